@@ -1,0 +1,28 @@
+// piezoid: identify piezoelectric actuator dynamics and diagnose the sim-to-real gap.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+
+#include "client/commands.h"
+#include "model/status.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"piezoid — identification of piezoelectric actuator dynamics (HGANN) and diagnosis of "
+               "the sim-to-real gap"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "piezoid 0.1.0");
+  int exit_code = 0;
+  pz::client::RegisterSimulate(app, exit_code);
+  pz::client::RegisterPi(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const pz::InputError& e) {
+    std::fprintf(stderr, "piezoid: error: %s\n", e.what());
+    return 2;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "piezoid: error: %s\n", e.what());
+    return 1;
+  }
+  return exit_code;
+}

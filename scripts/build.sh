@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Configures and builds piezoid (Release) into ./build. Usage: scripts/build.sh [extra cmake args]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+BUILD_DIR=${PIEZOID_BUILD_DIR:-build}
+cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=${BUILD_TYPE:-Release} "$@" >/dev/null
+cmake --build "$BUILD_DIR" -j"$(nproc)"

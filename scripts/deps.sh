@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Installs the Debian packages piezoid needs to build, test and run. Idempotent: installs only
+# what is missing, and runs apt-get update only when something is.
+set -euo pipefail
+PKGS=(build-essential cmake ninja-build pkg-config git
+      libeigen3-dev libsundials-dev libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler
+      libspdlog-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev libboost-dev
+      gnuplot-nox)
+missing=()
+for p in "${PKGS[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "deps: all ${#PKGS[@]} packages present"
+  exit 0
+fi
+echo "deps: installing ${missing[*]}"
+SUDO=""
+[ "$(id -u)" -eq 0 ] || SUDO="sudo"
+$SUDO apt-get update -qq
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
