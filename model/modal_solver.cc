@@ -1,10 +1,15 @@
-// PLACEHOLDER — being replaced by the fast-path implementation.
 #include "model/modal_solver.h"
+
+#include "model/modal_simulator.h"
+
 namespace pz::model {
-BimorphTrace SimulateModal(const BimorphPlant&, const BimorphParams&, const DriveSignal&) {
-  BimorphTrace t;
-  t.summary.status = SimStatus::kSolverFailure;
-  t.summary.message = "modal solver not built yet";
-  return t;
+
+BimorphTrace SimulateModal(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive) {
+  const ModalSimulator sim(plant);
+  ModalWorkspace ws;
+  BimorphTrace trace;
+  sim.Simulate(params, drive, trace, ws);
+  return trace;
 }
+
 }  // namespace pz::model

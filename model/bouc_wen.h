@@ -1,0 +1,53 @@
+// Closed-form Bouc–Wen hysteresis with exponent 1 (spec "bimorph-fin model", §2):
+//
+//   ż = α u̇ − β |u̇| z − γ u̇ |z|,    z(0) = 0
+//
+// z depends on the path of u alone. On a stretch where s = sgn(u̇) and σ = sgn(z) are fixed,
+//
+//   dz/du = α − κ z,   κ = β s + γ σ,   z(u) = z₀ + (κ z₀ − α) · expm1(−κ (u − u₀)) / κ
+//
+// (z₀ + α (u − u₀) when κ = 0). Branches end at the reversals of u and at the zero crossings of z.
+// The loop is bounded for every input iff α = 0, or β + γ > 0 and β − γ ≥ 0 (the spec's rule;
+// BimorphParams::HysteresisBounded()).
+#pragma once
+
+#include <span>
+
+namespace pz::model {
+
+/// The three Bouc–Wen parameters.
+struct BoucWenParams {
+  double alpha = 0;  ///< α, input gain [N/V], finite
+  double beta = 0;   ///< β [1/V], finite
+  double gamma = 0;  ///< γ [1/V], finite
+};
+
+/// One branch of the closed-form solution: z as a function of u while s and σ stay fixed.
+struct BoucWenBranch {
+  double alpha = 0;  ///< α [N/V]
+  double kappa = 0;  ///< κ = β s + γ σ [1/V]
+  double u0 = 0;     ///< input at the start of the branch [V]
+  double z0 = 0;     ///< z at the start of the branch [N]
+  int s = 0;         ///< direction of u on the branch: +1, −1, or 0 (u constant: z frozen)
+  int sigma = 0;     ///< sign of z on the branch (0 only when z stays 0)
+
+  /// z [N] at input u [V] (exact on the branch; the formula extends smoothly past its ends).
+  double Z(double u) const;
+  /// dz/du [N/V] at z [N].
+  double Slope(double z) const { return alpha - kappa * z; }
+  /// The input at which z reaches 0 while u moves in direction s, if it does (before the branch's
+  /// fixed point α/κ): writes it to *u_cross and returns true.
+  bool ZeroCrossing(double* u_cross) const;
+};
+
+/// Starts a branch at (u0, z0) with u moving in direction s (sign taken; 0 freezes z). At z0 = 0 the
+/// sign σ is that of α s, the way z leaves zero.
+BoucWenBranch StartBranch(const BoucWenParams& p, double u0, double z0, double s);
+
+/// z along a piecewise-linear input path u_0, u_1, … (exact: z depends on the path of u only), from
+/// z(u_0) = z_init. z.size() must equal u.size(); returns false (and leaves z partly filled) if a
+/// value becomes non-finite, as it does for unbounded parameters driven far enough.
+bool BoucWenAlongPath(const BoucWenParams& p, std::span<const double> u, std::span<double> z,
+                      double z_init = 0.0);
+
+}  // namespace pz::model

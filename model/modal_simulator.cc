@@ -1,0 +1,585 @@
+#include "model/modal_simulator.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "model/bouc_wen.h"
+
+namespace pz::model {
+namespace {
+
+using modal::ModePoles;
+using modal::ModeStep;
+
+// Quintic Hermite hold on [0, 1]: coefficients a_j of p(s) = Σ a_j s^j from the end data
+// [z₀, τż₀, τ²z̈₀, z₁, τż₁, τ²z̈₁] (rows j = 0 … 5).
+constexpr double kHermite[6][6] = {
+    {1, 0, 0, 0, 0, 0},            //
+    {0, 1, 0, 0, 0, 0},            //
+    {0, 0, 0.5, 0, 0, 0},          //
+    {-10, -6, -1.5, 10, -4, 0.5},  //
+    {15, 8, 1.5, -15, 7, -1},      //
+    {-6, -3, -0.5, 6, -3, 0.5},    //
+};
+constexpr double kFact[6] = {1, 1, 2, 6, 24, 120};
+
+// A step of the z hold may span at most this much of exp(−κ Δu) and of the sinusoid's phase
+// (κ u̇ τ ≤ 0.5, Ω τ ≤ 0.5): the quintic hold is then good to ~1e-7 of |z − α/κ|. Larger steps are
+// split into equal sub-steps, at most kMaxSubsteps per sample.
+constexpr double kMaxHoldArg = 0.5;
+constexpr int kMaxSubsteps = 1000;
+
+// Relative tolerances for reusing a cached discretisation (a sampled grid's steps differ in their
+// last bits) and for treating a breakpoint as lying on a node.
+constexpr double kStepRelTol = 1e-10;
+constexpr double kNodeRelTol = 1e-9;
+
+std::atomic<uint64_t> g_next_sim_id{1};
+
+int SubstepsFor(double arg) {
+  if (!(arg > kMaxHoldArg)) return 1;
+  const double m = std::ceil(arg / kMaxHoldArg);
+  return m >= kMaxSubsteps ? kMaxSubsteps : static_cast<int>(m);
+}
+
+// z and its first two time derivatives at one instant (unscaled).
+struct ZData {
+  double z = 0, zd = 0, zdd = 0;
+  bool operator==(const ZData&) const = default;
+};
+
+// z, ż = (α − κz) u̇, z̈ = (α − κz)(ü − κ u̇²) on a branch.
+inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
+  const double z = b.Z(u);
+  const double sl = b.Slope(z);
+  return {z, sl * ud, sl * (udd - b.kappa * ud * ud)};
+}
+
+// Output angle [deg] of a tip deflection.
+inline double Degrees(double w, double inv_length) {
+  return std::atan(w * inv_length) * (180.0 / std::numbers::pi);
+}
+
+// Sinks: what a run does with each output sample.
+struct AngleSink {
+  std::span<double> out;
+  void Emit(size_t k, double, double, double, double, double, double angle) { out[k] = angle; }
+};
+struct TraceSink {
+  BimorphTrace* tr;
+  void Emit(size_t k, double t, double u, double z, double w, double theta, double angle) {
+    tr->t[k] = t;
+    tr->u[k] = u;
+    tr->z[k] = z;
+    tr->w_tip[k] = w;
+    tr->theta_deg[k] = theta;
+    tr->angle_deg[k] = angle;
+  }
+};
+
+// x ← E x + G·d (+ the jump correction E P1 (d⁻ − d⁺) when the hold data jump at the node).
+inline void RegularStep(int n, double* __restrict x0, double* __restrict x1, const double* __restrict e11,
+                        const double* __restrict e12, const double* __restrict e21,
+                        const double* __restrict e22, const std::vector<double>* g, double d0, double d1,
+                        double d2) {
+  const double* __restrict g0 = g[0].data();
+  const double* __restrict g1 = g[1].data();
+  const double* __restrict g2 = g[2].data();
+  const double* __restrict g3 = g[3].data();
+  const double* __restrict g4 = g[4].data();
+  const double* __restrict g5 = g[5].data();
+  for (int i = 0; i < n; ++i) {
+    const double a = x0[i], b = x1[i];
+    x0[i] = e11[i] * a + e12[i] * b + (g0[i] * d0 + g1[i] * d1 + g2[i] * d2);
+    x1[i] = e21[i] * a + e22[i] * b + (g3[i] * d0 + g4[i] * d1 + g5[i] * d2);
+  }
+}
+
+// x += sign · M·d for a per-mode 2×3 matrix M stored as six arrays.
+inline void AddMatVec(int n, double* __restrict x0, double* __restrict x1, const std::vector<double>* m,
+                      double d0, double d1, double d2) {
+  for (int i = 0; i < n; ++i) {
+    x0[i] += m[0][i] * d0 + m[1][i] * d1 + m[2][i] * d2;
+    x1[i] += m[3][i] * d0 + m[4][i] * d1 + m[5][i] * d2;
+  }
+}
+
+// Σ x0 over modes (n a multiple of 4; four partial sums so the loop vectorises).
+inline double SumModes(int n, const double* __restrict x0) {
+  double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
+  for (int i = 0; i < n; i += 4) {
+    s0 += x0[i];
+    s1 += x0[i + 1];
+    s2 += x0[i + 2];
+    s3 += x0[i + 3];
+  }
+  return (s0 + s1) + (s2 + s3);
+}
+
+std::string NonFiniteMessage(size_t k, double t) {
+  return "non-finite tip deflection at sample " + std::to_string(k) + " (t = " + std::to_string(t) + " s)";
+}
+
+}  // namespace
+
+ModalSimulator::ModalSimulator(const BimorphPlant& plant)
+    : plant_(&plant), id_(g_next_sim_id.fetch_add(1)), length_m_(plant.geometry().TotalLength()) {
+  const ModalBasis& mb = plant.modal();
+  for (Eigen::Index i = 0; i < mb.omega.size(); ++i) {
+    const double wu = mb.tip(i) * mb.gain_u(i), wz = mb.tip(i) * mb.gain_z(i);
+    if (wu == 0.0 && wz == 0.0) continue;  // invisible at the tip
+    omega2_.push_back(mb.omega(i) * mb.omega(i));
+    wu_.push_back(wu);
+    wz_.push_back(wz);
+  }
+  n_ = static_cast<int>(omega2_.size());
+  npad_ = (n_ + 3) / 4 * 4;
+}
+
+void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws) const {
+  if (ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
+      std::abs(ws.step_ - step) <= kStepRelTol * step)
+    return;
+  ws.sim_id_ = id_;
+  ws.mu_ = params.mu;
+  ws.delta_ = params.delta;
+  ws.step_ = step;
+  ws.poles_.resize(n_);
+  ws.steps_.resize(n_);
+  for (auto* v : {&ws.e11_, &ws.e12_, &ws.e21_, &ws.e22_}) v->assign(npad_, 0.0);
+  ws.x0_.resize(npad_);  // the state is set by the runs, and kept when a sampled run re-prepares
+  ws.x1_.resize(npad_);
+  for (int r = 0; r < 6; ++r) {
+    ws.g_[r].assign(npad_, 0.0);
+    ws.p1_[r].assign(npad_, 0.0);
+    ws.ep1_[r].assign(npad_, 0.0);
+  }
+  ws.t1_[0] = ws.t1_[1] = ws.t1_[2] = 0.0;
+  for (int i = 0; i < n_; ++i) {
+    const ModePoles poles = modal::MakePoles(omega2_[i], params.mu + params.delta * omega2_[i]);
+    ws.poles_[i] = poles;
+    ModeStep& st = ws.steps_[i];
+    modal::Discretise(poles, step, st);
+    // P = −w_z Σ_j j! R_j ⊗ Hermite row j, R_j = [τ D_{j+1}, D_j]: response to the 6 end data.
+    double p[2][6] = {};
+    for (int j = 0; j < 6; ++j) {
+      const double r0 = step * st.d[j + 1] * kFact[j], r1 = st.d[j] * kFact[j];
+      for (int c = 0; c < 6; ++c) {
+        p[0][c] += r0 * kHermite[j][c];
+        p[1][c] += r1 * kHermite[j][c];
+      }
+    }
+    ws.e11_[i] = st.e11;
+    ws.e12_[i] = st.e12;
+    ws.e21_[i] = st.e21;
+    ws.e22_[i] = st.e22;
+    for (int c = 0; c < 3; ++c) {
+      const double p00 = -wz_[i] * p[0][c], p01 = -wz_[i] * p[1][c];          // P0 column c
+      const double p10 = -wz_[i] * p[0][c + 3], p11 = -wz_[i] * p[1][c + 3];  // P1 column c
+      const double ep0 = st.e11 * p10 + st.e12 * p11, ep1 = st.e21 * p10 + st.e22 * p11;
+      ws.p1_[c][i] = p10;
+      ws.p1_[3 + c][i] = p11;
+      ws.ep1_[c][i] = ep0;
+      ws.ep1_[3 + c][i] = ep1;
+      ws.g_[c][i] = ep0 + p00;
+      ws.g_[3 + c][i] = ep1 + p01;
+      ws.t1_[c] += p10;
+    }
+  }
+}
+
+// Sub-step of length τ from the current full state (x0, x1): z held by the quintic Hermite of
+// (zl, zr), u (sampled path) linear from u_a with slope u̇. `cached` uses ws.steps_ (τ = ws.step_).
+static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, const double* wu,
+                           const double* wz, double* x0, double* x1, double tau, const ZData& zl,
+                           const ZData& zr, double u_a, double u_dot) {
+  if (!(tau > 0)) return;
+  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
+  double fz[6];
+  for (int j = 0; j < 6; ++j) {
+    double a = 0;
+    for (int c = 0; c < 6; ++c) a += kHermite[j][c] * dat[c];
+    fz[j] = a * kFact[j];
+  }
+  const double fu0 = u_a, fu1 = u_dot * tau;
+  for (int i = 0; i < n; ++i) {
+    ModeStep local;
+    const ModeStep* st = cached;
+    if (cached) {
+      st = cached + i;
+    } else {
+      modal::Discretise(poles[i], tau, local);
+      st = &local;
+    }
+    double f[6];
+    for (int j = 0; j < 6; ++j) f[j] = -wz[i] * fz[j];
+    f[0] += wu[i] * fu0;
+    f[1] += wu[i] * fu1;
+    double s0 = 0, s1 = 0;
+    for (int j = 0; j < 6; ++j) {
+      s0 += f[j] * st->d[j + 1];
+      s1 += f[j] * st->d[j];
+    }
+    const double a = x0[i], b = x1[i];
+    x0[i] = st->e11 * a + st->e12 * b + tau * s0;
+    x1[i] = st->e21 * a + st->e22 * b + s1;
+  }
+}
+
+template <class Sink>
+void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws,
+                                 Sink& sink, SimulationSummary& summary) const {
+  const size_t n_out = static_cast<size_t>(drive.NumSamples());
+  const double fs = drive.sample_rate_hz, f = drive.frequency_hz, V = drive.amplitude_v;
+  const double om = 2 * std::numbers::pi * f;
+  const double h = 1.0 / fs;
+  const BoucWenParams bw{params.alpha, params.beta, params.gamma};
+  const bool hyst = params.alpha != 0.0 && V != 0.0;
+  const int m = hyst ? SubstepsFor(std::max((std::abs(params.beta) + std::abs(params.gamma)) * V * om * h, om * h))
+                     : 1;
+  const double hs = h / m;  // internal step
+  const long n_steps = static_cast<long>(n_out - 1) * m;
+  Prepare(params, hs, ws);
+  const int np = npad_;
+  double* x0 = ws.x0_.data();
+  double* x1 = ws.x1_.data();
+  const BacklashParams bl = params.backlash();
+  const double inv_len = 1.0 / length_m_;
+
+  // Exact particular solution of the u part: η_p,i = g_u,i V Im(H_i e^{iΩt}), H_i = 1/(ω²−Ω²+icΩ).
+  // The state x carries tip_i (η_i − η_p,i); it starts at −tip_i η_p,i(0).
+  double htip_re = 0, htip_im = 0;
+  std::fill(ws.x0_.begin(), ws.x0_.end(), 0.0);
+  std::fill(ws.x1_.begin(), ws.x1_.end(), 0.0);
+  for (int i = 0; i < n_; ++i) {
+    const double dr = omega2_[i] - om * om, di = ws.poles_[i].c * om;
+    const double den = dr * dr + di * di;
+    const double hr = dr / den, hi = -di / den;
+    x0[i] = -wu_[i] * V * hi;
+    x1[i] = -wu_[i] * V * om * hr;
+    htip_re += wu_[i] * hr;
+    htip_im += wu_[i] * hi;
+  }
+
+  // Bouc–Wen branch and its end (the next breakpoint): stretch n of the sinusoid runs between the
+  // reversals at t = (1/4 + (n−1)/2)/f and (1/4 + n/2)/f, with s = (−1)^n.
+  BoucWenBranch br = StartBranch(bw, 0.0, 0.0, 1.0);
+  int stretch = 0;
+  double t_start = 0.0, t_end = std::numeric_limits<double>::infinity(), u_cross = 0.0;
+  bool end_is_crossing = false;
+  auto compute_end = [&]() {
+    if (!hyst) return;
+    const double t_rev = (0.25 + 0.5 * stretch) / f;
+    t_end = t_rev;
+    end_is_crossing = false;
+    double uc;
+    if (br.ZeroCrossing(&uc) && ((br.s > 0 && uc < V) || (br.s < 0 && uc > -V))) {
+      const double a = std::asin(std::clamp(uc / V, -1.0, 1.0));
+      double tc = (stretch * std::numbers::pi + ((stretch & 1) ? -a : a)) / om;
+      tc = std::clamp(tc, t_start, t_rev);
+      if (tc < t_rev) {
+        t_end = tc;
+        end_is_crossing = true;
+        u_cross = uc;
+      }
+    }
+  };
+  auto advance = [&]() {
+    if (end_is_crossing) {
+      br = StartBranch(bw, u_cross, 0.0, br.s);
+    } else {
+      const double u_rev = br.s * V;
+      br = StartBranch(bw, u_rev, br.Z(u_rev), -br.s);
+      ++stretch;
+    }
+    t_start = t_end;
+    compute_end();
+  };
+  // Exact u, u̇, ü at the current branch end.
+  auto u_at_end = [&](double* u, double* ud, double* udd) {
+    if (end_is_crossing) {
+      *u = u_cross;
+      *ud = V * om * std::cos(om * t_end);
+      *udd = -om * om * u_cross;
+    } else {
+      *u = br.s * V;
+      *ud = 0.0;
+      *udd = -om * om * br.s * V;
+    }
+  };
+  auto eval = [&](double u, double ud, double udd) { return hyst ? EvalZ(br, u, ud, udd) : ZData{}; };
+  compute_end();
+
+  const double eps = kNodeRelTol * hs;
+  ZData dm = eval(0.0, V * om, 0.0), dp = dm;  // hold data at the node: left and right limits
+  // x̄ = x − P1 d⁻ (the recursion runs on x̄: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺)).
+  AddMatVec(np, x0, x1, ws.p1_, -dm.z, -hs * dm.zd, -hs * hs * dm.zdd);
+  auto emit = [&](size_t k, double u, double zeta_re, double zeta_im, double* y) -> bool {
+    const double w = SumModes(np, x0) + ws.t1_[0] * dm.z + ws.t1_[1] * hs * dm.zd +
+                     ws.t1_[2] * hs * hs * dm.zdd + V * (htip_re * zeta_im + htip_im * zeta_re);
+    const double t = static_cast<double>(k) / fs;
+    if (!std::isfinite(w)) {
+      summary.status = SimStatus::kNonFinite;
+      summary.message = NonFiniteMessage(k, t);
+      return false;
+    }
+    const double theta = Degrees(w, inv_len);
+    *y = BacklashStep(bl, theta, *y);
+    sink.Emit(k, t, u, dm.z, w, theta, *y);
+    return true;
+  };
+  double y = 0.0;
+  if (!emit(0, 0.0, 1.0, 0.0, &y)) return;
+
+  const double rot_re = std::cos(om * hs), rot_im = std::sin(om * hs);
+  double zr = 1.0, zi = 0.0;  // e^{iΩt}
+  long steps = 0;
+  for (long k = 0; k < n_steps; ++k) {
+    const double t0 = static_cast<double>(k) * hs, t1 = static_cast<double>(k + 1) * hs;
+    if (((k + 1) & 63) == 0) {
+      zr = std::cos(om * t1);
+      zi = std::sin(om * t1);
+    } else {
+      const double a = zr * rot_re - zi * rot_im;
+      zi = zr * rot_im + zi * rot_re;
+      zr = a;
+    }
+    const double u1 = V * zi, ud1 = V * om * zr, udd1 = -om * om * u1;
+    if (t_end >= t1 - eps) {
+      // No breakpoint inside the step: the precomputed recursion.
+      RegularStep(np, x0, x1, ws.e11_.data(), ws.e12_.data(), ws.e21_.data(), ws.e22_.data(), ws.g_, dp.z,
+                  hs * dp.zd, hs * hs * dp.zdd);
+      if (!(dm == dp))
+        AddMatVec(np, x0, x1, ws.ep1_, dm.z - dp.z, hs * (dm.zd - dp.zd), hs * hs * (dm.zdd - dp.zdd));
+      ++steps;
+      dm = dp = eval(u1, ud1, udd1);
+    } else {
+      // Breakpoints inside: back to the full state, sub-steps between them, then to x̄ again.
+      AddMatVec(np, x0, x1, ws.p1_, dm.z, hs * dm.zd, hs * hs * dm.zdd);
+      double tcur = t0;
+      ZData dcur = dp;
+      while (t_end < t1 - eps) {
+        double ub, udb, uddb;
+        u_at_end(&ub, &udb, &uddb);
+        const double tb = t_end;
+        const ZData dl = eval(ub, udb, uddb);
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, tb - tcur, dcur, dl,
+                       0.0, 0.0);
+        ++steps;
+        advance();
+        dcur = eval(ub, udb, uddb);
+        tcur = tb;
+      }
+      dm = eval(u1, ud1, udd1);
+      GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, t1 - tcur, dcur, dm,
+                     0.0, 0.0);
+      ++steps;
+      AddMatVec(np, x0, x1, ws.p1_, -dm.z, -hs * dm.zd, -hs * hs * dm.zdd);
+      dp = dm;
+    }
+    // Breakpoints on the node t1: the data jump from the left to the right limit.
+    while (t_end <= t1 + eps) {
+      advance();
+      dp = eval(u1, ud1, udd1);
+    }
+    if ((k + 1) % m == 0 && !emit(static_cast<size_t>((k + 1) / m), u1, zr, zi, &y)) return;
+  }
+  summary.steps = steps;
+}
+
+template <class Sink>
+void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal& drive, ModalWorkspace& ws,
+                                Sink& sink, SimulationSummary& summary) const {
+  const std::vector<double>& t = drive.t;
+  const std::vector<double>& u = drive.u;
+  const size_t n_out = t.size();
+  const BoucWenParams bw{params.alpha, params.beta, params.gamma};
+  const bool hyst = params.alpha != 0.0;
+  const BacklashParams bl = params.backlash();
+  const double inv_len = 1.0 / length_m_;
+  const double kappa_max = std::abs(params.beta) + std::abs(params.gamma);
+
+  Prepare(params, t[1] - t[0], ws);
+  std::fill(ws.x0_.begin(), ws.x0_.end(), 0.0);
+  std::fill(ws.x1_.begin(), ws.x1_.end(), 0.0);
+  double* x0 = ws.x0_.data();
+  double* x1 = ws.x1_.data();
+
+  double z = 0.0, y = 0.0;
+  auto emit = [&](size_t k) -> bool {
+    const double w = SumModes(npad_, x0);
+    if (!std::isfinite(w)) {
+      summary.status = SimStatus::kNonFinite;
+      summary.message = NonFiniteMessage(k, t[k]);
+      return false;
+    }
+    const double theta = Degrees(w, inv_len);
+    y = BacklashStep(bl, theta, y);
+    sink.Emit(k, t[k], u[k], z, w, theta, y);
+    return true;
+  };
+  if (!emit(0)) return;
+  long steps = 0;
+  for (size_t k = 0; k + 1 < n_out; ++k) {
+    const double tau = t[k + 1] - t[k];
+    const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
+    const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
+    const double ts = tau / nsub;
+    Prepare(params, ts, ws);  // no-op on a uniform grid
+    const double eps = kNodeRelTol * ts;
+    BoucWenBranch br = StartBranch(bw, u[k], z, r);
+    auto eval = [&](double uu) { return hyst ? EvalZ(br, uu, r, 0.0) : ZData{}; };
+    ZData dcur = eval(u[k]);
+    double sa = 0.0;  // time since t_k
+    for (int q = 0; q < nsub; ++q) {
+      const bool last = q + 1 == nsub;
+      const double sb = last ? tau : (q + 1) * ts;
+      const double ub = last ? u[k + 1] : u[k] + r * sb;
+      bool split = false;
+      double uc;
+      if (hyst && br.ZeroCrossing(&uc)) {
+        const double sc = (uc - u[k]) / r;
+        if (sc < sb - eps) {
+          if (sc > sa + eps) {
+            GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
+                           eval(uc), u[k] + r * sa, r);
+            ++steps;
+            split = true;
+            sa = sc;
+          }
+          br = StartBranch(bw, uc, 0.0, r);
+          dcur = eval(uc);
+        }
+      }
+      const ZData dr = eval(ub);
+      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), wu_.data(), wz_.data(), x0,
+                     x1, sb - sa, dcur, dr, u[k] + r * sa, r);
+      ++steps;
+      dcur = dr;
+      sa = sb;
+    }
+    z = dcur.z;
+    if (!emit(k + 1)) return;
+  }
+  summary.steps = steps;
+}
+
+template <class Sink>
+SimulationSummary ModalSimulator::Run(const BimorphParams& params, const DriveSignal& drive,
+                                      ModalWorkspace& ws, Sink& sink) const {
+  SimulationSummary summary;
+  if (std::holds_alternative<Sinusoid>(drive)) {
+    RunSinusoid(params, std::get<Sinusoid>(drive), ws, sink, summary);
+  } else {
+    RunSampled(params, std::get<SampledSignal>(drive), ws, sink, summary);
+  }
+  return summary;
+}
+
+namespace {
+
+// Validation shared by every entry point; returns false with the summary filled on failure.
+bool Admit(const BimorphParams& params, size_t n_out, size_t expected_out, SimulationSummary& summary) {
+  auto fail = [&](SimStatus st, std::string msg) {
+    summary.status = st;
+    summary.message = std::move(msg);
+    return false;
+  };
+  if (auto s = params.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
+  if (!params.HysteresisBounded())
+    return fail(SimStatus::kUnboundedHysteresis,
+                FieldError("(alpha, beta, gamma)",
+                           "(" + std::to_string(params.alpha) + ", " + std::to_string(params.beta) + ", " +
+                               std::to_string(params.gamma) + ")",
+                           "Bouc-Wen loop unbounded: needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0"));
+  if (n_out != expected_out)
+    return fail(SimStatus::kInvalidInput, FieldError("angle_deg.size()", n_out,
+                                                     "must equal the number of samples " +
+                                                         std::to_string(expected_out)));
+  return true;
+}
+
+size_t NumSamples(const DriveSignal& drive) {
+  if (const auto* s = std::get_if<Sinusoid>(&drive)) return static_cast<size_t>(std::max(0, s->NumSamples()));
+  return std::get<SampledSignal>(drive).t.size();
+}
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
+                                                std::span<double> angle_deg, ModalWorkspace& ws) const {
+  const auto start = std::chrono::steady_clock::now();
+  SimulationSummary summary;
+  // Validate the sinusoid first: NumSamples() is only meaningful for a valid one.
+  if (auto s = drive.Validate(); !s.ok()) {
+    summary.status = SimStatus::kInvalidInput;
+    summary.message = s.message();
+  } else if (Admit(params, angle_deg.size(), static_cast<size_t>(drive.NumSamples()), summary)) {
+    AngleSink sink{angle_deg};
+    RunSinusoid(params, drive, ws, sink, summary);
+  }
+  summary.wall_time_s = Seconds(start);
+  return summary;
+}
+
+SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
+                                                std::span<double> angle_deg) const {
+  thread_local ModalWorkspace ws;
+  return SimulateAngle(params, drive, angle_deg, ws);
+}
+
+SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, const DriveSignal& drive,
+                                                std::span<double> angle_deg, ModalWorkspace& ws) const {
+  const auto start = std::chrono::steady_clock::now();
+  SimulationSummary summary;
+  if (auto s = Validate(drive); !s.ok()) {
+    summary.status = SimStatus::kInvalidInput;
+    summary.message = s.message();
+  } else if (Admit(params, angle_deg.size(), NumSamples(drive), summary)) {
+    AngleSink sink{angle_deg};
+    summary = Run(params, drive, ws, sink);
+  }
+  summary.wall_time_s = Seconds(start);
+  return summary;
+}
+
+void ModalSimulator::Simulate(const BimorphParams& params, const DriveSignal& drive, BimorphTrace& trace,
+                              ModalWorkspace& ws) const {
+  const auto start = std::chrono::steady_clock::now();
+  trace.summary = SimulationSummary{};
+  size_t n = 0;
+  if (auto s = Validate(drive); !s.ok()) {
+    trace.summary.status = SimStatus::kInvalidInput;
+    trace.summary.message = s.message();
+  } else {
+    n = NumSamples(drive);
+  }
+  for (auto* v : {&trace.t, &trace.u, &trace.z, &trace.w_tip, &trace.theta_deg, &trace.angle_deg})
+    v->assign(n, std::numeric_limits<double>::quiet_NaN());
+  if (trace.summary.ok() && Admit(params, n, n, trace.summary)) {
+    TraceSink sink{&trace};
+    trace.summary = Run(params, drive, ws, sink);
+  }
+  if (!trace.summary.ok() && trace.summary.status != SimStatus::kNonFinite) {
+    for (auto* v : {&trace.t, &trace.u, &trace.z, &trace.w_tip, &trace.theta_deg, &trace.angle_deg}) v->clear();
+  }
+  trace.summary.wall_time_s = Seconds(start);
+}
+
+BimorphTrace ModalSimulator::Simulate(const BimorphParams& params, const DriveSignal& drive) const {
+  thread_local ModalWorkspace ws;
+  BimorphTrace trace;
+  Simulate(params, drive, trace, ws);
+  return trace;
+}
+
+}  // namespace pz::model

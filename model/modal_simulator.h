@@ -1,0 +1,100 @@
+// The fast path of the bimorph-fin plant as a reusable, allocation-free simulator for the GA fitness.
+//
+// With C = μM + δK the mass-normalised modes decouple (spec §6):
+//
+//   η̈_i + (μ + δ ω_i²) η̇_i + ω_i² η_i = g_u,i u(t) − g_z,i z(t),     w_tip = Σ_i tip_i η_i
+//
+// and z (Bouc–Wen) depends on u alone, in closed form per branch (model/bouc_wen.h). Each mode is
+// advanced by its exact discretisation (model/modal_discretise.h) with a quintic Hermite hold of z
+// built from the analytic z, ż, z̈ at the step ends; steps are split at the zero crossings of z and
+// the reversals of u. For a sinusoid the response to u is the exact particular solution
+// Im(H_i(iΩ) g_u,i V e^{iΩt}), so only z drives the recursion; for a sampled signal u is linear between
+// samples and held exactly.
+//
+// Threading: a ModalSimulator is immutable after construction and can be shared by any number of
+// threads; all mutable state lives in a ModalWorkspace, one per thread (the overloads without a
+// workspace use a thread_local one).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "model/bimorph.h"
+#include "model/modal_discretise.h"
+
+namespace pz::model {
+
+/// Scratch for ModalSimulator: mode states and a cache of the last discretisation (keyed by the
+/// simulator, μ, δ and the step). Grows on first use, then allocates nothing. One per thread.
+class ModalWorkspace {
+ public:
+  ModalWorkspace() = default;
+
+ private:
+  friend class ModalSimulator;
+  // Cache key.
+  uint64_t sim_id_ = 0;
+  double mu_ = -1, delta_ = -1, step_ = -1;
+  // Per-mode data for the cached (μ, δ, step), padded to a multiple of 4 modes.
+  std::vector<modal::ModePoles> poles_;
+  std::vector<modal::ModeStep> steps_;  // discretisation over `step_`
+  std::vector<double> e11_, e12_, e21_, e22_;
+  std::vector<double> g_[6];    // G = E P1 + P0 (rows 0, 1 × z, τż, τ²z̈)
+  std::vector<double> p1_[6];   // P1: response to the end-of-step Hermite data
+  std::vector<double> ep1_[6];  // E P1
+  double t1_[3] = {0, 0, 0};    // Σ_i P1_i row 0 (feed-through of the end data to w_tip)
+  // Mode states (scaled by tip_i, so that w_tip = Σ x0).
+  std::vector<double> x0_, x1_;
+  std::vector<double> hr_, hi_;  // particular-solution gains H_i (sinusoid path)
+};
+
+class ModalSimulator {
+ public:
+  /// Copies what it needs of the plant's modal basis; the plant must outlive the simulator.
+  explicit ModalSimulator(const BimorphPlant& plant);
+
+  const BimorphPlant& plant() const { return *plant_; }
+  /// Number of modes simulated (modes invisible at the tip are dropped).
+  int num_modes() const { return n_; }
+
+  /// Hot path of the GA fitness: the fin angle y_k [deg] of a sinusoid drive into `angle_deg`, whose
+  /// size must be drive.NumSamples(). Validates params and drive, returns kUnboundedHysteresis for
+  /// an unbounded loop; never throws. No heap allocation once `ws` has served a run of this plant.
+  SimulationSummary SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
+                                  std::span<double> angle_deg, ModalWorkspace& ws) const;
+  /// Same with a thread_local workspace.
+  SimulationSummary SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
+                                  std::span<double> angle_deg) const;
+  /// Any drive (sinusoid or sampled); `angle_deg` has one entry per sample of the drive.
+  SimulationSummary SimulateAngle(const BimorphParams& params, const DriveSignal& drive,
+                                  std::span<double> angle_deg, ModalWorkspace& ws) const;
+
+  /// Full trace (t, u, z, w_tip, θ, y and the summary) into `trace`, reusing its vectors.
+  void Simulate(const BimorphParams& params, const DriveSignal& drive, BimorphTrace& trace,
+                ModalWorkspace& ws) const;
+  BimorphTrace Simulate(const BimorphParams& params, const DriveSignal& drive) const;
+
+ private:
+  template <class Sink>
+  SimulationSummary Run(const BimorphParams& params, const DriveSignal& drive, ModalWorkspace& ws,
+                        Sink& sink) const;
+  template <class Sink>
+  void RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws, Sink& sink,
+                   SimulationSummary& summary) const;
+  template <class Sink>
+  void RunSampled(const BimorphParams& params, const SampledSignal& drive, ModalWorkspace& ws,
+                  Sink& sink, SimulationSummary& summary) const;
+  void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws) const;
+
+  const BimorphPlant* plant_;
+  uint64_t id_;
+  int n_ = 0;      // modes kept
+  int npad_ = 0;   // n_ rounded up to a multiple of 4
+  double length_m_ = 0;
+  std::vector<double> omega2_;  // ω_i² [1/s²]
+  std::vector<double> wu_;      // tip_i g_u,i [m/V per unit modal acceleration]
+  std::vector<double> wz_;      // tip_i g_z,i
+};
+
+}  // namespace pz::model
