@@ -1,0 +1,38 @@
+// Job state on disk: state_dir/jobs/<job id>/{spec.pb, checkpoint.pb}, each replaced atomically
+// (write a temporary file, fsync, rename over the old one, fsync the directory), so a master
+// killed at any instant leaves either the previous or the new checkpoint, never a torn one.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "master/service_types.h"
+#include "model/status.h"
+
+namespace pz::master {
+
+Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes);
+/// Reads a whole file (at most max_bytes); NotFound if it does not exist.
+Status ReadWholeFile(const std::filesystem::path& path, std::string* out,
+                     size_t max_bytes = size_t{1} << 31);
+
+class JobDirectory {
+ public:
+  explicit JobDirectory(std::filesystem::path state_dir) : root_(std::move(state_dir) / "jobs") {}
+  std::filesystem::path dir(const std::string& job_id) const { return root_ / job_id; }
+
+  /// The ids of all stored jobs, sorted.
+  std::vector<std::string> List() const;
+  Status SaveSpec(const std::string& job_id, std::string_view spec_bytes) const;
+  Status LoadSpec(const std::string& job_id, std::string* spec_bytes) const;
+  Status SaveCheckpoint(const JobCheckpoint& c) const;
+  /// NotFound when the job has no checkpoint yet.
+  Status LoadCheckpoint(const std::string& job_id, JobCheckpoint* c) const;
+
+ private:
+  std::filesystem::path root_;
+};
+
+}  // namespace pz::master

@@ -1,0 +1,95 @@
+#include "master/job_runner.h"
+
+#include <chrono>
+
+#include "master/inline_evaluator.h"
+
+namespace pz::master {
+
+GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
+  GaOptions o;
+  const GaSettings g = spec.ga.value_or(GaSettings{});
+  o.population_size = g.population;
+  o.genome_bits = layout.bits;
+  o.elite_fraction = g.elite_fraction;
+  o.tournament_size = g.tournament;
+  o.crossover_probability = g.crossover_probability;
+  o.mutation_probability = g.mutation_probability;
+  o.max_generations = g.generations;
+  o.stall_generations = g.stall_generations;
+  if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
+  o.error_cost = spec.limits.penalty_cost;
+  o.seed = spec.seed;
+  return o;
+}
+
+JobRunner::JobRunner(std::string job_id, JobSpec spec) : spec_(std::move(spec)) {
+  checkpoint_.job_id = std::move(job_id);
+}
+
+JobRunner::~JobRunner() = default;
+
+Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume) {
+  GenomeLayout layout;
+  if (Status s = kinds.Layout(spec_, &layout); !s.ok()) return s;
+  try {
+    ga_ = std::make_unique<GeneticAlgorithm>(ToGaOptions(spec_, layout), &forward_);
+    if (resume) {
+      ga_->RestoreState(resume->optimizer);
+      const std::string id = checkpoint_.job_id;
+      checkpoint_ = *resume;
+      checkpoint_.job_id = id;
+    }
+  } catch (const InputError& e) {
+    return e.status();
+  }
+  return Status::Ok();
+}
+
+bool JobRunner::Done() const {
+  return ga_->state().initialized && ga_->CheckTermination().has_value();
+}
+
+const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
+  const auto t0 = std::chrono::steady_clock::now();
+  forward_.target = &evaluator;
+  const GenerationSummary& s = ga_->state().initialized ? ga_->Step() : ga_->Initialize();
+  GenerationRecord rec;
+  rec.generation = s.generation;
+  rec.best_cost = s.best_cost;
+  rec.mean_cost = s.mean_cost;
+  rec.evaluations = static_cast<uint64_t>(s.evaluations_total);
+  rec.errors = static_cast<uint32_t>(s.failures);
+  if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end())
+    rec.quarantined = static_cast<uint32_t>(q->second);
+  forward_.target = nullptr;
+
+  const GaState& st = ga_->state();
+  checkpoint_.optimizer = st;
+  checkpoint_.optimizer.log.clear();
+  checkpoint_.best.clear();
+  for (size_t i = 0; i < st.population.size() && i < static_cast<size_t>(kBestKept); ++i)
+    checkpoint_.best.push_back({static_cast<int>(i), st.population[i], st.fitness[i]});
+  checkpoint_.log.push_back(rec);
+  checkpoint_.elapsed_s +=
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (auto t = ga_->CheckTermination()) {
+    checkpoint_.state = JobState::kSucceeded;
+    checkpoint_.message = GaTerminationName(*t);
+  }
+  return checkpoint_.log.back();
+}
+
+Status RunJobInProcess(const std::string& job_id, const JobSpec& spec,
+                       const JobKindRegistry& kinds, JobCheckpoint* out) {
+  std::unique_ptr<FitnessFunction> fitness;
+  if (Status s = kinds.MakeFitness(spec, &fitness); !s.ok()) return s;
+  InlineEvaluator eval(*fitness, spec.limits.penalty_cost);
+  JobRunner runner(job_id, spec);
+  if (Status s = runner.Init(kinds); !s.ok()) return s;
+  while (!runner.Done()) runner.Step(eval);
+  *out = runner.checkpoint();
+  return Status::Ok();
+}
+
+}  // namespace pz::master

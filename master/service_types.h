@@ -1,0 +1,166 @@
+// Domain structs of the service protocol (proto/wire.proto decoded by master/wire_codec.h):
+// the master, the workers and the client library only handle these, never protobuf types.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "master/evaluator.h"
+#include "master/ga.h"
+#include "master/job_spec.h"
+
+namespace pz::master {
+
+inline constexpr uint32_t kProtocolVersion = 1;
+
+/// Request outcome; IsTransient() tells the retryable ones apart (wire.proto Code).
+enum class WireCode : int {
+  kUnspecified = 0,
+  kOk = 1,
+  kInvalidArgument = 2,
+  kNotFound = 3,
+  kFailedPrecondition = 4,
+  kVersionMismatch = 5,
+  kMalformed = 6,
+  kUnavailable = 100,
+  kDeadlineExceeded = 101,
+  kResourceExhausted = 102,
+  kInternal = 103,
+};
+inline bool IsTransient(WireCode c) { return static_cast<int>(c) >= 100; }
+const char* WireCodeName(WireCode c);
+
+enum class JobState : int { kUnspecified = 0, kRunning, kSucceeded, kFailed, kCancelled };
+const char* JobStateName(JobState s);
+inline bool IsFinal(JobState s) { return s != JobState::kRunning && s != JobState::kUnspecified; }
+
+struct ScoredGenome {
+  int index = 0;  ///< population index
+  Genome genome;
+  FitnessResult fitness;
+};
+
+struct GenerationRecord {
+  uint64_t generation = 0;
+  double best_cost = 0;
+  double mean_cost = 0;
+  uint64_t evaluations = 0;  ///< cumulative
+  uint32_t errors = 0;
+  uint32_t quarantined = 0;
+  bool operator==(const GenerationRecord&) const = default;
+};
+
+struct QuarantineRecord {
+  uint64_t generation = 0;
+  int index = 0;
+  uint32_t strikes = 0;
+};
+
+struct JobInfo {
+  std::string job_id, name, kind;
+  JobState state = JobState::kUnspecified;
+  uint64_t generation = 0, max_generations = 0;
+  double best_cost = 0;
+  uint64_t evaluations = 0;
+  std::string message;
+  std::vector<QuarantineRecord> quarantined;
+  double elapsed_s = 0;
+  uint64_t seed = 0;
+};
+
+struct JobEvent {
+  std::string job_id;
+  JobState state = JobState::kUnspecified;
+  std::optional<GenerationRecord> record;
+  std::string message;
+};
+
+// ------------------------------------------------------------------ worker protocol
+
+struct TaskBatchMsg {
+  uint64_t lease_id = 0;
+  std::string job_id;
+  uint64_t generation = 0;
+  std::string context_hash;
+  std::vector<int> indices;
+  std::vector<Genome> genomes;  ///< same length as indices
+  double deadline_s = 0;
+};
+
+struct BatchResultMsg {
+  uint64_t lease_id = 0;
+  std::string job_id;
+  uint64_t generation = 0;
+  std::vector<int> indices;
+  std::vector<FitnessResult> results;  ///< same length as indices
+  WireCode code = WireCode::kOk;
+  std::string error;
+  double eval_seconds = 0;
+};
+
+/// What travels between a worker and the master (both directions share the struct; `type` says
+/// which fields are meaningful).
+struct WorkerMsg {
+  enum class Type { kReady, kHeartbeat, kDisconnect, kContextRequest, kContext, kBatch, kResult };
+  Type type = Type::kHeartbeat;
+  int threads = 0;                  ///< kReady
+  std::string host;                 ///< kReady
+  int64_t pid = 0;                  ///< kReady
+  std::string reason;               ///< kDisconnect
+  std::string context_hash;         ///< kContextRequest, kContext
+  std::string context_spec;         ///< kContext: serialised JobSpec
+  WireCode code = WireCode::kOk;    ///< kContext (not found), or an error answer
+  TaskBatchMsg batch;               ///< kBatch
+  BatchResultMsg result;            ///< kResult
+};
+
+// ------------------------------------------------------------------ client protocol
+
+struct ClientRequestMsg {
+  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing };
+  Type type = Type::kPing;
+  uint64_t request_id = 0;
+  JobSpec spec;              ///< kSubmit (decoded)
+  std::string spec_bytes;    ///< kSubmit: the deterministic serialisation of the spec
+  std::vector<FieldViolation> decode_violations;  ///< kSubmit: fields that did not decode
+  std::string client_token;  ///< kSubmit
+  std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch
+  int count = 1;             ///< kFetch
+};
+
+struct ClientReplyMsg {
+  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent };
+  Type type = Type::kNone;
+  uint64_t request_id = 0;
+  WireCode code = WireCode::kOk;
+  std::string error;
+  std::vector<FieldViolation> violations;
+  std::string job_id;  ///< kSubmit
+  bool existed = false;  ///< kSubmit
+  JobInfo info;        ///< kStatus, kFetch
+  std::vector<JobInfo> jobs;  ///< kList
+  int workers = 0, worker_threads = 0;  ///< kList
+  std::vector<ScoredGenome> best;       ///< kFetch
+  std::vector<GenerationRecord> log;    ///< kFetch
+  JobEvent event;                       ///< kEvent
+};
+
+}  // namespace pz::master
+
+namespace pz::master {
+
+/// What the master stores per job after each generation.
+struct JobCheckpoint {
+  std::string job_id;
+  JobState state = JobState::kRunning;
+  GaState optimizer;  ///< without its log (the log is `log` below)
+  std::vector<GenerationRecord> log;
+  std::vector<ScoredGenome> best;  ///< best first
+  std::string message;
+  std::vector<QuarantineRecord> quarantined;
+  double elapsed_s = 0;
+};
+
+}  // namespace pz::master
