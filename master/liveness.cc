@@ -25,6 +25,13 @@ std::vector<std::string> PeerLiveness::TakeExpired(TimePoint now) {
   return out;
 }
 
+std::vector<std::string> PeerLiveness::ids() const {
+  std::vector<std::string> out;
+  for (const auto& [id, seen] : last_seen_) out.push_back(id);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 TimePoint PeerLiveness::NextExpiry() const {
   TimePoint t = TimePoint::max();
   for (const auto& [id, seen] : last_seen_) t = std::min(t, seen + timeout());

@@ -25,6 +25,8 @@ class PeerLiveness {
   void Remove(const std::string& id);
   bool Contains(const std::string& id) const { return last_seen_.count(id) > 0; }
   size_t size() const { return last_seen_.size(); }
+  /// The peers, sorted.
+  std::vector<std::string> ids() const;
 
   /// Removes and returns the peers not heard from for longer than interval × liveness.
   std::vector<std::string> TakeExpired(TimePoint now);

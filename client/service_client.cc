@@ -1,0 +1,216 @@
+#include "client/service_client.h"
+
+#include <random>
+#include <thread>
+#include <zmq.hpp>
+
+#include "master/wire_codec.h"
+
+namespace pz::client {
+
+using master::ClientReplyMsg;
+using master::ClientRequestMsg;
+using master::WireCode;
+
+Status StatusFromWire(WireCode code, const std::string& error) {
+  switch (code) {
+    case WireCode::kOk: return Status::Ok();
+    case WireCode::kInvalidArgument: return {StatusCode::kInvalidArgument, error};
+    case WireCode::kNotFound: return {StatusCode::kNotFound, error};
+    case WireCode::kFailedPrecondition:
+    case WireCode::kVersionMismatch: return {StatusCode::kFailedPrecondition, error};
+    case WireCode::kMalformed: return {StatusCode::kDataLoss, error};
+    case WireCode::kInternal: return {StatusCode::kInternal, error};
+    default: return {StatusCode::kUnavailable, error.empty() ? "master unavailable" : error};
+  }
+}
+
+struct ServiceClient::Impl {
+  explicit Impl(ServiceClientOptions o) : options(std::move(o)), rng(std::random_device{}()) {
+    options.retries = std::max(1, options.retries);
+  }
+  ServiceClientOptions options;
+  zmq::context_t ctx{1};
+  std::unique_ptr<zmq::socket_t> sock;
+  std::mt19937_64 rng;
+  uint64_t next_id = 1;
+
+  void Open() {
+    sock = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
+    sock->set(zmq::sockopt::linger, 0);
+    sock->connect(options.endpoint);
+  }
+
+  /// Receives the next reply within `timeout`; false on timeout.
+  bool Receive(ClientReplyMsg* reply, std::chrono::milliseconds timeout) {
+    const auto until = std::chrono::steady_clock::now() + timeout;
+    for (int guard = 0; guard < 100000; ++guard) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          until - std::chrono::steady_clock::now());
+      if (left.count() < 0) return false;
+      zmq::pollitem_t items[] = {{sock->handle(), 0, ZMQ_POLLIN, 0}};
+      zmq::poll(items, 1, left);
+      if (!(items[0].revents & ZMQ_POLLIN)) return false;
+      zmq::message_t msg;
+      if (!sock->recv(msg, zmq::recv_flags::dontwait)) continue;
+      if (master::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply).ok())
+        return true;
+    }
+    return false;
+  }
+
+  Status Call(ClientRequestMsg& req, ClientReplyMsg* reply) {
+    for (int attempt = 0; attempt < options.retries; ++attempt) {
+      if (!sock) Open();
+      req.request_id = next_id++;
+      const std::string payload = master::EncodeClientRequest(req);
+      sock->send(zmq::buffer(payload), zmq::send_flags::dontwait);
+      const auto until = std::chrono::steady_clock::now() +
+                         std::chrono::milliseconds(options.timeout_ms);
+      while (std::chrono::steady_clock::now() < until) {
+        if (!Receive(reply, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                until - std::chrono::steady_clock::now())))
+          break;
+        if (reply->request_id == req.request_id && reply->type != ClientReplyMsg::Type::kEvent)
+          return StatusFromWire(reply->code, reply->error);
+      }
+      sock.reset();  // Lazy Pirate: a fresh socket for the retry
+    }
+    return {StatusCode::kUnavailable,
+            "no answer from " + options.endpoint + " after " + std::to_string(options.retries) +
+                " attempts of " + std::to_string(options.timeout_ms) + " ms"};
+  }
+};
+
+ServiceClient::ServiceClient(ServiceClientOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {}
+
+ServiceClient::~ServiceClient() = default;
+
+Status ServiceClient::Submit(const master::JobSpec& spec, SubmitResult* out,
+                             std::vector<master::FieldViolation>* violations,
+                             std::string client_token) {
+  if (client_token.empty()) client_token = master::ContentHash(std::to_string(impl_->rng()));
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kSubmit;
+  req.spec = spec;
+  req.client_token = client_token;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (violations) *violations = reply.violations;
+  if (!s.ok()) return s;
+  out->job_id = reply.job_id;
+  out->existed = reply.existed;
+  return s;
+}
+
+Status ServiceClient::SubmitJson(const std::string& json, SubmitResult* out,
+                                 std::vector<master::FieldViolation>* violations,
+                                 std::string client_token) {
+  master::JobSpec spec;
+  std::vector<master::FieldViolation> decode;
+  if (Status s = master::JobSpecFromJson(json, &spec, &decode); !s.ok()) return s;
+  if (!decode.empty()) {
+    if (violations) *violations = decode;
+    return InvalidArgument(decode.front().description);
+  }
+  return Submit(spec, out, violations, std::move(client_token));
+}
+
+Status ServiceClient::GetStatus(const std::string& job_id, master::JobInfo* info) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kStatus;
+  req.job_id = job_id;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (s.ok()) *info = reply.info;
+  return s;
+}
+
+Status ServiceClient::List(std::vector<master::JobInfo>* jobs, int* workers, int* threads) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kList;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  *jobs = reply.jobs;
+  if (workers) *workers = reply.workers;
+  if (threads) *threads = reply.worker_threads;
+  return s;
+}
+
+Status ServiceClient::Cancel(const std::string& job_id) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kCancel;
+  req.job_id = job_id;
+  ClientReplyMsg reply;
+  return impl_->Call(req, &reply);
+}
+
+Status ServiceClient::Fetch(const std::string& job_id, int count,
+                            std::vector<master::ScoredGenome>* best,
+                            std::vector<master::GenerationRecord>* log, master::JobInfo* info) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kFetch;
+  req.job_id = job_id;
+  req.count = count;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  if (best) *best = reply.best;
+  if (log) *log = reply.log;
+  if (info) *info = reply.info;
+  return s;
+}
+
+Status ServiceClient::Watch(const std::string& job_id,
+                            const std::function<bool(const master::JobEvent&)>& on_event,
+                            std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const auto quiet = std::chrono::milliseconds(std::max(200, impl_->options.timeout_ms));
+  while (std::chrono::steady_clock::now() < deadline) {
+    ClientRequestMsg req;
+    req.type = ClientRequestMsg::Type::kWatch;
+    req.job_id = job_id;
+    ClientReplyMsg reply;
+    Status s = impl_->Call(req, &reply);
+    if (s.code() == StatusCode::kUnavailable) continue;  // master restarting: try again
+    if (!s.ok()) return s;
+    if (master::IsFinal(reply.info.state)) {
+      master::JobEvent e{job_id, reply.info.state, std::nullopt, reply.info.message};
+      on_event(e);
+      return Status::Ok();
+    }
+    // Events until the job ends; a quiet spell re-registers (e.g. after a master restart).
+    for (;;) {
+      const auto left = std::min(quiet, std::chrono::duration_cast<std::chrono::milliseconds>(
+                                            deadline - std::chrono::steady_clock::now()));
+      if (left.count() <= 0) break;
+      ClientReplyMsg ev;
+      if (!impl_->Receive(&ev, left)) break;
+      if (ev.type != ClientReplyMsg::Type::kEvent || ev.event.job_id != job_id) continue;
+      if (!on_event(ev.event)) return Status::Ok();
+      if (master::IsFinal(ev.event.state)) return Status::Ok();
+    }
+  }
+  return {StatusCode::kUnavailable, "watch of " + job_id + " timed out"};
+}
+
+Status ServiceClient::WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
+                                master::JobInfo* info) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  master::JobInfo i;
+  while (std::chrono::steady_clock::now() < deadline) {
+    Status s = GetStatus(job_id, &i);
+    if (s.ok() && master::IsFinal(i.state)) {
+      if (info) *info = i;
+      return s;
+    }
+    if (!s.ok() && s.code() != StatusCode::kUnavailable) return s;
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  if (info) *info = i;
+  return {StatusCode::kUnavailable, "job " + job_id + " not final in time"};
+}
+
+}  // namespace pz::client

@@ -1,0 +1,73 @@
+// The client library of the piezoid service: submit / status / watch / list / cancel / fetch over
+// ZeroMQ (a DEALER to the master's client endpoint), with per-request timeouts and Lazy-Pirate
+// retries (a fresh socket per retry; submissions are idempotent through a client token).
+//
+//   pz::client::ServiceClient c({.endpoint = "tcp://127.0.0.1:5556"});
+//   pz::client::SubmitResult r;
+//   std::vector<pz::master::FieldViolation> bad;
+//   pz::Status s = c.SubmitJson(json_text, &r, &bad);   // bad: field-named errors
+//   c.Watch(r.job_id, [](const pz::master::JobEvent& e) { ...; return true; }, 10min);
+//   c.Fetch(r.job_id, 5, &best, &log);
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "master/service_types.h"
+#include "model/status.h"
+
+namespace pz::client {
+
+struct ServiceClientOptions {
+  std::string endpoint = "tcp://127.0.0.1:5556";  ///< the master's client endpoint
+  int timeout_ms = 5000;                          ///< per attempt [ms]
+  int retries = 3;                                ///< attempts per request, ≥ 1
+};
+
+struct SubmitResult {
+  std::string job_id;
+  bool existed = false;  ///< the same (spec, token) had been submitted before
+};
+
+class ServiceClient {
+ public:
+  explicit ServiceClient(ServiceClientOptions options = {});
+  ~ServiceClient();
+
+  /// Submits a job. On CODE_INVALID_ARGUMENT returns kInvalidArgument and the field errors.
+  /// An empty token is replaced by a random one (retries of this call reuse it).
+  Status Submit(const master::JobSpec& spec, SubmitResult* out,
+                std::vector<master::FieldViolation>* violations = nullptr,
+                std::string client_token = {});
+  /// Parses a protobuf-JSON job spec (examples/) and submits it.
+  Status SubmitJson(const std::string& json, SubmitResult* out,
+                    std::vector<master::FieldViolation>* violations = nullptr,
+                    std::string client_token = {});
+  Status GetStatus(const std::string& job_id, master::JobInfo* info);
+  Status List(std::vector<master::JobInfo>* jobs, int* workers = nullptr,
+              int* worker_threads = nullptr);
+  Status Cancel(const std::string& job_id);
+  /// The best `count` individuals (best first) and the generation log.
+  Status Fetch(const std::string& job_id, int count, std::vector<master::ScoredGenome>* best,
+               std::vector<master::GenerationRecord>* log, master::JobInfo* info = nullptr);
+  /// Calls on_event for each pushed event until the job ends (returns Ok), on_event returns
+  /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches).
+  Status Watch(const std::string& job_id,
+               const std::function<bool(const master::JobEvent&)>& on_event,
+               std::chrono::milliseconds timeout);
+  /// Waits (polling status) until the job is final; its last info in *info.
+  Status WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
+                   master::JobInfo* info = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// pz::Status for a reply's wire code (transient codes → kUnavailable).
+Status StatusFromWire(master::WireCode code, const std::string& error);
+
+}  // namespace pz::client

@@ -1,0 +1,578 @@
+#include "master/broker.h"
+
+#include <spdlog/spdlog.h>
+#include <sys/eventfd.h>
+#include <unistd.h>
+
+#include <deque>
+#include <map>
+#include <random>
+#include <set>
+#include <zmq.hpp>
+
+#include "master/liveness.h"
+#include "master/wire_codec.h"
+
+namespace pz::master {
+namespace {
+
+struct Command {
+  enum class Type { kRegister, kUnregister, kSubmit, kPublish };
+  Type type = Type::kPublish;
+  std::string job_id, spec_bytes;
+  JobLimits limits;
+  std::shared_ptr<EvalTicket> ticket;
+  uint64_t generation = 0;
+  std::vector<Genome> genomes;
+  std::vector<int> indices;
+  JobEvent event;
+};
+
+void Finish(const std::shared_ptr<EvalTicket>& t, bool interrupted, std::string error = {}) {
+  {
+    std::lock_guard lock(t->mu);
+    t->finished = true;
+    t->interrupted = interrupted;
+    t->error = std::move(error);
+  }
+  t->cv.notify_all();
+}
+
+std::string Hex(const std::string& id) {
+  static const char* d = "0123456789abcdef";
+  std::string s;
+  for (unsigned char c : id) {
+    s += d[c >> 4];
+    s += d[c & 15];
+  }
+  return s;
+}
+
+}  // namespace
+
+struct Broker::Impl {
+  explicit Impl(BrokerOptions o)
+      : options(std::move(o)),
+        workers(ctx, zmq::socket_type::router),
+        clients(ctx, zmq::socket_type::router),
+        liveness(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
+        dispatcher(options.dispatch, std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {}
+
+  // ---- shared with other threads
+  BrokerOptions options;
+  std::mutex mu;
+  std::deque<Command> inbox;
+  int wake_fd = -1;
+  std::atomic<bool> stop{false};
+  bool stopped = false;  // under mu: the loop has ended
+  mutable std::mutex stats_mu;
+  BrokerStats stats;
+
+  // ---- broker thread only
+  zmq::context_t ctx{1};
+  zmq::socket_t workers, clients;
+  ClientHandler* handler = nullptr;
+  std::thread thread;
+  PeerLiveness liveness;
+  Dispatcher dispatcher;
+  struct Job {
+    std::string spec_bytes, context_hash;
+    JobLimits limits;
+    std::shared_ptr<EvalTicket> ticket;  // the generation being evaluated, if any
+    uint64_t generation = 0;
+    std::vector<Genome> genomes;
+    std::vector<int> indices;
+    std::set<std::string> watchers;  // client envelopes (identity frames joined)
+  };
+  std::map<std::string, Job> jobs;
+  std::map<std::string, std::string> contexts;  // hash → job id
+  std::map<std::string, std::vector<std::string>> watcher_envelopes;
+  BrokerStats local;
+  uint64_t bad_frames_logged = 0;
+
+  void Wake() {
+    uint64_t one = 1;
+    (void)!::write(wake_fd, &one, sizeof one);
+  }
+
+  void Post(Command c) {
+    {
+      std::lock_guard lock(mu);
+      if (stopped) {
+        if (c.ticket) Finish(c.ticket, true);
+        return;
+      }
+      inbox.push_back(std::move(c));
+    }
+    Wake();
+  }
+
+  void SendToWorker(const std::string& id, const WorkerMsg& m) {
+    const std::string payload = EncodeMasterToWorker(m);
+    workers.send(zmq::buffer(id), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+    workers.send(zmq::buffer(payload), zmq::send_flags::dontwait);
+  }
+
+  void SendToClient(const std::vector<std::string>& envelope, const ClientReplyMsg& m) {
+    const std::string payload = EncodeClientReply(m);
+    for (const auto& f : envelope)
+      clients.send(zmq::buffer(f), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+    clients.send(zmq::buffer(payload), zmq::send_flags::dontwait);
+  }
+
+  void BadFrame(const char* where, const std::string& why) {
+    ++local.bad_frames;
+    if (bad_frames_logged < 20 || bad_frames_logged % 1000 == 0)
+      spdlog::warn("broker: bad {} frame ({}), ignored", where, why);
+    ++bad_frames_logged;
+  }
+
+  // ------------------------------------------------------------------ commands from job threads
+  void Drain() {
+    std::deque<Command> cmds;
+    {
+      std::lock_guard lock(mu);
+      cmds.swap(inbox);
+    }
+    for (Command& c : cmds) {
+      switch (c.type) {
+        case Command::Type::kRegister: {
+          Job& j = jobs[c.job_id];
+          j.spec_bytes = std::move(c.spec_bytes);
+          j.context_hash = ContentHash(j.spec_bytes);
+          j.limits = c.limits;
+          contexts[j.context_hash] = c.job_id;
+          break;
+        }
+        case Command::Type::kUnregister: {
+          auto it = jobs.find(c.job_id);
+          if (it == jobs.end()) break;
+          if (it->second.ticket) Finish(it->second.ticket, true);
+          contexts.erase(it->second.context_hash);
+          dispatcher.RemoveJob(c.job_id);
+          jobs.erase(it);
+          break;
+        }
+        case Command::Type::kSubmit: {
+          auto it = jobs.find(c.job_id);
+          if (it == jobs.end()) {
+            Finish(c.ticket, true);
+            break;
+          }
+          Job& j = it->second;
+          if (j.ticket) Finish(j.ticket, true);
+          j.ticket = c.ticket;
+          j.generation = c.generation;
+          j.genomes = std::move(c.genomes);
+          j.indices = std::move(c.indices);
+          j.ticket->results.assign(j.genomes.size(), FitnessResult{});
+          dispatcher.StartGeneration(c.job_id, c.generation, static_cast<int>(j.genomes.size()),
+                                     j.limits.task_timeout_s, j.limits.quarantine_after);
+          if (j.genomes.empty()) CompleteGeneration(c.job_id, j);
+          break;
+        }
+        case Command::Type::kPublish: PublishEvent(c.event); break;
+      }
+    }
+  }
+
+  void PublishEvent(const JobEvent& e) {
+    auto it = jobs.find(e.job_id);
+    std::set<std::string>* watchers = it == jobs.end() ? nullptr : &it->second.watchers;
+    if (!watchers) return;
+    ClientReplyMsg m;
+    m.type = ClientReplyMsg::Type::kEvent;
+    m.code = WireCode::kOk;
+    m.event = e;
+    for (const auto& w : *watchers) SendToClient(watcher_envelopes[w], m);
+    if (IsFinal(e.state)) {
+      for (const auto& w : *watchers) watcher_envelopes.erase(w);
+      watchers->clear();
+    }
+  }
+
+  void CompleteGeneration(const std::string& job_id, Job& j) {
+    if (!j.ticket) return;
+    Finish(j.ticket, false);
+    j.ticket.reset();
+    j.genomes.clear();
+    j.indices.clear();
+  }
+
+  void Quarantine(const std::vector<Quarantined>& qs) {
+    for (const Quarantined& q : qs) {
+      auto it = jobs.find(q.job_id);
+      if (it == jobs.end() || !it->second.ticket || it->second.generation != q.generation) continue;
+      Job& j = it->second;
+      const int index = j.indices[q.position];
+      {
+        std::lock_guard lock(j.ticket->mu);
+        j.ticket->results[q.position] = {j.limits.penalty_cost, FitnessStatus::kError,
+                                         "quarantined"};
+        j.ticket->quarantined.push_back({q.generation, index, static_cast<uint32_t>(q.strikes)});
+      }
+      spdlog::warn("job {}: individual {} of generation {} quarantined after {} lost leases",
+                   q.job_id, index, q.generation, q.strikes);
+      if (dispatcher.remaining(q.job_id) == 0) CompleteGeneration(q.job_id, j);
+    }
+  }
+
+  // ------------------------------------------------------------------ workers
+  void RemoveWorker(const std::string& id, bool strike, const char* why) {
+    if (!dispatcher.HasWorker(id)) return;
+    spdlog::info("worker {} removed ({})", Hex(id), why);
+    liveness.Remove(id);
+    Quarantine(dispatcher.RemoveWorker(id, strike));
+  }
+
+  void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now) {
+    WorkerMsg m;
+    Status s = DecodeWorkerToMaster(payload, &m);
+    if (!s.ok()) {
+      BadFrame("worker", s.message());
+      WorkerMsg answer;
+      answer.type = WorkerMsg::Type::kDisconnect;
+      answer.code = DecodeFailureCode(s);
+      answer.reason = s.message();
+      SendToWorker(id, answer);
+      return;
+    }
+    const bool known = dispatcher.HasWorker(id);
+    if (known) liveness.Seen(id, now);
+    switch (m.type) {
+      case WorkerMsg::Type::kReady:
+        if (known) RemoveWorker(id, false, "re-announced");
+        dispatcher.AddWorker(id, m.threads);
+        liveness.Seen(id, now);
+        spdlog::info("worker {} ready: {} threads, host {} pid {}", Hex(id), m.threads, m.host,
+                     m.pid);
+        return;
+      case WorkerMsg::Type::kDisconnect:
+        RemoveWorker(id, false, "disconnected");
+        return;
+      default: break;
+    }
+    if (!known) {  // e.g. after a master restart: ask it to announce itself
+      WorkerMsg answer;
+      answer.type = WorkerMsg::Type::kDisconnect;
+      answer.code = WireCode::kFailedPrecondition;
+      answer.reason = "unknown worker: reconnect and send READY";
+      SendToWorker(id, answer);
+      return;
+    }
+    if (m.type == WorkerMsg::Type::kContextRequest) {
+      WorkerMsg answer;
+      answer.type = WorkerMsg::Type::kContext;
+      answer.context_hash = m.context_hash;
+      auto c = contexts.find(m.context_hash);
+      if (c != contexts.end() && jobs.count(c->second)) {
+        answer.context_spec = jobs[c->second].spec_bytes;
+        answer.code = WireCode::kOk;
+      } else {
+        answer.code = WireCode::kNotFound;
+      }
+      SendToWorker(id, answer);
+    } else if (m.type == WorkerMsg::Type::kResult) {
+      OnResult(id, m.result);
+    }
+  }
+
+  void OnResult(const std::string& id, const BatchResultMsg& r) {
+    auto lease = dispatcher.Complete(id, r.lease_id, r.eval_seconds);
+    if (!lease) {
+      ++local.results_ignored;
+      return;
+    }
+    auto it = jobs.find(lease->job_id);
+    if (it == jobs.end() || !it->second.ticket || it->second.generation != lease->generation) {
+      ++local.results_ignored;
+      return;
+    }
+    Job& j = it->second;
+    if (r.code != WireCode::kOk) {
+      if (IsTransient(r.code)) {
+        Quarantine(dispatcher.Requeue(*lease, false));
+      } else {
+        spdlog::error("job {}: worker reports a deterministic error: {}", lease->job_id, r.error);
+        dispatcher.RemoveJob(lease->job_id);
+        Finish(j.ticket, false, r.error.empty() ? "worker error" : r.error);
+        j.ticket.reset();
+      }
+      return;
+    }
+    bool consistent = r.indices.size() == lease->positions.size() && r.job_id == lease->job_id &&
+                      r.generation == lease->generation;
+    for (size_t i = 0; consistent && i < r.indices.size(); ++i)
+      consistent = r.indices[i] == j.indices[lease->positions[i]];
+    if (!consistent) {
+      BadFrame("result", "does not match its lease");
+      Quarantine(dispatcher.Requeue(*lease, false));
+      return;
+    }
+    ++local.results_accepted;
+    {
+      std::lock_guard lock(j.ticket->mu);
+      for (size_t i = 0; i < r.indices.size(); ++i) {
+        const int pos = lease->positions[i];
+        if (dispatcher.MarkDone(lease->job_id, lease->generation, pos)) {
+          j.ticket->results[pos] = r.results[i];
+          ++local.tasks_done;
+        }
+      }
+    }
+    if (dispatcher.remaining(lease->job_id) == 0) CompleteGeneration(lease->job_id, j);
+  }
+
+  void Dispatch(TimePoint now) {
+    while (auto lease = dispatcher.NextLease(now)) {
+      const Job& j = jobs.at(lease->job_id);
+      WorkerMsg m;
+      m.type = WorkerMsg::Type::kBatch;
+      m.batch.lease_id = lease->id;
+      m.batch.job_id = lease->job_id;
+      m.batch.generation = lease->generation;
+      m.batch.context_hash = j.context_hash;
+      m.batch.deadline_s = std::chrono::duration<double>(lease->deadline - now).count();
+      for (int p : lease->positions) {
+        m.batch.indices.push_back(j.indices[p]);
+        m.batch.genomes.push_back(j.genomes[p]);
+      }
+      SendToWorker(lease->worker, m);
+      ++local.leases_sent;
+    }
+  }
+
+  // ------------------------------------------------------------------ clients
+  void OnClientFrames(std::vector<zmq::message_t>& frames) {
+    std::vector<std::string> envelope;
+    for (size_t i = 0; i + 1 < frames.size(); ++i) envelope.push_back(frames[i].to_string());
+    const auto& last = frames.back();
+    ClientRequestMsg req;
+    Status s = DecodeClientRequest({static_cast<const char*>(last.data()), last.size()}, &req);
+    ClientReplyMsg reply;
+    reply.request_id = req.request_id;
+    if (!s.ok()) {
+      BadFrame("client", s.message());
+      reply.code = DecodeFailureCode(s);
+      reply.error = s.message();
+      SendToClient(envelope, reply);
+      return;
+    }
+    if (req.type == ClientRequestMsg::Type::kPing) {
+      reply.code = WireCode::kOk;
+    } else if (req.type == ClientRequestMsg::Type::kWatch) {
+      ClientRequestMsg status = req;
+      status.type = ClientRequestMsg::Type::kStatus;
+      reply = handler->Handle(status);
+      reply.request_id = req.request_id;
+      auto it = jobs.find(req.job_id);
+      if (reply.code == WireCode::kOk && !IsFinal(reply.info.state) && it != jobs.end()) {
+        if (static_cast<int>(it->second.watchers.size()) >= options.max_watchers_per_job) {
+          reply.code = WireCode::kResourceExhausted;
+          reply.error = "too many watchers of job " + req.job_id;
+        } else {
+          std::string key;
+          for (const auto& f : envelope) key += f + '\0';
+          it->second.watchers.insert(key);
+          watcher_envelopes[key] = envelope;
+        }
+      }
+    } else {
+      reply = handler->Handle(req);
+      reply.request_id = req.request_id;
+      if (req.type == ClientRequestMsg::Type::kList) {
+        reply.workers = dispatcher.worker_count();
+        reply.worker_threads = dispatcher.total_threads();
+      }
+    }
+    SendToClient(envelope, reply);
+  }
+
+  // ------------------------------------------------------------------ the loop
+  bool RecvFrames(zmq::socket_t& sock, std::vector<zmq::message_t>& frames) {
+    frames.clear();
+    for (int i = 0; i < 64; ++i) {
+      zmq::message_t msg;
+      if (!sock.recv(msg, zmq::recv_flags::dontwait)) return !frames.empty();
+      const bool more = msg.more();
+      frames.push_back(std::move(msg));
+      if (!more) return true;
+    }
+    // Too many frames: drain the rest of the message.
+    for (int guard = 0; guard < 1000000; ++guard) {
+      zmq::message_t msg;
+      if (!sock.recv(msg, zmq::recv_flags::dontwait) || !msg.more()) break;
+    }
+    frames.clear();
+    BadFrame("multipart", "more than 64 frames");
+    return false;
+  }
+
+  void Run() {
+    std::vector<zmq::message_t> frames;
+    while (!stop.load()) {
+      const TimePoint before = Clock::now();
+      TimePoint next = std::min({liveness.next_heartbeat(), liveness.NextExpiry(),
+                                 dispatcher.NextDeadline(), before + std::chrono::milliseconds(200)});
+      const long timeout_ms = std::max<long>(
+          0, std::chrono::duration_cast<std::chrono::milliseconds>(next - before).count() + 1);
+      zmq::pollitem_t items[] = {{workers.handle(), 0, ZMQ_POLLIN, 0},
+                                 {clients.handle(), 0, ZMQ_POLLIN, 0},
+                                 {nullptr, wake_fd, ZMQ_POLLIN, 0}};
+      try {
+        zmq::poll(items, 3, std::chrono::milliseconds(timeout_ms));
+      } catch (const zmq::error_t& e) {
+        if (e.num() == EINTR) continue;
+        throw;
+      }
+      if (items[2].revents & ZMQ_POLLIN) {
+        uint64_t v;
+        (void)!::read(wake_fd, &v, sizeof v);
+      }
+      Drain();
+      TimePoint now = Clock::now();
+      for (int n = 0; n < 10000 && RecvFrames(workers, frames); ++n) {
+        if (frames.size() != 2 || frames[0].size() == 0) {
+          BadFrame("worker", std::to_string(frames.size()) + " frames");
+          continue;
+        }
+        OnWorkerFrame(frames[0].to_string(),
+                      {static_cast<const char*>(frames[1].data()), frames[1].size()}, now);
+      }
+      for (int n = 0; n < 1000 && RecvFrames(clients, frames); ++n) {
+        if (frames.size() < 2) {
+          BadFrame("client", "no envelope");
+          continue;
+        }
+        OnClientFrames(frames);
+      }
+      now = Clock::now();
+      for (const std::string& id : liveness.TakeExpired(now)) {
+        spdlog::warn("worker {} missed its heartbeats", Hex(id));
+        Quarantine(dispatcher.RemoveWorker(id, true));
+      }
+      Quarantine(dispatcher.ExpireLeases(now));
+      if (liveness.HeartbeatDue(now)) {
+        WorkerMsg hb;
+        hb.type = WorkerMsg::Type::kHeartbeat;
+        for (const auto& id : liveness.ids()) SendToWorker(id, hb);
+      }
+      Dispatch(now);
+      std::lock_guard lock(stats_mu);
+      stats = local;
+      stats.workers = dispatcher.worker_count();
+      stats.worker_threads = dispatcher.total_threads();
+    }
+    for (auto& [id, j] : jobs)
+      if (j.ticket) Finish(j.ticket, true);
+    std::lock_guard lock(mu);
+    stopped = true;
+    for (auto& c : inbox)
+      if (c.ticket) Finish(c.ticket, true);
+    inbox.clear();
+  }
+
+};
+
+Broker::Broker(BrokerOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+
+Broker::~Broker() { Stop(); }
+
+Status Broker::Start(ClientHandler* handler) {
+  Impl& m = *impl_;
+  m.handler = handler;
+  try {
+    for (zmq::socket_t* s : {&m.workers, &m.clients}) {
+      s->set(zmq::sockopt::linger, 0);
+      s->set(zmq::sockopt::maxmsgsize, m.options.max_message_bytes);
+      s->set(zmq::sockopt::sndhwm, 100000);
+      s->set(zmq::sockopt::rcvhwm, 100000);
+    }
+    m.workers.bind(m.options.worker_endpoint);
+    m.clients.bind(m.options.client_endpoint);
+    worker_endpoint_ = m.workers.get(zmq::sockopt::last_endpoint);
+    client_endpoint_ = m.clients.get(zmq::sockopt::last_endpoint);
+  } catch (const zmq::error_t& e) {
+    return {StatusCode::kUnavailable, std::string("cannot bind: ") + e.what()};
+  }
+  m.wake_fd = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (m.wake_fd < 0) return Internal("eventfd failed");
+  m.thread = std::thread([&m] { m.Run(); });
+  return Status::Ok();
+}
+
+void Broker::Stop() {
+  Impl& m = *impl_;
+  if (!m.thread.joinable()) return;
+  m.stop = true;
+  m.Wake();
+  m.thread.join();
+  m.workers.close();
+  m.clients.close();
+  ::close(m.wake_fd);
+}
+
+void Broker::RegisterJob(const std::string& job_id, const std::string& spec_bytes,
+                         const JobLimits& limits) {
+  Command c;
+  c.type = Command::Type::kRegister;
+  c.job_id = job_id;
+  c.spec_bytes = spec_bytes;
+  c.limits = limits;
+  impl_->Post(std::move(c));
+}
+
+void Broker::UnregisterJob(const std::string& job_id) {
+  Command c;
+  c.type = Command::Type::kUnregister;
+  c.job_id = job_id;
+  impl_->Post(std::move(c));
+}
+
+std::shared_ptr<EvalTicket> Broker::Submit(const std::string& job_id, uint64_t generation,
+                                           std::span<const Genome> genomes,
+                                           std::span<const int> indices) {
+  Command c;
+  c.type = Command::Type::kSubmit;
+  c.job_id = job_id;
+  c.generation = generation;
+  c.genomes.assign(genomes.begin(), genomes.end());
+  c.indices.assign(indices.begin(), indices.end());
+  c.ticket = std::make_shared<EvalTicket>();
+  auto t = c.ticket;
+  impl_->Post(std::move(c));
+  return t;
+}
+
+void Broker::Publish(const JobEvent& event) {
+  Command c;
+  c.type = Command::Type::kPublish;
+  c.job_id = event.job_id;
+  c.event = event;
+  impl_->Post(std::move(c));
+}
+
+BrokerStats Broker::stats() const {
+  std::lock_guard lock(impl_->stats_mu);
+  return impl_->stats;
+}
+
+void BrokerEvaluator::Evaluate(const EvalBatch& batch, std::span<FitnessResult> out) {
+  interrupted_ = false;
+  error_.clear();
+  auto t = broker_.Submit(job_id_, batch.generation, batch.genomes, batch.indices);
+  std::unique_lock lock(t->mu);
+  t->cv.wait(lock, [&] { return t->finished; });
+  interrupted_ = t->interrupted || !t->error.empty();
+  error_ = t->error;
+  if (interrupted_) {
+    for (auto& r : out) r = {0, FitnessStatus::kError, "interrupted"};
+    return;
+  }
+  for (size_t i = 0; i < out.size() && i < t->results.size(); ++i) out[i] = t->results[i];
+  quarantined_.insert(quarantined_.end(), t->quarantined.begin(), t->quarantined.end());
+}
+
+int BrokerEvaluator::concurrency() const { return std::max(1, broker_.stats().worker_threads); }
+
+}  // namespace pz::master

@@ -1,0 +1,114 @@
+// The master's transport: one ROUTER for workers, one for clients, one thread owning both
+// (conventions 10, 11). Job threads hand it generations to evaluate through BrokerEvaluator (the
+// broker-backed BatchEvaluator) and events to push to watching clients; client requests are
+// answered by a ClientHandler (the job store). Scheduling is master/dispatcher.h.
+//
+// Robustness: every frame is decoded into a status, never trusted; a frame above
+// max_message_bytes is refused by ZeroMQ (ZMQ_MAXMSGSIZE drops the sender's connection); a bad
+// frame gets a typed error answer (CODE_MALFORMED / CODE_VERSION_MISMATCH) and is counted.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <span>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "master/dispatcher.h"
+#include "master/evaluator.h"
+#include "master/service_types.h"
+#include "model/status.h"
+
+namespace pz::master {
+
+struct BrokerOptions {
+  std::string worker_endpoint = "tcp://127.0.0.1:5555";  ///< "tcp://127.0.0.1:*" = any free port
+  std::string client_endpoint = "tcp://127.0.0.1:5556";
+  int heartbeat_ms = 500;                  ///< heartbeat interval, both ways [ms]
+  int liveness = 6;                        ///< missed intervals before a worker is dead
+  int64_t max_message_bytes = 64 << 20;    ///< larger frames are refused
+  int max_watchers_per_job = 64;
+  DispatchOptions dispatch;
+};
+
+/// Answers client requests (called on the broker thread; must not block for long).
+class ClientHandler {
+ public:
+  virtual ~ClientHandler() = default;
+  virtual ClientReplyMsg Handle(const ClientRequestMsg& request) = 0;
+};
+
+/// One generation handed to the broker; completed by the broker thread.
+struct EvalTicket {
+  std::mutex mu;
+  std::condition_variable cv;
+  bool finished = false;
+  bool interrupted = false;  ///< cancelled or shut down: results are meaningless
+  std::string error;         ///< a worker's deterministic error: the job must fail
+  std::vector<FitnessResult> results;
+  std::vector<QuarantineRecord> quarantined;
+};
+
+struct BrokerStats {
+  int workers = 0, worker_threads = 0;
+  uint64_t leases_sent = 0, results_accepted = 0, results_ignored = 0, bad_frames = 0;
+  uint64_t tasks_done = 0;
+};
+
+class Broker {
+ public:
+  explicit Broker(BrokerOptions options);
+  ~Broker();
+  Broker(const Broker&) = delete;
+  Broker& operator=(const Broker&) = delete;
+
+  /// Binds both endpoints and starts the broker thread.
+  Status Start(ClientHandler* handler);
+  /// Stops the thread; outstanding tickets are interrupted.
+  void Stop();
+  /// The bound endpoints (with the actual port when bound to '*').
+  const std::string& worker_endpoint() const { return worker_endpoint_; }
+  const std::string& client_endpoint() const { return client_endpoint_; }
+
+  // Thread-safe, for job threads.
+  void RegisterJob(const std::string& job_id, const std::string& spec_bytes,
+                   const JobLimits& limits);
+  /// Forgets the job and interrupts its outstanding ticket (cancel).
+  void UnregisterJob(const std::string& job_id);
+  std::shared_ptr<EvalTicket> Submit(const std::string& job_id, uint64_t generation,
+                                     std::span<const Genome> genomes,
+                                     std::span<const int> indices);
+  void Publish(const JobEvent& event);
+  BrokerStats stats() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  std::string worker_endpoint_, client_endpoint_;
+};
+
+/// The broker-backed BatchEvaluator of one job (blocks until the generation is evaluated).
+class BrokerEvaluator final : public BatchEvaluator {
+ public:
+  BrokerEvaluator(Broker& broker, std::string job_id)
+      : broker_(broker), job_id_(std::move(job_id)) {}
+  void Evaluate(const EvalBatch& batch, std::span<FitnessResult> out) override;
+  int concurrency() const override;
+  /// The last Evaluate was interrupted (cancel / shutdown) or failed (error() non-empty).
+  bool interrupted() const { return interrupted_; }
+  const std::string& error() const { return error_; }
+  std::vector<QuarantineRecord> TakeQuarantined() { return std::move(quarantined_); }
+
+ private:
+  Broker& broker_;
+  std::string job_id_;
+  bool interrupted_ = false;
+  std::string error_;
+  std::vector<QuarantineRecord> quarantined_;
+};
+
+}  // namespace pz::master

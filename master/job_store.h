@@ -1,0 +1,61 @@
+// The master's jobs: validation on submission, one thread per running job (JobRunner over a
+// BrokerEvaluator), a checkpoint after every generation, resumption of every unfinished job on
+// start, and the answers to client requests.
+#pragma once
+
+#include <atomic>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "master/broker.h"
+#include "master/checkpoint.h"
+#include "master/job_kinds.h"
+
+namespace pz::master {
+
+struct JobStoreOptions {
+  std::filesystem::path state_dir = "piezoid-state";
+  int max_running_jobs = 64;  ///< further submissions are refused (CODE_RESOURCE_EXHAUSTED)
+};
+
+class JobStore final : public ClientHandler {
+ public:
+  JobStore(JobStoreOptions options, Broker& broker, const JobKindRegistry& kinds);
+  ~JobStore() override;
+
+  /// Loads every stored job and restarts the unfinished ones from their last checkpoint.
+  Status Resume();
+  ClientReplyMsg Handle(const ClientRequestMsg& request) override;
+  /// Stops the broker and every job thread without changing any job's stored state.
+  void Shutdown();
+
+  /// Job id of a spec submitted with a client token (content-addressed: retries are idempotent).
+  static std::string JobIdOf(const std::string& spec_bytes, const std::string& client_token);
+
+ private:
+  struct Job {
+    std::string id, spec_bytes;
+    JobSpec spec;
+    std::mutex mu;
+    JobCheckpoint checkpoint;  // the last saved one
+    std::atomic<bool> cancel{false}, shutdown{false};
+    std::thread thread;
+  };
+  void Start(const std::shared_ptr<Job>& job);
+  void Run(Job& job);
+  void Save(Job& job, const JobCheckpoint& c);
+  JobInfo Info(Job& job);
+
+  JobStoreOptions options_;
+  Broker& broker_;
+  const JobKindRegistry& kinds_;
+  JobDirectory dir_;
+  std::mutex mu_;
+  std::map<std::string, std::shared_ptr<Job>> jobs_;
+};
+
+}  // namespace pz::master

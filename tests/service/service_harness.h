@@ -1,0 +1,191 @@
+// Helpers of the multi-process service tests: spawn piezoid-master / piezoid-worker on
+// 127.0.0.1 with free ports and a temporary state directory; every wait is bounded.
+#pragma once
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "client/service_client.h"
+#include "master/job_runner.h"
+#include "master/wire_codec.h"
+
+extern char** environ;
+
+namespace pz::testing {
+namespace fs = std::filesystem;
+
+inline fs::path BuildDir() {
+  return fs::read_symlink("/proc/self/exe").parent_path().parent_path();
+}
+
+inline int FreePort() {
+  int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  a.sin_port = 0;
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+class Process {
+ public:
+  Process(const fs::path& exe, std::vector<std::string> args, const fs::path& log) {
+    std::vector<char*> argv;
+    std::string exe_s = exe.string();
+    argv.push_back(exe_s.data());
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+    posix_spawn_file_actions_adddup2(&fa, 1, 2);
+    if (posix_spawn(&pid_, exe_s.c_str(), &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&fa);
+  }
+  ~Process() { Kill(SIGKILL); }
+  Process(const Process&) = delete;
+  pid_t pid() const { return pid_; }
+  bool running() {
+    if (pid_ <= 0) return false;
+    int st;
+    if (::waitpid(pid_, &st, WNOHANG) == pid_) {
+      pid_ = -1;
+      return false;
+    }
+    return true;
+  }
+  /// Sends sig and reaps the process (bounded: 10 s, then SIGKILL).
+  void Kill(int sig) {
+    if (pid_ <= 0) return;
+    ::kill(pid_, sig);
+    for (int i = 0; i < 1000; ++i) {
+      int st;
+      if (::waitpid(pid_, &st, WNOHANG) == pid_) {
+        pid_ = -1;
+        return;
+      }
+      if (i == 999 || (i > 0 && i % 200 == 0)) ::kill(pid_, SIGKILL);
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+
+ private:
+  pid_t pid_ = -1;
+};
+
+/// A master and its workers on free loopback ports, with fast heartbeats.
+class Cluster {
+ public:
+  explicit Cluster(const std::string& name, std::vector<std::string> master_extra = {})
+      : master_extra_(std::move(master_extra)) {
+    dir_ = fs::temp_directory_path() /
+           ("pz-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(FreePort()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    worker_ep_ = "tcp://127.0.0.1:" + std::to_string(FreePort());
+    client_ep_ = "tcp://127.0.0.1:" + std::to_string(FreePort());
+    StartMaster();
+  }
+  ~Cluster() {
+    workers_.clear();
+    master_.reset();
+    std::error_code ec;
+    if (!::testing::Test::HasFailure()) fs::remove_all(dir_, ec);
+  }
+  void StartMaster() {
+    std::vector<std::string> args = {"--workers", worker_ep_, "--clients", client_ep_,
+                                     "--state-dir", (dir_ / "state").string(),
+                                     "--heartbeat-ms", "100", "--liveness", "5",
+                                     "--log-level", "warn"};
+    args.insert(args.end(), master_extra_.begin(), master_extra_.end());
+    master_ = std::make_unique<Process>(BuildDir() / "master" / "piezoid-master", args,
+                                        dir_ / "master.log");
+  }
+  void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
+  Process& AddWorker(int threads) {
+    workers_.push_back(std::make_unique<Process>(
+        BuildDir() / "worker" / "piezoid-worker",
+        std::vector<std::string>{"--master", worker_ep_, "--threads", std::to_string(threads),
+                                 "--heartbeat-ms", "100", "--liveness", "5", "--backoff-max-ms",
+                                 "500", "--log-level", "warn"},
+        dir_ / "workers.log"));
+    return *workers_.back();
+  }
+  std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
+  client::ServiceClient Client(int timeout_ms = 2000, int retries = 3) {
+    return client::ServiceClient({client_ep_, timeout_ms, retries});
+  }
+  const std::string& worker_endpoint() const { return worker_ep_; }
+  const std::string& client_endpoint() const { return client_ep_; }
+  const fs::path& dir() const { return dir_; }
+
+ private:
+  fs::path dir_;
+  std::string worker_ep_, client_ep_;
+  std::vector<std::string> master_extra_;
+  std::unique_ptr<Process> master_;
+  std::vector<std::unique_ptr<Process>> workers_;
+};
+
+inline master::JobSpec SyntheticSpec(uint64_t seed, int population, int generations,
+                                     double sleep_ms = 0, int bits = 64) {
+  master::JobSpec s;
+  s.name = "test";
+  s.seed = seed;
+  master::SyntheticProblem p;
+  p.cost = master::SyntheticProblem::Cost::kFunction;
+  p.genome_bits = bits;
+  p.sleep_ms = sleep_ms;
+  s.problem = p;
+  master::GaSettings ga;
+  ga.population = population;
+  ga.generations = generations;
+  ga.stall_generations = 0;
+  ga.mutation_probability = 0.02;
+  s.ga = ga;
+  return s;
+}
+
+/// The in-process reference run of a spec.
+inline master::JobCheckpoint Reference(const master::JobSpec& spec) {
+  master::JobCheckpoint c;
+  Status s = master::RunJobInProcess("ref", spec, master::JobKindRegistry::Default(), &c);
+  PZ_CHECK_MSG(s.ok(), s.message());
+  return c;
+}
+
+/// Expects the service's best and log to equal the reference bit for bit.
+inline void ExpectSameRun(const master::JobCheckpoint& ref,
+                          const std::vector<master::ScoredGenome>& best,
+                          const std::vector<master::GenerationRecord>& log) {
+  ASSERT_EQ(log.size(), ref.log.size());
+  for (size_t i = 0; i < log.size(); ++i) EXPECT_EQ(log[i], ref.log[i]) << "generation " << i;
+  ASSERT_FALSE(best.empty());
+  ASSERT_LE(best.size(), ref.best.size());
+  for (size_t i = 0; i < best.size(); ++i) {
+    EXPECT_EQ(best[i].genome, ref.best[i].genome) << "best #" << i;
+    EXPECT_EQ(std::memcmp(&best[i].fitness.cost, &ref.best[i].fitness.cost, sizeof(double)), 0)
+        << "best #" << i << ": " << best[i].fitness.cost << " vs " << ref.best[i].fitness.cost;
+  }
+}
+
+}  // namespace pz::testing

@@ -1,0 +1,402 @@
+#include "worker/worker.h"
+
+#include <spdlog/spdlog.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <cmath>
+#include <deque>
+#include <list>
+#include <map>
+#include <thread>
+#include <unordered_map>
+#include <zmq.hpp>
+
+#include "master/inline_evaluator.h"
+#include "master/liveness.h"
+#include "master/wire_codec.h"
+
+namespace pz::worker {
+namespace {
+
+using master::Clock;
+using master::TimePoint;
+using master::WireCode;
+using master::WorkerMsg;
+
+struct Context {
+  master::JobSpec spec;
+  std::unique_ptr<master::FitnessFunction> fitness;
+};
+
+struct LocalLease {
+  master::TaskBatchMsg batch;
+  std::shared_ptr<const Context> context;
+  std::vector<master::FitnessResult> results;
+  int next = 0;         // next task not yet handed to a thread
+  int remaining = 0;    // tasks not yet evaluated
+  int in_progress = 0;  // chunks out at threads
+  double eval_s = 0;
+  bool abandoned = false;
+};
+
+// inproc messages carry these PODs (same process).
+struct Chunk {
+  LocalLease* lease;
+  int begin, end;
+};
+struct Done {
+  LocalLease* lease;
+  int begin, end;
+  double eval_s;
+};
+
+void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
+  zmq::socket_t s(ctx, zmq::socket_type::dealer);
+  s.set(zmq::sockopt::routing_id, "c" + std::to_string(id));
+  s.set(zmq::sockopt::linger, 0);
+  s.connect(endpoint);
+  Done d{nullptr, 0, 0, 0};
+  s.send(zmq::buffer(&d, sizeof d));
+  for (;;) {
+    zmq::message_t m;
+    if (!s.recv(m) || m.size() != sizeof(Chunk)) break;
+    Chunk c;
+    std::memcpy(&c, m.data(), sizeof c);
+    if (!c.lease) break;
+    Done out{c.lease, c.begin, c.end, 0};
+    const auto& f = *c.lease->context->fitness;
+    const double penalty = c.lease->context->spec.limits.penalty_cost;
+    for (int i = c.begin; i < c.end; ++i) {
+      const auto t0 = Clock::now();
+      c.lease->results[i] = master::EvaluateGuarded(f, c.lease->batch.genomes[i], penalty);
+      out.eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
+    }
+    s.send(zmq::buffer(&out, sizeof out));
+  }
+}
+
+}  // namespace
+
+struct Worker::Impl {
+  Impl(WorkerOptions o, const master::JobKindRegistry& k)
+      : options(std::move(o)),
+        kinds(k),
+        inproc(ctx, zmq::socket_type::router),
+        server(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
+        backoff(std::chrono::milliseconds(options.backoff_initial_ms),
+                std::chrono::milliseconds(options.backoff_max_ms)) {}
+
+  WorkerOptions options;
+  const master::JobKindRegistry& kinds;
+  zmq::context_t ctx{1};
+  zmq::socket_t inproc;
+  std::unique_ptr<zmq::socket_t> master;
+  std::string inproc_endpoint;
+  std::vector<std::thread> threads;
+  std::deque<std::string> idle;  // compute thread ids waiting for work
+  std::unordered_map<LocalLease*, std::unique_ptr<LocalLease>> leases;
+  std::deque<LocalLease*> ready;  // leases with tasks not yet handed out
+  std::map<std::string, std::vector<std::unique_ptr<LocalLease>>> parked;  // by context hash
+  std::list<std::pair<std::string, std::shared_ptr<const Context>>> contexts;  // LRU, front = newest
+  master::ServerLiveness server;
+  master::Backoff backoff;
+  WorkerStats stats;
+
+  void Send(const WorkerMsg& m) {
+    const std::string payload = master::EncodeWorkerToMaster(m);
+    master->send(zmq::buffer(payload), zmq::send_flags::dontwait);
+  }
+
+  void Connect() {
+    master = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
+    master->set(zmq::sockopt::linger, 0);
+    master->set(zmq::sockopt::maxmsgsize, options.max_message_bytes);
+    master->set(zmq::sockopt::reconnect_ivl, options.backoff_initial_ms);
+    master->set(zmq::sockopt::reconnect_ivl_max, options.backoff_max_ms);
+    master->connect(options.master);
+    WorkerMsg ready_msg;
+    ready_msg.type = WorkerMsg::Type::kReady;
+    ready_msg.threads = options.threads;
+    char host[256] = {0};
+    ::gethostname(host, sizeof host - 1);
+    ready_msg.host = host;
+    ready_msg.pid = ::getpid();
+    Send(ready_msg);
+    server.Reset(Clock::now());
+  }
+
+  /// Drops every lease (the master re-queues them) and the parked ones.
+  void AbandonAll() {
+    ready.clear();
+    parked.clear();
+    for (auto it = leases.begin(); it != leases.end();) {
+      it->second->abandoned = true;
+      if (it->second->in_progress == 0)
+        it = leases.erase(it);
+      else
+        ++it;
+    }
+  }
+
+  void Reconnect(const std::atomic<bool>& stop, const char* why) {
+    spdlog::warn("master {}: {}; reconnecting", options.master, why);
+    AbandonAll();
+    master.reset();
+    ++stats.reconnects;
+    const auto delay = backoff.Next();
+    const auto until = Clock::now() + delay;
+    // Keep serving compute threads (finishing chunks) while waiting.
+    while (!stop.load() && Clock::now() < until) {
+      PollInproc(std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()));
+    }
+    if (!stop.load()) Connect();
+  }
+
+  std::shared_ptr<const Context> FindContext(const std::string& hash) {
+    for (auto it = contexts.begin(); it != contexts.end(); ++it) {
+      if (it->first == hash) {
+        contexts.splice(contexts.begin(), contexts, it);
+        return it->second;
+      }
+    }
+    return nullptr;
+  }
+
+  void Reply(LocalLease& l, WireCode code, const std::string& error) {
+    WorkerMsg m;
+    m.type = WorkerMsg::Type::kResult;
+    m.result.lease_id = l.batch.lease_id;
+    m.result.job_id = l.batch.job_id;
+    m.result.generation = l.batch.generation;
+    m.result.code = code;
+    m.result.error = error;
+    if (code == WireCode::kOk) {
+      m.result.indices = l.batch.indices;
+      m.result.results = l.results;
+      m.result.eval_seconds = l.eval_s;
+    }
+    Send(m);
+  }
+
+  void Enqueue(std::unique_ptr<LocalLease> l, std::shared_ptr<const Context> c) {
+    l->context = std::move(c);
+    l->results.resize(l->batch.genomes.size());
+    l->remaining = static_cast<int>(l->batch.genomes.size());
+    ++stats.leases;
+    if (l->remaining == 0) {
+      Reply(*l, WireCode::kOk, {});
+      return;
+    }
+    LocalLease* p = l.get();
+    leases[p] = std::move(l);
+    ready.push_back(p);
+  }
+
+  void OnMaster(std::string_view payload, const std::atomic<bool>& stop) {
+    WorkerMsg m;
+    pz::Status s = master::DecodeMasterToWorker(payload, &m);
+    if (!s.ok()) {
+      spdlog::warn("bad frame from the master ignored: {}", s.message());
+      return;
+    }
+    server.Seen(Clock::now());
+    backoff.Reset();
+    switch (m.type) {
+      case WorkerMsg::Type::kBatch: {
+        auto l = std::make_unique<LocalLease>();
+        l->batch = std::move(m.batch);
+        const std::string hash = l->batch.context_hash;
+        if (auto c = FindContext(hash)) {
+          Enqueue(std::move(l), c);
+        } else {
+          auto& waiting = parked[hash];
+          if (waiting.empty()) {
+            WorkerMsg req;
+            req.type = WorkerMsg::Type::kContextRequest;
+            req.context_hash = hash;
+            Send(req);
+          }
+          waiting.push_back(std::move(l));
+        }
+        break;
+      }
+      case WorkerMsg::Type::kContext: OnContext(m); break;
+      case WorkerMsg::Type::kDisconnect:
+        Reconnect(stop, ("master says: " + m.reason).c_str());
+        break;
+      default: break;
+    }
+  }
+
+  void OnContext(const WorkerMsg& m) {
+    auto waiting = parked.find(m.context_hash);
+    if (waiting == parked.end()) return;
+    auto leases_waiting = std::move(waiting->second);
+    parked.erase(waiting);
+    WireCode code = WireCode::kOk;
+    std::string error;
+    auto c = std::make_shared<Context>();
+    if (m.code != WireCode::kOk) {
+      code = WireCode::kUnavailable;
+      error = "context " + m.context_hash + " not available";
+    } else if (master::ContentHash(m.context_spec) != m.context_hash) {
+      code = WireCode::kUnavailable;
+      error = "context does not match its hash";
+    } else {
+      std::vector<master::FieldViolation> violations;
+      pz::Status s = master::DecodeJobSpec(m.context_spec, &c->spec, &violations);
+      for (auto& v : kinds.Validate(c->spec)) violations.push_back(v);
+      if (s.ok() && violations.empty()) s = kinds.MakeFitness(c->spec, &c->fitness);
+      if (!s.ok() || !violations.empty()) {
+        code = WireCode::kInvalidArgument;
+        error = !s.ok() ? s.message() : violations.front().description;
+      }
+    }
+    if (code != WireCode::kOk) {
+      spdlog::error("job context {}: {}", m.context_hash, error);
+      for (auto& l : leases_waiting) Reply(*l, code, error);
+      return;
+    }
+    ++stats.contexts_fetched;
+    contexts.emplace_front(m.context_hash, c);
+    while (static_cast<int>(contexts.size()) > std::max(1, options.max_contexts)) contexts.pop_back();
+    for (auto& l : leases_waiting) Enqueue(std::move(l), c);
+  }
+
+  void OnDone(const std::string& thread_id, const Done& d) {
+    if (d.lease) {
+      auto it = leases.find(d.lease);
+      if (it != leases.end()) {
+        LocalLease& l = *it->second;
+        l.in_progress -= 1;
+        l.remaining -= d.end - d.begin;
+        l.eval_s += d.eval_s;
+        stats.tasks += static_cast<uint64_t>(d.end - d.begin);
+        if (!l.abandoned && l.remaining == 0) Reply(l, WireCode::kOk, {});
+        if (l.remaining == 0 || (l.abandoned && l.in_progress == 0)) leases.erase(it);
+      }
+    }
+    idle.push_back(thread_id);
+  }
+
+  void Assign() {
+    while (!idle.empty() && !ready.empty()) {
+      LocalLease* l = ready.front();
+      const int total = static_cast<int>(l->batch.genomes.size());
+      const int left = total - l->next;
+      const int chunk = std::max(1, static_cast<int>(std::ceil(
+                                        left / (2.0 * std::max(1, options.threads)))));
+      Chunk c{l, l->next, l->next + std::min(chunk, left)};
+      l->next = c.end;
+      l->in_progress += 1;
+      if (l->next >= total) ready.pop_front();
+      const std::string id = idle.front();
+      idle.pop_front();
+      inproc.send(zmq::buffer(id), zmq::send_flags::sndmore);
+      inproc.send(zmq::buffer(&c, sizeof c));
+    }
+  }
+
+  bool RecvInproc() {
+    zmq::message_t id, body;
+    if (!inproc.recv(id, zmq::recv_flags::dontwait)) return false;
+    if (!inproc.recv(body) || body.size() != sizeof(Done)) return true;
+    Done d;
+    std::memcpy(&d, body.data(), sizeof d);
+    OnDone(id.to_string(), d);
+    return true;
+  }
+
+  void PollInproc(std::chrono::milliseconds timeout) {
+    zmq::pollitem_t items[] = {{inproc.handle(), 0, ZMQ_POLLIN, 0}};
+    zmq::poll(items, 1, std::max(std::chrono::milliseconds(0), timeout));
+    while (RecvInproc()) {
+    }
+  }
+
+  WorkerStats Run(const std::atomic<bool>& stop) {
+    inproc_endpoint = "inproc://pz-worker-" + std::to_string(reinterpret_cast<uintptr_t>(this));
+    inproc.set(zmq::sockopt::linger, 0);
+    inproc.bind(inproc_endpoint);
+    for (int i = 0; i < options.threads; ++i)
+      threads.emplace_back([this, i] { ComputeLoop(ctx, inproc_endpoint, i); });
+    Connect();
+    while (!stop.load()) {
+      const TimePoint now = Clock::now();
+      const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
+          server.next_heartbeat() - now);
+      zmq::pollitem_t items[] = {{master->handle(), 0, ZMQ_POLLIN, 0},
+                                 {inproc.handle(), 0, ZMQ_POLLIN, 0}};
+      try {
+        zmq::poll(items, 2, std::clamp(wait, std::chrono::milliseconds(0),
+                                       std::chrono::milliseconds(100)) +
+                                std::chrono::milliseconds(1));
+      } catch (const zmq::error_t& e) {
+        if (e.num() != EINTR) throw;
+      }
+      for (int n = 0; n < 1000; ++n) {
+        zmq::message_t msg;
+        if (!master->recv(msg, zmq::recv_flags::dontwait)) break;
+        OnMaster({static_cast<const char*>(msg.data()), msg.size()}, stop);
+        if (!master) break;
+      }
+      while (RecvInproc()) {
+      }
+      Assign();
+      const TimePoint after = Clock::now();
+      if (server.Expired(after)) {
+        Reconnect(stop, "no heartbeat");
+        continue;
+      }
+      if (server.HeartbeatDue(after)) {
+        WorkerMsg hb;
+        hb.type = WorkerMsg::Type::kHeartbeat;
+        Send(hb);
+      }
+    }
+    if (master) {
+      WorkerMsg bye;
+      bye.type = WorkerMsg::Type::kDisconnect;
+      bye.reason = "worker stopping";
+      Send(bye);
+    }
+    AbandonAll();
+    // Let the compute threads finish their chunks (bounded), then stop them.
+    int stopped = 0;
+    const TimePoint give_up = Clock::now() + std::chrono::seconds(10);
+    while (stopped < options.threads && Clock::now() < give_up) {
+      while (!idle.empty()) {
+        Chunk quit{nullptr, 0, 0};
+        inproc.send(zmq::buffer(idle.front()), zmq::send_flags::sndmore);
+        inproc.send(zmq::buffer(&quit, sizeof quit));
+        idle.pop_front();
+        ++stopped;
+      }
+      if (stopped < options.threads) PollInproc(std::chrono::milliseconds(50));
+    }
+    for (auto& t : threads) {
+      if (stopped >= options.threads)
+        t.join();
+      else
+        t.detach();
+    }
+    if (stopped < options.threads) std::_Exit(0);  // a computation would not end
+    threads.clear();
+    master.reset();
+    return stats;
+  }
+};
+
+Worker::Worker(WorkerOptions options, const master::JobKindRegistry& kinds)
+    : impl_(std::make_unique<Impl>(std::move(options), kinds)) {
+  impl_->options.threads = std::clamp(impl_->options.threads, 1, 4096);
+}
+
+Worker::~Worker() = default;
+
+WorkerStats Worker::Run(const std::atomic<bool>& stop) { return impl_->Run(stop); }
+
+}  // namespace pz::worker

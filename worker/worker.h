@@ -1,0 +1,44 @@
+// piezoid-worker's engine: stateless evaluation of task batches for a master (conventions 9–11).
+// The calling thread is the I/O thread and owns the DEALER socket to the master; `threads`
+// compute threads take chunks of the leased tasks over inproc:// and never block heartbeats. Job
+// contexts are fetched once by content hash and cached (LRU). When the master falls silent or
+// asks, the worker drops its leases (the master re-queues them) and reconnects with back-off.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "master/job_kinds.h"
+
+namespace pz::worker {
+
+struct WorkerOptions {
+  std::string master = "tcp://127.0.0.1:5555";  ///< the master's worker endpoint
+  int threads = 1;                    ///< compute threads, 1..4096
+  int heartbeat_ms = 500;             ///< heartbeat interval; match the master's [ms]
+  int liveness = 6;                   ///< silent intervals before the master is presumed gone
+  int backoff_initial_ms = 100;       ///< first reconnect delay [ms]
+  int backoff_max_ms = 5000;          ///< reconnect delay cap [ms]
+  int64_t max_message_bytes = 64 << 20;
+  int max_contexts = 8;               ///< job contexts cached
+};
+
+struct WorkerStats {
+  uint64_t tasks = 0, leases = 0, reconnects = 0, contexts_fetched = 0;
+};
+
+class Worker {
+ public:
+  Worker(WorkerOptions options, const master::JobKindRegistry& kinds);
+  ~Worker();
+  /// Serves until `stop` becomes true, then says DISCONNECT and returns.
+  WorkerStats Run(const std::atomic<bool>& stop);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pz::worker

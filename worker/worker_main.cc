@@ -1,0 +1,46 @@
+// piezoid-worker: evaluates individuals for a piezoid-master. See docs/service.md.
+#include <spdlog/spdlog.h>
+
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <thread>
+
+#include "worker/worker.h"
+
+namespace {
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+}  // namespace
+
+int main(int argc, char** argv) {
+  pz::worker::WorkerOptions o;
+  o.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  std::string log_level = "info";
+  CLI::App app{"piezoid-worker — evaluates GA individuals for a piezoid-master"};
+  app.add_option("--master", o.master, "the master's worker endpoint")->capture_default_str();
+  app.add_option("--threads", o.threads, "evaluation threads")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
+  app.add_option("--heartbeat-ms", o.heartbeat_ms, "heartbeat interval [ms] (as the master's)")
+      ->check(CLI::Range(10, 60000))
+      ->capture_default_str();
+  app.add_option("--liveness", o.liveness, "missed heartbeats before reconnecting")
+      ->check(CLI::Range(2, 1000))
+      ->capture_default_str();
+  app.add_option("--backoff-max-ms", o.backoff_max_ms, "reconnect delay cap [ms]")
+      ->capture_default_str();
+  app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
+      ->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(log_level));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %P: %v");
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  std::signal(SIGPIPE, SIG_IGN);
+  pz::worker::Worker w(o, pz::master::JobKindRegistry::Default());
+  spdlog::info("{} threads, master {}", o.threads, o.master);
+  const auto stats = w.Run(g_stop);
+  spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,
+               stats.reconnects);
+  return 0;
+}
