@@ -9,5 +9,6 @@ namespace pz::client {
 // the reference it is given (0 ok, 1 runtime failure, 2 bad input).
 void RegisterSimulate(CLI::App& app, int& exit_code);
 void RegisterPi(CLI::App& app, int& exit_code);
+void RegisterIdentify(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   int exit_code = 0;
   pz::client::RegisterSimulate(app, exit_code);
   pz::client::RegisterPi(app, exit_code);
+  pz::client::RegisterIdentify(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

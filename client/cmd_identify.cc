@@ -1,0 +1,100 @@
+// `piezoid identify`: HGANN identification on one machine.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+#include "client/commands.h"
+#include "client/identify.h"
+
+#ifndef PIEZOID_DATA_DIR
+#define PIEZOID_DATA_DIR "data"
+#endif
+
+namespace pz::client {
+namespace {
+
+std::filesystem::path DefaultCasesDir() {
+  if (const char* env = std::getenv("PIEZOID_DATA")) return std::filesystem::path(env) / "bimorph-fin/nominal";
+  return std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal";
+}
+
+struct Progress {
+  bool tty = isatty(STDERR_FILENO);
+  int max_generations = 0;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  std::chrono::steady_clock::time_point last_print{};
+
+  void operator()(const master::GenerationSummary& g) {
+    const auto now = std::chrono::steady_clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start).count();
+    const bool final_line = static_cast<int>(g.generation) >= max_generations;
+    if (!final_line && now - last_print < std::chrono::milliseconds(tty ? 200 : 5000)) return;
+    last_print = now;
+    const double rate = elapsed > 0 ? g.evaluations_total / elapsed : 0;
+    const int width = 24;
+    const int filled = max_generations > 0 ? static_cast<int>(width * g.generation / max_generations) : width;
+    std::string bar(filled, '#');
+    bar.resize(width, '.');
+    std::fprintf(stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s  %.0f s%s",
+                 tty ? "\r" : "", bar.c_str(), static_cast<unsigned long long>(g.generation), max_generations,
+                 g.best_cost, g.mean_cost, g.stall, rate, g.best_description.substr(0, 5).c_str(), elapsed,
+                 tty ? "   " : "\n");
+    std::fflush(stderr);
+  }
+};
+
+}  // namespace
+
+void RegisterIdentify(CLI::App& app, int& exit_code) {
+  auto* cmd = app.add_subcommand("identify",
+                                 "HGANN identification on this machine: train on the case set's training cases, "
+                                 "validate on every case, write a result folder");
+  auto opts = std::make_shared<IdentifyOptions>();
+  opts->cases_dir = DefaultCasesDir();
+  opts->out_dir = "piezoid-identify";
+  auto cases = std::make_shared<std::string>(opts->cases_dir.string());
+  auto out = std::make_shared<std::string>(opts->out_dir.string());
+  auto no_plots = std::make_shared<bool>(false);
+  cmd->add_option("--cases", *cases, "bench case set folder (cases.csv + per-case CSV)")->capture_default_str();
+  cmd->add_option("--out", *out, "result folder (created; files in it are overwritten)")->capture_default_str();
+  cmd->add_option("--seed", opts->ga.seed, "seed of the GA's generator")->capture_default_str();
+  cmd->add_option("--population", opts->ga.population_size, "individuals per generation (paper: 400)")
+      ->capture_default_str();
+  cmd->add_option("--generations", opts->ga.max_generations, "maximum generations (paper: 1000)")
+      ->capture_default_str();
+  cmd->add_option("--stall", opts->ga.stall_generations,
+                  "stop after this many generations without improvement (paper: 200; 0 = never)")
+      ->capture_default_str();
+  cmd->add_option("--elite", opts->ga.elite_fraction, "share of the population kept unchanged (paper: 0.5)")
+      ->capture_default_str();
+  cmd->add_option("--mutation", opts->ga.mutation_probability, "per-bit mutation probability (paper: 0.01)")
+      ->capture_default_str();
+  cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--ranges", opts->ranges,
+                  "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
+                  "(Table 3: α, β, γ ∈ [-0.1, 0])")
+      ->capture_default_str();
+  cmd->add_flag("--no-plots", *no_plots, "do not render figures (scripts are still written)");
+  cmd->callback([=, &exit_code] {
+    opts->cases_dir = *cases;
+    opts->out_dir = *out;
+    opts->plots = !*no_plots;
+    const auto ranges = RangesPreset(opts->ranges);
+    ThrowIfError(opts->ga.Validate());
+    const io::CaseSet set = io::LoadCaseSet(opts->cases_dir);
+    const master::HgannFitness fitness(master::HgannConfigFromCaseSet(set, ranges));
+    std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d, up to %d generations, seed %llu\n",
+                 set.cases.size(), opts->cases_dir.string().c_str(), set.Training().size(),
+                 opts->ga.population_size, opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));
+    Progress progress;
+    progress.max_generations = opts->ga.max_generations;
+    const auto result = RunIdentify(*opts, set, fitness, [&](const master::GenerationSummary& g) { progress(g); });
+    if (progress.tty) std::fprintf(stderr, "\n");
+    WriteIdentifyReport(*opts, set, fitness, result, std::cout);
+    exit_code = 0;
+  });
+}
+
+}  // namespace pz::client

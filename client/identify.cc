@@ -1,0 +1,338 @@
+#include "client/identify.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "client/plots.h"
+#include "io/trace_io.h"
+#include "master/thread_pool_evaluator.h"
+#include "model/metrics.h"
+#include "model/chromosome.h"
+#include "model/saturation.h"
+
+namespace pz::client {
+namespace fs = std::filesystem;
+
+model::ParameterRanges RangesPreset(const std::string& name) {
+  if (name == "default") return model::ParameterRanges{};
+  if (name == "paper") return model::ParameterRanges::PaperTable3();
+  throw InputError(FieldError("--ranges", name, "must be 'default' (spec ranges) or 'paper' (the paper's Table 3)"));
+}
+
+double PaperTable8Pi(double v, double f) {
+  static const std::map<std::pair<int, int>, double> table = {
+      {{375, 25}, 1.42}, {{375, 50}, 2.08}, {{375, 100}, 2.38}, {{500, 25}, 2.49}, {{500, 50}, 1.96},
+      {{500, 100}, 1.51}, {{750, 25}, 5.64}, {{750, 50}, 3.23}, {{750, 100}, 6.78}};
+  const int vi = static_cast<int>(std::lround(v)), fi = static_cast<int>(std::lround(f * 100));
+  if (std::abs(v - vi) > 1e-9 || std::abs(f * 100 - fi) > 1e-9) return std::nan("");
+  auto it = table.find({vi, fi});
+  return it == table.end() ? std::nan("") : it->second;
+}
+
+IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
+                           const master::HgannFitness& fitness,
+                           const std::function<void(const master::GenerationSummary&)>& on_generation) {
+  master::GaOptions ga = options.ga;
+  ga.genome_bits = model::kChromosomeBits;
+  ga.error_cost = fitness.penalty_cost();
+  master::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
+  master::GeneticAlgorithm algorithm(ga, &evaluator);
+  algorithm.SetDescriber([](const master::Genome& g) { return model::DescribeChromosome(g.bits); });
+  if (on_generation) algorithm.AddGenerationCallback(on_generation);
+
+  IdentifyResult r;
+  r.summary = algorithm.Run();
+  r.log = algorithm.state().log;
+  r.best.network = fitness.Decode(r.summary.best);
+  r.best.chromosome = r.summary.best.bits;
+  auto& p = r.best.provenance;
+  p.job_id = options.job_id;
+  p.seed = ga.seed;
+  p.generation = r.summary.best_generation;
+  p.fitness = r.summary.best_fitness.cost;
+  p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  p.piezoid_version = "0.1.0";
+  for (const auto* c : set.Training()) p.training_cases.push_back("case" + std::to_string(c->number));
+  r.cases = fitness.EvaluateCases(r.best.network);
+  return r;
+}
+
+namespace {
+
+std::string Fmt(double x, int prec = 4) {
+  if (std::isnan(x)) return "—";
+  std::ostringstream os;
+  os << std::setprecision(prec) << x;
+  return os.str();
+}
+
+// Grid of a per-case value over amplitude (rows) × frequency (columns), markdown.
+std::string Grid(const io::CaseSet& set, const std::function<std::string(const io::BenchCase&)>& cell) {
+  std::set<double> vs, fs_;
+  for (const auto& c : set.cases) {
+    vs.insert(c.amplitude_v);
+    fs_.insert(c.frequency_hz);
+  }
+  std::ostringstream os;
+  os << "| V \\ f |";
+  for (double f : fs_) os << " " << Fmt(f) << " Hz |";
+  os << "\n|---|";
+  for (size_t i = 0; i < fs_.size(); ++i) os << "---|";
+  os << "\n";
+  for (double v : vs) {
+    os << "| " << Fmt(v) << " V |";
+    for (double f : fs_) {
+      const io::BenchCase* found = nullptr;
+      for (const auto& c : set.cases)
+        if (c.amplitude_v == v && c.frequency_hz == f) found = &c;
+      os << " " << (found ? cell(*found) : std::string("")) << " |";
+    }
+    os << "\n";
+  }
+  return os.str();
+}
+
+const master::HgannCaseResult& ResultOf(const IdentifyResult& r, int number) {
+  for (const auto& c : r.cases)
+    if (c.number == number) return c;
+  PZ_CHECK_MSG(false, "no result for case " + std::to_string(number));
+  return r.cases.front();
+}
+
+}  // namespace
+
+std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
+                                          const master::HgannFitness& fitness, const IdentifyResult& result,
+                                          std::ostream& term) {
+  std::vector<fs::path> written;
+  const fs::path out = options.out_dir;
+  fs::create_directories(out / "traces");
+  auto add = [&](const fs::path& p) { written.push_back(p); };
+
+  // Networks.
+  for (const char* name : {"network.pb", "network.json"}) {
+    ThrowIfError(io::SaveNetwork(result.best, (out / name).string()));
+    add(out / name);
+  }
+
+  // Progress log.
+  {
+    std::ofstream f(out / "progress.csv");
+    f << "generation,best_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+         "errors,wall_time_s,best_network\n";
+    f << std::setprecision(17);
+    for (const auto& g : result.log)
+      f << g.generation << "," << g.best_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
+        << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
+        << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"\n";
+    add(out / "progress.csv");
+  }
+
+  // Per-case validation and parameters.
+  std::vector<double> v_all, f_all, mu_all;
+  double train_sum = 0, all_sum = 0;
+  int beaten = 0, compared = 0;
+  {
+    std::ofstream val(out / "validation.csv"), par(out / "parameters.csv");
+    val << "case,amplitude_V,frequency_Hz,role,pi_deg2,rmse_deg,max_abs_deg,paper_pi_deg2,status\n";
+    par << "case,amplitude_V,frequency_Hz,role,mu,delta,alpha,beta,gamma,a1,a2,b1,b2\n";
+    val << std::setprecision(10);
+    par << std::setprecision(10);
+    for (const auto& bc : set.cases) {
+      const auto& r = ResultOf(result, bc.number);
+      const auto trace = fitness.Trace(result.best.network, fitness.config().cases[&bc - set.cases.data()]);
+      const auto m = trace.summary.ok() ? model::CompareSeries(bc.angle_deg, trace.angle_deg) : model::ErrorMetrics{};
+      const double paper = PaperTable8Pi(bc.amplitude_v, bc.frequency_hz);
+      val << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
+          << r.pi << "," << m.rmse << "," << m.max_abs << "," << (std::isnan(paper) ? std::string("") : Fmt(paper, 6))
+          << "," << model::SimStatusName(r.summary.status) << "\n";
+      const auto& q = r.params;
+      par << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
+          << q.mu << "," << q.delta << "," << q.alpha << "," << q.beta << "," << q.gamma << "," << q.a1 << ","
+          << q.a2 << "," << q.b1 << "," << q.b2 << "\n";
+      all_sum += r.pi;
+      if (bc.role == io::CaseRole::kTrain) train_sum += r.pi;
+      if (!std::isnan(paper)) {
+        ++compared;
+        beaten += r.pi < paper;
+      }
+      v_all.push_back(bc.amplitude_v);
+      f_all.push_back(bc.frequency_hz);
+      mu_all.push_back(q.mu);
+      // Trace for plots: t, u, measured, model, theta.
+      const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
+      if (trace.summary.ok()) {
+        std::vector<io::NamedColumn> cols = {{"t_s", trace.t},
+                                             {"voltage_V", trace.u},
+                                             {"measured_deg", bc.angle_deg},
+                                             {"model_deg", trace.angle_deg},
+                                             {"theta_linear_deg", trace.theta_deg},
+                                             {"z_N", trace.z}};
+        io::WriteColumnsCsvFile(out / tf, cols);
+        add(out / tf);
+      }
+    }
+    add(out / "validation.csv");
+    add(out / "parameters.csv");
+  }
+
+  // Regression of μ on V and f (paper eq. 7).
+  std::string mu_regression;
+  {
+    double mn = *std::min_element(mu_all.begin(), mu_all.end());
+    double mx = *std::max_element(mu_all.begin(), mu_all.end());
+    if (mx - mn <= 1e-12 * std::max(1.0, std::abs(mx))) {
+      mu_regression = "μ = " + Fmt(mn, 6) + " 1/s in every case: no trend over V and f (R² undefined).";
+    } else {
+      try {
+        const auto fit = model::FitPlane(v_all, f_all, mu_all);
+        std::ostringstream os;
+        os << "μ = " << Fmt(fit.v.coef, 4) << " V " << (fit.f.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.f.coef), 5)
+           << " f " << (fit.intercept.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.intercept.coef), 6)
+           << "  (R² " << Fmt(fit.r2, 3) << "; p-values V " << Fmt(fit.v.p_value, 2) << ", f "
+           << Fmt(fit.f.p_value, 2) << ", intercept " << Fmt(fit.intercept.p_value, 2) << "; n = " << fit.n
+           << "). Paper eq. 7: μ = 0.020 V − 36.525 f + 102.361 (R² 0.988).";
+        mu_regression = os.str();
+      } catch (const InputError& e) {
+        mu_regression = std::string("μ regression not possible: ") + e.what();
+      }
+    }
+  }
+
+  // Figures.
+  std::vector<std::string> plot_errors;
+  int rendered = 0;
+  std::vector<fs::path> scripts;
+  {
+    Plot p{"fitness", "HGANN fitness progress (CF = Σ PI over the training cases)", "generation",
+           "cost [deg²]", true,
+           {{"progress.csv", 1, 2, "best", "lines"}, {"progress.csv", 1, 3, "mean", "lines"}}};
+    scripts.push_back(WritePlotScript(out, p));
+    for (const auto& bc : set.cases) {
+      const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
+      if (!fs::exists(out / tf)) continue;
+      const std::string label = "case " + std::to_string(bc.number) + " (" + Fmt(bc.amplitude_v) + " V, " +
+                                Fmt(bc.frequency_hz) + " Hz, " + io::CaseRoleName(bc.role) + ")";
+      scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_angle",
+                                                  "Fin angle, " + label, "t [s]", "fin angle [deg]", false,
+                                                  {{tf, 1, 3, "measured", "lines"}, {tf, 1, 4, "model", "lines"}}}));
+      scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_loop",
+                                                  "Hysteresis loop, " + label, "voltage [V]", "fin angle [deg]", false,
+                                                  {{tf, 2, 3, "measured", "lines"}, {tf, 2, 4, "model", "lines"}}}));
+    }
+    for (const auto& s : scripts) add(s);
+    if (options.plots) {
+      if (GnuplotAvailable()) {
+        rendered = RenderPlots(out, scripts, &plot_errors);
+        for (const auto& s : scripts) {
+          auto png = s;
+          png.replace_extension(".png");
+          if (fs::exists(png)) add(png);
+        }
+      } else {
+        plot_errors.push_back("gnuplot not found: figures not rendered (install gnuplot-nox, then run gnuplot on each .gp in " +
+                              out.string() + ")");
+      }
+    }
+  }
+
+  // Report (markdown) and terminal summary.
+  std::ostringstream md;
+  const auto& s = result.summary;
+  const auto& last = result.log.empty() ? master::GenerationSummary{} : result.log.back();
+  int64_t penalized = 0, errors = 0;
+  std::map<std::string, int64_t> reasons;
+  for (const auto& g : result.log) {
+    penalized += g.penalized;
+    errors += g.errors;
+    for (const auto& [k, n] : g.failure_reasons) reasons[k] += n;
+  }
+  md << "# HGANN identification of " << set.dir.string() << "\n\n"
+     << "- best network: " << result.best.network.Describe() << "\n"
+     << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6) << " deg² (found in generation "
+     << s.best_generation << ")\n"
+     << "- stopped: " << master::GaTerminationName(s.termination) << " after " << s.generations
+     << " generations (" << s.message << ")\n"
+     << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors " << errors;
+  if (!reasons.empty()) {
+    md << " (";
+    bool first = true;
+    for (const auto& [k, n] : reasons) {
+      md << (first ? "" : ", ") << k << ": " << n;
+      first = false;
+    }
+    md << ")";
+  }
+  md << "\n- GA: population " << options.ga.population_size << ", seed " << options.ga.seed << ", ranges '"
+     << options.ranges << "', wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";
+  if (options.ranges == "paper") {
+    const auto& best = result.cases.front().params;
+    md << "With the paper's Table 3 ranges (α, β, γ ≤ 0) every network with α ≠ 0 has an unbounded Bouc–Wen "
+          "loop and is penalised (" << reasons["unbounded_hysteresis"] << " evaluations). The surviving networks "
+          "put α exactly at the top of its range, α = " << Fmt(best.alpha, 3) << ": then z ≡ 0 and β, γ have no "
+          "effect at all — which is why the paper found α = 0 in every case.\n\n";
+  }
+  md << "## Performance index per case (PI [deg²]; paper's Table 8 in brackets)\n\n"
+     << Grid(set, [&](const io::BenchCase& c) {
+          const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
+          return "case " + std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") + ": " +
+                 Fmt(ResultOf(result, c.number).pi, 3) + (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
+        })
+     << "\n\\* training case. Σ over training cases " << Fmt(train_sum, 5) << ", over all cases " << Fmt(all_sum, 5)
+     << "; below the paper's value in " << beaten << " of " << compared << " cases.\n\n";
+  md << "## Identified parameters per case (paper Tables 6, 7)\n\n"
+     << "| case | role | V [V] | f [Hz] | μ [1/s] | δ [s] | α [N/V] | β [1/V] | γ [1/V] | a1 [deg] | a2 [deg] | b1 [deg] | b2 [deg] |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& bc : set.cases) {
+    const auto& q = ResultOf(result, bc.number).params;
+    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(bc.amplitude_v) << " | "
+       << Fmt(bc.frequency_hz) << " | " << Fmt(q.mu, 5) << " | " << Fmt(q.delta, 4) << " | " << Fmt(q.alpha, 3)
+       << " | " << Fmt(q.beta, 3) << " | " << Fmt(q.gamma, 3) << " | " << Fmt(q.a1, 3) << " | " << Fmt(q.a2, 3)
+       << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3) << " |\n";
+  }
+  auto param_grid = [&](const char* title, double model::BimorphParams::*field, int prec) {
+    md << "\n### " << title << "\n\n"
+       << Grid(set, [&](const io::BenchCase& c) { return Fmt(ResultOf(result, c.number).params.*field, prec); });
+  };
+  param_grid("δ over the grid (paper Table 9)", &model::BimorphParams::delta, 4);
+  param_grid("μ over the grid (paper Table 10)", &model::BimorphParams::mu, 5);
+  param_grid("a1 over the grid (paper Table 12)", &model::BimorphParams::a1, 3);
+  param_grid("a2 over the grid (paper Table 13)", &model::BimorphParams::a2, 3);
+  md << "\n## Regression of μ on V and f (paper eq. 7)\n\n" << mu_regression << "\n\n## Figures\n\n";
+  md << "![fitness](fitness.png)\n\n";
+  for (const auto& bc : set.cases)
+    md << "![case " << bc.number << "](case" << bc.number << "_angle.png) ![loop " << bc.number << "](case"
+       << bc.number << "_loop.png)\n";
+  {
+    std::ofstream f(out / "report.md");
+    f << md.str();
+    add(out / "report.md");
+  }
+
+  term << "\n" << s.BriefReport() << "\n"
+       << "best network " << result.best.network.Describe() << "\n\n"
+       << "PI per case [deg²] (paper's Table 8 in brackets; * = training):\n"
+       << Grid(set, [&](const io::BenchCase& c) {
+            const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
+            return std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") + " " +
+                   Fmt(ResultOf(result, c.number).pi, 3) + (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
+          })
+       << "below the paper in " << beaten << " of " << compared << " cases; Σ training " << Fmt(train_sum, 5) << "\n"
+       << mu_regression << "\n";
+  (void)last;
+  for (const auto& e : plot_errors) term << "warning: " << e << "\n";
+  term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
+       << "parameters.csv, " << rendered << " figures)\n";
+  return written;
+}
+
+}  // namespace pz::client
