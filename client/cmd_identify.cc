@@ -76,6 +76,10 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
                   "(Table 3: α, β, γ ∈ [-0.1, 0])")
       ->capture_default_str();
+  cmd->add_option("--spread-penalty", opts->spread_penalty,
+                  "λ [deg²]: adds λ·Σ Var(normalised outputs over the training box) to the cost, so that "
+                  "parameters vary over the envelope only where the data pay for it (0 = the paper's cost)")
+      ->capture_default_str();
   cmd->add_flag("--no-plots", *no_plots, "do not render figures (scripts are still written)");
   cmd->callback([=, &exit_code] {
     opts->cases_dir = *cases;
@@ -84,7 +88,9 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     const auto ranges = RangesPreset(opts->ranges);
     ThrowIfError(opts->ga.Validate());
     const io::CaseSet set = io::LoadCaseSet(opts->cases_dir);
-    const master::HgannFitness fitness(master::HgannConfigFromCaseSet(set, ranges));
+    auto config = master::HgannConfigFromCaseSet(set, ranges);
+    config.spread_penalty = opts->spread_penalty;
+    const master::HgannFitness fitness(std::move(config));
     std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d, up to %d generations, seed %llu\n",
                  set.cases.size(), opts->cases_dir.string().c_str(), set.Training().size(),
                  opts->ga.population_size, opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));

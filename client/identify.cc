@@ -273,7 +273,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
     md << ")";
   }
   md << "\n- GA: population " << options.ga.population_size << ", seed " << options.ga.seed << ", ranges '"
-     << options.ranges << "', wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";
+     << options.ranges << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
+     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";
   if (options.ranges == "paper") {
     const auto& best = result.cases.front().params;
     md << "With the paper's Table 3 ranges (α, β, γ ≤ 0) every network with α ≠ 0 has an unbounded Bouc–Wen "

@@ -23,6 +23,7 @@ struct IdentifyOptions {
   master::GaOptions ga;             ///< population, generations, stall, seed, …
   int threads = 0;                  ///< evaluator threads (0 = all cores)
   std::string ranges = "default";   ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
+  double spread_penalty = 0;        ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
   bool plots = true;                ///< render figures with gnuplot
   std::string job_id = "local";     ///< provenance
 };

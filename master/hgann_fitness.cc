@@ -41,6 +41,8 @@ Status HgannFitnessConfig::Validate() const {
     training += c.training;
   }
   if (training == 0) return InvalidArgument("cases: needs at least one training case");
+  if (!(std::isfinite(spread_penalty) && spread_penalty >= 0))
+    return InvalidArgument(FieldError("spread_penalty", spread_penalty, "must be finite and >= 0 [deg^2]"));
   if (auto s = ranges.Validate(); !s.ok()) return s;
   if (auto s = normalization.Validate(); !s.ok()) return InvalidArgument("normalization." + s.message());
   if (auto s = geometry.Validate(); !s.ok()) return InvalidArgument("geometry." + s.message());
@@ -113,7 +115,32 @@ FitnessResult HgannFitness::EvaluateNetwork(const model::Network& network) const
     if (!std::isfinite(pi)) return {penalty_, FitnessStatus::kPenalized, "non_finite"};
     cost += pi;
   }
+  if (config_.spread_penalty > 0) cost += config_.spread_penalty * OutputSpread(network);
   return {cost, FitnessStatus::kOk, {}};
+}
+
+double HgannFitness::OutputSpread(const model::Network& network) const {
+  constexpr int kGrid = 5;
+  const auto& n = config_.normalization;
+  double sum[model::kNetworkOutputs] = {}, sum2[model::kNetworkOutputs] = {};
+  for (int i = 0; i < kGrid; ++i) {
+    for (int j = 0; j < kGrid; ++j) {
+      const double v = n.amplitude_lo_v + (n.amplitude_hi_v - n.amplitude_lo_v) * i / (kGrid - 1);
+      const double f = n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1);
+      const auto p = network.Predict(v, f).ToArray();
+      for (int k = 0; k < model::kNetworkOutputs; ++k) {
+        const auto& r = config_.ranges[k];
+        const double s = r.upper > r.lower ? (p[k] - r.lower) / (r.upper - r.lower) : 0.0;
+        sum[k] += s;
+        sum2[k] += s * s;
+      }
+    }
+  }
+  double spread = 0;
+  constexpr double kN = kGrid * kGrid;
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    spread += std::max(0.0, sum2[k] / kN - (sum[k] / kN) * (sum[k] / kN));
+  return spread;
 }
 
 std::vector<HgannCaseResult> HgannFitness::EvaluateCases(const model::Network& network) const {

@@ -34,6 +34,12 @@ struct HgannFitnessConfig {
   model::ParameterRanges ranges;            ///< where the network's outputs are mapped
   model::InputNormalization normalization;  ///< default: FromTrainingCases()
   model::BeamGeometry geometry;             ///< the beam (default: the spec's)
+  /// λ [deg²] of the optional spread penalty added to the cost: λ · Σ_k Var_grid(s_k), the variance
+  /// of each normalised output s_k ∈ [0, 1] over a 5 × 5 grid of the normalised training box
+  /// [0, 1]². 0 = the paper's cost exactly. A positive λ prefers networks whose parameters vary over
+  /// the operating envelope only where the data pay for it, which keeps predictions at untrained
+  /// operating points (corners of the box) from bending. Finite, ≥ 0.
+  double spread_penalty = 0;
 
   /// Normalisation over the training cases' (V, f) (spec hgann.md §1).
   model::InputNormalization FromTrainingCases() const;
@@ -74,6 +80,12 @@ class HgannFitness final : public FitnessFunction {
 
  private:
   model::BimorphParams ParamsFor(const model::NetworkParameters& p, const HgannCase& c) const;
+
+ public:
+  /// Σ_k Var_grid(s_k) of a network (without λ); see HgannFitnessConfig::spread_penalty.
+  double OutputSpread(const model::Network& network) const;
+
+ private:
 
   HgannFitnessConfig config_;
   std::unique_ptr<model::BimorphPlant> plant_;
