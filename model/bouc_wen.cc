@@ -8,12 +8,6 @@ namespace {
 int Sign(double x) { return (x > 0) - (x < 0); }
 }  // namespace
 
-double BoucWenBranch::Z(double u) const {
-  const double du = u - u0;
-  if (kappa == 0.0) return z0 + alpha * du;
-  return z0 + (kappa * z0 - alpha) * (std::expm1(-kappa * du) / kappa);
-}
-
 bool BoucWenBranch::ZeroCrossing(double* u_cross) const {
   // z moves towards 0 iff dz = α du at z = 0 points back at the side z is on: α s σ < 0.
   if (z0 == 0.0 || alpha == 0.0 || s == 0 || alpha * s * sigma >= 0) return false;
@@ -35,6 +29,7 @@ BoucWenBranch StartBranch(const BoucWenParams& p, double u0, double z0, double s
   b.s = Sign(s);
   b.sigma = z0 != 0.0 ? Sign(z0) : Sign(p.alpha) * b.s;
   b.kappa = p.beta * b.s + p.gamma * b.sigma;
+  b.gain = b.kappa != 0.0 ? (b.kappa * z0 - p.alpha) / b.kappa : 0.0;
   return b;
 }
 

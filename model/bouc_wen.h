@@ -11,9 +11,17 @@
 // BimorphParams::HysteresisBounded()).
 #pragma once
 
+#include <cmath>
 #include <span>
 
 namespace pz::model {
+
+/// e^x − 1 with an absolute error of a few ulps of 1 (relative too for |x| < 1e-3), cheaper than
+/// std::expm1. Branch values are z₀ + gain·(e^x − 1), so the absolute error is what counts.
+inline double FastExpm1(double x) {
+  if (std::abs(x) < 1e-3) return x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24))));  // x⁵/120 < 1e-17
+  return std::exp(x) - 1.0;
+}
 
 /// The three Bouc–Wen parameters.
 struct BoucWenParams {
@@ -31,8 +39,13 @@ struct BoucWenBranch {
   int s = 0;         ///< direction of u on the branch: +1, −1, or 0 (u constant: z frozen)
   int sigma = 0;     ///< sign of z on the branch (0 only when z stays 0)
 
+  double gain = 0;   ///< (κ z₀ − α)/κ [N] (unused when κ = 0); set by StartBranch
+
   /// z [N] at input u [V] (exact on the branch; the formula extends smoothly past its ends).
-  double Z(double u) const;
+  double Z(double u) const {
+    const double du = u - u0;
+    return kappa == 0.0 ? z0 + alpha * du : z0 + gain * FastExpm1(-kappa * du);
+  }
   /// dz/du [N/V] at z [N].
   double Slope(double z) const { return alpha - kappa * z; }
   /// The input at which z reaches 0 while u moves in direction s, if it does (before the branch's

@@ -63,8 +63,12 @@ void PhiComplex(Cx x, Cx* phi) {
     }
     return;
   }
-  const double e = std::exp(x.re);
-  phi[0] = {e * std::cos(x.im), e * std::sin(x.im)};
+  if (x.re > -745.0) {
+    const double e = std::exp(x.re);
+    phi[0] = {e * std::cos(x.im), e * std::sin(x.im)};
+  } else {
+    phi[0] = {0.0, 0.0};
+  }
   const Cx inv = Inv(x);
   for (int j = 1; j <= kMaxPhi; ++j) {
     Cx q = phi[j - 1];
@@ -103,14 +107,17 @@ void SeriesRegime(const ModePoles& p, double tau, ModeStep& out) {
 }  // namespace
 
 void PhiReal(double x, double* phi) {
-  if (std::abs(x) < 1.0) {
-    double p = kInvFact[kMaxPhi + 16];
-    for (int m = 15; m >= 0; --m) p = p * x + kInvFact[m + kMaxPhi];
+  const double ax = std::abs(x);
+  if (ax < 1.0) {
+    // Taylor terms of φ_6 up to x^N with |x|^{N+1} 6!/(N+7)! < 2^-53: N = 7, 9, 14 for |x| ≤ 1/16, 1/4, 1.
+    const int top = ax <= 0.0625 ? 7 : (ax <= 0.25 ? 9 : 14);
+    double p = kInvFact[kMaxPhi + top];
+    for (int m = top - 1; m >= 0; --m) p = p * x + kInvFact[m + kMaxPhi];
     phi[kMaxPhi] = p;
     for (int j = kMaxPhi; j >= 1; --j) phi[j - 1] = x * phi[j] + kInvFact[j - 1];
     return;
   }
-  phi[0] = std::exp(x);
+  phi[0] = x > -745.0 ? std::exp(x) : 0.0;  // below −745 e^x underflows (and exp() takes a slow path)
   const double inv = 1.0 / x;
   for (int j = 1; j <= kMaxPhi; ++j) phi[j] = (phi[j - 1] - kInvFact[j - 1]) * inv;
 }
@@ -173,7 +180,7 @@ void Discretise(const ModePoles& p, double tau, ModeStep& out) {
   // from (λ φ_j(τλ))[λ₁, λ₂] = m D_j + avg_j; its error factor 1/|τm| is < 4/3.
   const double m = -0.5 * p.c;
   const double y = 0.5 * gap;
-  const double em = std::exp(tau * m);
+  const double em = tau * m > -745.0 ? std::exp(tau * m) : 0.0;
   double C, S;
   double avg[kMaxPhi + 1];
   if (p.complex) {

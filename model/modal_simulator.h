@@ -25,6 +25,16 @@
 
 namespace pz::model {
 
+namespace modal {
+/// z and its first two time derivatives at one instant: the end data of the quintic hold.
+struct ZData {
+  double z = 0;    ///< [N]
+  double zd = 0;   ///< ż [N/s]
+  double zdd = 0;  ///< z̈ [N/s²]
+  bool operator==(const ZData&) const = default;
+};
+}  // namespace modal
+
 /// Scratch for ModalSimulator: mode states and a cache of the last discretisation (keyed by the
 /// simulator, μ, δ and the step). Grows on first use, then allocates nothing. One per thread.
 class ModalWorkspace {
@@ -46,7 +56,19 @@ class ModalWorkspace {
   double t1_[3] = {0, 0, 0};    // Σ_i P1_i row 0 (feed-through of the end data to w_tip)
   // Mode states (scaled by tip_i, so that w_tip = Σ x0).
   std::vector<double> x0_, x1_;
-  std::vector<double> hr_, hi_;  // particular-solution gains H_i (sinusoid path)
+  // Sinusoid path, one chunk of steps at a time.
+  struct Special {  // a step with breakpoints inside, or with a data jump at its first node
+    long step;
+    int inner_begin, inner_end;  // its breakpoints in inner_
+  };
+  struct Inner {  // a breakpoint: time since the step's first node, data just before and after
+    double offset;
+    modal::ZData left, right;
+  };
+  std::vector<modal::ZData> zl_, zr_;  // hold data at the nodes: left and right limits
+  std::vector<double> xs_, base_, uo_;  // Σ x̄0, state-free part of w_tip, u at the nodes
+  std::vector<Special> special_;
+  std::vector<Inner> inner_;
 };
 
 class ModalSimulator {
