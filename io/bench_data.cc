@@ -1,0 +1,188 @@
+#include "io/bench_data.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "io/csv.h"
+
+namespace pz::io {
+namespace fs = std::filesystem;
+
+const char* CaseRoleName(CaseRole role) {
+  switch (role) {
+    case CaseRole::kTrain:
+      return "train";
+    case CaseRole::kValidate:
+      return "validate";
+    case CaseRole::kTest:
+      return "test";
+  }
+  return "unknown";
+}
+
+std::optional<CaseRole> ParseCaseRole(std::string_view name) {
+  for (CaseRole r : {CaseRole::kTrain, CaseRole::kValidate, CaseRole::kTest})
+    if (name == CaseRoleName(r)) return r;
+  return std::nullopt;
+}
+
+model::Sinusoid BenchCase::Drive() const {
+  model::Sinusoid s;
+  s.amplitude_v = amplitude_v;
+  s.frequency_hz = frequency_hz;
+  s.sample_rate_hz = sample_rate_hz;
+  s.cycles = static_cast<double>(t.size()) * frequency_hz / sample_rate_hz;
+  return s;
+}
+
+model::SampledSignal BenchCase::SampledDrive() const { return {t, u}; }
+
+Status BenchReadOptions::Validate() const {
+  if (!(std::isfinite(cycles) && cycles >= 0))
+    return InvalidArgument(FieldError("cycles", cycles, "must be finite and >= 0"));
+  if (!(time_rel_tol > 0 && time_rel_tol < 0.5))
+    return InvalidArgument(FieldError("time_rel_tol", time_rel_tol, "must be in (0, 0.5)"));
+  if (!(voltage_rel_tol >= 0 && std::isfinite(voltage_rel_tol)))
+    return InvalidArgument(
+        FieldError("voltage_rel_tol", voltage_rel_tol, "must be finite and >= 0"));
+  if (!(voltage_abs_tol_v >= 0 && std::isfinite(voltage_abs_tol_v)))
+    return InvalidArgument(
+        FieldError("voltage_abs_tol_v", voltage_abs_tol_v, "must be finite and >= 0"));
+  return Status::Ok();
+}
+
+const BenchCase* CaseSet::Find(int number) const {
+  for (const auto& c : cases)
+    if (c.number == number) return &c;
+  return nullptr;
+}
+
+std::vector<const BenchCase*> CaseSet::WithRole(CaseRole role) const {
+  std::vector<const BenchCase*> out;
+  for (const auto& c : cases)
+    if (c.role == role) out.push_back(&c);
+  return out;
+}
+
+BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, double frequency_hz,
+                       CaseRole role, const BenchReadOptions& options, const std::string& context) {
+  ThrowIfError(options.Validate());
+  const std::string ctx = context.empty() ? "" : " (" + context + ")";
+  const CsvTable csv = ReadCsvFile(file);
+  csv.RequireColumns({"t_s", "voltage_V", "angle_deg"});
+  const int ct = *csv.FindColumn("t_s"), cu = *csv.FindColumn("voltage_V"),
+            cy = *csv.FindColumn("angle_deg");
+  if (csv.rows.size() < 2)
+    throw InputError(csv.source + ": " + std::to_string(csv.rows.size()) +
+                     " data rows; a case needs at least 2 samples" + ctx);
+
+  BenchCase c;
+  c.number = number;
+  c.amplitude_v = amplitude_v;
+  c.frequency_hz = frequency_hz;
+  c.role = role;
+  c.file = file;
+  const size_t n = csv.rows.size();
+  c.t.resize(n);
+  c.u.resize(n);
+  c.angle_deg.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    c.t[k] = csv.Number(k, ct);
+    c.u[k] = csv.Number(k, cu);
+    c.angle_deg[k] = csv.Number(k, cy);
+  }
+  const double dt0 = c.t[1] - c.t[0];
+  if (!(dt0 > 0))
+    throw InputError(csv.Where(1, ct) + ": time " + FormatNumber(c.t[1]) +
+                     " s is not after the previous sample's " + FormatNumber(c.t[0]) + " s");
+  const double tol = options.time_rel_tol * dt0;
+  if (!(std::abs(c.t[0]) <= tol))
+    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(c.t[0]) +
+                     " s; a case starts at t = 0 (from rest)");
+  c.sample_rate_hz = 1.0 / dt0;
+  for (size_t k = 1; k < n; ++k) {
+    const double dt = c.t[k] - c.t[k - 1];
+    if (!(dt > 0))
+      throw InputError(csv.Where(k, ct) + ": time " + FormatNumber(c.t[k]) +
+                       " s is not after the previous sample's " + FormatNumber(c.t[k - 1]) +
+                       " s (time must be strictly increasing)");
+    if (!(std::abs(dt - dt0) <= tol))
+      throw InputError(csv.Where(k, ct) + ": step " + FormatNumber(dt) +
+                       " s from the previous sample differs from the first step " +
+                       FormatNumber(dt0) + " s (sample rate " + FormatNumber(c.sample_rate_hz) +
+                       " Hz inferred from it; relative tolerance " +
+                       FormatNumber(options.time_rel_tol) + ")");
+  }
+  if (options.cycles > 0) {
+    const long expected = std::lround(options.cycles * c.sample_rate_hz / frequency_hz);
+    if (static_cast<long>(n) != expected)
+      throw InputError(csv.source + ": " + std::to_string(n) + " samples, expected round(" +
+                       FormatNumber(options.cycles) + " cycles * " +
+                       FormatNumber(c.sample_rate_hz) + " Hz / " + FormatNumber(frequency_hz) +
+                       " Hz) = " + std::to_string(expected) + ctx);
+  }
+  if (options.check_voltage) {
+    const double vtol = options.voltage_rel_tol * amplitude_v + options.voltage_abs_tol_v;
+    for (size_t k = 0; k < n; ++k) {
+      const double want = amplitude_v * std::sin(2 * std::numbers::pi * frequency_hz * c.t[k]);
+      if (!(std::abs(c.u[k] - want) <= vtol))
+        throw InputError(csv.Where(k, cu) + ": " + FormatNumber(c.u[k]) +
+                         " V is not V sin(2 pi f t) = " + FormatNumber(want) + " V (V = " +
+                         FormatNumber(amplitude_v) + " V, f = " + FormatNumber(frequency_hz) +
+                         " Hz, t = " + FormatNumber(c.t[k]) + " s; tolerance " +
+                         FormatNumber(vtol) + " V)" + ctx);
+    }
+  }
+  return c;
+}
+
+CaseSet LoadCaseSet(const fs::path& dir, const BenchReadOptions& options) {
+  ThrowIfError(options.Validate());
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw InputError(dir.string() +
+                     ": not a directory (expected a case set folder with cases.csv)");
+  const fs::path manifest = dir / "cases.csv";
+  const CsvTable csv = ReadCsvFile(manifest);
+  csv.RequireColumns({"case", "amplitude_V", "frequency_Hz", "file", "role"});
+  csv.RequireRows();
+  const int cc = *csv.FindColumn("case"), cv = *csv.FindColumn("amplitude_V"),
+            cf = *csv.FindColumn("frequency_Hz"), cfile = *csv.FindColumn("file"),
+            crole = *csv.FindColumn("role");
+  CaseSet set;
+  set.dir = dir;
+  std::vector<int> seen_line;
+  for (size_t r = 0; r < csv.rows.size(); ++r) {
+    const long number = csv.Integer(r, cc);
+    if (number <= 0 || number > 1000000)
+      throw InputError(csv.Where(r, cc) + ": case number " + csv.Field(r, cc) +
+                       " must be a positive integer");
+    for (size_t p = 0; p < set.cases.size(); ++p)
+      if (set.cases[p].number == number)
+        throw InputError(csv.Where(r, cc) + ": duplicate case " + std::to_string(number) +
+                         " (first on line " + std::to_string(seen_line[p]) + ")");
+    const double v = csv.Number(r, cv);
+    if (v < 0)
+      throw InputError(csv.Where(r, cv) + ": amplitude " + csv.Field(r, cv) + " V must be >= 0");
+    const double f = csv.Number(r, cf);
+    if (!(f > 0))
+      throw InputError(csv.Where(r, cf) + ": frequency " + csv.Field(r, cf) + " Hz must be > 0");
+    const auto role = ParseCaseRole(csv.Field(r, crole));
+    if (!role)
+      throw InputError(csv.Where(r, crole) + ": unknown role '" + csv.Field(r, crole) +
+                       "' (expected train, validate or test)");
+    const std::string& name = csv.Field(r, cfile);
+    if (name.empty()) throw InputError(csv.Where(r, cfile) + ": empty file name");
+    const fs::path file = dir / name;
+    if (!fs::is_regular_file(file, ec))
+      throw InputError(csv.Where(r, cfile) + ": case file '" + name + "' not found (" +
+                       file.string() + ")");
+    set.cases.push_back(LoadCaseFile(file, static_cast<int>(number), v, f, *role, options,
+                                     "case " + std::to_string(number) + " of " + manifest.string() +
+                                         " line " + std::to_string(csv.rows[r].line)));
+    seen_line.push_back(csv.rows[r].line);
+  }
+  return set;
+}
+
+}  // namespace pz::io

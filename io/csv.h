@@ -1,0 +1,71 @@
+// A small, strict CSV reader and number formatting shared by the io/ readers and writers.
+//
+// Accepted: comma-separated fields without quotes, a header row, LF or CRLF line ends, a UTF-8 byte
+// order mark, spaces around fields, blank lines at the end. Rejected with a message that names the
+// file, the line and the column: an empty file, duplicate or empty header names, a blank line
+// inside the data, a row with the wrong number of fields (ragged), quoted fields, and — through
+// Number() — empty fields, non-numbers and NaN / inf.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pz::io {
+
+/// One data row with its 1-based line number in the file.
+struct CsvRow {
+  int line = 0;
+  std::vector<std::string> fields;
+};
+
+class CsvTable {
+ public:
+  std::string source;               ///< the file name used in messages
+  std::vector<std::string> header;  ///< column names (trimmed)
+  int header_line = 1;              ///< 1-based line of the header
+  std::vector<CsvRow> rows;         ///< data rows, each with header.size() fields
+
+  /// Column index by name, or nullopt.
+  std::optional<int> FindColumn(std::string_view name) const;
+  /// Column index by name; throws InputError "file:1: missing column 'x' (columns: a, b)".
+  int RequireColumn(std::string_view name) const;
+  /// Checks all the names at once; throws InputError naming every missing column.
+  void RequireColumns(const std::vector<std::string_view>& names) const;
+
+  /// "file:line: column 'name' (n)" for messages about one field (n is 1-based).
+  std::string Where(size_t row, int col) const;
+  const std::string& Field(size_t row, int col) const { return rows[row].fields[col]; }
+  /// The field as a finite double; throws InputError naming file, line and column for an empty
+  /// field, a non-number or NaN / inf.
+  double Number(size_t row, int col) const;
+  /// The field as an integer; throws InputError as Number().
+  long Integer(size_t row, int col) const;
+  /// Throws InputError "file: no data rows" when there are none.
+  void RequireRows() const;
+};
+
+/// Parses CSV text; source names it in messages. Throws InputError.
+CsvTable ParseCsv(std::string_view text, std::string source);
+/// The whole content of a file. Throws InputError naming the path if it is missing, a directory or
+/// unreadable.
+std::string ReadTextFile(const std::filesystem::path& path);
+/// Reads and parses a file. Throws InputError if it cannot be opened (naming the path).
+CsvTable ReadCsvFile(const std::filesystem::path& path);
+
+/// Opens path for writing (binary, truncating), calls write(out), flushes. Throws
+/// std::runtime_error naming the path if it cannot be opened or written (a runtime failure, not bad
+/// input).
+void WriteFileWith(const std::filesystem::path& path,
+                   const std::function<void(std::ostream&)>& write);
+
+/// Parses a whole string as a double ("+1", "1e-3", "-0"); nullopt if it is not exactly one number.
+std::optional<double> ParseDouble(std::string_view s);
+/// Shortest text that reads back to the same double (std::to_chars).
+std::string FormatNumber(double x);
+
+}  // namespace pz::io
