@@ -1,0 +1,59 @@
+// Scoring a model against a bench case set (`piezoid pi`): simulate each case, compare the model's
+// fin angle with the measured one on the same grid, and report the paper's PI per case, the cost CF
+// (Σ PI over the training cases, paper eq. 6), RMSE and max |e|, as a text table, in the paper's
+// amplitude × frequency grid, as CSV and as JSON.
+#pragma once
+
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "client/case_models.h"
+#include "io/bench_data.h"
+#include "model/metrics.h"
+#include "model/simulation.h"
+
+namespace pz::client {
+
+struct CaseScore {
+  int case_number = 0;
+  double amplitude_v = 0;   ///< [V]
+  double frequency_hz = 0;  ///< [Hz]
+  io::CaseRole role = io::CaseRole::kTrain;
+  double b1 = 0, b2 = 0;  ///< saturations used [deg]
+  std::string saturation_source;
+  model::SimulationSummary summary;  ///< of the simulation
+  bool scored = false;               ///< false if the simulation failed (metrics unset)
+  model::ErrorMetrics metrics;       ///< angle [deg]: pi [deg²], rmse, max_abs [deg]
+};
+
+struct PiReport {
+  std::string case_set;         ///< the folder scored
+  std::string solver;           ///< "modal" / "cvode"
+  std::string saturation_mode;  ///< the --saturation policy
+  std::vector<CaseScore> cases;
+  double cf_train = 0;      ///< Σ PI over the scored training cases [deg²] (the paper's CF)
+  double sum_validate = 0;  ///< Σ PI over the scored validation cases [deg²]
+  double sum_test = 0;      ///< Σ PI over the scored test cases [deg²]
+  int failed = 0;           ///< cases whose simulation failed (they are not in the sums)
+};
+
+/// Simulates every case with models[i] (same order as set.cases) and scores it. A failed simulation
+/// is a row with scored = false. Throws InputError if models and cases disagree or a model trace is
+/// not on the case's time grid (tolerance 1e-6 / fs).
+PiReport ScoreCaseSet(const io::CaseSet& set, std::span<const CaseModel> models,
+                      const Simulator& simulate);
+
+/// Per-case table, the amplitude × frequency grid of PI, and the sums.
+void PrintPiReport(std::ostream& out, const PiReport& report);
+/// CSV:
+/// case,amplitude_V,frequency_Hz,role,b1_deg,b2_deg,saturation,status,pi_deg2,rmse_deg,max_abs_error_deg,r2
+void WritePiCsv(std::ostream& out, const PiReport& report);
+/// JSON object with the settings, one object per case and the sums (non-finite numbers as null).
+void WritePiJson(std::ostream& out, const PiReport& report);
+
+/// Escapes a string for a JSON string literal (without the quotes).
+std::string JsonEscape(const std::string& s);
+
+}  // namespace pz::client
