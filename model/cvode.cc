@@ -1,0 +1,483 @@
+#include "model/cvode.h"
+
+#include <cvode/cvode.h>
+#include <cvode/cvode_ls.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_band.h>
+#include <sunlinsol/sunlinsol_dense.h>
+#include <sunmatrix/sunmatrix_band.h>
+#include <sunmatrix/sunmatrix_dense.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <limits>
+#include <memory>
+#include <string>
+#include <type_traits>
+
+namespace pz::model {
+
+const char* OdeMethodName(OdeMethod m) { return m == OdeMethod::kBdf ? "bdf" : "adams"; }
+
+JacobianView JacobianView::Banded(double* data, int n, int upper, int lower, int storage_upper, int ldim) {
+  JacobianView v;
+  v.data_ = data;
+  v.n_ = n;
+  v.ldim_ = ldim;
+  v.banded_ = true;
+  v.upper_ = upper;
+  v.lower_ = lower;
+  v.storage_upper_ = storage_upper;
+  return v;
+}
+
+Status CvodeOptions::Validate(int n) const {
+  if (!(rtol > 0 && rtol < 1)) return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1)"));
+  if (atol_vector.empty()) {
+    if (!(atol > 0 && std::isfinite(atol))) return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
+  } else {
+    if (static_cast<int>(atol_vector.size()) != n)
+      return InvalidArgument(FieldError("atol_vector.size()", atol_vector.size(),
+                                        "must equal the number of states " + std::to_string(n)));
+    for (size_t i = 0; i < atol_vector.size(); ++i)
+      if (!(atol_vector[i] > 0 && std::isfinite(atol_vector[i])))
+        return InvalidArgument(FieldError("atol_vector[" + std::to_string(i) + "]", atol_vector[i], "must be finite and > 0"));
+  }
+  if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
+  if (!(max_step >= 0 && std::isfinite(max_step)))
+    return InvalidArgument(FieldError("max_step", max_step, "must be finite and >= 0 [s]"));
+  if (!(initial_step >= 0 && std::isfinite(initial_step)))
+    return InvalidArgument(FieldError("initial_step", initial_step, "must be finite and >= 0 [s]"));
+  const int order_cap = method == OdeMethod::kBdf ? 5 : 12;
+  if (max_order < 0 || max_order > order_cap)
+    return InvalidArgument(FieldError("max_order", max_order, "must be in [0, " + std::to_string(order_cap) + "] for " +
+                                                                  OdeMethodName(method)));
+  for (size_t i = 0; i < breakpoints.size(); ++i)
+    if (!std::isfinite(breakpoints[i]))
+      return InvalidArgument(FieldError("breakpoints[" + std::to_string(i) + "]", breakpoints[i], "must be finite"));
+  return Status::Ok();
+}
+
+namespace {
+
+// ---- RAII handles for the SUNDIALS objects -------------------------------------------------------
+struct ContextFree {
+  void operator()(SUNContext c) const { SUNContext_Free(&c); }
+};
+struct VectorFree {
+  void operator()(N_Vector v) const { N_VDestroy(v); }
+};
+struct MatrixFree {
+  void operator()(SUNMatrix m) const { SUNMatDestroy(m); }
+};
+struct LinearSolverFree {
+  void operator()(SUNLinearSolver s) const { SUNLinSolFree(s); }
+};
+struct NonlinearSolverFree {
+  void operator()(SUNNonlinearSolver s) const { SUNNonlinSolFree(s); }
+};
+struct CvodeFree {
+  void operator()(void* mem) const { CVodeFree(&mem); }
+};
+using ContextPtr = std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextFree>;
+using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorFree>;
+using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixFree>;
+using LinearSolverPtr = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, LinearSolverFree>;
+using NonlinearSolverPtr = std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, NonlinearSolverFree>;
+using CvodePtr = std::unique_ptr<void, CvodeFree>;
+
+std::string FlagName(int flag) {
+  char* name = CVodeGetReturnFlagName(flag);
+  std::string s = name ? name : "CV_UNKNOWN";
+  std::free(name);
+  return s;
+}
+
+std::string Num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+// ---- callback data and trampolines (no exception leaves them) -----------------------------------
+struct RunData {
+  const OdeSystem* system = nullptr;
+  int n = 0;
+  std::string cvode_message;  // last message from CVODE's error handler
+  std::string callback_note;  // last problem a callback reported (kept even if CVODE recovered)
+
+  void Note(std::string s) { callback_note = std::move(s); }
+};
+
+// Runs a user callback with no exception escaping into SUNDIALS: a throw becomes a fatal −1, and any
+// non-zero return is noted with the callback's name and t for the summary message.
+template <typename Body>
+int Guarded(RunData* d, const char* what, double t, Body&& body) {
+  try {
+    const int r = body();
+    if (r != 0) d->Note(std::string(what) + " returned " + std::to_string(r) + " at t = " + Num(t));
+    return r;
+  } catch (const std::exception& e) {
+    d->Note(std::string("exception in ") + what + " at t = " + Num(t) + ": " + e.what());
+  } catch (...) {
+    d->Note(std::string("unknown exception in ") + what + " at t = " + Num(t));
+  }
+  return -1;
+}
+
+int RhsCallback(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
+  auto* d = static_cast<RunData*>(user_data);
+  double* f = N_VGetArrayPointer(ydot);
+  if (const int r = Guarded(d, "right-hand side", t, [&] { return d->system->Rhs(t, N_VGetArrayPointer(y), f); }); r != 0)
+    return r;
+  for (int i = 0; i < d->n; ++i) {
+    if (!std::isfinite(f[i])) {
+      d->Note("right-hand side non-finite in state " + std::to_string(i) + " at t = " + Num(t));
+      return 1;  // recoverable: CVODE retries with a smaller step
+    }
+  }
+  return 0;
+}
+
+int JacobianCallback(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix jac, void* user_data, N_Vector,
+                     N_Vector, N_Vector) {
+  auto* d = static_cast<RunData*>(user_data);
+  return Guarded(d, "Jacobian", t, [&] {
+    SUNMatZero(jac);
+    const int n = d->n;
+    JacobianView view =
+        SUNMatGetID(jac) == SUNMATRIX_BAND
+            ? JacobianView::Banded(SUNBandMatrix_Data(jac), n, static_cast<int>(SUNBandMatrix_UpperBandwidth(jac)),
+                                   static_cast<int>(SUNBandMatrix_LowerBandwidth(jac)),
+                                   static_cast<int>(SUNBandMatrix_StoredUpperBandwidth(jac)),
+                                   static_cast<int>(SUNBandMatrix_LDim(jac)))
+            : JacobianView(SUNDenseMatrix_Data(jac), n);
+    return d->system->Jacobian(t, N_VGetArrayPointer(y), N_VGetArrayPointer(fy), view);
+  });
+}
+
+int RootCallback(sunrealtype t, N_Vector y, sunrealtype* g, void* user_data) {
+  auto* d = static_cast<RunData*>(user_data);
+  return Guarded(d, "root functions", t, [&] { return d->system->Roots(t, N_VGetArrayPointer(y), g); });
+}
+
+void ErrorHandler(int error_code, const char* module, const char* function, char* msg, void* user_data) {
+  auto* d = static_cast<RunData*>(user_data);
+  try {
+    d->cvode_message = std::string(module ? module : "") + "/" + (function ? function : "") + ": " + (msg ? msg : "");
+  } catch (...) {
+  }
+}
+
+// ---- stops: output times and breakpoints merged --------------------------------------------------
+struct Stop {
+  double t = 0;
+  int first_output = -1;  // outputs [first_output, last_output] are recorded here
+  int last_output = -1;
+  bool breakpoint = false;
+};
+
+std::vector<Stop> MergeStops(double t0, std::span<const double> t_out, const std::vector<double>& breakpoints) {
+  const double t_end = t_out.back();
+  const double tol = 64 * std::numeric_limits<double>::epsilon() * std::max({std::abs(t0), std::abs(t_end), t_end - t0});
+  struct Item {
+    double t;
+    int output;
+  };
+  std::vector<Item> items;
+  items.reserve(t_out.size() + breakpoints.size() + 1);
+  items.push_back({t0, -2});  // the start
+  for (size_t k = 0; k < t_out.size(); ++k) items.push_back({t_out[k], static_cast<int>(k)});
+  for (double b : breakpoints)
+    if (b > t0 && b < t_end + tol) items.push_back({b, -1});
+  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t < b.t; });
+  std::vector<Stop> stops;
+  for (size_t i = 0; i < items.size();) {
+    Stop s;
+    s.t = items[i].t;
+    bool has_output = false, is_start = false;
+    size_t j = i;
+    for (; j < items.size() && items[j].t - items[i].t <= tol; ++j) {
+      const Item& it = items[j];
+      if (it.output == -2) {
+        is_start = true;
+      } else if (it.output >= 0) {
+        if (!has_output) s.first_output = it.output;
+        s.last_output = it.output;
+        if (!has_output && !is_start) s.t = it.t;  // an output time wins over a breakpoint close to it
+        has_output = true;
+      } else {
+        s.breakpoint = true;
+      }
+    }
+    if (is_start) {
+      s.t = t0;
+      s.breakpoint = false;  // nothing to stop at: the integration starts here
+    }
+    stops.push_back(s);
+    i = j;
+  }
+  return stops;
+}
+
+struct Counters {
+  long steps = 0, rhs = 0, jac = 0;
+};
+
+}  // namespace
+
+OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const double> y0,
+                           std::span<const double> t_out, const CvodeOptions& options) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  OdeSolution sol;
+  const int n = system.size();
+  sol.n = n;
+  SimulationSummary& sum = sol.summary;
+  auto finish = [&]() -> OdeSolution {
+    sum.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    return std::move(sol);
+  };
+  auto invalid = [&](std::string msg) {
+    sum.status = SimStatus::kInvalidInput;
+    sum.message = std::move(msg);
+    return finish();
+  };
+
+  // ---- validation ----
+  if (n < 1) return invalid(FieldError("system.size()", n, "must be >= 1"));
+  if (auto s = options.Validate(n); !s.ok()) return invalid(s.message());
+  if (static_cast<int>(y0.size()) != n)
+    return invalid(FieldError("y0.size()", y0.size(), "must equal the number of states " + std::to_string(n)));
+  if (!std::isfinite(t0)) return invalid(FieldError("t0", t0, "must be finite"));
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(y0[i])) return invalid(FieldError("y0[" + std::to_string(i) + "]", y0[i], "must be finite"));
+  for (size_t k = 0; k < t_out.size(); ++k) {
+    if (!std::isfinite(t_out[k])) return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be finite"));
+    if (t_out[k] < t0) return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be >= t0 = " + Num(t0)));
+    if (k > 0 && !(t_out[k] > t_out[k - 1]))
+      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "output times must be strictly increasing"));
+  }
+  const JacobianStructure js = system.jacobian_structure();
+  const bool newton = options.iteration == NonlinearIteration::kNewton;
+  const bool banded = newton && (options.linear_solver == LinearSolverKind::kBanded ||
+                                 (options.linear_solver == LinearSolverKind::kAuto && js.banded));
+  if (banded) {
+    if (!js.banded) return invalid("linear_solver = banded but the system declares no band");
+    if (js.upper < 0 || js.upper >= n || js.lower < 0 || js.lower >= n)
+      return invalid("system bandwidths (upper " + std::to_string(js.upper) + ", lower " + std::to_string(js.lower) +
+                     ") must be in [0, n-1]");
+  }
+  const int n_roots = system.num_roots();
+  if (n_roots < 0) return invalid(FieldError("system.num_roots()", n_roots, "must be >= 0"));
+  sol.t.reserve(t_out.size());
+  sol.y.reserve(t_out.size() * static_cast<size_t>(n));
+  if (t_out.empty()) return finish();
+
+  // ---- SUNDIALS objects (declared in creation order, destroyed in reverse) ----
+  RunData data;
+  data.system = &system;
+  data.n = n;
+  // Fills the summary with a solver failure; the caller then returns finish().
+  auto set_failure = [&](int flag, const std::string& what) {
+    sum.status = SimStatus::kSolverFailure;
+    sum.solver_flag = flag;
+    sum.message = what;
+    if (!data.cvode_message.empty()) sum.message += ": " + data.cvode_message;
+    if (!data.callback_note.empty()) sum.message += " (last callback problem: " + data.callback_note + ")";
+  };
+  auto fail = [&](int flag, const std::string& what) {
+    set_failure(flag, what);
+    return finish();
+  };
+
+  SUNContext raw_ctx = nullptr;
+  if (SUNContext_Create(nullptr, &raw_ctx) != 0 || raw_ctx == nullptr) return fail(-1, "SUNContext_Create failed");
+  ContextPtr ctx(raw_ctx);
+  VectorPtr y(N_VNew_Serial(n, ctx.get()));
+  if (!y) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
+  double* yd = N_VGetArrayPointer(y.get());
+  std::copy(y0.begin(), y0.end(), yd);
+  MatrixPtr matrix;
+  LinearSolverPtr linear_solver;
+  NonlinearSolverPtr nonlinear_solver;
+  CvodePtr mem(CVodeCreate(options.method == OdeMethod::kBdf ? CV_BDF : CV_ADAMS, ctx.get()));
+  if (!mem) return fail(CV_MEM_FAIL, "CVodeCreate failed");
+  void* cv = mem.get();
+  CVodeSetErrHandlerFn(cv, ErrorHandler, &data);
+
+  auto check = [&](int flag, const char* call) -> bool {
+    if (flag >= 0) return true;
+    set_failure(flag, std::string(call) + " failed with " + FlagName(flag));
+    return false;
+  };
+  if (!check(CVodeInit(cv, RhsCallback, t0, y.get()), "CVodeInit")) return finish();
+  if (!check(CVodeSetUserData(cv, &data), "CVodeSetUserData")) return finish();
+  if (options.atol_vector.empty()) {
+    if (!check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances")) return finish();
+  } else {
+    VectorPtr abstol(N_VNew_Serial(n, ctx.get()));
+    if (!abstol) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
+    std::copy(options.atol_vector.begin(), options.atol_vector.end(), N_VGetArrayPointer(abstol.get()));
+    if (!check(CVodeSVtolerances(cv, options.rtol, abstol.get()), "CVodeSVtolerances")) return finish();
+  }
+  if (newton) {
+    matrix.reset(banded ? SUNBandMatrix(n, js.upper, js.lower, ctx.get()) : SUNDenseMatrix(n, n, ctx.get()));
+    if (!matrix) return fail(CV_MEM_FAIL, "SUNMatrix creation failed");
+    linear_solver.reset(banded ? SUNLinSol_Band(y.get(), matrix.get(), ctx.get())
+                               : SUNLinSol_Dense(y.get(), matrix.get(), ctx.get()));
+    if (!linear_solver) return fail(CV_MEM_FAIL, "SUNLinearSolver creation failed");
+    if (!check(CVodeSetLinearSolver(cv, linear_solver.get(), matrix.get()), "CVodeSetLinearSolver"))
+      return finish();
+    if (js.analytic && options.use_analytic_jacobian)
+      if (!check(CVodeSetJacFn(cv, JacobianCallback), "CVodeSetJacFn")) return finish();
+  } else {
+    nonlinear_solver.reset(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()));
+    if (!nonlinear_solver) return fail(CV_MEM_FAIL, "SUNNonlinSol_FixedPoint failed");
+    if (!check(CVodeSetNonlinearSolver(cv, nonlinear_solver.get()), "CVodeSetNonlinearSolver")) return finish();
+  }
+  if (options.max_step > 0 && !check(CVodeSetMaxStep(cv, options.max_step), "CVodeSetMaxStep")) return finish();
+  if (options.initial_step > 0 && !check(CVodeSetInitStep(cv, options.initial_step), "CVodeSetInitStep"))
+    return finish();
+  if (options.max_order > 0 && !check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd")) return finish();
+  if (options.stability_limit_detection && options.method == OdeMethod::kBdf &&
+      !check(CVodeSetStabLimDet(cv, SUNTRUE), "CVodeSetStabLimDet"))
+    return finish();
+  if (n_roots > 0) {
+    if (!check(CVodeRootInit(cv, n_roots, RootCallback), "CVodeRootInit")) return finish();
+    CVodeSetNoInactiveRootWarn(cv);
+  }
+
+  // ---- counters survive restarts (CVodeReInit zeroes CVODE's own) ----
+  Counters done;
+  auto current = [&]() {
+    Counters c;
+    long v = 0;
+    if (CVodeGetNumSteps(cv, &v) == CV_SUCCESS) c.steps = v;
+    if (CVodeGetNumRhsEvals(cv, &v) == CV_SUCCESS) c.rhs = v;
+    if (newton) {
+      if (CVodeGetNumLinRhsEvals(cv, &v) == CV_SUCCESS) c.rhs += v;
+      if (CVodeGetNumJacEvals(cv, &v) == CV_SUCCESS) c.jac = v;
+    }
+    return c;
+  };
+  auto publish = [&]() {
+    const Counters c = current();
+    sum.steps = done.steps + c.steps;
+    sum.rhs_calls = done.rhs + c.rhs;
+    sum.jacobian_calls = done.jac + c.jac;
+  };
+
+  const std::vector<Stop> stops = MergeStops(t0, t_out, options.breakpoints);
+  auto stopping = [&](const Stop& s) { return s.breakpoint || (options.restart_at_outputs && s.first_output >= 0); };
+  size_t next_tstop = 0;  // index of the next stop where the integrator must halt exactly
+  auto arm_tstop = [&](double t_now) -> bool {
+    while (next_tstop < stops.size() && !(stops[next_tstop].t > t_now && stopping(stops[next_tstop]))) ++next_tstop;
+    if (next_tstop < stops.size()) return check(CVodeSetStopTime(cv, stops[next_tstop].t), "CVodeSetStopTime");
+    // SUNDIALS 6.4 cannot clear a stop time, and one reached by a CV_SUCCESS return (not CV_TSTOP_RETURN)
+    // stays armed: move it beyond the last output, where it never acts.
+    const double t_end = stops.back().t;
+    return check(CVodeSetStopTime(cv, t_end + std::max(1.0, t_end - t0)), "CVodeSetStopTime");
+  };
+  auto restart = [&](double t_now) -> bool {
+    const Counters c = current();
+    done.steps += c.steps;
+    done.rhs += c.rhs;
+    done.jac += c.jac;
+    if (!check(CVodeReInit(cv, t_now, y.get()), "CVodeReInit")) return false;
+    return arm_tstop(t_now);
+  };
+  auto record = [&](const Stop& s) -> bool {
+    for (int k = s.first_output; k >= 0 && k <= s.last_output; ++k) {
+      sol.t.push_back(t_out[k]);
+      sol.y.insert(sol.y.end(), yd, yd + n);
+    }
+    for (int i = 0; i < n && s.first_output >= 0; ++i) {
+      if (!std::isfinite(yd[i])) {
+        sum.status = SimStatus::kNonFinite;
+        sum.message = "state " + std::to_string(i) + " non-finite at t = " + Num(s.t);
+        return false;
+      }
+    }
+    return true;
+  };
+  std::vector<int> root_info(static_cast<size_t>(n_roots));
+  // Calls the hook; returns false (with the summary filled) if it asks to fail.
+  auto call_hook = [&](StopEvent ev, bool& restart_needed) -> bool {
+    if (!options.on_stop) return true;
+    StopAction a;
+    try {
+      a = options.on_stop(ev, std::span<double>(yd, static_cast<size_t>(n)));
+    } catch (const std::exception& e) {
+      data.Note(std::string("exception in discrete-update hook: ") + e.what());
+      a = StopAction::kFail;
+    }
+    if (a == StopAction::kFail) {
+      set_failure(CV_ILL_INPUT, "discrete-update hook stopped the integration at t = " + Num(ev.t));
+      return false;
+    }
+    if (a == StopAction::kRestart) restart_needed = true;
+    return true;
+  };
+
+  if (!arm_tstop(t0)) return finish();
+  int flag = CV_SUCCESS;
+  for (const Stop& s : stops) {
+    if (s.t > t0) {
+      for (;;) {
+        publish();
+        const long remaining = options.max_steps - sum.steps;  // CVODE's mxstep counts per CVode() call
+        if (remaining <= 0) {
+          flag = CV_TOO_MUCH_WORK;
+          sum.solver_flag = flag;
+          double tc = t0;
+          CVodeGetCurrentTime(cv, &tc);
+          return fail(flag, "CVODE CV_TOO_MUCH_WORK at t = " + Num(tc) + ": step budget max_steps = " +
+                                std::to_string(options.max_steps) + " used up before t = " + Num(s.t));
+        }
+        CVodeSetMaxNumSteps(cv, remaining);
+        double tret = s.t;
+        flag = CVode(cv, s.t, y.get(), &tret, CV_NORMAL);
+        sum.solver_flag = flag;
+        if (flag < 0) {
+          publish();
+          double tc = tret;
+          CVodeGetCurrentTime(cv, &tc);
+          std::string what = "CVODE " + FlagName(flag) + " at t = " + Num(tc);
+          if (flag == CV_TOO_MUCH_WORK) what += " (step budget max_steps = " + std::to_string(options.max_steps) + ")";
+          return fail(flag, what);
+        }
+        if (flag != CV_ROOT_RETURN) break;
+        // A root function crossed zero at tret < s.t: discrete update, maybe restart, then go on.
+        CVodeGetRootInfo(cv, root_info.data());
+        StopEvent ev;
+        ev.t = tret;
+        ev.roots = root_info;
+        bool need_restart = false;
+        if (!call_hook(ev, need_restart)) return finish();
+        if (need_restart && !restart(tret)) return finish();
+        if (s.t - tret <= 64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(s.t))) break;
+      }
+    }
+    if (!record(s)) {
+      publish();
+      return finish();
+    }
+    StopEvent ev;
+    ev.t = s.t;
+    ev.output_index = s.last_output;
+    ev.breakpoint = s.breakpoint;
+    bool need_restart = s.t > t0 && stopping(s);
+    if (!call_hook(ev, need_restart)) return finish();
+    if (need_restart && &s != &stops.back() && !restart(s.t)) return finish();
+  }
+  publish();
+  return finish();
+}
+
+}  // namespace pz::model
