@@ -7,8 +7,9 @@
 //   dz/du = α − κ z,   κ = β s + γ σ,   z(u) = z₀ + (κ z₀ − α) · expm1(−κ (u − u₀)) / κ
 //
 // (z₀ + α (u − u₀) when κ = 0). Branches end at the reversals of u and at the zero crossings of z.
-// The loop is bounded for every input iff α = 0, or β + γ > 0 and β − γ ≥ 0 (the spec's rule;
-// BimorphParams::HysteresisBounded()).
+// For α > 0 the loop is bounded for every input iff β + γ > 0 and β − γ ≥ 0 (the spec's rule,
+// BimorphParams::HysteresisBounded()); the model is symmetric under (α, γ, z) → (−α, −γ, −z), so for
+// α < 0 the rule reads β − γ > 0 and β + γ ≥ 0 — the same open region, other boundary lines.
 #pragma once
 
 #include <cmath>
