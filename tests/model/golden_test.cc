@@ -149,6 +149,18 @@ INSTANTIATE_TEST_SUITE_P(AllFiles, GoldenTest,
 
 // ---- The fast path's own checks ------------------------------------------------------------------
 
+// The sinusoid sampled `refine` times finer than its own grid, as a sampled signal.
+SampledSignal FineSamples(const Sinusoid& drive, int refine) {
+  SampledSignal s;
+  const size_t n = static_cast<size_t>(drive.NumSamples() - 1) * refine + 1;
+  for (size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) / (drive.sample_rate_hz * refine);
+    s.t.push_back(t);
+    s.u.push_back(drive.Value(t));
+  }
+  return s;
+}
+
 // A sampled drive (u linear between samples) takes the general branch of the fast path: sampling the
 // sinusoid at 10 kHz (linear-interpolation error (Ωh)²V/8 ≤ 4e-5 V) must land on the goldens' θ at
 // their sample times. Files: stiff overdamped (case1), δ = 0 (case6), sharp loop (random3).
@@ -156,14 +168,7 @@ TEST(ModalSampledDrive, FinelySampledSinusoidMatchesGoldenTheta) {
   for (const std::string name : {"case1", "case6", "random3"}) {
     const GoldenCase g = LoadGolden(name);
     constexpr int kRefine = 100;
-    SampledSignal s;
-    const size_t n = (g.t.size() - 1) * kRefine + 1;
-    for (size_t k = 0; k < n; ++k) {
-      const double t = static_cast<double>(k) / (g.drive.sample_rate_hz * kRefine);
-      s.t.push_back(t);
-      s.u.push_back(g.drive.Value(t));
-    }
-    const BimorphTrace tr = Simulate(DefaultPlant(), g.params, s);
+    const BimorphTrace tr = Simulate(DefaultPlant(), g.params, FineSamples(g.drive, kRefine));
     ASSERT_TRUE(tr.summary.ok()) << name << ": " << tr.summary.BriefReport();
     double worst = 0;
     for (size_t k = 0; k < g.t.size(); ++k)
@@ -190,14 +195,7 @@ TEST(ModalSinusoidDrive, OffGridReversalsAndSubstepsMatchFineSampledDrive) {
     const BimorphTrace a = Simulate(DefaultPlant(), p, c.drive);
     ASSERT_TRUE(a.summary.ok()) << a.summary.BriefReport();
     constexpr int kRefine = 200;
-    SampledSignal s;
-    const size_t n = (a.t.size() - 1) * kRefine + 1;
-    for (size_t k = 0; k < n; ++k) {
-      const double t = static_cast<double>(k) / (c.drive.sample_rate_hz * kRefine);
-      s.t.push_back(t);
-      s.u.push_back(c.drive.Value(t));
-    }
-    const BimorphTrace b = Simulate(DefaultPlant(), p, s);
+    const BimorphTrace b = Simulate(DefaultPlant(), p, FineSamples(c.drive, kRefine));
     ASSERT_TRUE(b.summary.ok()) << b.summary.BriefReport();
     double worst_theta = 0, worst_z = 0;
     for (size_t k = 0; k < a.t.size(); ++k) {
