@@ -29,9 +29,8 @@ std::vector<double> DriveInput::Breakpoints() const {
     if (sampled_->t.size() > 2) b.assign(sampled_->t.begin() + 1, sampled_->t.end() - 1);
     return b;
   }
-  // u̇ = V ω cos(ω t) vanishes at t = (2m + 1) / (4 f).
-  const std::vector<double> t = SampleTimes(DriveSignal(*sinusoid_));
-  const double t_last = t.back();
+  // u̇ = V ω cos(ω t) vanishes at t = (2m + 1) / (4 f); the last sample is at (N − 1) / fs.
+  const double t_last = static_cast<double>(sinusoid_->NumSamples() - 1) / sinusoid_->sample_rate_hz;
   for (long m = 0;; ++m) {
     const double tb = (2.0 * m + 1.0) / (4.0 * sinusoid_->frequency_hz);
     if (tb >= t_last) break;
@@ -79,7 +78,6 @@ BimorphOde::BimorphOde(const BimorphPlant& plant, const BimorphParams& params, c
     size_ += e->num_states();
   }
   work_.setZero(nd_);
-  drive_.SelectPieceAt(SampleTimes(drive).front());
 }
 
 std::vector<double> BimorphOde::InitialState() const {

@@ -53,6 +53,7 @@ class DriveInput {
   /// True if the right-hand side depends on the selected piece (SampledSignal).
   bool piecewise() const { return sampled_ != nullptr; }
   /// Selects the piece that starts at or before t (t at a sample selects the piece that starts there).
+  /// The first piece is selected on construction.
   void SelectPieceAt(double t);
 
  private:
@@ -174,7 +175,8 @@ class BimorphOde final : public OdeSystem {
 /// Simulates the plant (with optional extensions) on the CVODE path: BDF, Newton with the analytic
 /// dense Jacobian, breakpoints at the drive's non-smooth points, outputs on the signal's sample grid,
 /// then θ = atan(w_tip / L) [deg] and the backlash. Assumes params, drive and options validated and
-/// the loop bounded (Simulate() checks); never throws. options.solver is ignored.
+/// the loop bounded (Simulate() checks); never throws. options.solver is ignored. If the solve fails,
+/// the trace holds the samples reached before the failure and the summary says why.
 BimorphTrace SimulateBimorphOde(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
                                 const SimulateOptions& options,
                                 std::vector<const BimorphExtension*> extensions = {});
