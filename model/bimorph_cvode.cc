@@ -19,7 +19,7 @@ BimorphTrace SimulateBimorphOde(const BimorphPlant& plant, const BimorphParams& 
   CvodeOptions co;
   co.method = OdeMethod::kBdf;
   co.iteration = NonlinearIteration::kNewton;
-  co.linear_solver = LinearSolverKind::kDense;
+  co.linear_solver = LinearSolverKind::kReduced;  // q̇ = v eliminated: see BimorphOde
   co.rtol = options.rtol;
   co.atol = options.atol;
   co.max_steps = options.max_steps;

@@ -11,7 +11,9 @@
 //
 // M⁻¹ is applied through a Cholesky factorisation computed once per run (M⁻¹K, M⁻¹B_u, M⁻¹e*), so the
 // right-hand side is a few small matrix-vector products. The Jacobian is analytic and dense (M⁻¹ of
-// the banded consistent mass matrix is full, so a banded Jacobian would only be an approximation).
+// the banded consistent mass matrix is full, so a banded Jacobian would only be an approximation);
+// the q̇ = v rows are declared kinematic, so each Newton system is solved by eliminating q and
+// factoring only the (2n + 1 + extension states)-sized rest.
 //
 // Extension seam. A plant extension (amplifier low-pass on u, creep, Dahl friction at the tip, cubic
 // stiffening, …) is a BimorphExtension: it owns x_i (num_states() ≥ 0 states appended to y), and
@@ -23,7 +25,11 @@
 //   * gives its Jacobian blocks ∂g_i/∂y, ∂f_i/∂y and, for a drive stage, ∂(u_e, u̇_e)/∂y, through
 //     ExtensionJacobian; BimorphOde applies M⁻¹ and the chain rule through the drive.
 // Extensions run in list order; none is needed for the spec's plant. Extensions are immutable and
-// shared (const methods); per-run state lives in y.
+// shared (const methods); per-run state lives in y. A plant with extensions is simulated by
+// SimulateBimorphOde(plant, params, drive, options, {&ext1, &ext2, …}); SimulateCvode() is the same
+// with none. Not yet in the seam: events of an extension (a switching state needing root functions and
+// a discrete update); they would go through OdeSystem::num_roots()/Roots() and the stop hook, as the
+// Dahl plant (model/dahl.h) does for its sign mode.
 #pragma once
 
 #include <Eigen/Dense>
@@ -138,7 +144,7 @@ class BimorphOde final : public OdeSystem {
 
   int size() const override { return size_; }
   int Rhs(double t, const double* y, double* ydot) const override;
-  JacobianStructure jacobian_structure() const override { return {.analytic = true}; }
+  JacobianStructure jacobian_structure() const override { return {.analytic = true, .kinematic = nd_}; }
   int Jacobian(double t, const double* y, const double* fy, JacobianView& jac) const override;
 
   int num_dofs() const { return nd_; }                      ///< 2n

@@ -10,6 +10,8 @@
 #include <sunmatrix/sunmatrix_dense.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
+#include <Eigen/Dense>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -18,6 +20,7 @@
 #include <exception>
 #include <limits>
 #include <memory>
+#include <new>
 #include <string>
 #include <type_traits>
 
@@ -175,6 +178,83 @@ void ErrorHandler(int error_code, const char* module, const char* function, char
   }
 }
 
+// ---- reduced dense linear solver for systems with kinematic rows --------------------------------
+// CVODE hands a matrix-based solver A = I − γJ. When rows i < k of J are exactly e_{k+i} (ẏ_i = y_{k+i}),
+// rows i < k of A x = b read x_i − γ x_{k+i} = b_i, so x_i = b_i + γ x_{k+i}; substituting into the
+// other rows leaves S x_r = b_r − A_rq b_q with S = A_rr plus γ A_rq added to its first k columns.
+struct ReducedContent {
+  int n = 0, k = 0;
+  void* cvode_mem = nullptr;  // for γ: the one CVODE formed A with
+  double gamma = 0;
+  Eigen::MatrixXd a_rq;                     // (n − k) × k block of A
+  Eigen::PartialPivLU<Eigen::MatrixXd> lu;  // of S
+  Eigen::VectorXd rhs, xr, xq;  // scratch, sized once
+  int last_flag = 0;
+};
+
+ReducedContent* Reduced(SUNLinearSolver s) { return static_cast<ReducedContent*>(s->content); }
+
+int ReducedSetup(SUNLinearSolver s, SUNMatrix a) {
+  ReducedContent* c = Reduced(s);
+  const int n = c->n, k = c->k, m = n - k;
+  const Eigen::Map<const Eigen::MatrixXd> am(SUNDenseMatrix_Data(a), n, n);
+  if (CVodeGetCurrentGamma(c->cvode_mem, &c->gamma) != CV_SUCCESS) return c->last_flag = SUNLS_MEM_NULL;
+  c->a_rq = am.bottomLeftCorner(m, k);
+  Eigen::MatrixXd reduced = am.bottomRightCorner(m, m);
+  reduced.leftCols(k) += c->gamma * c->a_rq;
+  c->lu.compute(reduced);
+  // PartialPivLU does not report singularity: look for a zero pivot (recoverable, as SUNLinSol_Dense).
+  const Eigen::VectorXd pivots = c->lu.matrixLU().diagonal();
+  for (int i = 0; i < m; ++i) {
+    if (pivots[i] == 0.0 || !std::isfinite(pivots[i])) return c->last_flag = SUNLS_LUFACT_FAIL;
+  }
+  return c->last_flag = SUNLS_SUCCESS;
+}
+
+int ReducedSolve(SUNLinearSolver s, SUNMatrix, N_Vector x, N_Vector b, sunrealtype) {
+  ReducedContent* c = Reduced(s);
+  const int n = c->n, k = c->k, m = n - k;
+  const Eigen::Map<const Eigen::VectorXd> bv(N_VGetArrayPointer(b), n);
+  c->rhs.noalias() = bv.tail(m) - c->a_rq * bv.head(k);
+  c->xr = c->lu.solve(c->rhs);
+  c->xq = bv.head(k) + c->gamma * c->xr.head(k);  // before writing x: b may alias x
+  Eigen::Map<Eigen::VectorXd> xv(N_VGetArrayPointer(x), n);
+  xv.tail(m) = c->xr;
+  xv.head(k) = c->xq;
+  return c->last_flag = SUNLS_SUCCESS;
+}
+
+SUNLinearSolver NewReducedSolver(int n, int k, void* cvode_mem, SUNContext ctx) {
+  SUNLinearSolver s = SUNLinSolNewEmpty(ctx);
+  if (!s) return nullptr;
+  auto* c = new (std::nothrow) ReducedContent;
+  if (!c) {
+    SUNLinSolFreeEmpty(s);
+    return nullptr;
+  }
+  c->n = n;
+  c->k = k;
+  c->cvode_mem = cvode_mem;
+  c->rhs.resize(n - k);
+  c->xr.resize(n - k);
+  c->xq.resize(k);
+  s->content = c;
+  s->ops->gettype = [](SUNLinearSolver) { return SUNLINEARSOLVER_DIRECT; };
+  s->ops->getid = [](SUNLinearSolver) { return SUNLINEARSOLVER_CUSTOM; };
+  s->ops->initialize = [](SUNLinearSolver) { return static_cast<int>(SUNLS_SUCCESS); };
+  s->ops->setup = ReducedSetup;
+  s->ops->solve = ReducedSolve;
+  s->ops->lastflag = [](SUNLinearSolver ls) { return static_cast<sunindextype>(Reduced(ls)->last_flag); };
+  s->ops->free = [](SUNLinearSolver ls) {
+    if (ls == nullptr) return static_cast<int>(SUNLS_SUCCESS);
+    delete Reduced(ls);
+    ls->content = nullptr;
+    SUNLinSolFreeEmpty(ls);
+    return static_cast<int>(SUNLS_SUCCESS);
+  };
+  return s;
+}
+
 // ---- stops: output times and breakpoints merged --------------------------------------------------
 struct Stop {
   double t = 0;
@@ -267,6 +347,11 @@ OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const d
   const bool newton = options.iteration == NonlinearIteration::kNewton;
   const bool banded = newton && (options.linear_solver == LinearSolverKind::kBanded ||
                                  (options.linear_solver == LinearSolverKind::kAuto && js.banded));
+  const bool reduced = newton && !banded &&
+                       (options.linear_solver == LinearSolverKind::kReduced ||
+                        (options.linear_solver == LinearSolverKind::kAuto && js.kinematic > 0));
+  if (reduced && !(js.kinematic > 0 && 2 * js.kinematic <= n))
+    return invalid(FieldError("system kinematic rows", js.kinematic, "must be in [1, n/2] for linear_solver = reduced"));
   if (banded) {
     if (!js.banded) return invalid("linear_solver = banded but the system declares no band");
     if (js.upper < 0 || js.upper >= n || js.lower < 0 || js.lower >= n)
@@ -329,8 +414,9 @@ OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const d
   if (newton) {
     matrix.reset(banded ? SUNBandMatrix(n, js.upper, js.lower, ctx.get()) : SUNDenseMatrix(n, n, ctx.get()));
     if (!matrix) return fail(CV_MEM_FAIL, "SUNMatrix creation failed");
-    linear_solver.reset(banded ? SUNLinSol_Band(y.get(), matrix.get(), ctx.get())
-                               : SUNLinSol_Dense(y.get(), matrix.get(), ctx.get()));
+    linear_solver.reset(banded    ? SUNLinSol_Band(y.get(), matrix.get(), ctx.get())
+                        : reduced ? NewReducedSolver(n, js.kinematic, cv, ctx.get())
+                                  : SUNLinSol_Dense(y.get(), matrix.get(), ctx.get()));
     if (!linear_solver) return fail(CV_MEM_FAIL, "SUNLinearSolver creation failed");
     if (!check(CVodeSetLinearSolver(cv, linear_solver.get(), matrix.get()), "CVodeSetLinearSolver"))
       return finish();

@@ -38,9 +38,11 @@ enum class NonlinearIteration : int {
 
 /// Matrix storage of the Newton linear solver.
 enum class LinearSolverKind : int {
-  kAuto = 0,    ///< the system's declared structure (banded if it declares a band, else dense)
-  kDense = 1,   ///< dense LU
-  kBanded = 2,  ///< banded LU with the system's declared bandwidths
+  kAuto = 0,     ///< the system's declared structure: banded if it declares a band, else reduced
+                 ///< dense if it declares kinematic rows, else dense
+  kDense = 1,    ///< dense LU
+  kBanded = 2,   ///< banded LU with the system's declared bandwidths
+  kReduced = 3,  ///< dense LU after eliminating the declared kinematic rows (JacobianStructure::kinematic)
 };
 
 const char* OdeMethodName(OdeMethod m);
@@ -51,6 +53,10 @@ struct JacobianStructure {
   bool banded = false;    ///< ∂f_i/∂y_j = 0 whenever j − i > upper or i − j > lower
   int upper = 0;          ///< upper bandwidth, 0 … n−1 (banded only)
   int lower = 0;          ///< lower bandwidth, 0 … n−1 (banded only)
+  /// Second-order structure: ẏ_i = y_{k+i} exactly for i < k (k positions, then their velocities).
+  /// With k > 0 the dense Newton systems (I − γJ) x = b are solved by eliminating the k position
+  /// unknowns, x_i = b_i + γ x_{k+i}: an (n − k)-sized LU instead of n-sized, same solution.
+  int kinematic = 0;
 };
 
 /// Writable view of a Jacobian J(i, j) = ∂f_i/∂y_j in SUNDIALS dense (column-major) or band storage.

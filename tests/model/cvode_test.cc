@@ -49,17 +49,17 @@ class Decay final : public OdeSystem {
   double lambda_;
 };
 
-// ẍ = −ω² x as [x, v]: x = cos ωt, v = −ω sin ωt.
+// ẍ = −ω² x as [x, v]: x = cos ωt, v = −ω sin ωt. Optionally declares ẋ = v as a kinematic row.
 class Oscillator final : public OdeSystem {
  public:
-  explicit Oscillator(double omega) : omega_(omega) {}
+  explicit Oscillator(double omega, bool kinematic = false) : omega_(omega), kinematic_(kinematic) {}
   int size() const override { return 2; }
   int Rhs(double, const double* y, double* ydot) const override {
     ydot[0] = y[1];
     ydot[1] = -omega_ * omega_ * y[0];
     return 0;
   }
-  JacobianStructure jacobian_structure() const override { return {.analytic = true}; }
+  JacobianStructure jacobian_structure() const override { return {.analytic = true, .kinematic = kinematic_ ? 1 : 0}; }
   int Jacobian(double, const double*, const double*, JacobianView& j) const override {
     j.Set(0, 1, 1.0);
     j.Set(1, 0, -omega_ * omega_);
@@ -68,6 +68,7 @@ class Oscillator final : public OdeSystem {
 
  private:
   double omega_;
+  bool kinematic_;
 };
 
 // ẏ = A y, A = P diag(−1, −1e3, −1e6) P⁻¹: stiffness ratio 1e6, y = P e^{Dt} P⁻¹ y0.
@@ -237,6 +238,29 @@ TEST(CvodeReferenceProblems, DenseAndBandedJacobianAgree) {
   }
   for (size_t r = 1; r < runs.size(); ++r)
     for (size_t i = 0; i < runs[0].y.size(); ++i) EXPECT_NEAR(runs[r].y[i], runs[0].y[i], 1e-8) << "run " << r << " entry " << i;
+}
+
+TEST(CvodeReferenceProblems, ReducedSolverEliminatesKinematicRowsExactly) {
+  // The reduced LU solves the same Newton systems as the dense one: same steps, same answer.
+  const Oscillator sys(2 * std::numbers::pi, /*kinematic=*/true);
+  const double y0[] = {1.0, 0.0};
+  const std::vector<double> t = Linspace(0, 5, 21);
+  CvodeOptions o;
+  o.rtol = 1e-10;
+  o.atol = 1e-13;
+  o.linear_solver = LinearSolverKind::kDense;
+  const OdeSolution dense = IntegrateCvode(sys, 0.0, y0, t, o);
+  o.linear_solver = LinearSolverKind::kAuto;  // picks the reduced solver from the declared structure
+  const OdeSolution reduced = IntegrateCvode(sys, 0.0, y0, t, o);
+  ASSERT_TRUE(dense.summary.ok() && reduced.summary.ok()) << reduced.summary.BriefReport();
+  EXPECT_EQ(reduced.summary.steps, dense.summary.steps);
+  for (size_t i = 0; i < dense.y.size(); ++i) EXPECT_NEAR(reduced.y[i], dense.y[i], 1e-12) << i;
+  for (size_t k = 0; k < t.size(); ++k) EXPECT_NEAR(reduced.at(k, 0), std::cos(2 * std::numbers::pi * t[k]), 1e-7);
+  // A system that declares no kinematic rows cannot use it.
+  o.linear_solver = LinearSolverKind::kReduced;
+  const OdeSolution bad = IntegrateCvode(Oscillator(1.0), 0.0, y0, t, o);
+  EXPECT_EQ(bad.summary.status, SimStatus::kInvalidInput);
+  EXPECT_NE(bad.summary.message.find("kinematic"), std::string::npos) << bad.summary.message;
 }
 
 TEST(CvodeJacobianView, BandedViewKeepsOnlyTheBand) {
@@ -599,6 +623,27 @@ class PassiveDecay final : public BimorphExtension {
     j.AddState(0, static_cast<int>(p.x.data() - p.y.data()), -1.0);
   }
 };
+
+TEST(BimorphOde, ReducedAndDenseNewtonSolversAgree) {
+  const BimorphPlant plant;
+  const DriveSignal drive = Sinusoid{375.0, 1.0, 1.0, 100.0};
+  const BimorphOde ode(plant, Case1Params(), drive);
+  EXPECT_EQ(ode.jacobian_structure().kinematic, ode.num_dofs());
+  const std::vector<double> t = SampleTimes(drive), y0 = ode.InitialState();
+  CvodeOptions o;
+  o.rtol = 1e-10;
+  o.atol = 1e-14;
+  o.breakpoints = ode.Breakpoints();
+  o.linear_solver = LinearSolverKind::kDense;
+  const OdeSolution dense = IntegrateCvode(ode, 0.0, y0, t, o);
+  o.linear_solver = LinearSolverKind::kReduced;
+  const OdeSolution reduced = IntegrateCvode(ode, 0.0, y0, t, o);
+  ASSERT_TRUE(dense.summary.ok() && reduced.summary.ok()) << reduced.summary.BriefReport();
+  double w_max = 0;
+  for (size_t k = 0; k < t.size(); ++k) w_max = std::max(w_max, std::abs(dense.at(k, ode.tip_index())));
+  for (size_t k = 0; k < t.size(); ++k)
+    EXPECT_NEAR(reduced.at(k, ode.tip_index()), dense.at(k, ode.tip_index()), 1e-9 * w_max) << "k=" << k;
+}
 
 TEST(BimorphOdeExtensions, JacobianWithStagesAndForcesMatchesDifferences) {
   const BimorphPlant plant;
