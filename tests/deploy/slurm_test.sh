@@ -20,24 +20,15 @@ need_build "${1:-}"
 need_root "starts munged, slurmctld and slurmd"
 need_commands slurmctld:slurmctld slurmd:slurmd sbatch:slurm-client munged:munge ss:iproute2
 
+source "$(dirname "$0")/slurm_lib.sh"
+
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/pz-slurm.XXXXXX")
-chmod 0755 "$TMP"  # munged (user munge) reaches its socket folder below
-SL=$TMP/slurm MU=$TMP/munge SH=$TMP/shared
-mkdir -p "$SL/state" "$SL/spool" "$SH"
-install -d -o munge -g munge -m 0755 "$MU"
-REF_PIDS=()
-daemon_pids() { cat "$SL/slurmctld.pid" "$SL/slurmd.pid" "$MU/munged.pid" 2>/dev/null; }
+REF_PIDS=() SL="" MU="" SH=""
 cleanup() {
   local rc=$? pid
   for pid in "${REF_PIDS[@]}"; do stop_pid "$pid" 5; done
-  if [[ -f $SL/slurm.conf ]] && [[ -s $SL/slurmctld.pid ]]; then
-    export SLURM_CONF=$SL/slurm.conf
-    scancel --quiet --user=root 2>/dev/null
-    wait_for 20 "the jobs are gone" bash -c '[[ -z $(squeue -h 2>/dev/null) ]]'
-  fi
   if ((rc != 0 && rc != 77)); then show_logs "$SL"/*.log "$SH"/*.out "$TMP"/*.log; fi
-  # slurmctld first, then slurmd (else slurmctld waits on its hung RPCs), then munged.
-  for pid in $(daemon_pids); do stop_pid "$pid" 10; done
+  slurm_stop
   rm -rf "$TMP"
   exit $rc
 }
@@ -45,66 +36,15 @@ trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 # ---------------------------------------------------------------- munge + Slurm
-free_port() {
-  local p
-  for _ in $(seq 1 50); do
-    p=$((20000 + RANDOM % 40000))
-    ss -Htan "( sport = :$p )" | grep -q . || { echo "$p"; return 0; }
-  done
-  return 1
-}
-if command -v mungekey >/dev/null; then
-  runuser -u munge -- mungekey --create --keyfile="$MU/munge.key" || fail "mungekey"
-else
-  (umask 077 && dd if=/dev/urandom of="$MU/munge.key" bs=1024 count=1 status=none) && chown munge:munge "$MU/munge.key"
-fi
-runuser -u munge -- munged --socket="$MU/munge.sock" --key-file="$MU/munge.key" --log-file="$MU/munged.log" \
-  --pid-file="$MU/munged.pid" --seed-file="$MU/munged.seed" || { show_logs "$MU/munged.log"; fail "munged"; }
-wait_for 10 "munged answers" bash -c "munge -n -S '$MU/munge.sock' | unmunge -S '$MU/munge.sock'" || fail "munge"
-
-CTLD_PORT=$(free_port) && SLURMD_PORT=$(free_port) || fail "no free port"
-cat >"$SL/slurm.conf" <<EOF
-ClusterName=pztest
-SlurmctldHost=localhost
-SlurmctldPort=$CTLD_PORT
-SlurmdPort=$SLURMD_PORT
-SlurmUser=root
-SlurmdUser=root
-AuthType=auth/munge
-AuthInfo=socket=$MU/munge.sock
-CredType=cred/munge
-StateSaveLocation=$SL/state
-SlurmdSpoolDir=$SL/spool
-SlurmctldPidFile=$SL/slurmctld.pid
-SlurmdPidFile=$SL/slurmd.pid
-SlurmctldLogFile=$SL/slurmctld.log
-SlurmdLogFile=$SL/slurmd.log
-ProctrackType=proctrack/linuxproc
-TaskPlugin=task/none
-SchedulerType=sched/builtin
-SelectType=select/cons_tres
-SelectTypeParameters=CR_CPU
-SlurmdParameters=config_overrides
-ReturnToService=2
-MailProg=/bin/true
-JobCompType=jobcomp/none
-AccountingStorageType=accounting_storage/none
-MpiDefault=none
-KillWait=10
-NodeName=localhost CPUs=8 State=UNKNOWN
-PartitionName=test Nodes=localhost Default=YES MaxTime=INFINITE State=UP
-EOF
-export SLURM_CONF=$SL/slurm.conf
+slurm_init "$TMP"
+slurm_conf localhost "NodeName=localhost CPUs=8 State=UNKNOWN
+PartitionName=test Nodes=localhost Default=YES MaxTime=INFINITE State=UP"
 slurmctld -c || fail "slurmctld"
 T_CTLD=$(date +%s)
 slurmd -N localhost || fail "slurmd"
-wait_for 20 "the node is idle" bash -c '[[ $(sinfo -h -o %T) == idle ]]' || fail "Slurm did not come up"
-say "$(sinfo --version) single node up: $(sinfo -h -o '%P %a %D %T %N'), slurmctld port $CTLD_PORT"
+wait_for 20 "the node is idle" nodes_idle 1 || fail "Slurm did not come up"
+say "$(sinfo --version) single node up: $(sinfo -h -o '%P %a %D %T %N')"
 
-# job_state JOBID: the job's state (PENDING, RUNNING, COMPLETED, FAILED, ...).
-job_state() { scontrol show job "$1" -o 2>/dev/null | grep -o 'JobState=[A-Z_]*' | cut -d= -f2; }
-job_field() { scontrol show job "$1" -o 2>/dev/null | tr ' ' '\n' | sed -n "s/^$2=//p"; }
-is_final() { case $(job_state "$1") in COMPLETED | FAILED | CANCELLED | TIMEOUT | NODE_FAIL | OUT_OF_MEMORY) return 0 ;; esac; return 1; }
 # master_cli STATE ARGS...: the client against the master that STATE's master.env names.
 master_cli() {
   local env=$1/run/master.env
