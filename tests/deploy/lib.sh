@@ -102,6 +102,34 @@ same_result() {
   say "bit-identical to the reference: $(($(wc -l <"$1/progress.csv") - 1)) generations, best cost $(tail -n 1 "$1/progress.csv" | cut -d, -f2)"
 }
 
+# hosts_up PREFIX "IP ..." : "hosts" on one machine: a network namespace PREFIX-br holding a
+# bridge br0, and one namespace per address (PREFIX-h1, PREFIX-h2, ...) joined to it by a veth pair
+# (eth0 inside, port<i> on the bridge) with that address /24. Sets NS_BR and NS (the hosts'
+# namespaces, in order); hosts_down deletes them all (for the EXIT trap). Skips the test where
+# network namespaces cannot be made.
+NS_BR="" NS=()
+hosts_up() {
+  local i ips
+  read -r -a ips <<<"$2"
+  NS_BR=$1-br
+  ip netns add "$NS_BR" 2>/dev/null || { NS_BR=""; skip "cannot create network namespaces here"; }
+  ip -n "$NS_BR" link add br0 type bridge && ip -n "$NS_BR" link set br0 up || fail "bridge"
+  for i in "${!ips[@]}"; do
+    NS+=("$1-h$((i + 1))")
+    ip netns add "${NS[i]}" || fail "netns ${NS[i]}"
+    ip -n "$NS_BR" link add "port$i" type veth peer name eth0 netns "${NS[i]}" || fail "veth $i"
+    ip -n "$NS_BR" link set "port$i" master br0 up
+    ip -n "${NS[i]}" link set lo up
+    ip -n "${NS[i]}" addr add "${ips[i]}/24" dev eth0
+    ip -n "${NS[i]}" link set eth0 up
+  done
+}
+hosts_down() {
+  local n
+  for n in "${NS[@]}" ${NS_BR:+"$NS_BR"}; do ip netns del "$n" 2>/dev/null; done
+  NS=() NS_BR=""
+}
+
 # synthetic_spec NAME SEED BITS SLEEP_MS POPULATION GENERATIONS: a synthetic job spec (JSON) on
 # stdout. With SLEEP_MS > 0 a run is paced by time rather than by the (shared) cores.
 synthetic_spec() {

@@ -17,14 +17,12 @@ need_commands ip:iproute2
 CUT_S=${PZ_NETNS_CUT_S:-30}
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/pz-netns.XXXXXX")
-P=pz$$
-NS_BR=$P-br NS=("$P-h1" "$P-h2" "$P-h3")
 IP=(198.18.0.1 198.18.0.2 198.18.0.3)
 PIDS=()
 cleanup() {
-  local rc=$? pid n
+  local rc=$? pid
   for pid in "${PIDS[@]}"; do stop_pid "$pid" 5; done
-  for n in "${NS[@]}" "$NS_BR"; do ip netns del "$n" 2>/dev/null; done
+  hosts_down
   if ((rc != 0 && rc != 77)); then show_logs "$TMP"/*.log; fi
   rm -rf "$TMP"
   exit $rc
@@ -33,16 +31,7 @@ trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 # ---------------------------------------------------------------- the hosts
-ip netns add "$NS_BR" 2>/dev/null || skip "cannot create network namespaces here"
-ip -n "$NS_BR" link add br0 type bridge && ip -n "$NS_BR" link set br0 up || fail "bridge"
-for i in 0 1 2; do
-  ip netns add "${NS[i]}" || fail "netns ${NS[i]}"
-  ip -n "$NS_BR" link add "port$i" type veth peer name eth0 netns "${NS[i]}" || fail "veth $i"
-  ip -n "$NS_BR" link set "port$i" master br0 up
-  ip -n "${NS[i]}" link set lo up
-  ip -n "${NS[i]}" addr add "${IP[i]}/24" dev eth0
-  ip -n "${NS[i]}" link set eth0 up
-done
+hosts_up "pz$$" "${IP[*]}"
 # `ip netns exec` execs the program: in the background, $! is the program's pid.
 on() { ip netns exec "$@"; }
 say "hosts: ${NS[*]} on bridge br0 in $NS_BR: ${IP[*]}"

@@ -17,16 +17,14 @@ need_commands slurmctld:slurmctld slurmd:slurmd sbatch:slurm-client munged:munge
 source "$(dirname "$0")/slurm_lib.sh"
 
 TMP=$(mktemp -d "${TMPDIR:-/tmp}/pz-slurm-nodes.XXXXXX")
-P=pz$$
-NS_BR=$P-br NODES=(n1 n2) IP=(198.18.1.1 198.18.1.2)
-NS=("$P-n1" "$P-n2")
+NODES=(n1 n2) IP=(198.18.1.1 198.18.1.2)
 REF_PID="" SL="" MU="" SH=""
 cleanup() {
-  local rc=$? n
+  local rc=$?
   stop_pid "$REF_PID" 5
   if ((rc != 0 && rc != 77)); then show_logs "$SL"/*.log "$SH"/*.out "$TMP"/*.log; fi
   slurm_stop
-  for n in "${NS[@]}" "$NS_BR"; do ip netns del "$n" 2>/dev/null; done
+  hosts_down
   rm -rf "$TMP"
   exit $rc
 }
@@ -34,18 +32,8 @@ trap cleanup EXIT
 trap 'exit 130' INT TERM
 
 # ---------------------------------------------------------------- the two hosts
-ip netns add "$NS_BR" 2>/dev/null || skip "cannot create network namespaces here"
-ip -n "$NS_BR" link add br0 type bridge && ip -n "$NS_BR" link set br0 up || fail "bridge"
-printf '127.0.0.1 localhost\n' >"$TMP/hosts"
-for i in 0 1; do
-  ip netns add "${NS[i]}" || fail "netns ${NS[i]}"
-  ip -n "$NS_BR" link add "port$i" type veth peer name eth0 netns "${NS[i]}" || fail "veth $i"
-  ip -n "$NS_BR" link set "port$i" master br0 up
-  ip -n "${NS[i]}" link set lo up
-  ip -n "${NS[i]}" addr add "${IP[i]}/24" dev eth0
-  ip -n "${NS[i]}" link set eth0 up
-  printf '%s %s\n' "${IP[i]}" "${NODES[i]}" >>"$TMP/hosts"
-done
+hosts_up "pz$$" "${IP[*]}"
+printf '127.0.0.1 localhost\n%s n1\n%s n2\n' "${IP[0]}" "${IP[1]}" >"$TMP/hosts"
 # on_node I COMMAND...: COMMAND on node I: its network, its host name, its /etc/hosts. Only the
 # network namespace is entered (`ip netns exec` would remount /sys, which slurmd needs).
 on_node() {
