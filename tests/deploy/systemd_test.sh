@@ -54,7 +54,7 @@ fi
 # ---------------------------------------------------------------- 2. the command lines
 # exec_argv UNIT ENVFILE... : prints ExecStart's argv (one per line) as systemd would build it.
 exec_argv() {
-  local unit=$1 line key val w
+  local unit=$1 line val w
   shift
   local -A env=([STATE_DIRECTORY]="$TMP/state")
   while IFS= read -r line; do
