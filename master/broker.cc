@@ -184,6 +184,8 @@ struct Broker::Impl {
     m.type = ClientReplyMsg::Type::kEvent;
     m.code = WireCode::kOk;
     m.event = e;
+    m.event.workers = dispatcher.worker_count();
+    m.event.worker_threads = dispatcher.total_threads();
     for (const auto& w : *watchers) SendToClient(watcher_envelopes[w], m);
     if (IsFinal(e.state)) {
       for (const auto& w : *watchers) watcher_envelopes.erase(w);

@@ -1,5 +1,7 @@
 #include "master/job_kinds.h"
 
+#include "master/hgann_job.h"
+
 #include <unistd.h>
 
 #include <chrono>
@@ -69,6 +71,7 @@ JobKindRegistry& JobKindRegistry::Default() {
   static JobKindRegistry* registry = [] {
     auto* r = new JobKindRegistry;
     r->Register(SyntheticJobKind());
+    r->Register(HgannJobKind());
     return r;
   }();
   return *registry;
@@ -88,7 +91,7 @@ const JobKind* JobKindRegistry::Find(const std::string& name) const {
 
 std::vector<FieldViolation> JobKindRegistry::Validate(const JobSpec& spec) const {
   std::vector<FieldViolation> out = spec.Validate();
-  if (!out.empty() || spec.kind().empty()) return out;
+  if (spec.kind().empty()) return out;
   const JobKind* k = Find(spec.kind());
   if (!k) {
     out.push_back({spec.kind(), spec.kind() + ": job kind not available on this master"});

@@ -1,6 +1,6 @@
 // Job kinds: how a job spec's problem becomes a genome layout and a FitnessFunction. The master
 // (validation, in-process runs) and every worker use the same registry, so a job kind registered
-// here is available everywhere. Built in: "synthetic". The HGANN fitness registers "hgann":
+// here is available everywhere. Built in: "synthetic" and "hgann" (master/hgann_job.h). A new kind:
 //
 //   pz::master::JobKind k;
 //   k.name = "hgann";
@@ -36,6 +36,8 @@ struct JobKind {
   std::function<Status(const JobSpec&, GenomeLayout*)> layout;
   /// Builds the (pure, thread-safe) fitness of a valid spec.
   std::function<Status(const JobSpec&, std::unique_ptr<FitnessFunction>*)> make_fitness;
+  /// Optional: describes a genome for the generation log (e.g. the decoded network's shape).
+  std::function<std::string(const JobSpec&, const Genome&)> describe;
 };
 
 class JobKindRegistry {
@@ -47,7 +49,8 @@ class JobKindRegistry {
   /// nullptr when unknown. The pointer stays valid while the kind is not replaced.
   const JobKind* Find(const std::string& name) const;
 
-  /// Generic + kind-specific validation; empty when the spec is acceptable.
+  /// Generic + kind-specific validation (both, so that every violated field is answered at once);
+  /// empty when the spec is acceptable.
   std::vector<FieldViolation> Validate(const JobSpec& spec) const;
   Status Layout(const JobSpec& spec, GenomeLayout* layout) const;
   Status MakeFitness(const JobSpec& spec, std::unique_ptr<FitnessFunction>* out) const;

@@ -1,5 +1,6 @@
 #include "master/job_runner.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "master/inline_evaluator.h"
@@ -34,6 +35,8 @@ Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume
   if (Status s = kinds.Layout(spec_, &layout); !s.ok()) return s;
   try {
     ga_ = std::make_unique<GeneticAlgorithm>(ToGaOptions(spec_, layout), &forward_);
+    if (const JobKind* k = kinds.Find(spec_.kind()); k && k->describe)
+      ga_->SetDescriber([this, describe = k->describe](const Genome& g) { return describe(spec_, g); });
     if (resume) {
       ga_->RestoreState(resume->optimizer);
       const std::string id = checkpoint_.job_id;
@@ -62,6 +65,14 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   rec.errors = static_cast<uint32_t>(s.failures);
   if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end())
     rec.quarantined = static_cast<uint32_t>(q->second);
+  rec.worst_cost = s.worst_cost;
+  rec.stall = static_cast<uint32_t>(std::max(0, s.stall));
+  rec.evaluated = static_cast<uint32_t>(std::max(0, s.evaluations));
+  rec.penalized = static_cast<uint32_t>(std::max(0, s.penalized));
+  for (const auto& [reason, n] : s.failure_reasons) rec.failure_reasons[reason] = static_cast<uint32_t>(std::max(0, n));
+  rec.best_description = s.best_description;
+  rec.wall_time_s = s.wall_time_s;
+  rec.improved = s.improved;
   forward_.target = nullptr;
 
   const GaState& st = ga_->state();

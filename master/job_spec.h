@@ -21,32 +21,40 @@ struct FieldViolation {
   bool operator==(const FieldViolation&) const = default;
 };
 
-/// A searched parameter: `bits` bits decoded to [min, max].
+/// Override of the range of one of the seven identified parameters (proto ParameterRange).
 struct ParameterRange {
-  std::string name;
-  double min = 0;  ///< lower bound, in the parameter's unit
-  double max = 1;  ///< upper bound, > min
-  int bits = 16;   ///< resolution, 1..32
+  std::string name;  ///< "mu", "delta", "alpha", "beta", "gamma", "a1", "a2"
+  double min = 0;    ///< lower bound, in the parameter's unit, finite
+  double max = 1;    ///< upper bound, finite, ≥ min
 };
 
-/// A measured experiment, uniformly sampled.
-struct BenchCase {
-  std::string name;
-  double sample_time_s = 0;       ///< > 0 [s]
-  std::vector<double> input_v;    ///< drive voltage [V]
-  std::vector<double> output_m;   ///< measured displacement [m], same length as input_v
-  double weight = 1;              ///< > 0
+enum class CaseRole : int { kUnspecified = 0, kTrain = 1, kValidate = 2, kTest = 3 };
+
+/// One bench case of a bimorph-fin case set (proto HgannCase; io/bench_data.h BenchCase).
+struct HgannCaseSpec {
+  int number = 0;                  ///< > 0, unique
+  double amplitude_v = 0;          ///< V [V], finite, ≥ 0
+  double frequency_hz = 0;         ///< f [Hz], finite, > 0
+  CaseRole role = CaseRole::kUnspecified;  ///< must be set
+  double sample_rate_hz = 0;       ///< fs [Hz], finite, > 0
+  std::vector<double> angle_deg;   ///< measured fin angle [deg] at t = k / fs, ≥ 2 samples, finite
+  std::vector<double> voltage_v;   ///< recorded drive [V]: empty or as many as angle_deg, finite
+  std::optional<double> b1, b2;    ///< saturations [deg] (only with Saturation::kGiven)
 };
 
-/// The HGANN identification problem (its fitness is registered as job kind "hgann").
+/// The HGANN identification problem (job kind "hgann", master/hgann_job.h).
 struct HgannProblem {
-  std::string plant_model;                     ///< e.g. "bimorph"
-  std::map<std::string, double> plant_options;
-  std::string solver;                          ///< "" = plant default
-  std::vector<BenchCase> cases;                ///< ≥ 1
-  std::vector<ParameterRange> ranges;          ///< ≥ 1
-  std::vector<int> hidden;                     ///< hidden layer widths, each 1..1024
-  std::string metric;                          ///< "" = default
+  enum class Saturation { kFromExtremes = 0, kGiven = 1 };
+  std::vector<HgannCaseSpec> cases;    ///< ≥ 1 training case
+  std::string case_set_dir;            ///< client side only: must be empty at the master
+  std::string source;                  ///< where the cases came from (reports), ≤ 1000 chars
+  std::string ranges_preset;           ///< "" / "default" (spec §3) or "paper" (Table 3)
+  std::vector<ParameterRange> ranges;  ///< per-parameter overrides of the preset
+  double spread_penalty = 0;           ///< λ [deg²], finite, ≥ 0
+  Saturation saturation = Saturation::kFromExtremes;
+  /// Overrides of the bench's beam (model/beam.h BeamGeometry), by field name, e.g.
+  /// {"tip_length_m", 0.02}; n_active and n_tip are whole numbers.
+  std::map<std::string, double> geometry;
 };
 
 /// A synthetic problem for tests and benchmarks (job kind "synthetic").

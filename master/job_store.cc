@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <chrono>
+
 #include "master/job_runner.h"
 #include "master/wire_codec.h"
 
@@ -52,9 +54,11 @@ void JobStore::Start(const std::shared_ptr<Job>& job) {
   job->thread = std::thread([this, job] { Run(*job); });
 }
 
-void JobStore::Save(Job& job, const JobCheckpoint& c) {
-  if (Status s = dir_.SaveCheckpoint(c); !s.ok())
-    spdlog::error("job {}: checkpoint not saved: {}", job.id, s.message());
+void JobStore::Save(Job& job, const JobCheckpoint& c, bool write) {
+  if (write) {
+    if (Status s = dir_.SaveCheckpoint(c); !s.ok())
+      spdlog::error("job {}: checkpoint not saved: {}", job.id, s.message());
+  }
   std::lock_guard lock(job.mu);
   job.checkpoint = c;
 }
@@ -82,6 +86,8 @@ void JobStore::Run(Job& job) {
   }
   broker_.RegisterJob(job.id, job.spec_bytes, job.spec.limits);
   BrokerEvaluator eval(broker_, job.id);
+  auto last_write = std::chrono::steady_clock::now();
+  bool unwritten = false;  // the current checkpoint is newer than the one on disk
   while (!runner.Done() && !job.cancel && !job.shutdown) {
     const GenerationRecord rec = runner.Step(eval);
     if (eval.interrupted()) {
@@ -94,10 +100,21 @@ void JobStore::Run(Job& job) {
     }
     JobCheckpoint& c = runner.mutable_checkpoint();
     for (const auto& q : eval.TakeQuarantined()) c.quarantined.push_back(q);
-    Save(job, c);
+    const auto now = std::chrono::steady_clock::now();
+    const bool write = IsFinal(c.state) || options_.checkpoint_interval_s <= 0 ||
+                       std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
+    Save(job, c, write);
+    if (write) last_write = now;
+    unwritten = !write;
     spdlog::info("job {}: generation {} best {:.9g} mean {:.6g} evaluations {}", job.id,
                  rec.generation, rec.best_cost, rec.mean_cost, rec.evaluations);
     broker_.Publish({job.id, c.state, rec, {}});
+  }
+  if (unwritten && !job.cancel) {  // shut down between writes (a failure was written by finish)
+    std::lock_guard lock(job.mu);
+    if (!IsFinal(job.checkpoint.state))
+      if (Status st = dir_.SaveCheckpoint(job.checkpoint); !st.ok())
+        spdlog::error("job {}: checkpoint not saved: {}", job.id, st.message());
   }
   if (job.cancel) {
     JobCheckpoint last;
@@ -212,6 +229,7 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
       const auto& best = job->checkpoint.best;
       r.best.assign(best.begin(), best.begin() + std::min<size_t>(best.size(), req.count));
       r.log = job->checkpoint.log;
+      r.spec = job->spec;
       return r;
     }
     case T::kList: {

@@ -42,6 +42,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--max-jobs", store.max_running_jobs, "running jobs at most")
       ->capture_default_str();
+  app.add_option("--checkpoint-interval-s", store.checkpoint_interval_s,
+                 "write a running job's checkpoint at most this often (0 = every generation) [s]")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.add_option("--endpoints-file", endpoints_file,
                  "write the bound endpoints here (two lines: workers, clients)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")

@@ -102,11 +102,33 @@ void ToProto(const GenerationRecord& r, pw::GenerationRecord* p) {
   p->set_evaluations(r.evaluations);
   p->set_errors(r.errors);
   p->set_quarantined(r.quarantined);
+  p->set_worst_cost(r.worst_cost);
+  p->set_stall(r.stall);
+  p->set_evaluated(r.evaluated);
+  p->set_penalized(r.penalized);
+  for (const auto& [k, n] : r.failure_reasons) (*p->mutable_failure_reasons())[k] = n;
+  p->set_best_description(r.best_description);
+  p->set_wall_time_s(r.wall_time_s);
+  p->set_improved(r.improved);
 }
 
 GenerationRecord FromProto(const pw::GenerationRecord& p) {
-  return {p.generation(), p.best_cost(), p.mean_cost(), p.evaluations(), p.errors(),
-          p.quarantined()};
+  GenerationRecord r;
+  r.generation = p.generation();
+  r.best_cost = p.best_cost();
+  r.mean_cost = p.mean_cost();
+  r.evaluations = p.evaluations();
+  r.errors = p.errors();
+  r.quarantined = p.quarantined();
+  r.worst_cost = p.worst_cost();
+  r.stall = p.stall();
+  r.evaluated = p.evaluated();
+  r.penalized = p.penalized();
+  for (const auto& [k, n] : p.failure_reasons()) r.failure_reasons[k] = n;
+  r.best_description = p.best_description();
+  r.wall_time_s = p.wall_time_s();
+  r.improved = p.improved();
+  return r;
 }
 
 void ToProto(const QuarantineRecord& q, pw::QuarantineRecord* p) {
@@ -142,26 +164,44 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
   if (s.limits.target_cost) l->set_target_cost(*s.limits.target_cost);
   if (const auto* h = std::get_if<HgannProblem>(&s.problem)) {
     auto* ph = p->mutable_hgann();
-    ph->mutable_plant()->set_model(h->plant_model);
-    ph->mutable_plant()->set_solver(h->solver);
-    for (const auto& [k, v] : h->plant_options) (*ph->mutable_plant()->mutable_options())[k] = v;
-    for (const BenchCase& b : h->cases) {
-      auto* pb = ph->add_cases();
-      pb->set_name(b.name);
-      pb->set_sample_time_s(b.sample_time_s);
-      pb->mutable_input_v()->Assign(b.input_v.begin(), b.input_v.end());
-      pb->mutable_output_m()->Assign(b.output_m.begin(), b.output_m.end());
-      pb->set_weight(b.weight);
+    for (const HgannCaseSpec& c : h->cases) {
+      auto* pc = ph->add_cases();
+      pc->set_number(static_cast<uint32_t>(std::max(0, c.number)));
+      pc->set_amplitude_v(c.amplitude_v);
+      pc->set_frequency_hz(c.frequency_hz);
+      pc->set_role(static_cast<pw::CaseRole>(c.role));
+      pc->set_sample_rate_hz(c.sample_rate_hz);
+      pc->mutable_angle_deg()->Assign(c.angle_deg.begin(), c.angle_deg.end());
+      pc->mutable_voltage_v()->Assign(c.voltage_v.begin(), c.voltage_v.end());
+      if (c.b1) pc->set_b1(*c.b1);
+      if (c.b2) pc->set_b2(*c.b2);
     }
+    ph->set_case_set_dir(h->case_set_dir);
+    ph->set_source(h->source);
+    ph->set_ranges_preset(h->ranges_preset);
     for (const ParameterRange& r : h->ranges) {
       auto* pr = ph->add_ranges();
       pr->set_name(r.name);
       pr->set_min(r.min);
       pr->set_max(r.max);
-      pr->set_bits(static_cast<uint32_t>(r.bits));
     }
-    for (int w : h->hidden) ph->add_hidden(static_cast<uint32_t>(w));
-    ph->set_metric(h->metric);
+    ph->set_spread_penalty(h->spread_penalty);
+    ph->set_saturation(h->saturation == HgannProblem::Saturation::kGiven
+                           ? pw::SATURATION_GIVEN
+                           : pw::SATURATION_FROM_EXTREMES);
+    if (!h->geometry.empty()) {
+      auto* g = ph->mutable_geometry();
+      const auto* d = g->GetDescriptor();
+      const auto* refl = g->GetReflection();
+      for (const auto& [name, value] : h->geometry) {
+        const auto* f = d->FindFieldByName(name);
+        if (!f) continue;  // unknown names are refused by validation before they are encoded
+        if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE)
+          refl->SetDouble(g, f, value);
+        else
+          refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
+      }
+    }
   } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
     auto* py = p->mutable_synthetic();
     py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
@@ -199,18 +239,51 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
   if (p.has_hgann()) {
     const auto& ph = p.hgann();
     HgannProblem h;
-    h.plant_model = ph.plant().model();
-    h.solver = ph.plant().solver();
-    for (const auto& [k, val] : ph.plant().options()) h.plant_options[k] = val;
-    for (const auto& pb : ph.cases())
-      h.cases.push_back({pb.name(), pb.sample_time_s(),
-                         std::vector<double>(pb.input_v().begin(), pb.input_v().end()),
-                         std::vector<double>(pb.output_m().begin(), pb.output_m().end()),
-                         OrDefault(pb.weight(), 1.0)});
-    for (const auto& pr : ph.ranges())
-      h.ranges.push_back({pr.name(), pr.min(), pr.max(), ClampInt(OrDefault<uint32_t>(pr.bits(), 16))});
-    for (uint32_t w : ph.hidden()) h.hidden.push_back(ClampInt(w));
-    h.metric = ph.metric();
+    for (int i = 0; i < ph.cases_size(); ++i) {
+      const auto& pc = ph.cases(i);
+      HgannCaseSpec c;
+      c.number = ClampInt(pc.number());
+      c.amplitude_v = pc.amplitude_v();
+      c.frequency_hz = pc.frequency_hz();
+      if (pw::CaseRole_IsValid(pc.role())) {
+        c.role = static_cast<CaseRole>(pc.role());
+      } else if (v) {
+        const std::string f = "hgann.cases[" + std::to_string(i) + "].role";
+        v->push_back({f, f + " = " + std::to_string(pc.role()) +
+                             ": must be CASE_ROLE_TRAIN, CASE_ROLE_VALIDATE or CASE_ROLE_TEST"});
+      }
+      c.sample_rate_hz = pc.sample_rate_hz();
+      c.angle_deg.assign(pc.angle_deg().begin(), pc.angle_deg().end());
+      c.voltage_v.assign(pc.voltage_v().begin(), pc.voltage_v().end());
+      if (pc.has_b1()) c.b1 = pc.b1();
+      if (pc.has_b2()) c.b2 = pc.b2();
+      h.cases.push_back(std::move(c));
+    }
+    h.case_set_dir = ph.case_set_dir();
+    h.source = ph.source();
+    h.ranges_preset = ph.ranges_preset();
+    for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
+    h.spread_penalty = ph.spread_penalty();
+    switch (ph.saturation()) {
+      case pw::SATURATION_UNSPECIFIED:
+      case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
+      case pw::SATURATION_GIVEN: h.saturation = HgannProblem::Saturation::kGiven; break;
+      default:
+        if (v) v->push_back({"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
+                                                     ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
+    }
+    if (ph.has_geometry()) {
+      const auto& g = ph.geometry();
+      const auto* d = g.GetDescriptor();
+      const auto* refl = g.GetReflection();
+      for (int i = 0; i < d->field_count(); ++i) {
+        const auto* f = d->field(i);
+        if (!refl->HasField(g, f)) continue;
+        h.geometry[f->name()] = f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE
+                                    ? refl->GetDouble(g, f)
+                                    : static_cast<double>(refl->GetUInt32(g, f));
+      }
+    }
     s->problem = std::move(h);
   } else if (p.has_synthetic()) {
     const auto& py = p.synthetic();
@@ -605,6 +678,7 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       InfoToProto(m.info, f->mutable_info());
       for (const auto& b : m.best) ToProto(b, f->add_best());
       for (const auto& r : m.log) ToProto(r, f->add_log());
+      if (m.spec) ToProto(*m.spec, f->mutable_spec());
       break;
     }
     case T::kEvent: {
@@ -613,6 +687,8 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       e->set_state(static_cast<pw::JobState>(m.event.state));
       if (m.event.record) ToProto(*m.event.record, e->mutable_record());
       e->set_message(m.event.message);
+      e->set_workers(static_cast<uint32_t>(std::max(0, m.event.workers)));
+      e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.event.worker_threads)));
       break;
     }
     case T::kNone: break;
@@ -651,6 +727,10 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
     case pw::ClientReply::kFetch:
       m->type = T::kFetch;
       for (const auto& r : p.fetch().log()) m->log.push_back(FromProto(r));
+      if (p.fetch().has_spec()) {
+        m->spec.emplace();
+        FromProto(p.fetch().spec(), &*m->spec, nullptr);
+      }
       if (Status s = IndividualsFromProto(p.fetch().best(), &m->best); !s.ok()) return s;
       return InfoFromProto(p.fetch().info(), &m->info);
     case pw::ClientReply::kEvent:
@@ -660,6 +740,8 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->event.state = static_cast<JobState>(p.event().state());
       if (p.event().has_record()) m->event.record = FromProto(p.event().record());
       m->event.message = p.event().message();
+      m->event.workers = ClampInt(p.event().workers());
+      m->event.worker_threads = ClampInt(p.event().worker_threads());
       break;
     default: m->type = T::kNone; break;
   }

@@ -44,12 +44,13 @@ TEST(ServiceFaults, BadJobSpecsAreRejectedWithTheField) {
   EXPECT_TRUE(HasField(v, "synthetic.genome_bits"));
   EXPECT_TRUE(HasField(v, "limits.task_timeout_s"));
 
-  master::HgannProblem h;  // no plant, no cases, no ranges
+  master::HgannProblem h;  // no cases, an unknown range name
+  h.ranges.push_back({"alfa", 0, 1});
   s = SyntheticSpec(1, 10, 5);
   s.problem = h;
   EXPECT_EQ(client.Submit(s, &r, &v).code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "hgann.cases"));
-  EXPECT_TRUE(HasField(v, "hgann.ranges"));
+  EXPECT_TRUE(HasField(v, "hgann.ranges[0].name"));
 
   // Unknown JSON fields are refused by the parser, naming the field.
   st = client.SubmitJson(R"({"version": 1, "populaton": 3})", &r, &v);

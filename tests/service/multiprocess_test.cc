@@ -45,7 +45,9 @@ TEST(Service, SameJobIsBitIdenticalWith124WorkersAndInProcess) {
 }
 
 TEST(Service, WorkersKilledRepeatedlyJobCompletesBitIdentical) {
-  master::JobSpec spec = SyntheticSpec(11, 40, 25, /*sleep_ms=*/2);
+  // Long enough (≥ 50 × 20 × 4 ms / 6 threads ≈ 0.7 s of evaluation, more with the kills) for
+  // several kills.
+  master::JobSpec spec = SyntheticSpec(11, 40, 50, /*sleep_ms=*/4);
   spec.limits.quarantine_after = 100;  // kills by the test must not quarantine innocents
   const master::JobCheckpoint ref = Reference(spec);
   Cluster c("killw");
@@ -76,7 +78,8 @@ TEST(Service, WorkersKilledRepeatedlyJobCompletesBitIdentical) {
 TEST(Service, MasterKilledAndRestartedResumesBitIdentical) {
   const master::JobSpec spec = SyntheticSpec(13, 40, 30, /*sleep_ms=*/3);
   const master::JobCheckpoint ref = Reference(spec);
-  Cluster c("killm");
+  // A checkpoint on disk after every generation, so that each restart really resumes mid-run.
+  Cluster c("killm", {"--checkpoint-interval-s", "0"});
   c.AddWorker(2);
   c.AddWorker(2);
   std::string job_id;
