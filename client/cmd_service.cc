@@ -1,135 +1,352 @@
-// `piezoid submit | status | watch | jobs | cancel | fetch`: the service commands, thin wrappers
-// of client/service_client.h. Register with RegisterServiceCommands(app, exit_code).
+// `piezoid submit | status | list | watch | cancel | fetch | export`: the service commands, thin
+// wrappers of client/service_client.h, client/job_file.h, client/job_report.h and
+// client/export_c.h. Register with RegisterServiceCommands(app, exit_code).
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include "client/cmd_service.h"
+#include "client/export_c.h"
+#include "client/job_file.h"
+#include "client/job_report.h"
 #include "client/service_client.h"
+#include "master/job_kinds.h"
 #include "master/wire_codec.h"
 
 namespace pz::client {
+namespace fs = std::filesystem;
+
+int ExitCodeOf(const Status& s) {
+  switch (s.code()) {
+    case StatusCode::kOk: return kExitOk;
+    case StatusCode::kInvalidArgument: return kExitBadInput;
+    case StatusCode::kUnavailable: return kExitUnreachable;
+    case StatusCode::kNotFound: return kExitUnknownJob;
+    case StatusCode::kFailedPrecondition: return kExitJobNotOk;
+    default: return kExitFailure;
+  }
+}
+
 namespace {
 
 struct Common {
-  std::string master = "tcp://127.0.0.1:5556";
-  int timeout_ms = 5000;
+  std::string master;
+  int timeout_ms = 4000;
+  int retries = 2;
+  ServiceClient Client() const { return ServiceClient({master, timeout_ms, retries}); }
 };
 
+std::string DefaultMaster() {
+  const char* env = std::getenv("PIEZOID_MASTER");
+  return env && *env ? env : "tcp://127.0.0.1:5556";
+}
+
 void AddCommon(CLI::App* c, Common& o) {
-  c->add_option("--master", o.master, "the master's client endpoint")->capture_default_str();
-  c->add_option("--timeout-ms", o.timeout_ms, "per-request timeout [ms]")->capture_default_str();
+  c->add_option("--master", o.master, "the master's client endpoint (default: $PIEZOID_MASTER or tcp://127.0.0.1:5556)")
+      ->capture_default_str();
+  c->add_option("--timeout-ms", o.timeout_ms, "per-request timeout [ms]")
+      ->check(CLI::Range(10, 3600000))
+      ->capture_default_str();
+  c->add_option("--retries", o.retries, "attempts per request before giving up")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
 }
 
 int Report(const Status& s) {
-  if (s.ok()) return 0;
-  std::fprintf(stderr, "piezoid: error: %s\n", s.ToString().c_str());
-  return s.code() == StatusCode::kInvalidArgument ? 2 : 1;
+  if (s.ok()) return kExitOk;
+  std::fprintf(stderr, "piezoid: error: %s\n", s.message().c_str());
+  return ExitCodeOf(s);
+}
+
+/// Prints every violation; returns the exit code for an invalid spec.
+int ReportViolations(const std::string& what, const std::vector<master::FieldViolation>& v, const Status& s) {
+  if (v.empty()) return Report(s);
+  std::fprintf(stderr, "piezoid: error: %s is invalid (%zu violation%s):\n", what.c_str(), v.size(),
+               v.size() == 1 ? "" : "s");
+  for (const auto& x : v) std::fprintf(stderr, "  %s\n", x.description.c_str());
+  return kExitBadInput;
+}
+
+std::string Num(double x, int prec = 6) {
+  std::ostringstream os;
+  os.precision(prec);
+  os << x;
+  return os.str();
+}
+
+/// "12/1000": the last completed generation (generation 0 is the initial population) of at most
+/// max; "-" before the first.
+std::string Generation(const master::JobInfo& i) {
+  return (i.generation == 0 ? std::string("-") : std::to_string(i.generation - 1)) + "/" +
+         std::to_string(i.max_generations);
 }
 
 void PrintInfo(const master::JobInfo& i) {
-  std::printf("%s  %-9s  %-9s  gen %llu/%llu  best %.9g  evals %llu  %s%s\n", i.job_id.c_str(),
-              master::JobStateName(i.state), i.kind.c_str(),
-              static_cast<unsigned long long>(i.generation),
-              static_cast<unsigned long long>(i.max_generations), i.best_cost,
-              static_cast<unsigned long long>(i.evaluations), i.name.c_str(),
-              i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str());
+  std::printf("%-17s %-9s %-9s gen %-9s best %-12s evals %-8llu %6.1f s  %s%s%s\n", i.job_id.c_str(),
+              master::JobStateName(i.state), i.kind.c_str(), Generation(i).c_str(),
+              i.generation == 0 ? "-" : Num(i.best_cost, 8).c_str(),
+              static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
+              i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
+              i.message.empty() ? "" : ("  (" + i.message + ")").c_str());
 }
+
+void PrintList(const std::vector<master::JobInfo>& all, int workers, int threads) {
+  std::printf("%d worker%s (%d thread%s), %zu job%s\n", workers, workers == 1 ? "" : "s", threads, threads == 1 ? "" : "s", all.size(),
+              all.size() == 1 ? "" : "s");
+  for (const auto& i : all) PrintInfo(i);
+}
+
+/// The watch progress display: a bar redrawn in place on a terminal, a line every few seconds
+/// otherwise (logs, pipes).
+class Progress {
+ public:
+  Progress(uint64_t max_generations, bool hgann)
+      : max_(max_generations), hgann_(hgann), tty_(::isatty(STDOUT_FILENO) != 0) {}
+
+  void Update(const master::JobEvent& e) {
+    if (!e.record) return;
+    const auto& r = *e.record;
+    window_.push_back(r);
+    while (window_.size() > 10) window_.pop_front();
+    double evals = 0, secs = 0;
+    for (const auto& w : window_) {
+      evals += w.evaluated;
+      secs += w.wall_time_s;
+    }
+    const double rate = secs > 0 ? evals / secs : 0;
+    const auto now = std::chrono::steady_clock::now();
+    const double since = std::chrono::duration<double>(now - last_print_).count();
+    const bool last = max_ > 0 && r.generation >= max_;
+    if (!(since >= (tty_ ? 0.1 : 5.0) || last || printed_ == 0)) return;
+    last_print_ = now;
+    ++printed_;
+    constexpr int kWidth = 28;
+    const double frac = max_ > 0 ? std::min(1.0, static_cast<double>(r.generation) / max_) : 0;
+    std::string bar(kWidth, '.');
+    for (int i = 0; i < static_cast<int>(std::lround(frac * kWidth)); ++i) bar[i] = '#';
+    char line[256];
+    const std::string best = Num(r.best_cost, 6) + (hgann_ ? " deg²" : "");
+    std::snprintf(line, sizeof line, "gen %4llu/%-4llu [%s] best %-*s %7.0f evals/s  %d worker%s (%d threads)",
+                  static_cast<unsigned long long>(r.generation), static_cast<unsigned long long>(max_), bar.c_str(),
+                  hgann_ ? 17 : 14, best.c_str(), rate, e.workers, e.workers == 1 ? "" : "s", e.worker_threads);
+    if (tty_) {
+      std::printf("\r%s\033[K", line);
+    } else {
+      std::printf("%s\n", line);
+    }
+    std::fflush(stdout);
+  }
+  void End() {
+    if (tty_ && printed_ > 0) std::printf("\n");
+    std::fflush(stdout);
+  }
+
+ private:
+  uint64_t max_;
+  bool hgann_, tty_;
+  std::deque<master::GenerationRecord> window_;
+  std::chrono::steady_clock::time_point last_print_{};
+  int printed_ = 0;
+};
 
 }  // namespace
 
 void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   auto common = std::make_shared<Common>();
+  common->master = DefaultMaster();
   auto job_id = std::make_shared<std::string>();
-  auto spec_path = std::make_shared<std::string>();
-  auto count = std::make_shared<int>(1);
+  auto path = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto name = std::make_shared<std::string>("piezoid_predict");
+  auto count = std::make_shared<int>(5);
+  auto no_plots = std::make_shared<bool>(false);
 
-  auto* submit = app.add_subcommand("submit", "submit a job spec (protobuf JSON, see examples/)");
+  // ---------------------------------------------------------------- submit
+  auto* submit = app.add_subcommand(
+      "submit", "submit a job spec (protobuf JSON, see examples/): prints the job id on stdout");
   AddCommon(submit, *common);
-  submit->add_option("spec", *spec_path, "job spec file")->required()->check(CLI::ExistingFile);
+  submit->add_option("spec", *path, "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
+      ->required();
   submit->callback([=, &exit_code] {
-    std::ifstream in(*spec_path);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    ServiceClient c({common->master, common->timeout_ms, 3});
-    SubmitResult r;
+    master::JobSpec spec;
     std::vector<master::FieldViolation> v;
-    Status s = c.SubmitJson(ss.str(), &r, &v);
-    for (const auto& x : v) std::fprintf(stderr, "  %s\n", x.description.c_str());
-    if (s.ok()) std::printf("%s%s\n", r.job_id.c_str(), r.existed ? " (already submitted)" : "");
-    exit_code = Report(s);
+    Status s = LoadJobSpecFile(*path, &spec, &v);
+    if (!s.ok()) {
+      exit_code = ReportViolations("job spec " + *path, v, s);
+      return;
+    }
+    // Checked here first (same rules as the master), so a bad spec needs no master to be told.
+    v = master::JobKindRegistry::Default().Validate(spec);
+    if (!v.empty()) {
+      exit_code = ReportViolations("job spec " + *path, v, InvalidArgument("invalid"));
+      return;
+    }
+    SubmitResult r;
+    s = common->Client().Submit(spec, &r, &v);
+    if (!s.ok()) {
+      exit_code = s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + *path, v, s) : Report(s);
+      return;
+    }
+    std::printf("%s\n", r.job_id.c_str());
+    if (r.existed) std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
+    exit_code = kExitOk;
   });
 
-  auto* status = app.add_subcommand("status", "a job's state and progress");
+  // ---------------------------------------------------------------- status / list
+  auto* status = app.add_subcommand("status", "a job's state and progress (every job without an id)");
   AddCommon(status, *common);
-  status->add_option("job", *job_id)->required();
+  status->add_option("job", *job_id, "job id (optional)");
   status->callback([=, &exit_code] {
-    ServiceClient c({common->master, common->timeout_ms, 3});
+    ServiceClient c = common->Client();
+    if (job_id->empty()) {
+      std::vector<master::JobInfo> all;
+      int workers = 0, threads = 0;
+      Status s = c.List(&all, &workers, &threads);
+      if (s.ok()) PrintList(all, workers, threads);
+      exit_code = Report(s);
+      return;
+    }
     master::JobInfo i;
     Status s = c.GetStatus(*job_id, &i);
     if (s.ok()) PrintInfo(i);
     exit_code = Report(s);
   });
 
-  auto* jobs = app.add_subcommand("jobs", "list the master's jobs and workers");
-  AddCommon(jobs, *common);
-  jobs->callback([=, &exit_code] {
-    ServiceClient c({common->master, common->timeout_ms, 3});
+  auto* list = app.add_subcommand("list", "the master's jobs and workers");
+  list->alias("jobs");
+  AddCommon(list, *common);
+  list->callback([=, &exit_code] {
     std::vector<master::JobInfo> all;
     int workers = 0, threads = 0;
-    Status s = c.List(&all, &workers, &threads);
-    if (s.ok()) {
-      std::printf("%d workers, %d threads\n", workers, threads);
-      for (const auto& i : all) PrintInfo(i);
-    }
+    Status s = common->Client().List(&all, &workers, &threads);
+    if (s.ok()) PrintList(all, workers, threads);
     exit_code = Report(s);
   });
 
-  auto* cancel = app.add_subcommand("cancel", "cancel a running job");
+  // ---------------------------------------------------------------- cancel
+  auto* cancel = app.add_subcommand("cancel", "cancel a running job (its checkpoint stays fetchable)");
   AddCommon(cancel, *common);
-  cancel->add_option("job", *job_id)->required();
+  cancel->add_option("job", *job_id, "job id")->required();
   cancel->callback([=, &exit_code] {
-    ServiceClient c({common->master, common->timeout_ms, 3});
-    exit_code = Report(c.Cancel(*job_id));
+    Status s = common->Client().Cancel(*job_id);
+    if (s.ok()) std::printf("%s cancelled\n", job_id->c_str());
+    exit_code = Report(s);
   });
 
-  auto* watch = app.add_subcommand("watch", "print a job's generations until it ends");
+  // ---------------------------------------------------------------- watch
+  auto* watch = app.add_subcommand(
+      "watch", "follow a job until it ends: generation, best cost, evaluations/s, workers; then the result");
   AddCommon(watch, *common);
-  watch->add_option("job", *job_id)->required();
+  watch->add_option("job", *job_id, "job id")->required();
   watch->callback([=, &exit_code] {
-    ServiceClient c({common->master, common->timeout_ms, 3});
-    Status s = c.Watch(
+    ServiceClient c = common->Client();
+    master::JobInfo info;
+    Status s = c.GetStatus(*job_id, &info);
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    std::printf("job %s (%s%s%s), %llu generations at most\n", job_id->c_str(), info.kind.c_str(),
+                info.name.empty() ? "" : ": ", info.name.c_str(),
+                static_cast<unsigned long long>(info.max_generations));
+    Progress progress(info.max_generations, info.kind == "hgann");
+    s = c.Watch(
         *job_id,
-        [](const master::JobEvent& e) {
-          if (e.record)
-            std::printf("gen %llu best %.9g mean %.6g evals %llu\n",
-                        static_cast<unsigned long long>(e.record->generation), e.record->best_cost,
-                        e.record->mean_cost, static_cast<unsigned long long>(e.record->evaluations));
-          if (master::IsFinal(e.state))
-            std::printf("%s %s\n", master::JobStateName(e.state), e.message.c_str());
-          std::fflush(stdout);
+        [&progress](const master::JobEvent& e) {
+          progress.Update(e);
           return true;
         },
         std::chrono::hours(24 * 365));
+    progress.End();
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    s = c.GetStatus(*job_id, &info);
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    std::printf("job %s %s (%s) after %llu generations: best cost %s%s, %llu evaluations in %.1f s\n",
+                job_id->c_str(), master::JobStateName(info.state), info.message.c_str(),
+                static_cast<unsigned long long>(info.generation > 0 ? info.generation - 1 : 0),
+                Num(info.best_cost, 9).c_str(), info.kind == "hgann" ? " deg²" : "",
+                static_cast<unsigned long long>(info.evaluations), info.elapsed_s);
+    if (info.state == master::JobState::kSucceeded || info.generation > 0)
+      std::printf("fetch the result: piezoid fetch %s --out <folder>\n", job_id->c_str());
+    exit_code = info.state == master::JobState::kSucceeded ? kExitOk : kExitJobNotOk;
+  });
+
+  // ---------------------------------------------------------------- fetch
+  auto* fetch = app.add_subcommand(
+      "fetch", "write a job's best networks (.pb, .json) and, for hgann jobs, the report of `piezoid identify`");
+  AddCommon(fetch, *common);
+  fetch->add_option("job", *job_id, "job id")->required();
+  fetch->add_option("--best,-n", *count, "how many of the best individuals (1 … 32)")
+      ->check(CLI::Range(1, 32))
+      ->capture_default_str();
+  fetch->add_option("--out,-o", *out, "result folder (default: ./<job id>)");
+  fetch->add_flag("--no-plots", *no_plots, "do not render figures (gnuplot scripts are still written)");
+  fetch->callback([=, &exit_code] {
+    FetchedJob job;
+    Status s = common->Client().Fetch(*job_id, *count, &job.best, &job.log, &job.info, &job.spec);
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    if (!master::IsFinal(job.info.state))
+      std::fprintf(stderr, "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
+                   job_id->c_str(), master::JobStateName(job.info.state),
+                   static_cast<unsigned long long>(job.info.generation));
+    const fs::path dir = out->empty() ? fs::path(*job_id) : fs::path(*out);
+    FetchOutput o;
+    s = WriteFetchedJob(job, dir, !*no_plots, std::cout, &o);
+    std::cout.flush();
+    if (s.ok() && !o.report.empty()) std::printf("report: %s\n", o.report.string().c_str());
     exit_code = Report(s);
   });
 
-  auto* fetch = app.add_subcommand("fetch", "the best individuals of a job");
-  AddCommon(fetch, *common);
-  fetch->add_option("job", *job_id)->required();
-  fetch->add_option("-n,--count", *count, "how many")->capture_default_str();
-  fetch->callback([=, &exit_code] {
-    ServiceClient c({common->master, common->timeout_ms, 3});
-    std::vector<master::ScoredGenome> best;
-    master::JobInfo info;
-    Status s = c.Fetch(*job_id, *count, &best, nullptr, &info);
-    if (s.ok()) {
-      PrintInfo(info);
-      for (const auto& b : best)
-        std::printf("%3d  %.17g  %s\n", b.index, b.fitness.cost, master::BitString(b.genome).c_str());
+  // ---------------------------------------------------------------- export
+  auto* exp = app.add_subcommand(
+      "export", "write a network file (.pb or .json) as a standalone C header for a controller");
+  exp->add_option("network", *path, "network file (from fetch or identify)")->required();
+  exp->add_option("--out,-o", *out, "header file to write (default: stdout)");
+  exp->add_option("--name", *name, "name of the C function (a C identifier)")->capture_default_str();
+  exp->callback([=, &exit_code] {
+    io::SavedNetwork net;
+    Status s = io::LoadNetwork(*path, &net);
+    if (!s.ok()) {
+      exit_code = Report(InvalidArgument(s.message()));
+      return;
     }
-    exit_code = Report(s);
+    std::string header;
+    s = NetworkToCHeader(net, *name, &header);
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    if (out->empty()) {
+      std::fwrite(header.data(), 1, header.size(), stdout);
+    } else {
+      std::ofstream f(*out, std::ios::binary);
+      f << header;
+      f.close();
+      if (!f) {
+        exit_code = Report({StatusCode::kInternal, *out + ": cannot write"});
+        return;
+      }
+      std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", out->c_str(), name->c_str());
+    }
+    exit_code = kExitOk;
   });
 }
 

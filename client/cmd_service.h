@@ -1,9 +1,30 @@
-// The service subcommands of `piezoid` (submit, status, jobs, cancel, watch, fetch).
+// The service subcommands of `piezoid`: submit, status, list, watch, cancel, fetch (client of a
+// piezoid-master), and export (a network file as a standalone C header).
 #pragma once
 
 #include <CLI/CLI.hpp>
 
+#include "model/status.h"
+
 namespace pz::client {
-/// Adds the subcommands; their callbacks set exit_code (0 ok, 1 runtime failure, 2 bad input).
+
+/// Exit codes of the service subcommands (documented in docs/service.md and `piezoid --help`).
+enum ExitCode : int {
+  kExitOk = 0,
+  kExitFailure = 1,       ///< any other runtime failure (I/O, internal error)
+  kExitBadInput = 2,      ///< bad command line, unreadable or invalid job spec / network file
+  kExitUnreachable = 3,   ///< the master did not answer (or answered "unavailable, retry later")
+  kExitUnknownJob = 4,    ///< no such job at the master
+  kExitJobNotOk = 5,      ///< the job failed or was cancelled (watch), or cannot do that now
+                          ///< (cancel of a finished job, fetch before the first generation)
+};
+
+/// The exit code of a status (kOk → 0, kInvalidArgument → 2, kUnavailable → 3, kNotFound → 4,
+/// kFailedPrecondition → 5, anything else → 1).
+int ExitCodeOf(const Status& s);
+
+/// Adds submit, status, list (alias jobs), watch, cancel, fetch and export; their callbacks set
+/// exit_code.
 void RegisterServiceCommands(CLI::App& app, int& exit_code);
+
 }  // namespace pz::client

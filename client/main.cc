@@ -2,6 +2,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
+#include "client/cmd_service.h"
 #include "client/commands.h"
 #include "model/status.h"
 
@@ -14,10 +15,16 @@ int main(int argc, char** argv) {
   pz::client::RegisterSimulate(app, exit_code);
   pz::client::RegisterPi(app, exit_code);
   pz::client::RegisterIdentify(app, exit_code);
+  pz::client::RegisterServiceCommands(app, exit_code);
+  app.footer(
+      "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every violated field, "
+      "network file); 3 master unreachable or unavailable; 4 unknown job; 5 job failed or cancelled (watch), "
+      "or not in a state for the request.");
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;  // --help / --version: 0; a bad command line: 2 (bad input)
   } catch (const pz::InputError& e) {
     std::fprintf(stderr, "piezoid: error: %s\n", e.what());
     return 2;

@@ -1,5 +1,6 @@
 #include "client/service_client.h"
 
+#include <optional>
 #include <random>
 #include <thread>
 #include <zmq.hpp>
@@ -77,8 +78,9 @@ struct ServiceClient::Impl {
       sock.reset();  // Lazy Pirate: a fresh socket for the retry
     }
     return {StatusCode::kUnavailable,
-            "no answer from " + options.endpoint + " after " + std::to_string(options.retries) +
-                " attempts of " + std::to_string(options.timeout_ms) + " ms"};
+            "cannot reach the master at " + options.endpoint + ": is piezoid-master running? (no answer to " +
+                std::to_string(options.retries) + (options.retries == 1 ? " attempt" : " attempts") + " of " +
+                std::to_string(options.timeout_ms) + " ms)"};
   }
 };
 
@@ -149,7 +151,8 @@ Status ServiceClient::Cancel(const std::string& job_id) {
 
 Status ServiceClient::Fetch(const std::string& job_id, int count,
                             std::vector<master::ScoredGenome>* best,
-                            std::vector<master::GenerationRecord>* log, master::JobInfo* info) {
+                            std::vector<master::GenerationRecord>* log, master::JobInfo* info,
+                            master::JobSpec* spec) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kFetch;
   req.job_id = job_id;
@@ -160,6 +163,10 @@ Status ServiceClient::Fetch(const std::string& job_id, int count,
   if (best) *best = reply.best;
   if (log) *log = reply.log;
   if (info) *info = reply.info;
+  if (spec) {
+    if (!reply.spec) return {StatusCode::kDataLoss, "the master's fetch reply has no job spec"};
+    *spec = *reply.spec;
+  }
   return s;
 }
 
@@ -168,13 +175,21 @@ Status ServiceClient::Watch(const std::string& job_id,
                             std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   const auto quiet = std::chrono::milliseconds(std::max(200, impl_->options.timeout_ms));
+  std::optional<std::chrono::steady_clock::time_point> unreachable_since;
   while (std::chrono::steady_clock::now() < deadline) {
     ClientRequestMsg req;
     req.type = ClientRequestMsg::Type::kWatch;
     req.job_id = job_id;
     ClientReplyMsg reply;
     Status s = impl_->Call(req, &reply);
-    if (s.code() == StatusCode::kUnavailable) continue;  // master restarting: try again
+    if (s.code() == StatusCode::kUnavailable) {  // master restarting: try again, for a while
+      const auto now = std::chrono::steady_clock::now();
+      if (!unreachable_since) unreachable_since = now;
+      if (std::chrono::duration<double>(now - *unreachable_since).count() >= impl_->options.watch_reconnect_s)
+        return s;
+      continue;
+    }
+    unreachable_since.reset();
     if (!s.ok()) return s;
     if (master::IsFinal(reply.info.state)) {
       master::JobEvent e{job_id, reply.info.state, std::nullopt, reply.info.message};

@@ -25,7 +25,14 @@ struct ServiceClientOptions {
   std::string endpoint = "tcp://127.0.0.1:5556";  ///< the master's client endpoint
   int timeout_ms = 5000;                          ///< per attempt [ms]
   int retries = 3;                                ///< attempts per request, ≥ 1
+  /// Watch keeps re-trying an unreachable master (e.g. one being restarted) this long, then gives
+  /// up with kUnavailable [s].
+  double watch_reconnect_s = 30;
 };
+
+// Errors: a request that gets no answer at all returns kUnavailable, "cannot reach the master at
+// <endpoint>: is piezoid-master running? …"; the master's answers map by StatusFromWire (unknown
+// job → kNotFound, invalid spec → kInvalidArgument with the violations, …).
 
 struct SubmitResult {
   std::string job_id;
@@ -50,11 +57,14 @@ class ServiceClient {
   Status List(std::vector<master::JobInfo>* jobs, int* workers = nullptr,
               int* worker_threads = nullptr);
   Status Cancel(const std::string& job_id);
-  /// The best `count` individuals (best first) and the generation log.
+  /// The best `count` individuals (best first, at most 32), the generation log, the job's state
+  /// and its spec (any output may be nullptr).
   Status Fetch(const std::string& job_id, int count, std::vector<master::ScoredGenome>* best,
-               std::vector<master::GenerationRecord>* log, master::JobInfo* info = nullptr);
+               std::vector<master::GenerationRecord>* log, master::JobInfo* info = nullptr,
+               master::JobSpec* spec = nullptr);
   /// Calls on_event for each pushed event until the job ends (returns Ok), on_event returns
-  /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches).
+  /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches) that
+  /// takes less than options.watch_reconnect_s; a master unreachable for longer is kUnavailable.
   Status Watch(const std::string& job_id,
                const std::function<bool(const master::JobEvent&)>& on_event,
                std::chrono::milliseconds timeout);

@@ -14,7 +14,10 @@
 
 #include <chrono>
 #include <cstring>
+#include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -91,6 +94,30 @@ class Process {
  private:
   pid_t pid_ = -1;
 };
+
+/// Runs `piezoid` (the client CLI of this build) with `args`; stdout and stderr into *out / *err.
+/// Returns its exit code (-1 if it did not exit normally).
+inline int RunCli(const std::vector<std::string>& args, std::string* out = nullptr, std::string* err = nullptr) {
+  static int counter = 0;
+  const fs::path base = fs::temp_directory_path() /
+                        ("pz-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  std::string cmd = "'" + (BuildDir() / "client" / "piezoid").string() + "'";
+  for (const auto& a : args) cmd += " '" + a + "'";
+  cmd += " >'" + base.string() + ".out' 2>'" + base.string() + ".err' </dev/null";
+  const int st = std::system(cmd.c_str());
+  auto slurp = [](const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+  };
+  if (out) *out = slurp(base.string() + ".out");
+  if (err) *err = slurp(base.string() + ".err");
+  std::error_code ec;
+  fs::remove(base.string() + ".out", ec);
+  fs::remove(base.string() + ".err", ec);
+  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
 
 /// A master and its workers on free loopback ports, with fast heartbeats.
 class Cluster {

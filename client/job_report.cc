@@ -1,0 +1,214 @@
+#include "client/job_report.h"
+
+#include <chrono>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+#include "master/hgann_job.h"
+#include "master/wire_codec.h"
+
+namespace pz::client {
+namespace fs = std::filesystem;
+
+master::GenerationSummary SummaryOfRecord(const master::GenerationRecord& r) {
+  master::GenerationSummary s;
+  s.generation = r.generation;
+  s.best_cost = r.best_cost;
+  s.mean_cost = r.mean_cost;
+  s.worst_cost = r.worst_cost;
+  s.improved = r.improved;
+  s.stall = static_cast<int>(r.stall);
+  s.best_description = r.best_description;
+  s.evaluations = static_cast<int>(r.evaluated);
+  s.evaluations_total = static_cast<int64_t>(r.evaluations);
+  s.failures = static_cast<int>(r.errors);
+  s.penalized = static_cast<int>(r.penalized);
+  s.errors = static_cast<int>(r.errors) - static_cast<int>(r.penalized);
+  for (const auto& [k, n] : r.failure_reasons) s.failure_reasons[k] = static_cast<int>(n);
+  s.wall_time_s = r.wall_time_s;
+  return s;
+}
+
+master::GaSummary GaSummaryOfJob(const FetchedJob& job) {
+  master::GaSummary s;
+  const master::GaSettings ga = job.spec.ga.value_or(master::GaSettings{});
+  if (!job.best.empty()) {
+    s.best = job.best.front().genome;
+    s.best_fitness = job.best.front().fitness;
+  }
+  for (const auto& r : job.log) {
+    if (r.improved) s.best_generation = r.generation;
+    s.failures += r.errors;
+  }
+  if (!job.log.empty()) {
+    s.generations = job.log.back().generation;
+    s.evaluations = static_cast<int64_t>(job.log.back().evaluations);
+  }
+  s.wall_time_s = job.info.elapsed_s;
+  std::ostringstream os;
+  os.precision(10);
+  const std::string& m = job.info.message;
+  if (job.info.state == master::JobState::kRunning) {
+    s.termination = master::GaTermination::kCancelled;
+    os << "job " << job.info.job_id << " is still running at the master: the best after generation "
+       << s.generations << " so far";
+  } else if (job.info.state == master::JobState::kCancelled) {
+    s.termination = master::GaTermination::kCancelled;
+    os << "cancelled after generation " << s.generations;
+  } else if (job.info.state == master::JobState::kFailed) {
+    s.termination = master::GaTermination::kCancelled;
+    os << "job failed after generation " << s.generations << ": " << m;
+  } else if (m == master::GaTerminationName(master::GaTermination::kStall)) {
+    s.termination = master::GaTermination::kStall;
+    os << "no improvement of the best cost " << s.best_fitness.cost << " in "
+       << (job.log.empty() ? 0 : job.log.back().stall) << " generations (since generation " << s.best_generation
+       << ")";
+  } else if (m == master::GaTerminationName(master::GaTermination::kTargetReached)) {
+    s.termination = master::GaTermination::kTargetReached;
+    os << "best cost " << s.best_fitness.cost << " <= target "
+       << job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
+  } else {
+    s.termination = master::GaTermination::kMaxGenerations;
+    os << "reached the maximum of " << ga.generations << " generations";
+  }
+  s.message = os.str();
+  return s;
+}
+
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFitness& fitness, size_t k) {
+  PZ_CHECK(k < job.best.size());
+  io::SavedNetwork n;
+  n.network = fitness.Decode(job.best[k].genome);
+  n.chromosome = job.best[k].genome.bits;
+  auto& p = n.provenance;
+  p.job_id = job.info.job_id;
+  p.seed = job.spec.seed;
+  // The best was found in the last improving generation; the others are members of the last
+  // population, which is all the master keeps of them.
+  const master::GaSummary s = GaSummaryOfJob(job);
+  p.generation = k == 0 ? s.best_generation : s.generations;
+  p.fitness = job.best[k].fitness.cost;
+  p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  p.piezoid_version = "0.1.0";
+  for (const auto& c : fitness.config().cases)
+    if (c.training) p.training_cases.push_back("case" + std::to_string(c.number));
+  return n;
+}
+
+IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const master::HgannFitness& fitness) {
+  IdentifyResult r;
+  r.summary = GaSummaryOfJob(job);
+  for (const auto& g : job.log) r.log.push_back(SummaryOfRecord(g));
+  r.best = SavedNetworkOfJob(job, fitness, 0);
+  r.cases = fitness.EvaluateCases(r.best.network);
+  return r;
+}
+
+IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_dir, bool plots) {
+  IdentifyOptions o;
+  o.out_dir = out_dir;
+  const auto* h = std::get_if<master::HgannProblem>(&job.spec.problem);
+  o.cases_dir = h ? h->source : "";
+  const master::GaSettings ga = job.spec.ga.value_or(master::GaSettings{});
+  o.ga.population_size = ga.population;
+  o.ga.max_generations = ga.generations;
+  o.ga.stall_generations = ga.stall_generations;
+  o.ga.elite_fraction = ga.elite_fraction;
+  o.ga.tournament_size = ga.tournament;
+  o.ga.crossover_probability = ga.crossover_probability;
+  o.ga.mutation_probability = ga.mutation_probability;
+  o.ga.seed = job.spec.seed;
+  o.threads = 1;
+  if (h) {
+    o.ranges = h->ranges_preset.empty() ? "default" : h->ranges_preset;
+    if (!h->ranges.empty()) {
+      o.ranges += " with overrides of";
+      for (const auto& r : h->ranges) o.ranges += " " + r.name;
+    }
+    o.spread_penalty = h->spread_penalty;
+  }
+  o.plots = plots;
+  o.job_id = job.info.job_id;
+  return o;
+}
+
+namespace {
+
+void WriteProgressCsv(const fs::path& file, const std::vector<master::GenerationRecord>& log) {
+  std::ofstream f(file);
+  f << "generation,best_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+       "quarantined,wall_time_s,best_description\n";
+  f << std::setprecision(17);
+  for (const auto& g : log)
+    f << g.generation << "," << g.best_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
+      << g.evaluated << "," << g.evaluations << "," << g.errors << "," << g.penalized << "," << g.quarantined << ","
+      << g.wall_time_s << ",\"" << g.best_description << "\"\n";
+}
+
+}  // namespace
+
+Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, std::ostream& term,
+                       FetchOutput* result) {
+  FetchOutput local;
+  FetchOutput& o = result ? *result : local;
+  if (job.best.empty())
+    return {StatusCode::kFailedPrecondition,
+            "job " + job.info.job_id + " has no evaluated individual yet (generation " +
+                std::to_string(job.info.generation) + "): fetch it again later"};
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) return InvalidArgument(out.string() + ": cannot create the folder: " + ec.message());
+
+  const auto* h = std::get_if<master::HgannProblem>(&job.spec.problem);
+  if (!h) {
+    {
+      std::ofstream f(out / "best.csv");
+      f << "rank,index,cost,status,reason,bits\n" << std::setprecision(17);
+      for (size_t k = 0; k < job.best.size(); ++k) {
+        const auto& b = job.best[k];
+        f << k + 1 << "," << b.index << "," << b.fitness.cost << "," << static_cast<int>(b.fitness.status) << ",\""
+          << b.fitness.reason << "\"," << master::BitString(b.genome) << "\n";
+      }
+    }
+    o.written.push_back(out / "best.csv");
+    WriteProgressCsv(out / "progress.csv", job.log);
+    o.written.push_back(out / "progress.csv");
+    term << "job " << job.info.job_id << " (" << job.info.kind << "): best cost " << job.best.front().fitness.cost
+         << "; " << job.best.size() << " individuals in " << (out / "best.csv").string() << ", log in "
+         << (out / "progress.csv").string() << "\n";
+    return Status::Ok();
+  }
+
+  master::HgannFitnessConfig config;
+  if (Status s = master::HgannConfigFromProblem(*h, &config); !s.ok())
+    return {s.code(), "the job's spec does not build its fitness here: " + s.message()};
+  try {
+    const master::HgannFitness fitness(std::move(config));
+    fs::create_directories(out / "networks");
+    for (size_t k = 0; k < job.best.size(); ++k) {
+      const io::SavedNetwork n = SavedNetworkOfJob(job, fitness, k);
+      for (const char* ext : {".pb", ".json"}) {
+        const fs::path p = out / "networks" / ("best-" + std::to_string(k + 1) + ext);
+        if (Status s = io::SaveNetwork(n, p.string()); !s.ok()) return s;
+        o.written.push_back(p);
+      }
+    }
+    io::CaseSet set = master::HgannCaseSet(*h);
+    if (set.dir.empty()) set.dir = "job " + job.info.job_id;
+    const IdentifyResult r = IdentifyResultOfJob(job, fitness);
+    const auto files = WriteIdentifyReport(IdentifyOptionsOfJob(job, out, plots), set, fitness, r, term);
+    o.written.insert(o.written.end(), files.begin(), files.end());
+    o.report = out / "report.md";
+    term << job.best.size() << " best networks in " << (out / "networks").string() << " (best-1 … best-"
+         << job.best.size() << ", .pb and .json)\n";
+  } catch (const InputError& e) {
+    return InvalidArgument(e.what());
+  }
+  return Status::Ok();
+}
+
+}  // namespace pz::client

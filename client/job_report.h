@@ -1,0 +1,53 @@
+// What `piezoid fetch` writes for a job fetched from the master: the best networks and, for an
+// hgann job, the same validation report as `piezoid identify` (client/identify.h
+// WriteIdentifyReport), rebuilt from the job's spec (spec → HgannFitnessConfig → HgannFitness), its
+// generation log and its best genomes.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+#include <vector>
+
+#include "client/identify.h"
+#include "master/service_types.h"
+
+namespace pz::client {
+
+/// A job as the master answers a fetch.
+struct FetchedJob {
+  master::JobInfo info;
+  master::JobSpec spec;
+  std::vector<master::ScoredGenome> best;      ///< best first
+  std::vector<master::GenerationRecord> log;  ///< one record per generation
+};
+
+/// The GA's generation summary carried by a generation record.
+master::GenerationSummary SummaryOfRecord(const master::GenerationRecord& record);
+
+/// The GA's final summary of a job: termination from its state and message, best from best[0],
+/// best generation = the last generation that improved, counters from the log.
+master::GaSummary GaSummaryOfJob(const FetchedJob& job);
+
+/// A job's k-th best genome as a network file (chromosome, decoded network, provenance).
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFitness& fitness, size_t k);
+
+/// The identification result of an hgann job (what RunIdentify returns for a local run).
+IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const master::HgannFitness& fitness);
+
+/// The report options of an hgann job: population, seed, ranges, spread penalty from its spec.
+IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots);
+
+struct FetchOutput {
+  std::vector<std::filesystem::path> written;
+  std::filesystem::path report;  ///< report.md (hgann jobs), else empty
+};
+
+/// Writes a fetched job into out_dir: for hgann jobs networks/best-<k>.pb and .json for each
+/// fetched individual and the identify report (report.md, network.pb/.json = the best, progress.csv,
+/// validation.csv, parameters.csv, traces, figures); for other kinds best.csv and progress.csv.
+/// Prints a summary to `terminal`. Errors (no individual yet, a spec that does not build) are a
+/// Status; files already written stay.
+Status WriteFetchedJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots,
+                       std::ostream& terminal, FetchOutput* out);
+
+}  // namespace pz::client

@@ -1,0 +1,218 @@
+// The real HGANN identification on the service, over real processes on 127.0.0.1: the bundled quick
+// job (examples/hgann_quick.json: the nominal bench set, population 60 × 40 generations) over a
+// master and 2 workers gives the same best networks and generation log, bit for bit, as the job run
+// in this process; `piezoid submit / watch / status / list / fetch` work on it and fetch writes the
+// networks and the report of `piezoid identify`; bad hgann specs are refused naming the field, by
+// the client and by the master; an unreachable master and an unknown job give their message and
+// exit code.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "client/job_file.h"
+#include "client/job_report.h"
+#include "io/network_io.h"
+#include "master/hgann_job.h"
+#include "tests/service/service_harness.h"
+
+namespace pz::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+const fs::path kExamples = fs::path(PIEZOID_DATA_DIR) / ".." / "examples";
+
+master::JobSpec QuickSpec() {
+  master::JobSpec spec;
+  std::vector<master::FieldViolation> v;
+  const Status s = client::LoadJobSpecFile(kExamples / "hgann_quick.json", &spec, &v);
+  PZ_CHECK_MSG(s.ok(), s.message());
+  return spec;
+}
+
+bool HasField(const std::vector<master::FieldViolation>& v, const std::string& field) {
+  for (const auto& x : v)
+    if (x.field == field) return true;
+  return false;
+}
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+/// The in-process reference of the quick job, computed once for the tests of this file.
+const master::JobCheckpoint& QuickReference() {
+  static const master::JobCheckpoint ref = Reference(QuickSpec());
+  return ref;
+}
+
+TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
+  const master::JobSpec spec = QuickSpec();
+  ASSERT_EQ(spec.kind(), "hgann");
+  ASSERT_EQ(std::get<master::HgannProblem>(spec.problem).cases.size(), 9u);
+  const master::JobCheckpoint& ref = QuickReference();
+  ASSERT_EQ(ref.log.size(), 41u);
+  EXPECT_FALSE(ref.log.back().best_description.empty());
+
+  Cluster c("hgann");
+  c.AddWorker(1);
+  c.AddWorker(1);
+  auto client = c.Client();
+  client::SubmitResult r;
+  std::vector<master::FieldViolation> v;
+  ASSERT_TRUE(client.Submit(spec, &r, &v).ok()) << (v.empty() ? "" : v.front().description);
+
+  // `piezoid watch` follows it to the end and exits 0.
+  std::string out, err;
+  EXPECT_EQ(RunCli({"watch", r.job_id, "--master", c.client_endpoint()}, &out, &err), 0) << out << err;
+  EXPECT_NE(out.find("succeeded"), std::string::npos) << out;
+
+  master::JobInfo info;
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 50s, &info).ok());
+  ASSERT_EQ(info.state, master::JobState::kSucceeded) << info.message;
+  std::vector<master::ScoredGenome> best;
+  std::vector<master::GenerationRecord> log;
+  master::JobSpec stored;
+  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored).ok());
+  ExpectSameRun(ref, best, log);
+  EXPECT_EQ(master::EncodeJobSpec(stored), master::EncodeJobSpec(spec));  // the spec comes back intact
+}
+
+TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
+  Cluster c("hgann-cli");
+  c.AddWorker(1);
+  c.AddWorker(1);
+  const std::string ep = c.client_endpoint();
+  std::string out, err;
+  ASSERT_EQ(RunCli({"submit", (kExamples / "hgann_quick.json").string(), "--master", ep}, &out, &err), 0) << err;
+  const std::string id = out.substr(0, out.find('\n'));
+  ASSERT_EQ(id.size(), 16u) << out;
+
+  EXPECT_EQ(RunCli({"watch", id, "--master", ep}, &out, &err), 0) << out << err;
+  EXPECT_EQ(RunCli({"status", id, "--master", ep}, &out, &err), 0) << err;
+  EXPECT_NE(out.find("succeeded"), std::string::npos) << out;
+  EXPECT_EQ(RunCli({"list", "--master", ep}, &out, &err), 0) << err;
+  EXPECT_NE(out.find(id), std::string::npos) << out;
+  EXPECT_NE(out.find("2 workers"), std::string::npos) << out;
+
+  const fs::path dir = c.dir() / "result";
+  ASSERT_EQ(RunCli({"fetch", id, "--best", "3", "--out", dir.string(), "--no-plots", "--master", ep}, &out, &err), 0)
+      << out << err;
+  EXPECT_NE(out.find("report: " + (dir / "report.md").string()), std::string::npos) << out;
+  for (const char* f : {"report.md", "network.pb", "network.json", "progress.csv", "validation.csv",
+                        "parameters.csv", "networks/best-1.pb", "networks/best-1.json", "networks/best-3.pb",
+                        "networks/best-3.json", "traces/case2.csv"})
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  EXPECT_FALSE(fs::exists(dir / "networks/best-4.pb"));
+
+  // The networks are the job's best, with provenance; the report is the identify report.
+  const master::JobCheckpoint& ref = QuickReference();
+  io::SavedNetwork best, best1, third;
+  ASSERT_TRUE(io::LoadNetwork((dir / "network.pb").string(), &best).ok());
+  ASSERT_TRUE(io::LoadNetwork((dir / "networks/best-1.json").string(), &best1).ok());
+  ASSERT_TRUE(io::LoadNetwork((dir / "networks/best-3.pb").string(), &third).ok());
+  EXPECT_EQ(best.chromosome, ref.best[0].genome.bits);
+  EXPECT_EQ(best1.network, best.network);
+  EXPECT_EQ(third.chromosome, ref.best[2].genome.bits);
+  EXPECT_EQ(best.provenance.job_id, id);
+  EXPECT_EQ(best.provenance.seed, 7u);
+  EXPECT_EQ(best.provenance.fitness, ref.best[0].fitness.cost);
+  const std::vector<std::string> training = {"case1", "case5", "case6", "case7"};
+  EXPECT_EQ(best.provenance.training_cases, training);
+  const std::string report = Slurp(dir / "report.md");
+  EXPECT_NE(report.find("# HGANN identification of "), std::string::npos);
+  EXPECT_NE(report.find("MAX_GENERATIONS after 40 generations"), std::string::npos) << report;
+  EXPECT_NE(report.find("population 60, seed 7"), std::string::npos) << report;
+  EXPECT_NE(report.find("Performance index per case"), std::string::npos);
+  const std::string progress = Slurp(dir / "progress.csv");
+  EXPECT_EQ(std::count(progress.begin(), progress.end(), '\n'), 42);  // header + generations 0 … 40
+
+  // Cancelling a finished job is refused (5); an unknown job is 4.
+  EXPECT_EQ(RunCli({"cancel", id, "--master", ep}, &out, &err), 5) << err;
+  EXPECT_EQ(RunCli({"fetch", "j0000000000000000", "--master", ep, "--out", (c.dir() / "x").string()}, &out, &err),
+            4);
+  EXPECT_NE(err.find("no such job"), std::string::npos) << err;
+}
+
+TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
+  master::JobSpec spec = QuickSpec();
+  auto& h = std::get<master::HgannProblem>(spec.problem);
+  h.cases[3].angle_deg[17] = std::nan("");
+  h.cases[2].role = master::CaseRole::kUnspecified;
+  h.cases[5].number = h.cases[0].number;
+  h.ranges_preset = "papier";
+  h.spread_penalty = -1;
+  h.geometry["tip_length_m"] = -0.01;
+  spec.ga->population = 1;
+
+  // The master answers every violated field.
+  Cluster c("hgann-bad");
+  auto client = c.Client();
+  client::SubmitResult r;
+  std::vector<master::FieldViolation> v;
+  Status st = client.Submit(spec, &r, &v);
+  ASSERT_EQ(st.code(), StatusCode::kInvalidArgument) << st.message();
+  for (const char* f : {"hgann.cases[3].angle_deg[17]", "hgann.cases[2].role", "hgann.cases[5].number",
+                        "hgann.ranges_preset", "hgann.spread_penalty", "hgann.geometry.tip_length_m",
+                        "ga.population"})
+    EXPECT_TRUE(HasField(v, f)) << f << " in: " << st.message();
+  EXPECT_NE(st.message().find("hgann.cases[3].angle_deg[17] = nan: must be finite"), std::string::npos)
+      << st.message();
+
+  // A spec naming a client folder never reaches a master's disk.
+  master::JobSpec dir_spec = QuickSpec();
+  std::get<master::HgannProblem>(dir_spec.problem).case_set_dir = "/etc";
+  EXPECT_EQ(client.Submit(dir_spec, &r, &v).code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(HasField(v, "hgann.case_set_dir"));
+
+  // The CLI refuses a bad JSON spec itself (exit 2, every violation printed), master or not.
+  const fs::path bad = c.dir() / "bad.json";
+  std::ofstream(bad) << R"({"version": 1, "seed": "1",
+    "hgann": {"case_set_dir": ")" << (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal").string() << R"(",
+              "ranges": [{"name": "alfa", "min": 0, "max": 1}, {"name": "beta", "min": 1, "max": 0}],
+              "spread_penalty": -2},
+    "ga": {"population": 1}})";
+  std::string out, err;
+  EXPECT_EQ(RunCli({"submit", bad.string(), "--master", "tcp://127.0.0.1:1", "--timeout-ms", "100"}, &out, &err), 2);
+  EXPECT_NE(err.find("hgann.ranges[0].name = \"alfa\": must be one of mu, delta, alpha, beta, gamma, a1, a2"),
+            std::string::npos)
+      << err;
+  EXPECT_NE(err.find("hgann.ranges[1].max = 0: must be finite and >= min (1)"), std::string::npos) << err;
+  EXPECT_NE(err.find("hgann.spread_penalty = -2"), std::string::npos) << err;
+  EXPECT_NE(err.find("ga.population = 1"), std::string::npos) << err;
+  EXPECT_TRUE(out.empty()) << out;
+
+  // A folder that is not a case set names the field and the file.
+  std::ofstream(bad) << R"({"version": 1, "hgann": {"case_set_dir": "no-such-folder"}, "ga": {}})";
+  EXPECT_EQ(RunCli({"submit", bad.string()}, &out, &err), 2);
+  EXPECT_NE(err.find("hgann.case_set_dir = \"no-such-folder\": cannot be read"), std::string::npos) << err;
+
+  // The master still serves.
+  EXPECT_TRUE(client.Submit(SyntheticSpec(1, 10, 2), &r).ok());
+}
+
+TEST(ServiceHgann, UnreachableMasterGivesItsMessageAndExitCode3) {
+  const std::string ep = "tcp://127.0.0.1:" + std::to_string(FreePort());
+  std::string out, err;
+  for (const std::vector<std::string>& cmd :
+       {std::vector<std::string>{"status"}, {"list"}, {"watch", "j1"}, {"fetch", "j1"}, {"cancel", "j1"},
+        {"submit", (kExamples / "synthetic_job.json").string()}}) {
+    std::vector<std::string> args = cmd;
+    args.insert(args.end(), {"--master", ep, "--timeout-ms", "150", "--retries", "2"});
+    EXPECT_EQ(RunCli(args, &out, &err), 3) << cmd[0] << ": " << err;
+    EXPECT_NE(err.find("cannot reach the master at " + ep + ": is piezoid-master running?"), std::string::npos)
+        << cmd[0] << ": " << err;
+  }
+  // A bad command line is bad input (2); --help is 0.
+  EXPECT_EQ(RunCli({"fetch"}, &out, &err), 2);
+  EXPECT_EQ(RunCli({"fetch", "j1", "--best", "0"}, &out, &err), 2);
+  EXPECT_EQ(RunCli({"--help"}, &out, &err), 0);
+  EXPECT_NE(out.find("Exit codes"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pz::testing
