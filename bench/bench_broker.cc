@@ -5,11 +5,12 @@
 //    returns at once (synthetic COST_NULL), batches of `n` genomes of 64 bits, 2 workers.
 //  * BM_FixedCostEfficiency: the GA over a 10 ms-per-evaluation fitness, 64 worker threads in 4
 //    workers; efficiency = evaluations/s ÷ (64 / 10 ms).
-// Measured 2026-11 on the 2-core shared build VM (Release):
-//   null cost, 2000-genome generations: 135 k individuals/s; 20000-genome generations: 770 k/s
-//   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5980 evals/s = 93.4 %
-//   same, population 400 (200 new): 4530 evals/s = 70.8 % (ceiling 78 %: 200/64 → 4 rounds)
-//   RSS: idle master 9.7 MB, master running 10 jobs (400 × 1415 bits) 36.7 MB, idle worker 9.5 MB
+// Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5; docs/performance.md):
+//   null cost, 2000-genome generations: 255 k individuals/s; 20000-genome generations: 580 k/s
+//   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5960 evals/s = 93.1 %
+//   same, population 400 (200 new): 4330 evals/s = 67.6 % (ceiling 78 %: 200/64 → 4 rounds)
+// Resident memory is measured by bench/memory.sh (real processes): idle master 10.2 MB, idle
+// worker 9.8 MB, master holding 10 running paper-scale hgann jobs 41.7 MB.
 #include <benchmark/benchmark.h>
 
 #include <atomic>
