@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "client/identify.h"
@@ -225,6 +226,45 @@ TEST(HgannJob, EveryBadFieldIsNamed) {
   std::get<HgannProblem>(s.problem).geometry = {{"core_width_m", -1}};
   EXPECT_TRUE(HasField(JobKindRegistry::Default().Validate(s), "hgann.geometry.core_width_m"))
       << All(JobKindRegistry::Default().Validate(s));
+}
+
+TEST(HgannJob, ExtremeButValidSpecsNeverCrashAnEvaluation) {
+  // What a hostile or careless spec can put in front of a worker: each either fails validation
+  // with a named field or evaluates every genome to a finite cost.
+  std::mt19937_64 rng(9);
+  std::vector<std::function<void(HgannProblem&)>> edits = {
+      [](HgannProblem& h) { h.cases[0].sample_rate_hz = 1e-300; },
+      [](HgannProblem& h) { h.cases[0].sample_rate_hz = 1e300; },
+      [](HgannProblem& h) { h.cases[0].amplitude_v = 1e300; },
+      [](HgannProblem& h) { h.cases[0].frequency_hz = 1e300; },
+      [](HgannProblem& h) { h.cases[0].frequency_hz = 1e-300; },
+      [](HgannProblem& h) { h.cases[0].angle_deg.assign(2, 1e300); h.cases[0].angle_deg[1] = -1e300; h.cases[0].voltage_v.clear(); },
+      [](HgannProblem& h) { h.ranges = {{"mu", -1e300, 1e300}, {"alpha", 1e300, 1e300}}; },
+      [](HgannProblem& h) { h.geometry = {{"core_modulus_pa", 1e-300}, {"n_active", 200}, {"n_tip", 200}}; },
+      [](HgannProblem& h) { h.spread_penalty = 1e300; },
+  };
+  for (size_t e = 0; e < edits.size(); ++e) {
+    JobSpec s = NominalSpec(10, 1);
+    edits[e](std::get<HgannProblem>(s.problem));
+    const auto v = JobKindRegistry::Default().Validate(s);
+    if (!v.empty()) {
+      EXPECT_FALSE(v.front().field.empty()) << e;
+      std::printf("edit %zu refused: %s\n", e, v.front().description.substr(0, 100).c_str());
+      continue;
+    }
+    std::unique_ptr<FitnessFunction> f;
+    if (Status st = JobKindRegistry::Default().MakeFitness(s, &f); !st.ok()) {
+      EXPECT_EQ(st.code(), StatusCode::kInvalidArgument) << e << ": " << st.message();
+      std::printf("edit %zu: no fitness: %s\n", e, st.message().substr(0, 100).c_str());
+      continue;
+    }
+    for (int i = 0; i < 5; ++i) {
+      Genome g;
+      for (int b = 0; b < model::kChromosomeBits; ++b) g.bits.push_back(rng() & 1);
+      EXPECT_TRUE(std::isfinite(EvaluateGuarded(*f, g).cost)) << "edit " << e;
+    }
+    std::printf("edit %zu evaluated\n", e);
+  }
 }
 
 TEST(HgannJob, BadEnumsInJsonAreNamed) {
