@@ -1,0 +1,486 @@
+#include "diagnose/diagnose.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "model/noise_floor.h"
+#include "model/saturation.h"
+
+namespace pz::diagnose {
+namespace {
+
+using model::EffectKind;
+
+std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0, double e = 0) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e);
+  return buf;
+}
+
+void Say(const DiagnoseOptions& o, const std::string& msg) {
+  if (o.progress) o.progress(msg);
+}
+
+// Per-case saturation-aware floor of the fitted model.
+std::vector<double> CaseFloors(const DiagnosisModel& m, const ParameterLayout& layout, const std::vector<double>& x) {
+  std::vector<double> floors;
+  std::vector<double> y;
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    const model::SimulationSummary s = m.Simulate(layout, x, c, y);
+    floors.push_back(s.ok() ? model::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
+                            : dc.noise.floor_rms_deg);
+  }
+  return floors;
+}
+
+// Localised excess over the floor of the withheld group: Σ_features n_f · max(0, rms_f² − σ²), over
+// the phase bins, branches, reversals, saturation and first/later cycles, plus the spectral groups
+// (odd, even, low) as N_w/2 · max(0, a² − noise²).
+std::vector<double> FeatureExcess(const model::GroupResidual& g) {
+  const double v = g.floor_rms * g.floor_rms;
+  std::vector<double> ex;
+  auto bin = [&](const model::BinStat& b) { ex.push_back(b.n * std::max(0.0, b.rms * b.rms - v)); };
+  for (const auto& b : g.phase) bin(b);
+  for (const auto* b : {&g.rising, &g.falling, &g.near_reversal, &g.in_saturation, &g.first_cycle, &g.later_cycles})
+    bin(*b);
+  const double hn = g.harmonic_noise * g.harmonic_noise;
+  for (double a : {g.odd_rms, g.even_rms, g.low_rms}) ex.push_back(0.5 * g.samples * std::max(0.0, a * a - hn));
+  return ex;
+}
+
+double PatternExplained(const model::GroupResidual& before, const model::GroupResidual& after) {
+  const std::vector<double> b = FeatureExcess(before), a = FeatureExcess(after);
+  double sb = 0, sa = 0;
+  for (size_t i = 0; i < b.size(); ++i) {
+    if (b[i] <= 0) continue;  // only features that carried excess before
+    sb += b[i];
+    sa += std::min(a[i], b[i] * 10);
+  }
+  return sb > 0 ? 1.0 - sa / sb : 0.0;
+}
+
+// Fits a structure: fast structures get a global search seeded around `from`, beam structures are
+// refined from `from` with a few starting magnitudes of the new effect.
+FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, const ParameterLayout* from_layout,
+                       const std::vector<double>* from_x, EffectKind added, const DiagnoseOptions& o) {
+  FitOptions fo;
+  fo.threads = o.threads;
+  fo.evaluator_factory = o.evaluator_factory;
+  fo.lm = o.lm;
+  fo.lm.threads = o.threads;
+  if (!from_x) {  // the base model: global search only
+    fo.de = o.de_base;
+    fo.de.seed = o.seed;
+    return FitGlobal(m, layout, fo);
+  }
+  const std::vector<double> x0 = layout.Extend(*from_x, *from_layout);
+  // The new effect's magnitude parameter.
+  int mag = -1;
+  const model::EffectInfo& info = model::GetEffectInfo(added);
+  for (int i = ParameterLayout::kBase; i < layout.size(); ++i) {
+    const ParamSpec& s = layout.specs()[i];
+    if (s.effect == static_cast<int>(layout.structure().size()) - 1 && s.effect_param == info.magnitude_param)
+      mag = i;
+  }
+  std::vector<std::vector<double>> starts;
+  if (mag >= 0) {
+    const ParamSpec& s = layout.specs()[mag];
+    for (size_t j = 0; j < o.cvode_start_fractions.size(); ++j) {
+      const double f = o.cvode_start_fractions[j];
+      std::vector<double> x = x0;
+      x[mag] = s.upper > 0 ? f * s.upper : f * s.lower;
+      starts.push_back(x);
+      if (s.lower < 0 && s.upper > 0 && j + 1 == o.cvode_start_fractions.size()) {
+        x[mag] = f * s.lower;
+        starts.push_back(x);
+      }
+    }
+  }
+  bool beam = false;
+  for (EffectKind k : layout.structure()) beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
+  if (beam) {
+    fo.global_search = false;
+    fo.lm.max_iterations = o.cvode_lm_iterations;
+    fo.starts = starts;
+    if (fo.starts.empty()) fo.starts.push_back(x0);
+  } else {
+    fo.de = o.de_candidate;
+    fo.de.seed = o.seed + 1000 * (static_cast<uint64_t>(added) + 1) + 17 * layout.structure().size();
+    fo.seeds = starts;
+    fo.seeds.insert(fo.seeds.begin(), x0);
+    fo.starts = {x0};
+  }
+  return FitGlobal(m, layout, fo);
+}
+
+double SumWithheld(const DiagnosisModel& m, std::span<const double> per_case) {
+  double s = 0;
+  for (size_t c = 0; c < m.cases().size(); ++c)
+    if (!m.cases()[c].training) s += per_case[c];
+  return s;
+}
+
+std::vector<double> CaseFloorVariance(const DiagnosisModel& m, std::span<const double> floors) {
+  std::vector<double> v;
+  for (size_t c = 0; c < m.cases().size(); ++c)
+    v.push_back(floors[c] * floors[c] * static_cast<double>(m.cases()[c].measured_deg.size()));
+  return v;
+}
+
+std::vector<Absorption> Compare(const FitResult& without, const FitResult& with) {
+  std::vector<Absorption> r;
+  for (int i = 0; i < ParameterLayout::kBase && i < static_cast<int>(without.params.size()) &&
+                  i < static_cast<int>(with.params.size());
+       ++i) {
+    const ParamEstimate& a = without.params[i];
+    const ParamEstimate& b = with.params[i];
+    const double se = std::sqrt(a.std_error * a.std_error + b.std_error * b.std_error);
+    const double z = se > 0 && std::isfinite(se) ? (a.value - b.value) / se : 0.0;
+    const double rel = std::abs(a.value - b.value) / std::max({std::abs(a.value), std::abs(b.value), 1e-300});
+    if (std::abs(z) > 2.0 && rel > 0.05) r.push_back({a.name, a.unit, a.value, b.value, z});
+  }
+  std::sort(r.begin(), r.end(), [](const Absorption& x, const Absorption& y) { return std::abs(x.z) > std::abs(y.z); });
+  return r;
+}
+
+RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const ParameterLayout& start_layout,
+                     const model::ResidualAnalysis& start_analysis, std::span<const double> floors,
+                     const std::vector<EffectKind>& kinds, const DiagnoseOptions& o, int64_t* evals) {
+  RoundResult round;
+  round.base_structure = start.structure;
+  round.s0 = start.withheld_pi;
+  round.s_floor = SumWithheld(m, CaseFloorVariance(m, floors));
+  round.rms_ratio = round.s_floor > 0 ? std::sqrt(round.s0 / round.s_floor) : INFINITY;
+  round.significant = round.rms_ratio > o.significance_ratio;
+  const double nw = m.withheld_samples(), nt = m.training_samples();
+  const double var_w = round.s_floor / nw;
+  double s_floor_t = 0;
+  for (size_t c = 0; c < m.cases().size(); ++c)
+    if (m.cases()[c].training) s_floor_t += floors[c] * floors[c] * m.cases()[c].measured_deg.size();
+  const double var_t = s_floor_t / nt;
+  const double excess = round.s0 - round.s_floor;  // the gap above the floor (≤ 0: none to close)
+  Say(o, "  starting model: " + start.description +
+             Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
+
+  for (EffectKind k : kinds) {
+    std::vector<EffectKind> structure = start.structure;
+    if (std::find(structure.begin(), structure.end(), k) != structure.end()) continue;
+    structure.push_back(k);
+    const ParameterLayout layout(structure);
+    const auto t0 = std::chrono::steady_clock::now();
+    CandidateResult c;
+    c.kind = k;
+    c.fit = FitStructure(m, layout, &start_layout, &start.x, k, o);
+    *evals += c.fit.evaluations;
+    c.added_params = layout.size() - start_layout.size();
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!c.fit.ok) {
+      c.score = -INFINITY;
+      c.note = "fit failed: " + c.fit.message;
+      Say(o, std::string("  ") + model::EffectName(k) + ": " + c.note);
+      round.candidates.push_back(std::move(c));
+      continue;
+    }
+    const double sc = c.fit.withheld_pi;
+    c.score = (round.s0 - sc) / var_w - c.added_params * std::log(nw);
+    c.train_delta_bic = (c.fit.train_pi - start.train_pi) / var_t + c.added_params * std::log(nt);
+    c.closed = excess > 0 ? (round.s0 - sc) / excess : NAN;
+    c.raw_reduction = round.s0 > 0 ? (round.s0 - sc) / round.s0 : 0;
+    const model::ResidualAnalysis ra = AnalyseFit(m, c.fit, floors);
+    c.pattern = PatternExplained(start_analysis.withheld, ra.withheld);
+    std::vector<std::string> why;
+    if (!(c.score > 0)) why.push_back("held-out gain below the parameter penalty");
+    if (!(c.train_delta_bic < 0)) why.push_back("no BIC gain on the training cases");
+    if (!(c.closed >= o.min_closed)) why.push_back(Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * o.min_closed));
+    if (c.pattern < o.min_pattern)
+      why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern, 100 * o.min_pattern));
+    c.qualifies = why.empty();
+    for (size_t i = 0; i < why.size(); ++i) c.note += (i ? "; " : "") + why[i];
+    Say(o, std::string("  ") + model::EffectName(k) +
+               Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%", std::sqrt(sc / nw), c.score,
+                   100 * c.closed, 100 * c.pattern) +
+               Fmt(" (%.1f s)", wall));
+    round.candidates.push_back(std::move(c));
+  }
+  std::stable_sort(round.candidates.begin(), round.candidates.end(),
+                   [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
+  // Posterior weights against "none" (score 0), tempered by the best model's over-dispersion.
+  if (!round.candidates.empty() && std::isfinite(round.candidates[0].score)) {
+    const double s_best = std::min(round.s0, round.candidates[0].fit.withheld_pi);
+    const double phi = std::max(1.0, s_best / round.s_floor);
+    double lmax = 0;
+    for (const auto& c : round.candidates)
+      if (std::isfinite(c.score)) lmax = std::max(lmax, c.score / (2 * phi));
+    double z = std::exp(-lmax);
+    for (const auto& c : round.candidates)
+      if (std::isfinite(c.score)) z += std::exp(c.score / (2 * phi) - lmax);
+    for (auto& c : round.candidates) c.weight = std::isfinite(c.score) ? std::exp(c.score / (2 * phi) - lmax) / z : 0;
+  }
+  const double wr = std::sqrt(round.s0 / nw), fr = std::sqrt(var_w);
+  if (!round.significant) {
+    round.verdict = Fmt("no significant gap: withheld RMS %.4f deg is %.2f x the noise floor %.4f deg (threshold %.2f)",
+                        wr, round.rms_ratio, fr, o.significance_ratio);
+  } else if (!round.candidates.empty() && round.candidates[0].qualifies) {
+    round.named = 0;
+    const auto& c = round.candidates[0];
+    round.verdict = std::string(model::EffectName(c.kind)) +
+                    Fmt(": closes %.0f %% of the withheld gap (RMS %.4f -> %.4f deg, floor %.4f), confidence %.3f",
+                        100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.weight);
+  } else {
+    round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,
+                        round.rms_ratio);
+    if (!round.candidates.empty())
+      round.verdict += std::string("; best candidate ") + model::EffectName(round.candidates[0].kind) + ": " +
+                       round.candidates[0].note;
+  }
+  Say(o, "  => " + round.verdict);
+  return round;
+}
+
+std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& base, const DiagnoseOptions& o,
+                                      int64_t* evals) {
+  const ParameterLayout layout({});
+  const int n = layout.size();
+  const size_t nc = m.cases().size();
+  std::vector<std::vector<double>> per(nc);
+  ParallelFor(static_cast<int>(nc), o.threads, [&](int c) {
+    ResidualFunction f = [&, c](std::span<const double> u, std::vector<double>& r) {
+      const std::vector<double> x = layout.FromUnit(u);
+      thread_local std::vector<double> y;
+      const model::SimulationSummary s = m.Simulate(layout, x, c, y);
+      if (!s.ok()) return false;
+      const auto& meas = m.cases()[c].measured_deg;
+      r.resize(meas.size());
+      for (size_t k = 0; k < meas.size(); ++k) r[k] = meas[k] - y[k];
+      return true;
+    };
+    LmOptions lo = o.lm;
+    lo.threads = 1;
+    lo.max_iterations = 25;
+    std::vector<double> lb(n, 0.0), ub(n, 1.0);
+    const LmResult r = LevenbergMarquardt(f, layout.ToUnit(base.x), lb, ub, lo);
+    per[c] = layout.FromUnit(r.x);
+  });
+  *evals += static_cast<int64_t>(nc) * 25 * (2 * n + 2);
+  std::vector<ParamTrend> trends;
+  std::vector<double> v, fr;
+  for (const DiagCase& c : m.cases()) {
+    v.push_back(c.drive.amplitude_v);
+    fr.push_back(c.drive.frequency_hz);
+  }
+  for (int i = 0; i < n; ++i) {
+    ParamTrend t;
+    t.name = layout.specs()[i].name;
+    t.unit = layout.specs()[i].unit;
+    double lo = INFINITY, hi = -INFINITY, mean = 0;
+    for (size_t c = 0; c < nc; ++c) {
+      t.per_case.push_back(per[c][i]);
+      lo = std::min(lo, per[c][i]);
+      hi = std::max(hi, per[c][i]);
+      mean += per[c][i] / nc;
+    }
+    t.relative_range = std::abs(mean) > 0 ? (hi - lo) / std::abs(mean) : 0;
+    try {
+      const model::PlaneFit pf = model::FitPlane(v, fr, t.per_case);
+      t.slope_v = pf.v.coef;
+      t.slope_f = pf.f.coef;
+      t.p_v = std::isfinite(pf.v.p_value) ? pf.v.p_value : 1;
+      t.p_f = std::isfinite(pf.f.p_value) ? pf.f.p_value : 1;
+      t.r2 = pf.r2;
+    } catch (const InputError&) {
+      // collinear or too few cases: no trend
+    }
+    t.significant = std::min(t.p_v, t.p_f) < 0.01 && t.relative_range > 0.1;
+    trends.push_back(std::move(t));
+  }
+  return trends;
+}
+
+}  // namespace
+
+Status DiagnoseOptions::Validate() const {
+  if (threads < 1) return InvalidArgument(FieldError("threads", threads, "must be >= 1"));
+  if (auto s = de_base.Validate(); !s.ok()) return InvalidArgument("de_base." + s.message());
+  if (auto s = de_candidate.Validate(); !s.ok()) return InvalidArgument("de_candidate." + s.message());
+  if (auto s = lm.Validate(); !s.ok()) return InvalidArgument("lm." + s.message());
+  if (cvode_lm_iterations < 1)
+    return InvalidArgument(FieldError("cvode_lm_iterations", cvode_lm_iterations, "must be >= 1"));
+  if (cvode_start_fractions.empty()) return InvalidArgument("cvode_start_fractions: needs at least one entry");
+  for (double f : cvode_start_fractions)
+    if (!(f > 0 && f <= 1)) return InvalidArgument(FieldError("cvode_start_fractions[]", f, "must be in (0, 1]"));
+  if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
+  if (!(significance_ratio > 1))
+    return InvalidArgument(FieldError("significance_ratio", significance_ratio, "must be > 1"));
+  if (!(min_closed > 0 && min_closed <= 1))
+    return InvalidArgument(FieldError("min_closed", min_closed, "must be in (0, 1]"));
+  if (!(min_pattern >= 0 && min_pattern <= 1))
+    return InvalidArgument(FieldError("min_pattern", min_pattern, "must be in [0, 1]"));
+  for (EffectKind k : candidates)
+    if (k == EffectKind::kNone || model::GetEffectInfo(k).kind != k)
+      return InvalidArgument(FieldError("candidates[]", static_cast<int>(k), "not an effect of the library"));
+  return Status::Ok();
+}
+
+model::ResidualAnalysis AnalyseFit(const DiagnosisModel& m, const FitResult& fit, std::span<const double> floors) {
+  const ParameterLayout layout(fit.structure);
+  std::vector<std::vector<double>> ys(m.cases().size());
+  std::vector<model::ResidualCaseInput> in;
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    const model::SimulationSummary s = m.Simulate(layout, fit.x, c, ys[c]);
+    if (!s.ok()) ys[c].assign(dc.measured_deg.size(), 0.0);
+    model::ResidualCaseInput r;
+    r.number = dc.number;
+    r.amplitude_v = dc.drive.amplitude_v;
+    r.frequency_hz = dc.drive.frequency_hz;
+    r.sample_rate_hz = dc.drive.sample_rate_hz;
+    r.cycles = std::max(1, static_cast<int>(std::lround(dc.drive.cycles)));
+    r.training = dc.training;
+    r.measured = dc.measured_deg;
+    r.model = ys[c];
+    r.floor_rms_deg = floors[c];
+    r.quantum_deg = dc.noise.quantum_deg;
+    in.push_back(r);
+  }
+  return model::AnalyseResiduals(in);
+}
+
+Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
+  ThrowIfError(o.Validate());
+  const auto start = std::chrono::steady_clock::now();
+  Diagnosis d;
+  d.cases = m.cases();
+  for (const DiagCase& c : m.cases()) d.quantum_deg = std::max(d.quantum_deg, c.noise.quantum_deg);
+  std::vector<EffectKind> kinds = o.candidates;
+  if (kinds.empty())
+    for (const auto& e : model::EffectLibrary()) kinds.push_back(e.kind);
+
+  // 1. Base fit.
+  Say(o, "base model: global fit on the training cases");
+  const ParameterLayout base_layout({});
+  d.base = FitStructure(m, base_layout, nullptr, nullptr, EffectKind::kNone, o);
+  d.evaluations += d.base.evaluations;
+  if (!d.base.ok) throw InputError("the base model could not be fitted: " + d.base.message);
+  // 2. Floors (saturation-aware with the base model) and the base residuals.
+  const std::vector<double> floors = CaseFloors(m, base_layout, d.base.x);
+  {
+    double st = 0, sw = 0;
+    for (size_t c = 0; c < m.cases().size(); ++c) {
+      const double v = floors[c] * floors[c] * m.cases()[c].measured_deg.size();
+      (m.cases()[c].training ? st : sw) += v;
+    }
+    d.floor_train = std::sqrt(st / std::max(1, m.training_samples()));
+    d.floor_withheld = std::sqrt(sw / std::max(1, m.withheld_samples()));
+    d.withheld_floor = sw;
+  }
+  d.base_residuals = AnalyseFit(m, d.base, floors);
+  Say(o, Fmt("base model: train RMS %.4f, withheld RMS %.4f deg; floor %.4f / %.4f deg",
+             std::sqrt(d.base.train_pi / m.training_samples()), std::sqrt(d.base.withheld_pi / m.withheld_samples()),
+             d.floor_train, d.floor_withheld));
+  // 3. Trends of per-case fits.
+  if (o.trends) {
+    Say(o, "per-case fits (trends over the V x f grid)");
+    d.trends = PerCaseTrends(m, d.base, o, &d.evaluations);
+  }
+  // 4–5. Rounds.
+  FitResult current = d.base;
+  model::ResidualAnalysis current_analysis = d.base_residuals;
+  for (int r = 0; r < (o.second_effect ? 2 : 1); ++r) {
+    Say(o, r == 0 ? "candidates: each effect added to the base model" : "second effect: the others on top of the first");
+    const ParameterLayout start_layout(current.structure);
+    RoundResult round = RunRound(m, current, start_layout, current_analysis, floors, kinds, o, &d.evaluations);
+    const bool named = round.named >= 0;
+    if (named) {
+      const CandidateResult& c = round.candidates[round.named];
+      d.named.push_back(c.kind);
+      if (r == 0) d.confidence = c.weight;
+      current = c.fit;
+      current_analysis = AnalyseFit(m, current, floors);
+    }
+    d.rounds.push_back(std::move(round));
+    if (!named) break;
+  }
+  d.final_fit = current;
+  d.final_residuals = current_analysis;
+
+  // 6. How far: per case and in total.
+  d.withheld_before = d.base.withheld_pi;
+  d.withheld_after = d.final_fit.withheld_pi;
+  const double excess = d.withheld_before - d.withheld_floor;
+  d.closed_total = excess > 0 ? (d.withheld_before - d.withheld_after) / excess : NAN;
+  d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    CaseGap g;
+    g.number = dc.number;
+    g.training = dc.training;
+    g.amplitude_v = dc.drive.amplitude_v;
+    g.frequency_hz = dc.drive.frequency_hz;
+    g.floor_rms = floors[c];
+    const double n = dc.measured_deg.size();
+    g.pi_before = d.base.case_pi[c];
+    g.pi_after = d.final_fit.case_pi[c];
+    g.rms_before = std::sqrt(g.pi_before / n);
+    g.rms_after = std::sqrt(g.pi_after / n);
+    const double ex = g.pi_before - n * floors[c] * floors[c];
+    g.closed = ex > 0 ? std::clamp((g.pi_before - g.pi_after) / ex, -9.0, 1.0) : 0.0;
+    d.gaps.push_back(g);
+  }
+  // What the base terms absorb: the best candidate of the first round against the base fit.
+  const RoundResult& first = d.rounds.front();
+  if (!first.candidates.empty() && first.candidates[0].fit.ok) {
+    const CandidateResult& best = first.candidates[0];
+    d.absorbed = Compare(d.base, best.fit);
+    d.absorbed_by = model::EffectName(best.kind);
+  }
+  // Verdict.
+  const double nw = m.withheld_samples();
+  if (!d.named.empty()) {
+    d.verdict_kind = "effect";
+    const CandidateResult& c = first.candidates[first.named];
+    d.verdict = "The gap is caused by " + model::GetEffectInfo(c.kind).title + " (" + model::EffectName(c.kind) +
+                Fmt(", confidence %.0f %%)", 100 * d.confidence);
+    if (d.named.size() > 1) {
+      d.verdict += std::string(", with a second effect: ") + model::EffectName(d.named[1]) +
+                   Fmt(" (confidence %.0f %%)", 100 * d.rounds[1].candidates[d.rounds[1].named].weight);
+    }
+    d.verdict += Fmt(". Adding it closes %.0f %% of the withheld gap above the noise floor: withheld RMS %.4f -> %.4f deg "
+                     "(floor %.4f deg, %.2f x floor remains).",
+                     100 * d.closed_total, std::sqrt(d.withheld_before / nw), std::sqrt(d.withheld_after / nw),
+                     d.floor_withheld, d.remaining_ratio);
+  } else if (!first.significant) {
+    d.verdict_kind = "none";
+    d.verdict = Fmt("No unmodelled effect is significant above the noise floor: the base model's withheld RMS %.4f deg "
+                    "is %.2f x the floor %.4f deg (threshold %.2f).",
+                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld, o.significance_ratio);
+    if (!first.candidates.empty() && first.candidates[0].fit.ok && first.candidates[0].score > 0) {
+      const CandidateResult& b = first.candidates[0];
+      d.verdict += " The best candidate, " + std::string(model::EffectName(b.kind)) +
+                   Fmt(", would lower it to %.4f deg, within the floor band", std::sqrt(b.fit.withheld_pi / nw));
+      if (!d.absorbed.empty()) {
+        d.verdict += "; what it would explain is absorbed by the base model's";
+        for (size_t i = 0; i < d.absorbed.size(); ++i)
+          d.verdict += (i ? ", " : " ") + d.absorbed[i].name +
+                       Fmt(" (%.3g without it, %.3g with it)", d.absorbed[i].without, d.absorbed[i].with);
+      }
+      d.verdict += ".";
+    }
+  } else {
+    d.verdict_kind = "unexplained";
+    d.verdict = Fmt("A significant gap (withheld RMS %.4f deg = %.2f x the floor %.4f deg) that no candidate effect of "
+                    "the library explains.",
+                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld);
+    if (!first.candidates.empty())
+      d.verdict += std::string(" Best candidate: ") + model::EffectName(first.candidates[0].kind) + " (" +
+                   first.candidates[0].note + ").";
+  }
+  d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  Say(o, d.verdict);
+  return d;
+}
+
+}  // namespace pz::diagnose

@@ -1,0 +1,156 @@
+// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect causes
+// it, and how far it shrinks once that effect is in the model.
+//
+//  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
+//     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
+//  2. Noise floor per case (model/noise_floor.h), made saturation-aware with the base model: σ_c.
+//     Withheld floor S_floor = Σ_withheld N_c σ_c². Gap of a model: its withheld Σe² = S.
+//  3. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
+//     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
+//     t statistics): a trend a global model lacks is evidence of an unmodelled effect.
+//  4. Which: every candidate effect of the library is added to the model and re-identified on the
+//     training cases (drive/output effects on the fast path with a global search; beam effects on
+//     CVODE, refined from the base fit with a few starting magnitudes), then scored on the withheld
+//     cases. Same rules and thresholds for every effect:
+//       significant gap  ⇔  RMS_withheld(base) > significance_ratio · floor  (√(S0 / S_floor));
+//       score_c          =  (S0 − S_c)/σ²_w − k_c ln N_w        (held-out χ² gain minus a BIC penalty
+//                                                              for the k_c added parameters);
+//       closed_c         =  (S0 − S_c) / (S0 − S_floor)        (share of the excess gap closed);
+//       pattern_c        =  share of the localised excess (phase bins, branches, reversals,
+//                           saturation, first/later cycles, odd/even harmonics, low frequency) removed;
+//       named            ⇔  significant, score > 0, training BIC lower, closed ≥ min_closed and
+//                           pattern ≥ min_pattern; confidence = the candidate's posterior weight
+//                           exp(score/2φ) against the others and "none" (score 0), with φ =
+//                           max(1, S_best / S_floor) the over-dispersion of the best model.
+//     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
+//     have explained: the base parameters that move by more than 2 σ when it is added), or "a
+//     significant gap that no candidate explains".
+//  5. Greedy: with the first effect in the model, the others are tried again on top of it.
+//  6. How far: per case and in total, the withheld gap before and after, the share closed, what
+//     remains above the floor; the effect parameters with σ; the identifiability table.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "diagnose/fit.h"
+#include "diagnose/problem.h"
+#include "model/residual_analysis.h"
+
+namespace pz::diagnose {
+
+struct DiagnoseOptions {
+  std::vector<model::EffectKind> candidates;  ///< empty = the whole library
+  int threads = 2;                            ///< ≥ 1
+  uint64_t seed = 1;
+  /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
+  std::function<std::unique_ptr<master::BatchEvaluator>(const master::FitnessFunction&)> evaluator_factory;
+  DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
+  DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
+  LmOptions lm{.max_iterations = 40};
+  int cvode_lm_iterations = 15;              ///< LM iterations of a beam (CVODE) candidate, ≥ 1
+  /// Starting magnitudes of a beam candidate, as fractions of its magnitude range, ≥ 1 entry.
+  std::vector<double> cvode_start_fractions = {0.02, 0.15};
+  model::EffectSimOptions sim;
+  // Decision rules: the same for every effect.
+  double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
+  double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
+  double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
+  bool second_effect = true;         ///< greedy search for a second effect
+  bool trends = true;                ///< per-case fits and their V × f trends
+  std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
+  Status Validate() const;
+};
+
+/// One candidate structure, fitted and scored.
+struct CandidateResult {
+  model::EffectKind kind = model::EffectKind::kNone;  ///< the effect added in this round
+  FitResult fit;
+  int added_params = 0;
+  double score = 0;            ///< held-out χ² gain − penalty
+  double train_delta_bic = 0;  ///< (T_c − T_0)/σ²_t + k ln N_t (< 0: better on training too)
+  double closed = 0;           ///< share of the excess withheld gap closed
+  double raw_reduction = 0;    ///< (S0 − S_c)/S0
+  double pattern = 0;          ///< share of the localised excess removed
+  double weight = 0;           ///< posterior weight (confidence if named)
+  bool qualifies = false;      ///< passes every rule but the ranking
+  std::string note;            ///< why it does not qualify
+};
+
+/// One greedy round: the model it starts from, its gap, the candidates on top of it.
+struct RoundResult {
+  std::vector<model::EffectKind> base_structure;
+  double s0 = 0;               ///< withheld Σe² of the starting model [deg²]
+  double s_floor = 0;          ///< withheld floor Σ N σ² [deg²]
+  double rms_ratio = 0;        ///< √(s0 / s_floor)
+  bool significant = false;
+  std::vector<CandidateResult> candidates;  ///< ranked by score, best first
+  int named = -1;              ///< index into candidates, −1 if none named
+  std::string verdict;         ///< one sentence
+};
+
+/// A parameter trend over the V × f grid from the per-case fits.
+struct ParamTrend {
+  std::string name, unit;
+  std::vector<double> per_case;   ///< value per case (case order)
+  double slope_v = 0, slope_f = 0;  ///< per V, per Hz
+  double p_v = 1, p_f = 1;          ///< two-sided p-values
+  double r2 = 0;
+  double relative_range = 0;        ///< (max − min)/|mean|
+  bool significant = false;         ///< p < 0.01 on V or f and relative range > 10 %
+};
+
+/// A base parameter that moves when an effect is added (what absorbed the effect).
+struct Absorption {
+  std::string name, unit;
+  double without = 0, with = 0;  ///< base model / model with the effect
+  double z = 0;                  ///< shift / combined σ
+};
+
+/// Per-case before/after of the final model.
+struct CaseGap {
+  int number = 0;
+  bool training = false;
+  double amplitude_v = 0, frequency_hz = 0;
+  double floor_rms = 0;                 ///< σ_c [deg]
+  double rms_before = 0, rms_after = 0; ///< [deg]
+  double pi_before = 0, pi_after = 0;   ///< [deg²]
+  double closed = 0;                    ///< (PI_b − PI_a)/(PI_b − N σ²), clamped to [−9, 1]
+};
+
+struct Diagnosis {
+  std::string bench;                 ///< the folder or a label
+  std::vector<DiagCase> cases;
+  double quantum_deg = 0;
+  double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
+  FitResult base;
+  model::ResidualAnalysis base_residuals;
+  std::vector<ParamTrend> trends;
+  std::vector<RoundResult> rounds;
+  std::vector<model::EffectKind> named;       ///< effects named, in order
+  double confidence = 0;                       ///< of the first named effect (or of "none")
+  FitResult final_fit;                         ///< the base model plus the named effects
+  model::ResidualAnalysis final_residuals;
+  std::vector<CaseGap> gaps;
+  double withheld_before = 0, withheld_after = 0;  ///< Σe² [deg²]
+  double withheld_floor = 0;                       ///< S_floor [deg²]
+  double closed_total = 0;                         ///< share of the excess closed
+  double remaining_ratio = 0;                      ///< √(after / floor)
+  std::vector<Absorption> absorbed;                ///< when an effect is mimicked by the base terms
+  std::string absorbed_by;                         ///< the candidate whose addition shows it
+  std::string verdict_kind;  ///< "effect", "none" (no significant gap), "unexplained"
+  std::string verdict;       ///< the summary sentence(s)
+  double wall_time_s = 0;
+  int64_t evaluations = 0;
+};
+
+/// Runs the whole diagnosis. Throws InputError on invalid options.
+Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
+
+/// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
+model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,
+                                   std::span<const double> case_floor);
+
+}  // namespace pz::diagnose

@@ -1,0 +1,89 @@
+#include "model/noise_floor.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pz::model {
+
+double EstimateQuantum(std::span<const double> y) {
+  std::vector<double> v(y.begin(), y.end());
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  if (v.size() < 2) return 0.0;
+  double dmin = INFINITY;
+  for (size_t i = 1; i < v.size(); ++i) dmin = std::min(dmin, v[i] - v[i - 1]);
+  if (!(dmin > 0) || !std::isfinite(dmin)) return 0.0;
+  for (int div = 1; div <= 16; ++div) {
+    const double q = dmin / div;
+    bool ok = true;
+    for (double x : v) {
+      const double r = x / q;
+      if (std::abs(r - std::round(r)) > 1e-6 * std::max(1.0, 1e-3 * std::abs(r))) {
+        ok = false;
+        break;
+      }
+    }
+    if (ok) return q;
+  }
+  return 0.0;
+}
+
+CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantum_deg) {
+  if (y.empty()) throw InputError("noise floor: empty series");
+  if (cycles < 1) throw InputError(FieldError("cycles", cycles, "must be >= 1"));
+  for (size_t k = 0; k < y.size(); ++k)
+    if (!std::isfinite(y[k]))
+      throw InputError(FieldError("y[" + std::to_string(k) + "]", y[k], "must be finite"));
+  CaseNoise n;
+  n.quantum_deg = quantum_deg >= 0 ? quantum_deg : EstimateQuantum(y);
+  n.quantisation_rms_deg = n.quantum_deg / std::sqrt(12.0);
+  const size_t p = y.size() / static_cast<size_t>(cycles);
+  if (cycles >= 2 && p >= 2) {
+    const size_t a = (cycles - 2) * p, b = (cycles - 1) * p;
+    // d_k = y_{b+k} − y_{a+k} = noise difference (variance 2 s²) + whatever is not periodic (creep,
+    // drift: slow). First differences of d remove the slow part: var(d_k − d_{k−1}) = 4 s².
+    double sum2 = 0, prev = y[b] - y[a];
+    for (size_t k = 1; k < p; ++k) {
+      const double d = y[b + k] - y[a + k];
+      sum2 += (d - prev) * (d - prev);
+      prev = d;
+    }
+    n.scatter_rms_deg = std::sqrt(sum2 / (p - 1) / 4.0);
+    n.compared_samples = static_cast<int>(p);
+  }
+  n.floor_rms_deg = std::sqrt(n.quantisation_rms_deg * n.quantisation_rms_deg +
+                              n.scatter_rms_deg * n.scatter_rms_deg);
+  return n;
+}
+
+double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
+                            double b1, double b2) {
+  if (measured.size() != model.size() || measured.empty())
+    throw InputError("saturation-aware floor: measured has " + std::to_string(measured.size()) +
+                     " samples, model " + std::to_string(model.size()));
+  const double v = noise.floor_rms_deg * noise.floor_rms_deg;
+  const double tol = 1e-9 * std::max(1.0, std::max(std::abs(b1), std::abs(b2)));
+  double sum = 0;
+  for (size_t k = 0; k < measured.size(); ++k) {
+    const bool sat = std::abs(model[k] - b1) <= tol || std::abs(model[k] - b2) <= tol;
+    const double e = measured[k] - model[k];
+    if (sat && noise.quantum_deg > 0 && std::abs(e) <= 1.01 * noise.quantum_deg) {
+      sum += e * e;  // the plateau read one level off: rounding, not model error
+    } else {
+      sum += v;
+    }
+  }
+  return std::sqrt(sum / static_cast<double>(measured.size()));
+}
+
+double PooledFloor(std::span<const CaseNoise> noise, std::span<const int> samples) {
+  PZ_CHECK(noise.size() == samples.size());
+  double num = 0, den = 0;
+  for (size_t i = 0; i < noise.size(); ++i) {
+    num += samples[i] * noise[i].floor_rms_deg * noise[i].floor_rms_deg;
+    den += samples[i];
+  }
+  return den > 0 ? std::sqrt(num / den) : 0.0;
+}
+
+}  // namespace pz::model
