@@ -1,6 +1,7 @@
 #include "model/dense_kernels.h"
 
 #include <cstddef>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -41,6 +42,12 @@ int AsInt(Eigen::Index i) {
   PZ_CHECK(i >= 0 && i <= 0x7fffffff);
   return static_cast<int>(i);
 }
+#ifdef PZ_HAVE_BLAS
+// Debian's serial OpenBLAS shares its work buffers between callers without locking: two threads in
+// dsyrk at once give wrong sums (seen here). Every BLAS / LAPACK call holds this lock, so callers
+// on several threads stay correct (they do not run their BLAS parts in parallel).
+std::mutex blas_mutex;
+#endif
 }  // namespace
 
 const char* DenseBackendName() {
@@ -69,6 +76,7 @@ void SyrkTnLower(const Eigen::Ref<const Eigen::MatrixXd>& J, double alpha, doubl
   const int n = AsInt(J.cols()), k = AsInt(J.rows());
   const int lda = AsInt(std::max<Eigen::Index>(1, J.outerStride()));
   const int ldc = AsInt(C.outerStride());
+  std::lock_guard<std::mutex> lock(blas_mutex);
   dsyrk_("L", "T", &n, &k, &alpha, J.data(), &lda, &beta, C.data(), &ldc, 1, 1);
 #else
   if (beta != 1.0) C.triangularView<Eigen::Lower>() = beta * C;
@@ -84,6 +92,7 @@ void GemmTn(const Eigen::Ref<const Eigen::MatrixXd>& A, const Eigen::Ref<const E
   const int lda = AsInt(std::max<Eigen::Index>(1, A.outerStride()));
   const int ldb = AsInt(std::max<Eigen::Index>(1, B.outerStride()));
   const int ldc = AsInt(std::max<Eigen::Index>(1, C.outerStride()));
+  std::lock_guard<std::mutex> lock(blas_mutex);
   dgemm_("T", "N", &m, &n, &k, &alpha, A.data(), &lda, B.data(), &ldb, &beta, C.data(), &ldc, 1, 1);
 #else
   if (beta == 0.0)
@@ -102,6 +111,7 @@ bool CholeskyLower(Eigen::Ref<Eigen::MatrixXd> A, double* rcond) {
   const int n = AsInt(A.rows()), lda = AsInt(std::max<Eigen::Index>(1, A.outerStride()));
   std::vector<double> work(3 * static_cast<size_t>(n) + 1);
   std::vector<int> iwork(static_cast<size_t>(n) + 1);
+  std::lock_guard<std::mutex> lock(blas_mutex);
   const double anorm = rcond != nullptr ? dlansy_("1", "L", &n, A.data(), &lda, work.data(), 1, 1) : 0;
   int info = 0;
   dpotrf_("L", &n, A.data(), &lda, &info, 1);
@@ -125,6 +135,7 @@ void CholeskySolve(const Eigen::Ref<const Eigen::MatrixXd>& L, Eigen::Ref<Eigen:
   const int n = AsInt(L.rows()), lda = AsInt(std::max<Eigen::Index>(1, L.outerStride()));
   const int one = 1, ldb = std::max(1, n);
   int info = 0;
+  std::lock_guard<std::mutex> lock(blas_mutex);
   dpotrs_("L", &n, &one, L.data(), &lda, b.data(), &ldb, &info, 1);
   PZ_CHECK(info == 0);
 #else
@@ -139,6 +150,7 @@ double CholeskyInverseTrace(const Eigen::Ref<const Eigen::MatrixXd>& L) {
 #ifdef PZ_HAVE_BLAS
   const int n = AsInt(L.rows()), lda = std::max(1, n);
   int info = 0;
+  std::lock_guard<std::mutex> lock(blas_mutex);
   dtrtri_("L", "N", &n, Linv.data(), &lda, &info, 1, 1);
   PZ_CHECK(info == 0);
   return Linv.triangularView<Eigen::Lower>().toDenseMatrix().squaredNorm();

@@ -5,7 +5,8 @@
 // scripts/deps.sh) these call its dsyrk / dgemm / dpotrf / dpotrs / dpocon / dpotri, which pick
 // AVX2/FMA kernels at run time; otherwise Eigen's own kernels (which this project compiles for the
 // baseline ISA unless PIEZOID_NATIVE is on). Results agree to rounding; a given build and machine is
-// deterministic (single-threaded BLAS).
+// deterministic (single-threaded BLAS). Safe to call from several threads: the BLAS calls are
+// serialised by a lock, because Debian's serial OpenBLAS is not re-entrant.
 #pragma once
 
 #include <Eigen/Core>
