@@ -10,5 +10,6 @@ namespace pz::client {
 void RegisterSimulate(CLI::App& app, int& exit_code);
 void RegisterPi(CLI::App& app, int& exit_code);
 void RegisterIdentify(CLI::App& app, int& exit_code);
+void RegisterDahl(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

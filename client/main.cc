@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   pz::client::RegisterSimulate(app, exit_code);
   pz::client::RegisterPi(app, exit_code);
   pz::client::RegisterIdentify(app, exit_code);
+  pz::client::RegisterDahl(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(
       "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every violated field, "
