@@ -28,7 +28,7 @@ bool ValidJobId(const std::string& id) {
 
 }  // namespace
 
-Status WriteFileAtomic(const fs::path& path, std::string_view bytes) {
+Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durable) {
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Internal("cannot create " + path.parent_path().string() + ": " + ec.message());
@@ -46,13 +46,14 @@ Status WriteFileAtomic(const fs::path& path, std::string_view bytes) {
     }
     off += static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0) {
+  if (durable && ::fsync(fd) != 0) {
     Status s = Errno("cannot fsync", tmp);
     ::close(fd);
     return s;
   }
   ::close(fd);
   if (::rename(tmp.c_str(), path.c_str()) != 0) return Errno("cannot rename onto", path);
+  if (!durable) return Status::Ok();
   int dfd = ::open(path.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dfd >= 0) {
     (void)::fsync(dfd);
@@ -96,9 +97,9 @@ Status JobDirectory::LoadSpec(const std::string& job_id, std::string* spec_bytes
   return ReadWholeFile(dir(job_id) / "spec.pb", spec_bytes);
 }
 
-Status JobDirectory::SaveCheckpoint(const JobCheckpoint& c) const {
+Status JobDirectory::SaveCheckpoint(const JobCheckpoint& c, bool durable) const {
   if (!ValidJobId(c.job_id)) return InvalidArgument("bad job id '" + c.job_id + "'");
-  return WriteFileAtomic(dir(c.job_id) / "checkpoint.pb", EncodeCheckpoint(c));
+  return WriteFileAtomic(dir(c.job_id) / "checkpoint.pb", EncodeCheckpoint(c), durable);
 }
 
 Status JobDirectory::LoadCheckpoint(const std::string& job_id, JobCheckpoint* c) const {

@@ -1,6 +1,7 @@
 // Job state on disk: state_dir/jobs/<job id>/{spec.pb, checkpoint.pb}, each replaced atomically
-// (write a temporary file, fsync, rename over the old one, fsync the directory), so a master
-// killed at any instant leaves either the previous or the new checkpoint, never a torn one.
+// (write a temporary file, rename it over the old one), so a master killed at any instant leaves
+// either the previous or the new checkpoint, never a torn one. A durable write also fsyncs the file
+// before the rename and the directory after it, so the checkpoint survives a power loss too.
 #pragma once
 
 #include <filesystem>
@@ -13,7 +14,7 @@
 
 namespace pz::master {
 
-Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes);
+Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes, bool durable = true);
 /// Reads a whole file (at most max_bytes); NotFound if it does not exist.
 Status ReadWholeFile(const std::filesystem::path& path, std::string* out,
                      size_t max_bytes = size_t{1} << 31);
@@ -27,7 +28,8 @@ class JobDirectory {
   std::vector<std::string> List() const;
   Status SaveSpec(const std::string& job_id, std::string_view spec_bytes) const;
   Status LoadSpec(const std::string& job_id, std::string* spec_bytes) const;
-  Status SaveCheckpoint(const JobCheckpoint& c) const;
+  /// durable: fsync file and directory (see the file comment).
+  Status SaveCheckpoint(const JobCheckpoint& c, bool durable = true) const;
   /// NotFound when the job has no checkpoint yet.
   Status LoadCheckpoint(const std::string& job_id, JobCheckpoint* c) const;
 

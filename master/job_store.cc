@@ -54,9 +54,9 @@ void JobStore::Start(const std::shared_ptr<Job>& job) {
   job->thread = std::thread([this, job] { Run(*job); });
 }
 
-void JobStore::Save(Job& job, const JobCheckpoint& c, bool write) {
+void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) {
   if (write) {
-    if (Status s = dir_.SaveCheckpoint(c); !s.ok())
+    if (Status s = dir_.SaveCheckpoint(c, durable); !s.ok())
       spdlog::error("job {}: checkpoint not saved: {}", job.id, s.message());
   }
   std::lock_guard lock(job.mu);
@@ -101,11 +101,11 @@ void JobStore::Run(Job& job) {
     JobCheckpoint& c = runner.mutable_checkpoint();
     for (const auto& q : eval.TakeQuarantined()) c.quarantined.push_back(q);
     const auto now = std::chrono::steady_clock::now();
-    const bool write = IsFinal(c.state) || options_.checkpoint_interval_s <= 0 ||
-                       std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
-    Save(job, c, write);
-    if (write) last_write = now;
-    unwritten = !write;
+    const bool durable = IsFinal(c.state) || options_.checkpoint_interval_s <= 0 ||
+                         std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
+    Save(job, c, /*write=*/true, durable);
+    if (durable) last_write = now;
+    unwritten = !durable;
     spdlog::info("job {}: generation {} best {:.9g} mean {:.6g} evaluations {}", job.id,
                  rec.generation, rec.best_cost, rec.mean_cost, rec.evaluations);
     broker_.Publish({job.id, c.state, rec, {}});

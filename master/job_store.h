@@ -20,10 +20,11 @@ namespace pz::master {
 struct JobStoreOptions {
   std::filesystem::path state_dir = "piezoid-state";
   int max_running_jobs = 64;  ///< further submissions are refused (CODE_RESOURCE_EXHAUSTED)
-  /// A running job's checkpoint is written to disk at most this often (and always when the job
-  /// ends or the master shuts down); 0 = after every generation [s]. Clients always see the
-  /// latest generation. A master killed in between resumes from the last written one, which
-  /// gives the same run bit for bit (the GA's state includes its generator).
+  /// A running job's checkpoint is replaced atomically after every generation (a killed master
+  /// resumes from the last generation, bit for bit: the GA's state includes its generator); it is
+  /// also made durable (fsync of file and directory, which costs as much as a generation on a
+  /// slow disk) at most this often, and always when the job ends or the master shuts down;
+  /// 0 = fsync after every generation [s].
   double checkpoint_interval_s = 1.0;
 };
 
@@ -53,7 +54,7 @@ class JobStore final : public ClientHandler {
   void Start(const std::shared_ptr<Job>& job);
   void Run(Job& job);
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
-  void Save(Job& job, const JobCheckpoint& c, bool write = true);
+  void Save(Job& job, const JobCheckpoint& c, bool write = true, bool durable = true);
   JobInfo Info(Job& job);
 
   JobStoreOptions options_;

@@ -43,7 +43,7 @@ int main(int argc, char** argv) {
   app.add_option("--max-jobs", store.max_running_jobs, "running jobs at most")
       ->capture_default_str();
   app.add_option("--checkpoint-interval-s", store.checkpoint_interval_s,
-                 "write a running job's checkpoint at most this often (0 = every generation) [s]")
+                 "the checkpoint is replaced after every generation; make it durable (fsync) at most this often (0 = every generation) [s]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
   app.add_option("--endpoints-file", endpoints_file,
