@@ -47,6 +47,21 @@ TEST(DivideRand, GivesMatlabCountsAndAPartition) {
   EXPECT_TRUE(std::is_sorted(s.train.begin(), s.train.end()));
 }
 
+TEST(PinToTraining, MovesTheEndsIntoTrainingAndKeepsTheSizes) {
+  std::mt19937_64 rng(1);
+  DataSplit s;
+  s.train = {1, 2, 3, 5, 6, 7};
+  s.val = {0, 4};
+  s.test = {8, 9};
+  PinToTraining(s, {0, 9, 2}, rng);
+  EXPECT_TRUE(s.Validate(10).ok()) << s.Validate(10).message();
+  EXPECT_EQ(s.train.size(), 6u);
+  EXPECT_EQ(s.val.size(), 2u);
+  EXPECT_EQ(s.test.size(), 2u);
+  for (int r : {0, 9, 2}) EXPECT_TRUE(std::binary_search(s.train.begin(), s.train.end(), r)) << r;
+  PZ_EXPECT_HAS(InputErrorOf([&] { PinToTraining(s, {12}, rng); }), "pinned row = 12");
+}
+
 // sin on [−π, π] with 10 tansig neurons: LM (no validation set) reaches MSE < 1e−6.
 TEST(TrainLm, FitsSineWithTenNeurons) {
   const RegressionData d = SineData(201);

@@ -1,0 +1,67 @@
+// The Dahl-network study plumbing: the paper's cases and data sets, a short deterministic training
+// with restarts chosen by validation MSE, and the table / CSV / JSON writers.
+#include "client/dahl_nets.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <sstream>
+
+#include "tests/testing/expect_error.h"
+
+namespace pz::client {
+namespace {
+
+using pz::testing::InputErrorOf;
+
+TEST(DahlCases, FollowThePaperAndRejectOthers) {
+  EXPECT_EQ(PaperDahlCase(2).params.b1, 3.09292e4);  // the value of the paper's Table 2 column
+  EXPECT_EQ(PaperDahlCase(2, DahlB1Policy::kSpec).params.b1, 3.09292e5);
+  EXPECT_EQ(PaperDahlCase(4).signal, model::DahlSignal::kDampedCosine);
+  PZ_EXPECT_HAS(InputErrorOf([] { PaperDahlCase(5); }), "case = 5");
+  EXPECT_EQ(PaperDahlTable(3).lm_epochs, 96);
+}
+
+TEST(DahlDataset, HasTheGridAndTheSteadyDisplacement) {
+  const DahlDataset ds = MakeDahlDataset(PaperDahlCase(1));
+  ASSERT_EQ(ds.data.size(), 10001);
+  EXPECT_EQ(ds.data.x(0, 0), 0.0);
+  EXPECT_NEAR(ds.data.x(10000, 0), 10.0, 1e-12);
+  EXPECT_EQ(ds.data.t(0), 0.0);
+  EXPECT_NEAR(ds.data.t(500), 3.0793593, 5e-8);  // the spec's Table 2, t = 0.5 s
+}
+
+TEST(DahlStudy, RestartsAreDeterministicAndChosenByValidation) {
+  const DahlDataset ds = MakeDahlDataset(PaperDahlCase(1), 1.0, 1e-3);  // 1,001 points
+  DahlStudyOptions o;
+  o.hidden = 8;
+  o.lm_restarts = 3;
+  o.lm_options.epochs = 4;
+  const DahlNetRun a = TrainDahlNet(ds, model::TrainMethod::kLevenbergMarquardt, o);
+  const DahlNetRun b = TrainDahlNet(ds, model::TrainMethod::kLevenbergMarquardt, o);
+  EXPECT_EQ(a.prediction, b.prediction);
+  ASSERT_EQ(a.restart_val_mse.size(), 3u);
+  EXPECT_EQ(a.restart_val_mse[static_cast<size_t>(a.chosen)],
+            *std::min_element(a.restart_val_mse.begin(), a.restart_val_mse.end()));
+  EXPECT_EQ(a.summary.val.mse, a.restart_val_mse[static_cast<size_t>(a.chosen)]);
+  EXPECT_TRUE(std::binary_search(a.split.train.begin(), a.split.train.end(), 0));     // pinned ends
+  EXPECT_TRUE(std::binary_search(a.split.train.begin(), a.split.train.end(), 1000));
+  EXPECT_GE(a.total_cpu_s, a.summary.cpu_time_s);
+
+  std::ostringstream table, csv, json, hist;
+  PrintDahlTable(table, {a});
+  WriteDahlCsv(csv, {a});
+  WriteDahlJson(json, {a}, "test");
+  WriteDahlHistoryCsv(hist, a);
+  PZ_EXPECT_HAS(table.str(), "paper");
+  PZ_EXPECT_HAS(csv.str(), "case,method,seed");
+  PZ_EXPECT_HAS(json.str(), "\"restart_val_mse\": [");
+  const std::string h = hist.str();
+  EXPECT_EQ(std::count(h.begin(), h.end(), '\n'), a.summary.epochs + 2);  // header + epochs 0..E
+  o.lm_restarts = 0;
+  PZ_EXPECT_HAS(InputErrorOf([&] { TrainDahlNet(ds, model::TrainMethod::kLevenbergMarquardt, o); }),
+                "lm_restarts = 0");
+}
+
+}  // namespace
+}  // namespace pz::client
