@@ -11,5 +11,7 @@ void RegisterSimulate(CLI::App& app, int& exit_code);
 void RegisterPi(CLI::App& app, int& exit_code);
 void RegisterIdentify(CLI::App& app, int& exit_code);
 void RegisterDahl(CLI::App& app, int& exit_code);
+void RegisterDiagnose(CLI::App& app, int& exit_code);
+void RegisterDiagnoseCheck(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -24,16 +24,10 @@ void Say(const DiagnoseOptions& o, const std::string& msg) {
   if (o.progress) o.progress(msg);
 }
 
-// Per-case saturation-aware floor of the fitted model.
-std::vector<double> CaseFloors(const DiagnosisModel& m, const ParameterLayout& layout, const std::vector<double>& x) {
+// Per-case floor, with the rounding of the saturation plateaus (model/noise_floor.h).
+std::vector<double> CaseFloors(const DiagnosisModel& m) {
   std::vector<double> floors;
-  std::vector<double> y;
-  for (size_t c = 0; c < m.cases().size(); ++c) {
-    const DiagCase& dc = m.cases()[c];
-    const model::SimulationSummary s = m.Simulate(layout, x, c, y);
-    floors.push_back(s.ok() ? model::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
-                            : dc.noise.floor_rms_deg);
-  }
+  for (const DiagCase& dc : m.cases()) floors.push_back(model::PlateauAwareFloor(dc.noise, dc.measured_deg));
   return floors;
 }
 
@@ -86,18 +80,17 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
     if (s.effect == static_cast<int>(layout.structure().size()) - 1 && s.effect_param == info.magnitude_param)
       mag = i;
   }
+  // Starting magnitudes: fractions of the upper end of the range; for a parameter of either sign
+  // the first fraction on both sides instead.
   std::vector<std::vector<double>> starts;
   if (mag >= 0) {
     const ParamSpec& s = layout.specs()[mag];
+    const bool both_signs = s.lower < 0 && s.upper > 0;
     for (size_t j = 0; j < o.cvode_start_fractions.size(); ++j) {
-      const double f = o.cvode_start_fractions[j];
+      const double f = both_signs ? o.cvode_start_fractions[0] : o.cvode_start_fractions[j];
       std::vector<double> x = x0;
-      x[mag] = s.upper > 0 ? f * s.upper : f * s.lower;
+      x[mag] = both_signs && j % 2 == 1 ? f * s.lower : f * s.upper;
       starts.push_back(x);
-      if (s.lower < 0 && s.upper > 0 && j + 1 == o.cvode_start_fractions.size()) {
-        x[mag] = f * s.lower;
-        starts.push_back(x);
-      }
     }
   }
   bool beam = false;
@@ -105,6 +98,7 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
   if (beam) {
     fo.global_search = false;
     fo.lm.max_iterations = o.cvode_lm_iterations;
+    fo.lm.central = false;  // forward differences: half the CVODE runs per Jacobian
     fo.starts = starts;
     if (fo.starts.empty()) fo.starts.push_back(x0);
   } else {
@@ -166,7 +160,10 @@ RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const Para
   Say(o, "  starting model: " + start.description +
              Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
 
+  // A later round whose starting gap is not significant cannot name anything: no fits.
+  const bool fit_candidates = round.significant || start.structure.empty();
   for (EffectKind k : kinds) {
+    if (!fit_candidates) break;
     std::vector<EffectKind> structure = start.structure;
     if (std::find(structure.begin(), structure.end(), k) != structure.end()) continue;
     structure.push_back(k);
@@ -177,6 +174,18 @@ RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const Para
     c.fit = FitStructure(m, layout, &start_layout, &start.x, k, o);
     *evals += c.fit.evaluations;
     c.added_params = layout.size() - start_layout.size();
+    if (c.fit.ok && c.fit.train_pi > start.train_pi) {
+      // The refinement ended above the nested model (effect at zero): keep the nested solution.
+      const std::vector<double> x0 = layout.Extend(start.x, start_layout);
+      FitResult nested = start;
+      nested.structure = layout.structure();
+      nested.description = layout.Describe();
+      nested.x = x0;
+      nested.evaluations = c.fit.evaluations;
+      nested.message = "refinement ended above the starting model (" + c.fit.message + "): effect kept at zero";
+      ComputeUncertainty(m, layout, nested, o.threads);
+      c.fit = std::move(nested);
+    }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!c.fit.ok) {
       c.score = -INFINITY;
@@ -195,7 +204,11 @@ RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const Para
     std::vector<std::string> why;
     if (!(c.score > 0)) why.push_back("held-out gain below the parameter penalty");
     if (!(c.train_delta_bic < 0)) why.push_back("no BIC gain on the training cases");
-    if (!(c.closed >= o.min_closed)) why.push_back(Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * o.min_closed));
+    if (!(excess > 0)) {
+      why.push_back("no gap above the floor to close");
+    } else if (!(c.closed >= o.min_closed)) {
+      why.push_back(Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * o.min_closed));
+    }
     if (c.pattern < o.min_pattern)
       why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern, 100 * o.min_pattern));
     c.qualifies = why.empty();
@@ -365,8 +378,8 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   d.base = FitStructure(m, base_layout, nullptr, nullptr, EffectKind::kNone, o);
   d.evaluations += d.base.evaluations;
   if (!d.base.ok) throw InputError("the base model could not be fitted: " + d.base.message);
-  // 2. Floors (saturation-aware with the base model) and the base residuals.
-  const std::vector<double> floors = CaseFloors(m, base_layout, d.base.x);
+  // 2. Floors (with the plateaus' rounding) and the base residuals.
+  const std::vector<double> floors = CaseFloors(m);
   {
     double st = 0, sw = 0;
     for (size_t c = 0; c < m.cases().size(); ++c) {

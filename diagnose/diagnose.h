@@ -3,7 +3,7 @@
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
-//  2. Noise floor per case (model/noise_floor.h), made saturation-aware with the base model: σ_c.
+//  2. Noise floor per case (model/noise_floor.h), with the rounding of the saturation plateaus: σ_c.
 //     Withheld floor S_floor = Σ_withheld N_c σ_c². Gap of a model: its withheld Σe² = S.
 //  3. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
 //     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
@@ -25,7 +25,8 @@
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains".
-//  5. Greedy: with the first effect in the model, the others are tried again on top of it.
+//  5. Greedy: with the first effect in the model, the others are tried again on top of it (only if
+//     the gap left is still significant: otherwise nothing could be named and no fit is run).
 //  6. How far: per case and in total, the withheld gap before and after, the share closed, what
 //     remains above the floor; the effect parameters with σ; the identifiability table.
 #pragma once
@@ -51,8 +52,9 @@ struct DiagnoseOptions {
   DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
   LmOptions lm{.max_iterations = 40};
   int cvode_lm_iterations = 15;              ///< LM iterations of a beam (CVODE) candidate, ≥ 1
-  /// Starting magnitudes of a beam candidate, as fractions of its magnitude range, ≥ 1 entry.
-  std::vector<double> cvode_start_fractions = {0.02, 0.15};
+  /// Starting magnitudes of a beam candidate, as fractions of the upper end of its magnitude range
+  /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
+  std::vector<double> cvode_start_fractions = {0.03, 0.15};
   model::EffectSimOptions sim;
   // Decision rules: the same for every effect.
   double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
@@ -124,7 +126,7 @@ struct Diagnosis {
   std::string bench;                 ///< the folder or a label
   std::vector<DiagCase> cases;
   double quantum_deg = 0;
-  double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
+  double floor_train = 0, floor_withheld = 0;  ///< pooled plateau-aware floor [deg]
   FitResult base;
   model::ResidualAnalysis base_residuals;
   std::vector<ParamTrend> trends;

@@ -106,7 +106,7 @@ bool NeedsCvode(std::span<const Effect> effects);
 /// Options of EffectSimulator.
 struct EffectSimOptions {
   int oversample = 4;          ///< fine-grid factor of the sampled fast path, 1 … 64
-  double rtol = 1e-7;          ///< CVODE relative tolerance, in (0, 1e-2]
+  double rtol = 1e-6;          ///< CVODE relative tolerance, in (0, 1e-2] (≈ 2e-6 deg on the bench)
   double atol = 1e-13;         ///< CVODE absolute tolerance, > 0
   long max_steps = 5000000;    ///< CVODE step budget, > 0
   bool force_cvode = false;    ///< run on CVODE even without beam effects (accuracy checks)

@@ -41,14 +41,14 @@ struct CaseNoise {
 CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantum_deg = -1);
 
 /// The floor of a record for a model that clips at the saturations b1, b2 taken from the measured
-/// extremes: where the model output sits on b1 or b2 it is a constant the reading's rounding and
-/// jitter scatter around (the plateau reads one quantum below the extreme now and then), so the
-/// residual there, (y_k − ŷ_k)², is irreducible as long as it is at most one quantum (a larger
-/// deviation is model error, counted like any other sample); elsewhere the noise is q²/12 + s²:
-///   σ = √([Σ_{k ∈ plateau} (y_k − ŷ_k)² + N_other (q²/12 + s²)] / N)   [deg].
-/// Throws InputError on mismatched lengths.
-double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
-                            double b1, double b2);
+/// extremes (b1 = max y, b2 = min y): on a saturation plateau the model output is that constant,
+/// and the reading's rounding and jitter scatter around it (the plateau reads one quantum inside the
+/// extreme now and then), so the residual there, (y_k − b)², is irreducible. A plateau is found
+/// from the data alone: a run of ≥ 3 consecutive readings within one quantum of an extreme that
+/// holds the extreme itself at least once. Elsewhere the noise is q²/12 + s²:
+///   σ = √([Σ_{k ∈ plateaus} (y_k − b)² + N_other (q²/12 + s²)] / N)   [deg].
+/// Without a quantum (continuous data) this is the plain floor. Throws InputError on an empty series.
+double PlateauAwareFloor(const CaseNoise& noise, std::span<const double> measured);
 
 /// Pooled floor over several records: √(Σ_c N_c σ_c² / Σ_c N_c) [deg].
 double PooledFloor(std::span<const CaseNoise> noise, std::span<const int> samples);

@@ -54,16 +54,19 @@ TEST(NoiseFloorTest, ScatterSeesJitterButNotASlowTrend) {
   EXPECT_NEAR(jit.scatter_rms_deg, 0.01, 2e-3);  // d has ±0.01 steps: var(Δd)/4 = 0.01²
 }
 
-TEST(NoiseFloorTest, SaturatedSamplesContributeTheirRoundingOnly) {
+TEST(NoiseFloorTest, PlateausContributeTheirRoundingOnly) {
   CaseNoise n;
   n.quantum_deg = kQ;
   n.floor_rms_deg = 0.01;
-  const std::vector<double> model = {1.0, 1.0, 0.5, 0.2};       // first two clipped at b1 = 1
-  const std::vector<double> meas = {1.0 - kQ, 1.0, 0.5, 0.21};   // one reads a level below
-  const double f = SaturationAwareFloor(n, meas, model, 1.0, -1.0);
-  EXPECT_NEAR(f, std::sqrt((kQ * kQ + 0 + 2 * 0.01 * 0.01) / 4), 1e-12);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { SaturationAwareFloor(n, meas, std::vector<double>{1.0}, 1.0, -1.0); }),
-                "measured has 4");
+  // A plateau at the top (4 readings, one a level below), a near-miss at the bottom that never
+  // holds the extreme's level twice... and a lone extreme reading (run too short).
+  const std::vector<double> y = {0, 10 * kQ, 10 * kQ, 9 * kQ, 10 * kQ, 5 * kQ, -3 * kQ, -2 * kQ, 0};
+  const double f = PlateauAwareFloor(n, y);
+  // Plateau: samples 1–4 → 0, 0, q², 0; the 5 others → 0.01².
+  EXPECT_NEAR(f, std::sqrt((kQ * kQ + 5 * 0.01 * 0.01) / 9), 1e-12);
+  n.quantum_deg = 0;
+  EXPECT_EQ(PlateauAwareFloor(n, y), 0.01);
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PlateauAwareFloor(n, std::vector<double>{}); }), "empty");
 }
 
 ResidualCaseInput Input(const std::vector<double>& meas, const std::vector<double>& model, double f = 0.5) {

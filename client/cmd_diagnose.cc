@@ -1,0 +1,198 @@
+// `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
+// and how far it shrinks once the effect is in the model (diagnose/diagnose.h). Writes a terminal
+// summary, diagnosis.json and report.html with figures.
+// `piezoid diagnose-check`: the same diagnosis on random synthetic benches whose effect is withheld
+// from it; prints the confusion matrix and the distribution of the share of the gap closed.
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "client/commands.h"
+#include "client/diagnose_report.h"
+#include "io/bench_data.h"
+#include "io/csv.h"
+
+namespace pz::client {
+namespace {
+
+struct DiagnoseArgs {
+  std::string cases_dir;
+  std::string out_dir;
+  std::string json_file;
+  std::string candidates;
+  int threads = 2;
+  uint64_t seed = 1;
+  bool no_second = false;
+  bool no_trends = false;
+  bool no_plots = false;
+  bool quick = false;
+  bool quiet = false;
+  double significance_ratio = 1.25;
+};
+
+std::vector<model::EffectKind> ParseKinds(const std::string& list) {
+  std::vector<model::EffectKind> kinds;
+  std::stringstream ss(list);
+  std::string name;
+  while (std::getline(ss, name, ',')) {
+    if (name.empty()) continue;
+    const auto k = model::ParseEffectKind(name);
+    if (!k || *k == model::EffectKind::kNone) {
+      std::string known;
+      for (const auto& e : model::EffectLibrary()) known += (known.empty() ? "" : ", ") + e.name;
+      throw InputError("unknown effect '" + name + "' (known: " + known + ")");
+    }
+    kinds.push_back(*k);
+  }
+  return kinds;
+}
+
+diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, uint64_t seed, bool quick,
+                                  double significance_ratio, bool quiet) {
+  diagnose::DiagnoseOptions o;
+  o.candidates = ParseKinds(candidates);
+  o.threads = threads;
+  o.seed = seed;
+  o.significance_ratio = significance_ratio;
+  if (quick) {  // a smaller search: quick looks and tests
+    o.de_base.population = 24;
+    o.de_base.generations = 40;
+    o.de_candidate.population = 24;
+    o.de_candidate.generations = 30;
+    o.lm.max_iterations = 20;
+    o.cvode_lm_iterations = 8;
+  }
+  if (!quiet) o.progress = [](const std::string& s) { std::cerr << s << std::endl; };
+  return o;
+}
+
+int RunDiagnose(const DiagnoseArgs& a) {
+  const std::filesystem::path dir(a.cases_dir);
+  const io::CaseSet set = io::LoadCaseSet(dir);
+  diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
+  o.second_effect = !a.no_second;
+  o.trends = !a.no_trends;
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
+  diagnose::Diagnosis d = diagnose::RunDiagnosis(m, o);
+  d.bench = a.cases_dir;
+  PrintDiagnosis(std::cout, d, o);
+  const std::filesystem::path out =
+      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string()) : std::filesystem::path(a.out_dir);
+  std::filesystem::create_directories(out);
+  std::vector<std::filesystem::path> files;
+  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
+  files.push_back(out / "diagnosis.json");
+  if (!a.json_file.empty()) {
+    io::WriteFileWith(a.json_file, [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
+    files.push_back(a.json_file);
+  }
+  std::vector<std::string> warnings;
+  const auto html = WriteDiagnosisHtml(out, d, m, o, !a.no_plots, &warnings);
+  files.push_back(out / "report.html");
+  for (const auto& w : warnings) std::cerr << "piezoid diagnose: warning: " << w << "\n";
+  std::cout << "written: ";
+  for (size_t i = 0; i < files.size(); ++i) std::cout << (i ? ", " : "") << files[i].string();
+  std::cout << " (+ " << html.size() - 1 << " figure files in " << (out / "figures").string() << ")\n";
+  return 0;
+}
+
+struct CheckArgs {
+  int trials = 50;
+  uint64_t seed = 1;
+  int threads = 2;
+  std::string json_file;
+  std::string candidates;
+  std::string kinds;
+  double none_probability = 0.2;
+  double other_form_probability = 0.3;
+  bool second = false;
+  bool quick = false;
+  double significance_ratio = 1.25;
+};
+
+int RunCheckCommand(const CheckArgs& a) {
+  diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
+  o.second_effect = a.second;
+  o.trends = false;
+  diagnose::SyntheticOptions so;
+  so.kinds = ParseKinds(a.kinds);
+  so.none_probability = a.none_probability;
+  so.other_form_probability = a.other_form_probability;
+  if (!(so.none_probability >= 0 && so.none_probability <= 1))
+    throw InputError(FieldError("--none-probability", so.none_probability, "must be in [0, 1]"));
+  if (!(so.other_form_probability >= 0 && so.other_form_probability <= 1))
+    throw InputError(FieldError("--other-form-probability", so.other_form_probability, "must be in [0, 1]"));
+  const diagnose::CheckSummary s =
+      diagnose::RunCheck(a.trials, a.seed, o, so, [&](const diagnose::CheckTrial& t, int i) {
+        char buf[400];
+        std::snprintf(buf, sizeof buf, "trial %3d %-6s %-70s -> %-11s %-16s ratio %5.2f closed %6s conf %.2f (%.0f s)\n",
+                      i + 1, t.correct() ? "right" : "WRONG", t.truth_description.c_str(), t.verdict_kind.c_str(),
+                      model::EffectName(t.named), t.rms_ratio,
+                      std::isfinite(t.closed) ? (std::to_string(static_cast<int>(std::lround(100 * t.closed))) + "%").c_str()
+                                              : "n/a",
+                      t.confidence, t.wall_time_s);
+        std::cout << buf << std::flush;
+      });
+  PrintCheckSummary(std::cout, s);
+  if (!a.json_file.empty()) io::WriteFileWith(a.json_file, [&](std::ostream& out) { WriteCheckJson(out, s); });
+  return 0;
+}
+
+}  // namespace
+
+void RegisterDiagnose(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<DiagnoseArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "diagnose",
+      "Diagnose the sim-to-real gap of a bench: localise the residual of a global model against the noise floor, "
+      "re-identify the model with each candidate unmodelled effect on the training cases, score it on the withheld "
+      "cases, name the effect (or say that no gap is significant) and report how far the gap shrinks.");
+  cmd->add_option("--cases", a->cases_dir, "bench case set folder (cases.csv + one CSV per case)")
+      ->required()
+      ->type_name("DIR");
+  cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")->type_name("DIR");
+  cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
+  cmd->add_option("--candidates", a->candidates,
+                  "comma-separated effects to try (default: the whole library: driver-lowpass, creep, hinge-friction, "
+                  "delay, cubic-stiffening, quadratic-drive, output-drift)")
+      ->type_name("LIST");
+  cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
+  cmd->add_option("--seed", a->seed, "seed of the global searches");
+  cmd->add_option("--significance-ratio", a->significance_ratio,
+                  "withheld RMS / noise floor above which a gap is significant")
+      ->check(CLI::Range(1.0001, 100.0));
+  cmd->add_flag("--no-second", a->no_second, "do not look for a second effect");
+  cmd->add_flag("--no-trends", a->no_trends, "skip the per-case fits and their V x f trends");
+  cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");
+  cmd->add_flag("--quick", a->quick, "smaller global searches (a quick look)");
+  cmd->add_flag("--quiet", a->quiet, "no progress lines on stderr");
+  cmd->callback([a, &exit_code] { exit_code = RunDiagnose(*a); });
+}
+
+void RegisterDiagnoseCheck(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<CheckArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "diagnose-check",
+      "Check the diagnosis on synthetic benches: the bench plant with an effect drawn at random from the library "
+      "(random magnitude and seed, sometimes in a functional form the library lacks) or none, quantised and noisy "
+      "like the encoder; the effect is withheld from the model; prints the confusion matrix (true x named effect) "
+      "and the distribution of the share of the gap closed.");
+  cmd->add_option("--trials", a->trials, "number of benches")->check(CLI::Range(1, 100000));
+  cmd->add_option("--seed", a->seed, "first bench seed (bench i uses seed + i)");
+  cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
+  cmd->add_option("--json", a->json_file, "write the trials and the matrix as JSON")->type_name("FILE");
+  cmd->add_option("--candidates", a->candidates, "effects the diagnosis tries (default: the library)")
+      ->type_name("LIST");
+  cmd->add_option("--kinds", a->kinds, "effects drawn for the benches (default: the library)")->type_name("LIST");
+  cmd->add_option("--none-probability", a->none_probability, "share of clean benches");
+  cmd->add_option("--other-form-probability", a->other_form_probability,
+                  "share of effects drawn in a form the library lacks (second-order amplifier, two creep relaxations)");
+  cmd->add_option("--significance-ratio", a->significance_ratio, "as for diagnose")->check(CLI::Range(1.0001, 100.0));
+  cmd->add_flag("--second", a->second, "also run the greedy search for a second effect");
+  cmd->add_flag("--quick", a->quick, "smaller global searches");
+  cmd->callback([a, &exit_code] { exit_code = RunCheckCommand(*a); });
+}
+
+}  // namespace pz::client

@@ -1,0 +1,589 @@
+#include "client/diagnose_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "client/pi_report.h"
+#include "client/plots.h"
+#include "io/csv.h"
+
+namespace pz::client {
+namespace {
+
+using diagnose::CandidateResult;
+using diagnose::Diagnosis;
+using diagnose::FitResult;
+using diagnose::RoundResult;
+
+std::string F(const char* fmt, double a) {
+  if (!std::isfinite(a)) return "n/a";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, a);
+  return buf;
+}
+std::string Pct(double share) { return std::isfinite(share) ? F("%.0f %%", 100 * share) : "n/a"; }
+std::string Num(double x) { return std::isfinite(x) ? io::FormatNumber(x) : "null"; }
+std::string Str(const std::string& s) { return "\"" + JsonEscape(s) + "\""; }
+std::string Html(const std::string& s) {
+  std::string r;
+  for (char c : s) {
+    if (c == '<') r += "&lt;";
+    else if (c == '>') r += "&gt;";
+    else if (c == '&') r += "&amp;";
+    else r += c;
+  }
+  return r;
+}
+
+double Rms(double pi, int n) { return n > 0 ? std::sqrt(pi / n) : NAN; }
+
+std::string Pad(std::string s, size_t w) {
+  // Pads by code points (the names hold UTF-8 Greek letters in some places).
+  size_t len = 0;
+  for (unsigned char c : s) len += (c & 0xC0) != 0x80;
+  while (len++ < w) s += ' ';
+  return s;
+}
+
+void PrintParams(std::ostream& o, const FitResult& f, const std::string& indent) {
+  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12) << Pad("sensitivity", 13)
+    << "identifiability\n";
+  for (const auto& p : f.params) {
+    o << indent << Pad(p.name + " [" + p.unit + "]", 30) << Pad(F("%.5g", p.value), 14)
+      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12) << Pad(F("%.4f deg", p.sensitivity), 13)
+      << diagnose::IdentifiabilityName(p.identifiability) << (p.note.empty() ? "" : "; " + p.note) << "\n";
+  }
+  if (!f.weakest_direction.empty()) o << indent << "weakest direction: " << f.weakest_direction << "\n";
+}
+
+
+std::string EffectParams(const FitResult& f) {
+  std::string s;
+  for (size_t i = diagnose::ParameterLayout::kBase; i < f.params.size(); ++i) {
+    const auto& p = f.params[i];
+    s += (s.empty() ? "" : ", ") + p.name + " = " + F("%.4g", p.value) +
+         (std::isfinite(p.std_error) ? " ± " + F("%.2g", p.std_error) : "") + " " + p.unit;
+  }
+  return s;
+}
+
+std::vector<double> Sorted(std::set<double> s) { return {s.begin(), s.end()}; }
+
+}  // namespace
+
+// ---- terminal ------------------------------------------------------------------------------------
+
+void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+  int nt = 0, nw = 0;
+  for (const auto& c : d.cases) (c.training ? nt : nw) += 1;
+  o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt << " training, " << nw
+    << " withheld)\n";
+  o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
+    << " (training) / " << F("%.4f", d.floor_withheld) << " (withheld) deg RMS\n";
+  const FitResult& b = d.base;
+  o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training RMS "
+    << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS " << F("%.4f", Rms(b.withheld_pi, b.withheld_samples))
+    << " deg\n\n";
+
+  o << "WHERE the gap lies (base model, each against the floor)\n";
+  o << "  case   V [V]  f [Hz]  role      floor   RMS      x floor  share of PI\n";
+  for (size_t i = 0; i < d.base_residuals.cases.size(); ++i) {
+    const auto& c = d.base_residuals.cases[i];
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "  %-5d %6.0f %7.3g  %-8s %7.4f  %7.4f  %6.2f   %5.1f %%\n", c.number, c.amplitude_v,
+                  c.frequency_hz, c.training ? "training" : "withheld", c.floor_rms, c.rms, c.rms_over_floor,
+                  100 * c.share);
+    o << buf;
+  }
+  for (const auto& f : d.base_residuals.findings) o << "  - " << f << "\n";
+  bool any_trend = false;
+  for (const auto& t : d.trends) {
+    if (!t.significant) continue;
+    if (!any_trend) o << "  parameter trends over the V x f grid (per-case fits; a global model cannot follow them):\n";
+    any_trend = true;
+    o << "    " << Pad(t.name, 7) << " slope " << F("%.3g", t.slope_v) << " /V (p = " << F("%.2g", t.p_v) << "), "
+      << F("%.3g", t.slope_f) << " /Hz (p = " << F("%.2g", t.p_f) << "), range " << Pct(t.relative_range)
+      << " of its mean\n";
+  }
+  if (!d.trends.empty() && !any_trend) o << "  no significant parameter trend over the V x f grid (per-case fits)\n";
+
+  o << "\nWHICH effect (re-identified on the training cases, scored on the withheld ones)\n";
+  for (size_t r = 0; r < d.rounds.size(); ++r) {
+    const RoundResult& rr = d.rounds[r];
+    std::string start = "base";
+    for (auto k : rr.base_structure) start += std::string(" + ") + model::EffectName(k);
+    o << "  round " << r + 1 << " from " << start << ": withheld RMS "
+      << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples))) << " deg = " << F("%.2f", rr.rms_ratio)
+      << " x floor (" << (rr.significant ? "significant" : "not significant") << ", threshold "
+      << F("%.2f", opt.significance_ratio) << ")\n";
+    o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14) << Pad("score", 10)
+      << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
+    for (const CandidateResult& c : rr.candidates) {
+      o << "    " << Pad(model::EffectName(c.kind), 18) << Pad(std::to_string(c.added_params), 4)
+        << Pad(F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)), 14) << Pad(F("%.1f", c.score), 10)
+        << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9) << Pad(F("%.3f", c.weight), 8)
+        << (c.qualifies ? "qualifies" : c.note) << "\n";
+    }
+    o << "    => " << rr.verdict << "\n";
+  }
+
+  o << "\nVERDICT: " << d.verdict << "\n";
+  if (!d.absorbed.empty()) {
+    o << "  base parameters that move when " << d.absorbed_by << " is added (|shift| > 2 σ):";
+    for (const auto& a : d.absorbed)
+      o << " " << a.name << " " << F("%.4g", a.without) << " -> " << F("%.4g", a.with) << " " << a.unit << " (z "
+        << F("%.1f", a.z) << ");";
+    o << "\n";
+  }
+
+  o << "\nHOW FAR the gap shrinks (" << d.final_fit.description << ")\n";
+  o << "  case  role      floor   RMS before  RMS after  x floor after  closed\n";
+  for (const auto& g : d.gaps) {
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "  %-5d %-8s %7.4f  %9.4f  %9.4f  %12.2f  %s\n", g.number,
+                  g.training ? "training" : "withheld", g.floor_rms, g.rms_before, g.rms_after,
+                  g.floor_rms > 0 ? g.rms_after / g.floor_rms : NAN, Pct(g.closed).c_str());
+    o << buf;
+  }
+  o << "  withheld total: PI " << F("%.4f", d.withheld_before) << " -> " << F("%.4f", d.withheld_after)
+    << " deg^2 (floor " << F("%.4f", d.withheld_floor) << "), share of the gap closed " << Pct(d.closed_total)
+    << ", remaining " << F("%.2f", d.remaining_ratio) << " x floor\n";
+  if (!d.named.empty()) o << "  effect parameters: " << EffectParams(d.final_fit) << "\n";
+
+  o << "\nIDENTIFIABILITY (" << d.final_fit.description << ", σ from s² (JᵀJ)⁺ at the solution)\n";
+  PrintParams(o, d.final_fit, "  ");
+  if (d.final_fit.description != d.base.description) {
+    o << "  base model:\n";
+    PrintParams(o, d.base, "  ");
+  }
+  o << "\n" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations\n";
+}
+
+// ---- JSON ----------------------------------------------------------------------------------------
+
+namespace {
+
+void FitJson(std::ostream& o, const FitResult& f) {
+  o << "{\"structure\": " << Str(f.description) << ", \"ok\": " << (f.ok ? "true" : "false")
+    << ", \"train_pi_deg2\": " << Num(f.train_pi) << ", \"withheld_pi_deg2\": " << Num(f.withheld_pi)
+    << ", \"train_rms_deg\": " << Num(Rms(f.train_pi, f.train_samples))
+    << ", \"withheld_rms_deg\": " << Num(Rms(f.withheld_pi, f.withheld_samples))
+    << ", \"residual_sigma_deg\": " << Num(f.residual_sigma) << ", \"case_pi_deg2\": [";
+  for (size_t i = 0; i < f.case_pi.size(); ++i) o << (i ? ", " : "") << Num(f.case_pi[i]);
+  o << "], \"parameters\": [";
+  for (size_t i = 0; i < f.params.size(); ++i) {
+    const auto& p = f.params[i];
+    o << (i ? ", " : "") << "{\"name\": " << Str(p.name) << ", \"unit\": " << Str(p.unit) << ", \"value\": " << Num(p.value)
+      << ", \"std_error\": " << Num(p.std_error) << ", \"sensitivity_deg\": " << Num(p.sensitivity)
+      << ", \"identifiability\": " << Str(diagnose::IdentifiabilityName(p.identifiability))
+      << ", \"note\": " << Str(p.note) << "}";
+  }
+  o << "], \"singular_values\": [";
+  for (size_t i = 0; i < f.singular_values.size(); ++i) o << (i ? ", " : "") << Num(f.singular_values[i]);
+  o << "], \"weakest_direction\": " << Str(f.weakest_direction) << ", \"evaluations\": " << f.evaluations
+    << ", \"wall_time_s\": " << Num(f.wall_time_s) << ", \"message\": " << Str(f.message) << "}";
+}
+
+void BinJson(std::ostream& o, const char* name, const model::BinStat& b) {
+  o << "\"" << name << "\": {\"rms_deg\": " << Num(b.rms) << ", \"mean_deg\": " << Num(b.mean) << ", \"n\": " << b.n
+    << "}";
+}
+
+void LoopJson(std::ostream& o, const model::LoopFeatures& l) {
+  o << "{\"width_deg\": " << Num(l.width_deg) << ", \"area_deg_V\": " << Num(l.area_deg_v)
+    << ", \"offset_deg\": " << Num(l.offset_deg) << ", \"peak_to_peak_deg\": " << Num(l.peak_to_peak_deg)
+    << ", \"top_phase_deg\": " << Num(l.top_phase_deg) << ", \"phase_lag_deg\": " << Num(l.phase_lag_deg)
+    << ", \"fundamental_deg\": " << Num(l.fundamental_deg) << "}";
+}
+
+void AnalysisJson(std::ostream& o, const model::ResidualAnalysis& a) {
+  o << "{\"cases\": [";
+  for (size_t i = 0; i < a.cases.size(); ++i) {
+    const auto& c = a.cases[i];
+    o << (i ? ",\n    " : "") << "{\"case\": " << c.number << ", \"training\": " << (c.training ? "true" : "false")
+      << ", \"amplitude_V\": " << Num(c.amplitude_v) << ", \"frequency_Hz\": " << Num(c.frequency_hz)
+      << ", \"pi_deg2\": " << Num(c.pi) << ", \"rms_deg\": " << Num(c.rms) << ", \"max_abs_deg\": " << Num(c.max_abs)
+      << ", \"share\": " << Num(c.share) << ", \"floor_rms_deg\": " << Num(c.floor_rms)
+      << ", \"rms_over_floor\": " << Num(c.rms_over_floor) << ", \"phase_bins_rms_deg\": [";
+    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].rms);
+    o << "], \"phase_bins_mean_deg\": [";
+    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].mean);
+    o << "], ";
+    const std::pair<const char*, const model::BinStat*> bins[] = {
+        {"rising", &c.rising},           {"falling", &c.falling},         {"near_reversal", &c.near_reversal},
+        {"in_saturation", &c.in_saturation}, {"first_cycle", &c.first_cycle}, {"later_cycles", &c.later_cycles}};
+    for (const auto& [name, bin] : bins) {
+      BinJson(o, name, *bin);
+      o << ", ";
+    }
+    o << "\"cycle_mean_deg\": [";
+    for (size_t k = 0; k < c.cycle_mean.size(); ++k) o << (k ? ", " : "") << Num(c.cycle_mean[k]);
+    o << "], \"trend_deg_per_s\": " << Num(c.trend_deg_per_s) << ", \"trend_se\": " << Num(c.trend_se)
+      << ", \"harmonics_deg\": [";
+    for (int k = 0; k <= model::kHarmonics; ++k) o << (k ? ", " : "") << Num(c.harmonic[k]);
+    o << "], \"harmonic_noise_deg\": " << Num(c.harmonic_noise) << ", \"odd_rms_deg\": " << Num(c.odd_rms)
+      << ", \"even_rms_deg\": " << Num(c.even_rms) << ", \"low_frequency_rms_deg\": " << Num(c.low_rms)
+      << ", \"measured_loop\": ";
+    LoopJson(o, c.measured_loop);
+    o << ", \"model_loop\": ";
+    LoopJson(o, c.model_loop);
+    o << "}";
+  }
+  o << "],\n   \"findings\": [";
+  for (size_t i = 0; i < a.findings.size(); ++i) o << (i ? ", " : "") << Str(a.findings[i]);
+  o << "]}";
+}
+
+}  // namespace
+
+void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+  o << "{\"bench\": " << Str(d.bench) << ",\n \"verdict_kind\": " << Str(d.verdict_kind)
+    << ",\n \"verdict\": " << Str(d.verdict) << ",\n \"named\": [";
+  for (size_t i = 0; i < d.named.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(d.named[i]));
+  o << "],\n \"confidence\": " << Num(d.named.empty() ? NAN : d.confidence)
+    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.significance_ratio)
+    << ", \"min_closed\": " << Num(opt.min_closed) << ", \"min_pattern\": " << Num(opt.min_pattern) << "}"
+    << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
+    << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"cases\": [";
+  for (size_t i = 0; i < d.cases.size(); ++i) {
+    const auto& c = d.cases[i];
+    o << (i ? ", " : "") << "{\"case\": " << c.number << ", \"quantum_deg\": " << Num(c.noise.quantum_deg)
+      << ", \"quantisation_rms_deg\": " << Num(c.noise.quantisation_rms_deg)
+      << ", \"scatter_rms_deg\": " << Num(c.noise.scatter_rms_deg) << ", \"floor_rms_deg\": " << Num(c.noise.floor_rms_deg)
+      << ", \"plateau_aware_floor_deg\": " << Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN)
+      << ", \"b1_deg\": " << Num(c.b1) << ", \"b2_deg\": " << Num(c.b2) << "}";
+  }
+  o << "]},\n \"base\": ";
+  FitJson(o, d.base);
+  o << ",\n \"base_residuals\": ";
+  AnalysisJson(o, d.base_residuals);
+  o << ",\n \"trends\": [";
+  for (size_t i = 0; i < d.trends.size(); ++i) {
+    const auto& t = d.trends[i];
+    o << (i ? ", " : "") << "{\"name\": " << Str(t.name) << ", \"per_case\": [";
+    for (size_t k = 0; k < t.per_case.size(); ++k) o << (k ? ", " : "") << Num(t.per_case[k]);
+    o << "], \"slope_per_V\": " << Num(t.slope_v) << ", \"slope_per_Hz\": " << Num(t.slope_f)
+      << ", \"p_V\": " << Num(t.p_v) << ", \"p_f\": " << Num(t.p_f) << ", \"r2\": " << Num(t.r2)
+      << ", \"relative_range\": " << Num(t.relative_range) << ", \"significant\": " << (t.significant ? "true" : "false")
+      << "}";
+  }
+  o << "],\n \"rounds\": [";
+  for (size_t r = 0; r < d.rounds.size(); ++r) {
+    const auto& rr = d.rounds[r];
+    o << (r ? ",\n  " : "") << "{\"from\": [";
+    for (size_t i = 0; i < rr.base_structure.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(rr.base_structure[i]));
+    o << "], \"withheld_pi_deg2\": " << Num(rr.s0) << ", \"floor_pi_deg2\": " << Num(rr.s_floor)
+      << ", \"rms_over_floor\": " << Num(rr.rms_ratio) << ", \"significant\": " << (rr.significant ? "true" : "false")
+      << ", \"named\": " << (rr.named >= 0 ? Str(model::EffectName(rr.candidates[rr.named].kind)) : "null")
+      << ", \"verdict\": " << Str(rr.verdict) << ",\n   \"candidates\": [";
+    for (size_t i = 0; i < rr.candidates.size(); ++i) {
+      const auto& c = rr.candidates[i];
+      o << (i ? ",\n    " : "") << "{\"effect\": " << Str(model::EffectName(c.kind)) << ", \"added_parameters\": "
+        << c.added_params << ", \"score\": " << Num(c.score) << ", \"train_delta_bic\": " << Num(c.train_delta_bic)
+        << ", \"closed\": " << Num(c.closed) << ", \"raw_reduction\": " << Num(c.raw_reduction)
+        << ", \"pattern\": " << Num(c.pattern) << ", \"weight\": " << Num(c.weight)
+        << ", \"qualifies\": " << (c.qualifies ? "true" : "false") << ", \"note\": " << Str(c.note) << ", \"fit\": ";
+      FitJson(o, c.fit);
+      o << "}";
+    }
+    o << "]}";
+  }
+  o << "],\n \"absorbed_by\": " << Str(d.absorbed_by) << ", \"absorbed\": [";
+  for (size_t i = 0; i < d.absorbed.size(); ++i) {
+    const auto& a = d.absorbed[i];
+    o << (i ? ", " : "") << "{\"name\": " << Str(a.name) << ", \"unit\": " << Str(a.unit)
+      << ", \"without\": " << Num(a.without) << ", \"with\": " << Num(a.with) << ", \"z\": " << Num(a.z) << "}";
+  }
+  o << "],\n \"final\": ";
+  FitJson(o, d.final_fit);
+  o << ",\n \"final_residuals\": ";
+  AnalysisJson(o, d.final_residuals);
+  o << ",\n \"gap\": {\"withheld_pi_before_deg2\": " << Num(d.withheld_before)
+    << ", \"withheld_pi_after_deg2\": " << Num(d.withheld_after) << ", \"withheld_floor_pi_deg2\": " << Num(d.withheld_floor)
+    << ", \"closed\": " << Num(d.closed_total) << ", \"remaining_over_floor\": " << Num(d.remaining_ratio)
+    << ", \"cases\": [";
+  for (size_t i = 0; i < d.gaps.size(); ++i) {
+    const auto& g = d.gaps[i];
+    o << (i ? ", " : "") << "{\"case\": " << g.number << ", \"training\": " << (g.training ? "true" : "false")
+      << ", \"floor_rms_deg\": " << Num(g.floor_rms) << ", \"rms_before_deg\": " << Num(g.rms_before)
+      << ", \"rms_after_deg\": " << Num(g.rms_after) << ", \"pi_before_deg2\": " << Num(g.pi_before)
+      << ", \"pi_after_deg2\": " << Num(g.pi_after) << ", \"closed\": " << Num(g.closed) << "}";
+  }
+  o << "]},\n \"wall_time_s\": " << Num(d.wall_time_s) << ", \"evaluations\": " << d.evaluations << "}\n";
+}
+
+// ---- HTML ----------------------------------------------------------------------------------------
+
+std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir, const Diagnosis& d,
+                                                      const diagnose::DiagnosisModel& model,
+                                                      const diagnose::DiagnoseOptions& opt, bool plots,
+                                                      std::vector<std::string>* warnings) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir / "figures");
+  const fs::path fig = dir / "figures";
+  std::vector<fs::path> written, scripts;
+  const diagnose::ParameterLayout base_layout(d.base.structure), final_layout(d.final_fit.structure);
+  const bool has_final = d.final_fit.description != d.base.description;
+  // Per case: trace data, spectrum data, three figures.
+  for (size_t c = 0; c < model.cases().size(); ++c) {
+    const diagnose::DiagCase& dc = model.cases()[c];
+    std::vector<double> yb, yf;
+    model.Simulate(base_layout, d.base.x, c, yb);
+    model.Simulate(final_layout, d.final_fit.x, c, yf);
+    const std::string stem = "case" + std::to_string(dc.number);
+    const fs::path trace = fig / (stem + "_trace.csv");
+    {
+      std::ofstream t(trace);
+      t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,cycle\n";
+      const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
+      const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
+      for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
+        const double tk = k / fs_hz;
+        const double ph = std::fmod(360.0 * f * tk, 360.0);
+        t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << "," << io::FormatNumber(dc.drive.Value(tk)) << ","
+          << io::FormatNumber(dc.measured_deg[k]) << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k])
+          << "," << io::FormatNumber(dc.measured_deg[k] - yb[k]) << "," << io::FormatNumber(dc.measured_deg[k] - yf[k])
+          << "," << (p ? k / p + 1 : 1) << "\n";
+      }
+      written.push_back(trace);
+    }
+    const fs::path spec = fig / (stem + "_spectrum.csv");
+    {
+      std::ofstream s(spec);
+      s << "harmonic,base_deg,final_deg,noise_deg\n";
+      const auto& rb = d.base_residuals.cases[c];
+      const auto& rf = d.final_residuals.cases[c];
+      for (int k = 0; k <= model::kHarmonics; ++k)
+        s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k]) << ","
+          << io::FormatNumber(rb.harmonic_noise) << "\n";
+      written.push_back(spec);
+    }
+    const std::string label = " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
+                              F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
+    Plot ph{stem + "_phase", "Residual vs drive phase" + label, "drive phase [deg]", "measured - model [deg]", false, {}};
+    ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
+    if (has_final) ph.series.push_back({trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
+    Plot sp{stem + "_spectrum", "Residual spectrum, later cycles" + label, "harmonic of the drive frequency",
+            "amplitude [deg]", false, {}};
+    sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
+    if (has_final) sp.series.push_back({spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
+    sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
+    Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
+    lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
+    lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
+    if (has_final) lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
+    for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
+  }
+  if (plots) {
+    if (GnuplotAvailable()) {
+      RenderPlots(fig, scripts, warnings);
+    } else if (warnings) {
+      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() + " (run gnuplot *.gp there)");
+    }
+  }
+  for (const auto& s : scripts) written.push_back(s);
+
+  // The page.
+  const fs::path html = dir / "report.html";
+  std::ofstream h(html);
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: " << Html(d.bench)
+    << "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
+       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
+       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0.8em;border:1px "
+       "solid #9bd}img{max-width:100%}</style></head><body>\n";
+  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> " << Html(d.verdict)
+    << "</p>\n";
+  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
+    << " deg (training), " << F("%.4f", d.floor_withheld)
+    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
+       "saturation plateaus. A gap is significant when the withheld RMS exceeds "
+    << F("%.2f", opt.significance_ratio) << " x the floor.</p>\n";
+  // Grid of PI before/after.
+  std::set<double> vs, fs_set;
+  for (const auto& c : model.cases()) {
+    vs.insert(c.drive.amplitude_v);
+    fs_set.insert(c.drive.frequency_hz);
+  }
+  const std::vector<double> V = Sorted(vs), Fr = Sorted(fs_set);
+  h << "<h2>Where: the grid of PI before / after</h2>\n<p>PI = Σ e² [deg²] per case, base model → "
+    << Html(d.final_fit.description) << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
+  for (double f : Fr) h << "<th>" << F("%.3g Hz", f) << "</th>";
+  h << "</tr>\n";
+  for (double v : V) {
+    h << "<tr><th>" << F("%.0f V", v) << "</th>";
+    for (double f : Fr) {
+      const diagnose::CaseGap* g = nullptr;
+      for (const auto& x : d.gaps)
+        if (x.amplitude_v == v && x.frequency_hz == f) g = &x;
+      if (!g) {
+        h << "<td></td>";
+        continue;
+      }
+      const double ratio = g->rms_before / std::max(g->floor_rms, 1e-12);
+      const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
+      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">" << (g->training ? "" : "<i>") << "case "
+        << g->number << ": " << F("%.3g", g->pi_before) << " → " << F("%.3g", g->pi_after) << " ("
+        << F("%.1f", ratio) << " → " << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
+        << (g->training ? "" : "</i>") << "</td>";
+    }
+    h << "</tr>\n";
+  }
+  h << "</table>\n<h3>Localisation of the base model's residual</h3>\n<ul>";
+  for (const auto& f : d.base_residuals.findings) h << "<li>" << Html(f) << "</li>";
+  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</th><th>falling</th><th>near "
+       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend [deg/s]</th><th>odd "
+       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width meas./model "
+       "[deg]</th></tr>\n";
+  for (const auto& c : d.base_residuals.cases) {
+    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld") << "</td><td>"
+      << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>" << F("%.4f", c.rising.rms)
+      << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>" << F("%.4f", c.near_reversal.rms) << "</td><td>"
+      << F("%.4f", c.in_saturation.rms) << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>"
+      << F("%.4f", c.later_cycles.rms) << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>"
+      << F("%.4f", c.odd_rms) << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms)
+      << "</td><td>" << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
+      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / " << F("%.3f", c.model_loop.width_deg)
+      << "</td></tr>\n";
+  }
+  h << "</table>\n";
+  if (!d.trends.empty()) {
+    h << "<h3>Parameter trends of per-case fits over the V × f grid</h3>\n<table><tr><th>parameter</th>";
+    for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
+    h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
+    for (const auto& t : d.trends) {
+      h << "<tr><td class=l>" << Html(t.name) << "</td>";
+      for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
+      h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
+        << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  h << "<h2>Which effect</h2>\n";
+  for (size_t r = 0; r < d.rounds.size(); ++r) {
+    const auto& rr = d.rounds[r];
+    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict) << "</p>\n<table><tr><th>candidate</th><th>added "
+         "parameters</th><th>withheld RMS [deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
+         "parameters</th><th>notes</th></tr>\n";
+    for (const auto& c : rr.candidates) {
+      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params << "</td><td>"
+        << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>" << F("%.1f", c.score) << "</td><td>"
+        << Pct(c.closed) << "</td><td>" << Pct(c.pattern) << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>"
+        << Html(EffectParams(c.fit)) << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note)
+        << "</td></tr>\n";
+    }
+    h << "</table>\n";
+  }
+  if (!d.absorbed.empty()) {
+    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by) << "</b> is added (|shift| &gt; 2 σ): ";
+    for (const auto& a : d.absorbed)
+      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " " << Html(a.unit) << "; ";
+    h << "</p>\n";
+  }
+  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS before</th><th>RMS "
+       "after</th><th>closed</th></tr>\n";
+  for (const auto& g : d.gaps)
+    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld") << "</td><td>"
+      << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)
+      << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
+  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → " << F("%.4f", d.withheld_after)
+    << " deg² (floor " << F("%.4f", d.withheld_floor) << "): " << Pct(d.closed_total) << " of the gap closed, "
+    << F("%.2f", d.remaining_ratio) << " × floor remains.</p>\n";
+  auto params_table = [&](const FitResult& f) {
+    h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity [deg]</th><th>identifiability</th>"
+         "</tr>\n";
+    for (const auto& p : f.params)
+      h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>" << F("%.5g", p.value) << "</td><td>"
+        << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>" << F("%.4f", p.sensitivity)
+        << "</td><td class=l>" << diagnose::IdentifiabilityName(p.identifiability)
+        << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
+    h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
+  };
+  h << "<h2>Identifiability</h2>\n<p>" << Html(d.final_fit.description)
+    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the parameter.</p>\n";
+  params_table(d.final_fit);
+  if (has_final) {
+    h << "<p>Base model:</p>\n";
+    params_table(d.base);
+  }
+  h << "<h2>Figures</h2>\n";
+  for (const auto& c : model.cases()) {
+    const std::string stem = "figures/case" + std::to_string(c.number);
+    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem << "_phase.png\" alt=\"residual vs phase\">\n<img src=\""
+      << stem << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem << "_loop.png\" alt=\"loop\">\n";
+  }
+  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations.</small></p>\n";
+  h << "</body></html>\n";
+  written.push_back(html);
+  return written;
+}
+
+// ---- check ---------------------------------------------------------------------------------------
+
+namespace {
+std::string ColumnName(int c) {
+  if (c == diagnose::kUnexplainedColumn) return "unexplained";
+  return model::EffectName(static_cast<model::EffectKind>(c));
+}
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double r = q * (v.size() - 1);
+  const size_t i = static_cast<size_t>(r);
+  return i + 1 < v.size() ? v[i] + (r - i) * (v[i + 1] - v[i]) : v[i];
+}
+}  // namespace
+
+void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
+  o << "confusion matrix (rows: true effect, columns: named; " << s.trials.size() << " benches)\n";
+  o << "  " << Pad("true \\ named", 18);
+  for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(ColumnName(c).substr(0, 11), 12);
+  o << "\n";
+  for (int r = 0; r < diagnose::kCheckRows; ++r) {
+    o << "  " << Pad(model::EffectName(static_cast<model::EffectKind>(r)), 18);
+    for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(std::to_string(s.confusion[r][c]), 12);
+    o << "\n";
+  }
+  o << "single-effect benches with a significant gap: " << s.single_significant << ", right effect named in "
+    << s.single_significant_right << " (" << Pct(s.accuracy()) << ")\n";
+  o << "clean benches: " << s.clean << ", false alarms " << s.clean_alarms << " (" << Pct(s.false_alarm_rate()) << ")\n";
+  o << "share of the gap closed (right effect named, " << s.closed.size() << " benches): min "
+    << Pct(Quantile(s.closed, 0)) << ", 10 % " << Pct(Quantile(s.closed, 0.1)) << ", median "
+    << Pct(Quantile(s.closed, 0.5)) << ", 90 % " << Pct(Quantile(s.closed, 0.9)) << ", max "
+    << Pct(Quantile(s.closed, 1)) << "\n";
+  o << F("%.0f", s.wall_time_s) << " s in all\n";
+}
+
+void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {
+  o << "{\"columns\": [";
+  for (int c = 0; c < diagnose::kCheckCols; ++c) o << (c ? ", " : "") << Str(ColumnName(c));
+  o << "],\n \"confusion\": {";
+  for (int r = 0; r < diagnose::kCheckRows; ++r) {
+    o << (r ? ", " : "") << Str(model::EffectName(static_cast<model::EffectKind>(r))) << ": [";
+    for (int c = 0; c < diagnose::kCheckCols; ++c) o << (c ? ", " : "") << s.confusion[r][c];
+    o << "]";
+  }
+  o << "},\n \"single_significant\": " << s.single_significant
+    << ", \"single_significant_right\": " << s.single_significant_right << ", \"accuracy\": " << Num(s.accuracy())
+    << ", \"clean\": " << s.clean << ", \"clean_alarms\": " << s.clean_alarms
+    << ", \"false_alarm_rate\": " << Num(s.false_alarm_rate()) << ",\n \"closed\": [";
+  for (size_t i = 0; i < s.closed.size(); ++i) o << (i ? ", " : "") << Num(s.closed[i]);
+  o << "],\n \"trials\": [";
+  for (size_t i = 0; i < s.trials.size(); ++i) {
+    const auto& t = s.trials[i];
+    o << (i ? ",\n  " : "") << "{\"seed\": " << t.seed << ", \"truth\": " << Str(model::EffectName(t.truth))
+      << ", \"truth_description\": " << Str(t.truth_description) << ", \"magnitude\": " << Num(t.magnitude)
+      << ", \"verdict_kind\": " << Str(t.verdict_kind) << ", \"named\": " << Str(model::EffectName(t.named))
+      << ", \"confidence\": " << Num(t.confidence) << ", \"significant\": " << (t.significant ? "true" : "false")
+      << ", \"rms_over_floor\": " << Num(t.rms_ratio) << ", \"closed\": " << Num(t.closed)
+      << ", \"correct\": " << (t.correct() ? "true" : "false") << ", \"wall_time_s\": " << Num(t.wall_time_s) << "}";
+  }
+  o << "],\n \"wall_time_s\": " << Num(s.wall_time_s) << "}\n";
+}
+
+}  // namespace pz::client

@@ -1,0 +1,34 @@
+// Reports of `piezoid diagnose` and `piezoid diagnose-check`: the terminal summary, the JSON record
+// and the HTML report with its figures (gnuplot, client/plots.h): residual vs drive phase per case,
+// residual spectra, loops before/after, and the amplitude × frequency grid of PI before/after.
+#pragma once
+
+#include <filesystem>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "diagnose/check.h"
+#include "diagnose/diagnose.h"
+
+namespace pz::client {
+
+/// The terminal summary: noise floor, where the gap lies, the candidates, the verdict, how far
+/// the gap shrinks, the identifiability table.
+void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
+
+/// The whole diagnosis as one JSON object (non-finite numbers as null).
+void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
+
+/// Writes dir/report.html with its data (CSV) and figures (gnuplot scripts, PNG if gnuplot runs).
+/// Returns the files written; gnuplot problems are appended to `warnings`.
+std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir, const diagnose::Diagnosis& d,
+                                                      const diagnose::DiagnosisModel& model,
+                                                      const diagnose::DiagnoseOptions& options, bool plots,
+                                                      std::vector<std::string>* warnings);
+
+/// The confusion matrix (true effect × named effect) and the distribution of the share closed.
+void PrintCheckSummary(std::ostream& out, const diagnose::CheckSummary& s);
+void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s);
+
+}  // namespace pz::client

@@ -1,0 +1,60 @@
+// The check of the diagnosis on data whose effect is withheld from it: random synthetic benches
+// (diagnose/synthetic.h), each diagnosed as a real bench would be, and the confusion matrix of the
+// true effect against the named one ("none" when no significant gap is found, "unexplained" when
+// a significant gap is not attributed), with the distribution of the share of the gap closed.
+#pragma once
+
+#include <array>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "diagnose/diagnose.h"
+#include "diagnose/synthetic.h"
+
+namespace pz::diagnose {
+
+/// Rows: true effect (kNone + library); columns: named (kNone, library, "unexplained").
+inline constexpr int kCheckRows = model::kNumEffectKinds;
+inline constexpr int kCheckCols = model::kNumEffectKinds + 1;
+inline constexpr int kUnexplainedColumn = model::kNumEffectKinds;
+
+struct CheckTrial {
+  uint64_t seed = 0;
+  model::EffectKind truth = model::EffectKind::kNone;
+  std::string truth_description;  ///< form and parameters
+  double magnitude = 0;
+  std::string verdict_kind;       ///< "effect", "none", "unexplained"
+  model::EffectKind named = model::EffectKind::kNone;  ///< first named effect (kNone otherwise)
+  double confidence = 0;
+  bool significant = false;       ///< the diagnosis found a significant gap
+  double rms_ratio = 0;           ///< base withheld RMS / floor
+  double closed = 0;              ///< share of the withheld gap closed by the named effect(s)
+  double wall_time_s = 0;
+  bool correct() const;           ///< named the true effect (or "none" on a clean bench)
+};
+
+struct CheckSummary {
+  std::vector<CheckTrial> trials;
+  std::array<std::array<int, kCheckCols>, kCheckRows> confusion{};  ///< [truth][named]
+  int single_significant = 0;        ///< benches with one effect whose gap was significant
+  int single_significant_right = 0;  ///< … where that effect was named
+  int clean = 0;                     ///< benches without an effect
+  int clean_alarms = 0;              ///< … where something was named or called unexplained
+  std::vector<double> closed;        ///< share closed, over correctly named effects
+  double wall_time_s = 0;
+  double accuracy() const { return single_significant ? double(single_significant_right) / single_significant : 0; }
+  double false_alarm_rate() const { return clean ? double(clean_alarms) / clean : 0; }
+};
+
+/// Column index of a named result.
+int CheckColumn(const CheckTrial& t);
+
+/// Runs `trials` benches with seeds seed, seed + 1, …; `on_trial` sees each finished trial.
+CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& diagnose, const SyntheticOptions& synthetic,
+                      const std::function<void(const CheckTrial&, int index)>& on_trial = {});
+
+/// Adds a trial to the counters of a summary (RunCheck uses it; exposed for tests).
+void Tally(CheckSummary& summary, const CheckTrial& trial);
+
+}  // namespace pz::diagnose

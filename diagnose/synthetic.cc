@@ -1,0 +1,163 @@
+#include "diagnose/synthetic.h"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "model/saturation.h"
+
+namespace pz::diagnose {
+namespace {
+
+using model::Effect;
+using model::EffectKind;
+
+double Uniform(master::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
+double LogUniform(master::Rng& rng, double lo, double hi) {
+  return lo * std::exp(std::log(hi / lo) * rng.Uniform01());
+}
+double Normal(master::Rng& rng) {  // Box–Muller on the portable generator
+  const double u1 = std::max(rng.Uniform01(), 1e-300), u2 = rng.Uniform01();
+  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
+}
+double Sign(master::Rng& rng) { return rng.Uniform01() < 0.5 ? -1.0 : 1.0; }
+
+// The paper's nine cases (V, f) and split (training 1, 5, 6, 7).
+struct CaseDef {
+  int number;
+  double v, f;
+  bool training;
+};
+constexpr CaseDef kCases[9] = {{1, 375, 0.25, true},  {2, 375, 0.5, false}, {3, 375, 1.0, false},
+                               {4, 500, 0.25, false}, {5, 500, 0.5, true},  {6, 500, 1.0, true},
+                               {7, 750, 0.25, true},  {8, 750, 0.5, false}, {9, 750, 1.0, false}};
+
+}  // namespace
+
+std::string SyntheticTrial::Describe() const {
+  std::ostringstream os;
+  os << "seed " << seed << ": " << model::EffectName(truth);
+  if (!form.empty()) os << " (" << form << ")";
+  for (const Effect& e : effects) os << " " << e.Describe();
+  return os.str();
+}
+
+std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
+                                    const std::vector<Effect>& effects,
+                                    const std::vector<std::pair<double, double>>& saturations,
+                                    const SyntheticOptions& o, master::Rng& rng) {
+  const model::EffectSimulator sim(plant);
+  std::vector<DiagCase> cases;
+  for (int c = 0; c < 9; ++c) {
+    const model::Sinusoid d{kCases[c].v, kCases[c].f};
+    model::BimorphParams p = params;
+    p.b1 = saturations[c].first;
+    p.b2 = saturations[c].second;
+    std::vector<double> y(d.NumSamples());
+    const model::SimulationSummary s = sim.SimulateAngle(p, effects, d, y);
+    if (!s.ok()) throw InputError("synthetic bench, case " + std::to_string(kCases[c].number) + ": " + s.message);
+    for (double& v : y) {
+      v += o.jitter_rms_deg * Normal(rng);
+      if (o.quantum_deg > 0) v = o.quantum_deg * std::round(v / o.quantum_deg);
+    }
+    cases.push_back(MakeCase(kCases[c].number, d, std::move(y), kCases[c].training));
+  }
+  return cases;
+}
+
+SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t seed, const SyntheticOptions& o) {
+  master::Rng rng(seed);
+  SyntheticTrial t;
+  t.seed = seed;
+  // The bench plant, around the physical bench's values.
+  model::BimorphParams& p = t.plant;
+  p.mu = Uniform(rng, 60, 130);
+  p.delta = Uniform(rng, 0.07, 0.13);
+  p.alpha = Uniform(rng, 1.5e-3, 3.5e-3);
+  p.beta = Uniform(rng, 4e-3, 8e-3);
+  p.gamma = p.beta * Uniform(rng, 0.3, 0.8);
+  p.a1 = Uniform(rng, 0.05, 0.15);
+  p.a2 = Uniform(rng, 0.1, 0.2);
+  // Saturations: the paper's regression with a ±4 % spread.
+  const model::SaturationRegression reg = model::PaperSaturationRegression();
+  std::vector<std::pair<double, double>> sat;
+  for (const CaseDef& c : kCases) {
+    const model::SaturationPair s = reg.Predict(c.v, c.f);
+    sat.push_back({s.b1 * Uniform(rng, 0.96, 1.04), s.b2 * Uniform(rng, 0.96, 1.04)});
+  }
+  // The effect.
+  std::vector<EffectKind> kinds = o.kinds;
+  if (kinds.empty())
+    for (const auto& e : model::EffectLibrary()) kinds.push_back(e.kind);
+  const bool none = rng.Uniform01() < o.none_probability;
+  const bool other_form = rng.Uniform01() < o.other_form_probability;
+  if (!none) {
+    t.truth = kinds[rng.UniformBelow(kinds.size())];
+    switch (t.truth) {
+      case EffectKind::kDriverLowpass: {
+        const double tau = LogUniform(rng, 0.005, 0.08);
+        t.magnitude = tau;
+        if (other_form) {  // second-order amplifier: two equal poles with the same total lag
+          t.form = "second-order (two poles)";
+          t.effects = {{EffectKind::kDriverLowpass, {tau / 2}}, {EffectKind::kDriverLowpass, {tau / 2}}};
+        } else {
+          t.form = "first-order";
+          t.effects = {{EffectKind::kDriverLowpass, {tau}}};
+        }
+        break;
+      }
+      case EffectKind::kCreep: {
+        const double k = LogUniform(rng, 0.02, 0.3), tau = LogUniform(rng, 0.5, 10);
+        t.magnitude = k;
+        if (other_form) {  // two relaxations a decade apart sharing the gain
+          t.form = "two relaxations";
+          t.effects = {{EffectKind::kCreep, {k / 2, tau / 3}}, {EffectKind::kCreep, {k / 2, tau * 3}}};
+        } else {
+          t.form = "one relaxation";
+          t.effects = {{EffectKind::kCreep, {k, tau}}};
+        }
+        break;
+      }
+      case EffectKind::kHingeFriction: {
+        const double fc = LogUniform(rng, 0.02, 0.3), sigma = LogUniform(rng, 500, 1e4);
+        t.magnitude = fc;
+        t.form = "Dahl";
+        t.effects = {{EffectKind::kHingeFriction, {fc, sigma}}};
+        break;
+      }
+      case EffectKind::kDelay: {
+        const double tau = LogUniform(rng, 0.003, 0.05);
+        t.magnitude = tau;
+        t.form = "pure delay";
+        t.effects = {{EffectKind::kDelay, {tau}}};
+        break;
+      }
+      case EffectKind::kCubicStiffening: {
+        const double k3 = LogUniform(rng, 3e5, 1e7);
+        t.magnitude = k3;
+        t.form = "cubic";
+        t.effects = {{EffectKind::kCubicStiffening, {k3}}};
+        break;
+      }
+      case EffectKind::kQuadraticDrive: {
+        const double c2 = Sign(rng) * LogUniform(rng, 1e-5, 2e-4);
+        t.magnitude = c2;
+        t.form = "quadratic";
+        t.effects = {{EffectKind::kQuadraticDrive, {c2}}};
+        break;
+      }
+      case EffectKind::kOutputDrift: {
+        const double r = Sign(rng) * LogUniform(rng, 0.002, 0.05);
+        t.magnitude = r;
+        t.form = "linear";
+        t.effects = {{EffectKind::kOutputDrift, {r}}};
+        break;
+      }
+      case EffectKind::kNone: break;
+    }
+  }
+  t.cases = SimulateBench(plant, p, t.effects, sat, o, rng);
+  return t;
+}
+
+}  // namespace pz::diagnose
