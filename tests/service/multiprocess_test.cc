@@ -2,6 +2,8 @@
 // worker and master kills, concurrent jobs, cancel. Each test is bounded (< 60 s).
 #include <gtest/gtest.h>
 
+#include <atomic>
+
 #include <random>
 
 #include "tests/service/service_harness.h"
@@ -127,8 +129,8 @@ TEST(Service, ThreeJobsAtOnceCompleteAndCancelWorks) {
   client::SubmitResult doomed;
   ASSERT_TRUE(client.Submit(SyntheticSpec(99, 30, 100000, 1), &doomed).ok());
   // A watcher sees generation events of the doomed job, then its cancellation.
-  int events = 0;
-  master::JobState last = master::JobState::kUnspecified;
+  std::atomic<int> events{0};
+  std::atomic<master::JobState> last{master::JobState::kUnspecified};
   std::thread watcher([&] {
     auto w = c.Client();
     (void)w.Watch(
@@ -140,11 +142,12 @@ TEST(Service, ThreeJobsAtOnceCompleteAndCancelWorks) {
         },
         40s);
   });
-  std::this_thread::sleep_for(1s);
+  // Cancel once the watcher has seen generations go by (bounded wait: the machine may be loaded).
+  for (int i = 0; i < 300 && events.load() < 2; ++i) std::this_thread::sleep_for(100ms);
   ASSERT_TRUE(client.Cancel(doomed.job_id).ok());
   watcher.join();
-  EXPECT_GT(events, 1);
-  EXPECT_EQ(last, master::JobState::kCancelled);
+  EXPECT_GT(events.load(), 1);
+  EXPECT_EQ(last.load(), master::JobState::kCancelled);
   master::JobInfo info;
   ASSERT_TRUE(client.GetStatus(doomed.job_id, &info).ok());
   EXPECT_EQ(info.state, master::JobState::kCancelled);
