@@ -85,7 +85,8 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt << " training, " << nw
     << " withheld)\n";
   o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
-    << " (training) / " << F("%.4f", d.floor_withheld) << " (withheld) deg RMS\n";
+    << " (training) / " << F("%.4f", d.floor_withheld) << " (withheld) deg RMS (plateaus of " << d.floor_model
+    << ")\n";
   const FitResult& b = d.base;
   o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training RMS "
     << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS " << F("%.4f", Rms(b.withheld_pi, b.withheld_samples))
@@ -250,13 +251,14 @@ void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::Dia
     << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.significance_ratio)
     << ", \"min_closed\": " << Num(opt.min_closed) << ", \"min_pattern\": " << Num(opt.min_pattern) << "}"
     << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
-    << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"cases\": [";
+    << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"floor_model\": " << Str(d.floor_model)
+    << ", \"cases\": [";
   for (size_t i = 0; i < d.cases.size(); ++i) {
     const auto& c = d.cases[i];
     o << (i ? ", " : "") << "{\"case\": " << c.number << ", \"quantum_deg\": " << Num(c.noise.quantum_deg)
       << ", \"quantisation_rms_deg\": " << Num(c.noise.quantisation_rms_deg)
       << ", \"scatter_rms_deg\": " << Num(c.noise.scatter_rms_deg) << ", \"floor_rms_deg\": " << Num(c.noise.floor_rms_deg)
-      << ", \"plateau_aware_floor_deg\": " << Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN)
+      << ", \"saturation_aware_floor_deg\": " << Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN)
       << ", \"b1_deg\": " << Num(c.b1) << ", \"b2_deg\": " << Num(c.b2) << "}";
   }
   o << "]},\n \"base\": ";
@@ -402,7 +404,7 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
   h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
     << " deg (training), " << F("%.4f", d.floor_withheld)
     << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
-       "saturation plateaus. A gap is significant when the withheld RMS exceeds "
+       "saturation plateaus of " << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
     << F("%.2f", opt.significance_ratio) << " x the floor.</p>\n";
   // Grid of PI before/after.
   std::set<double> vs, fs_set;

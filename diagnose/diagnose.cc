@@ -24,10 +24,16 @@ void Say(const DiagnoseOptions& o, const std::string& msg) {
   if (o.progress) o.progress(msg);
 }
 
-// Per-case floor, with the rounding of the saturation plateaus (model/noise_floor.h).
-std::vector<double> CaseFloors(const DiagnosisModel& m) {
-  std::vector<double> floors;
-  for (const DiagCase& dc : m.cases()) floors.push_back(model::PlateauAwareFloor(dc.noise, dc.measured_deg));
+// Per-case floor where `fit` sits on its saturations (model/noise_floor.h).
+std::vector<double> CaseFloors(const DiagnosisModel& m, const FitResult& fit) {
+  const ParameterLayout layout(fit.structure);
+  std::vector<double> floors, y;
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    const model::SimulationSummary s = m.Simulate(layout, fit.x, c, y);
+    floors.push_back(s.ok() ? model::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
+                            : dc.noise.floor_rms_deg);
+  }
   return floors;
 }
 
@@ -141,9 +147,48 @@ std::vector<Absorption> Compare(const FitResult& without, const FitResult& with)
   return r;
 }
 
-RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const ParameterLayout& start_layout,
-                     const model::ResidualAnalysis& start_analysis, std::span<const double> floors,
-                     const std::vector<EffectKind>& kinds, const DiagnoseOptions& o, int64_t* evals) {
+// Fits every candidate effect on top of `start` (no scoring).
+std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitResult& start,
+                                           const ParameterLayout& start_layout, const std::vector<EffectKind>& kinds,
+                                           const DiagnoseOptions& o, int64_t* evals) {
+  std::vector<CandidateResult> out;
+  for (EffectKind k : kinds) {
+    std::vector<EffectKind> structure = start.structure;
+    if (std::find(structure.begin(), structure.end(), k) != structure.end()) continue;
+    structure.push_back(k);
+    const ParameterLayout layout(structure);
+    const auto t0 = std::chrono::steady_clock::now();
+    CandidateResult c;
+    c.kind = k;
+    c.fit = FitStructure(m, layout, &start_layout, &start.x, k, o);
+    *evals += c.fit.evaluations;
+    c.added_params = layout.size() - start_layout.size();
+    if (c.fit.ok && c.fit.train_pi > start.train_pi) {
+      // The refinement ended above the nested model (effect at zero): keep the nested solution.
+      FitResult nested = start;
+      nested.structure = layout.structure();
+      nested.description = layout.Describe();
+      nested.x = layout.Extend(start.x, start_layout);
+      nested.evaluations = c.fit.evaluations;
+      nested.message = "refinement ended above the starting model (" + c.fit.message + "): effect kept at zero";
+      ComputeUncertainty(m, layout, nested, o.threads);
+      c.fit = std::move(nested);
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    Say(o, std::string("  ") + model::EffectName(k) +
+               (c.fit.ok ? Fmt(": training RMS %.4f, withheld RMS %.4f deg", std::sqrt(c.fit.train_pi / m.training_samples()),
+                               std::sqrt(c.fit.withheld_pi / m.withheld_samples()))
+                         : ": fit failed: " + c.fit.message) +
+               Fmt(" (%.1f s)", wall));
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// The gap of `start` against the floors, and its candidates scored, ranked and judged.
+RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const model::ResidualAnalysis& start_analysis,
+                       std::span<const double> floors, std::vector<CandidateResult> candidates,
+                       const DiagnoseOptions& o) {
   RoundResult round;
   round.base_structure = start.structure;
   round.s0 = start.withheld_pi;
@@ -159,39 +204,10 @@ RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const Para
   const double excess = round.s0 - round.s_floor;  // the gap above the floor (≤ 0: none to close)
   Say(o, "  starting model: " + start.description +
              Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
-
-  // A later round whose starting gap is not significant cannot name anything: no fits.
-  const bool fit_candidates = round.significant || start.structure.empty();
-  for (EffectKind k : kinds) {
-    if (!fit_candidates) break;
-    std::vector<EffectKind> structure = start.structure;
-    if (std::find(structure.begin(), structure.end(), k) != structure.end()) continue;
-    structure.push_back(k);
-    const ParameterLayout layout(structure);
-    const auto t0 = std::chrono::steady_clock::now();
-    CandidateResult c;
-    c.kind = k;
-    c.fit = FitStructure(m, layout, &start_layout, &start.x, k, o);
-    *evals += c.fit.evaluations;
-    c.added_params = layout.size() - start_layout.size();
-    if (c.fit.ok && c.fit.train_pi > start.train_pi) {
-      // The refinement ended above the nested model (effect at zero): keep the nested solution.
-      const std::vector<double> x0 = layout.Extend(start.x, start_layout);
-      FitResult nested = start;
-      nested.structure = layout.structure();
-      nested.description = layout.Describe();
-      nested.x = x0;
-      nested.evaluations = c.fit.evaluations;
-      nested.message = "refinement ended above the starting model (" + c.fit.message + "): effect kept at zero";
-      ComputeUncertainty(m, layout, nested, o.threads);
-      c.fit = std::move(nested);
-    }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  for (CandidateResult& c : candidates) {
     if (!c.fit.ok) {
       c.score = -INFINITY;
       c.note = "fit failed: " + c.fit.message;
-      Say(o, std::string("  ") + model::EffectName(k) + ": " + c.note);
-      round.candidates.push_back(std::move(c));
       continue;
     }
     const double sc = c.fit.withheld_pi;
@@ -213,12 +229,11 @@ RoundResult RunRound(const DiagnosisModel& m, const FitResult& start, const Para
       why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern, 100 * o.min_pattern));
     c.qualifies = why.empty();
     for (size_t i = 0; i < why.size(); ++i) c.note += (i ? "; " : "") + why[i];
-    Say(o, std::string("  ") + model::EffectName(k) +
+    Say(o, std::string("  ") + model::EffectName(c.kind) +
                Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%", std::sqrt(sc / nw), c.score,
-                   100 * c.closed, 100 * c.pattern) +
-               Fmt(" (%.1f s)", wall));
-    round.candidates.push_back(std::move(c));
+                   100 * c.closed, 100 * c.pattern));
   }
+  round.candidates = std::move(candidates);
   std::stable_sort(round.candidates.begin(), round.candidates.end(),
                    [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
   // Posterior weights against "none" (score 0), tempered by the best model's over-dispersion.
@@ -378,8 +393,15 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   d.base = FitStructure(m, base_layout, nullptr, nullptr, EffectKind::kNone, o);
   d.evaluations += d.base.evaluations;
   if (!d.base.ok) throw InputError("the base model could not be fitted: " + d.base.message);
-  // 2. Floors (with the plateaus' rounding) and the base residuals.
-  const std::vector<double> floors = CaseFloors(m);
+  // 2. Round-1 fits: every candidate on top of the base model.
+  Say(o, "candidates: each effect added to the base model");
+  std::vector<CandidateResult> first_fits = FitCandidates(m, d.base, base_layout, kinds, o, &d.evaluations);
+  // 3. Floors where the best-fitting model (lowest training PI) sits on its saturations.
+  const FitResult* floor_model = &d.base;
+  for (const CandidateResult& c : first_fits)
+    if (c.fit.ok && c.fit.train_pi < floor_model->train_pi) floor_model = &c.fit;
+  const std::vector<double> floors = CaseFloors(m, *floor_model);
+  d.floor_model = floor_model->description;
   {
     double st = 0, sw = 0;
     for (size_t c = 0; c < m.cases().size(); ++c) {
@@ -393,19 +415,28 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   d.base_residuals = AnalyseFit(m, d.base, floors);
   Say(o, Fmt("base model: train RMS %.4f, withheld RMS %.4f deg; floor %.4f / %.4f deg",
              std::sqrt(d.base.train_pi / m.training_samples()), std::sqrt(d.base.withheld_pi / m.withheld_samples()),
-             d.floor_train, d.floor_withheld));
-  // 3. Trends of per-case fits.
+             d.floor_train, d.floor_withheld) +
+             " (saturations of " + d.floor_model + ")");
+  // 4. Trends of per-case fits.
   if (o.trends) {
     Say(o, "per-case fits (trends over the V x f grid)");
     d.trends = PerCaseTrends(m, d.base, o, &d.evaluations);
   }
-  // 4–5. Rounds.
+  // 5. Rounds: score the first; greedily fit and score a second while the gap left is significant.
   FitResult current = d.base;
   model::ResidualAnalysis current_analysis = d.base_residuals;
   for (int r = 0; r < (o.second_effect ? 2 : 1); ++r) {
-    Say(o, r == 0 ? "candidates: each effect added to the base model" : "second effect: the others on top of the first");
-    const ParameterLayout start_layout(current.structure);
-    RoundResult round = RunRound(m, current, start_layout, current_analysis, floors, kinds, o, &d.evaluations);
+    std::vector<CandidateResult> fits;
+    if (r == 0) {
+      fits = std::move(first_fits);
+    } else {
+      const double ratio = std::sqrt(current.withheld_pi / std::max(d.withheld_floor, 1e-300));
+      if (ratio > o.significance_ratio) {
+        Say(o, "second effect: the others on top of the first");
+        fits = FitCandidates(m, current, ParameterLayout(current.structure), kinds, o, &d.evaluations);
+      }
+    }
+    RoundResult round = ScoreRound(m, current, current_analysis, floors, std::move(fits), o);
     const bool named = round.named >= 0;
     if (named) {
       const CandidateResult& c = round.candidates[round.named];

@@ -3,15 +3,17 @@
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
-//  2. Noise floor per case (model/noise_floor.h), with the rounding of the saturation plateaus: σ_c.
+//  2. Every candidate effect of the library is added to the base model and re-identified on the
+//     training cases (drive/output effects on the fast path with a global search; beam effects on
+//     CVODE, refined from the base fit with a few starting magnitudes).
+//  3. Noise floor per case (model/noise_floor.h): rounding and scatter, and on the saturation
+//     plateaus of the best-fitting model (lowest training PI) the rounding of the plateau: σ_c.
 //     Withheld floor S_floor = Σ_withheld N_c σ_c². Gap of a model: its withheld Σe² = S.
-//  3. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
+//  4. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
 //     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
 //     t statistics): a trend a global model lacks is evidence of an unmodelled effect.
-//  4. Which: every candidate effect of the library is added to the model and re-identified on the
-//     training cases (drive/output effects on the fast path with a global search; beam effects on
-//     CVODE, refined from the base fit with a few starting magnitudes), then scored on the withheld
-//     cases. Same rules and thresholds for every effect:
+//  5. Which: each candidate is scored on the withheld cases. Same rules and thresholds for every
+//     effect:
 //       significant gap  ⇔  RMS_withheld(base) > significance_ratio · floor  (√(S0 / S_floor));
 //       score_c          =  (S0 − S_c)/σ²_w − k_c ln N_w        (held-out χ² gain minus a BIC penalty
 //                                                              for the k_c added parameters);
@@ -25,9 +27,9 @@
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains".
-//  5. Greedy: with the first effect in the model, the others are tried again on top of it (only if
+//  6. Greedy: with the first effect in the model, the others are tried again on top of it (only if
 //     the gap left is still significant: otherwise nothing could be named and no fit is run).
-//  6. How far: per case and in total, the withheld gap before and after, the share closed, what
+//  7. How far: per case and in total, the withheld gap before and after, the share closed, what
 //     remains above the floor; the effect parameters with σ; the identifiability table.
 #pragma once
 
@@ -126,7 +128,8 @@ struct Diagnosis {
   std::string bench;                 ///< the folder or a label
   std::vector<DiagCase> cases;
   double quantum_deg = 0;
-  double floor_train = 0, floor_withheld = 0;  ///< pooled plateau-aware floor [deg]
+  double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
+  std::string floor_model;                     ///< the model whose saturations the floor uses
   FitResult base;
   model::ResidualAnalysis base_residuals;
   std::vector<ParamTrend> trends;

@@ -51,40 +51,28 @@ CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantu
     n.scatter_rms_deg = std::sqrt(sum2 / (p - 1) / 4.0);
     n.compared_samples = static_cast<int>(p);
   }
-  n.floor_rms_deg = std::sqrt(n.quantisation_rms_deg * n.quantisation_rms_deg +
-                              n.scatter_rms_deg * n.scatter_rms_deg);
+  n.floor_rms_deg = std::max(n.quantisation_rms_deg, n.scatter_rms_deg);
   return n;
 }
 
-double PlateauAwareFloor(const CaseNoise& noise, std::span<const double> y) {
-  if (y.empty()) throw InputError("plateau-aware floor: empty series");
+double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
+                            double b1, double b2) {
+  if (measured.size() != model.size() || measured.empty())
+    throw InputError("saturation-aware floor: measured has " + std::to_string(measured.size()) +
+                     " samples, model " + std::to_string(model.size()));
   const double v = noise.floor_rms_deg * noise.floor_rms_deg;
-  const double q = noise.quantum_deg;
-  const size_t n = y.size();
-  if (!(q > 0)) return noise.floor_rms_deg;
-  const auto [lo, hi] = std::minmax_element(y.begin(), y.end());
-  std::vector<double> contribution(n, v);
-  for (const double extreme : {*hi, *lo}) {
-    size_t k = 0;
-    while (k < n) {
-      if (std::abs(y[k] - extreme) > 1.01 * q) {
-        ++k;
-        continue;
-      }
-      size_t end = k;
-      bool holds_extreme = false;
-      while (end < n && std::abs(y[end] - extreme) <= 1.01 * q) {
-        holds_extreme = holds_extreme || std::abs(y[end] - extreme) < 0.01 * q;
-        ++end;
-      }
-      if (end - k >= 3 && holds_extreme)
-        for (size_t j = k; j < end; ++j) contribution[j] = (y[j] - extreme) * (y[j] - extreme);
-      k = end;
+  const double tol = 1e-9 * std::max(1.0, std::max(std::abs(b1), std::abs(b2)));
+  double sum = 0;
+  for (size_t k = 0; k < measured.size(); ++k) {
+    const bool sat = std::abs(model[k] - b1) <= tol || std::abs(model[k] - b2) <= tol;
+    const double e = measured[k] - model[k];
+    if (sat && noise.quantum_deg > 0 && std::abs(e) <= 1.01 * noise.quantum_deg) {
+      sum += e * e;  // the plateau read off its extreme: rounding, not model error
+    } else {
+      sum += v;
     }
   }
-  double sum = 0;
-  for (double c : contribution) sum += c;
-  return std::sqrt(sum / static_cast<double>(n));
+  return std::sqrt(sum / static_cast<double>(measured.size()));
 }
 
 double PooledFloor(std::span<const CaseNoise> noise, std::span<const int> samples) {

@@ -8,8 +8,11 @@
 //                  (P samples per cycle), differenced once more so that slow non-periodic parts (creep,
 //                  drift) drop out: s² = mean((d_k − d_{k−1})²)/4 is the sample-to-sample noise that is
 //                  not repeated from cycle to cycle (vibration jitter).
-//   floor:         σ = √(q²/12 + s²) [deg], per case and pooled over cases (root mean square over
-//                  the samples).
+//   floor:         σ = √max(q²/12, s²) [deg], per case and pooled over cases (root mean square over
+//                  the samples). Not the sum: on a quantised record the scatter is mostly the
+//                  rounding itself (the rounding flips between cycles wherever the signal or the
+//                  jitter moves it across a level), so adding both would count it twice; with a
+//                  jitter larger than the quantum the scatter dominates and is the whole noise.
 //
 // A model whose residual RMS is at σ explains the record down to the noise. Pure: no I/O.
 #pragma once
@@ -32,7 +35,7 @@ struct CaseNoise {
   double quantisation_rms_deg = 0;  ///< q/√12 [deg]
   double scatter_rms_deg = 0;     ///< s [deg], from the last two cycles (0 with fewer than 2 cycles)
   int compared_samples = 0;       ///< P, samples per cycle compared
-  double floor_rms_deg = 0;       ///< σ = √(q²/12 + s²) [deg]
+  double floor_rms_deg = 0;       ///< σ = √max(q²/12, s²) [deg]
 };
 
 /// Estimates the noise of a record of `cycles` whole drive cycles (y.size() divisible by cycles is
@@ -41,14 +44,15 @@ struct CaseNoise {
 CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantum_deg = -1);
 
 /// The floor of a record for a model that clips at the saturations b1, b2 taken from the measured
-/// extremes (b1 = max y, b2 = min y): on a saturation plateau the model output is that constant,
-/// and the reading's rounding and jitter scatter around it (the plateau reads one quantum inside the
-/// extreme now and then), so the residual there, (y_k − b)², is irreducible. A plateau is found
-/// from the data alone: a run of ≥ 3 consecutive readings within one quantum of an extreme that
-/// holds the extreme itself at least once. Elsewhere the noise is q²/12 + s²:
-///   σ = √([Σ_{k ∈ plateaus} (y_k − b)² + N_other (q²/12 + s²)] / N)   [deg].
-/// Without a quantum (continuous data) this is the plain floor. Throws InputError on an empty series.
-double PlateauAwareFloor(const CaseNoise& noise, std::span<const double> measured);
+/// extremes: where the model output sits on b1 or b2 it is a constant that the reading's rounding
+/// and jitter scatter around (a plateau reads one quantum inside the extreme now and then, or for a
+/// whole cycle), so the residual there, (y_k − ŷ_k)², is irreducible as long as it is at most one
+/// quantum (a larger deviation is model error, counted like any other sample); elsewhere the noise
+/// is σ_c² = floor_rms²:
+///   σ = √([Σ_{k ∈ plateau} (y_k − ŷ_k)² + N_other σ_c²] / N)   [deg].
+/// Throws InputError on mismatched lengths.
+double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
+                            double b1, double b2);
 
 /// Pooled floor over several records: √(Σ_c N_c σ_c² / Σ_c N_c) [deg].
 double PooledFloor(std::span<const CaseNoise> noise, std::span<const int> samples);

@@ -43,6 +43,15 @@ TEST(NoiseFloorTest, PeriodicQuantisedRecordHasTheQuantisationFloor) {
   EXPECT_NEAR(n.floor_rms_deg, kQ / std::sqrt(12.0), 1e-12);
 }
 
+TEST(NoiseFloorTest, FloorIsTheLargerOfRoundingAndScatter) {
+  // Continuous data (no quantum): the scatter is the floor.
+  std::vector<double> y = Sine(300, 1.0, 2.0);
+  for (size_t k = 200; k < 300; ++k) y[k] += (k % 2 ? 0.005 : -0.005);
+  EXPECT_NEAR(EstimateCaseNoise(y, 3, 0.0).floor_rms_deg, 0.005, 1e-3);
+  // Quantised: rounding dominates a small scatter.
+  EXPECT_NEAR(EstimateCaseNoise(y, 3, kQ).floor_rms_deg, kQ / std::sqrt(12.0), 1e-12);
+}
+
 TEST(NoiseFloorTest, ScatterSeesJitterButNotASlowTrend) {
   // Continuous data: alternating ±s jitter on the last cycle only, plus a slow drift.
   std::vector<double> y = Sine(300, 1.0, 2.0);
@@ -54,19 +63,16 @@ TEST(NoiseFloorTest, ScatterSeesJitterButNotASlowTrend) {
   EXPECT_NEAR(jit.scatter_rms_deg, 0.01, 2e-3);  // d has ±0.01 steps: var(Δd)/4 = 0.01²
 }
 
-TEST(NoiseFloorTest, PlateausContributeTheirRoundingOnly) {
+TEST(NoiseFloorTest, SaturatedSamplesContributeTheirRoundingOnly) {
   CaseNoise n;
   n.quantum_deg = kQ;
   n.floor_rms_deg = 0.01;
-  // A plateau at the top (4 readings, one a level below), a near-miss at the bottom that never
-  // holds the extreme's level twice... and a lone extreme reading (run too short).
-  const std::vector<double> y = {0, 10 * kQ, 10 * kQ, 9 * kQ, 10 * kQ, 5 * kQ, -3 * kQ, -2 * kQ, 0};
-  const double f = PlateauAwareFloor(n, y);
-  // Plateau: samples 1–4 → 0, 0, q², 0; the 5 others → 0.01².
-  EXPECT_NEAR(f, std::sqrt((kQ * kQ + 5 * 0.01 * 0.01) / 9), 1e-12);
-  n.quantum_deg = 0;
-  EXPECT_EQ(PlateauAwareFloor(n, y), 0.01);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PlateauAwareFloor(n, std::vector<double>{}); }), "empty");
+  const std::vector<double> model = {1.0, 1.0, 1.0, 0.5, 0.2};             // first three clipped at b1 = 1
+  const std::vector<double> meas = {1.0 - kQ, 1.0, 1.0 - 3 * kQ, 0.5, 0.21};  // one level below; three below
+  const double f = SaturationAwareFloor(n, meas, model, 1.0, -1.0);
+  EXPECT_NEAR(f, std::sqrt((kQ * kQ + 0 + 3 * 0.01 * 0.01) / 5), 1e-12);
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { SaturationAwareFloor(n, meas, std::vector<double>{1.0}, 1.0, -1.0); }),
+                "measured has 5");
 }
 
 ResidualCaseInput Input(const std::vector<double>& meas, const std::vector<double>& model, double f = 0.5) {
