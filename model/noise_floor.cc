@@ -51,7 +51,8 @@ CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantu
     n.scatter_rms_deg = std::sqrt(sum2 / (p - 1) / 4.0);
     n.compared_samples = static_cast<int>(p);
   }
-  n.floor_rms_deg = std::max(n.quantisation_rms_deg, n.scatter_rms_deg);
+  n.floor_rms_deg = std::sqrt(n.quantisation_rms_deg * n.quantisation_rms_deg +
+                              n.scatter_rms_deg * n.scatter_rms_deg);
   return n;
 }
 

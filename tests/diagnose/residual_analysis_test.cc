@@ -43,13 +43,12 @@ TEST(NoiseFloorTest, PeriodicQuantisedRecordHasTheQuantisationFloor) {
   EXPECT_NEAR(n.floor_rms_deg, kQ / std::sqrt(12.0), 1e-12);
 }
 
-TEST(NoiseFloorTest, FloorIsTheLargerOfRoundingAndScatter) {
-  // Continuous data (no quantum): the scatter is the floor.
+TEST(NoiseFloorTest, FloorAddsRoundingAndScatter) {
   std::vector<double> y = Sine(300, 1.0, 2.0);
   for (size_t k = 200; k < 300; ++k) y[k] += (k % 2 ? 0.005 : -0.005);
-  EXPECT_NEAR(EstimateCaseNoise(y, 3, 0.0).floor_rms_deg, 0.005, 1e-3);
-  // Quantised: rounding dominates a small scatter.
-  EXPECT_NEAR(EstimateCaseNoise(y, 3, kQ).floor_rms_deg, kQ / std::sqrt(12.0), 1e-12);
+  EXPECT_NEAR(EstimateCaseNoise(y, 3, 0.0).floor_rms_deg, 0.005, 1e-3);  // continuous: the scatter
+  const CaseNoise n = EstimateCaseNoise(y, 3, kQ);
+  EXPECT_NEAR(n.floor_rms_deg, std::hypot(kQ / std::sqrt(12.0), n.scatter_rms_deg), 1e-12);
 }
 
 TEST(NoiseFloorTest, ScatterSeesJitterButNotASlowTrend) {
