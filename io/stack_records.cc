@@ -1,0 +1,177 @@
+#include "io/stack_records.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "io/csv.h"
+
+namespace pz::io {
+namespace fs = std::filesystem;
+
+const char* RecordRoleName(RecordRole role) {
+  switch (role) {
+    case RecordRole::kTrain:
+      return "train";
+    case RecordRole::kTest:
+      return "test";
+  }
+  return "unknown";
+}
+
+std::optional<RecordRole> ParseRecordRole(std::string_view name) {
+  for (RecordRole r : {RecordRole::kTrain, RecordRole::kTest})
+    if (name == RecordRoleName(r)) return r;
+  return std::nullopt;
+}
+
+std::string StackRecord::Label() const {
+  return "record " + std::to_string(number) + " (" + FormatNumber(frequency_hz) + " Hz, A = " +
+         FormatNumber(amplitude_v) + " V, " + RecordRoleName(role) + ")";
+}
+
+Status StackReadOptions::Validate() const {
+  if (!(time_rel_tol > 0 && time_rel_tol < 0.5))
+    return InvalidArgument(FieldError("time_rel_tol", time_rel_tol, "must be in (0, 0.5)"));
+  if (!(voltage_rel_tol >= 0 && std::isfinite(voltage_rel_tol)))
+    return InvalidArgument(
+        FieldError("voltage_rel_tol", voltage_rel_tol, "must be finite and >= 0"));
+  if (!(voltage_abs_tol_v >= 0 && std::isfinite(voltage_abs_tol_v)))
+    return InvalidArgument(
+        FieldError("voltage_abs_tol_v", voltage_abs_tol_v, "must be finite and >= 0"));
+  return Status::Ok();
+}
+
+const StackRecord* StackRecordSet::Find(int number) const {
+  for (const auto& r : records)
+    if (r.number == number) return &r;
+  return nullptr;
+}
+
+std::vector<const StackRecord*> StackRecordSet::WithRole(RecordRole role) const {
+  std::vector<const StackRecord*> out;
+  for (const auto& r : records)
+    if (r.role == role) out.push_back(&r);
+  return out;
+}
+
+StackRecord LoadStackRecordFile(const fs::path& file, int number, double frequency_hz,
+                                double offset_v, double amplitude_v, RecordRole role,
+                                const StackReadOptions& options, const std::string& context) {
+  ThrowIfError(options.Validate());
+  const std::string ctx = context.empty() ? "" : " (" + context + ")";
+  const CsvTable csv = ReadCsvFile(file);
+  csv.RequireColumns({"t_s", "voltage_V", "displacement_um"});
+  const int ct = *csv.FindColumn("t_s"), cu = *csv.FindColumn("voltage_V"),
+            cy = *csv.FindColumn("displacement_um");
+  if (csv.rows.size() < 2)
+    throw InputError(csv.source + ": " + std::to_string(csv.rows.size()) +
+                     " data rows; a record needs at least 2 samples" + ctx);
+  StackRecord r;
+  r.number = number;
+  r.frequency_hz = frequency_hz;
+  r.offset_v = offset_v;
+  r.amplitude_v = amplitude_v;
+  r.role = role;
+  r.file = file;
+  const size_t n = csv.rows.size();
+  r.t.resize(n);
+  r.u.resize(n);
+  r.y.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    r.t[k] = csv.Number(k, ct);
+    r.u[k] = csv.Number(k, cu);
+    r.y[k] = csv.Number(k, cy);
+  }
+  const double dt0 = r.t[1] - r.t[0];
+  if (!(dt0 > 0))
+    throw InputError(csv.Where(1, ct) + ": time " + FormatNumber(r.t[1]) +
+                     " s is not after the previous sample's " + FormatNumber(r.t[0]) + " s");
+  const double tol = options.time_rel_tol * dt0;
+  if (!(std::abs(r.t[0]) <= tol))
+    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(r.t[0]) +
+                     " s; a record starts at t = 0 (from rest at the offset)");
+  r.sample_rate_hz = 1.0 / dt0;
+  for (size_t k = 1; k < n; ++k) {
+    const double dt = r.t[k] - r.t[k - 1];
+    if (!(dt > 0))
+      throw InputError(csv.Where(k, ct) + ": time " + FormatNumber(r.t[k]) +
+                       " s is not after the previous sample's " + FormatNumber(r.t[k - 1]) +
+                       " s (time must be strictly increasing)");
+    if (!(std::abs(dt - dt0) <= tol))
+      throw InputError(csv.Where(k, ct) + ": step " + FormatNumber(dt) +
+                       " s from the previous sample differs from the first step " +
+                       FormatNumber(dt0) + " s (relative tolerance " +
+                       FormatNumber(options.time_rel_tol) + ")");
+  }
+  if (options.check_voltage) {
+    const double vtol =
+        options.voltage_rel_tol * (std::abs(offset_v) + amplitude_v) + options.voltage_abs_tol_v;
+    for (size_t k = 0; k < n; ++k) {
+      const double want =
+          offset_v + amplitude_v * std::sin(2 * std::numbers::pi * frequency_hz * r.t[k]);
+      if (!(std::abs(r.u[k] - want) <= vtol))
+        throw InputError(csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) +
+                         " V is not offset + A sin(2 pi f t) = " + FormatNumber(want) +
+                         " V (offset = " + FormatNumber(offset_v) + " V, A = " +
+                         FormatNumber(amplitude_v) + " V, f = " + FormatNumber(frequency_hz) +
+                         " Hz, t = " + FormatNumber(r.t[k]) + " s; tolerance " +
+                         FormatNumber(vtol) + " V)" + ctx);
+    }
+  }
+  return r;
+}
+
+StackRecordSet LoadStackRecordSet(const fs::path& dir, const StackReadOptions& options) {
+  ThrowIfError(options.Validate());
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw InputError(dir.string() +
+                     ": not a directory (expected a record set folder with records.csv)");
+  const fs::path manifest = dir / "records.csv";
+  const CsvTable csv = ReadCsvFile(manifest);
+  csv.RequireColumns({"record", "frequency_Hz", "offset_V", "amplitude_V", "file", "role"});
+  csv.RequireRows();
+  const int cr = *csv.FindColumn("record"), cf = *csv.FindColumn("frequency_Hz"),
+            co = *csv.FindColumn("offset_V"), ca = *csv.FindColumn("amplitude_V"),
+            cfile = *csv.FindColumn("file"), crole = *csv.FindColumn("role");
+  StackRecordSet set;
+  set.dir = dir;
+  std::vector<int> seen_line;
+  for (size_t row = 0; row < csv.rows.size(); ++row) {
+    const long number = csv.Integer(row, cr);
+    if (number <= 0 || number > 1000000)
+      throw InputError(csv.Where(row, cr) + ": record number " + csv.Field(row, cr) +
+                       " must be a positive integer");
+    for (size_t p = 0; p < set.records.size(); ++p)
+      if (set.records[p].number == number)
+        throw InputError(csv.Where(row, cr) + ": duplicate record " + std::to_string(number) +
+                         " (first on line " + std::to_string(seen_line[p]) + ")");
+    const double f = csv.Number(row, cf);
+    if (!(f > 0))
+      throw InputError(csv.Where(row, cf) + ": frequency " + csv.Field(row, cf) +
+                       " Hz must be > 0");
+    const double offset = csv.Number(row, co);
+    const double a = csv.Number(row, ca);
+    if (a < 0)
+      throw InputError(csv.Where(row, ca) + ": amplitude " + csv.Field(row, ca) +
+                       " V must be >= 0");
+    const auto role = ParseRecordRole(csv.Field(row, crole));
+    if (!role)
+      throw InputError(csv.Where(row, crole) + ": unknown role '" + csv.Field(row, crole) +
+                       "' (expected train or test)");
+    const std::string& name = csv.Field(row, cfile);
+    if (name.empty()) throw InputError(csv.Where(row, cfile) + ": empty file name");
+    const fs::path file = dir / name;
+    if (!fs::is_regular_file(file, ec))
+      throw InputError(csv.Where(row, cfile) + ": record file '" + name + "' not found (" +
+                       file.string() + ")");
+    set.records.push_back(LoadStackRecordFile(
+        file, static_cast<int>(number), f, offset, a, *role, options,
+        "record " + std::to_string(number) + " of " + manifest.string() + " line " +
+            std::to_string(csv.rows[row].line)));
+    seen_line.push_back(csv.rows[row].line);
+  }
+  return set;
+}
+
+}  // namespace pz::io
