@@ -13,5 +13,6 @@ void RegisterIdentify(CLI::App& app, int& exit_code);
 void RegisterDahl(CLI::App& app, int& exit_code);
 void RegisterDiagnose(CLI::App& app, int& exit_code);
 void RegisterDiagnoseCheck(CLI::App& app, int& exit_code);
+void RegisterCommittee(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   pz::client::RegisterDahl(app, exit_code);
   pz::client::RegisterDiagnose(app, exit_code);
   pz::client::RegisterDiagnoseCheck(app, exit_code);
+  pz::client::RegisterCommittee(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(
       "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every violated field, "

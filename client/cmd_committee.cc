@@ -1,0 +1,150 @@
+// `piezoid committee`: the committee machine of seed 002 on a stack record set (default: the
+// bundled data/piezo-stack-bench): complete models and per-band sub-models of each family by each
+// optimiser, selection per band, the committee against the best complete model; writes report.md,
+// committee.json and loop figures (client/committee.h).
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "client/commands.h"
+#include "client/committee.h"
+#include "io/csv.h"
+
+namespace pz::client {
+namespace {
+
+struct CommitteeArgs {
+  std::string records = std::string(PIEZOID_DATA_DIR) + "/piezo-stack-bench";
+  std::string out = "committee-out";
+  std::string bands = "0,50,150,250,350";
+  std::vector<std::string> families{"bouc-wen", "backlash-like"};
+  std::vector<std::string> optimisers{"pso", "ga-real"};
+  std::string criterion = "iae";
+  double t0 = 0.5, t1 = 2.5;
+  int repetitions = 5;
+  uint64_t seed = 1;
+  int particles = 30, iterations = 150, population = 30, generations = 150, stall = 40;
+  int substeps = 2;
+  int threads = 0;
+  bool averaging = false;
+  bool no_figures = false;
+  bool quiet = false;
+};
+
+int RunCommitteeCommand(const CommitteeArgs& a) {
+  CommitteeOptions o;
+  o.bands = FrequencyBands::Parse(a.bands);
+  o.families.clear();
+  for (const std::string& f : a.families) {
+    const auto fam = model::ParseStackFamily(f);
+    if (!fam) throw InputError("--families: unknown family '" + f + "' (bouc-wen, backlash-like)");
+    o.families.push_back(*fam);
+  }
+  o.algorithms.clear();
+  for (const std::string& s : a.optimisers) o.algorithms.push_back(master::ParseSearchAlgorithm(s));
+  o.criterion = ParseFitCriterion(a.criterion);
+  o.t0_s = a.t0;
+  o.t1_s = a.t1;
+  o.sim.substeps = a.substeps;
+  o.averaging = a.averaging;
+  o.search.repetitions = a.repetitions;
+  o.search.pso.seed = o.search.ga_real.seed = o.search.ga_binary.ga.seed = a.seed;
+  o.search.pso.particles = a.particles;
+  o.search.pso.iterations = a.iterations;
+  o.search.pso.stall_iterations = a.stall;
+  o.search.ga_real.population = a.population;
+  o.search.ga_real.generations = a.generations;
+  o.search.ga_real.stall_generations = a.stall;
+  o.search.ga_binary.ga.population_size = a.population;
+  o.search.ga_binary.ga.max_generations = a.generations;
+  o.search.ga_binary.ga.stall_generations = a.stall;
+  ThrowIfError(o.Validate());
+
+  const io::StackRecordSet set = io::LoadStackRecordSet(a.records);
+  std::cout << "piezoid committee: " << set.records.size() << " records from " << a.records << ", "
+            << o.bands.size() << " bands, " << o.families.size() << " famil"
+            << (o.families.size() == 1 ? "y" : "ies") << " x " << o.algorithms.size()
+            << " optimiser(s), " << o.search.repetitions << " repetitions each" << std::endl;
+  CommitteeLog log;
+  if (!a.quiet) log = [](const std::string& line) { std::cout << "  " << line << std::endl; };
+  const CommitteeResult r = RunCommittee(set, o, LocalEvaluatorFactory(a.threads), log);
+
+  namespace fs = std::filesystem;
+  fs::create_directories(a.out);
+  io::WriteFileWith(fs::path(a.out) / "report.md",
+                    [&](std::ostream& os) { WriteCommitteeReport(os, r, set); });
+  io::WriteFileWith(fs::path(a.out) / "committee.json",
+                    [&](std::ostream& os) { os << CommitteeJson(r, set); });
+  std::vector<std::string> warnings;
+  if (!a.no_figures) WriteCommitteeFigures((fs::path(a.out) / "figures").string(), r, set, &warnings);
+  for (const auto& w : warnings) std::cerr << "piezoid committee: warning: " << w << "\n";
+
+  std::cout << "committee test RMSE " << r.committee_test.rmse << " um, max error "
+            << r.committee_test.max_abs << " um";
+  if (r.best_complete >= 0)
+    std::cout << "; best complete model " << r.complete[r.best_complete].Name() << " RMSE "
+              << r.complete[r.best_complete].all_test.rmse << " um: reduction "
+              << 100 * r.rmse_reduction << " % (max error " << 100 * r.max_reduction << " %)";
+  std::cout << "\n" << r.evaluations << " evaluations in " << r.wall_s << " s on " << r.threads
+            << " thread(s); report in " << (fs::path(a.out) / "report.md").string() << "\n";
+  return 0;
+}
+
+}  // namespace
+
+void RegisterCommittee(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<CommitteeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "committee",
+      "Committee machine (seed 002): identify the stack Bouc-Wen and backlash-like models by PSO and "
+      "GA on all training records (complete) and per frequency band, select a sub-model per band by "
+      "A = (RMSE_train + RMSE_test)/2, and compare the committee with the best complete model on the "
+      "test records; writes report.md, committee.json and loop figures.");
+  cmd->add_option("--records", a->records, "record set folder (records.csv + one CSV per record)")
+      ->type_name("DIR")
+      ->default_str("data/piezo-stack-bench");
+  cmd->add_option("--out", a->out, "output folder")->type_name("DIR")->default_str("committee-out");
+  cmd->add_option("--bands", a->bands,
+                  "band edges in Hz ('0,50,150,250,350') or ranges ('0-50,50-150,…'); a record "
+                  "belongs to [lo, hi), the last band closed")
+      ->default_str("0,50,150,250,350");
+  cmd->add_option("--families", a->families, "model families: bouc-wen, backlash-like")
+      ->delimiter(',')
+      ->default_str("bouc-wen,backlash-like");
+  cmd->add_option("--optimisers", a->optimisers, "optimisers: pso, ga-real, ga-binary")
+      ->delimiter(',')
+      ->default_str("pso,ga-real");
+  cmd->add_option("--criterion", a->criterion, "identification criterion: iae, sse or rmse (summed "
+                                               "over the training records)")
+      ->default_str("iae");
+  cmd->add_option("--t0", a->t0, "criterion window start [s]")->default_str("0.5");
+  cmd->add_option("--t1", a->t1, "criterion window end [s] (clipped to each record's end)")
+      ->default_str("2.5");
+  cmd->add_option("--repetitions", a->repetitions, "seeded runs per search, best kept")
+      ->default_str("5");
+  cmd->add_option("--seed", a->seed, "seed of the first repetition (then seed+1, …)")
+      ->default_str("1");
+  cmd->add_option("--particles", a->particles, "PSO swarm size")->default_str("30");
+  cmd->add_option("--iterations", a->iterations, "PSO iterations")->default_str("150");
+  cmd->add_option("--population", a->population, "GA population")->default_str("30");
+  cmd->add_option("--generations", a->generations, "GA generations")->default_str("150");
+  cmd->add_option("--stall", a->stall,
+                  "stop a repetition after this many iterations / generations without a relative "
+                  "improvement of 1e-6 (0: never)")
+      ->default_str("40");
+  cmd->add_option("--substeps", a->substeps,
+                  "Bouc-Wen driver-filter sub-steps per sample interval (1 … 1024)")
+      ->default_str("2");
+  cmd->add_option("--threads", a->threads, "evaluation threads (0: all cores; 1: inline)")
+      ->default_str("0");
+  cmd->add_flag("--averaging", a->averaging,
+                "averaging committee (triangular band memberships) instead of the hard switch");
+  cmd->add_flag("--no-figures", a->no_figures, "do not write the loop figures");
+  cmd->add_flag("--quiet", a->quiet, "no per-search progress lines");
+  cmd->callback([a, &exit_code] { exit_code = RunCommitteeCommand(*a); });
+}
+
+}  // namespace pz::client

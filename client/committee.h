@@ -1,0 +1,187 @@
+// The committee machine of seed 002 (spec committee-machine.md) on a stack record set
+// (io/stack_records.h):
+//
+//  1. complete models: each model family (Bouc–Wen with driver filter, backlash-like;
+//     model/stack_models.h) identified by each optimiser (PSO, real GA, binary GA;
+//     master/param_search.h) on ALL training records; the parameters are the search space, the
+//     cost is the criterion (IAE by default) over the window [t0, t1] summed over the records;
+//     `repetitions` seeded runs, best kept;
+//  2. per band (default 0–50, 50–150, 150–250, 250–350 Hz; a record belongs to the band
+//     [lo, hi) containing its excitation frequency, the last band closed): the same
+//     identifications on the band's training records only;
+//  3. selection per band, by the aggregate A = ½ (RMSE_train + RMSE_test), the RMSEs over the
+//     window pooled over the band's training, resp. testing records (lowest A wins; ties to the
+//     first family, then the first optimiser, in option order);
+//  4. the committee output for a record: the selected sub-model of the record's band (hard switch);
+//     or, with `averaging`, Σ_b μ_b(f) ŷ_b with triangular memberships μ_b over the band centres
+//     (a partition of unity; μ_b = 1 at band b's centre; the outer bands extend flat);
+//  5. comparison on the test records: pooled RMSE and max error of the committee against the best
+//     complete model (lowest pooled test RMSE of all complete models: the strongest baseline);
+//     reduction = 1 − RMSE_committee / RMSE_complete.
+//
+// Every search goes through the BatchEvaluator seam, so it runs inline, on a thread pool, or on any
+// other evaluator made by the factory; the results are the same bit for bit.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/stack_records.h"
+#include "master/evaluator.h"
+#include "master/param_search.h"
+#include "model/stack_models.h"
+#include "model/status.h"
+
+namespace pz::client {
+
+enum class FitCriterion : int { kIae = 0, kSse = 1, kRmse = 2 };
+/// "iae", "sse", "rmse".
+const char* FitCriterionName(FitCriterion c);
+/// Parses the names above; throws InputError naming the value otherwise.
+FitCriterion ParseFitCriterion(const std::string& name);
+
+/// The fitness of a parameter vector (Genome::reals, in model::StackParamNames order) on a set of
+/// records: IAE or SSE over the window summed over the records, or the RMSE over the window pooled
+/// over the records. Pure and thread-safe (one scratch buffer per thread, no allocation once
+/// grown). A simulation with non-finite output is a penalised result (the error cost) naming the
+/// record.
+class StackFitness final : public master::FitnessFunction {
+ public:
+  /// The records must outlive the fitness. Throws InputError on no records, a bad window
+  /// (t0 < t1, t0 ≥ 0, t0 inside every record) or bad simulation options. The window end is
+  /// clipped to each record's last sample time.
+  StackFitness(model::StackFamily family, std::vector<const io::StackRecord*> records,
+               FitCriterion criterion, double t0_s, double t1_s,
+               model::StackSimOptions sim = {}, double error_cost = master::kDefaultErrorCost);
+  master::FitnessResult Evaluate(const master::Genome& genome) const override;
+  /// The cost of one parameter vector; throws InputError on a wrong size or invalid parameters.
+  double Cost(std::span<const double> params) const;
+
+ private:
+  model::StackFamily family_;
+  std::vector<const io::StackRecord*> records_;
+  FitCriterion criterion_;
+  double t0_, t1_;
+  model::StackSimOptions sim_;
+  double error_cost_;
+};
+
+/// Frequency bands by their edges e_0 < e_1 < … < e_B: band b is [e_b, e_{b+1}), the last closed.
+struct FrequencyBands {
+  std::vector<double> edges{0, 50, 150, 250, 350};
+  int size() const { return static_cast<int>(edges.size()) - 1; }
+  /// The band containing f, or −1.
+  int BandOf(double f_hz) const;
+  /// "0–50 Hz".
+  std::string Label(int band) const;
+  /// ≥ 2 finite edges ≥ 0, strictly increasing; the error names the edge.
+  Status Validate() const;
+  /// Parses "0,50,150,250,350" (or "0-50,50-150,…"); throws InputError naming the item.
+  static FrequencyBands Parse(const std::string& text);
+};
+
+/// The default search box of a family (names = model::StackParamNames):
+///  Bouc–Wen: α ∈ [0.01, 3] (log), β ∈ [1e-5, 0.1] (log), γ ∈ [−0.05, 0.05], d ∈ [0.02, 0.08] µm/V,
+///            fc ∈ [100, 20000] Hz (log);
+///  backlash-like: α ∈ [1e-4, 1] 1/V (log), c ∈ [0.02, 0.08] µm/V, B1 ∈ [−0.05, 0.1] µm/V.
+master::ParamBox DefaultStackBox(model::StackFamily family);
+
+struct CommitteeOptions {
+  FrequencyBands bands;
+  std::vector<model::StackFamily> families{model::StackFamily::kBoucWen,
+                                           model::StackFamily::kBacklashLike};
+  std::vector<master::SearchAlgorithm> algorithms{master::SearchAlgorithm::kPso,
+                                                  master::SearchAlgorithm::kGaReal};
+  /// Settings of every search (the algorithm field is set per run; repetitions, seeds, swarm and
+  /// population sizes are used as given).
+  master::SearchOptions search;
+  FitCriterion criterion = FitCriterion::kIae;
+  double t0_s = 0.5;  ///< criterion window [s]
+  double t1_s = 2.5;
+  model::StackSimOptions sim;
+  bool averaging = false;  ///< averaging committee instead of the hard switch
+  bool complete = true;    ///< also identify the complete models (needed for the comparison)
+  Status Validate() const;
+};
+
+/// Makes the evaluator a search runs on, for a fitness that outlives it.
+using EvaluatorFactory =
+    std::function<std::unique_ptr<master::BatchEvaluator>(const master::FitnessFunction&)>;
+/// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
+EvaluatorFactory LocalEvaluatorFactory(int threads);
+
+/// Errors of one model on the records of one role in one band, over the window.
+struct RoleMetrics {
+  int records = 0;
+  size_t samples = 0;  ///< in the window, all records
+  double iae = 0;      ///< Σ over records [µm·s]
+  double rmse = 0;     ///< pooled [µm]
+  double max_abs = 0;  ///< max over records [µm]
+};
+struct BandMetrics {
+  RoleMetrics train, test;
+};
+
+struct IdentifiedModel {
+  model::StackFamily family = model::StackFamily::kBoucWen;
+  master::SearchAlgorithm algorithm = master::SearchAlgorithm::kPso;
+  int band = -1;  ///< −1: the complete model (all training records)
+  std::vector<double> params;
+  master::SearchResult search;
+  std::vector<BandMetrics> per_band;  ///< its errors on every band's records
+  RoleMetrics all_test;               ///< on all test records
+  std::string Name() const;           ///< "bouc-wen/pso"
+};
+
+struct CommitteeResult {
+  CommitteeOptions options;
+  std::vector<IdentifiedModel> complete;                 ///< families × algorithms (may be empty)
+  std::vector<std::vector<IdentifiedModel>> band_models;  ///< [band][families × algorithms]
+  std::vector<int> selected;        ///< per band: index into band_models[band]
+  std::vector<double> aggregate;    ///< per band: A of the selected model
+  std::vector<BandMetrics> committee_per_band;
+  RoleMetrics committee_test;       ///< all test records
+  RoleMetrics committee_train;      ///< all training records
+  int best_complete = -1;           ///< index into complete (lowest pooled test RMSE)
+  double rmse_reduction = 0;        ///< 1 − RMSE_cm / RMSE_complete on the test records
+  double max_reduction = 0;         ///< 1 − max_cm / max_complete on the test records
+  std::vector<double> band_wall_s;  ///< identification wall time per band [s]
+  double complete_wall_s = 0;
+  double wall_s = 0;
+  int64_t evaluations = 0;
+  int threads = 1;
+};
+
+using CommitteeLog = std::function<void(const std::string&)>;
+
+/// Runs the whole study. Throws InputError on bad options, a record outside every band, a band
+/// without training or test records.
+CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptions& options,
+                             const EvaluatorFactory& factory, const CommitteeLog& log = {});
+
+/// Simulates one identified model on a record.
+std::vector<double> PredictModel(const IdentifiedModel& m, const io::StackRecord& record,
+                                 const model::StackSimOptions& sim);
+/// The committee's output for a record (hard switch or averaging, as in the result's options).
+std::vector<double> PredictCommittee(const CommitteeResult& r, const io::StackRecord& record);
+/// Window errors of a prediction on a record, as a one-record RoleMetrics.
+RoleMetrics RecordMetrics(const io::StackRecord& record, std::span<const double> yhat, double t0_s,
+                          double t1_s);
+
+/// report.md: settings, per-band tables like the paper's Tables 3–16, selection, reduction, timing.
+void WriteCommitteeReport(std::ostream& out, const CommitteeResult& r,
+                          const io::StackRecordSet& set);
+/// committee.json (protobuf's JSON printer over a google.protobuf.Struct).
+std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& set);
+/// Loop figures (displacement vs voltage over the last drive cycle, measured / committee / best
+/// complete) per test record, grouped by band: <dir>/loop_band<b>_f<f>.{csv,gp,png}. Returns the
+/// scripts written; renders them when gnuplot is available (failures appended to warnings).
+std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const CommitteeResult& r,
+                                               const io::StackRecordSet& set,
+                                               std::vector<std::string>* warnings);
+
+}  // namespace pz::client
