@@ -29,6 +29,7 @@ struct DahlArgs {
   int epochs = -1;
   double time_limit_s = 0;
   std::string b1 = "paper";
+  std::string min_grad_units = "normalised";
   std::string data_dir;
   std::string history_dir;
   std::string json_file;
@@ -50,12 +51,14 @@ int RunDahl(const DahlArgs& a) {
   o.b1 = a.b1 == "spec" ? DahlB1Policy::kSpec : DahlB1Policy::kPaper;
   if (a.epochs >= 0) o.lm_options.epochs = o.br_options.epochs = a.epochs;
   if (a.time_limit_s > 0) o.lm_options.time_limit_s = o.br_options.time_limit_s = a.time_limit_s;
+  o.lm_options.min_grad_normalised = o.br_options.min_grad_normalised = a.min_grad_units == "normalised";
   ThrowIfError(o.lm_options.Validate());
   ThrowIfError(o.br_options.Validate());
   std::cout << "piezoid dahl: seed " << o.seed << ", " << o.hidden << " tansig neurons, input t -> d, "
             << "70/15/15 split" << (o.pin_ends ? " (t = 0 and 10 s kept in training)" : "") << ", "
             << o.lm_restarts << " LM / " << o.br_restarts
-            << " BR initialisation(s) per network, the lowest validation MSE kept; dense kernels: "
+            << " BR initialisation(s) per network, the lowest validation MSE kept; min_grad in "
+            << a.min_grad_units << " target units; dense kernels: "
             << model::DenseBackendName() << "\n";
 
   std::vector<DahlNetRun> runs;
@@ -143,6 +146,12 @@ void RegisterDahl(CLI::App& app, int& exit_code) {
                   "case 2's b1: paper (3.09292e4, reproduces the paper's Table 2 data) or spec (3.09292e5)")
       ->check(CLI::IsMember({"paper", "spec"}))
       ->default_str("paper");
+  cmd->add_option("--min-grad-units", args->min_grad_units,
+                  "units of the min_grad = 1e-7 stop: normalised (the gradient of the MSE in mapminmax-normalised "
+                  "target units, the same test for every case) or target (MATLAB's: in units of d, so case 2's "
+                  "targets, 10 x smaller, stop 100 x sooner)")
+      ->check(CLI::IsMember({"normalised", "target"}))
+      ->default_str("normalised");
   cmd->add_option("--data-dir", args->data_dir,
                   "write dahl_case<k>.csv (t, v, d) and, per run, dahl_case<k>_<lm|br>_fit.csv (subset, network "
                   "output) here")

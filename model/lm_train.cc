@@ -330,6 +330,10 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
   const int N = tr.n();
   const bool track_best = va.n() > 0 && (!br || opt.max_fail > 0);
   const bool need_test = opt.keep_history || static_cast<bool>(on_epoch);
+  // ‖∇MSE‖ in normalised target units is gain² times the one in target units (e and J both scale
+  // with the gain of the output map).
+  const double out_gain = net.output_map().gain(0);
+  const double min_grad_scale = opt.min_grad_normalised ? out_gain * out_gain : 1.0;
 
   TrainSummary sum;
   sum.method = method;
@@ -379,7 +383,7 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
     else if (mse <= opt.goal) stop = TrainTermination::kGoalMet;
     else if (epoch >= opt.epochs) stop = TrainTermination::kMaxEpochs;
     else if (elapsed >= opt.time_limit_s) stop = TrainTermination::kTimeLimit;
-    else if (gradient <= opt.min_grad) stop = TrainTermination::kMinGradient;
+    else if (gradient * min_grad_scale <= opt.min_grad) stop = TrainTermination::kMinGradient;
     else if (mu >= opt.mu_max) stop = TrainTermination::kMuMax;
     else if (opt.max_fail > 0 && va.n() > 0 && val_fail >= opt.max_fail) stop = TrainTermination::kValidationStop;
     if (stop) {

@@ -3,7 +3,9 @@
 // validation and test samples (MATLAB dividerand).
 //
 // With e = y − t over the N training samples, MSE = Σe²/N, JJ = JᵀJ/N, JE = Jᵀe/N (the toolbox's
-// normalised "perfsJEJJ"), the gradient reported is ‖∇MSE‖ = 2‖JE‖.
+// normalised "perfsJEJJ"), the gradient reported is ‖∇MSE‖ = 2‖JE‖. As in the toolbox, e, MSE, JJ and
+// JE are in target units: the network's output passes through the reverse mapminmax before the
+// error is taken (mse's 'normalization' parameter defaults to 'none'); see min_grad_normalised.
 //
 // LM epoch:  solve (JJ + μI) δ = −JE by Cholesky; accept w + δ if the training MSE drops (μ ← μ μ_dec,
 //            floor 1e−20), else μ ← μ μ_inc and retry (a failed or ill-conditioned factorisation,
@@ -74,6 +76,13 @@ struct LmOptions {
   int epochs = 1000;           ///< maximum epochs, in [0, 1e9]
   double goal = 0.0;           ///< stop when the training MSE ≤ goal [target unit²], finite, ≥ 0
   double min_grad = 1e-7;      ///< stop when ‖∇MSE‖ ≤ min_grad [target unit² per weight unit], ≥ 0
+  /// Units of the min_grad test. false (MATLAB's): the gradient as reported, of the MSE in target
+  /// units, so it scales with the square of the targets' range (targets 10 × smaller ⇒ gradients
+  /// 100 × smaller, and a min_grad stop 100 × sooner). true: the gradient of the MSE in the
+  /// mapminmax-normalised target units the network works in (‖∇MSE‖ · gain², gain = 2/(tmax − tmin)),
+  /// the same test whatever the unit and scale of the targets. The reported gradient stays in target
+  /// units either way.
+  bool min_grad_normalised = false;
   int max_fail = 6;            ///< successive epochs without a new best validation MSE before
                                ///< stopping, ≥ 0; 0 disables the validation stop
   double mu = 1e-3;            ///< initial μ, finite, > 0

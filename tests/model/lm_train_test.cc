@@ -132,6 +132,45 @@ TEST(TrainLm, StopsWhenTheValidationErrorRises) {
   EXPECT_EQ(s.history.back().val_fail, o.max_fail);
 }
 
+// BR's steps are invariant to the scale of the targets (β JJ, β JE, α and μ do not change when t is
+// multiplied by s; MSE and gradient scale by s²). MATLAB's min_grad test is in target units, so the
+// same problem with targets 100 × smaller stops on min_grad where the original runs on; tested in
+// normalised target units, both stop at the same epoch on the same fit, the gradient still reported
+// in target units.
+TEST(TrainBr, MinGradInNormalisedUnitsDoesNotDependOnTheTargetScale) {
+  const RegressionData d = SineData(120, 0.0, 0);
+  RegressionData small = d;
+  small.t *= 0.01;
+  const FitSetup f0 = SetUpFit(d, 6, SplitRatios{1.0, 0.0, 0.0}, 5);
+  auto run = [&](const RegressionData& data, bool normalised, double min_grad) {
+    FitSetup f = f0;
+    f.net.ConfigureMaps(data.x, data.t);  // same weights, the data's maps
+    BrOptions o;
+    o.epochs = 60;
+    o.min_grad = min_grad;
+    o.min_grad_normalised = normalised;
+    return TrainBr(f.net, data, f.split, o);
+  };
+  // A threshold between the two scales' gradients at the end of the unscaled run.
+  const TrainSummary ref = run(d, false, 0.0);
+  ASSERT_EQ(ref.termination, TrainTermination::kMaxEpochs) << ref.BriefReport();
+  double g_min = ref.history.front().gradient;
+  for (const EpochRecord& e : ref.history) g_min = std::min(g_min, e.gradient);
+  const double min_grad = 1e-2 * g_min;  // never reached at scale 1, reached at scale 0.01 (1e-4 ×)
+  const TrainSummary target_units = run(small, false, min_grad);
+  EXPECT_EQ(target_units.termination, TrainTermination::kMinGradient) << target_units.BriefReport();
+  EXPECT_LT(target_units.epochs, ref.epochs);
+  const double gain2 = std::pow(f0.net.output_map().gain(0), 2);  // of the unscaled targets
+  for (const TrainSummary& s : {run(d, true, min_grad * gain2), run(small, true, min_grad * gain2)}) {
+    EXPECT_EQ(s.termination, TrainTermination::kMaxEpochs) << s.BriefReport();
+    EXPECT_EQ(s.epochs, ref.epochs);
+  }
+  const TrainSummary a = run(d, true, 0.0), b = run(small, true, 0.0);
+  EXPECT_NEAR(b.train.mse, 1e-4 * a.train.mse, 1e-6 * 1e-4 * a.train.mse);
+  EXPECT_NEAR(b.gradient, 1e-4 * a.gradient, 1e-5 * 1e-4 * a.gradient);  // reported in target units
+  EXPECT_NEAR(b.gamma, a.gamma, 1e-4 * a.gamma);  // P − α tr(·): a difference of near-equal terms
+}
+
 TEST(Training, SameSeedGivesIdenticalWeights) {
   const RegressionData d = SineData(150, 0.01, 9);
   auto run = [&](uint64_t seed, bool br) {
