@@ -2,8 +2,8 @@
 # Full diagnosis (every candidate of the effect library, greedy second effect, per-case trends,
 # report with figures) of bundled nine-case bench sets, timed on this machine with 2 threads.
 # Prints per set: wall time, the time of each candidate fit, the verdict and the share of the
-# withheld gap closed. The diagnosis runs locally (thread-pool evaluator): the service has no
-# diagnose job kind yet (docs/diagnosis.md, "Service").
+# withheld gap closed. The diagnosis runs locally (thread-pool evaluators); the same diagnosis with
+# its fits on a local master + 2 workers is bench/diagnose_service.sh.
 # Usage: bench/diagnose_full.sh [build dir] [sets…]   (default sets: driver-lowpass creep delay nominal hinge-friction)
 set -euo pipefail
 cd "$(dirname "$0")/.."

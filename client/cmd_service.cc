@@ -86,6 +86,7 @@ std::string Num(double x, int prec = 6) {
 /// "12/1000": the last completed generation (generation 0 is the initial population) of at most
 /// max; "-" before the first.
 std::string Generation(const master::JobInfo& i) {
+  if (i.algorithm == "external") return std::to_string(i.generation) + "b";  // a session: batches
   return (i.generation == 0 ? std::string("-") : std::to_string(i.generation - 1)) + "/" +
          std::to_string(i.max_generations);
 }

@@ -211,6 +211,33 @@ Status ServiceClient::Watch(const std::string& job_id,
   return {StatusCode::kUnavailable, "watch of " + job_id + " timed out"};
 }
 
+Status ServiceClient::Evaluate(const std::string& job_id, uint64_t batch_seq,
+                               const std::vector<master::Genome>& genomes, bool* done,
+                               std::vector<master::FitnessResult>* results, int* worker_threads) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kEvaluate;
+  req.job_id = job_id;
+  req.batch_seq = batch_seq;
+  req.genomes = genomes;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  if (reply.type != ClientReplyMsg::Type::kEvaluate || reply.batch_seq != batch_seq)
+    return {StatusCode::kDataLoss, "the master's evaluate reply does not answer batch " + std::to_string(batch_seq)};
+  *done = reply.done;
+  if (reply.done) *results = std::move(reply.results);
+  if (worker_threads) *worker_threads = reply.worker_threads;
+  return s;
+}
+
+Status ServiceClient::Close(const std::string& job_id) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kClose;
+  req.job_id = job_id;
+  ClientReplyMsg reply;
+  return impl_->Call(req, &reply);
+}
+
 Status ServiceClient::WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
                                 master::JobInfo* info) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;

@@ -68,6 +68,14 @@ class ServiceClient {
   Status Watch(const std::string& job_id,
                const std::function<bool(const master::JobEvent&)>& on_event,
                std::chrono::milliseconds timeout);
+  /// Evaluation sessions (JobSpec.external, client/service_evaluator.h): submits batch `batch_seq`
+  /// of a session (genomes non-empty; a retry is a poll) or polls it (genomes empty). *done says
+  /// whether *results holds its results (one per genome). A batch the master does not hold is
+  /// kNotFound: send it again with its genomes.
+  Status Evaluate(const std::string& job_id, uint64_t batch_seq, const std::vector<master::Genome>& genomes,
+                  bool* done, std::vector<master::FitnessResult>* results, int* worker_threads = nullptr);
+  /// Ends an evaluation session: it succeeds (a retried close of a succeeded session is Ok).
+  Status Close(const std::string& job_id);
   /// Waits (polling status) until the job is final; its last info in *info.
   Status WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
                    master::JobInfo* info = nullptr);

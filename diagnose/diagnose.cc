@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <exception>
 
 #include "model/noise_floor.h"
 #include "model/saturation.h"
@@ -151,17 +152,22 @@ std::vector<Absorption> Compare(const FitResult& without, const FitResult& with)
 std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitResult& start,
                                            const ParameterLayout& start_layout, const std::vector<EffectKind>& kinds,
                                            const DiagnoseOptions& o, int64_t* evals) {
-  std::vector<CandidateResult> out;
-  for (EffectKind k : kinds) {
+  std::vector<EffectKind> todo;
+  for (EffectKind k : kinds)
+    if (std::find(start.structure.begin(), start.structure.end(), k) == start.structure.end()) todo.push_back(k);
+  std::vector<CandidateResult> out(todo.size());
+  std::vector<std::string> lines(todo.size());
+  std::vector<std::exception_ptr> errors(todo.size());
+  // Each fit is independent of the others: concurrent fits give the same results.
+  auto fit_one = [&](int i) {
+    const EffectKind k = todo[i];
     std::vector<EffectKind> structure = start.structure;
-    if (std::find(structure.begin(), structure.end(), k) != structure.end()) continue;
     structure.push_back(k);
     const ParameterLayout layout(structure);
     const auto t0 = std::chrono::steady_clock::now();
-    CandidateResult c;
+    CandidateResult& c = out[i];
     c.kind = k;
     c.fit = FitStructure(m, layout, &start_layout, &start.x, k, o);
-    *evals += c.fit.evaluations;
     c.added_params = layout.size() - start_layout.size();
     if (c.fit.ok && c.fit.train_pi > start.train_pi) {
       // The refinement ended above the nested model (effect at zero): keep the nested solution.
@@ -175,12 +181,25 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
       c.fit = std::move(nested);
     }
     const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    Say(o, std::string("  ") + model::EffectName(k) +
+    lines[i] = std::string("  ") + model::EffectName(k) +
                (c.fit.ok ? Fmt(": training RMS %.4f, withheld RMS %.4f deg", std::sqrt(c.fit.train_pi / m.training_samples()),
                                std::sqrt(c.fit.withheld_pi / m.withheld_samples()))
                          : ": fit failed: " + c.fit.message) +
-               Fmt(" (%.1f s)", wall));
-    out.push_back(std::move(c));
+               Fmt(" (%.1f s)", wall);
+    if (o.concurrent_fits <= 1) Say(o, lines[i]);
+  };
+  ParallelFor(static_cast<int>(todo.size()), o.concurrent_fits, [&](int i) {
+    try {
+      fit_one(i);
+    } catch (...) {  // e.g. the service failed: rethrown on the calling thread
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+  for (size_t i = 0; i < out.size(); ++i) {
+    *evals += out[i].fit.evaluations;
+    if (o.concurrent_fits > 1) Say(o, lines[i]);
   }
   return out;
 }
@@ -332,6 +351,7 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
 
 Status DiagnoseOptions::Validate() const {
   if (threads < 1) return InvalidArgument(FieldError("threads", threads, "must be >= 1"));
+  if (concurrent_fits < 1) return InvalidArgument(FieldError("concurrent_fits", concurrent_fits, "must be >= 1"));
   if (auto s = de_base.Validate(); !s.ok()) return InvalidArgument("de_base." + s.message());
   if (auto s = de_candidate.Validate(); !s.ok()) return InvalidArgument("de_candidate." + s.message());
   if (auto s = lm.Validate(); !s.ok()) return InvalidArgument("lm." + s.message());

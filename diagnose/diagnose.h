@@ -49,7 +49,10 @@ struct DiagnoseOptions {
   int threads = 2;                            ///< ≥ 1
   uint64_t seed = 1;
   /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
-  std::function<std::unique_ptr<master::BatchEvaluator>(const master::FitnessFunction&)> evaluator_factory;
+  EvaluatorFactory evaluator_factory;
+  /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
+  /// sessions), ≥ 1; the results do not depend on it.
+  int concurrent_fits = 1;
   DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
   DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
   LmOptions lm{.max_iterations = 40};

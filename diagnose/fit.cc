@@ -160,7 +160,13 @@ FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, 
   }
   if (lm_starts.empty()) throw InputError("FitGlobal: no global search and no starting point");
 
-  const ResidualFunction f = UnitResiduals(model, layout);
+  // The refinement's residuals through the same seam (DiagnosisFitness with residuals: the
+  // training residuals at FromUnit(u), as UnitResiduals), so every Jacobian is one batch.
+  const DiagnosisFitness residual_fitness(model, layout, /*residuals=*/true);
+  std::unique_ptr<master::BatchEvaluator> rev =
+      o.evaluator_factory ? o.evaluator_factory(residual_fitness)
+                          : std::make_unique<master::ThreadPoolEvaluator>(residual_fitness, o.lm.threads);
+  const BatchResidualFunction f = EvaluatorResiduals(*rev);
   std::vector<double> lo(n, 0.0), hi(n, 1.0);
   LmResult best;
   best.cost = std::numeric_limits<double>::infinity();

@@ -39,11 +39,15 @@ struct ParamEstimate {
   std::string note;        ///< e.g. "correlated with delta (r = -0.98)"
 };
 
+/// Builds the evaluator of a fitness (e.g. an evaluation session on the service, which needs the
+/// fitness's model, layout and residual mode to write the session's spec).
+using EvaluatorFactory = std::function<std::unique_ptr<master::BatchEvaluator>(const DiagnosisFitness&)>;
+
 struct FitOptions {
   int threads = 2;                 ///< evaluator threads and Jacobian columns, ≥ 1
-  /// Builds the evaluator of the global search for its fitness (e.g. the service's broker-backed
-  /// one); null = a ThreadPoolEvaluator with `threads` threads.
-  std::function<std::unique_ptr<master::BatchEvaluator>(const master::FitnessFunction&)> evaluator_factory;
+  /// Builds the evaluators of the global search (cost) and of the refinement (residuals: every
+  /// Jacobian one batch); null = ThreadPoolEvaluators with `threads` threads.
+  EvaluatorFactory evaluator_factory;
   bool global_search = true;       ///< differential evolution before the refinement
   DeOptions de;
   LmOptions lm;

@@ -135,48 +135,115 @@ Status LmOptions::Validate() const {
   return Status::Ok();
 }
 
+BatchResidualFunction ParallelResiduals(ResidualFunction f, int threads) {
+  return [f = std::move(f), threads](const std::vector<std::vector<double>>& xs, std::vector<std::vector<double>>& rs,
+                                     std::vector<char>& ok) {
+    rs.assign(xs.size(), {});
+    ok.assign(xs.size(), 0);
+    ParallelFor(static_cast<int>(xs.size()), threads, [&](int i) { ok[i] = f(xs[i], rs[i]) ? 1 : 0; });
+  };
+}
+
+BatchResidualFunction EvaluatorResiduals(master::BatchEvaluator& evaluator) {
+  return [&evaluator](const std::vector<std::vector<double>>& xs, std::vector<std::vector<double>>& rs,
+                      std::vector<char>& ok) {
+    std::vector<master::Genome> genomes(xs.size());
+    std::vector<int> idx(xs.size());
+    for (size_t i = 0; i < xs.size(); ++i) {
+      genomes[i].reals = xs[i];
+      idx[i] = static_cast<int>(i);
+    }
+    std::vector<master::FitnessResult> out(xs.size());
+    evaluator.Evaluate({0, genomes, idx}, out);
+    rs.assign(xs.size(), {});
+    ok.assign(xs.size(), 0);
+    for (size_t i = 0; i < xs.size(); ++i) {
+      ok[i] = out[i].status == master::FitnessStatus::kOk ? 1 : 0;
+      rs[i] = std::move(out[i].residuals);
+    }
+  };
+}
+
 bool NumericJacobian(const ResidualFunction& f, std::span<const double> x, std::span<const double> r0,
                      std::span<const double> lower, std::span<const double> upper, double step, bool central,
                      int threads, Eigen::MatrixXd& jac, int64_t* evaluations) {
+  return NumericJacobian(ParallelResiduals(f, threads), x, r0, lower, upper, step, central, jac, evaluations);
+}
+
+bool NumericJacobian(const BatchResidualFunction& f, std::span<const double> x, std::span<const double> r0,
+                     std::span<const double> lower, std::span<const double> upper, double step, bool central,
+                     Eigen::MatrixXd& jac, int64_t* evaluations) {
   const int n = static_cast<int>(x.size());
   const int m = static_cast<int>(r0.size());
   jac.setZero(m, n);
-  std::atomic<bool> all_ok{true};
-  std::atomic<int64_t> evals{0};
-  ParallelFor(n, threads, [&](int j) {
-    std::vector<double> xp(x.begin(), x.end()), xm(x.begin(), x.end());
-    const double up = std::min(upper[j], x[j] + step), dn = std::max(lower[j], x[j] - step);
-    std::vector<double> rp, rm;
-    bool okp = false, okm = false;
-    const bool use_up = up > x[j];
-    const bool use_dn = dn < x[j] && (central || !use_up);
+  // Every column's points (up and/or down), evaluated as one batch.
+  struct Column {
+    double up = 0, dn = 0;
+    int ip = -1, im = -1;  // indices into the batch
+  };
+  std::vector<Column> cols(n);
+  std::vector<std::vector<double>> xs;
+  for (int j = 0; j < n; ++j) {
+    Column& c = cols[j];
+    c.up = std::min(upper[j], x[j] + step);
+    c.dn = std::max(lower[j], x[j] - step);
+    const bool use_up = c.up > x[j];
+    const bool use_dn = c.dn < x[j] && (central || !use_up);
     if (use_up) {
-      xp[j] = up;
-      okp = f(xp, rp) && rp.size() == static_cast<size_t>(m);
-      evals.fetch_add(1);
+      c.ip = static_cast<int>(xs.size());
+      xs.emplace_back(x.begin(), x.end());
+      xs.back()[j] = c.up;
     }
     if (use_dn) {
-      xm[j] = dn;
-      okm = f(xm, rm) && rm.size() == static_cast<size_t>(m);
-      evals.fetch_add(1);
+      c.im = static_cast<int>(xs.size());
+      xs.emplace_back(x.begin(), x.end());
+      xs.back()[j] = c.dn;
     }
+  }
+  std::vector<std::vector<double>> rs;
+  std::vector<char> ok;
+  if (!xs.empty()) f(xs, rs, ok);
+  if (evaluations) *evaluations += static_cast<int64_t>(xs.size());
+  bool all_ok = true;
+  for (int j = 0; j < n; ++j) {
+    const Column& c = cols[j];
+    const bool okp = c.ip >= 0 && ok[c.ip] && rs[c.ip].size() == static_cast<size_t>(m);
+    const bool okm = c.im >= 0 && ok[c.im] && rs[c.im].size() == static_cast<size_t>(m);
     if (okp && okm) {
-      for (int i = 0; i < m; ++i) jac(i, j) = (rp[i] - rm[i]) / (up - dn);
+      const auto& rp = rs[c.ip];
+      const auto& rm = rs[c.im];
+      for (int i = 0; i < m; ++i) jac(i, j) = (rp[i] - rm[i]) / (c.up - c.dn);
     } else if (okp) {
-      for (int i = 0; i < m; ++i) jac(i, j) = (rp[i] - r0[i]) / (up - x[j]);
+      const auto& rp = rs[c.ip];
+      for (int i = 0; i < m; ++i) jac(i, j) = (rp[i] - r0[i]) / (c.up - x[j]);
     } else if (okm) {
-      for (int i = 0; i < m; ++i) jac(i, j) = (r0[i] - rm[i]) / (x[j] - dn);
-    } else if (use_up || use_dn) {
+      const auto& rm = rs[c.im];
+      for (int i = 0; i < m; ++i) jac(i, j) = (r0[i] - rm[i]) / (x[j] - c.dn);
+    } else if (c.ip >= 0 || c.im >= 0) {
       all_ok = false;
     }
-  });
-  if (evaluations) *evaluations += evals.load();
-  return all_ok.load();
+  }
+  return all_ok;
 }
 
 LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x, std::span<const double> lower,
                             std::span<const double> upper, const LmOptions& o) {
   ThrowIfError(o.Validate());
+  return LevenbergMarquardt(ParallelResiduals(f, o.threads), std::move(x), lower, upper, o);
+}
+
+LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double> x, std::span<const double> lower,
+                            std::span<const double> upper, const LmOptions& o) {
+  ThrowIfError(o.Validate());
+  // One point at a time (the start and the trial steps).
+  std::vector<std::vector<double>> one(1), rs1;
+  std::vector<char> ok1;
+  auto f = [&](std::span<const double> p, std::vector<double>& r) {
+    one[0].assign(p.begin(), p.end());
+    fb(one, rs1, ok1);
+    r = std::move(rs1[0]);
+    return ok1[0] != 0;
+  };
   const int n = static_cast<int>(x.size());
   PZ_CHECK(lower.size() == x.size() && upper.size() == x.size());
   for (int j = 0; j < n; ++j) x[j] = std::clamp(x[j], lower[j], upper[j]);
@@ -197,7 +264,7 @@ LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x, st
   double lambda = o.lambda0;
   std::vector<double> r_new;
   for (int it = 0; it < o.max_iterations; ++it) {
-    NumericJacobian(f, res.x, res.r, lower, upper, o.fd_step, o.central, o.threads, res.jacobian, &res.evaluations);
+    NumericJacobian(fb, res.x, res.r, lower, upper, o.fd_step, o.central, res.jacobian, &res.evaluations);
     res.iterations = it + 1;
     const Eigen::Map<const Eigen::VectorXd> rv(res.r.data(), static_cast<Eigen::Index>(res.r.size()));
     const Eigen::MatrixXd a = res.jacobian.transpose() * res.jacobian;

@@ -49,6 +49,18 @@ DeResult DifferentialEvolution(int dim, const DeOptions& options, master::BatchE
 /// r(x) into r; false if x cannot be evaluated (then r is ignored). Must be thread-safe.
 using ResidualFunction = std::function<bool(std::span<const double> x, std::vector<double>& r)>;
 
+/// Residual vectors of many points at once (a Jacobian's columns as one batch): rs[i] = r(xs[i]),
+/// ok[i] = whether xs[i] could be evaluated. Each point's result must not depend on the batch.
+using BatchResidualFunction =
+    std::function<void(const std::vector<std::vector<double>>& xs, std::vector<std::vector<double>>& rs,
+                       std::vector<char>& ok)>;
+
+/// f on up to `threads` threads.
+BatchResidualFunction ParallelResiduals(ResidualFunction f, int threads);
+/// Through a BatchEvaluator whose fitness returns residuals (genome.reals = x; ok ⇔ status kOk),
+/// e.g. the service's workers (client/service_evaluator.h). The evaluator must outlive the function.
+BatchResidualFunction EvaluatorResiduals(master::BatchEvaluator& evaluator);
+
 struct LmOptions {
   int max_iterations = 40;   ///< Jacobian evaluations, ≥ 1
   double fd_step = 1e-3;     ///< finite-difference step in the coordinates of x, > 0 (large enough to
@@ -77,6 +89,9 @@ struct LmResult {
 /// carries the message and cost +inf).
 LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x0, std::span<const double> lower,
                             std::span<const double> upper, const LmOptions& options);
+/// The same with batched evaluations: every Jacobian is one batch (options.threads unused).
+LmResult LevenbergMarquardt(const BatchResidualFunction& f, std::vector<double> x0, std::span<const double> lower,
+                            std::span<const double> upper, const LmOptions& options);
 
 /// Numeric Jacobian at x with residuals r0 = f(x): central (or forward) differences, one-sided
 /// at the bounds, columns in parallel. Returns false if a needed evaluation failed (that column
@@ -84,5 +99,9 @@ LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x0, s
 bool NumericJacobian(const ResidualFunction& f, std::span<const double> x, std::span<const double> r0,
                      std::span<const double> lower, std::span<const double> upper, double step, bool central,
                      int threads, Eigen::MatrixXd& jacobian, int64_t* evaluations);
+/// The same, every column's points evaluated as one batch.
+bool NumericJacobian(const BatchResidualFunction& f, std::span<const double> x, std::span<const double> r0,
+                     std::span<const double> lower, std::span<const double> upper, double step, bool central,
+                     Eigen::MatrixXd& jacobian, int64_t* evaluations);
 
 }  // namespace pz::diagnose

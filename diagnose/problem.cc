@@ -250,8 +250,8 @@ std::vector<double> DiagnosisModel::CasePi(const ParameterLayout& layout, std::s
 
 // ---- fitness -------------------------------------------------------------------------------------
 
-DiagnosisFitness::DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout)
-    : model_(model), layout_(std::move(layout)) {
+DiagnosisFitness::DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout, bool residuals)
+    : model_(model), layout_(std::move(layout)), residuals_(residuals) {
   // Strictly above any valid cost: every residual bounded by |y| + max(b1, −b2) per sample.
   for (const DiagCase& c : model_.cases()) {
     if (!c.training) continue;
@@ -288,6 +288,7 @@ master::FitnessResult DiagnosisFitness::Evaluate(const master::Genome& genome) c
   double cost = 0;
   for (double e : res) cost += e * e;
   r.cost = std::min(cost, penalty_);
+  if (residuals_) r.residuals = res;
   return r;
 }
 

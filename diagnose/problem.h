@@ -117,17 +117,22 @@ class DiagnosisModel {
 };
 
 /// The cost over Genome.reals (search coordinates in [0, 1]): CF = Σ_training PI [deg²]; an invalid
-/// genome or failed simulation gets the finite penalty_cost() with status kPenalized.
+/// genome or failed simulation gets the finite penalty_cost() with status kPenalized. With
+/// `residuals`, an evaluable genome's result also carries the training residual vector (what
+/// Levenberg–Marquardt needs: DiagnosisModel::Residuals at FromUnit(genome.reals)).
 class DiagnosisFitness final : public master::FitnessFunction {
  public:
-  DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout);
+  DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout, bool residuals = false);
   master::FitnessResult Evaluate(const master::Genome& genome) const override;
+  const DiagnosisModel& model() const { return model_; }
   const ParameterLayout& layout() const { return layout_; }
+  bool residuals() const { return residuals_; }
   double penalty_cost() const { return penalty_; }
 
  private:
   const DiagnosisModel& model_;
   ParameterLayout layout_;
+  bool residuals_ = false;
   double penalty_ = 0;
 };
 

@@ -382,7 +382,7 @@ struct Broker::Impl {
     } else {
       reply = handler->Handle(req);
       reply.request_id = req.request_id;
-      if (req.type == ClientRequestMsg::Type::kList) {
+      if (req.type == ClientRequestMsg::Type::kList || req.type == ClientRequestMsg::Type::kEvaluate) {
         reply.workers = dispatcher.worker_count();
         reply.worker_threads = dispatcher.total_threads();
       }

@@ -29,6 +29,9 @@ struct FitnessResult {
   double cost = 0;  ///< finite always; lower is better
   FitnessStatus status = FitnessStatus::kOk;
   std::string reason;  ///< empty when ok
+  /// The residual vector behind the cost, for least-squares optimisers (job kinds that are asked
+  /// for it: diagnose with `residuals`); empty for GA kinds, so the hot path carries nothing.
+  std::vector<double> residuals{};
 };
 
 /// A pure, thread-safe fitness function of one genome.

@@ -43,6 +43,7 @@ int GaSettings::offspring() const {
 std::string JobSpec::kind() const {
   if (std::holds_alternative<HgannProblem>(problem)) return "hgann";
   if (std::holds_alternative<SyntheticProblem>(problem)) return "synthetic";
+  if (std::holds_alternative<DiagnoseProblem>(problem)) return "diagnose";
   return "";
 }
 
@@ -66,12 +67,20 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     bool bits01 = s->crash_prefix.find_first_not_of("01") == std::string::npos;
     c.Require(bits01 && static_cast<int>(s->crash_prefix.size()) <= s->genome_bits,
               "synthetic.crash_prefix", s->crash_prefix, "must be a 0/1 string ≤ genome_bits");
+  } else if (std::holds_alternative<DiagnoseProblem>(problem)) {
+    // Checked by the "diagnose" job kind (diagnose/job_kind.h), which knows the effect library.
   } else {
-    out.push_back({"problem", "problem: one of hgann, synthetic must be set"});
+    out.push_back({"problem", "problem: one of hgann, synthetic, diagnose must be set"});
   }
 
-  if (!ga) {
-    out.push_back({"algorithm", "algorithm: ga must be set"});
+  if (ga && external) {
+    out.push_back({"algorithm", "algorithm: only one of ga, external may be set"});
+  } else if (external) {
+    c.Range("external.idle_timeout_s", external->idle_timeout_s, 0.1, 86400.0);
+    c.Require(external->owner.size() <= 200, "external.owner", external->owner.size(),
+              "must be ≤ 200 characters");
+  } else if (!ga) {
+    out.push_back({"algorithm", "algorithm: one of ga, external must be set"});
   } else {
     c.Range("ga.population", ga->population, 2, 1000000);
     c.Require(ga->elite_fraction > 0 && ga->elite_fraction < 1, "ga.elite_fraction",

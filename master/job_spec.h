@@ -66,6 +66,36 @@ struct SyntheticProblem {
   std::string crash_prefix;  ///< test aid: genomes starting with these 0/1 bits kill the evaluator
 };
 
+/// One parameter box of a diagnosis model (proto DiagnoseParam; diagnose/problem.h ParamSpec).
+struct DiagnoseParamBox {
+  std::string name;
+  double lower = 0, upper = 1;
+  bool log_scale = false, ratio = false;
+  bool operator==(const DiagnoseParamBox&) const = default;
+};
+
+/// The global fit of one diagnosis model structure (job kind "diagnose", diagnose/job_kind.h):
+/// genome.reals = search coordinates in [0, 1]; cost = Σ training e² [deg²].
+struct DiagnoseProblem {
+  std::vector<HgannCaseSpec> cases;     ///< role kTrain = fitted; b1, b2 unset (from extremes)
+  std::vector<double> cycles;           ///< drive cycles per case (as many as cases), > 0
+  std::vector<std::string> structure;   ///< effect names added to the base model, in order
+  std::vector<DiagnoseParamBox> params; ///< the search box in layout order
+  bool residuals = false;               ///< results carry the training residual vector
+  int oversample = 4;                   ///< model/effects.h EffectSimOptions
+  double rtol = 1e-6, atol = 1e-13;
+  int64_t max_steps = 5000000;
+  bool force_cvode = false;
+  std::string source;                   ///< free text, ≤ 1000 chars
+};
+
+/// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends
+/// batches of genomes; the master only evaluates them.
+struct ExternalSettings {
+  double idle_timeout_s = 120;  ///< cancelled after this long without a request from its client [s]
+  std::string owner;            ///< free text, ≤ 200 chars
+};
+
 /// Settings of the HGANN binary GA (master/ga.h GaOptions; genome length, seed, target and error
 /// cost come from the problem, the spec's seed and its limits).
 struct GaSettings {
@@ -92,11 +122,16 @@ struct JobSpec {
   std::string name;
   uint64_t seed = 0;
   JobLimits limits;
-  std::variant<std::monostate, HgannProblem, SyntheticProblem> problem;
-  std::optional<GaSettings> ga;  ///< the algorithm (only the GA so far)
+  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem> problem;
+  /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
+  /// evaluation session driven by the client).
+  std::optional<GaSettings> ga;
+  std::optional<ExternalSettings> external;
 
-  /// "hgann", "synthetic" or "" when no problem is set.
+  /// "hgann", "synthetic", "diagnose" or "" when no problem is set.
   std::string kind() const;
+  /// "ga", "external" or "".
+  std::string algorithm() const { return ga ? "ga" : external ? "external" : ""; }
   /// Generic checks (every field's range); kind-specific checks come from the job-kind registry.
   std::vector<FieldViolation> Validate() const;
 };

@@ -51,7 +51,68 @@ Status JobStore::Resume() {
 }
 
 void JobStore::Start(const std::shared_ptr<Job>& job) {
-  job->thread = std::thread([this, job] { Run(*job); });
+  if (job->spec.external) {
+    GenomeLayout layout;
+    (void)kinds_.Layout(job->spec, &layout);  // a failure fails the job in RunSession
+    job->session = std::make_shared<Session>(job->id, *job->spec.external, layout, job->spec.kind());
+  }
+  job->thread = std::thread([this, job] { job->session ? RunSession(*job) : Run(*job); });
+}
+
+void JobStore::RunSession(Job& job) {
+  JobCheckpoint c;
+  {
+    std::lock_guard lock(job.mu);
+    c = job.checkpoint;
+  }
+  auto finish = [&](JobState state, const std::string& message) {
+    c.state = state;
+    c.message = message;
+    Save(job, c);
+    broker_.Publish({job.id, state, c.log.empty() ? std::nullopt : std::optional(c.log.back()), message});
+    spdlog::info("session {}: {} {}", job.id, JobStateName(state), message);
+  };
+  GenomeLayout layout;
+  if (Status s = kinds_.Layout(job.spec, &layout); !s.ok()) {
+    finish(JobState::kFailed, "cannot start: " + s.message());
+    return;
+  }
+  broker_.RegisterJob(job.id, job.spec_bytes, job.spec.limits);
+  BrokerEvaluator eval(broker_, job.id);
+  auto last_write = std::chrono::steady_clock::now();
+  auto t0 = std::chrono::steady_clock::now();
+  const Session::End end = job.session->Run(
+      eval, c.log.size() + 1, [&] { return job.cancel || job.shutdown; },
+      [&](uint64_t seq, std::span<const Genome> genomes, std::span<const FitnessResult> results) {
+        if (eval.interrupted()) return false;
+        const auto now = std::chrono::steady_clock::now();
+        const GenerationRecord& rec =
+            FoldSessionBatch(c, genomes, results, std::chrono::duration<double>(now - t0).count());
+        t0 = now;
+        for (const auto& q : eval.TakeQuarantined()) c.quarantined.push_back(q);
+        const bool durable = options_.checkpoint_interval_s <= 0 ||
+                             std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
+        Save(job, c, /*write=*/true, durable);
+        if (durable) last_write = now;
+        spdlog::debug("session {}: batch {} ({} genomes) best {:.9g}", job.id, seq, genomes.size(), rec.best_cost);
+        broker_.Publish({job.id, c.state, rec, {}});
+        return true;
+      });
+  if (!eval.error().empty()) {
+    finish(JobState::kFailed, eval.error());
+  } else if (job.cancel) {
+    finish(JobState::kCancelled, "cancelled by a client");
+  } else if (end == Session::End::kClosed) {
+    finish(JobState::kSucceeded, "closed by its client");
+  } else if (end == Session::End::kIdle) {
+    finish(JobState::kCancelled, "its client sent nothing for " +
+                                     std::to_string(job.spec.external->idle_timeout_s) + " s (external.idle_timeout_s)");
+  } else {  // shutdown: resumed on the next start
+    std::lock_guard lock(job.mu);
+    if (Status st = dir_.SaveCheckpoint(job.checkpoint); !st.ok())
+      spdlog::error("session {}: checkpoint not saved: {}", job.id, st.message());
+  }
+  broker_.UnregisterJob(job.id);
 }
 
 void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) {
@@ -145,6 +206,7 @@ JobInfo JobStore::Info(Job& job) {
   i.quarantined = c.quarantined;
   i.elapsed_s = c.elapsed_s;
   i.seed = job.spec.seed;
+  i.algorithm = job.spec.algorithm();
   return i;
 }
 
@@ -154,7 +216,8 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
   r.code = WireCode::kOk;
   using T = ClientRequestMsg::Type;
   std::shared_ptr<Job> job;
-  if (req.type == T::kStatus || req.type == T::kCancel || req.type == T::kFetch) {
+  if (req.type == T::kStatus || req.type == T::kCancel || req.type == T::kFetch ||
+      req.type == T::kEvaluate || req.type == T::kClose) {
     std::lock_guard lock(mu_);
     auto it = jobs_.find(req.job_id);
     if (it == jobs_.end()) {
@@ -231,6 +294,33 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
       r.log = job->checkpoint.log;
       r.spec = job->spec;
       return r;
+    }
+    case T::kEvaluate:
+    case T::kClose: {
+      if (!job->session) {
+        r.code = WireCode::kFailedPrecondition;
+        r.error = "job " + job->id + " runs the GA (algorithm " + job->spec.algorithm() +
+                  "): only an evaluation session (algorithm external) takes " +
+                  (req.type == T::kEvaluate ? "evaluate" : "close") + " requests";
+        return r;
+      }
+      r.info = Info(*job);
+      if (IsFinal(r.info.state)) {
+        if (req.type == T::kClose && r.info.state == JobState::kSucceeded) {  // a retried close
+          r.type = ClientReplyMsg::Type::kStatus;
+          return r;
+        }
+        r.code = WireCode::kFailedPrecondition;
+        r.error = "session " + job->id + " is " + JobStateName(r.info.state) +
+                  (r.info.message.empty() ? "" : " (" + r.info.message + ")");
+        return r;
+      }
+      if (req.type == T::kClose) {
+        job->session->Close();
+        r.type = ClientReplyMsg::Type::kStatus;
+        return r;
+      }
+      return job->session->Evaluate(req);
     }
     case T::kList: {
       r.type = ClientReplyMsg::Type::kList;

@@ -14,6 +14,7 @@
 #include "master/broker.h"
 #include "master/checkpoint.h"
 #include "master/job_kinds.h"
+#include "master/session.h"
 
 namespace pz::master {
 
@@ -50,9 +51,11 @@ class JobStore final : public ClientHandler {
     JobCheckpoint checkpoint;  // the last saved one
     std::atomic<bool> cancel{false}, shutdown{false};
     std::thread thread;
+    std::shared_ptr<Session> session;  // external jobs (evaluation sessions) only
   };
   void Start(const std::shared_ptr<Job>& job);
   void Run(Job& job);
+  void RunSession(Job& job);  // the job thread of an evaluation session
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
   void Save(Job& job, const JobCheckpoint& c, bool write = true, bool durable = true);
   JobInfo Info(Job& job);

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "master/broker.h"
+#include "diagnose/job_kind.h"
 #include "master/job_store.h"
 
 namespace {
@@ -59,6 +60,7 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
 
   pz::master::Broker b(broker);
+  pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
   pz::master::JobStore jobs(store, b, pz::master::JobKindRegistry::Default());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {
     spdlog::critical("{}", s.message());

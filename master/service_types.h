@@ -85,6 +85,7 @@ struct JobInfo {
   std::vector<QuarantineRecord> quarantined;
   double elapsed_s = 0;
   uint64_t seed = 0;
+  std::string algorithm;  ///< "ga" or "external" (a session: generation = batches evaluated)
 };
 
 struct JobEvent {
@@ -137,19 +138,21 @@ struct WorkerMsg {
 // ------------------------------------------------------------------ client protocol
 
 struct ClientRequestMsg {
-  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing };
+  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose };
   Type type = Type::kPing;
   uint64_t request_id = 0;
   JobSpec spec;              ///< kSubmit (decoded)
   std::string spec_bytes;    ///< kSubmit: the deterministic serialisation of the spec
   std::vector<FieldViolation> decode_violations;  ///< kSubmit: fields that did not decode
   std::string client_token;  ///< kSubmit
-  std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch
+  std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch, kEvaluate, kClose
   int count = 1;             ///< kFetch
+  uint64_t batch_seq = 0;         ///< kEvaluate: ≥ 1
+  std::vector<Genome> genomes;    ///< kEvaluate: the batch, or empty (a poll)
 };
 
 struct ClientReplyMsg {
-  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent };
+  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate };
   Type type = Type::kNone;
   uint64_t request_id = 0;
   WireCode code = WireCode::kOk;
@@ -164,6 +167,9 @@ struct ClientReplyMsg {
   std::vector<GenerationRecord> log;    ///< kFetch
   std::optional<JobSpec> spec;          ///< kFetch: the job's spec
   JobEvent event;                       ///< kEvent
+  uint64_t batch_seq = 0;               ///< kEvaluate
+  bool done = false;                    ///< kEvaluate: results holds the batch's results
+  std::vector<FitnessResult> results;   ///< kEvaluate (worker_threads: connected threads)
 };
 
 }  // namespace pz::master

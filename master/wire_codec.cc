@@ -79,6 +79,21 @@ Status FromProto(pw::FitnessCode c, double cost, FitnessStatus* s) {
   return Status::Ok();
 }
 
+void ToProto(const FitnessResult& r, int index, pw::TaskResult* t) {
+  t->set_index(index);
+  t->set_cost(r.cost);
+  t->set_code(ToProto(r.status));
+  t->set_reason(r.reason);
+  if (!r.residuals.empty()) t->mutable_residuals()->Assign(r.residuals.begin(), r.residuals.end());
+}
+
+Status FromProto(const pw::TaskResult& t, FitnessResult* r) {
+  r->cost = t.cost();
+  r->reason = t.reason();
+  r->residuals.assign(t.residuals().begin(), t.residuals().end());
+  return FromProto(t.code(), t.cost(), &r->status);
+}
+
 void ToProto(const ScoredGenome& s, pw::Individual* p) {
   ToProto(s.genome, p->mutable_genome());
   p->set_cost(s.fitness.cost);
@@ -153,6 +168,41 @@ bool ValidState(int s) { return pw::JobState_IsValid(s); }
 
 // ---------------------------------------------------------------- job specs
 
+int ClampInt(uint64_t v) { return v > 0x7fffffffu ? 0x7fffffff : static_cast<int>(v); }
+
+void CaseToProto(const HgannCaseSpec& c, pw::HgannCase* pc) {
+  pc->set_number(static_cast<uint32_t>(std::max(0, c.number)));
+  pc->set_amplitude_v(c.amplitude_v);
+  pc->set_frequency_hz(c.frequency_hz);
+  pc->set_role(static_cast<pw::CaseRole>(c.role));
+  pc->set_sample_rate_hz(c.sample_rate_hz);
+  pc->mutable_angle_deg()->Assign(c.angle_deg.begin(), c.angle_deg.end());
+  pc->mutable_voltage_v()->Assign(c.voltage_v.begin(), c.voltage_v.end());
+  if (c.b1) pc->set_b1(*c.b1);
+  if (c.b2) pc->set_b2(*c.b2);
+}
+
+/// `field` names the case in violations ("hgann.cases[3]").
+HgannCaseSpec CaseFromProto(const pw::HgannCase& pc, const std::string& field, std::vector<FieldViolation>* v) {
+  HgannCaseSpec c;
+  c.number = ClampInt(pc.number());
+  c.amplitude_v = pc.amplitude_v();
+  c.frequency_hz = pc.frequency_hz();
+  if (pw::CaseRole_IsValid(pc.role())) {
+    c.role = static_cast<CaseRole>(pc.role());
+  } else if (v) {
+    const std::string f = field + ".role";
+    v->push_back({f, f + " = " + std::to_string(pc.role()) +
+                         ": must be CASE_ROLE_TRAIN, CASE_ROLE_VALIDATE or CASE_ROLE_TEST"});
+  }
+  c.sample_rate_hz = pc.sample_rate_hz();
+  c.angle_deg.assign(pc.angle_deg().begin(), pc.angle_deg().end());
+  c.voltage_v.assign(pc.voltage_v().begin(), pc.voltage_v().end());
+  if (pc.has_b1()) c.b1 = pc.b1();
+  if (pc.has_b2()) c.b2 = pc.b2();
+  return c;
+}
+
 void ToProto(const JobSpec& s, pw::JobSpec* p) {
   p->set_version(s.version);
   p->set_name(s.name);
@@ -164,18 +214,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
   if (s.limits.target_cost) l->set_target_cost(*s.limits.target_cost);
   if (const auto* h = std::get_if<HgannProblem>(&s.problem)) {
     auto* ph = p->mutable_hgann();
-    for (const HgannCaseSpec& c : h->cases) {
-      auto* pc = ph->add_cases();
-      pc->set_number(static_cast<uint32_t>(std::max(0, c.number)));
-      pc->set_amplitude_v(c.amplitude_v);
-      pc->set_frequency_hz(c.frequency_hz);
-      pc->set_role(static_cast<pw::CaseRole>(c.role));
-      pc->set_sample_rate_hz(c.sample_rate_hz);
-      pc->mutable_angle_deg()->Assign(c.angle_deg.begin(), c.angle_deg.end());
-      pc->mutable_voltage_v()->Assign(c.voltage_v.begin(), c.voltage_v.end());
-      if (c.b1) pc->set_b1(*c.b1);
-      if (c.b2) pc->set_b2(*c.b2);
-    }
+    for (const HgannCaseSpec& c : h->cases) CaseToProto(c, ph->add_cases());
     ph->set_case_set_dir(h->case_set_dir);
     ph->set_source(h->source);
     ph->set_ranges_preset(h->ranges_preset);
@@ -202,6 +241,26 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
           refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
       }
     }
+  } else if (const auto* d = std::get_if<DiagnoseProblem>(&s.problem)) {
+    auto* pd = p->mutable_diagnose();
+    for (const HgannCaseSpec& c : d->cases) CaseToProto(c, pd->add_cases());
+    pd->mutable_cycles()->Assign(d->cycles.begin(), d->cycles.end());
+    for (const auto& e : d->structure) pd->add_structure(e);
+    for (const DiagnoseParamBox& b : d->params) {
+      auto* pp = pd->add_params();
+      pp->set_name(b.name);
+      pp->set_lower(b.lower);
+      pp->set_upper(b.upper);
+      pp->set_log_scale(b.log_scale);
+      pp->set_ratio(b.ratio);
+    }
+    pd->set_residuals(d->residuals);
+    pd->set_oversample(static_cast<uint32_t>(std::max(0, d->oversample)));
+    pd->set_rtol(d->rtol);
+    pd->set_atol(d->atol);
+    pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d->max_steps)));
+    pd->set_force_cvode(d->force_cvode);
+    pd->set_source(d->source);
   } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
     auto* py = p->mutable_synthetic();
     py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
@@ -220,12 +279,15 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     g->set_generations(static_cast<uint32_t>(s.ga->generations));
     g->set_stall_generations(static_cast<uint32_t>(s.ga->stall_generations));
   }
+  if (s.external) {
+    auto* e = p->mutable_external();
+    e->set_idle_timeout_s(s.external->idle_timeout_s);
+    e->set_owner(s.external->owner);
+  }
 }
 
 template <typename T>
 T OrDefault(T v, T def) { return v == T{} ? def : v; }
-
-int ClampInt(uint64_t v) { return v > 0x7fffffffu ? 0x7fffffff : static_cast<int>(v); }
 
 void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v) {
   *s = JobSpec{};
@@ -239,26 +301,8 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
   if (p.has_hgann()) {
     const auto& ph = p.hgann();
     HgannProblem h;
-    for (int i = 0; i < ph.cases_size(); ++i) {
-      const auto& pc = ph.cases(i);
-      HgannCaseSpec c;
-      c.number = ClampInt(pc.number());
-      c.amplitude_v = pc.amplitude_v();
-      c.frequency_hz = pc.frequency_hz();
-      if (pw::CaseRole_IsValid(pc.role())) {
-        c.role = static_cast<CaseRole>(pc.role());
-      } else if (v) {
-        const std::string f = "hgann.cases[" + std::to_string(i) + "].role";
-        v->push_back({f, f + " = " + std::to_string(pc.role()) +
-                             ": must be CASE_ROLE_TRAIN, CASE_ROLE_VALIDATE or CASE_ROLE_TEST"});
-      }
-      c.sample_rate_hz = pc.sample_rate_hz();
-      c.angle_deg.assign(pc.angle_deg().begin(), pc.angle_deg().end());
-      c.voltage_v.assign(pc.voltage_v().begin(), pc.voltage_v().end());
-      if (pc.has_b1()) c.b1 = pc.b1();
-      if (pc.has_b2()) c.b2 = pc.b2();
-      h.cases.push_back(std::move(c));
-    }
+    for (int i = 0; i < ph.cases_size(); ++i)
+      h.cases.push_back(CaseFromProto(ph.cases(i), "hgann.cases[" + std::to_string(i) + "]", v));
     h.case_set_dir = ph.case_set_dir();
     h.source = ph.source();
     h.ranges_preset = ph.ranges_preset();
@@ -299,6 +343,23 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     y.sleep_ms = py.sleep_ms();
     y.crash_prefix = py.crash_prefix();
     s->problem = std::move(y);
+  } else if (p.has_diagnose()) {
+    const auto& pd = p.diagnose();
+    DiagnoseProblem d;
+    for (int i = 0; i < pd.cases_size(); ++i)
+      d.cases.push_back(CaseFromProto(pd.cases(i), "diagnose.cases[" + std::to_string(i) + "]", v));
+    d.cycles.assign(pd.cycles().begin(), pd.cycles().end());
+    d.structure.assign(pd.structure().begin(), pd.structure().end());
+    for (const auto& pp : pd.params())
+      d.params.push_back({pp.name(), pp.lower(), pp.upper(), pp.log_scale(), pp.ratio()});
+    d.residuals = pd.residuals();
+    d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
+    d.rtol = OrDefault(pd.rtol(), 1e-6);
+    d.atol = OrDefault(pd.atol(), 1e-13);
+    d.max_steps = static_cast<int64_t>(std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
+    d.force_cvode = pd.force_cvode();
+    d.source = pd.source();
+    s->problem = std::move(d);
   }
   if (p.has_ga()) {
     const auto& pg = p.ga();
@@ -311,6 +372,11 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     if (pg.has_generations()) g.generations = ClampInt(pg.generations());
     if (pg.has_stall_generations()) g.stall_generations = ClampInt(pg.stall_generations());
     s->ga = g;
+  } else if (p.has_external()) {
+    ExternalSettings e;
+    e.idle_timeout_s = OrDefault(p.external().idle_timeout_s(), 120.0);
+    e.owner = p.external().owner();
+    s->external = e;
   }
 }
 
@@ -351,13 +417,7 @@ void ResultToProto(const BatchResultMsg& r, pw::BatchResult* p) {
   p->set_code(static_cast<pw::Code>(r.code));
   p->set_error(r.error);
   p->set_eval_seconds(r.eval_seconds);
-  for (size_t i = 0; i < r.indices.size(); ++i) {
-    auto* t = p->add_results();
-    t->set_index(r.indices[i]);
-    t->set_cost(r.results[i].cost);
-    t->set_code(ToProto(r.results[i].status));
-    t->set_reason(r.results[i].reason);
-  }
+  for (size_t i = 0; i < r.indices.size(); ++i) ToProto(r.results[i], r.indices[i], p->add_results());
 }
 
 Status CodeFromProto(int c, WireCode* out) {
@@ -378,9 +438,7 @@ Status ResultFromProto(const pw::BatchResult& p, BatchResultMsg* r) {
   for (int i = 0; i < p.results_size(); ++i) {
     const auto& t = p.results(i);
     r->indices[i] = t.index();
-    r->results[i].cost = t.cost();
-    r->results[i].reason = t.reason();
-    if (Status s = FromProto(t.code(), t.cost(), &r->results[i].status); !s.ok()) return s;
+    if (Status s = FromProto(t, &r->results[i]); !s.ok()) return s;
   }
   return Status::Ok();
 }
@@ -407,6 +465,7 @@ void InfoToProto(const JobInfo& i, pw::JobInfo* p) {
   for (const auto& q : i.quarantined) ToProto(q, p->add_quarantined());
   p->set_elapsed_s(i.elapsed_s);
   p->set_seed(i.seed);
+  p->set_algorithm(i.algorithm);
 }
 
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
@@ -424,6 +483,7 @@ Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
   for (const auto& q : p.quarantined()) i->quarantined.push_back(FromProto(q));
   i->elapsed_s = p.elapsed_s();
   i->seed = p.seed();
+  i->algorithm = p.algorithm();
   return Status::Ok();
 }
 
@@ -617,6 +677,14 @@ std::string EncodeClientRequest(const ClientRequestMsg& m) {
       p.mutable_fetch()->set_count(static_cast<uint32_t>(std::max(0, m.count)));
       break;
     case T::kPing: p.mutable_ping(); break;
+    case T::kEvaluate: {
+      auto* e = p.mutable_evaluate();
+      e->set_job_id(m.job_id);
+      e->set_batch_seq(m.batch_seq);
+      for (const Genome& g : m.genomes) ToProto(g, e->add_genomes());
+      break;
+    }
+    case T::kClose: p.mutable_close()->set_job_id(m.job_id); break;
   }
   return p.SerializeAsString();
 }
@@ -645,6 +713,18 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
       m->count = ClampInt(std::max<uint32_t>(1, p.fetch().count()));
       break;
     case pw::ClientRequest::kPing: m->type = T::kPing; break;
+    case pw::ClientRequest::kEvaluate: {
+      const auto& e = p.evaluate();
+      m->type = T::kEvaluate;
+      m->job_id = e.job_id();
+      m->batch_seq = e.batch_seq();
+      m->genomes.resize(e.genomes_size());
+      for (int i = 0; i < e.genomes_size(); ++i)
+        if (Status s = FromProto(e.genomes(i), &m->genomes[i]); !s.ok())
+          return Malformed("evaluate.genomes[" + std::to_string(i) + "]: " + s.message());
+      break;
+    }
+    case pw::ClientRequest::kClose: m->type = T::kClose; m->job_id = p.close().job_id(); break;
     default: return Malformed("client request has no body");
   }
   return Status::Ok();
@@ -689,6 +769,16 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       e->set_message(m.event.message);
       e->set_workers(static_cast<uint32_t>(std::max(0, m.event.workers)));
       e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.event.worker_threads)));
+      break;
+    }
+    case T::kEvaluate: {
+      auto* e = p.mutable_evaluate();
+      e->set_job_id(m.job_id);
+      e->set_batch_seq(m.batch_seq);
+      e->set_done(m.done);
+      for (size_t i = 0; i < m.results.size(); ++i)
+        ToProto(m.results[i], static_cast<int>(i), e->add_results());
+      e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.worker_threads)));
       break;
     }
     case T::kNone: break;
@@ -743,6 +833,20 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->event.workers = ClampInt(p.event().workers());
       m->event.worker_threads = ClampInt(p.event().worker_threads());
       break;
+    case pw::ClientReply::kEvaluate: {
+      const auto& e = p.evaluate();
+      m->type = T::kEvaluate;
+      m->job_id = e.job_id();
+      m->batch_seq = e.batch_seq();
+      m->done = e.done();
+      m->worker_threads = ClampInt(e.worker_threads());
+      m->results.resize(e.results_size());
+      for (int i = 0; i < e.results_size(); ++i) {
+        if (e.results(i).index() != i) return Malformed("evaluate.results[" + std::to_string(i) + "].index");
+        if (Status s = FromProto(e.results(i), &m->results[i]); !s.ok()) return s;
+      }
+      break;
+    }
     default: m->type = T::kNone; break;
   }
   return Status::Ok();

@@ -5,6 +5,7 @@
 #include <csignal>
 #include <thread>
 
+#include "diagnose/job_kind.h"
 #include "worker/worker.h"
 
 namespace {
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
+  pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
   pz::worker::Worker w(o, pz::master::JobKindRegistry::Default());
   spdlog::info("{} threads, master {}", o.threads, o.master);
   const auto stats = w.Run(g_stop);

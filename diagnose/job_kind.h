@@ -1,0 +1,28 @@
+// The "diagnose" job kind: the global fit of one diagnosis model structure as a job on the service
+// (issue 6: "re-identify the augmented model … as jobs on the service"). Its spec (proto
+// DiagnoseProblem) carries the bench cases, the structure (effect names), the parameter boxes and
+// the simulation options, so that DiagnosisFitness is a pure function of (genome.reals, spec); the
+// optimiser (DE, Levenberg–Marquardt) runs in the client and evaluates through an evaluation session
+// (JobSpec.external, client/service_evaluator.h). The master and the workers register the kind from
+// their main(); pz::master cannot depend on pz::diagnose.
+#pragma once
+
+#include "diagnose/problem.h"
+#include "master/job_kinds.h"
+#include "master/job_spec.h"
+
+namespace pz::diagnose {
+
+/// The spec's problem for `fitness` (its model's cases, its layout and residual mode). The model
+/// must run on the bench's default beam (the kind builds that plant).
+master::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness);
+
+/// A whole session spec for `fitness` (algorithm set by the caller; seed 0; errors and quarantined
+/// individuals cost master::kDefaultErrorCost, as in the local evaluators).
+master::JobSpec DiagnoseJobSpec(const DiagnosisFitness& fitness, const std::string& name);
+
+master::JobKind DiagnoseJobKind();
+/// Registers the kind (replacing one of the same name).
+void RegisterDiagnoseJobKind(master::JobKindRegistry& registry);
+
+}  // namespace pz::diagnose

@@ -1,0 +1,172 @@
+// The diagnosis on the service: the "diagnose" job kind builds, from its spec alone, the fitness the
+// client has (costs and residual vectors bit for bit; bad specs refused field by field), and a whole
+// diagnosis whose fits run as evaluation sessions on a local master with two workers equals the
+// local run bit for bit.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "client/service_evaluator.h"
+#include "diagnose/diagnose.h"
+#include "diagnose/job_kind.h"
+#include "diagnose/synthetic.h"
+#include "master/inline_evaluator.h"
+#include "tests/service/service_harness.h"
+
+namespace pz::diagnose {
+namespace {
+
+using model::EffectKind;
+
+std::vector<DiagCase> SmallBench(bool with_delay) {
+  const model::BimorphPlant plant;
+  SyntheticOptions so;
+  model::BimorphParams p;
+  std::vector<std::pair<double, double>> sat;
+  for (double v : {375.0, 500.0, 750.0})
+    for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
+  master::Rng rng(3);
+  std::vector<model::Effect> effects;
+  if (with_delay) effects = {{EffectKind::kDelay, {0.02}}};
+  return SimulateBench(plant, p, effects, sat, so, rng);
+}
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+void ExpectSameVector(const std::vector<double>& a, const std::vector<double>& b, const std::string& what) {
+  ASSERT_EQ(a.size(), b.size()) << what;
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(SameBits(a[i], b[i])) << what << "[" << i << "]: " << a[i] << " vs " << b[i];
+}
+
+TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  const DiagnosisModel m(plant, SmallBench(true));
+  for (const bool residuals : {false, true}) {
+    const DiagnosisFitness local(m, ParameterLayout({EffectKind::kDelay, EffectKind::kDriverLowpass}), residuals);
+    const master::JobSpec spec = DiagnoseJobSpec(local, "test");
+    // Through the wire encoding, as a worker gets it.
+    master::JobSpec decoded;
+    ASSERT_TRUE(master::DecodeJobSpec(master::EncodeJobSpec(spec), &decoded).ok());
+    master::JobKindRegistry registry;
+    RegisterDiagnoseJobKind(registry);
+    decoded.external = master::ExternalSettings{};
+    EXPECT_TRUE(registry.Validate(decoded).empty());
+    master::GenomeLayout layout;
+    ASSERT_TRUE(registry.Layout(decoded, &layout).ok());
+    EXPECT_EQ(layout.reals, local.layout().size());
+    EXPECT_EQ(layout.bits, 0);
+    std::unique_ptr<master::FitnessFunction> remote;
+    ASSERT_TRUE(registry.MakeFitness(decoded, &remote).ok());
+    master::Rng rng(5);
+    for (int k = 0; k < 3; ++k) {
+      master::Genome g;
+      for (int i = 0; i < layout.reals; ++i) g.reals.push_back(rng.Uniform01());
+      if (k == 0) g.reals[7] = 0;  // the delay at zero
+      const master::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
+      EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
+      EXPECT_EQ(a.status, b.status);
+      EXPECT_EQ(a.residuals.empty(), !residuals || a.status != master::FitnessStatus::kOk);
+      ExpectSameVector(a.residuals, b.residuals, "residuals");
+    }
+  }
+}
+
+TEST(DiagnoseJobKindTest, BadSpecsAreRefusedFieldByField) {
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  const DiagnosisModel m(plant, SmallBench(false));
+  const DiagnosisFitness f(m, ParameterLayout({EffectKind::kCreep}));
+  master::JobKindRegistry registry;
+  RegisterDiagnoseJobKind(registry);
+  auto violations = [&](const master::JobSpec& s) {
+    std::string all;
+    for (const auto& v : registry.Validate(s)) all += v.description + "\n";
+    return all;
+  };
+  master::JobSpec ok = DiagnoseJobSpec(f, "ok");
+  ok.external = master::ExternalSettings{};
+  EXPECT_EQ(violations(ok), "");
+  master::JobSpec s = ok;
+  auto& d = std::get<master::DiagnoseProblem>(s.problem);
+  d.structure = {"creep", "friction-of-the-gods"};
+  EXPECT_NE(violations(s).find("diagnose.structure[1] = friction-of-the-gods: not an effect"), std::string::npos)
+      << violations(s);
+  s = ok;
+  std::get<master::DiagnoseProblem>(s.problem).params[7].upper *= 2;
+  EXPECT_NE(violations(s).find("diagnose.params[7] = creep."), std::string::npos) << violations(s);
+  s = ok;
+  std::get<master::DiagnoseProblem>(s.problem).cycles[2] = 2.5;
+  EXPECT_NE(violations(s).find("diagnose.cycles[2] = 2.5: gives"), std::string::npos) << violations(s);
+  s = ok;
+  std::get<master::DiagnoseProblem>(s.problem).cases[4].angle_deg[3] = NAN;
+  EXPECT_NE(violations(s).find("diagnose.cases[4].angle_deg[3] = nan: must be finite"), std::string::npos)
+      << violations(s);
+  s = ok;
+  for (auto& c : std::get<master::DiagnoseProblem>(s.problem).cases) c.role = master::CaseRole::kTest;
+  EXPECT_NE(violations(s).find("no case with role CASE_ROLE_TRAIN"), std::string::npos) << violations(s);
+  s = ok;
+  std::get<master::DiagnoseProblem>(s.problem).rtol = 0.5;
+  EXPECT_NE(violations(s).find("rtol"), std::string::npos) << violations(s);
+}
+
+TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
+  RegisterDiagnoseJobKind(master::JobKindRegistry::Default());
+  testing::Cluster cluster("diagnose-service");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  const DiagnosisModel m(plant, SmallBench(true));
+  DiagnoseOptions o;
+  o.candidates = {EffectKind::kDelay, EffectKind::kCubicStiffening};
+  o.de_base.population = 12;
+  o.de_base.generations = 8;
+  o.de_candidate.population = 12;
+  o.de_candidate.generations = 5;
+  o.lm.max_iterations = 6;
+  o.cvode_lm_iterations = 2;
+  o.cvode_start_fractions = {0.05};
+  o.second_effect = false;
+  o.trends = false;
+  const Diagnosis local = RunDiagnosis(m, o);
+
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 300;
+  int sessions = 0;
+  o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<master::BatchEvaluator> {
+    ++sessions;
+    return std::make_unique<client::ServiceEvaluator>(so, DiagnoseJobSpec(f, "test " + f.layout().Describe()));
+  };
+  const Diagnosis remote = RunDiagnosis(m, o);
+  // base: DE + LM; delay: DE + LM; cubic stiffening (beam): LM only.
+  EXPECT_EQ(sessions, 5);
+  ExpectSameVector(remote.base.x, local.base.x, "base.x");
+  EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
+  EXPECT_EQ(remote.base.evaluations, local.base.evaluations);
+  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
+  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
+  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
+    const auto& a = remote.rounds[0].candidates[i];
+    const auto& b = local.rounds[0].candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
+    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
+    EXPECT_TRUE(SameBits(a.score, b.score));
+  }
+  EXPECT_EQ(remote.named, local.named);
+  EXPECT_EQ(remote.verdict, local.verdict);
+  EXPECT_EQ(remote.evaluations, local.evaluations);
+  // Every session was closed: all succeeded.
+  auto client = cluster.Client();
+  std::vector<master::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  EXPECT_EQ(jobs.size(), 5u);
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.kind, "diagnose");
+    EXPECT_GT(j.evaluations, 0u);
+  }
+}
+
+}  // namespace
+}  // namespace pz::diagnose
