@@ -38,17 +38,36 @@ int ExitCodeOf(const Status& s) {
 
 namespace {
 
+std::string Env(const char* name, const char* fallback = "") {
+  const char* env = std::getenv(name);
+  return env && *env ? env : fallback;
+}
+
 struct Common {
   std::string master;
   int timeout_ms = 4000;
   int retries = 2;
-  ServiceClient Client() const { return ServiceClient({master, timeout_ms, retries}); }
+  std::string curve_secret = Env("PIEZOID_CURVE_SECRET"), master_public = Env("PIEZOID_MASTER_PUBLIC");
+  /// The client of these options; a bad key file throws InputError (exit code 2).
+  ServiceClient Client() const {
+    ServiceClientOptions o{master, timeout_ms, retries};
+    if (curve_secret.empty() != master_public.empty())
+      throw InputError(curve_secret.empty()
+                           ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs --curve-secret (or PIEZOID_CURVE_SECRET)"
+                           : "--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public (or PIEZOID_MASTER_PUBLIC)");
+    if (!curve_secret.empty()) {
+      master::CurveKeyPair keys;
+      if (Status s = master::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
+        throw InputError("--curve-secret: " + s.message());
+      if (Status s = master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
+        throw InputError("--master-public: " + s.message());
+      o.curve = keys;
+    }
+    return ServiceClient(std::move(o));
+  }
 };
 
-std::string DefaultMaster() {
-  const char* env = std::getenv("PIEZOID_MASTER");
-  return env && *env ? env : "tcp://127.0.0.1:5556";
-}
+std::string DefaultMaster() { return Env("PIEZOID_MASTER", "tcp://127.0.0.1:5556"); }
 
 void AddCommon(CLI::App* c, Common& o) {
   c->add_option("--master", o.master, "the master's client endpoint (default: $PIEZOID_MASTER or tcp://127.0.0.1:5556)")
@@ -59,6 +78,10 @@ void AddCommon(CLI::App* c, Common& o) {
   c->add_option("--retries", o.retries, "attempts per request before giving up")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
+  c->add_option("--curve-secret", o.curve_secret,
+                "CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: $PIEZOID_CURVE_SECRET)");
+  c->add_option("--master-public", o.master_public,
+                "CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
 
 int Report(const Status& s) {
@@ -170,6 +193,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   auto name = std::make_shared<std::string>("piezoid_predict");
   auto count = std::make_shared<int>(5);
   auto no_plots = std::make_shared<bool>(false);
+  auto token = std::make_shared<std::string>();
 
   // ---------------------------------------------------------------- submit
   auto* submit = app.add_subcommand(
@@ -177,6 +201,9 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   AddCommon(submit, *common);
   submit->add_option("spec", *path, "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
       ->required();
+  submit->add_option("--client-token", *token,
+                     "idempotence token: submitting the same spec with the same token again returns the same job "
+                     "(default: a random one)");
   submit->callback([=, &exit_code] {
     master::JobSpec spec;
     std::vector<master::FieldViolation> v;
@@ -192,7 +219,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
       return;
     }
     SubmitResult r;
-    s = common->Client().Submit(spec, &r, &v);
+    s = common->Client().Submit(spec, &r, &v, *token);
     if (!s.ok()) {
       exit_code = s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + *path, v, s) : Report(s);
       return;
@@ -349,6 +376,8 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
     }
     exit_code = kExitOk;
   });
+
+  RegisterKeygen(app, exit_code);
 }
 
 }  // namespace pz::client

@@ -1,5 +1,5 @@
 // The service subcommands of `piezoid`: submit, status, list, watch, cancel, fetch (client of a
-// piezoid-master), and export (a network file as a standalone C header).
+// piezoid-master), export (a network file as a standalone C header) and keygen (CURVE keys).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -26,5 +26,8 @@ int ExitCodeOf(const Status& s);
 /// Adds submit, status, list (alias jobs), watch, cancel, fetch and export; their callbacks set
 /// exit_code.
 void RegisterServiceCommands(CLI::App& app, int& exit_code);
+
+/// Adds keygen (a CURVE key pair for the service); called by RegisterServiceCommands.
+void RegisterKeygen(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -33,12 +33,16 @@ struct ServiceClient::Impl {
   ServiceClientOptions options;
   zmq::context_t ctx{1};
   std::unique_ptr<zmq::socket_t> sock;
+  std::unique_ptr<master::HandshakeMonitor> monitor;  // of sock
+  std::string refused;  // the master refused the handshake: why
   std::mt19937_64 rng;
   uint64_t next_id = 1;
 
   void Open() {
     sock = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
     sock->set(zmq::sockopt::linger, 0);
+    if (options.curve) master::SetCurveClient(*sock, *options.curve, options.master_public);
+    monitor = std::make_unique<master::HandshakeMonitor>(ctx, *sock, "client");
     sock->connect(options.endpoint);
   }
 
@@ -49,9 +53,19 @@ struct ServiceClient::Impl {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
           until - std::chrono::steady_clock::now());
       if (left.count() < 0) return false;
-      zmq::pollitem_t items[] = {{sock->handle(), 0, ZMQ_POLLIN, 0}};
-      zmq::poll(items, 1, left);
-      if (!(items[0].revents & ZMQ_POLLIN)) return false;
+      zmq::pollitem_t items[] = {{sock->handle(), 0, ZMQ_POLLIN, 0},
+                                 {monitor->handle(), 0, ZMQ_POLLIN, 0}};
+      zmq::poll(items, monitor->handle() ? 2 : 1, left);
+      if (items[1].revents & ZMQ_POLLIN) {
+        if (auto why = monitor->Poll()) {
+          refused = *why;
+          return false;
+        }
+      }
+      if (!(items[0].revents & ZMQ_POLLIN)) {
+        if (items[1].revents & ZMQ_POLLIN) continue;
+        return false;
+      }
       zmq::message_t msg;
       if (!sock->recv(msg, zmq::recv_flags::dontwait)) continue;
       if (master::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply).ok())
@@ -61,10 +75,18 @@ struct ServiceClient::Impl {
   }
 
   Status Call(ClientRequestMsg& req, ClientReplyMsg* reply) {
+    size_t sent_bytes = 0;
+    std::string handshake;  // a handshake failure seen meanwhile
+    refused.clear();
     for (int attempt = 0; attempt < options.retries; ++attempt) {
       if (!sock) Open();
       req.request_id = next_id++;
       const std::string payload = master::EncodeClientRequest(req);
+      sent_bytes = payload.size();
+      if (static_cast<int64_t>(payload.size()) > options.max_message_bytes)
+        return InvalidArgument("request of " + std::to_string(payload.size()) +
+                               " bytes: above the maximum message size (max_message_bytes = " +
+                               std::to_string(options.max_message_bytes) + ")");
       sock->send(zmq::buffer(payload), zmq::send_flags::dontwait);
       const auto until = std::chrono::steady_clock::now() +
                          std::chrono::milliseconds(options.timeout_ms);
@@ -75,12 +97,28 @@ struct ServiceClient::Impl {
         if (reply->request_id == req.request_id && reply->type != ClientReplyMsg::Type::kEvent)
           return StatusFromWire(reply->code, reply->error);
       }
+      if (!refused.empty()) break;  // retrying cannot help
+      if (monitor && !monitor->last_transient().empty()) handshake = monitor->last_transient();
       sock.reset();  // Lazy Pirate: a fresh socket for the retry
+      monitor.reset();
     }
+    if (!refused.empty()) {
+      sock.reset();
+      monitor.reset();
+      return {StatusCode::kUnavailable, refused};
+    }
+    std::string hint = options.curve
+                           ? "; or it refused this client's CURVE key, or --master-public is not its key"
+                           : "; the master may require CURVE keys (--curve-secret and --master-public, or "
+                             "PIEZOID_CURVE_SECRET and PIEZOID_MASTER_PUBLIC)";
+    if (!handshake.empty()) hint += " (" + handshake + ")";
+    if (sent_bytes > (1u << 20))
+      hint += "; the request was " + std::to_string(sent_bytes) +
+              " bytes: a master drops the connection of a request above its --max-message-bytes";
     return {StatusCode::kUnavailable,
             "cannot reach the master at " + options.endpoint + ": is piezoid-master running? (no answer to " +
                 std::to_string(options.retries) + (options.retries == 1 ? " attempt" : " attempts") + " of " +
-                std::to_string(options.timeout_ms) + " ms)"};
+                std::to_string(options.timeout_ms) + " ms)" + hint};
   }
 };
 
@@ -183,6 +221,7 @@ Status ServiceClient::Watch(const std::string& job_id,
     ClientReplyMsg reply;
     Status s = impl_->Call(req, &reply);
     if (s.code() == StatusCode::kUnavailable) {  // master restarting: try again, for a while
+      if (!impl_->refused.empty()) return s;
       const auto now = std::chrono::steady_clock::now();
       if (!unreachable_since) unreachable_since = now;
       if (std::chrono::duration<double>(now - *unreachable_since).count() >= impl_->options.watch_reconnect_s)

@@ -13,9 +13,11 @@
 #include <chrono>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "master/security.h"
 #include "master/service_types.h"
 #include "model/status.h"
 
@@ -28,10 +30,19 @@ struct ServiceClientOptions {
   /// Watch keeps re-trying an unreachable master (e.g. one being restarted) this long, then gives
   /// up with kUnavailable [s].
   double watch_reconnect_s = 30;
+  /// CURVE: this client's key pair and the master's public key (Z85); plain when unset.
+  std::optional<master::CurveKeyPair> curve;
+  std::string master_public;
+  /// A request larger than this is refused here, naming the limit (the master drops the
+  /// connection of a sender above its own --max-message-bytes) [bytes].
+  int64_t max_message_bytes = 64 << 20;
 };
 
 // Errors: a request that gets no answer at all returns kUnavailable, "cannot reach the master at
-// <endpoint>: is piezoid-master running? …"; the master's answers map by StatusFromWire (unknown
+// <endpoint>: is piezoid-master running? … may require CURVE keys …"; a master that refuses this
+// client's CURVE key (or expects another mechanism) returns kUnavailable at once, saying so, without
+// retrying; a request above max_message_bytes is kInvalidArgument; the master's answers map by
+// StatusFromWire (unknown
 // job → kNotFound, invalid spec → kInvalidArgument with the violations, …).
 
 struct SubmitResult {

@@ -10,6 +10,7 @@
 #include <set>
 #include <zmq.hpp>
 
+#include "master/job_store.h"
 #include "master/liveness.h"
 #include "master/wire_codec.h"
 
@@ -48,6 +49,12 @@ std::string Hex(const std::string& id) {
   return s;
 }
 
+/// A message's metadata property, or "" (zmq_msg_gets fails when the transport has none).
+std::string Property(const zmq::message_t& m, const char* name) {
+  const char* v = zmq_msg_gets(m.handle(), name);
+  return v ? v : "";
+}
+
 }  // namespace
 
 struct Broker::Impl {
@@ -71,6 +78,7 @@ struct Broker::Impl {
   // ---- broker thread only
   zmq::context_t ctx{1};
   zmq::socket_t workers, clients;
+  std::unique_ptr<ZapHandler> zap;  // destroyed before ctx
   ClientHandler* handler = nullptr;
   std::thread thread;
   PeerLiveness liveness;
@@ -87,6 +95,7 @@ struct Broker::Impl {
   std::map<std::string, Job> jobs;
   std::map<std::string, std::string> contexts;  // hash → job id
   std::map<std::string, std::vector<std::string>> watcher_envelopes;
+  std::map<std::string, std::set<std::string>> jobs_of_client;  // client identity → job ids
   BrokerStats local;
   uint64_t bad_frames_logged = 0;
 
@@ -227,7 +236,8 @@ struct Broker::Impl {
     Quarantine(dispatcher.RemoveWorker(id, strike));
   }
 
-  void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now) {
+  void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now,
+                     const std::string& user = {}) {
     WorkerMsg m;
     Status s = DecodeWorkerToMaster(payload, &m);
     if (!s.ok()) {
@@ -246,8 +256,8 @@ struct Broker::Impl {
         if (known) RemoveWorker(id, false, "re-announced");
         dispatcher.AddWorker(id, m.threads);
         liveness.Seen(id, now);
-        spdlog::info("worker {} ready: {} threads, host {} pid {}", Hex(id), m.threads, m.host,
-                     m.pid);
+        spdlog::info("worker {} ready: {} threads, host {} pid {}{}", Hex(id), m.threads, m.host,
+                     m.pid, user.empty() ? "" : ", key " + user);
         return;
       case WorkerMsg::Type::kDisconnect:
         RemoveWorker(id, false, "disconnected");
@@ -345,6 +355,64 @@ struct Broker::Impl {
   }
 
   // ------------------------------------------------------------------ clients
+  /// Who submitted: the CURVE key's name given by the ZAP handler, else the peer's IP address.
+  static std::string ClientIdentity(const zmq::message_t& m) {
+    std::string user = Property(m, "User-Id");
+    if (!user.empty()) return user;
+    const std::string addr = Property(m, "Peer-Address");
+    return addr.empty() ? "local" : "address:" + addr;
+  }
+
+  /// Running jobs submitted by `client` (forgets its jobs that have ended).
+  int RunningJobsOf(const std::string& client) {
+    auto it = jobs_of_client.find(client);
+    if (it == jobs_of_client.end()) return 0;
+    int running = 0;
+    for (auto j = it->second.begin(); j != it->second.end();) {
+      ClientRequestMsg q;
+      q.type = ClientRequestMsg::Type::kStatus;
+      q.job_id = *j;
+      const ClientReplyMsg r = handler->Handle(q);
+      if (r.code == WireCode::kOk && !IsFinal(r.info.state)) {
+        ++running;
+        ++j;
+      } else {
+        j = it->second.erase(j);
+      }
+    }
+    if (it->second.empty()) jobs_of_client.erase(it);
+    return running;
+  }
+
+  /// The submission limits; false with *reply filled when the request is refused.
+  bool AdmitSubmission(const ClientRequestMsg& req, const std::string& client,
+                       ClientReplyMsg* reply) {
+    const auto bytes = static_cast<int64_t>(req.spec_bytes.size());
+    if (bytes > options.max_spec_bytes) {
+      reply->code = WireCode::kInvalidArgument;
+      reply->error = "spec: " + std::to_string(bytes) +
+                     " bytes serialised, above the master's maximum data size per job (--max-spec-bytes = " +
+                     std::to_string(options.max_spec_bytes) + ")";
+      reply->violations.push_back({"spec", reply->error});
+      return false;
+    }
+    // A retry of a submission that was accepted is answered as such, whatever the limit.
+    ClientRequestMsg q;
+    q.type = ClientRequestMsg::Type::kStatus;
+    q.job_id = JobStore::JobIdOf(req.spec_bytes, req.client_token);
+    if (handler->Handle(q).code == WireCode::kOk) return true;
+    const int running = RunningJobsOf(client);
+    if (running >= options.max_jobs_per_client) {
+      reply->code = WireCode::kResourceExhausted;
+      reply->error = "client " + client + " already has " + std::to_string(running) +
+                     " running jobs: the maximum jobs per client is " +
+                     std::to_string(options.max_jobs_per_client) +
+                     " (--max-jobs-per-client); retry when one has ended";
+      return false;
+    }
+    return true;
+  }
+
   void OnClientFrames(std::vector<zmq::message_t>& frames) {
     std::vector<std::string> envelope;
     for (size_t i = 0; i + 1 < frames.size(); ++i) envelope.push_back(frames[i].to_string());
@@ -379,9 +447,15 @@ struct Broker::Impl {
           watcher_envelopes[key] = envelope;
         }
       }
+    } else if (req.type == ClientRequestMsg::Type::kSubmit &&
+               !AdmitSubmission(req, ClientIdentity(last), &reply)) {
+      ++local.refused_submissions;
+      spdlog::warn("submission refused: {}", reply.error);
     } else {
       reply = handler->Handle(req);
       reply.request_id = req.request_id;
+      if (req.type == ClientRequestMsg::Type::kSubmit && reply.code == WireCode::kOk && !reply.existed)
+        jobs_of_client[ClientIdentity(last)].insert(reply.job_id);
       if (req.type == ClientRequestMsg::Type::kList || req.type == ClientRequestMsg::Type::kEvaluate) {
         reply.workers = dispatcher.worker_count();
         reply.worker_threads = dispatcher.total_threads();
@@ -439,7 +513,8 @@ struct Broker::Impl {
           continue;
         }
         OnWorkerFrame(frames[0].to_string(),
-                      {static_cast<const char*>(frames[1].data()), frames[1].size()}, now);
+                      {static_cast<const char*>(frames[1].data()), frames[1].size()}, now,
+                      options.curve ? Property(frames[1], "User-Id") : std::string());
       }
       for (int n = 0; n < 1000 && RecvFrames(clients, frames); ++n) {
         if (frames.size() < 2) {
@@ -483,12 +558,22 @@ Broker::~Broker() { Stop(); }
 Status Broker::Start(ClientHandler* handler) {
   Impl& m = *impl_;
   m.handler = handler;
+  if (m.options.curve) {
+    m.zap = std::make_unique<ZapHandler>(m.ctx, *m.options.curve);
+    if (Status s = m.zap->Start(); !s.ok()) return s;
+  }
   try {
     for (zmq::socket_t* s : {&m.workers, &m.clients}) {
       s->set(zmq::sockopt::linger, 0);
       s->set(zmq::sockopt::maxmsgsize, m.options.max_message_bytes);
       s->set(zmq::sockopt::sndhwm, 100000);
       s->set(zmq::sockopt::rcvhwm, 100000);
+      if (m.options.curve) {
+        s->set(zmq::sockopt::curve_server, true);
+        s->set(zmq::sockopt::curve_secretkey, m.options.curve->keys.secret_z85);
+        s->set(zmq::sockopt::zap_domain,
+               s == &m.workers ? kZapDomainWorkers : kZapDomainClients);
+      }
     }
     m.workers.bind(m.options.worker_endpoint);
     m.clients.bind(m.options.client_endpoint);
@@ -511,6 +596,7 @@ void Broker::Stop() {
   m.thread.join();
   m.workers.close();
   m.clients.close();
+  if (m.zap) m.zap->Stop();
   ::close(m.wake_fd);
 }
 

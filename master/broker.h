@@ -6,6 +6,12 @@
 // Robustness: every frame is decoded into a status, never trusted; a frame above
 // max_message_bytes is refused by ZeroMQ (ZMQ_MAXMSGSIZE drops the sender's connection); a bad
 // frame gets a typed error answer (CODE_MALFORMED / CODE_VERSION_MISMATCH) and is counted.
+//
+// Security (docs/service.md, "Security"): with `curve` set both sockets are CURVE servers and a
+// ZAP handler (master/security.h) admits only the allowed worker / client keys. Limits on client
+// submissions: a spec above max_spec_bytes serialised is refused (CODE_INVALID_ARGUMENT, field
+// "spec"), and a client identity (its CURVE key name, or its IP address without CURVE) with
+// max_jobs_per_client running jobs gets CODE_RESOURCE_EXHAUSTED.
 #pragma once
 
 #include <atomic>
@@ -13,6 +19,7 @@
 #include <cstdint>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <thread>
@@ -20,6 +27,7 @@
 
 #include "master/dispatcher.h"
 #include "master/evaluator.h"
+#include "master/security.h"
 #include "master/service_types.h"
 #include "model/status.h"
 
@@ -32,6 +40,9 @@ struct BrokerOptions {
   int liveness = 6;                        ///< missed intervals before a worker is dead
   int64_t max_message_bytes = 64 << 20;    ///< larger frames are refused
   int max_watchers_per_job = 64;
+  int64_t max_spec_bytes = 16 << 20;       ///< serialised job spec (with its data) at most
+  int max_jobs_per_client = 16;            ///< running jobs submitted by one client identity
+  std::optional<CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
   DispatchOptions dispatch;
 };
 
@@ -57,6 +68,7 @@ struct BrokerStats {
   int workers = 0, worker_threads = 0;
   uint64_t leases_sent = 0, results_accepted = 0, results_ignored = 0, bad_frames = 0;
   uint64_t tasks_done = 0;
+  uint64_t refused_submissions = 0;  ///< spec too large or too many jobs of a client
 };
 
 class Broker {

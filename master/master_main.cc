@@ -1,8 +1,14 @@
 // piezoid-master: the GA master service (job store + broker). See docs/service.md.
+#include <fcntl.h>
 #include <spdlog/spdlog.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
 #include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <thread>
 
@@ -13,12 +19,45 @@
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
 void OnSignal(int) { g_stop = 1; }
+
+/// Takes an exclusive flock on DIR/master.lock (held until the process exits) so that a second
+/// master refuses the same state directory; -1 with *error on failure.
+int LockStateDir(const std::filesystem::path& dir, std::string* error) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) {
+    *error = "--state-dir " + dir.string() + ": cannot create (" + ec.message() + ")";
+    return -1;
+  }
+  const std::filesystem::path lock = dir / "master.lock";
+  const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    *error = lock.string() + ": cannot open (" + std::strerror(errno) + ")";
+    return -1;
+  }
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    char pid[32] = {0};
+    (void)!::pread(fd, pid, sizeof pid - 1, 0);
+    std::string holder(pid);
+    while (!holder.empty() && (holder.back() == '\n' || holder.back() == ' ')) holder.pop_back();
+    *error = "--state-dir " + dir.string() + " is in use by another piezoid-master" +
+             (holder.empty() ? std::string() : " (pid " + holder + ")") +
+             ": stop it first, or give this master another state directory";
+    ::close(fd);
+    return -1;
+  }
+  const std::string me = std::to_string(::getpid()) + "\n";
+  (void)!::ftruncate(fd, 0);
+  (void)!::pwrite(fd, me.data(), me.size(), 0);
+  return fd;
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   pz::master::BrokerOptions broker;
   pz::master::JobStoreOptions store;
   std::string log_level = "info", endpoints_file;
+  std::string curve_secret, allow_workers, allow_clients;
   CLI::App app{"piezoid-master — holds the GA jobs and shares the workers among them"};
   app.add_option("--workers", broker.worker_endpoint, "endpoint workers connect to")
       ->capture_default_str();
@@ -35,6 +74,23 @@ int main(int argc, char** argv) {
   app.add_option("--max-message-bytes", broker.max_message_bytes, "larger frames are refused")
       ->check(CLI::Range(int64_t{1024}, int64_t{1} << 32))
       ->capture_default_str();
+  app.add_option("--max-spec-bytes", broker.max_spec_bytes,
+                 "maximum data size per job: a submitted spec (with its embedded data) larger than this serialised is refused [bytes]")
+      ->check(CLI::Range(int64_t{1024}, int64_t{1} << 32))
+      ->capture_default_str();
+  app.add_option("--max-jobs-per-client", broker.max_jobs_per_client,
+                 "running jobs one client may have (a client = its CURVE key, or its IP address without CURVE)")
+      ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  auto* secret_opt = app.add_option(
+      "--curve-secret", curve_secret,
+      "require CURVE on both endpoints with this key pair (NAME.key from `piezoid keygen`, mode 0600)");
+  app.add_option("--allow-workers", allow_workers,
+                 "with --curve-secret: directory of the workers' allowed public keys (*.pub)")
+      ->needs(secret_opt);
+  app.add_option("--allow-clients", allow_clients,
+                 "with --curve-secret: directory of the clients' allowed public keys (*.pub)")
+      ->needs(secret_opt);
   app.add_option("--max-batch", broker.dispatch.max_batch, "tasks per lease at most")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
@@ -55,6 +111,33 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ master: %v");
 
+  if (!curve_secret.empty()) {
+    if (allow_workers.empty() || allow_clients.empty()) {
+      spdlog::critical("--curve-secret needs --allow-workers DIR and --allow-clients DIR (the allowed public keys)");
+      return 2;
+    }
+    pz::master::CurveServerConfig curve;
+    if (pz::Status s = pz::master::LoadCurveSecretFile(curve_secret, &curve.keys); !s.ok()) {
+      spdlog::critical("--curve-secret: {}", s.message());
+      return 2;
+    }
+    curve.allow_workers = allow_workers;
+    curve.allow_clients = allow_clients;
+    broker.curve = std::move(curve);
+  } else {
+    for (const std::string* ep : {&broker.worker_endpoint, &broker.client_endpoint})
+      if (!pz::master::IsLoopbackEndpoint(*ep))
+        spdlog::warn("{} is reachable from other hosts and CURVE is off: anyone who can connect may {}; "
+                     "start with --curve-secret, --allow-workers and --allow-clients (see docs/service.md, Security)",
+                     *ep, ep == &broker.worker_endpoint ? "join as a worker and see job specs" : "submit, fetch and cancel jobs");
+  }
+  std::string lock_error;
+  const int lock_fd = LockStateDir(store.state_dir, &lock_error);
+  if (lock_fd < 0) {
+    spdlog::critical("{}", lock_error);
+    return 1;
+  }
+
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
@@ -66,8 +149,9 @@ int main(int argc, char** argv) {
     spdlog::critical("{}", s.message());
     return 1;
   }
-  spdlog::info("workers on {}, clients on {}, state in {}", b.worker_endpoint(),
-               b.client_endpoint(), store.state_dir.string());
+  spdlog::info("workers on {}, clients on {}, state in {}{}", b.worker_endpoint(),
+               b.client_endpoint(), store.state_dir.string(),
+               broker.curve ? ", CURVE required (public key " + broker.curve->keys.public_z85 + ")" : "");
   if (!endpoints_file.empty()) {
     const std::string tmp = endpoints_file + ".tmp";
     std::ofstream(tmp) << b.worker_endpoint() << "\n" << b.client_endpoint() << "\n";
@@ -77,5 +161,6 @@ int main(int argc, char** argv) {
   while (!g_stop) std::this_thread::sleep_for(std::chrono::milliseconds(50));
   spdlog::info("shutting down");
   jobs.Shutdown();
+  ::close(lock_fd);
   return 0;
 }

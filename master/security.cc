@@ -350,12 +350,12 @@ std::optional<std::string> HandshakeMonitor::Poll() {
         else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC)
           out = "CURVE handshake with the master at " + where +
                 " failed (cryptographic error): is --master-public the master's public key?";
-        else
-          out = "handshake with the master at " + where + " failed (ZMTP protocol error 0x" +
-                fmt::format("{:x}", value) + ")";
+        else  // e.g. a connection cut during the handshake: ZeroMQ retries, so may we
+          transient_ = "handshake with the master at " + where + " failed (ZMTP protocol error 0x" +
+                       fmt::format("{:x}", value) + ")";
         break;
       default:
-        out = "handshake with the master at " + where + " failed";
+        transient_ = "handshake with the master at " + where + " failed";
         break;
     }
   }

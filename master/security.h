@@ -113,12 +113,15 @@ class HandshakeMonitor {
   HandshakeMonitor(zmq::context_t& ctx, zmq::socket_t& watched, std::string who);
   ~HandshakeMonitor();
   void* handle() const;  ///< for zmq::poll
-  /// Reads the pending events; returns the explanation of the last handshake failure, if any.
+  /// Reads the pending events; returns the explanation of the last definitive handshake failure
+  /// (the master refused the key, another mechanism, a wrong master key), if any. Other failures
+  /// (a connection cut during the handshake, …) may pass: ZeroMQ retries; see last_transient().
   std::optional<std::string> Poll();
+  const std::string& last_transient() const { return transient_; }
 
  private:
   std::unique_ptr<zmq::socket_t> pair_;
-  std::string who_;
+  std::string who_, transient_;
 };
 
 /// True for endpoints only this host can reach: tcp on 127.0.0.0/8, ::1 or localhost, ipc://,

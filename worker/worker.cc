@@ -94,6 +94,8 @@ struct Worker::Impl {
   zmq::context_t ctx{1};
   zmq::socket_t inproc;
   std::unique_ptr<zmq::socket_t> master;
+  std::unique_ptr<master::HandshakeMonitor> monitor;  // of `master`
+  std::string last_handshake_error;
   std::string inproc_endpoint;
   std::vector<std::thread> threads;
   std::deque<std::string> idle;  // compute thread ids waiting for work
@@ -116,6 +118,8 @@ struct Worker::Impl {
     master->set(zmq::sockopt::maxmsgsize, options.max_message_bytes);
     master->set(zmq::sockopt::reconnect_ivl, options.backoff_initial_ms);
     master->set(zmq::sockopt::reconnect_ivl_max, options.backoff_max_ms);
+    if (options.curve) master::SetCurveClient(*master, *options.curve, options.master_public);
+    monitor = std::make_unique<master::HandshakeMonitor>(ctx, *master, "worker");
     master->connect(options.master);
     WorkerMsg ready_msg;
     ready_msg.type = WorkerMsg::Type::kReady;
@@ -145,6 +149,7 @@ struct Worker::Impl {
     spdlog::warn("master {}: {}; reconnecting", options.master, why);
     AbandonAll();
     master.reset();
+    monitor.reset();
     ++stats.reconnects;
     const auto delay = backoff.Next();
     const auto until = Clock::now() + delay;
@@ -329,13 +334,19 @@ struct Worker::Impl {
       const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
           server.next_heartbeat() - now);
       zmq::pollitem_t items[] = {{master->handle(), 0, ZMQ_POLLIN, 0},
-                                 {inproc.handle(), 0, ZMQ_POLLIN, 0}};
+                                 {inproc.handle(), 0, ZMQ_POLLIN, 0},
+                                 {monitor->handle(), 0, ZMQ_POLLIN, 0}};
       try {
-        zmq::poll(items, 2, std::clamp(wait, std::chrono::milliseconds(0),
+        zmq::poll(items, monitor->handle() ? 3 : 2, std::clamp(wait, std::chrono::milliseconds(0),
                                        std::chrono::milliseconds(100)) +
                                 std::chrono::milliseconds(1));
       } catch (const zmq::error_t& e) {
         if (e.num() != EINTR) throw;
+      }
+      if (auto why = monitor->Poll()) {  // logged when it changes (ZeroMQ retries on its own)
+        ++stats.handshake_failures;
+        if (*why != last_handshake_error) spdlog::error("{}", *why);
+        last_handshake_error = *why;
       }
       for (int n = 0; n < 1000; ++n) {
         zmq::message_t msg;
@@ -386,6 +397,7 @@ struct Worker::Impl {
     if (stopped < options.threads) std::_Exit(0);  // a computation would not end
     threads.clear();
     master.reset();
+    monitor.reset();
     return stats;
   }
 };

@@ -8,9 +8,11 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "master/job_kinds.h"
+#include "master/security.h"
 
 namespace pz::worker {
 
@@ -23,10 +25,14 @@ struct WorkerOptions {
   int backoff_max_ms = 5000;          ///< reconnect delay cap [ms]
   int64_t max_message_bytes = 64 << 20;
   int max_contexts = 8;               ///< job contexts cached
+  /// CURVE: this worker's key pair and the master's public key (Z85); plain when unset.
+  std::optional<master::CurveKeyPair> curve;
+  std::string master_public;
 };
 
 struct WorkerStats {
   uint64_t tasks = 0, leases = 0, reconnects = 0, contexts_fetched = 0;
+  uint64_t handshake_failures = 0;  ///< e.g. the master refused this worker's CURVE key
 };
 
 class Worker {

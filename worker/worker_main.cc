@@ -16,7 +16,7 @@ void OnSignal(int) { g_stop = true; }
 int main(int argc, char** argv) {
   pz::worker::WorkerOptions o;
   o.threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  std::string log_level = "info";
+  std::string log_level = "info", curve_secret, master_public;
   CLI::App app{"piezoid-worker — evaluates GA individuals for a piezoid-master"};
   app.add_option("--master", o.master, "the master's worker endpoint")->capture_default_str();
   app.add_option("--threads", o.threads, "evaluation threads")
@@ -30,17 +30,36 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--backoff-max-ms", o.backoff_max_ms, "reconnect delay cap [ms]")
       ->capture_default_str();
+  auto* secret = app.add_option("--curve-secret", curve_secret,
+                                "CURVE: this worker's key pair (NAME.key from `piezoid keygen`, mode 0600; "
+                                "its NAME.pub must be in the master's --allow-workers directory)");
+  auto* pub = app.add_option("--master-public", master_public,
+                             "CURVE: the master's public key file (its NAME.pub)");
+  secret->needs(pub);
+  pub->needs(secret);
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %P: %v");
+  if (!curve_secret.empty()) {
+    pz::master::CurveKeyPair keys;
+    if (pz::Status s = pz::master::LoadCurveSecretFile(curve_secret, &keys); !s.ok()) {
+      spdlog::critical("--curve-secret: {}", s.message());
+      return 2;
+    }
+    if (pz::Status s = pz::master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok()) {
+      spdlog::critical("--master-public: {}", s.message());
+      return 2;
+    }
+    o.curve = keys;
+  }
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
   pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
   pz::worker::Worker w(o, pz::master::JobKindRegistry::Default());
-  spdlog::info("{} threads, master {}", o.threads, o.master);
+  spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);
   spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,
                stats.reconnects);
