@@ -13,6 +13,7 @@ void RegisterIdentify(CLI::App& app, int& exit_code);
 void RegisterDahl(CLI::App& app, int& exit_code);
 void RegisterDiagnose(CLI::App& app, int& exit_code);
 void RegisterDiagnoseCheck(CLI::App& app, int& exit_code);
+void RegisterBoucwen(CLI::App& app, int& exit_code);
 void RegisterCommittee(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   pz::client::RegisterDahl(app, exit_code);
   pz::client::RegisterDiagnose(app, exit_code);
   pz::client::RegisterDiagnoseCheck(app, exit_code);
+  pz::client::RegisterBoucwen(app, exit_code);
   pz::client::RegisterCommittee(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(

@@ -1,0 +1,254 @@
+#include "model/bw_oscillator.h"
+
+#include <algorithm>
+#include <boost/math/interpolators/cardinal_cubic_b_spline.hpp>
+#include <cmath>
+#include <complex>
+#include <sstream>
+#include <unsupported/Eigen/FFT>
+
+namespace pz::model {
+namespace {
+
+Status Bad(const char* field, double value, const char* rule) {
+  return InvalidArgument(FieldError(std::string("bw.") + field, value, rule));
+}
+
+std::string Num(double v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << v;
+  return os.str();
+}
+
+// Trigonometric interpolation of one period u[0 … n) to `factor` points per sample.
+std::vector<double> FourierUpsample(std::span<const double> u, size_t factor) {
+  const size_t n = u.size(), m = n * factor;
+  Eigen::FFT<double> fft;
+  std::vector<std::complex<double>> x(n), X, Y(m, 0.0), out;
+  for (size_t i = 0; i < n; ++i) x[i] = u[i];
+  fft.fwd(X, x);
+  const double scale = static_cast<double>(factor);
+  const size_t half = (n - 1) / 2;  // bins 1 … half have a distinct negative partner
+  Y[0] = X[0] * scale;
+  for (size_t f = 1; f <= half; ++f) {
+    Y[f] = X[f] * scale;
+    Y[m - f] = X[n - f] * scale;
+  }
+  if (n % 2 == 0) {  // the Nyquist bin, split between +n/2 and −n/2
+    Y[n / 2] = X[n / 2] * (0.5 * scale);
+    Y[m - n / 2] = X[n / 2] * (0.5 * scale);
+  }
+  fft.inv(out, Y);
+  std::vector<double> r(m);
+  for (size_t i = 0; i < m; ++i) r[i] = out[i].real();
+  return r;
+}
+
+template <bool kNuOne>
+Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwState* state) {
+  const size_t n = in.samples();
+  const int S = in.substeps();
+  const double h = 1.0 / (in.sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
+  const double inv_m = 1.0 / p.m, c = p.c, k = p.k, alpha = p.alpha;
+  const double bg = p.beta * p.gamma, bd = p.beta * p.delta, nu1 = p.nu - 1.0, nu = p.nu;
+  const double* u = in.half_steps().data();
+  BwState s0 = state ? *state : BwState{};
+  double Y = s0.y, V = s0.v, Z = s0.z;
+
+  auto zdot = [&](double v, double z) {
+    if constexpr (kNuOne) {
+      return alpha * v - bg * std::abs(v) * z - bd * v * std::abs(z);
+    } else {
+      const double az = std::abs(z);
+      const double pw = az > 0 ? std::pow(az, nu1) : (nu1 == 0 ? 1.0 : 0.0);
+      return alpha * v - pw * (bg * std::abs(v) * z + bd * v * az);
+    }
+  };
+  (void)nu;
+  y[0] = Y;
+  size_t j = 0;
+  for (size_t i = 1; i < n; ++i) {
+    for (int s = 0; s < S; ++s, j += 2) {
+      const double u0 = u[j], u1 = u[j + 1], u2 = u[j + 2];
+      const double a1 = (u0 - c * V - k * Y - Z) * inv_m, z1 = zdot(V, Z);
+      const double y2 = Y + h2 * V, v2 = V + h2 * a1, w2 = Z + h2 * z1;
+      const double a2 = (u1 - c * v2 - k * y2 - w2) * inv_m, z2 = zdot(v2, w2);
+      const double y3 = Y + h2 * v2, v3 = V + h2 * a2, w3 = Z + h2 * z2;
+      const double a3 = (u1 - c * v3 - k * y3 - w3) * inv_m, z3 = zdot(v3, w3);
+      const double y4 = Y + h * v3, v4 = V + h * a3, w4 = Z + h * z3;
+      const double a4 = (u2 - c * v4 - k * y4 - w4) * inv_m, z4 = zdot(v4, w4);
+      Y += h6 * (V + 2 * (v2 + v3) + v4);
+      V += h6 * (a1 + 2 * (a2 + a3) + a4);
+      Z += h6 * (z1 + 2 * (z2 + z3) + z4);
+    }
+    y[i] = Y;
+    // |x| ≤ bound is false for NaN too.
+    if (!(std::abs(Y) <= 1e3 && std::abs(Z) <= 1e12 && std::abs(V) <= 1e9)) {
+      std::fill(y.begin() + static_cast<std::ptrdiff_t>(i), y.end(), 0.0);
+      if (state) *state = BwState{Y, V, Z};
+      return OutOfRange("bw: the simulation diverged at sample " + std::to_string(i) + " (t = " +
+                        Num(static_cast<double>(i) / in.sample_rate_hz()) + " s): y = " + Num(Y) +
+                        " m, z = " + Num(Z) + " N");
+    }
+  }
+  if (state) *state = BwState{Y, V, Z};
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status BwParams::Validate() const {
+  if (!(std::isfinite(m) && m > 0)) return Bad("m", m, "must be finite and > 0");
+  const std::pair<const char*, double> finite[] = {{"c", c},         {"k", k},         {"alpha", alpha},
+                                                   {"beta", beta},   {"gamma", gamma}, {"delta", delta}};
+  for (const auto& [name, v] : finite) {
+    if (!std::isfinite(v)) return Bad(name, v, "must be finite");
+  }
+  if (!(std::isfinite(nu) && nu >= 1)) return Bad("nu", nu, "must be finite and >= 1");
+  return Status::Ok();
+}
+
+const char* InputInterpolationName(InputInterpolation i) {
+  switch (i) {
+    case InputInterpolation::kZeroOrderHold: return "zoh";
+    case InputInterpolation::kLinear: return "linear";
+    case InputInterpolation::kCubicSpline: return "spline";
+    case InputInterpolation::kPeriodicFourier: return "fourier";
+  }
+  return "unknown";
+}
+
+InputInterpolation ParseInputInterpolation(const std::string& name) {
+  for (InputInterpolation i : {InputInterpolation::kZeroOrderHold, InputInterpolation::kLinear,
+                               InputInterpolation::kCubicSpline, InputInterpolation::kPeriodicFourier}) {
+    if (name == InputInterpolationName(i)) return i;
+  }
+  throw InputError("interpolation = " + name + ": must be zoh, linear, spline or fourier");
+}
+
+Status BwInputOptions::Validate() const {
+  if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) {
+    return Bad("input.sample_rate_hz", sample_rate_hz, "must be finite and > 0");
+  }
+  if (substeps < 1 || substeps > 1000) return Bad("input.substeps", substeps, "must be in 1 … 1000");
+  return Status::Ok();
+}
+
+BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : options_(options) {
+  ThrowIfError(options.Validate());
+  const size_t n = u.size();
+  if (n < 2) throw InputError(FieldError("bw.input: u.size()", n, "needs at least 2 samples"));
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(u[i])) throw InputError(FieldError("bw.input: u[" + std::to_string(i) + "]", u[i], "must be finite"));
+  }
+  samples_ = n;
+  const size_t L = 2 * static_cast<size_t>(options.substeps);  // half steps per sample
+  fine_.resize(L * (n - 1) + 1);
+  switch (options.interpolation) {
+    case InputInterpolation::kZeroOrderHold:
+      // u[i] on [t_i, t_{i+1}); a node takes the new sample (the last sub-step of an interval
+      // sees it at its end point only).
+      for (size_t j = 0; j < fine_.size(); ++j) fine_[j] = u[std::min(j / L, n - 1)];
+      break;
+    case InputInterpolation::kLinear:
+      for (size_t i = 0; i + 1 < n; ++i) {
+        for (size_t r = 0; r < L; ++r) {
+          fine_[i * L + r] = u[i] + (u[i + 1] - u[i]) * (static_cast<double>(r) / static_cast<double>(L));
+        }
+      }
+      fine_.back() = u[n - 1];
+      break;
+    case InputInterpolation::kCubicSpline: {
+      if (n < 4) throw InputError(FieldError("bw.input: u.size()", n, "the cubic spline needs at least 4 samples"));
+      boost::math::interpolators::cardinal_cubic_b_spline<double> spline(u.data(), n, 0.0, 1.0);
+      for (size_t i = 0; i + 1 < n; ++i) {
+        fine_[i * L] = u[i];
+        for (size_t r = 1; r < L; ++r) {
+          fine_[i * L + r] = spline(static_cast<double>(i) + static_cast<double>(r) / static_cast<double>(L));
+        }
+      }
+      fine_.back() = u[n - 1];
+      break;
+    }
+    case InputInterpolation::kPeriodicFourier: {
+      const size_t period = options.period_samples == 0 ? n : options.period_samples;
+      if (n % period != 0) {
+        throw InputError(FieldError("bw.input.period_samples", period,
+                                    "must divide the record length " + std::to_string(n)));
+      }
+      double scale = 0;
+      for (double v : u) scale = std::max(scale, std::abs(v));
+      for (size_t i = period; i < n; ++i) {
+        if (std::abs(u[i] - u[i % period]) > 1e-9 * scale) {
+          throw InputError("bw.input: u[" + std::to_string(i) + "] = " + Num(u[i]) + " differs from u[" +
+                           std::to_string(i % period) + "] = " + Num(u[i % period]) +
+                           ": the record is not periodic with period_samples = " + std::to_string(period));
+        }
+      }
+      const std::vector<double> one = FourierUpsample(u.subspan(0, period), L);
+      for (size_t j = 0; j < fine_.size(); ++j) fine_[j] = one[j % one.size()];
+      break;
+    }
+  }
+}
+
+Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y, BwState* state) {
+  ThrowIfError(params.Validate());
+  if (y.size() != input.samples()) {
+    throw InputError(FieldError("bw: y.size()", y.size(), "must equal the input's samples = " +
+                                                             std::to_string(input.samples())));
+  }
+  if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
+  return params.nu == 1.0 ? Integrate<true>(params, input, y, state) : Integrate<false>(params, input, y, state);
+}
+
+BwParams BwFromIdentifiable(std::span<const double> theta) {
+  if (theta.size() != 6) throw InputError(FieldError("bw: theta.size()", theta.size(), "must be 6"));
+  BwParams p;
+  p.m = theta[0];
+  p.c = theta[1];
+  p.k = theta[2];
+  p.alpha = theta[3];
+  p.beta = 1;
+  p.gamma = theta[4];
+  p.delta = theta[5];
+  p.nu = 1;
+  return p;
+}
+
+std::vector<double> BwIdentifiable(const BwParams& p) {
+  return {p.m, p.c, p.k, p.alpha, p.beta * p.gamma, p.beta * p.delta};
+}
+
+const std::vector<std::string>& BwIdentifiableNames() {
+  static const std::vector<std::string> names = {"m", "c", "k", "alpha", "beta_gamma", "beta_delta"};
+  return names;
+}
+
+double BwOutputMse(const BwParams& params, std::span<const BwRecord> records, double penalty, bool* diverged) {
+  if (diverged) *diverged = false;
+  double sum = 0;
+  size_t count = 0;
+  std::vector<double> y;
+  for (const BwRecord& r : records) {
+    if (r.y_measured.size() != r.input.samples()) {
+      throw InputError(FieldError("bw record " + r.name + ": y_measured.size()", r.y_measured.size(),
+                                  "must equal the input's samples = " + std::to_string(r.input.samples())));
+    }
+    y.resize(r.input.samples());
+    if (!SimulateBw(params, r.input, y).ok()) {
+      if (diverged) *diverged = true;
+      return penalty;
+    }
+    for (size_t i = r.first_counted; i < y.size(); ++i) {
+      const double e = y[i] - r.y_measured[i];
+      sum += e * e;
+    }
+    count += y.size() - std::min(r.first_counted, y.size());
+  }
+  if (count == 0) throw InputError("bw: no counted sample in the records (first_counted past the end)");
+  return sum / static_cast<double>(count);
+}
+
+}  // namespace pz::model

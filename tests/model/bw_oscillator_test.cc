@@ -1,0 +1,195 @@
+// The Bouc–Wen benchmark oscillator (model/bw_oscillator.h): the linear limit against the closed-form
+// step response; the true parameters reproduce the official noiseless test outputs to the floor the
+// benchmark README measured (the integrator matches the benchmark's generator) and the training
+// records to their noise level; input reconstruction; divergence and bad input named.
+#include "model/bw_oscillator.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "io/csv.h"
+#include "tests/testing/expect_error.h"
+
+namespace pz::model {
+namespace {
+
+struct Record {
+  std::vector<double> u, y;
+};
+
+Record Load(const char* name) {
+  const io::CsvTable t = io::ReadCsvFile(std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark/" + name);
+  Record r;
+  const int cu = t.RequireColumn("u_N"), cy = t.RequireColumn("y_m");
+  for (size_t i = 0; i < t.rows.size(); ++i) {
+    r.u.push_back(t.Number(i, cu));
+    r.y.push_back(t.Number(i, cy));
+  }
+  return r;
+}
+
+double Rms(std::span<const double> a, std::span<const double> b) {
+  double s = 0;
+  for (size_t i = 0; i < a.size(); ++i) s += (a[i] - b[i]) * (a[i] - b[i]);
+  return std::sqrt(s / static_cast<double>(a.size()));
+}
+
+TEST(BwOscillator, LinearLimitMatchesStepResponse) {
+  // β = 0: z = α y exactly, a linear oscillator of stiffness K = k + α under a constant force.
+  BwParams p;
+  p.beta = 0;
+  const double F = 10, K = p.k + p.alpha, w0 = std::sqrt(K / p.m), zeta = p.c / (2 * std::sqrt(K * p.m));
+  const double wd = w0 * std::sqrt(1 - zeta * zeta);
+  std::vector<double> u(751, F);
+  BwInputOptions o;
+  o.interpolation = InputInterpolation::kLinear;
+  BwInput in(u, o);
+  std::vector<double> y(u.size());
+  BwState s;
+  ASSERT_TRUE(SimulateBw(p, in, y, &s).ok());
+  double worst = 0;
+  for (size_t i = 0; i < y.size(); ++i) {
+    const double t = static_cast<double>(i) / 750;
+    const double exact = F / K * (1 - std::exp(-zeta * w0 * t) * (std::cos(wd * t) + zeta * w0 / wd * std::sin(wd * t)));
+    worst = std::max(worst, std::abs(y[i] - exact));
+  }
+  EXPECT_LT(worst, 1e-11);  // static deflection 1e-4 m
+  EXPECT_NEAR(s.z, p.alpha * s.y, 1e-9);
+}
+
+TEST(BwOscillator, TrueModelReachesTheMultisineFloor) {
+  const Record test = Load("test_multisine.csv");
+  ASSERT_EQ(test.u.size(), 8192u);
+  // One steady-state period: simulate three, compare the last (as the README's floor).
+  std::vector<double> u3;
+  for (int p = 0; p < 3; ++p) u3.insert(u3.end(), test.u.begin(), test.u.end());
+  BwInputOptions o;
+  o.interpolation = InputInterpolation::kPeriodicFourier;
+  o.period_samples = 8192;
+  BwInput in(u3, o);
+  std::vector<double> y(u3.size());
+  ASSERT_TRUE(SimulateBw(BwParams{}, in, y).ok());
+  const double rms = Rms(std::span(y).subspan(2 * 8192), test.y);
+  RecordProperty("multisine_true_rms_m", std::to_string(rms));
+  EXPECT_LT(rms, 3e-7);  // README: 2.3e-7 m; rms(y) = 6.7e-4 m
+  // The Fourier table passes through the samples.
+  for (size_t i = 0; i < 50; ++i) EXPECT_NEAR(in.half_steps()[i * 40], u3[i], 1e-9);
+}
+
+TEST(BwOscillator, TrueModelOnTrainingRecordsIsAtTheNoiseLevel) {
+  const Record a = Load("train_A_multisine.csv");
+  BwInputOptions o;
+  o.interpolation = InputInterpolation::kPeriodicFourier;
+  o.period_samples = 8192;
+  o.substeps = 4;  // the identification's setting
+  std::vector<BwRecord> records(1);
+  records[0].input = BwInput(a.u, o);
+  records[0].y_measured = a.y;
+  const double rms = std::sqrt(BwOutputMse(BwParams{}, records));
+  // The added output noise: 8e-6 m RMS nominal; the period-to-period differences give 7.4e-6 m.
+  EXPECT_GT(rms, 7e-6);
+  EXPECT_LT(rms, 8.5e-6);
+  // A 1 % error in the stiffness is far above the noise.
+  BwParams off;
+  off.k *= 1.01;
+  EXPECT_GT(std::sqrt(BwOutputMse(off, records)), 1.5 * rms);
+}
+
+TEST(BwOscillator, FewSubstepsAgreeWithTwenty) {
+  const Record test = Load("test_multisine.csv");
+  BwInputOptions o;
+  o.interpolation = InputInterpolation::kPeriodicFourier;
+  o.substeps = 20;
+  BwInput fine(test.u, o);
+  o.substeps = 4;
+  BwInput coarse(test.u, o);
+  std::vector<double> y20(test.u.size()), y4(test.u.size());
+  ASSERT_TRUE(SimulateBw(BwParams{}, fine, y20).ok());
+  ASSERT_TRUE(SimulateBw(BwParams{}, coarse, y4).ok());
+  // RK4 loses order at the kinks of |ẏ| and |z|: 4 sub-steps (the search's setting) stay within
+  // 3e-7 m RMS of 20 (rms(y) = 6.7e-4 m), below the 2.4e-7 m floor plus the target's margin.
+  EXPECT_LT(Rms(y4, y20), 3e-7);
+}
+
+TEST(BwOscillator, SineSweepFloorWithSpline) {
+  const Record sweep = Load("test_sinesweep.csv");
+  BwInputOptions o;
+  o.interpolation = InputInterpolation::kCubicSpline;
+  o.substeps = 10;
+  BwInput in(sweep.u, o);
+  std::vector<double> y(sweep.u.size());
+  ASSERT_TRUE(SimulateBw(BwParams{}, in, y).ok());
+  const double rms = Rms(y, sweep.y);
+  RecordProperty("sweep_true_rms_m", std::to_string(rms));
+  EXPECT_LT(rms, 3.5e-6);  // README: 2.5e-6 … 3.2e-6 m depending on the upsampling
+}
+
+TEST(BwOscillator, NuAboveOneUsesThePowerLaw) {
+  // ν = 2 against ν = 1 differ, both finite; ν = 1 through the general path equals the fast one.
+  std::vector<double> u(400);
+  for (size_t i = 0; i < u.size(); ++i) u[i] = 40 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750);
+  BwInput in(u, BwInputOptions{});
+  std::vector<double> y1(u.size()), y2(u.size());
+  BwParams p;
+  ASSERT_TRUE(SimulateBw(p, in, y1).ok());
+  p.nu = 1.0 + 1e-15;  // the general path, numerically ν = 1
+  ASSERT_TRUE(SimulateBw(p, in, y2).ok());
+  EXPECT_LT(Rms(y1, y2), 1e-12);
+  p.nu = 2;
+  p.beta = 1e3 / 100;  // keep z bounded: |z| ~ 1e2 N
+  ASSERT_TRUE(SimulateBw(p, in, y2).ok());
+  EXPECT_GT(Rms(y1, y2), 1e-7);
+}
+
+TEST(BwOscillator, DivergenceIsNamedAndPenalised) {
+  std::vector<double> u(200, 0.0);
+  for (size_t i = 0; i < u.size(); ++i) u[i] = 50 * std::sin(0.3 * static_cast<double>(i));
+  BwInput in(u, BwInputOptions{});
+  BwParams p;
+  p.gamma = -1e4;  // β γ = −1e7: z grows without bound
+  p.delta = 0;
+  std::vector<double> y(u.size());
+  const Status s = SimulateBw(p, in, y);
+  EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
+  PZ_EXPECT_HAS(s.message(), "diverged at sample");
+  std::vector<BwRecord> records(1);
+  records[0].input = in;
+  records[0].y_measured = u;
+  bool diverged = false;
+  EXPECT_EQ(BwOutputMse(p, records, 7.0, &diverged), 7.0);
+  EXPECT_TRUE(diverged);
+  for (double v : y) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(BwOscillator, BadInputNamed) {
+  using pz::testing::InputErrorOf;
+  std::vector<double> u = {1, 2, 3, 4, 5, 6};
+  BwInput in(u, BwInputOptions{});
+  std::vector<double> y(u.size());
+  BwParams p;
+  p.m = -1;
+  PZ_EXPECT_HAS(InputErrorOf([&] { (void)SimulateBw(p, in, y); }), "bw.m = -1");
+  p = BwParams{};
+  p.nu = 0.5;
+  PZ_EXPECT_HAS(InputErrorOf([&] { (void)SimulateBw(p, in, y); }), "bw.nu = 0.5");
+  std::vector<double> y_short(3);
+  PZ_EXPECT_HAS(InputErrorOf([&] { (void)SimulateBw(BwParams{}, in, y_short); }), "y.size() = 3");
+  std::vector<double> bad = u;
+  bad[4] = std::nan("");
+  PZ_EXPECT_HAS(InputErrorOf([&] { BwInput(bad, BwInputOptions{}); }), "u[4]");
+  BwInputOptions o;
+  o.substeps = 0;
+  PZ_EXPECT_HAS(InputErrorOf([&] { BwInput(u, o); }), "bw.input.substeps = 0");
+  o = BwInputOptions{};
+  o.interpolation = InputInterpolation::kPeriodicFourier;
+  o.period_samples = 4;
+  PZ_EXPECT_HAS(InputErrorOf([&] { BwInput(u, o); }), "must divide the record length 6");
+  o.period_samples = 3;
+  PZ_EXPECT_HAS(InputErrorOf([&] { BwInput(u, o); }), "u[3] = 4 differs from u[0] = 1");
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseInputInterpolation("sinc"); }), "interpolation = sinc");
+}
+
+}  // namespace
+}  // namespace pz::model
