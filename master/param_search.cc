@@ -253,6 +253,10 @@ RepetitionResult RunGaReal(Run& run, int repetition) {
              .empty()) {
     ++generation;
     const int n_off = n - elite;
+    const double sigma =
+        o.generations <= 1 ? o.mutation_sigma
+                           : o.mutation_sigma * std::pow(o.mutation_sigma_end / o.mutation_sigma,
+                                                         static_cast<double>(generation - 1) / (o.generations - 1));
     std::vector<std::vector<double>> off(n_off);
     for (int c = 0; c < n_off; c += 2) {
       const std::vector<double>& pa = pop[tournament()];
@@ -276,7 +280,7 @@ RepetitionResult RunGaReal(Run& run, int repetition) {
       }
       for (std::vector<double>* child : {&c1, &c2}) {
         for (double& xk : *child) {
-          if (rng.Bernoulli(mutate)) xk += o.mutation_sigma * Gaussian(rng);
+          if (rng.Bernoulli(mutate)) xk += sigma * Gaussian(rng);
           xk = Reflect(xk);
         }
       }
@@ -492,6 +496,10 @@ Status RealGaOptions::Validate() const {
   if (!(std::isfinite(sbx_eta) && sbx_eta > 0)) return Field(p, "sbx_eta", sbx_eta, "must be finite and > 0");
   if (!(std::isfinite(mutation_sigma) && mutation_sigma > 0)) {
     return Field(p, "mutation_sigma", mutation_sigma, "must be finite and > 0");
+  }
+  if (!(std::isfinite(mutation_sigma_end) && mutation_sigma_end > 0 && mutation_sigma_end <= mutation_sigma)) {
+    return InvalidArgument(FieldError(p + ".mutation_sigma_end", mutation_sigma_end,
+                                      "must be finite, > 0 and <= mutation_sigma = " + Num(mutation_sigma)));
   }
   if (stall_generations < 0) return Field(p, "stall_generations", stall_generations, "must be >= 0 (0 = never)");
   return Status::Ok();

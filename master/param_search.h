@@ -92,7 +92,10 @@ struct RealGaOptions {
   double sbx_eta = 15;                ///< SBX distribution index, finite > 0
   double blx_alpha = 0.5;             ///< BLX-α extension, finite ≥ 0
   double mutation_probability = 0.1;  ///< per gene, in [0, 1]
-  double mutation_sigma = 0.1;        ///< Gaussian step, fraction of the unit box, finite > 0
+  double mutation_sigma = 0.1;        ///< Gaussian step at the first generation, fraction of the
+                                      ///< unit box, finite > 0
+  double mutation_sigma_end = 0.001;  ///< … decreasing geometrically to this at the last generation
+                                      ///< (coarse exploration, then fine tuning), in (0, sigma]
   int stall_generations = 60;         ///< ≥ 0 (0 = never stop for stall)
   double tolerance = 1e-6;            ///< relative improvement that resets the stall count, ≥ 0
   uint64_t seed = 1;

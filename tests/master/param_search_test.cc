@@ -279,6 +279,9 @@ TEST(ParamSearch, BadBoxAndOptionsNamed) {
   o.ga_real.mutation_probability = 0.1;
   o.ga_real.mutation_sigma = -1;
   PZ_EXPECT_HAS(search(box, o), "ga_real.mutation_sigma = -1");
+  o.ga_real.mutation_sigma = 0.1;
+  o.ga_real.mutation_sigma_end = 0.2;
+  PZ_EXPECT_HAS(search(box, o), "ga_real.mutation_sigma_end = 0.2");
   o = Options(SearchAlgorithm::kGaBinary, 1);
   o.ga_binary.bits_per_parameter = 60;
   PZ_EXPECT_HAS(search(box, o), "ga_binary.bits_per_parameter = 60");
