@@ -254,7 +254,7 @@ RepetitionResult RunGaReal(Run& run, int repetition) {
     ++generation;
     const int n_off = n - elite;
     const double sigma =
-        o.generations <= 1 ? o.mutation_sigma
+        o.generations <= 1 || o.mutation_sigma_end == 0 ? o.mutation_sigma
                            : o.mutation_sigma * std::pow(o.mutation_sigma_end / o.mutation_sigma,
                                                          static_cast<double>(generation - 1) / (o.generations - 1));
     std::vector<std::vector<double>> off(n_off);
@@ -497,9 +497,9 @@ Status RealGaOptions::Validate() const {
   if (!(std::isfinite(mutation_sigma) && mutation_sigma > 0)) {
     return Field(p, "mutation_sigma", mutation_sigma, "must be finite and > 0");
   }
-  if (!(std::isfinite(mutation_sigma_end) && mutation_sigma_end > 0 && mutation_sigma_end <= mutation_sigma)) {
+  if (!(std::isfinite(mutation_sigma_end) && mutation_sigma_end >= 0 && mutation_sigma_end <= mutation_sigma)) {
     return InvalidArgument(FieldError(p + ".mutation_sigma_end", mutation_sigma_end,
-                                      "must be finite, > 0 and <= mutation_sigma = " + Num(mutation_sigma)));
+                                      "must be 0 (constant step) or in (0, mutation_sigma = " + Num(mutation_sigma) + "]"));
   }
   if (stall_generations < 0) return Field(p, "stall_generations", stall_generations, "must be >= 0 (0 = never)");
   return Status::Ok();

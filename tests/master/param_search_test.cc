@@ -134,6 +134,11 @@ TEST(ParamSearch, RealGaRosenbrockAndRastrigin) {
   Rastrigin rast;
   SearchResult q = RunSearch(rast, Box(4, -5.12, 5.12), Options(SearchAlgorithm::kGaReal, 5));
   EXPECT_LT(q.best_cost, 1e-4);
+  SearchOptions decay = Options(SearchAlgorithm::kGaReal);
+  decay.ga_real.mutation_sigma_end = 0.001;  // geometric decrease of the mutation step
+  SearchResult d = RunSearch(rosen, Box(2, -2, 2), decay);
+  EXPECT_LT(d.best_cost, 1e-4);
+  EXPECT_NE(d.trace.best_cost, r.trace.best_cost);
   SearchOptions blx = Options(SearchAlgorithm::kGaReal);
   blx.ga_real.crossover = RealCrossover::kBlxAlpha;
   SearchResult b = RunSearch(rosen, Box(2, -2, 2), blx);
