@@ -358,8 +358,8 @@ int RunBoucwen(const BoucwenArgs& a) {
                    PlotSeries{"test_multisine.csv", 1, 4, "error", "lines"}}}));
     scripts.push_back(WritePlotScript(
         out, Plot{"test_sinesweep_error", "Sine-sweep test set: simulation error", "t [s]", "error [m]", false,
-                  {PlotSeries{"test_sinesweep.csv", 1, 4, "identified model", "lines"},
-                   PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"}}}));
+                  {PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"},
+                   PlotSeries{"test_sinesweep.csv", 1, 4, "identified model (drawn on top)", "lines"}}}));
     if (GnuplotAvailable()) {
       std::vector<std::string> errors;
       RenderPlots(out, scripts, &errors);
