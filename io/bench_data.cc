@@ -91,28 +91,8 @@ BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, dou
     c.u[k] = csv.Number(k, cu);
     c.angle_deg[k] = csv.Number(k, cy);
   }
-  const double dt0 = c.t[1] - c.t[0];
-  if (!(dt0 > 0))
-    throw InputError(csv.Where(1, ct) + ": time " + FormatNumber(c.t[1]) +
-                     " s is not after the previous sample's " + FormatNumber(c.t[0]) + " s");
-  const double tol = options.time_rel_tol * dt0;
-  if (!(std::abs(c.t[0]) <= tol))
-    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(c.t[0]) +
-                     " s; a case starts at t = 0 (from rest)");
-  c.sample_rate_hz = 1.0 / dt0;
-  for (size_t k = 1; k < n; ++k) {
-    const double dt = c.t[k] - c.t[k - 1];
-    if (!(dt > 0))
-      throw InputError(csv.Where(k, ct) + ": time " + FormatNumber(c.t[k]) +
-                       " s is not after the previous sample's " + FormatNumber(c.t[k - 1]) +
-                       " s (time must be strictly increasing)");
-    if (!(std::abs(dt - dt0) <= tol))
-      throw InputError(csv.Where(k, ct) + ": step " + FormatNumber(dt) +
-                       " s from the previous sample differs from the first step " +
-                       FormatNumber(dt0) + " s (sample rate " + FormatNumber(c.sample_rate_hz) +
-                       " Hz inferred from it; relative tolerance " +
-                       FormatNumber(options.time_rel_tol) + ")");
-  }
+  c.sample_rate_hz = CheckUniformTimeGrid(csv, ct, c.t, options.time_rel_tol,
+                                          "a case starts at t = 0 (from rest)");
   if (options.cycles > 0) {
     const long expected = std::lround(options.cycles * c.sample_rate_hz / frequency_hz);
     if (static_cast<long>(n) != expected)

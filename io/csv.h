@@ -68,4 +68,11 @@ std::optional<double> ParseDouble(std::string_view s);
 /// Shortest text that reads back to the same double (std::to_chars).
 std::string FormatNumber(double x);
 
+/// Checks that the times t (column `time_column` of csv) form a uniform grid from t = 0: strictly
+/// increasing, first sample within rel_tol·dt of 0, every step within rel_tol·dt of the first one.
+/// Throws InputError naming the file, line and column; `start_note` ends the message of a nonzero
+/// start (e.g. "a case starts at t = 0 (from rest)"). Returns the sample rate 1/dt [Hz].
+double CheckUniformTimeGrid(const CsvTable& csv, int time_column, const std::vector<double>& t,
+                            double rel_tol, const std::string& start_note);
+
 }  // namespace pz::io

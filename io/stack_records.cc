@@ -82,27 +82,8 @@ StackRecord LoadStackRecordFile(const fs::path& file, int number, double frequen
     r.u[k] = csv.Number(k, cu);
     r.y[k] = csv.Number(k, cy);
   }
-  const double dt0 = r.t[1] - r.t[0];
-  if (!(dt0 > 0))
-    throw InputError(csv.Where(1, ct) + ": time " + FormatNumber(r.t[1]) +
-                     " s is not after the previous sample's " + FormatNumber(r.t[0]) + " s");
-  const double tol = options.time_rel_tol * dt0;
-  if (!(std::abs(r.t[0]) <= tol))
-    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(r.t[0]) +
-                     " s; a record starts at t = 0 (from rest at the offset)");
-  r.sample_rate_hz = 1.0 / dt0;
-  for (size_t k = 1; k < n; ++k) {
-    const double dt = r.t[k] - r.t[k - 1];
-    if (!(dt > 0))
-      throw InputError(csv.Where(k, ct) + ": time " + FormatNumber(r.t[k]) +
-                       " s is not after the previous sample's " + FormatNumber(r.t[k - 1]) +
-                       " s (time must be strictly increasing)");
-    if (!(std::abs(dt - dt0) <= tol))
-      throw InputError(csv.Where(k, ct) + ": step " + FormatNumber(dt) +
-                       " s from the previous sample differs from the first step " +
-                       FormatNumber(dt0) + " s (relative tolerance " +
-                       FormatNumber(options.time_rel_tol) + ")");
-  }
+  r.sample_rate_hz = CheckUniformTimeGrid(csv, ct, r.t, options.time_rel_tol,
+                                          "a record starts at t = 0 (from rest at the offset)");
   if (options.check_voltage) {
     const double vtol =
         options.voltage_rel_tol * (std::abs(offset_v) + amplitude_v) + options.voltage_abs_tol_v;
