@@ -19,8 +19,12 @@
 #include <string>
 #include <vector>
 
+#include "client/cmd_service.h"
 #include "client/commands.h"
+#include "client/complete_service.h"
 #include "client/plots.h"
+#include "complete/bw_fitness.h"
+#include "complete/job_kind.h"
 #include "io/csv.h"
 #include "master/param_search.h"
 #include "master/thread_pool_evaluator.h"
@@ -51,6 +55,7 @@ struct BoucwenArgs {
   int train_periods = 0; // 0 = all periods of both training records
   int progress = 25;
   bool no_plots = false;
+  CompleteServiceFlags service;  ///< --master: the search's evaluations on the service
 };
 
 struct Series {
@@ -75,8 +80,8 @@ Series LoadSeries(const std::filesystem::path& file) {
 /// A training record of `samples` samples. `steady_state`: the record is a steady-state response
 /// (train_B: its first samples are far from a start at rest), so one period of the periodic input is
 /// simulated first as a warm-up and not counted (the 1.1 % damped mode decays in about 0.4 s).
-model::BwRecord MakeRecord(const std::string& name, const Series& s, size_t samples, int substeps,
-                           bool steady_state) {
+complete::BwTrainingRecord MakeRecord(const std::string& name, const Series& s, size_t samples, int substeps,
+                                     bool steady_state) {
   model::BwInputOptions o;
   o.sample_rate_hz = kFs;
   o.substeps = substeps;
@@ -86,14 +91,14 @@ model::BwRecord MakeRecord(const std::string& name, const Series& s, size_t samp
     throw InputError(FieldError(name + ": samples", samples, "must be a whole number of 8192-sample periods"));
   }
   const size_t warmup = steady_state ? kPeriod : 0;
-  std::vector<double> u(s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(warmup));
-  u.insert(u.end(), s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(samples));
-  model::BwRecord r;
+  complete::BwTrainingRecord r;
   r.name = name;
-  r.input = model::BwInput(u, o);
-  r.y_measured.assign(warmup, 0.0);
-  r.y_measured.insert(r.y_measured.end(), s.y.begin(), s.y.begin() + static_cast<std::ptrdiff_t>(samples));
+  r.u.assign(s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(warmup));
+  r.u.insert(r.u.end(), s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(samples));
+  r.y.assign(warmup, 0.0);
+  r.y.insert(r.y.end(), s.y.begin(), s.y.begin() + static_cast<std::ptrdiff_t>(samples));
   r.first_counted = warmup;
+  r.input = o;
   return r;
 }
 
@@ -131,17 +136,6 @@ std::string Sci(double v, int digits = 4) {
   return buf;
 }
 
-master::ParamBox BoucwenBox() {
-  // Wide, physically motivated bounds (log scale: the magnitudes are not known a priori); β·δ may
-  // have either sign.
-  master::ParamBox box;
-  box.names = model::BwIdentifiableNames();
-  box.lower = {0.2, 0.1, 1e3, 1e3, 1, -1e4};
-  box.upper = {20, 1e3, 1e6, 1e6, 1e5, 1e4};
-  box.log_scale = {true, true, true, true, true, false};
-  return box;
-}
-
 master::SearchOptions MakeOptions(const BoucwenArgs& a) {
   master::SearchOptions o;
   o.algorithm = master::ParseSearchAlgorithm(a.algorithm);
@@ -174,13 +168,14 @@ int RunBoucwen(const BoucwenArgs& a) {
     const size_t all = s.u.size() - s.u.size() % kPeriod;
     return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kPeriod) : all;
   };
-  std::vector<model::BwRecord> records;
+  std::vector<complete::BwTrainingRecord> records;
   records.push_back(MakeRecord("train_A", train_a, samples_of(train_a), a.substeps, false));
   records.push_back(MakeRecord("train_B", train_b, samples_of(train_b), a.substeps, true));
-  size_t n_train = 0;
-  for (const auto& r : records) n_train += r.input.samples() - r.first_counted;
+  // Output-error MSE; a diverging simulation costs 1 m² (penalised).
+  const complete::BwOscillatorFitness fitness(std::move(records), 1.0);
+  const size_t n_train = fitness.counted_samples();
 
-  const master::ParamBox box = BoucwenBox();
+  const master::ParamBox box = complete::BwOscillatorBox();
   master::SearchOptions options = MakeOptions(a);
   const int progress = a.progress;
   options.on_progress = [progress](const master::SearchProgress& p) {
@@ -191,19 +186,33 @@ int RunBoucwen(const BoucwenArgs& a) {
     }
   };
   ThrowIfError(options.Validate(box));
-  master::FunctionFitness fitness([&records](std::span<const double> theta) {
-    bool diverged = false;
-    const double mse = model::BwOutputMse(model::BwFromIdentifiable(theta), records, 1.0, &diverged);
-    if (diverged) return master::FitnessResult{mse, master::FitnessStatus::kPenalized, "diverged"};
-    return master::FitnessResult{mse, master::FitnessStatus::kOk, {}};
-  });
-  master::ThreadPoolEvaluator evaluator(fitness, a.threads);
-  std::cout << "piezoid boucwen: " << master::SearchAlgorithmName(options.algorithm) << ", "
-            << options.repetitions << " repetition(s) from seed " << a.seed << ", " << evaluator.concurrency()
-            << " thread(s); training on " << n_train
-            << " samples (train_A from rest, train_B in steady state after a one-period warm-up), RK4 with " << a.substeps
-            << " sub-steps per sample, Fourier-interpolated input" << std::endl;
-  const master::SearchResult result = master::Search(box, options, evaluator);
+  const std::string where =
+      a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)");
+  master::SearchResult result;
+  int threads = 0;
+  try {
+    // Locally a thread pool; with --master one evaluation session (the spec carries the records).
+    std::unique_ptr<master::BatchEvaluator> evaluator;
+    if (a.service.enabled()) {
+      evaluator = std::make_unique<ServiceEvaluator>(
+          a.service.Options(),
+          complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness),
+                                         std::string("boucwen ") + master::SearchAlgorithmName(options.algorithm)),
+          "piezoid boucwen");
+    } else {
+      evaluator = std::make_unique<master::ThreadPoolEvaluator>(fitness, a.threads);
+    }
+    std::cout << "piezoid boucwen: " << master::SearchAlgorithmName(options.algorithm) << ", "
+              << options.repetitions << " repetition(s) from seed " << a.seed << ", " << evaluator->concurrency()
+              << where << "; training on " << n_train
+              << " samples (train_A from rest, train_B in steady state after a one-period warm-up), RK4 with "
+              << a.substeps << " sub-steps per sample, Fourier-interpolated input" << std::endl;
+    result = master::Search(box, options, *evaluator);
+    threads = evaluator->concurrency();
+  } catch (const ServiceError& e) {  // the evaluator's destructor has closed the session
+    std::cerr << "piezoid boucwen: error: " << e.what() << "\n";
+    return ExitCodeOf(e.status());
+  }
 
   const model::BwParams fitted = model::BwFromIdentifiable(result.best);
   const model::BwParams truth;  // benchmark Table 1
@@ -258,7 +267,8 @@ int RunBoucwen(const BoucwenArgs& a) {
   f["algorithm"] = str(master::SearchAlgorithmName(options.algorithm));
   f["seed"] = num(static_cast<double>(a.seed));
   f["repetitions"] = num(options.repetitions);
-  f["threads"] = num(evaluator.concurrency());
+  f["threads"] = num(threads);
+  f["evaluated_on"] = str(a.service.enabled() ? "service" : "local");
   f["substeps"] = num(a.substeps);
   f["training_samples"] = num(static_cast<double>(n_train));
   f["evaluations"] = num(static_cast<double>(result.evaluations));
@@ -304,7 +314,7 @@ int RunBoucwen(const BoucwenArgs& a) {
        << "Algorithm " << master::SearchAlgorithmName(options.algorithm) << ", " << options.repetitions
        << " repetitions from seed " << a.seed << " (best kept: repetition " << result.best_repetition << ", "
        << result.stop_reason << "); " << result.evaluations << " evaluations in " << result.wall_time_s
-       << " s on " << evaluator.concurrency() << " thread(s). Training: train_A + train_B (" << n_train
+       << " s on " << threads << where << ". Training: train_A + train_B (" << n_train
        << " samples; train_A simulated from rest, train_B, a steady-state record, after a one-period warm-up), "
           "output-error MSE of a free-run simulation (RK4, " << a.substeps
        << " sub-steps per sample).\n\n"
@@ -412,6 +422,7 @@ void RegisterBoucwen(CLI::App& app, int& exit_code) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_flag("--no-plots", a->no_plots, "do not write or render gnuplot figures");
+  AddCompleteServiceFlags(cmd, a->service);
   cmd->callback([a, &exit_code] { exit_code = RunBoucwen(*a); });
 }
 

@@ -9,8 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "client/cmd_service.h"
 #include "client/commands.h"
 #include "client/committee.h"
+#include "client/complete_service.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -32,6 +34,7 @@ struct CommitteeArgs {
   bool averaging = false;
   bool no_figures = false;
   bool quiet = false;
+  CompleteServiceFlags service;  ///< --master: every search's evaluations on the service
 };
 
 int RunCommitteeCommand(const CommitteeArgs& a) {
@@ -70,7 +73,15 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
             << " optimiser(s), " << o.search.repetitions << " repetitions each" << std::endl;
   CommitteeLog log;
   if (!a.quiet) log = [](const std::string& line) { std::cout << "  " << line << std::endl; };
-  const CommitteeResult r = RunCommittee(set, o, LocalEvaluatorFactory(a.threads), log);
+  const EvaluatorFactory factory =
+      a.service.enabled() ? CommitteeServiceFactory(a.service.Options()) : LocalEvaluatorFactory(a.threads);
+  CommitteeResult r;
+  try {
+    r = RunCommittee(set, o, factory, log);
+  } catch (const ServiceError& e) {
+    std::cerr << "piezoid committee: error: " << e.what() << "\n";
+    return ExitCodeOf(e.status());
+  }
 
   namespace fs = std::filesystem;
   fs::create_directories(a.out);
@@ -89,7 +100,8 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
               << r.complete[r.best_complete].all_test.rmse << " um: reduction "
               << 100 * r.rmse_reduction << " % (max error " << 100 * r.max_reduction << " %)";
   std::cout << "\n" << r.evaluations << " evaluations in " << r.wall_s << " s on " << r.threads
-            << " thread(s); report in " << (fs::path(a.out) / "report.md").string() << "\n";
+            << (a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)"))
+            << "; report in " << (fs::path(a.out) / "report.md").string() << "\n";
   return 0;
 }
 
@@ -117,8 +129,8 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
   cmd->add_option("--optimisers", a->optimisers, "optimisers: pso, ga-real, ga-binary")
       ->delimiter(',')
       ->default_str("pso,ga-real");
-  cmd->add_option("--criterion", a->criterion, "identification criterion: iae, sse or rmse (summed "
-                                               "over the training records)")
+  cmd->add_option("--criterion", a->criterion, "identification criterion: iae, sse, rmse (each summed "
+                                               "over the training records) or max (the largest over them)")
       ->default_str("iae");
   cmd->add_option("--t0", a->t0, "criterion window start [s]")->default_str("0.5");
   cmd->add_option("--t1", a->t1, "criterion window end [s] (clipped to each record's end)")
@@ -144,6 +156,7 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
                 "averaging committee (triangular band memberships) instead of the hard switch");
   cmd->add_flag("--no-figures", a->no_figures, "do not write the loop figures");
   cmd->add_flag("--quiet", a->quiet, "no per-search progress lines");
+  AddCompleteServiceFlags(cmd, a->service);
   cmd->callback([a, &exit_code] { exit_code = RunCommitteeCommand(*a); });
 }
 

@@ -36,6 +36,27 @@ int ExitCodeOf(const Status& s) {
   }
 }
 
+ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
+                                     const std::string& curve_secret, const std::string& master_public) {
+  ServiceClientOptions o;
+  o.endpoint = master;
+  o.timeout_ms = timeout_ms;
+  o.retries = retries;
+  if (curve_secret.empty() != master_public.empty())
+    throw InputError(curve_secret.empty()
+                         ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs --curve-secret (or PIEZOID_CURVE_SECRET)"
+                         : "--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public (or PIEZOID_MASTER_PUBLIC)");
+  if (!curve_secret.empty()) {
+    master::CurveKeyPair keys;
+    if (Status s = master::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
+      throw InputError("--curve-secret: " + s.message());
+    if (Status s = master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
+      throw InputError("--master-public: " + s.message());
+    o.curve = keys;
+  }
+  return o;
+}
+
 namespace {
 
 std::string Env(const char* name, const char* fallback = "") {
@@ -50,20 +71,7 @@ struct Common {
   std::string curve_secret = Env("PIEZOID_CURVE_SECRET"), master_public = Env("PIEZOID_MASTER_PUBLIC");
   /// The client of these options; a bad key file throws InputError (exit code 2).
   ServiceClient Client() const {
-    ServiceClientOptions o{master, timeout_ms, retries};
-    if (curve_secret.empty() != master_public.empty())
-      throw InputError(curve_secret.empty()
-                           ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs --curve-secret (or PIEZOID_CURVE_SECRET)"
-                           : "--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public (or PIEZOID_MASTER_PUBLIC)");
-    if (!curve_secret.empty()) {
-      master::CurveKeyPair keys;
-      if (Status s = master::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
-        throw InputError("--curve-secret: " + s.message());
-      if (Status s = master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
-        throw InputError("--master-public: " + s.message());
-      o.curve = keys;
-    }
-    return ServiceClient(std::move(o));
+    return ServiceClient(ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public));
   }
 };
 

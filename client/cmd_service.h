@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "client/service_client.h"
 #include "model/status.h"
 
 namespace pz::client {
@@ -22,6 +23,13 @@ enum ExitCode : int {
 /// The exit code of a status (kOk → 0, kInvalidArgument → 2, kUnavailable → 3, kNotFound → 4,
 /// kFailedPrecondition → 5, anything else → 1).
 int ExitCodeOf(const Status& s);
+
+/// The options of a client of the master at `master` (timeout per attempt, attempts); CURVE when
+/// both key files are given (this client's NAME.key from `piezoid keygen`, the master's public
+/// key). Throws InputError naming the flag (--curve-secret, --master-public) on a missing partner
+/// or a bad key file. Used by every command that talks to a master.
+ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
+                                     const std::string& curve_secret, const std::string& master_public);
 
 /// Adds submit, status, list (alias jobs), watch, cancel, fetch and export; their callbacks set
 /// exit_code.

@@ -20,8 +20,6 @@
 namespace pz::client {
 namespace {
 
-using master::FitnessResult;
-using master::FitnessStatus;
 using model::StackFamily;
 
 double Now() {
@@ -36,10 +34,6 @@ size_t WindowCount(size_t n, double dt, double t0, double t1) {
   if (l * dt > t1) l -= 1;
   l = std::min(l, static_cast<double>(n - 1));
   return l >= f ? static_cast<size_t>(l - f + 1) : 0;
-}
-
-double ClipEnd(const io::StackRecord& r, double t1) {
-  return std::min(t1, static_cast<double>(r.t.size() - 1) * r.dt());
 }
 
 // Accumulates RoleMetrics with the pooled squared error.
@@ -66,7 +60,7 @@ struct RecordError {
 };
 
 RecordError Errors(const io::StackRecord& r, std::span<const double> yhat, double t0, double t1) {
-  const double end = ClipEnd(r, t1), dt = r.dt();
+  const double end = complete::WindowEnd(r, t1), dt = r.dt();
   RecordError e;
   e.m.records = 1;
   e.m.samples = WindowCount(r.t.size(), dt, t0, end);
@@ -117,93 +111,6 @@ std::vector<double> Memberships(const FrequencyBands& bands, double f) {
 }
 
 }  // namespace
-
-const char* FitCriterionName(FitCriterion c) {
-  switch (c) {
-    case FitCriterion::kIae:
-      return "iae";
-    case FitCriterion::kSse:
-      return "sse";
-    case FitCriterion::kRmse:
-      return "rmse";
-  }
-  return "unknown";
-}
-
-FitCriterion ParseFitCriterion(const std::string& name) {
-  for (FitCriterion c : {FitCriterion::kIae, FitCriterion::kSse, FitCriterion::kRmse})
-    if (name == FitCriterionName(c)) return c;
-  throw InputError("criterion '" + name + "': expected iae, sse or rmse");
-}
-
-// ---- StackFitness ---------------------------------------------------------------------------
-
-StackFitness::StackFitness(StackFamily family, std::vector<const io::StackRecord*> records,
-                           FitCriterion criterion, double t0_s, double t1_s,
-                           model::StackSimOptions sim, double error_cost)
-    : family_(family),
-      records_(std::move(records)),
-      criterion_(criterion),
-      t0_(t0_s),
-      t1_(t1_s),
-      sim_(sim),
-      error_cost_(error_cost) {
-  ThrowIfError(sim_.Validate());
-  if (records_.empty()) throw InputError("stack fitness: no records to fit");
-  if (!(std::isfinite(t0_) && t0_ >= 0))
-    throw InputError(FieldError("window t0_s", t0_, "must be finite and >= 0"));
-  if (!(std::isfinite(t1_) && t1_ > t0_))
-    throw InputError(FieldError("window t1_s", t1_, "must be finite and > t0_s"));
-  for (const io::StackRecord* r : records_) {
-    PZ_CHECK(r != nullptr);
-    if (!(ClipEnd(*r, t1_) > t0_))
-      throw InputError(r->Label() + " ends at " +
-                       io::FormatNumber(static_cast<double>(r->t.size() - 1) * r->dt()) +
-                       " s, before the window start t0_s = " + io::FormatNumber(t0_) + " s");
-  }
-}
-
-double StackFitness::Cost(std::span<const double> params) const {
-  thread_local std::vector<double> yhat;
-  double total = 0;
-  for (const io::StackRecord* r : records_) {
-    yhat.resize(r->u.size());
-    const std::span<double> out(yhat.data(), r->u.size());
-    model::SimulateStack(family_, params, r->u, r->dt(), out, sim_);
-    for (double v : out)
-      if (!std::isfinite(v)) return std::numeric_limits<double>::infinity();
-    const double end = ClipEnd(*r, t1_);
-    switch (criterion_) {
-      case FitCriterion::kIae:
-        total += model::Iae(r->y, out, r->dt(), t0_, end);
-        break;
-      case FitCriterion::kSse:
-        total += model::Sse(r->y, out, r->dt(), t0_, end);
-        break;
-      case FitCriterion::kRmse:
-        total += model::Rmse(r->y, out, r->dt(), t0_, end);
-        break;
-    }
-  }
-  return total;
-}
-
-FitnessResult StackFitness::Evaluate(const master::Genome& genome) const {
-  const size_t want = model::StackParamNames(family_).size();
-  if (genome.reals.size() != want)
-    return {error_cost_, FitnessStatus::kError,
-            "genome has " + std::to_string(genome.reals.size()) + " reals, " +
-                model::StackFamilyName(family_) + " has " + std::to_string(want) + " parameters"};
-  double cost;
-  try {
-    cost = Cost(genome.reals);
-  } catch (const InputError& e) {
-    return {error_cost_, FitnessStatus::kPenalized, std::string("invalid parameters: ") + e.what()};
-  }
-  if (!std::isfinite(cost) || cost >= error_cost_)
-    return {error_cost_, FitnessStatus::kPenalized, "simulation diverged (non-finite output)"};
-  return {cost, FitnessStatus::kOk, ""};
-}
 
 // ---- Bands ---------------------------------------------------------------------------------
 
@@ -421,12 +328,8 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
 
   CommitteeResult res;
   res.options = options;
-  {
-    auto probe = factory(StackFitness(options.families[0], all_train, options.criterion,
-                                      options.t0_s, options.t1_s, options.sim));
-    res.threads = probe->concurrency();
-  }
 
+  bool first_search = true;
   auto identify = [&](StackFamily family, master::SearchAlgorithm algo,
                       const std::vector<const io::StackRecord*>& records, int band) {
     IdentifiedModel m;
@@ -436,6 +339,8 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
     const StackFitness fitness(family, records, options.criterion, options.t0_s, options.t1_s,
                                options.sim, options.search.error_cost);
     auto evaluator = factory(fitness);
+    if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
+    first_search = false;
     master::SearchOptions so = options.search;
     so.algorithm = algo;
     m.search = master::Search(DefaultStackBox(family), so, *evaluator);

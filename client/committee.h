@@ -19,8 +19,8 @@
 //     complete model (lowest pooled test RMSE of all complete models: the strongest baseline);
 //     reduction = 1 − RMSE_committee / RMSE_complete.
 //
-// Every search goes through the BatchEvaluator seam, so it runs inline, on a thread pool, or on any
-// other evaluator made by the factory; the results are the same bit for bit.
+// Every search goes through the BatchEvaluator seam, so it runs inline, on a thread pool, or on the
+// service's workers (any evaluator made by the factory); the results are the same bit for bit.
 #pragma once
 
 #include <functional>
@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "complete/stack_fitness.h"
 #include "io/stack_records.h"
 #include "master/evaluator.h"
 #include "master/param_search.h"
@@ -38,37 +39,12 @@
 
 namespace pz::client {
 
-enum class FitCriterion : int { kIae = 0, kSse = 1, kRmse = 2 };
-/// "iae", "sse", "rmse".
-const char* FitCriterionName(FitCriterion c);
-/// Parses the names above; throws InputError naming the value otherwise.
-FitCriterion ParseFitCriterion(const std::string& name);
-
-/// The fitness of a parameter vector (Genome::reals, in model::StackParamNames order) on a set of
-/// records: IAE or SSE over the window summed over the records, or the RMSE over the window pooled
-/// over the records. Pure and thread-safe (one scratch buffer per thread, no allocation once
-/// grown). A simulation with non-finite output is a penalised result (the error cost) naming the
-/// record.
-class StackFitness final : public master::FitnessFunction {
- public:
-  /// The records must outlive the fitness. Throws InputError on no records, a bad window
-  /// (t0 < t1, t0 ≥ 0, t0 inside every record) or bad simulation options. The window end is
-  /// clipped to each record's last sample time.
-  StackFitness(model::StackFamily family, std::vector<const io::StackRecord*> records,
-               FitCriterion criterion, double t0_s, double t1_s,
-               model::StackSimOptions sim = {}, double error_cost = master::kDefaultErrorCost);
-  master::FitnessResult Evaluate(const master::Genome& genome) const override;
-  /// The cost of one parameter vector; throws InputError on a wrong size or invalid parameters.
-  double Cost(std::span<const double> params) const;
-
- private:
-  model::StackFamily family_;
-  std::vector<const io::StackRecord*> records_;
-  FitCriterion criterion_;
-  double t0_, t1_;
-  model::StackSimOptions sim_;
-  double error_cost_;
-};
+// The fitness of the stack models (criterion over the window, summed over the records) lives in
+// complete/stack_fitness.h, where the service's workers link it too ("complete_model" job kind).
+using complete::FitCriterion;
+using complete::FitCriterionName;
+using complete::ParseFitCriterion;
+using complete::StackFitness;
 
 /// Frequency bands by their edges e_0 < e_1 < … < e_B: band b is [e_b, e_{b+1}), the last closed.
 struct FrequencyBands {
@@ -108,9 +84,9 @@ struct CommitteeOptions {
   Status Validate() const;
 };
 
-/// Makes the evaluator a search runs on, for a fitness that outlives it.
-using EvaluatorFactory =
-    std::function<std::unique_ptr<master::BatchEvaluator>(const master::FitnessFunction&)>;
+/// Makes the evaluator a search runs on, for a fitness that outlives it (locally a thread pool over
+/// it; on the service a session whose spec carries its records, client/complete_service.h).
+using EvaluatorFactory = std::function<std::unique_ptr<master::BatchEvaluator>(const StackFitness&)>;
 /// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
 EvaluatorFactory LocalEvaluatorFactory(int threads);
 

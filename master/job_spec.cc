@@ -44,6 +44,7 @@ std::string JobSpec::kind() const {
   if (std::holds_alternative<HgannProblem>(problem)) return "hgann";
   if (std::holds_alternative<SyntheticProblem>(problem)) return "synthetic";
   if (std::holds_alternative<DiagnoseProblem>(problem)) return "diagnose";
+  if (std::holds_alternative<CompleteModelProblem>(problem)) return "complete_model";
   return "";
 }
 
@@ -69,8 +70,18 @@ std::vector<FieldViolation> JobSpec::Validate() const {
               "synthetic.crash_prefix", s->crash_prefix, "must be a 0/1 string ≤ genome_bits");
   } else if (std::holds_alternative<DiagnoseProblem>(problem)) {
     // Checked by the "diagnose" job kind (diagnose/job_kind.h), which knows the effect library.
+  } else if (const auto* m = std::get_if<CompleteModelProblem>(&problem)) {
+    // The generic ranges; the records and the family's rules are checked by the "complete_model"
+    // job kind (complete/job_kind.h), which knows the models.
+    c.Require(m->family != CompleteModelProblem::Family::kUnspecified, "complete_model.family",
+              "COMPLETE_MODEL_FAMILY_UNSPECIFIED",
+              "must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+    c.Require(!m->records.empty(), "complete_model.records", "0 records", "at least one record is needed");
+    c.Require(std::isfinite(m->error_cost) && m->error_cost > 0, "complete_model.error_cost", m->error_cost,
+              "must be finite and > 0");
+    c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(), "must be ≤ 1000 characters");
   } else {
-    out.push_back({"problem", "problem: one of hgann, synthetic, diagnose must be set"});
+    out.push_back({"problem", "problem: one of hgann, synthetic, diagnose, complete_model must be set"});
   }
 
   if (ga && external) {

@@ -89,6 +89,32 @@ struct DiagnoseProblem {
   std::string source;                   ///< free text, ≤ 1000 chars
 };
 
+/// One sampled record of a complete-model identification (proto CompleteModelRecord).
+struct CompleteModelRecord {
+  std::string name;            ///< label in messages, ≤ 200 chars
+  double sample_rate_hz = 0;   ///< fs [Hz], finite, > 0
+  std::vector<double> input;   ///< u_k at t = k / fs, ≥ 2 samples, finite
+  std::vector<double> output;  ///< measured y_k, as many as input, finite
+  uint64_t first_counted = 0;  ///< oscillator: warm-up samples simulated but not counted
+};
+
+/// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
+/// the family's physical parameters; cost = the family's criterion on the records.
+struct CompleteModelProblem {
+  enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3 };
+  enum class Criterion { kIae = 1, kSse = 2, kRmse = 3, kMax = 4 };
+  enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
+  Family family = Family::kUnspecified;
+  std::vector<CompleteModelRecord> records;      ///< ≥ 1
+  Criterion criterion = Criterion::kIae;         ///< stack families
+  double t0_s = 0, t1_s = 0;                     ///< stack families: the criterion's window [s]
+  int substeps = 0;                              ///< 0 = the family's default (oscillator 4, stack 2)
+  Interpolation interpolation = Interpolation::kSpline;  ///< oscillator
+  uint64_t period_samples = 0;                   ///< oscillator, Fourier (0 = whole record)
+  double error_cost = 1e30;                      ///< cost of a diverged / invalid parameter set
+  std::string source;                            ///< free text, ≤ 1000 chars
+};
+
 /// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends
 /// batches of genomes; the master only evaluates them.
 struct ExternalSettings {
@@ -122,13 +148,13 @@ struct JobSpec {
   std::string name;
   uint64_t seed = 0;
   JobLimits limits;
-  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem> problem;
+  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem, CompleteModelProblem> problem;
   /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
   /// evaluation session driven by the client).
   std::optional<GaSettings> ga;
   std::optional<ExternalSettings> external;
 
-  /// "hgann", "synthetic", "diagnose" or "" when no problem is set.
+  /// "hgann", "synthetic", "diagnose", "complete_model" or "" when no problem is set.
   std::string kind() const;
   /// "ga", "external" or "".
   std::string algorithm() const { return ga ? "ga" : external ? "external" : ""; }

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "master/broker.h"
+#include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "master/job_store.h"
 
@@ -144,6 +145,7 @@ int main(int argc, char** argv) {
 
   pz::master::Broker b(broker);
   pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
+  pz::complete::RegisterCompleteModelJobKind(pz::master::JobKindRegistry::Default());
   pz::master::JobStore jobs(store, b, pz::master::JobKindRegistry::Default());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {
     spdlog::critical("{}", s.message());

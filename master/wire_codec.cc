@@ -261,6 +261,25 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d->max_steps)));
     pd->set_force_cvode(d->force_cvode);
     pd->set_source(d->source);
+  } else if (const auto* m = std::get_if<CompleteModelProblem>(&s.problem)) {
+    auto* pm = p->mutable_complete_model();
+    pm->set_family(static_cast<pw::CompleteModelFamily>(m->family));
+    for (const CompleteModelRecord& r : m->records) {
+      auto* pr = pm->add_records();
+      pr->set_name(r.name);
+      pr->set_sample_rate_hz(r.sample_rate_hz);
+      pr->mutable_input()->Assign(r.input.begin(), r.input.end());
+      pr->mutable_output()->Assign(r.output.begin(), r.output.end());
+      pr->set_first_counted(r.first_counted);
+    }
+    pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m->criterion));
+    pm->set_t0_s(m->t0_s);
+    pm->set_t1_s(m->t1_s);
+    pm->set_substeps(static_cast<uint32_t>(std::max(0, m->substeps)));
+    pm->set_interpolation(static_cast<pw::BwInterpolation>(m->interpolation));
+    pm->set_period_samples(m->period_samples);
+    pm->set_error_cost(m->error_cost);
+    pm->set_source(m->source);
   } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
     auto* py = p->mutable_synthetic();
     py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
@@ -360,6 +379,41 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     d.force_cvode = pd.force_cvode();
     d.source = pd.source();
     s->problem = std::move(d);
+  } else if (p.has_complete_model()) {
+    const auto& pm = p.complete_model();
+    CompleteModelProblem m;
+    auto bad_enum = [&](const char* field, int value, const char* known) {
+      if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
+    };
+    if (pm.family() >= 0 && pm.family() <= 3)
+      m.family = static_cast<CompleteModelProblem::Family>(pm.family());
+    else
+      bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+    for (const auto& pr : pm.records()) {
+      CompleteModelRecord r;
+      r.name = pr.name();
+      r.sample_rate_hz = pr.sample_rate_hz();
+      r.input.assign(pr.input().begin(), pr.input().end());
+      r.output.assign(pr.output().begin(), pr.output().end());
+      r.first_counted = pr.first_counted();
+      m.records.push_back(std::move(r));
+    }
+    if (pm.criterion() >= 0 && pm.criterion() <= 4)
+      m.criterion = static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
+    else
+      bad_enum("complete_model.criterion", pm.criterion(), "IAE, SSE, RMSE or MAX");
+    m.t0_s = pm.t0_s();
+    m.t1_s = pm.t1_s();
+    m.substeps = ClampInt(pm.substeps());
+    if (pm.interpolation() >= 0 && pm.interpolation() <= 4)
+      m.interpolation = pm.interpolation() == 0 ? CompleteModelProblem::Interpolation::kSpline
+                                                : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
+    else
+      bad_enum("complete_model.interpolation", pm.interpolation(), "ZOH, LINEAR, SPLINE or FOURIER");
+    m.period_samples = pm.period_samples();
+    m.error_cost = OrDefault(pm.error_cost(), 1e30);
+    m.source = pm.source();
+    s->problem = std::move(m);
   }
   if (p.has_ga()) {
     const auto& pg = p.ga();

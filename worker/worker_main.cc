@@ -5,6 +5,7 @@
 #include <csignal>
 #include <thread>
 
+#include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "worker/worker.h"
 
@@ -58,6 +59,7 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
   pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
+  pz::complete::RegisterCompleteModelJobKind(pz::master::JobKindRegistry::Default());
   pz::worker::Worker w(o, pz::master::JobKindRegistry::Default());
   spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);

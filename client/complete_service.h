@@ -1,0 +1,34 @@
+// Complete-model searches on the workers of a piezoid-master (issue 7): the flags `piezoid boucwen`
+// and `piezoid committee` take to run every evaluation of their PSO / GA searches as evaluation
+// sessions (--master, --timeout-ms, --retries, --curve-secret, --master-public), and the
+// committee's EvaluatorFactory over the service. Each search is one session whose spec (the
+// "complete_model" job kind, complete/job_kind.h) carries the fitness's records, so the results
+// equal the local run's bit for bit.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "client/committee.h"
+#include "client/service_evaluator.h"
+
+namespace pz::client {
+
+struct CompleteServiceFlags {
+  std::string master;  ///< the master's client endpoint; empty = evaluate locally
+  int timeout_ms = 4000;
+  int retries = 3;
+  std::string curve_secret, master_public;  ///< default: $PIEZOID_CURVE_SECRET, $PIEZOID_MASTER_PUBLIC
+  CompleteServiceFlags();
+  bool enabled() const { return !master.empty(); }
+  /// The session options of these flags (CURVE keys loaded); throws InputError naming the flag.
+  ServiceEvaluatorOptions Options() const;
+};
+
+/// Adds the flags to `cmd`.
+void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
+
+/// One session per search of the committee, on the master of `options`.
+EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options);
+
+}  // namespace pz::client

@@ -1,0 +1,307 @@
+#include "complete/job_kind.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "master/inline_evaluator.h"
+
+namespace pz::complete {
+namespace {
+
+using master::CompleteModelProblem;
+using master::CompleteModelRecord;
+using master::FieldViolation;
+using Family = CompleteModelProblem::Family;
+using SpecInterpolation = CompleteModelProblem::Interpolation;
+using SpecCriterion = CompleteModelProblem::Criterion;
+
+std::string Num(double v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << v;
+  return os.str();
+}
+
+bool IsStack(Family f) { return f == Family::kStackBoucWen || f == Family::kStackBacklashLike; }
+
+model::StackFamily StackFamilyOf(Family f) {
+  return f == Family::kStackBoucWen ? model::StackFamily::kBoucWen : model::StackFamily::kBacklashLike;
+}
+
+std::vector<std::string> ParameterNames(Family f) {
+  if (f == Family::kBwOscillator) return model::BwIdentifiableNames();
+  if (IsStack(f)) return model::StackParamNames(StackFamilyOf(f));
+  return {};
+}
+
+int Substeps(const CompleteModelProblem& p) {
+  return p.substeps > 0 ? p.substeps : p.family == Family::kBwOscillator ? 4 : 2;
+}
+
+model::InputInterpolation InterpolationOf(SpecInterpolation i) {
+  switch (i) {
+    case SpecInterpolation::kZoh: return model::InputInterpolation::kZeroOrderHold;
+    case SpecInterpolation::kLinear: return model::InputInterpolation::kLinear;
+    case SpecInterpolation::kSpline: return model::InputInterpolation::kCubicSpline;
+    case SpecInterpolation::kFourier: return model::InputInterpolation::kPeriodicFourier;
+  }
+  return model::InputInterpolation::kCubicSpline;
+}
+
+SpecInterpolation SpecOf(model::InputInterpolation i) {
+  switch (i) {
+    case model::InputInterpolation::kZeroOrderHold: return SpecInterpolation::kZoh;
+    case model::InputInterpolation::kLinear: return SpecInterpolation::kLinear;
+    case model::InputInterpolation::kCubicSpline: return SpecInterpolation::kSpline;
+    case model::InputInterpolation::kPeriodicFourier: return SpecInterpolation::kFourier;
+  }
+  return SpecInterpolation::kSpline;
+}
+
+FitCriterion CriterionOf(SpecCriterion c) {
+  switch (c) {
+    case SpecCriterion::kIae: return FitCriterion::kIae;
+    case SpecCriterion::kSse: return FitCriterion::kSse;
+    case SpecCriterion::kRmse: return FitCriterion::kRmse;
+    case SpecCriterion::kMax: return FitCriterion::kMax;
+  }
+  return FitCriterion::kIae;
+}
+
+SpecCriterion SpecOf(FitCriterion c) {
+  switch (c) {
+    case FitCriterion::kIae: return SpecCriterion::kIae;
+    case FitCriterion::kSse: return SpecCriterion::kSse;
+    case FitCriterion::kRmse: return SpecCriterion::kRmse;
+    case FitCriterion::kMax: return SpecCriterion::kMax;
+  }
+  return SpecCriterion::kIae;
+}
+
+std::vector<BwTrainingRecord> BwRecords(const CompleteModelProblem& p) {
+  std::vector<BwTrainingRecord> out;
+  for (const CompleteModelRecord& r : p.records) {
+    BwTrainingRecord b;
+    b.name = r.name;
+    b.u = r.input;
+    b.y = r.output;
+    b.first_counted = r.first_counted;
+    b.input.sample_rate_hz = r.sample_rate_hz;
+    b.input.substeps = Substeps(p);
+    b.input.interpolation = InterpolationOf(p.interpolation);
+    b.input.period_samples = p.period_samples;
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+// The spec's records as stack records, numbered from 1 (t only gives their length).
+std::vector<io::StackRecord> StackRecords(const CompleteModelProblem& p) {
+  std::vector<io::StackRecord> out;
+  for (size_t i = 0; i < p.records.size(); ++i) {
+    const CompleteModelRecord& r = p.records[i];
+    io::StackRecord s;
+    s.number = static_cast<int>(i + 1);
+    s.sample_rate_hz = r.sample_rate_hz;
+    s.t.resize(r.input.size());
+    for (size_t k = 0; k < s.t.size(); ++k) s.t[k] = static_cast<double>(k) / r.sample_rate_hz;
+    s.u = r.input;
+    s.y = r.output;
+    out.push_back(std::move(s));
+  }
+  return out;
+}
+
+// Owns the records its StackFitness points to.
+class OwningStackFitness final : public master::FitnessFunction {
+ public:
+  OwningStackFitness(std::vector<io::StackRecord> records, const CompleteModelProblem& p)
+      : records_(std::move(records)),
+        fitness_(StackFamilyOf(p.family), Pointers(records_), CriterionOf(p.criterion), p.t0_s, p.t1_s,
+                 model::StackSimOptions{Substeps(p)}, p.error_cost) {}
+  master::FitnessResult Evaluate(const master::Genome& g) const override { return fitness_.Evaluate(g); }
+
+ private:
+  static std::vector<const io::StackRecord*> Pointers(const std::vector<io::StackRecord>& records) {
+    std::vector<const io::StackRecord*> p;
+    for (const auto& r : records) p.push_back(&r);
+    return p;
+  }
+  std::vector<io::StackRecord> records_;
+  StackFitness fitness_;
+};
+
+Status Build(const CompleteModelProblem& p, std::unique_ptr<master::FitnessFunction>* out) {
+  try {
+    if (p.family == Family::kBwOscillator)
+      *out = std::make_unique<BwOscillatorFitness>(BwRecords(p), p.error_cost);
+    else if (IsStack(p.family))
+      *out = std::make_unique<OwningStackFitness>(StackRecords(p), p);
+    else
+      return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
+  } catch (const InputError& e) {
+    return InvalidArgument(std::string("complete_model: ") + e.what());
+  }
+  return Status::Ok();
+}
+
+// Every field rule that needs no simulation model (each violation named with its value).
+std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
+  std::vector<FieldViolation> v;
+  auto add = [&](const std::string& field, const std::string& value, const std::string& rule) {
+    v.push_back({field, field + " = " + value + ": " + rule});
+  };
+  if (p.family == Family::kUnspecified) return v;  // named by the generic validation
+  const bool osc = p.family == Family::kBwOscillator;
+  const int sub = Substeps(p);
+  if (sub < 1 || sub > (osc ? 1000 : 1024))
+    add("complete_model.substeps", std::to_string(p.substeps), osc ? "must be in [1, 1000] (0 = 4)" : "must be in [1, 1024] (0 = 2)");
+  if (osc) {
+    if (p.t0_s != 0 || p.t1_s != 0)
+      add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s),
+          "the oscillator has no window (its cost is the MSE over the counted samples): leave both unset");
+    if (p.criterion != SpecCriterion::kIae)
+      add("complete_model.criterion", FitCriterionName(CriterionOf(p.criterion)),
+          "the oscillator's cost is the output-error MSE: leave criterion unset");
+    if (p.interpolation != SpecInterpolation::kFourier && p.period_samples != 0)
+      add("complete_model.period_samples", std::to_string(p.period_samples), "only the FOURIER input has periods");
+  } else {
+    if (!(std::isfinite(p.t0_s) && p.t0_s >= 0)) add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
+    if (!(std::isfinite(p.t1_s) && p.t1_s > p.t0_s))
+      add("complete_model.t1_s", Num(p.t1_s), "must be finite and > t0_s = " + Num(p.t0_s));
+    if (p.period_samples != 0)
+      add("complete_model.period_samples", std::to_string(p.period_samples),
+          "only the oscillator's FOURIER input has periods: must be 0");
+  }
+  const size_t min_samples = osc && p.interpolation == SpecInterpolation::kSpline ? 4 : 2;
+  for (size_t i = 0; i < p.records.size(); ++i) {
+    const CompleteModelRecord& r = p.records[i];
+    const std::string f = "complete_model.records[" + std::to_string(i) + "]";
+    const size_t n = r.input.size();
+    if (r.name.size() > 200) add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
+    const bool fs_ok = std::isfinite(r.sample_rate_hz) && r.sample_rate_hz > 0;
+    if (!fs_ok) add(f + ".sample_rate_hz", Num(r.sample_rate_hz), "must be finite and > 0");
+    if (n < min_samples)
+      add(f + ".input", std::to_string(n) + " samples",
+          "needs >= " + std::to_string(min_samples) + (min_samples == 4 ? " (the cubic-spline input)" : ""));
+    if (r.output.size() != n)
+      add(f + ".output", std::to_string(r.output.size()) + " samples", "must have as many as input (" + std::to_string(n) + ")");
+    for (size_t k = 0; k < n; ++k)
+      if (!std::isfinite(r.input[k])) {
+        add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]), "must be finite");
+        break;
+      }
+    for (size_t k = 0; k < r.output.size(); ++k)
+      if (!std::isfinite(r.output[k])) {
+        add(f + ".output[" + std::to_string(k) + "]", Num(r.output[k]), "must be finite");
+        break;
+      }
+    if (osc) {
+      if (n > 0 && r.first_counted >= n)
+        add(f + ".first_counted", std::to_string(r.first_counted), "leaves no counted sample of " + std::to_string(n));
+      if (p.interpolation == SpecInterpolation::kFourier && p.period_samples > 0 && n % p.period_samples != 0)
+        add(f + ".input", std::to_string(n) + " samples",
+            "must be a whole number of periods (period_samples = " + std::to_string(p.period_samples) + ")");
+    } else {
+      if (r.first_counted != 0)
+        add(f + ".first_counted", std::to_string(r.first_counted), "only the oscillator has a warm-up: must be 0");
+      if (fs_ok && n >= 2 && std::isfinite(p.t0_s) && std::isfinite(p.t1_s)) {
+        const double end = static_cast<double>(n - 1) * (1.0 / r.sample_rate_hz);
+        if (!(std::min(p.t1_s, end) > p.t0_s))
+          add(f, "ends at " + Num(end) + " s", "before the window start t0_s = " + Num(p.t0_s) + " s");
+      }
+    }
+  }
+  return v;
+}
+
+std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
+  const auto& p = std::get<CompleteModelProblem>(spec.problem);
+  std::vector<FieldViolation> v = CheckFields(p);
+  if (v.empty() && spec.Validate().empty()) {
+    // What only the models know (a "periodic" record that is not, an option's own range): build it.
+    std::unique_ptr<master::FitnessFunction> f;
+    if (Status s = Build(p, &f); !s.ok()) v.push_back({"complete_model", s.message()});
+  }
+  return v;
+}
+
+}  // namespace
+
+master::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness) {
+  CompleteModelProblem p;
+  p.family = Family::kBwOscillator;
+  const auto& records = fitness.records();
+  const model::BwInputOptions& o = records.front().input;
+  for (const BwTrainingRecord& r : records) {
+    if (r.input.substeps != o.substeps || r.input.interpolation != o.interpolation ||
+        r.input.period_samples != o.period_samples)
+      throw InputError("bw record " + r.name + ": its input options differ from record " + records.front().name +
+                       "'s (a complete_model spec carries one set)");
+    p.records.push_back({r.name, r.input.sample_rate_hz, r.u, r.y, r.first_counted});
+  }
+  p.substeps = o.substeps;
+  p.interpolation = SpecOf(o.interpolation);
+  p.period_samples = o.period_samples;
+  p.error_cost = fitness.penalty();
+  return p;
+}
+
+master::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness) {
+  CompleteModelProblem p;
+  p.family = fitness.family() == model::StackFamily::kBoucWen ? Family::kStackBoucWen : Family::kStackBacklashLike;
+  for (const io::StackRecord* r : fitness.records())
+    p.records.push_back({r->Label(), r->sample_rate_hz, r->u, r->y, 0});
+  p.criterion = SpecOf(fitness.criterion());
+  p.t0_s = fitness.t0_s();
+  p.t1_s = fitness.t1_s();
+  p.substeps = fitness.sim().substeps;
+  p.error_cost = fitness.error_cost();
+  return p;
+}
+
+master::JobSpec CompleteModelJobSpec(master::CompleteModelProblem problem, const std::string& name) {
+  master::JobSpec spec;
+  spec.name = name.substr(0, 200);
+  spec.seed = 0;
+  spec.problem = std::move(problem);
+  spec.limits.penalty_cost = master::kDefaultErrorCost;
+  return spec;
+}
+
+Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<master::FitnessFunction>* out) {
+  const auto* p = std::get_if<CompleteModelProblem>(&spec.problem);
+  if (!p) return InvalidArgument("problem: not a complete_model spec");
+  const std::vector<FieldViolation> v = CheckFields(*p);
+  if (!v.empty()) return InvalidArgument(v.front().description);
+  return Build(*p, out);
+}
+
+master::JobKind CompleteModelJobKind() {
+  master::JobKind k;
+  k.name = "complete_model";
+  k.validate = [](const master::JobSpec& s) { return Validate(s); };
+  k.layout = [](const master::JobSpec& s, master::GenomeLayout* l) {
+    const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
+    if (names.empty()) return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
+    l->bits = 0;
+    l->reals = static_cast<int>(names.size());
+    return Status::Ok();
+  };
+  k.make_fitness = [](const master::JobSpec& s, std::unique_ptr<master::FitnessFunction>* f) {
+    return MakeCompleteModelFitness(s, f);
+  };
+  k.describe = [](const master::JobSpec& s, const master::Genome& g) {
+    const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
+    if (g.reals.size() != names.size()) return std::string();
+    std::ostringstream os;
+    os.precision(6);
+    for (size_t i = 0; i < names.size(); ++i) os << (i ? " " : "") << names[i] << "=" << g.reals[i];
+    return os.str();
+  };
+  return k;
+}
+
+void RegisterCompleteModelJobKind(master::JobKindRegistry& registry) { registry.Register(CompleteModelJobKind()); }
+
+}  // namespace pz::complete

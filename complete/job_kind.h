@@ -1,0 +1,38 @@
+// The "complete_model" job kind (issue 7): complete-model identification on the service. The
+// optimiser (PSO, real or binary GA, master/param_search.h) runs in the client (`piezoid boucwen
+// --master`, `piezoid committee --master`) and evaluates its swarms / generations through an
+// evaluation session (client/service_evaluator.h); the spec (proto CompleteModelProblem) carries
+// the model family, the records and the criterion, so that the workers rebuild the client's
+// fitness (BwOscillatorFitness, StackFitness) from the spec alone: the same costs bit for bit.
+// The master and the workers register the kind from their main(); pz::master cannot depend on
+// pz::complete.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "complete/bw_fitness.h"
+#include "complete/stack_fitness.h"
+#include "master/job_kinds.h"
+#include "master/job_spec.h"
+
+namespace pz::complete {
+
+/// The problem of a local fitness. Throws InputError if the oscillator's records differ in their
+/// input options (a spec carries one set).
+master::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
+master::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness);
+
+/// A whole session spec (algorithm set by the caller; seed 0; errors and quarantined individuals
+/// cost master::kDefaultErrorCost, as in the local evaluators).
+master::JobSpec CompleteModelJobSpec(master::CompleteModelProblem problem, const std::string& name);
+
+/// The fitness a spec describes (what a worker evaluates). InvalidArgument naming the field when
+/// the spec is not valid.
+Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<master::FitnessFunction>* out);
+
+master::JobKind CompleteModelJobKind();
+/// Registers the kind (replacing one of the same name).
+void RegisterCompleteModelJobKind(master::JobKindRegistry& registry);
+
+}  // namespace pz::complete

@@ -1,0 +1,427 @@
+// Complete models on the service (issue 7): the "complete_model" job kind rebuilds, from its spec
+// alone, the fitness the client has (Bouc–Wen oscillator and both stack families, every criterion:
+// costs bit for bit, through the binary and the JSON encodings); bad specs are refused field by
+// field; and PSO / GA searches whose evaluations run as evaluation sessions on a local master with
+// two workers (one of them killed mid-run) give the local thread-pool run's results bit for bit,
+// for the Bouc–Wen searches and the committee machine, and so do the commands `piezoid boucwen
+// --master` and `piezoid committee --master` on the bundled data.
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/message_differencer.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <numbers>
+#include <random>
+#include <thread>
+
+#include "client/committee.h"
+#include "client/complete_service.h"
+#include "client/service_evaluator.h"
+#include "complete/job_kind.h"
+#include "master/random.h"
+#include "master/thread_pool_evaluator.h"
+#include "service_harness.h"
+
+namespace pz::testing {
+namespace {
+
+using complete::BwOscillatorFitness;
+using complete::BwTrainingRecord;
+using complete::FitCriterion;
+using complete::StackFitness;
+using master::CompleteModelProblem;
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+// A periodic multisine force of `periods` × period samples at 750 Hz and the true oscillator's
+// response with a little deterministic noise; the first `warmup` samples are not counted.
+BwTrainingRecord OscillatorRecord(const std::string& name, size_t period, int periods, size_t warmup,
+                                  unsigned seed) {
+  BwTrainingRecord r;
+  r.name = name;
+  r.input.sample_rate_hz = 750;
+  r.input.substeps = 4;
+  r.input.interpolation = model::InputInterpolation::kPeriodicFourier;
+  r.input.period_samples = period;
+  std::mt19937 rng(seed);
+  std::vector<double> phase(12);
+  for (double& p : phase) p = 2 * std::numbers::pi * (rng() / 4294967296.0);
+  for (size_t k = 0; k < period * static_cast<size_t>(periods); ++k) {
+    double u = 0;
+    for (size_t l = 0; l < phase.size(); ++l)
+      u += 15 * std::sin(2 * std::numbers::pi * static_cast<double>((l + 1) * (k % period)) / period + phase[l]);
+    r.u.push_back(u);
+  }
+  r.y.resize(r.u.size());
+  EXPECT_TRUE(model::SimulateBw(model::BwParams{}, model::BwInput(r.u, r.input), r.y).ok());
+  for (double& y : r.y) y += 1e-6 * (rng() / 4294967296.0 - 0.5);
+  r.first_counted = warmup;
+  return r;
+}
+
+BwOscillatorFitness SmallOscillator() {
+  return BwOscillatorFitness({OscillatorRecord("A", 256, 2, 0, 1), OscillatorRecord("B", 256, 2, 256, 2)}, 1.0);
+}
+
+io::StackRecord StackRecord(int number, double f, double amp, io::RecordRole role, unsigned seed) {
+  io::StackRecord r;
+  r.number = number;
+  r.frequency_hz = f;
+  r.offset_v = 400;
+  r.amplitude_v = amp;
+  r.role = role;
+  r.sample_rate_hz = 5000;
+  for (int k = 0; k < 600; ++k) {
+    r.t.push_back(k / r.sample_rate_hz);
+    r.u.push_back(400 + amp * std::sin(2 * std::numbers::pi * f * k / r.sample_rate_hz));
+  }
+  r.y.resize(r.u.size());
+  model::SimulateStackBoucWen({0.3, 0.004, 0.002, 0.05, 400}, r.u, 1 / r.sample_rate_hz, r.y);
+  std::mt19937 rng(seed);
+  for (double& y : r.y) y += 0.02 * (rng() / 4294967296.0 - 0.5);
+  return r;
+}
+
+io::StackRecordSet StackSet() {
+  io::StackRecordSet set;
+  set.dir = "synthetic";
+  set.records.push_back(StackRecord(1, 40, 400, io::RecordRole::kTrain, 1));
+  set.records.push_back(StackRecord(2, 40, 300, io::RecordRole::kTest, 2));
+  set.records.push_back(StackRecord(3, 60, 350, io::RecordRole::kTrain, 3));
+  set.records.push_back(StackRecord(4, 60, 250, io::RecordRole::kTest, 4));
+  return set;
+}
+
+// The spec through the binary encoding (as a worker gets it) or the JSON one (as a user writes it),
+// made into a fitness by a registry with the kind.
+std::unique_ptr<master::FitnessFunction> Remote(const master::JobSpec& spec, bool json) {
+  master::JobSpec decoded;
+  std::vector<master::FieldViolation> v;
+  if (json)
+    EXPECT_TRUE(master::JobSpecFromJson(master::JobSpecToJson(spec), &decoded, &v).ok());
+  else
+    EXPECT_TRUE(master::DecodeJobSpec(master::EncodeJobSpec(spec), &decoded, &v).ok());
+  EXPECT_TRUE(v.empty());
+  EXPECT_EQ(master::EncodeJobSpec(decoded), master::EncodeJobSpec(spec));  // nothing lost
+  decoded.external = master::ExternalSettings{};
+  master::JobKindRegistry registry;
+  complete::RegisterCompleteModelJobKind(registry);
+  for (const auto& x : registry.Validate(decoded)) ADD_FAILURE() << x.description;
+  std::unique_ptr<master::FitnessFunction> f;
+  EXPECT_TRUE(registry.MakeFitness(decoded, &f).ok());
+  return f;
+}
+
+void ExpectSameFitness(const master::FitnessFunction& local, const master::FitnessFunction& remote,
+                       const std::vector<std::vector<double>>& points) {
+  for (const auto& p : points) {
+    master::Genome g;
+    g.reals = p;
+    const master::FitnessResult a = local.Evaluate(g), b = remote.Evaluate(g);
+    EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_EQ(a.reason, b.reason);
+  }
+}
+
+TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
+  const BwOscillatorFitness local = SmallOscillator();
+  const master::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
+  const std::vector<std::vector<double>> points = {
+      model::BwIdentifiable(model::BwParams{}),       // the truth: cost = the noise
+      {2.5, 20, 4e4, 6e4, 700, -900},                  // elsewhere
+      {0.2, -1e4, 5e4, 5e4, 800, -1100},               // negative damping diverges: penalised, cost 1
+      {1, 2, 3}};                                      // wrong size: an error
+  for (bool json : {false, true}) {
+    SCOPED_TRACE(json ? "json" : "binary");
+    const auto remote = Remote(spec, json);
+    ASSERT_TRUE(remote);
+    ExpectSameFitness(local, *remote, points);
+  }
+  master::Genome g;
+  g.reals = points[2];
+  EXPECT_EQ(local.Evaluate(g).status, master::FitnessStatus::kPenalized);
+  master::JobKindRegistry registry;
+  complete::RegisterCompleteModelJobKind(registry);
+  master::GenomeLayout layout;
+  ASSERT_TRUE(registry.Layout(spec, &layout).ok());
+  EXPECT_EQ(layout.reals, 6);
+  EXPECT_EQ(layout.bits, 0);
+  EXPECT_EQ(registry.Find("complete_model")->describe(spec, master::Genome{{}, {2, 10, 5e4, 5e4, 800, -1100}}),
+            "m=2 c=10 k=50000 alpha=50000 beta_gamma=800 beta_delta=-1100");
+}
+
+TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
+  const io::StackRecordSet set = StackSet();
+  const std::vector<const io::StackRecord*> train = set.WithRole(io::RecordRole::kTrain);
+  for (model::StackFamily family : {model::StackFamily::kBoucWen, model::StackFamily::kBacklashLike}) {
+    for (FitCriterion c : {FitCriterion::kIae, FitCriterion::kSse, FitCriterion::kRmse, FitCriterion::kMax}) {
+      SCOPED_TRACE(std::string(model::StackFamilyName(family)) + " " + complete::FitCriterionName(c));
+      const StackFitness local(family, train, c, 0.01, 0.5, model::StackSimOptions{3});
+      const auto remote = Remote(complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "stack"), false);
+      ASSERT_TRUE(remote);
+      if (family == model::StackFamily::kBoucWen)
+        ExpectSameFitness(local, *remote,
+                          {{0.3, 0.004, 0.002, 0.05, 400}, {1.5, 0.02, -0.01, 0.03, 5000}, {0.3, -0.05, -0.05, 0.05, 400}});
+      else
+        ExpectSameFitness(local, *remote, {{0.012, 0.052, 0.015}, {0.5, 0.03, -0.02}, {-1, 0.05, 0.01}});
+    }
+  }
+}
+
+TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
+  const io::StackRecordSet set = StackSet();
+  const StackFitness stack(model::StackFamily::kBoucWen, set.WithRole(io::RecordRole::kTrain), FitCriterion::kIae,
+                           0.01, 0.5);
+  const master::JobSpec stack_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(stack), "ok");
+  const master::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
+  master::JobKindRegistry registry;
+  complete::RegisterCompleteModelJobKind(registry);
+  auto violations = [&](master::JobSpec s) {
+    s.external = master::ExternalSettings{};
+    std::string all;
+    for (const auto& v : registry.Validate(s)) all += v.description + "\n";
+    return all;
+  };
+  auto expect = [&](const master::JobSpec& s, const std::string& message) {
+    const std::string all = violations(s);
+    EXPECT_NE(all.find(message), std::string::npos) << "wanted: " << message << "\ngot: " << all;
+  };
+  EXPECT_EQ(violations(stack_ok), "");
+  EXPECT_EQ(violations(bw_ok), "");
+  auto edit = [](master::JobSpec s, auto&& f) {
+    f(std::get<CompleteModelProblem>(s.problem));
+    return s;
+  };
+  expect(edit(stack_ok, [](auto& p) { p.records[1].input.resize(1); }),
+         "complete_model.records[1].input = 1 samples: needs >= 2");
+  expect(edit(stack_ok, [](auto& p) { p.records[0].output.pop_back(); }),
+         "complete_model.records[0].output = 599 samples: must have as many as input (600)");
+  expect(edit(stack_ok, [](auto& p) { p.records[1].input[7] = NAN; }),
+         "complete_model.records[1].input[7] = nan: must be finite");
+  expect(edit(stack_ok, [](auto& p) { p.records[0].output[3] = INFINITY; }),
+         "complete_model.records[0].output[3] = inf: must be finite");
+  expect(edit(stack_ok, [](auto& p) { p.records[0].sample_rate_hz = -5; }),
+         "complete_model.records[0].sample_rate_hz = -5: must be finite and > 0");
+  expect(edit(stack_ok, [](auto& p) { p.family = CompleteModelProblem::Family::kUnspecified; }),
+         "complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be");
+  expect(edit(stack_ok, [](auto& p) { p.records.clear(); }), "complete_model.records = 0 records: at least one");
+  expect(edit(stack_ok, [](auto& p) { p.t1_s = 0.005; }), "complete_model.t1_s = 0.0050000000000000001: must be finite and > t0_s");
+  expect(edit(stack_ok, [](auto& p) { p.t0_s = 0.2; }), "complete_model.records[0] = ends at 0.1198");
+  expect(edit(stack_ok, [](auto& p) { p.substeps = 2000; }), "complete_model.substeps = 2000: must be in [1, 1024]");
+  expect(edit(stack_ok, [](auto& p) { p.error_cost = NAN; }), "complete_model.error_cost = nan: must be finite and > 0");
+  expect(edit(stack_ok, [](auto& p) { p.records[0].first_counted = 3; }),
+         "complete_model.records[0].first_counted = 3: only the oscillator has a warm-up");
+  expect(edit(bw_ok, [](auto& p) { p.records[1].first_counted = 512; }),
+         "complete_model.records[1].first_counted = 512: leaves no counted sample of 512");
+  expect(edit(bw_ok, [](auto& p) { p.period_samples = 300; }),
+         "complete_model.records[0].input = 512 samples: must be a whole number of periods (period_samples = 300)");
+  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }), "complete_model: bw record A: ");
+  expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
+  expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
+  // An unknown enum value on the wire is named too.
+  master::JobSpec decoded;
+  std::vector<master::FieldViolation> v;
+  std::string json = master::JobSpecToJson(bw_ok);
+  const std::string family = "\"COMPLETE_MODEL_FAMILY_BW_OSCILLATOR\"";
+  ASSERT_NE(json.find(family), std::string::npos);
+  json.replace(json.find(family), family.size(), "9");
+  EXPECT_TRUE(master::JobSpecFromJson(json, &decoded, &v).ok());
+  ASSERT_FALSE(v.empty());
+  EXPECT_EQ(v[0].description, "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+}
+
+client::ServiceEvaluatorOptions Options(const Cluster& c) {
+  client::ServiceEvaluatorOptions o;
+  o.client.endpoint = c.client_endpoint();
+  o.client.timeout_ms = 2000;
+  o.client.retries = 3;
+  o.batch_timeout_s = 120;
+  return o;
+}
+
+// Kills `victim` `after_ms` after the `at`-th batch starts (a worker lost in the middle of a search).
+class KillingEvaluator final : public master::BatchEvaluator {
+ public:
+  KillingEvaluator(master::BatchEvaluator& inner, Process* victim, int at, int after_ms)
+      : inner_(inner), victim_(victim), at_(at), after_ms_(after_ms) {}
+  ~KillingEvaluator() override {
+    if (killer_.joinable()) killer_.join();
+  }
+  void Evaluate(const master::EvalBatch& batch, std::span<master::FitnessResult> out) override {
+    if (victim_ && ++batches_ == at_)
+      killer_ = std::thread([this] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(after_ms_));
+        victim_->Kill(SIGKILL);
+      });
+    inner_.Evaluate(batch, out);
+  }
+  int concurrency() const override { return inner_.concurrency(); }
+
+ private:
+  master::BatchEvaluator& inner_;
+  Process* victim_;
+  int at_, after_ms_, batches_ = 0;
+  std::thread killer_;
+};
+
+void ExpectSameSearch(const master::SearchResult& a, const master::SearchResult& b) {
+  ASSERT_EQ(a.best.size(), b.best.size());
+  for (size_t i = 0; i < a.best.size(); ++i) EXPECT_TRUE(SameBits(a.best[i], b.best[i])) << "best[" << i << "]";
+  EXPECT_TRUE(SameBits(a.best_cost, b.best_cost)) << a.best_cost << " vs " << b.best_cost;
+  EXPECT_EQ(a.evaluations, b.evaluations);
+  EXPECT_EQ(a.iterations, b.iterations);
+  EXPECT_EQ(a.stop_reason, b.stop_reason);
+  ASSERT_EQ(a.trace.best_cost.size(), b.trace.best_cost.size());
+  for (size_t i = 0; i < a.trace.best_cost.size(); ++i) EXPECT_TRUE(SameBits(a.trace.best_cost[i], b.trace.best_cost[i]));
+}
+
+TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForBit) {
+  complete::RegisterCompleteModelJobKind(master::JobKindRegistry::Default());
+  Cluster cluster("complete-bw");
+  cluster.AddWorker(1);
+  Process& victim = cluster.AddWorker(1);
+  const BwOscillatorFitness fitness = SmallOscillator();
+  const master::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
+  for (master::SearchAlgorithm algorithm : {master::SearchAlgorithm::kPso, master::SearchAlgorithm::kGaBinary}) {
+    SCOPED_TRACE(master::SearchAlgorithmName(algorithm));
+    const bool kill = algorithm == master::SearchAlgorithm::kGaBinary;
+    master::SearchOptions o;
+    o.algorithm = algorithm;
+    o.repetitions = 2;
+    o.pso.particles = 10;
+    o.pso.iterations = 6;
+    o.ga_binary.ga.population_size = 10;
+    o.ga_binary.ga.max_generations = 8;
+    master::ThreadPoolEvaluator pool(fitness, 2);
+    const master::SearchResult local = master::Search(complete::BwOscillatorBox(), o, pool);
+    client::ServiceEvaluator service(Options(cluster), spec, "test");
+    // With the binary GA, one of the two workers is killed during the third batch.
+    KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
+    const master::SearchResult remote = master::Search(complete::BwOscillatorBox(), o, ev);
+    ExpectSameSearch(local, remote);
+    EXPECT_EQ(service.evaluations(), local.evaluations);
+  }
+  EXPECT_FALSE(victim.running());
+}
+
+TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
+  complete::RegisterCompleteModelJobKind(master::JobKindRegistry::Default());
+  Cluster cluster("complete-committee");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  const io::StackRecordSet set = StackSet();
+  client::CommitteeOptions o;
+  o.bands.edges = {0, 50, 100};
+  o.t0_s = 0.01;
+  o.t1_s = 0.12;
+  o.algorithms = {master::SearchAlgorithm::kPso, master::SearchAlgorithm::kGaReal};
+  o.search.repetitions = 1;
+  o.search.pso.particles = 6;
+  o.search.pso.iterations = 3;
+  o.search.ga_real.population = 6;
+  o.search.ga_real.generations = 3;
+  const client::CommitteeResult local = client::RunCommittee(set, o, client::LocalEvaluatorFactory(2));
+  int sessions = 0;
+  const client::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster));
+  const client::CommitteeResult remote =
+      client::RunCommittee(set, o, [&](const StackFitness& f) {
+        ++sessions;
+        return service(f);
+      });
+  EXPECT_EQ(sessions, 12);  // (complete + 2 bands) x 2 families x 2 optimisers
+  ASSERT_EQ(remote.complete.size(), local.complete.size());
+  for (size_t i = 0; i < local.complete.size(); ++i) ExpectSameSearch(local.complete[i].search, remote.complete[i].search);
+  ASSERT_EQ(remote.band_models.size(), local.band_models.size());
+  for (size_t b = 0; b < local.band_models.size(); ++b)
+    for (size_t i = 0; i < local.band_models[b].size(); ++i)
+      ExpectSameSearch(local.band_models[b][i].search, remote.band_models[b][i].search);
+  EXPECT_EQ(remote.selected, local.selected);
+  EXPECT_TRUE(SameBits(remote.committee_test.rmse, local.committee_test.rmse));
+  EXPECT_EQ(remote.evaluations, local.evaluations);
+  auto client = cluster.Client();
+  std::vector<master::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  EXPECT_EQ(jobs.size(), 12u);
+  for (const auto& j : jobs) EXPECT_EQ(j.kind, "complete_model");
+}
+
+// A report without what depends on the machine (wall times, rates, threads, where it ran).
+google::protobuf::Struct ReadReport(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  google::protobuf::Struct s;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(ss.str(), &s).ok()) << file;
+  std::function<void(google::protobuf::Struct*)> drop = [&](google::protobuf::Struct* x) {
+    for (const char* key : {"wall_time_s", "threads", "evaluations_per_s", "seconds_to_final", "evaluated_on"})
+      x->mutable_fields()->erase(key);
+    for (auto& [key, v] : *x->mutable_fields()) {
+      if (v.has_struct_value()) drop(v.mutable_struct_value());
+      if (v.has_list_value())
+        for (auto& item : *v.mutable_list_value()->mutable_values())
+          if (item.has_struct_value()) drop(item.mutable_struct_value());
+    }
+  };
+  drop(&s);
+  return s;
+}
+
+// Same keys and values, bit for bit (numbers are printed with 17 digits).
+void ExpectSameReport(const google::protobuf::Struct& a, const google::protobuf::Struct& b) {
+  google::protobuf::util::MessageDifferencer d;
+  std::string diff;
+  d.ReportDifferencesToString(&diff);
+  EXPECT_TRUE(d.Compare(a, b)) << diff;
+}
+
+TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
+  Cluster cluster("complete-cli");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  const fs::path root = cluster.dir() / "cli";
+  auto with = [](std::vector<std::string> args, const std::vector<std::string>& more) {
+    args.insert(args.end(), more.begin(), more.end());
+    return args;
+  };
+  const std::vector<std::string> bw = {"boucwen", "--algorithm", "pso", "--iterations", "3", "--population", "6",
+                                       "--repetitions", "1", "--train-periods", "1", "--no-plots", "--progress", "0"};
+  std::string out, err;
+  ASSERT_EQ(RunCli(with(bw, {"--threads", "2", "--out", (root / "bw-local").string()}), &out, &err), 0) << err;
+  ASSERT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--out", (root / "bw-service").string()}), &out, &err), 0)
+      << err;
+  EXPECT_NE(out.find("worker thread(s) of " + cluster.client_endpoint()), std::string::npos) << out;
+  const auto bw_local = ReadReport(root / "bw-local" / "report.json");
+  EXPECT_EQ(bw_local.fields().at("evaluations").number_value(), 24);
+  ExpectSameReport(ReadReport(root / "bw-service" / "report.json"), bw_local);
+
+  const std::vector<std::string> cm = {"committee", "--bands", "0,350", "--optimisers", "pso", "--repetitions", "1",
+                                       "--particles", "4", "--iterations", "2", "--stall", "0", "--no-figures",
+                                       "--quiet"};
+  ASSERT_EQ(RunCli(with(cm, {"--threads", "2", "--out", (root / "cm-local").string()}), &out, &err), 0) << err;
+  ASSERT_EQ(RunCli(with(cm, {"--master", cluster.client_endpoint(), "--out", (root / "cm-service").string()}), &out, &err), 0)
+      << err;
+  const auto cm_local = ReadReport(root / "cm-local" / "committee.json");
+  EXPECT_EQ(cm_local.fields().at("evaluations").number_value(), 4 * 12);
+  ExpectSameReport(ReadReport(root / "cm-service" / "committee.json"), cm_local);
+  auto client = cluster.Client();
+  std::vector<master::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  EXPECT_EQ(jobs.size(), 1u + 4u);
+
+  // A master that does not answer: exit code 3 and the command named.
+  const std::string nobody = "tcp://127.0.0.1:" + std::to_string(FreePort());
+  EXPECT_EQ(RunCli(with(bw, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out", (root / "x").string()}),
+                   &out, &err),
+            3);
+  EXPECT_NE(err.find("piezoid boucwen: error: "), std::string::npos) << err;
+  EXPECT_EQ(RunCli(with(cm, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out", (root / "y").string()}),
+                   &out, &err),
+            3);
+  EXPECT_NE(err.find("piezoid committee: error: "), std::string::npos) << err;
+}
+
+}  // namespace
+}  // namespace pz::testing
