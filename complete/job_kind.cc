@@ -145,7 +145,23 @@ Status Build(const CompleteModelProblem& p, std::unique_ptr<master::FitnessFunct
   return Status::Ok();
 }
 
-// Every field rule that needs no simulation model (each violation named with its value).
+// The largest prime factor of n (n ≥ 1).
+uint64_t LargestPrimeFactor(uint64_t n) {
+  uint64_t largest = 1;
+  for (uint64_t f = 2; f * f <= n; ++f)
+    while (n % f == 0) {
+      largest = f;
+      n /= f;
+    }
+  return std::max(largest, n);
+}
+
+// The FFT of the Fourier interpolation costs O(period · largest prime factor): a period with a
+// large prime factor would keep a worker busy for hours.
+constexpr uint64_t kMaxPeriodPrimeFactor = 1000;
+
+// Every rule of the spec, checked without building the models (the master never runs them):
+// each violation named with its value.
 std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
   std::vector<FieldViolation> v;
   auto add = [&](const std::string& field, const std::string& value, const std::string& rule) {
@@ -172,6 +188,9 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     if (p.period_samples != 0)
       add("complete_model.period_samples", std::to_string(p.period_samples),
           "only the oscillator's FOURIER input has periods: must be 0");
+    if (p.interpolation != SpecInterpolation::kSpline)
+      add("complete_model.interpolation", model::InputInterpolationName(InterpolationOf(p.interpolation)),
+          "only the oscillator's input is interpolated (the stack models take it piecewise linear): leave unset");
   }
   const size_t min_samples = osc && p.interpolation == SpecInterpolation::kSpline ? 4 : 2;
   for (size_t i = 0; i < p.records.size(); ++i) {
@@ -199,9 +218,28 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     if (osc) {
       if (n > 0 && r.first_counted >= n)
         add(f + ".first_counted", std::to_string(r.first_counted), "leaves no counted sample of " + std::to_string(n));
-      if (p.interpolation == SpecInterpolation::kFourier && p.period_samples > 0 && n % p.period_samples != 0)
-        add(f + ".input", std::to_string(n) + " samples",
-            "must be a whole number of periods (period_samples = " + std::to_string(p.period_samples) + ")");
+      const uint64_t period = p.period_samples > 0 ? p.period_samples : n;
+      if (p.interpolation == SpecInterpolation::kFourier && n >= 2) {
+        if (n % period != 0) {
+          add(f + ".input", std::to_string(n) + " samples",
+              "must be a whole number of periods (period_samples = " + std::to_string(period) + ")");
+        } else if (LargestPrimeFactor(period) > kMaxPeriodPrimeFactor) {
+          add(f + ".input", std::to_string(period) + " samples per period",
+              "has the prime factor " + std::to_string(LargestPrimeFactor(period)) +
+                  " > 1000: the FOURIER input's FFT would be too slow (use SPLINE or a smoother period)");
+        } else {
+          // Every period equal to the first (model/bw_oscillator.h's rule, 1e-9 of the largest |u|).
+          double scale = 0;
+          for (double u : r.input) scale = std::max(scale, std::abs(u));
+          for (size_t k = period; k < n; ++k)
+            if (std::abs(r.input[k] - r.input[k % period]) > 1e-9 * scale) {
+              add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]),
+                  "differs from input[" + std::to_string(k % period) + "] = " + Num(r.input[k % period]) +
+                      ": not periodic with period_samples = " + std::to_string(period));
+              break;
+            }
+        }
+      }
     } else {
       if (r.first_counted != 0)
         add(f + ".first_counted", std::to_string(r.first_counted), "only the oscillator has a warm-up: must be 0");
@@ -211,17 +249,6 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
           add(f, "ends at " + Num(end) + " s", "before the window start t0_s = " + Num(p.t0_s) + " s");
       }
     }
-  }
-  return v;
-}
-
-std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
-  const auto& p = std::get<CompleteModelProblem>(spec.problem);
-  std::vector<FieldViolation> v = CheckFields(p);
-  if (v.empty() && spec.Validate().empty()) {
-    // What only the models know (a "periodic" record that is not, an option's own range): build it.
-    std::unique_ptr<master::FitnessFunction> f;
-    if (Status s = Build(p, &f); !s.ok()) v.push_back({"complete_model", s.message()});
   }
   return v;
 }
@@ -280,7 +307,7 @@ Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<mas
 master::JobKind CompleteModelJobKind() {
   master::JobKind k;
   k.name = "complete_model";
-  k.validate = [](const master::JobSpec& s) { return Validate(s); };
+  k.validate = [](const master::JobSpec& s) { return CheckFields(std::get<CompleteModelProblem>(s.problem)); };
   k.layout = [](const master::JobSpec& s, master::GenomeLayout* l) {
     const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
     if (names.empty()) return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");

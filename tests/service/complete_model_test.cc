@@ -218,7 +218,20 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.records[1].first_counted = 512: leaves no counted sample of 512");
   expect(edit(bw_ok, [](auto& p) { p.period_samples = 300; }),
          "complete_model.records[0].input = 512 samples: must be a whole number of periods (period_samples = 300)");
-  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }), "complete_model: bw record A: ");
+  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }),
+         "complete_model.records[0].input[300] = ");
+  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }),
+         ": differs from input[44] = ");
+  expect(edit(bw_ok, [](auto& p) {
+           p.period_samples = 0;
+           for (auto& r : p.records) {
+             r.input.resize(1009 * 2);
+             r.output.resize(1009 * 2);
+           }
+         }),
+         "complete_model.records[0].input = 2018 samples per period: has the prime factor 1009 > 1000");
+  expect(edit(stack_ok, [](auto& p) { p.interpolation = CompleteModelProblem::Interpolation::kFourier; }),
+         "complete_model.interpolation = fourier: only the oscillator's input is interpolated");
   expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
   expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
   // An unknown enum value on the wire is named too.
@@ -421,6 +434,12 @@ TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
                    &out, &err),
             3);
   EXPECT_NE(err.find("piezoid committee: error: "), std::string::npos) << err;
+  // CURVE flags as the other service commands take them: half a pair is bad input.
+  EXPECT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--curve-secret", (root / "me.key").string(),
+                             "--out", (root / "z").string()}),
+                   &out, &err),
+            2);
+  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"), std::string::npos) << err;
 }
 
 }  // namespace
