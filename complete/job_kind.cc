@@ -307,7 +307,14 @@ Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<mas
 master::JobKind CompleteModelJobKind() {
   master::JobKind k;
   k.name = "complete_model";
-  k.validate = [](const master::JobSpec& s) { return CheckFields(std::get<CompleteModelProblem>(s.problem)); };
+  k.validate = [](const master::JobSpec& s) {
+    std::vector<FieldViolation> v = CheckFields(std::get<CompleteModelProblem>(s.problem));
+    if (s.ga)
+      v.push_back({"ga", "ga: the project GA searches binary genomes; a complete_model genome is the family's real "
+                         "parameters: drive it as an evaluation session (external; piezoid boucwen / committee "
+                         "--master)"});
+    return v;
+  };
   k.layout = [](const master::JobSpec& s, master::GenomeLayout* l) {
     const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
     if (names.empty()) return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");

@@ -234,6 +234,10 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.interpolation = fourier: only the oscillator's input is interpolated");
   expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
   expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
+  master::JobSpec with_ga = bw_ok;
+  with_ga.ga = master::GaSettings{};
+  EXPECT_NE(registry.Validate(with_ga).at(0).description.find("ga: the project GA searches binary genomes"),
+            std::string::npos);
   // An unknown enum value on the wire is named too.
   master::JobSpec decoded;
   std::vector<master::FieldViolation> v;
@@ -255,7 +259,8 @@ client::ServiceEvaluatorOptions Options(const Cluster& c) {
   return o;
 }
 
-// Kills `victim` `after_ms` after the `at`-th batch starts (a worker lost in the middle of a search).
+// Kills `victim` `after_ms` after the `at`-th batch starts, and before the (at + 2)-th batch (a worker
+// lost in the middle of a search, maybe in the middle of a batch).
 class KillingEvaluator final : public master::BatchEvaluator {
  public:
   KillingEvaluator(master::BatchEvaluator& inner, Process* victim, int at, int after_ms)
@@ -264,11 +269,13 @@ class KillingEvaluator final : public master::BatchEvaluator {
     if (killer_.joinable()) killer_.join();
   }
   void Evaluate(const master::EvalBatch& batch, std::span<master::FitnessResult> out) override {
-    if (victim_ && ++batches_ == at_)
+    ++batches_;
+    if (victim_ && batches_ == at_)
       killer_ = std::thread([this] {
         std::this_thread::sleep_for(std::chrono::milliseconds(after_ms_));
         victim_->Kill(SIGKILL);
       });
+    if (batches_ == at_ + 2 && killer_.joinable()) killer_.join();
     inner_.Evaluate(batch, out);
   }
   int concurrency() const override { return inner_.concurrency(); }
@@ -314,6 +321,7 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
     // With the binary GA, one of the two workers is killed during the third batch.
     KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
     const master::SearchResult remote = master::Search(complete::BwOscillatorBox(), o, ev);
+    if (kill) EXPECT_FALSE(victim.running());  // killed before the fifth of 2 x 9 batches
     ExpectSameSearch(local, remote);
     EXPECT_EQ(service.evaluations(), local.evaluations);
   }
