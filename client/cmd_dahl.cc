@@ -26,6 +26,9 @@ struct DahlArgs {
   int br_restarts = 1;
   bool no_pin_ends = false;
   int hidden = 100;
+  std::string init;
+  std::string lm_init, br_init;
+  double adaptive_fraction = 0.25;
   int epochs = -1;
   double time_limit_s = 0;
   std::string b1 = "paper";
@@ -48,6 +51,11 @@ int RunDahl(const DahlArgs& a) {
   o.br_restarts = a.br_restarts;
   o.pin_ends = !a.no_pin_ends;
   o.hidden = a.hidden;
+  auto parse_init = [](const std::string& v) { return v == "adaptive" ? DahlInit::kAdaptive : DahlInit::kNguyenWidrow; };
+  if (!a.init.empty()) o.lm_init = o.br_init = parse_init(a.init);
+  if (!a.lm_init.empty()) o.lm_init = parse_init(a.lm_init);
+  if (!a.br_init.empty()) o.br_init = parse_init(a.br_init);
+  o.adaptive_fraction = a.adaptive_fraction;
   o.b1 = a.b1 == "spec" ? DahlB1Policy::kSpec : DahlB1Policy::kPaper;
   if (a.epochs >= 0) o.lm_options.epochs = o.br_options.epochs = a.epochs;
   if (a.time_limit_s > 0) o.lm_options.time_limit_s = o.br_options.time_limit_s = a.time_limit_s;
@@ -57,7 +65,11 @@ int RunDahl(const DahlArgs& a) {
   std::cout << "piezoid dahl: seed " << o.seed << ", " << o.hidden << " tansig neurons, input t -> d, "
             << "70/15/15 split" << (o.pin_ends ? " (t = 0 and 10 s kept in training)" : "") << ", "
             << o.lm_restarts << " LM / " << o.br_restarts
-            << " BR initialisation(s) per network, the lowest validation MSE kept; min_grad in "
+            << " BR initialisation(s) per network (" << DahlInitName(o.lm_init) << " / " << DahlInitName(o.br_init)
+            << (o.lm_init == DahlInit::kAdaptive || o.br_init == DahlInit::kAdaptive
+                    ? ", adaptive fraction " + std::to_string(o.adaptive_fraction)
+                    : std::string())
+            << "), the lowest validation MSE kept; min_grad in "
             << a.min_grad_units << " target units; dense kernels: "
             << model::DenseBackendName() << "\n";
 
@@ -138,6 +150,18 @@ void RegisterDahl(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-pin-ends", args->no_pin_ends,
                 "pure dividerand: let t = 0 and t = 10 s fall into validation / test (extrapolation)");
   cmd->add_option("--hidden", args->hidden, "hidden tansig neurons")->check(CLI::Range(1, 100000))->default_str("100");
+  const auto inits = CLI::IsMember({"nguyen-widrow", "adaptive"});
+  cmd->add_option("--init", args->init,
+                  "initial weights of both trainers: nguyen-widrow (MATLAB's initnw) or adaptive (Nguyen-Widrow "
+                  "with the neuron centres denser where the training target varies; default: adaptive for LM, "
+                  "nguyen-widrow for BR)")
+      ->check(inits);
+  cmd->add_option("--lm-init", args->lm_init, "initial weights of the LM networks (default adaptive)")->check(inits);
+  cmd->add_option("--br-init", args->br_init, "initial weights of the BR networks (default nguyen-widrow)")->check(inits);
+  cmd->add_option("--adaptive-fraction", args->adaptive_fraction,
+                  "adaptive init: share of the neurons placed by the target's variation (the rest evenly)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
   cmd->add_option("--epochs", args->epochs, "maximum epochs (default: 1000 for both, as MATLAB)")
       ->check(CLI::Range(0, 1000000000));
   cmd->add_option("--time-limit", args->time_limit_s, "wall-time budget per run [s] (default: none)")

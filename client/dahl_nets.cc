@@ -67,6 +67,8 @@ const PaperDahlRow& PaperDahlTable(int id) {
   return kPaper[id - 1];
 }
 
+const char* DahlInitName(DahlInit i) { return i == DahlInit::kAdaptive ? "adaptive" : "nguyen-widrow"; }
+
 DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const DahlStudyOptions& o,
                         const model::EpochCallback& on_epoch) {
   const bool is_br = method == model::TrainMethod::kBayesianRegularization;
@@ -91,7 +93,17 @@ DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const 
   model::FeedForwardNet base(shape);
   base.ConfigureMaps(ds.data.x, ds.data.t);
   std::vector<model::FeedForwardNet> nets(static_cast<size_t>(restarts), base);
-  for (auto& net : nets) net.InitNguyenWidrow(rng);
+  const DahlInit init = is_br ? o.br_init : o.lm_init;
+  if (init == DahlInit::kAdaptive) {
+    Eigen::VectorXd xt(static_cast<Eigen::Index>(run.split.train.size())), tt(xt.size());
+    for (size_t i = 0; i < run.split.train.size(); ++i) {
+      xt(static_cast<Eigen::Index>(i)) = ds.data.x(run.split.train[i], 0);
+      tt(static_cast<Eigen::Index>(i)) = ds.data.t(run.split.train[i]);
+    }
+    for (auto& net : nets) net.InitAdaptive(rng, xt, tt, o.adaptive_fraction);
+  } else {
+    for (auto& net : nets) net.InitNguyenWidrow(rng);
+  }
 
   std::vector<model::TrainSummary> sums(nets.size());
   for (size_t k = 0; k < nets.size(); ++k) {

@@ -4,6 +4,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <algorithm>
+#include <vector>
 #include <string>
 
 #include <Eigen/Dense>
@@ -192,6 +194,89 @@ void FeedForwardNet::InitNguyenWidrow(std::mt19937_64& rng) {
   for (int j = 0; j < H; ++j) w(H * R + H + j) = uniform(rng);
   w(num_params() - 1) = uniform(rng);
   w_ = w;
+}
+
+void FeedForwardNet::InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const Eigen::VectorXd>& x_train,
+                                  const Eigen::Ref<const Eigen::VectorXd>& t_train, double lambda,
+                                  double min_samples_per_neuron) {
+  const int H = hidden();
+  if (inputs() != 1)
+    throw InputError(FieldError("inputs", inputs(), "the adaptive initialisation needs a one-input network"));
+  if (x_train.size() != t_train.size())
+    throw InputError(FieldError("training targets", t_train.size(),
+                                "must have one entry per training input (" + std::to_string(x_train.size()) + ")"));
+  const Eigen::Index n = x_train.size();
+  if (n < 2) throw InputError(FieldError("training samples", n, "the adaptive initialisation needs >= 2"));
+  if (!(lambda >= 0.0 && lambda <= 1.0))
+    throw InputError(FieldError("adaptive fraction", lambda, "must be in [0, 1]"));
+  if (!(std::isfinite(min_samples_per_neuron) && min_samples_per_neuron >= 0))
+    throw InputError(FieldError("samples per neuron", min_samples_per_neuron, "must be finite and >= 0"));
+  for (Eigen::Index i = 0; i < n; ++i)
+    if (!std::isfinite(x_train(i)) || !std::isfinite(t_train(i)))
+      throw InputError(FieldError("training sample " + std::to_string(i),
+                                  std::isfinite(x_train(i)) ? t_train(i) : x_train(i), "must be finite"));
+
+  // Normalised samples sorted by input (stable: ties keep their order), and the cumulative
+  // variation of the normalised target along them.
+  std::vector<Eigen::Index> order(static_cast<size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
+  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return x_train(a) < x_train(b); });
+  const double gx = input_map_.gain(0), gt = output_map_.gain(0);
+  std::vector<double> xs(static_cast<size_t>(n)), cv(static_cast<size_t>(n), 0.0);
+  for (size_t k = 0; k < xs.size(); ++k) {
+    const Eigen::Index i = order[k];
+    xs[k] = (x_train(i) - input_map_.xmin(0)) * gx - 1.0;
+    if (k > 0) cv[k] = cv[k - 1] + std::abs(t_train(i) - t_train(order[k - 1])) * gt;
+  }
+  const double x0 = xs.front(), x1 = xs.back();
+  if (!(x1 > x0)) throw InputError(FieldError("training input range", x1 - x0, "must be > 0"));
+  const double tv = cv.back();
+  const double lam = tv > 0 ? lambda : 0.0;
+  // The mixture's CDF at the sorted samples (non-decreasing from 0 to 1), then its quantiles.
+  std::vector<double> F(static_cast<size_t>(n));
+  for (size_t k = 0; k < F.size(); ++k)
+    F[k] = (1.0 - lam) * (xs[k] - x0) / (x1 - x0) + (lam > 0 ? lam * cv[k] / tv : 0.0);
+  F.back() = 1.0;
+  std::vector<double> c(static_cast<size_t>(H));
+  for (int j = 0; j < H; ++j) {
+    const double q = H == 1 ? 0.5 : static_cast<double>(j) / (H - 1);
+    const size_t k = static_cast<size_t>(std::lower_bound(F.begin(), F.end(), q) - F.begin());
+    if (k == 0) {
+      c[static_cast<size_t>(j)] = xs[0];
+    } else {
+      const double f0 = F[k - 1], f1 = F[k];
+      const double u = f1 > f0 ? (q - f0) / (f1 - f0) : 1.0;
+      c[static_cast<size_t>(j)] = xs[k - 1] + u * (xs[k] - xs[k - 1]);
+    }
+  }
+  // NW: |IW| = 2 · 0.7 H on the spacing 2/(H − 1), i.e. |IW| · spacing = kappa. A neuron's active
+  // region (|IW x̃ + b| ≤ 2) is then 4 s/kappa wide; it must hold min_samples_per_neuron training
+  // samples at their median spacing, or the network can bend between the samples it is fitted to.
+  const double kappa = H == 1 ? 2.8 : 2.8 * H / (H - 1.0);
+  std::vector<double> gaps;
+  gaps.reserve(static_cast<size_t>(n - 1));
+  for (size_t k = 1; k < xs.size(); ++k)
+    if (xs[k] > xs[k - 1]) gaps.push_back(xs[k] - xs[k - 1]);
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  const double s_min = min_samples_per_neuron * gaps[gaps.size() / 2] * kappa / 4.0;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::VectorXd w(num_params());
+  for (int j = 0; j < H; ++j) {
+    const size_t u = static_cast<size_t>(j);
+    double s;
+    if (H == 1) s = x1 - x0;
+    else if (j == 0) s = c[1] - c[0];
+    else if (j == H - 1) s = c[u] - c[u - 1];
+    else s = (c[u + 1] - c[u - 1]) / 2;
+    s = std::max(s, s_min);
+    const double sign = normal(rng) >= 0 ? 1.0 : -1.0;  // NW's random direction, in one dimension
+    w(j) = sign * kappa / s;
+    w(H + j) = -w(j) * c[u];
+  }
+  for (int j = 0; j < H; ++j) w(2 * H + j) = uniform(rng);
+  w(num_params() - 1) = uniform(rng);
+  set_params(w);
 }
 
 Eigen::VectorXd FeedForwardNet::PredictNormalised(const Eigen::Ref<const Eigen::MatrixXd>& Xn) const {

@@ -86,6 +86,24 @@ class FeedForwardNet {
   /// Draws only from rng.
   void InitNguyenWidrow(std::mt19937_64& rng);
 
+  /// Data-adaptive Nguyen–Widrow for a one-input network (R = 1), from the training samples (raw
+  /// units; the maps must be configured). NW tiles the input range with evenly spaced neurons of
+  /// one width, so a feature much narrower than that spacing (the Dahl response's 30 ms rise in a
+  /// 10 s record) is reached only after hundreds of epochs on a plateau. Here the H centres are the
+  /// quantiles j/(H − 1) of a mixture of the uniform density on the input range (weight 1 − λ) and
+  /// the density of the target's variation along the input (weight λ: the cumulative Σ|Δt̃| over
+  /// the training samples sorted by input). Each neuron's width follows the local spacing s_j of
+  /// the centres (|IW_j| = κ/s_j with NW's product κ = 2.8 H/(H − 1)), but its active region
+  /// (|n| ≤ 2) spans at least min_samples_per_neuron training samples at their median spacing; the
+  /// sign of IW_j is drawn from rng, b1_j = −IW_j c_j, and the output layer is uniform in [−1, 1]
+  /// as in NW. With λ = 0 the centres and widths are NW's (when the floor does not bind). Draws
+  /// only from rng; the targets are used only through their variation.
+  /// Throws InputError if R ≠ 1, the sizes differ, fewer than 2 samples or no input range is
+  /// given, a value is not finite, λ is not in [0, 1] or min_samples_per_neuron < 0.
+  void InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const Eigen::VectorXd>& x_train,
+                    const Eigen::Ref<const Eigen::VectorXd>& t_train, double lambda,
+                    double min_samples_per_neuron = 10.0);
+
   /// y (target units) for each row of X (n × R, raw input units).
   Eigen::VectorXd Predict(const Eigen::MatrixXd& X) const;
   /// y (target units) for each row of already-normalised inputs Xn (n × R).

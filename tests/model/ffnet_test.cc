@@ -8,6 +8,8 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
+#include <algorithm>
 
 #include <Eigen/Dense>
 
@@ -125,6 +127,85 @@ TEST(FeedForwardNet, NguyenWidrowTilesTheInputRange) {
   FeedForwardNet again(FfnetShape{1, 10});
   again.InitNguyenWidrow(rng2);
   EXPECT_EQ(net.params(), again.params());
+}
+
+// The data-adaptive Nguyen–Widrow: λ = 0 is NW's tiling; λ > 0 moves centres into a narrow step of
+// the target, but no neuron gets narrower than its minimum number of training samples.
+TEST(FeedForwardNet, AdaptiveInitWithoutVariationWeightIsNguyenWidrowsTiling) {
+  const int H = 10;
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(201, 0.0, 4.0);
+  Eigen::VectorXd t = x.array().sin().matrix();
+  FeedForwardNet net(FfnetShape{1, H});
+  net.ConfigureMaps(x, t);
+  std::mt19937_64 rng(3);
+  net.InitAdaptive(rng, x, t, 0.0);
+  std::vector<double> centres;
+  for (int j = 0; j < H; ++j) {
+    EXPECT_NEAR(std::abs(net.IW()(j, 0)), 2 * 0.7 * H, 1e-9);
+    EXPECT_LE(std::abs(net.LW()(j)), 1.0);
+    centres.push_back(-net.b1()(j) / net.IW()(j, 0));
+  }
+  std::sort(centres.begin(), centres.end());
+  for (int j = 0; j < H; ++j) EXPECT_NEAR(centres[static_cast<size_t>(j)], -1.0 + 2.0 * j / (H - 1), 1e-12);
+  // Deterministic for a seed; another seed flips other signs.
+  FeedForwardNet again(FfnetShape{1, H}), other(FfnetShape{1, H});
+  again.ConfigureMaps(x, t);
+  other.ConfigureMaps(x, t);
+  std::mt19937_64 rng3(3), rng4(4);
+  again.InitAdaptive(rng3, x, t, 0.0);
+  other.InitAdaptive(rng4, x, t, 0.0);
+  EXPECT_EQ(net.params(), again.params());
+  EXPECT_NE(net.params(), other.params());
+}
+
+TEST(FeedForwardNet, AdaptiveInitPutsNeuronsWhereTheTargetVaries) {
+  // A fast first-order rise over the first 0.5 % of the range, then flat (the Dahl corner).
+  const int H = 40;
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(2001, 0.0, 10.0);  // 0.001 apart once normalised
+  Eigen::VectorXd t = (1.0 - (-x.array() / 0.01).exp()).matrix();
+  FeedForwardNet net(FfnetShape{1, H});
+  net.ConfigureMaps(x, t);
+  std::mt19937_64 rng(1);
+  net.InitAdaptive(rng, x, t, 0.5);
+  int in_rise = 0;
+  double min_abs_iw = 1e300, max_abs_iw = 0;
+  for (int j = 0; j < H; ++j) {
+    const double c = -net.b1()(j) / net.IW()(j, 0);  // normalised input; the rise is x̃ < −0.99
+    in_rise += c < -0.99;
+    min_abs_iw = std::min(min_abs_iw, std::abs(net.IW()(j, 0)));
+    max_abs_iw = std::max(max_abs_iw, std::abs(net.IW()(j, 0)));
+  }
+  EXPECT_GE(in_rise, H / 2 - 1);
+  EXPECT_LE(in_rise, H / 2 + 1);
+  // The other half spreads evenly at half NW's density, so twice NW's width (|IW| = 1.4 H / 2).
+  EXPECT_NEAR(min_abs_iw, 0.5 * 2 * 0.7 * H, 0.05 * 2 * 0.7 * H);
+  // The active region |n| ≤ 2 is 4/|IW| wide: at least 10 samples (0.01), so |IW| ≤ 400 ...
+  EXPECT_LE(max_abs_iw, 400.0 * (1 + 1e-12));
+  EXPECT_GT(max_abs_iw, 399.0);  // ... and the crowded neurons are held at that floor
+  // A smaller floor lets them be narrower.
+  FeedForwardNet narrow(FfnetShape{1, H});
+  narrow.ConfigureMaps(x, t);
+  std::mt19937_64 rng2(1);
+  narrow.InitAdaptive(rng2, x, t, 0.5, 2.0);
+  EXPECT_GT(narrow.IW().cwiseAbs().maxCoeff(), 1000.0);
+}
+
+TEST(FeedForwardNet, AdaptiveInitRejectsBadInput) {
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(11, 0.0, 1.0), t = x;
+  FeedForwardNet net(FfnetShape{1, 4});
+  net.ConfigureMaps(x, t);
+  std::mt19937_64 rng(1);
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t, 1.5); }), "adaptive fraction = 1.5");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t, 0.5, -1.0); }), "samples per neuron = -1");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t.head(5), 0.5); }), "training targets = 5");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x.head(1), t.head(1), 0.5); }), "training samples = 1");
+  Eigen::VectorXd bad = t;
+  bad(3) = std::nan("");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, bad, 0.5); }), "training sample 3");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, Eigen::VectorXd::Zero(11), t, 0.5); }),
+                "training input range = 0");
+  FeedForwardNet two(FfnetShape{2, 4});
+  PZ_EXPECT_HAS(InputErrorOf([&] { two.InitAdaptive(rng, x, t, 0.5); }), "inputs = 2");
 }
 
 TEST(FeedForwardNet, RejectsBadShapesAndParameters) {
