@@ -16,6 +16,8 @@
 
 #include <google/protobuf/stubs/logging.h>
 
+#include "complete/job_kind.h"
+#include "diagnose/job_kind.h"
 #include "master/job_kinds.h"
 #include "master/security.h"
 #include "master/wire_codec.h"
@@ -50,6 +52,10 @@ void Validate(const JobSpec& spec) {
 // are what is checked).
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   google::protobuf::SetLogHandler(nullptr);
+  // The kinds piezoid-master and piezoid-worker register besides the built-in ones, so their
+  // validation is fuzzed too.
+  pz::diagnose::RegisterDiagnoseJobKind(JobKindRegistry::Default());
+  pz::complete::RegisterCompleteModelJobKind(JobKindRegistry::Default());
   return 0;
 }
 
