@@ -11,6 +11,7 @@
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
+#include "client/complete_service.h"
 #include "client/diagnose_report.h"
 #include "client/service_evaluator.h"
 #include "diagnose/job_kind.h"
@@ -33,18 +34,14 @@ struct DiagnoseArgs {
   bool quick = false;
   bool quiet = false;
   double significance_ratio = 1.25;
-  std::string master;  ///< evaluate on this piezoid-master's workers (empty: locally)
-  int timeout_ms = 4000, retries = 3;
+  CompleteServiceFlags service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
   int concurrent_fits = 0;  ///< 0: 1 locally, 3 with --master
 };
 
-/// Every candidate fit's evaluations as evaluation sessions on the master at `a.master`: one
+/// Every candidate fit's evaluations as evaluation sessions on the master of `a.service`: one
 /// session per global search (costs) and one per refinement (residuals, a Jacobian per batch).
 diagnose::EvaluatorFactory ServiceFactory(const DiagnoseArgs& a) {
-  ServiceEvaluatorOptions so;
-  so.client.endpoint = a.master;
-  so.client.timeout_ms = a.timeout_ms;
-  so.client.retries = a.retries;
+  const ServiceEvaluatorOptions so = a.service.Options();  // CURVE keys loaded (InputError naming the flag)
   return [so](const diagnose::DiagnosisFitness& f) -> std::unique_ptr<master::BatchEvaluator> {
     const std::string what = "diagnose " + f.layout().Describe() + (f.residuals() ? " (refinement)" : " (global search)");
     return std::make_unique<ServiceEvaluator>(so, diagnose::DiagnoseJobSpec(f, what), "piezoid diagnose");
@@ -88,13 +85,15 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
+  diagnose::EvaluatorFactory service;
+  if (a.service.enabled()) service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
   const std::filesystem::path dir(a.cases_dir);
   const io::CaseSet set = io::LoadCaseSet(dir);
   diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
   o.trends = !a.no_trends;
-  if (!a.master.empty()) o.evaluator_factory = ServiceFactory(a);
-  o.concurrent_fits = a.concurrent_fits > 0 ? a.concurrent_fits : a.master.empty() ? 1 : 3;
+  if (a.service.enabled()) o.evaluator_factory = std::move(service);
+  o.concurrent_fits = a.concurrent_fits > 0 ? a.concurrent_fits : a.service.enabled() ? 3 : 1;
   auto plant = std::make_shared<const model::BimorphPlant>();
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
   diagnose::Diagnosis d;
@@ -196,12 +195,7 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");
   cmd->add_flag("--quick", a->quick, "smaller global searches (a quick look)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines on stderr");
-  cmd->add_option("--master", a->master,
-                  "run every fit's evaluations on the workers of this piezoid-master (its client endpoint, e.g. "
-                  "tcp://127.0.0.1:5556) as evaluation sessions: the same result, bit for bit, as the local run")
-      ->type_name("ENDPOINT");
-  cmd->add_option("--timeout-ms", a->timeout_ms, "with --master: per-request timeout [ms]")->check(CLI::Range(10, 3600000));
-  cmd->add_option("--retries", a->retries, "with --master: attempts per request")->check(CLI::Range(1, 100));
+  AddCompleteServiceFlags(cmd, a->service);  // --master, --timeout-ms, --retries, --curve-secret, --master-public
   cmd->add_option("--concurrent-fits", a->concurrent_fits,
                   "candidate fits run at the same time (default 1 locally, 3 with --master: sessions in parallel keep "
                   "the workers busy); the result does not depend on it")

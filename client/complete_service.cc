@@ -26,8 +26,8 @@ ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
   cmd->add_option("--master", f.master,
                   "run every evaluation of the searches on the workers of this piezoid-master (its client endpoint, "
-                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search: the same result, bit for bit, as "
-                  "the local run")
+                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search or fit: the same result, bit for "
+                  "bit, as the local run")
       ->type_name("ENDPOINT");
   cmd->add_option("--timeout-ms", f.timeout_ms, "with --master: per-request timeout [ms]")
       ->check(CLI::Range(10, 3600000))

@@ -1,6 +1,6 @@
-// Complete-model searches on the workers of a piezoid-master (issue 7): the flags `piezoid boucwen`
-// and `piezoid committee` take to run every evaluation of their PSO / GA searches as evaluation
-// sessions (--master, --timeout-ms, --retries, --curve-secret, --master-public), and the
+// Complete-model searches on the workers of a piezoid-master (issue 7): the flags `piezoid boucwen`,
+// `piezoid committee` (and `piezoid diagnose`) take to run every evaluation of their searches as
+// evaluation sessions (--master, --timeout-ms, --retries, --curve-secret, --master-public), and the
 // committee's EvaluatorFactory over the service. Each search is one session whose spec (the
 // "complete_model" job kind, complete/job_kind.h) carries the fitness's records, so the results
 // equal the local run's bit for bit.

@@ -448,6 +448,14 @@ TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
                    &out, &err),
             2);
   EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"), std::string::npos) << err;
+  // piezoid diagnose takes the same flags.
+  EXPECT_EQ(RunCli({"diagnose", "--cases", (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "nominal").string(),
+                    "--master", cluster.client_endpoint(), "--curve-secret", (root / "me.key").string(), "--out",
+                    (root / "d").string()},
+                   &out, &err),
+            2);
+  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(root / "d"));
 }
 
 }  // namespace
