@@ -17,6 +17,7 @@ if [ -z "${OUT:-}" ]; then
   OUT=$(mktemp -d)
   trap 'rm -rf "$OUT"' EXIT
 fi
+mkdir -p "$OUT"
 field() { grep -o "\"$1\": [^,}]*" "$2" | head -1 | sed 's/.*: //'; }
 for alg in $ALGORITHMS; do
   start=$(date +%s.%N)
