@@ -69,30 +69,20 @@ BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, dou
   ThrowIfError(options.Validate());
   const std::string ctx = context.empty() ? "" : " (" + context + ")";
   const CsvTable csv = ReadCsvFile(file);
-  csv.RequireColumns({"t_s", "voltage_V", "angle_deg"});
-  const int ct = *csv.FindColumn("t_s"), cu = *csv.FindColumn("voltage_V"),
-            cy = *csv.FindColumn("angle_deg");
-  if (csv.rows.size() < 2)
-    throw InputError(csv.source + ": " + std::to_string(csv.rows.size()) +
-                     " data rows; a case needs at least 2 samples" + ctx);
-
+  SampledColumns cols = ReadSampledColumns(csv, "angle_deg", "case", options.time_rel_tol,
+                                           "a case starts at t = 0 (from rest)", ctx);
+  const int cu = cols.u_column;
+  const size_t n = cols.t.size();
   BenchCase c;
   c.number = number;
   c.amplitude_v = amplitude_v;
   c.frequency_hz = frequency_hz;
   c.role = role;
   c.file = file;
-  const size_t n = csv.rows.size();
-  c.t.resize(n);
-  c.u.resize(n);
-  c.angle_deg.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    c.t[k] = csv.Number(k, ct);
-    c.u[k] = csv.Number(k, cu);
-    c.angle_deg[k] = csv.Number(k, cy);
-  }
-  c.sample_rate_hz = CheckUniformTimeGrid(csv, ct, c.t, options.time_rel_tol,
-                                          "a case starts at t = 0 (from rest)");
+  c.t = std::move(cols.t);
+  c.u = std::move(cols.u);
+  c.angle_deg = std::move(cols.y);
+  c.sample_rate_hz = cols.sample_rate_hz;
   if (options.cycles > 0) {
     const long expected = std::lround(options.cycles * c.sample_rate_hz / frequency_hz);
     if (static_cast<long>(n) != expected)

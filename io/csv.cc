@@ -206,4 +206,27 @@ double CheckUniformTimeGrid(const CsvTable& csv, int ct, const std::vector<doubl
   return rate;
 }
 
+SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output, const std::string& what,
+                                  double rel_tol, const std::string& start_note, const std::string& context) {
+  csv.RequireColumns({"t_s", "voltage_V", output});
+  SampledColumns s;
+  s.t_column = *csv.FindColumn("t_s");
+  s.u_column = *csv.FindColumn("voltage_V");
+  s.y_column = *csv.FindColumn(output);
+  const size_t n = csv.rows.size();
+  if (n < 2)
+    throw InputError(csv.source + ": " + std::to_string(n) + " data rows; a " + what +
+                     " needs at least 2 samples" + context);
+  s.t.resize(n);
+  s.u.resize(n);
+  s.y.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    s.t[k] = csv.Number(k, s.t_column);
+    s.u[k] = csv.Number(k, s.u_column);
+    s.y[k] = csv.Number(k, s.y_column);
+  }
+  s.sample_rate_hz = CheckUniformTimeGrid(csv, s.t_column, s.t, rel_tol, start_note);
+  return s;
+}
+
 }  // namespace pz::io

@@ -75,4 +75,16 @@ std::string FormatNumber(double x);
 double CheckUniformTimeGrid(const CsvTable& csv, int time_column, const std::vector<double>& t,
                             double rel_tol, const std::string& start_note);
 
+/// A sampled input/output record read from a CSV table with columns t_s, voltage_V and `output`:
+/// the three series, their column indices, and the sample rate of the checked uniform grid
+/// (CheckUniformTimeGrid with rel_tol and start_note). Throws InputError naming the missing column,
+/// or "<file>: N data rows; a <what> needs at least 2 samples<context>".
+struct SampledColumns {
+  std::vector<double> t, u, y;
+  int t_column = 0, u_column = 0, y_column = 0;
+  double sample_rate_hz = 0;
+};
+SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output, const std::string& what,
+                                  double rel_tol, const std::string& start_note, const std::string& context);
+
 }  // namespace pz::io

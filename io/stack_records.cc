@@ -60,12 +60,10 @@ StackRecord LoadStackRecordFile(const fs::path& file, int number, double frequen
   ThrowIfError(options.Validate());
   const std::string ctx = context.empty() ? "" : " (" + context + ")";
   const CsvTable csv = ReadCsvFile(file);
-  csv.RequireColumns({"t_s", "voltage_V", "displacement_um"});
-  const int ct = *csv.FindColumn("t_s"), cu = *csv.FindColumn("voltage_V"),
-            cy = *csv.FindColumn("displacement_um");
-  if (csv.rows.size() < 2)
-    throw InputError(csv.source + ": " + std::to_string(csv.rows.size()) +
-                     " data rows; a record needs at least 2 samples" + ctx);
+  SampledColumns cols = ReadSampledColumns(csv, "displacement_um", "record", options.time_rel_tol,
+                                           "a record starts at t = 0 (from rest at the offset)", ctx);
+  const int cu = cols.u_column;
+  const size_t n = cols.t.size();
   StackRecord r;
   r.number = number;
   r.frequency_hz = frequency_hz;
@@ -73,17 +71,10 @@ StackRecord LoadStackRecordFile(const fs::path& file, int number, double frequen
   r.amplitude_v = amplitude_v;
   r.role = role;
   r.file = file;
-  const size_t n = csv.rows.size();
-  r.t.resize(n);
-  r.u.resize(n);
-  r.y.resize(n);
-  for (size_t k = 0; k < n; ++k) {
-    r.t[k] = csv.Number(k, ct);
-    r.u[k] = csv.Number(k, cu);
-    r.y[k] = csv.Number(k, cy);
-  }
-  r.sample_rate_hz = CheckUniformTimeGrid(csv, ct, r.t, options.time_rel_tol,
-                                          "a record starts at t = 0 (from rest at the offset)");
+  r.t = std::move(cols.t);
+  r.u = std::move(cols.u);
+  r.y = std::move(cols.y);
+  r.sample_rate_hz = cols.sample_rate_hz;
   if (options.check_voltage) {
     const double vtol =
         options.voltage_rel_tol * (std::abs(offset_v) + amplitude_v) + options.voltage_abs_tol_v;
