@@ -24,21 +24,21 @@ slurm_init() {
     fail "munge"
 }
 
-# free_port: a TCP port nobody listens on (in this network namespace).
-free_port() {
-  local p
-  for _ in $(seq 1 50); do
-    p=$((20000 + RANDOM % 40000))
-    ss -Htan "( sport = :$p )" | grep -q . || { echo "$p"; return 0; }
-  done
-  return 1
+# free_ports N: N distinct TCP ports the system hands out (sockets bound to port 0 together), for
+# the Slurm daemons, whose configuration needs numbers; piezoid's own endpoints bind tcp://…:*.
+free_ports() {
+  python3 -c '
+import socket, sys
+socks = [socket.socket() for _ in range(int(sys.argv[1]))]
+for s in socks: s.bind(("127.0.0.1", 0))
+print(" ".join(str(s.getsockname()[1]) for s in socks))' "$1"
 }
 
 # slurm_conf CONTROLLER NODE_AND_PARTITION_LINES: writes $SL/slurm.conf and exports SLURM_CONF.
 # No cgroups (proctrack/linuxproc, task/none), nodes may claim more CPUs than they have.
 slurm_conf() {
   local ctld_port slurmd_port
-  ctld_port=$(free_port) && slurmd_port=$(free_port) || fail "no free port"
+  read -r ctld_port slurmd_port < <(free_ports 2) && [[ -n $slurmd_port ]] || fail "no free port"
   cat >"$SL/slurm.conf" <<EOF
 ClusterName=pztest
 SlurmctldHost=$1

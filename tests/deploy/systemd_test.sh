@@ -77,29 +77,34 @@ exec_argv() {
     fi
   done
 }
-# The shipped env files, with this test's loopback ports (and the defaults kept otherwise).
-port() { local p; p=$((20000 + RANDOM % 40000)); echo "$p"; }
-WP=$(port) CP=$(port)
-sed -e "s#^PIEZOID_WORKERS=.*#PIEZOID_WORKERS=tcp://127.0.0.1:$WP#" -e "s#^PIEZOID_CLIENTS=.*#PIEZOID_CLIENTS=tcp://127.0.0.1:$CP#" \
+# The shipped env files, with loopback endpoints on ports the system picks (tcp://127.0.0.1:*: never a
+# guessed number, other tests run in parallel), published by the master's --endpoints-file; the
+# worker's env file is written from it once the master has bound them.
+sed -e "s#^PIEZOID_WORKERS=.*#PIEZOID_WORKERS=tcp://127.0.0.1:*#" -e "s#^PIEZOID_CLIENTS=.*#PIEZOID_CLIENTS=tcp://127.0.0.1:*#" \
+  -e "s#^\#*PIEZOID_MASTER_ARGS=.*#PIEZOID_MASTER_ARGS=--endpoints-file $TMP/endpoints#" \
   "$UNITS/master.env" >"$TMP/master.env"
-sed -e "s#^PIEZOID_MASTER_WORKERS=.*#PIEZOID_MASTER_WORKERS=tcp://127.0.0.1:$WP#" "$UNITS/worker.env" >"$TMP/worker.env"
-printf 'PIEZOID_WORKER_ARGS=--threads 2 --heartbeat-ms 500\n' >"$TMP/worker-0.env"  # worker-%i.env
+grep -q "^PIEZOID_MASTER_ARGS=--endpoints-file" "$TMP/master.env" || fail "master.env has no PIEZOID_MASTER_ARGS line to set"
 mapfile -t M < <(exec_argv "$TMP/units/piezoid-master.service" "$TMP/master.env")
-mapfile -t W < <(exec_argv "$TMP/units/piezoid-worker@0.service" "$TMP/worker.env" "$TMP/worker-0.env")
 say "master: ${M[*]}"
-say "worker: ${W[*]}"
-[[ ${M[0]} == "$MASTER" && ${W[0]} == "$WORKER" ]] || fail "ExecStart does not start the programs"
+[[ ${M[0]} == "$MASTER" ]] || fail "ExecStart does not start the master"
 mkdir -p "$TMP/state"
 "${M[@]}" >"$TMP/master.log" 2>&1 &
 MPID=$!
 PIDS+=("$MPID")
-wait_for 20 "the master listens on 127.0.0.1:$CP" bash -c "exec 3<>/dev/tcp/127.0.0.1/$CP" || fail "the master did not start"
+wait_for 20 "the master publishes its endpoints" test -s "$TMP/endpoints" || fail "the master did not start"
+WEP=$(sed -n 1p "$TMP/endpoints") CEP=$(sed -n 2p "$TMP/endpoints")
+[[ $WEP == tcp://127.0.0.1:[0-9]* && $CEP == tcp://127.0.0.1:[0-9]* ]] || fail "endpoints file: '$WEP' '$CEP'"
+sed -e "s#^PIEZOID_MASTER_WORKERS=.*#PIEZOID_MASTER_WORKERS=$WEP#" "$UNITS/worker.env" >"$TMP/worker.env"
+printf 'PIEZOID_WORKER_ARGS=--threads 2 --heartbeat-ms 500\n' >"$TMP/worker-0.env"  # worker-%i.env
+mapfile -t W < <(exec_argv "$TMP/units/piezoid-worker@0.service" "$TMP/worker.env" "$TMP/worker-0.env")
+say "worker: ${W[*]}"
+[[ ${W[0]} == "$WORKER" ]] || fail "ExecStart does not start the worker"
 "${W[@]}" >"$TMP/worker.log" 2>&1 &
 WPID=$!
 PIDS+=("$WPID")
 synthetic_spec "systemd unit test" 5 32 0 20 10 >"$TMP/job.json"
-ID=$("$CLIENT" submit "$TMP/job.json" --master "tcp://127.0.0.1:$CP") || fail "submit"
-timeout 60 "$CLIENT" watch "$ID" --master "tcp://127.0.0.1:$CP" >"$TMP/watch.log" 2>&1 || fail "job $ID did not succeed"
+ID=$("$CLIENT" submit "$TMP/job.json" --master "$CEP") || fail "submit"
+timeout 60 "$CLIENT" watch "$ID" --master "$CEP" >"$TMP/watch.log" 2>&1 || fail "job $ID did not succeed"
 say "$(tail -n 2 "$TMP/watch.log" | head -n 1)"
 [[ -s $TMP/state/jobs/$ID/checkpoint.pb ]] || fail "no checkpoint in STATE_DIRECTORY"
 for p in "$WPID:worker:30" "$MPID:master:60"; do

@@ -411,8 +411,7 @@ TEST(SecurityCurve, MasterRefusesToStartWithBadKeyOptions) {
   keys.Make("master", "");
   ::chmod(keys.key("master").c_str(), 0604);
   const auto run = [&](std::vector<std::string> args) {
-    args.insert(args.end(), {"--workers", "tcp://127.0.0.1:" + std::to_string(FreePort()), "--clients",
-                             "tcp://127.0.0.1:" + std::to_string(FreePort()), "--state-dir",
+    args.insert(args.end(), {"--workers", "tcp://127.0.0.1:*", "--clients", "tcp://127.0.0.1:*", "--state-dir",
                              (d / "state").string()});
     std::string cmd = "'" + (BuildDir() / "master" / "piezoid-master").string() + "'";
     for (const auto& a : args) cmd += " '" + a + "'";
@@ -522,8 +521,7 @@ TEST(SecurityMaster, SecondMasterOnTheSameStateDirectoryRefusesToStart) {
   std::vector<master::JobInfo> jobs;
   ASSERT_TRUE(cluster.Client().List(&jobs).ok());  // the first master is up
   Process second(BuildDir() / "master" / "piezoid-master",
-                 {"--workers", "tcp://127.0.0.1:" + std::to_string(FreePort()), "--clients",
-                  "tcp://127.0.0.1:" + std::to_string(FreePort()), "--state-dir",
+                 {"--workers", "tcp://127.0.0.1:*", "--clients", "tcp://127.0.0.1:*", "--state-dir",
                   (cluster.dir() / "state").string()},
                  cluster.dir() / "second.log");
   EXPECT_TRUE(WaitFor([&] { return !second.running(); }, std::chrono::seconds(10)));

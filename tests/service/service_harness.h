@@ -128,8 +128,6 @@ class Cluster {
            ("pz-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(FreePort()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    worker_ep_ = "tcp://127.0.0.1:" + std::to_string(FreePort());
-    client_ep_ = "tcp://127.0.0.1:" + std::to_string(FreePort());
     StartMaster();
   }
   ~Cluster() {
@@ -138,14 +136,38 @@ class Cluster {
     std::error_code ec;
     if (!::testing::Test::HasFailure()) fs::remove_all(dir_, ec);
   }
-  void StartMaster() {
-    std::vector<std::string> args = {"--workers", worker_ep_, "--clients", client_ep_,
+  /// Starts the master. The first start lets it pick free ports (port 0 = "*", never a guessed
+  /// number: tests run in parallel) and reads them from its endpoints file; a restart binds the
+  /// same ones again, so that the workers reconnect to it. Returns false (with a test failure)
+  /// when the master did not publish its endpoints within 20 s.
+  bool StartMaster() {
+    const bool first = worker_ep_.empty();
+    const fs::path endpoints = dir_ / "endpoints";
+    std::error_code ec;
+    fs::remove(endpoints, ec);
+    std::vector<std::string> args = {"--workers", first ? "tcp://127.0.0.1:*" : worker_ep_,
+                                     "--clients", first ? "tcp://127.0.0.1:*" : client_ep_,
+                                     "--endpoints-file", endpoints.string(),
                                      "--state-dir", (dir_ / "state").string(),
                                      "--heartbeat-ms", "100", "--liveness", "5",
                                      "--log-level", "warn"};
     args.insert(args.end(), master_extra_.begin(), master_extra_.end());
     master_ = std::make_unique<Process>(BuildDir() / "master" / "piezoid-master", args,
                                         dir_ / "master.log");
+    if (!first) return true;
+    for (int i = 0; i < 2000; ++i) {
+      std::ifstream f(endpoints);
+      std::string w, c;
+      if (f && std::getline(f, w) && std::getline(f, c) && !c.empty()) {
+        worker_ep_ = w;
+        client_ep_ = c;
+        return true;
+      }
+      if (!master_->running()) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    ADD_FAILURE() << "the master did not write " << endpoints << " (see " << dir_ / "master.log" << ")";
+    return false;
   }
   void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
   Process& AddWorker(int threads) {
