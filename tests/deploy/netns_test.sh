@@ -46,16 +46,17 @@ REF_PID=$!
 PIDS+=("$REF_PID")
 
 FAST=(--heartbeat-ms 200 --liveness 5)
-ip netns exec "${NS[0]}" "$MASTER" --workers "tcp://${IP[0]}:5555" --clients "tcp://${IP[0]}:5556" \
+ip netns exec "${NS[0]}" "$MASTER" --workers "tcp://${IP[0]}:*" --clients "tcp://${IP[0]}:*" \
   --state-dir "$TMP/state" --endpoints-file "$TMP/endpoints" "${FAST[@]}" --log-level info >"$TMP/master.log" 2>&1 &
 PIDS+=($!)
 wait_for 20 "the master binds on h1" test -s "$TMP/endpoints" || fail "no master"
+WEP=$(sed -n 1p "$TMP/endpoints") CEP=$(sed -n 2p "$TMP/endpoints")  # ports the system picked
 for i in 1 2; do
-  ip netns exec "${NS[i]}" "$WORKER" --master "tcp://${IP[0]}:5555" --threads 1 "${FAST[@]}" --backoff-max-ms 1000 \
+  ip netns exec "${NS[i]}" "$WORKER" --master "$WEP" --threads 1 "${FAST[@]}" --backoff-max-ms 1000 \
     --log-level info >"$TMP/worker-h$((i + 1)).log" 2>&1 &
   PIDS+=($!)
 done
-cli() { on "${NS[0]}" "$CLIENT" "$@" --master "tcp://${IP[0]}:5556"; }
+cli() { on "${NS[0]}" "$CLIENT" "$@" --master "$CEP"; }
 workers() { cli list 2>/dev/null | sed -n '1s/^\([0-9]*\) worker.*/\1/p'; }
 has_workers() { [[ $(workers) == "$1" ]]; }
 wait_for 20 "both workers (h2, h3) registered" has_workers 2 || fail "workers did not connect across the bridge"
@@ -86,7 +87,7 @@ wait_for 30 "h3's worker rejoins" has_workers 2 || fail "h3's worker did not rej
 say "h3's worker rejoined after $((SECONDS - t_up)) s"
 
 # ---------------------------------------------------------------- to the end, then compare
-ip netns exec "${NS[0]}" "$CLIENT" watch "$ID" --master "tcp://${IP[0]}:5556" --timeout-ms 10000 >"$TMP/watch.log" 2>&1 &
+ip netns exec "${NS[0]}" "$CLIENT" watch "$ID" --master "$CEP" --timeout-ms 10000 >"$TMP/watch.log" 2>&1 &
 WATCH=$!
 PIDS+=("$WATCH")
 end=$((SECONDS + 120))
