@@ -18,14 +18,15 @@
 
 #include "master/broker.h"
 #include "master/job_runner.h"
-#include "master/wire_codec.h"
+#include "service/wire_codec.h"
 #include "worker/worker.h"
+#include "kinds/kinds.h"
 
 namespace pz {
 namespace {
 
 struct NullHandler final : master::ClientHandler {
-  master::ClientReplyMsg Handle(const master::ClientRequestMsg&) override { return {}; }
+  service::ClientReplyMsg Handle(const service::ClientRequestMsg&) override { return {}; }
 };
 
 struct Rig {
@@ -39,7 +40,7 @@ struct Rig {
       worker::WorkerOptions w;
       w.master = broker->worker_endpoint();
       w.threads = threads;
-      engines.push_back(std::make_unique<worker::Worker>(w, master::JobKindRegistry::Default()));
+      engines.push_back(std::make_unique<worker::Worker>(w, kinds::All()));
       auto* e = engines.back().get();
       threads_.emplace_back([this, e] { e->Run(stop); });
     }
@@ -58,16 +59,16 @@ struct Rig {
   std::vector<std::thread> threads_;
 };
 
-master::JobSpec Synthetic(bool null_cost, double sleep_ms, int population) {
-  master::JobSpec s;
+job::JobSpec Synthetic(bool null_cost, double sleep_ms, int population) {
+  job::JobSpec s;
   s.seed = 1;
-  master::SyntheticProblem p;
-  p.cost = null_cost ? master::SyntheticProblem::Cost::kNull
-                     : master::SyntheticProblem::Cost::kFunction;
+  job::SyntheticProblem p;
+  p.cost = null_cost ? job::SyntheticProblem::Cost::kNull
+                     : job::SyntheticProblem::Cost::kFunction;
   p.genome_bits = 64;
   p.sleep_ms = sleep_ms;
   s.problem = p;
-  master::GaSettings g;
+  job::GaSettings g;
   g.population = population;
   g.generations = 1000000;
   g.stall_generations = 0;
@@ -78,12 +79,12 @@ master::JobSpec Synthetic(bool null_cost, double sleep_ms, int population) {
 void BM_NullCostThroughput(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   Rig rig(2, 1);
-  const master::JobSpec spec = Synthetic(true, 0, 2);
-  rig.broker->RegisterJob("bench", master::EncodeJobSpec(spec), spec.limits);
-  std::vector<master::Genome> genomes(n, master::Genome{std::vector<uint8_t>(64, 1), {}});
+  const job::JobSpec spec = Synthetic(true, 0, 2);
+  rig.broker->RegisterJob("bench", service::EncodeJobSpec(spec), spec.limits);
+  std::vector<opt::Genome> genomes(n, opt::Genome{std::vector<uint8_t>(64, 1), {}});
   std::vector<int> indices(n);
   for (int i = 0; i < n; ++i) indices[i] = i;
-  std::vector<master::FitnessResult> out(n);
+  std::vector<opt::FitnessResult> out(n);
   master::BrokerEvaluator eval(*rig.broker, "bench");
   uint64_t gen = 0;
   int64_t done = 0;
@@ -99,10 +100,10 @@ BENCHMARK(BM_NullCostThroughput)->Arg(2000)->Arg(20000)->Unit(benchmark::kMillis
 void BM_FixedCostEfficiency(benchmark::State& state) {
   const int population = static_cast<int>(state.range(0));
   Rig rig(4, 16);
-  const master::JobSpec spec = Synthetic(false, 10, population);
-  rig.broker->RegisterJob("bench", master::EncodeJobSpec(spec), spec.limits);
+  const job::JobSpec spec = Synthetic(false, 10, population);
+  rig.broker->RegisterJob("bench", service::EncodeJobSpec(spec), spec.limits);
   master::JobRunner runner("bench", spec);
-  PZ_CHECK(runner.Init(master::JobKindRegistry::Default()).ok());
+  PZ_CHECK(runner.Init(kinds::All()).ok());
   master::BrokerEvaluator eval(*rig.broker, "bench");
   runner.Step(eval);  // generation 0 (all individuals) outside the timing
   int64_t evals = 0;

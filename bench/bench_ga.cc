@@ -6,13 +6,25 @@
 
 #include <algorithm>
 
-#include "master/ga.h"
-#include "master/inline_evaluator.h"
-#include "master/random.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/ga.h"
+#include "opt/inline_evaluator.h"
+#include "opt/random.h"
+#include "opt/thread_pool_evaluator.h"
 #include "model/chromosome.h"
 
 namespace pz::master {
+
+using opt::BatchEvaluator;
+using opt::BernoulliThreshold;
+using opt::FitnessFunction;
+using opt::FitnessResult;
+using opt::FitnessStatus;
+using opt::GaOptions;
+using opt::GeneticAlgorithm;
+using opt::Genome;
+using opt::InlineEvaluator;
+using opt::Rng;
+using opt::ThreadPoolEvaluator;
 namespace {
 
 class NullFitness final : public FitnessFunction {

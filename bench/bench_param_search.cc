@@ -11,12 +11,25 @@
 #include <vector>
 
 #include "io/csv.h"
-#include "master/inline_evaluator.h"
-#include "master/param_search.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/inline_evaluator.h"
+#include "opt/param_search.h"
+#include "opt/thread_pool_evaluator.h"
 #include "model/bw_oscillator.h"
 
 namespace pz::master {
+
+using opt::BatchEvaluator;
+using opt::FitnessFunction;
+using opt::FitnessResult;
+using opt::FitnessStatus;
+using opt::FunctionFitness;
+using opt::InlineEvaluator;
+using opt::ParamBox;
+using opt::Search;
+using opt::SearchAlgorithm;
+using opt::SearchAlgorithmName;
+using opt::SearchOptions;
+using opt::ThreadPoolEvaluator;
 namespace {
 
 struct Data {

@@ -26,8 +26,8 @@
 #include "complete/bw_fitness.h"
 #include "complete/job_kind.h"
 #include "io/csv.h"
-#include "master/param_search.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/param_search.h"
+#include "opt/thread_pool_evaluator.h"
 #include "model/bw_oscillator.h"
 #include "model/criteria.h"
 
@@ -136,9 +136,9 @@ std::string Sci(double v, int digits = 4) {
   return buf;
 }
 
-master::SearchOptions MakeOptions(const BoucwenArgs& a) {
-  master::SearchOptions o;
-  o.algorithm = master::ParseSearchAlgorithm(a.algorithm);
+opt::SearchOptions MakeOptions(const BoucwenArgs& a) {
+  opt::SearchOptions o;
+  o.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   o.repetitions = a.repetitions;
   o.pso.seed = o.ga_real.seed = o.ga_binary.ga.seed = a.seed;
   o.pso.particles = 40;
@@ -175,10 +175,10 @@ int RunBoucwen(const BoucwenArgs& a) {
   const complete::BwOscillatorFitness fitness(std::move(records), 1.0);
   const size_t n_train = fitness.counted_samples();
 
-  const master::ParamBox box = complete::BwOscillatorBox();
-  master::SearchOptions options = MakeOptions(a);
+  const opt::ParamBox box = complete::BwOscillatorBox();
+  opt::SearchOptions options = MakeOptions(a);
   const int progress = a.progress;
-  options.on_progress = [progress](const master::SearchProgress& p) {
+  options.on_progress = [progress](const opt::SearchProgress& p) {
     if (progress > 0 && p.iteration % progress == 0) {
       std::fprintf(stderr, "rep %d it %4d  evals %7lld  best rms %.4e m  overall %.4e m\n", p.repetition,
                    p.iteration, static_cast<long long>(p.evaluations), std::sqrt(p.best_cost),
@@ -188,26 +188,26 @@ int RunBoucwen(const BoucwenArgs& a) {
   ThrowIfError(options.Validate(box));
   const std::string where =
       a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)");
-  master::SearchResult result;
+  opt::SearchResult result;
   int threads = 0;
   try {
     // Locally a thread pool; with --master one evaluation session (the spec carries the records).
-    std::unique_ptr<master::BatchEvaluator> evaluator;
+    std::unique_ptr<opt::BatchEvaluator> evaluator;
     if (a.service.enabled()) {
       evaluator = std::make_unique<ServiceEvaluator>(
           a.service.Options(),
           complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness),
-                                         std::string("boucwen ") + master::SearchAlgorithmName(options.algorithm)),
+                                         std::string("boucwen ") + opt::SearchAlgorithmName(options.algorithm)),
           "piezoid boucwen");
     } else {
-      evaluator = std::make_unique<master::ThreadPoolEvaluator>(fitness, a.threads);
+      evaluator = std::make_unique<opt::ThreadPoolEvaluator>(fitness, a.threads);
     }
-    std::cout << "piezoid boucwen: " << master::SearchAlgorithmName(options.algorithm) << ", "
+    std::cout << "piezoid boucwen: " << opt::SearchAlgorithmName(options.algorithm) << ", "
               << options.repetitions << " repetition(s) from seed " << a.seed << ", " << evaluator->concurrency()
               << where << "; training on " << n_train
               << " samples (train_A from rest, train_B in steady state after a one-period warm-up), RK4 with "
               << a.substeps << " sub-steps per sample, Fourier-interpolated input" << std::endl;
-    result = master::Search(box, options, *evaluator);
+    result = opt::Search(box, options, *evaluator);
     threads = evaluator->concurrency();
   } catch (const ServiceError& e) {  // the evaluator's destructor has closed the session
     std::cerr << "piezoid boucwen: error: " << e.what() << "\n";
@@ -264,7 +264,7 @@ int RunBoucwen(const BoucwenArgs& a) {
     x.set_string_value(v);
     return x;
   };
-  f["algorithm"] = str(master::SearchAlgorithmName(options.algorithm));
+  f["algorithm"] = str(opt::SearchAlgorithmName(options.algorithm));
   f["seed"] = num(static_cast<double>(a.seed));
   f["repetitions"] = num(options.repetitions);
   f["threads"] = num(threads);
@@ -311,7 +311,7 @@ int RunBoucwen(const BoucwenArgs& a) {
 
   io::WriteFileWith(out / "report.md", [&](std::ostream& os) {
     os << "# Bouc–Wen benchmark: complete-model identification\n\n"
-       << "Algorithm " << master::SearchAlgorithmName(options.algorithm) << ", " << options.repetitions
+       << "Algorithm " << opt::SearchAlgorithmName(options.algorithm) << ", " << options.repetitions
        << " repetitions from seed " << a.seed << " (best kept: repetition " << result.best_repetition << ", "
        << result.stop_reason << "); " << result.evaluations << " evaluations in " << result.wall_time_s
        << " s on " << threads << where << ". Training: train_A + train_B (" << n_train

@@ -47,7 +47,7 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
     o.families.push_back(*fam);
   }
   o.algorithms.clear();
-  for (const std::string& s : a.optimisers) o.algorithms.push_back(master::ParseSearchAlgorithm(s));
+  for (const std::string& s : a.optimisers) o.algorithms.push_back(opt::ParseSearchAlgorithm(s));
   o.criterion = ParseFitCriterion(a.criterion);
   o.t0_s = a.t0;
   o.t1_s = a.t1;

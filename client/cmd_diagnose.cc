@@ -42,7 +42,7 @@ struct DiagnoseArgs {
 /// session per global search (costs) and one per refinement (residuals, a Jacobian per batch).
 diagnose::EvaluatorFactory ServiceFactory(const DiagnoseArgs& a) {
   const ServiceEvaluatorOptions so = a.service.Options();  // CURVE keys loaded (InputError naming the flag)
-  return [so](const diagnose::DiagnosisFitness& f) -> std::unique_ptr<master::BatchEvaluator> {
+  return [so](const diagnose::DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     const std::string what = "diagnose " + f.layout().Describe() + (f.residuals() ? " (refinement)" : " (global search)");
     return std::make_unique<ServiceEvaluator>(so, diagnose::DiagnoseJobSpec(f, what), "piezoid diagnose");
   };

@@ -26,7 +26,7 @@ struct Progress {
   std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_print{};
 
-  void operator()(const master::GenerationSummary& g) {
+  void operator()(const opt::GenerationSummary& g) {
     const auto now = std::chrono::steady_clock::now();
     const double elapsed = std::chrono::duration<double>(now - start).count();
     const bool final_line = static_cast<int>(g.generation) >= max_generations;
@@ -88,15 +88,15 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     const auto ranges = RangesPreset(opts->ranges);
     ThrowIfError(opts->ga.Validate());
     const io::CaseSet set = io::LoadCaseSet(opts->cases_dir);
-    auto config = master::HgannConfigFromCaseSet(set, ranges);
+    auto config = hgann::HgannConfigFromCaseSet(set, ranges);
     config.spread_penalty = opts->spread_penalty;
-    const master::HgannFitness fitness(std::move(config));
+    const hgann::HgannFitness fitness(std::move(config));
     std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d, up to %d generations, seed %llu\n",
                  set.cases.size(), opts->cases_dir.string().c_str(), set.Training().size(),
                  opts->ga.population_size, opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));
     Progress progress;
     progress.max_generations = opts->ga.max_generations;
-    const auto result = RunIdentify(*opts, set, fitness, [&](const master::GenerationSummary& g) { progress(g); });
+    const auto result = RunIdentify(*opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
     if (progress.tty) std::fprintf(stderr, "\n");
     WriteIdentifyReport(*opts, set, fitness, result, std::cout);
     exit_code = 0;

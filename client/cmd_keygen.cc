@@ -6,7 +6,7 @@
 #include <memory>
 
 #include "client/cmd_service.h"
-#include "master/security.h"
+#include "service/security.h"
 
 namespace pz::client {
 
@@ -18,9 +18,9 @@ void RegisterKeygen(CLI::App& app, int& exit_code) {
   c->add_option("--out,-o", *out, "directory to write to (created if missing)")->required();
   c->add_option("--name", *name, "file name of the pair, e.g. master, worker-node3, alice")->required();
   c->callback([=, &exit_code] {
-    master::CurveKeyPair pair;
-    Status s = master::GenerateCurveKeyPair(&pair);
-    if (s.ok()) s = master::WriteCurveKeyFiles(*out, *name, pair);
+    service::CurveKeyPair pair;
+    Status s = service::GenerateCurveKeyPair(&pair);
+    if (s.ok()) s = service::WriteCurveKeyFiles(*out, *name, pair);
     if (!s.ok()) {
       std::fprintf(stderr, "piezoid: error: %s\n", s.message().c_str());
       exit_code = s.code() == StatusCode::kInvalidArgument || s.code() == StatusCode::kFailedPrecondition

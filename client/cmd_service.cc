@@ -19,8 +19,9 @@
 #include "client/job_file.h"
 #include "client/job_report.h"
 #include "client/service_client.h"
-#include "master/job_kinds.h"
-#include "master/wire_codec.h"
+#include "job/job_kind.h"
+#include "service/wire_codec.h"
+#include "kinds/kinds.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -47,10 +48,10 @@ ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, 
                          ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs --curve-secret (or PIEZOID_CURVE_SECRET)"
                          : "--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public (or PIEZOID_MASTER_PUBLIC)");
   if (!curve_secret.empty()) {
-    master::CurveKeyPair keys;
-    if (Status s = master::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
+    service::CurveKeyPair keys;
+    if (Status s = service::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
       throw InputError("--curve-secret: " + s.message());
-    if (Status s = master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
+    if (Status s = service::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
       throw InputError("--master-public: " + s.message());
     o.curve = keys;
   }
@@ -99,7 +100,7 @@ int Report(const Status& s) {
 }
 
 /// Prints every violation; returns the exit code for an invalid spec.
-int ReportViolations(const std::string& what, const std::vector<master::FieldViolation>& v, const Status& s) {
+int ReportViolations(const std::string& what, const std::vector<job::FieldViolation>& v, const Status& s) {
   if (v.empty()) return Report(s);
   std::fprintf(stderr, "piezoid: error: %s is invalid (%zu violation%s):\n", what.c_str(), v.size(),
                v.size() == 1 ? "" : "s");
@@ -116,22 +117,22 @@ std::string Num(double x, int prec = 6) {
 
 /// "12/1000": the last completed generation (generation 0 is the initial population) of at most
 /// max; "-" before the first.
-std::string Generation(const master::JobInfo& i) {
+std::string Generation(const service::JobInfo& i) {
   if (i.algorithm == "external") return std::to_string(i.generation) + "b";  // a session: batches
   return (i.generation == 0 ? std::string("-") : std::to_string(i.generation - 1)) + "/" +
          std::to_string(i.max_generations);
 }
 
-void PrintInfo(const master::JobInfo& i) {
+void PrintInfo(const service::JobInfo& i) {
   std::printf("%-17s %-9s %-9s gen %-9s best %-12s evals %-8llu %6.1f s  %s%s%s\n", i.job_id.c_str(),
-              master::JobStateName(i.state), i.kind.c_str(), Generation(i).c_str(),
+              service::JobStateName(i.state), i.kind.c_str(), Generation(i).c_str(),
               i.generation == 0 ? "-" : Num(i.best_cost, 8).c_str(),
               static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
               i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
               i.message.empty() ? "" : ("  (" + i.message + ")").c_str());
 }
 
-void PrintList(const std::vector<master::JobInfo>& all, int workers, int threads) {
+void PrintList(const std::vector<service::JobInfo>& all, int workers, int threads) {
   std::printf("%d worker%s (%d thread%s), %zu job%s\n", workers, workers == 1 ? "" : "s", threads, threads == 1 ? "" : "s", all.size(),
               all.size() == 1 ? "" : "s");
   for (const auto& i : all) PrintInfo(i);
@@ -144,7 +145,7 @@ class Progress {
   Progress(uint64_t max_generations, bool hgann)
       : max_(max_generations), hgann_(hgann), tty_(::isatty(STDOUT_FILENO) != 0) {}
 
-  void Update(const master::JobEvent& e) {
+  void Update(const service::JobEvent& e) {
     if (!e.record) return;
     const auto& r = *e.record;
     window_.push_back(r);
@@ -185,7 +186,7 @@ class Progress {
  private:
   uint64_t max_;
   bool hgann_, tty_;
-  std::deque<master::GenerationRecord> window_;
+  std::deque<service::GenerationRecord> window_;
   std::chrono::steady_clock::time_point last_print_{};
   int printed_ = 0;
 };
@@ -213,15 +214,15 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
                      "idempotence token: submitting the same spec with the same token again returns the same job "
                      "(default: a random one)");
   submit->callback([=, &exit_code] {
-    master::JobSpec spec;
-    std::vector<master::FieldViolation> v;
+    job::JobSpec spec;
+    std::vector<job::FieldViolation> v;
     Status s = LoadJobSpecFile(*path, &spec, &v);
     if (!s.ok()) {
       exit_code = ReportViolations("job spec " + *path, v, s);
       return;
     }
     // Checked here first (same rules as the master), so a bad spec needs no master to be told.
-    v = master::JobKindRegistry::Default().Validate(spec);
+    v = kinds::All().Validate(spec);
     if (!v.empty()) {
       exit_code = ReportViolations("job spec " + *path, v, InvalidArgument("invalid"));
       return;
@@ -244,14 +245,14 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   status->callback([=, &exit_code] {
     ServiceClient c = common->Client();
     if (job_id->empty()) {
-      std::vector<master::JobInfo> all;
+      std::vector<service::JobInfo> all;
       int workers = 0, threads = 0;
       Status s = c.List(&all, &workers, &threads);
       if (s.ok()) PrintList(all, workers, threads);
       exit_code = Report(s);
       return;
     }
-    master::JobInfo i;
+    service::JobInfo i;
     Status s = c.GetStatus(*job_id, &i);
     if (s.ok()) PrintInfo(i);
     exit_code = Report(s);
@@ -261,7 +262,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   list->alias("jobs");
   AddCommon(list, *common);
   list->callback([=, &exit_code] {
-    std::vector<master::JobInfo> all;
+    std::vector<service::JobInfo> all;
     int workers = 0, threads = 0;
     Status s = common->Client().List(&all, &workers, &threads);
     if (s.ok()) PrintList(all, workers, threads);
@@ -285,7 +286,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   watch->add_option("job", *job_id, "job id")->required();
   watch->callback([=, &exit_code] {
     ServiceClient c = common->Client();
-    master::JobInfo info;
+    service::JobInfo info;
     Status s = c.GetStatus(*job_id, &info);
     if (!s.ok()) {
       exit_code = Report(s);
@@ -297,7 +298,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
     Progress progress(info.max_generations, info.kind == "hgann");
     s = c.Watch(
         *job_id,
-        [&progress](const master::JobEvent& e) {
+        [&progress](const service::JobEvent& e) {
           progress.Update(e);
           return true;
         },
@@ -313,13 +314,13 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
       return;
     }
     std::printf("job %s %s (%s) after %llu generations: best cost %s%s, %llu evaluations in %.1f s\n",
-                job_id->c_str(), master::JobStateName(info.state), info.message.c_str(),
+                job_id->c_str(), service::JobStateName(info.state), info.message.c_str(),
                 static_cast<unsigned long long>(info.generation > 0 ? info.generation - 1 : 0),
                 Num(info.best_cost, 9).c_str(), info.kind == "hgann" ? " deg²" : "",
                 static_cast<unsigned long long>(info.evaluations), info.elapsed_s);
-    if (info.state == master::JobState::kSucceeded || info.generation > 0)
+    if (info.state == service::JobState::kSucceeded || info.generation > 0)
       std::printf("fetch the result: piezoid fetch %s --out <folder>\n", job_id->c_str());
-    exit_code = info.state == master::JobState::kSucceeded ? kExitOk : kExitJobNotOk;
+    exit_code = info.state == service::JobState::kSucceeded ? kExitOk : kExitJobNotOk;
   });
 
   // ---------------------------------------------------------------- fetch
@@ -339,9 +340,9 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
       exit_code = Report(s);
       return;
     }
-    if (!master::IsFinal(job.info.state))
+    if (!service::IsFinal(job.info.state))
       std::fprintf(stderr, "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
-                   job_id->c_str(), master::JobStateName(job.info.state),
+                   job_id->c_str(), service::JobStateName(job.info.state),
                    static_cast<unsigned long long>(job.info.generation));
     const fs::path dir = out->empty() ? fs::path(*job_id) : fs::path(*out);
     FetchOutput o;

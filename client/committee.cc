@@ -13,8 +13,8 @@
 
 #include "client/plots.h"
 #include "io/csv.h"
-#include "master/inline_evaluator.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/inline_evaluator.h"
+#include "opt/thread_pool_evaluator.h"
 #include "model/criteria.h"
 
 namespace pz::client {
@@ -177,8 +177,8 @@ FrequencyBands FrequencyBands::Parse(const std::string& text) {
   return b;
 }
 
-master::ParamBox DefaultStackBox(StackFamily family) {
-  master::ParamBox box;
+opt::ParamBox DefaultStackBox(StackFamily family) {
+  opt::ParamBox box;
   box.names = model::StackParamNames(family);
   if (family == StackFamily::kBoucWen) {
     box.lower = {0.01, 1e-5, -0.05, 0.02, 100};
@@ -205,15 +205,15 @@ Status CommitteeOptions::Validate() const {
     for (size_t j = 0; j < i; ++j)
       if (algorithms[i] == algorithms[j])
         return InvalidArgument(std::string("optimisers: ") +
-                               master::SearchAlgorithmName(algorithms[i]) + " given twice");
+                               opt::SearchAlgorithmName(algorithms[i]) + " given twice");
   if (!(std::isfinite(t0_s) && t0_s >= 0))
     return InvalidArgument(FieldError("window t0_s", t0_s, "must be finite and >= 0"));
   if (!(std::isfinite(t1_s) && t1_s > t0_s))
     return InvalidArgument(FieldError("window t1_s", t1_s, "must be finite and > t0_s"));
   if (Status s = sim.Validate(); !s.ok()) return s;
   for (StackFamily f : families) {
-    master::SearchOptions so = search;
-    for (master::SearchAlgorithm a : algorithms) {
+    opt::SearchOptions so = search;
+    for (opt::SearchAlgorithm a : algorithms) {
       so.algorithm = a;
       if (Status s = so.Validate(DefaultStackBox(f)); !s.ok()) return s;
     }
@@ -223,14 +223,14 @@ Status CommitteeOptions::Validate() const {
 
 EvaluatorFactory LocalEvaluatorFactory(int threads) {
   if (threads < 0) throw InputError(FieldError("threads", threads, "must be >= 0"));
-  return [threads](const master::FitnessFunction& f) -> std::unique_ptr<master::BatchEvaluator> {
-    if (threads == 1) return std::make_unique<master::InlineEvaluator>(f);
-    return std::make_unique<master::ThreadPoolEvaluator>(f, threads);
+  return [threads](const opt::FitnessFunction& f) -> std::unique_ptr<opt::BatchEvaluator> {
+    if (threads == 1) return std::make_unique<opt::InlineEvaluator>(f);
+    return std::make_unique<opt::ThreadPoolEvaluator>(f, threads);
   };
 }
 
 std::string IdentifiedModel::Name() const {
-  return std::string(model::StackFamilyName(family)) + "/" + master::SearchAlgorithmName(algorithm);
+  return std::string(model::StackFamilyName(family)) + "/" + opt::SearchAlgorithmName(algorithm);
 }
 
 std::vector<double> PredictModel(const IdentifiedModel& m, const io::StackRecord& record,
@@ -330,7 +330,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
   res.options = options;
 
   bool first_search = true;
-  auto identify = [&](StackFamily family, master::SearchAlgorithm algo,
+  auto identify = [&](StackFamily family, opt::SearchAlgorithm algo,
                       const std::vector<const io::StackRecord*>& records, int band) {
     IdentifiedModel m;
     m.family = family;
@@ -341,9 +341,9 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
     auto evaluator = factory(fitness);
     if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
     first_search = false;
-    master::SearchOptions so = options.search;
+    opt::SearchOptions so = options.search;
     so.algorithm = algo;
-    m.search = master::Search(DefaultStackBox(family), so, *evaluator);
+    m.search = opt::Search(DefaultStackBox(family), so, *evaluator);
     m.params = m.search.best;
     res.evaluations += m.search.evaluations;
     Score(set, options, [&](const io::StackRecord& r) { return PredictModel(m, r, options.sim); },
@@ -364,7 +364,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
   if (options.complete) {
     const double t = Now();
     for (StackFamily f : options.families)
-      for (master::SearchAlgorithm a : options.algorithms)
+      for (opt::SearchAlgorithm a : options.algorithms)
         res.complete.push_back(identify(f, a, all_train, -1));
     res.complete_wall_s = Now() - t;
   }
@@ -375,7 +375,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
   for (int b = 0; b < nb; ++b) {
     const double t = Now();
     for (StackFamily f : options.families)
-      for (master::SearchAlgorithm a : options.algorithms)
+      for (opt::SearchAlgorithm a : options.algorithms)
         res.band_models[b].push_back(identify(f, a, band_train[b], b));
     res.band_wall_s[b] = Now() - t;
     double best = std::numeric_limits<double>::infinity();
@@ -445,7 +445,7 @@ void ParamTable(std::ostream& o, const std::vector<const IdentifiedModel*>& mode
   for (const IdentifiedModel* m : models) {
     if (m->family != family) continue;
     o << "| " << (m->band < 0 ? std::string("complete") : bands.Label(m->band)) << " | "
-      << master::SearchAlgorithmName(m->algorithm) << " |";
+      << opt::SearchAlgorithmName(m->algorithm) << " |";
     for (double p : m->params) o << " " << Fmt(p, 4) << " |";
     o << " " << Fmt(m->search.best_cost, 4) << " | " << m->search.evaluations << " | "
       << Fmt(m->search.wall_time_s) << " | "
@@ -657,7 +657,7 @@ Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
   Struct s;
   auto& f = *s.mutable_fields();
   f["family"] = Text(model::StackFamilyName(m.family));
-  f["optimiser"] = Text(master::SearchAlgorithmName(m.algorithm));
+  f["optimiser"] = Text(opt::SearchAlgorithmName(m.algorithm));
   f["scope"] = Text(m.band < 0 ? "complete" : bands.Label(m.band));
   Struct p;
   const auto names = model::StackParamNames(m.family);

@@ -32,8 +32,8 @@
 
 #include "complete/stack_fitness.h"
 #include "io/stack_records.h"
-#include "master/evaluator.h"
-#include "master/param_search.h"
+#include "opt/evaluator.h"
+#include "opt/param_search.h"
 #include "model/stack_models.h"
 #include "model/status.h"
 
@@ -64,17 +64,17 @@ struct FrequencyBands {
 ///  Bouc–Wen: α ∈ [0.01, 3] (log), β ∈ [1e-5, 0.1] (log), γ ∈ [−0.05, 0.05], d ∈ [0.02, 0.08] µm/V,
 ///            fc ∈ [100, 20000] Hz (log);
 ///  backlash-like: α ∈ [1e-4, 1] 1/V (log), c ∈ [0.02, 0.08] µm/V, B1 ∈ [−0.05, 0.1] µm/V.
-master::ParamBox DefaultStackBox(model::StackFamily family);
+opt::ParamBox DefaultStackBox(model::StackFamily family);
 
 struct CommitteeOptions {
   FrequencyBands bands;
   std::vector<model::StackFamily> families{model::StackFamily::kBoucWen,
                                            model::StackFamily::kBacklashLike};
-  std::vector<master::SearchAlgorithm> algorithms{master::SearchAlgorithm::kPso,
-                                                  master::SearchAlgorithm::kGaReal};
+  std::vector<opt::SearchAlgorithm> algorithms{opt::SearchAlgorithm::kPso,
+                                                  opt::SearchAlgorithm::kGaReal};
   /// Settings of every search (the algorithm field is set per run; repetitions, seeds, swarm and
   /// population sizes are used as given).
-  master::SearchOptions search;
+  opt::SearchOptions search;
   FitCriterion criterion = FitCriterion::kIae;
   double t0_s = 0.5;  ///< criterion window [s]
   double t1_s = 2.5;
@@ -86,7 +86,7 @@ struct CommitteeOptions {
 
 /// Makes the evaluator a search runs on, for a fitness that outlives it (locally a thread pool over
 /// it; on the service a session whose spec carries its records, client/complete_service.h).
-using EvaluatorFactory = std::function<std::unique_ptr<master::BatchEvaluator>(const StackFitness&)>;
+using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const StackFitness&)>;
 /// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
 EvaluatorFactory LocalEvaluatorFactory(int threads);
 
@@ -104,10 +104,10 @@ struct BandMetrics {
 
 struct IdentifiedModel {
   model::StackFamily family = model::StackFamily::kBoucWen;
-  master::SearchAlgorithm algorithm = master::SearchAlgorithm::kPso;
+  opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
   int band = -1;  ///< −1: the complete model (all training records)
   std::vector<double> params;
-  master::SearchResult search;
+  opt::SearchResult search;
   std::vector<BandMetrics> per_band;  ///< its errors on every band's records
   RoleMetrics all_test;               ///< on all test records
   std::string Name() const;           ///< "bouc-wen/pso"

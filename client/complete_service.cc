@@ -43,7 +43,7 @@ void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
 }
 
 EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options) {
-  return [options](const StackFitness& f) -> std::unique_ptr<master::BatchEvaluator> {
+  return [options](const StackFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     const std::string what = std::string("committee ") + model::StackFamilyName(f.family()) + " on " +
                              std::to_string(f.records().size()) + " record(s)";
     return std::make_unique<ServiceEvaluator>(

@@ -12,7 +12,7 @@
 
 #include "client/plots.h"
 #include "io/trace_io.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/thread_pool_evaluator.h"
 #include "model/metrics.h"
 #include "model/chromosome.h"
 #include "model/saturation.h"
@@ -37,14 +37,14 @@ double PaperTable8Pi(double v, double f) {
 }
 
 IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
-                           const master::HgannFitness& fitness,
-                           const std::function<void(const master::GenerationSummary&)>& on_generation) {
-  master::GaOptions ga = options.ga;
+                           const hgann::HgannFitness& fitness,
+                           const std::function<void(const opt::GenerationSummary&)>& on_generation) {
+  opt::GaOptions ga = options.ga;
   ga.genome_bits = model::kChromosomeBits;
   ga.error_cost = fitness.penalty_cost();
-  master::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
-  master::GeneticAlgorithm algorithm(ga, &evaluator);
-  algorithm.SetDescriber([](const master::Genome& g) { return model::DescribeChromosome(g.bits); });
+  opt::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
+  opt::GeneticAlgorithm algorithm(ga, &evaluator);
+  algorithm.SetDescriber([](const opt::Genome& g) { return model::DescribeChromosome(g.bits); });
   if (on_generation) algorithm.AddGenerationCallback(on_generation);
 
   IdentifyResult r;
@@ -101,7 +101,7 @@ std::string Grid(const io::CaseSet& set, const std::function<std::string(const i
   return os.str();
 }
 
-const master::HgannCaseResult& ResultOf(const IdentifyResult& r, int number) {
+const hgann::HgannCaseResult& ResultOf(const IdentifyResult& r, int number) {
   for (const auto& c : r.cases)
     if (c.number == number) return c;
   PZ_CHECK_MSG(false, "no result for case " + std::to_string(number));
@@ -111,7 +111,7 @@ const master::HgannCaseResult& ResultOf(const IdentifyResult& r, int number) {
 }  // namespace
 
 std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
-                                          const master::HgannFitness& fitness, const IdentifyResult& result,
+                                          const hgann::HgannFitness& fitness, const IdentifyResult& result,
                                           std::ostream& term) {
   std::vector<fs::path> written;
   const fs::path out = options.out_dir;
@@ -248,7 +248,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   // Report (markdown) and terminal summary.
   std::ostringstream md;
   const auto& s = result.summary;
-  const auto& last = result.log.empty() ? master::GenerationSummary{} : result.log.back();
+  const auto& last = result.log.empty() ? opt::GenerationSummary{} : result.log.back();
   int64_t penalized = 0, errors = 0;
   std::map<std::string, int64_t> reasons;
   for (const auto& g : result.log) {
@@ -260,7 +260,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
      << "- best network: " << result.best.network.Describe() << "\n"
      << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6) << " deg² (found in generation "
      << s.best_generation << ")\n"
-     << "- stopped: " << master::GaTerminationName(s.termination) << " after " << s.generations
+     << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
      << " generations (" << s.message << ")\n"
      << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors " << errors;
   if (!reasons.empty()) {

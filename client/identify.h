@@ -12,15 +12,15 @@
 
 #include "io/bench_data.h"
 #include "io/network_io.h"
-#include "master/ga.h"
-#include "master/hgann_fitness.h"
+#include "opt/ga.h"
+#include "hgann/hgann_fitness.h"
 
 namespace pz::client {
 
 struct IdentifyOptions {
   std::filesystem::path cases_dir;  ///< bench case set (cases.csv + per-case CSV)
   std::filesystem::path out_dir;    ///< result folder (created)
-  master::GaOptions ga;             ///< population, generations, stall, seed, …
+  opt::GaOptions ga;             ///< population, generations, stall, seed, …
   int threads = 0;                  ///< evaluator threads (0 = all cores)
   std::string ranges = "default";   ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
   double spread_penalty = 0;        ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
@@ -29,10 +29,10 @@ struct IdentifyOptions {
 };
 
 struct IdentifyResult {
-  master::GaSummary summary;
-  std::vector<master::GenerationSummary> log;
+  opt::GaSummary summary;
+  std::vector<opt::GenerationSummary> log;
   io::SavedNetwork best;
-  std::vector<master::HgannCaseResult> cases;  ///< every case of the set, in manifest order
+  std::vector<hgann::HgannCaseResult> cases;  ///< every case of the set, in manifest order
 };
 
 /// The parameter ranges of a preset name; throws InputError naming the value.
@@ -40,12 +40,12 @@ model::ParameterRanges RangesPreset(const std::string& name);
 
 /// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
 IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
-                           const master::HgannFitness& fitness,
-                           const std::function<void(const master::GenerationSummary&)>& on_generation);
+                           const hgann::HgannFitness& fitness,
+                           const std::function<void(const opt::GenerationSummary&)>& on_generation);
 
 /// Writes the result folder and prints a summary to `terminal`. Returns the files written.
 std::vector<std::filesystem::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
-                                                       const master::HgannFitness& fitness,
+                                                       const hgann::HgannFitness& fitness,
                                                        const IdentifyResult& result, std::ostream& terminal);
 
 /// The paper's Table 8 PI [deg²] for an operating point, or NaN if it is not one of the nine.

@@ -4,15 +4,15 @@
 #include <sstream>
 
 #include "io/bench_data.h"
-#include "master/hgann_job.h"
-#include "master/wire_codec.h"
+#include "hgann/hgann_job.h"
+#include "service/wire_codec.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
 
-Status ResolveCaseSetDir(master::JobSpec* spec, const fs::path& base_dir,
-                         std::vector<master::FieldViolation>* violations) {
-  auto* h = std::get_if<master::HgannProblem>(&spec->problem);
+Status ResolveCaseSetDir(job::JobSpec* spec, const fs::path& base_dir,
+                         std::vector<job::FieldViolation>* violations) {
+  auto* h = std::get_if<job::HgannProblem>(&spec->problem);
   if (!h || h->case_set_dir.empty()) return Status::Ok();
   auto fail = [&](const std::string& rule) {
     const std::string d = FieldError("hgann.case_set_dir", "\"" + h->case_set_dir + "\"", rule);
@@ -29,7 +29,7 @@ Status ResolveCaseSetDir(master::JobSpec* spec, const fs::path& base_dir,
   } catch (const InputError& e) {
     return fail(std::string("cannot be read: ") + e.what());
   }
-  master::HgannProblem loaded = master::HgannProblemFromCaseSet(set);
+  job::HgannProblem loaded = hgann::HgannProblemFromCaseSet(set);
   h->cases = std::move(loaded.cases);
   if (h->source.empty()) {
     std::error_code ec;
@@ -41,10 +41,10 @@ Status ResolveCaseSetDir(master::JobSpec* spec, const fs::path& base_dir,
   return Status::Ok();
 }
 
-Status JobSpecFromJsonFile(const std::string& json, const fs::path& base_dir, master::JobSpec* spec,
-                           std::vector<master::FieldViolation>* violations) {
-  std::vector<master::FieldViolation> decode;
-  if (Status s = master::JobSpecFromJson(json, spec, &decode); !s.ok()) return s;
+Status JobSpecFromJsonFile(const std::string& json, const fs::path& base_dir, job::JobSpec* spec,
+                           std::vector<job::FieldViolation>* violations) {
+  std::vector<job::FieldViolation> decode;
+  if (Status s = service::JobSpecFromJson(json, spec, &decode); !s.ok()) return s;
   if (!decode.empty()) {
     std::string all;
     for (const auto& v : decode) all += (all.empty() ? "" : "; ") + v.description;
@@ -54,8 +54,8 @@ Status JobSpecFromJsonFile(const std::string& json, const fs::path& base_dir, ma
   return ResolveCaseSetDir(spec, base_dir, violations);
 }
 
-Status LoadJobSpecFile(const fs::path& file, master::JobSpec* spec,
-                       std::vector<master::FieldViolation>* violations) {
+Status LoadJobSpecFile(const fs::path& file, job::JobSpec* spec,
+                       std::vector<job::FieldViolation>* violations) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return InvalidArgument(file.string() + ": cannot read the job spec");
   std::stringstream ss;

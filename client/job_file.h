@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "master/job_spec.h"
+#include "job/job_spec.h"
 #include "model/status.h"
 
 namespace pz::client {
@@ -19,16 +19,16 @@ namespace pz::client {
 /// Parses `json` (a job spec; `base_dir` resolves a relative case_set_dir) and embeds the case set
 /// it names. kInvalidArgument with every field violation in *violations when the spec is bad.
 Status JobSpecFromJsonFile(const std::string& json, const std::filesystem::path& base_dir,
-                           master::JobSpec* spec, std::vector<master::FieldViolation>* violations);
+                           job::JobSpec* spec, std::vector<job::FieldViolation>* violations);
 
 /// Reads `file` and calls JobSpecFromJsonFile with its folder. Errors start with the path.
-Status LoadJobSpecFile(const std::filesystem::path& file, master::JobSpec* spec,
-                       std::vector<master::FieldViolation>* violations);
+Status LoadJobSpecFile(const std::filesystem::path& file, job::JobSpec* spec,
+                       std::vector<job::FieldViolation>* violations);
 
 /// Embeds the case set named by an hgann spec's case_set_dir (relative to base_dir) into its
 /// cases and clears case_set_dir; source becomes the folder (relative to the current directory
 /// when it lies below it). No-op for other kinds or an empty case_set_dir.
-Status ResolveCaseSetDir(master::JobSpec* spec, const std::filesystem::path& base_dir,
-                         std::vector<master::FieldViolation>* violations);
+Status ResolveCaseSetDir(job::JobSpec* spec, const std::filesystem::path& base_dir,
+                         std::vector<job::FieldViolation>* violations);
 
 }  // namespace pz::client

@@ -6,14 +6,14 @@
 #include <limits>
 #include <sstream>
 
-#include "master/hgann_job.h"
-#include "master/wire_codec.h"
+#include "hgann/hgann_job.h"
+#include "service/wire_codec.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
 
-master::GenerationSummary SummaryOfRecord(const master::GenerationRecord& r) {
-  master::GenerationSummary s;
+opt::GenerationSummary SummaryOfRecord(const service::GenerationRecord& r) {
+  opt::GenerationSummary s;
   s.generation = r.generation;
   s.best_cost = r.best_cost;
   s.mean_cost = r.mean_cost;
@@ -31,9 +31,9 @@ master::GenerationSummary SummaryOfRecord(const master::GenerationRecord& r) {
   return s;
 }
 
-master::GaSummary GaSummaryOfJob(const FetchedJob& job) {
-  master::GaSummary s;
-  const master::GaSettings ga = job.spec.ga.value_or(master::GaSettings{});
+opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
+  opt::GaSummary s;
+  const job::GaSettings ga = job.spec.ga.value_or(job::GaSettings{});
   if (!job.best.empty()) {
     s.best = job.best.front().genome;
     s.best_fitness = job.best.front().fitness;
@@ -50,34 +50,34 @@ master::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   std::ostringstream os;
   os.precision(10);
   const std::string& m = job.info.message;
-  if (job.info.state == master::JobState::kRunning) {
-    s.termination = master::GaTermination::kCancelled;
+  if (job.info.state == service::JobState::kRunning) {
+    s.termination = opt::GaTermination::kCancelled;
     os << "job " << job.info.job_id << " is still running at the master: the best after generation "
        << s.generations << " so far";
-  } else if (job.info.state == master::JobState::kCancelled) {
-    s.termination = master::GaTermination::kCancelled;
+  } else if (job.info.state == service::JobState::kCancelled) {
+    s.termination = opt::GaTermination::kCancelled;
     os << "cancelled after generation " << s.generations;
-  } else if (job.info.state == master::JobState::kFailed) {
-    s.termination = master::GaTermination::kCancelled;
+  } else if (job.info.state == service::JobState::kFailed) {
+    s.termination = opt::GaTermination::kCancelled;
     os << "job failed after generation " << s.generations << ": " << m;
-  } else if (m == master::GaTerminationName(master::GaTermination::kStall)) {
-    s.termination = master::GaTermination::kStall;
+  } else if (m == opt::GaTerminationName(opt::GaTermination::kStall)) {
+    s.termination = opt::GaTermination::kStall;
     os << "no improvement of the best cost " << s.best_fitness.cost << " in "
        << (job.log.empty() ? 0 : job.log.back().stall) << " generations (since generation " << s.best_generation
        << ")";
-  } else if (m == master::GaTerminationName(master::GaTermination::kTargetReached)) {
-    s.termination = master::GaTermination::kTargetReached;
+  } else if (m == opt::GaTerminationName(opt::GaTermination::kTargetReached)) {
+    s.termination = opt::GaTermination::kTargetReached;
     os << "best cost " << s.best_fitness.cost << " <= target "
        << job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
   } else {
-    s.termination = master::GaTermination::kMaxGenerations;
+    s.termination = opt::GaTermination::kMaxGenerations;
     os << "reached the maximum of " << ga.generations << " generations";
   }
   s.message = os.str();
   return s;
 }
 
-io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFitness& fitness, size_t k) {
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness, size_t k) {
   PZ_CHECK(k < job.best.size());
   io::SavedNetwork n;
   n.network = fitness.Decode(job.best[k].genome);
@@ -87,7 +87,7 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFit
   p.seed = job.spec.seed;
   // The best was found in the last improving generation; the others are members of the last
   // population, which is all the master keeps of them.
-  const master::GaSummary s = GaSummaryOfJob(job);
+  const opt::GaSummary s = GaSummaryOfJob(job);
   p.generation = k == 0 ? s.best_generation : s.generations;
   p.fitness = job.best[k].fitness.cost;
   p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -99,7 +99,7 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFit
   return n;
 }
 
-IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const master::HgannFitness& fitness) {
+IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness) {
   IdentifyResult r;
   r.summary = GaSummaryOfJob(job);
   for (const auto& g : job.log) r.log.push_back(SummaryOfRecord(g));
@@ -111,9 +111,9 @@ IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const master::HgannFit
 IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_dir, bool plots) {
   IdentifyOptions o;
   o.out_dir = out_dir;
-  const auto* h = std::get_if<master::HgannProblem>(&job.spec.problem);
+  const auto* h = std::get_if<job::HgannProblem>(&job.spec.problem);
   o.cases_dir = h ? h->source : "";
-  const master::GaSettings ga = job.spec.ga.value_or(master::GaSettings{});
+  const job::GaSettings ga = job.spec.ga.value_or(job::GaSettings{});
   o.ga.population_size = ga.population;
   o.ga.max_generations = ga.generations;
   o.ga.stall_generations = ga.stall_generations;
@@ -138,7 +138,7 @@ IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_
 
 namespace {
 
-void WriteProgressCsv(const fs::path& file, const std::vector<master::GenerationRecord>& log) {
+void WriteProgressCsv(const fs::path& file, const std::vector<service::GenerationRecord>& log) {
   std::ofstream f(file);
   f << "generation,best_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
        "quarantined,wall_time_s,best_description\n";
@@ -163,7 +163,7 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
   fs::create_directories(out, ec);
   if (ec) return InvalidArgument(out.string() + ": cannot create the folder: " + ec.message());
 
-  const auto* h = std::get_if<master::HgannProblem>(&job.spec.problem);
+  const auto* h = std::get_if<job::HgannProblem>(&job.spec.problem);
   if (!h) {
     {
       std::ofstream f(out / "best.csv");
@@ -171,7 +171,7 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
       for (size_t k = 0; k < job.best.size(); ++k) {
         const auto& b = job.best[k];
         f << k + 1 << "," << b.index << "," << b.fitness.cost << "," << static_cast<int>(b.fitness.status) << ",\""
-          << b.fitness.reason << "\"," << master::BitString(b.genome) << "\n";
+          << b.fitness.reason << "\"," << service::BitString(b.genome) << "\n";
       }
     }
     o.written.push_back(out / "best.csv");
@@ -183,11 +183,11 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
     return Status::Ok();
   }
 
-  master::HgannFitnessConfig config;
-  if (Status s = master::HgannConfigFromProblem(*h, &config); !s.ok())
+  hgann::HgannFitnessConfig config;
+  if (Status s = hgann::HgannConfigFromProblem(*h, &config); !s.ok())
     return {s.code(), "the job's spec does not build its fitness here: " + s.message()};
   try {
-    const master::HgannFitness fitness(std::move(config));
+    const hgann::HgannFitness fitness(std::move(config));
     fs::create_directories(out / "networks");
     for (size_t k = 0; k < job.best.size(); ++k) {
       const io::SavedNetwork n = SavedNetworkOfJob(job, fitness, k);
@@ -197,7 +197,7 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
         o.written.push_back(p);
       }
     }
-    io::CaseSet set = master::HgannCaseSet(*h);
+    io::CaseSet set = hgann::HgannCaseSet(*h);
     if (set.dir.empty()) set.dir = "job " + job.info.job_id;
     const IdentifyResult r = IdentifyResultOfJob(job, fitness);
     const auto files = WriteIdentifyReport(IdentifyOptionsOfJob(job, out, plots), set, fitness, r, term);

@@ -9,30 +9,30 @@
 #include <vector>
 
 #include "client/identify.h"
-#include "master/service_types.h"
+#include "service/service_types.h"
 
 namespace pz::client {
 
 /// A job as the master answers a fetch.
 struct FetchedJob {
-  master::JobInfo info;
-  master::JobSpec spec;
-  std::vector<master::ScoredGenome> best;      ///< best first
-  std::vector<master::GenerationRecord> log;  ///< one record per generation
+  service::JobInfo info;
+  job::JobSpec spec;
+  std::vector<service::ScoredGenome> best;      ///< best first
+  std::vector<service::GenerationRecord> log;  ///< one record per generation
 };
 
 /// The GA's generation summary carried by a generation record.
-master::GenerationSummary SummaryOfRecord(const master::GenerationRecord& record);
+opt::GenerationSummary SummaryOfRecord(const service::GenerationRecord& record);
 
 /// The GA's final summary of a job: termination from its state and message, best from best[0],
 /// best generation = the last generation that improved, counters from the log.
-master::GaSummary GaSummaryOfJob(const FetchedJob& job);
+opt::GaSummary GaSummaryOfJob(const FetchedJob& job);
 
 /// A job's k-th best genome as a network file (chromosome, decoded network, provenance).
-io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const master::HgannFitness& fitness, size_t k);
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness, size_t k);
 
 /// The identification result of an hgann job (what RunIdentify returns for a local run).
-IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const master::HgannFitness& fitness);
+IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness);
 
 /// The report options of an hgann job: population, seed, ranges, spread penalty from its spec.
 IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots);

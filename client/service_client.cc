@@ -5,13 +5,13 @@
 #include <thread>
 #include <zmq.hpp>
 
-#include "master/wire_codec.h"
+#include "service/wire_codec.h"
 
 namespace pz::client {
 
-using master::ClientReplyMsg;
-using master::ClientRequestMsg;
-using master::WireCode;
+using service::ClientReplyMsg;
+using service::ClientRequestMsg;
+using service::WireCode;
 
 Status StatusFromWire(WireCode code, const std::string& error) {
   switch (code) {
@@ -33,7 +33,7 @@ struct ServiceClient::Impl {
   ServiceClientOptions options;
   zmq::context_t ctx{1};
   std::unique_ptr<zmq::socket_t> sock;
-  std::unique_ptr<master::HandshakeMonitor> monitor;  // of sock
+  std::unique_ptr<service::HandshakeMonitor> monitor;  // of sock
   std::string refused;  // the master refused the handshake: why
   std::mt19937_64 rng;
   uint64_t next_id = 1;
@@ -41,8 +41,8 @@ struct ServiceClient::Impl {
   void Open() {
     sock = std::make_unique<zmq::socket_t>(ctx, zmq::socket_type::dealer);
     sock->set(zmq::sockopt::linger, 0);
-    if (options.curve) master::SetCurveClient(*sock, *options.curve, options.master_public);
-    monitor = std::make_unique<master::HandshakeMonitor>(ctx, *sock, "client");
+    if (options.curve) service::SetCurveClient(*sock, *options.curve, options.master_public);
+    monitor = std::make_unique<service::HandshakeMonitor>(ctx, *sock, "client");
     sock->connect(options.endpoint);
   }
 
@@ -68,7 +68,7 @@ struct ServiceClient::Impl {
       }
       zmq::message_t msg;
       if (!sock->recv(msg, zmq::recv_flags::dontwait)) continue;
-      if (master::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply).ok())
+      if (service::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply).ok())
         return true;
     }
     return false;
@@ -81,7 +81,7 @@ struct ServiceClient::Impl {
     for (int attempt = 0; attempt < options.retries; ++attempt) {
       if (!sock) Open();
       req.request_id = next_id++;
-      const std::string payload = master::EncodeClientRequest(req);
+      const std::string payload = service::EncodeClientRequest(req);
       sent_bytes = payload.size();
       if (static_cast<int64_t>(payload.size()) > options.max_message_bytes)
         return InvalidArgument("request of " + std::to_string(payload.size()) +
@@ -127,10 +127,10 @@ ServiceClient::ServiceClient(ServiceClientOptions options)
 
 ServiceClient::~ServiceClient() = default;
 
-Status ServiceClient::Submit(const master::JobSpec& spec, SubmitResult* out,
-                             std::vector<master::FieldViolation>* violations,
+Status ServiceClient::Submit(const job::JobSpec& spec, SubmitResult* out,
+                             std::vector<job::FieldViolation>* violations,
                              std::string client_token) {
-  if (client_token.empty()) client_token = master::ContentHash(std::to_string(impl_->rng()));
+  if (client_token.empty()) client_token = service::ContentHash(std::to_string(impl_->rng()));
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kSubmit;
   req.spec = spec;
@@ -145,11 +145,11 @@ Status ServiceClient::Submit(const master::JobSpec& spec, SubmitResult* out,
 }
 
 Status ServiceClient::SubmitJson(const std::string& json, SubmitResult* out,
-                                 std::vector<master::FieldViolation>* violations,
+                                 std::vector<job::FieldViolation>* violations,
                                  std::string client_token) {
-  master::JobSpec spec;
-  std::vector<master::FieldViolation> decode;
-  if (Status s = master::JobSpecFromJson(json, &spec, &decode); !s.ok()) return s;
+  job::JobSpec spec;
+  std::vector<job::FieldViolation> decode;
+  if (Status s = service::JobSpecFromJson(json, &spec, &decode); !s.ok()) return s;
   if (!decode.empty()) {
     if (violations) *violations = decode;
     return InvalidArgument(decode.front().description);
@@ -157,7 +157,7 @@ Status ServiceClient::SubmitJson(const std::string& json, SubmitResult* out,
   return Submit(spec, out, violations, std::move(client_token));
 }
 
-Status ServiceClient::GetStatus(const std::string& job_id, master::JobInfo* info) {
+Status ServiceClient::GetStatus(const std::string& job_id, service::JobInfo* info) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kStatus;
   req.job_id = job_id;
@@ -167,7 +167,7 @@ Status ServiceClient::GetStatus(const std::string& job_id, master::JobInfo* info
   return s;
 }
 
-Status ServiceClient::List(std::vector<master::JobInfo>* jobs, int* workers, int* threads) {
+Status ServiceClient::List(std::vector<service::JobInfo>* jobs, int* workers, int* threads) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kList;
   ClientReplyMsg reply;
@@ -188,9 +188,9 @@ Status ServiceClient::Cancel(const std::string& job_id) {
 }
 
 Status ServiceClient::Fetch(const std::string& job_id, int count,
-                            std::vector<master::ScoredGenome>* best,
-                            std::vector<master::GenerationRecord>* log, master::JobInfo* info,
-                            master::JobSpec* spec) {
+                            std::vector<service::ScoredGenome>* best,
+                            std::vector<service::GenerationRecord>* log, service::JobInfo* info,
+                            job::JobSpec* spec) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kFetch;
   req.job_id = job_id;
@@ -209,7 +209,7 @@ Status ServiceClient::Fetch(const std::string& job_id, int count,
 }
 
 Status ServiceClient::Watch(const std::string& job_id,
-                            const std::function<bool(const master::JobEvent&)>& on_event,
+                            const std::function<bool(const service::JobEvent&)>& on_event,
                             std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   const auto quiet = std::chrono::milliseconds(std::max(200, impl_->options.timeout_ms));
@@ -230,8 +230,8 @@ Status ServiceClient::Watch(const std::string& job_id,
     }
     unreachable_since.reset();
     if (!s.ok()) return s;
-    if (master::IsFinal(reply.info.state)) {
-      master::JobEvent e{job_id, reply.info.state, std::nullopt, reply.info.message};
+    if (service::IsFinal(reply.info.state)) {
+      service::JobEvent e{job_id, reply.info.state, std::nullopt, reply.info.message};
       on_event(e);
       return Status::Ok();
     }
@@ -244,15 +244,15 @@ Status ServiceClient::Watch(const std::string& job_id,
       if (!impl_->Receive(&ev, left)) break;
       if (ev.type != ClientReplyMsg::Type::kEvent || ev.event.job_id != job_id) continue;
       if (!on_event(ev.event)) return Status::Ok();
-      if (master::IsFinal(ev.event.state)) return Status::Ok();
+      if (service::IsFinal(ev.event.state)) return Status::Ok();
     }
   }
   return {StatusCode::kUnavailable, "watch of " + job_id + " timed out"};
 }
 
 Status ServiceClient::Evaluate(const std::string& job_id, uint64_t batch_seq,
-                               const std::vector<master::Genome>& genomes, bool* done,
-                               std::vector<master::FitnessResult>* results, int* worker_threads) {
+                               const std::vector<opt::Genome>& genomes, bool* done,
+                               std::vector<opt::FitnessResult>* results, int* worker_threads) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kEvaluate;
   req.job_id = job_id;
@@ -278,12 +278,12 @@ Status ServiceClient::Close(const std::string& job_id) {
 }
 
 Status ServiceClient::WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
-                                master::JobInfo* info) {
+                                service::JobInfo* info) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  master::JobInfo i;
+  service::JobInfo i;
   while (std::chrono::steady_clock::now() < deadline) {
     Status s = GetStatus(job_id, &i);
-    if (s.ok() && master::IsFinal(i.state)) {
+    if (s.ok() && service::IsFinal(i.state)) {
       if (info) *info = i;
       return s;
     }

@@ -4,9 +4,9 @@
 //
 //   pz::client::ServiceClient c({.endpoint = "tcp://127.0.0.1:5556"});
 //   pz::client::SubmitResult r;
-//   std::vector<pz::master::FieldViolation> bad;
+//   std::vector<pz::job::FieldViolation> bad;
 //   pz::Status s = c.SubmitJson(json_text, &r, &bad);   // bad: field-named errors
-//   c.Watch(r.job_id, [](const pz::master::JobEvent& e) { ...; return true; }, 10min);
+//   c.Watch(r.job_id, [](const pz::service::JobEvent& e) { ...; return true; }, 10min);
 //   c.Fetch(r.job_id, 5, &best, &log);
 #pragma once
 
@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "master/security.h"
-#include "master/service_types.h"
+#include "service/security.h"
+#include "service/service_types.h"
 #include "model/status.h"
 
 namespace pz::client {
@@ -31,7 +31,7 @@ struct ServiceClientOptions {
   /// up with kUnavailable [s].
   double watch_reconnect_s = 30;
   /// CURVE: this client's key pair and the master's public key (Z85); plain when unset.
-  std::optional<master::CurveKeyPair> curve;
+  std::optional<service::CurveKeyPair> curve;
   std::string master_public;
   /// A request larger than this is refused here, naming the limit (the master drops the
   /// connection of a sender above its own --max-message-bytes) [bytes].
@@ -57,39 +57,39 @@ class ServiceClient {
 
   /// Submits a job. On CODE_INVALID_ARGUMENT returns kInvalidArgument and the field errors.
   /// An empty token is replaced by a random one (retries of this call reuse it).
-  Status Submit(const master::JobSpec& spec, SubmitResult* out,
-                std::vector<master::FieldViolation>* violations = nullptr,
+  Status Submit(const job::JobSpec& spec, SubmitResult* out,
+                std::vector<job::FieldViolation>* violations = nullptr,
                 std::string client_token = {});
   /// Parses a protobuf-JSON job spec (examples/) and submits it.
   Status SubmitJson(const std::string& json, SubmitResult* out,
-                    std::vector<master::FieldViolation>* violations = nullptr,
+                    std::vector<job::FieldViolation>* violations = nullptr,
                     std::string client_token = {});
-  Status GetStatus(const std::string& job_id, master::JobInfo* info);
-  Status List(std::vector<master::JobInfo>* jobs, int* workers = nullptr,
+  Status GetStatus(const std::string& job_id, service::JobInfo* info);
+  Status List(std::vector<service::JobInfo>* jobs, int* workers = nullptr,
               int* worker_threads = nullptr);
   Status Cancel(const std::string& job_id);
   /// The best `count` individuals (best first, at most 32), the generation log, the job's state
   /// and its spec (any output may be nullptr).
-  Status Fetch(const std::string& job_id, int count, std::vector<master::ScoredGenome>* best,
-               std::vector<master::GenerationRecord>* log, master::JobInfo* info = nullptr,
-               master::JobSpec* spec = nullptr);
+  Status Fetch(const std::string& job_id, int count, std::vector<service::ScoredGenome>* best,
+               std::vector<service::GenerationRecord>* log, service::JobInfo* info = nullptr,
+               job::JobSpec* spec = nullptr);
   /// Calls on_event for each pushed event until the job ends (returns Ok), on_event returns
   /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches) that
   /// takes less than options.watch_reconnect_s; a master unreachable for longer is kUnavailable.
   Status Watch(const std::string& job_id,
-               const std::function<bool(const master::JobEvent&)>& on_event,
+               const std::function<bool(const service::JobEvent&)>& on_event,
                std::chrono::milliseconds timeout);
   /// Evaluation sessions (JobSpec.external, client/service_evaluator.h): submits batch `batch_seq`
   /// of a session (genomes non-empty; a retry is a poll) or polls it (genomes empty). *done says
   /// whether *results holds its results (one per genome). A batch the master does not hold is
   /// kNotFound: send it again with its genomes.
-  Status Evaluate(const std::string& job_id, uint64_t batch_seq, const std::vector<master::Genome>& genomes,
-                  bool* done, std::vector<master::FitnessResult>* results, int* worker_threads = nullptr);
+  Status Evaluate(const std::string& job_id, uint64_t batch_seq, const std::vector<opt::Genome>& genomes,
+                  bool* done, std::vector<opt::FitnessResult>* results, int* worker_threads = nullptr);
   /// Ends an evaluation session: it succeeds (a retried close of a succeeded session is Ok).
   Status Close(const std::string& job_id);
   /// Waits (polling status) until the job is final; its last info in *info.
   Status WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,
-                   master::JobInfo* info = nullptr);
+                   service::JobInfo* info = nullptr);
 
  private:
   struct Impl;
@@ -97,6 +97,6 @@ class ServiceClient {
 };
 
 /// pz::Status for a reply's wire code (transient codes → kUnavailable).
-Status StatusFromWire(master::WireCode code, const std::string& error);
+Status StatusFromWire(service::WireCode code, const std::string& error);
 
 }  // namespace pz::client

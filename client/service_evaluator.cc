@@ -6,12 +6,12 @@
 
 namespace pz::client {
 
-ServiceEvaluator::ServiceEvaluator(ServiceEvaluatorOptions options, master::JobSpec spec, const std::string& owner)
+ServiceEvaluator::ServiceEvaluator(ServiceEvaluatorOptions options, job::JobSpec spec, const std::string& owner)
     : options_(std::move(options)), client_(options_.client) {
   spec.ga.reset();
-  spec.external = master::ExternalSettings{options_.idle_timeout_s, owner};
+  spec.external = job::ExternalSettings{options_.idle_timeout_s, owner};
   SubmitResult r;
-  std::vector<master::FieldViolation> violations;
+  std::vector<job::FieldViolation> violations;
   Status s = client_.Submit(spec, &r, &violations);
   if (s.code() == StatusCode::kInvalidArgument) {
     std::string all;
@@ -21,7 +21,7 @@ ServiceEvaluator::ServiceEvaluator(ServiceEvaluatorOptions options, master::JobS
   if (!s.ok()) throw ServiceError(s);
   job_id_ = r.job_id;
   // The live worker threads, for concurrency() before the first batch.
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   int workers = 0;
   (void)client_.List(&jobs, &workers, &worker_threads_);
 }
@@ -36,14 +36,14 @@ Status ServiceEvaluator::Close() {
   return client_.Close(job_id_);
 }
 
-void ServiceEvaluator::Evaluate(const master::EvalBatch& batch, std::span<master::FitnessResult> out) {
+void ServiceEvaluator::Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) {
   PZ_CHECK(out.size() == batch.genomes.size());
   if (closed_) throw ServiceError({StatusCode::kFailedPrecondition, "session " + job_id_ + " is closed"});
   if (batch.genomes.empty()) return;
   const uint64_t seq = next_seq_++;
-  const std::vector<master::Genome> genomes(batch.genomes.begin(), batch.genomes.end());
-  const std::vector<master::Genome> none;
-  std::vector<master::FitnessResult> results;
+  const std::vector<opt::Genome> genomes(batch.genomes.begin(), batch.genomes.end());
+  const std::vector<opt::Genome> none;
+  std::vector<opt::FitnessResult> results;
   const auto start = std::chrono::steady_clock::now();
   bool done = false, send_genomes = true;
   int wait_us = 200;

@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "client/service_client.h"
-#include "master/evaluator.h"
-#include "master/job_spec.h"
+#include "opt/evaluator.h"
+#include "job/job_spec.h"
 
 namespace pz::client {
 
@@ -42,19 +42,19 @@ struct ServiceEvaluatorOptions {
   double batch_timeout_s = 0;
 };
 
-class ServiceEvaluator final : public master::BatchEvaluator {
+class ServiceEvaluator final : public opt::BatchEvaluator {
  public:
   /// Opens a session for `spec` (its algorithm becomes `external`, with `owner` as the owner).
   /// Throws InputError with every violated field if the master refuses the spec, ServiceError if
   /// it cannot be reached.
-  ServiceEvaluator(ServiceEvaluatorOptions options, master::JobSpec spec, const std::string& owner = {});
+  ServiceEvaluator(ServiceEvaluatorOptions options, job::JobSpec spec, const std::string& owner = {});
   /// Closes the session (errors are ignored: an unclosed session ends by its idle timeout).
   ~ServiceEvaluator() override;
   ServiceEvaluator(const ServiceEvaluator&) = delete;
   ServiceEvaluator& operator=(const ServiceEvaluator&) = delete;
 
   /// Evaluates the batch on the service (blocking). Throws ServiceError on a service failure.
-  void Evaluate(const master::EvalBatch& batch, std::span<master::FitnessResult> out) override;
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override;
   /// The master's live worker threads (as of the last reply), ≥ 1.
   int concurrency() const override { return std::max(1, worker_threads_); }
 

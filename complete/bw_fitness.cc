@@ -4,8 +4,8 @@
 
 namespace pz::complete {
 
-master::ParamBox BwOscillatorBox() {
-  master::ParamBox box;
+opt::ParamBox BwOscillatorBox() {
+  opt::ParamBox box;
   box.names = model::BwIdentifiableNames();
   box.lower = {0.2, 0.1, 1e3, 1e3, 1, -1e4};
   box.upper = {20, 1e3, 1e6, 1e6, 1e5, 1e4};
@@ -47,14 +47,14 @@ size_t BwOscillatorFitness::counted_samples() const {
   return n;
 }
 
-master::FitnessResult BwOscillatorFitness::Evaluate(const master::Genome& genome) const {
+opt::FitnessResult BwOscillatorFitness::Evaluate(const opt::Genome& genome) const {
   if (genome.reals.size() != 6)
-    return {penalty_, master::FitnessStatus::kError,
+    return {penalty_, opt::FitnessStatus::kError,
             "genome has " + std::to_string(genome.reals.size()) + " reals, the Bouc-Wen oscillator has 6 parameters"};
   bool diverged = false;
   const double mse = model::BwOutputMse(model::BwFromIdentifiable(genome.reals), prepared_, penalty_, &diverged);
-  if (diverged) return {mse, master::FitnessStatus::kPenalized, "diverged"};
-  return {mse, master::FitnessStatus::kOk, {}};
+  if (diverged) return {mse, opt::FitnessStatus::kPenalized, "diverged"};
+  return {mse, opt::FitnessStatus::kOk, {}};
 }
 
 }  // namespace pz::complete

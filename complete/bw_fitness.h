@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "master/evaluator.h"
-#include "master/param_search.h"
+#include "opt/evaluator.h"
+#include "opt/param_search.h"
 #include "model/bw_oscillator.h"
 
 namespace pz::complete {
@@ -26,9 +26,9 @@ struct BwTrainingRecord {
 /// The search box of θ = (m, c, k, alpha, beta_gamma, beta_delta): wide, physically motivated
 /// bounds (log scale: the magnitudes are not known a priori; β·δ may have either sign):
 /// m 0.2–20 kg, c 0.1–1000 N s/m, k and α 1e3–1e6 N/m, β·γ 1–1e5, β·δ ±1e4.
-master::ParamBox BwOscillatorBox();
+opt::ParamBox BwOscillatorBox();
 
-class BwOscillatorFitness final : public master::FitnessFunction {
+class BwOscillatorFitness final : public opt::FitnessFunction {
  public:
   /// Prepares every record's input once (model::BwInput). Throws InputError naming the record and
   /// what is wrong: no records, u and y of different lengths, a non-finite sample, a warm-up that
@@ -36,7 +36,7 @@ class BwOscillatorFitness final : public master::FitnessFunction {
   explicit BwOscillatorFitness(std::vector<BwTrainingRecord> records, double penalty = 1.0);
   /// cost = the pooled MSE; a diverging simulation is kPenalized with cost `penalty`; a genome
   /// without 6 reals is kError.
-  master::FitnessResult Evaluate(const master::Genome& genome) const override;
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
 
   const std::vector<BwTrainingRecord>& records() const { return records_; }
   double penalty() const { return penalty_; }

@@ -3,14 +3,14 @@
 #include <cmath>
 #include <sstream>
 
-#include "master/inline_evaluator.h"
+#include "opt/inline_evaluator.h"
 
 namespace pz::complete {
 namespace {
 
-using master::CompleteModelProblem;
-using master::CompleteModelRecord;
-using master::FieldViolation;
+using job::CompleteModelProblem;
+using job::CompleteModelRecord;
+using job::FieldViolation;
 using Family = CompleteModelProblem::Family;
 using SpecInterpolation = CompleteModelProblem::Interpolation;
 using SpecCriterion = CompleteModelProblem::Criterion;
@@ -113,13 +113,13 @@ std::vector<io::StackRecord> StackRecords(const CompleteModelProblem& p) {
 }
 
 // Owns the records its StackFitness points to.
-class OwningStackFitness final : public master::FitnessFunction {
+class OwningStackFitness final : public opt::FitnessFunction {
  public:
   OwningStackFitness(std::vector<io::StackRecord> records, const CompleteModelProblem& p)
       : records_(std::move(records)),
         fitness_(StackFamilyOf(p.family), Pointers(records_), CriterionOf(p.criterion), p.t0_s, p.t1_s,
                  model::StackSimOptions{Substeps(p)}, p.error_cost) {}
-  master::FitnessResult Evaluate(const master::Genome& g) const override { return fitness_.Evaluate(g); }
+  opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_.Evaluate(g); }
 
  private:
   static std::vector<const io::StackRecord*> Pointers(const std::vector<io::StackRecord>& records) {
@@ -131,7 +131,7 @@ class OwningStackFitness final : public master::FitnessFunction {
   StackFitness fitness_;
 };
 
-Status Build(const CompleteModelProblem& p, std::unique_ptr<master::FitnessFunction>* out) {
+Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction>* out) {
   try {
     if (p.family == Family::kBwOscillator)
       *out = std::make_unique<BwOscillatorFitness>(BwRecords(p), p.error_cost);
@@ -255,7 +255,7 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
 
 }  // namespace
 
-master::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness) {
+job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness) {
   CompleteModelProblem p;
   p.family = Family::kBwOscillator;
   const auto& records = fitness.records();
@@ -274,7 +274,7 @@ master::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& f
   return p;
 }
 
-master::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness) {
+job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness) {
   CompleteModelProblem p;
   p.family = fitness.family() == model::StackFamily::kBoucWen ? Family::kStackBoucWen : Family::kStackBacklashLike;
   for (const io::StackRecord* r : fitness.records())
@@ -287,16 +287,16 @@ master::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness)
   return p;
 }
 
-master::JobSpec CompleteModelJobSpec(master::CompleteModelProblem problem, const std::string& name) {
-  master::JobSpec spec;
+job::JobSpec CompleteModelJobSpec(job::CompleteModelProblem problem, const std::string& name) {
+  job::JobSpec spec;
   spec.name = name.substr(0, 200);
   spec.seed = 0;
   spec.problem = std::move(problem);
-  spec.limits.penalty_cost = master::kDefaultErrorCost;
+  spec.limits.penalty_cost = opt::kDefaultErrorCost;
   return spec;
 }
 
-Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<master::FitnessFunction>* out) {
+Status MakeCompleteModelFitness(const job::JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out) {
   const auto* p = std::get_if<CompleteModelProblem>(&spec.problem);
   if (!p) return InvalidArgument("problem: not a complete_model spec");
   const std::vector<FieldViolation> v = CheckFields(*p);
@@ -304,10 +304,10 @@ Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<mas
   return Build(*p, out);
 }
 
-master::JobKind CompleteModelJobKind() {
-  master::JobKind k;
+job::JobKind CompleteModelJobKind() {
+  job::JobKind k;
   k.name = "complete_model";
-  k.validate = [](const master::JobSpec& s) {
+  k.validate = [](const job::JobSpec& s) {
     std::vector<FieldViolation> v = CheckFields(std::get<CompleteModelProblem>(s.problem));
     if (s.ga)
       v.push_back({"ga", "ga: the project GA searches binary genomes; a complete_model genome is the family's real "
@@ -315,17 +315,17 @@ master::JobKind CompleteModelJobKind() {
                          "--master)"});
     return v;
   };
-  k.layout = [](const master::JobSpec& s, master::GenomeLayout* l) {
+  k.layout = [](const job::JobSpec& s, job::GenomeLayout* l) {
     const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
     if (names.empty()) return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
     l->bits = 0;
     l->reals = static_cast<int>(names.size());
     return Status::Ok();
   };
-  k.make_fitness = [](const master::JobSpec& s, std::unique_ptr<master::FitnessFunction>* f) {
+  k.make_fitness = [](const job::JobSpec& s, std::unique_ptr<opt::FitnessFunction>* f) {
     return MakeCompleteModelFitness(s, f);
   };
-  k.describe = [](const master::JobSpec& s, const master::Genome& g) {
+  k.describe = [](const job::JobSpec& s, const opt::Genome& g) {
     const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
     if (g.reals.size() != names.size()) return std::string();
     std::ostringstream os;
@@ -336,6 +336,5 @@ master::JobKind CompleteModelJobKind() {
   return k;
 }
 
-void RegisterCompleteModelJobKind(master::JobKindRegistry& registry) { registry.Register(CompleteModelJobKind()); }
 
 }  // namespace pz::complete

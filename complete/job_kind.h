@@ -13,26 +13,24 @@
 
 #include "complete/bw_fitness.h"
 #include "complete/stack_fitness.h"
-#include "master/job_kinds.h"
-#include "master/job_spec.h"
+#include "job/job_kind.h"
+#include "job/job_spec.h"
 
 namespace pz::complete {
 
 /// The problem of a local fitness. Throws InputError if the oscillator's records differ in their
 /// input options (a spec carries one set).
-master::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
-master::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness);
+job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
+job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness);
 
 /// A whole session spec (algorithm set by the caller; seed 0; errors and quarantined individuals
-/// cost master::kDefaultErrorCost, as in the local evaluators).
-master::JobSpec CompleteModelJobSpec(master::CompleteModelProblem problem, const std::string& name);
+/// cost opt::kDefaultErrorCost, as in the local evaluators).
+job::JobSpec CompleteModelJobSpec(job::CompleteModelProblem problem, const std::string& name);
 
 /// The fitness a spec describes (what a worker evaluates). InvalidArgument naming the field when
 /// the spec is not valid.
-Status MakeCompleteModelFitness(const master::JobSpec& spec, std::unique_ptr<master::FitnessFunction>* out);
+Status MakeCompleteModelFitness(const job::JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out);
 
-master::JobKind CompleteModelJobKind();
-/// Registers the kind (replacing one of the same name).
-void RegisterCompleteModelJobKind(master::JobKindRegistry& registry);
+job::JobKind CompleteModelJobKind();
 
 }  // namespace pz::complete

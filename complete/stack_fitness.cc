@@ -9,8 +9,8 @@
 
 namespace pz::complete {
 
-using master::FitnessResult;
-using master::FitnessStatus;
+using opt::FitnessResult;
+using opt::FitnessStatus;
 
 const char* FitCriterionName(FitCriterion c) {
   switch (c) {
@@ -89,7 +89,7 @@ double StackFitness::Cost(std::span<const double> params) const {
   return total;
 }
 
-FitnessResult StackFitness::Evaluate(const master::Genome& genome) const {
+FitnessResult StackFitness::Evaluate(const opt::Genome& genome) const {
   const size_t want = model::StackParamNames(family_).size();
   if (genome.reals.size() != want)
     return {error_cost_, FitnessStatus::kError,

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "io/stack_records.h"
-#include "master/inline_evaluator.h"
+#include "opt/inline_evaluator.h"
 #include "model/stack_models.h"
 #include "model/status.h"
 
@@ -29,15 +29,15 @@ double WindowEnd(const io::StackRecord& record, double t1_s);
 /// record summed over the records, or the largest windowed max error of the records (model/criteria.h).
 /// Pure and thread-safe (one scratch buffer per thread, no allocation once grown). A simulation
 /// with non-finite output is a penalised result (the error cost).
-class StackFitness final : public master::FitnessFunction {
+class StackFitness final : public opt::FitnessFunction {
  public:
   /// The records must outlive the fitness. Throws InputError on no records, a bad window
   /// (t0 < t1, t0 ≥ 0, t0 inside every record) or bad simulation options. The window end is
   /// clipped to each record's last sample time.
   StackFitness(model::StackFamily family, std::vector<const io::StackRecord*> records,
                FitCriterion criterion, double t0_s, double t1_s,
-               model::StackSimOptions sim = {}, double error_cost = master::kDefaultErrorCost);
-  master::FitnessResult Evaluate(const master::Genome& genome) const override;
+               model::StackSimOptions sim = {}, double error_cost = opt::kDefaultErrorCost);
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
   /// The cost of one parameter vector; throws InputError on a wrong size or invalid parameters.
   double Cost(std::span<const double> params) const;
 

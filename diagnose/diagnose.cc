@@ -11,6 +11,12 @@
 #include "model/saturation.h"
 
 namespace pz::diagnose {
+
+using opt::LevenbergMarquardt;
+using opt::LmOptions;
+using opt::LmResult;
+using opt::ParallelFor;
+using opt::ResidualFunction;
 namespace {
 
 using model::EffectKind;

@@ -53,9 +53,9 @@ struct DiagnoseOptions {
   /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
   /// sessions), ≥ 1; the results do not depend on it.
   int concurrent_fits = 1;
-  DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
-  DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
-  LmOptions lm{.max_iterations = 40};
+  opt::DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
+  opt::DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
+  opt::LmOptions lm{.max_iterations = 40};
   int cvode_lm_iterations = 15;              ///< LM iterations of a beam (CVODE) candidate, ≥ 1
   /// Starting magnitudes of a beam candidate, as fractions of the upper end of its magnitude range
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].

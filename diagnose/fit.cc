@@ -7,9 +7,18 @@
 #include <limits>
 #include <memory>
 
-#include "master/thread_pool_evaluator.h"
+#include "opt/thread_pool_evaluator.h"
 
 namespace pz::diagnose {
+
+using opt::BatchResidualFunction;
+using opt::DeResult;
+using opt::DifferentialEvolution;
+using opt::EvaluatorResiduals;
+using opt::LevenbergMarquardt;
+using opt::LmResult;
+using opt::NumericJacobian;
+using opt::ResidualFunction;
 
 const char* IdentifiabilityName(Identifiability i) {
   switch (i) {
@@ -150,9 +159,9 @@ FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, 
   std::vector<std::vector<double>> lm_starts = to_unit(o.starts, "starts");
   if (o.global_search) {
     DiagnosisFitness fitness(model, layout);
-    std::unique_ptr<master::BatchEvaluator> ev =
+    std::unique_ptr<opt::BatchEvaluator> ev =
         o.evaluator_factory ? o.evaluator_factory(fitness)
-                            : std::make_unique<master::ThreadPoolEvaluator>(fitness, o.threads);
+                            : std::make_unique<opt::ThreadPoolEvaluator>(fitness, o.threads);
     const DeResult de = DifferentialEvolution(n, o.de, *ev, unit_seeds);
     fit.evaluations += de.evaluations;
     lm_starts.insert(lm_starts.begin(), de.best);
@@ -163,9 +172,9 @@ FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, 
   // The refinement's residuals through the same seam (DiagnosisFitness with residuals: the
   // training residuals at FromUnit(u), as UnitResiduals), so every Jacobian is one batch.
   const DiagnosisFitness residual_fitness(model, layout, /*residuals=*/true);
-  std::unique_ptr<master::BatchEvaluator> rev =
+  std::unique_ptr<opt::BatchEvaluator> rev =
       o.evaluator_factory ? o.evaluator_factory(residual_fitness)
-                          : std::make_unique<master::ThreadPoolEvaluator>(residual_fitness, o.lm.threads);
+                          : std::make_unique<opt::ThreadPoolEvaluator>(residual_fitness, o.lm.threads);
   const BatchResidualFunction f = EvaluatorResiduals(*rev);
   std::vector<double> lo(n, 0.0), hi(n, 1.0);
   LmResult best;

@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/optimize.h"
+#include "opt/de_lm.h"
 #include "diagnose/problem.h"
 
 namespace pz::diagnose {
@@ -41,7 +41,7 @@ struct ParamEstimate {
 
 /// Builds the evaluator of a fitness (e.g. an evaluation session on the service, which needs the
 /// fitness's model, layout and residual mode to write the session's spec).
-using EvaluatorFactory = std::function<std::unique_ptr<master::BatchEvaluator>(const DiagnosisFitness&)>;
+using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const DiagnosisFitness&)>;
 
 struct FitOptions {
   int threads = 2;                 ///< evaluator threads and Jacobian columns, ≥ 1
@@ -49,8 +49,8 @@ struct FitOptions {
   /// Jacobian one batch); null = ThreadPoolEvaluators with `threads` threads.
   EvaluatorFactory evaluator_factory;
   bool global_search = true;       ///< differential evolution before the refinement
-  DeOptions de;
-  LmOptions lm;
+  opt::DeOptions de;
+  opt::LmOptions lm;
   /// Physical points seeding the global search's initial population.
   std::vector<std::vector<double>> seeds;
   /// Physical starting points of the refinement, refined besides the global search's best (the
@@ -87,6 +87,6 @@ void ComputeUncertainty(const DiagnosisModel& model, const ParameterLayout& layo
                         double fd_step = 1e-3);
 
 /// Training residual function of the model in unit coordinates (for LM), or in physical ones.
-ResidualFunction UnitResiduals(const DiagnosisModel& model, const ParameterLayout& layout);
+opt::ResidualFunction UnitResiduals(const DiagnosisModel& model, const ParameterLayout& layout);
 
 }  // namespace pz::diagnose

@@ -4,13 +4,13 @@
 #include <set>
 #include <sstream>
 
-#include "master/inline_evaluator.h"
+#include "opt/inline_evaluator.h"
 #include "model/effects.h"
 
 namespace pz::diagnose {
 namespace {
 
-using master::FieldViolation;
+using job::FieldViolation;
 
 std::string Num(double v) {
   std::ostringstream os;
@@ -25,7 +25,7 @@ std::shared_ptr<const model::BimorphPlant> DefaultPlant() {
 }
 
 // The structure of the spec, or the violations of its names.
-std::vector<model::EffectKind> Structure(const master::DiagnoseProblem& d, std::vector<FieldViolation>* v) {
+std::vector<model::EffectKind> Structure(const job::DiagnoseProblem& d, std::vector<FieldViolation>* v) {
   std::vector<model::EffectKind> kinds;
   std::set<model::EffectKind> seen;
   for (size_t i = 0; i < d.structure.size(); ++i) {
@@ -44,7 +44,7 @@ std::vector<model::EffectKind> Structure(const master::DiagnoseProblem& d, std::
   return kinds;
 }
 
-model::EffectSimOptions SimOptions(const master::DiagnoseProblem& d) {
+model::EffectSimOptions SimOptions(const job::DiagnoseProblem& d) {
   model::EffectSimOptions o;
   o.oversample = d.oversample;
   o.rtol = d.rtol;
@@ -54,9 +54,9 @@ model::EffectSimOptions SimOptions(const master::DiagnoseProblem& d) {
   return o;
 }
 
-std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
+std::vector<FieldViolation> Validate(const job::JobSpec& spec) {
   std::vector<FieldViolation> v;
-  const auto& d = std::get<master::DiagnoseProblem>(spec.problem);
+  const auto& d = std::get<job::DiagnoseProblem>(spec.problem);
   auto add = [&](const std::string& field, const std::string& value, const std::string& rule) {
     v.push_back({field, field + " = " + value + ": " + rule});
   };
@@ -67,7 +67,7 @@ std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
   std::set<int> numbers;
   int train = 0;
   for (size_t i = 0; i < d.cases.size(); ++i) {
-    const master::HgannCaseSpec& c = d.cases[i];
+    const job::HgannCaseSpec& c = d.cases[i];
     const std::string f = "diagnose.cases[" + std::to_string(i) + "]";
     if (c.number <= 0) add(f + ".number", std::to_string(c.number), "must be > 0");
     if (!numbers.insert(c.number).second) add(f + ".number", std::to_string(c.number), "must be unique");
@@ -75,8 +75,8 @@ std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
     if (!(std::isfinite(c.frequency_hz) && c.frequency_hz > 0)) add(f + ".frequency_hz", Num(c.frequency_hz), "must be finite and > 0");
     if (!(std::isfinite(c.sample_rate_hz) && c.sample_rate_hz > 0))
       add(f + ".sample_rate_hz", Num(c.sample_rate_hz), "must be finite and > 0");
-    if (c.role == master::CaseRole::kUnspecified) add(f + ".role", "CASE_ROLE_UNSPECIFIED", "must be set");
-    train += c.role == master::CaseRole::kTrain;
+    if (c.role == job::CaseRole::kUnspecified) add(f + ".role", "CASE_ROLE_UNSPECIFIED", "must be set");
+    train += c.role == job::CaseRole::kTrain;
     if (c.angle_deg.size() < 2) add(f + ".angle_deg", std::to_string(c.angle_deg.size()) + " samples", "needs >= 2");
     for (size_t k = 0; k < c.angle_deg.size(); ++k)
       if (!std::isfinite(c.angle_deg[k])) {
@@ -107,7 +107,7 @@ std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
     } else {
       for (int i = 0; i < layout.size(); ++i) {
         const ParamSpec& s = layout.specs()[i];
-        const master::DiagnoseParamBox& b = d.params[i];
+        const job::DiagnoseParamBox& b = d.params[i];
         if (b.name != s.name || b.lower != s.lower || b.upper != s.upper || b.log_scale != s.log_scale ||
             b.ratio != s.ratio)
           add("diagnose.params[" + std::to_string(i) + "]", b.name + " [" + Num(b.lower) + ", " + Num(b.upper) + "]",
@@ -124,11 +124,11 @@ std::vector<FieldViolation> Validate(const master::JobSpec& spec) {
 }
 
 // Owns the model the fitness refers to.
-class OwningFitness final : public master::FitnessFunction {
+class OwningFitness final : public opt::FitnessFunction {
  public:
   OwningFitness(std::unique_ptr<DiagnosisModel> model, ParameterLayout layout, bool residuals)
       : model_(std::move(model)), fitness_(*model_, std::move(layout), residuals) {}
-  master::FitnessResult Evaluate(const master::Genome& g) const override { return fitness_.Evaluate(g); }
+  opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_.Evaluate(g); }
 
  private:
   std::unique_ptr<DiagnosisModel> model_;
@@ -137,16 +137,16 @@ class OwningFitness final : public master::FitnessFunction {
 
 }  // namespace
 
-master::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness) {
+job::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness) {
   const DiagnosisModel& m = fitness.model();
-  master::DiagnoseProblem d;
+  job::DiagnoseProblem d;
   for (const DiagCase& c : m.cases()) {
-    master::HgannCaseSpec s;
+    job::HgannCaseSpec s;
     s.number = c.number;
     s.amplitude_v = c.drive.amplitude_v;
     s.frequency_hz = c.drive.frequency_hz;
     s.sample_rate_hz = c.drive.sample_rate_hz;
-    s.role = c.training ? master::CaseRole::kTrain : master::CaseRole::kTest;
+    s.role = c.training ? job::CaseRole::kTrain : job::CaseRole::kTest;
     s.angle_deg = c.measured_deg;
     d.cases.push_back(std::move(s));
     d.cycles.push_back(c.drive.cycles);
@@ -164,42 +164,42 @@ master::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness) {
   return d;
 }
 
-master::JobSpec DiagnoseJobSpec(const DiagnosisFitness& fitness, const std::string& name) {
-  master::JobSpec spec;
+job::JobSpec DiagnoseJobSpec(const DiagnosisFitness& fitness, const std::string& name) {
+  job::JobSpec spec;
   spec.name = name.substr(0, 200);
   spec.seed = 0;
   spec.problem = DiagnoseProblemOf(fitness);
-  spec.limits.penalty_cost = master::kDefaultErrorCost;
+  spec.limits.penalty_cost = opt::kDefaultErrorCost;
   return spec;
 }
 
-master::JobKind DiagnoseJobKind() {
-  master::JobKind k;
+job::JobKind DiagnoseJobKind() {
+  job::JobKind k;
   k.name = "diagnose";
-  k.validate = [](const master::JobSpec& s) { return Validate(s); };
-  k.layout = [](const master::JobSpec& s, master::GenomeLayout* l) {
+  k.validate = [](const job::JobSpec& s) { return Validate(s); };
+  k.layout = [](const job::JobSpec& s, job::GenomeLayout* l) {
     std::vector<FieldViolation> v;
-    const auto kinds = Structure(std::get<master::DiagnoseProblem>(s.problem), &v);
+    const auto kinds = Structure(std::get<job::DiagnoseProblem>(s.problem), &v);
     if (!v.empty()) return InvalidArgument(v.front().description);
     l->bits = 0;
     l->reals = ParameterLayout(kinds).size();
     return Status::Ok();
   };
-  k.make_fitness = [](const master::JobSpec& s, std::unique_ptr<master::FitnessFunction>* f) {
+  k.make_fitness = [](const job::JobSpec& s, std::unique_ptr<opt::FitnessFunction>* f) {
     const std::vector<FieldViolation> v = Validate(s);
     if (!v.empty()) return InvalidArgument(v.front().description);
-    const auto& d = std::get<master::DiagnoseProblem>(s.problem);
+    const auto& d = std::get<job::DiagnoseProblem>(s.problem);
     std::vector<FieldViolation> ignored;
     try {
       std::vector<DiagCase> cases;
       for (size_t i = 0; i < d.cases.size(); ++i) {
-        const master::HgannCaseSpec& c = d.cases[i];
+        const job::HgannCaseSpec& c = d.cases[i];
         model::Sinusoid drive;
         drive.amplitude_v = c.amplitude_v;
         drive.frequency_hz = c.frequency_hz;
         drive.sample_rate_hz = c.sample_rate_hz;
         drive.cycles = d.cycles[i];
-        cases.push_back(MakeCase(c.number, drive, c.angle_deg, c.role == master::CaseRole::kTrain));
+        cases.push_back(MakeCase(c.number, drive, c.angle_deg, c.role == job::CaseRole::kTrain));
       }
       auto model = std::make_unique<DiagnosisModel>(DefaultPlant(), std::move(cases), SimOptions(d));
       *f = std::make_unique<OwningFitness>(std::move(model), ParameterLayout(Structure(d, &ignored)), d.residuals);
@@ -208,15 +208,14 @@ master::JobKind DiagnoseJobKind() {
     }
     return Status::Ok();
   };
-  k.describe = [](const master::JobSpec& s, const master::Genome& g) {
+  k.describe = [](const job::JobSpec& s, const opt::Genome& g) {
     std::vector<FieldViolation> ignored;
-    const ParameterLayout layout(Structure(std::get<master::DiagnoseProblem>(s.problem), &ignored));
+    const ParameterLayout layout(Structure(std::get<job::DiagnoseProblem>(s.problem), &ignored));
     if (g.reals.size() != static_cast<size_t>(layout.size())) return std::string();
     return layout.Describe();
   };
   return k;
 }
 
-void RegisterDiagnoseJobKind(master::JobKindRegistry& registry) { registry.Register(DiagnoseJobKind()); }
 
 }  // namespace pz::diagnose

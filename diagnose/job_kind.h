@@ -8,21 +8,19 @@
 #pragma once
 
 #include "diagnose/problem.h"
-#include "master/job_kinds.h"
-#include "master/job_spec.h"
+#include "job/job_kind.h"
+#include "job/job_spec.h"
 
 namespace pz::diagnose {
 
 /// The spec's problem for `fitness` (its model's cases, its layout and residual mode). The model
 /// must run on the bench's default beam (the kind builds that plant).
-master::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness);
+job::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness);
 
 /// A whole session spec for `fitness` (algorithm set by the caller; seed 0; errors and quarantined
-/// individuals cost master::kDefaultErrorCost, as in the local evaluators).
-master::JobSpec DiagnoseJobSpec(const DiagnosisFitness& fitness, const std::string& name);
+/// individuals cost opt::kDefaultErrorCost, as in the local evaluators).
+job::JobSpec DiagnoseJobSpec(const DiagnosisFitness& fitness, const std::string& name);
 
-master::JobKind DiagnoseJobKind();
-/// Registers the kind (replacing one of the same name).
-void RegisterDiagnoseJobKind(master::JobKindRegistry& registry);
+job::JobKind DiagnoseJobKind();
 
 }  // namespace pz::diagnose

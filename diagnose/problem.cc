@@ -260,11 +260,11 @@ DiagnosisFitness::DiagnosisFitness(const DiagnosisModel& model, ParameterLayout 
   }
 }
 
-master::FitnessResult DiagnosisFitness::Evaluate(const master::Genome& genome) const {
-  master::FitnessResult r;
+opt::FitnessResult DiagnosisFitness::Evaluate(const opt::Genome& genome) const {
+  opt::FitnessResult r;
   if (genome.reals.size() != static_cast<size_t>(layout_.size())) {
     r.cost = penalty_;
-    r.status = master::FitnessStatus::kError;
+    r.status = opt::FitnessStatus::kError;
     r.reason = "genome has " + std::to_string(genome.reals.size()) + " reals, expected " +
                std::to_string(layout_.size());
     return r;
@@ -272,7 +272,7 @@ master::FitnessResult DiagnosisFitness::Evaluate(const master::Genome& genome) c
   for (double v : genome.reals) {
     if (!std::isfinite(v)) {
       r.cost = penalty_;
-      r.status = master::FitnessStatus::kError;
+      r.status = opt::FitnessStatus::kError;
       r.reason = "non-finite gene";
       return r;
     }
@@ -281,7 +281,7 @@ master::FitnessResult DiagnosisFitness::Evaluate(const master::Genome& genome) c
   thread_local std::vector<double> res;
   if (!model_.Residuals(layout_, x, true, res)) {
     r.cost = penalty_;
-    r.status = master::FitnessStatus::kPenalized;
+    r.status = opt::FitnessStatus::kPenalized;
     r.reason = "simulation failed";
     return r;
   }

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "master/evaluator.h"
+#include "opt/evaluator.h"
 #include "model/bimorph.h"
 #include "model/effects.h"
 #include "model/noise_floor.h"
@@ -120,10 +120,10 @@ class DiagnosisModel {
 /// genome or failed simulation gets the finite penalty_cost() with status kPenalized. With
 /// `residuals`, an evaluable genome's result also carries the training residual vector (what
 /// Levenberg–Marquardt needs: DiagnosisModel::Residuals at FromUnit(genome.reals)).
-class DiagnosisFitness final : public master::FitnessFunction {
+class DiagnosisFitness final : public opt::FitnessFunction {
  public:
   DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout, bool residuals = false);
-  master::FitnessResult Evaluate(const master::Genome& genome) const override;
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
   const DiagnosisModel& model() const { return model_; }
   const ParameterLayout& layout() const { return layout_; }
   bool residuals() const { return residuals_; }

@@ -12,15 +12,15 @@ namespace {
 using model::Effect;
 using model::EffectKind;
 
-double Uniform(master::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
-double LogUniform(master::Rng& rng, double lo, double hi) {
+double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
+double LogUniform(opt::Rng& rng, double lo, double hi) {
   return lo * std::exp(std::log(hi / lo) * rng.Uniform01());
 }
-double Normal(master::Rng& rng) {  // Box–Muller on the portable generator
+double Normal(opt::Rng& rng) {  // Box–Muller on the portable generator
   const double u1 = std::max(rng.Uniform01(), 1e-300), u2 = rng.Uniform01();
   return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
 }
-double Sign(master::Rng& rng) { return rng.Uniform01() < 0.5 ? -1.0 : 1.0; }
+double Sign(opt::Rng& rng) { return rng.Uniform01() < 0.5 ? -1.0 : 1.0; }
 
 // The paper's nine cases (V, f) and split (training 1, 5, 6, 7).
 struct CaseDef {
@@ -45,7 +45,7 @@ std::string SyntheticTrial::Describe() const {
 std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
                                     const std::vector<Effect>& effects,
                                     const std::vector<std::pair<double, double>>& saturations,
-                                    const SyntheticOptions& o, master::Rng& rng) {
+                                    const SyntheticOptions& o, opt::Rng& rng) {
   const model::EffectSimulator sim(plant);
   std::vector<DiagCase> cases;
   for (int c = 0; c < 9; ++c) {
@@ -66,7 +66,7 @@ std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const mode
 }
 
 SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t seed, const SyntheticOptions& o) {
-  master::Rng rng(seed);
+  opt::Rng rng(seed);
   SyntheticTrial t;
   t.seed = seed;
   // The bench plant, around the physical bench's values.

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "diagnose/problem.h"
-#include "master/random.h"
+#include "opt/random.h"
 
 namespace pz::diagnose {
 
@@ -46,6 +46,6 @@ SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t see
 std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
                                     const std::vector<model::Effect>& effects,
                                     const std::vector<std::pair<double, double>>& saturations,
-                                    const SyntheticOptions& options, master::Rng& rng);
+                                    const SyntheticOptions& options, opt::Rng& rng);
 
 }  // namespace pz::diagnose

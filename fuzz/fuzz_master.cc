@@ -18,9 +18,10 @@
 
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
-#include "master/job_kinds.h"
-#include "master/security.h"
-#include "master/wire_codec.h"
+#include "job/job_kind.h"
+#include "service/security.h"
+#include "service/wire_codec.h"
+#include "kinds/kinds.h"
 
 namespace {
 
@@ -32,7 +33,7 @@ using namespace pz::master;
 }
 
 void Validate(const JobSpec& spec) {
-  const auto violations = JobKindRegistry::Default().Validate(spec);
+  const auto violations = kinds::All().Validate(spec);
   for (const auto& v : violations)
     if (v.description.empty()) Fail("a violation without a description");
   // A spec that validates must encode to bytes that decode to the same encoding (the master
@@ -54,8 +55,6 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
   google::protobuf::SetLogHandler(nullptr);
   // The kinds piezoid-master and piezoid-worker register besides the built-in ones, so their
   // validation is fuzzed too.
-  pz::diagnose::RegisterDiagnoseJobKind(JobKindRegistry::Default());
-  pz::complete::RegisterCompleteModelJobKind(JobKindRegistry::Default());
   return 0;
 }
 

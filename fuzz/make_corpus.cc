@@ -6,8 +6,8 @@
 #include <fstream>
 #include <string>
 
-#include "master/security.h"
-#include "master/wire_codec.h"
+#include "service/security.h"
+#include "service/wire_codec.h"
 
 using namespace pz::master;
 

@@ -11,10 +11,36 @@
 #include <zmq.hpp>
 
 #include "master/job_store.h"
-#include "master/liveness.h"
-#include "master/wire_codec.h"
+#include "service/liveness.h"
+#include "service/wire_codec.h"
 
 namespace pz::master {
+
+using job::JobLimits;
+using opt::EvalBatch;
+using opt::FitnessResult;
+using opt::FitnessStatus;
+using opt::Genome;
+using service::BatchResultMsg;
+using service::ClientReplyMsg;
+using service::ClientRequestMsg;
+using service::Clock;
+using service::ContentHash;
+using service::DecodeClientRequest;
+using service::DecodeFailureCode;
+using service::DecodeWorkerToMaster;
+using service::EncodeClientReply;
+using service::EncodeMasterToWorker;
+using service::IsFinal;
+using service::IsTransient;
+using service::JobEvent;
+using service::PeerLiveness;
+using service::TimePoint;
+using service::WireCode;
+using service::WorkerMsg;
+using service::ZapHandler;
+using service::kZapDomainClients;
+using service::kZapDomainWorkers;
 namespace {
 
 struct Command {

@@ -26,9 +26,9 @@
 #include <vector>
 
 #include "master/dispatcher.h"
-#include "master/evaluator.h"
-#include "master/security.h"
-#include "master/service_types.h"
+#include "opt/evaluator.h"
+#include "service/security.h"
+#include "service/service_types.h"
 #include "model/status.h"
 
 namespace pz::master {
@@ -42,7 +42,7 @@ struct BrokerOptions {
   int max_watchers_per_job = 64;
   int64_t max_spec_bytes = 16 << 20;       ///< serialised job spec (with its data) at most
   int max_jobs_per_client = 16;            ///< running jobs submitted by one client identity
-  std::optional<CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
+  std::optional<service::CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
   DispatchOptions dispatch;
 };
 
@@ -50,7 +50,7 @@ struct BrokerOptions {
 class ClientHandler {
  public:
   virtual ~ClientHandler() = default;
-  virtual ClientReplyMsg Handle(const ClientRequestMsg& request) = 0;
+  virtual service::ClientReplyMsg Handle(const service::ClientRequestMsg& request) = 0;
 };
 
 /// One generation handed to the broker; completed by the broker thread.
@@ -60,8 +60,8 @@ struct EvalTicket {
   bool finished = false;
   bool interrupted = false;  ///< cancelled or shut down: results are meaningless
   std::string error;         ///< a worker's deterministic error: the job must fail
-  std::vector<FitnessResult> results;
-  std::vector<QuarantineRecord> quarantined;
+  std::vector<opt::FitnessResult> results;
+  std::vector<service::QuarantineRecord> quarantined;
 };
 
 struct BrokerStats {
@@ -88,13 +88,13 @@ class Broker {
 
   // Thread-safe, for job threads.
   void RegisterJob(const std::string& job_id, const std::string& spec_bytes,
-                   const JobLimits& limits);
+                   const job::JobLimits& limits);
   /// Forgets the job and interrupts its outstanding ticket (cancel).
   void UnregisterJob(const std::string& job_id);
   std::shared_ptr<EvalTicket> Submit(const std::string& job_id, uint64_t generation,
-                                     std::span<const Genome> genomes,
+                                     std::span<const opt::Genome> genomes,
                                      std::span<const int> indices);
-  void Publish(const JobEvent& event);
+  void Publish(const service::JobEvent& event);
   BrokerStats stats() const;
 
  private:
@@ -104,23 +104,23 @@ class Broker {
 };
 
 /// The broker-backed BatchEvaluator of one job (blocks until the generation is evaluated).
-class BrokerEvaluator final : public BatchEvaluator {
+class BrokerEvaluator final : public opt::BatchEvaluator {
  public:
   BrokerEvaluator(Broker& broker, std::string job_id)
       : broker_(broker), job_id_(std::move(job_id)) {}
-  void Evaluate(const EvalBatch& batch, std::span<FitnessResult> out) override;
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override;
   int concurrency() const override;
   /// The last Evaluate was interrupted (cancel / shutdown) or failed (error() non-empty).
   bool interrupted() const { return interrupted_; }
   const std::string& error() const { return error_; }
-  std::vector<QuarantineRecord> TakeQuarantined() { return std::move(quarantined_); }
+  std::vector<service::QuarantineRecord> TakeQuarantined() { return std::move(quarantined_); }
 
  private:
   Broker& broker_;
   std::string job_id_;
   bool interrupted_ = false;
   std::string error_;
-  std::vector<QuarantineRecord> quarantined_;
+  std::vector<service::QuarantineRecord> quarantined_;
 };
 
 }  // namespace pz::master

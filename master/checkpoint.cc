@@ -9,9 +9,13 @@
 #include <cstring>
 #include <fstream>
 
-#include "master/wire_codec.h"
+#include "service/wire_codec.h"
 
 namespace pz::master {
+
+using service::DecodeCheckpoint;
+using service::EncodeCheckpoint;
+using service::JobCheckpoint;
 namespace fs = std::filesystem;
 namespace {
 

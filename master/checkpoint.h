@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "master/service_types.h"
+#include "service/service_types.h"
 #include "model/status.h"
 
 namespace pz::master {
@@ -29,9 +29,9 @@ class JobDirectory {
   Status SaveSpec(const std::string& job_id, std::string_view spec_bytes) const;
   Status LoadSpec(const std::string& job_id, std::string* spec_bytes) const;
   /// durable: fsync file and directory (see the file comment).
-  Status SaveCheckpoint(const JobCheckpoint& c, bool durable = true) const;
+  Status SaveCheckpoint(const service::JobCheckpoint& c, bool durable = true) const;
   /// NotFound when the job has no checkpoint yet.
-  Status LoadCheckpoint(const std::string& job_id, JobCheckpoint* c) const;
+  Status LoadCheckpoint(const std::string& job_id, service::JobCheckpoint* c) const;
 
  private:
   std::filesystem::path root_;

@@ -5,6 +5,9 @@
 
 namespace pz::master {
 
+using service::Duration;
+using service::TimePoint;
+
 Dispatcher::Dispatcher(DispatchOptions options, uint64_t first_lease_id)
     : options_(options), next_lease_id_(first_lease_id) {
   options_.max_batch = std::max(1, options_.max_batch);

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "master/liveness.h"
+#include "service/liveness.h"
 
 namespace pz::master {
 
@@ -39,7 +39,7 @@ struct Lease {
   std::string job_id;
   uint64_t generation = 0;
   std::vector<int> positions;
-  TimePoint granted{}, deadline{};
+  service::TimePoint granted{}, deadline{};
 };
 
 /// A task quarantined by Requeue.
@@ -75,15 +75,15 @@ class Dispatcher {
 
   // ---- leases
   /// The next lease to send, or nullopt when no worker has room or no task is pending.
-  std::optional<Lease> NextLease(TimePoint now);
+  std::optional<Lease> NextLease(service::TimePoint now);
   /// Completes a lease held by `worker`; nullopt if it is not (ignored result). Updates the
   /// worker's speed estimate from the summed evaluation time of its tasks.
   std::optional<Lease> Complete(const std::string& worker, uint64_t lease_id, double eval_seconds);
   /// Re-queues the tasks of a lease that are not done (a strike each when `strike`).
   std::vector<Quarantined> Requeue(const Lease& lease, bool strike);
   /// Takes the leases whose deadline has passed, re-queues them with a strike.
-  std::vector<Quarantined> ExpireLeases(TimePoint now);
-  TimePoint NextDeadline() const;
+  std::vector<Quarantined> ExpireLeases(service::TimePoint now);
+  service::TimePoint NextDeadline() const;
   size_t leases_outstanding() const { return leases_.size(); }
 
   /// Measured time of one evaluation on one thread of the worker [s] (< 0 when unknown).

@@ -3,9 +3,27 @@
 #include <algorithm>
 #include <chrono>
 
-#include "master/inline_evaluator.h"
+#include "opt/inline_evaluator.h"
 
 namespace pz::master {
+
+using job::GaSettings;
+using job::GenomeLayout;
+using job::JobKind;
+using job::JobKindRegistry;
+using job::JobSpec;
+using opt::BatchEvaluator;
+using opt::FitnessFunction;
+using opt::GaOptions;
+using opt::GaState;
+using opt::GaTerminationName;
+using opt::GenerationSummary;
+using opt::GeneticAlgorithm;
+using opt::Genome;
+using opt::InlineEvaluator;
+using service::GenerationRecord;
+using service::JobCheckpoint;
+using service::JobState;
 
 GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   GaOptions o;

@@ -6,10 +6,10 @@
 #include <memory>
 #include <string>
 
-#include "master/evaluator.h"
-#include "master/ga.h"
-#include "master/job_kinds.h"
-#include "master/service_types.h"
+#include "opt/evaluator.h"
+#include "opt/ga.h"
+#include "job/job_kind.h"
+#include "service/service_types.h"
 
 namespace pz::master {
 
@@ -17,40 +17,40 @@ inline constexpr int kBestKept = 32;  ///< best individuals stored in each check
 
 /// The GA options of a job: its GaSettings plus genome length (from the kind), seed, target and
 /// penalty cost (from the limits).
-GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout);
+opt::GaOptions ToGaOptions(const job::JobSpec& spec, const job::GenomeLayout& layout);
 
 class JobRunner {
  public:
-  JobRunner(std::string job_id, JobSpec spec);
+  JobRunner(std::string job_id, job::JobSpec spec);
   ~JobRunner();
   /// Builds the GA; with `resume`, continues from that checkpoint.
-  Status Init(const JobKindRegistry& kinds, const JobCheckpoint* resume = nullptr);
+  Status Init(const job::JobKindRegistry& kinds, const service::JobCheckpoint* resume = nullptr);
   /// True once the GA's stopping rule holds.
   bool Done() const;
   /// Runs one generation (the first evaluates the initial population) through `evaluator` and
   /// folds it into the checkpoint. If the evaluator was interrupted (cancel, shutdown), the
   /// caller must discard the runner.
-  const GenerationRecord& Step(BatchEvaluator& evaluator);
-  const JobCheckpoint& checkpoint() const { return checkpoint_; }
-  JobCheckpoint& mutable_checkpoint() { return checkpoint_; }
-  const JobSpec& spec() const { return spec_; }
+  const service::GenerationRecord& Step(opt::BatchEvaluator& evaluator);
+  const service::JobCheckpoint& checkpoint() const { return checkpoint_; }
+  service::JobCheckpoint& mutable_checkpoint() { return checkpoint_; }
+  const job::JobSpec& spec() const { return spec_; }
 
  private:
-  class Forward final : public BatchEvaluator {
+  class Forward final : public opt::BatchEvaluator {
    public:
-    BatchEvaluator* target = nullptr;
-    void Evaluate(const EvalBatch& b, std::span<FitnessResult> out) override {
+    opt::BatchEvaluator* target = nullptr;
+    void Evaluate(const opt::EvalBatch& b, std::span<opt::FitnessResult> out) override {
       target->Evaluate(b, out);
     }
   };
-  JobSpec spec_;
+  job::JobSpec spec_;
   Forward forward_;
-  std::unique_ptr<GeneticAlgorithm> ga_;
-  JobCheckpoint checkpoint_;
+  std::unique_ptr<opt::GeneticAlgorithm> ga_;
+  service::JobCheckpoint checkpoint_;
 };
 
 /// Runs a whole job in this process (the reference for the service's determinism tests).
-Status RunJobInProcess(const std::string& job_id, const JobSpec& spec,
-                       const JobKindRegistry& kinds, JobCheckpoint* out);
+Status RunJobInProcess(const std::string& job_id, const job::JobSpec& spec,
+                       const job::JobKindRegistry& kinds, service::JobCheckpoint* out);
 
 }  // namespace pz::master

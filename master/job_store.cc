@@ -5,9 +5,26 @@
 #include <chrono>
 
 #include "master/job_runner.h"
-#include "master/wire_codec.h"
+#include "service/wire_codec.h"
 
 namespace pz::master {
+
+using job::FieldViolation;
+using job::GenomeLayout;
+using job::JobKindRegistry;
+using opt::FitnessResult;
+using opt::Genome;
+using service::ClientReplyMsg;
+using service::ClientRequestMsg;
+using service::ContentHash;
+using service::DecodeJobSpec;
+using service::GenerationRecord;
+using service::IsFinal;
+using service::JobCheckpoint;
+using service::JobInfo;
+using service::JobState;
+using service::JobStateName;
+using service::WireCode;
 
 JobStore::JobStore(JobStoreOptions options, Broker& broker, const JobKindRegistry& kinds)
     : options_(std::move(options)), broker_(broker), kinds_(kinds), dir_(options_.state_dir) {}

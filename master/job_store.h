@@ -13,7 +13,7 @@
 
 #include "master/broker.h"
 #include "master/checkpoint.h"
-#include "master/job_kinds.h"
+#include "job/job_kind.h"
 #include "master/session.h"
 
 namespace pz::master {
@@ -31,12 +31,12 @@ struct JobStoreOptions {
 
 class JobStore final : public ClientHandler {
  public:
-  JobStore(JobStoreOptions options, Broker& broker, const JobKindRegistry& kinds);
+  JobStore(JobStoreOptions options, Broker& broker, const job::JobKindRegistry& kinds);
   ~JobStore() override;
 
   /// Loads every stored job and restarts the unfinished ones from their last checkpoint.
   Status Resume();
-  ClientReplyMsg Handle(const ClientRequestMsg& request) override;
+  service::ClientReplyMsg Handle(const service::ClientRequestMsg& request) override;
   /// Stops the broker and every job thread without changing any job's stored state.
   void Shutdown();
 
@@ -46,9 +46,9 @@ class JobStore final : public ClientHandler {
  private:
   struct Job {
     std::string id, spec_bytes;
-    JobSpec spec;
+    job::JobSpec spec;
     std::mutex mu;
-    JobCheckpoint checkpoint;  // the last saved one
+    service::JobCheckpoint checkpoint;  // the last saved one
     std::atomic<bool> cancel{false}, shutdown{false};
     std::thread thread;
     std::shared_ptr<Session> session;  // external jobs (evaluation sessions) only
@@ -57,12 +57,12 @@ class JobStore final : public ClientHandler {
   void Run(Job& job);
   void RunSession(Job& job);  // the job thread of an evaluation session
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
-  void Save(Job& job, const JobCheckpoint& c, bool write = true, bool durable = true);
-  JobInfo Info(Job& job);
+  void Save(Job& job, const service::JobCheckpoint& c, bool write = true, bool durable = true);
+  service::JobInfo Info(Job& job);
 
   JobStoreOptions options_;
   Broker& broker_;
-  const JobKindRegistry& kinds_;
+  const job::JobKindRegistry& kinds_;
   JobDirectory dir_;
   std::mutex mu_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;

@@ -16,6 +16,7 @@
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "master/job_store.h"
+#include "kinds/kinds.h"
 
 namespace {
 volatile std::sig_atomic_t g_stop = 0;
@@ -117,8 +118,8 @@ int main(int argc, char** argv) {
       spdlog::critical("--curve-secret needs --allow-workers DIR and --allow-clients DIR (the allowed public keys)");
       return 2;
     }
-    pz::master::CurveServerConfig curve;
-    if (pz::Status s = pz::master::LoadCurveSecretFile(curve_secret, &curve.keys); !s.ok()) {
+    pz::service::CurveServerConfig curve;
+    if (pz::Status s = pz::service::LoadCurveSecretFile(curve_secret, &curve.keys); !s.ok()) {
       spdlog::critical("--curve-secret: {}", s.message());
       return 2;
     }
@@ -127,7 +128,7 @@ int main(int argc, char** argv) {
     broker.curve = std::move(curve);
   } else {
     for (const std::string* ep : {&broker.worker_endpoint, &broker.client_endpoint})
-      if (!pz::master::IsLoopbackEndpoint(*ep))
+      if (!pz::service::IsLoopbackEndpoint(*ep))
         spdlog::warn("{} is reachable from other hosts and CURVE is off: anyone who can connect may {}; "
                      "start with --curve-secret, --allow-workers and --allow-clients (see docs/service.md, Security)",
                      *ep, ep == &broker.worker_endpoint ? "join as a worker and see job specs" : "submit, fetch and cancel jobs");
@@ -144,9 +145,7 @@ int main(int argc, char** argv) {
   std::signal(SIGPIPE, SIG_IGN);
 
   pz::master::Broker b(broker);
-  pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
-  pz::complete::RegisterCompleteModelJobKind(pz::master::JobKindRegistry::Default());
-  pz::master::JobStore jobs(store, b, pz::master::JobKindRegistry::Default());
+  pz::master::JobStore jobs(store, b, pz::kinds::All());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {
     spdlog::critical("{}", s.message());
     return 1;

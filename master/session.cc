@@ -7,6 +7,19 @@
 
 namespace pz::master {
 
+using job::ExternalSettings;
+using job::GenomeLayout;
+using opt::BatchEvaluator;
+using opt::FitnessResult;
+using opt::FitnessStatus;
+using opt::Genome;
+using service::ClientReplyMsg;
+using service::ClientRequestMsg;
+using service::GenerationRecord;
+using service::JobCheckpoint;
+using service::ScoredGenome;
+using service::WireCode;
+
 Session::Session(std::string job_id, ExternalSettings settings, GenomeLayout layout, std::string kind)
     : job_id_(std::move(job_id)),
       settings_(std::move(settings)),

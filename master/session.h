@@ -24,9 +24,9 @@
 #include <string>
 #include <vector>
 
-#include "master/evaluator.h"
-#include "master/job_kinds.h"
-#include "master/service_types.h"
+#include "opt/evaluator.h"
+#include "job/job_kind.h"
+#include "service/service_types.h"
 
 namespace pz::master {
 
@@ -35,10 +35,10 @@ inline constexpr int kSessionBatchesHeld = 4;     ///< completed batches kept fo
 
 class Session {
  public:
-  Session(std::string job_id, ExternalSettings settings, GenomeLayout layout, std::string kind);
+  Session(std::string job_id, job::ExternalSettings settings, job::GenomeLayout layout, std::string kind);
 
   /// An evaluate request (submit or poll): the reply (type kEvaluate, or an error code).
-  ClientReplyMsg Evaluate(const ClientRequestMsg& request);
+  service::ClientReplyMsg Evaluate(const service::ClientRequestMsg& request);
   /// The client ends the session (it will succeed).
   void Close();
   /// Any request of the client keeps the session alive.
@@ -49,21 +49,21 @@ class Session {
   /// idle too long, or stop() / an interrupted evaluation ends it. After each batch, on_batch gets
   /// its genomes and results (the broker generation is `evaluations so far`-independent: numbered
   /// first_generation, first_generation + 1, …). `stop` is polled at least every 100 ms.
-  End Run(BatchEvaluator& evaluator, uint64_t first_generation, const std::function<bool()>& stop,
-          const std::function<bool(uint64_t batch_seq, std::span<const Genome>, std::span<const FitnessResult>)>&
+  End Run(opt::BatchEvaluator& evaluator, uint64_t first_generation, const std::function<bool()>& stop,
+          const std::function<bool(uint64_t batch_seq, std::span<const opt::Genome>, std::span<const opt::FitnessResult>)>&
               on_batch);
 
  private:
   struct Batch {
-    std::vector<Genome> genomes;
-    std::vector<FitnessResult> results;
+    std::vector<opt::Genome> genomes;
+    std::vector<opt::FitnessResult> results;
     bool done = false;
   };
-  ClientReplyMsg Error(const ClientRequestMsg& req, WireCode code, std::string message) const;
+  service::ClientReplyMsg Error(const service::ClientRequestMsg& req, service::WireCode code, std::string message) const;
 
   const std::string job_id_;
-  const ExternalSettings settings_;
-  const GenomeLayout layout_;
+  const job::ExternalSettings settings_;
+  const job::GenomeLayout layout_;
   const std::string kind_;
   std::mutex mu_;
   std::condition_variable cv_;
@@ -76,7 +76,7 @@ class Session {
 /// Folds one evaluated batch into a session's checkpoint: a GenerationRecord (generation = the
 /// number of batches so far, evaluated, best / mean / worst cost, errors, failure reasons), the
 /// evaluation count, and the best individuals seen (at most kBestKept, without residuals).
-const GenerationRecord& FoldSessionBatch(JobCheckpoint& checkpoint, std::span<const Genome> genomes,
-                                         std::span<const FitnessResult> results, double wall_time_s);
+const service::GenerationRecord& FoldSessionBatch(service::JobCheckpoint& checkpoint, std::span<const opt::Genome> genomes,
+                                         std::span<const opt::FitnessResult> results, double wall_time_s);
 
 }  // namespace pz::master

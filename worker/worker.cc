@@ -14,27 +14,27 @@
 #include <unordered_map>
 #include <zmq.hpp>
 
-#include "master/inline_evaluator.h"
-#include "master/liveness.h"
-#include "master/wire_codec.h"
+#include "opt/inline_evaluator.h"
+#include "service/liveness.h"
+#include "service/wire_codec.h"
 
 namespace pz::worker {
 namespace {
 
-using master::Clock;
-using master::TimePoint;
-using master::WireCode;
-using master::WorkerMsg;
+using service::Clock;
+using service::TimePoint;
+using service::WireCode;
+using service::WorkerMsg;
 
 struct Context {
-  master::JobSpec spec;
-  std::unique_ptr<master::FitnessFunction> fitness;
+  job::JobSpec spec;
+  std::unique_ptr<opt::FitnessFunction> fitness;
 };
 
 struct LocalLease {
-  master::TaskBatchMsg batch;
+  service::TaskBatchMsg batch;
   std::shared_ptr<const Context> context;
-  std::vector<master::FitnessResult> results;
+  std::vector<opt::FitnessResult> results;
   int next = 0;         // next task not yet handed to a thread
   int remaining = 0;    // tasks not yet evaluated
   int in_progress = 0;  // chunks out at threads
@@ -71,7 +71,7 @@ void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
     const double penalty = c.lease->context->spec.limits.penalty_cost;
     for (int i = c.begin; i < c.end; ++i) {
       const auto t0 = Clock::now();
-      c.lease->results[i] = master::EvaluateGuarded(f, c.lease->batch.genomes[i], penalty);
+      c.lease->results[i] = opt::EvaluateGuarded(f, c.lease->batch.genomes[i], penalty);
       out.eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
     }
     s.send(zmq::buffer(&out, sizeof out));
@@ -81,7 +81,7 @@ void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
 }  // namespace
 
 struct Worker::Impl {
-  Impl(WorkerOptions o, const master::JobKindRegistry& k)
+  Impl(WorkerOptions o, const job::JobKindRegistry& k)
       : options(std::move(o)),
         kinds(k),
         inproc(ctx, zmq::socket_type::router),
@@ -90,11 +90,11 @@ struct Worker::Impl {
                 std::chrono::milliseconds(options.backoff_max_ms)) {}
 
   WorkerOptions options;
-  const master::JobKindRegistry& kinds;
+  const job::JobKindRegistry& kinds;
   zmq::context_t ctx{1};
   zmq::socket_t inproc;
   std::unique_ptr<zmq::socket_t> master;
-  std::unique_ptr<master::HandshakeMonitor> monitor;  // of `master`
+  std::unique_ptr<service::HandshakeMonitor> monitor;  // of `master`
   std::string last_handshake_error;
   std::string inproc_endpoint;
   std::vector<std::thread> threads;
@@ -103,12 +103,12 @@ struct Worker::Impl {
   std::deque<LocalLease*> ready;  // leases with tasks not yet handed out
   std::map<std::string, std::vector<std::unique_ptr<LocalLease>>> parked;  // by context hash
   std::list<std::pair<std::string, std::shared_ptr<const Context>>> contexts;  // LRU, front = newest
-  master::ServerLiveness server;
-  master::Backoff backoff;
+  service::ServerLiveness server;
+  service::Backoff backoff;
   WorkerStats stats;
 
   void Send(const WorkerMsg& m) {
-    const std::string payload = master::EncodeWorkerToMaster(m);
+    const std::string payload = service::EncodeWorkerToMaster(m);
     master->send(zmq::buffer(payload), zmq::send_flags::dontwait);
   }
 
@@ -118,8 +118,8 @@ struct Worker::Impl {
     master->set(zmq::sockopt::maxmsgsize, options.max_message_bytes);
     master->set(zmq::sockopt::reconnect_ivl, options.backoff_initial_ms);
     master->set(zmq::sockopt::reconnect_ivl_max, options.backoff_max_ms);
-    if (options.curve) master::SetCurveClient(*master, *options.curve, options.master_public);
-    monitor = std::make_unique<master::HandshakeMonitor>(ctx, *master, "worker");
+    if (options.curve) service::SetCurveClient(*master, *options.curve, options.master_public);
+    monitor = std::make_unique<service::HandshakeMonitor>(ctx, *master, "worker");
     master->connect(options.master);
     WorkerMsg ready_msg;
     ready_msg.type = WorkerMsg::Type::kReady;
@@ -202,7 +202,7 @@ struct Worker::Impl {
 
   void OnMaster(std::string_view payload, const std::atomic<bool>& stop) {
     WorkerMsg m;
-    pz::Status s = master::DecodeMasterToWorker(payload, &m);
+    pz::Status s = service::DecodeMasterToWorker(payload, &m);
     if (!s.ok()) {
       spdlog::warn("bad frame from the master ignored: {}", s.message());
       return;
@@ -247,12 +247,12 @@ struct Worker::Impl {
     if (m.code != WireCode::kOk) {
       code = WireCode::kUnavailable;
       error = "context " + m.context_hash + " not available";
-    } else if (master::ContentHash(m.context_spec) != m.context_hash) {
+    } else if (service::ContentHash(m.context_spec) != m.context_hash) {
       code = WireCode::kUnavailable;
       error = "context does not match its hash";
     } else {
-      std::vector<master::FieldViolation> violations;
-      pz::Status s = master::DecodeJobSpec(m.context_spec, &c->spec, &violations);
+      std::vector<job::FieldViolation> violations;
+      pz::Status s = service::DecodeJobSpec(m.context_spec, &c->spec, &violations);
       for (auto& v : kinds.Validate(c->spec)) violations.push_back(v);
       if (s.ok() && violations.empty()) s = kinds.MakeFitness(c->spec, &c->fitness);
       if (!s.ok() || !violations.empty()) {
@@ -402,7 +402,7 @@ struct Worker::Impl {
   }
 };
 
-Worker::Worker(WorkerOptions options, const master::JobKindRegistry& kinds)
+Worker::Worker(WorkerOptions options, const job::JobKindRegistry& kinds)
     : impl_(std::make_unique<Impl>(std::move(options), kinds)) {
   impl_->options.threads = std::clamp(impl_->options.threads, 1, 4096);
 }

@@ -11,8 +11,8 @@
 #include <optional>
 #include <string>
 
-#include "master/job_kinds.h"
-#include "master/security.h"
+#include "job/job_kind.h"
+#include "service/security.h"
 
 namespace pz::worker {
 
@@ -26,7 +26,7 @@ struct WorkerOptions {
   int64_t max_message_bytes = 64 << 20;
   int max_contexts = 8;               ///< job contexts cached
   /// CURVE: this worker's key pair and the master's public key (Z85); plain when unset.
-  std::optional<master::CurveKeyPair> curve;
+  std::optional<service::CurveKeyPair> curve;
   std::string master_public;
 };
 
@@ -37,7 +37,7 @@ struct WorkerStats {
 
 class Worker {
  public:
-  Worker(WorkerOptions options, const master::JobKindRegistry& kinds);
+  Worker(WorkerOptions options, const job::JobKindRegistry& kinds);
   ~Worker();
   /// Serves until `stop` becomes true, then says DISCONNECT and returns.
   WorkerStats Run(const std::atomic<bool>& stop);

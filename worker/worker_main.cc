@@ -8,6 +8,7 @@
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "worker/worker.h"
+#include "kinds/kinds.h"
 
 namespace {
 std::atomic<bool> g_stop{false};
@@ -44,12 +45,12 @@ int main(int argc, char** argv) {
   spdlog::set_level(spdlog::level::from_str(log_level));
   spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ worker %P: %v");
   if (!curve_secret.empty()) {
-    pz::master::CurveKeyPair keys;
-    if (pz::Status s = pz::master::LoadCurveSecretFile(curve_secret, &keys); !s.ok()) {
+    pz::service::CurveKeyPair keys;
+    if (pz::Status s = pz::service::LoadCurveSecretFile(curve_secret, &keys); !s.ok()) {
       spdlog::critical("--curve-secret: {}", s.message());
       return 2;
     }
-    if (pz::Status s = pz::master::LoadCurvePublicFile(master_public, &o.master_public); !s.ok()) {
+    if (pz::Status s = pz::service::LoadCurvePublicFile(master_public, &o.master_public); !s.ok()) {
       spdlog::critical("--master-public: {}", s.message());
       return 2;
     }
@@ -58,9 +59,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
-  pz::diagnose::RegisterDiagnoseJobKind(pz::master::JobKindRegistry::Default());
-  pz::complete::RegisterCompleteModelJobKind(pz::master::JobKindRegistry::Default());
-  pz::worker::Worker w(o, pz::master::JobKindRegistry::Default());
+  pz::worker::Worker w(o, pz::kinds::All());
   spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);
   spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,

@@ -156,18 +156,18 @@ TEST(StackFitnessTest, CostsAndReasons) {
   off[3] *= 1.05;
   EXPECT_GT(iae.Cost(off), 10 * at_truth);
   // Genome checks: wrong size is an error; a diverging parameter set is penalised, named.
-  master::Genome g;
+  opt::Genome g;
   g.reals = {1, 2, 3};
   const auto bad = iae.Evaluate(g);
-  EXPECT_EQ(bad.status, master::FitnessStatus::kError);
+  EXPECT_EQ(bad.status, opt::FitnessStatus::kError);
   PZ_EXPECT_HAS(bad.reason, "genome has 3 reals, bouc-wen has 5 parameters");
   g.reals = {3, 1e-5, -10, 0.05, 1000};  // β + γ ≪ 0: h overflows
   const auto div = iae.Evaluate(g);
-  EXPECT_EQ(div.status, master::FitnessStatus::kPenalized);
+  EXPECT_EQ(div.status, opt::FitnessStatus::kPenalized);
   EXPECT_TRUE(std::isfinite(div.cost));
   g.reals = model::ToVector(kBw);
   const auto ok = iae.Evaluate(g);
-  EXPECT_EQ(ok.status, master::FitnessStatus::kOk);
+  EXPECT_EQ(ok.status, opt::FitnessStatus::kOk);
   EXPECT_EQ(ok.cost, at_truth);
   PZ_EXPECT_HAS(InputErrorOf([&] {
                   StackFitness(StackFamily::kBoucWen, low, FitCriterion::kIae, 0.5, 0.6);

@@ -66,7 +66,7 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
     for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   CheckSummary summary;
   for (const bool with_delay : {true, false}) {
-    master::Rng rng(with_delay ? 1 : 2);
+    opt::Rng rng(with_delay ? 1 : 2);
     std::vector<model::Effect> effects;
     if (with_delay) effects = {{EffectKind::kDelay, {0.02}}};
     const DiagnosisModel m(plant, SimulateBench(*plant, p, effects, sat, so, rng));

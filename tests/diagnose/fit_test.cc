@@ -7,10 +7,18 @@
 #include <memory>
 
 #include "diagnose/fit.h"
-#include "master/inline_evaluator.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/inline_evaluator.h"
+#include "opt/thread_pool_evaluator.h"
 
 namespace pz::diagnose {
+
+using opt::DeOptions;
+using opt::DeResult;
+using opt::DifferentialEvolution;
+using opt::LevenbergMarquardt;
+using opt::LmOptions;
+using opt::LmResult;
+using opt::ResidualFunction;
 namespace {
 
 using model::EffectKind;
@@ -73,12 +81,12 @@ TEST(ParameterLayoutTest, ExtendKeepsTheBaseAndStartsNewEffectsAtTheIdentity) {
 }
 
 // Σ (x_i − c_i)² as a fitness over Genome.reals.
-class Sphere final : public master::FitnessFunction {
+class Sphere final : public opt::FitnessFunction {
  public:
-  master::FitnessResult Evaluate(const master::Genome& g) const override {
+  opt::FitnessResult Evaluate(const opt::Genome& g) const override {
     double s = 0;
     for (size_t i = 0; i < g.reals.size(); ++i) s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
-    return {s, master::FitnessStatus::kOk, ""};
+    return {s, opt::FitnessStatus::kOk, ""};
   }
 };
 
@@ -89,8 +97,8 @@ TEST(OptimizeTest, DifferentialEvolutionFindsTheMinimumAndIsTheSameOnAnyEvaluato
   o.generations = 150;
   o.stall_generations = 150;
   o.seed = 7;
-  master::InlineEvaluator inline_ev(f);
-  master::ThreadPoolEvaluator pool(f, 2);
+  opt::InlineEvaluator inline_ev(f);
+  opt::ThreadPoolEvaluator pool(f, 2);
   const DeResult a = DifferentialEvolution(4, o, inline_ev);
   const DeResult b = DifferentialEvolution(4, o, pool);
   EXPECT_LT(a.best_cost, 1e-8);

@@ -10,8 +10,9 @@
 #include "diagnose/diagnose.h"
 #include "diagnose/job_kind.h"
 #include "diagnose/synthetic.h"
-#include "master/inline_evaluator.h"
+#include "opt/inline_evaluator.h"
 #include "tests/service/service_harness.h"
+#include "kinds/kinds.h"
 
 namespace pz::diagnose {
 namespace {
@@ -25,7 +26,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
     for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
-  master::Rng rng(3);
+  opt::Rng rng(3);
   std::vector<model::Effect> effects;
   if (with_delay) effects = {{EffectKind::kDelay, {0.02}}};
   return SimulateBench(plant, p, effects, sat, so, rng);
@@ -43,29 +44,29 @@ TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
   const DiagnosisModel m(plant, SmallBench(true));
   for (const bool residuals : {false, true}) {
     const DiagnosisFitness local(m, ParameterLayout({EffectKind::kDelay, EffectKind::kDriverLowpass}), residuals);
-    const master::JobSpec spec = DiagnoseJobSpec(local, "test");
+    const job::JobSpec spec = DiagnoseJobSpec(local, "test");
     // Through the wire encoding, as a worker gets it.
-    master::JobSpec decoded;
-    ASSERT_TRUE(master::DecodeJobSpec(master::EncodeJobSpec(spec), &decoded).ok());
-    master::JobKindRegistry registry;
-    RegisterDiagnoseJobKind(registry);
-    decoded.external = master::ExternalSettings{};
+    job::JobSpec decoded;
+    ASSERT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded).ok());
+    job::JobKindRegistry registry;
+    registry.Register(DiagnoseJobKind());
+    decoded.external = job::ExternalSettings{};
     EXPECT_TRUE(registry.Validate(decoded).empty());
-    master::GenomeLayout layout;
+    job::GenomeLayout layout;
     ASSERT_TRUE(registry.Layout(decoded, &layout).ok());
     EXPECT_EQ(layout.reals, local.layout().size());
     EXPECT_EQ(layout.bits, 0);
-    std::unique_ptr<master::FitnessFunction> remote;
+    std::unique_ptr<opt::FitnessFunction> remote;
     ASSERT_TRUE(registry.MakeFitness(decoded, &remote).ok());
-    master::Rng rng(5);
+    opt::Rng rng(5);
     for (int k = 0; k < 3; ++k) {
-      master::Genome g;
+      opt::Genome g;
       for (int i = 0; i < layout.reals; ++i) g.reals.push_back(rng.Uniform01());
       if (k == 0) g.reals[7] = 0;  // the delay at zero
-      const master::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
+      const opt::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
       EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
       EXPECT_EQ(a.status, b.status);
-      EXPECT_EQ(a.residuals.empty(), !residuals || a.status != master::FitnessStatus::kOk);
+      EXPECT_EQ(a.residuals.empty(), !residuals || a.status != opt::FitnessStatus::kOk);
       ExpectSameVector(a.residuals, b.residuals, "residuals");
     }
   }
@@ -75,41 +76,40 @@ TEST(DiagnoseJobKindTest, BadSpecsAreRefusedFieldByField) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(false));
   const DiagnosisFitness f(m, ParameterLayout({EffectKind::kCreep}));
-  master::JobKindRegistry registry;
-  RegisterDiagnoseJobKind(registry);
-  auto violations = [&](const master::JobSpec& s) {
+  job::JobKindRegistry registry;
+  registry.Register(DiagnoseJobKind());
+  auto violations = [&](const job::JobSpec& s) {
     std::string all;
     for (const auto& v : registry.Validate(s)) all += v.description + "\n";
     return all;
   };
-  master::JobSpec ok = DiagnoseJobSpec(f, "ok");
-  ok.external = master::ExternalSettings{};
+  job::JobSpec ok = DiagnoseJobSpec(f, "ok");
+  ok.external = job::ExternalSettings{};
   EXPECT_EQ(violations(ok), "");
-  master::JobSpec s = ok;
-  auto& d = std::get<master::DiagnoseProblem>(s.problem);
+  job::JobSpec s = ok;
+  auto& d = std::get<job::DiagnoseProblem>(s.problem);
   d.structure = {"creep", "friction-of-the-gods"};
   EXPECT_NE(violations(s).find("diagnose.structure[1] = friction-of-the-gods: not an effect"), std::string::npos)
       << violations(s);
   s = ok;
-  std::get<master::DiagnoseProblem>(s.problem).params[7].upper *= 2;
+  std::get<job::DiagnoseProblem>(s.problem).params[7].upper *= 2;
   EXPECT_NE(violations(s).find("diagnose.params[7] = creep."), std::string::npos) << violations(s);
   s = ok;
-  std::get<master::DiagnoseProblem>(s.problem).cycles[2] = 2.5;
+  std::get<job::DiagnoseProblem>(s.problem).cycles[2] = 2.5;
   EXPECT_NE(violations(s).find("diagnose.cycles[2] = 2.5: gives"), std::string::npos) << violations(s);
   s = ok;
-  std::get<master::DiagnoseProblem>(s.problem).cases[4].angle_deg[3] = NAN;
+  std::get<job::DiagnoseProblem>(s.problem).cases[4].angle_deg[3] = NAN;
   EXPECT_NE(violations(s).find("diagnose.cases[4].angle_deg[3] = nan: must be finite"), std::string::npos)
       << violations(s);
   s = ok;
-  for (auto& c : std::get<master::DiagnoseProblem>(s.problem).cases) c.role = master::CaseRole::kTest;
+  for (auto& c : std::get<job::DiagnoseProblem>(s.problem).cases) c.role = job::CaseRole::kTest;
   EXPECT_NE(violations(s).find("no case with role CASE_ROLE_TRAIN"), std::string::npos) << violations(s);
   s = ok;
-  std::get<master::DiagnoseProblem>(s.problem).rtol = 0.5;
+  std::get<job::DiagnoseProblem>(s.problem).rtol = 0.5;
   EXPECT_NE(violations(s).find("rtol"), std::string::npos) << violations(s);
 }
 
 TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
-  RegisterDiagnoseJobKind(master::JobKindRegistry::Default());
   testing::Cluster cluster("diagnose-service");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
@@ -134,7 +134,7 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   so.client.retries = 3;
   so.batch_timeout_s = 300;
   int sessions = 0;
-  o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<master::BatchEvaluator> {
+  o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     ++sessions;
     return std::make_unique<client::ServiceEvaluator>(so, DiagnoseJobSpec(f, "test " + f.layout().Describe()));
   };
@@ -159,7 +159,7 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   EXPECT_EQ(remote.evaluations, local.evaluations);
   // Every session was closed: all succeeded.
   auto client = cluster.Client();
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
   EXPECT_EQ(jobs.size(), 5u);
   for (const auto& j : jobs) {

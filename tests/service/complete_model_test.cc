@@ -20,9 +20,10 @@
 #include "client/complete_service.h"
 #include "client/service_evaluator.h"
 #include "complete/job_kind.h"
-#include "master/random.h"
-#include "master/thread_pool_evaluator.h"
+#include "opt/random.h"
+#include "opt/thread_pool_evaluator.h"
 #include "service_harness.h"
+#include "kinds/kinds.h"
 
 namespace pz::testing {
 namespace {
@@ -31,7 +32,7 @@ using complete::BwOscillatorFitness;
 using complete::BwTrainingRecord;
 using complete::FitCriterion;
 using complete::StackFitness;
-using master::CompleteModelProblem;
+using job::CompleteModelProblem;
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
@@ -96,30 +97,30 @@ io::StackRecordSet StackSet() {
 
 // The spec through the binary encoding (as a worker gets it) or the JSON one (as a user writes it),
 // made into a fitness by a registry with the kind.
-std::unique_ptr<master::FitnessFunction> Remote(const master::JobSpec& spec, bool json) {
-  master::JobSpec decoded;
-  std::vector<master::FieldViolation> v;
+std::unique_ptr<opt::FitnessFunction> Remote(const job::JobSpec& spec, bool json) {
+  job::JobSpec decoded;
+  std::vector<job::FieldViolation> v;
   if (json)
-    EXPECT_TRUE(master::JobSpecFromJson(master::JobSpecToJson(spec), &decoded, &v).ok());
+    EXPECT_TRUE(service::JobSpecFromJson(service::JobSpecToJson(spec), &decoded, &v).ok());
   else
-    EXPECT_TRUE(master::DecodeJobSpec(master::EncodeJobSpec(spec), &decoded, &v).ok());
+    EXPECT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded, &v).ok());
   EXPECT_TRUE(v.empty());
-  EXPECT_EQ(master::EncodeJobSpec(decoded), master::EncodeJobSpec(spec));  // nothing lost
-  decoded.external = master::ExternalSettings{};
-  master::JobKindRegistry registry;
-  complete::RegisterCompleteModelJobKind(registry);
+  EXPECT_EQ(service::EncodeJobSpec(decoded), service::EncodeJobSpec(spec));  // nothing lost
+  decoded.external = job::ExternalSettings{};
+  job::JobKindRegistry registry;
+  registry.Register(complete::CompleteModelJobKind());
   for (const auto& x : registry.Validate(decoded)) ADD_FAILURE() << x.description;
-  std::unique_ptr<master::FitnessFunction> f;
+  std::unique_ptr<opt::FitnessFunction> f;
   EXPECT_TRUE(registry.MakeFitness(decoded, &f).ok());
   return f;
 }
 
-void ExpectSameFitness(const master::FitnessFunction& local, const master::FitnessFunction& remote,
+void ExpectSameFitness(const opt::FitnessFunction& local, const opt::FitnessFunction& remote,
                        const std::vector<std::vector<double>>& points) {
   for (const auto& p : points) {
-    master::Genome g;
+    opt::Genome g;
     g.reals = p;
-    const master::FitnessResult a = local.Evaluate(g), b = remote.Evaluate(g);
+    const opt::FitnessResult a = local.Evaluate(g), b = remote.Evaluate(g);
     EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
     EXPECT_EQ(a.status, b.status);
     EXPECT_EQ(a.reason, b.reason);
@@ -128,7 +129,7 @@ void ExpectSameFitness(const master::FitnessFunction& local, const master::Fitne
 
 TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
   const BwOscillatorFitness local = SmallOscillator();
-  const master::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
+  const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
   const std::vector<std::vector<double>> points = {
       model::BwIdentifiable(model::BwParams{}),       // the truth: cost = the noise
       {2.5, 20, 4e4, 6e4, 700, -900},                  // elsewhere
@@ -140,16 +141,16 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
     ASSERT_TRUE(remote);
     ExpectSameFitness(local, *remote, points);
   }
-  master::Genome g;
+  opt::Genome g;
   g.reals = points[2];
-  EXPECT_EQ(local.Evaluate(g).status, master::FitnessStatus::kPenalized);
-  master::JobKindRegistry registry;
-  complete::RegisterCompleteModelJobKind(registry);
-  master::GenomeLayout layout;
+  EXPECT_EQ(local.Evaluate(g).status, opt::FitnessStatus::kPenalized);
+  job::JobKindRegistry registry;
+  registry.Register(complete::CompleteModelJobKind());
+  job::GenomeLayout layout;
   ASSERT_TRUE(registry.Layout(spec, &layout).ok());
   EXPECT_EQ(layout.reals, 6);
   EXPECT_EQ(layout.bits, 0);
-  EXPECT_EQ(registry.Find("complete_model")->describe(spec, master::Genome{{}, {2, 10, 5e4, 5e4, 800, -1100}}),
+  EXPECT_EQ(registry.Find("complete_model")->describe(spec, opt::Genome{{}, {2, 10, 5e4, 5e4, 800, -1100}}),
             "m=2 c=10 k=50000 alpha=50000 beta_gamma=800 beta_delta=-1100");
 }
 
@@ -175,23 +176,23 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   const io::StackRecordSet set = StackSet();
   const StackFitness stack(model::StackFamily::kBoucWen, set.WithRole(io::RecordRole::kTrain), FitCriterion::kIae,
                            0.01, 0.5);
-  const master::JobSpec stack_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(stack), "ok");
-  const master::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
-  master::JobKindRegistry registry;
-  complete::RegisterCompleteModelJobKind(registry);
-  auto violations = [&](master::JobSpec s) {
-    s.external = master::ExternalSettings{};
+  const job::JobSpec stack_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(stack), "ok");
+  const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
+  job::JobKindRegistry registry;
+  registry.Register(complete::CompleteModelJobKind());
+  auto violations = [&](job::JobSpec s) {
+    s.external = job::ExternalSettings{};
     std::string all;
     for (const auto& v : registry.Validate(s)) all += v.description + "\n";
     return all;
   };
-  auto expect = [&](const master::JobSpec& s, const std::string& message) {
+  auto expect = [&](const job::JobSpec& s, const std::string& message) {
     const std::string all = violations(s);
     EXPECT_NE(all.find(message), std::string::npos) << "wanted: " << message << "\ngot: " << all;
   };
   EXPECT_EQ(violations(stack_ok), "");
   EXPECT_EQ(violations(bw_ok), "");
-  auto edit = [](master::JobSpec s, auto&& f) {
+  auto edit = [](job::JobSpec s, auto&& f) {
     f(std::get<CompleteModelProblem>(s.problem));
     return s;
   };
@@ -234,18 +235,18 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.interpolation = fourier: only the oscillator's input is interpolated");
   expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
   expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
-  master::JobSpec with_ga = bw_ok;
-  with_ga.ga = master::GaSettings{};
+  job::JobSpec with_ga = bw_ok;
+  with_ga.ga = job::GaSettings{};
   EXPECT_NE(registry.Validate(with_ga).at(0).description.find("ga: the project GA searches binary genomes"),
             std::string::npos);
   // An unknown enum value on the wire is named too.
-  master::JobSpec decoded;
-  std::vector<master::FieldViolation> v;
-  std::string json = master::JobSpecToJson(bw_ok);
+  job::JobSpec decoded;
+  std::vector<job::FieldViolation> v;
+  std::string json = service::JobSpecToJson(bw_ok);
   const std::string family = "\"COMPLETE_MODEL_FAMILY_BW_OSCILLATOR\"";
   ASSERT_NE(json.find(family), std::string::npos);
   json.replace(json.find(family), family.size(), "9");
-  EXPECT_TRUE(master::JobSpecFromJson(json, &decoded, &v).ok());
+  EXPECT_TRUE(service::JobSpecFromJson(json, &decoded, &v).ok());
   ASSERT_FALSE(v.empty());
   EXPECT_EQ(v[0].description, "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
 }
@@ -261,14 +262,14 @@ client::ServiceEvaluatorOptions Options(const Cluster& c) {
 
 // Kills `victim` `after_ms` after the `at`-th batch starts, and before the (at + 2)-th batch (a worker
 // lost in the middle of a search, maybe in the middle of a batch).
-class KillingEvaluator final : public master::BatchEvaluator {
+class KillingEvaluator final : public opt::BatchEvaluator {
  public:
-  KillingEvaluator(master::BatchEvaluator& inner, Process* victim, int at, int after_ms)
+  KillingEvaluator(opt::BatchEvaluator& inner, Process* victim, int at, int after_ms)
       : inner_(inner), victim_(victim), at_(at), after_ms_(after_ms) {}
   ~KillingEvaluator() override {
     if (killer_.joinable()) killer_.join();
   }
-  void Evaluate(const master::EvalBatch& batch, std::span<master::FitnessResult> out) override {
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
     ++batches_;
     if (victim_ && batches_ == at_)
       killer_ = std::thread([this] {
@@ -281,13 +282,13 @@ class KillingEvaluator final : public master::BatchEvaluator {
   int concurrency() const override { return inner_.concurrency(); }
 
  private:
-  master::BatchEvaluator& inner_;
+  opt::BatchEvaluator& inner_;
   Process* victim_;
   int at_, after_ms_, batches_ = 0;
   std::thread killer_;
 };
 
-void ExpectSameSearch(const master::SearchResult& a, const master::SearchResult& b) {
+void ExpectSameSearch(const opt::SearchResult& a, const opt::SearchResult& b) {
   ASSERT_EQ(a.best.size(), b.best.size());
   for (size_t i = 0; i < a.best.size(); ++i) EXPECT_TRUE(SameBits(a.best[i], b.best[i])) << "best[" << i << "]";
   EXPECT_TRUE(SameBits(a.best_cost, b.best_cost)) << a.best_cost << " vs " << b.best_cost;
@@ -299,28 +300,27 @@ void ExpectSameSearch(const master::SearchResult& a, const master::SearchResult&
 }
 
 TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForBit) {
-  complete::RegisterCompleteModelJobKind(master::JobKindRegistry::Default());
   Cluster cluster("complete-bw");
   cluster.AddWorker(1);
   Process& victim = cluster.AddWorker(1);
   const BwOscillatorFitness fitness = SmallOscillator();
-  const master::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
-  for (master::SearchAlgorithm algorithm : {master::SearchAlgorithm::kPso, master::SearchAlgorithm::kGaBinary}) {
-    SCOPED_TRACE(master::SearchAlgorithmName(algorithm));
-    const bool kill = algorithm == master::SearchAlgorithm::kGaBinary;
-    master::SearchOptions o;
+  const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
+  for (opt::SearchAlgorithm algorithm : {opt::SearchAlgorithm::kPso, opt::SearchAlgorithm::kGaBinary}) {
+    SCOPED_TRACE(opt::SearchAlgorithmName(algorithm));
+    const bool kill = algorithm == opt::SearchAlgorithm::kGaBinary;
+    opt::SearchOptions o;
     o.algorithm = algorithm;
     o.repetitions = 2;
     o.pso.particles = 10;
     o.pso.iterations = 6;
     o.ga_binary.ga.population_size = 10;
     o.ga_binary.ga.max_generations = 8;
-    master::ThreadPoolEvaluator pool(fitness, 2);
-    const master::SearchResult local = master::Search(complete::BwOscillatorBox(), o, pool);
+    opt::ThreadPoolEvaluator pool(fitness, 2);
+    const opt::SearchResult local = opt::Search(complete::BwOscillatorBox(), o, pool);
     client::ServiceEvaluator service(Options(cluster), spec, "test");
     // With the binary GA, one of the two workers is killed during the third batch.
     KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
-    const master::SearchResult remote = master::Search(complete::BwOscillatorBox(), o, ev);
+    const opt::SearchResult remote = opt::Search(complete::BwOscillatorBox(), o, ev);
     if (kill) EXPECT_FALSE(victim.running());  // killed before the fifth of 2 x 9 batches
     ExpectSameSearch(local, remote);
     EXPECT_EQ(service.evaluations(), local.evaluations);
@@ -329,7 +329,6 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
 }
 
 TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
-  complete::RegisterCompleteModelJobKind(master::JobKindRegistry::Default());
   Cluster cluster("complete-committee");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
@@ -338,7 +337,7 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   o.bands.edges = {0, 50, 100};
   o.t0_s = 0.01;
   o.t1_s = 0.12;
-  o.algorithms = {master::SearchAlgorithm::kPso, master::SearchAlgorithm::kGaReal};
+  o.algorithms = {opt::SearchAlgorithm::kPso, opt::SearchAlgorithm::kGaReal};
   o.search.repetitions = 1;
   o.search.pso.particles = 6;
   o.search.pso.iterations = 3;
@@ -363,7 +362,7 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   EXPECT_TRUE(SameBits(remote.committee_test.rmse, local.committee_test.rmse));
   EXPECT_EQ(remote.evaluations, local.evaluations);
   auto client = cluster.Client();
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
   EXPECT_EQ(jobs.size(), 12u);
   for (const auto& j : jobs) EXPECT_EQ(j.kind, "complete_model");
@@ -428,7 +427,7 @@ TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
   EXPECT_EQ(cm_local.fields().at("evaluations").number_value(), 4 * 12);
   ExpectSameReport(ReadReport(root / "cm-service" / "committee.json"), cm_local);
   auto client = cluster.Client();
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
   EXPECT_EQ(jobs.size(), 1u + 4u);
 

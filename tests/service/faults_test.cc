@@ -13,7 +13,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-bool HasField(const std::vector<master::FieldViolation>& v, const std::string& field) {
+bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field) {
   for (const auto& x : v)
     if (x.field == field) return true;
   return false;
@@ -23,9 +23,9 @@ TEST(ServiceFaults, BadJobSpecsAreRejectedWithTheField) {
   Cluster c("badspec");
   auto client = c.Client();
   client::SubmitResult r;
-  std::vector<master::FieldViolation> v;
+  std::vector<job::FieldViolation> v;
 
-  master::JobSpec s = SyntheticSpec(1, 10, 5);
+  job::JobSpec s = SyntheticSpec(1, 10, 5);
   s.ga->population = 1;
   Status st = client.Submit(s, &r, &v);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
@@ -38,13 +38,13 @@ TEST(ServiceFaults, BadJobSpecsAreRejectedWithTheField) {
   EXPECT_TRUE(HasField(v, "problem"));
 
   s = SyntheticSpec(1, 10, 5);
-  std::get<master::SyntheticProblem>(s.problem).genome_bits = 70000;
+  std::get<job::SyntheticProblem>(s.problem).genome_bits = 70000;
   s.limits.task_timeout_s = -1;
   EXPECT_EQ(client.Submit(s, &r, &v).code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "synthetic.genome_bits"));
   EXPECT_TRUE(HasField(v, "limits.task_timeout_s"));
 
-  master::HgannProblem h;  // no cases, an unknown range name
+  job::HgannProblem h;  // no cases, an unknown range name
   h.ranges.push_back({"alfa", 0, 1});
   s = SyntheticSpec(1, 10, 5);
   s.problem = h;
@@ -108,18 +108,18 @@ TEST(ServiceFaults, GarbageFramesOnBothEndpointsLeaveTheMasterServing) {
     EXPECT_EQ(reply.code(), pz::wire::CODE_VERSION_MISMATCH);
   }
   auto client = c.Client();
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
   client::SubmitResult r;
   ASSERT_TRUE(client.Submit(SyntheticSpec(5, 20, 5), &r).ok());
-  master::JobInfo info;
+  service::JobInfo info;
   ASSERT_TRUE(client.WaitFinal(r.job_id, 30s, &info).ok());
-  EXPECT_EQ(info.state, master::JobState::kSucceeded);
+  EXPECT_EQ(info.state, service::JobState::kSucceeded);
 }
 
 TEST(ServiceFaults, IndividualThatKeepsKillingWorkersIsQuarantined) {
-  master::JobSpec spec = SyntheticSpec(17, 16, 2, 0, 16);
-  std::get<master::SyntheticProblem>(spec.problem).crash_prefix = "11";
+  job::JobSpec spec = SyntheticSpec(17, 16, 2, 0, 16);
+  std::get<job::SyntheticProblem>(spec.problem).crash_prefix = "11";
   spec.limits.quarantine_after = 2;
   spec.limits.penalty_cost = 1e6;
   Cluster c("quarantine");
@@ -128,18 +128,18 @@ TEST(ServiceFaults, IndividualThatKeepsKillingWorkersIsQuarantined) {
   auto client = c.Client();
   client::SubmitResult r;
   ASSERT_TRUE(client.Submit(spec, &r).ok());
-  master::JobInfo info;
+  service::JobInfo info;
   const auto deadline = std::chrono::steady_clock::now() + 50s;
   while (std::chrono::steady_clock::now() < deadline) {
     ASSERT_TRUE(client.GetStatus(r.job_id, &info).ok());
-    if (master::IsFinal(info.state)) break;
+    if (service::IsFinal(info.state)) break;
     for (auto& w : c.workers())
       if (!w->running()) w = nullptr;
     std::erase(c.workers(), nullptr);
     while (c.workers().size() < 2) c.AddWorker(1);
     std::this_thread::sleep_for(100ms);
   }
-  ASSERT_EQ(info.state, master::JobState::kSucceeded) << info.message;
+  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
   EXPECT_FALSE(info.quarantined.empty());
   for (const auto& q : info.quarantined) EXPECT_GE(q.strikes, 2u);
 }

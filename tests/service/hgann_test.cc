@@ -13,7 +13,7 @@
 #include "client/job_file.h"
 #include "client/job_report.h"
 #include "io/network_io.h"
-#include "master/hgann_job.h"
+#include "hgann/hgann_job.h"
 #include "tests/service/service_harness.h"
 
 namespace pz::testing {
@@ -23,15 +23,15 @@ using namespace std::chrono_literals;
 
 const fs::path kExamples = fs::path(PIEZOID_DATA_DIR) / ".." / "examples";
 
-master::JobSpec QuickSpec() {
-  master::JobSpec spec;
-  std::vector<master::FieldViolation> v;
+job::JobSpec QuickSpec() {
+  job::JobSpec spec;
+  std::vector<job::FieldViolation> v;
   const Status s = client::LoadJobSpecFile(kExamples / "hgann_quick.json", &spec, &v);
   PZ_CHECK_MSG(s.ok(), s.message());
   return spec;
 }
 
-bool HasField(const std::vector<master::FieldViolation>& v, const std::string& field) {
+bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field) {
   for (const auto& x : v)
     if (x.field == field) return true;
   return false;
@@ -45,16 +45,16 @@ std::string Slurp(const fs::path& p) {
 }
 
 /// The in-process reference of the quick job, computed once for the tests of this file.
-const master::JobCheckpoint& QuickReference() {
-  static const master::JobCheckpoint ref = Reference(QuickSpec());
+const service::JobCheckpoint& QuickReference() {
+  static const service::JobCheckpoint ref = Reference(QuickSpec());
   return ref;
 }
 
 TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
-  const master::JobSpec spec = QuickSpec();
+  const job::JobSpec spec = QuickSpec();
   ASSERT_EQ(spec.kind(), "hgann");
-  ASSERT_EQ(std::get<master::HgannProblem>(spec.problem).cases.size(), 9u);
-  const master::JobCheckpoint& ref = QuickReference();
+  ASSERT_EQ(std::get<job::HgannProblem>(spec.problem).cases.size(), 9u);
+  const service::JobCheckpoint& ref = QuickReference();
   ASSERT_EQ(ref.log.size(), 41u);
   EXPECT_FALSE(ref.log.back().best_description.empty());
 
@@ -63,7 +63,7 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   c.AddWorker(1);
   auto client = c.Client();
   client::SubmitResult r;
-  std::vector<master::FieldViolation> v;
+  std::vector<job::FieldViolation> v;
   ASSERT_TRUE(client.Submit(spec, &r, &v).ok()) << (v.empty() ? "" : v.front().description);
 
   // `piezoid watch` follows it to the end and exits 0.
@@ -71,15 +71,15 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   EXPECT_EQ(RunCli({"watch", r.job_id, "--master", c.client_endpoint()}, &out, &err), 0) << out << err;
   EXPECT_NE(out.find("succeeded"), std::string::npos) << out;
 
-  master::JobInfo info;
+  service::JobInfo info;
   ASSERT_TRUE(client.WaitFinal(r.job_id, 50s, &info).ok());
-  ASSERT_EQ(info.state, master::JobState::kSucceeded) << info.message;
-  std::vector<master::ScoredGenome> best;
-  std::vector<master::GenerationRecord> log;
-  master::JobSpec stored;
+  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  std::vector<service::ScoredGenome> best;
+  std::vector<service::GenerationRecord> log;
+  job::JobSpec stored;
   ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored).ok());
   ExpectSameRun(ref, best, log);
-  EXPECT_EQ(master::EncodeJobSpec(stored), master::EncodeJobSpec(spec));  // the spec comes back intact
+  EXPECT_EQ(service::EncodeJobSpec(stored), service::EncodeJobSpec(spec));  // the spec comes back intact
 }
 
 TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
@@ -110,7 +110,7 @@ TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
   EXPECT_FALSE(fs::exists(dir / "networks/best-4.pb"));
 
   // The networks are the job's best, with provenance; the report is the identify report.
-  const master::JobCheckpoint& ref = QuickReference();
+  const service::JobCheckpoint& ref = QuickReference();
   io::SavedNetwork best, best1, third;
   ASSERT_TRUE(io::LoadNetwork((dir / "network.pb").string(), &best).ok());
   ASSERT_TRUE(io::LoadNetwork((dir / "networks/best-1.json").string(), &best1).ok());
@@ -139,10 +139,10 @@ TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
 }
 
 TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
-  master::JobSpec spec = QuickSpec();
-  auto& h = std::get<master::HgannProblem>(spec.problem);
+  job::JobSpec spec = QuickSpec();
+  auto& h = std::get<job::HgannProblem>(spec.problem);
   h.cases[3].angle_deg[17] = std::nan("");
-  h.cases[2].role = master::CaseRole::kUnspecified;
+  h.cases[2].role = job::CaseRole::kUnspecified;
   h.cases[5].number = h.cases[0].number;
   h.ranges_preset = "papier";
   h.spread_penalty = -1;
@@ -153,7 +153,7 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
   Cluster c("hgann-bad");
   auto client = c.Client();
   client::SubmitResult r;
-  std::vector<master::FieldViolation> v;
+  std::vector<job::FieldViolation> v;
   Status st = client.Submit(spec, &r, &v);
   ASSERT_EQ(st.code(), StatusCode::kInvalidArgument) << st.message();
   for (const char* f : {"hgann.cases[3].angle_deg[17]", "hgann.cases[2].role", "hgann.cases[5].number",
@@ -164,8 +164,8 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
       << st.message();
 
   // A spec naming a client folder never reaches a master's disk.
-  master::JobSpec dir_spec = QuickSpec();
-  std::get<master::HgannProblem>(dir_spec.problem).case_set_dir = "/etc";
+  job::JobSpec dir_spec = QuickSpec();
+  std::get<job::HgannProblem>(dir_spec.problem).case_set_dir = "/etc";
   EXPECT_EQ(client.Submit(dir_spec, &r, &v).code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "hgann.case_set_dir"));
 

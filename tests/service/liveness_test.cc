@@ -4,9 +4,14 @@
 #include <set>
 
 #include "master/dispatcher.h"
-#include "master/liveness.h"
+#include "service/liveness.h"
 
 namespace pz::master {
+
+using service::Backoff;
+using service::PeerLiveness;
+using service::ServerLiveness;
+using service::TimePoint;
 namespace {
 
 using std::chrono::milliseconds;

@@ -10,13 +10,13 @@
 #include <atomic>
 #include <mutex>
 
-#include "master/security.h"
+#include "service/security.h"
 #include "service_harness.h"
 
 namespace pz::testing {
 namespace {
 
-using master::CurveKeyPair;
+using service::CurveKeyPair;
 
 std::string Slurp(const fs::path& p) {
   std::ifstream f(p);
@@ -141,8 +141,8 @@ class Keys {
   /// Makes NAME's pair; allowed on "workers", "clients" or nowhere ("").
   CurveKeyPair Make(const std::string& name, const std::string& allowed_on) {
     CurveKeyPair p;
-    EXPECT_TRUE(master::GenerateCurveKeyPair(&p).ok());
-    Status s = master::WriteCurveKeyFiles(dir_ / "keys", name, p);
+    EXPECT_TRUE(service::GenerateCurveKeyPair(&p).ok());
+    Status s = service::WriteCurveKeyFiles(dir_ / "keys", name, p);
     EXPECT_TRUE(s.ok()) << s.message();
     if (!allowed_on.empty())
       fs::copy_file(pub(name), dir_ / "allow" / allowed_on / (name + ".pub"));
@@ -199,10 +199,10 @@ TEST(SecurityKeys, KeygenWritesAPrivateSecretAndAReadablePublicKey) {
   ASSERT_EQ(::stat((d / "k" / "alice.pub").c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0644u);
   CurveKeyPair pair;
-  Status s = master::LoadCurveSecretFile(d / "k" / "alice.key", &pair);
+  Status s = service::LoadCurveSecretFile(d / "k" / "alice.key", &pair);
   ASSERT_TRUE(s.ok()) << s.message();
   std::string pub;
-  ASSERT_TRUE(master::LoadCurvePublicFile(d / "k" / "alice.pub", &pub).ok());
+  ASSERT_TRUE(service::LoadCurvePublicFile(d / "k" / "alice.pub", &pub).ok());
   EXPECT_EQ(pub, pair.public_z85);
   EXPECT_NE(out.find(pub), std::string::npos) << out;
   EXPECT_EQ(Slurp(d / "k" / "alice.pub").find("secret-key"), std::string::npos);
@@ -218,17 +218,17 @@ TEST(SecurityKeys, SecretKeyReadableByOthersIsRefusedNamingTheMode) {
   keys.Make("w", "");
   ::chmod(keys.key("w").c_str(), 0644);
   CurveKeyPair p;
-  Status s = master::LoadCurveSecretFile(keys.key("w"), &p);
+  Status s = service::LoadCurveSecretFile(keys.key("w"), &p);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("mode 0644"), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("chmod 600"), std::string::npos) << s.message();
   ::chmod(keys.key("w").c_str(), 0640);
-  EXPECT_FALSE(master::LoadCurveSecretFile(keys.key("w"), &p).ok());
+  EXPECT_FALSE(service::LoadCurveSecretFile(keys.key("w"), &p).ok());
   ::chmod(keys.key("w").c_str(), 0400);
-  EXPECT_TRUE(master::LoadCurveSecretFile(keys.key("w"), &p).ok());
+  EXPECT_TRUE(service::LoadCurveSecretFile(keys.key("w"), &p).ok());
   // The .pub file is not a secret key.
   ::chmod(keys.pub("w").c_str(), 0600);
-  s = master::LoadCurveSecretFile(keys.pub("w"), &p);
+  s = service::LoadCurveSecretFile(keys.pub("w"), &p);
   EXPECT_NE(s.message().find("no secret-key"), std::string::npos) << s.message();
   // The CLI says the same, exit code 2.
   ::chmod(keys.key("w").c_str(), 0644);
@@ -243,32 +243,32 @@ TEST(SecurityKeys, SecretKeyReadableByOthersIsRefusedNamingTheMode) {
 
 TEST(SecurityKeys, BadKeyTextNamesTheLine) {
   CurveKeyPair p;
-  Status s = master::ParseCurveKeyFile("metadata\ncurve\n    public-key = \"short\"\n", "x.pub", &p);
+  Status s = service::ParseCurveKeyFile("metadata\ncurve\n    public-key = \"short\"\n", "x.pub", &p);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("x.pub:3: public-key"), std::string::npos) << s.message();
-  s = master::ParseCurveKeyFile("hello\n", "y.pub", &p);
+  s = service::ParseCurveKeyFile("hello\n", "y.pub", &p);
   EXPECT_NE(s.message().find("not a CURVE key file"), std::string::npos) << s.message();
   CurveKeyPair a, b;
-  ASSERT_TRUE(master::GenerateCurveKeyPair(&a).ok());
-  ASSERT_TRUE(master::GenerateCurveKeyPair(&b).ok());
-  s = master::ParseCurveKeyFile("public-key = \"" + a.public_z85 + "\"\nsecret-key = \"" + b.secret_z85 + "\"\n",
+  ASSERT_TRUE(service::GenerateCurveKeyPair(&a).ok());
+  ASSERT_TRUE(service::GenerateCurveKeyPair(&b).ok());
+  s = service::ParseCurveKeyFile("public-key = \"" + a.public_z85 + "\"\nsecret-key = \"" + b.secret_z85 + "\"\n",
                                 "z.key", &p);
   EXPECT_NE(s.message().find("does not belong"), std::string::npos) << s.message();
-  ASSERT_TRUE(master::ParseCurveKeyFile("secret-key = \"" + a.secret_z85 + "\"\n", "s.key", &p).ok());
+  ASSERT_TRUE(service::ParseCurveKeyFile("secret-key = \"" + a.secret_z85 + "\"\n", "s.key", &p).ok());
   EXPECT_EQ(p.public_z85, a.public_z85);  // derived
 }
 
 TEST(SecurityKeys, LoopbackEndpoints) {
-  EXPECT_TRUE(master::IsLoopbackEndpoint("tcp://127.0.0.1:5555"));
-  EXPECT_TRUE(master::IsLoopbackEndpoint("tcp://127.0.1.1:*"));
-  EXPECT_TRUE(master::IsLoopbackEndpoint("tcp://localhost:5555"));
-  EXPECT_TRUE(master::IsLoopbackEndpoint("tcp://[::1]:5555"));
-  EXPECT_TRUE(master::IsLoopbackEndpoint("ipc:///tmp/x"));
-  EXPECT_FALSE(master::IsLoopbackEndpoint("tcp://*:5555"));
-  EXPECT_FALSE(master::IsLoopbackEndpoint("tcp://0.0.0.0:5555"));
-  EXPECT_FALSE(master::IsLoopbackEndpoint("tcp://10.1.2.3:5555"));
-  EXPECT_FALSE(master::IsLoopbackEndpoint("tcp://eth0:5555"));
-  EXPECT_FALSE(master::IsLoopbackEndpoint("tcp://[::]:5555"));
+  EXPECT_TRUE(service::IsLoopbackEndpoint("tcp://127.0.0.1:5555"));
+  EXPECT_TRUE(service::IsLoopbackEndpoint("tcp://127.0.1.1:*"));
+  EXPECT_TRUE(service::IsLoopbackEndpoint("tcp://localhost:5555"));
+  EXPECT_TRUE(service::IsLoopbackEndpoint("tcp://[::1]:5555"));
+  EXPECT_TRUE(service::IsLoopbackEndpoint("ipc:///tmp/x"));
+  EXPECT_FALSE(service::IsLoopbackEndpoint("tcp://*:5555"));
+  EXPECT_FALSE(service::IsLoopbackEndpoint("tcp://0.0.0.0:5555"));
+  EXPECT_FALSE(service::IsLoopbackEndpoint("tcp://10.1.2.3:5555"));
+  EXPECT_FALSE(service::IsLoopbackEndpoint("tcp://eth0:5555"));
+  EXPECT_FALSE(service::IsLoopbackEndpoint("tcp://[::]:5555"));
 }
 
 // ------------------------------------------------------------------ CURVE on the service
@@ -297,7 +297,7 @@ void RunThroughProxies(bool curve) {
                                  "100", "--liveness", "5", "--log-level", "warn"},
         d / "worker.log");
   }
-  master::JobSpec spec = SyntheticSpec(41, 16, 6);
+  job::JobSpec spec = SyntheticSpec(41, 16, 6);
   const std::string marker = "PZ-MARKER-plaintext-7f3a9c";
   spec.name = marker;
   auto c = curve ? CurveClient(to_clients.endpoint(), client_keys, master_keys)
@@ -305,19 +305,19 @@ void RunThroughProxies(bool curve) {
   client::SubmitResult r;
   Status s = c.Submit(spec, &r);
   ASSERT_TRUE(s.ok()) << s.message();
-  master::JobInfo info;
+  service::JobInfo info;
   s = c.WaitFinal(r.job_id, std::chrono::seconds(60), &info);
   if (!s.ok()) {
-    std::vector<master::JobInfo> jobs;
+    std::vector<service::JobInfo> jobs;
     int workers = -1;
     (void)c.List(&jobs, &workers);
     FAIL() << s.message() << "\nworkers " << workers << ", worker proxy bytes " << to_workers.captured().size()
            << ", worker running " << worker->running() << "\n"
            << Slurp(cluster.dir() / "master.log") << Slurp(d / "worker.log");
   }
-  EXPECT_EQ(info.state, master::JobState::kSucceeded) << info.message;
-  std::vector<master::ScoredGenome> best;
-  std::vector<master::GenerationRecord> log;
+  EXPECT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  std::vector<service::ScoredGenome> best;
+  std::vector<service::GenerationRecord> log;
   ASSERT_TRUE(c.Fetch(r.job_id, 3, &best, &log).ok());
   ExpectSameRun(Reference(spec), best, log);
   const std::string clients = to_clients.captured(), workers = to_workers.captured();
@@ -351,7 +351,7 @@ TEST(SecurityCurve, UnknownKeysAreRefusedOnBothEndpoints) {
   // Client endpoint: an unknown key gets a clear error at once (no retries), exit code 3.
   {
     auto c = CurveClient(cluster.client_endpoint(), mallory, master_keys, 3000, 3);
-    std::vector<master::JobInfo> jobs;
+    std::vector<service::JobInfo> jobs;
     const auto t0 = std::chrono::steady_clock::now();
     Status s = c.List(&jobs);
     EXPECT_EQ(s.code(), StatusCode::kUnavailable);
@@ -392,7 +392,7 @@ TEST(SecurityCurve, UnknownKeysAreRefusedOnBothEndpoints) {
            b.find("refused this worker's CURVE key") != std::string::npos;
   })) << Slurp(d / "stranger.log") << Slurp(d / "misplaced.log");
   auto c = CurveClient(cluster.client_endpoint(), alice, master_keys);
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   int workers = -1;
   ASSERT_TRUE(c.List(&jobs, &workers).ok());
   EXPECT_EQ(workers, 0);
@@ -439,10 +439,10 @@ TEST(SecurityCurve, MasterRefusesToStartWithBadKeyOptions) {
 TEST(SecurityLimits, SpecAboveTheDataSizePerJobIsRefusedNamingTheLimit) {
   Cluster cluster("specsize", {"--max-spec-bytes", "4096"});
   auto c = cluster.Client();
-  master::JobSpec spec = SyntheticSpec(1, 8, 2);
+  job::JobSpec spec = SyntheticSpec(1, 8, 2);
   spec.name = std::string(5000, 'n');
   client::SubmitResult r;
-  std::vector<master::FieldViolation> v;
+  std::vector<job::FieldViolation> v;
   Status s = c.Submit(spec, &r, &v);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.message();
   EXPECT_NE(s.message().find("--max-spec-bytes = 4096"), std::string::npos) << s.message();
@@ -496,7 +496,7 @@ TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
   client::ServiceClientOptions o{"tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1};
   o.max_message_bytes = 2048;
   client::ServiceClient c(o);
-  master::JobSpec spec = SyntheticSpec(1, 8, 2);
+  job::JobSpec spec = SyntheticSpec(1, 8, 2);
   spec.name = std::string(4096, 'n');
   client::SubmitResult r;
   Status s = c.Submit(spec, &r);
@@ -510,7 +510,7 @@ TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
   s = big.Submit(spec, &r);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable);
   EXPECT_NE(s.message().find("--max-message-bytes"), std::string::npos) << s.message();
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   EXPECT_TRUE(cluster.Client().List(&jobs).ok());
 }
 
@@ -518,7 +518,7 @@ TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
 
 TEST(SecurityMaster, SecondMasterOnTheSameStateDirectoryRefusesToStart) {
   Cluster cluster("lock");
-  std::vector<master::JobInfo> jobs;
+  std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(cluster.Client().List(&jobs).ok());  // the first master is up
   Process second(BuildDir() / "master" / "piezoid-master",
                  {"--workers", "tcp://127.0.0.1:*", "--clients", "tcp://127.0.0.1:*", "--state-dir",
@@ -548,7 +548,7 @@ TEST(SecurityMaster, PlainMasterOnANonLoopbackAddressWarns) {
 TEST(SecurityCli, SubmitWithAClientTokenIsIdempotent) {
   Cluster cluster("token");
   const fs::path spec = cluster.dir() / "job.json";
-  std::ofstream(spec) << master::JobSpecToJson(SyntheticSpec(5, 8, 2));
+  std::ofstream(spec) << service::JobSpecToJson(SyntheticSpec(5, 8, 2));
   std::string a, b, err;
   ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(), "--client-token", "t1"}, &a, &err), 0)
       << err;

@@ -25,7 +25,8 @@
 
 #include "client/service_client.h"
 #include "master/job_runner.h"
-#include "master/wire_codec.h"
+#include "service/wire_codec.h"
+#include "kinds/kinds.h"
 
 extern char** environ;
 
@@ -195,17 +196,17 @@ class Cluster {
   std::vector<std::unique_ptr<Process>> workers_;
 };
 
-inline master::JobSpec SyntheticSpec(uint64_t seed, int population, int generations,
+inline job::JobSpec SyntheticSpec(uint64_t seed, int population, int generations,
                                      double sleep_ms = 0, int bits = 64) {
-  master::JobSpec s;
+  job::JobSpec s;
   s.name = "test";
   s.seed = seed;
-  master::SyntheticProblem p;
-  p.cost = master::SyntheticProblem::Cost::kFunction;
+  job::SyntheticProblem p;
+  p.cost = job::SyntheticProblem::Cost::kFunction;
   p.genome_bits = bits;
   p.sleep_ms = sleep_ms;
   s.problem = p;
-  master::GaSettings ga;
+  job::GaSettings ga;
   ga.population = population;
   ga.generations = generations;
   ga.stall_generations = 0;
@@ -215,17 +216,17 @@ inline master::JobSpec SyntheticSpec(uint64_t seed, int population, int generati
 }
 
 /// The in-process reference run of a spec.
-inline master::JobCheckpoint Reference(const master::JobSpec& spec) {
-  master::JobCheckpoint c;
-  Status s = master::RunJobInProcess("ref", spec, master::JobKindRegistry::Default(), &c);
+inline service::JobCheckpoint Reference(const job::JobSpec& spec) {
+  service::JobCheckpoint c;
+  Status s = master::RunJobInProcess("ref", spec, kinds::All(), &c);
   PZ_CHECK_MSG(s.ok(), s.message());
   return c;
 }
 
 /// Expects the service's best and log to equal the reference bit for bit.
-inline void ExpectSameRun(const master::JobCheckpoint& ref,
-                          const std::vector<master::ScoredGenome>& best,
-                          const std::vector<master::GenerationRecord>& log) {
+inline void ExpectSameRun(const service::JobCheckpoint& ref,
+                          const std::vector<service::ScoredGenome>& best,
+                          const std::vector<service::GenerationRecord>& log) {
   ASSERT_EQ(log.size(), ref.log.size());
   for (size_t i = 0; i < log.size(); ++i) EXPECT_EQ(log[i], ref.log[i]) << "generation " << i;
   ASSERT_FALSE(best.empty());

@@ -8,21 +8,22 @@
 #include <cstring>
 
 #include "client/service_evaluator.h"
-#include "master/inline_evaluator.h"
-#include "master/random.h"
+#include "opt/inline_evaluator.h"
+#include "opt/random.h"
 #include "service_harness.h"
+#include "kinds/kinds.h"
 
 namespace pz::testing {
 namespace {
 
-using master::FitnessResult;
-using master::Genome;
+using opt::FitnessResult;
+using opt::Genome;
 
-master::JobSpec SessionSpec(double sleep_ms = 0, int bits = 48) {
-  master::JobSpec s;
+job::JobSpec SessionSpec(double sleep_ms = 0, int bits = 48) {
+  job::JobSpec s;
   s.name = "session test";
-  master::SyntheticProblem p;
-  p.cost = master::SyntheticProblem::Cost::kFunction;
+  job::SyntheticProblem p;
+  p.cost = job::SyntheticProblem::Cost::kFunction;
   p.genome_bits = bits;
   p.sleep_ms = sleep_ms;
   s.problem = p;
@@ -30,7 +31,7 @@ master::JobSpec SessionSpec(double sleep_ms = 0, int bits = 48) {
 }
 
 std::vector<Genome> RandomGenomes(int n, int bits, uint64_t seed) {
-  master::Rng rng(seed);
+  opt::Rng rng(seed);
   std::vector<Genome> g(n);
   for (auto& x : g) {
     x.bits.resize(bits);
@@ -39,17 +40,17 @@ std::vector<Genome> RandomGenomes(int n, int bits, uint64_t seed) {
   return g;
 }
 
-std::vector<FitnessResult> Inline(const master::JobSpec& spec, const std::vector<Genome>& genomes) {
-  std::unique_ptr<master::FitnessFunction> f;
-  EXPECT_TRUE(master::JobKindRegistry::Default().MakeFitness(spec, &f).ok());
-  master::InlineEvaluator ev(*f, spec.limits.penalty_cost);
+std::vector<FitnessResult> Inline(const job::JobSpec& spec, const std::vector<Genome>& genomes) {
+  std::unique_ptr<opt::FitnessFunction> f;
+  EXPECT_TRUE(kinds::All().MakeFitness(spec, &f).ok());
+  opt::InlineEvaluator ev(*f, spec.limits.penalty_cost);
   std::vector<FitnessResult> out(genomes.size());
   std::vector<int> idx(genomes.size());
   ev.Evaluate({0, genomes, idx}, out);
   return out;
 }
 
-std::vector<FitnessResult> Evaluate(master::BatchEvaluator& ev, const std::vector<Genome>& genomes) {
+std::vector<FitnessResult> Evaluate(opt::BatchEvaluator& ev, const std::vector<Genome>& genomes) {
   std::vector<FitnessResult> out(genomes.size());
   std::vector<int> idx(genomes.size());
   for (size_t i = 0; i < idx.size(); ++i) idx[i] = static_cast<int>(i);
@@ -76,8 +77,8 @@ client::ServiceEvaluatorOptions Options(const Cluster& c) {
   return o;
 }
 
-master::JobInfo WaitFor(client::ServiceClient& c, const std::string& id, master::JobState state) {
-  master::JobInfo info;
+service::JobInfo WaitFor(client::ServiceClient& c, const std::string& id, service::JobState state) {
+  service::JobInfo info;
   for (int i = 0; i < 400; ++i) {
     EXPECT_TRUE(c.GetStatus(id, &info).ok());
     if (info.state == state) break;
@@ -91,7 +92,7 @@ TEST(SessionTest, BitIdenticalToInlineWithOneAndTwoWorkers) {
     SCOPED_TRACE(std::to_string(workers) + " workers");
     Cluster cluster("session" + std::to_string(workers));
     for (int w = 0; w < workers; ++w) cluster.AddWorker(2);
-    const master::JobSpec spec = SessionSpec();
+    const job::JobSpec spec = SessionSpec();
     std::string id;
     {
       client::ServiceEvaluator ev(Options(cluster), spec, "session test");
@@ -102,18 +103,18 @@ TEST(SessionTest, BitIdenticalToInlineWithOneAndTwoWorkers) {
       }
       EXPECT_GE(ev.concurrency(), 1);
       auto client = cluster.Client();
-      master::JobInfo info;
+      service::JobInfo info;
       ASSERT_TRUE(client.GetStatus(id, &info).ok());
-      EXPECT_EQ(info.state, master::JobState::kRunning);
+      EXPECT_EQ(info.state, service::JobState::kRunning);
       EXPECT_EQ(info.algorithm, "external");
       EXPECT_EQ(info.kind, "synthetic");
       EXPECT_EQ(info.generation, 4u);  // batches
       EXPECT_EQ(info.evaluations, 17u + 47u + 77u + 107u);
     }  // closes the session
     auto client = cluster.Client();
-    const master::JobInfo info = WaitFor(client, id, master::JobState::kSucceeded);
-    EXPECT_EQ(info.state, master::JobState::kSucceeded) << info.message;
-    std::vector<master::GenerationRecord> log;
+    const service::JobInfo info = WaitFor(client, id, service::JobState::kSucceeded);
+    EXPECT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+    std::vector<service::GenerationRecord> log;
     ASSERT_TRUE(client.Fetch(id, 1, nullptr, &log).ok());
     ASSERT_EQ(log.size(), 4u);
     EXPECT_EQ(log[3].evaluations, info.evaluations);
@@ -124,7 +125,7 @@ TEST(SessionTest, AWorkerKilledMidBatchGivesTheSameResults) {
   Cluster cluster("session-kill");
   cluster.AddWorker(1);
   Process& victim = cluster.AddWorker(1);
-  const master::JobSpec spec = SessionSpec(/*sleep_ms=*/30);
+  const job::JobSpec spec = SessionSpec(/*sleep_ms=*/30);
   const auto genomes = RandomGenomes(60, 48, 7);
   client::ServiceEvaluator ev(Options(cluster), spec, "kill test");
   std::thread killer([&] {
@@ -158,19 +159,19 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_EQ(client.Close(ga.job_id).code(), StatusCode::kFailedPrecondition);
   ASSERT_TRUE(client.Cancel(ga.job_id).ok());
   // A session spec without a problem, or with both algorithms, is refused field by field.
-  master::JobSpec none = SessionSpec();
+  job::JobSpec none = SessionSpec();
   none.problem = std::monostate{};
-  none.external = master::ExternalSettings{};
-  std::vector<master::FieldViolation> v;
+  none.external = job::ExternalSettings{};
+  std::vector<job::FieldViolation> v;
   client::SubmitResult r;
   EXPECT_EQ(client.Submit(none, &r, &v).code(), StatusCode::kInvalidArgument);
   ASSERT_FALSE(v.empty());
   EXPECT_EQ(v.front().field, "problem");
   // (On the wire the algorithm is a oneof: both set is a client-side mistake, caught by validation.)
-  master::JobSpec both = SessionSpec();
-  both.external = master::ExternalSettings{};
-  both.ga = master::GaSettings{};
-  v = master::JobKindRegistry::Default().Validate(both);
+  job::JobSpec both = SessionSpec();
+  both.external = job::ExternalSettings{};
+  both.ga = job::GaSettings{};
+  v = kinds::All().Validate(both);
   ASSERT_FALSE(v.empty());
   EXPECT_EQ(v.front().field, "algorithm");
   EXPECT_EQ(v.front().description, "algorithm: only one of ga, external may be set");
@@ -195,7 +196,7 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_NE(s.message().find("send it with its genomes"), std::string::npos) << s.message();
   // After closing: refused; a second close is fine.
   ASSERT_TRUE(ev.Close().ok());
-  WaitFor(client, ev.job_id(), master::JobState::kSucceeded);
+  WaitFor(client, ev.job_id(), service::JobState::kSucceeded);
   s = client.Evaluate(ev.job_id(), 1, RandomGenomes(1, 48, 1), &done, &results);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(s.message().find("succeeded"), std::string::npos) << s.message();
@@ -212,8 +213,8 @@ TEST(SessionTest, ASilentClientsSessionIsCancelled) {
   }();
   client::ServiceEvaluator ev(o, SessionSpec());
   auto client = cluster.Client();
-  const master::JobInfo info = WaitFor(client, ev.job_id(), master::JobState::kCancelled);
-  EXPECT_EQ(info.state, master::JobState::kCancelled);
+  const service::JobInfo info = WaitFor(client, ev.job_id(), service::JobState::kCancelled);
+  EXPECT_EQ(info.state, service::JobState::kCancelled);
   EXPECT_NE(info.message.find("idle_timeout_s"), std::string::npos) << info.message;
   EXPECT_THROW(Evaluate(ev, RandomGenomes(1, 48, 1)), client::ServiceError);
 }

@@ -1,0 +1,109 @@
+// The HGANN fitness (spec hgann.md §1–3, paper eq. 6): a genome is a whole 2-H-7 network; its cost is
+//
+//   CF = Σ_{c ∈ training cases} PI_c,    PI_c = Σ_k (y_meas,c,k − y_model,c,k)²   [deg²]
+//
+// where y_model,c is the bimorph plant (fast modal path) run with the seven parameters the network
+// predicts for case c's (V, f) and that case's saturations b1, b2 (fitted from its measured data).
+// A network whose parameters give an unbounded Bouc–Wen loop, or whose simulation fails, gets the
+// finite penalty_cost() (larger than any valid cost) and a reason: never a NaN, never a throw.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "opt/evaluator.h"
+#include "model/bimorph.h"
+#include "model/modal_simulator.h"
+#include "model/network.h"
+
+namespace pz::hgann {
+
+/// One case of an HGANN problem: its drive, its measured fin angle and its saturations.
+struct HgannCase {
+  int number = 0;                   ///< case number (> 0)
+  model::Sinusoid drive;            ///< V sin(2π f t) on the record's grid
+  std::vector<double> measured_deg; ///< y_meas,k [deg], drive.NumSamples() values, finite
+  double b1 = 1.0;                  ///< saturation [deg], > 0
+  double b2 = -1.0;                 ///< saturation [deg], < 0
+  bool training = true;             ///< counted in the cost
+};
+
+struct HgannFitnessConfig {
+  std::vector<HgannCase> cases;             ///< ≥ 1 training case
+  model::ParameterRanges ranges;            ///< where the network's outputs are mapped
+  model::InputNormalization normalization;  ///< default: FromTrainingCases()
+  model::BeamGeometry geometry;             ///< the beam (default: the spec's)
+  /// λ [deg²] of the optional spread penalty added to the cost: λ · Σ_k Var_grid(s_k), the variance
+  /// of each normalised output s_k ∈ [0, 1] over a 5 × 5 grid of the normalised training box
+  /// [0, 1]². 0 = the paper's cost exactly. A positive λ prefers networks whose parameters vary over
+  /// the operating envelope only where the data pay for it, which keeps predictions at untrained
+  /// operating points (corners of the box) from bending. Finite, ≥ 0.
+  double spread_penalty = 0;
+
+  /// Normalisation over the training cases' (V, f) (spec hgann.md §1).
+  model::InputNormalization FromTrainingCases() const;
+  /// Field-named errors: no training case, sample counts, finiteness, saturations, ranges.
+  Status Validate() const;
+};
+
+/// What one network does on one case.
+struct HgannCaseResult {
+  int number = 0;
+  bool training = false;
+  model::BimorphParams params;  ///< predicted μ…a2 with the case's b1, b2
+  model::SimulationSummary summary;
+  double pi = 0;                ///< PI [deg²] (penalty share if the simulation failed)
+};
+
+class HgannFitness final : public opt::FitnessFunction {
+ public:
+  /// Throws InputError if the configuration is invalid.
+  explicit HgannFitness(HgannFitnessConfig config);
+
+  /// Decode → predict per training case → simulate → Σ PI. Thread-safe; never throws.
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
+  /// The same for an already decoded network (e.g. one loaded from a file).
+  opt::FitnessResult EvaluateNetwork(const model::Network& network) const;
+  /// Every case (training or not) with its parameters and PI, for reports.
+  std::vector<HgannCaseResult> EvaluateCases(const model::Network& network) const;
+  /// Full traces of one case for plots.
+  model::BimorphTrace Trace(const model::Network& network, const HgannCase& c) const;
+  /// Decodes a genome with this problem's normalisation and ranges. Throws InputError on bad bits.
+  model::Network Decode(const opt::Genome& genome) const;
+
+  /// Cost given to a network whose simulation is invalid: 2 · Σ_c Σ_k (max(b1, −b2) + |y_meas,k|)²,
+  /// strictly above the cost of any valid output (which stays in [b2, b1]).
+  double penalty_cost() const { return penalty_; }
+  const HgannFitnessConfig& config() const { return config_; }
+  const model::BimorphPlant& plant() const { return *plant_; }
+
+ private:
+  model::BimorphParams ParamsFor(const model::NetworkParameters& p, const HgannCase& c) const;
+
+ public:
+  /// Σ_k Var_grid(s_k) of a network (without λ); see HgannFitnessConfig::spread_penalty.
+  double OutputSpread(const model::Network& network) const;
+
+ private:
+
+  HgannFitnessConfig config_;
+  std::unique_ptr<model::BimorphPlant> plant_;
+  std::unique_ptr<model::ModalSimulator> simulator_;
+  double penalty_ = 0;
+};
+
+}  // namespace pz::hgann
+
+namespace pz::io {
+struct CaseSet;
+}
+
+namespace pz::hgann {
+
+/// Builds the problem of a bench case set: every case with its drive (stated V, f on the record's
+/// grid), measured angle and saturations fitted from its measured extremes (spec §3); training =
+/// the manifest's "train" role; normalisation over the training cases. Throws InputError.
+HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges);
+
+}  // namespace pz::hgann

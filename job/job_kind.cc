@@ -1,0 +1,47 @@
+#include "job/job_kind.h"
+
+
+namespace pz::job {
+
+using opt::FitnessFunction;
+void JobKindRegistry::Register(JobKind kind) {
+  std::lock_guard lock(mu_);
+  std::string name = kind.name;
+  kinds_[name] = std::make_shared<const JobKind>(std::move(kind));
+}
+
+const JobKind* JobKindRegistry::Find(const std::string& name) const {
+  std::lock_guard lock(mu_);
+  auto it = kinds_.find(name);
+  return it == kinds_.end() ? nullptr : it->second.get();
+}
+
+std::vector<FieldViolation> JobKindRegistry::Validate(const JobSpec& spec) const {
+  std::vector<FieldViolation> out = spec.Validate();
+  if (spec.kind().empty()) return out;
+  const JobKind* k = Find(spec.kind());
+  if (!k) {
+    out.push_back({spec.kind(), spec.kind() + ": job kind not available on this master"});
+    return out;
+  }
+  if (k->validate) {
+    auto more = k->validate(spec);
+    out.insert(out.end(), more.begin(), more.end());
+  }
+  return out;
+}
+
+Status JobKindRegistry::Layout(const JobSpec& spec, GenomeLayout* layout) const {
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->layout) return NotFound("job kind '" + spec.kind() + "' has no genome layout");
+  return k->layout(spec, layout);
+}
+
+Status JobKindRegistry::MakeFitness(const JobSpec& spec,
+                                    std::unique_ptr<FitnessFunction>* out) const {
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->make_fitness) return NotFound("job kind '" + spec.kind() + "' has no fitness");
+  return k->make_fitness(spec, out);
+}
+
+}  // namespace pz::job

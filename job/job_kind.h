@@ -1,0 +1,62 @@
+// Job kinds: how a job spec's problem becomes a genome layout and a FitnessFunction. Each kind lives
+// with its problem (hgann/, diagnose/, complete/); the one list of them is kinds/kinds.h, which the
+// master, the workers, the fuzzer and the client all use, so a kind added there is available
+// everywhere. A kind:
+//
+//   pz::job::JobKind k;
+//   k.name = "hgann";
+//   k.validate = [](const JobSpec& s) { return std::vector<FieldViolation>{...}; };
+//   k.layout = [](const JobSpec& s, GenomeLayout* l) { l->bits = ...; return pz::Status::Ok(); };
+//   k.make_fitness = [](const JobSpec& s, std::unique_ptr<FitnessFunction>* f) { ...; };
+//   registry.Register(std::move(k));   // in kinds/kinds.cc
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "opt/evaluator.h"
+#include "job/job_spec.h"
+#include "model/status.h"
+
+namespace pz::job {
+
+/// Shape of the genomes of a job.
+struct GenomeLayout {
+  int bits = 0;   ///< binary genes
+  int reals = 0;  ///< real genes (none so far)
+};
+
+struct JobKind {
+  std::string name;
+  /// Kind-specific checks of a spec whose kind() == name (may be empty).
+  std::function<std::vector<FieldViolation>(const JobSpec&)> validate;
+  std::function<Status(const JobSpec&, GenomeLayout*)> layout;
+  /// Builds the (pure, thread-safe) fitness of a valid spec.
+  std::function<Status(const JobSpec&, std::unique_ptr<opt::FitnessFunction>*)> make_fitness;
+  /// Optional: describes a genome for the generation log (e.g. the decoded network's shape).
+  std::function<std::string(const JobSpec&, const opt::Genome&)> describe;
+};
+
+class JobKindRegistry {
+ public:
+  void Register(JobKind kind);  ///< replaces a kind of the same name
+  /// nullptr when unknown. The pointer stays valid while the kind is not replaced.
+  const JobKind* Find(const std::string& name) const;
+
+  /// Generic + kind-specific validation (both, so that every violated field is answered at once);
+  /// empty when the spec is acceptable.
+  std::vector<FieldViolation> Validate(const JobSpec& spec) const;
+  Status Layout(const JobSpec& spec, GenomeLayout* layout) const;
+  Status MakeFitness(const JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out) const;
+
+ private:
+  mutable std::mutex mu_;
+  std::map<std::string, std::shared_ptr<const JobKind>> kinds_;
+};
+
+
+}  // namespace pz::job

@@ -1,0 +1,112 @@
+#include "job/job_spec.h"
+
+#include <cmath>
+#include <set>
+
+#include "model/status.h"
+
+namespace pz::job {
+namespace {
+
+class Checker {
+ public:
+  explicit Checker(std::vector<FieldViolation>* out) : out_(out) {}
+  template <typename T>
+  void Require(bool ok, const std::string& field, const T& value, const std::string& rule) {
+    if (!ok) out_->push_back({field, FieldError(field, value, rule)});
+  }
+  template <typename T>
+  void Range(const std::string& field, T value, T lo, T hi) {
+    Require(value >= lo && value <= hi, field, value,
+            "must be in [" + Num(lo) + ", " + Num(hi) + "]");
+  }
+  void Finite(const std::string& field, double value) {
+    Require(std::isfinite(value), field, value, "must be finite");
+  }
+
+ private:
+  template <typename T>
+  static std::string Num(T v) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  }
+  std::vector<FieldViolation>* out_;
+};
+
+}  // namespace
+
+int GaSettings::offspring() const {
+  return population - static_cast<int>(std::lround(population * elite_fraction));
+}
+
+std::string JobSpec::kind() const {
+  if (std::holds_alternative<HgannProblem>(problem)) return "hgann";
+  if (std::holds_alternative<SyntheticProblem>(problem)) return "synthetic";
+  if (std::holds_alternative<DiagnoseProblem>(problem)) return "diagnose";
+  if (std::holds_alternative<CompleteModelProblem>(problem)) return "complete_model";
+  return "";
+}
+
+std::vector<FieldViolation> JobSpec::Validate() const {
+  std::vector<FieldViolation> out;
+  Checker c(&out);
+  c.Require(version == kJobSpecVersion, "version", version,
+            "unsupported job spec version (this master reads " + std::to_string(kJobSpecVersion) +
+                ")");
+  c.Require(name.size() <= 200, "name", name.size(), "must be ≤ 200 characters");
+  c.Range("limits.task_timeout_s", limits.task_timeout_s, 0.001, 86400.0);
+  c.Range("limits.quarantine_after", limits.quarantine_after, 1, 100);
+  c.Finite("limits.penalty_cost", limits.penalty_cost);
+  if (limits.target_cost) c.Finite("limits.target_cost", *limits.target_cost);
+
+  if (std::holds_alternative<HgannProblem>(problem)) {
+    // Checked by the "hgann" job kind (master/hgann_job.h), which knows the model.
+  } else if (const auto* s = std::get_if<SyntheticProblem>(&problem)) {
+    c.Range("synthetic.genome_bits", s->genome_bits, 1, 65536);
+    c.Range("synthetic.sleep_ms", s->sleep_ms, 0.0, 60000.0);
+    bool bits01 = s->crash_prefix.find_first_not_of("01") == std::string::npos;
+    c.Require(bits01 && static_cast<int>(s->crash_prefix.size()) <= s->genome_bits,
+              "synthetic.crash_prefix", s->crash_prefix, "must be a 0/1 string ≤ genome_bits");
+  } else if (std::holds_alternative<DiagnoseProblem>(problem)) {
+    // Checked by the "diagnose" job kind (diagnose/job_kind.h), which knows the effect library.
+  } else if (const auto* m = std::get_if<CompleteModelProblem>(&problem)) {
+    // The generic ranges; the records and the family's rules are checked by the "complete_model"
+    // job kind (complete/job_kind.h), which knows the models.
+    c.Require(m->family != CompleteModelProblem::Family::kUnspecified, "complete_model.family",
+              "COMPLETE_MODEL_FAMILY_UNSPECIFIED",
+              "must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+    c.Require(!m->records.empty(), "complete_model.records", "0 records", "at least one record is needed");
+    c.Require(std::isfinite(m->error_cost) && m->error_cost > 0, "complete_model.error_cost", m->error_cost,
+              "must be finite and > 0");
+    c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(), "must be ≤ 1000 characters");
+  } else {
+    out.push_back({"problem", "problem: one of hgann, synthetic, diagnose, complete_model must be set"});
+  }
+
+  if (ga && external) {
+    out.push_back({"algorithm", "algorithm: only one of ga, external may be set"});
+  } else if (external) {
+    c.Range("external.idle_timeout_s", external->idle_timeout_s, 0.1, 86400.0);
+    c.Require(external->owner.size() <= 200, "external.owner", external->owner.size(),
+              "must be ≤ 200 characters");
+  } else if (!ga) {
+    out.push_back({"algorithm", "algorithm: one of ga, external must be set"});
+  } else {
+    c.Range("ga.population", ga->population, 2, 1000000);
+    c.Require(ga->elite_fraction > 0 && ga->elite_fraction < 1, "ga.elite_fraction",
+              ga->elite_fraction, "must be in (0, 1)");
+    const int elite = static_cast<int>(std::lround(ga->population * ga->elite_fraction));
+    c.Require(elite >= 1 && elite <= ga->population - 1, "ga.elite_fraction", ga->elite_fraction,
+              "round(population · elite_fraction) = " + std::to_string(elite) +
+                  " must be in [1, population − 1]");
+    c.Range("ga.tournament", ga->tournament, 1, 1000000);
+    c.Range("ga.crossover_probability", ga->crossover_probability, 0.0, 1.0);
+    c.Range("ga.mutation_probability", ga->mutation_probability, 0.0, 1.0);
+    c.Range("ga.generations", ga->generations, 0, 100000000);
+    c.Range("ga.stall_generations", ga->stall_generations, 0, 100000000);
+  }
+  return out;
+}
+
+}  // namespace pz::job

@@ -1,0 +1,165 @@
+// The job specification as the master, the workers and the client library see it (conventions 3,
+// 12): plain structs with defaults, decoded from proto/job.proto by master/wire_codec.h.
+#pragma once
+
+#include <algorithm>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace pz::job {
+
+inline constexpr uint32_t kJobSpecVersion = 1;
+
+/// One violated rule of a job spec: the field path (as in the JSON spec) and what is wrong.
+struct FieldViolation {
+  std::string field;        ///< e.g. "ga.population"
+  std::string description;  ///< e.g. "ga.population = 1: must be ≥ 2"
+  bool operator==(const FieldViolation&) const = default;
+};
+
+/// Override of the range of one of the seven identified parameters (proto ParameterRange).
+struct ParameterRange {
+  std::string name;  ///< "mu", "delta", "alpha", "beta", "gamma", "a1", "a2"
+  double min = 0;    ///< lower bound, in the parameter's unit, finite
+  double max = 1;    ///< upper bound, finite, ≥ min
+};
+
+enum class CaseRole : int { kUnspecified = 0, kTrain = 1, kValidate = 2, kTest = 3 };
+
+/// One bench case of a bimorph-fin case set (proto HgannCase; io/bench_data.h BenchCase).
+struct HgannCaseSpec {
+  int number = 0;                  ///< > 0, unique
+  double amplitude_v = 0;          ///< V [V], finite, ≥ 0
+  double frequency_hz = 0;         ///< f [Hz], finite, > 0
+  CaseRole role = CaseRole::kUnspecified;  ///< must be set
+  double sample_rate_hz = 0;       ///< fs [Hz], finite, > 0
+  std::vector<double> angle_deg;   ///< measured fin angle [deg] at t = k / fs, ≥ 2 samples, finite
+  std::vector<double> voltage_v;   ///< recorded drive [V]: empty or as many as angle_deg, finite
+  std::optional<double> b1, b2;    ///< saturations [deg] (only with Saturation::kGiven)
+};
+
+/// The HGANN identification problem (job kind "hgann", master/hgann_job.h).
+struct HgannProblem {
+  enum class Saturation { kFromExtremes = 0, kGiven = 1 };
+  std::vector<HgannCaseSpec> cases;    ///< ≥ 1 training case
+  std::string case_set_dir;            ///< client side only: must be empty at the master
+  std::string source;                  ///< where the cases came from (reports), ≤ 1000 chars
+  std::string ranges_preset;           ///< "" / "default" (spec §3) or "paper" (Table 3)
+  std::vector<ParameterRange> ranges;  ///< per-parameter overrides of the preset
+  double spread_penalty = 0;           ///< λ [deg²], finite, ≥ 0
+  Saturation saturation = Saturation::kFromExtremes;
+  /// Overrides of the bench's beam (model/beam.h BeamGeometry), by field name, e.g.
+  /// {"tip_length_m", 0.02}; n_active and n_tip are whole numbers.
+  std::map<std::string, double> geometry;
+};
+
+/// A synthetic problem for tests and benchmarks (job kind "synthetic").
+struct SyntheticProblem {
+  enum class Cost { kNull, kFunction };
+  Cost cost = Cost::kFunction;
+  int genome_bits = 64;      ///< 1..65536
+  double sleep_ms = 0;       ///< each evaluation sleeps this long, 0..60000 [ms]
+  std::string crash_prefix;  ///< test aid: genomes starting with these 0/1 bits kill the evaluator
+};
+
+/// One parameter box of a diagnosis model (proto DiagnoseParam; diagnose/problem.h ParamSpec).
+struct DiagnoseParamBox {
+  std::string name;
+  double lower = 0, upper = 1;
+  bool log_scale = false, ratio = false;
+  bool operator==(const DiagnoseParamBox&) const = default;
+};
+
+/// The global fit of one diagnosis model structure (job kind "diagnose", diagnose/job_kind.h):
+/// genome.reals = search coordinates in [0, 1]; cost = Σ training e² [deg²].
+struct DiagnoseProblem {
+  std::vector<HgannCaseSpec> cases;     ///< role kTrain = fitted; b1, b2 unset (from extremes)
+  std::vector<double> cycles;           ///< drive cycles per case (as many as cases), > 0
+  std::vector<std::string> structure;   ///< effect names added to the base model, in order
+  std::vector<DiagnoseParamBox> params; ///< the search box in layout order
+  bool residuals = false;               ///< results carry the training residual vector
+  int oversample = 4;                   ///< model/effects.h EffectSimOptions
+  double rtol = 1e-6, atol = 1e-13;
+  int64_t max_steps = 5000000;
+  bool force_cvode = false;
+  std::string source;                   ///< free text, ≤ 1000 chars
+};
+
+/// One sampled record of a complete-model identification (proto CompleteModelRecord).
+struct CompleteModelRecord {
+  std::string name;            ///< label in messages, ≤ 200 chars
+  double sample_rate_hz = 0;   ///< fs [Hz], finite, > 0
+  std::vector<double> input;   ///< u_k at t = k / fs, ≥ 2 samples, finite
+  std::vector<double> output;  ///< measured y_k, as many as input, finite
+  uint64_t first_counted = 0;  ///< oscillator: warm-up samples simulated but not counted
+};
+
+/// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
+/// the family's physical parameters; cost = the family's criterion on the records.
+struct CompleteModelProblem {
+  enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3 };
+  enum class Criterion { kIae = 1, kSse = 2, kRmse = 3, kMax = 4 };
+  enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
+  Family family = Family::kUnspecified;
+  std::vector<CompleteModelRecord> records;      ///< ≥ 1
+  Criterion criterion = Criterion::kIae;         ///< stack families
+  double t0_s = 0, t1_s = 0;                     ///< stack families: the criterion's window [s]
+  int substeps = 0;                              ///< 0 = the family's default (oscillator 4, stack 2)
+  Interpolation interpolation = Interpolation::kSpline;  ///< oscillator
+  uint64_t period_samples = 0;                   ///< oscillator, Fourier (0 = whole record)
+  double error_cost = 1e30;                      ///< cost of a diverged / invalid parameter set
+  std::string source;                            ///< free text, ≤ 1000 chars
+};
+
+/// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends
+/// batches of genomes; the master only evaluates them.
+struct ExternalSettings {
+  double idle_timeout_s = 120;  ///< cancelled after this long without a request from its client [s]
+  std::string owner;            ///< free text, ≤ 200 chars
+};
+
+/// Settings of the HGANN binary GA (master/ga.h GaOptions; genome length, seed, target and error
+/// cost come from the problem, the spec's seed and its limits).
+struct GaSettings {
+  int population = 400;                ///< 2..1000000
+  double elite_fraction = 0.5;         ///< (0, 1); round(population · fraction) in 1..population−1
+  int tournament = 2;                  ///< ≥ 1
+  double crossover_probability = 1.0;  ///< 0..1
+  double mutation_probability = 0.01;  ///< 0..1
+  int generations = 1000;              ///< max generations after the initial one, ≥ 0
+  int stall_generations = 200;         ///< ≥ 0 (0 = never stop for stall)
+  int offspring() const;               ///< evaluated per generation: population − elite count
+};
+
+/// Service limits of a job.
+struct JobLimits {
+  double task_timeout_s = 60;         ///< max wall time of one evaluation (0.001..86400) [s]
+  int quarantine_after = 3;           ///< failed leases before quarantine, 1..100
+  double penalty_cost = 1e9;          ///< finite cost of errored / quarantined individuals
+  std::optional<double> target_cost;  ///< stop once best ≤ this
+};
+
+struct JobSpec {
+  uint32_t version = kJobSpecVersion;
+  std::string name;
+  uint64_t seed = 0;
+  JobLimits limits;
+  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem, CompleteModelProblem> problem;
+  /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
+  /// evaluation session driven by the client).
+  std::optional<GaSettings> ga;
+  std::optional<ExternalSettings> external;
+
+  /// "hgann", "synthetic", "diagnose", "complete_model" or "" when no problem is set.
+  std::string kind() const;
+  /// "ga", "external" or "".
+  std::string algorithm() const { return ga ? "ga" : external ? "external" : ""; }
+  /// Generic checks (every field's range); kind-specific checks come from the job-kind registry.
+  std::vector<FieldViolation> Validate() const;
+};
+
+}  // namespace pz::job

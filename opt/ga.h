@@ -1,0 +1,184 @@
+// The binary genetic algorithm of HGANN (spec hgann.md §4, paper Table 2, Appendix C). Socket-free:
+// individuals are evaluated through a BatchEvaluator (inline, threaded, or the broker).
+//
+// Generation 0: population_size genomes, bits drawn uniformly (or given seeds), all evaluated,
+// ranked by (cost, index). Each later generation (Step):
+//   1. the best E = round(elite_fraction · population_size) individuals pass unchanged, with their
+//      costs (they are not re-evaluated);
+//   2. the other population_size − E are offspring, made pair by pair: two parents, each the best
+//      of tournament_size uniform draws from the elite; two-point crossover with probability
+//      crossover_probability; then each offspring bit flips with probability mutation_probability;
+//   3. the offspring (and only they) are evaluated as one batch, population indices E … N − 1;
+//   4. the N individuals are ranked by (cost, index), stable; penalised and failed individuals rank
+//      by their finite penalty cost. The best individual never gets worse (elitism).
+// One seeded generator (master/random.h), owned by the GA, drives every random choice in a fixed
+// order, so the run is a function of (options, seed, fitness) alone: the evaluator, its thread
+// count and the order in which results arrive cannot change it.
+//
+// The whole run state is the plain struct GaState: a master can Step() generation by generation,
+// save state() between generations, and RestoreState() into a new GeneticAlgorithm to continue
+// bit for bit.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "opt/evaluator.h"
+#include "opt/inline_evaluator.h"
+#include "opt/random.h"
+#include "model/status.h"
+
+namespace pz::opt {
+
+/// Every setting of the GA; defaults are the paper's Table 2 / spec §4.
+struct GaOptions {
+  int population_size = 400;           ///< individuals, ≥ 2
+  int genome_bits = 1415;              ///< bits per genome, ≥ 3 (two distinct cut points)
+  double elite_fraction = 0.5;         ///< share passed unchanged, in (0, 1); the elite count
+                                       ///< round(population_size · elite_fraction) must be 1 … N − 1
+  int tournament_size = 2;             ///< parent = best of k uniform draws from the elite, k ≥ 1
+  double crossover_probability = 1.0; ///< two-point crossover of an offspring pair, in [0, 1]
+  double mutation_probability = 0.01;  ///< flip probability of each offspring bit, in [0, 1]
+  int max_generations = 1000;          ///< generations after the initial one, ≥ 0
+  int stall_generations = 200;         ///< stop after this many generations without a strictly
+                                       ///< lower best cost, ≥ 0 (0 = never stop for stall)
+  double target_cost = -std::numeric_limits<double>::infinity();  ///< stop once best ≤ this; not NaN
+  double error_cost = kDefaultErrorCost;  ///< cost given to non-finite results, finite
+  uint64_t seed = 0;                   ///< seeds the only generator
+
+  /// The error names the field, its value and the rule broken.
+  Status Validate() const;
+  /// round(population_size · elite_fraction).
+  int elite_count() const;
+};
+
+/// One generation's record, delivered to the on_generation callbacks and kept in GaState::log.
+struct GenerationSummary {
+  uint64_t generation = 0;  ///< 0 = the initial population
+  double best_cost = 0;     ///< finite
+  double mean_cost = 0;     ///< over the whole population, finite
+  double worst_cost = 0;    ///< finite
+  bool improved = false;    ///< best cost strictly lower than before (always true for generation 0)
+  int stall = 0;            ///< generations since the best cost last improved
+  std::string best_description;  ///< from the describer hook (e.g. "2-3-7 …"), empty without one
+  int evaluations = 0;           ///< genomes evaluated in this generation
+  int64_t evaluations_total = 0; ///< since the start of the run
+  int failures = 0;              ///< non-ok results among this generation's evaluations
+  int penalized = 0;             ///< of which FitnessStatus::kPenalized
+  int errors = 0;                ///< of which FitnessStatus::kError
+  std::map<std::string, int> failure_reasons;  ///< reason → count, this generation
+  double wall_time_s = 0;        ///< wall time of the generation (the only non-deterministic field)
+
+  /// Equal in every field but wall_time_s.
+  bool SameOutcome(const GenerationSummary& other) const;
+  /// One line, e.g. "gen 12: best 10.53 mean 30.1 worst 1e+30 stall 3 evals 200/2600 fail 4".
+  std::string BriefReport() const;
+};
+
+enum class GaTermination : int {
+  kMaxGenerations = 1,  ///< generation == max_generations
+  kStall = 2,           ///< stall_generations generations without improvement
+  kCancelled = 3,       ///< Cancel() was called
+  kTargetReached = 4,   ///< best cost ≤ target_cost
+};
+const char* GaTerminationName(GaTermination t);
+
+/// The complete state of a run between generations. Plain data: save it to checkpoint, restore it
+/// with GeneticAlgorithm::RestoreState() to continue bit for bit.
+struct GaState {
+  bool initialized = false;            ///< generation 0 has been evaluated
+  uint64_t generation = 0;             ///< last completed generation
+  int stall = 0;                       ///< generations since the best cost last improved
+  std::vector<Genome> population;      ///< ranked, best first; population_size genomes
+  std::vector<FitnessResult> fitness;  ///< fitness[i] of population[i]
+  RngState rng;                        ///< the generator, ready for the next generation
+  Genome best;                         ///< best so far (== population[0])
+  FitnessResult best_fitness;
+  uint64_t best_generation = 0;        ///< generation in which the best cost was reached
+  int64_t evaluations = 0;             ///< genomes evaluated since the start
+  int64_t failures = 0;                ///< non-ok results since the start
+  std::vector<GenerationSummary> log;  ///< one record per generation (may be trimmed by the owner)
+
+  /// Consistency with the options: sizes, 0/1 bits, finite costs, ranking order, RNG state. The
+  /// error names the field, e.g. "state.population[3].bits.size()".
+  Status Validate(const GaOptions& options) const;
+};
+
+/// The final record of Run().
+struct GaSummary {
+  GaTermination termination = GaTermination::kMaxGenerations;
+  std::string message;             ///< why it stopped, with the figures
+  uint64_t generations = 0;        ///< last completed generation
+  Genome best;
+  FitnessResult best_fitness;
+  uint64_t best_generation = 0;
+  int64_t evaluations = 0;
+  int64_t failures = 0;
+  double wall_time_s = 0;          ///< of the Run() call
+  std::string BriefReport() const;
+};
+
+class GeneticAlgorithm {
+ public:
+  using GenerationCallback = std::function<void(const GenerationSummary&)>;
+  using Describer = std::function<std::string(const Genome&)>;
+
+  /// Throws InputError if the options are invalid. `evaluator` is not owned and must outlive the GA.
+  GeneticAlgorithm(const GaOptions& options, BatchEvaluator* evaluator);
+
+  /// Called after every generation (0 included), once state() is complete for that generation:
+  /// a checkpoint callback may save state() from here.
+  void AddGenerationCallback(GenerationCallback callback);
+  /// Optional problem hook describing an individual (e.g. its decoded architecture) for the
+  /// per-generation summary. Called on the best individual of each generation.
+  void SetDescriber(Describer describer);
+
+  /// Creates generation 0: `seeds` (≤ population_size genomes of genome_bits 0/1 bits) fill the
+  /// first slots, the rest are drawn uniformly; evaluates and ranks them. Throws InputError on bad
+  /// seeds; requires !state().initialized (checked).
+  const GenerationSummary& Initialize(std::span<const Genome> seeds = {});
+  /// Runs one generation (selection, crossover, mutation, evaluation of the offspring, ranking).
+  /// Requires state().initialized (checked). Does not check the termination criteria.
+  const GenerationSummary& Step();
+  /// The criterion met by the current state, if any (target, stall, max generations, cancel, in
+  /// that order of precedence).
+  std::optional<GaTermination> CheckTermination() const;
+  /// Initialize() if needed, then Step() until CheckTermination() says stop.
+  GaSummary Run();
+  /// Thread-safe; Run() stops after the current generation. Sticky until ClearCancel().
+  void Cancel() { cancel_.store(true); }
+  void ClearCancel() { cancel_.store(false); }
+
+  /// Replaces the run state (e.g. from a checkpoint). Throws InputError if it is inconsistent with
+  /// the options.
+  void RestoreState(GaState state);
+  const GaState& state() const { return state_; }
+  const GaOptions& options() const { return options_; }
+  /// The summary Run() would return if the run stopped now for `termination`.
+  GaSummary MakeSummary(GaTermination termination, double wall_time_s = 0) const;
+
+ private:
+  int Tournament();
+  void Evaluate(std::span<const Genome> genomes, int first_index, std::span<FitnessResult> out);
+  // Ranks population/fitness by (cost, index) (entries first_evaluated … were evaluated in this
+  // generation), updates best, stall and counters, logs the summary and calls the callbacks.
+  const GenerationSummary& Finish(std::vector<Genome> population, std::vector<FitnessResult> fitness,
+                                  int first_evaluated, double start_s);
+
+  GaOptions options_;
+  BatchEvaluator* evaluator_;
+  std::vector<GenerationCallback> callbacks_;
+  Describer describer_;
+  std::atomic<bool> cancel_{false};
+  Rng rng_;
+  GaState state_;
+};
+
+}  // namespace pz::opt

@@ -1,0 +1,124 @@
+// The GA's only random generator (conventions 9): MT19937-64 with portable integer → uniform and
+// integer → Bernoulli mappings, so that one seed gives the same run bit for bit on every platform.
+//
+// The engine is the standard's std::mt19937_64 (same seeding, same output sequence; a test checks
+// it against the standard library), written out here because the textual state of
+// std::mt19937_64 is implementation-defined (libstdc++ appends its position index, libc++ does not),
+// and a checkpoint must restore on any platform. The state is a plain struct: 312 words + position.
+// The std:: distributions are not used: their algorithms are implementation-defined.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+
+#include "model/status.h"
+
+namespace pz::opt {
+
+/// The complete state of the generator; plain data for checkpoints.
+struct RngState {
+  static constexpr int kWords = 312;
+  std::array<uint64_t, kWords> words{};  ///< the Mersenne-Twister state vector
+  uint32_t position = kWords;            ///< next word to temper, 0 … 312 (312 = twist first)
+  bool operator==(const RngState&) const = default;
+
+  /// position ≤ 312 and not all words zero (the all-zero state is degenerate).
+  Status Validate() const {
+    if (position > static_cast<uint32_t>(kWords)) {
+      return InvalidArgument(FieldError("rng.position", position, "must be <= 312"));
+    }
+    for (uint64_t w : words) {
+      if (w != 0) return Status::Ok();
+    }
+    return InvalidArgument("rng.words: all zero, not a reachable generator state");
+  }
+};
+
+/// Precomputed Bernoulli(p) test: a draw x succeeds iff x < threshold (or always, for p ≥ 1).
+struct BernoulliThreshold {
+  uint64_t threshold = 0;
+  bool always = false;
+  /// p in [0, 1] (checked): threshold = ⌊p · 2⁶⁴⌋, exact in IEEE arithmetic.
+  explicit BernoulliThreshold(double p) {
+    PZ_CHECK_MSG(p >= 0 && p <= 1, "Bernoulli probability outside [0, 1]");
+    const double scaled = std::ldexp(p, 64);
+    if (scaled >= 18446744073709551616.0) {
+      always = true;
+    } else {
+      threshold = static_cast<uint64_t>(scaled);
+    }
+  }
+};
+
+class Rng {
+ public:
+  /// Seeds as std::mt19937_64(seed) does.
+  explicit Rng(uint64_t seed = 5489u) {
+    s_.words[0] = seed;
+    for (int i = 1; i < RngState::kWords; ++i) {
+      const uint64_t prev = s_.words[i - 1];
+      s_.words[i] = 6364136223846793005ULL * (prev ^ (prev >> 62)) + static_cast<uint64_t>(i);
+    }
+    s_.position = RngState::kWords;
+  }
+  /// Restores a saved state. Throws InputError if it is invalid.
+  explicit Rng(const RngState& state) : s_(state) { ThrowIfError(state.Validate()); }
+
+  const RngState& state() const { return s_; }
+  bool operator==(const Rng&) const = default;
+
+  /// The next 64-bit output (identical to std::mt19937_64's).
+  uint64_t NextU64() {
+    if (s_.position >= static_cast<uint32_t>(RngState::kWords)) Twist();
+    uint64_t x = s_.words[s_.position++];
+    x ^= (x >> 29) & 0x5555555555555555ULL;
+    x ^= (x << 17) & 0x71D67FFFEDA60000ULL;
+    x ^= (x << 37) & 0xFFF7EEE000000000ULL;
+    x ^= x >> 43;
+    return x;
+  }
+
+  /// Uniform in [0, 1) on the 2⁻⁵³ grid: (x >> 11) · 2⁻⁵³.
+  double Uniform01() { return static_cast<double>(NextU64() >> 11) * 0x1.0p-53; }
+
+  /// Uniform integer in [0, n), n ≥ 1 (checked); unbiased by rejection of the lowest 2⁶⁴ mod n
+  /// values, so the number of draws consumed is itself deterministic.
+  uint64_t UniformBelow(uint64_t n) {
+    PZ_CHECK(n >= 1);
+    const uint64_t reject_below = (0 - n) % n;  // 2^64 mod n
+    uint64_t x;
+    do {
+      x = NextU64();
+    } while (x < reject_below);
+    return x % n;
+  }
+
+  /// One draw; true with probability p (exactly ⌊p · 2⁶⁴⌋ / 2⁶⁴). Always consumes one draw.
+  bool Bernoulli(const BernoulliThreshold& t) {
+    const uint64_t x = NextU64();
+    return t.always || x < t.threshold;
+  }
+  bool Bernoulli(double p) { return Bernoulli(BernoulliThreshold(p)); }
+
+ private:
+  void Twist() {
+    constexpr int n = RngState::kWords, m = 156;
+    constexpr uint64_t upper = 0xFFFFFFFF80000000ULL, lower = 0x7FFFFFFFULL;
+    constexpr uint64_t matrix_a = 0xB5026F5AA96619E9ULL;
+    auto& w = s_.words;
+    auto mix = [&](int i, int next, int far) {
+      const uint64_t y = (w[i] & upper) | (w[next] & lower);
+      w[i] = w[far] ^ (y >> 1) ^ ((y & 1u) ? matrix_a : 0);
+    };
+    int i = 0;
+    for (; i < n - m; ++i) mix(i, i + 1, i + m);
+    for (; i < n - 1; ++i) mix(i, i + 1, i + m - n);
+    mix(n - 1, 0, m - 1);
+    s_.position = 0;
+  }
+
+  RngState s_;
+};
+
+}  // namespace pz::opt

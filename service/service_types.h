@@ -1,0 +1,191 @@
+// Domain structs of the service protocol (proto/wire.proto decoded by master/wire_codec.h):
+// the master, the workers and the client library only handle these, never protobuf types.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "opt/evaluator.h"
+#include "opt/ga.h"
+#include "job/job_spec.h"
+
+namespace pz::service {
+
+inline constexpr uint32_t kProtocolVersion = 1;
+
+/// Request outcome; IsTransient() tells the retryable ones apart (wire.proto Code).
+enum class WireCode : int {
+  kUnspecified = 0,
+  kOk = 1,
+  kInvalidArgument = 2,
+  kNotFound = 3,
+  kFailedPrecondition = 4,
+  kVersionMismatch = 5,
+  kMalformed = 6,
+  kUnavailable = 100,
+  kDeadlineExceeded = 101,
+  kResourceExhausted = 102,
+  kInternal = 103,
+};
+inline bool IsTransient(WireCode c) { return static_cast<int>(c) >= 100; }
+const char* WireCodeName(WireCode c);
+
+enum class JobState : int { kUnspecified = 0, kRunning, kSucceeded, kFailed, kCancelled };
+const char* JobStateName(JobState s);
+inline bool IsFinal(JobState s) { return s != JobState::kRunning && s != JobState::kUnspecified; }
+
+struct ScoredGenome {
+  int index = 0;  ///< population index
+  opt::Genome genome;
+  opt::FitnessResult fitness;
+};
+
+/// One generation of a job (proto GenerationRecord; master/ga.h GenerationSummary).
+struct GenerationRecord {
+  uint64_t generation = 0;
+  double best_cost = 0;
+  double mean_cost = 0;
+  uint64_t evaluations = 0;  ///< cumulative
+  uint32_t errors = 0;       ///< non-ok results in this generation (penalised or errored)
+  uint32_t quarantined = 0;
+  double worst_cost = 0;
+  uint32_t stall = 0;        ///< generations since the best cost last improved
+  uint32_t evaluated = 0;    ///< genomes evaluated in this generation
+  uint32_t penalized = 0;    ///< of errors, FitnessStatus::kPenalized
+  std::map<std::string, uint32_t> failure_reasons;  ///< reason → count, this generation
+  std::string best_description;  ///< from the job kind's describer, or empty
+  double wall_time_s = 0;    ///< the only non-deterministic field
+  bool improved = false;
+  /// Equal in every field but wall_time_s.
+  bool operator==(const GenerationRecord& o) const {
+    return generation == o.generation && best_cost == o.best_cost && mean_cost == o.mean_cost &&
+           evaluations == o.evaluations && errors == o.errors && quarantined == o.quarantined &&
+           worst_cost == o.worst_cost && stall == o.stall && evaluated == o.evaluated &&
+           penalized == o.penalized && failure_reasons == o.failure_reasons &&
+           best_description == o.best_description && improved == o.improved;
+  }
+};
+
+struct QuarantineRecord {
+  uint64_t generation = 0;
+  int index = 0;
+  uint32_t strikes = 0;
+};
+
+struct JobInfo {
+  std::string job_id, name, kind;
+  JobState state = JobState::kUnspecified;
+  uint64_t generation = 0, max_generations = 0;
+  double best_cost = 0;
+  uint64_t evaluations = 0;
+  std::string message;
+  std::vector<QuarantineRecord> quarantined;
+  double elapsed_s = 0;
+  uint64_t seed = 0;
+  std::string algorithm;  ///< "ga" or "external" (a session: generation = batches evaluated)
+};
+
+struct JobEvent {
+  std::string job_id;
+  JobState state = JobState::kUnspecified;
+  std::optional<GenerationRecord> record;
+  std::string message;
+  int workers = 0, worker_threads = 0;  ///< connected when sent (filled in by the broker)
+};
+
+// ------------------------------------------------------------------ worker protocol
+
+struct TaskBatchMsg {
+  uint64_t lease_id = 0;
+  std::string job_id;
+  uint64_t generation = 0;
+  std::string context_hash;
+  std::vector<int> indices;
+  std::vector<opt::Genome> genomes;  ///< same length as indices
+  double deadline_s = 0;
+};
+
+struct BatchResultMsg {
+  uint64_t lease_id = 0;
+  std::string job_id;
+  uint64_t generation = 0;
+  std::vector<int> indices;
+  std::vector<opt::FitnessResult> results;  ///< same length as indices
+  WireCode code = WireCode::kOk;
+  std::string error;
+  double eval_seconds = 0;
+};
+
+/// What travels between a worker and the master (both directions share the struct; `type` says
+/// which fields are meaningful).
+struct WorkerMsg {
+  enum class Type { kReady, kHeartbeat, kDisconnect, kContextRequest, kContext, kBatch, kResult };
+  Type type = Type::kHeartbeat;
+  int threads = 0;                  ///< kReady
+  std::string host;                 ///< kReady
+  int64_t pid = 0;                  ///< kReady
+  std::string reason;               ///< kDisconnect
+  std::string context_hash;         ///< kContextRequest, kContext
+  std::string context_spec;         ///< kContext: serialised JobSpec
+  WireCode code = WireCode::kOk;    ///< kContext (not found), or an error answer
+  TaskBatchMsg batch;               ///< kBatch
+  BatchResultMsg result;            ///< kResult
+};
+
+// ------------------------------------------------------------------ client protocol
+
+struct ClientRequestMsg {
+  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose };
+  Type type = Type::kPing;
+  uint64_t request_id = 0;
+  job::JobSpec spec;              ///< kSubmit (decoded)
+  std::string spec_bytes;    ///< kSubmit: the deterministic serialisation of the spec
+  std::vector<job::FieldViolation> decode_violations;  ///< kSubmit: fields that did not decode
+  std::string client_token;  ///< kSubmit
+  std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch, kEvaluate, kClose
+  int count = 1;             ///< kFetch
+  uint64_t batch_seq = 0;         ///< kEvaluate: ≥ 1
+  std::vector<opt::Genome> genomes;    ///< kEvaluate: the batch, or empty (a poll)
+};
+
+struct ClientReplyMsg {
+  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate };
+  Type type = Type::kNone;
+  uint64_t request_id = 0;
+  WireCode code = WireCode::kOk;
+  std::string error;
+  std::vector<job::FieldViolation> violations;
+  std::string job_id;  ///< kSubmit
+  bool existed = false;  ///< kSubmit
+  JobInfo info;        ///< kStatus, kFetch
+  std::vector<JobInfo> jobs;  ///< kList
+  int workers = 0, worker_threads = 0;  ///< kList
+  std::vector<ScoredGenome> best;       ///< kFetch
+  std::vector<GenerationRecord> log;    ///< kFetch
+  std::optional<job::JobSpec> spec;          ///< kFetch: the job's spec
+  JobEvent event;                       ///< kEvent
+  uint64_t batch_seq = 0;               ///< kEvaluate
+  bool done = false;                    ///< kEvaluate: results holds the batch's results
+  std::vector<opt::FitnessResult> results;   ///< kEvaluate (worker_threads: connected threads)
+};
+
+}  // namespace pz::service
+
+namespace pz::service {
+
+/// What the master stores per job after each generation.
+struct JobCheckpoint {
+  std::string job_id;
+  JobState state = JobState::kRunning;
+  opt::GaState optimizer;  ///< without its log (the log is `log` below)
+  std::vector<GenerationRecord> log;
+  std::vector<ScoredGenome> best;  ///< best first
+  std::string message;
+  std::vector<QuarantineRecord> quarantined;
+  double elapsed_s = 0;
+};
+
+}  // namespace pz::service

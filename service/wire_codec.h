@@ -1,0 +1,51 @@
+// The edge between protobuf (proto/job.proto, proto/wire.proto) and the domain structs of
+// master/service_types.h: the only file that sees generated protobuf types on the service side.
+// Decoders never throw: they return kDataLoss for a frame that does not decode (or decodes to
+// inconsistent content) and kFailedPrecondition for another protocol or format version.
+#pragma once
+
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "service/service_types.h"
+#include "model/status.h"
+
+namespace pz::service {
+
+/// FNV-1a 64-bit hash of `bytes` as 16 hex digits (content addressing, not authentication).
+std::string ContentHash(std::string_view bytes);
+
+/// Maps a decode status to the wire code answered to the sender.
+WireCode DecodeFailureCode(const Status& s);
+
+// Job specs. Encoding is deterministic (stable bytes for hashing); defaults are made explicit.
+std::string EncodeJobSpec(const job::JobSpec& spec);
+/// Decodes a serialised JobSpec; field-level problems (e.g. an unknown enum) go to *violations.
+Status DecodeJobSpec(std::string_view bytes, job::JobSpec* spec,
+                     std::vector<job::FieldViolation>* violations = nullptr);
+/// Parses a protobuf-JSON job spec (the user-facing format, see examples/).
+Status JobSpecFromJson(const std::string& json, job::JobSpec* spec,
+                       std::vector<job::FieldViolation>* violations = nullptr);
+std::string JobSpecToJson(const job::JobSpec& spec);
+
+// Worker ↔ master.
+std::string EncodeWorkerToMaster(const WorkerMsg& m);
+Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m);
+std::string EncodeMasterToWorker(const WorkerMsg& m);
+Status DecodeMasterToWorker(std::string_view bytes, WorkerMsg* m);
+
+// Client ↔ master.
+std::string EncodeClientRequest(const ClientRequestMsg& m);
+Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m);
+std::string EncodeClientReply(const ClientReplyMsg& m);
+Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m);
+
+// Stored job state.
+std::string EncodeCheckpoint(const JobCheckpoint& c);
+Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c);
+
+/// "0101…" rendering of genome bits (logs, reports).
+std::string BitString(const opt::Genome& g);
+
+}  // namespace pz::service

@@ -1,0 +1,263 @@
+// The HGANN fitness and a complete (small) identification: determinism across evaluators and thread
+// counts, the penalty of unbounded loops, the paper's Table 3 preset forcing α = 0.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <sstream>
+#include <unistd.h>
+#include <filesystem>
+
+#include "client/identify.h"
+#include "io/bench_data.h"
+#include "opt/ga.h"
+#include "hgann/hgann_fitness.h"
+#include "opt/inline_evaluator.h"
+#include "opt/thread_pool_evaluator.h"
+#include "model/chromosome.h"
+
+namespace pz::hgann {
+
+using opt::BatchEvaluator;
+using opt::FitnessStatus;
+using opt::GaOptions;
+using opt::GenerationSummary;
+using opt::GeneticAlgorithm;
+using opt::Genome;
+using opt::InlineEvaluator;
+using opt::Rng;
+using opt::ThreadPoolEvaluator;
+namespace {
+
+const io::CaseSet& Nominal() {
+  static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
+  return set;
+}
+
+HgannFitness MakeFitness(const model::ParameterRanges& ranges = {}, double spread = 0) {
+  auto config = HgannConfigFromCaseSet(Nominal(), ranges);
+  config.spread_penalty = spread;
+  return HgannFitness(std::move(config));
+}
+
+
+TEST(HgannConfig, FromCaseSetUsesTrainingRolesAndFittedSaturations) {
+  const auto config = HgannConfigFromCaseSet(Nominal(), {});
+  ASSERT_EQ(config.cases.size(), 9u);
+  int training = 0;
+  for (const auto& c : config.cases) {
+    training += c.training;
+    EXPECT_GT(c.b1, 0);
+    EXPECT_LT(c.b2, 0);
+  }
+  EXPECT_EQ(training, 4);
+  // Normalisation over the training cases (1, 5, 6, 7): V in [375, 750], f in [0.25, 1].
+  EXPECT_EQ(config.normalization.amplitude_lo_v, 375);
+  EXPECT_EQ(config.normalization.amplitude_hi_v, 750);
+  EXPECT_EQ(config.normalization.frequency_lo_hz, 0.25);
+  EXPECT_EQ(config.normalization.frequency_hi_hz, 1.0);
+}
+
+TEST(HgannConfig, ValidateNamesTheField) {
+  auto config = HgannConfigFromCaseSet(Nominal(), {});
+  config.cases[2].measured_deg[17] = std::nan("");
+  EXPECT_NE(config.Validate().message().find("cases[2].measured_deg[17]"), std::string::npos);
+  config = HgannConfigFromCaseSet(Nominal(), {});
+  config.spread_penalty = -1;
+  EXPECT_NE(config.Validate().message().find("spread_penalty"), std::string::npos);
+  config = HgannConfigFromCaseSet(Nominal(), {});
+  for (auto& c : config.cases) c.training = false;
+  EXPECT_NE(config.Validate().message().find("training"), std::string::npos);
+  EXPECT_THROW(HgannFitness{config}, InputError);
+}
+
+TEST(HgannFitness, RandomGenomesGiveFiniteCostsAndPenaltiesRankLast) {
+  const auto fitness = MakeFitness();
+  Rng rng(7);
+  int penalized = 0, ok = 0;
+  double worst_ok = 0;
+  for (int i = 0; i < 300; ++i) {
+    Genome g;
+    g.bits.resize(model::kChromosomeBits);
+    for (auto& b : g.bits) b = static_cast<uint8_t>(rng.NextU64() & 1);
+    const auto r = fitness.Evaluate(g);
+    ASSERT_TRUE(std::isfinite(r.cost));
+    if (r.status == FitnessStatus::kOk) {
+      ++ok;
+      worst_ok = std::max(worst_ok, r.cost);
+      EXPECT_TRUE(r.reason.empty());
+    } else {
+      ++penalized;
+      EXPECT_EQ(r.cost, fitness.penalty_cost());
+      EXPECT_FALSE(r.reason.empty());
+    }
+  }
+  EXPECT_GT(ok, 0);
+  EXPECT_GT(penalized, 0) << "the default ranges allow beta - gamma < 0: some loops are unbounded";
+  EXPECT_LT(worst_ok, fitness.penalty_cost());
+}
+
+TEST(HgannFitness, MalformedGenomeIsAnErrorNotACrash) {
+  const auto fitness = MakeFitness();
+  Genome g;
+  g.bits.assign(100, 1);
+  const auto r = fitness.Evaluate(g);
+  EXPECT_EQ(r.status, FitnessStatus::kError);
+  EXPECT_TRUE(std::isfinite(r.cost));
+  EXPECT_NE(r.reason.find("invalid genome"), std::string::npos);
+}
+
+TEST(HgannFitness, SpreadPenaltyIsZeroForConstantOutputsAndAddsToCost) {
+  const auto plain = MakeFitness({}, 0);
+  const auto spread = MakeFitness({}, 10);
+  Rng rng(3);
+  int checked = 0;
+  for (int i = 0; i < 50 && checked < 10; ++i) {
+    Genome g;
+    g.bits.resize(model::kChromosomeBits);
+    for (auto& b : g.bits) b = static_cast<uint8_t>(rng.NextU64() & 1);
+    const auto a = plain.Evaluate(g), b = spread.Evaluate(g);
+    if (a.status != FitnessStatus::kOk) continue;
+    ++checked;
+    const double s = spread.OutputSpread(spread.Decode(g));
+    EXPECT_GE(s, 0);
+    EXPECT_NEAR(b.cost, a.cost + 10 * s, 1e-9 * b.cost);
+  }
+  EXPECT_EQ(checked, 10);
+}
+
+GaOptions SmallGa(uint64_t seed) {
+  GaOptions o;
+  o.population_size = 40;
+  o.max_generations = 12;
+  o.seed = seed;
+  return o;
+}
+
+struct RunRecord {
+  Genome best;
+  std::vector<GenerationSummary> log;
+};
+
+RunRecord RunWith(const HgannFitness& fitness, BatchEvaluator& evaluator, uint64_t seed) {
+  auto o = SmallGa(seed);
+  o.error_cost = fitness.penalty_cost();
+  GeneticAlgorithm ga(o, &evaluator);
+  ga.SetDescriber([](const Genome& g) { return model::DescribeChromosome(g.bits); });
+  const auto summary = ga.Run();
+  return {summary.best, ga.state().log};
+}
+
+TEST(HgannIdentification, SameSeedIsBitIdenticalInlineOneAndTwoThreads) {
+  const auto fitness = MakeFitness();
+  InlineEvaluator inline_eval(fitness, fitness.penalty_cost());
+  ThreadPoolEvaluator one(fitness, 1, fitness.penalty_cost());
+  ThreadPoolEvaluator two(fitness, 2, fitness.penalty_cost());
+  const auto a = RunWith(fitness, inline_eval, 11);
+  const auto b = RunWith(fitness, one, 11);
+  const auto c = RunWith(fitness, two, 11);
+  EXPECT_EQ(a.best, b.best);
+  EXPECT_EQ(a.best, c.best);
+  ASSERT_EQ(a.log.size(), 13u);
+  ASSERT_EQ(a.log.size(), b.log.size());
+  ASSERT_EQ(a.log.size(), c.log.size());
+  for (size_t i = 0; i < a.log.size(); ++i) {
+    EXPECT_TRUE(a.log[i].SameOutcome(b.log[i])) << i;
+    EXPECT_TRUE(a.log[i].SameOutcome(c.log[i])) << i;
+    // Bit-identical costs, not merely close.
+    EXPECT_EQ(std::memcmp(&a.log[i].best_cost, &c.log[i].best_cost, sizeof(double)), 0) << i;
+  }
+  // A different seed gives a different run.
+  const auto d = RunWith(fitness, two, 12);
+  EXPECT_NE(a.best, d.best);
+}
+
+TEST(HgannIdentification, ShortRunImprovesAndBeatsRandom) {
+  const auto fitness = MakeFitness();
+  ThreadPoolEvaluator pool(fitness, 2, fitness.penalty_cost());
+  const auto r = RunWith(fitness, pool, 5);
+  EXPECT_LT(r.log.back().best_cost, r.log.front().best_cost);
+  EXPECT_LT(r.log.back().best_cost, fitness.penalty_cost());
+}
+
+// With the paper's Table 3 ranges (α, β, γ ≤ 0) every α ≠ 0 gives an unbounded loop: the GA's
+// survivors put α exactly at 0 (the top of its range) and the failures are counted as penalised.
+TEST(HgannIdentification, PaperTable3RangesDriveAlphaToZero) {
+  const auto fitness = MakeFitness(model::ParameterRanges::PaperTable3());
+  ThreadPoolEvaluator pool(fitness, 2, fitness.penalty_cost());
+  auto o = SmallGa(21);
+  o.max_generations = 15;
+  o.error_cost = fitness.penalty_cost();
+  GeneticAlgorithm ga(o, &pool);
+  const auto summary = ga.Run();
+  ASSERT_EQ(summary.best_fitness.status, FitnessStatus::kOk);
+  int64_t penalized = 0;
+  std::map<std::string, int> reasons;
+  for (const auto& g : ga.state().log) {
+    penalized += g.penalized;
+    for (const auto& [k, n] : g.failure_reasons) reasons[k] += n;
+    EXPECT_TRUE(std::isfinite(g.mean_cost));
+    EXPECT_TRUE(std::isfinite(g.worst_cost));
+  }
+  EXPECT_GT(penalized, 0);
+  EXPECT_GT(reasons["unbounded_hysteresis"], 0);
+  const auto net = fitness.Decode(summary.best);
+  for (const auto& c : fitness.EvaluateCases(net)) {
+    if (c.training) {
+      EXPECT_EQ(c.params.alpha, 0.0) << "case " << c.number;
+      EXPECT_TRUE(c.summary.ok()) << "case " << c.number;
+    } else {
+      // Untrained operating points: α = 0 again, or an unbounded loop reported as a status.
+      EXPECT_TRUE(c.params.alpha == 0.0 || c.summary.status == model::SimStatus::kUnboundedHysteresis);
+      EXPECT_TRUE(std::isfinite(c.pi));
+    }
+  }
+}
+
+TEST(HgannReport, PaperTable8Lookup) {
+  EXPECT_DOUBLE_EQ(client::PaperTable8Pi(750, 1.0), 6.78);
+  EXPECT_DOUBLE_EQ(client::PaperTable8Pi(375, 0.25), 1.42);
+  EXPECT_TRUE(std::isnan(client::PaperTable8Pi(600, 1.0)));
+  EXPECT_THROW(client::RangesPreset("tabel3"), InputError);
+}
+
+}  // namespace
+}  // namespace pz::hgann
+
+namespace pz::client {
+namespace {
+
+TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
+  const auto& set = hgann::Nominal();
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  IdentifyOptions o;
+  o.cases_dir = set.dir;
+  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-identify-test-" + std::to_string(::getpid()));
+  o.ga.population_size = 20;
+  o.ga.max_generations = 3;
+  o.ga.seed = 4;
+  o.threads = 2;
+  o.plots = false;
+  int generations = 0;
+  const auto result = RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
+  EXPECT_EQ(generations, 4);
+  std::ostringstream term;
+  const auto files = WriteIdentifyReport(o, set, fitness, result, term);
+  for (const char* f : {"network.pb", "network.json", "progress.csv", "validation.csv", "parameters.csv",
+                        "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
+    EXPECT_TRUE(std::filesystem::exists(o.out_dir / f)) << f;
+  EXPECT_NE(term.str().find("paper's Table 8"), std::string::npos);
+  for (const char* f : {"network.pb", "network.json"}) {
+    io::SavedNetwork loaded;
+    ASSERT_TRUE(io::LoadNetwork((o.out_dir / f).string(), &loaded).ok()) << f;
+    EXPECT_EQ(loaded.network, result.best.network) << f;
+    EXPECT_EQ(loaded.provenance.fitness, result.summary.best_fitness.cost);
+    const auto a = loaded.network.Predict(600, 0.7), b = fitness.Decode(result.summary.best).Predict(600, 0.7);
+    EXPECT_EQ(a, b) << f;
+  }
+  std::filesystem::remove_all(o.out_dir);
+}
+
+}  // namespace
+}  // namespace pz::client
