@@ -6,7 +6,7 @@
 #include <iostream>
 
 #include "client/commands.h"
-#include "client/identify.h"
+#include "client/identify_report.h"
 
 #ifndef PIEZOID_DATA_DIR
 #define PIEZOID_DATA_DIR "data"
@@ -85,10 +85,11 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     opts->cases_dir = *cases;
     opts->out_dir = *out;
     opts->plots = !*no_plots;
-    const auto ranges = RangesPreset(opts->ranges);
+    const auto ranges = hgann::RangesPreset(opts->ranges);
+    if (!ranges) throw InputError(FieldError("--ranges", opts->ranges, hgann::kRangesPresetRule));
     ThrowIfError(opts->ga.Validate());
     const io::CaseSet set = io::LoadCaseSet(opts->cases_dir);
-    auto config = hgann::HgannConfigFromCaseSet(set, ranges);
+    auto config = hgann::HgannConfigFromCaseSet(set, *ranges);
     config.spread_penalty = opts->spread_penalty;
     const hgann::HgannFitness fitness(std::move(config));
     std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d, up to %d generations, seed %llu\n",
@@ -96,7 +97,7 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                  opts->ga.population_size, opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));
     Progress progress;
     progress.max_generations = opts->ga.max_generations;
-    const auto result = RunIdentify(*opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
+    const auto result = hgann::RunIdentify(*opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
     if (progress.tty) std::fprintf(stderr, "\n");
     WriteIdentifyReport(*opts, set, fitness, result, std::cout);
     exit_code = 0;

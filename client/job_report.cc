@@ -99,8 +99,8 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitn
   return n;
 }
 
-IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness) {
-  IdentifyResult r;
+hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness) {
+  hgann::IdentifyResult r;
   r.summary = GaSummaryOfJob(job);
   for (const auto& g : job.log) r.log.push_back(SummaryOfRecord(g));
   r.best = SavedNetworkOfJob(job, fitness, 0);
@@ -199,7 +199,7 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
     }
     io::CaseSet set = hgann::HgannCaseSet(*h);
     if (set.dir.empty()) set.dir = "job " + job.info.job_id;
-    const IdentifyResult r = IdentifyResultOfJob(job, fitness);
+    const hgann::IdentifyResult r = IdentifyResultOfJob(job, fitness);
     const auto files = WriteIdentifyReport(IdentifyOptionsOfJob(job, out, plots), set, fitness, r, term);
     o.written.insert(o.written.end(), files.begin(), files.end());
     o.report = out / "report.md";

@@ -1,5 +1,5 @@
 // What `piezoid fetch` writes for a job fetched from the master: the best networks and, for an
-// hgann job, the same validation report as `piezoid identify` (client/identify.h
+// hgann job, the same validation report as `piezoid identify` (client/identify_report.h
 // WriteIdentifyReport), rebuilt from the job's spec (spec → HgannFitnessConfig → HgannFitness), its
 // generation log and its best genomes.
 #pragma once
@@ -8,7 +8,7 @@
 #include <ostream>
 #include <vector>
 
-#include "client/identify.h"
+#include "client/identify_report.h"
 #include "service/service_types.h"
 
 namespace pz::client {
@@ -32,7 +32,7 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job);
 io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness, size_t k);
 
 /// The identification result of an hgann job (what RunIdentify returns for a local run).
-IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness);
+hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness);
 
 /// The report options of an hgann job: population, seed, ranges, spread penalty from its spec.
 IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots);

@@ -1,5 +1,7 @@
 #include "hgann/hgann_job.h"
 
+#include "hgann/identify.h"
+
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -140,14 +142,10 @@ void RequireFiniteSamples(Violations& c, const std::string& field, const std::ve
 }  // namespace
 
 Status HgannRanges(const HgannProblem& h, model::ParameterRanges* ranges) {
-  if (h.ranges_preset.empty() || h.ranges_preset == "default") {
-    *ranges = model::ParameterRanges{};
-  } else if (h.ranges_preset == "paper") {
-    *ranges = model::ParameterRanges::PaperTable3();
-  } else {
-    return InvalidArgument(FieldError("hgann.ranges_preset", "\"" + h.ranges_preset + "\"",
-                                      "must be \"default\" (spec ranges) or \"paper\" (the paper's Table 3)"));
-  }
+  const auto preset = RangesPreset(h.ranges_preset);
+  if (!preset)
+    return InvalidArgument(FieldError("hgann.ranges_preset", "\"" + h.ranges_preset + "\"", kRangesPresetRule));
+  *ranges = *preset;
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];
@@ -225,9 +223,8 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
               "needs at least one case with role CASE_ROLE_TRAIN");
   c.Require(std::isfinite(h.spread_penalty) && h.spread_penalty >= 0, "hgann.spread_penalty", h.spread_penalty,
             "must be finite and >= 0 [deg^2]");
-  c.Require(h.ranges_preset.empty() || h.ranges_preset == "default" || h.ranges_preset == "paper",
-            "hgann.ranges_preset", "\"" + h.ranges_preset + "\"",
-            "must be \"default\" (spec ranges) or \"paper\" (the paper's Table 3)");
+  c.Require(RangesPreset(h.ranges_preset).has_value(), "hgann.ranges_preset", "\"" + h.ranges_preset + "\"",
+            kRangesPresetRule);
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];

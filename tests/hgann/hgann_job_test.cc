@@ -8,7 +8,7 @@
 #include <functional>
 #include <random>
 
-#include "client/identify.h"
+#include "hgann/identify.h"
 #include "client/job_file.h"
 #include "hgann/hgann_job.h"
 #include "master/job_runner.h"
@@ -120,12 +120,12 @@ TEST(HgannJob, InProcessJobRunsExactlyAsPiezoidIdentify) {
   JobCheckpoint job;
   ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &job).ok());
 
-  client::IdentifyOptions o;
+  IdentifyOptions o;
   GenomeLayout layout{model::kChromosomeBits, 0};
   o.ga = ToGaOptions(spec, layout);
   o.threads = 2;
   const HgannFitness fitness(HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
-  const client::IdentifyResult id = client::RunIdentify(o, Nominal(), fitness, nullptr);
+  const IdentifyResult id = RunIdentify(o, Nominal(), fitness, nullptr);
 
   ASSERT_EQ(job.log.size(), id.log.size());
   for (size_t g = 0; g < job.log.size(); ++g) {

@@ -9,7 +9,7 @@
 #include <unistd.h>
 #include <filesystem>
 
-#include "client/identify.h"
+#include "hgann/identify.h"
 #include "io/bench_data.h"
 #include "opt/ga.h"
 #include "hgann/hgann_fitness.h"
@@ -216,48 +216,13 @@ TEST(HgannIdentification, PaperTable3RangesDriveAlphaToZero) {
 }
 
 TEST(HgannReport, PaperTable8Lookup) {
-  EXPECT_DOUBLE_EQ(client::PaperTable8Pi(750, 1.0), 6.78);
-  EXPECT_DOUBLE_EQ(client::PaperTable8Pi(375, 0.25), 1.42);
-  EXPECT_TRUE(std::isnan(client::PaperTable8Pi(600, 1.0)));
-  EXPECT_THROW(client::RangesPreset("tabel3"), InputError);
+  EXPECT_DOUBLE_EQ(PaperTable8Pi(750, 1.0), 6.78);
+  EXPECT_DOUBLE_EQ(PaperTable8Pi(375, 0.25), 1.42);
+  EXPECT_TRUE(std::isnan(PaperTable8Pi(600, 1.0)));
+  EXPECT_FALSE(RangesPreset("tabel3").has_value());
+  EXPECT_EQ(*RangesPreset("paper"), model::ParameterRanges::PaperTable3());
+  EXPECT_EQ(*RangesPreset(""), model::ParameterRanges{});
 }
 
 }  // namespace
 }  // namespace pz::hgann
-
-namespace pz::client {
-namespace {
-
-TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
-  const auto& set = hgann::Nominal();
-  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
-  IdentifyOptions o;
-  o.cases_dir = set.dir;
-  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-identify-test-" + std::to_string(::getpid()));
-  o.ga.population_size = 20;
-  o.ga.max_generations = 3;
-  o.ga.seed = 4;
-  o.threads = 2;
-  o.plots = false;
-  int generations = 0;
-  const auto result = RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
-  EXPECT_EQ(generations, 4);
-  std::ostringstream term;
-  const auto files = WriteIdentifyReport(o, set, fitness, result, term);
-  for (const char* f : {"network.pb", "network.json", "progress.csv", "validation.csv", "parameters.csv",
-                        "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
-    EXPECT_TRUE(std::filesystem::exists(o.out_dir / f)) << f;
-  EXPECT_NE(term.str().find("paper's Table 8"), std::string::npos);
-  for (const char* f : {"network.pb", "network.json"}) {
-    io::SavedNetwork loaded;
-    ASSERT_TRUE(io::LoadNetwork((o.out_dir / f).string(), &loaded).ok()) << f;
-    EXPECT_EQ(loaded.network, result.best.network) << f;
-    EXPECT_EQ(loaded.provenance.fitness, result.summary.best_fitness.cost);
-    const auto a = loaded.network.Predict(600, 0.7), b = fitness.Decode(result.summary.best).Predict(600, 0.7);
-    EXPECT_EQ(a, b) << f;
-  }
-  std::filesystem::remove_all(o.out_dir);
-}
-
-}  // namespace
-}  // namespace pz::client

@@ -1,4 +1,4 @@
-#include "client/identify.h"
+#include "client/identify_report.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,59 +12,14 @@
 
 #include "client/plots.h"
 #include "io/trace_io.h"
-#include "opt/thread_pool_evaluator.h"
 #include "model/metrics.h"
 #include "model/chromosome.h"
 #include "model/saturation.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
-
-model::ParameterRanges RangesPreset(const std::string& name) {
-  if (name == "default") return model::ParameterRanges{};
-  if (name == "paper") return model::ParameterRanges::PaperTable3();
-  throw InputError(FieldError("--ranges", name, "must be 'default' (spec ranges) or 'paper' (the paper's Table 3)"));
-}
-
-double PaperTable8Pi(double v, double f) {
-  static const std::map<std::pair<int, int>, double> table = {
-      {{375, 25}, 1.42}, {{375, 50}, 2.08}, {{375, 100}, 2.38}, {{500, 25}, 2.49}, {{500, 50}, 1.96},
-      {{500, 100}, 1.51}, {{750, 25}, 5.64}, {{750, 50}, 3.23}, {{750, 100}, 6.78}};
-  const int vi = static_cast<int>(std::lround(v)), fi = static_cast<int>(std::lround(f * 100));
-  if (std::abs(v - vi) > 1e-9 || std::abs(f * 100 - fi) > 1e-9) return std::nan("");
-  auto it = table.find({vi, fi});
-  return it == table.end() ? std::nan("") : it->second;
-}
-
-IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
-                           const hgann::HgannFitness& fitness,
-                           const std::function<void(const opt::GenerationSummary&)>& on_generation) {
-  opt::GaOptions ga = options.ga;
-  ga.genome_bits = model::kChromosomeBits;
-  ga.error_cost = fitness.penalty_cost();
-  opt::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
-  opt::GeneticAlgorithm algorithm(ga, &evaluator);
-  algorithm.SetDescriber([](const opt::Genome& g) { return model::DescribeChromosome(g.bits); });
-  if (on_generation) algorithm.AddGenerationCallback(on_generation);
-
-  IdentifyResult r;
-  r.summary = algorithm.Run();
-  r.log = algorithm.state().log;
-  r.best.network = fitness.Decode(r.summary.best);
-  r.best.chromosome = r.summary.best.bits;
-  auto& p = r.best.provenance;
-  p.job_id = options.job_id;
-  p.seed = ga.seed;
-  p.generation = r.summary.best_generation;
-  p.fitness = r.summary.best_fitness.cost;
-  p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                          std::chrono::system_clock::now().time_since_epoch())
-                          .count();
-  p.piezoid_version = "0.1.0";
-  for (const auto* c : set.Training()) p.training_cases.push_back("case" + std::to_string(c->number));
-  r.cases = fitness.EvaluateCases(r.best.network);
-  return r;
-}
+using hgann::IdentifyResult;
+using hgann::PaperTable8Pi;
 
 namespace {
 

@@ -1,0 +1,52 @@
+// `piezoid identify` on one machine: the HGANN identification of a bench case set by the GA
+// (opt/ga.h) over a thread pool, with the HGANN fitness (hgann/hgann_fitness.h). The report of the
+// run is client/identify_report.h; the same run on the service is the "hgann" job kind
+// (hgann/hgann_job.h), bit for bit.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hgann/hgann_fitness.h"
+#include "io/bench_data.h"
+#include "io/network_io.h"
+#include "model/network.h"
+#include "opt/ga.h"
+
+namespace pz::hgann {
+
+struct IdentifyOptions {
+  std::filesystem::path cases_dir;  ///< bench case set (cases.csv + per-case CSV)
+  opt::GaOptions ga;                ///< population, generations, stall, seed, …
+  int threads = 0;                  ///< evaluator threads (0 = all cores)
+  std::string ranges = "default";   ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
+  double spread_penalty = 0;        ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
+  std::string job_id = "local";     ///< provenance
+};
+
+struct IdentifyResult {
+  opt::GaSummary summary;
+  std::vector<opt::GenerationSummary> log;
+  io::SavedNetwork best;
+  std::vector<HgannCaseResult> cases;  ///< every case of the set, in manifest order
+};
+
+/// The parameter ranges of a preset: "" or "default" (spec §3), "paper" (the paper's Table 3);
+/// nullopt for another name (kRangesPresetRule says what is allowed). The one parser of preset
+/// names: the CLI's --ranges and a job spec's hgann.ranges_preset both use it.
+std::optional<model::ParameterRanges> RangesPreset(std::string_view name);
+inline constexpr const char* kRangesPresetRule =
+    "must be \"default\" (spec ranges) or \"paper\" (the paper's Table 3)";
+
+/// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
+IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,
+                           const std::function<void(const opt::GenerationSummary&)>& on_generation);
+
+/// The paper's Table 8 PI [deg²] for an operating point, or NaN if it is not one of the nine.
+double PaperTable8Pi(double amplitude_v, double frequency_hz);
+
+}  // namespace pz::hgann
