@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "model/chromosome.h"
 #include "model/metrics.h"
@@ -64,6 +65,9 @@ HgannFitness::HgannFitness(HgannFitnessConfig config) : config_(std::move(config
     for (double y : c.measured_deg) bound += (b + std::abs(y)) * (b + std::abs(y));
   }
   penalty_ = 2.0 * bound + 1.0;
+  // Absurd data (e.g. samples of 1e300 deg) would make the bound, and so every cost, infinite: the
+  // penalty stays the largest finite double then, and costs that overflow are penalised below.
+  if (!std::isfinite(penalty_)) penalty_ = std::numeric_limits<double>::max();
 }
 
 model::Network HgannFitness::Decode(const Genome& genome) const {
@@ -120,6 +124,8 @@ FitnessResult HgannFitness::EvaluateNetwork(const model::Network& network) const
     cost += pi;
   }
   if (config_.spread_penalty > 0) cost += config_.spread_penalty * OutputSpread(network);
+  if (!std::isfinite(cost) || cost >= penalty_)
+    return {penalty_, FitnessStatus::kPenalized, "cost overflow (" + std::to_string(cost) + " deg^2)"};
   return {cost, FitnessStatus::kOk, {}};
 }
 

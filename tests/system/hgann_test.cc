@@ -14,7 +14,7 @@
 #include "client/job_report.h"
 #include "io/network_io.h"
 #include "hgann/hgann_job.h"
-#include "tests/service/service_harness.h"
+#include "tests/system/service_harness.h"
 
 namespace pz::testing {
 namespace {

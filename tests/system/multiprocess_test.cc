@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "tests/service/service_harness.h"
+#include "tests/system/service_harness.h"
 
 namespace pz::testing {
 namespace {

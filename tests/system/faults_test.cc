@@ -5,7 +5,7 @@
 
 #include <zmq.hpp>
 
-#include "tests/service/service_harness.h"
+#include "tests/system/service_harness.h"
 #include "wire.pb.h"
 
 namespace pz::testing {

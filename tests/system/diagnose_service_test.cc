@@ -11,7 +11,7 @@
 #include "diagnose/job_kind.h"
 #include "diagnose/synthetic.h"
 #include "opt/inline_evaluator.h"
-#include "tests/service/service_harness.h"
+#include "tests/system/service_harness.h"
 #include "kinds/kinds.h"
 
 namespace pz::diagnose {

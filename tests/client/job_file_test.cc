@@ -1,0 +1,68 @@
+// Job files (client/job_file.h): an hgann spec's case_set_dir is read relative to the job file
+// and embedded; a folder and cases at once, or a folder that is not a case set, are named.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "client/job_file.h"
+#include "kinds/kinds.h"
+#include "tests/testing/hgann_spec.h"
+
+namespace pz::client {
+namespace {
+
+using testing::Descriptions;
+using testing::HasViolation;
+const io::CaseSet& Nominal() { return testing::NominalCaseSet(); }
+job::JobSpec NominalSpec(int population, int generations) { return testing::NominalHgannSpec(population, generations); }
+bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field, const std::string& text = "") {
+  return HasViolation(v, field, text);
+}
+std::string All(const std::vector<job::FieldViolation>& v) { return Descriptions(v); }
+
+namespace fs = std::filesystem;
+const fs::path kExamples = fs::path(PIEZOID_DATA_DIR) / ".." / "examples";
+using job::CaseRole;
+using job::FieldViolation;
+using job::HgannProblem;
+using job::JobSpec;
+
+TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
+  JobSpec s;
+  std::vector<FieldViolation> v;
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_quick.json", &s, &v).ok()) << All(v);
+  const auto& h = std::get<HgannProblem>(s.problem);
+  EXPECT_TRUE(h.case_set_dir.empty());
+  ASSERT_EQ(h.cases.size(), Nominal().cases.size());
+  EXPECT_EQ(h.cases[4].angle_deg, Nominal().cases[4].angle_deg);
+  EXPECT_EQ(h.cases[4].voltage_v, Nominal().cases[4].u);
+  EXPECT_EQ(h.cases[4].role, CaseRole::kTrain);
+  EXPECT_NE(h.source.find("bimorph-fin/nominal"), std::string::npos) << h.source;
+  EXPECT_TRUE(kinds::All().Validate(s).empty());
+  EXPECT_EQ(s.ga->population, 60);
+  EXPECT_EQ(s.ga->generations, 40);
+
+  JobSpec paper;
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_job.json", &paper, &v).ok()) << All(v);
+  EXPECT_EQ(paper.ga->population, 400);
+  EXPECT_EQ(paper.ga->generations, 1000);
+  EXPECT_EQ(paper.ga->stall_generations, 200);
+  EXPECT_EQ(paper.ga->mutation_probability, 0.01);
+  EXPECT_TRUE(kinds::All().Validate(paper).empty());
+
+  // Cases and a folder at once, or a folder that is not a case set: named.
+  v.clear();
+  Status st = client::JobSpecFromJsonFile(
+      R"({"version": 1, "hgann": {"case_set_dir": "x", "cases": [{"number": 1}]}, "ga": {}})", ".", &s, &v);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(HasField(v, "hgann.case_set_dir", "cannot be combined")) << All(v);
+  v.clear();
+  st = client::JobSpecFromJsonFile(R"({"version": 1, "hgann": {"case_set_dir": "nowhere"}, "ga": {}})",
+                                   fs::path(PIEZOID_TEST_DATA_DIR), &s, &v);
+  EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
+  EXPECT_TRUE(HasField(v, "hgann.case_set_dir", "cannot be read")) << All(v);
+  EXPECT_NE(st.message().find("nowhere"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace pz::client

@@ -1,0 +1,46 @@
+// The one list of job kinds (kinds/kinds.h): every kind is there once, under its spec's kind()
+// name, with a layout and a fitness; an unknown kind is refused naming it.
+#include <gtest/gtest.h>
+
+#include "kinds/kinds.h"
+#include "tests/testing/hgann_spec.h"
+
+namespace pz::kinds {
+namespace {
+
+TEST(Kinds, AllHasEveryKindOnce) {
+  for (const char* name : {"synthetic", "hgann", "diagnose", "complete_model"}) {
+    const job::JobKind* k = All().Find(name);
+    ASSERT_NE(k, nullptr) << name;
+    EXPECT_EQ(k->name, name);
+    EXPECT_TRUE(k->validate && k->layout && k->make_fitness) << name;
+  }
+  EXPECT_EQ(All().Find("hgan"), nullptr);
+}
+
+TEST(Kinds, SpecsOfEachKindFindTheirKind) {
+  const job::JobSpec hgann = testing::NominalHgannSpec(10, 1);
+  EXPECT_EQ(hgann.kind(), "hgann");
+  job::GenomeLayout l;
+  ASSERT_TRUE(All().Layout(hgann, &l).ok());
+  EXPECT_EQ(l.bits, 1415);
+  EXPECT_TRUE(All().Validate(hgann).empty()) << testing::Descriptions(All().Validate(hgann));
+
+  job::JobSpec synthetic;
+  job::SyntheticProblem p;
+  p.genome_bits = 24;
+  synthetic.problem = p;
+  job::GaSettings ga;
+  synthetic.ga = ga;
+  EXPECT_EQ(synthetic.kind(), "synthetic");
+  ASSERT_TRUE(All().Layout(synthetic, &l).ok());
+  EXPECT_EQ(l.bits, 24);
+  std::unique_ptr<opt::FitnessFunction> f;
+  ASSERT_TRUE(All().MakeFitness(synthetic, &f).ok());
+  opt::Genome g;
+  g.bits.assign(24, 1);
+  EXPECT_EQ(f->Evaluate(g).status, opt::FitnessStatus::kOk);
+}
+
+}  // namespace
+}  // namespace pz::kinds
