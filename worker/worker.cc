@@ -377,7 +377,7 @@ struct Worker::Impl {
     AbandonAll();
     // Let the compute threads finish their chunks (bounded), then stop them.
     int stopped = 0;
-    const TimePoint give_up = Clock::now() + std::chrono::seconds(10);
+    const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
     while (stopped < options.threads && Clock::now() < give_up) {
       while (!idle.empty()) {
         Chunk quit{nullptr, 0, 0};
@@ -394,7 +394,12 @@ struct Worker::Impl {
       else
         t.detach();
     }
-    if (stopped < options.threads) std::_Exit(0);  // a computation would not end
+    if (stopped < options.threads) {  // a computation would not end: see WorkerStats::stuck_threads
+      stats.stuck_threads = options.threads - stopped;
+      spdlog::warn("{} compute thread(s) still inside an evaluation after {} ms", stats.stuck_threads,
+                   options.stop_grace_ms);
+      return stats;
+    }
     threads.clear();
     master.reset();
     monitor.reset();
@@ -407,7 +412,11 @@ Worker::Worker(WorkerOptions options, const job::JobKindRegistry& kinds)
   impl_->options.threads = std::clamp(impl_->options.threads, 1, 4096);
 }
 
-Worker::~Worker() = default;
+Worker::~Worker() {
+  // Threads still computing use the Impl (its ZeroMQ context, the fitness of their job): it must
+  // outlive them, and a ZeroMQ context with their sockets open would block its destruction.
+  if (impl_ && impl_->stats.stuck_threads > 0) (void)impl_.release();
+}
 
 WorkerStats Worker::Run(const std::atomic<bool>& stop) { return impl_->Run(stop); }
 

@@ -25,6 +25,7 @@ struct WorkerOptions {
   int backoff_max_ms = 5000;          ///< reconnect delay cap [ms]
   int64_t max_message_bytes = 64 << 20;
   int max_contexts = 8;               ///< job contexts cached
+  int stop_grace_ms = 10000;          ///< on stop, how long running evaluations may finish [ms]
   /// CURVE: this worker's key pair and the master's public key (Z85); plain when unset.
   std::optional<service::CurveKeyPair> curve;
   std::string master_public;
@@ -33,13 +34,19 @@ struct WorkerOptions {
 struct WorkerStats {
   uint64_t tasks = 0, leases = 0, reconnects = 0, contexts_fetched = 0;
   uint64_t handshake_failures = 0;  ///< e.g. the master refused this worker's CURVE key
+  /// Compute threads still inside an evaluation when Run returned (stop_grace_ms ran out). They
+  /// cannot be interrupted, so the Worker keeps everything they use: its destructor leaves it
+  /// allocated. The library never ends the process; a program that sees this should (what
+  /// piezoid-worker does: it exits at once).
+  int stuck_threads = 0;
 };
 
 class Worker {
  public:
   Worker(WorkerOptions options, const job::JobKindRegistry& kinds);
   ~Worker();
-  /// Serves until `stop` becomes true, then says DISCONNECT and returns.
+  /// Serves until `stop` becomes true, then says DISCONNECT, gives running evaluations
+  /// stop_grace_ms to finish, and returns (see WorkerStats::stuck_threads).
   WorkerStats Run(const std::atomic<bool>& stop);
 
  private:

@@ -64,5 +64,10 @@ int main(int argc, char** argv) {
   const auto stats = w.Run(g_stop);
   spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,
                stats.reconnects);
+  if (stats.stuck_threads > 0) {  // an evaluation that would not end: the process ends it
+    spdlog::warn("exiting with {} evaluation(s) unfinished", stats.stuck_threads);
+    spdlog::shutdown();
+    std::_Exit(0);
+  }
   return 0;
 }
