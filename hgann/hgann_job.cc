@@ -21,6 +21,7 @@ using job::HgannCaseSpec;
 using job::HgannProblem;
 using job::JobKind;
 using job::JobSpec;
+using job::Violations;
 using job::ParameterRange;
 using opt::FitnessFunction;
 using opt::Genome;
@@ -119,15 +120,6 @@ CaseRole FromIoRole(io::CaseRole r) {
   }
 }
 
-class Violations {
- public:
-  template <typename T>
-  void Require(bool ok, const std::string& field, const T& value, const std::string& rule) {
-    if (!ok) out.push_back({field, FieldError(field, value, rule)});
-  }
-  void Add(const std::string& field, const std::string& description) { out.push_back({field, description}); }
-  std::vector<FieldViolation> out;
-};
 
 /// The first non-finite sample of `v`, checked as "<field>[k] = nan: must be finite".
 void RequireFiniteSamples(Violations& c, const std::string& field, const std::vector<double>& v) {

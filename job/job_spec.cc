@@ -6,35 +6,6 @@
 #include "model/status.h"
 
 namespace pz::job {
-namespace {
-
-class Checker {
- public:
-  explicit Checker(std::vector<FieldViolation>* out) : out_(out) {}
-  template <typename T>
-  void Require(bool ok, const std::string& field, const T& value, const std::string& rule) {
-    if (!ok) out_->push_back({field, FieldError(field, value, rule)});
-  }
-  template <typename T>
-  void Range(const std::string& field, T value, T lo, T hi) {
-    Require(value >= lo && value <= hi, field, value,
-            "must be in [" + Num(lo) + ", " + Num(hi) + "]");
-  }
-  void Finite(const std::string& field, double value) {
-    Require(std::isfinite(value), field, value, "must be finite");
-  }
-
- private:
-  template <typename T>
-  static std::string Num(T v) {
-    std::ostringstream os;
-    os << v;
-    return os.str();
-  }
-  std::vector<FieldViolation>* out_;
-};
-
-}  // namespace
 
 int GaSettings::offspring() const {
   return population - static_cast<int>(std::lround(population * elite_fraction));
@@ -49,8 +20,7 @@ std::string JobSpec::kind() const {
 }
 
 std::vector<FieldViolation> JobSpec::Validate() const {
-  std::vector<FieldViolation> out;
-  Checker c(&out);
+  Violations c;
   c.Require(version == kJobSpecVersion, "version", version,
             "unsupported job spec version (this master reads " + std::to_string(kJobSpecVersion) +
                 ")");
@@ -81,17 +51,17 @@ std::vector<FieldViolation> JobSpec::Validate() const {
               "must be finite and > 0");
     c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(), "must be ≤ 1000 characters");
   } else {
-    out.push_back({"problem", "problem: one of hgann, synthetic, diagnose, complete_model must be set"});
+    c.Add("problem", "problem: one of hgann, synthetic, diagnose, complete_model must be set");
   }
 
   if (ga && external) {
-    out.push_back({"algorithm", "algorithm: only one of ga, external may be set"});
+    c.Add("algorithm", "algorithm: only one of ga, external may be set");
   } else if (external) {
     c.Range("external.idle_timeout_s", external->idle_timeout_s, 0.1, 86400.0);
     c.Require(external->owner.size() <= 200, "external.owner", external->owner.size(),
               "must be ≤ 200 characters");
   } else if (!ga) {
-    out.push_back({"algorithm", "algorithm: one of ga, external must be set"});
+    c.Add("algorithm", "algorithm: one of ga, external must be set");
   } else {
     c.Range("ga.population", ga->population, 2, 1000000);
     c.Require(ga->elite_fraction > 0 && ga->elite_fraction < 1, "ga.elite_fraction",
@@ -106,7 +76,7 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Range("ga.generations", ga->generations, 0, 100000000);
     c.Range("ga.stall_generations", ga->stall_generations, 0, 100000000);
   }
-  return out;
+  return std::move(c.out);
 }
 
 }  // namespace pz::job

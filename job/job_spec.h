@@ -1,14 +1,18 @@
 // The job specification as the master, the workers and the client library see it (conventions 3,
-// 12): plain structs with defaults, decoded from proto/job.proto by master/wire_codec.h.
+// 12): plain structs with defaults, decoded from proto/job.proto by service/wire_codec.h.
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <map>
 #include <optional>
 #include <string>
+#include <sstream>
 #include <variant>
 #include <vector>
+
+#include "model/status.h"
 
 namespace pz::job {
 
@@ -19,6 +23,31 @@ struct FieldViolation {
   std::string field;        ///< e.g. "ga.population"
   std::string description;  ///< e.g. "ga.population = 1: must be ≥ 2"
   bool operator==(const FieldViolation&) const = default;
+};
+
+/// The one collector of violations: every check of a spec adds to one list, so that a client is
+/// told every violated field at once ("<field> = <value>: <rule>", model/status.h FieldError).
+class Violations {
+ public:
+  template <typename T>
+  void Require(bool ok, const std::string& field, const T& value, const std::string& rule) {
+    if (!ok) out.push_back({field, FieldError(field, value, rule)});
+  }
+  template <typename T>
+  void Range(const std::string& field, T value, T lo, T hi) {
+    Require(value >= lo && value <= hi, field, value, "must be in [" + Num(lo) + ", " + Num(hi) + "]");
+  }
+  void Finite(const std::string& field, double value) { Require(std::isfinite(value), field, value, "must be finite"); }
+  void Add(const std::string& field, const std::string& description) { out.push_back({field, description}); }
+  std::vector<FieldViolation> out;
+
+ private:
+  template <typename T>
+  static std::string Num(T v) {
+    std::ostringstream os;
+    os << v;
+    return os.str();
+  }
 };
 
 /// Override of the range of one of the seven identified parameters (proto ParameterRange).
