@@ -104,22 +104,6 @@ std::string OutputNames() {
   return s;
 }
 
-io::CaseRole ToIoRole(CaseRole r) {
-  switch (r) {
-    case CaseRole::kValidate: return io::CaseRole::kValidate;
-    case CaseRole::kTest: return io::CaseRole::kTest;
-    default: return io::CaseRole::kTrain;
-  }
-}
-
-CaseRole FromIoRole(io::CaseRole r) {
-  switch (r) {
-    case io::CaseRole::kValidate: return CaseRole::kValidate;
-    case io::CaseRole::kTest: return CaseRole::kTest;
-    default: return CaseRole::kTrain;
-  }
-}
-
 
 /// The first non-finite sample of `v`, checked as "<field>[k] = nan: must be finite".
 void RequireFiniteSamples(Violations& c, const std::string& field, const std::vector<double>& v) {
@@ -261,7 +245,7 @@ io::CaseSet HgannCaseSet(const HgannProblem& h) {
     b.number = x.number;
     b.amplitude_v = x.amplitude_v;
     b.frequency_hz = x.frequency_hz;
-    b.role = ToIoRole(x.role);
+    b.role = x.role;
     b.file = "case" + std::to_string(x.number);
     b.sample_rate_hz = x.sample_rate_hz;
     const size_t n = x.angle_deg.size();
@@ -337,7 +321,7 @@ HgannProblem HgannProblemFromCaseSet(const io::CaseSet& set) {
     x.number = b.number;
     x.amplitude_v = b.amplitude_v;
     x.frequency_hz = b.frequency_hz;
-    x.role = FromIoRole(b.role);
+    x.role = b.role;
     x.sample_rate_hz = b.sample_rate_hz;
     x.angle_deg = b.angle_deg;
     x.voltage_v = b.u;

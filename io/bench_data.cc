@@ -8,24 +8,6 @@
 namespace pz::io {
 namespace fs = std::filesystem;
 
-const char* CaseRoleName(CaseRole role) {
-  switch (role) {
-    case CaseRole::kTrain:
-      return "train";
-    case CaseRole::kValidate:
-      return "validate";
-    case CaseRole::kTest:
-      return "test";
-  }
-  return "unknown";
-}
-
-std::optional<CaseRole> ParseCaseRole(std::string_view name) {
-  for (CaseRole r : {CaseRole::kTrain, CaseRole::kValidate, CaseRole::kTest})
-    if (name == CaseRoleName(r)) return r;
-  return std::nullopt;
-}
-
 model::Sinusoid BenchCase::Drive() const {
   model::Sinusoid s;
   s.amplitude_v = amplitude_v;

@@ -18,17 +18,15 @@
 #include <string_view>
 #include <vector>
 
+#include "model/case_role.h"
 #include "model/signal.h"
 #include "model/status.h"
 
 namespace pz::io {
 
-enum class CaseRole : int { kTrain = 0, kValidate = 1, kTest = 2 };
-
-/// "train", "validate", "test".
-const char* CaseRoleName(CaseRole role);
-/// Parses a role name (exact, lower case); nullopt if unknown.
-std::optional<CaseRole> ParseCaseRole(std::string_view name);
+using model::CaseRole;  // model/case_role.h: the one train / validate / test enum
+using model::CaseRoleName;
+using model::ParseCaseRole;
 
 /// One recorded case: the stated drive V sin(2π f t) and the record on its sample grid.
 struct BenchCase {

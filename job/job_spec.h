@@ -12,6 +12,7 @@
 #include <variant>
 #include <vector>
 
+#include "model/case_role.h"
 #include "model/status.h"
 
 namespace pz::job {
@@ -57,7 +58,7 @@ struct ParameterRange {
   double max = 1;    ///< upper bound, finite, ≥ min
 };
 
-enum class CaseRole : int { kUnspecified = 0, kTrain = 1, kValidate = 2, kTest = 3 };
+using model::CaseRole;  // model/case_role.h: the one train / validate / test enum
 
 /// One bench case of a bimorph-fin case set (proto HgannCase; io/bench_data.h BenchCase).
 struct HgannCaseSpec {
