@@ -17,6 +17,7 @@
 
 #include "opt/evaluator.h"
 #include "model/bimorph.h"
+#include "model/fin_case.h"
 #include "model/effects.h"
 #include "model/noise_floor.h"
 
@@ -26,14 +27,9 @@ struct CaseSet;
 
 namespace pz::diagnose {
 
-/// One bench case of the problem.
-struct DiagCase {
-  int number = 0;
-  model::Sinusoid drive;             ///< V sin(2π f t) on the record's grid
-  std::vector<double> measured_deg;  ///< y_meas [deg], drive.NumSamples() values
-  double b1 = 1.0, b2 = -1.0;        ///< saturations from the measured extremes [deg]
-  bool training = true;
-  model::CaseNoise noise;            ///< noise floor of the record
+/// One bench case of the problem (saturations from the measured extremes) with its noise floor.
+struct DiagCase : model::FinCase {
+  model::CaseNoise noise;  ///< noise floor of the record
 };
 
 /// The cases of a bench with their noise. Throws InputError on a set without training or

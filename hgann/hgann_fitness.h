@@ -15,19 +15,13 @@
 #include "opt/evaluator.h"
 #include "model/bimorph.h"
 #include "model/modal_simulator.h"
+#include "model/fin_case.h"
 #include "model/network.h"
 
 namespace pz::hgann {
 
 /// One case of an HGANN problem: its drive, its measured fin angle and its saturations.
-struct HgannCase {
-  int number = 0;                   ///< case number (> 0)
-  model::Sinusoid drive;            ///< V sin(2π f t) on the record's grid
-  std::vector<double> measured_deg; ///< y_meas,k [deg], drive.NumSamples() values, finite
-  double b1 = 1.0;                  ///< saturation [deg], > 0
-  double b2 = -1.0;                 ///< saturation [deg], < 0
-  bool training = true;             ///< counted in the cost
-};
+using HgannCase = model::FinCase;
 
 struct HgannFitnessConfig {
   std::vector<HgannCase> cases;             ///< ≥ 1 training case

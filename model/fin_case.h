@@ -1,0 +1,22 @@
+// One case of a bimorph-fin bench, ready to simulate and score: what the HGANN fitness
+// (hgann/hgann_fitness.h) and the diagnosis (diagnose/problem.h) both work on. The same case exists
+// as a file record (io/bench_data.h BenchCase: t, u, angle as read) and in a job spec
+// (job/job_spec.h HgannCaseSpec: what travels on the wire); this is the form the plants take.
+#pragma once
+
+#include <vector>
+
+#include "model/signal.h"
+
+namespace pz::model {
+
+struct FinCase {
+  int number = 0;                    ///< case number (> 0)
+  Sinusoid drive;                    ///< V sin(2π f t) on the record's grid
+  std::vector<double> measured_deg;  ///< y_meas,k [deg], drive.NumSamples() values, finite
+  double b1 = 1.0;                   ///< saturation [deg], > 0 (from the measured extremes, or given)
+  double b2 = -1.0;                  ///< saturation [deg], < 0
+  bool training = true;              ///< fitted (counted in the cost); else withheld
+};
+
+}  // namespace pz::model
