@@ -12,19 +12,8 @@
 #include "opt/thread_pool_evaluator.h"
 #include "model/chromosome.h"
 
-namespace pz::master {
+namespace pz::opt {
 
-using opt::BatchEvaluator;
-using opt::BernoulliThreshold;
-using opt::FitnessFunction;
-using opt::FitnessResult;
-using opt::FitnessStatus;
-using opt::GaOptions;
-using opt::GeneticAlgorithm;
-using opt::Genome;
-using opt::InlineEvaluator;
-using opt::Rng;
-using opt::ThreadPoolEvaluator;
 namespace {
 
 class NullFitness final : public FitnessFunction {
@@ -99,6 +88,6 @@ void BM_DecodeAndPredict(benchmark::State& state) {
 BENCHMARK(BM_DecodeAndPredict);
 
 }  // namespace
-}  // namespace pz::master
+}  // namespace pz::opt
 
 BENCHMARK_MAIN();

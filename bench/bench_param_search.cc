@@ -16,20 +16,8 @@
 #include "opt/thread_pool_evaluator.h"
 #include "model/bw_oscillator.h"
 
-namespace pz::master {
+namespace pz::opt {
 
-using opt::BatchEvaluator;
-using opt::FitnessFunction;
-using opt::FitnessResult;
-using opt::FitnessStatus;
-using opt::FunctionFitness;
-using opt::InlineEvaluator;
-using opt::ParamBox;
-using opt::Search;
-using opt::SearchAlgorithm;
-using opt::SearchAlgorithmName;
-using opt::SearchOptions;
-using opt::ThreadPoolEvaluator;
 namespace {
 
 struct Data {
@@ -141,6 +129,6 @@ BENCHMARK(BM_Search_Sphere)
     ->Unit(benchmark::kMicrosecond);
 
 }  // namespace
-}  // namespace pz::master
+}  // namespace pz::opt
 
 BENCHMARK_MAIN();

@@ -9,7 +9,10 @@
 #include "service/security.h"
 #include "service/wire_codec.h"
 
-using namespace pz::master;
+using namespace pz::job;
+using namespace pz::service;
+using pz::opt::Genome;
+namespace kinds = pz::kinds;
 
 namespace {
 
