@@ -7,6 +7,8 @@
 #include <sstream>
 
 #include "hgann/hgann_job.h"
+#include "job/job_kind.h"
+#include "model/chromosome.h"
 #include "service/wire_codec.h"
 
 namespace pz::client {
@@ -113,15 +115,7 @@ IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_
   o.out_dir = out_dir;
   const auto* h = std::get_if<job::HgannProblem>(&job.spec.problem);
   o.cases_dir = h ? h->source : "";
-  const job::GaSettings ga = job.spec.ga.value_or(job::GaSettings{});
-  o.ga.population_size = ga.population;
-  o.ga.max_generations = ga.generations;
-  o.ga.stall_generations = ga.stall_generations;
-  o.ga.elite_fraction = ga.elite_fraction;
-  o.ga.tournament_size = ga.tournament;
-  o.ga.crossover_probability = ga.crossover_probability;
-  o.ga.mutation_probability = ga.mutation_probability;
-  o.ga.seed = job.spec.seed;
+  o.ga = job::ToGaOptions(job.spec, job::GenomeLayout{model::kChromosomeBits, 0});
   o.threads = 1;
   if (h) {
     o.ranges = h->ranges_preset.empty() ? "default" : h->ranges_preset;

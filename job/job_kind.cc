@@ -4,6 +4,24 @@
 namespace pz::job {
 
 using opt::FitnessFunction;
+
+opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
+  opt::GaOptions o;
+  const GaSettings g = spec.ga.value_or(GaSettings{});
+  o.population_size = g.population;
+  o.genome_bits = layout.bits;
+  o.elite_fraction = g.elite_fraction;
+  o.tournament_size = g.tournament;
+  o.crossover_probability = g.crossover_probability;
+  o.mutation_probability = g.mutation_probability;
+  o.max_generations = g.generations;
+  o.stall_generations = g.stall_generations;
+  if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
+  o.error_cost = spec.limits.penalty_cost;
+  o.seed = spec.seed;
+  return o;
+}
+
 void JobKindRegistry::Register(JobKind kind) {
   std::lock_guard lock(mu_);
   std::string name = kind.name;

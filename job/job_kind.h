@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "opt/evaluator.h"
+#include "opt/ga.h"
 #include "job/job_spec.h"
 #include "model/status.h"
 
@@ -40,6 +41,10 @@ struct JobKind {
   /// Optional: describes a genome for the generation log (e.g. the decoded network's shape).
   std::function<std::string(const JobSpec&, const opt::Genome&)> describe;
 };
+
+/// The GA options of a spec's `ga` settings, limits and seed, for genomes of `layout` (what the
+/// master's job runner and a client's local rerun of the job both use).
+opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout);
 
 class JobKindRegistry {
  public:

@@ -17,7 +17,7 @@ inline constexpr int kBestKept = 32;  ///< best individuals stored in each check
 
 /// The GA options of a job: its GaSettings plus genome length (from the kind), seed, target and
 /// penalty cost (from the limits).
-opt::GaOptions ToGaOptions(const job::JobSpec& spec, const job::GenomeLayout& layout);
+using job::ToGaOptions;  // job/job_kind.h
 
 class JobRunner {
  public:
