@@ -116,11 +116,19 @@ struct Broker::Impl {
     uint64_t generation = 0;
     std::vector<Genome> genomes;
     std::vector<int> indices;
-    std::set<std::string> watchers;  // client envelopes (identity frames joined)
   };
   std::map<std::string, Job> jobs;
   std::map<std::string, std::string> contexts;  // hash → job id
-  std::map<std::string, std::vector<std::string>> watcher_envelopes;
+  /// A client watching a job: where to push its events, and the request_id of its Watch, which
+  /// every pushed event echoes.
+  struct Watcher {
+    std::vector<std::string> envelope;
+    uint64_t request_id = 0;
+  };
+  /// Watchers by job, kept apart from `jobs` (a job's registration by its thread comes after the
+  /// Submit reply, and ends before its final event): a Watch sent right after Submit, or a cancel,
+  /// loses nothing. A job's watchers are dropped with its final event.
+  std::map<std::string, std::map<std::string, Watcher>> watchers;  // job → envelope key → watcher
   std::map<std::string, std::set<std::string>> jobs_of_client;  // client identity → job ids
   BrokerStats local;
   uint64_t bad_frames_logged = 0;
@@ -212,20 +220,19 @@ struct Broker::Impl {
   }
 
   void PublishEvent(const JobEvent& e) {
-    auto it = jobs.find(e.job_id);
-    std::set<std::string>* watchers = it == jobs.end() ? nullptr : &it->second.watchers;
-    if (!watchers) return;
+    auto it = watchers.find(e.job_id);
+    if (it == watchers.end()) return;
     ClientReplyMsg m;
     m.type = ClientReplyMsg::Type::kEvent;
     m.code = WireCode::kOk;
     m.event = e;
     m.event.workers = dispatcher.worker_count();
     m.event.worker_threads = dispatcher.total_threads();
-    for (const auto& w : *watchers) SendToClient(watcher_envelopes[w], m);
-    if (IsFinal(e.state)) {
-      for (const auto& w : *watchers) watcher_envelopes.erase(w);
-      watchers->clear();
+    for (const auto& [key, w] : it->second) {
+      m.request_id = w.request_id;
+      SendToClient(w.envelope, m);
     }
+    if (IsFinal(e.state)) watchers.erase(it);
   }
 
   void CompleteGeneration(const std::string& job_id, Job& j) {
@@ -461,16 +468,20 @@ struct Broker::Impl {
       status.type = ClientRequestMsg::Type::kStatus;
       reply = handler->Handle(status);
       reply.request_id = req.request_id;
-      auto it = jobs.find(req.job_id);
-      if (reply.code == WireCode::kOk && !IsFinal(reply.info.state) && it != jobs.end()) {
-        if (static_cast<int>(it->second.watchers.size()) >= options.max_watchers_per_job) {
+      // Recorded whenever the store has the job and it has not ended, registered with the
+      // broker yet or not. Its final event cannot be missed: the job thread saves the final state
+      // (what this status reads) before it publishes the final event, which the broker thread
+      // handles after this request.
+      if (reply.code == WireCode::kOk && !IsFinal(reply.info.state)) {
+        auto& of_job = watchers[req.job_id];
+        std::string key;
+        for (const auto& f : envelope) key += f + '\0';
+        if (!of_job.count(key) && static_cast<int>(of_job.size()) >= options.max_watchers_per_job) {
           reply.code = WireCode::kResourceExhausted;
-          reply.error = "too many watchers of job " + req.job_id;
+          reply.error = "job " + req.job_id + " already has " + std::to_string(of_job.size()) +
+                        " watchers (the master's maximum per job); retry when one has gone";
         } else {
-          std::string key;
-          for (const auto& f : envelope) key += f + '\0';
-          it->second.watchers.insert(key);
-          watcher_envelopes[key] = envelope;
+          of_job[key] = Watcher{envelope, req.request_id};
         }
       }
     } else if (req.type == ClientRequestMsg::Type::kSubmit &&
