@@ -130,6 +130,9 @@ void PrintInfo(const service::JobInfo& i) {
               static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
               i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
               i.message.empty() ? "" : ("  (" + i.message + ")").c_str());
+  if (!i.storage_error.empty())
+    std::printf("%-17s   ! checkpoints not written: %s\n", "", i.storage_error.c_str());
+  if (!i.notice.empty()) std::printf("%-17s   ! on loading: %s\n", "", i.notice.c_str());
 }
 
 void PrintList(const std::vector<service::JobInfo>& all, int workers, int threads) {
@@ -146,6 +149,13 @@ class Progress {
       : max_(max_generations), hgann_(hgann), tty_(::isatty(STDOUT_FILENO) != 0) {}
 
   void Update(const service::JobEvent& e) {
+    if (e.storage_error != storage_error_) {  // said once when it starts and once when it ends
+      storage_error_ = e.storage_error;
+      std::printf("%s%s\n", tty_ && printed_ ? "\n" : "",
+                  storage_error_.empty() ? "checkpoints are written again"
+                                         : ("! checkpoints not written (a master restart would lose progress): " +
+                                            storage_error_).c_str());
+    }
     if (!e.record) return;
     const auto& r = *e.record;
     window_.push_back(r);
@@ -189,6 +199,7 @@ class Progress {
   std::deque<service::GenerationRecord> window_;
   std::chrono::steady_clock::time_point last_print_{};
   int printed_ = 0;
+  std::string storage_error_;
 };
 
 }  // namespace
@@ -295,6 +306,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
     std::printf("job %s (%s%s%s), %llu generations at most\n", job_id->c_str(), info.kind.c_str(),
                 info.name.empty() ? "" : ": ", info.name.c_str(),
                 static_cast<unsigned long long>(info.max_generations));
+    if (!info.notice.empty()) std::printf("! on loading: %s\n", info.notice.c_str());
     Progress progress(info.max_generations, info.kind == "hgann");
     s = c.Watch(
         *job_id,

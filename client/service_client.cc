@@ -231,7 +231,11 @@ Status ServiceClient::Watch(const std::string& job_id,
     unreachable_since.reset();
     if (!s.ok()) return s;
     if (service::IsFinal(reply.info.state)) {
-      service::JobEvent e{job_id, reply.info.state, std::nullopt, reply.info.message};
+      service::JobEvent e;
+      e.job_id = job_id;
+      e.state = reply.info.state;
+      e.message = reply.info.message;
+      e.storage_error = reply.info.storage_error;
       on_event(e);
       return Status::Ok();
     }

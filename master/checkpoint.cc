@@ -14,7 +14,9 @@
 namespace pz::master {
 
 using service::DecodeCheckpoint;
+using service::DecodeStoredFile;
 using service::EncodeCheckpoint;
+using service::EncodeStoredFile;
 using service::JobCheckpoint;
 namespace fs = std::filesystem;
 namespace {
@@ -22,6 +24,9 @@ namespace {
 Status Errno(const std::string& what, const fs::path& p) {
   return Internal(what + " " + p.string() + ": " + std::strerror(errno));
 }
+
+constexpr std::string_view kSpecType = "pz.wire.JobSpec";
+constexpr std::string_view kCheckpointType = "pz.wire.JobCheckpoint";
 
 bool ValidJobId(const std::string& id) {
   if (id.empty() || id.size() > 64) return false;
@@ -32,7 +37,7 @@ bool ValidJobId(const std::string& id) {
 
 }  // namespace
 
-Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durable) {
+Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durable, const fs::path& previous) {
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Internal("cannot create " + path.parent_path().string() + ": " + ec.message());
@@ -55,7 +60,9 @@ Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durabl
     ::close(fd);
     return s;
   }
-  ::close(fd);
+  if (::close(fd) != 0) return Errno("cannot write", tmp);  // NFS and friends report late
+  if (!previous.empty() && ::rename(path.c_str(), previous.c_str()) != 0 && errno != ENOENT)
+    return Errno("cannot rename to " + previous.string() + ":", path);
   if (::rename(tmp.c_str(), path.c_str()) != 0) return Errno("cannot rename onto", path);
   if (!durable) return Status::Ok();
   int dfd = ::open(path.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
@@ -93,25 +100,75 @@ std::vector<std::string> JobDirectory::List() const {
 
 Status JobDirectory::SaveSpec(const std::string& job_id, std::string_view spec_bytes) const {
   if (!ValidJobId(job_id)) return InvalidArgument("bad job id '" + job_id + "'");
-  return WriteFileAtomic(dir(job_id) / "spec.pb", spec_bytes);
+  return WriteFileAtomic(dir(job_id) / kSpecFile, EncodeStoredFile(kSpecType, spec_bytes));
 }
 
 Status JobDirectory::LoadSpec(const std::string& job_id, std::string* spec_bytes) const {
   if (!ValidJobId(job_id)) return InvalidArgument("bad job id '" + job_id + "'");
-  return ReadWholeFile(dir(job_id) / "spec.pb", spec_bytes);
+  const fs::path file = dir(job_id) / kSpecFile;
+  std::string bytes;
+  if (Status s = ReadWholeFile(file, &bytes); !s.ok()) return s;
+  Status s = DecodeStoredFile(bytes, kSpecType, spec_bytes);
+  if (s.code() == StatusCode::kNotFound) {  // written before stored files: the bare spec
+    *spec_bytes = std::move(bytes);
+    return Status::Ok();
+  }
+  if (!s.ok()) return {StatusCode::kDataLoss, file.string() + ": " + s.message()};
+  return Status::Ok();
 }
 
 Status JobDirectory::SaveCheckpoint(const JobCheckpoint& c, bool durable) const {
   if (!ValidJobId(c.job_id)) return InvalidArgument("bad job id '" + c.job_id + "'");
-  return WriteFileAtomic(dir(c.job_id) / "checkpoint.pb", EncodeCheckpoint(c), durable);
+  return WriteFileAtomic(dir(c.job_id) / kCheckpointFile, EncodeStoredFile(kCheckpointType, EncodeCheckpoint(c)),
+                         durable, dir(c.job_id) / kPreviousFile);
 }
 
-Status JobDirectory::LoadCheckpoint(const std::string& job_id, JobCheckpoint* c) const {
+namespace {
+
+/// One checkpoint file: OK, NotFound (no such file), or why it is unusable.
+Status LoadOne(const fs::path& file, const std::string& job_id, JobCheckpoint* c) {
+  std::string bytes, payload;
+  if (Status s = ReadWholeFile(file, &bytes); !s.ok()) return s;
+  Status s = DecodeStoredFile(bytes, kCheckpointType, &payload);
+  if (s.code() == StatusCode::kNotFound) {
+    payload = std::move(bytes);  // written before stored files: the bare checkpoint
+  } else if (!s.ok()) {
+    return {StatusCode::kDataLoss, s.message()};
+  }
+  if (Status d = DecodeCheckpoint(payload, c); !d.ok())
+    return {StatusCode::kDataLoss, s.code() == StatusCode::kNotFound ? "not a checkpoint" : d.message()};
+  if (c->job_id != job_id) return {StatusCode::kDataLoss, "the checkpoint of job " + c->job_id};
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status JobDirectory::LoadCheckpoint(const std::string& job_id, JobCheckpoint* c, std::string* notice) const {
   if (!ValidJobId(job_id)) return InvalidArgument("bad job id '" + job_id + "'");
-  std::string bytes;
-  if (Status s = ReadWholeFile(dir(job_id) / "checkpoint.pb", &bytes); !s.ok()) return s;
-  if (Status s = DecodeCheckpoint(bytes, c); !s.ok()) return s;
-  if (c->job_id != job_id) return {StatusCode::kDataLoss, "checkpoint of another job"};
+  notice->clear();
+  const fs::path current = dir(job_id) / kCheckpointFile, previous = dir(job_id) / kPreviousFile;
+  const Status a = LoadOne(current, job_id, c);
+  if (a.ok()) return a;
+  const Status b = LoadOne(previous, job_id, c);
+  if (a.code() == StatusCode::kNotFound && b.code() == StatusCode::kNotFound) return a;  // a new job
+  std::string why = current.string() + ": " + (a.code() == StatusCode::kNotFound ? "missing" : a.message());
+  if (b.ok()) {
+    *notice = why + "; resumed from " + previous.string() + " (after generation " +
+              std::to_string(c->log.size()) + ")";
+    return b;
+  }
+  *c = JobCheckpoint{};
+  *notice = why + "; " + previous.string() + ": " +
+            (b.code() == StatusCode::kNotFound ? "missing" : b.message()) +
+            "; restarted from generation 0 from the job's spec";
+  return {StatusCode::kNotFound, *notice};
+}
+
+Status JobDirectory::Remove(const std::string& job_id) const {
+  if (!ValidJobId(job_id)) return InvalidArgument("bad job id '" + job_id + "'");
+  std::error_code ec;
+  fs::remove_all(dir(job_id), ec);
+  if (ec) return Internal("cannot remove " + dir(job_id).string() + ": " + ec.message());
   return Status::Ok();
 }
 

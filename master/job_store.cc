@@ -15,6 +15,7 @@ using job::JobKindRegistry;
 using opt::FitnessResult;
 using opt::Genome;
 using service::ClientReplyMsg;
+using service::JobEvent;
 using service::ClientRequestMsg;
 using service::ContentHash;
 using service::DecodeJobSpec;
@@ -44,18 +45,39 @@ Status JobStore::Resume() {
     job->id = id;
     std::vector<FieldViolation> violations;
     Status s = dir_.LoadSpec(id, &job->spec_bytes);
+    std::string notice;
+    if (s.code() == StatusCode::kNotFound) {
+      // No spec: a submission that could not be written (e.g. disk full). Nothing to resume.
+      if (dir_.LoadCheckpoint(id, &job->checkpoint, &notice).code() == StatusCode::kNotFound) {
+        const Status r = dir_.Remove(id);
+        spdlog::warn("job folder {}: no spec.pb (a submission that could not be written): {}",
+                     dir_.dir(id).string(), r.ok() ? "removed" : r.message());
+        continue;
+      }
+    }
     if (s.ok()) s = DecodeJobSpec(job->spec_bytes, &job->spec, &violations);
+    if (s.ok() && !violations.empty()) s = {StatusCode::kDataLoss, violations.front().description};
     if (!s.ok()) {
-      spdlog::error("job {}: cannot load its spec, skipped: {}", id, s.message());
+      // The job cannot run again, but it does not vanish: it is listed, failed, with the reason
+      // (and what its checkpoint holds, if that is readable).
+      if (!dir_.LoadCheckpoint(id, &job->checkpoint, &notice).ok()) job->checkpoint = JobCheckpoint{};
+      job->checkpoint.job_id = id;
+      job->checkpoint.state = JobState::kFailed;
+      job->checkpoint.message = "its spec cannot be read, so it cannot be resumed: " + s.message();
+      job->notice = s.message();
+      spdlog::error("job {}: {}", id, job->checkpoint.message);
+      std::lock_guard lock(mu_);
+      jobs_[id] = job;
       continue;
     }
-    s = dir_.LoadCheckpoint(id, &job->checkpoint);
-    if (s.code() == StatusCode::kNotFound) {
+    s = dir_.LoadCheckpoint(id, &job->checkpoint, &notice);
+    if (!s.ok()) {  // a new job, or (notice) one whose checkpoints are unusable: generation 0
       job->checkpoint = JobCheckpoint{};
       job->checkpoint.job_id = id;
-    } else if (!s.ok()) {
-      spdlog::error("job {}: cannot load its checkpoint, skipped: {}", id, s.message());
-      continue;
+    }
+    if (!notice.empty()) {
+      job->notice = notice;
+      spdlog::warn("job {}: {}", id, notice);
     }
     std::lock_guard lock(mu_);
     jobs_[id] = job;
@@ -86,7 +108,7 @@ void JobStore::RunSession(Job& job) {
     c.state = state;
     c.message = message;
     Save(job, c);
-    broker_.Publish({job.id, state, c.log.empty() ? std::nullopt : std::optional(c.log.back()), message});
+    PublishFinal(job, c, state, message);
     spdlog::info("session {}: {} {}", job.id, JobStateName(state), message);
   };
   GenomeLayout layout;
@@ -112,7 +134,7 @@ void JobStore::RunSession(Job& job) {
         Save(job, c, /*write=*/true, durable);
         if (durable) last_write = now;
         spdlog::debug("session {}: batch {} ({} genomes) best {:.9g}", job.id, seq, genomes.size(), rec.best_cost);
-        broker_.Publish({job.id, c.state, rec, {}});
+        PublishGeneration(job, c.state, rec);
         return true;
       });
   if (!eval.error().empty()) {
@@ -125,20 +147,66 @@ void JobStore::RunSession(Job& job) {
     finish(JobState::kCancelled, "its client sent nothing for " +
                                      std::to_string(job.spec.external->idle_timeout_s) + " s (external.idle_timeout_s)");
   } else {  // shutdown: resumed on the next start
-    std::lock_guard lock(job.mu);
-    if (Status st = dir_.SaveCheckpoint(job.checkpoint); !st.ok())
-      spdlog::error("session {}: checkpoint not saved: {}", job.id, st.message());
+    JobCheckpoint last;
+    {
+      std::lock_guard lock(job.mu);
+      last = job.checkpoint;
+    }
+    Save(job, last);
   }
   broker_.UnregisterJob(job.id);
 }
 
-void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) {
-  if (write) {
-    if (Status s = dir_.SaveCheckpoint(c, durable); !s.ok())
-      spdlog::error("job {}: checkpoint not saved: {}", job.id, s.message());
+void JobStore::PublishGeneration(Job& job, JobState state, const GenerationRecord& rec) {
+  JobEvent e;
+  e.job_id = job.id;
+  e.state = state;
+  e.record = rec;
+  {
+    std::lock_guard lock(job.mu);
+    e.storage_error = job.storage_error;
   }
+  broker_.Publish(e);
+}
+
+void JobStore::PublishFinal(Job& job, const JobCheckpoint& c, JobState state, const std::string& message) {
+  JobEvent e;
+  e.job_id = job.id;
+  e.state = state;
+  if (!c.log.empty()) e.record = c.log.back();
+  e.message = message;
+  {
+    std::lock_guard lock(job.mu);
+    e.storage_error = job.storage_error;
+  }
+  broker_.Publish(e);
+}
+
+void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) {
+  Status s;
+  if (write) s = dir_.SaveCheckpoint(c, durable);
   std::lock_guard lock(job.mu);
   job.checkpoint = c;
+  if (!write) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!s.ok()) {
+    // The job runs on (its state is in memory), but status and watch say that a restart would
+    // lose what was not written; the log says it once a minute, with the count in between.
+    if (job.storage_error.empty())
+      job.storage_error_since = std::chrono::duration<double>(
+                                    std::chrono::system_clock::now().time_since_epoch()).count();
+    job.storage_error = s.message();
+    uint64_t suppressed = 0;
+    if (log_throttle_.Allow("checkpoint " + job.id, now, &suppressed))
+      spdlog::error("job {}: checkpoint not saved: {}{}", job.id, s.message(),
+                    suppressed ? " (" + std::to_string(suppressed) + " more failed writes not logged)" : "");
+  } else if (!job.storage_error.empty()) {
+    spdlog::info("job {}: checkpoints are written again (failing since {:.0f} s ago)", job.id,
+                 std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() -
+                     job.storage_error_since);
+    job.storage_error.clear();
+    job.storage_error_since = 0;
+  }
 }
 
 void JobStore::Run(Job& job) {
@@ -154,8 +222,7 @@ void JobStore::Run(Job& job) {
     c.state = state;
     c.message = message;
     Save(job, c);
-    broker_.Publish({job.id, state, c.log.empty() ? std::nullopt : std::optional(c.log.back()),
-                     message});
+    PublishFinal(job, c, state, message);
     spdlog::info("job {}: {} {}", job.id, JobStateName(state), message);
   };
   if (!s.ok()) {
@@ -186,13 +253,15 @@ void JobStore::Run(Job& job) {
     unwritten = !durable;
     spdlog::info("job {}: generation {} best {:.9g} mean {:.6g} evaluations {}", job.id,
                  rec.generation, rec.best_cost, rec.mean_cost, rec.evaluations);
-    broker_.Publish({job.id, c.state, rec, {}});
+    PublishGeneration(job, c.state, rec);
   }
   if (unwritten && !job.cancel) {  // shut down between writes (a failure was written by finish)
-    std::lock_guard lock(job.mu);
-    if (!IsFinal(job.checkpoint.state))
-      if (Status st = dir_.SaveCheckpoint(job.checkpoint); !st.ok())
-        spdlog::error("job {}: checkpoint not saved: {}", job.id, st.message());
+    JobCheckpoint last;
+    {
+      std::lock_guard lock(job.mu);
+      last = job.checkpoint;
+    }
+    if (!IsFinal(last.state)) Save(job, last);
   }
   if (job.cancel) {
     JobCheckpoint last;
@@ -224,6 +293,9 @@ JobInfo JobStore::Info(Job& job) {
   i.elapsed_s = c.elapsed_s;
   i.seed = job.spec.seed;
   i.algorithm = job.spec.algorithm();
+  i.notice = job.notice;
+  i.storage_error = job.storage_error;
+  i.storage_error_since_unix_s = job.storage_error_since;
   return i;
 }
 
@@ -271,8 +343,13 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
         return r;
       }
       if (Status s = dir_.SaveSpec(r.job_id, req.spec_bytes); !s.ok()) {
-        r.code = WireCode::kInternal;
-        r.error = s.message();
+        (void)dir_.Remove(r.job_id);  // no empty folder left for every restart to complain about
+        r.code = WireCode::kUnavailable;
+        r.error = "the master cannot store the job: " + s.message() + " (retry when it has space)";
+        uint64_t suppressed = 0;
+        if (log_throttle_.Allow("submit", std::chrono::steady_clock::now(), &suppressed))
+          spdlog::error("submission refused: {}{}", r.error,
+                        suppressed ? " (" + std::to_string(suppressed) + " more not logged)" : "");
         return r;
       }
       auto j = std::make_shared<Job>();

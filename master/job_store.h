@@ -13,6 +13,7 @@
 
 #include "master/broker.h"
 #include "master/checkpoint.h"
+#include "master/log_throttle.h"
 #include "job/job_kind.h"
 #include "master/session.h"
 
@@ -52,6 +53,9 @@ class JobStore final : public ClientHandler {
     std::atomic<bool> cancel{false}, shutdown{false};
     std::thread thread;
     std::shared_ptr<Session> session;  // external jobs (evaluation sessions) only
+    std::string notice;                 // what loading it repaired (JobInfo.notice)
+    std::string storage_error;          // under mu: the last checkpoint write failed (JobInfo)
+    double storage_error_since = 0;     // under mu: since when [unix s]
   };
   void Start(const std::shared_ptr<Job>& job);
   void Run(Job& job);
@@ -59,11 +63,16 @@ class JobStore final : public ClientHandler {
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
   void Save(Job& job, const service::JobCheckpoint& c, bool write = true, bool durable = true);
   service::JobInfo Info(Job& job);
+  /// A generation's (or batch's) event for the job's watchers, with its storage condition.
+  void PublishGeneration(Job& job, service::JobState state, const service::GenerationRecord& rec);
+  /// The job's final event (state, message, its last record).
+  void PublishFinal(Job& job, const service::JobCheckpoint& c, service::JobState state, const std::string& message);
 
   JobStoreOptions options_;
   Broker& broker_;
   const job::JobKindRegistry& kinds_;
   JobDirectory dir_;
+  LogThrottle log_throttle_{std::chrono::minutes(1)};
   std::mutex mu_;
   std::map<std::string, std::shared_ptr<Job>> jobs_;
 };

@@ -4,7 +4,7 @@
 set -euo pipefail
 PKGS=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler
-      libspdlog-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev libboost-dev
+      libspdlog-dev zlib1g-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev libboost-dev
       gnuplot-nox libopenblas-serial-dev
       clang libclang-rt-14-dev)  # clang + its sanitizer/libFuzzer runtimes: fuzz/run.sh
 missing=()

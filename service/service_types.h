@@ -86,6 +86,9 @@ struct JobInfo {
   double elapsed_s = 0;
   uint64_t seed = 0;
   std::string algorithm;  ///< "ga" or "external" (a session: generation = batches evaluated)
+  std::string notice;     ///< what the master repaired on loading the job (names the file), or ""
+  std::string storage_error;            ///< checkpoints cannot be written now: why, or ""
+  double storage_error_since_unix_s = 0;
 };
 
 struct JobEvent {
@@ -94,6 +97,7 @@ struct JobEvent {
   std::optional<GenerationRecord> record;
   std::string message;
   int workers = 0, worker_threads = 0;  ///< connected when sent (filled in by the broker)
+  std::string storage_error;  ///< the job's checkpoints cannot be written now (JobInfo)
 };
 
 // ------------------------------------------------------------------ worker protocol

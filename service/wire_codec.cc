@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include <zlib.h>
+
 #include "job.pb.h"
 #include "wire.pb.h"
 
@@ -539,6 +541,9 @@ void InfoToProto(const JobInfo& i, pw::JobInfo* p) {
   p->set_elapsed_s(i.elapsed_s);
   p->set_seed(i.seed);
   p->set_algorithm(i.algorithm);
+  p->set_notice(i.notice);
+  p->set_storage_error(i.storage_error);
+  p->set_storage_error_since_unix_s(i.storage_error_since_unix_s);
 }
 
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
@@ -557,6 +562,9 @@ Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
   i->elapsed_s = p.elapsed_s();
   i->seed = p.seed();
   i->algorithm = p.algorithm();
+  i->notice = p.notice();
+  i->storage_error = p.storage_error();
+  i->storage_error_since_unix_s = p.storage_error_since_unix_s();
   return Status::Ok();
 }
 
@@ -842,6 +850,7 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       e->set_message(m.event.message);
       e->set_workers(static_cast<uint32_t>(std::max(0, m.event.workers)));
       e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.event.worker_threads)));
+      e->set_storage_error(m.event.storage_error);
       break;
     }
     case T::kEvaluate: {
@@ -905,6 +914,7 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->event.message = p.event().message();
       m->event.workers = ClampInt(p.event().workers());
       m->event.worker_threads = ClampInt(p.event().worker_threads());
+      m->event.storage_error = p.event().storage_error();
       break;
     case pw::ClientReply::kEvaluate: {
       const auto& e = p.evaluate();
@@ -993,6 +1003,32 @@ Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c) {
   c->message = p.message();
   for (const auto& q : p.quarantined()) c->quarantined.push_back(FromProto(q));
   c->elapsed_s = p.elapsed_s();
+  return Status::Ok();
+}
+
+std::string EncodeStoredFile(std::string_view type, std::string_view payload) {
+  pw::StoredFile f;
+  f.set_type(std::string(type));
+  f.set_payload(std::string(payload));
+  f.set_length(payload.size());
+  f.set_crc32(static_cast<uint32_t>(
+      crc32(0L, reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size()))));
+  return Deterministic(f);
+}
+
+Status DecodeStoredFile(std::string_view bytes, std::string_view type, std::string* payload) {
+  pw::StoredFile f;
+  if (!Parse(bytes, &f) || f.type().empty())
+    return {StatusCode::kNotFound, "not a stored file (" + std::to_string(bytes.size()) + " bytes)"};
+  if (f.type() != type)
+    return {StatusCode::kDataLoss, "holds a " + f.type() + ", not a " + std::string(type)};
+  if (f.payload().size() != f.length())
+    return {StatusCode::kDataLoss, "truncated: " + std::to_string(f.payload().size()) + " of " +
+                                       std::to_string(f.length()) + " payload bytes"};
+  const auto crc = static_cast<uint32_t>(crc32(
+      0L, reinterpret_cast<const Bytef*>(f.payload().data()), static_cast<uInt>(f.payload().size())));
+  if (crc != f.crc32()) return {StatusCode::kDataLoss, "checksum mismatch (the file was altered)"};
+  *payload = std::move(*f.mutable_payload());
   return Status::Ok();
 }
 

@@ -45,6 +45,14 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m);
 std::string EncodeCheckpoint(const JobCheckpoint& c);
 Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c);
 
+/// A file of the state directory: `payload` (a serialised message of protobuf type `type`) framed
+/// with its length and CRC-32 (proto StoredFile).
+std::string EncodeStoredFile(std::string_view type, std::string_view payload);
+/// The payload of a stored file of `type`; kDataLoss naming what is wrong (not a stored file,
+/// another type, truncated, checksum mismatch). A file written before stored files existed (a
+/// bare payload) is kNotFound, so that a caller may read it as the bare message.
+Status DecodeStoredFile(std::string_view bytes, std::string_view type, std::string* payload);
+
 /// "0101…" rendering of genome bits (logs, reports).
 std::string BitString(const opt::Genome& g);
 
