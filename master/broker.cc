@@ -11,6 +11,7 @@
 #include <zmq.hpp>
 
 #include "master/job_store.h"
+#include "master/log_throttle.h"
 #include "service/liveness.h"
 #include "service/wire_codec.h"
 
@@ -131,7 +132,7 @@ struct Broker::Impl {
   std::map<std::string, std::map<std::string, Watcher>> watchers;  // job → envelope key → watcher
   std::map<std::string, std::set<std::string>> jobs_of_client;  // client identity → job ids
   BrokerStats local;
-  uint64_t bad_frames_logged = 0;
+  LogThrottle log_throttle{std::chrono::seconds(10)};
 
   void Wake() {
     uint64_t one = 1;
@@ -165,9 +166,10 @@ struct Broker::Impl {
 
   void BadFrame(const char* where, const std::string& why) {
     ++local.bad_frames;
-    if (bad_frames_logged < 20 || bad_frames_logged % 1000 == 0)
-      spdlog::warn("broker: bad {} frame ({}), ignored", where, why);
-    ++bad_frames_logged;
+    uint64_t suppressed = 0;  // a flood is one line every 10 s per endpoint, with its count
+    if (log_throttle.Allow(where, Clock::now(), &suppressed))
+      spdlog::warn("broker: bad {} frame ({}), ignored{}", where, why,
+                   suppressed ? " (" + std::to_string(suppressed) + " more since the last line)" : "");
   }
 
   // ------------------------------------------------------------------ commands from job threads
