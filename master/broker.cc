@@ -84,13 +84,21 @@ std::string Property(const zmq::message_t& m, const char* name) {
 
 }  // namespace
 
+/// The dispatcher's quiet window is at least two liveness timeouts: deaths are seen up to one
+/// timeout late, so two kills a moment apart may be noticed that far apart.
+DispatchOptions WithQuietWindow(const BrokerOptions& o) {
+  DispatchOptions d = o.dispatch;
+  d.quiet_window_s = std::max(d.quiet_window_s, 2.0 * o.heartbeat_ms * o.liveness / 1000.0);
+  return d;
+}
+
 struct Broker::Impl {
   explicit Impl(BrokerOptions o)
       : options(std::move(o)),
         workers(ctx, zmq::socket_type::router),
         clients(ctx, zmq::socket_type::router),
         liveness(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
-        dispatcher(options.dispatch, std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {}
+        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {}
 
   // ---- shared with other threads
   BrokerOptions options;
@@ -257,18 +265,19 @@ struct Broker::Impl {
                                          "quarantined"};
         j.ticket->quarantined.push_back({q.generation, index, static_cast<uint32_t>(q.strikes)});
       }
-      spdlog::warn("job {}: individual {} of generation {} quarantined after {} lost leases",
+      spdlog::warn("job {}: individual {} of generation {} quarantined: it killed or hung {} workers that "
+                   "ran it alone while the rest of the cluster was healthy",
                    q.job_id, index, q.generation, q.strikes);
       if (dispatcher.remaining(q.job_id) == 0) CompleteGeneration(q.job_id, j);
     }
   }
 
   // ------------------------------------------------------------------ workers
-  void RemoveWorker(const std::string& id, bool strike, const char* why) {
+  void RemoveWorker(const std::string& id, bool lost, const char* why) {
     if (!dispatcher.HasWorker(id)) return;
     spdlog::info("worker {} removed ({})", Hex(id), why);
     liveness.Remove(id);
-    Quarantine(dispatcher.RemoveWorker(id, strike));
+    dispatcher.RemoveWorker(id, lost, Clock::now());
   }
 
   void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now,
@@ -338,7 +347,7 @@ struct Broker::Impl {
     Job& j = it->second;
     if (r.code != WireCode::kOk) {
       if (IsTransient(r.code)) {
-        Quarantine(dispatcher.Requeue(*lease, false));
+        Quarantine(dispatcher.Requeue(*lease, RequeueCause::kTransient, Clock::now()));
       } else {
         spdlog::error("job {}: worker reports a deterministic error: {}", lease->job_id, r.error);
         dispatcher.RemoveJob(lease->job_id);
@@ -353,7 +362,7 @@ struct Broker::Impl {
       consistent = r.indices[i] == j.indices[lease->positions[i]];
     if (!consistent) {
       BadFrame("result", "does not match its lease");
-      Quarantine(dispatcher.Requeue(*lease, false));
+      Quarantine(dispatcher.Requeue(*lease, RequeueCause::kTransient, Clock::now()));
       return;
     }
     ++local.results_accepted;
@@ -565,9 +574,10 @@ struct Broker::Impl {
       now = Clock::now();
       for (const std::string& id : liveness.TakeExpired(now)) {
         spdlog::warn("worker {} missed its heartbeats", Hex(id));
-        Quarantine(dispatcher.RemoveWorker(id, true));
+        dispatcher.RemoveWorker(id, /*lost=*/true, now);
       }
       Quarantine(dispatcher.ExpireLeases(now));
+      Quarantine(dispatcher.ConfirmStrikes(now));
       if (liveness.HeartbeatDue(now)) {
         WorkerMsg hb;
         hb.type = WorkerMsg::Type::kHeartbeat;

@@ -26,7 +26,7 @@ void Dispatcher::StartGeneration(const std::string& job_id, uint64_t generation,
   j.task_timeout_s = task_timeout_s;
   j.quarantine_after = std::max(1, quarantine_after);
   j.done.assign(tasks, 0);
-  j.strikes.assign(tasks, 0);
+  j.struck_by.assign(tasks, {});
   for (int i = 0; i < tasks; ++i) j.pending.push_back(i);
   j.last_served = served;
 }
@@ -66,8 +66,7 @@ void Dispatcher::AddWorker(const std::string& id, int threads) {
   total_threads_ += it->second.threads;
 }
 
-std::vector<Quarantined> Dispatcher::RemoveWorker(const std::string& id, bool strike) {
-  std::vector<Quarantined> out;
+void Dispatcher::RemoveWorker(const std::string& id, bool lost, TimePoint now) {
   std::vector<Lease> taken;
   for (auto it = leases_.begin(); it != leases_.end();) {
     if (it->second.worker == id) {
@@ -77,20 +76,84 @@ std::vector<Quarantined> Dispatcher::RemoveWorker(const std::string& id, bool st
       ++it;
     }
   }
+  Departure d;
+  d.worker = id;
+  d.at = now;
+  for (const Lease& l : taken) {
+    d.held_jobs.emplace_back(l.job_id, l.generation);
+    d.held.push_back(l.positions);
+  }
   for (const Lease& l : taken) {
     Release(l);
-    auto q = Requeue(l, strike);
-    out.insert(out.end(), q.begin(), q.end());
+    if (lost && l.solo && !l.positions.empty()) {  // it died running this task alone
+      d.job_id = l.job_id;
+      d.generation = l.generation;
+      d.position = l.positions[0];
+      candidates_.push_back(d);
+    }
+    (void)Requeue(l, lost ? RequeueCause::kWorkerLost : RequeueCause::kTransient, now);
   }
+  departures_.push_back(d);
+  while (!departures_.empty() && now - departures_.front().at > 2 * quiet_window()) departures_.pop_front();
   auto w = workers_.find(id);
   if (w != workers_.end()) {
     total_threads_ -= w->second.threads;
     workers_.erase(w);
   }
+}
+
+bool Dispatcher::Departure::Held(const std::string& job, uint64_t gen, int pos) const {
+  for (size_t i = 0; i < held.size(); ++i)
+    if (held_jobs[i].first == job && held_jobs[i].second == gen &&
+        std::find(held[i].begin(), held[i].end(), pos) != held[i].end())
+      return true;
+  return false;
+}
+
+Duration Dispatcher::quiet_window() const {
+  return std::chrono::duration_cast<Duration>(std::chrono::duration<double>(std::max(0.0, options_.quiet_window_s)));
+}
+
+std::optional<Quarantined> Dispatcher::Strike(const std::string& job_id, uint64_t generation, int position,
+                                              const std::string& worker) {
+  auto it = jobs_.find(job_id);
+  if (it == jobs_.end() || it->second.generation != generation) return std::nullopt;
+  JobTasks& j = it->second;
+  if (position < 0 || position >= j.tasks || j.done[position]) return std::nullopt;
+  auto& by = j.struck_by[position];
+  if (std::find(by.begin(), by.end(), worker) == by.end()) by.push_back(worker);
+  const int strikes = static_cast<int>(by.size());
+  if (strikes < j.quarantine_after) return std::nullopt;
+  j.done[position] = 1;
+  --j.remaining;
+  std::erase(j.suspects, position);
+  std::erase(j.pending, position);
+  return Quarantined{job_id, generation, position, strikes};
+}
+
+std::vector<Quarantined> Dispatcher::ConfirmStrikes(TimePoint now) {
+  std::vector<Quarantined> out;
+  const Duration window = quiet_window();
+  while (!candidates_.empty() && now - candidates_.front().at >= window) {
+    const Departure c = std::move(candidates_.front());
+    candidates_.pop_front();
+    // Another worker, not running this same task, left around the death: the cluster was not
+    // healthy then (churn, a partition), so the death says nothing about the task.
+    bool isolated = true;
+    for (const Departure& d : departures_) {
+      if (d.worker == c.worker || d.at < c.at - window || d.at > c.at + window) continue;
+      if (d.Held(c.job_id, c.generation, c.position)) continue;  // the task's own doing
+      isolated = false;
+      break;
+    }
+    if (!isolated) continue;
+    if (auto q = Strike(c.job_id, c.generation, c.position, c.worker)) out.push_back(*q);
+  }
   return out;
 }
 
 bool Dispatcher::HasRoom(const WorkerSlot& w) const {
+  if (w.exclusive) return false;
   return w.leases < options_.leases_per_worker || w.items < w.threads;
 }
 
@@ -106,12 +169,72 @@ int Dispatcher::BatchSize(const WorkerSlot& w, const JobTasks& j) const {
   return static_cast<int>(std::max(1L, size));
 }
 
+Lease Dispatcher::Grant(const std::string& job_id, JobTasks& job, const std::string& worker_id,
+                        WorkerSlot& worker, std::vector<int> positions, bool solo, TimePoint now) {
+  Lease l;
+  l.id = next_lease_id_++;
+  l.worker = worker_id;
+  l.job_id = job_id;
+  l.generation = job.generation;
+  l.positions = std::move(positions);
+  l.solo = solo;
+  const int n = static_cast<int>(l.positions.size());
+  worker.leases += 1;
+  worker.items += n;
+  worker.exclusive = solo;
+  worker.last_served = job.last_served = ++serve_counter_;
+  job.in_flight += n;
+  const double rounds = std::ceil(static_cast<double>(worker.items) / worker.threads);
+  l.granted = now;
+  l.deadline = now + std::chrono::duration_cast<Duration>(
+                         std::chrono::duration<double>(rounds * job.task_timeout_s));
+  leases_.emplace(l.id, l);
+  return l;
+}
+
 std::optional<Lease> Dispatcher::NextLease(TimePoint now) {
+  // Suspects first, each alone on an idle worker (served longest ago); with no idle worker, the
+  // least loaded one gets no new lease until it is idle (it drains), so suspects never starve.
+  const std::string* drain = nullptr;
+  {
+    JobTasks* job = nullptr;
+    const std::string* job_id = nullptr;
+    for (auto& [id, j] : jobs_) {
+      if (j.suspects.empty()) continue;
+      if (!job || j.last_served < job->last_served) {
+        job = &j;
+        job_id = &id;
+      }
+    }
+    if (job) {
+      WorkerSlot *idle = nullptr, *least = nullptr;
+      const std::string *idle_id = nullptr, *least_id = nullptr;
+      for (auto& [id, w] : workers_) {
+        if (w.exclusive) continue;
+        if (w.leases == 0) {
+          if (!idle || w.last_served < idle->last_served) {
+            idle = &w;
+            idle_id = &id;
+          }
+        } else if (!least || static_cast<double>(w.items) / w.threads <
+                                 static_cast<double>(least->items) / least->threads) {
+          least = &w;
+          least_id = &id;
+        }
+      }
+      if (idle) {
+        const int p = job->suspects.front();
+        job->suspects.pop_front();
+        return Grant(*job_id, *job, *idle_id, *idle, {p}, /*solo=*/true, now);
+      }
+      drain = least_id;
+    }
+  }
   // The job: fewest tasks in flight among those with pending tasks; ties: served longest ago.
   JobTasks* job = nullptr;
   const std::string* job_id = nullptr;
   for (auto& [id, j] : jobs_) {
-    if (j.pending.empty() && j.suspects.empty()) continue;
+    if (j.pending.empty()) continue;
     if (!job || j.in_flight < job->in_flight ||
         (j.in_flight == job->in_flight && j.last_served < job->last_served)) {
       job = &j;
@@ -123,7 +246,7 @@ std::optional<Lease> Dispatcher::NextLease(TimePoint now) {
   WorkerSlot* worker = nullptr;
   const std::string* worker_id = nullptr;
   for (auto& [id, w] : workers_) {
-    if (!HasRoom(w)) continue;
+    if (!HasRoom(w) || (drain && id == *drain)) continue;
     if (!worker || static_cast<double>(w.items) / w.threads <
                        static_cast<double>(worker->items) / worker->threads ||
         (w.items * worker->threads == worker->items * w.threads &&
@@ -133,31 +256,10 @@ std::optional<Lease> Dispatcher::NextLease(TimePoint now) {
     }
   }
   if (!worker) return std::nullopt;
-
-  Lease l;
-  l.id = next_lease_id_++;
-  l.worker = *worker_id;
-  l.job_id = *job_id;
-  l.generation = job->generation;
-  if (!job->suspects.empty()) {
-    l.positions.push_back(job->suspects.front());
-    job->suspects.pop_front();
-  } else {
-    const int n = BatchSize(*worker, *job);
-    l.positions.assign(job->pending.begin(), job->pending.begin() + n);
-    job->pending.erase(job->pending.begin(), job->pending.begin() + n);
-  }
-  const int n = static_cast<int>(l.positions.size());
-  worker->leases += 1;
-  worker->items += n;
-  worker->last_served = job->last_served = ++serve_counter_;
-  job->in_flight += n;
-  const double rounds = std::ceil(static_cast<double>(worker->items) / worker->threads);
-  l.granted = now;
-  l.deadline = now + std::chrono::duration_cast<Duration>(
-                         std::chrono::duration<double>(rounds * job->task_timeout_s));
-  leases_.emplace(l.id, l);
-  return l;
+  const int n = BatchSize(*worker, *job);
+  std::vector<int> positions(job->pending.begin(), job->pending.begin() + n);
+  job->pending.erase(job->pending.begin(), job->pending.begin() + n);
+  return Grant(*job_id, *job, *worker_id, *worker, std::move(positions), /*solo=*/false, now);
 }
 
 void Dispatcher::Release(const Lease& lease) {
@@ -165,6 +267,7 @@ void Dispatcher::Release(const Lease& lease) {
   if (auto w = workers_.find(lease.worker); w != workers_.end()) {
     w->second.leases -= 1;
     w->second.items -= n;
+    if (lease.solo) w->second.exclusive = false;
   }
   if (auto j = jobs_.find(lease.job_id); j != jobs_.end()) j->second.in_flight -= n;
 }
@@ -185,24 +288,26 @@ std::optional<Lease> Dispatcher::Complete(const std::string& worker, uint64_t le
   return l;
 }
 
-std::vector<Quarantined> Dispatcher::Requeue(const Lease& lease, bool strike) {
+std::vector<Quarantined> Dispatcher::Requeue(const Lease& lease, RequeueCause cause, TimePoint now) {
   std::vector<Quarantined> out;
   auto it = jobs_.find(lease.job_id);
   if (it == jobs_.end() || it->second.generation != lease.generation) return out;
   JobTasks& j = it->second;
   for (int p : lease.positions) {
     if (p < 0 || p >= j.tasks || j.done[p]) continue;
-    if (strike) j.strikes[p] += 1;
-    if (j.strikes[p] >= j.quarantine_after) {
-      j.done[p] = 1;
-      --j.remaining;
-      out.push_back({lease.job_id, lease.generation, p, j.strikes[p]});
-    } else if (j.strikes[p] > 0) {
-      j.suspects.push_back(p);
-    } else {
+    if (cause == RequeueCause::kDeadline && lease.solo) {  // it hangs its worker, which lives on
+      if (auto q = Strike(lease.job_id, lease.generation, p, lease.worker)) {
+        out.push_back(*q);
+        continue;
+      }
+    }
+    if (cause == RequeueCause::kTransient && !lease.solo) {
       j.pending.push_front(p);
+    } else {
+      j.suspects.push_back(p);
     }
   }
+  (void)now;
   return out;
 }
 
@@ -219,7 +324,7 @@ std::vector<Quarantined> Dispatcher::ExpireLeases(TimePoint now) {
   std::vector<Quarantined> out;
   for (const Lease& l : expired) {
     Release(l);
-    auto q = Requeue(l, true);
+    auto q = Requeue(l, RequeueCause::kDeadline, now);
     out.insert(out.end(), q.begin(), q.end());
   }
   return out;
@@ -228,6 +333,7 @@ std::vector<Quarantined> Dispatcher::ExpireLeases(TimePoint now) {
 TimePoint Dispatcher::NextDeadline() const {
   TimePoint t = TimePoint::max();
   for (const auto& [id, l] : leases_) t = std::min(t, l.deadline);
+  if (!candidates_.empty()) t = std::min(t, candidates_.front().at + quiet_window());
   return t;
 }
 

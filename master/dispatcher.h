@@ -10,8 +10,17 @@
 //    threads), never below one round of its threads, never above max_batch.
 //  * A worker holds at most leases_per_worker leases, or more while it has idle threads.
 //  * Deadline: now + rounds × task_timeout_s, rounds = ⌈tasks held by the worker / threads⌉.
-//  * Re-queue with a strike when the holder dies or the deadline passes; a struck task is then
-//    leased alone, so further strikes are its own; at quarantine_after strikes it is quarantined.
+//  * Quarantine only on evidence that the task itself kills workers (issue 12.1), never because the
+//    cluster churns. A lease lost to a dead worker or a passed deadline makes its unfinished tasks
+//    suspects, re-run ALONE: a suspect goes only to an idle worker, which gets nothing else until it
+//    answers (if no worker is idle, the least loaded one is drained). Evidence (a strike) is:
+//      - the worker running a suspect alone dies, and no other worker (one not running that same
+//        task) left the cluster within quiet_window_s before or after: the cluster was otherwise
+//        healthy, so the death is the task's; decided quiet_window_s after the death
+//        (ConfirmStrikes);
+//      - or a suspect running alone passes its deadline while its worker stays alive (a hang).
+//    Strikes count once per worker; at quarantine_after strikes the task is quarantined.
+//    Under churn, deaths are never isolated, so they never strike: the result stays bit-identical.
 //  * Results count once: a position already done, or a lease no longer held by the sender, or an
 //    old generation, is ignored.
 #pragma once
@@ -27,10 +36,22 @@
 
 namespace pz::master {
 
+using service::Duration;
+using service::TimePoint;
+
 struct DispatchOptions {
   double target_batch_s = 0.25;  ///< wall time a batch should keep a worker busy [s]
   int max_batch = 4096;          ///< tasks per lease, ≥ 1
   int leases_per_worker = 2;     ///< pipelining depth, ≥ 1
+  /// A death strikes a task only if no other worker left within this long before or after [s].
+  double quiet_window_s = 5.0;
+};
+
+/// Why a lease's tasks go back to the queue.
+enum class RequeueCause {
+  kTransient,   ///< the worker answered "retry" or left in good order: no suspicion
+  kWorkerLost,  ///< the holder died (missed heartbeats): its tasks become suspects
+  kDeadline,    ///< the lease passed its deadline with its holder alive: suspects (a hang if alone)
 };
 
 struct Lease {
@@ -39,7 +60,8 @@ struct Lease {
   std::string job_id;
   uint64_t generation = 0;
   std::vector<int> positions;
-  service::TimePoint granted{}, deadline{};
+  TimePoint granted{}, deadline{};
+  bool solo = false;  ///< one suspect on an otherwise idle worker, which gets nothing else meanwhile
 };
 
 /// A task quarantined by Requeue.
@@ -68,22 +90,27 @@ class Dispatcher {
   // ---- workers
   void AddWorker(const std::string& id, int threads);
   bool HasWorker(const std::string& id) const { return workers_.count(id) > 0; }
-  /// Removes a worker and re-queues its leases (with a strike when `strike`).
-  std::vector<Quarantined> RemoveWorker(const std::string& id, bool strike);
+  /// Removes a worker and re-queues its leases: `lost` (it died) makes their tasks suspects and a
+  /// solo task a strike candidate (see ConfirmStrikes); otherwise they are simply re-queued.
+  void RemoveWorker(const std::string& id, bool lost, TimePoint now);
   int worker_count() const { return static_cast<int>(workers_.size()); }
   int total_threads() const { return total_threads_; }
 
   // ---- leases
   /// The next lease to send, or nullopt when no worker has room or no task is pending.
-  std::optional<Lease> NextLease(service::TimePoint now);
+  std::optional<Lease> NextLease(TimePoint now);
   /// Completes a lease held by `worker`; nullopt if it is not (ignored result). Updates the
   /// worker's speed estimate from the summed evaluation time of its tasks.
   std::optional<Lease> Complete(const std::string& worker, uint64_t lease_id, double eval_seconds);
-  /// Re-queues the tasks of a lease that are not done (a strike each when `strike`).
-  std::vector<Quarantined> Requeue(const Lease& lease, bool strike);
-  /// Takes the leases whose deadline has passed, re-queues them with a strike.
-  std::vector<Quarantined> ExpireLeases(service::TimePoint now);
-  service::TimePoint NextDeadline() const;
+  /// Re-queues the tasks of a lease that are not done (see RequeueCause).
+  std::vector<Quarantined> Requeue(const Lease& lease, RequeueCause cause, TimePoint now);
+  /// Takes the leases whose deadline has passed and re-queues them (a solo one strikes: a hang).
+  std::vector<Quarantined> ExpireLeases(TimePoint now);
+  /// Decides the strike candidates older than quiet_window_s: a strike each when no other worker
+  /// left around its death; returns the tasks quarantined by them.
+  std::vector<Quarantined> ConfirmStrikes(TimePoint now);
+  /// The earliest lease deadline or strike decision (TimePoint::max() if none).
+  TimePoint NextDeadline() const;
   size_t leases_outstanding() const { return leases_.size(); }
 
   /// Measured time of one evaluation on one thread of the worker [s] (< 0 when unknown).
@@ -97,7 +124,7 @@ class Dispatcher {
     int quarantine_after = 3;
     std::deque<int> pending, suspects;
     std::vector<uint8_t> done;
-    std::vector<uint16_t> strikes;
+    std::vector<std::vector<std::string>> struck_by;  ///< distinct workers that gave evidence
     uint64_t last_served = 0;
   };
   struct WorkerSlot {
@@ -105,10 +132,28 @@ class Dispatcher {
     double item_s = -1;
     int leases = 0, items = 0;
     uint64_t last_served = 0;
+    bool exclusive = false;  ///< holds a solo lease: nothing else until it answers
+  };
+  /// A worker that left: the task it was running alone then (none: position < 0), and every
+  /// task it held (a task's own deaths never count against its evidence).
+  struct Departure {
+    std::string worker, job_id;
+    uint64_t generation = 0;
+    int position = -1;
+    TimePoint at{};
+    std::vector<std::pair<std::string, uint64_t>> held_jobs;  ///< (job, generation) per lease
+    std::vector<std::vector<int>> held;                       ///< its positions, per lease
+    bool Held(const std::string& job, uint64_t generation, int position) const;
   };
   bool HasRoom(const WorkerSlot& w) const;
   int BatchSize(const WorkerSlot& w, const JobTasks& j) const;
   void Release(const Lease& lease);
+  Lease Grant(const std::string& job_id, JobTasks& job, const std::string& worker_id, WorkerSlot& worker,
+              std::vector<int> positions, bool solo, TimePoint now);
+  /// Adds one strike of `worker` to a task (once per worker); the quarantine it causes, if any.
+  std::optional<Quarantined> Strike(const std::string& job_id, uint64_t generation, int position,
+                                    const std::string& worker);
+  Duration quiet_window() const;
 
   DispatchOptions options_;
   uint64_t next_lease_id_;
@@ -117,6 +162,8 @@ class Dispatcher {
   std::map<std::string, JobTasks> jobs_;
   std::map<std::string, WorkerSlot> workers_;
   std::map<uint64_t, Lease> leases_;
+  std::deque<Departure> departures_;  ///< recent, oldest first (kept 2 quiet windows)
+  std::deque<Departure> candidates_;  ///< solo deaths awaiting ConfirmStrikes, oldest first
 };
 
 }  // namespace pz::master

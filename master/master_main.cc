@@ -99,6 +99,11 @@ int main(int argc, char** argv) {
   app.add_option("--target-batch-s", broker.dispatch.target_batch_s,
                  "work per lease, by the worker's measured speed [s]")
       ->capture_default_str();
+  app.add_option("--quiet-window-s", broker.dispatch.quiet_window_s,
+                 "a worker's death while it runs a suspect task alone counts against the task only if no "
+                 "other worker left this long before or after (at least 2 liveness timeouts) [s]")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   app.add_option("--max-jobs", store.max_running_jobs, "running jobs at most")
       ->capture_default_str();
   app.add_option("--checkpoint-interval-s", store.checkpoint_interval_s,

@@ -182,7 +182,11 @@ class Cluster {
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
   client::ServiceClient Client(int timeout_ms = 2000, int retries = 3) {
-    return client::ServiceClient({client_ep_, timeout_ms, retries});
+    client::ServiceClientOptions o;
+    o.endpoint = client_ep_;
+    o.timeout_ms = timeout_ms;
+    o.retries = retries;
+    return client::ServiceClient(o);
   }
   const std::string& worker_endpoint() const { return worker_ep_; }
   const std::string& client_endpoint() const { return client_ep_; }
