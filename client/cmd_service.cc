@@ -347,7 +347,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   fetch->add_flag("--no-plots", *no_plots, "do not render figures (gnuplot scripts are still written)");
   fetch->callback([=, &exit_code] {
     FetchedJob job;
-    Status s = common->Client().Fetch(*job_id, *count, &job.best, &job.log, &job.info, &job.spec);
+    Status s = common->Client().Fetch(*job_id, *count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
     if (!s.ok()) {
       exit_code = Report(s);
       return;

@@ -95,7 +95,7 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitn
   p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
-  p.piezoid_version = "0.1.0";
+  p.piezoid_version = PIEZOID_VERSION;
   for (const auto& c : fitness.config().cases)
     if (c.training) p.training_cases.push_back("case" + std::to_string(c.number));
   return n;
@@ -184,7 +184,8 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
     const hgann::HgannFitness fitness(std::move(config));
     fs::create_directories(out / "networks");
     for (size_t k = 0; k < job.best.size(); ++k) {
-      const io::SavedNetwork n = SavedNetworkOfJob(job, fitness, k);
+      // The master's networks; a master from before fetch returned them: decoded here.
+      const io::SavedNetwork n = k < job.networks.size() ? job.networks[k] : SavedNetworkOfJob(job, fitness, k);
       for (const char* ext : {".pb", ".json"}) {
         const fs::path p = out / "networks" / ("best-" + std::to_string(k + 1) + ext);
         if (Status s = io::SaveNetwork(n, p.string()); !s.ok()) return s;

@@ -19,6 +19,7 @@ struct FetchedJob {
   job::JobSpec spec;
   std::vector<service::ScoredGenome> best;      ///< best first
   std::vector<service::GenerationRecord> log;  ///< one record per generation
+  std::vector<io::SavedNetwork> networks;      ///< best[i] as the master decoded it (hgann), or empty
 };
 
 /// The GA's generation summary carried by a generation record.

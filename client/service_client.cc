@@ -190,7 +190,7 @@ Status ServiceClient::Cancel(const std::string& job_id) {
 Status ServiceClient::Fetch(const std::string& job_id, int count,
                             std::vector<service::ScoredGenome>* best,
                             std::vector<service::GenerationRecord>* log, service::JobInfo* info,
-                            job::JobSpec* spec) {
+                            job::JobSpec* spec, std::vector<io::SavedNetwork>* networks) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kFetch;
   req.job_id = job_id;
@@ -201,6 +201,7 @@ Status ServiceClient::Fetch(const std::string& job_id, int count,
   if (best) *best = reply.best;
   if (log) *log = reply.log;
   if (info) *info = reply.info;
+  if (networks) *networks = std::move(reply.networks);
   if (spec) {
     if (!reply.spec) return {StatusCode::kDataLoss, "the master's fetch reply has no job spec"};
     *spec = *reply.spec;

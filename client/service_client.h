@@ -70,9 +70,11 @@ class ServiceClient {
   Status Cancel(const std::string& job_id);
   /// The best `count` individuals (best first, at most 32), the generation log, the job's state
   /// and its spec (any output may be nullptr).
+  /// The job's best `count` (1 … 32) individuals, its log, status and spec, and for kinds whose
+  /// genomes are networks (hgann) those networks as the master decoded them (`networks`).
   Status Fetch(const std::string& job_id, int count, std::vector<service::ScoredGenome>* best,
                std::vector<service::GenerationRecord>* log, service::JobInfo* info = nullptr,
-               job::JobSpec* spec = nullptr);
+               job::JobSpec* spec = nullptr, std::vector<io::SavedNetwork>* networks = nullptr);
   /// Calls on_event for each pushed event until the job ends (returns Ok), on_event returns
   /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches) that
   /// takes less than options.watch_reconnect_s; a master unreachable for longer is kUnavailable.

@@ -349,6 +349,16 @@ JobKind HgannJobKind() {
     }
     return Status::Ok();
   };
+  k.networks = [](const JobSpec& s, std::span<const Genome> genomes, std::vector<model::Network>* out) {
+    HgannFitnessConfig config;  // the normalisation and ranges the fitness decodes with
+    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok()) return st;
+    out->clear();
+    for (const Genome& g : genomes) {
+      if (Status st = model::ValidateChromosome(g.bits); !st.ok()) return st;
+      out->push_back(model::DecodeChromosome(g.bits, config.normalization, config.ranges));
+    }
+    return Status::Ok();
+  };
   k.describe = [](const JobSpec&, const Genome& g) {
     return g.bits.size() == static_cast<size_t>(model::kChromosomeBits) ? model::DescribeChromosome(g.bits)
                                                                         : std::string();

@@ -49,7 +49,7 @@ IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& se
   p.created_unix_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
-  p.piezoid_version = "0.1.0";
+  p.piezoid_version = PIEZOID_VERSION;
   for (const auto* c : set.Training()) p.training_cases.push_back("case" + std::to_string(c->number));
   r.cases = fitness.EvaluateCases(r.best.network);
   return r;

@@ -62,4 +62,11 @@ Status JobKindRegistry::MakeFitness(const JobSpec& spec,
   return k->make_fitness(spec, out);
 }
 
+Status JobKindRegistry::Networks(const JobSpec& spec, std::span<const opt::Genome> genomes,
+                                 std::vector<model::Network>* out) const {
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->networks) return NotFound("job kind '" + spec.kind() + "' has no networks");
+  return k->networks(spec, genomes, out);
+}
+
 }  // namespace pz::job

@@ -15,12 +15,14 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "opt/evaluator.h"
 #include "opt/ga.h"
 #include "job/job_spec.h"
+#include "model/network.h"
 #include "model/status.h"
 
 namespace pz::job {
@@ -40,6 +42,9 @@ struct JobKind {
   std::function<Status(const JobSpec&, std::unique_ptr<opt::FitnessFunction>*)> make_fitness;
   /// Optional: describes a genome for the generation log (e.g. the decoded network's shape).
   std::function<std::string(const JobSpec&, const opt::Genome&)> describe;
+  /// Optional, for kinds whose genomes are networks: decodes genomes into the networks a client
+  /// deploys (with the spec's input normalisation and parameter ranges); fetch returns them.
+  std::function<Status(const JobSpec&, std::span<const opt::Genome>, std::vector<model::Network>*)> networks;
 };
 
 /// The GA options of a spec's `ga` settings, limits and seed, for genomes of `layout` (what the
@@ -57,6 +62,9 @@ class JobKindRegistry {
   std::vector<FieldViolation> Validate(const JobSpec& spec) const;
   Status Layout(const JobSpec& spec, GenomeLayout* layout) const;
   Status MakeFitness(const JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out) const;
+  /// The kind's networks of `genomes`; NotFound for a kind without networks.
+  Status Networks(const JobSpec& spec, std::span<const opt::Genome> genomes,
+                  std::vector<model::Network>* out) const;
 
  private:
   mutable std::mutex mu_;

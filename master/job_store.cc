@@ -20,6 +20,7 @@ using service::ClientRequestMsg;
 using service::ContentHash;
 using service::DecodeJobSpec;
 using service::GenerationRecord;
+using service::ScoredGenome;
 using service::IsFinal;
 using service::JobCheckpoint;
 using service::JobInfo;
@@ -276,6 +277,43 @@ void JobStore::Run(Job& job) {
   broker_.UnregisterJob(job.id);
 }
 
+std::vector<io::SavedNetwork> JobStore::NetworksOf(const Job& job, const std::vector<ScoredGenome>& best,
+                                                   uint64_t best_generation, size_t generations) const {
+  std::vector<io::SavedNetwork> out;
+  std::vector<Genome> genomes;
+  for (const auto& b : best) genomes.push_back(b.genome);
+  std::vector<model::Network> nets;
+  const Status s = kinds_.Networks(job.spec, genomes, &nets);
+  if (s.code() == StatusCode::kNotFound) return out;  // a kind without networks
+  if (!s.ok() || nets.size() != best.size()) {
+    spdlog::error("job {}: its networks cannot be built for fetch: {}", job.id, s.message());
+    return out;
+  }
+  std::vector<std::string> training;
+  if (const auto* h = std::get_if<job::HgannProblem>(&job.spec.problem))
+    for (const auto& c : h->cases)
+      if (c.role == job::CaseRole::kTrain) training.push_back("case" + std::to_string(c.number));
+  const int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                             std::chrono::system_clock::now().time_since_epoch()).count();
+  for (size_t k = 0; k < best.size(); ++k) {
+    io::SavedNetwork n;
+    n.network = std::move(nets[k]);
+    n.chromosome = best[k].genome.bits;
+    auto& p = n.provenance;
+    p.job_id = job.id;
+    p.seed = job.spec.seed;
+    // The best was found in the GA's best generation; the others are members of the last
+    // population (the generations after the initial one), which is all a checkpoint keeps.
+    p.generation = k == 0 ? best_generation : (generations > 0 ? generations - 1 : 0);
+    p.fitness = best[k].fitness.cost;
+    p.created_unix_ms = now_ms;
+    p.piezoid_version = PIEZOID_VERSION;
+    p.training_cases = training;
+    out.push_back(std::move(n));
+  }
+  return out;
+}
+
 JobInfo JobStore::Info(Job& job) {
   std::lock_guard lock(job.mu);
   const JobCheckpoint& c = job.checkpoint;
@@ -380,13 +418,24 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
       return r;
     }
     case T::kFetch: {
+      if (req.count < 1 || req.count > kBestKept) {
+        r.code = WireCode::kInvalidArgument;
+        r.error = "count = " + std::to_string(req.count) + ": must be in [1, " + std::to_string(kBestKept) +
+                  "] (the master keeps the " + std::to_string(kBestKept) + " best individuals of a job)";
+        r.violations.push_back({"count", r.error});
+        return r;
+      }
       r.type = ClientReplyMsg::Type::kFetch;
       r.info = Info(*job);
-      std::lock_guard lock(job->mu);
-      const auto& best = job->checkpoint.best;
-      r.best.assign(best.begin(), best.begin() + std::min<size_t>(best.size(), req.count));
-      r.log = job->checkpoint.log;
+      JobCheckpoint c;
+      {
+        std::lock_guard lock(job->mu);
+        c = job->checkpoint;
+      }
+      r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
+      r.log = std::move(c.log);
       r.spec = job->spec;
+      r.networks = NetworksOf(*job, r.best, c.optimizer.best_generation, r.log.size());
       return r;
     }
     case T::kEvaluate:

@@ -63,6 +63,10 @@ class JobStore final : public ClientHandler {
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
   void Save(Job& job, const service::JobCheckpoint& c, bool write = true, bool durable = true);
   service::JobInfo Info(Job& job);
+  /// The kind's networks of a fetch's best individuals, with their provenance (none for kinds
+  /// without networks).
+  std::vector<io::SavedNetwork> NetworksOf(const Job& job, const std::vector<service::ScoredGenome>& best,
+                                           uint64_t best_generation, size_t generations) const;
   /// A generation's (or batch's) event for the job's watchers, with its storage condition.
   void PublishGeneration(Job& job, service::JobState state, const service::GenerationRecord& rec);
   /// The job's final event (state, message, its last record).

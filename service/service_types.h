@@ -10,6 +10,7 @@
 
 #include "opt/evaluator.h"
 #include "opt/ga.h"
+#include "io/network_io.h"
 #include "job/job_spec.h"
 
 namespace pz::service {
@@ -170,6 +171,7 @@ struct ClientReplyMsg {
   std::vector<ScoredGenome> best;       ///< kFetch
   std::vector<GenerationRecord> log;    ///< kFetch
   std::optional<job::JobSpec> spec;          ///< kFetch: the job's spec
+  std::vector<io::SavedNetwork> networks;    ///< kFetch: best[i] as networks (hgann), or empty
   JobEvent event;                       ///< kEvent
   uint64_t batch_seq = 0;               ///< kEvaluate
   bool done = false;                    ///< kEvaluate: results holds the batch's results

@@ -10,6 +10,7 @@
 #include <zlib.h>
 
 #include "job.pb.h"
+#include "network.pb.h"
 #include "wire.pb.h"
 
 namespace pz::service {
@@ -840,6 +841,7 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       for (const auto& b : m.best) ToProto(b, f->add_best());
       for (const auto& r : m.log) ToProto(r, f->add_log());
       if (m.spec) ToProto(*m.spec, f->mutable_spec());
+      for (const auto& n : m.networks) io::ToProto(n, f->add_networks());
       break;
     }
     case T::kEvent: {
@@ -904,6 +906,12 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
         FromProto(p.fetch().spec(), &*m->spec, nullptr);
       }
       if (Status s = IndividualsFromProto(p.fetch().best(), &m->best); !s.ok()) return s;
+      for (int i = 0; i < p.fetch().networks_size(); ++i) {
+        io::SavedNetwork n;
+        if (Status s = io::FromProto(p.fetch().networks(i), &n); !s.ok())
+          return Malformed("fetch.networks[" + std::to_string(i) + "]: " + s.message());
+        m->networks.push_back(std::move(n));
+      }
       return InfoFromProto(p.fetch().info(), &m->info);
     case pw::ClientReply::kEvent:
       m->type = T::kEvent;

@@ -321,7 +321,9 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
     // With the binary GA, one of the two workers is killed during the third batch.
     KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
     const opt::SearchResult remote = opt::Search(complete::BwOscillatorBox(), o, ev);
-    if (kill) EXPECT_FALSE(victim.running());  // killed before the fifth of 2 x 9 batches
+    if (kill) {
+      EXPECT_FALSE(victim.running());  // killed before the fifth of 2 x 9 batches
+    }
     ExpectSameSearch(local, remote);
     EXPECT_EQ(service.evaluations(), local.evaluations);
   }

@@ -77,9 +77,33 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   std::vector<service::ScoredGenome> best;
   std::vector<service::GenerationRecord> log;
   job::JobSpec stored;
-  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored).ok());
+  std::vector<io::SavedNetwork> networks;
+  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored, &networks).ok());
   ExpectSameRun(ref, best, log);
   EXPECT_EQ(service::EncodeJobSpec(stored), service::EncodeJobSpec(spec));  // the spec comes back intact
+
+  // Fetch brings the networks themselves, as a client in any language deploys them: the same,
+  // bit for bit, as this client's own decoding of the genomes and as the in-process run's.
+  ASSERT_EQ(networks.size(), best.size());
+  client::FetchedJob job{info, stored, best, log, {}};
+  hgann::HgannFitnessConfig config;
+  ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(stored.problem), &config).ok());
+  const hgann::HgannFitness fitness(config);
+  for (size_t k = 0; k < networks.size(); ++k) {
+    io::SavedNetwork mine = client::SavedNetworkOfJob(job, fitness, k);
+    mine.provenance.created_unix_ms = networks[k].provenance.created_unix_ms;
+    EXPECT_EQ(networks[k], mine) << "network " << k;
+    EXPECT_EQ(networks[k].network, fitness.Decode(ref.best[k].genome)) << "network " << k;
+    EXPECT_TRUE(io::ValidateSavedNetwork(networks[k]).ok());
+  }
+  EXPECT_EQ(networks[0].provenance.fitness, ref.best[0].fitness.cost);
+  EXPECT_EQ(networks[0].provenance.seed, spec.seed);
+  EXPECT_EQ(networks[0].provenance.generation, ref.optimizer.best_generation);
+  // The cap is said, not silently applied.
+  std::vector<service::ScoredGenome> too_many;
+  const Status capped = client.Fetch(r.job_id, master::kBestKept + 1, &too_many, &log);
+  EXPECT_EQ(capped.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(capped.message().find("must be in [1, 32]"), std::string::npos) << capped.message();
 }
 
 TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {

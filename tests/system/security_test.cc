@@ -181,7 +181,7 @@ std::unique_ptr<Process> CurveWorker(const std::string& endpoint, const Keys& ke
 
 client::ServiceClient CurveClient(const std::string& endpoint, const CurveKeyPair& own,
                                   const CurveKeyPair& master_keys, int timeout_ms = 2000, int retries = 3) {
-  client::ServiceClientOptions o{endpoint, timeout_ms, retries};
+  client::ServiceClientOptions o = ClientOptions(endpoint, timeout_ms, retries);
   o.curve = own;
   o.master_public = master_keys.public_z85;
   return client::ServiceClient(o);
@@ -301,7 +301,7 @@ void RunThroughProxies(bool curve) {
   const std::string marker = "PZ-MARKER-plaintext-7f3a9c";
   spec.name = marker;
   auto c = curve ? CurveClient(to_clients.endpoint(), client_keys, master_keys)
-                 : client::ServiceClient({to_clients.endpoint(), 2000, 3});
+                 : client::ServiceClient(ClientOptions(to_clients.endpoint(), 2000, 3));
   client::SubmitResult r;
   Status s = c.Submit(spec, &r);
   ASSERT_TRUE(s.ok()) << s.message();
@@ -493,7 +493,7 @@ TEST(SecurityLimits, WithCurveTheLimitIsPerClientKey) {
 
 TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
   // Above the client's own limit: refused before sending.
-  client::ServiceClientOptions o{"tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1};
+  client::ServiceClientOptions o = ClientOptions("tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1);
   o.max_message_bytes = 2048;
   client::ServiceClient c(o);
   job::JobSpec spec = SyntheticSpec(1, 8, 2);

@@ -120,6 +120,14 @@ inline int RunCli(const std::vector<std::string>& args, std::string* out = nullp
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
+inline client::ServiceClientOptions ClientOptions(const std::string& endpoint, int timeout_ms, int retries) {
+  client::ServiceClientOptions o;
+  o.endpoint = endpoint;
+  o.timeout_ms = timeout_ms;
+  o.retries = retries;
+  return o;
+}
+
 /// A master and its workers on free loopback ports, with fast heartbeats.
 class Cluster {
  public:
@@ -182,11 +190,7 @@ class Cluster {
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
   client::ServiceClient Client(int timeout_ms = 2000, int retries = 3) {
-    client::ServiceClientOptions o;
-    o.endpoint = client_ep_;
-    o.timeout_ms = timeout_ms;
-    o.retries = retries;
-    return client::ServiceClient(o);
+    return client::ServiceClient(ClientOptions(client_ep_, timeout_ms, retries));
   }
   const std::string& worker_endpoint() const { return worker_ep_; }
   const std::string& client_endpoint() const { return client_ep_; }
