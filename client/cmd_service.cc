@@ -125,7 +125,8 @@ std::string Generation(const service::JobInfo& i) {
 
 void PrintInfo(const service::JobInfo& i) {
   std::printf("%-17s %-9s %-9s gen %-9s best %-12s evals %-8llu %6.1f s  %s%s%s\n", i.job_id.c_str(),
-              service::JobStateName(i.state), i.kind.c_str(), Generation(i).c_str(),
+              (std::string(service::JobStateName(i.state)) + (i.archived ? "*" : "")).c_str(), i.kind.c_str(),
+              Generation(i).c_str(),
               i.generation == 0 ? "-" : Num(i.best_cost, 8).c_str(),
               static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
               i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
@@ -138,7 +139,12 @@ void PrintInfo(const service::JobInfo& i) {
 void PrintList(const std::vector<service::JobInfo>& all, int workers, int threads) {
   std::printf("%d worker%s (%d thread%s), %zu job%s\n", workers, workers == 1 ? "" : "s", threads, threads == 1 ? "" : "s", all.size(),
               all.size() == 1 ? "" : "s");
-  for (const auto& i : all) PrintInfo(i);
+  bool archived = false;
+  for (const auto& i : all) {
+    PrintInfo(i);
+    archived = archived || i.archived;
+  }
+  if (archived) std::printf("* archived: on the master's disk only (fetch reads it there)\n");
 }
 
 /// The watch progress display: a bar redrawn in place on a terminal, a line every few seconds
@@ -288,6 +294,38 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
     Status s = common->Client().Cancel(*job_id);
     if (s.ok()) std::printf("%s cancelled\n", job_id->c_str());
     exit_code = Report(s);
+  });
+
+  // ---------------------------------------------------------------- prune
+  auto* prune = app.add_subcommand(
+      "prune", "delete ended jobs from the master (memory and state directory): those named, or by age / count");
+  AddCommon(prune, *common);
+  auto prune_ids = std::make_shared<std::vector<std::string>>();
+  auto older_days = std::make_shared<double>(0);
+  auto keep = std::make_shared<int>(0);
+  auto dry_run = std::make_shared<bool>(false);
+  prune->add_option("jobs", *prune_ids, "ended jobs to delete (running ones are refused)");
+  prune->add_option("--older-than", *older_days, "delete the ended jobs that ended more than DAYS ago")
+      ->check(CLI::PositiveNumber);
+  prune->add_option("--keep", *keep, "delete all but the N most recently ended jobs")->check(CLI::Range(1, 100000000));
+  prune->add_flag("--dry-run", *dry_run, "list what would be deleted, delete nothing");
+  prune->callback([=, &exit_code] {
+    if (prune_ids->empty() && *older_days <= 0 && *keep <= 0) {
+      std::fprintf(stderr, "piezoid prune: name the jobs, or give --older-than DAYS or --keep N\n");
+      exit_code = kExitBadInput;
+      return;
+    }
+    std::vector<std::string> pruned;
+    std::vector<job::FieldViolation> refused;
+    Status s = common->Client().Prune(*prune_ids, *older_days * 86400.0, *keep, *dry_run, &pruned, &refused);
+    if (!s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    for (const auto& id : pruned) std::printf("%s %s\n", *dry_run ? "would prune" : "pruned", id.c_str());
+    for (const auto& v : refused) std::fprintf(stderr, "piezoid prune: %s: %s\n", v.field.c_str(), v.description.c_str());
+    if (pruned.empty() && refused.empty()) std::printf("nothing to prune\n");
+    exit_code = refused.empty() ? kExitOk : kExitJobNotOk;
   });
 
   // ---------------------------------------------------------------- watch

@@ -187,6 +187,22 @@ Status ServiceClient::Cancel(const std::string& job_id) {
   return impl_->Call(req, &reply);
 }
 
+Status ServiceClient::Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep, bool dry_run,
+                            std::vector<std::string>* pruned, std::vector<job::FieldViolation>* refused) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kPrune;
+  req.job_ids = job_ids;
+  req.older_than_s = older_than_s;
+  req.keep = keep;
+  req.dry_run = dry_run;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  *pruned = std::move(reply.pruned);
+  *refused = std::move(reply.refused);
+  return s;
+}
+
 Status ServiceClient::Fetch(const std::string& job_id, int count,
                             std::vector<service::ScoredGenome>* best,
                             std::vector<service::GenerationRecord>* log, service::JobInfo* info,

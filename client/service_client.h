@@ -68,6 +68,10 @@ class ServiceClient {
   Status List(std::vector<service::JobInfo>* jobs, int* workers = nullptr,
               int* worker_threads = nullptr);
   Status Cancel(const std::string& job_id);
+  /// Deletes ended jobs from the master (see proto PruneRequest): those named, or by age / count.
+  /// *pruned: deleted (dry run: would be); *refused: {job id, why not}.
+  Status Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep, bool dry_run,
+               std::vector<std::string>* pruned, std::vector<job::FieldViolation>* refused);
   /// The best `count` individuals (best first, at most 32), the generation log, the job's state
   /// and its spec (any output may be nullptr).
   /// The job's best `count` (1 … 32) individuals, its log, status and spec, and for kinds whose

@@ -2,12 +2,22 @@
 
 #include <spdlog/spdlog.h>
 
+#include <sys/stat.h>
+
+#include <algorithm>
 #include <chrono>
 
 #include "master/job_runner.h"
 #include "service/wire_codec.h"
 
 namespace pz::master {
+namespace {
+
+double UnixNow() {
+  return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
 
 using job::FieldViolation;
 using job::GenomeLayout;
@@ -80,12 +90,20 @@ Status JobStore::Resume() {
       job->notice = notice;
       spdlog::warn("job {}: {}", id, notice);
     }
-    std::lock_guard lock(mu_);
-    jobs_[id] = job;
-    if (!IsFinal(job->checkpoint.state)) {
-      spdlog::info("job {}: resuming after generation {}", id, job->checkpoint.log.size());
-      Start(job);
+    if (IsFinal(job->checkpoint.state)) {  // ended when its last checkpoint was written
+      struct stat st{};
+      if (::stat((dir_.dir(id) / JobDirectory::kCheckpointFile).c_str(), &st) == 0)
+        job->ended_unix_s = static_cast<double>(st.st_mtim.tv_sec) + 1e-9 * static_cast<double>(st.st_mtim.tv_nsec);
     }
+    {
+      std::lock_guard lock(mu_);
+      jobs_[id] = job;
+      if (!IsFinal(job->checkpoint.state)) {
+        spdlog::info("job {}: resuming after generation {}", id, job->checkpoint.log.size());
+        Start(job);
+      }
+    }
+    Retain();  // one ended job in memory beyond the limit at a time, not all of them
   }
   return Status::Ok();
 }
@@ -156,6 +174,7 @@ void JobStore::RunSession(Job& job) {
     Save(job, last);
   }
   broker_.UnregisterJob(job.id);
+  Retain();
 }
 
 void JobStore::PublishGeneration(Job& job, JobState state, const GenerationRecord& rec) {
@@ -188,6 +207,7 @@ void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) 
   if (write) s = dir_.SaveCheckpoint(c, durable);
   std::lock_guard lock(job.mu);
   job.checkpoint = c;
+  if (IsFinal(c.state) && job.ended_unix_s == 0) job.ended_unix_s = UnixNow();
   if (!write) return;
   const auto now = std::chrono::steady_clock::now();
   if (!s.ok()) {
@@ -275,22 +295,24 @@ void JobStore::Run(Job& job) {
     spdlog::info("job {}: succeeded ({})", job.id, runner.checkpoint().message);
   }
   broker_.UnregisterJob(job.id);
+  Retain();
 }
 
-std::vector<io::SavedNetwork> JobStore::NetworksOf(const Job& job, const std::vector<ScoredGenome>& best,
+std::vector<io::SavedNetwork> JobStore::NetworksOf(const std::string& job_id, const job::JobSpec& spec,
+                                                   const std::vector<ScoredGenome>& best,
                                                    uint64_t best_generation, size_t generations) const {
   std::vector<io::SavedNetwork> out;
   std::vector<Genome> genomes;
   for (const auto& b : best) genomes.push_back(b.genome);
   std::vector<model::Network> nets;
-  const Status s = kinds_.Networks(job.spec, genomes, &nets);
+  const Status s = kinds_.Networks(spec, genomes, &nets);
   if (s.code() == StatusCode::kNotFound) return out;  // a kind without networks
   if (!s.ok() || nets.size() != best.size()) {
-    spdlog::error("job {}: its networks cannot be built for fetch: {}", job.id, s.message());
+    spdlog::error("job {}: its networks cannot be built for fetch: {}", job_id, s.message());
     return out;
   }
   std::vector<std::string> training;
-  if (const auto* h = std::get_if<job::HgannProblem>(&job.spec.problem))
+  if (const auto* h = std::get_if<job::HgannProblem>(&spec.problem))
     for (const auto& c : h->cases)
       if (c.role == job::CaseRole::kTrain) training.push_back("case" + std::to_string(c.number));
   const int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -300,8 +322,8 @@ std::vector<io::SavedNetwork> JobStore::NetworksOf(const Job& job, const std::ve
     n.network = std::move(nets[k]);
     n.chromosome = best[k].genome.bits;
     auto& p = n.provenance;
-    p.job_id = job.id;
-    p.seed = job.spec.seed;
+    p.job_id = job_id;
+    p.seed = spec.seed;
     // The best was found in the GA's best generation; the others are members of the last
     // population (the generations after the initial one), which is all a checkpoint keeps.
     p.generation = k == 0 ? best_generation : (generations > 0 ? generations - 1 : 0);
@@ -316,6 +338,7 @@ std::vector<io::SavedNetwork> JobStore::NetworksOf(const Job& job, const std::ve
 
 JobInfo JobStore::Info(Job& job) {
   std::lock_guard lock(job.mu);
+  if (job.archived) return job.summary;
   const JobCheckpoint& c = job.checkpoint;
   JobInfo i;
   i.job_id = job.id;
@@ -334,7 +357,110 @@ JobInfo JobStore::Info(Job& job) {
   i.notice = job.notice;
   i.storage_error = job.storage_error;
   i.storage_error_since_unix_s = job.storage_error_since;
+  i.ended_unix_s = job.ended_unix_s;
   return i;
+}
+
+void JobStore::Retain() {
+  std::vector<std::shared_ptr<Job>> ended;
+  {
+    std::lock_guard lock(mu_);
+    for (auto& [id, j] : jobs_) {
+      std::lock_guard jl(j->mu);
+      if (IsFinal(j->checkpoint.state) && !j->archived) ended.push_back(j);
+    }
+  }
+  const auto keep = static_cast<size_t>(std::max(0, options_.keep_in_memory));
+  if (ended.size() <= keep) return;
+  std::sort(ended.begin(), ended.end(), [](const auto& a, const auto& b) {
+    return a->ended_unix_s != b->ended_unix_s ? a->ended_unix_s > b->ended_unix_s : a->id > b->id;
+  });
+  for (size_t k = keep; k < ended.size(); ++k) {
+    Job& j = *ended[k];
+    JobInfo summary = Info(j);
+    summary.archived = true;
+    std::lock_guard jl(j.mu);
+    j.summary = std::move(summary);
+    j.archived = true;
+    j.checkpoint = JobCheckpoint{};  // what a fetch needs is on disk
+    j.checkpoint.job_id = j.id;
+    j.checkpoint.state = j.summary.state;
+    j.spec = job::JobSpec{};
+    std::string().swap(j.spec_bytes);
+    spdlog::debug("job {}: archived (on disk only)", j.id);
+  }
+}
+
+Status JobStore::LoadArchived(const Job& job, job::JobSpec* spec, JobCheckpoint* c) const {
+  std::string bytes, notice;
+  if (Status s = dir_.LoadSpec(job.id, &bytes); !s.ok()) return {StatusCode::kDataLoss, s.message()};
+  std::vector<FieldViolation> v;
+  if (Status s = DecodeJobSpec(bytes, spec, &v); !s.ok()) return {StatusCode::kDataLoss, s.message()};
+  if (Status s = dir_.LoadCheckpoint(job.id, c, &notice); !s.ok())
+    return {StatusCode::kDataLoss, "archived job " + job.id + ": " + (notice.empty() ? s.message() : notice)};
+  return Status::Ok();
+}
+
+ClientReplyMsg JobStore::Prune(const ClientRequestMsg& req) {
+  ClientReplyMsg r;
+  r.request_id = req.request_id;
+  r.type = ClientReplyMsg::Type::kPrune;
+  if (req.job_ids.empty() && req.older_than_s <= 0 && req.keep <= 0) {
+    r.code = WireCode::kInvalidArgument;
+    r.error = "prune: name the jobs, or give older_than_s or keep (nothing is pruned without a rule)";
+    return r;
+  }
+  // The candidates: the jobs named, or every job; running ones are refused when named.
+  struct Candidate {
+    std::shared_ptr<Job> job;
+    double ended = 0;
+  };
+  std::vector<Candidate> ended;
+  {
+    std::lock_guard lock(mu_);
+    auto consider = [&](const std::string& id, bool named) {
+      auto it = jobs_.find(id);
+      if (it == jobs_.end()) {
+        if (named) r.refused.push_back({id, "no such job"});
+        return;
+      }
+      std::lock_guard jl(it->second->mu);
+      if (!IsFinal(it->second->checkpoint.state)) {
+        if (named) r.refused.push_back({id, "running: cancel it first (only ended jobs are pruned)"});
+        return;
+      }
+      ended.push_back({it->second, it->second->ended_unix_s});
+    };
+    if (req.job_ids.empty()) {
+      for (const auto& [id, j] : jobs_) consider(id, false);
+    } else {
+      for (const auto& id : req.job_ids) consider(id, true);
+    }
+  }
+  std::sort(ended.begin(), ended.end(), [](const Candidate& a, const Candidate& b) {
+    return a.ended != b.ended ? a.ended > b.ended : a.job->id > b.job->id;
+  });
+  const double now = UnixNow();
+  for (size_t k = 0; k < ended.size(); ++k) {
+    if (req.keep > 0 && k < static_cast<size_t>(req.keep)) continue;            // among the newest
+    if (req.older_than_s > 0 && now - ended[k].ended < req.older_than_s) continue;  // too recent
+    r.pruned.push_back(ended[k].job->id);
+  }
+  if (req.dry_run) return r;
+  for (const std::string& id : r.pruned) {
+    std::shared_ptr<Job> j;
+    {
+      std::lock_guard lock(mu_);
+      auto it = jobs_.find(id);
+      if (it == jobs_.end()) continue;
+      j = it->second;
+      jobs_.erase(it);
+    }
+    if (j->thread.joinable()) j->thread.join();  // it has ended: this returns at once
+    if (Status s = dir_.Remove(id); !s.ok()) spdlog::error("prune {}: {}", id, s.message());
+  }
+  if (!r.pruned.empty()) spdlog::info("pruned {} ended job(s)", r.pruned.size());
+  return r;
 }
 
 ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
@@ -343,6 +469,7 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
   r.code = WireCode::kOk;
   using T = ClientRequestMsg::Type;
   std::shared_ptr<Job> job;
+  if (req.type == T::kPrune) return Prune(req);
   if (req.type == T::kStatus || req.type == T::kCancel || req.type == T::kFetch ||
       req.type == T::kEvaluate || req.type == T::kClose) {
     std::lock_guard lock(mu_);
@@ -428,14 +555,27 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
       r.type = ClientReplyMsg::Type::kFetch;
       r.info = Info(*job);
       JobCheckpoint c;
+      job::JobSpec spec;
+      bool archived;
       {
         std::lock_guard lock(job->mu);
-        c = job->checkpoint;
+        archived = job->archived;
+        if (!archived) {
+          c = job->checkpoint;
+          spec = job->spec;
+        }
+      }
+      if (archived) {
+        if (Status s = LoadArchived(*job, &spec, &c); !s.ok()) {
+          r.code = WireCode::kInternal;
+          r.error = s.message();
+          return r;
+        }
       }
       r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
       r.log = std::move(c.log);
-      r.spec = job->spec;
-      r.networks = NetworksOf(*job, r.best, c.optimizer.best_generation, r.log.size());
+      r.networks = NetworksOf(job->id, spec, r.best, c.optimizer.best_generation, r.log.size());
+      r.spec = std::move(spec);
       return r;
     }
     case T::kEvaluate:

@@ -28,6 +28,10 @@ struct JobStoreOptions {
   /// slow disk) at most this often, and always when the job ends or the master shuts down;
   /// 0 = fsync after every generation [s].
   double checkpoint_interval_s = 1.0;
+  /// Ended jobs whose whole state (log, best, GA state, spec with its data) stays in memory, the
+  /// most recently ended ones; older ones are archived: a summary answers status and list, fetch
+  /// reads them from the state directory. `piezoid prune` deletes ended jobs for good.
+  int keep_in_memory = 100;
 };
 
 class JobStore final : public ClientHandler {
@@ -56,8 +60,16 @@ class JobStore final : public ClientHandler {
     std::string notice;                 // what loading it repaired (JobInfo.notice)
     std::string storage_error;          // under mu: the last checkpoint write failed (JobInfo)
     double storage_error_since = 0;     // under mu: since when [unix s]
+    double ended_unix_s = 0;            // under mu: when it ended (0 while running)
+    bool archived = false;              // under mu: state on disk only; `summary` answers status
+    service::JobInfo summary;           // under mu: when archived
   };
   void Start(const std::shared_ptr<Job>& job);
+  /// Archives the ended jobs beyond keep_in_memory, oldest first.
+  void Retain();
+  service::ClientReplyMsg Prune(const service::ClientRequestMsg& req);
+  /// Fetch of an archived job: its spec and checkpoint read from the state directory.
+  Status LoadArchived(const Job& job, job::JobSpec* spec, service::JobCheckpoint* c) const;
   void Run(Job& job);
   void RunSession(Job& job);  // the job thread of an evaluation session
   /// Makes c the job's current checkpoint; writes it to disk if `write`.
@@ -65,7 +77,8 @@ class JobStore final : public ClientHandler {
   service::JobInfo Info(Job& job);
   /// The kind's networks of a fetch's best individuals, with their provenance (none for kinds
   /// without networks).
-  std::vector<io::SavedNetwork> NetworksOf(const Job& job, const std::vector<service::ScoredGenome>& best,
+  std::vector<io::SavedNetwork> NetworksOf(const std::string& job_id, const job::JobSpec& spec,
+                                           const std::vector<service::ScoredGenome>& best,
                                            uint64_t best_generation, size_t generations) const;
   /// A generation's (or batch's) event for the job's watchers, with its storage condition.
   void PublishGeneration(Job& job, service::JobState state, const service::GenerationRecord& rec);

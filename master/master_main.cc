@@ -104,6 +104,11 @@ int main(int argc, char** argv) {
                  "other worker left this long before or after (at least 2 liveness timeouts) [s]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
+  app.add_option("--keep-in-memory", store.keep_in_memory,
+                 "ended jobs kept whole in memory (the most recent); older ones are answered from the state "
+                 "directory (status from a summary, fetch from disk); `piezoid prune` deletes ended jobs")
+      ->check(CLI::Range(0, 1000000))
+      ->capture_default_str();
   app.add_option("--max-jobs", store.max_running_jobs, "running jobs at most")
       ->capture_default_str();
   app.add_option("--checkpoint-interval-s", store.checkpoint_interval_s,

@@ -90,6 +90,8 @@ struct JobInfo {
   std::string notice;     ///< what the master repaired on loading the job (names the file), or ""
   std::string storage_error;            ///< checkpoints cannot be written now: why, or ""
   double storage_error_since_unix_s = 0;
+  bool archived = false;   ///< ended, kept on disk only: fetch reads it from the state directory
+  double ended_unix_s = 0; ///< when it ended (0 while running)
 };
 
 struct JobEvent {
@@ -143,7 +145,7 @@ struct WorkerMsg {
 // ------------------------------------------------------------------ client protocol
 
 struct ClientRequestMsg {
-  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose };
+  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose, kPrune };
   Type type = Type::kPing;
   uint64_t request_id = 0;
   job::JobSpec spec;              ///< kSubmit (decoded)
@@ -154,10 +156,14 @@ struct ClientRequestMsg {
   int count = 1;             ///< kFetch
   uint64_t batch_seq = 0;         ///< kEvaluate: ≥ 1
   std::vector<opt::Genome> genomes;    ///< kEvaluate: the batch, or empty (a poll)
+  std::vector<std::string> job_ids;    ///< kPrune: jobs named
+  double older_than_s = 0;             ///< kPrune: ended longer ago than this (> 0)
+  int keep = 0;                        ///< kPrune: all but the `keep` most recently ended (> 0)
+  bool dry_run = false;                ///< kPrune
 };
 
 struct ClientReplyMsg {
-  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate };
+  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate, kPrune };
   Type type = Type::kNone;
   uint64_t request_id = 0;
   WireCode code = WireCode::kOk;
@@ -176,6 +182,8 @@ struct ClientReplyMsg {
   uint64_t batch_seq = 0;               ///< kEvaluate
   bool done = false;                    ///< kEvaluate: results holds the batch's results
   std::vector<opt::FitnessResult> results;   ///< kEvaluate (worker_threads: connected threads)
+  std::vector<std::string> pruned;            ///< kPrune: deleted (dry run: would be)
+  std::vector<job::FieldViolation> refused;   ///< kPrune: {job id, why not}
 };
 
 }  // namespace pz::service

@@ -545,6 +545,8 @@ void InfoToProto(const JobInfo& i, pw::JobInfo* p) {
   p->set_notice(i.notice);
   p->set_storage_error(i.storage_error);
   p->set_storage_error_since_unix_s(i.storage_error_since_unix_s);
+  p->set_archived(i.archived);
+  p->set_ended_unix_s(i.ended_unix_s);
 }
 
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
@@ -566,6 +568,8 @@ Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
   i->notice = p.notice();
   i->storage_error = p.storage_error();
   i->storage_error_since_unix_s = p.storage_error_since_unix_s();
+  i->archived = p.archived();
+  i->ended_unix_s = p.ended_unix_s();
   return Status::Ok();
 }
 
@@ -767,6 +771,14 @@ std::string EncodeClientRequest(const ClientRequestMsg& m) {
       break;
     }
     case T::kClose: p.mutable_close()->set_job_id(m.job_id); break;
+    case T::kPrune: {
+      auto* q = p.mutable_prune();
+      for (const auto& id : m.job_ids) q->add_job_ids(id);
+      q->set_older_than_s(m.older_than_s);
+      q->set_keep(m.keep);
+      q->set_dry_run(m.dry_run);
+      break;
+    }
   }
   return p.SerializeAsString();
 }
@@ -807,6 +819,19 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
       break;
     }
     case pw::ClientRequest::kClose: m->type = T::kClose; m->job_id = p.close().job_id(); break;
+    case pw::ClientRequest::kPrune: {
+      const auto& q = p.prune();
+      m->type = T::kPrune;
+      if (q.job_ids_size() > 100000) return Malformed("prune.job_ids: more than 100000");
+      m->job_ids.assign(q.job_ids().begin(), q.job_ids().end());
+      if (!std::isfinite(q.older_than_s()) || q.older_than_s() < 0)
+        return Malformed("prune.older_than_s = " + std::to_string(q.older_than_s()) + ": must be finite and >= 0");
+      if (q.keep() < 0) return Malformed("prune.keep = " + std::to_string(q.keep()) + ": must be >= 0");
+      m->older_than_s = q.older_than_s();
+      m->keep = q.keep();
+      m->dry_run = q.dry_run();
+      break;
+    }
     default: return Malformed("client request has no body");
   }
   return Status::Ok();
@@ -863,6 +888,16 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       for (size_t i = 0; i < m.results.size(); ++i)
         ToProto(m.results[i], static_cast<int>(i), e->add_results());
       e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.worker_threads)));
+      break;
+    }
+    case T::kPrune: {
+      auto* q = p.mutable_prune();
+      for (const auto& id : m.pruned) q->add_pruned(id);
+      for (const auto& v : m.refused) {
+        auto* r = q->add_refused();
+        r->set_field(v.field);
+        r->set_description(v.description);
+      }
       break;
     }
     case T::kNone: break;
@@ -938,6 +973,11 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       }
       break;
     }
+    case pw::ClientReply::kPrune:
+      m->type = T::kPrune;
+      m->pruned.assign(p.prune().pruned().begin(), p.prune().pruned().end());
+      for (const auto& r : p.prune().refused()) m->refused.push_back({r.field(), r.description()});
+      break;
     default: m->type = T::kNone; break;
   }
   return Status::Ok();
