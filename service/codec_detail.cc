@@ -1,0 +1,212 @@
+// The codecs' shared pieces (service/codec_detail.h).
+#include "service/codec_detail.h"
+
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace pz::service::detail {
+
+
+Status Malformed(const std::string& what) { return {StatusCode::kDataLoss, what}; }
+
+std::string Deterministic(const google::protobuf::MessageLite& msg) {
+  std::string out;
+  {
+    google::protobuf::io::StringOutputStream sos(&out);
+    google::protobuf::io::CodedOutputStream cos(&sos);
+    cos.SetSerializationDeterministic(true);
+    msg.SerializeToCodedStream(&cos);
+  }
+  return out;
+}
+
+bool Parse(std::string_view bytes, google::protobuf::MessageLite* msg) {
+  if (bytes.size() > static_cast<size_t>(INT32_MAX)) return false;
+  return msg->ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
+}
+
+// ---------------------------------------------------------------- genomes and results
+
+void ToProto(const Genome& g, pw::Genome* p) {
+  std::string packed((g.bits.size() + 7) / 8, '\0');
+  for (size_t i = 0; i < g.bits.size(); ++i)
+    if (g.bits[i]) packed[i / 8] = static_cast<char>(packed[i / 8] | (1u << (i % 8)));
+  p->set_bits(std::move(packed));
+  p->set_bit_count(static_cast<uint32_t>(g.bits.size()));
+  p->mutable_reals()->Assign(g.reals.begin(), g.reals.end());
+}
+
+Status FromProto(const pw::Genome& p, Genome* g) {
+  if (p.bit_count() > kMaxGenomeBits) return Malformed("genome.bit_count too large");
+  if (p.bits().size() != (p.bit_count() + 7) / 8)
+    return Malformed("genome.bits has " + std::to_string(p.bits().size()) + " bytes for " +
+                     std::to_string(p.bit_count()) + " bits");
+  g->bits.resize(p.bit_count());
+  for (uint32_t i = 0; i < p.bit_count(); ++i)
+    g->bits[i] = (static_cast<uint8_t>(p.bits()[i / 8]) >> (i % 8)) & 1u;
+  g->reals.assign(p.reals().begin(), p.reals().end());
+  return Status::Ok();
+}
+
+pw::FitnessCode ToProto(FitnessStatus s) {
+  switch (s) {
+    case FitnessStatus::kOk: return pw::FITNESS_OK;
+    case FitnessStatus::kPenalized: return pw::FITNESS_PENALIZED;
+    case FitnessStatus::kError: return pw::FITNESS_ERROR;
+  }
+  return pw::FITNESS_UNSPECIFIED;
+}
+
+Status FromProto(pw::FitnessCode c, double cost, FitnessStatus* s) {
+  switch (c) {
+    case pw::FITNESS_OK: *s = FitnessStatus::kOk; break;
+    case pw::FITNESS_PENALIZED: *s = FitnessStatus::kPenalized; break;
+    case pw::FITNESS_ERROR:
+    case pw::FITNESS_QUARANTINED: *s = FitnessStatus::kError; break;
+    default: return Malformed("fitness code unspecified");
+  }
+  if (!std::isfinite(cost)) return Malformed("cost is not finite");
+  return Status::Ok();
+}
+
+void ToProto(const FitnessResult& r, int index, pw::TaskResult* t) {
+  t->set_index(index);
+  t->set_cost(r.cost);
+  t->set_code(ToProto(r.status));
+  t->set_reason(r.reason);
+  if (!r.residuals.empty()) t->mutable_residuals()->Assign(r.residuals.begin(), r.residuals.end());
+}
+
+Status FromProto(const pw::TaskResult& t, FitnessResult* r) {
+  r->cost = t.cost();
+  r->reason = t.reason();
+  r->residuals.assign(t.residuals().begin(), t.residuals().end());
+  return FromProto(t.code(), t.cost(), &r->status);
+}
+
+void ToProto(const ScoredGenome& s, pw::Individual* p) {
+  ToProto(s.genome, p->mutable_genome());
+  p->set_cost(s.fitness.cost);
+  p->set_code(ToProto(s.fitness.status));
+  p->set_reason(s.fitness.reason);
+  p->set_index(s.index);
+}
+
+Status FromProto(const pw::Individual& p, ScoredGenome* s) {
+  s->index = p.index();
+  s->fitness.cost = p.cost();
+  s->fitness.reason = p.reason();
+  if (Status st = FromProto(p.code(), p.cost(), &s->fitness.status); !st.ok()) return st;
+  return FromProto(p.genome(), &s->genome);
+}
+
+void ToProto(const GenerationRecord& r, pw::GenerationRecord* p) {
+  p->set_generation(r.generation);
+  p->set_best_cost(r.best_cost);
+  p->set_mean_cost(r.mean_cost);
+  p->set_evaluations(r.evaluations);
+  p->set_errors(r.errors);
+  p->set_quarantined(r.quarantined);
+  p->set_worst_cost(r.worst_cost);
+  p->set_stall(r.stall);
+  p->set_evaluated(r.evaluated);
+  p->set_penalized(r.penalized);
+  for (const auto& [k, n] : r.failure_reasons) (*p->mutable_failure_reasons())[k] = n;
+  p->set_best_description(r.best_description);
+  p->set_wall_time_s(r.wall_time_s);
+  p->set_improved(r.improved);
+}
+
+GenerationRecord FromProto(const pw::GenerationRecord& p) {
+  GenerationRecord r;
+  r.generation = p.generation();
+  r.best_cost = p.best_cost();
+  r.mean_cost = p.mean_cost();
+  r.evaluations = p.evaluations();
+  r.errors = p.errors();
+  r.quarantined = p.quarantined();
+  r.worst_cost = p.worst_cost();
+  r.stall = p.stall();
+  r.evaluated = p.evaluated();
+  r.penalized = p.penalized();
+  for (const auto& [k, n] : p.failure_reasons()) r.failure_reasons[k] = n;
+  r.best_description = p.best_description();
+  r.wall_time_s = p.wall_time_s();
+  r.improved = p.improved();
+  return r;
+}
+
+void ToProto(const QuarantineRecord& q, pw::QuarantineRecord* p) {
+  p->set_generation(q.generation);
+  p->set_index(q.index);
+  p->set_strikes(q.strikes);
+}
+
+QuarantineRecord FromProto(const pw::QuarantineRecord& p) {
+  return {p.generation(), p.index(), p.strikes()};
+}
+
+
+bool ValidState(int s) { return pw::JobState_IsValid(s); }
+
+// ---------------------------------------------------------------- job specs
+
+int ClampInt(uint64_t v) { return v > 0x7fffffffu ? 0x7fffffff : static_cast<int>(v); }
+Status VersionCheck(uint32_t got) {
+  if (got == kProtocolVersion) return Status::Ok();
+  return {StatusCode::kFailedPrecondition, "protocol version " + std::to_string(got) +
+                                               " (this side speaks " +
+                                               std::to_string(kProtocolVersion) + ")"};
+}
+
+// ---------------------------------------------------------------- client protocol
+
+void InfoToProto(const JobInfo& i, pw::JobInfo* p) {
+  p->set_job_id(i.job_id);
+  p->set_name(i.name);
+  p->set_kind(i.kind);
+  p->set_state(static_cast<pw::JobState>(i.state));
+  p->set_generation(i.generation);
+  p->set_max_generations(i.max_generations);
+  p->set_best_cost(i.best_cost);
+  p->set_evaluations(i.evaluations);
+  p->set_message(i.message);
+  for (const auto& q : i.quarantined) ToProto(q, p->add_quarantined());
+  p->set_elapsed_s(i.elapsed_s);
+  p->set_seed(i.seed);
+  p->set_algorithm(i.algorithm);
+  p->set_notice(i.notice);
+  p->set_storage_error(i.storage_error);
+  p->set_storage_error_since_unix_s(i.storage_error_since_unix_s);
+  p->set_archived(i.archived);
+  p->set_ended_unix_s(i.ended_unix_s);
+}
+
+Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
+  if (!ValidState(p.state())) return Malformed("job state unknown");
+  i->job_id = p.job_id();
+  i->name = p.name();
+  i->kind = p.kind();
+  i->state = static_cast<JobState>(p.state());
+  i->generation = p.generation();
+  i->max_generations = p.max_generations();
+  i->best_cost = p.best_cost();
+  i->evaluations = p.evaluations();
+  i->message = p.message();
+  i->quarantined.clear();
+  for (const auto& q : p.quarantined()) i->quarantined.push_back(FromProto(q));
+  i->elapsed_s = p.elapsed_s();
+  i->seed = p.seed();
+  i->algorithm = p.algorithm();
+  i->notice = p.notice();
+  i->storage_error = p.storage_error();
+  i->storage_error_since_unix_s = p.storage_error_since_unix_s();
+  i->archived = p.archived();
+  i->ended_unix_s = p.ended_unix_s();
+  return Status::Ok();
+}
+
+}  // namespace pz::service::detail

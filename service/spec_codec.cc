@@ -1,0 +1,354 @@
+// The job-spec codec: JobSpec ↔ proto (binary and protobuf JSON), with every field that does not
+// decode named; content hashes; names of codes and states.
+#include "service/codec_detail.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace pz::service {
+namespace detail {
+namespace {
+template <typename T>
+T OrDefault(T v, T def) { return v == T{} ? def : v; }
+}  // namespace
+
+void CaseToProto(const HgannCaseSpec& c, pw::HgannCase* pc) {
+  pc->set_number(static_cast<uint32_t>(std::max(0, c.number)));
+  pc->set_amplitude_v(c.amplitude_v);
+  pc->set_frequency_hz(c.frequency_hz);
+  pc->set_role(static_cast<pw::CaseRole>(c.role));
+  pc->set_sample_rate_hz(c.sample_rate_hz);
+  pc->mutable_angle_deg()->Assign(c.angle_deg.begin(), c.angle_deg.end());
+  pc->mutable_voltage_v()->Assign(c.voltage_v.begin(), c.voltage_v.end());
+  if (c.b1) pc->set_b1(*c.b1);
+  if (c.b2) pc->set_b2(*c.b2);
+}
+
+/// `field` names the case in violations ("hgann.cases[3]").
+HgannCaseSpec CaseFromProto(const pw::HgannCase& pc, const std::string& field, std::vector<FieldViolation>* v) {
+  HgannCaseSpec c;
+  c.number = ClampInt(pc.number());
+  c.amplitude_v = pc.amplitude_v();
+  c.frequency_hz = pc.frequency_hz();
+  if (pw::CaseRole_IsValid(pc.role())) {
+    c.role = static_cast<CaseRole>(pc.role());
+  } else if (v) {
+    const std::string f = field + ".role";
+    v->push_back({f, f + " = " + std::to_string(pc.role()) +
+                         ": must be CASE_ROLE_TRAIN, CASE_ROLE_VALIDATE or CASE_ROLE_TEST"});
+  }
+  c.sample_rate_hz = pc.sample_rate_hz();
+  c.angle_deg.assign(pc.angle_deg().begin(), pc.angle_deg().end());
+  c.voltage_v.assign(pc.voltage_v().begin(), pc.voltage_v().end());
+  if (pc.has_b1()) c.b1 = pc.b1();
+  if (pc.has_b2()) c.b2 = pc.b2();
+  return c;
+}
+
+void ToProto(const JobSpec& s, pw::JobSpec* p) {
+  p->set_version(s.version);
+  p->set_name(s.name);
+  p->set_seed(s.seed);
+  auto* l = p->mutable_limits();
+  l->set_task_timeout_s(s.limits.task_timeout_s);
+  l->set_quarantine_after(static_cast<uint32_t>(s.limits.quarantine_after));
+  l->set_penalty_cost(s.limits.penalty_cost);
+  if (s.limits.target_cost) l->set_target_cost(*s.limits.target_cost);
+  if (const auto* h = std::get_if<HgannProblem>(&s.problem)) {
+    auto* ph = p->mutable_hgann();
+    for (const HgannCaseSpec& c : h->cases) CaseToProto(c, ph->add_cases());
+    ph->set_case_set_dir(h->case_set_dir);
+    ph->set_source(h->source);
+    ph->set_ranges_preset(h->ranges_preset);
+    for (const ParameterRange& r : h->ranges) {
+      auto* pr = ph->add_ranges();
+      pr->set_name(r.name);
+      pr->set_min(r.min);
+      pr->set_max(r.max);
+    }
+    ph->set_spread_penalty(h->spread_penalty);
+    ph->set_saturation(h->saturation == HgannProblem::Saturation::kGiven
+                           ? pw::SATURATION_GIVEN
+                           : pw::SATURATION_FROM_EXTREMES);
+    if (!h->geometry.empty()) {
+      auto* g = ph->mutable_geometry();
+      const auto* d = g->GetDescriptor();
+      const auto* refl = g->GetReflection();
+      for (const auto& [name, value] : h->geometry) {
+        const auto* f = d->FindFieldByName(name);
+        if (!f) continue;  // unknown names are refused by validation before they are encoded
+        if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE)
+          refl->SetDouble(g, f, value);
+        else
+          refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
+      }
+    }
+  } else if (const auto* d = std::get_if<DiagnoseProblem>(&s.problem)) {
+    auto* pd = p->mutable_diagnose();
+    for (const HgannCaseSpec& c : d->cases) CaseToProto(c, pd->add_cases());
+    pd->mutable_cycles()->Assign(d->cycles.begin(), d->cycles.end());
+    for (const auto& e : d->structure) pd->add_structure(e);
+    for (const DiagnoseParamBox& b : d->params) {
+      auto* pp = pd->add_params();
+      pp->set_name(b.name);
+      pp->set_lower(b.lower);
+      pp->set_upper(b.upper);
+      pp->set_log_scale(b.log_scale);
+      pp->set_ratio(b.ratio);
+    }
+    pd->set_residuals(d->residuals);
+    pd->set_oversample(static_cast<uint32_t>(std::max(0, d->oversample)));
+    pd->set_rtol(d->rtol);
+    pd->set_atol(d->atol);
+    pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d->max_steps)));
+    pd->set_force_cvode(d->force_cvode);
+    pd->set_source(d->source);
+  } else if (const auto* m = std::get_if<CompleteModelProblem>(&s.problem)) {
+    auto* pm = p->mutable_complete_model();
+    pm->set_family(static_cast<pw::CompleteModelFamily>(m->family));
+    for (const CompleteModelRecord& r : m->records) {
+      auto* pr = pm->add_records();
+      pr->set_name(r.name);
+      pr->set_sample_rate_hz(r.sample_rate_hz);
+      pr->mutable_input()->Assign(r.input.begin(), r.input.end());
+      pr->mutable_output()->Assign(r.output.begin(), r.output.end());
+      pr->set_first_counted(r.first_counted);
+    }
+    pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m->criterion));
+    pm->set_t0_s(m->t0_s);
+    pm->set_t1_s(m->t1_s);
+    pm->set_substeps(static_cast<uint32_t>(std::max(0, m->substeps)));
+    pm->set_interpolation(static_cast<pw::BwInterpolation>(m->interpolation));
+    pm->set_period_samples(m->period_samples);
+    pm->set_error_cost(m->error_cost);
+    pm->set_source(m->source);
+  } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
+    auto* py = p->mutable_synthetic();
+    py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
+                                                          : pw::SyntheticProblem::COST_FUNCTION);
+    py->set_genome_bits(static_cast<uint32_t>(y->genome_bits));
+    py->set_sleep_ms(y->sleep_ms);
+    py->set_crash_prefix(y->crash_prefix);
+  }
+  if (s.ga) {
+    auto* g = p->mutable_ga();
+    g->set_population(static_cast<uint32_t>(s.ga->population));
+    g->set_elite_fraction(s.ga->elite_fraction);
+    g->set_tournament(static_cast<uint32_t>(s.ga->tournament));
+    g->set_crossover_probability(s.ga->crossover_probability);
+    g->set_mutation_probability(s.ga->mutation_probability);
+    g->set_generations(static_cast<uint32_t>(s.ga->generations));
+    g->set_stall_generations(static_cast<uint32_t>(s.ga->stall_generations));
+  }
+  if (s.external) {
+    auto* e = p->mutable_external();
+    e->set_idle_timeout_s(s.external->idle_timeout_s);
+    e->set_owner(s.external->owner);
+  }
+}
+
+
+
+void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v) {
+  *s = JobSpec{};
+  s->version = p.version();
+  s->name = p.name();
+  s->seed = p.seed();
+  s->limits.task_timeout_s = OrDefault(p.limits().task_timeout_s(), 60.0);
+  s->limits.quarantine_after = ClampInt(OrDefault<uint32_t>(p.limits().quarantine_after(), 3));
+  s->limits.penalty_cost = OrDefault(p.limits().penalty_cost(), 1e9);
+  if (p.limits().has_target_cost()) s->limits.target_cost = p.limits().target_cost();
+  if (p.has_hgann()) {
+    const auto& ph = p.hgann();
+    HgannProblem h;
+    for (int i = 0; i < ph.cases_size(); ++i)
+      h.cases.push_back(CaseFromProto(ph.cases(i), "hgann.cases[" + std::to_string(i) + "]", v));
+    h.case_set_dir = ph.case_set_dir();
+    h.source = ph.source();
+    h.ranges_preset = ph.ranges_preset();
+    for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
+    h.spread_penalty = ph.spread_penalty();
+    switch (ph.saturation()) {
+      case pw::SATURATION_UNSPECIFIED:
+      case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
+      case pw::SATURATION_GIVEN: h.saturation = HgannProblem::Saturation::kGiven; break;
+      default:
+        if (v) v->push_back({"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
+                                                     ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
+    }
+    if (ph.has_geometry()) {
+      const auto& g = ph.geometry();
+      const auto* d = g.GetDescriptor();
+      const auto* refl = g.GetReflection();
+      for (int i = 0; i < d->field_count(); ++i) {
+        const auto* f = d->field(i);
+        if (!refl->HasField(g, f)) continue;
+        h.geometry[f->name()] = f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE
+                                    ? refl->GetDouble(g, f)
+                                    : static_cast<double>(refl->GetUInt32(g, f));
+      }
+    }
+    s->problem = std::move(h);
+  } else if (p.has_synthetic()) {
+    const auto& py = p.synthetic();
+    SyntheticProblem y;
+    switch (py.cost()) {
+      case pw::SyntheticProblem::COST_NULL: y.cost = SyntheticProblem::Cost::kNull; break;
+      case pw::SyntheticProblem::COST_FUNCTION: y.cost = SyntheticProblem::Cost::kFunction; break;
+      default:
+        if (v) v->push_back({"synthetic.cost", "synthetic.cost = " + std::to_string(py.cost()) +
+                                                   ": must be COST_NULL or COST_FUNCTION"});
+    }
+    y.genome_bits = ClampInt(OrDefault<uint32_t>(py.genome_bits(), 64));
+    y.sleep_ms = py.sleep_ms();
+    y.crash_prefix = py.crash_prefix();
+    s->problem = std::move(y);
+  } else if (p.has_diagnose()) {
+    const auto& pd = p.diagnose();
+    DiagnoseProblem d;
+    for (int i = 0; i < pd.cases_size(); ++i)
+      d.cases.push_back(CaseFromProto(pd.cases(i), "diagnose.cases[" + std::to_string(i) + "]", v));
+    d.cycles.assign(pd.cycles().begin(), pd.cycles().end());
+    d.structure.assign(pd.structure().begin(), pd.structure().end());
+    for (const auto& pp : pd.params())
+      d.params.push_back({pp.name(), pp.lower(), pp.upper(), pp.log_scale(), pp.ratio()});
+    d.residuals = pd.residuals();
+    d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
+    d.rtol = OrDefault(pd.rtol(), 1e-6);
+    d.atol = OrDefault(pd.atol(), 1e-13);
+    d.max_steps = static_cast<int64_t>(std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
+    d.force_cvode = pd.force_cvode();
+    d.source = pd.source();
+    s->problem = std::move(d);
+  } else if (p.has_complete_model()) {
+    const auto& pm = p.complete_model();
+    CompleteModelProblem m;
+    auto bad_enum = [&](const char* field, int value, const char* known) {
+      if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
+    };
+    if (pm.family() >= 0 && pm.family() <= 3)
+      m.family = static_cast<CompleteModelProblem::Family>(pm.family());
+    else
+      bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+    for (const auto& pr : pm.records()) {
+      CompleteModelRecord r;
+      r.name = pr.name();
+      r.sample_rate_hz = pr.sample_rate_hz();
+      r.input.assign(pr.input().begin(), pr.input().end());
+      r.output.assign(pr.output().begin(), pr.output().end());
+      r.first_counted = pr.first_counted();
+      m.records.push_back(std::move(r));
+    }
+    if (pm.criterion() >= 0 && pm.criterion() <= 4)
+      m.criterion = static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
+    else
+      bad_enum("complete_model.criterion", pm.criterion(), "IAE, SSE, RMSE or MAX");
+    m.t0_s = pm.t0_s();
+    m.t1_s = pm.t1_s();
+    m.substeps = ClampInt(pm.substeps());
+    if (pm.interpolation() >= 0 && pm.interpolation() <= 4)
+      m.interpolation = pm.interpolation() == 0 ? CompleteModelProblem::Interpolation::kSpline
+                                                : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
+    else
+      bad_enum("complete_model.interpolation", pm.interpolation(), "ZOH, LINEAR, SPLINE or FOURIER");
+    m.period_samples = pm.period_samples();
+    m.error_cost = OrDefault(pm.error_cost(), 1e30);
+    m.source = pm.source();
+    s->problem = std::move(m);
+  }
+  if (p.has_ga()) {
+    const auto& pg = p.ga();
+    GaSettings g;
+    g.population = ClampInt(OrDefault<uint32_t>(pg.population(), 400));
+    if (pg.has_elite_fraction()) g.elite_fraction = pg.elite_fraction();
+    g.tournament = ClampInt(OrDefault<uint32_t>(pg.tournament(), 2));
+    if (pg.has_crossover_probability()) g.crossover_probability = pg.crossover_probability();
+    if (pg.has_mutation_probability()) g.mutation_probability = pg.mutation_probability();
+    if (pg.has_generations()) g.generations = ClampInt(pg.generations());
+    if (pg.has_stall_generations()) g.stall_generations = ClampInt(pg.stall_generations());
+    s->ga = g;
+  } else if (p.has_external()) {
+    ExternalSettings e;
+    e.idle_timeout_s = OrDefault(p.external().idle_timeout_s(), 120.0);
+    e.owner = p.external().owner();
+    s->external = e;
+  }
+}
+
+}  // namespace detail
+
+using namespace detail;
+
+
+std::string ContentHash(std::string_view bytes) {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : bytes) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  char buf[17];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(h));
+  return buf;
+}
+
+WireCode DecodeFailureCode(const Status& s) {
+  return s.code() == StatusCode::kFailedPrecondition ? WireCode::kVersionMismatch
+                                                     : WireCode::kMalformed;
+}
+
+std::string BitString(const Genome& g) {
+  std::string s(g.bits.size(), '0');
+  for (size_t i = 0; i < g.bits.size(); ++i) s[i] = g.bits[i] ? '1' : '0';
+  return s;
+}
+
+const char* WireCodeName(WireCode c) {
+  return pw::Code_Name(static_cast<pw::Code>(c)).c_str();
+}
+
+const char* JobStateName(JobState s) {
+  switch (s) {
+    case JobState::kRunning: return "running";
+    case JobState::kSucceeded: return "succeeded";
+    case JobState::kFailed: return "failed";
+    case JobState::kCancelled: return "cancelled";
+    default: return "unspecified";
+  }
+}
+
+std::string EncodeJobSpec(const JobSpec& spec) {
+  pw::JobSpec p;
+  ToProto(spec, &p);
+  return Deterministic(p);
+}
+
+Status DecodeJobSpec(std::string_view bytes, JobSpec* spec, std::vector<FieldViolation>* v) {
+  pw::JobSpec p;
+  if (!Parse(bytes, &p)) return Malformed("job spec does not decode");
+  FromProto(p, spec, v);
+  return Status::Ok();
+}
+
+Status JobSpecFromJson(const std::string& json, JobSpec* spec, std::vector<FieldViolation>* v) {
+  pw::JobSpec p;
+  google::protobuf::util::JsonParseOptions opts;
+  opts.ignore_unknown_fields = false;
+  auto st = google::protobuf::util::JsonStringToMessage(json, &p, opts);
+  if (!st.ok()) return InvalidArgument("job spec JSON: " + std::string(st.message()));
+  FromProto(p, spec, v);
+  return Status::Ok();
+}
+
+std::string JobSpecToJson(const JobSpec& spec) {
+  pw::JobSpec p;
+  ToProto(spec, &p);
+  std::string out;
+  google::protobuf::util::JsonPrintOptions opts;
+  opts.add_whitespace = true;
+  opts.preserve_proto_field_names = true;
+  (void)google::protobuf::util::MessageToJsonString(p, &out, opts);
+  return out;
+}
+}  // namespace pz::service
