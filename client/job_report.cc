@@ -49,9 +49,13 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
     s.evaluations = static_cast<int64_t>(job.log.back().evaluations);
   }
   s.wall_time_s = job.info.elapsed_s;
-  std::ostringstream os;
-  os.precision(10);
+  // A job that ended by the GA's rule stores the rule's name as its message (job runner); the
+  // GA's own text is rebuilt from the stored state by the same function the GA uses.
   const std::string& m = job.info.message;
+  const auto rule = opt::ParseGaTermination(m);
+  const int stall = job.log.empty() ? 0 : static_cast<int>(job.log.back().stall);
+  const double target = job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
+  std::ostringstream os;
   if (job.info.state == service::JobState::kRunning) {
     s.termination = opt::GaTermination::kCancelled;
     os << "job " << job.info.job_id << " is still running at the master: the best after generation "
@@ -62,18 +66,10 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   } else if (job.info.state == service::JobState::kFailed) {
     s.termination = opt::GaTermination::kCancelled;
     os << "job failed after generation " << s.generations << ": " << m;
-  } else if (m == opt::GaTerminationName(opt::GaTermination::kStall)) {
-    s.termination = opt::GaTermination::kStall;
-    os << "no improvement of the best cost " << s.best_fitness.cost << " in "
-       << (job.log.empty() ? 0 : job.log.back().stall) << " generations (since generation " << s.best_generation
-       << ")";
-  } else if (m == opt::GaTerminationName(opt::GaTermination::kTargetReached)) {
-    s.termination = opt::GaTermination::kTargetReached;
-    os << "best cost " << s.best_fitness.cost << " <= target "
-       << job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
   } else {
-    s.termination = opt::GaTermination::kMaxGenerations;
-    os << "reached the maximum of " << ga.generations << " generations";
+    s.termination = rule.value_or(opt::GaTermination::kMaxGenerations);
+    os << opt::DescribeTermination(s.termination, s.best_fitness.cost, stall, s.best_generation, s.generations,
+                                   ga.generations, target);
   }
   s.message = os.str();
   return s;

@@ -104,6 +104,31 @@ const char* GaTerminationName(GaTermination t) {
   return "UNKNOWN";
 }
 
+std::optional<GaTermination> ParseGaTermination(std::string_view name) {
+  for (GaTermination t : {GaTermination::kMaxGenerations, GaTermination::kStall, GaTermination::kCancelled,
+                          GaTermination::kTargetReached})
+    if (name == GaTerminationName(t)) return t;
+  return std::nullopt;
+}
+
+std::string DescribeTermination(GaTermination termination, double best_cost, int stall, uint64_t best_generation,
+                                uint64_t generations, int max_generations, double target_cost) {
+  std::ostringstream os;
+  os.precision(10);
+  switch (termination) {
+    case GaTermination::kMaxGenerations:
+      os << "reached the maximum of " << max_generations << " generations";
+      break;
+    case GaTermination::kStall:
+      os << "no improvement of the best cost " << best_cost << " in " << stall << " generations (since generation "
+         << best_generation << ")";
+      break;
+    case GaTermination::kCancelled: os << "cancelled after generation " << generations; break;
+    case GaTermination::kTargetReached: os << "best cost " << best_cost << " <= target " << target_cost; break;
+  }
+  return os.str();
+}
+
 std::string GaSummary::BriefReport() const {
   std::ostringstream os;
   os.precision(10);
@@ -347,22 +372,8 @@ GaSummary GeneticAlgorithm::MakeSummary(GaTermination termination, double wall_t
   s.evaluations = state_.evaluations;
   s.failures = state_.failures;
   s.wall_time_s = wall_time_s;
-  std::ostringstream os;
-  os.precision(10);
-  switch (termination) {
-    case GaTermination::kMaxGenerations:
-      os << "reached the maximum of " << options_.max_generations << " generations";
-      break;
-    case GaTermination::kStall:
-      os << "no improvement of the best cost " << state_.best_fitness.cost << " in " << state_.stall
-         << " generations (since generation " << state_.best_generation << ")";
-      break;
-    case GaTermination::kCancelled: os << "cancelled after generation " << state_.generation; break;
-    case GaTermination::kTargetReached:
-      os << "best cost " << state_.best_fitness.cost << " <= target " << options_.target_cost;
-      break;
-  }
-  s.message = os.str();
+  s.message = DescribeTermination(termination, state_.best_fitness.cost, state_.stall, state_.best_generation,
+                                  state_.generation, options_.max_generations, options_.target_cost);
   return s;
 }
 

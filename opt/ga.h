@@ -28,6 +28,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "opt/evaluator.h"
@@ -89,6 +90,9 @@ enum class GaTermination : int {
   kTargetReached = 4,   ///< best cost ≤ target_cost
 };
 const char* GaTerminationName(GaTermination t);
+/// The inverse of GaTerminationName (what a checkpoint stores as a finished job's message);
+/// nullopt for another text.
+std::optional<GaTermination> ParseGaTermination(std::string_view name);
 
 /// The complete state of a run between generations. Plain data: save it to checkpoint, restore it
 /// with GeneticAlgorithm::RestoreState() to continue bit for bit.
@@ -124,6 +128,11 @@ struct GaSummary {
   double wall_time_s = 0;          ///< of the Run() call
   std::string BriefReport() const;
 };
+
+/// Why a run stopped, with the figures (GaSummary::message): what Run() says, and what a client
+/// that holds only a job's stored state (its termination, best, stall and settings) says too.
+std::string DescribeTermination(GaTermination termination, double best_cost, int stall, uint64_t best_generation,
+                                uint64_t generations, int max_generations, double target_cost);
 
 class GeneticAlgorithm {
  public:

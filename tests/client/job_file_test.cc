@@ -14,7 +14,6 @@ namespace {
 using testing::Descriptions;
 using testing::HasViolation;
 const io::CaseSet& Nominal() { return testing::NominalCaseSet(); }
-job::JobSpec NominalSpec(int population, int generations) { return testing::NominalHgannSpec(population, generations); }
 bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field, const std::string& text = "") {
   return HasViolation(v, field, text);
 }

@@ -198,7 +198,9 @@ TEST(HgannJob, ExtremeButValidSpecsNeverCrashAnEvaluation) {
       EXPECT_NO_THROW(r = f->Evaluate(g)) << "edit " << e;
       EXPECT_NO_THROW(again = f->Evaluate(g)) << "edit " << e;
       EXPECT_TRUE(std::isfinite(r.cost)) << "edit " << e << ": cost " << r.cost << " " << r.reason;
-      if (r.status != FitnessStatus::kOk) EXPECT_FALSE(r.reason.empty()) << "edit " << e;
+      if (r.status != FitnessStatus::kOk) {
+        EXPECT_FALSE(r.reason.empty()) << "edit " << e;
+      }
       EXPECT_EQ(std::memcmp(&r.cost, &again.cost, sizeof r.cost), 0) << "edit " << e;
       EXPECT_EQ(r.status, again.status) << "edit " << e;
       FitnessResult sanitised = r;
