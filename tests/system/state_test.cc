@@ -130,7 +130,14 @@ TEST(State, UnwritableCheckpointsShowInStatusUntilTheyAreWrittenAgain) {
   }
   // The next writes fail: their temporary file's name is taken by a folder.
   const fs::path blocker = c.dir() / "state" / "jobs" / r.job_id / "checkpoint.pb.tmp";
-  fs::create_directories(blocker);
+  // The master writes and renames that file every generation: retry while it is there.
+  bool blocked = false;
+  for (int i = 0; i < 1000 && !blocked; ++i) {
+    std::error_code ec;
+    blocked = fs::create_directory(blocker, ec) && !ec;
+    if (!blocked) std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_TRUE(blocked) << "could not put a folder at " << blocker;
   bool shown = false;
   for (int i = 0; i < 300 && !shown; ++i) {
     ASSERT_TRUE(client.GetStatus(r.job_id, &info).ok());
