@@ -277,7 +277,7 @@ void Score(const io::StackRecordSet& set, const CommitteeOptions& o, Predict pre
     const int b = o.bands.BandOf(r.frequency_hz);
     const std::vector<double> y = predict(r);
     const RecordError e = Errors(r, y, o.t0_s, o.t1_s);
-    if (r.role == io::RecordRole::kTrain) {
+    if (r.role == io::CaseRole::kTrain) {
       train[b].Add(e.m, e.sse);
       atr.Add(e.m, e.sse);
     } else {
@@ -312,7 +312,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
                          return s;
                        }() +
                        " Hz)");
-    if (r.role == io::RecordRole::kTrain) {
+    if (r.role == io::CaseRole::kTrain) {
       band_train[b].push_back(&r);
       all_train.push_back(&r);
     } else {
@@ -492,8 +492,8 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
   const FrequencyBands& bands = opt.bands;
   const int nb = bands.size();
   o << "# Committee machine on " << set.dir.filename().string() << "\n\n";
-  o << "Records: " << set.records.size() << " (" << set.WithRole(io::RecordRole::kTrain).size()
-    << " training, " << set.WithRole(io::RecordRole::kTest).size() << " testing). Bands:";
+  o << "Records: " << set.records.size() << " (" << set.WithRole(io::CaseRole::kTrain).size()
+    << " training, " << set.WithRole(io::CaseRole::kTest).size() << " testing). Bands:";
   for (int b = 0; b < nb; ++b) o << " " << bands.Label(b) << (b + 1 < nb ? "," : ".");
   o << " Criterion " << FitCriterionName(opt.criterion) << " over t ∈ [" << opt.t0_s << ", "
     << opt.t1_s << "] s (clipped to each record's last sample), summed over the training records. "
@@ -749,7 +749,7 @@ std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const Com
   std::vector<fs::path> scripts;
   const IdentifiedModel* complete = r.best_complete >= 0 ? &r.complete[r.best_complete] : nullptr;
   for (const io::StackRecord& rec : set.records) {
-    if (rec.role != io::RecordRole::kTest) continue;
+    if (rec.role != io::CaseRole::kTest) continue;
     const int b = r.options.bands.BandOf(rec.frequency_hz);
     const auto cm = PredictCommittee(r, rec);
     std::vector<double> full;

@@ -8,25 +8,15 @@
 namespace pz::io {
 namespace fs = std::filesystem;
 
-const char* RecordRoleName(RecordRole role) {
-  switch (role) {
-    case RecordRole::kTrain:
-      return "train";
-    case RecordRole::kTest:
-      return "test";
-  }
-  return "unknown";
-}
-
-std::optional<RecordRole> ParseRecordRole(std::string_view name) {
-  for (RecordRole r : {RecordRole::kTrain, RecordRole::kTest})
-    if (name == RecordRoleName(r)) return r;
+std::optional<CaseRole> ParseRecordRole(std::string_view name) {
+  for (CaseRole r : {CaseRole::kTrain, CaseRole::kTest})
+    if (name == CaseRoleName(r)) return r;
   return std::nullopt;
 }
 
 std::string StackRecord::Label() const {
   return "record " + std::to_string(number) + " (" + FormatNumber(frequency_hz) + " Hz, A = " +
-         FormatNumber(amplitude_v) + " V, " + RecordRoleName(role) + ")";
+         FormatNumber(amplitude_v) + " V, " + CaseRoleName(role) + ")";
 }
 
 Status StackReadOptions::Validate() const {
@@ -47,7 +37,7 @@ const StackRecord* StackRecordSet::Find(int number) const {
   return nullptr;
 }
 
-std::vector<const StackRecord*> StackRecordSet::WithRole(RecordRole role) const {
+std::vector<const StackRecord*> StackRecordSet::WithRole(CaseRole role) const {
   std::vector<const StackRecord*> out;
   for (const auto& r : records)
     if (r.role == role) out.push_back(&r);
@@ -55,7 +45,7 @@ std::vector<const StackRecord*> StackRecordSet::WithRole(RecordRole role) const 
 }
 
 StackRecord LoadStackRecordFile(const fs::path& file, int number, double frequency_hz,
-                                double offset_v, double amplitude_v, RecordRole role,
+                                double offset_v, double amplitude_v, CaseRole role,
                                 const StackReadOptions& options, const std::string& context) {
   ThrowIfError(options.Validate());
   const std::string ctx = context.empty() ? "" : " (" + context + ")";

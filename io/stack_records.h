@@ -19,16 +19,15 @@
 #include <string_view>
 #include <vector>
 
+#include "model/case_role.h"
 #include "model/status.h"
 
 namespace pz::io {
 
-enum class RecordRole : int { kTrain = 0, kTest = 1 };
+using model::CaseRole;  // model/case_role.h: the one train / validate / test enum
 
-/// "train", "test".
-const char* RecordRoleName(RecordRole role);
-/// Parses a role name (exact, lower case); nullopt if unknown.
-std::optional<RecordRole> ParseRecordRole(std::string_view name);
+/// A stack record's role: "train" or "test" (exact, lower case); nullopt otherwise.
+std::optional<CaseRole> ParseRecordRole(std::string_view name);
 
 /// One record of the stage: the stated drive and the samples.
 struct StackRecord {
@@ -36,7 +35,7 @@ struct StackRecord {
   double frequency_hz = 0;   ///< excitation frequency f [Hz], > 0
   double offset_v = 0;       ///< drive offset [V]
   double amplitude_v = 0;    ///< drive amplitude A [V], ≥ 0
-  RecordRole role = RecordRole::kTrain;
+  CaseRole role = CaseRole::kTrain;
   std::filesystem::path file;  ///< the record's CSV (manifest folder / file)
   double sample_rate_hz = 0;   ///< fs = 1 / (t_1 − t_0)
   std::vector<double> t;       ///< [s], t_0 = 0, uniform steps 1 / fs
@@ -62,7 +61,7 @@ struct StackRecordSet {
   std::vector<StackRecord> records;
 
   const StackRecord* Find(int number) const;  ///< nullptr if absent
-  std::vector<const StackRecord*> WithRole(RecordRole role) const;
+  std::vector<const StackRecord*> WithRole(CaseRole role) const;
 };
 
 /// Reads dir/records.csv and every record file it lists. Throws pz::InputError (file:line: column …).
@@ -72,7 +71,7 @@ StackRecordSet LoadStackRecordSet(const std::filesystem::path& dir,
 /// Reads one record file with what the manifest states about it. `context` (e.g. "record 3 of
 /// records.csv line 4") is appended to whole-file errors. Throws pz::InputError.
 StackRecord LoadStackRecordFile(const std::filesystem::path& file, int number, double frequency_hz,
-                                double offset_v, double amplitude_v, RecordRole role,
+                                double offset_v, double amplitude_v, CaseRole role,
                                 const StackReadOptions& options = {},
                                 const std::string& context = "");
 

@@ -28,7 +28,7 @@ const model::StackBoucWenParams kBw{0.3, 0.004, 0.002, 0.05, 400};
 const model::BacklashLikeParams kBl{0.012, 0.052, 0.015};
 constexpr double kFs = 5000, kDuration = 0.2, kNoise = 0.02;
 
-io::StackRecord MakeRecord(int number, double f, double amp, io::RecordRole role, unsigned seed) {
+io::StackRecord MakeRecord(int number, double f, double amp, io::CaseRole role, unsigned seed) {
   io::StackRecord r;
   r.number = number;
   r.frequency_hz = f;
@@ -54,10 +54,10 @@ io::StackRecord MakeRecord(int number, double f, double amp, io::RecordRole role
 io::StackRecordSet SyntheticSet() {
   io::StackRecordSet set;
   set.dir = "synthetic";
-  set.records.push_back(MakeRecord(1, 40, 400, io::RecordRole::kTrain, 1));
-  set.records.push_back(MakeRecord(2, 40, 300, io::RecordRole::kTest, 2));
-  set.records.push_back(MakeRecord(3, 200, 400, io::RecordRole::kTrain, 3));
-  set.records.push_back(MakeRecord(4, 200, 300, io::RecordRole::kTest, 4));
+  set.records.push_back(MakeRecord(1, 40, 400, io::CaseRole::kTrain, 1));
+  set.records.push_back(MakeRecord(2, 40, 300, io::CaseRole::kTest, 2));
+  set.records.push_back(MakeRecord(3, 200, 400, io::CaseRole::kTrain, 3));
+  set.records.push_back(MakeRecord(4, 200, 300, io::CaseRole::kTest, 4));
   return set;
 }
 

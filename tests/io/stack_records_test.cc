@@ -32,14 +32,14 @@ TEST(PiezoStackBench, HasSixteenRecordsAtEightFrequencies) {
     EXPECT_EQ(r.frequency_hz, f[i / 2]);
     EXPECT_EQ(r.offset_v, 400);
     EXPECT_EQ(r.amplitude_v, i % 2 == 0 ? 400 : 300);
-    EXPECT_EQ(r.role, i % 2 == 0 ? RecordRole::kTrain : RecordRole::kTest);
+    EXPECT_EQ(r.role, i % 2 == 0 ? CaseRole::kTrain : CaseRole::kTest);
     EXPECT_EQ(r.t.size(), 12500u);
     EXPECT_EQ(r.y.size(), r.t.size());
     EXPECT_NEAR(r.sample_rate_hz, 5000, 1e-6);
     EXPECT_EQ(r.u[0], 400);
   }
-  EXPECT_EQ(set.WithRole(RecordRole::kTrain).size(), 8u);
-  EXPECT_EQ(set.WithRole(RecordRole::kTest).size(), 8u);
+  EXPECT_EQ(set.WithRole(CaseRole::kTrain).size(), 8u);
+  EXPECT_EQ(set.WithRole(CaseRole::kTest).size(), 8u);
   EXPECT_EQ(set.Find(3)->Label(), "record 3 (40 Hz, A = 400 V, train)");
   EXPECT_EQ(set.Find(17), nullptr);
 }

@@ -66,7 +66,7 @@ BwOscillatorFitness SmallOscillator() {
   return BwOscillatorFitness({OscillatorRecord("A", 256, 2, 0, 1), OscillatorRecord("B", 256, 2, 256, 2)}, 1.0);
 }
 
-io::StackRecord StackRecord(int number, double f, double amp, io::RecordRole role, unsigned seed) {
+io::StackRecord StackRecord(int number, double f, double amp, io::CaseRole role, unsigned seed) {
   io::StackRecord r;
   r.number = number;
   r.frequency_hz = f;
@@ -88,10 +88,10 @@ io::StackRecord StackRecord(int number, double f, double amp, io::RecordRole rol
 io::StackRecordSet StackSet() {
   io::StackRecordSet set;
   set.dir = "synthetic";
-  set.records.push_back(StackRecord(1, 40, 400, io::RecordRole::kTrain, 1));
-  set.records.push_back(StackRecord(2, 40, 300, io::RecordRole::kTest, 2));
-  set.records.push_back(StackRecord(3, 60, 350, io::RecordRole::kTrain, 3));
-  set.records.push_back(StackRecord(4, 60, 250, io::RecordRole::kTest, 4));
+  set.records.push_back(StackRecord(1, 40, 400, io::CaseRole::kTrain, 1));
+  set.records.push_back(StackRecord(2, 40, 300, io::CaseRole::kTest, 2));
+  set.records.push_back(StackRecord(3, 60, 350, io::CaseRole::kTrain, 3));
+  set.records.push_back(StackRecord(4, 60, 250, io::CaseRole::kTest, 4));
   return set;
 }
 
@@ -156,7 +156,7 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
 
 TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
   const io::StackRecordSet set = StackSet();
-  const std::vector<const io::StackRecord*> train = set.WithRole(io::RecordRole::kTrain);
+  const std::vector<const io::StackRecord*> train = set.WithRole(io::CaseRole::kTrain);
   for (model::StackFamily family : {model::StackFamily::kBoucWen, model::StackFamily::kBacklashLike}) {
     for (FitCriterion c : {FitCriterion::kIae, FitCriterion::kSse, FitCriterion::kRmse, FitCriterion::kMax}) {
       SCOPED_TRACE(std::string(model::StackFamilyName(family)) + " " + complete::FitCriterionName(c));
@@ -174,7 +174,7 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
 
 TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   const io::StackRecordSet set = StackSet();
-  const StackFitness stack(model::StackFamily::kBoucWen, set.WithRole(io::RecordRole::kTrain), FitCriterion::kIae,
+  const StackFitness stack(model::StackFamily::kBoucWen, set.WithRole(io::CaseRole::kTrain), FitCriterion::kIae,
                            0.01, 0.5);
   const job::JobSpec stack_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(stack), "ok");
   const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
