@@ -61,8 +61,17 @@ Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durabl
     return s;
   }
   if (::close(fd) != 0) return Errno("cannot write", tmp);  // NFS and friends report late
-  if (!previous.empty() && ::rename(path.c_str(), previous.c_str()) != 0 && errno != ENOENT)
-    return Errno("cannot rename to " + previous.string() + ":", path);
+  if (!previous.empty()) {
+    // The replaced file becomes `previous` through a hard link, so that `path` exists at every
+    // instant (a master killed between two renames would otherwise leave only `previous`).
+    const fs::path link_tmp = previous.string() + ".tmp";
+    (void)::unlink(link_tmp.c_str());
+    if (::link(path.c_str(), link_tmp.c_str()) == 0) {
+      if (::rename(link_tmp.c_str(), previous.c_str()) != 0) return Errno("cannot rename onto", previous);
+    } else if (errno != ENOENT) {
+      return Errno("cannot link " + path.string() + " to", link_tmp);
+    }
+  }
   if (::rename(tmp.c_str(), path.c_str()) != 0) return Errno("cannot rename onto", path);
   if (!durable) return Status::Ok();
   int dfd = ::open(path.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);

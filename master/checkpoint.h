@@ -23,7 +23,7 @@
 namespace pz::master {
 
 /// Writes `bytes` to path.tmp and renames it over `path`; when `previous` is given, the file it
-/// replaces is first renamed to `previous`.
+/// replaces first becomes `previous` (hard link + rename: `path` exists at every instant).
 Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes, bool durable = true,
                        const std::filesystem::path& previous = {});
 /// Reads a whole file (at most max_bytes); NotFound if it does not exist.
