@@ -1,7 +1,7 @@
 // `piezoid committee`: the committee machine of seed 002 on a stack record set (default: the
 // bundled data/piezo-stack-bench): complete models and per-band sub-models of each family by each
 // optimiser, selection per band, the committee against the best complete model; writes report.md,
-// committee.json and loop figures (client/committee.h).
+// committee.json and loop figures (complete/committee.h, client/committee_report.h).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -11,11 +11,13 @@
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/committee.h"
+#include "client/committee_report.h"
+#include "complete/committee.h"
 #include "client/complete_service.h"
 #include "io/csv.h"
 
 namespace pz::client {
+using namespace complete;
 namespace {
 
 struct CommitteeArgs {

@@ -6,6 +6,7 @@
 #include "complete/job_kind.h"
 
 namespace pz::client {
+using namespace complete;
 
 namespace {
 std::string Env(const char* name) {

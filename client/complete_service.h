@@ -9,7 +9,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "client/committee.h"
+#include "complete/committee.h"
 #include "client/service_evaluator.h"
 
 namespace pz::client {
@@ -29,6 +29,6 @@ struct CompleteServiceFlags {
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
 
 /// One session per search of the committee, on the master of `options`.
-EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options);
+complete::EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options);
 
 }  // namespace pz::client

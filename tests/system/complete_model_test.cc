@@ -16,7 +16,7 @@
 #include <random>
 #include <thread>
 
-#include "client/committee.h"
+#include "complete/committee.h"
 #include "client/complete_service.h"
 #include "client/service_evaluator.h"
 #include "complete/job_kind.h"
@@ -335,7 +335,7 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   cluster.AddWorker(1);
   cluster.AddWorker(1);
   const io::StackRecordSet set = StackSet();
-  client::CommitteeOptions o;
+  complete::CommitteeOptions o;
   o.bands.edges = {0, 50, 100};
   o.t0_s = 0.01;
   o.t1_s = 0.12;
@@ -345,11 +345,11 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   o.search.pso.iterations = 3;
   o.search.ga_real.population = 6;
   o.search.ga_real.generations = 3;
-  const client::CommitteeResult local = client::RunCommittee(set, o, client::LocalEvaluatorFactory(2));
+  const complete::CommitteeResult local = complete::RunCommittee(set, o, complete::LocalEvaluatorFactory(2));
   int sessions = 0;
-  const client::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster));
-  const client::CommitteeResult remote =
-      client::RunCommittee(set, o, [&](const StackFitness& f) {
+  const complete::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster));
+  const complete::CommitteeResult remote =
+      complete::RunCommittee(set, o, [&](const StackFitness& f) {
         ++sessions;
         return service(f);
       });

@@ -25,7 +25,6 @@
 
 #include <functional>
 #include <memory>
-#include <ostream>
 #include <span>
 #include <string>
 #include <vector>
@@ -37,14 +36,10 @@
 #include "model/stack_models.h"
 #include "model/status.h"
 
-namespace pz::client {
+namespace pz::complete {
 
-// The fitness of the stack models (criterion over the window, summed over the records) lives in
-// complete/stack_fitness.h, where the service's workers link it too ("complete_model" job kind).
-using complete::FitCriterion;
-using complete::FitCriterionName;
-using complete::ParseFitCriterion;
-using complete::StackFitness;
+// The fitness of the stack models (criterion over the window, summed over the records) is
+// complete/stack_fitness.h, which the service's workers link too ("complete_model" job kind).
 
 /// Frequency bands by their edges e_0 < e_1 < … < e_B: band b is [e_b, e_{b+1}), the last closed.
 struct FrequencyBands {
@@ -148,16 +143,9 @@ std::vector<double> PredictCommittee(const CommitteeResult& r, const io::StackRe
 RoleMetrics RecordMetrics(const io::StackRecord& record, std::span<const double> yhat, double t0_s,
                           double t1_s);
 
-/// report.md: settings, per-band tables like the paper's Tables 3–16, selection, reduction, timing.
-void WriteCommitteeReport(std::ostream& out, const CommitteeResult& r,
-                          const io::StackRecordSet& set);
-/// committee.json (protobuf's JSON printer over a google.protobuf.Struct).
-std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& set);
-/// Loop figures (displacement vs voltage over the last drive cycle, measured / committee / best
-/// complete) per test record, grouped by band: <dir>/loop_band<b>_f<f>.{csv,gp,png}. Returns the
-/// scripts written; renders them when gnuplot is available (failures appended to warnings).
-std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const CommitteeResult& r,
-                                               const io::StackRecordSet& set,
-                                               std::vector<std::string>* warnings);
+/// x with 3 significant digits (scientific below 1e-3 and from 1e5), "—" when not finite.
+std::string FormatFigure(double x, int precision = 3);
+/// 100·x with two decimals and " %".
+std::string FormatPercent(double x);
 
-}  // namespace pz::client
+}  // namespace pz::complete
