@@ -1,11 +1,12 @@
 // `piezoid boucwen`: complete-model identification of the Bouc–Wen benchmark oscillator (issue 7,
 // data/boucwen-benchmark/README.md). The six identifiable parameters θ = (m, c, k, α, β·γ, β·δ)
 // (ν = 1; β only appears in the products) are searched by PSO, the real-coded GA or the binary GA
-// (master/param_search.h) on the training records train_A and train_B, minimising the output-error
+// (opt/param_search.h) on the training records train_A and train_B, minimising the output-error
 // MSE of a free-run simulation (train_A from rest; train_B, a steady-state record, after a
 // one-period warm-up). The test records are read only afterwards, to report the
 // simulation RMS error of the identified model (and of the true one, the floor) on the official
-// multisine and sine-sweep sets. Writes report.json, report.md, CSVs and gnuplot figures.
+// multisine and sine-sweep sets (the protocol: complete/boucwen_benchmark.h). Writes report.json,
+// report.md, CSVs and gnuplot figures.
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
 
@@ -23,6 +24,7 @@
 #include "client/commands.h"
 #include "client/complete_service.h"
 #include "client/plots.h"
+#include "complete/boucwen_benchmark.h"
 #include "complete/bw_fitness.h"
 #include "complete/job_kind.h"
 #include "io/csv.h"
@@ -38,8 +40,13 @@
 namespace pz::client {
 namespace {
 
-constexpr size_t kPeriod = 8192;  // samples per multisine period (benchmark README)
-constexpr double kFs = 750;
+using complete::BwSeries;
+using complete::kBwPeriod;
+using complete::kBwSampleRateHz;
+using complete::LoadBwSeries;
+using complete::MakeBwTrainingRecord;
+using complete::SimulateBwMultisineTest;
+using complete::SimulateBwSweepTest;
 
 struct BoucwenArgs {
   std::string data_dir = std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark";
@@ -57,78 +64,6 @@ struct BoucwenArgs {
   bool no_plots = false;
   CompleteServiceFlags service;  ///< --master: the search's evaluations on the service
 };
-
-struct Series {
-  std::vector<double> u, y;
-};
-
-Series LoadSeries(const std::filesystem::path& file) {
-  const io::CsvTable t = io::ReadCsvFile(file);
-  t.RequireColumns({"u_N", "y_m"});
-  t.RequireRows();
-  const int cu = t.RequireColumn("u_N"), cy = t.RequireColumn("y_m");
-  Series s;
-  s.u.reserve(t.rows.size());
-  s.y.reserve(t.rows.size());
-  for (size_t i = 0; i < t.rows.size(); ++i) {
-    s.u.push_back(t.Number(i, cu));
-    s.y.push_back(t.Number(i, cy));
-  }
-  return s;
-}
-
-/// A training record of `samples` samples. `steady_state`: the record is a steady-state response
-/// (train_B: its first samples are far from a start at rest), so one period of the periodic input is
-/// simulated first as a warm-up and not counted (the 1.1 % damped mode decays in about 0.4 s).
-complete::BwTrainingRecord MakeRecord(const std::string& name, const Series& s, size_t samples, int substeps,
-                                     bool steady_state) {
-  model::BwInputOptions o;
-  o.sample_rate_hz = kFs;
-  o.substeps = substeps;
-  o.interpolation = model::InputInterpolation::kPeriodicFourier;
-  o.period_samples = kPeriod;
-  if (samples % kPeriod != 0 || samples == 0) {
-    throw InputError(FieldError(name + ": samples", samples, "must be a whole number of 8192-sample periods"));
-  }
-  const size_t warmup = steady_state ? kPeriod : 0;
-  complete::BwTrainingRecord r;
-  r.name = name;
-  r.u.assign(s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(warmup));
-  r.u.insert(r.u.end(), s.u.begin(), s.u.begin() + static_cast<std::ptrdiff_t>(samples));
-  r.y.assign(warmup, 0.0);
-  r.y.insert(r.y.end(), s.y.begin(), s.y.begin() + static_cast<std::ptrdiff_t>(samples));
-  r.first_counted = warmup;
-  r.input = o;
-  return r;
-}
-
-/// Simulation on the official multisine test set: one steady-state period; three are simulated
-/// from rest, the last compared (as the README's floor).
-std::vector<double> SimulateMultisineTest(const model::BwParams& p, const Series& test) {
-  std::vector<double> u3;
-  for (int k = 0; k < 3; ++k) u3.insert(u3.end(), test.u.begin(), test.u.end());
-  model::BwInputOptions o;
-  o.sample_rate_hz = kFs;
-  o.substeps = 20;
-  o.interpolation = model::InputInterpolation::kPeriodicFourier;
-  o.period_samples = test.u.size();
-  std::vector<double> y(u3.size());
-  Status s = model::SimulateBw(p, model::BwInput(u3, o), y);
-  if (!s.ok()) throw std::runtime_error("multisine test: " + s.message());
-  return std::vector<double>(y.end() - static_cast<std::ptrdiff_t>(test.u.size()), y.end());
-}
-
-/// The sine sweep starts from rest and is not periodic: cubic-spline input, 20 sub-steps.
-std::vector<double> SimulateSweepTest(const model::BwParams& p, const Series& test) {
-  model::BwInputOptions o;
-  o.sample_rate_hz = kFs;
-  o.substeps = 20;
-  o.interpolation = model::InputInterpolation::kCubicSpline;
-  std::vector<double> y(test.u.size());
-  Status s = model::SimulateBw(p, model::BwInput(test.u, o), y);
-  if (!s.ok()) throw std::runtime_error("sine-sweep test: " + s.message());
-  return y;
-}
 
 std::string Sci(double v, int digits = 4) {
   char buf[64];
@@ -162,15 +97,15 @@ opt::SearchOptions MakeOptions(const BoucwenArgs& a) {
 int RunBoucwen(const BoucwenArgs& a) {
   namespace fs = std::filesystem;
   const fs::path data(a.data_dir), out(a.out_dir);
-  const Series train_a = LoadSeries(data / "train_A_multisine.csv");
-  const Series train_b = LoadSeries(data / "train_B_multisine.csv");
-  auto samples_of = [&](const Series& s) {
-    const size_t all = s.u.size() - s.u.size() % kPeriod;
-    return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kPeriod) : all;
+  const BwSeries train_a = LoadBwSeries(data / "train_A_multisine.csv");
+  const BwSeries train_b = LoadBwSeries(data / "train_B_multisine.csv");
+  auto samples_of = [&](const BwSeries& s) {
+    const size_t all = s.u.size() - s.u.size() % kBwPeriod;
+    return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kBwPeriod) : all;
   };
   std::vector<complete::BwTrainingRecord> records;
-  records.push_back(MakeRecord("train_A", train_a, samples_of(train_a), a.substeps, false));
-  records.push_back(MakeRecord("train_B", train_b, samples_of(train_b), a.substeps, true));
+  records.push_back(MakeBwTrainingRecord("train_A", train_a, samples_of(train_a), a.substeps, false));
+  records.push_back(MakeBwTrainingRecord("train_B", train_b, samples_of(train_b), a.substeps, true));
   // Output-error MSE; a diverging simulation costs 1 m² (penalised).
   const complete::BwOscillatorFitness fitness(std::move(records), 1.0);
   const size_t n_train = fitness.counted_samples();
@@ -220,16 +155,16 @@ int RunBoucwen(const BoucwenArgs& a) {
   const double train_rms = std::sqrt(result.best_cost);
 
   // Test sets: read only now.
-  const Series test_ms = LoadSeries(data / "test_multisine.csv");
-  const Series test_sw = LoadSeries(data / "test_sinesweep.csv");
-  const std::vector<double> yms = SimulateMultisineTest(fitted, test_ms);
-  const std::vector<double> ysw = SimulateSweepTest(fitted, test_sw);
-  const std::vector<double> yms_true = SimulateMultisineTest(truth, test_ms);
-  const std::vector<double> ysw_true = SimulateSweepTest(truth, test_sw);
+  const BwSeries test_ms = LoadBwSeries(data / "test_multisine.csv");
+  const BwSeries test_sw = LoadBwSeries(data / "test_sinesweep.csv");
+  const std::vector<double> yms = SimulateBwMultisineTest(fitted, test_ms);
+  const std::vector<double> ysw = SimulateBwSweepTest(fitted, test_sw);
+  const std::vector<double> yms_true = SimulateBwMultisineTest(truth, test_ms);
+  const std::vector<double> ysw_true = SimulateBwSweepTest(truth, test_sw);
   const double rms_ms = model::Rmse(test_ms.y, yms), rms_sw = model::Rmse(test_sw.y, ysw);
   const double rms_ms_true = model::Rmse(test_ms.y, yms_true), rms_sw_true = model::Rmse(test_sw.y, ysw_true);
-  const double max_ms = model::MaxAbsError(test_ms.y, yms, 1 / kFs, 0, (test_ms.y.size() - 1) / kFs);
-  const double max_sw = model::MaxAbsError(test_sw.y, ysw, 1 / kFs, 0, (test_sw.y.size() - 1) / kFs);
+  const double max_ms = model::MaxAbsError(test_ms.y, yms, 1 / kBwSampleRateHz, 0, (test_ms.y.size() - 1) / kBwSampleRateHz);
+  const double max_sw = model::MaxAbsError(test_sw.y, ysw, 1 / kBwSampleRateHz, 0, (test_sw.y.size() - 1) / kBwSampleRateHz);
   // Time to reach the final criterion: the first trace point within 1 % of the final best cost.
   size_t reach = 0;
   while (reach + 1 < result.trace.best_cost.size() && result.trace.best_cost[reach] > result.best_cost * 1.01) ++reach;
@@ -344,14 +279,14 @@ int RunBoucwen(const BoucwenArgs& a) {
   io::WriteFileWith(out / "test_multisine.csv", [&](std::ostream& os) {
     os << "t_s,y_test_m,y_model_m,error_m\n";
     for (size_t i = 0; i < yms.size(); ++i) {
-      os << io::FormatNumber(i / kFs) << "," << io::FormatNumber(test_ms.y[i]) << "," << io::FormatNumber(yms[i])
+      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(test_ms.y[i]) << "," << io::FormatNumber(yms[i])
          << "," << io::FormatNumber(test_ms.y[i] - yms[i]) << "\n";
     }
   });
   io::WriteFileWith(out / "test_sinesweep.csv", [&](std::ostream& os) {
     os << "t_s,y_test_m,y_model_m,error_m,error_true_model_m\n";
     for (size_t i = 0; i < ysw.size(); i += 5) {
-      os << io::FormatNumber(i / kFs) << "," << io::FormatNumber(test_sw.y[i]) << "," << io::FormatNumber(ysw[i])
+      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(test_sw.y[i]) << "," << io::FormatNumber(ysw[i])
          << "," << io::FormatNumber(test_sw.y[i] - ysw[i]) << "," << io::FormatNumber(test_sw.y[i] - ysw_true[i])
          << "\n";
     }
