@@ -168,7 +168,7 @@ class Progress {
     while (window_.size() > 10) window_.pop_front();
     double evals = 0, secs = 0;
     for (const auto& w : window_) {
-      evals += w.evaluated;
+      evals += w.evaluations;
       secs += w.wall_time_s;
     }
     const double rate = secs > 0 ? evals / secs : 0;

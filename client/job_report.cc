@@ -14,25 +14,6 @@
 namespace pz::client {
 namespace fs = std::filesystem;
 
-opt::GenerationSummary SummaryOfRecord(const service::GenerationRecord& r) {
-  opt::GenerationSummary s;
-  s.generation = r.generation;
-  s.best_cost = r.best_cost;
-  s.mean_cost = r.mean_cost;
-  s.worst_cost = r.worst_cost;
-  s.improved = r.improved;
-  s.stall = static_cast<int>(r.stall);
-  s.best_description = r.best_description;
-  s.evaluations = static_cast<int>(r.evaluated);
-  s.evaluations_total = static_cast<int64_t>(r.evaluations);
-  s.failures = static_cast<int>(r.errors);
-  s.penalized = static_cast<int>(r.penalized);
-  s.errors = static_cast<int>(r.errors) - static_cast<int>(r.penalized);
-  for (const auto& [k, n] : r.failure_reasons) s.failure_reasons[k] = static_cast<int>(n);
-  s.wall_time_s = r.wall_time_s;
-  return s;
-}
-
 opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   opt::GaSummary s;
   const job::GaSettings ga = job.spec.ga.value_or(job::GaSettings{});
@@ -42,11 +23,11 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   }
   for (const auto& r : job.log) {
     if (r.improved) s.best_generation = r.generation;
-    s.failures += r.errors;
+    s.failures += r.failures;
   }
   if (!job.log.empty()) {
     s.generations = job.log.back().generation;
-    s.evaluations = static_cast<int64_t>(job.log.back().evaluations);
+    s.evaluations = job.log.back().evaluations_total;
   }
   s.wall_time_s = job.info.elapsed_s;
   // A job that ended by the GA's rule stores the rule's name as its message (job runner); the
@@ -100,7 +81,7 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitn
 hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness) {
   hgann::IdentifyResult r;
   r.summary = GaSummaryOfJob(job);
-  for (const auto& g : job.log) r.log.push_back(SummaryOfRecord(g));
+  r.log = job.log;  // the records are the GA's own summaries
   r.best = SavedNetworkOfJob(job, fitness, 0);
   r.cases = fitness.EvaluateCases(r.best.network);
   return r;
@@ -135,7 +116,7 @@ void WriteProgressCsv(const fs::path& file, const std::vector<service::Generatio
   f << std::setprecision(17);
   for (const auto& g : log)
     f << g.generation << "," << g.best_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
-      << g.evaluated << "," << g.evaluations << "," << g.errors << "," << g.penalized << "," << g.quarantined << ","
+      << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << "," << g.quarantined << ","
       << g.wall_time_s << ",\"" << g.best_description << "\"\n";
 }
 

@@ -22,9 +22,6 @@ struct FetchedJob {
   std::vector<io::SavedNetwork> networks;      ///< best[i] as the master decoded it (hgann), or empty
 };
 
-/// The GA's generation summary carried by a generation record.
-opt::GenerationSummary SummaryOfRecord(const service::GenerationRecord& record);
-
 /// The GA's final summary of a job: termination from its state and message, best from best[0],
 /// best generation = the last generation that improved, counters from the log.
 opt::GaSummary GaSummaryOfJob(const FetchedJob& job);

@@ -58,22 +58,8 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   const auto t0 = std::chrono::steady_clock::now();
   forward_.target = &evaluator;
   const GenerationSummary& s = ga_->state().initialized ? ga_->Step() : ga_->Initialize();
-  GenerationRecord rec;
-  rec.generation = s.generation;
-  rec.best_cost = s.best_cost;
-  rec.mean_cost = s.mean_cost;
-  rec.evaluations = static_cast<uint64_t>(s.evaluations_total);
-  rec.errors = static_cast<uint32_t>(s.failures);
-  if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end())
-    rec.quarantined = static_cast<uint32_t>(q->second);
-  rec.worst_cost = s.worst_cost;
-  rec.stall = static_cast<uint32_t>(std::max(0, s.stall));
-  rec.evaluated = static_cast<uint32_t>(std::max(0, s.evaluations));
-  rec.penalized = static_cast<uint32_t>(std::max(0, s.penalized));
-  for (const auto& [reason, n] : s.failure_reasons) rec.failure_reasons[reason] = static_cast<uint32_t>(std::max(0, n));
-  rec.best_description = s.best_description;
-  rec.wall_time_s = s.wall_time_s;
-  rec.improved = s.improved;
+  GenerationRecord rec = s;
+  if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end()) rec.quarantined = q->second;
   forward_.target = nullptr;
 
   const GaState& st = ga_->state();

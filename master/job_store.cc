@@ -273,7 +273,7 @@ void JobStore::Run(Job& job) {
     if (durable) last_write = now;
     unwritten = !durable;
     spdlog::info("job {}: generation {} best {:.9g} mean {:.6g} evaluations {}", job.id,
-                 rec.generation, rec.best_cost, rec.mean_cost, rec.evaluations);
+                 rec.generation, rec.best_cost, rec.mean_cost, rec.evaluations_total);
     PublishGeneration(job, c.state, rec);
   }
   if (unwritten && !job.cancel) {  // shut down between writes (a failure was written by finish)

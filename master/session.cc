@@ -149,9 +149,9 @@ const GenerationRecord& FoldSessionBatch(JobCheckpoint& c, std::span<const Genom
                                          std::span<const FitnessResult> results, double wall_time_s) {
   GenerationRecord rec;
   rec.generation = c.log.size() + 1;
-  rec.evaluated = static_cast<uint32_t>(results.size());
+  rec.evaluations = static_cast<int>(results.size());
   c.optimizer.evaluations += static_cast<int64_t>(results.size());
-  rec.evaluations = static_cast<uint64_t>(c.optimizer.evaluations);
+  rec.evaluations_total = c.optimizer.evaluations;
   double sum = 0;
   rec.best_cost = results.empty() ? 0 : INFINITY;
   rec.worst_cost = results.empty() ? 0 : -INFINITY;
@@ -160,13 +160,14 @@ const GenerationRecord& FoldSessionBatch(JobCheckpoint& c, std::span<const Genom
     rec.worst_cost = std::max(rec.worst_cost, r.cost);
     sum += r.cost;
     if (r.status != FitnessStatus::kOk) {
-      ++rec.errors;
+      ++rec.failures;
       rec.penalized += r.status == FitnessStatus::kPenalized;
+      rec.errors += r.status == FitnessStatus::kError;
       rec.quarantined += r.reason == "quarantined";
       ++rec.failure_reasons[r.reason];
     }
   }
-  c.optimizer.failures += rec.errors;
+  c.optimizer.failures += rec.failures;
   rec.mean_cost = results.empty() ? 0 : sum / static_cast<double>(results.size());
   rec.wall_time_s = wall_time_s;
   const double before = c.best.empty() ? INFINITY : c.best.front().fitness.cost;

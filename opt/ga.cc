@@ -81,7 +81,8 @@ bool GenerationSummary::SameOutcome(const GenerationSummary& o) const {
          worst_cost == o.worst_cost && improved == o.improved && stall == o.stall &&
          best_description == o.best_description && evaluations == o.evaluations &&
          evaluations_total == o.evaluations_total && failures == o.failures &&
-         penalized == o.penalized && errors == o.errors && failure_reasons == o.failure_reasons;
+         penalized == o.penalized && errors == o.errors && quarantined == o.quarantined &&
+         failure_reasons == o.failure_reasons;
 }
 
 std::string GenerationSummary::BriefReport() const {

@@ -74,11 +74,14 @@ struct GenerationSummary {
   int failures = 0;              ///< non-ok results among this generation's evaluations
   int penalized = 0;             ///< of which FitnessStatus::kPenalized
   int errors = 0;                ///< of which FitnessStatus::kError
+  int quarantined = 0;           ///< of which quarantined by the service (a kError each; 0 in a local run)
   std::map<std::string, int> failure_reasons;  ///< reason → count, this generation
   double wall_time_s = 0;        ///< wall time of the generation (the only non-deterministic field)
 
   /// Equal in every field but wall_time_s.
   bool SameOutcome(const GenerationSummary& other) const;
+  /// SameOutcome: two runs that did the same have equal records, whatever their wall times.
+  bool operator==(const GenerationSummary& other) const { return SameOutcome(other); }
   /// One line, e.g. "gen 12: best 10.53 mean 30.1 worst 1e+30 stall 3 evals 200/2600 fail 4".
   std::string BriefReport() const;
 };

@@ -45,30 +45,9 @@ struct ScoredGenome {
 };
 
 /// One generation of a job (proto GenerationRecord; master/ga.h GenerationSummary).
-struct GenerationRecord {
-  uint64_t generation = 0;
-  double best_cost = 0;
-  double mean_cost = 0;
-  uint64_t evaluations = 0;  ///< cumulative
-  uint32_t errors = 0;       ///< non-ok results in this generation (penalised or errored)
-  uint32_t quarantined = 0;
-  double worst_cost = 0;
-  uint32_t stall = 0;        ///< generations since the best cost last improved
-  uint32_t evaluated = 0;    ///< genomes evaluated in this generation
-  uint32_t penalized = 0;    ///< of errors, FitnessStatus::kPenalized
-  std::map<std::string, uint32_t> failure_reasons;  ///< reason → count, this generation
-  std::string best_description;  ///< from the job kind's describer, or empty
-  double wall_time_s = 0;    ///< the only non-deterministic field
-  bool improved = false;
-  /// Equal in every field but wall_time_s.
-  bool operator==(const GenerationRecord& o) const {
-    return generation == o.generation && best_cost == o.best_cost && mean_cost == o.mean_cost &&
-           evaluations == o.evaluations && errors == o.errors && quarantined == o.quarantined &&
-           worst_cost == o.worst_cost && stall == o.stall && evaluated == o.evaluated &&
-           penalized == o.penalized && failure_reasons == o.failure_reasons &&
-           best_description == o.best_description && improved == o.improved;
-  }
-};
+/// One generation's record (a batch's, for an evaluation session) is the GA's own summary: the
+/// service stores, sends and shows it as it is (opt/ga.h).
+using GenerationRecord = opt::GenerationSummary;
 
 struct QuarantineRecord {
   uint64_t generation = 0;

@@ -117,7 +117,7 @@ TEST(SessionTest, BitIdenticalToInlineWithOneAndTwoWorkers) {
     std::vector<service::GenerationRecord> log;
     ASSERT_TRUE(client.Fetch(id, 1, nullptr, &log).ok());
     ASSERT_EQ(log.size(), 4u);
-    EXPECT_EQ(log[3].evaluations, info.evaluations);
+    EXPECT_EQ(log[3].evaluations_total, static_cast<int64_t>(info.evaluations));
   }
 }
 
