@@ -15,5 +15,7 @@ void RegisterDiagnose(CLI::App& app, int& exit_code);
 void RegisterDiagnoseCheck(CLI::App& app, int& exit_code);
 void RegisterBoucwen(CLI::App& app, int& exit_code);
 void RegisterCommittee(CLI::App& app, int& exit_code);
+void RegisterFit(CLI::App& app, int& exit_code);
+void RegisterRecords(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -1,0 +1,287 @@
+// `piezoid fit`: identify one plant family on a record set of any drive (issue 14, records/fit.h),
+// and `piezoid records`: check and describe a record set (io/records.h). The fit writes report.md
+// (parameters, RMSE / max / NRMSE on train and on withheld records), fit.json, per-record traces
+// (CSV) and figures (time traces, hysteresis loops); for the Prandtl–Ishlinskii family, optionally
+// the analytic inverse as a C header (--export-c).
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "client/commands.h"
+#include "client/plots.h"
+#include "io/csv.h"
+#include "io/records.h"
+#include "model/prandtl_ishlinskii.h"
+#include "records/fit.h"
+
+namespace pz::client {
+namespace fs = std::filesystem;
+namespace {
+
+struct FitArgs {
+  std::string records;
+  std::string family = "backlash-like";
+  std::vector<std::string> effects;
+  std::vector<std::string> train_windows, validate_windows, test_windows;
+  std::string out = "fit-out";
+  std::string algorithm = "pso";
+  int repetitions = 3, particles = 30, iterations = 150, population = 30, generations = 150, stall = 40;
+  uint64_t seed = 1;
+  int threads = 2;
+  int substeps = 2;
+  int pi_operators = 12;
+  int lm_iterations = 60;
+  bool no_polish = false;
+  bool no_figures = false;
+  bool quiet = false;
+  std::string export_c;
+};
+
+io::RecordSet LoadWithWindows(const std::string& path, const std::vector<std::string>& tr,
+                              const std::vector<std::string>& va, const std::vector<std::string>& te) {
+  io::RecordSet set = io::LoadRecordSet(path);
+  std::vector<io::WindowSpec> w;
+  for (const auto& s : tr) w.push_back(io::ParseWindow(s, model::CaseRole::kTrain, "--train-window"));
+  for (const auto& s : va) w.push_back(io::ParseWindow(s, model::CaseRole::kValidate, "--validate-window"));
+  for (const auto& s : te) w.push_back(io::ParseWindow(s, model::CaseRole::kTest, "--test-window"));
+  io::SplitIntoWindows(set, w);
+  return set;
+}
+
+std::string Fmt(double x, int prec = 4) {
+  std::ostringstream s;
+  s << std::setprecision(prec) << x;
+  return s.str();
+}
+
+void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::FitResult& r,
+                 std::vector<fs::path>* scripts) {
+  fs::create_directories(dir);
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const io::Record& rec = set.records[i];
+    const std::string stem = "trace_" + rec.name;
+    io::WriteFileWith(dir / (stem + ".csv"), [&](std::ostream& os) {
+      os << "t_s,drive_" << set.drive_unit << ",measured_" << set.response_unit << ",model_" << set.response_unit
+         << ",error_" << set.response_unit << "\n";
+      for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
+        os << io::FormatNumber(rec.t[k]) << "," << io::FormatNumber(rec.u[k]) << "," << io::FormatNumber(rec.y[k])
+           << "," << io::FormatNumber(r.yhat[i][k]) << "," << io::FormatNumber(rec.y[k] - r.yhat[i][k]) << "\n";
+      }
+    });
+    if (!scripts) continue;
+    const std::string role = model::CaseRoleName(rec.role);
+    Plot trace{stem, rec.name + " (" + role + "): measured and " + r.model->Describe(), "t [s]",
+               "response [" + set.response_unit + "]", false,
+               {{stem + ".csv", 1, 3, "measured", "lines"}, {stem + ".csv", 1, 4, "model", "lines"},
+                {stem + ".csv", 1, 5, "error", "lines"}}};
+    scripts->push_back(WritePlotScript(dir, trace));
+    Plot loop{"loop_" + rec.name, rec.name + " (" + role + "): hysteresis loop", "drive [" + set.drive_unit + "]",
+              "response [" + set.response_unit + "]", false,
+              {{stem + ".csv", 2, 3, "measured", "lines"}, {stem + ".csv", 2, 4, "model", "lines"}}};
+    scripts->push_back(WritePlotScript(dir, loop));
+  }
+}
+
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a) {
+  const auto& m = *r.model;
+  os << "# piezoid fit: " << m.Describe() << "\n\n"
+     << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
+     << " records; drive in " << set.drive_unit << ", response in " << set.response_unit << ").\n\n"
+     << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
+  for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
+  os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
+     << " (sign of the drive-to-response slope); offsets per record as stated below.\n\n";
+  os << "## Parameters\n\n| parameter | value | unit | search range |\n|---|---|---|---|\n";
+  for (size_t i = 0; i < m.params().size(); ++i) {
+    const auto& p = m.params()[i];
+    os << "| " << p.name << " | " << Fmt(r.params[i], 6) << " | " << p.unit << " | [" << Fmt(p.lower) << ", "
+       << Fmt(p.upper) << "]" << (p.log_scale ? " log" : "") << " |\n";
+  }
+  const auto wn = m.family().weight_names();
+  for (size_t i = 0; i < r.weights.size(); ++i) {
+    os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) |\n";
+  }
+  os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | NRMSE [% of range] |\n"
+     << "|---|---|---|---|---|---|---|---|\n";
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const auto& rec = set.records[i];
+    const auto& e = r.metrics[i];
+    os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
+       << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
+       << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
+       << Fmt(e.nrmse_pct, 3) << " |\n";
+  }
+  os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
+     << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
+  if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
+  os << "; LM iterations " << r.lm_iterations << ".\n\nCommand: `piezoid fit --records " << a.records << " --family "
+     << a.family << "`.\n";
+}
+
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
+  std::ostringstream os;
+  os << "{\n  \"model\": \"" << r.model->Describe() << "\",\n  \"response_unit\": \"" << set.response_unit
+     << "\",\n  \"drive_unit\": \"" << set.drive_unit << "\",\n  \"polarity\": " << r.model->scale().polarity
+     << ",\n  \"params\": {";
+  for (size_t i = 0; i < r.params.size(); ++i)
+    os << (i ? ", " : "") << "\"" << r.model->params()[i].name << "\": " << io::FormatNumber(r.params[i]);
+  os << "},\n  \"weights\": [";
+  for (size_t i = 0; i < r.weights.size(); ++i) os << (i ? ", " : "") << io::FormatNumber(r.weights[i]);
+  os << "],\n  \"records\": [\n";
+  for (size_t i = 0; i < r.metrics.size(); ++i) {
+    const auto& e = r.metrics[i];
+    os << "    {\"name\": \"" << e.name << "\", \"role\": \"" << model::CaseRoleName(e.role) << "\", \"samples\": "
+       << e.samples << ", \"offset\": " << io::FormatNumber(e.offset) << ", \"rmse\": " << io::FormatNumber(e.rmse)
+       << ", \"max_abs\": " << io::FormatNumber(e.max_abs) << ", \"nrmse_pct\": " << io::FormatNumber(e.nrmse_pct)
+       << "}" << (i + 1 < r.metrics.size() ? "," : "") << "\n";
+  }
+  os << "  ],\n  \"train_mse\": " << io::FormatNumber(r.train_mse) << ",\n  \"evaluations\": " << r.evaluations
+     << "\n}\n";
+  return os.str();
+}
+
+int RunFit(const FitArgs& a) {
+  io::RecordSet set = LoadWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  records::FitOptions o;
+  o.family = a.family;
+  for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
+  o.family_options.substeps = a.substeps;
+  o.family_options.pi_operators = a.pi_operators;
+  o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
+  o.search.repetitions = a.repetitions;
+  o.search.pso.seed = o.search.ga_real.seed = o.search.ga_binary.ga.seed = a.seed;
+  o.search.pso.particles = a.particles;
+  o.search.pso.iterations = a.iterations;
+  o.search.pso.stall_iterations = a.stall;
+  o.search.ga_real.population = a.population;
+  o.search.ga_real.generations = a.generations;
+  o.search.ga_real.stall_generations = a.stall;
+  o.search.ga_binary.ga.population_size = a.population;
+  o.search.ga_binary.ga.max_generations = a.generations;
+  o.search.ga_binary.ga.stall_generations = a.stall;
+  o.polish = !a.no_polish;
+  o.lm.max_iterations = a.lm_iterations;
+  o.threads = a.threads;
+  if (!a.quiet) o.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
+  std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
+            << "), family " << a.family << std::endl;
+  const records::FitResult r = records::FitRecords(set, o);
+  fs::create_directories(a.out);
+  io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) { WriteFitReport(os, set, r, a); });
+  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r); });
+  std::vector<fs::path> scripts;
+  WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
+  if (!scripts.empty()) {
+    std::vector<std::string> errors;
+    if (GnuplotAvailable()) {
+      RenderPlots(fs::path(a.out) / "figures", scripts, &errors);
+    } else {
+      errors.push_back("gnuplot not found: figure scripts written to " + (fs::path(a.out) / "figures").string());
+    }
+    for (const auto& e : errors) std::cerr << "piezoid fit: warning: " << e << "\n";
+  }
+  if (!a.export_c.empty()) {
+    if (a.family != "prandtl-ishlinskii" || !r.model->effects().empty()) {
+      throw InputError("--export-c: only a prandtl-ishlinskii fit without effects has an analytic inverse");
+    }
+    model::PiOperator op;
+    op.w0 = r.model->scale().polarity * r.weights[0];
+    op.thresholds = model::PiThresholds(a.pi_operators, r.model->scale().u_half);
+    for (size_t i = 1; i < r.weights.size(); ++i) op.weights.push_back(r.model->scale().polarity * r.weights[i]);
+    if (!op.Invertible()) {
+      throw InputError("--export-c: the fitted operator is not invertible (w0 = " + io::FormatNumber(op.w0) +
+                       "; a negative drive-to-response slope needs the sign flipped by the caller)");
+    }
+    std::string comment = "Inverse Prandtl-Ishlinskii compensator fitted by piezoid fit on " + a.records +
+                          " (drive in " + set.drive_unit + ", output in " + set.response_unit + ")";
+    for (char& c : comment)
+      if (c == '*') c = '_';
+    io::WriteFileWith(a.export_c, [&](std::ostream& os) { os << model::PiInverseCHeader(op, "pz_pi_inverse", comment); });
+    std::cout << "inverse compensator written to " << a.export_c << "\n";
+  }
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const auto& e = r.metrics[i];
+    std::cout << "  " << std::left << std::setw(10) << model::CaseRoleName(e.role) << std::setw(16) << e.name
+              << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
+              << Fmt(e.nrmse_pct, 3) << " %\n";
+  }
+  std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s; report in "
+            << (fs::path(a.out) / "report.md").string() << "\n";
+  return 0;
+}
+
+}  // namespace
+
+void RegisterFit(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<FitArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "fit",
+      "Identify a plant family on measured records of any drive (a record-set folder with manifest.csv, "
+      "a stack or fin bench folder, or one CSV file with windows): global search + Levenberg-Marquardt, "
+      "offsets explicit; writes report.md, fit.json, traces and loop figures.");
+  cmd->add_option("--records", a->records, "record set: folder (manifest.csv) or one CSV (time, drive, response)")
+      ->required()
+      ->type_name("PATH");
+  cmd->add_option("--family", a->family,
+                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin")
+      ->default_str("backlash-like");
+  cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');
+  cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
+  cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
+  cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
+  cmd->add_option("--algorithm", a->algorithm, "pso, ga-real or ga-binary")->default_str("pso");
+  cmd->add_option("--repetitions", a->repetitions, "seeded searches, best kept")->default_str("3");
+  cmd->add_option("--seed", a->seed, "seed of the first repetition")->default_str("1");
+  cmd->add_option("--particles", a->particles, "PSO swarm size")->default_str("30");
+  cmd->add_option("--iterations", a->iterations, "PSO iterations")->default_str("150");
+  cmd->add_option("--population", a->population, "GA population")->default_str("30");
+  cmd->add_option("--generations", a->generations, "GA generations")->default_str("150");
+  cmd->add_option("--stall", a->stall, "stop a repetition after this many iterations without progress")
+      ->default_str("40");
+  cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
+  cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
+  cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
+  cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
+  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii play operators")->default_str("12");
+  cmd->add_option("--export-c", a->export_c, "prandtl-ishlinskii: write the inverse compensator as a C header");
+  cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
+  cmd->add_flag("--quiet", a->quiet, "no progress lines");
+  cmd->callback([a, &exit_code] { exit_code = RunFit(*a); });
+}
+
+void RegisterRecords(CLI::App& app, int& exit_code) {
+  auto path = std::make_shared<std::string>();
+  auto convert = std::make_shared<std::string>();
+  CLI::App* cmd = app.add_subcommand(
+      "records", "Check a record set and describe it (records, roles, windows, units, rest, sample rate, "
+                 "quantum); --convert writes it in the manifest format.");
+  cmd->add_option("path", *path, "record set folder or CSV file")->required();
+  cmd->add_option("--convert", *convert, "write the set as a manifest-format folder");
+  cmd->callback([path, convert, &exit_code] {
+    const io::RecordSet set = io::LoadRecordSet(*path);
+    std::cout << set.source.string() << ": " << set.format << ", " << set.records.size() << " record(s), drive in "
+              << set.drive_unit << ", response in " << set.response_unit << "\n";
+    for (const io::Record& r : set.records) {
+      std::cout << "  " << std::left << std::setw(16) << r.name << std::setw(9) << model::CaseRoleName(r.role)
+                << " " << r.size() << " samples at " << Fmt(r.sample_rate_hz(), 6) << " Hz, scored "
+                << Fmt(r.t[r.first_scored]) << "–" << Fmt(r.t[r.end_scored - 1]) << " s (" << r.scored()
+                << "), rest " << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);
+      if (r.offset_mode != io::OffsetMode::kFit) std::cout << " " << Fmt(r.offset);
+      if (r.quantum > 0) std::cout << ", quantum " << Fmt(r.quantum);
+      std::cout << "\n";
+    }
+    if (!convert->empty()) {
+      io::WriteRecordSet(set, *convert);
+      std::cout << "written to " << *convert << "\n";
+    }
+    exit_code = 0;
+  });
+}
+
+}  // namespace pz::client

@@ -1,0 +1,480 @@
+#include "io/records.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <sstream>
+
+#include "io/bench_data.h"
+#include "io/csv.h"
+#include "io/stack_records.h"
+#include "model/noise_floor.h"
+#include "model/status.h"
+
+namespace pz::io {
+namespace fs = std::filesystem;
+using model::CaseRole;
+
+const char* OffsetModeName(OffsetMode m) {
+  switch (m) {
+    case OffsetMode::kFit: return "fit";
+    case OffsetMode::kRest: return "rest";
+    case OffsetMode::kFixed: return "fixed";
+  }
+  return "?";
+}
+
+std::string Record::Label() const {
+  std::ostringstream s;
+  s << model::CaseRoleName(role) << " record '" << name << "' (" << file.filename().string();
+  if (!t.empty()) {
+    s << ", " << FormatNumber(t[first_scored]) << "–" << FormatNumber(t[end_scored - 1]) << " s";
+  }
+  s << ")";
+  return s.str();
+}
+
+std::vector<const Record*> RecordSet::WithRole(CaseRole role) const {
+  std::vector<const Record*> out;
+  for (const Record& r : records)
+    if (r.role == role) out.push_back(&r);
+  return out;
+}
+
+const Record* RecordSet::Find(std::string_view name) const {
+  for (const Record& r : records)
+    if (r.name == name) return &r;
+  return nullptr;
+}
+
+UnitConversion ConvertUnit(std::string_view unit) {
+  struct Row {
+    const char* name;
+    const char* canonical;
+    double factor;
+    const char* quantity;
+  };
+  static const Row kTable[] = {
+      {"s", "s", 1, "time"},          {"ms", "s", 1e-3, "time"},     {"us", "s", 1e-6, "time"},
+      {"µs", "s", 1e-6, "time"},      {"V", "V", 1, "voltage"},      {"mV", "V", 1e-3, "voltage"},
+      {"kV", "V", 1e3, "voltage"},    {"m", "um", 1e6, "length"},    {"mm", "um", 1e3, "length"},
+      {"um", "um", 1, "length"},      {"µm", "um", 1, "length"},     {"nm", "um", 1e-3, "length"},
+      {"deg", "deg", 1, "angle"},     {"rad", "deg", 180 / std::numbers::pi, "angle"}, {"N", "N", 1, "force"},
+  };
+  for (const Row& r : kTable)
+    if (unit == r.name) return {r.canonical, r.factor, r.quantity};
+  return {std::string(unit), 1, std::string(unit)};
+}
+
+namespace {
+
+std::string SuffixUnit(const std::string& column) {
+  const size_t p = column.rfind('_');
+  if (p == std::string::npos || p + 1 >= column.size()) return "";
+  return column.substr(p + 1);
+}
+
+bool ValidName(const std::string& s) {
+  if (s.empty() || s.size() > 100) return false;
+  for (char c : s)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) return false;
+  return true;
+}
+
+/// A loaded file, shared by the manifest rows that use it.
+struct FileData {
+  std::vector<double> t, u, y;
+  double dt = 0;
+  UnitConversion drive, response;
+  size_t rest = 0;
+  double quantum = 0;
+};
+
+struct ColumnSpec {
+  std::string time = "t_s", drive = "voltage_V", response = "displacement_um";
+  std::string time_unit, drive_unit, response_unit;  // declared in the manifest (may be empty)
+};
+
+UnitConversion ResolveUnit(const CsvTable& csv, const std::string& column, const std::string& declared,
+                           const std::string& where_declared, const char* what) {
+  const std::string suffix = SuffixUnit(column);
+  std::string unit = declared;
+  const bool suffix_is_unit = !suffix.empty() && ConvertUnit(suffix).quantity != suffix;
+  if (!declared.empty() && suffix_is_unit &&
+      (ConvertUnit(suffix).canonical != ConvertUnit(declared).canonical ||
+       ConvertUnit(suffix).factor != ConvertUnit(declared).factor)) {
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": mismatched units: column '" +
+                     column + "' says " + suffix + " but " + where_declared + " declares " + declared);
+  }
+  if (unit.empty()) unit = suffix;
+  if (unit.empty()) {
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": the unit of the " + what +
+                     " column '" + column + "' is not declared (name it <name>_<unit>, e.g. " +
+                     (std::string(what) == "time" ? "t_s" : std::string(what) == "drive" ? "voltage_V" : "displacement_um") +
+                     ", or give " + what + "_unit in the manifest)");
+  }
+  return ConvertUnit(unit);
+}
+
+FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const RecordReadOptions& opt,
+                        const std::string& where_declared) {
+  const CsvTable csv = ReadCsvFile(file);
+  csv.RequireColumns({cols.time, cols.drive, cols.response});
+  const int ct = csv.RequireColumn(cols.time), cu = csv.RequireColumn(cols.drive),
+            cy = csv.RequireColumn(cols.response);
+  FileData d;
+  const UnitConversion tu = ResolveUnit(csv, cols.time, cols.time_unit, where_declared, "time");
+  if (tu.quantity != "time") {
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": mismatched units: the time column '" +
+                     cols.time + "' is in " + tu.canonical + ", not a time (s, ms, us)");
+  }
+  d.drive = ResolveUnit(csv, cols.drive, cols.drive_unit, where_declared, "drive");
+  d.response = ResolveUnit(csv, cols.response, cols.response_unit, where_declared, "response");
+  const size_t n = csv.rows.size();
+  if (n < 2) {
+    throw InputError(csv.source + ": " + std::to_string(n) + " data rows; a record needs at least " +
+                     std::to_string(std::max<size_t>(2, opt.min_scored)) + " samples (too short)");
+  }
+  d.t.resize(n);
+  d.u.resize(n);
+  d.y.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    d.t[i] = csv.Number(i, ct) * tu.factor;
+    d.u[i] = csv.Number(i, cu) * d.drive.factor;
+    d.y[i] = csv.Number(i, cy) * d.response.factor;
+    if (i > 0 && !(d.t[i] > d.t[i - 1])) {
+      throw InputError(csv.Where(i, ct) + ": time " + csv.Field(i, ct) + " is not after the previous " +
+                       csv.Field(i - 1, ct) + " (times must increase strictly: unsorted or repeated rows)");
+    }
+  }
+  // Steps are checked against the median step (a gap does not shift it); dt is the mean step.
+  std::vector<double> steps(n - 1);
+  for (size_t i = 1; i < n; ++i) steps[i - 1] = d.t[i] - d.t[i - 1];
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  const double median = steps[steps.size() / 2];
+  d.dt = (d.t.back() - d.t.front()) / static_cast<double>(n - 1);
+  for (size_t i = 1; i < n; ++i) {
+    const double step = d.t[i] - d.t[i - 1];
+    if (std::abs(step - median) > opt.time_jitter * median) {
+      throw InputError(csv.Where(i, ct) + ": step " + FormatNumber(step / tu.factor) + " differs from the usual step " +
+                       FormatNumber(median / tu.factor) + " by more than " + FormatNumber(100 * opt.time_jitter) +
+                       " % (the samples must be uniform: resample the record, or a gap is missing)");
+    }
+  }
+  double umax = 0;
+  for (double v : d.u) umax = std::max(umax, std::abs(v));
+  const double tol = opt.rest_tolerance * umax + 1e-12;
+  d.rest = 1;
+  while (d.rest < n && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
+  d.quantum = model::EstimateQuantum(d.y);
+  return d;
+}
+
+std::string OptionalField(const CsvTable& csv, size_t row, const char* name) {
+  const auto c = csv.FindColumn(name);
+  if (!c) return "";
+  return csv.Field(row, *c);
+}
+
+std::optional<double> OptionalNumber(const CsvTable& csv, size_t row, const char* name) {
+  const auto c = csv.FindColumn(name);
+  if (!c || csv.Field(row, *c).empty()) return std::nullopt;
+  return csv.Number(row, *c);
+}
+
+Record MakeRecord(const FileData& d, std::string name, CaseRole role, fs::path file) {
+  Record r;
+  r.name = std::move(name);
+  r.role = role;
+  r.file = std::move(file);
+  r.t = d.t;
+  r.u = d.u;
+  r.y = d.y;
+  r.dt = d.dt;
+  r.first_scored = 0;
+  r.end_scored = d.t.size();
+  r.rest_samples = d.rest;
+  r.quantum = d.quantum;
+  return r;
+}
+
+void CheckSameUnits(RecordSet& set, const std::vector<std::pair<std::string, FileData*>>& files) {
+  // files: (record name, its data) in manifest order
+  if (files.empty()) return;
+  const auto& [n0, d0] = files.front();
+  set.drive_unit = d0->drive.canonical;
+  set.response_unit = d0->response.canonical;
+  for (const auto& [n, d] : files) {
+    if (d->drive.canonical != d0->drive.canonical) {
+      throw InputError("mismatched units: record '" + n + "' has its drive in " + d->drive.canonical +
+                       " but record '" + n0 + "' in " + d0->drive.canonical);
+    }
+    if (d->response.canonical != d0->response.canonical) {
+      throw InputError("mismatched units: record '" + n + "' has its response in " + d->response.canonical +
+                       " but record '" + n0 + "' in " + d0->response.canonical);
+    }
+  }
+}
+
+void FinishRecord(Record& r, const RecordReadOptions& opt) {
+  if (r.scored() < opt.min_scored) {
+    throw InputError(r.file.string() + ": record '" + r.name + "' has " + std::to_string(r.scored()) +
+                     " samples; at least " + std::to_string(opt.min_scored) + " are needed (too short)");
+  }
+  if (r.offset_mode == OffsetMode::kRest) {
+    if (r.rest_samples < 10) {
+      throw InputError(r.file.string() + ": record '" + r.name + "': offset 'rest' needs a rest segment (a constant drive) of at least 10 samples at the start; this record has " +
+                       std::to_string(r.rest_samples));
+    }
+    double s = 0;
+    for (size_t i = 0; i < r.rest_samples; ++i) s += r.y[i];
+    r.offset = s / static_cast<double>(r.rest_samples);
+  }
+}
+
+RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
+  const fs::path manifest = dir / "manifest.csv";
+  const CsvTable csv = ReadCsvFile(manifest);
+  csv.RequireColumns({"record", "file", "role"});
+  csv.RequireRows();
+  static const std::vector<std::string> kKnown = {"record", "file", "role", "t_start_s", "t_end_s", "offset",
+                                                  "time_column", "drive_column", "response_column",
+                                                  "time_unit", "drive_unit", "response_unit"};
+  for (size_t c = 0; c < csv.header.size(); ++c) {
+    if (std::find(kKnown.begin(), kKnown.end(), csv.header[c]) == kKnown.end()) {
+      throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" + csv.header[c] +
+                       "' (columns: record, file, role, t_start_s, t_end_s, offset, time_column, drive_column, "
+                       "response_column, time_unit, drive_unit, response_unit)");
+    }
+  }
+  RecordSet set;
+  set.source = dir;
+  set.format = "manifest";
+  std::map<std::string, FileData> files;
+  std::vector<std::pair<std::string, FileData*>> used;
+  const int c_rec = csv.RequireColumn("record"), c_file = csv.RequireColumn("file"), c_role = csv.RequireColumn("role");
+  for (size_t i = 0; i < csv.rows.size(); ++i) {
+    const std::string name = csv.Field(i, c_rec);
+    if (!ValidName(name)) {
+      throw InputError(csv.Where(i, c_rec) + ": record name '" + name +
+                       "' must be 1–100 letters, digits, '-', '_' or '.'");
+    }
+    if (set.Find(name)) throw InputError(csv.Where(i, c_rec) + ": duplicate record '" + name + "'");
+    const auto role = model::ParseCaseRole(csv.Field(i, c_role));
+    if (!role) {
+      throw InputError(csv.Where(i, c_role) + ": unknown role '" + csv.Field(i, c_role) +
+                       "' (train, validate or test)");
+    }
+    const std::string file = csv.Field(i, c_file);
+    if (file.empty()) throw InputError(csv.Where(i, c_file) + ": empty file name");
+    ColumnSpec cols;
+    if (auto s = OptionalField(csv, i, "time_column"); !s.empty()) cols.time = s;
+    if (auto s = OptionalField(csv, i, "drive_column"); !s.empty()) cols.drive = s;
+    if (auto s = OptionalField(csv, i, "response_column"); !s.empty()) cols.response = s;
+    cols.time_unit = OptionalField(csv, i, "time_unit");
+    cols.drive_unit = OptionalField(csv, i, "drive_unit");
+    cols.response_unit = OptionalField(csv, i, "response_unit");
+    const std::string key = file + "\n" + cols.time + "\n" + cols.drive + "\n" + cols.response + "\n" +
+                            cols.time_unit + "\n" + cols.drive_unit + "\n" + cols.response_unit;
+    auto it = files.find(key);
+    if (it == files.end()) {
+      const fs::path path = dir / file;
+      if (!fs::is_regular_file(path)) {
+        throw InputError(csv.Where(i, c_file) + ": record file '" + file + "' not found in " + dir.string());
+      }
+      it = files.emplace(key, ReadRecordFile(path, cols, opt, "manifest line " + std::to_string(csv.rows[i].line))).first;
+    }
+    Record r = MakeRecord(it->second, name, *role, dir / file);
+    r.manifest_line = csv.rows[i].line;
+    const auto t0 = OptionalNumber(csv, i, "t_start_s");
+    const auto t1 = OptionalNumber(csv, i, "t_end_s");
+    if (t0 || t1) {
+      SetWindow(r, t0.value_or(r.t.front()), t1.value_or(r.t.back()), opt.min_scored,
+                csv.source + ":" + std::to_string(csv.rows[i].line) + ": record '" + name + "' window");
+    }
+    const std::string off = OptionalField(csv, i, "offset");
+    if (off.empty() || off == "fit") {
+      r.offset_mode = OffsetMode::kFit;
+    } else if (off == "rest") {
+      r.offset_mode = OffsetMode::kRest;
+    } else {
+      const auto v = ParseDouble(off);
+      const auto c = csv.FindColumn("offset");
+      if (!v || !std::isfinite(*v)) {
+        throw InputError(csv.Where(i, *c) + ": offset '" + off + "' is not fit, rest or a finite number");
+      }
+      r.offset_mode = OffsetMode::kFixed;
+      r.offset = *v * it->second.response.factor;
+    }
+    FinishRecord(r, opt);
+    used.emplace_back(name, &it->second);
+    set.records.push_back(std::move(r));
+  }
+  CheckSameUnits(set, used);
+  return set;
+}
+
+RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
+  StackReadOptions so;
+  so.check_voltage = false;  // the drive is the measured samples
+  const StackRecordSet s = LoadStackRecordSet(dir, so);
+  RecordSet set;
+  set.source = dir;
+  set.format = "stack-bench";
+  for (const StackRecord& sr : s.records) {
+    FileData d;
+    d.t = sr.t;
+    d.u = sr.u;
+    d.y = sr.y;
+    d.dt = sr.dt();
+    double umax = 0;
+    for (double v : d.u) umax = std::max(umax, std::abs(v));
+    d.rest = 1;
+    while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= opt.rest_tolerance * umax + 1e-12) ++d.rest;
+    d.quantum = model::EstimateQuantum(d.y);
+    Record r = MakeRecord(d, "record" + std::to_string(sr.number), sr.role, sr.file);
+    r.offset_mode = OffsetMode::kFixed;
+    r.offset = 0;
+    FinishRecord(r, opt);
+    set.records.push_back(std::move(r));
+  }
+  return set;
+}
+
+RecordSet FromFinBench(const fs::path& dir, const RecordReadOptions& opt) {
+  BenchReadOptions bo;
+  bo.check_voltage = false;
+  bo.cycles = 0;
+  const CaseSet cs = LoadCaseSet(dir, bo);
+  RecordSet set;
+  set.source = dir;
+  set.format = "bimorph-fin-bench";
+  set.response_unit = "deg";
+  for (const BenchCase& c : cs.cases) {
+    FileData d;
+    d.t = c.t;
+    d.u = c.u;
+    d.y = c.angle_deg;
+    d.dt = 1.0 / c.sample_rate_hz;
+    d.rest = 1;
+    d.quantum = model::EstimateQuantum(d.y);
+    Record r = MakeRecord(d, "case" + std::to_string(c.number), c.role, c.file);
+    r.offset_mode = OffsetMode::kFixed;
+    r.offset = 0;
+    FinishRecord(r, opt);
+    set.records.push_back(std::move(r));
+  }
+  return set;
+}
+
+RecordSet FromCsv(const fs::path& file, const RecordReadOptions& opt) {
+  RecordSet set;
+  set.source = file;
+  set.format = "csv";
+  // The columns: t_s-like time first; the drive and the response by the usual names, else the
+  // second and third columns.
+  const CsvTable head = ReadCsvFile(file);
+  if (head.header.size() < 3) {
+    throw InputError(file.string() + ":" + std::to_string(head.header_line) +
+                     ": a record needs three columns (time, drive, response), found " +
+                     std::to_string(head.header.size()));
+  }
+  ColumnSpec cols;
+  cols.time = head.header[0];
+  cols.drive = head.header[1];
+  cols.response = head.header[2];
+  FileData d = ReadRecordFile(file, cols, opt, "the file");
+  Record r = MakeRecord(d, "record", CaseRole::kTrain, file);
+  FinishRecord(r, opt);
+  set.drive_unit = d.drive.canonical;
+  set.response_unit = d.response.canonical;
+  set.records.push_back(std::move(r));
+  return set;
+}
+
+}  // namespace
+
+void SetWindow(Record& r, double t0, double t1, size_t min_scored, const std::string& what) {
+  if (!(t0 < t1)) {
+    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s: the start must be before the end");
+  }
+  if (t0 < r.t.front() - 0.5 * r.dt || t1 > r.t.back() + 0.5 * r.dt) {
+    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s is outside the record (" +
+                     FormatNumber(r.t.front()) + " … " + FormatNumber(r.t.back()) + " s)");
+  }
+  const auto first = std::lower_bound(r.t.begin(), r.t.end(), t0 - 1e-9 * r.dt) - r.t.begin();
+  const auto end = std::upper_bound(r.t.begin(), r.t.end(), t1 + 1e-9 * r.dt) - r.t.begin();
+  r.first_scored = static_cast<size_t>(first);
+  r.end_scored = static_cast<size_t>(end);
+  if (r.end_scored <= r.first_scored || r.scored() < min_scored) {
+    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s holds " +
+                     std::to_string(r.end_scored > r.first_scored ? r.scored() : 0) + " samples; at least " +
+                     std::to_string(min_scored) + " are needed (too short)");
+  }
+}
+
+WindowSpec ParseWindow(std::string_view text, CaseRole role, const std::string& flag) {
+  const size_t colon = text.find(':');
+  WindowSpec w;
+  w.role = role;
+  const auto a = colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(0, colon));
+  const auto b = colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(colon + 1));
+  if (!a || !b || !std::isfinite(*a) || !std::isfinite(*b) || !(*a < *b)) {
+    throw InputError(flag + " '" + std::string(text) + "': expected START:END in seconds with START < END, e.g. 4:7");
+  }
+  w.t0_s = *a;
+  w.t1_s = *b;
+  return w;
+}
+
+void SplitIntoWindows(RecordSet& set, const std::vector<WindowSpec>& windows, const RecordReadOptions& opt) {
+  if (windows.empty()) return;
+  if (set.records.size() != 1) {
+    throw InputError("windows on the command line need a single record (a CSV file); " + set.source.string() +
+                     " holds " + std::to_string(set.records.size()) + ": give t_start_s / t_end_s in its manifest");
+  }
+  const Record whole = set.records.front();
+  set.records.clear();
+  std::map<CaseRole, int> count;
+  for (const WindowSpec& w : windows) {
+    Record r = whole;
+    const int k = ++count[w.role];
+    r.name = std::string(model::CaseRoleName(w.role)) + (k > 1 ? std::to_string(k) : "");
+    r.role = w.role;
+    SetWindow(r, w.t0_s, w.t1_s, opt.min_scored, std::string(model::CaseRoleName(w.role)) + " window");
+    set.records.push_back(std::move(r));
+  }
+}
+
+RecordSet LoadRecordSet(const fs::path& path, const RecordReadOptions& opt) {
+  if (!(opt.time_jitter > 0 && opt.time_jitter < 0.5)) throw InputError("time_jitter must be in (0, 0.5)");
+  if (fs::is_regular_file(path)) return FromCsv(path, opt);
+  if (!fs::is_directory(path)) throw InputError("records '" + path.string() + "': no such file or folder");
+  if (fs::exists(path / "manifest.csv")) return LoadManifest(path, opt);
+  if (fs::exists(path / "records.csv")) return FromStackBench(path, opt);
+  if (fs::exists(path / "cases.csv")) return FromFinBench(path, opt);
+  throw InputError("records '" + path.string() +
+                   "': no manifest.csv (nor a stack bench's records.csv or a fin bench's cases.csv) in the folder");
+}
+
+void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
+  fs::create_directories(dir);
+  WriteFileWith(dir / "manifest.csv", [&](std::ostream& m) {
+    m << "record,file,role,t_start_s,t_end_s,offset,drive_column,response_column\n";
+    for (const Record& r : set.records) {
+      const std::string file = r.name + ".csv";
+      m << r.name << "," << file << "," << model::CaseRoleName(r.role) << "," << FormatNumber(r.t[r.first_scored])
+        << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
+        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode))
+        << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
+      WriteFileWith(dir / file, [&](std::ostream& f) {
+        f << "t_s,drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
+        for (size_t i = 0; i < r.size(); ++i)
+          f << FormatNumber(r.t[i]) << "," << FormatNumber(r.u[i]) << "," << FormatNumber(r.y[i]) << "\n";
+      });
+    }
+  });
+}
+
+}  // namespace pz::io

@@ -1,0 +1,289 @@
+#include "records/families.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "io/csv.h"
+#include "model/bimorph.h"
+#include "model/bw_oscillator.h"
+#include "model/duhem.h"
+#include "model/prandtl_ishlinskii.h"
+#include "model/stack_models.h"
+
+namespace pz::records {
+namespace {
+
+constexpr double kTwoPi = 2 * std::numbers::pi;
+
+class StackBoucWenFamily final : public Family {
+ public:
+  StackBoucWenFamily(const DataScale& s, const FamilyOptions& o) : sim_{.substeps = o.substeps} {
+    ThrowIfError(sim_.Validate());
+    const double a = s.u_half, g = s.gain;
+    params_ = {{"alpha", "-", 0.01, 1.5, false},
+               {"beta", "1/V", 0.02 / a, 50 / a, true},
+               {"gamma", "1/V", -50 / a, 50 / a, false},
+               {"d", "y/V", 0.3 * g, 10 * g, true},
+               {"fc_Hz", "Hz", std::min(2 * s.f_dom, 0.04 * s.fs), 0.45 * s.fs, true}};
+  }
+  std::string name() const override { return "stack-bouc-wen"; }
+  std::string title() const override { return "Bouc–Wen stack with driver filter"; }
+  std::string equation() const override {
+    return "y = LPF_fc[d (u - h)], dh/dt = alpha du/dt - beta |du/dt| h - gamma du/dt |h|";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+    model::SimulateStackBoucWen(model::BoucWenFromVector(p), u, dt, y, sim_);
+  }
+  std::vector<std::string> excluded_effects() const override { return {"driver-lowpass"}; }
+
+ private:
+  model::StackSimOptions sim_;
+  std::vector<ParamInfo> params_;
+};
+
+class BacklashLikeFamily final : public Family {
+ public:
+  explicit BacklashLikeFamily(const DataScale& s) {
+    const double a = s.u_half, g = s.gain;
+    params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true}, {"c", "y/V", 0.3 * g, 3 * g, true}, {"B1", "y/V", -3 * g, 5 * g, false}};
+  }
+  std::string name() const override { return "backlash-like"; }
+  std::string title() const override { return "backlash-like (Coleman–Hodgdon)"; }
+  std::string equation() const override { return "dy/dt = alpha |du/dt| (c u - y) + B1 du/dt"; }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+    model::SimulateBacklashLike(model::BacklashLikeFromVector(p), u, y);
+  }
+
+ private:
+  std::vector<ParamInfo> params_;
+};
+
+class DuhemFamily final : public Family {
+ public:
+  explicit DuhemFamily(const DataScale& s) {
+    const double a = s.u_half, g = s.gain;
+    params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true},
+               {"c", "y/V", 0.3 * g, 3 * g, true},
+               {"c3", "y/V^3", -0.5 * g / (a * a), 0.5 * g / (a * a), false},
+               {"b", "y/V", -3 * g, 5 * g, false},
+               {"lambda", "1/s", 0, 10 * kTwoPi * s.f_dom, false}};
+  }
+  std::string name() const override { return "duhem"; }
+  std::string title() const override { return "Duhem-type (cubic curve, relaxation)"; }
+  std::string equation() const override {
+    return "dy/dt = alpha |du/dt| (f(u) - y) + b du/dt + lambda (f(u) - y), f(u) = c u + c3 u^3";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+    model::SimulateDuhem(model::DuhemFromVector(p), u, dt, y);
+  }
+  std::vector<std::string> excluded_effects() const override { return {"creep"}; }
+
+ private:
+  std::vector<ParamInfo> params_;
+};
+
+class PrandtlIshlinskiiFamily final : public Family {
+ public:
+  PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
+      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)) {}
+  std::string name() const override { return "prandtl-ishlinskii"; }
+  std::string title() const override { return "Prandtl–Ishlinskii operator"; }
+  std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  bool linear() const override { return true; }
+  size_t regressors() const override { return thresholds_.size() + 1; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+    if (p.size() != regressors()) {
+      throw InputError("prandtl-ishlinskii: " + std::to_string(p.size()) + " weights given, " +
+                       std::to_string(regressors()) + " expected");
+    }
+    model::PiOperator op{p[0], thresholds_, std::vector<double>(p.begin() + 1, p.end())};
+    model::ApplyPi(op, u, y);
+  }
+  void Regressors(std::span<const double> u, std::span<double> out) const override {
+    const size_t n = thresholds_.size(), m = n + 1;
+    if (out.size() != u.size() * m) throw InputError("prandtl-ishlinskii: regressor size mismatch");
+    std::vector<double> plays(u.size() * n);
+    model::PiPlayOutputs(thresholds_, u, plays);
+    for (size_t k = 0; k < u.size(); ++k) {
+      out[k * m] = u[k];
+      std::copy_n(plays.data() + k * n, n, out.data() + k * m + 1);
+    }
+  }
+  std::vector<std::string> weight_names() const override {
+    std::vector<std::string> names = {"w0"};
+    for (size_t i = 0; i < thresholds_.size(); ++i) {
+      names.push_back("w" + std::to_string(i + 1) + "(r=" + io::FormatNumber(thresholds_[i]) + ")");
+    }
+    return names;
+  }
+  std::vector<std::string> excluded_effects() const override { return {"friction"}; }
+  const std::vector<double>& thresholds() const { return thresholds_; }
+
+ private:
+  std::vector<double> thresholds_;
+  std::vector<ParamInfo> params_;
+};
+
+class BwOscillatorFamily final : public Family {
+ public:
+  BwOscillatorFamily(const DataScale& s, const FamilyOptions& o) : substeps_(2 * o.substeps) {
+    const double g = s.gain, y = s.y_half;
+    const double fn_lo = std::min(3 * s.f_dom, 0.05 * s.fs), fn_hi = std::max(fn_lo * 2, 0.3 * s.fs);
+    params_ = {{"K", "y/V", 0.3 * g, 3 * g, true},        {"fn_Hz", "Hz", fn_lo, fn_hi, true},
+               {"zeta", "-", 0.02, 3, true},               {"share", "-", 0.0, 0.95, false},
+               {"beta_gamma", "1/y", 0.01 / y, 100 / y, true}, {"beta_delta", "1/y", -100 / y, 100 / y, false}};
+  }
+  std::string name() const override { return "bw-oscillator"; }
+  std::string title() const override { return "Bouc–Wen hysteretic oscillator"; }
+  std::string equation() const override {
+    return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z| (k = (1-share)/K, "
+           "alpha = share/K, m = (k+alpha)/(2 pi fn)^2, c = 2 zeta sqrt((k+alpha) m))";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+    if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
+    const double ktot = 1.0 / p[0], wn = kTwoPi * p[1];
+    model::BwParams b;
+    b.k = (1 - p[3]) * ktot;
+    b.alpha = p[3] * ktot;
+    b.m = ktot / (wn * wn);
+    b.c = 2 * p[2] * std::sqrt(ktot * b.m);
+    b.beta = 1;
+    b.gamma = p[4];
+    b.delta = p[5];
+    b.nu = 1;
+    model::BwInputOptions io;
+    io.sample_rate_hz = 1.0 / dt;
+    io.substeps = substeps_;
+    io.interpolation = model::InputInterpolation::kLinear;
+    const model::BwInput input(u, io);
+    // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state).
+    model::BwState state{b.k != 0 ? u[0] / b.k : 0.0, 0, 0};
+    const Status st = model::SimulateBw(b, input, y, &state);
+    if (!st.ok()) std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN());
+  }
+
+ private:
+  int substeps_;
+  std::vector<ParamInfo> params_;
+};
+
+class BimorphFinFamily final : public Family {
+ public:
+  BimorphFinFamily(const DataScale& s, const FamilyOptions& o) : plant_(o.geometry) {
+    // The spec's ranges (model/network.h) are for drives up to 375 V; α scales with 1/drive.
+    const double a = 375.0 / s.u_half, g = s.y_half;  // gain: output units per degree
+    params_ = {{"mu", "1/s", 0, 300, false},          {"delta", "s", 1e-5, 1, true},
+               {"alpha", "N/V", 1e-5 * a, 0.02 * a, true}, {"beta", "1/V", 0, 0.02 * a, false},
+               {"gamma", "1/V", -0.02 * a, 0.02 * a, false}, {"a1", "deg", 0, 2, false},
+               {"a2", "deg", 0, 2, false},             {"b1", "deg", 0.05, 60, true},
+               {"b2_abs", "deg", 0.05, 60, true},       {"gain", "y/deg", 0.01 * g, 100 * g, true}};
+  }
+  std::string name() const override { return "bimorph-fin"; }
+  std::string title() const override { return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)"; }
+  std::string equation() const override {
+    return "M q'' + C q' + K q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, y = gain * Backlash(atan(w_tip/L))";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+    if (p.size() != 10) throw InputError("bimorph-fin: 10 parameters expected");
+    model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
+    model::SampledSignal sig;
+    sig.t.resize(u.size());
+    for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
+    sig.u.assign(u.begin(), u.end());
+    const model::BimorphTrace tr = model::Simulate(plant_, b, sig);
+    if (tr.angle_deg.size() != u.size() || !tr.summary.ok()) {
+      std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
+    for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * tr.angle_deg[k];
+  }
+
+ private:
+  model::BimorphPlant plant_;
+  std::vector<ParamInfo> params_;
+};
+
+}  // namespace
+
+void Family::Regressors(std::span<const double>, std::span<double>) const {
+  throw InputError(name() + " is not linear in its parameters");
+}
+
+DataScale MeasureScale(const std::vector<const io::Record*>& records) {
+  if (records.empty()) throw InputError("no training records to identify on");
+  DataScale s;
+  s.u_min = std::numeric_limits<double>::infinity();
+  s.u_max = -s.u_min;
+  double ymin = s.u_min, ymax = -s.u_min;
+  double su = 0, sy = 0, suu = 0, suy = 0, n = 0, reversals = 0, excited = 0;
+  for (const io::Record* r : records) {
+    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+      s.u_min = std::min(s.u_min, r->u[k]);
+      s.u_max = std::max(s.u_max, r->u[k]);
+      ymin = std::min(ymin, r->y[k]);
+      ymax = std::max(ymax, r->y[k]);
+      su += r->u[k];
+      sy += r->y[k];
+      suu += r->u[k] * r->u[k];
+      suy += r->u[k] * r->y[k];
+      n += 1;
+    }
+    s.fs = r->sample_rate_hz();
+    s.duration = std::max(s.duration, r->t[r->end_scored - 1] - r->t[r->first_scored]);
+  }
+  s.u_half = (s.u_max - s.u_min) / 2;
+  if (!(s.u_half > 0)) {
+    std::string names;
+    for (const io::Record* r : records) names += (names.empty() ? "" : ", ") + r->name;
+    throw InputError("the drive is constant over the scored samples of " + names + ": nothing to identify");
+  }
+  s.y_half = std::max((ymax - ymin) / 2, 1e-300);
+  const double var = suu - su * su / n, cov = suy - su * sy / n;
+  const double slope = var > 0 ? cov / var : 0;
+  s.polarity = slope < 0 ? -1 : 1;
+  s.gain = std::abs(slope) > 0 ? std::abs(slope) : s.y_half / s.u_half;
+  // Dominant frequency: reversals of the drive by more than 5 % of its range, over the excited time.
+  for (const io::Record* r : records) {
+    const double thr = 0.1 * s.u_half;
+    double ext = r->u[r->first_scored];
+    int dir = 0;
+    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+      const double v = r->u[k];
+      if (dir >= 0 && v > ext) ext = v;
+      else if (dir <= 0 && v < ext) ext = v;
+      if (dir >= 0 && v < ext - thr) { if (dir > 0) ++reversals; dir = -1; ext = v; }
+      else if (dir <= 0 && v > ext + thr) { if (dir < 0) ++reversals; dir = 1; ext = v; }
+    }
+    excited += r->t[r->end_scored - 1] - r->t[r->first_scored];
+  }
+  s.f_dom = reversals > 0 ? reversals / (2 * excited) : 1.0 / std::max(excited, 1e-9);
+  return s;
+}
+
+const std::vector<std::string>& FamilyNames() {
+  static const std::vector<std::string> names = {"stack-bouc-wen", "backlash-like", "duhem",
+                                                 "prandtl-ishlinskii", "bw-oscillator", "bimorph-fin"};
+  return names;
+}
+
+std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale, const FamilyOptions& o) {
+  if (o.substeps < 1 || o.substeps > 512) throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
+  if (name == "stack-bouc-wen") return std::make_unique<StackBoucWenFamily>(scale, o);
+  if (name == "backlash-like") return std::make_unique<BacklashLikeFamily>(scale);
+  if (name == "duhem") return std::make_unique<DuhemFamily>(scale);
+  if (name == "prandtl-ishlinskii") return std::make_unique<PrandtlIshlinskiiFamily>(scale, o);
+  if (name == "bw-oscillator") return std::make_unique<BwOscillatorFamily>(scale, o);
+  if (name == "bimorph-fin") return std::make_unique<BimorphFinFamily>(scale, o);
+  std::string known;
+  for (const auto& n : FamilyNames()) known += (known.empty() ? "" : ", ") + n;
+  throw InputError("--family '" + std::string(name) + "' is unknown (families: " + known + ")");
+}
+
+}  // namespace pz::records

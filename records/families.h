@@ -1,0 +1,91 @@
+// The plant families `piezoid fit` identifies on measured records (issue 14), behind one
+// interface: drive samples u (any waveform) → model output ŷ on the same samples, from rest at u_0.
+//
+//   stack-bouc-wen      Bouc–Wen stack with driver filter (model/stack_models.h), α β γ d fc
+//   backlash-like       Coleman–Hodgdon / Su backlash-like (model/stack_models.h), α c B1
+//   duhem               Duhem-type with cubic curve and relaxation (model/duhem.h), α c c3 b λ
+//   prandtl-ishlinskii  PI operator (model/prandtl_ishlinskii.h): weights solved by non-negative
+//                       least squares for given thresholds (no search), invertible by design
+//   bw-oscillator       Bouc–Wen hysteretic oscillator (model/bw_oscillator.h), driven by the
+//                       drive through a gain: K fn ζ share βγ βδ
+//   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
+//                       μ δ α β γ a1 a2 b1 b2 gain; the beam geometry is a fixed parameter set
+//                       (FamilyOptions::geometry)
+//
+// A family is made for a data scale (drive range, response range, dominant frequency, sample
+// rate) measured on the training records: its search box is scaled to it, so the same family fits
+// volts and micrometres, millivolts and nanometres, 1 Hz and 300 Hz.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "io/records.h"
+#include "model/beam.h"
+#include "model/status.h"
+
+namespace pz::records {
+
+/// Scales measured on the records a family is made for.
+struct DataScale {
+  double u_min = 0, u_max = 0;  ///< drive range over the scored samples
+  double u_half = 1;            ///< (u_max − u_min)/2, > 0
+  double y_half = 1;            ///< half range of the response over the scored samples, > 0
+  double gain = 1;              ///< |slope| of the least-squares line y = a u + b, > 0
+  int polarity = 1;             ///< sign of that slope
+  double f_dom = 1;             ///< dominant drive frequency [Hz] (from the drive's reversals)
+  double fs = 1;                ///< sample rate [Hz]
+  double duration = 1;          ///< longest scored window [s]
+};
+/// Measures the scale on the scored samples of the records (≥ 1). Throws InputError when the drive
+/// is constant (nothing to identify) naming the records.
+DataScale MeasureScale(const std::vector<const io::Record*>& records);
+
+struct ParamInfo {
+  std::string name;
+  std::string unit;
+  double lower = 0, upper = 1;
+  bool log_scale = false;
+};
+
+struct FamilyOptions {
+  int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
+  int pi_operators = 12;     ///< Prandtl–Ishlinskii plays
+  model::BeamGeometry geometry;  ///< bimorph fin
+};
+
+class Family {
+ public:
+  virtual ~Family() = default;
+  virtual std::string name() const = 0;
+  virtual std::string title() const = 0;
+  virtual std::string equation() const = 0;
+  /// The searched parameters (empty for a linear-in-parameters family).
+  virtual const std::vector<ParamInfo>& params() const = 0;
+  /// Simulates from rest at u[0] into y (same size). A diverging parameter set gives non-finite
+  /// values (callers penalise them); invalid sizes throw InputError. Thread-safe.
+  virtual void Simulate(std::span<const double> p, std::span<const double> u, double dt,
+                        std::span<double> y) const = 0;
+  /// Linear-in-parameters families: the regressors of u (rows = samples, columns = weights, in
+  /// row-major order), whose non-negative combination is the output. Others: not called.
+  virtual bool linear() const { return false; }
+  virtual size_t regressors() const { return 0; }
+  virtual void Regressors(std::span<const double> u, std::span<double> out) const;
+  /// Names of the solved weights (linear families).
+  virtual std::vector<std::string> weight_names() const { return {}; }
+  /// The effects of the diagnosis library that make physical sense on top of this family (the
+  /// ones it already contains are left out: the stack Bouc–Wen has a driver filter, the Duhem
+  /// model a relaxation, the PI model plays).
+  virtual std::vector<std::string> excluded_effects() const { return {}; }
+};
+
+/// Every family name, in the order of the header comment.
+const std::vector<std::string>& FamilyNames();
+/// Makes a family for the scale. Throws InputError naming an unknown family (and the known ones)
+/// or bad options.
+std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale, const FamilyOptions& options = {});
+
+}  // namespace pz::records

@@ -1,0 +1,275 @@
+#include "records/fit.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "io/csv.h"
+#include "opt/thread_pool_evaluator.h"
+
+namespace pz::records {
+
+Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) {
+  const Eigen::Index n = h.size();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+  std::vector<char> passive(static_cast<size_t>(n), 0);
+  const double tol = 1e-12 * std::max(1.0, G.diagonal().cwiseAbs().maxCoeff()) *
+                     std::max(1.0, h.cwiseAbs().maxCoeff());
+  auto solve_passive = [&](Eigen::VectorXd& s) {
+    std::vector<Eigen::Index> idx;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (passive[static_cast<size_t>(i)]) idx.push_back(i);
+    const Eigen::Index m = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd Gp(m, m);
+    Eigen::VectorXd hp(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      hp(a) = h(idx[static_cast<size_t>(a)]);
+      for (Eigen::Index b = 0; b < m; ++b) Gp(a, b) = G(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+    }
+    // A tiny ridge keeps nearly collinear plays solvable.
+    Gp.diagonal().array() += 1e-13 * std::max(1.0, Gp.diagonal().maxCoeff());
+    const Eigen::VectorXd sp = Gp.ldlt().solve(hp);
+    s.setZero(n);
+    for (Eigen::Index a = 0; a < m; ++a) s(idx[static_cast<size_t>(a)]) = sp(a);
+  };
+  for (int outer = 0; outer < 3 * n + 10; ++outer) {
+    const Eigen::VectorXd g = h - G * w;
+    Eigen::Index best = -1;
+    double gbest = tol;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (!passive[static_cast<size_t>(i)] && g(i) > gbest) {
+        gbest = g(i);
+        best = i;
+      }
+    }
+    if (best < 0) break;
+    passive[static_cast<size_t>(best)] = 1;
+    for (int inner = 0; inner < 3 * n + 10; ++inner) {
+      Eigen::VectorXd s;
+      solve_passive(s);
+      bool feasible = true;
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (passive[static_cast<size_t>(i)] && s(i) <= 0) feasible = false;
+      if (feasible) {
+        w = s;
+        break;
+      }
+      double alpha = 1;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (passive[static_cast<size_t>(i)] && s(i) <= 0) alpha = std::min(alpha, w(i) / (w(i) - s(i)));
+      }
+      w += alpha * (s - w);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (passive[static_cast<size_t>(i)] && w(i) <= 1e-15 * std::max(1.0, w.cwiseAbs().maxCoeff())) {
+          passive[static_cast<size_t>(i)] = 0;
+          w(i) = 0;
+        }
+      }
+    }
+  }
+  return w;
+}
+
+RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Record*> records)
+    : model_(model), records_(std::move(records)) {
+  if (records_.empty()) throw InputError("no training records to fit on");
+  for (const io::Record* r : records_) samples_ += r->scored();
+}
+
+std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const {
+  const Family& fam = model_.family();
+  const size_t m = fam.regressors(), nf = model_.family_param_count();
+  const int pol = model_.scale().polarity;
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
+  Eigen::VectorXd h = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
+  std::vector<double> ue, reg, c(m);
+  for (const io::Record* r : records_) {
+    const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->end_scored - 1);
+    model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
+    reg.resize(ue.size() * m);
+    fam.Regressors(ue, reg);
+    auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
+      return reg.data() + (k < from ? 0 : (k - from)) * m;
+    };
+    double d = 0;
+    std::fill(c.begin(), c.end(), 0.0);
+    if (r->offset_mode == io::OffsetMode::kFit) {
+      for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+        for (size_t j = 0; j < m; ++j) c[j] += row(k)[j];
+        d += r->y[k];
+      }
+      for (double& v : c) v /= static_cast<double>(r->scored());
+      d /= static_cast<double>(r->scored());
+    } else if (r->offset_mode == io::OffsetMode::kRest) {
+      std::copy_n(row(0), m, c.begin());
+      d = r->offset;
+    } else {
+      d = r->offset;
+    }
+    Eigen::VectorXd a(static_cast<Eigen::Index>(m));
+    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+      for (size_t j = 0; j < m; ++j) a(static_cast<Eigen::Index>(j)) = pol * (row(k)[j] - c[j]);
+      const double b = r->y[k] - d;
+      G.selfadjointView<Eigen::Lower>().rankUpdate(a);
+      h += b * a;
+    }
+  }
+  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+  const Eigen::VectorXd w = NonNegativeLeastSquares(G, h);
+  return std::vector<double>(w.data(), w.data() + w.size());
+}
+
+RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
+  Output out;
+  if (model_.family().linear()) out.weights = SolveWeights(params);
+  const int pol = model_.scale().polarity;
+  double sse = 0;
+  for (const io::Record* r : records_) {
+    std::vector<double> y(r->end_scored);
+    model_.Simulate(*r, params, out.weights, r->end_scored, y);
+    for (double& v : y) v *= pol;
+    const double o = RecordOffset(*r, y);
+    for (double& v : y) v += o;
+    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+      const double e = r->y[k] - y[k];
+      sse += e * e;
+    }
+    out.offsets.push_back(o);
+    out.yhat.push_back(std::move(y));
+  }
+  out.mse = std::isfinite(sse) ? sse / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+  return out;
+}
+
+opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
+  const Output o = Run(genome.reals);
+  if (!std::isfinite(o.mse)) return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
+  return {o.mse, opt::FitnessStatus::kOk, ""};
+}
+
+bool RecordFitness::Residuals(std::span<const double> params, std::vector<double>& r) const {
+  const Output o = Run(params);
+  if (!std::isfinite(o.mse)) return false;
+  r.clear();
+  r.reserve(samples_);
+  const double s = 1 / std::sqrt(static_cast<double>(samples_));
+  for (size_t i = 0; i < records_.size(); ++i) {
+    const io::Record& rec = *records_[i];
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) r.push_back((rec.y[k] - o.yhat[i][k]) * s);
+  }
+  return true;
+}
+
+RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params, std::span<const double> weights,
+                       const io::Record& r, std::vector<double>* yhat_out) {
+  std::vector<double> y(r.end_scored);
+  model.Simulate(r, params, weights, r.end_scored, y);
+  for (double& v : y) v *= model.scale().polarity;
+  const double o = RecordOffset(r, y);
+  for (double& v : y) v += o;
+  RecordMetrics m;
+  m.name = r.name;
+  m.role = r.role;
+  m.samples = r.scored();
+  m.offset = o;
+  double sse = 0, lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    const double e = r.y[k] - y[k];
+    sse += e * e;
+    m.max_abs = std::max(m.max_abs, std::abs(e));
+    lo = std::min(lo, r.y[k]);
+    hi = std::max(hi, r.y[k]);
+  }
+  if (!std::isfinite(sse)) m.max_abs = std::numeric_limits<double>::infinity();
+  m.rmse = std::sqrt(sse / static_cast<double>(m.samples));
+  m.range = hi - lo;
+  m.nrmse_pct = m.range > 0 ? 100 * m.rmse / m.range : std::numeric_limits<double>::infinity();
+  if (yhat_out) *yhat_out = std::move(y);
+  return m;
+}
+
+FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  auto train = set.WithRole(model::CaseRole::kTrain);
+  if (train.empty()) throw InputError(set.source.string() + ": no record has the role 'train'");
+  if (options.threads < 1) throw InputError(FieldError("threads", options.threads, "must be >= 1"));
+  RecordFitness fitness(*model, train);
+  FitResult res;
+  res.model = model;
+  const auto& params = model->params();
+  std::vector<double> best;
+  if (!params.empty()) {
+    opt::ParamBox box;
+    for (const ParamInfo& p : params) {
+      box.names.push_back(p.name);
+      box.lower.push_back(p.lower);
+      box.upper.push_back(p.upper);
+      box.log_scale.push_back(p.log_scale);
+    }
+    ThrowIfError(box.Validate());
+    std::unique_ptr<opt::BatchEvaluator> ev = options.evaluator_factory
+                                                  ? options.evaluator_factory(fitness)
+                                                  : std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads);
+    opt::SearchOptions so = options.search;
+    if (options.progress) {
+      so.on_progress = [&](const opt::SearchProgress& p) {
+        if (p.iteration % 25 == 0) {
+          options.progress("search repetition " + std::to_string(p.repetition) + " iteration " +
+                           std::to_string(p.iteration) + ": best MSE " + io::FormatNumber(p.overall_best_cost));
+        }
+      };
+    }
+    res.search = opt::Search(box, so, *ev);
+    res.evaluations = res.search.evaluations;
+    res.stop_reason = res.search.stop_reason;
+    best = res.search.best;
+    if (options.polish) {
+      std::vector<std::vector<double>> starts;
+      std::vector<double> u0(box.size());
+      box.ToUnit(best.data(), u0.data());
+      starts.push_back(u0);
+      for (const auto& s : options.extra_starts) starts.push_back(s);
+      const std::vector<double> lo(box.size(), 0.0), hi(box.size(), 1.0);
+      opt::ResidualFunction rf = [&](std::span<const double> x, std::vector<double>& r) {
+        std::vector<double> phys(x.size());
+        box.ToPhysical(x.data(), phys.data());
+        return fitness.Residuals(phys, r);
+      };
+      opt::LmOptions lm = options.lm;
+      lm.threads = options.threads;
+      double best_cost = res.search.best_cost;
+      for (const auto& s : starts) {
+        const opt::LmResult r = opt::LevenbergMarquardt(rf, s, lo, hi, lm);
+        res.evaluations += r.evaluations;
+        res.lm_iterations += r.iterations;
+        if (std::isfinite(r.cost) && r.cost < best_cost) {
+          best_cost = r.cost;
+          best.assign(box.size(), 0);
+          box.ToPhysical(r.x.data(), best.data());
+        }
+      }
+    }
+  }
+  const RecordFitness::Output out = fitness.Run(best);
+  res.params = best;
+  res.weights = out.weights;
+  res.train_mse = out.mse;
+  res.train_sse = out.mse * static_cast<double>(fitness.samples());
+  for (const io::Record& r : set.records) {
+    std::vector<double> y;
+    res.metrics.push_back(Evaluate(*model, res.params, res.weights, r, &y));
+    res.yhat.push_back(std::move(y));
+  }
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return res;
+}
+
+FitResult FitRecords(const io::RecordSet& set, const FitOptions& options) {
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  std::shared_ptr<const Family> fam = MakeFamily(options.family, scale, options.family_options);
+  auto model = std::make_shared<RecordModel>(fam, options.effects, scale);
+  return FitModel(set, model, options);
+}
+
+}  // namespace pz::records

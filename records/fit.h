@@ -1,0 +1,126 @@
+// Identification of a record model (records/model.h) on the training records of a record set
+// (issue 14): the least-squares output error over the scored windows, with each record's offset
+// handled explicitly (io::OffsetMode), by a global search (PSO / real GA / binary GA of
+// opt/param_search.h, through the evaluator seam: threads here, the service's workers with
+// --master) and a bounded Levenberg–Marquardt polish. A linear-in-parameters family (the
+// Prandtl–Ishlinskii operator) has its weights solved exactly by non-negative least squares inside
+// every evaluation (variable projection), so only effect parameters are searched.
+//
+// Deterministic: the result is a function of (records, model, options) alone, bit for bit,
+// whatever the evaluator or its thread count.
+#pragma once
+
+#include <Eigen/Dense>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "io/records.h"
+#include "opt/de_lm.h"
+#include "opt/evaluator.h"
+#include "opt/param_search.h"
+#include "records/model.h"
+
+namespace pz::records {
+
+/// min ‖A w − b‖² subject to w ≥ 0, from the normal equations G = AᵀA, h = Aᵀb (Lawson–Hanson
+/// active set). Returns w.
+Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::VectorXd& h);
+
+/// The training criterion: mean squared output error over the scored samples of the records.
+class RecordFitness final : public opt::FitnessFunction {
+ public:
+  /// The records and the model must outlive the fitness. Throws InputError on no records.
+  RecordFitness(const RecordModel& model, std::vector<const io::Record*> records);
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
+
+  /// Everything about one parameter vector: the weights of a linear family (solved), each record's
+  /// output (polarity and offset applied) and offset, the mean squared error. Non-finite output
+  /// gives mse = +inf. Thread-safe.
+  struct Output {
+    std::vector<double> weights;
+    std::vector<std::vector<double>> yhat;  ///< per record, samples [0, end_scored)
+    std::vector<double> offsets;
+    double mse = 0;
+  };
+  Output Run(std::span<const double> params) const;
+  /// The residuals (measured − model) over the scored samples of every record, divided by √N so
+  /// that their sum of squares is the MSE; false if the output is not finite.
+  bool Residuals(std::span<const double> params, std::vector<double>& r) const;
+
+  const RecordModel& model() const { return model_; }
+  const std::vector<const io::Record*>& records() const { return records_; }
+  size_t samples() const { return samples_; }
+
+ private:
+  std::vector<double> SolveWeights(std::span<const double> params) const;
+  const RecordModel& model_;
+  std::vector<const io::Record*> records_;
+  size_t samples_ = 0;
+};
+
+/// Error figures of a model on one record's window.
+struct RecordMetrics {
+  std::string name;
+  model::CaseRole role = model::CaseRole::kTrain;
+  size_t samples = 0;
+  double rmse = 0;       ///< [response unit]
+  double max_abs = 0;    ///< largest |error|
+  double nrmse_pct = 0;  ///< RMSE / measured range over the window × 100
+  double range = 0;      ///< measured max − min over the window
+  double offset = 0;     ///< the offset used
+};
+
+/// Builds the evaluator of a global search (null = a thread pool of `threads`).
+using RecordEvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&)>;
+
+struct FitOptions {
+  std::string family = "backlash-like";
+  std::vector<EffectKind> effects;
+  FamilyOptions family_options;
+  opt::SearchOptions search = [] {
+    opt::SearchOptions s;
+    s.repetitions = 3;
+    s.pso.particles = 30;
+    s.pso.iterations = 150;
+    s.pso.stall_iterations = 40;
+    return s;
+  }();
+  bool polish = true;   ///< Levenberg–Marquardt after the search
+  opt::LmOptions lm{.max_iterations = 60, .fd_step = 1e-4};
+  int threads = 2;
+  RecordEvaluatorFactory evaluator_factory;
+  /// Starting points for the polish besides the search's best (unit coordinates, e.g. a base fit
+  /// with an effect at small magnitudes); the best polished one is kept.
+  std::vector<std::vector<double>> extra_starts;
+  std::function<void(const std::string&)> progress;
+};
+
+struct FitResult {
+  std::shared_ptr<RecordModel> model;
+  std::vector<double> params;    ///< physical values, model().params() order
+  std::vector<double> weights;   ///< linear family: the solved weights
+  double train_mse = 0;
+  double train_sse = 0;
+  std::vector<RecordMetrics> metrics;              ///< every record of the set, set order
+  std::vector<std::vector<double>> yhat;           ///< every record: the model output [0, end_scored)
+  opt::SearchResult search;                        ///< empty when nothing was searched
+  int lm_iterations = 0;
+  int64_t evaluations = 0;
+  double wall_time_s = 0;
+  std::string stop_reason;
+};
+
+/// Fits on the set's training records and evaluates on every record. Throws InputError on no
+/// training records, an unknown family / effect or invalid options.
+FitResult FitRecords(const io::RecordSet& set, const FitOptions& options);
+/// The same for a given model (its scale already measured).
+FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options);
+
+/// Evaluates a fitted model on any record (output with polarity and offset, metrics).
+RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params, std::span<const double> weights,
+                       const io::Record& r, std::vector<double>* yhat = nullptr);
+
+}  // namespace pz::records
