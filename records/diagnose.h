@@ -1,0 +1,114 @@
+// The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14):
+// the rules of diagnose/diagnose.h (docs/diagnosis.md) on records instead of the nine-case grid.
+//
+//  1. Noise floor σ from what the records allow, in this order of preference (every available
+//     estimate is reported, and which one was used):
+//       rest         the response's scatter over a rest segment (≥ 50 samples), linear trend removed;
+//       periods      the drive repeats with a period P: the difference of the last two periods,
+//                    differenced once more (slow drift drops out): σ² = mean((d_k − d_{k−1})²)/4;
+//       repeats      two records with the same drive: σ² = var(y₁ − y₂)/2;
+//       residual     the high-frequency part of the base model's residual: mean((e_k − e_{k−1})²)/2
+//                    (an upper bound when the model error is smooth).
+//  2. The base family is fitted on the training records; each applicable effect (Family::
+//     excluded_effects leaves out what the family already holds) is added and the model re-fitted
+//     (global search + LM, with the base fit as extra starting points).
+//  3. Withheld = the records with role validate or test (records or time windows). S = Σe² there,
+//     S_floor = N_w σ². Same rules for every effect:
+//       significant ⇔ √(S0/S_floor) > significance_ratio;
+//       score = (S0 − S_c)/σ² − k ln N_w;   train ΔBIC = (T_c − T0)/σ² + k ln N_t;
+//       closed = (S0 − S_c)/(S0 − S_floor);  pattern = share of the localised excess (drive level ×
+//       direction bins of the withheld samples) removed;
+//       qualifies ⇔ significant, score > 0, ΔBIC < 0, closed ≥ min_closed, pattern ≥ min_pattern.
+//  4. Confidence, made honest: residuals are correlated in time, so two models are compared by a
+//     paired test on blocks of the withheld samples (the per-sample difference of squared errors,
+//     summed per block, B blocks): z = mean / standard error, P(better) ≈ Φ(z). The named effect's
+//     confidence is the product of P(better) against the base model and against every other
+//     qualifying candidate. When the runner-up qualifies too and z < separation_z, the verdict is
+//     "cannot separate A from B", and the next measurement is proposed: among sines, triangles and
+//     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
+//     the two fitted models' predictions differ most (RMS, offsets removed), with that difference
+//     against σ.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "io/records.h"
+#include "records/fit.h"
+#include "records/synthetic.h"
+
+namespace pz::records {
+
+struct NoiseEstimate {
+  std::string method;  ///< "rest", "periods", "repeats", "residual"
+  double sigma = 0;
+  size_t samples = 0;
+  std::string detail;
+};
+struct NoiseFloor {
+  double sigma = 0;
+  std::string used;
+  std::vector<NoiseEstimate> estimates;
+};
+/// Rest, periods and repeats from the records; `residuals` (the base model's, per record over its
+/// scored window) adds the residual estimate. Throws InputError when no estimate is possible.
+NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::vector<double>>* residuals = nullptr);
+
+struct ProposedExperiment {
+  DriveShape shape;
+  double rms_difference = 0;  ///< between the two models' predictions [response unit]
+  double ratio_to_noise = 0;  ///< rms_difference / σ
+  std::string description;
+};
+
+struct RecordCandidate {
+  EffectKind kind = EffectKind::kDrift;
+  FitResult fit;
+  double s_withheld = 0, s_train = 0;
+  double score = 0, train_delta_bic = 0, closed = 0, pattern = 0;
+  double z_vs_base = 0;      ///< paired block test against the base model (> 0: better)
+  double confidence = 0;     ///< as the named effect
+  bool qualifies = false;
+  std::string note;
+};
+
+struct RecordDiagnoseOptions {
+  std::string family = "backlash-like";
+  std::vector<EffectKind> candidates;  ///< empty = every effect that applies to the family
+  FitOptions fit;                      ///< family options, search and polish of every fit
+  double significance_ratio = 1.25;
+  double min_closed = 0.5;
+  double min_pattern = 0.5;
+  double separation_z = 2.0;  ///< runner-up within this z of the best: cannot separate
+  int blocks = 20;            ///< of the paired test, ≥ 4
+  bool propose = true;
+};
+
+struct RecordDiagnosis {
+  NoiseFloor noise;
+  FitResult base;
+  size_t withheld_samples = 0, train_samples = 0;
+  double s0 = 0, s_floor = 0, rms_ratio = 0;
+  bool significant = false;
+  std::vector<RecordCandidate> candidates;  ///< ranked by score, best first
+  int named = -1;                           ///< index into candidates
+  int runner_up = -1;                       ///< a qualifying candidate that cannot be separated, or −1
+  double z_runner_up = 0;
+  double confidence = 0;
+  std::string verdict_kind;  ///< "effect", "inseparable", "none", "unexplained"
+  std::string verdict;
+  std::optional<ProposedExperiment> next;
+};
+
+/// Throws InputError when the set has no training or no withheld record, or on bad options.
+RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
+
+/// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a, const FitResult& b, double sigma);
+
+/// Simulates a fitted model on a drive shape (the record's rest and excitation, window = the
+/// excitation after its first period), output with polarity; offsets not applied.
+std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape, io::Record* record = nullptr);
+
+}  // namespace pz::records
