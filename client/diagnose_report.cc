@@ -1,5 +1,7 @@
 #include "client/diagnose_report.h"
 
+#include "model/model_comparison.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -558,6 +560,21 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     << Pct(Quantile(s.closed, 0)) << ", 10 % " << Pct(Quantile(s.closed, 0.1)) << ", median "
     << Pct(Quantile(s.closed, 0.5)) << ", 90 % " << Pct(Quantile(s.closed, 0.9)) << ", max "
     << Pct(Quantile(s.closed, 1)) << "\n";
+  // Calibration: is a stated confidence of 90 % right 90 % of the time? Over every bench where an
+  // effect was named (right when it is the true one).
+  std::vector<double> conf;
+  std::vector<char> right;
+  for (const auto& t : s.trials) {
+    if (t.verdict_kind != "effect" && t.verdict_kind != "inseparable") continue;
+    conf.push_back(t.confidence);
+    right.push_back(t.correct() ? 1 : 0);
+  }
+  o << "calibration of the stated confidence (" << conf.size() << " benches with a named effect):\n";
+  for (const auto& b : model::ReliabilityTable(conf, right)) {
+    if (b.count == 0) continue;
+    o << "  confidence " << F("%.2f", b.lo) << " – " << F("%.2f", std::min(b.hi, 1.0)) << ": " << b.count
+      << " benches, mean stated " << Pct(b.mean_confidence) << ", right " << Pct(b.frequency_right) << "\n";
+  }
   o << F("%.0f", s.wall_time_s) << " s in all\n";
 }
 

@@ -8,12 +8,12 @@ namespace pz::diagnose {
 
 bool CheckTrial::correct() const {
   if (truth == model::EffectKind::kNone) return verdict_kind == "none";
-  return verdict_kind == "effect" && named == truth;
+  return (verdict_kind == "effect" || verdict_kind == "inseparable") && named == truth;
 }
 
 int CheckColumn(const CheckTrial& t) {
   if (t.verdict_kind == "unexplained") return kUnexplainedColumn;
-  if (t.verdict_kind == "effect") return static_cast<int>(t.named);
+  if (t.verdict_kind == "effect" || t.verdict_kind == "inseparable") return static_cast<int>(t.named);
   return static_cast<int>(model::EffectKind::kNone);
 }
 

@@ -7,6 +7,7 @@
 #include <limits>
 #include <exception>
 
+#include "model/model_comparison.h"
 #include "model/noise_floor.h"
 #include "model/saturation.h"
 
@@ -279,10 +280,36 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
                         wr, round.rms_ratio, fr, o.significance_ratio);
   } else if (!round.candidates.empty() && round.candidates[0].qualifies) {
     round.named = 0;
-    const auto& c = round.candidates[0];
+    auto& c = round.candidates[0];
+    // An honest confidence (model/model_comparison.h): paired block tests of the withheld squared
+    // errors against the starting model and against every other qualifying candidate.
+    auto squares = [&](const std::vector<EffectKind>& structure, const std::vector<double>& x) {
+      std::vector<double> r;
+      m.Residuals(ParameterLayout(structure), x, false, r);
+      for (double& v : r) v *= v;
+      return r;
+    };
+    const std::vector<double> best_sq = squares(c.fit.structure, c.fit.x);
+    c.confidence = model::NormalCdf(model::PairedBlockZ(squares(start.structure, start.x), best_sq));
+    for (size_t i = 1; i < round.candidates.size(); ++i) {
+      const auto& other = round.candidates[i];
+      if (!other.qualifies) continue;
+      const double z = model::PairedBlockZ(squares(other.fit.structure, other.fit.x), best_sq);
+      c.confidence *= model::NormalCdf(z);
+      if (z < o.separation_z && (round.runner_up < 0 || z < round.z_runner_up)) {
+        round.runner_up = static_cast<int>(i);
+        round.z_runner_up = z;
+      }
+    }
     round.verdict = std::string(model::EffectName(c.kind)) +
                     Fmt(": closes %.0f %% of the withheld gap (RMS %.4f -> %.4f deg, floor %.4f), confidence %.3f",
-                        100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.weight);
+                        100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.confidence);
+    if (round.runner_up >= 0) {
+      const auto& ru = round.candidates[static_cast<size_t>(round.runner_up)];
+      round.verdict += std::string("; the data cannot separate it from ") + model::EffectName(ru.kind) +
+                       Fmt(" (closes %.0f %%, paired block test z = %.2f < %.1f)", 100 * ru.closed, round.z_runner_up,
+                           o.separation_z);
+    }
   } else {
     round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,
                         round.rms_ratio);
@@ -467,7 +494,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     if (named) {
       const CandidateResult& c = round.candidates[round.named];
       d.named.push_back(c.kind);
-      if (r == 0) d.confidence = c.weight;
+      if (r == 0) d.confidence = c.confidence;
       current = c.fit;
       current_analysis = AnalyseFit(m, current, floors);
     }
@@ -514,9 +541,17 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     const CandidateResult& c = first.candidates[first.named];
     d.verdict = "The gap is caused by " + model::GetEffectInfo(c.kind).title + " (" + model::EffectName(c.kind) +
                 Fmt(", confidence %.0f %%)", 100 * d.confidence);
+    if (first.runner_up >= 0) {
+      const CandidateResult& ru = first.candidates[static_cast<size_t>(first.runner_up)];
+      d.verdict_kind = "inseparable";
+      d.verdict += std::string(" — or by ") + model::EffectName(ru.kind) +
+                   Fmt(": the data cannot separate the two (both close the gap, paired block test z = %.2f). "
+                       "`piezoid diagnose --records <this bench> --family bimorph-fin` proposes the measurement that would",
+                       first.z_runner_up);
+    }
     if (d.named.size() > 1) {
       d.verdict += std::string(", with a second effect: ") + model::EffectName(d.named[1]) +
-                   Fmt(" (confidence %.0f %%)", 100 * d.rounds[1].candidates[d.rounds[1].named].weight);
+                   Fmt(" (confidence %.0f %%)", 100 * d.rounds[1].candidates[d.rounds[1].named].confidence);
     }
     d.verdict += Fmt(". Adding it closes %.0f %% of the withheld gap above the noise floor: withheld RMS %.4f -> %.4f deg "
                      "(floor %.4f deg, %.2f x floor remains).",

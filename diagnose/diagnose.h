@@ -21,9 +21,11 @@
 //       pattern_c        =  share of the localised excess (phase bins, branches, reversals,
 //                           saturation, first/later cycles, odd/even harmonics, low frequency) removed;
 //       named            ⇔  significant, score > 0, training BIC lower, closed ≥ min_closed and
-//                           pattern ≥ min_pattern; confidence = the candidate's posterior weight
-//                           exp(score/2φ) against the others and "none" (score 0), with φ =
-//                           max(1, S_best / S_floor) the over-dispersion of the best model.
+//                           pattern ≥ min_pattern (the best by score); confidence = Π Φ(z) of paired
+//                           block tests of the withheld squared errors (model/model_comparison.h)
+//                           against the starting model and every other qualifying candidate — the
+//                           residuals are correlated in time, so a χ² difference would overstate it;
+//                           a qualifying runner-up with z < separation_z: "cannot separate" them.
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains".
@@ -65,6 +67,7 @@ struct DiagnoseOptions {
   double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
   double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
   double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
+  double separation_z = 2.0;         ///< a qualifying runner-up within this paired z: cannot separate
   bool second_effect = true;         ///< greedy search for a second effect
   bool trends = true;                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
@@ -81,7 +84,9 @@ struct CandidateResult {
   double closed = 0;           ///< share of the excess withheld gap closed
   double raw_reduction = 0;    ///< (S0 − S_c)/S0
   double pattern = 0;          ///< share of the localised excess removed
-  double weight = 0;           ///< posterior weight (confidence if named)
+  double weight = 0;           ///< posterior weight exp(score/2φ) against the others and "none" (ranking)
+  double confidence = 0;       ///< if named: Π Φ(z) of paired block tests against the starting model and
+                               ///< every other qualifying candidate (model/model_comparison.h)
   bool qualifies = false;      ///< passes every rule but the ranking
   std::string note;            ///< why it does not qualify
 };
@@ -95,6 +100,8 @@ struct RoundResult {
   bool significant = false;
   std::vector<CandidateResult> candidates;  ///< ranked by score, best first
   int named = -1;              ///< index into candidates, −1 if none named
+  int runner_up = -1;          ///< a qualifying candidate the data cannot separate from the named one
+  double z_runner_up = 0;      ///< its paired block z against the named one
   std::string verdict;         ///< one sentence
 };
 
@@ -148,7 +155,8 @@ struct Diagnosis {
   double remaining_ratio = 0;                      ///< √(after / floor)
   std::vector<Absorption> absorbed;                ///< when an effect is mimicked by the base terms
   std::string absorbed_by;                         ///< the candidate whose addition shows it
-  std::string verdict_kind;  ///< "effect", "none" (no significant gap), "unexplained"
+  std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as well),
+                             ///< "none" (no significant gap), "unexplained"
   std::string verdict;       ///< the summary sentence(s)
   double wall_time_s = 0;
   int64_t evaluations = 0;

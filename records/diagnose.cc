@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "io/csv.h"
+#include "model/model_comparison.h"
 
 namespace pz::records {
 namespace {
@@ -13,8 +14,6 @@ namespace {
 using model::CaseRole;
 
 bool Withheld(const io::Record& r) { return r.role != CaseRole::kTrain; }
-
-double NormalCdf(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
 std::string Fmt(double x, int prec = 3) {
   std::ostringstream s;
@@ -49,21 +48,6 @@ std::vector<double> WithheldSquares(const io::RecordSet& set, const FitResult& f
     }
   }
   return out;
-}
-
-/// Paired block test: z > 0 when `b` has smaller squared errors than `a`.
-double PairedZ(const std::vector<double>& a, const std::vector<double>& b, int blocks) {
-  const size_t n = a.size();
-  if (n < static_cast<size_t>(blocks) * 2) return 0;
-  std::vector<double> sums(static_cast<size_t>(blocks), 0.0);
-  for (size_t k = 0; k < n; ++k) sums[k * static_cast<size_t>(blocks) / n] += a[k] - b[k];
-  const double mean = std::accumulate(sums.begin(), sums.end(), 0.0) / blocks;
-  double var = 0;
-  for (double s : sums) var += (s - mean) * (s - mean);
-  var /= (blocks - 1);
-  const double se = std::sqrt(var / blocks);
-  if (!(se > 0)) return mean > 0 ? 50 : (mean < 0 ? -50 : 0);
-  return std::clamp(mean / se, -50.0, 50.0);
 }
 
 /// Localised excess over drive-level × direction bins of the withheld samples.
@@ -349,7 +333,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     c.train_delta_bic = (c.s_train - t0) / sigma2 + k * std::log(nt);
     c.closed = d.s0 > d.s_floor ? (d.s0 - c.s_withheld) / (d.s0 - d.s_floor) : 0;
     c.pattern = Pattern(base_ex, BinExcess(set, c.fit, sigma2, scale));
-    c.z_vs_base = PairedZ(base_sq, WithheldSquares(set, c.fit), o.blocks);
+    c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.blocks);
     if (!d.significant) c.note = "no significant gap";
     else if (c.score <= 0) c.note = "withheld score " + Fmt(c.score) + " ≤ 0";
     else if (c.train_delta_bic >= 0) c.note = "no better on the training records (ΔBIC " + Fmt(c.train_delta_bic) + ")";
@@ -369,12 +353,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   if (d.named >= 0) {
     RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
     const auto best_sq = WithheldSquares(set, best.fit);
-    double conf = NormalCdf(best.z_vs_base);
+    double conf = model::NormalCdf(best.z_vs_base);
     double zmin = 1e9;
     for (size_t i = 0; i < d.candidates.size(); ++i) {
       if (static_cast<int>(i) == d.named || !d.candidates[i].qualifies) continue;
-      const double z = PairedZ(WithheldSquares(set, d.candidates[i].fit), best_sq, o.blocks);
-      conf *= NormalCdf(z);
+      const double z = model::PairedBlockZ(WithheldSquares(set, d.candidates[i].fit), best_sq, o.blocks);
+      conf *= model::NormalCdf(z);
       if (z < zmin) {
         zmin = z;
         if (z < o.separation_z) {

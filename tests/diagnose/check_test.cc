@@ -5,6 +5,8 @@
 // truth.json (read only here, after the diagnosis, to check its answer).
 #include <gtest/gtest.h>
 
+#include "tests/testing/expect_error.h"
+
 #include <cmath>
 #include <fstream>
 #include <memory>
@@ -79,7 +81,13 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
     t.closed = d.closed_total;
     Tally(summary, t);
     if (with_delay) {
-      EXPECT_EQ(d.verdict_kind, "effect") << d.verdict;
+      // On phase-zero sines a delay and a driver low-pass explain the grid equally: the verdict says
+      // so (issue 14) rather than claiming certainty, and still names the better one.
+      EXPECT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
+      if (d.verdict_kind == "inseparable") {
+        PZ_EXPECT_HAS(d.verdict, "cannot separate");
+        EXPECT_LT(d.confidence, 0.9) << d.verdict;
+      }
       ASSERT_FALSE(d.named.empty());
       EXPECT_EQ(d.named.front(), EffectKind::kDelay) << d.verdict;
       EXPECT_GE(d.closed_total, 0.7) << d.verdict;
@@ -115,7 +123,8 @@ TEST(CheckTest, RunCheckTalliesEveryTrial) {
     for (int n : row) total += n;
   EXPECT_EQ(total, 1);
   const CheckTrial& t = s.trials[0];
-  EXPECT_TRUE(t.verdict_kind == "effect" || t.verdict_kind == "none" || t.verdict_kind == "unexplained");
+  EXPECT_TRUE(t.verdict_kind == "effect" || t.verdict_kind == "inseparable" || t.verdict_kind == "none" ||
+              t.verdict_kind == "unexplained");
   if (t.significant) {
     EXPECT_TRUE(t.correct()) << t.truth_description << " -> " << t.verdict_kind;
   }
