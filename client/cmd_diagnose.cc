@@ -13,6 +13,7 @@
 #include "client/commands.h"
 #include "client/complete_service.h"
 #include "client/diagnose_report.h"
+#include "client/records_diagnose.h"
 #include "client/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
@@ -23,6 +24,7 @@ namespace {
 
 struct DiagnoseArgs {
   std::string cases_dir;
+  RecordsDiagnoseRequest records;  ///< --records: a record set of any drive (records/diagnose.h)
   std::string out_dir;
   std::string json_file;
   std::string candidates;
@@ -85,6 +87,21 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
+  if (!a.records.records.empty()) {
+    if (!a.cases_dir.empty()) throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
+    if (a.service.enabled()) throw InputError("--master: the records diagnosis runs locally for now (drop --master)");
+    RecordsDiagnoseRequest r = a.records;
+    r.out = a.out_dir;
+    r.candidates = a.candidates;
+    r.threads = a.threads;
+    r.seed = a.seed;
+    r.quick = a.quick;
+    r.no_plots = a.no_plots;
+    r.quiet = a.quiet;
+    r.significance_ratio = a.significance_ratio;
+    return RunRecordsDiagnose(r);
+  }
+  if (a.cases_dir.empty()) throw InputError("piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
   diagnose::EvaluatorFactory service;
   if (a.service.enabled()) service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
   const std::filesystem::path dir(a.cases_dir);
@@ -176,9 +193,17 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
       "Diagnose the sim-to-real gap of a bench: localise the residual of a global model against the noise floor, "
       "re-identify the model with each candidate unmodelled effect on the training cases, score it on the withheld "
       "cases, name the effect (or say that no gap is significant) and report how far the gap shrinks.");
-  cmd->add_option("--cases", a->cases_dir, "bench case set folder (cases.csv + one CSV per case)")
-      ->required()
-      ->type_name("DIR");
+  cmd->add_option("--cases", a->cases_dir, "bench case set folder (cases.csv + one CSV per case)")->type_name("DIR");
+  cmd->add_option("--records", a->records.records,
+                  "instead of --cases: any record set (folder with manifest.csv, a stack or fin bench folder, or one "
+                  "CSV with windows), diagnosed for --family")
+      ->type_name("PATH");
+  cmd->add_option("--family", a->records.family,
+                  "with --records: stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin")
+      ->default_str("backlash-like");
+  cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
+  cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");
+  cmd->add_option("--test-window", a->records.test_windows, "with one CSV: a withheld test window START:END [s]");
   cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")->type_name("DIR");
   cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,

@@ -14,6 +14,7 @@
 
 #include "client/commands.h"
 #include "client/plots.h"
+#include "client/record_windows.h"
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/prandtl_ishlinskii.h"
@@ -41,17 +42,6 @@ struct FitArgs {
   bool quiet = false;
   std::string export_c;
 };
-
-io::RecordSet LoadWithWindows(const std::string& path, const std::vector<std::string>& tr,
-                              const std::vector<std::string>& va, const std::vector<std::string>& te) {
-  io::RecordSet set = io::LoadRecordSet(path);
-  std::vector<io::WindowSpec> w;
-  for (const auto& s : tr) w.push_back(io::ParseWindow(s, model::CaseRole::kTrain, "--train-window"));
-  for (const auto& s : va) w.push_back(io::ParseWindow(s, model::CaseRole::kValidate, "--validate-window"));
-  for (const auto& s : te) w.push_back(io::ParseWindow(s, model::CaseRole::kTest, "--test-window"));
-  io::SplitIntoWindows(set, w);
-  return set;
-}
 
 std::string Fmt(double x, int prec = 4) {
   std::ostringstream s;
@@ -95,7 +85,11 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
      << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
   for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
   os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
-     << " (sign of the drive-to-response slope); offsets per record as stated below.\n\n";
+     << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
+     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min) << " … "
+     << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range " << Fmt(m.scale().y_half) << " "
+     << set.response_unit << ", gain " << Fmt(m.scale().gain) << " " << set.response_unit << "/" << set.drive_unit
+     << ", dominant frequency " << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
   os << "## Parameters\n\n| parameter | value | unit | search range |\n|---|---|---|---|\n";
   for (size_t i = 0; i < m.params().size(); ++i) {
     const auto& p = m.params()[i];
@@ -146,7 +140,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
 }
 
 int RunFit(const FitArgs& a) {
-  io::RecordSet set = LoadWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
   records::FitOptions o;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));

@@ -291,16 +291,22 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
     };
     const std::vector<double> best_sq = squares(c.fit.structure, c.fit.x);
     c.confidence = model::NormalCdf(model::PairedBlockZ(squares(start.structure, start.x), best_sq));
+    int equivalent = 1;
     for (size_t i = 1; i < round.candidates.size(); ++i) {
       const auto& other = round.candidates[i];
       if (!other.qualifies) continue;
       const double z = model::PairedBlockZ(squares(other.fit.structure, other.fit.x), best_sq);
-      c.confidence *= model::NormalCdf(z);
-      if (z < o.separation_z && (round.runner_up < 0 || z < round.z_runner_up)) {
-        round.runner_up = static_cast<int>(i);
-        round.z_runner_up = z;
+      if (z < o.separation_z || c.closed - other.closed < o.separation_closed) {  // cannot separate
+        ++equivalent;
+        if (round.runner_up < 0) {
+          round.runner_up = static_cast<int>(i);
+          round.z_runner_up = z;
+        }
+      } else {
+        c.confidence *= model::NormalCdf(z);
       }
     }
+    c.confidence /= equivalent;  // shared among the candidates the data cannot separate
     round.verdict = std::string(model::EffectName(c.kind)) +
                     Fmt(": closes %.0f %% of the withheld gap (RMS %.4f -> %.4f deg, floor %.4f), confidence %.3f",
                         100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.confidence);

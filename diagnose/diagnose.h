@@ -25,7 +25,8 @@
 //                           block tests of the withheld squared errors (model/model_comparison.h)
 //                           against the starting model and every other qualifying candidate — the
 //                           residuals are correlated in time, so a χ² difference would overstate it;
-//                           a qualifying runner-up with z < separation_z: "cannot separate" them.
+//                           a qualifying runner-up with z < separation_z, or closing the gap within
+//                           separation_closed of it: "cannot separate" them (confidence shared).
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains".
@@ -68,6 +69,7 @@ struct DiagnoseOptions {
   double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
   double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
   double separation_z = 2.0;         ///< a qualifying runner-up within this paired z: cannot separate
+  double separation_closed = 0.05;   ///< … or closing the gap within this share of the named one
   bool second_effect = true;         ///< greedy search for a second effect
   bool trends = true;                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)

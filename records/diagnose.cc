@@ -354,21 +354,26 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
     const auto best_sq = WithheldSquares(set, best.fit);
     double conf = model::NormalCdf(best.z_vs_base);
-    double zmin = 1e9;
+    int equivalent = 1;
     for (size_t i = 0; i < d.candidates.size(); ++i) {
       if (static_cast<int>(i) == d.named || !d.candidates[i].qualifies) continue;
       const double z = model::PairedBlockZ(WithheldSquares(set, d.candidates[i].fit), best_sq, o.blocks);
-      conf *= model::NormalCdf(z);
-      if (z < zmin) {
-        zmin = z;
-        if (z < o.separation_z) {
+      // Cannot separate: not significantly worse, or practically as good (closes nearly the same
+      // share of the gap: a consistent but tiny difference is model-form detail, not evidence).
+      const bool same = z < o.separation_z || best.closed - d.candidates[i].closed < o.separation_closed;
+      if (same) {
+        ++equivalent;
+        if (d.runner_up < 0) {
           d.runner_up = static_cast<int>(i);
           d.z_runner_up = z;
         }
+      } else {
+        conf *= model::NormalCdf(z);
       }
     }
-    best.confidence = conf;
-    d.confidence = conf;
+    // Among candidates the data cannot separate, none is more likely than the others.
+    best.confidence = conf / equivalent;
+    d.confidence = best.confidence;
   }
   const std::string unit = set.response_unit;
   std::ostringstream v;
@@ -385,9 +390,8 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
       const RecordCandidate& ru = d.candidates[static_cast<size_t>(d.runner_up)];
       d.verdict_kind = "inseparable";
       v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind) << ": both close the gap ("
-        << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %), and the paired test between them gives z = "
-        << Fmt(d.z_runner_up, 2) << " (< " << o.separation_z << "); confidence in " << EffectName(best.kind) << " "
-        << Fmt(100 * d.confidence, 3) << " %.";
+        << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %; paired block test z = "
+        << Fmt(d.z_runner_up, 2) << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
       if (o.propose) {
         d.next = ProposeExperiment(set, best.fit, ru.fit, d.noise.sigma);
         v << " Next measurement: " << d.next->description << ".";

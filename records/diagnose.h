@@ -23,8 +23,10 @@
 //     paired test on blocks of the withheld samples (the per-sample difference of squared errors,
 //     summed per block, B blocks): z = mean / standard error, P(better) ≈ Φ(z). The named effect's
 //     confidence is the product of P(better) against the base model and against every other
-//     qualifying candidate. When the runner-up qualifies too and z < separation_z, the verdict is
-//     "cannot separate A from B", and the next measurement is proposed: among sines, triangles and
+//     qualifying candidate. When the runner-up qualifies too and z < separation_z, or closes the gap
+//     within separation_closed of the best (a consistent but tiny difference is model-form detail),
+//     the verdict is "cannot separate A from B", the confidence is shared among the candidates that
+//     cannot be separated, and the next measurement is proposed: among sines, triangles and
 //     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
 //     the two fitted models' predictions differ most (RMS, offsets removed), with that difference
 //     against σ.
@@ -81,6 +83,7 @@ struct RecordDiagnoseOptions {
   double min_closed = 0.5;
   double min_pattern = 0.5;
   double separation_z = 2.0;  ///< runner-up within this z of the best: cannot separate
+  double separation_closed = 0.05;  ///< … or closing within this share of the gap of the best
   int blocks = 20;            ///< of the paired test, ≥ 4
   bool propose = true;
 };

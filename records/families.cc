@@ -249,17 +249,24 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
   const double slope = var > 0 ? cov / var : 0;
   s.polarity = slope < 0 ? -1 : 1;
   s.gain = std::abs(slope) > 0 ? std::abs(slope) : s.y_half / s.u_half;
-  // Dominant frequency: reversals of the drive by more than 5 % of its range, over the excited time.
+  // Dominant frequency: reversals of the drive by more than 10 % of its half range, over the scored time.
   for (const io::Record* r : records) {
     const double thr = 0.1 * s.u_half;
-    double ext = r->u[r->first_scored];
-    int dir = 0;
+    double hi = r->u[r->first_scored], lo = hi;
+    int dir = 0;  // +1 rising, −1 falling, 0 not yet known
     for (size_t k = r->first_scored; k < r->end_scored; ++k) {
       const double v = r->u[k];
-      if (dir >= 0 && v > ext) ext = v;
-      else if (dir <= 0 && v < ext) ext = v;
-      if (dir >= 0 && v < ext - thr) { if (dir > 0) ++reversals; dir = -1; ext = v; }
-      else if (dir <= 0 && v > ext + thr) { if (dir < 0) ++reversals; dir = 1; ext = v; }
+      hi = std::max(hi, v);
+      lo = std::min(lo, v);
+      if (dir >= 0 && v < hi - thr) {  // a maximum passed
+        if (dir > 0) ++reversals;
+        dir = -1;
+        lo = v;
+      } else if (dir <= 0 && v > lo + thr) {  // a minimum passed
+        if (dir < 0) ++reversals;
+        dir = 1;
+        hi = v;
+      }
     }
     excited += r->t[r->end_scored - 1] - r->t[r->first_scored];
   }

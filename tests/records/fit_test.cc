@@ -84,7 +84,7 @@ FitOptions QuickOptions(const std::string& family) {
   o.search.pso.iterations = 80;
   o.search.pso.stall_iterations = 25;
   o.lm.max_iterations = 40;
-  if (family == "bimorph-fin") {  // ten parameters: a wider search
+  if (family == "bimorph-fin" || family == "bw-oscillator") {  // more parameters, resonances: a wider search
     o.search.repetitions = 3;
     o.search.pso.particles = 30;
     o.search.pso.iterations = 150;

@@ -1,0 +1,157 @@
+#include "client/records_diagnose.h"
+
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "client/plots.h"
+#include "client/record_windows.h"
+#include "io/csv.h"
+
+namespace pz::client {
+namespace fs = std::filesystem;
+namespace {
+
+std::string G(double x, int prec = 4) {
+  std::ostringstream s;
+  s << std::setprecision(prec) << x;
+  return s.str();
+}
+
+std::string Q(const std::string& s) {
+  std::string o = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') o += '\\';
+    o += c;
+  }
+  return o + "\"";
+}
+
+}  // namespace
+
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d) {
+  const std::string u = set.response_unit;
+  os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
+     << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n"
+     << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
+  for (const auto& e : d.noise.estimates) {
+    os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma) << " | " << e.samples
+       << " | " << e.detail << " |\n";
+  }
+  os << "\nWithheld: " << d.withheld_samples << " samples; training: " << d.train_samples << ". Base model "
+     << d.base.model->Describe() << ": withheld RMS " << G(std::sqrt(d.s0 / d.withheld_samples)) << " " << u << " = "
+     << G(d.rms_ratio, 3) << " × the floor (significant above 1.25: " << (d.significant ? "yes" : "no") << ").\n\n"
+     << "## Candidates (ranked by score)\n\n"
+     << "| effect | withheld RMS [" << u << "] | score | train ΔBIC | closed | pattern | z vs base | qualifies |\n"
+     << "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : d.candidates) {
+    os << "| " << records::EffectName(c.kind) << " | " << G(std::sqrt(c.s_withheld / d.withheld_samples)) << " | "
+       << G(c.score, 5) << " | " << G(c.train_delta_bic, 5) << " | " << G(100 * c.closed, 3) << " % | "
+       << G(100 * c.pattern, 3) << " % | " << G(c.z_vs_base, 3) << " | " << (c.qualifies ? "yes" : c.note) << " |\n";
+  }
+  if (d.named >= 0) {
+    const auto& c = d.candidates[static_cast<size_t>(d.named)];
+    os << "\n## The named model: " << c.fit.model->Describe() << "\n\n| parameter | value | unit |\n|---|---|---|\n";
+    for (size_t i = 0; i < c.fit.params.size(); ++i) {
+      os << "| " << c.fit.model->params()[i].name << " | " << G(c.fit.params[i], 6) << " | "
+         << c.fit.model->params()[i].unit << " |\n";
+    }
+    os << "\n| record | role | RMSE before | RMSE after | NRMSE after |\n|---|---|---|---|---|\n";
+    for (size_t i = 0; i < set.records.size(); ++i) {
+      os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role) << " | "
+         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << G(c.fit.metrics[i].nrmse_pct, 3)
+         << " % |\n";
+    }
+  }
+  if (d.next) {
+    os << "\n## Next measurement\n\n" << d.next->description << ".\n";
+  }
+}
+
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d) {
+  os << "{\n  \"records\": " << Q(set.source.string()) << ",\n  \"family\": " << Q(d.base.model->family().name())
+     << ",\n  \"response_unit\": " << Q(set.response_unit) << ",\n  \"noise_floor\": {\"sigma\": "
+     << io::FormatNumber(d.noise.sigma) << ", \"used\": " << Q(d.noise.used) << ", \"estimates\": [";
+  for (size_t i = 0; i < d.noise.estimates.size(); ++i) {
+    const auto& e = d.noise.estimates[i];
+    os << (i ? ", " : "") << "{\"method\": " << Q(e.method) << ", \"sigma\": " << io::FormatNumber(e.sigma)
+       << ", \"samples\": " << e.samples << "}";
+  }
+  os << "]},\n  \"withheld_samples\": " << d.withheld_samples << ",\n  \"rms_ratio\": " << io::FormatNumber(d.rms_ratio)
+     << ",\n  \"significant\": " << (d.significant ? "true" : "false") << ",\n  \"candidates\": [\n";
+  for (size_t i = 0; i < d.candidates.size(); ++i) {
+    const auto& c = d.candidates[i];
+    os << "    {\"effect\": " << Q(records::EffectName(c.kind)) << ", \"score\": " << io::FormatNumber(c.score)
+       << ", \"closed\": " << io::FormatNumber(c.closed) << ", \"pattern\": " << io::FormatNumber(c.pattern)
+       << ", \"z_vs_base\": " << io::FormatNumber(c.z_vs_base) << ", \"qualifies\": " << (c.qualifies ? "true" : "false")
+       << ", \"note\": " << Q(c.note) << "}" << (i + 1 < d.candidates.size() ? "," : "") << "\n";
+  }
+  os << "  ],\n  \"named\": "
+     << (d.named >= 0 ? Q(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : "null")
+     << ",\n  \"confidence\": " << io::FormatNumber(d.confidence) << ",\n  \"verdict_kind\": " << Q(d.verdict_kind)
+     << ",\n  \"verdict\": " << Q(d.verdict);
+  if (d.next) {
+    os << ",\n  \"next_measurement\": {\"waveform\": " << Q(records::WaveformName(d.next->shape.waveform))
+       << ", \"amplitude\": " << io::FormatNumber(d.next->shape.amplitude) << ", \"bias\": "
+       << io::FormatNumber(d.next->shape.bias) << ", \"frequency_hz\": " << io::FormatNumber(d.next->shape.frequency_hz)
+       << ", \"duration_s\": " << io::FormatNumber(d.next->shape.duration_s) << ", \"rms_difference\": "
+       << io::FormatNumber(d.next->rms_difference) << ", \"ratio_to_noise\": " << io::FormatNumber(d.next->ratio_to_noise)
+       << "}";
+  }
+  os << "\n}\n";
+}
+
+int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
+  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  records::RecordDiagnoseOptions o;
+  o.family = a.family;
+  o.significance_ratio = a.significance_ratio;
+  std::stringstream ss(a.candidates);
+  std::string name;
+  while (std::getline(ss, name, ','))
+    if (!name.empty()) o.candidates.push_back(records::ParseEffect(name));
+  o.fit.threads = a.threads;
+  o.fit.search.pso.seed = a.seed;
+  if (a.quick) {
+    o.fit.search.repetitions = 1;
+    o.fit.search.pso.particles = 20;
+    o.fit.search.pso.iterations = 60;
+    o.fit.lm.max_iterations = 30;
+  }
+  if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
+  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
+  std::cout << d.verdict << "\n";
+  const fs::path out = a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
+  fs::create_directories(out / "figures");
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d); });
+  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d); });
+  // Withheld traces: measured, base, named model.
+  std::vector<fs::path> scripts;
+  const records::FitResult* best = d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const io::Record& r = set.records[i];
+    const std::string stem = "withheld_" + r.name;
+    if (r.role == model::CaseRole::kTrain) continue;
+    io::WriteFileWith(out / "figures" / (stem + ".csv"), [&](std::ostream& os) {
+      os << "t_s,measured,base_error,named_error\n";
+      for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+        os << io::FormatNumber(r.t[k]) << "," << io::FormatNumber(r.y[k]) << ","
+           << io::FormatNumber(r.y[k] - d.base.yhat[i][k]) << ","
+           << io::FormatNumber(best ? r.y[k] - best->yhat[i][k] : 0.0) << "\n";
+      }
+    });
+    Plot p{stem, r.name + ": error of the base and the named model", "t [s]", "error [" + set.response_unit + "]", false,
+           {{stem + ".csv", 1, 3, d.base.model->Describe(), "lines"}}};
+    if (best) p.series.push_back({stem + ".csv", 1, 4, best->model->Describe(), "lines"});
+    scripts.push_back(WritePlotScript(out / "figures", p));
+  }
+  std::vector<std::string> errors;
+  if (!a.no_plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
+  for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";
+  std::cout << "written: " << (out / "report.md").string() << ", " << (out / "diagnosis.json").string() << "\n";
+  return 0;
+}
+
+}  // namespace pz::client

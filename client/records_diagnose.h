@@ -1,0 +1,33 @@
+// `piezoid diagnose --records PATH --family NAME`: the diagnosis of records/diagnose.h on a record
+// set of any drive, with its report (report.md, diagnosis.json, withheld traces and figures).
+#pragma once
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "io/records.h"
+#include "records/diagnose.h"
+
+namespace pz::client {
+
+struct RecordsDiagnoseRequest {
+  std::string records;
+  std::string family = "backlash-like";
+  std::vector<std::string> train_windows, validate_windows, test_windows;
+  std::string out;
+  std::string candidates;  ///< comma-separated, empty = every applicable effect
+  int threads = 2;
+  uint64_t seed = 1;
+  bool quick = false;
+  bool no_plots = false;
+  bool quiet = false;
+  double significance_ratio = 1.25;
+};
+
+int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
+
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d);
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d);
+
+}  // namespace pz::client
