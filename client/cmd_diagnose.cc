@@ -14,6 +14,7 @@
 #include "client/complete_service.h"
 #include "client/diagnose_report.h"
 #include "client/records_diagnose.h"
+#include "records/check.h"
 #include "client/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
@@ -143,6 +144,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
 }
 
 struct CheckArgs {
+  std::string records_family;  ///< --records-family: the records diagnosis on synthetic records of it
   int trials = 50;
   uint64_t seed = 1;
   int threads = 2;
@@ -156,7 +158,43 @@ struct CheckArgs {
   double significance_ratio = 1.25;
 };
 
+int RunRecordsCheckCommand(const CheckArgs& a) {
+  records::RecordsCheckOptions o;
+  o.family = a.records_family;
+  o.trials = a.trials;
+  o.seed = a.seed;
+  o.none_probability = a.none_probability;
+  o.diagnose.significance_ratio = a.significance_ratio;
+  o.diagnose.fit.threads = a.threads;
+  if (a.quick) {
+    o.diagnose.fit.search.repetitions = 1;
+    o.diagnose.fit.search.pso.particles = 20;
+    o.diagnose.fit.search.pso.iterations = 60;
+    o.diagnose.fit.lm.max_iterations = 30;
+  }
+  const records::RecordsCheckSummary s = records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
+    char buf[400];
+    std::snprintf(buf, sizeof buf, "trial %3d %-6s %-42s -> %-11s %-16s ratio %6.2f conf %.2f\n", i + 1,
+                  t.correct ? "right" : "WRONG", t.description.c_str(), t.verdict_kind.c_str(), t.named.c_str(),
+                  t.rms_ratio, t.confidence);
+    std::cout << buf << std::flush;
+  });
+  std::cout << "records with an effect and a significant gap: " << s.effect_trials << ", right effect named in "
+            << s.effect_right << "; verdicts 'cannot separate': " << s.inseparable << "\nclean records: " << s.clean
+            << ", false alarms " << s.clean_alarms << "\ncalibration of the stated confidence (named effects):\n";
+  for (const auto& b : s.reliability) {
+    if (b.count == 0) continue;
+    char buf[200];
+    std::snprintf(buf, sizeof buf, "  confidence %.2f – %.2f: %3d records, mean stated %5.1f %%, right %5.1f %%\n", b.lo,
+                  std::min(b.hi, 1.0), b.count, 100 * b.mean_confidence, 100 * b.frequency_right);
+    std::cout << buf;
+  }
+  std::cout << static_cast<int>(s.wall_time_s) << " s in all\n";
+  return 0;
+}
+
 int RunCheckCommand(const CheckArgs& a) {
+  if (!a.records_family.empty()) return RunRecordsCheckCommand(a);
   diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
   o.second_effect = a.second;
   o.trends = false;
@@ -237,6 +275,9 @@ void RegisterDiagnoseCheck(CLI::App& app, int& exit_code) {
       "like the encoder; the effect is withheld from the model; prints the confusion matrix (true x named effect) "
       "and the distribution of the share of the gap closed.");
   cmd->add_option("--trials", a->trials, "number of benches")->check(CLI::Range(1, 100000));
+  cmd->add_option("--records-family", a->records_family,
+                  "check the records diagnosis instead (diagnose --records) on synthetic records of this family: "
+                  "stack-bouc-wen, backlash-like or duhem");
   cmd->add_option("--seed", a->seed, "first bench seed (bench i uses seed + i)");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
   cmd->add_option("--json", a->json_file, "write the trials and the matrix as JSON")->type_name("FILE");
