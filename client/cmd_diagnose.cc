@@ -90,8 +90,8 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
 int RunDiagnose(const DiagnoseArgs& a) {
   if (!a.records.records.empty()) {
     if (!a.cases_dir.empty()) throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
-    if (a.service.enabled()) throw InputError("--master: the records diagnosis runs locally for now (drop --master)");
     RecordsDiagnoseRequest r = a.records;
+    if (a.service.enabled()) r.evaluator_factory = RecordsServiceFactory(a.service.Options(), 12, "piezoid diagnose");
     r.out = a.out_dir;
     r.candidates = a.candidates;
     r.threads = a.threads;
@@ -100,7 +100,12 @@ int RunDiagnose(const DiagnoseArgs& a) {
     r.no_plots = a.no_plots;
     r.quiet = a.quiet;
     r.significance_ratio = a.significance_ratio;
-    return RunRecordsDiagnose(r);
+    try {
+      return RunRecordsDiagnose(r);
+    } catch (const ServiceError& e) {
+      std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
+      return ExitCodeOf(e.status());
+    }
   }
   if (a.cases_dir.empty()) throw InputError("piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
   diagnose::EvaluatorFactory service;

@@ -12,7 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "client/cmd_service.h"
 #include "client/commands.h"
+#include "client/complete_service.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "io/csv.h"
@@ -41,6 +43,7 @@ struct FitArgs {
   bool no_figures = false;
   bool quiet = false;
   std::string export_c;
+  CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
 };
 
 std::string Fmt(double x, int prec = 4) {
@@ -140,8 +143,11 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
 }
 
 int RunFit(const FitArgs& a) {
+  records::RecordEvaluatorFactory service;
+  if (a.service.enabled()) service = RecordsServiceFactory(a.service.Options(), a.pi_operators, "piezoid fit");
   io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
   records::FitOptions o;
+  o.evaluator_factory = service;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
@@ -164,7 +170,13 @@ int RunFit(const FitArgs& a) {
   if (!a.quiet) o.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
   std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
             << "), family " << a.family << std::endl;
-  const records::FitResult r = records::FitRecords(set, o);
+  records::FitResult r;
+  try {
+    r = records::FitRecords(set, o);
+  } catch (const ServiceError& e) {
+    std::cerr << "piezoid fit: error: " << e.what() << "\n";
+    return ExitCodeOf(e.status());
+  }
   fs::create_directories(a.out);
   io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) { WriteFitReport(os, set, r, a); });
   io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r); });
@@ -204,7 +216,9 @@ int RunFit(const FitArgs& a) {
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
-  std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s; report in "
+  std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
+            << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
+            << "; report in "
             << (fs::path(a.out) / "report.md").string() << "\n";
   return 0;
 }
@@ -246,6 +260,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--export-c", a->export_c, "prandtl-ishlinskii: write the inverse compensator as a C header");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
+  AddCompleteServiceFlags(cmd, a->service);  // --master: the same result, bit for bit
   cmd->callback([a, &exit_code] { exit_code = RunFit(*a); });
 }
 

@@ -11,6 +11,7 @@
 
 #include "complete/committee.h"
 #include "client/service_evaluator.h"
+#include "records/fit.h"
 
 namespace pz::client {
 
@@ -27,6 +28,10 @@ struct CompleteServiceFlags {
 
 /// Adds the flags to `cmd`.
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
+
+/// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS).
+records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options, int pi_operators,
+                                                      const std::string& owner);
 
 /// One session per search of the committee, on the master of `options`.
 complete::EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options);

@@ -113,6 +113,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   while (std::getline(ss, name, ','))
     if (!name.empty()) o.candidates.push_back(records::ParseEffect(name));
   o.fit.threads = a.threads;
+  o.fit.evaluator_factory = a.evaluator_factory;
   o.fit.search.pso.seed = a.seed;
   if (a.quick) {
     o.fit.search.repetitions = 1;

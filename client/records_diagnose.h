@@ -23,6 +23,7 @@ struct RecordsDiagnoseRequest {
   bool no_plots = false;
   bool quiet = false;
   double significance_ratio = 1.25;
+  records::RecordEvaluatorFactory evaluator_factory;  ///< --master (null: local threads)
 };
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);

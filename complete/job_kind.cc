@@ -28,15 +28,83 @@ model::StackFamily StackFamilyOf(Family f) {
   return f == Family::kStackBoucWen ? model::StackFamily::kBoucWen : model::StackFamily::kBacklashLike;
 }
 
-std::vector<std::string> ParameterNames(Family f) {
-  if (f == Family::kBwOscillator) return model::BwIdentifiableNames();
-  if (IsStack(f)) return model::StackParamNames(StackFamilyOf(f));
-  return {};
-}
-
 int Substeps(const CompleteModelProblem& p) {
   return p.substeps > 0 ? p.substeps : p.family == Family::kBwOscillator ? 4 : 2;
 }
+
+records::DataScale ScaleOf(const CompleteModelProblem& p) {
+  records::DataScale s;
+  if (p.scale.size() != 9) throw InputError("complete_model.scale: 9 values expected");
+  s.u_min = p.scale[0];
+  s.u_max = p.scale[1];
+  s.u_half = p.scale[2];
+  s.y_half = p.scale[3];
+  s.gain = p.scale[4];
+  s.polarity = p.scale[5] < 0 ? -1 : 1;
+  s.f_dom = p.scale[6];
+  s.fs = p.scale[7];
+  s.duration = p.scale[8];
+  return s;
+}
+
+std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& p) {
+  const records::DataScale scale = ScaleOf(p);
+  records::FamilyOptions fo;
+  fo.substeps = Substeps(p);
+  fo.pi_operators = p.pi_operators;
+  std::shared_ptr<const records::Family> fam = records::MakeFamily(p.record_family, scale, fo);
+  std::vector<records::EffectKind> effects;
+  for (const std::string& e : p.effects) effects.push_back(records::ParseEffect(e));
+  return std::make_shared<records::RecordModel>(fam, effects, scale);
+}
+
+std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
+  const Family f = p.family;
+  if (f == Family::kBwOscillator) return model::BwIdentifiableNames();
+  if (IsStack(f)) return model::StackParamNames(StackFamilyOf(f));
+  if (f == Family::kRecords) {
+    try {
+      const auto model = RecordModelOf(p);  // alive through the loop (a temporary would not be)
+      std::vector<std::string> names;
+      for (const auto& q : model->params()) names.push_back(q.name);
+      return names;
+    } catch (const InputError&) {
+      return {};
+    }
+  }
+  return {};
+}
+
+// Owns the records and the model its RecordFitness points to.
+class OwningRecordFitness final : public opt::FitnessFunction {
+ public:
+  explicit OwningRecordFitness(const CompleteModelProblem& p) : model_(RecordModelOf(p)) {
+    for (const CompleteModelRecord& c : p.records) {
+      io::Record r;
+      r.name = c.name;
+      r.u = c.input;
+      r.y = c.output;
+      r.dt = c.dt_s;
+      r.t.resize(r.u.size());
+      for (size_t k = 0; k < r.t.size(); ++k) r.t[k] = static_cast<double>(k) * r.dt;
+      r.first_scored = c.first_counted;
+      r.end_scored = c.end_counted;
+      r.rest_samples = c.rest_samples;
+      r.offset_mode = static_cast<io::OffsetMode>(c.offset_mode);
+      r.offset = c.offset;
+      records_.push_back(std::move(r));
+    }
+    std::vector<const io::Record*> ptrs;
+    for (const auto& r : records_) ptrs.push_back(&r);
+    fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
+  }
+  opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_->Evaluate(g); }
+
+ private:
+  std::shared_ptr<records::RecordModel> model_;
+  std::vector<io::Record> records_;
+  std::unique_ptr<records::RecordFitness> fitness_;
+};
 
 model::InputInterpolation InterpolationOf(SpecInterpolation i) {
   switch (i) {
@@ -137,6 +205,8 @@ Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction
       *out = std::make_unique<BwOscillatorFitness>(BwRecords(p), p.error_cost);
     else if (IsStack(p.family))
       *out = std::make_unique<OwningStackFitness>(StackRecords(p), p);
+    else if (p.family == Family::kRecords)
+      *out = std::make_unique<OwningRecordFitness>(p);
     else
       return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
   } catch (const InputError& e) {
@@ -160,6 +230,59 @@ uint64_t LargestPrimeFactor(uint64_t n) {
 // large prime factor would keep a worker busy for hours.
 constexpr uint64_t kMaxPeriodPrimeFactor = 1000;
 
+// The RECORDS family: the family, effects and scale build a model; every record's window, rest and
+// offset are in range.
+template <typename Add>
+void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
+  if (p.t0_s != 0 || p.t1_s != 0)
+    add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s), "records carry their own windows: leave unset");
+  if (p.criterion != SpecCriterion::kIae)
+    add("complete_model.criterion", FitCriterionName(CriterionOf(p.criterion)), "records are scored by the MSE: leave unset");
+  if (p.pi_operators < 1 || p.pi_operators > 10000)
+    add("complete_model.pi_operators", std::to_string(p.pi_operators), "must be in [1, 10000]");
+  if (p.scale.size() != 9) {
+    add("complete_model.scale", std::to_string(p.scale.size()) + " values", "must hold 9 (u_min … duration)");
+  } else {
+    for (size_t i = 0; i < 9; ++i)
+      if (!std::isfinite(p.scale[i])) add("complete_model.scale[" + std::to_string(i) + "]", Num(p.scale[i]), "must be finite");
+  }
+  if (Substeps(p) < 1 || Substeps(p) > 512) add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 512] (0 = 2)");
+  if (p.scale.size() == 9 && p.pi_operators >= 1 && p.pi_operators <= 10000) {
+    try {
+      RecordModelOf(p);
+    } catch (const InputError& e) {
+      add("complete_model.record_family", "'" + p.record_family + "'", e.what());
+    }
+  }
+  for (size_t i = 0; i < p.records.size(); ++i) {
+    const CompleteModelRecord& r = p.records[i];
+    const std::string f = "complete_model.records[" + std::to_string(i) + "]";
+    const size_t n = r.input.size();
+    if (r.name.size() > 200) add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
+    if (!(std::isfinite(r.dt_s) && r.dt_s > 0)) add(f + ".dt_s", Num(r.dt_s), "must be finite and > 0");
+    if (n < 2) add(f + ".input", std::to_string(n) + " samples", "needs >= 2");
+    if (r.output.size() != n)
+      add(f + ".output", std::to_string(r.output.size()) + " samples", "must have as many as input (" + std::to_string(n) + ")");
+    for (size_t k = 0; k < n; ++k)
+      if (!std::isfinite(r.input[k])) {
+        add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]), "must be finite");
+        break;
+      }
+    for (size_t k = 0; k < r.output.size(); ++k)
+      if (!std::isfinite(r.output[k])) {
+        add(f + ".output[" + std::to_string(k) + "]", Num(r.output[k]), "must be finite");
+        break;
+      }
+    if (!(r.first_counted < r.end_counted && r.end_counted <= n))
+      add(f + ".end_counted", std::to_string(r.end_counted),
+          "must be > first_counted = " + std::to_string(r.first_counted) + " and <= " + std::to_string(n) + " samples");
+    if (r.rest_samples < 1 || r.rest_samples > n)
+      add(f + ".rest_samples", std::to_string(r.rest_samples), "must be in [1, " + std::to_string(n) + "]");
+    if (r.offset_mode < 0 || r.offset_mode > 2) add(f + ".offset_mode", std::to_string(r.offset_mode), "must be 0, 1 or 2");
+    if (!std::isfinite(r.offset)) add(f + ".offset", Num(r.offset), "must be finite");
+  }
+}
+
 // Every rule of the spec, checked without building the models (the master never runs them):
 // each violation named with its value.
 std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
@@ -168,6 +291,10 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     v.push_back({field, field + " = " + value + ": " + rule});
   };
   if (p.family == Family::kUnspecified) return v;  // named by the generic validation
+  if (p.family == Family::kRecords) {
+    CheckRecordFields(p, add);
+    return v;
+  }
   const bool osc = p.family == Family::kBwOscillator;
   const int sub = Substeps(p);
   if (sub < 1 || sub > (osc ? 1000 : 1024))
@@ -287,6 +414,33 @@ job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness) {
   return p;
 }
 
+job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators) {
+  CompleteModelProblem p;
+  p.family = Family::kRecords;
+  const records::RecordModel& m = fitness.model();
+  p.record_family = m.family().name();
+  for (records::EffectKind e : m.effects()) p.effects.push_back(records::EffectName(e));
+  p.pi_operators = pi_operators;
+  const records::DataScale& s = m.scale();
+  p.scale = {s.u_min, s.u_max, s.u_half, s.y_half, s.gain, static_cast<double>(s.polarity), s.f_dom, s.fs, s.duration};
+  for (const io::Record* r : fitness.records()) {
+    const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored);
+    CompleteModelRecord c;
+    c.name = r->name.substr(0, 200);
+    c.sample_rate_hz = r->sample_rate_hz();
+    c.input.assign(r->u.begin() + static_cast<std::ptrdiff_t>(from), r->u.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+    c.output.assign(r->y.begin() + static_cast<std::ptrdiff_t>(from), r->y.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+    c.first_counted = r->first_scored - from;
+    c.end_counted = r->end_scored - from;
+    c.rest_samples = r->rest_samples - from;
+    c.dt_s = r->dt;
+    c.offset_mode = static_cast<int>(r->offset_mode);
+    c.offset = r->offset;
+    p.records.push_back(std::move(c));
+  }
+  return p;
+}
+
 job::JobSpec CompleteModelJobSpec(job::CompleteModelProblem problem, const std::string& name) {
   job::JobSpec spec;
   spec.name = name.substr(0, 200);
@@ -316,8 +470,13 @@ job::JobKind CompleteModelJobKind() {
     return v;
   };
   k.layout = [](const job::JobSpec& s, job::GenomeLayout* l) {
-    const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
-    if (names.empty()) return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
+    const auto& p = std::get<CompleteModelProblem>(s.problem);
+    const auto names = ParameterNames(p);
+    if (names.empty()) {
+      return InvalidArgument(p.family == Family::kRecords
+                                 ? "complete_model: the records model '" + p.record_family + "' has no searched parameter"
+                                 : std::string("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set"));
+    }
     l->bits = 0;
     l->reals = static_cast<int>(names.size());
     return Status::Ok();
@@ -326,7 +485,7 @@ job::JobKind CompleteModelJobKind() {
     return MakeCompleteModelFitness(s, f);
   };
   k.describe = [](const job::JobSpec& s, const opt::Genome& g) {
-    const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem).family);
+    const auto names = ParameterNames(std::get<CompleteModelProblem>(s.problem));
     if (g.reals.size() != names.size()) return std::string();
     std::ostringstream os;
     os.precision(6);

@@ -15,6 +15,7 @@
 #include "complete/stack_fitness.h"
 #include "job/job_kind.h"
 #include "job/job_spec.h"
+#include "records/fit.h"
 
 namespace pz::complete {
 
@@ -22,6 +23,10 @@ namespace pz::complete {
 /// input options (a spec carries one set).
 job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
 job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness);
+/// `piezoid fit` / `diagnose --records` on the service (family RECORDS): the training records
+/// without the part of their leading rest that is not scored (the model is at rest there: the cut
+/// changes no cost, bit for bit), the family, effects and data scale.
+job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators);
 
 /// A whole session spec (algorithm set by the caller; seed 0; errors and quarantined individuals
 /// cost opt::kDefaultErrorCost, as in the local evaluators).

@@ -125,13 +125,20 @@ struct CompleteModelRecord {
   double sample_rate_hz = 0;   ///< fs [Hz], finite, > 0
   std::vector<double> input;   ///< u_k at t = k / fs, ≥ 2 samples, finite
   std::vector<double> output;  ///< measured y_k, as many as input, finite
-  uint64_t first_counted = 0;  ///< oscillator: warm-up samples simulated but not counted
+  uint64_t first_counted = 0;  ///< oscillator: warm-up samples simulated but not counted;
+                               ///< records: the first scored sample
+  // Family kRecords only (records/fit.h, io::Record):
+  double dt_s = 0;             ///< the record's step [s] (exact; sample_rate_hz is informative)
+  uint64_t end_counted = 0;    ///< one past the last scored sample, ≤ samples
+  uint64_t rest_samples = 1;   ///< leading samples at the first sample's drive, 1 … samples
+  int offset_mode = 0;         ///< io::OffsetMode: 0 fit, 1 rest, 2 fixed
+  double offset = 0;           ///< rest: the measured rest level; fixed: the offset
 };
 
 /// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
 /// the family's physical parameters; cost = the family's criterion on the records.
 struct CompleteModelProblem {
-  enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3 };
+  enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3, kRecords = 4 };
   enum class Criterion { kIae = 1, kSse = 2, kRmse = 3, kMax = 4 };
   enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
   Family family = Family::kUnspecified;
@@ -143,6 +150,14 @@ struct CompleteModelProblem {
   uint64_t period_samples = 0;                   ///< oscillator, Fourier (0 = whole record)
   double error_cost = 1e30;                      ///< cost of a diverged / invalid parameter set
   std::string source;                            ///< free text, ≤ 1000 chars
+  // Family kRecords: `piezoid fit` / `diagnose --records` on the service (records/fit.h).
+  std::string record_family;                     ///< records/families.h name
+  std::vector<std::string> effects;              ///< records/model.h effect names
+  int pi_operators = 12;                         ///< Prandtl–Ishlinskii plays, 1 … 10000
+  /// The data scale the client measured (records::DataScale, in this order): u_min, u_max, u_half,
+  /// y_half, gain, polarity, f_dom, fs, duration — sent so that the workers' search box and model
+  /// are the client's, bit for bit.
+  std::vector<double> scale;
 };
 
 /// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
 #include <numbers>
 
 #include "io/csv.h"
@@ -175,37 +177,51 @@ class BwOscillatorFamily final : public Family {
 
 class BimorphFinFamily final : public Family {
  public:
-  BimorphFinFamily(const DataScale& s, const FamilyOptions& o) : plant_(o.geometry) {
+  BimorphFinFamily(const DataScale& s, const FamilyOptions& o) : geometry_(o.geometry), plant_(o.geometry) {
     // The spec's ranges (model/network.h) are for drives up to 375 V; α scales with 1/drive.
     const double a = 375.0 / s.u_half, g = s.y_half;  // gain: output units per degree
+    const double lp = o.geometry.active_length_m, le = o.geometry.tip_length_m;
     params_ = {{"mu", "1/s", 0, 300, false},          {"delta", "s", 1e-5, 1, true},
                {"alpha", "N/V", 1e-5 * a, 0.02 * a, true}, {"beta", "1/V", 0, 0.02 * a, false},
                {"gamma", "1/V", -0.02 * a, 0.02 * a, false}, {"a1", "deg", 0, 2, false},
                {"a2", "deg", 0, 2, false},             {"b1", "deg", 0.05, 60, true},
-               {"b2_abs", "deg", 0.05, 60, true},       {"gain", "y/deg", 0.01 * g, 100 * g, true}};
+               {"b2_abs", "deg", 0.05, 60, true},       {"gain", "y/deg", 0.01 * g, 100 * g, true},
+               // The beam's geometry: the active (MFC) and passive tip lengths set the modes.
+               {"active_length", "m", 0.5 * lp, 2 * lp, true}};
+    if (le > 0 && o.geometry.n_tip > 0) params_.push_back({"tip_length", "m", 0.25 * le, 3 * le, true});
   }
   std::string name() const override { return "bimorph-fin"; }
   std::string title() const override { return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)"; }
   std::string equation() const override {
-    return "M q'' + C q' + K q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, y = gain * Backlash(atan(w_tip/L))";
+    return "M(L_p, L_e) q'' + C q' + K(L_p, L_e) q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, "
+           "y = gain * Backlash(atan(w_tip/L))";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
-    if (p.size() != 10) throw InputError("bimorph-fin: 10 parameters expected");
+    if (p.size() != params_.size())
+      throw InputError("bimorph-fin: " + std::to_string(params_.size()) + " parameters expected");
     model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
     model::SampledSignal sig;
     sig.t.resize(u.size());
     for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
     sig.u.assign(u.begin(), u.end());
-    const model::BimorphTrace tr = model::Simulate(plant_, b, sig);
-    if (tr.angle_deg.size() != u.size() || !tr.summary.ok()) {
-      std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN());
-      return;
-    }
+    model::BeamGeometry geo = geometry_;
+    geo.active_length_m = p[10];
+    if (params_.size() > 11) geo.tip_length_m = p[11];
+    auto nan = [&] { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); };
+    if (!geo.Validate().ok()) return nan();
+    // The nominal geometry's plant is assembled once; another geometry costs one FE assembly and
+    // eigen-decomposition of 2 (n_active + n_tip) DOFs, small against the simulation.
+    const bool nominal = geo.active_length_m == geometry_.active_length_m && geo.tip_length_m == geometry_.tip_length_m;
+    std::optional<model::BimorphPlant> other;
+    if (!nominal) other.emplace(geo);
+    const model::BimorphTrace tr = model::Simulate(nominal ? plant_ : *other, b, sig);
+    if (tr.angle_deg.size() != u.size() || !tr.summary.ok()) return nan();
     for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * tr.angle_deg[k];
   }
 
  private:
+  model::BeamGeometry geometry_;
   model::BimorphPlant plant_;
   std::vector<ParamInfo> params_;
 };

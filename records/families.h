@@ -9,8 +9,9 @@
 //   bw-oscillator       Bouc–Wen hysteretic oscillator (model/bw_oscillator.h), driven by the
 //                       drive through a gain: K fn ζ share βγ βδ
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
-//                       μ δ α β γ a1 a2 b1 b2 gain; the beam geometry is a fixed parameter set
-//                       (FamilyOptions::geometry)
+//                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
+//                       and tip length L_e (searched around FamilyOptions::geometry; the
+//                       cross-section and materials stay that geometry's)
 //
 // A family is made for a data scale (drive range, response range, dominant frequency, sample
 // rate) measured on the training records: its search box is scaled to it, so the same family fits

@@ -127,9 +127,9 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   double sse = 0;
   for (const io::Record* r : records_) {
     std::vector<double> y(r->end_scored);
-    model_.Simulate(*r, params, out.weights, r->end_scored, y);
+    const double rest = pol * model_.Simulate(*r, params, out.weights, r->end_scored, y);
     for (double& v : y) v *= pol;
-    const double o = RecordOffset(*r, y);
+    const double o = RecordOffset(*r, y, rest);
     for (double& v : y) v += o;
     for (size_t k = r->first_scored; k < r->end_scored; ++k) {
       const double e = r->y[k] - y[k];
@@ -164,9 +164,9 @@ bool RecordFitness::Residuals(std::span<const double> params, std::vector<double
 RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params, std::span<const double> weights,
                        const io::Record& r, std::vector<double>* yhat_out) {
   std::vector<double> y(r.end_scored);
-  model.Simulate(r, params, weights, r.end_scored, y);
+  const double rest = model.scale().polarity * model.Simulate(r, params, weights, r.end_scored, y);
   for (double& v : y) v *= model.scale().polarity;
-  const double o = RecordOffset(r, y);
+  const double o = RecordOffset(r, y, rest);
   for (double& v : y) v += o;
   RecordMetrics m;
   m.name = r.name;

@@ -152,8 +152,10 @@ void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double
         break;
       }
       case EffectKind::kDrift: {
-        const double t0 = r.t[r.first_scored];
-        for (size_t k = 0; k < y.size(); ++k) y[k] += q[0] * (r.t[k] - t0);
+        // Time from the window's start on the record's uniform grid (the same wherever the record
+        // is cut: the service's workers receive it without its leading rest).
+        const double first = static_cast<double>(r.first_scored);
+        for (size_t k = 0; k < y.size(); ++k) y[k] += q[0] * (static_cast<double>(k) - first) * r.dt;
         break;
       }
       default: break;
@@ -161,8 +163,8 @@ void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double
   }
 }
 
-void RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
-                           size_t end, std::span<double> yhat) const {
+double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
+                             size_t end, std::span<double> yhat) const {
   if (p.size() != params_.size()) {
     throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
                      std::to_string(params_.size()) + " expected");
@@ -186,14 +188,16 @@ void RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::
   } else {
     family_->Simulate(p.first(nf), ue, r.dt, seg);
   }
-  std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), seg[0]);
+  const double rest_output = seg[0];
+  std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), rest_output);
   ApplyOutputEffects(r, p.subspan(nf), 0, yhat.first(end));
+  return rest_output;
 }
 
-double RecordOffset(const io::Record& r, std::span<const double> y) {
+double RecordOffset(const io::Record& r, std::span<const double> y, double rest_output) {
   switch (r.offset_mode) {
     case io::OffsetMode::kFixed: return r.offset;
-    case io::OffsetMode::kRest: return r.offset - y[0];
+    case io::OffsetMode::kRest: return r.offset - rest_output;
     case io::OffsetMode::kFit: {
       double s = 0;
       for (size_t k = r.first_scored; k < r.end_scored; ++k) s += r.y[k] - y[k];

@@ -14,8 +14,9 @@
 // delay reads the drive by linear interpolation (u_0 before the start).
 //
 // Offsets (io::OffsetMode): ŷ_total = polarity · ŷ + o with o the least-squares offset over the
-// scored window (fit), the measured rest level minus the model's rest output (rest), or the given
-// value (fixed).
+// scored window (fit), the measured rest level minus the model's rest output (rest: the family's
+// output at rest, before the output effects — a drift is zero at the window's start, not at rest),
+// or the given value (fixed).
 //
 // Simulation skips the record's rest segment: every family and effect is at equilibrium under a
 // constant drive, so the output there is the rest output (exact).
@@ -64,7 +65,8 @@ class RecordModel {
 
   /// The model output ŷ (without polarity and offset) on samples [0, end) of the record — only
   /// [rest, end) is simulated. For a linear family, `weights` are the solved weights; else empty.
-  void Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
+  /// Returns the model's rest output (before the output effects: what a rest measurement is).
+  double Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
                 std::span<double> yhat) const;
   /// The effective drive after the drive effects, on samples [from, end); and the family's
   /// regressors for a linear family (rows = samples from..end).
@@ -83,7 +85,8 @@ class RecordModel {
   std::vector<size_t> effect_offset_;  ///< index of each effect's first parameter in p
 };
 
-/// The offset o of a record given the model output over the window (polarity applied by caller).
-double RecordOffset(const io::Record& r, std::span<const double> signed_yhat);
+/// The offset o of a record given the model output over the window and its rest output (polarity
+/// applied to both by the caller).
+double RecordOffset(const io::Record& r, std::span<const double> signed_yhat, double signed_rest_output);
 
 }  // namespace pz::records

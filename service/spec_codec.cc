@@ -115,6 +115,11 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
       pr->mutable_input()->Assign(r.input.begin(), r.input.end());
       pr->mutable_output()->Assign(r.output.begin(), r.output.end());
       pr->set_first_counted(r.first_counted);
+      pr->set_dt_s(r.dt_s);
+      pr->set_end_counted(r.end_counted);
+      pr->set_rest_samples(r.rest_samples);
+      pr->set_offset_mode(static_cast<uint32_t>(std::max(0, r.offset_mode)));
+      pr->set_offset(r.offset);
     }
     pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m->criterion));
     pm->set_t0_s(m->t0_s);
@@ -124,6 +129,10 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     pm->set_period_samples(m->period_samples);
     pm->set_error_cost(m->error_cost);
     pm->set_source(m->source);
+    pm->set_record_family(m->record_family);
+    for (const std::string& e : m->effects) pm->add_effects(e);
+    pm->set_pi_operators(static_cast<uint32_t>(std::max(0, m->pi_operators)));
+    pm->mutable_scale()->Assign(m->scale.begin(), m->scale.end());
   } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
     auto* py = p->mutable_synthetic();
     py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
@@ -228,10 +237,10 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     auto bad_enum = [&](const char* field, int value, const char* known) {
       if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
     };
-    if (pm.family() >= 0 && pm.family() <= 3)
+    if (pm.family() >= 0 && pm.family() <= 4)
       m.family = static_cast<CompleteModelProblem::Family>(pm.family());
     else
-      bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+      bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
     for (const auto& pr : pm.records()) {
       CompleteModelRecord r;
       r.name = pr.name();
@@ -239,6 +248,11 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
       r.input.assign(pr.input().begin(), pr.input().end());
       r.output.assign(pr.output().begin(), pr.output().end());
       r.first_counted = pr.first_counted();
+      r.dt_s = pr.dt_s();
+      r.end_counted = pr.end_counted();
+      r.rest_samples = std::max<uint64_t>(1, pr.rest_samples());
+      r.offset_mode = static_cast<int>(std::min<uint32_t>(pr.offset_mode(), 1000));
+      r.offset = pr.offset();
       m.records.push_back(std::move(r));
     }
     if (pm.criterion() >= 0 && pm.criterion() <= 4)
@@ -256,6 +270,10 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     m.period_samples = pm.period_samples();
     m.error_cost = OrDefault(pm.error_cost(), 1e30);
     m.source = pm.source();
+    m.record_family = pm.record_family();
+    m.effects.assign(pm.effects().begin(), pm.effects().end());
+    m.pi_operators = pm.pi_operators() == 0 ? 12 : ClampInt(pm.pi_operators());
+    m.scale.assign(pm.scale().begin(), pm.scale().end());
     s->problem = std::move(m);
   }
   if (p.has_ga()) {

@@ -248,7 +248,7 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   json.replace(json.find(family), family.size(), "9");
   EXPECT_TRUE(service::JobSpecFromJson(json, &decoded, &v).ok());
   ASSERT_FALSE(v.empty());
-  EXPECT_EQ(v[0].description, "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
+  EXPECT_EQ(v[0].description, "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
 }
 
 client::ServiceEvaluatorOptions Options(const Cluster& c) {

@@ -1,0 +1,193 @@
+// Record fits on the service (issue 14): the "complete_model" job kind's RECORDS family rebuilds,
+// from its spec alone (binary and JSON encodings), the fitness `piezoid fit` has — every family
+// with effects, records cut at their rest, each offset mode — cost for cost, bit for bit; bad
+// specs are refused field by field; and a fit whose global search runs on a local master with two
+// workers gives the local result bit for bit.
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+#include "client/complete_service.h"
+#include "complete/job_kind.h"
+#include "records/synthetic.h"
+#include "service_harness.h"
+#include "tests/testing/expect_error.h"
+
+namespace pz::testing {
+namespace {
+
+using records::EffectKind;
+
+bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+records::DataScale Scale() {
+  records::DataScale s;
+  s.u_min = -100;
+  s.u_max = 100;
+  s.u_half = 100;
+  s.y_half = 10;
+  s.gain = 0.1;
+  s.f_dom = 1;
+  s.fs = 500;
+  s.duration = 3;
+  return s;
+}
+
+/// Two records of backlash-like + delay: a sine after a rest (offset fit), a multisine (offset rest),
+/// plus a withheld one; windows that start after the rest.
+io::RecordSet MakeSet() {
+  const records::DataScale s = Scale();
+  auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", s));
+  records::RecordModel truth(fam, {EffectKind::kDelay}, s);
+  const std::vector<double> p = {0.02, 0.1, 0.05, 0.006};
+  io::RecordSet set;
+  set.source = "synthetic";
+  for (int i = 0; i < 3; ++i) {
+    records::DriveShape d;
+    d.waveform = i == 1 ? records::Waveform::kMultisine : records::Waveform::kSine;
+    d.amplitude = 100;
+    d.frequency_hz = 1;
+    d.frequency_end_hz = 5;
+    d.phase_rad = 0.8 + i;
+    d.rest_s = 0.3;
+    d.duration_s = 3;
+    d.fs_hz = 500;
+    d.seed = static_cast<uint64_t>(i + 1);
+    io::Record r = records::SynthesizeRecord(truth, p, {}, d, {-0.7, 0.02, 0.005, static_cast<uint64_t>(i + 1)},
+                                             "r" + std::to_string(i), i == 2 ? model::CaseRole::kValidate : model::CaseRole::kTrain,
+                                             0.5, 3.2);
+    if (i == 1) {
+      r.offset_mode = io::OffsetMode::kRest;
+      double m = 0;
+      for (size_t k = 0; k < r.rest_samples; ++k) m += r.y[k];
+      r.offset = m / static_cast<double>(r.rest_samples);
+    }
+    set.records.push_back(std::move(r));
+  }
+  return set;
+}
+
+std::unique_ptr<opt::FitnessFunction> Remote(const job::JobSpec& spec, bool json) {
+  job::JobSpec decoded;
+  std::vector<job::FieldViolation> v;
+  if (json)
+    EXPECT_TRUE(service::JobSpecFromJson(service::JobSpecToJson(spec), &decoded, &v).ok());
+  else
+    EXPECT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded, &v).ok());
+  EXPECT_TRUE(v.empty());
+  EXPECT_EQ(service::EncodeJobSpec(decoded), service::EncodeJobSpec(spec));  // nothing lost
+  decoded.external = job::ExternalSettings{};
+  job::JobKindRegistry registry;
+  registry.Register(complete::CompleteModelJobKind());
+  for (const auto& x : registry.Validate(decoded)) ADD_FAILURE() << x.description;
+  std::unique_ptr<opt::FitnessFunction> f;
+  EXPECT_TRUE(registry.MakeFitness(decoded, &f).ok());
+  return f;
+}
+
+TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
+  const io::RecordSet set = MakeSet();
+  const auto train = set.WithRole(model::CaseRole::kTrain);
+  const records::DataScale scale = records::MeasureScale(train);
+  struct Case {
+    std::string family;
+    std::vector<EffectKind> effects;
+  };
+  for (const Case& c : {Case{"backlash-like", {EffectKind::kDelay, EffectKind::kDrift}},
+                        Case{"prandtl-ishlinskii", {EffectKind::kDriverLowpass}},
+                        Case{"duhem", {EffectKind::kFriction, EffectKind::kStiffening}},
+                        Case{"stack-bouc-wen", {}}}) {
+    SCOPED_TRACE(c.family);
+    auto fam = std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale));
+    records::RecordModel model(fam, c.effects, scale);
+    records::RecordFitness local(model, train);
+    const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, 12), "test");
+    // The rest is cut from the records on the wire.
+    const auto& problem = std::get<job::CompleteModelProblem>(spec.problem);
+    EXPECT_LT(problem.records[0].input.size(), train[0]->end_scored);
+    for (bool json : {false, true}) {
+      const auto remote = Remote(spec, json);
+      ASSERT_TRUE(remote);
+      for (double x : {0.1, 0.37, 0.8}) {
+        opt::Genome g;
+        for (const auto& p : model.params()) g.reals.push_back(p.lower + x * (p.upper - p.lower));
+        const opt::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
+        EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
+        EXPECT_EQ(a.status, b.status);
+      }
+    }
+  }
+}
+
+TEST(RecordsJobKindTest, BadSpecsAreRefusedFieldByField) {
+  const io::RecordSet set = MakeSet();
+  const auto train = set.WithRole(model::CaseRole::kTrain);
+  const records::DataScale scale = records::MeasureScale(train);
+  auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", scale));
+  records::RecordModel model(fam, {}, scale);
+  records::RecordFitness local(model, train);
+  job::CompleteModelProblem p = complete::CompleteModelProblemOf(local, 12);
+  job::JobKindRegistry registry;
+  registry.Register(complete::CompleteModelJobKind());
+  auto first_error = [&](job::CompleteModelProblem q) {
+    job::JobSpec spec = complete::CompleteModelJobSpec(std::move(q), "bad");
+    spec.external = job::ExternalSettings{};
+    const auto v = registry.Validate(spec);
+    return v.empty() ? std::string("<none>") : v.front().description;
+  };
+  EXPECT_EQ(first_error(p), "<none>");
+  auto q = p;
+  q.record_family = "preisach";
+  PZ_EXPECT_HAS(first_error(q), "complete_model.record_family = 'preisach': --family 'preisach' is unknown");
+  q = p;
+  q.scale.pop_back();
+  PZ_EXPECT_HAS(first_error(q), "complete_model.scale = 8 values: must hold 9");
+  q = p;
+  q.records[0].end_counted = q.records[0].input.size() + 1;
+  PZ_EXPECT_HAS(first_error(q), "complete_model.records[0].end_counted");
+  q = p;
+  q.effects = {"hum"};
+  PZ_EXPECT_HAS(first_error(q), "effect 'hum' is unknown");
+  q = p;
+  q.records[1].offset_mode = 7;
+  PZ_EXPECT_HAS(first_error(q), "complete_model.records[1].offset_mode = 7: must be 0, 1 or 2");
+}
+
+TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
+  Cluster cluster("records-fit");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  const io::RecordSet set = MakeSet();
+  records::FitOptions o;
+  o.family = "backlash-like";
+  o.effects = {EffectKind::kDelay};
+  o.search.repetitions = 1;
+  o.search.pso.particles = 8;
+  o.search.pso.iterations = 6;
+  o.lm.max_iterations = 5;
+  const records::FitResult local = records::FitRecords(set, o);
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 120;
+  o.evaluator_factory = client::RecordsServiceFactory(so, 12, "test");
+  records::FitResult remote;
+  try {
+    remote = records::FitRecords(set, o);
+  } catch (const std::exception& e) {
+    FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
+  }
+  ASSERT_EQ(local.params.size(), remote.params.size());
+  for (size_t i = 0; i < local.params.size(); ++i) EXPECT_TRUE(SameBits(local.params[i], remote.params[i])) << i;
+  EXPECT_TRUE(SameBits(local.train_mse, remote.train_mse));
+  EXPECT_EQ(local.search.evaluations, remote.search.evaluations);
+  auto client = cluster.Client();
+  std::vector<service::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  ASSERT_EQ(jobs.size(), 1u);
+  EXPECT_EQ(jobs[0].kind, "complete_model");
+}
+
+}  // namespace
+}  // namespace pz::testing
