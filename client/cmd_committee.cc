@@ -14,6 +14,7 @@
 #include "client/committee_report.h"
 #include "complete/committee.h"
 #include "client/complete_service.h"
+#include "client/search_flags.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -28,9 +29,7 @@ struct CommitteeArgs {
   std::vector<std::string> optimisers{"pso", "ga-real"};
   std::string criterion = "iae";
   double t0 = 0.5, t1 = 2.5;
-  int repetitions = 5;
-  uint64_t seed = 1;
-  int particles = 30, iterations = 150, population = 30, generations = 150, stall = 40;
+  SearchFlags search{.repetitions = 5};
   int substeps = 2;
   int threads = 0;
   bool averaging = false;
@@ -55,17 +54,7 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   o.t1_s = a.t1;
   o.sim.substeps = a.substeps;
   o.averaging = a.averaging;
-  o.search.repetitions = a.repetitions;
-  o.search.pso.seed = o.search.ga_real.seed = o.search.ga_binary.ga.seed = a.seed;
-  o.search.pso.particles = a.particles;
-  o.search.pso.iterations = a.iterations;
-  o.search.pso.stall_iterations = a.stall;
-  o.search.ga_real.population = a.population;
-  o.search.ga_real.generations = a.generations;
-  o.search.ga_real.stall_generations = a.stall;
-  o.search.ga_binary.ga.population_size = a.population;
-  o.search.ga_binary.ga.max_generations = a.generations;
-  o.search.ga_binary.ga.stall_generations = a.stall;
+  ApplySearchFlags(a.search, &o.search);
   ThrowIfError(o.Validate());
 
   const io::StackRecordSet set = io::LoadStackRecordSet(a.records);
@@ -137,18 +126,7 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
   cmd->add_option("--t0", a->t0, "criterion window start [s]")->default_str("0.5");
   cmd->add_option("--t1", a->t1, "criterion window end [s] (clipped to each record's end)")
       ->default_str("2.5");
-  cmd->add_option("--repetitions", a->repetitions, "seeded runs per search, best kept")
-      ->default_str("5");
-  cmd->add_option("--seed", a->seed, "seed of the first repetition (then seed+1, …)")
-      ->default_str("1");
-  cmd->add_option("--particles", a->particles, "PSO swarm size")->default_str("30");
-  cmd->add_option("--iterations", a->iterations, "PSO iterations")->default_str("150");
-  cmd->add_option("--population", a->population, "GA population")->default_str("30");
-  cmd->add_option("--generations", a->generations, "GA generations")->default_str("150");
-  cmd->add_option("--stall", a->stall,
-                  "stop a repetition after this many iterations / generations without a relative "
-                  "improvement of 1e-6 (0: never)")
-      ->default_str("40");
+  AddSearchFlags(cmd, &a->search);
   cmd->add_option("--substeps", a->substeps,
                   "Bouc-Wen driver-filter sub-steps per sample interval (1 … 1024)")
       ->default_str("2");

@@ -15,6 +15,7 @@
 #include "client/cmd_service.h"
 #include "client/commands.h"
 #include "client/complete_service.h"
+#include "client/search_flags.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "io/csv.h"
@@ -33,8 +34,7 @@ struct FitArgs {
   std::vector<std::string> train_windows, validate_windows, test_windows;
   std::string out = "fit-out";
   std::string algorithm = "pso";
-  int repetitions = 3, particles = 30, iterations = 150, population = 30, generations = 150, stall = 40;
-  uint64_t seed = 1;
+  SearchFlags search;
   int threads = 2;
   int substeps = 2;
   int pi_operators = 12;
@@ -153,17 +153,7 @@ int RunFit(const FitArgs& a) {
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
-  o.search.repetitions = a.repetitions;
-  o.search.pso.seed = o.search.ga_real.seed = o.search.ga_binary.ga.seed = a.seed;
-  o.search.pso.particles = a.particles;
-  o.search.pso.iterations = a.iterations;
-  o.search.pso.stall_iterations = a.stall;
-  o.search.ga_real.population = a.population;
-  o.search.ga_real.generations = a.generations;
-  o.search.ga_real.stall_generations = a.stall;
-  o.search.ga_binary.ga.population_size = a.population;
-  o.search.ga_binary.ga.max_generations = a.generations;
-  o.search.ga_binary.ga.stall_generations = a.stall;
+  ApplySearchFlags(a.search, &o.search);
   o.polish = !a.no_polish;
   o.lm.max_iterations = a.lm_iterations;
   o.threads = a.threads;
@@ -244,14 +234,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real or ga-binary")->default_str("pso");
-  cmd->add_option("--repetitions", a->repetitions, "seeded searches, best kept")->default_str("3");
-  cmd->add_option("--seed", a->seed, "seed of the first repetition")->default_str("1");
-  cmd->add_option("--particles", a->particles, "PSO swarm size")->default_str("30");
-  cmd->add_option("--iterations", a->iterations, "PSO iterations")->default_str("150");
-  cmd->add_option("--population", a->population, "GA population")->default_str("30");
-  cmd->add_option("--generations", a->generations, "GA generations")->default_str("150");
-  cmd->add_option("--stall", a->stall, "stop a repetition after this many iterations without progress")
-      ->default_str("40");
+  AddSearchFlags(cmd, &a->search);
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");

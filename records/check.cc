@@ -19,19 +19,6 @@ std::vector<double> Nominal(const std::string& family) {
                    "' has no nominal parameter set for synthetic records (stack-bouc-wen, backlash-like, duhem)");
 }
 
-DataScale CheckScale() {
-  DataScale s;
-  s.u_min = -100;
-  s.u_max = 100;
-  s.u_half = 100;
-  s.y_half = 10;
-  s.gain = 0.1;
-  s.f_dom = 1;
-  s.fs = 500;
-  s.duration = 4;
-  return s;
-}
-
 double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
 double Sign(opt::Rng& rng) { return rng.Uniform01() < 0.5 ? -1 : 1; }
 
@@ -42,7 +29,7 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   if (o.trials < 1) throw InputError(FieldError("trials", o.trials, "must be >= 1"));
   const auto start = std::chrono::steady_clock::now();
   const std::vector<double> nominal = Nominal(o.family);
-  const DataScale scale = CheckScale();
+  const DataScale scale = SyntheticStackScale();
   std::shared_ptr<const Family> fam = MakeFamily(o.family, scale);
   std::vector<EffectKind> kinds;
   const auto excluded = fam->excluded_effects();

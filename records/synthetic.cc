@@ -90,6 +90,19 @@ std::vector<double> MakeDrive(const DriveShape& s) {
   return u;
 }
 
+DataScale SyntheticStackScale() {
+  DataScale s;
+  s.u_min = -100;
+  s.u_max = 100;
+  s.u_half = 100;
+  s.y_half = 10;
+  s.gain = 0.1;
+  s.f_dom = 1;
+  s.fs = 500;
+  s.duration = 4;
+  return s;
+}
+
 io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params, std::span<const double> weights,
                             const DriveShape& shape, const Measurement& m, const std::string& name,
                             model::CaseRole role, double t0_s, double t1_s) {

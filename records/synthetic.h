@@ -42,6 +42,10 @@ struct Measurement {
   uint64_t seed = 1;
 };
 
+/// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
+/// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
+DataScale SyntheticStackScale();
+
 /// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
 io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params, std::span<const double> weights,

@@ -20,19 +20,6 @@ using model::CaseRole;
 
 constexpr double kNoise = 0.02;
 
-DataScale Scale() {
-  DataScale s;
-  s.u_min = -100;
-  s.u_max = 100;
-  s.u_half = 100;
-  s.y_half = 10;
-  s.gain = 0.1;
-  s.f_dom = 1;
-  s.fs = 500;
-  s.duration = 4;
-  return s;
-}
-
 FitOptions Quick() {
   FitOptions o;
   o.search.repetitions = 1;
@@ -46,7 +33,7 @@ FitOptions Quick() {
 /// A record of truth = family + effects, cut into a training and a withheld window.
 void AddRecord(io::RecordSet& set, const std::string& family, std::vector<EffectKind> effects, std::vector<double> params,
                const DriveShape& d, uint64_t seed, const std::string& name, double split_fraction = 0.6) {
-  const DataScale s = Scale();
+  const DataScale s = SyntheticStackScale();
   auto fam = std::shared_ptr<const Family>(MakeFamily(family, s));
   RecordModel truth(fam, std::move(effects), s);
   io::Record r = SynthesizeRecord(truth, params, {}, d, {-1.2, kNoise, 0.005, seed}, name, CaseRole::kTrain);

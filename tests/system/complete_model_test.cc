@@ -22,6 +22,7 @@
 #include "complete/job_kind.h"
 #include "opt/random.h"
 #include "opt/thread_pool_evaluator.h"
+#include "complete_remote.h"
 #include "service_harness.h"
 #include "kinds/kinds.h"
 
@@ -95,26 +96,6 @@ io::StackRecordSet StackSet() {
   return set;
 }
 
-// The spec through the binary encoding (as a worker gets it) or the JSON one (as a user writes it),
-// made into a fitness by a registry with the kind.
-std::unique_ptr<opt::FitnessFunction> Remote(const job::JobSpec& spec, bool json) {
-  job::JobSpec decoded;
-  std::vector<job::FieldViolation> v;
-  if (json)
-    EXPECT_TRUE(service::JobSpecFromJson(service::JobSpecToJson(spec), &decoded, &v).ok());
-  else
-    EXPECT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded, &v).ok());
-  EXPECT_TRUE(v.empty());
-  EXPECT_EQ(service::EncodeJobSpec(decoded), service::EncodeJobSpec(spec));  // nothing lost
-  decoded.external = job::ExternalSettings{};
-  job::JobKindRegistry registry;
-  registry.Register(complete::CompleteModelJobKind());
-  for (const auto& x : registry.Validate(decoded)) ADD_FAILURE() << x.description;
-  std::unique_ptr<opt::FitnessFunction> f;
-  EXPECT_TRUE(registry.MakeFitness(decoded, &f).ok());
-  return f;
-}
-
 void ExpectSameFitness(const opt::FitnessFunction& local, const opt::FitnessFunction& remote,
                        const std::vector<std::vector<double>>& points) {
   for (const auto& p : points) {
@@ -137,7 +118,7 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
       {1, 2, 3}};                                      // wrong size: an error
   for (bool json : {false, true}) {
     SCOPED_TRACE(json ? "json" : "binary");
-    const auto remote = Remote(spec, json);
+    const auto remote = RemoteCompleteFitness(spec, json);
     ASSERT_TRUE(remote);
     ExpectSameFitness(local, *remote, points);
   }
@@ -161,7 +142,7 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
     for (FitCriterion c : {FitCriterion::kIae, FitCriterion::kSse, FitCriterion::kRmse, FitCriterion::kMax}) {
       SCOPED_TRACE(std::string(model::StackFamilyName(family)) + " " + complete::FitCriterionName(c));
       const StackFitness local(family, train, c, 0.01, 0.5, model::StackSimOptions{3});
-      const auto remote = Remote(complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "stack"), false);
+      const auto remote = RemoteCompleteFitness(complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "stack"), false);
       ASSERT_TRUE(remote);
       if (family == model::StackFamily::kBoucWen)
         ExpectSameFitness(local, *remote,

@@ -10,6 +10,7 @@
 #include "client/complete_service.h"
 #include "complete/job_kind.h"
 #include "records/synthetic.h"
+#include "complete_remote.h"
 #include "service_harness.h"
 #include "tests/testing/expect_error.h"
 
@@ -20,23 +21,10 @@ using records::EffectKind;
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-records::DataScale Scale() {
-  records::DataScale s;
-  s.u_min = -100;
-  s.u_max = 100;
-  s.u_half = 100;
-  s.y_half = 10;
-  s.gain = 0.1;
-  s.f_dom = 1;
-  s.fs = 500;
-  s.duration = 3;
-  return s;
-}
-
 /// Two records of backlash-like + delay: a sine after a rest (offset fit), a multisine (offset rest),
 /// plus a withheld one; windows that start after the rest.
 io::RecordSet MakeSet() {
-  const records::DataScale s = Scale();
+  const records::DataScale s = records::SyntheticStackScale();
   auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", s));
   records::RecordModel truth(fam, {EffectKind::kDelay}, s);
   const std::vector<double> p = {0.02, 0.1, 0.05, 0.006};
@@ -67,24 +55,6 @@ io::RecordSet MakeSet() {
   return set;
 }
 
-std::unique_ptr<opt::FitnessFunction> Remote(const job::JobSpec& spec, bool json) {
-  job::JobSpec decoded;
-  std::vector<job::FieldViolation> v;
-  if (json)
-    EXPECT_TRUE(service::JobSpecFromJson(service::JobSpecToJson(spec), &decoded, &v).ok());
-  else
-    EXPECT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded, &v).ok());
-  EXPECT_TRUE(v.empty());
-  EXPECT_EQ(service::EncodeJobSpec(decoded), service::EncodeJobSpec(spec));  // nothing lost
-  decoded.external = job::ExternalSettings{};
-  job::JobKindRegistry registry;
-  registry.Register(complete::CompleteModelJobKind());
-  for (const auto& x : registry.Validate(decoded)) ADD_FAILURE() << x.description;
-  std::unique_ptr<opt::FitnessFunction> f;
-  EXPECT_TRUE(registry.MakeFitness(decoded, &f).ok());
-  return f;
-}
-
 TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
   const io::RecordSet set = MakeSet();
   const auto train = set.WithRole(model::CaseRole::kTrain);
@@ -106,7 +76,7 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     const auto& problem = std::get<job::CompleteModelProblem>(spec.problem);
     EXPECT_LT(problem.records[0].input.size(), train[0]->end_scored);
     for (bool json : {false, true}) {
-      const auto remote = Remote(spec, json);
+      const auto remote = RemoteCompleteFitness(spec, json);
       ASSERT_TRUE(remote);
       for (double x : {0.1, 0.37, 0.8}) {
         opt::Genome g;

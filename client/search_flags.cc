@@ -1,0 +1,34 @@
+#include "client/search_flags.h"
+
+namespace pz::client {
+
+void AddSearchFlags(CLI::App* cmd, SearchFlags* f) {
+  auto s = [](auto v) { return std::to_string(v); };
+  cmd->add_option("--repetitions", f->repetitions, "seeded searches (seed, seed+1, …), best kept")
+      ->default_str(s(f->repetitions));
+  cmd->add_option("--seed", f->seed, "seed of the first repetition")->default_str(s(f->seed));
+  cmd->add_option("--particles", f->particles, "PSO swarm size")->default_str(s(f->particles));
+  cmd->add_option("--iterations", f->iterations, "PSO iterations")->default_str(s(f->iterations));
+  cmd->add_option("--population", f->population, "GA population")->default_str(s(f->population));
+  cmd->add_option("--generations", f->generations, "GA generations")->default_str(s(f->generations));
+  cmd->add_option("--stall", f->stall,
+                  "stop a repetition after this many iterations / generations without a relative "
+                  "improvement of 1e-6 (0: never)")
+      ->default_str(s(f->stall));
+}
+
+void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
+  o->repetitions = f.repetitions;
+  o->pso.seed = o->ga_real.seed = o->ga_binary.ga.seed = f.seed;
+  o->pso.particles = f.particles;
+  o->pso.iterations = f.iterations;
+  o->pso.stall_iterations = f.stall;
+  o->ga_real.population = f.population;
+  o->ga_real.generations = f.generations;
+  o->ga_real.stall_generations = f.stall;
+  o->ga_binary.ga.population_size = f.population;
+  o->ga_binary.ga.max_generations = f.generations;
+  o->ga_binary.ga.stall_generations = f.stall;
+}
+
+}  // namespace pz::client

@@ -1,0 +1,28 @@
+// The global-search flags shared by the commands that fit physical parameters (`piezoid fit`,
+// `piezoid committee`): repetitions, seed, PSO swarm / iterations, GA population / generations,
+// stall — one definition of their names, help and defaults, one mapping onto opt::SearchOptions.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <cstdint>
+#include <string>
+
+#include "opt/param_search.h"
+
+namespace pz::client {
+
+struct SearchFlags {
+  int repetitions = 3;
+  uint64_t seed = 1;
+  int particles = 30, iterations = 150, population = 30, generations = 150, stall = 40;
+};
+
+/// Adds --repetitions --seed --particles --iterations --population --generations --stall to `cmd`,
+/// with `flags`' values as the shown defaults.
+void AddSearchFlags(CLI::App* cmd, SearchFlags* flags);
+
+/// Sets every algorithm's options in `o` from the flags (the algorithm itself is the caller's).
+void ApplySearchFlags(const SearchFlags& flags, opt::SearchOptions* o);
+
+}  // namespace pz::client
