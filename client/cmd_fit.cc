@@ -15,6 +15,7 @@
 #include "client/cmd_service.h"
 #include "client/commands.h"
 #include "client/complete_service.h"
+#include "client/json_values.h"
 #include "client/search_flags.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
@@ -121,25 +122,35 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
 }
 
 std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
-  std::ostringstream os;
-  os << "{\n  \"model\": \"" << r.model->Describe() << "\",\n  \"response_unit\": \"" << set.response_unit
-     << "\",\n  \"drive_unit\": \"" << set.drive_unit << "\",\n  \"polarity\": " << r.model->scale().polarity
-     << ",\n  \"params\": {";
-  for (size_t i = 0; i < r.params.size(); ++i)
-    os << (i ? ", " : "") << "\"" << r.model->params()[i].name << "\": " << io::FormatNumber(r.params[i]);
-  os << "},\n  \"weights\": [";
-  for (size_t i = 0; i < r.weights.size(); ++i) os << (i ? ", " : "") << io::FormatNumber(r.weights[i]);
-  os << "],\n  \"records\": [\n";
-  for (size_t i = 0; i < r.metrics.size(); ++i) {
-    const auto& e = r.metrics[i];
-    os << "    {\"name\": \"" << e.name << "\", \"role\": \"" << model::CaseRoleName(e.role) << "\", \"samples\": "
-       << e.samples << ", \"offset\": " << io::FormatNumber(e.offset) << ", \"rmse\": " << io::FormatNumber(e.rmse)
-       << ", \"max_abs\": " << io::FormatNumber(e.max_abs) << ", \"nrmse_pct\": " << io::FormatNumber(e.nrmse_pct)
-       << "}" << (i + 1 < r.metrics.size() ? "," : "") << "\n";
+  using namespace json;  // NOLINT
+  Struct root;
+  auto& f = *root.mutable_fields();
+  f["model"] = Text(r.model->Describe());
+  f["response_unit"] = Text(set.response_unit);
+  f["drive_unit"] = Text(set.drive_unit);
+  f["polarity"] = Num(r.model->scale().polarity);
+  Struct params;
+  for (size_t i = 0; i < r.params.size(); ++i) (*params.mutable_fields())[r.model->params()[i].name] = Num(r.params[i]);
+  f["params"] = Obj(params);
+  std::vector<Value> weights, records;
+  for (double w : r.weights) weights.push_back(Num(w));
+  f["weights"] = List(weights);
+  for (const auto& e : r.metrics) {
+    Struct m;
+    auto& g = *m.mutable_fields();
+    g["name"] = Text(e.name);
+    g["role"] = Text(model::CaseRoleName(e.role));
+    g["samples"] = Num(static_cast<double>(e.samples));
+    g["offset"] = Num(e.offset);
+    g["rmse"] = Num(e.rmse);
+    g["max_abs"] = Num(e.max_abs);
+    g["nrmse_pct"] = Num(e.nrmse_pct);
+    records.push_back(Obj(m));
   }
-  os << "  ],\n  \"train_mse\": " << io::FormatNumber(r.train_mse) << ",\n  \"evaluations\": " << r.evaluations
-     << "\n}\n";
-  return os.str();
+  f["records"] = List(records);
+  f["train_mse"] = Num(r.train_mse);
+  f["evaluations"] = Num(static_cast<double>(r.evaluations));
+  return Print(root, "fit.json");
 }
 
 int RunFit(const FitArgs& a) {
@@ -253,7 +264,7 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "records", "Check a record set and describe it (records, roles, windows, units, rest, sample rate, "
                  "quantum); --convert writes it in the manifest format.");
-  cmd->add_option("path", *path, "record set folder or CSV file")->required();
+  cmd->add_option("path,--records", *path, "record set folder or CSV file")->required();
   cmd->add_option("--convert", *convert, "write the set as a manifest-format folder");
   cmd->callback([path, convert, &exit_code] {
     const io::RecordSet set = io::LoadRecordSet(*path);

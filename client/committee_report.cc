@@ -1,14 +1,12 @@
 #include "client/committee_report.h"
 
-#include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
-
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <sstream>
 
+#include "client/json_values.h"
 #include "client/plots.h"
 #include "io/csv.h"
 #include "model/criteria.h"
@@ -222,33 +220,7 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
 
 namespace {
 
-using google::protobuf::ListValue;
-using google::protobuf::Struct;
-using google::protobuf::Value;
-
-Value Num(double x) {
-  Value v;
-  if (std::isfinite(x))
-    v.set_number_value(x);
-  else
-    v.set_null_value(google::protobuf::NULL_VALUE);
-  return v;
-}
-Value Text(const std::string& s) {
-  Value v;
-  v.set_string_value(s);
-  return v;
-}
-Value Obj(const Struct& s) {
-  Value v;
-  *v.mutable_struct_value() = s;
-  return v;
-}
-Value List(const std::vector<Value>& items) {
-  Value v;
-  for (const auto& i : items) *v.mutable_list_value()->add_values() = i;
-  return v;
-}
+using namespace json;  // NOLINT: Num, Text, Obj, List, Struct, Value
 
 Value RoleJson(const RoleMetrics& m) {
   Struct s;
@@ -338,13 +310,7 @@ std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& se
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
   f["wall_time_s"] = Num(r.wall_s);
   f["threads"] = Num(r.threads);
-  std::string json;
-  google::protobuf::util::JsonPrintOptions jo;
-  jo.add_whitespace = true;
-  jo.preserve_proto_field_names = true;
-  if (!google::protobuf::util::MessageToJsonString(root, &json, jo).ok())
-    throw std::runtime_error("cannot format committee.json");
-  return json;
+  return Print(root, "committee.json");
 }
 
 // ---- Figures -------------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "io/csv.h"
@@ -18,15 +19,6 @@ std::string G(double x, int prec = 4) {
   std::ostringstream s;
   s << std::setprecision(prec) << x;
   return s.str();
-}
-
-std::string Q(const std::string& s) {
-  std::string o = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') o += '\\';
-    o += c;
-  }
-  return o + "\"";
 }
 
 }  // namespace
@@ -71,36 +63,62 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
 }
 
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d) {
-  os << "{\n  \"records\": " << Q(set.source.string()) << ",\n  \"family\": " << Q(d.base.model->family().name())
-     << ",\n  \"response_unit\": " << Q(set.response_unit) << ",\n  \"noise_floor\": {\"sigma\": "
-     << io::FormatNumber(d.noise.sigma) << ", \"used\": " << Q(d.noise.used) << ", \"estimates\": [";
-  for (size_t i = 0; i < d.noise.estimates.size(); ++i) {
-    const auto& e = d.noise.estimates[i];
-    os << (i ? ", " : "") << "{\"method\": " << Q(e.method) << ", \"sigma\": " << io::FormatNumber(e.sigma)
-       << ", \"samples\": " << e.samples << "}";
+  using namespace json;  // NOLINT
+  Struct root;
+  auto& f = *root.mutable_fields();
+  f["records"] = Text(set.source.string());
+  f["family"] = Text(d.base.model->family().name());
+  f["response_unit"] = Text(set.response_unit);
+  Struct noise;
+  auto& n = *noise.mutable_fields();
+  n["sigma"] = Num(d.noise.sigma);
+  n["used"] = Text(d.noise.used);
+  std::vector<Value> estimates;
+  for (const auto& e : d.noise.estimates) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["method"] = Text(e.method);
+    g["sigma"] = Num(e.sigma);
+    g["samples"] = Num(static_cast<double>(e.samples));
+    g["from"] = Text(e.detail);
+    estimates.push_back(Obj(x));
   }
-  os << "]},\n  \"withheld_samples\": " << d.withheld_samples << ",\n  \"rms_ratio\": " << io::FormatNumber(d.rms_ratio)
-     << ",\n  \"significant\": " << (d.significant ? "true" : "false") << ",\n  \"candidates\": [\n";
-  for (size_t i = 0; i < d.candidates.size(); ++i) {
-    const auto& c = d.candidates[i];
-    os << "    {\"effect\": " << Q(records::EffectName(c.kind)) << ", \"score\": " << io::FormatNumber(c.score)
-       << ", \"closed\": " << io::FormatNumber(c.closed) << ", \"pattern\": " << io::FormatNumber(c.pattern)
-       << ", \"z_vs_base\": " << io::FormatNumber(c.z_vs_base) << ", \"qualifies\": " << (c.qualifies ? "true" : "false")
-       << ", \"note\": " << Q(c.note) << "}" << (i + 1 < d.candidates.size() ? "," : "") << "\n";
+  n["estimates"] = List(estimates);
+  f["noise_floor"] = Obj(noise);
+  f["withheld_samples"] = Num(static_cast<double>(d.withheld_samples));
+  f["rms_ratio"] = Num(d.rms_ratio);
+  f["significant"] = Bool(d.significant);
+  std::vector<Value> candidates;
+  for (const auto& c : d.candidates) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["effect"] = Text(records::EffectName(c.kind));
+    g["score"] = Num(c.score);
+    g["closed"] = Num(c.closed);
+    g["pattern"] = Num(c.pattern);
+    g["z_vs_base"] = Num(c.z_vs_base);
+    g["qualifies"] = Bool(c.qualifies);
+    g["note"] = Text(c.note);
+    candidates.push_back(Obj(x));
   }
-  os << "  ],\n  \"named\": "
-     << (d.named >= 0 ? Q(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : "null")
-     << ",\n  \"confidence\": " << io::FormatNumber(d.confidence) << ",\n  \"verdict_kind\": " << Q(d.verdict_kind)
-     << ",\n  \"verdict\": " << Q(d.verdict);
+  f["candidates"] = List(candidates);
+  f["named"] = d.named >= 0 ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : Null();
+  f["confidence"] = Num(d.confidence);
+  f["verdict_kind"] = Text(d.verdict_kind);
+  f["verdict"] = Text(d.verdict);
   if (d.next) {
-    os << ",\n  \"next_measurement\": {\"waveform\": " << Q(records::WaveformName(d.next->shape.waveform))
-       << ", \"amplitude\": " << io::FormatNumber(d.next->shape.amplitude) << ", \"bias\": "
-       << io::FormatNumber(d.next->shape.bias) << ", \"frequency_hz\": " << io::FormatNumber(d.next->shape.frequency_hz)
-       << ", \"duration_s\": " << io::FormatNumber(d.next->shape.duration_s) << ", \"rms_difference\": "
-       << io::FormatNumber(d.next->rms_difference) << ", \"ratio_to_noise\": " << io::FormatNumber(d.next->ratio_to_noise)
-       << "}";
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["waveform"] = Text(records::WaveformName(d.next->shape.waveform));
+    g["amplitude"] = Num(d.next->shape.amplitude);
+    g["bias"] = Num(d.next->shape.bias);
+    g["frequency_hz"] = Num(d.next->shape.frequency_hz);
+    g["duration_s"] = Num(d.next->shape.duration_s);
+    g["rms_difference"] = Num(d.next->rms_difference);
+    g["ratio_to_noise"] = Num(d.next->ratio_to_noise);
+    f["next_measurement"] = Obj(x);
   }
-  os << "\n}\n";
+  os << Print(root, "diagnosis.json");
 }
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {

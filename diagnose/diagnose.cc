@@ -20,6 +20,17 @@ using opt::ParallelFor;
 using opt::ResidualFunction;
 namespace {
 
+// What would separate two effects that the bench cannot: the physics of their difference (the fin
+// benches are nine sinusoids; `diagnose --records` simulates candidate drives for record sets).
+std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
+  auto is = [&](model::EffectKind x, model::EffectKind y) { return (a == x && b == y) || (a == y && b == x); };
+  if (is(model::EffectKind::kDriverLowpass, model::EffectKind::kDelay))
+    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) and rounds edges: "
+           "a square-wave (step) drive, or sinusoids at several times the bench's highest frequency, would separate them";
+  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) would separate them; "
+         "`piezoid diagnose --records` proposes one for record sets";
+}
+
 using model::EffectKind;
 
 std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0, double e = 0) {
@@ -313,8 +324,12 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
     if (round.runner_up >= 0) {
       const auto& ru = round.candidates[static_cast<size_t>(round.runner_up)];
       round.verdict += std::string("; the data cannot separate it from ") + model::EffectName(ru.kind) +
-                       Fmt(" (closes %.0f %%, paired block test z = %.2f < %.1f)", 100 * ru.closed, round.z_runner_up,
-                           o.separation_z);
+                       (round.z_runner_up < o.separation_z
+                            ? Fmt(" (closes %.0f %%, paired block test z = %.2f < %.1f)", 100 * ru.closed,
+                                  round.z_runner_up, o.separation_z)
+                            : Fmt(" (closes %.0f %%, within %.0f points of it: practically equivalent, paired block "
+                                  "test z = %.2f)",
+                                  100 * ru.closed, 100 * o.separation_closed, round.z_runner_up));
     }
   } else {
     round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,
@@ -551,9 +566,9 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
       const CandidateResult& ru = first.candidates[static_cast<size_t>(first.runner_up)];
       d.verdict_kind = "inseparable";
       d.verdict += std::string(" — or by ") + model::EffectName(ru.kind) +
-                   Fmt(": the data cannot separate the two (both close the gap, paired block test z = %.2f). "
-                       "`piezoid diagnose --records <this bench> --family bimorph-fin` proposes the measurement that would",
-                       first.z_runner_up);
+                   Fmt(": the data cannot separate the two (both close the gap, paired block test z = %.2f). ",
+                       first.z_runner_up) +
+                   NextMeasurementHint(c.kind, ru.kind);
     }
     if (d.named.size() > 1) {
       d.verdict += std::string(", with a second effect: ") + model::EffectName(d.named[1]) +

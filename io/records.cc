@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -117,9 +118,37 @@ UnitConversion ResolveUnit(const CsvTable& csv, const std::string& column, const
   return ConvertUnit(unit);
 }
 
+// A record file's CSV. A file without a header line (its first line is data, e.g. a
+// recorder's export) is refused with the fix: the columns' names and units are what the reader
+// goes by.
+CsvTable ReadRecordCsv(const fs::path& file) {
+  const std::string text = ReadTextFile(file);
+  const size_t start = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+  const size_t eol = text.find('\n', start);
+  std::string first = text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
+  if (!first.empty() && first.back() == '\r') first.pop_back();
+  int numbers = 0, words = 0;
+  for (size_t a = 0; a <= first.size();) {
+    size_t b = first.find(',', a);
+    if (b == std::string::npos) b = first.size();
+    std::string f = first.substr(a, b - a);
+    f.erase(0, f.find_first_not_of(" \t"));
+    f.erase(f.find_last_not_of(" \t") + 1);
+    if (!f.empty()) ++(ParseDouble(f) ? numbers : words);
+    a = b + 1;
+  }
+  if (numbers > 0 && words == 0) {
+    throw InputError(file.string() + ":1: no header line (the first line is data: '" + first.substr(0, 60) +
+                     "'): add a header that names the columns with their units, e.g. t_s,voltage_V,displacement_um "
+                     "(name an empty column too, e.g. unused), or name the columns in a manifest.csv "
+                     "(time_column, drive_column, response_column; docs/records.md)");
+  }
+  return ParseCsv(text, file.string());
+}
+
 FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const RecordReadOptions& opt,
                         const std::string& where_declared) {
-  const CsvTable csv = ReadCsvFile(file);
+  const CsvTable csv = ReadRecordCsv(file);
   csv.RequireColumns({cols.time, cols.drive, cols.response});
   const int ct = csv.RequireColumn(cols.time), cu = csv.RequireColumn(cols.drive),
             cy = csv.RequireColumn(cols.response);
@@ -372,18 +401,33 @@ RecordSet FromCsv(const fs::path& file, const RecordReadOptions& opt) {
   RecordSet set;
   set.source = file;
   set.format = "csv";
-  // The columns: t_s-like time first; the drive and the response by the usual names, else the
-  // second and third columns.
-  const CsvTable head = ReadCsvFile(file);
+  // The columns by their units: the first time column (…_s, …_ms, …_us), the first voltage one
+  // (…_V, …_mV, …_kV), the first length / angle one (…_um, …_mm, …_nm, …_m, …_deg, …_rad); else,
+  // in order, the first three columns.
+  const CsvTable head = ReadRecordCsv(file);
   if (head.header.size() < 3) {
     throw InputError(file.string() + ":" + std::to_string(head.header_line) +
                      ": a record needs three columns (time, drive, response), found " +
                      std::to_string(head.header.size()));
   }
+  auto first_of = [&](std::initializer_list<std::string_view> quantities) -> std::string {
+    for (const std::string& c : head.header) {
+      const std::string q = ConvertUnit(SuffixUnit(c)).quantity;
+      for (std::string_view want : quantities)
+        if (!SuffixUnit(c).empty() && q == want) return c;
+    }
+    return "";
+  };
   ColumnSpec cols;
-  cols.time = head.header[0];
-  cols.drive = head.header[1];
-  cols.response = head.header[2];
+  cols.time = first_of({"time"});
+  cols.drive = first_of({"voltage"});
+  cols.response = first_of({"length", "angle"});
+  if (cols.time.empty() || cols.drive.empty() || cols.response.empty() || cols.time == cols.drive ||
+      cols.drive == cols.response || cols.time == cols.response) {
+    cols.time = head.header[0];
+    cols.drive = head.header[1];
+    cols.response = head.header[2];
+  }
   FileData d = ReadRecordFile(file, cols, opt, "the file");
   Record r = MakeRecord(d, "record", CaseRole::kTrain, file);
   FinishRecord(r, opt);

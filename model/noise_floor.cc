@@ -25,6 +25,32 @@ double EstimateQuantum(std::span<const double> y) {
     }
     if (ok) return q;
   }
+  // A printed grid: refine q on the values in order of magnitude (n = round(x / q) is sure for
+  // small |x| while q is still rough), then check every value against the refined q.
+  std::vector<double> by_size = v;
+  std::sort(by_size.begin(), by_size.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
+  for (int div = 1; div <= 16; ++div) {
+    double q = dmin / div, sxn = 0, snn = 0;
+    bool ok = true;
+    for (double x : by_size) {
+      const double n = std::round(x / q);
+      if (std::abs(x - n * q) > 0.02 * q) {
+        ok = false;
+        break;
+      }
+      sxn += x * n;
+      snn += n * n;
+      if (snn > 0) q = sxn / snn;
+    }
+    if (!ok || !(q > 0)) continue;
+    for (double x : v) {
+      if (std::abs(x - std::round(x / q) * q) > 1e-3 * q) {
+        ok = false;
+        break;
+      }
+    }
+    if (ok) return q;
+  }
   return 0.0;
 }
 

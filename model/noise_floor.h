@@ -26,7 +26,10 @@ namespace pz::model {
 
 /// The quantum of a quantised series: the largest q such that every value is an integer multiple
 /// of q (to 1e-6 q), found from the smallest step between distinct values and its integer divisors
-/// (1 … 16). 0 when the series is not on a grid (continuous data) or has fewer than 2 distinct values.
+/// (1 … 16). A recorder that prints a few decimals rounds its grid (0.0076294 µm steps written as
+/// -1.6174316): when no exact grid fits, q is refined by least squares over the values taken in
+/// order of magnitude and accepted when every value is within 1e-3 q of a multiple of it. 0 when
+/// the series is not on a grid (continuous data) or has fewer than 2 distinct values.
 double EstimateQuantum(std::span<const double> y);
 
 /// Noise estimate of one record.

@@ -131,7 +131,7 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
       double hi = *std::max_element(r.u.begin() + static_cast<std::ptrdiff_t>(start), r.u.end());
       const double tol = 1e-4 * (hi - lo) + 1e-12;
       size_t period = 0;
-      for (size_t P = 10; P <= len / 3 && !period; ++P) {
+      for (size_t P = 10; P <= len / 2 && !period; ++P) {  // two periods at least
         bool ok = true;
         for (size_t k = start; k + P < r.size() && ok; k += std::max<size_t>(1, P / 50)) ok = std::abs(r.u[k + P] - r.u[k]) <= tol;
         if (ok) period = P;
@@ -186,6 +186,18 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
   }
   if (nf.estimates.empty()) {
     throw InputError("no noise estimate is possible: no rest segment of 50 samples, no periodic drive, no repeated record, no residual");
+  }
+  // A reading rounded to a quantum q is at least q/√12 RMS from a continuous model on a varying
+  // signal, while a rest or two identical periods can cancel the rounding (σ ≪ q): no estimate
+  // goes below that floor.
+  double q = 0;
+  for (const io::Record& r : set.records) q = std::max(q, r.quantum);
+  const double q_floor = q / std::sqrt(12.0);
+  for (NoiseEstimate& e : nf.estimates) {
+    if (e.sigma < q_floor) {
+      e.sigma = q_floor;
+      e.detail += "; raised to the quantisation floor q/√12 (q = " + Fmt(q) + ")";
+    }
   }
   nf.sigma = nf.estimates.front().sigma;
   nf.used = nf.estimates.front().method;

@@ -9,6 +9,8 @@
 //       repeats      two records with the same drive: σ² = var(y₁ − y₂)/2;
 //       residual     the high-frequency part of the base model's residual: mean((e_k − e_{k−1})²)/2
 //                    (an upper bound when the model error is smooth).
+//     None goes below the quantisation floor q/√12 (a rest or identical periods cancel the
+//     rounding; a continuous model cannot): the estimate says when it was raised to it.
 //  2. The base family is fitted on the training records; each applicable effect (Family::
 //     excluded_effects leaves out what the family already holds) is added and the model re-fitted
 //     (global search + LM, with the base fit as extra starting points).

@@ -106,6 +106,35 @@ TEST_F(RecordsDir, SingleCsvSplitsIntoWindows) {
                 "train window [0.5, 2] s is outside the record (0 … 0.999 s)");
 }
 
+// A recorder's export: no header (refused with the fix), then columns in another order with an
+// empty one (found by their units).
+TEST_F(RecordsDir, ColumnsAreFoundByTheirUnitsAndAMissingHeaderIsNamed) {
+  std::string text = RecordText("t_s,voltage_V,displacement_um");
+  std::istringstream in(text);
+  std::string line, headerless, reordered = "unused,t_ms,displacement_nm,voltage_V\n";
+  std::getline(in, line);
+  while (std::getline(in, line)) {
+    const size_t a = line.find(','), b = line.rfind(',');
+    const double t = std::stod(line.substr(0, a)), u = std::stod(line.substr(a + 1, b - a - 1)),
+                 y = std::stod(line.substr(b + 1));
+    headerless += "," + line.substr(0, a) + "," + line.substr(b + 1) + "," + line.substr(a + 1, b - a - 1) + "\n";
+    reordered += "," + std::to_string(t * 1e3) + "," + std::to_string(y * 1e3) + "," + std::to_string(u) + "\n";
+  }
+  Write("export.csv", headerless);
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "export.csv"); }),
+                "export.csv:1: no header line (the first line is data: ',0,-1.5,0'): add a header");
+  Write("named.csv", reordered);
+  const RecordSet set = LoadRecordSet(dir_ / "named.csv");
+  ASSERT_EQ(set.records.size(), 1u);
+  const Record& r = set.records[0];
+  EXPECT_NEAR(r.dt, 1e-3, 1e-9);
+  EXPECT_EQ(set.response_unit, "um");
+  EXPECT_EQ(r.rest_samples, 100u);
+  const size_t k = 500;
+  EXPECT_NEAR(r.y[k], 0.1 * r.u[k] - 1.5, 1e-5);
+  EXPECT_NEAR(r.u[k], 50 * std::sin(2 * std::numbers::pi * 5 * 0.4 + 1), 1e-4);
+}
+
 TEST_F(RecordsDir, RecorderJitterIsAcceptedButGapsAreNot) {
   std::string text = RecordText();
   Write("ok.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.000200010001,0,1\n0.0004,0,1\n0.00059999,1,1\n" +
