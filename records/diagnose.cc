@@ -402,8 +402,10 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
       const RecordCandidate& ru = d.candidates[static_cast<size_t>(d.runner_up)];
       d.verdict_kind = "inseparable";
       v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind) << ": both close the gap ("
-        << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %; paired block test z = "
-        << Fmt(d.z_runner_up, 2) << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
+        << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %"
+        << (d.z_runner_up < o.separation_z ? "" : std::string(", within ") + Fmt(100 * o.separation_closed) +
+                                                       " points: practically equivalent")
+        << "; paired block test z = " << Fmt(d.z_runner_up, 2) << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
       if (o.propose) {
         d.next = ProposeExperiment(set, best.fit, ru.fit, d.noise.sigma);
         v << " Next measurement: " << d.next->description << ".";
