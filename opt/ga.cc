@@ -211,6 +211,11 @@ int GeneticAlgorithm::Tournament() {
   return static_cast<int>(winner);
 }
 
+const GeometricGaps& GeneticAlgorithm::MutationGaps() {
+  if (!mutation_gaps_) mutation_gaps_.emplace(options_.mutation_probability, options_.genome_bits);
+  return *mutation_gaps_;
+}
+
 void GeneticAlgorithm::Evaluate(std::span<const Genome> genomes, int first_index,
                                 std::span<FitnessResult> out) {
   std::vector<int> indices(genomes.size());
@@ -256,7 +261,7 @@ const GenerationSummary& GeneticAlgorithm::Step() {
   const int n = options_.population_size, bits = options_.genome_bits;
   const int elite = options_.elite_count(), n_off = n - elite;
   const BernoulliThreshold cross(options_.crossover_probability);
-  const BernoulliThreshold mutate(options_.mutation_probability);
+  const GeometricGaps& mutate = MutationGaps();
 
   std::vector<Genome> offspring(n_off);
   for (int o = 0; o < n_off; o += 2) {
@@ -277,7 +282,10 @@ const GenerationSummary& GeneticAlgorithm::Step() {
     }
     for (Genome* c : {&c1, &c2}) {
       if (c == &c2_storage) continue;
-      for (uint8_t& bit : c->bits) bit ^= rng_.Bernoulli(mutate) ? 1u : 0u;
+      // Each bit flips with probability p, independently: the positions of the flips are drawn
+      // as geometric gaps (one draw per flip, plus one that ends the genome) instead of one
+      // Bernoulli draw per bit.
+      for (int pos = rng_.Gap(mutate); pos < bits; pos += 1 + rng_.Gap(mutate)) c->bits[pos] ^= 1u;
     }
   }
   std::vector<FitnessResult> evaluated(n_off);

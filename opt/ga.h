@@ -7,7 +7,8 @@
 //      costs (they are not re-evaluated);
 //   2. the other population_size − E are offspring, made pair by pair: two parents, each the best
 //      of tournament_size uniform draws from the elite; two-point crossover with probability
-//      crossover_probability; then each offspring bit flips with probability mutation_probability;
+//      crossover_probability; then each offspring bit flips with probability mutation_probability,
+//      independently (the flipped positions are drawn as geometric gaps, see GeometricGaps);
 //   3. the offspring (and only they) are evaluated as one batch, population indices E … N − 1;
 //   4. the N individuals are ranked by (cost, index), stable; penalised and failed individuals rank
 //      by their finite penalty cost. The best individual never gets worse (elitism).
@@ -178,6 +179,8 @@ class GeneticAlgorithm {
 
  private:
   int Tournament();
+  /// The mutation's gap table for (mutation_probability, genome_bits), built on first use.
+  const GeometricGaps& MutationGaps();
   void Evaluate(std::span<const Genome> genomes, int first_index, std::span<FitnessResult> out);
   // Ranks population/fitness by (cost, index) (entries first_evaluated … were evaluated in this
   // generation), updates best, stall and counters, logs the summary and calls the callbacks.
@@ -190,6 +193,7 @@ class GeneticAlgorithm {
   Describer describer_;
   std::atomic<bool> cancel_{false};
   Rng rng_;
+  std::optional<GeometricGaps> mutation_gaps_;
   GaState state_;
 };
 

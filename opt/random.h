@@ -8,9 +8,11 @@
 // The std:: distributions are not used: their algorithms are implementation-defined.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "model/status.h"
 
@@ -49,6 +51,50 @@ struct BernoulliThreshold {
       threshold = static_cast<uint64_t>(scaled);
     }
   }
+};
+
+/// Precomputed inverse CDF of the gap between two successes of independent Bernoulli(p) trials,
+/// for drawing the positions of mutated bits instead of testing every bit. The gap G (the number of
+/// failures before the next success) has P(G ≥ k) = (1 − p)^k; the table holds
+/// T_k = ⌊(1 − p)^k · 2⁶⁴⌋ for k = 1 … max_gap, and a draw x gives G = #{k : x < T_k}, i.e. G ≥ k
+/// iff x < T_k, exactly as k successive Bernoulli(1 − p) tests with the thresholds' ratios would.
+/// (1 − p)^k is formed by repeated IEEE multiplication, so the table — and every run — is the same on
+/// every platform (no libm call). Draws beyond max_gap are returned as max_gap: the caller's
+/// "no further success in this block". One draw per gap; p = 0 and p = 1 need none.
+class GeometricGaps {
+ public:
+  /// p in [0, 1] (checked), max_gap ≥ 0.
+  GeometricGaps(double p, int max_gap) : p_(p), max_gap_(max_gap) {
+    PZ_CHECK_MSG(p >= 0 && p <= 1, "mutation probability outside [0, 1]");
+    PZ_CHECK(max_gap >= 0);
+    if (p == 0 || p == 1) return;
+    const double q = 1 - p;
+    double qk = 1;
+    thresholds_.reserve(static_cast<size_t>(max_gap));
+    for (int k = 1; k <= max_gap; ++k) {
+      qk *= q;
+      const double scaled = std::ldexp(qk, 64);  // qk = 1 when p < 2⁻⁵³: clamp
+      const uint64_t t = scaled >= 18446744073709551616.0 ? ~uint64_t{0} : static_cast<uint64_t>(scaled);
+      if (t == 0) break;  // P(G ≥ k) < 2⁻⁶⁴: never reached, the table ends here
+      thresholds_.push_back(t);
+    }
+  }
+  double probability() const { return p_; }
+  int max_gap() const { return max_gap_; }
+  bool never() const { return p_ == 0; }
+  bool always() const { return p_ == 1; }
+  /// The gap for the 64-bit draw x, in [0, min(max_gap, table size)].
+  int GapFor(uint64_t x) const {
+    // Thresholds decrease with k: G = the number of them above x.
+    const auto it = std::lower_bound(thresholds_.begin(), thresholds_.end(), x,
+                                     [](uint64_t t, uint64_t v) { return t > v; });
+    return static_cast<int>(it - thresholds_.begin());
+  }
+
+ private:
+  double p_;
+  int max_gap_;
+  std::vector<uint64_t> thresholds_;  ///< T_1 … T_m, strictly positive, non-increasing
 };
 
 class Rng {
@@ -100,6 +146,14 @@ class Rng {
     return t.always || x < t.threshold;
   }
   bool Bernoulli(double p) { return Bernoulli(BernoulliThreshold(p)); }
+
+  /// The failures before the next success of Bernoulli(p) trials, capped at gaps.max_gap(); one draw
+  /// (none if p = 0: returns max_gap; none if p = 1: returns 0).
+  int Gap(const GeometricGaps& gaps) {
+    if (gaps.never()) return gaps.max_gap();
+    if (gaps.always()) return 0;
+    return std::min(gaps.GapFor(NextU64()), gaps.max_gap());
+  }
 
  private:
   void Twist() {

@@ -149,6 +149,155 @@ TEST(Rng, PortableMappings) {
 }
 
 // ------------------------------------------------------------------------------------------
+// Mutation: positions of flipped bits drawn as geometric gaps
+
+// z-score of a chi-square statistic with `dof` degrees of freedom (normal approximation).
+double ChiSquareZ(double chi2, double dof) { return (chi2 - dof) / std::sqrt(2 * dof); }
+
+// The gap of one draw x by the definition, scanning k = 1, 2, …: G ≥ k iff x < ⌊(1 − p)^k 2⁶⁴⌋.
+int GapByDefinition(uint64_t x, double p, int max_gap) {
+  double qk = 1;
+  int g = 0;
+  for (int k = 1; k <= max_gap; ++k) {
+    qk *= 1 - p;
+    const double t = std::ldexp(qk, 64);
+    const uint64_t threshold = t >= 0x1.0p64 ? ~uint64_t{0} : static_cast<uint64_t>(t);
+    if (!(x < threshold)) break;
+    g = k;
+  }
+  return g;
+}
+
+TEST(GeometricGaps, EachDrawGivesTheGapOfItsDefinition) {
+  for (double p : {0.01, 0.3, 0.9, 1e-4}) {
+    const int max_gap = 1415;
+    const GeometricGaps gaps(p, max_gap);
+    Rng r(17);
+    std::mt19937_64 ref(17);
+    for (int i = 0; i < 3000; ++i) {
+      const uint64_t x = ref();
+      ASSERT_EQ(r.Gap(gaps), GapByDefinition(x, p, max_gap)) << "p " << p << " draw " << i;
+    }
+  }
+  // The ends consume nothing: p = 0 never succeeds within the block, p = 1 always at once.
+  Rng a(5), b(5);
+  const GeometricGaps never(0.0, 100), always(1.0, 100);
+  for (int i = 0; i < 100; ++i) {
+    EXPECT_EQ(a.Gap(never), 100);
+    EXPECT_EQ(a.Gap(always), 0);
+  }
+  EXPECT_EQ(a, b);
+  // A probability below 2⁻⁵³ (1 − p rounds to 1) stays defined: practically never.
+  const GeometricGaps tiny(1e-300, 50);
+  for (int i = 0; i < 100; ++i) EXPECT_EQ(a.Gap(tiny), 50);
+}
+
+TEST(GeometricGaps, GapsFollowTheTruncatedGeometricLaw) {
+  for (double p : {0.01, 0.2}) {
+    const int max_gap = 300;
+    const GeometricGaps gaps(p, max_gap);
+    Rng r(23);
+    const int n = 400000;
+    std::vector<double> count(max_gap + 1, 0);
+    for (int i = 0; i < n; ++i) ++count[r.Gap(gaps)];
+    // Pool k into bins of expected count ≥ 50; P(G = k) = (1 − p)^k p, P(G = max) = (1 − p)^max.
+    double chi2 = 0, expected_bin = 0, observed_bin = 0;
+    int bins = 0;
+    for (int k = 0; k <= max_gap; ++k) {
+      const double pk = k < max_gap ? std::pow(1 - p, k) * p : std::pow(1 - p, max_gap);
+      expected_bin += n * pk;
+      observed_bin += count[k];
+      if (expected_bin >= 50 || k == max_gap) {
+        chi2 += (observed_bin - expected_bin) * (observed_bin - expected_bin) / expected_bin;
+        ++bins;
+        expected_bin = observed_bin = 0;
+      }
+    }
+    EXPECT_LT(std::abs(ChiSquareZ(chi2, bins - 1)), 4) << "p " << p << ": chi2 " << chi2 << " over " << bins << " bins";
+  }
+}
+
+// Generation 1 of a GA whose population is all zeros and whose crossover is off: every offspring is
+// a zero genome with the mutation applied, so its ones are the flipped positions.
+std::vector<Genome> MutatedZeros(double p, uint64_t seed, int population = 400, int bits = 1415) {
+  const ConstantFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o;
+  o.population_size = population;
+  o.genome_bits = bits;
+  o.crossover_probability = 0;
+  o.mutation_probability = p;
+  o.seed = seed;
+  GeneticAlgorithm ga(o, &ev);
+  Genome zeros;
+  zeros.bits.assign(bits, 0);
+  ga.Initialize(std::vector<Genome>(population, zeros));
+  ga.Step();
+  // Equal costs rank by index: the elite (zeros) first, then the offspring in order.
+  const auto& pop = ga.state().population;
+  return {pop.begin() + o.elite_count(), pop.end()};
+}
+
+TEST(GaMutation, FlipsAreIndependentBitsWithTheRateAndPositionsOfTheOptions) {
+  const double p = 0.01;
+  const int bits = 1415;
+  std::vector<double> per_position(bits, 0);
+  std::vector<double> per_genome_hist(60, 0);
+  double total = 0, adjacent = 0, genomes = 0;
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    for (const Genome& g : MutatedZeros(p, seed)) {
+      int ones = 0;
+      for (int b = 0; b < bits; ++b) {
+        per_position[b] += g.bits[b];
+        ones += g.bits[b];
+        if (b > 0) adjacent += g.bits[b] & g.bits[b - 1];
+      }
+      ++per_genome_hist[std::min(ones, 59)];
+      total += ones;
+      ++genomes;
+    }
+  }
+  const double n_bits = genomes * bits;  // 40 × 200 × 1415 = 11.3 M bits
+  // The rate: the total is Binomial(n_bits, p).
+  EXPECT_LT(std::abs(total - n_bits * p) / std::sqrt(n_bits * p * (1 - p)), 4) << total << " flips";
+  // The positions: uniform over the genome (chi-square over 1415 positions).
+  const double e = genomes * p;
+  double chi2 = 0;
+  for (double c : per_position) chi2 += (c - e) * (c - e) / (e * (1 - p));
+  EXPECT_LT(std::abs(ChiSquareZ(chi2, bits)), 4) << "positions chi2 " << chi2;
+  // The count per genome: Binomial(1415, p), binned where the expectation is ≥ 20.
+  double binom_chi2 = 0, eb = 0, ob = 0;
+  int bins = 0;
+  for (int k = 0; k < 60; ++k) {
+    const double pk = std::exp(std::lgamma(bits + 1.0) - std::lgamma(k + 1.0) - std::lgamma(bits - k + 1.0) +
+                               k * std::log(p) + (bits - k) * std::log1p(-p));
+    eb += genomes * pk;
+    ob += per_genome_hist[k];
+    if (eb >= 20 || k == 59) {
+      binom_chi2 += (ob - eb) * (ob - eb) / eb;
+      ++bins;
+      eb = ob = 0;
+    }
+  }
+  EXPECT_LT(std::abs(ChiSquareZ(binom_chi2, bins - 1)), 4) << "flips per genome chi2 " << binom_chi2;
+  // Independence of neighbours: adjacent pairs both flipped ≈ p² per pair.
+  const double pairs = genomes * (bits - 1), ea = pairs * p * p;
+  EXPECT_LT(std::abs(adjacent - ea) / std::sqrt(ea), 4) << adjacent << " adjacent pairs, expected " << ea;
+}
+
+TEST(GaMutation, ProbabilityZeroKeepsAndOneFlipsEveryBit) {
+  for (const Genome& g : MutatedZeros(0.0, 3, 20, 100)) EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 0);
+  for (const Genome& g : MutatedZeros(1.0, 3, 20, 100)) EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 100);
+  // A higher rate too (the gaps' table is not only for small p).
+  double ones = 0, n = 0;
+  for (const Genome& g : MutatedZeros(0.37, 4, 200, 333)) {
+    ones += std::count(g.bits.begin(), g.bits.end(), 1);
+    n += g.bits.size();
+  }
+  EXPECT_LT(std::abs(ones - 0.37 * n) / std::sqrt(n * 0.37 * 0.63), 4);
+}
+
+// ------------------------------------------------------------------------------------------
 // Options
 
 TEST(GaOptions, DefaultsArePaperTable2) {
