@@ -1,6 +1,8 @@
 // `piezoid submit | status | list | watch | cancel | fetch | export`: the service commands, thin
 // wrappers of client/service_client.h, client/job_file.h, client/job_report.h and
 // client/export_c.h. Register with RegisterServiceCommands(app, exit_code).
+#include <pthread.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -15,6 +17,7 @@
 #include <sstream>
 
 #include "client/cmd_service.h"
+#include "client/dashboard.h"
 #include "client/export_c.h"
 #include "client/job_file.h"
 #include "client/job_report.h"
@@ -433,6 +436,85 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
       }
       std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", out->c_str(), name->c_str());
     }
+    exit_code = kExitOk;
+  });
+
+  // ---------------------------------------------------------------- dashboard
+  auto* dash = app.add_subcommand(
+      "dashboard", "serve a live web page of the master's jobs, fitness curves, workers and reports (read-only)");
+  AddCommon(dash, *common);
+  auto listen = std::make_shared<std::string>("127.0.0.1:8080");
+  auto token_file = std::make_shared<std::string>();
+  auto poll_ms = std::make_shared<int>(1000);
+  auto reports = std::make_shared<std::string>();
+  auto cache = std::make_shared<std::string>();
+  auto endpoints_file = std::make_shared<std::string>();
+  dash->add_option("--listen", *listen,
+                   "HOST:PORT to serve on (PORT 0: any free port; beyond loopback needs --token-file)")
+      ->capture_default_str();
+  dash->add_option("--token-file", *token_file,
+                   "file whose first line is the access token every request must carry (?token= or a Bearer "
+                   "header); required beyond loopback or with CURVE");
+  dash->add_option("--poll-ms", *poll_ms, "how often the master is polled [ms]")->capture_default_str();
+  dash->add_option("--reports", *reports, "also serve the report folders (each with a report.md) under this folder");
+  dash->add_option("--cache", *cache, "where ended jobs' reports are built (default: a temporary folder)");
+  dash->add_option("--url-file", *endpoints_file, "write the dashboard's URL to this file once it listens");
+  auto dash_no_plots = std::make_shared<bool>(false);
+  dash->add_flag("--no-plots", *dash_no_plots, "build job reports without figures (no gnuplot)");
+  dash->callback([=, &exit_code] {
+    DashboardOptions o;
+    o.client = ClientOptionsOf(common->master, common->timeout_ms, common->retries, common->curve_secret,
+                               common->master_public);
+    const size_t colon = listen->rfind(':');
+    if (colon == std::string::npos || colon + 1 == listen->size()) {
+      exit_code = Report(InvalidArgument("--listen '" + *listen + "': must be HOST:PORT, e.g. 127.0.0.1:8080"));
+      return;
+    }
+    o.host = listen->substr(0, colon);
+    if (o.host.size() > 2 && o.host.front() == '[' && o.host.back() == ']') o.host = o.host.substr(1, o.host.size() - 2);
+    try {
+      size_t used = 0;
+      o.port = std::stoi(listen->substr(colon + 1), &used);
+      if (used != listen->size() - colon - 1) throw std::invalid_argument("trailing characters");
+    } catch (const std::exception&) {
+      exit_code = Report(InvalidArgument("--listen '" + *listen + "': the port must be a number in [0, 65535]"));
+      return;
+    }
+    if (!token_file->empty()) {
+      std::ifstream f(*token_file);
+      if (!f || !std::getline(f, o.token)) {
+        exit_code = Report(InvalidArgument("--token-file " + *token_file + ": cannot read its first line"));
+        return;
+      }
+      while (!o.token.empty() && std::isspace(static_cast<unsigned char>(o.token.back()))) o.token.pop_back();
+    }
+    o.poll_ms = *poll_ms;
+    o.reports_dir = *reports;
+    o.cache_dir = *cache;
+    o.plots = !*dash_no_plots;
+    // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited below.
+    sigset_t signals;
+    sigemptyset(&signals);
+    sigaddset(&signals, SIGINT);
+    sigaddset(&signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+    Dashboard d(o);
+    if (Status s = d.Start(); !s.ok()) {
+      exit_code = Report(s);
+      return;
+    }
+    if (!endpoints_file->empty()) {
+      const std::string tmp = *endpoints_file + ".tmp";
+      std::ofstream(tmp) << d.url() << "\n";
+      std::error_code ec;
+      fs::rename(tmp, *endpoints_file, ec);
+    }
+    std::printf("piezoid dashboard of %s on %s%s (Ctrl-C to stop)\n", o.client.endpoint.c_str(), d.url().c_str(),
+                o.token.empty() ? "" : "?token=…");
+    std::fflush(stdout);
+    int sig = 0;
+    sigwait(&signals, &sig);
+    d.Stop();
     exit_code = kExitOk;
   });
 

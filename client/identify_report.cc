@@ -82,11 +82,11 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   // Progress log.
   {
     std::ofstream f(out / "progress.csv");
-    f << "generation,best_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+    f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
          "errors,wall_time_s,best_network\n";
     f << std::setprecision(17);
     for (const auto& g : result.log)
-      f << g.generation << "," << g.best_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
+      f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
         << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
         << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"\n";
     add(out / "progress.csv");

@@ -111,11 +111,11 @@ namespace {
 
 void WriteProgressCsv(const fs::path& file, const std::vector<service::GenerationRecord>& log) {
   std::ofstream f(file);
-  f << "generation,best_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
        "quarantined,wall_time_s,best_description\n";
   f << std::setprecision(17);
   for (const auto& g : log)
-    f << g.generation << "," << g.best_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
+    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
       << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << "," << g.quarantined << ","
       << g.wall_time_s << ",\"" << g.best_description << "\"\n";
 }

@@ -179,6 +179,36 @@ Status ServiceClient::List(std::vector<service::JobInfo>* jobs, int* workers, in
   return s;
 }
 
+Status ServiceClient::Workers(service::WorkersSnapshot* out) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kWorkers;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  if (reply.type != ClientReplyMsg::Type::kWorkers)
+    return Status(StatusCode::kUnavailable, "the master did not answer the workers request (an older version?)");
+  *out = std::move(reply.workers_snapshot);
+  return s;
+}
+
+Status ServiceClient::FetchLog(const std::string& job_id, uint64_t from_generation, service::JobInfo* info,
+                               std::vector<service::GenerationRecord>* log) {
+  ClientRequestMsg req;
+  req.type = ClientRequestMsg::Type::kFetch;
+  req.job_id = job_id;
+  req.log_only = true;
+  req.log_from = from_generation;
+  ClientReplyMsg reply;
+  Status s = impl_->Call(req, &reply);
+  if (!s.ok()) return s;
+  // A master without log_only answers the whole log: keep the asked part.
+  log->clear();
+  for (auto& r : reply.log)
+    if (r.generation >= from_generation) log->push_back(std::move(r));
+  if (info) *info = std::move(reply.info);
+  return s;
+}
+
 Status ServiceClient::Cancel(const std::string& job_id) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kCancel;

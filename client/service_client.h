@@ -68,6 +68,12 @@ class ServiceClient {
   Status List(std::vector<service::JobInfo>* jobs, int* workers = nullptr,
               int* worker_threads = nullptr);
   Status Cancel(const std::string& job_id);
+  /// The connected workers (threads, speed, leases, tasks done) and the recent departures.
+  Status Workers(service::WorkersSnapshot* out);
+  /// A job's info and the records of its log from generation `from_generation` on (a live view's
+  /// poll: no individuals, spec or networks travel).
+  Status FetchLog(const std::string& job_id, uint64_t from_generation, service::JobInfo* info,
+                  std::vector<service::GenerationRecord>* log);
   /// Deletes ended jobs from the master (see proto PruneRequest): those named, or by age / count.
   /// *pruned: deleted (dry run: would be); *refused: {job id, why not}.
   Status Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep, bool dry_run,

@@ -141,6 +141,62 @@ struct Broker::Impl {
   std::map<std::string, std::set<std::string>> jobs_of_client;  // client identity → job ids
   BrokerStats local;
   LogThrottle log_throttle{std::chrono::seconds(10)};
+  /// What the workers announced, for the Workers request (dashboards); departures kept: the last 32.
+  struct WorkerMeta {
+    std::string host, key;
+    int64_t pid = 0;
+    double connected_unix_s = 0;
+    uint64_t tasks_done = 0;
+  };
+  std::map<std::string, WorkerMeta> worker_meta;
+  std::deque<service::WorkerDepartureView> departed;
+  const TimePoint started = Clock::now();
+
+  static double UnixNow() {
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  }
+  void Departed(const std::string& id, const std::string& why) {
+    auto it = worker_meta.find(id);
+    service::WorkerDepartureView d;
+    d.id = Hex(id);
+    d.reason = why;
+    d.at_unix_s = UnixNow();
+    if (it != worker_meta.end()) {
+      d.host = it->second.host;
+      d.pid = it->second.pid;
+      d.tasks_done = it->second.tasks_done;
+      worker_meta.erase(it);
+    }
+    departed.push_back(std::move(d));
+    while (departed.size() > 32) departed.pop_front();
+  }
+  service::WorkersSnapshot Workers() const {
+    service::WorkersSnapshot w;
+    for (const Dispatcher::WorkerLoad& l : dispatcher.Workers()) {
+      service::WorkerView v;
+      v.id = Hex(l.id);
+      v.threads = l.threads;
+      v.item_seconds = l.item_s;
+      v.leases = l.leases;
+      v.tasks_in_flight = l.items;
+      v.solo = l.solo;
+      if (auto it = worker_meta.find(l.id); it != worker_meta.end()) {
+        v.host = it->second.host;
+        v.key = it->second.key;
+        v.pid = it->second.pid;
+        v.connected_unix_s = it->second.connected_unix_s;
+        v.tasks_done = it->second.tasks_done;
+      }
+      w.workers.push_back(std::move(v));
+    }
+    w.departed.assign(departed.begin(), departed.end());
+    w.leases_sent = local.leases_sent;
+    w.tasks_done = local.tasks_done;
+    w.results_ignored = local.results_ignored;
+    w.bad_frames = local.bad_frames;
+    w.uptime_s = std::chrono::duration<double>(Clock::now() - started).count();
+    return w;
+  }
 
   void Wake() {
     uint64_t one = 1;
@@ -276,6 +332,7 @@ struct Broker::Impl {
   void RemoveWorker(const std::string& id, bool lost, const char* why) {
     if (!dispatcher.HasWorker(id)) return;
     spdlog::info("worker {} removed ({})", Hex(id), why);
+    Departed(id, why);
     liveness.Remove(id);
     dispatcher.RemoveWorker(id, lost, Clock::now());
   }
@@ -299,6 +356,7 @@ struct Broker::Impl {
       case WorkerMsg::Type::kReady:
         if (known) RemoveWorker(id, false, "re-announced");
         dispatcher.AddWorker(id, m.threads);
+        worker_meta[id] = {m.host, user, m.pid, UnixNow(), 0};
         liveness.Seen(id, now);
         spdlog::info("worker {} ready: {} threads, host {} pid {}{}", Hex(id), m.threads, m.host,
                      m.pid, user.empty() ? "" : ", key " + user);
@@ -373,6 +431,7 @@ struct Broker::Impl {
         if (dispatcher.MarkDone(lease->job_id, lease->generation, pos)) {
           j.ticket->results[pos] = r.results[i];
           ++local.tasks_done;
+          if (auto m = worker_meta.find(id); m != worker_meta.end()) ++m->second.tasks_done;
         }
       }
     }
@@ -474,6 +533,10 @@ struct Broker::Impl {
     }
     if (req.type == ClientRequestMsg::Type::kPing) {
       reply.code = WireCode::kOk;
+    } else if (req.type == ClientRequestMsg::Type::kWorkers) {
+      reply.code = WireCode::kOk;
+      reply.type = ClientReplyMsg::Type::kWorkers;
+      reply.workers_snapshot = Workers();
     } else if (req.type == ClientRequestMsg::Type::kWatch) {
       ClientRequestMsg status = req;
       status.type = ClientRequestMsg::Type::kStatus;
@@ -574,6 +637,7 @@ struct Broker::Impl {
       now = Clock::now();
       for (const std::string& id : liveness.TakeExpired(now)) {
         spdlog::warn("worker {} missed its heartbeats", Hex(id));
+        Departed(id, "lost (missed its heartbeats)");
         dispatcher.RemoveWorker(id, /*lost=*/true, now);
       }
       Quarantine(dispatcher.ExpireLeases(now));

@@ -342,4 +342,11 @@ double Dispatcher::worker_item_seconds(const std::string& id) const {
   return it == workers_.end() ? -1 : it->second.item_s;
 }
 
+std::vector<Dispatcher::WorkerLoad> Dispatcher::Workers() const {
+  std::vector<WorkerLoad> out;
+  out.reserve(workers_.size());
+  for (const auto& [id, w] : workers_) out.push_back({id, w.threads, w.item_s, w.leases, w.items, w.exclusive});
+  return out;
+}
+
 }  // namespace pz::master

@@ -116,6 +116,16 @@ class Dispatcher {
   /// Measured time of one evaluation on one thread of the worker [s] (< 0 when unknown).
   double worker_item_seconds(const std::string& id) const;
 
+  /// What the scheduler holds of a worker now (for the dashboard's worker table).
+  struct WorkerLoad {
+    std::string id;
+    int threads = 0;
+    double item_s = -1;  ///< < 0 unknown
+    int leases = 0, items = 0;
+    bool solo = false;
+  };
+  std::vector<WorkerLoad> Workers() const;
+
  private:
   struct JobTasks {
     uint64_t generation = 0;

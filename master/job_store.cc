@@ -554,6 +554,31 @@ ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
       }
       r.type = ClientReplyMsg::Type::kFetch;
       r.info = Info(*job);
+      if (req.log_only) {  // a live view's poll: the info and the log's tail, nothing else
+        std::vector<service::GenerationRecord> log;
+        bool archived;
+        {
+          std::lock_guard lock(job->mu);
+          archived = job->archived;
+          if (!archived) {
+            for (const auto& rec : job->checkpoint.log)
+              if (rec.generation >= req.log_from) log.push_back(rec);
+          }
+        }
+        if (archived) {
+          job::JobSpec spec;
+          JobCheckpoint c;
+          if (Status s = LoadArchived(*job, &spec, &c); !s.ok()) {
+            r.code = WireCode::kInternal;
+            r.error = s.message();
+            return r;
+          }
+          for (auto& rec : c.log)
+            if (rec.generation >= req.log_from) log.push_back(std::move(rec));
+        }
+        r.log = std::move(log);
+        return r;
+      }
       JobCheckpoint c;
       job::JobSpec spec;
       bool archived;

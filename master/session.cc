@@ -169,6 +169,14 @@ const GenerationRecord& FoldSessionBatch(JobCheckpoint& c, std::span<const Genom
   }
   c.optimizer.failures += rec.failures;
   rec.mean_cost = results.empty() ? 0 : sum / static_cast<double>(results.size());
+  if (!results.empty()) {  // the batch's median cost
+    std::vector<double> costs;
+    costs.reserve(results.size());
+    for (const FitnessResult& r : results) costs.push_back(r.cost);
+    std::sort(costs.begin(), costs.end());
+    const double lo = costs[(costs.size() - 1) / 2], hi = costs[costs.size() / 2];
+    rec.median_cost = lo + (hi - lo) / 2;
+  }
   rec.wall_time_s = wall_time_s;
   const double before = c.best.empty() ? INFINITY : c.best.front().fitness.cost;
   // Best individuals seen: merge this batch in (stable: earlier batches first on ties).

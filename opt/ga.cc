@@ -78,6 +78,7 @@ Status GaOptions::Validate() const {
 
 bool GenerationSummary::SameOutcome(const GenerationSummary& o) const {
   return generation == o.generation && best_cost == o.best_cost && mean_cost == o.mean_cost &&
+         median_cost == o.median_cost &&
          worst_cost == o.worst_cost && improved == o.improved && stall == o.stall &&
          best_description == o.best_description && evaluations == o.evaluations &&
          evaluations_total == o.evaluations_total && failures == o.failures &&
@@ -351,6 +352,10 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Genome> population
   double mean = 0;
   for (const FitnessResult& f : state_.fitness) mean += f.cost / n;  // cannot overflow for finite costs
   s.mean_cost = std::isfinite(mean) ? mean : std::numeric_limits<double>::max();
+  // The population is ranked: the median is its middle (the mean of the two middle costs).
+  const double lo = state_.fitness[(n - 1) / 2].cost, hi = state_.fitness[n / 2].cost;
+  const double median = lo + (hi - lo) / 2;
+  s.median_cost = std::isfinite(median) ? median : std::numeric_limits<double>::max();
   if (describer_) s.best_description = describer_(state_.population.front());
   state_.evaluations += s.evaluations;
   state_.failures += s.failures;

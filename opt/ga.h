@@ -66,6 +66,7 @@ struct GenerationSummary {
   uint64_t generation = 0;  ///< 0 = the initial population
   double best_cost = 0;     ///< finite
   double mean_cost = 0;     ///< over the whole population, finite
+  double median_cost = 0;   ///< of the whole population (robust to penalised individuals), finite
   double worst_cost = 0;    ///< finite
   bool improved = false;    ///< best cost strictly lower than before (always true for generation 0)
   int stall = 0;            ///< generations since the best cost last improved

@@ -6,6 +6,7 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       libeigen3-dev libsundials-dev libzmq3-dev cppzmq-dev libprotobuf-dev protobuf-compiler
       libspdlog-dev zlib1g-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev libboost-dev
       gnuplot-nox libopenblas-serial-dev
+      libcpp-httplib-dev libjs-chart.js libjs-marked chromium fonts-dejavu-core  # the dashboard and its browser test
       clang libclang-rt-14-dev)  # clang + its sanitizer/libFuzzer runtimes: fuzz/run.sh
 missing=()
 for p in "${PKGS[@]}"; do

@@ -118,6 +118,7 @@ void ToProto(const GenerationRecord& r, pw::GenerationRecord* p) {
   p->set_best_description(r.best_description);
   p->set_wall_time_s(r.wall_time_s);
   p->set_improved(r.improved);
+  p->set_median_cost(r.median_cost);
 }
 
 GenerationRecord FromProto(const pw::GenerationRecord& p) {
@@ -125,6 +126,7 @@ GenerationRecord FromProto(const pw::GenerationRecord& p) {
   r.generation = p.generation();
   r.best_cost = p.best_cost();
   r.mean_cost = p.mean_cost();
+  r.median_cost = p.median_cost();
   r.evaluations_total = static_cast<int64_t>(std::min<uint64_t>(p.evaluations(), INT64_MAX));
   r.failures = ClampInt(p.errors());
   r.quarantined = ClampInt(p.quarantined());
@@ -208,6 +210,64 @@ Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
   i->archived = p.archived();
   i->ended_unix_s = p.ended_unix_s();
   return Status::Ok();
+}
+
+void ToProto(const WorkersSnapshot& w, pw::WorkersReply* q) {
+  for (const WorkerView& v : w.workers) {
+    auto* o = q->add_workers();
+    o->set_id(v.id);
+    o->set_host(v.host);
+    o->set_pid(v.pid);
+    o->set_threads(static_cast<uint32_t>(std::max(0, v.threads)));
+    o->set_item_seconds(v.item_seconds);
+    o->set_leases(static_cast<uint32_t>(std::max(0, v.leases)));
+    o->set_tasks_in_flight(static_cast<uint32_t>(std::max(0, v.tasks_in_flight)));
+    o->set_tasks_done(v.tasks_done);
+    o->set_connected_unix_s(v.connected_unix_s);
+    o->set_solo(v.solo);
+    o->set_key(v.key);
+  }
+  for (const WorkerDepartureView& d : w.departed) {
+    auto* o = q->add_departed();
+    o->set_id(d.id);
+    o->set_host(d.host);
+    o->set_pid(d.pid);
+    o->set_reason(d.reason);
+    o->set_at_unix_s(d.at_unix_s);
+    o->set_tasks_done(d.tasks_done);
+  }
+  q->set_leases_sent(w.leases_sent);
+  q->set_tasks_done(w.tasks_done);
+  q->set_results_ignored(w.results_ignored);
+  q->set_bad_frames(w.bad_frames);
+  q->set_uptime_s(w.uptime_s);
+}
+
+WorkersSnapshot FromProto(const pw::WorkersReply& q) {
+  WorkersSnapshot w;
+  for (const auto& o : q.workers()) {
+    WorkerView v;
+    v.id = o.id();
+    v.host = o.host();
+    v.key = o.key();
+    v.pid = o.pid();
+    v.threads = ClampInt(o.threads());
+    v.item_seconds = std::isfinite(o.item_seconds()) ? o.item_seconds() : -1;
+    v.leases = ClampInt(o.leases());
+    v.tasks_in_flight = ClampInt(o.tasks_in_flight());
+    v.tasks_done = o.tasks_done();
+    v.connected_unix_s = o.connected_unix_s();
+    v.solo = o.solo();
+    w.workers.push_back(std::move(v));
+  }
+  for (const auto& o : q.departed())
+    w.departed.push_back({o.id(), o.host(), o.reason(), o.pid(), o.at_unix_s(), o.tasks_done()});
+  w.leases_sent = q.leases_sent();
+  w.tasks_done = q.tasks_done();
+  w.results_ignored = q.results_ignored();
+  w.bad_frames = q.bad_frames();
+  w.uptime_s = q.uptime_s();
+  return w;
 }
 
 }  // namespace pz::service::detail

@@ -59,6 +59,8 @@ QuarantineRecord FromProto(const pw::QuarantineRecord& p);
 void ToProto(const JobSpec& s, pw::JobSpec* p);
 void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v);
 void InfoToProto(const JobInfo& i, pw::JobInfo* p);
+void ToProto(const WorkersSnapshot& w, pw::WorkersReply* p);
+WorkersSnapshot FromProto(const pw::WorkersReply& p);
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i);
 
 template <typename Domain, typename ProtoList>

@@ -192,7 +192,10 @@ std::string EncodeClientRequest(const ClientRequestMsg& m) {
     case T::kFetch:
       p.mutable_fetch()->set_job_id(m.job_id);
       p.mutable_fetch()->set_count(static_cast<uint32_t>(std::max(0, m.count)));
+      p.mutable_fetch()->set_log_only(m.log_only);
+      p.mutable_fetch()->set_log_from(m.log_from);
       break;
+    case T::kWorkers: p.mutable_workers(); break;
     case T::kPing: p.mutable_ping(); break;
     case T::kEvaluate: {
       auto* e = p.mutable_evaluate();
@@ -236,7 +239,10 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
       m->type = T::kFetch;
       m->job_id = p.fetch().job_id();
       m->count = ClampInt(std::max<uint32_t>(1, p.fetch().count()));
+      m->log_only = p.fetch().log_only();
+      m->log_from = p.fetch().log_from();
       break;
+    case pw::ClientRequest::kWorkers: m->type = T::kWorkers; break;
     case pw::ClientRequest::kPing: m->type = T::kPing; break;
     case pw::ClientRequest::kEvaluate: {
       const auto& e = p.evaluate();
@@ -321,6 +327,7 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.worker_threads)));
       break;
     }
+    case T::kWorkers: ToProto(m.workers_snapshot, p.mutable_workers()); break;
     case T::kPrune: {
       auto* q = p.mutable_prune();
       for (const auto& id : m.pruned) q->add_pruned(id);
@@ -408,6 +415,10 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->type = T::kPrune;
       m->pruned.assign(p.prune().pruned().begin(), p.prune().pruned().end());
       for (const auto& r : p.prune().refused()) m->refused.push_back({r.field(), r.description()});
+      break;
+    case pw::ClientReply::kWorkers:
+      m->type = T::kWorkers;
+      m->workers_snapshot = FromProto(p.workers());
       break;
     default: m->type = T::kNone; break;
   }

@@ -124,7 +124,7 @@ struct WorkerMsg {
 // ------------------------------------------------------------------ client protocol
 
 struct ClientRequestMsg {
-  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose, kPrune };
+  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose, kPrune, kWorkers };
   Type type = Type::kPing;
   uint64_t request_id = 0;
   job::JobSpec spec;              ///< kSubmit (decoded)
@@ -133,6 +133,8 @@ struct ClientRequestMsg {
   std::string client_token;  ///< kSubmit
   std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch, kEvaluate, kClose
   int count = 1;             ///< kFetch
+  bool log_only = false;     ///< kFetch: only the info and the log (records of generations ≥ log_from)
+  uint64_t log_from = 0;     ///< kFetch with log_only
   uint64_t batch_seq = 0;         ///< kEvaluate: ≥ 1
   std::vector<opt::Genome> genomes;    ///< kEvaluate: the batch, or empty (a poll)
   std::vector<std::string> job_ids;    ///< kPrune: jobs named
@@ -141,8 +143,37 @@ struct ClientRequestMsg {
   bool dry_run = false;                ///< kPrune
 };
 
+/// A connected worker as the scheduler sees it (proto WorkerInfo).
+struct WorkerView {
+  std::string id, host, key;
+  int64_t pid = 0;
+  int threads = 0;
+  double item_seconds = -1;  ///< per task per thread [s]; < 0 unknown
+  int leases = 0, tasks_in_flight = 0;
+  uint64_t tasks_done = 0;
+  double connected_unix_s = 0;
+  bool solo = false;
+  bool operator==(const WorkerView&) const = default;
+};
+/// A worker that left (proto WorkerDeparture).
+struct WorkerDepartureView {
+  std::string id, host, reason;
+  int64_t pid = 0;
+  double at_unix_s = 0;
+  uint64_t tasks_done = 0;
+  bool operator==(const WorkerDepartureView&) const = default;
+};
+/// The master's workers (proto WorkersReply).
+struct WorkersSnapshot {
+  std::vector<WorkerView> workers;
+  std::vector<WorkerDepartureView> departed;  ///< most recent last
+  uint64_t leases_sent = 0, tasks_done = 0, results_ignored = 0, bad_frames = 0;
+  double uptime_s = 0;
+  bool operator==(const WorkersSnapshot&) const = default;
+};
+
 struct ClientReplyMsg {
-  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate, kPrune };
+  enum class Type { kNone, kSubmit, kStatus, kList, kFetch, kEvent, kEvaluate, kPrune, kWorkers };
   Type type = Type::kNone;
   uint64_t request_id = 0;
   WireCode code = WireCode::kOk;
@@ -163,6 +194,7 @@ struct ClientReplyMsg {
   std::vector<opt::FitnessResult> results;   ///< kEvaluate (worker_threads: connected threads)
   std::vector<std::string> pruned;            ///< kPrune: deleted (dry run: would be)
   std::vector<job::FieldViolation> refused;   ///< kPrune: {job id, why not}
+  WorkersSnapshot workers_snapshot;           ///< kWorkers
 };
 
 }  // namespace pz::service

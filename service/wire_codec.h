@@ -36,6 +36,13 @@ std::string EncodeMasterToWorker(const WorkerMsg& m);
 Status DecodeMasterToWorker(std::string_view bytes, WorkerMsg* m);
 
 // Client ↔ master.
+/// The dashboard's JSON documents (proto/dashboard.proto through protobuf's JSON printer).
+std::string DashboardStateJson(const std::string& master, double polled_unix_s, uint64_t polls,
+                               const std::string& error, const std::vector<JobInfo>& jobs,
+                               const WorkersSnapshot& workers, const std::string& workers_error,
+                               const std::vector<std::string>& reports);
+std::string DashboardCurveJson(const std::string& job_id, const std::vector<GenerationRecord>& records);
+
 std::string EncodeClientRequest(const ClientRequestMsg& m);
 Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m);
 std::string EncodeClientReply(const ClientReplyMsg& m);

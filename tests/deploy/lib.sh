@@ -82,14 +82,14 @@ show_logs() {
 
 # comparable DIR: what must be bit-identical between two runs of one spec in a fetched result:
 # best.csv (synthetic jobs) or the best networks (hgann: networks/*.json, validation.csv) without
-# their provenance (job id, time of writing), and progress.csv without its wall-clock column (11).
+# their provenance (job id, time of writing), and progress.csv without its wall-clock column (12).
 comparable() {
   local d=$1 f
   for f in "$d"/best.csv "$d"/networks/*.json "$d"/network.json "$d"/validation.csv; do
     [[ -f $f ]] && { echo "== ${f#"$d"/}"; grep -Ev '^ *"(job_id|created)":' "$f"; }
   done
   echo "== progress.csv without wall_time_s"
-  sed -E 's/^(([^,]*,){10})[^,]*,/\1/' "$d/progress.csv"
+  sed -E 's/^(([^,]*,){11})[^,]*,/\1/' "$d/progress.csv"
 }
 
 # same_result A B: A and B (fetch folders) hold the same individuals and generation log.

@@ -466,6 +466,9 @@ TEST(GaInvariants, ElitismBestNeverWorsensAndOnlyOffspringAreEvaluated) {
   EXPECT_EQ(st.best, st.population[0]);
   EXPECT_EQ(st.best_fitness.cost, seen.back().best_cost);
   EXPECT_EQ(HashFitness{}.Evaluate(st.best).cost, st.best_fitness.cost);
+  // The median of the ranked population (60: the mean of the 30th and 31st costs).
+  EXPECT_EQ(seen.back().median_cost, st.fitness[29].cost + (st.fitness[30].cost - st.fitness[29].cost) / 2);
+  EXPECT_LE(seen.back().best_cost, seen.back().median_cost);
   EXPECT_TRUE(std::is_sorted(st.fitness.begin(), st.fitness.end(),
                              [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
   EXPECT_EQ(summary.termination, GaTermination::kMaxGenerations);

@@ -169,6 +169,41 @@ TEST(WireCodec, ClientRepliesRoundTripWithNetworksAndStatusFields) {
   auto pr = RoundTrip(prune, EncodeClientReply, DecodeClientReply);
   EXPECT_EQ(pr.pruned, prune.pruned);
   EXPECT_EQ(pr.refused, prune.refused);
+
+  // The dashboard's workers table and the median of a generation record.
+  ClientReplyMsg workers;
+  workers.type = ClientReplyMsg::Type::kWorkers;
+  workers.workers_snapshot.workers = {{"00aa", "node-3", "worker-key", 4242, 8, 1.5e-4, 2, 37, 12345, 1.7e9, true}};
+  workers.workers_snapshot.departed = {{"00bb", "node-4", "lost (missed its heartbeats)", 77, 1.7e9 + 5, 99}};
+  workers.workers_snapshot.leases_sent = 10;
+  workers.workers_snapshot.tasks_done = 20;
+  workers.workers_snapshot.results_ignored = 3;
+  workers.workers_snapshot.bad_frames = 1;
+  workers.workers_snapshot.uptime_s = 60.5;
+  auto wr = RoundTrip(workers, EncodeClientReply, DecodeClientReply);
+  EXPECT_EQ(wr.type, ClientReplyMsg::Type::kWorkers);
+  EXPECT_EQ(wr.workers_snapshot, workers.workers_snapshot);
+  ClientReplyMsg with_median;
+  with_median.type = ClientReplyMsg::Type::kFetch;
+  GenerationRecord median_rec;
+  median_rec.generation = 7;
+  median_rec.median_cost = 0.25;
+  with_median.log = {median_rec};
+  EXPECT_EQ(RoundTrip(with_median, EncodeClientReply, DecodeClientReply).log.at(0).median_cost, 0.25);
+}
+
+TEST(WireCodec, LiveViewRequestsRoundTrip) {
+  ClientRequestMsg fetch;
+  fetch.type = ClientRequestMsg::Type::kFetch;
+  fetch.job_id = "jf";
+  fetch.log_only = true;
+  fetch.log_from = 123;
+  auto f = RoundTrip(fetch, EncodeClientRequest, DecodeClientRequest);
+  EXPECT_TRUE(f.log_only);
+  EXPECT_EQ(f.log_from, 123u);
+  ClientRequestMsg workers;
+  workers.type = ClientRequestMsg::Type::kWorkers;
+  EXPECT_EQ(RoundTrip(workers, EncodeClientRequest, DecodeClientRequest).type, ClientRequestMsg::Type::kWorkers);
 }
 
 TEST(WireCodec, WhatDoesNotDecodeIsNamed) {
