@@ -233,6 +233,10 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   submit->add_option("--client-token", *token,
                      "idempotence token: submitting the same spec with the same token again returns the same job "
                      "(default: a random one)");
+  auto embedded_out = std::make_shared<std::string>();
+  submit->add_option("--write-embedded", *embedded_out,
+                     "write the checked spec with its case data embedded (protobuf JSON, what the Python client "
+                     "submits) to this file instead of submitting it");
   submit->callback([=, &exit_code] {
     job::JobSpec spec;
     std::vector<job::FieldViolation> v;
@@ -245,6 +249,18 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
     v = kinds::All().Validate(spec);
     if (!v.empty()) {
       exit_code = ReportViolations("job spec " + *path, v, InvalidArgument("invalid"));
+      return;
+    }
+    if (!embedded_out->empty()) {
+      std::ofstream f(*embedded_out, std::ios::binary);
+      f << service::JobSpecToJson(spec) << "\n";
+      f.close();
+      if (!f) {
+        exit_code = Report({StatusCode::kInternal, *embedded_out + ": cannot write"});
+        return;
+      }
+      std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n", embedded_out->c_str());
+      exit_code = kExitOk;
       return;
     }
     SubmitResult r;

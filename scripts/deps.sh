@@ -7,6 +7,7 @@ PKGS=(build-essential cmake ninja-build pkg-config git
       libspdlog-dev zlib1g-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev libboost-dev
       gnuplot-nox libopenblas-serial-dev
       libcpp-httplib-dev libjs-chart.js libjs-marked chromium fonts-dejavu-core  # the dashboard and its browser test
+      python3-zmq python3-protobuf python3-venv python3-setuptools python3-pip   # the Python client (python/)
       clang libclang-rt-14-dev)  # clang + its sanitizer/libFuzzer runtimes: fuzz/run.sh
 missing=()
 for p in "${PKGS[@]}"; do
