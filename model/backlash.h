@@ -18,9 +18,15 @@ struct BacklashParams {
   double b2 = -1.0; ///< lower saturation [deg], < 0
 };
 
-/// One step of the operator.
+/// One step of the operator. The formula above, rearranged so that y_{k−1} meets two operations
+/// instead of four (this is the serial chain of a simulation's output): max(b2, max(lo, v)) =
+/// max(max(b2, lo), v), and min(b1, max(L, v)) = max(min(b1, L), min(b1, v)) (min distributes over
+/// max), so y_k = max(A, min(B, y_{k−1})) with A = min(b1, max(b2, θ − a1)), B = min(b1, θ + a2).
+/// min and max are exact: the same value for every finite input (a zero may change its sign).
 inline double BacklashStep(const BacklashParams& p, double theta, double y_prev) {
-  return std::min(p.b1, std::max(p.b2, std::max(theta - p.a1, std::min(theta + p.a2, y_prev))));
+  const double a = std::min(p.b1, std::max(p.b2, theta - p.a1));
+  const double b = std::min(p.b1, theta + p.a2);
+  return std::max(a, std::min(b, y_prev));
 }
 
 /// Applies the operator to theta (deg) into y (same length; may alias theta).

@@ -1,4 +1,5 @@
 #include "model/ffnet.h"
+#include "model/fast_exp.h"
 
 #include <cmath>
 #include <cstddef>
@@ -78,37 +79,12 @@ namespace {
 // std::tanh. Branch-free so GCC vectorises it (this file is compiled with -fno-trapping-math, see
 // model/CMakeLists.txt); target_clones adds an AVX2+FMA copy chosen at load time on CPUs that have it.
 __attribute__((target_clones("arch=x86-64-v3", "default"))) void TansigKernel(double* x, std::ptrdiff_t n) {
-  constexpr double kLog2e = 1.4426950408889634;
-  constexpr double kLn2Hi = 6.93147180369123816490e-01;
-  constexpr double kLn2Lo = 1.90821492927058770002e-10;
-  constexpr double kRound = 6755399441055744.0;  // 2^52 + 2^51: adding it rounds to an integer
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const double v = x[i];
     const double a0 = 2.0 * std::fabs(v);
     const double a = a0 > 40.0 ? 40.0 : a0;  // NaN passes through
-    const double kr = a * kLog2e + kRound;  // low mantissa bits hold k = round(a / ln2), 0..58
-    const double k = kr - kRound;
-    const double r = (a - k * kLn2Hi) - k * kLn2Lo;
-    double p = 1.0 / 6227020800.0;
-    p = p * r + 1.0 / 479001600.0;
-    p = p * r + 1.0 / 39916800.0;
-    p = p * r + 1.0 / 3628800.0;
-    p = p * r + 1.0 / 362880.0;
-    p = p * r + 1.0 / 40320.0;
-    p = p * r + 1.0 / 5040.0;
-    p = p * r + 1.0 / 720.0;
-    p = p * r + 1.0 / 120.0;
-    p = p * r + 1.0 / 24.0;
-    p = p * r + 1.0 / 6.0;
-    p = p * r + 0.5;
-    p = p * r + 1.0;
-    p = p * r + 1.0;
-    uint64_t kbits;
-    std::memcpy(&kbits, &kr, sizeof kbits);
-    const uint64_t ebits = (kbits + 1023u) << 52;
-    double two_k;
-    std::memcpy(&two_k, &ebits, sizeof two_k);
-    x[i] = std::copysign(1.0 - 2.0 / (p * two_k + 1.0), v);
+    const double e = ExpReduced(a);
+    x[i] = std::copysign(1.0 - 2.0 / (e + 1.0), v);
   }
 }
 

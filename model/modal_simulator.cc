@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -9,6 +10,7 @@
 #include <string>
 
 #include "model/bouc_wen.h"
+#include "model/fast_exp.h"
 
 namespace pz::model {
 namespace {
@@ -74,6 +76,55 @@ inline double FastAtan(double x) {
 // Output angle [deg] of a tip deflection.
 inline double Degrees(double w, double inv_length) {
   return FastAtan(w * inv_length) * (180.0 / std::numbers::pi);
+}
+
+// z, ż, z̈ (EvalZ) at the nodes [from, to) of a chunk, all on one branch, into
+// structure-of-arrays outputs; arguments of e^x beyond ±700 (extreme parameters) are redone with
+// std::expm1 afterwards. Returns false if none needed that.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+bool ZBatch(long from, long to, const double* __restrict u, const double* __restrict ud,
+            const double* __restrict udd, double u0, double z0, double gain, double kappa, double alpha,
+            double* __restrict z, double* __restrict zd, double* __restrict zdd) {
+  int far = 0;
+  for (long j = from; j < to; ++j) {
+    const double du = u[j] - u0;
+    const double x = -kappa * du;
+    const bool in_range = (x >= -700.0) & (x <= 700.0);
+    const double xc = in_range ? x : 0.0;
+    far += !in_range;
+    // Every candidate is computed, then selected: the loop has no branch and vectorises.
+    const double taylor = x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24))));  // FastExpm1's small branch
+    const double expm1 = ExpReduced(xc) - 1.0;
+    const double em1 = ((x < 1e-3) & (x > -1e-3)) ? taylor : expm1;
+    const double linear = z0 + alpha * du, curved = z0 + gain * em1;
+    const double zj = kappa == 0.0 ? linear : curved;
+    const double sl = alpha - kappa * zj;
+    z[j] = zj;
+    zd[j] = sl * ud[j];
+    zdd[j] = sl * (udd[j] - kappa * ud[j] * ud[j]);
+  }
+  return far == 0;
+}
+
+// θ [deg] of tip deflections w[0 … n): the vectorised FastAtan; |w/L| ≥ 1/8 (beyond 7 deg) is
+// redone with std::atan by the caller (returns false when some are).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+bool DegreesBatch(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
+  int far = 0;
+  for (long q = 0; q < n; ++q) {
+    const double x = w[q] * inv_length;
+    far += !(std::abs(x) < 0.125);
+    const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
+    const double p01 = 1.0 + (-1.0 / 3) * x2, p23 = 1.0 / 5 + (-1.0 / 7) * x2, p45 = 1.0 / 9 + (-1.0 / 11) * x2;
+    const double p67 = 1.0 / 13 + (-1.0 / 15) * x2, p89 = 1.0 / 17 + (-1.0 / 19) * x2;
+    const double p = (p01 + p23 * x4) + (p45 + p67 * x4) * x8 + p89 * x16;
+    theta[q] = x * p * (180.0 / std::numbers::pi);
+  }
+  return far == 0;
 }
 
 // Sinks: what a run does with each output sample.
@@ -381,6 +432,10 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   double* xs = ws.xs_.data();
   double* base = ws.base_.data();
   double* uo = ws.uo_.data();
+  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_}) v->resize(kChunk + 1);
+  double *nu = ws.nu_.data(), *nud = ws.nud_.data(), *nudd = ws.nudd_.data(), *nre = ws.nre_.data(),
+         *nim = ws.nim_.data();
+  double *zz = ws.zz_.data(), *zzd = ws.zzd_.data(), *zzdd = ws.zzdd_.data();
   const double eps = kNodeRelTol * hs;
   const StepCoeffs coeffs{ws.e11_.data(),
                           ws.e12_.data(),
@@ -409,30 +464,62 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   };
   if (!output(0, SumModes(np, x0), feedthrough(zl[0]) + V * htip_im, 0.0, zl[0].z)) return;
 
+  // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
+  // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the nodes
+  // of a chunk are independent of each other and their drive is one vectorised loop.
+  constexpr long kBlock = 64;
+  static_assert(kChunk % kBlock == 0);
   const double rot_re = std::cos(om * hs), rot_im = std::sin(om * hs);
-  double zre = 1.0, zim = 0.0;  // e^{iΩt}
+  double rpow_re[kBlock], rpow_im[kBlock];
+  rpow_re[0] = 1.0;
+  rpow_im[0] = 0.0;
+  for (long r = 1; r < kBlock; ++r) {
+    rpow_re[r] = rpow_re[r - 1] * rot_re - rpow_im[r - 1] * rot_im;
+    rpow_im[r] = rpow_re[r - 1] * rot_im + rpow_im[r - 1] * rot_re;
+  }
   long steps = 0;
   bool jump_at_start = false;  // d⁻ ≠ d⁺ at the chunk's first node
   int to_output = m;           // internal steps left to the next output sample (pass 1)
   size_t next_out = 1;
+  using Segment = ModalWorkspace::SegmentData;  // nodes [from, to) whose left limits share a branch
+  std::vector<Segment>& segments = ws.segments_;
   for (long c0 = 0; c0 < n_steps; c0 += kChunk) {
     const long len = std::min(kChunk, n_steps - c0);
-    // Pass 1.
+    // Pass 1a: the drive at the nodes 1 … len (global node c0 + j), block by block.
+    for (long q = 0; q * kBlock <= len; ++q) {
+      const long b = c0 + q * kBlock;  // a multiple of 64: e^{iΩ t_b} exactly
+      const double tb = static_cast<double>(b) * hs;
+      const double ere = b == 0 ? 1.0 : std::cos(om * tb), eim = b == 0 ? 0.0 : std::sin(om * tb);
+      const long j0 = std::max<long>(1, q * kBlock), j1 = std::min(len, q * kBlock + kBlock - 1);
+      for (long j = j0; j <= j1; ++j) {
+        const long r = j - q * kBlock;
+        const double re = ere * rpow_re[r] - eim * rpow_im[r];
+        const double im = ere * rpow_im[r] + eim * rpow_re[r];
+        nre[j] = re;
+        nim[j] = im;
+        nu[j] = V * im;
+        nud[j] = V * om * re;
+        nudd[j] = -om * om * (V * im);
+      }
+    }
+    // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
+    // make it special (sub-steps, z data now); on a node its data jump there. Between them the
+    // nodes' left limits lie on one branch: a segment.
     ws.special_.clear();
     ws.inner_.clear();
+    ws.jumps_.clear();
+    segments.clear();
+    BoucWenBranch cur = br;  // the branch of the next node's left limit
+    long seg_from = 1;
+    auto close_segment = [&](long to) {
+      if (to > seg_from) segments.push_back({seg_from, to, cur});
+      seg_from = to;
+    };
     bool jump_at_node = jump_at_start;
     for (long i = 0; i < len; ++i) {
       const long k = c0 + i;
       const double t1 = static_cast<double>(k + 1) * hs;
-      if (((k + 1) & 63) == 0) {
-        zre = std::cos(om * t1);
-        zim = std::sin(om * t1);
-      } else {
-        const double a = zre * rot_re - zim * rot_im;
-        zim = zre * rot_im + zim * rot_re;
-        zre = a;
-      }
-      const double u1 = V * zim, ud1 = V * om * zre, udd1 = -om * om * u1;
+      if (!jump_at_node && !(t_end <= t1 + eps)) continue;  // nothing up to this node
       const int inner_begin = static_cast<int>(ws.inner_.size());
       while (t_end < t1 - eps) {
         double ub, udb, uddb;
@@ -444,20 +531,48 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       }
       const int inner_end = static_cast<int>(ws.inner_.size());
       if (jump_at_node || inner_end > inner_begin) ws.special_.push_back({i, inner_begin, inner_end});
-      zl[i + 1] = zr[i + 1] = eval(u1, ud1, udd1);
+      if (inner_end > inner_begin) {  // node i + 1 is on the new branch
+        close_segment(i + 1);
+        cur = br;
+      }
       jump_at_node = false;
       while (t_end <= t1 + eps) {  // breakpoints on the node: the data jump there
         advance();
-        zr[i + 1] = eval(u1, ud1, udd1);
         jump_at_node = true;
       }
-      if (--to_output == 0) {
-        base[i + 1] = feedthrough(zl[i + 1]) + V * (htip_re * zim + htip_im * zre);
-        uo[i + 1] = u1;
-        to_output = m;
+      if (jump_at_node) {  // node i + 1's left limit stays on `cur`, its right one and the next on br
+        ws.jumps_.emplace_back(i + 1, br);
+        close_segment(i + 2);
+        cur = br;
       }
     }
+    close_segment(len + 1);
     jump_at_start = jump_at_node;
+    // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the node.
+    if (hyst) {
+      for (const Segment& sg : segments) {
+        const BoucWenBranch& b = sg.branch;
+        if (!ZBatch(sg.from, std::min(sg.to, len + 1), nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd,
+                    zzdd)) {
+          for (long j = sg.from; j < std::min(sg.to, len + 1); ++j) {  // arguments beyond ±700: as EvalZ has it
+            const ZData d = EvalZ(b, nu[j], nud[j], nudd[j]);
+            zz[j] = d.z;
+            zzd[j] = d.zd;
+            zzdd[j] = d.zdd;
+          }
+        }
+      }
+      for (long j = 1; j <= len; ++j) zl[j] = zr[j] = ZData{zz[j], zzd[j], zzdd[j]};
+      for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
+    } else {
+      for (long j = 1; j <= len; ++j) zl[j] = zr[j] = ZData{};
+    }
+    for (long j = 1; j <= len; ++j) {
+      if (--to_output != 0) continue;
+      base[j] = feedthrough(zl[j]) + V * (htip_re * nim[j] + htip_im * nre[j]);
+      uo[j] = nu[j];
+      to_output = m;
+    }
     // Pass 2.
     long i = 0;
     for (const ModalWorkspace::Special& sp : ws.special_) {
@@ -493,10 +608,30 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     }
     if (i < len) StepRun(i, len, np, x0, x1, coeffs, zr, hs, xs);
     steps += len;
-    // Pass 3.
+    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash in order.
+    ws.io_.clear();
+    ws.wo_.clear();
     for (long i3 = 1; i3 <= len; ++i3) {
       if (m != 1 && (c0 + i3) % m != 0) continue;
-      if (!output(next_out, xs[i3], base[i3], uo[i3], zl[i3].z)) return;
+      ws.io_.push_back(i3);
+      ws.wo_.push_back(xs[i3] + base[i3]);
+    }
+    const long n_o = static_cast<long>(ws.wo_.size());
+    ws.tho_.resize(static_cast<size_t>(n_o));
+    if (!DegreesBatch(n_o, ws.wo_.data(), inv_len, ws.tho_.data())) {
+      for (long q = 0; q < n_o; ++q)
+        if (!(std::abs(ws.wo_[q] * inv_len) < 0.125)) ws.tho_[q] = Degrees(ws.wo_[q], inv_len);
+    }
+    for (long q = 0; q < n_o; ++q) {
+      const long i3 = ws.io_[q];
+      const double w = ws.wo_[q];
+      if (!std::isfinite(w)) {
+        summary.status = SimStatus::kNonFinite;
+        summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
+        return;
+      }
+      y = BacklashStep(bl, ws.tho_[q], y);
+      sink.Emit(next_out, static_cast<double>(next_out) / fs, uo[i3], zl[i3].z, w, ws.tho_[q], y);
       ++next_out;
     }
     zl[0] = zl[len];
