@@ -222,6 +222,15 @@ TEST(Dashboard, TokenReportsAndRefusals) {
   EXPECT_NE(err.find("--token-file: the token has 3 characters"), std::string::npos) << err;
   EXPECT_EQ(RunCli({"dashboard", "--listen", "127.0.0.1:http"}, &out, &err), 2);
   EXPECT_NE(err.find("--listen '127.0.0.1:http': the port must be a number"), std::string::npos) << err;
+  // A CURVE master: the dashboard needs its own token too.
+  const fs::path keys = cluster.dir() / "keys";
+  ASSERT_EQ(RunCli({"keygen", "--out", keys.string(), "--name", "viewer"}, &out, &err), 0) << err;
+  ASSERT_EQ(RunCli({"keygen", "--out", keys.string(), "--name", "master"}, &out, &err), 0) << err;
+  EXPECT_EQ(RunCli({"dashboard", "--listen", "127.0.0.1:0", "--curve-secret", (keys / "viewer.key").string(),
+                    "--master-public", (keys / "master.pub").string()},
+                   &out, &err),
+            2);
+  EXPECT_NE(err.find("the master uses CURVE: the dashboard needs its own access token"), std::string::npos) << err;
 }
 
 }  // namespace
