@@ -174,6 +174,8 @@ struct Dashboard::Impl {
     if (s.ok()) {
       infos.clear();
       for (const auto& j : jobs) infos[j.job_id] = j;
+      for (auto it = logs.begin(); it != logs.end();)  // jobs pruned from the master: forget their curves
+        it = infos.count(it->first) ? std::next(it) : logs.erase(it);
       ++polls;
     }
     std::vector<service::JobInfo> shown;
