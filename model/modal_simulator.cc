@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -58,20 +57,19 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
   return {z, sl * ud, sl * (udd - b.kappa * ud * ud)};
 }
 
-// atan to ~1 ulp; the fin's |w/L| < 1/8 (7 deg) takes the odd Taylor series (x^20/21 < 1e-19).
-inline double FastAtan(double x) {
-  if (std::abs(x) < 0.125) {
-    constexpr double kC[10] = {1.0,       -1.0 / 3,  1.0 / 5,  -1.0 / 7,  1.0 / 9,
-                               -1.0 / 11, 1.0 / 13,  -1.0 / 15, 1.0 / 17, -1.0 / 19};
-    // Estrin's scheme: a short dependency chain (this sits on the per-sample critical path).
-    const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
-    const double p01 = kC[0] + kC[1] * x2, p23 = kC[2] + kC[3] * x2, p45 = kC[4] + kC[5] * x2;
-    const double p67 = kC[6] + kC[7] * x2, p89 = kC[8] + kC[9] * x2;
-    const double p = (p01 + p23 * x4) + (p45 + p67 * x4) * x8 + p89 * x16;
-    return x * p;
-  }
-  return std::atan(x);
+// The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's scheme: a
+// short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
+inline double AtanSeries(double x) {
+  constexpr double kC[10] = {1.0, -1.0 / 3, 1.0 / 5, -1.0 / 7, 1.0 / 9, -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
+  const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
+  const double p01 = kC[0] + kC[1] * x2, p23 = kC[2] + kC[3] * x2, p45 = kC[4] + kC[5] * x2;
+  const double p67 = kC[6] + kC[7] * x2, p89 = kC[8] + kC[9] * x2;
+  const double p = (p01 + p23 * x4) + (p45 + p67 * x4) * x8 + p89 * x16;
+  return x * p;
 }
+
+// atan to ~1 ulp; the fin's |w/L| < 1/8 (7 deg) takes the series.
+inline double FastAtan(double x) { return std::abs(x) < 0.125 ? AtanSeries(x) : std::atan(x); }
 
 // Output angle [deg] of a tip deflection.
 inline double Degrees(double w, double inv_length) {
@@ -95,7 +93,7 @@ bool ZBatch(long from, long to, const double* __restrict u, const double* __rest
     const double xc = in_range ? x : 0.0;
     far += !in_range;
     // Every candidate is computed, then selected: the loop has no branch and vectorises.
-    const double taylor = x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24))));  // FastExpm1's small branch
+    const double taylor = Expm1Taylor4(x);  // FastExpm1's small branch
     const double expm1 = ExpReduced(xc) - 1.0;
     const double em1 = ((x < 1e-3) & (x > -1e-3)) ? taylor : expm1;
     const double linear = z0 + alpha * du, curved = z0 + gain * em1;
@@ -118,11 +116,7 @@ bool DegreesBatch(long n, const double* __restrict w, double inv_length, double*
   for (long q = 0; q < n; ++q) {
     const double x = w[q] * inv_length;
     far += !(std::abs(x) < 0.125);
-    const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
-    const double p01 = 1.0 + (-1.0 / 3) * x2, p23 = 1.0 / 5 + (-1.0 / 7) * x2, p45 = 1.0 / 9 + (-1.0 / 11) * x2;
-    const double p67 = 1.0 / 13 + (-1.0 / 15) * x2, p89 = 1.0 / 17 + (-1.0 / 19) * x2;
-    const double p = (p01 + p23 * x4) + (p45 + p67 * x4) * x8 + p89 * x16;
-    theta[q] = x * p * (180.0 / std::numbers::pi);
+    theta[q] = AtanSeries(x) * (180.0 / std::numbers::pi);
   }
   return far == 0;
 }
@@ -449,20 +443,20 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   zl[0] = zr[0] = eval(0.0, V * om, 0.0);
   AddMatVec(np, x0, x1, ws.p1_, -zl[0].z, -hs * zl[0].zd, -hs * hs * zl[0].zdd);
   double y = 0.0;
-  auto output = [&](size_t j, double xsum, double base_j, double u, double z) -> bool {
-    const double w = xsum + base_j;
+  // Output sample j: tip deflection w, its angle θ (NaN-safe: only used once w is checked), backlash.
+  auto output = [&](size_t j, double w, double theta, double u, double z) -> bool {
     const double t = static_cast<double>(j) / fs;
     if (!std::isfinite(w)) {
       summary.status = SimStatus::kNonFinite;
       summary.message = NonFiniteMessage(j, t);
       return false;
     }
-    const double theta = Degrees(w, inv_len);
     y = BacklashStep(bl, theta, y);
     sink.Emit(j, t, u, z, w, theta, y);
     return true;
   };
-  if (!output(0, SumModes(np, x0), feedthrough(zl[0]) + V * htip_im, 0.0, zl[0].z)) return;
+  const double w0 = SumModes(np, x0) + (feedthrough(zl[0]) + V * htip_im);
+  if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl[0].z)) return;
 
   // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
   // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the nodes
@@ -552,9 +546,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     if (hyst) {
       for (const Segment& sg : segments) {
         const BoucWenBranch& b = sg.branch;
-        if (!ZBatch(sg.from, std::min(sg.to, len + 1), nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd,
-                    zzdd)) {
-          for (long j = sg.from; j < std::min(sg.to, len + 1); ++j) {  // arguments beyond ±700: as EvalZ has it
+        if (!ZBatch(sg.from, sg.to, nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd, zzdd)) {
+          for (long j = sg.from; j < sg.to; ++j) {  // arguments beyond ±700: as EvalZ has it
             const ZData d = EvalZ(b, nu[j], nud[j], nudd[j]);
             zz[j] = d.z;
             zzd[j] = d.zd;
@@ -622,17 +615,9 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       for (long q = 0; q < n_o; ++q)
         if (!(std::abs(ws.wo_[q] * inv_len) < 0.125)) ws.tho_[q] = Degrees(ws.wo_[q], inv_len);
     }
-    for (long q = 0; q < n_o; ++q) {
+    for (long q = 0; q < n_o; ++q, ++next_out) {
       const long i3 = ws.io_[q];
-      const double w = ws.wo_[q];
-      if (!std::isfinite(w)) {
-        summary.status = SimStatus::kNonFinite;
-        summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
-        return;
-      }
-      y = BacklashStep(bl, ws.tho_[q], y);
-      sink.Emit(next_out, static_cast<double>(next_out) / fs, uo[i3], zl[i3].z, w, ws.tho_[q], y);
-      ++next_out;
+      if (!output(next_out, ws.wo_[q], ws.tho_[q], uo[i3], zl[i3].z)) return;
     }
     zl[0] = zl[len];
     zr[0] = zr[len];

@@ -147,12 +147,12 @@ class Rng {
   }
   bool Bernoulli(double p) { return Bernoulli(BernoulliThreshold(p)); }
 
-  /// The failures before the next success of Bernoulli(p) trials, capped at gaps.max_gap(); one draw
-  /// (none if p = 0: returns max_gap; none if p = 1: returns 0).
+  /// The failures before the next success of Bernoulli(p) trials, capped at gaps.max_gap() (the table
+  /// has at most max_gap entries); one draw (none if p = 0: returns max_gap; none if p = 1: returns 0).
   int Gap(const GeometricGaps& gaps) {
     if (gaps.never()) return gaps.max_gap();
     if (gaps.always()) return 0;
-    return std::min(gaps.GapFor(NextU64()), gaps.max_gap());
+    return gaps.GapFor(NextU64());
   }
 
  private:
