@@ -132,8 +132,7 @@ struct Dashboard::Impl {
   // ------------------------------------------------------------------ polling
   void PollOnce(ServiceClient& client, double* polled_at, std::string* error) {
     std::vector<service::JobInfo> jobs;
-    int workers = 0, threads = 0;
-    Status s = client.List(&jobs, &workers, &threads);
+    Status s = client.List(&jobs);
     service::WorkersSnapshot snapshot;
     std::string workers_error;
     if (s.ok()) {
@@ -156,12 +155,13 @@ struct Dashboard::Impl {
           const auto& log = logs[j.job_id];
           if (!log.empty()) from = log.back().generation + 1;
           auto it = infos.find(j.job_id);
-          complete = !log.empty() && from > j.generation && it != infos.end() && it->second.state == j.state;
+          // Caught up: a GA job's last record is generation `generation − 1` (generation counts
+          // generation 0 too), a session's batch `generation`; nothing new unless the state moved.
+          complete = !log.empty() && from >= j.generation && it != infos.end() && it->second.state == j.state;
         }
         if (complete) continue;
         std::vector<service::GenerationRecord> more;
-        service::JobInfo info;
-        if (!client.FetchLog(j.job_id, from, &info, &more).ok()) continue;  // e.g. pruned meanwhile
+        if (!client.FetchLog(j.job_id, from, nullptr, &more).ok()) continue;  // e.g. pruned meanwhile
         std::lock_guard lock(mu);
         auto& log = logs[j.job_id];
         for (auto& r : more)
@@ -170,6 +170,7 @@ struct Dashboard::Impl {
     } else {
       *error = s.message();
     }
+    const std::vector<std::string> reports = Reports();  // the disk is read outside the lock
     std::lock_guard lock(mu);
     if (s.ok()) {
       infos.clear();
@@ -178,13 +179,11 @@ struct Dashboard::Impl {
         it = infos.count(it->first) ? std::next(it) : logs.erase(it);
       ++polls;
     }
-    std::vector<service::JobInfo> shown;
-    for (const auto& j : jobs) shown.push_back(j);
-    if (!s.ok()) {  // keep showing what was last known
+    std::vector<service::JobInfo> shown = jobs;
+    if (!s.ok())  // keep showing what was last known
       for (const auto& [id, j] : infos) shown.push_back(j);
-    }
     state_json = service::DashboardStateJson(options.client.endpoint, *polled_at, polls, *error, shown, snapshot,
-                                             workers_error, Reports());
+                                             workers_error, reports);
   }
 
   void PollLoop() {
@@ -231,8 +230,7 @@ struct Dashboard::Impl {
     }
     if (!known) {  // not polled (archived, or new): ask the master
       std::lock_guard lock(request_mu);
-      service::JobInfo info;
-      Status s = request_client->FetchLog(job, from, &info, &records);
+      Status s = request_client->FetchLog(job, from, nullptr, &records);
       if (s.code() == StatusCode::kNotFound) return Text(res, 404, "job " + job + ": " + s.message());
       if (!s.ok()) return Text(res, 503, "the master did not answer: " + s.message());
     }
@@ -312,18 +310,16 @@ struct Dashboard::Impl {
            "`piezoid dashboard --token-file`), or send 'Authorization: Bearer TOKEN'");
       return httplib::Server::HandlerResponse::Handled;
     });
-    server.Get("/", [](const httplib::Request&, httplib::Response& res) {
-      res.set_content(std::string(assets::kIndexHtml), "text/html; charset=utf-8");
-    });
-    server.Get("/static/dashboard.js", [](const httplib::Request&, httplib::Response& res) {
-      res.set_content(std::string(assets::kDashboardJs), "text/javascript; charset=utf-8");
-    });
-    server.Get("/static/chart.min.js", [](const httplib::Request&, httplib::Response& res) {
-      res.set_content(std::string(assets::kChartJs), "text/javascript; charset=utf-8");
-    });
-    server.Get("/static/marked.min.js", [](const httplib::Request&, httplib::Response& res) {
-      res.set_content(std::string(assets::kMarkedJs), "text/javascript; charset=utf-8");
-    });
+    struct Asset {
+      const char* path;
+      std::string_view body;
+      const char* type;
+    };
+    for (const Asset& a : {Asset{"/", assets::kIndexHtml, "text/html; charset=utf-8"},
+                           Asset{"/static/dashboard.js", assets::kDashboardJs, "text/javascript; charset=utf-8"},
+                           Asset{"/static/chart.min.js", assets::kChartJs, "text/javascript; charset=utf-8"},
+                           Asset{"/static/marked.min.js", assets::kMarkedJs, "text/javascript; charset=utf-8"}})
+      server.Get(a.path, [a](const httplib::Request&, httplib::Response& res) { res.set_content(std::string(a.body), a.type); });
     server.Get("/api/state", [this](const httplib::Request&, httplib::Response& res) {
       std::string json;
       {

@@ -19,7 +19,7 @@ from typing import Callable, Iterable, Optional, Union
 import zmq
 from google.protobuf import json_format
 
-from ._proto import job_pb2, network_pb2, wire_pb2
+from ._proto import job_pb2, wire_pb2
 from .network import Network
 
 PROTOCOL_VERSION = 1
