@@ -121,6 +121,43 @@ bool DegreesBatch(long n, const double* __restrict w, double inv_length, double*
   return far == 0;
 }
 
+// Pass 1a of a sinusoid run: the drive at the nodes [j0, j1) of a block starting at node b0, from
+// e^{iΩ t_b0} = (ere, eim) and the powers of the one-step rotation: e^{iΩt}, u, u̇, ü.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re, const double* __restrict rpow_im,
+                double ere, double eim, double V, double om, double* __restrict nre, double* __restrict nim,
+                double* __restrict nu, double* __restrict nud, double* __restrict nudd) {
+  for (long j = j0; j < j1; ++j) {
+    const long r = j - b0;
+    const double re = ere * rpow_re[r] - eim * rpow_im[r];
+    const double im = ere * rpow_im[r] + eim * rpow_re[r];
+    nre[j] = re;
+    nim[j] = im;
+    nu[j] = V * im;
+    nud[j] = V * om * re;
+    nudd[j] = -om * om * (V * im);
+  }
+}
+
+// Pass 1c's end: the hold data of the nodes 1 … len as left and right limits (the right ones of the
+// nodes with a jump are redone by the caller), and the state-free part of w_tip there: the
+// feed-through t1c · d of the end data plus V Im(H_tip e^{iΩt}).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void NodeData(long len, const double* __restrict zz, const double* __restrict zzd, const double* __restrict zzdd,
+              const double* __restrict nre, const double* __restrict nim, const double* __restrict t1c, double V,
+              double htip_re, double htip_im, ZData* __restrict zl, ZData* __restrict zr, double* __restrict base) {
+  for (long j = 1; j <= len; ++j) {
+    const ZData d{zz[j], zzd[j], zzdd[j]};
+    zl[j] = d;
+    zr[j] = d;
+    base[j] = (t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd) + V * (htip_re * nim[j] + htip_im * nre[j]);
+  }
+}
+
 // Sinks: what a run does with each output sample.
 struct AngleSink {
   std::span<double> out;
@@ -147,7 +184,7 @@ struct StepCoeffs {
 // Regular steps i0 … i1−1 of a chunk: x ← E x + G·d_i⁺ (d scaled by the step hs) for every mode,
 // xs[i+1] = Σ_modes x0. NB blocks of 4 modes (NB = 0: n/4 blocks, not known at compile time).
 template <int NB>
-inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0, double* __restrict x1,
+[[gnu::always_inline]] inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0, double* __restrict x1,
                         const StepCoeffs& c, const ZData* __restrict d, double hs, double* __restrict xs) {
   const int nb = NB > 0 ? NB : n / 4;
   const double* __restrict e11 = c.e11;
@@ -160,6 +197,16 @@ inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0, double* 
   const double* __restrict g3 = c.g[3];
   const double* __restrict g4 = c.g[4];
   const double* __restrict g5 = c.g[5];
+  // A known number of modes keeps the state in registers for the whole run.
+  constexpr int kLocal = NB > 0 ? 4 * NB : 1;
+  double l0[kLocal], l1[kLocal];
+  double* __restrict s0 = x0;
+  double* __restrict s1 = x1;
+  if constexpr (NB > 0) {
+    for (int q = 0; q < kLocal; ++q) l0[q] = x0[q], l1[q] = x1[q];
+    s0 = l0;
+    s1 = l1;
+  }
   const double hs2 = hs * hs;
   for (long k = i0; k < i1; ++k) {
     const double d0 = d[k].z, d1 = hs * d[k].zd, d2 = hs2 * d[k].zdd;
@@ -167,14 +214,21 @@ inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0, double* 
     for (int blk = 0; blk < nb; ++blk) {
       for (int j = 0; j < 4; ++j) {
         const int q = 4 * blk + j;
-        const double a = x0[q], b = x1[q];
-        const double na = e11[q] * a + e12[q] * b + (g0[q] * d0 + g1[q] * d1 + g2[q] * d2);
-        x1[q] = e21[q] * a + e22[q] * b + (g3[q] * d0 + g4[q] * d1 + g5[q] * d2);
-        x0[q] = na;
+        const double a = s0[q], b = s1[q];
+        // The input terms first and the state last: the chain from one step to the next is then two
+        // multiply-adds (contracted where the target has FMA), the rest runs beside it.
+        const double in0 = (g0[q] * d0 + g1[q] * d1) + g2[q] * d2;
+        const double in1 = (g3[q] * d0 + g4[q] * d1) + g5[q] * d2;
+        const double na = e11[q] * a + (e12[q] * b + in0);
+        s1[q] = e21[q] * a + (e22[q] * b + in1);
+        s0[q] = na;
         acc[j] += na;
       }
     }
     xs[k + 1] = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+  }
+  if constexpr (NB > 0) {
+    for (int q = 0; q < kLocal; ++q) x0[q] = l0[q], x1[q] = l1[q];
   }
 }
 
@@ -420,13 +474,16 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   ws.zr_.resize(kChunk + 1);
   ws.xs_.resize(kChunk + 1);
   ws.base_.resize(kChunk + 1);
-  ws.uo_.resize(kChunk + 1);
   ZData* zl = ws.zl_.data();  // hold data at the chunk's nodes: left limits
   ZData* zr = ws.zr_.data();  //                                 right limits
   double* xs = ws.xs_.data();
   double* base = ws.base_.data();
-  double* uo = ws.uo_.data();
-  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_}) v->resize(kChunk + 1);
+  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_, &ws.wo_, &ws.tho_,
+                  &ws.yo_})
+    v->resize(kChunk + 1);
+  ws.io_.resize(kChunk + 1);
+  double *wo = ws.wo_.data(), *tho = ws.tho_.data(), *yo = ws.yo_.data();  // pass 3: w, θ, y at the outputs
+  long* io = ws.io_.data();                                                 //         and their nodes
   double *nu = ws.nu_.data(), *nud = ws.nud_.data(), *nudd = ws.nudd_.data(), *nre = ws.nre_.data(),
          *nim = ws.nim_.data();
   double *zz = ws.zz_.data(), *zzd = ws.zzd_.data(), *zzdd = ws.zzdd_.data();
@@ -473,7 +530,6 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   }
   long steps = 0;
   bool jump_at_start = false;  // d⁻ ≠ d⁺ at the chunk's first node
-  int to_output = m;           // internal steps left to the next output sample (pass 1)
   size_t next_out = 1;
   using Segment = ModalWorkspace::SegmentData;  // nodes [from, to) whose left limits share a branch
   std::vector<Segment>& segments = ws.segments_;
@@ -485,16 +541,7 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       const double tb = static_cast<double>(b) * hs;
       const double ere = b == 0 ? 1.0 : std::cos(om * tb), eim = b == 0 ? 0.0 : std::sin(om * tb);
       const long j0 = std::max<long>(1, q * kBlock), j1 = std::min(len, q * kBlock + kBlock - 1);
-      for (long j = j0; j <= j1; ++j) {
-        const long r = j - q * kBlock;
-        const double re = ere * rpow_re[r] - eim * rpow_im[r];
-        const double im = ere * rpow_im[r] + eim * rpow_re[r];
-        nre[j] = re;
-        nim[j] = im;
-        nu[j] = V * im;
-        nud[j] = V * om * re;
-        nudd[j] = -om * om * (V * im);
-      }
+      DriveNodes(j0, j1 + 1, q * kBlock, rpow_re, rpow_im, ere, eim, V, om, nre, nim, nu, nud, nudd);
     }
     // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
     // make it special (sub-steps, z data now); on a node its data jump there. Between them the
@@ -511,9 +558,16 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     };
     bool jump_at_node = jump_at_start;
     for (long i = 0; i < len; ++i) {
+      if (!jump_at_node) {
+        // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then to
+        // the first that the test below passes (it is monotone in i).
+        const double kf = std::floor((t_end - eps) / hs) - 2.0;
+        if (kf > static_cast<double>(c0 + i)) i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len : static_cast<long>(kf) - c0;
+        while (i < len && !(t_end <= static_cast<double>(c0 + i + 1) * hs + eps)) ++i;
+        if (i == len) break;
+      }
       const long k = c0 + i;
       const double t1 = static_cast<double>(k + 1) * hs;
-      if (!jump_at_node && !(t_end <= t1 + eps)) continue;  // nothing up to this node
       const int inner_begin = static_cast<int>(ws.inner_.size());
       while (t_end < t1 - eps) {
         double ub, udb, uddb;
@@ -555,17 +609,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
           }
         }
       }
-      for (long j = 1; j <= len; ++j) zl[j] = zr[j] = ZData{zz[j], zzd[j], zzdd[j]};
-      for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
     } else {
-      for (long j = 1; j <= len; ++j) zl[j] = zr[j] = ZData{};
+      std::fill(zz + 1, zz + len + 1, 0.0);
+      std::fill(zzd + 1, zzd + len + 1, 0.0);
+      std::fill(zzdd + 1, zzdd + len + 1, 0.0);
     }
-    for (long j = 1; j <= len; ++j) {
-      if (--to_output != 0) continue;
-      base[j] = feedthrough(zl[j]) + V * (htip_re * nim[j] + htip_im * nre[j]);
-      uo[j] = nu[j];
-      to_output = m;
-    }
+    NodeData(len, zz, zzd, zzdd, nre, nim, t1c, V, htip_re, htip_im, zl, zr, base);
+    for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
     // Pass 2.
     long i = 0;
     for (const ModalWorkspace::Special& sp : ws.special_) {
@@ -601,23 +651,28 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     }
     if (i < len) StepRun(i, len, np, x0, x1, coeffs, zr, hs, xs);
     steps += len;
-    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash in order.
-    ws.io_.clear();
-    ws.wo_.clear();
+    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash (BacklashRun).
+    long n_o = 0;
     for (long i3 = 1; i3 <= len; ++i3) {
       if (m != 1 && (c0 + i3) % m != 0) continue;
-      ws.io_.push_back(i3);
-      ws.wo_.push_back(xs[i3] + base[i3]);
+      io[n_o] = i3;
+      wo[n_o++] = xs[i3] + base[i3];
     }
-    const long n_o = static_cast<long>(ws.wo_.size());
-    ws.tho_.resize(static_cast<size_t>(n_o));
-    if (!DegreesBatch(n_o, ws.wo_.data(), inv_len, ws.tho_.data())) {
+    if (!DegreesBatch(n_o, wo, inv_len, tho)) {
       for (long q = 0; q < n_o; ++q)
-        if (!(std::abs(ws.wo_[q] * inv_len) < 0.125)) ws.tho_[q] = Degrees(ws.wo_[q], inv_len);
+        if (!(std::abs(wo[q] * inv_len) < 0.125)) tho[q] = Degrees(wo[q], inv_len);
     }
-    for (long q = 0; q < n_o; ++q, ++next_out) {
-      const long i3 = ws.io_[q];
-      if (!output(next_out, ws.wo_[q], ws.tho_[q], uo[i3], zl[i3].z)) return;
+    long n_ok = 0;  // outputs before the first non-finite w
+    while (n_ok < n_o && std::isfinite(wo[n_ok])) ++n_ok;
+    y = BacklashRun(bl, tho, yo, n_ok, y);
+    for (long q = 0; q < n_ok; ++q, ++next_out) {
+      const long i3 = io[q];
+      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl[i3].z, wo[q], tho[q], yo[q]);
+    }
+    if (n_ok < n_o) {
+      summary.status = SimStatus::kNonFinite;
+      summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
+      return;
     }
     zl[0] = zl[len];
     zr[0] = zr[len];

@@ -67,7 +67,7 @@ class ModalWorkspace {
     modal::ZData left, right;
   };
   std::vector<modal::ZData> zl_, zr_;  // hold data at the nodes: left and right limits
-  std::vector<double> xs_, base_, uo_;  // Σ x̄0, state-free part of w_tip, u at the nodes
+  std::vector<double> xs_, base_;  // Σ x̄0, state-free part of w_tip at the nodes
   // Pass 1 computes each node's drive (u, u̇, ü, e^{iΩt}) in one vectorised loop, finds the
   // breakpoints, and evaluates z segment by segment (the nodes between breakpoints share a branch).
   std::vector<double> nu_, nud_, nudd_, nre_, nim_;
@@ -78,7 +78,7 @@ class ModalWorkspace {
   };
   std::vector<SegmentData> segments_;
   std::vector<std::pair<long, BoucWenBranch>> jumps_;  // nodes whose right limit is on another branch
-  std::vector<double> wo_, tho_;                       // pass 3: w_tip and θ at the chunk's outputs
+  std::vector<double> wo_, tho_, yo_;                  // pass 3: w_tip, θ and y at the chunk's outputs
   std::vector<long> io_;                               //         and their nodes
   std::vector<Special> special_;
   std::vector<Inner> inner_;

@@ -184,6 +184,28 @@ TEST(Backlash, InPlaceApplicationAndInitialOutput) {
 }
 
 // In the plant the measured angle is the operator applied to the sampled linear angle.
+// BacklashRun cuts the serial chain into four parts joined by composed maps: every value must be the
+// one of the plain step-by-step recursion, bit for bit, for any length (including those too short to
+// split and those with a remainder), any start value and parameters that saturate or not.
+TEST(Backlash, RunInPartsEqualsTheStepByStepRecursionBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int trial = 0; trial < 400; ++trial) {
+    const BacklashParams p{0.5 * u(rng), 0.5 * u(rng), 0.2 + 3 * u(rng), -0.2 - 3 * u(rng)};
+    const int n = trial < 40 ? trial : 40 + static_cast<int>(400 * u(rng));
+    const std::vector<double> theta = RandomWalk(static_cast<unsigned>(trial), n, 0.05 + 0.5 * u(rng));
+    const double y0 = 2 * u(rng) - 1;
+    std::vector<double> y(theta.size());
+    const double last = BacklashRun(p, theta.data(), y.data(), n, y0);
+    double prev = y0;
+    for (int k = 0; k < n; ++k) {
+      prev = BacklashStep(p, theta[k], prev);
+      ASSERT_EQ(y[k], prev) << "trial " << trial << ", n = " << n << ", k = " << k;
+    }
+    EXPECT_EQ(last, prev) << "trial " << trial;
+  }
+}
+
 TEST(Backlash, PlantAngleIsBacklashOfLinearAngle) {
   const BimorphPlant plant;
   BimorphParams params;
