@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "model/fast_exp.h"
+
 namespace pz::model::modal {
 namespace {
 
@@ -204,6 +206,92 @@ void Discretise(const ModePoles& p, double tau, ModeStep& out) {
   out.e21 = -p.omega2 * d[0];
   const double inv_m = 1.0 / m, inv_tau = 1.0 / tau;
   for (int j = 1; j <= kMaxPhi; ++j) d[j] = (d[j - 1] * inv_tau - avg[j]) * inv_m;
+}
+
+namespace {
+
+// φ_0 … φ_6 at xs[0 … n) into phi[j][i] (rows of stride n), as PhiReal without its branches: the
+// Taylor series of φ_6 to x^14 and the downward recurrence for |x| < 1, e^x and the upward recurrence
+// otherwise, both computed and one selected. e^x by ExpReduced (within 2 ulp of std::exp), and 0 below
+// x = −700 where Discretise's PhiReal has e^x < 1e-304 (0 below −745).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void PhiRealBatch(int n, const double* __restrict xs, double* __restrict phi, int stride) {
+  for (int i = 0; i < n; ++i) {
+    const double x = xs[i];
+    const bool small = (x < 1.0) & (x > -1.0);
+    double p = kInvFact[kMaxPhi + 14];
+    for (int m = 13; m >= 0; --m) p = p * x + kInvFact[m + kMaxPhi];
+    double down[kMaxPhi + 1];
+    down[kMaxPhi] = p;
+    for (int j = kMaxPhi; j >= 1; --j) down[j - 1] = x * down[j] + kInvFact[j - 1];
+    const double inv = 1.0 / (small ? 1.0 : x);
+    const double e = ExpReduced(small ? 0.0 : (x < -700.0 ? -700.0 : x));
+    double up = x < -700.0 ? 0.0 : e;  // below, e^x < 1e-304: nothing of it survives the recurrence
+    phi[i] = small ? down[0] : up;
+    for (int j = 1; j <= kMaxPhi; ++j) {
+      up = (up - kInvFact[j - 1]) * inv;
+      phi[j * stride + i] = small ? down[j] : up;
+    }
+  }
+}
+
+// The same for |x| ≥ 1 only (e^x and the upward recurrence).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void PhiRealLargeBatch(int n, const double* __restrict xs, double* __restrict phi, int stride) {
+  for (int i = 0; i < n; ++i) {
+    const double x = xs[i];
+    const double inv = 1.0 / x;
+    const double e = ExpReduced(x < -700.0 ? -700.0 : x);
+    double up = x < -700.0 ? 0.0 : e;
+    phi[i] = up;
+    for (int j = 1; j <= kMaxPhi; ++j) {
+      up = (up - kInvFact[j - 1]) * inv;
+      phi[j * stride + i] = up;
+    }
+  }
+}
+
+}  // namespace
+
+void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch) {
+  // The batch: real roots, τ|λ₁| > 1, gap ≥ 0.5 (Discretise's "well separated" real branch). Its
+  // modes' indices go to `idx`, τλ₁ and τλ₂ side by side to `xs`.
+  int* idx = reinterpret_cast<int*>(scratch + 30 * n);  // 2n ints fit in the last 2n doubles
+  double* xs = scratch;                                 // 2n: τλ₁ of the batch, then τλ₂
+  int nb = 0;
+  for (int i = 0; i < n; ++i) {
+    const ModePoles& p = poles[i];
+    const bool batch = tau > 0 && !p.complex && -tau * p.l1 > 1.0 && tau * (p.l2 - p.l1) >= 0.5;
+    if (batch) {
+      idx[nb++] = i;
+    } else {
+      Discretise(p, tau, out[i]);
+    }
+  }
+  if (nb == 0) return;
+  for (int b = 0; b < nb; ++b) {
+    xs[b] = tau * poles[idx[b]].l1;
+    xs[nb + b] = tau * poles[idx[b]].l2;
+  }
+  double* phi = scratch + 2 * n;  // 7 rows of 2 nb
+  PhiRealLargeBatch(nb, xs, phi, 2 * nb);      // τ|λ₁| > 1 in the batch
+  PhiRealBatch(nb, xs + nb, phi + nb, 2 * nb);  // τλ₂ of any size
+  const int s = 2 * nb;
+  for (int b = 0; b < nb; ++b) {
+    const ModePoles& p = poles[idx[b]];
+    ModeStep& o = out[idx[b]];
+    const double inv = 1.0 / (p.l1 - p.l2);
+    for (int j = 0; j <= kMaxPhi; ++j) o.d[j] = (phi[j * s + b] - phi[j * s + nb + b]) * inv;
+    const double f10 = phi[b], f20 = phi[nb + b];
+    o.e11 = (p.l1 * f20 - p.l2 * f10) * inv;
+    o.e22 = (p.l1 * f10 - p.l2 * f20) * inv;
+    o.e12 = o.d[0];
+    o.e21 = -p.omega2 * o.d[0];
+  }
 }
 
 }  // namespace pz::model::modal

@@ -299,6 +299,8 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
   ws.step_ = step;
   ws.poles_.resize(n_);
   ws.steps_.resize(n_);
+  ws.sub_.resize(n_);
+  ws.scratch_.resize(32 * static_cast<size_t>(n_));
   for (auto* v : {&ws.e11_, &ws.e12_, &ws.e21_, &ws.e22_}) v->assign(npad_, 0.0);
   ws.x0_.resize(npad_);  // the state is set by the runs, and kept when a sampled run re-prepares
   ws.x1_.resize(npad_);
@@ -343,10 +345,16 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
 
 // Sub-step of length τ from the current full state (x0, x1): z held by the quintic Hermite of
 // (zl, zr), u (sampled path) linear from u_a with slope u̇. `cached` uses ws.steps_ (τ = ws.step_).
-static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, const double* wu,
-                           const double* wz, double* x0, double* x1, double tau, const ZData& zl,
-                           const ZData& zr, double u_a, double u_dot) {
+// Without `cached`, the step's discretisation of every mode is made in `local` (n entries) with
+// `scratch` (32 n doubles) by DiscretiseBatch.
+static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, ModeStep* local,
+                           double* scratch, const double* wu, const double* wz, double* x0, double* x1,
+                           double tau, const ZData& zl, const ZData& zr, double u_a, double u_dot) {
   if (!(tau > 0)) return;
+  if (!cached) {
+    modal::DiscretiseBatch(n, poles, tau, local, scratch);
+    cached = local;
+  }
   const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
   double fz[6];
   for (int j = 0; j < 6; ++j) {
@@ -356,14 +364,7 @@ static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached
   }
   const double fu0 = u_a, fu1 = u_dot * tau;
   for (int i = 0; i < n; ++i) {
-    ModeStep local;
-    const ModeStep* st = cached;
-    if (cached) {
-      st = cached + i;
-    } else {
-      modal::Discretise(poles[i], tau, local);
-      st = &local;
-    }
+    const ModeStep* st = cached + i;
     double f[6];
     for (int j = 0; j < 6; ++j) f[j] = -wz[i] * fz[j];
     f[0] += wu[i] * fu0;
@@ -636,12 +637,12 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
         ZData dcur = zr[i];
         for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
           const ModalWorkspace::Inner& in = ws.inner_[e];
-          GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, in.offset - scur, dcur,
+          GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, in.offset - scur, dcur,
                          in.left, 0.0, 0.0);
           dcur = in.right;
           scur = in.offset;
         }
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, hs - scur, dcur, zl[i + 1],
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, hs - scur, dcur, zl[i + 1],
                        0.0, 0.0);
         AddMatVec(np, x0, x1, ws.p1_, -zl[i + 1].z, -hs * zl[i + 1].zd, -hs * hs * zl[i + 1].zdd);
         steps += sp.inner_end - sp.inner_begin;
@@ -653,17 +654,26 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     steps += len;
     // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash (BacklashRun).
     long n_o = 0;
-    for (long i3 = 1; i3 <= len; ++i3) {
-      if (m != 1 && (c0 + i3) % m != 0) continue;
-      io[n_o] = i3;
-      wo[n_o++] = xs[i3] + base[i3];
+    if (m == 1) {  // every node is an output
+      for (long q = 0; q < len; ++q) {
+        io[q] = q + 1;
+        wo[q] = xs[q + 1] + base[q + 1];
+      }
+      n_o = len;
+    } else {
+      for (long i3 = 1; i3 <= len; ++i3) {
+        if ((c0 + i3) % m != 0) continue;
+        io[n_o] = i3;
+        wo[n_o++] = xs[i3] + base[i3];
+      }
     }
+    long n_ok = n_o;  // outputs before the first non-finite w (DegreesBatch's test fails on those)
     if (!DegreesBatch(n_o, wo, inv_len, tho)) {
-      for (long q = 0; q < n_o; ++q)
+      n_ok = 0;
+      while (n_ok < n_o && std::isfinite(wo[n_ok])) ++n_ok;
+      for (long q = 0; q < n_ok; ++q)
         if (!(std::abs(wo[q] * inv_len) < 0.125)) tho[q] = Degrees(wo[q], inv_len);
     }
-    long n_ok = 0;  // outputs before the first non-finite w
-    while (n_ok < n_o && std::isfinite(wo[n_ok])) ++n_ok;
     y = BacklashRun(bl, tho, yo, n_ok, y);
     for (long q = 0; q < n_ok; ++q, ++next_out) {
       const long i3 = io[q];
@@ -734,7 +744,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         const double sc = (uc - u[k]) / r;
         if (sc < sb - eps) {
           if (sc > sa + eps) {
-            GeneralSubstep(n_, ws.poles_.data(), nullptr, wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
+            GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
                            eval(uc), u[k] + r * sa, r);
             ++steps;
             split = true;
@@ -745,7 +755,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         }
       }
       const ZData dr = eval(ub);
-      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), wu_.data(), wz_.data(), x0,
+      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0,
                      x1, sb - sa, dcur, dr, u[k] + r * sa, r);
       ++steps;
       dcur = dr;

@@ -50,6 +50,8 @@ class ModalWorkspace {
   // Per-mode data for the cached (μ, δ, step), padded to a multiple of 4 modes.
   std::vector<modal::ModePoles> poles_;
   std::vector<modal::ModeStep> steps_;  // discretisation over `step_`
+  std::vector<modal::ModeStep> sub_;    // of a sub-step (GeneralSubstep), and its scratch
+  std::vector<double> scratch_;
   std::vector<double> e11_, e12_, e21_, e22_;
   std::vector<double> g_[6];    // G = E P1 + P0 (rows 0, 1 × z, τż, τ²z̈)
   std::vector<double> p1_[6];   // P1: response to the end-of-step Hermite data
