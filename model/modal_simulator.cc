@@ -141,18 +141,17 @@ void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re, con
   }
 }
 
-// Pass 1c's end: the hold data of the nodes 1 … len as left and right limits (the right ones of the
-// nodes with a jump are redone by the caller), and the state-free part of w_tip there: the
+// Pass 1c's end: the hold data of the nodes 1 … len as right limits for the recursion (the left ones
+// are (zz, zzd, zzdd) themselves; the right ones of the nodes with a jump are redone by the caller), and the state-free part of w_tip there: the
 // feed-through t1c · d of the end data plus V Im(H_tip e^{iΩt}).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 void NodeData(long len, const double* __restrict zz, const double* __restrict zzd, const double* __restrict zzdd,
               const double* __restrict nre, const double* __restrict nim, const double* __restrict t1c, double V,
-              double htip_re, double htip_im, ZData* __restrict zl, ZData* __restrict zr, double* __restrict base) {
+              double htip_re, double htip_im, ZData* __restrict zr, double* __restrict base) {
   for (long j = 1; j <= len; ++j) {
     const ZData d{zz[j], zzd[j], zzdd[j]};
-    zl[j] = d;
     zr[j] = d;
     base[j] = (t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd) + V * (htip_re * nim[j] + htip_im * nre[j]);
   }
@@ -471,11 +470,9 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   //     sub-steps on the full state x where a step holds breakpoints;
   //  3. outputs: w_tip, θ, the backlash.
   constexpr long kChunk = 256;
-  ws.zl_.resize(kChunk + 1);
   ws.zr_.resize(kChunk + 1);
   ws.xs_.resize(kChunk + 1);
   ws.base_.resize(kChunk + 1);
-  ZData* zl = ws.zl_.data();  // hold data at the chunk's nodes: left limits
   ZData* zr = ws.zr_.data();  //                                 right limits
   double* xs = ws.xs_.data();
   double* base = ws.base_.data();
@@ -498,8 +495,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   const double t1c[3] = {ws.t1_[0], hs * ws.t1_[1], hs * hs * ws.t1_[2]};
   auto feedthrough = [&](const ZData& d) { return t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd; };
 
-  zl[0] = zr[0] = eval(0.0, V * om, 0.0);
-  AddMatVec(np, x0, x1, ws.p1_, -zl[0].z, -hs * zl[0].zd, -hs * hs * zl[0].zdd);
+  // Left limits at the nodes are (zz, zzd, zzdd) themselves; node 0 of a chunk carries the last one.
+  auto zl = [&](long j) { return ZData{zz[j], zzd[j], zzdd[j]}; };
+  zr[0] = eval(0.0, V * om, 0.0);
+  zz[0] = zr[0].z;
+  zzd[0] = zr[0].zd;
+  zzdd[0] = zr[0].zdd;
+  AddMatVec(np, x0, x1, ws.p1_, -zl(0).z, -hs * zl(0).zd, -hs * hs * zl(0).zdd);
   double y = 0.0;
   // Output sample j: tip deflection w, its angle θ (NaN-safe: only used once w is checked), backlash.
   auto output = [&](size_t j, double w, double theta, double u, double z) -> bool {
@@ -513,8 +515,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     sink.Emit(j, t, u, z, w, theta, y);
     return true;
   };
-  const double w0 = SumModes(np, x0) + (feedthrough(zl[0]) + V * htip_im);
-  if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl[0].z)) return;
+  const double w0 = SumModes(np, x0) + (feedthrough(zl(0)) + V * htip_im);
+  if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl(0).z)) return;
 
   // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
   // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the nodes
@@ -615,7 +617,7 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       std::fill(zzd + 1, zzd + len + 1, 0.0);
       std::fill(zzdd + 1, zzdd + len + 1, 0.0);
     }
-    NodeData(len, zz, zzd, zzdd, nre, nim, t1c, V, htip_re, htip_im, zl, zr, base);
+    NodeData(len, zz, zzd, zzdd, nre, nim, t1c, V, htip_re, htip_im, zr, base);
     for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
     // Pass 2.
     long i = 0;
@@ -626,13 +628,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       }
       if (sp.inner_begin == sp.inner_end) {
         // Data jump at the node, no breakpoint inside: one regular step plus the correction.
-        const ZData& a = zl[i];
+        const ZData a = zl(i);
         const ZData& b = zr[i];
         StepRun(i, i + 1, np, x0, x1, coeffs, zr, hs, xs);
         AddMatVec(np, x0, x1, ws.ep1_, a.z - b.z, hs * (a.zd - b.zd), hs * hs * (a.zdd - b.zdd));
       } else {
         // Breakpoints inside: back to the full state, sub-steps between them, then to x̄ again.
-        AddMatVec(np, x0, x1, ws.p1_, zl[i].z, hs * zl[i].zd, hs * hs * zl[i].zdd);
+        AddMatVec(np, x0, x1, ws.p1_, zl(i).z, hs * zl(i).zd, hs * hs * zl(i).zdd);
         double scur = 0.0;
         ZData dcur = zr[i];
         for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
@@ -642,9 +644,9 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
           dcur = in.right;
           scur = in.offset;
         }
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, hs - scur, dcur, zl[i + 1],
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, hs - scur, dcur, zl(i + 1),
                        0.0, 0.0);
-        AddMatVec(np, x0, x1, ws.p1_, -zl[i + 1].z, -hs * zl[i + 1].zd, -hs * hs * zl[i + 1].zdd);
+        AddMatVec(np, x0, x1, ws.p1_, -zl(i + 1).z, -hs * zl(i + 1).zd, -hs * hs * zl(i + 1).zdd);
         steps += sp.inner_end - sp.inner_begin;
       }
       xs[i + 1] = SumModes(np, x0);
@@ -677,14 +679,16 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     y = BacklashRun(bl, tho, yo, n_ok, y);
     for (long q = 0; q < n_ok; ++q, ++next_out) {
       const long i3 = io[q];
-      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl[i3].z, wo[q], tho[q], yo[q]);
+      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl(i3).z, wo[q], tho[q], yo[q]);
     }
     if (n_ok < n_o) {
       summary.status = SimStatus::kNonFinite;
       summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
       return;
     }
-    zl[0] = zl[len];
+    zz[0] = zz[len];
+    zzd[0] = zzd[len];
+    zzdd[0] = zzdd[len];
     zr[0] = zr[len];
   }
   summary.steps = steps;

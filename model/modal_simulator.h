@@ -68,7 +68,7 @@ class ModalWorkspace {
     double offset;
     modal::ZData left, right;
   };
-  std::vector<modal::ZData> zl_, zr_;  // hold data at the nodes: left and right limits
+  std::vector<modal::ZData> zr_;  // hold data at the nodes: right limits (the left ones are zz_ …)
   std::vector<double> xs_, base_;  // Σ x̄0, state-free part of w_tip at the nodes
   // Pass 1 computes each node's drive (u, u̇, ü, e^{iΩt}) in one vectorised loop, finds the
   // breakpoints, and evaluates z segment by segment (the nodes between breakpoints share a branch).
