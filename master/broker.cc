@@ -147,7 +147,9 @@ struct Broker::Impl {
     int64_t pid = 0;
     double connected_unix_s = 0;
     uint64_t tasks_done = 0;
+    std::string arithmetic;
   };
+  std::string arithmetic;  // the profile this master serves (the first worker's), unless mixing is allowed
   std::map<std::string, WorkerMeta> worker_meta;
   std::deque<service::WorkerDepartureView> departed;
   const TimePoint started = Clock::now();
@@ -186,6 +188,7 @@ struct Broker::Impl {
         v.pid = it->second.pid;
         v.connected_unix_s = it->second.connected_unix_s;
         v.tasks_done = it->second.tasks_done;
+        v.arithmetic = it->second.arithmetic;
       }
       w.workers.push_back(std::move(v));
     }
@@ -337,6 +340,32 @@ struct Broker::Impl {
     dispatcher.RemoveWorker(id, lost, Clock::now());
   }
 
+  // A worker whose arithmetic differs from the one served: told why, never added, kept among the
+  // departures (the dashboard shows it).
+  void RefuseWorker(const std::string& id, const WorkerMsg& m) {
+    const std::string why = "this master's workers compute as '" + arithmetic + "' and this one as '" +
+                            (m.arithmetic.empty() ? std::string("(not announced)") : m.arithmetic) +
+                            "': results would differ in their last bits (start the master with "
+                            "--allow-mixed-arithmetic to accept both)";
+    uint64_t suppressed = 0;
+    if (log_throttle.Allow("refused " + m.host, Clock::now(), &suppressed))
+      spdlog::warn("worker {} (host {} pid {}) refused: {}{}", Hex(id), m.host, m.pid, why,
+                   suppressed ? " (" + std::to_string(suppressed) + " more refusals)" : "");
+    WorkerMsg answer;
+    answer.type = WorkerMsg::Type::kDisconnect;
+    answer.code = WireCode::kInvalidArgument;
+    answer.reason = "refused: " + why;
+    SendToWorker(id, answer);
+    service::WorkerDepartureView d;
+    d.id = Hex(id);
+    d.host = m.host;
+    d.pid = m.pid;
+    d.reason = "refused: another arithmetic (" + (m.arithmetic.empty() ? std::string("not announced") : m.arithmetic) + ")";
+    d.at_unix_s = UnixNow();
+    departed.push_back(std::move(d));
+    while (departed.size() > 32) departed.pop_front();
+  }
+
   void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now,
                      const std::string& user = {}) {
     WorkerMsg m;
@@ -355,8 +384,16 @@ struct Broker::Impl {
     switch (m.type) {
       case WorkerMsg::Type::kReady:
         if (known) RemoveWorker(id, false, "re-announced");
+        if (!options.allow_mixed_arithmetic && !arithmetic.empty() && m.arithmetic != arithmetic) {
+          RefuseWorker(id, m);
+          return;
+        }
+        if (arithmetic.empty() && !options.allow_mixed_arithmetic) {
+          arithmetic = m.arithmetic;
+          spdlog::info("serving workers of arithmetic profile '{}'", arithmetic);
+        }
         dispatcher.AddWorker(id, m.threads);
-        worker_meta[id] = {m.host, user, m.pid, UnixNow(), 0};
+        worker_meta[id] = {m.host, user, m.pid, UnixNow(), 0, m.arithmetic};
         liveness.Seen(id, now);
         spdlog::info("worker {} ready: {} threads, host {} pid {}{}", Hex(id), m.threads, m.host,
                      m.pid, user.empty() ? "" : ", key " + user);

@@ -43,6 +43,11 @@ struct BrokerOptions {
   int64_t max_spec_bytes = 16 << 20;       ///< serialised job spec (with its data) at most
   int max_jobs_per_client = 16;            ///< running jobs submitted by one client identity
   std::optional<service::CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
+  /// Workers announce their arithmetic profile (model::ArithmeticProfile()): the first one accepted
+  /// fixes it for the master's lifetime and a worker announcing another is refused (DISCONNECT with
+  /// CODE_INVALID_ARGUMENT), so that no job's results depend on which kind of machine computed
+  /// them. True: accept every profile (results bit for bit only among workers of one profile).
+  bool allow_mixed_arithmetic = false;
   DispatchOptions dispatch;
 };
 

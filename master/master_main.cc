@@ -93,6 +93,10 @@ int main(int argc, char** argv) {
   app.add_option("--allow-clients", allow_clients,
                  "with --curve-secret: directory of the clients' allowed public keys (*.pub)")
       ->needs(secret_opt);
+  app.add_flag("--allow-mixed-arithmetic", broker.allow_mixed_arithmetic,
+               "accept workers of any arithmetic profile (CPU instruction-set level, build, C library); by "
+               "default the first worker's profile is the only one served, so that no result depends on "
+               "which machine computed it");
   app.add_option("--max-batch", broker.dispatch.max_batch, "tasks per lease at most")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();

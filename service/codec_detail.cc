@@ -226,6 +226,7 @@ void ToProto(const WorkersSnapshot& w, pw::WorkersReply* q) {
     o->set_connected_unix_s(v.connected_unix_s);
     o->set_solo(v.solo);
     o->set_key(v.key);
+    o->set_arithmetic(v.arithmetic);
   }
   for (const WorkerDepartureView& d : w.departed) {
     auto* o = q->add_departed();
@@ -250,6 +251,7 @@ WorkersSnapshot FromProto(const pw::WorkersReply& q) {
     v.id = o.id();
     v.host = o.host();
     v.key = o.key();
+    v.arithmetic = o.arithmetic();
     v.pid = o.pid();
     v.threads = ClampInt(o.threads());
     v.item_seconds = std::isfinite(o.item_seconds()) ? o.item_seconds() : -1;

@@ -85,6 +85,7 @@ std::string EncodeWorkerToMaster(const WorkerMsg& m) {
       r->set_threads(static_cast<uint32_t>(m.threads));
       r->set_host(m.host);
       r->set_pid(m.pid);
+      r->set_arithmetic(m.arithmetic);
       break;
     }
     case WorkerMsg::Type::kDisconnect: p.mutable_disconnect()->set_reason(m.reason); break;
@@ -110,6 +111,7 @@ Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m) {
       m->threads = static_cast<int>(p.ready().threads());
       m->host = p.ready().host();
       m->pid = p.ready().pid();
+      m->arithmetic = p.ready().arithmetic();
       return Status::Ok();
     case pw::WorkerToMaster::kHeartbeat: m->type = WorkerMsg::Type::kHeartbeat; return Status::Ok();
     case pw::WorkerToMaster::kDisconnect:

@@ -113,6 +113,7 @@ struct WorkerMsg {
   int threads = 0;                  ///< kReady
   std::string host;                 ///< kReady
   int64_t pid = 0;                  ///< kReady
+  std::string arithmetic;           ///< kReady: model::ArithmeticProfile() of the worker
   std::string reason;               ///< kDisconnect
   std::string context_hash;         ///< kContextRequest, kContext
   std::string context_spec;         ///< kContext: serialised JobSpec
@@ -145,7 +146,7 @@ struct ClientRequestMsg {
 
 /// A connected worker as the scheduler sees it (proto WorkerInfo).
 struct WorkerView {
-  std::string id, host, key;
+  std::string id, host, key, arithmetic;
   int64_t pid = 0;
   int threads = 0;
   double item_seconds = -1;  ///< per task per thread [s]; < 0 unknown

@@ -14,6 +14,7 @@
 #include <unordered_map>
 #include <zmq.hpp>
 
+#include "model/arithmetic.h"
 #include "opt/inline_evaluator.h"
 #include "service/liveness.h"
 #include "service/wire_codec.h"
@@ -128,6 +129,7 @@ struct Worker::Impl {
     ::gethostname(host, sizeof host - 1);
     ready_msg.host = host;
     ready_msg.pid = ::getpid();
+    ready_msg.arithmetic = options.arithmetic.empty() ? model::ArithmeticProfile() : options.arithmetic;
     Send(ready_msg);
     server.Reset(Clock::now());
   }
@@ -230,6 +232,14 @@ struct Worker::Impl {
       }
       case WorkerMsg::Type::kContext: OnContext(m); break;
       case WorkerMsg::Type::kDisconnect:
+        if (m.code == WireCode::kInvalidArgument) {  // refused for good: retrying cannot help
+          spdlog::error("master {} refused this worker: {}", options.master, m.reason);
+          stats.refused = m.reason.empty() ? "refused" : m.reason;
+          AbandonAll();
+          master.reset();
+          monitor.reset();
+          break;
+        }
         Reconnect(stop, ("master says: " + m.reason).c_str());
         break;
       default: break;
@@ -329,7 +339,7 @@ struct Worker::Impl {
     for (int i = 0; i < options.threads; ++i)
       threads.emplace_back([this, i] { ComputeLoop(ctx, inproc_endpoint, i); });
     Connect();
-    while (!stop.load()) {
+    while (!stop.load() && stats.refused.empty()) {
       const TimePoint now = Clock::now();
       const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
           server.next_heartbeat() - now);
@@ -354,6 +364,7 @@ struct Worker::Impl {
         OnMaster({static_cast<const char*>(msg.data()), msg.size()}, stop);
         if (!master) break;
       }
+      if (!stats.refused.empty()) break;
       while (RecvInproc()) {
       }
       Assign();

@@ -29,11 +29,16 @@ struct WorkerOptions {
   /// CURVE: this worker's key pair and the master's public key (Z85); plain when unset.
   std::optional<service::CurveKeyPair> curve;
   std::string master_public;
+  /// Announced in READY; empty: model::ArithmeticProfile() of this process.
+  std::string arithmetic;
 };
 
 struct WorkerStats {
   uint64_t tasks = 0, leases = 0, reconnects = 0, contexts_fetched = 0;
   uint64_t handshake_failures = 0;  ///< e.g. the master refused this worker's CURVE key
+  /// Non-empty when the master refused this worker for good (DISCONNECT with CODE_INVALID_ARGUMENT,
+  /// e.g. another arithmetic profile than the one it serves): Run returned without retrying.
+  std::string refused;
   /// Compute threads still inside an evaluation when Run returned (stop_grace_ms ran out). They
   /// cannot be interrupted, so the Worker keeps everything they use: its destructor leaves it
   /// allocated. The library never ends the process; a program that sees this should (what

@@ -7,6 +7,7 @@
 
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
+#include "model/arithmetic.h"
 #include "worker/worker.h"
 #include "kinds/kinds.h"
 
@@ -39,6 +40,11 @@ int main(int argc, char** argv) {
                              "CURVE: the master's public key file (its NAME.pub)");
   secret->needs(pub);
   pub->needs(secret);
+  app.add_option("--arithmetic", o.arithmetic,
+                 "announce this arithmetic profile instead of the detected one (" +
+                     pz::model::ArithmeticProfile() +
+                     " here); only to declare two kinds of machine equivalent after checking that they "
+                     "give the same results");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -62,6 +68,11 @@ int main(int argc, char** argv) {
   pz::worker::Worker w(o, pz::kinds::All());
   spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);
+  if (!stats.refused.empty()) {
+    spdlog::critical("the master refused this worker: {}", stats.refused);
+    spdlog::shutdown();
+    return 3;
+  }
   spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,
                stats.reconnects);
   if (stats.stuck_threads > 0) {  // an evaluation that would not end: the process ends it

@@ -103,8 +103,10 @@ function renderWorkers(state) {
     threads += t;
     if (isFinite(speed)) rate += speed;
     done += num(x.tasks_done);
+    const host = td((x.host || '?') + ' / ' + x.pid);
+    host.title = x.arithmetic ? 'arithmetic: ' + x.arithmetic : '';
     return el('tr', {'data-worker': x.id},
-        td(x.id.slice(-8) + (x.solo ? ' (suspect alone)' : '')), td((x.host || '?') + ' / ' + x.pid),
+        td(x.id.slice(-8) + (x.solo ? ' (suspect alone)' : '')), host,
         td(t, 'num'), td(isFinite(speed) ? speed.toFixed(0) : 'measuring', 'num'), td(num(x.leases), 'num'),
         td(num(x.tasks_in_flight), 'num'), td(num(x.tasks_done).toLocaleString(), 'num'),
         td(fmtTime(x.connected_unix_s)));

@@ -36,11 +36,13 @@ TEST(WireCodec, WorkerEnvelopesRoundTrip) {
   ready.threads = 8;
   ready.host = "node-3";
   ready.pid = 4242;
+  ready.arithmetic = "piezoid 0.1.0; x86-64-v3; glibc 2.36";
   auto r = RoundTrip(ready, EncodeWorkerToMaster, DecodeWorkerToMaster);
   EXPECT_EQ(r.type, WorkerMsg::Type::kReady);
   EXPECT_EQ(r.threads, 8);
   EXPECT_EQ(r.host, "node-3");
   EXPECT_EQ(r.pid, 4242);
+  EXPECT_EQ(r.arithmetic, ready.arithmetic);
 
   WorkerMsg result;
   result.type = WorkerMsg::Type::kResult;
@@ -173,7 +175,8 @@ TEST(WireCodec, ClientRepliesRoundTripWithNetworksAndStatusFields) {
   // The dashboard's workers table and the median of a generation record.
   ClientReplyMsg workers;
   workers.type = ClientReplyMsg::Type::kWorkers;
-  workers.workers_snapshot.workers = {{"00aa", "node-3", "worker-key", 4242, 8, 1.5e-4, 2, 37, 12345, 1.7e9, true}};
+  workers.workers_snapshot.workers = {
+      {"00aa", "node-3", "worker-key", "piezoid 0.1.0; x86-64-v3; glibc 2.36", 4242, 8, 1.5e-4, 2, 37, 12345, 1.7e9, true}};
   workers.workers_snapshot.departed = {{"00bb", "node-4", "lost (missed its heartbeats)", 77, 1.7e9 + 5, 99}};
   workers.workers_snapshot.leases_sent = 10;
   workers.workers_snapshot.tasks_done = 20;

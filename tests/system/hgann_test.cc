@@ -37,13 +37,6 @@ bool HasField(const std::vector<job::FieldViolation>& v, const std::string& fiel
   return false;
 }
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 /// The in-process reference of the quick job, computed once for the tests of this file.
 const service::JobCheckpoint& QuickReference() {
   static const service::JobCheckpoint ref = Reference(QuickSpec());

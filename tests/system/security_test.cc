@@ -18,13 +18,6 @@ namespace {
 
 using service::CurveKeyPair;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream f(p);
-  std::stringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
-
 /// Waits (bounded) until `pred` holds.
 template <typename F>
 bool WaitFor(F pred, std::chrono::milliseconds limit = std::chrono::seconds(20)) {

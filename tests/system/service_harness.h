@@ -96,6 +96,14 @@ class Process {
   pid_t pid_ = -1;
 };
 
+/// The whole of a file ("" when it cannot be read).
+inline std::string Slurp(const fs::path& p) {
+  std::ifstream f(p);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
 /// Runs `piezoid` (the client CLI of this build) with `args`; stdout and stderr into *out / *err.
 /// Returns its exit code (-1 if it did not exit normally).
 inline int RunCli(const std::vector<std::string>& args, std::string* out = nullptr, std::string* err = nullptr) {
@@ -106,14 +114,8 @@ inline int RunCli(const std::vector<std::string>& args, std::string* out = nullp
   for (const auto& a : args) cmd += " '" + a + "'";
   cmd += " >'" + base.string() + ".out' 2>'" + base.string() + ".err' </dev/null";
   const int st = std::system(cmd.c_str());
-  auto slurp = [](const fs::path& p) {
-    std::ifstream f(p);
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
-  };
-  if (out) *out = slurp(base.string() + ".out");
-  if (err) *err = slurp(base.string() + ".err");
+  if (out) *out = Slurp(base.string() + ".out");
+  if (err) *err = Slurp(base.string() + ".err");
   std::error_code ec;
   fs::remove(base.string() + ".out", ec);
   fs::remove(base.string() + ".err", ec);
@@ -179,13 +181,13 @@ class Cluster {
     return false;
   }
   void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
-  Process& AddWorker(int threads) {
-    workers_.push_back(std::make_unique<Process>(
-        BuildDir() / "worker" / "piezoid-worker",
-        std::vector<std::string>{"--master", worker_ep_, "--threads", std::to_string(threads),
-                                 "--heartbeat-ms", "100", "--liveness", "5", "--backoff-max-ms",
-                                 "500", "--log-level", "warn"},
-        dir_ / "workers.log"));
+  Process& AddWorker(int threads, const std::vector<std::string>& extra = {}) {
+    std::vector<std::string> args{"--master", worker_ep_, "--threads", std::to_string(threads),
+                                  "--heartbeat-ms", "100", "--liveness", "5", "--backoff-max-ms",
+                                  "500", "--log-level", "warn"};
+    args.insert(args.end(), extra.begin(), extra.end());
+    workers_.push_back(
+        std::make_unique<Process>(BuildDir() / "worker" / "piezoid-worker", args, dir_ / "workers.log"));
     return *workers_.back();
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
