@@ -91,7 +91,9 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
       ASSERT_FALSE(d.named.empty());
       EXPECT_EQ(d.named.front(), EffectKind::kDelay) << d.verdict;
       EXPECT_GE(d.closed_total, 0.7) << d.verdict;
-      if (d.verdict_kind == "effect") EXPECT_GT(d.confidence, 0.5);  // the named effect carries most of the weight
+      if (d.verdict_kind == "effect") {
+        EXPECT_GT(d.confidence, 0.5);  // the named effect carries most of the weight
+      }
       ASSERT_EQ(d.final_fit.params.size(), 8u);
       EXPECT_NEAR(d.final_fit.params[7].value, 0.02, 3 * d.final_fit.params[7].std_error + 1e-3);
     } else {
@@ -137,7 +139,9 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   const Diagnosis d = RunDiagnosis(m, Quick({EffectKind::kDriverLowpass, EffectKind::kDelay, EffectKind::kCreep}));
   // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says so.
   ASSERT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
-  if (d.verdict_kind == "inseparable") PZ_EXPECT_HAS(d.verdict, "cannot separate the two");
+  if (d.verdict_kind == "inseparable") {
+    PZ_EXPECT_HAS(d.verdict, "cannot separate the two");
+  }
   EXPECT_EQ(d.named.front(), EffectKind::kDriverLowpass) << d.verdict;
   EXPECT_GE(d.closed_total, 0.7);
   // Only now, to check the answer: the bench's low-pass corner frequency.
