@@ -4,6 +4,8 @@
 #include <gnu/libc-version.h>
 #endif
 
+#include "pz_build_id.h"  // PIEZOID_BUILD_ID (cmake/build_id.cmake)
+
 namespace pz::model {
 
 std::string InstructionSetLevel() {
@@ -22,7 +24,7 @@ std::string InstructionSetLevel() {
 }
 
 std::string ArithmeticProfile() {
-  std::string p = std::string("piezoid ") + PIEZOID_VERSION + "; " + InstructionSetLevel();
+  std::string p = std::string("piezoid ") + PIEZOID_VERSION + " (" + PIEZOID_BUILD_ID + "); " + InstructionSetLevel();
 #if defined(__GLIBC__)
   p += std::string("; glibc ") + gnu_get_libc_version();
 #else
