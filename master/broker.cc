@@ -149,7 +149,7 @@ struct Broker::Impl {
     uint64_t tasks_done = 0;
     std::string arithmetic;
   };
-  std::string arithmetic;  // the profile this master serves (the first worker's), unless mixing is allowed
+  std::optional<std::string> arithmetic;  // the profile served (the first worker's), unless mixing is allowed
   std::map<std::string, WorkerMeta> worker_meta;
   std::deque<service::WorkerDepartureView> departed;
   const TimePoint started = Clock::now();
@@ -169,6 +169,9 @@ struct Broker::Impl {
       d.tasks_done = it->second.tasks_done;
       worker_meta.erase(it);
     }
+    Remember(std::move(d));
+  }
+  void Remember(service::WorkerDepartureView d) {
     departed.push_back(std::move(d));
     while (departed.size() > 32) departed.pop_front();
   }
@@ -343,8 +346,8 @@ struct Broker::Impl {
   // A worker whose arithmetic differs from the one served: told why, never added, kept among the
   // departures (the dashboard shows it).
   void RefuseWorker(const std::string& id, const WorkerMsg& m) {
-    const std::string why = "this master's workers compute as '" + arithmetic + "' and this one as '" +
-                            (m.arithmetic.empty() ? std::string("(not announced)") : m.arithmetic) +
+    const std::string theirs = m.arithmetic.empty() ? "(not announced)" : m.arithmetic;
+    const std::string why = "this master's workers compute as '" + *arithmetic + "' and this one as '" + theirs +
                             "': results would differ in their last bits (start the master with "
                             "--allow-mixed-arithmetic to accept both)";
     uint64_t suppressed = 0;
@@ -360,10 +363,9 @@ struct Broker::Impl {
     d.id = Hex(id);
     d.host = m.host;
     d.pid = m.pid;
-    d.reason = "refused: another arithmetic (" + (m.arithmetic.empty() ? std::string("not announced") : m.arithmetic) + ")";
+    d.reason = "refused: another arithmetic (" + theirs + ")";
     d.at_unix_s = UnixNow();
-    departed.push_back(std::move(d));
-    while (departed.size() > 32) departed.pop_front();
+    Remember(std::move(d));
   }
 
   void OnWorkerFrame(const std::string& id, std::string_view payload, TimePoint now,
@@ -384,13 +386,15 @@ struct Broker::Impl {
     switch (m.type) {
       case WorkerMsg::Type::kReady:
         if (known) RemoveWorker(id, false, "re-announced");
-        if (!options.allow_mixed_arithmetic && !arithmetic.empty() && m.arithmetic != arithmetic) {
-          RefuseWorker(id, m);
-          return;
-        }
-        if (arithmetic.empty() && !options.allow_mixed_arithmetic) {
-          arithmetic = m.arithmetic;
-          spdlog::info("serving workers of arithmetic profile '{}'", arithmetic);
+        if (!options.allow_mixed_arithmetic) {
+          if (arithmetic && m.arithmetic != *arithmetic) {
+            RefuseWorker(id, m);
+            return;
+          }
+          if (!arithmetic) {
+            arithmetic = m.arithmetic;
+            spdlog::info("serving workers of arithmetic profile '{}'", *arithmetic);
+          }
         }
         dispatcher.AddWorker(id, m.threads);
         worker_meta[id] = {m.host, user, m.pid, UnixNow(), 0, m.arithmetic};

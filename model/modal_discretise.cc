@@ -210,10 +210,30 @@ void Discretise(const ModePoles& p, double tau, ModeStep& out) {
 
 namespace {
 
-// φ_0 … φ_6 at xs[0 … n) into phi[j][i] (rows of stride n), as PhiReal without its branches: the
-// Taylor series of φ_6 to x^14 and the downward recurrence for |x| < 1, e^x and the upward recurrence
-// otherwise, both computed and one selected. e^x by ExpReduced (within 2 ulp of std::exp), and 0 below
-// x = −700 where Discretise's PhiReal has e^x < 1e-304 (0 below −745).
+// φ_0 … φ_6 at x by e^x and the upward recurrence φ_j = (φ_{j−1} − 1/(j−1)!)/x, as PhiReal for
+// |x| ≥ 1 without its branch. e^x by ExpReduced (within 2 ulp of std::exp), and 0 below x = −700,
+// where PhiReal's e^x < 1e-304 leaves nothing in the recurrence. The caller selects it for |x| ≥ 1.
+inline void PhiUpward(double x, double* up) {
+  const double inv = 1.0 / x;
+  const double e = ExpReduced(x < -700.0 ? -700.0 : x);
+  up[0] = x < -700.0 ? 0.0 : e;
+  for (int j = 1; j <= kMaxPhi; ++j) up[j] = (up[j - 1] - kInvFact[j - 1]) * inv;
+}
+
+// φ_0 … φ_6 at xs[0 … n) into phi[j · stride + i] for |x| ≥ 1 (PhiUpward).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+void PhiRealLargeBatch(int n, const double* __restrict xs, double* __restrict phi, int stride) {
+  for (int i = 0; i < n; ++i) {
+    double up[kMaxPhi + 1];
+    PhiUpward(xs[i], up);
+    for (int j = 0; j <= kMaxPhi; ++j) phi[j * stride + i] = up[j];
+  }
+}
+
+// The same for x of any size, as PhiReal without its branches: for |x| < 1 the Taylor series of φ_6
+// to x^14 and the downward recurrence, otherwise PhiUpward; both computed, one selected.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
@@ -226,46 +246,22 @@ void PhiRealBatch(int n, const double* __restrict xs, double* __restrict phi, in
     double down[kMaxPhi + 1];
     down[kMaxPhi] = p;
     for (int j = kMaxPhi; j >= 1; --j) down[j - 1] = x * down[j] + kInvFact[j - 1];
-    const double inv = 1.0 / (small ? 1.0 : x);
-    const double e = ExpReduced(small ? 0.0 : (x < -700.0 ? -700.0 : x));
-    double up = x < -700.0 ? 0.0 : e;  // below, e^x < 1e-304: nothing of it survives the recurrence
-    phi[i] = small ? down[0] : up;
-    for (int j = 1; j <= kMaxPhi; ++j) {
-      up = (up - kInvFact[j - 1]) * inv;
-      phi[j * stride + i] = small ? down[j] : up;
-    }
-  }
-}
-
-// The same for |x| ≥ 1 only (e^x and the upward recurrence).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("arch=x86-64-v3", "default")))
-#endif
-void PhiRealLargeBatch(int n, const double* __restrict xs, double* __restrict phi, int stride) {
-  for (int i = 0; i < n; ++i) {
-    const double x = xs[i];
-    const double inv = 1.0 / x;
-    const double e = ExpReduced(x < -700.0 ? -700.0 : x);
-    double up = x < -700.0 ? 0.0 : e;
-    phi[i] = up;
-    for (int j = 1; j <= kMaxPhi; ++j) {
-      up = (up - kInvFact[j - 1]) * inv;
-      phi[j * stride + i] = up;
-    }
+    double up[kMaxPhi + 1];
+    PhiUpward(small ? 2.0 : x, up);  // any |x| ≥ 1 keeps the unselected lanes finite
+    for (int j = 0; j <= kMaxPhi; ++j) phi[j * stride + i] = small ? down[j] : up[j];
   }
 }
 
 }  // namespace
 
-void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch) {
+void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch, int* idx) {
   // The batch: real roots, τ|λ₁| > 1, gap ≥ 0.5 (Discretise's "well separated" real branch). Its
   // modes' indices go to `idx`, τλ₁ and τλ₂ side by side to `xs`.
-  int* idx = reinterpret_cast<int*>(scratch + 30 * n);  // 2n ints fit in the last 2n doubles
-  double* xs = scratch;                                 // 2n: τλ₁ of the batch, then τλ₂
+  double* xs = scratch;  // 2n: τλ₁ of the batch, then τλ₂
   int nb = 0;
   for (int i = 0; i < n; ++i) {
     const ModePoles& p = poles[i];
-    const bool batch = tau > 0 && !p.complex && -tau * p.l1 > 1.0 && tau * (p.l2 - p.l1) >= 0.5;
+    const bool batch = !p.complex && -tau * p.l1 > 1.0 && tau * (p.l2 - p.l1) >= 0.5;
     if (batch) {
       idx[nb++] = i;
     } else {

@@ -44,8 +44,8 @@ void Discretise(const ModePoles& poles, double tau, ModeStep& out);
 /// Discretise for the n modes poles[0 … n) over one step τ, into out[0 … n): the same values to a few
 /// ulps. The modes with real, well separated roots (every mode once δ ω² ≫ ω, the usual case) go
 /// through one branch-free loop over the modes (vectorised); the others through Discretise.
-/// `scratch` holds 32 n doubles.
-void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch);
+/// `scratch` holds 16 n doubles, `idx` n ints.
+void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch, int* idx);
 
 /// Scalar φ_0 … φ_kMaxPhi at a real x (x ≤ 0 in use; stable for any sign of moderate size).
 void PhiReal(double x, double* phi);

@@ -60,7 +60,8 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
 // The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's scheme: a
 // short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
 inline double AtanSeries(double x) {
-  constexpr double kC[10] = {1.0, -1.0 / 3, 1.0 / 5, -1.0 / 7, 1.0 / 9, -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
+  constexpr double kC[10] = {1.0,       -1.0 / 3, 1.0 / 5,   -1.0 / 7, 1.0 / 9,
+                             -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
   const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
   const double p01 = kC[0] + kC[1] * x2, p23 = kC[2] + kC[3] * x2, p45 = kC[4] + kC[5] * x2;
   const double p67 = kC[6] + kC[7] * x2, p89 = kC[8] + kC[9] * x2;
@@ -141,9 +142,13 @@ void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re, con
   }
 }
 
+// Feed-through of a node's hold data d to w_tip: t1c · (z, ż, z̈) with t1c = Σ_i P1_i row 0 scaled by
+// the step (1, h, h²).
+inline double Feedthrough(const double* t1c, const ZData& d) { return t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd; }
+
 // Pass 1c's end: the hold data of the nodes 1 … len as right limits for the recursion (the left ones
-// are (zz, zzd, zzdd) themselves; the right ones of the nodes with a jump are redone by the caller), and the state-free part of w_tip there: the
-// feed-through t1c · d of the end data plus V Im(H_tip e^{iΩt}).
+// are (zz, zzd, zzdd) themselves; the right ones of the nodes with a jump are redone by the caller),
+// and the state-free part of w_tip there: Feedthrough plus V Im(H_tip e^{iΩt}).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
@@ -153,7 +158,7 @@ void NodeData(long len, const double* __restrict zz, const double* __restrict zz
   for (long j = 1; j <= len; ++j) {
     const ZData d{zz[j], zzd[j], zzdd[j]};
     zr[j] = d;
-    base[j] = (t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd) + V * (htip_re * nim[j] + htip_im * nre[j]);
+    base[j] = Feedthrough(t1c, d) + V * (htip_re * nim[j] + htip_im * nre[j]);
   }
 }
 
@@ -183,8 +188,9 @@ struct StepCoeffs {
 // Regular steps i0 … i1−1 of a chunk: x ← E x + G·d_i⁺ (d scaled by the step hs) for every mode,
 // xs[i+1] = Σ_modes x0. NB blocks of 4 modes (NB = 0: n/4 blocks, not known at compile time).
 template <int NB>
-[[gnu::always_inline]] inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0, double* __restrict x1,
-                        const StepCoeffs& c, const ZData* __restrict d, double hs, double* __restrict xs) {
+[[gnu::always_inline]] inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0,
+                                               double* __restrict x1, const StepCoeffs& c,
+                                               const ZData* __restrict d, double hs, double* __restrict xs) {
   const int nb = NB > 0 ? NB : n / 4;
   const double* __restrict e11 = c.e11;
   const double* __restrict e12 = c.e12;
@@ -298,8 +304,9 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
   ws.step_ = step;
   ws.poles_.resize(n_);
   ws.steps_.resize(n_);
-  ws.sub_.resize(n_);
-  ws.scratch_.resize(32 * static_cast<size_t>(n_));
+  ws.sub_.steps.resize(n_);
+  ws.sub_.scratch.resize(16 * static_cast<size_t>(n_));
+  ws.sub_.idx.resize(n_);
   for (auto* v : {&ws.e11_, &ws.e12_, &ws.e21_, &ws.e22_}) v->assign(npad_, 0.0);
   ws.x0_.resize(npad_);  // the state is set by the runs, and kept when a sampled run re-prepares
   ws.x1_.resize(npad_);
@@ -344,15 +351,15 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
 
 // Sub-step of length τ from the current full state (x0, x1): z held by the quintic Hermite of
 // (zl, zr), u (sampled path) linear from u_a with slope u̇. `cached` uses ws.steps_ (τ = ws.step_).
-// Without `cached`, the step's discretisation of every mode is made in `local` (n entries) with
-// `scratch` (32 n doubles) by DiscretiseBatch.
-static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, ModeStep* local,
-                           double* scratch, const double* wu, const double* wz, double* x0, double* x1,
-                           double tau, const ZData& zl, const ZData& zr, double u_a, double u_dot) {
+// Without `cached`, the step's discretisation of every mode is made by DiscretiseBatch in the
+// workspace's sub_ (with its scratch).
+static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, modal::SubStep& sub,
+                           const double* wu, const double* wz, double* x0, double* x1, double tau,
+                           const ZData& zl, const ZData& zr, double u_a, double u_dot) {
   if (!(tau > 0)) return;
   if (!cached) {
-    modal::DiscretiseBatch(n, poles, tau, local, scratch);
-    cached = local;
+    modal::DiscretiseBatch(n, poles, tau, sub.steps.data(), sub.scratch.data(), sub.idx.data());
+    cached = sub.steps.data();
   }
   const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
   double fz[6];
@@ -493,7 +500,6 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
                           {ws.g_[0].data(), ws.g_[1].data(), ws.g_[2].data(), ws.g_[3].data(), ws.g_[4].data(),
                            ws.g_[5].data()}};
   const double t1c[3] = {ws.t1_[0], hs * ws.t1_[1], hs * hs * ws.t1_[2]};
-  auto feedthrough = [&](const ZData& d) { return t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd; };
 
   // Left limits at the nodes are (zz, zzd, zzdd) themselves; node 0 of a chunk carries the last one.
   auto zl = [&](long j) { return ZData{zz[j], zzd[j], zzdd[j]}; };
@@ -515,7 +521,7 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     sink.Emit(j, t, u, z, w, theta, y);
     return true;
   };
-  const double w0 = SumModes(np, x0) + (feedthrough(zl(0)) + V * htip_im);
+  const double w0 = SumModes(np, x0) + (Feedthrough(t1c, zl(0)) + V * htip_im);
   if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl(0).z)) return;
 
   // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
@@ -565,7 +571,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
         // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then to
         // the first that the test below passes (it is monotone in i).
         const double kf = std::floor((t_end - eps) / hs) - 2.0;
-        if (kf > static_cast<double>(c0 + i)) i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len : static_cast<long>(kf) - c0;
+        if (kf > static_cast<double>(c0 + i))
+          i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len : static_cast<long>(kf) - c0;
         while (i < len && !(t_end <= static_cast<double>(c0 + i + 1) * hs + eps)) ++i;
         if (i == len) break;
       }
@@ -639,13 +646,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
         ZData dcur = zr[i];
         for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
           const ModalWorkspace::Inner& in = ws.inner_[e];
-          GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, in.offset - scur, dcur,
-                         in.left, 0.0, 0.0);
+          GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
+                         in.offset - scur, dcur, in.left, 0.0, 0.0);
           dcur = in.right;
           scur = in.offset;
         }
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, hs - scur, dcur, zl(i + 1),
-                       0.0, 0.0);
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, hs - scur,
+                       dcur, zl(i + 1), 0.0, 0.0);
         AddMatVec(np, x0, x1, ws.p1_, -zl(i + 1).z, -hs * zl(i + 1).zd, -hs * hs * zl(i + 1).zdd);
         steps += sp.inner_end - sp.inner_begin;
       }
@@ -748,7 +755,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         const double sc = (uc - u[k]) / r;
         if (sc < sb - eps) {
           if (sc > sa + eps) {
-            GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
+            GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
                            eval(uc), u[k] + r * sa, r);
             ++steps;
             split = true;
@@ -759,7 +766,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         }
       }
       const ZData dr = eval(ub);
-      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), ws.sub_.data(), ws.scratch_.data(), wu_.data(), wz_.data(), x0,
+      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), ws.sub_, wu_.data(), wz_.data(), x0,
                      x1, sb - sa, dcur, dr, u[k] + r * sa, r);
       ++steps;
       dcur = dr;

@@ -34,6 +34,12 @@ struct ZData {
   double zdd = 0;  ///< z̈ [N/s²]
   bool operator==(const ZData&) const = default;
 };
+/// The discretisation of a sub-step of arbitrary length (all modes) and DiscretiseBatch's scratch.
+struct SubStep {
+  std::vector<ModeStep> steps;
+  std::vector<double> scratch;
+  std::vector<int> idx;
+};
 }  // namespace modal
 
 /// Scratch for ModalSimulator: mode states and a cache of the last discretisation (keyed by the
@@ -50,8 +56,7 @@ class ModalWorkspace {
   // Per-mode data for the cached (μ, δ, step), padded to a multiple of 4 modes.
   std::vector<modal::ModePoles> poles_;
   std::vector<modal::ModeStep> steps_;  // discretisation over `step_`
-  std::vector<modal::ModeStep> sub_;    // of a sub-step (GeneralSubstep), and its scratch
-  std::vector<double> scratch_;
+  modal::SubStep sub_;
   std::vector<double> e11_, e12_, e21_, e22_;
   std::vector<double> g_[6];    // G = E P1 + P0 (rows 0, 1 × z, τż, τ²z̈)
   std::vector<double> p1_[6];   // P1: response to the end-of-step Hermite data

@@ -339,7 +339,7 @@ struct Worker::Impl {
     for (int i = 0; i < options.threads; ++i)
       threads.emplace_back([this, i] { ComputeLoop(ctx, inproc_endpoint, i); });
     Connect();
-    while (!stop.load() && stats.refused.empty()) {
+    while (!stop.load()) {
       const TimePoint now = Clock::now();
       const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
           server.next_heartbeat() - now);
