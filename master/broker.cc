@@ -357,7 +357,7 @@ struct Broker::Impl {
     WorkerMsg answer;
     answer.type = WorkerMsg::Type::kDisconnect;
     answer.code = WireCode::kInvalidArgument;
-    answer.reason = "refused: " + why;
+    answer.reason = why;
     SendToWorker(id, answer);
     service::WorkerDepartureView d;
     d.id = Hex(id);

@@ -68,11 +68,7 @@ int main(int argc, char** argv) {
   pz::worker::Worker w(o, pz::kinds::All());
   spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);
-  if (!stats.refused.empty()) {
-    spdlog::critical("the master refused this worker: {}", stats.refused);
-    spdlog::shutdown();
-    return 3;
-  }
+  if (!stats.refused.empty()) return 3;  // the reason is logged
   spdlog::info("stopped: {} tasks in {} leases, {} reconnects", stats.tasks, stats.leases,
                stats.reconnects);
   if (stats.stuck_threads > 0) {  // an evaluation that would not end: the process ends it
