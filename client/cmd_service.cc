@@ -211,329 +211,361 @@ class Progress {
   std::string storage_error_;
 };
 
+/// Adds the subcommand `name` with the options of every client of the master (AddCommon) in o.
+CLI::App* AddMasterCommand(CLI::App& app, const char* name, const char* description, Common& o) {
+  auto* c = app.add_subcommand(name, description);
+  o.master = DefaultMaster();
+  AddCommon(c, o);
+  return c;
+}
+
+/// Registers the subcommand `c` whose run is `run(options)`, its result the exit code.
+template <typename Options, typename Run>
+void OnRun(CLI::App* c, const std::shared_ptr<Options>& o, int& exit_code, Run run) {
+  c->callback([o, &exit_code, run] { exit_code = run(*o); });
+}
+
+/// Writes text to path: kExitOk, or the exit code after saying that it cannot.
+int WriteFile(const std::string& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary);
+  f << text;
+  f.close();
+  return f ? kExitOk : Report({StatusCode::kInternal, path + ": cannot write"});
+}
+
+// ---------------------------------------------------------------- submit
+
+struct SubmitOptions : Common {
+  std::string spec, token, embedded_out;
+};
+
+int SubmitJob(const SubmitOptions& o) {
+  job::JobSpec spec;
+  std::vector<job::FieldViolation> v;
+  Status s = LoadJobSpecFile(o.spec, &spec, &v);
+  if (!s.ok()) return ReportViolations("job spec " + o.spec, v, s);
+  // Checked here first (same rules as the master), so a bad spec needs no master to be told.
+  v = kinds::All().Validate(spec);
+  if (!v.empty()) return ReportViolations("job spec " + o.spec, v, InvalidArgument("invalid"));
+  if (!o.embedded_out.empty()) {
+    if (int code = WriteFile(o.embedded_out, service::JobSpecToJson(spec) + "\n"); code != kExitOk) return code;
+    std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n", o.embedded_out.c_str());
+    return kExitOk;
+  }
+  SubmitResult r;
+  s = o.Client().Submit(spec, &r, &v, o.token);
+  if (!s.ok()) return s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + o.spec, v, s) : Report(s);
+  std::printf("%s\n", r.job_id.c_str());
+  if (r.existed) std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
+  return kExitOk;
+}
+
+void RegisterSubmit(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<SubmitOptions>();
+  auto* c = AddMasterCommand(app, "submit", "submit a job spec (protobuf JSON, see examples/): prints the job id on stdout", *o);
+  c->add_option("spec", o->spec, "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
+      ->required();
+  c->add_option("--client-token", o->token,
+                "idempotence token: submitting the same spec with the same token again returns the same job "
+                "(default: a random one)");
+  c->add_option("--write-embedded", o->embedded_out,
+                "write the checked spec with its case data embedded (protobuf JSON, what the Python client "
+                "submits) to this file instead of submitting it");
+  OnRun(c, o, exit_code, SubmitJob);
+}
+
+// ---------------------------------------------------------------- status / list
+
+struct StatusOptions : Common {
+  std::string job_id;  ///< empty: every job
+};
+
+int ListJobs(const Common& o) {
+  std::vector<service::JobInfo> all;
+  int workers = 0, threads = 0;
+  Status s = o.Client().List(&all, &workers, &threads);
+  if (s.ok()) PrintList(all, workers, threads);
+  return Report(s);
+}
+
+int ShowStatus(const StatusOptions& o) {
+  if (o.job_id.empty()) return ListJobs(o);
+  service::JobInfo i;
+  Status s = o.Client().GetStatus(o.job_id, &i);
+  if (s.ok()) PrintInfo(i);
+  return Report(s);
+}
+
+void RegisterStatus(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<StatusOptions>();
+  auto* c = AddMasterCommand(app, "status", "a job's state and progress (every job without an id)", *o);
+  c->add_option("job", o->job_id, "job id (optional)");
+  OnRun(c, o, exit_code, ShowStatus);
+}
+
+void RegisterList(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<Common>();
+  auto* c = AddMasterCommand(app, "list", "the master's jobs and workers", *o);
+  c->alias("jobs");
+  OnRun(c, o, exit_code, ListJobs);
+}
+
+// ---------------------------------------------------------------- cancel
+
+struct JobOptions : Common {
+  std::string job_id;
+};
+
+int CancelJob(const JobOptions& o) {
+  Status s = o.Client().Cancel(o.job_id);
+  if (s.ok()) std::printf("%s cancelled\n", o.job_id.c_str());
+  return Report(s);
+}
+
+void RegisterCancel(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<JobOptions>();
+  auto* c = AddMasterCommand(app, "cancel", "cancel a running job (its checkpoint stays fetchable)", *o);
+  c->add_option("job", o->job_id, "job id")->required();
+  OnRun(c, o, exit_code, CancelJob);
+}
+
+// ---------------------------------------------------------------- prune
+
+struct PruneOptions : Common {
+  std::vector<std::string> job_ids;
+  double older_days = 0;
+  int keep = 0;
+  bool dry_run = false;
+};
+
+int PruneJobs(const PruneOptions& o) {
+  if (o.job_ids.empty() && o.older_days <= 0 && o.keep <= 0) {
+    std::fprintf(stderr, "piezoid prune: name the jobs, or give --older-than DAYS or --keep N\n");
+    return kExitBadInput;
+  }
+  std::vector<std::string> pruned;
+  std::vector<job::FieldViolation> refused;
+  Status s = o.Client().Prune(o.job_ids, o.older_days * 86400.0, o.keep, o.dry_run, &pruned, &refused);
+  if (!s.ok()) return Report(s);
+  for (const auto& id : pruned) std::printf("%s %s\n", o.dry_run ? "would prune" : "pruned", id.c_str());
+  for (const auto& v : refused) std::fprintf(stderr, "piezoid prune: %s: %s\n", v.field.c_str(), v.description.c_str());
+  if (pruned.empty() && refused.empty()) std::printf("nothing to prune\n");
+  return refused.empty() ? kExitOk : kExitJobNotOk;
+}
+
+void RegisterPrune(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<PruneOptions>();
+  auto* c = AddMasterCommand(
+      app, "prune", "delete ended jobs from the master (memory and state directory): those named, or by age / count", *o);
+  c->add_option("jobs", o->job_ids, "ended jobs to delete (running ones are refused)");
+  c->add_option("--older-than", o->older_days, "delete the ended jobs that ended more than DAYS ago")
+      ->check(CLI::PositiveNumber);
+  c->add_option("--keep", o->keep, "delete all but the N most recently ended jobs")->check(CLI::Range(1, 100000000));
+  c->add_flag("--dry-run", o->dry_run, "list what would be deleted, delete nothing");
+  OnRun(c, o, exit_code, PruneJobs);
+}
+
+// ---------------------------------------------------------------- watch
+
+int WatchJob(const JobOptions& o) {
+  ServiceClient c = o.Client();
+  service::JobInfo info;
+  Status s = c.GetStatus(o.job_id, &info);
+  if (!s.ok()) return Report(s);
+  std::printf("job %s (%s%s%s), %llu generations at most\n", o.job_id.c_str(), info.kind.c_str(),
+              info.name.empty() ? "" : ": ", info.name.c_str(),
+              static_cast<unsigned long long>(info.max_generations));
+  if (!info.notice.empty()) std::printf("! on loading: %s\n", info.notice.c_str());
+  Progress progress(info.max_generations, info.kind == "hgann");
+  s = c.Watch(
+      o.job_id,
+      [&progress](const service::JobEvent& e) {
+        progress.Update(e);
+        return true;
+      },
+      std::chrono::hours(24 * 365));
+  progress.End();
+  if (!s.ok()) return Report(s);
+  s = c.GetStatus(o.job_id, &info);
+  if (!s.ok()) return Report(s);
+  std::printf("job %s %s (%s) after %llu generations: best cost %s%s, %llu evaluations in %.1f s\n",
+              o.job_id.c_str(), service::JobStateName(info.state), info.message.c_str(),
+              static_cast<unsigned long long>(info.generation > 0 ? info.generation - 1 : 0),
+              Num(info.best_cost, 9).c_str(), info.kind == "hgann" ? " deg²" : "",
+              static_cast<unsigned long long>(info.evaluations), info.elapsed_s);
+  if (info.state == service::JobState::kSucceeded || info.generation > 0)
+    std::printf("fetch the result: piezoid fetch %s --out <folder>\n", o.job_id.c_str());
+  return info.state == service::JobState::kSucceeded ? kExitOk : kExitJobNotOk;
+}
+
+void RegisterWatch(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<JobOptions>();
+  auto* c = AddMasterCommand(
+      app, "watch", "follow a job until it ends: generation, best cost, evaluations/s, workers; then the result", *o);
+  c->add_option("job", o->job_id, "job id")->required();
+  OnRun(c, o, exit_code, WatchJob);
+}
+
+// ---------------------------------------------------------------- fetch
+
+struct FetchOptions : JobOptions {
+  int count = 5;
+  std::string out;
+  bool no_plots = false;
+};
+
+int FetchJob(const FetchOptions& o) {
+  FetchedJob job;
+  Status s = o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
+  if (!s.ok()) return Report(s);
+  if (!service::IsFinal(job.info.state))
+    std::fprintf(stderr, "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
+                 o.job_id.c_str(), service::JobStateName(job.info.state),
+                 static_cast<unsigned long long>(job.info.generation));
+  const fs::path dir = o.out.empty() ? fs::path(o.job_id) : fs::path(o.out);
+  FetchOutput out;
+  s = WriteFetchedJob(job, dir, !o.no_plots, std::cout, &out);
+  std::cout.flush();
+  if (s.ok() && !out.report.empty()) std::printf("report: %s\n", out.report.string().c_str());
+  return Report(s);
+}
+
+void RegisterFetch(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<FetchOptions>();
+  auto* c = AddMasterCommand(
+      app, "fetch", "write a job's best networks (.pb, .json) and, for hgann jobs, the report of `piezoid identify`", *o);
+  c->add_option("job", o->job_id, "job id")->required();
+  c->add_option("--best,-n", o->count, "how many of the best individuals (1 … 32)")
+      ->check(CLI::Range(1, 32))
+      ->capture_default_str();
+  c->add_option("--out,-o", o->out, "result folder (default: ./<job id>)");
+  c->add_flag("--no-plots", o->no_plots, "do not render figures (gnuplot scripts are still written)");
+  OnRun(c, o, exit_code, FetchJob);
+}
+
+// ---------------------------------------------------------------- export
+
+struct ExportOptions {
+  std::string network, out, name = "piezoid_predict";
+};
+
+int ExportNetwork(const ExportOptions& o) {
+  io::SavedNetwork net;
+  Status s = io::LoadNetwork(o.network, &net);
+  if (!s.ok()) return Report(InvalidArgument(s.message()));
+  std::string header;
+  s = NetworkToCHeader(net, o.name, &header);
+  if (!s.ok()) return Report(s);
+  if (o.out.empty()) {
+    std::fwrite(header.data(), 1, header.size(), stdout);
+    return kExitOk;
+  }
+  if (int code = WriteFile(o.out, header); code != kExitOk) return code;
+  std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(), o.name.c_str());
+  return kExitOk;
+}
+
+void RegisterExport(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<ExportOptions>();
+  auto* c = app.add_subcommand("export", "write a network file (.pb or .json) as a standalone C header for a controller");
+  c->add_option("network", o->network, "network file (from fetch or identify)")->required();
+  c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
+  c->add_option("--name", o->name, "name of the C function (a C identifier)")->capture_default_str();
+  OnRun(c, o, exit_code, ExportNetwork);
+}
+
+// ---------------------------------------------------------------- dashboard
+
+struct DashboardFlags : Common {
+  std::string listen = "127.0.0.1:8080", token_file, reports, cache, url_file;
+  int poll_ms = 1000;
+  bool no_plots = false;
+};
+
+/// The dashboard's options of its flags: InvalidArgument naming --listen or --token-file.
+Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
+  o->client = ClientOptionsOf(f.master, f.timeout_ms, f.retries, f.curve_secret, f.master_public);
+  const size_t colon = f.listen.rfind(':');
+  if (colon == std::string::npos || colon + 1 == f.listen.size())
+    return InvalidArgument("--listen '" + f.listen + "': must be HOST:PORT, e.g. 127.0.0.1:8080");
+  o->host = f.listen.substr(0, colon);
+  if (o->host.size() > 2 && o->host.front() == '[' && o->host.back() == ']') o->host = o->host.substr(1, o->host.size() - 2);
+  try {
+    size_t used = 0;
+    o->port = std::stoi(f.listen.substr(colon + 1), &used);
+    if (used != f.listen.size() - colon - 1) throw std::invalid_argument("trailing characters");
+  } catch (const std::exception&) {
+    return InvalidArgument("--listen '" + f.listen + "': the port must be a number in [0, 65535]");
+  }
+  if (!f.token_file.empty()) {
+    std::ifstream in(f.token_file);
+    if (!in || !std::getline(in, o->token))
+      return InvalidArgument("--token-file " + f.token_file + ": cannot read its first line");
+    while (!o->token.empty() && std::isspace(static_cast<unsigned char>(o->token.back()))) o->token.pop_back();
+  }
+  o->poll_ms = f.poll_ms;
+  o->reports_dir = f.reports;
+  o->cache_dir = f.cache;
+  o->plots = !f.no_plots;
+  return Status::Ok();
+}
+
+int ServeDashboard(const DashboardFlags& f) {
+  DashboardOptions o;
+  if (Status s = DashboardOptionsOf(f, &o); !s.ok()) return Report(s);
+  // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited below.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  Dashboard d(o);
+  if (Status s = d.Start(); !s.ok()) return Report(s);
+  if (!f.url_file.empty()) {
+    const std::string tmp = f.url_file + ".tmp";
+    std::ofstream(tmp) << d.url() << "\n";
+    std::error_code ec;
+    fs::rename(tmp, f.url_file, ec);
+  }
+  std::printf("piezoid dashboard of %s on %s%s (Ctrl-C to stop)\n", o.client.endpoint.c_str(), d.url().c_str(),
+              o.token.empty() ? "" : "?token=…");
+  std::fflush(stdout);
+  int sig = 0;
+  sigwait(&signals, &sig);
+  d.Stop();
+  return kExitOk;
+}
+
+void RegisterDashboard(CLI::App& app, int& exit_code) {
+  auto o = std::make_shared<DashboardFlags>();
+  auto* c = AddMasterCommand(
+      app, "dashboard", "serve a live web page of the master's jobs, fitness curves, workers and reports (read-only)", *o);
+  c->add_option("--listen", o->listen,
+                "HOST:PORT to serve on (PORT 0: any free port; beyond loopback needs --token-file)")
+      ->capture_default_str();
+  c->add_option("--token-file", o->token_file,
+                "file whose first line is the access token every request must carry (?token= or a Bearer "
+                "header); required beyond loopback or with CURVE");
+  c->add_option("--poll-ms", o->poll_ms, "how often the master is polled [ms]")->capture_default_str();
+  c->add_option("--reports", o->reports, "also serve the report folders (each with a report.md) under this folder");
+  c->add_option("--cache", o->cache, "where ended jobs' reports are built (default: a temporary folder)");
+  c->add_option("--url-file", o->url_file, "write the dashboard's URL to this file once it listens");
+  c->add_flag("--no-plots", o->no_plots, "build job reports without figures (no gnuplot)");
+  OnRun(c, o, exit_code, ServeDashboard);
+}
+
 }  // namespace
 
 void RegisterServiceCommands(CLI::App& app, int& exit_code) {
-  auto common = std::make_shared<Common>();
-  common->master = DefaultMaster();
-  auto job_id = std::make_shared<std::string>();
-  auto path = std::make_shared<std::string>();
-  auto out = std::make_shared<std::string>();
-  auto name = std::make_shared<std::string>("piezoid_predict");
-  auto count = std::make_shared<int>(5);
-  auto no_plots = std::make_shared<bool>(false);
-  auto token = std::make_shared<std::string>();
-
-  // ---------------------------------------------------------------- submit
-  auto* submit = app.add_subcommand(
-      "submit", "submit a job spec (protobuf JSON, see examples/): prints the job id on stdout");
-  AddCommon(submit, *common);
-  submit->add_option("spec", *path, "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
-      ->required();
-  submit->add_option("--client-token", *token,
-                     "idempotence token: submitting the same spec with the same token again returns the same job "
-                     "(default: a random one)");
-  auto embedded_out = std::make_shared<std::string>();
-  submit->add_option("--write-embedded", *embedded_out,
-                     "write the checked spec with its case data embedded (protobuf JSON, what the Python client "
-                     "submits) to this file instead of submitting it");
-  submit->callback([=, &exit_code] {
-    job::JobSpec spec;
-    std::vector<job::FieldViolation> v;
-    Status s = LoadJobSpecFile(*path, &spec, &v);
-    if (!s.ok()) {
-      exit_code = ReportViolations("job spec " + *path, v, s);
-      return;
-    }
-    // Checked here first (same rules as the master), so a bad spec needs no master to be told.
-    v = kinds::All().Validate(spec);
-    if (!v.empty()) {
-      exit_code = ReportViolations("job spec " + *path, v, InvalidArgument("invalid"));
-      return;
-    }
-    if (!embedded_out->empty()) {
-      std::ofstream f(*embedded_out, std::ios::binary);
-      f << service::JobSpecToJson(spec) << "\n";
-      f.close();
-      if (!f) {
-        exit_code = Report({StatusCode::kInternal, *embedded_out + ": cannot write"});
-        return;
-      }
-      std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n", embedded_out->c_str());
-      exit_code = kExitOk;
-      return;
-    }
-    SubmitResult r;
-    s = common->Client().Submit(spec, &r, &v, *token);
-    if (!s.ok()) {
-      exit_code = s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + *path, v, s) : Report(s);
-      return;
-    }
-    std::printf("%s\n", r.job_id.c_str());
-    if (r.existed) std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
-    exit_code = kExitOk;
-  });
-
-  // ---------------------------------------------------------------- status / list
-  auto* status = app.add_subcommand("status", "a job's state and progress (every job without an id)");
-  AddCommon(status, *common);
-  status->add_option("job", *job_id, "job id (optional)");
-  status->callback([=, &exit_code] {
-    ServiceClient c = common->Client();
-    if (job_id->empty()) {
-      std::vector<service::JobInfo> all;
-      int workers = 0, threads = 0;
-      Status s = c.List(&all, &workers, &threads);
-      if (s.ok()) PrintList(all, workers, threads);
-      exit_code = Report(s);
-      return;
-    }
-    service::JobInfo i;
-    Status s = c.GetStatus(*job_id, &i);
-    if (s.ok()) PrintInfo(i);
-    exit_code = Report(s);
-  });
-
-  auto* list = app.add_subcommand("list", "the master's jobs and workers");
-  list->alias("jobs");
-  AddCommon(list, *common);
-  list->callback([=, &exit_code] {
-    std::vector<service::JobInfo> all;
-    int workers = 0, threads = 0;
-    Status s = common->Client().List(&all, &workers, &threads);
-    if (s.ok()) PrintList(all, workers, threads);
-    exit_code = Report(s);
-  });
-
-  // ---------------------------------------------------------------- cancel
-  auto* cancel = app.add_subcommand("cancel", "cancel a running job (its checkpoint stays fetchable)");
-  AddCommon(cancel, *common);
-  cancel->add_option("job", *job_id, "job id")->required();
-  cancel->callback([=, &exit_code] {
-    Status s = common->Client().Cancel(*job_id);
-    if (s.ok()) std::printf("%s cancelled\n", job_id->c_str());
-    exit_code = Report(s);
-  });
-
-  // ---------------------------------------------------------------- prune
-  auto* prune = app.add_subcommand(
-      "prune", "delete ended jobs from the master (memory and state directory): those named, or by age / count");
-  AddCommon(prune, *common);
-  auto prune_ids = std::make_shared<std::vector<std::string>>();
-  auto older_days = std::make_shared<double>(0);
-  auto keep = std::make_shared<int>(0);
-  auto dry_run = std::make_shared<bool>(false);
-  prune->add_option("jobs", *prune_ids, "ended jobs to delete (running ones are refused)");
-  prune->add_option("--older-than", *older_days, "delete the ended jobs that ended more than DAYS ago")
-      ->check(CLI::PositiveNumber);
-  prune->add_option("--keep", *keep, "delete all but the N most recently ended jobs")->check(CLI::Range(1, 100000000));
-  prune->add_flag("--dry-run", *dry_run, "list what would be deleted, delete nothing");
-  prune->callback([=, &exit_code] {
-    if (prune_ids->empty() && *older_days <= 0 && *keep <= 0) {
-      std::fprintf(stderr, "piezoid prune: name the jobs, or give --older-than DAYS or --keep N\n");
-      exit_code = kExitBadInput;
-      return;
-    }
-    std::vector<std::string> pruned;
-    std::vector<job::FieldViolation> refused;
-    Status s = common->Client().Prune(*prune_ids, *older_days * 86400.0, *keep, *dry_run, &pruned, &refused);
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    for (const auto& id : pruned) std::printf("%s %s\n", *dry_run ? "would prune" : "pruned", id.c_str());
-    for (const auto& v : refused) std::fprintf(stderr, "piezoid prune: %s: %s\n", v.field.c_str(), v.description.c_str());
-    if (pruned.empty() && refused.empty()) std::printf("nothing to prune\n");
-    exit_code = refused.empty() ? kExitOk : kExitJobNotOk;
-  });
-
-  // ---------------------------------------------------------------- watch
-  auto* watch = app.add_subcommand(
-      "watch", "follow a job until it ends: generation, best cost, evaluations/s, workers; then the result");
-  AddCommon(watch, *common);
-  watch->add_option("job", *job_id, "job id")->required();
-  watch->callback([=, &exit_code] {
-    ServiceClient c = common->Client();
-    service::JobInfo info;
-    Status s = c.GetStatus(*job_id, &info);
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    std::printf("job %s (%s%s%s), %llu generations at most\n", job_id->c_str(), info.kind.c_str(),
-                info.name.empty() ? "" : ": ", info.name.c_str(),
-                static_cast<unsigned long long>(info.max_generations));
-    if (!info.notice.empty()) std::printf("! on loading: %s\n", info.notice.c_str());
-    Progress progress(info.max_generations, info.kind == "hgann");
-    s = c.Watch(
-        *job_id,
-        [&progress](const service::JobEvent& e) {
-          progress.Update(e);
-          return true;
-        },
-        std::chrono::hours(24 * 365));
-    progress.End();
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    s = c.GetStatus(*job_id, &info);
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    std::printf("job %s %s (%s) after %llu generations: best cost %s%s, %llu evaluations in %.1f s\n",
-                job_id->c_str(), service::JobStateName(info.state), info.message.c_str(),
-                static_cast<unsigned long long>(info.generation > 0 ? info.generation - 1 : 0),
-                Num(info.best_cost, 9).c_str(), info.kind == "hgann" ? " deg²" : "",
-                static_cast<unsigned long long>(info.evaluations), info.elapsed_s);
-    if (info.state == service::JobState::kSucceeded || info.generation > 0)
-      std::printf("fetch the result: piezoid fetch %s --out <folder>\n", job_id->c_str());
-    exit_code = info.state == service::JobState::kSucceeded ? kExitOk : kExitJobNotOk;
-  });
-
-  // ---------------------------------------------------------------- fetch
-  auto* fetch = app.add_subcommand(
-      "fetch", "write a job's best networks (.pb, .json) and, for hgann jobs, the report of `piezoid identify`");
-  AddCommon(fetch, *common);
-  fetch->add_option("job", *job_id, "job id")->required();
-  fetch->add_option("--best,-n", *count, "how many of the best individuals (1 … 32)")
-      ->check(CLI::Range(1, 32))
-      ->capture_default_str();
-  fetch->add_option("--out,-o", *out, "result folder (default: ./<job id>)");
-  fetch->add_flag("--no-plots", *no_plots, "do not render figures (gnuplot scripts are still written)");
-  fetch->callback([=, &exit_code] {
-    FetchedJob job;
-    Status s = common->Client().Fetch(*job_id, *count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    if (!service::IsFinal(job.info.state))
-      std::fprintf(stderr, "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
-                   job_id->c_str(), service::JobStateName(job.info.state),
-                   static_cast<unsigned long long>(job.info.generation));
-    const fs::path dir = out->empty() ? fs::path(*job_id) : fs::path(*out);
-    FetchOutput o;
-    s = WriteFetchedJob(job, dir, !*no_plots, std::cout, &o);
-    std::cout.flush();
-    if (s.ok() && !o.report.empty()) std::printf("report: %s\n", o.report.string().c_str());
-    exit_code = Report(s);
-  });
-
-  // ---------------------------------------------------------------- export
-  auto* exp = app.add_subcommand(
-      "export", "write a network file (.pb or .json) as a standalone C header for a controller");
-  exp->add_option("network", *path, "network file (from fetch or identify)")->required();
-  exp->add_option("--out,-o", *out, "header file to write (default: stdout)");
-  exp->add_option("--name", *name, "name of the C function (a C identifier)")->capture_default_str();
-  exp->callback([=, &exit_code] {
-    io::SavedNetwork net;
-    Status s = io::LoadNetwork(*path, &net);
-    if (!s.ok()) {
-      exit_code = Report(InvalidArgument(s.message()));
-      return;
-    }
-    std::string header;
-    s = NetworkToCHeader(net, *name, &header);
-    if (!s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    if (out->empty()) {
-      std::fwrite(header.data(), 1, header.size(), stdout);
-    } else {
-      std::ofstream f(*out, std::ios::binary);
-      f << header;
-      f.close();
-      if (!f) {
-        exit_code = Report({StatusCode::kInternal, *out + ": cannot write"});
-        return;
-      }
-      std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", out->c_str(), name->c_str());
-    }
-    exit_code = kExitOk;
-  });
-
-  // ---------------------------------------------------------------- dashboard
-  auto* dash = app.add_subcommand(
-      "dashboard", "serve a live web page of the master's jobs, fitness curves, workers and reports (read-only)");
-  AddCommon(dash, *common);
-  auto listen = std::make_shared<std::string>("127.0.0.1:8080");
-  auto token_file = std::make_shared<std::string>();
-  auto poll_ms = std::make_shared<int>(1000);
-  auto reports = std::make_shared<std::string>();
-  auto cache = std::make_shared<std::string>();
-  auto endpoints_file = std::make_shared<std::string>();
-  dash->add_option("--listen", *listen,
-                   "HOST:PORT to serve on (PORT 0: any free port; beyond loopback needs --token-file)")
-      ->capture_default_str();
-  dash->add_option("--token-file", *token_file,
-                   "file whose first line is the access token every request must carry (?token= or a Bearer "
-                   "header); required beyond loopback or with CURVE");
-  dash->add_option("--poll-ms", *poll_ms, "how often the master is polled [ms]")->capture_default_str();
-  dash->add_option("--reports", *reports, "also serve the report folders (each with a report.md) under this folder");
-  dash->add_option("--cache", *cache, "where ended jobs' reports are built (default: a temporary folder)");
-  dash->add_option("--url-file", *endpoints_file, "write the dashboard's URL to this file once it listens");
-  auto dash_no_plots = std::make_shared<bool>(false);
-  dash->add_flag("--no-plots", *dash_no_plots, "build job reports without figures (no gnuplot)");
-  dash->callback([=, &exit_code] {
-    DashboardOptions o;
-    o.client = ClientOptionsOf(common->master, common->timeout_ms, common->retries, common->curve_secret,
-                               common->master_public);
-    const size_t colon = listen->rfind(':');
-    if (colon == std::string::npos || colon + 1 == listen->size()) {
-      exit_code = Report(InvalidArgument("--listen '" + *listen + "': must be HOST:PORT, e.g. 127.0.0.1:8080"));
-      return;
-    }
-    o.host = listen->substr(0, colon);
-    if (o.host.size() > 2 && o.host.front() == '[' && o.host.back() == ']') o.host = o.host.substr(1, o.host.size() - 2);
-    try {
-      size_t used = 0;
-      o.port = std::stoi(listen->substr(colon + 1), &used);
-      if (used != listen->size() - colon - 1) throw std::invalid_argument("trailing characters");
-    } catch (const std::exception&) {
-      exit_code = Report(InvalidArgument("--listen '" + *listen + "': the port must be a number in [0, 65535]"));
-      return;
-    }
-    if (!token_file->empty()) {
-      std::ifstream f(*token_file);
-      if (!f || !std::getline(f, o.token)) {
-        exit_code = Report(InvalidArgument("--token-file " + *token_file + ": cannot read its first line"));
-        return;
-      }
-      while (!o.token.empty() && std::isspace(static_cast<unsigned char>(o.token.back()))) o.token.pop_back();
-    }
-    o.poll_ms = *poll_ms;
-    o.reports_dir = *reports;
-    o.cache_dir = *cache;
-    o.plots = !*dash_no_plots;
-    // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited below.
-    sigset_t signals;
-    sigemptyset(&signals);
-    sigaddset(&signals, SIGINT);
-    sigaddset(&signals, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-    Dashboard d(o);
-    if (Status s = d.Start(); !s.ok()) {
-      exit_code = Report(s);
-      return;
-    }
-    if (!endpoints_file->empty()) {
-      const std::string tmp = *endpoints_file + ".tmp";
-      std::ofstream(tmp) << d.url() << "\n";
-      std::error_code ec;
-      fs::rename(tmp, *endpoints_file, ec);
-    }
-    std::printf("piezoid dashboard of %s on %s%s (Ctrl-C to stop)\n", o.client.endpoint.c_str(), d.url().c_str(),
-                o.token.empty() ? "" : "?token=…");
-    std::fflush(stdout);
-    int sig = 0;
-    sigwait(&signals, &sig);
-    d.Stop();
-    exit_code = kExitOk;
-  });
-
+  RegisterSubmit(app, exit_code);
+  RegisterStatus(app, exit_code);
+  RegisterList(app, exit_code);
+  RegisterCancel(app, exit_code);
+  RegisterPrune(app, exit_code);
+  RegisterWatch(app, exit_code);
+  RegisterFetch(app, exit_code);
+  RegisterExport(app, exit_code);
+  RegisterDashboard(app, exit_code);
   RegisterKeygen(app, exit_code);
 }
 
