@@ -10,7 +10,6 @@
 #include <set>
 #include <zmq.hpp>
 
-#include "master/job_store.h"
 #include "master/log_throttle.h"
 #include "service/liveness.h"
 #include "service/wire_codec.h"
@@ -543,7 +542,7 @@ struct Broker::Impl {
     // A retry of a submission that was accepted is answered as such, whatever the limit.
     ClientRequestMsg q;
     q.type = ClientRequestMsg::Type::kStatus;
-    q.job_id = JobStore::JobIdOf(req.spec_bytes, req.client_token);
+    q.job_id = service::JobIdOf(req.spec_bytes, req.client_token);
     if (handler->Handle(q).code == WireCode::kOk) return true;
     const int running = RunningJobsOf(client);
     if (running >= options.max_jobs_per_client) {

@@ -17,6 +17,22 @@ double UnixNow() {
   return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
 }
 
+/// The reply to req that its handler fills: req's request id, code OK.
+service::ClientReplyMsg ReplyTo(const service::ClientRequestMsg& req,
+                                service::ClientReplyMsg::Type type = service::ClientReplyMsg::Type::kNone) {
+  service::ClientReplyMsg r;
+  r.request_id = req.request_id;
+  r.type = type;
+  return r;
+}
+
+/// r refused with code and error.
+service::ClientReplyMsg Refused(service::ClientReplyMsg r, service::WireCode code, std::string error) {
+  r.code = code;
+  r.error = std::move(error);
+  return r;
+}
+
 }  // namespace
 
 using job::FieldViolation;
@@ -27,7 +43,6 @@ using opt::Genome;
 using service::ClientReplyMsg;
 using service::JobEvent;
 using service::ClientRequestMsg;
-using service::ContentHash;
 using service::DecodeJobSpec;
 using service::GenerationRecord;
 using service::ScoredGenome;
@@ -42,13 +57,6 @@ JobStore::JobStore(JobStoreOptions options, Broker& broker, const JobKindRegistr
     : options_(std::move(options)), broker_(broker), kinds_(kinds), dir_(options_.state_dir) {}
 
 JobStore::~JobStore() { Shutdown(); }
-
-std::string JobStore::JobIdOf(const std::string& spec_bytes, const std::string& client_token) {
-  std::string key = spec_bytes;
-  key += '\0';
-  key += client_token;
-  return "j" + ContentHash(key).substr(0, 15);
-}
 
 Status JobStore::Resume() {
   for (const std::string& id : dir_.List()) {
@@ -401,15 +409,11 @@ Status JobStore::LoadArchived(const Job& job, job::JobSpec* spec, JobCheckpoint*
   return Status::Ok();
 }
 
-ClientReplyMsg JobStore::Prune(const ClientRequestMsg& req) {
-  ClientReplyMsg r;
-  r.request_id = req.request_id;
-  r.type = ClientReplyMsg::Type::kPrune;
-  if (req.job_ids.empty() && req.older_than_s <= 0 && req.keep <= 0) {
-    r.code = WireCode::kInvalidArgument;
-    r.error = "prune: name the jobs, or give older_than_s or keep (nothing is pruned without a rule)";
-    return r;
-  }
+ClientReplyMsg JobStore::AnswerPrune(const ClientRequestMsg& req) {
+  ClientReplyMsg r = ReplyTo(req, ClientReplyMsg::Type::kPrune);
+  if (req.job_ids.empty() && req.older_than_s <= 0 && req.keep <= 0)
+    return Refused(std::move(r), WireCode::kInvalidArgument,
+                   "prune: name the jobs, or give older_than_s or keep (nothing is pruned without a rule)");
   // The candidates: the jobs named, or every job; running ones are refused when named.
   struct Candidate {
     std::shared_ptr<Job> job;
@@ -464,187 +468,184 @@ ClientReplyMsg JobStore::Prune(const ClientRequestMsg& req) {
 }
 
 ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
-  ClientReplyMsg r;
-  r.request_id = req.request_id;
-  r.code = WireCode::kOk;
   using T = ClientRequestMsg::Type;
+  switch (req.type) {
+    case T::kSubmit: return AnswerSubmit(req);
+    case T::kList: return AnswerList(req);
+    case T::kPrune: return AnswerPrune(req);
+    case T::kStatus:
+    case T::kCancel:
+    case T::kFetch:
+    case T::kEvaluate:
+    case T::kClose: return AnswerAboutJob(req);
+    default: return Refused(ReplyTo(req), WireCode::kInvalidArgument, "unsupported request");
+  }
+}
+
+ClientReplyMsg JobStore::AnswerSubmit(const ClientRequestMsg& req) {
+  ClientReplyMsg r = ReplyTo(req);
+  r.violations = req.decode_violations;
+  for (auto& v : kinds_.Validate(req.spec)) r.violations.push_back(std::move(v));
+  if (!r.violations.empty()) {
+    r.code = WireCode::kInvalidArgument;
+    for (const auto& v : r.violations) r.error += (r.error.empty() ? "" : "; ") + v.description;
+    return r;
+  }
+  r.type = ClientReplyMsg::Type::kSubmit;
+  r.job_id = service::JobIdOf(req.spec_bytes, req.client_token);
+  std::lock_guard lock(mu_);
+  if (jobs_.count(r.job_id)) {
+    r.existed = true;
+    return r;
+  }
+  int running = 0;
+  for (auto& [id, j] : jobs_) {
+    std::lock_guard jl(j->mu);
+    running += !IsFinal(j->checkpoint.state);
+  }
+  if (running >= options_.max_running_jobs)
+    return Refused(std::move(r), WireCode::kResourceExhausted, "too many running jobs (" + std::to_string(running) + ")");
+  if (Status s = dir_.SaveSpec(r.job_id, req.spec_bytes); !s.ok()) {
+    (void)dir_.Remove(r.job_id);  // no empty folder left for every restart to complain about
+    r = Refused(std::move(r), WireCode::kUnavailable,
+                "the master cannot store the job: " + s.message() + " (retry when it has space)");
+    uint64_t suppressed = 0;
+    if (log_throttle_.Allow("submit", std::chrono::steady_clock::now(), &suppressed))
+      spdlog::error("submission refused: {}{}", r.error,
+                    suppressed ? " (" + std::to_string(suppressed) + " more not logged)" : "");
+    return r;
+  }
+  auto j = std::make_shared<Job>();
+  j->id = r.job_id;
+  j->spec = req.spec;
+  j->spec_bytes = req.spec_bytes;
+  j->checkpoint.job_id = r.job_id;
+  jobs_[r.job_id] = j;
+  spdlog::info("job {} submitted: {} '{}' seed {}", r.job_id, req.spec.kind(), req.spec.name, req.spec.seed);
+  Start(j);
+  return r;
+}
+
+ClientReplyMsg JobStore::AnswerList(const ClientRequestMsg& req) {
+  ClientReplyMsg r = ReplyTo(req, ClientReplyMsg::Type::kList);
+  std::vector<std::shared_ptr<Job>> all;
+  {
+    std::lock_guard lock(mu_);
+    for (auto& [id, j] : jobs_) all.push_back(j);
+  }
+  for (auto& j : all) r.jobs.push_back(Info(*j));
+  return r;
+}
+
+ClientReplyMsg JobStore::AnswerAboutJob(const ClientRequestMsg& req) {
   std::shared_ptr<Job> job;
-  if (req.type == T::kPrune) return Prune(req);
-  if (req.type == T::kStatus || req.type == T::kCancel || req.type == T::kFetch ||
-      req.type == T::kEvaluate || req.type == T::kClose) {
+  {
     std::lock_guard lock(mu_);
     auto it = jobs_.find(req.job_id);
-    if (it == jobs_.end()) {
-      r.code = WireCode::kNotFound;
-      r.error = "job_id = " + req.job_id + ": no such job";
-      return r;
-    }
-    job = it->second;
+    if (it != jobs_.end()) job = it->second;
   }
+  if (!job) return Refused(ReplyTo(req), WireCode::kNotFound, "job_id = " + req.job_id + ": no such job");
+  using T = ClientRequestMsg::Type;
   switch (req.type) {
-    case T::kSubmit: {
-      r.violations = req.decode_violations;
-      for (auto& v : kinds_.Validate(req.spec)) r.violations.push_back(std::move(v));
-      if (!r.violations.empty()) {
-        r.code = WireCode::kInvalidArgument;
-        for (const auto& v : r.violations) r.error += (r.error.empty() ? "" : "; ") + v.description;
-        return r;
-      }
-      r.type = ClientReplyMsg::Type::kSubmit;
-      r.job_id = JobIdOf(req.spec_bytes, req.client_token);
-      std::lock_guard lock(mu_);
-      if (jobs_.count(r.job_id)) {
-        r.existed = true;
-        return r;
-      }
-      int running = 0;
-      for (auto& [id, j] : jobs_) {
-        std::lock_guard jl(j->mu);
-        running += !IsFinal(j->checkpoint.state);
-      }
-      if (running >= options_.max_running_jobs) {
-        r.code = WireCode::kResourceExhausted;
-        r.error = "too many running jobs (" + std::to_string(running) + ")";
-        return r;
-      }
-      if (Status s = dir_.SaveSpec(r.job_id, req.spec_bytes); !s.ok()) {
-        (void)dir_.Remove(r.job_id);  // no empty folder left for every restart to complain about
-        r.code = WireCode::kUnavailable;
-        r.error = "the master cannot store the job: " + s.message() + " (retry when it has space)";
-        uint64_t suppressed = 0;
-        if (log_throttle_.Allow("submit", std::chrono::steady_clock::now(), &suppressed))
-          spdlog::error("submission refused: {}{}", r.error,
-                        suppressed ? " (" + std::to_string(suppressed) + " more not logged)" : "");
-        return r;
-      }
-      auto j = std::make_shared<Job>();
-      j->id = r.job_id;
-      j->spec = req.spec;
-      j->spec_bytes = req.spec_bytes;
-      j->checkpoint.job_id = r.job_id;
-      jobs_[r.job_id] = j;
-      spdlog::info("job {} submitted: {} '{}' seed {}", r.job_id, req.spec.kind(), req.spec.name,
-                   req.spec.seed);
-      Start(j);
-      return r;
-    }
-    case T::kStatus:
-      r.type = ClientReplyMsg::Type::kStatus;
-      r.info = Info(*job);
-      return r;
-    case T::kCancel: {
-      r.type = ClientReplyMsg::Type::kStatus;
-      r.info = Info(*job);
-      if (IsFinal(r.info.state)) {
-        r.code = WireCode::kFailedPrecondition;
-        r.error = "job " + job->id + " is already " + JobStateName(r.info.state);
-        return r;
-      }
-      job->cancel = true;
-      broker_.UnregisterJob(job->id);
-      return r;
-    }
-    case T::kFetch: {
-      if (req.count < 1 || req.count > kBestKept) {
-        r.code = WireCode::kInvalidArgument;
-        r.error = "count = " + std::to_string(req.count) + ": must be in [1, " + std::to_string(kBestKept) +
-                  "] (the master keeps the " + std::to_string(kBestKept) + " best individuals of a job)";
-        r.violations.push_back({"count", r.error});
-        return r;
-      }
-      r.type = ClientReplyMsg::Type::kFetch;
-      r.info = Info(*job);
-      if (req.log_only) {  // a live view's poll: the info and the log's tail, nothing else
-        std::vector<service::GenerationRecord> log;
-        bool archived;
-        {
-          std::lock_guard lock(job->mu);
-          archived = job->archived;
-          if (!archived) {
-            for (const auto& rec : job->checkpoint.log)
-              if (rec.generation >= req.log_from) log.push_back(rec);
-          }
-        }
-        if (archived) {
-          job::JobSpec spec;
-          JobCheckpoint c;
-          if (Status s = LoadArchived(*job, &spec, &c); !s.ok()) {
-            r.code = WireCode::kInternal;
-            r.error = s.message();
-            return r;
-          }
-          for (auto& rec : c.log)
-            if (rec.generation >= req.log_from) log.push_back(std::move(rec));
-        }
-        r.log = std::move(log);
-        return r;
-      }
-      JobCheckpoint c;
-      job::JobSpec spec;
-      bool archived;
-      {
-        std::lock_guard lock(job->mu);
-        archived = job->archived;
-        if (!archived) {
-          c = job->checkpoint;
-          spec = job->spec;
-        }
-      }
-      if (archived) {
-        if (Status s = LoadArchived(*job, &spec, &c); !s.ok()) {
-          r.code = WireCode::kInternal;
-          r.error = s.message();
-          return r;
-        }
-      }
-      r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
-      r.log = std::move(c.log);
-      r.networks = NetworksOf(job->id, spec, r.best, c.optimizer.best_generation, r.log.size());
-      r.spec = std::move(spec);
-      return r;
-    }
-    case T::kEvaluate:
-    case T::kClose: {
-      if (!job->session) {
-        r.code = WireCode::kFailedPrecondition;
-        r.error = "job " + job->id + " runs the GA (algorithm " + job->spec.algorithm() +
-                  "): only an evaluation session (algorithm external) takes " +
-                  (req.type == T::kEvaluate ? "evaluate" : "close") + " requests";
-        return r;
-      }
-      r.info = Info(*job);
-      if (IsFinal(r.info.state)) {
-        if (req.type == T::kClose && r.info.state == JobState::kSucceeded) {  // a retried close
-          r.type = ClientReplyMsg::Type::kStatus;
-          return r;
-        }
-        r.code = WireCode::kFailedPrecondition;
-        r.error = "session " + job->id + " is " + JobStateName(r.info.state) +
-                  (r.info.message.empty() ? "" : " (" + r.info.message + ")");
-        return r;
-      }
-      if (req.type == T::kClose) {
-        job->session->Close();
-        r.type = ClientReplyMsg::Type::kStatus;
-        return r;
-      }
-      return job->session->Evaluate(req);
-    }
-    case T::kList: {
-      r.type = ClientReplyMsg::Type::kList;
-      std::vector<std::shared_ptr<Job>> all;
-      {
-        std::lock_guard lock(mu_);
-        for (auto& [id, j] : jobs_) all.push_back(j);
-      }
-      for (auto& j : all) r.jobs.push_back(Info(*j));
-      return r;
-    }
-    default:
-      r.code = WireCode::kInvalidArgument;
-      r.error = "unsupported request";
-      return r;
+    case T::kStatus: return AnswerStatus(req, *job);
+    case T::kCancel: return AnswerCancel(req, *job);
+    case T::kFetch: return AnswerFetch(req, *job);
+    default: return AnswerSessionRequest(req, *job);  // kEvaluate, kClose
   }
+}
+
+ClientReplyMsg JobStore::AnswerStatus(const ClientRequestMsg& req, Job& job) {
+  ClientReplyMsg r = ReplyTo(req, ClientReplyMsg::Type::kStatus);
+  r.info = Info(job);
+  return r;
+}
+
+ClientReplyMsg JobStore::AnswerCancel(const ClientRequestMsg& req, Job& job) {
+  ClientReplyMsg r = AnswerStatus(req, job);
+  if (IsFinal(r.info.state))
+    return Refused(std::move(r), WireCode::kFailedPrecondition,
+                   "job " + job.id + " is already " + JobStateName(r.info.state));
+  job.cancel = true;
+  broker_.UnregisterJob(job.id);
+  return r;
+}
+
+ClientReplyMsg JobStore::AnswerFetch(const ClientRequestMsg& req, Job& job) {
+  ClientReplyMsg r = ReplyTo(req);
+  if (req.count < 1 || req.count > kBestKept) {
+    r = Refused(std::move(r), WireCode::kInvalidArgument,
+                "count = " + std::to_string(req.count) + ": must be in [1, " + std::to_string(kBestKept) +
+                    "] (the master keeps the " + std::to_string(kBestKept) + " best individuals of a job)");
+    r.violations.push_back({"count", r.error});
+    return r;
+  }
+  r.type = ClientReplyMsg::Type::kFetch;
+  r.info = Info(job);
+  if (req.log_only) {  // a live view's poll: the info and the log's tail, nothing else
+    if (Status s = LogFrom(job, req.log_from, &r.log); !s.ok()) return Refused(std::move(r), WireCode::kInternal, s.message());
+    return r;
+  }
+  JobCheckpoint c;
+  job::JobSpec spec;
+  if (Status s = SpecAndCheckpoint(job, &spec, &c); !s.ok()) return Refused(std::move(r), WireCode::kInternal, s.message());
+  r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
+  r.log = std::move(c.log);
+  r.networks = NetworksOf(job.id, spec, r.best, c.optimizer.best_generation, r.log.size());
+  r.spec = std::move(spec);
+  return r;
+}
+
+Status JobStore::SpecAndCheckpoint(Job& job, job::JobSpec* spec, JobCheckpoint* c) const {
+  {
+    std::lock_guard lock(job.mu);
+    if (!job.archived) {
+      *c = job.checkpoint;
+      *spec = job.spec;
+      return Status::Ok();
+    }
+  }
+  return LoadArchived(job, spec, c);
+}
+
+Status JobStore::LogFrom(Job& job, uint64_t from, std::vector<GenerationRecord>* log) const {
+  {
+    std::lock_guard lock(job.mu);
+    if (!job.archived) {
+      for (const auto& rec : job.checkpoint.log)
+        if (rec.generation >= from) log->push_back(rec);
+      return Status::Ok();
+    }
+  }
+  job::JobSpec spec;
+  JobCheckpoint c;
+  if (Status s = LoadArchived(job, &spec, &c); !s.ok()) return s;
+  for (auto& rec : c.log)
+    if (rec.generation >= from) log->push_back(std::move(rec));
+  return Status::Ok();
+}
+
+ClientReplyMsg JobStore::AnswerSessionRequest(const ClientRequestMsg& req, Job& job) {
+  const bool close = req.type == ClientRequestMsg::Type::kClose;
+  ClientReplyMsg r = ReplyTo(req);
+  if (!job.session)
+    return Refused(std::move(r), WireCode::kFailedPrecondition,
+                   "job " + job.id + " runs the GA (algorithm " + job.spec.algorithm() +
+                       "): only an evaluation session (algorithm external) takes " + (close ? "close" : "evaluate") +
+                       " requests");
+  r.info = Info(job);
+  if (IsFinal(r.info.state)) {
+    if (close && r.info.state == JobState::kSucceeded) {  // a retried close
+      r.type = ClientReplyMsg::Type::kStatus;
+      return r;
+    }
+    return Refused(std::move(r), WireCode::kFailedPrecondition,
+                   "session " + job.id + " is " + JobStateName(r.info.state) +
+                       (r.info.message.empty() ? "" : " (" + r.info.message + ")"));
+  }
+  if (!close) return job.session->Evaluate(req);
+  job.session->Close();
+  r.type = ClientReplyMsg::Type::kStatus;
+  return r;
 }
 
 void JobStore::Shutdown() {

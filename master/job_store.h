@@ -45,9 +45,6 @@ class JobStore final : public ClientHandler {
   /// Stops the broker and every job thread without changing any job's stored state.
   void Shutdown();
 
-  /// Job id of a spec submitted with a client token (content-addressed: retries are idempotent).
-  static std::string JobIdOf(const std::string& spec_bytes, const std::string& client_token);
-
  private:
   struct Job {
     std::string id, spec_bytes;
@@ -64,12 +61,30 @@ class JobStore final : public ClientHandler {
     bool archived = false;              // under mu: state on disk only; `summary` answers status
     service::JobInfo summary;           // under mu: when archived
   };
+  // One handler per client request (Handle picks it by the request's type).
+  service::ClientReplyMsg AnswerSubmit(const service::ClientRequestMsg& req);
+  service::ClientReplyMsg AnswerList(const service::ClientRequestMsg& req);
+  service::ClientReplyMsg AnswerPrune(const service::ClientRequestMsg& req);
+  /// The requests about one job (status, cancel, fetch, evaluate, close): NotFound for an
+  /// unknown job id, else the job's handler below.
+  service::ClientReplyMsg AnswerAboutJob(const service::ClientRequestMsg& req);
+  service::ClientReplyMsg AnswerStatus(const service::ClientRequestMsg& req, Job& job);
+  service::ClientReplyMsg AnswerCancel(const service::ClientRequestMsg& req, Job& job);
+  service::ClientReplyMsg AnswerFetch(const service::ClientRequestMsg& req, Job& job);
+  /// Evaluate and close: to an evaluation session that is still open (a retried close of a
+  /// closed one is answered OK).
+  service::ClientReplyMsg AnswerSessionRequest(const service::ClientRequestMsg& req, Job& job);
+
   void Start(const std::shared_ptr<Job>& job);
   /// Archives the ended jobs beyond keep_in_memory, oldest first.
   void Retain();
-  service::ClientReplyMsg Prune(const service::ClientRequestMsg& req);
   /// Fetch of an archived job: its spec and checkpoint read from the state directory.
   Status LoadArchived(const Job& job, job::JobSpec* spec, service::JobCheckpoint* c) const;
+  /// The job's spec and checkpoint: copies of what is in memory, or read from disk when it is
+  /// archived.
+  Status SpecAndCheckpoint(Job& job, job::JobSpec* spec, service::JobCheckpoint* c) const;
+  /// The job's generation records from generation `from` on (from disk when it is archived).
+  Status LogFrom(Job& job, uint64_t from, std::vector<service::GenerationRecord>* log) const;
   void Run(Job& job);
   void RunSession(Job& job);  // the job thread of an evaluation session
   /// Makes c the job's current checkpoint; writes it to disk if `write`.

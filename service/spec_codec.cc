@@ -311,6 +311,13 @@ std::string ContentHash(std::string_view bytes) {
   return buf;
 }
 
+std::string JobIdOf(const std::string& spec_bytes, const std::string& client_token) {
+  std::string key = spec_bytes;
+  key += '\0';
+  key += client_token;
+  return "j" + ContentHash(key).substr(0, 15);
+}
+
 WireCode DecodeFailureCode(const Status& s) {
   return s.code() == StatusCode::kFailedPrecondition ? WireCode::kVersionMismatch
                                                      : WireCode::kMalformed;

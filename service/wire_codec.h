@@ -16,6 +16,10 @@ namespace pz::service {
 /// FNV-1a 64-bit hash of `bytes` as 16 hex digits (content addressing, not authentication).
 std::string ContentHash(std::string_view bytes);
 
+/// The job id of a spec (its serialised bytes) submitted with a client token: content-addressed,
+/// so a retried submission is the same job.
+std::string JobIdOf(const std::string& spec_bytes, const std::string& client_token);
+
 /// Maps a decode status to the wire code answered to the sender.
 WireCode DecodeFailureCode(const Status& s);
 

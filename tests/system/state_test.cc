@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "master/checkpoint.h"
-#include "master/job_store.h"
+#include "service/wire_codec.h"
 #include "tests/system/service_harness.h"
 
 namespace pz::testing {
@@ -179,7 +179,7 @@ TEST(State, AnUnstorableSubmissionLeavesNoFolderAndEmptyFoldersGoAtStart) {
   // The spec file cannot be written: its temporary file's name is taken by a folder.
   const job::JobSpec s = SyntheticSpec(51, 8, 2);
   const std::string token = "fixed-token";
-  const std::string id = master::JobStore::JobIdOf(service::EncodeJobSpec(s), token);
+  const std::string id = service::JobIdOf(service::EncodeJobSpec(s), token);
   const fs::path dir = c.dir() / "state" / "jobs" / id;
   fs::create_directories(dir / "spec.pb.tmp");
   client::SubmitResult r;
