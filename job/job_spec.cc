@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <set>
+#include <type_traits>
+#include <utility>
 
 #include "model/status.h"
 
@@ -11,12 +13,34 @@ int GaSettings::offspring() const {
   return population - static_cast<int>(std::lround(population * elite_fraction));
 }
 
+namespace {
+
+using Problem = decltype(JobSpec::problem);
+static_assert(std::is_same_v<std::variant_alternative_t<0, Problem>, std::monostate>,
+              "JobSpec::problem starts with std::monostate (no problem set)");
+
+template <typename P>
+constexpr std::string_view KindOf() {
+  if constexpr (std::is_same_v<P, std::monostate>) {
+    return "";
+  } else {
+    return P::kKind;  // every problem names its kind
+  }
+}
+
+template <size_t... I>
+std::vector<std::string> KindNames(std::index_sequence<I...>) {
+  return {std::string(KindOf<std::variant_alternative_t<I + 1, Problem>>())...};  // after monostate
+}
+
+}  // namespace
+
 std::string JobSpec::kind() const {
-  if (std::holds_alternative<HgannProblem>(problem)) return "hgann";
-  if (std::holds_alternative<SyntheticProblem>(problem)) return "synthetic";
-  if (std::holds_alternative<DiagnoseProblem>(problem)) return "diagnose";
-  if (std::holds_alternative<CompleteModelProblem>(problem)) return "complete_model";
-  return "";
+  return std::visit([](const auto& p) { return std::string(KindOf<std::decay_t<decltype(p)>>()); }, problem);
+}
+
+std::vector<std::string> JobKindNames() {
+  return KindNames(std::make_index_sequence<std::variant_size_v<Problem> - 1>());
 }
 
 std::vector<FieldViolation> JobSpec::Validate() const {
@@ -50,8 +74,10 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Require(std::isfinite(m->error_cost) && m->error_cost > 0, "complete_model.error_cost", m->error_cost,
               "must be finite and > 0");
     c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(), "must be ≤ 1000 characters");
-  } else {
-    c.Add("problem", "problem: one of hgann, synthetic, diagnose, complete_model must be set");
+  } else if (std::holds_alternative<std::monostate>(problem)) {
+    std::string kinds;
+    for (const std::string& k : JobKindNames()) kinds += (kinds.empty() ? "" : ", ") + k;
+    c.Add("problem", "problem: one of " + kinds + " must be set");
   }
 
   if (ga && external) {

@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <sstream>
 #include <variant>
 #include <vector>
@@ -74,6 +75,7 @@ struct HgannCaseSpec {
 
 /// The HGANN identification problem (job kind "hgann", master/hgann_job.h).
 struct HgannProblem {
+  static constexpr std::string_view kKind = "hgann";  ///< JobSpec::kind()
   enum class Saturation { kFromExtremes = 0, kGiven = 1 };
   std::vector<HgannCaseSpec> cases;    ///< ≥ 1 training case
   std::string case_set_dir;            ///< client side only: must be empty at the master
@@ -89,6 +91,7 @@ struct HgannProblem {
 
 /// A synthetic problem for tests and benchmarks (job kind "synthetic").
 struct SyntheticProblem {
+  static constexpr std::string_view kKind = "synthetic";
   enum class Cost { kNull, kFunction };
   Cost cost = Cost::kFunction;
   int genome_bits = 64;      ///< 1..65536
@@ -107,6 +110,7 @@ struct DiagnoseParamBox {
 /// The global fit of one diagnosis model structure (job kind "diagnose", diagnose/job_kind.h):
 /// genome.reals = search coordinates in [0, 1]; cost = Σ training e² [deg²].
 struct DiagnoseProblem {
+  static constexpr std::string_view kKind = "diagnose";
   std::vector<HgannCaseSpec> cases;     ///< role kTrain = fitted; b1, b2 unset (from extremes)
   std::vector<double> cycles;           ///< drive cycles per case (as many as cases), > 0
   std::vector<std::string> structure;   ///< effect names added to the base model, in order
@@ -138,6 +142,7 @@ struct CompleteModelRecord {
 /// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
 /// the family's physical parameters; cost = the family's criterion on the records.
 struct CompleteModelProblem {
+  static constexpr std::string_view kKind = "complete_model";
   enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3, kRecords = 4 };
   enum class Criterion { kIae = 1, kSse = 2, kRmse = 3, kMax = 4 };
   enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
@@ -193,18 +198,23 @@ struct JobSpec {
   std::string name;
   uint64_t seed = 0;
   JobLimits limits;
+  /// The problem; each names its job kind (kKind). A new kind adds its problem struct here.
   std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem, CompleteModelProblem> problem;
   /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
   /// evaluation session driven by the client).
   std::optional<GaSettings> ga;
   std::optional<ExternalSettings> external;
 
-  /// "hgann", "synthetic", "diagnose", "complete_model" or "" when no problem is set.
+  /// The problem's kKind ("hgann", "synthetic", "diagnose", "complete_model"), "" when no problem
+  /// is set.
   std::string kind() const;
   /// "ga", "external" or "".
   std::string algorithm() const { return ga ? "ga" : external ? "external" : ""; }
   /// Generic checks (every field's range); kind-specific checks come from the job-kind registry.
   std::vector<FieldViolation> Validate() const;
 };
+
+/// The kinds of every problem a spec can hold, in the order of JobSpec::problem.
+std::vector<std::string> JobKindNames();
 
 }  // namespace pz::job

@@ -18,6 +18,27 @@ TEST(Kinds, AllHasEveryKindOnce) {
   EXPECT_EQ(All().Find("hgan"), nullptr);
 }
 
+// kind() comes from the problem's type (each problem names its kind), so the kinds a spec can
+// hold and the registered kinds must be the same list: a problem added to JobSpec::problem without
+// its kind in kinds/kinds.cc, or the other way round, fails here.
+TEST(Kinds, EveryProblemOfASpecHasItsRegisteredKind) {
+  const std::vector<std::string> names = job::JobKindNames();
+  EXPECT_EQ(names, (std::vector<std::string>{"hgann", "synthetic", "diagnose", "complete_model"}));
+  for (const std::string& name : names) EXPECT_NE(All().Find(name), nullptr) << name;
+  job::JobSpec spec;
+  spec.problem = job::DiagnoseProblem{};
+  EXPECT_EQ(spec.kind(), "diagnose");
+  spec.problem = job::CompleteModelProblem{};
+  EXPECT_EQ(spec.kind(), "complete_model");
+  spec.problem = std::monostate{};
+  EXPECT_EQ(spec.kind(), "");
+  spec.ga = job::GaSettings{};
+  const std::vector<job::FieldViolation> v = All().Validate(spec);
+  ASSERT_EQ(v.size(), 1u) << testing::Descriptions(v);
+  EXPECT_EQ(v[0].field, "problem");
+  EXPECT_EQ(v[0].description, "problem: one of hgann, synthetic, diagnose, complete_model must be set");
+}
+
 TEST(Kinds, SpecsOfEachKindFindTheirKind) {
   const job::JobSpec hgann = testing::NominalHgannSpec(10, 1);
   EXPECT_EQ(hgann.kind(), "hgann");
