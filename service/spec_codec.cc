@@ -47,6 +47,212 @@ HgannCaseSpec CaseFromProto(const pw::HgannCase& pc, const std::string& field, s
   return c;
 }
 
+// One encoder and one decoder per problem: a new job kind adds its pair here and its case in
+// FromProto's switch.
+void ProblemToProto(const std::monostate&, pw::JobSpec*) {}
+
+void ProblemToProto(const HgannProblem& h, pw::JobSpec* p) {
+  auto* ph = p->mutable_hgann();
+  for (const HgannCaseSpec& c : h.cases) CaseToProto(c, ph->add_cases());
+  ph->set_case_set_dir(h.case_set_dir);
+  ph->set_source(h.source);
+  ph->set_ranges_preset(h.ranges_preset);
+  for (const ParameterRange& r : h.ranges) {
+    auto* pr = ph->add_ranges();
+    pr->set_name(r.name);
+    pr->set_min(r.min);
+    pr->set_max(r.max);
+  }
+  ph->set_spread_penalty(h.spread_penalty);
+  ph->set_saturation(h.saturation == HgannProblem::Saturation::kGiven
+                         ? pw::SATURATION_GIVEN
+                         : pw::SATURATION_FROM_EXTREMES);
+  if (!h.geometry.empty()) {
+    auto* g = ph->mutable_geometry();
+    const auto* d = g->GetDescriptor();
+    const auto* refl = g->GetReflection();
+    for (const auto& [name, value] : h.geometry) {
+      const auto* f = d->FindFieldByName(name);
+      if (!f) continue;  // unknown names are refused by validation before they are encoded
+      if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE)
+        refl->SetDouble(g, f, value);
+      else
+        refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
+    }
+  }
+}
+
+HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolation>* v) {
+  HgannProblem h;
+  for (int i = 0; i < ph.cases_size(); ++i)
+    h.cases.push_back(CaseFromProto(ph.cases(i), "hgann.cases[" + std::to_string(i) + "]", v));
+  h.case_set_dir = ph.case_set_dir();
+  h.source = ph.source();
+  h.ranges_preset = ph.ranges_preset();
+  for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
+  h.spread_penalty = ph.spread_penalty();
+  switch (ph.saturation()) {
+    case pw::SATURATION_UNSPECIFIED:
+    case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
+    case pw::SATURATION_GIVEN: h.saturation = HgannProblem::Saturation::kGiven; break;
+    default:
+      if (v) v->push_back({"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
+                                                   ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
+  }
+  if (ph.has_geometry()) {
+    const auto& g = ph.geometry();
+    const auto* d = g.GetDescriptor();
+    const auto* refl = g.GetReflection();
+    for (int i = 0; i < d->field_count(); ++i) {
+      const auto* f = d->field(i);
+      if (!refl->HasField(g, f)) continue;
+      h.geometry[f->name()] = f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE
+                                  ? refl->GetDouble(g, f)
+                                  : static_cast<double>(refl->GetUInt32(g, f));
+    }
+  }
+  return h;
+}
+
+void ProblemToProto(const SyntheticProblem& y, pw::JobSpec* p) {
+  auto* py = p->mutable_synthetic();
+  py->set_cost(y.cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
+                                                        : pw::SyntheticProblem::COST_FUNCTION);
+  py->set_genome_bits(static_cast<uint32_t>(y.genome_bits));
+  py->set_sleep_ms(y.sleep_ms);
+  py->set_crash_prefix(y.crash_prefix);
+}
+
+SyntheticProblem SyntheticFromProto(const pw::SyntheticProblem& py, std::vector<FieldViolation>* v) {
+  SyntheticProblem y;
+  switch (py.cost()) {
+    case pw::SyntheticProblem::COST_NULL: y.cost = SyntheticProblem::Cost::kNull; break;
+    case pw::SyntheticProblem::COST_FUNCTION: y.cost = SyntheticProblem::Cost::kFunction; break;
+    default:
+      if (v) v->push_back({"synthetic.cost", "synthetic.cost = " + std::to_string(py.cost()) +
+                                                 ": must be COST_NULL or COST_FUNCTION"});
+  }
+  y.genome_bits = ClampInt(OrDefault<uint32_t>(py.genome_bits(), 64));
+  y.sleep_ms = py.sleep_ms();
+  y.crash_prefix = py.crash_prefix();
+  return y;
+}
+
+void ProblemToProto(const DiagnoseProblem& d, pw::JobSpec* p) {
+  auto* pd = p->mutable_diagnose();
+  for (const HgannCaseSpec& c : d.cases) CaseToProto(c, pd->add_cases());
+  pd->mutable_cycles()->Assign(d.cycles.begin(), d.cycles.end());
+  for (const auto& e : d.structure) pd->add_structure(e);
+  for (const DiagnoseParamBox& b : d.params) {
+    auto* pp = pd->add_params();
+    pp->set_name(b.name);
+    pp->set_lower(b.lower);
+    pp->set_upper(b.upper);
+    pp->set_log_scale(b.log_scale);
+    pp->set_ratio(b.ratio);
+  }
+  pd->set_residuals(d.residuals);
+  pd->set_oversample(static_cast<uint32_t>(std::max(0, d.oversample)));
+  pd->set_rtol(d.rtol);
+  pd->set_atol(d.atol);
+  pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d.max_steps)));
+  pd->set_force_cvode(d.force_cvode);
+  pd->set_source(d.source);
+}
+
+DiagnoseProblem DiagnoseFromProto(const pw::DiagnoseProblem& pd, std::vector<FieldViolation>* v) {
+  DiagnoseProblem d;
+  for (int i = 0; i < pd.cases_size(); ++i)
+    d.cases.push_back(CaseFromProto(pd.cases(i), "diagnose.cases[" + std::to_string(i) + "]", v));
+  d.cycles.assign(pd.cycles().begin(), pd.cycles().end());
+  d.structure.assign(pd.structure().begin(), pd.structure().end());
+  for (const auto& pp : pd.params())
+    d.params.push_back({pp.name(), pp.lower(), pp.upper(), pp.log_scale(), pp.ratio()});
+  d.residuals = pd.residuals();
+  d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
+  d.rtol = OrDefault(pd.rtol(), 1e-6);
+  d.atol = OrDefault(pd.atol(), 1e-13);
+  d.max_steps = static_cast<int64_t>(std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
+  d.force_cvode = pd.force_cvode();
+  d.source = pd.source();
+  return d;
+}
+
+void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
+  auto* pm = p->mutable_complete_model();
+  pm->set_family(static_cast<pw::CompleteModelFamily>(m.family));
+  for (const CompleteModelRecord& r : m.records) {
+    auto* pr = pm->add_records();
+    pr->set_name(r.name);
+    pr->set_sample_rate_hz(r.sample_rate_hz);
+    pr->mutable_input()->Assign(r.input.begin(), r.input.end());
+    pr->mutable_output()->Assign(r.output.begin(), r.output.end());
+    pr->set_first_counted(r.first_counted);
+    pr->set_dt_s(r.dt_s);
+    pr->set_end_counted(r.end_counted);
+    pr->set_rest_samples(r.rest_samples);
+    pr->set_offset_mode(static_cast<uint32_t>(std::max(0, r.offset_mode)));
+    pr->set_offset(r.offset);
+  }
+  pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m.criterion));
+  pm->set_t0_s(m.t0_s);
+  pm->set_t1_s(m.t1_s);
+  pm->set_substeps(static_cast<uint32_t>(std::max(0, m.substeps)));
+  pm->set_interpolation(static_cast<pw::BwInterpolation>(m.interpolation));
+  pm->set_period_samples(m.period_samples);
+  pm->set_error_cost(m.error_cost);
+  pm->set_source(m.source);
+  pm->set_record_family(m.record_family);
+  for (const std::string& e : m.effects) pm->add_effects(e);
+  pm->set_pi_operators(static_cast<uint32_t>(std::max(0, m.pi_operators)));
+  pm->mutable_scale()->Assign(m.scale.begin(), m.scale.end());
+}
+
+CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm, std::vector<FieldViolation>* v) {
+  CompleteModelProblem m;
+  auto bad_enum = [&](const char* field, int value, const char* known) {
+    if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
+  };
+  if (pm.family() >= 0 && pm.family() <= 4)
+    m.family = static_cast<CompleteModelProblem::Family>(pm.family());
+  else
+    bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
+  for (const auto& pr : pm.records()) {
+    CompleteModelRecord r;
+    r.name = pr.name();
+    r.sample_rate_hz = pr.sample_rate_hz();
+    r.input.assign(pr.input().begin(), pr.input().end());
+    r.output.assign(pr.output().begin(), pr.output().end());
+    r.first_counted = pr.first_counted();
+    r.dt_s = pr.dt_s();
+    r.end_counted = pr.end_counted();
+    r.rest_samples = std::max<uint64_t>(1, pr.rest_samples());
+    r.offset_mode = static_cast<int>(std::min<uint32_t>(pr.offset_mode(), 1000));
+    r.offset = pr.offset();
+    m.records.push_back(std::move(r));
+  }
+  if (pm.criterion() >= 0 && pm.criterion() <= 4)
+    m.criterion = static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
+  else
+    bad_enum("complete_model.criterion", pm.criterion(), "IAE, SSE, RMSE or MAX");
+  m.t0_s = pm.t0_s();
+  m.t1_s = pm.t1_s();
+  m.substeps = ClampInt(pm.substeps());
+  if (pm.interpolation() >= 0 && pm.interpolation() <= 4)
+    m.interpolation = pm.interpolation() == 0 ? CompleteModelProblem::Interpolation::kSpline
+                                              : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
+  else
+    bad_enum("complete_model.interpolation", pm.interpolation(), "ZOH, LINEAR, SPLINE or FOURIER");
+  m.period_samples = pm.period_samples();
+  m.error_cost = OrDefault(pm.error_cost(), 1e30);
+  m.source = pm.source();
+  m.record_family = pm.record_family();
+  m.effects.assign(pm.effects().begin(), pm.effects().end());
+  m.pi_operators = pm.pi_operators() == 0 ? 12 : ClampInt(pm.pi_operators());
+  m.scale.assign(pm.scale().begin(), pm.scale().end());
+  return m;
+}
+
 void ToProto(const JobSpec& s, pw::JobSpec* p) {
   p->set_version(s.version);
   p->set_name(s.name);
@@ -56,91 +262,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
   l->set_quarantine_after(static_cast<uint32_t>(s.limits.quarantine_after));
   l->set_penalty_cost(s.limits.penalty_cost);
   if (s.limits.target_cost) l->set_target_cost(*s.limits.target_cost);
-  if (const auto* h = std::get_if<HgannProblem>(&s.problem)) {
-    auto* ph = p->mutable_hgann();
-    for (const HgannCaseSpec& c : h->cases) CaseToProto(c, ph->add_cases());
-    ph->set_case_set_dir(h->case_set_dir);
-    ph->set_source(h->source);
-    ph->set_ranges_preset(h->ranges_preset);
-    for (const ParameterRange& r : h->ranges) {
-      auto* pr = ph->add_ranges();
-      pr->set_name(r.name);
-      pr->set_min(r.min);
-      pr->set_max(r.max);
-    }
-    ph->set_spread_penalty(h->spread_penalty);
-    ph->set_saturation(h->saturation == HgannProblem::Saturation::kGiven
-                           ? pw::SATURATION_GIVEN
-                           : pw::SATURATION_FROM_EXTREMES);
-    if (!h->geometry.empty()) {
-      auto* g = ph->mutable_geometry();
-      const auto* d = g->GetDescriptor();
-      const auto* refl = g->GetReflection();
-      for (const auto& [name, value] : h->geometry) {
-        const auto* f = d->FindFieldByName(name);
-        if (!f) continue;  // unknown names are refused by validation before they are encoded
-        if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE)
-          refl->SetDouble(g, f, value);
-        else
-          refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
-      }
-    }
-  } else if (const auto* d = std::get_if<DiagnoseProblem>(&s.problem)) {
-    auto* pd = p->mutable_diagnose();
-    for (const HgannCaseSpec& c : d->cases) CaseToProto(c, pd->add_cases());
-    pd->mutable_cycles()->Assign(d->cycles.begin(), d->cycles.end());
-    for (const auto& e : d->structure) pd->add_structure(e);
-    for (const DiagnoseParamBox& b : d->params) {
-      auto* pp = pd->add_params();
-      pp->set_name(b.name);
-      pp->set_lower(b.lower);
-      pp->set_upper(b.upper);
-      pp->set_log_scale(b.log_scale);
-      pp->set_ratio(b.ratio);
-    }
-    pd->set_residuals(d->residuals);
-    pd->set_oversample(static_cast<uint32_t>(std::max(0, d->oversample)));
-    pd->set_rtol(d->rtol);
-    pd->set_atol(d->atol);
-    pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d->max_steps)));
-    pd->set_force_cvode(d->force_cvode);
-    pd->set_source(d->source);
-  } else if (const auto* m = std::get_if<CompleteModelProblem>(&s.problem)) {
-    auto* pm = p->mutable_complete_model();
-    pm->set_family(static_cast<pw::CompleteModelFamily>(m->family));
-    for (const CompleteModelRecord& r : m->records) {
-      auto* pr = pm->add_records();
-      pr->set_name(r.name);
-      pr->set_sample_rate_hz(r.sample_rate_hz);
-      pr->mutable_input()->Assign(r.input.begin(), r.input.end());
-      pr->mutable_output()->Assign(r.output.begin(), r.output.end());
-      pr->set_first_counted(r.first_counted);
-      pr->set_dt_s(r.dt_s);
-      pr->set_end_counted(r.end_counted);
-      pr->set_rest_samples(r.rest_samples);
-      pr->set_offset_mode(static_cast<uint32_t>(std::max(0, r.offset_mode)));
-      pr->set_offset(r.offset);
-    }
-    pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m->criterion));
-    pm->set_t0_s(m->t0_s);
-    pm->set_t1_s(m->t1_s);
-    pm->set_substeps(static_cast<uint32_t>(std::max(0, m->substeps)));
-    pm->set_interpolation(static_cast<pw::BwInterpolation>(m->interpolation));
-    pm->set_period_samples(m->period_samples);
-    pm->set_error_cost(m->error_cost);
-    pm->set_source(m->source);
-    pm->set_record_family(m->record_family);
-    for (const std::string& e : m->effects) pm->add_effects(e);
-    pm->set_pi_operators(static_cast<uint32_t>(std::max(0, m->pi_operators)));
-    pm->mutable_scale()->Assign(m->scale.begin(), m->scale.end());
-  } else if (const auto* y = std::get_if<SyntheticProblem>(&s.problem)) {
-    auto* py = p->mutable_synthetic();
-    py->set_cost(y->cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
-                                                          : pw::SyntheticProblem::COST_FUNCTION);
-    py->set_genome_bits(static_cast<uint32_t>(y->genome_bits));
-    py->set_sleep_ms(y->sleep_ms);
-    py->set_crash_prefix(y->crash_prefix);
-  }
+  std::visit([p](const auto& problem) { ProblemToProto(problem, p); }, s.problem);
   if (s.ga) {
     auto* g = p->mutable_ga();
     g->set_population(static_cast<uint32_t>(s.ga->population));
@@ -169,112 +291,12 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
   s->limits.quarantine_after = ClampInt(OrDefault<uint32_t>(p.limits().quarantine_after(), 3));
   s->limits.penalty_cost = OrDefault(p.limits().penalty_cost(), 1e9);
   if (p.limits().has_target_cost()) s->limits.target_cost = p.limits().target_cost();
-  if (p.has_hgann()) {
-    const auto& ph = p.hgann();
-    HgannProblem h;
-    for (int i = 0; i < ph.cases_size(); ++i)
-      h.cases.push_back(CaseFromProto(ph.cases(i), "hgann.cases[" + std::to_string(i) + "]", v));
-    h.case_set_dir = ph.case_set_dir();
-    h.source = ph.source();
-    h.ranges_preset = ph.ranges_preset();
-    for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
-    h.spread_penalty = ph.spread_penalty();
-    switch (ph.saturation()) {
-      case pw::SATURATION_UNSPECIFIED:
-      case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
-      case pw::SATURATION_GIVEN: h.saturation = HgannProblem::Saturation::kGiven; break;
-      default:
-        if (v) v->push_back({"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
-                                                     ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
-    }
-    if (ph.has_geometry()) {
-      const auto& g = ph.geometry();
-      const auto* d = g.GetDescriptor();
-      const auto* refl = g.GetReflection();
-      for (int i = 0; i < d->field_count(); ++i) {
-        const auto* f = d->field(i);
-        if (!refl->HasField(g, f)) continue;
-        h.geometry[f->name()] = f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE
-                                    ? refl->GetDouble(g, f)
-                                    : static_cast<double>(refl->GetUInt32(g, f));
-      }
-    }
-    s->problem = std::move(h);
-  } else if (p.has_synthetic()) {
-    const auto& py = p.synthetic();
-    SyntheticProblem y;
-    switch (py.cost()) {
-      case pw::SyntheticProblem::COST_NULL: y.cost = SyntheticProblem::Cost::kNull; break;
-      case pw::SyntheticProblem::COST_FUNCTION: y.cost = SyntheticProblem::Cost::kFunction; break;
-      default:
-        if (v) v->push_back({"synthetic.cost", "synthetic.cost = " + std::to_string(py.cost()) +
-                                                   ": must be COST_NULL or COST_FUNCTION"});
-    }
-    y.genome_bits = ClampInt(OrDefault<uint32_t>(py.genome_bits(), 64));
-    y.sleep_ms = py.sleep_ms();
-    y.crash_prefix = py.crash_prefix();
-    s->problem = std::move(y);
-  } else if (p.has_diagnose()) {
-    const auto& pd = p.diagnose();
-    DiagnoseProblem d;
-    for (int i = 0; i < pd.cases_size(); ++i)
-      d.cases.push_back(CaseFromProto(pd.cases(i), "diagnose.cases[" + std::to_string(i) + "]", v));
-    d.cycles.assign(pd.cycles().begin(), pd.cycles().end());
-    d.structure.assign(pd.structure().begin(), pd.structure().end());
-    for (const auto& pp : pd.params())
-      d.params.push_back({pp.name(), pp.lower(), pp.upper(), pp.log_scale(), pp.ratio()});
-    d.residuals = pd.residuals();
-    d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
-    d.rtol = OrDefault(pd.rtol(), 1e-6);
-    d.atol = OrDefault(pd.atol(), 1e-13);
-    d.max_steps = static_cast<int64_t>(std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
-    d.force_cvode = pd.force_cvode();
-    d.source = pd.source();
-    s->problem = std::move(d);
-  } else if (p.has_complete_model()) {
-    const auto& pm = p.complete_model();
-    CompleteModelProblem m;
-    auto bad_enum = [&](const char* field, int value, const char* known) {
-      if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
-    };
-    if (pm.family() >= 0 && pm.family() <= 4)
-      m.family = static_cast<CompleteModelProblem::Family>(pm.family());
-    else
-      bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
-    for (const auto& pr : pm.records()) {
-      CompleteModelRecord r;
-      r.name = pr.name();
-      r.sample_rate_hz = pr.sample_rate_hz();
-      r.input.assign(pr.input().begin(), pr.input().end());
-      r.output.assign(pr.output().begin(), pr.output().end());
-      r.first_counted = pr.first_counted();
-      r.dt_s = pr.dt_s();
-      r.end_counted = pr.end_counted();
-      r.rest_samples = std::max<uint64_t>(1, pr.rest_samples());
-      r.offset_mode = static_cast<int>(std::min<uint32_t>(pr.offset_mode(), 1000));
-      r.offset = pr.offset();
-      m.records.push_back(std::move(r));
-    }
-    if (pm.criterion() >= 0 && pm.criterion() <= 4)
-      m.criterion = static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
-    else
-      bad_enum("complete_model.criterion", pm.criterion(), "IAE, SSE, RMSE or MAX");
-    m.t0_s = pm.t0_s();
-    m.t1_s = pm.t1_s();
-    m.substeps = ClampInt(pm.substeps());
-    if (pm.interpolation() >= 0 && pm.interpolation() <= 4)
-      m.interpolation = pm.interpolation() == 0 ? CompleteModelProblem::Interpolation::kSpline
-                                                : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
-    else
-      bad_enum("complete_model.interpolation", pm.interpolation(), "ZOH, LINEAR, SPLINE or FOURIER");
-    m.period_samples = pm.period_samples();
-    m.error_cost = OrDefault(pm.error_cost(), 1e30);
-    m.source = pm.source();
-    m.record_family = pm.record_family();
-    m.effects.assign(pm.effects().begin(), pm.effects().end());
-    m.pi_operators = pm.pi_operators() == 0 ? 12 : ClampInt(pm.pi_operators());
-    m.scale.assign(pm.scale().begin(), pm.scale().end());
-    s->problem = std::move(m);
+  switch (p.problem_case()) {
+    case pw::JobSpec::kHgann: s->problem = HgannFromProto(p.hgann(), v); break;
+    case pw::JobSpec::kSynthetic: s->problem = SyntheticFromProto(p.synthetic(), v); break;
+    case pw::JobSpec::kDiagnose: s->problem = DiagnoseFromProto(p.diagnose(), v); break;
+    case pw::JobSpec::kCompleteModel: s->problem = CompleteModelFromProto(p.complete_model(), v); break;
+    case pw::JobSpec::PROBLEM_NOT_SET: break;
   }
   if (p.has_ga()) {
     const auto& pg = p.ga();
