@@ -38,15 +38,14 @@ bool IsCIdentifier(const std::string& name) {
   return true;
 }
 
-Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header) {
-  if (!IsCIdentifier(name))
-    return InvalidArgument(FieldError("--name", "\"" + name + "\"", "must be a C identifier ([A-Za-z_][A-Za-z0-9_]*)"));
+namespace {
+
+/// The header's comment (provenance, the entry point, the outputs' ranges and units, the inputs'
+/// normalisation), its include guard and the output macros.
+void WriteHeaderStart(std::ostream& o, const io::SavedNetwork& saved, const std::string& name) {
   const model::Network& n = saved.network;
-  if (Status s = n.Validate(); !s.ok()) return InvalidArgument("network: " + s.message());
-  const int h = n.hidden();
   const std::string up = Upper(name);
   const auto& prov = saved.provenance;
-  std::ostringstream o;
   o << "/* " << name << ".h: HGANN network " << n.Describe() << "\n"
     << " * exported by piezoid 0.1.0 (piezoid export) from job '" << prov.job_id << "', seed " << prov.seed
     << ", generation " << prov.generation << ", fitness " << Dec(prov.fitness) << " deg^2.\n"
@@ -79,7 +78,10 @@ Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, 
     o << "#define " << up << "_" << kOutputMacro[k] << " " << k << "  /* " << model::OutputName(k) << " ["
       << model::OutputUnit(k) << "] */\n";
   o << "#define " << up << "_OUTPUTS 7\n\n";
+}
 
+/// NAME_transfer: the eight transfer functions.
+void WriteTransferFunction(std::ostream& o, const std::string& name) {
   o << "/* The eight MATLAB transfer functions by their 3-bit code: 0 hardlim, 1 hardlims, 2 satlin,\n"
        " * 3 satlins, 4 tribas, 5 tansig, 6 logsig, 7 radbas. */\n"
     << "static inline double " << name << "_transfer(int code, double n) {\n"
@@ -94,7 +96,12 @@ Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, 
     << "    default: return exp(-n * n);\n"
     << "  }\n"
     << "}\n\n";
+}
 
+/// The network's constants as static tables of the predictor: normalisation, transfer-function
+/// codes, weights, biases and output ranges (exact literals, decimal values in comments).
+void WriteConstants(std::ostream& o, const model::Network& n) {
+  const int h = n.hidden();
   auto tf_list = [](auto begin, auto end) {
     std::ostringstream s;
     for (auto it = begin; it != end; ++it) s << (it == begin ? "" : ", ") << static_cast<int>(*it);
@@ -106,9 +113,7 @@ Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, 
     return s.str();
   };
 
-  o << "/* p[7] = the seven parameters for amplitude_v [V] and frequency_hz [Hz]. */\n"
-    << "static inline void " << name << "(double amplitude_v, double frequency_hz, double p[7]) {\n"
-    << "  /* normalisation of the inputs: [lo, hi] of amplitude [V] and frequency [Hz] */\n"
+  o << "  /* normalisation of the inputs: [lo, hi] of amplitude [V] and frequency [Hz] */\n"
     << "  static const double norm_lo[2] = {" << Lit(n.normalization.amplitude_lo_v) << ", "
     << Lit(n.normalization.frequency_lo_hz) << "}; /* " << Dec(n.normalization.amplitude_lo_v) << ", "
     << Dec(n.normalization.frequency_lo_hz) << " */\n"
@@ -155,6 +160,10 @@ Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, 
   o << "};\n  static const double upper[7] = {";
   for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << Lit(n.ranges[k].upper);
   o << "};\n";
+}
+
+/// The predictor's computation, model::Network::Forward's operation for operation.
+void WriteForward(std::ostream& o, const std::string& name, int h) {
   o << "  double a[2], b[" << h << "];\n"
     << "  int i, j, k;\n"
     << "  a[0] = " << name << "_transfer(tf_in[0], (amplitude_v - norm_lo[0]) / (norm_hi[0] - norm_lo[0]));\n"
@@ -173,8 +182,24 @@ Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, 
     << "    hi = 1.0;\n"
     << "    s = (o - lo) / (hi - lo);\n"
     << "    p[k] = lower[k] + s * (upper[k] - lower[k]);\n"
-    << "  }\n"
-    << "}\n\n#endif /* " << up << "_H_ */\n";
+    << "  }\n";
+}
+
+}  // namespace
+
+Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header) {
+  if (!IsCIdentifier(name))
+    return InvalidArgument(FieldError("--name", "\"" + name + "\"", "must be a C identifier ([A-Za-z_][A-Za-z0-9_]*)"));
+  const model::Network& n = saved.network;
+  if (Status s = n.Validate(); !s.ok()) return InvalidArgument("network: " + s.message());
+  std::ostringstream o;
+  WriteHeaderStart(o, saved, name);
+  WriteTransferFunction(o, name);
+  o << "/* p[7] = the seven parameters for amplitude_v [V] and frequency_hz [Hz]. */\n"
+    << "static inline void " << name << "(double amplitude_v, double frequency_hz, double p[7]) {\n";
+  WriteConstants(o, n);
+  WriteForward(o, name, n.hidden());
+  o << "}\n\n#endif /* " << Upper(name) << "_H_ */\n";
   *header = o.str();
   return Status::Ok();
 }

@@ -63,147 +63,148 @@ const hgann::HgannCaseResult& ResultOf(const IdentifyResult& r, int number) {
   return r.cases.front();
 }
 
-}  // namespace
+/// What the per-case tables add up to (for the report and the regression of μ).
+struct CaseTotals {
+  std::vector<double> v_all, f_all, mu_all;  ///< every case's V, f and identified μ
+  double train_sum = 0, all_sum = 0;         ///< Σ PI over the training cases, over all cases
+  int beaten = 0, compared = 0;              ///< cases below the paper's PI, cases it has a PI for
+};
 
-std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
-                                          const hgann::HgannFitness& fitness, const IdentifyResult& result,
-                                          std::ostream& term) {
-  std::vector<fs::path> written;
-  const fs::path out = options.out_dir;
-  fs::create_directories(out / "traces");
+/// progress.csv: one line per generation.
+void WriteProgressCsv(const fs::path& out, const IdentifyResult& result, std::vector<fs::path>& written) {
+  std::ofstream f(out / "progress.csv");
+  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+       "errors,wall_time_s,best_network\n";
+  f << std::setprecision(17);
+  for (const auto& g : result.log)
+    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
+      << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
+      << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"\n";
+  written.push_back(out / "progress.csv");
+}
+
+/// validation.csv, parameters.csv and every case's trace (traces/caseN.csv).
+CaseTotals WriteCaseTables(const fs::path& out, const io::CaseSet& set, const hgann::HgannFitness& fitness,
+                           const IdentifyResult& result, std::vector<fs::path>& written) {
   auto add = [&](const fs::path& p) { written.push_back(p); };
-
-  // Networks.
-  for (const char* name : {"network.pb", "network.json"}) {
-    ThrowIfError(io::SaveNetwork(result.best, (out / name).string()));
-    add(out / name);
-  }
-
-  // Progress log.
-  {
-    std::ofstream f(out / "progress.csv");
-    f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
-         "errors,wall_time_s,best_network\n";
-    f << std::setprecision(17);
-    for (const auto& g : result.log)
-      f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
-        << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
-        << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"\n";
-    add(out / "progress.csv");
-  }
-
-  // Per-case validation and parameters.
-  std::vector<double> v_all, f_all, mu_all;
-  double train_sum = 0, all_sum = 0;
-  int beaten = 0, compared = 0;
-  {
-    std::ofstream val(out / "validation.csv"), par(out / "parameters.csv");
-    val << "case,amplitude_V,frequency_Hz,role,pi_deg2,rmse_deg,max_abs_deg,paper_pi_deg2,status\n";
-    par << "case,amplitude_V,frequency_Hz,role,mu,delta,alpha,beta,gamma,a1,a2,b1,b2\n";
-    val << std::setprecision(10);
-    par << std::setprecision(10);
-    for (const auto& bc : set.cases) {
-      const auto& r = ResultOf(result, bc.number);
-      const auto trace = fitness.Trace(result.best.network, fitness.config().cases[&bc - set.cases.data()]);
-      const auto m = trace.summary.ok() ? model::CompareSeries(bc.angle_deg, trace.angle_deg) : model::ErrorMetrics{};
-      const double paper = PaperTable8Pi(bc.amplitude_v, bc.frequency_hz);
-      val << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
-          << r.pi << "," << m.rmse << "," << m.max_abs << "," << (std::isnan(paper) ? std::string("") : Fmt(paper, 6))
-          << "," << model::SimStatusName(r.summary.status) << "\n";
-      const auto& q = r.params;
-      par << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
-          << q.mu << "," << q.delta << "," << q.alpha << "," << q.beta << "," << q.gamma << "," << q.a1 << ","
-          << q.a2 << "," << q.b1 << "," << q.b2 << "\n";
-      all_sum += r.pi;
-      if (bc.role == io::CaseRole::kTrain) train_sum += r.pi;
-      if (!std::isnan(paper)) {
-        ++compared;
-        beaten += r.pi < paper;
-      }
-      v_all.push_back(bc.amplitude_v);
-      f_all.push_back(bc.frequency_hz);
-      mu_all.push_back(q.mu);
-      // Trace for plots: t, u, measured, model, theta.
-      const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
-      if (trace.summary.ok()) {
-        std::vector<io::NamedColumn> cols = {{"t_s", trace.t},
-                                             {"voltage_V", trace.u},
-                                             {"measured_deg", bc.angle_deg},
-                                             {"model_deg", trace.angle_deg},
-                                             {"theta_linear_deg", trace.theta_deg},
-                                             {"z_N", trace.z}};
-        io::WriteColumnsCsvFile(out / tf, cols);
-        add(out / tf);
-      }
+  CaseTotals t;
+  auto& [v_all, f_all, mu_all, train_sum, all_sum, beaten, compared] = t;
+  std::ofstream val(out / "validation.csv"), par(out / "parameters.csv");
+  val << "case,amplitude_V,frequency_Hz,role,pi_deg2,rmse_deg,max_abs_deg,paper_pi_deg2,status\n";
+  par << "case,amplitude_V,frequency_Hz,role,mu,delta,alpha,beta,gamma,a1,a2,b1,b2\n";
+  val << std::setprecision(10);
+  par << std::setprecision(10);
+  for (const auto& bc : set.cases) {
+    const auto& r = ResultOf(result, bc.number);
+    const auto trace = fitness.Trace(result.best.network, fitness.config().cases[&bc - set.cases.data()]);
+    const auto m = trace.summary.ok() ? model::CompareSeries(bc.angle_deg, trace.angle_deg) : model::ErrorMetrics{};
+    const double paper = PaperTable8Pi(bc.amplitude_v, bc.frequency_hz);
+    val << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
+        << r.pi << "," << m.rmse << "," << m.max_abs << "," << (std::isnan(paper) ? std::string("") : Fmt(paper, 6))
+        << "," << model::SimStatusName(r.summary.status) << "\n";
+    const auto& q = r.params;
+    par << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
+        << q.mu << "," << q.delta << "," << q.alpha << "," << q.beta << "," << q.gamma << "," << q.a1 << ","
+        << q.a2 << "," << q.b1 << "," << q.b2 << "\n";
+    all_sum += r.pi;
+    if (bc.role == io::CaseRole::kTrain) train_sum += r.pi;
+    if (!std::isnan(paper)) {
+      ++compared;
+      beaten += r.pi < paper;
     }
-    add(out / "validation.csv");
-    add(out / "parameters.csv");
+    v_all.push_back(bc.amplitude_v);
+    f_all.push_back(bc.frequency_hz);
+    mu_all.push_back(q.mu);
+    // Trace for plots: t, u, measured, model, theta.
+    const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
+    if (trace.summary.ok()) {
+      std::vector<io::NamedColumn> cols = {{"t_s", trace.t},
+                                           {"voltage_V", trace.u},
+                                           {"measured_deg", bc.angle_deg},
+                                           {"model_deg", trace.angle_deg},
+                                           {"theta_linear_deg", trace.theta_deg},
+                                           {"z_N", trace.z}};
+      io::WriteColumnsCsvFile(out / tf, cols);
+      add(out / tf);
+    }
   }
+  add(out / "validation.csv");
+  add(out / "parameters.csv");
+  return t;
+}
 
-  // Regression of μ on V and f (paper eq. 7).
+/// The regression of μ on V and f (paper eq. 7), as a sentence.
+std::string MuRegression(const CaseTotals& t) {
+  const std::vector<double> &v_all = t.v_all, &f_all = t.f_all, &mu_all = t.mu_all;
   std::string mu_regression;
-  {
-    double mn = *std::min_element(mu_all.begin(), mu_all.end());
-    double mx = *std::max_element(mu_all.begin(), mu_all.end());
-    if (mx - mn <= 1e-12 * std::max(1.0, std::abs(mx))) {
-      mu_regression = "μ = " + Fmt(mn, 6) + " 1/s in every case: no trend over V and f (R² undefined).";
-    } else {
-      try {
-        const auto fit = model::FitPlane(v_all, f_all, mu_all);
-        std::ostringstream os;
-        os << "μ = " << Fmt(fit.v.coef, 4) << " V " << (fit.f.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.f.coef), 5)
-           << " f " << (fit.intercept.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.intercept.coef), 6)
-           << "  (R² " << Fmt(fit.r2, 3) << "; p-values V " << Fmt(fit.v.p_value, 2) << ", f "
-           << Fmt(fit.f.p_value, 2) << ", intercept " << Fmt(fit.intercept.p_value, 2) << "; n = " << fit.n
-           << "). Paper eq. 7: μ = 0.020 V − 36.525 f + 102.361 (R² 0.988).";
-        mu_regression = os.str();
-      } catch (const InputError& e) {
-        mu_regression = std::string("μ regression not possible: ") + e.what();
-      }
+  double mn = *std::min_element(mu_all.begin(), mu_all.end());
+  double mx = *std::max_element(mu_all.begin(), mu_all.end());
+  if (mx - mn <= 1e-12 * std::max(1.0, std::abs(mx))) {
+    mu_regression = "μ = " + Fmt(mn, 6) + " 1/s in every case: no trend over V and f (R² undefined).";
+  } else {
+    try {
+      const auto fit = model::FitPlane(v_all, f_all, mu_all);
+      std::ostringstream os;
+      os << "μ = " << Fmt(fit.v.coef, 4) << " V " << (fit.f.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.f.coef), 5)
+         << " f " << (fit.intercept.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.intercept.coef), 6)
+         << "  (R² " << Fmt(fit.r2, 3) << "; p-values V " << Fmt(fit.v.p_value, 2) << ", f "
+         << Fmt(fit.f.p_value, 2) << ", intercept " << Fmt(fit.intercept.p_value, 2) << "; n = " << fit.n
+         << "). Paper eq. 7: μ = 0.020 V − 36.525 f + 102.361 (R² 0.988).";
+      mu_regression = os.str();
+    } catch (const InputError& e) {
+      mu_regression = std::string("μ regression not possible: ") + e.what();
     }
   }
+  return mu_regression;
+}
 
-  // Figures.
-  std::vector<std::string> plot_errors;
+/// The figures' gnuplot scripts and, with options.plots, their renderings; the number rendered.
+int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::CaseSet& set,
+                 std::vector<fs::path>& written, std::vector<std::string>* plot_errors_out) {
+  auto add = [&](const fs::path& p) { written.push_back(p); };
+  auto& plot_errors = *plot_errors_out;
   int rendered = 0;
   std::vector<fs::path> scripts;
-  {
-    Plot p{"fitness", "HGANN fitness progress (CF = Σ PI over the training cases)", "generation",
-           "cost [deg²]", true,
-           {{"progress.csv", 1, 2, "best", "lines"}, {"progress.csv", 1, 3, "mean", "lines"}}};
-    scripts.push_back(WritePlotScript(out, p));
-    for (const auto& bc : set.cases) {
-      const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
-      if (!fs::exists(out / tf)) continue;
-      const std::string label = "case " + std::to_string(bc.number) + " (" + Fmt(bc.amplitude_v) + " V, " +
-                                Fmt(bc.frequency_hz) + " Hz, " + io::CaseRoleName(bc.role) + ")";
-      scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_angle",
-                                                  "Fin angle, " + label, "t [s]", "fin angle [deg]", false,
-                                                  {{tf, 1, 3, "measured", "lines"}, {tf, 1, 4, "model", "lines"}}}));
-      scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_loop",
-                                                  "Hysteresis loop, " + label, "voltage [V]", "fin angle [deg]", false,
-                                                  {{tf, 2, 3, "measured", "lines"}, {tf, 2, 4, "model", "lines"}}}));
-    }
-    for (const auto& s : scripts) add(s);
-    if (options.plots) {
-      if (GnuplotAvailable()) {
-        rendered = RenderPlots(out, scripts, &plot_errors);
-        for (const auto& s : scripts) {
-          auto png = s;
-          png.replace_extension(".png");
-          if (fs::exists(png)) add(png);
-        }
-      } else {
-        plot_errors.push_back("gnuplot not found: figures not rendered (install gnuplot-nox, then run gnuplot on each .gp in " +
-                              out.string() + ")");
+  Plot p{"fitness", "HGANN fitness progress (CF = Σ PI over the training cases)", "generation",
+         "cost [deg²]", true,
+         {{"progress.csv", 1, 2, "best", "lines"}, {"progress.csv", 1, 3, "mean", "lines"}}};
+  scripts.push_back(WritePlotScript(out, p));
+  for (const auto& bc : set.cases) {
+    const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
+    if (!fs::exists(out / tf)) continue;
+    const std::string label = "case " + std::to_string(bc.number) + " (" + Fmt(bc.amplitude_v) + " V, " +
+                              Fmt(bc.frequency_hz) + " Hz, " + io::CaseRoleName(bc.role) + ")";
+    scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_angle",
+                                                "Fin angle, " + label, "t [s]", "fin angle [deg]", false,
+                                                {{tf, 1, 3, "measured", "lines"}, {tf, 1, 4, "model", "lines"}}}));
+    scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_loop",
+                                                "Hysteresis loop, " + label, "voltage [V]", "fin angle [deg]", false,
+                                                {{tf, 2, 3, "measured", "lines"}, {tf, 2, 4, "model", "lines"}}}));
+  }
+  for (const auto& s : scripts) add(s);
+  if (options.plots) {
+    if (GnuplotAvailable()) {
+      rendered = RenderPlots(out, scripts, &plot_errors);
+      for (const auto& s : scripts) {
+        auto png = s;
+        png.replace_extension(".png");
+        if (fs::exists(png)) add(png);
       }
+    } else {
+      plot_errors.push_back("gnuplot not found: figures not rendered (install gnuplot-nox, then run gnuplot on each .gp in " +
+                            out.string() + ")");
     }
   }
+  return rendered;
+}
 
-  // Report (markdown) and terminal summary.
+/// report.md.
+std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
+                           const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression) {
+  const double train_sum = t.train_sum, all_sum = t.all_sum;
+  const int beaten = t.beaten, compared = t.compared;
   std::ostringstream md;
   const auto& s = result.summary;
-  const auto& last = result.log.empty() ? opt::GenerationSummary{} : result.log.back();
   int64_t penalized = 0, errors = 0;
   std::map<std::string, int64_t> reasons;
   for (const auto& g : result.log) {
@@ -268,13 +269,32 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   for (const auto& bc : set.cases)
     md << "![case " << bc.number << "](case" << bc.number << "_angle.png) ![loop " << bc.number << "](case"
        << bc.number << "_loop.png)\n";
+  return md.str();
+}
+
+}  // namespace
+
+std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
+                                          const hgann::HgannFitness& fitness, const IdentifyResult& result,
+                                          std::ostream& term) {
+  std::vector<fs::path> written;
+  const fs::path out = options.out_dir;
+  fs::create_directories(out / "traces");
+  for (const char* name : {"network.pb", "network.json"}) {
+    ThrowIfError(io::SaveNetwork(result.best, (out / name).string()));
+    written.push_back(out / name);
+  }
+  WriteProgressCsv(out, result, written);
+  const CaseTotals totals = WriteCaseTables(out, set, fitness, result, written);
+  const std::string mu_regression = MuRegression(totals);
+  std::vector<std::string> plot_errors;
+  const int rendered = WriteFigures(options, out, set, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
-    f << md.str();
-    add(out / "report.md");
+    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression);
+    written.push_back(out / "report.md");
   }
-
-  term << "\n" << s.BriefReport() << "\n"
+  term << "\n" << result.summary.BriefReport() << "\n"
        << "best network " << result.best.network.Describe() << "\n\n"
        << "PI per case [deg²] (paper's Table 8 in brackets; * = training):\n"
        << Grid(set, [&](const io::BenchCase& c) {
@@ -282,9 +302,9 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
             return std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") + " " +
                    Fmt(ResultOf(result, c.number).pi, 3) + (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
           })
-       << "below the paper in " << beaten << " of " << compared << " cases; Σ training " << Fmt(train_sum, 5) << "\n"
+       << "below the paper in " << totals.beaten << " of " << totals.compared << " cases; Σ training "
+       << Fmt(totals.train_sum, 5) << "\n"
        << mu_regression << "\n";
-  (void)last;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
        << "parameters.csv, " << rendered << " figures)\n";

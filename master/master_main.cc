@@ -53,14 +53,17 @@ int LockStateDir(const std::filesystem::path& dir, std::string* error) {
   (void)!::pwrite(fd, me.data(), me.size(), 0);
   return fd;
 }
-}  // namespace
 
-int main(int argc, char** argv) {
+/// The master's command line.
+struct Flags {
   pz::master::BrokerOptions broker;
   pz::master::JobStoreOptions store;
   std::string log_level = "info", endpoints_file;
   std::string curve_secret, allow_workers, allow_clients;
-  CLI::App app{"piezoid-master — holds the GA jobs and shares the workers among them"};
+};
+
+void AddFlags(CLI::App& app, Flags& flags) {
+  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
   app.add_option("--workers", broker.worker_endpoint, "endpoint workers connect to")
       ->capture_default_str();
   app.add_option("--clients", broker.client_endpoint, "endpoint clients connect to")
@@ -123,10 +126,12 @@ int main(int argc, char** argv) {
                  "write the bound endpoints here (two lines: workers, clients)");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
-  spdlog::set_level(spdlog::level::from_str(log_level));
-  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ master: %v");
+}
 
+/// CURVE on both endpoints with --curve-secret (or a warning for an endpoint beyond loopback
+/// without it); the exit code 2 after saying why it cannot, else 0.
+int ConfigureCurve(Flags& flags) {
+  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
   if (!curve_secret.empty()) {
     if (allow_workers.empty() || allow_clients.empty()) {
       spdlog::critical("--curve-secret needs --allow-workers DIR and --allow-clients DIR (the allowed public keys)");
@@ -147,6 +152,12 @@ int main(int argc, char** argv) {
                      "start with --curve-secret, --allow-workers and --allow-clients (see docs/service.md, Security)",
                      *ep, ep == &broker.worker_endpoint ? "join as a worker and see job specs" : "submit, fetch and cancel jobs");
   }
+  return 0;
+}
+
+/// Serves until SIGINT or SIGTERM; the exit code.
+int Serve(const Flags& flags) {
+  const auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
   std::string lock_error;
   const int lock_fd = LockStateDir(store.state_dir, &lock_error);
   if (lock_fd < 0) {
@@ -178,4 +189,16 @@ int main(int argc, char** argv) {
   jobs.Shutdown();
   ::close(lock_fd);
   return 0;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  Flags flags;
+  CLI::App app{"piezoid-master — holds the GA jobs and shares the workers among them"};
+  AddFlags(app, flags);
+  CLI11_PARSE(app, argc, argv);
+  spdlog::set_level(spdlog::level::from_str(flags.log_level));
+  spdlog::set_pattern("%Y-%m-%dT%H:%M:%S.%e %^%l%$ master: %v");
+  if (const int code = ConfigureCurve(flags); code != 0) return code;
+  return Serve(flags);
 }
