@@ -133,7 +133,9 @@ struct Broker::Impl {
   struct Watcher {
     std::vector<std::string> envelope;
     uint64_t request_id = 0;
+    uint64_t registered = 0;  ///< registration order (the oldest makes room at the maximum)
   };
+  uint64_t next_watcher = 0;
   /// Watchers by job, kept apart from `jobs` (a job's registration by its thread comes after the
   /// Submit reply, and ends before its final event): a Watch sent right after Submit, or a cancel,
   /// loses nothing. A job's watchers are dropped with its final event.
@@ -591,13 +593,18 @@ struct Broker::Impl {
         auto& of_job = watchers[req.job_id];
         std::string key;
         for (const auto& f : envelope) key += f + '\0';
+        // At the maximum, the watcher registered longest ago makes room: a watcher that stopped
+        // reading (or went) cannot shut out a new one, and a live one re-registers after a quiet
+        // spell of its watch (client/service_client.h).
         if (!of_job.count(key) && static_cast<int>(of_job.size()) >= options.max_watchers_per_job) {
-          reply.code = WireCode::kResourceExhausted;
-          reply.error = "job " + req.job_id + " already has " + std::to_string(of_job.size()) +
-                        " watchers (the master's maximum per job); retry when one has gone";
-        } else {
-          of_job[key] = Watcher{envelope, req.request_id};
+          auto oldest = std::min_element(of_job.begin(), of_job.end(), [](const auto& a, const auto& b) {
+            return a.second.registered < b.second.registered;
+          });
+          spdlog::debug("job {}: {} watchers, the maximum; the oldest is dropped", req.job_id, of_job.size());
+          of_job.erase(oldest);
+          ++local.dropped_watchers;
         }
+        of_job[key] = Watcher{envelope, req.request_id, next_watcher++};
       }
     } else if (req.type == ClientRequestMsg::Type::kSubmit &&
                !AdmitSubmission(req, ClientIdentity(last), &reply)) {
@@ -720,7 +727,7 @@ Status Broker::Start(ClientHandler* handler) {
     for (zmq::socket_t* s : {&m.workers, &m.clients}) {
       s->set(zmq::sockopt::linger, 0);
       s->set(zmq::sockopt::maxmsgsize, m.options.max_message_bytes);
-      s->set(zmq::sockopt::sndhwm, 100000);
+      s->set(zmq::sockopt::sndhwm, s == &m.clients ? m.options.client_queue : 100000);
       s->set(zmq::sockopt::rcvhwm, 100000);
       if (m.options.curve) {
         s->set(zmq::sockopt::curve_server, true);

@@ -84,6 +84,11 @@ int main(int argc, char** argv) {
                  "running jobs one client may have (a client = its CURVE key, or its IP address without CURVE)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
+  app.add_option("--client-queue", broker.client_queue,
+                 "messages queued for one client at most; beyond, a client that does not read loses watch "
+                 "events (it re-syncs when it reads again) instead of the master growing")
+      ->check(CLI::Range(16, 1000000))
+      ->capture_default_str();
   auto* secret_opt = app.add_option(
       "--curve-secret", curve_secret,
       "require CURVE on both endpoints with this key pair (NAME.key from `piezoid keygen`, mode 0600)");
