@@ -98,7 +98,15 @@ struct Broker::Impl {
         workers(ctx, zmq::socket_type::router),
         clients(ctx, zmq::socket_type::router),
         liveness(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
-        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {}
+        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {
+    if (!options.allow_mixed_arithmetic && !options.pinned_arithmetic.empty()) Serve(options.pinned_arithmetic);
+  }
+
+  void Serve(const std::string& profile) {
+    arithmetic = profile;
+    std::lock_guard lock(served_mu);
+    served = profile;
+  }
 
   // ---- shared with other threads
   BrokerOptions options;
@@ -152,6 +160,8 @@ struct Broker::Impl {
     std::string arithmetic;
   };
   std::optional<std::string> arithmetic;  // the profile served (the first worker's), unless mixing is allowed
+  mutable std::mutex served_mu;             // the served profile for other threads
+  std::string served;
   std::map<std::string, WorkerMeta> worker_meta;
   std::deque<service::WorkerDepartureView> departed;
   const TimePoint started = Clock::now();
@@ -349,7 +359,8 @@ struct Broker::Impl {
   // departures (the dashboard shows it).
   void RefuseWorker(const std::string& id, const WorkerMsg& m) {
     const std::string theirs = m.arithmetic.empty() ? "(not announced)" : m.arithmetic;
-    const std::string why = "this master's workers compute as '" + *arithmetic + "' and this one as '" + theirs +
+    const std::string pinned = options.pinned_by.empty() ? "" : " (" + options.pinned_by + ")";
+    const std::string why = "this master's workers compute as '" + *arithmetic + "'" + pinned + " and this one as '" + theirs +
                             "': results would differ in their last bits (start the master with "
                             "--allow-mixed-arithmetic to accept both)";
     uint64_t suppressed = 0;
@@ -394,7 +405,7 @@ struct Broker::Impl {
             return;
           }
           if (!arithmetic) {
-            arithmetic = m.arithmetic;
+            Serve(m.arithmetic);
             spdlog::info("serving workers of arithmetic profile '{}'", *arithmetic);
           }
         }
@@ -715,6 +726,11 @@ struct Broker::Impl {
 Broker::Broker(BrokerOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
 
 Broker::~Broker() { Stop(); }
+
+std::string Broker::served_arithmetic() const {
+  std::lock_guard lock(impl_->served_mu);
+  return impl_->served;
+}
 
 Status Broker::Start(ClientHandler* handler) {
   Impl& m = *impl_;

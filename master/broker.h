@@ -52,6 +52,9 @@ struct BrokerOptions {
   /// CODE_INVALID_ARGUMENT), so that no job's results depend on which kind of machine computed
   /// them. True: accept every profile (results bit for bit only among workers of one profile).
   bool allow_mixed_arithmetic = false;
+  /// Serve this profile from the start instead of the first worker's, because of `pinned_by` (a job
+  /// resumed from the state directory was computed on it; master/checkpoint.h PinnedArithmetic).
+  std::string pinned_arithmetic, pinned_by;
   DispatchOptions dispatch;
 };
 
@@ -106,6 +109,9 @@ class Broker {
                                      std::span<const int> indices);
   void Publish(const service::JobEvent& event);
   BrokerStats stats() const;
+  /// The arithmetic profile served ("" until the first worker fixes it, or when mixing is allowed).
+  /// Thread-safe.
+  std::string served_arithmetic() const;
 
  private:
   struct Impl;

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "master/broker.h"
+#include "master/checkpoint.h"
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "master/job_store.h"
@@ -163,6 +164,13 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
 
+  if (!broker.allow_mixed_arithmetic) {
+    if (auto pinned = pz::master::PinnedArithmetic(pz::master::JobDirectory(store.state_dir))) {
+      broker.pinned_arithmetic = pinned->profile;
+      broker.pinned_by = pinned->why;
+      spdlog::info("serving workers of arithmetic profile '{}' ({})", pinned->profile, pinned->why);
+    }
+  }
   pz::master::Broker b(broker);
   pz::master::JobStore jobs(store, b, pz::kinds::All());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {
