@@ -3,6 +3,7 @@
 // (parameters, RMSE / max / NRMSE on train and on withheld records), fit.json, per-record traces
 // (CSV) and figures (time traces, hysteresis loops); for the Prandtl–Ishlinskii family, optionally
 // the analytic inverse as a C header (--export-c).
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -27,6 +28,13 @@
 namespace pz::client {
 namespace fs = std::filesystem;
 namespace {
+
+/// The width of a column of record names: the longest name and two spaces, at least 16.
+int NameColumnWidth(const io::RecordSet& set) {
+  size_t w = 14;
+  for (const io::Record& r : set.records) w = std::max(w, r.name.size());
+  return static_cast<int>(w + 2);
+}
 
 struct FitArgs {
   std::string records;
@@ -211,9 +219,10 @@ int RunFit(const FitArgs& a) {
     io::WriteFileWith(a.export_c, [&](std::ostream& os) { os << model::PiInverseCHeader(op, "pz_pi_inverse", comment); });
     std::cout << "inverse compensator written to " << a.export_c << "\n";
   }
+  const int name_width = NameColumnWidth(set);
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
-    std::cout << "  " << std::left << std::setw(10) << model::CaseRoleName(e.role) << std::setw(16) << e.name
+    std::cout << "  " << std::left << std::setw(10) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
@@ -270,8 +279,9 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
     const io::RecordSet set = io::LoadRecordSet(*path);
     std::cout << set.source.string() << ": " << set.format << ", " << set.records.size() << " record(s), drive in "
               << set.drive_unit << ", response in " << set.response_unit << "\n";
+    const int name_width = NameColumnWidth(set);
     for (const io::Record& r : set.records) {
-      std::cout << "  " << std::left << std::setw(16) << r.name << std::setw(9) << model::CaseRoleName(r.role)
+      std::cout << "  " << std::left << std::setw(name_width) << r.name << std::setw(9) << model::CaseRoleName(r.role)
                 << " " << r.size() << " samples at " << Fmt(r.sample_rate_hz(), 6) << " Hz, scored "
                 << Fmt(r.t[r.first_scored]) << "–" << Fmt(r.t[r.end_scored - 1]) << " s (" << r.scored()
                 << "), rest " << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);

@@ -17,7 +17,7 @@
 #include "service/wire_codec.h"
 
 // Last: <resolv.h>, which httplib.h includes, defines a macro `_res` that Eigen's headers use as a name.
-#include <httplib.h>
+#include "client/http_guard.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -98,7 +98,7 @@ struct Dashboard::Impl {
   explicit Impl(DashboardOptions o) : options(std::move(o)) {}
 
   DashboardOptions options;
-  httplib::Server server;
+  GuardedServer server;  // a slow or half-open client cannot stall the others
   int port = 0;
   std::thread http_thread, poll_thread;
   std::atomic<bool> stop{false};
@@ -383,7 +383,7 @@ Status Dashboard::Start() {
   if (ec) return InvalidArgument("--cache " + impl_->cache_dir.string() + ": " + ec.message());
   impl_->request_client = std::make_unique<ServiceClient>(o.client);
   impl_->Routes();
-  impl_->port = o.port == 0 ? impl_->server.bind_to_any_port(o.host) : (impl_->server.bind_to_port(o.host, o.port) ? o.port : -1);
+  impl_->port = impl_->server.Bind(o.host, o.port);
   if (impl_->port <= 0)
     return Status(StatusCode::kUnavailable, "--listen " + o.host + ":" + std::to_string(o.port) +
                                                 ": cannot listen there (address in use, or not this machine's)");
@@ -409,7 +409,7 @@ void Dashboard::Stop() {
     impl_->stop = true;
   }
   impl_->stop_cv.notify_all();
-  impl_->server.stop();
+  impl_->server.Shutdown();
   if (impl_->http_thread.joinable()) impl_->http_thread.join();
   if (impl_->poll_thread.joinable()) impl_->poll_thread.join();
 }

@@ -97,7 +97,15 @@ struct Broker::Impl {
         workers(ctx, zmq::socket_type::router),
         clients(ctx, zmq::socket_type::router),
         liveness(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
-        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {}
+        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {
+    if (!options.allow_mixed_arithmetic && !options.pinned_arithmetic.empty()) Serve(options.pinned_arithmetic);
+  }
+
+  void Serve(const std::string& profile) {
+    arithmetic = profile;
+    std::lock_guard lock(served_mu);
+    served = profile;
+  }
 
   // ---- shared with other threads
   BrokerOptions options;
@@ -132,7 +140,9 @@ struct Broker::Impl {
   struct Watcher {
     std::vector<std::string> envelope;
     uint64_t request_id = 0;
+    uint64_t registered = 0;  ///< registration order (the oldest makes room at the maximum)
   };
+  uint64_t next_watcher = 0;
   /// Watchers by job, kept apart from `jobs` (a job's registration by its thread comes after the
   /// Submit reply, and ends before its final event): a Watch sent right after Submit, or a cancel,
   /// loses nothing. A job's watchers are dropped with its final event.
@@ -149,6 +159,8 @@ struct Broker::Impl {
     std::string arithmetic;
   };
   std::optional<std::string> arithmetic;  // the profile served (the first worker's), unless mixing is allowed
+  mutable std::mutex served_mu;             // the served profile for other threads
+  std::string served;
   std::map<std::string, WorkerMeta> worker_meta;
   std::deque<service::WorkerDepartureView> departed;
   const TimePoint started = Clock::now();
@@ -346,7 +358,8 @@ struct Broker::Impl {
   // departures (the dashboard shows it).
   void RefuseWorker(const std::string& id, const WorkerMsg& m) {
     const std::string theirs = m.arithmetic.empty() ? "(not announced)" : m.arithmetic;
-    const std::string why = "this master's workers compute as '" + *arithmetic + "' and this one as '" + theirs +
+    const std::string pinned = options.pinned_by.empty() ? "" : " (" + options.pinned_by + ")";
+    const std::string why = "this master's workers compute as '" + *arithmetic + "'" + pinned + " and this one as '" + theirs +
                             "': results would differ in their last bits (start the master with "
                             "--allow-mixed-arithmetic to accept both)";
     uint64_t suppressed = 0;
@@ -391,7 +404,7 @@ struct Broker::Impl {
             return;
           }
           if (!arithmetic) {
-            arithmetic = m.arithmetic;
+            Serve(m.arithmetic);
             spdlog::info("serving workers of arithmetic profile '{}'", *arithmetic);
           }
         }
@@ -590,13 +603,18 @@ struct Broker::Impl {
         auto& of_job = watchers[req.job_id];
         std::string key;
         for (const auto& f : envelope) key += f + '\0';
+        // At the maximum, the watcher registered longest ago makes room: a watcher that stopped
+        // reading (or went) cannot shut out a new one, and a live one re-registers after a quiet
+        // spell of its watch (client/service_client.h).
         if (!of_job.count(key) && static_cast<int>(of_job.size()) >= options.max_watchers_per_job) {
-          reply.code = WireCode::kResourceExhausted;
-          reply.error = "job " + req.job_id + " already has " + std::to_string(of_job.size()) +
-                        " watchers (the master's maximum per job); retry when one has gone";
-        } else {
-          of_job[key] = Watcher{envelope, req.request_id};
+          auto oldest = std::min_element(of_job.begin(), of_job.end(), [](const auto& a, const auto& b) {
+            return a.second.registered < b.second.registered;
+          });
+          spdlog::debug("job {}: {} watchers, the maximum; the oldest is dropped", req.job_id, of_job.size());
+          of_job.erase(oldest);
+          ++local.dropped_watchers;
         }
+        of_job[key] = Watcher{envelope, req.request_id, next_watcher++};
       }
     } else if (req.type == ClientRequestMsg::Type::kSubmit &&
                !AdmitSubmission(req, ClientIdentity(last), &reply)) {
@@ -708,6 +726,11 @@ Broker::Broker(BrokerOptions options) : impl_(std::make_unique<Impl>(std::move(o
 
 Broker::~Broker() { Stop(); }
 
+std::string Broker::served_arithmetic() const {
+  std::lock_guard lock(impl_->served_mu);
+  return impl_->served;
+}
+
 Status Broker::Start(ClientHandler* handler) {
   Impl& m = *impl_;
   m.handler = handler;
@@ -719,7 +742,7 @@ Status Broker::Start(ClientHandler* handler) {
     for (zmq::socket_t* s : {&m.workers, &m.clients}) {
       s->set(zmq::sockopt::linger, 0);
       s->set(zmq::sockopt::maxmsgsize, m.options.max_message_bytes);
-      s->set(zmq::sockopt::sndhwm, 100000);
+      s->set(zmq::sockopt::sndhwm, s == &m.clients ? m.options.client_queue : 100000);
       s->set(zmq::sockopt::rcvhwm, 100000);
       if (m.options.curve) {
         s->set(zmq::sockopt::curve_server, true);

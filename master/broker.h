@@ -40,6 +40,10 @@ struct BrokerOptions {
   int liveness = 6;                        ///< missed intervals before a worker is dead
   int64_t max_message_bytes = 64 << 20;    ///< larger frames are refused
   int max_watchers_per_job = 64;
+  /// Messages the client socket queues per client at most (ZeroMQ's send high-water mark): a client
+  /// that stops reading loses its watch events beyond this, and the master's memory stays bounded
+  /// (≈ client_queue × event size × watchers). Workers keep their own, larger queue.
+  int client_queue = 1000;
   int64_t max_spec_bytes = 16 << 20;       ///< serialised job spec (with its data) at most
   int max_jobs_per_client = 16;            ///< running jobs submitted by one client identity
   std::optional<service::CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
@@ -48,6 +52,9 @@ struct BrokerOptions {
   /// CODE_INVALID_ARGUMENT), so that no job's results depend on which kind of machine computed
   /// them. True: accept every profile (results bit for bit only among workers of one profile).
   bool allow_mixed_arithmetic = false;
+  /// Serve this profile from the start instead of the first worker's, because of `pinned_by` (a job
+  /// resumed from the state directory was computed on it; master/checkpoint.h PinnedArithmetic).
+  std::string pinned_arithmetic, pinned_by;
   DispatchOptions dispatch;
 };
 
@@ -74,6 +81,7 @@ struct BrokerStats {
   uint64_t leases_sent = 0, results_accepted = 0, results_ignored = 0, bad_frames = 0;
   uint64_t tasks_done = 0;
   uint64_t refused_submissions = 0;  ///< spec too large or too many jobs of a client
+  uint64_t dropped_watchers = 0;     ///< the oldest watcher of a job at the maximum, for a new one
 };
 
 class Broker {
@@ -101,6 +109,9 @@ class Broker {
                                      std::span<const int> indices);
   void Publish(const service::JobEvent& event);
   BrokerStats stats() const;
+  /// The arithmetic profile served ("" until the first worker fixes it, or when mixing is allowed).
+  /// Thread-safe.
+  std::string served_arithmetic() const;
 
  private:
   struct Impl;

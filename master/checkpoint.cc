@@ -181,4 +181,14 @@ Status JobDirectory::Remove(const std::string& job_id) const {
   return Status::Ok();
 }
 
+std::optional<PinnedProfile> PinnedArithmetic(const JobDirectory& dir) {
+  for (const std::string& id : dir.List()) {
+    service::JobCheckpoint c;
+    std::string notice;
+    if (!dir.LoadCheckpoint(id, &c, &notice).ok() || service::IsFinal(c.state) || c.arithmetic.empty()) continue;
+    return PinnedProfile{c.arithmetic, "fixed by job " + id + ", computed on it before this master started"};
+  }
+  return std::nullopt;
+}
+
 }  // namespace pz::master

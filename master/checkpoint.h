@@ -13,6 +13,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -56,5 +57,15 @@ class JobDirectory {
  private:
   std::filesystem::path root_;
 };
+
+/// The arithmetic profile a master must serve on this state directory: the one recorded in the
+/// checkpoint of a job that has not ended (the first such job by id), with a sentence naming that
+/// job for the refusal of other workers; nullopt when no running job recorded one. A job computed
+/// on one profile continues on it after a restart, whichever worker reaches the new master first.
+struct PinnedProfile {
+  std::string profile, why;
+};
+std::optional<PinnedProfile> PinnedArithmetic(const JobDirectory& dir);
+
 
 }  // namespace pz::master

@@ -94,6 +94,12 @@ Status JobStore::Resume() {
       job->checkpoint = JobCheckpoint{};
       job->checkpoint.job_id = id;
     }
+    job->arithmetic = job->checkpoint.arithmetic;
+    const std::string served = broker_.served_arithmetic();
+    if (!IsFinal(job->checkpoint.state) && !job->arithmetic.empty() && !served.empty() && served != job->arithmetic)
+      notice += std::string(notice.empty() ? "" : "; ") + "computed on arithmetic '" + job->arithmetic +
+                "' and resumed on '" + served + "' (another job running on this state directory fixed it): " +
+                "its results may differ in their last bits from an uninterrupted run";
     if (!notice.empty()) {
       job->notice = notice;
       spdlog::warn("job {}: {}", id, notice);
@@ -210,7 +216,14 @@ void JobStore::PublishFinal(Job& job, const JobCheckpoint& c, JobState state, co
   broker_.Publish(e);
 }
 
-void JobStore::Save(Job& job, const JobCheckpoint& c, bool write, bool durable) {
+void JobStore::Save(Job& job, const JobCheckpoint& checkpoint, bool write, bool durable) {
+  // Stamped with the profile of the workers that computed it, from its first generation on.
+  JobCheckpoint c = checkpoint;
+  {
+    std::lock_guard lock(job.mu);
+    if (job.arithmetic.empty() && !c.log.empty()) job.arithmetic = broker_.served_arithmetic();
+    c.arithmetic = job.arithmetic;
+  }
   Status s;
   if (write) s = dir_.SaveCheckpoint(c, durable);
   std::lock_guard lock(job.mu);

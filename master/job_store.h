@@ -55,6 +55,7 @@ class JobStore final : public ClientHandler {
     std::thread thread;
     std::shared_ptr<Session> session;  // external jobs (evaluation sessions) only
     std::string notice;                 // what loading it repaired (JobInfo.notice)
+    std::string arithmetic;             // under mu: the profile that computed it (stamped on its checkpoints)
     std::string storage_error;          // under mu: the last checkpoint write failed (JobInfo)
     double storage_error_since = 0;     // under mu: since when [unix s]
     double ended_unix_s = 0;            // under mu: when it ended (0 while running)

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "master/broker.h"
+#include "master/checkpoint.h"
 #include "complete/job_kind.h"
 #include "diagnose/job_kind.h"
 #include "master/job_store.h"
@@ -86,6 +87,11 @@ void AddFlags(CLI::App& app, Flags& flags) {
   app.add_option("--max-jobs-per-client", broker.max_jobs_per_client,
                  "running jobs one client may have (a client = its CURVE key, or its IP address without CURVE)")
       ->check(CLI::Range(1, 1000000))
+      ->capture_default_str();
+  app.add_option("--client-queue", broker.client_queue,
+                 "messages queued for one client at most; beyond, a client that does not read loses watch "
+                 "events (it re-syncs when it reads again) instead of the master growing")
+      ->check(CLI::Range(16, 1000000))
       ->capture_default_str();
   auto* secret_opt = app.add_option(
       "--curve-secret", curve_secret,
@@ -169,6 +175,13 @@ int Serve(const Flags& flags) {
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
 
+  if (!broker.allow_mixed_arithmetic) {
+    if (auto pinned = pz::master::PinnedArithmetic(pz::master::JobDirectory(store.state_dir))) {
+      broker.pinned_arithmetic = pinned->profile;
+      broker.pinned_by = pinned->why;
+      spdlog::info("serving workers of arithmetic profile '{}' ({})", pinned->profile, pinned->why);
+    }
+  }
   pz::master::Broker b(broker);
   pz::master::JobStore jobs(store, b, pz::kinds::All());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {

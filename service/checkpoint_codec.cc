@@ -34,6 +34,7 @@ std::string EncodeCheckpoint(const JobCheckpoint& c) {
   p.set_message(c.message);
   for (const auto& q : c.quarantined) ToProto(q, p.add_quarantined());
   p.set_elapsed_s(c.elapsed_s);
+  p.set_arithmetic(c.arithmetic);
   return Deterministic(p);
 }
 
@@ -77,6 +78,7 @@ Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c) {
   c->message = p.message();
   for (const auto& q : p.quarantined()) c->quarantined.push_back(FromProto(q));
   c->elapsed_s = p.elapsed_s();
+  c->arithmetic = p.arithmetic();
   return Status::Ok();
 }
 

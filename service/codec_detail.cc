@@ -3,6 +3,7 @@
 
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+#include <google/protobuf/stubs/logging.h>
 
 #include <cmath>
 #include <cstdio>
@@ -25,6 +26,10 @@ std::string Deterministic(const google::protobuf::MessageLite& msg) {
 
 bool Parse(std::string_view bytes, google::protobuf::MessageLite* msg) {
   if (bytes.size() > static_cast<size_t>(INT32_MAX)) return false;
+  // The callers say what is wrong with bytes that do not decode; protobuf's own log lines ("String
+  // field … contains invalid UTF-8 data", when a damaged checkpoint is tried as a bare one or a peer
+  // sends garbage) would only repeat it on stderr, once per frame a peer chooses to send.
+  google::protobuf::LogSilencer quiet;
   return msg->ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
 }
 

@@ -212,6 +212,7 @@ struct JobCheckpoint {
   std::string message;
   std::vector<QuarantineRecord> quarantined;
   double elapsed_s = 0;
+  std::string arithmetic;  ///< the profile of the workers that computed it ("" = none recorded)
 };
 
 }  // namespace pz::service

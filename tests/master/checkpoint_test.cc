@@ -91,6 +91,7 @@ TEST_F(CheckpointFiles, AFlippedBitAnywhereFallsBackToThePreviousOne) {
   const std::string good = Read(JobDirectory::kCheckpointFile);
   ASSERT_GT(good.size(), 100u);
   int tried = 0;
+  ::testing::internal::CaptureStderr();  // the fallback says why; protobuf adds nothing of its own
   for (size_t pos = 0; pos < good.size(); pos += std::max<size_t>(1, good.size() / 97)) {
     for (int bit : {0, 5}) {
       std::string bad = good;
@@ -106,6 +107,9 @@ TEST_F(CheckpointFiles, AFlippedBitAnywhereFallsBackToThePreviousOne) {
       ++tried;
     }
   }
+  const std::string logged = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(logged.find("invalid UTF-8"), std::string::npos) << logged;
+  EXPECT_EQ(logged.find("[libprotobuf"), std::string::npos) << logged;
   EXPECT_GT(tried, 150);
 }
 

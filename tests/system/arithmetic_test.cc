@@ -2,7 +2,8 @@
 // C library): workers of two kinds of machine would give a job results that differ in their last
 // bits depending on which computed what. The first worker fixes the profile; a worker announcing
 // another is refused with the reason, exits instead of retrying, and shows among the departures.
-// --allow-mixed-arithmetic accepts both.
+// --allow-mixed-arithmetic accepts both. A job records the profile that computed it, and a master
+// restarted on its state directory serves that profile while the job runs.
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <set>
 #include <sstream>
 
+#include "master/checkpoint.h"
 #include "model/arithmetic.h"
 #include "tests/system/service_harness.h"
 
@@ -70,6 +72,46 @@ TEST(Arithmetic, TheFirstWorkerFixesTheProfileServed) {
   EXPECT_EQ(w.workers.size(), 1u);
   for (int i = 0; i < 200 && native.running(); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_FALSE(native.running());
+}
+
+TEST(Arithmetic, AJobResumedByARestartedMasterContinuesOnTheProfileItWasComputedOn) {
+  Cluster c("arith-resume");
+  c.AddWorker(1, {"--arithmetic", kOther});
+  client::SubmitResult r;
+  {
+    auto client = c.Client(4000, 5);
+    ASSERT_TRUE(client.Submit(SyntheticSpec(31, 20, 400, 2), &r).ok());
+    service::JobInfo info;
+    for (int i = 0; i < 400 && info.generation < 3; ++i) {
+      ASSERT_TRUE(client.GetStatus(r.job_id, &info).ok());
+      std::this_thread::sleep_for(25ms);
+    }
+    ASSERT_GE(info.generation, 3u);
+  }
+  c.KillMaster(SIGKILL);
+  service::JobCheckpoint stored;
+  std::string notice;
+  ASSERT_TRUE(master::JobDirectory(c.dir() / "state").LoadCheckpoint(r.job_id, &stored, &notice).ok()) << notice;
+  EXPECT_EQ(stored.arithmetic, kOther) << "the checkpoint records the profile that computed the job";
+
+  // The restarted master serves the job's profile before any worker arrives: a worker of this
+  // machine's profile is refused even if it is the first to reconnect.
+  ASSERT_TRUE(c.StartMaster());
+  Process& native = c.AddWorker(1);
+  auto client = c.Client(4000, 5);
+  service::WorkersSnapshot w;
+  ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty() && s.workers.size() == 1; }));
+  EXPECT_NE(w.departed.back().reason.find(model::ArithmeticProfile()), std::string::npos) << w.departed.back().reason;
+  EXPECT_EQ(w.workers[0].arithmetic, kOther);
+  for (int i = 0; i < 200 && native.running(); ++i) std::this_thread::sleep_for(50ms);
+  EXPECT_FALSE(native.running());
+  const std::string log = Slurp(c.dir() / "workers.log");
+  EXPECT_NE(log.find("fixed by job " + r.job_id), std::string::npos) << "the refusal names the job:\n" << log;
+
+  service::JobInfo info;
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 60s, &info).ok());
+  EXPECT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  EXPECT_EQ(info.notice.find("resumed on"), std::string::npos) << info.notice;
 }
 
 TEST(Arithmetic, AllowMixedArithmeticServesBothProfiles) {

@@ -181,6 +181,7 @@ class Cluster {
     return false;
   }
   void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
+  pid_t master_pid() const { return master_->pid(); }
   Process& AddWorker(int threads, const std::vector<std::string>& extra = {}) {
     std::vector<std::string> args{"--master", worker_ep_, "--threads", std::to_string(threads),
                                   "--heartbeat-ms", "100", "--liveness", "5", "--backoff-max-ms",
