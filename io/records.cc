@@ -268,12 +268,12 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   csv.RequireColumns({"record", "file", "role"});
   csv.RequireRows();
   static const std::vector<std::string> kKnown = {"record", "file", "role", "t_start_s", "t_end_s", "offset",
-                                                  "time_column", "drive_column", "response_column",
+                                                  "frequency_Hz", "time_column", "drive_column", "response_column",
                                                   "time_unit", "drive_unit", "response_unit"};
   for (size_t c = 0; c < csv.header.size(); ++c) {
     if (std::find(kKnown.begin(), kKnown.end(), csv.header[c]) == kKnown.end()) {
       throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" + csv.header[c] +
-                       "' (columns: record, file, role, t_start_s, t_end_s, offset, time_column, drive_column, "
+                       "' (columns: record, file, role, t_start_s, t_end_s, offset, frequency_Hz, time_column, drive_column, "
                        "response_column, time_unit, drive_unit, response_unit)");
     }
   }
@@ -322,6 +322,12 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
       SetWindow(r, t0.value_or(r.t.front()), t1.value_or(r.t.back()), opt.min_scored,
                 csv.source + ":" + std::to_string(csv.rows[i].line) + ": record '" + name + "' window");
     }
+    if (const auto f = OptionalNumber(csv, i, "frequency_Hz")) {
+      if (!(std::isfinite(*f) && *f > 0))
+        throw InputError(csv.Where(i, *csv.FindColumn("frequency_Hz")) + ": frequency " +
+                         csv.Field(i, *csv.FindColumn("frequency_Hz")) + " Hz must be finite and > 0");
+      r.frequency_hz = *f;
+    }
     const std::string off = OptionalField(csv, i, "offset");
     if (off.empty() || off == "fit") {
       r.offset_mode = OffsetMode::kFit;
@@ -346,7 +352,7 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
 
 RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
   StackReadOptions so;
-  so.check_voltage = false;  // the drive is the measured samples
+  so.check_voltage = opt.check_stated_drive;  // else the drive is the measured samples
   const StackRecordSet s = LoadStackRecordSet(dir, so);
   RecordSet set;
   set.source = dir;
@@ -365,6 +371,7 @@ RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
     Record r = MakeRecord(d, "record" + std::to_string(sr.number), sr.role, sr.file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
+    r.frequency_hz = sr.frequency_hz;
     FinishRecord(r, opt);
     set.records.push_back(std::move(r));
   }
@@ -391,6 +398,7 @@ RecordSet FromFinBench(const fs::path& dir, const RecordReadOptions& opt) {
     Record r = MakeRecord(d, "case" + std::to_string(c.number), c.role, c.file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
+    r.frequency_hz = c.frequency_hz;
     FinishRecord(r, opt);
     set.records.push_back(std::move(r));
   }
@@ -505,13 +513,13 @@ RecordSet LoadRecordSet(const fs::path& path, const RecordReadOptions& opt) {
 void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
   fs::create_directories(dir);
   WriteFileWith(dir / "manifest.csv", [&](std::ostream& m) {
-    m << "record,file,role,t_start_s,t_end_s,offset,drive_column,response_column\n";
+    m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,drive_column,response_column\n";
     for (const Record& r : set.records) {
       const std::string file = r.name + ".csv";
       m << r.name << "," << file << "," << model::CaseRoleName(r.role) << "," << FormatNumber(r.t[r.first_scored])
         << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
-        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode))
-        << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
+        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode)) << ","
+        << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
       WriteFileWith(dir / file, [&](std::ostream& f) {
         f << "t_s,drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
         for (size_t i = 0; i < r.size(); ++i)
