@@ -9,7 +9,6 @@
 
 #include "io/bench_data.h"
 #include "io/csv.h"
-#include "io/stack_records.h"
 #include "model/noise_floor.h"
 #include "model/status.h"
 
@@ -350,30 +349,85 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   return set;
 }
 
+// The stack bench's drive as its manifest states it, offset + A sin(2π f t): checked on request
+// within 1e-4 of |offset| + A plus 1 mV.
+void CheckStatedDrive(const CsvTable& csv, int cu, const Record& r, double offset, double amplitude,
+                      const std::string& ctx) {
+  const double vtol = 1e-4 * (std::abs(offset) + amplitude) + 1e-3;
+  for (size_t k = 0; k < r.u.size(); ++k) {
+    const double want = offset + amplitude * std::sin(2 * std::numbers::pi * r.frequency_hz * r.t[k]);
+    if (!(std::abs(r.u[k] - want) <= vtol))
+      throw InputError(csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) + " V is not offset + A sin(2 pi f t) = " +
+                       FormatNumber(want) + " V (offset = " + FormatNumber(offset) + " V, A = " +
+                       FormatNumber(amplitude) + " V, f = " + FormatNumber(r.frequency_hz) + " Hz, t = " +
+                       FormatNumber(r.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)" + ctx);
+  }
+}
+
+// The stack bench of `piezoid committee` (data/piezo-stack-bench/): records.csv (record,
+// frequency_Hz, offset_V, amplitude_V, file, role; roles train / test) and one CSV per record
+// (t_s, voltage_V, displacement_um) starting at t = 0 on a uniform grid (the sample rate is
+// inferred from the first step, within 1e-6); drive u = offset + A sin(2π f t) from rest at the
+// offset; offset 0.
 RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
-  StackReadOptions so;
-  so.check_voltage = opt.check_stated_drive;  // else the drive is the measured samples
-  const StackRecordSet s = LoadStackRecordSet(dir, so);
+  const fs::path manifest = dir / "records.csv";
+  const CsvTable csv = ReadCsvFile(manifest);
+  csv.RequireColumns({"record", "frequency_Hz", "offset_V", "amplitude_V", "file", "role"});
+  csv.RequireRows();
+  const int cr = csv.RequireColumn("record"), cf = csv.RequireColumn("frequency_Hz"),
+            co = csv.RequireColumn("offset_V"), ca = csv.RequireColumn("amplitude_V"),
+            cfile = csv.RequireColumn("file"), crole = csv.RequireColumn("role");
   RecordSet set;
   set.source = dir;
   set.format = "stack-bench";
-  for (const StackRecord& sr : s.records) {
+  std::vector<std::pair<long, int>> seen;  // (record number, manifest line)
+  for (size_t row = 0; row < csv.rows.size(); ++row) {
+    const long number = csv.Integer(row, cr);
+    if (number <= 0 || number > 1000000)
+      throw InputError(csv.Where(row, cr) + ": record number " + csv.Field(row, cr) + " must be a positive integer");
+    for (const auto& [n, line] : seen)
+      if (n == number)
+        throw InputError(csv.Where(row, cr) + ": duplicate record " + std::to_string(number) + " (first on line " +
+                         std::to_string(line) + ")");
+    const double f = csv.Number(row, cf);
+    if (!(f > 0)) throw InputError(csv.Where(row, cf) + ": frequency " + csv.Field(row, cf) + " Hz must be > 0");
+    const double offset = csv.Number(row, co), amplitude = csv.Number(row, ca);
+    if (amplitude < 0)
+      throw InputError(csv.Where(row, ca) + ": amplitude " + csv.Field(row, ca) + " V must be >= 0");
+    const std::string& role_name = csv.Field(row, crole);
+    if (role_name != "train" && role_name != "test")
+      throw InputError(csv.Where(row, crole) + ": unknown role '" + role_name + "' (expected train or test)");
+    const std::string& name = csv.Field(row, cfile);
+    if (name.empty()) throw InputError(csv.Where(row, cfile) + ": empty file name");
+    const fs::path file = dir / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec))
+      throw InputError(csv.Where(row, cfile) + ": record file '" + name + "' not found (" + file.string() + ")");
+    const std::string ctx = " (record " + std::to_string(number) + " of " + manifest.string() + " line " +
+                            std::to_string(csv.rows[row].line) + ")";
+    const CsvTable data = ReadCsvFile(file);
+    SampledColumns cols = ReadSampledColumns(data, "displacement_um", "record", 1e-6,
+                                             "a record starts at t = 0 (from rest at the offset)", ctx);
     FileData d;
-    d.t = sr.t;
-    d.u = sr.u;
-    d.y = sr.y;
-    d.dt = sr.dt();
+    d.t = std::move(cols.t);
+    d.u = std::move(cols.u);
+    d.y = std::move(cols.y);
+    d.dt = 1.0 / cols.sample_rate_hz;
     double umax = 0;
     for (double v : d.u) umax = std::max(umax, std::abs(v));
     d.rest = 1;
     while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= opt.rest_tolerance * umax + 1e-12) ++d.rest;
     d.quantum = model::EstimateQuantum(d.y);
-    Record r = MakeRecord(d, "record" + std::to_string(sr.number), sr.role, sr.file);
+    Record r = MakeRecord(d, "record" + std::to_string(number), role_name == "train" ? CaseRole::kTrain : CaseRole::kTest,
+                          file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
-    r.frequency_hz = sr.frequency_hz;
+    r.frequency_hz = f;
+    r.manifest_line = csv.rows[row].line;
+    if (opt.check_stated_drive) CheckStatedDrive(data, cols.u_column, r, offset, amplitude, ctx);
     FinishRecord(r, opt);
     set.records.push_back(std::move(r));
+    seen.emplace_back(number, csv.rows[row].line);
   }
   return set;
 }

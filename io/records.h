@@ -32,9 +32,11 @@
 // one) is detected and reported.
 //
 // Also read (converted on load, with their own checks): the stack bench folder of
-// `piezoid committee` (records.csv, io/stack_records.h; roles train/test, offset 0), the bimorph-fin
-// bench folder (cases.csv, io/bench_data.h; offset 0), and a single CSV file (one record, role
-// train; windows are given by the command line, see SplitIntoWindows).
+// `piezoid committee` (records.csv: record, frequency_Hz, offset_V, amplitude_V, file, role; roles
+// train/test, records named record<N>, offset 0, the stated frequency kept; the drive checked
+// against offset + A sin(2π f t) on request), the bimorph-fin bench folder (cases.csv,
+// io/bench_data.h; offset 0), and a single CSV file (one record, role train; windows are given by
+// the command line, see SplitIntoWindows).
 //
 // Every error is a pz::InputError that names the file, the line and the column, or the record.
 #pragma once
