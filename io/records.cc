@@ -145,6 +145,17 @@ CsvTable ReadRecordCsv(const fs::path& file) {
   return ParseCsv(text, file.string());
 }
 
+// The rest segment (the leading samples whose drive equals the first one, within the tolerance)
+// and the response's quantum of a file's samples.
+void FinishFileData(FileData& d, const RecordReadOptions& opt) {
+  double umax = 0;
+  for (double v : d.u) umax = std::max(umax, std::abs(v));
+  const double tol = opt.rest_tolerance * umax + 1e-12;
+  d.rest = 1;
+  while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
+  d.quantum = model::EstimateQuantum(d.y);
+}
+
 FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const RecordReadOptions& opt,
                         const std::string& where_declared) {
   const CsvTable csv = ReadRecordCsv(file);
@@ -190,12 +201,7 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
                        " % (the samples must be uniform: resample the record, or a gap is missing)");
     }
   }
-  double umax = 0;
-  for (double v : d.u) umax = std::max(umax, std::abs(v));
-  const double tol = opt.rest_tolerance * umax + 1e-12;
-  d.rest = 1;
-  while (d.rest < n && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
-  d.quantum = model::EstimateQuantum(d.y);
+  FinishFileData(d, opt);
   return d;
 }
 
@@ -413,11 +419,7 @@ RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
     d.u = std::move(cols.u);
     d.y = std::move(cols.y);
     d.dt = 1.0 / cols.sample_rate_hz;
-    double umax = 0;
-    for (double v : d.u) umax = std::max(umax, std::abs(v));
-    d.rest = 1;
-    while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= opt.rest_tolerance * umax + 1e-12) ++d.rest;
-    d.quantum = model::EstimateQuantum(d.y);
+    FinishFileData(d, opt);
     Record r = MakeRecord(d, "record" + std::to_string(number), role_name == "train" ? CaseRole::kTrain : CaseRole::kTest,
                           file);
     r.offset_mode = OffsetMode::kFixed;
