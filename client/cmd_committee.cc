@@ -1,5 +1,6 @@
-// `piezoid committee`: the committee machine of seed 002 on a stack record set (default: the
-// bundled data/piezo-stack-bench): complete models and per-band sub-models of each family by each
+// `piezoid committee`: the committee machine of seed 002 on a record set whose records state their
+// excitation frequency (default: the bundled stack bench data/piezo-stack-bench; any records/
+// families.h family): complete models and per-band sub-models of each family by each
 // optimiser, selection per band, the committee against the best complete model; writes report.md,
 // committee.json and loop figures (complete/committee.h, client/committee_report.h).
 #include <filesystem>
@@ -25,7 +26,7 @@ struct CommitteeArgs {
   std::string records = std::string(PIEZOID_DATA_DIR) + "/piezo-stack-bench";
   std::string out = "committee-out";
   std::string bands = "0,50,150,250,350";
-  std::vector<std::string> families{"bouc-wen", "backlash-like"};
+  std::vector<std::string> families{"stack-bouc-wen", "backlash-like"};
   std::vector<std::string> optimisers{"pso", "ga-real"};
   std::string criterion = "iae";
   double t0 = 0.5, t1 = 2.5;
@@ -41,23 +42,20 @@ struct CommitteeArgs {
 int RunCommitteeCommand(const CommitteeArgs& a) {
   CommitteeOptions o;
   o.bands = FrequencyBands::Parse(a.bands);
-  o.families.clear();
-  for (const std::string& f : a.families) {
-    const auto fam = model::ParseStackFamily(f);
-    if (!fam) throw InputError("--families: unknown family '" + f + "' (bouc-wen, backlash-like)");
-    o.families.push_back(*fam);
-  }
+  o.families = a.families;
   o.algorithms.clear();
   for (const std::string& s : a.optimisers) o.algorithms.push_back(opt::ParseSearchAlgorithm(s));
-  o.criterion = ParseFitCriterion(a.criterion);
+  o.criterion = records::ParseCriterion(a.criterion);
   o.t0_s = a.t0;
   o.t1_s = a.t1;
-  o.sim.substeps = a.substeps;
+  o.family_options.substeps = a.substeps;
   o.averaging = a.averaging;
   ApplySearchFlags(a.search, &o.search);
   ThrowIfError(o.Validate());
 
-  const io::StackRecordSet set = io::LoadStackRecordSet(a.records);
+  io::RecordReadOptions ro;
+  ro.check_stated_drive = true;
+  const io::RecordSet set = io::LoadRecordSet(a.records, ro);
   std::cout << "piezoid committee: " << set.records.size() << " records from " << a.records << ", "
             << o.bands.size() << " bands, " << o.families.size() << " famil"
             << (o.families.size() == 1 ? "y" : "ies") << " x " << o.algorithms.size()
@@ -65,7 +63,8 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   CommitteeLog log;
   if (!a.quiet) log = [](const std::string& line) { std::cout << "  " << line << std::endl; };
   const EvaluatorFactory factory =
-      a.service.enabled() ? CommitteeServiceFactory(a.service.Options()) : LocalEvaluatorFactory(a.threads);
+      a.service.enabled() ? CommitteeServiceFactory(a.service.Options(), o.family_options)
+                           : LocalEvaluatorFactory(a.threads);
   CommitteeResult r;
   try {
     r = RunCommittee(set, o, factory, log);
@@ -77,11 +76,11 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   namespace fs = std::filesystem;
   fs::create_directories(a.out);
   io::WriteFileWith(fs::path(a.out) / "report.md",
-                    [&](std::ostream& os) { WriteCommitteeReport(os, r, set); });
+                    [&](std::ostream& os) { WriteCommitteeReport(os, r); });
   io::WriteFileWith(fs::path(a.out) / "committee.json",
-                    [&](std::ostream& os) { os << CommitteeJson(r, set); });
+                    [&](std::ostream& os) { os << CommitteeJson(r); });
   std::vector<std::string> warnings;
-  if (!a.no_figures) WriteCommitteeFigures((fs::path(a.out) / "figures").string(), r, set, &warnings);
+  if (!a.no_figures) WriteCommitteeFigures((fs::path(a.out) / "figures").string(), r, &warnings);
   for (const auto& w : warnings) std::cerr << "piezoid committee: warning: " << w << "\n";
 
   std::cout << "committee test RMSE " << r.committee_test.rmse << " um, max error "
@@ -102,11 +101,14 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<CommitteeArgs>();
   CLI::App* cmd = app.add_subcommand(
       "committee",
-      "Committee machine (seed 002): identify the stack Bouc-Wen and backlash-like models by PSO and "
-      "GA on all training records (complete) and per frequency band, select a sub-model per band by "
+      "Committee machine (seed 002): identify model families (default the stack Bouc-Wen and "
+      "backlash-like models; any records family) by PSO and GA on all training records (complete) and "
+      "per frequency band, select a sub-model per band by "
       "A = (RMSE_train + RMSE_test)/2, and compare the committee with the best complete model on the "
       "test records; writes report.md, committee.json and loop figures.");
-  cmd->add_option("--records", a->records, "record set folder (records.csv + one CSV per record)")
+  cmd->add_option("--records", a->records,
+                  "record set whose records state their excitation frequency: a stack bench folder (records.csv), "
+                  "a fin bench (cases.csv) or a manifest.csv with a frequency_Hz column")
       ->type_name("DIR")
       ->default_str("data/piezo-stack-bench");
   cmd->add_option("--out", a->out, "output folder")->type_name("DIR")->default_str("committee-out");
@@ -114,21 +116,25 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
                   "band edges in Hz ('0,50,150,250,350') or ranges ('0-50,50-150,…'); a record "
                   "belongs to [lo, hi), the last band closed")
       ->default_str("0,50,150,250,350");
-  cmd->add_option("--families", a->families, "model families: bouc-wen, backlash-like")
+  std::string families;
+  for (const std::string& f : records::FamilyNames()) families += (families.empty() ? "" : ", ") + f;
+  cmd->add_option("--families", a->families, "model families, any of `piezoid fit`'s: " + families)
       ->delimiter(',')
-      ->default_str("bouc-wen,backlash-like");
+      ->default_str("stack-bouc-wen,backlash-like");
   cmd->add_option("--optimisers", a->optimisers, "optimisers: pso, ga-real, ga-binary")
       ->delimiter(',')
       ->default_str("pso,ga-real");
-  cmd->add_option("--criterion", a->criterion, "identification criterion: iae, sse, rmse (each summed "
-                                               "over the training records) or max (the largest over them)")
+  cmd->add_option("--criterion", a->criterion, "identification criterion over the window: iae, sse, rmse (each "
+                                               "summed over the training records), max (the largest over them) or "
+                                               "mse (pooled)")
       ->default_str("iae");
   cmd->add_option("--t0", a->t0, "criterion window start [s]")->default_str("0.5");
   cmd->add_option("--t1", a->t1, "criterion window end [s] (clipped to each record's end)")
       ->default_str("2.5");
   AddSearchFlags(cmd, &a->search);
   cmd->add_option("--substeps", a->substeps,
-                  "Bouc-Wen driver-filter sub-steps per sample interval (1 … 1024)")
+                  "sub-steps per sample interval of the families that take them (stack Bouc-Wen driver filter, "
+                  "Duhem; oscillator RK4 steps x2), 1 … 512")
       ->default_str("2");
   cmd->add_option("--threads", a->threads, "evaluation threads (0: all cores; 1: inline)")
       ->default_str("0");

@@ -9,11 +9,9 @@
 #include "client/json_values.h"
 #include "client/plots.h"
 #include "io/csv.h"
-#include "model/criteria.h"
 
 namespace pz::client {
 using namespace complete;  // the committee's types and figures formatting
-using model::StackFamily;
 
 // ---- Report --------------------------------------------------------------------------------
 
@@ -41,8 +39,14 @@ void BandTable(std::ostream& o, const std::string& title, const FrequencyBands& 
 }
 
 void ParamTable(std::ostream& o, const std::vector<const IdentifiedModel*>& models,
-                const FrequencyBands& bands, StackFamily family) {
-  const auto names = model::StackParamNames(family);
+                const FrequencyBands& bands, const std::string& family) {
+  std::vector<std::string> names;
+  for (const IdentifiedModel* m : models)
+    if (m->family == family) {
+      for (const auto& p : m->model->params()) names.push_back(p.name);
+      for (const auto& w : m->model->family().weight_names()) names.push_back(w);
+      break;
+    }
   o << "| scope | optimiser |";
   for (const auto& n : names) o << " " << n << " |";
   o << " best cost | evaluations | wall [s] | evaluations/s | stop (best repetition) |\n|---|---|";
@@ -53,6 +57,7 @@ void ParamTable(std::ostream& o, const std::vector<const IdentifiedModel*>& mode
     o << "| " << (m->band < 0 ? std::string("complete") : bands.Label(m->band)) << " | "
       << opt::SearchAlgorithmName(m->algorithm) << " |";
     for (double p : m->params) o << " " << FormatFigure(p, 4) << " |";
+    for (double w : m->weights) o << " " << FormatFigure(w, 4) << " |";
     o << " " << FormatFigure(m->search.best_cost, 4) << " | " << m->search.evaluations << " | "
       << FormatFigure(m->search.wall_time_s) << " | "
       << FormatFigure(m->search.evaluations / std::max(m->search.wall_time_s, 1e-9)) << " | "
@@ -92,16 +97,16 @@ void MetricTables(std::ostream& o, const std::string& prefix, const FrequencyBan
 
 }  // namespace
 
-void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
-                          const io::StackRecordSet& set) {
+void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
+  const io::RecordSet& set = r.set;
   const CommitteeOptions& opt = r.options;
   const FrequencyBands& bands = opt.bands;
   const int nb = bands.size();
-  o << "# Committee machine on " << set.dir.filename().string() << "\n\n";
-  o << "Records: " << set.records.size() << " (" << set.WithRole(io::CaseRole::kTrain).size()
-    << " training, " << set.WithRole(io::CaseRole::kTest).size() << " testing). Bands:";
+  o << "# Committee machine on " << set.source.filename().string() << "\n\n";
+  o << "Records: " << set.records.size() << " (" << set.WithRole(model::CaseRole::kTrain).size()
+    << " training, " << set.WithRole(model::CaseRole::kTest).size() << " testing). Bands:";
   for (int b = 0; b < nb; ++b) o << " " << bands.Label(b) << (b + 1 < nb ? "," : ".");
-  o << " Criterion " << FitCriterionName(opt.criterion) << " over t ∈ [" << opt.t0_s << ", "
+  o << " Criterion " << records::CriterionName(opt.criterion) << " over t ∈ [" << opt.t0_s << ", "
     << opt.t1_s << "] s (clipped to each record's last sample), summed over the training records. "
     << opt.search.repetitions << " repetitions per search (seeds " << opt.search.pso.seed
     << ", … for PSO; " << opt.search.ga_real.seed << ", … for the real GA), best kept. PSO "
@@ -111,7 +116,7 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
     << " generations (stall " << opt.search.ga_real.stall_generations << "); binary GA "
     << opt.search.ga_binary.ga.population_size << " × " << opt.search.ga_binary.ga.max_generations
     << ", " << opt.search.ga_binary.bits_per_parameter << " bits/parameter. Bouc–Wen filter "
-    << opt.sim.substeps << " sub-step(s) per sample. " << r.threads << " evaluation thread(s).\n\n";
+    << opt.family_options.substeps << " sub-step(s) per sample. " << r.threads << " evaluation thread(s).\n\n";
   o << "Selection per band: A = ½ (RMSE_train + RMSE_test) over the window, pooled over the band's "
        "records of each role; lowest A. Committee output: "
     << (opt.averaging ? "averaging (triangular memberships over the band centres)"
@@ -122,7 +127,7 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
   for (const auto& m : r.complete) complete.push_back(&m);
   if (!complete.empty()) {
     o << "## Complete models (one parameter set over all bands; cf. the paper's Tables 1–10)\n\n";
-    for (StackFamily f : opt.families) ParamTable(o, complete, bands, f);
+    for (const std::string& f : opt.families) ParamTable(o, complete, bands, f);
     MetricTables(o, "Complete", bands, complete, false, {});
     o << "| complete model | test RMSE, all test records [µm] | test max error [µm] |\n"
          "|---|---:|---:|\n";
@@ -136,7 +141,7 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r,
   std::vector<const IdentifiedModel*> all_band;
   for (const auto& v : r.band_models)
     for (const auto& m : v) all_band.push_back(&m);
-  for (StackFamily f : opt.families) ParamTable(o, all_band, bands, f);
+  for (const std::string& f : opt.families) ParamTable(o, all_band, bands, f);
   // One row per family/optimiser, the cell of band b from band b's sub-model.
   const size_t per = r.band_models.empty() ? 0 : r.band_models[0].size();
   std::vector<const IdentifiedModel*> rows;
@@ -236,12 +241,14 @@ Value RoleJson(const RoleMetrics& m) {
 Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
   Struct s;
   auto& f = *s.mutable_fields();
-  f["family"] = Text(model::StackFamilyName(m.family));
+  f["family"] = Text(m.family);
   f["optimiser"] = Text(opt::SearchAlgorithmName(m.algorithm));
   f["scope"] = Text(m.band < 0 ? "complete" : bands.Label(m.band));
   Struct p;
-  const auto names = model::StackParamNames(m.family);
-  for (size_t i = 0; i < names.size(); ++i) (*p.mutable_fields())[names[i]] = Num(m.params[i]);
+  const auto& params = m.model->params();
+  for (size_t i = 0; i < params.size(); ++i) (*p.mutable_fields())[params[i].name] = Num(m.params[i]);
+  const auto weights = m.model->family().weight_names();
+  for (size_t i = 0; i < weights.size() && i < m.weights.size(); ++i) (*p.mutable_fields())[weights[i]] = Num(m.weights[i]);
   f["parameters"] = Obj(p);
   f["best_cost"] = Num(m.search.best_cost);
   f["evaluations"] = Num(static_cast<double>(m.search.evaluations));
@@ -267,15 +274,16 @@ Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
 
 }  // namespace
 
-std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& set) {
+std::string CommitteeJson(const CommitteeResult& r) {
+  const io::RecordSet& set = r.set;
   const CommitteeOptions& opt = r.options;
   Struct root;
   auto& f = *root.mutable_fields();
-  f["records_dir"] = Text(set.dir.filename().string());
+  f["records_dir"] = Text(set.source.filename().string());
   std::vector<Value> edges;
   for (double e : opt.bands.edges) edges.push_back(Num(e));
   f["band_edges_hz"] = List(edges);
-  f["criterion"] = Text(FitCriterionName(opt.criterion));
+  f["criterion"] = Text(records::CriterionName(opt.criterion));
   f["window_s"] = List({Num(opt.t0_s), Num(opt.t1_s)});
   f["repetitions"] = Num(opt.search.repetitions);
   f["committee"] = Text(opt.averaging ? "averaging" : "hard switch");
@@ -316,22 +324,21 @@ std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& se
 // ---- Figures -------------------------------------------------------------------------------
 
 std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const CommitteeResult& r,
-                                               const io::StackRecordSet& set,
                                                std::vector<std::string>* warnings) {
   namespace fs = std::filesystem;
   fs::create_directories(dir);
   std::vector<fs::path> scripts;
   const IdentifiedModel* complete = r.best_complete >= 0 ? &r.complete[r.best_complete] : nullptr;
-  for (const io::StackRecord& rec : set.records) {
-    if (rec.role != io::CaseRole::kTest) continue;
+  for (const io::Record& rec : r.set.records) {
+    if (rec.role != model::CaseRole::kTest) continue;
     const int b = r.options.bands.BandOf(rec.frequency_hz);
     const auto cm = PredictCommittee(r, rec);
     std::vector<double> full;
-    if (complete) full = PredictModel(*complete, rec, r.options.sim);
-    // The last whole drive cycle of the record.
-    const size_t n = rec.t.size();
+    if (complete) full = PredictModel(*complete, rec);
+    // The last whole drive cycle of the record's window.
+    const size_t n = rec.end_scored;
     const size_t per = std::max<size_t>(
-        2, static_cast<size_t>(std::lround(rec.sample_rate_hz / rec.frequency_hz)));
+        2, static_cast<size_t>(std::lround(rec.sample_rate_hz() / rec.frequency_hz)));
     const size_t first = n > per + 1 ? n - per - 1 : 0;
     const std::string stem =
         "loop_band" + std::to_string(b + 1) + "_f" + io::FormatNumber(rec.frequency_hz);
@@ -346,7 +353,7 @@ std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const Com
     });
     Plot p;
     p.name = stem;
-    p.title = "Band " + r.options.bands.Label(b) + ": " + rec.Label() + ", last cycle";
+    p.title = "Band " + r.options.bands.Label(b) + ": " + rec.Label() + " at " + io::FormatNumber(rec.frequency_hz) + " Hz, last cycle";
     p.xlabel = "voltage [V]";
     p.ylabel = "displacement [µm]";
     p.series.push_back({stem + ".csv", 1, 2, "measured", "points pt 7 ps 0.4"});

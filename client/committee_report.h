@@ -7,22 +7,19 @@
 #include <vector>
 
 #include "complete/committee.h"
-#include "io/stack_records.h"
 
 namespace pz::client {
 
 using complete::CommitteeResult;
 
 /// report.md: settings, per-band tables like the paper's Tables 3–16, selection, reduction, timing.
-void WriteCommitteeReport(std::ostream& out, const CommitteeResult& r,
-                          const io::StackRecordSet& set);
+void WriteCommitteeReport(std::ostream& out, const CommitteeResult& r);
 /// committee.json (protobuf's JSON printer over a google.protobuf.Struct).
-std::string CommitteeJson(const CommitteeResult& r, const io::StackRecordSet& set);
+std::string CommitteeJson(const CommitteeResult& r);
 /// Loop figures (displacement vs voltage over the last drive cycle, measured / committee / best
 /// complete) per test record, grouped by band: <dir>/loop_band<b>_f<f>.{csv,gp,png}. Returns the
 /// scripts written; renders them when gnuplot is available (failures appended to warnings).
 std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const CommitteeResult& r,
-                                               const io::StackRecordSet& set,
                                                std::vector<std::string>* warnings);
 
 }  // namespace pz::client

@@ -52,12 +52,11 @@ records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOpti
   };
 }
 
-EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options) {
-  return [options](const StackFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
-    const std::string what = std::string("committee ") + model::StackFamilyName(f.family()) + " on " +
-                             std::to_string(f.records().size()) + " record(s)";
+EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options, const records::FamilyOptions& family) {
+  return [options, family](const records::CriterionFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+    const std::string what = "committee " + f.model().Describe() + " on " + std::to_string(f.records().size()) + " record(s)";
     return std::make_unique<ServiceEvaluator>(
-        options, complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f), what), "piezoid committee");
+        options, complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f, family), what), "piezoid committee");
   };
 }
 

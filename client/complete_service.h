@@ -33,7 +33,9 @@ void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
 records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options, int pi_operators,
                                                       const std::string& owner);
 
-/// One session per search of the committee, on the master of `options`.
-complete::EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options);
+/// One session per search of the committee, on the master of `options`; `family`: the committee's
+/// family options (sub-steps, PI plays).
+complete::EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options,
+                                                   const records::FamilyOptions& family);
 
 }  // namespace pz::client

@@ -11,25 +11,13 @@
 #include "io/csv.h"
 #include "opt/inline_evaluator.h"
 #include "opt/thread_pool_evaluator.h"
-#include "model/criteria.h"
+#include "records/fit.h"
 
 namespace pz::complete {
 namespace {
 
-using model::StackFamily;
-
 double Now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-// Samples k with t0 ≤ k dt ≤ t1 (as model/criteria.h counts them).
-size_t WindowCount(size_t n, double dt, double t0, double t1) {
-  double f = std::ceil(t0 / dt);
-  if (f * dt < t0) f += 1;
-  double l = std::floor(t1 / dt);
-  if (l * dt > t1) l -= 1;
-  l = std::min(l, static_cast<double>(n - 1));
-  return l >= f ? static_cast<size_t>(l - f + 1) : 0;
 }
 
 // Accumulates RoleMetrics with the pooled squared error.
@@ -55,15 +43,15 @@ struct RecordError {
   double sse = 0;
 };
 
-RecordError Errors(const io::StackRecord& r, std::span<const double> yhat, double t0, double t1) {
-  const double end = complete::WindowEnd(r, t1), dt = r.dt();
+RecordError Errors(const io::Record& r, std::span<const double> yhat, double t0, double t1) {
+  const records::WindowErrors w = records::ScoreWindow(r, yhat, t0, t1);
   RecordError e;
   e.m.records = 1;
-  e.m.samples = WindowCount(r.t.size(), dt, t0, end);
-  e.m.iae = model::Iae(r.y, yhat, dt, t0, end);
-  e.sse = model::Sse(r.y, yhat, dt, t0, end);
+  e.m.samples = w.samples;
+  e.m.iae = w.iae;
+  e.sse = w.sse;
   e.m.rmse = std::sqrt(e.sse / static_cast<double>(std::max<size_t>(e.m.samples, 1)));
-  e.m.max_abs = model::MaxAbsError(r.y, yhat, dt, t0, end);
+  e.m.max_abs = w.max_abs;
   return e;
 }
 
@@ -156,30 +144,30 @@ FrequencyBands FrequencyBands::Parse(const std::string& text) {
   return b;
 }
 
-opt::ParamBox DefaultStackBox(StackFamily family) {
-  opt::ParamBox box;
-  box.names = model::StackParamNames(family);
-  if (family == StackFamily::kBoucWen) {
-    box.lower = {0.01, 1e-5, -0.05, 0.02, 100};
-    box.upper = {3.0, 0.1, 0.05, 0.08, 20000};
-    box.log_scale = {true, true, false, false, true};
-  } else {
-    box.lower = {1e-4, 0.02, -0.05};
-    box.upper = {1.0, 0.08, 0.1};
-    box.log_scale = {true, false, false};
-  }
-  return box;
+std::map<std::string, opt::ParamBox> Seed002Boxes() {
+  std::map<std::string, opt::ParamBox> boxes;
+  boxes["stack-bouc-wen"] = {{"alpha", "beta", "gamma", "d", "fc_Hz"},
+                             {0.01, 1e-5, -0.05, 0.02, 100},
+                             {3.0, 0.1, 0.05, 0.08, 20000},
+                             {true, true, false, false, true}};
+  boxes["backlash-like"] = {{"alpha", "c", "B1"}, {1e-4, 0.02, -0.05}, {1.0, 0.08, 0.1}, {true, false, false}};
+  return boxes;
 }
 
 Status CommitteeOptions::Validate() const {
   if (Status s = bands.Validate(); !s.ok()) return s;
   if (families.empty()) return InvalidArgument("families: at least one model family is needed");
   if (algorithms.empty()) return InvalidArgument("optimisers: at least one optimiser is needed");
-  for (size_t i = 0; i < families.size(); ++i)
+  const std::vector<std::string>& known = records::FamilyNames();
+  for (size_t i = 0; i < families.size(); ++i) {
+    if (std::find(known.begin(), known.end(), families[i]) == known.end()) {
+      std::string list;
+      for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
+      return InvalidArgument("families: unknown family '" + families[i] + "' (families: " + list + ")");
+    }
     for (size_t j = 0; j < i; ++j)
-      if (families[i] == families[j])
-        return InvalidArgument(std::string("families: ") + model::StackFamilyName(families[i]) +
-                               " given twice");
+      if (families[i] == families[j]) return InvalidArgument("families: " + families[i] + " given twice");
+  }
   for (size_t i = 0; i < algorithms.size(); ++i)
     for (size_t j = 0; j < i; ++j)
       if (algorithms[i] == algorithms[j])
@@ -189,12 +177,14 @@ Status CommitteeOptions::Validate() const {
     return InvalidArgument(FieldError("window t0_s", t0_s, "must be finite and >= 0"));
   if (!(std::isfinite(t1_s) && t1_s > t0_s))
     return InvalidArgument(FieldError("window t1_s", t1_s, "must be finite and > t0_s"));
-  if (Status s = sim.Validate(); !s.ok()) return s;
-  for (StackFamily f : families) {
+  if (family_options.substeps < 1 || family_options.substeps > 512)
+    return InvalidArgument(FieldError("substeps", family_options.substeps, "must be 1 … 512"));
+  if (Status s = records::CriterionOptions{criterion, t0_s, t1_s, search.error_cost}.Validate(); !s.ok()) return s;
+  for (const auto& [name, box] : boxes) {
     opt::SearchOptions so = search;
     for (opt::SearchAlgorithm a : algorithms) {
       so.algorithm = a;
-      if (Status s = so.Validate(DefaultStackBox(f)); !s.ok()) return s;
+      if (Status s = so.Validate(box); !s.ok()) return InvalidArgument("box of " + name + ": " + s.message());
     }
   }
   return Status::Ok();
@@ -208,36 +198,32 @@ EvaluatorFactory LocalEvaluatorFactory(int threads) {
   };
 }
 
-std::string IdentifiedModel::Name() const {
-  return std::string(model::StackFamilyName(family)) + "/" + opt::SearchAlgorithmName(algorithm);
-}
+std::string IdentifiedModel::Name() const { return family + "/" + opt::SearchAlgorithmName(algorithm); }
 
-std::vector<double> PredictModel(const IdentifiedModel& m, const io::StackRecord& record,
-                                 const model::StackSimOptions& sim) {
-  std::vector<double> y(record.u.size());
-  model::SimulateStack(m.family, m.params, record.u, record.dt(), y, sim);
+std::vector<double> PredictModel(const IdentifiedModel& m, const io::Record& record) {
+  std::vector<double> y;
+  records::Evaluate(*m.model, m.params, m.weights, record, &y);
   return y;
 }
 
-std::vector<double> PredictCommittee(const CommitteeResult& r, const io::StackRecord& record) {
+std::vector<double> PredictCommittee(const CommitteeResult& r, const io::Record& record) {
   const FrequencyBands& bands = r.options.bands;
   if (!r.options.averaging) {
     const int b = bands.BandOf(record.frequency_hz);
     if (b < 0) throw InputError(record.Label() + " is outside every band");
-    return PredictModel(r.band_models[b][r.selected[b]], record, r.options.sim);
+    return PredictModel(r.band_models[b][r.selected[b]], record);
   }
   const std::vector<double> mu = Memberships(bands, record.frequency_hz);
-  std::vector<double> y(record.u.size(), 0.0);
+  std::vector<double> y(record.end_scored, 0.0);
   for (int b = 0; b < bands.size(); ++b) {
     if (mu[b] == 0) continue;
-    const auto yb = PredictModel(r.band_models[b][r.selected[b]], record, r.options.sim);
+    const auto yb = PredictModel(r.band_models[b][r.selected[b]], record);
     for (size_t k = 0; k < y.size(); ++k) y[k] += mu[b] * yb[k];
   }
   return y;
 }
 
-RoleMetrics RecordMetrics(const io::StackRecord& record, std::span<const double> yhat, double t0_s,
-                          double t1_s) {
+RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s, double t1_s) {
   return Errors(record, yhat, t0_s, t1_s).m;
 }
 
@@ -247,16 +233,16 @@ namespace {
 
 // Errors of a predictor on every band's records, per role, and on all test / train records.
 template <typename Predict>
-void Score(const io::StackRecordSet& set, const CommitteeOptions& o, Predict predict,
+void Score(const io::RecordSet& set, const CommitteeOptions& o, Predict predict,
            std::vector<BandMetrics>* per_band, RoleMetrics* all_test, RoleMetrics* all_train) {
   const int nb = o.bands.size();
   std::vector<Pool> train(nb), test(nb);
   Pool at, atr;
-  for (const io::StackRecord& r : set.records) {
+  for (const io::Record& r : set.records) {
     const int b = o.bands.BandOf(r.frequency_hz);
     const std::vector<double> y = predict(r);
     const RecordError e = Errors(r, y, o.t0_s, o.t1_s);
-    if (r.role == io::CaseRole::kTrain) {
+    if (r.role == model::CaseRole::kTrain) {
       train[b].Add(e.m, e.sse);
       atr.Add(e.m, e.sse);
     } else {
@@ -272,18 +258,25 @@ void Score(const io::StackRecordSet& set, const CommitteeOptions& o, Predict pre
 
 }  // namespace
 
-CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptions& options,
+CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOptions& options,
                              const EvaluatorFactory& factory, const CommitteeLog& log) {
   ThrowIfError(options.Validate());
   const double start = Now();
   const int nb = options.bands.size();
-  std::vector<std::vector<const io::StackRecord*>> band_train(nb);
+  CommitteeResult res;
+  res.options = options;
+  res.set = records;
+  const io::RecordSet& set = res.set;
+  std::vector<std::vector<const io::Record*>> band_train(nb);
   std::vector<int> band_tests(nb, 0);
-  std::vector<const io::StackRecord*> all_train;
-  for (const io::StackRecord& r : set.records) {
+  std::vector<const io::Record*> all_train;
+  for (io::Record& r : res.set.records) {
+    if (!(r.frequency_hz > 0))
+      throw InputError(r.Label() + " states no excitation frequency (the committee bands the records by it: a "
+                       "bench's, or a manifest's frequency_Hz column)");
     const int b = options.bands.BandOf(r.frequency_hz);
     if (b < 0)
-      throw InputError(r.Label() + " is outside every band (edges " +
+      throw InputError(r.Label() + " (" + io::FormatNumber(r.frequency_hz) + " Hz) is outside every band (edges " +
                        [&] {
                          std::string s;
                          for (double e : options.bands.edges)
@@ -291,7 +284,14 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
                          return s;
                        }() +
                        " Hz)");
-    if (r.role == io::CaseRole::kTrain) {
+    // The criterion's window in the record's own time, t1 clipped to its last sample.
+    const double t_end = r.t.back() - r.t.front();
+    if (!(t_end > options.t0_s))
+      throw InputError(r.Label() + " ends at " + io::FormatNumber(t_end) + " s, before the window start t0_s = " +
+                       io::FormatNumber(options.t0_s) + " s");
+    io::SetWindow(r, r.t.front() + options.t0_s, r.t.front() + std::min(options.t1_s, t_end), 1,
+                  r.Label() + ": the criterion window");
+    if (r.role == model::CaseRole::kTrain) {
       band_train[b].push_back(&r);
       all_train.push_back(&r);
     } else {
@@ -305,32 +305,44 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
       throw InputError("band " + options.bands.Label(b) + " has no test record");
   }
 
-  CommitteeResult res;
-  res.options = options;
-
   bool first_search = true;
-  auto identify = [&](StackFamily family, opt::SearchAlgorithm algo,
-                      const std::vector<const io::StackRecord*>& records, int band) {
+  auto identify = [&](const std::string& family, opt::SearchAlgorithm algo,
+                      const std::vector<const io::Record*>& train, int band) {
     IdentifiedModel m;
     m.family = family;
     m.algorithm = algo;
     m.band = band;
-    const StackFitness fitness(family, records, options.criterion, options.t0_s, options.t1_s,
-                               options.sim, options.search.error_cost);
-    auto evaluator = factory(fitness);
-    if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
-    first_search = false;
-    opt::SearchOptions so = options.search;
-    so.algorithm = algo;
-    m.search = opt::Search(DefaultStackBox(family), so, *evaluator);
-    m.params = m.search.best;
-    res.evaluations += m.search.evaluations;
-    Score(set, options, [&](const io::StackRecord& r) { return PredictModel(m, r, options.sim); },
-          &m.per_band, &m.all_test, nullptr);
+    const records::DataScale scale = records::MeasureScale(train);
+    auto model = std::make_shared<records::RecordModel>(records::MakeFamily(family, scale, options.family_options),
+                                                         std::vector<records::EffectKind>{}, scale);
+    m.model = model;
+    const records::CriterionFitness fitness(*model, train,
+                                            {options.criterion, options.t0_s, options.t1_s, options.search.error_cost});
+    const auto given = options.boxes.find(family);
+    const opt::ParamBox box = given != options.boxes.end() ? given->second : records::ParamBoxOf(*model);
+    if (box.names.size() != model->params().size())
+      throw InputError("box of " + family + ": " + std::to_string(box.names.size()) + " parameters, the family has " +
+                       std::to_string(model->params().size()));
+    if (!box.names.empty()) {
+      auto evaluator = factory(fitness);
+      if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
+      first_search = false;
+      opt::SearchOptions so = options.search;
+      so.algorithm = algo;
+      ThrowIfError(so.Validate(box));
+      m.search = opt::Search(box, so, *evaluator);
+      m.params = m.search.best;
+      res.evaluations += m.search.evaluations;
+    } else {  // a linear family without searched parameters: its weights are solved
+      m.search.best_cost = fitness.Cost({});
+      m.search.stop_reason = "weights solved by least squares";
+    }
+    if (model->family().linear()) m.weights = fitness.outputs().Run(m.params).weights;
+    Score(set, options, [&](const io::Record& r) { return PredictModel(m, r); }, &m.per_band, &m.all_test, nullptr);
     if (log) {
       std::ostringstream os;
       os << (band < 0 ? std::string("complete") : options.bands.Label(band)) << " " << m.Name()
-         << ": " << FitCriterionName(options.criterion) << " " << FormatFigure(m.search.best_cost, 5)
+         << ": " << records::CriterionName(options.criterion) << " " << FormatFigure(m.search.best_cost, 5)
          << " after " << m.search.evaluations << " evaluations in " << FormatFigure(m.search.wall_time_s)
          << " s (" << FormatFigure(m.search.evaluations / std::max(m.search.wall_time_s, 1e-9))
          << " evaluations/s), best of " << m.search.repetition_costs.size()
@@ -342,7 +354,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
 
   if (options.complete) {
     const double t = Now();
-    for (StackFamily f : options.families)
+    for (const std::string& f : options.families)
       for (opt::SearchAlgorithm a : options.algorithms)
         res.complete.push_back(identify(f, a, all_train, -1));
     res.complete_wall_s = Now() - t;
@@ -353,7 +365,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
   res.aggregate.assign(nb, 0.0);
   for (int b = 0; b < nb; ++b) {
     const double t = Now();
-    for (StackFamily f : options.families)
+    for (const std::string& f : options.families)
       for (opt::SearchAlgorithm a : options.algorithms)
         res.band_models[b].push_back(identify(f, a, band_train[b], b));
     res.band_wall_s[b] = Now() - t;
@@ -371,7 +383,7 @@ CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptio
       log("band " + options.bands.Label(b) + ": selected " +
           res.band_models[b][res.selected[b]].Name() + " (A = " + FormatFigure(best, 4) + " µm)");
   }
-  Score(set, options, [&](const io::StackRecord& r) { return PredictCommittee(res, r); },
+  Score(set, options, [&](const io::Record& r) { return PredictCommittee(res, r); },
         &res.committee_per_band, &res.committee_test, &res.committee_train);
   if (!res.complete.empty()) {
     double best = std::numeric_limits<double>::infinity();

@@ -1,17 +1,19 @@
-// The committee machine of seed 002 (spec committee-machine.md) on a stack record set
-// (io/stack_records.h):
+// The committee machine of seed 002 (spec committee-machine.md) on a record set (io/records.h;
+// the stack bench data/piezo-stack-bench is one), a thin protocol over the records engine
+// (records/families.h, records/criterion.h):
 //
-//  1. complete models: each model family (Bouc–Wen with driver filter, backlash-like;
-//     model/stack_models.h) identified by each optimiser (PSO, real GA, binary GA;
-//     master/param_search.h) on ALL training records; the parameters are the search space, the
-//     cost is the criterion (IAE by default) over the window [t0, t1] summed over the records;
-//     `repetitions` seeded runs, best kept;
+//  1. complete models: each model family (any records/families.h family; by default the paper's
+//     stack Bouc–Wen with driver filter and backlash-like) identified by each optimiser (PSO, real
+//     GA, binary GA; opt/param_search.h) on ALL training records; the parameters are the search
+//     space (the family's data-scaled ranges, or the protocol's box: seed 002's for the paper's
+//     two families), the cost is the engine's criterion (IAE by default) over the window [t0, t1]
+//     summed over the records; `repetitions` seeded runs, best kept;
 //  2. per band (default 0–50, 50–150, 150–250, 250–350 Hz; a record belongs to the band
-//     [lo, hi) containing its excitation frequency, the last band closed): the same
+//     [lo, hi) containing its stated excitation frequency, the last band closed): the same
 //     identifications on the band's training records only;
 //  3. selection per band, by the aggregate A = ½ (RMSE_train + RMSE_test), the RMSEs over the
-//     window pooled over the band's training, resp. testing records (lowest A wins; ties to the
-//     first family, then the first optimiser, in option order);
+//     window pooled over the band's training, resp. withheld (test, validate) records (lowest A
+//     wins; ties to the first family, then the first optimiser, in option order);
 //  4. the committee output for a record: the selected sub-model of the record's band (hard switch);
 //     or, with `averaging`, Σ_b μ_b(f) ŷ_b with triangular memberships μ_b over the band centres
 //     (a partition of unity; μ_b = 1 at band b's centre; the outer bands extend flat);
@@ -19,6 +21,7 @@
 //     complete model (lowest pooled test RMSE of all complete models: the strongest baseline);
 //     reduction = 1 − RMSE_committee / RMSE_complete.
 //
+// Every record's scored window is set to [t0, t1] of its own time (t1 clipped to its last sample).
 // Every search goes through the BatchEvaluator seam, so it runs inline, on a thread pool, or on the
 // service's workers (any evaluator made by the factory); the results are the same bit for bit.
 #pragma once
@@ -29,17 +32,17 @@
 #include <string>
 #include <vector>
 
-#include "complete/stack_fitness.h"
-#include "io/stack_records.h"
+#include <map>
+
+#include "io/records.h"
+#include "model/status.h"
 #include "opt/evaluator.h"
 #include "opt/param_search.h"
-#include "model/stack_models.h"
-#include "model/status.h"
+#include "records/criterion.h"
+#include "records/families.h"
+#include "records/model.h"
 
 namespace pz::complete {
-
-// The fitness of the stack models (criterion over the window, summed over the records) is
-// complete/stack_fitness.h, which the service's workers link too ("complete_model" job kind).
 
 /// Frequency bands by their edges e_0 < e_1 < … < e_B: band b is [e_b, e_{b+1}), the last closed.
 struct FrequencyBands {
@@ -55,25 +58,27 @@ struct FrequencyBands {
   static FrequencyBands Parse(const std::string& text);
 };
 
-/// The default search box of a family (names = model::StackParamNames):
-///  Bouc–Wen: α ∈ [0.01, 3] (log), β ∈ [1e-5, 0.1] (log), γ ∈ [−0.05, 0.05], d ∈ [0.02, 0.08] µm/V,
-///            fc ∈ [100, 20000] Hz (log);
-///  backlash-like: α ∈ [1e-4, 1] 1/V (log), c ∈ [0.02, 0.08] µm/V, B1 ∈ [−0.05, 0.1] µm/V.
-opt::ParamBox DefaultStackBox(model::StackFamily family);
+/// Seed 002's search boxes of the paper's two families (the committee's default `boxes`):
+///  stack-bouc-wen: α ∈ [0.01, 3] (log), β ∈ [1e-5, 0.1] (log), γ ∈ [−0.05, 0.05],
+///                  d ∈ [0.02, 0.08] µm/V, fc ∈ [100, 20000] Hz (log);
+///  backlash-like:  α ∈ [1e-4, 1] 1/V (log), c ∈ [0.02, 0.08] µm/V, B1 ∈ [−0.05, 0.1] µm/V.
+std::map<std::string, opt::ParamBox> Seed002Boxes();
 
 struct CommitteeOptions {
   FrequencyBands bands;
-  std::vector<model::StackFamily> families{model::StackFamily::kBoucWen,
-                                           model::StackFamily::kBacklashLike};
+  std::vector<std::string> families{"stack-bouc-wen", "backlash-like"};  ///< records/families.h names
   std::vector<opt::SearchAlgorithm> algorithms{opt::SearchAlgorithm::kPso,
                                                   opt::SearchAlgorithm::kGaReal};
   /// Settings of every search (the algorithm field is set per run; repetitions, seeds, swarm and
   /// population sizes are used as given).
   opt::SearchOptions search;
-  FitCriterion criterion = FitCriterion::kIae;
+  records::Criterion criterion = records::Criterion::kIae;
   double t0_s = 0.5;  ///< criterion window [s]
   double t1_s = 2.5;
-  model::StackSimOptions sim;
+  records::FamilyOptions family_options;  ///< sub-steps, PI plays, fin geometry
+  /// The search box of a family by name (its parameters in order); a family not listed is searched
+  /// in its own data-scaled ranges (records/families.h).
+  std::map<std::string, opt::ParamBox> boxes = Seed002Boxes();
   bool averaging = false;  ///< averaging committee instead of the hard switch
   bool complete = true;    ///< also identify the complete models (needed for the comparison)
   Status Validate() const;
@@ -81,7 +86,7 @@ struct CommitteeOptions {
 
 /// Makes the evaluator a search runs on, for a fitness that outlives it (locally a thread pool over
 /// it; on the service a session whose spec carries its records, client/complete_service.h).
-using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const StackFitness&)>;
+using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const records::CriterionFitness&)>;
 /// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
 EvaluatorFactory LocalEvaluatorFactory(int threads);
 
@@ -98,18 +103,21 @@ struct BandMetrics {
 };
 
 struct IdentifiedModel {
-  model::StackFamily family = model::StackFamily::kBoucWen;
+  std::string family;  ///< records/families.h name
   opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
   int band = -1;  ///< −1: the complete model (all training records)
-  std::vector<double> params;
+  std::shared_ptr<const records::RecordModel> model;  ///< made for its training records' scale
+  std::vector<double> params;   ///< model->params() order
+  std::vector<double> weights;  ///< a linear family's solved weights
   opt::SearchResult search;
   std::vector<BandMetrics> per_band;  ///< its errors on every band's records
   RoleMetrics all_test;               ///< on all test records
-  std::string Name() const;           ///< "bouc-wen/pso"
+  std::string Name() const;           ///< "stack-bouc-wen/pso"
 };
 
 struct CommitteeResult {
   CommitteeOptions options;
+  io::RecordSet set;  ///< the records, their scored windows set to the criterion's window
   std::vector<IdentifiedModel> complete;                 ///< families × algorithms (may be empty)
   std::vector<std::vector<IdentifiedModel>> band_models;  ///< [band][families × algorithms]
   std::vector<int> selected;        ///< per band: index into band_models[band]
@@ -129,19 +137,17 @@ struct CommitteeResult {
 
 using CommitteeLog = std::function<void(const std::string&)>;
 
-/// Runs the whole study. Throws InputError on bad options, a record outside every band, a band
-/// without training or test records.
-CommitteeResult RunCommittee(const io::StackRecordSet& set, const CommitteeOptions& options,
+/// Runs the whole study. Throws InputError on bad options, a record without a stated frequency or
+/// outside every band, a band without training or test records.
+CommitteeResult RunCommittee(const io::RecordSet& set, const CommitteeOptions& options,
                              const EvaluatorFactory& factory, const CommitteeLog& log = {});
 
-/// Simulates one identified model on a record.
-std::vector<double> PredictModel(const IdentifiedModel& m, const io::StackRecord& record,
-                                 const model::StackSimOptions& sim);
+/// One identified model's output on a record (samples [0, end_scored)).
+std::vector<double> PredictModel(const IdentifiedModel& m, const io::Record& record);
 /// The committee's output for a record (hard switch or averaging, as in the result's options).
-std::vector<double> PredictCommittee(const CommitteeResult& r, const io::StackRecord& record);
+std::vector<double> PredictCommittee(const CommitteeResult& r, const io::Record& record);
 /// Window errors of a prediction on a record, as a one-record RoleMetrics.
-RoleMetrics RecordMetrics(const io::StackRecord& record, std::span<const double> yhat, double t0_s,
-                          double t1_s);
+RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s, double t1_s);
 
 /// x with 3 significant digits (scientific below 1e-3 and from 1e5), "—" when not finite.
 std::string FormatFigure(double x, int precision = 3);

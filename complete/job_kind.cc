@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "opt/inline_evaluator.h"
+#include "records/criterion.h"
 
 namespace pz::complete {
 namespace {
@@ -23,10 +24,6 @@ std::string Num(double v) {
 }
 
 bool IsStack(Family f) { return f == Family::kStackBoucWen || f == Family::kStackBacklashLike; }
-
-model::StackFamily StackFamilyOf(Family f) {
-  return f == Family::kStackBoucWen ? model::StackFamily::kBoucWen : model::StackFamily::kBacklashLike;
-}
 
 int Substeps(const CompleteModelProblem& p) {
   return p.substeps > 0 ? p.substeps : p.family == Family::kBwOscillator ? 4 : 2;
@@ -61,7 +58,6 @@ std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& 
 std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
   const Family f = p.family;
   if (f == Family::kBwOscillator) return model::BwIdentifiableNames();
-  if (IsStack(f)) return model::StackParamNames(StackFamilyOf(f));
   if (f == Family::kRecords) {
     try {
       const auto model = RecordModelOf(p);  // alive through the loop (a temporary would not be)
@@ -75,7 +71,30 @@ std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
   return {};
 }
 
-// Owns the records and the model its RecordFitness points to.
+records::Criterion CriterionOf(SpecCriterion c) {
+  switch (c) {
+    case SpecCriterion::kIae: return records::Criterion::kIae;
+    case SpecCriterion::kSse: return records::Criterion::kSse;
+    case SpecCriterion::kRmse: return records::Criterion::kRmse;
+    case SpecCriterion::kMax: return records::Criterion::kMax;
+  }
+  return records::Criterion::kIae;
+}
+
+SpecCriterion SpecOf(records::Criterion c) {
+  switch (c) {
+    case records::Criterion::kSse: return SpecCriterion::kSse;
+    case records::Criterion::kRmse: return SpecCriterion::kRmse;
+    case records::Criterion::kMax: return SpecCriterion::kMax;
+    default: return SpecCriterion::kIae;
+  }
+}
+
+// A records spec with a window is scored by its criterion over it (records/criterion.h); without
+// one, by the MSE over the records' scored samples.
+bool Windowed(const CompleteModelProblem& p) { return p.t0_s != 0 || p.t1_s != 0; }
+
+// Owns the records and the model its fitness points to.
 class OwningRecordFitness final : public opt::FitnessFunction {
  public:
   explicit OwningRecordFitness(const CompleteModelProblem& p) : model_(RecordModelOf(p)) {
@@ -96,14 +115,18 @@ class OwningRecordFitness final : public opt::FitnessFunction {
     }
     std::vector<const io::Record*> ptrs;
     for (const auto& r : records_) ptrs.push_back(&r);
-    fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
+    if (Windowed(p))
+      fitness_ = std::make_unique<records::CriterionFitness>(
+          *model_, ptrs, records::CriterionOptions{CriterionOf(p.criterion), p.t0_s, p.t1_s, p.error_cost});
+    else
+      fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
   }
   opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_->Evaluate(g); }
 
  private:
   std::shared_ptr<records::RecordModel> model_;
   std::vector<io::Record> records_;
-  std::unique_ptr<records::RecordFitness> fitness_;
+  std::unique_ptr<opt::FitnessFunction> fitness_;
 };
 
 model::InputInterpolation InterpolationOf(SpecInterpolation i) {
@@ -126,26 +149,6 @@ SpecInterpolation SpecOf(model::InputInterpolation i) {
   return SpecInterpolation::kSpline;
 }
 
-FitCriterion CriterionOf(SpecCriterion c) {
-  switch (c) {
-    case SpecCriterion::kIae: return FitCriterion::kIae;
-    case SpecCriterion::kSse: return FitCriterion::kSse;
-    case SpecCriterion::kRmse: return FitCriterion::kRmse;
-    case SpecCriterion::kMax: return FitCriterion::kMax;
-  }
-  return FitCriterion::kIae;
-}
-
-SpecCriterion SpecOf(FitCriterion c) {
-  switch (c) {
-    case FitCriterion::kIae: return SpecCriterion::kIae;
-    case FitCriterion::kSse: return SpecCriterion::kSse;
-    case FitCriterion::kRmse: return SpecCriterion::kRmse;
-    case FitCriterion::kMax: return SpecCriterion::kMax;
-  }
-  return SpecCriterion::kIae;
-}
-
 std::vector<BwTrainingRecord> BwRecords(const CompleteModelProblem& p) {
   std::vector<BwTrainingRecord> out;
   for (const CompleteModelRecord& r : p.records) {
@@ -163,48 +166,10 @@ std::vector<BwTrainingRecord> BwRecords(const CompleteModelProblem& p) {
   return out;
 }
 
-// The spec's records as stack records, numbered from 1 (t only gives their length).
-std::vector<io::StackRecord> StackRecords(const CompleteModelProblem& p) {
-  std::vector<io::StackRecord> out;
-  for (size_t i = 0; i < p.records.size(); ++i) {
-    const CompleteModelRecord& r = p.records[i];
-    io::StackRecord s;
-    s.number = static_cast<int>(i + 1);
-    s.sample_rate_hz = r.sample_rate_hz;
-    s.t.resize(r.input.size());
-    for (size_t k = 0; k < s.t.size(); ++k) s.t[k] = static_cast<double>(k) / r.sample_rate_hz;
-    s.u = r.input;
-    s.y = r.output;
-    out.push_back(std::move(s));
-  }
-  return out;
-}
-
-// Owns the records its StackFitness points to.
-class OwningStackFitness final : public opt::FitnessFunction {
- public:
-  OwningStackFitness(std::vector<io::StackRecord> records, const CompleteModelProblem& p)
-      : records_(std::move(records)),
-        fitness_(StackFamilyOf(p.family), Pointers(records_), CriterionOf(p.criterion), p.t0_s, p.t1_s,
-                 model::StackSimOptions{Substeps(p)}, p.error_cost) {}
-  opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_.Evaluate(g); }
-
- private:
-  static std::vector<const io::StackRecord*> Pointers(const std::vector<io::StackRecord>& records) {
-    std::vector<const io::StackRecord*> p;
-    for (const auto& r : records) p.push_back(&r);
-    return p;
-  }
-  std::vector<io::StackRecord> records_;
-  StackFitness fitness_;
-};
-
 Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction>* out) {
   try {
     if (p.family == Family::kBwOscillator)
       *out = std::make_unique<BwOscillatorFitness>(BwRecords(p), p.error_cost);
-    else if (IsStack(p.family))
-      *out = std::make_unique<OwningStackFitness>(StackRecords(p), p);
     else if (p.family == Family::kRecords)
       *out = std::make_unique<OwningRecordFitness>(p);
     else
@@ -234,10 +199,20 @@ constexpr uint64_t kMaxPeriodPrimeFactor = 1000;
 // offset are in range.
 template <typename Add>
 void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
-  if (p.t0_s != 0 || p.t1_s != 0)
-    add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s), "records carry their own windows: leave unset");
-  if (p.criterion != SpecCriterion::kIae)
-    add("complete_model.criterion", FitCriterionName(CriterionOf(p.criterion)), "records are scored by the MSE: leave unset");
+  if (Windowed(p)) {
+    if (!(std::isfinite(p.t0_s) && p.t0_s >= 0)) add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
+    if (!(std::isfinite(p.t1_s) && p.t1_s > p.t0_s))
+      add("complete_model.t1_s", Num(p.t1_s), "must be finite and > t0_s = " + Num(p.t0_s));
+  } else if (p.criterion != SpecCriterion::kIae) {
+    add("complete_model.criterion", records::CriterionName(CriterionOf(p.criterion)),
+        "without a window (t0_s, t1_s) records are scored by the MSE: leave unset");
+  }
+  if (p.interpolation != SpecInterpolation::kSpline)
+    add("complete_model.interpolation", model::InputInterpolationName(InterpolationOf(p.interpolation)),
+        "only the oscillator's input is interpolated (the records families take it as sampled): leave unset");
+  if (p.period_samples != 0)
+    add("complete_model.period_samples", std::to_string(p.period_samples),
+        "only the oscillator's FOURIER input has periods: must be 0");
   if (p.pi_operators < 1 || p.pi_operators > 10000)
     add("complete_model.pi_operators", std::to_string(p.pi_operators), "must be in [1, 10000]");
   if (p.scale.size() != 9) {
@@ -280,6 +255,12 @@ void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
       add(f + ".rest_samples", std::to_string(r.rest_samples), "must be in [1, " + std::to_string(n) + "]");
     if (r.offset_mode < 0 || r.offset_mode > 2) add(f + ".offset_mode", std::to_string(r.offset_mode), "must be 0, 1 or 2");
     if (!std::isfinite(r.offset)) add(f + ".offset", Num(r.offset), "must be finite");
+    if (Windowed(p) && std::isfinite(p.t0_s) && std::isfinite(p.t1_s) && std::isfinite(r.dt_s) && r.dt_s > 0 &&
+        r.end_counted >= 1 && r.end_counted <= n) {
+      const double end = static_cast<double>(r.end_counted - 1) * r.dt_s;
+      if (!(std::min(p.t1_s, end) > p.t0_s))
+        add(f, "ends at " + Num(end) + " s", "before the window start t0_s = " + Num(p.t0_s) + " s");
+    }
   }
 }
 
@@ -295,31 +276,24 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     CheckRecordFields(p, add);
     return v;
   }
-  const bool osc = p.family == Family::kBwOscillator;
-  const int sub = Substeps(p);
-  if (sub < 1 || sub > (osc ? 1000 : 1024))
-    add("complete_model.substeps", std::to_string(p.substeps), osc ? "must be in [1, 1000] (0 = 4)" : "must be in [1, 1024] (0 = 2)");
-  if (osc) {
-    if (p.t0_s != 0 || p.t1_s != 0)
-      add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s),
-          "the oscillator has no window (its cost is the MSE over the counted samples): leave both unset");
-    if (p.criterion != SpecCriterion::kIae)
-      add("complete_model.criterion", FitCriterionName(CriterionOf(p.criterion)),
-          "the oscillator's cost is the output-error MSE: leave criterion unset");
-    if (p.interpolation != SpecInterpolation::kFourier && p.period_samples != 0)
-      add("complete_model.period_samples", std::to_string(p.period_samples), "only the FOURIER input has periods");
-  } else {
-    if (!(std::isfinite(p.t0_s) && p.t0_s >= 0)) add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
-    if (!(std::isfinite(p.t1_s) && p.t1_s > p.t0_s))
-      add("complete_model.t1_s", Num(p.t1_s), "must be finite and > t0_s = " + Num(p.t0_s));
-    if (p.period_samples != 0)
-      add("complete_model.period_samples", std::to_string(p.period_samples),
-          "only the oscillator's FOURIER input has periods: must be 0");
-    if (p.interpolation != SpecInterpolation::kSpline)
-      add("complete_model.interpolation", model::InputInterpolationName(InterpolationOf(p.interpolation)),
-          "only the oscillator's input is interpolated (the stack models take it piecewise linear): leave unset");
+  if (IsStack(p.family)) {
+    add("complete_model.family", p.family == Family::kStackBoucWen ? "STACK_BOUC_WEN" : "STACK_BACKLASH_LIKE",
+        "the stack models are records families: family RECORDS with record_family 'stack-bouc-wen' or "
+        "'backlash-like' (and the criterion's window)");
+    return v;
   }
-  const size_t min_samples = osc && p.interpolation == SpecInterpolation::kSpline ? 4 : 2;
+  // The Bouc–Wen oscillator of the benchmark protocol.
+  const int sub = Substeps(p);
+  if (sub < 1 || sub > 1000) add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 1000] (0 = 4)");
+  if (p.t0_s != 0 || p.t1_s != 0)
+    add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s),
+        "the oscillator has no window (its cost is the MSE over the counted samples): leave both unset");
+  if (p.criterion != SpecCriterion::kIae)
+    add("complete_model.criterion", records::CriterionName(CriterionOf(p.criterion)),
+        "the oscillator's cost is the output-error MSE: leave criterion unset");
+  if (p.interpolation != SpecInterpolation::kFourier && p.period_samples != 0)
+    add("complete_model.period_samples", std::to_string(p.period_samples), "only the FOURIER input has periods");
+  const size_t min_samples = p.interpolation == SpecInterpolation::kSpline ? 4 : 2;
   for (size_t i = 0; i < p.records.size(); ++i) {
     const CompleteModelRecord& r = p.records[i];
     const std::string f = "complete_model.records[" + std::to_string(i) + "]";
@@ -342,38 +316,28 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
         add(f + ".output[" + std::to_string(k) + "]", Num(r.output[k]), "must be finite");
         break;
       }
-    if (osc) {
-      if (n > 0 && r.first_counted >= n)
-        add(f + ".first_counted", std::to_string(r.first_counted), "leaves no counted sample of " + std::to_string(n));
-      const uint64_t period = p.period_samples > 0 ? p.period_samples : n;
-      if (p.interpolation == SpecInterpolation::kFourier && n >= 2) {
-        if (n % period != 0) {
-          add(f + ".input", std::to_string(n) + " samples",
-              "must be a whole number of periods (period_samples = " + std::to_string(period) + ")");
-        } else if (LargestPrimeFactor(period) > kMaxPeriodPrimeFactor) {
-          add(f + ".input", std::to_string(period) + " samples per period",
-              "has the prime factor " + std::to_string(LargestPrimeFactor(period)) +
-                  " > 1000: the FOURIER input's FFT would be too slow (use SPLINE or a smoother period)");
-        } else {
-          // Every period equal to the first (model/bw_oscillator.h's rule, 1e-9 of the largest |u|).
-          double scale = 0;
-          for (double u : r.input) scale = std::max(scale, std::abs(u));
-          for (size_t k = period; k < n; ++k)
-            if (std::abs(r.input[k] - r.input[k % period]) > 1e-9 * scale) {
-              add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]),
-                  "differs from input[" + std::to_string(k % period) + "] = " + Num(r.input[k % period]) +
-                      ": not periodic with period_samples = " + std::to_string(period));
-              break;
-            }
-        }
-      }
-    } else {
-      if (r.first_counted != 0)
-        add(f + ".first_counted", std::to_string(r.first_counted), "only the oscillator has a warm-up: must be 0");
-      if (fs_ok && n >= 2 && std::isfinite(p.t0_s) && std::isfinite(p.t1_s)) {
-        const double end = static_cast<double>(n - 1) * (1.0 / r.sample_rate_hz);
-        if (!(std::min(p.t1_s, end) > p.t0_s))
-          add(f, "ends at " + Num(end) + " s", "before the window start t0_s = " + Num(p.t0_s) + " s");
+    if (n > 0 && r.first_counted >= n)
+      add(f + ".first_counted", std::to_string(r.first_counted), "leaves no counted sample of " + std::to_string(n));
+    const uint64_t period = p.period_samples > 0 ? p.period_samples : n;
+    if (p.interpolation == SpecInterpolation::kFourier && n >= 2) {
+      if (n % period != 0) {
+        add(f + ".input", std::to_string(n) + " samples",
+            "must be a whole number of periods (period_samples = " + std::to_string(period) + ")");
+      } else if (LargestPrimeFactor(period) > kMaxPeriodPrimeFactor) {
+        add(f + ".input", std::to_string(period) + " samples per period",
+            "has the prime factor " + std::to_string(LargestPrimeFactor(period)) +
+                " > 1000: the FOURIER input's FFT would be too slow (use SPLINE or a smoother period)");
+      } else {
+        // Every period equal to the first (model/bw_oscillator.h's rule, 1e-9 of the largest |u|).
+        double scale = 0;
+        for (double u : r.input) scale = std::max(scale, std::abs(u));
+        for (size_t k = period; k < n; ++k)
+          if (std::abs(r.input[k] - r.input[k % period]) > 1e-9 * scale) {
+            add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]),
+                "differs from input[" + std::to_string(k % period) + "] = " + Num(r.input[k % period]) +
+                    ": not periodic with period_samples = " + std::to_string(period));
+            break;
+          }
       }
     }
   }
@@ -401,20 +365,10 @@ job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitn
   return p;
 }
 
-job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness) {
-  CompleteModelProblem p;
-  p.family = fitness.family() == model::StackFamily::kBoucWen ? Family::kStackBoucWen : Family::kStackBacklashLike;
-  for (const io::StackRecord* r : fitness.records())
-    p.records.push_back({r->Label(), r->sample_rate_hz, r->u, r->y, 0});
-  p.criterion = SpecOf(fitness.criterion());
-  p.t0_s = fitness.t0_s();
-  p.t1_s = fitness.t1_s();
-  p.substeps = fitness.sim().substeps;
-  p.error_cost = fitness.error_cost();
-  return p;
-}
+namespace {
 
-job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators) {
+// A records problem; `cut`: without the part of each record's leading rest that is not scored.
+CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int pi_operators, bool cut) {
   CompleteModelProblem p;
   p.family = Family::kRecords;
   const records::RecordModel& m = fitness.model();
@@ -424,7 +378,7 @@ job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& f
   const records::DataScale& s = m.scale();
   p.scale = {s.u_min, s.u_max, s.u_half, s.y_half, s.gain, static_cast<double>(s.polarity), s.f_dom, s.fs, s.duration};
   for (const io::Record* r : fitness.records()) {
-    const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored);
+    const size_t from = cut ? std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored) : 0;
     CompleteModelRecord c;
     c.name = r->name.substr(0, 200);
     c.sample_rate_hz = r->sample_rate_hz();
@@ -437,6 +391,27 @@ job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& f
     c.offset_mode = static_cast<int>(r->offset_mode);
     c.offset = r->offset;
     p.records.push_back(std::move(c));
+  }
+  return p;
+}
+
+}  // namespace
+
+job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators) {
+  return RecordsProblem(fitness, pi_operators, true);
+}
+
+job::CompleteModelProblem CompleteModelProblemOf(const records::CriterionFitness& fitness,
+                                                 const records::FamilyOptions& options) {
+  const records::CriterionOptions& c = fitness.criterion();
+  // A window is in each record's time from its first sample: windowed records are sent whole.
+  CompleteModelProblem p = RecordsProblem(fitness.outputs(), options.pi_operators, !c.windowed());
+  p.substeps = options.substeps;
+  p.error_cost = c.error_cost;
+  if (c.windowed()) {
+    p.criterion = SpecOf(c.kind);
+    p.t0_s = c.t0_s;
+    p.t1_s = c.t1_s;
   }
   return p;
 }

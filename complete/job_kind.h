@@ -3,7 +3,9 @@
 // --master`, `piezoid committee --master`) and evaluates its swarms / generations through an
 // evaluation session (client/service_evaluator.h); the spec (proto CompleteModelProblem) carries
 // the model family, the records and the criterion, so that the workers rebuild the client's
-// fitness (BwOscillatorFitness, StackFitness) from the spec alone: the same costs bit for bit.
+// fitness (BwOscillatorFitness; the records engine's RecordFitness and CriterionFitness for any
+// records/families.h family, the committee's included) from the spec alone: the same costs bit
+// for bit.
 // The master and the workers register the kind from their main(); pz::master cannot depend on
 // pz::complete.
 #pragma once
@@ -12,9 +14,9 @@
 #include <string>
 
 #include "complete/bw_fitness.h"
-#include "complete/stack_fitness.h"
 #include "job/job_kind.h"
 #include "job/job_spec.h"
+#include "records/criterion.h"
 #include "records/fit.h"
 
 namespace pz::complete {
@@ -22,11 +24,14 @@ namespace pz::complete {
 /// The problem of a local fitness. Throws InputError if the oscillator's records differ in their
 /// input options (a spec carries one set).
 job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
-job::CompleteModelProblem CompleteModelProblemOf(const StackFitness& fitness);
 /// `piezoid fit` / `diagnose --records` on the service (family RECORDS): the training records
 /// without the part of their leading rest that is not scored (the model is at rest there: the cut
 /// changes no cost, bit for bit), the family, effects and data scale.
 job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators);
+/// The committee's fitness (family RECORDS with its criterion and window; the records whole, since
+/// the window is in their own time); `options`: the family's (sub-steps, PI plays).
+job::CompleteModelProblem CompleteModelProblemOf(const records::CriterionFitness& fitness,
+                                                 const records::FamilyOptions& options);
 
 /// A whole session spec (algorithm set by the caller; seed 0; errors and quarantined individuals
 /// cost opt::kDefaultErrorCost, as in the local evaluators).

@@ -9,7 +9,6 @@
 
 #include "io/bench_data.h"
 #include "io/csv.h"
-#include "io/stack_records.h"
 #include "model/noise_floor.h"
 #include "model/status.h"
 
@@ -146,6 +145,17 @@ CsvTable ReadRecordCsv(const fs::path& file) {
   return ParseCsv(text, file.string());
 }
 
+// The rest segment (the leading samples whose drive equals the first one, within the tolerance)
+// and the response's quantum of a file's samples.
+void FinishFileData(FileData& d, const RecordReadOptions& opt) {
+  double umax = 0;
+  for (double v : d.u) umax = std::max(umax, std::abs(v));
+  const double tol = opt.rest_tolerance * umax + 1e-12;
+  d.rest = 1;
+  while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
+  d.quantum = model::EstimateQuantum(d.y);
+}
+
 FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const RecordReadOptions& opt,
                         const std::string& where_declared) {
   const CsvTable csv = ReadRecordCsv(file);
@@ -191,12 +201,7 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
                        " % (the samples must be uniform: resample the record, or a gap is missing)");
     }
   }
-  double umax = 0;
-  for (double v : d.u) umax = std::max(umax, std::abs(v));
-  const double tol = opt.rest_tolerance * umax + 1e-12;
-  d.rest = 1;
-  while (d.rest < n && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
-  d.quantum = model::EstimateQuantum(d.y);
+  FinishFileData(d, opt);
   return d;
 }
 
@@ -268,12 +273,12 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   csv.RequireColumns({"record", "file", "role"});
   csv.RequireRows();
   static const std::vector<std::string> kKnown = {"record", "file", "role", "t_start_s", "t_end_s", "offset",
-                                                  "time_column", "drive_column", "response_column",
+                                                  "frequency_Hz", "time_column", "drive_column", "response_column",
                                                   "time_unit", "drive_unit", "response_unit"};
   for (size_t c = 0; c < csv.header.size(); ++c) {
     if (std::find(kKnown.begin(), kKnown.end(), csv.header[c]) == kKnown.end()) {
       throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" + csv.header[c] +
-                       "' (columns: record, file, role, t_start_s, t_end_s, offset, time_column, drive_column, "
+                       "' (columns: record, file, role, t_start_s, t_end_s, offset, frequency_Hz, time_column, drive_column, "
                        "response_column, time_unit, drive_unit, response_unit)");
     }
   }
@@ -322,6 +327,12 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
       SetWindow(r, t0.value_or(r.t.front()), t1.value_or(r.t.back()), opt.min_scored,
                 csv.source + ":" + std::to_string(csv.rows[i].line) + ": record '" + name + "' window");
     }
+    if (const auto f = OptionalNumber(csv, i, "frequency_Hz")) {
+      if (!(std::isfinite(*f) && *f > 0))
+        throw InputError(csv.Where(i, *csv.FindColumn("frequency_Hz")) + ": frequency " +
+                         csv.Field(i, *csv.FindColumn("frequency_Hz")) + " Hz must be finite and > 0");
+      r.frequency_hz = *f;
+    }
     const std::string off = OptionalField(csv, i, "offset");
     if (off.empty() || off == "fit") {
       r.offset_mode = OffsetMode::kFit;
@@ -344,29 +355,81 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   return set;
 }
 
+// The stack bench's drive as its manifest states it, offset + A sin(2π f t): checked on request
+// within 1e-4 of |offset| + A plus 1 mV.
+void CheckStatedDrive(const CsvTable& csv, int cu, const Record& r, double offset, double amplitude,
+                      const std::string& ctx) {
+  const double vtol = 1e-4 * (std::abs(offset) + amplitude) + 1e-3;
+  for (size_t k = 0; k < r.u.size(); ++k) {
+    const double want = offset + amplitude * std::sin(2 * std::numbers::pi * r.frequency_hz * r.t[k]);
+    if (!(std::abs(r.u[k] - want) <= vtol))
+      throw InputError(csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) + " V is not offset + A sin(2 pi f t) = " +
+                       FormatNumber(want) + " V (offset = " + FormatNumber(offset) + " V, A = " +
+                       FormatNumber(amplitude) + " V, f = " + FormatNumber(r.frequency_hz) + " Hz, t = " +
+                       FormatNumber(r.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)" + ctx);
+  }
+}
+
+// The stack bench of `piezoid committee` (data/piezo-stack-bench/): records.csv (record,
+// frequency_Hz, offset_V, amplitude_V, file, role; roles train / test) and one CSV per record
+// (t_s, voltage_V, displacement_um) starting at t = 0 on a uniform grid (the sample rate is
+// inferred from the first step, within 1e-6); drive u = offset + A sin(2π f t) from rest at the
+// offset; offset 0.
 RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
-  StackReadOptions so;
-  so.check_voltage = false;  // the drive is the measured samples
-  const StackRecordSet s = LoadStackRecordSet(dir, so);
+  const fs::path manifest = dir / "records.csv";
+  const CsvTable csv = ReadCsvFile(manifest);
+  csv.RequireColumns({"record", "frequency_Hz", "offset_V", "amplitude_V", "file", "role"});
+  csv.RequireRows();
+  const int cr = csv.RequireColumn("record"), cf = csv.RequireColumn("frequency_Hz"),
+            co = csv.RequireColumn("offset_V"), ca = csv.RequireColumn("amplitude_V"),
+            cfile = csv.RequireColumn("file"), crole = csv.RequireColumn("role");
   RecordSet set;
   set.source = dir;
   set.format = "stack-bench";
-  for (const StackRecord& sr : s.records) {
+  std::vector<std::pair<long, int>> seen;  // (record number, manifest line)
+  for (size_t row = 0; row < csv.rows.size(); ++row) {
+    const long number = csv.Integer(row, cr);
+    if (number <= 0 || number > 1000000)
+      throw InputError(csv.Where(row, cr) + ": record number " + csv.Field(row, cr) + " must be a positive integer");
+    for (const auto& [n, line] : seen)
+      if (n == number)
+        throw InputError(csv.Where(row, cr) + ": duplicate record " + std::to_string(number) + " (first on line " +
+                         std::to_string(line) + ")");
+    const double f = csv.Number(row, cf);
+    if (!(f > 0)) throw InputError(csv.Where(row, cf) + ": frequency " + csv.Field(row, cf) + " Hz must be > 0");
+    const double offset = csv.Number(row, co), amplitude = csv.Number(row, ca);
+    if (amplitude < 0)
+      throw InputError(csv.Where(row, ca) + ": amplitude " + csv.Field(row, ca) + " V must be >= 0");
+    const std::string& role_name = csv.Field(row, crole);
+    if (role_name != "train" && role_name != "test")
+      throw InputError(csv.Where(row, crole) + ": unknown role '" + role_name + "' (expected train or test)");
+    const std::string& name = csv.Field(row, cfile);
+    if (name.empty()) throw InputError(csv.Where(row, cfile) + ": empty file name");
+    const fs::path file = dir / name;
+    std::error_code ec;
+    if (!fs::is_regular_file(file, ec))
+      throw InputError(csv.Where(row, cfile) + ": record file '" + name + "' not found (" + file.string() + ")");
+    const std::string ctx = " (record " + std::to_string(number) + " of " + manifest.string() + " line " +
+                            std::to_string(csv.rows[row].line) + ")";
+    const CsvTable data = ReadCsvFile(file);
+    SampledColumns cols = ReadSampledColumns(data, "displacement_um", "record", 1e-6,
+                                             "a record starts at t = 0 (from rest at the offset)", ctx);
     FileData d;
-    d.t = sr.t;
-    d.u = sr.u;
-    d.y = sr.y;
-    d.dt = sr.dt();
-    double umax = 0;
-    for (double v : d.u) umax = std::max(umax, std::abs(v));
-    d.rest = 1;
-    while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= opt.rest_tolerance * umax + 1e-12) ++d.rest;
-    d.quantum = model::EstimateQuantum(d.y);
-    Record r = MakeRecord(d, "record" + std::to_string(sr.number), sr.role, sr.file);
+    d.t = std::move(cols.t);
+    d.u = std::move(cols.u);
+    d.y = std::move(cols.y);
+    d.dt = 1.0 / cols.sample_rate_hz;
+    FinishFileData(d, opt);
+    Record r = MakeRecord(d, "record" + std::to_string(number), role_name == "train" ? CaseRole::kTrain : CaseRole::kTest,
+                          file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
+    r.frequency_hz = f;
+    r.manifest_line = csv.rows[row].line;
+    if (opt.check_stated_drive) CheckStatedDrive(data, cols.u_column, r, offset, amplitude, ctx);
     FinishRecord(r, opt);
     set.records.push_back(std::move(r));
+    seen.emplace_back(number, csv.rows[row].line);
   }
   return set;
 }
@@ -391,6 +454,7 @@ RecordSet FromFinBench(const fs::path& dir, const RecordReadOptions& opt) {
     Record r = MakeRecord(d, "case" + std::to_string(c.number), c.role, c.file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
+    r.frequency_hz = c.frequency_hz;
     FinishRecord(r, opt);
     set.records.push_back(std::move(r));
   }
@@ -505,13 +569,13 @@ RecordSet LoadRecordSet(const fs::path& path, const RecordReadOptions& opt) {
 void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
   fs::create_directories(dir);
   WriteFileWith(dir / "manifest.csv", [&](std::ostream& m) {
-    m << "record,file,role,t_start_s,t_end_s,offset,drive_column,response_column\n";
+    m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,drive_column,response_column\n";
     for (const Record& r : set.records) {
       const std::string file = r.name + ".csv";
       m << r.name << "," << file << "," << model::CaseRoleName(r.role) << "," << FormatNumber(r.t[r.first_scored])
         << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
-        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode))
-        << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
+        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode)) << ","
+        << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
       WriteFileWith(dir / file, [&](std::ostream& f) {
         f << "t_s,drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
         for (size_t i = 0; i < r.size(); ++i)

@@ -3,7 +3,7 @@
 //
 // A record set is a folder with a manifest `manifest.csv`, one row per record:
 //
-//   record,file,role[,t_start_s,t_end_s,offset,time_column,drive_column,response_column,
+//   record,file,role[,t_start_s,t_end_s,offset,frequency_Hz,time_column,drive_column,response_column,
 //                     time_unit,drive_unit,response_unit]
 //
 //   record    a unique name (letters, digits, - _ .)
@@ -15,6 +15,8 @@
 //             response over the record's leading rest segment, where the drive is constant, is the
 //             model's rest output) | a number (response units: added to the model output)
 //   *_column  the CSV's column names (defaults t_s, voltage_V, displacement_um)
+//   frequency_Hz  the stated excitation frequency of the record (optional; `piezoid committee`
+//             bands records by it)
 //   *_unit    the columns' units; when absent, the unit is the column name's suffix after the last
 //             '_' (t_s → s). A unit stated in both places must agree.
 //
@@ -30,9 +32,11 @@
 // one) is detected and reported.
 //
 // Also read (converted on load, with their own checks): the stack bench folder of
-// `piezoid committee` (records.csv, io/stack_records.h; roles train/test, offset 0), the bimorph-fin
-// bench folder (cases.csv, io/bench_data.h; offset 0), and a single CSV file (one record, role
-// train; windows are given by the command line, see SplitIntoWindows).
+// `piezoid committee` (records.csv: record, frequency_Hz, offset_V, amplitude_V, file, role; roles
+// train/test, records named record<N>, offset 0, the stated frequency kept; the drive checked
+// against offset + A sin(2π f t) on request), the bimorph-fin bench folder (cases.csv,
+// io/bench_data.h; offset 0), and a single CSV file (one record, role train; windows are given by
+// the command line, see SplitIntoWindows).
 //
 // Every error is a pz::InputError that names the file, the line and the column, or the record.
 #pragma once
@@ -67,6 +71,8 @@ struct Record {
   OffsetMode offset_mode = OffsetMode::kFit;
   double offset = 0;        ///< kFixed: the value; kRest: the mean response over the rest
   double quantum = 0;       ///< the response's quantisation step (0 if not quantised)
+  double frequency_hz = 0;  ///< the stated excitation frequency [Hz] (a bench's, or a manifest's
+                            ///< frequency_Hz column); 0 = not stated
   int manifest_line = 0;    ///< 0 when not from a manifest
 
   size_t size() const { return t.size(); }
@@ -91,6 +97,9 @@ struct RecordReadOptions {
   double time_jitter = 0.01;    ///< every step within this fraction of the mean step, in (0, 0.5)
   size_t min_scored = 20;       ///< a window must hold at least this many samples
   double rest_tolerance = 1e-9; ///< rest: |u − u_0| ≤ this × max |u| (plus 1e-12)
+  /// A bench that states its drive (the stack bench: offset + A sin(2π f t)): check the measured
+  /// drive against it (`piezoid committee`); off by default (the drive is the measured samples).
+  bool check_stated_drive = false;
 };
 
 /// Reads a record set: a folder with manifest.csv, a stack bench folder (records.csv), a bimorph-fin

@@ -148,9 +148,9 @@ struct CompleteModelProblem {
   enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
   Family family = Family::kUnspecified;
   std::vector<CompleteModelRecord> records;      ///< ≥ 1
-  Criterion criterion = Criterion::kIae;         ///< stack families
-  double t0_s = 0, t1_s = 0;                     ///< stack families: the criterion's window [s]
-  int substeps = 0;                              ///< 0 = the family's default (oscillator 4, stack 2)
+  Criterion criterion = Criterion::kIae;         ///< records with a window
+  double t0_s = 0, t1_s = 0;                     ///< records: the criterion's window [s] (0, 0: none, the MSE)
+  int substeps = 0;                              ///< 0 = the family's default (oscillator 4, records 2)
   Interpolation interpolation = Interpolation::kSpline;  ///< oscillator
   uint64_t period_samples = 0;                   ///< oscillator, Fourier (0 = whole record)
   double error_cost = 1e30;                      ///< cost of a diverged / invalid parameter set

@@ -1,6 +1,6 @@
 // Complete models on the service (issue 7): the "complete_model" job kind rebuilds, from its spec
-// alone, the fitness the client has (Bouc–Wen oscillator and both stack families, every criterion:
-// costs bit for bit, through the binary and the JSON encodings); bad specs are refused field by
+// alone, the fitness the client has (Bouc–Wen oscillator; the records engine's criterion fitness of
+// the committee, both stack families, every criterion: costs bit for bit, through the binary and the JSON encodings); bad specs are refused field by
 // field; and PSO / GA searches whose evaluations run as evaluation sessions on a local master with
 // two workers (one of them killed mid-run) give the local thread-pool run's results bit for bit,
 // for the Bouc–Wen searches and the committee machine, and so do the commands `piezoid boucwen
@@ -20,6 +20,7 @@
 #include "client/complete_service.h"
 #include "client/service_evaluator.h"
 #include "complete/job_kind.h"
+#include "model/stack_models.h"
 #include "opt/random.h"
 #include "opt/thread_pool_evaluator.h"
 #include "complete_remote.h"
@@ -31,8 +32,8 @@ namespace {
 
 using complete::BwOscillatorFitness;
 using complete::BwTrainingRecord;
-using complete::FitCriterion;
-using complete::StackFitness;
+using records::Criterion;
+using records::CriterionFitness;
 using job::CompleteModelProblem;
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -67,33 +68,52 @@ BwOscillatorFitness SmallOscillator() {
   return BwOscillatorFitness({OscillatorRecord("A", 256, 2, 0, 1), OscillatorRecord("B", 256, 2, 256, 2)}, 1.0);
 }
 
-io::StackRecord StackRecord(int number, double f, double amp, io::CaseRole role, unsigned seed) {
-  io::StackRecord r;
-  r.number = number;
+io::Record StackRecord(int number, double f, double amp, model::CaseRole role, unsigned seed) {
+  io::Record r;
+  r.name = "record" + std::to_string(number);
   r.frequency_hz = f;
-  r.offset_v = 400;
-  r.amplitude_v = amp;
   r.role = role;
-  r.sample_rate_hz = 5000;
+  r.dt = 1 / 5000.0;
+  r.offset_mode = io::OffsetMode::kFixed;
+  r.rest_samples = 1;
   for (int k = 0; k < 600; ++k) {
-    r.t.push_back(k / r.sample_rate_hz);
-    r.u.push_back(400 + amp * std::sin(2 * std::numbers::pi * f * k / r.sample_rate_hz));
+    r.t.push_back(k * r.dt);
+    r.u.push_back(400 + amp * std::sin(2 * std::numbers::pi * f * k * r.dt));
   }
+  r.end_scored = r.t.size();
   r.y.resize(r.u.size());
-  model::SimulateStackBoucWen({0.3, 0.004, 0.002, 0.05, 400}, r.u, 1 / r.sample_rate_hz, r.y);
+  model::SimulateStackBoucWen({0.3, 0.004, 0.002, 0.05, 400}, r.u, r.dt, r.y);
   std::mt19937 rng(seed);
   for (double& y : r.y) y += 0.02 * (rng() / 4294967296.0 - 0.5);
   return r;
 }
 
-io::StackRecordSet StackSet() {
-  io::StackRecordSet set;
-  set.dir = "synthetic";
-  set.records.push_back(StackRecord(1, 40, 400, io::CaseRole::kTrain, 1));
-  set.records.push_back(StackRecord(2, 40, 300, io::CaseRole::kTest, 2));
-  set.records.push_back(StackRecord(3, 60, 350, io::CaseRole::kTrain, 3));
-  set.records.push_back(StackRecord(4, 60, 250, io::CaseRole::kTest, 4));
+io::RecordSet StackSet() {
+  io::RecordSet set;
+  set.source = "synthetic";
+  set.records.push_back(StackRecord(1, 40, 400, model::CaseRole::kTrain, 1));
+  set.records.push_back(StackRecord(2, 40, 300, model::CaseRole::kTest, 2));
+  set.records.push_back(StackRecord(3, 60, 350, model::CaseRole::kTrain, 3));
+  set.records.push_back(StackRecord(4, 60, 250, model::CaseRole::kTest, 4));
   return set;
+}
+
+// A committee fitness of a family on the set's training records (the model kept alive with it).
+struct StackFitness {
+  std::shared_ptr<records::RecordModel> model;
+  std::unique_ptr<CriterionFitness> fitness;
+  records::FamilyOptions options;
+};
+StackFitness MakeStackFitness(const io::RecordSet& set, const std::string& family, Criterion c, double t0,
+                              double t1, int substeps = 2) {
+  StackFitness f;
+  const auto train = set.WithRole(model::CaseRole::kTrain);
+  const records::DataScale scale = records::MeasureScale(train);
+  f.options.substeps = substeps;
+  f.model = std::make_shared<records::RecordModel>(records::MakeFamily(family, scale, f.options),
+                                                   std::vector<records::EffectKind>{}, scale);
+  f.fitness = std::make_unique<CriterionFitness>(*f.model, train, records::CriterionOptions{c, t0, t1});
+  return f;
 }
 
 void ExpectSameFitness(const opt::FitnessFunction& local, const opt::FitnessFunction& remote,
@@ -135,16 +155,17 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
             "m=2 c=10 k=50000 alpha=50000 beta_gamma=800 beta_delta=-1100");
 }
 
-TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
-  const io::StackRecordSet set = StackSet();
-  const std::vector<const io::StackRecord*> train = set.WithRole(io::CaseRole::kTrain);
-  for (model::StackFamily family : {model::StackFamily::kBoucWen, model::StackFamily::kBacklashLike}) {
-    for (FitCriterion c : {FitCriterion::kIae, FitCriterion::kSse, FitCriterion::kRmse, FitCriterion::kMax}) {
-      SCOPED_TRACE(std::string(model::StackFamilyName(family)) + " " + complete::FitCriterionName(c));
-      const StackFitness local(family, train, c, 0.01, 0.5, model::StackSimOptions{3});
-      const auto remote = RemoteCompleteFitness(complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "stack"), false);
+TEST(CompleteModelJobKindTest, TheSpecRebuildsTheCommitteesFitnessBitForBit) {
+  const io::RecordSet set = StackSet();
+  for (const std::string family : {"stack-bouc-wen", "backlash-like"}) {
+    for (Criterion c : {Criterion::kIae, Criterion::kSse, Criterion::kRmse, Criterion::kMax}) {
+      SCOPED_TRACE(family + " " + records::CriterionName(c));
+      const StackFitness f = MakeStackFitness(set, family, c, 0.01, 0.5, 3);
+      const CriterionFitness& local = *f.fitness;
+      const auto remote = RemoteCompleteFitness(
+          complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, f.options), "stack"), false);
       ASSERT_TRUE(remote);
-      if (family == model::StackFamily::kBoucWen)
+      if (family == "stack-bouc-wen")
         ExpectSameFitness(local, *remote,
                           {{0.3, 0.004, 0.002, 0.05, 400}, {1.5, 0.02, -0.01, 0.03, 5000}, {0.3, -0.05, -0.05, 0.05, 400}});
       else
@@ -154,10 +175,10 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheStackFitnessBitForBit) {
 }
 
 TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
-  const io::StackRecordSet set = StackSet();
-  const StackFitness stack(model::StackFamily::kBoucWen, set.WithRole(io::CaseRole::kTrain), FitCriterion::kIae,
-                           0.01, 0.5);
-  const job::JobSpec stack_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(stack), "ok");
+  const io::RecordSet set = StackSet();
+  const StackFitness stack = MakeStackFitness(set, "stack-bouc-wen", Criterion::kIae, 0.01, 0.5);
+  const job::JobSpec stack_ok =
+      complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*stack.fitness, stack.options), "ok");
   const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
   job::JobKindRegistry registry;
   registry.Register(complete::CompleteModelJobKind());
@@ -185,17 +206,23 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.records[1].input[7] = nan: must be finite");
   expect(edit(stack_ok, [](auto& p) { p.records[0].output[3] = INFINITY; }),
          "complete_model.records[0].output[3] = inf: must be finite");
-  expect(edit(stack_ok, [](auto& p) { p.records[0].sample_rate_hz = -5; }),
+  expect(edit(stack_ok, [](auto& p) { p.records[0].dt_s = -5; }),
+         "complete_model.records[0].dt_s = -5: must be finite and > 0");
+  expect(edit(bw_ok, [](auto& p) { p.records[0].sample_rate_hz = -5; }),
          "complete_model.records[0].sample_rate_hz = -5: must be finite and > 0");
   expect(edit(stack_ok, [](auto& p) { p.family = CompleteModelProblem::Family::kUnspecified; }),
          "complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be");
   expect(edit(stack_ok, [](auto& p) { p.records.clear(); }), "complete_model.records = 0 records: at least one");
   expect(edit(stack_ok, [](auto& p) { p.t1_s = 0.005; }), "complete_model.t1_s = 0.0050000000000000001: must be finite and > t0_s");
   expect(edit(stack_ok, [](auto& p) { p.t0_s = 0.2; }), "complete_model.records[0] = ends at 0.1198");
-  expect(edit(stack_ok, [](auto& p) { p.substeps = 2000; }), "complete_model.substeps = 2000: must be in [1, 1024]");
+  expect(edit(stack_ok, [](auto& p) { p.substeps = 2000; }), "complete_model.substeps = 2000: must be in [1, 512]");
+  expect(edit(stack_ok, [](auto& p) { p.criterion = CompleteModelProblem::Criterion::kMax; p.t0_s = p.t1_s = 0; }),
+         "complete_model.criterion = max: without a window (t0_s, t1_s) records are scored by the MSE");
+  expect(edit(stack_ok, [](auto& p) { p.family = CompleteModelProblem::Family::kStackBoucWen; }),
+         "complete_model.family = STACK_BOUC_WEN: the stack models are records families: family RECORDS");
   expect(edit(stack_ok, [](auto& p) { p.error_cost = NAN; }), "complete_model.error_cost = nan: must be finite and > 0");
-  expect(edit(stack_ok, [](auto& p) { p.records[0].first_counted = 3; }),
-         "complete_model.records[0].first_counted = 3: only the oscillator has a warm-up");
+  expect(edit(stack_ok, [](auto& p) { p.records[0].end_counted = 601; }),
+         "complete_model.records[0].end_counted = 601: must be > first_counted = 0 and <= 600 samples");
   expect(edit(bw_ok, [](auto& p) { p.records[1].first_counted = 512; }),
          "complete_model.records[1].first_counted = 512: leaves no counted sample of 512");
   expect(edit(bw_ok, [](auto& p) { p.period_samples = 300; }),
@@ -214,6 +241,8 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.records[0].input = 2018 samples per period: has the prime factor 1009 > 1000");
   expect(edit(stack_ok, [](auto& p) { p.interpolation = CompleteModelProblem::Interpolation::kFourier; }),
          "complete_model.interpolation = fourier: only the oscillator's input is interpolated");
+  expect(edit(stack_ok, [](auto& p) { p.period_samples = 10; }),
+         "complete_model.period_samples = 10: only the oscillator's FOURIER input has periods");
   expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
   expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
   job::JobSpec with_ga = bw_ok;
@@ -315,7 +344,7 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   Cluster cluster("complete-committee");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
-  const io::StackRecordSet set = StackSet();
+  const io::RecordSet set = StackSet();
   complete::CommitteeOptions o;
   o.bands.edges = {0, 50, 100};
   o.t0_s = 0.01;
@@ -328,9 +357,9 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   o.search.ga_real.generations = 3;
   const complete::CommitteeResult local = complete::RunCommittee(set, o, complete::LocalEvaluatorFactory(2));
   int sessions = 0;
-  const complete::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster));
+  const complete::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster), o.family_options);
   const complete::CommitteeResult remote =
-      complete::RunCommittee(set, o, [&](const StackFitness& f) {
+      complete::RunCommittee(set, o, [&](const CriterionFitness& f) {
         ++sessions;
         return service(f);
       });

@@ -1,7 +1,7 @@
-// Stack record sets (io/stack_records.h): the bundled data/piezo-stack-bench loads as its README
-// describes it, and malformed manifests and record files (written by the test into a temporary
-// folder) are rejected with a message naming the file, the line and the column.
-#include "io/stack_records.h"
+// The stack bench as a record set (io/records.h, the one reader): the bundled data/piezo-stack-bench
+// loads as its README describes it, and malformed manifests and record files (written by the test
+// into a temporary folder) are rejected with a message naming the file, the line and the column.
+#include "io/records.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,30 +18,41 @@ namespace pz::io {
 namespace {
 
 namespace fs = std::filesystem;
+using model::CaseRole;
 using pz::testing::InputErrorOf;
 
 const fs::path kBench = fs::path(PIEZOID_DATA_DIR) / "piezo-stack-bench";
 
+RecordReadOptions Checked() {
+  RecordReadOptions o;
+  o.check_stated_drive = true;
+  return o;
+}
+
 TEST(PiezoStackBench, HasSixteenRecordsAtEightFrequencies) {
-  const StackRecordSet set = LoadStackRecordSet(kBench);
+  const RecordSet set = LoadRecordSet(kBench, Checked());  // the drives are the stated sines
+  EXPECT_EQ(set.format, "stack-bench");
   ASSERT_EQ(set.records.size(), 16u);
   const double f[] = {10, 40, 75, 125, 175, 225, 275, 340};
   for (int i = 0; i < 16; ++i) {
-    const StackRecord& r = set.records[i];
-    EXPECT_EQ(r.number, i + 1);
+    const Record& r = set.records[i];
+    EXPECT_EQ(r.name, "record" + std::to_string(i + 1));
     EXPECT_EQ(r.frequency_hz, f[i / 2]);
-    EXPECT_EQ(r.offset_v, 400);
-    EXPECT_EQ(r.amplitude_v, i % 2 == 0 ? 400 : 300);
     EXPECT_EQ(r.role, i % 2 == 0 ? CaseRole::kTrain : CaseRole::kTest);
     EXPECT_EQ(r.t.size(), 12500u);
     EXPECT_EQ(r.y.size(), r.t.size());
-    EXPECT_NEAR(r.sample_rate_hz, 5000, 1e-6);
+    EXPECT_NEAR(r.dt, 2e-4, 1e-15);
+    EXPECT_NEAR(r.sample_rate_hz(), 5000, 1e-6);
     EXPECT_EQ(r.u[0], 400);
+    EXPECT_EQ(r.rest_samples, 1u);  // a sine from the offset
+    EXPECT_EQ(r.offset_mode, OffsetMode::kFixed);
+    EXPECT_EQ(r.offset, 0);
+    EXPECT_EQ(r.scored(), 12500u);
   }
   EXPECT_EQ(set.WithRole(CaseRole::kTrain).size(), 8u);
   EXPECT_EQ(set.WithRole(CaseRole::kTest).size(), 8u);
-  EXPECT_EQ(set.Find(3)->Label(), "record 3 (40 Hz, A = 400 V, train)");
-  EXPECT_EQ(set.Find(17), nullptr);
+  EXPECT_EQ(set.Find("record3")->Label(), "train record 'record3' (f040_train.csv, 0–2.4998 s)");
+  EXPECT_EQ(set.Find("record17"), nullptr);
 }
 
 class BadRecords : public ::testing::Test {
@@ -74,7 +85,7 @@ class BadRecords : public ::testing::Test {
     return "record,frequency_Hz,offset_V,amplitude_V,file,role\n" + rows;
   }
   std::string SetError() {
-    return InputErrorOf([&] { (void)LoadStackRecordSet(dir_); });
+    return InputErrorOf([&] { (void)LoadRecordSet(dir_, Checked()); });
   }
 
   fs::path dir_;
@@ -83,9 +94,11 @@ class BadRecords : public ::testing::Test {
 TEST_F(BadRecords, ValidSmallSetLoads) {
   Write("a.csv", Record());
   Write("records.csv", Manifest("1,10,400,100,a.csv,train\n2,10,400,100,a.csv,test\n"));
-  const StackRecordSet set = LoadStackRecordSet(dir_);
+  const RecordSet set = LoadRecordSet(dir_, Checked());
   ASSERT_EQ(set.records.size(), 2u);
-  EXPECT_NEAR(set.records[0].dt(), 1e-3, 1e-15);
+  EXPECT_NEAR(set.records[0].dt, 1e-3, 1e-15);
+  EXPECT_EQ(set.records[1].role, CaseRole::kTest);
+  EXPECT_EQ(set.records[1].frequency_hz, 10);
 }
 
 TEST_F(BadRecords, ManifestErrorsNameLineAndColumn) {
@@ -143,13 +156,11 @@ TEST_F(BadRecords, RecordFileErrorsNameLineAndColumn) {
   PZ_EXPECT_HAS(SetError(), "a.csv:3: column 'voltage_V' (2): 410 V is not offset + A sin(2 pi f t)");
   Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,nan\n0.001,406.279,20\n");
   PZ_EXPECT_HAS(SetError(), "a.csv:2: column 'displacement_um' (3)");
-  // The voltage check can be switched off.
+  // The voltage check is on request (`piezoid committee`); else the drive is the measured samples.
   Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,20\n0.001,410,20\n");
-  StackReadOptions lax;
-  lax.check_voltage = false;
-  EXPECT_EQ(LoadStackRecordSet(dir_, lax).records.size(), 1u);
-  lax.voltage_rel_tol = -1;
-  PZ_EXPECT_HAS(InputErrorOf([&] { (void)LoadStackRecordSet(dir_, lax); }), "voltage_rel_tol = -1");
+  RecordReadOptions lax;
+  lax.min_scored = 2;
+  EXPECT_EQ(LoadRecordSet(dir_, lax).records.size(), 1u);
 }
 
 }  // namespace
