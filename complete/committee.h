@@ -3,7 +3,7 @@
 //
 //  1. complete models: each model family (Bouc–Wen with driver filter, backlash-like;
 //     model/stack_models.h) identified by each optimiser (PSO, real GA, binary GA;
-//     master/param_search.h) on ALL training records; the parameters are the search space, the
+//     opt/param_search.h) on ALL training records; the parameters are the search space, the
 //     cost is the criterion (IAE by default) over the window [t0, t1] summed over the records;
 //     `repetitions` seeded runs, best kept;
 //  2. per band (default 0–50, 50–150, 150–250, 250–350 Hz; a record belongs to the band
