@@ -13,8 +13,6 @@
 #include <thread>
 
 #include "master/broker.h"
-#include "complete/job_kind.h"
-#include "diagnose/job_kind.h"
 #include "master/job_store.h"
 #include "kinds/kinds.h"
 
