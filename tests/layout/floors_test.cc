@@ -186,6 +186,53 @@ std::vector<std::string> CheckFloors(const fs::path& root) {
   return out;
 }
 
+std::string ReadFile(const fs::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+bool HasWord(const std::string& text, const std::string& word) {
+  return std::regex_search(text, std::regex("(^|[^A-Za-z0-9_])" + word + "($|[^A-Za-z0-9_])"));
+}
+
+// Every .cc of the checkout is built: its folder's CMakeLists.txt names it (its file name or
+// stem; a test tests/<folder>/<name>_test.cc by <name> in tests/CMakeLists.txt's PZ_TESTS_<folder>).
+// The CMakeLists list their sources, so a file they do not name would silently not be compiled.
+std::vector<std::string> UnlistedSources(const fs::path& root) {
+  std::vector<std::string> out;
+  std::vector<std::string> errors;
+  const Floors f = ParseFloors(root / "cmake" / "floors.txt", errors);
+  const std::string tests_cmake = ReadFile(root / "tests" / "CMakeLists.txt");
+  for (const auto& folder : f.order) {
+    if (folder == "tests/testing" || !fs::is_directory(root / folder)) continue;
+    for (const auto& e : fs::directory_iterator(root / folder)) {
+      if (e.path().extension() != ".cc") continue;
+      const std::string name = e.path().filename().string();
+      const std::string stem = e.path().stem().string();
+      bool listed;
+      if (folder.rfind("tests/", 0) == 0) {
+        const std::string group = folder.substr(6);
+        std::smatch m;
+        const std::regex set_re("set\\(PZ_TESTS_" + group + "\\s([^)]*)\\)");
+        listed = std::regex_search(tests_cmake, m, set_re) && stem.size() > 5 &&
+                 stem.compare(stem.size() - 5, 5, "_test") == 0 &&
+                 HasWord(m[1].str(), stem.substr(0, stem.size() - 5));
+      } else {
+        const std::string cmake = ReadFile(root / folder / "CMakeLists.txt");
+        listed = cmake.find(name) != std::string::npos || HasWord(cmake, stem);
+      }
+      if (!listed) {
+        out.push_back(folder + "/" + name + ": not named in " +
+                      (folder.rfind("tests/", 0) == 0 ? "tests/CMakeLists.txt" : folder + "/CMakeLists.txt"));
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::string Join(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
@@ -221,6 +268,24 @@ class ScratchTree : public ::testing::Test {
 TEST(Floors, TheSourcesKeepToTheFloors) {
   const auto violations = CheckFloors(PIEZOID_SOURCE_DIR);
   EXPECT_TRUE(violations.empty()) << Join(violations);
+}
+
+TEST(Floors, EverySourceIsListedInItsCMakeLists) {
+  const auto unlisted = UnlistedSources(PIEZOID_SOURCE_DIR);
+  EXPECT_TRUE(unlisted.empty()) << Join(unlisted);
+}
+
+TEST_F(ScratchTree, AnUnlistedSourceIsCaught) {
+  Write(root_ / "opt" / "CMakeLists.txt", "pz_cc_library(NAME opt SRCS ga.cc)\n");
+  Write(root_ / "opt" / "ga.cc", "");
+  Write(root_ / "opt" / "ga_extra.cc", "");
+  Write(root_ / "tests" / "CMakeLists.txt", "set(PZ_TESTS_opt ga\n    param_search)\n");
+  Write(root_ / "tests" / "opt" / "param_search_test.cc", "");
+  Write(root_ / "tests" / "opt" / "search_test.cc", "");
+  const auto v = UnlistedSources(root_);
+  ASSERT_EQ(v.size(), 2u) << Join(v);
+  EXPECT_EQ(v[0], "opt/ga_extra.cc: not named in opt/CMakeLists.txt");
+  EXPECT_EQ(v[1], "tests/opt/search_test.cc: not named in tests/CMakeLists.txt");
 }
 
 TEST_F(ScratchTree, APlantedUpwardIncludeIsCaught) {
