@@ -1,4 +1,4 @@
-// Speed of the complete-model optimisers (master/param_search.h) on the Bouc–Wen benchmark
+// Speed of the complete-model optimisers (opt/param_search.h) on the Bouc–Wen benchmark
 // oscillator's fitness, and of the simulator itself (model/bw_oscillator.h).
 //   BM_BwSimulate/S          one 8192-sample multisine period at S RK4 sub-steps: samples/s
 //   BM_Search_Bw/alg/threads a whole search (1 repetition, 20 particles / individuals, 10 iterations)

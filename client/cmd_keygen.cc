@@ -1,6 +1,6 @@
 // `piezoid keygen --out DIR --name NAME`: a CURVE key pair for the service (master, worker or
 // client): DIR/NAME.key (secret, mode 0600) and DIR/NAME.pub, in czmq's zcert text format
-// (master/security.h). Registered by RegisterServiceCommands.
+// (service/security.h). Registered by RegisterServiceCommands.
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>

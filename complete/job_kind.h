@@ -1,5 +1,5 @@
 // The "complete_model" job kind (issue 7): complete-model identification on the service. The
-// optimiser (PSO, real or binary GA, master/param_search.h) runs in the client (`piezoid boucwen
+// optimiser (PSO, real or binary GA, opt/param_search.h) runs in the client (`piezoid boucwen
 // --master`, `piezoid committee --master`) and evaluates its swarms / generations through an
 // evaluation session (client/service_evaluator.h); the spec (proto CompleteModelProblem) carries
 // the model family, the records and the criterion, so that the workers rebuild the client's

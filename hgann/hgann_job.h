@@ -20,7 +20,6 @@
 #include "job/job_spec.h"
 #include "model/network.h"
 #include "model/status.h"
-#include "kinds/kinds.h"
 
 namespace pz::hgann {
 

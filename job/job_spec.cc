@@ -55,7 +55,7 @@ std::vector<FieldViolation> JobSpec::Validate() const {
   if (limits.target_cost) c.Finite("limits.target_cost", *limits.target_cost);
 
   if (std::holds_alternative<HgannProblem>(problem)) {
-    // Checked by the "hgann" job kind (master/hgann_job.h), which knows the model.
+    // Checked by the "hgann" job kind (hgann/hgann_job.h), which knows the model.
   } else if (const auto* s = std::get_if<SyntheticProblem>(&problem)) {
     c.Range("synthetic.genome_bits", s->genome_bits, 1, 65536);
     c.Range("synthetic.sleep_ms", s->sleep_ms, 0.0, 60000.0);

@@ -73,7 +73,7 @@ struct HgannCaseSpec {
   std::optional<double> b1, b2;    ///< saturations [deg] (only with Saturation::kGiven)
 };
 
-/// The HGANN identification problem (job kind "hgann", master/hgann_job.h).
+/// The HGANN identification problem (job kind "hgann", hgann/hgann_job.h).
 struct HgannProblem {
   static constexpr std::string_view kKind = "hgann";  ///< JobSpec::kind()
   enum class Saturation { kFromExtremes = 0, kGiven = 1 };
@@ -172,7 +172,7 @@ struct ExternalSettings {
   std::string owner;            ///< free text, ≤ 200 chars
 };
 
-/// Settings of the HGANN binary GA (master/ga.h GaOptions; genome length, seed, target and error
+/// Settings of the HGANN binary GA (opt/ga.h GaOptions; genome length, seed, target and error
 /// cost come from the problem, the spec's seed and its limits).
 struct GaSettings {
   int population = 400;                ///< 2..1000000

@@ -2,7 +2,7 @@
 // the workers, the fuzzer, the client (local runs, spec checks before submission) — takes its
 // registry from All(), so a kind added here is available everywhere, and nowhere else needs to
 // change. Each kind lives with its problem:
-//   synthetic       kinds/synthetic.cc       tests and benchmarks (null / function cost, sleeps,
+//   synthetic       kinds/kinds.cc           tests and benchmarks (null / function cost, sleeps,
 //                                            an optional crash prefix)
 //   hgann           hgann/hgann_job.h        the paper's bimorph-fin identification
 //   diagnose        diagnose/job_kind.h      one model structure of the sim-to-real diagnosis

@@ -8,7 +8,7 @@
 // frame gets a typed error answer (CODE_MALFORMED / CODE_VERSION_MISMATCH) and is counted.
 //
 // Security (docs/service.md, "Security"): with `curve` set both sockets are CURVE servers and a
-// ZAP handler (master/security.h) admits only the allowed worker / client keys. Limits on client
+// ZAP handler (service/security.h) admits only the allowed worker / client keys. Limits on client
 // submissions: a spec above max_spec_bytes serialised is refused (CODE_INVALID_ARGUMENT, field
 // "spec"), and a client identity (its CURVE key name, or its IP address without CURVE) with
 // max_jobs_per_client running jobs gets CODE_RESOURCE_EXHAUSTED.

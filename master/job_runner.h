@@ -1,5 +1,5 @@
 // One job's generation loop, shared by the master's job threads and in-process runs so both are
-// the same computation: the project GA (master/ga.h) configured from the job spec, restored from a
+// the same computation: the project GA (opt/ga.h) configured from the job spec, restored from a
 // checkpoint, stepped one generation at a time through any BatchEvaluator.
 #pragma once
 

@@ -14,8 +14,6 @@
 
 #include "master/broker.h"
 #include "master/checkpoint.h"
-#include "complete/job_kind.h"
-#include "diagnose/job_kind.h"
 #include "master/job_store.h"
 #include "kinds/kinds.h"
 

@@ -18,7 +18,7 @@
 //   3. returns y at the input samples (y[0] = the initial state's y).
 //
 // With the true parameters, 20 sub-steps and Fourier interpolation, the simulated multisine test
-// output is within 2.3e-7 m RMS of the official one (tests/model/bw_oscillator_test.cc), the floor
+// output is within 2.3e-7 m RMS of the official one (tests/complete/bw_oscillator_test.cc), the floor
 // the benchmark README measured: the integrator matches the generator.
 #pragma once
 

@@ -12,7 +12,7 @@
 //   3. the offspring (and only they) are evaluated as one batch, population indices E … N − 1;
 //   4. the N individuals are ranked by (cost, index), stable; penalised and failed individuals rank
 //      by their finite penalty cost. The best individual never gets worse (elitism).
-// One seeded generator (master/random.h), owned by the GA, drives every random choice in a fixed
+// One seeded generator (opt/random.h), owned by the GA, drives every random choice in a fixed
 // order, so the run is a function of (options, seed, fitness) alone: the evaluator, its thread
 // count and the order in which results arrive cannot change it.
 //

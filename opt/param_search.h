@@ -1,6 +1,6 @@
 // Complete-model identification (issue 7, seed 002): the physical parameters themselves are the
 // search space. Three optimisers, all evaluating whole swarms / generations through the
-// BatchEvaluator seam (master/evaluator.h), so the same search runs inline, on a thread pool or on
+// BatchEvaluator seam (opt/evaluator.h), so the same search runs inline, on a thread pool or on
 // the service's workers:
 //
 //   kPso       particle swarm: inertia decreasing linearly from inertia_start to inertia_end over
@@ -9,14 +9,14 @@
 //              component changes sign), global-best topology;
 //   kGaReal    real-coded GA: elitism, k-tournament selection, SBX (or BLX-α) crossover, Gaussian
 //              mutation, children reflected into the box;
-//   kGaBinary  the project's binary GA (master/ga.h), each parameter a bits_per_parameter gene
+//   kGaBinary  the project's binary GA (opt/ga.h), each parameter a bits_per_parameter gene
 //              (Gray code by default) decoded to a real before evaluation.
 //
 // The search space is the unit box [0, 1]^d: coordinate x maps to lower + x (upper − lower), or to
 // 10^(log10 lower + x (log10 upper − log10 lower)) for log-scaled parameters. Genomes handed to the
 // evaluator carry the physical values in Genome::reals (bits empty).
 //
-// Determinism: one generator (master/random.h) per repetition, seeded with seed + repetition,
+// Determinism: one generator (opt/random.h) per repetition, seeded with seed + repetition,
 // drives every random choice in a fixed order on the calling thread; the evaluator only computes
 // costs. So the result is a function of (box, options, fitness) alone, bit for bit, whatever the
 // evaluator or its thread count. Ties between equal costs go to the lower index (particle,
@@ -107,7 +107,7 @@ struct RealGaOptions {
 struct BinaryGaOptions {
   int bits_per_parameter = 16;  ///< 2 … 52
   bool gray_code = true;        ///< genes are Gray-coded (else plain binary)
-  /// The project GA (master/ga.h). genome_bits and seed are set by Search (bits_per_parameter ·
+  /// The project GA (opt/ga.h). genome_bits and seed are set by Search (bits_per_parameter ·
   /// parameters; seed + repetition); the other fields are used as given. The defaults below are
   /// a small-problem setting, not the HGANN paper's.
   GaOptions ga = [] {
@@ -171,7 +171,7 @@ struct SearchResult {
 
 /// A FitnessFunction from a callable of the physical values (Genome::reals). The callable must be
 /// thread-safe when used with a thread pool; exceptions and non-finite costs are turned into kError
-/// results by the evaluators (master/inline_evaluator.h).
+/// results by the evaluators (opt/inline_evaluator.h).
 class FunctionFitness final : public FitnessFunction {
  public:
   using Function = std::function<FitnessResult(std::span<const double> values)>;

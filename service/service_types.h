@@ -1,4 +1,4 @@
-// Domain structs of the service protocol (proto/wire.proto decoded by master/wire_codec.h):
+// Domain structs of the service protocol (proto/wire.proto decoded by service/wire_codec.h):
 // the master, the workers and the client library only handle these, never protobuf types.
 #pragma once
 
@@ -44,7 +44,7 @@ struct ScoredGenome {
   opt::FitnessResult fitness;
 };
 
-/// One generation of a job (proto GenerationRecord; master/ga.h GenerationSummary).
+/// One generation of a job (proto GenerationRecord; opt/ga.h GenerationSummary).
 /// One generation's record (a batch's, for an evaluation session) is the GA's own summary: the
 /// service stores, sends and shows it as it is (opt/ga.h).
 using GenerationRecord = opt::GenerationSummary;

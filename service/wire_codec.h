@@ -1,5 +1,5 @@
 // The edge between protobuf (proto/job.proto, proto/wire.proto) and the domain structs of
-// master/service_types.h: the only file that sees generated protobuf types on the service side.
+// service/service_types.h: the only file that sees generated protobuf types on the service side.
 // Decoders never throw: they return kDataLoss for a frame that does not decode (or decodes to
 // inconsistent content) and kFailedPrecondition for another protocol or format version.
 #pragma once

@@ -5,8 +5,6 @@
 #include <csignal>
 #include <thread>
 
-#include "complete/job_kind.h"
-#include "diagnose/job_kind.h"
 #include "model/arithmetic.h"
 #include "worker/worker.h"
 #include "kinds/kinds.h"

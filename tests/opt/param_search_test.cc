@@ -1,4 +1,4 @@
-// Complete-model optimisers (master/param_search.h): PSO, real-coded GA and binary GA reach the
+// Complete-model optimisers (opt/param_search.h): PSO, real-coded GA and binary GA reach the
 // known minima of Rosenbrock and Rastrigin; the same seed gives the same result bit for bit inline
 // and on a 2-thread pool; bad boxes and options are refused naming the field; Gray decoding.
 #include "opt/param_search.h"

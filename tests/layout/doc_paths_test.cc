@@ -1,0 +1,160 @@
+// Every repository path named in README.md and docs/*.md exists. A path is a token like
+// `opt/param_search.h`, `client/dashboard/`, `tests/deploy/*_test.sh` or `client/plots.{h,cc}`
+// whose first part is an entry of the repository's top folder (or, starting with ../, one that
+// resolves inside the repository from the document's folder); `*` must match at least one entry
+// and `{a,b}` names each alternative.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// `pattern` with its first {a,b,...} expanded, recursively.
+std::vector<std::string> ExpandBraces(const std::string& pattern) {
+  const auto open = pattern.find('{');
+  const auto close = pattern.find('}', open);
+  if (open == std::string::npos || close == std::string::npos) return {pattern};
+  std::vector<std::string> out;
+  const std::string alts = pattern.substr(open + 1, close - open - 1);
+  for (size_t start = 0;;) {
+    const auto comma = alts.find(',', start);
+    const std::string alt = alts.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    for (auto& s : ExpandBraces(pattern.substr(0, open) + alt + pattern.substr(close + 1))) {
+      out.push_back(std::move(s));
+    }
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+// Whether `name` matches `glob` ('*' = any run of characters).
+bool Matches(const std::string& glob, const std::string& name) {
+  std::string re;
+  for (char c : glob) re += c == '*' ? std::string(".*") : std::regex_replace(std::string(1, c),
+                                                                              std::regex(R"([.^$|()\[\]{}+?\\])"),
+                                                                              R"(\$&)");
+  return std::regex_match(name, std::regex(re));
+}
+
+// Whether `rel` (relative to root, '/'-separated, may hold '*' in its parts) names something.
+bool Exists(const fs::path& root, const std::string& rel) {
+  std::vector<fs::path> here = {root};
+  size_t start = 0;
+  while (start < rel.size()) {
+    const auto slash = rel.find('/', start);
+    const std::string part = rel.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
+    start = slash == std::string::npos ? rel.size() : slash + 1;
+    if (part.empty()) continue;
+    std::vector<fs::path> next;
+    for (const auto& dir : here) {
+      if (part.find('*') == std::string::npos) {
+        if (fs::exists(dir / part)) next.push_back(dir / part);
+      } else if (fs::is_directory(dir)) {
+        for (const auto& e : fs::directory_iterator(dir)) {
+          if (Matches(part, e.path().filename().string())) next.push_back(e.path());
+        }
+      }
+    }
+    here = std::move(next);
+    if (here.empty()) return false;
+  }
+  return true;
+}
+
+// The repository paths named in `doc` that do not exist, as "doc:line: path".
+std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc) {
+  std::set<std::string> top;
+  for (const auto& e : fs::directory_iterator(root)) {
+    const auto name = e.path().filename().string();
+    if (name[0] != '.' && !fs::exists(e.path() / "CMakeCache.txt")) top.insert(name);
+  }
+  const std::string doc_dir = fs::relative(doc.parent_path(), root).generic_string();
+  // A token: optional ../ steps, then parts of path characters separated by '/', not preceded by
+  // a character that would make it part of a URL or a longer word.
+  static const std::regex kToken(R"((^|[^A-Za-z0-9_./:~@$<-])((?:\.\./)*[A-Za-z0-9_.-]+(?:/[A-Za-z0-9_.*@{},-]+)+/?))");
+  std::vector<std::string> out;
+  std::ifstream in(doc);
+  std::string line;
+  for (int n = 1; std::getline(in, line); ++n) {
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), kToken); it != std::sregex_iterator(); ++it) {
+      std::string token = (*it)[2];
+      while (!token.empty() && (token.back() == '.' || token.back() == ',')) token.pop_back();
+      std::string rel = token;
+      if (rel.rfind("../", 0) == 0) {
+        // Relative to the document's folder; a path leaving the repository is not one of its paths.
+        fs::path p = fs::path(doc_dir) / rel;
+        rel = p.lexically_normal().generic_string();
+        if (rel.rfind("..", 0) == 0) continue;
+      }
+      if (!top.count(rel.substr(0, rel.find('/')))) continue;
+      for (const auto& alt : ExpandBraces(rel)) {
+        if (!Exists(root, alt)) {
+          out.push_back(fs::relative(doc, root).generic_string() + ":" + std::to_string(n) + ": " + token +
+                        (alt == rel ? "" : " (" + alt + ")"));
+        }
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<fs::path> Docs(const fs::path& root) {
+  std::vector<fs::path> docs = {root / "README.md"};
+  for (const auto& e : fs::directory_iterator(root / "docs")) {
+    if (e.path().extension() == ".md") docs.push_back(e.path());
+  }
+  return docs;
+}
+
+std::string Join(const std::vector<std::string>& lines) {
+  std::string s;
+  for (const auto& l : lines) s += l + "\n";
+  return s;
+}
+
+}  // namespace
+
+TEST(DocPaths, EveryRepositoryPathInTheDocsExists) {
+  const fs::path root = PIEZOID_SOURCE_DIR;
+  std::vector<std::string> missing;
+  size_t docs = 0;
+  for (const auto& doc : Docs(root)) {
+    ++docs;
+    for (auto& m : MissingPaths(root, doc)) missing.push_back(std::move(m));
+  }
+  EXPECT_GE(docs, 2u);
+  EXPECT_TRUE(missing.empty()) << Join(missing);
+}
+
+// The check on a scratch repository: stale paths are named with their line, the rest pass.
+TEST(DocPaths, AStalePathIsCaught) {
+  const fs::path root = fs::temp_directory_path() / ("pz_doc_paths_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "docs");
+  fs::create_directories(root / "opt");
+  fs::create_directories(root / "master");
+  fs::create_directories(root / "tests" / "deploy");
+  std::ofstream(root / "opt" / "ga.h") << "";
+  std::ofstream(root / "opt" / "ga.cc") << "";
+  std::ofstream(root / "tests" / "deploy" / "netns_test.sh") << "";
+  std::ofstream(root / "docs" / "a.md")
+      << "The GA: `opt/ga.h`, `opt/ga.{h,cc}` and [the page](../opt/ga.h), tests/deploy/*_test.sh.\n"
+         "See https://example.org/opt/nothing.h, state/jobs/<id>/spec.pb and ../../outside/x.h.\n"
+         "Moved: `master/ga.h`, opt/{ga,gone}.h, tests/deploy/*_validate.sh, ../opt/old.h.\n";
+  const auto missing = MissingPaths(root, root / "docs" / "a.md");
+  fs::remove_all(root);
+  ASSERT_EQ(missing.size(), 4u) << Join(missing);
+  EXPECT_EQ(missing[0], "docs/a.md:3: master/ga.h");
+  EXPECT_EQ(missing[1], "docs/a.md:3: opt/{ga,gone}.h (opt/gone.h)");
+  EXPECT_EQ(missing[2], "docs/a.md:3: tests/deploy/*_validate.sh");
+  EXPECT_EQ(missing[3], "docs/a.md:3: ../opt/old.h");
+}
