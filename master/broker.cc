@@ -211,6 +211,8 @@ struct Broker::Impl {
     w.tasks_done = local.tasks_done;
     w.results_ignored = local.results_ignored;
     w.bad_frames = local.bad_frames;
+    w.speculative_leases = local.speculative_leases;
+    w.speculative_wins = local.speculative_wins;
     w.uptime_s = std::chrono::duration<double>(Clock::now() - started).count();
     return w;
   }
@@ -479,9 +481,12 @@ struct Broker::Impl {
     ++local.results_accepted;
     {
       std::lock_guard lock(j.ticket->mu);
+      bool counted = false;
       for (size_t i = 0; i < r.indices.size(); ++i) {
         const int pos = lease->positions[i];
         if (dispatcher.MarkDone(lease->job_id, lease->generation, pos)) {
+          if (lease->speculative && !counted) ++local.speculative_wins;
+          counted = true;
           j.ticket->results[pos] = r.results[i];
           ++local.tasks_done;
           if (auto m = worker_meta.find(id); m != worker_meta.end()) ++m->second.tasks_done;
@@ -507,6 +512,10 @@ struct Broker::Impl {
       }
       SendToWorker(lease->worker, m);
       ++local.leases_sent;
+      if (lease->speculative) {
+        ++local.speculative_leases;
+        spdlog::debug("job {}: a copy of a straggling lease to worker {}", lease->job_id, Hex(lease->worker));
+      }
     }
   }
 

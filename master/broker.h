@@ -82,6 +82,8 @@ struct BrokerStats {
   uint64_t tasks_done = 0;
   uint64_t refused_submissions = 0;  ///< spec too large or too many jobs of a client
   uint64_t dropped_watchers = 0;     ///< the oldest watcher of a job at the maximum, for a new one
+  uint64_t speculative_leases = 0;   ///< copies of straggling leases sent
+  uint64_t speculative_wins = 0;     ///< … that answered first for at least one task
 };
 
 class Broker {

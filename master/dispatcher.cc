@@ -179,6 +179,7 @@ Lease Dispatcher::Grant(const std::string& job_id, JobTasks& job, const std::str
   l.positions = std::move(positions);
   l.solo = solo;
   const int n = static_cast<int>(l.positions.size());
+  l.rounds = (n + worker.threads - 1) / worker.threads;
   worker.leases += 1;
   worker.items += n;
   worker.exclusive = solo;
@@ -241,7 +242,7 @@ std::optional<Lease> Dispatcher::NextLease(TimePoint now) {
       job_id = &id;
     }
   }
-  if (!job) return std::nullopt;
+  if (!job) return Speculate(now);
   // The worker: with room, least loaded per thread; ties: served longest ago.
   WorkerSlot* worker = nullptr;
   const std::string* worker_id = nullptr;
@@ -284,8 +285,61 @@ std::optional<Lease> Dispatcher::Complete(const std::string& worker, uint64_t le
       std::isfinite(eval_seconds)) {
     const double item = std::max(1e-7, eval_seconds / static_cast<double>(l.positions.size()));
     w->second.item_s = w->second.item_s < 0 ? item : 0.7 * w->second.item_s + 0.3 * item;
+    // The generation's time per task, for its stragglers: per thread, as the holder ran it.
+    if (auto j = jobs_.find(l.job_id); j != jobs_.end() && j->second.generation == l.generation && !l.speculative)
+      j->second.task_s.push_back(item);
   }
   return l;
+}
+
+TimePoint Dispatcher::StragglerAt(const Lease& l) const {
+  if (options_.speculate_after <= 0 || l.speculative || l.copied || l.solo) return TimePoint::max();
+  auto j = jobs_.find(l.job_id);
+  if (j == jobs_.end() || j->second.generation != l.generation || j->second.task_s.empty())
+    return TimePoint::max();
+  std::vector<double> t = j->second.task_s;
+  std::nth_element(t.begin(), t.begin() + static_cast<long>(t.size() / 2), t.end());
+  const double expected = t[t.size() / 2] * l.rounds;
+  const double after = std::max(options_.speculate_min_s, options_.speculate_after * expected);
+  return l.granted + std::chrono::duration_cast<Duration>(std::chrono::duration<double>(after));
+}
+
+std::optional<Lease> Dispatcher::Speculate(TimePoint now) {
+  if (options_.speculate_after <= 0) return std::nullopt;
+  // An idle worker, served longest ago (one that holds no lease holds no straggler either).
+  WorkerSlot* idle = nullptr;
+  const std::string* idle_id = nullptr;
+  for (auto& [id, w] : workers_) {
+    if (w.exclusive || w.leases > 0) continue;
+    if (!idle || w.last_served < idle->last_served) {
+      idle = &w;
+      idle_id = &id;
+    }
+  }
+  if (!idle) return std::nullopt;
+  // The stragglers of the jobs that have nothing else to hand out, the one granted first.
+  for (;;) {
+    Lease* straggler = nullptr;
+    for (auto& [id, l] : leases_) {
+      auto j = jobs_.find(l.job_id);
+      if (j == jobs_.end() || !j->second.pending.empty() || !j->second.suspects.empty()) continue;
+      if (StragglerAt(l) > now) continue;
+      if (!straggler || l.granted < straggler->granted) straggler = &l;
+    }
+    if (!straggler) return std::nullopt;
+    straggler->copied = true;  // once, whether or not anything is left to copy
+    JobTasks& job = jobs_.at(straggler->job_id);
+    std::vector<int> left;
+    for (int p : straggler->positions)
+      if (!job.done[p]) left.push_back(p);
+    if (left.empty()) continue;
+    const std::string job_id = straggler->job_id;
+    Lease copy = Grant(job_id, job, *idle_id, *idle, std::move(left), /*solo=*/false, now);
+    copy.speculative = true;
+    leases_.at(copy.id).speculative = true;
+    ++speculative_leases_;
+    return copy;
+  }
 }
 
 std::vector<Quarantined> Dispatcher::Requeue(const Lease& lease, RequeueCause cause, TimePoint now) {
@@ -332,7 +386,14 @@ std::vector<Quarantined> Dispatcher::ExpireLeases(TimePoint now) {
 
 TimePoint Dispatcher::NextDeadline() const {
   TimePoint t = TimePoint::max();
-  for (const auto& [id, l] : leases_) t = std::min(t, l.deadline);
+  bool idle = false;  // straggler times matter only while a worker could take a copy
+  for (const auto& [id, w] : workers_) idle = idle || (!w.exclusive && w.leases == 0);
+  for (const auto& [id, l] : leases_) {
+    t = std::min(t, l.deadline);
+    if (!idle) continue;
+    auto j = jobs_.find(l.job_id);
+    if (j != jobs_.end() && j->second.pending.empty() && j->second.suspects.empty()) t = std::min(t, StragglerAt(l));
+  }
   if (!candidates_.empty()) t = std::min(t, candidates_.front().at + quiet_window());
   return t;
 }

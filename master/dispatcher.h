@@ -23,6 +23,12 @@
 //    Under churn, deaths are never isolated, so they never strike: the result stays bit-identical.
 //  * Results count once: a position already done, or a lease no longer held by the sender, or an
 //    old generation, is ignored.
+//  * Stragglers (speculative re-dispatch): once a job has nothing left to hand out, a lease that has
+//    run longer than `speculate_after` × the expected time (the generation's median time per task
+//    of the leases completed so far × the lease's rounds, and at least `speculate_min_s`) gets one
+//    copy, on an idle worker other than its holder. The first answer for each task counts and the
+//    other is ignored (results are a function of the genome alone, so the job's result does not
+//    change); a copy is never copied again, and a solo (suspect) lease is never copied.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +51,10 @@ struct DispatchOptions {
   int leases_per_worker = 2;     ///< pipelining depth, ≥ 1
   /// A death strikes a task only if no other worker left within this long before or after [s].
   double quiet_window_s = 5.0;
+  /// A lease running longer than this many times its expected time gets a copy on an idle worker
+  /// when its job has nothing else to hand out; 0 = never.
+  double speculate_after = 3.0;
+  double speculate_min_s = 0.2;  ///< … and at least this long [s]
 };
 
 /// Why a lease's tasks go back to the queue.
@@ -62,6 +72,9 @@ struct Lease {
   std::vector<int> positions;
   TimePoint granted{}, deadline{};
   bool solo = false;  ///< one suspect on an otherwise idle worker, which gets nothing else meanwhile
+  bool speculative = false;  ///< a copy of a straggling lease (see Stragglers above)
+  bool copied = false;       ///< a copy of this lease was handed out
+  int rounds = 1;            ///< ⌈tasks / the holder's threads⌉ when granted
 };
 
 /// A task quarantined by Requeue.
@@ -113,6 +126,9 @@ class Dispatcher {
   TimePoint NextDeadline() const;
   size_t leases_outstanding() const { return leases_.size(); }
 
+  /// Copies of straggling leases handed out since the start.
+  uint64_t speculative_leases() const { return speculative_leases_; }
+
   /// Measured time of one evaluation on one thread of the worker [s] (< 0 when unknown).
   double worker_item_seconds(const std::string& id) const;
 
@@ -136,6 +152,7 @@ class Dispatcher {
     std::vector<uint8_t> done;
     std::vector<std::vector<std::string>> struck_by;  ///< distinct workers that gave evidence
     uint64_t last_served = 0;
+    std::vector<double> task_s;  ///< time per task of each lease of this generation completed [s]
   };
   struct WorkerSlot {
     int threads = 1;
@@ -156,6 +173,11 @@ class Dispatcher {
     bool Held(const std::string& job, uint64_t generation, int position) const;
   };
   bool HasRoom(const WorkerSlot& w) const;
+  /// When the lease becomes a straggler (TimePoint::max() if it cannot: a copy, solo, copied, or
+  /// no completed lease of its generation to compare with).
+  TimePoint StragglerAt(const Lease& l) const;
+  /// A copy of a straggling lease for an idle worker, if any.
+  std::optional<Lease> Speculate(TimePoint now);
   int BatchSize(const WorkerSlot& w, const JobTasks& j) const;
   void Release(const Lease& lease);
   Lease Grant(const std::string& job_id, JobTasks& job, const std::string& worker_id, WorkerSlot& worker,
@@ -174,6 +196,7 @@ class Dispatcher {
   std::map<uint64_t, Lease> leases_;
   std::deque<Departure> departures_;  ///< recent, oldest first (kept 2 quiet windows)
   std::deque<Departure> candidates_;  ///< solo deaths awaiting ConfirmStrikes, oldest first
+  uint64_t speculative_leases_ = 0;
 };
 
 }  // namespace pz::master

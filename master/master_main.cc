@@ -110,6 +110,12 @@ void AddFlags(CLI::App& app, Flags& flags) {
   app.add_option("--target-batch-s", broker.dispatch.target_batch_s,
                  "work per lease, by the worker's measured speed [s]")
       ->capture_default_str();
+  app.add_option("--speculate-after", broker.dispatch.speculate_after,
+                 "a lease running this many times longer than expected (the generation's median time per "
+                 "task) once its job has nothing else to hand out gets a copy on an idle worker; the first "
+                 "answer counts (0 = never)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
   app.add_option("--quiet-window-s", broker.dispatch.quiet_window_s,
                  "a worker's death while it runs a suspect task alone counts against the task only if no "
                  "other worker left this long before or after (at least 2 liveness timeouts) [s]")
@@ -173,14 +179,15 @@ int Serve(const Flags& flags) {
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
 
-  if (!broker.allow_mixed_arithmetic) {
+  pz::master::BrokerOptions options = broker;
+  if (!options.allow_mixed_arithmetic) {
     if (auto pinned = pz::master::PinnedArithmetic(pz::master::JobDirectory(store.state_dir))) {
-      broker.pinned_arithmetic = pinned->profile;
-      broker.pinned_by = pinned->why;
+      options.pinned_arithmetic = pinned->profile;
+      options.pinned_by = pinned->why;
       spdlog::info("serving workers of arithmetic profile '{}' ({})", pinned->profile, pinned->why);
     }
   }
-  pz::master::Broker b(broker);
+  pz::master::Broker b(options);
   pz::master::JobStore jobs(store, b, pz::kinds::All());
   if (pz::Status s = b.Start(&jobs); !s.ok()) {
     spdlog::critical("{}", s.message());

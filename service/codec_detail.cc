@@ -247,6 +247,8 @@ void ToProto(const WorkersSnapshot& w, pw::WorkersReply* q) {
   q->set_results_ignored(w.results_ignored);
   q->set_bad_frames(w.bad_frames);
   q->set_uptime_s(w.uptime_s);
+  q->set_speculative_leases(w.speculative_leases);
+  q->set_speculative_wins(w.speculative_wins);
 }
 
 WorkersSnapshot FromProto(const pw::WorkersReply& q) {
@@ -273,6 +275,8 @@ WorkersSnapshot FromProto(const pw::WorkersReply& q) {
   w.tasks_done = q.tasks_done();
   w.results_ignored = q.results_ignored();
   w.bad_frames = q.bad_frames();
+  w.speculative_leases = q.speculative_leases();
+  w.speculative_wins = q.speculative_wins();
   w.uptime_s = q.uptime_s();
   return w;
 }

@@ -169,6 +169,8 @@ struct WorkersSnapshot {
   std::vector<WorkerView> workers;
   std::vector<WorkerDepartureView> departed;  ///< most recent last
   uint64_t leases_sent = 0, tasks_done = 0, results_ignored = 0, bad_frames = 0;
+  uint64_t speculative_leases = 0;  ///< copies of straggling leases sent
+  uint64_t speculative_wins = 0;    ///< … that answered first for at least one task
   double uptime_s = 0;
   bool operator==(const WorkersSnapshot&) const = default;
 };

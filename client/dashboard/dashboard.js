@@ -207,8 +207,10 @@ async function tick(once) {
         ? 'master not answering: ' + state.error
         : 'updated ' + fmtTime(state.polled_unix_s);
     document.getElementById('poll').className = state.error ? 'error' : 'muted';
-    document.getElementById('uptime').textContent = state.workers && Number(state.workers.uptime_s) > 0
-        ? 'master up ' + fmtDuration(state.workers.uptime_s) : '';
+    const spec = state.workers ? num(state.workers.speculative_leases) : 0;
+    document.getElementById('uptime').textContent = (state.workers && Number(state.workers.uptime_s) > 0
+        ? 'master up ' + fmtDuration(state.workers.uptime_s) : '') +
+        (spec > 0 ? ' · stragglers: ' + spec + ' copies sent, ' + num(state.workers.speculative_wins) + ' answered first' : '');
     renderJobs(state);
     renderWorkers(state);
     renderFailures(state);

@@ -243,5 +243,84 @@ TEST(Dispatcher, BatchSizeAdaptsToWorkerSpeed) {
   EXPECT_EQ(second->positions.size(), 200u);  // 100 rounds of 2 threads ≈ 1 s
 }
 
+// Stragglers: with nothing left to hand out, a lease running 3× longer than the generation's
+// median time per task (and at least 0.2 s) gets one copy on an idle worker; the first answer
+// counts.
+TEST(Dispatcher, AStragglingLeaseGetsOneCopyOnAnIdleWorkerAndTheFirstAnswerCounts) {
+  Dispatcher d;
+  for (const char* w : {"w1", "w2", "w3"}) d.AddWorker(w, 1);
+  d.StartGeneration("j", 0, 3, 60, 3);
+  std::vector<Lease> ls;
+  while (auto l = d.NextLease(t0)) ls.push_back(*l);
+  ASSERT_EQ(ls.size(), 3u);
+  for (int i = 0; i < 2; ++i) {
+    ASSERT_TRUE(d.Complete(ls[i].worker, ls[i].id, 0.01));
+    ASSERT_TRUE(d.MarkDone("j", 0, ls[i].positions[0]));
+  }
+  const Lease& slow = ls[2];
+  EXPECT_LE(d.NextDeadline(), t0 + milliseconds(200)) << "the broker wakes when the straggler is due";
+  EXPECT_FALSE(d.NextLease(t0 + milliseconds(150))) << "not yet a straggler";
+  auto copy = d.NextLease(t0 + milliseconds(250));
+  ASSERT_TRUE(copy);
+  EXPECT_TRUE(copy->speculative);
+  EXPECT_NE(copy->worker, slow.worker);
+  EXPECT_EQ(copy->positions, slow.positions);
+  EXPECT_FALSE(d.NextLease(t0 + seconds(5))) << "one copy per lease, and a copy is never copied";
+  EXPECT_EQ(d.speculative_leases(), 1u);
+  // The copy answers first: it counts; the straggler's late answer is ignored.
+  ASSERT_TRUE(d.Complete(copy->worker, copy->id, 0.01));
+  EXPECT_TRUE(d.MarkDone("j", 0, copy->positions[0]));
+  EXPECT_EQ(d.remaining("j"), 0);
+  ASSERT_TRUE(d.Complete(slow.worker, slow.id, 1.0));
+  EXPECT_FALSE(d.MarkDone("j", 0, slow.positions[0]));
+}
+
+TEST(Dispatcher, NoCopyWithoutAnIdleWorkerWhenTurnedOffOrForASuspect) {
+  {
+    DispatchOptions o;
+    o.speculate_after = 0;
+    Dispatcher d(o);
+    d.AddWorker("w1", 1);
+    d.AddWorker("w2", 1);
+    d.StartGeneration("j", 0, 2, 60, 3);
+    auto a = d.NextLease(t0), b = d.NextLease(t0);
+    ASSERT_TRUE(a && b);
+    ASSERT_TRUE(d.Complete(a->worker, a->id, 0.01));
+    EXPECT_FALSE(d.NextLease(t0 + seconds(10)));
+  }
+  {
+    Dispatcher d;  // two workers, both busy: nobody idle to take a copy
+    d.AddWorker("w1", 1);
+    d.AddWorker("w2", 1);
+    d.StartGeneration("j", 0, 3, 60, 3);
+    auto a = d.NextLease(t0), b = d.NextLease(t0);
+    ASSERT_TRUE(a && b);
+    ASSERT_TRUE(d.Complete(a->worker, a->id, 0.01));
+    ASSERT_TRUE(d.MarkDone("j", 0, a->positions[0]));
+    auto c = d.NextLease(t0 + milliseconds(10));  // the last task, to the worker that answered
+    ASSERT_TRUE(c);
+    EXPECT_FALSE(c->speculative);
+    EXPECT_FALSE(d.NextLease(t0 + seconds(10)));
+    EXPECT_EQ(d.speculative_leases(), 0u);
+  }
+  {
+    Dispatcher d;  // a suspect runs alone and is never copied
+    d.AddWorker("w1", 1);
+    d.AddWorker("w2", 1);
+    d.AddWorker("w3", 1);
+    d.StartGeneration("j", 0, 2, 60, 3);
+    auto a = d.NextLease(t0), b = d.NextLease(t0);
+    ASSERT_TRUE(a && b);
+    ASSERT_TRUE(d.Complete(a->worker, a->id, 0.01));
+    ASSERT_TRUE(d.MarkDone("j", 0, a->positions[0]));
+    d.RemoveWorker(b->worker, /*lost=*/true, t0 + milliseconds(20));
+    auto solo = d.NextLease(t0 + milliseconds(30));
+    ASSERT_TRUE(solo);
+    EXPECT_TRUE(solo->solo);
+    EXPECT_FALSE(d.NextLease(t0 + seconds(10)));
+    EXPECT_EQ(d.speculative_leases(), 0u);
+  }
+}
+
 }  // namespace
 }  // namespace pz::master
