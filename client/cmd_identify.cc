@@ -37,10 +37,11 @@ struct Progress {
     const int filled = max_generations > 0 ? static_cast<int>(width * g.generation / max_generations) : width;
     std::string bar(filled, '#');
     bar.resize(width, '.');
-    std::fprintf(stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s  %.0f s%s",
+    const std::string islands = IslandsBrief(g);
+    std::fprintf(stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s%s  %.0f s%s",
                  tty ? "\r" : "", bar.c_str(), static_cast<unsigned long long>(g.generation), max_generations,
-                 g.best_cost, g.mean_cost, g.stall, rate, g.best_description.substr(0, 5).c_str(), elapsed,
-                 tty ? "   " : "\n");
+                 g.best_cost, g.mean_cost, g.stall, rate, g.best_description.substr(0, 5).c_str(), islands.c_str(),
+                 elapsed, tty ? "   " : "\n");
     std::fflush(stderr);
   }
 };
@@ -71,6 +72,21 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   cmd->add_option("--mutation", opts->ga.mutation_probability, "per-bit mutation probability (paper: 0.01)")
       ->capture_default_str();
+  cmd->add_option("--islands", opts->ga.islands,
+                  "populations of --population each, bred apart and evaluated together (1 = one population)")
+      ->capture_default_str();
+  cmd->add_option("--migration-interval", opts->ga.migration_interval,
+                  "generations between migrations of the islands' best (0 = never: independent runs, best kept)")
+      ->capture_default_str();
+  cmd->add_option("--migrants", opts->ga.migrants, "individuals each island sends per migration")
+      ->capture_default_str();
+  auto topology = std::make_shared<std::string>(opt::TopologyName(opts->ga.topology));
+  cmd->add_option("--topology", *topology, "who sends migrants to whom: ring, fully_connected, random (seeded)")
+      ->capture_default_str();
+  cmd->add_option("--island-stall", opts->ga.island_stall_generations,
+                  "restart an island (its sources' migrants + fresh random individuals) after this many "
+                  "generations without a better best of its own (0 = never)")
+      ->capture_default_str();
   cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--ranges", opts->ranges,
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
@@ -85,6 +101,9 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     opts->cases_dir = *cases;
     opts->out_dir = *out;
     opts->plots = !*no_plots;
+    const auto parsed_topology = opt::ParseTopology(*topology);
+    if (!parsed_topology) throw InputError(FieldError("--topology", *topology, opt::kTopologyRule));
+    opts->ga.topology = *parsed_topology;
     const auto ranges = hgann::RangesPreset(opts->ranges);
     if (!ranges) throw InputError(FieldError("--ranges", opts->ranges, hgann::kRangesPresetRule));
     ThrowIfError(opts->ga.Validate());
@@ -92,9 +111,10 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     auto config = hgann::HgannConfigFromCaseSet(set, *ranges);
     config.spread_penalty = opts->spread_penalty;
     const hgann::HgannFitness fitness(std::move(config));
-    std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d, up to %d generations, seed %llu\n",
-                 set.cases.size(), opts->cases_dir.string().c_str(), set.Training().size(),
-                 opts->ga.population_size, opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));
+    std::fprintf(stderr, "piezoid identify: %zu cases from %s (%zu training), population %d%s, up to %d generations, seed %llu\n",
+                 set.cases.size(), opts->cases_dir.string().c_str(), set.Training().size(), opts->ga.population_size,
+                 opts->ga.islands > 1 ? (" x " + std::to_string(opts->ga.islands) + " islands").c_str() : "",
+                 opts->ga.max_generations, static_cast<unsigned long long>(opts->ga.seed));
     Progress progress;
     progress.max_generations = opts->ga.max_generations;
     const auto result = hgann::RunIdentify(*opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -185,11 +186,13 @@ class Progress {
     const double frac = max_ > 0 ? std::min(1.0, static_cast<double>(r.generation) / max_) : 0;
     std::string bar(kWidth, '.');
     for (int i = 0; i < static_cast<int>(std::lround(frac * kWidth)); ++i) bar[i] = '#';
-    char line[256];
+    char line[384];
     const std::string best = Num(r.best_cost, 6) + (hgann_ ? " deg²" : "");
     std::snprintf(line, sizeof line, "gen %4llu/%-4llu [%s] best %-*s %7.0f evals/s  %d worker%s (%d threads)",
                   static_cast<unsigned long long>(r.generation), static_cast<unsigned long long>(max_), bar.c_str(),
                   hgann_ ? 17 : 14, best.c_str(), rate, e.workers, e.workers == 1 ? "" : "s", e.worker_threads);
+    const std::string islands = IslandsBrief(r);
+    std::strncat(line, islands.c_str(), sizeof line - std::strlen(line) - 1);
     if (tty_) {
       std::printf("\r%s\033[K", line);
     } else {

@@ -70,16 +70,35 @@ struct CaseTotals {
   int beaten = 0, compared = 0;              ///< cases below the paper's PI, cases it has a PI for
 };
 
+std::string IslandCsvHeader(const std::vector<opt::GenerationSummary>& log) {
+  if (log.empty() || log.front().islands.empty()) return "";
+  std::string h = ",best_island,migrated,immigrants,restarted";
+  for (size_t k = 0; k < log.front().islands.size(); ++k) h += ",island_" + std::to_string(k) + "_best";
+  return h;
+}
+
+std::string IslandCsvCells(const opt::GenerationSummary& g) {
+  if (g.islands.empty()) return "";
+  int immigrants = 0, restarted = 0;
+  for (const opt::IslandSummary& i : g.islands) immigrants += i.immigrants, restarted += i.restarted;
+  std::ostringstream os;
+  os << std::setprecision(17) << "," << g.best_island << "," << (g.migrated ? 1 : 0) << "," << immigrants << ","
+     << restarted;
+  for (const opt::IslandSummary& i : g.islands) os << "," << i.best_cost;
+  return os.str();
+}
+
 /// progress.csv: one line per generation.
 void WriteProgressCsv(const fs::path& out, const IdentifyResult& result, std::vector<fs::path>& written) {
   std::ofstream f(out / "progress.csv");
   f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
-       "errors,wall_time_s,best_network\n";
+       "errors,wall_time_s,best_network"
+    << IslandCsvHeader(result.log) << "\n";
   f << std::setprecision(17);
   for (const auto& g : result.log)
     f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
       << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
-      << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"\n";
+      << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"" << IslandCsvCells(g) << "\n";
   written.push_back(out / "progress.csv");
 }
 
@@ -159,7 +178,7 @@ std::string MuRegression(const CaseTotals& t) {
 }
 
 /// The figures' gnuplot scripts and, with options.plots, their renderings; the number rendered.
-int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::CaseSet& set,
+int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::CaseSet& set, size_t islands,
                  std::vector<fs::path>& written, std::vector<std::string>* plot_errors_out) {
   auto add = [&](const fs::path& p) { written.push_back(p); };
   auto& plot_errors = *plot_errors_out;
@@ -168,6 +187,9 @@ int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::
   Plot p{"fitness", "HGANN fitness progress (CF = Σ PI over the training cases)", "generation",
          "cost [deg²]", true,
          {{"progress.csv", 1, 2, "best", "lines"}, {"progress.csv", 1, 3, "mean", "lines"}}};
+  // With islands, one line per island's best (progress.csv's island_<k>_best, from column 18).
+  for (size_t k = 0; k < islands; ++k)
+    p.series.push_back({"progress.csv", 1, 18 + static_cast<int>(k), "island " + std::to_string(k), "lines"});
   scripts.push_back(WritePlotScript(out, p));
   for (const auto& bc : set.cases) {
     const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
@@ -215,7 +237,8 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   md << "# HGANN identification of " << set.dir.string() << "\n\n"
      << "- best network: " << result.best.network.Describe() << "\n"
      << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6) << " deg² (found in generation "
-     << s.best_generation << ")\n"
+     << s.best_generation << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
+     << ")\n"
      << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
      << " generations (" << s.message << ")\n"
      << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors " << errors;
@@ -228,7 +251,24 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     }
     md << ")";
   }
-  md << "\n- GA: population " << options.ga.population_size << ", seed " << options.ga.seed << ", ranges '"
+  md << "\n- GA: population " << options.ga.population_size;
+  if (options.ga.islands > 1) {
+    md << " × " << options.ga.islands << " islands (";
+    if (options.ga.migration_interval > 0)
+      md << options.ga.migrants << " migrants every " << options.ga.migration_interval << " generations, "
+         << opt::TopologyName(options.ga.topology);
+    else
+      md << "independent: multi-start";
+    if (options.ga.island_stall_generations > 0)
+      md << "; an island is restarted after " << options.ga.island_stall_generations << " generations of stall";
+    int migrations = 0, restarts = 0;
+    for (const auto& g : result.log) {
+      migrations += g.migrated;
+      for (const auto& i : g.islands) restarts += i.restarted;
+    }
+    md << "; " << migrations << " migrations, " << restarts << " restarts)";
+  }
+  md << ", seed " << options.ga.seed << ", ranges '"
      << options.ranges << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
      << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";
   if (options.ranges == "paper") {
@@ -274,6 +314,15 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
 
 }  // namespace
 
+std::string IslandsBrief(const opt::GenerationSummary& g) {
+  if (g.islands.empty()) return "";
+  double lo = g.islands.front().best_cost, hi = lo;
+  for (const opt::IslandSummary& i : g.islands) lo = std::min(lo, i.best_cost), hi = std::max(hi, i.best_cost);
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "  island %d/%zu (islands %.4g…%.4g)", g.best_island, g.islands.size(), lo, hi);
+  return buf;
+}
+
 std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
                                           const hgann::HgannFitness& fitness, const IdentifyResult& result,
                                           std::ostream& term) {
@@ -288,7 +337,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const CaseTotals totals = WriteCaseTables(out, set, fitness, result, written);
   const std::string mu_regression = MuRegression(totals);
   std::vector<std::string> plot_errors;
-  const int rendered = WriteFigures(options, out, set, written, &plot_errors);
+  const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
+  const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
     f << ReportMarkdown(options, set, fitness, result, totals, mu_regression);

@@ -20,6 +20,15 @@ struct IdentifyOptions : hgann::IdentifyOptions {
   bool plots = true;              ///< render figures with gnuplot
 };
 
+/// The island columns of a progress.csv (both identify's and a fetched job's): empty for a run of
+/// one island (its file is as before islands), else ",best_island,migrated,immigrants,restarted,
+/// island_0_best,…,island_<K−1>_best" — the header, then each generation's cells in that order.
+std::string IslandCsvHeader(const std::vector<opt::GenerationSummary>& log);
+std::string IslandCsvCells(const opt::GenerationSummary& g);
+/// The islands of a progress line (identify's, watch's): "" for one island, else e.g.
+/// "  island 2/4 (islands 0.93…1.4)": the best's island and the range of the islands' bests.
+std::string IslandsBrief(const opt::GenerationSummary& g);
+
 /// Writes the result folder and prints a summary to `terminal`. Returns the files written.
 std::vector<std::filesystem::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
                                                        const hgann::HgannFitness& fitness,

@@ -22,7 +22,10 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
     s.best_fitness = job.best.front().fitness;
   }
   for (const auto& r : job.log) {
-    if (r.improved) s.best_generation = r.generation;
+    if (r.improved) {
+      s.best_generation = r.generation;
+      s.best_island = r.best_island;
+    }
     s.failures += r.failures;
   }
   if (!job.log.empty()) {
@@ -30,10 +33,10 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
     s.evaluations = job.log.back().evaluations_total;
   }
   s.wall_time_s = job.info.elapsed_s;
-  // A job that ended by the GA's rule stores the rule's name as its message (job runner); the
-  // GA's own text is rebuilt from the stored state by the same function the GA uses.
+  // A job that ended by the GA's rule carries the rule (JobInfo::termination); the GA's own text
+  // is rebuilt from the stored state by the same function the GA uses.
   const std::string& m = job.info.message;
-  const auto rule = opt::ParseGaTermination(m);
+  const auto rule = job.info.termination;
   const int stall = job.log.empty() ? 0 : static_cast<int>(job.log.back().stall);
   const double target = job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
   std::ostringstream os;
@@ -112,12 +115,13 @@ namespace {
 void WriteProgressCsv(const fs::path& file, const std::vector<service::GenerationRecord>& log) {
   std::ofstream f(file);
   f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
-       "quarantined,wall_time_s,best_description\n";
+       "quarantined,wall_time_s,best_description"
+    << IslandCsvHeader(log) << "\n";
   f << std::setprecision(17);
   for (const auto& g : log)
     f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
       << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << "," << g.quarantined << ","
-      << g.wall_time_s << ",\"" << g.best_description << "\"\n";
+      << g.wall_time_s << ",\"" << g.best_description << "\"" << IslandCsvCells(g) << "\n";
 }
 
 }  // namespace

@@ -16,6 +16,11 @@ opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   o.mutation_probability = g.mutation_probability;
   o.max_generations = g.generations;
   o.stall_generations = g.stall_generations;
+  o.islands = g.islands;
+  o.migration_interval = g.migration_interval;
+  o.migrants = g.migrants;
+  o.topology = g.topology;
+  o.island_stall_generations = g.island_stall_generations;
   if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
   o.error_cost = spec.limits.penalty_cost;
   o.seed = spec.seed;

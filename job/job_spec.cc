@@ -101,6 +101,16 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Range("ga.mutation_probability", ga->mutation_probability, 0.0, 1.0);
     c.Range("ga.generations", ga->generations, 0, 100000000);
     c.Range("ga.stall_generations", ga->stall_generations, 0, 100000000);
+    c.Range("ga.islands", ga->islands, 1, 1024);
+    c.Require(static_cast<int64_t>(ga->islands) * ga->population <= 1000000, "ga.islands", ga->islands,
+              "islands · population must be ≤ 1000000 (population " + std::to_string(ga->population) + ")");
+    c.Range("ga.migration_interval", ga->migration_interval, 0, 100000000);
+    c.Range("ga.migrants", ga->migrants, 0, std::max(0, ga->population - 1));
+    c.Require(ga->migration_interval == 0 || ga->migrants >= 1, "ga.migrants", ga->migrants,
+              "must be ≥ 1 when ga.migration_interval > 0 (0 runs the islands independently)");
+    c.Require(opt::ValidTopology(ga->topology), "ga.topology", static_cast<int>(ga->topology),
+              "must be MIGRATION_TOPOLOGY_RING, _FULLY_CONNECTED or _RANDOM");
+    c.Range("ga.island_stall_generations", ga->island_stall_generations, 0, 100000000);
   }
   return std::move(c.out);
 }

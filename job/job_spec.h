@@ -15,6 +15,7 @@
 
 #include "model/case_role.h"
 #include "model/status.h"
+#include "opt/topology.h"
 
 namespace pz::job {
 
@@ -182,6 +183,12 @@ struct GaSettings {
   double mutation_probability = 0.01;  ///< 0..1
   int generations = 1000;              ///< max generations after the initial one, ≥ 0
   int stall_generations = 200;         ///< ≥ 0 (0 = never stop for stall)
+  // Islands (opt/ga.h GaOptions): population is per island.
+  int islands = 1;                     ///< 1..1024
+  int migration_interval = 10;         ///< ≥ 0 (0 = never: independent islands)
+  int migrants = 4;                    ///< 0..population − 1, ≥ 1 when migration_interval > 0
+  opt::MigrationTopology topology = opt::MigrationTopology::kRing;
+  int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
   int offspring() const;               ///< evaluated per generation: population − elite count
 };
 

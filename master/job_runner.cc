@@ -66,14 +66,26 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   checkpoint_.optimizer = st;
   checkpoint_.optimizer.log.clear();
   checkpoint_.best.clear();
-  for (size_t i = 0; i < st.population.size() && i < static_cast<size_t>(kBestKept); ++i)
-    checkpoint_.best.push_back({static_cast<int>(i), st.population[i], st.fitness[i]});
+  // The best kBestKept over all islands, best first (ties: island, then rank); index = island ·
+  // population + rank, the individual's index in the generation's batch (its rank with one island).
+  const int n = ga_->options().population_size;
+  std::vector<std::pair<int, int>> ranked;  // (island, rank)
+  for (size_t k = 0; k < st.islands.size(); ++k)
+    for (int r = 0; r < n && r < kBestKept; ++r) ranked.emplace_back(static_cast<int>(k), r);
+  std::stable_sort(ranked.begin(), ranked.end(), [&st](const auto& a, const auto& b) {
+    return st.islands[a.first].fitness[a.second].cost < st.islands[b.first].fitness[b.second].cost;
+  });
+  for (size_t i = 0; i < ranked.size() && i < static_cast<size_t>(kBestKept); ++i) {
+    const auto [k, r] = ranked[i];
+    checkpoint_.best.push_back({k * n + r, st.islands[k].population[r], st.islands[k].fitness[r]});
+  }
   checkpoint_.log.push_back(rec);
   checkpoint_.elapsed_s +=
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (auto t = ga_->CheckTermination()) {
     checkpoint_.state = JobState::kSucceeded;
     checkpoint_.message = GaTerminationName(*t);
+    checkpoint_.termination = *t;
   }
   return checkpoint_.log.back();
 }

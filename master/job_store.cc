@@ -371,6 +371,7 @@ JobInfo JobStore::Info(Job& job) {
   i.best_cost = c.best.empty() ? 0 : c.best.front().fitness.cost;
   i.evaluations = static_cast<uint64_t>(c.optimizer.evaluations);
   i.message = c.message;
+  i.termination = c.termination;
   i.quarantined = c.quarantined;
   i.elapsed_s = c.elapsed_s;
   i.seed = job.spec.seed;

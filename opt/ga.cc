@@ -73,7 +73,53 @@ Status GaOptions::Validate() const {
   }
   if (std::isnan(target_cost)) return InvalidArgument(FieldError("target_cost", target_cost, "must not be NaN"));
   if (!std::isfinite(error_cost)) return InvalidArgument(FieldError("error_cost", error_cost, "must be finite"));
+  if (islands < 1 || islands > kMaxIslands) {
+    return InvalidArgument(FieldError("islands", islands, "must be in [1, " + std::to_string(kMaxIslands) + "]"));
+  }
+  if (migration_interval < 0) {
+    return InvalidArgument(FieldError("migration_interval", migration_interval, "must be >= 0 (0 = no migration)"));
+  }
+  if (migrants < 0 || migrants >= population_size) {
+    return InvalidArgument(FieldError("migrants", migrants,
+                                      "must be in [0, population_size - 1 = " + std::to_string(population_size - 1) +
+                                          "]"));
+  }
+  if (migration_interval > 0 && migrants == 0) {
+    return InvalidArgument(FieldError("migrants", migrants,
+                                      "must be >= 1 when migration_interval = " + std::to_string(migration_interval) +
+                                          " > 0 (migration_interval 0 runs the islands independently)"));
+  }
+  if (!ValidTopology(topology)) {
+    return InvalidArgument(FieldError("topology", static_cast<int>(topology), kTopologyRule));
+  }
+  if (island_stall_generations < 0) {
+    return InvalidArgument(FieldError("island_stall_generations", island_stall_generations, "must be >= 0 (0 = never)"));
+  }
   return Status::Ok();
+}
+
+std::vector<int> GaOptions::MigrationSources(int i) const {
+  const int k = islands;
+  if (k < 2) return {};
+  switch (topology) {
+    case MigrationTopology::kRing: return {(i + k - 1) % k};
+    case MigrationTopology::kFullyConnected: {
+      std::vector<int> all;
+      for (int j = 0; j < k; ++j)
+        if (j != i) all.push_back(j);
+      return all;
+    }
+    case MigrationTopology::kRandom: {
+      // A ring in a random order: Fisher–Yates with the topology's own stream.
+      Rng rng(StreamSeed(seed, kTopologyStream));
+      std::vector<int> order(k);
+      std::iota(order.begin(), order.end(), 0);
+      for (int j = k - 1; j > 0; --j) std::swap(order[j], order[rng.UniformBelow(j + 1)]);
+      const int at = static_cast<int>(std::find(order.begin(), order.end(), i) - order.begin());
+      return {order[(at + k - 1) % k]};
+    }
+  }
+  return {};
 }
 
 bool GenerationSummary::SameOutcome(const GenerationSummary& o) const {
@@ -83,7 +129,8 @@ bool GenerationSummary::SameOutcome(const GenerationSummary& o) const {
          best_description == o.best_description && evaluations == o.evaluations &&
          evaluations_total == o.evaluations_total && failures == o.failures &&
          penalized == o.penalized && errors == o.errors && quarantined == o.quarantined &&
-         failure_reasons == o.failure_reasons;
+         failure_reasons == o.failure_reasons && best_island == o.best_island && migrated == o.migrated &&
+         islands == o.islands;
 }
 
 std::string GenerationSummary::BriefReport() const {
@@ -93,6 +140,16 @@ std::string GenerationSummary::BriefReport() const {
      << worst_cost << " stall " << stall << " evals " << evaluations << "/" << evaluations_total
      << " fail " << failures;
   if (!best_description.empty()) os << " [" << best_description << "]";
+  if (!islands.empty()) {
+    os << " island " << best_island << " of " << islands.size();
+    int restarted = 0, immigrants = 0;
+    for (const IslandSummary& i : islands) {
+      restarted += i.restarted;
+      immigrants += i.immigrants;
+    }
+    if (migrated) os << ", migrated " << immigrants;
+    if (restarted) os << ", restarted " << restarted;
+  }
   return os.str();
 }
 
@@ -104,13 +161,6 @@ const char* GaTerminationName(GaTermination t) {
     case GaTermination::kTargetReached: return "TARGET_REACHED";
   }
   return "UNKNOWN";
-}
-
-std::optional<GaTermination> ParseGaTermination(std::string_view name) {
-  for (GaTermination t : {GaTermination::kMaxGenerations, GaTermination::kStall, GaTermination::kCancelled,
-                          GaTermination::kTargetReached})
-    if (name == GaTerminationName(t)) return t;
-  return std::nullopt;
 }
 
 std::string DescribeTermination(GaTermination termination, double best_cost, int stall, uint64_t best_generation,
@@ -135,7 +185,7 @@ std::string GaSummary::BriefReport() const {
   std::ostringstream os;
   os.precision(10);
   os << "GA " << GaTerminationName(termination) << " after generation " << generations << ": best cost "
-     << best_fitness.cost << " (generation " << best_generation << "), " << evaluations
+     << best_fitness.cost << " (generation " << best_generation << ", island " << best_island << "), " << evaluations
      << " evaluations, " << failures << " failures, " << wall_time_s << " s. " << message;
   return os.str();
 }
@@ -143,31 +193,48 @@ std::string GaSummary::BriefReport() const {
 Status GaState::Validate(const GaOptions& options) const {
   if (!initialized) return Status::Ok();
   const size_t n = options.population_size;
-  if (population.size() != n) {
-    return InvalidArgument(FieldError("state.population.size()", population.size(),
-                                      "must equal population_size = " + std::to_string(n)));
+  if (islands.size() != static_cast<size_t>(options.islands)) {
+    return InvalidArgument(FieldError("state.islands.size()", islands.size(),
+                                      "must equal islands = " + std::to_string(options.islands)));
   }
-  if (fitness.size() != n) {
-    return InvalidArgument(FieldError("state.fitness.size()", fitness.size(),
-                                      "must equal population_size = " + std::to_string(n)));
-  }
-  for (size_t i = 0; i < n; ++i) {
-    Status s = CheckGenome(population[i], options.genome_bits, "state.population[" + std::to_string(i) + "]");
-    if (!s.ok()) return s;
-    if (!std::isfinite(fitness[i].cost)) {
-      return InvalidArgument(FieldError("state.fitness[" + std::to_string(i) + "].cost", fitness[i].cost,
-                                        "must be finite"));
+  double top = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < islands.size(); ++k) {
+    const IslandState& is = islands[k];
+    const std::string f = "state.islands[" + std::to_string(k) + "]";
+    if (is.population.size() != n) {
+      return InvalidArgument(FieldError(f + ".population.size()", is.population.size(),
+                                        "must equal population_size = " + std::to_string(n)));
     }
-    if (i > 0 && fitness[i].cost < fitness[i - 1].cost) {
-      return InvalidArgument(FieldError("state.fitness[" + std::to_string(i) + "].cost", fitness[i].cost,
-                                        "population must be ranked: cost below its predecessor's"));
+    if (is.fitness.size() != n) {
+      return InvalidArgument(FieldError(f + ".fitness.size()", is.fitness.size(),
+                                        "must equal population_size = " + std::to_string(n)));
     }
+    for (size_t i = 0; i < n; ++i) {
+      Status s = CheckGenome(is.population[i], options.genome_bits, f + ".population[" + std::to_string(i) + "]");
+      if (!s.ok()) return s;
+      const std::string fc = f + ".fitness[" + std::to_string(i) + "].cost";
+      if (!std::isfinite(is.fitness[i].cost)) return InvalidArgument(FieldError(fc, is.fitness[i].cost, "must be finite"));
+      if (i > 0 && is.fitness[i].cost < is.fitness[i - 1].cost) {
+        return InvalidArgument(FieldError(fc, is.fitness[i].cost, "population must be ranked: cost below its predecessor's"));
+      }
+    }
+    if (!std::isfinite(is.best_cost) || is.best_cost < is.fitness[0].cost) {
+      return InvalidArgument(FieldError(f + ".best_cost", is.best_cost, "must be finite and not below the island's best"));
+    }
+    if (is.stall < 0) return InvalidArgument(FieldError(f + ".stall", is.stall, "must be >= 0"));
+    if (is.restarts < 0) return InvalidArgument(FieldError(f + ".restarts", is.restarts, "must be >= 0"));
+    if (Status s = is.rng.Validate(); !s.ok()) return InvalidArgument(f + "." + s.message());
+    top = std::min(top, is.fitness[0].cost);
   }
   Status s = CheckGenome(best, options.genome_bits, "state.best");
   if (!s.ok()) return s;
-  if (!std::isfinite(best_fitness.cost) || best_fitness.cost < fitness[0].cost) {
+  if (!std::isfinite(best_fitness.cost) || best_fitness.cost < top) {
     return InvalidArgument(FieldError("state.best_fitness.cost", best_fitness.cost,
-                                      "must be finite and not below the population's best"));
+                                      "must be finite and not below the islands' best"));
+  }
+  if (best_island < 0 || best_island >= options.islands) {
+    return InvalidArgument(FieldError("state.best_island", best_island,
+                                      "must be in [0, islands - 1 = " + std::to_string(options.islands - 1) + "]"));
   }
   if (stall < 0) return InvalidArgument(FieldError("state.stall", stall, "must be >= 0"));
   if (best_generation > generation) {
@@ -179,17 +246,22 @@ Status GaState::Validate(const GaOptions& options) const {
                                       "counters must satisfy 0 <= failures <= evaluations = " +
                                           std::to_string(evaluations)));
   }
-  return rng.Validate();
+  return Status::Ok();
 }
 
 // ---------------------------------------------------------------------------------------------
 // GeneticAlgorithm
 
 GeneticAlgorithm::GeneticAlgorithm(const GaOptions& options, BatchEvaluator* evaluator)
-    : options_(options), evaluator_(evaluator), rng_(options.seed) {
+    : options_(options), evaluator_(evaluator) {
   ThrowIfError(options_.Validate());
   if (evaluator_ == nullptr) throw InputError("evaluator: must not be null");
-  state_.rng = rng_.state();
+  state_.islands.resize(options_.islands);
+  for (int i = 0; i < options_.islands; ++i) {
+    rngs_.emplace_back(StreamSeed(options_.seed, static_cast<uint64_t>(i)));
+    state_.islands[i].rng = rngs_.back().state();
+    sources_.push_back(options_.MigrationSources(i));
+  }
 }
 
 void GeneticAlgorithm::AddGenerationCallback(GenerationCallback callback) {
@@ -200,15 +272,16 @@ void GeneticAlgorithm::SetDescriber(Describer describer) { describer_ = std::mov
 
 void GeneticAlgorithm::RestoreState(GaState state) {
   ThrowIfError(state.Validate(options_));
-  rng_ = Rng(state.rng);
+  if (!state.initialized) state.islands = state_.islands;  // nothing drawn yet: the seeded generators
+  for (int i = 0; i < options_.islands; ++i) rngs_[i] = Rng(state.islands[i].rng);
   state_ = std::move(state);
 }
 
-int GeneticAlgorithm::Tournament() {
+int GeneticAlgorithm::Tournament(Rng& rng) {
   const uint64_t elite = static_cast<uint64_t>(options_.elite_count());
   // The population is ranked, so the best of the draws is the smallest index.
-  uint64_t winner = rng_.UniformBelow(elite);
-  for (int k = 1; k < options_.tournament_size; ++k) winner = std::min(winner, rng_.UniformBelow(elite));
+  uint64_t winner = rng.UniformBelow(elite);
+  for (int k = 1; k < options_.tournament_size; ++k) winner = std::min(winner, rng.UniformBelow(elite));
   return static_cast<int>(winner);
 }
 
@@ -217,18 +290,50 @@ const GeometricGaps& GeneticAlgorithm::MutationGaps() {
   return *mutation_gaps_;
 }
 
-void GeneticAlgorithm::Evaluate(std::span<const Genome> genomes, int first_index,
-                                std::span<FitnessResult> out) {
-  std::vector<int> indices(genomes.size());
-  std::iota(indices.begin(), indices.end(), first_index);
+void GeneticAlgorithm::DrawUniform(Rng& rng, int count, std::vector<Genome>* out) {
+  // Uniform bits, 64 per draw, most significant first.
+  const int bits = options_.genome_bits;
+  for (int i = 0; i < count; ++i) {
+    Genome& g = out->emplace_back();
+    g.bits.resize(bits);
+    for (int b = 0; b < bits; b += 64) {
+      const uint64_t x = rng.NextU64();
+      for (int k = 0; k < 64 && b + k < bits; ++k) g.bits[b + k] = (x >> (63 - k)) & 1u;
+    }
+  }
+}
+
+std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(const std::vector<Draft>& drafts) {
+  // One batch for all islands: island i's fresh genome j has population index
+  // i · population_size + (kept count + j).
+  const int n = options_.population_size;
+  std::vector<Genome> genomes;
+  std::vector<int> indices;
+  for (size_t i = 0; i < drafts.size(); ++i) {
+    const int first = static_cast<int>(i) * n + static_cast<int>(drafts[i].kept.size());
+    for (size_t j = 0; j < drafts[i].fresh.size(); ++j) {
+      genomes.push_back(drafts[i].fresh[j]);
+      indices.push_back(first + static_cast<int>(j));
+    }
+  }
+  std::vector<FitnessResult> out(genomes.size());
   const uint64_t generation = state_.initialized ? state_.generation + 1 : 0;
   try {
     evaluator_->Evaluate(EvalBatch{generation, genomes, indices}, out);
   } catch (...) {
-    rng_ = Rng(state_.rng);  // leave the GA as it was before this generation
+    // leave the GA as it was before this generation
+    for (size_t i = 0; i < rngs_.size(); ++i) rngs_[i] = Rng(state_.islands[i].rng);
     throw;
   }
-  for (FitnessResult& r : out) SanitizeFitness(r, options_.error_cost);
+  std::vector<std::vector<FitnessResult>> split(drafts.size());
+  size_t at = 0;
+  for (size_t i = 0; i < drafts.size(); ++i) {
+    for (size_t j = 0; j < drafts[i].fresh.size(); ++j, ++at) {
+      SanitizeFitness(out[at], options_.error_cost);
+      split[i].push_back(std::move(out[at]));
+    }
+  }
+  return split;
 }
 
 const GenerationSummary& GeneticAlgorithm::Initialize(std::span<const Genome> seeds) {
@@ -238,45 +343,39 @@ const GenerationSummary& GeneticAlgorithm::Initialize(std::span<const Genome> se
   if (seeds.size() > static_cast<size_t>(n)) {
     throw InputError(FieldError("seeds.size()", seeds.size(), "must be <= population_size"));
   }
-  std::vector<Genome> population(n);
+  std::vector<Draft> drafts(options_.islands);
   for (size_t i = 0; i < seeds.size(); ++i) {
     ThrowIfError(CheckGenome(seeds[i], bits, "seeds[" + std::to_string(i) + "]"));
-    population[i] = seeds[i];
+    drafts[0].fresh.push_back(seeds[i]);
   }
-  // Uniform bits, 64 per draw, most significant first.
-  for (int i = static_cast<int>(seeds.size()); i < n; ++i) {
-    population[i].bits.resize(bits);
-    for (int b = 0; b < bits; b += 64) {
-      const uint64_t x = rng_.NextU64();
-      for (int k = 0; k < 64 && b + k < bits; ++k) population[i].bits[b + k] = (x >> (63 - k)) & 1u;
-    }
-  }
-  std::vector<FitnessResult> fitness(n);
-  Evaluate(population, 0, fitness);
-  return Finish(std::move(population), std::move(fitness), 0, start);
+  for (int k = 0; k < options_.islands; ++k)
+    DrawUniform(rngs_[k], n - static_cast<int>(drafts[k].fresh.size()), &drafts[k].fresh);
+  auto evaluated = Evaluate(drafts);
+  return Finish(std::move(drafts), std::move(evaluated), start);
 }
 
-const GenerationSummary& GeneticAlgorithm::Step() {
-  PZ_CHECK_MSG(state_.initialized, "GeneticAlgorithm::Step before Initialize");
-  const double start = NowSeconds();
+GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   const int n = options_.population_size, bits = options_.genome_bits;
   const int elite = options_.elite_count(), n_off = n - elite;
   const BernoulliThreshold cross(options_.crossover_probability);
   const GeometricGaps& mutate = MutationGaps();
+  Rng& rng = rngs_[island];
+  const IslandState& is = state_.islands[island];
 
-  std::vector<Genome> offspring(n_off);
+  Draft d;
+  d.fresh.resize(n_off);
   for (int o = 0; o < n_off; o += 2) {
-    const Genome& pa = state_.population[Tournament()];
-    const Genome& pb = state_.population[Tournament()];
-    Genome& c1 = offspring[o];
+    const Genome& pa = is.population[Tournament(rng)];
+    const Genome& pb = is.population[Tournament(rng)];
+    Genome& c1 = d.fresh[o];
     Genome c2_storage;
-    Genome& c2 = o + 1 < n_off ? offspring[o + 1] : c2_storage;  // an odd last child is dropped
+    Genome& c2 = o + 1 < n_off ? d.fresh[o + 1] : c2_storage;  // an odd last child is dropped
     c1.bits = pa.bits;
     c2.bits = pb.bits;
-    if (rng_.Bernoulli(cross)) {
+    if (rng.Bernoulli(cross)) {
       // Two distinct cut points in 1 … bits − 1; the segment [lo, hi) is exchanged.
-      const int p = 1 + static_cast<int>(rng_.UniformBelow(bits - 1));
-      int q = 1 + static_cast<int>(rng_.UniformBelow(bits - 2));
+      const int p = 1 + static_cast<int>(rng.UniformBelow(bits - 1));
+      int q = 1 + static_cast<int>(rng.UniformBelow(bits - 2));
       if (q >= p) ++q;
       const int lo = std::min(p, q), hi = std::max(p, q);
       std::swap_ranges(c1.bits.begin() + lo, c1.bits.begin() + hi, c2.bits.begin() + lo);
@@ -286,77 +385,185 @@ const GenerationSummary& GeneticAlgorithm::Step() {
       // Each bit flips with probability p, independently: the positions of the flips are drawn
       // as geometric gaps (one draw per flip, plus one that ends the genome) instead of one
       // Bernoulli draw per bit.
-      for (int pos = rng_.Gap(mutate); pos < bits; pos += 1 + rng_.Gap(mutate)) c->bits[pos] ^= 1u;
+      for (int pos = rng.Gap(mutate); pos < bits; pos += 1 + rng.Gap(mutate)) c->bits[pos] ^= 1u;
     }
   }
-  std::vector<FitnessResult> evaluated(n_off);
-  Evaluate(offspring, elite, evaluated);
-
-  std::vector<Genome> population;
-  std::vector<FitnessResult> fitness;
-  population.reserve(n);
-  fitness.reserve(n);
-  for (int i = 0; i < elite; ++i) {
-    population.push_back(std::move(state_.population[i]));
-    fitness.push_back(std::move(state_.fitness[i]));
-  }
-  for (int o = 0; o < n_off; ++o) {
-    population.push_back(std::move(offspring[o]));
-    fitness.push_back(evaluated[o]);
-  }
-  return Finish(std::move(population), std::move(fitness), elite, start);
+  // The elite is kept: copied here, so that a failed evaluation leaves the state untouched.
+  d.kept.assign(is.population.begin(), is.population.begin() + elite);
+  d.kept_fitness.assign(is.fitness.begin(), is.fitness.begin() + elite);
+  return d;
 }
 
-const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Genome> population,
-                                                   std::vector<FitnessResult> fitness,
-                                                   int first_evaluated, double start_s) {
-  const int n = static_cast<int>(population.size());
-  GenerationSummary s;
-  s.evaluations = n - first_evaluated;
-  for (int i = first_evaluated; i < n; ++i) {
-    const FitnessResult& f = fitness[i];
-    if (f.status == FitnessStatus::kOk) continue;
-    ++s.failures;
-    (f.status == FitnessStatus::kPenalized ? s.penalized : s.errors)++;
-    ++s.failure_reasons[f.reason];
+std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island) const {
+  std::vector<std::pair<Genome, FitnessResult>> in;
+  if (!options_.migrates()) return in;
+  const int m = options_.migrants;
+  for (int s : sources_[island]) {
+    const IslandState& src = state_.islands[s];
+    for (int r = 0; r < m; ++r) in.emplace_back(src.population[r], src.fitness[r]);
   }
-  std::vector<int> order(n);
-  std::iota(order.begin(), order.end(), 0);
-  std::sort(order.begin(), order.end(),
-            [&fitness](int a, int b) { return Better(fitness[a], a, fitness[b], b); });
-  state_.population.resize(n);
-  state_.fitness.resize(n);
-  for (int r = 0; r < n; ++r) {
-    state_.population[r] = std::move(population[order[r]]);
-    state_.fitness[r] = std::move(fitness[order[r]]);
+  // Best first; ties keep source order, then rank.
+  std::stable_sort(in.begin(), in.end(), [](const auto& a, const auto& b) { return a.second.cost < b.second.cost; });
+  if (in.size() > static_cast<size_t>(m)) in.resize(m);
+  return in;
+}
+
+GeneticAlgorithm::Draft GeneticAlgorithm::Restart(int island) {
+  Draft d;
+  d.restarted = true;
+  for (auto& [g, f] : Immigrants(island)) {
+    d.kept.push_back(std::move(g));
+    d.kept_fitness.push_back(std::move(f));
+  }
+  DrawUniform(rngs_[island], options_.population_size - static_cast<int>(d.kept.size()), &d.fresh);
+  return d;
+}
+
+const GenerationSummary& GeneticAlgorithm::Step() {
+  PZ_CHECK_MSG(state_.initialized, "GeneticAlgorithm::Step before Initialize");
+  const double start = NowSeconds();
+  std::vector<Draft> drafts;
+  drafts.reserve(options_.islands);
+  for (int k = 0; k < options_.islands; ++k) {
+    const bool restart = options_.island_stall_generations > 0 &&
+                         state_.islands[k].stall >= options_.island_stall_generations;
+    drafts.push_back(restart ? Restart(k) : Breed(k));
+  }
+  auto evaluated = Evaluate(drafts);
+  return Finish(std::move(drafts), std::move(evaluated), start);
+}
+
+std::vector<int> GeneticAlgorithm::Migrate() {
+  const int k_islands = options_.islands, n = options_.population_size;
+  // Every island's immigrants are chosen before any island receives (the order cannot matter).
+  std::vector<std::vector<std::pair<Genome, FitnessResult>>> incoming(k_islands);
+  for (int k = 0; k < k_islands; ++k) incoming[k] = Immigrants(k);
+  std::vector<int> taken(k_islands, 0);
+  for (int k = 0; k < k_islands; ++k) {
+    IslandState& is = state_.islands[k];
+    // Best migrant ↔ worst resident, while the migrant is strictly better.
+    for (size_t j = 0; j < incoming[k].size(); ++j) {
+      const size_t slot = n - 1 - j;
+      if (!(incoming[k][j].second.cost < is.fitness[slot].cost)) break;
+      is.population[slot] = std::move(incoming[k][j].first);
+      is.fitness[slot] = std::move(incoming[k][j].second);
+      ++taken[k];
+    }
+    if (taken[k] == 0) continue;
+    std::vector<int> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&is](int a, int b) { return is.fitness[a].cost < is.fitness[b].cost; });
+    std::vector<Genome> population(n);
+    std::vector<FitnessResult> fitness(n);
+    for (int r = 0; r < n; ++r) {
+      population[r] = std::move(is.population[order[r]]);
+      fitness[r] = std::move(is.fitness[order[r]]);
+    }
+    is.population = std::move(population);
+    is.fitness = std::move(fitness);
+    if (is.fitness.front().cost < is.best_cost) {
+      is.best_cost = is.fitness.front().cost;
+      is.stall = 0;
+    }
+  }
+  return taken;
+}
+
+const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
+                                                   std::vector<std::vector<FitnessResult>> evaluated,
+                                                   double start_s) {
+  const int k_islands = options_.islands;
+  GenerationSummary s;
+  s.generation = state_.initialized ? state_.generation + 1 : 0;
+  for (int k = 0; k < k_islands; ++k) {
+    Draft& d = drafts[k];
+    const std::vector<FitnessResult>& ev = evaluated[k];
+    s.evaluations += static_cast<int>(ev.size());
+    for (const FitnessResult& f : ev) {
+      if (f.status == FitnessStatus::kOk) continue;
+      ++s.failures;
+      (f.status == FitnessStatus::kPenalized ? s.penalized : s.errors)++;
+      ++s.failure_reasons[f.reason];
+    }
+    // kept first, then the evaluated ones; ranked by (cost, index), stable.
+    const int n = static_cast<int>(d.kept.size() + d.fresh.size());
+    auto genome = [&d](int i) -> Genome& {
+      return i < static_cast<int>(d.kept.size()) ? d.kept[i] : d.fresh[i - d.kept.size()];
+    };
+    auto fit = [&d, &ev](int i) -> const FitnessResult& {
+      return i < static_cast<int>(d.kept.size()) ? d.kept_fitness[i] : ev[i - d.kept.size()];
+    };
+    std::vector<int> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&fit](int a, int b) { return Better(fit(a), a, fit(b), b); });
+    IslandState& is = state_.islands[k];
+    is.population.resize(n);
+    is.fitness.resize(n);
+    for (int r = 0; r < n; ++r) {
+      is.population[r] = std::move(genome(order[r]));
+      is.fitness[r] = fit(order[r]);
+    }
+    const double top = is.fitness.front().cost;
+    if (!state_.initialized || d.restarted || top < is.best_cost) {
+      is.best_cost = top;
+      is.stall = 0;
+    } else {
+      ++is.stall;
+    }
+    is.restarts += d.restarted;
+    is.rng = rngs_[k].state();
   }
 
-  s.generation = state_.initialized ? state_.generation + 1 : 0;
-  const FitnessResult& top = state_.fitness.front();
+  // The job's best: the best island's (ties: the lowest island index).
+  int best_island = 0;
+  for (int k = 1; k < k_islands; ++k)
+    if (state_.islands[k].fitness.front().cost < state_.islands[best_island].fitness.front().cost) best_island = k;
+  const IslandState& bi = state_.islands[best_island];
+  const FitnessResult& top = bi.fitness.front();
   s.improved = !state_.initialized || top.cost < state_.best_fitness.cost;
   if (s.improved) {
-    state_.best = state_.population.front();
+    state_.best = bi.population.front();
     state_.best_fitness = top;
     state_.best_generation = s.generation;
+    state_.best_island = best_island;
     state_.stall = 0;
   } else {
     ++state_.stall;
   }
   state_.initialized = true;
   state_.generation = s.generation;
-  state_.rng = rng_.state();
 
   s.stall = state_.stall;
   s.best_cost = top.cost;
-  s.worst_cost = state_.fitness.back().cost;
+  s.best_island = best_island;
+  if (describer_) s.best_description = describer_(bi.population.front());
+  // Mean, median and worst over every island's population.
+  std::vector<double> costs;
+  for (const IslandState& is : state_.islands)
+    for (const FitnessResult& f : is.fitness) costs.push_back(f.cost);
+  if (k_islands > 1) std::sort(costs.begin(), costs.end());  // one island is ranked already
+  const int n = static_cast<int>(costs.size());
+  s.worst_cost = costs.back();
   double mean = 0;
-  for (const FitnessResult& f : state_.fitness) mean += f.cost / n;  // cannot overflow for finite costs
+  for (double c : costs) mean += c / n;  // cannot overflow for finite costs
   s.mean_cost = std::isfinite(mean) ? mean : std::numeric_limits<double>::max();
-  // The population is ranked: the median is its middle (the mean of the two middle costs).
-  const double lo = state_.fitness[(n - 1) / 2].cost, hi = state_.fitness[n / 2].cost;
+  // The costs are sorted: the median is their middle (the mean of the two middle costs).
+  const double lo = costs[(n - 1) / 2], hi = costs[n / 2];
   const double median = lo + (hi - lo) / 2;
   s.median_cost = std::isfinite(median) ? median : std::numeric_limits<double>::max();
-  if (describer_) s.best_description = describer_(state_.population.front());
+
+  std::vector<int> taken(k_islands, 0);
+  if (options_.migrates() && s.generation > 0 && s.generation % options_.migration_interval == 0) {
+    taken = Migrate();
+    s.migrated = true;
+  }
+  if (k_islands > 1) {
+    for (int k = 0; k < k_islands; ++k) {
+      const IslandState& is = state_.islands[k];
+      s.islands.push_back({is.best_cost, is.stall, taken[k], drafts[k].restarted});
+    }
+  }
   state_.evaluations += s.evaluations;
   state_.failures += s.failures;
   s.evaluations_total = state_.evaluations;
@@ -383,6 +590,7 @@ GaSummary GeneticAlgorithm::MakeSummary(GaTermination termination, double wall_t
   s.best = state_.best;
   s.best_fitness = state_.best_fitness;
   s.best_generation = state_.best_generation;
+  s.best_island = state_.best_island;
   s.evaluations = state_.evaluations;
   s.failures = state_.failures;
   s.wall_time_s = wall_time_s;

@@ -19,6 +19,30 @@
 // The whole run state is the plain struct GaState: a master can Step() generation by generation,
 // save state() between generations, and RestoreState() into a new GeneticAlgorithm to continue
 // bit for bit.
+//
+// Islands (an archipelago, after pagmo2's, but synchronous and reproducible). With islands = K > 1
+// the GA holds K populations of population_size each; island i has its own generator, seeded by
+// StreamSeed(seed, i) (island 0 by the seed itself, so K = 1 is the single-population GA above,
+// draw for draw). Each generation, every island breeds its offspring with its own generator (in
+// island order), and the offspring of all islands are evaluated as ONE batch (population index
+// i · population_size + slot), so a generation gives an evaluator K times the work. Then:
+//   5. each island is ranked as in 4. and its own stall is counted (generations without a lower
+//      best since its last restart);
+//   6. every migration_interval generations (0 = never: K independent runs, "multi-start"), each
+//      island sends copies of its best `migrants` individuals along the topology (ring: i − 1 → i;
+//      fully connected: every other island, in index order; random: a ring in an order drawn from
+//      StreamSeed(seed, kTopologyStream), fixed for the run). All emigrants are taken before any
+//      island receives, and islands receive in index order, so completion order cannot matter.
+//      An island takes the best `migrants` of what it receives (ties: source order, then rank);
+//      they replace its worst individuals pair by pair (best migrant ↔ worst resident) where the
+//      migrant's cost is strictly lower; the island is re-ranked;
+//   7. an island whose own stall reaches island_stall_generations (0 = never) is restarted at the
+//      next generation: its population becomes the best `migrants` individuals its topology
+//      sources hold (as a migration would send them; none for multi-start or K = 1) plus fresh
+//      uniform individuals drawn from its generator, which are evaluated in that generation's
+//      batch instead of its offspring.
+// The job's best, stall and termination are over all islands (the best of the best); the
+// generation's summary carries each island's best, stall, immigrants and restart (IslandSummary).
 #pragma once
 
 #include <atomic>
@@ -35,9 +59,14 @@
 #include "opt/evaluator.h"
 #include "opt/inline_evaluator.h"
 #include "opt/random.h"
+#include "opt/topology.h"
 #include "model/status.h"
 
 namespace pz::opt {
+
+inline constexpr int kMaxIslands = 1024;
+/// The stream of the random topology's generator (island streams are 0 … kMaxIslands − 1).
+inline constexpr uint64_t kTopologyStream = uint64_t{1} << 32;
 
 /// Every setting of the GA; defaults are the paper's Table 2 / spec §4.
 struct GaOptions {
@@ -53,12 +82,34 @@ struct GaOptions {
                                        ///< lower best cost, ≥ 0 (0 = never stop for stall)
   double target_cost = -std::numeric_limits<double>::infinity();  ///< stop once best ≤ this; not NaN
   double error_cost = kDefaultErrorCost;  ///< cost given to non-finite results, finite
-  uint64_t seed = 0;                   ///< seeds the only generator
+  uint64_t seed = 0;                   ///< seeds the generators (island i: StreamSeed(seed, i))
+  // Islands (file comment). With islands = 1 the other four are not used.
+  int islands = 1;                      ///< populations, 1 … kMaxIslands
+  int migration_interval = 10;          ///< generations between migrations, ≥ 0 (0 = never: multi-start)
+  int migrants = 4;                     ///< individuals each island sends per migration, 0 … population_size − 1
+                                        ///< (≥ 1 when migration_interval > 0)
+  MigrationTopology topology = MigrationTopology::kRing;
+  int island_stall_generations = 0;     ///< restart an island after this many generations without
+                                        ///< a lower best of its own, ≥ 0 (0 = never)
 
   /// The error names the field, its value and the rule broken.
   Status Validate() const;
   /// round(population_size · elite_fraction).
   int elite_count() const;
+  /// The islands island `i` receives migrants from, in the order it takes them (empty for one
+  /// island). A function of (islands, topology, seed) alone.
+  std::vector<int> MigrationSources(int i) const;
+  /// migration_interval > 0 and more than one island.
+  bool migrates() const { return islands > 1 && migration_interval > 0; }
+};
+
+/// One island's part of a generation's record (GenerationSummary::islands).
+struct IslandSummary {
+  double best_cost = 0;  ///< the island's best after this generation (and its migration), finite
+  int stall = 0;         ///< generations since the island's best last went down (since its restart)
+  int immigrants = 0;    ///< migrants it took in this generation's migration (0 when none)
+  bool restarted = false;  ///< its population was restarted in this generation
+  bool operator==(const IslandSummary&) const = default;
 };
 
 /// One generation's record, delivered to the on_generation callbacks and kept in GaState::log.
@@ -78,6 +129,9 @@ struct GenerationSummary {
   int errors = 0;                ///< of which FitnessStatus::kError
   int quarantined = 0;           ///< of which quarantined by the service (a kError each; 0 in a local run)
   std::map<std::string, int> failure_reasons;  ///< reason → count, this generation
+  int best_island = 0;           ///< island holding this generation's best (0 with one island)
+  bool migrated = false;         ///< a migration took place at the end of this generation
+  std::vector<IslandSummary> islands;  ///< one per island when there are several; empty for one
   double wall_time_s = 0;        ///< wall time of the generation (the only non-deterministic field)
 
   /// Equal in every field but wall_time_s.
@@ -95,28 +149,35 @@ enum class GaTermination : int {
   kTargetReached = 4,   ///< best cost ≤ target_cost
 };
 const char* GaTerminationName(GaTermination t);
-/// The inverse of GaTerminationName (what a checkpoint stores as a finished job's message);
-/// nullopt for another text.
-std::optional<GaTermination> ParseGaTermination(std::string_view name);
+
+/// One island of a run between generations (GaState::islands).
+struct IslandState {
+  std::vector<Genome> population;      ///< ranked, best first; population_size genomes
+  std::vector<FitnessResult> fitness;  ///< fitness[i] of population[i]
+  RngState rng;                        ///< the island's generator, ready for the next generation
+  int stall = 0;                       ///< generations since its best last went down (since its restart)
+  double best_cost = 0;                ///< its best since its last restart
+  int restarts = 0;                    ///< times it was restarted
+  bool operator==(const IslandState&) const = default;
+};
 
 /// The complete state of a run between generations. Plain data: save it to checkpoint, restore it
 /// with GeneticAlgorithm::RestoreState() to continue bit for bit.
 struct GaState {
   bool initialized = false;            ///< generation 0 has been evaluated
   uint64_t generation = 0;             ///< last completed generation
-  int stall = 0;                       ///< generations since the best cost last improved
-  std::vector<Genome> population;      ///< ranked, best first; population_size genomes
-  std::vector<FitnessResult> fitness;  ///< fitness[i] of population[i]
-  RngState rng;                        ///< the generator, ready for the next generation
-  Genome best;                         ///< best so far (== population[0])
+  int stall = 0;                       ///< generations since the best cost (over islands) last improved
+  std::vector<IslandState> islands;    ///< options.islands of them (one before Initialize too)
+  Genome best;                         ///< best so far, over all islands
   FitnessResult best_fitness;
   uint64_t best_generation = 0;        ///< generation in which the best cost was reached
+  int best_island = 0;                 ///< island in which it was found
   int64_t evaluations = 0;             ///< genomes evaluated since the start
   int64_t failures = 0;                ///< non-ok results since the start
   std::vector<GenerationSummary> log;  ///< one record per generation (may be trimmed by the owner)
 
   /// Consistency with the options: sizes, 0/1 bits, finite costs, ranking order, RNG state. The
-  /// error names the field, e.g. "state.population[3].bits.size()".
+  /// error names the field, e.g. "state.islands[0].population[3].bits.size()".
   Status Validate(const GaOptions& options) const;
 };
 
@@ -128,6 +189,7 @@ struct GaSummary {
   Genome best;
   FitnessResult best_fitness;
   uint64_t best_generation = 0;
+  int best_island = 0;             ///< island in which the best was found
   int64_t evaluations = 0;
   int64_t failures = 0;
   double wall_time_s = 0;          ///< of the Run() call
@@ -155,7 +217,8 @@ class GeneticAlgorithm {
   void SetDescriber(Describer describer);
 
   /// Creates generation 0: `seeds` (≤ population_size genomes of genome_bits 0/1 bits) fill the
-  /// first slots, the rest are drawn uniformly; evaluates and ranks them. Throws InputError on bad
+  /// first slots of island 0, the rest are drawn uniformly (each island from its own generator);
+  /// evaluates all islands as one batch and ranks them. Throws InputError on bad
   /// seeds; requires !state().initialized (checked).
   const GenerationSummary& Initialize(std::span<const Genome> seeds = {});
   /// Runs one generation (selection, crossover, mutation, evaluation of the offspring, ranking).
@@ -179,21 +242,37 @@ class GeneticAlgorithm {
   GaSummary MakeSummary(GaTermination termination, double wall_time_s = 0) const;
 
  private:
-  int Tournament();
+  /// An island's new generation before ranking: kept individuals (with their costs) first, then
+  /// `fresh` ones to evaluate.
+  struct Draft {
+    std::vector<Genome> kept, fresh;
+    std::vector<FitnessResult> kept_fitness;
+    bool restarted = false;
+  };
+  int Tournament(Rng& rng);
   /// The mutation's gap table for (mutation_probability, genome_bits), built on first use.
   const GeometricGaps& MutationGaps();
-  void Evaluate(std::span<const Genome> genomes, int first_index, std::span<FitnessResult> out);
-  // Ranks population/fitness by (cost, index) (entries first_evaluated … were evaluated in this
-  // generation), updates best, stall and counters, logs the summary and calls the callbacks.
-  const GenerationSummary& Finish(std::vector<Genome> population, std::vector<FitnessResult> fitness,
-                                  int first_evaluated, double start_s);
+  void DrawUniform(Rng& rng, int count, std::vector<Genome>* out);
+  Draft Breed(int island);
+  Draft Restart(int island);
+  /// The best `migrants` individuals island `i` receives from its sources (ties: source order, rank).
+  std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island) const;
+  /// Evaluates every draft's fresh genomes as one batch (generation 0 if !initialized).
+  std::vector<std::vector<FitnessResult>> Evaluate(const std::vector<Draft>& drafts);
+  /// Ranks each island by (cost, index), updates island and job best, stall and counters, migrates
+  /// when due, logs the summary and calls the callbacks.
+  const GenerationSummary& Finish(std::vector<Draft> drafts, std::vector<std::vector<FitnessResult>> evaluated,
+                                  double start_s);
+  /// The migration at the end of a generation (file comment, 6.); immigrants taken per island.
+  std::vector<int> Migrate();
 
   GaOptions options_;
   BatchEvaluator* evaluator_;
   std::vector<GenerationCallback> callbacks_;
   Describer describer_;
   std::atomic<bool> cancel_{false};
-  Rng rng_;
+  std::vector<Rng> rngs_;                  ///< one per island
+  std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once
   std::optional<GeometricGaps> mutation_gaps_;
   GaState state_;
 };

@@ -97,6 +97,16 @@ class GeometricGaps {
   std::vector<uint64_t> thresholds_;  ///< T_1 … T_m, strictly positive, non-increasing
 };
 
+/// The seed of stream `stream` of a run seeded `seed`: the seed itself for stream 0, otherwise
+/// SplitMix64's finaliser of seed + stream · φ·2⁶⁴ (independent-looking generators per island).
+inline uint64_t StreamSeed(uint64_t seed, uint64_t stream) {
+  if (stream == 0) return seed;
+  uint64_t z = seed + stream * 0x9E3779B97F4A7C15ULL;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  return z ^ (z >> 31);
+}
+
 class Rng {
  public:
   /// Seeds as std::mt19937_64(seed) does.

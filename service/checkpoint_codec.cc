@@ -8,6 +8,35 @@
 
 namespace pz::service {
 using namespace detail;
+namespace {
+
+template <typename Proto>
+void PopulationToProto(const opt::IslandState& is, Proto* o) {
+  for (size_t i = 0; i < is.population.size(); ++i)
+    ToProto(ScoredGenome{static_cast<int>(i), is.population[i],
+                         i < is.fitness.size() ? is.fitness[i] : FitnessResult{}},
+            o->add_population());
+  o->mutable_rng_words()->Assign(is.rng.words.begin(), is.rng.words.end());
+  o->set_rng_position(is.rng.position);
+}
+
+template <typename Proto>
+Status PopulationFromProto(const Proto& o, bool need_rng, opt::IslandState* is) {
+  std::vector<ScoredGenome> pop;
+  if (Status s = IndividualsFromProto(o.population(), &pop); !s.ok()) return s;
+  for (auto& sg : pop) {
+    is->population.push_back(std::move(sg.genome));
+    is->fitness.push_back(std::move(sg.fitness));
+  }
+  if (need_rng || o.rng_words_size() > 0) {
+    if (o.rng_words_size() != RngState::kWords) return Malformed("checkpoint rng_words size");
+    std::copy(o.rng_words().begin(), o.rng_words().end(), is->rng.words.begin());
+    is->rng.position = o.rng_position();
+  }
+  return Status::Ok();
+}
+
+}  // namespace
 
 std::string EncodeCheckpoint(const JobCheckpoint& c) {
   pw::JobCheckpoint p;
@@ -19,12 +48,22 @@ std::string EncodeCheckpoint(const JobCheckpoint& c) {
   o->set_initialized(g.initialized);
   o->set_generation(g.generation);
   o->set_stall(g.stall);
-  for (size_t i = 0; i < g.population.size(); ++i)
-    ToProto(ScoredGenome{static_cast<int>(i), g.population[i],
-                         i < g.fitness.size() ? g.fitness[i] : FitnessResult{}},
-            o->add_population());
-  o->mutable_rng_words()->Assign(g.rng.words.begin(), g.rng.words.end());
-  o->set_rng_position(g.rng.position);
+  // One island that is the job (its stall and best are the job's, never restarted): the layout
+  // from before islands, byte for byte; otherwise every island in `islands`.
+  const bool single = g.islands.size() == 1 && g.islands[0].stall == g.stall && g.islands[0].restarts == 0 &&
+                      (!g.initialized || g.islands[0].best_cost == g.best_fitness.cost);
+  if (single) {
+    PopulationToProto(g.islands[0], o);
+  } else {
+    for (const opt::IslandState& is : g.islands) {
+      auto* pi = o->add_islands();
+      PopulationToProto(is, pi);
+      pi->set_stall(is.stall);
+      pi->set_best_cost(is.best_cost);
+      pi->set_restarts(static_cast<uint32_t>(is.restarts));
+    }
+  }
+  o->set_best_island(static_cast<uint32_t>(g.best_island));
   ToProto(ScoredGenome{0, g.best, g.best_fitness}, o->mutable_best());
   o->set_best_generation(g.best_generation);
   o->set_evaluations(g.evaluations);
@@ -32,6 +71,7 @@ std::string EncodeCheckpoint(const JobCheckpoint& c) {
   for (const auto& r : c.log) ToProto(r, p.add_log());
   for (const auto& b : c.best) ToProto(b, p.add_best());
   p.set_message(c.message);
+  p.set_termination(ToProto(c.termination));
   for (const auto& q : c.quarantined) ToProto(q, p.add_quarantined());
   p.set_elapsed_s(c.elapsed_s);
   p.set_arithmetic(c.arithmetic);
@@ -53,17 +93,23 @@ Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c) {
   g.initialized = o.initialized();
   g.generation = o.generation();
   g.stall = o.stall();
-  std::vector<ScoredGenome> pop;
-  if (Status s = IndividualsFromProto(o.population(), &pop); !s.ok()) return s;
-  for (auto& sg : pop) {
-    g.population.push_back(std::move(sg.genome));
-    g.fitness.push_back(std::move(sg.fitness));
+  if (o.islands_size() == 0) {
+    opt::IslandState& is = g.islands.emplace_back();
+    if (Status s = PopulationFromProto(o, o.initialized(), &is); !s.ok()) return s;
+    is.stall = g.stall;
+    is.best_cost = o.best().cost();
+  } else {
+    for (int k = 0; k < o.islands_size(); ++k) {
+      const auto& pi = o.islands(k);
+      opt::IslandState& is = g.islands.emplace_back();
+      if (Status s = PopulationFromProto(pi, o.initialized(), &is); !s.ok())
+        return Malformed("checkpoint islands[" + std::to_string(k) + "]: " + s.message());
+      is.stall = pi.stall();
+      is.best_cost = pi.best_cost();
+      is.restarts = ClampInt(pi.restarts());
+    }
   }
-  if (o.initialized() || o.rng_words_size() > 0) {
-    if (o.rng_words_size() != RngState::kWords) return Malformed("checkpoint rng_words size");
-    std::copy(o.rng_words().begin(), o.rng_words().end(), g.rng.words.begin());
-    g.rng.position = o.rng_position();
-  }
+  g.best_island = ClampInt(o.best_island());
   if (o.has_best()) {
     ScoredGenome best;
     if (Status s = FromProto(o.best(), &best); !s.ok()) return s;
@@ -76,6 +122,7 @@ Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c) {
   for (const auto& r : p.log()) c->log.push_back(FromProto(r));
   if (Status s = IndividualsFromProto(p.best(), &c->best); !s.ok()) return s;
   c->message = p.message();
+  c->termination = FromProto(p.termination());
   for (const auto& q : p.quarantined()) c->quarantined.push_back(FromProto(q));
   c->elapsed_s = p.elapsed_s();
   c->arithmetic = p.arithmetic();

@@ -124,6 +124,15 @@ void ToProto(const GenerationRecord& r, pw::GenerationRecord* p) {
   p->set_wall_time_s(r.wall_time_s);
   p->set_improved(r.improved);
   p->set_median_cost(r.median_cost);
+  p->set_best_island(static_cast<uint32_t>(std::max(0, r.best_island)));
+  p->set_migrated(r.migrated);
+  for (const opt::IslandSummary& i : r.islands) {
+    auto* q = p->add_islands();
+    q->set_best_cost(i.best_cost);
+    q->set_stall(static_cast<uint32_t>(std::max(0, i.stall)));
+    q->set_immigrants(static_cast<uint32_t>(std::max(0, i.immigrants)));
+    q->set_restarted(i.restarted);
+  }
 }
 
 GenerationRecord FromProto(const pw::GenerationRecord& p) {
@@ -144,7 +153,20 @@ GenerationRecord FromProto(const pw::GenerationRecord& p) {
   r.best_description = p.best_description();
   r.wall_time_s = p.wall_time_s();
   r.improved = p.improved();
+  r.best_island = ClampInt(p.best_island());
+  r.migrated = p.migrated();
+  for (const auto& q : p.islands())
+    r.islands.push_back({q.best_cost(), ClampInt(q.stall()), ClampInt(q.immigrants()), q.restarted()});
   return r;
+}
+
+pw::GaTermination ToProto(std::optional<opt::GaTermination> t) {
+  return t ? static_cast<pw::GaTermination>(*t) : pw::GA_TERMINATION_UNSPECIFIED;
+}
+
+std::optional<opt::GaTermination> FromProto(pw::GaTermination t) {
+  if (t == pw::GA_TERMINATION_UNSPECIFIED || !pw::GaTermination_IsValid(t)) return std::nullopt;
+  return static_cast<opt::GaTermination>(t);
 }
 
 void ToProto(const QuarantineRecord& q, pw::QuarantineRecord* p) {
@@ -191,6 +213,7 @@ void InfoToProto(const JobInfo& i, pw::JobInfo* p) {
   p->set_storage_error_since_unix_s(i.storage_error_since_unix_s);
   p->set_archived(i.archived);
   p->set_ended_unix_s(i.ended_unix_s);
+  p->set_termination(ToProto(i.termination));
 }
 
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
@@ -214,6 +237,7 @@ Status InfoFromProto(const pw::JobInfo& p, JobInfo* i) {
   i->storage_error_since_unix_s = p.storage_error_since_unix_s();
   i->archived = p.archived();
   i->ended_unix_s = p.ended_unix_s();
+  i->termination = FromProto(p.termination());
   return Status::Ok();
 }
 

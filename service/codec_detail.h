@@ -54,6 +54,9 @@ void ToProto(const ScoredGenome& s, pw::Individual* p);
 Status FromProto(const pw::Individual& p, ScoredGenome* s);
 void ToProto(const GenerationRecord& r, pw::GenerationRecord* p);
 GenerationRecord FromProto(const pw::GenerationRecord& p);
+/// The GA's stopping rule on the wire (GA_TERMINATION_UNSPECIFIED = none).
+pw::GaTermination ToProto(std::optional<opt::GaTermination> t);
+std::optional<opt::GaTermination> FromProto(pw::GaTermination t);
 void ToProto(const QuarantineRecord& q, pw::QuarantineRecord* p);
 QuarantineRecord FromProto(const pw::QuarantineRecord& p);
 void ToProto(const JobSpec& s, pw::JobSpec* p);

@@ -71,6 +71,7 @@ struct JobInfo {
   double storage_error_since_unix_s = 0;
   bool archived = false;   ///< ended, kept on disk only: fetch reads it from the state directory
   double ended_unix_s = 0; ///< when it ended (0 while running)
+  std::optional<opt::GaTermination> termination;  ///< the GA's rule, for a GA job that ended by it
 };
 
 struct JobEvent {
@@ -212,6 +213,7 @@ struct JobCheckpoint {
   std::vector<GenerationRecord> log;
   std::vector<ScoredGenome> best;  ///< best first
   std::string message;
+  std::optional<opt::GaTermination> termination;  ///< the GA's rule, for a GA job that ended by it
   std::vector<QuarantineRecord> quarantined;
   double elapsed_s = 0;
   std::string arithmetic;  ///< the profile of the workers that computed it ("" = none recorded)

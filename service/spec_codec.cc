@@ -272,6 +272,14 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     g->set_mutation_probability(s.ga->mutation_probability);
     g->set_generations(static_cast<uint32_t>(s.ga->generations));
     g->set_stall_generations(static_cast<uint32_t>(s.ga->stall_generations));
+    if (s.ga->islands != 1) {  // a one-island spec serialises as before islands existed (the same job id)
+      g->set_islands(static_cast<uint32_t>(s.ga->islands));
+      g->set_migration_interval(static_cast<uint32_t>(s.ga->migration_interval));
+      g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
+      g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
+    }
+    if (s.ga->island_stall_generations != 0)
+      g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
   }
   if (s.external) {
     auto* e = p->mutable_external();
@@ -308,6 +316,12 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     if (pg.has_mutation_probability()) g.mutation_probability = pg.mutation_probability();
     if (pg.has_generations()) g.generations = ClampInt(pg.generations());
     if (pg.has_stall_generations()) g.stall_generations = ClampInt(pg.stall_generations());
+    if (pg.has_islands()) g.islands = ClampInt(pg.islands());
+    if (pg.has_migration_interval()) g.migration_interval = ClampInt(pg.migration_interval());
+    if (pg.has_migrants()) g.migrants = ClampInt(pg.migrants());
+    if (pg.topology() != pw::MIGRATION_TOPOLOGY_UNSPECIFIED)
+      g.topology = static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
+    if (pg.has_island_stall_generations()) g.island_stall_generations = ClampInt(pg.island_stall_generations());
     s->ga = g;
   } else if (p.has_external()) {
     ExternalSettings e;

@@ -150,6 +150,10 @@ function drawChart() {
   const recs = curve.records;
   const best = recs.map(r => ({x: num(r.generation), y: Number(r.best_cost)}));
   const median = recs.map(r => ({x: num(r.generation), y: Number(r.median_cost)}));
+  // A job of several islands: the band from the best to the worst of the islands' bests.
+  const islandBests = r => (r.islands || []).map(i => Number(i.best_cost || 0));
+  const band = recs.filter(r => (r.islands || []).length > 1)
+                   .map(r => ({x: num(r.generation), y: Math.max(...islandBests(r))}));
   const positive = recs.every(r => Number(r.best_cost) > 0 && Number(r.median_cost) > 0);
   const yType = positive && recs.length ? 'logarithmic' : 'linear';
   if (!chart) {
@@ -158,6 +162,8 @@ function drawChart() {
       data: {datasets: [
         {label: 'best cost', data: best, borderColor: '#1a6fc4', backgroundColor: '#1a6fc4', pointRadius: 0, borderWidth: 2},
         {label: 'median cost', data: median, borderColor: '#e08a1e', backgroundColor: '#e08a1e', pointRadius: 0, borderWidth: 1.5},
+        {label: 'islands (best … worst island best)', data: band, borderColor: 'rgba(26,111,196,0.35)',
+         backgroundColor: 'rgba(26,111,196,0.15)', pointRadius: 0, borderWidth: 1, fill: {target: 0}, hidden: !band.length},
       ]},
       options: {
         animation: false, parsing: false, normalized: true, maintainAspectRatio: false,
@@ -169,6 +175,8 @@ function drawChart() {
   } else {
     chart.data.datasets[0].data = best;
     chart.data.datasets[1].data = median;
+    chart.data.datasets[2].data = band;
+    chart.data.datasets[2].hidden = !band.length;
     chart.options.scales.y.type = yType;
     chart.update('none');
   }
@@ -176,7 +184,8 @@ function drawChart() {
   const last = recs[recs.length - 1];
   document.getElementById('chart-info').textContent = last
       ? '(generation ' + num(last.generation) + ': best ' + fmtCost(last.best_cost) + ', median ' + fmtCost(last.median_cost) +
-        ', ' + num(last.errors) + ' failed evaluations)'
+        ', ' + num(last.errors) + ' failed evaluations' +
+        ((last.islands || []).length > 1 ? ', ' + last.islands.length + ' islands, best in island ' + num(last.best_island || 0) : '') + ')'
       : '(no generation yet)';
   document.body.dataset.curveJob = curve.job || '';
   document.body.dataset.curvePoints = recs.length;

@@ -71,6 +71,21 @@ class FetchResult:
         return records_frame(self.log)
 
 
+def _island_columns(r) -> dict:
+    """A job of several islands: the best's island, the migration and one best per island."""
+    if not len(r.islands):
+        return {}
+    row = {
+        "best_island": r.best_island,
+        "migrated": r.migrated,
+        "immigrants": sum(i.immigrants for i in r.islands),
+        "restarted": sum(1 for i in r.islands if i.restarted),
+    }
+    for k, i in enumerate(r.islands):
+        row[f"island_{k}_best"] = i.best_cost
+    return row
+
+
 def records_frame(records: Iterable):
     rows = [
         {
@@ -84,6 +99,7 @@ def records_frame(records: Iterable):
             "penalized": r.penalized,
             "stall": r.stall,
             "best_description": r.best_description,
+            **_island_columns(r),
         }
         for r in records
     ]
@@ -352,6 +368,9 @@ class _Progress:
         if not self.enabled:
             return
         text = f"best {record.best_cost:.6g} median {record.median_cost:.6g}, {workers} workers / {threads} threads"
+        if len(record.islands):
+            bests = [i.best_cost for i in record.islands]
+            text += f", island {record.best_island}/{len(bests)} (islands {min(bests):.4g}…{max(bests):.4g})"
         if self.bar is not None:
             self.bar.n = record.generation
             self.bar.set_postfix_str(text, refresh=True)

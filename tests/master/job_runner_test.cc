@@ -6,6 +6,8 @@
 #include "kinds/kinds.h"
 #include "master/job_runner.h"
 #include "model/chromosome.h"
+#include "opt/inline_evaluator.h"
+#include "service/wire_codec.h"
 #include "tests/testing/hgann_spec.h"
 
 namespace pz::master {
@@ -37,6 +39,79 @@ TEST(JobRunner, InProcessJobRunsExactlyAsPiezoidIdentify) {
   EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
 }
 
+/// Four islands of the nominal hgann problem: migration every 3 generations, fully connected, an
+/// island restarted after 4 generations of its own stall.
+job::JobSpec IslandSpec() {
+  job::JobSpec spec = NominalSpec(16, 10);
+  spec.ga->islands = 4;
+  spec.ga->migration_interval = 3;
+  spec.ga->migrants = 2;
+  spec.ga->topology = opt::MigrationTopology::kFullyConnected;
+  spec.ga->island_stall_generations = 4;
+  return spec;
+}
+
+TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
+  const job::JobSpec spec = IslandSpec();
+  service::JobCheckpoint job;
+  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &job).ok());
+
+  hgann::IdentifyOptions o;
+  o.ga = ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
+  EXPECT_EQ(o.ga.islands, 4);
+  o.threads = 2;
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
+  const hgann::IdentifyResult id = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
+
+  ASSERT_EQ(job.log.size(), id.log.size());
+  int migrations = 0;
+  for (size_t g = 0; g < job.log.size(); ++g) {
+    EXPECT_EQ(job.log[g], id.log[g]) << g;  // every field, the islands' records included
+    EXPECT_EQ(job.log[g].islands.size(), 4u);
+    migrations += job.log[g].migrated;
+  }
+  EXPECT_EQ(migrations, 3);
+  EXPECT_EQ(job.best.front().genome.bits, id.best.chromosome);
+  EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
+  EXPECT_EQ(job.optimizer.best_island, id.summary.best_island);
+  EXPECT_EQ(job.termination, opt::GaTermination::kMaxGenerations);
+  // The kept best are over all islands, best first, indexed island · population + rank.
+  ASSERT_EQ(job.best.size(), static_cast<size_t>(kBestKept));
+  for (size_t i = 1; i < job.best.size(); ++i) EXPECT_LE(job.best[i - 1].fitness.cost, job.best[i].fitness.cost);
+  const auto& top_island = job.optimizer.islands[job.optimizer.best_island];
+  EXPECT_EQ(job.best.front().genome, top_island.population[0]);
+}
+
+TEST(JobRunner, ResumeFromAStoredCheckpointAtAMigrationIsBitIdentical) {
+  const job::JobSpec spec = IslandSpec();
+  service::JobCheckpoint whole;
+  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &whole).ok());
+  std::unique_ptr<opt::FitnessFunction> f;
+  ASSERT_TRUE(kinds::All().MakeFitness(spec, &f).ok());
+  opt::InlineEvaluator eval(*f, spec.limits.penalty_cost);
+  for (int stop : {3, 4}) {  // generation 3 migrates; 4 restarts islands that stalled
+    SCOPED_TRACE("stopped after generation " + std::to_string(stop));
+    JobRunner first("t", spec);
+    ASSERT_TRUE(first.Init(kinds::All()).ok());
+    for (int g = 0; g <= stop; ++g) first.Step(eval);
+    ASSERT_EQ(first.checkpoint().log.back().migrated, stop == 3);
+    // Through the stored bytes, as a master restart reads them.
+    service::JobCheckpoint stored;
+    ASSERT_TRUE(service::DecodeCheckpoint(service::EncodeCheckpoint(first.checkpoint()), &stored).ok());
+    ASSERT_EQ(stored.optimizer.islands.size(), 4u);
+    JobRunner second("t", spec);
+    ASSERT_TRUE(second.Init(kinds::All(), &stored).ok());
+    while (!second.Done()) second.Step(eval);
+    const service::JobCheckpoint& resumed = second.checkpoint();
+    EXPECT_TRUE(service::EncodeCheckpoint([&] {
+                  auto c = resumed;
+                  c.elapsed_s = whole.elapsed_s;
+                  for (size_t g = 0; g < c.log.size() && g < whole.log.size(); ++g) c.log[g].wall_time_s = whole.log[g].wall_time_s;
+                  return c;
+                }()) == service::EncodeCheckpoint(whole))
+        << "the resumed job's checkpoint differs from the uninterrupted one";
+  }
+}
 
 }  // namespace
 }  // namespace pz::master

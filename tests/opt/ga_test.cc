@@ -234,7 +234,7 @@ std::vector<Genome> MutatedZeros(double p, uint64_t seed, int population = 400, 
   ga.Initialize(std::vector<Genome>(population, zeros));
   ga.Step();
   // Equal costs rank by index: the elite (zeros) first, then the offspring in order.
-  const auto& pop = ga.state().population;
+  const auto& pop = ga.state().islands[0].population;
   return {pop.begin() + o.elite_count(), pop.end()};
 }
 
@@ -356,14 +356,22 @@ RunRecord RunWith(BatchEvaluator* evaluator, const GaOptions& options) {
 }
 
 void ExpectSameRun(const RunRecord& a, const RunRecord& b) {
-  ASSERT_EQ(a.state.population.size(), b.state.population.size());
-  for (size_t i = 0; i < a.state.population.size(); ++i) {
-    ASSERT_EQ(a.state.population[i], b.state.population[i]) << "individual " << i;
-    ASSERT_EQ(a.state.fitness[i].cost, b.state.fitness[i].cost) << "individual " << i;
-    ASSERT_EQ(a.state.fitness[i].status, b.state.fitness[i].status);
-    ASSERT_EQ(a.state.fitness[i].reason, b.state.fitness[i].reason);
+  ASSERT_EQ(a.state.islands.size(), b.state.islands.size());
+  for (size_t k = 0; k < a.state.islands.size(); ++k) {
+    const IslandState &x = a.state.islands[k], &y = b.state.islands[k];
+    ASSERT_EQ(x.population.size(), y.population.size());
+    for (size_t i = 0; i < x.population.size(); ++i) {
+      ASSERT_EQ(x.population[i], y.population[i]) << "island " << k << " individual " << i;
+      ASSERT_EQ(x.fitness[i].cost, y.fitness[i].cost) << "island " << k << " individual " << i;
+      ASSERT_EQ(x.fitness[i].status, y.fitness[i].status);
+      ASSERT_EQ(x.fitness[i].reason, y.fitness[i].reason);
+    }
+    EXPECT_EQ(x.rng, y.rng) << "island " << k;
+    EXPECT_EQ(x.stall, y.stall) << "island " << k;
+    EXPECT_EQ(x.best_cost, y.best_cost) << "island " << k;
+    EXPECT_EQ(x.restarts, y.restarts) << "island " << k;
   }
-  EXPECT_EQ(a.state.rng, b.state.rng);
+  EXPECT_EQ(a.state.best_island, b.state.best_island);
   EXPECT_EQ(a.state.best, b.state.best);
   EXPECT_EQ(a.state.best_fitness.cost, b.state.best_fitness.cost);
   EXPECT_EQ(a.state.generation, b.state.generation);
@@ -396,7 +404,7 @@ TEST(GaDeterminism, SameSeedSameRunWhateverTheEvaluator) {
 
   // A different seed gives a different run.
   const RunRecord other = RunWith(&inline_ev, SmallOptions(43));
-  EXPECT_NE(other.state.population[0], reference.state.population[0]);
+  EXPECT_NE(other.state.islands[0].population[0], reference.state.islands[0].population[0]);
 }
 
 TEST(GaDeterminism, StepByStepWithCheckpointRestoreEqualsOneRun) {
@@ -426,16 +434,16 @@ TEST(GaDeterminism, StepByStepWithCheckpointRestoreEqualsOneRun) {
 
   // A corrupt checkpoint is refused with a named field.
   GaState bad = checkpoint;
-  bad.population[3].bits.pop_back();
+  bad.islands[0].population[3].bits.pop_back();
   GeneticAlgorithm third(options, &ev);
   try {
     third.RestoreState(bad);
     FAIL() << "no throw";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("state.population[3].bits.size()"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("state.islands[0].population[3].bits.size()"), std::string::npos) << e.what();
   }
   bad = checkpoint;
-  std::swap(bad.fitness[0], bad.fitness[59]);
+  std::swap(bad.islands[0].fitness[0], bad.islands[0].fitness[59]);
   EXPECT_THROW(third.RestoreState(bad), InputError);
 }
 
@@ -463,13 +471,14 @@ TEST(GaInvariants, ElitismBestNeverWorsensAndOnlyOffspringAreEvaluated) {
   }
   EXPECT_LT(seen.back().best_cost, seen.front().best_cost);
   const GaState& st = ga.state();
-  EXPECT_EQ(st.best, st.population[0]);
+  EXPECT_EQ(st.best, st.islands[0].population[0]);
   EXPECT_EQ(st.best_fitness.cost, seen.back().best_cost);
   EXPECT_EQ(HashFitness{}.Evaluate(st.best).cost, st.best_fitness.cost);
   // The median of the ranked population (60: the mean of the 30th and 31st costs).
-  EXPECT_EQ(seen.back().median_cost, st.fitness[29].cost + (st.fitness[30].cost - st.fitness[29].cost) / 2);
+  const auto& fit = st.islands[0].fitness;
+  EXPECT_EQ(seen.back().median_cost, fit[29].cost + (fit[30].cost - fit[29].cost) / 2);
   EXPECT_LE(seen.back().best_cost, seen.back().median_cost);
-  EXPECT_TRUE(std::is_sorted(st.fitness.begin(), st.fitness.end(),
+  EXPECT_TRUE(std::is_sorted(fit.begin(), fit.end(),
                              [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
   EXPECT_EQ(summary.termination, GaTermination::kMaxGenerations);
   EXPECT_EQ(summary.generations, 40u);
@@ -501,7 +510,7 @@ TEST(GaInvariants, PenalisedAndFailedIndividualsNeverPutNaNInSummaries) {
   EXPECT_GT(reasons["exception: solver blew up"], 0);
   EXPECT_GT(reasons["non-finite cost nan"], 0);
   EXPECT_EQ(summary.failures, penalized + errors);
-  for (const FitnessResult& f : ga.state().fitness) {
+  for (const FitnessResult& f : ga.state().islands[0].fitness) {
     EXPECT_TRUE(std::isfinite(f.cost));
     if (f.status == FitnessStatus::kError) {
       EXPECT_EQ(f.cost, kDefaultErrorCost);
@@ -527,7 +536,7 @@ TEST(GaInvariants, SeedsEnterGenerationZeroAndDescriberIsCalled) {
   const GenerationSummary& g0 = ga.Initialize(std::vector<Genome>{all_ones});
   EXPECT_EQ(g0.best_cost, 0);
   EXPECT_EQ(g0.best_description, "ones=1415");
-  EXPECT_EQ(ga.state().population[0], all_ones);
+  EXPECT_EQ(ga.state().islands[0].population[0], all_ones);
   EXPECT_EQ(ga.CheckTermination(), std::nullopt);
   Genome bad;
   bad.bits.assign(10, 1);
@@ -641,6 +650,307 @@ TEST(GaConvergence, DecodeAndFitATargetNetwork) {
   EXPECT_LT(log.back().best_cost, 0.05 * log.front().best_cost) << s.BriefReport();
   EXPECT_EQ(log.back().best_description.substr(1, 1), "-");  // "2-H-7 …"
 }
+
+// ------------------------------------------------------------------------------------------
+// Islands
+
+namespace islands {
+
+/// The run's outcome folded into one number: every island's population, costs and generator,
+/// the log's figures, the end. The same fold over the GA before islands existed (one population,
+/// GaState::population / fitness / rng) gave the pinned value of OneIslandIsTheGaBeforeIslands.
+uint64_t Digest(const GaState& st, const GaSummary& s) {
+  uint64_t h = 1469598103934665603ull;
+  auto add = [&h](const void* p, size_t n) {
+    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  auto d = [&add](double x) { add(&x, 8); };
+  auto u = [&add](uint64_t x) { add(&x, 8); };
+  for (const IslandState& is : st.islands) {
+    for (size_t i = 0; i < is.population.size(); ++i) {
+      add(is.population[i].bits.data(), is.population[i].bits.size());
+      d(is.fitness[i].cost);
+    }
+    for (uint64_t w : is.rng.words) u(w);
+    u(is.rng.position);
+  }
+  for (const GenerationSummary& g : st.log) {
+    d(g.best_cost);
+    d(g.mean_cost);
+    d(g.median_cost);
+    d(g.worst_cost);
+    u(static_cast<uint64_t>(g.stall));
+    u(static_cast<uint64_t>(g.failures));
+  }
+  u(s.generations);
+  d(s.best_fitness.cost);
+  return h;
+}
+
+GaOptions IslandOptions(int k, uint64_t seed = 42) {
+  GaOptions o = SmallOptions(seed);
+  o.islands = k;
+  o.migration_interval = 3;
+  o.migrants = 2;
+  return o;
+}
+
+TEST(GaIslands, OneIslandIsTheGaBeforeIslands) {
+  // The value printed by the GA of the commit before islands (same options, fitness and fold).
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = SmallOptions();
+  RunRecord r = RunWith(&ev, o);
+  EXPECT_EQ(Digest(r.state, r.summary), 0xd70ed114cf6bb092ull);
+  EXPECT_EQ(r.summary.best_fitness.cost, 551.54706204370177);
+  EXPECT_TRUE(r.state.log.back().islands.empty());
+  // With one island the migration settings are not used.
+  o.migration_interval = 1;
+  o.migrants = 7;
+  o.topology = MigrationTopology::kFullyConnected;
+  r = RunWith(&ev, o);
+  EXPECT_EQ(Digest(r.state, r.summary), 0xd70ed114cf6bb092ull);
+}
+
+TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
+  auto error = [](auto mutate) {
+    GaOptions o;
+    mutate(o);
+    const Status s = o.Validate();
+    EXPECT_FALSE(s.ok());
+    return s.message();
+  };
+  EXPECT_EQ(error([](GaOptions& o) { o.islands = 0; }), "islands = 0: must be in [1, 1024]");
+  EXPECT_EQ(error([](GaOptions& o) { o.islands = 1025; }).rfind("islands = 1025", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 400; }), "migrants = 400: must be in [0, population_size - 1 = 399]");
+  EXPECT_EQ(error([](GaOptions& o) { o.migrants = -1; }).rfind("migrants = -1", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 0; }).rfind("migrants = 0: must be >= 1 when migration_interval = 10", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migration_interval = -1; }).rfind("migration_interval = -1", 0), 0u);
+  EXPECT_NE(error([](GaOptions& o) { o.topology = static_cast<MigrationTopology>(9); }).find("topology = 9: must be \"ring\""),
+            std::string::npos);
+  EXPECT_EQ(error([](GaOptions& o) { o.island_stall_generations = -2; }).rfind("island_stall_generations = -2", 0), 0u);
+  GaOptions multistart;
+  multistart.migration_interval = 0;
+  multistart.migrants = 0;
+  EXPECT_TRUE(multistart.Validate().ok());
+  EXPECT_EQ(ParseTopology("fully_connected"), MigrationTopology::kFullyConnected);
+  EXPECT_EQ(ParseTopology("star"), std::nullopt);
+}
+
+TEST(GaIslands, TopologiesAreFixedAndConnected) {
+  GaOptions o = IslandOptions(5);
+  EXPECT_EQ(o.MigrationSources(0), std::vector<int>{4});
+  EXPECT_EQ(o.MigrationSources(3), std::vector<int>{2});
+  o.topology = MigrationTopology::kFullyConnected;
+  EXPECT_EQ(o.MigrationSources(2), (std::vector<int>{0, 1, 3, 4}));
+  o.topology = MigrationTopology::kRandom;
+  // A ring in a seeded order: each island has one source, and following sources visits all.
+  std::vector<int> seen;
+  int at = 0;
+  for (int step = 0; step < 5; ++step) {
+    ASSERT_EQ(o.MigrationSources(at).size(), 1u);
+    at = o.MigrationSources(at)[0];
+    seen.push_back(at);
+  }
+  std::sort(seen.begin(), seen.end());
+  EXPECT_EQ(seen, (std::vector<int>{0, 1, 2, 3, 4}));
+  GaOptions again = o;
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(again.MigrationSources(i), o.MigrationSources(i));
+  bool differs = false;
+  for (uint64_t seed = 1; seed < 20 && !differs; ++seed) {
+    again.seed = seed;
+    for (int i = 0; i < 5; ++i) differs = differs || again.MigrationSources(i) != o.MigrationSources(i);
+  }
+  EXPECT_TRUE(differs) << "the random topology should depend on the seed";
+  EXPECT_TRUE(IslandOptions(1).MigrationSources(0).empty());
+}
+
+TEST(GaIslands, SameRunWhateverTheEvaluatorItsThreadsAndTheCompletionOrder) {
+  const HashFitness fitness;
+  for (MigrationTopology t : kTopologies) {
+    SCOPED_TRACE(TopologyName(t));
+    GaOptions o = IslandOptions(4);
+    o.topology = t;
+    o.island_stall_generations = 4;
+    InlineEvaluator inline_ev(fitness);
+    const RunRecord reference = RunWith(&inline_ev, o);
+    ThreadPoolEvaluator pool2(fitness, 2), pool4(fitness, 4);
+    ShuffledEvaluator shuffled(&pool4);
+    for (BatchEvaluator* ev : std::initializer_list<BatchEvaluator*>{&pool2, &shuffled})
+      ExpectSameRun(reference, RunWith(ev, o));
+    int migrations = 0, immigrants = 0;
+    for (const GenerationSummary& g : reference.state.log) {
+      ASSERT_EQ(g.islands.size(), 4u);
+      EXPECT_EQ(g.migrated, g.generation > 0 && g.generation % 3 == 0) << g.generation;
+      migrations += g.migrated;
+      for (const IslandSummary& i : g.islands) immigrants += i.immigrants;
+      double best = INFINITY;
+      for (const IslandSummary& i : g.islands) best = std::min(best, i.best_cost);
+      EXPECT_LE(g.best_cost, best) << "the generation's best is over the islands";
+    }
+    EXPECT_EQ(migrations, 8);
+    EXPECT_GT(immigrants, 0);
+  }
+}
+
+TEST(GaIslands, OneDispatchPerGenerationWithEveryIslandsIndividuals) {
+  const HashFitness fitness;
+  InlineEvaluator inner(fitness);
+  struct Counting final : BatchEvaluator {
+    BatchEvaluator* inner;
+    std::vector<std::vector<int>> batches;
+    void Evaluate(const EvalBatch& b, std::span<FitnessResult> out) override {
+      batches.emplace_back(b.indices.begin(), b.indices.end());
+      inner->Evaluate(b, out);
+    }
+  } counting;
+  counting.inner = &inner;
+  GaOptions o = IslandOptions(4);
+  o.max_generations = 5;
+  GeneticAlgorithm ga(o, &counting);
+  ga.Run();
+  ASSERT_EQ(counting.batches.size(), 6u);
+  EXPECT_EQ(counting.batches[0].size(), 240u);  // 4 × 60
+  for (size_t g = 1; g < 6; ++g) {
+    ASSERT_EQ(counting.batches[g].size(), 120u);  // 4 × 30 offspring
+    EXPECT_EQ(counting.batches[g][0], 30);        // island 0, slots 30 … 59
+    EXPECT_EQ(counting.batches[g][30], 90);       // island 1 starts at 60 + 30
+    EXPECT_EQ(counting.batches[g][119], 239);
+  }
+}
+
+TEST(GaIslands, MultiStartIsIndependentRunsOnTheIslandStreams) {
+  // Migration interval 0: island k is exactly the one-island GA seeded StreamSeed(seed, k).
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = IslandOptions(3);
+  o.migration_interval = 0;
+  o.stall_generations = 0;
+  const RunRecord multi = RunWith(&ev, o);
+  double best = INFINITY;
+  int best_island = -1;
+  for (int k = 0; k < 3; ++k) {
+    GaOptions one = SmallOptions(StreamSeed(o.seed, k));
+    one.stall_generations = 0;
+    const RunRecord single = RunWith(&ev, one);
+    const IslandState &x = single.state.islands[0], &y = multi.state.islands[k];
+    EXPECT_EQ(x.population, y.population) << "island " << k;
+    ASSERT_EQ(x.fitness.size(), y.fitness.size());
+    for (size_t i = 0; i < x.fitness.size(); ++i) EXPECT_EQ(x.fitness[i].cost, y.fitness[i].cost) << k << " " << i;
+    EXPECT_EQ(x.rng, y.rng) << "island " << k;
+    if (single.summary.best_fitness.cost < best) best = single.summary.best_fitness.cost, best_island = k;
+  }
+  EXPECT_EQ(multi.summary.best_fitness.cost, best);
+  EXPECT_EQ(multi.summary.best_island, best_island);
+  for (const GenerationSummary& g : multi.state.log) EXPECT_FALSE(g.migrated);
+}
+
+TEST(GaIslands, MigrantsReplaceTheWorstWhenBetter) {
+  // Ring of 2 at every generation: after a migration, each island holds the two best of the
+  // other (they are better than its worst, penalised or error-cost individuals).
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = IslandOptions(2);
+  o.migration_interval = 1;
+  GeneticAlgorithm ga(o, &ev);
+  ga.Initialize();
+  ga.Step();
+  const GenerationSummary& g = ga.state().log.back();
+  ASSERT_TRUE(g.migrated);
+  for (int k = 0; k < 2; ++k) {
+    const IslandState& is = ga.state().islands[k];
+    EXPECT_EQ(g.islands[k].immigrants, 2);
+    EXPECT_TRUE(std::is_sorted(is.fitness.begin(), is.fitness.end(),
+                               [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
+    EXPECT_EQ(g.islands[k].best_cost, is.fitness[0].cost);
+  }
+  // The other island's top two (after its breeding, before the exchange) are in each island: the
+  // exchange takes copies, so both islands hold both.
+  const IslandState &a = ga.state().islands[0], &b = ga.state().islands[1];
+  EXPECT_NE(std::find(b.population.begin(), b.population.end(), a.population[0]), b.population.end());
+  EXPECT_NE(std::find(a.population.begin(), a.population.end(), b.population[0]), a.population.end());
+}
+
+TEST(GaIslands, StalledIslandRestartsFromMigrantsAndFreshIndividuals) {
+  const ConstantFitness fitness;  // nothing ever improves: every island stalls
+  InlineEvaluator ev(fitness);
+  GaOptions o = IslandOptions(3);
+  o.migration_interval = 100;  // no migration in this run, but migrants for restarts
+  o.island_stall_generations = 2;
+  o.stall_generations = 0;
+  o.max_generations = 6;
+  GeneticAlgorithm ga(o, &ev);
+  ga.Initialize();
+  ga.Step();
+  ga.Step();  // generation 2: every island at stall 2
+  for (const IslandState& is : ga.state().islands) EXPECT_EQ(is.stall, 2);
+  const GaState before = ga.state();
+  const GenerationSummary& g3 = ga.Step();
+  // Each island: the two best of its ring source (kept, not evaluated) + 58 fresh ones.
+  EXPECT_EQ(g3.evaluations, 3 * 58);
+  for (int k = 0; k < 3; ++k) {
+    const IslandState& is = ga.state().islands[k];
+    const IslandState& src = before.islands[(k + 2) % 3];
+    EXPECT_TRUE(g3.islands[k].restarted);
+    EXPECT_EQ(g3.islands[k].stall, 0);
+    EXPECT_EQ(is.restarts, 1);
+    // Equal costs rank by index: the migrants first, in the source's order.
+    EXPECT_EQ(is.population[0], src.population[0]);
+    EXPECT_EQ(is.population[1], src.population[1]);
+    EXPECT_EQ(std::find(is.population.begin() + 2, is.population.end(), before.islands[k].population[0]),
+              is.population.end())
+        << "the fresh individuals are new draws";
+  }
+  // The job's stall is over the islands' best, and a restart does not reset it.
+  EXPECT_EQ(g3.stall, 3);
+  EXPECT_FALSE(g3.improved);
+  // One island restarts from fresh individuals only.
+  GaOptions one = SmallOptions();
+  one.island_stall_generations = 1;
+  one.stall_generations = 0;
+  GeneticAlgorithm single(one, &ev);
+  single.Initialize();
+  single.Step();
+  EXPECT_EQ(single.Step().evaluations, 60);
+  EXPECT_TRUE(single.state().log.back().islands.empty());
+  EXPECT_EQ(single.state().islands[0].restarts, 1);
+}
+
+TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = IslandOptions(4);
+  o.island_stall_generations = 3;
+  const RunRecord reference = RunWith(&ev, o);
+  for (int stop : {2, 3, 4}) {  // before, at (interval 3) and after a migration
+    SCOPED_TRACE("checkpoint after generation " + std::to_string(stop));
+    GaState checkpoint;
+    {
+      GeneticAlgorithm first(o, &ev);
+      first.Initialize();
+      for (int g = 0; g < stop; ++g) first.Step();
+      checkpoint = first.state();
+    }
+    GeneticAlgorithm second(o, &ev);
+    second.RestoreState(checkpoint);
+    GaSummary summary;
+    while (!second.CheckTermination()) second.Step();
+    summary = second.MakeSummary(*second.CheckTermination());
+    ExpectSameRun(reference, {second.state(), summary});
+  }
+  GaState bad = reference.state;
+  bad.islands.pop_back();
+  GeneticAlgorithm third(o, &ev);
+  try {
+    third.RestoreState(bad);
+    FAIL() << "no throw";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("state.islands.size() = 3: must equal islands = 4"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace islands
 
 }  // namespace
 }  // namespace pz::opt

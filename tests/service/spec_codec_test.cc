@@ -70,6 +70,50 @@ TEST(SpecCodec, SpecSurvivesTheWireAndJsonBitForBit) {
   EXPECT_EQ(c.cases[2].b2, -10.25 - h.cases[2].number);
 }
 
+TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
+  JobSpec s = NominalSpec(10, 1);
+  const std::string one_island = EncodeJobSpec(s);
+  s.ga->migration_interval = 7;  // not used with one island: the spec encodes as before islands
+  EXPECT_TRUE(EncodeJobSpec(s) == one_island);
+  s.ga->islands = 4;
+  s.ga->migrants = 3;
+  s.ga->topology = opt::MigrationTopology::kRandom;
+  s.ga->island_stall_generations = 9;
+  JobSpec back;
+  std::vector<FieldViolation> v;
+  ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(s), &back, &v).ok());
+  EXPECT_EQ(back.ga->islands, 4);
+  EXPECT_EQ(back.ga->migration_interval, 7);
+  EXPECT_EQ(back.ga->migrants, 3);
+  EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
+  EXPECT_EQ(back.ga->island_stall_generations, 9);
+  back = JobSpec{};
+  ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(s), &back, &v).ok());
+  ASSERT_TRUE(back.ga.has_value());
+  EXPECT_EQ(back.ga->islands, 4);
+  EXPECT_EQ(back.ga->migrants, 3);
+  EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
+  EXPECT_EQ(back.ga->island_stall_generations, 9);
+  EXPECT_NE(JobSpecToJson(s).find("\"MIGRATION_TOPOLOGY_RANDOM\""), std::string::npos);
+
+  auto violations = [&](auto mutate) {
+    JobSpec bad = s;
+    mutate(*bad.ga);
+    return bad.Validate();
+  };
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.islands = 0; }), "ga.islands", "must be in [1, 1024]"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migrants = 10; }), "ga.migrants", "must be in [0, 9]"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migrants = 0; }), "ga.migrants",
+                       "must be ≥ 1 when ga.migration_interval > 0"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.topology = static_cast<opt::MigrationTopology>(5); }),
+                       "ga.topology", "MIGRATION_TOPOLOGY_RING"));
+  EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0; }).empty());
+  // A topology name JSON does not know is refused naming it.
+  const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);
+  EXPECT_FALSE(st.ok());
+  EXPECT_NE(st.message().find("topology"), std::string::npos) << st.message();
+}
+
 TEST(SpecCodec, BadEnumsInJsonAreNamed) {
   JobSpec s;
   std::vector<FieldViolation> v;

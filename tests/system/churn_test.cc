@@ -123,5 +123,17 @@ TEST(Churn, ASyntheticJobIsBitIdenticalUnderAKillEveryThirdOfASecond) {
   ExpectUnchangedByChurn(SyntheticSpec(77, 40, 400, /*sleep_ms=*/1), "churn-fast", 0.3, 1.0, 1);
 }
 
+TEST(Churn, AJobOfFourIslandsIsBitIdenticalUnderAKillEveryThirdOfASecond) {
+  // One dispatch holds all four islands' offspring; migrations every 5 generations and restarts
+  // of stalled islands happen while workers die.
+  job::JobSpec spec = SyntheticSpec(78, 20, 200, /*sleep_ms=*/1);
+  spec.ga->islands = 4;
+  spec.ga->migration_interval = 5;
+  spec.ga->migrants = 2;
+  spec.ga->topology = opt::MigrationTopology::kRandom;
+  spec.ga->island_stall_generations = 8;
+  ExpectUnchangedByChurn(spec, "churn-islands", 0.3, 1.0, 1);
+}
+
 }  // namespace
 }  // namespace pz::testing

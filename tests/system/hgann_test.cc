@@ -14,6 +14,9 @@
 #include "client/job_report.h"
 #include "io/network_io.h"
 #include "hgann/hgann_job.h"
+#include "hgann/identify.h"
+#include "job/job_kind.h"
+#include "model/chromosome.h"
 #include "tests/system/service_harness.h"
 
 namespace pz::testing {
@@ -97,6 +100,49 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   const Status capped = client.Fetch(r.job_id, master::kBestKept + 1, &too_many, &log);
   EXPECT_EQ(capped.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(capped.message().find("must be in [1, 32]"), std::string::npos) << capped.message();
+}
+
+TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIdentify) {
+  // The quick job as an archipelago: 4 islands of 30, a ring migration every 4 generations,
+  // islands restarted after 6 generations of their own stall; one dispatch of 4 × 15 per generation.
+  job::JobSpec spec = QuickSpec();
+  spec.ga->population = 30;
+  spec.ga->generations = 16;
+  spec.ga->islands = 4;
+  spec.ga->migration_interval = 4;
+  spec.ga->migrants = 2;
+  spec.ga->island_stall_generations = 6;
+  const service::JobCheckpoint ref = Reference(spec);
+
+  hgann::IdentifyOptions o;
+  o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
+  o.threads = 2;
+  hgann::HgannFitnessConfig config;
+  ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(spec.problem), &config).ok());
+  const hgann::HgannFitness fitness(config);
+  const io::CaseSet set = hgann::HgannCaseSet(std::get<job::HgannProblem>(spec.problem));
+  const hgann::IdentifyResult id = hgann::RunIdentify(o, set, fitness, nullptr);
+
+  Cluster c("hgann-islands");
+  c.AddWorker(1);
+  c.AddWorker(1);
+  auto client = c.Client();
+  client::SubmitResult r;
+  ASSERT_TRUE(client.Submit(spec, &r).ok());
+  service::JobInfo info;
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, &info).ok());
+  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  EXPECT_EQ(info.termination, opt::GaTermination::kMaxGenerations);
+  std::vector<service::ScoredGenome> best;
+  std::vector<service::GenerationRecord> log;
+  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info).ok());
+  ExpectSameRun(ref, best, log);
+  ASSERT_EQ(log.size(), id.log.size());
+  for (size_t g = 0; g < log.size(); ++g) EXPECT_EQ(log[g], id.log[g]) << "generation " << g;
+  EXPECT_EQ(log[0].evaluations, 4 * 30);
+  EXPECT_EQ(log[1].evaluations, 4 * 15);
+  EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
+  EXPECT_EQ(client::GaSummaryOfJob({info, spec, best, log, {}}).best_island, id.summary.best_island);
 }
 
 TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
