@@ -124,7 +124,7 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
     o << "  round " << r + 1 << " from " << start << ": withheld RMS "
       << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples))) << " deg = " << F("%.2f", rr.rms_ratio)
       << " x floor (" << (rr.significant ? "significant" : "not significant") << ", threshold "
-      << F("%.2f", opt.significance_ratio) << ")\n";
+      << F("%.2f", opt.rules.significance_ratio) << ")\n";
     o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14) << Pad("score", 10)
       << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
     for (const CandidateResult& c : rr.candidates) {
@@ -250,8 +250,8 @@ void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::Dia
     << ",\n \"verdict\": " << Str(d.verdict) << ",\n \"named\": [";
   for (size_t i = 0; i < d.named.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(d.named[i]));
   o << "],\n \"confidence\": " << Num(d.named.empty() ? NAN : d.confidence)
-    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.significance_ratio)
-    << ", \"min_closed\": " << Num(opt.min_closed) << ", \"min_pattern\": " << Num(opt.min_pattern) << "}"
+    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.rules.significance_ratio)
+    << ", \"min_closed\": " << Num(opt.rules.min_closed) << ", \"min_pattern\": " << Num(opt.rules.min_pattern) << "}"
     << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
     << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"floor_model\": " << Str(d.floor_model)
     << ", \"cases\": [";
@@ -407,7 +407,7 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
     << " deg (training), " << F("%.4f", d.floor_withheld)
     << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
        "saturation plateaus of " << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
-    << F("%.2f", opt.significance_ratio) << " x the floor.</p>\n";
+    << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
   // Grid of PI before/after.
   std::set<double> vs, fs_set;
   for (const auto& c : model.cases()) {
