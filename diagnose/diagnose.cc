@@ -472,8 +472,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   // 6. How far: per case and in total.
   d.withheld_before = d.base.withheld_pi;
   d.withheld_after = d.final_fit.withheld_pi;
-  const double excess = d.withheld_before - d.withheld_floor;
-  d.closed_total = excess > 0 ? (d.withheld_before - d.withheld_after) / excess : NAN;
+  d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
   d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
   for (size_t c = 0; c < m.cases().size(); ++c) {
     const DiagCase& dc = m.cases()[c];
@@ -488,8 +487,8 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     g.pi_after = d.final_fit.case_pi[c];
     g.rms_before = std::sqrt(g.pi_before / n);
     g.rms_after = std::sqrt(g.pi_after / n);
-    const double ex = g.pi_before - n * floors[c] * floors[c];
-    g.closed = ex > 0 ? std::clamp((g.pi_before - g.pi_after) / ex, -9.0, 1.0) : 0.0;
+    const double floor_c = n * floors[c] * floors[c];
+    g.closed = g.pi_before > floor_c ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0) : 0.0;
     d.gaps.push_back(g);
   }
   // What the base terms absorb: the best candidate of the first round against the base fit.

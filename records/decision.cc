@@ -46,6 +46,11 @@ Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t,
   return g;
 }
 
+double ClosedShare(double s0, double s_c, double s_floor) {
+  const double excess = s0 - s_floor;
+  return excess > 0 ? (s0 - s_c) / excess : std::numeric_limits<double>::quiet_NaN();
+}
+
 void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added_params, double pattern,
                     const DecisionRules& rules, CandidateScore& c) {
   const double k = added_params;
@@ -54,7 +59,7 @@ void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added
   c.s_train = s_train;
   c.score = (gap.s0 - s_withheld) / gap.var_w - k * std::log(gap.nw);
   c.train_delta_bic = (s_train - gap.t0) / gap.var_t + k * std::log(gap.nt);
-  c.closed = excess > 0 ? (gap.s0 - s_withheld) / excess : std::numeric_limits<double>::quiet_NaN();
+  c.closed = ClosedShare(gap.s0, s_withheld, gap.s_floor);
   c.raw_reduction = gap.s0 > 0 ? (gap.s0 - s_withheld) / gap.s0 : 0;
   c.pattern = pattern;
   std::vector<std::string> why;

@@ -56,6 +56,9 @@ struct Gap {
 Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t, double nw, double nt,
                const DecisionRules& rules);
 
+/// The share of the excess gap closed: (s0 − s_c)/(s0 − s_floor); NaN when s0 ≤ s_floor (no excess).
+double ClosedShare(double s0, double s_c, double s_floor);
+
 /// What the rules say of one candidate. Protocols' candidate types derive from it.
 struct CandidateScore {
   double s_withheld = 0, s_train = 0;  ///< Σe² of the candidate on the withheld / training data

@@ -7,6 +7,7 @@
 
 #include "io/csv.h"
 #include "model/model_comparison.h"
+#include "model/noise_floor.h"
 
 namespace pz::records {
 namespace {
@@ -129,17 +130,10 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
         if (ok) period = P;
       }
       if (!period) continue;
-      // The last two periods.
-      const size_t b = r.size() - 2 * period;
-      double s = 0;
-      size_t m = 0;
-      for (size_t k = b + 1; k < b + period; ++k) {
-        const double d1 = r.y[k + period] - r.y[k], d0 = r.y[k + period - 1] - r.y[k - 1];
-        s += (d1 - d0) * (d1 - d0);
-        ++m;
-      }
+      // The last two periods (model/noise_floor.h, as the scatter of a bench case).
+      const double s = model::PeriodDifferenceSquares(r.y, r.size() - 2 * period, period);
       ss += s / 4;
-      n += m;
+      n += period - 1;
       ++found;
     }
     if (n > 0) nf.estimates.push_back({"periods", std::sqrt(ss / static_cast<double>(n)), n, std::to_string(found) + " periodic record(s)"});
