@@ -144,4 +144,27 @@ std::string VerdictKind(bool significant, const Naming& naming) {
   return naming.runner_up >= 0 ? "inseparable" : "effect";
 }
 
+bool CalibrationTally::Add(bool clean_truth, bool significant, const std::string& verdict_kind, bool named_is_truth,
+                           double stated_confidence) {
+  const bool named = verdict_kind == "effect" || verdict_kind == "inseparable";
+  const bool verdict_right = clean_truth ? verdict_kind == "none" : named && named_is_truth;
+  if (clean_truth) {
+    ++clean;
+    if (verdict_kind != "none") ++clean_alarms;
+  } else if (significant) {
+    ++effect_trials;
+    if (verdict_right) ++effect_right;
+  }
+  if (verdict_kind == "inseparable") ++inseparable;
+  if (named) {
+    confidence.push_back(stated_confidence);
+    right.push_back(named_is_truth ? 1 : 0);
+  }
+  return verdict_right;
+}
+
+std::vector<model::ReliabilityBin> CalibrationTally::Reliability() const {
+  return model::ReliabilityTable(confidence, right);
+}
+
 }  // namespace pz::records

@@ -27,6 +27,7 @@
 #include <string>
 #include <vector>
 
+#include "model/model_comparison.h"
 #include "model/status.h"
 
 namespace pz::records {
@@ -119,5 +120,25 @@ Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const
 
 /// "none" (no significant gap), "unexplained" (nothing named), "effect" or "inseparable".
 std::string VerdictKind(bool significant, const Naming& naming);
+
+/// The tally of a calibration check (`diagnose-check`, benches or records) over trials whose truth
+/// is known: the same counts and reliability table for every data shape.
+struct CalibrationTally {
+  int effect_trials = 0;           ///< trials with an effect whose gap was significant
+  int effect_right = 0;            ///< … where that effect was named
+  int clean = 0;                   ///< trials without an effect
+  int clean_alarms = 0;            ///< … where something was named or called unexplained
+  int inseparable = 0;             ///< verdicts "inseparable"
+  std::vector<double> confidence;  ///< stated confidence, over trials with a named effect
+  std::vector<char> right;         ///< … 1 when the named effect was the truth
+  /// Counts one trial (`named_is_truth`: an effect was named and it is the truth); returns whether
+  /// the verdict is right: the truth named, or "none" on a clean trial.
+  bool Add(bool clean_truth, bool significant, const std::string& verdict_kind, bool named_is_truth,
+           double stated_confidence);
+  double accuracy() const { return effect_trials ? double(effect_right) / effect_trials : 0; }
+  double false_alarm_rate() const { return clean ? double(clean_alarms) / clean : 0; }
+  /// Is a stated confidence of 90 % right 90 % of the time (model/model_comparison.h)?
+  std::vector<model::ReliabilityBin> Reliability() const;
+};
 
 }  // namespace pz::records

@@ -2,7 +2,7 @@
 // and the nine-case bench diagnosis take them from: worked numbers for the gap, the score, the
 // training ΔBIC, the closed share and the pattern; every rule refusing on its own; the best-ranked
 // candidate named only when it qualifies; a rival the paired block test cannot separate shares the
-// confidence and makes the verdict "inseparable".
+// confidence and makes the verdict "inseparable"; the tally of a calibration check.
 #include "records/decision.h"
 
 #include <gtest/gtest.h>
@@ -110,6 +110,28 @@ TEST(DecisionTest, ARivalThatCannotBeSeparatedSharesTheConfidence) {
   EXPECT_DOUBLE_EQ(m.confidence, model::NormalCdf(model::PairedBlockZ(far(-1), far(0), 20)) *
                                      model::NormalCdf(model::PairedBlockZ(far(1), far(0), 20)));
   EXPECT_EQ(VerdictKind(g.significant, m), "effect");
+}
+
+TEST(DecisionTest, CalibrationTallyCountsRightVerdictsAlarmsAndStatedConfidence) {
+  CalibrationTally t;
+  EXPECT_TRUE(t.Add(false, true, "effect", true, 0.99));        // right effect
+  EXPECT_TRUE(t.Add(false, true, "inseparable", true, 0.5));    // right, but shared
+  EXPECT_FALSE(t.Add(false, true, "effect", false, 0.9));       // wrong effect
+  EXPECT_FALSE(t.Add(false, false, "none", false, 0));          // an effect below the floor: not counted
+  EXPECT_TRUE(t.Add(true, false, "none", false, 0));            // clean, quiet
+  EXPECT_FALSE(t.Add(true, true, "unexplained", false, 0));     // clean, alarm
+  EXPECT_EQ(t.effect_trials, 3);
+  EXPECT_EQ(t.effect_right, 2);
+  EXPECT_EQ(t.clean, 2);
+  EXPECT_EQ(t.clean_alarms, 1);
+  EXPECT_EQ(t.inseparable, 1);
+  EXPECT_EQ(t.confidence, (std::vector<double>{0.99, 0.5, 0.9}));
+  EXPECT_EQ(t.right, (std::vector<char>{1, 1, 0}));
+  EXPECT_DOUBLE_EQ(t.accuracy(), 2.0 / 3);
+  EXPECT_DOUBLE_EQ(t.false_alarm_rate(), 0.5);
+  int counted = 0;
+  for (const auto& b : t.Reliability()) counted += b.count;
+  EXPECT_EQ(counted, 3);
 }
 
 TEST(DecisionTest, RulesAreValidated) {
