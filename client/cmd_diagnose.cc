@@ -74,7 +74,7 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
   o.candidates = ParseKinds(candidates);
   o.threads = threads;
   o.seed = seed;
-  o.significance_ratio = significance_ratio;
+  o.rules.significance_ratio = significance_ratio;
   if (quick) {  // a smaller search: quick looks and tests
     o.de_base.population = 24;
     o.de_base.generations = 40;
@@ -169,7 +169,7 @@ int RunRecordsCheckCommand(const CheckArgs& a) {
   o.trials = a.trials;
   o.seed = a.seed;
   o.none_probability = a.none_probability;
-  o.diagnose.significance_ratio = a.significance_ratio;
+  o.diagnose.rules.significance_ratio = a.significance_ratio;
   o.diagnose.fit.threads = a.threads;
   if (a.quick) {
     o.diagnose.fit.search.repetitions = 1;

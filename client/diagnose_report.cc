@@ -124,7 +124,7 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
     o << "  round " << r + 1 << " from " << start << ": withheld RMS "
       << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples))) << " deg = " << F("%.2f", rr.rms_ratio)
       << " x floor (" << (rr.significant ? "significant" : "not significant") << ", threshold "
-      << F("%.2f", opt.significance_ratio) << ")\n";
+      << F("%.2f", opt.rules.significance_ratio) << ")\n";
     o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14) << Pad("score", 10)
       << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
     for (const CandidateResult& c : rr.candidates) {
@@ -250,8 +250,8 @@ void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::Dia
     << ",\n \"verdict\": " << Str(d.verdict) << ",\n \"named\": [";
   for (size_t i = 0; i < d.named.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(d.named[i]));
   o << "],\n \"confidence\": " << Num(d.named.empty() ? NAN : d.confidence)
-    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.significance_ratio)
-    << ", \"min_closed\": " << Num(opt.min_closed) << ", \"min_pattern\": " << Num(opt.min_pattern) << "}"
+    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.rules.significance_ratio)
+    << ", \"min_closed\": " << Num(opt.rules.min_closed) << ", \"min_pattern\": " << Num(opt.rules.min_pattern) << "}"
     << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
     << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"floor_model\": " << Str(d.floor_model)
     << ", \"cases\": [";
@@ -407,7 +407,7 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
     << " deg (training), " << F("%.4f", d.floor_withheld)
     << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
        "saturation plateaus of " << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
-    << F("%.2f", opt.significance_ratio) << " x the floor.</p>\n";
+    << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
   // Grid of PI before/after.
   std::set<double> vs, fs_set;
   for (const auto& c : model.cases()) {
@@ -553,8 +553,8 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(std::to_string(s.confusion[r][c]), 12);
     o << "\n";
   }
-  o << "single-effect benches with a significant gap: " << s.single_significant << ", right effect named in "
-    << s.single_significant_right << " (" << Pct(s.accuracy()) << ")\n";
+  o << "single-effect benches with a significant gap: " << s.effect_trials << ", right effect named in "
+    << s.effect_right << " (" << Pct(s.accuracy()) << ")\n";
   o << "clean benches: " << s.clean << ", false alarms " << s.clean_alarms << " (" << Pct(s.false_alarm_rate()) << ")\n";
   o << "share of the gap closed (right effect named, " << s.closed.size() << " benches): min "
     << Pct(Quantile(s.closed, 0)) << ", 10 % " << Pct(Quantile(s.closed, 0.1)) << ", median "
@@ -562,15 +562,8 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     << Pct(Quantile(s.closed, 1)) << "\n";
   // Calibration: is a stated confidence of 90 % right 90 % of the time? Over every bench where an
   // effect was named (right when it is the true one).
-  std::vector<double> conf;
-  std::vector<char> right;
-  for (const auto& t : s.trials) {
-    if (t.verdict_kind != "effect" && t.verdict_kind != "inseparable") continue;
-    conf.push_back(t.confidence);
-    right.push_back(t.correct() ? 1 : 0);
-  }
-  o << "calibration of the stated confidence (" << conf.size() << " benches with a named effect):\n";
-  for (const auto& b : model::ReliabilityTable(conf, right)) {
+  o << "calibration of the stated confidence (" << s.confidence.size() << " benches with a named effect):\n";
+  for (const auto& b : s.Reliability()) {
     if (b.count == 0) continue;
     o << "  confidence " << F("%.2f", b.lo) << " – " << F("%.2f", std::min(b.hi, 1.0)) << ": " << b.count
       << " benches, mean stated " << Pct(b.mean_confidence) << ", right " << Pct(b.frequency_right) << "\n";
@@ -587,8 +580,8 @@ void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {
     for (int c = 0; c < diagnose::kCheckCols; ++c) o << (c ? ", " : "") << s.confusion[r][c];
     o << "]";
   }
-  o << "},\n \"single_significant\": " << s.single_significant
-    << ", \"single_significant_right\": " << s.single_significant_right << ", \"accuracy\": " << Num(s.accuracy())
+  o << "},\n \"single_significant\": " << s.effect_trials
+    << ", \"single_significant_right\": " << s.effect_right << ", \"accuracy\": " << Num(s.accuracy())
     << ", \"clean\": " << s.clean << ", \"clean_alarms\": " << s.clean_alarms
     << ", \"false_alarm_rate\": " << Num(s.false_alarm_rate()) << ",\n \"closed\": [";
   for (size_t i = 0; i < s.closed.size(); ++i) o << (i ? ", " : "") << Num(s.closed[i]);

@@ -40,7 +40,7 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
      << "|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : d.candidates) {
     os << "| " << records::EffectName(c.kind) << " | " << G(std::sqrt(c.s_withheld / d.withheld_samples)) << " | "
-       << G(c.score, 5) << " | " << G(c.train_delta_bic, 5) << " | " << G(100 * c.closed, 3) << " % | "
+       << G(c.score, 5) << " | " << G(c.train_delta_bic, 5) << " | " << (std::isfinite(c.closed) ? G(100 * c.closed, 3) + " %" : "—") << " | "
        << G(100 * c.pattern, 3) << " % | " << G(c.z_vs_base, 3) << " | " << (c.qualifies ? "yes" : c.note) << " |\n";
   }
   if (d.named >= 0) {
@@ -125,7 +125,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
-  o.significance_ratio = a.significance_ratio;
+  o.rules.significance_ratio = a.significance_ratio;
   std::stringstream ss(a.candidates);
   std::string name;
   while (std::getline(ss, name, ','))

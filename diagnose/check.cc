@@ -19,13 +19,8 @@ int CheckColumn(const CheckTrial& t) {
 
 void Tally(CheckSummary& s, const CheckTrial& t) {
   s.confusion[static_cast<int>(t.truth)][CheckColumn(t)] += 1;
-  if (t.truth == model::EffectKind::kNone) {
-    ++s.clean;
-    if (t.verdict_kind != "none") ++s.clean_alarms;
-  } else if (t.significant) {
-    ++s.single_significant;
-    if (t.correct()) ++s.single_significant_right;
-  }
+  s.Add(t.truth == model::EffectKind::kNone, t.significant, t.verdict_kind,
+        t.truth != model::EffectKind::kNone && t.named == t.truth, t.confidence);
   if (t.truth != model::EffectKind::kNone && t.correct() && std::isfinite(t.closed)) s.closed.push_back(t.closed);
   s.trials.push_back(t);
 }

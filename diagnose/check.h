@@ -34,17 +34,14 @@ struct CheckTrial {
   bool correct() const;           ///< named the true effect (or "none" on a clean bench)
 };
 
-struct CheckSummary {
+/// The counts (effect_trials: benches with one effect whose gap was significant, effect_right: …
+/// where that effect was named, clean, clean_alarms) and the reliability table are those of every
+/// calibration check (records/decision.h); the confusion matrix and the shares closed are the bench's.
+struct CheckSummary : records::CalibrationTally {
   std::vector<CheckTrial> trials;
   std::array<std::array<int, kCheckCols>, kCheckRows> confusion{};  ///< [truth][named]
-  int single_significant = 0;        ///< benches with one effect whose gap was significant
-  int single_significant_right = 0;  ///< … where that effect was named
-  int clean = 0;                     ///< benches without an effect
-  int clean_alarms = 0;              ///< … where something was named or called unexplained
   std::vector<double> closed;        ///< share closed, over correctly named effects
   double wall_time_s = 0;
-  double accuracy() const { return single_significant ? double(single_significant_right) / single_significant : 0; }
-  double false_alarm_rate() const { return clean ? double(clean_alarms) / clean : 0; }
 };
 
 /// Column index of a named result.

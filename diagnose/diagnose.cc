@@ -71,17 +71,6 @@ std::vector<double> FeatureExcess(const model::GroupResidual& g) {
   return ex;
 }
 
-double PatternExplained(const model::GroupResidual& before, const model::GroupResidual& after) {
-  const std::vector<double> b = FeatureExcess(before), a = FeatureExcess(after);
-  double sb = 0, sa = 0;
-  for (size_t i = 0; i < b.size(); ++i) {
-    if (b[i] <= 0) continue;  // only features that carried excess before
-    sb += b[i];
-    sa += std::min(a[i], b[i] * 10);
-  }
-  return sb > 0 ? 1.0 - sa / sb : 0.0;
-}
-
 // Fits a structure: fast structures get a global search seeded around `from`, beam structures are
 // refined from `from` with a few starting magnitudes of the new effect.
 FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, const ParameterLayout* from_layout,
@@ -222,114 +211,74 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
   return out;
 }
 
-// The gap of `start` against the floors, and its candidates scored, ranked and judged.
+// The gap of `start` against the floors, and its candidates scored, ranked and judged by the rules
+// of records/decision.h; the bench supplies the floors, the localised excess and the squared errors.
 RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const model::ResidualAnalysis& start_analysis,
                        std::span<const double> floors, std::vector<CandidateResult> candidates,
                        const DiagnoseOptions& o) {
   RoundResult round;
   round.base_structure = start.structure;
-  round.s0 = start.withheld_pi;
-  round.s_floor = SumWithheld(m, CaseFloorVariance(m, floors));
-  round.rms_ratio = round.s_floor > 0 ? std::sqrt(round.s0 / round.s_floor) : INFINITY;
-  round.significant = round.rms_ratio > o.significance_ratio;
   const double nw = m.withheld_samples(), nt = m.training_samples();
-  const double var_w = round.s_floor / nw;
+  const double s_floor = SumWithheld(m, CaseFloorVariance(m, floors));
   double s_floor_t = 0;
   for (size_t c = 0; c < m.cases().size(); ++c)
     if (m.cases()[c].training) s_floor_t += floors[c] * floors[c] * m.cases()[c].measured_deg.size();
-  const double var_t = s_floor_t / nt;
-  const double excess = round.s0 - round.s_floor;  // the gap above the floor (≤ 0: none to close)
+  const records::Gap gap =
+      records::MeasureGap(start.withheld_pi, start.train_pi, s_floor, s_floor / nw, s_floor_t / nt, nw, nt, o.rules);
+  round.s0 = gap.s0;
+  round.s_floor = gap.s_floor;
+  round.rms_ratio = gap.rms_ratio;
+  round.significant = gap.significant;
   Say(o, "  starting model: " + start.description +
              Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
+  const std::vector<double> start_excess = FeatureExcess(start_analysis.withheld);
   for (CandidateResult& c : candidates) {
     if (!c.fit.ok) {
-      c.score = -INFINITY;
-      c.note = "fit failed: " + c.fit.message;
+      records::FailCandidate(c.fit.message, c);
       continue;
     }
-    const double sc = c.fit.withheld_pi;
-    c.score = (round.s0 - sc) / var_w - c.added_params * std::log(nw);
-    c.train_delta_bic = (c.fit.train_pi - start.train_pi) / var_t + c.added_params * std::log(nt);
-    c.closed = excess > 0 ? (round.s0 - sc) / excess : NAN;
-    c.raw_reduction = round.s0 > 0 ? (round.s0 - sc) / round.s0 : 0;
     const model::ResidualAnalysis ra = AnalyseFit(m, c.fit, floors);
-    c.pattern = PatternExplained(start_analysis.withheld, ra.withheld);
-    std::vector<std::string> why;
-    if (!(c.score > 0)) why.push_back("held-out gain below the parameter penalty");
-    if (!(c.train_delta_bic < 0)) why.push_back("no BIC gain on the training cases");
-    if (!(excess > 0)) {
-      why.push_back("no gap above the floor to close");
-    } else if (!(c.closed >= o.min_closed)) {
-      why.push_back(Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * o.min_closed));
-    }
-    if (c.pattern < o.min_pattern)
-      why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern, 100 * o.min_pattern));
-    c.qualifies = why.empty();
-    for (size_t i = 0; i < why.size(); ++i) c.note += (i ? "; " : "") + why[i];
+    records::ScoreCandidate(gap, c.fit.withheld_pi, c.fit.train_pi, c.added_params,
+                            records::PatternExplained(start_excess, FeatureExcess(ra.withheld)), o.rules, c);
     Say(o, std::string("  ") + model::EffectName(c.kind) +
-               Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%", std::sqrt(sc / nw), c.score,
-                   100 * c.closed, 100 * c.pattern));
+               Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%", std::sqrt(c.s_withheld / nw),
+                   c.score, 100 * c.closed, 100 * c.pattern));
   }
   round.candidates = std::move(candidates);
-  std::stable_sort(round.candidates.begin(), round.candidates.end(),
-                   [](const CandidateResult& a, const CandidateResult& b) { return a.score > b.score; });
-  // Posterior weights against "none" (score 0), tempered by the best model's over-dispersion.
-  if (!round.candidates.empty() && std::isfinite(round.candidates[0].score)) {
-    const double s_best = std::min(round.s0, round.candidates[0].fit.withheld_pi);
-    const double phi = std::max(1.0, s_best / round.s_floor);
-    double lmax = 0;
-    for (const auto& c : round.candidates)
-      if (std::isfinite(c.score)) lmax = std::max(lmax, c.score / (2 * phi));
-    double z = std::exp(-lmax);
-    for (const auto& c : round.candidates)
-      if (std::isfinite(c.score)) z += std::exp(c.score / (2 * phi) - lmax);
-    for (auto& c : round.candidates) c.weight = std::isfinite(c.score) ? std::exp(c.score / (2 * phi) - lmax) / z : 0;
-  }
-  const double wr = std::sqrt(round.s0 / nw), fr = std::sqrt(var_w);
+  records::RankByScore(round.candidates);
+  const std::vector<records::CandidateScore*> ranked = records::Scores(round.candidates);
+  records::AssignWeights(gap, ranked);
+  // The withheld squared errors of the starting model (−1) or of candidate i, for the paired block
+  // tests (model/model_comparison.h).
+  const records::SquaredErrors squares = [&](int i) {
+    const FitResult& f = i < 0 ? start : round.candidates[static_cast<size_t>(i)].fit;
+    std::vector<double> r;
+    m.Residuals(ParameterLayout(f.structure), f.x, false, r);
+    for (double& v : r) v *= v;
+    return r;
+  };
+  const records::Naming naming = records::NameEffect(gap, ranked, squares, o.rules);
+  round.named = naming.named;
+  round.runner_up = naming.runner_up;
+  round.z_runner_up = naming.z_runner_up;
+  const double wr = std::sqrt(round.s0 / nw), fr = std::sqrt(gap.var_w);
   if (!round.significant) {
     round.verdict = Fmt("no significant gap: withheld RMS %.4f deg is %.2f x the noise floor %.4f deg (threshold %.2f)",
-                        wr, round.rms_ratio, fr, o.significance_ratio);
-  } else if (!round.candidates.empty() && round.candidates[0].qualifies) {
-    round.named = 0;
-    auto& c = round.candidates[0];
-    // An honest confidence (model/model_comparison.h): paired block tests of the withheld squared
-    // errors against the starting model and against every other qualifying candidate.
-    auto squares = [&](const std::vector<EffectKind>& structure, const std::vector<double>& x) {
-      std::vector<double> r;
-      m.Residuals(ParameterLayout(structure), x, false, r);
-      for (double& v : r) v *= v;
-      return r;
-    };
-    const std::vector<double> best_sq = squares(c.fit.structure, c.fit.x);
-    c.confidence = model::NormalCdf(model::PairedBlockZ(squares(start.structure, start.x), best_sq));
-    int equivalent = 1;
-    for (size_t i = 1; i < round.candidates.size(); ++i) {
-      const auto& other = round.candidates[i];
-      if (!other.qualifies) continue;
-      const double z = model::PairedBlockZ(squares(other.fit.structure, other.fit.x), best_sq);
-      if (z < o.separation_z || c.closed - other.closed < o.separation_closed) {  // cannot separate
-        ++equivalent;
-        if (round.runner_up < 0) {
-          round.runner_up = static_cast<int>(i);
-          round.z_runner_up = z;
-        }
-      } else {
-        c.confidence *= model::NormalCdf(z);
-      }
-    }
-    c.confidence /= equivalent;  // shared among the candidates the data cannot separate
+                        wr, round.rms_ratio, fr, o.rules.significance_ratio);
+  } else if (round.named >= 0) {
+    const auto& c = round.candidates[static_cast<size_t>(round.named)];
     round.verdict = std::string(model::EffectName(c.kind)) +
                     Fmt(": closes %.0f %% of the withheld gap (RMS %.4f -> %.4f deg, floor %.4f), confidence %.3f",
                         100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.confidence);
     if (round.runner_up >= 0) {
       const auto& ru = round.candidates[static_cast<size_t>(round.runner_up)];
       round.verdict += std::string("; the data cannot separate it from ") + model::EffectName(ru.kind) +
-                       (round.z_runner_up < o.separation_z
+                       (round.z_runner_up < o.rules.separation_z
                             ? Fmt(" (closes %.0f %%, paired block test z = %.2f < %.1f)", 100 * ru.closed,
-                                  round.z_runner_up, o.separation_z)
+                                  round.z_runner_up, o.rules.separation_z)
                             : Fmt(" (closes %.0f %%, within %.0f points of it: practically equivalent, paired block "
                                   "test z = %.2f)",
-                                  100 * ru.closed, 100 * o.separation_closed, round.z_runner_up));
+                                  100 * ru.closed, 100 * o.rules.separation_closed, round.z_runner_up));
     }
   } else {
     round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,
@@ -415,12 +364,7 @@ Status DiagnoseOptions::Validate() const {
   for (double f : cvode_start_fractions)
     if (!(f > 0 && f <= 1)) return InvalidArgument(FieldError("cvode_start_fractions[]", f, "must be in (0, 1]"));
   if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
-  if (!(significance_ratio > 1))
-    return InvalidArgument(FieldError("significance_ratio", significance_ratio, "must be > 1"));
-  if (!(min_closed > 0 && min_closed <= 1))
-    return InvalidArgument(FieldError("min_closed", min_closed, "must be in (0, 1]"));
-  if (!(min_pattern >= 0 && min_pattern <= 1))
-    return InvalidArgument(FieldError("min_pattern", min_pattern, "must be in [0, 1]"));
+  if (auto s = rules.Validate(); !s.ok()) return InvalidArgument("rules." + s.message());
   for (EffectKind k : candidates)
     if (k == EffectKind::kNone || model::GetEffectInfo(k).kind != k)
       return InvalidArgument(FieldError("candidates[]", static_cast<int>(k), "not an effect of the library"));
@@ -505,7 +449,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
       fits = std::move(first_fits);
     } else {
       const double ratio = std::sqrt(current.withheld_pi / std::max(d.withheld_floor, 1e-300));
-      if (ratio > o.significance_ratio) {
+      if (ratio > o.rules.significance_ratio) {
         Say(o, "second effect: the others on top of the first");
         fits = FitCandidates(m, current, ParameterLayout(current.structure), kinds, o, &d.evaluations);
       }
@@ -528,8 +472,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   // 6. How far: per case and in total.
   d.withheld_before = d.base.withheld_pi;
   d.withheld_after = d.final_fit.withheld_pi;
-  const double excess = d.withheld_before - d.withheld_floor;
-  d.closed_total = excess > 0 ? (d.withheld_before - d.withheld_after) / excess : NAN;
+  d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
   d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
   for (size_t c = 0; c < m.cases().size(); ++c) {
     const DiagCase& dc = m.cases()[c];
@@ -544,8 +487,8 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     g.pi_after = d.final_fit.case_pi[c];
     g.rms_before = std::sqrt(g.pi_before / n);
     g.rms_after = std::sqrt(g.pi_after / n);
-    const double ex = g.pi_before - n * floors[c] * floors[c];
-    g.closed = ex > 0 ? std::clamp((g.pi_before - g.pi_after) / ex, -9.0, 1.0) : 0.0;
+    const double floor_c = n * floors[c] * floors[c];
+    g.closed = g.pi_before > floor_c ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0) : 0.0;
     d.gaps.push_back(g);
   }
   // What the base terms absorb: the best candidate of the first round against the base fit.
@@ -557,14 +500,13 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   }
   // Verdict.
   const double nw = m.withheld_samples();
+  d.verdict_kind = records::VerdictKind(first.significant, {.named = first.named, .runner_up = first.runner_up});
   if (!d.named.empty()) {
-    d.verdict_kind = "effect";
     const CandidateResult& c = first.candidates[first.named];
     d.verdict = "The gap is caused by " + model::GetEffectInfo(c.kind).title + " (" + model::EffectName(c.kind) +
                 Fmt(", confidence %.0f %%)", 100 * d.confidence);
     if (first.runner_up >= 0) {
       const CandidateResult& ru = first.candidates[static_cast<size_t>(first.runner_up)];
-      d.verdict_kind = "inseparable";
       d.verdict += std::string(" — or by ") + model::EffectName(ru.kind) +
                    Fmt(": the data cannot separate the two (both close the gap, paired block test z = %.2f). ",
                        first.z_runner_up) +
@@ -579,10 +521,9 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
                      100 * d.closed_total, std::sqrt(d.withheld_before / nw), std::sqrt(d.withheld_after / nw),
                      d.floor_withheld, d.remaining_ratio);
   } else if (!first.significant) {
-    d.verdict_kind = "none";
     d.verdict = Fmt("No unmodelled effect is significant above the noise floor: the base model's withheld RMS %.4f deg "
                     "is %.2f x the floor %.4f deg (threshold %.2f).",
-                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld, o.significance_ratio);
+                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld, o.rules.significance_ratio);
     if (!first.candidates.empty() && first.candidates[0].fit.ok && first.candidates[0].score > 0) {
       const CandidateResult& b = first.candidates[0];
       d.verdict += " The best candidate, " + std::string(model::EffectName(b.kind)) +
@@ -596,7 +537,6 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
       d.verdict += ".";
     }
   } else {
-    d.verdict_kind = "unexplained";
     d.verdict = Fmt("A significant gap (withheld RMS %.4f deg = %.2f x the floor %.4f deg) that no candidate effect of "
                     "the library explains.",
                     std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld);

@@ -12,21 +12,12 @@
 //  4. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
 //     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
 //     t statistics): a trend a global model lacks is evidence of an unmodelled effect.
-//  5. Which: each candidate is scored on the withheld cases. Same rules and thresholds for every
-//     effect:
-//       significant gap  ⇔  RMS_withheld(base) > significance_ratio · floor  (√(S0 / S_floor));
-//       score_c          =  (S0 − S_c)/σ²_w − k_c ln N_w        (held-out χ² gain minus a BIC penalty
-//                                                              for the k_c added parameters);
-//       closed_c         =  (S0 − S_c) / (S0 − S_floor)        (share of the excess gap closed);
-//       pattern_c        =  share of the localised excess (phase bins, branches, reversals,
-//                           saturation, first/later cycles, odd/even harmonics, low frequency) removed;
-//       named            ⇔  significant, score > 0, training BIC lower, closed ≥ min_closed and
-//                           pattern ≥ min_pattern (the best by score); confidence = Π Φ(z) of paired
-//                           block tests of the withheld squared errors (model/model_comparison.h)
-//                           against the starting model and every other qualifying candidate — the
-//                           residuals are correlated in time, so a χ² difference would overstate it;
-//                           a qualifying runner-up with z < separation_z, or closing the gap within
-//                           separation_closed of it: "cannot separate" them (confidence shared).
+//  5. Which: each candidate is scored on the withheld cases by the decision rules of
+//     records/decision.h (the same for every effect, family and data shape: significance, score,
+//     training BIC, closed share, pattern, ranking, paired block tests, separation, verdict kind);
+//     what the bench supplies is its floor (σ_c per case), its localised excess (phase bins,
+//     branches, reversals, saturation, first/later cycles, odd/even harmonics, low frequency: the
+//     pattern features) and the withheld squared errors of each model.
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains".
@@ -44,6 +35,7 @@
 #include "diagnose/fit.h"
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
+#include "records/decision.h"
 
 namespace pz::diagnose {
 
@@ -64,33 +56,18 @@ struct DiagnoseOptions {
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
   std::vector<double> cvode_start_fractions = {0.03, 0.15};
   model::EffectSimOptions sim;
-  // Decision rules: the same for every effect.
-  double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
-  double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
-  double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
-  double separation_z = 2.0;         ///< a qualifying runner-up within this paired z: cannot separate
-  double separation_closed = 0.05;   ///< … or closing the gap within this share of the named one
+  records::DecisionRules rules;  ///< the decision rules: the same for every effect (records/decision.h)
   bool second_effect = true;         ///< greedy search for a second effect
   bool trends = true;                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
   Status Validate() const;
 };
 
-/// One candidate structure, fitted and scored.
-struct CandidateResult {
+/// One candidate structure, fitted and scored by the rules of records/decision.h.
+struct CandidateResult : records::CandidateScore {
   model::EffectKind kind = model::EffectKind::kNone;  ///< the effect added in this round
   FitResult fit;
   int added_params = 0;
-  double score = 0;            ///< held-out χ² gain − penalty
-  double train_delta_bic = 0;  ///< (T_c − T_0)/σ²_t + k ln N_t (< 0: better on training too)
-  double closed = 0;           ///< share of the excess withheld gap closed
-  double raw_reduction = 0;    ///< (S0 − S_c)/S0
-  double pattern = 0;          ///< share of the localised excess removed
-  double weight = 0;           ///< posterior weight exp(score/2φ) against the others and "none" (ranking)
-  double confidence = 0;       ///< if named: Π Φ(z) of paired block tests against the starting model and
-                               ///< every other qualifying candidate (model/model_comparison.h)
-  bool qualifies = false;      ///< passes every rule but the ranking
-  std::string note;            ///< why it does not qualify
 };
 
 /// One greedy round: the model it starts from, its gap, the candidates on top of it.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace pz::model {
 
@@ -54,6 +55,23 @@ double EstimateQuantum(std::span<const double> y) {
   return 0.0;
 }
 
+double PeriodDifferenceSquares(std::span<const double> y, size_t a, size_t period) {
+  if (period < 2 || a + 2 * period > y.size())
+    throw InputError("period difference: periods of " + std::to_string(period) + " samples from sample " +
+                     std::to_string(a) + " need " + std::to_string(a + 2 * period) + " samples, the series has " +
+                     std::to_string(y.size()));
+  const size_t b = a + period;
+  // d_k = y_{b+k} − y_{a+k} = noise difference (variance 2 s²) + whatever is not periodic (creep,
+  // drift: slow). First differences of d remove the slow part: var(d_k − d_{k−1}) = 4 s².
+  double sum2 = 0, prev = y[b] - y[a];
+  for (size_t k = 1; k < period; ++k) {
+    const double d = y[b + k] - y[a + k];
+    sum2 += (d - prev) * (d - prev);
+    prev = d;
+  }
+  return sum2;
+}
+
 CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantum_deg) {
   if (y.empty()) throw InputError("noise floor: empty series");
   if (cycles < 1) throw InputError(FieldError("cycles", cycles, "must be >= 1"));
@@ -65,15 +83,7 @@ CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantu
   n.quantisation_rms_deg = n.quantum_deg / std::sqrt(12.0);
   const size_t p = y.size() / static_cast<size_t>(cycles);
   if (cycles >= 2 && p >= 2) {
-    const size_t a = (cycles - 2) * p, b = (cycles - 1) * p;
-    // d_k = y_{b+k} − y_{a+k} = noise difference (variance 2 s²) + whatever is not periodic (creep,
-    // drift: slow). First differences of d remove the slow part: var(d_k − d_{k−1}) = 4 s².
-    double sum2 = 0, prev = y[b] - y[a];
-    for (size_t k = 1; k < p; ++k) {
-      const double d = y[b + k] - y[a + k];
-      sum2 += (d - prev) * (d - prev);
-      prev = d;
-    }
+    const double sum2 = PeriodDifferenceSquares(y, (cycles - 2) * p, p);
     n.scatter_rms_deg = std::sqrt(sum2 / (p - 1) / 4.0);
     n.compared_samples = static_cast<int>(p);
   }

@@ -32,6 +32,14 @@ namespace pz::model {
 /// the series is not on a grid (continuous data) or has fewer than 2 distinct values.
 double EstimateQuantum(std::span<const double> y);
 
+/// The scatter term of two consecutive periods of `period` samples starting at sample a:
+/// Σ_{k=1}^{P−1} (d_k − d_{k−1})² with d_k = y_{a+P+k} − y_{a+k}. The difference of the periods
+/// holds the noise twice and whatever is not periodic; differencing once more removes the slow part,
+/// so each term has expectation 4 s² (s the sample-to-sample noise not repeated from period to
+/// period). Used by the bench cases (EstimateCaseNoise: the last two cycles) and by records with a
+/// periodic drive (records/diagnose.h). Throws InputError unless period ≥ 2 and a + 2P ≤ y.size().
+double PeriodDifferenceSquares(std::span<const double> y, size_t a, size_t period);
+
 /// Noise estimate of one record.
 struct CaseNoise {
   double quantum_deg = 0;         ///< q [deg] (0: not quantised)

@@ -36,8 +36,6 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   for (const std::string& n : EffectNames())
     if (std::find(excluded.begin(), excluded.end(), n) == excluded.end()) kinds.push_back(ParseEffect(n));
   RecordsCheckSummary sum;
-  std::vector<double> conf;
-  std::vector<char> right;
   for (int i = 0; i < o.trials; ++i) {
     RecordsCheckTrial t;
     t.seed = o.seed + static_cast<uint64_t>(i);
@@ -100,23 +98,12 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
       t.named = EffectName(dg.candidates[static_cast<size_t>(dg.named)].kind);
       t.confidence = dg.confidence;
     }
-    t.correct = t.truth == "none" ? dg.verdict_kind == "none" : (dg.named >= 0 && t.named == t.truth);
-    if (t.truth == "none") {
-      ++sum.clean;
-      if (dg.verdict_kind != "none") ++sum.clean_alarms;
-    } else if (dg.significant) {
-      ++sum.effect_trials;
-      if (t.correct) ++sum.effect_right;
-    }
-    if (dg.verdict_kind == "inseparable") ++sum.inseparable;
-    if (dg.named >= 0) {
-      conf.push_back(t.confidence);
-      right.push_back(t.named == t.truth ? 1 : 0);
-    }
+    t.correct = sum.Add(t.truth == "none", dg.significant, dg.verdict_kind, dg.named >= 0 && t.named == t.truth,
+                        t.confidence);
     sum.trials.push_back(t);
     if (on_trial) on_trial(t, i);
   }
-  sum.reliability = model::ReliabilityTable(conf, right);
+  sum.reliability = sum.Reliability();
   sum.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return sum;
 }

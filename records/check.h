@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "model/model_comparison.h"
+#include "records/decision.h"
 #include "records/diagnose.h"
 
 namespace pz::records {
@@ -36,10 +37,9 @@ struct RecordsCheckTrial {
   bool correct = false;        ///< named the truth (or "none" on a clean record)
 };
 
-struct RecordsCheckSummary {
+/// The counts and the reliability table are those of every calibration check (records/decision.h).
+struct RecordsCheckSummary : CalibrationTally {
   std::vector<RecordsCheckTrial> trials;
-  int effect_trials = 0, effect_right = 0, inseparable = 0;
-  int clean = 0, clean_alarms = 0;
   std::vector<model::ReliabilityBin> reliability;  ///< over trials where an effect was named
   double wall_time_s = 0;
 };

@@ -7,6 +7,7 @@
 
 #include "io/csv.h"
 #include "model/model_comparison.h"
+#include "model/noise_floor.h"
 
 namespace pz::records {
 namespace {
@@ -71,14 +72,6 @@ std::vector<double> BinExcess(const io::RecordSet& set, const FitResult& f, doub
   return ex;
 }
 
-double Pattern(const std::vector<double>& base, const std::vector<double>& cand) {
-  const double b = std::accumulate(base.begin(), base.end(), 0.0);
-  if (!(b > 0)) return 0;
-  double removed = 0;
-  for (size_t i = 0; i < base.size(); ++i) removed += std::max(0.0, base[i] - cand[i]);
-  return removed / b;
-}
-
 double DetrendedStd(std::span<const double> y) {
   const double n = static_cast<double>(y.size());
   double st = 0, sy = 0, stt = 0, sty = 0;
@@ -137,17 +130,10 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
         if (ok) period = P;
       }
       if (!period) continue;
-      // The last two periods.
-      const size_t b = r.size() - 2 * period;
-      double s = 0;
-      size_t m = 0;
-      for (size_t k = b + 1; k < b + period; ++k) {
-        const double d1 = r.y[k + period] - r.y[k], d0 = r.y[k + period - 1] - r.y[k - 1];
-        s += (d1 - d0) * (d1 - d0);
-        ++m;
-      }
+      // The last two periods (model/noise_floor.h, as the scatter of a bench case).
+      const double s = model::PeriodDifferenceSquares(r.y, r.size() - 2 * period, period);
       ss += s / 4;
-      n += m;
+      n += period - 1;
       ++found;
     }
     if (n > 0) nf.estimates.push_back({"periods", std::sqrt(ss / static_cast<double>(n)), n, std::to_string(found) + " periodic record(s)"});
@@ -269,8 +255,7 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
 }
 
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& o) {
-  if (o.blocks < 4) throw InputError(FieldError("blocks", o.blocks, "must be >= 4"));
-  if (!(o.significance_ratio > 1)) throw InputError(FieldError("significance_ratio", o.significance_ratio, "must be > 1"));
+  if (auto st = o.rules.Validate(); !st.ok()) throw InputError("rules." + st.message());
   RecordDiagnosis d;
   for (const io::Record& r : set.records) (Withheld(r) ? d.withheld_samples : d.train_samples) += r.scored();
   if (d.train_samples == 0) throw InputError(set.source.string() + ": no training record (role train)");
@@ -294,11 +279,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   d.noise = EstimateNoiseFloor(set, &base_res);
   const double sigma2 = d.noise.sigma * d.noise.sigma;
   const double nw = static_cast<double>(d.withheld_samples), nt = static_cast<double>(d.train_samples);
-  d.s0 = Sse(set, d.base, true);
-  const double t0 = Sse(set, d.base, false);
-  d.s_floor = nw * sigma2;
-  d.rms_ratio = std::sqrt(d.s0 / d.s_floor);
-  d.significant = d.rms_ratio > o.significance_ratio;
+  const records::Gap gap =
+      MeasureGap(Sse(set, d.base, true), Sse(set, d.base, false), nw * sigma2, sigma2, sigma2, nw, nt, o.rules);
+  d.s0 = gap.s0;
+  d.s_floor = gap.s_floor;
+  d.rms_ratio = gap.rms_ratio;
+  d.significant = gap.significant;
 
   // Candidates that apply to the family.
   std::vector<EffectKind> cands = o.candidates;
@@ -338,72 +324,38 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
       ce.extra_starts.push_back(unit);
     }
     c.fit = FitModel(set, model, ce);
-    c.s_withheld = Sse(set, c.fit, true);
-    c.s_train = Sse(set, c.fit, false);
-    const double k = static_cast<double>(lib[static_cast<size_t>(e)].params.size());
-    c.score = (d.s0 - c.s_withheld) / sigma2 - k * std::log(nw);
-    c.train_delta_bic = (c.s_train - t0) / sigma2 + k * std::log(nt);
-    c.closed = d.s0 > d.s_floor ? (d.s0 - c.s_withheld) / (d.s0 - d.s_floor) : 0;
-    c.pattern = Pattern(base_ex, BinExcess(set, c.fit, sigma2, scale));
-    c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.blocks);
-    if (!d.significant) c.note = "no significant gap";
-    else if (c.score <= 0) c.note = "withheld score " + Fmt(c.score) + " ≤ 0";
-    else if (c.train_delta_bic >= 0) c.note = "no better on the training records (ΔBIC " + Fmt(c.train_delta_bic) + ")";
-    else if (c.closed < o.min_closed) c.note = "closes " + Fmt(100 * c.closed) + " % of the gap (< " + Fmt(100 * o.min_closed) + " %)";
-    else if (c.pattern < o.min_pattern) c.note = "removes " + Fmt(100 * c.pattern) + " % of the localised excess";
-    else c.qualifies = true;
+    const int k = static_cast<int>(lib[static_cast<size_t>(e)].params.size());
+    ScoreCandidate(gap, Sse(set, c.fit, true), Sse(set, c.fit, false), k,
+                   PatternExplained(base_ex, BinExcess(set, c.fit, sigma2, scale)), o.rules, c);
+    c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.rules.blocks);
     d.candidates.push_back(std::move(c));
   }
-  std::stable_sort(d.candidates.begin(), d.candidates.end(),
-                   [](const RecordCandidate& a, const RecordCandidate& b) { return a.score > b.score; });
-  for (size_t i = 0; i < d.candidates.size(); ++i) {
-    if (d.candidates[i].qualifies) {
-      d.named = static_cast<int>(i);
-      break;
-    }
-  }
-  if (d.named >= 0) {
-    RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
-    const auto best_sq = WithheldSquares(set, best.fit);
-    double conf = model::NormalCdf(best.z_vs_base);
-    int equivalent = 1;
-    for (size_t i = 0; i < d.candidates.size(); ++i) {
-      if (static_cast<int>(i) == d.named || !d.candidates[i].qualifies) continue;
-      const double z = model::PairedBlockZ(WithheldSquares(set, d.candidates[i].fit), best_sq, o.blocks);
-      // Cannot separate: not significantly worse, or practically as good (closes nearly the same
-      // share of the gap: a consistent but tiny difference is model-form detail, not evidence).
-      const bool same = z < o.separation_z || best.closed - d.candidates[i].closed < o.separation_closed;
-      if (same) {
-        ++equivalent;
-        if (d.runner_up < 0) {
-          d.runner_up = static_cast<int>(i);
-          d.z_runner_up = z;
-        }
-      } else {
-        conf *= model::NormalCdf(z);
-      }
-    }
-    // Among candidates the data cannot separate, none is more likely than the others.
-    best.confidence = conf / equivalent;
-    d.confidence = best.confidence;
-  }
+  RankByScore(d.candidates);
+  const std::vector<CandidateScore*> ranked = Scores(d.candidates);
+  AssignWeights(gap, ranked);
+  const Naming naming = NameEffect(
+      gap, ranked,
+      [&](int i) { return i < 0 ? base_sq : WithheldSquares(set, d.candidates[static_cast<size_t>(i)].fit); },
+      o.rules);
+  d.named = naming.named;
+  d.runner_up = naming.runner_up;
+  d.z_runner_up = naming.z_runner_up;
+  d.confidence = naming.confidence;
+  d.verdict_kind = VerdictKind(d.significant, naming);
   const std::string unit = set.response_unit;
   std::ostringstream v;
   if (!d.significant) {
-    d.verdict_kind = "none";
     v << "No significant gap: the withheld RMS error of " << o.family << " is " << Fmt(d.rms_ratio) << " × the noise floor ("
-      << Fmt(d.noise.sigma) << " " << unit << ", from " << d.noise.used << "), at most " << o.significance_ratio << ".";
+      << Fmt(d.noise.sigma) << " " << unit << ", from " << d.noise.used << "), at most " << o.rules.significance_ratio << ".";
   } else if (d.named < 0) {
-    d.verdict_kind = "unexplained";
     v << "A significant gap (" << Fmt(d.rms_ratio) << " × the noise floor) that no candidate explains by the rules.";
   } else {
     const RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
     if (d.runner_up >= 0) {
       const RecordCandidate& ru = d.candidates[static_cast<size_t>(d.runner_up)];
-      d.verdict_kind = "inseparable";
       v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind) << ": both close the gap ("
         << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %"
-        << (d.z_runner_up < o.separation_z ? "" : std::string(", within ") + Fmt(100 * o.separation_closed) +
+        << (d.z_runner_up < o.rules.separation_z ? "" : std::string(", within ") + Fmt(100 * o.rules.separation_closed) +
                                                        " points: practically equivalent")
         << "; paired block test z = " << Fmt(d.z_runner_up, 2) << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
       if (o.propose) {
@@ -411,7 +363,6 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
         v << " Next measurement: " << d.next->description << ".";
       }
     } else {
-      d.verdict_kind = "effect";
       v << "The gap is " << EffectName(best.kind) << " (confidence " << Fmt(100 * d.confidence, 3) << " %): adding it closes "
         << Fmt(100 * best.closed) << " % of the excess withheld gap; withheld RMS " << Fmt(std::sqrt(d.s0 / nw)) << " → "
         << Fmt(std::sqrt(best.s_withheld / nw)) << " " << unit << " against a noise floor of " << Fmt(d.noise.sigma) << " "

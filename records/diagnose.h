@@ -15,18 +15,13 @@
 //     excluded_effects leaves out what the family already holds) is added and the model re-fitted
 //     (global search + LM, with the base fit as extra starting points).
 //  3. Withheld = the records with role validate or test (records or time windows). S = Σe² there,
-//     S_floor = N_w σ². Same rules for every effect:
-//       significant ⇔ √(S0/S_floor) > significance_ratio;
-//       score = (S0 − S_c)/σ² − k ln N_w;   train ΔBIC = (T_c − T0)/σ² + k ln N_t;
-//       closed = (S0 − S_c)/(S0 − S_floor);  pattern = share of the localised excess (drive level ×
-//       direction bins of the withheld samples) removed;
-//       qualifies ⇔ significant, score > 0, ΔBIC < 0, closed ≥ min_closed, pattern ≥ min_pattern.
+//     S_floor = N_w σ². The decision is that of records/decision.h (the same rules as the bench
+//     diagnosis): significance, score, training ΔBIC, closed share, pattern (here the localised
+//     excess over drive level × direction bins of the withheld samples), the best-ranked candidate
+//     named if it qualifies.
 //  4. Confidence, made honest: residuals are correlated in time, so two models are compared by a
-//     paired test on blocks of the withheld samples (the per-sample difference of squared errors,
-//     summed per block, B blocks): z = mean / standard error, P(better) ≈ Φ(z). The named effect's
-//     confidence is the product of P(better) against the base model and against every other
-//     qualifying candidate. When the runner-up qualifies too and z < separation_z, or closes the gap
-//     within separation_closed of the best (a consistent but tiny difference is model-form detail),
+//     paired test on blocks of the withheld samples (records/decision.h, model/model_comparison.h);
+//     when the runner-up qualifies too and cannot be separated,
 //     the verdict is "cannot separate A from B", the confidence is shared among the candidates that
 //     cannot be separated, and the next measurement is proposed: among sines, triangles and
 //     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
@@ -39,6 +34,7 @@
 #include <vector>
 
 #include "io/records.h"
+#include "records/decision.h"
 #include "records/fit.h"
 #include "records/synthetic.h"
 
@@ -66,27 +62,18 @@ struct ProposedExperiment {
   std::string description;
 };
 
-struct RecordCandidate {
+/// One effect added to the base family, fitted and scored by the rules of records/decision.h.
+struct RecordCandidate : CandidateScore {
   EffectKind kind = EffectKind::kDrift;
   FitResult fit;
-  double s_withheld = 0, s_train = 0;
-  double score = 0, train_delta_bic = 0, closed = 0, pattern = 0;
   double z_vs_base = 0;      ///< paired block test against the base model (> 0: better)
-  double confidence = 0;     ///< as the named effect
-  bool qualifies = false;
-  std::string note;
 };
 
 struct RecordDiagnoseOptions {
   std::string family = "backlash-like";
   std::vector<EffectKind> candidates;  ///< empty = every effect that applies to the family
   FitOptions fit;                      ///< family options, search and polish of every fit
-  double significance_ratio = 1.25;
-  double min_closed = 0.5;
-  double min_pattern = 0.5;
-  double separation_z = 2.0;  ///< runner-up within this z of the best: cannot separate
-  double separation_closed = 0.05;  ///< … or closing within this share of the gap of the best
-  int blocks = 20;            ///< of the paired test, ≥ 4
+  DecisionRules rules;                 ///< the decision rules: the same for every effect
   bool propose = true;
 };
 

@@ -98,7 +98,7 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
       EXPECT_NEAR(d.final_fit.params[7].value, 0.02, 3 * d.final_fit.params[7].std_error + 1e-3);
     } else {
       EXPECT_EQ(d.verdict_kind, "none") << d.verdict;
-      EXPECT_LT(d.rounds.front().rms_ratio, o.significance_ratio);
+      EXPECT_LT(d.rounds.front().rms_ratio, o.rules.significance_ratio);
     }
   }
   EXPECT_EQ(summary.confusion[static_cast<int>(EffectKind::kDelay)][static_cast<int>(EffectKind::kDelay)], 1);

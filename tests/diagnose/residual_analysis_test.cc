@@ -71,6 +71,21 @@ TEST(NoiseFloorTest, ScatterSeesJitterButNotASlowTrend) {
   EXPECT_NEAR(jit.scatter_rms_deg, 0.01, 2e-3);  // d has ±0.01 steps: var(Δd)/4 = 0.01²
 }
 
+TEST(NoiseFloorTest, PeriodDifferenceIsTheScatterOfAnyTwoPeriods) {
+  // A periodic signal with a slow drift, ±0.01 jitter on the period starting at 120 (period 50):
+  // 49 terms of (±0.02)² from the jitter alone, whatever comes before the periods compared.
+  std::vector<double> y = Sine(250, 2.0, 1.5);
+  for (size_t k = 0; k < y.size(); ++k) y[k] += 0.03 * k / 100.0;
+  EXPECT_LT(PeriodDifferenceSquares(y, 70, 50), 1e-12);
+  for (size_t k = 120; k < 170; ++k) y[k] += (k % 2 ? 0.01 : -0.01);
+  EXPECT_NEAR(PeriodDifferenceSquares(y, 70, 50), 49 * 0.02 * 0.02, 1e-9);
+  // The bench's scatter is the last two cycles of it.
+  EXPECT_DOUBLE_EQ(EstimateCaseNoise(std::span<const double>(y).first(200), 4, 0.0).scatter_rms_deg,
+                   std::sqrt(PeriodDifferenceSquares(y, 100, 50) / 49 / 4.0));
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 200, 50); }), "the series has 250");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 0, 1); }), "periods of 1 samples");
+}
+
 TEST(NoiseFloorTest, SaturatedSamplesContributeTheirRoundingOnly) {
   CaseNoise n;
   n.quantum_deg = kQ;
