@@ -70,24 +70,6 @@ struct CaseTotals {
   int beaten = 0, compared = 0;              ///< cases below the paper's PI, cases it has a PI for
 };
 
-std::string IslandCsvHeader(const std::vector<opt::GenerationSummary>& log) {
-  if (log.empty() || log.front().islands.empty()) return "";
-  std::string h = ",best_island,migrated,immigrants,restarted";
-  for (size_t k = 0; k < log.front().islands.size(); ++k) h += ",island_" + std::to_string(k) + "_best";
-  return h;
-}
-
-std::string IslandCsvCells(const opt::GenerationSummary& g) {
-  if (g.islands.empty()) return "";
-  int immigrants = 0, restarted = 0;
-  for (const opt::IslandSummary& i : g.islands) immigrants += i.immigrants, restarted += i.restarted;
-  std::ostringstream os;
-  os << std::setprecision(17) << "," << g.best_island << "," << (g.migrated ? 1 : 0) << "," << immigrants << ","
-     << restarted;
-  for (const opt::IslandSummary& i : g.islands) os << "," << i.best_cost;
-  return os.str();
-}
-
 /// progress.csv: one line per generation.
 void WriteProgressCsv(const fs::path& out, const IdentifyResult& result, std::vector<fs::path>& written) {
   std::ofstream f(out / "progress.csv");
@@ -313,6 +295,24 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
 }
 
 }  // namespace
+
+std::string IslandCsvHeader(const std::vector<opt::GenerationSummary>& log) {
+  if (log.empty() || log.front().islands.empty()) return "";
+  std::string h = ",best_island,migrated,immigrants,restarted";
+  for (size_t k = 0; k < log.front().islands.size(); ++k) h += ",island_" + std::to_string(k) + "_best";
+  return h;
+}
+
+std::string IslandCsvCells(const opt::GenerationSummary& g) {
+  if (g.islands.empty()) return "";
+  int immigrants = 0, restarted = 0;
+  for (const opt::IslandSummary& i : g.islands) immigrants += i.immigrants, restarted += i.restarted;
+  std::ostringstream os;
+  os << std::setprecision(17) << "," << g.best_island << "," << (g.migrated ? 1 : 0) << "," << immigrants << ","
+     << restarted;
+  for (const opt::IslandSummary& i : g.islands) os << "," << i.best_cost;
+  return os.str();
+}
 
 std::string IslandsBrief(const opt::GenerationSummary& g) {
   if (g.islands.empty()) return "";
