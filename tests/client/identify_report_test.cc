@@ -18,17 +18,28 @@
 namespace pz::client {
 namespace {
 
-TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
+const io::CaseSet& Nominal() {
   static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
-  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  return set;
+}
+
+/// A small run of the nominal set into a temporary folder named after `name`.
+IdentifyOptions SmallRun(const std::string& name, int population, int generations) {
   IdentifyOptions o;
-  o.cases_dir = set.dir;
-  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-identify-test-" + std::to_string(::getpid()));
-  o.ga.population_size = 20;
-  o.ga.max_generations = 3;
+  o.cases_dir = Nominal().dir;
+  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-" + name + "-" + std::to_string(::getpid()));
+  o.ga.population_size = population;
+  o.ga.max_generations = generations;
   o.ga.seed = 4;
   o.threads = 2;
   o.plots = false;
+  return o;
+}
+
+TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
+  const io::CaseSet& set = Nominal();
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  IdentifyOptions o = SmallRun("identify-test", 20, 3);
   int generations = 0;
   const auto result = hgann::RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
   EXPECT_EQ(generations, 4);
@@ -50,19 +61,12 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
 }
 
 TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
-  static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
+  const io::CaseSet& set = Nominal();
   const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
-  IdentifyOptions o;
-  o.cases_dir = set.dir;
-  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-identify-islands-" + std::to_string(::getpid()));
-  o.ga.population_size = 12;
-  o.ga.max_generations = 4;
+  IdentifyOptions o = SmallRun("identify-islands", 12, 4);
   o.ga.islands = 3;
   o.ga.migration_interval = 2;
   o.ga.migrants = 1;
-  o.ga.seed = 4;
-  o.threads = 2;
-  o.plots = false;
   const auto result = hgann::RunIdentify(o, set, fitness, nullptr);
   std::ostringstream term;
   WriteIdentifyReport(o, set, fitness, result, term);
