@@ -3,8 +3,9 @@
 // piezoid-worker process) exchange real messages over loopback.
 //  * BM_NullCostThroughput: individuals dispatched and collected per second when the fitness
 //    returns at once (synthetic COST_NULL), batches of `n` genomes of 64 bits, 2 workers.
-//  * BM_FixedCostEfficiency: the GA over a 10 ms-per-evaluation fitness, 64 worker threads in 4
-//    workers; efficiency = evaluations/s ÷ (64 / 10 ms).
+//  * BM_FixedCostEfficiency/<population>/<islands>: the GA over a 10 ms-per-evaluation fitness
+//    (a sleep: no CPU), 64 worker threads in 4 workers; one generation of K islands is one dispatch
+//    of K × (population − elite) evaluations; efficiency = evaluations/s ÷ (64 / 10 ms).
 // Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5; docs/performance.md):
 //   null cost, 2000-genome generations: 255 k individuals/s; 20000-genome generations: 580 k/s
 //   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5960 evals/s = 93.1 %
@@ -13,6 +14,7 @@
 // worker 9.8 MB, master holding 10 running paper-scale hgann jobs 41.7 MB.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <atomic>
 #include <thread>
 
@@ -59,7 +61,7 @@ struct Rig {
   std::vector<std::thread> threads_;
 };
 
-job::JobSpec Synthetic(bool null_cost, double sleep_ms, int population) {
+job::JobSpec Synthetic(bool null_cost, double sleep_ms, int population, int islands = 1) {
   job::JobSpec s;
   s.seed = 1;
   job::SyntheticProblem p;
@@ -72,6 +74,7 @@ job::JobSpec Synthetic(bool null_cost, double sleep_ms, int population) {
   g.population = population;
   g.generations = 1000000;
   g.stall_generations = 0;
+  g.islands = islands;
   s.ga = g;
   return s;
 }
@@ -98,25 +101,33 @@ void BM_NullCostThroughput(benchmark::State& state) {
 BENCHMARK(BM_NullCostThroughput)->Arg(2000)->Arg(20000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_FixedCostEfficiency(benchmark::State& state) {
-  const int population = static_cast<int>(state.range(0));
+  const int population = static_cast<int>(state.range(0)), islands = static_cast<int>(state.range(1));
   Rig rig(4, 16);
-  const job::JobSpec spec = Synthetic(false, 10, population);
+  const job::JobSpec spec = Synthetic(false, 10, population, islands);
   rig.broker->RegisterJob("bench", service::EncodeJobSpec(spec), spec.limits);
   master::JobRunner runner("bench", spec);
   PZ_CHECK(runner.Init(kinds::All()).ok());
   master::BrokerEvaluator eval(*rig.broker, "bench");
   runner.Step(eval);  // generation 0 (all individuals) outside the timing
-  int64_t evals = 0;
+  int64_t evals = 0, generations = 0;
   for (auto _ : state) {
-    runner.Step(eval);
-    evals += spec.ga->offspring();
+    evals += runner.Step(eval).evaluations;
+    ++generations;
   }
+  state.counters["evals/generation"] = static_cast<double>(evals) / std::max<int64_t>(1, generations);
   state.counters["evals/s"] = benchmark::Counter(static_cast<double>(evals),
                                                  benchmark::Counter::kIsRate);
   state.counters["efficiency"] = benchmark::Counter(
       static_cast<double>(evals) / 6400.0, benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_FixedCostEfficiency)->Arg(4000)->Arg(400)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3);
+BENCHMARK(BM_FixedCostEfficiency)
+    ->Args({4000, 1})
+    ->Args({400, 1})
+    ->Args({400, 4})
+    ->Args({400, 16})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(3);
 
 }  // namespace
 }  // namespace pz

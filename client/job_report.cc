@@ -17,6 +17,7 @@ namespace fs = std::filesystem;
 opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   opt::GaSummary s;
   const job::GaSettings ga = job.spec.ga.value_or(job::GaSettings{});
+  s.islands = ga.islands;
   if (!job.best.empty()) {
     s.best = job.best.front().genome;
     s.best_fitness = job.best.front().fitness;

@@ -185,7 +185,9 @@ std::string GaSummary::BriefReport() const {
   std::ostringstream os;
   os.precision(10);
   os << "GA " << GaTerminationName(termination) << " after generation " << generations << ": best cost "
-     << best_fitness.cost << " (generation " << best_generation << ", island " << best_island << "), " << evaluations
+     << best_fitness.cost << " (generation " << best_generation
+     << (islands > 1 ? ", island " + std::to_string(best_island) + " of " + std::to_string(islands) : std::string())
+     << "), " << evaluations
      << " evaluations, " << failures << " failures, " << wall_time_s << " s. " << message;
   return os.str();
 }
@@ -591,6 +593,7 @@ GaSummary GeneticAlgorithm::MakeSummary(GaTermination termination, double wall_t
   s.best_fitness = state_.best_fitness;
   s.best_generation = state_.best_generation;
   s.best_island = state_.best_island;
+  s.islands = options_.islands;
   s.evaluations = state_.evaluations;
   s.failures = state_.failures;
   s.wall_time_s = wall_time_s;

@@ -158,7 +158,6 @@ struct IslandState {
   int stall = 0;                       ///< generations since its best last went down (since its restart)
   double best_cost = 0;                ///< its best since its last restart
   int restarts = 0;                    ///< times it was restarted
-  bool operator==(const IslandState&) const = default;
 };
 
 /// The complete state of a run between generations. Plain data: save it to checkpoint, restore it
@@ -190,6 +189,7 @@ struct GaSummary {
   FitnessResult best_fitness;
   uint64_t best_generation = 0;
   int best_island = 0;             ///< island in which the best was found
+  int islands = 1;                 ///< the run's islands
   int64_t evaluations = 0;
   int64_t failures = 0;
   double wall_time_s = 0;          ///< of the Run() call

@@ -4,7 +4,10 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "client/identify_report.h"
@@ -15,17 +18,28 @@
 namespace pz::client {
 namespace {
 
-TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
+const io::CaseSet& Nominal() {
   static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
-  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  return set;
+}
+
+/// A small run of the nominal set into a temporary folder named after `name`.
+IdentifyOptions SmallRun(const std::string& name, int population, int generations) {
   IdentifyOptions o;
-  o.cases_dir = set.dir;
-  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-identify-test-" + std::to_string(::getpid()));
-  o.ga.population_size = 20;
-  o.ga.max_generations = 3;
+  o.cases_dir = Nominal().dir;
+  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-" + name + "-" + std::to_string(::getpid()));
+  o.ga.population_size = population;
+  o.ga.max_generations = generations;
   o.ga.seed = 4;
   o.threads = 2;
   o.plots = false;
+  return o;
+}
+
+TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
+  const io::CaseSet& set = Nominal();
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  IdentifyOptions o = SmallRun("identify-test", 20, 3);
   int generations = 0;
   const auto result = hgann::RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
   EXPECT_EQ(generations, 4);
@@ -43,6 +57,45 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
     const auto a = loaded.network.Predict(600, 0.7), b = fitness.Decode(result.summary.best).Predict(600, 0.7);
     EXPECT_EQ(a, b) << f;
   }
+  std::filesystem::remove_all(o.out_dir);
+}
+
+TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
+  const io::CaseSet& set = Nominal();
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
+  IdentifyOptions o = SmallRun("identify-islands", 12, 4);
+  o.ga.islands = 3;
+  o.ga.migration_interval = 2;
+  o.ga.migrants = 1;
+  const auto result = hgann::RunIdentify(o, set, fitness, nullptr);
+  std::ostringstream term;
+  WriteIdentifyReport(o, set, fitness, result, term);
+  std::ifstream csv(o.out_dir / "progress.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  EXPECT_NE(header.find(",best_network,best_island,migrated,immigrants,restarted,island_0_best,island_1_best,"
+                        "island_2_best"),
+            std::string::npos)
+      << header;
+  int rows = 0;
+  while (std::getline(csv, row)) {
+    ++rows;
+    // The columns after the quoted network description (which holds commas) match the header's.
+    const std::string tail = row.substr(row.rfind('"')), head = header.substr(header.find("best_network"));
+    EXPECT_EQ(std::count(tail.begin(), tail.end(), ','), std::count(head.begin(), head.end(), ',')) << row;
+  }
+  EXPECT_EQ(rows, 5);
+  EXPECT_EQ(IslandCsvCells(result.log[2]).substr(0, 3), "," + std::to_string(result.log[2].best_island) + ",");
+  EXPECT_NE(IslandsBrief(result.log.back()).find("/3 (islands "), std::string::npos);
+  std::ifstream gp(o.out_dir / "fitness.gp");
+  const std::string plot((std::istreambuf_iterator<char>(gp)), {});
+  EXPECT_NE(plot.find("island 2"), std::string::npos) << plot;
+  std::ifstream md(o.out_dir / "report.md");
+  const std::string report((std::istreambuf_iterator<char>(md)), {});
+  EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; 2 migrations"), std::string::npos) << report;
+  // One island: the file is as before islands.
+  EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
+  EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
   std::filesystem::remove_all(o.out_dir);
 }
 
