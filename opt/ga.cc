@@ -305,19 +305,22 @@ void GeneticAlgorithm::DrawUniform(Rng& rng, int count, std::vector<Genome>* out
   }
 }
 
-std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(const std::vector<Draft>& drafts) {
+std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(std::vector<Draft>& drafts) {
   // One batch for all islands: island i's fresh genome j has population index
-  // i · population_size + (kept count + j).
+  // i · population_size + (kept count + j). One island's fresh genomes are the batch as they are;
+  // several islands' are moved into one batch and back (no copy either way).
   const int n = options_.population_size;
-  std::vector<Genome> genomes;
+  std::vector<Genome> joined;
   std::vector<int> indices;
   for (size_t i = 0; i < drafts.size(); ++i) {
-    const int first = static_cast<int>(i) * n + static_cast<int>(drafts[i].kept.size());
+    const int first = static_cast<int>(i) * n + drafts[i].kept_count();
     for (size_t j = 0; j < drafts[i].fresh.size(); ++j) {
-      genomes.push_back(drafts[i].fresh[j]);
+      if (drafts.size() > 1) joined.push_back(std::move(drafts[i].fresh[j]));
       indices.push_back(first + static_cast<int>(j));
     }
   }
+  const std::span<const Genome> genomes =
+      drafts.size() == 1 ? std::span<const Genome>(drafts[0].fresh) : std::span<const Genome>(joined);
   std::vector<FitnessResult> out(genomes.size());
   const uint64_t generation = state_.initialized ? state_.generation + 1 : 0;
   try {
@@ -326,6 +329,11 @@ std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(const std::ve
     // leave the GA as it was before this generation
     for (size_t i = 0; i < rngs_.size(); ++i) rngs_[i] = Rng(state_.islands[i].rng);
     throw;
+  }
+  if (drafts.size() > 1) {
+    size_t from = 0;
+    for (Draft& d : drafts)
+      for (Genome& g : d.fresh) g = std::move(joined[from++]);
   }
   std::vector<std::vector<FitnessResult>> split(drafts.size());
   size_t at = 0;
@@ -390,9 +398,7 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
       for (int pos = rng.Gap(mutate); pos < bits; pos += 1 + rng.Gap(mutate)) c->bits[pos] ^= 1u;
     }
   }
-  // The elite is kept: copied here, so that a failed evaluation leaves the state untouched.
-  d.kept.assign(is.population.begin(), is.population.begin() + elite);
-  d.kept_fitness.assign(is.fitness.begin(), is.fitness.begin() + elite);
+  d.elite = elite;  // kept: moved from the state once the generation is evaluated (Finish)
   return d;
 }
 
@@ -488,6 +494,19 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
       (f.status == FitnessStatus::kPenalized ? s.penalized : s.errors)++;
       ++s.failure_reasons[f.reason];
     }
+    IslandState& is = state_.islands[k];
+    if (d.elite > 0) {  // the elite, left in the state while the generation was evaluated, goes first
+      std::vector<Genome> kept(std::make_move_iterator(is.population.begin()),
+                               std::make_move_iterator(is.population.begin() + d.elite));
+      std::vector<FitnessResult> kept_fitness(std::make_move_iterator(is.fitness.begin()),
+                                              std::make_move_iterator(is.fitness.begin() + d.elite));
+      kept.insert(kept.end(), std::make_move_iterator(d.kept.begin()), std::make_move_iterator(d.kept.end()));
+      kept_fitness.insert(kept_fitness.end(), std::make_move_iterator(d.kept_fitness.begin()),
+                          std::make_move_iterator(d.kept_fitness.end()));
+      d.kept = std::move(kept);
+      d.kept_fitness = std::move(kept_fitness);
+      d.elite = 0;
+    }
     // kept first, then the evaluated ones; ranked by (cost, index), stable.
     const int n = static_cast<int>(d.kept.size() + d.fresh.size());
     auto genome = [&d](int i) -> Genome& {
@@ -499,7 +518,6 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
     std::vector<int> order(n);
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&fit](int a, int b) { return Better(fit(a), a, fit(b), b); });
-    IslandState& is = state_.islands[k];
     is.population.resize(n);
     is.fitness.resize(n);
     for (int r = 0; r < n; ++r) {

@@ -247,7 +247,12 @@ class GeneticAlgorithm {
   struct Draft {
     std::vector<Genome> kept, fresh;
     std::vector<FitnessResult> kept_fitness;
+    /// The island's first `elite` individuals stay in the state until the generation is evaluated
+    /// (then Finish moves them in front of `kept`): no copy, and a failed evaluation leaves the
+    /// state untouched.
+    int elite = 0;
     bool restarted = false;
+    int kept_count() const { return elite + static_cast<int>(kept.size()); }
   };
   int Tournament(Rng& rng);
   /// The mutation's gap table for (mutation_probability, genome_bits), built on first use.
@@ -258,7 +263,7 @@ class GeneticAlgorithm {
   /// The best `migrants` individuals island `i` receives from its sources (ties: source order, rank).
   std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island) const;
   /// Evaluates every draft's fresh genomes as one batch (generation 0 if !initialized).
-  std::vector<std::vector<FitnessResult>> Evaluate(const std::vector<Draft>& drafts);
+  std::vector<std::vector<FitnessResult>> Evaluate(std::vector<Draft>& drafts);
   /// Ranks each island by (cost, index), updates island and job best, stall and counters, migrates
   /// when due, logs the summary and calls the callbacks.
   const GenerationSummary& Finish(std::vector<Draft> drafts, std::vector<std::vector<FitnessResult>> evaluated,
