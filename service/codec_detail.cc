@@ -5,7 +5,10 @@
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 #include <google/protobuf/stubs/logging.h>
 
+#include <array>
+#include <bit>
 #include <cmath>
+#include <cstring>
 #include <cstdio>
 
 namespace pz::service::detail {
@@ -35,9 +38,35 @@ bool Parse(std::string_view bytes, google::protobuf::MessageLite* msg) {
 
 // ---------------------------------------------------------------- genomes and results
 
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "the genome packing reads eight bytes as one word");
+
+/// Eight genome bits (one byte each, nonzero = set) as one byte, bit k = genome bit k.
+inline uint8_t PackEight(const uint8_t* bits) {
+  uint64_t x;
+  std::memcpy(&x, bits, 8);
+  constexpr uint64_t kLow7 = 0x7F7F7F7F7F7F7F7FULL, kHigh = 0x8080808080808080ULL;
+  const uint64_t set = ((((x & kLow7) + kLow7) | x) & kHigh) >> 7;  // 1 in each nonzero byte
+  return static_cast<uint8_t>((set * 0x0102040810204080ULL) >> 56);  // byte k's 1 → bit k
+}
+
+/// A packed byte as eight genome bits (bytes 0/1, bit k → byte k).
+constexpr std::array<uint64_t, 256> kUnpacked = [] {
+  std::array<uint64_t, 256> t{};
+  for (int v = 0; v < 256; ++v)
+    for (int k = 0; k < 8; ++k) t[v] |= static_cast<uint64_t>((v >> k) & 1) << (8 * k);
+  return t;
+}();
+
+}  // namespace
+
 void ToProto(const Genome& g, pw::Genome* p) {
-  std::string packed((g.bits.size() + 7) / 8, '\0');
-  for (size_t i = 0; i < g.bits.size(); ++i)
+  // Eight bits at a time: the master packs every genome it leases (the paper's has 1415 bits).
+  const size_t n = g.bits.size(), whole = n / 8;
+  std::string packed((n + 7) / 8, '\0');
+  for (size_t b = 0; b < whole; ++b) packed[b] = static_cast<char>(PackEight(g.bits.data() + 8 * b));
+  for (size_t i = 8 * whole; i < n; ++i)
     if (g.bits[i]) packed[i / 8] = static_cast<char>(packed[i / 8] | (1u << (i % 8)));
   p->set_bits(std::move(packed));
   p->set_bit_count(static_cast<uint32_t>(g.bits.size()));
@@ -49,9 +78,13 @@ Status FromProto(const pw::Genome& p, Genome* g) {
   if (p.bits().size() != (p.bit_count() + 7) / 8)
     return Malformed("genome.bits has " + std::to_string(p.bits().size()) + " bytes for " +
                      std::to_string(p.bit_count()) + " bits");
-  g->bits.resize(p.bit_count());
-  for (uint32_t i = 0; i < p.bit_count(); ++i)
-    g->bits[i] = (static_cast<uint8_t>(p.bits()[i / 8]) >> (i % 8)) & 1u;
+  const size_t n = p.bit_count(), whole = n / 8;
+  g->bits.resize(n);
+  for (size_t b = 0; b < whole; ++b) {
+    const uint64_t eight = kUnpacked[static_cast<uint8_t>(p.bits()[b])];
+    std::memcpy(g->bits.data() + 8 * b, &eight, 8);
+  }
+  for (size_t i = 8 * whole; i < n; ++i) g->bits[i] = (static_cast<uint8_t>(p.bits()[i / 8]) >> (i % 8)) & 1u;
   g->reals.assign(p.reals().begin(), p.reals().end());
   return Status::Ok();
 }

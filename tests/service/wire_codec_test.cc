@@ -3,6 +3,8 @@
 // status, never a crash; versions are checked; stored files detect alteration.
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include "hgann/hgann_job.h"
 #include "io/network_io.h"
 #include "model/chromosome.h"
@@ -78,6 +80,38 @@ TEST(WireCodec, WorkerEnvelopesRoundTrip) {
   context.context_spec = EncodeJobSpec(testing::NominalHgannSpec(10, 1));
   b = RoundTrip(context, EncodeMasterToWorker, DecodeMasterToWorker);
   EXPECT_EQ(b.context_spec, context.context_spec);
+}
+
+// Genomes are packed eight bits at a time: every length, every bit pattern, the same bytes on the
+// wire as one bit at a time (bit i in byte i/8 at position i%8), and back.
+TEST(WireCodec, GenomesPackBitForBitAtEveryLength) {
+  std::mt19937 rng(5);
+  for (int bits = 0; bits <= 200; ++bits) {
+    for (int trial = 0; trial < 4; ++trial) {
+      opt::Genome g;
+      for (int i = 0; i < bits; ++i) g.bits.push_back(static_cast<uint8_t>(rng() & 1u));
+      if (trial == 3)  // any nonzero byte is a set bit
+        for (auto& b : g.bits) b = b ? static_cast<uint8_t>(1 + rng() % 255) : 0;
+      std::string expected((bits + 7) / 8, '\0');
+      for (int i = 0; i < bits; ++i)
+        if (g.bits[i]) expected[i / 8] = static_cast<char>(expected[i / 8] | (1u << (i % 8)));
+      WorkerMsg m;
+      m.type = WorkerMsg::Type::kBatch;
+      m.batch.lease_id = 1;
+      m.batch.job_id = "j";
+      m.batch.indices = {0};
+      m.batch.genomes = {g};
+      pz::wire::MasterToWorker wire;
+      ASSERT_TRUE(wire.ParseFromString(EncodeMasterToWorker(m)));
+      ASSERT_EQ(wire.batch().tasks_size(), 1);
+      EXPECT_EQ(wire.batch().tasks(0).genome().bits(), expected) << bits << " bits, trial " << trial;
+      WorkerMsg back;
+      ASSERT_TRUE(DecodeMasterToWorker(EncodeMasterToWorker(m), &back).ok());
+      ASSERT_EQ(back.batch.genomes.size(), 1u);
+      for (auto& b : g.bits) b = b ? 1 : 0;
+      EXPECT_EQ(back.batch.genomes[0].bits, g.bits) << bits << " bits, trial " << trial;
+    }
+  }
 }
 
 TEST(WireCodec, ClientRequestsRoundTrip) {
