@@ -128,8 +128,11 @@ std::vector<std::string> CheckFloors(const fs::path& root) {
        ++it) {
     const fs::path& p = it->path();
     if (it->is_directory()) {
-      // Hidden folders and build trees (anything configured by CMake) are not sources.
-      if (p.filename().string()[0] == '.' || fs::exists(p / "CMakeCache.txt")) {
+      // Hidden folders, build trees (anything configured by CMake) and what .gitignore keeps out
+      // at the top (/build*/, /out/: scripts/demo.sh writes a C header there) are not sources.
+      const std::string name = p.filename().string();
+      if (name[0] == '.' || fs::exists(p / "CMakeCache.txt") ||
+          (it.depth() == 0 && (name == "out" || name.rfind("build", 0) == 0))) {
         it.disable_recursion_pending();
       }
       continue;
