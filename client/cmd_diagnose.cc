@@ -91,7 +91,8 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (!a.records.records.empty()) {
     if (!a.cases_dir.empty()) throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
     RecordsDiagnoseRequest r = a.records;
-    if (a.service.enabled()) r.evaluator_factory = RecordsServiceFactory(a.service.Options(), 12, "piezoid diagnose");
+    if (a.service.enabled())
+      r.evaluator_factory = RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
     r.out = a.out_dir;
     r.candidates = a.candidates;
     r.threads = a.threads;

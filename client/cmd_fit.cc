@@ -162,15 +162,13 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
 }
 
 int RunFit(const FitArgs& a) {
-  records::RecordEvaluatorFactory service;
-  if (a.service.enabled()) service = RecordsServiceFactory(a.service.Options(), a.pi_operators, "piezoid fit");
   io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
   records::FitOptions o;
-  o.evaluator_factory = service;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
+  if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
   o.polish = !a.no_polish;

@@ -43,12 +43,12 @@ void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
                   "with --master, CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
 
-records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options, int pi_operators,
-                                                      const std::string& owner) {
-  return [options, pi_operators, owner](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
+                                                      const records::FamilyOptions& family, const std::string& owner) {
+  return [options, family, owner](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     const std::string what = owner + ": " + f.model().Describe() + " on " + std::to_string(f.records().size()) + " record(s)";
     return std::make_unique<ServiceEvaluator>(
-        options, complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f, pi_operators), what), owner);
+        options, complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f, family), what), owner);
   };
 }
 

@@ -29,9 +29,10 @@ struct CompleteServiceFlags {
 /// Adds the flags to `cmd`.
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
 
-/// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS).
-records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options, int pi_operators,
-                                                      const std::string& owner);
+/// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS), its
+/// family made with `family` as locally (sub-steps, plays), so that the costs are the local ones.
+records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
+                                                      const records::FamilyOptions& family, const std::string& owner);
 
 /// One session per search of the committee, on the master of `options`; `family`: the committee's
 /// family options (sub-steps, PI plays).

@@ -397,8 +397,11 @@ CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int p
 
 }  // namespace
 
-job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators) {
-  return RecordsProblem(fitness, pi_operators, true);
+job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness,
+                                                 const records::FamilyOptions& options) {
+  CompleteModelProblem p = RecordsProblem(fitness, options.pi_operators, true);
+  p.substeps = options.substeps;  // the workers' family integrates as the local one
+  return p;
 }
 
 job::CompleteModelProblem CompleteModelProblemOf(const records::CriterionFitness& fitness,

@@ -26,8 +26,10 @@ namespace pz::complete {
 job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
 /// `piezoid fit` / `diagnose --records` on the service (family RECORDS): the training records
 /// without the part of their leading rest that is not scored (the model is at rest there: the cut
-/// changes no cost, bit for bit), the family, effects and data scale.
-job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness, int pi_operators);
+/// changes no cost, bit for bit), the family, effects and data scale, and the family's options
+/// (sub-steps, Prandtl–Ishlinskii plays) it was made with.
+job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness,
+                                                 const records::FamilyOptions& options);
 /// The committee's fitness (family RECORDS with its criterion and window; the records whole, since
 /// the window is in their own time); `options`: the family's (sub-steps, PI plays).
 job::CompleteModelProblem CompleteModelProblemOf(const records::CriterionFitness& fitness,

@@ -62,16 +62,23 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
   struct Case {
     std::string family;
     std::vector<EffectKind> effects;
+    int substeps = 2;  // a family made with other sub-steps is made so on the workers too
+    int pi_operators = 12;
   };
   for (const Case& c : {Case{"backlash-like", {EffectKind::kDelay, EffectKind::kDrift}},
                         Case{"prandtl-ishlinskii", {EffectKind::kDriverLowpass}},
+                        Case{"prandtl-ishlinskii", {}, 2, 7},
                         Case{"duhem", {EffectKind::kFriction, EffectKind::kStiffening}},
-                        Case{"stack-bouc-wen", {}}}) {
-    SCOPED_TRACE(c.family);
-    auto fam = std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale));
+                        Case{"stack-bouc-wen", {}},
+                        Case{"stack-bouc-wen", {}, 5}}) {
+    SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
+    records::FamilyOptions options;
+    options.substeps = c.substeps;
+    options.pi_operators = c.pi_operators;
+    auto fam = std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale, options));
     records::RecordModel model(fam, c.effects, scale);
     records::RecordFitness local(model, train);
-    const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, 12), "test");
+    const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, options), "test");
     // The rest is cut from the records on the wire.
     const auto& problem = std::get<job::CompleteModelProblem>(spec.problem);
     EXPECT_LT(problem.records[0].input.size(), train[0]->end_scored);
@@ -96,7 +103,7 @@ TEST(RecordsJobKindTest, BadSpecsAreRefusedFieldByField) {
   auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", scale));
   records::RecordModel model(fam, {}, scale);
   records::RecordFitness local(model, train);
-  job::CompleteModelProblem p = complete::CompleteModelProblemOf(local, 12);
+  job::CompleteModelProblem p = complete::CompleteModelProblemOf(local, records::FamilyOptions{});
   job::JobKindRegistry registry;
   registry.Register(complete::CompleteModelJobKind());
   auto first_error = [&](job::CompleteModelProblem q) {
@@ -141,7 +148,7 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   so.client.timeout_ms = 2000;
   so.client.retries = 3;
   so.batch_timeout_s = 120;
-  o.evaluator_factory = client::RecordsServiceFactory(so, 12, "test");
+  o.evaluator_factory = client::RecordsServiceFactory(so, o.family_options, "test");
   records::FitResult remote;
   try {
     remote = records::FitRecords(set, o);
