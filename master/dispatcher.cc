@@ -286,8 +286,11 @@ std::optional<Lease> Dispatcher::Complete(const std::string& worker, uint64_t le
     const double item = std::max(1e-7, eval_seconds / static_cast<double>(l.positions.size()));
     w->second.item_s = w->second.item_s < 0 ? item : 0.7 * w->second.item_s + 0.3 * item;
     // The generation's time per task, for its stragglers: per thread, as the holder ran it.
-    if (auto j = jobs_.find(l.job_id); j != jobs_.end() && j->second.generation == l.generation && !l.speculative)
+    if (auto j = jobs_.find(l.job_id); j != jobs_.end() && j->second.generation == l.generation &&
+        !l.speculative) {
       j->second.task_s.push_back(item);
+      j->second.median_task_s = -1;
+    }
   }
   return l;
 }
@@ -297,9 +300,13 @@ TimePoint Dispatcher::StragglerAt(const Lease& l) const {
   auto j = jobs_.find(l.job_id);
   if (j == jobs_.end() || j->second.generation != l.generation || j->second.task_s.empty())
     return TimePoint::max();
-  std::vector<double> t = j->second.task_s;
-  std::nth_element(t.begin(), t.begin() + static_cast<long>(t.size() / 2), t.end());
-  const double expected = t[t.size() / 2] * l.rounds;
+  const JobTasks& job = j->second;
+  if (job.median_task_s < 0) {
+    std::vector<double> t = job.task_s;
+    std::nth_element(t.begin(), t.begin() + static_cast<long>(t.size() / 2), t.end());
+    job.median_task_s = t[t.size() / 2];
+  }
+  const double expected = job.median_task_s * l.rounds;
   const double after = std::max(options_.speculate_min_s, options_.speculate_after * expected);
   return l.granted + std::chrono::duration_cast<Duration>(std::chrono::duration<double>(after));
 }

@@ -153,6 +153,9 @@ class Dispatcher {
     std::vector<std::vector<std::string>> struck_by;  ///< distinct workers that gave evidence
     uint64_t last_served = 0;
     std::vector<double> task_s;  ///< time per task of each lease of this generation completed [s]
+    /// The median of task_s, computed when a straggler check first needs it after a completion
+    /// (NextDeadline asks for every lease on every turn of the broker's loop).
+    mutable double median_task_s = -1;
   };
   struct WorkerSlot {
     int threads = 1;
