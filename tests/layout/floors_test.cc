@@ -3,6 +3,7 @@
 // lines. The build enforces the same list through include directories and links
 // (cmake/PzHelpers.cmake); this check also names the offending line, and covers what the build
 // cannot see: includes of outside libraries (ZeroMQ, protobuf) whose headers are on every path.
+#include <fnmatch.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -30,6 +31,16 @@ struct Floors {
 };
 
 // Parses floors.txt; problems (syntax, unknown names, cycles) are appended to `errors`.
+/// The top-level folders .gitignore keeps out of the repository ("/build*/", "/out/": what the
+/// build and scripts/demo.sh write), as fnmatch patterns.
+std::vector<std::string> IgnoredTopFolders(const fs::path& root) {
+  std::vector<std::string> out;
+  std::ifstream in(root / ".gitignore");
+  for (std::string line; std::getline(in, line);)
+    if (line.size() > 2 && line.front() == '/' && line.back() == '/') out.push_back(line.substr(1, line.size() - 2));
+  return out;
+}
+
 Floors ParseFloors(const fs::path& file, std::vector<std::string>& errors) {
   Floors f;
   std::ifstream in(file);
@@ -124,15 +135,18 @@ std::vector<std::string> CheckFloors(const fs::path& root) {
     }
   }
   static const std::regex kInclude(R"(^\s*#\s*include\s*([<"])([^>"]+)[>"])");
+  const std::vector<std::string> ignored_top = IgnoredTopFolders(root);
   for (auto it = fs::recursive_directory_iterator(root); it != fs::recursive_directory_iterator();
        ++it) {
     const fs::path& p = it->path();
     if (it->is_directory()) {
-      // Hidden folders, build trees (anything configured by CMake) and what .gitignore keeps out
-      // at the top (/build*/, /out/: scripts/demo.sh writes a C header there) are not sources.
+      // Hidden folders, build trees (anything configured by CMake) and the top-level folders
+      // .gitignore keeps out (scripts/demo.sh writes a C header into out/) are not sources.
       const std::string name = p.filename().string();
-      if (name[0] == '.' || fs::exists(p / "CMakeCache.txt") ||
-          (it.depth() == 0 && (name == "out" || name.rfind("build", 0) == 0))) {
+      const bool ignored = it.depth() == 0 && std::any_of(ignored_top.begin(), ignored_top.end(), [&](const std::string& g) {
+                             return ::fnmatch(g.c_str(), name.c_str(), 0) == 0;
+                           });
+      if (name[0] == '.' || fs::exists(p / "CMakeCache.txt") || ignored) {
         it.disable_recursion_pending();
       }
       continue;
