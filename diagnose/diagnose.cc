@@ -33,9 +33,9 @@ std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
 
 using model::EffectKind;
 
-std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0, double e = 0) {
+std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
   char buf[512];
-  std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e);
+  std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e, f);
   return buf;
 }
 
@@ -273,12 +273,11 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
     if (round.runner_up >= 0) {
       const auto& ru = round.candidates[static_cast<size_t>(round.runner_up)];
       round.verdict += std::string("; the data cannot separate it from ") + model::EffectName(ru.kind) +
-                       (round.z_runner_up < o.rules.separation_z
-                            ? Fmt(" (closes %.0f %%, paired block test z = %.2f < %.1f)", 100 * ru.closed,
-                                  round.z_runner_up, o.rules.separation_z)
-                            : Fmt(" (closes %.0f %%, within %.0f points of it: practically equivalent, paired block "
-                                  "test z = %.2f)",
-                                  100 * ru.closed, 100 * o.rules.separation_closed, round.z_runner_up));
+                       Fmt(" (closes %.0f %%; both leave %.2f x and %.2f x the floor, at most %.2f, and the "
+                           "paired block test gives z = %.2f < %.1f: practically equivalent)",
+                           100 * ru.closed, std::sqrt(c.s_withheld / round.s_floor),
+                           std::sqrt(ru.s_withheld / round.s_floor), o.rules.significance_ratio, round.z_runner_up,
+                           o.rules.separation_z);
     }
   } else {
     round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,

@@ -25,8 +25,6 @@ Status DecisionRules::Validate() const {
   if (!(min_pattern >= 0 && min_pattern <= 1))
     return InvalidArgument(FieldError("min_pattern", min_pattern, "must be in [0, 1]"));
   if (!std::isfinite(separation_z)) return InvalidArgument(FieldError("separation_z", separation_z, "must be finite"));
-  if (!(separation_closed >= 0 && separation_closed <= 1))
-    return InvalidArgument(FieldError("separation_closed", separation_closed, "must be in [0, 1]"));
   if (blocks < 4) return InvalidArgument(FieldError("blocks", blocks, "must be >= 4"));
   return Status::Ok();
 }
@@ -107,6 +105,10 @@ void AssignWeights(const Gap& gap, std::span<CandidateScore* const> ranked) {
   for (CandidateScore* c : ranked) c->weight = std::isfinite(c->score) ? std::exp(c->score / (2 * phi) - lmax) / z : 0;
 }
 
+bool AtFloor(const Gap& gap, const CandidateScore& c, const DecisionRules& rules) {
+  return gap.s_floor > 0 && std::sqrt(c.s_withheld / gap.s_floor) <= rules.significance_ratio;
+}
+
 Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const SquaredErrors& squares,
                   const DecisionRules& rules) {
   Naming n;
@@ -120,9 +122,10 @@ Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const
     const CandidateScore& other = *ranked[i];
     if (!other.qualifies) continue;
     const double z = model::PairedBlockZ(squares(static_cast<int>(i)), best_sq, rules.blocks);
-    // Cannot separate: not significantly worse, or practically as good (closes nearly the same
-    // share of the gap: a consistent but tiny difference is model-form detail, not evidence).
-    if (z < rules.separation_z || best.closed - other.closed < rules.separation_closed) {
+    // Practically equivalent only when both leave no significant gap and the paired test does not
+    // separate them; a rival that leaves a significant gap is evidence against itself (its Φ(z)
+    // enters the confidence however small z is).
+    if (z < rules.separation_z && AtFloor(gap, best, rules) && AtFloor(gap, other, rules)) {
       ++equivalent;
       if (n.runner_up < 0) {
         n.runner_up = static_cast<int>(i);

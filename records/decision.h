@@ -14,9 +14,11 @@
 //   ranking          :  by score, best first (stable); posterior weights against "none"
 //   named            ⇔  the best-ranked candidate qualifies; its confidence is Π Φ(z) of paired
 //                       block tests of the withheld squared errors against the starting model and
-//                       every other qualifying candidate; a qualifying rival with z < separation_z
-//                       or closing the gap within separation_closed of it cannot be separated
-//                       (confidence shared among them).
+//                       every other qualifying candidate; a qualifying rival is practically
+//                       equivalent (cannot be separated; confidence shared among them) only when
+//                       both bring the withheld gap within the significance threshold of the floor
+//                       (√(S_c / S_floor) ≤ significance_ratio) and the paired test does not
+//                       separate them (z < separation_z); otherwise its Φ(z) enters the confidence.
 //   verdict kind     :  "none" (no significant gap), "unexplained" (significant, nothing named),
 //                       "effect", "inseparable" (named with a rival it cannot be separated from).
 #pragma once
@@ -37,8 +39,8 @@ struct DecisionRules {
   double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
   double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
   double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
-  double separation_z = 2.0;         ///< a qualifying rival within this paired z: cannot separate
-  double separation_closed = 0.05;   ///< … or closing the gap within this share of the named one
+  double separation_z = 2.0;         ///< a qualifying rival within this paired z, both at the floor:
+                                     ///< cannot separate
   int blocks = 20;                   ///< of the paired block tests, ≥ 4
   Status Validate() const;
 };
@@ -104,6 +106,9 @@ std::vector<CandidateScore*> Scores(std::vector<Candidate>& candidates) {
 
 /// Posterior weights against "none" (score 0), tempered by the best model's over-dispersion.
 void AssignWeights(const Gap& gap, std::span<CandidateScore* const> ranked);
+
+/// Whether a candidate brings the withheld gap within the significance threshold of the floor.
+bool AtFloor(const Gap& gap, const CandidateScore& c, const DecisionRules& rules);
 
 /// The named effect of a ranked list and what it cannot be separated from.
 struct Naming {

@@ -353,11 +353,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     const RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
     if (d.runner_up >= 0) {
       const RecordCandidate& ru = d.candidates[static_cast<size_t>(d.runner_up)];
-      v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind) << ": both close the gap ("
-        << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed) << " %"
-        << (d.z_runner_up < o.rules.separation_z ? "" : std::string(", within ") + Fmt(100 * o.rules.separation_closed) +
-                                                       " points: practically equivalent")
-        << "; paired block test z = " << Fmt(d.z_runner_up, 2) << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
+      v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind)
+        << ": both bring the withheld gap to the noise floor (" << Fmt(std::sqrt(best.s_withheld / d.s_floor)) << " × and "
+        << Fmt(std::sqrt(ru.s_withheld / d.s_floor)) << " ×, at most " << o.rules.significance_ratio
+        << "; they close " << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed)
+        << " %) and the paired block test does not separate them (z = " << Fmt(d.z_runner_up, 2) << " < "
+        << o.rules.separation_z << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
       if (o.propose) {
         d.next = ProposeExperiment(set, best.fit, ru.fit, d.noise.sigma);
         v << " Next measurement: " << d.next->description << ".";

@@ -86,23 +86,65 @@ TEST(DecisionTest, BestRankedIsNamedOnlyWhenItQualifies) {
   EXPECT_EQ(VerdictKind(g.significant, n), "unexplained");
 }
 
+// The squared errors of model 0 with block-to-block scatter of mean ≈ 0 added: a paired block
+// test against them gives a small z (about 0.4).
+std::vector<double> Scattered(std::vector<double> r) {
+  for (size_t k = 0; k < r.size(); ++k) r[k] += (k / 10) % 2 == 0 ? 0.3 : -0.25;
+  return r;
+}
+
 TEST(DecisionTest, ARivalThatCannotBeSeparatedSharesTheConfidence) {
-  const Gap g = TestGap();
+  const Gap g = TestGap();  // floor Σ = 100: at the floor means S_c ≤ 1.25² × 100 = 156.25
   std::vector<CandidateScore> cs(3);
-  ScoreCandidate(g, 130, 180, 2, 0.8, {}, cs[0]);  // closes 90 %
-  ScoreCandidate(g, 140, 180, 2, 0.8, {}, cs[1]);  // closes 87 %: within 5 points
+  ScoreCandidate(g, 130, 180, 2, 0.8, {}, cs[0]);  // closes 90 %, 1.14 × the floor
+  ScoreCandidate(g, 140, 180, 2, 0.8, {}, cs[1]);  // closes 87 %, 1.18 × the floor
   ScoreCandidate(g, 390, 180, 1, 0.8, {}, cs[2]);  // does not qualify: not compared
   RankByScore(cs);
   const auto ranked = Scores(cs);
-  const auto squares = [](int i) { return i < 0 ? Squares(4, 3) : Squares(1.3 + 0.1 * i, 0.2); };
+  ASSERT_TRUE(AtFloor(g, cs[0], {}) && AtFloor(g, cs[1], {}));
+  const auto squares = [](int i) {
+    return i < 0 ? Squares(4, 3) : (i == 0 ? Squares(1.3, 0.2) : Scattered(Squares(1.3, 0.2)));
+  };
+  const double z = model::PairedBlockZ(squares(1), squares(0), 20);
+  ASSERT_LT(z, 2.0);
   const Naming n = NameEffect(g, ranked, squares, {});
   ASSERT_EQ(n.named, 0);
   EXPECT_EQ(n.runner_up, 1);
+  EXPECT_DOUBLE_EQ(n.z_runner_up, z);
   const double base = model::NormalCdf(model::PairedBlockZ(squares(-1), squares(0), 20));
   EXPECT_DOUBLE_EQ(n.confidence, base / 2);
   EXPECT_DOUBLE_EQ(cs[0].confidence, n.confidence);
   EXPECT_EQ(VerdictKind(g.significant, n), "inseparable");
-  // With the rival clearly worse (closing 60 %, z large), it is separated and multiplies in.
+
+  // Both at the floor, but the paired test separates them (the rival is worse on every block).
+  const auto apart = [](int i) { return i < 0 ? Squares(4, 3) : Squares(1.3 + 0.1 * i, 0.2); };
+  const Naming a = NameEffect(g, ranked, apart, {});
+  EXPECT_EQ(a.runner_up, -1);
+  EXPECT_EQ(VerdictKind(g.significant, a), "effect");
+}
+
+TEST(DecisionTest, ARivalThatLeavesASignificantGapIsNeverEquivalent) {
+  // The case of issue 22: the rival closes most of the gap too but leaves 1.41 × the floor where the
+  // named one leaves 1.14 ×. Even with a paired z below the threshold, it is evidence, not a tie:
+  // its Φ(z) multiplies into the confidence and the verdict names one effect.
+  const Gap g = TestGap();
+  std::vector<CandidateScore> cs(2);
+  ScoreCandidate(g, 130, 180, 2, 0.8, {}, cs[0]);
+  ScoreCandidate(g, 200, 180, 2, 0.8, {}, cs[1]);  // closes 67 %: qualifies, 1.41 × the floor
+  RankByScore(cs);
+  const auto ranked = Scores(cs);
+  ASSERT_TRUE(cs[1].qualifies) << cs[1].note;
+  EXPECT_FALSE(AtFloor(g, cs[1], {}));
+  const auto squares = [](int i) {
+    return i < 0 ? Squares(4, 3) : (i == 0 ? Squares(1.3, 0.2) : Scattered(Squares(1.3, 0.2)));
+  };
+  const Naming n = NameEffect(g, ranked, squares, {});
+  ASSERT_EQ(n.named, 0);
+  EXPECT_EQ(n.runner_up, -1);
+  EXPECT_DOUBLE_EQ(n.confidence, model::NormalCdf(model::PairedBlockZ(squares(-1), squares(0), 20)) *
+                                     model::NormalCdf(model::PairedBlockZ(squares(1), squares(0), 20)));
+  EXPECT_EQ(VerdictKind(g.significant, n), "effect");
+  // With a large z it is separated as well.
   ScoreCandidate(g, 220, 180, 2, 0.8, {}, cs[1]);
   const auto far = [](int i) { return i < 0 ? Squares(4, 3) : (i == 0 ? Squares(1.3, 0.2) : Squares(2.2, 0.9)); };
   const Naming m = NameEffect(g, ranked, far, {});
