@@ -2,7 +2,8 @@
 // oscillator's fitness, and of the simulator itself (model/bw_oscillator.h).
 //   BM_BwSimulate/S          one 8192-sample multisine period at S RK4 sub-steps: samples/s
 //   BM_Search_Bw/alg/threads a whole search (1 repetition, 20 particles / individuals, 10 iterations)
-//                            on one 8192-sample period of train_A at 4 sub-steps: evaluations/s
+//                            on one 8192-sample period of train_A at 4 sub-steps, the benchmark's
+//                            fitness (complete/boucwen_benchmark.h, the records engine's): evaluations/s
 //   BM_Search_Sphere/alg     the same search on a 6-D sphere: the optimisers' own overhead
 // Figures and the command: docs/performance.md, "Complete models: PSO and GA".
 #include <benchmark/benchmark.h>
@@ -10,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "complete/boucwen_benchmark.h"
 #include "io/csv.h"
 #include "opt/inline_evaluator.h"
 #include "opt/param_search.h"
@@ -69,15 +71,6 @@ SearchOptions SmallSearch(SearchAlgorithm a) {
   return o;
 }
 
-ParamBox BwBox() {
-  ParamBox box;
-  box.names = model::BwIdentifiableNames();
-  box.lower = {0.2, 0.1, 1e3, 1e3, 1, -1e4};
-  box.upper = {20, 1e3, 1e6, 1e6, 1e5, 1e4};
-  box.log_scale = {true, true, true, true, true, false};
-  return box;
-}
-
 void RunSearch(benchmark::State& state, const ParamBox& box, const FitnessFunction& fitness) {
   const auto algorithm = static_cast<SearchAlgorithm>(state.range(0));
   const int threads = static_cast<int>(state.range(1));
@@ -91,15 +84,12 @@ void RunSearch(benchmark::State& state, const ParamBox& box, const FitnessFuncti
 }
 
 void BM_Search_Bw(benchmark::State& state) {
-  std::vector<model::BwRecord> records(1);
-  records[0].input = Input(4);
-  records[0].y_measured = TrainA().y;
-  FunctionFitness fitness([&records](std::span<const double> theta) {
-    bool diverged = false;
-    const double mse = model::BwOutputMse(model::BwFromIdentifiable(theta), records, 1.0, &diverged);
-    return FitnessResult{mse, diverged ? FitnessStatus::kPenalized : FitnessStatus::kOk, {}};
-  });
-  RunSearch(state, BwBox(), fitness);
+  // The benchmark's protocol (complete/boucwen_benchmark.h): the records engine's fitness.
+  std::vector<io::Record> records;
+  records.push_back(complete::MakeBwRecord("train_A", model::CaseRole::kTrain, TrainA().u, TrainA().y, 0));
+  const complete::BwTraining fitness(
+      std::move(records), complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 8192), 1.0);
+  RunSearch(state, fitness.Box(), fitness);
 }
 BENCHMARK(BM_Search_Bw)
     ->ArgsProduct({{static_cast<int>(SearchAlgorithm::kPso), static_cast<int>(SearchAlgorithm::kGaReal),

@@ -25,7 +25,6 @@
 #include "client/complete_service.h"
 #include "client/plots.h"
 #include "complete/boucwen_benchmark.h"
-#include "complete/bw_fitness.h"
 #include "complete/job_kind.h"
 #include "io/csv.h"
 #include "opt/param_search.h"
@@ -40,10 +39,9 @@
 namespace pz::client {
 namespace {
 
-using complete::BwSeries;
 using complete::kBwPeriod;
 using complete::kBwSampleRateHz;
-using complete::LoadBwSeries;
+using complete::LoadBwBenchmark;
 using complete::MakeBwTrainingRecord;
 using complete::SimulateBwMultisineTest;
 using complete::SimulateBwSweepTest;
@@ -97,20 +95,23 @@ opt::SearchOptions MakeOptions(const BoucwenArgs& a) {
 int RunBoucwen(const BoucwenArgs& a) {
   namespace fs = std::filesystem;
   const fs::path data(a.data_dir), out(a.out_dir);
-  const BwSeries train_a = LoadBwSeries(data / "train_A_multisine.csv");
-  const BwSeries train_b = LoadBwSeries(data / "train_B_multisine.csv");
-  auto samples_of = [&](const BwSeries& s) {
-    const size_t all = s.u.size() - s.u.size() % kBwPeriod;
+  const io::RecordSet train = LoadBwBenchmark(data, model::CaseRole::kTrain);
+  auto samples_of = [&](const io::Record& r) {
+    const size_t all = r.size() - r.size() % kBwPeriod;
     return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kBwPeriod) : all;
   };
-  std::vector<complete::BwTrainingRecord> records;
-  records.push_back(MakeBwTrainingRecord("train_A", train_a, samples_of(train_a), a.substeps, false));
-  records.push_back(MakeBwTrainingRecord("train_B", train_b, samples_of(train_b), a.substeps, true));
+  const io::Record& train_a = *train.Find("train_A");
+  const io::Record& train_b = *train.Find("train_B");
+  std::vector<io::Record> records;
+  records.push_back(MakeBwTrainingRecord(train_a, samples_of(train_a), false));
+  records.push_back(MakeBwTrainingRecord(train_b, samples_of(train_b), true));
   // Output-error MSE; a diverging simulation costs 1 m² (penalised).
-  const complete::BwOscillatorFitness fitness(std::move(records), 1.0);
+  const complete::BwTraining fitness(
+      std::move(records), complete::BwProtocol(a.substeps, model::InputInterpolation::kPeriodicFourier, kBwPeriod),
+      1.0);
   const size_t n_train = fitness.counted_samples();
 
-  const opt::ParamBox box = complete::BwOscillatorBox();
+  const opt::ParamBox box = fitness.Box();
   opt::SearchOptions options = MakeOptions(a);
   const int progress = a.progress;
   options.on_progress = [progress](const opt::SearchProgress& p) {
@@ -149,18 +150,17 @@ int RunBoucwen(const BoucwenArgs& a) {
     return ExitCodeOf(e.status());
   }
 
-  const model::BwParams fitted = model::BwFromIdentifiable(result.best);
-  const model::BwParams truth;  // benchmark Table 1
-  const std::vector<double> theta_true = model::BwIdentifiable(truth);
+  const std::vector<double> theta_true = model::BwIdentifiable(model::BwParams{});  // benchmark Table 1
   const double train_rms = std::sqrt(result.best_cost);
 
   // Test sets: read only now.
-  const BwSeries test_ms = LoadBwSeries(data / "test_multisine.csv");
-  const BwSeries test_sw = LoadBwSeries(data / "test_sinesweep.csv");
-  const std::vector<double> yms = SimulateBwMultisineTest(fitted, test_ms);
-  const std::vector<double> ysw = SimulateBwSweepTest(fitted, test_sw);
-  const std::vector<double> yms_true = SimulateBwMultisineTest(truth, test_ms);
-  const std::vector<double> ysw_true = SimulateBwSweepTest(truth, test_sw);
+  const io::RecordSet test = LoadBwBenchmark(data, model::CaseRole::kTest);
+  const io::Record& test_ms = *test.Find("test_multisine");
+  const io::Record& test_sw = *test.Find("test_sinesweep");
+  const std::vector<double> yms = SimulateBwMultisineTest(result.best, test_ms);
+  const std::vector<double> ysw = SimulateBwSweepTest(result.best, test_sw);
+  const std::vector<double> yms_true = SimulateBwMultisineTest(theta_true, test_ms);
+  const std::vector<double> ysw_true = SimulateBwSweepTest(theta_true, test_sw);
   const double rms_ms = model::Rmse(test_ms.y, yms), rms_sw = model::Rmse(test_sw.y, ysw);
   const double rms_ms_true = model::Rmse(test_ms.y, yms_true), rms_sw_true = model::Rmse(test_sw.y, ysw_true);
   const double max_ms = model::MaxAbsError(test_ms.y, yms, 1 / kBwSampleRateHz, 0, (test_ms.y.size() - 1) / kBwSampleRateHz);

@@ -149,27 +149,19 @@ SpecInterpolation SpecOf(model::InputInterpolation i) {
   return SpecInterpolation::kSpline;
 }
 
-std::vector<BwTrainingRecord> BwRecords(const CompleteModelProblem& p) {
-  std::vector<BwTrainingRecord> out;
-  for (const CompleteModelRecord& r : p.records) {
-    BwTrainingRecord b;
-    b.name = r.name;
-    b.u = r.input;
-    b.y = r.output;
-    b.first_counted = r.first_counted;
-    b.input.sample_rate_hz = r.sample_rate_hz;
-    b.input.substeps = Substeps(p);
-    b.input.interpolation = InterpolationOf(p.interpolation);
-    b.input.period_samples = p.period_samples;
-    out.push_back(std::move(b));
-  }
-  return out;
+// The benchmark's identification a BW_OSCILLATOR spec describes (the records as the client's).
+std::unique_ptr<BwTraining> BwTrainingOf(const CompleteModelProblem& p) {
+  std::vector<io::Record> records;
+  for (const CompleteModelRecord& r : p.records)
+    records.push_back(MakeBwRecord(r.name, model::CaseRole::kTrain, r.input, r.output, r.first_counted, r.sample_rate_hz));
+  return std::make_unique<BwTraining>(
+      std::move(records), BwProtocol(Substeps(p), InterpolationOf(p.interpolation), p.period_samples), p.error_cost);
 }
 
 Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction>* out) {
   try {
     if (p.family == Family::kBwOscillator)
-      *out = std::make_unique<BwOscillatorFitness>(BwRecords(p), p.error_cost);
+      *out = BwTrainingOf(p);
     else if (p.family == Family::kRecords)
       *out = std::make_unique<OwningRecordFitness>(p);
     else
@@ -346,22 +338,16 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
 
 }  // namespace
 
-job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness) {
+job::CompleteModelProblem CompleteModelProblemOf(const BwTraining& training) {
   CompleteModelProblem p;
   p.family = Family::kBwOscillator;
-  const auto& records = fitness.records();
-  const model::BwInputOptions& o = records.front().input;
-  for (const BwTrainingRecord& r : records) {
-    if (r.input.substeps != o.substeps || r.input.interpolation != o.interpolation ||
-        r.input.period_samples != o.period_samples)
-      throw InputError("bw record " + r.name + ": its input options differ from record " + records.front().name +
-                       "'s (a complete_model spec carries one set)");
-    p.records.push_back({r.name, r.input.sample_rate_hz, r.u, r.y, r.first_counted});
-  }
-  p.substeps = o.substeps;
+  for (const io::Record& r : training.records())
+    p.records.push_back({r.name, r.sample_rate_hz(), r.u, r.y, r.first_scored});
+  const records::OscillatorOptions& o = training.options();
+  p.substeps = static_cast<uint32_t>(o.rk4_steps);
   p.interpolation = SpecOf(o.interpolation);
   p.period_samples = o.period_samples;
-  p.error_cost = fitness.penalty();
+  p.error_cost = training.penalty();
   return p;
 }
 

@@ -3,9 +3,9 @@
 // --master`, `piezoid committee --master`) and evaluates its swarms / generations through an
 // evaluation session (client/service_evaluator.h); the spec (proto CompleteModelProblem) carries
 // the model family, the records and the criterion, so that the workers rebuild the client's
-// fitness (BwOscillatorFitness; the records engine's RecordFitness and CriterionFitness for any
-// records/families.h family, the committee's included) from the spec alone: the same costs bit
-// for bit.
+// fitness (the Bouc–Wen benchmark's BwTraining, complete/boucwen_benchmark.h; the records engine's
+// RecordFitness and CriterionFitness for any records/families.h family, the committee's included)
+// from the spec alone: the same costs bit for bit.
 // The master and the workers register the kind from their main(); pz::master cannot depend on
 // pz::complete.
 #pragma once
@@ -13,7 +13,7 @@
 #include <memory>
 #include <string>
 
-#include "complete/bw_fitness.h"
+#include "complete/boucwen_benchmark.h"
 #include "job/job_kind.h"
 #include "job/job_spec.h"
 #include "records/criterion.h"
@@ -21,9 +21,9 @@
 
 namespace pz::complete {
 
-/// The problem of a local fitness. Throws InputError if the oscillator's records differ in their
-/// input options (a spec carries one set).
-job::CompleteModelProblem CompleteModelProblemOf(const BwOscillatorFitness& fitness);
+/// The Bouc–Wen benchmark's identification (family BW_OSCILLATOR: its records, sub-steps, input
+/// interpolation and period, penalty).
+job::CompleteModelProblem CompleteModelProblemOf(const BwTraining& training);
 /// `piezoid fit` / `diagnose --records` on the service (family RECORDS): the training records
 /// without the part of their leading rest that is not scored (the model is at rest there: the cut
 /// changes no cost, bit for bit), the family, effects and data scale, and the family's options

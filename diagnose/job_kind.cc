@@ -1,5 +1,7 @@
 #include "diagnose/job_kind.h"
 
+#include "io/bench_data.h"
+
 #include <cmath>
 #include <set>
 #include <sstream>
@@ -192,14 +194,15 @@ job::JobKind DiagnoseJobKind() {
     std::vector<FieldViolation> ignored;
     try {
       std::vector<DiagCase> cases;
+      io::BenchReadOptions options;  // the stated cycles are checked; the drive is the stated one
+      options.check_voltage = false;
       for (size_t i = 0; i < d.cases.size(); ++i) {
-        const job::HgannCaseSpec& c = d.cases[i];
-        model::Sinusoid drive;
-        drive.amplitude_v = c.amplitude_v;
-        drive.frequency_hz = c.frequency_hz;
-        drive.sample_rate_hz = c.sample_rate_hz;
-        drive.cycles = d.cycles[i];
-        cases.push_back(MakeCase(c.number, drive, c.angle_deg, c.role == job::CaseRole::kTrain));
+        io::BenchCaseSamples b = io::SamplesOfSpecCase(d.cases[i]);
+        b.u.clear();  // the diagnosis simulates the stated drive
+        b.cycles = d.cycles[i];
+        const io::BenchCase bc =
+            io::MakeBenchCase(std::move(b), options, io::SpecCaseWhere("diagnose.cases[" + std::to_string(i) + "]"));
+        cases.push_back(MakeCase(bc.number, bc.Drive(), bc.angle_deg, bc.role == io::CaseRole::kTrain));
       }
       auto model = std::make_unique<DiagnosisModel>(DefaultPlant(), std::move(cases), SimOptions(d));
       *f = std::make_unique<OwningFitness>(std::move(model), ParameterLayout(Structure(d, &ignored)), d.residuals);

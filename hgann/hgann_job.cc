@@ -240,26 +240,12 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
 io::CaseSet HgannCaseSet(const HgannProblem& h) {
   io::CaseSet set;
   set.dir = h.source;
-  for (const HgannCaseSpec& x : h.cases) {
-    io::BenchCase b;
-    b.number = x.number;
-    b.amplitude_v = x.amplitude_v;
-    b.frequency_hz = x.frequency_hz;
-    b.role = x.role;
-    b.file = "case" + std::to_string(x.number);
-    b.sample_rate_hz = x.sample_rate_hz;
-    const size_t n = x.angle_deg.size();
-    b.t.resize(n);
-    for (size_t k = 0; k < n; ++k) b.t[k] = static_cast<double>(k) / x.sample_rate_hz;
-    if (x.voltage_v.size() == n) {
-      b.u = x.voltage_v;
-    } else {
-      b.u.resize(n);
-      for (size_t k = 0; k < n; ++k)
-        b.u[k] = x.amplitude_v * std::sin(2 * std::numbers::pi * x.frequency_hz * b.t[k]);
-    }
-    b.angle_deg = x.angle_deg;
-    set.cases.push_back(std::move(b));
+  io::BenchReadOptions options;  // the spec's samples are the measured ones: no stated length or drive to check
+  options.cycles = 0;
+  options.check_voltage = false;
+  for (size_t i = 0; i < h.cases.size(); ++i) {
+    set.cases.push_back(io::MakeBenchCase(io::SamplesOfSpecCase(h.cases[i]), options,
+                                          io::SpecCaseWhere("hgann.cases[" + std::to_string(i) + "]")));
   }
   return set;
 }

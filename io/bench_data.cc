@@ -13,7 +13,7 @@ model::Sinusoid BenchCase::Drive() const {
   s.amplitude_v = amplitude_v;
   s.frequency_hz = frequency_hz;
   s.sample_rate_hz = sample_rate_hz;
-  s.cycles = static_cast<double>(t.size()) * frequency_hz / sample_rate_hz;
+  s.cycles = cycles > 0 ? cycles : static_cast<double>(t.size()) * frequency_hz / sample_rate_hz;
   return s;
 }
 
@@ -46,6 +46,76 @@ std::vector<const BenchCase*> CaseSet::WithRole(CaseRole role) const {
   return out;
 }
 
+BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options, const BenchCaseWhere& where,
+                        const std::string& context) {
+  ThrowIfError(options.Validate());
+  constexpr size_t kWhole = std::string::npos;
+  auto fail = [&](std::string_view field, size_t index, const std::string& what) {
+    throw InputError(where(field, index) + ": " + what + context);
+  };
+  if (!(std::isfinite(s.amplitude_v) && s.amplitude_v >= 0))
+    fail("amplitude_v", kWhole, "amplitude " + FormatNumber(s.amplitude_v) + " V must be finite and >= 0");
+  if (!(std::isfinite(s.frequency_hz) && s.frequency_hz > 0))
+    fail("frequency_hz", kWhole, "frequency " + FormatNumber(s.frequency_hz) + " Hz must be finite and > 0");
+  if (!(std::isfinite(s.sample_rate_hz) && s.sample_rate_hz > 0))
+    fail("sample_rate_hz", kWhole, "sample rate " + FormatNumber(s.sample_rate_hz) + " Hz must be finite and > 0");
+  const size_t n = s.angle_deg.size();
+  if (n < 2) fail("angle_deg", kWhole, std::to_string(n) + " samples; a case needs at least 2");
+  for (size_t k = 0; k < n; ++k)
+    if (!std::isfinite(s.angle_deg[k])) fail("angle_deg", k, FormatNumber(s.angle_deg[k]) + " deg must be finite");
+  if (!s.t.empty() && s.t.size() != n)
+    fail("t", kWhole, std::to_string(s.t.size()) + " times for " + std::to_string(n) + " angle samples");
+  if (!s.u.empty() && s.u.size() != n)
+    fail("u", kWhole, std::to_string(s.u.size()) + " drive samples for " + std::to_string(n) + " angle samples");
+  for (size_t k = 0; k < s.u.size(); ++k)
+    if (!std::isfinite(s.u[k])) fail("u", k, FormatNumber(s.u[k]) + " V must be finite");
+  const double cycles = s.cycles > 0 ? s.cycles : options.cycles;
+  if (cycles > 0) {
+    const long expected = std::lround(cycles * s.sample_rate_hz / s.frequency_hz);
+    if (static_cast<long>(n) != expected)
+      fail("", kWhole, std::to_string(n) + " samples, expected round(" + FormatNumber(cycles) + " cycles * " +
+                           FormatNumber(s.sample_rate_hz) + " Hz / " + FormatNumber(s.frequency_hz) +
+                           " Hz) = " + std::to_string(expected));
+  }
+  BenchCase c;
+  c.number = s.number;
+  c.amplitude_v = s.amplitude_v;
+  c.frequency_hz = s.frequency_hz;
+  c.role = s.role;
+  c.file = std::move(s.file);
+  c.sample_rate_hz = s.sample_rate_hz;
+  c.cycles = s.cycles;
+  c.t = std::move(s.t);
+  if (c.t.empty()) {
+    c.t.resize(n);
+    for (size_t k = 0; k < n; ++k) c.t[k] = static_cast<double>(k) / s.sample_rate_hz;
+  }
+  c.u = std::move(s.u);
+  if (c.u.empty()) {
+    c.u.resize(n);
+    for (size_t k = 0; k < n; ++k) c.u[k] = s.amplitude_v * std::sin(2 * std::numbers::pi * s.frequency_hz * c.t[k]);
+  } else if (options.check_voltage) {
+    const double vtol = options.voltage_rel_tol * c.amplitude_v + options.voltage_abs_tol_v;
+    for (size_t k = 0; k < n; ++k) {
+      const double want = c.amplitude_v * std::sin(2 * std::numbers::pi * c.frequency_hz * c.t[k]);
+      if (!(std::abs(c.u[k] - want) <= vtol))
+        fail("u", k,
+             FormatNumber(c.u[k]) + " V is not V sin(2 pi f t) = " + FormatNumber(want) + " V (V = " +
+                 FormatNumber(c.amplitude_v) + " V, f = " + FormatNumber(c.frequency_hz) + " Hz, t = " +
+                 FormatNumber(c.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)");
+    }
+  }
+  c.angle_deg = std::move(s.angle_deg);
+  return c;
+}
+
+BenchCaseWhere SpecCaseWhere(std::string prefix) {
+  return [prefix = std::move(prefix)](std::string_view field, size_t k) {
+    const std::string name = field.empty() ? "" : "." + std::string(field == "u" ? "voltage_v" : field);
+    return prefix + name + (k == std::string::npos ? "" : "[" + std::to_string(k) + "]");
+  };
+}
+
 BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, double frequency_hz,
                        CaseRole role, const BenchReadOptions& options, const std::string& context) {
   ThrowIfError(options.Validate());
@@ -53,39 +123,21 @@ BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, dou
   const CsvTable csv = ReadCsvFile(file);
   SampledColumns cols = ReadSampledColumns(csv, "angle_deg", "case", options.time_rel_tol,
                                            "a case starts at t = 0 (from rest)", ctx);
-  const int cu = cols.u_column;
-  const size_t n = cols.t.size();
-  BenchCase c;
-  c.number = number;
-  c.amplitude_v = amplitude_v;
-  c.frequency_hz = frequency_hz;
-  c.role = role;
-  c.file = file;
-  c.t = std::move(cols.t);
-  c.u = std::move(cols.u);
-  c.angle_deg = std::move(cols.y);
-  c.sample_rate_hz = cols.sample_rate_hz;
-  if (options.cycles > 0) {
-    const long expected = std::lround(options.cycles * c.sample_rate_hz / frequency_hz);
-    if (static_cast<long>(n) != expected)
-      throw InputError(csv.source + ": " + std::to_string(n) + " samples, expected round(" +
-                       FormatNumber(options.cycles) + " cycles * " +
-                       FormatNumber(c.sample_rate_hz) + " Hz / " + FormatNumber(frequency_hz) +
-                       " Hz) = " + std::to_string(expected) + ctx);
-  }
-  if (options.check_voltage) {
-    const double vtol = options.voltage_rel_tol * amplitude_v + options.voltage_abs_tol_v;
-    for (size_t k = 0; k < n; ++k) {
-      const double want = amplitude_v * std::sin(2 * std::numbers::pi * frequency_hz * c.t[k]);
-      if (!(std::abs(c.u[k] - want) <= vtol))
-        throw InputError(csv.Where(k, cu) + ": " + FormatNumber(c.u[k]) +
-                         " V is not V sin(2 pi f t) = " + FormatNumber(want) + " V (V = " +
-                         FormatNumber(amplitude_v) + " V, f = " + FormatNumber(frequency_hz) +
-                         " Hz, t = " + FormatNumber(c.t[k]) + " s; tolerance " +
-                         FormatNumber(vtol) + " V)" + ctx);
-    }
-  }
-  return c;
+  BenchCaseSamples s;
+  s.number = number;
+  s.amplitude_v = amplitude_v;
+  s.frequency_hz = frequency_hz;
+  s.role = role;
+  s.sample_rate_hz = cols.sample_rate_hz;
+  s.angle_deg = std::move(cols.y);
+  s.u = std::move(cols.u);
+  s.t = std::move(cols.t);
+  s.file = file;
+  const BenchCaseWhere where = [&](std::string_view field, size_t k) {
+    if (k == std::string::npos) return csv.source;
+    return csv.Where(k, field == "u" ? cols.u_column : field == "t" ? cols.t_column : cols.y_column);
+  };
+  return MakeBenchCase(std::move(s), options, where, ctx);
 }
 
 CaseSet LoadCaseSet(const fs::path& dir, const BenchReadOptions& options) {

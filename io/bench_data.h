@@ -13,6 +13,7 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -39,9 +40,10 @@ struct BenchCase {
   std::vector<double> t;          ///< sample times [s], t_0 = 0, steps 1/fs
   std::vector<double> u;          ///< drive voltage [V]
   std::vector<double> angle_deg;  ///< measured fin angle [deg]
+  double cycles = 0;  ///< the record length in drive cycles a job spec states (0: N f / fs)
 
-  /// The stated drive on this record's grid: Sinusoid{V, f, cycles = N f / fs, fs}, so that
-  /// SampleTimes() has exactly t.size() samples at k / fs.
+  /// The stated drive on this record's grid: Sinusoid{V, f, cycles, fs}, cycles = N f / fs unless
+  /// stated, so that SampleTimes() has exactly t.size() samples at k / fs.
   model::Sinusoid Drive() const;
   /// The recorded drive (t, u) as a sampled signal.
   model::SampledSignal SampledDrive() const;
@@ -71,6 +73,57 @@ struct CaseSet {
   std::vector<const BenchCase*> Validation() const { return WithRole(CaseRole::kValidate); }
   std::vector<const BenchCase*> Test() const { return WithRole(CaseRole::kTest); }
 };
+
+/// A bench case as given, before MakeBenchCase checks and completes it: a case file's columns, or
+/// a job spec's case (job::HgannCaseSpec, the hgann and diagnose job kinds).
+struct BenchCaseSamples {
+  int number = 0;
+  double amplitude_v = 0;   ///< the stated V [V]
+  double frequency_hz = 0;  ///< the stated f [Hz]
+  CaseRole role = CaseRole::kTrain;
+  double sample_rate_hz = 0;      ///< fs [Hz]
+  std::vector<double> angle_deg;  ///< measured fin angle [deg]
+  std::vector<double> u;          ///< the recorded drive [V]; empty: the stated V sin(2π f t_k)
+  std::vector<double> t;          ///< sample times [s]; empty: t_k = k / fs
+  double cycles = 0;              ///< the stated record length in drive cycles (0: none stated)
+  std::filesystem::path file;     ///< the case's file, or a label for a spec's case
+};
+
+/// Where a value of a case is, for messages: `field` is "amplitude_v", "frequency_hz",
+/// "sample_rate_hz", "angle_deg", "u" or "t", `index` a sample (npos: the field as a whole; an
+/// empty field: the case as a whole). E.g. "cases/c3.csv:12: column voltage_V" or
+/// "hgann.cases[2].voltage_v[11]".
+using BenchCaseWhere = std::function<std::string(std::string_view field, size_t index)>;
+
+/// The samples of a job spec's case, labelled "case<number>": a job::HgannCaseSpec (the hgann and
+/// diagnose kinds'), which io/ cannot name, or any struct with its fields (number, amplitude_v,
+/// frequency_hz, role, sample_rate_hz, angle_deg, voltage_v).
+template <typename CaseSpec>
+BenchCaseSamples SamplesOfSpecCase(const CaseSpec& x) {
+  BenchCaseSamples b;
+  b.number = x.number;
+  b.amplitude_v = x.amplitude_v;
+  b.frequency_hz = x.frequency_hz;
+  b.role = x.role;
+  b.sample_rate_hz = x.sample_rate_hz;
+  b.angle_deg = x.angle_deg;
+  b.u = x.voltage_v;
+  b.file = "case" + std::to_string(x.number);
+  return b;
+}
+
+/// The places of a job spec's case (a job::HgannCaseSpec) for MakeBenchCase: "<prefix>" for the
+/// case, "<prefix>.<field>[k]" for a sample, the drive u named voltage_v as in the spec.
+BenchCaseWhere SpecCaseWhere(std::string prefix);
+
+/// The one builder of a bench case: the case file reader (LoadCaseFile) and the hgann and
+/// diagnose job kinds (a spec's cases) all make their cases here. Checks, each error naming its
+/// place by `where` (and ending with `context`): V finite and >= 0; f and fs finite and > 0; at
+/// least 2 angle samples, all finite; u and t empty or as many as the angle samples, u finite;
+/// the sample count round(cycles · fs / f) for the stated cycles, else options.cycles (when > 0);
+/// with options.check_voltage, u against V sin(2π f t) within the tolerance. Throws InputError.
+BenchCase MakeBenchCase(BenchCaseSamples samples, const BenchReadOptions& options, const BenchCaseWhere& where,
+                        const std::string& context = "");
 
 /// Reads dir/cases.csv and every case file it lists. Throws pz::InputError (file:line: column …).
 CaseSet LoadCaseSet(const std::filesystem::path& dir, const BenchReadOptions& options = {});

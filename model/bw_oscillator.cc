@@ -226,29 +226,4 @@ const std::vector<std::string>& BwIdentifiableNames() {
   return names;
 }
 
-double BwOutputMse(const BwParams& params, std::span<const BwRecord> records, double penalty, bool* diverged) {
-  if (diverged) *diverged = false;
-  double sum = 0;
-  size_t count = 0;
-  std::vector<double> y;
-  for (const BwRecord& r : records) {
-    if (r.y_measured.size() != r.input.samples()) {
-      throw InputError(FieldError("bw record " + r.name + ": y_measured.size()", r.y_measured.size(),
-                                  "must equal the input's samples = " + std::to_string(r.input.samples())));
-    }
-    y.resize(r.input.samples());
-    if (!SimulateBw(params, r.input, y).ok()) {
-      if (diverged) *diverged = true;
-      return penalty;
-    }
-    for (size_t i = r.first_counted; i < y.size(); ++i) {
-      const double e = y[i] - r.y_measured[i];
-      sum += e * e;
-    }
-    count += y.size() - std::min(r.first_counted, y.size());
-  }
-  if (count == 0) throw InputError("bw: no counted sample in the records (first_counted past the end)");
-  return sum / static_cast<double>(count);
-}
-
 }  // namespace pz::model

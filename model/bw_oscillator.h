@@ -104,19 +104,4 @@ std::vector<double> BwIdentifiable(const BwParams& p);
 /// The names of θ: "m", "c", "k", "alpha", "beta_gamma", "beta_delta".
 const std::vector<std::string>& BwIdentifiableNames();
 
-/// One identification record: the prepared input, the measured output, and the first sample
-/// counted by the criterion (a leading transient to leave out, if wanted).
-struct BwRecord {
-  std::string name;
-  BwInput input;
-  std::vector<double> y_measured;
-  size_t first_counted = 0;
-};
-
-/// The output-error criterion of the identification: the MSE of y_model − y_measured over the
-/// counted samples of all records (pooled) [m²]. A diverging simulation gives `penalty` and
-/// *diverged = true (if given). Thread-safe (const, allocates only its output buffer).
-double BwOutputMse(const BwParams& params, std::span<const BwRecord> records, double penalty = 1.0,
-                   bool* diverged = nullptr);
-
 }  // namespace pz::model

@@ -133,7 +133,17 @@ class PrandtlIshlinskiiFamily final : public Family {
 
 class BwOscillatorFamily final : public Family {
  public:
-  BwOscillatorFamily(const DataScale& s, const FamilyOptions& o) : substeps_(2 * o.substeps) {
+  BwOscillatorFamily(const DataScale& s, const FamilyOptions& o)
+      : osc_(o.oscillator), substeps_(o.oscillator.rk4_steps > 0 ? o.oscillator.rk4_steps : 2 * o.substeps) {
+    if (substeps_ < 1 || substeps_ > 1000)
+      throw InputError(FieldError("bw-oscillator: rk4_steps", substeps_, "must be 1 … 1000"));
+    if (osc_.physical) {
+      const auto& names = model::BwIdentifiableNames();
+      params_ = {{names[0], "u s^2/y", 0.2, 20, true},  {names[1], "u s/y", 0.1, 1e3, true},
+                 {names[2], "u/y", 1e3, 1e6, true},     {names[3], "u/y", 1e3, 1e6, true},
+                 {names[4], "1/y", 1, 1e5, true},       {names[5], "1/y", -1e4, 1e4, false}};
+      return;
+    }
     const double g = s.gain, y = s.y_half;
     const double fn_lo = std::min(3 * s.f_dom, 0.05 * s.fs), fn_hi = std::max(fn_lo * 2, 0.3 * s.fs);
     params_ = {{"K", "y/V", 0.3 * g, 3 * g, true},        {"fn_Hz", "Hz", fn_lo, fn_hi, true},
@@ -143,12 +153,48 @@ class BwOscillatorFamily final : public Family {
   std::string name() const override { return "bw-oscillator"; }
   std::string title() const override { return "Bouc–Wen hysteretic oscillator"; }
   std::string equation() const override {
+    if (osc_.physical) return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z|";
     return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z| (k = (1-share)/K, "
            "alpha = share/K, m = (k+alpha)/(2 pi fn)^2, c = 2 zeta sqrt((k+alpha) m))";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+    SimulatePrepared(nullptr, p, u, dt, y);
+  }
+  // The input table (model::BwInput: the drive at every half RK4 step) depends on the drive alone.
+  struct Input final : Prepared {
+    model::BwInput input;
+  };
+  std::shared_ptr<const Prepared> Prepare(std::span<const double> u, double dt) const override {
+    auto in = std::make_shared<Input>();
+    in->input = model::BwInput(u, InputOptions(dt));
+    return in;
+  }
+  void SimulatePrepared(const Prepared* prepared, std::span<const double> p, std::span<const double> u, double dt,
+                        std::span<double> y) const override {
     if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
+    const model::BwParams b = osc_.physical ? model::BwFromIdentifiable(p) : Scaled(p);
+    auto nan = [&] { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); };
+    if (!b.Validate().ok()) return nan();  // outside any box (m <= 0, a non-finite value)
+    std::optional<model::BwInput> own;
+    const auto* in = dynamic_cast<const Input*>(prepared);
+    const model::BwInput& input = in ? in->input : own.emplace(u, InputOptions(dt));
+    // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.
+    model::BwState state{!osc_.from_zero_state && b.k != 0 ? u[0] / b.k : 0.0, 0, 0};
+    const Status st = model::SimulateBw(b, input, y, &state);
+    if (!st.ok()) nan();
+  }
+
+ private:
+  model::BwInputOptions InputOptions(double dt) const {
+    model::BwInputOptions io;
+    io.sample_rate_hz = 1.0 / dt;
+    io.substeps = substeps_;
+    io.interpolation = osc_.interpolation;
+    io.period_samples = osc_.period_samples;
+    return io;
+  }
+  static model::BwParams Scaled(std::span<const double> p) {
     const double ktot = 1.0 / p[0], wn = kTwoPi * p[1];
     model::BwParams b;
     b.k = (1 - p[3]) * ktot;
@@ -159,18 +205,9 @@ class BwOscillatorFamily final : public Family {
     b.gamma = p[4];
     b.delta = p[5];
     b.nu = 1;
-    model::BwInputOptions io;
-    io.sample_rate_hz = 1.0 / dt;
-    io.substeps = substeps_;
-    io.interpolation = model::InputInterpolation::kLinear;
-    const model::BwInput input(u, io);
-    // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state).
-    model::BwState state{b.k != 0 ? u[0] / b.k : 0.0, 0, 0};
-    const Status st = model::SimulateBw(b, input, y, &state);
-    if (!st.ok()) std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN());
+    return b;
   }
-
- private:
+  OscillatorOptions osc_;
   int substeps_;
   std::vector<ParamInfo> params_;
 };
@@ -230,6 +267,13 @@ class BimorphFinFamily final : public Family {
 
 void Family::Regressors(std::span<const double>, std::span<double>) const {
   throw InputError(name() + " is not linear in its parameters");
+}
+
+std::shared_ptr<const Family::Prepared> Family::Prepare(std::span<const double>, double) const { return nullptr; }
+
+void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::span<const double> u, double dt,
+                              std::span<double> y) const {
+  Simulate(p, u, dt, y);
 }
 
 DataScale MeasureScale(const std::vector<const io::Record*>& records) {

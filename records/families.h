@@ -7,7 +7,8 @@
 //   prandtl-ishlinskii  PI operator (model/prandtl_ishlinskii.h): weights solved by non-negative
 //                       least squares for given thresholds (no search), invertible by design
 //   bw-oscillator       Bouc–Wen hysteretic oscillator (model/bw_oscillator.h), driven by the
-//                       drive through a gain: K fn ζ share βγ βδ
+//                       drive through a gain: K fn ζ share βγ βδ; or, with OscillatorOptions, the
+//                       Bouc–Wen benchmark's protocol (complete/boucwen_benchmark.h): m c k α βγ βδ
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
 //                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
 //                       and tip length L_e (searched around FamilyOptions::geometry; the
@@ -26,6 +27,7 @@
 
 #include "io/records.h"
 #include "model/beam.h"
+#include "model/bw_oscillator.h"
 #include "model/status.h"
 
 namespace pz::records {
@@ -52,10 +54,25 @@ struct ParamInfo {
   bool log_scale = false;
 };
 
+/// The bw-oscillator family's protocol. The defaults are `piezoid fit`'s (the scaled parameters, a
+/// drive linear between samples, from rest under u_0); the Bouc–Wen benchmark
+/// (complete/boucwen_benchmark.h) sets every field.
+struct OscillatorOptions {
+  /// θ = (m, c, k, α, β·γ, β·δ) in the data's units (ν = 1, model::BwFromIdentifiable) in the
+  /// benchmark's box (SI: m 0.2–20 kg, c 0.1–1000 N s/m, k and α 1e3–1e6 N/m, β·γ 1–1e5 1/m,
+  /// β·δ ±1e4 1/m; not scaled to the data), instead of (K, f_n, ζ, share, β·γ, β·δ) scaled to it.
+  bool physical = false;
+  int rk4_steps = 0;  ///< RK4 steps per sample, 1 … 1000; 0 = 2 × FamilyOptions::substeps
+  model::InputInterpolation interpolation = model::InputInterpolation::kLinear;  ///< the drive between samples
+  size_t period_samples = 0;     ///< kPeriodicFourier: samples per period (0 = the whole record)
+  bool from_zero_state = false;  ///< start at y = ẏ = z = 0 (the benchmark's generator), not at rest under u_0
+};
+
 struct FamilyOptions {
   int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
   int pi_operators = 12;     ///< Prandtl–Ishlinskii plays
   model::BeamGeometry geometry;  ///< bimorph fin
+  OscillatorOptions oscillator;  ///< bw-oscillator
 };
 
 class Family {
@@ -70,6 +87,18 @@ class Family {
   /// values (callers penalise them); invalid sizes throw InputError. Thread-safe.
   virtual void Simulate(std::span<const double> p, std::span<const double> u, double dt,
                         std::span<double> y) const = 0;
+  /// The per-record prepare step: work that depends on the drive alone and that every simulation
+  /// of it would repeat (the oscillator's input table: an FFT or spline per record) is done once
+  /// by Prepare and handed to SimulatePrepared, which must give Simulate's output bit for bit.
+  /// RecordModel::Prepare calls it for a record whose drive no effect changes, RecordFitness keeps
+  /// one per training record. Immutable, so shared by threads. The default prepares nothing.
+  struct Prepared {
+    virtual ~Prepared() = default;
+  };
+  virtual std::shared_ptr<const Prepared> Prepare(std::span<const double> u, double dt) const;
+  /// Simulate with `prepared` = Prepare(u, dt) of this family (null: as Simulate).
+  virtual void SimulatePrepared(const Prepared* prepared, std::span<const double> p, std::span<const double> u,
+                                double dt, std::span<double> y) const;
   /// Linear-in-parameters families: the regressors of u (rows = samples, columns = weights, in
   /// row-major order), whose non-negative combination is the output. Others: not called.
   virtual bool linear() const { return false; }

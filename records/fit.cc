@@ -71,10 +71,19 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
   return w;
 }
 
-RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Record*> records)
-    : model_(model), records_(std::move(records)) {
+RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Record*> records, double penalty)
+    : model_(model), records_(std::move(records)), penalty_(penalty) {
   if (records_.empty()) throw InputError("no training records to fit on");
-  for (const io::Record* r : records_) samples_ += r->scored();
+  if (!(std::isfinite(penalty_) && penalty_ > 0))
+    throw InputError(FieldError("penalty", penalty_, "must be finite and > 0"));
+  for (const io::Record* r : records_) {
+    samples_ += r->scored();
+    try {
+      prepared_.push_back(model_.Prepare(*r, r->end_scored));
+    } catch (const InputError& e) {
+      throw InputError(r->Label() + ": " + e.what());
+    }
+  }
 }
 
 std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const {
@@ -125,9 +134,10 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   if (model_.family().linear()) out.weights = SolveWeights(params);
   const int pol = model_.scale().polarity;
   double sse = 0;
-  for (const io::Record* r : records_) {
+  for (size_t i = 0; i < records_.size(); ++i) {
+    const io::Record* r = records_[i];
     std::vector<double> y(r->end_scored);
-    const double rest = pol * model_.Simulate(*r, params, out.weights, r->end_scored, y);
+    const double rest = pol * model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get());
     for (double& v : y) v *= pol;
     const double o = RecordOffset(*r, y, rest);
     for (double& v : y) v += o;
@@ -144,7 +154,7 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
 
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
   const Output o = Run(genome.reals);
-  if (!std::isfinite(o.mse)) return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
+  if (!std::isfinite(o.mse)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
   return {o.mse, opt::FitnessStatus::kOk, ""};
 }
 

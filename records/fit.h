@@ -32,8 +32,11 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
 /// The training criterion: mean squared output error over the scored samples of the records.
 class RecordFitness final : public opt::FitnessFunction {
  public:
-  /// The records and the model must outlive the fitness. Throws InputError on no records.
-  RecordFitness(const RecordModel& model, std::vector<const io::Record*> records);
+  /// The records and the model must outlive the fitness; each record's drive is prepared once
+  /// (RecordModel::Prepare). A diverging parameter set costs `penalty`. Throws InputError on no
+  /// records or a penalty that is not finite and > 0.
+  RecordFitness(const RecordModel& model, std::vector<const io::Record*> records,
+                double penalty = opt::kDefaultErrorCost);
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
 
   /// Everything about one parameter vector: the weights of a linear family (solved), each record's
@@ -53,12 +56,15 @@ class RecordFitness final : public opt::FitnessFunction {
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
   size_t samples() const { return samples_; }
+  double penalty() const { return penalty_; }
 
  private:
   std::vector<double> SolveWeights(std::span<const double> params) const;
   const RecordModel& model_;
   std::vector<const io::Record*> records_;
+  std::vector<std::shared_ptr<const Family::Prepared>> prepared_;  ///< per record (null: none)
   size_t samples_ = 0;
+  double penalty_;
 };
 
 /// Error figures of a model on one record's window.

@@ -163,15 +163,36 @@ void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double
   }
 }
 
+namespace {
+
+// The first simulated sample of a record: the last sample of its rest segment (the model is at
+// rest before it), at most end − 1.
+size_t SimulatedFrom(const io::Record& r, size_t end) { return std::min(std::max<size_t>(r.rest_samples, 1) - 1, end - 1); }
+
+bool IsDriveEffect(EffectKind e) {
+  return e == EffectKind::kDriverLowpass || e == EffectKind::kQuadraticDrive || e == EffectKind::kCreep ||
+         e == EffectKind::kDelay;
+}
+
+}  // namespace
+
+std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r, size_t end) const {
+  if (family_->linear() || end > r.size() || end == 0) return nullptr;
+  for (EffectKind e : effects_)
+    if (IsDriveEffect(e)) return nullptr;
+  const size_t from = SimulatedFrom(r, end);
+  return family_->Prepare(std::span<const double>(r.u).subspan(from, end - from), r.dt);
+}
+
 double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
-                             size_t end, std::span<double> yhat) const {
+                             size_t end, std::span<double> yhat, const Family::Prepared* prepared) const {
   if (p.size() != params_.size()) {
     throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
                      std::to_string(params_.size()) + " expected");
   }
   if (yhat.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::Simulate: bad end");
   const size_t nf = family_->params().size();
-  const size_t from = std::min(std::max<size_t>(r.rest_samples, 1) - 1, end - 1);
+  const size_t from = SimulatedFrom(r, end);
   std::vector<double> ue;
   EffectiveDrive(r, p.subspan(nf), from, end, ue);
   std::span<double> seg = yhat.subspan(from, end - from);
@@ -186,7 +207,7 @@ double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std
       seg[k] = acc;
     }
   } else {
-    family_->Simulate(p.first(nf), ue, r.dt, seg);
+    family_->SimulatePrepared(prepared, p.first(nf), ue, r.dt, seg);
   }
   const double rest_output = seg[0];
   std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), rest_output);

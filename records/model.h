@@ -66,8 +66,13 @@ class RecordModel {
   /// The model output ŷ (without polarity and offset) on samples [0, end) of the record — only
   /// [rest, end) is simulated. For a linear family, `weights` are the solved weights; else empty.
   /// Returns the model's rest output (before the output effects: what a rest measurement is).
+  /// `prepared`: Prepare(r, end) (null: none; the output is the same bit for bit).
   double Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
-                std::span<double> yhat) const;
+                  std::span<double> yhat, const Family::Prepared* prepared = nullptr) const;
+  /// The family's per-record prepare step (Family::Prepare) on the drive that Simulate(r, …, end)
+  /// hands the family; null when a drive effect changes that drive with the parameters, or when
+  /// the family prepares nothing.
+  std::shared_ptr<const Family::Prepared> Prepare(const io::Record& r, size_t end) const;
   /// The effective drive after the drive effects, on samples [from, end); and the family's
   /// regressors for a linear family (rows = samples from..end).
   void EffectiveDrive(const io::Record& r, std::span<const double> effect_params, size_t from, size_t end,

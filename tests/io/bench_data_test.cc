@@ -175,6 +175,60 @@ TEST(CaseFileOptions, ChecksCanBeRelaxed) {
                 "time_rel_tol = 0");
 }
 
+// The one builder of a bench case (the file reader's, and the hgann and diagnose job kinds' from a
+// spec): a case given without its drive gets the stated V sin(2 pi f k / fs) on t = k / fs; the
+// stated cycles make its drive and are checked against the sample count; every error names the
+// spec's field and sample.
+TEST(MakeBenchCase, BuildsTheStatedDriveAndNamesTheSpecsFields) {
+  BenchReadOptions o;
+  o.cycles = 0;
+  o.check_voltage = false;
+  BenchCaseSamples s;
+  s.number = 3;
+  s.amplitude_v = 375;
+  s.frequency_hz = 7;
+  s.sample_rate_hz = 1000;
+  s.role = CaseRole::kTest;
+  s.angle_deg.assign(429, 0.5);
+  const BenchCase c = MakeBenchCase(s, o, SpecCaseWhere("hgann.cases[0]"));
+  ASSERT_EQ(c.t.size(), 429u);
+  ASSERT_EQ(c.u.size(), 429u);
+  for (size_t k = 0; k < c.t.size(); ++k) {
+    EXPECT_EQ(c.t[k], static_cast<double>(k) / 1000);
+    EXPECT_EQ(c.u[k], 375 * std::sin(2 * std::numbers::pi * 7 * c.t[k]));
+  }
+  EXPECT_EQ(c.role, CaseRole::kTest);
+  EXPECT_EQ(c.Drive().cycles, 429 * 7 / 1000.0);  // N f / fs unless stated
+  BenchCaseSamples stated = s;
+  stated.cycles = 3;  // round(3 * 1000 / 7) = 429
+  EXPECT_EQ(MakeBenchCase(stated, o, SpecCaseWhere("diagnose.cases[1]")).Drive().cycles, 3.0);
+  stated.cycles = 2;
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(stated, o, SpecCaseWhere("diagnose.cases[1]")); }),
+                "diagnose.cases[1]: 429 samples, expected round(2 cycles * 1000 Hz / 7 Hz) = 286");
+  BenchCaseSamples bad = s;
+  bad.angle_deg[5] = NAN;
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(bad, o, SpecCaseWhere("hgann.cases[2]")); }),
+                "hgann.cases[2].angle_deg[5]: nan deg must be finite");
+  bad = s;
+  bad.u.assign(428, 0.0);
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(bad, o, SpecCaseWhere("hgann.cases[2]")); }),
+                "hgann.cases[2].voltage_v: 428 drive samples for 429 angle samples");
+  bad.u.assign(429, 0.0);
+  bad.u[7] = INFINITY;
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(bad, o, SpecCaseWhere("hgann.cases[2]")); }),
+                "hgann.cases[2].voltage_v[7]: inf V must be finite");
+  bad = s;
+  bad.sample_rate_hz = 0;
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(bad, o, SpecCaseWhere("hgann.cases[2]")); }),
+                "hgann.cases[2].sample_rate_hz: sample rate 0 Hz must be finite and > 0");
+  // The recorded drive, when given, is kept and (with the check on) compared with the stated one.
+  bad = s;
+  bad.u.assign(429, 0.0);
+  o.check_voltage = true;
+  PZ_EXPECT_HAS(InputErrorOf([&] { MakeBenchCase(bad, o, SpecCaseWhere("hgann.cases[2]")); }),
+                "hgann.cases[2].voltage_v[1]: 0 V is not V sin(2 pi f t)");
+}
+
 TEST(CaseRoles, RoundTripNames) {
   for (CaseRole r : {CaseRole::kTrain, CaseRole::kValidate, CaseRole::kTest})
     EXPECT_EQ(ParseCaseRole(CaseRoleName(r)), r);

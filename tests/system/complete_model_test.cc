@@ -30,8 +30,7 @@
 namespace pz::testing {
 namespace {
 
-using complete::BwOscillatorFitness;
-using complete::BwTrainingRecord;
+using complete::BwTraining;
 using records::Criterion;
 using records::CriterionFitness;
 using job::CompleteModelProblem;
@@ -40,32 +39,35 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // A periodic multisine force of `periods` × period samples at 750 Hz and the true oscillator's
 // response with a little deterministic noise; the first `warmup` samples are not counted.
-BwTrainingRecord OscillatorRecord(const std::string& name, size_t period, int periods, size_t warmup,
-                                  unsigned seed) {
-  BwTrainingRecord r;
-  r.name = name;
-  r.input.sample_rate_hz = 750;
-  r.input.substeps = 4;
-  r.input.interpolation = model::InputInterpolation::kPeriodicFourier;
-  r.input.period_samples = period;
+io::Record OscillatorRecord(const std::string& name, size_t period, int periods, size_t warmup, unsigned seed) {
+  model::BwInputOptions input;
+  input.sample_rate_hz = 750;
+  input.substeps = 4;
+  input.interpolation = model::InputInterpolation::kPeriodicFourier;
+  input.period_samples = period;
+  std::vector<double> u, y;
   std::mt19937 rng(seed);
   std::vector<double> phase(12);
   for (double& p : phase) p = 2 * std::numbers::pi * (rng() / 4294967296.0);
   for (size_t k = 0; k < period * static_cast<size_t>(periods); ++k) {
-    double u = 0;
+    double x = 0;
     for (size_t l = 0; l < phase.size(); ++l)
-      u += 15 * std::sin(2 * std::numbers::pi * static_cast<double>((l + 1) * (k % period)) / period + phase[l]);
-    r.u.push_back(u);
+      x += 15 * std::sin(2 * std::numbers::pi * static_cast<double>((l + 1) * (k % period)) / period + phase[l]);
+    u.push_back(x);
   }
-  r.y.resize(r.u.size());
-  EXPECT_TRUE(model::SimulateBw(model::BwParams{}, model::BwInput(r.u, r.input), r.y).ok());
-  for (double& y : r.y) y += 1e-6 * (rng() / 4294967296.0 - 0.5);
-  r.first_counted = warmup;
-  return r;
+  y.resize(u.size());
+  EXPECT_TRUE(model::SimulateBw(model::BwParams{}, model::BwInput(u, input), y).ok());
+  for (double& v : y) v += 1e-6 * (rng() / 4294967296.0 - 0.5);
+  return complete::MakeBwRecord(name, model::CaseRole::kTrain, std::move(u), std::move(y), warmup);
 }
 
-BwOscillatorFitness SmallOscillator() {
-  return BwOscillatorFitness({OscillatorRecord("A", 256, 2, 0, 1), OscillatorRecord("B", 256, 2, 256, 2)}, 1.0);
+// The benchmark's protocol on two small periodic records (4 RK4 sub-steps, Fourier input).
+std::unique_ptr<BwTraining> SmallOscillator() {
+  std::vector<io::Record> records;
+  records.push_back(OscillatorRecord("A", 256, 2, 0, 1));
+  records.push_back(OscillatorRecord("B", 256, 2, 256, 2));
+  return std::make_unique<BwTraining>(std::move(records),
+                                      complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 256), 1.0);
 }
 
 io::Record StackRecord(int number, double f, double amp, model::CaseRole role, unsigned seed) {
@@ -129,7 +131,8 @@ void ExpectSameFitness(const opt::FitnessFunction& local, const opt::FitnessFunc
 }
 
 TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
-  const BwOscillatorFitness local = SmallOscillator();
+  const auto small = SmallOscillator();
+  const BwTraining& local = *small;
   const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
   const std::vector<std::vector<double>> points = {
       model::BwIdentifiable(model::BwParams{}),       // the truth: cost = the noise
@@ -179,7 +182,7 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   const StackFitness stack = MakeStackFitness(set, "stack-bouc-wen", Criterion::kIae, 0.01, 0.5);
   const job::JobSpec stack_ok =
       complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*stack.fitness, stack.options), "ok");
-  const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(SmallOscillator()), "ok");
+  const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*SmallOscillator()), "ok");
   job::JobKindRegistry registry;
   registry.Register(complete::CompleteModelJobKind());
   auto violations = [&](job::JobSpec s) {
@@ -313,7 +316,8 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
   Cluster cluster("complete-bw");
   cluster.AddWorker(1);
   Process& victim = cluster.AddWorker(1);
-  const BwOscillatorFitness fitness = SmallOscillator();
+  const auto small = SmallOscillator();
+  const BwTraining& fitness = *small;
   const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
   for (opt::SearchAlgorithm algorithm : {opt::SearchAlgorithm::kPso, opt::SearchAlgorithm::kGaBinary}) {
     SCOPED_TRACE(opt::SearchAlgorithmName(algorithm));
@@ -326,11 +330,11 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
     o.ga_binary.ga.population_size = 10;
     o.ga_binary.ga.max_generations = 8;
     opt::ThreadPoolEvaluator pool(fitness, 2);
-    const opt::SearchResult local = opt::Search(complete::BwOscillatorBox(), o, pool);
+    const opt::SearchResult local = opt::Search(fitness.Box(), o, pool);
     client::ServiceEvaluator service(Options(cluster), spec, "test");
     // With the binary GA, one of the two workers is killed during the third batch.
     KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
-    const opt::SearchResult remote = opt::Search(complete::BwOscillatorBox(), o, ev);
+    const opt::SearchResult remote = opt::Search(fitness.Box(), o, ev);
     if (kill) {
       EXPECT_FALSE(victim.running());  // killed before the fifth of 2 x 9 batches
     }
