@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <sstream>
 
 #include "model/status.h"
@@ -22,7 +23,7 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
   for (int i = 0; i < o.trials; ++i) {
     RealLikeCheckTrial t;
     t.seed = o.seed + static_cast<uint64_t>(i);
-    opt::Rng rng(t.seed * 7046029254386353131ull + 5);
+    opt::Rng rng(t.seed * 104729 + 11);
     RealLikeOptions g = o.base;
     g.seed = t.seed;
     g.ramp = g.reversals = g.second_sine = true;
@@ -35,10 +36,11 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
     g.sensor.noise_white_um = Uniform(rng, 0.03, 0.1);
     if (g.stack.creep_per_decade > 0) t.truth_effects.push_back("creep");
     if (g.sensor.lag_samples > 0) t.truth_effects.push_back("delay");
+    if (std::abs(g.stack.quadratic) >= 0.05) t.truth_effects.push_back("quadratic-drive");
     std::ostringstream desc;
     desc.precision(3);
-    desc << "creep " << g.stack.creep_per_decade << "/dec, lag " << g.sensor.lag_samples << ", asym "
-         << g.stack.asymmetry << ", hyst " << g.stack.hysteresis_share;
+    desc << "creep " << g.stack.creep_per_decade << "/dec, lag " << g.sensor.lag_samples << ", quad "
+         << g.stack.quadratic << ", asym " << g.stack.asymmetry << ", hyst " << g.stack.hysteresis_share;
     t.description = desc.str();
     const RealLikeSet s = GenerateRealLikeSet(g);
     t.floor_truth = s.realised_floor_um;

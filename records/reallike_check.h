@@ -6,8 +6,8 @@
 // reversals). Each trial is checked against the truth that made it: the noise floor the diagnosis
 // used against the true one; the excitation report (the ramped and reversal records need minor
 // loops the major loop lacks, the second sine needs nothing); the named effect against the
-// effects the plant has (creep, delay; the product's quadratic-drive and the asymmetric density
-// are not named as truth: the Preisach plant is no family plus one effect).
+// effects the plant has (creep, delay, and quadratic-drive for a reversible curvature |c| ≥ 0.05;
+// the asymmetric density has no effect of its own: the Preisach plant is no family plus one effect).
 #pragma once
 
 #include <cstdint>
@@ -31,7 +31,7 @@ struct RealLikeCheckOptions {
 struct RealLikeCheckTrial {
   uint64_t seed = 0;
   std::string description;                ///< the drawn plant
-  std::vector<std::string> truth_effects;  ///< library effects the plant has: "creep", "delay"
+  std::vector<std::string> truth_effects;  ///< library effects the plant has: "creep", "delay", "quadratic-drive"
   double floor_truth = 0, floor_estimate = 0;
   std::string floor_used;
   bool excitation_right = false;  ///< ramp and reversals flagged for their reversals, major-2 not
