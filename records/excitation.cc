@@ -112,6 +112,7 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
   d.level_weight.assign(static_cast<size_t>(o.bins), 0.0);
   std::vector<double> rates;
   for (const io::Record* r : recs) {
+    const size_t first_rate = rates.size();
     size_t hold_start = r->first_scored;
     for (size_t k = r->first_scored; k < r->end_scored; ++k) {
       d.u_min = std::min(d.u_min, r->u[k]);
@@ -120,6 +121,9 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
       if (std::abs(r->u[k] - r->u[hold_start]) > o.hold_level * range) hold_start = k;
       d.longest_hold_s = std::max(d.longest_hold_s, static_cast<double>(k - hold_start) * r->dt);
     }
+    const double p95 = Percentile95(std::vector<double>(rates.begin() + static_cast<std::ptrdiff_t>(first_rate), rates.end()));
+    d.rate_p95_lo = r == recs.front() ? p95 : std::min(d.rate_p95_lo, p95);
+    d.rate_p95_hi = r == recs.front() ? p95 : std::max(d.rate_p95_hi, p95);
     d.duration_s += static_cast<double>(r->scored()) * r->dt;
     const std::vector<double> turns = Turns(*r, o.turn_threshold * range);
     d.turns += turns.size();
@@ -220,7 +224,9 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
     rep.training_lines.push_back(s.str());
   }
   rep.training_lines.push_back("rates: |du/dt| up to " + Num(t.rate_max) + " " + unit + "/s (95th percentile " +
-                               Num(t.rate_p95) + " " + unit + "/s)");
+                               (t.records > 1 ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit +
+                                                    "/s over the records)"
+                                              : Num(t.rate_p95) + " " + unit + "/s)"));
   {
     std::ostringstream s;
     const double period = t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;
@@ -265,17 +271,18 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
                              "; training turns only at " + BinRanges(Present(t.level_weight)) + " (depths " +
                              BinRanges(Present(t.depth_weight)) + "): its minor loops are extrapolated"});
     }
-    if (t.rate_p95 > 0 && d.rate_p95 > o.rate_faster * t.rate_p95) {
-      const double k = d.rate_p95 / t.rate_p95;
+    if (t.rate_p95_hi > 0 && d.rate_p95 > o.rate_faster * t.rate_p95_hi) {
+      const double k = d.rate_p95 / t.rate_p95_hi;
       w.needs.push_back({ExcitationNeed::Kind::kRate, k,
                          "rates " + Num(k, 2) + "× faster than training (95th percentile of |du/dt| " + Num(d.rate_p95) + " " +
-                             unit + "/s; training " + Num(t.rate_p95) + " " + unit + "/s)"});
-    } else if (d.rate_p95 * o.rate_slower < t.rate_p95) {
-      const double k = d.rate_p95 > 0 ? t.rate_p95 / d.rate_p95 : INFINITY;
+                             unit + "/s; training up to " + Num(t.rate_p95_hi) + " " + unit + "/s)"});
+    } else if (d.rate_p95 * o.rate_slower < t.rate_p95_lo) {
+      const double k = d.rate_p95 > 0 ? t.rate_p95_lo / d.rate_p95 : INFINITY;
       w.needs.push_back({ExcitationNeed::Kind::kRate, 1 / k,
                          "rates " + (std::isfinite(k) ? Num(k, 2) + "×" : std::string("far")) +
                              " slower than training (95th percentile of |du/dt| " + Num(d.rate_p95) + " " + unit +
-                             "/s; training " + Num(t.rate_p95) + " " + unit + "/s): slow creep and rate dependence are extrapolated"});
+                             "/s; training down to " + Num(t.rate_p95_lo) + " " + unit +
+                             "/s): slow creep and rate dependence are extrapolated"});
     }
     if (d.longest_hold_s >= o.min_hold_s && d.longest_hold_s > 2 * t.longest_hold_s) {
       w.needs.push_back({ExcitationNeed::Kind::kHold, d.longest_hold_s,
@@ -329,8 +336,12 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     hi = std::max(hi, w.drive.u_max);
     rate = std::max(rate, w.drive.rate_p95);
   }
-  for (const io::Record& r : set.records)
-    if (r.role == CaseRole::kTrain) fs = std::max(fs, r.sample_rate_hz());
+  double rest_level = 0;
+  for (const io::Record& r : set.records) {
+    if (r.role != CaseRole::kTrain) continue;
+    if (fs == 0) rest_level = r.u.front();  // the first training record's rest
+    fs = std::max(fs, r.sample_rate_hz());
+  }
   const double range = hi - lo, mid = (lo + hi) / 2, amp = range / 2;
   if (!(range > 0) || !(fs > 0)) throw InputError("proposed drive: the records have no drive range or sample rate");
   if (!(rate > 0)) rate = range;  // one range per second
@@ -352,7 +363,9 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
       p.u.push_back(from + (level - from) * (1 - std::cos(std::numbers::pi * static_cast<double>(k) / n)) / 2);
   };
   p.rest_s = 1;
-  hold(lo, p.rest_s);
+  rest_level = std::clamp(rest_level, lo, hi);
+  hold(rest_level, p.rest_s);
+  move(lo);
   // 1. A decaying-amplitude sine from the lower end: nested minor loops around the middle.
   const int cycles = 12;
   const size_t nd = static_cast<size_t>(std::llround(cycles / f * fs));
@@ -383,7 +396,7 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
                        " s each: creep from 0.05 s to " + Num(hold_s) + " s");
   std::ostringstream d;
   d << "a proposed training drive of " << Num(static_cast<double>(p.u.size()) * dt) << " s at " << Num(fs, 5)
-    << " Hz (after a " << Num(p.rest_s) << " s rest at " << Num(lo, 4) << " " << rep.drive_unit << "): ";
+    << " Hz (after a " << Num(p.rest_s) << " s rest at " << Num(rest_level, 4) << " " << rep.drive_unit << "): ";
   for (size_t i = 0; i < p.segments.size(); ++i) d << (i ? "; then " : "") << p.segments[i];
   p.description = d.str();
   return p;

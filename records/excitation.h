@@ -17,8 +17,8 @@
 //  - range: drive beyond the training range by more than `range_margin` of it;
 //  - reversals: at least `uncovered_share` of its cycles (and one full cycle) in cells of the plane
 //    where training has no cycle, nor in the next cells (its minor loops are extrapolated);
-//  - rate: a 95th percentile of |du/dt| more than `rate_faster` × the training's, or less than
-//    1 / `rate_slower` of it;
+//  - rate: a 95th percentile of |du/dt| more than `rate_faster` × the fastest training record's,
+//    or less than 1 / `rate_slower` of the slowest one's;
 //  - hold: a hold longer than `min_hold_s` and than twice the training's longest.
 #pragma once
 
@@ -52,7 +52,8 @@ struct DriveExcitation {
   size_t records = 0;
   double u_min = 0, u_max = 0;
   double duration_s = 0;
-  double rate_p95 = 0, rate_max = 0;  ///< |du/dt| [drive unit / s]
+  double rate_p95 = 0, rate_max = 0;  ///< |du/dt| [drive unit / s], over the records together
+  double rate_p95_lo = 0, rate_p95_hi = 0;  ///< the slowest and fastest record's 95th percentile
   double longest_hold_s = 0;
   size_t turns = 0;
   std::vector<ReversalCycle> cycles;

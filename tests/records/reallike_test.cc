@@ -11,6 +11,7 @@
 #include <filesystem>
 
 #include "records/diagnose.h"
+#include "records/fit.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -140,6 +141,32 @@ TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
       EXPECT_NEAR(e.sigma / s.realised_floor_um, 1, 0.15) << "seed " << seed;
     }
     EXPECT_TRUE(periods);
+  }
+}
+
+// A cross-check of two independent codes: a Preisach density that depends only on the hysteron's
+// width (no centre dependence, no asymmetry, no curvature, creep or lag) is a Prandtl–Ishlinskii
+// operator, so the product's prandtl-ishlinskii family, fitted on the major loop alone, must
+// predict the withheld minor loops (the ramp, the reversals) near the true floor — although the
+// excitation report, which knows no family, flags them. Scored from 1.5 s into each excitation: the
+// two start differently (the plant rests at the bottom of its range, below every hysteron: from
+// there it rises as from negative saturation; the family starts its plays centred on the rest
+// drive), and the first large reversal wipes the difference out (before it, ramp and reversals
+// differ by 1.4 and 0.6 µm RMS over the first 0.5 s).
+TEST(RealLikeTest, AWidthOnlyDensityIsWhatThePrandtlIshlinskiiFamilyPredicts) {
+  RealLikeOptions o = Short(4);
+  o.stack.density_center_spread = 1e3;
+  o.stack.asymmetry = o.stack.quadratic = o.stack.creep_per_decade = 0;
+  o.sensor.lag_samples = 0;
+  o.sensor.noise_colored_um = 0;
+  RealLikeSet s = GenerateRealLikeSet(o);
+  for (io::Record& r : s.set.records) io::SetWindow(r, r.t[r.rest_samples] + 1.5, r.t.back(), 20, r.name);
+  FitOptions f;
+  f.family = "prandtl-ishlinskii";
+  f.family_options.pi_operators = 40;
+  const FitResult r = FitRecords(s.set, f);
+  for (const RecordMetrics& m : r.metrics) {
+    EXPECT_LT(m.rmse / s.realised_floor_um, 1.25) << m.name << ": " << m.rmse << " vs floor " << s.realised_floor_um;
   }
 }
 
