@@ -372,7 +372,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   }
   std::vector<double> ratios;
   for (const RecordMetrics& m : d.base.metrics) ratios.push_back(m.rmse / d.noise.sigma);
-  if (d.significant) d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
+  if (d.significant && d.noise.sigma > 0) d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
   if (!d.excitation_note.empty()) v << " " << d.excitation_note;
   d.verdict = v.str();
   return d;
