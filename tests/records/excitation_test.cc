@@ -10,6 +10,7 @@
 
 #include <cmath>
 
+#include "records/diagnose.h"
 #include "records/reallike.h"
 #include "tests/testing/expect_error.h"
 
@@ -159,6 +160,24 @@ TEST(ExcitationTest, TheDiagnosisSentenceTellsAnExcitationGapFromMissingPhysics)
   set_ratio("ramp", 1.1);
   set_ratio("reversals", 1.2);
   EXPECT_EQ(ExcitationGapNote(s.set, r, ratio, 1.25), "");  // the records that need more have no gap
+}
+
+TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
+  const RealLikeSet s = GenerateRealLikeSet(Short(3));
+  RecordDiagnoseOptions o;
+  o.family = "prandtl-ishlinskii";
+  o.candidates = {EffectKind::kDelay};
+  o.propose = false;
+  o.fit.search.repetitions = 1;
+  o.fit.search.pso.particles = 12;
+  o.fit.search.pso.iterations = 20;
+  o.fit.lm.max_iterations = 10;
+  const RecordDiagnosis d = DiagnoseRecords(s.set, o);
+  ASSERT_EQ(d.excitation.withheld.size(), 3u);
+  EXPECT_TRUE(Needs(Of(d.excitation, s.set, "ramp"), ExcitationNeed::Kind::kReversals));
+  ASSERT_TRUE(d.significant) << d.verdict;  // Prandtl–Ishlinskii is not this plant
+  PZ_EXPECT_HAS(d.excitation_note, "Excitation gap: withheld record(s) ramp");
+  PZ_EXPECT_HAS(d.verdict, d.excitation_note);
 }
 
 TEST(ExcitationTest, BadInputIsNamed) {
