@@ -15,6 +15,7 @@
 #include "client/diagnose_report.h"
 #include "client/records_diagnose.h"
 #include "records/check.h"
+#include "records/reallike_check.h"
 #include "client/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
@@ -162,7 +163,52 @@ struct CheckArgs {
   bool second = false;
   bool quick = false;
   double significance_ratio = 1.25;
+  bool real_like = false;          ///< --real-like: real-like stack sets (records/reallike.h) instead
+  double real_like_train_s = 20;   ///< their training sine's length
+  double real_like_withheld_s = 10;
 };
+
+/// The records diagnosis of a check: its rules, threads and (--quick) a smaller search.
+records::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
+  records::RecordDiagnoseOptions d;
+  d.rules.significance_ratio = a.significance_ratio;
+  d.fit.threads = a.threads;
+  if (a.quick) {
+    d.fit.search.repetitions = 1;
+    d.fit.search.pso.particles = 20;
+    d.fit.search.pso.iterations = 60;
+    d.fit.lm.max_iterations = 30;
+  }
+  return d;
+}
+
+/// The records diagnosis on real-like stack sets, checked against their truth (records/reallike_check.h).
+int RunRealLikeCheckCommand(const CheckArgs& a) {
+  records::RealLikeCheckOptions o;
+  o.family = a.records_family;
+  o.trials = a.trials;
+  o.seed = a.seed;
+  o.base.train_s = a.real_like_train_s;
+  o.base.withheld_s = a.real_like_withheld_s;
+  o.diagnose = CheckDiagnoseOptions(a);
+  const records::RealLikeCheckSummary s = records::RunRealLikeCheck(o, [](const records::RealLikeCheckTrial& t, int i) {
+    char buf[600];
+    std::snprintf(buf, sizeof buf,
+                  "trial %3d %-52s floor %.4f/%.4f (%s) excitation %-5s [%s] -> %-11s %-16s%s ratio %6.2f conf %.2f%s\n",
+                  i + 1, t.description.c_str(), t.floor_estimate, t.floor_truth, t.floor_used.c_str(),
+                  t.excitation_right ? "right" : "WRONG", t.excitation.c_str(), t.verdict_kind.c_str(), t.named.c_str(),
+                  t.named == "none" ? "" : (t.named_present ? " (in truth)" : " (not in truth)"), t.rms_ratio,
+                  t.confidence, t.excitation_note ? "; excitation gap said" : "");
+    std::cout << buf << std::flush;
+  });
+  const int n = static_cast<int>(s.trials.size());
+  std::cout << "real-like stacks: " << n << "; noise floor estimate / truth " << s.floor_ratio_min << " … "
+            << s.floor_ratio_max << "; excitation report right in " << s.excitation_right << " of " << n
+            << "; significant gaps " << s.significant << ", excitation gap said in " << s.excitation_notes
+            << "; effects named " << s.named << ", of which in the truth " << s.named_present << "\n"
+            << static_cast<int>(s.wall_time_s) << " s in all\n";
+  return 0;
+}
 
 int RunRecordsCheckCommand(const CheckArgs& a) {
   records::RecordsCheckOptions o;
@@ -170,14 +216,7 @@ int RunRecordsCheckCommand(const CheckArgs& a) {
   o.trials = a.trials;
   o.seed = a.seed;
   o.none_probability = a.none_probability;
-  o.diagnose.rules.significance_ratio = a.significance_ratio;
-  o.diagnose.fit.threads = a.threads;
-  if (a.quick) {
-    o.diagnose.fit.search.repetitions = 1;
-    o.diagnose.fit.search.pso.particles = 20;
-    o.diagnose.fit.search.pso.iterations = 60;
-    o.diagnose.fit.lm.max_iterations = 30;
-  }
+  o.diagnose = CheckDiagnoseOptions(a);
   const records::RecordsCheckSummary s = records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
     char buf[400];
     std::snprintf(buf, sizeof buf, "trial %3d %-6s %-42s -> %-11s %-16s ratio %6.2f conf %.2f\n", i + 1,
@@ -200,6 +239,9 @@ int RunRecordsCheckCommand(const CheckArgs& a) {
 }
 
 int RunCheckCommand(const CheckArgs& a) {
+  if (a.real_like && a.records_family.empty())
+    throw InputError("diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
+  if (a.real_like) return RunRealLikeCheckCommand(a);
   if (!a.records_family.empty()) return RunRecordsCheckCommand(a);
   diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
   o.second_effect = a.second;
@@ -284,6 +326,14 @@ void RegisterDiagnoseCheck(CLI::App& app, int& exit_code) {
   cmd->add_option("--records-family", a->records_family,
                   "check the records diagnosis instead (diagnose --records) on synthetic records of this family: "
                   "stack-bouc-wen, backlash-like or duhem");
+  cmd->add_flag("--real-like", a->real_like,
+                "with --records-family: diagnose real-like stack record sets (synth-stack: a Preisach plant with log "
+                "creep and sensor lag, not a family of the product) and check the floor, the excitation report and "
+                "the named effect against their truth");
+  cmd->add_option("--real-like-train-s", a->real_like_train_s, "with --real-like: training sine length [s]")
+      ->check(CLI::Range(2.0, 1000.0));
+  cmd->add_option("--real-like-withheld-s", a->real_like_withheld_s, "with --real-like: withheld record length [s]")
+      ->check(CLI::Range(2.0, 1000.0));
   cmd->add_option("--seed", a->seed, "first bench seed (bench i uses seed + i)");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
   cmd->add_option("--json", a->json_file, "write the trials and the matrix as JSON")->type_name("FILE");

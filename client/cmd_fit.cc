@@ -2,7 +2,9 @@
 // and `piezoid records`: check and describe a record set (io/records.h). The fit writes report.md
 // (parameters, RMSE / max / NRMSE on train and on withheld records), fit.json, per-record traces
 // (CSV) and figures (time traces, hysteresis loops); for the Prandtl–Ishlinskii family, optionally
-// the analytic inverse as a C header (--export-c).
+// the analytic inverse as a C header (--export-c). Before the fit, the excitation report
+// (records/excitation.h): what the training records excite, what each withheld record needs beyond
+// it, and a proposed training drive (excitation_drive.csv).
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +18,7 @@
 #include "client/cmd_service.h"
 #include "client/commands.h"
 #include "client/complete_service.h"
+#include "client/excitation_report.h"
 #include "client/json_values.h"
 #include "client/search_flags.h"
 #include "client/plots.h"
@@ -23,6 +26,7 @@
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/prandtl_ishlinskii.h"
+#include "records/excitation.h"
 #include "records/fit.h"
 
 namespace pz::client {
@@ -89,7 +93,8 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
   }
 }
 
-void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a) {
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
+                    const records::ExcitationReport& excitation, const records::TrainingDriveProposal& proposal) {
   const auto& m = *r.model;
   os << "# piezoid fit: " << m.Describe() << "\n\n"
      << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
@@ -127,9 +132,11 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
   os << "; LM iterations " << r.lm_iterations << ".\n\nCommand: `piezoid fit --records " << a.records << " --family "
      << a.family << "`.\n";
+  WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
 }
 
-std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -158,6 +165,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
   f["records"] = List(records);
   f["train_mse"] = Num(r.train_mse);
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
+  f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
   return Print(root, "fit.json");
 }
 
@@ -177,6 +185,9 @@ int RunFit(const FitArgs& a) {
   if (!a.quiet) o.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
   std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
             << "), family " << a.family << std::endl;
+  const records::ExcitationReport excitation = records::AnalyseExcitation(set);
+  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, excitation);
+  PrintExcitationSummary(std::cout, set, excitation);
   records::FitResult r;
   try {
     r = records::FitRecords(set, o);
@@ -185,8 +196,10 @@ int RunFit(const FitArgs& a) {
     return ExitCodeOf(e.status());
   }
   fs::create_directories(a.out);
-  io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) { WriteFitReport(os, set, r, a); });
-  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r); });
+  WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
+  io::WriteFileWith(fs::path(a.out) / "report.md",
+                    [&](std::ostream& os) { WriteFitReport(os, set, r, a, excitation, proposal); });
+  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal); });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
   if (!scripts.empty()) {

@@ -17,5 +17,6 @@ void RegisterBoucwen(CLI::App& app, int& exit_code);
 void RegisterCommittee(CLI::App& app, int& exit_code);
 void RegisterFit(CLI::App& app, int& exit_code);
 void RegisterRecords(CLI::App& app, int& exit_code);
+void RegisterSynthStack(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -6,6 +6,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "client/excitation_report.h"
 #include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
@@ -23,7 +24,8 @@ std::string G(double x, int prec = 4) {
 
 }  // namespace
 
-void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d) {
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+                                   const records::TrainingDriveProposal& proposal) {
   const std::string u = set.response_unit;
   os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
      << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n"
@@ -60,9 +62,11 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
   if (d.next) {
     os << "\n## Next measurement\n\n" << d.next->description << ".\n";
   }
+  WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
-void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d) {
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+                               const records::TrainingDriveProposal& proposal) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -106,6 +110,8 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
   f["confidence"] = Num(d.confidence);
   f["verdict_kind"] = Text(d.verdict_kind);
   f["verdict"] = Text(d.verdict);
+  f["excitation"] = ExcitationJson(set, d.excitation, proposal, kProposedDriveFile);
+  f["excitation_gap_note"] = Text(d.excitation_note);
   if (d.next) {
     Struct x;
     auto& g = *x.mutable_fields();
@@ -143,9 +149,12 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
   std::cout << d.verdict << "\n";
   const fs::path out = a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
+  PrintExcitationSummary(std::cout, set, d.excitation);
   fs::create_directories(out / "figures");
-  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d); });
-  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d); });
+  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
+  WriteProposedDrive(out / kProposedDriveFile, set, proposal);
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal); });
+  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d, proposal); });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;
   const records::FitResult* best = d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;

@@ -1,5 +1,6 @@
 // `piezoid diagnose --records PATH --family NAME`: the diagnosis of records/diagnose.h on a record
-// set of any drive, with its report (report.md, diagnosis.json, withheld traces and figures).
+// set of any drive, with its report (report.md, diagnosis.json, withheld traces and figures, the
+// excitation report and its proposed training drive excitation_drive.csv).
 #pragma once
 
 #include <ostream>
@@ -28,7 +29,10 @@ struct RecordsDiagnoseRequest {
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
 
-void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d);
-void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d);
+/// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+                                   const records::TrainingDriveProposal& proposal);
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+                               const records::TrainingDriveProposal& proposal);
 
 }  // namespace pz::client

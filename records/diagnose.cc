@@ -262,6 +262,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   if (d.withheld_samples == 0) {
     throw InputError(set.source.string() + ": no withheld record or window (role validate or test): the diagnosis scores effects on data the fits did not see");
   }
+  d.excitation = AnalyseExcitation(set);
   const auto progress = o.fit.progress;
   FitOptions fo = o.fit;
   fo.family = o.family;
@@ -370,6 +371,10 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
         << unit << " (" << d.noise.used << ").";
     }
   }
+  std::vector<double> ratios;
+  for (const RecordMetrics& m : d.base.metrics) ratios.push_back(m.rmse / d.noise.sigma);
+  if (d.significant && d.noise.sigma > 0) d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
+  if (!d.excitation_note.empty()) v << " " << d.excitation_note;
   d.verdict = v.str();
   return d;
 }

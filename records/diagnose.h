@@ -27,6 +27,9 @@
 //     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
 //     the two fitted models' predictions differ most (RMS, offsets removed), with that difference
 //     against σ.
+//  5. Excitation (records/excitation.h), before any fit: what the training records excite and what
+//     each withheld record needs beyond it; when the withheld records that need more carry the
+//     gap, the verdict says it is an excitation gap rather than missing physics.
 #pragma once
 
 #include <optional>
@@ -35,6 +38,7 @@
 
 #include "io/records.h"
 #include "records/decision.h"
+#include "records/excitation.h"
 #include "records/fit.h"
 #include "records/synthetic.h"
 
@@ -91,6 +95,8 @@ struct RecordDiagnosis {
   std::string verdict_kind;  ///< "effect", "inseparable", "none", "unexplained"
   std::string verdict;
   std::optional<ProposedExperiment> next;
+  ExcitationReport excitation;  ///< what training excites, what each withheld record needs (records/excitation.h)
+  std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict (empty: none)
 };
 
 /// Throws InputError when the set has no training or no withheld record, or on bad options.

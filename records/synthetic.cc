@@ -3,18 +3,13 @@
 #include <cmath>
 #include <numbers>
 
-#include "opt/random.h"
 
 namespace pz::records {
-namespace {
 
-/// A standard normal draw (Box–Muller on the generator's uniform grid).
-double Normal(opt::Rng& rng) {
+double NormalDraw(opt::Rng& rng) {
   const double a = 1 - rng.Uniform01(), b = rng.Uniform01();
   return std::sqrt(-2 * std::log(a)) * std::cos(2 * std::numbers::pi * b);
 }
-
-}  // namespace
 
 const char* WaveformName(Waveform w) {
   switch (w) {
@@ -123,7 +118,7 @@ io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> pa
   truth.Simulate(r, params, weights, n, r.y);
   opt::Rng rng(m.seed * 7919 + 17);
   for (double& v : r.y) {
-    v += m.offset + (m.noise_std > 0 ? m.noise_std * Normal(rng) : 0);
+    v += m.offset + (m.noise_std > 0 ? m.noise_std * NormalDraw(rng) : 0);
     if (m.quantum > 0) v = m.quantum * std::round(v / m.quantum);
   }
   r.quantum = m.quantum;

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "io/records.h"
+#include "opt/random.h"
 #include "records/model.h"
 
 namespace pz::records {
@@ -45,6 +46,9 @@ struct Measurement {
 /// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
 /// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
 DataScale SyntheticStackScale();
+
+/// A standard normal draw (Box–Muller on the generator's uniform grid).
+double NormalDraw(opt::Rng& rng);
 
 /// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.

@@ -1,0 +1,173 @@
+// `piezoid synth-stack`: writes a real-like stack record set (records/reallike.h, issue 22 item 5)
+// in the manifest format (io/records.h; `piezoid fit`, `diagnose --records` and `records` read it)
+// with its truth: truth.json (the plant, the sensor, each record's drive, offset and realised noise,
+// the true noise floor) and a README.md saying how it was made.
+#include <cmath>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "client/commands.h"
+#include "client/json_values.h"
+#include "io/csv.h"
+#include "io/records.h"
+#include "model/status.h"
+#include "records/reallike.h"
+
+namespace pz::client {
+namespace fs = std::filesystem;
+namespace {
+
+struct SynthArgs {
+  std::string out;
+  records::RealLikeOptions o;
+  bool no_creep = false;
+  std::string train_drive;  ///< --train-drive: a CSV (time, drive) the training record plays
+};
+
+/// The drive column of a CSV (first column time from 0 at the sample rate fs, second the drive).
+std::vector<double> ReadDrive(const std::string& path, double fs) {
+  const io::CsvTable csv = io::ReadCsvFile(path);
+  csv.RequireRows();
+  if (csv.header.size() < 2) throw InputError(path + ": --train-drive needs two columns (time [s], drive [V])");
+  std::vector<double> t, u;
+  for (size_t r = 0; r < csv.rows.size(); ++r) {
+    t.push_back(csv.Number(r, 0));
+    u.push_back(csv.Number(r, 1));
+  }
+  const double rate = io::CheckUniformTimeGrid(csv, 0, t, 0.01, "the played drive starts at t = 0");
+  if (std::abs(rate - fs) > 1e-6 * fs) {
+    throw InputError(path + ": sampled at " + io::FormatNumber(rate) + " Hz; --fs is " + io::FormatNumber(fs) +
+                     " Hz (give --fs " + io::FormatNumber(rate) + ")");
+  }
+  return u;
+}
+
+std::string TruthJson(const records::RealLikeSet& s) {
+  using namespace json;  // NOLINT
+  const records::RealLikeStack& st = s.options.stack;
+  const records::RealLikeSensor& se = s.options.sensor;
+  Struct root;
+  auto& f = *root.mutable_fields();
+  Struct plant;
+  auto& p = *plant.mutable_fields();
+  p["model"] = Text("Preisach (Everett function of a Gaussian width x Gaussian centre density, skewed) + reversible "
+                    "linear-quadratic part, then log creep (relaxations 3 per decade), then the sensor's lag");
+  p["u_lo_V"] = Num(st.u_lo);
+  p["u_hi_V"] = Num(st.u_hi);
+  p["stroke_um"] = Num(st.stroke_um);
+  p["hysteresis_share"] = Num(st.hysteresis_share);
+  p["density_width"] = Num(st.density_width);
+  p["density_width_spread"] = Num(st.density_width_spread);
+  p["density_center_spread"] = Num(st.density_center_spread);
+  p["asymmetry"] = Num(st.asymmetry);
+  p["quadratic"] = Num(st.quadratic);
+  p["creep_per_decade"] = Num(st.creep_per_decade);
+  p["creep_tau_min_s"] = Num(st.creep_tau_min_s);
+  p["creep_tau_max_s"] = Num(st.creep_tau_max_s);
+  p["everett_grid"] = Num(st.everett_grid);
+  p["major_loop_width_share"] = Num(s.major_loop_width);
+  f["plant"] = Obj(plant);
+  Struct sensor;
+  auto& q = *sensor.mutable_fields();
+  q["fs_hz"] = Num(se.fs_hz);
+  q["oversample"] = Num(se.oversample);
+  q["lag_samples"] = Num(se.lag_samples);
+  q["noise_white_um"] = Num(se.noise_white_um);
+  q["noise_colored_um"] = Num(se.noise_colored_um);
+  q["colored_time_s"] = Num(se.colored_time_s);
+  q["quantum_um"] = Num(se.quantum_um);
+  q["drive_quantum_V"] = Num(se.drive_quantum_v);
+  q["offset_range_um"] = Num(se.offset_range_um);
+  f["sensor"] = Obj(sensor);
+  Struct floor;
+  auto& n = *floor.mutable_fields();
+  n["nominal_um"] = Num(s.nominal_floor_um);
+  n["realised_um"] = Num(s.realised_floor_um);
+  n["definition"] = Text("RMS of measured - (noise-free response + offset): what a perfect model leaves; nominal = "
+                         "sqrt(white^2 + coloured^2 + quantum^2/12), realised = over every scored sample");
+  f["noise_floor"] = Obj(floor);
+  std::vector<Value> recs;
+  for (const records::RealLikeRecordTruth& t : s.truth) {
+    Struct r;
+    auto& g = *r.mutable_fields();
+    g["record"] = Text(t.name);
+    g["role"] = Text(t.role);
+    g["drive"] = Text(t.drive);
+    g["offset_um"] = Num(t.offset_um);
+    g["noise_rms_um"] = Num(t.noise_rms_um);
+    g["scored_samples"] = Num(static_cast<double>(t.scored));
+    recs.push_back(Obj(r));
+  }
+  f["records"] = List(recs);
+  f["seed"] = Num(static_cast<double>(s.options.seed));
+  return Print(root, "truth.json");
+}
+
+int RunSynth(const SynthArgs& a) {
+  records::RealLikeOptions o = a.o;
+  if (a.no_creep) o.stack.creep_per_decade = 0;
+  if (!a.train_drive.empty()) o.train_drive = ReadDrive(a.train_drive, o.sensor.fs_hz);
+  const records::RealLikeSet s = records::GenerateRealLikeSet(o);
+  const fs::path out(a.out);
+  io::WriteRecordSet(s.set, out);
+  io::WriteFileWith(out / "truth.json", [&](std::ostream& os) { os << TruthJson(s); });
+  io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
+    os << "# A real-like stack record set (generated)\n\nMade by `piezoid synth-stack --out " << a.out << " --seed "
+       << o.seed << "` (records/reallike.h; the other options at their values in truth.json). The plant is "
+       << "written independently of the product's families: a Preisach model (return-point memory) with an "
+       << "asymmetric density, a reversible quadratic part, log creep, a sensor lag of " << o.sensor.lag_samples
+       << " samples, white and coloured noise, quantisation, an offset per record and a rest before each record.\n\n"
+       << "| record | role | drive | offset [um] | noise RMS [um] |\n|---|---|---|---|---|\n";
+    for (const auto& t : s.truth)
+      os << "| " << t.name << " | " << t.role << " | " << t.drive << " | " << io::FormatNumber(t.offset_um) << " | "
+         << io::FormatNumber(t.noise_rms_um) << " |\n";
+    os << "\nThe true noise floor: " << io::FormatNumber(s.realised_floor_um) << " um (nominal "
+       << io::FormatNumber(s.nominal_floor_um) << " um). The major loop is " << io::FormatNumber(100 * s.major_loop_width)
+       << " % of its stroke wide.\n";
+  });
+  std::cout << "written " << s.set.records.size() << " records to " << out.string() << " (true noise floor "
+            << io::FormatNumber(s.realised_floor_um) << " um; truth.json, README.md)\n";
+  return 0;
+}
+
+}  // namespace
+
+void RegisterSynthStack(CLI::App& app, int& exit_code) {
+  auto a = std::make_shared<SynthArgs>();
+  records::RealLikeOptions& o = a->o;
+  CLI::App* cmd = app.add_subcommand(
+      "synth-stack",
+      "Write a real-like piezo stack record set with its truth (a Preisach plant with an asymmetric density, log "
+      "creep, sensor lag, noise, quantisation, offsets, rests; independent of the product's families): a major-loop "
+      "training sine and withheld records (a second sine, an amplitude ramped to zero and back, random reversals).");
+  cmd->add_option("--out", a->out, "output folder (manifest.csv, one CSV per record, truth.json, README.md)")
+      ->required()
+      ->type_name("DIR");
+  cmd->add_option("--seed", o.seed, "seed of phases, reversals, offsets and noise");
+  cmd->add_option("--fs", o.sensor.fs_hz, "sample rate [Hz]")->check(CLI::Range(10.0, 1e6));
+  cmd->add_option("--frequency", o.frequency_hz, "sine frequency [Hz]")->check(CLI::Range(1e-3, 1e5));
+  cmd->add_option("--train-s", o.train_s, "training sine length [s]")->check(CLI::Range(0.5, 1e5));
+  cmd->add_option("--withheld-s", o.withheld_s, "each withheld record's length [s]")->check(CLI::Range(0.5, 1e5));
+  cmd->add_option("--amplitude-share", o.amplitude_share, "sine amplitude, share of the 0-150 V range")
+      ->check(CLI::Range(0.01, 0.5));
+  cmd->add_option("--lag-samples", o.sensor.lag_samples, "sensor lag [samples], whole and fractional")
+      ->check(CLI::Range(0.0, 1000.0));
+  cmd->add_option("--noise", o.sensor.noise_white_um, "white noise RMS [um]")->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--colored-noise", o.sensor.noise_colored_um, "coloured noise RMS [um]")->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--quantum", o.sensor.quantum_um, "response resolution [um] (0: none)")->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--creep-per-decade", o.stack.creep_per_decade, "log creep per decade of time (share)")
+      ->check(CLI::Range(0.0, 0.099));
+  cmd->add_flag("--no-creep", a->no_creep, "no creep");
+  cmd->add_option("--train-drive", a->train_drive,
+                  "a CSV (time [s] from 0 at --fs, drive [V]) the training record plays instead of the sine, e.g. "
+                  "the excitation_drive.csv of a fit or diagnosis; the withheld records stay the same")
+      ->type_name("FILE");
+  cmd->add_option("--asymmetry", o.stack.asymmetry, "skew of the Preisach density")->check(CLI::Range(-10.0, 10.0));
+  cmd->add_option("--hysteresis-share", o.stack.hysteresis_share, "share of the stroke carried by the hysterons")
+      ->check(CLI::Range(0.0, 0.95));
+  cmd->callback([a, &exit_code] { exit_code = RunSynth(*a); });
+}
+
+}  // namespace pz::client

@@ -1,0 +1,99 @@
+// `piezoid synth-stack` and the excitation report of `piezoid fit` (issue 22, items 5 and 3): the
+// set is written in the record format with its truth; the fit prints what the withheld records need
+// beyond the training, writes the Excitation section, the JSON object and the proposed drive; that
+// drive, played on the plant by synth-stack --train-drive, leaves no reversal the training lacks.
+#include <gtest/gtest.h>
+
+#include <CLI/CLI.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "client/commands.h"
+#include "tests/testing/expect_error.h"
+
+namespace pz::client {
+namespace {
+
+namespace fs = std::filesystem;
+
+int RunCli(const std::vector<std::string>& args) {
+  CLI::App app{"piezoid"};
+  app.require_subcommand(1);
+  int exit_code = 0;
+  RegisterSynthStack(app, exit_code);
+  RegisterFit(app, exit_code);
+  std::vector<const char*> argv = {"piezoid"};
+  for (const auto& a : args) argv.push_back(a.c_str());
+  app.parse(static_cast<int>(argv.size()), argv.data());
+  return exit_code;
+}
+
+std::string Read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs the command with stdout captured; returns what it printed.
+std::string Captured(const std::vector<std::string>& args) {
+  ::testing::internal::CaptureStdout();
+  const int code = RunCli(args);
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(code, 0) << out;
+  return out;
+}
+
+TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "synth_stack_cli";
+  fs::remove_all(dir);
+  const std::string set = (dir / "set").string(), fit = (dir / "fit").string();
+  PZ_EXPECT_HAS(Captured({"synth-stack", "--out", set, "--train-s", "8", "--withheld-s", "6", "--seed", "3"}),
+                "written 4 records");
+  PZ_EXPECT_HAS(Read(dir / "set" / "manifest.csv"), "ramp,ramp.csv,validate");
+  const std::string truth = Read(dir / "set" / "truth.json");
+  PZ_EXPECT_HAS(truth, "\"realised_um\"");
+  PZ_EXPECT_HAS(truth, "\"lag_samples\": 1.35");
+  PZ_EXPECT_HAS(Read(dir / "set" / "README.md"), "piezoid synth-stack --out");
+
+  const std::string out =
+      Captured({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--out", fit, "--no-figures", "--quiet"});
+  PZ_EXPECT_HAS(out, "excitation: ramp needs");
+  PZ_EXPECT_HAS(out, "excitation: reversals needs");
+  EXPECT_EQ(out.find("excitation: major-2"), std::string::npos) << out;
+  const std::string report = Read(dir / "fit" / "report.md");
+  PZ_EXPECT_HAS(report, "## Excitation (before fitting)");
+  PZ_EXPECT_HAS(report, "| major-2 | ");
+  PZ_EXPECT_HAS(report, "nothing: within the training excitation");
+  const std::string json = Read(dir / "fit" / "fit.json");
+  PZ_EXPECT_HAS(json, "\"excitation\"");
+  PZ_EXPECT_HAS(json, "\"kind\": \"reversals\"");
+  std::ifstream drive(dir / "fit" / "excitation_drive.csv");
+  std::string header, line;
+  std::getline(drive, header);
+  EXPECT_EQ(header, "t_s,drive_V");
+  size_t rows = 0;
+  while (std::getline(drive, line)) ++rows;
+  EXPECT_GT(rows, 200u * 20);  // tens of seconds at 200 Hz
+
+  // Play the proposed drive as the training record: the withheld records need no reversals then.
+  const std::string set2 = (dir / "set2").string(), fit2 = (dir / "fit2").string();
+  Captured({"synth-stack", "--out", set2, "--train-s", "8", "--withheld-s", "6", "--seed", "3", "--train-drive",
+            (dir / "fit" / "excitation_drive.csv").string()});
+  PZ_EXPECT_HAS(Read(dir / "set2" / "manifest.csv"), "played,played.csv,train");
+  EXPECT_EQ(Read(dir / "set2" / "ramp.csv"), Read(dir / "set" / "ramp.csv"));  // the same withheld records
+  const std::string out2 =
+      Captured({"fit", "--records", set2, "--family", "prandtl-ishlinskii", "--out", fit2, "--no-figures", "--quiet"});
+  EXPECT_EQ(out2.find("of its reversal cycles turn where training has none"), std::string::npos) << out2;
+
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"synth-stack", "--out", (dir / "bad").string(), "--fs", "100", "--train-drive",
+                          (dir / "fit" / "excitation_drive.csv").string()});
+                }),
+                "sampled at 200 Hz; --fs is 100 Hz");
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace pz::client
