@@ -23,6 +23,7 @@
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/prandtl_ishlinskii.h"
+#include "records/extrapolation.h"
 #include "records/fit.h"
 
 namespace pz::client {
@@ -89,7 +90,8 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
   }
 }
 
-void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a) {
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
   const auto& m = *r.model;
   os << "# piezoid fit: " << m.Describe() << "\n\n"
      << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
@@ -112,6 +114,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   for (size_t i = 0; i < r.weights.size(); ++i) {
     os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) |\n";
   }
+  if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -122,6 +125,10 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
        << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
        << Fmt(e.nrmse_pct, 3) << " |\n";
   }
+  if (!extrapolation.empty()) {
+    os << "\n## Extrapolation (records/extrapolation.h)\n\n";
+    for (const auto& c : extrapolation) os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+  }
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
@@ -129,7 +136,8 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
      << a.family << "`.\n";
 }
 
-std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -156,6 +164,26 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r) {
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
+  if (r.regularisation.used) {
+    Struct g;
+    (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
+    (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
+    f["regularisation"] = Obj(g);
+  }
+  std::vector<Value> checks;
+  for (const auto& c : extrapolation) {
+    Struct g;
+    auto& x = *g.mutable_fields();
+    x["record"] = Text(c.record);
+    x["flagged"] = Bool(c.flagged);
+    x["drive_beyond"] = Num(c.drive_beyond);
+    x["drive_beyond_share"] = Num(c.drive_beyond_share);
+    x["terms"] = Num(static_cast<double>(c.terms));
+    x["term_max"] = Num(c.term_max);
+    x["term_rms"] = Num(c.term_rms);
+    checks.push_back(Obj(g));
+  }
+  f["extrapolation"] = List(checks);
   f["train_mse"] = Num(r.train_mse);
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
   return Print(root, "fit.json");
@@ -184,9 +212,10 @@ int RunFit(const FitArgs& a) {
     std::cerr << "piezoid fit: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }
+  const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
   fs::create_directories(a.out);
-  io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) { WriteFitReport(os, set, r, a); });
-  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r); });
+  io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) { WriteFitReport(os, set, r, a, extrapolation); });
+  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r, extrapolation); });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
   if (!scripts.empty()) {
@@ -224,6 +253,9 @@ int RunFit(const FitArgs& a) {
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
+  if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
+  for (const auto& c : extrapolation)
+    if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
             << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
             << "; report in "
@@ -244,7 +276,8 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->required()
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
-                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin")
+                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin, preisach, "
+                  "asymmetric-pi")
       ->default_str("backlash-like");
   cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');
   cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
@@ -257,7 +290,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
-  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii play operators")->default_str("12");
+  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii / asymmetric-pi play operators; preisach grid levels")->default_str("12");
   cmd->add_option("--export-c", a->export_c, "prandtl-ishlinskii: write the inverse compensator as a C header");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");

@@ -75,15 +75,43 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     : model_(model), records_(std::move(records)) {
   if (records_.empty()) throw InputError("no training records to fit on");
   for (const io::Record* r : records_) samples_ += r->scored();
+  const Family& fam = model_.family();
+  fam.CheckTraining(records_);
+  // A regularised linear family: its strength chosen once, by validation, with the effects at
+  // their neutral values (records/regularisation.h); every evaluation then uses it.
+  const std::vector<double> R = fam.linear() ? fam.regularisation() : std::vector<double>{};
+  if (!R.empty()) {
+    const auto m = static_cast<Eigen::Index>(fam.regressors());
+    if (R.size() != fam.regressors() * fam.regressors()) throw InputError(fam.name() + ": regularisation size mismatch");
+    regularisation_ = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(R.data(), m, m);
+    std::vector<double> neutral;
+    for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
+      const ParamInfo& q = model_.params()[i];
+      neutral.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
+    }
+    const size_t K = kValidationBlocks;
+    BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
+                              std::vector<size_t>(K)};
+    std::vector<double> p(model_.family_param_count(), 0.0);
+    p.insert(p.end(), neutral.begin(), neutral.end());
+    Accumulate(p, eq);
+    validation_ = ChooseStrength(eq, regularisation_);
+  }
 }
 
-std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const {
+void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations& eq) const {
   const Family& fam = model_.family();
-  const size_t m = fam.regressors(), nf = model_.family_param_count();
+  const size_t m = fam.regressors(), nf = model_.family_param_count(), blocks = eq.G.size();
   const int pol = model_.scale().polarity;
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m), static_cast<Eigen::Index>(m));
-  Eigen::VectorXd h = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m));
+  const auto mi = static_cast<Eigen::Index>(m);
+  for (size_t b = 0; b < blocks; ++b) {
+    eq.G[b] = Eigen::MatrixXd::Zero(mi, mi);
+    eq.h[b] = Eigen::VectorXd::Zero(mi);
+    eq.bb[b] = 0;
+    eq.samples[b] = 0;
+  }
   std::vector<double> ue, reg, c(m);
+  size_t index = 0;  // of the scored sample over the records: its block is index · blocks / samples_
   for (const io::Record* r : records_) {
     const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->end_scored - 1);
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
@@ -107,16 +135,25 @@ std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const
     } else {
       d = r->offset;
     }
-    Eigen::VectorXd a(static_cast<Eigen::Index>(m));
-    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+    Eigen::VectorXd a(mi);
+    for (size_t k = r->first_scored; k < r->end_scored; ++k, ++index) {
+      const size_t blk = blocks == 1 ? 0 : index * blocks / samples_;
       for (size_t j = 0; j < m; ++j) a(static_cast<Eigen::Index>(j)) = pol * (row(k)[j] - c[j]);
       const double b = r->y[k] - d;
-      G.selfadjointView<Eigen::Lower>().rankUpdate(a);
-      h += b * a;
+      eq.G[blk].selfadjointView<Eigen::Lower>().rankUpdate(a);
+      eq.h[blk] += b * a;
+      eq.bb[blk] += b * b;
+      ++eq.samples[blk];
     }
   }
-  G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
-  const Eigen::VectorXd w = NonNegativeLeastSquares(G, h);
+  for (Eigen::MatrixXd& G : eq.G) G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+}
+
+std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const {
+  BlockedNormalEquations eq{{Eigen::MatrixXd()}, {Eigen::VectorXd()}, {0.0}, {0}};
+  Accumulate(p, eq);
+  if (validation_.used) eq.G[0] += validation_.lambda * regularisation_;
+  const Eigen::VectorXd w = NonNegativeLeastSquares(eq.G[0], eq.h[0]);
   return std::vector<double>(w.data(), w.data() + w.size());
 }
 
@@ -254,6 +291,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   const RecordFitness::Output out = fitness.Run(best);
   res.params = best;
   res.weights = out.weights;
+  res.regularisation = fitness.validation();
   res.train_mse = out.mse;
   res.train_sse = out.mse * static_cast<double>(fitness.samples());
   for (const io::Record& r : set.records) {
