@@ -128,6 +128,15 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (records/extrapolation.h)\n\n";
     for (const auto& c : extrapolation) os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+    os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the training drive "
+          "range; minor loops are the shallow pieces):\n\n";
+    for (size_t i = 0; i < set.records.size(); ++i) {
+      const auto& rec = set.records[i];
+      if (rec.role == model::CaseRole::kTrain) continue;
+      os << "- " << rec.name << ": "
+         << records::DescribeDepthBins(records::ErrorByReversalDepth(rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+         << "\n";
+    }
   }
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";

@@ -98,4 +98,72 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
   return out;
 }
 
+std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat, double range) {
+  if (yhat.size() < r.end_scored) throw InputError("ErrorByReversalDepth: model output shorter than the window");
+  if (!(range > 0)) throw InputError("ErrorByReversalDepth: the training drive range must be > 0");
+  constexpr int kBins = 5;
+  std::vector<DepthBin> bins(kBins);
+  std::vector<double> sse(kBins, 0.0);
+  for (int b = 0; b < kBins; ++b) {
+    bins[static_cast<size_t>(b)].lo = 0.2 * b;
+    bins[static_cast<size_t>(b)].hi = b + 1 < kBins ? 0.2 * (b + 1) : std::numeric_limits<double>::infinity();
+  }
+  const double thr = 0.01 * range;
+  auto close = [&](size_t first, size_t end) {  // the piece [first, end): its swing and errors
+    if (end <= first) return;
+    // The swing from the turning point before the piece (its last sample) to the piece's end.
+    const size_t from = first > r.first_scored ? first - 1 : first;
+    double lo = r.u[from], hi = lo;
+    for (size_t k = from; k < end; ++k) {
+      lo = std::min(lo, r.u[k]);
+      hi = std::max(hi, r.u[k]);
+    }
+    const size_t b = std::min<size_t>(kBins - 1, static_cast<size_t>((hi - lo) / range / 0.2));
+    ++bins[b].pieces;
+    for (size_t k = first; k < end; ++k) {
+      const double e = r.y[k] - yhat[k];
+      sse[b] += e * e;
+      ++bins[b].samples;
+    }
+  };
+  // Turning points with a dead band of thr: a piece ends at the extreme the drive then leaves by thr.
+  size_t start = r.first_scored, hi = start, lo = start;
+  int dir = 0;  // +1 rising, −1 falling, 0 not yet known
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    if (r.u[k] > r.u[hi]) hi = k;
+    if (r.u[k] < r.u[lo]) lo = k;
+    if (dir >= 0 && r.u[k] < r.u[hi] - thr) {  // a maximum at hi passed
+      if (dir > 0) {
+        close(start, hi + 1);
+        start = hi + 1;
+      }
+      dir = -1;
+      lo = k;
+    } else if (dir <= 0 && r.u[k] > r.u[lo] + thr) {  // a minimum at lo passed
+      if (dir < 0) {
+        close(start, lo + 1);
+        start = lo + 1;
+      }
+      dir = 1;
+      hi = k;
+    }
+  }
+  close(start, r.end_scored);
+  for (size_t b = 0; b < bins.size(); ++b)
+    if (bins[b].samples > 0) bins[b].rmse = std::sqrt(sse[b] / static_cast<double>(bins[b].samples));
+  return bins;
+}
+
+std::string DescribeDepthBins(const std::vector<DepthBin>& bins) {
+  std::string s;
+  for (const DepthBin& b : bins) {
+    if (b.samples == 0) continue;
+    s += (s.empty() ? "" : "; ") + std::string("swing ") + io::FormatNumber(std::round(100 * b.lo)) +
+         (std::isfinite(b.hi) ? "–" + io::FormatNumber(std::round(100 * b.hi)) + " %" : " % and more") + ": RMSE " +
+         io::FormatNumber(std::round(b.rmse * 1e4) / 1e4) + " (" + std::to_string(b.pieces) + " piece(s), " +
+         std::to_string(b.samples) + " samples)";
+  }
+  return s;
+}
+
 }  // namespace pz::records

@@ -37,4 +37,17 @@ struct ExtrapolationCheck {
 /// The check of every non-training record of the set, set order.
 std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, const FitResult& fit);
 
+/// Error against reversal depth: the scored window cut at the drive's reversals (turns by more
+/// than 1 % of the training drive range), each monotone piece binned by its swing as a share of
+/// that range (minor loops are the shallow pieces), the RMSE of each bin.
+struct DepthBin {
+  double lo = 0, hi = 0;  ///< swing / training drive range
+  size_t pieces = 0, samples = 0;
+  double rmse = 0;
+};
+/// Bins [0, 0.2), [0.2, 0.4) … [0.8, ∞) (empty bins included). yhat: the model output [0, end_scored).
+std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat, double training_range);
+/// "swing 0–20 %: 0.05 (3 pieces); …" over the non-empty bins.
+std::string DescribeDepthBins(const std::vector<DepthBin>& bins);
+
 }  // namespace pz::records

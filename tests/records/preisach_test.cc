@@ -171,6 +171,32 @@ TEST(PreisachFamily, TheExtrapolationGuardFlagsADriveBeyondTheTrainingRangeOnly)
   }
 }
 
+TEST(PreisachFamily, ErrorAgainstReversalDepthBinsEveryMonotonePiece) {
+  io::Record r;
+  for (double x : {0.0, 100.0, 55.0, 100.0, 0.0}) {  // swings 100, 45, 45, 100 % of the range
+    const double from = r.u.empty() ? x : r.u.back();
+    for (int k = 1; k <= 200 || r.u.empty(); ++k) {
+      r.u.push_back(from + (x - from) * k / 200);
+      if (r.u.size() == 1) break;
+    }
+  }
+  r.y = r.u;
+  r.first_scored = 0;
+  r.end_scored = r.u.size();
+  std::vector<double> yhat(r.y);
+  for (size_t k = 0; k < yhat.size(); ++k) yhat[k] += r.u[k] < 50 ? 0.2 : 0.1;
+  const auto bins = ErrorByReversalDepth(r, yhat, 100);
+  ASSERT_EQ(bins.size(), 5u);
+  EXPECT_EQ(bins[2].pieces, 2u);  // 100 → 55 → 100
+  EXPECT_NEAR(bins[2].rmse, 0.1, 1e-12);
+  EXPECT_EQ(bins[4].pieces, 2u);  // the full rise and fall
+  EXPECT_GT(bins[4].rmse, 0.1);
+  EXPECT_EQ(bins[0].samples + bins[1].samples + bins[3].samples, 0u);
+  EXPECT_EQ(bins[2].samples + bins[4].samples, r.scored());
+  PZ_EXPECT_HAS(DescribeDepthBins(bins), "swing 40–60 %: RMSE 0.1 (2 piece(s)");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ErrorByReversalDepth(r, yhat, 0); }), "range must be > 0");
+}
+
 TEST(PreisachFamily, RecordsThatCannotSupportTheGridSayWhatIsMissing) {
   const RelayPlant plant(20);
   io::RecordSet set;
