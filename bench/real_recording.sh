@@ -6,7 +6,7 @@
 #
 # Usage: bench/real_recording.sh RECORD.csv [build dir] [train START:END] [validate START:END]
 #   e.g. bench/real_recording.sh ~/data/piezo_150V_1Hz.csv build 4:7 7:10
-# Env: FAMILIES (default: all six), DIAGNOSE_FAMILY (default stack-bouc-wen; empty = none),
+# Env: FAMILIES (default: all eight), DIAGNOSE_FAMILY (default stack-bouc-wen; empty = none),
 #      OUT (default: a temporary folder, kept and printed), FIT_FLAGS (extra `piezoid fit` flags).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,7 +17,7 @@ VALIDATE=${4:-7:10}
 BIN="$BUILD/client/piezoid"
 [ -x "$BIN" ] || { echo "no $BIN: build first (scripts/build.sh)" >&2; exit 2; }
 [ -f "$REC" ] || { echo "no file $REC" >&2; exit 2; }
-FAMILIES=${FAMILIES:-stack-bouc-wen backlash-like duhem prandtl-ishlinskii bw-oscillator bimorph-fin}
+FAMILIES=${FAMILIES:-stack-bouc-wen backlash-like duhem prandtl-ishlinskii bw-oscillator bimorph-fin preisach asymmetric-pi}
 DIAGNOSE_FAMILY=${DIAGNOSE_FAMILY-stack-bouc-wen}
 OUT=${OUT:-$(mktemp -d)}
 mkdir -p "$OUT"

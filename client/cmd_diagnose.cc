@@ -285,7 +285,8 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
                   "CSV with windows), diagnosed for --family")
       ->type_name("PATH");
   cmd->add_option("--family", a->records.family,
-                  "with --records: stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin")
+                  "with --records: stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin, "
+                  "preisach, asymmetric-pi")
       ->default_str("backlash-like");
   cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
   cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");

@@ -27,6 +27,7 @@
 #include "io/records.h"
 #include "model/prandtl_ishlinskii.h"
 #include "records/excitation.h"
+#include "records/extrapolation.h"
 #include "records/fit.h"
 
 namespace pz::client {
@@ -94,7 +95,8 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
 }
 
 void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
-                    const records::ExcitationReport& excitation, const records::TrainingDriveProposal& proposal) {
+                    const records::ExcitationReport& excitation, const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
   const auto& m = *r.model;
   os << "# piezoid fit: " << m.Describe() << "\n\n"
      << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
@@ -117,6 +119,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   for (size_t i = 0; i < r.weights.size(); ++i) {
     os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) |\n";
   }
+  if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -127,6 +130,19 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
        << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
        << Fmt(e.nrmse_pct, 3) << " |\n";
   }
+  if (!extrapolation.empty()) {
+    os << "\n## Extrapolation (records/extrapolation.h)\n\n";
+    for (const auto& c : extrapolation) os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+    os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the training drive "
+          "range; minor loops are the shallow pieces):\n\n";
+    for (size_t i = 0; i < set.records.size(); ++i) {
+      const auto& rec = set.records[i];
+      if (rec.role == model::CaseRole::kTrain) continue;
+      os << "- " << rec.name << ": "
+         << records::DescribeDepthBins(records::ErrorByReversalDepth(rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+         << "\n";
+    }
+  }
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
@@ -136,7 +152,8 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
 }
 
 std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const records::ExcitationReport& excitation,
-                    const records::TrainingDriveProposal& proposal) {
+                    const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -163,6 +180,26 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
+  if (r.regularisation.used) {
+    Struct g;
+    (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
+    (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
+    f["regularisation"] = Obj(g);
+  }
+  std::vector<Value> checks;
+  for (const auto& c : extrapolation) {
+    Struct g;
+    auto& x = *g.mutable_fields();
+    x["record"] = Text(c.record);
+    x["flagged"] = Bool(c.flagged);
+    x["drive_beyond"] = Num(c.drive_beyond);
+    x["drive_beyond_share"] = Num(c.drive_beyond_share);
+    x["terms"] = Num(static_cast<double>(c.terms));
+    x["term_max"] = Num(c.term_max);
+    x["term_rms"] = Num(c.term_rms);
+    checks.push_back(Obj(g));
+  }
+  f["extrapolation"] = List(checks);
   f["train_mse"] = Num(r.train_mse);
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
   f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
@@ -195,11 +232,13 @@ int RunFit(const FitArgs& a) {
     std::cerr << "piezoid fit: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }
+  const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
   fs::create_directories(a.out);
   WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
   io::WriteFileWith(fs::path(a.out) / "report.md",
-                    [&](std::ostream& os) { WriteFitReport(os, set, r, a, excitation, proposal); });
-  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal); });
+                    [&](std::ostream& os) { WriteFitReport(os, set, r, a, excitation, proposal, extrapolation); });
+  io::WriteFileWith(fs::path(a.out) / "fit.json",
+                    [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal, extrapolation); });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
   if (!scripts.empty()) {
@@ -237,6 +276,9 @@ int RunFit(const FitArgs& a) {
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
+  if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
+  for (const auto& c : extrapolation)
+    if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
             << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
             << "; report in "
@@ -257,7 +299,8 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->required()
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
-                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin")
+                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin, preisach, "
+                  "asymmetric-pi")
       ->default_str("backlash-like");
   cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');
   cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
@@ -270,7 +313,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
-  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii play operators")->default_str("12");
+  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii / asymmetric-pi play operators; preisach grid levels")->default_str("12");
   cmd->add_option("--export-c", a->export_c, "prandtl-ishlinskii: write the inverse compensator as a C header");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");

@@ -12,6 +12,7 @@
 #include "model/duhem.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
+#include "records/preisach_family.h"
 
 namespace pz::records {
 namespace {
@@ -336,7 +337,8 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
 
 const std::vector<std::string>& FamilyNames() {
   static const std::vector<std::string> names = {"stack-bouc-wen", "backlash-like", "duhem",
-                                                 "prandtl-ishlinskii", "bw-oscillator", "bimorph-fin"};
+                                                 "prandtl-ishlinskii", "bw-oscillator", "bimorph-fin",
+                                                 "preisach", "asymmetric-pi"};
   return names;
 }
 
@@ -348,6 +350,8 @@ std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale
   if (name == "prandtl-ishlinskii") return std::make_unique<PrandtlIshlinskiiFamily>(scale, o);
   if (name == "bw-oscillator") return std::make_unique<BwOscillatorFamily>(scale, o);
   if (name == "bimorph-fin") return std::make_unique<BimorphFinFamily>(scale, o);
+  if (name == "preisach") return MakePreisachFamily(scale, o);
+  if (name == "asymmetric-pi") return MakeAsymmetricPiFamily(scale, o);
   std::string known;
   for (const auto& n : FamilyNames()) known += (known.empty() ? "" : ", ") + n;
   throw InputError("--family '" + std::string(name) + "' is unknown (families: " + known + ")");

@@ -9,6 +9,14 @@
 //   bw-oscillator       Bouc–Wen hysteretic oscillator (model/bw_oscillator.h), driven by the
 //                       drive through a gain: K fn ζ share βγ βδ; or, with OscillatorOptions, the
 //                       Bouc–Wen benchmark's protocol (complete/boucwen_benchmark.h): m c k α βγ βδ
+//   preisach            discrete Preisach model on a triangular grid of relays over the training
+//                       drive range (model/preisach.h), FamilyOptions::pi_operators levels: cell
+//                       weights by non-negative least squares with a roughness penalty along the
+//                       centre axis whose strength is chosen by blocked cross-validation
+//                       (records/regularisation.h); exact inverse by one-step bisection
+//   asymmetric-pi       PI operator plus a monotone memoryless bend from one-sided dead zones of the
+//                       drive (model/preisach.h): asymmetric loops, weights ≥ 0 (monotone, exact
+//                       inverse), a ridge on the dead zones chosen by the same validation
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
 //                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
 //                       and tip length L_e (searched around FamilyOptions::geometry; the
@@ -70,7 +78,7 @@ struct OscillatorOptions {
 
 struct FamilyOptions {
   int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
-  int pi_operators = 12;     ///< Prandtl–Ishlinskii plays
+  int pi_operators = 12;     ///< Prandtl–Ishlinskii / asymmetric-pi plays; preisach grid levels
   model::BeamGeometry geometry;  ///< bimorph fin
   OscillatorOptions oscillator;  ///< bw-oscillator
 };
@@ -106,6 +114,13 @@ class Family {
   virtual void Regressors(std::span<const double> u, std::span<double> out) const;
   /// Names of the solved weights (linear families).
   virtual std::vector<std::string> weight_names() const { return {}; }
+  /// Linear families: the Gram matrix R (regressors × regressors, row-major, positive
+  /// semi-definite) of a penalty λ wᵀRw added to the weights' least squares, its strength λ chosen
+  /// by validation on the training records (records/regularisation.h). Empty: none.
+  virtual std::vector<double> regularisation() const { return {}; }
+  /// Throws InputError saying what is missing when the training records (scored windows) cannot
+  /// support the family (e.g. no reversals for a Preisach grid). Default: accepts any records.
+  virtual void CheckTraining(const std::vector<const io::Record*>& train) const { (void)train; }
   /// The effects of the diagnosis library that make physical sense on top of this family (the
   /// ones it already contains are left out: the stack Bouc–Wen has a driver filter, the Duhem
   /// model a relaxation, the PI model plays).

@@ -22,6 +22,7 @@
 #include "opt/evaluator.h"
 #include "opt/param_search.h"
 #include "records/model.h"
+#include "records/regularisation.h"
 
 namespace pz::records {
 
@@ -55,16 +56,22 @@ class RecordFitness final : public opt::FitnessFunction {
 
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
+  /// A regularised linear family: the strength chosen by validation at construction.
+  const WeightValidation& validation() const { return validation_; }
   size_t samples() const { return samples_; }
   double penalty() const { return penalty_; }
 
  private:
   std::vector<double> SolveWeights(std::span<const double> params) const;
+  /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples.
+  void Accumulate(std::span<const double> params, BlockedNormalEquations& eq) const;
   const RecordModel& model_;
   std::vector<const io::Record*> records_;
   std::vector<std::shared_ptr<const Family::Prepared>> prepared_;  ///< per record (null: none)
   size_t samples_ = 0;
   double penalty_;
+  Eigen::MatrixXd regularisation_;  ///< the family's R (empty: none)
+  WeightValidation validation_;
 };
 
 /// Error figures of a model on one record's window.
@@ -108,6 +115,7 @@ struct FitResult {
   std::shared_ptr<RecordModel> model;
   std::vector<double> params;    ///< physical values, model().params() order
   std::vector<double> weights;   ///< linear family: the solved weights
+  WeightValidation regularisation;  ///< a regularised linear family: the strength and its validation
   double train_mse = 0;
   double train_sse = 0;
   std::vector<RecordMetrics> metrics;              ///< every record of the set, set order

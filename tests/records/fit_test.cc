@@ -218,8 +218,8 @@ TEST(RecordFit, NonNegativeLeastSquaresMatchesAnActiveSetByHand) {
 TEST(RecordFit, BadRequestsAreNamed) {
   using pz::testing::InputErrorOf;
   io::RecordSet set = MakeSet(Cases()[1], Waveform::kSine, 1);
-  FitOptions o = QuickOptions("preisach");
-  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }), "--family 'preisach' is unknown (families: stack-bouc-wen");
+  FitOptions o = QuickOptions("jiles-atherton");
+  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }), "--family 'jiles-atherton' is unknown (families: stack-bouc-wen");
   PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("hum"); }), "effect 'hum' is unknown");
   for (auto& r : set.records) r.role = CaseRole::kTest;
   PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, QuickOptions("duhem")); }), "no training records");

@@ -70,7 +70,10 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
                         Case{"prandtl-ishlinskii", {}, 2, 7},
                         Case{"duhem", {EffectKind::kFriction, EffectKind::kStiffening}},
                         Case{"stack-bouc-wen", {}},
-                        Case{"stack-bouc-wen", {}, 5}}) {
+                        Case{"stack-bouc-wen", {}, 5},
+                        Case{"preisach", {EffectKind::kDelay}},
+                        Case{"preisach", {EffectKind::kCreep}, 2, 9},
+                        Case{"asymmetric-pi", {EffectKind::kQuadraticDrive}}}) {
     SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
     records::FamilyOptions options;
     options.substeps = c.substeps;
@@ -114,8 +117,8 @@ TEST(RecordsJobKindTest, BadSpecsAreRefusedFieldByField) {
   };
   EXPECT_EQ(first_error(p), "<none>");
   auto q = p;
-  q.record_family = "preisach";
-  PZ_EXPECT_HAS(first_error(q), "complete_model.record_family = 'preisach': --family 'preisach' is unknown");
+  q.record_family = "jiles-atherton";
+  PZ_EXPECT_HAS(first_error(q), "complete_model.record_family = 'jiles-atherton': --family 'jiles-atherton' is unknown");
   q = p;
   q.scale.pop_back();
   PZ_EXPECT_HAS(first_error(q), "complete_model.scale = 8 values: must hold 9");

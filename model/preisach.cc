@@ -1,0 +1,346 @@
+#include "model/preisach.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace pz::model {
+namespace {
+
+std::string Num(double x) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.6g", x);
+  return buf;
+}
+
+/// The grid's constants: per width its half-width, its cells' lower centres and the constant k_i.
+struct GridTables {
+  std::vector<double> r, k;
+  std::vector<size_t> first;  ///< index of the first cell of width i (first[n] = cells)
+  std::vector<double> c;      ///< lower centre of every cell
+  double delta = 0;
+  explicit GridTables(const PreisachGrid& g) {
+    ThrowIfError(g.Validate());
+    const int n = g.levels;
+    delta = g.step();
+    for (int i = 0; i < n; ++i) {
+      r.push_back(g.half_width(i));
+      k.push_back((g.u_min + r.back()) / (n - i));
+      first.push_back(c.size());
+      for (int j = 0; j < n - i; ++j) c.push_back(g.u_min + r.back() + j * delta);
+    }
+    first.push_back(c.size());
+  }
+  size_t widths() const { return r.size(); }
+  /// Σ_ij w_ij φ_ij(p_i) for the play values p.
+  double Output(std::span<const double> w, const double* p) const {
+    double acc = 0;
+    for (size_t i = 0; i < r.size(); ++i) {
+      const double pi = p[i];
+      for (size_t q = first[i]; q < first[i + 1]; ++q) acc += w[q] * (std::clamp(pi, c[q], c[q] + delta) - c[q] + k[i]);
+    }
+    return acc;
+  }
+};
+
+/// Solves f(v) = ref for a non-decreasing f on [lo, hi] with f(lo) ≤ ref ≤ f(hi), by bisection down
+/// to adjacent doubles; returns the end whose value is nearer.
+template <class F>
+double Bisect(const F& f, double lo, double hi, double flo, double fhi, double ref) {
+  if (flo == ref) return lo;
+  if (fhi == ref) return hi;
+  for (int it = 0; it < 2100; ++it) {
+    const double mid = lo + 0.5 * (hi - lo);
+    if (!(mid > lo && mid < hi)) break;
+    const double fm = f(mid);
+    if (fm == ref) return mid;
+    if (fm < ref) {
+      lo = mid;
+      flo = fm;
+    } else {
+      hi = mid;
+      fhi = fm;
+    }
+  }
+  return std::abs(fhi - ref) <= std::abs(ref - flo) ? hi : lo;
+}
+
+/// One inverse step of a monotone operator: the drive v with f(v) = ref, starting from the previous
+/// drive v0 (f(v0) = y0) within [lo, hi]; out-of-reach references give the limit and are counted.
+template <class F>
+double SolveStep(const F& f, double v0, double y0, double ref, double lo, double hi, InverseReport* rep) {
+  if (ref == y0) return v0;
+  if (ref > y0) {
+    const double fh = f(hi);
+    if (fh < ref) {
+      ++rep->saturated;
+      rep->max_shortfall = std::max(rep->max_shortfall, ref - fh);
+      return hi;
+    }
+    return Bisect(f, v0, hi, y0, fh, ref);
+  }
+  const double fl = f(lo);
+  if (fl > ref) {
+    ++rep->saturated;
+    rep->max_shortfall = std::max(rep->max_shortfall, fl - ref);
+    return lo;
+  }
+  return Bisect(f, lo, v0, fl, y0, ref);
+}
+
+/// A bracket [v − d, v + d] that holds ref for an unbounded non-decreasing f (doubling d).
+template <class F>
+void Bracket(const F& f, double v, double ref, double* lo, double* hi) {
+  double d = std::max(1.0, std::abs(v)) * 1e-3;
+  *lo = v;
+  *hi = v;
+  for (int it = 0; it < 2100; ++it) {
+    if (f(*hi) >= ref && f(*lo) <= ref) return;
+    *lo = v - d;
+    *hi = v + d;
+    d *= 2;
+  }
+  throw InputError("inverse: no drive reaches the reference " + Num(ref));
+}
+
+}  // namespace
+
+Status PreisachGrid::Validate() const {
+  if (!std::isfinite(u_min) || !std::isfinite(u_max) || !(u_min < u_max)) {
+    return InvalidArgument("preisach.range = [" + Num(u_min) + ", " + Num(u_max) +
+                           "]: must be finite with u_min < u_max (a constant drive?)");
+  }
+  if (levels < 1 || levels > 200) return InvalidArgument(FieldError("preisach.levels", levels, "must be 1 … 200"));
+  return Status::Ok();
+}
+
+size_t PreisachGrid::cell(int i, int j) const {
+  // Widths 0 … i−1 hold n + (n−1) + … + (n−i+1) cells.
+  return static_cast<size_t>(i) * static_cast<size_t>(levels) - static_cast<size_t>(i) * static_cast<size_t>(i - 1) / 2 +
+         static_cast<size_t>(j);
+}
+
+std::string PreisachGrid::CellName(int i, int j) const {
+  const double c = u_min + half_width(i) + (j + 0.5) * step();
+  return "w(a=" + Num(c + half_width(i)) + ",b=" + Num(c - half_width(i)) + ")";
+}
+
+void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out) {
+  const GridTables t(grid);
+  const size_t m = grid.cells(), n = t.widths();
+  if (out.size() != u.size() * m) throw InputError("PreisachRegressors: output size mismatch");
+  if (u.empty()) return;
+  std::vector<double> p(n, u[0]);
+  for (size_t s = 0; s < u.size(); ++s) {
+    double* row = out.data() + s * m;
+    for (size_t i = 0; i < n; ++i) {
+      p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
+      for (size_t q = t.first[i]; q < t.first[i + 1]; ++q) row[q] = std::clamp(p[i], t.c[q], t.c[q] + t.delta) - t.c[q] + t.k[i];
+    }
+  }
+}
+
+void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u, std::span<double> y) {
+  const GridTables t(grid);
+  if (w.size() != grid.cells()) {
+    throw InputError("preisach: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) + " cells");
+  }
+  if (y.size() != u.size()) throw InputError("ApplyPreisach: output size mismatch");
+  if (u.empty()) return;
+  std::vector<double> p(t.widths(), u[0]);
+  for (size_t s = 0; s < u.size(); ++s) {
+    for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
+    y[s] = t.Output(w, p.data());
+  }
+}
+
+std::vector<double> PreisachRoughness(const PreisachGrid& grid) {
+  ThrowIfError(grid.Validate());
+  const size_t m = grid.cells();
+  std::vector<double> R(m * m, 0.0);
+  for (int i = 0; i < grid.levels; ++i) {
+    for (int j = 0; j + 1 < grid.levels - i; ++j) {
+      const size_t a = grid.cell(i, j), b = grid.cell(i, j + 1);
+      R[a * m + a] += 1;
+      R[b * m + b] += 1;
+      R[a * m + b] -= 1;
+      R[b * m + a] -= 1;
+    }
+  }
+  return R;
+}
+
+InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> y_ref,
+                             double u_lo, double u_hi, std::span<double> u) {
+  const GridTables t(grid);
+  if (w.size() != grid.cells()) {
+    throw InputError("preisach inverse: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) +
+                     " cells");
+  }
+  for (size_t q = 0; q < w.size(); ++q) {
+    if (!(w[q] >= 0) || !std::isfinite(w[q])) {
+      throw InputError("preisach inverse: weight " + std::to_string(q) + " = " + Num(w[q]) +
+                       ": must be finite and >= 0 (a monotone operator)");
+    }
+  }
+  if (!std::isfinite(u_lo) || !std::isfinite(u_hi) || !(u_lo < u_hi)) {
+    throw InputError("preisach inverse: drive limits [" + Num(u_lo) + ", " + Num(u_hi) + "] must be finite, lo < hi");
+  }
+  if (u.size() != y_ref.size()) throw InputError("InvertPreisach: output size mismatch");
+  InverseReport rep;
+  if (u.empty()) return rep;
+  const size_t n = t.widths();
+  std::vector<double> p(n), trial(n);
+  // The first sample: a rest state (every play at v), whose output is non-decreasing in v.
+  auto rest = [&](double v) {
+    std::fill(trial.begin(), trial.end(), v);
+    return t.Output(w, trial.data());
+  };
+  const double mid = 0.5 * (u_lo + u_hi);
+  double v = SolveStep(rest, mid, rest(mid), y_ref[0], u_lo, u_hi, &rep);
+  std::fill(p.begin(), p.end(), v);
+  double y = t.Output(w, p.data());
+  u[0] = v;
+  for (size_t s = 1; s < y_ref.size(); ++s) {
+    auto step = [&](double x) {
+      for (size_t i = 0; i < n; ++i) trial[i] = std::max(x - t.r[i], std::min(x + t.r[i], p[i]));
+      return t.Output(w, trial.data());
+    };
+    v = SolveStep(step, v, y, y_ref[s], u_lo, u_hi, &rep);
+    for (size_t i = 0; i < n; ++i) p[i] = std::max(v - t.r[i], std::min(v + t.r[i], p[i]));
+    y = t.Output(w, p.data());
+    u[s] = v;
+  }
+  return rep;
+}
+
+Status AsymmetricPi::Validate() const {
+  if (!std::isfinite(w0)) return InvalidArgument("asymmetric-pi.w0 = " + Num(w0) + ": must be finite");
+  if (thresholds.size() != weights.size()) {
+    return InvalidArgument("asymmetric-pi.weights has " + std::to_string(weights.size()) + " values for " +
+                           std::to_string(thresholds.size()) + " thresholds");
+  }
+  if (up.size() != knots.size() || down.size() != knots.size()) {
+    return InvalidArgument("asymmetric-pi.up / down have " + std::to_string(up.size()) + " / " +
+                           std::to_string(down.size()) + " values for " + std::to_string(knots.size()) + " knots");
+  }
+  for (size_t i = 0; i < thresholds.size(); ++i) {
+    if (!std::isfinite(thresholds[i]) || thresholds[i] <= 0 || (i > 0 && thresholds[i] <= thresholds[i - 1])) {
+      return InvalidArgument("asymmetric-pi.thresholds[" + std::to_string(i) + "] = " + Num(thresholds[i]) +
+                             ": must be finite, > 0 and above the previous one");
+    }
+    if (!std::isfinite(weights[i])) {
+      return InvalidArgument("asymmetric-pi.weights[" + std::to_string(i) + "] = " + Num(weights[i]) + ": must be finite");
+    }
+  }
+  for (size_t j = 0; j < knots.size(); ++j) {
+    if (!std::isfinite(knots[j]) || (j > 0 && knots[j] <= knots[j - 1])) {
+      return InvalidArgument("asymmetric-pi.knots[" + std::to_string(j) + "] = " + Num(knots[j]) +
+                             ": must be finite and above the previous one");
+    }
+    if (!std::isfinite(up[j]) || !std::isfinite(down[j])) {
+      return InvalidArgument("asymmetric-pi.up/down[" + std::to_string(j) + "]: must be finite");
+    }
+  }
+  return Status::Ok();
+}
+
+bool AsymmetricPi::Monotone() const {
+  if (!Validate().ok() || !(w0 >= 0)) return false;
+  auto nonneg = [](const std::vector<double>& v) { return std::all_of(v.begin(), v.end(), [](double x) { return x >= 0; }); };
+  return nonneg(weights) && nonneg(up) && nonneg(down);
+}
+
+std::vector<double> AsymmetricPiKnots(int count, double u_min, double u_max) {
+  if (count < 1 || count > 1000) throw InputError(FieldError("asymmetric-pi knots", count, "must be 1 … 1000"));
+  if (!std::isfinite(u_min) || !std::isfinite(u_max) || !(u_min < u_max)) {
+    throw InputError("asymmetric-pi: the drive range [" + Num(u_min) + ", " + Num(u_max) + "] is empty (a constant drive?)");
+  }
+  std::vector<double> z(static_cast<size_t>(count));
+  for (int j = 0; j < count; ++j) z[static_cast<size_t>(j)] = u_min + (u_max - u_min) * (j + 1) / (count + 1);
+  return z;
+}
+
+void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z, std::span<const double> u,
+                            std::span<double> out) {
+  const size_t n = r.size(), K = z.size(), m = 1 + n + 2 * K;
+  if (out.size() != u.size() * m) throw InputError("AsymmetricPiRegressors: output size mismatch");
+  if (u.empty()) return;
+  std::vector<double> p(n, u[0]);
+  for (size_t s = 0; s < u.size(); ++s) {
+    double* row = out.data() + s * m;
+    const double x = u[s];
+    row[0] = x;
+    for (size_t i = 0; i < n; ++i) {
+      p[i] = std::max(x - r[i], std::min(x + r[i], p[i]));
+      row[1 + i] = p[i];
+    }
+    for (size_t j = 0; j < K; ++j) {
+      row[1 + n + j] = std::max(x - z[j], 0.0);
+      row[1 + n + K + j] = std::min(x - z[j], 0.0);
+    }
+  }
+}
+
+namespace {
+
+/// The asymmetric PI's output for the drive x and the play values p (already updated for x).
+double AsymmetricOutput(const AsymmetricPi& op, double x, const double* p) {
+  double acc = op.w0 * x;
+  for (size_t i = 0; i < op.weights.size(); ++i) acc += op.weights[i] * p[i];
+  for (size_t j = 0; j < op.knots.size(); ++j) {
+    acc += op.up[j] * std::max(x - op.knots[j], 0.0) + op.down[j] * std::min(x - op.knots[j], 0.0);
+  }
+  return acc;
+}
+
+}  // namespace
+
+void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::span<double> y) {
+  ThrowIfError(op.Validate());
+  if (y.size() != u.size()) throw InputError("ApplyAsymmetricPi: output size mismatch");
+  if (u.empty()) return;
+  std::vector<double> p(op.thresholds.size(), u[0]);
+  for (size_t s = 0; s < u.size(); ++s) {
+    for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - op.thresholds[i], std::min(u[s] + op.thresholds[i], p[i]));
+    y[s] = AsymmetricOutput(op, u[s], p.data());
+  }
+}
+
+void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref, std::span<double> u) {
+  if (!op.Monotone()) throw InputError("asymmetric-pi inverse: the operator needs finite weights >= 0 (monotone)");
+  double total = op.w0;
+  for (double w : op.weights) total += w;
+  for (size_t j = 0; j < op.knots.size(); ++j) total += op.up[j] + op.down[j];
+  if (!(total > 0)) throw InputError("asymmetric-pi inverse: every weight is zero (no drive reaches a reference)");
+  if (u.size() != y_ref.size()) throw InputError("InvertAsymmetricPi: output size mismatch");
+  if (u.empty()) return;
+  for (double v : y_ref)
+    if (!std::isfinite(v)) throw InputError("asymmetric-pi inverse: a reference sample is not finite");
+  const size_t n = op.thresholds.size();
+  std::vector<double> p(n), trial(n);
+  InverseReport rep;  // never saturates: the operator is unbounded
+  auto rest = [&](double v) {
+    std::fill(trial.begin(), trial.end(), v);
+    return AsymmetricOutput(op, v, trial.data());
+  };
+  double lo = 0, hi = 0;
+  Bracket(rest, 0.0, y_ref[0], &lo, &hi);
+  double v = Bisect(rest, lo, hi, rest(lo), rest(hi), y_ref[0]);
+  std::fill(p.begin(), p.end(), v);
+  double y = AsymmetricOutput(op, v, p.data());
+  u[0] = v;
+  for (size_t s = 1; s < y_ref.size(); ++s) {
+    auto step = [&](double x) {
+      for (size_t i = 0; i < n; ++i) trial[i] = std::max(x - op.thresholds[i], std::min(x + op.thresholds[i], p[i]));
+      return AsymmetricOutput(op, x, trial.data());
+    };
+    Bracket(step, v, y_ref[s], &lo, &hi);
+    v = SolveStep(step, v, y, y_ref[s], lo, hi, &rep);
+    for (size_t i = 0; i < n; ++i) p[i] = std::max(v - op.thresholds[i], std::min(v + op.thresholds[i], p[i]));
+    y = AsymmetricOutput(op, v, p.data());
+    u[s] = v;
+  }
+}
+
+}  // namespace pz::model

@@ -1,0 +1,185 @@
+#include "records/preisach_family.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "io/csv.h"
+#include "model/preisach.h"
+#include "model/prandtl_ishlinskii.h"
+
+namespace pz::records {
+namespace {
+
+std::string Names(const std::vector<const io::Record*>& records) {
+  std::string s;
+  for (const io::Record* r : records) s += (s.empty() ? "" : ", ") + r->name;
+  return s;
+}
+
+/// Reversals of the drive by more than `depth` over the scored windows (a maximum then a fall of
+/// more than depth, or a minimum then a rise).
+int Reversals(const io::Record& r, double depth) {
+  int reversals = 0, dir = 0;
+  double hi = r.u[r.first_scored], lo = hi;
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    const double v = r.u[k];
+    hi = std::max(hi, v);
+    lo = std::min(lo, v);
+    if (dir >= 0 && v < hi - depth) {
+      if (dir > 0) ++reversals;
+      dir = -1;
+      lo = v;
+    } else if (dir <= 0 && v > lo + depth) {
+      if (dir < 0) ++reversals;
+      dir = 1;
+      hi = v;
+    }
+  }
+  return reversals;
+}
+
+class PreisachFamily final : public Family {
+ public:
+  PreisachFamily(const DataScale& s, const FamilyOptions& o) : grid_{s.u_min, s.u_max, o.pi_operators} {
+    ThrowIfError(grid_.Validate());
+  }
+  std::string name() const override { return "preisach"; }
+  std::string title() const override {
+    return "discrete Preisach model (" + std::to_string(grid_.levels) + " levels, " + std::to_string(grid_.cells()) +
+           " cells on the triangle over the training drive range)";
+  }
+  std::string equation() const override {
+    return "y = sum_ij w_ij (clamp(play_{r_i}[u], c_ij, c_ij + D) - c_ij + k_i), w >= 0, r_i = i D/2, "
+           "c_ij = u_min + r_i + j D, D = (u_max - u_min)/n";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  bool linear() const override { return true; }
+  size_t regressors() const override { return grid_.cells(); }
+  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+    model::ApplyPreisach(grid_, p, u, y);
+  }
+  void Regressors(std::span<const double> u, std::span<double> out) const override {
+    model::PreisachRegressors(grid_, u, out);
+  }
+  std::vector<std::string> weight_names() const override {
+    std::vector<std::string> names;
+    for (int i = 0; i < grid_.levels; ++i)
+      for (int j = 0; j < grid_.levels - i; ++j) names.push_back(grid_.CellName(i, j));
+    return names;
+  }
+  std::vector<std::string> excluded_effects() const override { return {"friction"}; }
+  std::vector<double> regularisation() const override { return model::PreisachRoughness(grid_); }
+  void CheckTraining(const std::vector<const io::Record*>& train) const override {
+    const double delta = grid_.step();
+    int reversals = 0;
+    std::vector<size_t> per_level(static_cast<size_t>(grid_.levels), 0);
+    for (const io::Record* r : train) {
+      reversals += Reversals(*r, delta);
+      for (size_t k = r->first_scored; k < r->end_scored; ++k) {
+        const double x = (r->u[k] - grid_.u_min) / delta;
+        ++per_level[static_cast<size_t>(std::clamp(x, 0.0, grid_.levels - 1.0))];
+      }
+    }
+    if (reversals < 2) {
+      throw InputError("preisach: the training drive of " + Names(train) + " has " + std::to_string(reversals) +
+                       " reversal(s) deeper than one grid step (" + io::FormatNumber(delta) +
+                       "); a Preisach grid needs at least 2 (a rise and a fall through the range) to identify its "
+                       "relays: train on a record that goes up and down, or use fewer levels (--pi-operators)");
+    }
+    for (size_t j = 0; j < per_level.size(); ++j) {
+      if (per_level[j] < kMinSamplesPerLevel) {
+        throw InputError("preisach: the training drive of " + Names(train) + " has " + std::to_string(per_level[j]) +
+                         " sample(s) between " + io::FormatNumber(grid_.u_min + static_cast<double>(j) * delta) +
+                         " and " + io::FormatNumber(grid_.u_min + static_cast<double>(j + 1) * delta) +
+                         " (grid level " + std::to_string(j + 1) + " of " + std::to_string(grid_.levels) + "); at least " +
+                         std::to_string(kMinSamplesPerLevel) +
+                         " per level are needed to identify its cells: use fewer levels (--pi-operators) or a "
+                         "drive that passes through that range");
+      }
+    }
+  }
+
+ private:
+  static constexpr size_t kMinSamplesPerLevel = 4;
+  model::PreisachGrid grid_;
+  std::vector<ParamInfo> params_;
+};
+
+class AsymmetricPiFamily final : public Family {
+ public:
+  AsymmetricPiFamily(const DataScale& s, const FamilyOptions& o)
+      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
+        knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)) {}
+  std::string name() const override { return "asymmetric-pi"; }
+  std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
+  std::string equation() const override {
+    return "y = w0 u + sum_i w_i play_{r_i}[u] + sum_j a_j max(u - z_j, 0) + sum_j b_j min(u - z_j, 0), all >= 0";
+  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  bool linear() const override { return true; }
+  size_t regressors() const override { return 1 + thresholds_.size() + 2 * knots_.size(); }
+  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+    model::ApplyAsymmetricPi(Operator(p), u, y);
+  }
+  void Regressors(std::span<const double> u, std::span<double> out) const override {
+    if (out.size() != u.size() * regressors()) throw InputError("asymmetric-pi: regressor size mismatch");
+    model::AsymmetricPiRegressors(thresholds_, knots_, u, out);
+  }
+  std::vector<std::string> weight_names() const override {
+    std::vector<std::string> names = {"w0"};
+    for (size_t i = 0; i < thresholds_.size(); ++i)
+      names.push_back("w" + std::to_string(i + 1) + "(r=" + io::FormatNumber(thresholds_[i]) + ")");
+    for (size_t j = 0; j < knots_.size(); ++j) names.push_back("a" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
+    for (size_t j = 0; j < knots_.size(); ++j) names.push_back("b" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
+    return names;
+  }
+  std::vector<std::string> excluded_effects() const override { return {"friction"}; }
+  /// A ridge on the dead zones: it shrinks the bend towards the symmetric PI operator where the
+  /// data do not ask for it (and resolves max(u − z, 0) + min(u − z, 0) = u − z).
+  std::vector<double> regularisation() const override {
+    const size_t m = regressors();
+    std::vector<double> R(m * m, 0.0);
+    for (size_t j = 1 + thresholds_.size(); j < m; ++j) R[j * m + j] = 1;
+    return R;
+  }
+  void CheckTraining(const std::vector<const io::Record*>& train) const override {
+    size_t samples = 0;
+    for (const io::Record* r : train) samples += r->scored();
+    if (samples < 2 * regressors()) {
+      throw InputError("asymmetric-pi: " + std::to_string(samples) + " training samples in " + Names(train) + " for " +
+                       std::to_string(regressors()) + " weights; at least " + std::to_string(2 * regressors()) +
+                       " are needed (a longer window or fewer plays, --pi-operators)");
+    }
+  }
+  model::AsymmetricPi Operator(std::span<const double> p) const {
+    if (p.size() != regressors()) {
+      throw InputError("asymmetric-pi: " + std::to_string(p.size()) + " weights given, " + std::to_string(regressors()) +
+                       " expected");
+    }
+    const size_t n = thresholds_.size(), K = knots_.size();
+    model::AsymmetricPi op;
+    op.w0 = p[0];
+    op.thresholds = thresholds_;
+    op.weights.assign(p.begin() + 1, p.begin() + 1 + static_cast<std::ptrdiff_t>(n));
+    op.knots = knots_;
+    op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n), p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
+    op.down.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K), p.end());
+    return op;
+  }
+
+ private:
+  std::vector<double> thresholds_, knots_;
+  std::vector<ParamInfo> params_;
+};
+
+}  // namespace
+
+std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyOptions& options) {
+  return std::make_unique<PreisachFamily>(scale, options);
+}
+
+std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale, const FamilyOptions& options) {
+  return std::make_unique<AsymmetricPiFamily>(scale, options);
+}
+
+}  // namespace pz::records

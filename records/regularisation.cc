@@ -1,0 +1,77 @@
+#include "records/regularisation.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "model/status.h"
+#include "records/fit.h"
+
+namespace pz::records {
+namespace {
+
+std::string Short(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", x);
+  return buf;
+}
+
+}  // namespace
+
+std::string WeightValidation::Describe() const {
+  if (!used) return "none";
+  std::string s = "strength " + Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
+                  std::to_string(folds) + "-fold blocked cross-validation; CV RMSE:";
+  for (size_t i = 0; i < relatives.size(); ++i) s += (i ? ", " : " ") + Short(relatives[i]) + " → " + Short(cv_rmse[i]);
+  return s;
+}
+
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R) {
+  const size_t K = eq.G.size();
+  WeightValidation v;
+  v.used = true;
+  v.folds = static_cast<int>(K);
+  size_t total = 0;
+  for (size_t b = 0; b < K; ++b) {
+    if (eq.samples[b] == 0) throw InputError("regularisation: fewer training samples than validation blocks");
+    total += eq.samples[b];
+  }
+  Eigen::MatrixXd G = eq.G[0];
+  Eigen::VectorXd h = eq.h[0];
+  for (size_t b = 1; b < K; ++b) {
+    G += eq.G[b];
+    h += eq.h[b];
+  }
+  const double trR = R.trace();
+  const double scale = trR > 0 ? G.trace() / trR : 0;
+  v.relatives = {0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1, 10, 100};
+  std::vector<std::vector<double>> err(v.relatives.size(), std::vector<double>(K));
+  for (size_t c = 0; c < v.relatives.size(); ++c) {
+    double sse = 0;
+    for (size_t b = 0; b < K; ++b) {
+      const Eigen::MatrixXd Gm = G - eq.G[b] + (v.relatives[c] * scale) * R;
+      const Eigen::VectorXd w = NonNegativeLeastSquares(Gm, h - eq.h[b]);
+      const double e = std::max(0.0, w.dot(eq.G[b] * w) - 2 * eq.h[b].dot(w) + eq.bb[b]);
+      err[c][b] = e;
+      sse += e;
+    }
+    v.cv_rmse.push_back(std::sqrt(sse / static_cast<double>(total)));
+  }
+  size_t best = 0;
+  for (size_t c = 1; c < v.cv_rmse.size(); ++c)
+    if (v.cv_rmse[c] < v.cv_rmse[best]) best = c;
+  size_t chosen = best;
+  for (size_t c = best + 1; c < v.relatives.size(); ++c) {
+    double mean = 0, sq = 0;
+    for (size_t b = 0; b < K; ++b) mean += err[c][b] - err[best][b];
+    mean /= static_cast<double>(K);
+    for (size_t b = 0; b < K; ++b) sq += (err[c][b] - err[best][b] - mean) * (err[c][b] - err[best][b] - mean);
+    const double se = std::sqrt(sq / static_cast<double>(K - 1) / static_cast<double>(K));
+    if (mean > se) break;
+    chosen = c;
+  }
+  v.relative = v.relatives[chosen];
+  v.lambda = v.relative * scale;
+  return v;
+}
+
+}  // namespace pz::records

@@ -1,0 +1,48 @@
+// The strength of a linear family's weight regularisation (records/families.h
+// Family::regularisation), chosen by validation on the training records (issue 22).
+//
+// The training samples (scored windows of the training records, in order) are cut into K = 5
+// contiguous time blocks; the normal equations are accumulated per block (G_b = A_bᵀA_b,
+// h_b = A_bᵀb_b, b_bᵀb_b). For each candidate strength λ = ρ · tr(G)/tr(R),
+// ρ ∈ {0, 10⁻⁶, 10⁻⁵, …, 10²}, and each block b the weights are solved without the block,
+// w = NNLS(G − G_b + λR, h − h_b), and the block's squared error is wᵀG_b w − 2h_bᵀw + b_bᵀb_b.
+// The chosen strength is the largest ρ, going up from the one with the least cross-validated error,
+// whose extra error over that one is not larger than its standard error across the blocks (the
+// paired "one standard error" rule): the strongest regularisation the data cannot tell from the
+// best — what keeps a Preisach density that a major loop does not determine close to the PI
+// operator's instead of a sparse artefact. Deterministic (a fixed order of fixed-size sums).
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+namespace pz::records {
+
+/// Normal equations of the training samples, per contiguous time block.
+struct BlockedNormalEquations {
+  std::vector<Eigen::MatrixXd> G;  ///< AᵀA of each block (full symmetric)
+  std::vector<Eigen::VectorXd> h;  ///< Aᵀb
+  std::vector<double> bb;          ///< bᵀb
+  std::vector<size_t> samples;     ///< samples of each block
+};
+
+/// What the validation chose (reported by `piezoid fit`).
+struct WeightValidation {
+  bool used = false;              ///< the family has a regularisation
+  double lambda = 0;              ///< the chosen λ (absolute, against the sum of squared errors)
+  double relative = 0;            ///< the chosen ρ = λ tr(R) / tr(G)
+  std::vector<double> relatives;  ///< the candidates ρ
+  std::vector<double> cv_rmse;    ///< their cross-validated RMSE [response unit]
+  int folds = 0;
+  std::string Describe() const;   ///< "ρ = 1e-3 (λ = …) by 5-fold blocked cross-validation: …"
+};
+
+/// The number of time blocks.
+inline constexpr int kValidationBlocks = 5;
+
+/// Chooses λ for the regularisation R (m×m) by the rule above. Throws InputError when a block is
+/// empty (fewer training samples than blocks).
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R);
+
+}  // namespace pz::records
