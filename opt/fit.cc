@@ -227,7 +227,6 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       LmResult r = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
       fit.evaluations += r.evaluations;
       fit.lm_iterations += r.iterations;
-      if (o.on_polish) o.on_polish(static_cast<int>(s), r.iterations, r.cost);
       if (std::isfinite(r.cost) && r.cost < best_cost) {
         best_cost = r.cost;
         best_unit = std::move(r.x);

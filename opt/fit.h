@@ -146,8 +146,6 @@ struct FitOptions {
   bool uncertainty = true;    ///< compute the uncertainty table at the solution
   double uncertainty_fd_step = 1e-3;  ///< in the scaled coordinates x / scale, > 0
   int threads = 2;            ///< Jacobian columns of the uncertainty, ≥ 1
-  /// Called after each polish with its start's index, iterations and cost (may be null).
-  std::function<void(int start, int iterations, double cost)> on_polish;
 };
 
 struct FitResult {
