@@ -6,6 +6,7 @@
 // (records/excitation.h): what the training records excite, what each withheld record needs beyond
 // it, and a proposed training drive (excitation_drive.csv).
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -109,15 +110,33 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
      << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range " << Fmt(m.scale().y_half) << " "
      << set.response_unit << ", gain " << Fmt(m.scale().gain) << " " << set.response_unit << "/" << set.drive_unit
      << ", dominant frequency " << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
-  os << "## Parameters\n\n| parameter | value | unit | search range |\n|---|---|---|---|\n";
+  const auto& u = r.uncertainty;
+  os << "## Parameters\n\n| parameter | value | unit | search range | ± σ | sensitivity [" << set.response_unit
+     << "] | identifiability |\n|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < m.params().size(); ++i) {
     const auto& p = m.params()[i];
     os << "| " << p.name << " | " << Fmt(r.params[i], 6) << " | " << p.unit << " | [" << Fmt(p.lower) << ", "
-       << Fmt(p.upper) << "]" << (p.log_scale ? " log" : "") << " |\n";
+       << Fmt(p.upper) << "]" << (p.log_scale ? " log" : "") << " | ";
+    if (i < u.params.size()) {
+      const auto& e = u.params[i];
+      os << (std::isfinite(e.std_error) ? Fmt(e.std_error, 3) : "—") << " | " << Fmt(e.sensitivity, 3) << " | "
+         << opt::IdentifiabilityName(e.identifiability) << (e.note.empty() ? "" : "; " + e.note) << " |\n";
+    } else {
+      os << " | | |\n";
+    }
   }
   const auto wn = m.family().weight_names();
   for (size_t i = 0; i < r.weights.size(); ++i) {
-    os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) |\n";
+    os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) | | | |\n";
+  }
+  if (!u.params.empty()) {
+    os << "\nσ from the training residuals (s = " << Fmt(u.residual_sigma, 4) << " " << set.response_unit
+       << ") and their Jacobian at the solution; sensitivity: the RMS change of the output per step of one "
+          "unit range (a log-scaled parameter: ∂x/∂u). Singular values of J·diag(scale):";
+    for (double v : u.singular_values) os << " " << Fmt(v, 3);
+    os << "; weakest direction: " << u.weakest_direction << ".";
+    if (!r.weights.empty()) os << " The solved weights are not in the table (they follow from the others).";
+    os << "\n";
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | NRMSE [% of range] |\n"
@@ -200,6 +219,22 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     checks.push_back(Obj(g));
   }
   f["extrapolation"] = List(checks);
+  std::vector<Value> table;
+  for (const auto& e : r.uncertainty.params) {
+    Struct p;
+    auto& g = *p.mutable_fields();
+    g["name"] = Text(e.name);
+    g["value"] = Num(e.value);
+    if (std::isfinite(e.std_error)) g["std_error"] = Num(e.std_error);
+    g["sensitivity"] = Num(e.sensitivity);
+    g["identifiability"] = Text(opt::IdentifiabilityName(e.identifiability));
+    if (!e.note.empty()) g["note"] = Text(e.note);
+    table.push_back(Obj(p));
+  }
+  f["uncertainty"] = List(table);
+  std::vector<Value> singular;
+  for (double v : r.uncertainty.singular_values) singular.push_back(Num(v));
+  f["singular_values"] = List(singular);
   f["train_mse"] = Num(r.train_mse);
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
   f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
@@ -307,7 +342,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
   cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
-  cmd->add_option("--algorithm", a->algorithm, "pso, ga-real or ga-binary")->default_str("pso");
+  cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
   AddSearchFlags(cmd, &a->search);
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");

@@ -9,17 +9,17 @@ void AddSearchFlags(CLI::App* cmd, SearchFlags* f) {
   cmd->add_option("--seed", f->seed, "seed of the first repetition")->default_str(s(f->seed));
   cmd->add_option("--particles", f->particles, "PSO swarm size")->default_str(s(f->particles));
   cmd->add_option("--iterations", f->iterations, "PSO iterations")->default_str(s(f->iterations));
-  cmd->add_option("--population", f->population, "GA population")->default_str(s(f->population));
-  cmd->add_option("--generations", f->generations, "GA generations")->default_str(s(f->generations));
+  cmd->add_option("--population", f->population, "GA / DE population")->default_str(s(f->population));
+  cmd->add_option("--generations", f->generations, "GA / DE generations")->default_str(s(f->generations));
   cmd->add_option("--stall", f->stall,
                   "stop a repetition after this many iterations / generations without a relative "
-                  "improvement of 1e-6 (0: never)")
+                  "improvement of 1e-6 (DE: 1e-4; 0: never)")
       ->default_str(s(f->stall));
 }
 
 void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
   o->repetitions = f.repetitions;
-  o->pso.seed = o->ga_real.seed = o->ga_binary.ga.seed = f.seed;
+  o->pso.seed = o->ga_real.seed = o->ga_binary.ga.seed = o->de.seed = f.seed;
   o->pso.particles = f.particles;
   o->pso.iterations = f.iterations;
   o->pso.stall_iterations = f.stall;
@@ -29,6 +29,9 @@ void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
   o->ga_binary.ga.population_size = f.population;
   o->ga_binary.ga.max_generations = f.generations;
   o->ga_binary.ga.stall_generations = f.stall;
+  o->de.population = f.population;
+  o->de.generations = f.generations;
+  o->de.stall_generations = f.stall;
 }
 
 }  // namespace pz::client

@@ -1,14 +1,9 @@
-// Global fit of one model structure (base model + effects) on the training cases of a bench:
-// a global search (differential evolution through the BatchEvaluator seam) and/or starts given by
-// the caller, then a bounded Levenberg–Marquardt refinement on the residual vector; then the
-// parameter uncertainties and the identifiability table from the Jacobian at the solution:
-//
-//   J = ∂r/∂x (physical parameters, central differences),  s² = Σ r² / (N − p),
-//   Cov = s² (JᵀJ)⁺,  σ_i = √Cov_ii,
-//   sensitivity_i = ‖J_i‖ · scale_i / √N  (RMS change of the output [deg] per typical step),
-//
-// and the singular values of J·diag(scale) (how many directions the data constrain). A parameter
-// whose column is zero has no effect on the output at all (β and γ when α = 0).
+// Global fit of one model structure (base model + effects) on the training cases of a bench: the
+// one fit of opt/fit.h (differential evolution through the BatchEvaluator seam and/or starts given
+// by the caller, a bounded Levenberg–Marquardt polish on the residual vector, the uncertainty and
+// identifiability table at the solution) over the layout's coordinates (γ searched as the ratio
+// γ/β), plus every case's PI. A parameter whose column is zero has no effect on the output at all
+// (β and γ when α = 0).
 #pragma once
 
 #include <functional>
@@ -16,28 +11,14 @@
 #include <string>
 #include <vector>
 
-#include "opt/de_lm.h"
+#include "opt/fit.h"
 #include "diagnose/problem.h"
 
 namespace pz::diagnose {
 
-/// How strongly the data constrain one parameter.
-enum class Identifiability : int {
-  kWell = 0,       ///< relative uncertainty ≤ 30 %
-  kPoorly = 1,     ///< larger uncertainty (flat or correlated direction)
-  kNoEffect = 2,   ///< the output does not depend on it at this point
-};
-const char* IdentifiabilityName(Identifiability i);
-
-struct ParamEstimate {
-  std::string name, unit;
-  double value = 0;        ///< physical
-  double std_error = 0;    ///< σ_i (inf when not identifiable)
-  double sensitivity = 0;  ///< RMS output change [deg] per `scale` of the parameter
-  double scale = 1;
-  Identifiability identifiability = Identifiability::kWell;
-  std::string note;        ///< e.g. "correlated with delta (r = -0.98)"
-};
+using opt::Identifiability;
+using opt::IdentifiabilityName;
+using opt::ParamEstimate;
 
 /// Builds the evaluator of a fitness (e.g. an evaluation session on the service, which needs the
 /// fitness's model, layout and residual mode to write the session's spec).
@@ -48,7 +29,7 @@ struct FitOptions {
   /// Builds the evaluators of the global search (cost) and of the refinement (residuals: every
   /// Jacobian one batch); null = ThreadPoolEvaluators with `threads` threads.
   EvaluatorFactory evaluator_factory;
-  bool global_search = true;       ///< differential evolution before the refinement
+  bool global_search = true;       ///< differential evolution before the refinement (one repetition)
   opt::DeOptions de;
   opt::LmOptions lm;
   /// Physical points seeding the global search's initial population.
@@ -82,11 +63,28 @@ struct FitResult {
 /// (the result says !ok); throws InputError on invalid options.
 FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, const FitOptions& options);
 
-/// Computes params (σ, sensitivity, identifiability) and the singular values at fit.x.
+/// Computes params (σ, sensitivity, identifiability) and the singular values at fit.x
+/// (opt::ComputeUncertainty on the training residuals); its evaluations are added to fit's.
 void ComputeUncertainty(const DiagnosisModel& model, const ParameterLayout& layout, FitResult& fit, int threads,
                         double fd_step = 1e-3);
 
-/// Training residual function of the model in unit coordinates (for LM), or in physical ones.
-opt::ResidualFunction UnitResiduals(const DiagnosisModel& model, const ParameterLayout& layout);
+/// The layout as the fit's parameter map: unit coordinates (what the evaluators get) ↔ physical,
+/// γ through the ratio γ/β (its bounds at a point are the ratio's times β).
+class LayoutMap final : public opt::ParameterMap {
+ public:
+  explicit LayoutMap(const ParameterLayout& layout) : layout_(layout) {}
+  int size() const override { return layout_.size(); }
+  std::string name(int i) const override { return layout_.specs()[i].name; }
+  std::string unit(int i) const override { return layout_.specs()[i].unit; }
+  std::vector<double> ToPhysical(std::span<const double> unit) const override { return layout_.FromUnit(unit); }
+  std::vector<double> ToUnit(std::span<const double> physical) const override { return layout_.ToUnit(physical); }
+  void Bounds(std::span<const double> x, int i, double* lower, double* upper) const override;
+  double Scale(std::span<const double>, int i) const override { return layout_.specs()[i].scale; }
+  bool physical_genomes() const override { return false; }
+  opt::ParamBox SearchBox() const override { return opt::UnitBox(*this); }
+
+ private:
+  const ParameterLayout& layout_;
+};
 
 }  // namespace pz::diagnose

@@ -377,6 +377,77 @@ RepetitionResult RunGaBinary(Run& run, int repetition) {
   return r;
 }
 
+RepetitionResult RunDe(Run& run, int repetition) {
+  // DE/rand-to-best/1/bin: trial = x + F (best − x) + F (x_r1 − x_r2) on the crossed coordinates
+  // (at least one), a coordinate leaving the box put between the parent and that bound; the trial
+  // replaces its parent when not worse. The seeds take the first slots of the initial population.
+  const DeOptions& o = run.options.de;
+  const size_t d = run.box.size();
+  const int np = o.population, dim = static_cast<int>(d);
+  const double rep_start = NowSeconds();
+  Rng rng(o.seed + static_cast<uint64_t>(repetition));
+  std::vector<std::vector<double>> pop(np, std::vector<double>(d));
+  const auto& seeds = run.options.seeds;
+  for (int i = 0; i < np; ++i) {
+    if (i < static_cast<int>(seeds.size())) {
+      for (size_t k = 0; k < d; ++k) pop[i][k] = std::clamp(seeds[i][k], 0.0, 1.0);
+    } else {
+      for (size_t k = 0; k < d; ++k) pop[i][k] = rng.Uniform01();
+    }
+  }
+  std::vector<double> cost, tcost;
+  run.EvaluateUnit(pop, cost);
+  int best = ArgMin(cost);
+  double reference = cost[best];
+  int stall = 0, generation = 0;
+  run.Record(repetition, 0, cost[best]);
+  std::vector<std::vector<double>> trial(np, std::vector<double>(d));
+  std::string reason;
+  while ((reason = run.Stop(generation, o.generations, stall, o.stall_generations, o.tolerance, cost[best],
+                            rep_start, "generations"))
+             .empty()) {
+    ++generation;
+    for (int i = 0; i < np; ++i) {
+      int r1, r2;
+      do r1 = static_cast<int>(rng.UniformBelow(np)); while (r1 == i);
+      do r2 = static_cast<int>(rng.UniformBelow(np)); while (r2 == i || r2 == r1);
+      const int jr = static_cast<int>(rng.UniformBelow(dim));
+      for (int k = 0; k < dim; ++k) {
+        const double xi = pop[i][k];
+        const bool cross = rng.Uniform01() < o.cr || k == jr;
+        double v = xi;
+        if (cross) {
+          v = xi + o.f * (pop[best][k] - xi) + o.f * (pop[r1][k] - pop[r2][k]);
+          if (v < 0) v = xi * rng.Uniform01();
+          if (v > 1) v = xi + (1 - xi) * rng.Uniform01();
+        }
+        trial[i][k] = v;
+      }
+    }
+    run.EvaluateUnit(trial, tcost);
+    for (int i = 0; i < np; ++i) {
+      if (tcost[i] <= cost[i]) {
+        pop[i] = trial[i];
+        cost[i] = tcost[i];
+      }
+    }
+    best = ArgMin(cost);
+    if (reference - cost[best] > o.tolerance * std::abs(reference)) {  // (the rule of Significant, as
+      reference = cost[best];                                             // the fin's seeded fits ran it)
+      stall = 0;
+    } else {
+      ++stall;
+    }
+    ++run.iterations;
+    run.Record(repetition, generation, cost[best]);
+  }
+  RepetitionResult r;
+  r.best_unit = pop[best];
+  r.best_cost = cost[best];
+  r.stop_reason = reason;
+  return r;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -446,6 +517,7 @@ const char* SearchAlgorithmName(SearchAlgorithm a) {
     case SearchAlgorithm::kPso: return "pso";
     case SearchAlgorithm::kGaReal: return "ga-real";
     case SearchAlgorithm::kGaBinary: return "ga-binary";
+    case SearchAlgorithm::kDe: return "de";
   }
   return "unknown";
 }
@@ -454,7 +526,19 @@ SearchAlgorithm ParseSearchAlgorithm(const std::string& name) {
   if (name == "pso") return SearchAlgorithm::kPso;
   if (name == "ga-real") return SearchAlgorithm::kGaReal;
   if (name == "ga-binary") return SearchAlgorithm::kGaBinary;
-  throw InputError("algorithm = " + name + ": must be pso, ga-real or ga-binary");
+  if (name == "de") return SearchAlgorithm::kDe;
+  throw InputError("algorithm = " + name + ": must be pso, ga-real, ga-binary or de");
+}
+
+Status DeOptions::Validate() const {
+  if (population < 4) return InvalidArgument(FieldError("de.population", population, "must be >= 4"));
+  if (generations < 0) return InvalidArgument(FieldError("de.generations", generations, "must be >= 0"));
+  if (stall_generations < 0)
+    return InvalidArgument(FieldError("de.stall_generations", stall_generations, "must be >= 0 (0 = never)"));
+  if (!(tolerance >= 0)) return InvalidArgument(FieldError("de.tolerance", tolerance, "must be >= 0"));
+  if (!(f > 0 && f <= 2)) return InvalidArgument(FieldError("de.f", f, "must be in (0, 2]"));
+  if (!(cr >= 0 && cr <= 1)) return InvalidArgument(FieldError("de.cr", cr, "must be in [0, 1]"));
+  return Status::Ok();
 }
 
 Status PsoOptions::Validate() const {
@@ -527,8 +611,16 @@ Status SearchOptions::Validate(const ParamBox& box) const {
     case SearchAlgorithm::kPso: s = pso.Validate(); break;
     case SearchAlgorithm::kGaReal: s = ga_real.Validate(); break;
     case SearchAlgorithm::kGaBinary: s = ga_binary.Validate(box.size()); break;
+    case SearchAlgorithm::kDe: s = de.Validate(); break;
   }
   if (!s.ok()) return s;
+  if (!seeds.empty() && algorithm != SearchAlgorithm::kDe)
+    return InvalidArgument(FieldError("seeds.size()", seeds.size(), "must be 0: only the de search takes seeds"));
+  for (size_t i = 0; i < seeds.size(); ++i) {
+    if (seeds[i].size() != box.size())
+      return InvalidArgument(FieldError("seeds[" + std::to_string(i) + "].size()", seeds[i].size(),
+                                        "must be " + std::to_string(box.size())));
+  }
   if (repetitions < 1) return InvalidArgument(FieldError("repetitions", repetitions, "must be >= 1"));
   if (std::isnan(target_cost)) return InvalidArgument(FieldError("target_cost", target_cost, "must not be NaN"));
   if (!(std::isfinite(max_wall_time_s) && max_wall_time_s >= 0)) {
@@ -569,6 +661,7 @@ SearchResult Search(const ParamBox& box, const SearchOptions& options, BatchEval
       case SearchAlgorithm::kPso: r = RunPso(run, rep); break;
       case SearchAlgorithm::kGaReal: r = RunGaReal(run, rep); break;
       case SearchAlgorithm::kGaBinary: r = RunGaBinary(run, rep); break;
+      case SearchAlgorithm::kDe: r = RunDe(run, rep); break;
     }
     std::vector<double> physical(box.size());
     box.ToPhysical(r.best_unit.data(), physical.data());

@@ -10,7 +10,10 @@
 //   kGaReal    real-coded GA: elitism, k-tournament selection, SBX (or BLX-α) crossover, Gaussian
 //              mutation, children reflected into the box;
 //   kGaBinary  the project's binary GA (opt/ga.h), each parameter a bits_per_parameter gene
-//              (Gray code by default) decoded to a real before evaluation.
+//              (Gray code by default) decoded to a real before evaluation;
+//   kDe        differential evolution DE/rand-to-best/1/bin, a trial coordinate leaving the box put
+//              between its parent and that bound; optional seeds take the first slots of the
+//              initial population (the fin-bench diagnosis's search).
 //
 // The search space is the unit box [0, 1]^d: coordinate x maps to lower + x (upper − lower), or to
 // 10^(log10 lower + x (log10 upper − log10 lower)) for log-scaled parameters. Genomes handed to the
@@ -59,8 +62,8 @@ struct ParamBox {
   void ToUnit(const double* physical, double* unit) const;
 };
 
-enum class SearchAlgorithm { kPso, kGaReal, kGaBinary };
-/// "pso", "ga-real", "ga-binary".
+enum class SearchAlgorithm { kPso, kGaReal, kGaBinary, kDe };
+/// "pso", "ga-real", "ga-binary", "de".
 const char* SearchAlgorithmName(SearchAlgorithm a);
 /// Parses the names above; throws InputError naming the value otherwise.
 SearchAlgorithm ParseSearchAlgorithm(const std::string& name);
@@ -104,6 +107,19 @@ struct RealGaOptions {
   Status Validate() const;  ///< names the field: "ga_real.tournament = 0: must be >= 1"
 };
 
+/// Differential evolution DE/rand-to-best/1/bin.
+struct DeOptions {
+  int population = 32;        ///< ≥ 4
+  int generations = 60;       ///< generations after the initial one, ≥ 0
+  int stall_generations = 15; ///< stop after this many generations without a relative gain > tolerance,
+                              ///< ≥ 0 (0 = never stop for stall)
+  double tolerance = 1e-4;    ///< relative gain that counts as progress, ≥ 0
+  double f = 0.6;             ///< differential weight, in (0, 2]
+  double cr = 0.9;            ///< crossover probability, in [0, 1]
+  uint64_t seed = 1;
+  Status Validate() const;    ///< names the field: "de.population = 3: must be >= 4"
+};
+
 struct BinaryGaOptions {
   int bits_per_parameter = 16;  ///< 2 … 52
   bool gray_code = true;        ///< genes are Gray-coded (else plain binary)
@@ -138,6 +154,10 @@ struct SearchOptions {
   PsoOptions pso;
   RealGaOptions ga_real;
   BinaryGaOptions ga_binary;
+  DeOptions de;
+  /// Points of the unit box (each of the box's size, clamped into it) that take the first slots of
+  /// the initial population; only the de search takes them.
+  std::vector<std::vector<double>> seeds;
   int repetitions = 5;  ///< seeds seed, seed+1, … (seed of the chosen algorithm's options); best kept
   double target_cost = -std::numeric_limits<double>::infinity();  ///< stop a repetition at ≤ this
   double max_wall_time_s = 0;  ///< per repetition, 0 = none (non-deterministic when it triggers)

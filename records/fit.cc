@@ -253,6 +253,27 @@ RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
   return m;
 }
 
+namespace {
+
+/// The residuals of the training records at physical values (FitnessResult::residuals, cost Σ r² =
+/// the MSE), the polish's fitness.
+class RecordResidualFitness final : public opt::FitnessFunction {
+ public:
+  explicit RecordResidualFitness(const RecordFitness& fitness) : fitness_(fitness) {}
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override {
+    opt::FitnessResult out;
+    if (!fitness_.Residuals(genome.reals, out.residuals))
+      return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
+    for (double e : out.residuals) out.cost += e * e;
+    return out;
+  }
+
+ private:
+  const RecordFitness& fitness_;
+};
+
+}  // namespace
+
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto train = set.WithRole(model::CaseRole::kTrain);
@@ -265,55 +286,53 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   std::vector<double> best;
   if (!params.empty()) {
     opt::ParamBox box;
+    std::vector<std::string> units;
     for (const ParamInfo& p : params) {
       box.names.push_back(p.name);
       box.lower.push_back(p.lower);
       box.upper.push_back(p.upper);
       box.log_scale.push_back(p.log_scale);
+      units.push_back(p.unit);
     }
-    ThrowIfError(box.Validate());
-    std::unique_ptr<opt::BatchEvaluator> ev = options.evaluator_factory
-                                                  ? options.evaluator_factory(fitness)
-                                                  : std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads);
-    opt::SearchOptions so = options.search;
+    const opt::BoxMap map(box, units);
+    const RecordResidualFitness residual_fitness(fitness);
+    opt::FitProblem problem;
+    problem.map = &map;
+    problem.cost_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
+      if (options.evaluator_factory) return options.evaluator_factory(fitness);
+      return std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads);
+    };
+    problem.residual_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
+      return std::make_unique<opt::ThreadPoolEvaluator>(residual_fitness, options.threads);
+    };
+    problem.physical_residuals = [&](std::span<const double> x, std::vector<double>& r) {
+      return fitness.Residuals(x, r);
+    };
+    problem.residual_weight = 1 / std::sqrt(static_cast<double>(fitness.samples()));
+    opt::FitOptions fo;
+    fo.search_options = options.search;
     if (options.progress) {
-      so.on_progress = [&](const opt::SearchProgress& p) {
+      fo.search_options.on_progress = [&](const opt::SearchProgress& p) {
         if (p.iteration % 25 == 0) {
           options.progress("search repetition " + std::to_string(p.repetition) + " iteration " +
                            std::to_string(p.iteration) + ": best MSE " + io::FormatNumber(p.overall_best_cost));
         }
       };
     }
-    res.search = opt::Search(box, so, *ev);
-    res.evaluations = res.search.evaluations;
+    fo.polish = options.polish;
+    fo.lm = options.lm;
+    fo.starts = options.extra_starts;
+    fo.search_cost_is_sum_of_squares = true;  // the search's cost is the MSE = Σ r²
+    fo.uncertainty = options.uncertainty;
+    fo.uncertainty_fd_step = options.lm.fd_step;
+    fo.threads = options.threads;
+    opt::FitResult fit = opt::Fit(problem, fo);
+    res.search = std::move(fit.search);
+    res.evaluations = fit.evaluations;
+    res.lm_iterations = fit.lm_iterations;
     res.stop_reason = res.search.stop_reason;
-    best = res.search.best;
-    if (options.polish) {
-      std::vector<std::vector<double>> starts;
-      std::vector<double> u0(box.size());
-      box.ToUnit(best.data(), u0.data());
-      starts.push_back(u0);
-      for (const auto& s : options.extra_starts) starts.push_back(s);
-      const std::vector<double> lo(box.size(), 0.0), hi(box.size(), 1.0);
-      opt::ResidualFunction rf = [&](std::span<const double> x, std::vector<double>& r) {
-        std::vector<double> phys(x.size());
-        box.ToPhysical(x.data(), phys.data());
-        return fitness.Residuals(phys, r);
-      };
-      opt::LmOptions lm = options.lm;
-      lm.threads = options.threads;
-      double best_cost = res.search.best_cost;
-      for (const auto& s : starts) {
-        const opt::LmResult r = opt::LevenbergMarquardt(rf, s, lo, hi, lm);
-        res.evaluations += r.evaluations;
-        res.lm_iterations += r.iterations;
-        if (std::isfinite(r.cost) && r.cost < best_cost) {
-          best_cost = r.cost;
-          best.assign(box.size(), 0);
-          box.ToPhysical(r.x.data(), best.data());
-        }
-      }
-    }
+    res.uncertainty = std::move(fit.uncertainty);
+    best = std::move(fit.x);
   }
   const RecordFitness::Output out = fitness.Run(best);
   res.params = best;

@@ -1,8 +1,10 @@
 // Identification of a record model (records/model.h) on the training records of a record set
 // (issue 14): the least-squares output error over the scored windows, with each record's offset
-// handled explicitly (io::OffsetMode), by a global search (PSO / real GA / binary GA of
-// opt/param_search.h, through the evaluator seam: threads here, the service's workers with
-// --master) and a bounded Levenberg–Marquardt polish. A linear-in-parameters family (the
+// handled explicitly (io::OffsetMode): the one fit of opt/fit.h over the model's parameter box — a
+// global search (PSO / real GA / binary GA / DE of opt/param_search.h, through the evaluator seam:
+// threads here, the service's workers with --master), a bounded Levenberg–Marquardt polish (its
+// Jacobians one batch of a residual evaluator, threads here) and the uncertainty table (σ,
+// sensitivity, identifiability, singular values) at the solution. A linear-in-parameters family (the
 // Prandtl–Ishlinskii operator) has its weights solved exactly by non-negative least squares inside
 // every evaluation (variable projection), so only effect parameters are searched.
 //
@@ -18,8 +20,8 @@
 #include <vector>
 
 #include "io/records.h"
-#include "opt/de_lm.h"
 #include "opt/evaluator.h"
+#include "opt/fit.h"
 #include "opt/param_search.h"
 #include "records/model.h"
 #include "records/regularisation.h"
@@ -108,6 +110,9 @@ struct FitOptions {
   /// Starting points for the polish besides the search's best (unit coordinates, e.g. a base fit
   /// with an effect at small magnitudes); the best polished one is kept.
   std::vector<std::vector<double>> extra_starts;
+  /// The uncertainty table at the solution (2p + 1 evaluations, on this machine; its Jacobian
+  /// steps are lm.fd_step of each parameter's unit range).
+  bool uncertainty = true;
   std::function<void(const std::string&)> progress;
 };
 
@@ -122,7 +127,11 @@ struct FitResult {
   std::vector<std::vector<double>> yhat;           ///< every record: the model output [0, end_scored)
   opt::SearchResult search;                        ///< empty when nothing was searched
   int lm_iterations = 0;
-  int64_t evaluations = 0;
+  int64_t evaluations = 0;                         ///< search and polish
+  /// σ, sensitivity (RMS change of the output, response unit, per scale: the unit range of a
+  /// linear parameter, ∂x/∂u of a log-scaled one), identifiability, singular values, weakest
+  /// direction; empty without options.uncertainty or parameters. Its evaluations are its own.
+  opt::Uncertainty uncertainty;
   double wall_time_s = 0;
   std::string stop_reason;
 };

@@ -12,9 +12,6 @@
 
 namespace pz::diagnose {
 
-using opt::DeOptions;
-using opt::DeResult;
-using opt::DifferentialEvolution;
 using opt::LevenbergMarquardt;
 using opt::LmOptions;
 using opt::LmResult;
@@ -89,23 +86,6 @@ class Sphere final : public opt::FitnessFunction {
     return {s, opt::FitnessStatus::kOk, ""};
   }
 };
-
-TEST(OptimizeTest, DifferentialEvolutionFindsTheMinimumAndIsTheSameOnAnyEvaluator) {
-  Sphere f;
-  DeOptions o;
-  o.population = 20;
-  o.generations = 150;
-  o.stall_generations = 150;
-  o.seed = 7;
-  opt::InlineEvaluator inline_ev(f);
-  opt::ThreadPoolEvaluator pool(f, 2);
-  const DeResult a = DifferentialEvolution(4, o, inline_ev);
-  const DeResult b = DifferentialEvolution(4, o, pool);
-  EXPECT_LT(a.best_cost, 1e-8);
-  EXPECT_EQ(a.best, b.best);
-  EXPECT_EQ(a.best_cost, b.best_cost);
-  EXPECT_EQ(a.evaluations, 20 * 151);
-}
 
 TEST(OptimizeTest, LevenbergMarquardtFitsAnExponentialAndRespectsBounds) {
   // r_k = 2 e^{−0.7 t_k} − a e^{−b t_k}: minimum at (2, 0.7); with b ≤ 0.5 the bound is active.

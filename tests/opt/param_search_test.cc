@@ -1,4 +1,4 @@
-// Complete-model optimisers (opt/param_search.h): PSO, real-coded GA and binary GA reach the
+// Complete-model optimisers (opt/param_search.h): PSO, real-coded GA, binary GA and DE reach the
 // known minima of Rosenbrock and Rastrigin; the same seed gives the same result bit for bit inline
 // and on a 2-thread pool; bad boxes and options are refused naming the field; Gray decoding.
 #include "opt/param_search.h"
@@ -170,9 +170,10 @@ TEST(ParamSearch, LogScaleFindsSmallValue) {
 
 TEST(ParamSearch, SameSeedSameResultInlineAndThreadPool) {
   Rastrigin f;
-  for (SearchAlgorithm a : {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary}) {
+  for (SearchAlgorithm a :
+       {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
     SearchOptions o = Options(a, 2);
-    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = 60;
+    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations = 60;
     InlineEvaluator inl(f);
     ThreadPoolEvaluator pool(f, 2);
     SearchResult x = Search(Box(3, -5.12, 5.12), o, inl);
@@ -186,10 +187,40 @@ TEST(ParamSearch, SameSeedSameResultInlineAndThreadPool) {
     EXPECT_EQ(x.trace.best_cost, y.trace.best_cost);
     EXPECT_EQ(x.trace.evaluations, y.trace.evaluations);
     // A different seed gives a different run.
-    o.pso.seed = o.ga_real.seed = o.ga_binary.ga.seed = 99;
+    o.pso.seed = o.ga_real.seed = o.ga_binary.ga.seed = o.de.seed = 99;
     SearchResult z = Search(Box(3, -5.12, 5.12), o, inl);
     EXPECT_NE(x.trace.best_cost, z.trace.best_cost);
   }
+}
+
+TEST(ParamSearch, DifferentialEvolutionFindsTheMinimumFromItsSeeds) {
+  // Sphere around (0.3, 0.4, 0.5, 0.6) in the unit box: the DE runs every generation (no stall),
+  // and a seed at the minimum is kept from the initial population on.
+  class Sphere final : public FitnessFunction {
+   public:
+    FitnessResult Evaluate(const Genome& g) const override {
+      double s = 0;
+      for (size_t i = 0; i < g.reals.size(); ++i) s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
+      return {s, FitnessStatus::kOk, {}};
+    }
+  } f;
+  SearchOptions o;
+  o.algorithm = SearchAlgorithm::kDe;
+  o.repetitions = 1;
+  o.de.population = 20;
+  o.de.generations = 150;
+  o.de.stall_generations = 0;
+  o.de.seed = 7;
+  const SearchResult a = RunSearch(f, Box(4, 0, 1), o);
+  EXPECT_LT(a.best_cost, 1e-8);
+  EXPECT_EQ(a.evaluations, 20 * 151);
+  EXPECT_EQ(a.iterations, 150);
+  PZ_EXPECT_HAS(a.stop_reason, "limit: 150 generations");
+  o.de.generations = 3;
+  o.seeds = {{0.3, 0.4, 0.5, 0.6}, {2.0, -1.0, 0.5, 0.5}};
+  const SearchResult b = RunSearch(f, Box(4, 0, 1), o);
+  EXPECT_LT(b.best_cost, 1e-30);
+  EXPECT_EQ(b.trace.best_cost.front(), b.best_cost);
 }
 
 TEST(ParamSearch, TraceAndCountersConsistent) {
@@ -234,9 +265,10 @@ TEST(ParamSearch, StallAndTargetStop) {
 
 TEST(ParamSearch, NanAndExceptionsAreSanitised) {
   Awkward f;
-  for (SearchAlgorithm a : {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary}) {
+  for (SearchAlgorithm a :
+       {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
     SearchOptions o = Options(a, 1);
-    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = 100;
+    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations = 100;
     SearchResult r = RunSearch(f, Box(2, -1, 1), o);
     SCOPED_TRACE(SearchAlgorithmName(a));
     EXPECT_TRUE(std::isfinite(r.best_cost));
@@ -293,8 +325,18 @@ TEST(ParamSearch, BadBoxAndOptionsNamed) {
   o.ga_binary.bits_per_parameter = 16;
   o.ga_binary.ga.population_size = 1;
   PZ_EXPECT_HAS(search(box, o), "ga_binary.ga.population_size = 1");
-  PZ_EXPECT_HAS(InputErrorOf([] { ParseSearchAlgorithm("de"); }), "algorithm = de");
+  o = Options(SearchAlgorithm::kDe, 1);
+  o.de.population = 3;
+  PZ_EXPECT_HAS(search(box, o), "de.population = 3: must be >= 4");
+  o.de.population = 20;
+  o.seeds = {{0.5}};
+  PZ_EXPECT_HAS(search(box, o), "seeds[0].size() = 1: must be 2");
+  o = ok;
+  o.seeds = {{0.5, 0.5}};
+  PZ_EXPECT_HAS(search(box, o), "only the de search takes seeds");
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseSearchAlgorithm("nelder-mead"); }), "algorithm = nelder-mead");
   EXPECT_EQ(ParseSearchAlgorithm("ga-binary"), SearchAlgorithm::kGaBinary);
+  EXPECT_EQ(ParseSearchAlgorithm("de"), SearchAlgorithm::kDe);
 }
 
 TEST(ParamSearch, GrayAndPlainDecoding) {

@@ -194,6 +194,38 @@ TEST(RecordFit, SameResultOnOneAndTwoThreads) {
   EXPECT_EQ(a.train_mse, b.train_mse);
 }
 
+TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
+  // backlash-like on a noisy sine: the one fit of opt/fit.h with the DE search; every parameter is
+  // well constrained and its σ covers the truth (|estimate − truth| < 4 σ), the same on two threads.
+  const Case c = Cases()[1];
+  const io::RecordSet set = MakeSet(c, Waveform::kSine, 7);
+  FitOptions o = QuickOptions(c.family);
+  o.search.algorithm = opt::SearchAlgorithm::kDe;
+  o.search.de.population = 20;
+  o.search.de.generations = 60;
+  o.threads = 1;
+  const FitResult r = FitRecords(set, o);
+  EXPECT_LT(r.metrics[1].rmse, 1.5 * kFloor);
+  ASSERT_EQ(r.uncertainty.params.size(), 3u);
+  EXPECT_NEAR(r.uncertainty.residual_sigma, kFloor, 0.2 * kFloor);
+  for (size_t i = 0; i < 3; ++i) {
+    const opt::ParamEstimate& p = r.uncertainty.params[i];
+    SCOPED_TRACE(p.name);
+    EXPECT_EQ(p.name, r.model->params()[i].name);
+    EXPECT_EQ(p.value, r.params[i]);
+    EXPECT_EQ(p.identifiability, opt::Identifiability::kWell);
+    EXPECT_GT(p.std_error, 0);
+    EXPECT_LT(std::abs(p.value - c.truth[i]), 4 * p.std_error);
+  }
+  EXPECT_EQ(r.uncertainty.singular_values.size(), 3u);
+  o.threads = 2;
+  const FitResult b = FitRecords(set, o);
+  EXPECT_EQ(b.params, r.params);
+  EXPECT_EQ(b.uncertainty.params[0].std_error, r.uncertainty.params[0].std_error);
+  o.uncertainty = false;
+  EXPECT_TRUE(FitRecords(set, o).uncertainty.params.empty());
+}
+
 TEST(RecordFit, NegativeGainIsHandledByPolarity) {
   Case c = Cases()[1];
   io::RecordSet set = MakeSet(c, Waveform::kSine, 5);

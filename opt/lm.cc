@@ -1,4 +1,4 @@
-#include "opt/de_lm.h"
+#include "opt/lm.h"
 
 #include <algorithm>
 #include <atomic>
@@ -26,102 +26,6 @@ void ParallelFor(int n, int threads, const std::function<void(int)>& fn) {
   for (int t = 1; t < threads; ++t) pool.emplace_back(work);
   work();
   for (auto& t : pool) t.join();
-}
-
-// ---- differential evolution ----------------------------------------------------------------------
-
-Status DeOptions::Validate() const {
-  if (population < 4) return InvalidArgument(FieldError("population", population, "must be >= 4"));
-  if (generations < 0) return InvalidArgument(FieldError("generations", generations, "must be >= 0"));
-  if (stall_generations < 1)
-    return InvalidArgument(FieldError("stall_generations", stall_generations, "must be >= 1"));
-  if (!(tolerance >= 0)) return InvalidArgument(FieldError("tolerance", tolerance, "must be >= 0"));
-  if (!(f > 0 && f <= 2)) return InvalidArgument(FieldError("f", f, "must be in (0, 2]"));
-  if (!(cr >= 0 && cr <= 1)) return InvalidArgument(FieldError("cr", cr, "must be in [0, 1]"));
-  return Status::Ok();
-}
-
-DeResult DifferentialEvolution(int dim, const DeOptions& o, opt::BatchEvaluator& evaluator,
-                               std::span<const std::vector<double>> seeds) {
-  ThrowIfError(o.Validate());
-  if (dim < 1) throw InputError(FieldError("dim", dim, "must be >= 1"));
-  const auto start = std::chrono::steady_clock::now();
-  opt::Rng rng(o.seed);
-  const int np = o.population;
-  std::vector<opt::Genome> pop(np);
-  for (int i = 0; i < np; ++i) {
-    pop[i].reals.resize(dim);
-    if (i < static_cast<int>(seeds.size())) {
-      if (seeds[i].size() != static_cast<size_t>(dim))
-        throw InputError(FieldError("seeds[" + std::to_string(i) + "].size()", seeds[i].size(),
-                                    "must be " + std::to_string(dim)));
-      for (int d = 0; d < dim; ++d) pop[i].reals[d] = std::clamp(seeds[i][d], 0.0, 1.0);
-    } else {
-      for (int d = 0; d < dim; ++d) pop[i].reals[d] = rng.Uniform01();
-    }
-  }
-  std::vector<opt::FitnessResult> fit(np);
-  std::vector<int> idx(np);
-  std::iota(idx.begin(), idx.end(), 0);
-  evaluator.Evaluate({0, pop, idx}, fit);
-  DeResult res;
-  res.evaluations = np;
-  auto best_index = [&] {
-    int b = 0;
-    for (int i = 1; i < np; ++i)
-      if (fit[i].cost < fit[b].cost) b = i;
-    return b;
-  };
-  int best = best_index();
-  double last_best = fit[best].cost;
-  int stall = 0;
-  std::vector<opt::Genome> trial(np);
-  std::vector<opt::FitnessResult> tfit(np);
-  int g = 0;
-  for (; g < o.generations; ++g) {
-    for (int i = 0; i < np; ++i) {
-      int r1, r2;
-      do r1 = static_cast<int>(rng.UniformBelow(np)); while (r1 == i);
-      do r2 = static_cast<int>(rng.UniformBelow(np)); while (r2 == i || r2 == r1);
-      const int jr = static_cast<int>(rng.UniformBelow(dim));
-      trial[i].reals.resize(dim);
-      for (int d = 0; d < dim; ++d) {
-        const double xi = pop[i].reals[d];
-        const bool cross = rng.Uniform01() < o.cr || d == jr;
-        double v = xi;
-        if (cross) {
-          v = xi + o.f * (pop[best].reals[d] - xi) + o.f * (pop[r1].reals[d] - pop[r2].reals[d]);
-          if (v < 0) v = xi * rng.Uniform01();            // between the parent and the bound
-          if (v > 1) v = xi + (1 - xi) * rng.Uniform01();
-        }
-        trial[i].reals[d] = v;
-      }
-    }
-    evaluator.Evaluate({static_cast<uint64_t>(g + 1), trial, idx}, tfit);
-    res.evaluations += np;
-    for (int i = 0; i < np; ++i) {
-      if (tfit[i].cost <= fit[i].cost) {
-        pop[i] = trial[i];
-        fit[i] = tfit[i];
-      }
-    }
-    best = best_index();
-    const double b = fit[best].cost;
-    if (last_best - b > o.tolerance * std::abs(last_best)) {
-      stall = 0;
-      last_best = b;
-    } else if (++stall >= o.stall_generations) {
-      ++g;
-      res.message = "stalled after " + std::to_string(g) + " generations";
-      break;
-    }
-  }
-  if (res.message.empty()) res.message = "ran " + std::to_string(g) + " generations";
-  res.generations = g;
-  res.best = pop[best].reals;
-  res.best_cost = fit[best].cost;
-  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return res;
 }
 
 // ---- Levenberg–Marquardt -------------------------------------------------------------------------

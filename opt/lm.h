@@ -1,7 +1,7 @@
-// Optimisers of the diagnosis: a real-coded global search (differential evolution) that evaluates
-// whole generations through the BatchEvaluator seam (inline, thread pool, or the service), and a
-// bounded Levenberg–Marquardt refinement on the residual vector with a numeric Jacobian (columns in
-// parallel). Socket-free; deterministic for a seed (the master owns the only generator).
+// Bounded Levenberg–Marquardt on a residual vector with a numeric Jacobian, whose columns are one
+// batch (threads here, or the BatchEvaluator seam: the service's workers). The global searches are
+// in opt/param_search.h; opt/fit.h chains the two and adds the uncertainty table. Socket-free;
+// deterministic.
 #pragma once
 
 #include <Eigen/Dense>
@@ -18,33 +18,6 @@ namespace pz::opt {
 
 /// Runs fn(0 … n−1) on up to `threads` threads (≥ 1); returns when all are done.
 void ParallelFor(int n, int threads, const std::function<void(int)>& fn);
-
-/// Differential evolution DE/rand-to-best/1/bin on the unit box [0, 1]^dim.
-struct DeOptions {
-  int population = 32;        ///< ≥ 4
-  int generations = 60;       ///< generations after the initial one, ≥ 0
-  int stall_generations = 15; ///< stop after this many generations without a relative gain > tol, ≥ 1
-  double tolerance = 1e-4;    ///< relative gain that counts as progress, ≥ 0
-  double f = 0.6;             ///< differential weight, in (0, 2]
-  double cr = 0.9;            ///< crossover probability, in [0, 1]
-  uint64_t seed = 1;
-  Status Validate() const;
-};
-
-struct DeResult {
-  std::vector<double> best;  ///< unit coordinates
-  double best_cost = 0;
-  int generations = 0;
-  int64_t evaluations = 0;
-  double wall_time_s = 0;
-  std::string message;
-};
-
-/// Minimises the fitness behind `evaluator` (genome.reals = unit coordinates). `seeds` (each of
-/// size dim, clamped into the box) take the first slots of the initial population, the rest is
-/// drawn uniformly. Throws InputError on invalid options or seeds.
-DeResult DifferentialEvolution(int dim, const DeOptions& options, opt::BatchEvaluator& evaluator,
-                               std::span<const std::vector<double>> seeds = {});
 
 /// r(x) into r; false if x cannot be evaluated (then r is ignored). Must be thread-safe.
 using ResidualFunction = std::function<bool(std::span<const double> x, std::vector<double>& r)>;
