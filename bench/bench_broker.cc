@@ -28,6 +28,7 @@
 
 #include "master/broker.h"
 #include "master/job_runner.h"
+#include "opt/inline_evaluator.h"
 #include "service/wire_codec.h"
 #include "worker/worker.h"
 #include "kinds/kinds.h"
@@ -215,6 +216,21 @@ void FixedCost(benchmark::State& state, int workers, int threads, double sleep_m
   state.counters["ga_ms"] = 1e3 * (wall - eval.seconds) / std::max<int64_t>(1, generations);
   if (cpu0 >= 0) state.counters["broker_us/eval"] = 1e6 * cpu / e;
 }
+
+/// The job thread's own work per generation (the serial part of a generation: selection, crossover,
+/// mutation, the record and the checkpoint's state), stepped with the synthetic fitness inline
+/// and no cost. Arg: population (64-bit genomes, one island).
+void BM_JobStepInline(benchmark::State& state) {
+  const job::JobSpec spec = Synthetic(true, 0, static_cast<int>(state.range(0)));
+  std::unique_ptr<opt::FitnessFunction> fitness;
+  PZ_CHECK(kinds::All().MakeFitness(spec, &fitness).ok());
+  opt::InlineEvaluator eval(*fitness);
+  master::JobRunner runner("bench", spec);
+  PZ_CHECK(runner.Init(kinds::All()).ok());
+  runner.Step(eval);
+  for (auto _ : state) runner.Step(eval);
+}
+BENCHMARK(BM_JobStepInline)->Arg(400)->Arg(4000)->Unit(benchmark::kMillisecond);
 
 // 10 ms per evaluation, 64 threads in 4 workers. Args: population, islands.
 void BM_FixedCostEfficiency(benchmark::State& state) {
