@@ -164,7 +164,7 @@ struct Worker::Impl {
     ++stats.reconnects;
     const auto delay = backoff.Next();
     const auto until = Clock::now() + delay;
-    // Keep serving compute threads (finishing chunks) while waiting.
+    // Keep serving compute threads (finishing their tasks) while waiting.
     while (!stop.load() && Clock::now() < until) {
       PollInproc(std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()));
     }
@@ -401,7 +401,7 @@ struct Worker::Impl {
       Send(bye);
     }
     AbandonAll();
-    // Let the compute threads finish their chunks (bounded), then stop them.
+    // Let the compute threads finish the task each one is running (bounded), then stop them.
     int stopped = 0;
     const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
     while (stopped < options.threads && Clock::now() < give_up) {
