@@ -6,6 +6,7 @@
 #include <sys/eventfd.h>
 #include <unistd.h>
 
+#include <cstring>
 #include <deque>
 #include <map>
 #include <random>
@@ -52,7 +53,7 @@ struct Command {
   JobLimits limits;
   std::shared_ptr<EvalTicket> ticket;
   uint64_t generation = 0;
-  std::vector<Genome> genomes;
+  service::PackedTasks tasks;  ///< packed by the submitting thread
   std::vector<int> indices;
   JobEvent event;
 };
@@ -132,7 +133,7 @@ struct Broker::Impl {
     JobLimits limits;
     std::shared_ptr<EvalTicket> ticket;  // the generation being evaluated, if any
     uint64_t generation = 0;
-    std::vector<Genome> genomes;
+    service::PackedTasks tasks;  // the generation's tasks as wire bytes (leases copy from them)
     std::vector<int> indices;
   };
   std::map<std::string, Job> jobs;
@@ -293,12 +294,12 @@ struct Broker::Impl {
           if (j.ticket) Finish(j.ticket, true);
           j.ticket = c.ticket;
           j.generation = c.generation;
-          j.genomes = std::move(c.genomes);
+          j.tasks = std::move(c.tasks);
           j.indices = std::move(c.indices);
-          j.ticket->results.assign(j.genomes.size(), FitnessResult{});
-          dispatcher.StartGeneration(c.job_id, c.generation, static_cast<int>(j.genomes.size()),
+          j.ticket->results.assign(j.indices.size(), FitnessResult{});
+          dispatcher.StartGeneration(c.job_id, c.generation, static_cast<int>(j.indices.size()),
                                      j.limits.task_timeout_s, j.limits.quarantine_after);
-          if (j.genomes.empty()) CompleteGeneration(c.job_id, j);
+          if (j.indices.empty()) CompleteGeneration(c.job_id, j);
           break;
         }
         case Command::Type::kPublish: PublishEvent(c.event); break;
@@ -326,7 +327,7 @@ struct Broker::Impl {
     if (!j.ticket) return;
     Finish(j.ticket, false);
     j.ticket.reset();
-    j.genomes.clear();
+    j.tasks = {};
     j.indices.clear();
   }
 
@@ -481,6 +482,7 @@ struct Broker::Impl {
       return;
     }
     ++local.results_accepted;
+    local.eval_seconds += r.eval_seconds;
     {
       std::lock_guard lock(j.ticket->mu);
       bool counted = false;
@@ -501,18 +503,21 @@ struct Broker::Impl {
   void Dispatch(TimePoint now) {
     while (auto lease = dispatcher.NextLease(now)) {
       const Job& j = jobs.at(lease->job_id);
-      WorkerMsg m;
-      m.type = WorkerMsg::Type::kBatch;
-      m.batch.lease_id = lease->id;
-      m.batch.job_id = lease->job_id;
-      m.batch.generation = lease->generation;
-      m.batch.context_hash = j.context_hash;
-      m.batch.deadline_s = std::chrono::duration<double>(lease->deadline - now).count();
-      for (int p : lease->positions) {
-        m.batch.indices.push_back(j.indices[p]);
-        m.batch.genomes.push_back(j.genomes[p]);
-      }
-      SendToWorker(lease->worker, m);
+      service::TaskBatchMsg head;
+      head.lease_id = lease->id;
+      head.job_id = lease->job_id;
+      head.generation = lease->generation;
+      head.context_hash = j.context_hash;
+      head.deadline_s = std::chrono::duration<double>(lease->deadline - now).count();
+      // Written straight into the frame from the generation's packed tasks: no genome is copied.
+      const size_t task_bytes = j.tasks.Bytes(lease->positions);
+      const std::string prefix = service::PackedBatchHead(head, task_bytes);
+      zmq::message_t payload(prefix.size() + task_bytes);
+      char* out = static_cast<char*>(payload.data());
+      std::memcpy(out, prefix.data(), prefix.size());
+      j.tasks.Write(lease->positions, out + prefix.size());
+      workers.send(zmq::buffer(lease->worker), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+      workers.send(payload, zmq::send_flags::dontwait);
       ++local.leases_sent;
       if (lease->speculative) {
         ++local.speculative_leases;
@@ -814,7 +819,7 @@ std::shared_ptr<EvalTicket> Broker::Submit(const std::string& job_id, uint64_t g
   c.type = Command::Type::kSubmit;
   c.job_id = job_id;
   c.generation = generation;
-  c.genomes.assign(genomes.begin(), genomes.end());
+  c.tasks = service::PackedTasks(genomes, indices);  // on the job's thread, not the broker's
   c.indices.assign(indices.begin(), indices.end());
   c.ticket = std::make_shared<EvalTicket>();
   auto t = c.ticket;

@@ -84,6 +84,7 @@ struct BrokerStats {
   uint64_t dropped_watchers = 0;     ///< the oldest watcher of a job at the maximum, for a new one
   uint64_t speculative_leases = 0;   ///< copies of straggling leases sent
   uint64_t speculative_wins = 0;     ///< … that answered first for at least one task
+  double eval_seconds = 0;           ///< summed evaluation time the accepted results report [s]
 };
 
 class Broker {

@@ -61,10 +61,12 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   GenerationRecord rec = s;
   if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end()) rec.quarantined = q->second;
   forward_.target = nullptr;
+  // The runner keeps the records (checkpoint_.log): the GA's own log would grow by one a generation
+  // and be copied with its state at every generation (quadratic in the generations).
+  ga_->ClearLog();
 
   const GaState& st = ga_->state();
   checkpoint_.optimizer = st;
-  checkpoint_.optimizer.log.clear();
   checkpoint_.best.clear();
   // The best kBestKept over all islands, best first (ties: island, then rank); index = island ·
   // population + rank, the individual's index in the generation's batch (its rank with one island).

@@ -237,6 +237,9 @@ class GeneticAlgorithm {
   /// the options.
   void RestoreState(GaState state);
   const GaState& state() const { return state_; }
+  /// Empties state().log, for an owner that keeps the records itself (the log is not needed to
+  /// continue; the last Step()'s record is gone with it).
+  void ClearLog() { state_.log.clear(); }
   const GaOptions& options() const { return options_; }
   /// The summary Run() would return if the run stopped now for `termination`.
   GaSummary MakeSummary(GaTermination termination, double wall_time_s = 0) const;

@@ -10,6 +10,9 @@
 #include <cmath>
 #include <cstring>
 #include <cstdio>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace pz::service::detail {
 
@@ -62,13 +65,24 @@ constexpr std::array<uint64_t, 256> kUnpacked = [] {
 }  // namespace
 
 void ToProto(const Genome& g, pw::Genome* p) {
-  // Eight bits at a time: the master packs every genome it leases (the paper's has 1415 bits).
+  // Sixteen or eight bits at a time: the master packs every genome it leases (the paper's has 1415 bits).
+  // Written into the message's own string, whose capacity a reused message keeps (PackedTasks).
   const size_t n = g.bits.size(), whole = n / 8;
-  std::string packed((n + 7) / 8, '\0');
-  for (size_t b = 0; b < whole; ++b) packed[b] = static_cast<char>(PackEight(g.bits.data() + 8 * b));
+  std::string& packed = *p->mutable_bits();
+  packed.assign((n + 7) / 8, '\0');
+  size_t b = 0;
+#if defined(__SSE2__)
+  // Sixteen bits at a time: the mask of the zero bytes, inverted, is the packed pair of bytes.
+  for (; b + 2 <= whole; b += 2) {
+    const __m128i sixteen = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g.bits.data() + 8 * b));
+    const auto set = static_cast<uint16_t>(~_mm_movemask_epi8(_mm_cmpeq_epi8(sixteen, _mm_setzero_si128())));
+    packed[b] = static_cast<char>(set & 0xFF);
+    packed[b + 1] = static_cast<char>(set >> 8);
+  }
+#endif
+  for (; b < whole; ++b) packed[b] = static_cast<char>(PackEight(g.bits.data() + 8 * b));
   for (size_t i = 8 * whole; i < n; ++i)
     if (g.bits[i]) packed[i / 8] = static_cast<char>(packed[i / 8] | (1u << (i % 8)));
-  p->set_bits(std::move(packed));
   p->set_bit_count(static_cast<uint32_t>(g.bits.size()));
   p->mutable_reals()->Assign(g.reals.begin(), g.reals.end());
 }

@@ -3,6 +3,9 @@
 #include "service/codec_detail.h"
 
 #include <cmath>
+#include <cstring>
+
+#include <google/protobuf/io/coded_stream.h>
 
 #include "network.pb.h"
 
@@ -127,6 +130,80 @@ Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m) {
       return ResultFromProto(p.result(), &m->result);
     default: return Malformed("worker message has no body");
   }
+}
+
+// ---------------------------------------------------------------- packed leases
+
+namespace {
+
+using google::protobuf::io::CodedOutputStream;
+
+/// The key of a length-delimited field (wire type 2).
+constexpr uint8_t LengthDelimited(int field) { return static_cast<uint8_t>(field << 3 | 2); }
+constexpr int kTaskBatchTasks = pw::TaskBatch::kTasksFieldNumber;
+constexpr int kMasterToWorkerBatch = pw::MasterToWorker::kBatchFieldNumber;
+static_assert(kTaskBatchTasks < 16 && kMasterToWorkerBatch < 16, "one-byte field keys");
+
+}  // namespace
+
+PackedTasks::PackedTasks(std::span<const Genome> genomes, std::span<const int> indices) {
+  PZ_CHECK(genomes.size() == indices.size());
+  pw::Task task;  // reused: its genome's strings keep their capacity
+  ends_.reserve(genomes.size());
+  for (size_t i = 0; i < genomes.size(); ++i) {
+    task.set_index(indices[i]);
+    ToProto(genomes[i], task.mutable_genome());
+    const size_t length = task.ByteSizeLong();
+    const size_t at = bytes_.size();
+    if (i == 1) bytes_.reserve(at * genomes.size() + (at + 8) * 64);  // all alike, as a rule
+    bytes_.resize(at + 1 + CodedOutputStream::VarintSize64(length) + length);
+    auto* out = reinterpret_cast<uint8_t*>(bytes_.data() + at);
+    *out++ = LengthDelimited(kTaskBatchTasks);
+    out = CodedOutputStream::WriteVarint64ToArray(length, out);
+    task.SerializeWithCachedSizesToArray(out);
+    ends_.push_back(bytes_.size());
+  }
+}
+
+std::string_view PackedTasks::Entry(int position) const {
+  PZ_CHECK(position >= 0 && position < size());
+  const size_t begin = position == 0 ? 0 : ends_[position - 1];
+  return {bytes_.data() + begin, ends_[position] - begin};
+}
+
+size_t PackedTasks::Bytes(std::span<const int> positions) const {
+  size_t total = 0;
+  for (int p : positions) total += Entry(p).size();
+  return total;
+}
+
+char* PackedTasks::Write(std::span<const int> positions, char* out) const {
+  for (int p : positions) {
+    const std::string_view e = Entry(p);
+    std::memcpy(out, e.data(), e.size());
+    out += e.size();
+  }
+  return out;
+}
+
+std::string PackedBatchHead(const TaskBatchMsg& header, size_t task_bytes) {
+  TaskBatchMsg fields = header;
+  fields.indices.clear();
+  fields.genomes.clear();
+  pw::TaskBatch batch;
+  BatchToProto(fields, &batch);
+  const std::string batch_fields = batch.SerializeAsString();
+  pw::MasterToWorker envelope;  // what EncodeMasterToWorker sets besides the body
+  envelope.set_version(kProtocolVersion);
+  envelope.set_code(static_cast<pw::Code>(WorkerMsg{}.code));
+  std::string out = envelope.SerializeAsString();
+  const uint64_t length = batch_fields.size() + task_bytes;
+  const size_t at = out.size();
+  out.resize(at + 1 + CodedOutputStream::VarintSize64(length));
+  auto* p = reinterpret_cast<uint8_t*>(out.data() + at);
+  *p++ = LengthDelimited(kMasterToWorkerBatch);
+  CodedOutputStream::WriteVarint64ToArray(length, p);
+  return out + batch_fields;
 }
 
 std::string EncodeMasterToWorker(const WorkerMsg& m) {

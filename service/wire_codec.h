@@ -4,6 +4,8 @@
 // inconsistent content) and kFailedPrecondition for another protocol or format version.
 #pragma once
 
+#include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +40,33 @@ std::string EncodeWorkerToMaster(const WorkerMsg& m);
 Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m);
 std::string EncodeMasterToWorker(const WorkerMsg& m);
 Status DecodeMasterToWorker(std::string_view bytes, WorkerMsg* m);
+
+/// A generation's tasks encoded once, when the generation is submitted: each one is the wire bytes
+/// of a TaskBatch's `tasks` entry (tag, length, Task{index, packed genome}), so that a lease — and
+/// a re-dispatched suspect or a speculative copy — is written by copying bytes, without the genomes
+/// being copied or packed again. A message of PackedBatchHead + Write decodes
+/// (DecodeMasterToWorker) exactly as EncodeMasterToWorker's batch of the same tasks.
+class PackedTasks {
+ public:
+  PackedTasks() = default;
+  /// `indices[i]` is the population index of `genomes[i]` (same length).
+  PackedTasks(std::span<const opt::Genome> genomes, std::span<const int> indices);
+  int size() const { return static_cast<int>(ends_.size()); }
+  /// Bytes of the entries of `positions` (each in [0, size())).
+  size_t Bytes(std::span<const int> positions) const;
+  /// Writes the entries of `positions` at `out` (Bytes(positions) bytes); returns the end.
+  char* Write(std::span<const int> positions, char* out) const;
+
+ private:
+  std::string_view Entry(int position) const;
+  std::string bytes_;
+  std::vector<size_t> ends_;  ///< entry i is bytes_[ends_[i-1], ends_[i])
+};
+
+/// The bytes of a batch message (MasterToWorker) up to its tasks: the envelope and `header`'s
+/// fields (its indices and genomes are ignored), the batch's length counting `task_bytes` more,
+/// which PackedTasks::Write appends.
+std::string PackedBatchHead(const TaskBatchMsg& header, size_t task_bytes);
 
 // Client ↔ master.
 /// The dashboard's JSON documents (proto/dashboard.proto through protobuf's JSON printer).

@@ -36,21 +36,25 @@ struct LocalLease {
   service::TaskBatchMsg batch;
   std::shared_ptr<const Context> context;
   std::vector<opt::FitnessResult> results;
-  int next = 0;         // next task not yet handed to a thread
+  // The threads handed the lease take its tasks one at a time (a task per fetch_add), so a thread
+  // runs on to the next task without a round trip through the I/O thread, and the lease's tail is
+  // shared to the last task.
+  std::atomic<int> next{0};          // next task not yet taken by a thread
+  std::atomic<bool> abandoned{false};  // its threads take no more tasks
+  // I/O thread only:
   int remaining = 0;    // tasks not yet evaluated
-  int in_progress = 0;  // chunks out at threads
+  int in_progress = 0;  // threads working on it (it lives until they are all back)
+  int handed = 0;       // threads it was handed to
   double eval_s = 0;
-  bool abandoned = false;
 };
 
 // inproc messages carry these PODs (same process).
 struct Chunk {
-  LocalLease* lease;
-  int begin, end;
+  LocalLease* lease;  ///< take its tasks until none is left; nullptr = stop
 };
 struct Done {
   LocalLease* lease;
-  int begin, end;
+  int tasks;  ///< tasks this thread evaluated
   double eval_s;
 };
 
@@ -59,7 +63,7 @@ void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
   s.set(zmq::sockopt::routing_id, "c" + std::to_string(id));
   s.set(zmq::sockopt::linger, 0);
   s.connect(endpoint);
-  Done d{nullptr, 0, 0, 0};
+  Done d{nullptr, 0, 0};
   s.send(zmq::buffer(&d, sizeof d));
   for (;;) {
     zmq::message_t m;
@@ -67,13 +71,18 @@ void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
     Chunk c;
     std::memcpy(&c, m.data(), sizeof c);
     if (!c.lease) break;
-    Done out{c.lease, c.begin, c.end, 0};
-    const auto& f = *c.lease->context->fitness;
-    const double penalty = c.lease->context->spec.limits.penalty_cost;
-    for (int i = c.begin; i < c.end; ++i) {
+    Done out{c.lease, 0, 0};
+    LocalLease& l = *c.lease;
+    const auto& f = *l.context->fitness;
+    const double penalty = l.context->spec.limits.penalty_cost;
+    const int total = static_cast<int>(l.batch.genomes.size());
+    while (!l.abandoned.load(std::memory_order_relaxed)) {
+      const int i = l.next.fetch_add(1, std::memory_order_relaxed);
+      if (i >= total) break;
       const auto t0 = Clock::now();
-      c.lease->results[i] = opt::EvaluateGuarded(f, c.lease->batch.genomes[i], penalty);
+      l.results[i] = opt::EvaluateGuarded(f, l.batch.genomes[i], penalty);
       out.eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
+      ++out.tasks;
     }
     s.send(zmq::buffer(&out, sizeof out));
   }
@@ -155,7 +164,7 @@ struct Worker::Impl {
     ++stats.reconnects;
     const auto delay = backoff.Next();
     const auto until = Clock::now() + delay;
-    // Keep serving compute threads (finishing chunks) while waiting.
+    // Keep serving compute threads (finishing their tasks) while waiting.
     while (!stop.load() && Clock::now() < until) {
       PollInproc(std::chrono::duration_cast<std::chrono::milliseconds>(until - Clock::now()));
     }
@@ -287,11 +296,15 @@ struct Worker::Impl {
       if (it != leases.end()) {
         LocalLease& l = *it->second;
         l.in_progress -= 1;
-        l.remaining -= d.end - d.begin;
+        l.remaining -= d.tasks;
         l.eval_s += d.eval_s;
-        stats.tasks += static_cast<uint64_t>(d.end - d.begin);
-        if (!l.abandoned && l.remaining == 0) Reply(l, WireCode::kOk, {});
-        if (l.remaining == 0 || (l.abandoned && l.in_progress == 0)) leases.erase(it);
+        stats.tasks += static_cast<uint64_t>(d.tasks);
+        if (d.tasks > 0 && !l.abandoned && l.remaining == 0) Reply(l, WireCode::kOk, {});
+        // Gone only when no thread holds it any more (one may not have looked at it yet).
+        if (l.in_progress == 0 && (l.remaining == 0 || l.abandoned)) {
+          std::erase(ready, &l);  // still there when no thread was idle to see it run out
+          leases.erase(it);
+        }
       }
     }
     idle.push_back(thread_id);
@@ -301,13 +314,15 @@ struct Worker::Impl {
     while (!idle.empty() && !ready.empty()) {
       LocalLease* l = ready.front();
       const int total = static_cast<int>(l->batch.genomes.size());
-      const int left = total - l->next;
-      const int chunk = std::max(1, static_cast<int>(std::ceil(
-                                        left / (2.0 * std::max(1, options.threads)))));
-      Chunk c{l, l->next, l->next + std::min(chunk, left)};
-      l->next = c.end;
+      // Handed to one more thread while it has tasks nobody took, and no more threads than tasks.
+      if (l->next.load(std::memory_order_relaxed) >= total || l->handed >= total) {
+        ready.pop_front();
+        continue;
+      }
+      Chunk c{l};
+      l->handed += 1;
       l->in_progress += 1;
-      if (l->next >= total) ready.pop_front();
+      if (l->handed >= total) ready.pop_front();
       const std::string id = idle.front();
       idle.pop_front();
       inproc.send(zmq::buffer(id), zmq::send_flags::sndmore);
@@ -386,12 +401,12 @@ struct Worker::Impl {
       Send(bye);
     }
     AbandonAll();
-    // Let the compute threads finish their chunks (bounded), then stop them.
+    // Let the compute threads finish the task each one is running (bounded), then stop them.
     int stopped = 0;
     const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
     while (stopped < options.threads && Clock::now() < give_up) {
       while (!idle.empty()) {
-        Chunk quit{nullptr, 0, 0};
+        Chunk quit{nullptr};
         inproc.send(zmq::buffer(idle.front()), zmq::send_flags::sndmore);
         inproc.send(zmq::buffer(&quit, sizeof quit));
         idle.pop_front();

@@ -1,6 +1,7 @@
 // piezoid-worker's engine: stateless evaluation of task batches for a master (conventions 9–11).
 // The calling thread is the I/O thread and owns the DEALER socket to the master; `threads`
-// compute threads take chunks of the leased tasks over inproc:// and never block heartbeats. Job
+// compute threads, handed a lease over inproc://, take its tasks one at a time (an atomic counter)
+// and never block heartbeats. Job
 // contexts are fetched once by content hash and cached (LRU). When the master falls silent or
 // asks, the worker drops its leases (the master re-queues them) and reconnects with back-off.
 #pragma once

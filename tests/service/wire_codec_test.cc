@@ -114,6 +114,53 @@ TEST(WireCodec, GenomesPackBitForBitAtEveryLength) {
   }
 }
 
+// A lease written from a generation's packed tasks (the master's path) is the batch message
+// EncodeMasterToWorker writes for the same tasks, field for field: any subset of positions in
+// any order, genomes of every size (multi-byte lengths), reals, and an empty lease.
+TEST(WireCodec, LeasesFromPackedTasksAreTheEncodedBatch) {
+  std::vector<opt::Genome> genomes = {G(1415, 0xdeadbeef), G(13, 7, {0.5, 1e-300}), G(0, 0), G(64, 99),
+                                      G(1415, 0x12345678)};
+  for (int i = 0; i < 200; ++i) genomes.push_back(G(1415, 0x9e3779b9u * static_cast<uint32_t>(i + 1)));
+  std::vector<int> indices(genomes.size());
+  for (size_t i = 0; i < indices.size(); ++i) indices[i] = static_cast<int>(3 * i + (i % 2 ? 1000000 : 0));
+  const PackedTasks packed(genomes, indices);
+  ASSERT_EQ(packed.size(), static_cast<int>(genomes.size()));
+  std::vector<int> all(genomes.size());
+  for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(all.size() - 1 - i);
+  for (const std::vector<int>& positions : {std::vector<int>{}, std::vector<int>{0}, std::vector<int>{2},
+                                            std::vector<int>{4, 1, 3}, all}) {
+    WorkerMsg m;
+    m.type = WorkerMsg::Type::kBatch;
+    m.batch.lease_id = 0x123456789abcULL;
+    m.batch.job_id = std::string(300, 'j');
+    m.batch.generation = 41;
+    m.batch.context_hash = ContentHash("spec");
+    m.batch.deadline_s = 12.5;
+    for (int p : positions) {
+      m.batch.indices.push_back(indices[p]);
+      m.batch.genomes.push_back(genomes[p]);
+    }
+    const size_t task_bytes = packed.Bytes(positions);
+    std::string frame = PackedBatchHead(m.batch, task_bytes);
+    const size_t head = frame.size();
+    frame.resize(head + task_bytes);
+    EXPECT_EQ(packed.Write(positions, frame.data() + head), frame.data() + frame.size());
+    pz::wire::MasterToWorker from_packed, encoded;
+    ASSERT_TRUE(from_packed.ParseFromString(frame)) << positions.size() << " tasks";
+    ASSERT_TRUE(encoded.ParseFromString(EncodeMasterToWorker(m)));
+    EXPECT_EQ(from_packed.SerializeAsString(), encoded.SerializeAsString()) << positions.size() << " tasks";
+    WorkerMsg back;
+    ASSERT_TRUE(DecodeMasterToWorker(frame, &back).ok());
+    EXPECT_EQ(back.batch.lease_id, m.batch.lease_id);
+    EXPECT_EQ(back.batch.job_id, m.batch.job_id);
+    EXPECT_EQ(back.batch.deadline_s, 12.5);
+    EXPECT_EQ(back.batch.indices, m.batch.indices);
+    for (auto& g : m.batch.genomes)
+      for (auto& b : g.bits) b = b ? 1 : 0;
+    EXPECT_EQ(back.batch.genomes, m.batch.genomes);
+  }
+}
+
 TEST(WireCodec, ClientRequestsRoundTrip) {
   ClientRequestMsg submit;
   submit.type = ClientRequestMsg::Type::kSubmit;

@@ -3,6 +3,9 @@
 // while an evaluation will not end within stop_grace_ms, Run returns with the thread reported
 // stuck instead of ending the process (the library never does; piezoid-worker exits itself).
 #include <gtest/gtest.h>
+
+#include <map>
+#include <set>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -77,10 +80,10 @@ struct Session {
   WorkerStats stats;
   std::unique_ptr<Worker> worker;
   std::thread thread;
-  explicit Session(int grace_ms) {
+  explicit Session(int grace_ms, int threads = 1) {
     WorkerOptions o;
     o.master = master.endpoint();
-    o.threads = 1;
+    o.threads = threads;
     o.heartbeat_ms = 100;
     o.stop_grace_ms = grace_ms;
     worker = std::make_unique<Worker>(o, kinds::All());
@@ -145,6 +148,62 @@ TEST(Worker, EvaluatesALeaseAfterFetchingItsContextOnce) {
   EXPECT_EQ(s.stats.tasks, 5u);
   EXPECT_EQ(s.stats.contexts_fetched, 1u);
   EXPECT_EQ(s.stats.stuck_threads, 0);
+}
+
+// The threads handed a lease take its tasks one at a time: many leases, of fewer and more tasks
+// than the worker has threads, sent back to back, are each answered once with every result.
+TEST(Worker, ManySmallLeasesOnManyThreadsAreEachAnsweredOnceAndWhole) {
+  Session s(10000, /*threads=*/8);
+  const std::string spec = SleepySpec(0);
+  s.Lease(spec, 3);  // lease 7, which fetches the context
+  job::JobSpec decoded;
+  ASSERT_TRUE(service::DecodeJobSpec(spec, &decoded).ok());
+  std::unique_ptr<opt::FitnessFunction> f;
+  ASSERT_TRUE(kinds::All().MakeFitness(decoded, &f).ok());
+  constexpr int kLeases = 400;
+  std::map<uint64_t, int> tasks_of;  // lease id → tasks
+  for (int k = 0; k < kLeases; ++k) {
+    WorkerMsg lease;
+    lease.type = WorkerMsg::Type::kBatch;
+    lease.batch.lease_id = 100 + static_cast<uint64_t>(k);
+    lease.batch.job_id = "j1";
+    lease.batch.generation = 1;
+    lease.batch.context_hash = service::ContentHash(spec);
+    lease.batch.deadline_s = 60;
+    const int n = 1 + k % 13;
+    for (int i = 0; i < n; ++i) {
+      opt::Genome g;
+      g.bits.assign(16, 0);
+      g.bits[static_cast<size_t>((k + i) % 16)] = 1;
+      lease.batch.indices.push_back(1000 * k + i);
+      lease.batch.genomes.push_back(g);
+    }
+    tasks_of[lease.batch.lease_id] = n;
+    s.master.Send(lease);
+  }
+  std::set<uint64_t> answered;
+  while (answered.size() < tasks_of.size() + 1) {
+    WorkerMsg m;
+    ASSERT_TRUE(s.master.Next(&m)) << answered.size() << " leases answered";
+    if (m.type != WorkerMsg::Type::kResult) continue;
+    ASSERT_EQ(m.result.code, service::WireCode::kOk);
+    ASSERT_TRUE(answered.insert(m.result.lease_id).second) << "lease " << m.result.lease_id << " answered twice";
+    if (m.result.lease_id == 7) continue;
+    const int k = static_cast<int>(m.result.lease_id - 100);
+    ASSERT_EQ(static_cast<int>(m.result.indices.size()), tasks_of.at(m.result.lease_id));
+    for (size_t i = 0; i < m.result.indices.size(); ++i) {
+      EXPECT_EQ(m.result.indices[i], 1000 * k + static_cast<int>(i));
+      opt::Genome g;
+      g.bits.assign(16, 0);
+      g.bits[static_cast<size_t>((k + static_cast<int>(i)) % 16)] = 1;
+      EXPECT_EQ(m.result.results[i].cost, f->Evaluate(g).cost) << "lease " << m.result.lease_id << " task " << i;
+    }
+  }
+  s.stop = true;
+  s.thread.join();
+  int total = 3;
+  for (const auto& [id, n] : tasks_of) total += n;
+  EXPECT_EQ(s.stats.tasks, static_cast<uint64_t>(total));
 }
 
 /// The stop scenario, in a child process: its exit status says what happened (kReturned: Run
