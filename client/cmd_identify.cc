@@ -4,6 +4,9 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <map>
+#include <memory>
+#include <string>
 
 #include "client/commands.h"
 #include "client/identify_report.h"
@@ -60,33 +63,33 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   auto no_plots = std::make_shared<bool>(false);
   cmd->add_option("--cases", *cases, "bench case set folder (cases.csv + per-case CSV)")->capture_default_str();
   cmd->add_option("--out", *out, "result folder (created; files in it are overwritten)")->capture_default_str();
-  cmd->add_option("--seed", opts->ga.seed, "seed of the GA's generator")->capture_default_str();
-  cmd->add_option("--population", opts->ga.population_size, "individuals per generation (paper: 400)")
-      ->capture_default_str();
-  cmd->add_option("--generations", opts->ga.max_generations, "maximum generations (paper: 1000)")
-      ->capture_default_str();
-  cmd->add_option("--stall", opts->ga.stall_generations,
-                  "stop after this many generations without improvement (paper: 200; 0 = never)")
-      ->capture_default_str();
-  cmd->add_option("--elite", opts->ga.elite_fraction, "share of the population kept unchanged (paper: 0.5)")
-      ->capture_default_str();
-  cmd->add_option("--mutation", opts->ga.mutation_probability, "per-bit mutation probability (paper: 0.01)")
-      ->capture_default_str();
-  cmd->add_option("--islands", opts->ga.islands,
-                  "populations of --population each, bred apart and evaluated together (1 = one population)")
-      ->capture_default_str();
-  cmd->add_option("--migration-interval", opts->ga.migration_interval,
-                  "generations between migrations of the islands' best (0 = never: independent runs, best kept)")
-      ->capture_default_str();
-  cmd->add_option("--migrants", opts->ga.migrants, "individuals each island sends per migration")
-      ->capture_default_str();
+  // The GA's options, each with the GaOptions member it sets: a bad value is reported under its flag.
+  auto flag_of = std::make_shared<std::map<std::string, std::string, std::less<>>>();
+  const auto ga_option = [&](const char* flag, const char* field, auto& value, const std::string& help) {
+    (*flag_of)[field] = flag;
+    cmd->add_option(flag, value, help)->capture_default_str();
+  };
+  ga_option("--seed", "seed", opts->ga.seed, "seed of the GA's generator");
+  ga_option("--population", "population_size", opts->ga.population_size,
+            "individuals per generation, per island (paper: 400)");
+  ga_option("--generations", "max_generations", opts->ga.max_generations, "maximum generations (paper: 1000)");
+  ga_option("--stall", "stall_generations", opts->ga.stall_generations,
+            "stop after this many generations without improvement of the best over the islands (paper: 200; "
+            "0 = never)");
+  ga_option("--elite", "elite_fraction", opts->ga.elite_fraction, "share of the population kept unchanged (paper: 0.5)");
+  ga_option("--mutation", "mutation_probability", opts->ga.mutation_probability,
+            "per-bit mutation probability (paper: 0.01)");
+  ga_option("--islands", "islands", opts->ga.islands,
+            "populations of --population each, bred apart and evaluated together (1 = one population; "
+            "4 with --generations 600 and the migration defaults: the measured archipelago, docs/performance.md)");
+  ga_option("--migration-interval", "migration_interval", opts->ga.migration_interval,
+            "generations between migrations of the islands' best (0 = never: independent runs, best kept)");
+  ga_option("--migrants", "migrants", opts->ga.migrants, "individuals each island sends per migration");
   auto topology = std::make_shared<std::string>(opt::TopologyName(opts->ga.topology));
-  cmd->add_option("--topology", *topology, "who sends migrants to whom: ring, fully_connected, random (seeded)")
-      ->capture_default_str();
-  cmd->add_option("--island-stall", opts->ga.island_stall_generations,
-                  "restart an island (its sources' migrants + fresh random individuals) after this many "
-                  "generations without a better best of its own (0 = never)")
-      ->capture_default_str();
+  ga_option("--topology", "topology", *topology, "who sends migrants to whom: ring, fully_connected, random (seeded)");
+  ga_option("--island-stall", "island_stall_generations", opts->ga.island_stall_generations,
+            "restart an island (its sources' migrants + fresh random individuals) after this many "
+            "generations without a better best of its own (0 = never)");
   cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--ranges", opts->ranges,
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
@@ -102,11 +105,14 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     opts->out_dir = *out;
     opts->plots = !*no_plots;
     const auto parsed_topology = opt::ParseTopology(*topology);
-    if (!parsed_topology) throw InputError(FieldError("--topology", *topology, opt::kTopologyRule));
+    if (!parsed_topology) throw InputError(FieldError(flag_of->at("topology"), *topology, opt::kTopologyRule));
     opts->ga.topology = *parsed_topology;
     const auto ranges = hgann::RangesPreset(opts->ranges);
     if (!ranges) throw InputError(FieldError("--ranges", opts->ranges, hgann::kRangesPresetRule));
-    ThrowIfError(opts->ga.Validate());
+    ThrowIfError(opts->ga.Validate([flag_of](std::string_view field) {
+      const auto it = flag_of->find(field);
+      return it == flag_of->end() ? std::string(field) : it->second;
+    }));
     const io::CaseSet set = io::LoadCaseSet(opts->cases_dir);
     auto config = hgann::HgannConfigFromCaseSet(set, *ranges);
     config.spread_penalty = opts->spread_penalty;

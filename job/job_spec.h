@@ -185,7 +185,7 @@ struct GaSettings {
   int stall_generations = 200;         ///< ≥ 0 (0 = never stop for stall)
   // Islands (opt/ga.h GaOptions): population is per island.
   int islands = 1;                     ///< 1..1024
-  int migration_interval = 10;         ///< ≥ 0 (0 = never: independent islands)
+  int migration_interval = 200;        ///< ≥ 0 (0 = never: independent islands)
   int migrants = 4;                    ///< 0..population − 1, ≥ 1 when migration_interval > 0
   opt::MigrationTopology topology = opt::MigrationTopology::kRing;
   int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)

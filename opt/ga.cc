@@ -14,7 +14,7 @@ double NowSeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-Status CheckProbability(const char* field, double p) {
+Status CheckProbability(const std::string& field, double p) {
   if (!(p >= 0 && p <= 1)) return InvalidArgument(FieldError(field, p, "must be in [0, 1]"));
   return Status::Ok();
 }
@@ -50,50 +50,63 @@ int GaOptions::elite_count() const {
   return static_cast<int>(std::lround(population_size * elite_fraction));
 }
 
-Status GaOptions::Validate() const {
-  if (population_size < 2) return InvalidArgument(FieldError("population_size", population_size, "must be >= 2"));
-  if (genome_bits < 3) return InvalidArgument(FieldError("genome_bits", genome_bits, "must be >= 3"));
+Status GaOptions::Validate(const FieldNamer& namer) const {
+  // The name of a field in the messages: the member's own, or what the caller's user wrote.
+  const auto name = [&namer](const char* field) { return namer ? namer(field) : std::string(field); };
+  if (population_size < 2) {
+    return InvalidArgument(FieldError(name("population_size"), population_size, "must be >= 2"));
+  }
+  if (genome_bits < 3) return InvalidArgument(FieldError(name("genome_bits"), genome_bits, "must be >= 3"));
   if (!(elite_fraction > 0 && elite_fraction < 1)) {
-    return InvalidArgument(FieldError("elite_fraction", elite_fraction, "must be in (0, 1)"));
+    return InvalidArgument(FieldError(name("elite_fraction"), elite_fraction, "must be in (0, 1)"));
   }
   const int e = elite_count();
   if (e < 1 || e > population_size - 1) {
-    return InvalidArgument(FieldError("elite_fraction", elite_fraction,
-                                      "round(population_size * elite_fraction) = " + std::to_string(e) +
-                                          " must be 1 … population_size − 1"));
+    return InvalidArgument(FieldError(name("elite_fraction"), elite_fraction,
+                                      "round(" + name("population_size") + " * " + name("elite_fraction") +
+                                          ") = " + std::to_string(e) + " must be 1 … " + name("population_size") +
+                                          " − 1"));
   }
-  if (tournament_size < 1) return InvalidArgument(FieldError("tournament_size", tournament_size, "must be >= 1"));
-  for (Status s : {CheckProbability("crossover_probability", crossover_probability),
-                   CheckProbability("mutation_probability", mutation_probability)}) {
+  if (tournament_size < 1) {
+    return InvalidArgument(FieldError(name("tournament_size"), tournament_size, "must be >= 1"));
+  }
+  for (Status s : {CheckProbability(name("crossover_probability"), crossover_probability),
+                   CheckProbability(name("mutation_probability"), mutation_probability)}) {
     if (!s.ok()) return s;
   }
-  if (max_generations < 0) return InvalidArgument(FieldError("max_generations", max_generations, "must be >= 0"));
-  if (stall_generations < 0) {
-    return InvalidArgument(FieldError("stall_generations", stall_generations, "must be >= 0 (0 = never)"));
+  if (max_generations < 0) {
+    return InvalidArgument(FieldError(name("max_generations"), max_generations, "must be >= 0"));
   }
-  if (std::isnan(target_cost)) return InvalidArgument(FieldError("target_cost", target_cost, "must not be NaN"));
-  if (!std::isfinite(error_cost)) return InvalidArgument(FieldError("error_cost", error_cost, "must be finite"));
+  if (stall_generations < 0) {
+    return InvalidArgument(FieldError(name("stall_generations"), stall_generations, "must be >= 0 (0 = never)"));
+  }
+  if (std::isnan(target_cost)) return InvalidArgument(FieldError(name("target_cost"), target_cost, "must not be NaN"));
+  if (!std::isfinite(error_cost)) return InvalidArgument(FieldError(name("error_cost"), error_cost, "must be finite"));
   if (islands < 1 || islands > kMaxIslands) {
-    return InvalidArgument(FieldError("islands", islands, "must be in [1, " + std::to_string(kMaxIslands) + "]"));
+    return InvalidArgument(
+        FieldError(name("islands"), islands, "must be in [1, " + std::to_string(kMaxIslands) + "]"));
   }
   if (migration_interval < 0) {
-    return InvalidArgument(FieldError("migration_interval", migration_interval, "must be >= 0 (0 = no migration)"));
+    return InvalidArgument(
+        FieldError(name("migration_interval"), migration_interval, "must be >= 0 (0 = no migration)"));
   }
   if (migrants < 0 || migrants >= population_size) {
-    return InvalidArgument(FieldError("migrants", migrants,
-                                      "must be in [0, population_size - 1 = " + std::to_string(population_size - 1) +
-                                          "]"));
+    return InvalidArgument(FieldError(name("migrants"), migrants,
+                                      "must be in [0, " + name("population_size") + " - 1 = " +
+                                          std::to_string(population_size - 1) + "]"));
   }
   if (migration_interval > 0 && migrants == 0) {
-    return InvalidArgument(FieldError("migrants", migrants,
-                                      "must be >= 1 when migration_interval = " + std::to_string(migration_interval) +
-                                          " > 0 (migration_interval 0 runs the islands independently)"));
+    return InvalidArgument(FieldError(name("migrants"), migrants,
+                                      "must be >= 1 when " + name("migration_interval") + " = " +
+                                          std::to_string(migration_interval) + " > 0 (" +
+                                          name("migration_interval") + " 0 runs the islands independently)"));
   }
   if (!ValidTopology(topology)) {
-    return InvalidArgument(FieldError("topology", static_cast<int>(topology), kTopologyRule));
+    return InvalidArgument(FieldError(name("topology"), static_cast<int>(topology), kTopologyRule));
   }
   if (island_stall_generations < 0) {
-    return InvalidArgument(FieldError("island_stall_generations", island_stall_generations, "must be >= 0 (0 = never)"));
+    return InvalidArgument(
+        FieldError(name("island_stall_generations"), island_stall_generations, "must be >= 0 (0 = never)"));
   }
   return Status::Ok();
 }

@@ -85,15 +85,19 @@ struct GaOptions {
   uint64_t seed = 0;                   ///< seeds the generators (island i: StreamSeed(seed, i))
   // Islands (file comment). With islands = 1 the other four are not used.
   int islands = 1;                      ///< populations, 1 … kMaxIslands
-  int migration_interval = 10;          ///< generations between migrations, ≥ 0 (0 = never: multi-start)
+  int migration_interval = 200;         ///< generations between migrations, ≥ 0 (0 = never: multi-start);
+                                        ///< 200 by measurement (docs/performance.md, "Islands")
   int migrants = 4;                     ///< individuals each island sends per migration, 0 … population_size − 1
                                         ///< (≥ 1 when migration_interval > 0)
   MigrationTopology topology = MigrationTopology::kRing;
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
 
-  /// The error names the field, its value and the rule broken.
-  Status Validate() const;
+  /// What Validate() calls a field, given the member's name (e.g. "islands" → "--islands" for a
+  /// command line); without one, the member's name.
+  using FieldNamer = std::function<std::string(std::string_view field)>;
+  /// The error names the field (through `namer`), its value and the rule broken.
+  Status Validate(const FieldNamer& namer = nullptr) const;
   /// round(population_size · elite_fraction).
   int elite_count() const;
   /// The islands island `i` receives migrants from, in the order it takes them (empty for one

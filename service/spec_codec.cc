@@ -2,6 +2,7 @@
 // decode named; content hashes; names of codes and states.
 #include "service/codec_detail.h"
 
+#include <google/protobuf/descriptor.h>
 #include <google/protobuf/util/json_util.h>
 
 #include <cmath>
@@ -392,12 +393,35 @@ Status DecodeJobSpec(std::string_view bytes, JobSpec* spec, std::vector<FieldVio
   return Status::Ok();
 }
 
+namespace {
+
+/// protobuf's refusal of an enum name it does not know names the field and the enum type, e.g.
+/// "(ga.topology): invalid value "STAR" for type type.googleapis.com/pz.wire.MigrationTopology":
+/// the names allowed are added from the type's descriptor ("" for any other message).
+std::string AllowedEnumNames(std::string_view message) {
+  static constexpr std::string_view kType = "for type type.googleapis.com/";
+  const size_t at = message.find(kType);
+  if (at == std::string_view::npos) return "";
+  std::string_view name = message.substr(at + kType.size());
+  name = name.substr(0, name.find_first_of(" \t\n"));
+  const auto* e = google::protobuf::DescriptorPool::generated_pool()->FindEnumTypeByName(std::string(name));
+  if (e == nullptr) return "";
+  std::string names;
+  for (int i = 0; i < e->value_count(); ++i) names += (i ? ", " : "") + std::string(e->value(i)->name());
+  return " (allowed: " + names + ")";
+}
+
+}  // namespace
+
 Status JobSpecFromJson(const std::string& json, JobSpec* spec, std::vector<FieldViolation>* v) {
   pw::JobSpec p;
   google::protobuf::util::JsonParseOptions opts;
   opts.ignore_unknown_fields = false;
   auto st = google::protobuf::util::JsonStringToMessage(json, &p, opts);
-  if (!st.ok()) return InvalidArgument("job spec JSON: " + std::string(st.message()));
+  if (!st.ok()) {
+    const std::string message(st.message());
+    return InvalidArgument("job spec JSON: " + message + AllowedEnumNames(message));
+  }
   FromProto(p, spec, v);
   return Status::Ok();
 }

@@ -4,12 +4,14 @@
 
 #include <unistd.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 
+#include "client/commands.h"
 #include "client/identify_report.h"
 #include "hgann/hgann_fitness.h"
 #include "io/bench_data.h"
@@ -97,6 +99,44 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
   EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
   std::filesystem::remove_all(o.out_dir);
+}
+
+/// The message `piezoid identify <args>` refuses its input with. --cases names no folder, so input
+/// that passes the GA's checks is refused for the case set.
+std::string IdentifyRefusal(std::vector<std::string> args) {
+  CLI::App app{"piezoid"};
+  int exit_code = 0;
+  RegisterIdentify(app, exit_code);
+  args.insert(args.begin(), {"piezoid", "identify", "--cases", "/nonexistent-case-set"});
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  try {
+    app.parse(static_cast<int>(argv.size()), argv.data());
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
+  EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
+  EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
+  EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");
+  EXPECT_EQ(IdentifyRefusal({"--migrants", "0"}),
+            "--migrants = 0: must be >= 1 when --migration-interval = 200 > 0 (--migration-interval 0 runs the "
+            "islands independently)");
+  EXPECT_EQ(IdentifyRefusal({"--migration-interval", "-1"}),
+            "--migration-interval = -1: must be >= 0 (0 = no migration)");
+  EXPECT_EQ(IdentifyRefusal({"--topology", "star"}),
+            "--topology = star: must be \"ring\", \"fully_connected\" or \"random\"");
+  EXPECT_EQ(IdentifyRefusal({"--island-stall", "-2"}), "--island-stall = -2: must be >= 0 (0 = never)");
+  EXPECT_EQ(IdentifyRefusal({"--population", "1"}), "--population = 1: must be >= 2");
+  EXPECT_EQ(IdentifyRefusal({"--generations", "-1"}), "--generations = -1: must be >= 0");
+  EXPECT_EQ(IdentifyRefusal({"--stall", "-1"}), "--stall = -1: must be >= 0 (0 = never)");
+  EXPECT_EQ(IdentifyRefusal({"--mutation", "2"}), "--mutation = 2: must be in [0, 1]");
+  EXPECT_EQ(IdentifyRefusal({"--elite", "1"}), "--elite = 1: must be in (0, 1)");
+  EXPECT_NE(IdentifyRefusal({"--islands", "4", "--migration-interval", "0", "--migrants", "0"}).find("nonexistent-case-set"),
+            std::string::npos);
 }
 
 }  // namespace

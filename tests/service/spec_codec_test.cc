@@ -108,10 +108,18 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.topology = static_cast<opt::MigrationTopology>(5); }),
                        "ga.topology", "MIGRATION_TOPOLOGY_RING"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0; }).empty());
-  // A topology name JSON does not know is refused naming it.
+  // A topology name JSON does not know is refused naming the field and the names allowed.
   const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);
   EXPECT_FALSE(st.ok());
-  EXPECT_NE(st.message().find("topology"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("(ga.topology)"), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("\"STAR\""), std::string::npos) << st.message();
+  EXPECT_NE(st.message().find("(allowed: MIGRATION_TOPOLOGY_UNSPECIFIED, MIGRATION_TOPOLOGY_RING, "
+                              "MIGRATION_TOPOLOGY_FULLY_CONNECTED, MIGRATION_TOPOLOGY_RANDOM)"),
+            std::string::npos)
+      << st.message();
+  // A negative count is refused by the JSON's unsigned type, naming the field.
+  const Status negative = JobSpecFromJson(R"({"version": 1, "ga": {"islands": -1}})", &back, &v);
+  EXPECT_NE(negative.message().find("(ga.islands)"), std::string::npos) << negative.message();
 }
 
 TEST(SpecCodec, BadEnumsInJsonAreNamed) {
