@@ -26,7 +26,12 @@ set(cases
   "worker/worker.cc|service/wire_codec.h|builds"
   "client/job_file.cc|kinds/kinds.h|builds")
 
-set(planted ${BUILD}/planted_include.cc)
+# In a folder of its own: a quoted include searches the including file's folder first, and the
+# build folder may hold anything (generated files of an older layout, say).
+set(planted_dir ${BUILD}/layout_planted)
+file(REMOVE_RECURSE ${planted_dir})
+file(MAKE_DIRECTORY ${planted_dir})
+set(planted ${planted_dir}/planted_include.cc)
 set(failures 0)
 foreach(case IN LISTS cases)
   string(REPLACE "|" ";" case "${case}")
@@ -74,7 +79,7 @@ foreach(case IN LISTS cases)
     math(EXPR failures "${failures} + 1")
   endif()
 endforeach()
-file(REMOVE ${planted})
+file(REMOVE_RECURSE ${planted_dir})
 if(failures GREATER 0)
   message(FATAL_ERROR "${failures} planted includes did not do what the floors say")
 endif()
