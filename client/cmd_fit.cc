@@ -139,15 +139,15 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\n";
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
-  os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | NRMSE [% of range] |\n"
-     << "|---|---|---|---|---|---|---|---|\n";
+  os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
+     << "|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& rec = set.records[i];
     const auto& e = r.metrics[i];
     os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
        << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
        << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
-       << Fmt(e.nrmse_pct, 3) << " |\n";
+       << Fmt(e.max_at_s) << " | " << Fmt(e.nrmse_pct, 3) << " |\n";
   }
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (records/extrapolation.h)\n\n";
@@ -195,6 +195,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     g["offset"] = Num(e.offset);
     g["rmse"] = Num(e.rmse);
     g["max_abs"] = Num(e.max_abs);
+    g["max_at_s"] = Num(e.max_at_s);
     g["nrmse_pct"] = Num(e.nrmse_pct);
     records.push_back(Obj(m));
   }
@@ -308,7 +309,8 @@ int RunFit(const FitArgs& a) {
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
     std::cout << "  " << std::left << std::setw(10) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
-              << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << ", NRMSE "
+              << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
+              << Fmt(e.max_at_s) << " s, NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";

@@ -241,7 +241,10 @@ RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
   for (size_t k = r.first_scored; k < r.end_scored; ++k) {
     const double e = r.y[k] - y[k];
     sse += e * e;
-    m.max_abs = std::max(m.max_abs, std::abs(e));
+    if (std::abs(e) > m.max_abs) {
+      m.max_abs = std::abs(e);
+      m.max_at_s = r.t[k];
+    }
     lo = std::min(lo, r.y[k]);
     hi = std::max(hi, r.y[k]);
   }

@@ -236,6 +236,22 @@ TEST(RecordFit, NegativeGainIsHandledByPolarity) {
   EXPECT_LT(r.metrics[1].rmse, 1.5 * kFloor);
 }
 
+TEST(RecordFit, TheLargestErrorIsReportedWithItsTime) {
+  // A spike planted in the withheld window: the metrics say how large and where, so that a report
+  // can tell a one-sample glitch (a jump at the start, a lagging sensor) from a blow-up.
+  Case c = Cases()[1];
+  io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
+  const FitResult r = FitRecords(set, QuickOptions(c.family));
+  io::Record spiked = set.records[1];
+  const size_t k = spiked.first_scored + (spiked.end_scored - spiked.first_scored) / 3;
+  spiked.y[k] += 50 * kFloor;
+  std::vector<double> yhat;
+  const RecordMetrics m = Evaluate(*r.model, r.params, r.weights, spiked, &yhat);
+  EXPECT_EQ(m.max_at_s, spiked.t[k]);
+  EXPECT_DOUBLE_EQ(m.max_abs, std::abs(spiked.y[k] - yhat[k]));
+  EXPECT_GT(m.max_abs, 40 * kFloor);
+}
+
 TEST(RecordFit, NonNegativeLeastSquaresMatchesAnActiveSetByHand) {
   // min ‖A w − b‖², w ≥ 0 with the unconstrained optimum (1, −1): the answer is (x, 0).
   Eigen::MatrixXd A(3, 2);
