@@ -3,16 +3,12 @@
 #include <sstream>
 
 #include "io/csv.h"
+#include "model/format.h"
 
 namespace pz::client {
 namespace {
 
-std::string G(double x) {
-  std::ostringstream s;
-  s.precision(4);
-  s << x;
-  return s.str();
-}
+std::string G(double x) { return FormatG(x, 4); }
 
 }  // namespace
 

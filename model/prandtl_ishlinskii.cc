@@ -5,14 +5,12 @@
 #include <cstdio>
 #include <sstream>
 
+#include "model/format.h"
+
 namespace pz::model {
 namespace {
 
-std::string Num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
+std::string Num(double x) { return FormatG(x, 17); }
 
 }  // namespace
 

@@ -4,14 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "model/format.h"
+
 namespace pz::model {
 namespace {
 
-std::string Num(double x) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.6g", x);
-  return buf;
-}
+std::string Num(double x) { return FormatG(x, 6); }
 
 /// The grid's constants: per width its half-width, its cells' lower centres and the constant k_i.
 struct GridTables {

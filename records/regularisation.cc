@@ -3,17 +3,14 @@
 #include <cmath>
 #include <cstdio>
 
+#include "model/format.h"
 #include "model/status.h"
 #include "records/fit.h"
 
 namespace pz::records {
 namespace {
 
-std::string Short(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", x);
-  return buf;
-}
+std::string Short(double x) { return FormatG(x, 4); }
 
 }  // namespace
 
