@@ -26,6 +26,7 @@
 #include "job/job_kind.h"
 #include "service/wire_codec.h"
 #include "kinds/kinds.h"
+#include "model/modal_simulator.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -450,6 +451,8 @@ void RegisterFetch(CLI::App& app, int& exit_code) {
 
 struct ExportOptions {
   std::string network, out, name = "piezoid_predict";
+  bool plant = false;
+  FinPlantExport fin;
 };
 
 int ExportNetwork(const ExportOptions& o) {
@@ -457,14 +460,24 @@ int ExportNetwork(const ExportOptions& o) {
   Status s = io::LoadNetwork(o.network, &net);
   if (!s.ok()) return Report(InvalidArgument(s.message()));
   std::string header;
-  s = NetworkToCHeader(net, o.name, &header);
+  if (o.plant) {
+    const model::BimorphPlant plant;  // the spec's beam, as the HGANN fitness's default
+    const model::ModalSimulator sim(plant);
+    s = NetworkAndFinToCHeader(net, sim, o.fin, o.name, &header);
+  } else {
+    s = NetworkToCHeader(net, o.name, &header);
+  }
   if (!s.ok()) return Report(s);
   if (o.out.empty()) {
     std::fwrite(header.data(), 1, header.size(), stdout);
     return kExitOk;
   }
   if (int code = WriteFile(o.out, header); code != kExitOk) return code;
-  std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(), o.name.c_str());
+  if (o.plant)
+    std::fprintf(stderr, "piezoid: wrote %s: %s_params, %s_init, %s_step, %s_inverse_step at %g Hz\n", o.out.c_str(),
+                 o.name.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(), o.fin.sample_rate_hz);
+  else
+    std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(), o.name.c_str());
   return kExitOk;
 }
 
@@ -474,6 +487,21 @@ void RegisterExport(CLI::App& app, int& exit_code) {
   c->add_option("network", o->network, "network file (from fetch or identify)")->required();
   c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
   c->add_option("--name", o->name, "name of the C function (a C identifier)")->capture_default_str();
+  auto* plant = c->add_flag("--plant", o->plant,
+              "add the bimorph-fin plant (spec beam) as a per-sample recursion: NAME_init, NAME_step (drive -> angle), "
+              "NAME_inverse_step (angle -> drive)");
+  c->add_option("--sample-rate", o->fin.sample_rate_hz, "the controller's sample rate [Hz] (with --plant)")
+      ->needs(plant)
+      ->capture_default_str();
+  c->add_option("--drive-limit", o->fin.drive_limit_v,
+                "|drive| limit [V] (with --plant; 0 = the largest training amplitude)")
+      ->needs(plant)
+      ->capture_default_str();
+  c->add_option("--inverse-horizon", o->fin.inverse_horizon,
+                "samples over which NAME_inverse_step reaches the desired angle (with --plant; 1 = exact one-step "
+                "inversion, unstable on this plant)")
+      ->needs(plant)
+      ->capture_default_str();
   OnRun(c, o, exit_code, ExportNetwork);
 }
 

@@ -4,27 +4,29 @@
 #include <cstdio>
 #include <sstream>
 
-namespace pz::client {
-namespace {
+#include "client/export_fin_c.h"
 
-/// An exact C literal: hex-float (e.g. 0x1.91eb851eb851fp+1), and its 17-digit decimal value.
-std::string Lit(double x) {
+namespace pz::client {
+
+std::string CHexLiteral(double x) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%a", x);
   return buf;
 }
 
-std::string Dec(double x) {
+std::string CDecimal(double x) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.17g", x);
   return buf;
 }
 
-std::string Upper(const std::string& s) {
+std::string CUpper(const std::string& s) {
   std::string u = s;
   for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   return u;
 }
+
+namespace {
 
 const char* kOutputMacro[model::kNetworkOutputs] = {"MU", "DELTA", "ALPHA", "BETA", "GAMMA", "A1", "A2"};
 
@@ -42,13 +44,13 @@ namespace {
 
 /// The header's comment (provenance, the entry point, the outputs' ranges and units, the inputs'
 /// normalisation), its include guard and the output macros.
-void WriteHeaderStart(std::ostream& o, const io::SavedNetwork& saved, const std::string& name) {
+void WriteHeaderStart(std::ostream& o, const io::SavedNetwork& saved, const std::string& name, bool plant) {
   const model::Network& n = saved.network;
-  const std::string up = Upper(name);
+  const std::string up = CUpper(name);
   const auto& prov = saved.provenance;
   o << "/* " << name << ".h: HGANN network " << n.Describe() << "\n"
     << " * exported by piezoid 0.1.0 (piezoid export) from job '" << prov.job_id << "', seed " << prov.seed
-    << ", generation " << prov.generation << ", fitness " << Dec(prov.fitness) << " deg^2.\n"
+    << ", generation " << prov.generation << ", fitness " << CDecimal(prov.fitness) << " deg^2.\n"
     << " *\n"
     << " * Standalone: needs only <math.h> (link with -lm). One entry point:\n"
     << " *\n"
@@ -56,23 +58,34 @@ void WriteHeaderStart(std::ostream& o, const io::SavedNetwork& saved, const std:
     << " *\n"
     << " * fills p[7] with the bimorph-fin parameters for a drive V sin(2 pi f t) of amplitude V [V] and\n"
     << " * frequency f [Hz] (finite):\n"
-    << " *   p[" << up << "_MU]    mu    [1/s]  in [" << Dec(n.ranges.mu.lower) << ", " << Dec(n.ranges.mu.upper) << "]\n"
-    << " *   p[" << up << "_DELTA] delta [s]    in [" << Dec(n.ranges.delta.lower) << ", " << Dec(n.ranges.delta.upper) << "]\n"
-    << " *   p[" << up << "_ALPHA] alpha [N/V]  in [" << Dec(n.ranges.alpha.lower) << ", " << Dec(n.ranges.alpha.upper) << "]\n"
-    << " *   p[" << up << "_BETA]  beta  [1/V]  in [" << Dec(n.ranges.beta.lower) << ", " << Dec(n.ranges.beta.upper) << "]\n"
-    << " *   p[" << up << "_GAMMA] gamma [1/V]  in [" << Dec(n.ranges.gamma.lower) << ", " << Dec(n.ranges.gamma.upper) << "]\n"
-    << " *   p[" << up << "_A1]    a1    [deg]  in [" << Dec(n.ranges.a1.lower) << ", " << Dec(n.ranges.a1.upper) << "]\n"
-    << " *   p[" << up << "_A2]    a2    [deg]  in [" << Dec(n.ranges.a2.lower) << ", " << Dec(n.ranges.a2.upper) << "]\n"
-    << " * Inputs are normalised over the training cases: x_V = (V - " << Dec(n.normalization.amplitude_lo_v) << ") / ("
-    << Dec(n.normalization.amplitude_hi_v) << " - " << Dec(n.normalization.amplitude_lo_v) << "), x_f = (f - "
-    << Dec(n.normalization.frequency_lo_hz) << ") / (" << Dec(n.normalization.frequency_hi_hz) << " - "
-    << Dec(n.normalization.frequency_lo_hz) << ");\n"
+    << " *   p[" << up << "_MU]    mu    [1/s]  in [" << CDecimal(n.ranges.mu.lower) << ", " << CDecimal(n.ranges.mu.upper) << "]\n"
+    << " *   p[" << up << "_DELTA] delta [s]    in [" << CDecimal(n.ranges.delta.lower) << ", " << CDecimal(n.ranges.delta.upper) << "]\n"
+    << " *   p[" << up << "_ALPHA] alpha [N/V]  in [" << CDecimal(n.ranges.alpha.lower) << ", " << CDecimal(n.ranges.alpha.upper) << "]\n"
+    << " *   p[" << up << "_BETA]  beta  [1/V]  in [" << CDecimal(n.ranges.beta.lower) << ", " << CDecimal(n.ranges.beta.upper) << "]\n"
+    << " *   p[" << up << "_GAMMA] gamma [1/V]  in [" << CDecimal(n.ranges.gamma.lower) << ", " << CDecimal(n.ranges.gamma.upper) << "]\n"
+    << " *   p[" << up << "_A1]    a1    [deg]  in [" << CDecimal(n.ranges.a1.lower) << ", " << CDecimal(n.ranges.a1.upper) << "]\n"
+    << " *   p[" << up << "_A2]    a2    [deg]  in [" << CDecimal(n.ranges.a2.lower) << ", " << CDecimal(n.ranges.a2.upper) << "]\n"
+    << " * Inputs are normalised over the training cases: x_V = (V - " << CDecimal(n.normalization.amplitude_lo_v) << ") / ("
+    << CDecimal(n.normalization.amplitude_hi_v) << " - " << CDecimal(n.normalization.amplitude_lo_v) << "), x_f = (f - "
+    << CDecimal(n.normalization.frequency_lo_hz) << ") / (" << CDecimal(n.normalization.frequency_hi_hz) << " - "
+    << CDecimal(n.normalization.frequency_lo_hz) << ");\n"
     << " * outside that box the network extrapolates.\n"
     << " *\n"
     << " * The computation is model::Network::Forward's, operation for operation, with every constant an\n"
     << " * exact hex-float literal: compiled without -ffast-math it reproduces piezoid's predictions (bit\n"
-    << " * for bit where the compiler does not contract a*b+c into fused multiply-adds).\n"
-    << " */\n"
+    << " * for bit where the compiler does not contract a*b+c into fused multiply-adds).\n";
+  if (plant)
+    o << " *\n"
+      << " * With it, the bimorph-fin plant as a per-sample recursion (see the plant's part below):\n"
+      << " *\n"
+      << " *   double p[7]; " << name << "_state s;\n"
+      << " *   int st = " << name << "_params(V, f, p);      range-checked network (0 = inside the training box)\n"
+      << " *   st = " << name << "_init(&s, p, b1, b2, u0);  b1 > 0 > b2: the fin's saturations [deg]\n"
+      << " *   y = " << name << "_step(&s, u);               forward: drive [V] -> angle [deg] at the next sample\n"
+      << " *   u = " << name << "_inverse_step(&s, y_ref);   inverse: desired angle -> drive (and the step)\n"
+      << " *\n"
+      << " * The state is a plain struct of fixed size: no allocation, no global, only <math.h>.\n";
+  o << " */\n"
     << "#ifndef " << up << "_H_\n#define " << up << "_H_\n\n#include <math.h>\n\n";
   for (int k = 0; k < model::kNetworkOutputs; ++k)
     o << "#define " << up << "_" << kOutputMacro[k] << " " << k << "  /* " << model::OutputName(k) << " ["
@@ -114,12 +127,12 @@ void WriteConstants(std::ostream& o, const model::Network& n) {
   };
 
   o << "  /* normalisation of the inputs: [lo, hi] of amplitude [V] and frequency [Hz] */\n"
-    << "  static const double norm_lo[2] = {" << Lit(n.normalization.amplitude_lo_v) << ", "
-    << Lit(n.normalization.frequency_lo_hz) << "}; /* " << Dec(n.normalization.amplitude_lo_v) << ", "
-    << Dec(n.normalization.frequency_lo_hz) << " */\n"
-    << "  static const double norm_hi[2] = {" << Lit(n.normalization.amplitude_hi_v) << ", "
-    << Lit(n.normalization.frequency_hi_hz) << "}; /* " << Dec(n.normalization.amplitude_hi_v) << ", "
-    << Dec(n.normalization.frequency_hi_hz) << " */\n"
+    << "  static const double norm_lo[2] = {" << CHexLiteral(n.normalization.amplitude_lo_v) << ", "
+    << CHexLiteral(n.normalization.frequency_lo_hz) << "}; /* " << CDecimal(n.normalization.amplitude_lo_v) << ", "
+    << CDecimal(n.normalization.frequency_lo_hz) << " */\n"
+    << "  static const double norm_hi[2] = {" << CHexLiteral(n.normalization.amplitude_hi_v) << ", "
+    << CHexLiteral(n.normalization.frequency_hi_hz) << "}; /* " << CDecimal(n.normalization.amplitude_hi_v) << ", "
+    << CDecimal(n.normalization.frequency_hi_hz) << " */\n"
     << "  /* transfer-function codes: input (" << tf_names(n.input_tf.begin(), n.input_tf.end()) << "), hidden ("
     << tf_names(n.hidden_tf.begin(), n.hidden_tf.end()) << "), output ("
     << tf_names(n.output_tf.begin(), n.output_tf.end()) << ") */\n"
@@ -130,35 +143,35 @@ void WriteConstants(std::ostream& o, const model::Network& n) {
     << "  static const double w1[2][" << h << "] = {\n";
   for (int i = 0; i < model::kNetworkInputs; ++i) {
     o << "    {";
-    for (int j = 0; j < h; ++j) o << (j ? ", " : "") << Lit(n.w1(i, j));
+    for (int j = 0; j < h; ++j) o << (j ? ", " : "") << CHexLiteral(n.w1(i, j));
     o << "}, /* ";
-    for (int j = 0; j < h; ++j) o << (j ? " " : "") << Dec(n.w1(i, j));
+    for (int j = 0; j < h; ++j) o << (j ? " " : "") << CDecimal(n.w1(i, j));
     o << " */\n";
   }
   o << "  };\n  static const double c1[" << h << "] = {";
-  for (int j = 0; j < h; ++j) o << (j ? ", " : "") << Lit(n.c1(j));
+  for (int j = 0; j < h; ++j) o << (j ? ", " : "") << CHexLiteral(n.c1(j));
   o << "}; /* ";
-  for (int j = 0; j < h; ++j) o << (j ? " " : "") << Dec(n.c1(j));
+  for (int j = 0; j < h; ++j) o << (j ? " " : "") << CDecimal(n.c1(j));
   o << " */\n";
   o << "  /* w2[j][k]: hidden j to output k; c2[k]: output biases */\n"
     << "  static const double w2[" << h << "][7] = {\n";
   for (int j = 0; j < h; ++j) {
     o << "    {";
-    for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << Lit(n.w2(j, k));
+    for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << CHexLiteral(n.w2(j, k));
     o << "}, /* ";
-    for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? " " : "") << Dec(n.w2(j, k));
+    for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? " " : "") << CDecimal(n.w2(j, k));
     o << " */\n";
   }
   o << "  };\n  static const double c2[7] = {";
-  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << Lit(n.c2(k));
+  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << CHexLiteral(n.c2(k));
   o << "}; /* ";
-  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? " " : "") << Dec(n.c2(k));
+  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? " " : "") << CDecimal(n.c2(k));
   o << " */\n";
   o << "  /* output ranges [lower, upper] of mu, delta, alpha, beta, gamma, a1, a2 */\n"
     << "  static const double lower[7] = {";
-  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << Lit(n.ranges[k].lower);
+  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << CHexLiteral(n.ranges[k].lower);
   o << "};\n  static const double upper[7] = {";
-  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << Lit(n.ranges[k].upper);
+  for (int k = 0; k < model::kNetworkOutputs; ++k) o << (k ? ", " : "") << CHexLiteral(n.ranges[k].upper);
   o << "};\n";
 }
 
@@ -187,21 +200,40 @@ void WriteForward(std::ostream& o, const std::string& name, int h) {
 
 }  // namespace
 
-Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header) {
+namespace {
+
+/// The header; with the fin plant after the network when `plant` is given.
+Status WriteHeader(const io::SavedNetwork& saved, const std::string& name, const model::ModalSimulator* plant,
+                   const FinPlantExport& options, std::string* header) {
   if (!IsCIdentifier(name))
     return InvalidArgument(FieldError("--name", "\"" + name + "\"", "must be a C identifier ([A-Za-z_][A-Za-z0-9_]*)"));
   const model::Network& n = saved.network;
   if (Status s = n.Validate(); !s.ok()) return InvalidArgument("network: " + s.message());
+  std::string plant_text;
+  if (plant) {
+    if (Status s = FinPlantToC(*plant, n, options, name, &plant_text); !s.ok()) return s;
+  }
   std::ostringstream o;
-  WriteHeaderStart(o, saved, name);
+  WriteHeaderStart(o, saved, name, plant != nullptr);
   WriteTransferFunction(o, name);
   o << "/* p[7] = the seven parameters for amplitude_v [V] and frequency_hz [Hz]. */\n"
     << "static inline void " << name << "(double amplitude_v, double frequency_hz, double p[7]) {\n";
   WriteConstants(o, n);
   WriteForward(o, name, n.hidden());
-  o << "}\n\n#endif /* " << Upper(name) << "_H_ */\n";
+  o << "}\n" << plant_text << "\n#endif /* " << CUpper(name) << "_H_ */\n";
   *header = o.str();
   return Status::Ok();
+}
+
+}  // namespace
+
+Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header) {
+  return WriteHeader(saved, name, nullptr, {}, header);
+}
+
+Status NetworkAndFinToCHeader(const io::SavedNetwork& saved, const model::ModalSimulator& plant,
+                              const FinPlantExport& options, const std::string& name, std::string* header) {
+  return WriteHeader(saved, name, &plant, options, header);
 }
 
 }  // namespace pz::client

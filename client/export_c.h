@@ -17,12 +17,35 @@
 #include "io/network_io.h"
 #include "model/status.h"
 
+namespace pz::model {
+class ModalSimulator;
+}
+
 namespace pz::client {
+
+/// An exact C literal of x: hex-float, e.g. 0x1.91eb851eb851fp+1.
+std::string CHexLiteral(double x);
+/// x to 17 significant digits (the decimal value of CHexLiteral in comments).
+std::string CDecimal(double x);
+/// s in upper case (macro and include-guard names).
+std::string CUpper(const std::string& s);
 
 /// True iff `name` is a C identifier ([A-Za-z_][A-Za-z0-9_]*, ≤ 63 characters).
 bool IsCIdentifier(const std::string& name);
 
 /// The header text. Requires a valid network and a C identifier (kInvalidArgument otherwise).
 Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header);
+
+/// What the fin plant's part of the header needs besides the network (client/export_fin_c.h).
+struct FinPlantExport {
+  double sample_rate_hz = 100.0;  ///< the controller's sample rate (the bench cases' 100 Hz), > 0
+  double drive_limit_v = 0.0;     ///< |u| ≤ this [V]; 0 = the largest training amplitude
+  int inverse_horizon = 2;        ///< samples over which NAME_inverse_step reaches its target, ≥ 1
+};
+
+/// The same header with the bimorph-fin plant of `plant` after the network (client/export_fin_c.h):
+/// NAME_params, NAME_init, NAME_step, NAME_inverse_step.
+Status NetworkAndFinToCHeader(const io::SavedNetwork& saved, const model::ModalSimulator& plant,
+                              const FinPlantExport& options, const std::string& name, std::string* header);
 
 }  // namespace pz::client

@@ -99,6 +99,12 @@ class ModalSimulator {
   const BimorphPlant& plant() const { return *plant_; }
   /// Number of modes simulated (modes invisible at the tip are dropped).
   int num_modes() const { return n_; }
+  /// The simulated modes' ω_i² [1/s²], tip_i g_u,i and tip_i g_z,i (num_modes() each), and the fin
+  /// length L [m]: what a per-sample export of the plant (client/export_fin_c.h) needs.
+  std::span<const double> omega2() const { return omega2_; }
+  std::span<const double> tip_gain_u() const { return wu_; }
+  std::span<const double> tip_gain_z() const { return wz_; }
+  double length_m() const { return length_m_; }
 
   /// Hot path of the GA fitness: the fin angle y_k [deg] of a sinusoid drive into `angle_deg`, whose
   /// size must be drive.NumSamples(). Validates params and drive, returns kUnboundedHysteresis for

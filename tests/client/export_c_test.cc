@@ -3,7 +3,6 @@
 // box, through every transfer function's kinks — exactly as model::Network::Predict does (checked to
 // 1e-12 relative; bit-identical on x86-64).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -16,18 +15,15 @@
 #include "client/export_c.h"
 #include "io/network_io.h"
 #include "model/chromosome.h"
+#include "tests/testing/shell.h"
 
 namespace pz::client {
 namespace {
 
 namespace fs = std::filesystem;
 
-fs::path BuildDir() { return fs::read_symlink("/proc/self/exe").parent_path().parent_path(); }
-
-int Shell(const std::string& cmd) {
-  const int st = std::system(cmd.c_str());
-  return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+using pz::testing::BuildDir;
+using pz::testing::Shell;
 
 bool HaveCc() { return Shell("command -v cc >/dev/null 2>&1") == 0; }
 

@@ -1,0 +1,356 @@
+// `piezoid export --plant`: the header's fin plant, compiled by the build's C compiler with
+// -std=c99 -Wall -Wextra -Werror -pedantic, steps like model::ModalSimulator on a sampled drive
+// (checked to 1e-12 of the angle's range on a drive with rests, reversals, minor loops, jumps that
+// split the step and cross z = 0, and on a bench case's sine), its inverse then forward tracks a
+// reachable reference, and bad input is flagged, not extrapolated silently.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "client/export_c.h"
+#include "io/network_io.h"
+#include "model/chromosome.h"
+#include "tests/testing/shell.h"
+#include "model/modal_simulator.h"
+
+#ifndef PIEZOID_C_COMPILER
+#define PIEZOID_C_COMPILER "cc"
+#endif
+
+namespace pz::client {
+namespace {
+
+namespace fs = std::filesystem;
+
+using pz::testing::BuildDir;
+using pz::testing::Shell;
+
+std::string Hex(double x) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%a", x);
+  return b;
+}
+
+/// A network on the nominal set's training box whose outputs stay near the bench's plant (μ 95, δ 0.1,
+/// α 2.5e-3, β 6e-3, γ 4e-3, a1 0.1, a2 0.15): narrow ranges keep every output's loop bounded.
+io::SavedNetwork FinNetwork(uint64_t seed) {
+  model::ParameterRanges r;
+  r.mu = {80, 110};
+  r.delta = {0.08, 0.12};
+  r.alpha = {2e-3, 3e-3};
+  r.beta = {5.5e-3, 6.5e-3};
+  r.gamma = {3e-3, 4.5e-3};
+  r.a1 = {0.08, 0.12};
+  r.a2 = {0.12, 0.18};
+  std::mt19937_64 rng(seed);
+  for (;;) {
+    std::vector<uint8_t> bits(model::kChromosomeBits);
+    for (auto& b : bits) b = rng() & 1;
+    if (!model::ValidateChromosome(bits).ok()) continue;
+    io::SavedNetwork s;
+    s.network = model::DecodeChromosome(bits, model::InputNormalization{375, 750, 0.25, 1}, r);
+    s.chromosome = bits;
+    s.provenance.job_id = "test";
+    s.provenance.seed = seed;
+    return s;
+  }
+}
+
+/// Rests, ramps, reversals, nested minor loops, jumps of several hundred volts in one sample (the step
+/// splits into sub-steps and z crosses 0 inside them), a drive beyond the limit (clipped), then a
+/// decaying sine: `n` samples at `fs`.
+std::vector<double> RichDrive(double fs) {
+  std::vector<double> u;
+  auto ramp = [&](double to, double seconds) {
+    const double from = u.empty() ? 0.0 : u.back();
+    const long m = std::lround(seconds * fs);
+    for (long k = 1; k <= m; ++k) u.push_back(from + (to - from) * static_cast<double>(k) / static_cast<double>(m));
+  };
+  u.push_back(0.0);
+  ramp(0, 0.2);     // rest
+  ramp(600, 1.0);   // rise
+  ramp(600, 0.3);   // rest at the top
+  ramp(-200, 0.8);  // reversal
+  ramp(300, 0.5);   // minor loop …
+  ramp(100, 0.3);   // … inside it another
+  ramp(250, 0.2);
+  ramp(-700, 0.9);
+  u.push_back(400);  // a jump up in one sample
+  u.push_back(-500);  // and down: sub-steps and z crossing 0
+  u.push_back(-500);
+  u.push_back(900);  // beyond the limit: clipped to 750 (the C side counts it; the reference gets 750)
+  ramp(0, 0.4);
+  const long m = std::lround(1.5 * fs);
+  for (long k = 1; k <= m; ++k) {
+    const double t = static_cast<double>(k) / fs;
+    u.push_back(700 * std::exp(-t) * std::sin(2 * std::numbers::pi * 2 * t));
+  }
+  return u;
+}
+
+struct Trace {
+  std::vector<double> y, theta;
+};
+
+/// The library's trace of a sampled drive at fs (u clipped to ±limit as the header does).
+Trace Library(const model::ModalSimulator& sim, const model::BimorphParams& p, std::vector<double> u, double fs,
+            double limit) {
+  model::SampledSignal s;
+  for (size_t k = 0; k < u.size(); ++k) {
+    s.t.push_back(static_cast<double>(k) / fs);
+    s.u.push_back(std::clamp(u[k], -limit, limit));
+  }
+  const model::BimorphTrace tr = sim.Simulate(p, s);
+  EXPECT_TRUE(tr.summary.ok()) << tr.summary.message;
+  return {tr.angle_deg, tr.theta_deg};
+}
+
+double MaxAbs(const std::vector<double>& v) {
+  double m = 0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+class ExportFinC : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("pz-export-fin-" + std::to_string(::getpid()) + "-" +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!HasFailure()) fs::remove_all(dir_);
+  }
+  /// Compiles prog.c (with the headers in dir_) and returns its stdout lines.
+  std::vector<std::string> CompileAndRun(const std::string& prog) {
+    std::ofstream(dir_ / "prog.c") << prog;
+    const std::string cc = std::string("'") + PIEZOID_C_COMPILER +
+                           "' -std=c99 -O2 -Wall -Wextra -Werror -pedantic -o prog prog.c -lm 2>cc.err";
+    EXPECT_EQ(Shell("cd '" + dir_.string() + "' && " + cc), 0) << std::ifstream(dir_ / "cc.err").rdbuf();
+    EXPECT_EQ(Shell("cd '" + dir_.string() + "' && ./prog > out.txt"), 0);
+    std::ifstream in(dir_ / "out.txt");
+    std::vector<std::string> lines;
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+    return lines;
+  }
+  fs::path dir_;
+};
+
+std::string CArray(const std::string& name, const std::vector<double>& v) {
+  std::ostringstream o;
+  o << "static const double " << name << "[" << v.size() << "] = {";
+  for (size_t i = 0; i < v.size(); ++i) o << (i ? "," : "") << (i % 6 ? " " : "\n  ") << Hex(v[i]);
+  o << "};\n";
+  return o.str();
+}
+
+TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
+  const model::BimorphPlant plant;
+  const model::ModalSimulator sim(plant);
+  const io::SavedNetwork net = FinNetwork(7);
+  const double b1 = 1.37, b2 = -1.5, limit = 750;
+
+  // The 100 Hz header through the CLI (what users run), a 1 kHz one through the library.
+  ASSERT_TRUE(io::SaveNetwork(net, (dir_ / "fin.json").string()).ok());
+  const std::string cli = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '" +
+                          (dir_ / "fin.json").string() + "' --plant --out '" + (dir_ / "fin.h").string() +
+                          "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
+  ASSERT_EQ(Shell(cli), 0) << cli << "\n" << std::ifstream(dir_ / "cli.err").rdbuf();
+  std::string h;
+  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{1000.0, 0.0}, "finms", &h).ok());
+  std::ofstream(dir_ / "finms.h") << h;
+
+  struct Case {
+    std::string header;
+    double fs, amplitude, frequency;
+    std::vector<double> u;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"fin", 100, 750, 0.5, RichDrive(100)});
+  cases.push_back({"finms", 1000, 500, 1, RichDrive(1000)});
+  {  // bench case 6 (500 V, 1 Hz, three cycles at 100 Hz), sampled
+    model::Sinusoid s{500, 1, 3, 100};
+    cases.push_back({"fin", 100, 500, 1, model::SampleValues(s)});
+  }
+
+  std::ostringstream prog;
+  prog << "#include <stdio.h>\n#include \"fin.h\"\n#include \"finms.h\"\n";
+  for (size_t c = 0; c < cases.size(); ++c) prog << CArray("u" + std::to_string(c), cases[c].u);
+  prog << "int main(void) {\n  double p[7];\n  long k;\n";
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const std::string n = cases[c].header, u = "u" + std::to_string(c);
+    prog << "  {\n    " << n << "_state s;\n"
+         << "    if (" << n << "_params(" << cases[c].amplitude << ", " << cases[c].frequency << ", p) != 0) return 1;\n"
+         << "    if (" << n << "_init(&s, p, " << b1 << ", " << b2 << ", " << u << "[0]) != 0) return 2;\n"
+         << "    printf(\"%a %a\\n\", " << n << "_angle(&s), s.d.theta);\n"
+         << "    for (k = 1; k < " << cases[c].u.size() << "; ++k) {\n"
+         << "      double y = " << n << "_step(&s, " << u << "[k]);\n"
+         << "      printf(\"%a %a\\n\", y, s.d.theta);\n    }\n"
+         << "    printf(\"saturations %ld status %d\\n\", s.saturations, s.status);\n  }\n";
+  }
+  prog << "  return 0;\n}\n";
+  const auto lines = CompileAndRun(prog.str());
+
+  size_t at = 0;
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const Case& cs = cases[c];
+    const auto params = net.network.Predict(cs.amplitude, cs.frequency);
+    model::BimorphParams p;
+    p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+    p.a1 = params.a1, p.a2 = params.a2, p.b1 = b1, p.b2 = b2;
+    const Trace want = Library(sim, p, cs.u, cs.fs, limit);
+    ASSERT_EQ(want.y.size(), cs.u.size());
+    const double scale_y = MaxAbs(want.y), scale_th = MaxAbs(want.theta);
+    ASSERT_GT(scale_y, 0.3) << "the drive must move the fin";
+    double err_y = 0, err_th = 0;
+    int exact = 0;
+    for (size_t k = 0; k < cs.u.size(); ++k) {
+      ASSERT_LT(at, lines.size()) << "output ended early";
+      char* end = nullptr;
+      const double y = std::strtod(lines[at].c_str(), &end);
+      const double th = std::strtod(end, nullptr);
+      ++at;
+      err_y = std::max(err_y, std::abs(y - want.y[k]));
+      err_th = std::max(err_th, std::abs(th - want.theta[k]));
+      exact += y == want.y[k];
+    }
+    EXPECT_LE(err_y, 1e-12 * scale_y) << "case " << c;
+    EXPECT_LE(err_th, 1e-12 * scale_th) << "case " << c;
+    ASSERT_LT(at, lines.size());
+    const std::string tail = lines[at++];
+    const long expected_saturations = std::count_if(cs.u.begin(), cs.u.end(), [&](double x) { return std::abs(x) > limit; });
+    EXPECT_EQ(tail, "saturations " + std::to_string(expected_saturations) + " status 0") << "case " << c;
+    std::printf("case %zu (%s, %g Hz, %zu samples): max |y_C - y_lib| = %.3g deg (%.3g of the range), theta %.3g; "
+                "%d of %zu bit-identical\n",
+                c, cs.header.c_str(), cs.fs, cs.u.size(), err_y, err_y / scale_y, err_th, exact, cs.u.size());
+  }
+  EXPECT_EQ(at, lines.size()) << "extra output";
+}
+
+TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
+  const model::BimorphPlant plant;
+  const model::ModalSimulator sim(plant);
+  const io::SavedNetwork net = FinNetwork(11);
+  const double b1 = 1.37, b2 = -1.5;
+  std::string h;
+  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{}, "fin", &h).ok());  // horizon 2
+  std::ofstream(dir_ / "fin.h") << h;
+  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, 0.0, 1}, "fin1", &h).ok());
+  std::ofstream(dir_ / "fin1.h") << h;
+  const auto params = net.network.Predict(750, 0.5);
+  model::BimorphParams p;
+  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+  p.a1 = params.a1, p.a2 = params.a2, p.b1 = b1, p.b2 = b2;
+  // The references: the library's responses to drives within the limits (reachable by construction):
+  // the rich drive (rests, reversals, minor loops, one-sample jumps) and bench case 9's sine.
+  std::vector<std::vector<double>> drives = {RichDrive(100), model::SampleValues(model::Sinusoid{740, 1, 3, 100})};
+  for (double& x : drives[0]) x = std::clamp(x, -740.0, 740.0);
+  std::vector<Trace> refs;
+  for (const auto& u : drives) refs.push_back(Library(sim, p, u, 100, 750));
+
+  // Each reference is followed with the horizon-2 inverse given one sample of preview, its drive
+  // replayed through the forward step, and once by the one-step inverse (horizon 1).
+  std::ostringstream prog;
+  prog << "#include <stdio.h>\n#include \"fin.h\"\n#include \"fin1.h\"\n";
+  for (size_t r = 0; r < refs.size(); ++r) prog << CArray("ref" + std::to_string(r), refs[r].y);
+  prog << "int main(void) {\n  double p[7], drive;\n  fin_state s, f;\n  fin1_state s1;\n  long k;\n"
+       << "  fin_params(750, 0.5, p);\n";
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const std::string ref = "ref" + std::to_string(r);
+    const long n = static_cast<long>(refs[r].y.size());
+    prog << "  if (fin_init(&s, p, " << b1 << ", " << b2 << ", 0) != 0) return 2;\n"
+         << "  if (fin1_init(&s1, p, " << b1 << ", " << b2 << ", 0) != 0) return 2;\n"
+         << "  f = s;\n"
+         << "  for (k = 1; k < " << n << "; ++k) {\n"
+         << "    drive = fin_inverse_step(&s, " << ref << "[k + 1 < " << n << " ? k + 1 : k]);\n"
+         << "    printf(\"%a %a %a\\n\", fin_angle(&s), fin_step(&f, drive), fin1_angle(&s1) * 0 + "
+         << "fin1_inverse_step(&s1, " << ref << "[k]) * 0 + fin1_angle(&s1));\n  }\n"
+         << "  printf(\"unreachable %ld saturations %ld\\n\", s.unreachable, s.saturations);\n";
+  }
+  prog << "  return 0;\n}\n";
+  const auto lines = CompileAndRun(prog.str());
+  size_t at = 0;
+  for (size_t r = 0; r < refs.size(); ++r) {
+    const std::vector<double>& y_ref = refs[r].y;
+    const double range = MaxAbs(y_ref);
+    double err = 0, sq = 0, replay = 0, err1 = 0;
+    for (size_t k = 1; k < y_ref.size(); ++k) {
+      ASSERT_LT(at, lines.size());
+      char* end = nullptr;
+      const double y = std::strtod(lines[at].c_str(), &end);
+      const double y_fwd = std::strtod(end, &end);
+      const double y1 = std::strtod(end, &end);
+      ++at;
+      err = std::max(err, std::abs(y - y_ref[k]));
+      sq += (y - y_ref[k]) * (y - y_ref[k]);
+      replay = std::max(replay, std::abs(y_fwd - y));
+      err1 = std::max(err1, std::abs(y1 - y_ref[k]));
+    }
+    ASSERT_LT(at, lines.size());
+    EXPECT_EQ(lines[at++], "unreachable 0 saturations 0") << "reference " << r;
+    const double rms = std::sqrt(sq / static_cast<double>(y_ref.size() - 1));
+    // The forward model run on the computed drive gives the same angles, bit for bit (one recursion).
+    EXPECT_EQ(replay, 0.0) << "reference " << r;
+    // Horizon 2 follows within a fraction of the dead band (a1 + a2 ≈ 0.25 deg): what docs/deploy.md says.
+    EXPECT_LE(rms, 0.01 * range) << "reference " << r;
+    EXPECT_LE(err, 0.05 * range) << "reference " << r;
+    // The one-step inverse rings (between the drive limits, once the rich reference leaves the dead
+    // band): that is why the default horizon is 2.
+    if (r == 0) EXPECT_GT(err1, 0.1 * range);
+    std::printf("reference %zu (range %.3g deg): horizon 2: rms %.3g deg (%.3g of the range), max %.3g deg; "
+                "horizon 1: max %.3g deg\n",
+                r, range, rms, rms / range, err, err1);
+  }
+  EXPECT_EQ(at, lines.size());
+}
+
+TEST_F(ExportFinC, BadInputIsReportedNotExtrapolatedSilently) {
+  const model::BimorphPlant plant;
+  const model::ModalSimulator sim(plant);
+  const io::SavedNetwork net = FinNetwork(3);
+  std::string h;
+  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{0.0, 0.0}, "fin", &h).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, -1.0}, "fin", &h).code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{}, "2fin", &h).code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, 600.0}, "fin", &h).ok());
+  std::ofstream(dir_ / "fin.h") << h;
+  const std::string prog = std::string("#include <stdio.h>\n#include \"fin.h\"\n") + R"(int main(void) {
+  double p[7], q[7];
+  fin_state s;
+  printf("%d %d %d %d %d\n", fin_params(500, 0.5, p), fin_params(900, 0.5, q), fin_params(500, 2, q),
+         fin_params(100, 0.1, q), fin_params(0.0 / 0.0, 0.5, q));
+  q[0] = p[0]; q[1] = p[1]; q[2] = p[2]; q[3] = 0.001; q[4] = 0.004; q[5] = p[5]; q[6] = p[6];
+  printf("%d\n", fin_init(&s, q, 1.0, -1.0, 0));            /* beta - gamma < 0: unbounded */
+  printf("%d ", fin_init(&s, p, -1.0, -1.0, 0));            /* b1 <= 0 */
+  printf("%g\n", fin_step(&s, 100));                        /* does nothing */
+  printf("%d\n", fin_init(&s, p, 1.0, -1.0, 0));
+  fin_step(&s, 700);                                         /* beyond the 600 V limit */
+  fin_step(&s, -601);
+  fin_step(&s, 1.0 / 0.0);
+  printf("%ld %d\n", s.saturations, s.status);
+  fin_inverse_step(&s, 5.0);                                 /* beyond b1 */
+  printf("%ld %d %g\n", s.unreachable, s.status & FIN_UNREACHABLE, fin_angle(&s));
+  return 0;
+}
+)";
+  const auto lines = CompileAndRun(prog);
+  ASSERT_EQ(lines.size(), 6u);
+  EXPECT_EQ(lines[0], "0 1 2 3 4");
+  EXPECT_EQ(lines[1], "16");
+  EXPECT_EQ(lines[2], "8 0");
+  EXPECT_EQ(lines[3], "0");
+  EXPECT_EQ(lines[4], "2 4");  // two drives clipped; the infinite one held (FIN_INVALID_INPUT)
+  EXPECT_EQ(lines[5].substr(0, 4), "1 64");
+}
+
+}  // namespace
+}  // namespace pz::client
