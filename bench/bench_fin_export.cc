@@ -6,8 +6,8 @@
 //   BM_FinStepJumps              NAME_step on a drive jumping ±600 V every sample (sub-steps, z crossing 0)
 //   BM_FinInverseStep/rate       NAME_inverse_step (horizon 2) following that drive's response; counter
 //                                trials = steps of the forward recursion per inverse step
-// The network is a seeded random one with outputs near the bench's plant. Figures and the operation
-// count: docs/performance.md, "Fin header".
+// The network: tests/data/networks/fin_nominal.json, identified on the nominal bench. Figures and the
+// operation count: docs/performance.md, "Fin header".
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>
 #include <sys/wait.h>
@@ -19,14 +19,12 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
-#include <random>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "client/export_c.h"
 #include "io/network_io.h"
-#include "model/chromosome.h"
 #include "model/modal_simulator.h"
 
 namespace pz::client {
@@ -34,24 +32,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// An identified network: tests/data/networks/README.md.
 io::SavedNetwork Network() {
-  model::ParameterRanges r;
-  r.mu = {80, 110};
-  r.delta = {0.08, 0.12};
-  r.alpha = {2e-3, 3e-3};
-  r.beta = {5.5e-3, 6.5e-3};
-  r.gamma = {3e-3, 4.5e-3};
-  r.a1 = {0.08, 0.12};
-  r.a2 = {0.12, 0.18};
-  std::mt19937_64 rng(7);
-  for (;;) {
-    std::vector<uint8_t> bits(model::kChromosomeBits);
-    for (auto& b : bits) b = rng() & 1;
-    if (!model::ValidateChromosome(bits).ok()) continue;
-    io::SavedNetwork s;
-    s.network = model::DecodeChromosome(bits, model::InputNormalization{375, 750, 0.25, 1}, r);
-    return s;
-  }
+  io::SavedNetwork s;
+  if (!io::LoadNetwork(PIEZOID_TEST_DATA_DIR "/networks/fin_nominal.json", &s).ok())
+    throw std::runtime_error("cannot load " PIEZOID_TEST_DATA_DIR "/networks/fin_nominal.json");
+  return s;
 }
 
 constexpr const char* kGlue = "#include <stddef.h>\n#include \"fin.h\"\n" R"C(
@@ -60,7 +46,7 @@ int glue_params(double v, double f, double* p) { return fin_params(v, f, p); }
 int glue_init(void* s, double v, double f, double u0) {
   double p[7];
   fin_params(v, f, p);
-  return fin_init((fin_state*)s, p, 1.37, -1.5, u0);
+  return fin_init((fin_state*)s, p, 3.1640625, -3.076171875, u0); /* case 9 */
 }
 double glue_step(void* s, double u) { return fin_step((fin_state*)s, u); }
 double glue_inverse(void* s, double y) { return fin_inverse_step((fin_state*)s, y); }

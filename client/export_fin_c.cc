@@ -45,7 +45,6 @@ typedef struct {
 typedef struct {
   double mu, delta, alpha, beta, gamma, a1, a2, b1, b2, kappa_max;
   double u_min, u_max;         /* drive limits [V] (PZF_U_MIN, PZF_U_MAX; may be narrowed after init) */
-  double gain_sign;            /* sign of d theta / d u over one step (set by init) */
   pzf_poles poles[PZF_MODES];
   pzf_mode_step full[PZF_MODES];  /* discretisation over PZF_DT */
   pzf_mode_step sub[PZF_MODES];   /* over PZF_DT / sub_n, cached */
@@ -524,11 +523,10 @@ static inline int pzf_init(pzf_state* st, const double p[7], double b1, double b
   int i, k, finite;
   for (i = 0; i < PZF_MODES_PADDED; ++i) st->d.x0[i] = st->d.x1[i] = 0.0;
   st->d.u = st->d.z = st->d.theta = st->d.y = 0.0;
-  st->samples = st->saturations = st->unreachable = 0;
+  st->samples = st->saturations = st->unreachable = st->trials = 0;
   st->sub_n = 0;
   st->u_min = PZF_U_MIN;
   st->u_max = PZF_U_MAX;
-  st->gain_sign = 1.0;
   st->status = PZF_OK;
   st->mu = p[0];
   st->delta = p[1];
@@ -555,11 +553,6 @@ static inline int pzf_init(pzf_state* st, const double p[7], double b1, double b
   st->d.u = pzf_clip(st, u0);
   st->d.theta = pzf_degrees(st, &finite);
   st->d.y = pzf_backlash(st, st->d.theta, 0.0);
-  { /* the sign of the inverse's gain d theta / d u, from a trial of +1 V (or -1 V at the limit) */
-    const double du = st->d.u + 1.0 <= st->u_max ? 1.0 : -1.0;
-    st->gain_sign = (pzf_trial(st, st->d.u + du) - pzf_trial(st, st->d.u)) * du >= 0 ? 1.0 : -1.0;
-    st->trials = 0;
-  }
   return st->status;
 }
 
@@ -581,20 +574,22 @@ static inline double pzf_step(pzf_state* st, double u) {
  *   The backlash is inverted exactly: moving up needs theta = y + a1, moving down theta = y - a2;
  * inside the dead band (angle_desired = the current angle) the theta nearest its course is kept.
  * theta(u) = target is solved on the horizon's map (drive ramped to u at the next sample, then
- * continuing its slope) by a bracket search from the last drive and the Illinois method: at most
- * PZF_INVERSE_ITERATIONS trials of PZF_INVERSE_HORIZON steps each, until theta is within 1e-13 deg
- * (relative above 1 deg) or the bracket is two adjacent doubles.
- *   What it cannot do: a one-sample horizon (exact one-step inversion) is unstable on this plant: the
- * drive's linear hold between samples gives the sampled plant a zero outside the unit circle (the
- * second sample's response to a drive step is larger than the first's), so the exact one-step
- * inverse can ring between the drive limits (it does where a reference leaves the dead band). Over a horizon of 2 it is stable but approximate: it
- * follows a reachable reference to a fraction of the dead band, with errors where the reference
- * leaves the dead band or turns faster than the drive's slope assumption (docs/deploy.md has the
- * figures). A target out of reach within [u_min, u_max], or an angle outside [b2, b1], is clipped to
- * the nearest reachable one and counted in st->unreachable (bit PZF_UNREACHABLE). */
+ * continuing its slope) by a bracket search on both sides of the last drive (the root nearest to
+ * it) and the Illinois method: at most PZF_INVERSE_ITERATIONS trials of PZF_INVERSE_HORIZON steps
+ * each, until theta is within 1e-13 deg (relative above 1 deg) or the bracket is two adjacent doubles.
+ *   What it cannot do. It undoes no dynamics beyond its horizon: the drive's linear hold between
+ * samples gives the sampled plant a zero outside the unit circle (the second sample's response to a
+ * drive step is several times the first's), so an exact one-step inverse (horizon 1) makes the drive
+ * oscillate; a horizon of 2 plans the next two samples and follows a reachable reference to a small
+ * fraction of the dead band, not exactly (errors where the reference leaves the dead band or turns).
+ * The plan is greedy: where the reference's state was reached by a path the plan did not take (the
+ * Bouc-Wen force remembers it) a target can be out of reach for a few samples, and theta(u) need not
+ * be monotone. docs/deploy.md has the figures. A target out of reach within [u_min, u_max], or an
+ * angle outside [b2, b1], is clipped: the drive that came nearest is applied, and the step is
+ * counted in st->unreachable (bit PZF_UNREACHABLE). */
 static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
-  double yd = angle_desired, th, a, b, ga, gb, h, best_u, best_g, dir;
-  int it, side = 0, reached = 1;
+  double yd = angle_desired, th, a, b, ga, gb, lo, hi, glo, ghi, h, best_u, best_g;
+  int it, side = 0, reached = 1, found;
   if (st->status & (PZF_INVALID_PARAMETERS | PZF_UNBOUNDED_HYSTERESIS)) return 0.0;
   if (!isfinite(yd)) {
     st->status |= PZF_INVALID_INPUT;
@@ -605,6 +600,9 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
     yd = yd > st->b1 ? st->b1 : st->b2;
     reached = 0;
   }
+  /* The backlash inverted: the theta that gives yd after y. Inside the dead band (and at a
+   * saturation) any theta of [yd - a2, yd + a1] does; the one nearest its course with the drive held
+   * is taken, which keeps theta at the band's edge, ready to move. */
   if (yd > st->d.y) {
     th = yd + st->a1;
   } else if (yd < st->d.y) {
@@ -613,35 +611,43 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
     th = pzf_trial(st, st->d.u);
     th = th < yd - st->a2 ? yd - st->a2 : (th > yd + st->a1 ? yd + st->a1 : th);
   }
-  /* g(u) = theta(u) - th times the gain's sign: increasing in u. */
-  a = b = st->d.u;
-  ga = gb = (pzf_trial(st, a) - th) * st->gain_sign;
-  best_u = a;
-  best_g = ga;
-  dir = ga < 0 ? 1.0 : -1.0;
+  /* g(u) = theta(u) - th need not be monotone (at small drives the Bouc-Wen force can outweigh
+   * the drive's moment): the bracket is searched on both sides of the last drive, with steps growing
+   * 4-fold, and the sign change nearest to it is taken. */
+  best_u = a = b = lo = hi = st->d.u;
+  best_g = ga = gb = glo = ghi = pzf_trial(st, best_u) - th;
+  found = best_g == 0;
   h = 1e-3 * (st->u_max - st->u_min);
-  for (it = 0; ga != 0 && it < PZF_INVERSE_ITERATIONS; ++it) { /* expand until g changes sign */
-    b = a + dir * h;
-    if (b > st->u_max) b = st->u_max;
-    if (b < st->u_min) b = st->u_min;
-    gb = (pzf_trial(st, b) - th) * st->gain_sign;
-    if (fabs(gb) < fabs(best_g)) best_u = b, best_g = gb;
-    if ((gb < 0) != (ga < 0) || gb == 0) break;
-    if (b == st->u_max || b == st->u_min) break;
-    a = b;
-    ga = gb;
-    h *= 4;
+  for (it = 1; !found && it < PZF_INVERSE_ITERATIONS && (lo > st->u_min || hi < st->u_max); h *= 4) {
+    int left;
+    for (left = 0; left < 2 && !found; ++left) {
+      const double from = left ? lo : hi, gfrom = left ? glo : ghi;
+      double to, gto;
+      if (left ? from <= st->u_min : from >= st->u_max) continue;
+      to = left ? from - h : from + h;
+      to = to > st->u_max ? st->u_max : (to < st->u_min ? st->u_min : to);
+      gto = pzf_trial(st, to) - th;
+      ++it;
+      if (fabs(gto) < fabs(best_g)) best_u = to, best_g = gto;
+      if (gto == 0 || (gto < 0) != (gfrom < 0)) {
+        a = from, ga = gfrom, b = to, gb = gto, found = 1;
+      } else if (left) {
+        lo = to, glo = gto;
+      } else {
+        hi = to, ghi = gto;
+      }
+    }
   }
-  if (ga != 0 && gb != 0 && (gb < 0) == (ga < 0)) {
-    reached = 0; /* out of reach: the limit (best_u) */
+  if (!found) {
+    reached = 0; /* out of reach: the drive that came nearest */
   } else {
     const double tol = 1e-13 * (fabs(th) > 1 ? fabs(th) : 1);
     for (; it < PZF_INVERSE_ITERATIONS && fabs(best_g) > tol; ++it) { /* Illinois on [a, b] */
       double c = (a * gb - b * ga) / (gb - ga), gc;
-      const double lo = a < b ? a : b, hi = a < b ? b : a;
-      if (!(c > lo && c < hi)) c = 0.5 * (a + b);
-      if (!(c > lo && c < hi)) break; /* the bracket is two adjacent doubles */
-      gc = (pzf_trial(st, c) - th) * st->gain_sign;
+      const double l = a < b ? a : b, r = a < b ? b : a;
+      if (!(c > l && c < r)) c = 0.5 * (a + b);
+      if (!(c > l && c < r)) break; /* the bracket is two adjacent doubles */
+      gc = pzf_trial(st, c) - th;
       if (fabs(gc) < fabs(best_g)) best_u = c, best_g = gc;
       if (gc == 0) break;
       if ((gc < 0) == (gb < 0)) {

@@ -11,12 +11,10 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <random>
 #include <sstream>
 
 #include "client/export_c.h"
 #include "io/network_io.h"
-#include "model/chromosome.h"
 #include "tests/testing/shell.h"
 #include "model/modal_simulator.h"
 
@@ -38,29 +36,12 @@ std::string Hex(double x) {
   return b;
 }
 
-/// A network on the nominal set's training box whose outputs stay near the bench's plant (μ 95, δ 0.1,
-/// α 2.5e-3, β 6e-3, γ 4e-3, a1 0.1, a2 0.15): narrow ranges keep every output's loop bounded.
-io::SavedNetwork FinNetwork(uint64_t seed) {
-  model::ParameterRanges r;
-  r.mu = {80, 110};
-  r.delta = {0.08, 0.12};
-  r.alpha = {2e-3, 3e-3};
-  r.beta = {5.5e-3, 6.5e-3};
-  r.gamma = {3e-3, 4.5e-3};
-  r.a1 = {0.08, 0.12};
-  r.a2 = {0.12, 0.18};
-  std::mt19937_64 rng(seed);
-  for (;;) {
-    std::vector<uint8_t> bits(model::kChromosomeBits);
-    for (auto& b : bits) b = rng() & 1;
-    if (!model::ValidateChromosome(bits).ok()) continue;
-    io::SavedNetwork s;
-    s.network = model::DecodeChromosome(bits, model::InputNormalization{375, 750, 0.25, 1}, r);
-    s.chromosome = bits;
-    s.provenance.job_id = "test";
-    s.provenance.seed = seed;
-    return s;
-  }
+/// An identified network (tests/data/networks/README.md): piezoid identify on the nominal bench.
+io::SavedNetwork FinNetwork() {
+  io::SavedNetwork s;
+  const Status st = io::LoadNetwork(PIEZOID_TEST_DATA_DIR "/networks/fin_nominal.json", &s);
+  EXPECT_TRUE(st.ok()) << st.message();
+  return s;
 }
 
 /// Rests, ramps, reversals, nested minor loops, jumps of several hundred volts in one sample (the step
@@ -155,8 +136,8 @@ std::string CArray(const std::string& name, const std::vector<double>& v) {
 TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
   const model::BimorphPlant plant;
   const model::ModalSimulator sim(plant);
-  const io::SavedNetwork net = FinNetwork(7);
-  const double b1 = 1.37, b2 = -1.5, limit = 750;
+  const io::SavedNetwork net = FinNetwork();
+  const double b1 = 3.1640625, b2 = -3.076171875, limit = 750;  // case 9's saturations
 
   // The 100 Hz header through the CLI (what users run), a 1 kHz one through the library.
   ASSERT_TRUE(io::SaveNetwork(net, (dir_ / "fin.json").string()).ok());
@@ -238,8 +219,8 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
 TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
   const model::BimorphPlant plant;
   const model::ModalSimulator sim(plant);
-  const io::SavedNetwork net = FinNetwork(11);
-  const double b1 = 1.37, b2 = -1.5;
+  const io::SavedNetwork net = FinNetwork();
+  const double b1 = 3.1640625, b2 = -3.076171875;
   std::string h;
   ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{}, "fin", &h).ok());  // horizon 2
   std::ofstream(dir_ / "fin.h") << h;
@@ -257,7 +238,7 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
   for (const auto& u : drives) refs.push_back(Library(sim, p, u, 100, 750));
 
   // Each reference is followed with the horizon-2 inverse given one sample of preview, its drive
-  // replayed through the forward step, and once by the one-step inverse (horizon 1).
+  // replayed through the forward step, and by the one-step inverse (horizon 1, for the record).
   std::ostringstream prog;
   prog << "#include <stdio.h>\n#include \"fin.h\"\n#include \"fin1.h\"\n";
   for (size_t r = 0; r < refs.size(); ++r) prog << CArray("ref" + std::to_string(r), refs[r].y);
@@ -295,19 +276,21 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
       err1 = std::max(err1, std::abs(y1 - y_ref[k]));
     }
     ASSERT_LT(at, lines.size());
-    EXPECT_EQ(lines[at++], "unreachable 0 saturations 0") << "reference " << r;
+    long unreachable = -1, saturations = -1;
+    ASSERT_EQ(std::sscanf(lines[at++].c_str(), "unreachable %ld saturations %ld", &unreachable, &saturations), 2);
+    EXPECT_EQ(saturations, 0) << "reference " << r;
     const double rms = std::sqrt(sq / static_cast<double>(y_ref.size() - 1));
     // The forward model run on the computed drive gives the same angles, bit for bit (one recursion).
     EXPECT_EQ(replay, 0.0) << "reference " << r;
-    // Horizon 2 follows within a fraction of the dead band (a1 + a2 ≈ 0.25 deg): what docs/deploy.md says.
-    EXPECT_LE(rms, 0.01 * range) << "reference " << r;
-    EXPECT_LE(err, 0.05 * range) << "reference " << r;
-    // The one-step inverse rings (between the drive limits, once the rich reference leaves the dead
-    // band): that is why the default horizon is 2.
-    if (r == 0) EXPECT_GT(err1, 0.1 * range);
-    std::printf("reference %zu (range %.3g deg): horizon 2: rms %.3g deg (%.3g of the range), max %.3g deg; "
-                "horizon 1: max %.3g deg\n",
-                r, range, rms, rms / range, err, err1);
+    // Horizon 2 with one sample of preview: what docs/deploy.md says (measured: rms 0.23 % and 0.26 %
+    // of the range, max 2.5 % and 1.5 %; 1 and 63 steps out of reach, on the sine near its negative
+    // peaks, where the greedy two-sample plan cannot make up the lag of the steps before).
+    EXPECT_LE(rms, 0.005 * range) << "reference " << r;
+    EXPECT_LE(err, 0.03 * range) << "reference " << r;
+    EXPECT_LE(unreachable, static_cast<long>(y_ref.size()) / 4) << "reference " << r;
+    std::printf("reference %zu (range %.3g deg, %zu samples): horizon 2: rms %.3g deg (%.3g of the range), max %.3g "
+                "deg, %ld steps out of reach; horizon 1: max %.3g deg\n",
+                r, range, y_ref.size(), rms, rms / range, err, unreachable, err1);
   }
   EXPECT_EQ(at, lines.size());
 }
@@ -315,7 +298,7 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
 TEST_F(ExportFinC, BadInputIsReportedNotExtrapolatedSilently) {
   const model::BimorphPlant plant;
   const model::ModalSimulator sim(plant);
-  const io::SavedNetwork net = FinNetwork(3);
+  const io::SavedNetwork net = FinNetwork();
   std::string h;
   EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{0.0, 0.0}, "fin", &h).code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, -1.0}, "fin", &h).code(),
