@@ -23,6 +23,7 @@
 #include "client/job_file.h"
 #include "client/job_report.h"
 #include "client/service_client.h"
+#include "hgann/hgann_job.h"
 #include "job/job_kind.h"
 #include "service/wire_codec.h"
 #include "kinds/kinds.h"
@@ -450,10 +451,31 @@ void RegisterFetch(CLI::App& app, int& exit_code) {
 // ---------------------------------------------------------------- export
 
 struct ExportOptions {
-  std::string network, out, name = "piezoid_predict";
+  std::string network, out, name = "piezoid_predict", job;
   bool plant = false;
   FinPlantExport fin;
 };
+
+/// The beam of the job spec `file` (its hgann.geometry overrides), and its cases' saturations as a
+/// note for the header.
+int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string* note) {
+  job::JobSpec spec;
+  std::vector<job::FieldViolation> v;
+  Status s = LoadJobSpecFile(file, &spec, &v);
+  if (!s.ok()) return ReportViolations("job spec " + file, v, s);
+  const auto* h = std::get_if<job::HgannProblem>(&spec.problem);
+  if (!h) return Report(InvalidArgument(FieldError("--job", file, "is not an hgann job spec")));
+  hgann::HgannFitnessConfig config;
+  if (s = hgann::HgannConfigFromProblem(*h, &config); !s.ok()) return Report(s);
+  *geometry = config.geometry;
+  std::ostringstream n;
+  n << "The beam of job spec " << fs::path(file).filename().string() << "; its cases' saturations [deg]";
+  for (const auto& c : config.cases)
+    n << (&c == &config.cases.front() ? ": " : ", ") << "case " << c.number << " (" << c.drive.amplitude_v << " V, "
+      << c.drive.frequency_hz << " Hz) b1 " << CDecimal(c.b1) << " b2 " << CDecimal(c.b2);
+  *note = n.str() + ".";
+  return kExitOk;
+}
 
 int ExportNetwork(const ExportOptions& o) {
   io::SavedNetwork net;
@@ -461,9 +483,14 @@ int ExportNetwork(const ExportOptions& o) {
   if (!s.ok()) return Report(InvalidArgument(s.message()));
   std::string header;
   if (o.plant) {
-    const model::BimorphPlant plant;  // the spec's beam, as the HGANN fitness's default
+    model::BeamGeometry geometry;  // the spec's beam, as the HGANN fitness's default …
+    FinPlantExport fin = o.fin;
+    if (!o.job.empty()) {          // … or the job's
+      if (int code = JobBeam(o.job, &geometry, &fin.note); code != kExitOk) return code;
+    }
+    const model::BimorphPlant plant(geometry);
     const model::ModalSimulator sim(plant);
-    s = NetworkAndFinToCHeader(net, sim, o.fin, o.name, &header);
+    s = NetworkAndFinToCHeader(net, sim, fin, o.name, &header);
   } else {
     s = NetworkToCHeader(net, o.name, &header);
   }
@@ -497,6 +524,10 @@ void RegisterExport(CLI::App& app, int& exit_code) {
                 "|drive| limit [V] (with --plant; 0 = the largest training amplitude)")
       ->needs(plant)
       ->capture_default_str();
+  c->add_option("--job", o->job,
+                "the HGANN job spec (.json) the network was identified with: its beam (hgann.geometry) and, in a "
+                "comment, its cases' saturations (with --plant; default: the spec's beam)")
+      ->needs(plant);
   c->add_option("--inverse-horizon", o->fin.inverse_horizon,
                 "samples over which NAME_inverse_step reaches the desired angle (with --plant; 1 = exact one-step "
                 "inversion, unstable on this plant)")

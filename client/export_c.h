@@ -41,6 +41,7 @@ struct FinPlantExport {
   double sample_rate_hz = 100.0;  ///< the controller's sample rate (the bench cases' 100 Hz), > 0
   double drive_limit_v = 0.0;     ///< |u| ≤ this [V]; 0 = the largest training amplitude
   int inverse_horizon = 2;        ///< samples over which NAME_inverse_step reaches its target, ≥ 1
+  std::string note;               ///< a sentence for the plant's comment (e.g. the job and its saturations)
 };
 
 /// The same header with the bimorph-fin plant of `plant` after the network (client/export_fin_c.h):

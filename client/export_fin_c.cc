@@ -704,7 +704,19 @@ Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& netwo
   const double dt = 1.0 / options.sample_rate_hz;
   std::ostringstream t;
   t << "/* The plant: " << n << " modes of the beam (those visible at the tip), fin length L = "
-    << CDecimal(sim.length_m()) << " m, sampled at " << CDecimal(options.sample_rate_hz) << " Hz. */\n"
+    << CDecimal(sim.length_m()) << " m, sampled at " << CDecimal(options.sample_rate_hz) << " Hz.";
+  if (!options.note.empty()) {  // wrapped at about 100 columns, "*/" kept out of the comment
+    std::string note = options.note;
+    Replace(note, "*/", "* /");
+    t << "\n *";
+    size_t col = 2;
+    std::istringstream words(note);
+    for (std::string w; words >> w; col += w.size() + 1) {
+      if (col + w.size() > 100) t << "\n *", col = 2;
+      t << " " << w;
+    }
+  }
+  t << " */\n"
     << "#define PZF_MODES " << n << "\n#define PZF_MODES_PADDED " << (n + 3) / 4 * 4 << "\n"
     << "#define PZF_DT " << CHexLiteral(dt) << " /* " << CDecimal(dt) << " s */\n"
     << "#define PZF_INV_LENGTH " << CHexLiteral(1.0 / sim.length_m()) << " /* 1/L = " << CDecimal(1.0 / sim.length_m()) << " 1/m */\n"

@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "client/export_c.h"
@@ -293,6 +294,49 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
                 r, range, y_ref.size(), rms, rms / range, err, unreachable, err1);
   }
   EXPECT_EQ(at, lines.size());
+}
+
+TEST_F(ExportFinC, TheJobSpecGivesTheBeamAndTheSaturations) {
+  // The quick example's spec with another tip length: the header's plant is that beam's.
+  std::ifstream in(PIEZOID_DATA_DIR "/../examples/hgann_quick.json");
+  std::string spec((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string from = "\"case_set_dir\": \"../data/bimorph-fin/nominal\"";
+  ASSERT_NE(spec.find(from), std::string::npos);
+  spec.replace(spec.find(from), from.size(),
+               "\"case_set_dir\": \"" PIEZOID_DATA_DIR "/bimorph-fin/nominal\", \"geometry\": {\"tip_length_m\": 0.03}");
+  std::ofstream(dir_ / "job.json") << spec;
+  ASSERT_TRUE(io::SaveNetwork(FinNetwork(), (dir_ / "fin.json").string()).ok());
+  const std::string cli = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '" +
+                          (dir_ / "fin.json").string() + "' --plant --job '" + (dir_ / "job.json").string() +
+                          "' --out '" + (dir_ / "fin.h").string() + "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
+  ASSERT_EQ(Shell(cli), 0) << cli << "\n" << std::ifstream(dir_ / "cli.err").rdbuf();
+  std::ifstream hin(dir_ / "fin.h");
+  const std::string h((std::istreambuf_iterator<char>(hin)), std::istreambuf_iterator<char>());
+  EXPECT_NE(h.find("The beam of job spec job.json"), std::string::npos);
+  EXPECT_NE(h.find("case 9 (750 V, 1 Hz) b1 "), std::string::npos);
+  model::BeamGeometry g;
+  g.tip_length_m = 0.03;
+  const model::BimorphPlant plant(g);
+  const model::ModalSimulator sim(plant);
+  EXPECT_NE(h.find("#define FIN_INV_LENGTH " + Hex(1.0 / sim.length_m())), std::string::npos);
+
+  // And it steps like the library's simulation of that beam (bench case 9's sine).
+  const std::vector<double> u = model::SampleValues(model::Sinusoid{750, 1, 3, 100});
+  std::ostringstream prog;
+  prog << "#include <stdio.h>\n#include \"fin.h\"\n" << CArray("u", u)
+       << "int main(void) {\n  double p[7];\n  fin_state s;\n  long k;\n  fin_params(750, 1, p);\n"
+       << "  if (fin_init(&s, p, 3.1640625, -3.076171875, 0) != 0) return 2;\n  printf(\"%a\\n\", fin_angle(&s));\n"
+       << "  for (k = 1; k < " << u.size() << "; ++k) printf(\"%a\\n\", fin_step(&s, u[k]));\n  return 0;\n}\n";
+  const auto lines = CompileAndRun(prog.str());
+  const auto params = FinNetwork().network.Predict(750, 1);
+  model::BimorphParams p;
+  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+  p.a1 = params.a1, p.a2 = params.a2, p.b1 = 3.1640625, p.b2 = -3.076171875;
+  const Trace want = Library(sim, p, u, 100, 750);
+  ASSERT_EQ(lines.size(), want.y.size());
+  double err = 0;
+  for (size_t k = 0; k < lines.size(); ++k) err = std::max(err, std::abs(std::strtod(lines[k].c_str(), nullptr) - want.y[k]));
+  EXPECT_LE(err, 1e-12 * MaxAbs(want.y));
 }
 
 TEST_F(ExportFinC, BadInputIsReportedNotExtrapolatedSilently) {
