@@ -628,13 +628,22 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
       to = to > st->u_max ? st->u_max : (to < st->u_min ? st->u_min : to);
       gto = pzf_trial(st, to) - th;
       ++it;
-      if (fabs(gto) < fabs(best_g)) best_u = to, best_g = gto;
+      if (fabs(gto) < fabs(best_g)) {
+        best_u = to;
+        best_g = gto;
+      }
       if (gto == 0 || (gto < 0) != (gfrom < 0)) {
-        a = from, ga = gfrom, b = to, gb = gto, found = 1;
+        a = from;
+        ga = gfrom;
+        b = to;
+        gb = gto;
+        found = 1;
       } else if (left) {
-        lo = to, glo = gto;
+        lo = to;
+        glo = gto;
       } else {
-        hi = to, ghi = gto;
+        hi = to;
+        ghi = gto;
       }
     }
   }
@@ -648,7 +657,10 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
       if (!(c > l && c < r)) c = 0.5 * (a + b);
       if (!(c > l && c < r)) break; /* the bracket is two adjacent doubles */
       gc = pzf_trial(st, c) - th;
-      if (fabs(gc) < fabs(best_g)) best_u = c, best_g = gc;
+      if (fabs(gc) < fabs(best_g)) {
+        best_u = c;
+        best_g = gc;
+      }
       if (gc == 0) break;
       if ((gc < 0) == (gb < 0)) {
         b = c;
