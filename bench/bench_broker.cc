@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <barrier>
 #include <sys/prctl.h>
 #include <time.h>
 #include <unistd.h>
@@ -257,6 +258,56 @@ BENCHMARK(BM_SleepCost50us)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(3);
+
+/// The machine's own ceiling for BM_SleepCost50us: `threads` threads of this process take the 2000
+/// evaluations of a generation (each a 50 µs sleep, as the synthetic fitness sleeps) from an atomic
+/// counter and meet at a barrier, generation after generation: no GA, no messages, no master. What
+/// a perfect dispatcher would reach on this machine; with one thread, `eval_us` is the kernel's
+/// real length of a 50 µs sleep (its granularity and wake-up latency). Arg: threads.
+void BM_SleepCeiling(benchmark::State& state) {
+  ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);  // as FixedCost: the sleep is the cost
+  const int threads = static_cast<int>(state.range(0));
+  constexpr int kEvals = 2000;
+  constexpr auto kCost = std::chrono::microseconds(50);
+  std::atomic<int> next{0};
+  std::atomic<bool> quit{false};
+  std::atomic<int64_t> slept_ns{0};
+  std::barrier start(threads + 1), end(threads + 1);
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back([&] {
+      for (;;) {
+        start.arrive_and_wait();
+        if (quit.load()) return;
+        int64_t ns = 0;
+        while (next.fetch_add(1, std::memory_order_relaxed) < kEvals) {
+          const auto t0 = std::chrono::steady_clock::now();
+          std::this_thread::sleep_for(kCost);
+          ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+        }
+        slept_ns += ns;
+        end.arrive_and_wait();
+      }
+    });
+  int64_t generations = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    next = 0;
+    start.arrive_and_wait();
+    end.arrive_and_wait();
+    ++generations;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  quit = true;
+  start.arrive_and_wait();
+  for (auto& t : pool) t.join();
+  const double evals = static_cast<double>(generations) * kEvals;
+  state.counters["threads"] = threads;
+  state.counters["efficiency"] = evals * 50e-6 / (threads * wall);
+  state.counters["eval_us"] = 1e-3 * static_cast<double>(slept_ns.load()) / evals;
+  state.counters["generation_ms"] = 1e3 * wall / static_cast<double>(std::max<int64_t>(1, generations));
+}
+BENCHMARK(BM_SleepCeiling)->Arg(1)->Arg(16)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2);
 
 }  // namespace
 }  // namespace pz
