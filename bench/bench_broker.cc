@@ -8,6 +8,8 @@
 //    (a sleep: no CPU), 64 worker threads in 4 workers; one generation of K islands is one dispatch
 //    of K × (population − elite) evaluations; efficiency = evals/s ÷ (64 / 10 ms).
 //  * BM_SleepCost50us/<workers>/<threads>: the same with 50 µs per evaluation, population 4000.
+//  * BM_SleepCeiling/<threads>: those 50 µs sleeps on threads of one process with no master (the
+//    machine's ceiling for BM_SleepCost50us; one thread: the kernel's real length of a 50 µs sleep).
 // Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5; docs/performance.md):
 //   null cost, 2000-genome generations: 255 k individuals/s; 20000-genome generations: 580 k/s
 //   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5960 evals/s = 93.1 %
