@@ -8,6 +8,8 @@
 //    (a sleep: no CPU), 64 worker threads in 4 workers; one generation of K islands is one dispatch
 //    of K × (population − elite) evaluations; efficiency = evals/s ÷ (64 / 10 ms).
 //  * BM_SleepCost50us/<workers>/<threads>: the same with 50 µs per evaluation, population 4000.
+//  * BM_SleepCeiling/<threads>: those 50 µs sleeps on threads of one process with no master (the
+//    machine's ceiling for BM_SleepCost50us; one thread: the kernel's real length of a 50 µs sleep).
 // Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5; docs/performance.md):
 //   null cost, 2000-genome generations: 255 k individuals/s; 20000-genome generations: 580 k/s
 //   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5960 evals/s = 93.1 %
@@ -18,6 +20,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <barrier>
 #include <sys/prctl.h>
 #include <time.h>
 #include <unistd.h>
@@ -257,6 +260,56 @@ BENCHMARK(BM_SleepCost50us)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->MinTime(3);
+
+/// The machine's own ceiling for BM_SleepCost50us: `threads` threads of this process take the 2000
+/// evaluations of a generation (each a 50 µs sleep, as the synthetic fitness sleeps) from an atomic
+/// counter and meet at a barrier, generation after generation: no GA, no messages, no master. What
+/// a perfect dispatcher would reach on this machine; with one thread, `eval_us` is the kernel's
+/// real length of a 50 µs sleep (its granularity and wake-up latency). Arg: threads.
+void BM_SleepCeiling(benchmark::State& state) {
+  ::prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);  // as FixedCost: the sleep is the cost
+  const int threads = static_cast<int>(state.range(0));
+  constexpr int kEvals = 2000;
+  constexpr auto kCost = std::chrono::microseconds(50);
+  std::atomic<int> next{0};
+  std::atomic<bool> quit{false};
+  std::atomic<int64_t> slept_ns{0};
+  std::barrier start(threads + 1), end(threads + 1);
+  std::vector<std::thread> pool;
+  for (int t = 0; t < threads; ++t)
+    pool.emplace_back([&] {
+      for (;;) {
+        start.arrive_and_wait();
+        if (quit.load()) return;
+        int64_t ns = 0;
+        while (next.fetch_add(1, std::memory_order_relaxed) < kEvals) {
+          const auto t0 = std::chrono::steady_clock::now();
+          std::this_thread::sleep_for(kCost);
+          ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+        }
+        slept_ns += ns;
+        end.arrive_and_wait();
+      }
+    });
+  int64_t generations = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (auto _ : state) {
+    next = 0;
+    start.arrive_and_wait();
+    end.arrive_and_wait();
+    ++generations;
+  }
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  quit = true;
+  start.arrive_and_wait();
+  for (auto& t : pool) t.join();
+  const double evals = static_cast<double>(generations) * kEvals;
+  state.counters["threads"] = threads;
+  state.counters["efficiency"] = evals * 50e-6 / (threads * wall);
+  state.counters["eval_us"] = 1e-3 * static_cast<double>(slept_ns.load()) / evals;
+  state.counters["generation_ms"] = 1e3 * wall / static_cast<double>(std::max<int64_t>(1, generations));
+}
+BENCHMARK(BM_SleepCeiling)->Arg(1)->Arg(16)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2);
 
 }  // namespace
 }  // namespace pz

@@ -5,11 +5,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
 #include <cstring>
 #include <cmath>
 #include <deque>
 #include <list>
 #include <map>
+#include <mutex>
 #include <thread>
 #include <unordered_map>
 #include <zmq.hpp>
@@ -36,56 +38,77 @@ struct LocalLease {
   service::TaskBatchMsg batch;
   std::shared_ptr<const Context> context;
   std::vector<opt::FitnessResult> results;
-  // The threads handed the lease take its tasks one at a time (a task per fetch_add), so a thread
-  // runs on to the next task without a round trip through the I/O thread, and the lease's tail is
-  // shared to the last task.
-  std::atomic<int> next{0};          // next task not yet taken by a thread
+  // The compute threads take its tasks one at a time (a task per fetch_add), so a thread runs on
+  // to the next task without a round trip through anyone, and the lease's tail is shared to the
+  // last task.
+  std::atomic<int> next{0};            // next task not yet taken by a thread
   std::atomic<bool> abandoned{false};  // its threads take no more tasks
-  // I/O thread only:
-  int remaining = 0;    // tasks not yet evaluated
+  // Under Handout::mu:
+  bool queued = false;  // in Handout::queue (threads may still join it)
   int in_progress = 0;  // threads working on it (it lives until they are all back)
-  int handed = 0;       // threads it was handed to
-  double eval_s = 0;
+  int done = 0;         // tasks evaluated
+  double eval_s = 0;    // their summed evaluation time [s]
 };
 
-// inproc messages carry these PODs (same process).
-struct Chunk {
-  LocalLease* lease;  ///< take its tasks until none is left; nullptr = stop
+/// The leases the compute threads take work from, in arrival order. A thread that runs out of
+/// tasks in one lease goes straight on to the next one queued, without the I/O thread; the I/O
+/// thread hears of a lease once, from the last thread to leave it when nobody can join it any more
+/// (its tasks all taken, or abandoned).
+struct Handout {
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<LocalLease*> queue;
+  bool stop = false;
 };
+
+// inproc messages from a compute thread to the I/O thread carry this POD (same process).
 struct Done {
-  LocalLease* lease;
-  int tasks;  ///< tasks this thread evaluated
-  double eval_s;
+  LocalLease* lease;  ///< the lease nobody works on any more; nullptr = the thread has stopped
 };
 
-void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id) {
+void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id, Handout& h) {
   zmq::socket_t s(ctx, zmq::socket_type::dealer);
   s.set(zmq::sockopt::routing_id, "c" + std::to_string(id));
   s.set(zmq::sockopt::linger, 0);
   s.connect(endpoint);
-  Done d{nullptr, 0, 0};
-  s.send(zmq::buffer(&d, sizeof d));
+  std::unique_lock lock(h.mu);
   for (;;) {
-    zmq::message_t m;
-    if (!s.recv(m) || m.size() != sizeof(Chunk)) break;
-    Chunk c;
-    std::memcpy(&c, m.data(), sizeof c);
-    if (!c.lease) break;
-    Done out{c.lease, 0, 0};
-    LocalLease& l = *c.lease;
+    h.cv.wait(lock, [&h] { return h.stop || !h.queue.empty(); });
+    if (h.stop) break;
+    LocalLease& l = *h.queue.front();
+    l.in_progress += 1;
+    lock.unlock();
     const auto& f = *l.context->fitness;
     const double penalty = l.context->spec.limits.penalty_cost;
     const int total = static_cast<int>(l.batch.genomes.size());
+    int tasks = 0;
+    double eval_s = 0;
     while (!l.abandoned.load(std::memory_order_relaxed)) {
       const int i = l.next.fetch_add(1, std::memory_order_relaxed);
       if (i >= total) break;
       const auto t0 = Clock::now();
       l.results[i] = opt::EvaluateGuarded(f, l.batch.genomes[i], penalty);
-      out.eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
-      ++out.tasks;
+      eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
+      ++tasks;
     }
-    s.send(zmq::buffer(&out, sizeof out));
+    lock.lock();
+    if (l.queued) {  // nothing left to take (or abandoned: then the I/O thread dequeued it)
+      l.queued = false;
+      std::erase(h.queue, &l);
+    }
+    l.in_progress -= 1;
+    l.done += tasks;
+    l.eval_s += eval_s;
+    if (l.in_progress == 0) {  // the last one out: the I/O thread replies and frees it
+      lock.unlock();
+      Done d{&l};
+      s.send(zmq::buffer(&d, sizeof d));
+      lock.lock();
+    }
   }
+  lock.unlock();
+  Done bye{nullptr};
+  s.send(zmq::buffer(&bye, sizeof bye));
 }
 
 }  // namespace
@@ -108,14 +131,14 @@ struct Worker::Impl {
   std::string last_handshake_error;
   std::string inproc_endpoint;
   std::vector<std::thread> threads;
-  std::deque<std::string> idle;  // compute thread ids waiting for work
+  Handout handout;
   std::unordered_map<LocalLease*, std::unique_ptr<LocalLease>> leases;
-  std::deque<LocalLease*> ready;  // leases with tasks not yet handed out
   std::map<std::string, std::vector<std::unique_ptr<LocalLease>>> parked;  // by context hash
   std::list<std::pair<std::string, std::shared_ptr<const Context>>> contexts;  // LRU, front = newest
   service::ServerLiveness server;
   service::Backoff backoff;
   WorkerStats stats;
+  int stopped_threads = 0;  // compute threads that have left their loop
 
   void Send(const WorkerMsg& m) {
     const std::string payload = service::EncodeWorkerToMaster(m);
@@ -143,13 +166,19 @@ struct Worker::Impl {
     server.Reset(Clock::now());
   }
 
-  /// Drops every lease (the master re-queues them) and the parked ones.
+  /// Drops every lease (the master re-queues them) and the parked ones. A lease a thread still
+  /// works on is freed when its last thread reports (OnDone).
   void AbandonAll() {
-    ready.clear();
     parked.clear();
+    std::lock_guard lock(handout.mu);
+    handout.queue.clear();
     for (auto it = leases.begin(); it != leases.end();) {
-      it->second->abandoned = true;
-      if (it->second->in_progress == 0)
+      LocalLease& l = *it->second;
+      l.abandoned = true;
+      const bool was_queued = l.queued;
+      l.queued = false;
+      // Not queued with nobody on it: its last thread's report is on its way.
+      if (was_queued && l.in_progress == 0)
         it = leases.erase(it);
       else
         ++it;
@@ -192,6 +221,7 @@ struct Worker::Impl {
     if (code == WireCode::kOk) {
       m.result.indices = l.batch.indices;
       m.result.results = l.results;
+      std::lock_guard lock(handout.mu);
       m.result.eval_seconds = l.eval_s;
     }
     Send(m);
@@ -200,15 +230,19 @@ struct Worker::Impl {
   void Enqueue(std::unique_ptr<LocalLease> l, std::shared_ptr<const Context> c) {
     l->context = std::move(c);
     l->results.resize(l->batch.genomes.size());
-    l->remaining = static_cast<int>(l->batch.genomes.size());
     ++stats.leases;
-    if (l->remaining == 0) {
+    if (l->batch.genomes.empty()) {
       Reply(*l, WireCode::kOk, {});
       return;
     }
     LocalLease* p = l.get();
     leases[p] = std::move(l);
-    ready.push_back(p);
+    {
+      std::lock_guard lock(handout.mu);
+      p->queued = true;
+      handout.queue.push_back(p);
+    }
+    handout.cv.notify_all();
   }
 
   void OnMaster(std::string_view payload, const std::atomic<bool>& stop) {
@@ -290,44 +324,25 @@ struct Worker::Impl {
     for (auto& l : leases_waiting) Enqueue(std::move(l), c);
   }
 
-  void OnDone(const std::string& thread_id, const Done& d) {
-    if (d.lease) {
-      auto it = leases.find(d.lease);
-      if (it != leases.end()) {
-        LocalLease& l = *it->second;
-        l.in_progress -= 1;
-        l.remaining -= d.tasks;
-        l.eval_s += d.eval_s;
-        stats.tasks += static_cast<uint64_t>(d.tasks);
-        if (d.tasks > 0 && !l.abandoned && l.remaining == 0) Reply(l, WireCode::kOk, {});
-        // Gone only when no thread holds it any more (one may not have looked at it yet).
-        if (l.in_progress == 0 && (l.remaining == 0 || l.abandoned)) {
-          std::erase(ready, &l);  // still there when no thread was idle to see it run out
-          leases.erase(it);
-        }
-      }
+  /// A compute thread's report: nobody works on `d.lease` any more (reply with its results unless
+  /// it was abandoned, and free it), or (nullptr) the thread has stopped.
+  void OnDone(const Done& d) {
+    if (!d.lease) {
+      ++stopped_threads;
+      return;
     }
-    idle.push_back(thread_id);
-  }
-
-  void Assign() {
-    while (!idle.empty() && !ready.empty()) {
-      LocalLease* l = ready.front();
-      const int total = static_cast<int>(l->batch.genomes.size());
-      // Handed to one more thread while it has tasks nobody took, and no more threads than tasks.
-      if (l->next.load(std::memory_order_relaxed) >= total || l->handed >= total) {
-        ready.pop_front();
-        continue;
-      }
-      Chunk c{l};
-      l->handed += 1;
-      l->in_progress += 1;
-      if (l->handed >= total) ready.pop_front();
-      const std::string id = idle.front();
-      idle.pop_front();
-      inproc.send(zmq::buffer(id), zmq::send_flags::sndmore);
-      inproc.send(zmq::buffer(&c, sizeof c));
+    auto it = leases.find(d.lease);
+    if (it == leases.end()) return;
+    LocalLease& l = *it->second;
+    int done = 0;
+    {
+      std::lock_guard lock(handout.mu);
+      if (l.queued || l.in_progress > 0) return;  // cannot happen: the last one out reports
+      done = l.done;
     }
+    stats.tasks += static_cast<uint64_t>(done);
+    if (!l.abandoned && done == static_cast<int>(l.batch.genomes.size())) Reply(l, WireCode::kOk, {});
+    leases.erase(it);
   }
 
   bool RecvInproc() {
@@ -336,7 +351,7 @@ struct Worker::Impl {
     if (!inproc.recv(body) || body.size() != sizeof(Done)) return true;
     Done d;
     std::memcpy(&d, body.data(), sizeof d);
-    OnDone(id.to_string(), d);
+    OnDone(d);
     return true;
   }
 
@@ -352,7 +367,7 @@ struct Worker::Impl {
     inproc.set(zmq::sockopt::linger, 0);
     inproc.bind(inproc_endpoint);
     for (int i = 0; i < options.threads; ++i)
-      threads.emplace_back([this, i] { ComputeLoop(ctx, inproc_endpoint, i); });
+      threads.emplace_back([this, i] { ComputeLoop(ctx, inproc_endpoint, i, handout); });
     Connect();
     while (!stop.load()) {
       const TimePoint now = Clock::now();
@@ -382,7 +397,6 @@ struct Worker::Impl {
       if (!stats.refused.empty()) break;
       while (RecvInproc()) {
       }
-      Assign();
       const TimePoint after = Clock::now();
       if (server.Expired(after)) {
         Reconnect(stop, "no heartbeat");
@@ -402,18 +416,15 @@ struct Worker::Impl {
     }
     AbandonAll();
     // Let the compute threads finish the task each one is running (bounded), then stop them.
-    int stopped = 0;
-    const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
-    while (stopped < options.threads && Clock::now() < give_up) {
-      while (!idle.empty()) {
-        Chunk quit{nullptr};
-        inproc.send(zmq::buffer(idle.front()), zmq::send_flags::sndmore);
-        inproc.send(zmq::buffer(&quit, sizeof quit));
-        idle.pop_front();
-        ++stopped;
-      }
-      if (stopped < options.threads) PollInproc(std::chrono::milliseconds(50));
+    {
+      std::lock_guard lock(handout.mu);
+      handout.stop = true;
     }
+    handout.cv.notify_all();
+    const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
+    while (stopped_threads < options.threads && Clock::now() < give_up)
+      PollInproc(std::chrono::milliseconds(50));
+    const int stopped = stopped_threads;
     for (auto& t : threads) {
       if (stopped >= options.threads)
         t.join();

@@ -1,7 +1,9 @@
 // piezoid-worker's engine: stateless evaluation of task batches for a master (conventions 9–11).
 // The calling thread is the I/O thread and owns the DEALER socket to the master; `threads`
-// compute threads, handed a lease over inproc://, take its tasks one at a time (an atomic counter)
-// and never block heartbeats. Job
+// compute threads take the leases it queues (a queue under a mutex, in arrival order) and their
+// tasks one at a time (an atomic counter per lease), going straight on to the next queued lease;
+// the last thread out of a lease tells the I/O thread over inproc:// (which replies). They never
+// block heartbeats. Job
 // contexts are fetched once by content hash and cached (LRU). When the master falls silent or
 // asks, the worker drops its leases (the master re-queues them) and reconnects with back-off.
 #pragma once
