@@ -129,9 +129,9 @@ std::string FinEffectError(std::string_view name) {
   for (const EffectInfo& e : EffectLibrary()) known += (known.empty() ? "" : ", ") + e.name;
   const EffectDef* def = FindEffect(name);
   if (def != nullptr)
-    return "effect '" + std::string(name) + "' (" + StageName(def->stage()) +
-           " stage) is not offered by the fin bench (its effects: " + known + ")";
-  return "unknown effect '" + std::string(name) + "' (effects: " + known + ")";
+    return "not an effect of the fin bench: '" + std::string(name) + "' is the library's " +
+           StageName(def->stage()) + "-stage effect of the records families (fin effects: " + known + ")";
+  return "not an effect of the library: '" + std::string(name) + "' is unknown (fin effects: " + known + ")";
 }
 
 Status Effect::Validate() const {

@@ -85,8 +85,8 @@ const char* EffectName(EffectKind kind);
 /// Parses a name of EffectLibrary(), "none" or the former name "output-drift"; nullopt if unknown
 /// or not a fin effect (FinEffectError says which).
 std::optional<EffectKind> ParseEffectKind(std::string_view name);
-/// Why `name` is not a fin effect: a library effect of a stage the fin does not offer, or unknown;
-/// lists the fin's effects.
+/// Why `name` is not a fin effect ("not an effect of the fin bench: …" for a library effect the fin
+/// does not offer, "not an effect of the library: …" else); lists the fin's effects.
 std::string FinEffectError(std::string_view name);
 
 /// One effect with its parameter values (in GetEffectInfo(kind).params order, physical units).
