@@ -291,7 +291,7 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,
                   "comma-separated effects to try (default: the whole library: driver-lowpass, creep, hinge-friction, "
-                  "delay, cubic-stiffening, quadratic-drive, output-drift)")
+                  "delay, cubic-stiffening, quadratic-drive, drift)")
       ->type_name("LIST");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
   cmd->add_option("--seed", a->seed, "seed of the global searches");
