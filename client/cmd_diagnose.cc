@@ -59,11 +59,7 @@ std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   while (std::getline(ss, name, ',')) {
     if (name.empty()) continue;
     const auto k = model::ParseEffectKind(name);
-    if (!k || *k == model::EffectKind::kNone) {
-      std::string known;
-      for (const auto& e : model::EffectLibrary()) known += (known.empty() ? "" : ", ") + e.name;
-      throw InputError("unknown effect '" + name + "' (known: " + known + ")");
-    }
+    if (!k || *k == model::EffectKind::kNone) throw InputError(model::FinEffectError(name));
     kinds.push_back(*k);
   }
   return kinds;
@@ -295,7 +291,7 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,
                   "comma-separated effects to try (default: the whole library: driver-lowpass, creep, hinge-friction, "
-                  "delay, cubic-stiffening, quadratic-drive, output-drift)")
+                  "delay, cubic-stiffening, quadratic-drive, drift)")
       ->type_name("LIST");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
   cmd->add_option("--seed", a->seed, "seed of the global searches");

@@ -34,9 +34,7 @@ std::vector<model::EffectKind> Structure(const job::DiagnoseProblem& d, std::vec
     const std::string f = "diagnose.structure[" + std::to_string(i) + "]";
     const auto k = model::ParseEffectKind(d.structure[i]);
     if (!k || *k == model::EffectKind::kNone) {
-      std::string known;
-      for (const auto& e : model::EffectLibrary()) known += (known.empty() ? "" : ", ") + e.name;
-      v->push_back({f, f + " = " + d.structure[i] + ": not an effect of the library (" + known + ")"});
+      v->push_back({f, f + " = " + d.structure[i] + ": " + model::FinEffectError(d.structure[i])});
     } else if (!seen.insert(*k).second) {
       v->push_back({f, f + " = " + d.structure[i] + ": appears twice"});
     } else {

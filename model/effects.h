@@ -1,26 +1,30 @@
-// The library of candidate unmodelled effects for the diagnosis of the sim-to-real gap (issue 6):
-// plant extensions of the bimorph-fin model (spec "bimorph-fin model"), each with few physical
-// parameters, their units and ranges, selectable by name. Zero magnitude is the identity.
+// The bimorph-fin bench's use of the one effect library (model/effect_library.h, issue 21): the
+// effects the fin diagnosis (issue 6) offers, by the handle EffectKind its reports and check matrix
+// use, each with the fin bench's search box (physical ranges, a typical scale, a doc line), and
+// EffectSimulator, which runs the bimorph plant with any list of them. Zero magnitude is the identity.
 //
-//   driver-lowpass     amplifier first-order low-pass on the drive      τ ẋ = u − x,  u_e = x
-//   creep              drive creep, one relaxation                      τ_c ẋ = k_c u − x,  u_e = u + x
-//   quadratic-drive    electrostrictive term                             u_e = u + c₂ u²
-//   delay              transport delay drive → encoder                   y(t) = y₀(t − τ_d)
-//   hinge-friction     Dahl friction at the fin hinge on the tip DOF     Ḟ = σ ẇ (1 − F/F_c sgn ẇ),  f_tip −= F
-//   cubic-stiffening   cubic spring on the tip DOF                       f_tip −= k₃ w_tip³
-//   output-drift       slow drift of the reading                         y_k += r t_k
+//   kind               library effect     stage    fin-bench range
+//   kDriverLowpass     driver-lowpass     drive    tau_s ∈ [0, 0.2] s
+//   kCreep             creep              drive    k_c ∈ [0, 1], tau_c_s ∈ [0.05, 50] s
+//   kHingeFriction     hinge-friction     beam     fc_n ∈ [0, 1] N, sigma ∈ [20, 2e5] N/m
+//   kDelay             delay              drive    tau_d_s ∈ [0, 0.1] s
+//   kCubicStiffening   cubic-stiffening   beam     k3 ∈ [−5e6, 2e7] N/m³
+//   kQuadraticDrive    quadratic-drive    drive    c2 ∈ [−5e-4, 5e-4] 1/V
+//   kOutputDrift       drift              output   rate ∈ [−0.2, 0.2] deg/s  (former name output-drift)
 //
-// Stages: drive effects act on u before the plant (in the fixed order low-pass → quadratic → creep
-// → delay), beam effects couple to the beam state (CVODE path, model/bimorph_ode.h's
-// BimorphExtension seam), output effects act on the fin angle. EffectSimulator runs a plant with
-// any list of effects on the fastest exact path: without beam effects the shaped drive is computed
-// on a fine grid (exact first-order-hold discretisation of the filters) and fed to the fast modal
-// path as a SampledSignal, the linear fin angle θ is read on the record's grid and the backlash is
-// applied there (spec §3: the backlash lives on the sample grid); with a beam effect the whole chain
-// runs on CVODE (drive stages as extensions, the delay as a shift of the output times, which is
-// exact for a time-invariant plant started from rest).
+// The arithmetic is the library's: drive effects run in the library's chain order (low-pass →
+// quadratic → creep → delay) through EffectDef::ApplyDrive, output effects through ApplyOutput on the
+// fin angle, beam effects (and, on the CVODE path, the drive filters) as the library's
+// BimorphExtensions. EffectSimulator runs a plant with any list of effects on the fastest exact
+// path: without beam effects the shaped drive is computed on a fine grid (the library's exact
+// first-order-hold filters; without filters pointwise, the delay as an exact time shift) and fed to
+// the fast modal path as a SampledSignal, the linear fin angle θ is read on the record's grid and the
+// backlash is applied there (spec §3: the backlash lives on the sample grid); with a beam effect the
+// whole chain runs on CVODE (drive stages as extensions, the delay as a shift of the output times,
+// which is exact for a time-invariant plant started from rest).
 //
-// Pure library: no I/O. EffectSimulator is immutable and thread-safe (per-thread scratch).
+// Pure library: no I/O. EffectSimulator is immutable and thread-safe (per-thread scratch, which
+// never carries a result from one call to the next).
 #pragma once
 
 #include <memory>
@@ -32,6 +36,7 @@
 
 #include "model/bimorph.h"
 #include "model/bimorph_ode.h"
+#include "model/effect_library.h"
 #include "model/modal_simulator.h"
 #include "model/signal.h"
 
@@ -49,12 +54,6 @@ enum class EffectKind : int {
 };
 inline constexpr int kNumEffectKinds = 8;  ///< including kNone
 
-enum class EffectStage : int {
-  kDrive = 0,   ///< shapes u(t) before the plant (fast path)
-  kBeam = 1,    ///< couples to the beam state (CVODE path)
-  kOutput = 2,  ///< acts on the fin angle (fast path)
-};
-
 /// One physical parameter of an effect.
 struct EffectParamInfo {
   std::string name;      ///< e.g. "tau_s"
@@ -68,6 +67,7 @@ struct EffectParamInfo {
 
 struct EffectInfo {
   EffectKind kind = EffectKind::kNone;
+  const EffectDef* def = nullptr;  ///< the library's effect (null for kNone)
   std::string name;      ///< selectable name, e.g. "driver-lowpass"
   std::string title;     ///< e.g. "driver (amplifier) low-pass"
   EffectStage stage = EffectStage::kDrive;
@@ -82,8 +82,12 @@ const std::vector<EffectInfo>& EffectLibrary();
 /// The entry of one kind (kNone: name "none", no parameters).
 const EffectInfo& GetEffectInfo(EffectKind kind);
 const char* EffectName(EffectKind kind);
-/// Parses a name of EffectLibrary() or "none"; nullopt if unknown.
+/// Parses a name of EffectLibrary(), "none" or the former name "output-drift"; nullopt if unknown
+/// or not a fin effect (FinEffectError says which).
 std::optional<EffectKind> ParseEffectKind(std::string_view name);
+/// Why `name` is not a fin effect ("not an effect of the fin bench: …" for a library effect the fin
+/// does not offer, "not an effect of the library: …" else); lists the fin's effects.
+std::string FinEffectError(std::string_view name);
 
 /// One effect with its parameter values (in GetEffectInfo(kind).params order, physical units).
 struct Effect {

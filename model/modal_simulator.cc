@@ -294,9 +294,9 @@ ModalSimulator::ModalSimulator(const BimorphPlant& plant)
   npad_ = (n_ + 3) / 4 * 4;
 }
 
-void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws) const {
+void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact) const {
   if (ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
-      std::abs(ws.step_ - step) <= kStepRelTol * step)
+      (exact ? ws.step_ == step : std::abs(ws.step_ - step) <= kStepRelTol * step))
     return;
   ws.sim_id_ = id_;
   ws.mu_ = params.mu;
@@ -399,7 +399,7 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
                      : 1;
   const double hs = h / m;  // internal step
   const long n_steps = static_cast<long>(n_out - 1) * m;
-  Prepare(params, hs, ws);
+  Prepare(params, hs, ws, /*exact=*/true);
   const int np = npad_;
   double* x0 = ws.x0_.data();
   double* x1 = ws.x1_.data();
@@ -713,7 +713,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
   const double inv_len = 1.0 / length_m_;
   const double kappa_max = std::abs(params.beta) + std::abs(params.gamma);
 
-  Prepare(params, t[1] - t[0], ws);
+  Prepare(params, t[1] - t[0], ws, /*exact=*/true);
   std::fill(ws.x0_.begin(), ws.x0_.end(), 0.0);
   std::fill(ws.x1_.begin(), ws.x1_.end(), 0.0);
   double* x0 = ws.x0_.data();

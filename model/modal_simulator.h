@@ -133,7 +133,11 @@ class ModalSimulator {
   template <class Sink>
   void RunSampled(const BimorphParams& params, const SampledSignal& drive, ModalWorkspace& ws,
                   Sink& sink, SimulationSummary& summary) const;
-  void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws) const;
+  /// Discretises the modes over `step` into ws, unless ws holds (μ, δ) and a step within 1e-10 of
+  /// it. `exact`: only the same step is reused — every run starts so, so a run's result never depends
+  /// on what the thread's workspace ran before (within a run the tolerance saves the re-discretising
+  /// of a sampled grid's steps, which differ in their last bits).
+  void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact = false) const;
 
   const BimorphPlant* plant_;
   uint64_t id_;

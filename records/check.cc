@@ -83,6 +83,9 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
         case EffectKind::kFriction: p.push_back(Uniform(rng, 0.05, 0.4)); break;
         case EffectKind::kStiffening: p.push_back(Sign(rng) * Uniform(rng, 0.02, 0.12)); break;
         case EffectKind::kDrift: p.push_back(Sign(rng) * Uniform(rng, 0.03, 0.15)); break;
+        default:
+          throw InputError(std::string("diagnose-check --records: effect '") + EffectName(e) +
+                           "' has no truth magnitudes in records/check.cc");
       }
       desc << t.truth << " " << p.back();
     } else {

@@ -36,31 +36,19 @@
 #include "io/records.h"
 #include "model/beam.h"
 #include "model/bw_oscillator.h"
+#include "model/effect_library.h"
 #include "model/status.h"
 
 namespace pz::records {
 
-/// Scales measured on the records a family is made for.
-struct DataScale {
-  double u_min = 0, u_max = 0;  ///< drive range over the scored samples
-  double u_half = 1;            ///< (u_max − u_min)/2, > 0
-  double y_half = 1;            ///< half range of the response over the scored samples, > 0
-  double gain = 1;              ///< |slope| of the least-squares line y = a u + b, > 0
-  int polarity = 1;             ///< sign of that slope
-  double f_dom = 1;             ///< dominant drive frequency [Hz] (from the drive's reversals)
-  double fs = 1;                ///< sample rate [Hz]
-  double duration = 1;          ///< longest scored window [s]
-};
+/// Scales measured on the records a family is made for (model/effect_library.h: the effects' ranges
+/// are scaled by it too).
+using DataScale = model::DataScale;
 /// Measures the scale on the scored samples of the records (≥ 1). Throws InputError when the drive
 /// is constant (nothing to identify) naming the records.
 DataScale MeasureScale(const std::vector<const io::Record*>& records);
 
-struct ParamInfo {
-  std::string name;
-  std::string unit;
-  double lower = 0, upper = 1;
-  bool log_scale = false;
-};
+using ParamInfo = model::ParamInfo;  ///< a searched parameter (model/effect_library.h)
 
 /// The bw-oscillator family's protocol. The defaults are `piezoid fit`'s (the scaled parameters, a
 /// drive linear between samples, from rest under u_0); the Bouc–Wen benchmark

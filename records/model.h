@@ -1,18 +1,12 @@
 // A record model: a plant family (records/families.h) plus candidate unmodelled effects, and its
 // output on a record with the record's explicit offset (issue 14).
 //
-// Effects (the diagnosis library of docs/diagnosis.md, for any family; zero magnitude = identity):
-//   driver-lowpass   τ u̇_e = u − u_e                       (amplifier low-pass)        tau_s
-//   quadratic-drive  u_e = u + c₂ u²                        (electrostriction)          c2
-//   creep            τ_c ẋ = k_c (u − u_0) − x, u_e = u + x (one slow relaxation)       k_c, tau_c
-//   delay            u_e(t) = u(t − τ_d)                    (transport delay)           tau_d
-//   friction         y_e = play_r[y]                        (dead band in the guide)    r
-//   stiffening       y_e = y − k₃ Y ((y − y_0)/Y)³          (hardening, Y = half range) k3
-//   drift            y_e = y + ρ (t − t_w)                  (slow drift of the reading) rate
-// Drive effects act on u in the order above, before the family; output effects after it. Every
-// filter starts at rest at u_0 and is discretised exactly for a drive linear between samples; the
-// delay reads the drive by linear interpolation (u_0 before the start).
-//
+// Effects: the one library's (model/effect_library.h) drive and output effects — driver-lowpass,
+// quadratic-drive, creep, delay (drive, before the family), friction, stiffening, drift (output,
+// after it) — with ranges scaled to the data; zero magnitude is the identity. A model applies them in
+// the library's chain order through EffectDef::ApplyDrive / ApplyOutput. Beam effects
+// (hinge-friction, cubic-stiffening) need a plant with a beam (the bimorph fin of `piezoid
+// diagnose`); a records family has none, and ParseEffect says so.
 // Offsets (io::OffsetMode): ŷ_total = polarity · ŷ + o with o the least-squares offset over the
 // scored window (fit), the measured rest level minus the model's rest output (rest: the family's
 // output at rest, before the output effects — a drift is zero at the window's start, not at rest),
@@ -33,6 +27,9 @@
 
 namespace pz::records {
 
+/// A records effect: its position among the library's effects that a records family can take (the
+/// drive and output stages), in chain order. The enumerators name the effects code refers to; an
+/// effect added to the library is reachable by name (ParseEffect) without one.
 enum class EffectKind : int { kDriverLowpass, kQuadraticDrive, kCreep, kDelay, kFriction, kStiffening, kDrift };
 
 struct EffectInfo {
@@ -42,13 +39,15 @@ struct EffectInfo {
   std::string equation;
   std::vector<ParamInfo> params;  ///< scaled to the data; params[0] is the magnitude
 };
-/// Every effect, in the order above, with ranges scaled to the data.
+/// Every records effect, in chain order, with ranges scaled to the data.
 std::vector<EffectInfo> EffectLibrary(const DataScale& scale);
 /// Names in that order.
 const std::vector<std::string>& EffectNames();
-/// Throws InputError naming an unknown effect and the known ones.
+/// Throws InputError naming an unknown effect and the known ones, or a beam effect and why.
 EffectKind ParseEffect(std::string_view name);
 const char* EffectName(EffectKind kind);
+/// The library's effect of a records effect.
+const model::EffectDef& EffectOf(EffectKind kind);
 
 /// A family with effects; a parameter vector is the family's params then each effect's.
 class RecordModel {
@@ -87,6 +86,7 @@ class RecordModel {
   std::vector<EffectKind> effects_;
   DataScale scale_;
   std::vector<ParamInfo> params_;
+  std::vector<const model::EffectDef*> defs_;  ///< the library's effect of each of effects_
   std::vector<size_t> effect_offset_;  ///< index of each effect's first parameter in p
 };
 

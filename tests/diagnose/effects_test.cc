@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <thread>
 #include <vector>
 
 #include "model/effects.h"
@@ -67,6 +68,38 @@ TEST_F(EffectsTest, LibraryNamesRoundTripAndEveryEffectHasUnitsAndRanges) {
   }
   EXPECT_EQ(*ParseEffectKind("none"), EffectKind::kNone);
   EXPECT_FALSE(ParseEffectKind("friction").has_value());
+}
+
+TEST_F(EffectsTest, FinOffersItsEffectsOfTheOneLibraryAndSaysWhyNotTheOthers) {
+  for (const EffectInfo& e : EffectLibrary()) {
+    ASSERT_NE(e.def, nullptr) << e.name;
+    EXPECT_EQ(FindEffect(e.name), e.def);
+    EXPECT_EQ(e.stage, e.def->stage());
+  }
+  EXPECT_EQ(*ParseEffectKind("drift"), EffectKind::kOutputDrift);
+  EXPECT_EQ(*ParseEffectKind("output-drift"), EffectKind::kOutputDrift);  // its former name
+  EXPECT_NE(FinEffectError("friction").find("not an effect of the fin bench: 'friction' is the library's output-stage"),
+            std::string::npos)
+      << FinEffectError("friction");
+  EXPECT_NE(FinEffectError("hum").find("not an effect of the library: 'hum' is unknown"), std::string::npos);
+}
+
+TEST_F(EffectsTest, ResultDoesNotDependOnWhatTheThreadRanBefore) {
+  // The modal workspace is per thread: a run on a grid whose step differs from the previous run's
+  // by less than the workspace's reuse tolerance (1e-10) is still discretised over its own step.
+  // Without hysteresis every interval is one sub-step, so run a leaves its own step in the cache.
+  Sinusoid a{500, 1.0, 2.0, 100.0};
+  Sinusoid b = a;
+  b.sample_rate_hz = 100.0 * (1 + 3e-11);
+  const std::vector<Effect> e = {{EffectKind::kQuadraticDrive, {2e-4}}};
+  std::vector<double> fresh, after;
+  std::thread([&] { fresh = Run(Params(false), e, b); }).join();
+  std::thread([&] {
+    Run(Params(false), e, a);
+    after = Run(Params(false), e, b);
+  }).join();
+  ASSERT_EQ(fresh.size(), after.size());
+  for (size_t k = 0; k < fresh.size(); ++k) ASSERT_EQ(fresh[k], after[k]) << "sample " << k;
 }
 
 TEST_F(EffectsTest, ValidateNamesTheParameterAndTheRange) {

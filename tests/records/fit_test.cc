@@ -269,6 +269,9 @@ TEST(RecordFit, BadRequestsAreNamed) {
   FitOptions o = QuickOptions("jiles-atherton");
   PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }), "--family 'jiles-atherton' is unknown (families: stack-bouc-wen");
   PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("hum"); }), "effect 'hum' is unknown");
+  // A beam effect of the one library: refused, and the error says where it runs.
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("hinge-friction"); }), "acts on the beam");
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("cubic-stiffening"); }), "piezoid diagnose --cases");
   for (auto& r : set.records) r.role = CaseRole::kTest;
   PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, QuickOptions("duhem")); }), "no training records");
 }

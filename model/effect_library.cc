@@ -1,0 +1,387 @@
+#include "model/effect_library.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "model/bimorph_ode.h"
+
+namespace pz::model {
+namespace {
+
+// ---- shared arithmetic ----------------------------------------------------------------------------
+
+/// First-order low-pass τ ẋ = v − x over samples of v (linear in between), in place, from rest at v[0]:
+/// exact first-order-hold discretisation.
+void LowpassInPlace(std::span<double> v, double tau, double dt) {
+  if (!(tau > 1e-12 * dt) || v.empty()) return;
+  const double a = std::exp(-dt / tau);
+  const double c = 1 - tau * (1 - a) / dt;  // = 1 − τ(1−a)/h
+  double x = v[0], prev = v[0];
+  for (size_t k = 1; k < v.size(); ++k) {
+    const double cur = v[k];
+    x = a * x + (1 - a) * prev + (cur - prev) * c;
+    prev = cur;
+    v[k] = x;
+  }
+}
+
+// ---- CVODE extensions (the continuous-time forms) ------------------------------------------------
+
+int StateIndex(const BimorphPoint& p, int i) { return static_cast<int>(p.x.data() - p.y.data()) + i; }
+
+// τ ẋ = u − x; drive out (x, (u − x)/τ).
+class LowpassExtension final : public BimorphExtension {
+ public:
+  explicit LowpassExtension(double tau) : tau_(tau) {}
+  std::string name() const override { return "driver-lowpass"; }
+  int num_states() const override { return 1; }
+  bool shapes_drive() const override { return true; }
+  int ShapeDrive(const BimorphPoint& p, double& u, double& u_dot) const override {
+    u_dot = (p.u - p.x[0]) / tau_;
+    u = p.x[0];
+    return 0;
+  }
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+    const int ix = StateIndex(p, 0);
+    for (size_t j = 0; j < du.size(); ++j) {
+      dud[j] = du[j] / tau_;
+      du[j] = 0.0;
+    }
+    du[ix] = 1.0;
+    dud[ix] -= 1.0 / tau_;
+  }
+  int Rhs(const BimorphPoint& p, std::span<double> x_dot, std::span<double>) const override {
+    x_dot[0] = (p.u - p.x[0]) / tau_;
+    return 0;
+  }
+  void Jacobian(const BimorphPoint& p, ExtensionJacobian& jac) const override {
+    for (size_t j = 0; j < p.du_dy.size(); ++j)
+      if (p.du_dy[j] != 0.0) jac.AddState(0, static_cast<int>(j), p.du_dy[j] / tau_);
+    jac.AddState(0, StateIndex(p, 0), -1.0 / tau_);
+  }
+
+ private:
+  double tau_;
+};
+
+// u_e = u + c u²: no state.
+class QuadraticExtension final : public BimorphExtension {
+ public:
+  explicit QuadraticExtension(double c) : c_(c) {}
+  std::string name() const override { return "quadratic-drive"; }
+  bool shapes_drive() const override { return true; }
+  int ShapeDrive(const BimorphPoint& p, double& u, double& u_dot) const override {
+    u = p.u + c_ * p.u * p.u;
+    u_dot = p.u_dot * (1.0 + 2.0 * c_ * p.u);
+    return 0;
+  }
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+    const double g = 1.0 + 2.0 * c_ * p.u;
+    for (size_t j = 0; j < du.size(); ++j) {
+      dud[j] = dud[j] * g + 2.0 * c_ * p.u_dot * du[j];
+      du[j] *= g;
+    }
+  }
+  int Rhs(const BimorphPoint&, std::span<double>, std::span<double>) const override { return 0; }
+  void Jacobian(const BimorphPoint&, ExtensionJacobian&) const override {}
+
+ private:
+  double c_;
+};
+
+// τ_c ẋ = k u − x; drive out (u + x, u̇ + (k u − x)/τ_c).
+class CreepExtension final : public BimorphExtension {
+ public:
+  CreepExtension(double k, double tau) : k_(k), tau_(tau) {}
+  std::string name() const override { return "creep"; }
+  int num_states() const override { return 1; }
+  bool shapes_drive() const override { return true; }
+  int ShapeDrive(const BimorphPoint& p, double& u, double& u_dot) const override {
+    u = p.u + p.x[0];
+    u_dot = p.u_dot + (k_ * p.u - p.x[0]) / tau_;
+    return 0;
+  }
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+    const int ix = StateIndex(p, 0);
+    for (size_t j = 0; j < du.size(); ++j) dud[j] += k_ * du[j] / tau_;
+    dud[ix] -= 1.0 / tau_;
+    du[ix] += 1.0;
+  }
+  int Rhs(const BimorphPoint& p, std::span<double> x_dot, std::span<double>) const override {
+    x_dot[0] = (k_ * p.u - p.x[0]) / tau_;
+    return 0;
+  }
+  void Jacobian(const BimorphPoint& p, ExtensionJacobian& jac) const override {
+    for (size_t j = 0; j < p.du_dy.size(); ++j)
+      if (p.du_dy[j] != 0.0) jac.AddState(0, static_cast<int>(j), k_ * p.du_dy[j] / tau_);
+    jac.AddState(0, StateIndex(p, 0), -1.0 / tau_);
+  }
+
+ private:
+  double k_, tau_;
+};
+
+// Dahl: Ḟ = σ v (1 − F/F_c sgn v), v = ẇ_tip; tip force −F.
+class DahlHingeExtension final : public BimorphExtension {
+ public:
+  DahlHingeExtension(double fc, double sigma) : fc_(fc), sigma_(sigma) {}
+  std::string name() const override { return "hinge-friction"; }
+  int num_states() const override { return 1; }
+  int Rhs(const BimorphPoint& p, std::span<double> x_dot, std::span<double> force) const override {
+    const double v = p.q_dot[p.tip_dof], f = p.x[0];
+    x_dot[0] = sigma_ * (v - std::abs(v) * f / fc_);
+    force[p.tip_dof] -= f;
+    return 0;
+  }
+  void Jacobian(const BimorphPoint& p, ExtensionJacobian& jac) const override {
+    const double v = p.q_dot[p.tip_dof], f = p.x[0];
+    const double sv = (v > 0) - (v < 0);
+    const int ix = StateIndex(p, 0);
+    const int iv = static_cast<int>(p.q_dot.data() - p.y.data()) + p.tip_dof;
+    jac.AddState(0, iv, sigma_ * (1.0 - sv * f / fc_));
+    jac.AddState(0, ix, -sigma_ * std::abs(v) / fc_);
+    jac.AddForce(p.tip_dof, ix, -1.0);
+  }
+
+ private:
+  double fc_, sigma_;
+};
+
+// Tip force −k3 w³.
+class CubicExtension final : public BimorphExtension {
+ public:
+  explicit CubicExtension(double k3) : k3_(k3) {}
+  std::string name() const override { return "cubic-stiffening"; }
+  int Rhs(const BimorphPoint& p, std::span<double>, std::span<double> force) const override {
+    const double w = p.q[p.tip_dof];
+    force[p.tip_dof] -= k3_ * w * w * w;
+    return 0;
+  }
+  void Jacobian(const BimorphPoint& p, ExtensionJacobian& jac) const override {
+    const double w = p.q[p.tip_dof];
+    const int iw = static_cast<int>(p.q.data() - p.y.data()) + p.tip_dof;
+    jac.AddForce(p.tip_dof, iw, -3.0 * k3_ * w * w);
+  }
+
+ private:
+  double k3_;
+};
+
+
+// ---- the effects ----------------------------------------------------------------------------------
+
+class DriverLowpass final : public EffectDef {
+ public:
+  const char* name() const override { return "driver-lowpass"; }
+  const char* title() const override { return "driver (amplifier) first-order low-pass"; }
+  const char* equation() const override { return "tau u_e' = u - u_e"; }
+  EffectStage stage() const override { return EffectStage::kDrive; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    const double dt = 1 / s.fs;
+    const double tau_hi = std::max(0.5 / (2 * std::numbers::pi * s.f_dom), 20 * dt);
+    return {{"tau_s", "s", dt / 100, tau_hi, true}};
+  }
+  void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
+    LowpassInPlace(u, p[0], dt);
+  }
+  std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
+    return std::make_unique<LowpassExtension>(p[0]);
+  }
+};
+
+class QuadraticDrive final : public EffectDef {
+ public:
+  const char* name() const override { return "quadratic-drive"; }
+  const char* title() const override { return "quadratic (electrostrictive) drive term"; }
+  const char* equation() const override { return "u_e = u + c2 u^2"; }
+  EffectStage stage() const override { return EffectStage::kDrive; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    const double umax = std::max(std::abs(s.u_min), std::abs(s.u_max));
+    return {{"c2", "1/V", -0.3 / umax, 0.3 / umax, false}};
+  }
+  void ApplyDrive(std::span<const double> p, double, std::span<double> u) const override {
+    for (double& v : u) v += p[0] * v * v;
+  }
+  bool memoryless() const override { return true; }
+  std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
+    return std::make_unique<QuadraticExtension>(p[0]);
+  }
+};
+
+class Creep final : public EffectDef {
+ public:
+  const char* name() const override { return "creep"; }
+  const char* title() const override { return "piezo creep of the drive (one relaxation)"; }
+  const char* equation() const override { return "tau_c x' = k_c (u - u0) - x, u_e = u + x"; }
+  EffectStage stage() const override { return EffectStage::kDrive; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    const double lo = 0.5 / s.f_dom, hi = std::max(10 * s.duration, 2 * lo);
+    return {{"k_c", "-", -0.3, 0.3, false}, {"tau_c_s", "s", lo, hi, true}};
+  }
+  void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
+    if (p[0] == 0 || u.empty()) return;
+    const double u0 = u[0];
+    std::vector<double> x(u.size());
+    for (size_t k = 0; k < u.size(); ++k) x[k] = p[0] * (u[k] - u0);
+    LowpassInPlace(x, p[1], dt);
+    for (size_t k = 0; k < u.size(); ++k) u[k] += x[k];
+  }
+  std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
+    return std::make_unique<CreepExtension>(p[0], p[1]);
+  }
+};
+
+class Delay final : public EffectDef {
+ public:
+  const char* name() const override { return "delay"; }
+  const char* title() const override { return "measurement / transport delay"; }
+  const char* equation() const override { return "u_e(t) = u(t - tau_d)"; }
+  EffectStage stage() const override { return EffectStage::kDrive; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    const double dt = 1 / s.fs;
+    return {{"tau_d_s", "s", 0, std::max(std::min(0.25 / s.f_dom, 500 * dt), 2 * dt), false}};
+  }
+  void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
+    const double shift = p[0] / dt;
+    if (!(shift > 0) || u.empty()) return;
+    const std::vector<double> src(u.begin(), u.end());
+    for (size_t k = 0; k < u.size(); ++k) {
+      const double pos = static_cast<double>(k) - shift;
+      if (pos <= 0) {
+        u[k] = src[0];
+      } else {
+        const size_t j = static_cast<size_t>(pos);
+        const double f = pos - static_cast<double>(j);
+        u[k] = j + 1 < src.size() ? src[j] + f * (src[j + 1] - src[j]) : src[j];
+      }
+    }
+  }
+  double TimeShift(std::span<const double> p) const override { return p[0]; }
+};
+
+class HingeFriction final : public EffectDef {
+ public:
+  const char* name() const override { return "hinge-friction"; }
+  const char* title() const override { return "Dahl friction at the fin hinge"; }
+  const char* equation() const override { return "F' = sigma w_tip' (1 - F/F_c sgn w_tip'), tip force -F"; }
+  EffectStage stage() const override { return EffectStage::kBeam; }
+  std::vector<ParamInfo> Params(const DataScale&) const override {  // physical: the beam's units
+    return {{"fc_n", "N", 0.0, 1.0, false}, {"sigma_n_per_m", "N/m", 20.0, 2e5, true}};
+  }
+  std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
+    return std::make_unique<DahlHingeExtension>(p[0], p[1]);
+  }
+};
+
+class CubicStiffening final : public EffectDef {
+ public:
+  const char* name() const override { return "cubic-stiffening"; }
+  const char* title() const override { return "cubic stiffening of the beam"; }
+  const char* equation() const override { return "tip force -k3 w_tip^3"; }
+  EffectStage stage() const override { return EffectStage::kBeam; }
+  std::vector<ParamInfo> Params(const DataScale&) const override {
+    return {{"k3_n_per_m3", "N/m^3", -5e6, 2e7, false}};
+  }
+  std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
+    return std::make_unique<CubicExtension>(p[0]);
+  }
+};
+
+class Friction final : public EffectDef {
+ public:
+  const char* name() const override { return "friction"; }
+  const char* title() const override { return "friction dead band at the output"; }
+  const char* equation() const override { return "y_e = play_r[y]"; }
+  EffectStage stage() const override { return EffectStage::kOutput; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override { return {{"r", "y", 0, 0.2 * s.y_half, false}}; }
+  void ApplyOutput(std::span<const double> p, const OutputFrame&, std::span<double> y) const override {
+    const double r = std::max(p[0], 0.0);
+    if (r == 0 || y.empty()) return;
+    double z = y[0];
+    for (double& v : y) {
+      z = std::max(v - r, std::min(v + r, z));
+      v = z;
+    }
+  }
+};
+
+class Stiffening final : public EffectDef {
+ public:
+  const char* name() const override { return "stiffening"; }
+  const char* title() const override { return "cubic stiffening"; }
+  const char* equation() const override { return "y_e = y - k3 Y ((y - y0)/Y)^3"; }
+  EffectStage stage() const override { return EffectStage::kOutput; }
+  std::vector<ParamInfo> Params(const DataScale&) const override { return {{"k3", "-", -0.3, 0.3, false}}; }
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+    if (y.empty()) return;
+    const double y0 = y[0], Y = f.y_half;
+    for (double& v : y) {
+      const double x = (v - y0) / Y;
+      v -= p[0] * Y * x * x * x;
+    }
+  }
+};
+
+class Drift final : public EffectDef {
+ public:
+  const char* name() const override { return "drift"; }
+  const char* title() const override { return "drift of the reading"; }
+  const char* equation() const override { return "y_e = y + rate (t - t_window)"; }
+  EffectStage stage() const override { return EffectStage::kOutput; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    return {{"rate", "y/s", -s.y_half / s.duration, s.y_half / s.duration, false}};
+  }
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+    for (size_t k = 0; k < y.size(); ++k) y[k] += p[0] * (static_cast<double>(k) - f.origin) * f.dt;
+  }
+};
+
+// The registry: one line per effect, in chain order.
+const DriverLowpass kDriverLowpass;
+const QuadraticDrive kQuadraticDrive;
+const Creep kCreep;
+const Delay kDelay;
+const HingeFriction kHingeFriction;
+const CubicStiffening kCubicStiffening;
+const Friction kFriction;
+const Stiffening kStiffening;
+const Drift kDrift;
+
+}  // namespace
+
+const std::vector<const EffectDef*>& Effects() {
+  static const std::vector<const EffectDef*> all = {&kDriverLowpass, &kQuadraticDrive, &kCreep,
+                                                    &kDelay,         &kHingeFriction,  &kCubicStiffening,
+                                                    &kFriction,      &kStiffening,     &kDrift};
+  return all;
+}
+
+const EffectDef* FindEffect(std::string_view name) {
+  for (const EffectDef* e : Effects())
+    if (name == e->name()) return e;
+  return nullptr;
+}
+
+size_t EffectIndex(const EffectDef& effect) {
+  const auto& all = Effects();
+  for (size_t i = 0; i < all.size(); ++i)
+    if (all[i] == &effect) return i;
+  throw std::logic_error(std::string("effect '") + effect.name() + "' is not registered in model::Effects()");
+}
+
+const char* StageName(EffectStage stage) {
+  switch (stage) {
+    case EffectStage::kDrive: return "drive";
+    case EffectStage::kBeam: return "beam";
+    case EffectStage::kOutput: return "output";
+  }
+  return "?";
+}
+
+void EffectDef::ApplyDrive(std::span<const double>, double, std::span<double>) const {}
+void EffectDef::ApplyOutput(std::span<const double>, const OutputFrame&, std::span<double>) const {}
+std::unique_ptr<BimorphExtension> EffectDef::MakeExtension(std::span<const double>) const { return nullptr; }
+
+}  // namespace pz::model

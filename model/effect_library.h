@@ -1,0 +1,118 @@
+// The one library of candidate unmodelled effects (issue 21): every effect is written once, as one
+// small class in model/effect_library.cc, with its name, title, equation, stage, parameters (ranges
+// scaled to the data) and its arithmetic; the registry (Effects()) lists them in stage order. Both
+// users run the same code:
+//   * records/ (records::RecordModel, every plant family on measured records) applies the drive
+//     stage to the record's sampled drive and the output stage to the family's output;
+//   * the bimorph-fin bench (model/effects.h, EffectSimulator) applies the same drive stage to its
+//     sinusoid sampled on a fine grid (or, for memoryless effects, pointwise with the delay as an
+//     exact time shift), the same output stage to the fin angle, and runs beam effects — and, on
+//     its CVODE path, the drive effects too — as BimorphExtensions (model/bimorph_ode.h).
+//
+//   name             stage   equation                                   parameters
+//   driver-lowpass   drive   τ u̇_e = u − u_e                           tau_s
+//   quadratic-drive  drive   u_e = u + c₂ u²                            c2
+//   creep            drive   τ_c ẋ = k_c (u − u_0) − x, u_e = u + x     k_c, tau_c_s
+//   delay            drive   u_e(t) = u(t − τ_d)                        tau_d_s
+//   hinge-friction   beam    Ḟ = σ ẇ (1 − F/F_c sgn ẇ), tip force −F    fc_n, sigma_n_per_m
+//   cubic-stiffening beam    tip force −k₃ w_tip³                       k3_n_per_m3
+//   friction         output  y_e = play_r[y]                            r
+//   stiffening       output  y_e = y − k₃ Y ((y − y_0)/Y)³              k3
+//   drift            output  y_e = y + ρ (t − t_w)                      rate
+//
+// Drive effects act on u in registry order, output effects on y in registry order; params[0] is the
+// magnitude (zero: identity). A drive filter starts at rest at u[0] and is discretised exactly for
+// a drive linear between samples; the delay reads the drive by linear interpolation (u[0] before).
+// Beam effects exist only for a plant with a beam (the bimorph fin); records families refuse them.
+//
+// Seams for later forms of the same effect (each one more virtual method of EffectDef, written
+// next to the arithmetic it mirrors): a per-sample step form for a controller (state in a caller's
+// buffer of StateSize() doubles, one Step(p, state, u) per sample), and a C-code emission of that
+// step (EmitC) for the controller export. See docs/architecture.md, "One effect library".
+//
+// Pure library: no I/O. The effects are immutable singletons, safe from any thread.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace pz::model {
+
+class BimorphExtension;
+
+/// Scales measured on the data a model is made for (records::MeasureScale measures them).
+struct DataScale {
+  double u_min = 0, u_max = 0;  ///< drive range over the scored samples
+  double u_half = 1;            ///< (u_max − u_min)/2, > 0
+  double y_half = 1;            ///< half range of the response over the scored samples, > 0
+  double gain = 1;              ///< |slope| of the least-squares line y = a u + b, > 0
+  int polarity = 1;             ///< sign of that slope
+  double f_dom = 1;             ///< dominant drive frequency [Hz] (from the drive's reversals)
+  double fs = 1;                ///< sample rate [Hz]
+  double duration = 1;          ///< longest scored window [s]
+};
+
+/// One searched parameter: name, unit, range, scale of the search.
+struct ParamInfo {
+  std::string name;
+  std::string unit;
+  double lower = 0, upper = 1;
+  bool log_scale = false;
+};
+
+enum class EffectStage : int {
+  kDrive = 0,   ///< shapes u before the plant
+  kBeam = 1,    ///< couples to the beam state (a plant with a beam only: CVODE path)
+  kOutput = 2,  ///< acts on the plant's output
+};
+const char* StageName(EffectStage stage);
+
+/// Where the output stage reads time and scale: y[k] is at time (k − origin)·dt from the window's
+/// start; y[0] is the rest output; y_half the data's half range (EffectDef::Params's scale).
+struct OutputFrame {
+  double dt = 1;
+  double origin = 0;
+  double y_half = 1;
+};
+
+/// One effect. Subclasses override the methods of their stage; the defaults are the identity.
+class EffectDef {
+ public:
+  virtual ~EffectDef() = default;
+  virtual const char* name() const = 0;
+  virtual const char* title() const = 0;
+  virtual const char* equation() const = 0;
+  virtual EffectStage stage() const = 0;
+  /// The parameters, ranges scaled to the data (params[0] is the magnitude).
+  virtual std::vector<ParamInfo> Params(const DataScale& scale) const = 0;
+
+  // ---- drive stage ----
+  /// In place on a drive sampled every dt (linear in between, at rest at u[0] before u[0]).
+  virtual void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const;
+  /// True when ApplyDrive acts sample by sample without memory (valid on any, even non-uniform, grid).
+  virtual bool memoryless() const { return false; }
+  /// The effect's pure time shift [s] (the delay's τ_d; 0 else): for a caller with an analytic drive
+  /// and a time-invariant chain started from rest, exact in place of ApplyDrive.
+  virtual double TimeShift(std::span<const double>) const { return 0; }
+
+  // ---- output stage ----
+  /// In place on the output y (y[0] = rest output).
+  virtual void ApplyOutput(std::span<const double> p, const OutputFrame& frame, std::span<double> y) const;
+
+  // ---- beam stage, and the continuous-time form of drive effects ----
+  /// The effect as an extension of the bimorph ODE (model/bimorph_ode.h); null when it has none
+  /// (output effects; the delay, which the CVODE path takes as a shift of the output times).
+  virtual std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const;
+};
+
+/// Every effect, in stage order (the order in which a chain applies them).
+const std::vector<const EffectDef*>& Effects();
+/// The effect of that name, or null.
+const EffectDef* FindEffect(std::string_view name);
+/// Position of an effect in Effects() (the chain order); throws std::logic_error if unregistered.
+size_t EffectIndex(const EffectDef& effect);
+
+}  // namespace pz::model
