@@ -61,7 +61,7 @@ ModelSpec Spec(const Case& c) {
   const auto model = s.Model();
   for (const auto& p : model->params())
     s.params.push_back(p.log_scale ? std::sqrt(p.lower * p.upper) : 0.5 * (p.lower + p.upper));
-  if (s.family == "backlash-like") s.params = {0.05 / s.scale.u_half * 40, 0.4, 0.1};
+  if (s.family == "backlash-like") s.params = {2 / s.scale.u_half, 0.4, 0.25};  // B1 >= c/2: monotone
   if (model->family().linear())
     for (size_t j = 0; j < model->family().regressors(); ++j) s.weights.push_back(0.01 + 0.002 * static_cast<double>(j % 7));
   return s;

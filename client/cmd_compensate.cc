@@ -254,9 +254,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     }
     records::Stepper inv(m);
     inv.Init(r.u[0]);
-    // Replay: the limits widened past the record's drive (the applied drive is the truth).
-    inv.ctl().u_lo = std::min(m.drive_min, *std::min_element(r.u.begin(), r.u.end())) - 10 * m.scale.u_half;
-    inv.ctl().u_hi = std::max(m.drive_max, *std::max_element(r.u.begin(), r.u.end())) + 10 * m.scale.u_half;
+    // Replay: the limits are the model's, widened to the record's drive (the applied drive is the truth).
+    inv.ctl().u_lo = std::min(m.drive_min, *std::min_element(r.u.begin(), r.u.end()));
+    inv.ctl().u_hi = std::max(m.drive_max, *std::max_element(r.u.begin(), r.u.end()));
     double sse_u = 0, sse_y = 0, max_y = 0;
     size_t n = 0;
     for (size_t k = 1; k < r.end_scored; ++k) {

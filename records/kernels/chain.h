@@ -133,56 +133,75 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
 }
 
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
- * present state is y_desired, then the state advanced with it. The one-step map u -> y is
- * evaluated on the scratch t; where it rises (or falls) over the limits, u is found by bisection
- * down to adjacent doubles (at most 2100 halvings, about 60 in practice): the root exactly for the
- * families that are monotone on each step (Prandtl-Ishlinskii, asymmetric PI, Preisach,
- * backlash-like with alpha >= 0, c >= B1 >= 0), and a root of the one-step map inside the bracket
- * for the others (Bouc-Wen, Duhem, oscillator: their one-step map is continuous). A reference the
- * limits cannot reach gives the nearer limit, counted in saturated, the shortfall in max_clip.
- * A delay cannot be undone: its block is skipped (the compensator drives the model without its
- * delay; feed it the reference tau_d ahead where the reference is known in advance). */
+ * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
+ * on the scratch t. From the last drive, the search walks in the direction the map must move (its
+ * local slope's sign; where it is flat, the sign over the limits), doubling its stride (from 1/1000
+ * of the limits' span) until the reference is passed, then bisects that bracket down to adjacent
+ * doubles (at most 2100 halvings, about 50 in practice): the nearest drive with that output.
+ * Exact for the families monotone on each step: Prandtl-Ishlinskii, asymmetric PI and Preisach
+ * with weights >= 0, backlash-like with alpha >= 0 and B1 >= c/2 > 0 (its slope after a reversal
+ * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
+ * the one-step map is continuous and the root found is the one nearest the last drive. A
+ * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
+ * max_clip. A delay cannot be undone: its block is skipped (the compensator drives the model
+ * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
 static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
                                        double y_desired) {
-  double lo = ctl->u_lo, hi = ctl->u_hi, flo, fhi, sign, ref, u;
+  const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
+  double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, sign, ref, a, fa, bb, fb, stride, u, eps = 1e-9 * span;
   int it;
-  flo = pzk_chain_eval(b, nb, c, d, t, lo, 1);
-  fhi = pzk_chain_eval(b, nb, c, d, t, hi, 1);
-  sign = fhi >= flo ? 1.0 : -1.0; /* work on the rising map sign * f */
-  flo *= sign;
-  fhi *= sign;
+  f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
+  fa = pzk_chain_eval(b, nb, c, d, t, u0 + eps < hi ? u0 + eps : hi, 1);
+  fb = pzk_chain_eval(b, nb, c, d, t, u0 - eps > lo ? u0 - eps : lo, 1);
+  if (fa == fb) {
+    fa = pzk_chain_eval(b, nb, c, d, t, hi, 1);
+    fb = pzk_chain_eval(b, nb, c, d, t, lo, 1);
+  }
+  sign = fa >= fb ? 1.0 : -1.0; /* work on the rising map sign * f */
   ref = sign * y_desired;
-  if (!(ref > flo)) {
-    u = lo;
-    if (ref < flo) {
-      ++ctl->saturated;
-      if (flo - ref > ctl->max_clip) ctl->max_clip = flo - ref;
-    }
-  } else if (!(ref < fhi)) {
-    u = hi;
-    if (ref > fhi) {
-      ++ctl->saturated;
-      if (ref - fhi > ctl->max_clip) ctl->max_clip = ref - fhi;
-    }
+  f0 *= sign;
+  if (f0 == ref) {
+    u = u0;
   } else {
-    for (it = 0; it < 2100; ++it) {
-      double mid = lo + 0.5 * (hi - lo), fm;
-      if (!(mid > lo && mid < hi)) break;
-      fm = sign * pzk_chain_eval(b, nb, c, d, t, mid, 1);
-      if (fm == ref) {
-        lo = hi = mid;
-        flo = fhi = fm;
-        break;
-      }
-      if (fm < ref) {
-        lo = mid;
-        flo = fm;
-      } else {
-        hi = mid;
-        fhi = fm;
-      }
+    /* Walk from u0 towards the reference: up when the output must rise, else down. */
+    double dir = ref > f0 ? 1.0 : -1.0, limit = dir > 0 ? hi : lo;
+    a = u0;
+    fa = f0;
+    stride = 1e-3 * span;
+    for (;;) {
+      bb = a + dir * stride;
+      if (dir > 0 ? !(bb < hi) : !(bb > lo)) bb = limit;
+      fb = sign * pzk_chain_eval(b, nb, c, d, t, bb, 1);
+      if (dir * (fb - ref) >= 0 || bb == limit) break;
+      a = bb;
+      fa = fb;
+      stride *= 2;
     }
-    u = fhi - ref <= ref - flo ? hi : lo;
+    if (dir * (fb - ref) < 0) { /* the limit cannot reach the reference */
+      u = limit;
+      ++ctl->saturated;
+      if (dir * (ref - fb) > ctl->max_clip) ctl->max_clip = dir * (ref - fb);
+    } else {
+      /* fa on the near side of ref, fb on (or at) the far side: bisect [a, bb]. */
+      for (it = 0; it < 2100; ++it) {
+        double mid = a + 0.5 * (bb - a), fm;
+        if (!(mid != a && mid != bb)) break;
+        fm = sign * pzk_chain_eval(b, nb, c, d, t, mid, 1);
+        if (fm == ref) {
+          a = bb = mid;
+          fa = fb = fm;
+          break;
+        }
+        if (dir * (fm - ref) < 0) {
+          a = mid;
+          fa = fm;
+        } else {
+          bb = mid;
+          fb = fm;
+        }
+      }
+      u = fabs(fb - ref) <= fabs(ref - fa) ? bb : a;
+    }
   }
   ctl->u_last = u;
   ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);

@@ -161,7 +161,7 @@ TEST(Stepper, InverseThenForwardReturnsTheReference) {
   const io::Record r = TestRecord();
   for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like"}) {
     ModelSpec s = Spec(family, {}, r);
-    if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.1};  // alpha, c > B1 > 0: monotone
+    if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};  // alpha >= 0, B1 >= c/2 > 0: monotone on every step
     const RoundTrip rt = InverseThenForward(s, r.u);
     EXPECT_EQ(rt.saturated, 0) << family;
     EXPECT_LE(MaxDiff(rt.ref, rt.y), 1e-9 * Range(rt.ref)) << family;
@@ -269,7 +269,7 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
   cases.push_back({"backlash-like", kEffects});
   for (const auto& [family, effects] : cases) {
     ModelSpec s = Spec(family, effects, r);
-    if (s.family == "backlash-like" && effects.empty()) s.params = {0.05, 0.4, 0.1};
+    if (s.family == "backlash-like" && effects.empty()) s.params = {0.05, 0.4, 0.25};
     Stepper st(s);
     const auto ref = Reference(s, r);
     Stepper fwd(s);
