@@ -7,6 +7,7 @@
 typedef struct {
   double u_lo, u_hi;      /* drive limits (the training records' range unless changed) */
   double u_last, y_last;  /* the last drive applied / computed and the model's output for it */
+  double du_last;         /* the last change of the drive (the inverse's first stride) */
   long saturated;         /* samples whose drive was clipped to a limit */
   double max_clip;        /* largest clipping: drive units (forward), response units (inverse) */
 } pzk_ctl;
@@ -101,6 +102,7 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
   for (i = 0; i < nb; ++i) v = pzk_block_init(&b[i], c + b[i].c_off, d + b[i].d_off, v, u0);
   ctl->u_last = u0;
   ctl->y_last = v;
+  ctl->du_last = 0;
   ctl->saturated = 0;
   ctl->max_clip = 0;
   return v;
@@ -127,6 +129,7 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
     ++ctl->saturated;
     if (excess > ctl->max_clip) ctl->max_clip = excess;
   }
+  ctl->du_last = clipped - ctl->u_last;
   ctl->u_last = clipped;
   ctl->y_last = pzk_chain_eval(b, nb, c, d, d, clipped, 0);
   return ctl->y_last;
@@ -134,10 +137,12 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
 
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
  * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
- * on the scratch t. From the last drive, the search walks in the direction the map must move (its
- * local slope's sign; where it is flat, the sign over the limits), doubling its stride (from 1/1000
- * of the limits' span) until the reference is passed, then bisects that bracket down to adjacent
- * doubles (at most 2100 halvings, about 50 in practice): the nearest drive with that output.
+ * on the scratch t. From the last drive, the search walks in the direction the map must move (by
+ * its local slope's sign; where it is flat, by its sign over the limits), with a stride of 1.5 times
+ * the last drive change, doubled until the reference is passed; then the bracket is closed by
+ * regula falsi with the Illinois rule and a bisection every fourth step, until the output is the
+ * reference to 1e-15 of the outputs' magnitude or the bracket is two adjacent doubles (about 5 to
+ * 10 evaluations of the map per sample; at most 200): the nearest drive with that output.
  * Exact for the families monotone on each step: Prandtl-Ishlinskii, asymmetric PI and Preisach
  * with weights >= 0, backlash-like with alpha >= 0 and B1 >= c/2 > 0 (its slope after a reversal
  * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
@@ -148,61 +153,75 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
 static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
                                        double y_desired) {
   const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
-  double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, sign, ref, a, fa, bb, fb, stride, u, eps = 1e-9 * span;
-  int it;
+  double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
   f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
-  fa = pzk_chain_eval(b, nb, c, d, t, u0 + eps < hi ? u0 + eps : hi, 1);
-  fb = pzk_chain_eval(b, nb, c, d, t, u0 - eps > lo ? u0 - eps : lo, 1);
-  if (fa == fb) {
-    fa = pzk_chain_eval(b, nb, c, d, t, hi, 1);
-    fb = pzk_chain_eval(b, nb, c, d, t, lo, 1);
+  if (u0 + eps < hi) {
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);
+    sign = f1 > f0 ? 1.0 : (f1 < f0 ? -1.0 : 0.0);
+  } else {
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 - eps, 1);
+    sign = f1 < f0 ? 1.0 : (f1 > f0 ? -1.0 : 0.0);
   }
-  sign = fa >= fb ? 1.0 : -1.0; /* work on the rising map sign * f */
-  ref = sign * y_desired;
+  if (sign == 0) sign = pzk_chain_eval(b, nb, c, d, t, hi, 1) >= pzk_chain_eval(b, nb, c, d, t, lo, 1) ? 1.0 : -1.0;
+  ref = sign * y_desired; /* work on the rising map sign * f */
   f0 *= sign;
   if (f0 == ref) {
     u = u0;
   } else {
-    /* Walk from u0 towards the reference: up when the output must rise, else down. */
-    double dir = ref > f0 ? 1.0 : -1.0, limit = dir > 0 ? hi : lo;
-    a = u0;
-    fa = f0;
-    stride = 1e-3 * span;
+    /* Walk from u0 towards the reference: up when the output must rise, else down. g = dir (f - ref)
+     * is < 0 at the near end a of the bracket and >= 0 at its far end e. */
+    const double dir = ref > f0 ? 1.0 : -1.0, limit = dir > 0 ? hi : lo;
+    double a = u0, fa = f0, e, fe, stride = 1.5 * fabs(ctl->du_last), tol;
+    if (stride < 1e-6 * span) stride = 1e-6 * span;
     for (;;) {
-      bb = a + dir * stride;
-      if (dir > 0 ? !(bb < hi) : !(bb > lo)) bb = limit;
-      fb = sign * pzk_chain_eval(b, nb, c, d, t, bb, 1);
-      if (dir * (fb - ref) >= 0 || bb == limit) break;
-      a = bb;
-      fa = fb;
+      e = a + dir * stride;
+      if (dir > 0 ? !(e < hi) : !(e > lo)) e = limit;
+      fe = sign * pzk_chain_eval(b, nb, c, d, t, e, 1);
+      if (dir * (fe - ref) >= 0 || e == limit) break;
+      a = e;
+      fa = fe;
       stride *= 2;
     }
-    if (dir * (fb - ref) < 0) { /* the limit cannot reach the reference */
+    if (dir * (fe - ref) < 0) { /* the limit cannot reach the reference (by more than rounding) */
       u = limit;
-      ++ctl->saturated;
-      if (dir * (ref - fb) > ctl->max_clip) ctl->max_clip = dir * (ref - fb);
+      if (dir * (ref - fe) > 1e-13 * (fabs(fe) + fabs(ref))) {
+        ++ctl->saturated;
+        if (dir * (ref - fe) > ctl->max_clip) ctl->max_clip = dir * (ref - fe);
+      }
     } else {
-      /* fa on the near side of ref, fb on (or at) the far side: bisect [a, bb]. */
-      for (it = 0; it < 2100; ++it) {
-        double mid = a + 0.5 * (bb - a), fm;
-        if (!(mid != a && mid != bb)) break;
-        fm = sign * pzk_chain_eval(b, nb, c, d, t, mid, 1);
-        if (fm == ref) {
-          a = bb = mid;
-          fa = fb = fm;
-          break;
-        }
-        if (dir * (fm - ref) < 0) {
-          a = mid;
-          fa = fm;
+      double ga = dir * (fa - ref), ge = dir * (fe - ref);
+      int it, side = 0;
+      tol = 1e-15 * (fabs(fa) + fabs(fe) + fabs(ref));
+      for (it = 0; it < 200 && dir * (fe - ref) > tol; ++it) {
+        double x = a - ga * (e - a) / (ge - ga), fx, gx;
+        if (it % 4 == 3 || !((x - a) * (e - x) > 0)) x = a + 0.5 * (e - a);
+        if (!((x - a) * (e - x) > 0)) break; /* adjacent doubles */
+        fx = sign * pzk_chain_eval(b, nb, c, d, t, x, 1);
+        gx = dir * (fx - ref);
+        if (gx < 0) {
+          if (-gx <= tol) {
+            e = x;
+            fe = fx;
+            ge = -gx;
+            break;
+          }
+          a = x;
+          fa = fx;
+          ga = gx;
+          if (side == -1) ge *= 0.5; /* Illinois: the far end kept twice */
+          side = -1;
         } else {
-          bb = mid;
-          fb = fm;
+          e = x;
+          fe = fx;
+          ge = gx;
+          if (side == 1) ga *= 0.5;
+          side = 1;
         }
       }
-      u = fabs(fb - ref) <= fabs(ref - fa) ? bb : a;
+      u = fabs(fe - ref) <= fabs(ref - fa) ? e : a;
     }
   }
+  ctl->du_last = u - ctl->u_last;
   ctl->u_last = u;
   ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
   return u;

@@ -152,7 +152,7 @@ TEST_F(Compensate, BadInputIsNamed) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "v2.json").string()); }),
                 "format_version 2: this piezoid reads fit.json format_version 1");
   std::string renamed = json;
-  const size_t w = renamed.find("\"weights\"");
+  const size_t w = renamed.find("\"weights\"", renamed.find("\"model\""));  // the model section's
   ASSERT_NE(w, std::string::npos);
   renamed.replace(w, 9, "\"weigths\"");
   std::ofstream(dir_ / "bad.json") << renamed;
