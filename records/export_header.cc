@@ -99,7 +99,7 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " * [s.ctl.u_lo, s.ctl.u_hi] (init sets " << N << "_U_MIN, " << N << "_U_MAX: the training records'\n"
      << " * drive range; change them after init for another amplifier); s.ctl.saturated counts clipped\n"
      << " * samples, s.ctl.max_clip the largest clipping (drive units forward, response units inverse).\n"
-     << " * The inverse solves the one-step map by bisection (exact for the monotone families); a delay\n"
+     << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families); a delay\n"
      << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
      << " * when the reference is known in advance (preview). Model: " << m.Model()->Describe() << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
