@@ -477,7 +477,7 @@ void RegisterExport(CLI::App& app, int& exit_code) {
   auto* c = app.add_subcommand("export", "write a network file (.pb or .json) or a fit.json (piezoid fit) as a standalone C header for a controller");
   c->add_option("network", o->network, "network file (from fetch or identify), or fit.json of piezoid fit")->required();
   c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
-  c->add_option("--name", o->name, "name of the C function (a C identifier)")->capture_default_str();
+  c->add_option("--name", o->name, "name of the C function (a C identifier; for a fit.json the prefix of its functions, default the header's file stem)")->capture_default_str();
   OnRun(c, o, exit_code, ExportNetwork);
 }
 
