@@ -1,8 +1,9 @@
 // `piezoid fit`: identify one plant family on a record set of any drive (issue 14, records/fit.h),
 // and `piezoid records`: check and describe a record set (io/records.h). The fit writes report.md
 // (parameters, RMSE / max / NRMSE on train and on withheld records), fit.json, per-record traces
-// (CSV) and figures (time traces, hysteresis loops); for the Prandtl–Ishlinskii family, optionally
-// the analytic inverse as a C header (--export-c). Before the fit, the excitation report
+// (CSV) and figures (time traces, hysteresis loops). fit.json is versioned and holds the model
+// section (client/fit_file.h) that `piezoid export` and `piezoid compensate` rebuild the model
+// from. Before the fit, the excitation report
 // (records/excitation.h): what the training records excite, what each withheld record needs beyond
 // it, and a proposed training drive (excitation_drive.csv).
 #include <algorithm>
@@ -26,7 +27,7 @@
 #include "client/record_windows.h"
 #include "io/csv.h"
 #include "io/records.h"
-#include "model/prandtl_ishlinskii.h"
+#include "client/fit_file.h"
 #include "records/excitation.h"
 #include "records/extrapolation.h"
 #include "records/fit.h"
@@ -57,7 +58,6 @@ struct FitArgs {
   bool no_polish = false;
   bool no_figures = false;
   bool quiet = false;
-  std::string export_c;
   CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
 };
 
@@ -172,11 +172,13 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
 
 std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const records::ExcitationReport& excitation,
                     const records::TrainingDriveProposal& proposal,
-                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
+                    const std::vector<records::ExtrapolationCheck>& extrapolation, const FitArgs& a) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
-  f["model"] = Text(r.model->Describe());
+  f["format_version"] = Num(kFitFormatVersion);
+  f["model"] = FitModelJson(set, r, a.substeps, a.pi_operators);
+  f["description"] = Text(r.model->Describe());
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
   f["polarity"] = Num(r.model->scale().polarity);
@@ -274,7 +276,7 @@ int RunFit(const FitArgs& a) {
   io::WriteFileWith(fs::path(a.out) / "report.md",
                     [&](std::ostream& os) { WriteFitReport(os, set, r, a, excitation, proposal, extrapolation); });
   io::WriteFileWith(fs::path(a.out) / "fit.json",
-                    [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal, extrapolation); });
+                    [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal, extrapolation, a); });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
   if (!scripts.empty()) {
@@ -285,25 +287,6 @@ int RunFit(const FitArgs& a) {
       errors.push_back("gnuplot not found: figure scripts written to " + (fs::path(a.out) / "figures").string());
     }
     for (const auto& e : errors) std::cerr << "piezoid fit: warning: " << e << "\n";
-  }
-  if (!a.export_c.empty()) {
-    if (a.family != "prandtl-ishlinskii" || !r.model->effects().empty()) {
-      throw InputError("--export-c: only a prandtl-ishlinskii fit without effects has an analytic inverse");
-    }
-    model::PiOperator op;
-    op.w0 = r.model->scale().polarity * r.weights[0];
-    op.thresholds = model::PiThresholds(a.pi_operators, r.model->scale().u_half);
-    for (size_t i = 1; i < r.weights.size(); ++i) op.weights.push_back(r.model->scale().polarity * r.weights[i]);
-    if (!op.Invertible()) {
-      throw InputError("--export-c: the fitted operator is not invertible (w0 = " + io::FormatNumber(op.w0) +
-                       "; a negative drive-to-response slope needs the sign flipped by the caller)");
-    }
-    std::string comment = "Inverse Prandtl-Ishlinskii compensator fitted by piezoid fit on " + a.records +
-                          " (drive in " + set.drive_unit + ", output in " + set.response_unit + ")";
-    for (char& c : comment)
-      if (c == '*') c = '_';
-    io::WriteFileWith(a.export_c, [&](std::ostream& os) { os << model::PiInverseCHeader(op, "pz_pi_inverse", comment); });
-    std::cout << "inverse compensator written to " << a.export_c << "\n";
   }
   const int name_width = NameColumnWidth(set);
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -351,7 +334,6 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
   cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii / asymmetric-pi play operators; preisach grid levels")->default_str("12");
-  cmd->add_option("--export-c", a->export_c, "prandtl-ishlinskii: write the inverse compensator as a C header");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
   AddCompleteServiceFlags(cmd, a->service);  // --master: the same result, bit for bit

@@ -19,7 +19,9 @@
 
 #include "client/cmd_service.h"
 #include "client/dashboard.h"
+#include "client/commands.h"
 #include "client/export_c.h"
+#include "client/fit_file.h"
 #include "client/job_file.h"
 #include "client/job_report.h"
 #include "client/service_client.h"
@@ -478,6 +480,8 @@ int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string*
 }
 
 int ExportNetwork(const ExportOptions& o) {
+  // A fit.json (piezoid fit): the record model's header (client/cmd_compensate.cc).
+  if (LooksLikeFitJson(o.network)) return ExportFit(o.network, o.out, o.name == "piezoid_predict" ? "" : o.name);
   io::SavedNetwork net;
   Status s = io::LoadNetwork(o.network, &net);
   if (!s.ok()) return Report(InvalidArgument(s.message()));
@@ -510,10 +514,10 @@ int ExportNetwork(const ExportOptions& o) {
 
 void RegisterExport(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ExportOptions>();
-  auto* c = app.add_subcommand("export", "write a network file (.pb or .json) as a standalone C header for a controller");
-  c->add_option("network", o->network, "network file (from fetch or identify)")->required();
+  auto* c = app.add_subcommand("export", "write a network file (.pb or .json) or a fit.json (piezoid fit) as a standalone C header for a controller");
+  c->add_option("network", o->network, "network file (from fetch or identify), or fit.json of piezoid fit")->required();
   c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
-  c->add_option("--name", o->name, "name of the C function (a C identifier)")->capture_default_str();
+  c->add_option("--name", o->name, "name of the C function (a C identifier; for a fit.json the prefix of its functions, default the header's file stem)")->capture_default_str();
   auto* plant = c->add_flag("--plant", o->plant,
               "add the bimorph-fin plant (spec beam) as a per-sample recursion: NAME_init, NAME_step (drive -> angle), "
               "NAME_inverse_step (angle -> drive)");

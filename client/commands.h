@@ -3,6 +3,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include <string>
+
 namespace pz::client {
 
 // Each Register* adds one subcommand to app; its callback sets the process exit code through
@@ -18,5 +20,11 @@ void RegisterCommittee(CLI::App& app, int& exit_code);
 void RegisterFit(CLI::App& app, int& exit_code);
 void RegisterRecords(CLI::App& app, int& exit_code);
 void RegisterSynthStack(CLI::App& app, int& exit_code);
+void RegisterCompensate(CLI::App& app, int& exit_code);
+
+/// `piezoid export FIT.json`: the fitted model as a self-contained C99 header (records/export_header.h)
+/// written to `out` (stdout when empty), its functions named `name` (default: out's stem). Throws
+/// InputError on a bad fit.json. Returns the exit code.
+int ExportFit(const std::string& fit_json, const std::string& out, const std::string& name);
 
 }  // namespace pz::client

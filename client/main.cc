@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   pz::client::RegisterFit(app, exit_code);
   pz::client::RegisterRecords(app, exit_code);
   pz::client::RegisterSynthStack(app, exit_code);
+  pz::client::RegisterCompensate(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(
       "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every violated field, "

@@ -53,10 +53,4 @@ void PiPlayOutputs(std::span<const double> thresholds, std::span<const double> u
 /// The inverse operator (formulas above). Throws InputError unless op.Invertible().
 PiOperator InvertPi(const PiOperator& op);
 
-/// A C99 header with the inverse operator as a feed-forward compensator: a state struct, an init
-/// function (at rest at a desired output) and a step function u = step(state, y_desired), with the
-/// thresholds and weights as constants. `prefix` names the symbols (a C identifier).
-std::string PiInverseCHeader(const PiOperator& forward, const std::string& prefix,
-                             const std::string& comment);
-
 }  // namespace pz::model

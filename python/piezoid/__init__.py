@@ -7,14 +7,16 @@
     result = c.fetch(job, count=3)       # best individuals, log, spec, networks
     result.networks[0].predict(500, 0.5) # {'mu': …, 'delta': …, …}
     result.log_frame()                   # the generation log as a pandas DataFrame (if pandas is installed)
+    m = piezoid.Model.load("fit.json")   # a fitted model: m.init(u0), m.step(u), m.inverse_step(y)
 
 The protobuf bindings (piezoid._proto) are generated from the checkout's proto/ when the package is built.
 """
 from .client import (Client, FetchResult, InvalidSpec, NotFound, PiezoidError, Unreachable, load_spec,
                      records_frame, state_name)
+from .model import Model
 from .network import PARAMETERS, Network
 from .reports import read_report
 
 __all__ = ["Client", "FetchResult", "InvalidSpec", "NotFound", "PiezoidError", "Unreachable", "load_spec",
-           "records_frame", "state_name", "Network", "PARAMETERS", "read_report"]
+           "records_frame", "state_name", "Model", "Network", "PARAMETERS", "read_report"]
 __version__ = "0.1.0"

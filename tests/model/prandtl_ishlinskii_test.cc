@@ -54,36 +54,6 @@ TEST(PrandtlIshlinskii, InverseUndoesTheOperatorExactly) {
   EXPECT_LT(worst, 1e-10);
 }
 
-TEST(PrandtlIshlinskii, ExportedCHeaderCompilesAndCompensates) {
-  if (std::system("command -v cc >/dev/null 2>&1") != 0) GTEST_SKIP() << "no C compiler";
-  PiOperator op{0.1, PiThresholds(6, 100), {0.02, 0.01, 0.03, 0.0, 0.015, 0.005}};
-  char tmpl[] = "/tmp/pz_pi_XXXXXX";
-  ASSERT_NE(mkdtemp(tmpl), nullptr);
-  const std::filesystem::path dir = tmpl;
-  std::ofstream(dir / "pi_inverse.h") << PiInverseCHeader(op, "pzpi", "test operator");
-  const std::vector<double> u = MinorLoopDrive();
-  std::vector<double> y(u.size());
-  ApplyPi(op, u, y);
-  {
-    std::ofstream c(dir / "main.c");
-    c << "#include <stdio.h>\n#include \"pi_inverse.h\"\nint main(void) {\n  pzpi_state s; double y;\n"
-      << "  int first = 1;\n  while (scanf(\"%lf\", &y) == 1) {\n    if (first) { pzpi_init(&s, y); first = 0; }\n"
-      << "    printf(\"%.17g\\n\", pzpi_step(&s, y));\n  }\n  return 0;\n}\n";
-    std::ofstream in(dir / "y.txt");
-    in.precision(17);
-    for (double v : y) in << v << "\n";
-  }
-  const std::string cmd = "cd " + dir.string() + " && cc -std=c99 -Wall -Werror -O2 -o inv main.c && ./inv < y.txt > u.txt";
-  ASSERT_EQ(std::system(cmd.c_str()), 0);
-  std::ifstream out(dir / "u.txt");
-  double v, worst = 0;
-  size_t k = 0;
-  while (out >> v) worst = std::max(worst, std::abs(v - u[k++]));
-  EXPECT_EQ(k, u.size());
-  EXPECT_LT(worst, 1e-9);
-  std::filesystem::remove_all(dir);
-}
-
 TEST(PrandtlIshlinskii, InvalidOperatorsAreNamed) {
   using pz::testing::InputErrorOf;
   PZ_EXPECT_HAS(InputErrorOf([] { InvertPi(PiOperator{0.1, {1, 2}, {0.1, -0.2}}); }), "not invertible");

@@ -1,0 +1,111 @@
+#include "client/fit_file.h"
+
+#include <google/protobuf/util/json_util.h>
+
+#include <cmath>
+#include <stdexcept>
+
+#include "io/csv.h"
+
+namespace pz::client {
+
+google::protobuf::Value FitModelJson(const io::RecordSet& set, const records::FitResult& r, int substeps,
+                                     int pi_operators) {
+  const records::RecordModel& m = *r.model;
+  const records::DataScale& s = m.scale();
+  io::FitModelFile f;
+  f.family = m.family().name();
+  f.substeps = substeps;
+  f.pi_operators = pi_operators;
+  f.u_min = s.u_min;
+  f.u_max = s.u_max;
+  f.u_half = s.u_half;
+  f.y_half = s.y_half;
+  f.gain = s.gain;
+  f.scale_polarity = s.polarity;
+  f.f_dom_hz = s.f_dom;
+  f.fs_hz = s.fs;
+  double offset = 0;
+  int train = 0;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    if (set.records[i].role != model::CaseRole::kTrain) continue;
+    offset += r.metrics[i].offset;
+    if (train == 0) f.sample_period_s = set.records[i].dt;
+    ++train;
+  }
+  for (records::EffectKind e : m.effects()) f.effects.push_back(records::EffectName(e));
+  for (size_t i = 0; i < r.params.size(); ++i) f.params.emplace_back(m.params()[i].name, r.params[i]);
+  f.weights = r.weights;
+  f.polarity = s.polarity;
+  f.offset = train > 0 ? offset / train : 0.0;
+  f.drive_min = s.u_min;
+  f.drive_max = s.u_max;
+  f.drive_unit = set.drive_unit;
+  f.response_unit = set.response_unit;
+  google::protobuf::Value v;
+  if (!google::protobuf::util::JsonStringToMessage(io::FitModelJson(f), &v).ok()) {
+    throw std::runtime_error("fit.json: the model section");
+  }
+  return v;
+}
+
+bool LooksLikeFitJson(const std::string& path) {
+  try {
+    return io::LooksLikeFitJson(io::ReadTextFile(path));
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
+records::ModelSpec LoadFit(const std::string& path) {
+  const io::FitModelFile m = io::ParseFitJson(path, io::ReadTextFile(path));
+  records::ModelSpec s;
+  s.family = m.family;
+  s.substeps = m.substeps;
+  s.pi_operators = m.pi_operators;
+  s.scale.u_min = m.u_min;
+  s.scale.u_max = m.u_max;
+  s.scale.u_half = m.u_half;
+  s.scale.y_half = m.y_half;
+  s.scale.gain = m.gain;
+  s.scale.polarity = m.scale_polarity;
+  s.scale.f_dom = m.f_dom_hz;
+  s.scale.fs = m.fs_hz;
+  try {
+    for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs}) {
+      if (!std::isfinite(v)) throw InputError("model.scale holds a value that is not finite");
+    }
+    if (!(s.scale.u_half > 0 && s.scale.y_half > 0 && s.scale.fs > 0 && s.scale.f_dom > 0)) {
+      throw InputError("model.scale: u_half, y_half, f_dom_hz and fs_hz must be > 0");
+    }
+    s.dt = m.sample_period_s;
+    for (const auto& e : m.effects) s.effects.push_back(records::ParseEffect(e));
+    const auto rm = s.Model();  // the family and its options, checked
+    if (m.params.size() != rm->params().size()) {
+      throw InputError("model.params: " + std::to_string(m.params.size()) + " values for " + rm->Describe() + ", " +
+                       std::to_string(rm->params().size()) + " expected");
+    }
+    for (size_t i = 0; i < m.params.size(); ++i) {
+      const std::string& want = rm->params()[i].name;
+      if (m.params[i].first != want) {
+        throw InputError("model.params[" + std::to_string(i) + "].name '" + m.params[i].first + "': expected '" + want +
+                         "' for " + rm->Describe());
+      }
+      s.params.push_back(m.params[i].second);
+    }
+    s.weights = m.weights;
+    s.polarity = m.polarity;
+    s.offset = m.offset;
+    s.drive_min = m.drive_min;
+    s.drive_max = m.drive_max;
+    s.drive_unit = m.drive_unit;
+    s.response_unit = m.response_unit;
+    if (s.drive_unit.empty() || s.response_unit.empty()) throw InputError("model.drive_unit / response_unit: empty");
+    s.Validate();
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  return s;
+}
+
+}  // namespace pz::client

@@ -1,0 +1,148 @@
+#include "records/export_header.h"
+
+#include <cctype>
+#include <cstdio>
+#include <sstream>
+#include <string_view>
+
+#include "io/csv.h"
+
+namespace pz::records {
+namespace kernel_text {
+extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kChain;
+}  // namespace kernel_text
+
+namespace {
+
+std::string Lit(double x) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%a", x);
+  return buf;
+}
+
+std::string Upper(const std::string& s) {
+  std::string u = s;
+  for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return u;
+}
+
+bool IsCName(const std::string& n) {
+  if (n.empty() || n.size() > 63 || std::isdigit(static_cast<unsigned char>(n[0]))) return false;
+  for (char c : n)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
+  return true;
+}
+
+const char* KindMacro(int kind) {
+  switch (kind) {
+    case pzk::PZK_LOWPASS: return "PZK_LOWPASS";
+    case pzk::PZK_QUADRATIC: return "PZK_QUADRATIC";
+    case pzk::PZK_CREEP: return "PZK_CREEP";
+    case pzk::PZK_DELAY: return "PZK_DELAY";
+    case pzk::PZK_STACK_BOUC_WEN: return "PZK_STACK_BOUC_WEN";
+    case pzk::PZK_BACKLASH_LIKE: return "PZK_BACKLASH_LIKE";
+    case pzk::PZK_DUHEM: return "PZK_DUHEM";
+    case pzk::PZK_PRANDTL_ISHLINSKII: return "PZK_PRANDTL_ISHLINSKII";
+    case pzk::PZK_BW_OSCILLATOR: return "PZK_BW_OSCILLATOR";
+    case pzk::PZK_PREISACH: return "PZK_PREISACH";
+    case pzk::PZK_ASYMMETRIC_PI: return "PZK_ASYMMETRIC_PI";
+    case pzk::PZK_FRICTION: return "PZK_FRICTION";
+    case pzk::PZK_STIFFENING: return "PZK_STIFFENING";
+    case pzk::PZK_DRIFT: return "PZK_DRIFT";
+    case pzk::PZK_AFFINE: return "PZK_AFFINE";
+  }
+  return "0";
+}
+
+void Array(std::ostream& os, const std::string& name, const double* v, int n) {
+  os << "static const double " << name << "[" << std::max(n, 1) << "] = {";
+  for (int i = 0; i < n; ++i) os << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << Lit(v[i]);
+  if (n == 0) os << "0";
+  os << "};\n";
+}
+
+}  // namespace
+
+std::string KernelSource() {
+  std::string s;
+  for (std::string_view part : {kernel_text::kCommon, kernel_text::kEffects, kernel_text::kStackModels,
+                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kChain}) {
+    s.append(part);
+  }
+  return s;
+}
+
+std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
+  if (!IsCName(name)) {
+    throw InputError("--name '" + name + "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
+  }
+  const ModelSpec& m = st.spec();
+  const std::string N = Upper(name);
+  const auto& blocks = st.blocks();
+  const int nb = static_cast<int>(blocks.size());
+  std::ostringstream os;
+  std::string safe = comment;
+  for (size_t i = 0; i + 1 < safe.size(); ++i)
+    if (safe[i] == '*' && safe[i + 1] == '/') safe[i] = '_';
+  os << "/* " << name << ".h: " << safe << "\n"
+     << " *\n"
+     << " * Written by `piezoid export` (issue 23). Self-contained C99: only <math.h>, no allocation, no\n"
+     << " * mutable global. Drive in " << m.drive_unit << ", response in " << m.response_unit << ", one call per sample of\n"
+     << " * " << io::FormatNumber(m.dt) << " s (the rate the model was identified at).\n"
+     << " *\n"
+     << " *   " << name << "_state s;\n"
+     << " *   " << name << "_init(&s, u0);                 at rest under the drive u0 (returns the response)\n"
+     << " *   y = " << name << "_step(&s, u);              forward model: the response to drive u\n"
+     << " *   u = " << name << "_inverse_step(&s, y_des);  compensator: the drive for the desired response\n"
+     << " *\n"
+     << " * A state is used either forward or as a compensator after init, not both. Drives are clipped to\n"
+     << " * [s.ctl.u_lo, s.ctl.u_hi] (init sets " << N << "_U_MIN, " << N << "_U_MAX: the training records'\n"
+     << " * drive range; change them after init for another amplifier); s.ctl.saturated counts clipped\n"
+     << " * samples, s.ctl.max_clip the largest clipping (drive units forward, response units inverse).\n"
+     << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families); a delay\n"
+     << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
+     << " * when the reference is known in advance (preview). Model: " << m.Model()->Describe() << ". */\n"
+     << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
+     << "#ifndef PZK_KERNELS_V1\n#define PZK_KERNELS_V1\n"
+     << KernelSource() << "#endif /* PZK_KERNELS_V1 */\n\n";
+  double delay = 0;
+  for (int i = 0; i < nb; ++i)
+    if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];
+  os << "#define " << N << "_U_MIN " << Lit(m.drive_min) << " /* " << io::FormatNumber(m.drive_min) << " " << m.drive_unit
+     << " */\n"
+     << "#define " << N << "_U_MAX " << Lit(m.drive_max) << " /* " << io::FormatNumber(m.drive_max) << " " << m.drive_unit
+     << " */\n"
+     << "#define " << N << "_DT_S " << Lit(m.dt) << "\n"
+     << "#define " << N << "_DELAY_S " << Lit(delay) << "\n"
+     << "#define " << N << "_BLOCKS " << nb << "\n\n";
+  for (int i = 0; i < nb; ++i) {
+    const auto& p = st.block_params(static_cast<size_t>(i));
+    Array(os, name + "_p" + std::to_string(i) + "_", p.data(), static_cast<int>(p.size()));
+    if (blocks[i].nw > 0) Array(os, name + "_w" + std::to_string(i) + "_", blocks[i].w, blocks[i].nw);
+  }
+  os << "static const pzk_block " << name << "_blocks_[" << nb << "] = {\n";
+  for (int i = 0; i < nb; ++i) {
+    const auto& b = blocks[i];
+    const std::string w = b.nw > 0 ? name + "_w" + std::to_string(i) + "_" : "0";
+    os << "  {" << KindMacro(b.kind) << ", " << b.n << ", " << b.m << ", " << Lit(b.dt) << ", " << Lit(b.u_min) << ", "
+       << Lit(b.u_max) << ", " << Lit(b.u_half) << ", " << Lit(b.y_half) << ",\n   " << name << "_p" << i << "_, "
+       << b.np << ", " << w << ", " << b.nw << ", " << b.c_off << ", " << b.d_off << "}" << (i + 1 < nb ? "," : "")
+       << "\n";
+  }
+  os << "};\n\n";
+  const int nc = std::max(st.constants(), 1), nd = std::max(st.dynamic(), 1);
+  os << "typedef struct {\n  double c[" << nc << "]; /* constants derived at init */\n  double d[" << nd
+     << "]; /* dynamic state */\n  double t[" << nd << "]; /* the inverse's trial state */\n"
+     << "  pzk_ctl ctl;  /* limits, last drive and output, saturation counter */\n} " << name << "_state;\n\n"
+     << "static inline double " << name << "_init(" << name << "_state *s, double u0) {\n"
+     << "  s->ctl.u_lo = " << N << "_U_MIN;\n  s->ctl.u_hi = " << N << "_U_MAX;\n"
+     << "  return pzk_chain_init(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u0);\n}\n\n"
+     << "static inline double " << name << "_step(" << name << "_state *s, double u) {\n"
+     << "  return pzk_chain_step(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u);\n}\n\n"
+     << "static inline double " << name << "_inverse_step(" << name << "_state *s, double y_desired) {\n"
+     << "  return pzk_chain_inverse(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
+     << "#endif /* " << N << "_H_ */\n";
+  return os.str();
+}
+
+}  // namespace pz::records

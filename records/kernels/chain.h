@@ -1,0 +1,228 @@
+/* The chain (last part of the kernels): sizes, init, one step forward, one step inverse. A model
+ * is an array of blocks in the order drive effects, family, output effects, PZK_AFFINE. Its state
+ * is three double arrays: constants c (derived at init), dynamic state d, and scratch t (the same
+ * layout as d: the inverse's trial steps write there), plus a pzk_ctl. A new family adds its
+ * kernel file and one case in pzk_block_sizes, pzk_block_init and pzk_block_step. */
+
+typedef struct {
+  double u_lo, u_hi;      /* drive limits (the training records' range unless changed) */
+  double u_last, y_last;  /* the last drive applied / computed and the model's output for it */
+  double du_last;         /* the last change of the drive (the inverse's first stride) */
+  long saturated;         /* samples whose drive was clipped to a limit */
+  double max_clip;        /* largest clipping: drive units (forward), response units (inverse) */
+} pzk_ctl;
+
+/* Constants and dynamic doubles a block needs; -1 for an unknown kind. */
+static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
+  int n = b->n;
+  *nc = 0;
+  *nd = 0;
+  switch (b->kind) {
+    case PZK_LOWPASS: *nc = 3; *nd = 2; return 0;
+    case PZK_QUADRATIC: return 0;
+    case PZK_CREEP: *nc = 5; *nd = 2; return 0;
+    case PZK_DELAY: *nc = 2; *nd = 1 + pzk_delay_capacity(b); return 0;
+    case PZK_STACK_BOUC_WEN: *nc = 4; *nd = 4; return 0;
+    case PZK_BACKLASH_LIKE: *nd = 2; return 0;
+    case PZK_DUHEM: *nd = 2; return 0;
+    case PZK_PRANDTL_ISHLINSKII: *nc = n; *nd = n; return 0;
+    case PZK_ASYMMETRIC_PI: *nc = n + b->m; *nd = n; return 0;
+    case PZK_PREISACH: *nc = 1 + 2 * n + n * (n + 1) / 2; *nd = n; return 0;
+    case PZK_BW_OSCILLATOR: *nc = 6; *nd = 4; return 0;
+    case PZK_FRICTION: *nd = 1; return 0;
+    case PZK_STIFFENING: *nc = 1; return 0;
+    case PZK_DRIFT: *nd = 1; return 0;
+    case PZK_AFFINE: return 0;
+    default: return -1;
+  }
+}
+
+/* Sets c_off / d_off of every block; returns 0, or -1 - i for an unknown kind at block i. */
+static inline int pzk_layout(pzk_block *b, int nb, int *nc_total, int *nd_total) {
+  int i, nc, nd;
+  *nc_total = 0;
+  *nd_total = 0;
+  for (i = 0; i < nb; ++i) {
+    if (pzk_block_sizes(&b[i], &nc, &nd) != 0) return -1 - i;
+    b[i].c_off = *nc_total;
+    b[i].d_off = *nd_total;
+    *nc_total += nc;
+    *nd_total += nd;
+  }
+  return 0;
+}
+
+static inline double pzk_block_init(const pzk_block *b, double *c, double *d, double v, double u_raw) {
+  switch (b->kind) {
+    case PZK_LOWPASS: return pzk_driver_lowpass_init(b, c, d, v, u_raw);
+    case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
+    case PZK_CREEP: return pzk_creep_init(b, c, d, v, u_raw);
+    case PZK_DELAY: return pzk_delay_init(b, c, d, v);
+    case PZK_STACK_BOUC_WEN: return pzk_stack_bw_init(b, c, d, v);
+    case PZK_BACKLASH_LIKE: return pzk_backlash_init(b, d, v);
+    case PZK_DUHEM: return pzk_duhem_init(b, d, v);
+    case PZK_PRANDTL_ISHLINSKII: return pzk_pi_init(b, c, d, v);
+    case PZK_ASYMMETRIC_PI: return pzk_asym_pi_init(b, c, d, v);
+    case PZK_PREISACH: return pzk_preisach_init(b, c, d, v);
+    case PZK_BW_OSCILLATOR: return pzk_bw_osc_init(b, c, d, v);
+    case PZK_FRICTION: return pzk_friction_init(d, v);
+    case PZK_STIFFENING: c[0] = v; return v;
+    case PZK_DRIFT: d[0] = 0; return v;
+    case PZK_AFFINE: return b->p[0] * v + b->p[1];
+    default: return v;
+  }
+}
+
+/* One block's step: reads its state in d, writes the next one to o (o may be d). */
+static inline double pzk_block_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+  switch (b->kind) {
+    case PZK_LOWPASS: return pzk_driver_lowpass_step(c, d, o, v);
+    case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
+    case PZK_CREEP: return pzk_creep_step(b, c, d, o, v);
+    case PZK_DELAY: return pzk_delay_step(c, o, v); /* in place only (o == d) */
+    case PZK_STACK_BOUC_WEN: return pzk_stack_bw_step(b, c, d, o, v);
+    case PZK_BACKLASH_LIKE: return pzk_backlash_step(b, d, o, v);
+    case PZK_DUHEM: return pzk_duhem_step(b, d, o, v);
+    case PZK_PRANDTL_ISHLINSKII: return pzk_pi_step(b, c, d, o, v);
+    case PZK_ASYMMETRIC_PI: return pzk_asym_pi_step(b, c, d, o, v);
+    case PZK_PREISACH: return pzk_preisach_step(b, c, d, o, v);
+    case PZK_BW_OSCILLATOR: return pzk_bw_osc_step(b, c, d, o, v);
+    case PZK_FRICTION: return pzk_friction_step(b, d, o, v);
+    case PZK_STIFFENING: return pzk_stiffening_step(b, c, v);
+    case PZK_DRIFT: return pzk_drift_step(b, d, o, v);
+    case PZK_AFFINE: return b->p[0] * v + b->p[1];
+    default: return v;
+  }
+}
+
+/* At rest under the drive u0 (every block at equilibrium); returns the output there. */
+static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, double *d, pzk_ctl *ctl, double u0) {
+  double v = u0;
+  int i;
+  for (i = 0; i < nb; ++i) v = pzk_block_init(&b[i], c + b[i].c_off, d + b[i].d_off, v, u0);
+  ctl->u_last = u0;
+  ctl->y_last = v;
+  ctl->du_last = 0;
+  ctl->saturated = 0;
+  ctl->max_clip = 0;
+  return v;
+}
+
+/* The output for drive u from state d, the next state written to o (o == d: a step; o the
+ * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on. */
+static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d, double *o, double u,
+                                    int skip_delay) {
+  double v = u;
+  int i;
+  for (i = 0; i < nb; ++i) {
+    if (b[i].kind == PZK_DELAY && skip_delay) continue;
+    v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+  }
+  return v;
+}
+
+/* Forward step: the drive clipped to [u_lo, u_hi] (counted), the model's output. */
+static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c, double *d, pzk_ctl *ctl, double u) {
+  double clipped = pzk_clamp(u, ctl->u_lo, ctl->u_hi);
+  if (clipped != u) {
+    double excess = fabs(u - clipped);
+    ++ctl->saturated;
+    if (excess > ctl->max_clip) ctl->max_clip = excess;
+  }
+  ctl->du_last = clipped - ctl->u_last;
+  ctl->u_last = clipped;
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, clipped, 0);
+  return ctl->y_last;
+}
+
+/* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
+ * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
+ * on the scratch t. From the last drive, the search walks in the direction the map must move (by
+ * its local slope's sign; where it is flat, by its sign over the limits), with a stride of 1.5 times
+ * the last drive change, doubled until the reference is passed; then the bracket is closed by
+ * regula falsi with the Illinois rule and a bisection every fourth step, until the output is the
+ * reference to 1e-15 of the outputs' magnitude or the bracket is two adjacent doubles (about 5 to
+ * 10 evaluations of the map per sample; at most 200): the nearest drive with that output.
+ * Exact for the families monotone on each step: Prandtl-Ishlinskii, asymmetric PI and Preisach
+ * with weights >= 0, backlash-like with alpha >= 0 and B1 >= c/2 > 0 (its slope after a reversal
+ * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
+ * the one-step map is continuous and the root found is the one nearest the last drive. A
+ * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
+ * max_clip. A delay cannot be undone: its block is skipped (the compensator drives the model
+ * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
+static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
+                                       double y_desired) {
+  const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
+  double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
+  f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
+  if (u0 + eps < hi) {
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);
+    sign = f1 > f0 ? 1.0 : (f1 < f0 ? -1.0 : 0.0);
+  } else {
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 - eps, 1);
+    sign = f1 < f0 ? 1.0 : (f1 > f0 ? -1.0 : 0.0);
+  }
+  if (sign == 0) sign = pzk_chain_eval(b, nb, c, d, t, hi, 1) >= pzk_chain_eval(b, nb, c, d, t, lo, 1) ? 1.0 : -1.0;
+  ref = sign * y_desired; /* work on the rising map sign * f */
+  f0 *= sign;
+  if (f0 == ref) {
+    u = u0;
+  } else {
+    /* Walk from u0 towards the reference: up when the output must rise, else down. g = dir (f - ref)
+     * is < 0 at the near end a of the bracket and >= 0 at its far end e. */
+    const double dir = ref > f0 ? 1.0 : -1.0, limit = dir > 0 ? hi : lo;
+    double a = u0, fa = f0, e, fe, stride = 1.5 * fabs(ctl->du_last), tol;
+    if (stride < 1e-6 * span) stride = 1e-6 * span;
+    for (;;) {
+      e = a + dir * stride;
+      if (dir > 0 ? !(e < hi) : !(e > lo)) e = limit;
+      fe = sign * pzk_chain_eval(b, nb, c, d, t, e, 1);
+      if (dir * (fe - ref) >= 0 || e == limit) break;
+      a = e;
+      fa = fe;
+      stride *= 2;
+    }
+    if (dir * (fe - ref) < 0) { /* the limit cannot reach the reference (by more than rounding) */
+      u = limit;
+      if (dir * (ref - fe) > 1e-13 * (fabs(fe) + fabs(ref))) {
+        ++ctl->saturated;
+        if (dir * (ref - fe) > ctl->max_clip) ctl->max_clip = dir * (ref - fe);
+      }
+    } else {
+      double ga = dir * (fa - ref), ge = dir * (fe - ref);
+      int it, side = 0;
+      tol = 1e-15 * (fabs(fa) + fabs(fe) + fabs(ref));
+      for (it = 0; it < 200 && dir * (fe - ref) > tol; ++it) {
+        double x = a - ga * (e - a) / (ge - ga), fx, gx;
+        if (it % 4 == 3 || !((x - a) * (e - x) > 0)) x = a + 0.5 * (e - a);
+        if (!((x - a) * (e - x) > 0)) break; /* adjacent doubles */
+        fx = sign * pzk_chain_eval(b, nb, c, d, t, x, 1);
+        gx = dir * (fx - ref);
+        if (gx < 0) {
+          if (-gx <= tol) {
+            e = x;
+            fe = fx;
+            ge = -gx;
+            break;
+          }
+          a = x;
+          fa = fx;
+          ga = gx;
+          if (side == -1) ge *= 0.5; /* Illinois: the far end kept twice */
+          side = -1;
+        } else {
+          e = x;
+          fe = fx;
+          ge = gx;
+          if (side == 1) ga *= 0.5;
+          side = 1;
+        }
+      }
+      u = fabs(fe - ref) <= fabs(ref - fa) ? e : a;
+    }
+  }
+  ctl->du_last = u - ctl->u_last;
+  ctl->u_last = u;
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
+  return u;
+}

@@ -1,0 +1,48 @@
+/* piezoid step kernels, part 1 of the one source (records/stepper.h, docs/deploy.md): the block
+ * descriptor and the exact-integration helpers. Plain C99 over double arrays, compiled into the
+ * C++ stepper (records/stepper.cc) and copied verbatim into every header `piezoid export` writes.
+ * Nothing here allocates, keeps a global or needs more than <math.h>. */
+
+/* A block of the chain drive -> drive effects -> family -> output effects -> polarity/offset. */
+enum {
+  PZK_LOWPASS = 1, PZK_QUADRATIC, PZK_CREEP, PZK_DELAY, /* drive effects (records/model.h order) */
+  PZK_STACK_BOUC_WEN = 10, PZK_BACKLASH_LIKE, PZK_DUHEM, PZK_PRANDTL_ISHLINSKII, PZK_BW_OSCILLATOR,
+  PZK_PREISACH, PZK_ASYMMETRIC_PI,                       /* families */
+  PZK_FRICTION = 30, PZK_STIFFENING, PZK_DRIFT,          /* output effects */
+  PZK_AFFINE = 40                                        /* y = polarity * v + offset */
+};
+
+typedef struct {
+  int kind;         /* PZK_* */
+  int n;            /* plays (PI, asymmetric PI), grid levels (Preisach), sub-steps (stack Bouc-Wen),
+                       RK4 steps per sample (oscillator), knots (asymmetric PI: in m) */
+  int m;            /* asymmetric PI: dead-zone knots; oscillator: 1 = physical parameters */
+  double dt;        /* sample step [s] */
+  double u_min, u_max, u_half, y_half; /* the data scale the family was made for */
+  const double *p;  /* parameters (the family's, the effect's, or {polarity, offset}) */
+  int np;
+  const double *w;  /* solved weights of a linear family */
+  int nw;
+  int c_off, d_off; /* offsets of the block's constants and dynamic state (pzk_layout) */
+} pzk_block;
+
+/* phi(z) = (1 - e^-z)/z, phi(0) = 1 (model/stack_models.cc). */
+static inline double pzk_phi(double z) {
+  if (fabs(z) < 3e-3) return 1.0 + z * (-0.5 + z * (1.0 / 6.0 - z * (1.0 / 24.0)));
+  return -expm1(-z) / z;
+}
+
+/* L(z) = log1p(z)/z, L(0) = 1. */
+static inline double pzk_log_ratio(double z) {
+  if (fabs(z) < 1e-8) return 1.0 - 0.5 * z;
+  return log1p(z) / z;
+}
+
+/* The play (backlash) operator of half-width r from state z. */
+static inline double pzk_play(double u, double r, double z) {
+  double lo = u - r, hi = u + r;
+  double m = hi < z ? hi : z; /* min(u + r, z) */
+  return lo > m ? lo : m;     /* max(u - r, .) */
+}
+
+static inline double pzk_clamp(double x, double lo, double hi) { return x < lo ? lo : (hi < x ? hi : x); }

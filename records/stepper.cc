@@ -1,0 +1,171 @@
+#include "records/stepper.h"
+
+#include <algorithm>
+
+#include "io/csv.h"
+#include "records/preisach_family.h"
+
+namespace pz::records {
+namespace {
+
+int FamilyKind(const std::string& family) {
+  if (family == "stack-bouc-wen") return pzk::PZK_STACK_BOUC_WEN;
+  if (family == "backlash-like") return pzk::PZK_BACKLASH_LIKE;
+  if (family == "duhem") return pzk::PZK_DUHEM;
+  if (family == "prandtl-ishlinskii") return pzk::PZK_PRANDTL_ISHLINSKII;
+  if (family == "bw-oscillator") return pzk::PZK_BW_OSCILLATOR;
+  if (family == "preisach") return pzk::PZK_PREISACH;
+  if (family == "asymmetric-pi") return pzk::PZK_ASYMMETRIC_PI;
+  return 0;
+}
+
+int EffectKindOf(EffectKind e) {
+  switch (e) {
+    case EffectKind::kDriverLowpass: return pzk::PZK_LOWPASS;
+    case EffectKind::kQuadraticDrive: return pzk::PZK_QUADRATIC;
+    case EffectKind::kCreep: return pzk::PZK_CREEP;
+    case EffectKind::kDelay: return pzk::PZK_DELAY;
+    case EffectKind::kFriction: return pzk::PZK_FRICTION;
+    case EffectKind::kStiffening: return pzk::PZK_STIFFENING;
+    case EffectKind::kDrift: return pzk::PZK_DRIFT;
+  }
+  return 0;
+}
+
+bool IsDriveEffect(EffectKind e) { return EffectKindOf(e) < pzk::PZK_STACK_BOUC_WEN; }
+
+void CheckFinite(const std::string& field, double v) {
+  if (!std::isfinite(v)) throw InputError(FieldError(field, v, "must be finite"));
+}
+
+}  // namespace
+
+bool HasStepKernel(const std::string& family) { return FamilyKind(family) != 0; }
+
+FamilyOptions ModelSpec::family_options() const {
+  FamilyOptions o;
+  o.substeps = substeps;
+  o.pi_operators = pi_operators;
+  return o;
+}
+
+std::shared_ptr<RecordModel> ModelSpec::Model() const {
+  return std::make_shared<RecordModel>(std::shared_ptr<const Family>(MakeFamily(family, scale, family_options())),
+                                       effects, scale);
+}
+
+void ModelSpec::Validate() const {
+  const auto model = Model();
+  if (params.size() != model->params().size()) {
+    throw InputError("model.params: " + std::to_string(params.size()) + " values for " + model->Describe() + ", " +
+                     std::to_string(model->params().size()) + " expected");
+  }
+  const size_t m = model->family().linear() ? model->family().regressors() : 0;
+  if (weights.size() != m) {
+    throw InputError("model.weights: " + std::to_string(weights.size()) + " values for " + family + ", " +
+                     std::to_string(m) + " expected");
+  }
+  for (size_t i = 0; i < params.size(); ++i) CheckFinite("model.params[" + model->params()[i].name + "]", params[i]);
+  for (size_t i = 0; i < weights.size(); ++i) CheckFinite("model.weights[" + std::to_string(i) + "]", weights[i]);
+  if (polarity != 1 && polarity != -1) throw InputError(FieldError("model.polarity", polarity, "must be 1 or -1"));
+  CheckFinite("model.offset", offset);
+  if (!(std::isfinite(dt) && dt > 0)) throw InputError(FieldError("model.sample_period_s", dt, "must be finite and > 0"));
+  if (!(std::isfinite(drive_min) && std::isfinite(drive_max) && drive_min < drive_max)) {
+    throw InputError("model.drive_min / drive_max = [" + io::FormatNumber(drive_min) + ", " +
+                     io::FormatNumber(drive_max) + "]: must be finite with min < max");
+  }
+}
+
+Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
+  const int family_kind = FamilyKind(spec_.family);
+  if (family_kind == 0) {
+    std::string known;
+    for (const auto& n : FamilyNames())
+      if (HasStepKernel(n)) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("family '" + spec_.family + "' has no step kernel (exportable families: " + known + ")");
+  }
+  spec_.Validate();
+  std::sort(spec_.effects.begin(), spec_.effects.end());
+  const auto model = spec_.Model();
+  const size_t nf = model->family_param_count();
+  const auto lib = EffectLibrary(spec_.scale);
+  auto block = [&](int kind, std::vector<double> p) {
+    pzk::pzk_block b{};
+    b.kind = kind;
+    b.dt = spec_.dt;
+    b.u_min = spec_.scale.u_min;
+    b.u_max = spec_.scale.u_max;
+    b.u_half = spec_.scale.u_half;
+    b.y_half = spec_.scale.y_half;
+    params_.push_back(std::move(p));
+    blocks_.push_back(b);
+  };
+  // The effects' parameters follow the family's, in effect order (RecordModel).
+  std::vector<std::vector<double>> effect_params;
+  size_t at = nf;
+  for (EffectKind e : spec_.effects) {
+    const size_t n = lib[static_cast<size_t>(e)].params.size();
+    effect_params.emplace_back(spec_.params.begin() + static_cast<std::ptrdiff_t>(at),
+                               spec_.params.begin() + static_cast<std::ptrdiff_t>(at + n));
+    at += n;
+  }
+  for (size_t i = 0; i < spec_.effects.size(); ++i)
+    if (IsDriveEffect(spec_.effects[i])) block(EffectKindOf(spec_.effects[i]), effect_params[i]);
+  block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
+  size_t family_block = blocks_.size() - 1;
+  auto& fb = blocks_[family_block];
+  switch (family_kind) {
+    case pzk::PZK_STACK_BOUC_WEN: fb.n = spec_.substeps; break;
+    case pzk::PZK_BW_OSCILLATOR: fb.n = 2 * spec_.substeps; break;  // OscillatorOptions' default of the fit
+    case pzk::PZK_PRANDTL_ISHLINSKII:
+    case pzk::PZK_PREISACH: fb.n = spec_.pi_operators; break;
+    case pzk::PZK_ASYMMETRIC_PI:
+      fb.n = spec_.pi_operators;
+      fb.m = kAsymmetricPiKnots;
+      break;
+    default: break;
+  }
+  for (size_t i = 0; i < spec_.effects.size(); ++i)
+    if (!IsDriveEffect(spec_.effects[i])) block(EffectKindOf(spec_.effects[i]), effect_params[i]);
+  block(pzk::PZK_AFFINE, {static_cast<double>(spec_.polarity), spec_.offset});
+  for (size_t i = 0; i < blocks_.size(); ++i) {
+    blocks_[i].p = params_[i].data();
+    blocks_[i].np = static_cast<int>(params_[i].size());
+  }
+  blocks_[family_block].w = spec_.weights.data();
+  blocks_[family_block].nw = static_cast<int>(spec_.weights.size());
+  if (pzk::pzk_layout(blocks_.data(), static_cast<int>(blocks_.size()), &nc_, &nd_) != 0) {
+    throw InputError("stepper: a block without a kernel");
+  }
+  c_.assign(static_cast<size_t>(nc_), 0.0);
+  d_.assign(static_cast<size_t>(nd_), 0.0);
+  t_.assign(static_cast<size_t>(nd_), 0.0);
+  Init(spec_.drive_min);
+}
+
+bool Stepper::has_delay() const {
+  for (const auto& b : blocks_)
+    if (b.kind == pzk::PZK_DELAY && b.p[0] > 0) return true;
+  return false;
+}
+
+double Stepper::Init(double u0) {
+  ctl_.u_lo = spec_.drive_min;
+  ctl_.u_hi = spec_.drive_max;
+  return pzk::pzk_chain_init(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), &ctl_, u0);
+}
+
+double Stepper::Step(double u) {
+  return pzk::pzk_chain_step(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), &ctl_, u);
+}
+
+double Stepper::InverseStep(double y_desired) {
+  return pzk::pzk_chain_inverse(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(),
+                                &ctl_, y_desired);
+}
+
+double Stepper::Trial(double u) {
+  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u, 1);
+}
+
+}  // namespace pz::records

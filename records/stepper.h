@@ -1,0 +1,97 @@
+// A fitted record model (records/model.h) one sample at a time, forward and inverse, for a
+// controller (issue 23): the C99 step kernels of records/kernels/ — the one source of the
+// per-sample arithmetic, also copied verbatim into the headers `piezoid export` writes
+// (records/export_header.h) — driven from C++.
+//
+//   forward  y = Step(u): the drive clipped to the drive limits (counted), the model's output with
+//            polarity and offset; equal to RecordModel::Simulate on the same drive (to rounding:
+//            the kernels do the same operations in the same order).
+//   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
+//            on the one-step map (records/kernels/chain.h: exact for the monotone families; a
+//            delay is skipped — it cannot be undone).
+// A Stepper is used either forward or inverse after Init, not both.
+#pragma once
+
+#include <cmath>
+#include <math.h>  // NOLINT: the kernels are C99 and call the C library's functions
+
+#include <string>
+#include <vector>
+
+#include "records/families.h"
+#include "records/model.h"
+
+namespace pz::records {
+namespace pzk {
+#include "records/kernels/common.h"
+#include "records/kernels/effects.h"
+#include "records/kernels/stack_models.h"
+#include "records/kernels/play_operators.h"
+#include "records/kernels/bw_oscillator.h"
+#include "records/kernels/chain.h"
+}  // namespace pzk
+
+/// Everything that rebuilds a fitted model (fit.json's "model" section, client/fit_file.h).
+struct ModelSpec {
+  std::string family;
+  int substeps = 2;      ///< FamilyOptions::substeps
+  int pi_operators = 12; ///< FamilyOptions::pi_operators
+  DataScale scale;       ///< the data scale the family was made for (sets its ranges and grids)
+  double dt = 0;         ///< sample step the model was identified at [s]
+  std::vector<EffectKind> effects;
+  std::vector<double> params;   ///< RecordModel::params() order
+  std::vector<double> weights;  ///< a linear family's solved weights
+  int polarity = 1;             ///< ŷ_total = polarity · ŷ + offset
+  double offset = 0;
+  double drive_min = 0, drive_max = 0;  ///< the drive limits (the training records' drive range)
+  std::string drive_unit = "V", response_unit = "um";
+
+  FamilyOptions family_options() const;
+  /// The RecordModel of this spec (the family made for the scale). Throws InputError.
+  std::shared_ptr<RecordModel> Model() const;
+  /// Throws InputError naming the field: sizes against the family and effects, finite values,
+  /// limits, polarity, dt.
+  void Validate() const;
+};
+
+/// The kernels' name of every family that has one ("bimorph-fin" has none yet).
+bool HasStepKernel(const std::string& family);
+
+class Stepper {
+ public:
+  /// Builds the blocks (throws InputError: a family without a kernel, an invalid spec).
+  explicit Stepper(const ModelSpec& spec);
+  Stepper(const Stepper&) = delete;
+  Stepper& operator=(const Stepper&) = delete;
+
+  /// At rest under drive u0; returns the output there (polarity and offset applied). Resets the
+  /// saturation counter; limits are the spec's.
+  double Init(double u0);
+  double Step(double u);
+  double InverseStep(double y_desired);
+  /// The output the next step would give for drive u (not clipped), the state unchanged: the
+  /// one-step map the inverse solves (without a delay).
+  double Trial(double u);
+
+  const ModelSpec& spec() const { return spec_; }
+  const pzk::pzk_ctl& ctl() const { return ctl_; }
+  pzk::pzk_ctl& ctl() { return ctl_; }
+  /// The blocks (pointers into this Stepper's copies of the parameters) and the state sizes.
+  const std::vector<pzk::pzk_block>& blocks() const { return blocks_; }
+  int constants() const { return nc_; }
+  int dynamic() const { return nd_; }
+  /// True when the chain holds a delay (the inverse cannot undo it).
+  bool has_delay() const;
+  /// Parameters of block i (the family's, an effect's, or {polarity, offset}).
+  const std::vector<double>& block_params(size_t i) const { return params_[i]; }
+
+ private:
+  ModelSpec spec_;
+  std::vector<std::vector<double>> params_;  ///< per block
+  std::vector<pzk::pzk_block> blocks_;
+  std::vector<double> c_, d_, t_;
+  pzk::pzk_ctl ctl_{};
+  int nc_ = 0, nd_ = 0;
+};
+
+}  // namespace pz::records
