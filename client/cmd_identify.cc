@@ -87,6 +87,9 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   ga_option("--migrants", "migrants", opts->ga.migrants, "individuals each island sends per migration");
   auto topology = std::make_shared<std::string>(opt::TopologyName(opts->ga.topology));
   ga_option("--topology", "topology", *topology, "who sends migrants to whom: ring, fully_connected, random (seeded)");
+  ga_option("--migration-margin", "migration_margin", opts->ga.migration_margin,
+            "an island takes migrants only from sources whose best is below its own by more than this share "
+            "of it, [0, 1) (0 = from every source)");
   ga_option("--island-stall", "island_stall_generations", opts->ga.island_stall_generations,
             "restart an island (its sources' migrants + fresh random individuals) after this many "
             "generations without a better best of its own (0 = never)");

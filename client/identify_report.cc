@@ -236,11 +236,14 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   md << "\n- GA: population " << options.ga.population_size;
   if (options.ga.islands > 1) {
     md << " × " << options.ga.islands << " islands (";
-    if (options.ga.migration_interval > 0)
+    if (options.ga.migration_interval > 0) {
       md << options.ga.migrants << " migrants every " << options.ga.migration_interval << " generations, "
          << opt::TopologyName(options.ga.topology);
-    else
+      if (options.ga.migration_margin > 0)
+        md << ", from sources better by more than " << options.ga.migration_margin * 100 << " %";
+    } else {
       md << "independent: multi-start";
+    }
     if (options.ga.island_stall_generations > 0)
       md << "; an island is restarted after " << options.ga.island_stall_generations << " generations of stall";
     int migrations = 0, restarts = 0;

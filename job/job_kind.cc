@@ -20,6 +20,7 @@ opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   o.migration_interval = g.migration_interval;
   o.migrants = g.migrants;
   o.topology = g.topology;
+  o.migration_margin = g.migration_margin;
   o.island_stall_generations = g.island_stall_generations;
   if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
   o.error_cost = spec.limits.penalty_cost;

@@ -110,6 +110,8 @@ std::vector<FieldViolation> JobSpec::Validate() const {
               "must be ≥ 1 when ga.migration_interval > 0 (0 runs the islands independently)");
     c.Require(opt::ValidTopology(ga->topology), "ga.topology", static_cast<int>(ga->topology),
               "must be MIGRATION_TOPOLOGY_RING, _FULLY_CONNECTED or _RANDOM");
+    c.Require(ga->migration_margin >= 0 && ga->migration_margin < 1, "ga.migration_margin", ga->migration_margin,
+              "must be in [0, 1) (0 = migrants from every source)");
     c.Range("ga.island_stall_generations", ga->island_stall_generations, 0, 100000000);
   }
   return std::move(c.out);

@@ -188,6 +188,7 @@ struct GaSettings {
   int migration_interval = 200;        ///< ≥ 0 (0 = never: independent islands)
   int migrants = 4;                    ///< 0..population − 1, ≥ 1 when migration_interval > 0
   opt::MigrationTopology topology = opt::MigrationTopology::kRing;
+  double migration_margin = 0;         ///< [0, 1) (0 = migrants from every source; opt/ga.h)
   int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
   int offspring() const;               ///< evaluated per generation: population − elite count
 };

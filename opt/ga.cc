@@ -101,6 +101,10 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
                                           std::to_string(migration_interval) + " > 0 (" +
                                           name("migration_interval") + " 0 runs the islands independently)"));
   }
+  if (!(migration_margin >= 0 && migration_margin < 1)) {
+    return InvalidArgument(
+        FieldError(name("migration_margin"), migration_margin, "must be in [0, 1) (0 = every source)"));
+  }
   if (!ValidTopology(topology)) {
     return InvalidArgument(FieldError(name("topology"), static_cast<int>(topology), kTopologyRule));
   }
@@ -415,12 +419,13 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   return d;
 }
 
-std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island) const {
+std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island, double below) const {
   std::vector<std::pair<Genome, FitnessResult>> in;
   if (!options_.migrates()) return in;
   const int m = options_.migrants;
   for (int s : sources_[island]) {
     const IslandState& src = state_.islands[s];
+    if (!(src.fitness.front().cost < below)) continue;
     for (int r = 0; r < m; ++r) in.emplace_back(src.population[r], src.fitness[r]);
   }
   // Best first; ties keep source order, then rank.
@@ -458,7 +463,13 @@ std::vector<int> GeneticAlgorithm::Migrate() {
   const int k_islands = options_.islands, n = options_.population_size;
   // Every island's immigrants are chosen before any island receives (the order cannot matter).
   std::vector<std::vector<std::pair<Genome, FitnessResult>>> incoming(k_islands);
-  for (int k = 0; k < k_islands; ++k) incoming[k] = Immigrants(k);
+  for (int k = 0; k < k_islands; ++k) {
+    // The margin's gate (file comment of ga.h, 6.): sources better than this island's best by more
+    // than migration_margin · |its best|; without a margin, every source.
+    const double own = state_.islands[k].fitness.front().cost;
+    const double m = options_.migration_margin;
+    incoming[k] = Immigrants(k, m > 0 ? own - m * std::abs(own) : std::numeric_limits<double>::infinity());
+  }
   std::vector<int> taken(k_islands, 0);
   for (int k = 0; k < k_islands; ++k) {
     IslandState& is = state_.islands[k];

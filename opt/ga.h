@@ -33,6 +33,9 @@
 //      fully connected: every other island, in index order; random: a ring in an order drawn from
 //      StreamSeed(seed, kTopologyStream), fixed for the run). All emigrants are taken before any
 //      island receives, and islands receive in index order, so completion order cannot matter.
+//      With migration_margin m > 0 an island hears only the sources whose best is below its own
+//      by more than m · |its best| (a gate: on a plateau the islands stay apart, and a lineage
+//      that steps down to a lower basin is copied to every island it leads by the margin).
 //      An island takes the best `migrants` of what it receives (ties: source order, then rank);
 //      they replace its worst individuals pair by pair (best migrant ↔ worst resident) where the
 //      migrant's cost is strictly lower; the island is re-ranked;
@@ -90,6 +93,9 @@ struct GaOptions {
   int migrants = 4;                     ///< individuals each island sends per migration, 0 … population_size − 1
                                         ///< (≥ 1 when migration_interval > 0)
   MigrationTopology topology = MigrationTopology::kRing;
+  double migration_margin = 0;          ///< a migration reaches an island only from sources whose best is
+                                        ///< below its own by more than this share of |its best|, [0, 1)
+                                        ///< (0 = every source, the rule before the margin)
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
 
@@ -267,8 +273,10 @@ class GeneticAlgorithm {
   void DrawUniform(Rng& rng, int count, std::vector<Genome>* out);
   Draft Breed(int island);
   Draft Restart(int island);
-  /// The best `migrants` individuals island `i` receives from its sources (ties: source order, rank).
-  std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island) const;
+  /// The best `migrants` individuals island `i` receives from its sources (ties: source order, rank),
+  /// counting only the sources whose best cost is below `below`.
+  std::vector<std::pair<Genome, FitnessResult>> Immigrants(
+      int island, double below = std::numeric_limits<double>::infinity()) const;
   /// Evaluates every draft's fresh genomes as one batch (generation 0 if !initialized).
   std::vector<std::vector<FitnessResult>> Evaluate(std::vector<Draft>& drafts);
   /// Ranks each island by (cost, index), updates island and job best, stall and counters, migrates

@@ -278,6 +278,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
       g->set_migration_interval(static_cast<uint32_t>(s.ga->migration_interval));
       g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
       g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
+      if (s.ga->migration_margin != 0) g->set_migration_margin(s.ga->migration_margin);
     }
     if (s.ga->island_stall_generations != 0)
       g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
@@ -322,6 +323,7 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     if (pg.has_migrants()) g.migrants = ClampInt(pg.migrants());
     if (pg.topology() != pw::MIGRATION_TOPOLOGY_UNSPECIFIED)
       g.topology = static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
+    if (pg.has_migration_margin()) g.migration_margin = pg.migration_margin();
     if (pg.has_island_stall_generations()) g.island_stall_generations = ClampInt(pg.island_stall_generations());
     s->ga = g;
   } else if (p.has_external()) {

@@ -95,6 +95,15 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   std::ifstream md(o.out_dir / "report.md");
   const std::string report((std::istreambuf_iterator<char>(md)), {});
   EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; 2 migrations"), std::string::npos) << report;
+  // The margin's gate is named in the report's line.
+  o.ga.migration_margin = 0.2;
+  const auto gated = hgann::RunIdentify(o, set, fitness, nullptr);
+  WriteIdentifyReport(o, set, fitness, gated, term);
+  std::ifstream md_gated(o.out_dir / "report.md");
+  const std::string report_gated((std::istreambuf_iterator<char>(md_gated)), {});
+  EXPECT_NE(report_gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; 2 migrations"),
+            std::string::npos)
+      << report_gated;
   // One island: the file is as before islands.
   EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
   EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
@@ -120,6 +129,7 @@ std::string IdentifyRefusal(std::vector<std::string> args) {
 
 TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
+  EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}), "--migration-margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "0"}),

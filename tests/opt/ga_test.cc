@@ -735,6 +735,9 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   EXPECT_NE(error([](GaOptions& o) { o.topology = static_cast<MigrationTopology>(9); }).find("topology = 9: must be \"ring\""),
             std::string::npos);
   EXPECT_EQ(error([](GaOptions& o) { o.island_stall_generations = -2; }).rfind("island_stall_generations = -2", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = 1; }), "migration_margin = 1: must be in [0, 1) (0 = every source)");
+  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = -0.5; }).rfind("migration_margin = -0.5", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = std::nan(""); }).rfind("migration_margin = nan", 0), 0u);
   // A caller names the fields as its user wrote them, in the field and in the rule.
   GaOptions named;
   named.migrants = 400;
@@ -880,6 +883,42 @@ TEST(GaIslands, MigrantsReplaceTheWorstWhenBetter) {
   const IslandState &a = ga.state().islands[0], &b = ga.state().islands[1];
   EXPECT_NE(std::find(b.population.begin(), b.population.end(), a.population[0]), b.population.end());
   EXPECT_NE(std::find(a.population.begin(), a.population.end(), b.population[0]), a.population.end());
+}
+
+TEST(GaIslands, MarginHearsOnlySourcesBetterByTheMargin) {
+  // Ring of 2 at every generation, as above, with a margin: an island takes migrants only from a
+  // source whose best is below its own by more than margin · |its best|.
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  for (double margin : {1e-12, 0.999}) {
+    GaOptions o = IslandOptions(2);
+    o.migration_interval = 1;
+    o.migration_margin = margin;
+    GeneticAlgorithm ga(o, &ev);
+    ga.Initialize();
+    // The islands' bests before the exchange: run the same generation without migration.
+    GaOptions apart = o;
+    apart.migration_interval = 0;
+    GeneticAlgorithm alone(apart, &ev);
+    alone.Initialize();
+    alone.Step();
+    const double b0 = alone.state().islands[0].fitness[0].cost, b1 = alone.state().islands[1].fitness[0].cost;
+    ASSERT_GT(b0, 0);
+    ASSERT_GT(b1, 0);
+    ASSERT_NE(b0, b1);
+    const GenerationSummary& g = ga.Step();
+    ASSERT_TRUE(g.migrated);
+    const int better = b0 < b1 ? 0 : 1, worse = 1 - better;
+    // The better island never hears the worse one; the worse hears the better only if the gap
+    // exceeds the margin (a tiny margin: yes; 0.999: no, the costs are not a thousandfold apart).
+    EXPECT_EQ(g.islands[better].immigrants, 0) << margin;
+    const double lo = std::min(b0, b1), hi = std::max(b0, b1);
+    const bool heard = lo < hi - margin * hi;
+    EXPECT_EQ(g.islands[worse].immigrants, heard ? 2 : 0) << margin;
+    EXPECT_EQ(heard, margin < 0.5) << "the two margins test both sides of the gate";
+    // An island that hears nothing is the island of the run without migration, bit for bit.
+    EXPECT_EQ(ga.state().islands[better].population, alone.state().islands[better].population);
+  }
 }
 
 TEST(GaIslands, StalledIslandRestartsFromMigrantsAndFreshIndividuals) {

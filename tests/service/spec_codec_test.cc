@@ -2,6 +2,8 @@
 // and JSON bit for bit (but for the sign of a zero sample in JSON); bad enums in JSON are named.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "hgann/hgann_job.h"
 #include "kinds/kinds.h"
 #include "service/wire_codec.h"
@@ -79,6 +81,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   s.ga->migrants = 3;
   s.ga->topology = opt::MigrationTopology::kRandom;
   s.ga->island_stall_generations = 9;
+  s.ga->migration_margin = 0.2;
   JobSpec back;
   std::vector<FieldViolation> v;
   ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(s), &back, &v).ok());
@@ -87,6 +90,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->migrants, 3);
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
   EXPECT_EQ(back.ga->island_stall_generations, 9);
+  EXPECT_EQ(back.ga->migration_margin, 0.2);
   back = JobSpec{};
   ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(s), &back, &v).ok());
   ASSERT_TRUE(back.ga.has_value());
@@ -94,6 +98,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->migrants, 3);
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
   EXPECT_EQ(back.ga->island_stall_generations, 9);
+  EXPECT_EQ(back.ga->migration_margin, 0.2);
   EXPECT_NE(JobSpecToJson(s).find("\"MIGRATION_TOPOLOGY_RANDOM\""), std::string::npos);
 
   auto violations = [&](auto mutate) {
@@ -107,6 +112,10 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                        "must be ≥ 1 when ga.migration_interval > 0"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.topology = static_cast<opt::MigrationTopology>(5); }),
                        "ga.topology", "MIGRATION_TOPOLOGY_RING"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = 1; }), "ga.migration_margin",
+                       "must be in [0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = std::nan(""); }),
+                       "ga.migration_margin", "must be in [0, 1)"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0; }).empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.
   const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);
