@@ -23,6 +23,7 @@ struct Plot {
   std::string ylabel;
   bool logscale_y = false;
   std::vector<PlotSeries> series;
+  std::string xrange{};  ///< gnuplot's "[lo:hi]"; empty: automatic
 };
 
 /// Writes dir/<name>.gp. Returns the script path.
