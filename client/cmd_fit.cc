@@ -56,6 +56,7 @@ struct FitArgs {
   std::string family = "backlash-like";
   std::vector<std::string> effects;
   std::vector<std::string> train_windows, validate_windows, test_windows;
+  double settle_s = 0;
   std::string out = "fit-out";
   std::string algorithm = "pso";
   SearchFlags search;
@@ -213,7 +214,9 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\n";
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
-  os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
+  os << "\n## Errors\n\n";
+  if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
+  os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& rec = set.records[i];
@@ -329,7 +332,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
 }
 
 int RunFit(const FitArgs& a) {
-  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::FitOptions o;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
@@ -433,6 +436,10 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
   cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
   cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--settle-s", a->settle_s,
+                  "score every record from this long after the end of its rest [s] (the models start with their memory "
+                  "centred on the rest drive; docs/records.md)")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
   AddSearchFlags(cmd, &a->search);

@@ -102,6 +102,17 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
       Captured({"fit", "--records", set2, "--family", "prandtl-ishlinskii", "--out", fit2, "--no-figures", "--quiet"});
   EXPECT_EQ(out2.find("of its reversal cycles turn where training has none"), std::string::npos) << out2;
 
+  // The settling window: scored from 0.5 s after each rest, and the report says so.
+  const std::string settled = Captured({"fit", "--records", set, "--family", "preisach", "--settle-s", "0.5", "--out",
+                                        (dir / "settled").string(), "--no-figures", "--quiet"});
+  PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "Every record is scored from 0.5 s after the end of its rest");
+  PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "| ramp | validate | 1.5–");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", set, "--family", "preisach", "--settle-s", "100", "--out",
+                          (dir / "bad-settle").string(), "--quiet"});
+                }),
+                "--settle-s 100: record major would keep 0 scored samples");
+
   // A set without withheld records says so; it does not say they lie within the training.
   const std::string only_train = (dir / "only-train").string();
   fs::create_directories(only_train);
