@@ -150,9 +150,32 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
                 {stem + ".csv", 1, 5, "error", "lines"}}};
     scripts->push_back(WritePlotScript(dir, trace));
     Plot loop{"loop_" + rec.name,
-              rec.name + " (" + role + "): hysteresis loop less its offset (" + Fmt(offset) + " " + yu +
-                  ") and the training line " + Fmt(a) + " " + yu + "/" + du + " · u + " + Fmt(b) + " " + yu,
-              "drive [" + du + "]", "response − line [" + yu + "]", false, {}};
+              rec.name + " (" + role + "): loop less the training line " + Fmt(a) + "·u + " + Fmt(b) + " " + yu,
+              "drive [" + du + "]", "response − offset (" + Fmt(offset) + ") − line [" + yu + "]", false, {}};
+    // The y range of the loop: the model's and 99.8 % of the measured samples, so that a sample or two
+    // at a jump from rest (a sensor lag reads the old level) does not squash the loops; they stay in
+    // the trace figure and the CSV, and the title counts them.
+    std::vector<double> measured, model;
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
+      measured.push_back(rec.y[k] - offset - a * rec.u[k] - b);
+      model.push_back(r.yhat[i][k] - offset - a * rec.u[k] - b);
+    }
+    std::vector<double> sorted = measured;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t cut = sorted.size() / 1000;
+    double lo = sorted[cut], hi = sorted[sorted.size() - 1 - cut];
+    for (double x : model) {
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    const double pad = 0.08 * std::max(hi - lo, 1e-12);
+    lo -= pad;
+    hi += pad;
+    const auto outside = std::count_if(measured.begin(), measured.end(), [&](double x) { return x < lo || x > hi; });
+    if (outside > 0) {
+      loop.yrange = "[" + io::FormatNumber(lo) + ":" + io::FormatNumber(hi) + "]";
+      loop.title += "; " + std::to_string(outside) + " sample(s) off-scale";
+    }
     if (!train) loop.series = major;  // the major loop behind: the withheld minor loops inside it
     loop.series.push_back({stem + ".csv", 2, 9, rec.name + " measured", "points pt 7 ps 0.3 lc rgb '#1f77b4'"});
     loop.series.push_back({stem + ".csv", 2, 10, rec.name + " model", "lines lc rgb '#d62728'"});

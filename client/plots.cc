@@ -39,6 +39,7 @@ std::filesystem::path WritePlotScript(const std::filesystem::path& dir, const Pl
      << "set ylabel " << Quote(plot.ylabel) << "\n";
   if (plot.logscale_y) gp << "set logscale y\n";
   if (!plot.xrange.empty()) gp << "set xrange " << plot.xrange << "\n";
+  if (!plot.yrange.empty()) gp << "set yrange " << plot.yrange << "\n";
   gp << "plot ";
   for (size_t i = 0; i < plot.series.size(); ++i) {
     const auto& s = plot.series[i];

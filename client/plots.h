@@ -24,6 +24,7 @@ struct Plot {
   bool logscale_y = false;
   std::vector<PlotSeries> series;
   std::string xrange{};  ///< gnuplot's "[lo:hi]"; empty: automatic
+  std::string yrange{};  ///< as xrange, for y
 };
 
 /// Writes dir/<name>.gp. Returns the script path.
