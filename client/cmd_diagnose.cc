@@ -287,6 +287,10 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
   cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");
   cmd->add_option("--test-window", a->records.test_windows, "with one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--settle-s", a->records.settle_s,
+                  "with --records: score every record from this long after the end of its rest [s] (the models start "
+                  "with their memory centred on the rest drive; docs/records.md)")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")->type_name("DIR");
   cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,

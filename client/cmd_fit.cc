@@ -15,6 +15,7 @@
 #include <memory>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "client/cmd_service.h"
@@ -28,6 +29,7 @@
 #include "io/csv.h"
 #include "io/records.h"
 #include "client/fit_file.h"
+#include "model/preisach.h"
 #include "records/excitation.h"
 #include "records/extrapolation.h"
 #include "records/fit.h"
@@ -43,11 +45,19 @@ int NameColumnWidth(const io::RecordSet& set) {
   return static_cast<int>(w + 2);
 }
 
+/// The width of a column of roles: the longest role name of the set and two spaces.
+int RoleColumnWidth(const io::RecordSet& set) {
+  size_t w = 5;
+  for (const io::Record& r : set.records) w = std::max(w, std::string_view(model::CaseRoleName(r.role)).size());
+  return static_cast<int>(w + 2);
+}
+
 struct FitArgs {
   std::string records;
   std::string family = "backlash-like";
   std::vector<std::string> effects;
   std::vector<std::string> train_windows, validate_windows, test_windows;
+  double settle_s = 0;
   std::string out = "fit-out";
   std::string algorithm = "pso";
   SearchFlags search;
@@ -67,32 +77,120 @@ std::string Fmt(double x, int prec = 4) {
   return s.str();
 }
 
+/// The averaging window of the creep figure: one period of the dominant drive frequency (a whole
+/// loop's error averages out, the drift stays), at least 5 samples.
+double TrendWindow(const records::DataScale& s) {
+  const double period = s.f_dom > 0 ? 1.0 / s.f_dom : 1.0;
+  return std::max(period, 5.0 / s.fs);
+}
+
+/// Per record: its trace CSV (time, drive, measured, model, error; then measured and model less the
+/// record's offset, so records share one frame; the error averaged over TrendWindow; measured and
+/// model less the offset and the training records' straight line a·u + b) and its
+/// error by reversal depth (depth_<name>.csv). Figures (when `scripts`): the trace, the loop of
+/// each record less the line (measured as dots, model as a line, over the training records'
+/// measured major loop in grey: minor loops inside it), one figure of error against reversal depth for every record and
+/// one of the averaged error over time (creep).
 void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::FitResult& r,
                  std::vector<fs::path>* scripts) {
   fs::create_directories(dir);
+  const records::DataScale& scale = r.model->scale();
+  const double window_s = TrendWindow(scale);
+  const std::string yu = set.response_unit, du = set.drive_unit;
+  // The straight line y = a u + b through the training records (offsets removed): the loops less it
+  // show the hysteresis at the scale of its width, not of the stroke, so minor loops can be seen.
+  const double a = scale.polarity * scale.gain;
+  double b = 0, nb = 0;
+  std::vector<PlotSeries> major, depth, creep;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const io::Record& rec = set.records[i];
+    if (rec.role != model::CaseRole::kTrain) continue;
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) b += rec.y[k] - r.metrics[i].offset - a * rec.u[k];
+    nb += static_cast<double>(rec.scored());
+    major.push_back({"trace_" + rec.name + ".csv", 2, 9, "training " + rec.name + " (measured)",
+                     "lines lc rgb '#c8c8c8'"});
+  }
+  if (nb > 0) b /= nb;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& rec = set.records[i];
     const std::string stem = "trace_" + rec.name;
+    const double offset = r.metrics[i].offset;
+    const std::vector<double> trend = records::ResidualTrend(rec, r.yhat[i], window_s);
     io::WriteFileWith(dir / (stem + ".csv"), [&](std::ostream& os) {
-      os << "t_s,drive_" << set.drive_unit << ",measured_" << set.response_unit << ",model_" << set.response_unit
-         << ",error_" << set.response_unit << "\n";
+      os << "t_s,drive_" << du << ",measured_" << yu << ",model_" << yu << ",error_" << yu << ",measured_less_offset_"
+         << yu << ",model_less_offset_" << yu << ",error_mean_" << io::FormatNumber(window_s) << "s_" << yu
+         << ",measured_less_line_" << yu << ",model_less_line_" << yu << "\n";
       for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
         os << io::FormatNumber(rec.t[k]) << "," << io::FormatNumber(rec.u[k]) << "," << io::FormatNumber(rec.y[k])
-           << "," << io::FormatNumber(r.yhat[i][k]) << "," << io::FormatNumber(rec.y[k] - r.yhat[i][k]) << "\n";
+           << "," << io::FormatNumber(r.yhat[i][k]) << "," << io::FormatNumber(rec.y[k] - r.yhat[i][k]) << ","
+           << io::FormatNumber(rec.y[k] - offset) << "," << io::FormatNumber(r.yhat[i][k] - offset) << ","
+           << io::FormatNumber(trend[k - rec.first_scored]) << "," << io::FormatNumber(rec.y[k] - offset - a * rec.u[k] - b)
+           << "," << io::FormatNumber(r.yhat[i][k] - offset - a * rec.u[k] - b) << "\n";
+      }
+    });
+    const std::vector<records::DepthBin> bins =
+        records::ErrorByReversalDepth(rec, r.yhat[i], scale.u_max - scale.u_min);
+    const std::string depth_file = "depth_" + rec.name + ".csv";
+    io::WriteFileWith(dir / depth_file, [&](std::ostream& os) {
+      os << "swing_lo_pct,swing_hi_pct,swing_mid_pct,pieces,samples,rmse_" << yu << "\n";
+      for (const records::DepthBin& b : bins) {
+        if (b.samples == 0) continue;  // an empty bin has no error to show
+        const double hi = std::isfinite(b.hi) ? b.hi : b.lo + 0.2;
+        os << io::FormatNumber(100 * b.lo) << "," << (std::isfinite(b.hi) ? io::FormatNumber(100 * b.hi) : "inf") << ","
+           << io::FormatNumber(50 * (b.lo + hi)) << "," << b.pieces << "," << b.samples << ","
+           << io::FormatNumber(b.rmse) << "\n";
       }
     });
     if (!scripts) continue;
     const std::string role = model::CaseRoleName(rec.role);
+    const bool train = rec.role == model::CaseRole::kTrain;
     Plot trace{stem, rec.name + " (" + role + "): measured and " + r.model->Describe(), "t [s]",
-               "response [" + set.response_unit + "]", false,
+               "response [" + yu + "]", false,
                {{stem + ".csv", 1, 3, "measured", "lines"}, {stem + ".csv", 1, 4, "model", "lines"},
                 {stem + ".csv", 1, 5, "error", "lines"}}};
     scripts->push_back(WritePlotScript(dir, trace));
-    Plot loop{"loop_" + rec.name, rec.name + " (" + role + "): hysteresis loop", "drive [" + set.drive_unit + "]",
-              "response [" + set.response_unit + "]", false,
-              {{stem + ".csv", 2, 3, "measured", "lines"}, {stem + ".csv", 2, 4, "model", "lines"}}};
+    Plot loop{"loop_" + rec.name,
+              rec.name + " (" + role + "): loop less the training line " + Fmt(a) + "·u + " + Fmt(b) + " " + yu,
+              "drive [" + du + "]", "response − offset (" + Fmt(offset) + ") − line [" + yu + "]", false, {}};
+    // The y range of the loop: the model's and 99.8 % of the measured samples, so that a sample or two
+    // at a jump from rest (a sensor lag reads the old level) does not squash the loops; they stay in
+    // the trace figure and the CSV, and the title counts them.
+    std::vector<double> measured, model;
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
+      measured.push_back(rec.y[k] - offset - a * rec.u[k] - b);
+      model.push_back(r.yhat[i][k] - offset - a * rec.u[k] - b);
+    }
+    std::vector<double> sorted = measured;
+    std::sort(sorted.begin(), sorted.end());
+    const size_t cut = sorted.size() / 1000;
+    double lo = sorted[cut], hi = sorted[sorted.size() - 1 - cut];
+    for (double x : model) {
+      lo = std::min(lo, x);
+      hi = std::max(hi, x);
+    }
+    const double pad = 0.08 * std::max(hi - lo, 1e-12);
+    lo -= pad;
+    hi += pad;
+    const auto outside = std::count_if(measured.begin(), measured.end(), [&](double x) { return x < lo || x > hi; });
+    if (outside > 0) {
+      loop.yrange = "[" + io::FormatNumber(lo) + ":" + io::FormatNumber(hi) + "]";
+      loop.title += "; " + std::to_string(outside) + " sample(s) off-scale";
+    }
+    if (!train) loop.series = major;  // the major loop behind: the withheld minor loops inside it
+    loop.series.push_back({stem + ".csv", 2, 9, rec.name + " measured", "points pt 7 ps 0.3 lc rgb '#1f77b4'"});
+    loop.series.push_back({stem + ".csv", 2, 10, rec.name + " model", "lines lc rgb '#d62728'"});
     scripts->push_back(WritePlotScript(dir, loop));
+    depth.push_back({depth_file, 3, 6, rec.name + " (" + role + ")", train ? "points pt 5 ps 1.5" : "linespoints pt 7 ps 1.2"});
+    creep.push_back({stem + ".csv", 1, 8, rec.name + " (" + role + ")", "lines"});
   }
+  if (!scripts) return;
+  scripts->push_back(WritePlotScript(
+      dir, Plot{"error_vs_depth",
+                "RMSE of each monotone piece of the drive by its swing (minor loops are the shallow pieces)",
+                "swing [% of the training drive range], bin centre", "RMSE [" + yu + "]", true, depth, "[0:100]"}));
+  scripts->push_back(WritePlotScript(
+      dir, Plot{"creep", "error (measured − model) averaged over " + Fmt(window_s, 3) + " s: slow drift is creep the model lacks",
+                "t [s]", "mean error [" + yu + "]", false, creep}));
 }
 
 void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
@@ -139,7 +237,9 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\n";
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
-  os << "\n## Errors\n\n| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
+  os << "\n## Errors\n\n";
+  if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
+  os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& rec = set.records[i];
@@ -161,6 +261,18 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
          << records::DescribeDepthBins(records::ErrorByReversalDepth(rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
          << "\n";
     }
+  }
+  if (!a.no_figures) {
+    os << "\n## Figures (figures/)\n\n"
+       << "- `loop_<record>.png`: the hysteresis loop, response less the record's offset and the training records' "
+          "straight line a·u + b against drive (the loop at the scale of its width), measured (dots) and model (line); "
+          "a withheld record's loops over the training records' measured major loop (grey): its minor loops inside it.\n"
+       << "- `error_vs_depth.png`: the RMSE of each record's monotone drive pieces by their swing (the table above, "
+          "`depth_<record>.csv`): shallow swings are minor loops.\n"
+       << "- `creep.png`: the error averaged over " << Fmt(TrendWindow(m.scale()), 3)
+       << " s (one period of the dominant drive frequency, column 8 of `trace_<record>.csv`): a slow drift is creep "
+          "the model lacks.\n"
+       << "- `trace_<record>.png`: measured, model and error over time.\n";
   }
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
@@ -245,12 +357,16 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
 }
 
 int RunFit(const FitArgs& a) {
-  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::FitOptions o;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
+  if (a.family == "preisach") {  // the grid's own bound, refused under the flag's name
+    const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
+    if (!levels.ok()) throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
+  }
   if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
@@ -288,10 +404,10 @@ int RunFit(const FitArgs& a) {
     }
     for (const auto& e : errors) std::cerr << "piezoid fit: warning: " << e << "\n";
   }
-  const int name_width = NameColumnWidth(set);
+  const int name_width = NameColumnWidth(set), role_width = RoleColumnWidth(set);
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
-    std::cout << "  " << std::left << std::setw(10) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
+    std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
               << Fmt(e.max_at_s) << " s, NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
@@ -326,6 +442,10 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
   cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
   cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--settle-s", a->settle_s,
+                  "score every record from this long after the end of its rest [s] (the models start with their memory "
+                  "centred on the rest drive; docs/records.md)")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
   AddSearchFlags(cmd, &a->search);
@@ -333,7 +453,10 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
-  cmd->add_option("--pi-operators", a->pi_operators, "Prandtl-Ishlinskii / asymmetric-pi play operators; preisach grid levels")->default_str("12");
+  cmd->add_option("--pi-operators", a->pi_operators,
+                  "Prandtl-Ishlinskii / asymmetric-pi play operators (1 … 10000); preisach grid levels (1 … 200)")
+      ->check(CLI::Range(1, 10000))
+      ->default_str("12");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
   AddCompleteServiceFlags(cmd, a->service);  // --master: the same result, bit for bit
@@ -352,10 +475,10 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
     const io::RecordSet set = io::LoadRecordSet(*path);
     std::cout << set.source.string() << ": " << set.format << ", " << set.records.size() << " record(s), drive in "
               << set.drive_unit << ", response in " << set.response_unit << "\n";
-    const int name_width = NameColumnWidth(set);
+    const int name_width = NameColumnWidth(set), role_width = RoleColumnWidth(set);
     for (const io::Record& r : set.records) {
-      std::cout << "  " << std::left << std::setw(name_width) << r.name << std::setw(9) << model::CaseRoleName(r.role)
-                << " " << r.size() << " samples at " << Fmt(r.sample_rate_hz(), 6) << " Hz, scored "
+      std::cout << "  " << std::left << std::setw(name_width) << r.name << std::setw(role_width)
+                << model::CaseRoleName(r.role) << r.size() << " samples at " << Fmt(r.sample_rate_hz(), 6) << " Hz, scored "
                 << Fmt(r.t[r.first_scored]) << "–" << Fmt(r.t[r.end_scored - 1]) << " s (" << r.scored()
                 << "), rest " << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);
       if (r.offset_mode != io::OffsetMode::kFit) std::cout << " " << Fmt(r.offset);

@@ -16,6 +16,11 @@ void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set, const r
                              const records::TrainingDriveProposal& p, const std::string& drive_file) {
   os << "\n## Excitation (before fitting)\n\nWhat the training records excite:\n\n";
   for (const std::string& line : r.training_lines) os << "- " << line << "\n";
+  if (r.withheld.empty()) {
+    os << "\nNo withheld records: nothing to compare with the training excitation. A richer training drive is in `"
+       << drive_file << "`: " << p.description << ".\n";
+    return;
+  }
   os << "\n| withheld record | drive [" << r.drive_unit << "] | reversals | cycles outside training | needs beyond training |\n"
      << "|---|---|---|---|---|\n";
   for (const records::WithheldExcitation& w : r.withheld) {
@@ -96,6 +101,10 @@ json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationRe
 }
 
 void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set, const records::ExcitationReport& r) {
+  if (r.withheld.empty()) {
+    os << "excitation: no withheld records\n";
+    return;
+  }
   if (!r.HasGap()) {
     os << "excitation: every withheld record lies within the training excitation\n";
     return;

@@ -29,7 +29,7 @@ std::filesystem::path WritePlotScript(const std::filesystem::path& dir, const Pl
   std::ofstream gp(path);
   if (!gp) throw std::runtime_error("cannot write " + path.string());
   gp << "# Rendered by piezoid; re-render with: gnuplot " << plot.name << ".gp\n"
-     << "set terminal pngcairo size 1000,620 enhanced font 'sans,11'\n"
+     << "set terminal pngcairo size 1000,620 noenhanced font 'sans,11'\n"
      << "set output " << Quote(plot.name + ".png") << "\n"
      << "set datafile separator ','\n"
      << "set key outside top center horizontal\n"
@@ -38,6 +38,8 @@ std::filesystem::path WritePlotScript(const std::filesystem::path& dir, const Pl
      << "set xlabel " << Quote(plot.xlabel) << "\n"
      << "set ylabel " << Quote(plot.ylabel) << "\n";
   if (plot.logscale_y) gp << "set logscale y\n";
+  if (!plot.xrange.empty()) gp << "set xrange " << plot.xrange << "\n";
+  if (!plot.yrange.empty()) gp << "set yrange " << plot.yrange << "\n";
   gp << "plot ";
   for (size_t i = 0; i < plot.series.size(); ++i) {
     const auto& s = plot.series[i];

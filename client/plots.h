@@ -23,6 +23,8 @@ struct Plot {
   std::string ylabel;
   bool logscale_y = false;
   std::vector<PlotSeries> series;
+  std::string xrange{};  ///< gnuplot's "[lo:hi]"; empty: automatic
+  std::string yrange{};  ///< as xrange, for y
 };
 
 /// Writes dir/<name>.gp. Returns the script path.

@@ -1,16 +1,28 @@
 #include "client/record_windows.h"
 
+#include "io/csv.h"
+
 namespace pz::client {
 
 io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vector<std::string>& tr,
-                                       const std::vector<std::string>& va, const std::vector<std::string>& te) {
+                                       const std::vector<std::string>& va, const std::vector<std::string>& te,
+                                       double settle_s) {
   io::RecordSet set = io::LoadRecordSet(path);
   std::vector<io::WindowSpec> w;
   for (const auto& s : tr) w.push_back(io::ParseWindow(s, model::CaseRole::kTrain, "--train-window"));
   for (const auto& s : va) w.push_back(io::ParseWindow(s, model::CaseRole::kValidate, "--validate-window"));
   for (const auto& s : te) w.push_back(io::ParseWindow(s, model::CaseRole::kTest, "--test-window"));
   io::SplitIntoWindows(set, w);
+  io::SkipSettling(set, settle_s, io::RecordReadOptions{}.min_scored, "--settle-s " + io::FormatNumber(settle_s));
   return set;
+}
+
+std::string SettlingSentence(double settle_s) {
+  if (settle_s == 0) return "";
+  return "Every record is scored from " + io::FormatNumber(settle_s) +
+         " s after the end of its rest (--settle-s): the models start with their memory centred on the rest "
+         "drive, a stack at rest sits where its last move left it, and the two differ until the first large "
+         "reversal (io::SkipSettling).";
 }
 
 }  // namespace pz::client

@@ -1,5 +1,6 @@
 // A record set from the command line: a folder or a CSV, and for one CSV the windows given by
-// --train-window / --validate-window / --test-window (START:END in seconds, repeatable).
+// --train-window / --validate-window / --test-window (START:END in seconds, repeatable); then the
+// settling window of --settle-s (io::SkipSettling).
 #pragma once
 
 #include <string>
@@ -10,6 +11,10 @@
 namespace pz::client {
 
 io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vector<std::string>& train,
-                                       const std::vector<std::string>& validate, const std::vector<std::string>& test);
+                                       const std::vector<std::string>& validate, const std::vector<std::string>& test,
+                                       double settle_s = 0);
+
+/// The report's sentence on the settling window ("" when settle_s is 0).
+std::string SettlingSentence(double settle_s);
 
 }  // namespace pz::client

@@ -25,11 +25,12 @@ std::string G(double x, int prec = 4) {
 }  // namespace
 
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                                   const records::TrainingDriveProposal& proposal) {
+                                   const records::TrainingDriveProposal& proposal, double settle_s) {
   const std::string u = set.response_unit;
   os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
-     << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n"
-     << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
+     << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
+  if (settle_s > 0) os << SettlingSentence(settle_s) << "\n\n";
+  os << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
   for (const auto& e : d.noise.estimates) {
     os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma) << " | " << e.samples
        << " | " << e.detail << " |\n";
@@ -128,7 +129,7 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
 }
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
-  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows);
+  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
   o.rules.significance_ratio = a.significance_ratio;
@@ -153,7 +154,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
   WriteProposedDrive(out / kProposedDriveFile, set, proposal);
-  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal); });
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s); });
   io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d, proposal); });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;

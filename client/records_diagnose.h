@@ -16,6 +16,7 @@ struct RecordsDiagnoseRequest {
   std::string records;
   std::string family = "backlash-like";
   std::vector<std::string> train_windows, validate_windows, test_windows;
+  double settle_s = 0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
   std::string out;
   std::string candidates;  ///< comma-separated, empty = every applicable effect
   int threads = 2;
@@ -31,7 +32,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
 
 /// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                                   const records::TrainingDriveProposal& proposal);
+                                   const records::TrainingDriveProposal& proposal, double settle_s = 0);
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal);
 

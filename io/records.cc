@@ -522,6 +522,25 @@ void SetWindow(Record& r, double t0, double t1, size_t min_scored, const std::st
   }
 }
 
+void SkipSettling(RecordSet& set, double settle_s, size_t min_scored, const std::string& what) {
+  if (!std::isfinite(settle_s) || settle_s < 0) throw InputError(what + ": must be finite and ≥ 0 s");
+  if (settle_s == 0) return;
+  for (Record& r : set.records) {
+    const size_t moved = std::min(r.rest_samples, r.size() - 1);  // the first sample off the rest
+    const double t0 = r.t[moved] + settle_s;
+    const auto first = static_cast<size_t>(std::lower_bound(r.t.begin(), r.t.end(), t0 - 1e-9 * r.dt) - r.t.begin());
+    if (first <= r.first_scored) continue;
+    if (first >= r.end_scored || r.end_scored - first < min_scored) {
+      throw InputError(what + ": record " + r.name + " would keep " +
+                       std::to_string(first < r.end_scored ? r.end_scored - first : 0) + " scored samples (window " +
+                       FormatNumber(r.t[r.first_scored]) + "–" + FormatNumber(r.t[r.end_scored - 1]) +
+                       " s, settled from " + FormatNumber(t0) + " s); at least " + std::to_string(min_scored) +
+                       " are needed");
+    }
+    r.first_scored = first;
+  }
+}
+
 WindowSpec ParseWindow(std::string_view text, CaseRole role, const std::string& flag) {
   const size_t colon = text.find(':');
   WindowSpec w;

@@ -117,26 +117,23 @@ Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const
   CandidateScore& best = *ranked[0];
   const std::vector<double> best_sq = squares(0);
   double confidence = model::NormalCdf(model::PairedBlockZ(squares(-1), best_sq, rules.blocks));
-  int equivalent = 1;
   for (size_t i = 1; i < ranked.size(); ++i) {
     const CandidateScore& other = *ranked[i];
     if (!other.qualifies) continue;
     const double z = model::PairedBlockZ(squares(static_cast<int>(i)), best_sq, rules.blocks);
     // Practically equivalent only when both leave no significant gap and the paired test does not
-    // separate them; a rival that leaves a significant gap is evidence against itself (its Φ(z)
-    // enters the confidence however small z is).
-    if (z < rules.separation_z && AtFloor(gap, best, rules) && AtFloor(gap, other, rules)) {
-      ++equivalent;
-      if (n.runner_up < 0) {
-        n.runner_up = static_cast<int>(i);
-        n.z_runner_up = z;
-      }
-    } else {
-      confidence *= model::NormalCdf(z);
+    // separate them; a rival that leaves a significant gap is evidence against itself however
+    // small z is (never a tie).
+    if (n.runner_up < 0 && z < rules.separation_z && AtFloor(gap, best, rules) && AtFloor(gap, other, rules)) {
+      n.runner_up = static_cast<int>(i);
+      n.z_runner_up = z;
     }
+    // The probability that the named one is the better of the two is Φ(z), tied or not: a tie is a
+    // verdict that the difference is too small to act on, not evidence that it is zero (z = 0
+    // gives ½, the equal split of two).
+    confidence *= model::NormalCdf(z);
   }
-  // Among candidates the data cannot separate, none is more likely than the others.
-  best.confidence = confidence / equivalent;
+  best.confidence = confidence;
   n.confidence = best.confidence;
   return n;
 }

@@ -14,11 +14,12 @@
 //   ranking          :  by score, best first (stable); posterior weights against "none"
 //   named            ⇔  the best-ranked candidate qualifies; its confidence is Π Φ(z) of paired
 //                       block tests of the withheld squared errors against the starting model and
-//                       every other qualifying candidate; a qualifying rival is practically
-//                       equivalent (cannot be separated; confidence shared among them) only when
-//                       both bring the withheld gap within the significance threshold of the floor
-//                       (√(S_c / S_floor) ≤ significance_ratio) and the paired test does not
-//                       separate them (z < separation_z); otherwise its Φ(z) enters the confidence.
+//                       every other qualifying candidate, tied or not (Φ(z): the probability that the
+//                       named one is the better of the two; a tie at z = 0 states ½); a qualifying
+//                       rival is practically equivalent (cannot be separated: verdict
+//                       "inseparable") only when both bring the withheld gap within the
+//                       significance threshold of the floor (√(S_c / S_floor) ≤ significance_ratio)
+//                       and the paired test does not separate them (z < separation_z).
 //   verdict kind     :  "none" (no significant gap), "unexplained" (significant, nothing named),
 //                       "effect", "inseparable" (named with a rival it cannot be separated from).
 #pragma once
@@ -71,7 +72,7 @@ struct CandidateScore {
   double raw_reduction = 0;            ///< (S0 − S_c)/S0
   double pattern = 0;                  ///< share of the localised excess removed
   double weight = 0;                   ///< posterior weight exp(score/2φ) against the others and "none"
-  double confidence = 0;               ///< if named: Π Φ(z) of the paired block tests, shared
+  double confidence = 0;               ///< if named: Π Φ(z) of the paired block tests
   bool qualifies = false;              ///< passes every rule but the ranking
   std::string note;                    ///< why it does not qualify
 };

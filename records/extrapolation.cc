@@ -166,4 +166,24 @@ std::string DescribeDepthBins(const std::vector<DepthBin>& bins) {
   return s;
 }
 
+std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat, double window_s) {
+  if (yhat.size() < r.end_scored) throw InputError("ResidualTrend: model output shorter than the window");
+  if (!std::isfinite(window_s) || window_s < 0) {
+    throw InputError("ResidualTrend: the averaging window must be finite and ≥ 0, got " + io::FormatNumber(window_s));
+  }
+  const size_t n = r.end_scored - r.first_scored;
+  std::vector<double> prefix(n + 1, 0.0);  // Σ of the residual over the first i scored samples
+  for (size_t i = 0; i < n; ++i) {
+    const size_t k = r.first_scored + i;
+    prefix[i + 1] = prefix[i] + (r.y[k] - yhat[k]);
+  }
+  const size_t half = static_cast<size_t>(std::floor(0.5 * window_s / r.dt));
+  std::vector<double> out(n);
+  for (size_t i = 0; i < n; ++i) {
+    const size_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);
+    out[i] = (prefix[b] - prefix[a]) / static_cast<double>(b - a);
+  }
+  return out;
+}
+
 }  // namespace pz::records

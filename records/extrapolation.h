@@ -50,4 +50,10 @@ std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const 
 /// "swing 0–20 %: 0.05 (3 pieces); …" over the non-empty bins.
 std::string DescribeDepthBins(const std::vector<DepthBin>& bins);
 
+/// Slow error over time (creep the model lacks): the residual y − ŷ over the scored window
+/// averaged over a centred window of `window_s` (one drive period removes the loop's periodic
+/// error and leaves the drift), truncated at the window's ends. One value per scored sample,
+/// [first_scored, end_scored). window_s ≤ one sample: the residual itself.
+std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat, double window_s);
+
 }  // namespace pz::records

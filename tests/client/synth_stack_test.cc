@@ -77,6 +77,21 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
   while (std::getline(drive, line)) ++rows;
   EXPECT_GT(rows, 200u * 20);  // tens of seconds at 200 Hz
 
+  // The figures' data and scripts (rendered when gnuplot is there): loops less the training line,
+  // error against reversal depth, the error averaged over a period (creep).
+  const std::string figured = (dir / "fig").string();
+  Captured({"fit", "--records", set, "--family", "preisach", "--out", figured, "--quiet"});
+  for (const char* f : {"loop_ramp.gp", "error_vs_depth.gp", "creep.gp", "depth_ramp.csv", "depth_major.csv"})
+    EXPECT_TRUE(fs::exists(dir / "fig" / "figures" / f)) << f;
+  std::ifstream trace(dir / "fig" / "figures" / "trace_ramp.csv");
+  std::getline(trace, header);
+  PZ_EXPECT_HAS(header, ",error_mean_");
+  PZ_EXPECT_HAS(header, ",measured_less_line_um,model_less_line_um");
+  PZ_EXPECT_HAS(Read(dir / "fig" / "figures" / "loop_ramp.gp"), "\"trace_major.csv\" using 2:9");  // major loop behind
+  const std::string figured_report = Read(dir / "fig" / "report.md");
+  PZ_EXPECT_HAS(figured_report, "## Figures (figures/)");
+  PZ_EXPECT_HAS(figured_report, "`creep.png`: the error averaged over");
+
   // Play the proposed drive as the training record: the withheld records need no reversals then.
   const std::string set2 = (dir / "set2").string(), fit2 = (dir / "fit2").string();
   Captured({"synth-stack", "--out", set2, "--train-s", "8", "--withheld-s", "6", "--seed", "3", "--train-drive",
@@ -86,6 +101,46 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
   const std::string out2 =
       Captured({"fit", "--records", set2, "--family", "prandtl-ishlinskii", "--out", fit2, "--no-figures", "--quiet"});
   EXPECT_EQ(out2.find("of its reversal cycles turn where training has none"), std::string::npos) << out2;
+
+  // The settling window: scored from 0.5 s after each rest, and the report says so.
+  const std::string settled = Captured({"fit", "--records", set, "--family", "preisach", "--settle-s", "0.5", "--out",
+                                        (dir / "settled").string(), "--no-figures", "--quiet"});
+  PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "Every record is scored from 0.5 s after the end of its rest");
+  PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "| ramp | validate | 1.5–");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", set, "--family", "preisach", "--settle-s", "100", "--out",
+                          (dir / "bad-settle").string(), "--quiet"});
+                }),
+                "--settle-s 100: record major would keep 0 scored samples");
+
+  // A set without withheld records says so; it does not say they lie within the training.
+  const std::string only_train = (dir / "only-train").string();
+  fs::create_directories(only_train);
+  {
+    std::istringstream full(Read(dir / "set" / "manifest.csv"));
+    std::string head, first;
+    std::getline(full, head);
+    std::getline(full, first);  // the training record
+    std::ofstream(dir / "only-train" / "manifest.csv") << head << "\n" << first << "\n";
+  }
+  fs::copy_file(dir / "set" / "major.csv", dir / "only-train" / "major.csv");
+  const std::string lone = Captured(
+      {"fit", "--records", only_train, "--family", "preisach", "--out", (dir / "lone").string(), "--no-figures", "--quiet"});
+  PZ_EXPECT_HAS(lone, "excitation: no withheld records");
+  EXPECT_EQ(lone.find("every withheld record"), std::string::npos) << lone;
+  PZ_EXPECT_HAS(Read(dir / "lone" / "report.md"), "No withheld records");
+  // --pi-operators out of range: the flag is named.
+  try {
+    RunCli({"fit", "--records", set, "--family", "preisach", "--pi-operators", "0", "--out", (dir / "bad-ops").string()});
+    ADD_FAILURE() << "--pi-operators 0 accepted";
+  } catch (const CLI::ValidationError& e) {
+    PZ_EXPECT_HAS(std::string(e.what()), "--pi-operators");
+  }
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", set, "--family", "preisach", "--pi-operators", "300", "--out",
+                          (dir / "bad-ops").string(), "--quiet"});
+                }),
+                "--pi-operators 300: preisach.levels");
 
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"synth-stack", "--out", (dir / "bad").string(), "--fs", "100", "--train-drive",

@@ -106,6 +106,27 @@ TEST_F(RecordsDir, SingleCsvSplitsIntoWindows) {
                 "train window [0.5, 2] s is outside the record (0 … 0.999 s)");
 }
 
+// The settling window (io::SkipSettling): a record is scored from settle_s after its rest, or from
+// its own window's start when that is later; nothing moves at 0; too long a settle is named.
+TEST_F(RecordsDir, TheSettlingWindowStartsAfterTheRest) {
+  Write("a.csv", RecordText());  // rest 0 … 0.099 s, excitation from 0.1 s
+  Write("manifest.csv",
+        "record,file,role,t_start_s,t_end_s,offset,time_column,drive_column,response_column\n"
+        "whole,a.csv,train,,,fit,,,\n"
+        "late,a.csv,validate,0.5,,fit,,,\n");
+  RecordSet set = LoadRecordSet(dir_);
+  ASSERT_EQ(set.records[0].rest_samples, 100u);
+  const size_t whole = set.records[0].first_scored, late = set.records[1].first_scored;
+  SkipSettling(set, 0, 20, "--settle-s 0");
+  EXPECT_EQ(set.records[0].first_scored, whole);
+  SkipSettling(set, 0.25, 20, "--settle-s 0.25");
+  EXPECT_NEAR(set.records[0].t[set.records[0].first_scored], 0.35, 1e-12);  // 0.1 s rest end + 0.25 s
+  EXPECT_EQ(set.records[1].first_scored, late);                              // its window starts later
+  PZ_EXPECT_HAS(InputErrorOf([&] { SkipSettling(set, 0.89, 20, "--settle-s 0.89"); }),
+                "--settle-s 0.89: record whole would keep 10 scored samples");
+  PZ_EXPECT_HAS(InputErrorOf([&] { SkipSettling(set, -1, 20, "--settle-s -1"); }), "must be finite and ≥ 0");
+}
+
 // A recorder's export: no header (refused with the fix), then columns in another order with an
 // empty one (found by their units).
 TEST_F(RecordsDir, ColumnsAreFoundByTheirUnitsAndAMissingHeaderIsNamed) {

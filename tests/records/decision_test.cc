@@ -93,7 +93,7 @@ std::vector<double> Scattered(std::vector<double> r) {
   return r;
 }
 
-TEST(DecisionTest, ARivalThatCannotBeSeparatedSharesTheConfidence) {
+TEST(DecisionTest, ARivalThatCannotBeSeparatedIsATieWhoseConfidenceCarriesZ) {
   const Gap g = TestGap();  // floor Σ = 100: at the floor means S_c ≤ 1.25² × 100 = 156.25
   std::vector<CandidateScore> cs(3);
   ScoreCandidate(g, 130, 180, 2, 0.8, {}, cs[0]);  // closes 90 %, 1.14 × the floor
@@ -111,8 +111,11 @@ TEST(DecisionTest, ARivalThatCannotBeSeparatedSharesTheConfidence) {
   ASSERT_EQ(n.named, 0);
   EXPECT_EQ(n.runner_up, 1);
   EXPECT_DOUBLE_EQ(n.z_runner_up, z);
+  // The tie is the verdict; the confidence still carries the evidence z measured: Φ(z) > ½ when
+  // the named one is the better on the blocks, where the equal split of issue 14 … 22 said ½.
   const double base = model::NormalCdf(model::PairedBlockZ(squares(-1), squares(0), 20));
-  EXPECT_DOUBLE_EQ(n.confidence, base / 2);
+  EXPECT_DOUBLE_EQ(n.confidence, base * model::NormalCdf(z));
+  EXPECT_GT(n.confidence, base / 2);
   EXPECT_DOUBLE_EQ(cs[0].confidence, n.confidence);
   EXPECT_EQ(VerdictKind(g.significant, n), "inseparable");
 

@@ -197,6 +197,33 @@ TEST(PreisachFamily, ErrorAgainstReversalDepthBinsEveryMonotonePiece) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { ErrorByReversalDepth(r, yhat, 0); }), "range must be > 0");
 }
 
+TEST(PreisachFamily, ResidualTrendAveragesOnePeriodAndLeavesTheDrift) {
+  // A residual of a 1 Hz loop error (0.5 µm) over a slow drift of 0.1 µm/s, sampled at 100 Hz, the
+  // window starting at sample 50: averaged over one period the loop error is gone, the drift stays.
+  io::Record r;
+  r.dt = 0.01;
+  for (int k = 0; k < 1050; ++k) {
+    r.t.push_back(k * r.dt);
+    r.u.push_back(0);
+    r.y.push_back(0.5 * std::sin(2 * std::numbers::pi * k * r.dt) + 0.1 * k * r.dt);
+  }
+  r.first_scored = 50;
+  r.end_scored = r.u.size();
+  const std::vector<double> yhat(r.u.size(), 0.0);
+  const std::vector<double> trend = ResidualTrend(r, yhat, 1.0);
+  ASSERT_EQ(trend.size(), r.scored());
+  for (size_t i = 50; i + 50 < trend.size(); ++i) {  // full windows: 101 samples, one period and one sample
+    const double t = (r.first_scored + i) * r.dt;
+    ASSERT_NEAR(trend[i], 0.1 * t, 0.006) << "at " << t << " s";
+  }
+  EXPECT_NE(trend.front(), trend.back());  // truncated at the ends, still finite
+  for (double x : trend) ASSERT_TRUE(std::isfinite(x));
+  const std::vector<double> raw = ResidualTrend(r, yhat, 0);  // no window: the residual itself
+  EXPECT_DOUBLE_EQ(raw[7], r.y[57]);
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, yhat, -1); }), "averaging window");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, std::vector<double>(10), 1); }), "shorter");
+}
+
 TEST(PreisachFamily, RecordsThatCannotSupportTheGridSayWhatIsMissing) {
   const RelayPlant plant(20);
   io::RecordSet set;
