@@ -64,7 +64,9 @@ std::string FitModelJson(const FitModelFile& m) {
 bool LooksLikeFitJson(const std::string& text) {
   Struct root;
   if (!google::protobuf::util::JsonStringToMessage(text, &root).ok()) return false;
-  return root.fields().contains("format_version") || root.fields().contains("model");
+  // A fit.json has "model" (an object since format_version 1, a description string before); a
+  // network's JSON (io/network_io.h) has a format_version of its own but no "model".
+  return root.fields().contains("model");
 }
 
 FitModelFile ParseFitJson(const std::string& path, const std::string& text) {

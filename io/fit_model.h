@@ -38,7 +38,7 @@ std::string FitModelJson(const FitModelFile& m);
 /// format_version (with the one needed), no "model" object, a bad field.
 FitModelFile ParseFitJson(const std::string& path, const std::string& text);
 
-/// True when the text is a JSON object with "format_version" or "model" (a fit.json).
+/// True when the text is a JSON object with "model" (a fit.json; a network's JSON has none).
 bool LooksLikeFitJson(const std::string& text);
 
 }  // namespace pz::io

@@ -56,7 +56,7 @@ static inline double pzk_block_init(const pzk_block *b, double *c, double *d, do
   switch (b->kind) {
     case PZK_LOWPASS: return pzk_driver_lowpass_init(b, c, d, v, u_raw);
     case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
-    case PZK_CREEP: return pzk_creep_init(b, c, d, v, u_raw);
+    case PZK_CREEP: return pzk_creep_init(b, c, d, v);
     case PZK_DELAY: return pzk_delay_init(b, c, d, v);
     case PZK_STACK_BOUC_WEN: return pzk_stack_bw_init(b, c, d, v);
     case PZK_BACKLASH_LIKE: return pzk_backlash_init(b, d, v);

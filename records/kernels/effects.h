@@ -33,16 +33,16 @@ static inline double pzk_driver_lowpass_step(const double *c, const double *d, d
 /* quadratic-drive: v + c2 v^2, memoryless. */
 static inline double pzk_quadratic_step(const pzk_block *b, double v) { return v + b->p[0] * v * v; }
 
-/* creep: x = LPF_tau_c[k_c (v - u0)], v + x; c = {on, filter on, a, c, u0}, d = {x, prev}. */
-static inline double pzk_creep_init(const pzk_block *b, double *c, double *d, double v, double u_raw) {
-  double x0 = b->p[0] * (v - u_raw);
+/* creep: x = LPF_tau_c[k_c (v - v0)], v + x, at rest at its own first input v0 (as the effect
+ * library's Creep::ApplyDrive); c = {on, filter on, a, c, v0}, d = {x, prev}. */
+static inline double pzk_creep_init(const pzk_block *b, double *c, double *d, double v) {
   c[0] = b->p[0] != 0;
   c[1] = pzk_lowpass_on(b->p[1], b->dt);
   if (c[1] != 0) pzk_lowpass_consts(b->p[1], b->dt, c + 2);
-  c[4] = u_raw;
-  d[0] = x0;
-  d[1] = x0;
-  return c[0] != 0 ? v + x0 : v;
+  c[4] = v;
+  d[0] = 0;
+  d[1] = 0;
+  return v;
 }
 static inline double pzk_creep_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
   double x;
