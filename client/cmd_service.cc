@@ -479,11 +479,25 @@ int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string*
   return kExitOk;
 }
 
+/// The file `piezoid export` reads for PATH: PATH itself, or for a folder the first of fit.json
+/// (piezoid fit), network.pb (identify; fetch of an hgann job) and networks/best-1.pb (fetch).
+std::string ExportSource(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return path;
+  for (const char* name : {"fit.json", "network.pb", "networks/best-1.pb"}) {
+    const fs::path p = fs::path(path) / name;
+    if (fs::is_regular_file(p, ec)) return p.string();
+  }
+  throw InputError(path + ": a folder without fit.json, network.pb or networks/best-1.pb (what piezoid fit, identify "
+                   "and fetch write)");
+}
+
 int ExportNetwork(const ExportOptions& o) {
+  const std::string source = ExportSource(o.network);
   // A fit.json (piezoid fit): the record model's header (client/cmd_compensate.cc).
-  if (LooksLikeFitJson(o.network)) return ExportFit(o.network, o.out, o.name == "piezoid_predict" ? "" : o.name);
+  if (LooksLikeFitJson(source)) return ExportFit(source, o.out, o.name == "piezoid_predict" ? "" : o.name);
   io::SavedNetwork net;
-  Status s = io::LoadNetwork(o.network, &net);
+  Status s = io::LoadNetwork(source, &net);
   if (!s.ok()) return Report(InvalidArgument(s.message()));
   std::string header;
   if (o.plant) {
@@ -515,7 +529,10 @@ int ExportNetwork(const ExportOptions& o) {
 void RegisterExport(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ExportOptions>();
   auto* c = app.add_subcommand("export", "write a network file (.pb or .json) or a fit.json (piezoid fit) as a standalone C header for a controller");
-  c->add_option("network", o->network, "network file (from fetch or identify), or fit.json of piezoid fit")->required();
+  c->add_option("network", o->network,
+                "network file (from fetch or identify), fit.json of piezoid fit, or their folder (fit.json, network.pb or "
+                "networks/best-1.pb in it)")
+      ->required();
   c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
   c->add_option("--name", o->name, "name of the C function (a C identifier; for a fit.json the prefix of its functions, default the header's file stem)")->capture_default_str();
   auto* plant = c->add_flag("--plant", o->plant,

@@ -80,6 +80,23 @@ TEST(ExportC, CompiledHeaderPredictsLikeTheLibrary) {
   const std::string cli = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '" + (dir / "net0.pb").string() +
                           "' --out '" + (dir / "net0.h").string() + "' --name net0 2>'" + (dir / "cli.err").string() + "'";
   ASSERT_EQ(Shell(cli), 0) << cli;
+  {  // The folder that identify / fetch write (network.pb, networks/best-1.pb) gives the same header.
+    const std::string piezoid = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '";
+    fs::create_directories(dir / "fetched" / "networks");
+    fs::copy_file(dir / "net0.pb", dir / "fetched" / "networks" / "best-1.pb");
+    ASSERT_EQ(Shell(piezoid + (dir / "fetched").string() + "' --out '" + (dir / "fetched.h").string() + "' --name net0"), 0);
+    fs::copy_file(dir / "net0.pb", dir / "fetched" / "network.pb");
+    ASSERT_EQ(Shell(piezoid + (dir / "fetched").string() + "' --out '" + (dir / "fetched2.h").string() + "' --name net0"), 0);
+    const auto text = [](const fs::path& p) { std::ostringstream os; os << std::ifstream(p).rdbuf(); return os.str(); };
+    EXPECT_EQ(text(dir / "fetched.h"), text(dir / "net0.h"));
+    EXPECT_EQ(text(dir / "fetched2.h"), text(dir / "net0.h"));
+    fs::create_directories(dir / "empty");
+    EXPECT_NE(Shell(piezoid + (dir / "empty").string() + "' --out '" + (dir / "e.h").string() + "' 2>'" +
+                    (dir / "empty.err").string() + "'"),
+              0);
+    EXPECT_NE(text(dir / "empty.err").find("a folder without fit.json, network.pb or networks/best-1.pb"), std::string::npos)
+        << text(dir / "empty.err");
+  }
   for (size_t i = 1; i < nets.size(); ++i) {
     std::string h;
     ASSERT_TRUE(NetworkToCHeader(nets[i], "net" + std::to_string(i), &h).ok());
