@@ -9,7 +9,7 @@
 
 namespace pz::records {
 namespace kernel_text {
-extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kChain;
+extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kBimorphFin, kChain;
 }  // namespace kernel_text
 
 namespace {
@@ -46,6 +46,7 @@ const char* KindMacro(int kind) {
     case pzk::PZK_BW_OSCILLATOR: return "PZK_BW_OSCILLATOR";
     case pzk::PZK_PREISACH: return "PZK_PREISACH";
     case pzk::PZK_ASYMMETRIC_PI: return "PZK_ASYMMETRIC_PI";
+    case pzk::PZK_BIMORPH_FIN: return "PZK_BIMORPH_FIN";
     case pzk::PZK_FRICTION: return "PZK_FRICTION";
     case pzk::PZK_STIFFENING: return "PZK_STIFFENING";
     case pzk::PZK_DRIFT: return "PZK_DRIFT";
@@ -66,7 +67,8 @@ void Array(std::ostream& os, const std::string& name, const double* v, int n) {
 std::string KernelSource() {
   std::string s;
   for (std::string_view part : {kernel_text::kCommon, kernel_text::kEffects, kernel_text::kStackModels,
-                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kChain}) {
+                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kBimorphFin,
+                                kernel_text::kChain}) {
     s.append(part);
   }
   return s;

@@ -28,6 +28,7 @@ namespace pzk {
 #include "records/kernels/stack_models.h"
 #include "records/kernels/play_operators.h"
 #include "records/kernels/bw_oscillator.h"
+#include "records/kernels/bimorph_fin.h"
 #include "records/kernels/chain.h"
 }  // namespace pzk
 
@@ -54,7 +55,7 @@ struct ModelSpec {
   void Validate() const;
 };
 
-/// The kernels' name of every family that has one ("bimorph-fin" has none yet).
+/// True for every family that has a step kernel (every one of FamilyNames()).
 bool HasStepKernel(const std::string& family);
 
 class Stepper {
@@ -89,6 +90,7 @@ class Stepper {
   ModelSpec spec_;
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
+  std::vector<double> modal_;  ///< bimorph fin: {1/L, omega_i^2, tip gains} of its geometry
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};
   int nc_ = 0, nd_ = 0;
