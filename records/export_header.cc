@@ -9,7 +9,7 @@
 
 namespace pz::records {
 namespace kernel_text {
-extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kBimorphFin, kChain;
+extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kFinModal, kBimorphFin, kChain;
 }  // namespace kernel_text
 
 namespace {
@@ -67,12 +67,14 @@ void Array(std::ostream& os, const std::string& name, const double* v, int n) {
 std::string KernelSource() {
   std::string s;
   for (std::string_view part : {kernel_text::kCommon, kernel_text::kEffects, kernel_text::kStackModels,
-                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kBimorphFin,
+                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kFinModal, kernel_text::kBimorphFin,
                                 kernel_text::kChain}) {
     s.append(part);
   }
   return s;
 }
+
+std::string FinModalSource() { return std::string(kernel_text::kFinModal); }
 
 std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
   if (!IsCName(name)) {

@@ -28,6 +28,7 @@ namespace pzk {
 #include "records/kernels/stack_models.h"
 #include "records/kernels/play_operators.h"
 #include "records/kernels/bw_oscillator.h"
+#include "records/kernels/fin_modal.h"
 #include "records/kernels/bimorph_fin.h"
 #include "records/kernels/chain.h"
 }  // namespace pzk

@@ -1,9 +1,7 @@
 /* bimorph-fin (records/families.h, model/modal_simulator.h): the fin's modal path on the sampled
  * drive (u linear between samples), times the output gain. The same recursion as the --plant header
- * of the HGANN fin (client/export_fin_c.cc, pzf_advance and its helpers), written over the block's
- * arrays for any number of modes: each mode's exact discretisation (modal_discretise.cc), the
- * closed-form Bouc-Wen branches split at their zero crossings, the quintic Hermite hold of z, the
- * atan series and the backlash step.
+ * of the HGANN fin (client/export_fin_c.cc pzf_advance: the same loop over the same helpers of
+ * fin_modal.h), over the block's arrays for any number of modes.
  * p = {mu, delta, alpha, beta, gamma, a1, a2, b1, b2_abs, gain, L_p[, L_e]} (b2 = -b2_abs);
  * n = modes; w = {1/L, omega_i^2 (n), tip_i g_u,i (n), tip_i g_z,i (n)}: the beam's modal data for
  * the geometry (L_p, L_e), computed by the library's FE assembly and eigen-decomposition when the
@@ -13,218 +11,7 @@
  * library's simulation starts. A state that became non-finite (not reached with parameters the
  * family accepts) holds the last output. */
 
-typedef struct { double re, im; } pzk_fin_cx;
-typedef struct { double omega2, c, l1, l2, re, im; int complex_pair; } pzk_fin_poles;
-typedef struct { double e11, e12, e21, e22, d[7]; } pzk_fin_step_t;
-typedef struct { double alpha, kappa, u0, z0, gain; int s, sigma; } pzk_fin_branch;
-typedef struct { double z, zd, zdd; } pzk_fin_zdata;
-
 #define PZK_FIN_C 18 /* constants per mode */
-
-static inline int pzk_fin_sign(double x) { return (x > 0) - (x < 0); }
-static inline double pzk_fin_min(double a, double b) { return (b < a) ? b : a; }
-static inline double pzk_fin_max(double a, double b) { return (a < b) ? b : a; }
-
-/* 1/n!, n = 0 ... 24 (modal_discretise.cc kInvFact). */
-static inline const double *pzk_fin_inv_fact(void) {
-  static const double f[25] = {1.0, 1.0, 1.0 / 2, 1.0 / 6, 1.0 / 24, 1.0 / 120, 1.0 / 720, 1.0 / 5040,
-      1.0 / 40320, 1.0 / 362880, 1.0 / 3628800, 1.0 / 39916800, 1.0 / 479001600, 1.0 / 6227020800.0,
-      1.0 / 87178291200.0, 1.0 / 1307674368000.0, 1.0 / 20922789888000.0, 1.0 / 355687428096000.0,
-      1.0 / 6402373705728000.0, 1.0 / 121645100408832000.0, 1.0 / 2432902008176640000.0,
-      1.0 / 51090942171709440000.0, 1.0 / 1124000727777607680000.0, 1.0 / 25852016738884976640000.0,
-      1.0 / 620448401733239439360000.0};
-  return f;
-}
-
-static inline pzk_fin_cx pzk_fin_cmul(pzk_fin_cx a, pzk_fin_cx b) {
-  pzk_fin_cx r;
-  r.re = a.re * b.re - a.im * b.im;
-  r.im = a.re * b.im + a.im * b.re;
-  return r;
-}
-
-/* phi_0 ... phi_6 at a real x (modal::PhiReal). */
-static inline void pzk_fin_phi_real(double x, double *phi) {
-  const double *f = pzk_fin_inv_fact();
-  const double ax = fabs(x);
-  int j, m;
-  if (ax < 1.0) {
-    const int top = ax <= 0.0625 ? 7 : (ax <= 0.25 ? 9 : 14);
-    double p = f[6 + top];
-    for (m = top - 1; m >= 0; --m) p = p * x + f[m + 6];
-    phi[6] = p;
-    for (j = 6; j >= 1; --j) phi[j - 1] = x * phi[j] + f[j - 1];
-    return;
-  }
-  phi[0] = x > -745.0 ? exp(x) : 0.0;
-  {
-    const double inv = 1.0 / x;
-    for (j = 1; j <= 6; ++j) phi[j] = (phi[j - 1] - f[j - 1]) * inv;
-  }
-}
-
-/* phi_0 ... phi_6 at a complex x (modal_discretise.cc PhiComplex). */
-static inline void pzk_fin_phi_complex(pzk_fin_cx x, pzk_fin_cx *phi) {
-  const double *f = pzk_fin_inv_fact();
-  const double r2 = x.re * x.re + x.im * x.im;
-  int j, m;
-  if (r2 < 1.0) {
-    pzk_fin_cx p;
-    p.re = f[6 + 16];
-    p.im = 0.0;
-    for (m = 15; m >= 0; --m) {
-      p = pzk_fin_cmul(p, x);
-      p.re += f[m + 6];
-    }
-    phi[6] = p;
-    for (j = 6; j >= 1; --j) {
-      pzk_fin_cx q = pzk_fin_cmul(x, phi[j]);
-      q.re += f[j - 1];
-      phi[j - 1] = q;
-    }
-    return;
-  }
-  if (x.re > -745.0) {
-    const double e = exp(x.re);
-    phi[0].re = e * cos(x.im);
-    phi[0].im = e * sin(x.im);
-  } else {
-    phi[0].re = 0.0;
-    phi[0].im = 0.0;
-  }
-  {
-    const double n = x.re * x.re + x.im * x.im;
-    pzk_fin_cx inv;
-    inv.re = x.re / n;
-    inv.im = -x.im / n;
-    for (j = 1; j <= 6; ++j) {
-      pzk_fin_cx q = phi[j - 1];
-      q.re -= f[j - 1];
-      phi[j] = pzk_fin_cmul(q, inv);
-    }
-  }
-}
-
-/* Roots of l^2 + c l + omega2 = 0 (modal::MakePoles). */
-static inline pzk_fin_poles pzk_fin_make_poles(double omega2, double c) {
-  pzk_fin_poles p;
-  const double w = sqrt(omega2);
-  const double disc = (c - 2 * w) * (c + 2 * w);
-  p.omega2 = omega2;
-  p.c = c;
-  p.l1 = p.l2 = p.re = p.im = 0.0;
-  p.complex_pair = disc < 0;
-  if (disc < 0) {
-    p.re = -0.5 * c;
-    p.im = 0.5 * sqrt(-disc);
-  } else {
-    p.l1 = -0.5 * (c + sqrt(disc));
-    p.l2 = p.l1 != 0.0 ? omega2 / p.l1 : 0.0;
-  }
-  return p;
-}
-
-/* Small |tau lambda| (modal_discretise.cc SeriesRegime). */
-static inline void pzk_fin_series(const pzk_fin_poles *p, double tau, pzk_fin_step_t *out) {
-  const double *f = pzk_fin_inv_fact();
-  const double ts = -p->c * tau, tp = p->omega2 * tau * tau;
-  double km2 = 0.0, km1 = 1.0, s6 = 0.0, s5 = 0.0;
-  double *d = out->d;
-  int m, j;
-  for (m = 0; m <= 17; ++m) {
-    const double k = m == 0 ? 1.0 : ts * km1 - tp * km2;
-    if (m > 0) {
-      km2 = km1;
-      km1 = k;
-    }
-    s6 += k * f[m + 1 + 6];
-    s5 += k * f[m + 6];
-  }
-  d[6] = tau * s6;
-  d[5] = tau * s5;
-  for (j = 5; j >= 1; --j) d[j - 1] = tau * f[j] - p->c * tau * d[j] - tp * d[j + 1];
-  out->e11 = 1.0 - p->omega2 * tau * d[1];
-  out->e12 = d[0];
-  out->e21 = -p->omega2 * d[0];
-  out->e22 = out->e11 - p->c * d[0];
-}
-
-/* One mode over a step tau: E = e^{tau A} and the divided differences D_0 ... D_6 (modal::Discretise). */
-static inline void pzk_fin_discretise(const pzk_fin_poles *p, double tau, pzk_fin_step_t *out) {
-  double *d = out->d;
-  double rho, gap, m, y, em, C, S, inv_m, inv_tau;
-  double avg[7];
-  int j;
-  if (!(tau > 0)) {
-    out->e11 = 1;
-    out->e12 = out->e21 = 0;
-    out->e22 = 1;
-    for (j = 0; j <= 6; ++j) d[j] = 0;
-    return;
-  }
-  rho = p->complex_pair ? tau * sqrt(p->omega2) : -tau * p->l1;
-  if (rho <= 1.0) {
-    pzk_fin_series(p, tau, out);
-    return;
-  }
-  gap = p->complex_pair ? 2 * tau * p->im : tau * (p->l2 - p->l1);
-  if (gap >= 0.5) {
-    if (p->complex_pair) {
-      pzk_fin_cx phi[7], x, lam, e, ec;
-      double inv;
-      x.re = tau * p->re;
-      x.im = tau * p->im;
-      pzk_fin_phi_complex(x, phi);
-      inv = 1.0 / p->im;
-      for (j = 0; j <= 6; ++j) d[j] = phi[j].im * inv;
-      lam.re = p->re;
-      lam.im = p->im;
-      e = phi[0];
-      ec.re = e.re;
-      ec.im = -e.im;
-      out->e11 = pzk_fin_cmul(lam, ec).im * inv;
-      out->e22 = pzk_fin_cmul(lam, e).im * inv;
-    } else {
-      double f1[7], f2[7], inv;
-      pzk_fin_phi_real(tau * p->l1, f1);
-      pzk_fin_phi_real(tau * p->l2, f2);
-      inv = 1.0 / (p->l1 - p->l2);
-      for (j = 0; j <= 6; ++j) d[j] = (f1[j] - f2[j]) * inv;
-      out->e11 = (p->l1 * f2[0] - p->l2 * f1[0]) * inv;
-      out->e22 = (p->l1 * f1[0] - p->l2 * f2[0]) * inv;
-    }
-    out->e12 = d[0];
-    out->e21 = -p->omega2 * d[0];
-    return;
-  }
-  m = -0.5 * p->c;
-  y = 0.5 * gap;
-  em = tau * m > -745.0 ? exp(tau * m) : 0.0;
-  if (p->complex_pair) {
-    pzk_fin_cx phi[7], x;
-    C = cos(y);
-    S = y > 0 ? sin(y) / y : 1.0;
-    x.re = tau * p->re;
-    x.im = tau * p->im;
-    pzk_fin_phi_complex(x, phi);
-    for (j = 0; j <= 6; ++j) avg[j] = phi[j].re;
-  } else {
-    double f1[7], f2[7];
-    C = cosh(y);
-    S = y > 0 ? sinh(y) / y : 1.0;
-    pzk_fin_phi_real(tau * p->l1, f1);
-    pzk_fin_phi_real(tau * p->l2, f2);
-    for (j = 0; j <= 6; ++j) avg[j] = 0.5 * (f1[j] + f2[j]);
-  }
-  d[0] = tau * em * S;
-  out->e11 = em * (C - tau * m * S);
-  out->e22 = em * (C + tau * m * S);
-  out->e12 = d[0];
-  out->e21 = -p->omega2 * d[0];
-  inv_m = 1.0 / m;
-  inv_tau = 1.0 / tau;
-  for (j = 1; j <= 6; ++j) d[j] = (d[j - 1] * inv_tau - avg[j]) * inv_m;
-}
 
 /* Mode i's poles and full-sample step, stored in / read from the block's constants. */
 static inline void pzk_fin_store(double *c, const pzk_fin_poles *p, const pzk_fin_step_t *s) {
@@ -264,132 +51,27 @@ static inline pzk_fin_step_t pzk_fin_step_of(const double *c) {
   return s;
 }
 
-/* Bouc-Wen branch (model/bouc_wen.h StartBranch, BoucWenBranch::Z, ::ZeroCrossing). */
-static inline pzk_fin_branch pzk_fin_start_branch(const double *p, double u0, double z0, double s) {
-  pzk_fin_branch b;
-  b.alpha = p[2];
-  b.u0 = u0;
-  b.z0 = z0;
-  b.s = pzk_fin_sign(s);
-  b.sigma = z0 != 0.0 ? pzk_fin_sign(z0) : pzk_fin_sign(p[2]) * b.s;
-  b.kappa = p[3] * b.s + p[4] * b.sigma;
-  b.gain = b.kappa != 0.0 ? (b.kappa * z0 - p[2]) / b.kappa : 0.0;
-  return b;
-}
-
-static inline double pzk_fin_expm1(double x) { /* FastExpm1 */
-  if (fabs(x) < 1e-3) return x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24))));
-  return exp(x) - 1.0;
-}
-
-static inline double pzk_fin_branch_z(const pzk_fin_branch *b, double u) {
-  const double du = u - b->u0;
-  return b->kappa == 0.0 ? b->z0 + b->alpha * du : b->z0 + b->gain * pzk_fin_expm1(-b->kappa * du);
-}
-
-static inline int pzk_fin_zero_crossing(const pzk_fin_branch *b, double *u_cross) {
-  double y, ratio, du;
-  if (b->z0 == 0.0 || b->alpha == 0.0 || b->s == 0 || b->alpha * b->s * b->sigma >= 0) return 0;
-  y = -b->kappa * b->z0 / b->alpha;
-  if (!(y > -1.0)) return 0;
-  ratio = fabs(y) < 1e-12 ? 1.0 - 0.5 * y : log1p(y) / y;
-  du = (-b->z0 / b->alpha) * ratio;
-  if (!isfinite(du)) return 0;
-  *u_cross = b->u0 + du;
-  return 1;
-}
-
-/* z, dz/dt, d2z/dt2 on a branch at input u moving at ud (modal_simulator.cc EvalZ; ramp: u'' = 0). */
-static inline pzk_fin_zdata pzk_fin_eval_z(const double *p, const pzk_fin_branch *b, double u, double ud) {
-  pzk_fin_zdata r;
-  if (p[2] == 0.0) {
-    r.z = r.zd = r.zdd = 0.0;
-    return r;
-  }
-  r.z = pzk_fin_branch_z(b, u);
-  {
-    const double sl = b->alpha - b->kappa * r.z;
-    r.zd = sl * ud;
-    r.zdd = sl * (0.0 - b->kappa * ud * ud);
-  }
-  return r;
-}
-
 /* One sub-step tau of every mode (x0, x1 in place), z held by the quintic Hermite of (zl, zr), u
  * linear from u_a with slope u_dot (modal_simulator.cc GeneralSubstep). Each mode's discretisation:
  * the constants' full sample when disc_tau == 0, else computed here for disc_tau. */
 static inline void pzk_fin_substep(const pzk_block *b, const double *c, double *x0, double *x1, double tau,
                                    double disc_tau, pzk_fin_zdata zl, pzk_fin_zdata zr, double u_a, double u_dot) {
-  static const double hermite[6][6] = {{1, 0, 0, 0, 0, 0},           {0, 1, 0, 0, 0, 0},
-                                       {0, 0, 0.5, 0, 0, 0},         {-10, -6, -1.5, 10, -4, 0.5},
-                                       {15, 8, 1.5, -15, 7, -1},     {-6, -3, -0.5, 6, -3, 0.5}};
-  static const double fact[6] = {1, 1, 2, 6, 24, 120};
   const int n = b->n;
   const double *wu = b->w + 1 + n, *wz = b->w + 1 + 2 * n;
-  double dat[6], fz[6], fu0, fu1;
-  int i, j, k;
+  double fz[6];
+  int i;
   if (!(tau > 0)) return;
-  dat[0] = zl.z;
-  dat[1] = tau * zl.zd;
-  dat[2] = tau * tau * zl.zdd;
-  dat[3] = zr.z;
-  dat[4] = tau * zr.zd;
-  dat[5] = tau * tau * zr.zdd;
-  for (j = 0; j < 6; ++j) {
-    double a = 0;
-    for (k = 0; k < 6; ++k) a += hermite[j][k] * dat[k];
-    fz[j] = a * fact[j];
-  }
-  fu0 = u_a;
-  fu1 = u_dot * tau;
+  pzk_fin_hermite(tau, zl, zr, fz);
   for (i = 0; i < n; ++i) {
     pzk_fin_step_t sp;
-    double f[6], s0 = 0, s1 = 0, a, bb;
     if (disc_tau == 0) {
       sp = pzk_fin_step_of(c + PZK_FIN_C * i);
     } else {
       const pzk_fin_poles pl = pzk_fin_poles_of(c + PZK_FIN_C * i);
       pzk_fin_discretise(&pl, disc_tau, &sp);
     }
-    for (j = 0; j < 6; ++j) f[j] = -wz[i] * fz[j];
-    f[0] += wu[i] * fu0;
-    f[1] += wu[i] * fu1;
-    for (j = 0; j < 6; ++j) {
-      s0 += f[j] * sp.d[j + 1];
-      s1 += f[j] * sp.d[j];
-    }
-    a = x0[i];
-    bb = x1[i];
-    x0[i] = sp.e11 * a + sp.e12 * bb + tau * s0;
-    x1[i] = sp.e21 * a + sp.e22 * bb + s1;
+    pzk_fin_mode_update(&sp, wu[i], wz[i], fz, u_a, u_dot, tau, x0 + i, x1 + i);
   }
-}
-
-/* Fin angle [deg] of the modal state (modal_simulator.cc SumModes in lanes of 4, Degrees / FastAtan). */
-static inline double pzk_fin_degrees(const pzk_block *b, const double *x0, int *finite) {
-  double s[4] = {0, 0, 0, 0}, w, x;
-  int i;
-  for (i = 0; i < b->n; ++i) s[i % 4] += x0[i];
-  w = (s[0] + s[1]) + (s[2] + s[3]);
-  *finite = isfinite(w);
-  x = w * b->w[0];
-  if (fabs(x) < 0.125) {
-    static const double k[10] = {1.0, -1.0 / 3, 1.0 / 5, -1.0 / 7, 1.0 / 9,
-                                 -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
-    const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
-    const double p01 = k[0] + k[1] * x2, p23 = k[2] + k[3] * x2, p45 = k[4] + k[5] * x2;
-    const double p67 = k[6] + k[7] * x2, p89 = k[8] + k[9] * x2;
-    const double p = (p01 + p23 * x4) + (p45 + p67 * x4) * x8 + p89 * x16;
-    return x * p * (180.0 / 3.14159265358979323846);
-  }
-  return atan(x) * (180.0 / 3.14159265358979323846);
-}
-
-/* The backlash step (model/backlash.h BacklashStep): a1 p[5], a2 p[6], b1 p[7], b2 = -p[8]. */
-static inline double pzk_fin_backlash(const double *p, double theta, double y_prev) {
-  const double a = pzk_fin_min(p[7], pzk_fin_max(-p[8], theta - p[5]));
-  const double b = pzk_fin_min(p[7], theta + p[6]);
-  return pzk_fin_max(a, pzk_fin_min(b, y_prev));
 }
 
 static inline double pzk_fin_init(const pzk_block *b, double *c, double *d, double v) {
@@ -405,37 +87,28 @@ static inline double pzk_fin_init(const pzk_block *b, double *c, double *d, doub
   for (i = 0; i < 2 * n; ++i) d[i] = 0.0;
   d[2 * n] = v;
   d[2 * n + 1] = 0.0;
-  d[2 * n + 2] = pzk_fin_degrees(b, d, &finite);
-  d[2 * n + 3] = pzk_fin_backlash(p, d[2 * n + 2], 0.0);
+  d[2 * n + 2] = pzk_fin_angle(d, n, b->w[0], &finite);
+  d[2 * n + 3] = pzk_fin_backlash(p[5], p[6], p[7], -p[8], d[2 * n + 2], 0.0);
   return p[9] * d[2 * n + 3];
 }
 
-/* One sample from the drive d[2n] to v (ModalSimulator::RunSampled's loop body; the --plant header's
- * pzf_advance); returns gain * angle. */
+/* One sample from the drive d[2n] to v (ModalSimulator::RunSampled's loop body); returns gain * angle. */
 static inline double pzk_fin_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
   const int n = b->n;
   const double *p = b->p;
   const double tau = b->dt, u0 = d[2 * n];
   const double r = (v - u0) / tau;
-  const int hyst = p[2] != 0.0;
-  int nsub = 1, q, i, finite;
-  double ts, eps, sa = 0.0, theta;
+  const int hyst = p[2] != 0.0, nsub = pzk_fin_substeps(hyst, fabs(p[3]) + fabs(p[4]), r, tau);
+  const double ts = tau / nsub, eps = 1e-9 * ts;
+  int q, i, finite;
+  double sa = 0.0, theta;
   double *x0 = o, *x1 = o + n;
   pzk_fin_branch br;
   pzk_fin_zdata dcur;
   if (o != d)
     for (i = 0; i < 2 * n + 4; ++i) o[i] = d[i];
-  if (hyst) { /* SubstepsFor */
-    const double arg = (fabs(p[3]) + fabs(p[4])) * fabs(r) * tau;
-    if (arg > 0.5) {
-      const double m = ceil(arg / 0.5);
-      nsub = m >= 1000 ? 1000 : (int)m;
-    }
-  }
-  ts = tau / nsub;
-  eps = 1e-9 * ts;
-  br = pzk_fin_start_branch(p, u0, d[2 * n + 1], r);
-  dcur = pzk_fin_eval_z(p, &br, u0, r);
+  br = pzk_fin_start_branch(p[2], p[3], p[4], u0, d[2 * n + 1], r);
+  dcur = pzk_fin_eval_z(p[2], &br, u0, r);
   for (q = 0; q < nsub; ++q) {
     const int last = q + 1 == nsub;
     const double sb = last ? tau : (q + 1) * ts;
@@ -447,24 +120,24 @@ static inline double pzk_fin_step(const pzk_block *b, const double *c, const dou
       const double sc = (uc - u0) / r;
       if (sc < sb - eps) {
         if (sc > sa + eps) {
-          pzk_fin_substep(b, c, x0, x1, sc - sa, sc - sa, dcur, pzk_fin_eval_z(p, &br, uc, r), u0 + r * sa, r);
+          pzk_fin_substep(b, c, x0, x1, sc - sa, sc - sa, dcur, pzk_fin_eval_z(p[2], &br, uc, r), u0 + r * sa, r);
           split = 1;
           sa = sc;
         }
-        br = pzk_fin_start_branch(p, uc, 0.0, r);
-        dcur = pzk_fin_eval_z(p, &br, uc, r);
+        br = pzk_fin_start_branch(p[2], p[3], p[4], uc, 0.0, r);
+        dcur = pzk_fin_eval_z(p[2], &br, uc, r);
       }
     }
-    dr = pzk_fin_eval_z(p, &br, ub, r);
+    dr = pzk_fin_eval_z(p[2], &br, ub, r);
     pzk_fin_substep(b, c, x0, x1, sb - sa, split ? sb - sa : (nsub == 1 ? 0.0 : ts), dcur, dr, u0 + r * sa, r);
     dcur = dr;
     sa = sb;
   }
-  theta = pzk_fin_degrees(b, x0, &finite);
+  theta = pzk_fin_angle(x0, n, b->w[0], &finite);
   if (!finite) return p[9] * d[2 * n + 3];
   o[2 * n] = v;
   o[2 * n + 1] = dcur.z;
   o[2 * n + 2] = theta;
-  o[2 * n + 3] = pzk_fin_backlash(p, theta, d[2 * n + 3]);
+  o[2 * n + 3] = pzk_fin_backlash(p[5], p[6], p[7], -p[8], theta, d[2 * n + 3]);
   return p[9] * o[2 * n + 3];
 }
