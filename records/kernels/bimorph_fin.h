@@ -141,3 +141,14 @@ static inline double pzk_fin_step(const pzk_block *b, const double *c, const dou
   o[2 * n + 3] = pzk_fin_backlash(p[5], p[6], p[7], -p[8], theta, d[2 * n + 3]);
   return p[9] * o[2 * n + 3];
 }
+
+/* The inverse's trial step (records/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
+ * the angle pushed through the backlash: theta - a1 (dir > 0) or theta + a2 (dir < 0), within the
+ * saturations [b2, b1]. */
+static inline double pzk_fin_step_through(const pzk_block *b, const double *c, const double *d, double *o, double v,
+                                          int dir) {
+  const int n = b->n;
+  const double *p = b->p;
+  pzk_fin_step(b, c, d, o, v);
+  return p[9] * pzk_clamp(dir > 0 ? o[2 * n + 2] - p[5] : o[2 * n + 2] + p[6], -p[8], p[7]);
+}

@@ -112,14 +112,18 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
 }
 
 /* The output for drive u from state d, the next state written to o (o == d: a step; o the
- * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on. */
+ * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on; 2 or
+ * 3: also the fin's angle pushed up or down through its backlash (pzk_fin_step_through). */
 static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d, double *o, double u,
                                     int skip_delay) {
   double v = u;
   int i;
   for (i = 0; i < nb; ++i) {
     if (b[i].kind == PZK_DELAY && skip_delay) continue;
-    v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+    if (b[i].kind == PZK_BIMORPH_FIN && skip_delay >= 2)
+      v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v, skip_delay == 2 ? 1 : -1);
+    else
+      v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
   }
   return v;
 }
@@ -138,6 +142,114 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
   return ctl->y_last;
 }
 
+/* The bimorph fin's compensator (a chain holding a PZK_BIMORPH_FIN block), after the HGANN fin
+ * plant's header (client/export_fin_c.h pzf_inverse_step). It plans two samples: the drive goes to
+ * u at the next sample and keeps its slope from the last drive one more (clipped to the limits), and
+ * u is solved so that the output two samples ahead is y_desired: give it the reference one sample
+ * ahead (preview), else it follows with a lag of one sample. One sample would not do: the drive's
+ * linear hold gives the sampled modes a zero outside the unit circle (the second sample's response to
+ * a drive step is several times the first's), and an exact one-step inverse makes the drive
+ * oscillate. The backlash is passed through: where the angle must rise (fall) to reach y_desired,
+ * the trials give the fin's output as theta - a1 (theta + a2), the angle it reaches once theta has
+ * crossed the dead band, so that a target beyond the band drives theta across it rather than holding
+ * (an angle that must stay: the trials are the model's). The map u -> y need not be monotone (at
+ * small drives the Bouc-Wen force can outweigh the drive's moment): the bracket is
+ * searched on both sides of the last drive with steps growing 4-fold from 1e-3 of the drive range,
+ * the sign change nearest to it taken, and closed by the Illinois method until the output is
+ * y_desired to 1e-13 of its magnitude (at least 1e-13) or the bracket is two adjacent doubles: at
+ * most 100 plans of two steps. Not reached within the limits: the drive that came nearest, counted
+ * in saturated (max_clip: the largest shortfall). What it reaches is not exact: the plan is greedy,
+ * and a reference whose state came by another path (the Bouc-Wen force remembers it) can be out of
+ * reach for some samples (docs/deploy.md has the figures). */
+static inline double pzk_chain_trial2(const pzk_block *b, int nb, const double *c, const double *d, double *t,
+                                      double u, double u_prev, double lo, double hi, int mode) {
+  pzk_chain_eval(b, nb, c, d, t, u, mode);
+  return pzk_chain_eval(b, nb, c, t, t, pzk_clamp(u + (u - u_prev), lo, hi), mode);
+}
+static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const double *c, double *d, double *t,
+                                           pzk_ctl *ctl, double y_desired) {
+  const double lo = ctl->u_lo, hi = ctl->u_hi, up = ctl->u_last;
+  const double tol = 1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1);
+  double u0 = pzk_clamp(up, lo, hi), a, bb, ga, gb, l, r, gl, gr, step, best_u, best_g, s_out = 1;
+  int it, side = 0, found, mode = 1, i, after = 0;
+  /* The direction the fin's angle must move: the output's against the last, times the sign of the
+   * output per angle (the gain, and the polarity; the output effects rise with their input). */
+  for (i = 0; i < nb; ++i) {
+    if (b[i].kind == PZK_BIMORPH_FIN) {
+      after = 1;
+      s_out = b[i].p[9] < 0 ? -1 : 1;
+    } else if (after && b[i].kind == PZK_AFFINE && b[i].p[0] < 0) {
+      s_out = -s_out;
+    }
+  }
+  if ((y_desired - ctl->y_last) * s_out > 0) mode = 2;
+  if ((y_desired - ctl->y_last) * s_out < 0) mode = 3;
+  best_u = a = bb = l = r = u0;
+  best_g = ga = gb = gl = gr = pzk_chain_trial2(b, nb, c, d, t, u0, up, lo, hi, mode) - y_desired;
+  found = best_g == 0;
+  step = 1e-3 * (hi - lo);
+  for (it = 1; !found && it < 100 && (l > lo || r < hi); step *= 4) {
+    int left;
+    for (left = 0; left < 2 && !found; ++left) {
+      const double from = left ? l : r, gfrom = left ? gl : gr;
+      double to, gto;
+      if (left ? from <= lo : from >= hi) continue;
+      to = pzk_clamp(left ? from - step : from + step, lo, hi);
+      gto = pzk_chain_trial2(b, nb, c, d, t, to, up, lo, hi, mode) - y_desired;
+      ++it;
+      if (fabs(gto) < fabs(best_g)) {
+        best_u = to;
+        best_g = gto;
+      }
+      if (gto == 0 || (gto < 0) != (gfrom < 0)) {
+        a = from;
+        ga = gfrom;
+        bb = to;
+        gb = gto;
+        found = 1;
+      } else if (left) {
+        l = to;
+        gl = gto;
+      } else {
+        r = to;
+        gr = gto;
+      }
+    }
+  }
+  if (found) {
+    for (; it < 100 && fabs(best_g) > tol; ++it) { /* Illinois on [a, bb] */
+      double x = (a * gb - bb * ga) / (gb - ga), gx;
+      const double xl = a < bb ? a : bb, xr = a < bb ? bb : a;
+      if (!(x > xl && x < xr)) x = 0.5 * (a + bb);
+      if (!(x > xl && x < xr)) break; /* adjacent doubles */
+      gx = pzk_chain_trial2(b, nb, c, d, t, x, up, lo, hi, mode) - y_desired;
+      if (fabs(gx) < fabs(best_g)) {
+        best_u = x;
+        best_g = gx;
+      }
+      if (gx == 0) break;
+      if ((gx < 0) == (gb < 0)) {
+        bb = x;
+        gb = gx;
+        if (side == -1) ga *= 0.5;
+        side = -1;
+      } else {
+        a = x;
+        ga = gx;
+        if (side == 1) gb *= 0.5;
+        side = 1;
+      }
+    }
+  } else {
+    ++ctl->saturated;
+    if (fabs(best_g) > ctl->max_clip) ctl->max_clip = fabs(best_g);
+  }
+  ctl->du_last = best_u - ctl->u_last;
+  ctl->u_last = best_u;
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, best_u, 1);
+  return best_u;
+}
+
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
  * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
  * on the scratch t. From the last drive, the search walks in the direction the map must move (by
@@ -151,12 +263,15 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
  * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
  * the one-step map is continuous and the root found is the one nearest the last drive. A
  * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
- * max_clip. A delay cannot be undone: its block is skipped (the compensator drives the model
+ * max_clip. The bimorph fin has its own search (pzk_chain_inverse_fin). A delay cannot be undone: its block is skipped (the compensator drives the model
  * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
 static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
                                        double y_desired) {
   const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
   double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_BIMORPH_FIN) return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
   f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
   if (u0 + eps < hi) {
     f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);
