@@ -268,9 +268,16 @@ static inline double pzf_step(pzf_state* st, double u) {
  * be monotone. docs/deploy.md has the figures. A target out of reach within [u_min, u_max], or an
  * angle outside [b2, b1], is clipped: the drive that came nearest is applied, and the step is
  * counted in st->unreachable (bit PZF_UNREACHABLE). */
+/* theta PZF_INVERSE_HORIZON samples ahead less the target: the inverse's map. */
+typedef struct { pzf_state* st; double th; } pzf_target;
+static inline double pzf_miss(void* ctx, double u) {
+  const pzf_target* t = (const pzf_target*)ctx;
+  return pzf_trial(t->st, u) - t->th;
+}
+
 static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
-  double yd = angle_desired, th, a, b, ga, gb, lo, hi, glo, ghi, h, best_u, best_g;
-  int it, side = 0, reached = 1, found;
+  double yd = angle_desired, th, best_u;
+  int reached = 1;
   if (st->status & (PZF_INVALID_PARAMETERS | PZF_UNBOUNDED_HYSTERESIS)) return 0.0;
   if (!isfinite(yd)) {
     st->status |= PZF_INVALID_INPUT;
@@ -293,68 +300,14 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
     th = th < yd - st->a2 ? yd - st->a2 : (th > yd + st->a1 ? yd + st->a1 : th);
   }
   /* g(u) = theta(u) - th need not be monotone (at small drives the Bouc-Wen force can outweigh
-   * the drive's moment): the bracket is searched on both sides of the last drive, with steps growing
-   * 4-fold, and the sign change nearest to it is taken. */
-  best_u = a = b = lo = hi = st->d.u;
-  best_g = ga = gb = glo = ghi = pzf_trial(st, best_u) - th;
-  found = best_g == 0;
-  h = 1e-3 * (st->u_max - st->u_min);
-  for (it = 1; !found && it < PZF_INVERSE_ITERATIONS && (lo > st->u_min || hi < st->u_max); h *= 4) {
-    int left;
-    for (left = 0; left < 2 && !found; ++left) {
-      const double from = left ? lo : hi, gfrom = left ? glo : ghi;
-      double to, gto;
-      if (left ? from <= st->u_min : from >= st->u_max) continue;
-      to = left ? from - h : from + h;
-      to = to > st->u_max ? st->u_max : (to < st->u_min ? st->u_min : to);
-      gto = pzf_trial(st, to) - th;
-      ++it;
-      if (fabs(gto) < fabs(best_g)) {
-        best_u = to;
-        best_g = gto;
-      }
-      if (gto == 0 || (gto < 0) != (gfrom < 0)) {
-        a = from;
-        ga = gfrom;
-        b = to;
-        gb = gto;
-        found = 1;
-      } else if (left) {
-        lo = to;
-        glo = gto;
-      } else {
-        hi = to;
-        ghi = gto;
-      }
-    }
-  }
-  if (!found) {
-    reached = 0; /* out of reach: the drive that came nearest */
-  } else {
-    const double tol = 1e-13 * (fabs(th) > 1 ? fabs(th) : 1);
-    for (; it < PZF_INVERSE_ITERATIONS && fabs(best_g) > tol; ++it) { /* Illinois on [a, b] */
-      double c = (a * gb - b * ga) / (gb - ga), gc;
-      const double l = a < b ? a : b, r = a < b ? b : a;
-      if (!(c > l && c < r)) c = 0.5 * (a + b);
-      if (!(c > l && c < r)) break; /* the bracket is two adjacent doubles */
-      gc = pzf_trial(st, c) - th;
-      if (fabs(gc) < fabs(best_g)) {
-        best_u = c;
-        best_g = gc;
-      }
-      if (gc == 0) break;
-      if ((gc < 0) == (gb < 0)) {
-        b = c;
-        gb = gc;
-        if (side == -1) ga *= 0.5;
-        side = -1;
-      } else {
-        a = c;
-        ga = gc;
-        if (side == 1) gb *= 0.5;
-        side = 1;
-      }
-    }
+   * the drive's moment): the root nearest the last drive (fin_modal.h pzk_fin_nearest_root). */
+  {
+    pzf_target target;
+    target.st = st;
+    target.th = th;
+    if (!pzk_fin_nearest_root(pzf_miss, &target, st->d.u, st->u_min, st->u_max,
+                              1e-13 * (fabs(th) > 1 ? fabs(th) : 1), PZF_INVERSE_ITERATIONS, &best_u))
+      reached = 0; /* out of reach: the drive that came nearest */
   }
   if (!reached) {
     ++st->unreachable;

@@ -161,17 +161,25 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
  * in saturated (max_clip: the largest shortfall). What it reaches is not exact: the plan is greedy,
  * and a reference whose state came by another path (the Bouc-Wen force remembers it) can be out of
  * reach for some samples (docs/deploy.md has the figures). */
-static inline double pzk_chain_trial2(const pzk_block *b, int nb, const double *c, const double *d, double *t,
-                                      double u, double u_prev, double lo, double hi, int mode) {
-  pzk_chain_eval(b, nb, c, d, t, u, mode);
-  return pzk_chain_eval(b, nb, c, t, t, pzk_clamp(u + (u - u_prev), lo, hi), mode);
+typedef struct {
+  const pzk_block *b;
+  int nb, mode;
+  const double *c, *d;
+  double *t, u_prev, lo, hi, y_desired;
+} pzk_fin_plan;
+/* The output two samples ahead less y_desired: the drive u at the next sample, its slope kept one
+ * more (clipped), from state d on the scratch t (delays skipped; mode 2 / 3: the fin pushed through). */
+static inline double pzk_fin_plan_miss(void *ctx, double u) {
+  const pzk_fin_plan *p = (const pzk_fin_plan *)ctx;
+  pzk_chain_eval(p->b, p->nb, p->c, p->d, p->t, u, p->mode);
+  return pzk_chain_eval(p->b, p->nb, p->c, p->t, p->t, pzk_clamp(u + (u - p->u_prev), p->lo, p->hi), p->mode) -
+         p->y_desired;
 }
 static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const double *c, double *d, double *t,
                                            pzk_ctl *ctl, double y_desired) {
-  const double lo = ctl->u_lo, hi = ctl->u_hi, up = ctl->u_last;
-  const double tol = 1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1);
-  double u0 = pzk_clamp(up, lo, hi), a, bb, ga, gb, l, r, gl, gr, step, best_u, best_g, s_out = 1;
-  int it, side = 0, found, mode = 1, i, after = 0;
+  pzk_fin_plan plan;
+  double s_out = 1, u;
+  int i, after = 0;
   /* The direction the fin's angle must move: the output's against the last, times the sign of the
    * output per angle (the gain, and the polarity; the output effects rise with their input). */
   for (i = 0; i < nb; ++i) {
@@ -182,72 +190,26 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
       s_out = -s_out;
     }
   }
-  if ((y_desired - ctl->y_last) * s_out > 0) mode = 2;
-  if ((y_desired - ctl->y_last) * s_out < 0) mode = 3;
-  best_u = a = bb = l = r = u0;
-  best_g = ga = gb = gl = gr = pzk_chain_trial2(b, nb, c, d, t, u0, up, lo, hi, mode) - y_desired;
-  found = best_g == 0;
-  step = 1e-3 * (hi - lo);
-  for (it = 1; !found && it < 100 && (l > lo || r < hi); step *= 4) {
-    int left;
-    for (left = 0; left < 2 && !found; ++left) {
-      const double from = left ? l : r, gfrom = left ? gl : gr;
-      double to, gto;
-      if (left ? from <= lo : from >= hi) continue;
-      to = pzk_clamp(left ? from - step : from + step, lo, hi);
-      gto = pzk_chain_trial2(b, nb, c, d, t, to, up, lo, hi, mode) - y_desired;
-      ++it;
-      if (fabs(gto) < fabs(best_g)) {
-        best_u = to;
-        best_g = gto;
-      }
-      if (gto == 0 || (gto < 0) != (gfrom < 0)) {
-        a = from;
-        ga = gfrom;
-        bb = to;
-        gb = gto;
-        found = 1;
-      } else if (left) {
-        l = to;
-        gl = gto;
-      } else {
-        r = to;
-        gr = gto;
-      }
-    }
-  }
-  if (found) {
-    for (; it < 100 && fabs(best_g) > tol; ++it) { /* Illinois on [a, bb] */
-      double x = (a * gb - bb * ga) / (gb - ga), gx;
-      const double xl = a < bb ? a : bb, xr = a < bb ? bb : a;
-      if (!(x > xl && x < xr)) x = 0.5 * (a + bb);
-      if (!(x > xl && x < xr)) break; /* adjacent doubles */
-      gx = pzk_chain_trial2(b, nb, c, d, t, x, up, lo, hi, mode) - y_desired;
-      if (fabs(gx) < fabs(best_g)) {
-        best_u = x;
-        best_g = gx;
-      }
-      if (gx == 0) break;
-      if ((gx < 0) == (gb < 0)) {
-        bb = x;
-        gb = gx;
-        if (side == -1) ga *= 0.5;
-        side = -1;
-      } else {
-        a = x;
-        ga = gx;
-        if (side == 1) gb *= 0.5;
-        side = 1;
-      }
-    }
-  } else {
+  plan.b = b;
+  plan.nb = nb;
+  plan.c = c;
+  plan.d = d;
+  plan.t = t;
+  plan.u_prev = ctl->u_last;
+  plan.lo = ctl->u_lo;
+  plan.hi = ctl->u_hi;
+  plan.y_desired = y_desired;
+  plan.mode = (y_desired - ctl->y_last) * s_out > 0 ? 2 : ((y_desired - ctl->y_last) * s_out < 0 ? 3 : 1);
+  if (!pzk_fin_nearest_root(pzk_fin_plan_miss, &plan, pzk_clamp(ctl->u_last, plan.lo, plan.hi), plan.lo, plan.hi,
+                            1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1), 100, &u)) {
+    const double miss = fabs(pzk_fin_plan_miss(&plan, u));
     ++ctl->saturated;
-    if (fabs(best_g) > ctl->max_clip) ctl->max_clip = fabs(best_g);
+    if (miss > ctl->max_clip) ctl->max_clip = miss;
   }
-  ctl->du_last = best_u - ctl->u_last;
-  ctl->u_last = best_u;
-  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, best_u, 1);
-  return best_u;
+  ctl->du_last = u - ctl->u_last;
+  ctl->u_last = u;
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
+  return u;
 }
 
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the

@@ -353,4 +353,77 @@ static inline double pzk_fin_backlash(double a1, double a2, double b1, double b2
   return pzk_fin_max(a, pzk_fin_min(b, y_prev));
 }
 
+/* The drive u in [lo, hi] with g(ctx, u) = 0 nearest to u0, g not necessarily monotone: the bracket
+ * is searched on both sides of u0 with steps growing 4-fold from 1e-3 of the range, the first sign
+ * change taken, then closed by the Illinois method until |g| <= tol or the bracket is two adjacent
+ * doubles; at most max_trials evaluations of g. Returns 1 when bracketed (else the limits hold no
+ * sign change); *u_best: the u of the smallest |g| seen. The fin's compensators (the records chain's
+ * pzk_chain_inverse_fin and the HGANN fin header's inverse step) both use it. */
+typedef double (*pzk_fin_map)(void *ctx, double u);
+static inline int pzk_fin_nearest_root(pzk_fin_map g, void *ctx, double u0, double lo, double hi, double tol,
+                                       int max_trials, double *u_best) {
+  double a, b, ga, gb, l, r, gl, gr, step, best_u, best_g;
+  int it, side = 0, found;
+  best_u = a = b = l = r = u0;
+  best_g = ga = gb = gl = gr = g(ctx, u0);
+  found = best_g == 0;
+  step = 1e-3 * (hi - lo);
+  for (it = 1; !found && it < max_trials && (l > lo || r < hi); step *= 4) {
+    int left;
+    for (left = 0; left < 2 && !found; ++left) {
+      const double from = left ? l : r, gfrom = left ? gl : gr;
+      double to, gto;
+      if (left ? from <= lo : from >= hi) continue;
+      to = left ? from - step : from + step;
+      to = to > hi ? hi : (to < lo ? lo : to);
+      gto = g(ctx, to);
+      ++it;
+      if (fabs(gto) < fabs(best_g)) {
+        best_u = to;
+        best_g = gto;
+      }
+      if (gto == 0 || (gto < 0) != (gfrom < 0)) {
+        a = from;
+        ga = gfrom;
+        b = to;
+        gb = gto;
+        found = 1;
+      } else if (left) {
+        l = to;
+        gl = gto;
+      } else {
+        r = to;
+        gr = gto;
+      }
+    }
+  }
+  if (found) {
+    for (; it < max_trials && fabs(best_g) > tol; ++it) { /* Illinois on [a, b] */
+      double c = (a * gb - b * ga) / (gb - ga), gc;
+      const double cl = a < b ? a : b, cr = a < b ? b : a;
+      if (!(c > cl && c < cr)) c = 0.5 * (a + b);
+      if (!(c > cl && c < cr)) break; /* the bracket is two adjacent doubles */
+      gc = g(ctx, c);
+      if (fabs(gc) < fabs(best_g)) {
+        best_u = c;
+        best_g = gc;
+      }
+      if (gc == 0) break;
+      if ((gc < 0) == (gb < 0)) {
+        b = c;
+        gb = gc;
+        if (side == -1) ga *= 0.5;
+        side = -1;
+      } else {
+        a = c;
+        ga = gc;
+        if (side == 1) gb *= 0.5;
+        side = 1;
+      }
+    }
+  }
+  *u_best = best_u;
+  return found;
+}
+
 #endif /* PZK_FIN_MODAL_H_ */
