@@ -182,6 +182,12 @@ bool Stepper::has_delay() const {
   return false;
 }
 
+int Stepper::inverse_plan_samples() const {
+  for (const auto& b : blocks_)
+    if (b.kind == pzk::PZK_BIMORPH_FIN) return 2;
+  return 1;
+}
+
 double Stepper::Init(double u0) {
   ctl_.u_lo = spec_.drive_min;
   ctl_.u_hi = spec_.drive_max;

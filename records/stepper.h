@@ -84,6 +84,9 @@ class Stepper {
   int dynamic() const { return nd_; }
   /// True when the chain holds a delay (the inverse cannot undo it).
   bool has_delay() const;
+  /// Samples the inverse plans ahead: 2 with the bimorph fin (records/kernels/chain.h
+  /// pzk_chain_inverse_fin: its InverseStep wants the reference one sample ahead), else 1.
+  int inverse_plan_samples() const;
   /// Parameters of block i (the family's, an effect's, or {polarity, offset}).
   const std::vector<double>& block_params(size_t i) const { return params_[i]; }
 
