@@ -105,7 +105,12 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " * samples, s.ctl.max_clip the largest clipping (drive units forward, response units inverse).\n"
      << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families); a delay\n"
      << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
-     << " * when the reference is known in advance (preview). Model: " << m.Model()->Describe() << ". */\n"
+     << " * when the reference is known in advance (preview)."
+     << (st.inverse_plan_samples() > 1
+             ? " The bimorph fin's compensator plans two samples (records/kernels/chain.h\n"
+               " * pzk_chain_inverse_fin): give it the reference one sample ahead (and " + N + "_DELAY_S more)."
+             : std::string())
+     << " Model: " << m.Model()->Describe() << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
      << "#ifndef PZK_KERNELS_V1\n#define PZK_KERNELS_V1\n"
      << KernelSource() << "#endif /* PZK_KERNELS_V1 */\n\n";

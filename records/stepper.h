@@ -8,7 +8,8 @@
 //            the kernels do the same operations in the same order).
 //   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
 //            on the one-step map (records/kernels/chain.h: exact for the monotone families; a
-//            delay is skipped — it cannot be undone).
+//            delay is skipped — it cannot be undone); the bimorph fin plans two samples and wants
+//            the reference one sample ahead (inverse_plan_samples()).
 // A Stepper is used either forward or inverse after Init, not both.
 #pragma once
 
