@@ -109,12 +109,12 @@ Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& 
 }
 
 /// The drive for the reference (the preview: with a delay of n samples, the reference n samples
-/// ahead, the last value held), and the clipping events.
+/// ahead, and one more for the fin's two-sample plan; the last value held), and the clipping events.
 std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
-  size_t preview = 0;
+  size_t preview = static_cast<size_t>(inv.inverse_plan_samples() - 1);
   for (size_t i = 0; i < inv.blocks().size(); ++i) {
     if (inv.blocks()[i].kind == records::pzk::PZK_DELAY) {
-      preview = static_cast<size_t>(std::lround(inv.block_params(i)[0] / inv.spec().dt));
+      preview += static_cast<size_t>(std::lround(inv.block_params(i)[0] / inv.spec().dt));
     }
   }
   std::vector<double> u(ref.y.size());
@@ -263,7 +263,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
       // The local gain of the one-step map at the applied drive, before the step.
       const double h = 1e-6 * m.scale.u_half;
       const double g = (inv.Trial(r.u[k] + h) - inv.Trial(r.u[k] - h)) / (2 * h);
-      const double u = inv.InverseStep(r.y[k]);
+      // The fin's compensator plans two samples: its target is the response one sample ahead.
+      const size_t ahead = std::min(k + static_cast<size_t>(inv.inverse_plan_samples() - 1), r.size() - 1);
+      const double u = inv.InverseStep(r.y[ahead]);
       if (k < r.first_scored) continue;
       const double du = u - r.u[k], dy = g * du;
       sse_u += du * du;

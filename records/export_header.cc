@@ -9,7 +9,7 @@
 
 namespace pz::records {
 namespace kernel_text {
-extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kChain;
+extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, kBwOscillator, kFinModal, kBimorphFin, kChain;
 }  // namespace kernel_text
 
 namespace {
@@ -46,6 +46,7 @@ const char* KindMacro(int kind) {
     case pzk::PZK_BW_OSCILLATOR: return "PZK_BW_OSCILLATOR";
     case pzk::PZK_PREISACH: return "PZK_PREISACH";
     case pzk::PZK_ASYMMETRIC_PI: return "PZK_ASYMMETRIC_PI";
+    case pzk::PZK_BIMORPH_FIN: return "PZK_BIMORPH_FIN";
     case pzk::PZK_FRICTION: return "PZK_FRICTION";
     case pzk::PZK_STIFFENING: return "PZK_STIFFENING";
     case pzk::PZK_DRIFT: return "PZK_DRIFT";
@@ -66,11 +67,14 @@ void Array(std::ostream& os, const std::string& name, const double* v, int n) {
 std::string KernelSource() {
   std::string s;
   for (std::string_view part : {kernel_text::kCommon, kernel_text::kEffects, kernel_text::kStackModels,
-                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kChain}) {
+                                kernel_text::kPlayOperators, kernel_text::kBwOscillator, kernel_text::kFinModal, kernel_text::kBimorphFin,
+                                kernel_text::kChain}) {
     s.append(part);
   }
   return s;
 }
+
+std::string FinModalSource() { return std::string(kernel_text::kFinModal); }
 
 std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
   if (!IsCName(name)) {
@@ -101,7 +105,12 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " * samples, s.ctl.max_clip the largest clipping (drive units forward, response units inverse).\n"
      << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families); a delay\n"
      << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
-     << " * when the reference is known in advance (preview). Model: " << m.Model()->Describe() << ". */\n"
+     << " * when the reference is known in advance (preview)."
+     << (st.inverse_plan_samples() > 1
+             ? " The bimorph fin's compensator plans two samples (records/kernels/chain.h\n"
+               " * pzk_chain_inverse_fin): give it the reference one sample ahead (and " + N + "_DELAY_S more)."
+             : std::string())
+     << " Model: " << m.Model()->Describe() << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
      << "#ifndef PZK_KERNELS_V1\n#define PZK_KERNELS_V1\n"
      << KernelSource() << "#endif /* PZK_KERNELS_V1 */\n\n";

@@ -19,6 +19,10 @@ namespace pz::records {
 /// The kernels' C source, in include order (records/kernels/*.h).
 std::string KernelSource();
 
+/// The bimorph fin's modal helpers (records/kernels/fin_modal.h, guarded): also the base of the
+/// HGANN fin plant's header (client/export_fin_c.h).
+std::string FinModalSource();
+
 /// The header text for `name` (a C identifier, checked: InputError). `comment` goes into the
 /// header's first comment (provenance).
 std::string ExportHeader(const Stepper& stepper, const std::string& name, const std::string& comment);

@@ -3,6 +3,8 @@
 #include <algorithm>
 
 #include "io/csv.h"
+#include "model/bimorph.h"
+#include "model/modal_simulator.h"
 #include "records/preisach_family.h"
 
 namespace pz::records {
@@ -16,6 +18,7 @@ int FamilyKind(const std::string& family) {
   if (family == "bw-oscillator") return pzk::PZK_BW_OSCILLATOR;
   if (family == "preisach") return pzk::PZK_PREISACH;
   if (family == "asymmetric-pi") return pzk::PZK_ASYMMETRIC_PI;
+  if (family == "bimorph-fin") return pzk::PZK_BIMORPH_FIN;
   return 0;
 }
 
@@ -36,6 +39,34 @@ bool IsDriveEffect(EffectKind e) { return EffectKindOf(e) < pzk::PZK_STACK_BOUC_
 
 void CheckFinite(const std::string& field, double v) {
   if (!std::isfinite(v)) throw InputError(FieldError(field, v, "must be finite"));
+}
+
+/// The bimorph fin's modal data for the fitted geometry (p[10] = L_p, p[11] = L_e when fitted):
+/// {1/L, omega_i^2, tip_i g_u,i, tip_i g_z,i} of the modes the library simulates, and their
+/// number into `modes`. The library's FE assembly and eigen-decomposition (model::BimorphPlant,
+/// model::ModalSimulator), as BimorphFinFamily::Simulate does; the kernel discretises from these.
+std::vector<double> FinModalData(const ModelSpec& spec, int& modes) {
+  const std::vector<double>& p = spec.params;
+  model::BeamGeometry geo = spec.family_options().geometry;
+  geo.active_length_m = p[10];
+  const bool tip = p.size() > 11;
+  if (tip) geo.tip_length_m = p[11];
+  if (Status s = geo.Validate(); !s.ok())
+    throw InputError("model.params[" + std::string(tip ? "active_length, tip_length" : "active_length") +
+                     "]: " + s.message());
+  const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
+  if (Status s = b.Validate(); !s.ok()) throw InputError("model.params (bimorph-fin): " + s.message());
+  if (!b.HysteresisBounded()) {
+    throw InputError("model.params[alpha, beta, gamma] = [" + io::FormatNumber(p[2]) + ", " + io::FormatNumber(p[3]) +
+                     ", " + io::FormatNumber(p[4]) +
+                     "]: the Bouc-Wen loop is unbounded (needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0)");
+  }
+  const model::BimorphPlant plant(geo);
+  const model::ModalSimulator sim(plant);
+  modes = sim.num_modes();
+  std::vector<double> w{1.0 / sim.length_m()};
+  for (auto part : {sim.omega2(), sim.tip_gain_u(), sim.tip_gain_z()}) w.insert(w.end(), part.begin(), part.end());
+  return w;
 }
 
 }  // namespace
@@ -123,6 +154,7 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
       fb.n = spec_.pi_operators;
       fb.m = kAsymmetricPiKnots;
       break;
+    case pzk::PZK_BIMORPH_FIN: modal_ = FinModalData(spec_, blocks_[family_block].n); break;
     default: break;
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
@@ -132,8 +164,9 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     blocks_[i].p = params_[i].data();
     blocks_[i].np = static_cast<int>(params_[i].size());
   }
-  blocks_[family_block].w = spec_.weights.data();
-  blocks_[family_block].nw = static_cast<int>(spec_.weights.size());
+  const std::vector<double>& w = family_kind == pzk::PZK_BIMORPH_FIN ? modal_ : spec_.weights;
+  blocks_[family_block].w = w.data();
+  blocks_[family_block].nw = static_cast<int>(w.size());
   if (pzk::pzk_layout(blocks_.data(), static_cast<int>(blocks_.size()), &nc_, &nd_) != 0) {
     throw InputError("stepper: a block without a kernel");
   }
@@ -147,6 +180,12 @@ bool Stepper::has_delay() const {
   for (const auto& b : blocks_)
     if (b.kind == pzk::PZK_DELAY && b.p[0] > 0) return true;
   return false;
+}
+
+int Stepper::inverse_plan_samples() const {
+  for (const auto& b : blocks_)
+    if (b.kind == pzk::PZK_BIMORPH_FIN) return 2;
+  return 1;
 }
 
 double Stepper::Init(double u0) {

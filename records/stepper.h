@@ -8,7 +8,8 @@
 //            the kernels do the same operations in the same order).
 //   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
 //            on the one-step map (records/kernels/chain.h: exact for the monotone families; a
-//            delay is skipped — it cannot be undone).
+//            delay is skipped — it cannot be undone); the bimorph fin plans two samples and wants
+//            the reference one sample ahead (inverse_plan_samples()).
 // A Stepper is used either forward or inverse after Init, not both.
 #pragma once
 
@@ -28,6 +29,8 @@ namespace pzk {
 #include "records/kernels/stack_models.h"
 #include "records/kernels/play_operators.h"
 #include "records/kernels/bw_oscillator.h"
+#include "records/kernels/fin_modal.h"
+#include "records/kernels/bimorph_fin.h"
 #include "records/kernels/chain.h"
 }  // namespace pzk
 
@@ -54,7 +57,7 @@ struct ModelSpec {
   void Validate() const;
 };
 
-/// The kernels' name of every family that has one ("bimorph-fin" has none yet).
+/// True for every family that has a step kernel (every one of FamilyNames()).
 bool HasStepKernel(const std::string& family);
 
 class Stepper {
@@ -82,6 +85,9 @@ class Stepper {
   int dynamic() const { return nd_; }
   /// True when the chain holds a delay (the inverse cannot undo it).
   bool has_delay() const;
+  /// Samples the inverse plans ahead: 2 with the bimorph fin (records/kernels/chain.h
+  /// pzk_chain_inverse_fin: its InverseStep wants the reference one sample ahead), else 1.
+  int inverse_plan_samples() const;
   /// Parameters of block i (the family's, an effect's, or {polarity, offset}).
   const std::vector<double>& block_params(size_t i) const { return params_[i]; }
 
@@ -89,6 +95,7 @@ class Stepper {
   ModelSpec spec_;
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
+  std::vector<double> modal_;  ///< bimorph fin: {1/L, omega_i^2, tip gains} of its geometry
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};
   int nc_ = 0, nd_ = 0;

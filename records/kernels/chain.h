@@ -29,6 +29,7 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
     case PZK_ASYMMETRIC_PI: *nc = n + b->m; *nd = n; return 0;
     case PZK_PREISACH: *nc = 1 + 2 * n + n * (n + 1) / 2; *nd = n; return 0;
     case PZK_BW_OSCILLATOR: *nc = 6; *nd = 4; return 0;
+    case PZK_BIMORPH_FIN: *nc = PZK_FIN_C * n; *nd = 2 * n + 4; return 0;
     case PZK_FRICTION: *nd = 1; return 0;
     case PZK_STIFFENING: *nc = 1; return 0;
     case PZK_DRIFT: *nd = 1; return 0;
@@ -65,6 +66,7 @@ static inline double pzk_block_init(const pzk_block *b, double *c, double *d, do
     case PZK_ASYMMETRIC_PI: return pzk_asym_pi_init(b, c, d, v);
     case PZK_PREISACH: return pzk_preisach_init(b, c, d, v);
     case PZK_BW_OSCILLATOR: return pzk_bw_osc_init(b, c, d, v);
+    case PZK_BIMORPH_FIN: return pzk_fin_init(b, c, d, v);
     case PZK_FRICTION: return pzk_friction_init(d, v);
     case PZK_STIFFENING: c[0] = v; return v;
     case PZK_DRIFT: d[0] = 0; return v;
@@ -87,6 +89,7 @@ static inline double pzk_block_step(const pzk_block *b, const double *c, const d
     case PZK_ASYMMETRIC_PI: return pzk_asym_pi_step(b, c, d, o, v);
     case PZK_PREISACH: return pzk_preisach_step(b, c, d, o, v);
     case PZK_BW_OSCILLATOR: return pzk_bw_osc_step(b, c, d, o, v);
+    case PZK_BIMORPH_FIN: return pzk_fin_step(b, c, d, o, v);
     case PZK_FRICTION: return pzk_friction_step(b, d, o, v);
     case PZK_STIFFENING: return pzk_stiffening_step(b, c, v);
     case PZK_DRIFT: return pzk_drift_step(b, d, o, v);
@@ -109,14 +112,18 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
 }
 
 /* The output for drive u from state d, the next state written to o (o == d: a step; o the
- * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on. */
+ * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on; 2 or
+ * 3: also the fin's angle pushed up or down through its backlash (pzk_fin_step_through). */
 static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d, double *o, double u,
                                     int skip_delay) {
   double v = u;
   int i;
   for (i = 0; i < nb; ++i) {
     if (b[i].kind == PZK_DELAY && skip_delay) continue;
-    v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+    if (b[i].kind == PZK_BIMORPH_FIN && skip_delay >= 2)
+      v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v, skip_delay == 2 ? 1 : -1);
+    else
+      v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
   }
   return v;
 }
@@ -135,6 +142,76 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
   return ctl->y_last;
 }
 
+/* The bimorph fin's compensator (a chain holding a PZK_BIMORPH_FIN block), after the HGANN fin
+ * plant's header (client/export_fin_c.h pzf_inverse_step). It plans two samples: the drive goes to
+ * u at the next sample and keeps its slope from the last drive one more (clipped to the limits), and
+ * u is solved so that the output two samples ahead is y_desired: give it the reference one sample
+ * ahead (preview), else it follows with a lag of one sample. One sample would not do: the drive's
+ * linear hold gives the sampled modes a zero outside the unit circle (the second sample's response to
+ * a drive step is several times the first's), and an exact one-step inverse makes the drive
+ * oscillate. The backlash is passed through: where the angle must rise (fall) to reach y_desired,
+ * the trials give the fin's output as theta - a1 (theta + a2), the angle it reaches once theta has
+ * crossed the dead band, so that a target beyond the band drives theta across it rather than holding
+ * (an angle that must stay: the trials are the model's). The map u -> y need not be monotone (at
+ * small drives the Bouc-Wen force can outweigh the drive's moment): the bracket is
+ * searched on both sides of the last drive with steps growing 4-fold from 1e-3 of the drive range,
+ * the sign change nearest to it taken, and closed by the Illinois method until the output is
+ * y_desired to 1e-13 of its magnitude (at least 1e-13) or the bracket is two adjacent doubles: at
+ * most 100 plans of two steps. Not reached within the limits: the drive that came nearest, counted
+ * in saturated (max_clip: the largest shortfall). What it reaches is not exact: the plan is greedy,
+ * and a reference whose state came by another path (the Bouc-Wen force remembers it) can be out of
+ * reach for some samples (docs/deploy.md has the figures). */
+typedef struct {
+  const pzk_block *b;
+  int nb, mode;
+  const double *c, *d;
+  double *t, u_prev, lo, hi, y_desired;
+} pzk_fin_plan;
+/* The output two samples ahead less y_desired: the drive u at the next sample, its slope kept one
+ * more (clipped), from state d on the scratch t (delays skipped; mode 2 / 3: the fin pushed through). */
+static inline double pzk_fin_plan_miss(void *ctx, double u) {
+  const pzk_fin_plan *p = (const pzk_fin_plan *)ctx;
+  pzk_chain_eval(p->b, p->nb, p->c, p->d, p->t, u, p->mode);
+  return pzk_chain_eval(p->b, p->nb, p->c, p->t, p->t, pzk_clamp(u + (u - p->u_prev), p->lo, p->hi), p->mode) -
+         p->y_desired;
+}
+static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const double *c, double *d, double *t,
+                                           pzk_ctl *ctl, double y_desired) {
+  pzk_fin_plan plan;
+  double s_out = 1, u;
+  int i, after = 0;
+  /* The direction the fin's angle must move: the output's against the last, times the sign of the
+   * output per angle (the gain, and the polarity; the output effects rise with their input). */
+  for (i = 0; i < nb; ++i) {
+    if (b[i].kind == PZK_BIMORPH_FIN) {
+      after = 1;
+      s_out = b[i].p[9] < 0 ? -1 : 1;
+    } else if (after && b[i].kind == PZK_AFFINE && b[i].p[0] < 0) {
+      s_out = -s_out;
+    }
+  }
+  plan.b = b;
+  plan.nb = nb;
+  plan.c = c;
+  plan.d = d;
+  plan.t = t;
+  plan.u_prev = ctl->u_last;
+  plan.lo = ctl->u_lo;
+  plan.hi = ctl->u_hi;
+  plan.y_desired = y_desired;
+  plan.mode = (y_desired - ctl->y_last) * s_out > 0 ? 2 : ((y_desired - ctl->y_last) * s_out < 0 ? 3 : 1);
+  if (!pzk_fin_nearest_root(pzk_fin_plan_miss, &plan, pzk_clamp(ctl->u_last, plan.lo, plan.hi), plan.lo, plan.hi,
+                            1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1), 100, &u)) {
+    const double miss = fabs(pzk_fin_plan_miss(&plan, u));
+    ++ctl->saturated;
+    if (miss > ctl->max_clip) ctl->max_clip = miss;
+  }
+  ctl->du_last = u - ctl->u_last;
+  ctl->u_last = u;
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
+  return u;
+}
+
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
  * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
  * on the scratch t. From the last drive, the search walks in the direction the map must move (by
@@ -148,12 +225,15 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
  * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
  * the one-step map is continuous and the root found is the one nearest the last drive. A
  * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
- * max_clip. A delay cannot be undone: its block is skipped (the compensator drives the model
+ * max_clip. The bimorph fin has its own search (pzk_chain_inverse_fin). A delay cannot be undone: its block is skipped (the compensator drives the model
  * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
 static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
                                        double y_desired) {
   const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
   double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_BIMORPH_FIN) return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
   f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
   if (u0 + eps < hi) {
     f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);

@@ -7,7 +7,7 @@
 enum {
   PZK_LOWPASS = 1, PZK_QUADRATIC, PZK_CREEP, PZK_DELAY, /* drive effects (records/model.h order) */
   PZK_STACK_BOUC_WEN = 10, PZK_BACKLASH_LIKE, PZK_DUHEM, PZK_PRANDTL_ISHLINSKII, PZK_BW_OSCILLATOR,
-  PZK_PREISACH, PZK_ASYMMETRIC_PI,                       /* families */
+  PZK_PREISACH, PZK_ASYMMETRIC_PI, PZK_BIMORPH_FIN,      /* families */
   PZK_FRICTION = 30, PZK_STIFFENING, PZK_DRIFT,          /* output effects */
   PZK_AFFINE = 40                                        /* y = polarity * v + offset */
 };
@@ -15,13 +15,14 @@ enum {
 typedef struct {
   int kind;         /* PZK_* */
   int n;            /* plays (PI, asymmetric PI), grid levels (Preisach), sub-steps (stack Bouc-Wen),
-                       RK4 steps per sample (oscillator), knots (asymmetric PI: in m) */
+                       RK4 steps per sample (oscillator), knots (asymmetric PI: in m),
+                       modes (bimorph fin) */
   int m;            /* asymmetric PI: dead-zone knots; oscillator: 1 = physical parameters */
   double dt;        /* sample step [s] */
   double u_min, u_max, u_half, y_half; /* the data scale the family was made for */
   const double *p;  /* parameters (the family's, the effect's, or {polarity, offset}) */
   int np;
-  const double *w;  /* solved weights of a linear family */
+  const double *w;  /* solved weights of a linear family; the bimorph fin's modal data */
   int nw;
   int c_off, d_off; /* offsets of the block's constants and dynamic state (pzk_layout) */
 } pzk_block;
