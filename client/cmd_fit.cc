@@ -294,6 +294,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
   f["polarity"] = Num(r.model->scale().polarity);
+  f["settle_s"] = Num(a.settle_s);  // each record scored from this long after its rest (0: from the rest's end)
   Struct params;
   for (size_t i = 0; i < r.params.size(); ++i) (*params.mutable_fields())[r.model->params()[i].name] = Num(r.params[i]);
   f["params"] = Obj(params);

@@ -107,6 +107,7 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
                                         (dir / "settled").string(), "--no-figures", "--quiet"});
   PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "Every record is scored from 0.5 s after the end of its rest");
   PZ_EXPECT_HAS(Read(dir / "settled" / "report.md"), "| ramp | validate | 1.5–");
+  PZ_EXPECT_HAS(Read(dir / "settled" / "fit.json"), "\"settle_s\": 0.5");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"fit", "--records", set, "--family", "preisach", "--settle-s", "100", "--out",
                           (dir / "bad-settle").string(), "--quiet"});
