@@ -8,39 +8,9 @@
 
 namespace pz::client {
 
-std::string CHexLiteral(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%a", x);
-  return buf;
-}
-
-std::string CDecimal(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", x);
-  return buf;
-}
-
-std::string CUpper(const std::string& s) {
-  std::string u = s;
-  for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return u;
-}
-
 namespace {
 
 const char* kOutputMacro[model::kNetworkOutputs] = {"MU", "DELTA", "ALPHA", "BETA", "GAMMA", "A1", "A2"};
-
-}  // namespace
-
-bool IsCIdentifier(const std::string& name) {
-  if (name.empty() || name.size() > 63) return false;
-  if (!(std::isalpha(static_cast<unsigned char>(name[0])) || name[0] == '_')) return false;
-  for (char c : name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
-  return true;
-}
-
-namespace {
 
 /// The header's comment (provenance, the entry point, the outputs' ranges and units, the inputs'
 /// normalisation), its include guard and the output macros.

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "io/network_io.h"
+#include "model/c_text.h"
 #include "model/status.h"
 
 namespace pz::model {
@@ -23,15 +24,7 @@ class ModalSimulator;
 
 namespace pz::client {
 
-/// An exact C literal of x: hex-float, e.g. 0x1.91eb851eb851fp+1.
-std::string CHexLiteral(double x);
-/// x to 17 significant digits (the decimal value of CHexLiteral in comments).
-std::string CDecimal(double x);
-/// s in upper case (macro and include-guard names).
-std::string CUpper(const std::string& s);
-
-/// True iff `name` is a C identifier ([A-Za-z_][A-Za-z0-9_]*, ≤ 63 characters).
-bool IsCIdentifier(const std::string& name);
+// CHexLiteral, CDecimal, CUpper and IsCIdentifier: model/c_text.h.
 
 /// The header text. Requires a valid network and a C identifier (kInvalidArgument otherwise).
 Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header);

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include "io/csv.h"
+#include "model/c_text.h"
 
 namespace pz::records {
 namespace kernel_text {
@@ -13,25 +14,6 @@ extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, k
 }  // namespace kernel_text
 
 namespace {
-
-std::string Lit(double x) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%a", x);
-  return buf;
-}
-
-std::string Upper(const std::string& s) {
-  std::string u = s;
-  for (char& c : u) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return u;
-}
-
-bool IsCName(const std::string& n) {
-  if (n.empty() || n.size() > 63 || std::isdigit(static_cast<unsigned char>(n[0]))) return false;
-  for (char c : n)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) return false;
-  return true;
-}
 
 const char* KindMacro(int kind) {
   switch (kind) {
@@ -57,7 +39,7 @@ const char* KindMacro(int kind) {
 
 void Array(std::ostream& os, const std::string& name, const double* v, int n) {
   os << "static const double " << name << "[" << std::max(n, 1) << "] = {";
-  for (int i = 0; i < n; ++i) os << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << Lit(v[i]);
+  for (int i = 0; i < n; ++i) os << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << CHexLiteral(v[i]);
   if (n == 0) os << "0";
   os << "};\n";
 }
@@ -77,11 +59,11 @@ std::string KernelSource() {
 std::string FinModalSource() { return std::string(kernel_text::kFinModal); }
 
 std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
-  if (!IsCName(name)) {
+  if (!IsCIdentifier(name)) {
     throw InputError("--name '" + name + "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
   }
   const ModelSpec& m = st.spec();
-  const std::string N = Upper(name);
+  const std::string N = CUpper(name);
   const auto& blocks = st.blocks();
   const int nb = static_cast<int>(blocks.size());
   std::ostringstream os;
@@ -117,12 +99,12 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
   double delay = 0;
   for (int i = 0; i < nb; ++i)
     if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];
-  os << "#define " << N << "_U_MIN " << Lit(m.drive_min) << " /* " << io::FormatNumber(m.drive_min) << " " << m.drive_unit
+  os << "#define " << N << "_U_MIN " << CHexLiteral(m.drive_min) << " /* " << io::FormatNumber(m.drive_min) << " " << m.drive_unit
      << " */\n"
-     << "#define " << N << "_U_MAX " << Lit(m.drive_max) << " /* " << io::FormatNumber(m.drive_max) << " " << m.drive_unit
+     << "#define " << N << "_U_MAX " << CHexLiteral(m.drive_max) << " /* " << io::FormatNumber(m.drive_max) << " " << m.drive_unit
      << " */\n"
-     << "#define " << N << "_DT_S " << Lit(m.dt) << "\n"
-     << "#define " << N << "_DELAY_S " << Lit(delay) << "\n"
+     << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
+     << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
      << "#define " << N << "_BLOCKS " << nb << "\n\n";
   for (int i = 0; i < nb; ++i) {
     const auto& p = st.block_params(static_cast<size_t>(i));
@@ -133,8 +115,8 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
   for (int i = 0; i < nb; ++i) {
     const auto& b = blocks[i];
     const std::string w = b.nw > 0 ? name + "_w" + std::to_string(i) + "_" : "0";
-    os << "  {" << KindMacro(b.kind) << ", " << b.n << ", " << b.m << ", " << Lit(b.dt) << ", " << Lit(b.u_min) << ", "
-       << Lit(b.u_max) << ", " << Lit(b.u_half) << ", " << Lit(b.y_half) << ",\n   " << name << "_p" << i << "_, "
+    os << "  {" << KindMacro(b.kind) << ", " << b.n << ", " << b.m << ", " << CHexLiteral(b.dt) << ", " << CHexLiteral(b.u_min) << ", "
+       << CHexLiteral(b.u_max) << ", " << CHexLiteral(b.u_half) << ", " << CHexLiteral(b.y_half) << ",\n   " << name << "_p" << i << "_, "
        << b.np << ", " << w << ", " << b.nw << ", " << b.c_off << ", " << b.d_off << "}" << (i + 1 < nb ? "," : "")
        << "\n";
   }
