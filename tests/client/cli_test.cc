@@ -13,6 +13,7 @@
 #include "client/commands.h"
 #include "client/pi_report.h"
 #include "model/saturation.h"
+#include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -26,15 +27,7 @@ const fs::path kNominal = fs::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "nominal"
 
 // Parses a command line for a fresh app holding the two commands; returns the exit code they set.
 int RunCli(const std::vector<std::string>& args) {
-  CLI::App app{"piezoid"};
-  app.require_subcommand(1);
-  int exit_code = 0;
-  RegisterSimulate(app, exit_code);
-  RegisterPi(app, exit_code);
-  std::vector<const char*> argv = {"piezoid"};
-  for (const auto& a : args) argv.push_back(a.c_str());
-  app.parse(static_cast<int>(argv.size()), argv.data());
-  return exit_code;
+  return pz::testing::RunCommands({RegisterSimulate, RegisterPi}, args);
 }
 
 // Flags as a command would have them after parsing args (e.g. {"--b1", "1.2", "--b2", "-1.1"}).

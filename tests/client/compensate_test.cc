@@ -18,6 +18,7 @@
 #include "client/commands.h"
 #include "client/fit_file.h"
 #include "io/csv.h"
+#include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -28,15 +29,7 @@ namespace fs = std::filesystem;
 constexpr double kNoise = 0.02;  // [um], the plant's measurement noise
 
 int RunCli(const std::vector<std::string>& args) {
-  CLI::App app{"piezoid"};
-  app.require_subcommand(1);
-  int exit_code = 0;
-  RegisterFit(app, exit_code);
-  RegisterCompensate(app, exit_code);
-  std::vector<const char*> argv = {"piezoid"};
-  for (const auto& a : args) argv.push_back(a.c_str());
-  app.parse(static_cast<int>(argv.size()), argv.data());
-  return exit_code;
+  return pz::testing::RunCommands({RegisterFit, RegisterCompensate}, args);
 }
 
 std::string Captured(const std::vector<std::string>& args) {

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "client/commands.h"
+#include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -18,15 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 
 int RunCli(const std::vector<std::string>& args) {
-  CLI::App app{"piezoid"};
-  app.require_subcommand(1);
-  int exit_code = 0;
-  RegisterSynthStack(app, exit_code);
-  RegisterFit(app, exit_code);
-  std::vector<const char*> argv = {"piezoid"};
-  for (const auto& a : args) argv.push_back(a.c_str());
-  app.parse(static_cast<int>(argv.size()), argv.data());
-  return exit_code;
+  return pz::testing::RunCommands({RegisterSynthStack, RegisterFit}, args);
 }
 
 std::string Read(const fs::path& p) {
