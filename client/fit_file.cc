@@ -2,6 +2,7 @@
 
 #include <google/protobuf/util/json_util.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -79,7 +80,19 @@ records::ModelSpec LoadFit(const std::string& path) {
       throw InputError("model.scale: u_half, y_half, f_dom_hz and fs_hz must be > 0");
     }
     s.dt = m.sample_period_s;
-    for (const auto& e : m.effects) s.effects.push_back(records::ParseEffect(e));
+    const auto& families = records::FamilyNames();
+    if (std::find(families.begin(), families.end(), s.family) == families.end()) {
+      std::string known;
+      for (const auto& n : families) known += (known.empty() ? "" : ", ") + n;
+      throw InputError("model.family '" + s.family + "' is unknown (families: " + known + ")");
+    }
+    for (const auto& e : m.effects) {
+      try {
+        s.effects.push_back(records::ParseEffect(e));
+      } catch (const InputError& x) {
+        throw InputError(std::string("model.effects: ") + x.what());
+      }
+    }
     const auto rm = s.Model();  // the family and its options, checked
     if (m.params.size() != rm->params().size()) {
       throw InputError("model.params: " + std::to_string(m.params.size()) + " values for " + rm->Describe() + ", " +

@@ -150,6 +150,13 @@ TEST_F(Compensate, BadInputIsNamed) {
   renamed.replace(w, 9, "\"weigths\"");
   std::ofstream(dir_ / "bad.json") << renamed;
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "bad.json").string()); }), "weigths");
+  std::string family = json;
+  const size_t fam = family.find("\"family\": \"");
+  ASSERT_NE(fam, std::string::npos);
+  family.insert(fam + 11, "no-such-");
+  std::ofstream(dir_ / "family.json") << family;
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "family.json").string()); }),
+                "model.family 'no-such-");
   std::ofstream(dir_ / "old.json") << "{\"model\": \"prandtl-ishlinskii\", \"params\": {}}\n";
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "old.json").string()); }), "no format_version");
 }
