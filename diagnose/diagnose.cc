@@ -8,7 +8,7 @@
 #include <exception>
 
 #include "model/model_comparison.h"
-#include "model/noise_floor.h"
+#include "records/noise_floor.h"
 #include "model/saturation.h"
 
 namespace pz::diagnose {
@@ -43,14 +43,14 @@ void Say(const DiagnoseOptions& o, const std::string& msg) {
   if (o.progress) o.progress(msg);
 }
 
-// Per-case floor where `fit` sits on its saturations (model/noise_floor.h).
+// Per-case floor where `fit` sits on its saturations (records/noise_floor.h).
 std::vector<double> CaseFloors(const DiagnosisModel& m, const FitResult& fit) {
   const ParameterLayout layout(fit.structure);
   std::vector<double> floors, y;
   for (size_t c = 0; c < m.cases().size(); ++c) {
     const DiagCase& dc = m.cases()[c];
     const model::SimulationSummary s = m.Simulate(layout, fit.x, c, y);
-    floors.push_back(s.ok() ? model::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
+    floors.push_back(s.ok() ? records::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
                             : dc.noise.floor_rms_deg);
   }
   return floors;

@@ -6,7 +6,7 @@
 //  2. Every candidate effect of the library is added to the base model and re-identified on the
 //     training cases (drive/output effects on the fast path with a global search; beam effects on
 //     CVODE, refined from the base fit with a few starting magnitudes).
-//  3. Noise floor per case (model/noise_floor.h): rounding and scatter, and on the saturation
+//  3. Noise floor per case (records/noise_floor.h): rounding and scatter, and on the saturation
 //     plateaus of the best-fitting model (lowest training PI) the rounding of the plateau: σ_c.
 //     Withheld floor S_floor = Σ_withheld N_c σ_c². Gap of a model: its withheld Σe² = S.
 //  4. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case

@@ -55,7 +55,7 @@ DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> 
   const model::SaturationPair sat = model::SaturationFromExtremes(measured);
   c.b1 = sat.b1;
   c.b2 = sat.b2;
-  c.noise = model::EstimateCaseNoise(measured, std::max(1, static_cast<int>(std::lround(drive.cycles))));
+  c.noise = records::EstimateCaseNoise(measured, std::max(1, static_cast<int>(std::lround(drive.cycles))));
   c.measured_deg = std::move(measured);
   return c;
 }

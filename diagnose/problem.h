@@ -19,7 +19,7 @@
 #include "model/bimorph.h"
 #include "model/fin_case.h"
 #include "model/effects.h"
-#include "model/noise_floor.h"
+#include "records/noise_floor.h"
 
 namespace pz::io {
 struct CaseSet;
@@ -29,7 +29,7 @@ namespace pz::diagnose {
 
 /// One bench case of the problem (saturations from the measured extremes) with its noise floor.
 struct DiagCase : model::FinCase {
-  model::CaseNoise noise;  ///< noise floor of the record
+  records::CaseNoise noise;  ///< noise floor of the record
 };
 
 /// The cases of a bench with their noise. Throws InputError on a set without training or

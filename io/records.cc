@@ -9,7 +9,7 @@
 
 #include "io/bench_data.h"
 #include "io/csv.h"
-#include "model/noise_floor.h"
+#include "io/quantum.h"
 #include "model/status.h"
 
 namespace pz::io {
@@ -153,7 +153,7 @@ void FinishFileData(FileData& d, const RecordReadOptions& opt) {
   const double tol = opt.rest_tolerance * umax + 1e-12;
   d.rest = 1;
   while (d.rest < d.u.size() && std::abs(d.u[d.rest] - d.u[0]) <= tol) ++d.rest;
-  d.quantum = model::EstimateQuantum(d.y);
+  d.quantum = EstimateQuantum(d.y);
 }
 
 FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const RecordReadOptions& opt,
@@ -450,7 +450,7 @@ RecordSet FromFinBench(const fs::path& dir, const RecordReadOptions& opt) {
     d.y = c.angle_deg;
     d.dt = 1.0 / c.sample_rate_hz;
     d.rest = 1;
-    d.quantum = model::EstimateQuantum(d.y);
+    d.quantum = EstimateQuantum(d.y);
     Record r = MakeRecord(d, "case" + std::to_string(c.number), c.role, c.file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;

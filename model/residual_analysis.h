@@ -1,6 +1,6 @@
 // Localisation of the sim-to-real gap (issue 6): the residual e_k = y_meas,k − y_model,k of every
 // case of a bench set, cut along each axis where an unmodelled effect leaves a mark, each figure
-// set against the noise floor σ (model/noise_floor.h):
+// set against the noise floor σ (records/noise_floor.h, given per case):
 //
 //   grid:       per case PI = Σ e², RMS, max |e|, share of the total PI, RMS / σ (training vs withheld);
 //   cycle:      by drive phase φ = 2π f t (twelve 30° bins; u = V sin φ), rising (u̇ > 0) vs falling

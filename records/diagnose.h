@@ -1,16 +1,9 @@
 // The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14):
 // the rules of diagnose/diagnose.h (docs/diagnosis.md) on records instead of the nine-case grid.
 //
-//  1. Noise floor σ from what the records allow, in this order of preference (every available
-//     estimate is reported, and which one was used):
-//       rest         the response's scatter over a rest segment (≥ 50 samples), linear trend removed;
-//       periods      the drive repeats with a period P: the difference of the last two periods,
-//                    differenced once more (slow drift drops out): σ² = mean((d_k − d_{k−1})²)/4;
-//       repeats      two records with the same drive: σ² = var(y₁ − y₂)/2;
-//       residual     the high-frequency part of the base model's residual: mean((e_k − e_{k−1})²)/2
-//                    (an upper bound when the model error is smooth).
-//     None goes below the quantisation floor q/√12 (a rest or identical periods cancel the
-//     rounding; a continuous model cannot): the estimate says when it was raised to it.
+//  1. Noise floor σ from what the records allow (records/noise_floor.h EstimateNoiseFloor: rest,
+//     periods, repeats, the base model's residual; every available estimate is reported, and which
+//     one was used; none below the quantisation floor q/√12).
 //  2. The base family is fitted on the training records; each applicable effect (Family::
 //     excluded_effects leaves out what the family already holds) is added and the model re-fitted
 //     (global search + LM, with the base fit as extra starting points).
@@ -40,24 +33,10 @@
 #include "records/decision.h"
 #include "records/excitation.h"
 #include "records/fit.h"
+#include "records/noise_floor.h"
 #include "records/synthetic.h"
 
 namespace pz::records {
-
-struct NoiseEstimate {
-  std::string method;  ///< "rest", "periods", "repeats", "residual"
-  double sigma = 0;
-  size_t samples = 0;
-  std::string detail;
-};
-struct NoiseFloor {
-  double sigma = 0;
-  std::string used;
-  std::vector<NoiseEstimate> estimates;
-};
-/// Rest, periods and repeats from the records; `residuals` (the base model's, per record over its
-/// scored window) adds the residual estimate. Throws InputError when no estimate is possible.
-NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::vector<double>>* residuals = nullptr);
 
 struct ProposedExperiment {
   DriveShape shape;
