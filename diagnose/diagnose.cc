@@ -9,6 +9,7 @@
 
 #include "model/model_comparison.h"
 #include "records/noise_floor.h"
+#include "records/verdict.h"
 #include "model/saturation.h"
 
 namespace pz::diagnose {
@@ -211,6 +212,26 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
   return out;
 }
 
+// The candidates of a round as the verdict names them (records/verdict.h), in ranked order.
+std::vector<records::VerdictCandidate> VerdictCandidates(const std::vector<CandidateResult>& ranked) {
+  std::vector<records::VerdictCandidate> v;
+  for (const CandidateResult& c : ranked) v.push_back({model::EffectName(c.kind), &c});
+  return v;
+}
+
+// What the bench tells the verdict of a round: its starting model, unit and floor, and (for a tie)
+// what would separate the two.
+records::VerdictText RoundText(const RoundResult& round, const FitResult& start) {
+  records::VerdictText t;
+  t.model = start.structure.empty() ? "the base model" : start.description;
+  t.unit = "deg";
+  t.floor_source = "rounding, scatter and saturation plateaus per case";
+  if (round.runner_up >= 0)
+    t.next = NextMeasurementHint(round.candidates[static_cast<size_t>(round.named)].kind,
+                                 round.candidates[static_cast<size_t>(round.runner_up)].kind);
+  return t;
+}
+
 // The gap of `start` against the floors, and its candidates scored, ranked and judged by the rules
 // of records/decision.h; the bench supplies the floors, the localised excess and the squared errors.
 RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const model::ResidualAnalysis& start_analysis,
@@ -261,31 +282,9 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
   round.named = naming.named;
   round.runner_up = naming.runner_up;
   round.z_runner_up = naming.z_runner_up;
-  const double wr = std::sqrt(round.s0 / nw), fr = std::sqrt(gap.var_w);
-  if (!round.significant) {
-    round.verdict = Fmt("no significant gap: withheld RMS %.4f deg is %.2f x the noise floor %.4f deg (threshold %.2f)",
-                        wr, round.rms_ratio, fr, o.rules.significance_ratio);
-  } else if (round.named >= 0) {
-    const auto& c = round.candidates[static_cast<size_t>(round.named)];
-    round.verdict = std::string(model::EffectName(c.kind)) +
-                    Fmt(": closes %.0f %% of the withheld gap (RMS %.4f -> %.4f deg, floor %.4f), confidence %.3f",
-                        100 * c.closed, wr, std::sqrt(c.fit.withheld_pi / nw), fr, c.confidence);
-    if (round.runner_up >= 0) {
-      const auto& ru = round.candidates[static_cast<size_t>(round.runner_up)];
-      round.verdict += std::string("; the data cannot separate it from ") + model::EffectName(ru.kind) +
-                       Fmt(" (closes %.0f %%; both leave %.2f x and %.2f x the floor, at most %.2f, and the "
-                           "paired block test gives z = %.2f < %.1f: practically equivalent)",
-                           100 * ru.closed, std::sqrt(c.s_withheld / round.s_floor),
-                           std::sqrt(ru.s_withheld / round.s_floor), o.rules.significance_ratio, round.z_runner_up,
-                           o.rules.separation_z);
-    }
-  } else {
-    round.verdict = Fmt("a significant gap (withheld RMS %.4f deg = %.2f x floor) that no candidate explains", wr,
-                        round.rms_ratio);
-    if (!round.candidates.empty())
-      round.verdict += std::string("; best candidate ") + model::EffectName(round.candidates[0].kind) + ": " +
-                       round.candidates[0].note;
-  }
+  round.gap = gap;
+  round.verdict = records::ComposeVerdict(gap, VerdictCandidates(round.candidates), naming, o.rules,
+                                          RoundText(round, start));
   Say(o, "  => " + round.verdict);
   return round;
 }
@@ -497,52 +496,20 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     d.absorbed = Compare(d.base, best.fit);
     d.absorbed_by = model::EffectName(best.kind);
   }
-  // Verdict.
-  const double nw = m.withheld_samples();
+  // Verdict: the first round's, with what the base terms absorb and the second effect.
   d.verdict_kind = records::VerdictKind(first.significant, {.named = first.named, .runner_up = first.runner_up});
-  if (!d.named.empty()) {
-    const CandidateResult& c = first.candidates[first.named];
-    d.verdict = "The gap is caused by " + model::GetEffectInfo(c.kind).title + " (" + model::EffectName(c.kind) +
-                Fmt(", confidence %.0f %%)", 100 * d.confidence);
-    if (first.runner_up >= 0) {
-      const CandidateResult& ru = first.candidates[static_cast<size_t>(first.runner_up)];
-      d.verdict += std::string(" — or by ") + model::EffectName(ru.kind) +
-                   Fmt(": the data cannot separate the two (both close the gap, paired block test z = %.2f). ",
-                       first.z_runner_up) +
-                   NextMeasurementHint(c.kind, ru.kind);
-    }
-    if (d.named.size() > 1) {
-      d.verdict += std::string(", with a second effect: ") + model::EffectName(d.named[1]) +
-                   Fmt(" (confidence %.0f %%)", 100 * d.rounds[1].candidates[d.rounds[1].named].confidence);
-    }
-    d.verdict += Fmt(". Adding it closes %.0f %% of the withheld gap above the noise floor: withheld RMS %.4f -> %.4f deg "
-                     "(floor %.4f deg, %.2f x floor remains).",
-                     100 * d.closed_total, std::sqrt(d.withheld_before / nw), std::sqrt(d.withheld_after / nw),
-                     d.floor_withheld, d.remaining_ratio);
-  } else if (!first.significant) {
-    d.verdict = Fmt("No unmodelled effect is significant above the noise floor: the base model's withheld RMS %.4f deg "
-                    "is %.2f x the floor %.4f deg (threshold %.2f).",
-                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld, o.rules.significance_ratio);
-    if (!first.candidates.empty() && first.candidates[0].fit.ok && first.candidates[0].score > 0) {
-      const CandidateResult& b = first.candidates[0];
-      d.verdict += " The best candidate, " + std::string(model::EffectName(b.kind)) +
-                   Fmt(", would lower it to %.4f deg, within the floor band", std::sqrt(b.fit.withheld_pi / nw));
-      if (!d.absorbed.empty()) {
-        d.verdict += "; what it would explain is absorbed by the base model's";
-        for (size_t i = 0; i < d.absorbed.size(); ++i)
-          d.verdict += (i ? ", " : " ") + d.absorbed[i].name +
-                       Fmt(" (%.3g without it, %.3g with it)", d.absorbed[i].without, d.absorbed[i].with);
-      }
-      d.verdict += ".";
-    }
-  } else {
-    d.verdict = Fmt("A significant gap (withheld RMS %.4f deg = %.2f x the floor %.4f deg) that no candidate effect of "
-                    "the library explains.",
-                    std::sqrt(d.withheld_before / nw), first.rms_ratio, d.floor_withheld);
-    if (!first.candidates.empty())
-      d.verdict += std::string(" Best candidate: ") + model::EffectName(first.candidates[0].kind) + " (" +
-                   first.candidates[0].note + ").";
+  records::VerdictText text = RoundText(first, d.base);
+  for (const Absorption& a : d.absorbed)
+    text.absorbed.push_back(a.name + Fmt(" (%.3g without it, %.3g with it)", a.without, a.with));
+  if (d.named.size() > 1) {
+    text.second = model::EffectName(d.named[1]);
+    text.second_confidence = d.rounds[1].candidates[static_cast<size_t>(d.rounds[1].named)].confidence;
+    text.s_final = d.withheld_after;
   }
+  d.verdict = records::ComposeVerdict(
+      first.gap, VerdictCandidates(first.candidates),
+      {.named = first.named, .runner_up = first.runner_up, .z_runner_up = first.z_runner_up, .confidence = d.confidence},
+      o.rules, text);
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Say(o, d.verdict);
   return d;

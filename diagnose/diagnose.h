@@ -81,7 +81,8 @@ struct RoundResult {
   int named = -1;              ///< index into candidates, −1 if none named
   int runner_up = -1;          ///< a qualifying candidate the data cannot separate from the named one
   double z_runner_up = 0;      ///< its paired block z against the named one
-  std::string verdict;         ///< one sentence
+  records::Gap gap;            ///< the starting model's gap, as the rules measured it
+  std::string verdict;         ///< the round's verdict (records/verdict.h)
 };
 
 /// A parameter trend over the V × f grid from the per-case fits.

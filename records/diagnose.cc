@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <sstream>
 
 #include "io/csv.h"
+#include "model/format.h"
 #include "model/model_comparison.h"
 
 namespace pz::records {
@@ -15,12 +15,7 @@ using model::CaseRole;
 
 bool Withheld(const io::Record& r) { return r.role != CaseRole::kTrain; }
 
-std::string Fmt(double x, int prec = 3) {
-  std::ostringstream s;
-  s.precision(prec);
-  s << x;
-  return s.str();
-}
+std::string Fmt(double x, int prec = 3) { return FormatG(x, prec); }
 
 /// Σe² over the withheld (or training) scored samples of a fit.
 double Sse(const io::RecordSet& set, const FitResult& f, bool withheld) {
@@ -226,39 +221,23 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   d.z_runner_up = naming.z_runner_up;
   d.confidence = naming.confidence;
   d.verdict_kind = VerdictKind(d.significant, naming);
-  const std::string unit = set.response_unit;
-  std::ostringstream v;
-  if (!d.significant) {
-    v << "No significant gap: the withheld RMS error of " << o.family << " is " << Fmt(d.rms_ratio) << " × the noise floor ("
-      << Fmt(d.noise.sigma) << " " << unit << ", from " << d.noise.used << "), at most " << o.rules.significance_ratio << ".";
-  } else if (d.named < 0) {
-    v << "A significant gap (" << Fmt(d.rms_ratio) << " × the noise floor) that no candidate explains by the rules.";
-  } else {
-    const RecordCandidate& best = d.candidates[static_cast<size_t>(d.named)];
-    if (d.runner_up >= 0) {
-      const RecordCandidate& ru = d.candidates[static_cast<size_t>(d.runner_up)];
-      v << "The data cannot separate " << EffectName(best.kind) << " from " << EffectName(ru.kind)
-        << ": both bring the withheld gap to the noise floor (" << Fmt(std::sqrt(best.s_withheld / d.s_floor)) << " × and "
-        << Fmt(std::sqrt(ru.s_withheld / d.s_floor)) << " ×, at most " << o.rules.significance_ratio
-        << "; they close " << Fmt(100 * best.closed) << " % and " << Fmt(100 * ru.closed)
-        << " %) and the paired block test does not separate them (z = " << Fmt(d.z_runner_up, 2) << " < "
-        << o.rules.separation_z << "); confidence in " << EffectName(best.kind) << " " << Fmt(100 * d.confidence, 3) << " %.";
-      if (o.propose) {
-        d.next = ProposeExperiment(set, best.fit, ru.fit, d.noise.sigma);
-        v << " Next measurement: " << d.next->description << ".";
-      }
-    } else {
-      v << "The gap is " << EffectName(best.kind) << " (confidence " << Fmt(100 * d.confidence, 3) << " %): adding it closes "
-        << Fmt(100 * best.closed) << " % of the excess withheld gap; withheld RMS " << Fmt(std::sqrt(d.s0 / nw)) << " → "
-        << Fmt(std::sqrt(best.s_withheld / nw)) << " " << unit << " against a noise floor of " << Fmt(d.noise.sigma) << " "
-        << unit << " (" << d.noise.used << ").";
-    }
+  VerdictText text;
+  text.model = o.family;
+  text.unit = set.response_unit;
+  text.floor_source = d.noise.used;
+  text.floor = d.noise.sigma;
+  if (d.runner_up >= 0 && o.propose) {
+    d.next = ProposeExperiment(set, d.candidates[static_cast<size_t>(d.named)].fit,
+                               d.candidates[static_cast<size_t>(d.runner_up)].fit, d.noise.sigma);
+    text.next = d.next->description;
   }
   std::vector<double> ratios;
   for (const RecordMetrics& m : d.base.metrics) ratios.push_back(m.rmse / d.noise.sigma);
   if (d.significant && d.noise.sigma > 0) d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
-  if (!d.excitation_note.empty()) v << " " << d.excitation_note;
-  d.verdict = v.str();
+  text.closing = d.excitation_note;
+  std::vector<VerdictCandidate> ranked_names;
+  for (const RecordCandidate& c : d.candidates) ranked_names.push_back({EffectName(c.kind), &c});
+  d.verdict = ComposeVerdict(gap, ranked_names, naming, o.rules, text);
   return d;
 }
 

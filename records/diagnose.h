@@ -35,6 +35,7 @@
 #include "records/fit.h"
 #include "records/noise_floor.h"
 #include "records/synthetic.h"
+#include "records/verdict.h"
 
 namespace pz::records {
 
