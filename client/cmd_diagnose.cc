@@ -16,6 +16,7 @@
 #include "client/records_diagnose.h"
 #include "records/check.h"
 #include "records/reallike_check.h"
+#include "records/verdict.h"
 #include "client/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
@@ -188,14 +189,14 @@ int RunRealLikeCheckCommand(const CheckArgs& a) {
   o.base.withheld_s = a.real_like_withheld_s;
   o.diagnose = CheckDiagnoseOptions(a);
   const records::RealLikeCheckSummary s = records::RunRealLikeCheck(o, [](const records::RealLikeCheckTrial& t, int i) {
-    char buf[600];
-    std::snprintf(buf, sizeof buf,
-                  "trial %3d %-52s floor %.4f/%.4f (%s) excitation %-5s [%s] -> %-11s %-16s%s ratio %6.2f conf %.2f%s\n",
-                  i + 1, t.description.c_str(), t.floor_estimate, t.floor_truth, t.floor_used.c_str(),
-                  t.excitation_right ? "right" : "WRONG", t.excitation.c_str(), t.verdict_kind.c_str(), t.named.c_str(),
-                  t.named == "none" ? "" : (t.named_present ? " (in truth)" : " (not in truth)"), t.rms_ratio,
-                  t.confidence, t.excitation_note ? "; excitation gap said" : "");
-    std::cout << buf << std::flush;
+    char floor[300];
+    std::snprintf(floor, sizeof floor, "%-52s floor %.4f/%.4f (%s) excitation %-5s [%s]", t.description.c_str(),
+                  t.floor_estimate, t.floor_truth, t.floor_used.c_str(), t.excitation_right ? "right" : "WRONG",
+                  t.excitation.c_str());
+    std::cout << records::TrialLine(i + 1, "", floor, 0, t,
+                                    t.named == "none" ? "" : (t.named_present ? " (in truth)" : " (not in truth)"),
+                                    t.excitation_note ? "; excitation gap said" : "")
+              << std::endl;
   });
   const int n = static_cast<int>(s.trials.size());
   std::cout << "real-like stacks: " << n << "; noise floor estimate / truth " << s.floor_ratio_min << " … "
@@ -214,23 +215,9 @@ int RunRecordsCheckCommand(const CheckArgs& a) {
   o.none_probability = a.none_probability;
   o.diagnose = CheckDiagnoseOptions(a);
   const records::RecordsCheckSummary s = records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
-    char buf[400];
-    std::snprintf(buf, sizeof buf, "trial %3d %-6s %-42s -> %-11s %-16s ratio %6.2f conf %.2f\n", i + 1,
-                  t.correct ? "right" : "WRONG", t.description.c_str(), t.verdict_kind.c_str(), t.named.c_str(),
-                  t.rms_ratio, t.confidence);
-    std::cout << buf << std::flush;
+    std::cout << records::TrialLine(i + 1, t.correct ? "right" : "WRONG", t.description, 42, t) << std::endl;
   });
-  std::cout << "records with an effect and a significant gap: " << s.effect_trials << ", right effect named in "
-            << s.effect_right << "; verdicts 'cannot separate': " << s.inseparable << "\nclean records: " << s.clean
-            << ", false alarms " << s.clean_alarms << "\ncalibration of the stated confidence (named effects):\n";
-  for (const auto& b : s.reliability) {
-    if (b.count == 0) continue;
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "  confidence %.2f – %.2f: %3d records, mean stated %5.1f %%, right %5.1f %%\n", b.lo,
-                  std::min(b.hi, 1.0), b.count, 100 * b.mean_confidence, 100 * b.frequency_right);
-    std::cout << buf;
-  }
-  std::cout << static_cast<int>(s.wall_time_s) << " s in all\n";
+  std::cout << records::TallyText(s, "records") << static_cast<int>(s.wall_time_s) << " s in all\n";
   return 0;
 }
 
@@ -252,14 +239,15 @@ int RunCheckCommand(const CheckArgs& a) {
     throw InputError(FieldError("--other-form-probability", so.other_form_probability, "must be in [0, 1]"));
   const diagnose::CheckSummary s =
       diagnose::RunCheck(a.trials, a.seed, o, so, [&](const diagnose::CheckTrial& t, int i) {
-        char buf[400];
-        std::snprintf(buf, sizeof buf, "trial %3d %-6s %-70s -> %-11s %-16s ratio %5.2f closed %6s conf %.2f (%.0f s)\n",
-                      i + 1, t.correct() ? "right" : "WRONG", t.truth_description.c_str(), t.verdict_kind.c_str(),
-                      model::EffectName(t.named), t.rms_ratio,
+        char extra[100];
+        std::snprintf(extra, sizeof extra, " closed %6s (%.0f s)",
                       std::isfinite(t.closed) ? (std::to_string(static_cast<int>(std::lround(100 * t.closed))) + "%").c_str()
                                               : "n/a",
-                      t.confidence, t.wall_time_s);
-        std::cout << buf << std::flush;
+                      t.wall_time_s);
+        const records::TrialVerdict v{.verdict_kind = t.verdict_kind, .named = model::EffectName(t.named),
+                                      .confidence = t.confidence, .rms_ratio = t.rms_ratio, .significant = t.significant};
+        std::cout << records::TrialLine(i + 1, t.correct() ? "right" : "WRONG", t.truth_description, 70, v, "", extra)
+                  << std::endl;
       });
   PrintCheckSummary(std::cout, s);
   if (!a.json_file.empty()) io::WriteFileWith(a.json_file, [&](std::ostream& out) { WriteCheckJson(out, s); });

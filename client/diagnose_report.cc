@@ -14,6 +14,7 @@
 #include "client/pi_report.h"
 #include "client/plots.h"
 #include "io/csv.h"
+#include "records/verdict.h"
 
 namespace pz::client {
 namespace {
@@ -553,22 +554,13 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(std::to_string(s.confusion[r][c]), 12);
     o << "\n";
   }
-  o << "single-effect benches with a significant gap: " << s.effect_trials << ", right effect named in "
-    << s.effect_right << " (" << Pct(s.accuracy()) << ")\n";
-  o << "clean benches: " << s.clean << ", false alarms " << s.clean_alarms << " (" << Pct(s.false_alarm_rate()) << ")\n";
   o << "share of the gap closed (right effect named, " << s.closed.size() << " benches): min "
     << Pct(Quantile(s.closed, 0)) << ", 10 % " << Pct(Quantile(s.closed, 0.1)) << ", median "
     << Pct(Quantile(s.closed, 0.5)) << ", 90 % " << Pct(Quantile(s.closed, 0.9)) << ", max "
     << Pct(Quantile(s.closed, 1)) << "\n";
-  // Calibration: is a stated confidence of 90 % right 90 % of the time? Over every bench where an
-  // effect was named (right when it is the true one).
-  o << "calibration of the stated confidence (" << s.confidence.size() << " benches with a named effect):\n";
-  for (const auto& b : s.Reliability()) {
-    if (b.count == 0) continue;
-    o << "  confidence " << F("%.2f", b.lo) << " – " << F("%.2f", std::min(b.hi, 1.0)) << ": " << b.count
-      << " benches, mean stated " << Pct(b.mean_confidence) << ", right " << Pct(b.frequency_right) << "\n";
-  }
-  o << F("%.0f", s.wall_time_s) << " s in all\n";
+  // The counts and the calibration (is a stated confidence of 90 % right 90 % of the time?) in the
+  // words of every check (records/verdict.h).
+  o << records::TallyText(s, "benches") << F("%.0f", s.wall_time_s) << " s in all\n";
 }
 
 void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {

@@ -121,19 +121,12 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     dopt.candidates.clear();
     dopt.propose = false;
     const RecordDiagnosis dg = DiagnoseRecords(set, dopt);
-    t.verdict_kind = dg.verdict_kind;
-    t.significant = dg.significant;
-    t.rms_ratio = dg.rms_ratio;
-    if (dg.named >= 0) {
-      t.named = EffectName(dg.candidates[static_cast<size_t>(dg.named)].kind);
-      t.confidence = dg.confidence;
-    }
+    static_cast<TrialVerdict&>(t) = TrialVerdictOf(dg);
     t.correct = sum.Add(t.truth == "none", dg.significant, dg.verdict_kind, dg.named >= 0 && t.named == t.truth,
                         t.confidence);
     sum.trials.push_back(t);
     if (on_trial) on_trial(t, i);
   }
-  sum.reliability = sum.Reliability();
   sum.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return sum;
 }

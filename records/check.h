@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "model/model_comparison.h"
 #include "records/decision.h"
 #include "records/diagnose.h"
 
@@ -25,22 +24,17 @@ struct RecordsCheckOptions {
   RecordDiagnoseOptions diagnose;        ///< family and candidates are set per trial
 };
 
-struct RecordsCheckTrial {
+/// A trial: its truth and what the diagnosis said of it (records/verdict.h).
+struct RecordsCheckTrial : TrialVerdict {
   uint64_t seed = 0;
   std::string truth = "none";  ///< effect name or "none"
   std::string description;     ///< effect, magnitude, drive
-  std::string verdict_kind;
-  std::string named = "none";
-  double confidence = 0;
-  double rms_ratio = 0;
-  bool significant = false;
   bool correct = false;        ///< named the truth (or "none" on a clean record)
 };
 
 /// The counts and the reliability table are those of every calibration check (records/decision.h).
 struct RecordsCheckSummary : CalibrationTally {
   std::vector<RecordsCheckTrial> trials;
-  std::vector<model::ReliabilityBin> reliability;  ///< over trials where an effect was named
   double wall_time_s = 0;
 };
 

@@ -241,4 +241,16 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   return d;
 }
 
+TrialVerdict TrialVerdictOf(const RecordDiagnosis& d) {
+  TrialVerdict v;
+  v.verdict_kind = d.verdict_kind;
+  v.significant = d.significant;
+  v.rms_ratio = d.rms_ratio;
+  if (d.named >= 0) {
+    v.named = EffectName(d.candidates[static_cast<size_t>(d.named)].kind);
+    v.confidence = d.confidence;
+  }
+  return v;
+}
+
 }  // namespace pz::records

@@ -82,6 +82,9 @@ struct RecordDiagnosis {
 /// Throws InputError when the set has no training or no withheld record, or on bad options.
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
+/// What a diagnosis said, as a calibration check counts it (records/verdict.h).
+TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
+
 /// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
 ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a, const FitResult& b, double sigma);
 

@@ -62,14 +62,9 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
     }
     if (t.excitation.empty()) t.excitation = "none";
     t.excitation_note = !d.excitation_note.empty();
-    t.verdict_kind = d.verdict_kind;
-    t.significant = d.significant;
-    t.rms_ratio = d.rms_ratio;
-    if (d.named >= 0) {
-      t.named = EffectName(d.candidates[static_cast<size_t>(d.named)].kind);
-      t.confidence = d.confidence;
+    static_cast<TrialVerdict&>(t) = TrialVerdictOf(d);
+    if (d.named >= 0)
       t.named_present = std::find(t.truth_effects.begin(), t.truth_effects.end(), t.named) != t.truth_effects.end();
-    }
     const double ratio = t.floor_estimate / t.floor_truth;
     sum.floor_ratio_min = i == 0 ? ratio : std::min(sum.floor_ratio_min, ratio);
     sum.floor_ratio_max = i == 0 ? ratio : std::max(sum.floor_ratio_max, ratio);

@@ -28,7 +28,8 @@ struct RealLikeCheckOptions {
   RecordDiagnoseOptions diagnose;  ///< family set per trial; no proposal
 };
 
-struct RealLikeCheckTrial {
+/// A trial: the drawn plant, what the diagnosis said (records/verdict.h) and how it compares.
+struct RealLikeCheckTrial : TrialVerdict {
   uint64_t seed = 0;
   std::string description;                ///< the drawn plant
   std::vector<std::string> truth_effects;  ///< library effects the plant has: "creep", "delay", "quadratic-drive"
@@ -37,9 +38,6 @@ struct RealLikeCheckTrial {
   bool excitation_right = false;  ///< ramp and reversals flagged for their reversals, major-2 not
   std::string excitation;         ///< which records were flagged for what
   bool excitation_note = false;   ///< the verdict carries the excitation-gap sentence
-  std::string verdict_kind, named = "none";
-  double confidence = 0, rms_ratio = 0;
-  bool significant = false;
   bool named_present = false;  ///< the named effect is one the plant has
 };
 

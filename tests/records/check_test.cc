@@ -24,7 +24,7 @@ TEST(RecordsCheck, NamesWithheldEffectsWithACalibratedConfidence) {
   ASSERT_GT(s.effect_trials, 8);
   EXPECT_GE(s.effect_right, 0.8 * s.effect_trials);
   EXPECT_LE(s.clean_alarms, 1);
-  for (const auto& b : s.reliability) {
+  for (const auto& b : s.Reliability()) {
     if (b.lo >= 0.99 && b.count > 0) {
       EXPECT_GE(b.frequency_right, 0.9) << b.count << " records stated ≥ 99 %";
     }
