@@ -20,7 +20,9 @@
 //     pattern features) and the withheld squared errors of each model.
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
-//     significant gap that no candidate explains".
+//     significant gap that no candidate explains". The sentences are those of every diagnosis
+//     (records/verdict.h ComposeVerdict); the bench adds the absorbed parameters, the second
+//     effect and, for a tie, what would separate the two on its sinusoids.
 //  6. Greedy: with the first effect in the model, the others are tried again on top of it (only if
 //     the gap left is still significant: otherwise nothing could be named and no fit is run).
 //  7. How far: per case and in total, the withheld gap before and after, the share closed, what

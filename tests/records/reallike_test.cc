@@ -1,7 +1,7 @@
 // The real-like stack generator (records/reallike.h, issue 22 item 5), checked without the
 // product's families: its Preisach loops have return-point memory and wipe out minor loops; its
 // creep is logarithmic; its sensor lag is the stated number of samples; the product's noise floor
-// (records/diagnose.h EstimateNoiseFloor) finds the true floor of its records; the set it writes
+// (records/noise_floor.h EstimateNoiseFloor) finds the true floor of its records; the set it writes
 // reads back through io/records.h with its rest and quantum; bad input is named.
 #include "records/reallike.h"
 
