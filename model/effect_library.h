@@ -1,7 +1,9 @@
 // The one library of candidate unmodelled effects (issue 21): every effect is written once, as one
 // small class in model/effect_library.cc, with its name, title, equation, stage, parameters (ranges
-// scaled to the data) and its arithmetic; the registry (Effects()) lists them in stage order. Both
-// users run the same code:
+// scaled to the data), its arithmetic, and what each protocol needs of it — the fin bench's box
+// (Fin), the truths of the synthetic checks (DrawRecordsTruth, DrawFinTruth) and the id of its C
+// step (kernel); the registry (Effects()) lists them in stage order, and one handle (EffectKind)
+// names an effect for every user. Both users run the same code:
 //   * records/ (records::RecordModel, every plant family on measured records) applies the drive
 //     stage to the record's sampled drive and the output stage to the family's output;
 //   * the bimorph-fin bench (model/effects.h, EffectSimulator) applies the same drive stage to its

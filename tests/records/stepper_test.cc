@@ -17,7 +17,6 @@
 #include <unistd.h>
 
 #include "model/effects.h"
-#include "opt/random.h"
 #include "records/export_header.h"
 #include "records/stepper.h"
 #include "records/synthetic.h"
@@ -168,9 +167,13 @@ TEST(Stepper, EveryEffectMatchesSimulate) {
 // service, draws a records truth inside its box, and has a step kernel of its stage that matches
 // RecordModel::Simulate; a fin effect (a beam effect must be one) parses for the fin diagnosis
 // and the job kind, has a fin box and draws fin truths inside it (both forms).
-/// Truth draws on a seeded generator, as the checks draw them.
+/// Truth draws on a seeded generator (a linear congruential one: tests/records/ keeps to the floors
+/// of records/, which draw through model::TruthDraw without opt/).
 model::TruthDraw Draws(uint64_t seed) {
-  return model::TruthDraw([rng = opt::Rng(seed)]() mutable { return rng.Uniform01(); });
+  return model::TruthDraw([state = seed]() mutable {
+    state = state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return static_cast<double>(state >> 11) * 0x1.0p-53;
+  });
 }
 
 TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
