@@ -26,7 +26,7 @@ struct Case {
   int operators;
 };
 const Case kCases[] = {{"prandtl-ishlinskii", {}, 30}, {"backlash-like", {}, 12},
-                       {"stack-bouc-wen", {EffectKind::kDriverLowpass}, 12}, {"duhem", {}, 12},
+                       {"stack-bouc-wen", {EffectKind::Named("driver-lowpass")}, 12}, {"duhem", {}, 12},
                        {"preisach", {}, 12}, {"asymmetric-pi", {}, 12}, {"bw-oscillator", {}, 12}};
 
 const io::Record& Drive() {

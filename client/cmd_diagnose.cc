@@ -60,7 +60,7 @@ std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   while (std::getline(ss, name, ',')) {
     if (name.empty()) continue;
     const auto k = model::ParseEffectKind(name);
-    if (!k || *k == model::EffectKind::kNone) throw InputError(model::FinEffectError(name));
+    if (!k || k->none()) throw InputError(model::FinEffectError(name));
     kinds.push_back(*k);
   }
   return kinds;

@@ -531,10 +531,6 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
 // ---- check ---------------------------------------------------------------------------------------
 
 namespace {
-std::string ColumnName(int c) {
-  if (c == diagnose::kUnexplainedColumn) return "unexplained";
-  return model::EffectName(static_cast<model::EffectKind>(c));
-}
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
@@ -547,11 +543,11 @@ double Quantile(std::vector<double> v, double q) {
 void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
   o << "confusion matrix (rows: true effect, columns: named; " << s.trials.size() << " benches)\n";
   o << "  " << Pad("true \\ named", 18);
-  for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(ColumnName(c).substr(0, 11), 12);
+  for (int c = 0; c < diagnose::CheckCols(); ++c) o << Pad(diagnose::CheckColumnName(c).substr(0, 11), 12);
   o << "\n";
-  for (int r = 0; r < diagnose::kCheckRows; ++r) {
-    o << "  " << Pad(model::EffectName(static_cast<model::EffectKind>(r)), 18);
-    for (int c = 0; c < diagnose::kCheckCols; ++c) o << Pad(std::to_string(s.confusion[r][c]), 12);
+  for (int r = 0; r < diagnose::CheckRows(); ++r) {
+    o << "  " << Pad(diagnose::CheckColumnName(r), 18);
+    for (int c = 0; c < diagnose::CheckCols(); ++c) o << Pad(std::to_string(s.confusion[r][c]), 12);
     o << "\n";
   }
   o << "share of the gap closed (right effect named, " << s.closed.size() << " benches): min "
@@ -565,11 +561,11 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
 
 void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {
   o << "{\"columns\": [";
-  for (int c = 0; c < diagnose::kCheckCols; ++c) o << (c ? ", " : "") << Str(ColumnName(c));
+  for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << Str(diagnose::CheckColumnName(c));
   o << "],\n \"confusion\": {";
-  for (int r = 0; r < diagnose::kCheckRows; ++r) {
-    o << (r ? ", " : "") << Str(model::EffectName(static_cast<model::EffectKind>(r))) << ": [";
-    for (int c = 0; c < diagnose::kCheckCols; ++c) o << (c ? ", " : "") << s.confusion[r][c];
+  for (int r = 0; r < diagnose::CheckRows(); ++r) {
+    o << (r ? ", " : "") << Str(diagnose::CheckColumnName(r)) << ": [";
+    for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << s.confusion[r][c];
     o << "]";
   }
   o << "},\n \"single_significant\": " << s.effect_trials

@@ -6,22 +6,28 @@
 
 namespace pz::diagnose {
 
+int CheckRows() { return static_cast<int>(model::EffectLibrary().size()) + 1; }
+
+std::string CheckColumnName(int c) {
+  if (c == UnexplainedColumn()) return "unexplained";
+  return c == 0 ? "none" : model::EffectLibrary().at(static_cast<size_t>(c - 1)).name;
+}
+
 bool CheckTrial::correct() const {
-  if (truth == model::EffectKind::kNone) return verdict_kind == "none";
+  if (truth.none()) return verdict_kind == "none";
   return (verdict_kind == "effect" || verdict_kind == "inseparable") && named == truth;
 }
 
 int CheckColumn(const CheckTrial& t) {
-  if (t.verdict_kind == "unexplained") return kUnexplainedColumn;
-  if (t.verdict_kind == "effect" || t.verdict_kind == "inseparable") return static_cast<int>(t.named);
-  return static_cast<int>(model::EffectKind::kNone);
+  if (t.verdict_kind == "unexplained") return UnexplainedColumn();
+  if (t.verdict_kind == "effect" || t.verdict_kind == "inseparable") return model::FinIndex(t.named);
+  return 0;
 }
 
 void Tally(CheckSummary& s, const CheckTrial& t) {
-  s.confusion[static_cast<int>(t.truth)][CheckColumn(t)] += 1;
-  s.Add(t.truth == model::EffectKind::kNone, t.significant, t.verdict_kind,
-        t.truth != model::EffectKind::kNone && t.named == t.truth, t.confidence);
-  if (t.truth != model::EffectKind::kNone && t.correct() && std::isfinite(t.closed)) s.closed.push_back(t.closed);
+  s.confusion[static_cast<size_t>(model::FinIndex(t.truth))][static_cast<size_t>(CheckColumn(t))] += 1;
+  s.Add(t.truth.none(), t.significant, t.verdict_kind, !t.truth.none() && t.named == t.truth, t.confidence);
+  if (!t.truth.none() && t.correct() && std::isfinite(t.closed)) s.closed.push_back(t.closed);
   s.trials.push_back(t);
 }
 
@@ -45,7 +51,7 @@ CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o, const
     od.seed = o.seed + static_cast<uint64_t>(i);
     const Diagnosis d = RunDiagnosis(m, od);
     t.verdict_kind = d.verdict_kind;
-    t.named = d.named.empty() ? model::EffectKind::kNone : d.named.front();
+    t.named = d.named.empty() ? model::EffectKind() : d.named.front();
     t.confidence = d.confidence;
     t.significant = !d.rounds.empty() && d.rounds.front().significant;
     t.rms_ratio = d.rounds.empty() ? 0 : d.rounds.front().rms_ratio;

@@ -4,7 +4,6 @@
 // a significant gap is not attributed), with the distribution of the share of the gap closed.
 #pragma once
 
-#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -14,18 +13,21 @@
 
 namespace pz::diagnose {
 
-/// Rows: true effect (kNone + library); columns: named (kNone, library, "unexplained").
-inline constexpr int kCheckRows = model::kNumEffectKinds;
-inline constexpr int kCheckCols = model::kNumEffectKinds + 1;
-inline constexpr int kUnexplainedColumn = model::kNumEffectKinds;
+/// Rows: true effect (none, then the fin's effects: model::FinIndex); columns: named (the same,
+/// then "unexplained").
+int CheckRows();
+inline int CheckCols() { return CheckRows() + 1; }
+inline int UnexplainedColumn() { return CheckRows(); }
+/// The effect of a row or column ("unexplained" for the last column).
+std::string CheckColumnName(int column);
 
 struct CheckTrial {
   uint64_t seed = 0;
-  model::EffectKind truth = model::EffectKind::kNone;
+  model::EffectKind truth;  ///< none: a clean bench
   std::string truth_description;  ///< form and parameters
   double magnitude = 0;
   std::string verdict_kind;       ///< "effect", "none", "unexplained"
-  model::EffectKind named = model::EffectKind::kNone;  ///< first named effect (kNone otherwise)
+  model::EffectKind named;        ///< first named effect (none otherwise)
   double confidence = 0;
   bool significant = false;       ///< the diagnosis found a significant gap
   double rms_ratio = 0;           ///< base withheld RMS / floor
@@ -39,7 +41,9 @@ struct CheckTrial {
 /// calibration check (records/decision.h); the confusion matrix and the shares closed are the bench's.
 struct CheckSummary : records::CalibrationTally {
   std::vector<CheckTrial> trials;
-  std::array<std::array<int, kCheckCols>, kCheckRows> confusion{};  ///< [truth][named]
+  /// [truth][named], CheckRows() × CheckCols().
+  std::vector<std::vector<int>> confusion =
+      std::vector<std::vector<int>>(static_cast<size_t>(CheckRows()), std::vector<int>(static_cast<size_t>(CheckCols()), 0));
   std::vector<double> closed;        ///< share closed, over correctly named effects
   double wall_time_s = 0;
 };

@@ -25,7 +25,7 @@ namespace {
 // benches are nine sinusoids; `diagnose --records` simulates candidate drives for record sets).
 std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
   auto is = [&](model::EffectKind x, model::EffectKind y) { return (a == x && b == y) || (a == y && b == x); };
-  if (is(model::EffectKind::kDriverLowpass, model::EffectKind::kDelay))
+  if (is(model::EffectKind::Named("driver-lowpass"), model::EffectKind::Named("delay")))
     return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) and rounds edges: "
            "a square-wave (step) drive, or sinusoids at several times the bench's highest frequency, would separate them";
   return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) would separate them; "
@@ -118,7 +118,7 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
     if (fo.starts.empty()) fo.starts.push_back(x0);
   } else {
     fo.de = o.de_candidate;
-    fo.de.seed = o.seed + 1000 * (static_cast<uint64_t>(added) + 1) + 17 * layout.structure().size();
+    fo.de.seed = o.seed + 1000 * (static_cast<uint64_t>(model::FinIndex(added)) + 1) + 17 * layout.structure().size();
     fo.seeds = starts;
     fo.seeds.insert(fo.seeds.begin(), x0);
     fo.starts = {x0};
@@ -364,8 +364,8 @@ Status DiagnoseOptions::Validate() const {
   if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
   if (auto s = rules.Validate(); !s.ok()) return InvalidArgument("rules." + s.message());
   for (EffectKind k : candidates)
-    if (k == EffectKind::kNone || model::GetEffectInfo(k).kind != k)
-      return InvalidArgument(FieldError("candidates[]", static_cast<int>(k), "not an effect of the library"));
+    if (!model::IsFinEffect(k))
+      return InvalidArgument(FieldError("candidates[]", std::string(k.name()), "not an effect of the fin bench"));
   return Status::Ok();
 }
 
@@ -406,7 +406,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   // 1. Base fit.
   Say(o, "base model: global fit on the training cases");
   const ParameterLayout base_layout({});
-  d.base = FitStructure(m, base_layout, nullptr, nullptr, EffectKind::kNone, o);
+  d.base = FitStructure(m, base_layout, nullptr, nullptr, EffectKind(), o);
   d.evaluations += d.base.evaluations;
   if (!d.base.ok) throw InputError("the base model could not be fitted: " + d.base.message);
   // 2. Round-1 fits: every candidate on top of the base model.

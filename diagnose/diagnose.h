@@ -67,7 +67,7 @@ struct DiagnoseOptions {
 
 /// One candidate structure, fitted and scored by the rules of records/decision.h.
 struct CandidateResult : records::CandidateScore {
-  model::EffectKind kind = model::EffectKind::kNone;  ///< the effect added in this round
+  model::EffectKind kind;  ///< the effect added in this round (none: the base)
   FitResult fit;
   int added_params = 0;
 };

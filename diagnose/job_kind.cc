@@ -33,7 +33,7 @@ std::vector<model::EffectKind> Structure(const job::DiagnoseProblem& d, std::vec
   for (size_t i = 0; i < d.structure.size(); ++i) {
     const std::string f = "diagnose.structure[" + std::to_string(i) + "]";
     const auto k = model::ParseEffectKind(d.structure[i]);
-    if (!k || *k == model::EffectKind::kNone) {
+    if (!k || k->none()) {
       v->push_back({f, f + " = " + d.structure[i] + ": " + model::FinEffectError(d.structure[i])});
     } else if (!seen.insert(*k).second) {
       v->push_back({f, f + " = " + d.structure[i] + ": appears twice"});

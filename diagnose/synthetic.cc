@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include "model/saturation.h"
 
@@ -13,14 +14,10 @@ using model::Effect;
 using model::EffectKind;
 
 double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
-double LogUniform(opt::Rng& rng, double lo, double hi) {
-  return lo * std::exp(std::log(hi / lo) * rng.Uniform01());
-}
 double Normal(opt::Rng& rng) {  // Box–Muller on the portable generator
   const double u1 = std::max(rng.Uniform01(), 1e-300), u2 = rng.Uniform01();
   return std::sqrt(-2 * std::log(u1)) * std::cos(2 * std::numbers::pi * u2);
 }
-double Sign(opt::Rng& rng) { return rng.Uniform01() < 0.5 ? -1.0 : 1.0; }
 
 // The paper's nine cases (V, f) and split (training 1, 5, 6, 7).
 struct CaseDef {
@@ -93,68 +90,15 @@ SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t see
   const bool other_form = rng.Uniform01() < o.other_form_probability;
   if (!none) {
     t.truth = kinds[rng.UniformBelow(kinds.size())];
-    switch (t.truth) {
-      case EffectKind::kDriverLowpass: {
-        const double tau = LogUniform(rng, 0.005, 0.08);
-        t.magnitude = tau;
-        if (other_form) {  // second-order amplifier: two equal poles with the same total lag
-          t.form = "second-order (two poles)";
-          t.effects = {{EffectKind::kDriverLowpass, {tau / 2}}, {EffectKind::kDriverLowpass, {tau / 2}}};
-        } else {
-          t.form = "first-order";
-          t.effects = {{EffectKind::kDriverLowpass, {tau}}};
-        }
-        break;
-      }
-      case EffectKind::kCreep: {
-        const double k = LogUniform(rng, 0.02, 0.3), tau = LogUniform(rng, 0.5, 10);
-        t.magnitude = k;
-        if (other_form) {  // two relaxations a decade apart sharing the gain
-          t.form = "two relaxations";
-          t.effects = {{EffectKind::kCreep, {k / 2, tau / 3}}, {EffectKind::kCreep, {k / 2, tau * 3}}};
-        } else {
-          t.form = "one relaxation";
-          t.effects = {{EffectKind::kCreep, {k, tau}}};
-        }
-        break;
-      }
-      case EffectKind::kHingeFriction: {
-        const double fc = LogUniform(rng, 0.02, 0.3), sigma = LogUniform(rng, 500, 1e4);
-        t.magnitude = fc;
-        t.form = "Dahl";
-        t.effects = {{EffectKind::kHingeFriction, {fc, sigma}}};
-        break;
-      }
-      case EffectKind::kDelay: {
-        const double tau = LogUniform(rng, 0.003, 0.05);
-        t.magnitude = tau;
-        t.form = "pure delay";
-        t.effects = {{EffectKind::kDelay, {tau}}};
-        break;
-      }
-      case EffectKind::kCubicStiffening: {
-        const double k3 = LogUniform(rng, 3e5, 1e7);
-        t.magnitude = k3;
-        t.form = "cubic";
-        t.effects = {{EffectKind::kCubicStiffening, {k3}}};
-        break;
-      }
-      case EffectKind::kQuadraticDrive: {
-        const double c2 = Sign(rng) * LogUniform(rng, 1e-5, 2e-4);
-        t.magnitude = c2;
-        t.form = "quadratic";
-        t.effects = {{EffectKind::kQuadraticDrive, {c2}}};
-        break;
-      }
-      case EffectKind::kOutputDrift: {
-        const double r = Sign(rng) * LogUniform(rng, 0.002, 0.05);
-        t.magnitude = r;
-        t.form = "linear";
-        t.effects = {{EffectKind::kOutputDrift, {r}}};
-        break;
-      }
-      case EffectKind::kNone: break;
+    model::TruthDraw draw([&rng] { return rng.Uniform01(); });
+    model::FinTruth truth = t.truth->DrawFinTruth(draw, other_form);
+    if (truth.parts.empty()) {
+      throw InputError(std::string("synthetic bench: effect '") + t.truth.name() +
+                       "' draws no fin truth (its DrawFinTruth in model/effect_library.cc)");
     }
+    t.form = std::move(truth.form);
+    t.magnitude = truth.magnitude;
+    for (std::vector<double>& part : truth.parts) t.effects.push_back({t.truth, std::move(part)});
   }
   t.cases = SimulateBench(plant, p, t.effects, sat, o, rng);
   return t;

@@ -19,7 +19,7 @@ namespace pz::diagnose {
 /// One drawn bench: what it holds (never shown to the diagnosis) and its cases.
 struct SyntheticTrial {
   uint64_t seed = 0;
-  model::EffectKind truth = model::EffectKind::kNone;  ///< the effect family
+  model::EffectKind truth;                               ///< the effect family (none: a clean bench)
   std::string form;                                      ///< e.g. "first-order", "two relaxations"
   std::vector<model::Effect> effects;                    ///< as simulated (library building blocks)
   double magnitude = 0;                                  ///< the drawn magnitude (physical units)

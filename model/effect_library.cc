@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <ostream>
 #include <stdexcept>
 
 #include "model/bimorph_ode.h"
@@ -178,6 +179,7 @@ class DriverLowpass final : public EffectDef {
   const char* title() const override { return "driver (amplifier) first-order low-pass"; }
   const char* equation() const override { return "tau u_e' = u - u_e"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
+  int kernel() const override { return 1; }  // PZK_LOWPASS
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double dt = 1 / s.fs;
     const double tau_hi = std::max(0.5 / (2 * std::numbers::pi * s.f_dom), 20 * dt);
@@ -189,6 +191,13 @@ class DriverLowpass final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<LowpassExtension>(p[0]);
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.004, 0.03)}; }
+  FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
+    const double tau = d.LogUniform(0.005, 0.08);
+    if (other_form) return {"second-order (two poles)", tau, {{tau / 2}, {tau / 2}}};  // same total lag
+    return {"first-order", tau, {{tau}}};
+  }
+  FinBox Fin() const override { return {1, {{0.0, 0.2, 0.01, false, "time constant of the amplifier"}}}; }
 };
 
 class QuadraticDrive final : public EffectDef {
@@ -197,6 +206,7 @@ class QuadraticDrive final : public EffectDef {
   const char* title() const override { return "quadratic (electrostrictive) drive term"; }
   const char* equation() const override { return "u_e = u + c2 u^2"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
+  int kernel() const override { return 2; }  // PZK_QUADRATIC
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double umax = std::max(std::abs(s.u_min), std::abs(s.u_max));
     return {{"c2", "1/V", -0.3 / umax, 0.3 / umax, false}};
@@ -208,6 +218,16 @@ class QuadraticDrive final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<QuadraticExtension>(p[0]);
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+    const double s = d.Sign();
+    return {s * d.Uniform(0.0005, 0.002)};
+  }
+  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
+    const double s = d.Sign();
+    const double c2 = s * d.LogUniform(1e-5, 2e-4);
+    return {"quadratic", c2, {{c2}}};
+  }
+  FinBox Fin() const override { return {6, {{-5e-4, 5e-4, 2e-5, false, "quadratic drive coefficient"}}}; }
 };
 
 class Creep final : public EffectDef {
@@ -216,6 +236,7 @@ class Creep final : public EffectDef {
   const char* title() const override { return "piezo creep of the drive (one relaxation)"; }
   const char* equation() const override { return "tau_c x' = k_c (u - u0) - x, u_e = u + x"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
+  int kernel() const override { return 3; }  // PZK_CREEP
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double lo = 0.5 / s.f_dom, hi = std::max(10 * s.duration, 2 * lo);
     return {{"k_c", "-", -0.3, 0.3, false}, {"tau_c_s", "s", lo, hi, true}};
@@ -231,6 +252,21 @@ class Creep final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+    const double s = d.Sign();
+    const double k = s * d.Uniform(0.03, 0.15);
+    return {k, d.Uniform(0.5, 2)};
+  }
+  FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
+    const double k = d.LogUniform(0.02, 0.3), tau = d.LogUniform(0.5, 10);
+    if (other_form) return {"two relaxations", k, {{k / 2, tau / 3}, {k / 2, tau * 3}}};  // a decade apart, one gain
+    return {"one relaxation", k, {{k, tau}}};
+  }
+  FinBox Fin() const override {
+    return {2,
+            {{0.0, 1.0, 0.05, false, "creep gain: long-run extra share of the drive"},
+             {0.05, 50.0, 2.0, true, "creep relaxation time"}}};
+  }
 };
 
 class Delay final : public EffectDef {
@@ -239,6 +275,7 @@ class Delay final : public EffectDef {
   const char* title() const override { return "measurement / transport delay"; }
   const char* equation() const override { return "u_e(t) = u(t - tau_d)"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
+  int kernel() const override { return 4; }  // PZK_DELAY
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double dt = 1 / s.fs;
     return {{"tau_d_s", "s", 0, std::max(std::min(0.25 / s.f_dom, 500 * dt), 2 * dt), false}};
@@ -259,6 +296,12 @@ class Delay final : public EffectDef {
     }
   }
   double TimeShift(std::span<const double> p) const override { return p[0]; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.003, 0.02)}; }
+  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
+    const double tau = d.LogUniform(0.003, 0.05);
+    return {"pure delay", tau, {{tau}}};
+  }
+  FinBox Fin() const override { return {4, {{0.0, 0.1, 0.005, false, "delay"}}}; }
 };
 
 class HingeFriction final : public EffectDef {
@@ -272,6 +315,15 @@ class HingeFriction final : public EffectDef {
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<DahlHingeExtension>(p[0], p[1]);
+  }
+  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
+    const double fc = d.LogUniform(0.02, 0.3), sigma = d.LogUniform(500, 1e4);
+    return {"Dahl", fc, {{fc, sigma}}};
+  }
+  FinBox Fin() const override {
+    return {3,
+            {{0.0, 1.0, 0.05, false, "Coulomb level F_c of the friction force"},
+             {20.0, 2e5, 2000.0, true, "pre-sliding stiffness sigma"}}};
   }
 };
 
@@ -287,6 +339,13 @@ class CubicStiffening final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CubicExtension>(p[0]);
   }
+  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
+    const double k3 = d.LogUniform(3e5, 1e7);
+    return {"cubic", k3, {{k3}}};
+  }
+  FinBox Fin() const override {
+    return {5, {{-5e6, 2e7, 1e6, false, "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}};
+  }
 };
 
 class Friction final : public EffectDef {
@@ -295,6 +354,7 @@ class Friction final : public EffectDef {
   const char* title() const override { return "friction dead band at the output"; }
   const char* equation() const override { return "y_e = play_r[y]"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
+  int kernel() const override { return 30; }  // PZK_FRICTION
   std::vector<ParamInfo> Params(const DataScale& s) const override { return {{"r", "y", 0, 0.2 * s.y_half, false}}; }
   void ApplyOutput(std::span<const double> p, const OutputFrame&, std::span<double> y) const override {
     const double r = std::max(p[0], 0.0);
@@ -305,6 +365,7 @@ class Friction final : public EffectDef {
       v = z;
     }
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.05, 0.4)}; }
 };
 
 class Stiffening final : public EffectDef {
@@ -313,6 +374,7 @@ class Stiffening final : public EffectDef {
   const char* title() const override { return "cubic stiffening"; }
   const char* equation() const override { return "y_e = y - k3 Y ((y - y0)/Y)^3"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
+  int kernel() const override { return 31; }  // PZK_STIFFENING
   std::vector<ParamInfo> Params(const DataScale&) const override { return {{"k3", "-", -0.3, 0.3, false}}; }
   void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
     if (y.empty()) return;
@@ -322,6 +384,10 @@ class Stiffening final : public EffectDef {
       v -= p[0] * Y * x * x * x;
     }
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+    const double s = d.Sign();
+    return {s * d.Uniform(0.02, 0.12)};
+  }
 };
 
 class Drift final : public EffectDef {
@@ -330,12 +396,24 @@ class Drift final : public EffectDef {
   const char* title() const override { return "drift of the reading"; }
   const char* equation() const override { return "y_e = y + rate (t - t_window)"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
+  int kernel() const override { return 32; }  // PZK_DRIFT
+  const char* former_name() const override { return "output-drift"; }  // its name before the one library
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     return {{"rate", "y/s", -s.y_half / s.duration, s.y_half / s.duration, false}};
   }
   void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
     for (size_t k = 0; k < y.size(); ++k) y[k] += p[0] * (static_cast<double>(k) - f.origin) * f.dt;
   }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+    const double s = d.Sign();
+    return {s * d.Uniform(0.03, 0.15)};
+  }
+  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
+    const double s = d.Sign();
+    const double r = s * d.LogUniform(0.002, 0.05);
+    return {"linear", r, {{r}}};
+  }
+  FinBox Fin() const override { return {7, {{-0.2, 0.2, 0.005, false, "drift rate", "deg/s"}}}; }
 };
 
 // The registry: one line per effect, in chain order.
@@ -360,9 +438,26 @@ const std::vector<const EffectDef*>& Effects() {
 
 const EffectDef* FindEffect(std::string_view name) {
   for (const EffectDef* e : Effects())
-    if (name == e->name()) return e;
+    if (name == e->name() || (e->former_name() != nullptr && name == e->former_name())) return e;
   return nullptr;
 }
+
+EffectKind EffectKind::Named(std::string_view name) {
+  const EffectDef* def = FindEffect(name);
+  if (def == nullptr) throw std::logic_error("no effect named '" + std::string(name) + "' in model::Effects()");
+  return *def;
+}
+
+const char* EffectKind::name() const { return def_ == nullptr ? "none" : def_->name(); }
+
+std::strong_ordering operator<=>(EffectKind a, EffectKind b) {
+  if (a.def_ == b.def_) return std::strong_ordering::equal;
+  if (a.def_ == nullptr) return std::strong_ordering::less;
+  if (b.def_ == nullptr) return std::strong_ordering::greater;
+  return EffectIndex(*a.def_) <=> EffectIndex(*b.def_);
+}
+
+std::ostream& operator<<(std::ostream& os, EffectKind kind) { return os << kind.name(); }
 
 size_t EffectIndex(const EffectDef& effect) {
   const auto& all = Effects();
@@ -379,6 +474,10 @@ const char* StageName(EffectStage stage) {
   }
   return "?";
 }
+
+double TruthDraw::Uniform(double lo, double hi) { return lo + (hi - lo) * u01_(); }
+double TruthDraw::LogUniform(double lo, double hi) { return lo * std::exp(std::log(hi / lo) * u01_()); }
+double TruthDraw::Sign() { return u01_() < 0.5 ? -1.0 : 1.0; }
 
 void EffectDef::ApplyDrive(std::span<const double>, double, std::span<double>) const {}
 void EffectDef::ApplyOutput(std::span<const double>, const OutputFrame&, std::span<double>) const {}

@@ -1,7 +1,9 @@
 // The one library of candidate unmodelled effects (issue 21): every effect is written once, as one
 // small class in model/effect_library.cc, with its name, title, equation, stage, parameters (ranges
-// scaled to the data) and its arithmetic; the registry (Effects()) lists them in stage order. Both
-// users run the same code:
+// scaled to the data), its arithmetic, and what each protocol needs of it — the fin bench's box
+// (Fin), the truths of the synthetic checks (DrawRecordsTruth, DrawFinTruth) and the id of its C
+// step (kernel); the registry (Effects()) lists them in stage order, and one handle (EffectKind)
+// names an effect for every user. Both users run the same code:
 //   * records/ (records::RecordModel, every plant family on measured records) applies the drive
 //     stage to the record's sampled drive and the output stage to the family's output;
 //   * the bimorph-fin bench (model/effects.h, EffectSimulator) applies the same drive stage to its
@@ -33,7 +35,12 @@
 // Pure library: no I/O. The effects are immutable singletons, safe from any thread.
 #pragma once
 
+#include <compare>
+#include <cstddef>
+#include <functional>
+#include <iosfwd>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -78,11 +85,53 @@ struct OutputFrame {
   double y_half = 1;
 };
 
+/// One parameter of the bimorph-fin bench's search box (model/effects.h), in the library's order:
+/// the physical range, a typical magnitude (search scaling, finite-difference steps, > 0), a doc
+/// line and, where the fin's output differs from the library's scale, the unit (null: the library's).
+struct FinParam {
+  double lower = 0, upper = 0, scale = 1;
+  bool log_scale = false;
+  const char* doc = "";
+  const char* unit = nullptr;
+};
+/// The fin bench's box of an effect it offers (no parameters: the fin does not offer it), and the
+/// effect's place in the fin's order — the order the fin's diagnosis tries candidates, its check
+/// draws truths and its confusion matrix lists rows (the order of the fin's former enum, kept so
+/// seeded checks stay the same; a new effect takes the next number).
+struct FinBox {
+  int order = 0;
+  std::vector<FinParam> params;
+};
+
+/// Random draws of a synthetic check's truth on the caller's seeded generator (a source of uniform
+/// numbers in [0, 1)); each draw takes one number, in the order written.
+class TruthDraw {
+ public:
+  explicit TruthDraw(std::function<double()> uniform01) : u01_(std::move(uniform01)) {}
+  double Uniform(double lo, double hi);     ///< lo + (hi − lo) u
+  double LogUniform(double lo, double hi);  ///< lo (hi/lo)^u
+  double Sign();                            ///< −1 if u < 0.5, else 1
+
+ private:
+  std::function<double()> u01_;
+};
+
+/// A drawn truth of the fin bench's check (diagnose/synthetic.h): one or more copies of the effect
+/// simulated together (a second form the library lacks, e.g. two equal low-pass poles), the drawn
+/// magnitude and the form's name.
+struct FinTruth {
+  std::string form;                        ///< e.g. "first-order", "two relaxations"
+  double magnitude = 0;                    ///< physical units
+  std::vector<std::vector<double>> parts;  ///< the parameters of each copy (fin-bench units)
+};
+
 /// One effect. Subclasses override the methods of their stage; the defaults are the identity.
 class EffectDef {
  public:
   virtual ~EffectDef() = default;
   virtual const char* name() const = 0;
+  /// A former name still accepted by FindEffect (drift's "output-drift"); null: none.
+  virtual const char* former_name() const { return nullptr; }
   virtual const char* title() const = 0;
   virtual const char* equation() const = 0;
   virtual EffectStage stage() const = 0;
@@ -106,13 +155,64 @@ class EffectDef {
   /// The effect as an extension of the bimorph ODE (model/bimorph_ode.h); null when it has none
   /// (output effects; the delay, which the CVODE path takes as a shift of the output times).
   virtual std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const;
+
+  // ---- the bimorph-fin bench (model/effects.h) ----
+  /// Its box on the fin bench (physical ranges: the fin's scale is fixed); default: not offered.
+  virtual FinBox Fin() const { return {}; }
+
+  // ---- per-sample step (controller export) ----
+  /// The id of the effect's step in the C kernels (records/kernels/common.h PZK_*, run by
+  /// records/kernels/chain.h for records/stepper.h and copied into `piezoid export` headers); 0:
+  /// none (beam effects, which only the fin bench's CVODE path runs). Drive effects take ids below
+  /// PZK_STACK_BOUC_WEN (10), output effects from PZK_FRICTION (30).
+  virtual int kernel() const { return 0; }
+
+  // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
+  /// The parameters of a records check's truth (records/check.cc), on the synthetic stack's scale
+  /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V); empty: none (beam effects).
+  virtual std::vector<double> DrawRecordsTruth(TruthDraw&) const { return {}; }
+  /// A fin-bench check's truth (diagnose/synthetic.cc) in the fin bench's units; `other_form`
+  /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer it.
+  virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }
 };
+
+/// The handle of an effect: the library's effect, or none (default). Compared in chain order
+/// (none first), hashable, printed by name. Every user — records fits and diagnoses, the fin bench,
+/// the synthetic checks, the stepper — names an effect by this one handle.
+class EffectKind {
+ public:
+  constexpr EffectKind() = default;
+  EffectKind(const EffectDef& def) : def_(&def) {}  // NOLINT: an effect is its own handle
+  /// The registered effect of that name or former name; throws std::logic_error if there is none
+  /// (for code that names an effect it knows; input goes through FindEffect / the parsers).
+  static EffectKind Named(std::string_view name);
+
+  bool none() const { return def_ == nullptr; }
+  const EffectDef* def() const { return def_; }
+  const EffectDef* operator->() const { return def_; }
+  /// The effect's name, "none" for none.
+  const char* name() const;
+
+  friend bool operator==(EffectKind a, EffectKind b) { return a.def_ == b.def_; }
+  friend std::strong_ordering operator<=>(EffectKind a, EffectKind b);
+
+ private:
+  const EffectDef* def_ = nullptr;
+};
+std::ostream& operator<<(std::ostream& os, EffectKind kind);
+/// kind.name().
+inline const char* EffectName(EffectKind kind) { return kind.name(); }
 
 /// Every effect, in stage order (the order in which a chain applies them).
 const std::vector<const EffectDef*>& Effects();
-/// The effect of that name, or null.
+/// The effect of that name (or former name), or null.
 const EffectDef* FindEffect(std::string_view name);
 /// Position of an effect in Effects() (the chain order); throws std::logic_error if unregistered.
 size_t EffectIndex(const EffectDef& effect);
 
 }  // namespace pz::model
+
+template <>
+struct std::hash<pz::model::EffectKind> {
+  size_t operator()(pz::model::EffectKind k) const noexcept { return std::hash<const void*>()(k.def()); }
+};

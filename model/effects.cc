@@ -14,53 +14,33 @@
 namespace pz::model {
 namespace {
 
-// The fin bench's box of each effect it offers: the library's effect by name, and per parameter
-// (in the library's order) the fin's range, typical scale, doc line and, for the angle output, unit.
-struct FinParamBox {
-  double lower, upper, scale;
-  bool log_scale;
-  const char* doc;
-  const char* unit = nullptr;  ///< null: the library's unit
-};
-struct FinEffectBox {
-  EffectKind kind;
-  const char* effect;
-  std::vector<FinParamBox> params;
-};
-
+// The fin's effects: every library effect with a fin box, in the fin's order.
 std::vector<EffectInfo> BuildLibrary() {
-  const std::vector<FinEffectBox> boxes = {
-      {EffectKind::kDriverLowpass, "driver-lowpass", {{0.0, 0.2, 0.01, false, "time constant of the amplifier"}}},
-      {EffectKind::kCreep, "creep",
-       {{0.0, 1.0, 0.05, false, "creep gain: long-run extra share of the drive"},
-        {0.05, 50.0, 2.0, true, "creep relaxation time"}}},
-      {EffectKind::kHingeFriction, "hinge-friction",
-       {{0.0, 1.0, 0.05, false, "Coulomb level F_c of the friction force"},
-        {20.0, 2e5, 2000.0, true, "pre-sliding stiffness sigma"}}},
-      {EffectKind::kDelay, "delay", {{0.0, 0.1, 0.005, false, "delay"}}},
-      {EffectKind::kCubicStiffening, "cubic-stiffening",
-       {{-5e6, 2e7, 1e6, false, "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}},
-      {EffectKind::kQuadraticDrive, "quadratic-drive", {{-5e-4, 5e-4, 2e-5, false, "quadratic drive coefficient"}}},
-      {EffectKind::kOutputDrift, "drift", {{-0.2, 0.2, 0.005, false, "drift rate", "deg/s"}}},
-  };
-  std::vector<EffectInfo> lib;
-  for (const FinEffectBox& b : boxes) {
-    const EffectDef* def = FindEffect(b.effect);
-    if (def == nullptr) throw std::logic_error(std::string("fin effect '") + b.effect + "' is not in the library");
+  std::vector<std::pair<int, EffectInfo>> lib;
+  for (const EffectDef* def : Effects()) {
+    const FinBox box = def->Fin();
+    if (box.params.empty()) continue;
     const std::vector<ParamInfo> names = def->Params(DataScale{});
-    if (names.size() != b.params.size()) throw std::logic_error(std::string("fin box of '") + b.effect + "': parameter count");
-    EffectInfo info{b.kind, def, def->name(), def->title(), def->stage(), def->equation(), 0, {}};
+    if (names.size() != box.params.size())
+      throw std::logic_error(std::string("fin box of '") + def->name() + "': parameter count");
+    EffectInfo info{*def, def, def->name(), def->title(), def->stage(), def->equation(), 0, {}};
     for (size_t i = 0; i < names.size(); ++i) {
-      const FinParamBox& p = b.params[i];
+      const FinParam& p = box.params[i];
       info.params.push_back({names[i].name, p.unit ? p.unit : names[i].unit, p.lower, p.upper, p.scale, p.log_scale, p.doc});
     }
-    lib.push_back(std::move(info));
+    for (const auto& [order, other] : lib)
+      if (order == box.order)
+        throw std::logic_error(std::string("fin boxes of '") + other.name + "' and '" + def->name() + "': same order");
+    lib.push_back({box.order, std::move(info)});
   }
-  return lib;
+  std::sort(lib.begin(), lib.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::vector<EffectInfo> out;
+  for (auto& [order, info] : lib) out.push_back(std::move(info));
+  return out;
 }
 
 const EffectInfo& NoneInfo() {
-  static const EffectInfo none{EffectKind::kNone, nullptr, "none", "no unmodelled effect", EffectStage::kOutput, "", -1, {}};
+  static const EffectInfo none{EffectKind(), nullptr, "none", "no unmodelled effect", EffectStage::kOutput, "", -1, {}};
   return none;
 }
 
@@ -114,14 +94,21 @@ const EffectInfo& GetEffectInfo(EffectKind kind) {
   return NoneInfo();
 }
 
-const char* EffectName(EffectKind kind) { return GetEffectInfo(kind).name.c_str(); }
+bool IsFinEffect(EffectKind kind) { return !kind.none() && GetEffectInfo(kind).kind == kind; }
+
+int FinIndex(EffectKind kind) {
+  if (kind.none()) return 0;
+  const auto& lib = EffectLibrary();
+  for (size_t i = 0; i < lib.size(); ++i)
+    if (lib[i].kind == kind) return static_cast<int>(i) + 1;
+  throw std::logic_error(std::string("effect '") + kind.name() + "' is not an effect of the fin bench");
+}
 
 std::optional<EffectKind> ParseEffectKind(std::string_view name) {
-  if (name == "none") return EffectKind::kNone;
-  if (name == "output-drift") return EffectKind::kOutputDrift;  // its name before the one library
-  for (const EffectInfo& e : EffectLibrary())
-    if (e.name == name) return e.kind;
-  return std::nullopt;
+  if (name == "none") return EffectKind();
+  const EffectDef* def = FindEffect(name);
+  if (def == nullptr || !IsFinEffect(*def)) return std::nullopt;
+  return EffectKind(*def);
 }
 
 std::string FinEffectError(std::string_view name) {
@@ -136,8 +123,8 @@ std::string FinEffectError(std::string_view name) {
 
 Status Effect::Validate() const {
   const EffectInfo& info = GetEffectInfo(kind);
-  if (kind != EffectKind::kNone && info.kind == EffectKind::kNone)
-    return InvalidArgument(FieldError("effect.kind", static_cast<int>(kind), "unknown effect kind"));
+  if (!kind.none() && info.kind != kind)
+    return InvalidArgument(FieldError("effect.kind", std::string(kind.name()), "not an effect of the fin bench"));
   if (params.size() != info.params.size())
     return InvalidArgument(FieldError(info.name + ".params.size()", params.size(),
                                       "must be " + std::to_string(info.params.size())));
@@ -156,7 +143,7 @@ Status Effect::Validate() const {
 }
 
 bool Effect::IsIdentity() const {
-  if (kind == EffectKind::kNone) return true;
+  if (kind.none()) return true;
   const EffectInfo& info = GetEffectInfo(kind);
   return info.magnitude_param >= 0 && static_cast<size_t>(info.magnitude_param) < params.size() &&
          params[info.magnitude_param] == 0.0;

@@ -1,16 +1,17 @@
 // The bimorph-fin bench's use of the one effect library (model/effect_library.h, issue 21): the
-// effects the fin diagnosis (issue 6) offers, by the handle EffectKind its reports and check matrix
-// use, each with the fin bench's search box (physical ranges, a typical scale, a doc line), and
-// EffectSimulator, which runs the bimorph plant with any list of them. Zero magnitude is the identity.
+// effects the fin diagnosis (issue 6) offers — every library effect whose class gives a fin box
+// (EffectDef::Fin: physical ranges, a typical scale, a doc line, its place in the fin's order) — by
+// the library's handle EffectKind, and EffectSimulator, which runs the bimorph plant with any list
+// of them. Zero magnitude is the identity. Today, in the fin's order:
 //
-//   kind               library effect     stage    fin-bench range
-//   kDriverLowpass     driver-lowpass     drive    tau_s ∈ [0, 0.2] s
-//   kCreep             creep              drive    k_c ∈ [0, 1], tau_c_s ∈ [0.05, 50] s
-//   kHingeFriction     hinge-friction     beam     fc_n ∈ [0, 1] N, sigma ∈ [20, 2e5] N/m
-//   kDelay             delay              drive    tau_d_s ∈ [0, 0.1] s
-//   kCubicStiffening   cubic-stiffening   beam     k3 ∈ [−5e6, 2e7] N/m³
-//   kQuadraticDrive    quadratic-drive    drive    c2 ∈ [−5e-4, 5e-4] 1/V
-//   kOutputDrift       drift              output   rate ∈ [−0.2, 0.2] deg/s  (former name output-drift)
+//   library effect     stage    fin-bench range
+//   driver-lowpass     drive    tau_s ∈ [0, 0.2] s
+//   creep              drive    k_c ∈ [0, 1], tau_c_s ∈ [0.05, 50] s
+//   hinge-friction     beam     fc_n ∈ [0, 1] N, sigma ∈ [20, 2e5] N/m
+//   delay              drive    tau_d_s ∈ [0, 0.1] s
+//   cubic-stiffening   beam     k3 ∈ [−5e6, 2e7] N/m³
+//   quadratic-drive    drive    c2 ∈ [−5e-4, 5e-4] 1/V
+//   drift              output   rate ∈ [−0.2, 0.2] deg/s  (former name output-drift)
 //
 // The arithmetic is the library's: drive effects run in the library's chain order (low-pass →
 // quadratic → creep → delay) through EffectDef::ApplyDrive, output effects through ApplyOutput on the
@@ -42,18 +43,6 @@
 
 namespace pz::model {
 
-enum class EffectKind : int {
-  kNone = 0,
-  kDriverLowpass = 1,
-  kCreep = 2,
-  kHingeFriction = 3,
-  kDelay = 4,
-  kCubicStiffening = 5,
-  kQuadraticDrive = 6,
-  kOutputDrift = 7,
-};
-inline constexpr int kNumEffectKinds = 8;  ///< including kNone
-
 /// One physical parameter of an effect.
 struct EffectParamInfo {
   std::string name;      ///< e.g. "tau_s"
@@ -66,8 +55,8 @@ struct EffectParamInfo {
 };
 
 struct EffectInfo {
-  EffectKind kind = EffectKind::kNone;
-  const EffectDef* def = nullptr;  ///< the library's effect (null for kNone)
+  EffectKind kind;                 ///< the library's effect (none: the entry "none")
+  const EffectDef* def = nullptr;  ///< kind.def()
   std::string name;      ///< selectable name, e.g. "driver-lowpass"
   std::string title;     ///< e.g. "driver (amplifier) low-pass"
   EffectStage stage = EffectStage::kDrive;
@@ -77,12 +66,16 @@ struct EffectInfo {
   std::vector<EffectParamInfo> params;
 };
 
-/// Every effect of the library (kNone excluded), in EffectKind order.
+/// Every effect the fin bench offers, in the fin's order (FinBox::order).
 const std::vector<EffectInfo>& EffectLibrary();
-/// The entry of one kind (kNone: name "none", no parameters).
+/// The entry of one kind (none, or an effect the fin does not offer: name "none", no parameters).
 const EffectInfo& GetEffectInfo(EffectKind kind);
-const char* EffectName(EffectKind kind);
-/// Parses a name of EffectLibrary(), "none" or the former name "output-drift"; nullopt if unknown
+/// True when the fin bench offers the effect.
+bool IsFinEffect(EffectKind kind);
+/// Position of a fin effect in EffectLibrary() plus one; 0 for none (the rows of the fin check's
+/// confusion matrix). Throws std::logic_error for an effect the fin does not offer.
+int FinIndex(EffectKind kind);
+/// Parses a name of EffectLibrary(), "none" or a former name ("output-drift"); nullopt if unknown
 /// or not a fin effect (FinEffectError says which).
 std::optional<EffectKind> ParseEffectKind(std::string_view name);
 /// Why `name` is not a fin effect ("not an effect of the fin bench: …" for a library effect the fin
@@ -91,12 +84,12 @@ std::string FinEffectError(std::string_view name);
 
 /// One effect with its parameter values (in GetEffectInfo(kind).params order, physical units).
 struct Effect {
-  EffectKind kind = EffectKind::kNone;
+  EffectKind kind;
   std::vector<double> params;
 
   /// Count, finiteness and ranges; the error names the effect, the parameter, the value and the range.
   Status Validate() const;
-  /// True when the effect changes nothing (kNone, or its magnitude parameter is 0).
+  /// True when the effect changes nothing (none, or its magnitude parameter is 0).
   bool IsIdentity() const;
   /// e.g. "driver-lowpass(tau_s = 0.02 s)".
   std::string Describe() const;

@@ -46,7 +46,6 @@ std::vector<double> Nominal(const std::string& family, const Family& fam) {
 }
 
 double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
-double Sign(opt::Rng& rng) { return rng.Uniform01() < 0.5 ? -1 : 1; }
 
 }  // namespace
 
@@ -59,8 +58,8 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   const std::vector<double> nominal = Nominal(o.family, *fam);
   std::vector<EffectKind> kinds;
   const auto excluded = fam->excluded_effects();
-  for (const std::string& n : EffectNames())
-    if (std::find(excluded.begin(), excluded.end(), n) == excluded.end()) kinds.push_back(ParseEffect(n));
+  for (EffectKind k : RecordEffects())
+    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end()) kinds.push_back(k);
   RecordsCheckSummary sum;
   for (int i = 0; i < o.trials; ++i) {
     RecordsCheckTrial t;
@@ -75,18 +74,13 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
       const EffectKind e = kinds[rng.UniformBelow(kinds.size())];
       effects.push_back(e);
       t.truth = EffectName(e);
-      switch (e) {
-        case EffectKind::kDriverLowpass: p.push_back(Uniform(rng, 0.004, 0.03)); break;
-        case EffectKind::kQuadraticDrive: p.push_back(Sign(rng) * Uniform(rng, 0.0005, 0.002)); break;
-        case EffectKind::kCreep: p.push_back(Sign(rng) * Uniform(rng, 0.03, 0.15)); p.push_back(Uniform(rng, 0.5, 2)); break;
-        case EffectKind::kDelay: p.push_back(Uniform(rng, 0.003, 0.02)); break;
-        case EffectKind::kFriction: p.push_back(Uniform(rng, 0.05, 0.4)); break;
-        case EffectKind::kStiffening: p.push_back(Sign(rng) * Uniform(rng, 0.02, 0.12)); break;
-        case EffectKind::kDrift: p.push_back(Sign(rng) * Uniform(rng, 0.03, 0.15)); break;
-        default:
-          throw InputError(std::string("diagnose-check --records: effect '") + EffectName(e) +
-                           "' has no truth magnitudes in records/check.cc");
+      model::TruthDraw draw([&rng] { return rng.Uniform01(); });
+      const std::vector<double> truth = e->DrawRecordsTruth(draw);
+      if (truth.empty()) {
+        throw InputError(std::string("diagnose-check --records: effect '") + EffectName(e) +
+                         "' draws no truth (its DrawRecordsTruth in model/effect_library.cc)");
       }
+      p.insert(p.end(), truth.begin(), truth.end());
       desc << t.truth << " " << p.back();
     } else {
       desc << "none";

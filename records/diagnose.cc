@@ -169,13 +169,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   std::vector<EffectKind> cands = o.candidates;
   if (cands.empty()) {
     const auto excluded = d.base.model->family().excluded_effects();
-    for (const std::string& n : EffectNames())
-      if (std::find(excluded.begin(), excluded.end(), n) == excluded.end()) cands.push_back(ParseEffect(n));
+    for (EffectKind k : RecordEffects())
+      if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end()) cands.push_back(k);
   }
   const DataScale& scale = d.base.model->scale();
   const auto base_ex = BinExcess(set, d.base, sigma2, scale);
   const auto base_sq = WithheldSquares(set, d.base);
-  const auto lib = EffectLibrary(scale);
   for (EffectKind e : cands) {
     if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
     RecordCandidate c;
@@ -193,7 +192,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     }
     for (double frac : {0.02, 0.1, 0.3}) {
       std::vector<double> phys = d.base.params;
-      for (const ParamInfo& p : lib[static_cast<size_t>(e)].params) {
+      for (const ParamInfo& p : e->Params(scale)) {
         const double mid = p.lower <= 0 && p.upper >= 0 ? frac * (p.upper > 0 ? p.upper : p.lower)
                                                          : p.lower * std::pow(p.upper / p.lower, frac);
         phys.push_back(mid);
@@ -203,7 +202,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
       ce.extra_starts.push_back(unit);
     }
     c.fit = FitModel(set, model, ce);
-    const int k = static_cast<int>(lib[static_cast<size_t>(e)].params.size());
+    const int k = static_cast<int>(e->Params(scale).size());
     ScoreCandidate(gap, Sse(set, c.fit, true), Sse(set, c.fit, false), k,
                    PatternExplained(base_ex, BinExcess(set, c.fit, sigma2, scale)), o.rules, c);
     c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.rules.blocks);

@@ -48,7 +48,7 @@ struct ProposedExperiment {
 
 /// One effect added to the base family, fitted and scored by the rules of records/decision.h.
 struct RecordCandidate : CandidateScore {
-  EffectKind kind = EffectKind::kDrift;
+  EffectKind kind;
   FitResult fit;
   double z_vs_base = 0;      ///< paired block test against the base model (> 0: better)
 };

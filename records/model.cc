@@ -5,54 +5,37 @@
 #include <numbers>
 
 namespace pz::records {
-namespace {
-
-// The library's effects a records family can take (drive and output stages), in chain order.
-const std::vector<const model::EffectDef*>& RecordEffects() {
-  static const std::vector<const model::EffectDef*> defs = [] {
-    std::vector<const model::EffectDef*> r;
+const std::vector<EffectKind>& RecordEffects() {
+  static const std::vector<EffectKind> kinds = [] {
+    std::vector<EffectKind> r;
     for (const model::EffectDef* e : model::Effects())
-      if (e->stage() != model::EffectStage::kBeam) r.push_back(e);
+      if (e->stage() != model::EffectStage::kBeam) r.push_back(*e);
     return r;
   }();
-  return defs;
-}
-
-}  // namespace
-
-const model::EffectDef& EffectOf(EffectKind kind) {
-  const auto& defs = RecordEffects();
-  const auto i = static_cast<size_t>(kind);
-  if (i >= defs.size()) throw InputError("records effect #" + std::to_string(i) + " does not exist");
-  return *defs[i];
+  return kinds;
 }
 
 std::vector<EffectInfo> EffectLibrary(const DataScale& s) {
   std::vector<EffectInfo> lib;
-  const auto& defs = RecordEffects();
-  for (size_t i = 0; i < defs.size(); ++i)
-    lib.push_back({static_cast<EffectKind>(i), defs[i]->name(), defs[i]->title(), defs[i]->equation(), defs[i]->Params(s)});
+  for (EffectKind k : RecordEffects()) lib.push_back({k, k->name(), k->title(), k->equation(), k->Params(s)});
   return lib;
 }
 
 const std::vector<std::string>& EffectNames() {
   static const std::vector<std::string> names = [] {
     std::vector<std::string> r;
-    for (const model::EffectDef* e : RecordEffects()) r.push_back(e->name());
+    for (EffectKind k : RecordEffects()) r.push_back(k.name());
     return r;
   }();
   return names;
 }
 
-const char* EffectName(EffectKind kind) { return EffectOf(kind).name(); }
-
 EffectKind ParseEffect(std::string_view name) {
-  const auto& names = EffectNames();
-  for (size_t i = 0; i < names.size(); ++i)
-    if (names[i] == name) return static_cast<EffectKind>(i);
+  const model::EffectDef* e = model::FindEffect(name);
+  if (e != nullptr && e->stage() != model::EffectStage::kBeam) return *e;
   std::string known;
-  for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
-  if (const model::EffectDef* e = model::FindEffect(name); e != nullptr && e->stage() == model::EffectStage::kBeam) {
+  for (const auto& n : EffectNames()) known += (known.empty() ? "" : ", ") + n;
+  if (e != nullptr) {
     throw InputError("effect '" + std::string(name) + "' acts on the beam (" + e->title() +
                      "): it runs on the bimorph-fin bench's beam (`piezoid diagnose --cases`); records families, "
                      "bimorph-fin included, take drive and output effects only (effects: " + known + ")");
@@ -68,7 +51,9 @@ RecordModel::RecordModel(std::shared_ptr<const Family> family, std::vector<Effec
   }
   params_ = family_->params();
   for (EffectKind e : effects_) {
-    defs_.push_back(&EffectOf(e));
+    if (e.none() || e->stage() == model::EffectStage::kBeam)
+      throw InputError(std::string("effect '") + e.name() + "' is not a records effect");
+    defs_.push_back(e.def());
     effect_offset_.push_back(params_.size() - family_->params().size());
     for (const ParamInfo& p : defs_.back()->Params(scale_)) {
       ParamInfo q = p;

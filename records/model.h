@@ -27,10 +27,10 @@
 
 namespace pz::records {
 
-/// A records effect: its position among the library's effects that a records family can take (the
-/// drive and output stages), in chain order. The enumerators name the effects code refers to; an
-/// effect added to the library is reachable by name (ParseEffect) without one.
-enum class EffectKind : int { kDriverLowpass, kQuadraticDrive, kCreep, kDelay, kFriction, kStiffening, kDrift };
+/// A records effect: the library's handle (model/effect_library.h), one of its drive or output
+/// effects (a records family has no beam).
+using model::EffectKind;
+using model::EffectName;
 
 struct EffectInfo {
   EffectKind kind;
@@ -41,13 +41,13 @@ struct EffectInfo {
 };
 /// Every records effect, in chain order, with ranges scaled to the data.
 std::vector<EffectInfo> EffectLibrary(const DataScale& scale);
-/// Names in that order.
+/// The records effects (the library's drive and output effects), in chain order.
+const std::vector<EffectKind>& RecordEffects();
+/// Their names in that order.
 const std::vector<std::string>& EffectNames();
-/// Throws InputError naming an unknown effect and the known ones, or a beam effect and why.
+/// The records effect of that name (or former name). Throws InputError naming an unknown effect
+/// and the known ones, or a beam effect and why.
 EffectKind ParseEffect(std::string_view name);
-const char* EffectName(EffectKind kind);
-/// The library's effect of a records effect.
-const model::EffectDef& EffectOf(EffectKind kind);
 
 /// A family with effects; a parameter vector is the family's params then each effect's.
 class RecordModel {

@@ -22,20 +22,16 @@ int FamilyKind(const std::string& family) {
   return 0;
 }
 
-int EffectKindOf(EffectKind e) {
-  switch (e) {
-    case EffectKind::kDriverLowpass: return pzk::PZK_LOWPASS;
-    case EffectKind::kQuadraticDrive: return pzk::PZK_QUADRATIC;
-    case EffectKind::kCreep: return pzk::PZK_CREEP;
-    case EffectKind::kDelay: return pzk::PZK_DELAY;
-    case EffectKind::kFriction: return pzk::PZK_FRICTION;
-    case EffectKind::kStiffening: return pzk::PZK_STIFFENING;
-    case EffectKind::kDrift: return pzk::PZK_DRIFT;
-  }
-  return 0;
+// The C step of a records effect (its class's kernel id, model/effect_library.cc).
+int KernelOf(EffectKind e) {
+  const int k = e.none() ? 0 : e->kernel();
+  const bool drive = e.none() || e->stage() == model::EffectStage::kDrive;
+  if (k <= 0 || (drive ? k >= pzk::PZK_STACK_BOUC_WEN : k < pzk::PZK_FRICTION || k >= pzk::PZK_AFFINE))
+    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (records/kernels/effects.h)");
+  return k;
 }
 
-bool IsDriveEffect(EffectKind e) { return EffectKindOf(e) < pzk::PZK_STACK_BOUC_WEN; }
+bool IsDriveEffect(EffectKind e) { return e->stage() == model::EffectStage::kDrive; }
 
 void CheckFinite(const std::string& field, double v) {
   if (!std::isfinite(v)) throw InputError(FieldError(field, v, "must be finite"));
@@ -119,7 +115,6 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   std::sort(spec_.effects.begin(), spec_.effects.end());
   const auto model = spec_.Model();
   const size_t nf = model->family_param_count();
-  const auto lib = EffectLibrary(spec_.scale);
   auto block = [&](int kind, std::vector<double> p) {
     pzk::pzk_block b{};
     b.kind = kind;
@@ -135,13 +130,13 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   std::vector<std::vector<double>> effect_params;
   size_t at = nf;
   for (EffectKind e : spec_.effects) {
-    const size_t n = lib[static_cast<size_t>(e)].params.size();
+    const size_t n = e->Params(spec_.scale).size();
     effect_params.emplace_back(spec_.params.begin() + static_cast<std::ptrdiff_t>(at),
                                spec_.params.begin() + static_cast<std::ptrdiff_t>(at + n));
     at += n;
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
-    if (IsDriveEffect(spec_.effects[i])) block(EffectKindOf(spec_.effects[i]), effect_params[i]);
+    if (IsDriveEffect(spec_.effects[i])) block(KernelOf(spec_.effects[i]), effect_params[i]);
   block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
   size_t family_block = blocks_.size() - 1;
   auto& fb = blocks_[family_block];
@@ -158,7 +153,7 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     default: break;
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
-    if (!IsDriveEffect(spec_.effects[i])) block(EffectKindOf(spec_.effects[i]), effect_params[i]);
+    if (!IsDriveEffect(spec_.effects[i])) block(KernelOf(spec_.effects[i]), effect_params[i]);
   block(pzk::PZK_AFFINE, {static_cast<double>(spec_.polarity), spec_.offset});
   for (size_t i = 0; i < blocks_.size(); ++i) {
     blocks_[i].p = params_[i].data();

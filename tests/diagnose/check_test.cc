@@ -54,13 +54,13 @@ TEST(SyntheticTest, BenchesAreDeterministicAndReadThroughTheEncoder) {
   EXPECT_EQ(a.Describe(), b.Describe());
   so.none_probability = 1.0;
   const SyntheticTrial clean = MakeSyntheticTrial(plant, 12, so);
-  EXPECT_EQ(clean.truth, EffectKind::kNone);
+  EXPECT_EQ(clean.truth, EffectKind());
   EXPECT_TRUE(clean.effects.empty());
 }
 
 TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
   auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnoseOptions o = Quick({EffectKind::kDriverLowpass, EffectKind::kDelay, EffectKind::kOutputDrift});
+  const DiagnoseOptions o = Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"), EffectKind::Named("drift")});
   SyntheticOptions so;
   model::BimorphParams p;  // the physical bench's values
   std::vector<std::pair<double, double>> sat;
@@ -70,13 +70,13 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
   for (const bool with_delay : {true, false}) {
     opt::Rng rng(with_delay ? 1 : 2);
     std::vector<model::Effect> effects;
-    if (with_delay) effects = {{EffectKind::kDelay, {0.02}}};
+    if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
     const DiagnosisModel m(plant, SimulateBench(*plant, p, effects, sat, so, rng));
     const Diagnosis d = RunDiagnosis(m, o);
     CheckTrial t;
-    t.truth = with_delay ? EffectKind::kDelay : EffectKind::kNone;
+    t.truth = with_delay ? EffectKind::Named("delay") : EffectKind();
     t.verdict_kind = d.verdict_kind;
-    t.named = d.named.empty() ? EffectKind::kNone : d.named.front();
+    t.named = d.named.empty() ? EffectKind() : d.named.front();
     t.significant = d.rounds.front().significant;
     t.closed = d.closed_total;
     Tally(summary, t);
@@ -89,7 +89,7 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
         EXPECT_LT(d.confidence, 0.9) << d.verdict;
       }
       ASSERT_FALSE(d.named.empty());
-      EXPECT_EQ(d.named.front(), EffectKind::kDelay) << d.verdict;
+      EXPECT_EQ(d.named.front(), EffectKind::Named("delay")) << d.verdict;
       EXPECT_GE(d.closed_total, 0.7) << d.verdict;
       if (d.verdict_kind == "effect") {
         EXPECT_GT(d.confidence, 0.5);  // the named effect carries most of the weight
@@ -101,7 +101,7 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
       EXPECT_LT(d.rounds.front().rms_ratio, o.rules.significance_ratio);
     }
   }
-  EXPECT_EQ(summary.confusion[static_cast<int>(EffectKind::kDelay)][static_cast<int>(EffectKind::kDelay)], 1);
+  EXPECT_EQ(summary.confusion[model::FinIndex(EffectKind::Named("delay"))][model::FinIndex(EffectKind::Named("delay"))], 1);
   EXPECT_EQ(summary.confusion[0][0], 1);
   EXPECT_EQ(summary.accuracy(), 1.0);
   EXPECT_EQ(summary.false_alarm_rate(), 0.0);
@@ -110,13 +110,13 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
 
 TEST(CheckTest, RunCheckTalliesEveryTrial) {
   SyntheticOptions so;
-  so.kinds = {EffectKind::kOutputDrift};
+  so.kinds = {EffectKind::Named("drift")};
   so.none_probability = 0.0;
   int seen = 0;
-  const CheckSummary s = RunCheck(1, 3, Quick({EffectKind::kOutputDrift, EffectKind::kDelay}), so,
+  const CheckSummary s = RunCheck(1, 3, Quick({EffectKind::Named("drift"), EffectKind::Named("delay")}), so,
                                   [&](const CheckTrial& t, int) {
                                     ++seen;
-                                    EXPECT_EQ(t.truth, EffectKind::kOutputDrift);
+                                    EXPECT_EQ(t.truth, EffectKind::Named("drift"));
                                   });
   EXPECT_EQ(seen, 1);
   ASSERT_EQ(s.trials.size(), 1u);
@@ -136,13 +136,13 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   const std::string dir = std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/driver-lowpass";
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, CasesFromCaseSet(io::LoadCaseSet(dir)));
-  const Diagnosis d = RunDiagnosis(m, Quick({EffectKind::kDriverLowpass, EffectKind::kDelay, EffectKind::kCreep}));
+  const Diagnosis d = RunDiagnosis(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"), EffectKind::Named("creep")}));
   // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says so.
   ASSERT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
   if (d.verdict_kind == "inseparable") {
     PZ_EXPECT_HAS(d.verdict, "The data cannot separate driver-lowpass from");
   }
-  EXPECT_EQ(d.named.front(), EffectKind::kDriverLowpass) << d.verdict;
+  EXPECT_EQ(d.named.front(), EffectKind::Named("driver-lowpass")) << d.verdict;
   EXPECT_GE(d.closed_total, 0.7);
   // Only now, to check the answer: the bench's low-pass corner frequency.
   std::ifstream in(dir + "/truth.json");

@@ -21,7 +21,7 @@ namespace {
 using model::EffectKind;
 
 TEST(ParameterLayoutTest, UnitCoordinatesRoundTripAndKeepTheLoopBounded) {
-  const ParameterLayout l({EffectKind::kCreep, EffectKind::kDelay});
+  const ParameterLayout l({EffectKind::Named("creep"), EffectKind::Named("delay")});
   ASSERT_EQ(l.size(), 7 + 2 + 1);
   EXPECT_EQ(l.specs()[7].name, "creep.k_c");
   EXPECT_EQ(l.specs()[9].name, "delay.tau_d_s");
@@ -47,7 +47,7 @@ TEST(ParameterLayoutTest, UnitCoordinatesRoundTripAndKeepTheLoopBounded) {
 }
 
 TEST(ParameterLayoutTest, UnitJacobianMatchesFiniteDifferences) {
-  const ParameterLayout l({EffectKind::kHingeFriction});
+  const ParameterLayout l({EffectKind::Named("hinge-friction")});
   const std::vector<double> u = {0.2, 0.1, 0.125, 0.5, 0.7, 0.1, 0.15, 0.3, 0.4};
   const std::vector<double> t = l.UnitJacobian(u);
   const int n = l.size();
@@ -65,7 +65,7 @@ TEST(ParameterLayoutTest, UnitJacobianMatchesFiniteDifferences) {
 
 TEST(ParameterLayoutTest, ExtendKeepsTheBaseAndStartsNewEffectsAtTheIdentity) {
   const ParameterLayout base({});
-  const ParameterLayout ext({EffectKind::kDriverLowpass, EffectKind::kCreep});
+  const ParameterLayout ext({EffectKind::Named("driver-lowpass"), EffectKind::Named("creep")});
   const std::vector<double> xb = {95, 0.1, 2.5e-3, 6e-3, 4e-3, 0.1, 0.15};
   const std::vector<double> x = ext.Extend(xb, base);
   for (int i = 0; i < 7; ++i) EXPECT_EQ(x[i], xb[i]);

@@ -71,7 +71,7 @@ TEST(RecordDiagnosis, NamesCreepOnAStack) {
   DriveShape d = Sine();
   d.waveform = Waveform::kMultisine;
   d.frequency_end_hz = 6;
-  AddRecord(set, "stack-bouc-wen", {EffectKind::kCreep}, p, d, 3, "multisine");
+  AddRecord(set, "stack-bouc-wen", {EffectKind::Named("creep")}, p, d, 3, "multisine");
   RecordDiagnoseOptions o;
   o.family = "stack-bouc-wen";
   o.fit = Quick();
@@ -80,10 +80,10 @@ TEST(RecordDiagnosis, NamesCreepOnAStack) {
   EXPECT_EQ(r.noise.used, "rest");
   EXPECT_NEAR(r.noise.sigma, std::sqrt(kNoise * kNoise + 0.005 * 0.005 / 12), 0.004);
   ASSERT_GE(r.named, 0) << r.verdict;
-  EXPECT_EQ(r.candidates[static_cast<size_t>(r.named)].kind, EffectKind::kCreep) << r.verdict;
+  EXPECT_EQ(r.candidates[static_cast<size_t>(r.named)].kind, EffectKind::Named("creep")) << r.verdict;
   EXPECT_EQ(r.verdict_kind, "effect") << r.verdict;
   EXPECT_GT(r.confidence, 0.9) << r.verdict;
-  for (const auto& c : r.candidates) EXPECT_NE(c.kind, EffectKind::kDriverLowpass);  // the stack family has its filter
+  for (const auto& c : r.candidates) EXPECT_NE(c.kind, EffectKind::Named("driver-lowpass"));  // the stack family has its filter
 }
 
 TEST(RecordDiagnosis, NoGapOnACleanStack) {
@@ -93,7 +93,7 @@ TEST(RecordDiagnosis, NoGapOnACleanStack) {
   RecordDiagnoseOptions o;
   o.family = "stack-bouc-wen";
   o.fit = Quick();
-  o.candidates = {EffectKind::kCreep, EffectKind::kDelay};
+  o.candidates = {EffectKind::Named("creep"), EffectKind::Named("delay")};
   const RecordDiagnosis r = DiagnoseRecords(set, o);
   EXPECT_FALSE(r.significant) << r.verdict;
   EXPECT_EQ(r.verdict_kind, "none");
@@ -105,11 +105,11 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
   const std::vector<double> truth = {0.02, 0.1, 0.05, 0.01};
   io::RecordSet set;
   set.source = "synthetic low-pass bench";
-  AddRecord(set, "backlash-like", {EffectKind::kDriverLowpass}, truth, Sine(1, 0), 5, "sine");
+  AddRecord(set, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, Sine(1, 0), 5, "sine");
   RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
-  o.candidates = {EffectKind::kDriverLowpass, EffectKind::kDelay};
+  o.candidates = {EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")};
   const RecordDiagnosis r = DiagnoseRecords(set, o);
   ASSERT_TRUE(r.significant) << r.verdict;
   std::cout << "before: " << r.verdict << "\n";
@@ -124,11 +124,11 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
   DriveShape next = r.next->shape;
   next.rest_s = 0.5;
   next.duration_s = std::max(next.duration_s, 4.0);
-  AddRecord(more, "backlash-like", {EffectKind::kDriverLowpass}, truth, next, 6, "proposed", 0.5);
+  AddRecord(more, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, next, 6, "proposed", 0.5);
   const RecordDiagnosis again = DiagnoseRecords(more, o);
   std::cout << "after: " << again.verdict << "\n";
   ASSERT_GE(again.named, 0) << again.verdict;
-  EXPECT_EQ(again.candidates[static_cast<size_t>(again.named)].kind, EffectKind::kDriverLowpass) << again.verdict;
+  EXPECT_EQ(again.candidates[static_cast<size_t>(again.named)].kind, EffectKind::Named("driver-lowpass")) << again.verdict;
   EXPECT_EQ(again.verdict_kind, "effect") << again.verdict;
   EXPECT_GT(again.confidence, 0.95) << again.verdict;
 }

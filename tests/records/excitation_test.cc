@@ -207,7 +207,7 @@ TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
   const RealLikeSet s = GenerateRealLikeSet(Short(3));
   RecordDiagnoseOptions o;
   o.family = "prandtl-ishlinskii";
-  o.candidates = {EffectKind::kDelay};
+  o.candidates = {EffectKind::Named("delay")};
   o.propose = false;
   o.fit.search.repetitions = 1;
   o.fit.search.pso.particles = 12;

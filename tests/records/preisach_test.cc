@@ -251,7 +251,7 @@ TEST(PreisachFamily, EffectsAreSearchedWithTheValidatedStrengthAndStayFinite) {
   const io::RecordSet& set = MajorLoopSet();
   const FitResult base = FitRecords(set, Options("preisach"));
   FitOptions o = Options("preisach");
-  o.effects = {EffectKind::kDelay};
+  o.effects = {EffectKind::Named("delay")};
   o.search.repetitions = 1;
   o.search.pso.particles = 8;
   o.search.pso.iterations = 6;

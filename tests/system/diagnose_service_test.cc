@@ -28,7 +28,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
     for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   opt::Rng rng(3);
   std::vector<model::Effect> effects;
-  if (with_delay) effects = {{EffectKind::kDelay, {0.02}}};
+  if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
   return SimulateBench(plant, p, effects, sat, so, rng);
 }
 
@@ -43,7 +43,7 @@ TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
   for (const bool residuals : {false, true}) {
-    const DiagnosisFitness local(m, ParameterLayout({EffectKind::kDelay, EffectKind::kDriverLowpass}), residuals);
+    const DiagnosisFitness local(m, ParameterLayout({EffectKind::Named("delay"), EffectKind::Named("driver-lowpass")}), residuals);
     const job::JobSpec spec = DiagnoseJobSpec(local, "test");
     // Through the wire encoding, as a worker gets it.
     job::JobSpec decoded;
@@ -75,7 +75,7 @@ TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
 TEST(DiagnoseJobKindTest, BadSpecsAreRefusedFieldByField) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(false));
-  const DiagnosisFitness f(m, ParameterLayout({EffectKind::kCreep}));
+  const DiagnosisFitness f(m, ParameterLayout({EffectKind::Named("creep")}));
   job::JobKindRegistry registry;
   registry.Register(DiagnoseJobKind());
   auto violations = [&](const job::JobSpec& s) {
@@ -116,7 +116,7 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
   DiagnoseOptions o;
-  o.candidates = {EffectKind::kDelay, EffectKind::kCubicStiffening};
+  o.candidates = {EffectKind::Named("delay"), EffectKind::Named("cubic-stiffening")};
   o.de_base.population = 12;
   o.de_base.generations = 8;
   o.de_candidate.population = 12;

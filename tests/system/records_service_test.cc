@@ -26,7 +26,7 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 io::RecordSet MakeSet() {
   const records::DataScale s = records::SyntheticStackScale();
   auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", s));
-  records::RecordModel truth(fam, {EffectKind::kDelay}, s);
+  records::RecordModel truth(fam, {EffectKind::Named("delay")}, s);
   const std::vector<double> p = {0.02, 0.1, 0.05, 0.006};
   io::RecordSet set;
   set.source = "synthetic";
@@ -65,15 +65,15 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     int substeps = 2;  // a family made with other sub-steps is made so on the workers too
     int pi_operators = 12;
   };
-  for (const Case& c : {Case{"backlash-like", {EffectKind::kDelay, EffectKind::kDrift}},
-                        Case{"prandtl-ishlinskii", {EffectKind::kDriverLowpass}},
+  for (const Case& c : {Case{"backlash-like", {EffectKind::Named("delay"), EffectKind::Named("drift")}},
+                        Case{"prandtl-ishlinskii", {EffectKind::Named("driver-lowpass")}},
                         Case{"prandtl-ishlinskii", {}, 2, 7},
-                        Case{"duhem", {EffectKind::kFriction, EffectKind::kStiffening}},
+                        Case{"duhem", {EffectKind::Named("friction"), EffectKind::Named("stiffening")}},
                         Case{"stack-bouc-wen", {}},
                         Case{"stack-bouc-wen", {}, 5},
-                        Case{"preisach", {EffectKind::kDelay}},
-                        Case{"preisach", {EffectKind::kCreep}, 2, 9},
-                        Case{"asymmetric-pi", {EffectKind::kQuadraticDrive}}}) {
+                        Case{"preisach", {EffectKind::Named("delay")}},
+                        Case{"preisach", {EffectKind::Named("creep")}, 2, 9},
+                        Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}}}) {
     SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
     records::FamilyOptions options;
     options.substeps = c.substeps;
@@ -140,7 +140,7 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   const io::RecordSet set = MakeSet();
   records::FitOptions o;
   o.family = "backlash-like";
-  o.effects = {EffectKind::kDelay};
+  o.effects = {EffectKind::Named("delay")};
   o.search.repetitions = 1;
   o.search.pso.particles = 8;
   o.search.pso.iterations = 6;
