@@ -100,7 +100,11 @@ SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t see
     t.magnitude = truth.magnitude;
     for (std::vector<double>& part : truth.parts) t.effects.push_back({t.truth, std::move(part)});
   }
-  t.cases = SimulateBench(plant, p, t.effects, sat, o, rng);
+  try {
+    t.cases = SimulateBench(plant, p, t.effects, sat, o, rng);
+  } catch (const InputError& e) {
+    throw InputError(t.Describe() + ": " + e.what());
+  }
   return t;
 }
 

@@ -58,6 +58,23 @@ TEST(SyntheticTest, BenchesAreDeterministicAndReadThroughTheEncoder) {
   EXPECT_TRUE(clean.effects.empty());
 }
 
+// Seed 14 draws a cubic stiffening whose case 9 (750 V, 1 Hz) stopped CVODE's BDF at order 5 with
+// repeated error-test failures at t = 2.33 s (h = 2e-8 s): the check stopped there with an error.
+// EffectSimulator retries a failed CVODE run at order ≤ 2; the bench is then simulated, and every
+// reading is finite and on the encoder's grid.
+TEST(SyntheticTest, AStiffeningTheHighOrderBdfCannotPassIsSimulated) {
+  const model::BimorphPlant plant;
+  const SyntheticOptions so;
+  const SyntheticTrial t = MakeSyntheticTrial(plant, 14, so);
+  EXPECT_EQ(t.truth.name(), std::string("cubic-stiffening"));
+  ASSERT_EQ(t.cases.size(), 9u);
+  for (const DiagCase& c : t.cases)
+    for (double y : c.measured_deg) {
+      ASSERT_TRUE(std::isfinite(y));
+      ASSERT_NEAR(y / so.quantum_deg, std::round(y / so.quantum_deg), 1e-9);
+    }
+}
+
 TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnoseOptions o = Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"), EffectKind::Named("drift")});
