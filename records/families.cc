@@ -9,6 +9,7 @@
 #include "io/csv.h"
 #include "model/bimorph.h"
 #include "model/bw_oscillator.h"
+#include "model/modal_simulator.h"
 #include "model/duhem.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
@@ -239,10 +240,16 @@ class BimorphFinFamily final : public Family {
     if (p.size() != params_.size())
       throw InputError("bimorph-fin: " + std::to_string(params_.size()) + " parameters expected");
     model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
-    model::SampledSignal sig;
+    // The drive, the modal workspace and the angle are kept per thread: a search's evaluations then
+    // allocate nothing of the record's size (fresh pages of that size cost more than the modes).
+    thread_local model::DriveSignal drive = model::SampledSignal{};
+    thread_local model::ModalWorkspace ws;
+    thread_local std::vector<double> angle;
+    auto& sig = std::get<model::SampledSignal>(drive);
     sig.t.resize(u.size());
     for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
     sig.u.assign(u.begin(), u.end());
+    angle.resize(u.size());
     model::BeamGeometry geo = geometry_;
     geo.active_length_m = p[10];
     if (params_.size() > 11) geo.tip_length_m = p[11];
@@ -253,9 +260,11 @@ class BimorphFinFamily final : public Family {
     const bool nominal = geo.active_length_m == geometry_.active_length_m && geo.tip_length_m == geometry_.tip_length_m;
     std::optional<model::BimorphPlant> other;
     if (!nominal) other.emplace(geo);
-    const model::BimorphTrace tr = model::Simulate(nominal ? plant_ : *other, b, sig);
-    if (tr.angle_deg.size() != u.size() || !tr.summary.ok()) return nan();
-    for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * tr.angle_deg[k];
+    // The fast path's angle alone (model::Simulate's modal path without the full trace): the same
+    // values; a failure (invalid or unbounded parameters, a non-finite angle) gives NaN.
+    const model::ModalSimulator sim(nominal ? plant_ : *other);
+    if (!sim.SimulateAngle(b, drive, angle, ws).ok()) return nan();
+    for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * angle[k];
   }
 
  private:
