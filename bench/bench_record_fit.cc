@@ -7,7 +7,8 @@
 // the project). Each iteration alternates between two parameter points near the real fit's, as a
 // search does (the fin's other geometry costs its FE assembly and modal discretisation each time).
 //
-//   BM_RecordEvaluation/<family>   one evaluation
+//   BM_RecordEvaluation/<family>       one evaluation
+//   BM_RecordEvaluationPair/<family>   two evaluations side by side (a family with lanes)
 //
 // Figures and the command: docs/performance.md, "Fits on records".
 #include <benchmark/benchmark.h>
@@ -75,12 +76,21 @@ const std::map<std::string, std::vector<std::vector<double>>>& Points() {
   return p;
 }
 
+// The fitness of the family (no effects) on the synthetic record's training window.
+struct Setup {
+  explicit Setup(const std::string& family)
+      : train{&Recording()}, scale(MeasureScale(train)), model(MakeFamily(family, scale), {}, scale),
+        fitness(model, train) {}
+  std::vector<const io::Record*> train;
+  DataScale scale;
+  RecordModel model;
+  RecordFitness fitness;
+};
+
 void BM_RecordEvaluation(benchmark::State& state, const std::string& family) {
   const io::Record& rec = Recording();
-  const std::vector<const io::Record*> train{&rec};
-  const DataScale scale = MeasureScale(train);
-  const RecordModel model(MakeFamily(family, scale), {}, scale);
-  const RecordFitness fitness(model, train);
+  const Setup setup(family);
+  const RecordFitness& fitness = setup.fitness;
   const auto& points = Points().at(family);
   opt::Genome g;
   size_t i = 0;
@@ -95,6 +105,25 @@ void BM_RecordEvaluation(benchmark::State& state, const std::string& family) {
   }
   state.counters["samples"] = static_cast<double>(rec.end_scored - (rec.rest_samples - 1));
 }
+// The same two points evaluated side by side (RecordFitness::EvaluateMany, what the thread pool
+// hands a family with lanes): time per evaluation.
+void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family) {
+  const Setup setup(family);
+  const RecordFitness& fitness = setup.fitness;
+  const auto& points = Points().at(family);
+  opt::Genome a, b;
+  a.reals = points[0];
+  b.reals = points[1];
+  const opt::Genome* pair[2] = {&a, &b};
+  opt::FitnessResult out[2];
+  for (auto _ : state) {
+    fitness.EvaluateMany(pair, out);
+    benchmark::DoNotOptimize(out[0].cost);
+  }
+  state.SetItemsProcessed(2 * static_cast<int64_t>(state.iterations()));  // evaluations/s
+}
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
+
 BENCHMARK_CAPTURE(BM_RecordEvaluation, stack-bouc-wen, std::string("stack-bouc-wen"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, duhem, std::string("duhem"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
