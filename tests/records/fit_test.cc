@@ -12,7 +12,6 @@
 #include <numbers>
 
 #include "model/bimorph.h"
-#include "opt/thread_pool_evaluator.h"
 
 #include <cmath>
 
@@ -200,7 +199,7 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
   // The bw-oscillator runs two parameter sets at once (Family::lanes, model::SimulateBwPair): each
   // result is Evaluate's, bit for bit, for points in the box, a point outside (m <= 0 after the
   // scaling: NaN alone) and one that diverges; a family without lanes and a pair of odd sizes take
-  // Evaluate one by one.
+  // Evaluate one by one. (The thread pool's groups: tests/opt/ga_test.cc.)
   const Case c = Cases()[4];
   const io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
   const auto train = set.WithRole(CaseRole::kTrain);
@@ -228,13 +227,6 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
     }
   }
   EXPECT_EQ(fitness.Evaluate(g[4]).status, opt::FitnessStatus::kPenalized);
-  // The thread pool hands out pairs: the same costs as one thread one by one.
-  opt::ThreadPoolEvaluator pool(fitness, 2);
-  std::vector<opt::FitnessResult> pooled(g.size());
-  std::vector<int> idx(g.size());
-  pool.Evaluate({0, g, idx}, pooled);
-  for (size_t i = 0; i < g.size(); ++i)
-    EXPECT_EQ(std::bit_cast<uint64_t>(pooled[i].cost), std::bit_cast<uint64_t>(fitness.Evaluate(g[i]).cost)) << i;
   const RecordModel plain(MakeFamily("backlash-like", scale), {}, scale);
   EXPECT_EQ(RecordFitness(plain, train).lanes(), 1);
 }
