@@ -96,6 +96,58 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
   return Status::Ok();
 }
 
+// Integrate<true>'s loop for two parameter sets at once: every operation of a lane is the scalar
+// loop's, in the same order (no reassociation, no FMA), so each lane's values are its bits. Returns
+// false, leaving y and the states undefined, as soon as either lane leaves the scalar loop's bounds
+// (the caller then runs both alone, for the scalar loop's exact output and message).
+bool IntegratePair(const std::array<BwParams, 2>& p, const BwInput& in, const std::array<std::span<double>, 2>& y,
+                   std::array<BwState, 2>& st) {
+  const size_t n = in.samples();
+  const int S = in.substeps();
+  const double h = 1.0 / (in.sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
+  double inv_m[2], c[2], k[2], alpha[2], bg[2], bd[2], Y[2], V[2], Z[2];
+  for (int l = 0; l < 2; ++l) {
+    inv_m[l] = 1.0 / p[l].m;
+    c[l] = p[l].c;
+    k[l] = p[l].k;
+    alpha[l] = p[l].alpha;
+    bg[l] = p[l].beta * p[l].gamma;
+    bd[l] = p[l].beta * p[l].delta;
+    Y[l] = st[l].y;
+    V[l] = st[l].v;
+    Z[l] = st[l].z;
+    y[l][0] = Y[l];
+  }
+  const double* u = in.half_steps().data();
+  size_t j = 0;
+  for (size_t i = 1; i < n; ++i) {
+    for (int s = 0; s < S; ++s, j += 2) {
+      const double u0 = u[j], u1 = u[j + 1], u2 = u[j + 2];
+      for (int l = 0; l < 2; ++l) {
+        auto zdot = [&](double v, double z) { return alpha[l] * v - bg[l] * std::abs(v) * z - bd[l] * v * std::abs(z); };
+        const double a1 = (u0 - c[l] * V[l] - k[l] * Y[l] - Z[l]) * inv_m[l], z1 = zdot(V[l], Z[l]);
+        const double y2 = Y[l] + h2 * V[l], v2 = V[l] + h2 * a1, w2 = Z[l] + h2 * z1;
+        const double a2 = (u1 - c[l] * v2 - k[l] * y2 - w2) * inv_m[l], z2 = zdot(v2, w2);
+        const double y3 = Y[l] + h2 * v2, v3 = V[l] + h2 * a2, w3 = Z[l] + h2 * z2;
+        const double a3 = (u1 - c[l] * v3 - k[l] * y3 - w3) * inv_m[l], z3 = zdot(v3, w3);
+        const double y4 = Y[l] + h * v3, v4 = V[l] + h * a3, w4 = Z[l] + h * z3;
+        const double a4 = (u2 - c[l] * v4 - k[l] * y4 - w4) * inv_m[l], z4 = zdot(v4, w4);
+        Y[l] += h6 * (V[l] + 2 * (v2 + v3) + v4);
+        V[l] += h6 * (a1 + 2 * (a2 + a3) + a4);
+        Z[l] += h6 * (z1 + 2 * (z2 + z3) + z4);
+      }
+    }
+    bool ok = true;
+    for (int l = 0; l < 2; ++l) {
+      y[l][i] = Y[l];
+      ok &= std::abs(Y[l]) <= 1e3 && std::abs(Z[l]) <= 1e12 && std::abs(V[l]) <= 1e9;  // false for NaN too
+    }
+    if (!ok) return false;
+  }
+  for (int l = 0; l < 2; ++l) st[l] = BwState{Y[l], V[l], Z[l]};
+  return true;
+}
+
 }  // namespace
 
 Status BwParams::Validate() const {
@@ -201,6 +253,26 @@ Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double
   }
   if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
   return params.nu == 1.0 ? Integrate<true>(params, input, y, state) : Integrate<false>(params, input, y, state);
+}
+
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
+  for (int l = 0; l < 2; ++l) {
+    ThrowIfError(params[l].Validate());
+    if (y[l].size() != input.samples()) {
+      throw InputError(FieldError("bw: y.size()", y[l].size(), "must equal the input's samples = " +
+                                                                  std::to_string(input.samples())));
+    }
+  }
+  if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
+  std::array<BwState, 2> st = states ? *states : std::array<BwState, 2>{};
+  if (params[0].nu == 1.0 && params[1].nu == 1.0 && IntegratePair(params, input, y, st)) {
+    if (states) *states = st;
+    return {Status::Ok(), Status::Ok()};
+  }
+  std::array<Status, 2> out;
+  for (int l = 0; l < 2; ++l) out[l] = SimulateBw(params[l], input, y[l], states ? &(*states)[l] : nullptr);
+  return out;
 }
 
 BwParams BwFromIdentifiable(std::span<const double> theta) {

@@ -22,6 +22,7 @@
 // the benchmark README measured: the integrator matches the generator.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <span>
 #include <string>
@@ -94,6 +95,14 @@ struct BwState {
 /// y is then filled up to that sample and zero after. Throws InputError on invalid parameters.
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y,
                   BwState* state = nullptr);
+
+/// Two parameter sets on one input, side by side in one thread (two independent chains of dependent
+/// operations take about the time of one): y[l] and states[l] (rest when null) as
+/// SimulateBw(params[l], input, y[l], states ? &states[l] : nullptr) has them, bit for bit, with the
+/// same status each (ν = 1 runs as a pair; otherwise, or when a lane diverges, each lane alone).
+/// Throws InputError as SimulateBw does.
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
 
 /// The identifiable parameterisation for ν = 1 (β appears only in the products β·γ and β·δ, see
 /// the benchmark README): θ = (m, c, k, α, β·γ, β·δ) ↦ BwParams with β = 1, γ = β·γ, δ = β·δ,

@@ -109,10 +109,8 @@ bool ZBatch(long from, long to, const double* __restrict u, const double* __rest
 
 // θ [deg] of tip deflections w[0 … n): the vectorised FastAtan; |w/L| ≥ 1/8 (beyond 7 deg) is
 // redone with std::atan by the caller (returns false when some are).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-__attribute__((target_clones("arch=x86-64-v3", "default")))
-#endif
-bool DegreesBatch(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
+[[gnu::always_inline]] inline bool DegreesLoop(long n, const double* __restrict w, double inv_length,
+                                               double* __restrict theta) {
   int far = 0;
   for (long q = 0; q < n; ++q) {
     const double x = w[q] * inv_length;
@@ -120,6 +118,20 @@ bool DegreesBatch(long n, const double* __restrict w, double inv_length, double*
     theta[q] = AtanSeries(x) * (180.0 / std::numbers::pi);
   }
   return far == 0;
+}
+// The sinusoid path's: with FMA where the CPU has it.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+#endif
+bool DegreesBatch(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
+  return DegreesLoop(n, w, inv_length, theta);
+}
+// The sampled path's: AVX2 without FMA, so the same roundings as Degrees (the baseline's) everywhere.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+bool DegreesBatchExact(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
+  return DegreesLoop(n, w, inv_length, theta);
 }
 
 // Pass 1a of a sinusoid run: the drive at the nodes [j0, j1) of a block starting at node b0, from
@@ -184,6 +196,21 @@ struct StepCoeffs {
   const double *e11, *e12, *e21, *e22;
   const double* g[6];
 };
+
+// Runs body(s0, s1) on the mode state x0, x1 (NB blocks of 4 modes; NB = 0: not known at compile
+// time): with a known number of modes on a local copy, kept in registers for the whole run and
+// written back after it.
+template <int NB, class Body>
+[[gnu::always_inline]] inline void RunModes(double* __restrict x0, double* __restrict x1, Body&& body) {
+  if constexpr (NB > 0) {
+    double l0[4 * NB], l1[4 * NB];
+    for (int q = 0; q < 4 * NB; ++q) l0[q] = x0[q], l1[q] = x1[q];
+    body(l0, l1);
+    for (int q = 0; q < 4 * NB; ++q) x0[q] = l0[q], x1[q] = l1[q];
+  } else {
+    body(x0, x1);
+  }
+}
 
 // Regular steps i0 … i1−1 of a chunk: x ← E x + G·d_i⁺ (d scaled by the step hs) for every mode,
 // xs[i+1] = Σ_modes x0. NB blocks of 4 modes (NB = 0: n/4 blocks, not known at compile time).
@@ -274,6 +301,81 @@ inline double SumModes(int n, const double* __restrict x0) {
   return (s0 + s1) + (s2 + s3);
 }
 
+// The quintic hold of z over a sub-step τ from its end data: f_j = j! a_j (kHermite), the input's
+// Taylor coefficients in the discretisation's convention.
+[[gnu::always_inline]] inline void HoldCoefficients(double tau, const ZData& zl, const ZData& zr, double* fz) {
+  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
+  for (int j = 0; j < 6; ++j) {
+    double a = 0;
+    for (int c = 0; c < 6; ++c) a += kHermite[j][c] * dat[c];
+    fz[j] = a * kFact[j];
+  }
+}
+
+// Per-mode data of the cached step, structure of arrays (npad entries each, zero in the padding).
+struct SampledCoeffs {
+  const double *e11, *e12, *e21, *e22;
+  const double *nwz, *wu;  // −tip_i g_z,i, tip_i g_u,i
+  const double* d[modal::kMaxPhi + 1];
+};
+
+// A run of sub-steps over the cached step (the sampled path's regular steps): GeneralSubstep's
+// arithmetic for every mode, operation for operation (so bit for bit, without FMA contraction),
+// over the modes' arrays so that it vectorises; after an output sample's last sub-step, SumModes of
+// x0 (same partial sums) into xs[out]. NB blocks of 4 modes as StepRunImpl.
+template <int NB>
+[[gnu::always_inline]] inline void SampledRunImpl(const modal::SampledSub* __restrict subs,
+                                                  long count, int n, double* __restrict x0,
+                                                  double* __restrict x1, const SampledCoeffs& c,
+                                                  double* __restrict xs) {
+  const int nb = NB > 0 ? NB : n / 4;
+  const double* const* d = c.d;
+  RunModes<NB>(x0, x1, [&](double* __restrict s0, double* __restrict s1) __attribute__((always_inline)) {
+    for (long k = 0; k < count; ++k) {
+      const modal::SampledSub& st = subs[k];
+      const double tau = st.tau;
+      double fz[6];
+      HoldCoefficients(tau, st.l, st.r, fz);
+      const double fu0 = st.u_a, fu1 = st.u_dot * tau;
+      double acc[4] = {0, 0, 0, 0};
+      for (int blk = 0; blk < nb; ++blk) {
+        for (int j = 0; j < 4; ++j) {
+          const int q = 4 * blk + j;
+          const double w = c.nwz[q];
+          const double f[6] = {w * fz[0] + c.wu[q] * fu0, w * fz[1] + c.wu[q] * fu1, w * fz[2],
+                               w * fz[3], w * fz[4], w * fz[5]};
+          double r0 = 0, r1 = 0;
+          for (int i = 0; i < 6; ++i) {
+            r0 += f[i] * d[i + 1][q];
+            r1 += f[i] * d[i][q];
+          }
+          const double a = s0[q], b = s1[q];
+          const double na = c.e11[q] * a + c.e12[q] * b + tau * r0;
+          s1[q] = c.e21[q] * a + c.e22[q] * b + r1;
+          s0[q] = na;
+          acc[j] += na;
+        }
+      }
+      if (st.out >= 0) xs[st.out] = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+    }
+  });
+}
+
+// AVX2 without FMA next to the baseline: four modes a vector, and the same roundings in both.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void SampledRun(const modal::SampledSub* subs, long count, int n, double* x0, double* x1, const SampledCoeffs& c,
+                double* xs) {
+  switch (n) {
+    case 4: return SampledRunImpl<1>(subs, count, n, x0, x1, c, xs);
+    case 8: return SampledRunImpl<2>(subs, count, n, x0, x1, c, xs);
+    case 12: return SampledRunImpl<3>(subs, count, n, x0, x1, c, xs);
+    case 16: return SampledRunImpl<4>(subs, count, n, x0, x1, c, xs);
+    default: return SampledRunImpl<0>(subs, count, n, x0, x1, c, xs);
+  }
+}
+
 std::string NonFiniteMessage(size_t k, double t) {
   return "non-finite tip deflection at sample " + std::to_string(k) + " (t = " + std::to_string(t) + " s)";
 }
@@ -294,9 +396,14 @@ ModalSimulator::ModalSimulator(const BimorphPlant& plant)
   npad_ = (n_ + 3) / 4 * 4;
 }
 
+bool ModalSimulator::Holds(const BimorphParams& params, double step, const ModalWorkspace& ws) const {
+  return ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
+         std::abs(ws.step_ - step) <= kStepRelTol * step;
+}
+
 void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact) const {
-  if (ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
-      (exact ? ws.step_ == step : std::abs(ws.step_ - step) <= kStepRelTol * step))
+  if (exact ? ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta && ws.step_ == step
+            : Holds(params, step, ws))
     return;
   ws.sim_id_ = id_;
   ws.mu_ = params.mu;
@@ -307,7 +414,8 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
   ws.sub_.steps.resize(n_);
   ws.sub_.scratch.resize(16 * static_cast<size_t>(n_));
   ws.sub_.idx.resize(n_);
-  for (auto* v : {&ws.e11_, &ws.e12_, &ws.e21_, &ws.e22_}) v->assign(npad_, 0.0);
+  for (auto* v : {&ws.e11_, &ws.e12_, &ws.e21_, &ws.e22_, &ws.nwz_, &ws.wu_}) v->assign(npad_, 0.0);
+  for (auto& v : ws.d_) v.assign(npad_, 0.0);
   ws.x0_.resize(npad_);  // the state is set by the runs, and kept when a sampled run re-prepares
   ws.x1_.resize(npad_);
   for (int r = 0; r < 6; ++r) {
@@ -334,6 +442,9 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
     ws.e12_[i] = st.e12;
     ws.e21_[i] = st.e21;
     ws.e22_[i] = st.e22;
+    for (int j = 0; j <= modal::kMaxPhi; ++j) ws.d_[j][i] = st.d[j];
+    ws.nwz_[i] = -wz_[i];
+    ws.wu_[i] = wu_[i];
     for (int c = 0; c < 3; ++c) {
       const double p00 = -wz_[i] * p[0][c], p01 = -wz_[i] * p[1][c];          // P0 column c
       const double p10 = -wz_[i] * p[0][c + 3], p11 = -wz_[i] * p[1][c + 3];  // P1 column c
@@ -361,13 +472,8 @@ static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached
     modal::DiscretiseBatch(n, poles, tau, sub.steps.data(), sub.scratch.data(), sub.idx.data());
     cached = sub.steps.data();
   }
-  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
   double fz[6];
-  for (int j = 0; j < 6; ++j) {
-    double a = 0;
-    for (int c = 0; c < 6; ++c) a += kHermite[j][c] * dat[c];
-    fz[j] = a * kFact[j];
-  }
+  HoldCoefficients(tau, zl, zr, fz);
   const double fu0 = u_a, fu1 = u_dot * tau;
   for (int i = 0; i < n; ++i) {
     const ModeStep* st = cached + i;
@@ -720,60 +826,111 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
   double* x1 = ws.x1_.data();
 
   double z = 0.0, y = 0.0;
-  auto emit = [&](size_t k) -> bool {
-    const double w = SumModes(npad_, x0);
-    if (!std::isfinite(w)) {
-      summary.status = SimStatus::kNonFinite;
-      summary.message = NonFiniteMessage(k, t[k]);
-      return false;
-    }
+  {
+    const double w = SumModes(npad_, x0);  // 0: the run starts at rest
     const double theta = Degrees(w, inv_len);
     y = BacklashStep(bl, theta, y);
-    sink.Emit(k, t[k], u[k], z, w, theta, y);
-    return true;
-  };
-  if (!emit(0)) return;
+    sink.Emit(0, t[0], u[0], z, w, theta, y);
+  }
+  // The run goes chunk by chunk (at most kChunk output samples, and fewer when the step changes so
+  // much that the discretisation is redone) through three passes:
+  //  1. z, which depends on u alone: each sample's sub-steps (split where κ|u̇|τ > 1/2 and at the
+  //     zero crossings of z) with the hold data at their ends;
+  //  2. the modes over the sub-steps in order: runs of sub-steps over the cached step in one loop
+  //     (SampledRun), the others by GeneralSubstep; w_tip after each sample's last sub-step;
+  //  3. outputs: θ in one loop, the backlash (BacklashRun), the sink.
+  constexpr size_t kChunk = 256;
+  std::vector<modal::SampledSub>& subs = ws.subs_;
+  ws.xs_.resize(kChunk + 1);
+  ws.zo_.resize(kChunk);
+  for (auto* v : {&ws.tho_, &ws.yo_}) v->resize(kChunk);
+  double *xs = ws.xs_.data(), *zo = ws.zo_.data(), *tho = ws.tho_.data(), *yo = ws.yo_.data();
   long steps = 0;
-  for (size_t k = 0; k + 1 < n_out; ++k) {
-    const double tau = t[k + 1] - t[k];
-    const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
-    const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
-    const double ts = tau / nsub;
-    Prepare(params, ts, ws);  // no-op on a uniform grid
-    const double eps = kNodeRelTol * ts;
-    BoucWenBranch br = StartBranch(bw, u[k], z, r);
-    auto eval = [&](double uu) { return hyst ? EvalZ(br, uu, r, 0.0) : ZData{}; };
-    ZData dcur = eval(u[k]);
-    double sa = 0.0;  // time since t_k
-    for (int q = 0; q < nsub; ++q) {
-      const bool last = q + 1 == nsub;
-      const double sb = last ? tau : (q + 1) * ts;
-      const double ub = last ? u[k + 1] : u[k] + r * sb;
-      bool split = false;
-      double uc;
-      if (hyst && br.ZeroCrossing(&uc)) {
-        const double sc = (uc - u[k]) / r;
-        if (sc < sb - eps) {
-          if (sc > sa + eps) {
-            GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, sc - sa, dcur,
-                           eval(uc), u[k] + r * sa, r);
-            ++steps;
-            split = true;
-            sa = sc;
-          }
-          br = StartBranch(bw, uc, 0.0, r);
-          dcur = eval(uc);
-        }
+  size_t k = 0;
+  while (k + 1 < n_out) {
+    // Pass 1.
+    const size_t k0 = k;
+    subs.clear();
+    while (k + 1 < n_out && k - k0 < kChunk) {
+      const double tau = t[k + 1] - t[k];
+      const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
+      const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
+      const double ts = tau / nsub;
+      if (!Holds(params, ts, ws)) {  // a step that needs another discretisation: after the chunk's
+        if (k > k0) break;           // sub-steps have run on this one
+        Prepare(params, ts, ws);
       }
-      const ZData dr = eval(ub);
-      GeneralSubstep(n_, ws.poles_.data(), split ? nullptr : ws.steps_.data(), ws.sub_, wu_.data(), wz_.data(), x0,
-                     x1, sb - sa, dcur, dr, u[k] + r * sa, r);
-      ++steps;
-      dcur = dr;
-      sa = sb;
+      const double eps = kNodeRelTol * ts;
+      BoucWenBranch br = StartBranch(bw, u[k], z, r);
+      auto eval = [&](double uu) { return hyst ? EvalZ(br, uu, r, 0.0) : ZData{}; };
+      ZData dcur = eval(u[k]);
+      double sa = 0.0;  // time since t_k
+      for (int q = 0; q < nsub; ++q) {
+        const bool last = q + 1 == nsub;
+        const double sb = last ? tau : (q + 1) * ts;
+        const double ub = last ? u[k + 1] : u[k] + r * sb;
+        bool split = false;
+        double uc;
+        if (hyst && br.ZeroCrossing(&uc)) {
+          const double sc = (uc - u[k]) / r;
+          if (sc < sb - eps) {
+            if (sc > sa + eps) {
+              subs.push_back({sc - sa, u[k] + r * sa, r, dcur, eval(uc), false, -1});
+              split = true;
+              sa = sc;
+            }
+            br = StartBranch(bw, uc, 0.0, r);
+            dcur = eval(uc);
+          }
+        }
+        const ZData dr = eval(ub);
+        subs.push_back({sb - sa, u[k] + r * sa, r, dcur, dr, !split && sb - sa > 0, -1});
+        dcur = dr;
+        sa = sb;
+      }
+      subs.back().out = static_cast<int>(k - k0);
+      z = dcur.z;
+      zo[k - k0] = z;
+      ++k;
     }
-    z = dcur.z;
-    if (!emit(k + 1)) return;
+    steps += static_cast<long>(subs.size());
+    // Pass 2.
+    const SampledCoeffs coeffs{ws.e11_.data(), ws.e12_.data(), ws.e21_.data(), ws.e22_.data(), ws.nwz_.data(),
+                               ws.wu_.data(),  {ws.d_[0].data(), ws.d_[1].data(), ws.d_[2].data(), ws.d_[3].data(),
+                                                ws.d_[4].data(), ws.d_[5].data(), ws.d_[6].data()}};
+    for (size_t i = 0; i < subs.size();) {
+      if (subs[i].cached) {
+        size_t j = i + 1;
+        while (j < subs.size() && subs[j].cached) ++j;
+        SampledRun(subs.data() + i, static_cast<long>(j - i), npad_, x0, x1, coeffs, xs);
+        i = j;
+      } else {
+        const modal::SampledSub& st = subs[i];
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, st.tau, st.l, st.r,
+                       st.u_a, st.u_dot);
+        if (st.out >= 0) xs[st.out] = SumModes(npad_, x0);
+        ++i;
+      }
+    }
+    // Pass 3: the outputs up to the first non-finite w_tip.
+    const long len = static_cast<long>(k - k0);
+    long n_ok = 0;
+    while (n_ok < len && std::isfinite(xs[n_ok])) ++n_ok;
+    if (!DegreesBatchExact(n_ok, xs, inv_len, tho)) {
+      for (long q = 0; q < n_ok; ++q)
+        if (!(std::abs(xs[q] * inv_len) < 0.125)) tho[q] = Degrees(xs[q], inv_len);
+    }
+    y = BacklashRun(bl, tho, yo, n_ok, y);
+    for (long q = 0; q < n_ok; ++q) {
+      const size_t j = k0 + 1 + static_cast<size_t>(q);
+      sink.Emit(j, t[j], u[j], zo[q], xs[q], tho[q], yo[q]);
+    }
+    if (n_ok < len) {
+      const size_t j = k0 + 1 + static_cast<size_t>(n_ok);
+      summary.status = SimStatus::kNonFinite;
+      summary.message = NonFiniteMessage(j, t[j]);
+      return;
+    }
   }
   summary.steps = steps;
 }

@@ -34,6 +34,14 @@ struct ZData {
   double zdd = 0;  ///< z̈ [N/s²]
   bool operator==(const ZData&) const = default;
 };
+/// A sub-step of the sampled path (u linear, z held by the quintic Hermite of its end data).
+struct SampledSub {
+  double tau = 0;            ///< length [s]
+  double u_a = 0, u_dot = 0; ///< u at its start [V], its slope [V/s]
+  ZData l, r;                ///< the hold data at its ends
+  bool cached = false;       ///< over the workspace's step (its discretisation), else made for tau
+  int out = -1;              ///< ≥ 0: the last sub-step of output sample `out` of the chunk
+};
 /// The discretisation of a sub-step of arbitrary length (all modes) and DiscretiseBatch's scratch.
 struct SubStep {
   std::vector<ModeStep> steps;
@@ -89,6 +97,12 @@ class ModalWorkspace {
   std::vector<long> io_;                               //         and their nodes
   std::vector<Special> special_;
   std::vector<Inner> inner_;
+  // Sampled path, one chunk of samples at a time: pass 1 lists the sub-steps with their hold data,
+  // pass 2 runs the modes over them (runs of cached steps in one loop over the modes' SoA data).
+  std::vector<modal::SampledSub> subs_;
+  std::vector<double> d_[modal::kMaxPhi + 1];  // the cached step's D_j per mode (npad entries)
+  std::vector<double> nwz_, wu_;               // −tip_i g_z,i and tip_i g_u,i, padded with zeros
+  std::vector<double> zo_;                     // z at the chunk's output samples
 };
 
 class ModalSimulator {
@@ -138,6 +152,8 @@ class ModalSimulator {
   /// on what the thread's workspace ran before (within a run the tolerance saves the re-discretising
   /// of a sampled grid's steps, which differ in their last bits).
   void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact = false) const;
+  /// True when Prepare(params, step, ws) (not exact) would keep ws's discretisation.
+  bool Holds(const BimorphParams& params, double step, const ModalWorkspace& ws) const;
 
   const BimorphPlant* plant_;
   uint64_t id_;

@@ -39,6 +39,13 @@ class FitnessFunction {
  public:
   virtual ~FitnessFunction() = default;
   virtual FitnessResult Evaluate(const Genome& genome) const = 0;
+  /// How many genomes EvaluateMany takes at once to gain from it (simulations run side by side in
+  /// one thread); 1 = none. The thread pool then hands its threads that many at a time.
+  virtual int lanes() const { return 1; }
+  /// out[i] = Evaluate(*genomes[i]) for every i, bit for bit (the default calls Evaluate).
+  virtual void EvaluateMany(std::span<const Genome* const> genomes, std::span<FitnessResult> out) const {
+    for (size_t i = 0; i < genomes.size(); ++i) out[i] = Evaluate(*genomes[i]);
+  }
 };
 
 /// One batch: the genomes of a generation that need evaluating, with their population indices.

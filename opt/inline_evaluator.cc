@@ -33,6 +33,16 @@ FitnessResult EvaluateGuarded(const FitnessFunction& fitness, const Genome& geno
   return r;
 }
 
+void EvaluateManyGuarded(const FitnessFunction& fitness, std::span<const Genome* const> genomes,
+                         std::span<FitnessResult> out, double error_cost) noexcept {
+  try {
+    fitness.EvaluateMany(genomes, out);
+    for (FitnessResult& r : out) SanitizeFitness(r, error_cost);
+  } catch (...) {
+    for (size_t i = 0; i < genomes.size(); ++i) out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost);
+  }
+}
+
 void InlineEvaluator::Evaluate(const EvalBatch& batch, std::span<FitnessResult> out) {
   PZ_CHECK(out.size() == batch.genomes.size());
   for (size_t i = 0; i < batch.genomes.size(); ++i) {

@@ -21,6 +21,10 @@ bool SanitizeFitness(FitnessResult& r, double error_cost = kDefaultErrorCost);
 /// and the result sanitised. Never throws.
 FitnessResult EvaluateGuarded(const FitnessFunction& fitness, const Genome& genome,
                               double error_cost = kDefaultErrorCost) noexcept;
+/// out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost) for every i, through
+/// fitness.EvaluateMany (an exception there: each genome by EvaluateGuarded). Never throws.
+void EvaluateManyGuarded(const FitnessFunction& fitness, std::span<const Genome* const> genomes,
+                         std::span<FitnessResult> out, double error_cost = kDefaultErrorCost) noexcept;
 
 /// Evaluates a batch in order on the calling thread (tests, single-core runs).
 class InlineEvaluator final : public BatchEvaluator {

@@ -1,6 +1,7 @@
 #include "records/families.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -9,6 +10,7 @@
 #include "io/csv.h"
 #include "model/bimorph.h"
 #include "model/bw_oscillator.h"
+#include "model/modal_simulator.h"
 #include "model/duhem.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
@@ -175,18 +177,40 @@ class BwOscillatorFamily final : public Family {
                         std::span<double> y) const override {
     if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
     const model::BwParams b = osc_.physical ? model::BwFromIdentifiable(p) : Scaled(p);
-    auto nan = [&] { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); };
-    if (!b.Validate().ok()) return nan();  // outside any box (m <= 0, a non-finite value)
+    if (!b.Validate().ok()) return Nan(y);  // outside any box (m <= 0, a non-finite value)
     std::optional<model::BwInput> own;
     const auto* in = dynamic_cast<const Input*>(prepared);
     const model::BwInput& input = in ? in->input : own.emplace(u, InputOptions(dt));
-    // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.
-    model::BwState state{!osc_.from_zero_state && b.k != 0 ? u[0] / b.k : 0.0, 0, 0};
+    model::BwState state = Rest(b, u[0]);
     const Status st = model::SimulateBw(b, input, y, &state);
-    if (!st.ok()) nan();
+    if (!st.ok()) Nan(y);
+  }
+  // Two parameter sets side by side (model::SimulateBwPair): the RK4 loop is a chain of dependent
+  // operations, and two chains in one thread take about the time of one.
+  int lanes() const override { return 2; }
+  void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
+                            std::span<const double> u, double dt, std::span<const std::span<double>> ys) const override {
+    const auto* in = dynamic_cast<const Input*>(prepared);
+    std::array<model::BwParams, 2> b;
+    bool pair = ps.size() == 2 && in;
+    for (size_t l = 0; pair && l < 2; ++l) {
+      if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
+      b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
+      pair = b[l].Validate().ok();
+    }
+    if (!pair) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
+    std::array<model::BwState, 2> states = {Rest(b[0], u[0]), Rest(b[1], u[0])};
+    const auto st = model::SimulateBwPair(b, in->input, {ys[0], ys[1]}, &states);
+    for (size_t l = 0; l < 2; ++l)
+      if (!st[l].ok()) Nan(ys[l]);
   }
 
  private:
+  static void Nan(std::span<double> y) { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); }
+  // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.
+  model::BwState Rest(const model::BwParams& b, double u0) const {
+    return {!osc_.from_zero_state && b.k != 0 ? u0 / b.k : 0.0, 0, 0};
+  }
   model::BwInputOptions InputOptions(double dt) const {
     model::BwInputOptions io;
     io.sample_rate_hz = 1.0 / dt;
@@ -239,10 +263,16 @@ class BimorphFinFamily final : public Family {
     if (p.size() != params_.size())
       throw InputError("bimorph-fin: " + std::to_string(params_.size()) + " parameters expected");
     model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
-    model::SampledSignal sig;
+    // The drive, the modal workspace and the angle are kept per thread: a search's evaluations then
+    // allocate nothing of the record's size (fresh pages of that size cost more than the modes).
+    thread_local model::DriveSignal drive = model::SampledSignal{};
+    thread_local model::ModalWorkspace ws;
+    thread_local std::vector<double> angle;
+    auto& sig = std::get<model::SampledSignal>(drive);
     sig.t.resize(u.size());
     for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
     sig.u.assign(u.begin(), u.end());
+    angle.resize(u.size());
     model::BeamGeometry geo = geometry_;
     geo.active_length_m = p[10];
     if (params_.size() > 11) geo.tip_length_m = p[11];
@@ -253,9 +283,11 @@ class BimorphFinFamily final : public Family {
     const bool nominal = geo.active_length_m == geometry_.active_length_m && geo.tip_length_m == geometry_.tip_length_m;
     std::optional<model::BimorphPlant> other;
     if (!nominal) other.emplace(geo);
-    const model::BimorphTrace tr = model::Simulate(nominal ? plant_ : *other, b, sig);
-    if (tr.angle_deg.size() != u.size() || !tr.summary.ok()) return nan();
-    for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * tr.angle_deg[k];
+    // The fast path's angle alone (model::Simulate's modal path without the full trace): the same
+    // values; a failure (invalid or unbounded parameters, a non-finite angle) gives NaN.
+    const model::ModalSimulator sim(nominal ? plant_ : *other);
+    if (!sim.SimulateAngle(b, drive, angle, ws).ok()) return nan();
+    for (size_t k = 0; k < u.size(); ++k) y[k] = p[9] * angle[k];
   }
 
  private:
@@ -275,6 +307,11 @@ std::shared_ptr<const Family::Prepared> Family::Prepare(std::span<const double>,
 void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::span<const double> u, double dt,
                               std::span<double> y) const {
   Simulate(p, u, dt, y);
+}
+
+void Family::SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
+                                  std::span<const double> u, double dt, std::span<const std::span<double>> ys) const {
+  for (size_t l = 0; l < ps.size(); ++l) SimulatePrepared(prepared, ps[l], u, dt, ys[l]);
 }
 
 DataScale MeasureScale(const std::vector<const io::Record*>& records) {

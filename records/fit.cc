@@ -212,6 +212,53 @@ opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
   return {o.mse, opt::FitnessStatus::kOk, ""};
 }
 
+int RecordFitness::lanes() const {
+  const Family& fam = model_.family();
+  return model_.effects().empty() && !fam.linear() ? std::max(1, fam.lanes()) : 1;
+}
+
+void RecordFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
+                                 std::span<opt::FitnessResult> out) const {
+  const size_t L = genomes.size(), nf = model_.family_param_count();
+  bool direct = lanes() > 1 && L > 1;
+  for (const opt::Genome* g : genomes) direct = direct && g->reals.size() == nf;
+  if (!direct) return FitnessFunction::EvaluateMany(genomes, out);
+  // Run's arithmetic for every genome, the simulation as RecordModel::Simulate has it without
+  // effects (from the rest's last sample on the recorded drive; the rest at the first output).
+  const int pol = model_.scale().polarity;
+  std::vector<double> sse(L, 0.0);
+  std::vector<std::vector<double>> y(L);
+  std::vector<std::span<const double>> ps(L);
+  std::vector<std::span<double>> segs(L);
+  for (size_t l = 0; l < L; ++l) ps[l] = genomes[l]->reals;
+  for (size_t i = 0; i < records_.size(); ++i) {
+    const io::Record* r = records_[i];
+    const size_t end = r->end_scored, from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, end - 1);
+    for (size_t l = 0; l < L; ++l) {
+      y[l].assign(end, 0.0);
+      segs[l] = std::span<double>(y[l]).subspan(from, end - from);
+    }
+    model_.family().SimulatePreparedMany(prepared_[i].get(), ps, std::span<const double>(r->u).subspan(from, end - from),
+                                         r->dt, segs);
+    for (size_t l = 0; l < L; ++l) {
+      std::fill(y[l].begin(), y[l].begin() + static_cast<std::ptrdiff_t>(from), segs[l][0]);
+      const double rest = pol * segs[l][0];
+      for (double& v : y[l]) v *= pol;
+      const double o = RecordOffset(*r, y[l], rest);
+      for (double& v : y[l]) v += o;
+      for (size_t k = r->first_scored; k < end; ++k) {
+        const double e = r->y[k] - y[l][k];
+        sse[l] += e * e;
+      }
+    }
+  }
+  for (size_t l = 0; l < L; ++l) {
+    const double mse = std::isfinite(sse[l]) ? sse[l] / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+    out[l] = std::isfinite(mse) ? opt::FitnessResult{mse, opt::FitnessStatus::kOk, ""}
+                                : opt::FitnessResult{penalty_, opt::FitnessStatus::kPenalized, "diverged"};
+  }
+}
+
 bool RecordFitness::Residuals(std::span<const double> params, std::vector<double>& r) const {
   const Output o = Run(params);
   if (!std::isfinite(o.mse)) return false;

@@ -41,6 +41,10 @@ class RecordFitness final : public opt::FitnessFunction {
   RecordFitness(const RecordModel& model, std::vector<const io::Record*> records,
                 double penalty = opt::kDefaultErrorCost);
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
+  /// A family without effects that runs parameter sets side by side (Family::lanes): that many
+  /// genomes at once, each with Evaluate's result bit for bit.
+  int lanes() const override;
+  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override;
 
   /// Everything about one parameter vector: the weights of a linear family (solved), each record's
   /// output (polarity and offset applied) and offset, the mean squared error. Non-finite output

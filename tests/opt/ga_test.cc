@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -96,6 +97,43 @@ GaOptions SmallOptions(uint64_t seed = 42) {
 
 // ------------------------------------------------------------------------------------------
 // Generator
+
+// A fitness with lanes (FitnessFunction::lanes / EvaluateMany): the thread pool hands its threads
+// that many genomes at a time, with the one-by-one results; an exception in EvaluateMany falls back
+// to EvaluateGuarded for each genome of the group.
+class LaneFitness final : public FitnessFunction {
+ public:
+  FitnessResult Evaluate(const Genome& g) const override {
+    if (g.reals[0] < 0) throw std::runtime_error("negative");
+    return {g.reals[0] * g.reals[0], FitnessStatus::kOk, ""};
+  }
+  int lanes() const override { return 3; }
+  void EvaluateMany(std::span<const Genome* const> gs, std::span<FitnessResult> out) const override {
+    groups.fetch_add(1);
+    largest.store(std::max<int>(largest.load(), static_cast<int>(gs.size())));
+    FitnessFunction::EvaluateMany(gs, out);
+  }
+  mutable std::atomic<int> groups{0}, largest{0};
+};
+
+TEST(ThreadPoolEvaluator, AFitnessWithLanesGetsGroupsWithTheSameResults) {
+  LaneFitness fitness;
+  std::vector<Genome> g(11);
+  for (size_t i = 0; i < g.size(); ++i) g[i].reals = {i == 4 ? -1.0 : 0.5 * static_cast<double>(i)};
+  std::vector<int> idx(g.size());
+  std::vector<FitnessResult> pooled(g.size());
+  ThreadPoolEvaluator pool(fitness, 2);
+  pool.Evaluate({0, g, idx}, pooled);
+  EXPECT_GE(fitness.groups.load(), 3);
+  EXPECT_EQ(fitness.largest.load(), 3);
+  for (size_t i = 0; i < g.size(); ++i) {
+    const FitnessResult want = EvaluateGuarded(fitness, g[i]);
+    EXPECT_EQ(pooled[i].cost, want.cost) << i;
+    EXPECT_EQ(pooled[i].status, want.status) << i;
+  }
+  EXPECT_EQ(pooled[4].status, FitnessStatus::kError);
+  EXPECT_EQ(pooled[4].reason, "exception: negative");
+}
 
 TEST(Rng, MatchesStdMt19937_64) {
   for (uint64_t seed : {5489ull, 0ull, 42ull, 0xFFFFFFFFFFFFFFFFull}) {

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <iostream>
 #include <numbers>
 
@@ -192,6 +193,42 @@ TEST(RecordFit, SameResultOnOneAndTwoThreads) {
   const FitResult b = FitRecords(set, o);
   EXPECT_EQ(a.params, b.params);
   EXPECT_EQ(a.train_mse, b.train_mse);
+}
+
+TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
+  // The bw-oscillator runs two parameter sets at once (Family::lanes, model::SimulateBwPair): each
+  // result is Evaluate's, bit for bit, for points in the box, a point outside (m <= 0 after the
+  // scaling: NaN alone) and one that diverges; a family without lanes and a pair of odd sizes take
+  // Evaluate one by one. (The thread pool's groups: tests/opt/ga_test.cc.)
+  const Case c = Cases()[4];
+  const io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
+  const auto train = set.WithRole(CaseRole::kTrain);
+  const DataScale scale = MeasureScale(train);
+  const RecordModel model(MakeFamily(c.family, scale), {}, scale);
+  const RecordFitness fitness(model, train);
+  ASSERT_EQ(fitness.lanes(), 2);
+  std::vector<opt::Genome> g(6);
+  g[0].reals = c.truth;
+  g[1].reals = {0.12, 25, 0.5, 0.2, 0.3, 0.01};
+  g[2].reals = {0.1, 30, 0.3, 0.4, 0.15, -0.05};
+  g[3].reals = {-0.1, 30, 0.3, 0.4, 0.15, -0.05};  // K < 0: m < 0, invalid
+  g[4].reals = {0.1, 30, 0.3, 0.4, -50, -50};      // β·γ + β·δ ≪ 0: z grows without bound
+  g[5].reals = {0.1, 40, 0.2, 0.3, 0.2, 0.1};
+  for (size_t a = 0; a < g.size(); ++a) {
+    for (size_t b = 0; b < g.size(); ++b) {
+      const opt::Genome* pair[2] = {&g[a], &g[b]};
+      opt::FitnessResult out[2];
+      fitness.EvaluateMany(pair, out);
+      for (int l = 0; l < 2; ++l) {
+        const opt::FitnessResult want = fitness.Evaluate(*pair[l]);
+        EXPECT_EQ(out[l].status, want.status) << a << " " << b;
+        EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost)) << a << " " << b;
+      }
+    }
+  }
+  EXPECT_EQ(fitness.Evaluate(g[4]).status, opt::FitnessStatus::kPenalized);
+  const RecordModel plain(MakeFamily("backlash-like", scale), {}, scale);
+  EXPECT_EQ(RecordFitness(plain, train).lanes(), 1);
 }
 
 TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
