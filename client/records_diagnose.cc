@@ -1,5 +1,7 @@
 #include "client/records_diagnose.h"
 
+#include "client/search_flags.h"
+
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -10,6 +12,7 @@
 #include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
+#include "client/search_flags.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -132,6 +135,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
+  o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family, a.evaluator_factory != nullptr);
   o.rules.significance_ratio = a.significance_ratio;
   std::stringstream ss(a.candidates);
   std::string name;

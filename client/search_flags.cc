@@ -1,5 +1,7 @@
 #include "client/search_flags.h"
 
+#include "records/families.h"
+
 namespace pz::client {
 
 void AddSearchFlags(CLI::App* cmd, SearchFlags* f) {
@@ -32,6 +34,33 @@ void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
   o->de.population = f.population;
   o->de.generations = f.generations;
   o->de.stall_generations = f.stall;
+}
+
+void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
+  const char* dflt = model::InitialStateName(records::FamilyOptions{}.initial_state);
+  cmd->add_option("--initial-state", *value,
+                  std::string("the memory at rest at the first sample's drive of prandtl-ishlinskii, asymmetric-pi, "
+                              "preisach, stack-bouc-wen and backlash-like: centred (demagnetised), descended (the drive "
+                              "came down to the rest from the top of its range: a stack resting at the bottom of its "
+                              "range after use) or ascended (docs/records.md)"))
+      ->type_name("NAME")
+      ->default_str(dflt);
+}
+
+model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family, bool service) {
+  const model::InitialState dflt = records::FamilyOptions{}.initial_state;
+  if (value.empty()) return dflt;
+  const model::InitialState s = model::ParseInitialState(value, "--initial-state");
+  if (!records::TakesInitialState(family) && s != model::InitialState::kCentred) {
+    throw InputError("--initial-state " + value + ": family " + family +
+                     " starts centred (the flag applies to prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen "
+                     "and backlash-like)");
+  }
+  if (service && s != dflt) {
+    throw InputError("--initial-state " + value + " with --master: the service's workers simulate in the default " +
+                     std::string(model::InitialStateName(dflt)) + " state; fit locally (without --master)");
+  }
+  return s;
 }
 
 }  // namespace pz::client

@@ -14,6 +14,21 @@ std::string Num(double x) { return FormatG(x, 17); }
 
 }  // namespace
 
+const char* InitialStateName(InitialState s) {
+  switch (s) {
+    case InitialState::kCentred: return "centred";
+    case InitialState::kDescended: return "descended";
+    case InitialState::kAscended: return "ascended";
+  }
+  return "centred";
+}
+
+InitialState ParseInitialState(std::string_view name, std::string_view field) {
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended})
+    if (name == InitialStateName(s)) return s;
+  throw InputError(std::string(field) + " '" + std::string(name) + "' is unknown (allowed: centred, descended, ascended)");
+}
+
 Status PiOperator::Validate() const {
   if (!std::isfinite(w0)) return InvalidArgument("pi.w0 = " + Num(w0) + ": must be finite");
   if (thresholds.size() != weights.size()) {
@@ -47,11 +62,12 @@ std::vector<double> PiThresholds(int n, double half_range) {
   return r;
 }
 
-void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out) {
+void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out, InitialState start) {
   const size_t n = r.size(), len = u.size();
   if (out.size() != len * n) throw InputError("PiPlayOutputs: output size mismatch");
   if (len == 0) return;
-  std::vector<double> z(n, u[0]);
+  std::vector<double> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], r[i], start);
   for (size_t k = 0; k < len; ++k) {
     const double uk = u[k];
     double* row = out.data() + k * n;
@@ -67,7 +83,8 @@ void ApplyPi(const PiOperator& op, std::span<const double> u, std::span<double> 
   if (y.size() != u.size()) throw InputError("ApplyPi: output size mismatch");
   if (u.empty()) return;
   const size_t n = op.thresholds.size();
-  std::vector<double> z(n, u[0]);
+  std::vector<double> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], op.thresholds[i], op.start);
   for (size_t k = 0; k < u.size(); ++k) {
     const double uk = u[k];
     double acc = op.w0 * uk;
@@ -86,6 +103,7 @@ PiOperator InvertPi(const PiOperator& op) {
   const size_t n = op.thresholds.size();
   PiOperator inv;
   inv.w0 = 1.0 / op.w0;
+  inv.start = op.start;  // a descent of the drive is a descent of the output
   inv.thresholds.resize(n);
   inv.weights.resize(n);
   double below = op.w0;  // w0 + Σ_{i<j} w_i

@@ -40,7 +40,8 @@ int Reversals(const io::Record& r, double depth) {
 
 class PreisachFamily final : public Family {
  public:
-  PreisachFamily(const DataScale& s, const FamilyOptions& o) : grid_{s.u_min, s.u_max, o.pi_operators} {
+  PreisachFamily(const DataScale& s, const FamilyOptions& o)
+      : grid_{s.u_min, s.u_max, o.pi_operators}, start_(o.initial_state) {
     ThrowIfError(grid_.Validate());
   }
   std::string name() const override { return "preisach"; }
@@ -56,11 +57,12 @@ class PreisachFamily final : public Family {
   bool linear() const override { return true; }
   size_t regressors() const override { return grid_.cells(); }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::ApplyPreisach(grid_, p, u, y);
+    model::ApplyPreisach(grid_, p, u, y, start_);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
-    model::PreisachRegressors(grid_, u, out);
+    model::PreisachRegressors(grid_, u, out, start_);
   }
+  model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
     std::vector<std::string> names;
     for (int i = 0; i < grid_.levels; ++i)
@@ -102,6 +104,7 @@ class PreisachFamily final : public Family {
  private:
   static constexpr size_t kMinSamplesPerLevel = 4;
   model::PreisachGrid grid_;
+  model::InitialState start_;
   std::vector<ParamInfo> params_;
 };
 
@@ -109,7 +112,8 @@ class AsymmetricPiFamily final : public Family {
  public:
   AsymmetricPiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
-        knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)) {}
+        knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)),
+        start_(o.initial_state) {}
   std::string name() const override { return "asymmetric-pi"; }
   std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
   std::string equation() const override {
@@ -123,8 +127,9 @@ class AsymmetricPiFamily final : public Family {
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     if (out.size() != u.size() * regressors()) throw InputError("asymmetric-pi: regressor size mismatch");
-    model::AsymmetricPiRegressors(thresholds_, knots_, u, out);
+    model::AsymmetricPiRegressors(thresholds_, knots_, u, out, start_);
   }
+  model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
     std::vector<std::string> names = {"w0"};
     for (size_t i = 0; i < thresholds_.size(); ++i)
@@ -164,11 +169,13 @@ class AsymmetricPiFamily final : public Family {
     op.knots = knots_;
     op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n), p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
     op.down.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K), p.end());
+    op.start = start_;
     return op;
   }
 
  private:
   std::vector<double> thresholds_, knots_;
+  model::InitialState start_;
   std::vector<ParamInfo> params_;
 };
 
