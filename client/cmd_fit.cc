@@ -239,10 +239,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   os << "\n## Errors\n\n";
-  if (records::TakesInitialState(m.family().name())) {
-    os << "The model starts at rest at each record's first drive in the **"
-       << model::InitialStateName(m.family().initial_state()) << "** state (--initial-state; docs/records.md).\n\n";
-  }
+  if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
   os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";

@@ -25,4 +25,15 @@ std::string SettlingSentence(double settle_s) {
          "do until the first large reversal (io::SkipSettling).";
 }
 
+std::string InitialStateSentence(const records::Family& family) {
+  if (!records::TakesInitialState(family.name())) return "";
+  const model::InitialState s = family.initial_state();
+  return std::string("The model starts at rest at each record's first drive in the **") + model::InitialStateName(s) +
+         "** state" +
+         (s == model::InitialState::kAuto
+              ? " (descended at a rest at the bottom of the training drive range, ascended at its top, else centred)"
+              : "") +
+         " (--initial-state; docs/records.md).";
+}
+
 }  // namespace pz::client

@@ -33,6 +33,7 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
   os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
      << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
   if (settle_s > 0) os << SettlingSentence(settle_s) << "\n\n";
+  if (const std::string s = InitialStateSentence(d.base.model->family()); !s.empty()) os << s << "\n\n";
   os << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
   for (const auto& e : d.noise.estimates) {
     os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma) << " | " << e.samples
@@ -76,6 +77,7 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
   auto& f = *root.mutable_fields();
   f["records"] = Text(set.source.string());
   f["family"] = Text(d.base.model->family().name());
+  f["initial_state"] = Text(model::InitialStateName(d.base.model->family().initial_state()));
   f["response_unit"] = Text(set.response_unit);
   Struct noise;
   auto& n = *noise.mutable_fields();

@@ -42,7 +42,8 @@ void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
                   std::string("the memory at rest at the first sample's drive of prandtl-ishlinskii, asymmetric-pi, "
                               "preisach, stack-bouc-wen and backlash-like: centred (demagnetised), descended (the drive "
                               "came down to the rest from the top of its range: a stack resting at the bottom of its "
-                              "range after use) or ascended (docs/records.md)"))
+                              "range after use), ascended, or auto (descended for a rest at the bottom of the training "
+                              "drive range, ascended at its top, else centred; docs/records.md)"))
       ->type_name("NAME")
       ->default_str(dflt);
 }

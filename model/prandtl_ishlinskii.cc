@@ -19,14 +19,23 @@ const char* InitialStateName(InitialState s) {
     case InitialState::kCentred: return "centred";
     case InitialState::kDescended: return "descended";
     case InitialState::kAscended: return "ascended";
+    case InitialState::kAuto: return "auto";
   }
   return "centred";
 }
 
 InitialState ParseInitialState(std::string_view name, std::string_view field) {
-  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended})
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended, InitialState::kAuto})
     if (name == InitialStateName(s)) return s;
-  throw InputError(std::string(field) + " '" + std::string(name) + "' is unknown (allowed: centred, descended, ascended)");
+  throw InputError(std::string(field) + " '" + std::string(name) +
+                   "' is unknown (allowed: centred, descended, ascended, auto)");
+}
+
+void RequireResolved(InitialState s, std::string_view what) {
+  if (s == InitialState::kAuto) {
+    throw InputError(std::string(what) + ": initial state 'auto' must be resolved on the drive range first "
+                     "(ResolveInitialState)");
+  }
 }
 
 Status PiOperator::Validate() const {
@@ -66,6 +75,7 @@ void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::sp
   const size_t n = r.size(), len = u.size();
   if (out.size() != len * n) throw InputError("PiPlayOutputs: output size mismatch");
   if (len == 0) return;
+  RequireResolved(start, "PiPlayOutputs");
   std::vector<double> z(n);
   for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], r[i], start);
   for (size_t k = 0; k < len; ++k) {
@@ -82,6 +92,7 @@ void ApplyPi(const PiOperator& op, std::span<const double> u, std::span<double> 
   if (Status s = op.Validate(); !s.ok()) throw InputError(s);
   if (y.size() != u.size()) throw InputError("ApplyPi: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(op.start, "ApplyPi");
   const size_t n = op.thresholds.size();
   std::vector<double> z(n);
   for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], op.thresholds[i], op.start);
@@ -103,6 +114,7 @@ PiOperator InvertPi(const PiOperator& op) {
   const size_t n = op.thresholds.size();
   PiOperator inv;
   inv.w0 = 1.0 / op.w0;
+  RequireResolved(op.start, "InvertPi");
   inv.start = op.start;  // a descent of the drive is a descent of the output
   inv.thresholds.resize(n);
   inv.weights.resize(n);

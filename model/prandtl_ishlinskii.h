@@ -10,7 +10,10 @@
 //   descended  z_0 = u_0 + r    the drive came down to u_0 from at least 2r above (a stack resting
 //                               at the bottom of its range after use: the next rise follows the
 //                               major loop's ascending branch);
-//   ascended   z_0 = u_0 − r    the drive came up to u_0 from at least 2r below.
+//   ascended   z_0 = u_0 − r    the drive came up to u_0 from at least 2r below;
+//   auto       descended when u_0 is at the bottom of the data's drive range (u_0 ≤ u_min + 5 % of
+//              the range: the drive came down to its rest), ascended at its top, else centred
+//              (ResolveInitialState; the families resolve it on each simulation's first drive).
 // With w₀ > 0 and w_i ≥ 0 the operator is strictly increasing on every branch
 // and its inverse is again a PI operator, of the output, with
 //
@@ -36,14 +39,24 @@ namespace pz::model {
 /// The memory of a hysteresis operator at rest at the first sample's drive u_0 (above; for the
 /// Bouc–Wen-type stack families, model/stack_models.h StackRestState: the state after the drive
 /// rose from u_0 by the data's full range and came back down to u_0, or the mirror of it).
-enum class InitialState : int { kCentred = 0, kDescended = 1, kAscended = 2 };
-/// "centred", "descended", "ascended".
+enum class InitialState : int { kCentred = 0, kDescended = 1, kAscended = 2, kAuto = 3 };
+/// "centred", "descended", "ascended", "auto".
 const char* InitialStateName(InitialState s);
 /// Parses a name of InitialStateName; throws InputError naming `field`, the value and the allowed ones.
 InitialState ParseInitialState(std::string_view name, std::string_view field);
-/// The play of half-width r at rest at u0 in state s: u0, u0 + r or u0 − r.
+/// The play of half-width r at rest at u0 in state s: u0, u0 + r or u0 − r (s resolved, not kAuto).
 inline double PlayRest(double u0, double r, InitialState s) {
   return s == InitialState::kDescended ? u0 + r : s == InitialState::kAscended ? u0 - r : u0;
+}
+/// Throws InputError for kAuto (an operator needs a resolved state), naming `what`.
+void RequireResolved(InitialState s, std::string_view what);
+/// The state `s` at rest at u0 for a drive range [u_min, u_max]: kAuto resolved (above), any other
+/// state itself.
+inline InitialState ResolveInitialState(InitialState s, double u0, double u_min, double u_max) {
+  if (s != InitialState::kAuto) return s;
+  const double margin = 0.05 * (u_max - u_min);
+  return u0 <= u_min + margin ? InitialState::kDescended
+                              : (u0 >= u_max - margin ? InitialState::kAscended : InitialState::kCentred);
 }
 
 struct PiOperator {

@@ -128,6 +128,7 @@ void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std
   const size_t m = grid.cells(), n = t.widths();
   if (out.size() != u.size() * m) throw InputError("PreisachRegressors: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(start, "PreisachRegressors");
   std::vector<double> p(n);
   for (size_t i = 0; i < n; ++i) p[i] = PlayRest(u[0], t.r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
@@ -147,6 +148,7 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::spa
   }
   if (y.size() != u.size()) throw InputError("ApplyPreisach: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(start, "ApplyPreisach");
   std::vector<double> p(t.widths());
   for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], t.r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
@@ -190,6 +192,7 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
   if (u.size() != y_ref.size()) throw InputError("InvertPreisach: output size mismatch");
   InverseReport rep;
   if (u.empty()) return rep;
+  RequireResolved(start, "InvertPreisach");
   const size_t n = t.widths();
   std::vector<double> p(n), trial(n);
   // The first sample: a rest state (every play at PlayRest(v)), whose output is non-decreasing in v.
@@ -267,6 +270,7 @@ void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z
   const size_t n = r.size(), K = z.size(), m = 1 + n + 2 * K;
   if (out.size() != u.size() * m) throw InputError("AsymmetricPiRegressors: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(start, "AsymmetricPiRegressors");
   std::vector<double> p(n);
   for (size_t i = 0; i < n; ++i) p[i] = PlayRest(u[0], r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
@@ -302,6 +306,7 @@ void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::s
   ThrowIfError(op.Validate());
   if (y.size() != u.size()) throw InputError("ApplyAsymmetricPi: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(op.start, "ApplyAsymmetricPi");
   std::vector<double> p(op.thresholds.size());
   for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], op.thresholds[i], op.start);
   for (size_t s = 0; s < u.size(); ++s) {
@@ -320,6 +325,7 @@ void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref, s
   if (u.empty()) return;
   for (double v : y_ref)
     if (!std::isfinite(v)) throw InputError("asymmetric-pi inverse: a reference sample is not finite");
+  RequireResolved(op.start, "InvertAsymmetricPi");
   const size_t n = op.thresholds.size();
   std::vector<double> p(n), trial(n);
   InverseReport rep;  // never saturates: the operator is unbounded

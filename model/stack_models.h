@@ -103,7 +103,8 @@ void SimulateBacklashLike(const BacklashLikeParams& p, std::span<const double> u
                           std::span<double> yhat, double w0 = 0);
 
 /// The memory at rest in state s (header comment; range R > 0 the drive's full range): h of the
-/// Bouc–Wen law, w of the backlash-like one; 0 when s is centred. Rate-independent: exact.
+/// Bouc–Wen law, w of the backlash-like one; 0 when s is centred (resolve kAuto first:
+/// ResolveInitialState). Rate-independent: exact.
 double StackRestState(const StackBoucWenParams& p, double range, InitialState s);
 double StackRestState(const BacklashLikeParams& p, double range, InitialState s);
 /// The backlash-like law's exact update of w over a straight piece of drive du (exposed for the

@@ -122,7 +122,11 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
     os << "  {" << KindMacro(b.kind) << ", " << b.n << ", " << b.m << ", " << CHexLiteral(b.dt) << ", " << CHexLiteral(b.u_min) << ", "
        << CHexLiteral(b.u_max) << ", " << CHexLiteral(b.u_half) << ", " << CHexLiteral(b.y_half) << ",\n   " << name << "_p" << i << "_, "
        << b.np << ", " << w << ", " << b.nw << ", " << b.c_off << ", " << b.d_off << ", "
-       << (b.init == pzk::PZK_DESCENDED ? "PZK_DESCENDED" : b.init == pzk::PZK_ASCENDED ? "PZK_ASCENDED" : "PZK_CENTRED") << "}"
+       << (b.init == pzk::PZK_DESCENDED  ? "PZK_DESCENDED"
+           : b.init == pzk::PZK_ASCENDED ? "PZK_ASCENDED"
+           : b.init == pzk::PZK_AUTO     ? "PZK_AUTO"
+                                         : "PZK_CENTRED")
+       << "}"
        << (i + 1 < nb ? "," : "")
        << "\n";
   }

@@ -22,7 +22,7 @@ constexpr double kTwoPi = 2 * std::numbers::pi;
 class StackBoucWenFamily final : public Family {
  public:
   StackBoucWenFamily(const DataScale& s, const FamilyOptions& o)
-      : sim_{.substeps = o.substeps}, start_(o.initial_state), range_(2 * s.u_half) {
+      : sim_{.substeps = o.substeps}, start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
     ThrowIfError(sim_.Validate());
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "-", 0.01, 1.5, false},
@@ -40,7 +40,7 @@ class StackBoucWenFamily final : public Family {
   void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
     const model::StackBoucWenParams b = model::BoucWenFromVector(p);
     model::StackSimOptions sim = sim_;
-    sim.rest_state = model::StackRestState(b, range_, start_);
+    sim.rest_state = model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_));
     model::SimulateStackBoucWen(b, u, dt, y, sim);
   }
   std::vector<std::string> excluded_effects() const override { return {"driver-lowpass"}; }
@@ -50,12 +50,14 @@ class StackBoucWenFamily final : public Family {
   model::StackSimOptions sim_;
   model::InitialState start_;
   double range_;  ///< the rise and fall of the rest state: the data's full drive range
+  double u_min_, u_max_;  ///< the data's drive range (kAuto)
   std::vector<ParamInfo> params_;
 };
 
 class BacklashLikeFamily final : public Family {
  public:
-  BacklashLikeFamily(const DataScale& s, const FamilyOptions& o) : start_(o.initial_state), range_(2 * s.u_half) {
+  BacklashLikeFamily(const DataScale& s, const FamilyOptions& o)
+      : start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true}, {"c", "y/V", 0.3 * g, 3 * g, true}, {"B1", "y/V", -3 * g, 5 * g, false}};
   }
@@ -65,13 +67,14 @@ class BacklashLikeFamily final : public Family {
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
     const model::BacklashLikeParams b = model::BacklashLikeFromVector(p);
-    model::SimulateBacklashLike(b, u, y, model::StackRestState(b, range_, start_));
+    model::SimulateBacklashLike(b, u, y,
+                                model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_)));
   }
   model::InitialState initial_state() const override { return start_; }
 
  private:
   model::InitialState start_;
-  double range_;
+  double range_, u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 
@@ -103,7 +106,7 @@ class DuhemFamily final : public Family {
 class PrandtlIshlinskiiFamily final : public Family {
  public:
   PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
-      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)), start_(o.initial_state) {}
+      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)), start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
   std::string name() const override { return "prandtl-ishlinskii"; }
   std::string title() const override { return "Prandtl–Ishlinskii operator"; }
   std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
@@ -115,14 +118,14 @@ class PrandtlIshlinskiiFamily final : public Family {
       throw InputError("prandtl-ishlinskii: " + std::to_string(p.size()) + " weights given, " +
                        std::to_string(regressors()) + " expected");
     }
-    model::PiOperator op{p[0], thresholds_, std::vector<double>(p.begin() + 1, p.end()), start_};
+    model::PiOperator op{p[0], thresholds_, std::vector<double>(p.begin() + 1, p.end()), Start(u)};
     model::ApplyPi(op, u, y);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     const size_t n = thresholds_.size(), m = n + 1;
     if (out.size() != u.size() * m) throw InputError("prandtl-ishlinskii: regressor size mismatch");
     std::vector<double> plays(u.size() * n);
-    model::PiPlayOutputs(thresholds_, u, plays, start_);
+    model::PiPlayOutputs(thresholds_, u, plays, Start(u));
     for (size_t k = 0; k < u.size(); ++k) {
       out[k * m] = u[k];
       std::copy_n(plays.data() + k * n, n, out.data() + k * m + 1);
@@ -140,8 +143,12 @@ class PrandtlIshlinskiiFamily final : public Family {
   const std::vector<double>& thresholds() const { return thresholds_; }
 
  private:
+  model::InitialState Start(std::span<const double> u) const {
+    return u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_);
+  }
   std::vector<double> thresholds_;
   model::InitialState start_;
+  double u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 

@@ -57,10 +57,10 @@ class PreisachFamily final : public Family {
   bool linear() const override { return true; }
   size_t regressors() const override { return grid_.cells(); }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::ApplyPreisach(grid_, p, u, y, start_);
+    model::ApplyPreisach(grid_, p, u, y, Start(u));
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
-    model::PreisachRegressors(grid_, u, out, start_);
+    model::PreisachRegressors(grid_, u, out, Start(u));
   }
   model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
@@ -103,6 +103,9 @@ class PreisachFamily final : public Family {
 
  private:
   static constexpr size_t kMinSamplesPerLevel = 4;
+  model::InitialState Start(std::span<const double> u) const {
+    return u.empty() ? start_ : model::ResolveInitialState(start_, u[0], grid_.u_min, grid_.u_max);
+  }
   model::PreisachGrid grid_;
   model::InitialState start_;
   std::vector<ParamInfo> params_;
@@ -113,7 +116,7 @@ class AsymmetricPiFamily final : public Family {
   AsymmetricPiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
         knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)),
-        start_(o.initial_state) {}
+        start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
   std::string name() const override { return "asymmetric-pi"; }
   std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
   std::string equation() const override {
@@ -123,11 +126,14 @@ class AsymmetricPiFamily final : public Family {
   bool linear() const override { return true; }
   size_t regressors() const override { return 1 + thresholds_.size() + 2 * knots_.size(); }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::ApplyAsymmetricPi(Operator(p), u, y);
+    model::AsymmetricPi op = Operator(p);
+    if (!u.empty()) op.start = model::ResolveInitialState(start_, u[0], u_min_, u_max_);
+    model::ApplyAsymmetricPi(op, u, y);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     if (out.size() != u.size() * regressors()) throw InputError("asymmetric-pi: regressor size mismatch");
-    model::AsymmetricPiRegressors(thresholds_, knots_, u, out, start_);
+    model::AsymmetricPiRegressors(thresholds_, knots_, u, out,
+                                  u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_));
   }
   model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
@@ -169,13 +175,13 @@ class AsymmetricPiFamily final : public Family {
     op.knots = knots_;
     op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n), p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
     op.down.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K), p.end());
-    op.start = start_;
-    return op;
+    return op;  // centred: Simulate sets the state resolved on the drive
   }
 
  private:
   std::vector<double> thresholds_, knots_;
   model::InitialState start_;
+  double u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 

@@ -26,10 +26,19 @@ typedef struct {
   int nw;
   int c_off, d_off; /* offsets of the block's constants and dynamic state (pzk_layout) */
   int init;         /* the family's memory at rest (model/prandtl_ishlinskii.h InitialState):
-                       PZK_CENTRED, PZK_DESCENDED or PZK_ASCENDED */
+                       PZK_CENTRED, PZK_DESCENDED, PZK_ASCENDED or PZK_AUTO */
 } pzk_block;
 
-enum { PZK_CENTRED = 0, PZK_DESCENDED = 1, PZK_ASCENDED = 2 };
+enum { PZK_CENTRED = 0, PZK_DESCENDED = 1, PZK_ASCENDED = 2, PZK_AUTO = 3 };
+
+/* The block's state at rest under v: PZK_AUTO resolved on the data's drive range (descended within 5 %
+ * of its bottom, ascended within 5 % of its top, else centred: ResolveInitialState). */
+static inline int pzk_rest_state(const pzk_block *b, double v) {
+  double margin;
+  if (b->init != PZK_AUTO) return b->init;
+  margin = 0.05 * (b->u_max - b->u_min);
+  return v <= b->u_min + margin ? PZK_DESCENDED : (v >= b->u_max - margin ? PZK_ASCENDED : PZK_CENTRED);
+}
 
 /* phi(z) = (1 - e^-z)/z, phi(0) = 1 (model/stack_models.cc). */
 static inline double pzk_phi(double z) {

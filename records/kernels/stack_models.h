@@ -10,8 +10,9 @@ static inline double pzk_backlash_state_step(const pzk_block *b, double w, doubl
 /* At rest in the block's initial state: w after a rise by the data's range 2 u_half from w = 0 and
  * a fall back (descended), or the mirror (ascended); 0 centred (StackRestState). */
 static inline double pzk_backlash_init(const pzk_block *b, double *d, double v) {
-  double first = b->init == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
-  d[0] = b->init == PZK_CENTRED ? 0.0 : pzk_backlash_state_step(b, pzk_backlash_state_step(b, 0.0, first), -first);
+  int state = pzk_rest_state(b, v);
+  double first = state == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
+  d[0] = state == PZK_CENTRED ? 0.0 : pzk_backlash_state_step(b, pzk_backlash_state_step(b, 0.0, first), -first);
   d[1] = v;
   return b->p[1] * v - d[0];
 }
@@ -54,8 +55,8 @@ static inline double pzk_stack_bw_init(const pzk_block *b, double *c, double *d,
   c[2] = 1.0 - q;
   c[3] = 1.0 / b->n;
   d[0] = 0.0; /* centred; else h after a rise by 2 u_half and a fall back (StackRestState) */
-  if (b->init != PZK_CENTRED) {
-    double first = b->init == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
+  if (pzk_rest_state(b, v) != PZK_CENTRED) {
+    double first = pzk_rest_state(b, v) == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
     d[0] = pzk_bouc_wen_state_step(pzk_bouc_wen_state_step(0.0, first, b->p[0], b->p[1], b->p[2]), -first, b->p[0],
                                    b->p[1], b->p[2]);
   }

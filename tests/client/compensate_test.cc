@@ -182,12 +182,12 @@ TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
   bad.replace(at, field.size(), "\"initial_state\": \"upward\"");
   std::ofstream(dir_ / "bad_state.json") << bad;
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "bad_state.json").string()); }),
-                "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended)");
+                "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended, auto)");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
                           "--initial-state", "down", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});
                 }),
-                "--initial-state 'down' is unknown (allowed: centred, descended, ascended)");
+                "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "duhem", "--initial-state",
                           "descended", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});

@@ -89,10 +89,23 @@ TEST(PrandtlIshlinskii, InitialStatesAreTheStatesAfterAMajorSwingAndInvertExactl
 }
 
 TEST(PrandtlIshlinskii, InitialStateNamesParseAndABadOneIsNamed) {
-  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended})
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended, InitialState::kAuto})
     EXPECT_EQ(ParseInitialState(InitialStateName(s), "--initial-state"), s);
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([] { ParseInitialState("down", "--initial-state"); }),
-                "--initial-state 'down' is unknown (allowed: centred, descended, ascended)");
+                "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
+  // auto: descended within 5 % of the range's bottom, ascended within 5 % of its top, else centred.
+  EXPECT_EQ(ResolveInitialState(InitialState::kAuto, -3, 0, 100), InitialState::kDescended);
+  EXPECT_EQ(ResolveInitialState(InitialState::kAuto, 5, 0, 100), InitialState::kDescended);
+  EXPECT_EQ(ResolveInitialState(InitialState::kAuto, 5.5, 0, 100), InitialState::kCentred);
+  EXPECT_EQ(ResolveInitialState(InitialState::kAuto, 96, 0, 100), InitialState::kAscended);
+  EXPECT_EQ(ResolveInitialState(InitialState::kCentred, -3, 0, 100), InitialState::kCentred);
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([] {
+                  PiOperator op = TestOperator();
+                  op.start = InitialState::kAuto;
+                  std::vector<double> y(3);
+                  ApplyPi(op, std::vector<double>{0, 1, 2}, y);
+                }),
+                "ApplyPi: initial state 'auto' must be resolved");
 }
 
 TEST(PrandtlIshlinskii, InvalidOperatorsAreNamed) {

@@ -193,6 +193,24 @@ TEST(Stepper, InitialStatesMatchSimulateAndInvert) {
       EXPECT_LE(MaxDiff(rt.ref, rt.y), 1e-9 * Range(rt.ref)) << what;
     }
   }
+  // auto: descended for a rest at the bottom of the data's drive range, centred in its middle.
+  io::Record bottom = r;
+  const double lowest = *std::min_element(r.u.begin(), r.u.end());
+  for (size_t k = 0; k < 200; ++k) bottom.u[k] = lowest;
+  for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
+    for (const io::Record* rec : std::vector<const io::Record*>{&r, &bottom}) {
+      ModelSpec s = Spec(family, {}, *rec);
+      if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};
+      if (s.family == "stack-bouc-wen") s.params[0] = 0.3;
+      ModelSpec resolved = s;
+      resolved.initial_state = rec == &r ? model::InitialState::kCentred : model::InitialState::kDescended;
+      s.initial_state = model::InitialState::kAuto;
+      Stepper st(s), want(resolved);
+      const auto ref = Reference(s, *rec), got = Forward(st, rec->u), expected = Forward(want, rec->u);
+      EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref)) << family << " auto";
+      EXPECT_EQ(MaxDiff(got, expected), 0.0) << family << " auto, rest " << (rec == &r ? "mid-range" : "at the bottom");
+    }
+  }
   ModelSpec s = Spec("duhem", {}, r);
   s.initial_state = model::InitialState::kDescended;
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Stepper st(s); }),
@@ -313,6 +331,7 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
   for (const auto& f : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "stack-bouc-wen"})
     cases.push_back({f, {}, model::InitialState::kDescended});
   cases.push_back({"backlash-like", {EffectKind::kCreep}, model::InitialState::kAscended});
+  cases.push_back({"asymmetric-pi", {}, model::InitialState::kAuto});
   for (const auto& [family, effects, state] : cases) {
     ModelSpec s = Spec(family, effects, r);
     s.initial_state = state;
