@@ -91,6 +91,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     RecordsDiagnoseRequest r = a.records;
     if (a.service.enabled())
       r.evaluator_factory = RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
+    // (the family's options, its initial state among them, travel with each fit's model: CompleteModelProblemOf)
     r.out = a.out_dir;
     r.candidates = a.candidates;
     r.threads = a.threads;

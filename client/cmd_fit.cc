@@ -366,7 +366,7 @@ int RunFit(const FitArgs& a) {
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
-  o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family, a.service.enabled());
+  o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   if (a.family == "preisach") {  // the grid's own bound, refused under the flag's name
     const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
     if (!levels.ok()) throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());

@@ -137,7 +137,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
-  o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family, a.evaluator_factory != nullptr);
+  o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   o.rules.significance_ratio = a.significance_ratio;
   std::stringstream ss(a.candidates);
   std::string name;

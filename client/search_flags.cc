@@ -48,7 +48,7 @@ void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
       ->default_str(dflt);
 }
 
-model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family, bool service) {
+model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family) {
   const model::InitialState dflt = records::FamilyOptions{}.initial_state;
   if (value.empty()) return dflt;
   const model::InitialState s = model::ParseInitialState(value, "--initial-state");
@@ -56,10 +56,6 @@ model::InitialState InitialStateOfFlag(const std::string& value, const std::stri
     throw InputError("--initial-state " + value + ": family " + family +
                      " starts centred (the flag applies to prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen "
                      "and backlash-like)");
-  }
-  if (service && s != dflt) {
-    throw InputError("--initial-state " + value + " with --master: the service's workers simulate in the default " +
-                     std::string(model::InitialStateName(dflt)) + " state; fit locally (without --master)");
   }
   return s;
 }

@@ -31,8 +31,8 @@ void ApplySearchFlags(const SearchFlags& flags, opt::SearchOptions* o);
 void AddInitialStateFlag(CLI::App* cmd, std::string* value);
 
 /// The initial state of the flag's value for `family` (empty: FamilyOptions' default). Throws
-/// InputError naming --initial-state and the allowed values; a family that does not take one; a
-/// value other than the default with --master (`service`: the workers' families use the default).
-model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family, bool service);
+/// InputError naming --initial-state and the allowed values, or a family that does not take one.
+/// (With --master the state travels in the job spec: complete_model.initial_state.)
+model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family);
 
 }  // namespace pz::client
