@@ -14,6 +14,7 @@
 #include "client/complete_service.h"
 #include "client/diagnose_report.h"
 #include "client/records_diagnose.h"
+#include "client/search_flags.h"
 #include "records/check.h"
 #include "records/reallike_check.h"
 #include "records/verdict.h"
@@ -91,6 +92,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     RecordsDiagnoseRequest r = a.records;
     if (a.service.enabled())
       r.evaluator_factory = RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
+    // (the family's options, its initial state among them, travel with each fit's model: CompleteModelProblemOf)
     r.out = a.out_dir;
     r.candidates = a.candidates;
     r.threads = a.threads;
@@ -277,8 +279,9 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--test-window", a->records.test_windows, "with one CSV: a withheld test window START:END [s]");
   cmd->add_option("--settle-s", a->records.settle_s,
                   "with --records: score every record from this long after the end of its rest [s] (the models start "
-                  "with their memory centred on the rest drive; docs/records.md)")
+                  "at rest with the memory of --initial-state; docs/records.md)")
       ->check(CLI::Range(0.0, 1e6));
+  AddInitialStateFlag(cmd, &a->records.initial_state);
   cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")->type_name("DIR");
   cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,

@@ -58,6 +58,7 @@ struct FitArgs {
   std::vector<std::string> effects;
   std::vector<std::string> train_windows, validate_windows, test_windows;
   double settle_s = 0;
+  std::string initial_state;  ///< --initial-state (empty: the default)
   std::string out = "fit-out";
   std::string algorithm = "pso";
   SearchFlags search;
@@ -238,6 +239,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   os << "\n## Errors\n\n";
+  if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
   os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
@@ -364,6 +366,7 @@ int RunFit(const FitArgs& a) {
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
+  o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   if (a.family == "preisach") {  // the grid's own bound, refused under the flag's name
     const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
     if (!levels.ok()) throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
@@ -444,9 +447,10 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
   cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
   cmd->add_option("--settle-s", a->settle_s,
-                  "score every record from this long after the end of its rest [s] (the models start with their memory "
-                  "centred on the rest drive; docs/records.md)")
+                  "score every record from this long after the end of its rest [s] (the models start at rest with the "
+                  "memory of --initial-state; docs/records.md)")
       ->check(CLI::Range(0.0, 1e6));
+  AddInitialStateFlag(cmd, &a->initial_state);
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
   AddSearchFlags(cmd, &a->search);

@@ -16,6 +16,7 @@ google::protobuf::Value FitModelJson(const io::RecordSet& set, const records::Fi
   const records::DataScale& s = m.scale();
   io::FitModelFile f;
   f.family = m.family().name();
+  f.initial_state = model::InitialStateName(m.family().initial_state());
   f.substeps = substeps;
   f.pi_operators = pi_operators;
   f.u_min = s.u_min;
@@ -93,6 +94,7 @@ records::ModelSpec LoadFit(const std::string& path) {
         throw InputError(std::string("model.effects: ") + x.what());
       }
     }
+    s.initial_state = model::ParseInitialState(m.initial_state, "model.initial_state");
     const auto rm = s.Model();  // the family and its options, checked
     if (m.params.size() != rm->params().size()) {
       throw InputError("model.params: " + std::to_string(m.params.size()) + " values for " + rm->Describe() + ", " +

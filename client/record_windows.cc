@@ -20,9 +20,20 @@ io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vecto
 std::string SettlingSentence(double settle_s) {
   if (settle_s == 0) return "";
   return "Every record is scored from " + io::FormatNumber(settle_s) +
-         " s after the end of its rest (--settle-s): the models start with their memory centred on the rest "
-         "drive, a stack at rest sits where its last move left it, and the two differ until the first large "
-         "reversal (io::SkipSettling).";
+         " s after the end of its rest (--settle-s): the models start at rest with the memory of their initial "
+         "state (--initial-state), a stack at rest sits where its last move left it, and where the two differ they "
+         "do until the first large reversal (io::SkipSettling).";
+}
+
+std::string InitialStateSentence(const records::Family& family) {
+  if (!records::TakesInitialState(family.name())) return "";
+  const model::InitialState s = family.initial_state();
+  return std::string("The model starts at rest at each record's first drive in the **") + model::InitialStateName(s) +
+         "** state" +
+         (s == model::InitialState::kAuto
+              ? " (descended at a rest at the bottom of the training drive range, ascended at its top, else centred)"
+              : "") +
+         " (--initial-state; docs/records.md).";
 }
 
 }  // namespace pz::client

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "io/records.h"
+#include "records/families.h"
 
 namespace pz::client {
 
@@ -16,5 +17,9 @@ io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vecto
 
 /// The report's sentence on the settling window ("" when settle_s is 0).
 std::string SettlingSentence(double settle_s);
+
+/// The report's sentence on the family's initial state at rest (--initial-state; "" for a family
+/// that does not take one).
+std::string InitialStateSentence(const records::Family& family);
 
 }  // namespace pz::client

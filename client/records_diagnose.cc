@@ -1,5 +1,7 @@
 #include "client/records_diagnose.h"
 
+#include "client/search_flags.h"
+
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -10,6 +12,7 @@
 #include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
+#include "client/search_flags.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -30,6 +33,7 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
   os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
      << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
   if (settle_s > 0) os << SettlingSentence(settle_s) << "\n\n";
+  if (const std::string s = InitialStateSentence(d.base.model->family()); !s.empty()) os << s << "\n\n";
   os << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
   for (const auto& e : d.noise.estimates) {
     os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma) << " | " << e.samples
@@ -73,6 +77,7 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
   auto& f = *root.mutable_fields();
   f["records"] = Text(set.source.string());
   f["family"] = Text(d.base.model->family().name());
+  f["initial_state"] = Text(model::InitialStateName(d.base.model->family().initial_state()));
   f["response_unit"] = Text(set.response_unit);
   Struct noise;
   auto& n = *noise.mutable_fields();
@@ -132,6 +137,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
+  o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   o.rules.significance_ratio = a.significance_ratio;
   std::stringstream ss(a.candidates);
   std::string name;

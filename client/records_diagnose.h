@@ -17,6 +17,7 @@ struct RecordsDiagnoseRequest {
   std::string family = "backlash-like";
   std::vector<std::string> train_windows, validate_windows, test_windows;
   double settle_s = 0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
+  std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default)
   std::string out;
   std::string candidates;  ///< comma-separated, empty = every applicable effect
   int threads = 2;

@@ -1,5 +1,7 @@
 #include "client/search_flags.h"
 
+#include "records/families.h"
+
 namespace pz::client {
 
 void AddSearchFlags(CLI::App* cmd, SearchFlags* f) {
@@ -32,6 +34,30 @@ void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
   o->de.population = f.population;
   o->de.generations = f.generations;
   o->de.stall_generations = f.stall;
+}
+
+void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
+  const char* dflt = model::InitialStateName(records::FamilyOptions{}.initial_state);
+  cmd->add_option("--initial-state", *value,
+                  std::string("the memory at rest at the first sample's drive of prandtl-ishlinskii, asymmetric-pi, "
+                              "preisach, stack-bouc-wen and backlash-like: centred (demagnetised), descended (the drive "
+                              "came down to the rest from the top of its range: a stack resting at the bottom of its "
+                              "range after use), ascended, or auto (descended for a rest at the bottom of the training "
+                              "drive range, ascended at its top, else centred; docs/records.md)"))
+      ->type_name("NAME")
+      ->default_str(dflt);
+}
+
+model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family) {
+  const model::InitialState dflt = records::FamilyOptions{}.initial_state;
+  if (value.empty()) return dflt;
+  const model::InitialState s = model::ParseInitialState(value, "--initial-state");
+  if (!records::TakesInitialState(family) && s != model::InitialState::kCentred) {
+    throw InputError("--initial-state " + value + ": family " + family +
+                     " starts centred (the flag applies to prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen "
+                     "and backlash-like)");
+  }
+  return s;
 }
 
 }  // namespace pz::client

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <string>
 
+#include "model/prandtl_ishlinskii.h"
 #include "opt/param_search.h"
 
 namespace pz::client {
@@ -24,5 +25,14 @@ void AddSearchFlags(CLI::App* cmd, SearchFlags* flags);
 
 /// Sets every algorithm's options in `o` from the flags (the algorithm itself is the caller's).
 void ApplySearchFlags(const SearchFlags& flags, opt::SearchOptions* o);
+
+/// Adds --initial-state NAME (`fit`, `diagnose --records`): the memory at rest of the families that
+/// take one (records/families.h FamilyOptions::initial_state); `value` empty = the default.
+void AddInitialStateFlag(CLI::App* cmd, std::string* value);
+
+/// The initial state of the flag's value for `family` (empty: FamilyOptions' default). Throws
+/// InputError naming --initial-state and the allowed values, or a family that does not take one.
+/// (With --master the state travels in the job spec: complete_model.initial_state.)
+model::InitialState InitialStateOfFlag(const std::string& value, const std::string& family);
 
 }  // namespace pz::client

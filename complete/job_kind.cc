@@ -49,6 +49,7 @@ std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& 
   records::FamilyOptions fo;
   fo.substeps = Substeps(p);
   fo.pi_operators = p.pi_operators;
+  if (!p.initial_state.empty()) fo.initial_state = model::ParseInitialState(p.initial_state, "complete_model.initial_state");
   std::shared_ptr<const records::Family> fam = records::MakeFamily(p.record_family, scale, fo);
   std::vector<records::EffectKind> effects;
   for (const std::string& e : p.effects) effects.push_back(records::ParseEffect(e));
@@ -361,6 +362,8 @@ CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int p
   p.record_family = m.family().name();
   for (records::EffectKind e : m.effects()) p.effects.push_back(records::EffectName(e));
   p.pi_operators = pi_operators;
+  // The state the family was made with, so the workers' family starts where the client's does.
+  p.initial_state = model::InitialStateName(m.family().initial_state());
   const records::DataScale& s = m.scale();
   p.scale = {s.u_min, s.u_max, s.u_half, s.y_half, s.gain, static_cast<double>(s.polarity), s.f_dom, s.fs, s.duration};
   for (const io::Record* r : fitness.records()) {

@@ -53,6 +53,7 @@ std::string FitModelJson(const FitModelFile& m) {
   f.set_drive_max(m.drive_max);
   f.set_drive_unit(m.drive_unit);
   f.set_response_unit(m.response_unit);
+  f.set_initial_state(m.initial_state);
   std::string json;
   google::protobuf::util::JsonPrintOptions po;
   po.always_print_primitive_fields = true;
@@ -122,6 +123,7 @@ FitModelFile ParseFitJson(const std::string& path, const std::string& text) {
   out.drive_max = m.drive_max();
   out.drive_unit = m.drive_unit();
   out.response_unit = m.response_unit();
+  out.initial_state = m.initial_state().empty() ? "centred" : m.initial_state();  // before the field: centred
   return out;
 }
 

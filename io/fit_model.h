@@ -29,6 +29,7 @@ struct FitModelFile {
   double offset = 0;
   double drive_min = 0, drive_max = 0;
   std::string drive_unit, response_unit;
+  std::string initial_state = "centred";  ///< FamilyOptions::initial_state by name ("" read: centred)
 };
 
 /// The model section as a JSON object (protobuf JSON, field names as in fit.proto).

@@ -112,8 +112,9 @@ RecordSet LoadRecordSet(const std::filesystem::path& path, const RecordReadOptio
 void SetWindow(Record& record, double t0_s, double t1_s, size_t min_scored, const std::string& what);
 
 /// The settling convention (issue 22): every model of this project starts at rest at the first
-/// sample's drive with its memory centred there (the plays of a Prandtl–Ishlinskii operator at u_0,
-/// a Bouc–Wen z at 0: a demagnetised stack), while a real stack at rest sits where its last move
+/// sample's drive, by default with its memory centred there (the plays of a Prandtl–Ishlinskii
+/// operator at u_0, a Bouc–Wen z at 0: a demagnetised stack; records/families.h
+/// FamilyOptions::initial_state sets another), while a real stack at rest sits where its last move
 /// left it — resting at the bottom of its range, below every hysteron, as after a descent. Until
 /// the first large reversal wipes that memory out the two differ (on a real-like 45 µm stack,
 /// 0.6–1.4 µm RMS over the first 0.5 s for prandtl-ishlinskii; docs/records.md), so a record can be scored

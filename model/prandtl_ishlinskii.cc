@@ -14,6 +14,30 @@ std::string Num(double x) { return FormatG(x, 17); }
 
 }  // namespace
 
+const char* InitialStateName(InitialState s) {
+  switch (s) {
+    case InitialState::kCentred: return "centred";
+    case InitialState::kDescended: return "descended";
+    case InitialState::kAscended: return "ascended";
+    case InitialState::kAuto: return "auto";
+  }
+  return "centred";
+}
+
+InitialState ParseInitialState(std::string_view name, std::string_view field) {
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended, InitialState::kAuto})
+    if (name == InitialStateName(s)) return s;
+  throw InputError(std::string(field) + " '" + std::string(name) +
+                   "' is unknown (allowed: centred, descended, ascended, auto)");
+}
+
+void RequireResolved(InitialState s, std::string_view what) {
+  if (s == InitialState::kAuto) {
+    throw InputError(std::string(what) + ": initial state 'auto' must be resolved on the drive range first "
+                     "(ResolveInitialState)");
+  }
+}
+
 Status PiOperator::Validate() const {
   if (!std::isfinite(w0)) return InvalidArgument("pi.w0 = " + Num(w0) + ": must be finite");
   if (thresholds.size() != weights.size()) {
@@ -47,11 +71,13 @@ std::vector<double> PiThresholds(int n, double half_range) {
   return r;
 }
 
-void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out) {
+void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out, InitialState start) {
   const size_t n = r.size(), len = u.size();
   if (out.size() != len * n) throw InputError("PiPlayOutputs: output size mismatch");
   if (len == 0) return;
-  std::vector<double> z(n, u[0]);
+  RequireResolved(start, "PiPlayOutputs");
+  std::vector<double> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], r[i], start);
   for (size_t k = 0; k < len; ++k) {
     const double uk = u[k];
     double* row = out.data() + k * n;
@@ -66,8 +92,10 @@ void ApplyPi(const PiOperator& op, std::span<const double> u, std::span<double> 
   if (Status s = op.Validate(); !s.ok()) throw InputError(s);
   if (y.size() != u.size()) throw InputError("ApplyPi: output size mismatch");
   if (u.empty()) return;
+  RequireResolved(op.start, "ApplyPi");
   const size_t n = op.thresholds.size();
-  std::vector<double> z(n, u[0]);
+  std::vector<double> z(n);
+  for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], op.thresholds[i], op.start);
   for (size_t k = 0; k < u.size(); ++k) {
     const double uk = u[k];
     double acc = op.w0 * uk;
@@ -86,6 +114,8 @@ PiOperator InvertPi(const PiOperator& op) {
   const size_t n = op.thresholds.size();
   PiOperator inv;
   inv.w0 = 1.0 / op.w0;
+  RequireResolved(op.start, "InvertPi");
+  inv.start = op.start;  // a descent of the drive is a descent of the output
   inv.thresholds.resize(n);
   inv.weights.resize(n);
   double below = op.w0;  // w0 + Σ_{i<j} w_i

@@ -123,12 +123,14 @@ std::string PreisachGrid::CellName(int i, int j) const {
   return "w(a=" + Num(c + half_width(i)) + ",b=" + Num(c - half_width(i)) + ")";
 }
 
-void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out) {
+void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out, InitialState start) {
   const GridTables t(grid);
   const size_t m = grid.cells(), n = t.widths();
   if (out.size() != u.size() * m) throw InputError("PreisachRegressors: output size mismatch");
   if (u.empty()) return;
-  std::vector<double> p(n, u[0]);
+  RequireResolved(start, "PreisachRegressors");
+  std::vector<double> p(n);
+  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(u[0], t.r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
     double* row = out.data() + s * m;
     for (size_t i = 0; i < n; ++i) {
@@ -138,14 +140,17 @@ void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std
   }
 }
 
-void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u, std::span<double> y) {
+void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u, std::span<double> y,
+                   InitialState start) {
   const GridTables t(grid);
   if (w.size() != grid.cells()) {
     throw InputError("preisach: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) + " cells");
   }
   if (y.size() != u.size()) throw InputError("ApplyPreisach: output size mismatch");
   if (u.empty()) return;
-  std::vector<double> p(t.widths(), u[0]);
+  RequireResolved(start, "ApplyPreisach");
+  std::vector<double> p(t.widths());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], t.r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
     for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
     y[s] = t.Output(w, p.data());
@@ -169,7 +174,7 @@ std::vector<double> PreisachRoughness(const PreisachGrid& grid) {
 }
 
 InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> y_ref,
-                             double u_lo, double u_hi, std::span<double> u) {
+                             double u_lo, double u_hi, std::span<double> u, InitialState start) {
   const GridTables t(grid);
   if (w.size() != grid.cells()) {
     throw InputError("preisach inverse: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) +
@@ -187,16 +192,17 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
   if (u.size() != y_ref.size()) throw InputError("InvertPreisach: output size mismatch");
   InverseReport rep;
   if (u.empty()) return rep;
+  RequireResolved(start, "InvertPreisach");
   const size_t n = t.widths();
   std::vector<double> p(n), trial(n);
-  // The first sample: a rest state (every play at v), whose output is non-decreasing in v.
+  // The first sample: a rest state (every play at PlayRest(v)), whose output is non-decreasing in v.
   auto rest = [&](double v) {
-    std::fill(trial.begin(), trial.end(), v);
+    for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, t.r[i], start);
     return t.Output(w, trial.data());
   };
   const double mid = 0.5 * (u_lo + u_hi);
   double v = SolveStep(rest, mid, rest(mid), y_ref[0], u_lo, u_hi, &rep);
-  std::fill(p.begin(), p.end(), v);
+  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(v, t.r[i], start);
   double y = t.Output(w, p.data());
   u[0] = v;
   for (size_t s = 1; s < y_ref.size(); ++s) {
@@ -260,11 +266,13 @@ std::vector<double> AsymmetricPiKnots(int count, double u_min, double u_max) {
 }
 
 void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z, std::span<const double> u,
-                            std::span<double> out) {
+                            std::span<double> out, InitialState start) {
   const size_t n = r.size(), K = z.size(), m = 1 + n + 2 * K;
   if (out.size() != u.size() * m) throw InputError("AsymmetricPiRegressors: output size mismatch");
   if (u.empty()) return;
-  std::vector<double> p(n, u[0]);
+  RequireResolved(start, "AsymmetricPiRegressors");
+  std::vector<double> p(n);
+  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(u[0], r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
     double* row = out.data() + s * m;
     const double x = u[s];
@@ -298,7 +306,9 @@ void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::s
   ThrowIfError(op.Validate());
   if (y.size() != u.size()) throw InputError("ApplyAsymmetricPi: output size mismatch");
   if (u.empty()) return;
-  std::vector<double> p(op.thresholds.size(), u[0]);
+  RequireResolved(op.start, "ApplyAsymmetricPi");
+  std::vector<double> p(op.thresholds.size());
+  for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], op.thresholds[i], op.start);
   for (size_t s = 0; s < u.size(); ++s) {
     for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - op.thresholds[i], std::min(u[s] + op.thresholds[i], p[i]));
     y[s] = AsymmetricOutput(op, u[s], p.data());
@@ -315,17 +325,18 @@ void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref, s
   if (u.empty()) return;
   for (double v : y_ref)
     if (!std::isfinite(v)) throw InputError("asymmetric-pi inverse: a reference sample is not finite");
+  RequireResolved(op.start, "InvertAsymmetricPi");
   const size_t n = op.thresholds.size();
   std::vector<double> p(n), trial(n);
   InverseReport rep;  // never saturates: the operator is unbounded
   auto rest = [&](double v) {
-    std::fill(trial.begin(), trial.end(), v);
+    for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, op.thresholds[i], op.start);
     return AsymmetricOutput(op, v, trial.data());
   };
   double lo = 0, hi = 0;
   Bracket(rest, 0.0, y_ref[0], &lo, &hi);
   double v = Bisect(rest, lo, hi, rest(lo), rest(hi), y_ref[0]);
-  std::fill(p.begin(), p.end(), v);
+  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(v, op.thresholds[i], op.start);
   double y = AsymmetricOutput(op, v, p.data());
   u[0] = v;
   for (size_t s = 1; s < y_ref.size(); ++s) {

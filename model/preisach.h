@@ -19,8 +19,11 @@
 //   ŷ = Σ_ij w_ij φ_ij(p_{r_i}),   φ_ij(p) = clamp(p, c_ij, c_ij + Δ) − c_ij + (u_min + r_i)/(n − i)
 //
 // (the constant makes a density constant along the centre exactly the PI play Σ_j φ_ij = p_{r_i}
-// while p_{r_i} stays inside the grid). Every play starts centred on the first sample (at rest at
-// u_0: relays with centre below u_0 on, the demagnetised state of the PI operator). Wiping-out and
+// while p_{r_i} stays inside the grid). Every play starts at rest at the first sample u_0 in the
+// initial state given (model/prandtl_ishlinskii.h InitialState): centred on u_0 (relays with centre
+// below u_0 on, the demagnetised state of the PI operator), descended (p_r = u_0 + r: the drive came
+// down to u_0 from the top, only relays with β < u_0 on) or ascended (p_r = u_0 − r: relays with
+// α ≤ u_0 on). A rest at or below the grid has every relay off in all three. Wiping-out and
 // return-point memory are those of the plays: exact. Beyond the grid's drive range the output is
 // flat (relays outside the grid are not modelled): a prediction there is an extrapolation.
 //
@@ -47,6 +50,7 @@
 #include <string>
 #include <vector>
 
+#include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
 
 namespace pz::model {
@@ -67,11 +71,12 @@ struct PreisachGrid {
 
 /// The cell regressors φ_ij(p_{r_i}[u]) (row-major, rows = samples, columns = grid.cells()).
 /// Throws InputError on an invalid grid or sizes.
-void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out);
+void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out,
+                        InitialState start = InitialState::kCentred);
 
 /// Runs the model (weights: grid.cells() values) over u into y. Throws InputError on sizes.
 void ApplyPreisach(const PreisachGrid& grid, std::span<const double> weights, std::span<const double> u,
-                   std::span<double> y);
+                   std::span<double> y, InitialState start = InitialState::kCentred);
 
 /// The roughness of the density along the centre axis, Σ_i Σ_j (w_{i,j+1} − w_{i,j})², as its
 /// m×m Gram matrix R (row-major, m = cells): the regularisation λ wᵀRw of the weights' least
@@ -87,10 +92,11 @@ struct InverseReport {
 };
 
 /// The exact inverse: u such that ApplyPreisach(grid, weights, u) = y_ref (to rounding), u within
-/// [u_lo, u_hi] (the amplifier's range; u_lo < u_hi). Weights must be ≥ 0 (a monotone operator);
-/// throws InputError otherwise or on sizes.
+/// [u_lo, u_hi] (the amplifier's range; u_lo < u_hi), the first sample a rest in state `start`.
+/// Weights must be ≥ 0 (a monotone operator); throws InputError otherwise or on sizes.
 InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> weights,
-                             std::span<const double> y_ref, double u_lo, double u_hi, std::span<double> u);
+                             std::span<const double> y_ref, double u_lo, double u_hi, std::span<double> u,
+                             InitialState start = InitialState::kCentred);
 
 struct AsymmetricPi {
   double w0 = 1;
@@ -99,6 +105,7 @@ struct AsymmetricPi {
   std::vector<double> knots;       ///< z_1 < … < z_K (drive units)
   std::vector<double> up;          ///< a_j ≥ 0 on max(u − z_j, 0)
   std::vector<double> down;        ///< b_j ≥ 0 on min(u − z_j, 0)
+  InitialState start = InitialState::kCentred;  ///< the plays at rest at u_0
   /// Finite values, matching sizes, increasing thresholds and knots; the error names the field.
   Status Validate() const;
   /// Validate() and every weight ≥ 0 (monotone on every branch; strictly when w0 > 0).
@@ -112,7 +119,8 @@ std::vector<double> AsymmetricPiKnots(int count, double u_min, double u_max);
 /// The regressors [u, F_{r_1} … F_{r_n}, max(u − z_j, 0)…, min(u − z_j, 0)…] (row-major,
 /// 1 + n + 2K columns).
 void AsymmetricPiRegressors(std::span<const double> thresholds, std::span<const double> knots,
-                            std::span<const double> u, std::span<double> out);
+                            std::span<const double> u, std::span<double> out,
+                            InitialState start = InitialState::kCentred);
 
 /// Runs the operator over u into y. Throws InputError on an invalid operator or sizes.
 void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::span<double> y);

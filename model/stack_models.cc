@@ -145,8 +145,8 @@ void SimulateStackBoucWen(const StackBoucWenParams& p, std::span<const double> u
   const double b1 = 1.0 - q, b0 = q - a;
   const double inv_m = 1.0 / m;
   const double alpha = p.alpha, beta = p.beta, gamma = p.gamma;
-  double h = 0.0;
-  double x = p.d * u[0];
+  double h = options.rest_state;
+  double x = p.d * (u[0] - h);
   double y = x;
   yhat[0] = y;
   if (!h_out.empty()) h_out[0] = h;
@@ -183,15 +183,32 @@ void SimulateStackBoucWen(const StackBoucWenParams& p, std::span<const double> u
   }
 }
 
+double BacklashLikeStateStep(double w, double du, const BacklashLikeParams& p) {
+  const double as = du >= 0 ? p.alpha : -p.alpha;
+  return w + ((p.c - p.b1) - as * w) * du * Phi(as * du);
+}
+
+double StackRestState(const StackBoucWenParams& p, double range, InitialState s) {
+  if (s == InitialState::kCentred || s == InitialState::kAuto) return 0.0;  // kAuto: resolve it first
+  const double first = s == InitialState::kDescended ? range : -range;
+  return BoucWenStateStep(BoucWenStateStep(0.0, first, p.alpha, p.beta, p.gamma), -first, p.alpha, p.beta, p.gamma);
+}
+
+double StackRestState(const BacklashLikeParams& p, double range, InitialState s) {
+  if (s == InitialState::kCentred || s == InitialState::kAuto) return 0.0;
+  const double first = s == InitialState::kDescended ? range : -range;
+  return BacklashLikeStateStep(BacklashLikeStateStep(0.0, first, p), -first, p);
+}
+
 void SimulateBacklashLike(const BacklashLikeParams& p, std::span<const double> u,
-                          std::span<double> yhat) {
+                          std::span<double> yhat, double w0) {
   ThrowIfError(p.Validate());
   CheckLengths(u, yhat, "SimulateBacklashLike");
   // w = c u − ŷ obeys dw/du = (c − B1) − α s w on a piece of sign s: w1 = w + (c − B1 − α s w) Δu
   // φ(α s Δu), with α s Δu = α |Δu| ≥ 0 (a decaying exponential).
   const double g = p.c - p.b1;
-  double w = 0.0;
-  yhat[0] = p.c * u[0];
+  double w = w0;
+  yhat[0] = p.c * u[0] - w;
   for (size_t k = 1; k < u.size(); ++k) {
     const double du = u[k] - u[k - 1];
     const double as = du >= 0 ? p.alpha : -p.alpha;

@@ -21,9 +21,12 @@
 //    is evaluated (first-order hold): x = d (u − h) is evaluated at M equal sub-steps of every
 //    sample interval (StackSimOptions::substeps, default 2); the only discretisation error left is
 //    the curvature of x inside a sub-step, second order in Δt / M.
-//  - initial state: at rest at the first sample u_0 (the 400 V offset of the bench): no hysteretic
-//    memory, h(0) = 0 and ŷ(0) = d u_0 (the filter in steady state) for Bouc–Wen; ŷ(0) = c u_0 (on
-//    the anhysteretic line, w = 0) for the backlash-like model.
+//  - initial state: at rest at the first sample u_0 (the 400 V offset of the bench), by default with
+//    no hysteretic memory, h(0) = 0 and ŷ(0) = d u_0 (the filter in steady state) for Bouc–Wen;
+//    ŷ(0) = c u_0 (on the anhysteretic line, w = 0) for the backlash-like model. StackRestState
+//    gives the memory of a stack resting after use (model/prandtl_ishlinskii.h InitialState): the
+//    state after the drive rose from that virgin rest by a range R and came back down to u_0
+//    (descended), or fell by R and came back up (ascended) — two exact pieces of the laws above.
 //
 // The simulations allocate nothing and keep no state between calls: they are pure functions of
 // (parameters, u, Δt), safe on any number of threads. A diverging parameter set (e.g. β + γ < 0
@@ -37,6 +40,7 @@
 #include <string_view>
 #include <vector>
 
+#include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
 
 namespace pz::model {
@@ -61,6 +65,9 @@ struct BacklashLikeParams {
 
 struct StackSimOptions {
   int substeps = 2;  ///< filter sub-steps per sample interval (Bouc–Wen only), 1 … 1024
+  /// The hysteretic memory at rest at u_0: h(0) (Bouc–Wen) or w(0) = c u_0 − ŷ(0) (backlash-like);
+  /// StackRestState. 0: the virgin state.
+  double rest_state = 0;
   Status Validate() const;
 };
 
@@ -91,9 +98,18 @@ void SimulateStackBoucWen(const StackBoucWenParams& p, std::span<const double> u
 
 /// Simulates the backlash-like model on the samples u into yhat (same length; may not alias u).
 /// Exact for the piecewise-linear drive; the step does not enter. Throws InputError on invalid
-/// parameters or lengths.
+/// parameters or lengths. w0: the memory at rest (StackSimOptions::rest_state).
 void SimulateBacklashLike(const BacklashLikeParams& p, std::span<const double> u,
-                          std::span<double> yhat);
+                          std::span<double> yhat, double w0 = 0);
+
+/// The memory at rest in state s (header comment; range R > 0 the drive's full range): h of the
+/// Bouc–Wen law, w of the backlash-like one; 0 when s is centred (resolve kAuto first:
+/// ResolveInitialState). Rate-independent: exact.
+double StackRestState(const StackBoucWenParams& p, double range, InitialState s);
+double StackRestState(const BacklashLikeParams& p, double range, InitialState s);
+/// The backlash-like law's exact update of w over a straight piece of drive du (exposed for the
+/// rest state and tests): dw/du = (c − B1) − α sgn(du) w.
+double BacklashLikeStateStep(double w, double du, const BacklashLikeParams& p);
 
 /// Either family from a parameter vector in StackParamNames order.
 void SimulateStack(StackFamily family, std::span<const double> params, std::span<const double> u,

@@ -92,7 +92,11 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
              ? " The bimorph fin's compensator plans two samples (records/kernels/chain.h\n"
                " * pzk_chain_inverse_fin): give it the reference one sample ahead (and " + N + "_DELAY_S more)."
              : std::string())
-     << " Model: " << m.Model()->Describe() << ". */\n"
+     << " Model: " << m.Model()->Describe()
+     << (m.initial_state != model::InitialState::kCentred
+             ? std::string(", at rest in the ") + model::InitialStateName(m.initial_state) + " state (docs/records.md)"
+             : std::string())
+     << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
      << "#ifndef PZK_KERNELS_V1\n#define PZK_KERNELS_V1\n"
      << KernelSource() << "#endif /* PZK_KERNELS_V1 */\n\n";
@@ -117,7 +121,13 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
     const std::string w = b.nw > 0 ? name + "_w" + std::to_string(i) + "_" : "0";
     os << "  {" << KindMacro(b.kind) << ", " << b.n << ", " << b.m << ", " << CHexLiteral(b.dt) << ", " << CHexLiteral(b.u_min) << ", "
        << CHexLiteral(b.u_max) << ", " << CHexLiteral(b.u_half) << ", " << CHexLiteral(b.y_half) << ",\n   " << name << "_p" << i << "_, "
-       << b.np << ", " << w << ", " << b.nw << ", " << b.c_off << ", " << b.d_off << "}" << (i + 1 < nb ? "," : "")
+       << b.np << ", " << w << ", " << b.nw << ", " << b.c_off << ", " << b.d_off << ", "
+       << (b.init == pzk::PZK_DESCENDED  ? "PZK_DESCENDED"
+           : b.init == pzk::PZK_ASCENDED ? "PZK_ASCENDED"
+           : b.init == pzk::PZK_AUTO     ? "PZK_AUTO"
+                                         : "PZK_CENTRED")
+       << "}"
+       << (i + 1 < nb ? "," : "")
        << "\n";
   }
   os << "};\n\n";

@@ -23,7 +23,8 @@ constexpr double kTwoPi = 2 * std::numbers::pi;
 
 class StackBoucWenFamily final : public Family {
  public:
-  StackBoucWenFamily(const DataScale& s, const FamilyOptions& o) : sim_{.substeps = o.substeps} {
+  StackBoucWenFamily(const DataScale& s, const FamilyOptions& o)
+      : sim_{.substeps = o.substeps}, start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
     ThrowIfError(sim_.Validate());
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "-", 0.01, 1.5, false},
@@ -39,18 +40,26 @@ class StackBoucWenFamily final : public Family {
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
-    model::SimulateStackBoucWen(model::BoucWenFromVector(p), u, dt, y, sim_);
+    const model::StackBoucWenParams b = model::BoucWenFromVector(p);
+    model::StackSimOptions sim = sim_;
+    sim.rest_state = model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_));
+    model::SimulateStackBoucWen(b, u, dt, y, sim);
   }
   std::vector<std::string> excluded_effects() const override { return {"driver-lowpass"}; }
+  model::InitialState initial_state() const override { return start_; }
 
  private:
   model::StackSimOptions sim_;
+  model::InitialState start_;
+  double range_;  ///< the rise and fall of the rest state: the data's full drive range
+  double u_min_, u_max_;  ///< the data's drive range (kAuto)
   std::vector<ParamInfo> params_;
 };
 
 class BacklashLikeFamily final : public Family {
  public:
-  explicit BacklashLikeFamily(const DataScale& s) {
+  BacklashLikeFamily(const DataScale& s, const FamilyOptions& o)
+      : start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true}, {"c", "y/V", 0.3 * g, 3 * g, true}, {"B1", "y/V", -3 * g, 5 * g, false}};
   }
@@ -59,10 +68,15 @@ class BacklashLikeFamily final : public Family {
   std::string equation() const override { return "dy/dt = alpha |du/dt| (c u - y) + B1 du/dt"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::SimulateBacklashLike(model::BacklashLikeFromVector(p), u, y);
+    const model::BacklashLikeParams b = model::BacklashLikeFromVector(p);
+    model::SimulateBacklashLike(b, u, y,
+                                model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_)));
   }
+  model::InitialState initial_state() const override { return start_; }
 
  private:
+  model::InitialState start_;
+  double range_, u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 
@@ -94,7 +108,7 @@ class DuhemFamily final : public Family {
 class PrandtlIshlinskiiFamily final : public Family {
  public:
   PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
-      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)) {}
+      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)), start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
   std::string name() const override { return "prandtl-ishlinskii"; }
   std::string title() const override { return "Prandtl–Ishlinskii operator"; }
   std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
@@ -106,14 +120,14 @@ class PrandtlIshlinskiiFamily final : public Family {
       throw InputError("prandtl-ishlinskii: " + std::to_string(p.size()) + " weights given, " +
                        std::to_string(regressors()) + " expected");
     }
-    model::PiOperator op{p[0], thresholds_, std::vector<double>(p.begin() + 1, p.end())};
+    model::PiOperator op{p[0], thresholds_, std::vector<double>(p.begin() + 1, p.end()), Start(u)};
     model::ApplyPi(op, u, y);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     const size_t n = thresholds_.size(), m = n + 1;
     if (out.size() != u.size() * m) throw InputError("prandtl-ishlinskii: regressor size mismatch");
     std::vector<double> plays(u.size() * n);
-    model::PiPlayOutputs(thresholds_, u, plays);
+    model::PiPlayOutputs(thresholds_, u, plays, Start(u));
     for (size_t k = 0; k < u.size(); ++k) {
       out[k * m] = u[k];
       std::copy_n(plays.data() + k * n, n, out.data() + k * m + 1);
@@ -127,10 +141,16 @@ class PrandtlIshlinskiiFamily final : public Family {
     return names;
   }
   std::vector<std::string> excluded_effects() const override { return {"friction"}; }
+  model::InitialState initial_state() const override { return start_; }
   const std::vector<double>& thresholds() const { return thresholds_; }
 
  private:
+  model::InitialState Start(std::span<const double> u) const {
+    return u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_);
+  }
   std::vector<double> thresholds_;
+  model::InitialState start_;
+  double u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 
@@ -379,10 +399,15 @@ const std::vector<std::string>& FamilyNames() {
   return names;
 }
 
+bool TakesInitialState(std::string_view family) {
+  return family == "prandtl-ishlinskii" || family == "asymmetric-pi" || family == "preisach" ||
+         family == "stack-bouc-wen" || family == "backlash-like";
+}
+
 std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale, const FamilyOptions& o) {
   if (o.substeps < 1 || o.substeps > 512) throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
   if (name == "stack-bouc-wen") return std::make_unique<StackBoucWenFamily>(scale, o);
-  if (name == "backlash-like") return std::make_unique<BacklashLikeFamily>(scale);
+  if (name == "backlash-like") return std::make_unique<BacklashLikeFamily>(scale, o);
   if (name == "duhem") return std::make_unique<DuhemFamily>(scale);
   if (name == "prandtl-ishlinskii") return std::make_unique<PrandtlIshlinskiiFamily>(scale, o);
   if (name == "bw-oscillator") return std::make_unique<BwOscillatorFamily>(scale, o);

@@ -37,6 +37,7 @@
 #include "model/beam.h"
 #include "model/bw_oscillator.h"
 #include "model/effect_library.h"
+#include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
 
 namespace pz::records {
@@ -67,6 +68,12 @@ struct OscillatorOptions {
 struct FamilyOptions {
   int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
   int pi_operators = 12;     ///< Prandtl–Ishlinskii / asymmetric-pi plays; preisach grid levels
+  /// The memory at rest at the first sample's drive u_0 (model/prandtl_ishlinskii.h InitialState)
+  /// of the families that take it (TakesInitialState): the plays of prandtl-ishlinskii,
+  /// asymmetric-pi and preisach at u_0, u_0 + r or u_0 − r; the Bouc–Wen h of stack-bouc-wen and the
+  /// w of backlash-like after a rise by the data's full range 2 u_half and a fall back to u_0
+  /// (model/stack_models.h StackRestState), or the mirror. Others start centred.
+  model::InitialState initial_state = model::InitialState::kCentred;
   model::BeamGeometry geometry;  ///< bimorph fin
   OscillatorOptions oscillator;  ///< bw-oscillator
 };
@@ -118,7 +125,15 @@ class Family {
   /// ones it already contains are left out: the stack Bouc–Wen has a driver filter, the Duhem
   /// model a relaxation, the PI model plays).
   virtual std::vector<std::string> excluded_effects() const { return {}; }
+  /// The memory it starts with at rest (FamilyOptions::initial_state for the families that take
+  /// it; centred for the others).
+  virtual model::InitialState initial_state() const { return model::InitialState::kCentred; }
 };
+
+/// True for the families whose memory at rest FamilyOptions::initial_state sets: prandtl-ishlinskii,
+/// asymmetric-pi, preisach, stack-bouc-wen, backlash-like. (duhem relaxes to its curve at rest, the
+/// oscillator and the fin start from their own equilibrium.)
+bool TakesInitialState(std::string_view family);
 
 /// Every family name, in the order of the header comment.
 const std::vector<std::string>& FamilyNames();

@@ -40,7 +40,8 @@ int Reversals(const io::Record& r, double depth) {
 
 class PreisachFamily final : public Family {
  public:
-  PreisachFamily(const DataScale& s, const FamilyOptions& o) : grid_{s.u_min, s.u_max, o.pi_operators} {
+  PreisachFamily(const DataScale& s, const FamilyOptions& o)
+      : grid_{s.u_min, s.u_max, o.pi_operators}, start_(o.initial_state) {
     ThrowIfError(grid_.Validate());
   }
   std::string name() const override { return "preisach"; }
@@ -56,11 +57,12 @@ class PreisachFamily final : public Family {
   bool linear() const override { return true; }
   size_t regressors() const override { return grid_.cells(); }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::ApplyPreisach(grid_, p, u, y);
+    model::ApplyPreisach(grid_, p, u, y, Start(u));
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
-    model::PreisachRegressors(grid_, u, out);
+    model::PreisachRegressors(grid_, u, out, Start(u));
   }
+  model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
     std::vector<std::string> names;
     for (int i = 0; i < grid_.levels; ++i)
@@ -101,7 +103,11 @@ class PreisachFamily final : public Family {
 
  private:
   static constexpr size_t kMinSamplesPerLevel = 4;
+  model::InitialState Start(std::span<const double> u) const {
+    return u.empty() ? start_ : model::ResolveInitialState(start_, u[0], grid_.u_min, grid_.u_max);
+  }
   model::PreisachGrid grid_;
+  model::InitialState start_;
   std::vector<ParamInfo> params_;
 };
 
@@ -109,7 +115,8 @@ class AsymmetricPiFamily final : public Family {
  public:
   AsymmetricPiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
-        knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)) {}
+        knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)),
+        start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
   std::string name() const override { return "asymmetric-pi"; }
   std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
   std::string equation() const override {
@@ -119,12 +126,16 @@ class AsymmetricPiFamily final : public Family {
   bool linear() const override { return true; }
   size_t regressors() const override { return 1 + thresholds_.size() + 2 * knots_.size(); }
   void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
-    model::ApplyAsymmetricPi(Operator(p), u, y);
+    model::AsymmetricPi op = Operator(p);
+    if (!u.empty()) op.start = model::ResolveInitialState(start_, u[0], u_min_, u_max_);
+    model::ApplyAsymmetricPi(op, u, y);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     if (out.size() != u.size() * regressors()) throw InputError("asymmetric-pi: regressor size mismatch");
-    model::AsymmetricPiRegressors(thresholds_, knots_, u, out);
+    model::AsymmetricPiRegressors(thresholds_, knots_, u, out,
+                                  u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_));
   }
+  model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
     std::vector<std::string> names = {"w0"};
     for (size_t i = 0; i < thresholds_.size(); ++i)
@@ -164,11 +175,13 @@ class AsymmetricPiFamily final : public Family {
     op.knots = knots_;
     op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n), p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
     op.down.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K), p.end());
-    return op;
+    return op;  // centred: Simulate sets the state resolved on the drive
   }
 
  private:
   std::vector<double> thresholds_, knots_;
+  model::InitialState start_;
+  double u_min_, u_max_;
   std::vector<ParamInfo> params_;
 };
 

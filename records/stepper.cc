@@ -73,6 +73,7 @@ FamilyOptions ModelSpec::family_options() const {
   FamilyOptions o;
   o.substeps = substeps;
   o.pi_operators = pi_operators;
+  o.initial_state = initial_state;
   return o;
 }
 
@@ -82,6 +83,11 @@ std::shared_ptr<RecordModel> ModelSpec::Model() const {
 }
 
 void ModelSpec::Validate() const {
+  if (initial_state != model::InitialState::kCentred && !TakesInitialState(family)) {
+    throw InputError("model.initial_state '" + std::string(model::InitialStateName(initial_state)) + "': " + family +
+                     " starts centred (only prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen and "
+                     "backlash-like take an initial state)");
+  }
   const auto model = Model();
   if (params.size() != model->params().size()) {
     throw InputError("model.params: " + std::to_string(params.size()) + " values for " + model->Describe() + ", " +
@@ -140,6 +146,7 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
   size_t family_block = blocks_.size() - 1;
   auto& fb = blocks_[family_block];
+  fb.init = static_cast<int>(spec_.initial_state);  // pzk PZK_CENTRED / DESCENDED / ASCENDED
   switch (family_kind) {
     case pzk::PZK_STACK_BOUC_WEN: fb.n = spec_.substeps; break;
     case pzk::PZK_BW_OSCILLATOR: fb.n = 2 * spec_.substeps; break;  // OscillatorOptions' default of the fit

@@ -39,6 +39,8 @@ struct ModelSpec {
   std::string family;
   int substeps = 2;      ///< FamilyOptions::substeps
   int pi_operators = 12; ///< FamilyOptions::pi_operators
+  /// FamilyOptions::initial_state (centred for a fit.json without it: the convention before it).
+  model::InitialState initial_state = model::InitialState::kCentred;
   DataScale scale;       ///< the data scale the family was made for (sets its ranges and grids)
   double dt = 0;         ///< sample step the model was identified at [s]
   std::vector<EffectKind> effects;

@@ -206,6 +206,7 @@ void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
   pm->set_record_family(m.record_family);
   for (const std::string& e : m.effects) pm->add_effects(e);
   pm->set_pi_operators(static_cast<uint32_t>(std::max(0, m.pi_operators)));
+  pm->set_initial_state(m.initial_state);
   pm->mutable_scale()->Assign(m.scale.begin(), m.scale.end());
 }
 
@@ -250,6 +251,7 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm, 
   m.record_family = pm.record_family();
   m.effects.assign(pm.effects().begin(), pm.effects().end());
   m.pi_operators = pm.pi_operators() == 0 ? 12 : ClampInt(pm.pi_operators());
+  m.initial_state = pm.initial_state();
   m.scale.assign(pm.scale().begin(), pm.scale().end());
   return m;
 }

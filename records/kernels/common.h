@@ -25,7 +25,20 @@ typedef struct {
   const double *w;  /* solved weights of a linear family; the bimorph fin's modal data */
   int nw;
   int c_off, d_off; /* offsets of the block's constants and dynamic state (pzk_layout) */
+  int init;         /* the family's memory at rest (model/prandtl_ishlinskii.h InitialState):
+                       PZK_CENTRED, PZK_DESCENDED, PZK_ASCENDED or PZK_AUTO */
 } pzk_block;
+
+enum { PZK_CENTRED = 0, PZK_DESCENDED = 1, PZK_ASCENDED = 2, PZK_AUTO = 3 };
+
+/* The block's state at rest under v: PZK_AUTO resolved on the data's drive range (descended within 5 %
+ * of its bottom, ascended within 5 % of its top, else centred: ResolveInitialState). */
+static inline int pzk_rest_state(const pzk_block *b, double v) {
+  double margin;
+  if (b->init != PZK_AUTO) return b->init;
+  margin = 0.05 * (b->u_max - b->u_min);
+  return v <= b->u_min + margin ? PZK_DESCENDED : (v >= b->u_max - margin ? PZK_ASCENDED : PZK_CENTRED);
+}
 
 /* phi(z) = (1 - e^-z)/z, phi(0) = 1 (model/stack_models.cc). */
 static inline double pzk_phi(double z) {
@@ -44,6 +57,11 @@ static inline double pzk_play(double u, double r, double z) {
   double lo = u - r, hi = u + r;
   double m = hi < z ? hi : z; /* min(u + r, z) */
   return lo > m ? lo : m;     /* max(u - r, .) */
+}
+
+/* A play of half-width r at rest at u in state init: u, u + r (descended) or u - r (ascended). */
+static inline double pzk_play_rest(double u, double r, int init) {
+  return init == PZK_DESCENDED ? u + r : (init == PZK_ASCENDED ? u - r : u);
 }
 
 static inline double pzk_clamp(double x, double lo, double hi) { return x < lo ? lo : (hi < x ? hi : x); }

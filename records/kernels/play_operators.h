@@ -1,5 +1,6 @@
 /* Play-operator families, linear in their weights (model/prandtl_ishlinskii.h, model/preisach.h).
- * The output is the regressors times the weights summed in order from 0, as RecordModel does. */
+ * The output is the regressors times the weights summed in order from 0, as RecordModel does.
+ * The plays start at rest in the block's initial state (pzk_play_rest). */
 
 /* prandtl-ishlinskii: n plays r_i = u_half (i+1)/(n+1); c = {r_1 .. r_n}; d = {z_1 .. z_n}. */
 static inline double pzk_pi_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
@@ -14,10 +15,10 @@ static inline double pzk_pi_step(const pzk_block *b, const double *c, const doub
   return acc;
 }
 static inline double pzk_pi_init(const pzk_block *b, double *c, double *d, double v) {
-  int i;
+  int i, state = pzk_rest_state(b, v);
   for (i = 0; i < b->n; ++i) {
     c[i] = b->u_half * (i + 1) / (b->n + 1);
-    d[i] = v;
+    d[i] = pzk_play_rest(v, c[i], state);
   }
   return pzk_pi_step(b, c, d, d, v);
 }
@@ -45,10 +46,10 @@ static inline double pzk_asym_pi_step(const pzk_block *b, const double *c, const
   return acc;
 }
 static inline double pzk_asym_pi_init(const pzk_block *b, double *c, double *d, double v) {
-  int i, j;
+  int i, j, state = pzk_rest_state(b, v);
   for (i = 0; i < b->n; ++i) {
     c[i] = b->u_half * (i + 1) / (b->n + 1);
-    d[i] = v;
+    d[i] = pzk_play_rest(v, c[i], state);
   }
   for (j = 0; j < b->m; ++j) c[b->n + j] = b->u_min + (b->u_max - b->u_min) * (j + 1) / (b->m + 1);
   return pzk_asym_pi_step(b, c, d, d, v);
@@ -72,14 +73,14 @@ static inline double pzk_preisach_step(const pzk_block *b, const double *c, cons
 static inline double pzk_preisach_init(const pzk_block *b, double *c, double *d, double v) {
   const int n = b->n;
   double delta = (b->u_max - b->u_min) / n;
-  int i, j, q = 0;
+  int i, j, q = 0, state = pzk_rest_state(b, v);
   c[0] = delta;
   for (i = 0; i < n; ++i) {
     double r = 0.5 * i * delta;
     c[1 + i] = r;
     c[1 + n + i] = (b->u_min + r) / (n - i);
     for (j = 0; j < n - i; ++j, ++q) c[1 + 2 * n + q] = b->u_min + r + j * delta;
-    d[i] = v;
+    d[i] = pzk_play_rest(v, r, state);
   }
   return pzk_preisach_step(b, c, d, d, v);
 }

@@ -1,12 +1,20 @@
 /* Stack families (model/stack_models.h, model/duhem.h): the same operations in the same order as
  * the library's simulations, one sample at a time. */
 
-/* backlash-like: p = {alpha, c, B1}; w = c u - y. */
-/* backlash-like: d = {w, u_prev}. */
+/* backlash-like: p = {alpha, c, B1}; w = c u - y; d = {w, u_prev}. */
+/* The exact update of w over a straight piece of drive du (BacklashLikeStateStep). */
+static inline double pzk_backlash_state_step(const pzk_block *b, double w, double du) {
+  double as = du >= 0 ? b->p[0] : -b->p[0];
+  return w + ((b->p[1] - b->p[2]) - as * w) * du * pzk_phi(as * du);
+}
+/* At rest in the block's initial state: w after a rise by the data's range 2 u_half from w = 0 and
+ * a fall back (descended), or the mirror (ascended); 0 centred (StackRestState). */
 static inline double pzk_backlash_init(const pzk_block *b, double *d, double v) {
-  d[0] = 0;
+  int state = pzk_rest_state(b, v);
+  double first = state == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
+  d[0] = state == PZK_CENTRED ? 0.0 : pzk_backlash_state_step(b, pzk_backlash_state_step(b, 0.0, first), -first);
   d[1] = v;
-  return b->p[1] * v;
+  return b->p[1] * v - d[0];
 }
 static inline double pzk_backlash_step(const pzk_block *b, const double *d, double *o, double v) {
   double alpha = b->p[0], cc = b->p[1], g = cc - b->p[2];
@@ -46,8 +54,13 @@ static inline double pzk_stack_bw_init(const pzk_block *b, double *c, double *d,
   c[1] = q - a;
   c[2] = 1.0 - q;
   c[3] = 1.0 / b->n;
-  d[0] = 0.0;
-  d[1] = b->p[3] * v;
+  d[0] = 0.0; /* centred; else h after a rise by 2 u_half and a fall back (StackRestState) */
+  if (pzk_rest_state(b, v) != PZK_CENTRED) {
+    double first = pzk_rest_state(b, v) == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
+    d[0] = pzk_bouc_wen_state_step(pzk_bouc_wen_state_step(0.0, first, b->p[0], b->p[1], b->p[2]), -first, b->p[0],
+                                   b->p[1], b->p[2]);
+  }
+  d[1] = b->p[3] * (v - d[0]);
   d[2] = d[1];
   d[3] = v;
   return d[2];

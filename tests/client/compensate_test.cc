@@ -161,6 +161,40 @@ TEST_F(Compensate, BadInputIsNamed) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "old.json").string()); }), "no format_version");
 }
 
+/// --initial-state reaches fit.json's model section and LoadFit reads it back; a fit.json without it
+/// (proto3: empty) reads as centred, the convention before it; bad values name the flag / field.
+TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii", "--pi-operators", "6",
+            "--initial-state", "ascended", "--out", (dir_ / "asc").string(), "--no-figures", "--quiet"});
+  const fs::path fit = dir_ / "asc" / "fit.json";
+  EXPECT_EQ(LoadFit(fit.string()).initial_state, model::InitialState::kAscended);
+  const std::string report = io::ReadTextFile(dir_ / "asc" / "report.md");
+  EXPECT_NE(report.find("in the **ascended** state"), std::string::npos) << report;
+  std::string json = io::ReadTextFile(fit);
+  const std::string field = "\"initial_state\": \"ascended\"";
+  const size_t at = json.find(field);
+  ASSERT_NE(at, std::string::npos) << json;
+  std::string old = json;
+  old.replace(at, field.size(), "\"initial_state\": \"\"");
+  std::ofstream(dir_ / "no_state.json") << old;
+  EXPECT_EQ(LoadFit((dir_ / "no_state.json").string()).initial_state, model::InitialState::kCentred);
+  std::string bad = json;
+  bad.replace(at, field.size(), "\"initial_state\": \"upward\"");
+  std::ofstream(dir_ / "bad_state.json") << bad;
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "bad_state.json").string()); }),
+                "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended, auto)");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
+                          "--initial-state", "down", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});
+                }),
+                "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "duhem", "--initial-state",
+                          "descended", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});
+                }),
+                "--initial-state descended: family duhem starts centred");
+}
+
 TEST_F(Compensate, ReplayOfTheTrainingRecordIsNearTheNoise) {
   const std::string out = Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--replay",
                                     (dir_ / "rec.csv").string()});

@@ -47,6 +47,40 @@ TEST(StackBoucWen, StartsAtRestAtTheOffset) {
   }
 }
 
+/// StackRestState is the memory after the drive rose from a virgin rest by the range and came back
+/// (descended; ascended: the mirror): the simulation from it is the virgin simulation after that
+/// history — exactly for the backlash-like model, h to rounding for Bouc–Wen (its filter starts at
+/// rest, so only h is compared) — and a descended stack rests above its virgin output.
+TEST(StackModels, RestStatesAreTheStatesAfterAMajorSwing) {
+  const StackBoucWenParams bw;
+  const BacklashLikeParams bl{0.01, 0.05, 0.02};
+  const double range = 300;
+  const auto u = Sine(400, 150, 50, 5000, 400);
+  for (InitialState start : {InitialState::kDescended, InitialState::kAscended}) {
+    const double swing = start == InitialState::kDescended ? range : -range;
+    std::vector<double> history = {u[0], u[0] + swing};
+    history.insert(history.end(), u.begin(), u.end());
+    std::vector<double> y_hist(history.size()), y(u.size());
+    SimulateBacklashLike(bl, history, y_hist);
+    const double w0 = StackRestState(bl, range, start);
+    SimulateBacklashLike(bl, u, y, w0);
+    EXPECT_GT(std::abs(w0), 1.0) << InitialStateName(start);
+    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12 * 400) << InitialStateName(start) << " " << k;
+
+    std::vector<double> h_hist(history.size()), yb_hist(history.size()), h(u.size()), yb(u.size());
+    SimulateStackBoucWen(bw, history, 2e-4, yb_hist, {}, h_hist);
+    StackSimOptions o;
+    o.rest_state = StackRestState(bw, range, start);
+    SimulateStackBoucWen(bw, u, 2e-4, yb, o, h);
+    EXPECT_EQ(h[0], o.rest_state);
+    EXPECT_DOUBLE_EQ(yb[0], bw.d * (u[0] - o.rest_state));
+    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(h[k], h_hist[k + 2], 1e-9 * 400) << InitialStateName(start) << " " << k;
+  }
+  EXPECT_GT(StackRestState(bw, range, InitialState::kAscended), 0);   // h > 0 after a rise: the output below d u
+  EXPECT_LT(StackRestState(bw, range, InitialState::kDescended), 0);  // and above it after a fall
+  EXPECT_EQ(StackRestState(bw, range, InitialState::kCentred), 0);
+}
+
 // α = 0 keeps h at 0, so ŷ = LPF[d u]: a step of u over one sample then held. Closed form of the
 // first-order filter for the ramp piece and the exponential approach after it.
 TEST(StackBoucWen, FilterStepResponseIsTheFirstOrderClosedForm) {

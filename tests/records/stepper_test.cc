@@ -256,6 +256,51 @@ TEST(Stepper, InverseThenForwardReturnsTheReference) {
   }
 }
 
+/// The initial states (FamilyOptions::initial_state) reach the kernels: forward equals Simulate, the
+/// state is not the centred one, and the inverse started in it undoes the forward model.
+TEST(Stepper, InitialStatesMatchSimulateAndInvert) {
+  const io::Record r = TestRecord();
+  for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
+    for (model::InitialState state : {model::InitialState::kDescended, model::InitialState::kAscended}) {
+      const std::string what = std::string(family) + " " + model::InitialStateName(state);
+      ModelSpec s = Spec(family, {}, r);
+      if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};
+      if (s.family == "stack-bouc-wen") s.params[0] = 0.3;
+      const ModelSpec centred = s;
+      s.initial_state = state;
+      Stepper st(s), c(centred);
+      const auto ref = Reference(s, r), got = Forward(st, r.u);
+      EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref)) << what;
+      EXPECT_GT(std::abs(got[0] - c.Init(r.u[0])), 1e-3 * Range(ref)) << what;
+      const RoundTrip rt = InverseThenForward(s, r.u);
+      EXPECT_LE(rt.max_clip, 1e-12 * Range(rt.ref)) << what;
+      EXPECT_LE(MaxDiff(rt.ref, rt.y), 1e-9 * Range(rt.ref)) << what;
+    }
+  }
+  // auto: descended for a rest at the bottom of the data's drive range, centred in its middle.
+  io::Record bottom = r;
+  const double lowest = *std::min_element(r.u.begin(), r.u.end());
+  for (size_t k = 0; k < 200; ++k) bottom.u[k] = lowest;
+  for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
+    for (const io::Record* rec : std::vector<const io::Record*>{&r, &bottom}) {
+      ModelSpec s = Spec(family, {}, *rec);
+      if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};
+      if (s.family == "stack-bouc-wen") s.params[0] = 0.3;
+      ModelSpec resolved = s;
+      resolved.initial_state = rec == &r ? model::InitialState::kCentred : model::InitialState::kDescended;
+      s.initial_state = model::InitialState::kAuto;
+      Stepper st(s), want(resolved);
+      const auto ref = Reference(s, *rec), got = Forward(st, rec->u), expected = Forward(want, rec->u);
+      EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref)) << family << " auto";
+      EXPECT_EQ(MaxDiff(got, expected), 0.0) << family << " auto, rest " << (rec == &r ? "mid-range" : "at the bottom");
+    }
+  }
+  ModelSpec s = Spec("duhem", {}, r);
+  s.initial_state = model::InitialState::kDescended;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Stepper st(s); }),
+                "model.initial_state 'descended': duhem starts centred");
+}
+
 TEST(Stepper, RateDependentInverseTracks) {
   const io::Record r = TestRecord();
   for (const auto& family : {"stack-bouc-wen", "duhem"}) {
@@ -358,12 +403,22 @@ HeaderRun CompileAndRun(const Stepper& st, const std::string& name, const std::v
 
 TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
   const io::Record r = TestRecord();
-  std::vector<std::pair<std::string, std::vector<EffectKind>>> cases;
+  struct Case {
+    std::string family;
+    std::vector<EffectKind> effects;
+    model::InitialState state = model::InitialState::kCentred;
+  };
+  std::vector<Case> cases;
   for (const auto& f : kFamilies) cases.push_back({f, {}});
   cases.push_back({"stack-bouc-wen", {EffectKind::Named("delay"), EffectKind::Named("quadratic-drive")}});
   cases.push_back({"backlash-like", kEffects});
-  for (const auto& [family, effects] : cases) {
+  for (const auto& f : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "stack-bouc-wen"})
+    cases.push_back({f, {}, model::InitialState::kDescended});
+  cases.push_back({"backlash-like", {EffectKind::Named("creep")}, model::InitialState::kAscended});
+  cases.push_back({"asymmetric-pi", {}, model::InitialState::kAuto});
+  for (const auto& [family, effects, state] : cases) {
     ModelSpec s = Spec(family, effects, r);
+    s.initial_state = state;
     if (s.family == "backlash-like" && effects.empty()) s.params = {0.05, 0.4, 0.25};
     Stepper st(s);
     const auto ref = Reference(s, r);
@@ -376,7 +431,7 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     std::string name = "pz_" + family;
     for (char& c : name)
       if (c == '-') c = '_';
-    name += "_" + std::to_string(effects.size());
+    name += "_" + std::to_string(effects.size()) + "_" + model::InitialStateName(state);
     const HeaderRun run = CompileAndRun(st, name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size()) << name;
     EXPECT_LE(MaxDiff(run.forward, ref), 1e-12 * Range(ref)) << name;

@@ -64,6 +64,7 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     std::vector<EffectKind> effects;
     int substeps = 2;  // a family made with other sub-steps is made so on the workers too
     int pi_operators = 12;
+    model::InitialState state = model::InitialState::kCentred;  // the family's memory at rest travels too
   };
   for (const Case& c : {Case{"backlash-like", {EffectKind::Named("delay"), EffectKind::Named("drift")}},
                         Case{"prandtl-ishlinskii", {EffectKind::Named("driver-lowpass")}},
@@ -73,11 +74,15 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
                         Case{"stack-bouc-wen", {}, 5},
                         Case{"preisach", {EffectKind::Named("delay")}},
                         Case{"preisach", {EffectKind::Named("creep")}, 2, 9},
-                        Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}}}) {
+                        Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}},
+                        Case{"stack-bouc-wen", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kDescended},
+                        Case{"backlash-like", {}, 2, 12, model::InitialState::kAscended},
+                        Case{"asymmetric-pi", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kAuto}}) {
     SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
     records::FamilyOptions options;
     options.substeps = c.substeps;
     options.pi_operators = c.pi_operators;
+    options.initial_state = c.state;
     auto fam = std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale, options));
     records::RecordModel model(fam, c.effects, scale);
     records::RecordFitness local(model, train);
@@ -85,6 +90,7 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     // The rest is cut from the records on the wire.
     const auto& problem = std::get<job::CompleteModelProblem>(spec.problem);
     EXPECT_LT(problem.records[0].input.size(), train[0]->end_scored);
+    EXPECT_EQ(problem.initial_state, model::InitialStateName(c.state));
     for (bool json : {false, true}) {
       const auto remote = RemoteCompleteFitness(spec, json);
       ASSERT_TRUE(remote);
