@@ -80,6 +80,11 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
         case EffectKind::kQuadraticDrive: p.push_back(Sign(rng) * Uniform(rng, 0.0005, 0.002)); break;
         case EffectKind::kCreep: p.push_back(Sign(rng) * Uniform(rng, 0.03, 0.15)); p.push_back(Uniform(rng, 0.5, 2)); break;
         case EffectKind::kDelay: p.push_back(Uniform(rng, 0.003, 0.02)); break;
+        case EffectKind::kCreepSpectrum: {  // log creep: equal weights, 1–4 % of the output per relaxation
+          const double w = Uniform(rng, 0.01, 0.04);
+          p.insert(p.end(), EffectOf(e).Params(scale).size(), w);
+          break;
+        }
         case EffectKind::kFriction: p.push_back(Uniform(rng, 0.05, 0.4)); break;
         case EffectKind::kStiffening: p.push_back(Sign(rng) * Uniform(rng, 0.02, 0.12)); break;
         case EffectKind::kDrift: p.push_back(Sign(rng) * Uniform(rng, 0.03, 0.15)); break;

@@ -121,6 +121,7 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     eq.samples[b] = 0;
   }
   std::vector<double> ue, c(m);
+  const bool linear_output = model_.has_linear_output_effects();
   std::unique_ptr<double[]> reg;  // not zero-filled: the family writes every entry
   size_t index = 0;  // of the scored sample over the records: its block is index · blocks / samples_
   // Rows are gathered in chunks of one block and added as rank-k updates (a level-3 product, several
@@ -145,6 +146,7 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
     reg.reset(new double[ue.size() * m]);
     fam.Regressors(ue, std::span<double>(reg.get(), ue.size() * m));
+    if (linear_output) model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, std::span<double>(reg.get(), ue.size() * m), m);
     auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
       return reg.get() + (k < from ? 0 : (k - from)) * m;
     };
