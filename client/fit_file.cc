@@ -76,7 +76,8 @@ records::ModelSpec LoadFit(const std::string& path) {
   // Files written before duration_s was stored: the default scale's 1 s (it set only drift's range then).
   s.scale.duration = m.duration_s > 0 ? m.duration_s : 1.0;
   try {
-    for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs, s.scale.duration}) {
+    for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs,
+                     s.scale.duration}) {
       if (!std::isfinite(v)) throw InputError("model.scale holds a value that is not finite");
     }
     if (!(s.scale.u_half > 0 && s.scale.y_half > 0 && s.scale.fs > 0 && s.scale.f_dom > 0)) {

@@ -157,7 +157,9 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
     reg.reset(new double[ue.size() * m]);
     fam.Regressors(ue, std::span<double>(reg.get(), ue.size() * m));
-    if (linear_output) model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, std::span<double>(reg.get(), ue.size() * m), m);
+    if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its output
+      model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, std::span<double>(reg.get(), ue.size() * m), m);
+    }
     auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
       return reg.get() + (k < from ? 0 : (k - from)) * m;
     };
