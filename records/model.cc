@@ -30,8 +30,15 @@ const model::EffectDef& EffectOf(EffectKind kind) {
 std::vector<EffectInfo> EffectLibrary(const DataScale& s) {
   std::vector<EffectInfo> lib;
   const auto& defs = RecordEffects();
-  for (size_t i = 0; i < defs.size(); ++i)
-    lib.push_back({static_cast<EffectKind>(i), defs[i]->name(), defs[i]->title(), defs[i]->equation(), defs[i]->Params(s)});
+  for (size_t i = 0; i < defs.size(); ++i) {
+    EffectInfo e{static_cast<EffectKind>(i), defs[i]->name(), defs[i]->title(), defs[i]->equation(), {}, {}};
+    try {
+      e.params = defs[i]->Params(s);
+    } catch (const InputError& x) {
+      e.unsupported = x.what();
+    }
+    lib.push_back(std::move(e));
+  }
   return lib;
 }
 

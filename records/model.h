@@ -40,8 +40,10 @@ struct EffectInfo {
   std::string title;
   std::string equation;
   std::vector<ParamInfo> params;  ///< scaled to the data; params[0] is the magnitude
+  std::string unsupported;        ///< why the data cannot support it (creep-spectrum on a short window; params empty)
 };
-/// Every records effect, in chain order, with ranges scaled to the data.
+/// Every records effect, in chain order, with ranges scaled to the data (an effect the data cannot
+/// support says why in `unsupported`; a model that takes it throws that).
 std::vector<EffectInfo> EffectLibrary(const DataScale& scale);
 /// Names in that order.
 const std::vector<std::string>& EffectNames();

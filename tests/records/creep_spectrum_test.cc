@@ -2,7 +2,8 @@
 // (records/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
-// weights stay non-negative; a record too short for the spectrum is refused, naming what is missing.
+// weights stay non-negative; a record too short for the spectrum is refused, naming what is missing
+// (and left out of a diagnosis's default candidates).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -11,6 +12,7 @@
 #include <numbers>
 #include <string>
 
+#include "records/diagnose.h"
 #include "records/fit.h"
 #include "records/reallike.h"
 #include "tests/testing/expect_error.h"
@@ -94,6 +96,7 @@ TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
   o.train_s = 0.4;
   o.withheld_s = 1;
   o.ramp = o.reversals = false;
+  o.second_sine = true;  // a withheld record for the diagnosis
   const RealLikeSet s = GenerateRealLikeSet(o);
   FitOptions f;
   f.family = "prandtl-ishlinskii";
@@ -102,6 +105,26 @@ TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
   PZ_EXPECT_HAS(e, "creep-spectrum");
   PZ_EXPECT_HAS(e, "at least 0.5 s");
   PZ_EXPECT_HAS(e, "longest training window");
+  // The library says so without throwing (a model without the effect is built as before).
+  const auto lib = EffectLibrary(MeasureScale(s.set.WithRole(model::CaseRole::kTrain)));
+  PZ_EXPECT_HAS(lib[static_cast<size_t>(EffectKind::kCreepSpectrum)].unsupported, "at least 0.5 s");
+  EXPECT_TRUE(lib[static_cast<size_t>(EffectKind::kCreepSpectrum)].params.empty());
+  EXPECT_TRUE(lib[static_cast<size_t>(EffectKind::kCreep)].unsupported.empty());
+  // The diagnosis's default candidates leave out what the records cannot support; named, it is
+  // the same error.
+  RecordDiagnoseOptions d;
+  d.family = "prandtl-ishlinskii";
+  d.propose = false;
+  d.fit.uncertainty = false;
+  d.fit.search.repetitions = 1;
+  d.fit.search.pso.particles = 6;
+  d.fit.search.pso.iterations = 4;
+  d.fit.lm.max_iterations = 5;
+  const RecordDiagnosis dg = DiagnoseRecords(s.set, d);
+  EXPECT_FALSE(dg.candidates.empty());
+  for (const auto& c : dg.candidates) EXPECT_NE(c.kind, EffectKind::kCreepSpectrum);
+  d.candidates = {EffectKind::kCreepSpectrum};
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { DiagnoseRecords(s.set, d); }), "at least 0.5 s");
 }
 
 }  // namespace
