@@ -27,6 +27,7 @@ google::protobuf::Value FitModelJson(const io::RecordSet& set, const records::Fi
   f.scale_polarity = s.polarity;
   f.f_dom_hz = s.f_dom;
   f.fs_hz = s.fs;
+  f.duration_s = s.duration;
   double offset = 0;
   int train = 0;
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -73,8 +74,11 @@ records::ModelSpec LoadFit(const std::string& path) {
   s.scale.polarity = m.scale_polarity;
   s.scale.f_dom = m.f_dom_hz;
   s.scale.fs = m.fs_hz;
+  // Files written before duration_s was stored: the default scale's 1 s (it set only drift's range then).
+  s.scale.duration = m.duration_s > 0 ? m.duration_s : 1.0;
   try {
-    for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs}) {
+    for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs,
+                     s.scale.duration}) {
       if (!std::isfinite(v)) throw InputError("model.scale holds a value that is not finite");
     }
     if (!(s.scale.u_half > 0 && s.scale.y_half > 0 && s.scale.fs > 0 && s.scale.f_dom > 0)) {

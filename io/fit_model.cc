@@ -39,6 +39,7 @@ std::string FitModelJson(const FitModelFile& m) {
   sc->set_polarity(m.scale_polarity);
   sc->set_f_dom_hz(m.f_dom_hz);
   sc->set_fs_hz(m.fs_hz);
+  sc->set_duration_s(m.duration_s);
   f.set_sample_period_s(m.sample_period_s);
   for (const auto& e : m.effects) f.add_effects(e);
   for (const auto& [name, value] : m.params) {
@@ -113,6 +114,7 @@ FitModelFile ParseFitJson(const std::string& path, const std::string& text) {
   out.scale_polarity = sc.polarity();
   out.f_dom_hz = sc.f_dom_hz();
   out.fs_hz = sc.fs_hz();
+  out.duration_s = sc.duration_s();
   out.sample_period_s = m.sample_period_s();
   out.effects.assign(m.effects().begin(), m.effects().end());
   for (const auto& p : m.params()) out.params.emplace_back(p.name(), p.value());

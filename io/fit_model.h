@@ -19,7 +19,7 @@ inline constexpr int kFitFormatVersion = 1;
 struct FitModelFile {
   std::string family;
   int substeps = 2, pi_operators = 12;
-  double u_min = 0, u_max = 0, u_half = 0, y_half = 0, gain = 0, f_dom_hz = 0, fs_hz = 0;  ///< DataScale
+  double u_min = 0, u_max = 0, u_half = 0, y_half = 0, gain = 0, f_dom_hz = 0, fs_hz = 0, duration_s = 0;  ///< DataScale
   int scale_polarity = 1;
   double sample_period_s = 0;
   std::vector<std::string> effects;

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <ostream>
 #include <stdexcept>
 
 #include "model/bimorph_ode.h"
+#include "model/status.h"
 
 namespace pz::model {
 namespace {
@@ -191,7 +193,7 @@ class DriverLowpass final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<LowpassExtension>(p[0]);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.004, 0.03)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.004, 0.03)}; }
   FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
     const double tau = d.LogUniform(0.005, 0.08);
     if (other_form) return {"second-order (two poles)", tau, {{tau / 2}, {tau / 2}}};  // same total lag
@@ -218,7 +220,7 @@ class QuadraticDrive final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<QuadraticExtension>(p[0]);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();
     return {s * d.Uniform(0.0005, 0.002)};
   }
@@ -252,7 +254,7 @@ class Creep final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();
     const double k = s * d.Uniform(0.03, 0.15);
     return {k, d.Uniform(0.5, 2)};
@@ -296,7 +298,7 @@ class Delay final : public EffectDef {
     }
   }
   double TimeShift(std::span<const double> p) const override { return p[0]; }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.003, 0.02)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.003, 0.02)}; }
   FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
     const double tau = d.LogUniform(0.003, 0.05);
     return {"pure delay", tau, {{tau}}};
@@ -348,6 +350,90 @@ class CubicStiffening final : public EffectDef {
   }
 };
 
+// Creep over decades (issue 22): relaxations at fixed log-spaced times from 0.05 s up to the data's
+// longest scored window T, two per decade (both ends included), each a first-order relaxation of
+// the plant's output with a non-negative weight w_i (a share of the output):
+//   y_e = y − Σ w_i (y − x_i),   τ_i ẋ_i = y − x_i,   at rest at y[0].
+// A step of the output then creeps up as 1 − Σ w_i e^{−t/τ_i}: equal weights are log creep over the
+// span, free weights any monotone creep spectrum. It acts on the output (after the hysteresis),
+// the Hammerstein structure of the stack-creep literature (hysteresis, then a linear creep
+// operator): the polarisation that the hysteresis sets relaxes, whatever drive set it. It is linear
+// in y, so a linear family (preisach, asymmetric-pi) takes it on each regressor and its weights
+// stay solved exactly (records::RecordFitness). Discretised exactly for an output linear between
+// samples (the driver low-pass's first-order hold), on deviations from the rest output (exactly
+// zero at rest).
+class CreepSpectrum final : public EffectDef {
+ public:
+  static constexpr double kTauMin = 0.05;    ///< [s] the fastest relaxation
+  static constexpr double kPerDecade = 2;    ///< relaxations per decade of time
+  static constexpr double kMaxWeight = 0.05; ///< per relaxation: 10 % of the output per decade
+
+  const char* name() const override { return "creep-spectrum"; }
+  const char* title() const override { return "creep over decades (relaxations from 0.05 s to the window's length)"; }
+  const char* equation() const override {
+    return "y_e = y - sum_i w_i (y - x_i), tau_i x_i' = y - x_i, w_i >= 0, tau_i = 0.05 s .. T log-spaced";
+  }
+  EffectStage stage() const override { return EffectStage::kOutput; }
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    std::vector<ParamInfo> out;
+    for (double tau : Times(s.duration)) {
+      char name[32];
+      std::snprintf(name, sizeof name, "w_%.3gs", tau);
+      out.push_back({name, "-", 0.0, kMaxWeight, false});
+    }
+    return out;
+  }
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+    if (y.empty()) return;
+    const std::vector<double> taus = Times(f.duration);  // p holds these weights first (then later effects')
+    const size_t n = taus.size();
+    if (p.size() < n) throw std::logic_error("creep-spectrum: fewer weights than relaxations");
+    std::vector<double> a(n), c(n), x(n, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      a[i] = std::exp(-f.dt / taus[i]);
+      c[i] = 1 - taus[i] * (1 - a[i]) / f.dt;  // as LowpassInPlace and the kernel's pzk_lowpass_consts
+    }
+    const double y0 = y[0];
+    double prev = 0;
+    for (size_t k = 1; k < y.size(); ++k) {
+      const double d = y[k] - y0;
+      double corr = 0;
+      for (size_t i = 0; i < n; ++i) {
+        x[i] = a[i] * x[i] + (1 - a[i]) * prev + (d - prev) * c[i];
+        corr += p[i] * (d - x[i]);
+      }
+      prev = d;
+      y[k] -= corr;
+    }
+  }
+  bool linear_output() const override { return true; }
+  std::vector<double> KernelData(const DataScale& s) const override { return Times(s.duration); }
+  int kernel() const override { return 33; }  // PZK_CREEP_SPECTRUM
+  /// Log creep: equal weights, 1–4 % of the output per relaxation.
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
+    return std::vector<double>(Times(s.duration).size(), d.Uniform(0.01, 0.04));
+  }
+
+ private:
+  /// The relaxation times for a window of T seconds; throws InputError when T is under a decade.
+  static std::vector<double> Times(double T) {
+    if (!(std::isfinite(T) && T >= 10 * kTauMin)) {
+      char msg[400];
+      std::snprintf(msg, sizeof msg,
+                    "effect 'creep-spectrum' needs a scored window of at least %g s (relaxations from %g s up to "
+                    "the window's length, one decade at least); the longest training window is %g s: record "
+                    "longer, or use 'creep' (one relaxation)",
+                    10 * kTauMin, kTauMin, T);
+      throw InputError(msg);
+    }
+    const size_t count = static_cast<size_t>(std::ceil(kPerDecade * std::log10(T / kTauMin) - 1e-9)) + 1;
+    std::vector<double> taus(count, kTauMin);
+    for (size_t i = 1; i < count; ++i)
+      taus[i] = kTauMin * std::pow(T / kTauMin, static_cast<double>(i) / static_cast<double>(count - 1));
+    return taus;
+  }
+};
+
 class Friction final : public EffectDef {
  public:
   const char* name() const override { return "friction"; }
@@ -365,7 +451,7 @@ class Friction final : public EffectDef {
       v = z;
     }
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override { return {d.Uniform(0.05, 0.4)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.05, 0.4)}; }
 };
 
 class Stiffening final : public EffectDef {
@@ -384,7 +470,7 @@ class Stiffening final : public EffectDef {
       v -= p[0] * Y * x * x * x;
     }
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();
     return {s * d.Uniform(0.02, 0.12)};
   }
@@ -404,7 +490,7 @@ class Drift final : public EffectDef {
   void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
     for (size_t k = 0; k < y.size(); ++k) y[k] += p[0] * (static_cast<double>(k) - f.origin) * f.dt;
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d) const override {
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();
     return {s * d.Uniform(0.03, 0.15)};
   }
@@ -423,6 +509,7 @@ const Creep kCreep;
 const Delay kDelay;
 const HingeFriction kHingeFriction;
 const CubicStiffening kCubicStiffening;
+const CreepSpectrum kCreepSpectrum;
 const Friction kFriction;
 const Stiffening kStiffening;
 const Drift kDrift;
@@ -430,9 +517,10 @@ const Drift kDrift;
 }  // namespace
 
 const std::vector<const EffectDef*>& Effects() {
-  static const std::vector<const EffectDef*> all = {&kDriverLowpass, &kQuadraticDrive, &kCreep,
-                                                    &kDelay,         &kHingeFriction,  &kCubicStiffening,
-                                                    &kFriction,      &kStiffening,     &kDrift};
+  static const std::vector<const EffectDef*> all = {&kDriverLowpass,    &kQuadraticDrive, &kCreep,
+                                                    &kDelay,            &kHingeFriction,  &kCubicStiffening,
+                                                    &kCreepSpectrum,    &kFriction,       &kStiffening,
+                                                    &kDrift};
   return all;
 }
 

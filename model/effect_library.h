@@ -18,12 +18,14 @@
 //   delay            drive   u_e(t) = u(t − τ_d)                        tau_d_s
 //   hinge-friction   beam    Ḟ = σ ẇ (1 − F/F_c sgn ẇ), tip force −F    fc_n, sigma_n_per_m
 //   cubic-stiffening beam    tip force −k₃ w_tip³                       k3_n_per_m3
+//   creep-spectrum   output  y_e = y − Σ w_i (y − x_i), τ_i ẋ_i = y − x_i    w_i ≥ 0 at τ_i = 0.05 s … T
 //   friction         output  y_e = play_r[y]                            r
 //   stiffening       output  y_e = y − k₃ Y ((y − y_0)/Y)³              k3
 //   drift            output  y_e = y + ρ (t − t_w)                      rate
 //
 // Drive effects act on u in registry order, output effects on y in registry order; params[0] is the
-// magnitude (zero: identity). A drive filter starts at rest at u[0] and is discretised exactly for
+// magnitude (zero: identity; the creep spectrum's weights are each their relaxation's magnitude,
+// all zero the identity). A drive filter starts at rest at u[0] and is discretised exactly for
 // a drive linear between samples; the delay reads the drive by linear interpolation (u[0] before).
 // Beam effects exist only for a plant with a beam (the bimorph fin); records families refuse them.
 //
@@ -83,6 +85,7 @@ struct OutputFrame {
   double dt = 1;
   double origin = 0;
   double y_half = 1;
+  double duration = 1;  ///< the data's longest scored window [s] (DataScale::duration)
 };
 
 /// One parameter of the bimorph-fin bench's search box (model/effects.h), in the library's order:
@@ -150,6 +153,14 @@ class EffectDef {
   // ---- output stage ----
   /// In place on the output y (y[0] = rest output).
   virtual void ApplyOutput(std::span<const double> p, const OutputFrame& frame, std::span<double> y) const;
+  /// True when ApplyOutput is linear and homogeneous in y (L[a y₁ + b y₂] = a L[y₁] + b L[y₂], the
+  /// rest output a fixed point): a linear family can take it on each of its regressors.
+  virtual bool linear_output() const { return false; }
+
+  // ---- step kernel ----
+  /// Constants a step kernel needs beyond the parameters, derived from the data scale (the creep
+  /// spectrum's relaxation times); empty for most effects.
+  virtual std::vector<double> KernelData(const DataScale&) const { return {}; }
 
   // ---- beam stage, and the continuous-time form of drive effects ----
   /// The effect as an extension of the bimorph ODE (model/bimorph_ode.h); null when it has none
@@ -169,8 +180,9 @@ class EffectDef {
 
   // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
   /// The parameters of a records check's truth (records/check.cc), on the synthetic stack's scale
-  /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V); empty: none (beam effects).
-  virtual std::vector<double> DrawRecordsTruth(TruthDraw&) const { return {}; }
+  /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect whose
+  /// parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
+  virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const { return {}; }
   /// A fin-bench check's truth (diagnose/synthetic.cc) in the fin bench's units; `other_form`
   /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer it.
   virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }

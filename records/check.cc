@@ -75,7 +75,7 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
       effects.push_back(e);
       t.truth = EffectName(e);
       model::TruthDraw draw([&rng] { return rng.Uniform01(); });
-      const std::vector<double> truth = e->DrawRecordsTruth(draw);
+      const std::vector<double> truth = e->DrawRecordsTruth(draw, scale);
       if (truth.empty()) {
         throw InputError(std::string("diagnose-check --records: effect '") + EffectName(e) +
                          "' draws no truth (its DrawRecordsTruth in model/effect_library.cc)");

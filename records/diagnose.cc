@@ -166,13 +166,18 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   d.significant = gap.significant;
 
   // Candidates that apply to the family.
+  const DataScale& scale = d.base.model->scale();
+  const auto lib = EffectLibrary(scale);
   std::vector<EffectKind> cands = o.candidates;
   if (cands.empty()) {
+    // By default, the effects the family does not hold and the records can support (creep-spectrum
+    // needs a window of a decade above its fastest relaxation); asked for by name, such an effect
+    // is an error (its model throws).
     const auto excluded = d.base.model->family().excluded_effects();
-    for (EffectKind k : RecordEffects())
-      if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end()) cands.push_back(k);
+    for (const EffectInfo& e : lib)
+      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() && e.unsupported.empty())
+        cands.push_back(e.kind);
   }
-  const DataScale& scale = d.base.model->scale();
   const auto base_ex = BinExcess(set, d.base, sigma2, scale);
   const auto base_sq = WithheldSquares(set, d.base);
   for (EffectKind e : cands) {

@@ -29,6 +29,7 @@ const char* KindMacro(int kind) {
     case pzk::PZK_PREISACH: return "PZK_PREISACH";
     case pzk::PZK_ASYMMETRIC_PI: return "PZK_ASYMMETRIC_PI";
     case pzk::PZK_BIMORPH_FIN: return "PZK_BIMORPH_FIN";
+    case pzk::PZK_CREEP_SPECTRUM: return "PZK_CREEP_SPECTRUM";
     case pzk::PZK_FRICTION: return "PZK_FRICTION";
     case pzk::PZK_STIFFENING: return "PZK_STIFFENING";
     case pzk::PZK_DRIFT: return "PZK_DRIFT";

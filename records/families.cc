@@ -339,6 +339,7 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
   DataScale s;
   s.u_min = std::numeric_limits<double>::infinity();
   s.u_max = -s.u_min;
+  s.duration = 0;  // the longest window, measured (a default of 1 s hid windows shorter than that)
   double ymin = s.u_min, ymax = -s.u_min;
   double su = 0, sy = 0, suu = 0, suy = 0, n = 0, reversals = 0, excited = 0;
   for (const io::Record* r : records) {
@@ -356,6 +357,7 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
     s.fs = r->sample_rate_hz();
     s.duration = std::max(s.duration, r->t[r->end_scored - 1] - r->t[r->first_scored]);
   }
+  s.duration = std::max(s.duration, 1 / s.fs);  // one sample at least (a range is divided by it)
   s.u_half = (s.u_max - s.u_min) / 2;
   if (!(s.u_half > 0)) {
     std::string names;

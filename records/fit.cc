@@ -87,26 +87,37 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
   }
   const Family& fam = model_.family();
   fam.CheckTraining(records_);
-  // A regularised linear family: its strength chosen once, by validation, with the effects at
-  // their neutral values (records/regularisation.h); every evaluation then uses it.
+  // A regularised linear family: its strength chosen by validation with the effects at their
+  // neutral values (records/regularisation.h), re-chosen at a fit's solution (FitModel); every
+  // evaluation uses the strength of the moment.
   const std::vector<double> R = fam.linear() ? fam.regularisation() : std::vector<double>{};
   if (!R.empty()) {
     const auto m = static_cast<Eigen::Index>(fam.regressors());
     if (R.size() != fam.regressors() * fam.regressors()) throw InputError(fam.name() + ": regularisation size mismatch");
     regularisation_ = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(R.data(), m, m);
-    std::vector<double> neutral;
+    std::vector<double> p(model_.family_param_count(), 0.0);
     for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
       const ParamInfo& q = model_.params()[i];
-      neutral.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
+      p.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
     }
-    const size_t K = kValidationBlocks;
-    BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
-                              std::vector<size_t>(K)};
-    std::vector<double> p(model_.family_param_count(), 0.0);
-    p.insert(p.end(), neutral.begin(), neutral.end());
-    Accumulate(p, eq);
-    validation_ = ChooseStrength(eq, regularisation_);
+    validation_ = ValidateAt(p);
   }
+}
+
+WeightValidation RecordFitness::ValidateAt(std::span<const double> p) const {
+  const size_t K = kValidationBlocks;
+  BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
+                            std::vector<size_t>(K)};
+  Accumulate(p, eq);
+  return ChooseStrength(eq, regularisation_);
+}
+
+bool RecordFitness::Revalidate(std::span<const double> params) {
+  if (!validation_.used) return false;
+  WeightValidation v = ValidateAt(params);
+  const bool changed = v.relative != validation_.relative;
+  validation_ = std::move(v);
+  return changed;
 }
 
 void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations& eq) const {
@@ -121,6 +132,7 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     eq.samples[b] = 0;
   }
   std::vector<double> ue, c(m);
+  const bool linear_output = model_.has_linear_output_effects();
   std::unique_ptr<double[]> reg;  // not zero-filled: the family writes every entry
   size_t index = 0;  // of the scored sample over the records: its block is index · blocks / samples_
   // Rows are gathered in chunks of one block and added as rank-k updates (a level-3 product, several
@@ -145,6 +157,9 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
     reg.reset(new double[ue.size() * m]);
     fam.Regressors(ue, std::span<double>(reg.get(), ue.size() * m));
+    if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its output
+      model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, std::span<double>(reg.get(), ue.size() * m), m);
+    }
     auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
       return reg.get() + (k < from ? 0 : (k - from)) * m;
     };
@@ -383,6 +398,20 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     res.stop_reason = res.search.stop_reason;
     res.uncertainty = std::move(fit.uncertainty);
     best = std::move(fit.x);
+    // A regularised linear family with effects: its strength was chosen with the effects at their
+    // neutral values; re-chosen at the solution, and where it changes the solution is polished
+    // again under the new strength (locally: a polish, no search).
+    if (fitness.validation().used && model->params().size() > model->family_param_count() && options.polish &&
+        fitness.Revalidate(best)) {
+      opt::FitOptions again = fo;
+      again.search = false;
+      again.starts = {map.ToUnit(best)};
+      opt::FitResult second = opt::Fit(problem, again);
+      res.evaluations += second.evaluations;
+      res.lm_iterations += second.lm_iterations;
+      res.uncertainty = std::move(second.uncertainty);
+      best = std::move(second.x);
+    }
   }
   const RecordFitness::Output out = fitness.Run(best);
   res.params = best;

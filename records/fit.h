@@ -62,13 +62,20 @@ class RecordFitness final : public opt::FitnessFunction {
 
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
-  /// A regularised linear family: the strength chosen by validation at construction.
+  /// A regularised linear family: the strength chosen by validation at construction (the effects
+  /// at their neutral values), or by Revalidate.
   const WeightValidation& validation() const { return validation_; }
+  /// Re-chooses the strength by the same validation with the effects at `params` (a fit's
+  /// solution: effects far from neutral — a creep, a lag — make the neutral model's misfit look
+  /// like noise and its validation choose too strong a strength); true when it changed. Not
+  /// thread-safe: call between fits.
+  bool Revalidate(std::span<const double> params);
   size_t samples() const { return samples_; }
   double penalty() const { return penalty_; }
 
  private:
   std::vector<double> SolveWeights(std::span<const double> params) const;
+  WeightValidation ValidateAt(std::span<const double> params) const;
   /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples.
   void Accumulate(std::span<const double> params, BlockedNormalEquations& eq) const;
   const RecordModel& model_;

@@ -17,7 +17,15 @@ const std::vector<EffectKind>& RecordEffects() {
 
 std::vector<EffectInfo> EffectLibrary(const DataScale& s) {
   std::vector<EffectInfo> lib;
-  for (EffectKind k : RecordEffects()) lib.push_back({k, k->name(), k->title(), k->equation(), k->Params(s)});
+  for (EffectKind k : RecordEffects()) {
+    EffectInfo e{k, k->name(), k->title(), k->equation(), {}, {}};
+    try {
+      e.params = k->Params(s);
+    } catch (const InputError& x) {
+      e.unsupported = x.what();
+    }
+    lib.push_back(std::move(e));
+  }
   return lib;
 }
 
@@ -81,9 +89,45 @@ void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double
   if (y.empty()) return;
   // Time from the window's start on the record's uniform grid (the same wherever the record is cut:
   // the service's workers receive it without its leading rest).
-  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored), scale_.y_half};
+  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored), scale_.y_half, scale_.duration};
   for (size_t i = 0; i < defs_.size(); ++i)
     if (defs_[i]->stage() == model::EffectStage::kOutput) defs_[i]->ApplyOutput(ep.subspan(effect_offset_[i]), frame, y);
+}
+
+namespace {
+
+/// The effects of `defs` that open the output stage and are linear in y.
+template <typename F>
+void ForLeadingLinearOutput(const std::vector<const model::EffectDef*>& defs, F&& f) {
+  for (size_t i = 0; i < defs.size(); ++i) {
+    if (defs[i]->stage() != model::EffectStage::kOutput) continue;
+    if (!defs[i]->linear_output()) return;
+    f(i);
+  }
+}
+
+}  // namespace
+
+bool RecordModel::has_linear_output_effects() const {
+  bool any = false;
+  ForLeadingLinearOutput(defs_, [&](size_t) { any = true; });
+  return any;
+}
+
+void RecordModel::ApplyLinearOutputEffects(const io::Record& r, std::span<const double> ep, size_t from,
+                                           std::span<double> reg, size_t m) const {
+  if (m == 0 || reg.empty()) return;
+  const size_t n = reg.size() / m;
+  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored) - static_cast<double>(from), scale_.y_half,
+                                 scale_.duration};
+  std::vector<double> col(n);
+  ForLeadingLinearOutput(defs_, [&](size_t i) {
+    for (size_t j = 0; j < m; ++j) {
+      for (size_t k = 0; k < n; ++k) col[k] = reg[k * m + j];
+      defs_[i]->ApplyOutput(ep.subspan(effect_offset_[i]), frame, col);
+      for (size_t k = 0; k < n; ++k) reg[k * m + j] = col[k];
+    }
+  });
 }
 
 namespace {

@@ -2,8 +2,8 @@
 // output on a record with the record's explicit offset (issue 14).
 //
 // Effects: the one library's (model/effect_library.h) drive and output effects — driver-lowpass,
-// quadratic-drive, creep, delay (drive, before the family), friction, stiffening, drift (output,
-// after it) — with ranges scaled to the data; zero magnitude is the identity. A model applies them in
+// quadratic-drive, creep, delay (drive, before the family), creep-spectrum, friction, stiffening,
+// drift (output, after it) — with ranges scaled to the data; zero magnitude is the identity. A model applies them in
 // the library's chain order through EffectDef::ApplyDrive / ApplyOutput. Beam effects
 // (hinge-friction, cubic-stiffening) need a plant with a beam (the bimorph fin of `piezoid
 // diagnose`); a records family has none, and ParseEffect says so.
@@ -38,8 +38,10 @@ struct EffectInfo {
   std::string title;
   std::string equation;
   std::vector<ParamInfo> params;  ///< scaled to the data; params[0] is the magnitude
+  std::string unsupported;        ///< why the data cannot support it (creep-spectrum on a short window; params empty)
 };
-/// Every records effect, in chain order, with ranges scaled to the data.
+/// Every records effect, in chain order, with ranges scaled to the data (an effect the data cannot
+/// support says why in `unsupported`; a model that takes it throws that).
 std::vector<EffectInfo> EffectLibrary(const DataScale& scale);
 /// The records effects (the library's drive and output effects), in chain order.
 const std::vector<EffectKind>& RecordEffects();
@@ -79,6 +81,14 @@ class RecordModel {
   /// Applies the output effects in place to y on samples [from, end) of the record (y[0] = rest).
   void ApplyOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
                           std::span<double> y) const;
+  /// True when the output stage starts with effects linear in y (EffectDef::linear_output, e.g.
+  /// creep-spectrum): a linear family's fit applies those to each regressor column, so that its
+  /// weights are solved for the output they make.
+  bool has_linear_output_effects() const;
+  /// Applies those leading linear output effects to the columns of `reg` (rows = samples from..,
+  /// row-major, m columns; row 0 at rest).
+  void ApplyLinearOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
+                                std::span<double> reg, size_t m) const;
   size_t family_param_count() const { return family_->params().size(); }
 
  private:

@@ -121,7 +121,7 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   std::sort(spec_.effects.begin(), spec_.effects.end());
   const auto model = spec_.Model();
   const size_t nf = model->family_param_count();
-  auto block = [&](int kind, std::vector<double> p) {
+  auto block = [&](int kind, std::vector<double> p, std::vector<double> data = {}) {
     pzk::pzk_block b{};
     b.kind = kind;
     b.dt = spec_.dt;
@@ -130,6 +130,7 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     b.u_half = spec_.scale.u_half;
     b.y_half = spec_.scale.y_half;
     params_.push_back(std::move(p));
+    kernel_data_.push_back(std::move(data));
     blocks_.push_back(b);
   };
   // The effects' parameters follow the family's, in effect order (RecordModel).
@@ -142,7 +143,8 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     at += n;
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
-    if (IsDriveEffect(spec_.effects[i])) block(KernelOf(spec_.effects[i]), effect_params[i]);
+    if (IsDriveEffect(spec_.effects[i]))
+      block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
   block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
   size_t family_block = blocks_.size() - 1;
   auto& fb = blocks_[family_block];
@@ -160,11 +162,17 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     default: break;
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
-    if (!IsDriveEffect(spec_.effects[i])) block(KernelOf(spec_.effects[i]), effect_params[i]);
+    if (!IsDriveEffect(spec_.effects[i]))
+      block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
   block(pzk::PZK_AFFINE, {static_cast<double>(spec_.polarity), spec_.offset});
   for (size_t i = 0; i < blocks_.size(); ++i) {
     blocks_[i].p = params_[i].data();
     blocks_[i].np = static_cast<int>(params_[i].size());
+    if (!kernel_data_[i].empty()) {  // an effect's constants (the creep spectrum's times: n of them)
+      blocks_[i].w = kernel_data_[i].data();
+      blocks_[i].nw = static_cast<int>(kernel_data_[i].size());
+      blocks_[i].n = blocks_[i].nw;
+    }
   }
   const std::vector<double>& w = family_kind == pzk::PZK_BIMORPH_FIN ? modal_ : spec_.weights;
   blocks_[family_block].w = w.data();

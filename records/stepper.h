@@ -98,6 +98,7 @@ class Stepper {
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
   std::vector<double> modal_;  ///< bimorph fin: {1/L, omega_i^2, tip gains} of its geometry
+  std::vector<std::vector<double>> kernel_data_;  ///< per block: an effect's EffectDef::KernelData (else empty)
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};
   int nc_ = 0, nd_ = 0;

@@ -30,6 +30,7 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
     case PZK_PREISACH: *nc = 1 + 2 * n + n * (n + 1) / 2; *nd = n; return 0;
     case PZK_BW_OSCILLATOR: *nc = 6; *nd = 4; return 0;
     case PZK_BIMORPH_FIN: *nc = PZK_FIN_C * n; *nd = 2 * n + 4; return 0;
+    case PZK_CREEP_SPECTRUM: *nc = 1 + 2 * n; *nd = 1 + n; return 0;
     case PZK_FRICTION: *nd = 1; return 0;
     case PZK_STIFFENING: *nc = 1; return 0;
     case PZK_DRIFT: *nd = 1; return 0;
@@ -67,6 +68,7 @@ static inline double pzk_block_init(const pzk_block *b, double *c, double *d, do
     case PZK_PREISACH: return pzk_preisach_init(b, c, d, v);
     case PZK_BW_OSCILLATOR: return pzk_bw_osc_init(b, c, d, v);
     case PZK_BIMORPH_FIN: return pzk_fin_init(b, c, d, v);
+    case PZK_CREEP_SPECTRUM: return pzk_creep_spectrum_init(b, c, d, v);
     case PZK_FRICTION: return pzk_friction_init(d, v);
     case PZK_STIFFENING: c[0] = v; return v;
     case PZK_DRIFT: d[0] = 0; return v;
@@ -90,6 +92,7 @@ static inline double pzk_block_step(const pzk_block *b, const double *c, const d
     case PZK_PREISACH: return pzk_preisach_step(b, c, d, o, v);
     case PZK_BW_OSCILLATOR: return pzk_bw_osc_step(b, c, d, o, v);
     case PZK_BIMORPH_FIN: return pzk_fin_step(b, c, d, o, v);
+    case PZK_CREEP_SPECTRUM: return pzk_creep_spectrum_step(b, c, d, o, v);
     case PZK_FRICTION: return pzk_friction_step(b, d, o, v);
     case PZK_STIFFENING: return pzk_stiffening_step(b, c, v);
     case PZK_DRIFT: return pzk_drift_step(b, d, o, v);

@@ -9,6 +9,7 @@ enum {
   PZK_STACK_BOUC_WEN = 10, PZK_BACKLASH_LIKE, PZK_DUHEM, PZK_PRANDTL_ISHLINSKII, PZK_BW_OSCILLATOR,
   PZK_PREISACH, PZK_ASYMMETRIC_PI, PZK_BIMORPH_FIN,      /* families */
   PZK_FRICTION = 30, PZK_STIFFENING, PZK_DRIFT,          /* output effects */
+  PZK_CREEP_SPECTRUM,                                    /* output effect (first of the output stage) */
   PZK_AFFINE = 40                                        /* y = polarity * v + offset */
 };
 
@@ -22,7 +23,8 @@ typedef struct {
   double u_min, u_max, u_half, y_half; /* the data scale the family was made for */
   const double *p;  /* parameters (the family's, the effect's, or {polarity, offset}) */
   int np;
-  const double *w;  /* solved weights of a linear family; the bimorph fin's modal data */
+  const double *w;  /* solved weights of a linear family; the bimorph fin's modal data; the creep
+                       spectrum's relaxation times */
   int nw;
   int c_off, d_off; /* offsets of the block's constants and dynamic state (pzk_layout) */
   int init;         /* the family's memory at rest (model/prandtl_ishlinskii.h InitialState):

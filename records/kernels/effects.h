@@ -84,6 +84,32 @@ static inline double pzk_delay_step(const double *c, double *d, double v) {
   return a + f * (b - a);
 }
 
+/* creep-spectrum: v - sum_i p_i (e - x_i), e = v - v0, tau_i x_i' = e - x_i (first-order hold, from
+ * rest), v0 the output at rest (as the effect library's CreepSpectrum::ApplyOutput); n = relaxations,
+ * w = their times. c = {v0, a_0, c_0, a_1, c_1, ...}, d = {e_prev, x_0, x_1, ...}. */
+static inline double pzk_creep_spectrum_init(const pzk_block *b, double *c, double *d, double v) {
+  int i;
+  c[0] = v;
+  d[0] = 0;
+  for (i = 0; i < b->n; ++i) {
+    pzk_lowpass_consts(b->w[i], b->dt, c + 1 + 2 * i);
+    d[1 + i] = 0;
+  }
+  return v;
+}
+static inline double pzk_creep_spectrum_step(const pzk_block *b, const double *c, const double *d, double *o,
+                                             double v) {
+  double e = v - c[0], prev = d[0], corr = 0, x;
+  int i;
+  for (i = 0; i < b->n; ++i) {
+    x = c[1 + 2 * i] * d[1 + i] + (1 - c[1 + 2 * i]) * prev + (e - prev) * c[2 + 2 * i];
+    o[1 + i] = x;
+    corr += b->p[i] * (e - x);
+  }
+  o[0] = e;
+  return v - corr;
+}
+
 /* friction: the play of half-width r on the output; d = {z}. */
 static inline double pzk_friction_init(double *d, double v) {
   d[0] = v;

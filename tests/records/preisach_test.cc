@@ -258,8 +258,12 @@ TEST(PreisachFamily, EffectsAreSearchedWithTheValidatedStrengthAndStayFinite) {
   o.lm.max_iterations = 5;
   const FitResult f = FitRecords(set, o);
   ASSERT_EQ(f.params.size(), 1u);
-  // The strength is chosen once, with the effect at its neutral value: the base fit's.
-  EXPECT_EQ(f.regularisation.relative, base.regularisation.relative);
+  // The strength is chosen with the effect at its neutral value (the base fit's), then re-chosen
+  // at the solution: the reported one is the validation's choice there.
+  RecordFitness at_solution(*f.model, set.WithRole(CaseRole::kTrain));
+  EXPECT_EQ(at_solution.validation().relative, base.regularisation.relative);
+  at_solution.Revalidate(f.params);
+  EXPECT_EQ(f.regularisation.relative, at_solution.validation().relative);
   for (const auto& m : f.metrics) EXPECT_TRUE(std::isfinite(m.rmse));
   EXPECT_LT(f.metrics[0].rmse, 1.02 * base.metrics[0].rmse);
 }
