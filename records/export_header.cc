@@ -1,6 +1,7 @@
 #include "records/export_header.h"
 
 #include <cctype>
+#include <cstdint>
 #include <cstdio>
 #include <sstream>
 #include <string_view>
@@ -57,6 +58,18 @@ std::string KernelSource() {
   return s;
 }
 
+std::string KernelGuard() {
+  // FNV-1a (64 bit) of the kernels' text: headers exported from the same kernels share them; a
+  // header from other kernels (another piezoid) has its own guard, so two of them in one
+  // translation unit fail to compile (the functions are defined twice) instead of one silently
+  // using the other's block layout.
+  uint64_t h = 14695981039346656037ULL;
+  for (unsigned char c : KernelSource()) h = (h ^ c) * 1099511628211ULL;
+  char guard[40];
+  std::snprintf(guard, sizeof guard, "PZK_KERNELS_%016llX", static_cast<unsigned long long>(h));
+  return guard;
+}
+
 std::string FinModalSource() { return std::string(kernel_text::kFinModal); }
 
 std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
@@ -99,8 +112,8 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
              : std::string())
      << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
-     << "#ifndef PZK_KERNELS_V1\n#define PZK_KERNELS_V1\n"
-     << KernelSource() << "#endif /* PZK_KERNELS_V1 */\n\n";
+     << "#ifndef " << KernelGuard() << "\n#define " << KernelGuard() << "\n"
+     << KernelSource() << "#endif /* " << KernelGuard() << " */\n\n";
   double delay = 0;
   for (int i = 0; i < nb; ++i)
     if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];

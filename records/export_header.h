@@ -18,6 +18,9 @@ namespace pz::records {
 
 /// The kernels' C source, in include order (records/kernels/*.h).
 std::string KernelSource();
+/// The include guard of the kernels in an exported header: PZK_KERNELS_ and a 64-bit hash of
+/// KernelSource() in hex (headers exported from the same kernels share them).
+std::string KernelGuard();
 
 /// The bimorph fin's modal helpers (records/kernels/fin_modal.h, guarded): also the base of the
 /// HGANN fin plant's header (client/export_fin_c.h).

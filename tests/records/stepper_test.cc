@@ -451,6 +451,9 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     for (char& c : name)
       if (c == '-') c = '_';
     name += "_" + std::to_string(effects.size()) + "_" + model::InitialStateName(state);
+    // The kernels' guard is their text's hash: the same for every header of these kernels.
+    const std::string text = ExportHeader(st, name, "test model");
+    EXPECT_NE(text.find("#ifndef " + KernelGuard() + "\n"), std::string::npos) << name;
     const HeaderRun run = CompileAndRun(st, name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size()) << name;
     EXPECT_LE(MaxDiff(run.forward, ref), 1e-12 * Range(ref)) << name;
