@@ -15,36 +15,6 @@ namespace {
 
 /// The nominal parameters of a searched family, or the weights of a linear one (for 200 V peak to
 /// peak and a gain of about 0.1 y/V, the synthetic stack's scale).
-std::vector<double> Nominal(const std::string& family, const Family& fam) {
-  if (family == "preisach") {
-    // A density falling with the relay width and leaning with the centre (an asymmetric loop).
-    const size_t m = fam.regressors();
-    int n = 1;
-    while (static_cast<size_t>(n * (n + 1) / 2) < m) ++n;
-    double norm = 0;
-    for (int i = 0; i < n; ++i) norm += std::exp(-i / 3.0);
-    std::vector<double> w;
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n - i; ++j) w.push_back(0.1 * std::exp(-i / 3.0) / norm * (1 + 0.3 * (2.0 * (j + 0.5) / (n - i) - 1)));
-    return w;
-  }
-  if (family == "asymmetric-pi") {
-    // w0, the plays (falling with the threshold), the dead zones: a steeper top, no bottom bend.
-    std::vector<double> w(fam.regressors(), 0.0);
-    const size_t plays = (w.size() - 1 - 2 * static_cast<size_t>(kAsymmetricPiKnots));
-    w[0] = 0.04;
-    for (size_t i = 0; i < plays; ++i) w[1 + i] = 0.02 * std::exp(-static_cast<double>(i) / 3);
-    w[plays + static_cast<size_t>(kAsymmetricPiKnots)] = 0.03;  // the last upper dead zone
-    return w;
-  }
-  if (family == "stack-bouc-wen") return {0.3, 0.018, 0.006, 0.12, 40};
-  if (family == "backlash-like") return {0.02, 0.1, 0.05};
-  if (family == "duhem") return {0.02, 0.1, -2e-6, 0.05, 2.0};
-  throw InputError("diagnose-check --records-family: '" + family +
-                   "' has no nominal parameter set for synthetic records (stack-bouc-wen, backlash-like, duhem, preisach, "
-                   "asymmetric-pi)");
-}
-
 double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
 
 }  // namespace
@@ -55,7 +25,15 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   const auto start = std::chrono::steady_clock::now();
   const DataScale scale = SyntheticStackScale();
   std::shared_ptr<const Family> fam = MakeFamily(o.family, scale);
-  const std::vector<double> nominal = Nominal(o.family, *fam);
+  const std::vector<double> nominal = fam->CheckNominal();
+  if (nominal.empty()) {
+    std::string with;
+    for (const std::string& name : FamilyNames())
+      if (!MakeFamily(name, scale)->CheckNominal().empty()) with += (with.empty() ? "" : ", ") + name;
+    throw InputError("diagnose-check --records-family: '" + o.family +
+                     "' has no nominal parameter set for synthetic records (Family::CheckNominal; families with one: " +
+                     with + ")");
+  }
   std::vector<EffectKind> kinds;
   const auto excluded = fam->excluded_effects();
   for (EffectKind k : RecordEffects())

@@ -47,6 +47,7 @@ class StackBoucWenFamily final : public Family {
   }
   std::vector<std::string> excluded_effects() const override { return {"driver-lowpass"}; }
   model::InitialState initial_state() const override { return start_; }
+  std::vector<double> CheckNominal() const override { return {0.3, 0.018, 0.006, 0.12, 40}; }
 
  private:
   model::StackSimOptions sim_;
@@ -73,6 +74,7 @@ class BacklashLikeFamily final : public Family {
                                 model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_)));
   }
   model::InitialState initial_state() const override { return start_; }
+  std::vector<double> CheckNominal() const override { return {0.02, 0.1, 0.05}; }
 
  private:
   model::InitialState start_;
@@ -100,6 +102,7 @@ class DuhemFamily final : public Family {
     model::SimulateDuhem(model::DuhemFromVector(p), u, dt, y);
   }
   std::vector<std::string> excluded_effects() const override { return {"creep"}; }
+  std::vector<double> CheckNominal() const override { return {0.02, 0.1, -2e-6, 0.05, 2.0}; }
 
  private:
   std::vector<ParamInfo> params_;

@@ -71,6 +71,16 @@ class PreisachFamily final : public Family {
   }
   std::vector<std::string> excluded_effects() const override { return {"friction"}; }
   std::vector<double> regularisation() const override { return model::PreisachRoughness(grid_); }
+  /// A density falling with the relay width and leaning with the centre (an asymmetric loop).
+  std::vector<double> CheckNominal() const override {
+    const int n = grid_.levels;
+    double norm = 0;
+    for (int i = 0; i < n; ++i) norm += std::exp(-i / 3.0);
+    std::vector<double> w;
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n - i; ++j) w.push_back(0.1 * std::exp(-i / 3.0) / norm * (1 + 0.3 * (2.0 * (j + 0.5) / (n - i) - 1)));
+    return w;
+  }
   void CheckTraining(const std::vector<const io::Record*>& train) const override {
     const double delta = grid_.step();
     int reversals = 0;
@@ -145,6 +155,15 @@ class AsymmetricPiFamily final : public Family {
     return names;
   }
   std::vector<std::string> excluded_effects() const override { return {"friction"}; }
+  /// w0, the plays (falling with the threshold), the dead zones: a steeper top, no bottom bend.
+  std::vector<double> CheckNominal() const override {
+    std::vector<double> w(regressors(), 0.0);
+    const size_t plays = thresholds_.size();
+    w[0] = 0.04;
+    for (size_t i = 0; i < plays; ++i) w[1 + i] = 0.02 * std::exp(-static_cast<double>(i) / 3);
+    w[plays + knots_.size()] = 0.03;  // the last upper dead zone
+    return w;
+  }
   /// A ridge on the dead zones: it shrinks the bend towards the symmetric PI operator where the
   /// data do not ask for it (and resolves max(u − z, 0) + min(u − z, 0) = u − z).
   std::vector<double> regularisation() const override {
