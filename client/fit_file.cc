@@ -19,15 +19,7 @@ google::protobuf::Value FitModelJson(const io::RecordSet& set, const records::Fi
   f.initial_state = model::InitialStateName(m.family().initial_state());
   f.substeps = substeps;
   f.pi_operators = pi_operators;
-  f.u_min = s.u_min;
-  f.u_max = s.u_max;
-  f.u_half = s.u_half;
-  f.y_half = s.y_half;
-  f.gain = s.gain;
-  f.scale_polarity = s.polarity;
-  f.f_dom_hz = s.f_dom;
-  f.fs_hz = s.fs;
-  f.duration_s = s.duration;
+  f.scale = s;
   double offset = 0;
   int train = 0;
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -66,16 +58,9 @@ records::ModelSpec LoadFit(const std::string& path) {
   s.family = m.family;
   s.substeps = m.substeps;
   s.pi_operators = m.pi_operators;
-  s.scale.u_min = m.u_min;
-  s.scale.u_max = m.u_max;
-  s.scale.u_half = m.u_half;
-  s.scale.y_half = m.y_half;
-  s.scale.gain = m.gain;
-  s.scale.polarity = m.scale_polarity;
-  s.scale.f_dom = m.f_dom_hz;
-  s.scale.fs = m.fs_hz;
+  s.scale = m.scale;
   // Files written before duration_s was stored: the default scale's 1 s (it set only drift's range then).
-  s.scale.duration = m.duration_s > 0 ? m.duration_s : 1.0;
+  if (!(s.scale.duration > 0)) s.scale.duration = 1.0;
   try {
     for (double v : {s.scale.u_min, s.scale.u_max, s.scale.u_half, s.scale.y_half, s.scale.f_dom, s.scale.fs,
                      s.scale.duration}) {

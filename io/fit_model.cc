@@ -31,15 +31,15 @@ std::string FitModelJson(const FitModelFile& m) {
   f.set_substeps(m.substeps);
   f.set_pi_operators(m.pi_operators);
   auto* sc = f.mutable_scale();
-  sc->set_u_min(m.u_min);
-  sc->set_u_max(m.u_max);
-  sc->set_u_half(m.u_half);
-  sc->set_y_half(m.y_half);
-  sc->set_gain(m.gain);
-  sc->set_polarity(m.scale_polarity);
-  sc->set_f_dom_hz(m.f_dom_hz);
-  sc->set_fs_hz(m.fs_hz);
-  sc->set_duration_s(m.duration_s);
+  sc->set_u_min(m.scale.u_min);
+  sc->set_u_max(m.scale.u_max);
+  sc->set_u_half(m.scale.u_half);
+  sc->set_y_half(m.scale.y_half);
+  sc->set_gain(m.scale.gain);
+  sc->set_polarity(m.scale.polarity);
+  sc->set_f_dom_hz(m.scale.f_dom);
+  sc->set_fs_hz(m.scale.fs);
+  sc->set_duration_s(m.scale.duration);
   f.set_sample_period_s(m.sample_period_s);
   for (const auto& e : m.effects) f.add_effects(e);
   for (const auto& [name, value] : m.params) {
@@ -106,15 +106,15 @@ FitModelFile ParseFitJson(const std::string& path, const std::string& text) {
   out.substeps = m.substeps();
   out.pi_operators = m.pi_operators();
   const auto& sc = m.scale();
-  out.u_min = sc.u_min();
-  out.u_max = sc.u_max();
-  out.u_half = sc.u_half();
-  out.y_half = sc.y_half();
-  out.gain = sc.gain();
-  out.scale_polarity = sc.polarity();
-  out.f_dom_hz = sc.f_dom_hz();
-  out.fs_hz = sc.fs_hz();
-  out.duration_s = sc.duration_s();
+  out.scale = {.u_min = sc.u_min(),
+               .u_max = sc.u_max(),
+               .u_half = sc.u_half(),
+               .y_half = sc.y_half(),
+               .gain = sc.gain(),
+               .polarity = sc.polarity(),
+               .f_dom = sc.f_dom_hz(),
+               .fs = sc.fs_hz(),
+               .duration = sc.duration_s()};
   out.sample_period_s = m.sample_period_s();
   out.effects.assign(m.effects().begin(), m.effects().end());
   for (const auto& p : m.params()) out.params.emplace_back(p.name(), p.value());

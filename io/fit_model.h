@@ -12,6 +12,8 @@
 #include <utility>
 #include <vector>
 
+#include "model/effect_library.h"
+
 namespace pz::io {
 
 inline constexpr int kFitFormatVersion = 1;
@@ -19,8 +21,7 @@ inline constexpr int kFitFormatVersion = 1;
 struct FitModelFile {
   std::string family;
   int substeps = 2, pi_operators = 12;
-  double u_min = 0, u_max = 0, u_half = 0, y_half = 0, gain = 0, f_dom_hz = 0, fs_hz = 0, duration_s = 0;  ///< DataScale
-  int scale_polarity = 1;
+  model::DataScale scale;  ///< the data scale the family and effects were made for (duration 0: not stored)
   double sample_period_s = 0;
   std::vector<std::string> effects;
   std::vector<std::pair<std::string, double>> params;
