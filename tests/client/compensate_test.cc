@@ -33,11 +33,7 @@ int RunCli(const std::vector<std::string>& args) {
 }
 
 std::string Captured(const std::vector<std::string>& args) {
-  ::testing::internal::CaptureStdout();
-  const int code = RunCli(args);
-  const std::string out = ::testing::internal::GetCapturedStdout();
-  EXPECT_EQ(code, 0) << out;
-  return out;
+  return pz::testing::CapturedCommands({RegisterFit, RegisterCompensate}, args);
 }
 
 /// The true plant: 0.25 u + Σ w_i play_{r_i}[u] from rest at u[0] (three plays).

@@ -31,11 +31,7 @@ std::string Read(const fs::path& p) {
 
 /// Runs the command with stdout captured; returns what it printed.
 std::string Captured(const std::vector<std::string>& args) {
-  ::testing::internal::CaptureStdout();
-  const int code = RunCli(args);
-  const std::string out = ::testing::internal::GetCapturedStdout();
-  EXPECT_EQ(code, 0) << out;
-  return out;
+  return pz::testing::CapturedCommands({RegisterSynthStack, RegisterFit}, args);
 }
 
 TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {

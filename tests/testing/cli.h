@@ -2,6 +2,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <gtest/gtest.h>
+
 #include <initializer_list>
 #include <string>
 #include <vector>
@@ -20,6 +22,15 @@ inline int RunCommands(std::initializer_list<RegisterCommand> commands, const st
   for (const auto& a : args) argv.push_back(a.c_str());
   app.parse(static_cast<int>(argv.size()), argv.data());
   return exit_code;
+}
+
+/// RunCommands with stdout captured: what the command printed (a non-zero exit fails the test).
+inline std::string CapturedCommands(std::initializer_list<RegisterCommand> commands, const std::vector<std::string>& args) {
+  ::testing::internal::CaptureStdout();
+  const int code = RunCommands(commands, args);
+  const std::string out = ::testing::internal::GetCapturedStdout();
+  EXPECT_EQ(code, 0) << out;
+  return out;
 }
 
 }  // namespace pz::testing
