@@ -310,10 +310,30 @@ struct Counters {
   long steps = 0, rhs = 0, jac = 0;
 };
 
+OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const double> y0,
+                          std::span<const double> t_out, const CvodeOptions& options);
+
 }  // namespace
 
 OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const double> y0,
                            std::span<const double> t_out, const CvodeOptions& options) {
+  OdeSolution sol = IntegrateOnce(system, t0, y0, t_out, options);
+  // BDF at high order can stall at a kink of f that is not a breakpoint (repeated error-test
+  // failures with h at its minimum, e.g. a Bouc–Wen |z| crossing zero): once more at order ≤ 2,
+  // which steps through it, with the same tolerances. A run that succeeded is untouched.
+  if (sol.summary.status == SimStatus::kSolverFailure && sol.summary.solver_flag == CV_ERR_FAILURE &&
+      options.method == OdeMethod::kBdf && (options.max_order == 0 || options.max_order > 2)) {
+    CvodeOptions low = options;
+    low.max_order = 2;
+    sol = IntegrateOnce(system, t0, y0, t_out, low);
+  }
+  return sol;
+}
+
+namespace {
+
+OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const double> y0,
+                          std::span<const double> t_out, const CvodeOptions& options) {
   const auto wall_start = std::chrono::steady_clock::now();
   OdeSolution sol;
   const int n = system.size();
@@ -565,5 +585,7 @@ OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const d
   publish();
   return finish();
 }
+
+}  // namespace
 
 }  // namespace pz::model

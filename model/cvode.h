@@ -172,6 +172,8 @@ struct OdeSolution {
 /// Integrates system from (t0, y0) and records y at every t_out (finite, strictly increasing, all ≥ t0;
 /// an output at t0 is y0). Never throws: invalid input comes back as SimStatus::kInvalidInput,
 /// a CVODE failure as kSolverFailure with the flag and CVODE's message, a non-finite state as kNonFinite.
+/// A BDF run that stops on repeated error-test failures (CV_ERR_FAILURE: a kink of f off the
+/// breakpoints) is run once more at order ≤ 2 with the same tolerances; its result is the answer.
 OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const double> y0,
                            std::span<const double> t_out, const CvodeOptions& options);
 

@@ -312,14 +312,7 @@ SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params, st
       co.max_steps = options.max_steps;
       co.breakpoints = ode.Breakpoints();
       std::vector<double> y0 = ode.InitialState();
-      OdeSolution sol = IntegrateCvode(ode, 0.0, y0, t_out, co);
-      // BDF at high order can stall at a kink of the hysteresis (|z|, sgn u̇) that is not a
-      // breakpoint (repeated error-test failures at h ≈ 1e-8 s); once more at order ≤ 2, which
-      // steps through it. Same tolerances, so the same accuracy; a run that succeeded is untouched.
-      if (!sol.summary.ok() && sol.summary.status == SimStatus::kSolverFailure) {
-        co.max_order = 2;
-        sol = IntegrateCvode(ode, 0.0, y0, t_out, co);
-      }
+      const OdeSolution sol = IntegrateCvode(ode, 0.0, y0, t_out, co);
       summary = sol.summary;
       if (!summary.ok()) return fail(summary.status, summary.message);
       for (size_t k = 0; k < t_out.size(); ++k)

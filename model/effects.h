@@ -131,7 +131,7 @@ class EffectSimulator {
   /// Fin angle y_k [deg] on the drive's sample grid into angle_deg (drive.NumSamples() entries);
   /// optionally the linear fin angle θ_k [deg] into theta_deg (same size, or empty). Never throws:
   /// invalid parameters / effects / options come back as kInvalidInput, physical failures as in
-  /// model::Simulate(). A CVODE run that fails is tried once more at BDF order ≤ 2 (model/effects.cc).
+  /// model::Simulate(). A CVODE run that stalls is tried once more at BDF order ≤ 2 (model/cvode.h).
   SimulationSummary SimulateAngle(const BimorphParams& params, std::span<const Effect> effects,
                                   const Sinusoid& drive, std::span<double> angle_deg,
                                   const EffectSimOptions& options = {},

@@ -60,7 +60,7 @@ TEST(SyntheticTest, BenchesAreDeterministicAndReadThroughTheEncoder) {
 
 // Seed 14 draws a cubic stiffening whose case 9 (750 V, 1 Hz) stopped CVODE's BDF at order 5 with
 // repeated error-test failures at t = 2.33 s (h = 2e-8 s): the check stopped there with an error.
-// EffectSimulator retries a failed CVODE run at order ≤ 2; the bench is then simulated, and every
+// IntegrateCvode retries such a run at order ≤ 2 (model/cvode.h); the bench is then simulated, and every
 // reading is finite and on the encoder's grid.
 TEST(SyntheticTest, AStiffeningTheHighOrderBdfCannotPassIsSimulated) {
   const model::BimorphPlant plant;
