@@ -80,63 +80,42 @@ static inline double pzf_backlash(const pzf_state* st, double theta, double y_pr
   return pzk_fin_backlash(st->a1, st->a2, st->b1, st->b2, theta, y_prev);
 }
 
-/* One sample from the drive d.u to u1 (ModalSimulator::RunSampled's loop body); returns the angle. */
+/* pzk_fin_sample's sub-step over the state: a regular one with the cached discretisation, a piece
+ * cut at a zero crossing of z discretised for its tau. */
+typedef struct { pzf_state* st; const pzk_fin_step_t* cached; } pzf_walk;
+static inline void pzf_walk_substep(void* ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
+                                    double u_a, double u_dot) {
+  const pzf_walk* w = (const pzf_walk*)ctx;
+  pzf_substep(w->st, regular ? w->cached : 0, tau, zl, zr, u_a, u_dot);
+}
+
+/* One sample from the drive d.u to u1 (fin_modal.h pzk_fin_sample); returns the angle. */
 static inline double pzf_advance(pzf_state* st, double u1) {
   const double tau = PZF_DT, u0 = st->d.u;
-  const double r = (u1 - u0) / tau;
-  const int hyst = st->alpha != 0.0;
-  const int nsub = pzk_fin_substeps(hyst, st->kappa_max, r, tau);
-  int q, finite;
-  double ts, eps, sa = 0.0, theta;
-  const pzk_fin_step_t* cached;
-  pzk_fin_branch br;
-  pzk_fin_zdata dcur;
+  const int nsub = pzk_fin_substeps(st->alpha != 0.0, st->kappa_max, (u1 - u0) / tau, tau);
+  int finite;
+  double z, theta;
+  pzf_walk w;
   pzf_dynamic before = st->d;
-  ts = tau / nsub;
   if (nsub == 1) {
-    cached = st->full;
+    w.cached = st->full;
   } else {
     if (st->sub_n != nsub) {
       int i;
-      for (i = 0; i < PZF_MODES; ++i) pzk_fin_discretise(&st->poles[i], ts, &st->sub[i]);
+      for (i = 0; i < PZF_MODES; ++i) pzk_fin_discretise(&st->poles[i], tau / nsub, &st->sub[i]);
       st->sub_n = nsub;
     }
-    cached = st->sub;
+    w.cached = st->sub;
   }
-  eps = 1e-9 * ts;
-  br = pzk_fin_start_branch(st->alpha, st->beta, st->gamma, u0, st->d.z, r);
-  dcur = pzk_fin_eval_z(st->alpha, &br, u0, r);
-  for (q = 0; q < nsub; ++q) {
-    const int last = q + 1 == nsub;
-    const double sb = last ? tau : (q + 1) * ts;
-    const double ub = last ? u1 : u0 + r * sb;
-    int split = 0;
-    double uc;
-    pzk_fin_zdata dr;
-    if (hyst && pzk_fin_zero_crossing(&br, &uc)) {
-      const double sc = (uc - u0) / r;
-      if (sc < sb - eps) {
-        if (sc > sa + eps) {
-          pzf_substep(st, 0, sc - sa, dcur, pzk_fin_eval_z(st->alpha, &br, uc, r), u0 + r * sa, r);
-          split = 1;
-          sa = sc;
-        }
-        br = pzk_fin_start_branch(st->alpha, st->beta, st->gamma, uc, 0.0, r);
-        dcur = pzk_fin_eval_z(st->alpha, &br, uc, r);
-      }
-    }
-    dr = pzk_fin_eval_z(st->alpha, &br, ub, r);
-    pzf_substep(st, split ? 0 : cached, sb - sa, dcur, dr, u0 + r * sa, r);
-    dcur = dr;
-    sa = sb;
-  }
+  w.st = st;
+  z = pzk_fin_sample(st->alpha, st->beta, st->gamma, u0, st->d.z, u1, tau, nsub, pzf_walk_substep, &w);
   theta = pzf_degrees(st, &finite);
   if (!finite) { /* the step is not taken */
     st->d = before;
     st->status |= PZF_NOT_FINITE;
     return st->d.y;
   }
-  st->d.z = dcur.z;
+  st->d.z = z;
   st->d.u = u1;
   st->d.theta = theta;
   st->d.y = pzf_backlash(st, theta, st->d.y);

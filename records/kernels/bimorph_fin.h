@@ -1,7 +1,7 @@
 /* bimorph-fin (records/families.h, model/modal_simulator.h): the fin's modal path on the sampled
  * drive (u linear between samples), times the output gain. The same recursion as the --plant header
- * of the HGANN fin (client/export_fin_c.cc pzf_advance: the same loop over the same helpers of
- * fin_modal.h), over the block's arrays for any number of modes.
+ * of the HGANN fin (client/export_fin_c.cc pzf_advance: the one sample loop of fin_modal.h,
+ * pzk_fin_sample, over the same helpers), over the block's arrays for any number of modes.
  * p = {mu, delta, alpha, beta, gamma, a1, a2, b1, b2_abs, gain, L_p[, L_e]} (b2 = -b2_abs);
  * n = modes; w = {1/L, omega_i^2 (n), tip_i g_u,i (n), tip_i g_z,i (n)}: the beam's modal data for
  * the geometry (L_p, L_e), computed by the library's FE assembly and eigen-decomposition when the
@@ -92,51 +92,41 @@ static inline double pzk_fin_init(const pzk_block *b, double *c, double *d, doub
   return p[9] * d[2 * n + 3];
 }
 
-/* One sample from the drive d[2n] to v (ModalSimulator::RunSampled's loop body); returns gain * angle. */
+/* pzk_fin_sample's sub-step over the block: a regular one with the constants' full sample (disc == 0,
+ * one sub-step per sample) or discretised for disc (the sample / nsub), a cut piece for its tau. */
+typedef struct {
+  const pzk_block *b;
+  const double *c;
+  double *x0, *x1;
+  double disc;
+} pzk_fin_walk;
+static inline void pzk_fin_walk_substep(void *ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
+                                        double u_a, double u_dot) {
+  const pzk_fin_walk *w = (const pzk_fin_walk *)ctx;
+  pzk_fin_substep(w->b, w->c, w->x0, w->x1, tau, regular ? w->disc : tau, zl, zr, u_a, u_dot);
+}
+
+/* One sample from the drive d[2n] to v (fin_modal.h pzk_fin_sample); returns gain * angle. */
 static inline double pzk_fin_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
   const int n = b->n;
   const double *p = b->p;
   const double tau = b->dt, u0 = d[2 * n];
-  const double r = (v - u0) / tau;
-  const int hyst = p[2] != 0.0, nsub = pzk_fin_substeps(hyst, fabs(p[3]) + fabs(p[4]), r, tau);
-  const double ts = tau / nsub, eps = 1e-9 * ts;
-  int q, i, finite;
-  double sa = 0.0, theta;
-  double *x0 = o, *x1 = o + n;
-  pzk_fin_branch br;
-  pzk_fin_zdata dcur;
+  const int nsub = pzk_fin_substeps(p[2] != 0.0, fabs(p[3]) + fabs(p[4]), (v - u0) / tau, tau);
+  int i, finite;
+  double z, theta;
+  pzk_fin_walk w;
   if (o != d)
     for (i = 0; i < 2 * n + 4; ++i) o[i] = d[i];
-  br = pzk_fin_start_branch(p[2], p[3], p[4], u0, d[2 * n + 1], r);
-  dcur = pzk_fin_eval_z(p[2], &br, u0, r);
-  for (q = 0; q < nsub; ++q) {
-    const int last = q + 1 == nsub;
-    const double sb = last ? tau : (q + 1) * ts;
-    const double ub = last ? v : u0 + r * sb;
-    int split = 0;
-    double uc;
-    pzk_fin_zdata dr;
-    if (hyst && pzk_fin_zero_crossing(&br, &uc)) {
-      const double sc = (uc - u0) / r;
-      if (sc < sb - eps) {
-        if (sc > sa + eps) {
-          pzk_fin_substep(b, c, x0, x1, sc - sa, sc - sa, dcur, pzk_fin_eval_z(p[2], &br, uc, r), u0 + r * sa, r);
-          split = 1;
-          sa = sc;
-        }
-        br = pzk_fin_start_branch(p[2], p[3], p[4], uc, 0.0, r);
-        dcur = pzk_fin_eval_z(p[2], &br, uc, r);
-      }
-    }
-    dr = pzk_fin_eval_z(p[2], &br, ub, r);
-    pzk_fin_substep(b, c, x0, x1, sb - sa, split ? sb - sa : (nsub == 1 ? 0.0 : ts), dcur, dr, u0 + r * sa, r);
-    dcur = dr;
-    sa = sb;
-  }
-  theta = pzk_fin_angle(x0, n, b->w[0], &finite);
+  w.b = b;
+  w.c = c;
+  w.x0 = o;
+  w.x1 = o + n;
+  w.disc = nsub == 1 ? 0.0 : tau / nsub;
+  z = pzk_fin_sample(p[2], p[3], p[4], u0, d[2 * n + 1], v, tau, nsub, pzk_fin_walk_substep, &w);
+  theta = pzk_fin_angle(o, n, b->w[0], &finite);
   if (!finite) return p[9] * d[2 * n + 3];
   o[2 * n] = v;
-  o[2 * n + 1] = dcur.z;
+  o[2 * n + 1] = z;
   o[2 * n + 2] = theta;
   o[2 * n + 3] = pzk_fin_backlash(p[5], p[6], p[7], -p[8], theta, d[2 * n + 3]);
   return p[9] * o[2 * n + 3];

@@ -325,6 +325,52 @@ static inline void pzk_fin_mode_update(const pzk_fin_step_t *sp, double wu, doub
   *x1 = sp->e21 * a + sp->e22 * b + s1;
 }
 
+/* One sub-step of pzk_fin_sample's walk: tau long, the drive u_a + u_dot s, z held by the quintic
+ * Hermite of (zl, zr). regular != 0: one of the sample's nsub equal sub-steps (tau = the sample / nsub:
+ * a discretisation the caller holds); 0: a piece cut at a zero crossing of z (discretised for tau). */
+typedef void (*pzk_fin_substep_fn)(void *ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
+                                   double u_a, double u_dot);
+
+/* One sample of the fin's drive from u0 (Bouc-Wen force z0) to v over tau, u linear between them, in
+ * nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero (ModalSimulator::RunSampled's loop
+ * body): the modes advance through `substep` (ctx its data); returns z at the sample's end. The one
+ * loop of the records kernel (bimorph_fin.h pzk_fin_step) and the HGANN fin header
+ * (client/export_fin_c.cc pzf_advance). */
+static inline double pzk_fin_sample(double alpha, double beta, double gamma, double u0, double z0, double v,
+                                    double tau, int nsub, pzk_fin_substep_fn substep, void *ctx) {
+  const double r = (v - u0) / tau, ts = tau / nsub, eps = 1e-9 * ts;
+  const int hyst = alpha != 0.0;
+  int q;
+  double sa = 0.0;
+  pzk_fin_branch br = pzk_fin_start_branch(alpha, beta, gamma, u0, z0, r);
+  pzk_fin_zdata dcur = pzk_fin_eval_z(alpha, &br, u0, r);
+  for (q = 0; q < nsub; ++q) {
+    const int last = q + 1 == nsub;
+    const double sb = last ? tau : (q + 1) * ts;
+    const double ub = last ? v : u0 + r * sb;
+    int split = 0;
+    double uc;
+    pzk_fin_zdata dr;
+    if (hyst && pzk_fin_zero_crossing(&br, &uc)) {
+      const double sc = (uc - u0) / r;
+      if (sc < sb - eps) {
+        if (sc > sa + eps) {
+          substep(ctx, sc - sa, 0, dcur, pzk_fin_eval_z(alpha, &br, uc, r), u0 + r * sa, r);
+          split = 1;
+          sa = sc;
+        }
+        br = pzk_fin_start_branch(alpha, beta, gamma, uc, 0.0, r);
+        dcur = pzk_fin_eval_z(alpha, &br, uc, r);
+      }
+    }
+    dr = pzk_fin_eval_z(alpha, &br, ub, r);
+    substep(ctx, sb - sa, !split, dcur, dr, u0 + r * sa, r);
+    dcur = dr;
+    sa = sb;
+  }
+  return dcur.z;
+}
+
 /* Fin angle [deg] of the modal states x0 (scaled by tip_i: w_tip = their sum) for a fin of length
  * 1/inv_length (modal_simulator.cc SumModes in lanes of 4, Degrees / FastAtan / AtanSeries). */
 static inline double pzk_fin_angle(const double *x0, int n, double inv_length, int *finite) {
