@@ -32,6 +32,7 @@ struct CommitteeArgs {
   double t0 = 0.5, t1 = 2.5;
   SearchFlags search{.repetitions = 5};
   int substeps = 2;
+  std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default, auto)
   int threads = 0;
   bool averaging = false;
   bool no_figures = false;
@@ -49,6 +50,8 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   o.t0_s = a.t0;
   o.t1_s = a.t1;
   o.family_options.substeps = a.substeps;
+  // One state for every family on the committee; an explicit one a family cannot take is an error.
+  for (const std::string& f : a.families) o.family_options.initial_state = InitialStateOfFlag(a.initial_state, f);
   o.averaging = a.averaging;
   ApplySearchFlags(a.search, &o.search);
   ThrowIfError(o.Validate());
@@ -136,6 +139,7 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
                   "sub-steps per sample interval of the families that take them (stack Bouc-Wen driver filter, "
                   "Duhem; oscillator RK4 steps x2), 1 … 512")
       ->default_str("2");
+  AddInitialStateFlag(cmd, &a->initial_state);
   cmd->add_option("--threads", a->threads, "evaluation threads (0: all cores; 1: inline)")
       ->default_str("0");
   cmd->add_flag("--averaging", a->averaging,

@@ -8,6 +8,7 @@
 
 #include "client/json_values.h"
 #include "client/plots.h"
+#include "client/record_windows.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -95,6 +96,21 @@ void MetricTables(std::ostream& o, const std::string& prefix, const FrequencyBan
             cell([](const BandMetrics& x) { return x.test.rmse / x.train.rmse; }), mark);
 }
 
+/// The report's sentences on the initial state at rest of the committee's families that take one
+/// (--initial-state; each family's own: backlash-like's auto is centred), "" when none does.
+std::string MemorySentence(const CommitteeResult& r) {
+  std::string out;
+  for (const std::string& f : r.options.families) {
+    if (!records::TakesInitialState(f)) continue;
+    const IdentifiedModel* m = nullptr;
+    for (const auto& c : r.complete) m = !m && c.family == f ? &c : m;
+    for (const auto& band : r.band_models)
+      for (const auto& c : band) m = !m && c.family == f ? &c : m;
+    if (m) out += (out.empty() ? "" : " ") + InitialStateSentence(m->model->family().initial_state(), "The " + f + " model starts");
+  }
+  return out;
+}
+
 }  // namespace
 
 void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
@@ -117,6 +133,7 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
     << opt.search.ga_binary.ga.population_size << " × " << opt.search.ga_binary.ga.max_generations
     << ", " << opt.search.ga_binary.bits_per_parameter << " bits/parameter. Bouc–Wen filter "
     << opt.family_options.substeps << " sub-step(s) per sample. " << r.threads << " evaluation thread(s).\n\n";
+  if (const std::string s = MemorySentence(r); !s.empty()) o << s << "\n\n";
   o << "Selection per band: A = ½ (RMSE_train + RMSE_test) over the window, pooled over the band's "
        "records of each role; lowest A. Committee output: "
     << (opt.averaging ? "averaging (triangular memberships over the band centres)"
@@ -242,6 +259,7 @@ Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
   Struct s;
   auto& f = *s.mutable_fields();
   f["family"] = Text(m.family);
+  if (records::TakesInitialState(m.family)) f["initial_state"] = Text(model::InitialStateName(m.model->family().initial_state()));
   f["optimiser"] = Text(opt::SearchAlgorithmName(m.algorithm));
   f["scope"] = Text(m.band < 0 ? "complete" : bands.Label(m.band));
   Struct p;
@@ -284,6 +302,7 @@ std::string CommitteeJson(const CommitteeResult& r) {
   for (double e : opt.bands.edges) edges.push_back(Num(e));
   f["band_edges_hz"] = List(edges);
   f["criterion"] = Text(records::CriterionName(opt.criterion));
+  f["initial_state"] = Text(model::InitialStateName(opt.family_options.initial_state));
   f["window_s"] = List({Num(opt.t0_s), Num(opt.t1_s)});
   f["repetitions"] = Num(opt.search.repetitions);
   f["committee"] = Text(opt.averaging ? "averaging" : "hard switch");

@@ -27,9 +27,11 @@ std::string SettlingSentence(double settle_s) {
 
 std::string InitialStateSentence(const records::Family& family) {
   if (!records::TakesInitialState(family.name())) return "";
-  const model::InitialState s = family.initial_state();
-  return std::string("The model starts at rest at each record's first drive in the **") + model::InitialStateName(s) +
-         "** state" +
+  return InitialStateSentence(family.initial_state(), "The model starts");
+}
+
+std::string InitialStateSentence(model::InitialState s, const std::string& subject) {
+  return subject + " at rest at each record's first drive in the **" + model::InitialStateName(s) + "** state" +
          (s == model::InitialState::kAuto
               ? " (descended at a rest at the bottom of the training drive range, ascended at its top, else centred)"
               : "") +

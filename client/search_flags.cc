@@ -43,7 +43,8 @@ void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
                               "preisach, stack-bouc-wen and backlash-like: centred (demagnetised), descended (the drive "
                               "came down to the rest from the top of its range: a stack resting at the bottom of its "
                               "range after use), ascended, or auto (descended for a rest at the bottom of the training "
-                              "drive range, ascended at its top, else centred; docs/records.md)"))
+                              "drive range, ascended at its top, else centred; resolved on each record's first drive; "
+                              "docs/records.md)"))
       ->type_name("NAME")
       ->default_str(dflt);
 }

@@ -26,8 +26,9 @@ void AddSearchFlags(CLI::App* cmd, SearchFlags* flags);
 /// Sets every algorithm's options in `o` from the flags (the algorithm itself is the caller's).
 void ApplySearchFlags(const SearchFlags& flags, opt::SearchOptions* o);
 
-/// Adds --initial-state NAME (`fit`, `diagnose --records`): the memory at rest of the families that
-/// take one (records/families.h FamilyOptions::initial_state); `value` empty = the default.
+/// Adds --initial-state NAME (`fit`, `diagnose --records`, `committee`): the memory at rest of the
+/// families that take one (records/families.h FamilyOptions::initial_state); `value` empty = the
+/// default (auto).
 void AddInitialStateFlag(CLI::App* cmd, std::string* value);
 
 /// The initial state of the flag's value for `family` (empty: FamilyOptions' default). Throws

@@ -160,7 +160,7 @@ struct CompleteModelProblem {
   std::string record_family;                     ///< records/families.h name
   std::vector<std::string> effects;              ///< records/model.h effect names
   int pi_operators = 12;                         ///< Prandtl–Ishlinskii plays, 1 … 10000
-  std::string initial_state;                     ///< FamilyOptions::initial_state by name ("" = centred)
+  std::string initial_state;                     ///< FamilyOptions::initial_state by name ("" = its default, auto)
   /// The data scale the client measured (records::DataScale, in this order): u_min, u_max, u_half,
   /// y_half, gain, polarity, f_dom, fs, duration — sent so that the workers' search box and model
   /// are the client's, bit for bit.

@@ -107,8 +107,9 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
                " * pzk_chain_inverse_fin): give it the reference one sample ahead (and " + N + "_DELAY_S more)."
              : std::string())
      << " Model: " << m.Model()->Describe()
-     << (m.initial_state != model::InitialState::kCentred
-             ? std::string(", at rest in the ") + model::InitialStateName(m.initial_state) + " state (docs/records.md)"
+     << (m.Model()->family().initial_state() != model::InitialState::kCentred
+             ? std::string(", at rest in the ") + model::InitialStateName(m.Model()->family().initial_state()) +
+                   " state (docs/records.md)"
              : std::string())
      << ". */\n"
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"

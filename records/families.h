@@ -72,8 +72,11 @@ struct FamilyOptions {
   /// of the families that take it (TakesInitialState): the plays of prandtl-ishlinskii,
   /// asymmetric-pi and preisach at u_0, u_0 + r or u_0 − r; the Bouc–Wen h of stack-bouc-wen and the
   /// w of backlash-like after a rise by the data's full range 2 u_half and a fall back to u_0
-  /// (model/stack_models.h StackRestState), or the mirror. Others start centred.
-  model::InitialState initial_state = model::InitialState::kCentred;
+  /// (model/stack_models.h StackRestState), or the mirror. Others start centred (and ignore it).
+  /// Default kAuto: resolved on each record's first drive against the data's drive range
+  /// (model::ResolveInitialState: descended at a rest at the bottom, ascended at the top, else
+  /// centred). A fit.json written before the field reads as centred (records/stepper.h).
+  model::InitialState initial_state = model::InitialState::kAuto;
   model::BeamGeometry geometry;  ///< bimorph fin
   OscillatorOptions oscillator;  ///< bw-oscillator
 };

@@ -148,7 +148,8 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
   size_t family_block = blocks_.size() - 1;
   auto& fb = blocks_[family_block];
-  fb.init = static_cast<int>(spec_.initial_state);  // pzk PZK_CENTRED / DESCENDED / ASCENDED
+  // pzk PZK_CENTRED / DESCENDED / ASCENDED / AUTO: the family's own (backlash-like's auto is centred)
+  fb.init = static_cast<int>(model->family().initial_state());
   switch (family_kind) {
     case pzk::PZK_STACK_BOUC_WEN: fb.n = spec_.substeps; break;
     case pzk::PZK_BW_OSCILLATOR: fb.n = 2 * spec_.substeps; break;  // OscillatorOptions' default of the fit

@@ -16,7 +16,10 @@
 #include <random>
 #include <sstream>
 
+#include "client/commands.h"
+#include "io/csv.h"
 #include "model/stack_models.h"
+#include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -172,6 +175,14 @@ TEST(Committee, TakesAnyRecordsFamily) {
   PZ_EXPECT_HAS(md.str(), "| scope | optimiser | w0 | w1(r=");
   PZ_EXPECT_HAS(md.str(), "| weights solved by least squares |");
   PZ_EXPECT_HAS(CommitteeJson(r), "\"family\": \"prandtl-ishlinskii\"");
+  // The families with memory start in the default state, auto (records/families.h FamilyOptions).
+  EXPECT_EQ(o.family_options.initial_state, model::InitialState::kAuto);
+  PZ_EXPECT_HAS(CommitteeJson(r), "\"initial_state\": \"auto\"");
+  PZ_EXPECT_HAS(md.str(), "The prandtl-ishlinskii model starts at rest at each record's first drive in the **auto** "
+                          "state (descended at a rest at the bottom");
+  // backlash-like's auto is centred (records/families.cc: measured on real-like stacks, docs/records.md).
+  PZ_EXPECT_HAS(md.str(), "The backlash-like model starts at rest at each record's first drive in the **centred** state");
+  PZ_EXPECT_HAS(CommitteeJson(r), "\"initial_state\": \"centred\"");  // backlash-like's models (and only theirs)
   o.families = {"backlash-like", "no-such-family"};
   PZ_EXPECT_HAS(InputErrorOf([&] { RunCommittee(set, o, LocalEvaluatorFactory(1)); }),
                 "families: unknown family 'no-such-family' (families: stack-bouc-wen, backlash-like");
@@ -181,6 +192,51 @@ TEST(Committee, TakesAnyRecordsFamily) {
   o.families = {"backlash-like"};
   PZ_EXPECT_HAS(InputErrorOf([&] { RunCommittee(unstated, o, LocalEvaluatorFactory(1)); }),
                 "s) states no excitation frequency");
+}
+
+/// `piezoid committee --initial-state`: auto by default, the state given reaches the families with
+/// memory (committee.json and report.md say which, and the fits differ: the bundled bench rests at
+/// 400 V, mid-range, where auto is centred), a bad name or a family without memory is refused.
+TEST(Committee, TheInitialStateFlagDefaultsToAutoAndReachesTheModels) {
+  const fs::path dir = fs::temp_directory_path() / ("pz_committee_state_" + std::to_string(::getpid()));
+  const auto args_of = [&](const std::string& out, std::vector<std::string> more) {
+    std::vector<std::string> args = {"committee", "--families", "prandtl-ishlinskii", "--optimisers", "pso",
+                                     "--bands", "0,350", "--repetitions", "1", "--particles", "4",
+                                     "--iterations", "2", "--stall", "0", "--t0", "0", "--threads", "1", "--no-figures",
+                                     "--quiet", "--out", (dir / out).string()};
+    args.insert(args.end(), more.begin(), more.end());
+    return args;
+  };
+  const auto run = [&](const std::string& out, std::vector<std::string> more) {
+    pz::testing::CapturedCommands({RegisterCommittee}, args_of(out, more));
+    return std::pair{io::ReadTextFile(dir / out / "committee.json"), io::ReadTextFile(dir / out / "report.md")};
+  };
+  const auto [dflt_json, dflt_md] = run("default", {});
+  PZ_EXPECT_HAS(dflt_json, "\"initial_state\": \"auto\"");
+  PZ_EXPECT_HAS(dflt_md, "The prandtl-ishlinskii model starts at rest at each record's first drive in the **auto** state");
+  const auto [centred_json, centred_md] = run("centred", {"--initial-state", "centred"});
+  PZ_EXPECT_HAS(centred_json, "\"initial_state\": \"centred\"");
+  const auto [desc_json, desc_md] = run("descended", {"--initial-state", "descended"});
+  PZ_EXPECT_HAS(desc_json, "\"initial_state\": \"descended\"");
+  PZ_EXPECT_HAS(desc_md, "in the **descended** state");
+  // The bench rests mid-range: auto resolves to centred there, the same figures; descended moves them
+  // (scored from t = 0, before the first reversals wipe the state out).
+  const auto committee_test = [](const std::string& json) {
+    const size_t at = json.find("\"committee_test\"");
+    return at == std::string::npos ? std::string() : json.substr(at, json.find('}', at) - at);
+  };
+  ASSERT_FALSE(committee_test(dflt_json).empty()) << dflt_json;
+  EXPECT_EQ(committee_test(dflt_json), committee_test(centred_json));
+  EXPECT_NE(committee_test(dflt_json), committee_test(desc_json));
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf(
+                    [&] { pz::testing::RunCommands({RegisterCommittee}, args_of("bad", {"--initial-state", "down"})); }),
+                "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  pz::testing::RunCommands({RegisterCommittee}, args_of("duhem", {"--families", "prandtl-ishlinskii,duhem",
+                                                                                  "--initial-state", "descended"}));
+                }),
+                "--initial-state descended: family duhem starts centred");
+  fs::remove_all(dir);
 }
 
 TEST(FrequencyBandsTest, ParseMembershipAndErrors) {

@@ -150,9 +150,10 @@ TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
 // predict the withheld minor loops (the ramp, the reversals) near the true floor — although the
 // excitation report, which knows no family, flags them. Scored from 1.5 s into each excitation: the
 // two start differently (the plant rests at the bottom of its range, below every hysteron: from
-// there it rises as from negative saturation; the family starts its plays centred on the rest
-// drive), and the first large reversal wipes the difference out (before it, ramp and reversals
-// differ by 1.4 and 0.6 µm RMS over the first 0.5 s).
+// there it rises as from negative saturation; the family started centred on the rest drive does
+// not, while the default state, auto, is descended there), and the first large reversal wipes the
+// difference out (before it, centred, ramp and reversals differ by 1.4 and 0.6 µm RMS over the
+// first 0.5 s).
 /// A plant whose density depends on the width alone (a PI operator), no creep, lag or coloured noise.
 RealLikeSet WidthOnlySet() {
   RealLikeOptions o = Short(4);
