@@ -22,7 +22,7 @@ std::string SettlingSentence(double settle_s);
 /// that does not take one).
 std::string InitialStateSentence(const records::Family& family);
 
-/// The same sentence for state `s` after `subject` ("The model starts", "The committee's … start").
+/// The same sentence for state `s` after `subject` ("The model starts", "The backlash-like model starts").
 std::string InitialStateSentence(model::InitialState s, const std::string& subject);
 
 }  // namespace pz::client
