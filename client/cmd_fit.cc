@@ -74,7 +74,8 @@ struct FitArgs {
 };
 
 /// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1 searched
-/// parameter): 412 evaluations; 2 polishes, the kept one from repetition 2's best".
+/// parameter): 340 search evaluations, 357 with the polish; 2 polishes, the kept one from repetition 2's best
+/// (the search's best: repetition 1)".
 std::string SearchSentence(const records::FitResult& r) {
   if (r.searched_parameters == 0) return "nothing searched (the weights are solved by least squares)";
   std::string s = r.algorithm == opt::SearchAlgorithm::kPso
@@ -87,8 +88,12 @@ std::string SearchSentence(const records::FitResult& r) {
        " with the polish";
   if (r.polishes > 0) {
     s += "; " + std::to_string(r.polishes) + (r.polishes == 1 ? " polish" : " polishes");
-    if (r.best_polish_repetition >= 0)
-      s += ", the kept one from repetition " + std::to_string(r.best_polish_repetition + 1) + "'s best";
+    if (r.best_polish_repetition >= 0 && r.best_polish_repetition == r.search.best_repetition) {
+      s += ", the kept one from the search's best (repetition " + std::to_string(r.best_polish_repetition + 1) + ")";
+    } else if (r.best_polish_repetition >= 0) {
+      s += ", the kept one from repetition " + std::to_string(r.best_polish_repetition + 1) +
+           "'s best (the search's best: repetition " + std::to_string(r.search.best_repetition + 1) + ")";
+    }
   }
   return s;
 }
@@ -394,6 +399,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     x["stop_reason"] = Text(r.stop_reason);
     x["polishes"] = Num(r.polishes);
     x["best_polish_repetition"] = Num(r.best_polish_repetition + 1);  // 1-based; 0 = none
+    x["search_best_repetition"] = Num(r.search.best_repetition + 1);
     x["summary"] = Text(SearchSentence(r));
     f["search"] = Obj(g);
   }
