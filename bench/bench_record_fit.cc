@@ -9,6 +9,10 @@
 //
 //   BM_RecordEvaluation/<family>       one evaluation
 //   BM_RecordEvaluationPair/<family>   two evaluations side by side (a family with lanes)
+//   BM_RecordEvaluation/<family>+<effects>   one evaluation with effects (issue 22's 10 s target): a
+//       linear family's weights solved for the effects' parameters (the regressors of the delayed /
+//       crept drive, the regularised normal equations, the non-negative solve, the output); the
+//       effects' parameters at 30 % / 31 % of their ranges (log ranges in log), the family's as above
 //
 // Figures and the command: docs/performance.md, "Fits on records".
 #include <benchmark/benchmark.h>
@@ -76,22 +80,47 @@ const std::map<std::string, std::vector<std::vector<double>>>& Points() {
   return p;
 }
 
-// The fitness of the family (no effects) on the synthetic record's training window.
+std::vector<EffectKind> Effects(const std::string& names) {
+  std::vector<EffectKind> out;
+  for (size_t a = 0; a < names.size();) {
+    const size_t b = std::min(names.find(',', a), names.size());
+    out.push_back(ParseEffect(names.substr(a, b - a)));
+    a = b + 1;
+  }
+  return out;
+}
+
+// The fitness of the family with `effects` (comma-separated, may be empty) on the synthetic
+// record's training window.
 struct Setup {
-  explicit Setup(const std::string& family)
-      : train{&Recording()}, scale(MeasureScale(train)), model(MakeFamily(family, scale), {}, scale),
+  explicit Setup(const std::string& family, const std::string& effects = "")
+      : train{&Recording()}, scale(MeasureScale(train)), model(MakeFamily(family, scale), Effects(effects), scale),
         fitness(model, train) {}
+  // The two points: the family's (Points(); none for a linear family), then each effect parameter at
+  // 30 % / 31 % of its range.
+  std::vector<std::vector<double>> points(const std::string& family) const {
+    std::vector<std::vector<double>> p = model.family().linear() ? std::vector<std::vector<double>>(2)
+                                                                 : Points().at(family);
+    for (size_t i = model.family_param_count(); i < model.params().size(); ++i) {
+      const ParamInfo& q = model.params()[i];
+      for (size_t j = 0; j < 2; ++j) {
+        const double f = 0.30 + 0.01 * static_cast<double>(j);
+        p[j].push_back(q.log_scale ? q.lower * std::pow(q.upper / q.lower, f) : q.lower + f * (q.upper - q.lower));
+      }
+    }
+    return p;
+  }
   std::vector<const io::Record*> train;
   DataScale scale;
   RecordModel model;
   RecordFitness fitness;
 };
 
-void BM_RecordEvaluation(benchmark::State& state, const std::string& family) {
+void BM_RecordEvaluation(benchmark::State& state, const std::string& family, const std::string& effects = "") {
   const io::Record& rec = Recording();
-  const Setup setup(family);
+  const Setup setup(family, effects);
   const RecordFitness& fitness = setup.fitness;
-  const auto& points = Points().at(family);
+  const auto points = setup.points(family);
   opt::Genome g;
   size_t i = 0;
   for (auto _ : state) {
@@ -110,7 +139,7 @@ void BM_RecordEvaluation(benchmark::State& state, const std::string& family) {
 void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family) {
   const Setup setup(family);
   const RecordFitness& fitness = setup.fitness;
-  const auto& points = Points().at(family);
+  const auto points = setup.points(family);
   opt::Genome a, b;
   a.reals = points[0];
   b.reals = points[1];
@@ -128,6 +157,22 @@ BENCHMARK_CAPTURE(BM_RecordEvaluation, stack-bouc-wen, std::string("stack-bouc-w
 BENCHMARK_CAPTURE(BM_RecordEvaluation, duhem, std::string("duhem"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, bimorph-fin, std::string("bimorph-fin"))->Unit(benchmark::kMillisecond);
+// With effects (issue 22): what the 10 s target's heaviest searches evaluate.
+BENCHMARK_CAPTURE(BM_RecordEvaluation, preisach+delay, std::string("preisach"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, preisach+creep-spectrum+delay, std::string("preisach"),
+                  std::string("creep-spectrum,delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, prandtl-ishlinskii+creep, std::string("prandtl-ishlinskii"), std::string("creep"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, asymmetric-pi+delay, std::string("asymmetric-pi"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, stack-bouc-wen+delay, std::string("stack-bouc-wen"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, bw-oscillator+delay, std::string("bw-oscillator"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, bimorph-fin+delay, std::string("bimorph-fin"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace pz::records

@@ -70,7 +70,33 @@ struct FitArgs {
   bool no_figures = false;
   bool quiet = false;
   CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
+  records::FitOptions::Sizing sizing;  ///< the PSO budget sized by the searched parameters, but for the flags given
 };
+
+/// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1 searched
+/// parameter): 340 search evaluations, 357 with the polish; 2 polishes, the kept one from repetition 2's best
+/// (the search's best: repetition 1)".
+std::string SearchSentence(const records::FitResult& r) {
+  if (r.searched_parameters == 0) return "nothing searched (the weights are solved by least squares)";
+  std::string s = r.algorithm == opt::SearchAlgorithm::kPso
+                      ? r.budget.Describe()
+                      : std::string(opt::SearchAlgorithmName(r.algorithm)) + ", " +
+                            std::to_string(r.budget.repetitions) + " repetitions";
+  s += r.budget_sized ? " (sized for " : " (as given, for ";
+  s += std::to_string(r.searched_parameters) + " searched parameter" + (r.searched_parameters == 1 ? "" : "s") + ")";
+  s += ": " + std::to_string(r.search.evaluations) + " search evaluations, " + std::to_string(r.evaluations) +
+       " with the polish";
+  if (r.polishes > 0) {
+    s += "; " + std::to_string(r.polishes) + (r.polishes == 1 ? " polish" : " polishes");
+    if (r.best_polish_repetition >= 0 && r.best_polish_repetition == r.search.best_repetition) {
+      s += ", the kept one from the search's best (repetition " + std::to_string(r.best_polish_repetition + 1) + ")";
+    } else if (r.best_polish_repetition >= 0) {
+      s += ", the kept one from repetition " + std::to_string(r.best_polish_repetition + 1) +
+           "'s best (the search's best: repetition " + std::to_string(r.search.best_repetition + 1) + ")";
+    }
+  }
+  return s;
+}
 
 std::string Fmt(double x, int prec = 4) {
   std::ostringstream s;
@@ -276,6 +302,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
           "the model lacks.\n"
        << "- `trace_<record>.png`: measured, model and error over time.\n";
   }
+  os << "\nSearch: " << SearchSentence(r) << ".\n";
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
@@ -355,6 +382,27 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   f["singular_values"] = List(singular);
   f["train_mse"] = Num(r.train_mse);
   f["evaluations"] = Num(static_cast<double>(r.evaluations));
+  {
+    Struct g;
+    auto& x = *g.mutable_fields();
+    x["algorithm"] = Text(opt::SearchAlgorithmName(r.algorithm));
+    x["searched_parameters"] = Num(static_cast<double>(r.searched_parameters));
+    x["sized"] = Bool(r.budget_sized);
+    x["repetitions"] = Num(r.budget.repetitions);
+    if (r.algorithm == opt::SearchAlgorithm::kPso) {
+      x["particles"] = Num(r.budget.particles);
+      x["iterations"] = Num(r.budget.iterations);
+      x["stall"] = Num(r.budget.stall);
+      x["converged_spread"] = Num(r.budget.converged_spread);
+    }
+    x["search_evaluations"] = Num(static_cast<double>(r.search.evaluations));
+    x["stop_reason"] = Text(r.stop_reason);
+    x["polishes"] = Num(r.polishes);
+    x["best_polish_repetition"] = Num(r.best_polish_repetition + 1);  // 1-based; 0 = none
+    x["search_best_repetition"] = Num(r.search.best_repetition + 1);
+    x["summary"] = Text(SearchSentence(r));
+    f["search"] = Obj(g);
+  }
   f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
   return Print(root, "fit.json");
 }
@@ -374,6 +422,8 @@ int RunFit(const FitArgs& a) {
   if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
+  o.sizing = a.sizing;
+  o.polish_repetitions = true;
   o.polish = !a.no_polish;
   o.lm.max_iterations = a.lm_iterations;
   o.threads = a.threads;
@@ -419,6 +469,7 @@ int RunFit(const FitArgs& a) {
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   for (const auto& c : extrapolation)
     if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+  std::cout << "  search: " << SearchSentence(r) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
             << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
             << "; report in "
@@ -453,7 +504,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   AddInitialStateFlag(cmd, &a->initial_state);
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
-  AddSearchFlags(cmd, &a->search);
+  AddSearchFlags(cmd, &a->search, /*sized=*/true);
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
@@ -465,7 +516,16 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
   AddCompleteServiceFlags(cmd, a->service);  // --master: the same result, bit for bit
-  cmd->callback([a, &exit_code] { exit_code = RunFit(*a); });
+  cmd->callback([a, cmd, &exit_code] {
+    // The PSO budget is sized by the searched parameters (records::SizedSearchBudget) but for the
+    // search flags given.
+    a->sizing.enabled = true;
+    a->sizing.keep_particles = cmd->count("--particles") > 0;
+    a->sizing.keep_iterations = cmd->count("--iterations") > 0;
+    a->sizing.keep_stall = cmd->count("--stall") > 0;
+    a->sizing.keep_repetitions = cmd->count("--repetitions") > 0;
+    exit_code = RunFit(*a);
+  });
 }
 
 void RegisterRecords(CLI::App& app, int& exit_code) {

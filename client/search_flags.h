@@ -20,8 +20,10 @@ struct SearchFlags {
 };
 
 /// Adds --repetitions --seed --particles --iterations --population --generations --stall to `cmd`,
-/// with `flags`' values as the shown defaults.
-void AddSearchFlags(CLI::App* cmd, SearchFlags* flags);
+/// with `flags`' values as the shown defaults; `sized`: the PSO's --repetitions, --particles,
+/// --iterations and --stall default to a budget sized by the searched parameters (`piezoid fit`,
+/// records::SizedSearchBudget), which the help says.
+void AddSearchFlags(CLI::App* cmd, SearchFlags* flags, bool sized = false);
 
 /// Sets every algorithm's options in `o` from the flags (the algorithm itself is the caller's).
 void ApplySearchFlags(const SearchFlags& flags, opt::SearchOptions* o);

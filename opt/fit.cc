@@ -195,6 +195,10 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     throw InputError("fit: no global search and no starting point to polish");
   if (o.search && !problem.cost_evaluator) throw InputError("fit: a global search needs a cost evaluator");
   if (o.polish && !problem.residual_evaluator) throw InputError("fit: a polish needs a residual evaluator");
+  if (o.polish_repetitions < 0)
+    throw InputError(FieldError("polish_repetitions", o.polish_repetitions, "must be >= 0"));
+  if (!(o.basin_margin >= 0 && std::isfinite(o.basin_margin)))
+    throw InputError(FieldError("basin_margin", o.basin_margin, "must be finite and >= 0"));
   if (o.uncertainty && !problem.physical_residuals)
     throw InputError("fit: the uncertainty table needs the physical residuals");
 
@@ -202,6 +206,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
   std::vector<double> best_unit;  // where the fit stands, unit coordinates
   double best_cost = std::numeric_limits<double>::infinity();
   std::vector<std::vector<double>> starts;
+  std::vector<int> start_repetition;  // per start: its repetition (−1: a caller's start)
+  size_t first_basin = 0;  // starts from here on are other repetitions' bests (kept only by basin_margin)
   if (o.search) {
     const ParamBox box = map.physical_genomes() ? map.SearchBox() : UnitBox(map);
     std::unique_ptr<BatchEvaluator> ev = problem.cost_evaluator();
@@ -212,6 +218,7 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     std::vector<double> u(box.size());
     box.ToUnit(fit.search.best.data(), u.data());
     starts.push_back(u);
+    start_repetition.push_back(fit.search.best_repetition);
     fit.cost = fit.search.best_cost;
     fit.x = map.physical_genomes() ? fit.search.best : map.ToPhysical(fit.search.best);
     fit.ok = std::isfinite(fit.cost);
@@ -219,6 +226,34 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
   }
   if (o.polish) {
     starts.insert(starts.end(), o.starts.begin(), o.starts.end());
+    start_repetition.resize(starts.size(), -1);
+    first_basin = starts.size();
+    if (fit.searched && o.polish_repetitions > 0) {
+      // The other repetitions' bests, cheapest first (ties: the lower repetition), distinct points.
+      const ParamBox box = map.physical_genomes() ? map.SearchBox() : UnitBox(map);
+      const SearchResult& sr = fit.search;
+      std::vector<int> order;
+      for (int r = 0; r < static_cast<int>(sr.repetition_best.size()); ++r)
+        if (r != sr.best_repetition && std::isfinite(sr.repetition_costs[static_cast<size_t>(r)])) order.push_back(r);
+      std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+        return sr.repetition_costs[static_cast<size_t>(a)] < sr.repetition_costs[static_cast<size_t>(b)];
+      });
+      int added = 0;
+      for (int r : order) {
+        if (added == o.polish_repetitions) break;
+        std::vector<double> u(box.size());
+        box.ToUnit(sr.repetition_best[static_cast<size_t>(r)].data(), u.data());
+        const bool seen = std::any_of(starts.begin(), starts.end(), [&](const std::vector<double>& s) {
+          for (int i = 0; i < n; ++i)
+            if (std::abs(s[static_cast<size_t>(i)] - u[static_cast<size_t>(i)]) > 1e-3) return false;
+          return true;
+        });
+        if (seen) continue;
+        starts.push_back(std::move(u));
+        start_repetition.push_back(r);
+        ++added;
+      }
+    }
     std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
     const BatchResidualFunction f = UnitResiduals(map, *rev);
     const std::vector<double> lo(n, 0.0), hi(n, 1.0);
@@ -227,10 +262,13 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       LmResult r = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
       fit.evaluations += r.evaluations;
       fit.lm_iterations += r.iterations;
-      if (std::isfinite(r.cost) && r.cost < best_cost) {
+      ++fit.polishes;
+      const double bar = s >= first_basin && polished ? best_cost * (1 - o.basin_margin) : best_cost;
+      if (std::isfinite(r.cost) && r.cost < bar) {
         best_cost = r.cost;
         best_unit = std::move(r.x);
         fit.best_polish = static_cast<int>(s);
+        fit.best_polish_repetition = start_repetition[s];
         fit.best_polish_iterations = r.iterations;
         fit.polish_message = r.message;
         polished = true;
@@ -245,6 +283,9 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       fit.ok = true;
       fit.message += "refinement: " + fit.polish_message + " after " + std::to_string(fit.best_polish_iterations) +
                      " iterations";
+      if (fit.best_polish >= static_cast<int>(first_basin))
+        fit.message += " from repetition " + std::to_string(fit.best_polish_repetition + 1) + "'s best (" +
+                       std::to_string(fit.polishes) + " polishes)";
     } else if (o.search_cost_is_sum_of_squares && fit.searched) {
       fit.message += "refinement: no polish lowered the search's cost";
     } else {

@@ -139,6 +139,14 @@ struct FitOptions {
   /// Starting points of the polish besides the search's best (unit coordinates), in this order.
   /// Without a search at least one is needed.
   std::vector<std::vector<double>> starts;
+  /// Polish also the best points of up to this many other repetitions of the search (by their cost,
+  /// skipping one within 1e-3 of an earlier start in every unit coordinate), after the search's best
+  /// and `starts`: the search's best is one basin among the repetitions'. Such a polish replaces the
+  /// one kept only when its cost is lower by more than the relative `basin_margin` (a polish of the
+  /// same basin from elsewhere lands within it), so that where the repetitions agree the result is
+  /// the search's best's polish. 0 = none.
+  int polish_repetitions = 0;
+  double basin_margin = 1e-4;  ///< ≥ 0
   /// The search's cost is Σ r² of the residuals: a polished point is then kept only where it
   /// lowers the search's cost, and the search's best stands when every polish fails. Otherwise the
   /// best polish wins whatever the search's cost, and a fit whose polishes all fail fails.
@@ -156,7 +164,10 @@ struct FitResult {
   SearchResult search;         ///< when searched
   int lm_iterations = 0;       ///< all polishes
   int best_polish = -1;        ///< index of the polish kept (0 = from the search's best when
-                               ///< searched), −1 = none
+                               ///< searched, then `starts`, then the other repetitions' bests), −1 = none
+  int polishes = 0;            ///< polishes run
+  int best_polish_repetition = -1;  ///< the search repetition whose best the kept polish started
+                                    ///< from (−1: a caller's start, or none)
   int best_polish_iterations = 0;
   std::string polish_message;  ///< of the polish kept, or of the last one that failed
   int64_t evaluations = 0;     ///< search and polish (not the uncertainty's)

@@ -159,9 +159,20 @@ RepetitionResult RunPso(Run& run, int repetition) {
   int stall = 0, iteration = 0;
   run.Record(repetition, 0, gcost);
   std::string reason;
+  // The swarm's spread about its best (max-norm, unit box) after an update; +inf before the first.
+  double spread = std::numeric_limits<double>::infinity();
+  auto converged = [&]() -> std::string {
+    if (!(o.converged_spread > 0 && spread <= o.converged_spread)) return "";
+    std::ostringstream os;
+    os.precision(10);
+    os << "converged: every particle within " << o.converged_spread << " of the best after " << iteration
+       << " iterations";
+    return os.str();
+  };
   while ((reason = run.Stop(iteration, o.iterations, stall, o.stall_iterations, o.tolerance, gcost,
                             rep_start, "iterations"))
-             .empty()) {
+             .empty() &&
+         (reason = converged()).empty()) {
     ++iteration;
     const double w = o.iterations <= 1 ? o.inertia_start
                                        : o.inertia_start + (o.inertia_end - o.inertia_start) *
@@ -198,6 +209,11 @@ RepetitionResult RunPso(Run& run, int repetition) {
       stall = 0;
     } else {
       ++stall;
+    }
+    if (o.converged_spread > 0) {
+      spread = 0;
+      for (size_t i = 0; i < n; ++i)
+        for (size_t k = 0; k < d; ++k) spread = std::max(spread, std::abs(x[i][k] - gbest[k]));
     }
     ++run.iterations;
     run.Record(repetition, iteration, gcost);
@@ -556,6 +572,8 @@ Status PsoOptions::Validate() const {
     return Field(p, "velocity_clamp", velocity_clamp, "must be in (0, 1] (a fraction of the unit box)");
   }
   if (stall_iterations < 0) return Field(p, "stall_iterations", stall_iterations, "must be >= 0 (0 = never)");
+  if (!(converged_spread >= 0 && converged_spread < 1))
+    return Field(p, "converged_spread", converged_spread, "must be in [0, 1) (0 = never)");
   return Status::Ok();
 }
 

@@ -28,7 +28,8 @@
 // Stopping (per repetition): the iteration / generation limit; `stall` iterations without a
 // significant improvement of the best cost (an improvement counts when the new best is below
 // old − tolerance · |old|: a relative tolerance, as costs here are tiny MSEs); the target cost;
-// the optional wall-time limit (the only non-deterministic criterion, off by default).
+// the optional wall-time limit (the only non-deterministic criterion, off by default); PSO only, when
+// asked (PsoOptions::converged_spread): a swarm that has collapsed onto its best.
 #pragma once
 
 #include <cstdint>
@@ -78,6 +79,10 @@ struct PsoOptions {
   double velocity_clamp = 0.2;        ///< |v| ≤ this fraction of the (unit) box width, in (0, 1]
   int stall_iterations = 60;          ///< ≥ 0 (0 = never stop for stall)
   double tolerance = 1e-6;            ///< relative improvement that resets the stall count, ≥ 0
+  /// Stop when the swarm has converged: every particle within this distance (max-norm, unit box) of
+  /// the swarm's best after an update — what is left is local, the polish's work. In [0, 1); 0 =
+  /// never (the default: the iteration and stall limits alone).
+  double converged_spread = 0;
   uint64_t seed = 1;
   Status Validate() const;  ///< names the field: "pso.particles = 1: must be >= 2"
 };

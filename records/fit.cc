@@ -120,7 +120,8 @@ bool RecordFitness::Revalidate(std::span<const double> params) {
   return changed;
 }
 
-void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations& eq) const {
+void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations& eq,
+                               std::vector<std::vector<double>>* regs) const {
   const Family& fam = model_.family();
   const size_t m = fam.regressors(), nf = model_.family_param_count(), blocks = eq.G.size();
   const int pol = model_.scale().polarity;
@@ -133,7 +134,11 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
   }
   std::vector<double> ue, c(m);
   const bool linear_output = model_.has_linear_output_effects();
-  std::unique_ptr<double[]> reg;  // not zero-filled: the family writes every entry
+  // The regressors of a record: the caller's (kept for the output) or this thread's scratch; the
+  // family writes every entry.
+  thread_local std::vector<double> scratch;
+  const bool keep = regs != nullptr && !linear_output;
+  if (keep) regs->resize(records_.size());  // their buffers reused from call to call
   size_t index = 0;  // of the scored sample over the records: its block is index · blocks / samples_
   // Rows are gathered in chunks of one block and added as rank-k updates (a level-3 product, several
   // times faster than a rank-1 update per sample on ~100 regressors).
@@ -152,16 +157,18 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     eq.samples[chunk_block] += static_cast<size_t>(filled);
     filled = 0;
   };
-  for (const io::Record* r : records_) {
+  for (size_t ri = 0; ri < records_.size(); ++ri) {
+    const io::Record* r = records_[ri];
     const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->end_scored - 1);
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
-    reg.reset(new double[ue.size() * m]);
-    fam.Regressors(ue, std::span<double>(reg.get(), ue.size() * m));
+    std::vector<double>& reg = keep ? (*regs)[ri] : scratch;
+    reg.resize(ue.size() * m);
+    fam.Regressors(ue, reg);
     if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its output
-      model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, std::span<double>(reg.get(), ue.size() * m), m);
+      model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, reg, m);
     }
     auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
-      return reg.get() + (k < from ? 0 : (k - from)) * m;
+      return reg.data() + (k < from ? 0 : (k - from)) * m;
     };
     double d = 0;
     std::fill(c.begin(), c.end(), 0.0);
@@ -190,9 +197,10 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
   for (Eigen::MatrixXd& G : eq.G) G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
 }
 
-std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const {
+std::vector<double> RecordFitness::SolveWeights(std::span<const double> p,
+                                                std::vector<std::vector<double>>* regs) const {
   BlockedNormalEquations eq{{Eigen::MatrixXd()}, {Eigen::VectorXd()}, {0.0}, {0}};
-  Accumulate(p, eq);
+  Accumulate(p, eq, regs);
   if (validation_.used) eq.G[0] += validation_.lambda * regularisation_;
   const Eigen::VectorXd w = NonNegativeLeastSquares(eq.G[0], eq.h[0]);
   return std::vector<double>(w.data(), w.data() + w.size());
@@ -200,13 +208,19 @@ std::vector<double> RecordFitness::SolveWeights(std::span<const double> p) const
 
 RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   Output out;
-  if (model_.family().linear()) out.weights = SolveWeights(params);
+  // A linear family: the regressors of the weights' solve give the output too (RecordModel::
+  // LinearOutput, Simulate's arithmetic), unless a linear output effect was applied to them.
+  thread_local std::vector<std::vector<double>> regs;
+  const bool kept = model_.family().linear() && !model_.has_linear_output_effects();
+  if (model_.family().linear()) out.weights = SolveWeights(params, &regs);
   const int pol = model_.scale().polarity;
   double sse = 0;
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record* r = records_[i];
     std::vector<double> y(r->end_scored);
-    const double rest = pol * model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get());
+    const double rest =
+        pol * (!kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
+                            : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y));
     for (double& v : y) v *= pol;
     const double o = RecordOffset(*r, y, rest);
     for (double& v : y) v += o;
@@ -339,6 +353,28 @@ class RecordResidualFitness final : public opt::FitnessFunction {
 
 }  // namespace
 
+SearchBudget SizedSearchBudget(size_t searched) {
+  const int d = static_cast<int>(std::clamp<size_t>(searched, 1, 100));
+  SearchBudget b;
+  b.particles = std::min(30, 10 + 5 * (d - 1));
+  b.iterations = std::min(150, 30 + 30 * (d - 1));
+  b.stall = std::min(40, 10 * d);
+  b.repetitions = d <= 2 ? 2 : 3;
+  b.converged_spread = 1e-3;
+  return b;
+}
+
+SearchBudget BudgetOf(const opt::SearchOptions& s) {
+  return {s.pso.particles, s.pso.iterations, s.pso.stall_iterations, s.repetitions, s.pso.converged_spread};
+}
+
+std::string SearchBudget::Describe() const {
+  std::string s = "PSO " + std::to_string(particles) + " particles × ≤ " + std::to_string(iterations) +
+                  " iterations, stall " + std::to_string(stall);
+  if (converged_spread > 0) s += ", converged at a spread of " + io::FormatNumber(converged_spread);
+  return s + ", " + std::to_string(repetitions) + (repetitions == 1 ? " repetition" : " repetitions");
+}
+
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto train = set.WithRole(model::CaseRole::kTrain);
@@ -376,6 +412,22 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     problem.residual_weight = 1 / std::sqrt(static_cast<double>(fitness.samples()));
     opt::FitOptions fo;
     fo.search_options = options.search;
+    // Searched: the model's parameters (a linear family's weights are solved, not among them).
+    res.searched_parameters = params.size();
+    if (options.sizing.enabled && fo.search_options.algorithm == opt::SearchAlgorithm::kPso) {
+      const SearchBudget b = SizedSearchBudget(params.size());
+      const FitOptions::Sizing& k = options.sizing;
+      opt::SearchOptions& so = fo.search_options;
+      if (!k.keep_particles) so.pso.particles = b.particles;
+      if (!k.keep_iterations) so.pso.iterations = b.iterations;
+      if (!k.keep_stall) so.pso.stall_iterations = b.stall;
+      if (!k.keep_repetitions) so.repetitions = b.repetitions;
+      so.pso.converged_spread = b.converged_spread;
+      res.budget_sized = true;
+    }
+    res.algorithm = fo.search_options.algorithm;
+    res.budget = BudgetOf(fo.search_options);
+    fo.polish_repetitions = options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
     if (options.progress) {
       fo.search_options.on_progress = [&](const opt::SearchProgress& p) {
         if (p.iteration % 25 == 0) {
@@ -396,6 +448,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     res.evaluations = fit.evaluations;
     res.lm_iterations = fit.lm_iterations;
     res.stop_reason = res.search.stop_reason;
+    res.polishes = fit.polishes;
+    res.best_polish_repetition = fit.best_polish_repetition;
+    res.polish_message = fit.message;
     res.uncertainty = std::move(fit.uncertainty);
     best = std::move(fit.x);
     // A regularised linear family with effects: its strength was chosen with the effects at their
@@ -409,6 +464,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       opt::FitResult second = opt::Fit(problem, again);
       res.evaluations += second.evaluations;
       res.lm_iterations += second.lm_iterations;
+      res.polishes += second.polishes;
       res.uncertainty = std::move(second.uncertainty);
       best = std::move(second.x);
     }

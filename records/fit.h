@@ -74,10 +74,14 @@ class RecordFitness final : public opt::FitnessFunction {
   double penalty() const { return penalty_; }
 
  private:
-  std::vector<double> SolveWeights(std::span<const double> params) const;
+  /// `regs` (optional): each record's regressors, kept for the output when no linear output effect
+  /// changes them (else untouched).
+  std::vector<double> SolveWeights(std::span<const double> params, std::vector<std::vector<double>>* regs = nullptr) const;
   WeightValidation ValidateAt(std::span<const double> params) const;
-  /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples.
-  void Accumulate(std::span<const double> params, BlockedNormalEquations& eq) const;
+  /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples; `regs`
+  /// as SolveWeights'.
+  void Accumulate(std::span<const double> params, BlockedNormalEquations& eq,
+                  std::vector<std::vector<double>>* regs = nullptr) const;
   const RecordModel& model_;
   std::vector<const io::Record*> records_;
   std::vector<std::shared_ptr<const Family::Prepared>> prepared_;  ///< per record (null: none)
@@ -100,6 +104,29 @@ struct RecordMetrics {
   double offset = 0;     ///< the offset used
 };
 
+/// The default global search of `piezoid fit`, sized by the number of parameters the search actually
+/// searches (a linear family's weights are solved in every evaluation, so with effects only the
+/// effects' parameters are searched): a one-parameter search needs neither a swarm of 30 nor 150
+/// iterations, and a swarm that has collapsed onto its best has converged (the polish does the
+/// rest). d searched parameters:
+///
+///   particles   = min(30, 10 + 5 (d − 1))        10, 15, 20, 25, 30 …
+///   iterations  = min(150, 30 + 30 (d − 1))      30, 60, 90, 120, 150 …
+///   stall       = min(40, 10 d)                  10, 20, 30, 40 …
+///   repetitions = d ≤ 2 ? 2 : 3
+///   converged   = every particle within 1e-3 of the best (unit box): stop the repetition.
+///
+/// docs/performance.md, "The 10 s target on the 150 V recording".
+struct SearchBudget {
+  int particles = 30, iterations = 150, stall = 40, repetitions = 3;
+  double converged_spread = 0;
+  /// "PSO 10 particles × ≤ 30 iterations, stall 10, converged at a spread of 0.001, 2 repetitions".
+  std::string Describe() const;
+};
+SearchBudget SizedSearchBudget(size_t searched);
+/// The PSO budget of `search` (its repetitions and PSO options).
+SearchBudget BudgetOf(const opt::SearchOptions& search);
+
 /// Builds the evaluator of a global search (null = a thread pool of `threads`).
 using RecordEvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&)>;
 
@@ -115,7 +142,16 @@ struct FitOptions {
     s.pso.stall_iterations = 40;
     return s;
   }();
+  /// Size the PSO search by SizedSearchBudget(the searched parameters) — `piezoid fit`'s default —
+  /// except the fields marked kept, which stay as `search` has them (the user's explicit flags).
+  struct Sizing {
+    bool enabled = false;
+    bool keep_particles = false, keep_iterations = false, keep_stall = false, keep_repetitions = false;
+  } sizing;
   bool polish = true;   ///< Levenberg–Marquardt after the search
+  /// Polish also each other repetition's best, keeping the lowest (opt::FitOptions::polish_repetitions:
+  /// a better basin replaces the search's best's polish only by more than 1e-4 of its cost).
+  bool polish_repetitions = false;
   opt::LmOptions lm{.max_iterations = 60, .fd_step = 1e-4};
   int threads = 2;
   RecordEvaluatorFactory evaluator_factory;
@@ -138,6 +174,15 @@ struct FitResult {
   std::vector<RecordMetrics> metrics;              ///< every record of the set, set order
   std::vector<std::vector<double>> yhat;           ///< every record: the model output [0, end_scored)
   opt::SearchResult search;                        ///< empty when nothing was searched
+  /// The global search as run (records of it in fit.json and report.md): the PSO budget, whether it
+  /// was sized, for how many searched parameters; the polishes run and the one kept.
+  opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
+  SearchBudget budget;
+  bool budget_sized = false;
+  size_t searched_parameters = 0;
+  int polishes = 0;
+  int best_polish_repetition = -1;  ///< the repetition whose best the kept polish started from (−1: other)
+  std::string polish_message;
   int lm_iterations = 0;
   int64_t evaluations = 0;                         ///< search and polish
   /// σ, sensitivity (RMS change of the output, response unit, per scale: the unit range of a

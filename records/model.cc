@@ -159,17 +159,29 @@ double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std
   EffectiveDrive(r, p.subspan(nf), from, end, ue);
   std::span<double> seg = yhat.subspan(from, end - from);
   if (family_->linear()) {
-    const size_t m = family_->regressors();
-    if (weights.size() != m) throw InputError(family_->name() + ": weights not solved");
-    std::vector<double> reg(ue.size() * m);
+    std::vector<double> reg(ue.size() * family_->regressors());
     family_->Regressors(ue, reg);
-    for (size_t k = 0; k < ue.size(); ++k) {
-      double acc = 0;
-      for (size_t j = 0; j < m; ++j) acc += reg[k * m + j] * weights[j];
-      seg[k] = acc;
-    }
-  } else {
-    family_->SimulatePrepared(prepared, p.first(nf), ue, r.dt, seg);
+    return LinearOutput(r, p, weights, end, reg, yhat);
+  }
+  family_->SimulatePrepared(prepared, p.first(nf), ue, r.dt, seg);
+  const double rest_output = seg[0];
+  std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), rest_output);
+  ApplyOutputEffects(r, p.subspan(nf), 0, yhat.first(end));
+  return rest_output;
+}
+
+double RecordModel::LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights,
+                                 size_t end, std::span<const double> reg, std::span<double> yhat) const {
+  const size_t m = family_->regressors(), nf = family_->params().size();
+  if (weights.size() != m) throw InputError(family_->name() + ": weights not solved");
+  if (yhat.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::LinearOutput: bad end");
+  const size_t from = SimulatedFrom(r, end);
+  if (reg.size() != (end - from) * m) throw InputError("RecordModel::LinearOutput: regressor size mismatch");
+  std::span<double> seg = yhat.subspan(from, end - from);
+  for (size_t k = 0; k < seg.size(); ++k) {
+    double acc = 0;
+    for (size_t j = 0; j < m; ++j) acc += reg[k * m + j] * weights[j];
+    seg[k] = acc;
   }
   const double rest_output = seg[0];
   std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), rest_output);

@@ -89,6 +89,12 @@ class RecordModel {
   /// row-major, m columns; row 0 at rest).
   void ApplyLinearOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
                                 std::span<double> reg, size_t m) const;
+  /// A linear family's output from its regressors: yhat[from + k] = Σ_j reg[k m + j] w_j on the
+  /// simulated samples (rows from SimulatedFrom(r, end) on), the rest output before them, then the
+  /// output effects — what Simulate does after computing the regressors (the same arithmetic: a
+  /// fit that already has them passes them here). Returns the rest output.
+  double LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
+                      std::span<const double> reg, std::span<double> yhat) const;
   size_t family_param_count() const { return family_->params().size(); }
 
  private:

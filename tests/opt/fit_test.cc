@@ -230,6 +230,61 @@ TEST(Fit, ThePolishIsKeptOnlyWhereItLowersAComparableSearchCost) {
   EXPECT_TRUE(failed.uncertainty.params.empty());
 }
 
+TEST(Fit, EachRepetitionsBestIsPolishedAndTheDeeperBasinKept) {
+  // Two basins of the residuals, r = (4 (x − 0.25)(x − 0.75), 0.3 x): Σ r² ≈ 0.0056 near 0.25 and
+  // 0.051 near 0.75. The search's cost prefers x near 0.9, and its repetitions (two random particles,
+  // no update) land on both sides of 0.5: the search's best polishes into the shallow basin.
+  const BoxMap map(ParamBox{{"x"}, {0.0}, {1.0}, {}});
+  const FunctionFitness search_cost([](std::span<const double> x) {
+    return FitnessResult{(x[0] - 0.9) * (x[0] - 0.9), FitnessStatus::kOk, ""};
+  });
+  auto residuals = [](std::span<const double> x, std::vector<double>& r) {
+    r = {4 * (x[0] - 0.25) * (x[0] - 0.75), 0.3 * x[0]};
+    return true;
+  };
+  const FunctionFitness residual_cost([&](std::span<const double> x) {
+    FitnessResult out;
+    residuals(x, out.residuals);
+    for (double e : out.residuals) out.cost += e * e;
+    return out;
+  });
+  FitProblem problem;
+  problem.map = &map;
+  problem.cost_evaluator = [&] { return std::make_unique<InlineEvaluator>(search_cost); };
+  problem.residual_evaluator = [&] { return std::make_unique<InlineEvaluator>(residual_cost); };
+  problem.physical_residuals = residuals;
+  FitOptions o = QuickOptions();
+  o.search_cost_is_sum_of_squares = false;
+  o.search_options.repetitions = 8;
+  o.search_options.pso.particles = 2;
+  o.search_options.pso.iterations = 0;
+  const FitResult one = Fit(problem, o);
+  ASSERT_TRUE(one.ok);
+  EXPECT_GT(one.search.best[0], 0.5);
+  EXPECT_NEAR(one.x[0], 0.75, 0.05);
+  EXPECT_EQ(one.polishes, 1);
+  bool left = false;  // a repetition's best in the deep basin
+  for (const auto& b : one.search.repetition_best) left = left || b[0] < 0.5;
+  ASSERT_TRUE(left) << "the seeds no longer put a repetition's best below 0.5";
+  o.polish_repetitions = 7;
+  const FitResult all = Fit(problem, o);
+  ASSERT_TRUE(all.ok);
+  EXPECT_NEAR(all.x[0], 0.25, 0.05);
+  EXPECT_LT(all.cost, 0.5 * one.cost);
+  EXPECT_GT(all.polishes, 1);
+  EXPECT_LE(all.polishes, 8);
+  ASSERT_GE(all.best_polish_repetition, 0);
+  EXPECT_NE(all.best_polish_repetition, all.search.best_repetition);
+  EXPECT_LT(all.search.repetition_best[static_cast<size_t>(all.best_polish_repetition)][0], 0.5);
+  PZ_EXPECT_HAS(all.message, "from repetition");
+  // A margin larger than the gain keeps the search's best's polish.
+  o.basin_margin = 0.99;
+  const FitResult kept = Fit(problem, o);
+  EXPECT_EQ(kept.x, one.x);
+  o.basin_margin = -1;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Fit(problem, o); }), "basin_margin = -1");
+}
+
 TEST(Fit, AProblemOrOptionsThatCannotRunAreRefusedNamingWhy) {
   using pz::testing::InputErrorOf;
   const Line line;

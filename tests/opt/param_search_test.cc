@@ -263,6 +263,28 @@ TEST(ParamSearch, StallAndTargetStop) {
   EXPECT_LE(t.best_cost, 1e-2);
 }
 
+TEST(ParamSearch, APsoSwarmThatHasConvergedStopsItsRepetition) {
+  Rosenbrock f;
+  SearchOptions o = Options(SearchAlgorithm::kPso, 2);
+  o.pso.iterations = 2000;
+  o.pso.stall_iterations = 0;
+  o.pso.tolerance = 0;
+  const SearchResult full = RunSearch(f, Box(2, -2, 2), o);
+  PZ_EXPECT_HAS(full.stop_reason, "limit");
+  o.pso.converged_spread = 1e-3;
+  const SearchResult r = RunSearch(f, Box(2, -2, 2), o);
+  PZ_EXPECT_HAS(r.stop_reason, "converged: every particle within 0.001 of the best");
+  EXPECT_LT(r.iterations, full.iterations / 2);
+  EXPECT_LT(r.best_cost, 1e-3);  // converged on the minimum, not stopped short
+  // The same search, the same stop, bit for bit.
+  const SearchResult again = RunSearch(f, Box(2, -2, 2), o);
+  EXPECT_EQ(again.best, r.best);
+  EXPECT_EQ(again.evaluations, r.evaluations);
+  o.pso.converged_spread = 1;
+  InlineEvaluator e(f);
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Search(Box(2, -2, 2), o, e); }), "pso.converged_spread = 1");
+}
+
 TEST(ParamSearch, NanAndExceptionsAreSanitised) {
   Awkward f;
   for (SearchAlgorithm a :

@@ -231,6 +231,70 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
   EXPECT_EQ(RecordFitness(plain, train).lanes(), 1);
 }
 
+TEST(RecordFit, ALinearFamilysOutputFromItsSolveIsSimulatesBitForBit) {
+  // RecordFitness::Run keeps the regressors of the weights' solve for the output (no second
+  // regressor pass); with a delay or a creep of the drive, the output is what RecordModel::Simulate
+  // gives for the solved weights, bit for bit.
+  const Case c = Cases()[3];
+  const io::RecordSet set = MakeSet(c, Waveform::kSine, 7);
+  const auto train = set.WithRole(CaseRole::kTrain);
+  const DataScale scale = MeasureScale(train);
+  for (const char* effects : {"delay", "creep"}) {
+    SCOPED_TRACE(effects);
+    const RecordModel model(MakeFamily("preisach", scale), {ParseEffect(effects)}, scale);
+    const RecordFitness fitness(model, train);
+    std::vector<double> p;
+    for (const ParamInfo& q : model.params()) p.push_back(q.lower + 0.3 * (q.upper - q.lower));
+    const RecordFitness::Output out = fitness.Run(p);
+    ASSERT_EQ(out.yhat.size(), train.size());
+    for (size_t i = 0; i < train.size(); ++i) {
+      std::vector<double> y(train[i]->end_scored);
+      model.Simulate(*train[i], p, out.weights, train[i]->end_scored, y);
+      const int pol = model.scale().polarity;
+      for (size_t k = 0; k < y.size(); ++k)
+        ASSERT_EQ(std::bit_cast<uint64_t>(pol * y[k] + out.offsets[i]), std::bit_cast<uint64_t>(out.yhat[i][k])) << k;
+    }
+  }
+}
+
+TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
+  const SearchBudget one = SizedSearchBudget(1), five = SizedSearchBudget(5), twelve = SizedSearchBudget(12);
+  EXPECT_EQ(one.particles, 10);
+  EXPECT_EQ(one.iterations, 30);
+  EXPECT_EQ(one.stall, 10);
+  EXPECT_EQ(one.repetitions, 2);
+  EXPECT_EQ(five.particles, 30);
+  EXPECT_EQ(five.iterations, 150);
+  EXPECT_EQ(five.stall, 40);
+  EXPECT_EQ(five.repetitions, 3);
+  EXPECT_EQ(twelve.particles, 30);
+  EXPECT_EQ(twelve.converged_spread, 1e-3);
+  PZ_EXPECT_HAS(one.Describe(), "PSO 10 particles × ≤ 30 iterations, stall 10, converged at a spread of 0.001, 2 repetitions");
+  // prandtl-ishlinskii + delay searches the delay alone (its weights are solved).
+  const Case c = Cases()[3];
+  const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
+  FitOptions o = QuickOptions("prandtl-ishlinskii");
+  o.effects = {ParseEffect("delay")};
+  o.uncertainty = false;
+  o.sizing.enabled = true;
+  const FitResult sized = FitRecords(set, o);
+  EXPECT_TRUE(sized.budget_sized);
+  EXPECT_EQ(sized.searched_parameters, 1u);
+  EXPECT_EQ(sized.budget.particles, 10);
+  EXPECT_EQ(sized.budget.repetitions, 2);
+  EXPECT_LE(sized.search.evaluations, 2 * 10 * 31);
+  o.sizing.keep_particles = o.sizing.keep_repetitions = true;  // --particles 24 --repetitions 1
+  const FitResult kept = FitRecords(set, o);
+  EXPECT_EQ(kept.budget.particles, 24);
+  EXPECT_EQ(kept.budget.repetitions, 1);
+  EXPECT_EQ(kept.budget.iterations, 30);
+  o.sizing.enabled = false;
+  const FitResult given = FitRecords(set, o);
+  EXPECT_FALSE(given.budget_sized);
+  EXPECT_EQ(given.budget.iterations, 80);
+  EXPECT_EQ(given.budget.converged_spread, 0);
+}
+
 TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
   // backlash-like on a noisy sine: the one fit of opt/fit.h with the DE search; every parameter is
   // well constrained and its σ covers the truth (|estimate − truth| < 4 σ), the same on two threads.
