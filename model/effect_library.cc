@@ -349,11 +349,11 @@ class RateDependence final : public EffectDef {
       prev1 = raw;
     }
   }
-  /// The knee rate r_m/τ_r at 1–4 × the peak rate of the dominant sine over the range, the bound
-  /// 2–5 % of the half range.
+  /// The bound 4–10 % of the half range, the knee rate r_m/τ_r at ½–2 × the peak rate of the
+  /// dominant sine over the range (a lag that saturates within the records' rates).
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
-    const double r_m = d.Uniform(0.02, 0.05) * s.u_half;
-    const double knee = d.LogUniform(1, 4) * 2 * std::numbers::pi * s.f_dom * s.u_half;
+    const double r_m = d.Uniform(0.04, 0.1) * s.u_half;
+    const double knee = d.LogUniform(0.5, 2) * 2 * std::numbers::pi * s.f_dom * s.u_half;
     return {r_m, r_m / knee};
   }
 
