@@ -11,7 +11,6 @@
 #include <map>
 #include <string>
 
-#include "io/records.h"
 #include "records/diagnose.h"
 #include "records/excitation.h"
 #include "records/extrapolation.h"
@@ -40,7 +39,7 @@ RealLikeOptions Rates(uint64_t seed) {
   return o;
 }
 
-/// The set, each record scored from 1.5 s after its rest (`--settle-s 1.5`: the jump from the rest
+/// The set (io::SkipSettling through records/reallike.h), each record scored from 1.5 s after its rest (`--settle-s 1.5`: the jump from the rest
 /// to the sine's phase is a step the recorder cannot sample, and a step's rate is no drive rate).
 RealLikeSet Generate(const RealLikeOptions& o) {
   RealLikeSet s = GenerateRealLikeSet(o);
