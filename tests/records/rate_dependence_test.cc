@@ -39,8 +39,9 @@ RealLikeOptions Rates(uint64_t seed) {
   return o;
 }
 
-/// The set (io::SkipSettling through records/reallike.h), each record scored from 1.5 s after its rest (`--settle-s 1.5`: the jump from the rest
-/// to the sine's phase is a step the recorder cannot sample, and a step's rate is no drive rate).
+/// The set, each record scored from 1.5 s after its rest (`--settle-s 1.5`, io::SkipSettling: the
+/// jump from the rest to the sine's phase is a step the recorder cannot sample, and a step's rate
+/// is no drive rate).
 RealLikeSet Generate(const RealLikeOptions& o) {
   RealLikeSet s = GenerateRealLikeSet(o);
   io::SkipSettling(s.set, 1.5, 20, "settle");
