@@ -68,6 +68,13 @@ std::string TruthJson(const records::RealLikeSet& s) {
   p["creep_tau_max_s"] = Num(st.creep_tau_max_s);
   p["everett_grid"] = Num(st.everett_grid);
   p["major_loop_width_share"] = Num(s.major_loop_width);
+  if (st.rate_lag_v > 0) {  // keys only when present: the default set's truth.json stays the same bytes
+    p["rate_lag_V"] = Num(st.rate_lag_v);
+    p["rate_time_s"] = Num(st.rate_time_s);
+    p["rate_model"] = Text("effective drive held within +- lambda of the applied u, lambda = rate_lag_V tanh(rate_time_s "
+                           "|du/dt| / rate_lag_V), into the Preisach and reversible parts (du/dt after the amplifier)");
+  }
+  if (st.driver_tau_s > 0) p["driver_tau_s"] = Num(st.driver_tau_s);
   f["plant"] = Obj(plant);
   Struct sensor;
   auto& q = *sensor.mutable_fields();
@@ -164,6 +171,19 @@ void RegisterSynthStack(CLI::App& app, int& exit_code) {
                   "a CSV (time [s] from 0 at --fs, drive [V]) the training record plays instead of the sine, e.g. "
                   "the excitation_drive.csv of a fit or diagnosis; the withheld records stay the same")
       ->type_name("FILE");
+  cmd->add_option("--rate-lag", o.stack.rate_lag_v,
+                  "rate dependence: the bound of the drive's rate-dependent lag [V] (0: none)")
+      ->check(CLI::Range(0.0, 150.0));
+  cmd->add_option("--rate-time", o.stack.rate_time_s, "rate dependence: lag per rate below the knee [s]")
+      ->check(CLI::Range(1e-6, 10.0));
+  cmd->add_option("--driver-tau", o.stack.driver_tau_s, "an amplifier first-order low-pass [s] (0: none)")
+      ->check(CLI::Range(0.0, 10.0));
+  cmd->add_option("--train-frequencies", o.train_frequencies_hz,
+                  "training sines at these frequencies [Hz] (records that cover rates) instead of one at --frequency")
+      ->delimiter(',');
+  cmd->add_option("--withheld-frequencies", o.withheld_frequencies_hz, "withheld sines at these frequencies [Hz]")
+      ->delimiter(',');
+  cmd->add_flag("--chirp", o.chirp, "a withheld logarithmic chirp over the training frequencies' span");
   cmd->add_option("--asymmetry", o.stack.asymmetry, "skew of the Preisach density")->check(CLI::Range(-10.0, 10.0));
   cmd->add_option("--hysteresis-share", o.stack.hysteresis_share, "share of the stroke carried by the hysterons")
       ->check(CLI::Range(0.0, 0.95));

@@ -16,6 +16,7 @@
 //   quadratic-drive  drive   u_e = u + c₂ u²                            c2
 //   creep            drive   τ_c ẋ = k_c (u − u_0) − x, u_e = u + x     k_c, tau_c_s
 //   delay            drive   u_e(t) = u(t − τ_d)                        tau_d_s
+//   rate-dependence  drive   u_e = play_λ[u], λ = r_m tanh(τ_r |u̇|/r_m)  r_m, tau_r_s
 //   hinge-friction   beam    Ḟ = σ ẇ (1 − F/F_c sgn ẇ), tip force −F    fc_n, sigma_n_per_m
 //   cubic-stiffening beam    tip force −k₃ w_tip³                       k3_n_per_m3
 //   creep-spectrum   output  y_e = y − Σ w_i (y − x_i), τ_i ẋ_i = y − x_i    w_i ≥ 0 at τ_i = 0.05 s … T

@@ -172,10 +172,13 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   if (cands.empty()) {
     // By default, the effects the family does not hold and the records can support (creep-spectrum
     // needs a window of a decade above its fastest relaxation); asked for by name, such an effect
-    // is an error (its model throws).
+    // is an error (its model throws); so does rate dependence on training records at one rate
+    // (records/excitation.h, the rate span).
     const auto excluded = d.base.model->family().excluded_effects();
+    const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
     for (const EffectInfo& e : lib)
-      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() && e.unsupported.empty())
+      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() && e.unsupported.empty() &&
+          (rates || !NeedsRateCoverage(e.kind)))
         cands.push_back(e.kind);
   }
   const auto base_ex = BinExcess(set, d.base, sigma2, scale);

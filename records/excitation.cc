@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <sstream>
+#include <utility>
 
 #include "model/status.h"
 #include "opt/random.h"
@@ -100,6 +101,37 @@ std::string BinRanges(const std::vector<bool>& on) {
   return out.empty() ? "none" : out;
 }
 
+/// The peak |du/dt| of each complete half cycle of the record's scored window with its duration
+/// [s]: between two turns (a retreat of more than `threshold` from the running extreme); the
+/// partial first and last are left out.
+void HalfCyclePeakRates(const io::Record& r, double threshold, std::vector<std::pair<double, double>>& peaks) {
+  if (r.scored() < 2) return;
+  double ext = r.u[r.first_scored], lo = ext, hi = ext, peak = 0;
+  int dir = 0;            // +1 rising, −1 falling, 0 not yet known
+  bool started = false;   // the half cycle in progress began at a turn (the first one did not)
+  size_t begin = r.first_scored;
+  for (size_t k = r.first_scored; k + 1 < r.end_scored; ++k) {
+    const double v = r.u[k + 1], rate = std::abs(v - r.u[k]) / r.dt;
+    if (dir == 0) {  // until the drive has moved by the threshold from its lowest or highest so far
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      if (v - lo > threshold || hi - v > threshold) dir = v - lo > threshold ? 1 : -1;
+      ext = v;
+      peak = std::max(peak, rate);
+    } else if (dir * (v - ext) >= 0) {  // on in the direction of motion
+      ext = v;
+      peak = std::max(peak, rate);
+    } else if (dir * (ext - v) > threshold) {  // a turn at ext
+      if (started) peaks.push_back({peak, static_cast<double>(k - begin) * r.dt});
+      started = true;
+      begin = k;
+      dir = -dir;
+      ext = v;
+      peak = rate;
+    }
+  }
+}
+
 /// The excitation of records (together), with levels and depths on the training range [lo, lo + range].
 DriveExcitation Describe(const std::string& name, const std::vector<const io::Record*>& recs, double lo, double range,
                          const ExcitationOptions& o) {
@@ -111,7 +143,9 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
   d.depth_weight.assign(static_cast<size_t>(o.bins), 0.0);
   d.level_weight.assign(static_cast<size_t>(o.bins), 0.0);
   std::vector<double> rates;
+  std::vector<std::pair<double, double>> peaks;  // (peak rate, duration)
   for (const io::Record* r : recs) {
+    HalfCyclePeakRates(*r, o.turn_threshold * range, peaks);
     const size_t first_rate = rates.size();
     size_t hold_start = r->first_scored;
     for (size_t k = r->first_scored; k < r->end_scored; ++k) {
@@ -135,6 +169,20 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
   }
   d.rate_p95 = Percentile95(rates);
   for (double v : rates) d.rate_max = std::max(d.rate_max, v);
+  d.half_cycles = peaks.size();
+  if (!peaks.empty()) {  // percentiles over time: each half cycle weighted by its duration
+    std::sort(peaks.begin(), peaks.end());
+    double total = 0;
+    for (const auto& p : peaks) total += p.second;
+    const auto at = [&](double q) {
+      double sum = 0;
+      for (const auto& p : peaks)
+        if ((sum += p.second) >= q * total) return p.first;
+      return peaks.back().first;
+    };
+    d.rate_peak_lo = at(0.1);
+    d.rate_peak_hi = at(0.9);
+  }
   return d;
 }
 
@@ -156,6 +204,25 @@ std::vector<bool> Present(const std::vector<double>& w) {
 }
 
 }  // namespace
+
+bool NeedsRateCoverage(model::EffectKind effect) { return effect == model::EffectKind::Named("rate-dependence"); }
+
+std::string RateCoverageError(const io::RecordSet& set, std::span<const model::EffectKind> effects,
+                              const ExcitationOptions& options) {
+  const auto it = std::find_if(effects.begin(), effects.end(), NeedsRateCoverage);
+  if (it == effects.end()) return "";
+  const ExcitationReport rep = AnalyseExcitation(set, options);
+  const DriveExcitation& t = rep.training;
+  if (t.rate_span() >= kMinRateSpan) return "";
+  std::ostringstream s;
+  s << "effect '" << it->name() << "' needs training records that cover rates: the peak drive rate of their half "
+    << "cycles must span a factor " << Num(kMinRateSpan) << " at least, and the " << t.half_cycles
+    << " complete half cycles of the training records peak at " << Num(t.rate_peak_lo) << " … " << Num(t.rate_peak_hi)
+    << " " << set.drive_unit << "/s (" << Num(t.rate_span(), 3)
+    << "×): at one rate a rate-dependent lag is not told from the loop's shape. Train on records at several rates "
+       "(sines at 0.5, 2 and 8 Hz, or a chirp), or leave the effect out";
+  return s.str();
+}
 
 std::string ExcitationOptions::Validate() const {
   if (!(turn_threshold > 0 && turn_threshold < 0.5)) return FieldError("turn_threshold", turn_threshold, "must be in (0, 0.5)");
@@ -227,6 +294,15 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
                                (t.records > 1 ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit +
                                                     "/s over the records)"
                                               : Num(t.rate_p95) + " " + unit + "/s)"));
+  {
+    std::ostringstream s;
+    s << "rate span: " << t.half_cycles << " complete half cycles peaking at " << Num(t.rate_peak_lo) << " … "
+      << Num(t.rate_peak_hi) << " " << unit << "/s (10th–90th percentile over time, " << Num(t.rate_span(), 3) << "×)";
+    if (t.rate_span() < kMinRateSpan)
+      s << ": one rate only — rate dependence cannot be told from the loop's shape; record at rates " << Num(kMinRateSpan)
+        << "× apart at least (e.g. sines at 0.5, 2 and 8 Hz)";
+    rep.training_lines.push_back(s.str());
+  }
   {
     std::ostringstream s;
     const double period = t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;

@@ -10,7 +10,11 @@
 //    range no larger than its neighbours is a closed minor loop; the rest are half cycles). Each
 //    cycle is a point (upper turn, lower turn) of the Preisach plane, binned on a `bins` × `bins`
 //    grid of the training range; its depth is (upper − lower) / training range;
-//  - its rates: the 95th percentile and the maximum of |du/dt|;
+//  - its rates: the 95th percentile and the maximum of |du/dt|, and the rate span: the peak |du/dt|
+//    of each complete half cycle (between turning points), its 10th and 90th percentiles over the
+//    records' time together (each half cycle weighted by its duration) — one sine at one amplitude and frequency has a span of 1, sines at 0.5, 2
+//    and 8 Hz one of 16; rate dependence (the effect `rate-dependence`) needs a span of
+//    kMinRateSpan at least, else it cannot be told from the loop's shape (RateCoverageError);
 //  - its duration and longest hold (the drive within `hold_level` of the range) against the creep
 //    times: a relaxation slower than the longest hold shows only as a drift.
 // A withheld record needs:
@@ -24,10 +28,12 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "io/records.h"
+#include "model/effect_library.h"
 
 namespace pz::records {
 
@@ -55,6 +61,9 @@ struct DriveExcitation {
   double rate_p95 = 0, rate_max = 0;  ///< |du/dt| [drive unit / s], over the records together
   double rate_p95_lo = 0, rate_p95_hi = 0;  ///< the slowest and fastest record's 95th percentile
   double longest_hold_s = 0;
+  size_t half_cycles = 0;                   ///< complete half cycles (between two turns)
+  double rate_peak_lo = 0, rate_peak_hi = 0;  ///< 10th / 90th percentile of their peak |du/dt| over time
+  double rate_span() const { return rate_peak_lo > 0 ? rate_peak_hi / rate_peak_lo : 1; }
   size_t turns = 0;
   std::vector<ReversalCycle> cycles;
   std::vector<double> depth_weight;  ///< rainflow weight per depth bin (share of the training range)
@@ -87,6 +96,17 @@ struct ExcitationReport {
 /// Throws InputError when the set has no training record, a training record has no excitation
 /// (constant drive), or on bad options.
 ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOptions& options = {});
+
+/// The least rate span (DriveExcitation::rate_span) of the training records for an effect whose
+/// magnitude depends on the drive rate.
+constexpr double kMinRateSpan = 2;
+/// True for an effect that only rates spread over the training records identify (rate-dependence).
+bool NeedsRateCoverage(model::EffectKind effect);
+/// Empty when the training records of `set` cover the rates the effects need; else the refusal:
+/// which effect, the rate span the training has and what to record. A fit (records::FitModel)
+/// throws it; the diagnosis leaves such a candidate out by default.
+std::string RateCoverageError(const io::RecordSet& set, std::span<const model::EffectKind> effects,
+                              const ExcitationOptions& options = {});
 
 /// The excitation-gap sentence of a diagnosis. `rms_ratio[i]`: record i's withheld RMS error of the
 /// base model / the noise floor (set order; training entries ignored). Empty when no withheld

@@ -22,6 +22,7 @@ const char* KindMacro(int kind) {
     case pzk::PZK_QUADRATIC: return "PZK_QUADRATIC";
     case pzk::PZK_CREEP: return "PZK_CREEP";
     case pzk::PZK_DELAY: return "PZK_DELAY";
+    case pzk::PZK_RATE_DEPENDENCE: return "PZK_RATE_DEPENDENCE";
     case pzk::PZK_STACK_BOUC_WEN: return "PZK_STACK_BOUC_WEN";
     case pzk::PZK_BACKLASH_LIKE: return "PZK_BACKLASH_LIKE";
     case pzk::PZK_DUHEM: return "PZK_DUHEM";

@@ -5,12 +5,25 @@
 #include <limits>
 
 #include "io/csv.h"
+#include "records/excitation.h"
 
 namespace pz::records {
 namespace {
 
 constexpr double kDriveShare = 0.02;  ///< of the training drive range
 constexpr double kTermRmse = 3;       ///< × the training RMSE
+constexpr double kRateFaster = 1.5;   ///< × the training's largest |du/dt|
+
+/// The largest |du/dt| over the record's scored window, and the count of samples above `limit`.
+double MaxRate(const io::Record& r, double limit, size_t* above = nullptr) {
+  double m = 0;
+  for (size_t k = r.first_scored; k + 1 < r.end_scored; ++k) {
+    const double v = std::abs(r.u[k + 1] - r.u[k]) / r.dt;
+    m = std::max(m, v);
+    if (above && v > limit) ++*above;
+  }
+  return m;
+}
 
 /// The regressor rows of the record's samples [from, end_scored) at the fitted parameters.
 size_t RegressorRows(const RecordModel& m, std::span<const double> params, const io::Record& r, std::vector<double>& reg) {
@@ -26,6 +39,10 @@ size_t RegressorRows(const RecordModel& m, std::span<const double> params, const
 
 std::string ExtrapolationCheck::Describe(const std::string& du, const std::string& yu) const {
   std::string s = record + ": " + (flagged ? "FLAGGED" : "inside the training range");
+  if (rate_ratio > 1) {
+    s += "; rates up to " + io::FormatNumber(rate_ratio) + " × the fastest in training (" +
+         io::FormatNumber(100 * rate_beyond_share) + " % of its samples faster): the rate-dependent lag is extrapolated";
+  }
   if (drive_beyond > 0) {
     s += "; the drive goes " + io::FormatNumber(drive_beyond) + " " + du + " beyond the training drive range (" +
          io::FormatNumber(100 * drive_beyond_share) + " % of its samples)";
@@ -57,6 +74,10 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
       }
     }
   }
+  const bool rates = std::any_of(m.effects().begin(), m.effects().end(), NeedsRateCoverage);
+  double train_rate = 0;
+  if (rates)
+    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain)) train_rate = std::max(train_rate, MaxRate(*r, 0));
   std::vector<ExtrapolationCheck> out;
   for (const io::Record& r : set.records) {
     if (r.role == model::CaseRole::kTrain) continue;
@@ -93,6 +114,12 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
     }
     c.flagged = c.drive_beyond > kDriveShare * (s.u_max - s.u_min) || c.term_max >= kTermRmse * train_rmse;
     if (c.term_max == 0 && c.drive_beyond == 0) c.flagged = false;
+    if (rates && train_rate > 0) {
+      size_t faster = 0;
+      c.rate_ratio = MaxRate(r, train_rate, &faster) / train_rate;
+      c.rate_beyond_share = static_cast<double>(faster) / static_cast<double>(r.scored());
+      if (c.rate_ratio > kRateFaster) c.flagged = true;
+    }
     out.push_back(std::move(c));
   }
   return out;

@@ -9,9 +9,13 @@
 //              fitted parameters); the part of the prediction outside it is
 //              e_k = polarity · Σ_j w_j (x_kj − clamp(x_kj, lo_j, hi_j)) — relays never switched in
 //              training that carry weight, plays driven further than in training;
+//   rates      a model with a rate-dependent effect (records/excitation.h NeedsRateCoverage): the
+//              record's largest |du/dt| against the training records' largest, and the share of
+//              its scored samples faster than that — the effect's lag there is extrapolated;
 //
-// flagged when the drive leaves the training range by more than 2 % of it, or when |e| reaches
-// 3 × the training RMSE somewhere.
+// flagged when the drive leaves the training range by more than 2 % of it, when |e| reaches
+// 3 × the training RMSE somewhere, or (rates) when the record is more than 1.5 × faster than
+// training.
 #pragma once
 
 #include <string>
@@ -29,6 +33,8 @@ struct ExtrapolationCheck {
   double term_max = 0;               ///< largest |e_k| (response units; linear families)
   double term_rms = 0;               ///< RMS of e_k over the scored samples
   size_t terms = 0;                  ///< weighted terms that leave their training range
+  double rate_ratio = 0;             ///< largest |du/dt| / the training's largest (rate-dependent models; 0 else)
+  double rate_beyond_share = 0;      ///< share of the scored samples faster than any in training
   bool flagged = false;
   /// One line: "ramp: flagged — the drive reaches 12 V beyond the training range (8 % of samples); …".
   std::string Describe(const std::string& drive_unit, const std::string& response_unit) const;

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "io/csv.h"
+#include "records/excitation.h"
 #include "opt/thread_pool_evaluator.h"
 
 namespace pz::records {
@@ -380,6 +381,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   auto train = set.WithRole(model::CaseRole::kTrain);
   if (train.empty()) throw InputError(set.source.string() + ": no record has the role 'train'");
   if (options.threads < 1) throw InputError(FieldError("threads", options.threads, "must be >= 1"));
+  if (const std::string e = RateCoverageError(set, model->effects()); !e.empty()) throw InputError(e);
   RecordFitness fitness(*model, train);
   FitResult res;
   res.model = model;

@@ -47,6 +47,10 @@ std::string RealLikeStack::Validate() const {
   if (!(creep_tau_min_s > 0 && creep_tau_max_s >= creep_tau_min_s))
     return FieldError("stack.creep_tau_max_s", creep_tau_max_s, "must be >= creep_tau_min_s > 0");
   if (everett_grid < 8 || everett_grid > 2000) return FieldError("stack.everett_grid", everett_grid, "must be in [8, 2000]");
+  if (!(rate_lag_v >= 0 && rate_lag_v <= u_hi - u_lo))
+    return FieldError("stack.rate_lag_v", rate_lag_v, "must be in [0, u_hi - u_lo]");
+  if (!(rate_time_s > 0 && rate_time_s <= 10)) return FieldError("stack.rate_time_s", rate_time_s, "must be in (0, 10]");
+  if (!(driver_tau_s >= 0 && driver_tau_s <= 10)) return FieldError("stack.driver_tau_s", driver_tau_s, "must be in [0, 10]");
   return "";
 }
 
@@ -82,6 +86,10 @@ std::string RealLikeDrive::Describe() const {
         << seed << ")";
       break;
     case Kind::kSamples: s << "a played drive of " << samples.size() << " samples at " << Num(samples_fs_hz) << " Hz"; break;
+    case Kind::kChirp:
+      s << "a logarithmic chirp " << Num(bias) << " ± " << Num(amplitude) << " V from " << Num(frequency_hz) << " to "
+        << Num(frequency_end_hz) << " Hz";
+      break;
   }
   if (kind != Kind::kSamples) s << " from phase " << Num(phase_rad) << " rad";
   s << " for " << Num(duration_s) << " s";
@@ -101,6 +109,19 @@ std::function<double(double)> DriveFunction(const RealLikeDrive& d) {
         const double tau = t - d.rest_s;
         const double a = ramp ? d.amplitude * std::abs(1 - 2 * std::min(tau, d.duration_s) / d.duration_s) : d.amplitude;
         return d.bias + a * std::sin(2 * kPi * d.frequency_hz * tau + d.phase_rad);
+      };
+    }
+    case RealLikeDrive::Kind::kChirp: {
+      if (!(d.frequency_hz > 0) || !(d.frequency_end_hz > 0))
+        throw InputError(FieldError("drive.frequency_end_hz", d.frequency_end_hz, "and frequency_hz must be > 0 (a chirp)"));
+      // Phase of f(τ) = f0 k^{τ/T}, k = f1/f0: 2π f0 T (k^{τ/T} − 1) / ln k (2π f0 τ for k = 1).
+      const double k = d.frequency_end_hz / d.frequency_hz, T = d.duration_s, lnk = std::log(k);
+      return [d, k, T, lnk](double t) {
+        if (t < d.rest_s) return d.rest_level;
+        const double tau = std::min(t - d.rest_s, T);
+        const double phase = std::abs(lnk) < 1e-12 ? 2 * kPi * d.frequency_hz * tau
+                                                   : 2 * kPi * d.frequency_hz * T * (std::pow(k, tau / T) - 1) / lnk;
+        return d.bias + d.amplitude * std::sin(phase + d.phase_rad);
       };
     }
     case RealLikeDrive::Kind::kReversals: {
@@ -261,8 +282,36 @@ std::vector<double> RealLikePlant::Respond(const std::function<double(double)>& 
   for (size_t i = 0; i < taus.size(); ++i) decay[i] = std::exp(-dtf / taus[i]);
   Memory m(stack_.u_lo, stack_.u_hi);
   std::vector<double> z, s(fine);
+  // The amplifier's low-pass τ ẋ = u − x, integrated exactly over each fine step for u linear in it,
+  // from rest; its rate is (u − x)/τ. Without it, the analytic drive's rate by a central difference.
+  const double tau_d = stack_.driver_tau_s, a_d = tau_d > 0 ? std::exp(-dtf / tau_d) : 0;
+  const double hd = 1e-3 * dtf;
+  double x_d = 0, u_prev = 0, v_rate = 0;
   for (size_t j = 0; j < fine; ++j) {
-    const double v = u(static_cast<double>(j) * dtf);
+    const double t = static_cast<double>(j) * dtf;
+    double v = u(t);
+    if (tau_d > 0 || stack_.rate_lag_v > 0) {
+      const double applied = v;
+      double rate = 0;
+      if (tau_d > 0) {
+        if (j == 0) {
+          x_d = applied;
+        } else {
+          const double slope = (applied - u_prev) / dtf;  // u over the step: u_prev + slope (t' − t_prev)
+          x_d = applied - tau_d * slope + a_d * (x_d - u_prev + tau_d * slope);
+        }
+        u_prev = applied;
+        v = x_d;
+        rate = (applied - x_d) / tau_d;
+      } else if (t > hd) {
+        rate = (u(t + hd) - u(t - hd)) / (2 * hd);
+      }
+      if (stack_.rate_lag_v > 0) {  // the effective drive held within ± lag of the applied one
+        const double lag = stack_.rate_lag_v * std::tanh(stack_.rate_time_s * std::abs(rate) / stack_.rate_lag_v);
+        v_rate = j == 0 ? v : std::clamp(v_rate, v - lag, v + lag);
+        v = v_rate;
+      }
+    }
     m.Update(v);
     const double x = Hysteretic(m.extrema()) + Reversible(v);
     if (j == 0) z.assign(taus.size(), x);  // settled at rest
@@ -342,6 +391,13 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
     throw InputError(FieldError("frequency_hz", o.frequency_hz, "must be in (0, fs/8]"));
   if (!(o.amplitude_share > 0 && o.amplitude_share <= 0.5))
     throw InputError(FieldError("amplitude_share", o.amplitude_share, "must be in (0, 0.5]"));
+  for (const auto* list : {&o.train_frequencies_hz, &o.withheld_frequencies_hz})
+    for (double f : *list)
+      if (!(f > 0) || f > o.sensor.fs_hz / 8)
+        throw InputError(FieldError(list == &o.train_frequencies_hz ? "train_frequencies_hz" : "withheld_frequencies_hz",
+                                    f, "must be in (0, fs/8]"));
+  if (o.chirp && o.train_frequencies_hz.empty())
+    throw InputError("chirp: a chirp spans the training frequencies; give train_frequencies_hz");
   const RealLikePlant plant(o.stack);
   RealLikeSet out;
   out.options = o;
@@ -361,17 +417,32 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
     model::CaseRole role;
     RealLikeDrive::Kind kind;
     double duration;
+    double frequency = 0, frequency_end = 0;  ///< 0: base's
   };
-  std::vector<Item> items{{"major", model::CaseRole::kTrain, RealLikeDrive::Kind::kSine, o.train_s}};
+  std::vector<Item> items;
+  if (o.train_frequencies_hz.empty()) {
+    items.push_back({"major", model::CaseRole::kTrain, RealLikeDrive::Kind::kSine, o.train_s});
+  } else {
+    for (double f : o.train_frequencies_hz)
+      items.push_back({"train-" + Num(f) + "hz", model::CaseRole::kTrain, RealLikeDrive::Kind::kSine, o.train_s, f});
+  }
   if (o.second_sine) items.push_back({"major-2", model::CaseRole::kValidate, RealLikeDrive::Kind::kSine, o.withheld_s});
   if (o.ramp) items.push_back({"ramp", model::CaseRole::kValidate, RealLikeDrive::Kind::kRampedSine, o.withheld_s});
   if (o.reversals) items.push_back({"reversals", model::CaseRole::kTest, RealLikeDrive::Kind::kReversals, o.withheld_s});
+  for (double f : o.withheld_frequencies_hz)
+    items.push_back({"sine-" + Num(f) + "hz", model::CaseRole::kValidate, RealLikeDrive::Kind::kSine, o.withheld_s, f});
+  if (o.chirp) {
+    const auto [lo, hi] = std::minmax_element(o.train_frequencies_hz.begin(), o.train_frequencies_hz.end());
+    items.push_back({"chirp", model::CaseRole::kValidate, RealLikeDrive::Kind::kChirp, o.withheld_s, *lo, *hi});
+  }
   double ss = 0;
   size_t n = 0;
   for (size_t i = 0; i < items.size(); ++i) {
     RealLikeDrive d = base;
     d.kind = items[i].kind;
     d.duration_s = items[i].duration;
+    if (items[i].frequency > 0) d.frequency_hz = items[i].frequency;
+    d.frequency_end_hz = items[i].frequency_end;
     d.phase_rad = 2 * kPi * rng.Uniform01();
     d.seed = o.seed * 1000 + i;
     if (i == 0 && !o.train_drive.empty()) {

@@ -23,6 +23,10 @@
 // The set: a constant-amplitude sine (the major loop) for training; withheld: a sine whose
 // amplitude ramps down to zero and back (nested minor loops), a random reversal sequence, and
 // a second constant-amplitude sine at another phase (within the training excitation).
+// With training frequencies (RealLikeOptions::train_frequencies_hz) the training records are sines
+// at several rates, and the withheld ones add sines at other frequencies and a chirp: the records
+// that cover rates, for a plant with rate dependence (RealLikeStack::rate_lag_v) or a driver
+// low-pass (RealLikeStack::driver_tau_s), both written here and not with the effect library.
 #pragma once
 
 #include <cstdint>
@@ -47,6 +51,15 @@ struct RealLikeStack {
   double creep_per_decade = 0.015;   ///< creep per decade of time, share of the displacement
   double creep_tau_min_s = 0.05, creep_tau_max_s = 50;
   int everett_grid = 240;            ///< cells per axis of the density's table
+  /// Rate dependence (0 = none): the stack's polarisation follows an effective drive held within
+  /// ± λ of the applied one (it lags by λ in the direction of motion and waits at a reversal),
+  /// λ = rate_lag_v · tanh(rate_time_s · |u̇| / rate_lag_v) — proportional to the rate below the
+  /// knee rate_lag_v / rate_time_s, bounded by rate_lag_v above it — with u̇ the analytic drive's
+  /// rate on the plant's fine grid; hysterons and the reversible part both see it.
+  double rate_lag_v = 0;
+  double rate_time_s = 0.01;
+  /// A first-order low-pass of the amplifier ahead of the stack [s] (0 = none).
+  double driver_tau_s = 0;
   std::string Validate() const;      ///< "" or what is wrong (field and value)
 };
 
@@ -68,13 +81,14 @@ struct RealLikeSensor {
 
 /// A drive: rest, then a waveform from an arbitrary phase (all levels in V).
 struct RealLikeDrive {
-  enum class Kind { kSine, kRampedSine, kReversals, kSamples };
+  enum class Kind { kSine, kRampedSine, kReversals, kSamples, kChirp };
   Kind kind = Kind::kSine;
   double rest_level = 0;       ///< the rest segment's drive
   double rest_s = 1;
   double bias = 75;            ///< centre of the waveform
   double amplitude = 70;       ///< peak; kRampedSine: at the ends (zero in the middle)
-  double frequency_hz = 1;     ///< kSine / kRampedSine; kReversals: mean rate of 4·A·f as a sine
+  double frequency_hz = 1;     ///< kSine / kRampedSine / kChirp (its start); kReversals: mean rate of 4·A·f as a sine
+  double frequency_end_hz = 0; ///< kChirp: the frequency at its end (logarithmic sweep)
   double phase_rad = 0;
   double duration_s = 20;      ///< after the rest
   uint64_t seed = 1;           ///< kReversals: the turning points
@@ -128,6 +142,12 @@ struct RealLikeOptions {
   /// Non-empty: the training record ("played") plays this drive (samples at sensor.fs_hz from t = 0,
   /// its leading constant samples the rest) instead of the sine; the withheld records are the same.
   std::vector<double> train_drive;
+  /// Rates (issue 22, rate dependence): non-empty, the training records are one sine per frequency
+  /// ("train-<f>hz", train_s each) instead of the major-loop sine at frequency_hz; the withheld
+  /// records add one sine per withheld frequency ("sine-<f>hz") and, with `chirp`, a logarithmic
+  /// chirp over the span of the training frequencies ("chirp").
+  std::vector<double> train_frequencies_hz, withheld_frequencies_hz;
+  bool chirp = false;
   uint64_t seed = 1;
 };
 

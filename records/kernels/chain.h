@@ -22,6 +22,7 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
     case PZK_QUADRATIC: return 0;
     case PZK_CREEP: *nc = 5; *nd = 2; return 0;
     case PZK_DELAY: *nc = 2; *nd = 1 + pzk_delay_capacity(b); return 0;
+    case PZK_RATE_DEPENDENCE: *nd = 4; return 0;
     case PZK_STACK_BOUC_WEN: *nc = 4; *nd = 4; return 0;
     case PZK_BACKLASH_LIKE: *nd = 2; return 0;
     case PZK_DUHEM: *nd = 2; return 0;
@@ -60,6 +61,7 @@ static inline double pzk_block_init(const pzk_block *b, double *c, double *d, do
     case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
     case PZK_CREEP: return pzk_creep_init(b, c, d, v);
     case PZK_DELAY: return pzk_delay_init(b, c, d, v);
+    case PZK_RATE_DEPENDENCE: return pzk_rate_dependence_init(d, v);
     case PZK_STACK_BOUC_WEN: return pzk_stack_bw_init(b, c, d, v);
     case PZK_BACKLASH_LIKE: return pzk_backlash_init(b, d, v);
     case PZK_DUHEM: return pzk_duhem_init(b, d, v);
@@ -84,6 +86,7 @@ static inline double pzk_block_step(const pzk_block *b, const double *c, const d
     case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
     case PZK_CREEP: return pzk_creep_step(b, c, d, o, v);
     case PZK_DELAY: return pzk_delay_step(c, o, v); /* in place only (o == d) */
+    case PZK_RATE_DEPENDENCE: return pzk_rate_dependence_step(b, d, o, v);
     case PZK_STACK_BOUC_WEN: return pzk_stack_bw_step(b, c, d, o, v);
     case PZK_BACKLASH_LIKE: return pzk_backlash_step(b, d, o, v);
     case PZK_DUHEM: return pzk_duhem_step(b, d, o, v);

@@ -5,7 +5,7 @@
 
 /* A block of the chain drive -> drive effects -> family -> output effects -> polarity/offset. */
 enum {
-  PZK_LOWPASS = 1, PZK_QUADRATIC, PZK_CREEP, PZK_DELAY, /* drive effects (records/model.h order) */
+  PZK_LOWPASS = 1, PZK_QUADRATIC, PZK_CREEP, PZK_DELAY, PZK_RATE_DEPENDENCE, /* drive effects (records/model.h order) */
   PZK_STACK_BOUC_WEN = 10, PZK_BACKLASH_LIKE, PZK_DUHEM, PZK_PRANDTL_ISHLINSKII, PZK_BW_OSCILLATOR,
   PZK_PREISACH, PZK_ASYMMETRIC_PI, PZK_BIMORPH_FIN,      /* families */
   PZK_FRICTION = 30, PZK_STIFFENING, PZK_DRIFT,          /* output effects */

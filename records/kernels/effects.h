@@ -84,6 +84,32 @@ static inline double pzk_delay_step(const double *c, double *d, double v) {
   return a + f * (b - a);
 }
 
+/* rate-dependence: the play of half-width lambda = r_m tanh(tau_r |v'| / r_m) on the drive, v' =
+ * (3 v - 4 v_1 + v_2) / (2 dt) (the second-order backward difference, at rest at its first input
+ * before it); where v' changes sign the play first passes the vertex v - v'^2 dt / (2 (v' - v'_1))
+ * (lambda = 0 there); as the effect library's RateDependence::ApplyDrive. p = {r_m, tau_r},
+ * d = {v_1, v_2, z, v'_1}. */
+static inline double pzk_rate_dependence_init(double *d, double v) {
+  d[0] = v;
+  d[1] = v;
+  d[2] = v;
+  d[3] = 0;
+  return v;
+}
+static inline double pzk_rate_dependence_step(const pzk_block *b, const double *d, double *o, double v) {
+  double rate, lambda, z, r_m = b->p[0];
+  if (!(r_m > 0)) return v;
+  rate = (3 * v - 4 * d[0] + d[1]) / (2 * b->dt);
+  z = rate * d[3] < 0 ? v - rate * rate * b->dt / (2 * (rate - d[3])) : d[2];
+  lambda = r_m * tanh(b->p[1] * fabs(rate) / r_m);
+  z = pzk_play(v, lambda, z);
+  o[3] = rate;
+  o[2] = z;
+  o[1] = d[0];
+  o[0] = v;
+  return z;
+}
+
 /* creep-spectrum: v - sum_i p_i (e - x_i), e = v - v0, tau_i x_i' = e - x_i (first-order hold, from
  * rest), v0 the output at rest (as the effect library's CreepSpectrum::ApplyOutput); n = relaxations,
  * w = their times. c = {v0, a_0, c_0, a_1, c_1, ...}, d = {e_prev, x_0, x_1, ...}. */
