@@ -20,6 +20,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "io/records.h"
@@ -90,6 +91,9 @@ class RecordModel {
   void ApplyLinearOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
                                 std::span<double> reg, size_t m) const;
   size_t family_param_count() const { return family_->params().size(); }
+  /// Where effect e's parameters are in params(): {first index, count}; {0, 0} when the model
+  /// does not take e.
+  std::pair<size_t, size_t> EffectParams(EffectKind e) const;
 
  private:
   std::shared_ptr<const Family> family_;
