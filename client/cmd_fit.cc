@@ -241,6 +241,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   if (r.spectrum_regularisation.used)
     os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
        << r.spectrum_regularisation.Describe() << ".\n";
+  if (const std::string s = r.SpectrumIdentification(); !s.empty()) os << "\nNote: " << s << ".\n";
   os << "\n## Errors\n\n";
   if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
@@ -330,6 +331,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     Struct g;
     (*g.mutable_fields())["relative"] = Num(r.spectrum_regularisation.relative);
     (*g.mutable_fields())["lambda"] = Num(r.spectrum_regularisation.lambda);
+    (*g.mutable_fields())["not_identified"] = Text(r.SpectrumIdentification());
     f["spectrum_regularisation"] = Obj(g);
   }
   std::vector<Value> checks;
@@ -428,6 +430,7 @@ int RunFit(const FitArgs& a) {
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   if (r.spectrum_regularisation.used)
     std::cout << "  creep spectrum: roughness " << r.spectrum_regularisation.Describe() << "\n";
+  if (const std::string s = r.SpectrumIdentification(); !s.empty()) std::cout << "  note: " << s << "\n";
   for (const auto& c : extrapolation)
     if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "io/csv.h"
+#include "model/format.h"
 #include "opt/lm.h"
 #include "opt/thread_pool_evaluator.h"
 
@@ -174,6 +175,25 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, int threads) 
     for (double sg : {1.0, -1.0}) {
       cols.push_back(static_cast<Eigen::Index>(c));
       sign.push_back(sg);
+    }
+  }
+  {  // each weight's standard error from the data alone (the unpenalised linearisation)
+    std::vector<Eigen::Index> used;
+    for (size_t c = 0; c < P; ++c)
+      if (ok[c]) used.push_back(static_cast<Eigen::Index>(c));
+    Eigen::MatrixXd Ju(N, static_cast<Eigen::Index>(used.size()));
+    for (size_t j = 0; j < used.size(); ++j) Ju.col(static_cast<Eigen::Index>(j)) = J.col(used[j]);
+    double sse = 0;
+    size_t idx = 0;
+    for (const io::Record* r : records_)
+      for (size_t k = r->first_scored; k < r->end_scored; ++k, ++idx) sse += (r->y[k] - y0[idx]) * (r->y[k] - y0[idx]);
+    const double dof = std::max<double>(1, static_cast<double>(samples_) - static_cast<double>(used.size()));
+    const Eigen::MatrixXd cov = (Ju.transpose() * Ju).completeOrthogonalDecomposition().pseudoInverse() * (sse / dof);
+    spectrum_sigma_.assign(n, std::numeric_limits<double>::infinity());
+    for (size_t j = 0; j < used.size(); ++j) {
+      const auto c = static_cast<size_t>(used[j]);
+      if (c >= spectrum_first_ && c < spectrum_first_ + n)
+        spectrum_sigma_[c - spectrum_first_] = std::sqrt(std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
     }
   }
   const auto m = static_cast<Eigen::Index>(cols.size());
@@ -540,6 +560,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   res.weights = out.weights;
   res.regularisation = fitness.validation();
   res.spectrum_regularisation = fitness.spectrum_validation();
+  res.spectrum_sigma = fitness.spectrum_sigma();
   res.train_mse = out.mse;
   res.train_sse = out.mse * static_cast<double>(fitness.samples());
   for (const io::Record& r : set.records) {
@@ -549,6 +570,27 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   }
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;
+}
+
+std::string FitResult::SpectrumIdentification() const {
+  const auto [first, count] = model->EffectParams(EffectKind::Named("creep-spectrum"));
+  if (count == 0 || spectrum_sigma.size() != count) return "";
+  double mean = 0;
+  for (size_t i = 0; i < count; ++i) mean += params[first + i] / static_cast<double>(count);
+  std::vector<size_t> loose;
+  for (size_t i = 0; i < count; ++i)
+    if (!(spectrum_sigma[i] <= mean)) loose.push_back(i);
+  if (loose.empty()) return "";
+  const auto& box = model->params();
+  std::string names, sigmas;
+  for (size_t i : loose) {
+    names += (names.empty() ? "" : ", ") + box[first + i].name;
+    sigmas += (sigmas.empty() ? "" : ", ") + FormatG(spectrum_sigma[i], 2);
+  }
+  return "the training excitation does not identify the creep spectrum's " + names + " (σ " + sigmas +
+         " from the training records alone, above the mean fitted weight " + FormatG(mean, 2) +
+         "): the roughness penalty holds them to their neighbours, and what they add to a withheld prediction "
+         "is extrapolated — a drive with holds and steps (the excitation report's proposed drive) identifies them";
 }
 
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options) {

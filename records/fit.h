@@ -82,6 +82,10 @@ class RecordFitness final : public opt::FitnessFunction {
   /// per left-out block as min ‖J p − (r + J p₀)‖² + μ ‖D w‖² with the spectrum's weights ≥ 0 and
   /// the other parameters free. True when μ changed. Not thread-safe: call between fits.
   bool RevalidateSpectrum(std::span<const double> params, int threads);
+  /// The standard error of each spectrum weight from the training records alone (no penalty), at
+  /// the last RevalidateSpectrum's point: s² (JᵀJ)⁺ of the same linearisation, s² = Σ r² / (N − p).
+  /// Empty before it.
+  const std::vector<double>& spectrum_sigma() const { return spectrum_sigma_; }
   /// The roughness penalty μ ‖D w‖² at `params` (0 without the spectrum or μ).
   double SpectrumPenalty(std::span<const double> params) const;
   size_t samples() const { return samples_; }
@@ -102,6 +106,7 @@ class RecordFitness final : public opt::FitnessFunction {
   size_t spectrum_first_ = 0, spectrum_count_ = 0;  ///< the creep spectrum's weights in params (count 0: none)
   Eigen::MatrixXd spectrum_roughness_;               ///< D
   WeightValidation spectrum_validation_;
+  std::vector<double> spectrum_sigma_;
 };
 
 /// Error figures of a model on one record's window.
@@ -154,6 +159,12 @@ struct FitResult {
   std::vector<double> weights;   ///< linear family: the solved weights
   WeightValidation regularisation;  ///< a regularised linear family: the strength and its validation
   WeightValidation spectrum_regularisation;  ///< creep-spectrum: its roughness penalty's strength
+  /// creep-spectrum: each weight's standard error from the training records alone
+  /// (RecordFitness::spectrum_sigma; empty without the penalty's validation).
+  std::vector<double> spectrum_sigma;
+  /// creep-spectrum: "" or which relaxations the training excitation does not identify (σ above
+  /// the mean fitted weight: the data cannot tell whether they are there).
+  std::string SpectrumIdentification() const;
   double train_mse = 0;
   double train_sse = 0;
   std::vector<RecordMetrics> metrics;              ///< every record of the set, set order
