@@ -590,7 +590,8 @@ std::string FitResult::SpectrumIdentification() const {
   return "the training excitation does not identify the creep spectrum's " + names + " (σ " + sigmas +
          " from the training records alone, above the mean fitted weight " + FormatG(mean, 2) +
          "): the roughness penalty holds them to their neighbours, and what they add to a withheld prediction "
-         "is extrapolated — a drive with holds and steps (the excitation report's proposed drive) identifies them";
+         "is extrapolated (fast relaxations need steps and holds at several amplitudes in the training drive, "
+         "slow ones a record several times longer than their time)";
 }
 
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options) {
