@@ -264,6 +264,10 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\n";
   }
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
+  if (r.spectrum_regularisation.used)
+    os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
+       << r.spectrum_regularisation.Describe() << ".\n";
+  if (const std::string s = r.SpectrumIdentification(); !s.empty()) os << "\nNote: " << s << ".\n";
   os << "\n## Errors\n\n";
   if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
@@ -349,6 +353,13 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
     (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
     f["regularisation"] = Obj(g);
+  }
+  if (r.spectrum_regularisation.used) {
+    Struct g;
+    (*g.mutable_fields())["relative"] = Num(r.spectrum_regularisation.relative);
+    (*g.mutable_fields())["lambda"] = Num(r.spectrum_regularisation.lambda);
+    (*g.mutable_fields())["not_identified"] = Text(r.SpectrumIdentification());
+    f["spectrum_regularisation"] = Obj(g);
   }
   std::vector<Value> checks;
   for (const auto& c : extrapolation) {
@@ -467,6 +478,9 @@ int RunFit(const FitArgs& a) {
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
+  if (r.spectrum_regularisation.used)
+    std::cout << "  creep spectrum: roughness " << r.spectrum_regularisation.Describe() << "\n";
+  if (const std::string s = r.SpectrumIdentification(); !s.empty()) std::cout << "  note: " << s << "\n";
   for (const auto& c : extrapolation)
     if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
   std::cout << "  search: " << SearchSentence(r) << "\n";

@@ -70,6 +70,24 @@ class RecordFitness final : public opt::FitnessFunction {
   /// like noise and its validation choose too strong a strength); true when it changed. Not
   /// thread-safe: call between fits.
   bool Revalidate(std::span<const double> params);
+  /// A model with `creep-spectrum`: the strength μ of its weights' roughness penalty
+  /// μ ‖D w‖² (records/regularisation.h SpectrumRoughness; added to the sum of squared errors, so
+  /// μ ‖D w‖² / N to the cost of Evaluate, √(μ/N) D w as extra rows of Residuals when μ > 0). Zero
+  /// (the search unpenalised) until RevalidateSpectrum.
+  const WeightValidation& spectrum_validation() const { return spectrum_validation_; }
+  /// Chooses μ by the blocked cross-validation of records/regularisation.h on the training
+  /// records, linearised at `params` (a fit's solution): the output's Jacobian J with respect to
+  /// every searched parameter (central differences; a linear family's weights re-solved inside,
+  /// so its columns carry the trade-off with the loop's shape), the step p from `params` solved
+  /// per left-out block as min ‖J p − (r + J p₀)‖² + μ ‖D w‖² with the spectrum's weights ≥ 0 and
+  /// the other parameters free. True when μ changed. Not thread-safe: call between fits.
+  bool RevalidateSpectrum(std::span<const double> params, int threads);
+  /// The standard error of each spectrum weight from the training records alone (no penalty), at
+  /// the last RevalidateSpectrum's point: s² (JᵀJ)⁺ of the same linearisation, s² = Σ r² / (N − p).
+  /// Empty before it.
+  const std::vector<double>& spectrum_sigma() const { return spectrum_sigma_; }
+  /// The roughness penalty μ ‖D w‖² at `params` (0 without the spectrum or μ).
+  double SpectrumPenalty(std::span<const double> params) const;
   size_t samples() const { return samples_; }
   double penalty() const { return penalty_; }
 
@@ -89,6 +107,10 @@ class RecordFitness final : public opt::FitnessFunction {
   double penalty_;
   Eigen::MatrixXd regularisation_;  ///< the family's R (empty: none)
   WeightValidation validation_;
+  size_t spectrum_first_ = 0, spectrum_count_ = 0;  ///< the creep spectrum's weights in params (count 0: none)
+  Eigen::MatrixXd spectrum_roughness_;               ///< D
+  WeightValidation spectrum_validation_;
+  std::vector<double> spectrum_sigma_;
 };
 
 /// Error figures of a model on one record's window.
@@ -158,6 +180,9 @@ struct FitOptions {
   /// Starting points for the polish besides the search's best (unit coordinates, e.g. a base fit
   /// with an effect at small magnitudes); the best polished one is kept.
   std::vector<std::vector<double>> extra_starts;
+  /// creep-spectrum: its weights' roughness penalty chosen by validation at the solution (false:
+  /// the weights unpenalised, as the search has them; for comparisons).
+  bool spectrum_roughness = true;
   /// The uncertainty table at the solution (2p + 1 evaluations, on this machine; its Jacobian
   /// steps are lm.fd_step of each parameter's unit range).
   bool uncertainty = true;
@@ -169,6 +194,13 @@ struct FitResult {
   std::vector<double> params;    ///< physical values, model().params() order
   std::vector<double> weights;   ///< linear family: the solved weights
   WeightValidation regularisation;  ///< a regularised linear family: the strength and its validation
+  WeightValidation spectrum_regularisation;  ///< creep-spectrum: its roughness penalty's strength
+  /// creep-spectrum: each weight's standard error from the training records alone
+  /// (RecordFitness::spectrum_sigma; empty without the penalty's validation).
+  std::vector<double> spectrum_sigma;
+  /// creep-spectrum: "" or which relaxations the training excitation does not identify (σ above
+  /// the mean fitted weight: the data cannot tell whether they are there).
+  std::string SpectrumIdentification() const;
   double train_mse = 0;
   double train_sse = 0;
   std::vector<RecordMetrics> metrics;              ///< every record of the set, set order

@@ -77,6 +77,15 @@ std::string RecordModel::Describe() const {
   return s;
 }
 
+std::pair<size_t, size_t> RecordModel::EffectParams(EffectKind e) const {
+  for (size_t i = 0; i < effects_.size(); ++i) {
+    if (effects_[i] != e) continue;
+    const size_t end = i + 1 < effects_.size() ? effect_offset_[i + 1] : params_.size() - family_param_count();
+    return {family_param_count() + effect_offset_[i], end - effect_offset_[i]};
+  }
+  return {0, 0};
+}
+
 void RecordModel::EffectiveDrive(const io::Record& r, std::span<const double> ep, size_t from, size_t end,
                                  std::vector<double>& ue) const {
   ue.assign(r.u.begin() + static_cast<std::ptrdiff_t>(from), r.u.begin() + static_cast<std::ptrdiff_t>(end));

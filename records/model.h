@@ -20,6 +20,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "io/records.h"
@@ -96,6 +97,9 @@ class RecordModel {
   double LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
                       std::span<const double> reg, std::span<double> yhat) const;
   size_t family_param_count() const { return family_->params().size(); }
+  /// Where effect e's parameters are in params(): {first index, count}; {0, 0} when the model
+  /// does not take e.
+  std::pair<size_t, size_t> EffectParams(EffectKind e) const;
 
  private:
   std::shared_ptr<const Family> family_;

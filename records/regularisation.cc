@@ -1,5 +1,6 @@
 #include "records/regularisation.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -16,6 +17,7 @@ std::string Short(double x) { return FormatG(x, 4); }
 
 std::string WeightValidation::Describe() const {
   if (!used) return "none";
+  if (relatives.empty()) return "none chosen (no validation ran)";
   std::string s = "strength " + Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
                   std::to_string(folds) + "-fold blocked cross-validation; CV RMSE:";
   for (size_t i = 0; i < relatives.size(); ++i) s += (i ? ", " : " ") + Short(relatives[i]) + " → " + Short(cv_rmse[i]);
@@ -23,6 +25,24 @@ std::string WeightValidation::Describe() const {
 }
 
 WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R) {
+  Eigen::MatrixXd G = eq.G[0];
+  for (size_t b = 1; b < eq.G.size(); ++b) G += eq.G[b];
+  const double trR = R.trace();
+  return ChooseStrength(eq, R, trR > 0 ? G.trace() / trR : 0, StrengthRule{});
+}
+
+Eigen::MatrixXd SpectrumRoughness(size_t n) {
+  const auto m = static_cast<Eigen::Index>(n);
+  Eigen::MatrixXd D = Eigen::MatrixXd::Zero(std::max<Eigen::Index>(m - 1, 0), m);
+  for (Eigen::Index i = 0; i + 1 < m; ++i) {
+    D(i, i) = -1;
+    D(i, i + 1) = 1;
+  }
+  return D;
+}
+
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R, double scale,
+                                const StrengthRule& rule) {
   const size_t K = eq.G.size();
   WeightValidation v;
   v.used = true;
@@ -38,8 +58,6 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
     G += eq.G[b];
     h += eq.h[b];
   }
-  const double trR = R.trace();
-  const double scale = trR > 0 ? G.trace() / trR : 0;
   v.relatives = {0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1, 10, 100};
   std::vector<std::vector<double>> err(v.relatives.size(), std::vector<double>(K));
   for (size_t c = 0; c < v.relatives.size(); ++c) {
@@ -63,7 +81,11 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
     mean /= static_cast<double>(K);
     for (size_t b = 0; b < K; ++b) sq += (err[c][b] - err[best][b] - mean) * (err[c][b] - err[best][b] - mean);
     const double se = std::sqrt(sq / static_cast<double>(K - 1) / static_cast<double>(K));
-    if (mean > se) break;
+    const bool negligible = rule.rmse_tolerance > 0 && v.cv_rmse[c] <= (1 + rule.rmse_tolerance) * v.cv_rmse[best];
+    if (mean > se && !negligible) {
+      if (rule.contiguous) break;
+      continue;
+    }
     chosen = c;
   }
   v.relative = v.relatives[chosen];

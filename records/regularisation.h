@@ -44,5 +44,26 @@ inline constexpr int kValidationBlocks = 5;
 /// Chooses λ for the regularisation R (m×m) by the rule above. Throws InputError when a block is
 /// empty (fewer training samples than blocks).
 WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R);
+/// How ChooseStrength picks among the candidates.
+struct StrengthRule {
+  /// True: the rule above (the first candidate above the best whose extra error exceeds its
+  /// standard error ends the climb). False: the largest ρ above the best that passes, wherever it
+  /// is (a CV curve flat within its noise but not monotone).
+  bool contiguous = true;
+  /// > 0: a candidate also passes when its CV RMSE is within this share of the best's (an extra
+  /// error too small to matter, however consistent across the blocks: the blocks of one periodic
+  /// record agree on a difference that only extrapolation would show).
+  double rmse_tolerance = 0;
+};
+/// The same with the candidates λ = ρ · scale (R penalising part of the unknowns only: the scale
+/// is then the trace of that part of G over tr(R)) and the rule `rule`.
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R, double scale,
+                                const StrengthRule& rule);
+
+/// The roughness of a creep spectrum's n weights (log-spaced relaxation times, model/effect_library.h
+/// `creep-spectrum`) across log-time: the first differences of neighbouring weights, D (n−1 × n),
+/// whose penalty ‖D w‖² = wᵀDᵀD w vanishes on equal weights per decade — log creep, the limit the
+/// penalty shrinks a spectrum towards — and grows with a spectrum's raggedness.
+Eigen::MatrixXd SpectrumRoughness(size_t n);
 
 }  // namespace pz::records
