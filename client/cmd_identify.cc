@@ -93,6 +93,11 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   ga_option("--island-stall", "island_stall_generations", opts->ga.island_stall_generations,
             "restart an island (its sources' migrants + fresh random individuals) after this many "
             "generations without a better best of its own (0 = never)");
+  (*flag_of)["island_mutation"] = "--island-mutation";
+  cmd->add_option("--island-mutation", opts->ga.island_mutation,
+                  "per-bit mutation probability of each island, one per island, comma-separated (e.g. "
+                  "0.01,0.02,0.03,0.05; default: --mutation for every island)")
+      ->delimiter(',');
   cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--ranges", opts->ranges,
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "

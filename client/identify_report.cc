@@ -244,6 +244,10 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     } else {
       md << "independent: multi-start";
     }
+    if (!options.ga.island_mutation.empty()) {
+      md << "; mutation by island";
+      for (double p : options.ga.island_mutation) md << " " << p;
+    }
     if (options.ga.island_stall_generations > 0)
       md << "; an island is restarted after " << options.ga.island_stall_generations << " generations of stall";
     int migrations = 0, restarts = 0;

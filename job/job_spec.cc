@@ -113,6 +113,11 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Require(ga->migration_margin >= 0 && ga->migration_margin < 1, "ga.migration_margin", ga->migration_margin,
               "must be in [0, 1) (0 = migrants from every source)");
     c.Range("ga.island_stall_generations", ga->island_stall_generations, 0, 100000000);
+    c.Require(ga->island_mutation.empty() || ga->island_mutation.size() == static_cast<size_t>(ga->islands),
+              "ga.island_mutation.size()", ga->island_mutation.size(),
+              "must be 0 (ga.mutation_probability for every island) or ga.islands = " + std::to_string(ga->islands));
+    for (size_t i = 0; i < ga->island_mutation.size(); ++i)
+      c.Range("ga.island_mutation[" + std::to_string(i) + "]", ga->island_mutation[i], 0.0, 1.0);
   }
   return std::move(c.out);
 }

@@ -191,6 +191,7 @@ struct GaSettings {
   opt::MigrationTopology topology = opt::MigrationTopology::kRing;
   double migration_margin = 0;         ///< [0, 1) (0 = migrants from every source; opt/ga.h)
   int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
+  std::vector<double> island_mutation;  ///< empty or one rate per island, each 0..1 (opt/ga.h)
   int offspring() const;               ///< evaluated per generation: population − elite count
 };
 

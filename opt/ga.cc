@@ -112,6 +112,16 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
     return InvalidArgument(
         FieldError(name("island_stall_generations"), island_stall_generations, "must be >= 0 (0 = never)"));
   }
+  if (!island_mutation.empty() && island_mutation.size() != static_cast<size_t>(islands)) {
+    return InvalidArgument(FieldError(name("island_mutation") + ".size()", island_mutation.size(),
+                                      "must be 0 (" + name("mutation_probability") + " for every island) or " +
+                                          name("islands") + " = " + std::to_string(islands)));
+  }
+  for (size_t i = 0; i < island_mutation.size(); ++i) {
+    if (Status s = CheckProbability(name("island_mutation") + "[" + std::to_string(i) + "]", island_mutation[i]);
+        !s.ok())
+      return s;
+  }
   return Status::Ok();
 }
 
@@ -304,9 +314,11 @@ int GeneticAlgorithm::Tournament(Rng& rng) {
   return static_cast<int>(winner);
 }
 
-const GeometricGaps& GeneticAlgorithm::MutationGaps() {
-  if (!mutation_gaps_) mutation_gaps_.emplace(options_.mutation_probability, options_.genome_bits);
-  return *mutation_gaps_;
+const GeometricGaps& GeneticAlgorithm::MutationGaps(int i) {
+  const double p = options_.MutationProbability(i);
+  auto it = mutation_gaps_.find(p);
+  if (it == mutation_gaps_.end()) it = mutation_gaps_.try_emplace(p, p, options_.genome_bits).first;
+  return it->second;
 }
 
 void GeneticAlgorithm::DrawUniform(Rng& rng, int count, std::vector<Genome>* out) {
@@ -385,7 +397,7 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   const int n = options_.population_size, bits = options_.genome_bits;
   const int elite = options_.elite_count(), n_off = n - elite;
   const BernoulliThreshold cross(options_.crossover_probability);
-  const GeometricGaps& mutate = MutationGaps();
+  const GeometricGaps& mutate = MutationGaps(island);
   Rng& rng = rngs_[island];
   const IslandState& is = state_.islands[island];
 

@@ -39,7 +39,10 @@
 //      An island takes the best `migrants` of what it receives (ties: source order, then rank);
 //      they replace its worst individuals pair by pair (best migrant ↔ worst resident) where the
 //      migrant's cost is strictly lower; the island is re-ranked;
-//   7. an island whose own stall reaches island_stall_generations (0 = never) is restarted at the
+//   7. with island_mutation (one rate per island) island i's offspring flip each bit with
+//      probability island_mutation[i] instead of mutation_probability: heterogeneous islands, the
+//      same operators at different rates (empty = mutation_probability for every island);
+//   8. an island whose own stall reaches island_stall_generations (0 = never) is restarted at the
 //      next generation: its population becomes the best `migrants` individuals its topology
 //      sources hold (as a migration would send them; none for multi-start or K = 1) plus fresh
 //      uniform individuals drawn from its generator, which are evaluated in that generation's
@@ -98,6 +101,8 @@ struct GaOptions {
                                         ///< (0 = every source, the rule before the margin)
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
+  std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0, 1];
+                                        ///< empty (mutation_probability everywhere) or `islands` entries
 
   /// What Validate() calls a field, given the member's name (e.g. "islands" → "--islands" for a
   /// command line); without one, the member's name.
@@ -111,6 +116,10 @@ struct GaOptions {
   std::vector<int> MigrationSources(int i) const;
   /// migration_interval > 0 and more than one island.
   bool migrates() const { return islands > 1 && migration_interval > 0; }
+  /// The per-bit mutation probability of island `i`: island_mutation[i], or mutation_probability.
+  double MutationProbability(int i) const {
+    return island_mutation.empty() ? mutation_probability : island_mutation[i];
+  }
 };
 
 /// One island's part of a generation's record (GenerationSummary::islands).
@@ -268,8 +277,9 @@ class GeneticAlgorithm {
     int kept_count() const { return elite + static_cast<int>(kept.size()); }
   };
   int Tournament(Rng& rng);
-  /// The mutation's gap table for (mutation_probability, genome_bits), built on first use.
-  const GeometricGaps& MutationGaps();
+  /// The mutation's gap table of island `i` for (MutationProbability(i), genome_bits), built on
+  /// first use (one table per distinct rate).
+  const GeometricGaps& MutationGaps(int i);
   void DrawUniform(Rng& rng, int count, std::vector<Genome>* out);
   Draft Breed(int island);
   Draft Restart(int island);
@@ -293,7 +303,7 @@ class GeneticAlgorithm {
   std::atomic<bool> cancel_{false};
   std::vector<Rng> rngs_;                  ///< one per island
   std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once
-  std::optional<GeometricGaps> mutation_gaps_;
+  std::map<double, GeometricGaps> mutation_gaps_;  ///< by mutation probability
   GaState state_;
 };
 

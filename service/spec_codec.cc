@@ -284,6 +284,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     }
     if (s.ga->island_stall_generations != 0)
       g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
+    for (double p : s.ga->island_mutation) g->add_island_mutation(p);
   }
   if (s.external) {
     auto* e = p->mutable_external();
@@ -327,6 +328,7 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
       g.topology = static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
     if (pg.has_migration_margin()) g.migration_margin = pg.migration_margin();
     if (pg.has_island_stall_generations()) g.island_stall_generations = ClampInt(pg.island_stall_generations());
+    g.island_mutation.assign(pg.island_mutation().begin(), pg.island_mutation().end());
     s->ga = g;
   } else if (p.has_external()) {
     ExternalSettings e;

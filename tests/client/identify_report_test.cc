@@ -95,15 +95,22 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   std::ifstream md(o.out_dir / "report.md");
   const std::string report((std::istreambuf_iterator<char>(md)), {});
   EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; 2 migrations"), std::string::npos) << report;
-  // The margin's gate is named in the report's line.
+  // The margin's gate and heterogeneous islands are named in the report's line.
+  const auto report_line = [&] {
+    WriteIdentifyReport(o, set, fitness, hgann::RunIdentify(o, set, fitness, nullptr), term);
+    std::ifstream in(o.out_dir / "report.md");
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+  };
   o.ga.migration_margin = 0.2;
-  const auto gated = hgann::RunIdentify(o, set, fitness, nullptr);
-  WriteIdentifyReport(o, set, fitness, gated, term);
-  std::ifstream md_gated(o.out_dir / "report.md");
-  const std::string report_gated((std::istreambuf_iterator<char>(md_gated)), {});
-  EXPECT_NE(report_gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; 2 migrations"),
+  const std::string gated = report_line();
+  EXPECT_NE(gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; 2 migrations"),
             std::string::npos)
-      << report_gated;
+      << gated;
+  o.ga.island_mutation = {0.01, 0.02, 0.05};
+  const std::string mixed = report_line();
+  EXPECT_NE(mixed.find("from sources better by more than 20 %; mutation by island 0.01 0.02 0.05; 2 migrations"),
+            std::string::npos)
+      << mixed;
   // One island: the file is as before islands.
   EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
   EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
@@ -131,6 +138,10 @@ TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
   EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}), "--migration-margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
+  EXPECT_EQ(IdentifyRefusal({"--islands", "3", "--island-mutation", "0.01,0.02"}),
+            "--island-mutation.size() = 2: must be 0 (--mutation for every island) or --islands = 3");
+  EXPECT_EQ(IdentifyRefusal({"--islands", "2", "--island-mutation", "0.01,2"}),
+            "--island-mutation[1] = 2: must be in [0, 1]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "0"}),
             "--migrants = 0: must be >= 1 when --migration-interval = 200 > 0 (--migration-interval 0 runs the "

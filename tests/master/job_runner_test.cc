@@ -40,7 +40,7 @@ TEST(JobRunner, InProcessJobRunsExactlyAsPiezoidIdentify) {
 }
 
 /// Four islands of the nominal hgann problem: migration every 3 generations, fully connected, an
-/// island restarted after 4 generations of its own stall.
+/// island restarted after 4 generations of its own stall, each island at its own mutation rate.
 job::JobSpec IslandSpec() {
   job::JobSpec spec = NominalSpec(16, 10);
   spec.ga->islands = 4;
@@ -48,6 +48,7 @@ job::JobSpec IslandSpec() {
   spec.ga->migrants = 2;
   spec.ga->topology = opt::MigrationTopology::kFullyConnected;
   spec.ga->island_stall_generations = 4;
+  spec.ga->island_mutation = {0.01, 0.02, 0.03, 0.05};
   return spec;
 }
 
@@ -59,6 +60,7 @@ TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
   hgann::IdentifyOptions o;
   o.ga = ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
   EXPECT_EQ(o.ga.islands, 4);
+  EXPECT_EQ(o.ga.island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
   o.threads = 2;
   const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
   const hgann::IdentifyResult id = hgann::RunIdentify(o, Nominal(), fitness, nullptr);

@@ -776,6 +776,18 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = 1; }), "migration_margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = -0.5; }).rfind("migration_margin = -0.5", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = std::nan(""); }).rfind("migration_margin = nan", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.island_mutation = {0.01, 0.02}; }),
+            "island_mutation.size() = 2: must be 0 (mutation_probability for every island) or islands = 1");
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.islands = 3;
+              o.island_mutation = {0.01, 1.5, 0.02};
+            }),
+            "island_mutation[1] = 1.5: must be in [0, 1]");
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.islands = 2;
+              o.island_mutation = {std::nan(""), 0.02};
+            }).rfind("island_mutation[0] = nan", 0),
+            0u);
   // A caller names the fields as its user wrote them, in the field and in the rule.
   GaOptions named;
   named.migrants = 400;
@@ -872,29 +884,57 @@ TEST(GaIslands, OneDispatchPerGenerationWithEveryIslandsIndividuals) {
 }
 
 TEST(GaIslands, MultiStartIsIndependentRunsOnTheIslandStreams) {
-  // Migration interval 0: island k is exactly the one-island GA seeded StreamSeed(seed, k).
+  // Migration interval 0: island k is exactly the one-island GA seeded StreamSeed(seed, k), at
+  // mutation probability island_mutation[k] when the islands have their own rates.
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  for (const std::vector<double>& rates : {std::vector<double>{}, std::vector<double>{0.002, 0.05, 0.2}}) {
+    SCOPED_TRACE("island_mutation of " + std::to_string(rates.size()));
+    GaOptions o = IslandOptions(3);
+    o.migration_interval = 0;
+    o.stall_generations = 0;
+    o.island_mutation = rates;
+    const RunRecord multi = RunWith(&ev, o);
+    double best = INFINITY;
+    int best_island = -1;
+    for (int k = 0; k < 3; ++k) {
+      GaOptions one = SmallOptions(StreamSeed(o.seed, k));
+      one.stall_generations = 0;
+      one.mutation_probability = o.MutationProbability(k);
+      const RunRecord single = RunWith(&ev, one);
+      const IslandState &x = single.state.islands[0], &y = multi.state.islands[k];
+      EXPECT_EQ(x.population, y.population) << "island " << k;
+      ASSERT_EQ(x.fitness.size(), y.fitness.size());
+      for (size_t i = 0; i < x.fitness.size(); ++i) EXPECT_EQ(x.fitness[i].cost, y.fitness[i].cost) << k << " " << i;
+      EXPECT_EQ(x.rng, y.rng) << "island " << k;
+      if (single.summary.best_fitness.cost < best) best = single.summary.best_fitness.cost, best_island = k;
+    }
+    EXPECT_EQ(multi.summary.best_fitness.cost, best);
+    EXPECT_EQ(multi.summary.best_island, best_island);
+    for (const GenerationSummary& g : multi.state.log) EXPECT_FALSE(g.migrated);
+  }
+}
+
+TEST(GaIslands, EachIslandMutatesAtItsOwnRate) {
+  // (Island k at its own rate is the one-island run at that rate: MultiStartIsIndependentRuns….)
+  // The same rate for every island is the run without island_mutation; different rates differ.
   const HashFitness fitness;
   InlineEvaluator ev(fitness);
   GaOptions o = IslandOptions(3);
-  o.migration_interval = 0;
-  o.stall_generations = 0;
-  const RunRecord multi = RunWith(&ev, o);
-  double best = INFINITY;
-  int best_island = -1;
-  for (int k = 0; k < 3; ++k) {
-    GaOptions one = SmallOptions(StreamSeed(o.seed, k));
-    one.stall_generations = 0;
-    const RunRecord single = RunWith(&ev, one);
-    const IslandState &x = single.state.islands[0], &y = multi.state.islands[k];
-    EXPECT_EQ(x.population, y.population) << "island " << k;
-    ASSERT_EQ(x.fitness.size(), y.fitness.size());
-    for (size_t i = 0; i < x.fitness.size(); ++i) EXPECT_EQ(x.fitness[i].cost, y.fitness[i].cost) << k << " " << i;
-    EXPECT_EQ(x.rng, y.rng) << "island " << k;
-    if (single.summary.best_fitness.cost < best) best = single.summary.best_fitness.cost, best_island = k;
-  }
-  EXPECT_EQ(multi.summary.best_fitness.cost, best);
-  EXPECT_EQ(multi.summary.best_island, best_island);
-  for (const GenerationSummary& g : multi.state.log) EXPECT_FALSE(g.migrated);
+  const RunRecord uniform = RunWith(&ev, o);
+  o.island_mutation.assign(3, o.mutation_probability);
+  const RunRecord same_rate = RunWith(&ev, o);
+  EXPECT_EQ(Digest(same_rate.state, same_rate.summary), Digest(uniform.state, uniform.summary));
+  o.island_mutation[1] = 0.05;
+  const RunRecord mixed = RunWith(&ev, o);
+  EXPECT_EQ(uniform.state.log[0], mixed.state.log[0]) << "generation 0 draws no mutation";
+  EXPECT_NE(uniform.state.islands[1].population, mixed.state.islands[1].population);
+  // With migration: the same run whatever the evaluator's threads and the completion order.
+  GaOptions migrating = IslandOptions(4);
+  migrating.island_mutation = {0.01, 0.02, 0.03, 0.05};
+  ThreadPoolEvaluator pool(fitness, 3);
+  ShuffledEvaluator shuffled(&pool);
+  ExpectSameRun(RunWith(&ev, migrating), RunWith(&shuffled, migrating));
 }
 
 TEST(GaIslands, MigrantsReplaceTheWorstWhenBetter) {
@@ -1009,6 +1049,7 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
   InlineEvaluator ev(fitness);
   GaOptions o = IslandOptions(4);
   o.island_stall_generations = 3;
+  o.island_mutation = {0.01, 0.02, 0.03, 0.05};
   const RunRecord reference = RunWith(&ev, o);
   for (int stop : {2, 3, 4}) {  // before, at (interval 3) and after a migration
     SCOPED_TRACE("checkpoint after generation " + std::to_string(stop));

@@ -82,6 +82,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   s.ga->topology = opt::MigrationTopology::kRandom;
   s.ga->island_stall_generations = 9;
   s.ga->migration_margin = 0.2;
+  s.ga->island_mutation = {0.01, 0.02, 0.03, 0.05};
   JobSpec back;
   std::vector<FieldViolation> v;
   ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(s), &back, &v).ok());
@@ -91,6 +92,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
   EXPECT_EQ(back.ga->island_stall_generations, 9);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
+  EXPECT_EQ(back.ga->island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
   back = JobSpec{};
   ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(s), &back, &v).ok());
   ASSERT_TRUE(back.ga.has_value());
@@ -99,6 +101,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kRandom);
   EXPECT_EQ(back.ga->island_stall_generations, 9);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
+  EXPECT_EQ(back.ga->island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
   EXPECT_NE(JobSpecToJson(s).find("\"MIGRATION_TOPOLOGY_RANDOM\""), std::string::npos);
 
   auto violations = [&](auto mutate) {
@@ -116,6 +119,11 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                        "must be in [0, 1)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = std::nan(""); }),
                        "ga.migration_margin", "must be in [0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation = {0.01, 0.02}; }),
+                       "ga.island_mutation.size()", "must be 0 (ga.mutation_probability for every island) or ga.islands = 4"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }), "ga.island_mutation[2]",
+                       "must be in [0, 1]"));
+  EXPECT_TRUE(violations([](job::GaSettings& g) { g.island_mutation.clear(); }).empty());
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0; }).empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.
   const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);

@@ -125,9 +125,10 @@ TEST(Churn, ASyntheticJobIsBitIdenticalUnderAKillEveryThirdOfASecond) {
 
 TEST(Churn, AJobOfFourIslandsIsBitIdenticalUnderAKillEveryThirdOfASecond) {
   // One dispatch holds all four islands' offspring; migrations every 5 generations and restarts
-  // of stalled islands happen while workers die.
+  // of stalled islands happen while workers die; each island mutates at its own rate.
   job::JobSpec spec = SyntheticSpec(78, 20, 200, /*sleep_ms=*/1);
   spec.ga->islands = 4;
+  spec.ga->island_mutation = {0.01, 0.02, 0.04, 0.08};
   spec.ga->migration_interval = 5;
   spec.ga->migrants = 2;
   spec.ga->topology = opt::MigrationTopology::kRandom;

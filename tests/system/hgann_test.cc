@@ -104,7 +104,8 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
 
 TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIdentify) {
   // The quick job as an archipelago: 4 islands of 30, a ring migration every 4 generations,
-  // islands restarted after 6 generations of their own stall; one dispatch of 4 × 15 per generation.
+  // islands restarted after 6 generations of their own stall, each island at its own mutation rate;
+  // one dispatch of 4 × 15 per generation.
   job::JobSpec spec = QuickSpec();
   spec.ga->population = 30;
   spec.ga->generations = 16;
@@ -112,6 +113,7 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   spec.ga->migration_interval = 4;
   spec.ga->migrants = 2;
   spec.ga->island_stall_generations = 6;
+  spec.ga->island_mutation = {0.01, 0.03, 0.01, 0.05};
   const service::JobCheckpoint ref = Reference(spec);
 
   hgann::IdentifyOptions o;
