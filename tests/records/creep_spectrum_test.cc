@@ -18,6 +18,7 @@
 #include "records/diagnose.h"
 #include "records/fit.h"
 #include "records/reallike.h"
+#include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -54,22 +55,9 @@ RealLikeOptions Small(uint64_t seed) {
   return o;
 }
 
-/// Each withheld record's RMSE / its true noise RMS, by name.
+/// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
 std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects, FitResult* out = nullptr) {
-  FitOptions f;
-  f.family = "preisach";
-  f.effects = std::move(effects);
-  f.uncertainty = false;
-  f.search.repetitions = 1;
-  f.search.pso.particles = 10;
-  f.search.pso.iterations = 15;
-  f.lm.max_iterations = 30;
-  FitResult r = FitRecords(s.set, f);
-  std::map<std::string, double> ratios;
-  for (size_t i = 0; i < s.set.records.size(); ++i)
-    ratios[s.set.records[i].name] = r.metrics[i].rmse / s.truth[i].noise_rms_um;
-  if (out) *out = std::move(r);
-  return ratios;
+  return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
 TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {

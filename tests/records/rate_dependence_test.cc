@@ -16,6 +16,7 @@
 #include "records/extrapolation.h"
 #include "records/fit.h"
 #include "records/reallike.h"
+#include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -55,33 +56,16 @@ RealLikeOptions RatePlant(uint64_t seed) {
   return o;
 }
 
-FitOptions Quick(std::vector<EffectKind> effects) {
-  FitOptions f;
-  f.family = "preisach";
-  f.effects = std::move(effects);
-  f.uncertainty = false;
-  f.search.repetitions = 1;
-  f.search.pso.particles = 10;
-  f.search.pso.iterations = 15;
-  f.lm.max_iterations = 30;
-  return f;
-}
-
-/// Each withheld record's RMSE / its true noise RMS, by name.
+/// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
 std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects, FitResult* out = nullptr) {
-  FitResult r = FitRecords(s.set, Quick(std::move(effects)));
-  std::map<std::string, double> ratios;
-  for (size_t i = 0; i < s.set.records.size(); ++i)
-    ratios[s.set.records[i].name] = r.metrics[i].rmse / s.truth[i].noise_rms_um;
-  if (out) *out = std::move(r);
-  return ratios;
+  return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
 RecordDiagnoseOptions QuickDiagnosis() {
   RecordDiagnoseOptions d;
   d.family = "preisach";
   d.propose = false;
-  d.fit = Quick({});
+  d.fit = testing::QuickPreisach({});
   return d;
 }
 
@@ -157,7 +141,7 @@ TEST(RateDependenceTest, RecordsAtOneRateAreRefusedAndFlagged) {
   for (const WithheldExcitation& w : rep.withheld)
     for (const ExcitationNeed& n : w.needs) rate_need = rate_need || n.kind == ExcitationNeed::Kind::kRate;
   EXPECT_TRUE(rate_need);
-  const std::string e = testing::InputErrorOf([&] { FitRecords(s.set, Quick({EffectKind::Named("rate-dependence")})); });
+  const std::string e = testing::InputErrorOf([&] { FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")})); });
   PZ_EXPECT_HAS(e, "rate-dependence");
   PZ_EXPECT_HAS(e, "cover rates");
   PZ_EXPECT_HAS(e, "several rates");
@@ -177,14 +161,14 @@ TEST(RateDependenceTest, AWithheldRecordFasterThanTrainingIsFlagged) {
   o.withheld_frequencies_hz = {8};
   o.chirp = false;
   const RealLikeSet s = Generate(o);
-  const FitResult fit = FitRecords(s.set, Quick({EffectKind::Named("rate-dependence")}));
+  const FitResult fit = FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")}));
   const std::vector<ExtrapolationCheck> checks = CheckExtrapolation(s.set, fit);
   ASSERT_EQ(checks.size(), 1u);
   EXPECT_TRUE(checks[0].flagged) << checks[0].Describe("V", "um");
   EXPECT_GT(checks[0].rate_ratio, 3);
   PZ_EXPECT_HAS(checks[0].Describe("V", "um"), "rate-dependent lag is extrapolated");
   // Without the effect the rates do not enter the guard.
-  const FitResult plain = FitRecords(s.set, Quick({}));
+  const FitResult plain = FitRecords(s.set, testing::QuickPreisach({}));
   EXPECT_EQ(CheckExtrapolation(s.set, plain)[0].rate_ratio, 0);
 }
 
