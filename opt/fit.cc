@@ -61,15 +61,13 @@ ParamBox UnitBox(const ParameterMap& map) {
 
 // ---- uncertainty -----------------------------------------------------------------------------------
 
-Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& residuals, std::span<const double> x,
-                               int threads, double fd_step, double weight) {
-  Uncertainty out;
+bool ScaledJacobian(const ParameterMap& map, const ResidualFunction& f, std::span<const double> x,
+                    std::span<const double> f0, double fd_step, int threads, Eigen::MatrixXd& js,
+                    std::vector<double>& scale, int64_t* evaluations) {
   const int n = map.size();
-  std::vector<double> r0;
-  if (!residuals(x, r0)) return out;
-  const int m = static_cast<int>(r0.size());
   // Scaled coordinates: x_i = scale_i s_i, so J_s = J diag(scale) with a uniform step.
-  std::vector<double> scale(n), s0(n), slo(n), shi(n);
+  scale.assign(static_cast<size_t>(n), 0.0);
+  std::vector<double> s0(n), slo(n), shi(n);
   for (int i = 0; i < n; ++i) {
     double lo, hi;
     map.Bounds(x, i, &lo, &hi);
@@ -81,10 +79,21 @@ Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& 
   ResidualFunction fs = [&](std::span<const double> s, std::vector<double>& r) {
     std::vector<double> xs(n);
     for (int i = 0; i < n; ++i) xs[i] = s[i] * scale[i];
-    return residuals(xs, r);
+    return f(xs, r);
   };
+  return NumericJacobian(fs, s0, f0, slo, shi, fd_step, true, threads, js, evaluations);
+}
+
+Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& residuals, std::span<const double> x,
+                               int threads, double fd_step, double weight) {
+  Uncertainty out;
+  const int n = map.size();
+  std::vector<double> r0;
+  if (!residuals(x, r0)) return out;
+  const int m = static_cast<int>(r0.size());
+  std::vector<double> scale;
   Eigen::MatrixXd js;
-  NumericJacobian(fs, s0, r0, slo, shi, fd_step, true, threads, js, &out.evaluations);
+  ScaledJacobian(map, residuals, x, r0, fd_step, threads, js, scale, &out.evaluations);
   double sse = 0;
   for (double e : r0) sse += e * e;
   const double dof = std::max(1, m - n);

@@ -180,6 +180,14 @@ struct FitResult {
 /// options need. A failure of the model is not thrown: the result says !ok.
 FitResult Fit(const FitProblem& problem, const FitOptions& options);
 
+/// The Jacobian of f (f0 = f(x)) at the physical point x in the scaled coordinates s_i = x_i /
+/// map.Scale(x, i), where one step `fd_step` suits every parameter: central differences, one-sided
+/// at a bound, columns on `threads` threads (opt::NumericJacobian). ∂f/∂x_i = js.col(i) / scale[i].
+/// False if an evaluation failed (that column then from the side that worked, or zeros).
+bool ScaledJacobian(const ParameterMap& map, const ResidualFunction& f, std::span<const double> x,
+                    std::span<const double> f0, double fd_step, int threads, Eigen::MatrixXd& js,
+                    std::vector<double>& scale, int64_t* evaluations = nullptr);
+
 /// The uncertainty table of the parameters x of `map`, from the residuals at physical points.
 /// Leaves it empty if the residuals at x cannot be computed.
 Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& physical_residuals,

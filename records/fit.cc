@@ -10,7 +10,6 @@
 #include "io/csv.h"
 #include "records/excitation.h"
 #include "model/format.h"
-#include "opt/lm.h"
 #include "opt/thread_pool_evaluator.h"
 
 namespace pz::records {
@@ -129,13 +128,14 @@ double RecordFitness::SpectrumPenalty(std::span<const double> p) const {
   return spectrum_validation_.lambda * (spectrum_roughness_ * w).squaredNorm();
 }
 
-bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, int threads) {
+bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::ParameterMap& map, int threads) {
   if (spectrum_count_ == 0) return false;
-  const auto& box = model_.params();
-  const size_t P = box.size(), n = spectrum_count_;
-  if (p0.size() != P) throw InputError("RevalidateSpectrum: parameter count mismatch");
-  // The data residuals and the output's Jacobian over the training records' scored samples.
-  auto outputs = [&](std::span<const double> p, std::vector<double>& y) {
+  const size_t P = model_.params().size(), n = spectrum_count_;
+  if (p0.size() != P || static_cast<size_t>(map.size()) != P)
+    throw InputError("RevalidateSpectrum: parameter count mismatch");
+  // The output's Jacobian over the training records' scored samples (a column of zeros — an
+  // evaluation that failed, or a parameter the output does not see — is left out).
+  const opt::ResidualFunction outputs = [&](std::span<const double> p, std::vector<double>& y) {
     const Output o = Run(p);
     y.clear();
     y.reserve(samples_);
@@ -146,22 +146,15 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, int threads) 
   std::vector<double> y0;
   if (!outputs(p0, y0)) return false;
   const auto N = static_cast<Eigen::Index>(samples_);
-  Eigen::MatrixXd J(N, static_cast<Eigen::Index>(P));
+  Eigen::MatrixXd J;
+  std::vector<double> scale;
+  opt::ScaledJacobian(map, outputs, p0, y0, 1e-4, std::max(1, threads), J, scale);
   std::vector<char> ok(P, 1);
-  opt::ParallelFor(static_cast<int>(P), std::max(1, threads), [&](int c) {
-    const ParamInfo& q = box[static_cast<size_t>(c)];
-    const double x = p0[static_cast<size_t>(c)];
-    const double scale = q.log_scale ? std::abs(x) * std::log(q.upper / q.lower) : q.upper - q.lower;
-    const double h = 1e-4 * scale;
-    const double lo = std::max(q.lower, x - h), hi = std::min(q.upper, x + h);
-    std::vector<double> p(p0.begin(), p0.end()), ylo, yhi;
-    p[static_cast<size_t>(c)] = lo;
-    bool good = hi > lo && outputs(p, ylo);
-    p[static_cast<size_t>(c)] = hi;
-    good = good && outputs(p, yhi);
-    for (Eigen::Index k = 0; k < N; ++k) J(k, c) = good ? (yhi[static_cast<size_t>(k)] - ylo[static_cast<size_t>(k)]) / (hi - lo) : 0;
-    ok[static_cast<size_t>(c)] = good;
-  });
+  for (size_t c = 0; c < P; ++c) {
+    const auto col = static_cast<Eigen::Index>(c);
+    J.col(col) /= scale[c];
+    ok[c] = J.col(col).squaredNorm() > 0;
+  }
   // Unknowns: the spectrum's weights (≥ 0), then every other parameter as a difference of two
   // non-negative ones (free); target t = r + J p₀, r = y − ŷ.
   std::vector<Eigen::Index> cols;  // column of J of each unknown, its sign
@@ -600,7 +593,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       bool changed = false;
       if (fitness.validation().used && model->params().size() > model->family_param_count())
         changed = fitness.Revalidate(best);
-      if (spectrum) changed = fitness.RevalidateSpectrum(best, options.threads) || changed;
+      if (spectrum) changed = fitness.RevalidateSpectrum(best, map, options.threads) || changed;
       if (!changed) break;
       opt::FitOptions again = fo;
       again.search = false;

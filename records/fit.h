@@ -77,11 +77,11 @@ class RecordFitness final : public opt::FitnessFunction {
   const WeightValidation& spectrum_validation() const { return spectrum_validation_; }
   /// Chooses μ by the blocked cross-validation of records/regularisation.h on the training
   /// records, linearised at `params` (a fit's solution): the output's Jacobian J with respect to
-  /// every searched parameter (central differences; a linear family's weights re-solved inside,
+  /// every searched parameter (opt::ScaledJacobian over `map`, the fit's box; a linear family's weights re-solved inside,
   /// so its columns carry the trade-off with the loop's shape), the step p from `params` solved
   /// per left-out block as min ‖J p − (r + J p₀)‖² + μ ‖D w‖² with the spectrum's weights ≥ 0 and
   /// the other parameters free. True when μ changed. Not thread-safe: call between fits.
-  bool RevalidateSpectrum(std::span<const double> params, int threads);
+  bool RevalidateSpectrum(std::span<const double> params, const opt::ParameterMap& map, int threads);
   /// The standard error of each spectrum weight from the training records alone (no penalty), at
   /// the last RevalidateSpectrum's point: s² (JᵀJ)⁺ of the same linearisation, s² = Σ r² / (N − p).
   /// Empty before it.
