@@ -7,9 +7,12 @@
 //       forward model, the clipping events (how much, where) and, with --check-model, the error
 //       another model predicts for that drive (the exposure to model error).
 //   compensate --model FIT.json --replay RECORDS
-//       the inverse run on each record's measured response; the drive it computes against the
-//       drive applied, in drive units and in response units through the model's local gain, next
-//       to the records' noise floor.
+//       the inverse run on each record's measured response (less the record's own offset, as the
+//       fit takes it: a sensor's zero is not a drive; a delay's response read that many samples
+//       later); the drive it computes against the drive applied, in drive units and in response
+//       units through the model's local gain, next to the records' noise floor and to what the
+//       model's own response to the applied drive gives replayed, noiseless (the inverse's
+//       exactness) and with noise of the floor's σ (the drive error the noise alone implies).
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -28,15 +31,20 @@
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/format.h"
+#include "opt/random.h"
 #include "records/diagnose.h"
 #include "records/export_header.h"
 #include "records/stepper.h"
+#include "records/synthetic.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
 namespace {
 
 std::string Fmt(double x, int prec = 4) { return FormatG(x, prec); }
+
+/// The seed of the replay's noise (stream i for record i): the floor it reports is reproducible.
+constexpr uint64_t kReplayNoiseSeed = 22;
 
 /// The unit of a column name: its suffix after the last '_' ("t_s" -> "s").
 std::string UnitOf(const std::string& column) {
@@ -108,15 +116,25 @@ Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& 
   return e;
 }
 
-/// The drive for the reference (the preview: with a delay of n samples, the reference n samples
-/// ahead, and one more for the fin's two-sample plan; the last value held), and the clipping events.
+/// What keeps the inverse from giving a model's own drive back ("" when nothing does): the
+/// rate-dependence play's lag over a quarter of a sample (records::Stepper::rate_dependence_inverse_gain).
+std::string InverseCaveat(const records::Stepper& inv) {
+  const double gain = inv.rate_dependence_inverse_gain();
+  if (!(gain >= 1)) return "";
+  double tau = 0;
+  for (size_t i = 0; i < inv.blocks().size(); ++i)
+    if (inv.blocks()[i].kind == records::pzk::PZK_RATE_DEPENDENCE) tau = std::max(tau, inv.block_params(i)[1]);
+  return "the rate-dependence play lags the drive by tau_r = " + Fmt(1e3 * tau) + " ms below its knee (" +
+         Fmt(tau / inv.spec().dt, 3) + " samples; its inverse is stable under 0.25): the one-step inverse carries a " +
+         "drive difference forward " + Fmt(gain, 3) + " × per sample" +
+         (tau / inv.spec().dt > 2.0 / 3 ? " and several drives give the same output" : "") +
+         ", so the drive it computes need not be the plant's, even without noise";
+}
+
+/// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
+/// value held), and the clipping events.
 std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
-  size_t preview = static_cast<size_t>(inv.inverse_plan_samples() - 1);
-  for (size_t i = 0; i < inv.blocks().size(); ++i) {
-    if (inv.blocks()[i].kind == records::pzk::PZK_DELAY) {
-      preview += static_cast<size_t>(std::lround(inv.block_params(i)[0] / inv.spec().dt));
-    }
-  }
+  const size_t preview = inv.preview_samples();
   std::vector<double> u(ref.y.size());
   u[0] = u0;
   inv.Init(u0);
@@ -205,6 +223,7 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
   if (inv.has_delay()) {
     std::cout << "  the model's delay cannot be undone: the reference's preview was used (the drive leads it)\n";
   }
+  if (const std::string caveat = InverseCaveat(inv); !caveat.empty()) std::cout << "  " << caveat << "\n";
   if (clips.empty()) {
     std::cout << "  clipping: none (the reference is reachable within the drive limits)\n";
   } else {
@@ -248,40 +267,51 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
   } catch (const InputError& e) {
     noise_how = std::string("no estimate: ") + e.what();
   }
-  for (const io::Record& r : set.records) {
+  if (const std::string caveat = InverseCaveat(records::Stepper(m)); !caveat.empty()) {
+    std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far)\n";
+  }
+  const std::string& du = m.drive_unit;
+  const std::string& yu = m.response_unit;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const io::Record& r = set.records[i];
     if (std::abs(r.dt - m.dt) > 0.01 * m.dt) {
       throw InputError(r.Label() + ": sample step " + Fmt(r.dt, 6) + " s; the model runs at " + Fmt(m.dt, 6) + " s");
     }
-    records::Stepper inv(m);
-    inv.Init(r.u[0]);
-    // Replay: the limits are the model's, widened to the record's drive (the applied drive is the truth).
-    inv.ctl().u_lo = std::min(m.drive_min, *std::min_element(r.u.begin(), r.u.end()));
-    inv.ctl().u_hi = std::max(m.drive_max, *std::max_element(r.u.begin(), r.u.end()));
-    double sse_u = 0, sse_y = 0, max_y = 0;
-    size_t n = 0;
-    for (size_t k = 1; k < r.end_scored; ++k) {
-      // The local gain of the one-step map at the applied drive, before the step.
-      const double h = 1e-6 * m.scale.u_half;
-      const double g = (inv.Trial(r.u[k] + h) - inv.Trial(r.u[k] - h)) / (2 * h);
-      // The fin's compensator plans two samples: its target is the response one sample ahead.
-      const size_t ahead = std::min(k + static_cast<size_t>(inv.inverse_plan_samples() - 1), r.size() - 1);
-      const double u = inv.InverseStep(r.y[ahead]);
-      if (k < r.first_scored) continue;
-      const double du = u - r.u[k], dy = g * du;
-      sse_u += du * du;
-      sse_y += dy * dy;
-      max_y = std::max(max_y, std::abs(dy));
-      ++n;
+    // The model on the applied drive; the record's offset as the fit takes it (its offset mode: by
+    // default the least-squares offset over the scored window), so that the inverse sees the
+    // measured response in the model's frame: a sensor's zero is not a drive.
+    const std::vector<double> sim = records::SimulateRecord(m, r);
+    std::vector<double> signed_sim(sim.size());
+    for (size_t k = 0; k < sim.size(); ++k) signed_sim[k] = sim[k] - m.offset;
+    const double offset = records::RecordOffset(r, signed_sim, signed_sim[0]);
+    std::vector<double> measured(r.size());
+    for (size_t k = 0; k < r.size(); ++k) measured[k] = r.y[k] - offset + m.offset;
+    const records::ReplayError e = records::ReplayDrive(m, r, measured);
+    std::cout << "  " << r.name << " (" << model::CaseRoleName(r.role) << ", " << e.n << " samples): drive RMSE "
+              << Fmt(e.rms_u) << " " << du << "; through the local gain " << Fmt(e.rms_y) << " " << yu << " RMS, max "
+              << Fmt(e.max_y) << " " << yu;
+    if (std::isfinite(noise)) std::cout << " (" << Fmt(e.rms_y / noise, 3) << " × the noise floor)";
+    std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
+              << "; the model's " << Fmt(m.offset) << ")\n";
+    // What the inverse itself and the noise alone give: the model's own response to the applied
+    // drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay, a play's
+    // band after a reversal, and an unstable rate-dependence inverse) and with white noise of the
+    // floor's σ (a fixed seed per record).
+    const records::ReplayError exact = records::ReplayDrive(m, r, sim);
+    std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " " << du;
+    if (std::isfinite(noise)) {
+      opt::Rng rng(opt::StreamSeed(kReplayNoiseSeed, i));
+      std::vector<double> noisy(sim);
+      for (double& v : noisy) v += noise * records::NormalDraw(rng);
+      const records::ReplayError floor = records::ReplayDrive(m, r, noisy);
+      std::cout << ", with noise of the floor's σ " << Fmt(floor.rms_u) << " " << du << " (" << Fmt(floor.rms_y) << " "
+                << yu << " through the local gain): the drive error the noise alone implies";
+      if (floor.rms_u > 0) std::cout << "; measured " << Fmt(e.rms_u / floor.rms_u, 3) << " × that";
     }
-    const double rms_u = std::sqrt(sse_u / static_cast<double>(n)), rms_y = std::sqrt(sse_y / static_cast<double>(n));
-    std::cout << "  " << r.name << " (" << model::CaseRoleName(r.role) << ", " << n << " samples): drive RMSE "
-              << Fmt(rms_u) << " " << m.drive_unit << "; through the local gain " << Fmt(rms_y) << " "
-              << m.response_unit << " RMS, max " << Fmt(max_y) << " " << m.response_unit;
-    if (std::isfinite(noise)) std::cout << " (" << Fmt(rms_y / noise, 3) << " × the noise floor)";
     std::cout << "\n";
   }
   if (std::isfinite(noise)) {
-    std::cout << "  noise floor " << Fmt(noise) << " " << m.response_unit << " (" << noise_how << ")\n";
+    std::cout << "  noise floor " << Fmt(noise) << " " << yu << " (" << noise_how << ")\n";
   } else {
     std::cout << "  noise floor: " << noise_how << "\n";
   }

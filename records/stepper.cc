@@ -199,6 +199,27 @@ int Stepper::inverse_plan_samples() const {
   return 1;
 }
 
+size_t Stepper::preview_samples() const {
+  size_t preview = static_cast<size_t>(inverse_plan_samples() - 1);
+  for (const auto& b : blocks_)
+    if (b.kind == pzk::PZK_DELAY) preview += static_cast<size_t>(std::lround(b.p[0] / spec_.dt));
+  return preview;
+}
+
+double Stepper::rate_dependence_inverse_gain() const {
+  double gain = 0;
+  for (const auto& b : blocks_) {
+    if (b.kind != pzk::PZK_RATE_DEPENDENCE || !(b.p[0] > 0)) continue;
+    const double a = b.p[1] / spec_.dt, lead = 1 - 1.5 * a;
+    if (lead == 0) return INFINITY;
+    // lead rho^2 + 2 a rho - a / 2 = 0: the discriminant 4 a^2 + 2 a lead = a (a + 2) >= 0.
+    const double s = std::sqrt(a * (a + 2));
+    const double g = std::max(std::abs((-2 * a + s) / (2 * lead)), std::abs((-2 * a - s) / (2 * lead)));
+    gain = std::max(gain, g);
+  }
+  return gain;
+}
+
 double Stepper::Init(double u0) {
   ctl_.u_lo = spec_.drive_min;
   ctl_.u_hi = spec_.drive_max;
@@ -216,6 +237,55 @@ double Stepper::InverseStep(double y_desired) {
 
 double Stepper::Trial(double u) {
   return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u, 1);
+}
+
+namespace {
+void WidenToRecord(Stepper& st, const io::Record& r) {
+  const auto [lo, hi] = std::minmax_element(r.u.begin(), r.u.end());
+  st.ctl().u_lo = std::min(st.spec().drive_min, *lo);
+  st.ctl().u_hi = std::max(st.spec().drive_max, *hi);
+}
+}  // namespace
+
+std::vector<double> SimulateRecord(const ModelSpec& spec, const io::Record& r) {
+  Stepper st(spec);
+  std::vector<double> y(r.size());
+  y[0] = st.Init(r.u[0]);
+  WidenToRecord(st, r);
+  for (size_t k = 1; k < r.size(); ++k) y[k] = st.Step(r.u[k]);
+  return y;
+}
+
+ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<const double> y) {
+  if (y.size() != r.size()) {
+    throw InputError(r.Label() + ": " + std::to_string(y.size()) + " responses to replay for " +
+                     std::to_string(r.size()) + " samples");
+  }
+  Stepper inv(spec);
+  inv.Init(r.u[0]);
+  WidenToRecord(inv, r);
+  const size_t preview = inv.preview_samples();
+  const double h = 1e-6 * spec.scale.u_half;
+  ReplayError e;
+  double sse_u = 0, sse_y = 0;
+  for (size_t k = 1; k < r.end_scored && k + preview < r.size(); ++k) {
+    // The local gain of the one-step map at the applied drive, before the step.
+    const double g = (inv.Trial(r.u[k] + h) - inv.Trial(r.u[k] - h)) / (2 * h);
+    const double u = inv.InverseStep(y[k + preview]);
+    if (k < r.first_scored) continue;
+    const double du = u - r.u[k], dy = g * du;
+    sse_u += du * du;
+    sse_y += dy * dy;
+    e.max_y = std::max(e.max_y, std::abs(dy));
+    ++e.n;
+  }
+  if (e.n == 0) {
+    throw InputError(r.Label() + ": no scored sample has its response within the record (the inverse reads " +
+                     std::to_string(preview) + " sample(s) ahead: the model's delay)");
+  }
+  e.rms_u = std::sqrt(sse_u / static_cast<double>(e.n));
+  e.rms_y = std::sqrt(sse_y / static_cast<double>(e.n));
+  return e;
 }
 
 }  // namespace pz::records

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <math.h>  // NOLINT: the kernels are C99 and call the C library's functions
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,18 @@ class Stepper {
   /// Samples the inverse plans ahead: 2 with the bimorph fin (records/kernels/chain.h
   /// pzk_chain_inverse_fin: its InverseStep wants the reference one sample ahead), else 1.
   int inverse_plan_samples() const;
+  /// Samples the inverse solves ahead of the drive it computes (a reference's preview, a replay's
+  /// look-ahead): a delay's whole samples (it cannot be undone: the response to the drive of sample k
+  /// shows that many samples later) plus inverse_plan_samples() - 1.
+  size_t preview_samples() const;
+  /// The rate-dependence play's inverse: below its knee the play is a lag of tau_r (z = v - tau_r
+  /// v', v' the second-order backward difference), so the drive its one-step inverse solves carries
+  /// a difference of the past drives forward by the roots rho of (1 - 1.5 a) rho^2 + 2 a rho -
+  /// 0.5 a = 0, a = tau_r / dt. The largest |rho|: < 1 (a < 1/4) a stable inverse that gives a
+  /// model's own drive back; > 1 a difference (noise, model error, rounding) grows by that factor
+  /// per sample and for a > 2/3 the one-step map is not monotone (several drives give the output):
+  /// the inverse's drive is not the plant's. 0 without the effect; infinity at a = 2/3.
+  double rate_dependence_inverse_gain() const;
   /// Parameters of block i (the family's, an effect's, or {polarity, offset}).
   const std::vector<double>& block_params(size_t i) const { return params_[i]; }
 
@@ -103,5 +116,26 @@ class Stepper {
   pzk::pzk_ctl ctl_{};
   int nc_ = 0, nd_ = 0;
 };
+
+/// The model's output (polarity and the spec's offset applied) on the record's applied drive from
+/// rest at its first sample, the drive limits widened to the record's drive (the applied drive is
+/// the truth).
+std::vector<double> SimulateRecord(const ModelSpec& spec, const io::Record& r);
+
+/// A replay's drive error: the inverse's drive against the drive applied over the scored samples,
+/// in drive units (rms_u) and through the one-step map's local gain at the applied drive (rms_y,
+/// max_y: response units).
+struct ReplayError {
+  double rms_u = 0, rms_y = 0, max_y = 0;
+  size_t n = 0;  ///< samples scored
+};
+
+/// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the
+/// record's first drive, the limits widened to the record's drive, each drive solved for the
+/// response preview_samples() later; the record's scored samples whose response lies within the
+/// record are compared. On the model's own noiseless response (SimulateRecord) it is the inverse's
+/// exactness: ≈ 0 where the one-step map determines the drive (not within a play's band after a
+/// reversal, nor by a fractional delay). Throws InputError when no sample can be scored.
+ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<const double> y);
 
 }  // namespace pz::records

@@ -4,7 +4,9 @@
 // the noise; a reference beyond the drive's reach is clipped and reported (how much, where); a
 // reference in other units is refused naming both; a fit.json of another version is refused with the
 // version needed, a bad field is named; --check-model reports another model's error; --replay of
-// the training record is close to the noise.
+// the training record is close to the noise, and so is the replay of a record whose sensor zero is
+// another (each record's offset is taken as the fit takes it), beside the noiseless replay of the
+// model's own response (≈ 0) and the drive error the noise alone implies.
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
@@ -206,6 +208,54 @@ TEST_F(Compensate, ReplayOfTheTrainingRecordIsNearTheNoise) {
   const double rms = std::stod(out.substr(at + 23));
   EXPECT_LT(rms, 2 * kNoise) << out;
   EXPECT_GT(rms, 0.5 * kNoise) << out;  // the noise is in the measured response it inverts
+}
+
+/// The number after `label` in `out` (the first occurrence at or after `from`).
+double NumberAfter(const std::string& out, const std::string& label, size_t from = 0) {
+  const size_t at = out.find(label, from);
+  if (at == std::string::npos) return NAN;
+  return std::stod(out.substr(at + label.size()));
+}
+
+/// A record whose sensor reads 3 um higher (another zero, as each record of a set has): the replay
+/// takes its offset as the fit does, so its drive error is the noise's, not 3 um through the gain
+/// (≈ 8 V here: the error `compensate --replay` showed on every synth-stack set, whose records each
+/// have their own offset).
+TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
+  const fs::path set = dir_ / "offsets";
+  fs::create_directories(set);
+  fs::copy_file(dir_ / "rec.csv", set / "rec.csv", fs::copy_options::overwrite_existing);
+  const std::vector<double> t = Column(dir_ / "rec.csv", 0), u = Column(dir_ / "rec.csv", 1), y = Plant(u);
+  {
+    // The same drive measured again: its own noise, the sensor's zero 3 um up.
+    std::mt19937_64 rng(8);
+    std::normal_distribution<double> noise(0, kNoise);
+    std::ofstream shifted(set / "shifted.csv");
+    shifted << "t_s,voltage_V,displacement_um\n";
+    for (size_t k = 0; k < u.size(); ++k)
+      shifted << io::FormatNumber(t[k]) << "," << io::FormatNumber(u[k]) << "," << io::FormatNumber(y[k] + 3.0 + noise(rng))
+              << "\n";
+  }
+  std::ofstream(set / "manifest.csv") << "record,file,role\nrec,rec.csv,train\nshifted,shifted.csv,validate\n";
+  const std::string out =
+      Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--replay", set.string()});
+  for (const std::string name : {"  rec (", "  shifted ("}) {
+    const size_t at = out.find(name);
+    ASSERT_NE(at, std::string::npos) << out;
+    const double rms = NumberAfter(out, "through the local gain ", at);
+    EXPECT_LT(rms, 2 * kNoise) << name << out;
+    EXPECT_GT(rms, 0.5 * kNoise) << name << out;
+    // The inverse on the model's own response gives the applied drive back; with noise of the
+    // floor's sigma, the drive error the noise implies, which the measured one is near.
+    EXPECT_LT(NumberAfter(out, "noiseless ", at), 1e-6) << name << out;
+    const double ratio = NumberAfter(out, "measured ", at);
+    EXPECT_GT(ratio, 0.5) << name << out;
+    EXPECT_LT(ratio, 2.0) << name << out;
+  }
+  const size_t shifted = out.find("  shifted (");
+  EXPECT_NEAR(NumberAfter(out, "record offset ", shifted) - NumberAfter(out, "record offset ", out.find("  rec (")), 3.0,
+              0.01)
+      << out;
 }
 
 }  // namespace

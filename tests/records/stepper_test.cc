@@ -336,6 +336,39 @@ TEST(Stepper, RateDependentInverseTracks) {
   }
 }
 
+/// `compensate --replay`'s core (ReplayDrive): every drive effect's inverse, replayed on the model's
+/// own noiseless response to the applied drive, gives that drive back — the delay (a whole number
+/// of samples) read that many samples ahead; the rate-dependence play with its lag τ_r under a
+/// quarter of the sample step —, on a rate-independent and a rate-dependent family. Over a quarter
+/// step the rate-dependence play's one-step inverse is unstable (Stepper::rate_dependence_inverse_gain):
+/// the replay's noiseless figure shows it.
+TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
+  const io::Record r = TestRecord();
+  const double span = Range(r.u);
+  for (const auto& family : {std::string("prandtl-ishlinskii"), std::string("stack-bouc-wen")}) {
+    for (EffectKind e : kEffects) {
+      if (e->stage() != model::EffectStage::kDrive) continue;
+      ModelSpec s = Spec(family, {e}, r);
+      if (s.family == "stack-bouc-wen") s.params[0] = 0.3;  // monotone on each step (RateDependentInverseTracks)
+      const std::string name = family + " + " + std::string(EffectName(e));
+      if (EffectName(e) == "delay") s.params.back() = 3 * kDt;
+      if (EffectName(e) == "rate-dependence") {
+        s.params.back() = 0.2 * kDt;  // tau_r
+        ASSERT_LT(Stepper(s).rate_dependence_inverse_gain(), 1) << name;
+      }
+      Stepper st(s);
+      const ReplayError exact = ReplayDrive(s, r, SimulateRecord(s, r));
+      EXPECT_EQ(exact.n, r.size() - 1 - st.preview_samples()) << name;
+      EXPECT_LE(exact.rms_u, 1e-9 * span) << name;
+      if (EffectName(e) == "rate-dependence") {
+        s.params.back() = 2 * kDt;  // the lag of two samples: unstable, the drive not given back
+        EXPECT_GT(Stepper(s).rate_dependence_inverse_gain(), 1) << name;
+        EXPECT_GT(ReplayDrive(s, r, SimulateRecord(s, r)).rms_u, 1e-3 * span) << name;
+      }
+    }
+  }
+}
+
 TEST(Stepper, UnreachableReferenceIsClippedAndCounted) {
   const io::Record r = TestRecord();
   const ModelSpec s = Spec("prandtl-ishlinskii", {}, r);
