@@ -12,7 +12,8 @@
 //       later); the drive it computes against the drive applied, in drive units and in response
 //       units through the model's local gain, next to the records' noise floor and to what the
 //       model's own response to the applied drive gives replayed, noiseless (the inverse's
-//       exactness) and with noise of the floor's σ (the drive error the noise alone implies).
+//       exactness) and with noise of the floor's σ (the drive error of the inverse and the noise,
+//       without model error).
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -117,18 +118,19 @@ Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& 
 }
 
 /// What keeps the inverse from giving a model's own drive back ("" when nothing does): the
-/// rate-dependence play's lag over a quarter of a sample (records::Stepper::rate_dependence_inverse_gain).
+/// rate-dependence play's lag over a quarter of a sample (records::Stepper::rate_dependence_inverse_gain),
+/// which the compensator meets by planning two samples.
 std::string InverseCaveat(const records::Stepper& inv) {
   const double gain = inv.rate_dependence_inverse_gain();
-  if (!(gain >= 1)) return "";
+  if (!(gain > 1)) return "";
   double tau = 0;
   for (size_t i = 0; i < inv.blocks().size(); ++i)
     if (inv.blocks()[i].kind == records::pzk::PZK_RATE_DEPENDENCE) tau = std::max(tau, inv.block_params(i)[1]);
   return "the rate-dependence play lags the drive by tau_r = " + Fmt(1e3 * tau) + " ms below its knee (" +
-         Fmt(tau / inv.spec().dt, 3) + " samples; its inverse is stable under 0.25): the one-step inverse carries a " +
-         "drive difference forward " + Fmt(gain, 3) + " × per sample" +
-         (tau / inv.spec().dt > 2.0 / 3 ? " and several drives give the same output" : "") +
-         ", so the drive it computes need not be the plant's, even without noise";
+         Fmt(tau / inv.spec().dt, 3) + " samples): solved one sample at a time, its inverse would carry a drive " +
+         "difference forward " + Fmt(gain, 3) + " × per sample" +
+         (tau / inv.spec().dt > 2.0 / 3 ? " (and several drives give the same output)" : "") +
+         "; the compensator plans two samples instead (the reference one sample ahead): stable, not exact";
 }
 
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
@@ -268,7 +270,7 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     noise_how = std::string("no estimate: ") + e.what();
   }
   if (const std::string caveat = InverseCaveat(records::Stepper(m)); !caveat.empty()) {
-    std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far)\n";
+    std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far from exact)\n";
   }
   const std::string& du = m.drive_unit;
   const std::string& yu = m.response_unit;
@@ -293,10 +295,10 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     if (std::isfinite(noise)) std::cout << " (" << Fmt(e.rms_y / noise, 3) << " × the noise floor)";
     std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
               << "; the model's " << Fmt(m.offset) << ")\n";
-    // What the inverse itself and the noise alone give: the model's own response to the applied
-    // drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay, a play's
-    // band after a reversal, and an unstable rate-dependence inverse) and with white noise of the
-    // floor's σ (a fixed seed per record).
+    // What the inverse itself and the noise give without model error: the model's own response to
+    // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay,
+    // a drive the output does not depend on, and a rate-dependence lag's two-sample plan) and with
+    // white noise of the floor's σ (a fixed seed per record).
     const records::ReplayError exact = records::ReplayDrive(m, r, sim);
     std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " " << du;
     if (std::isfinite(noise)) {
@@ -305,7 +307,7 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
       for (double& v : noisy) v += noise * records::NormalDraw(rng);
       const records::ReplayError floor = records::ReplayDrive(m, r, noisy);
       std::cout << ", with noise of the floor's σ " << Fmt(floor.rms_u) << " " << du << " (" << Fmt(floor.rms_y) << " "
-                << yu << " through the local gain): the drive error the noise alone implies";
+                << yu << " through the local gain): the drive error of the inverse and the noise, without model error";
       if (floor.rms_u > 0) std::cout << "; measured " << Fmt(e.rms_u / floor.rms_u, 3) << " × that";
     }
     std::cout << "\n";

@@ -104,8 +104,9 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
      << " * when the reference is known in advance (preview)."
      << (st.inverse_plan_samples() > 1
-             ? " The bimorph fin's compensator plans two samples (records/kernels/chain.h\n"
-               " * pzk_chain_inverse_fin): give it the reference one sample ahead (and " + N + "_DELAY_S more)."
+             ? " This compensator plans two samples (the bimorph fin, or a rate-dependence lag over a\n"
+               " * quarter sample: records/kernels/chain.h pzk_chain_inverse_fin): give it the reference one\n"
+               " * sample ahead (and " + N + "_DELAY_S more)."
              : std::string())
      << " Model: " << m.Model()->Describe()
      << (m.Model()->family().initial_state() != model::InitialState::kCentred

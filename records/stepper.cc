@@ -195,7 +195,8 @@ bool Stepper::has_delay() const {
 
 int Stepper::inverse_plan_samples() const {
   for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_BIMORPH_FIN) return 2;
+    if (b.kind == pzk::PZK_BIMORPH_FIN || (b.kind == pzk::PZK_RATE_DEPENDENCE && pzk::pzk_rate_dependence_plans(&b)))
+      return 2;
   return 1;
 }
 

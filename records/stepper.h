@@ -8,8 +8,9 @@
 //            the kernels do the same operations in the same order).
 //   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
 //            on the one-step map (records/kernels/chain.h: exact for the monotone families; a
-//            delay is skipped — it cannot be undone); the bimorph fin plans two samples and wants
-//            the reference one sample ahead (inverse_plan_samples()).
+//            delay is skipped — it cannot be undone); the bimorph fin and a rate-dependence lag
+//            over a quarter sample plan two samples and want the reference one sample ahead
+//            (inverse_plan_samples()).
 // A Stepper is used either forward or inverse after Init, not both.
 #pragma once
 
@@ -88,8 +89,9 @@ class Stepper {
   int dynamic() const { return nd_; }
   /// True when the chain holds a delay (the inverse cannot undo it).
   bool has_delay() const;
-  /// Samples the inverse plans ahead: 2 with the bimorph fin (records/kernels/chain.h
-  /// pzk_chain_inverse_fin: its InverseStep wants the reference one sample ahead), else 1.
+  /// Samples the inverse plans ahead: 2 with the bimorph fin or a rate-dependence lag over a quarter
+  /// sample (records/kernels/chain.h pzk_chain_inverse_fin: its InverseStep wants the reference one
+  /// sample ahead), else 1.
   int inverse_plan_samples() const;
   /// Samples the inverse solves ahead of the drive it computes (a reference's preview, a replay's
   /// look-ahead): a delay's whole samples (it cannot be undone: the response to the drive of sample k
@@ -99,9 +101,10 @@ class Stepper {
   /// v', v' the second-order backward difference), so the drive its one-step inverse solves carries
   /// a difference of the past drives forward by the roots rho of (1 - 1.5 a) rho^2 + 2 a rho -
   /// 0.5 a = 0, a = tau_r / dt. The largest |rho|: < 1 (a < 1/4) a stable inverse that gives a
-  /// model's own drive back; > 1 a difference (noise, model error, rounding) grows by that factor
-  /// per sample and for a > 2/3 the one-step map is not monotone (several drives give the output):
-  /// the inverse's drive is not the plant's. 0 without the effect; infinity at a = 2/3.
+  /// model's own drive back; > 1 a difference (noise, model error, rounding) would grow by that
+  /// factor per sample, and for a > 2/3 the one-step map is not monotone (several drives give the
+  /// output): the inverse then plans two samples instead (inverse_plan_samples), stable but not
+  /// exact. 0 without the effect; infinity at a = 2/3.
   double rate_dependence_inverse_gain() const;
   /// Parameters of block i (the family's, an effect's, or {polarity, offset}).
   const std::vector<double>& block_params(size_t i) const { return params_[i]; }

@@ -148,8 +148,11 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
   return ctl->y_last;
 }
 
-/* The bimorph fin's compensator (a chain holding a PZK_BIMORPH_FIN block), after the HGANN fin
- * plant's header (client/export_fin_c.h pzf_inverse_step). It plans two samples: the drive goes to
+/* The two-sample compensator of a chain that one sample cannot invert: the bimorph fin's (a chain
+ * holding a PZK_BIMORPH_FIN block), after the HGANN fin plant's header (client/export_fin_c.h
+ * pzf_inverse_step), and a chain whose rate-dependence lags over a quarter sample
+ * (pzk_rate_dependence_plans: its one-step inverse is unstable; planned, the drive stays within a
+ * few tenths of a volt of a model's own on the rate sets of docs/deploy.md). It plans two samples: the drive goes to
  * u at the next sample and keeps its slope from the last drive one more (clipped to the limits), and
  * u is solved so that the output two samples ahead is y_desired: give it the reference one sample
  * ahead (preview), else it follows with a lag of one sample. One sample would not do: the drive's
@@ -231,7 +234,8 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
  * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
  * the one-step map is continuous and the root found is the one nearest the last drive. A
  * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
- * max_clip. The bimorph fin has its own search (pzk_chain_inverse_fin). A delay cannot be undone: its block is skipped (the compensator drives the model
+ * max_clip. The bimorph fin and a rate-dependence lag over a quarter sample plan two samples
+ * (pzk_chain_inverse_fin). A delay cannot be undone: its block is skipped (the compensator drives the model
  * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
 static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
                                        double y_desired) {
@@ -239,7 +243,8 @@ static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double 
   double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
   int i;
   for (i = 0; i < nb; ++i)
-    if (b[i].kind == PZK_BIMORPH_FIN) return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
+    if (b[i].kind == PZK_BIMORPH_FIN || (b[i].kind == PZK_RATE_DEPENDENCE && pzk_rate_dependence_plans(&b[i])))
+      return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
   f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
   if (u0 + eps < hi) {
     f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);

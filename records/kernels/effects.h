@@ -96,6 +96,11 @@ static inline double pzk_rate_dependence_init(double *d, double v) {
   d[3] = 0;
   return v;
 }
+/* Below its knee the play is a lag of tau_r (z = v - tau_r v'): solved for the drive one sample at a
+ * time it carries a difference of the past drives forward, unstably once tau_r > dt / 4
+ * (records/stepper.h rate_dependence_inverse_gain), and the compensator then plans two samples
+ * (pzk_chain_inverse_fin). */
+static inline int pzk_rate_dependence_plans(const pzk_block *b) { return b->p[0] > 0 && b->p[1] > 0.25 * b->dt; }
 static inline double pzk_rate_dependence_step(const pzk_block *b, const double *d, double *o, double v) {
   double rate, lambda, z, r_m = b->p[0];
   if (!(r_m > 0)) return v;

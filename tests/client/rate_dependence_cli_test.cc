@@ -63,6 +63,9 @@ TEST(RateDependenceCli, FitJsonRoundTripsAndCompensates) {
   const size_t at = out.find("through the local gain ");
   ASSERT_NE(at, std::string::npos) << out;
   EXPECT_TRUE(std::isfinite(std::stod(out.substr(at + 23)))) << out;
+  // A lag over a quarter sample: the compensator plans two samples, and says so.
+  const bool plans = tau > 0.25 * m.dt;
+  EXPECT_EQ(out.find("the compensator plans two samples instead") != std::string::npos, plans) << out;
 }
 
 TEST(RateDependenceCli, ATrainingSetAtOneRateIsRefused) {
