@@ -294,7 +294,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
               << Fmt(e.max_y) << " " << yu;
     if (std::isfinite(noise)) std::cout << " (" << Fmt(e.rms_y / noise, 3) << " × the noise floor)";
     std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
-              << "; the model's " << Fmt(m.offset) << ")\n";
+              << "; the model's " << Fmt(m.offset) << ")";
+    if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
+    std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
     // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay,
     // a drive the output does not depend on, and a rate-dependence lag's two-sample plan) and with

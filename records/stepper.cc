@@ -272,8 +272,10 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
   for (size_t k = 1; k < r.end_scored && k + preview < r.size(); ++k) {
     // The local gain of the one-step map at the applied drive, before the step.
     const double g = (inv.Trial(r.u[k] + h) - inv.Trial(r.u[k] - h)) / (2 * h);
+    const long saturated = inv.ctl().saturated;
     const double u = inv.InverseStep(y[k + preview]);
     if (k < r.first_scored) continue;
+    if (inv.ctl().saturated != saturated) ++e.clipped;
     const double du = u - r.u[k], dy = g * du;
     sse_u += du * du;
     sse_y += dy * dy;

@@ -131,6 +131,7 @@ std::vector<double> SimulateRecord(const ModelSpec& spec, const io::Record& r);
 struct ReplayError {
   double rms_u = 0, rms_y = 0, max_y = 0;
   size_t n = 0;  ///< samples scored
+  size_t clipped = 0;  ///< scored samples whose drive the inverse clipped to a limit (the record's drive range)
 };
 
 /// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the

@@ -360,6 +360,7 @@ TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
       const ReplayError exact = ReplayDrive(s, r, SimulateRecord(s, r));
       EXPECT_EQ(exact.n, r.size() - 1 - st.preview_samples()) << name;
       EXPECT_LE(exact.rms_u, 1e-9 * span) << name;
+      EXPECT_EQ(exact.clipped, 0u) << name;  // its own response is within the drive's reach
       if (EffectName(e) == "rate-dependence") {
         s.params.back() = 2 * kDt;  // a lag of two samples: one-step unstable, planned over two
         EXPECT_GT(Stepper(s).rate_dependence_inverse_gain(), 1) << name;
