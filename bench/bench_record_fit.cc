@@ -8,7 +8,8 @@
 // search does (the fin's other geometry costs its FE assembly and modal discretisation each time).
 //
 //   BM_RecordEvaluation/<family>       one evaluation
-//   BM_RecordEvaluationPair/<family>   two evaluations side by side (a family with lanes)
+//   BM_RecordEvaluationPair/<family>[+<effects>]   two evaluations side by side (a family with lanes;
+//       with drive effects each on its own drive)
 //   BM_RecordEvaluation/<family>+<effects>   one evaluation with effects (issue 22's 10 s target): a
 //       linear family's weights solved for the effects' parameters (the regressors of the delayed /
 //       crept drive, the regularised normal equations, the non-negative solve, the output); the
@@ -136,8 +137,8 @@ void BM_RecordEvaluation(benchmark::State& state, const std::string& family, con
 }
 // The same two points evaluated side by side (RecordFitness::EvaluateMany, what the thread pool
 // hands a family with lanes): time per evaluation.
-void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family) {
-  const Setup setup(family);
+void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family, const std::string& effects = "") {
+  const Setup setup(family, effects);
   const RecordFitness& fitness = setup.fitness;
   const auto points = setup.points(family);
   opt::Genome a, b;
@@ -152,6 +153,14 @@ void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family)
   state.SetItemsProcessed(2 * static_cast<int64_t>(state.iterations()));  // evaluations/s
 }
 BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
+// With effects: each genome its own delayed / crept drive, its own output effects.
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+delay, std::string("bw-oscillator"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+creep, std::string("bw-oscillator"), std::string("creep"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+creep-spectrum+delay, std::string("bw-oscillator"),
+                  std::string("creep-spectrum,delay"))
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_RecordEvaluation, stack-bouc-wen, std::string("stack-bouc-wen"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, duhem, std::string("duhem"))->Unit(benchmark::kMillisecond);

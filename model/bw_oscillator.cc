@@ -100,11 +100,13 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
 // loop's, in the same order (no reassociation, no FMA), so each lane's values are its bits. Returns
 // false, leaving y and the states undefined, as soon as either lane leaves the scalar loop's bounds
 // (the caller then runs both alone, for the scalar loop's exact output and message).
-bool IntegratePair(const std::array<BwParams, 2>& p, const BwInput& in, const std::array<std::span<double>, 2>& y,
-                   std::array<BwState, 2>& st) {
-  const size_t n = in.samples();
-  const int S = in.substeps();
-  const double h = 1.0 / (in.sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
+// Each lane reads its own input (the same table for both when they share a drive); the inputs have
+// the same samples, sub-steps and rate (checked by the caller).
+bool IntegratePair(const std::array<BwParams, 2>& p, const std::array<const BwInput*, 2>& in,
+                   const std::array<std::span<double>, 2>& y, std::array<BwState, 2>& st) {
+  const size_t n = in[0]->samples();
+  const int S = in[0]->substeps();
+  const double h = 1.0 / (in[0]->sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
   double inv_m[2], c[2], k[2], alpha[2], bg[2], bd[2], Y[2], V[2], Z[2];
   for (int l = 0; l < 2; ++l) {
     inv_m[l] = 1.0 / p[l].m;
@@ -118,12 +120,12 @@ bool IntegratePair(const std::array<BwParams, 2>& p, const BwInput& in, const st
     Z[l] = st[l].z;
     y[l][0] = Y[l];
   }
-  const double* u = in.half_steps().data();
+  const double* u[2] = {in[0]->half_steps().data(), in[1]->half_steps().data()};
   size_t j = 0;
   for (size_t i = 1; i < n; ++i) {
     for (int s = 0; s < S; ++s, j += 2) {
-      const double u0 = u[j], u1 = u[j + 1], u2 = u[j + 2];
       for (int l = 0; l < 2; ++l) {
+        const double u0 = u[l][j], u1 = u[l][j + 1], u2 = u[l][j + 2];
         auto zdot = [&](double v, double z) { return alpha[l] * v - bg[l] * std::abs(v) * z - bd[l] * v * std::abs(z); };
         const double a1 = (u0 - c[l] * V[l] - k[l] * Y[l] - Z[l]) * inv_m[l], z1 = zdot(V[l], Z[l]);
         const double y2 = Y[l] + h2 * V[l], v2 = V[l] + h2 * a1, w2 = Z[l] + h2 * z1;
@@ -187,14 +189,17 @@ Status BwInputOptions::Validate() const {
   return Status::Ok();
 }
 
-BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : options_(options) {
+BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) { Assign(u, options); }
+
+void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
+  samples_ = 0;  // empty until the table is made (an error leaves it so)
   ThrowIfError(options.Validate());
   const size_t n = u.size();
   if (n < 2) throw InputError(FieldError("bw.input: u.size()", n, "needs at least 2 samples"));
   for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(u[i])) throw InputError(FieldError("bw.input: u[" + std::to_string(i) + "]", u[i], "must be finite"));
   }
-  samples_ = n;
+  options_ = options;
   const size_t L = 2 * static_cast<size_t>(options.substeps);  // half steps per sample
   fine_.resize(L * (n - 1) + 1);
   switch (options.interpolation) {
@@ -203,14 +208,19 @@ BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : opt
       // sees it at its end point only).
       for (size_t j = 0; j < fine_.size(); ++j) fine_[j] = u[std::min(j / L, n - 1)];
       break;
-    case InputInterpolation::kLinear:
+    case InputInterpolation::kLinear: {
+      // u_i + (u_{i+1} − u_i) r/L, the fractions r/L divided once (the same values).
+      thread_local std::vector<double> frac;
+      frac.resize(L);
+      for (size_t r = 0; r < L; ++r) frac[r] = static_cast<double>(r) / static_cast<double>(L);
       for (size_t i = 0; i + 1 < n; ++i) {
-        for (size_t r = 0; r < L; ++r) {
-          fine_[i * L + r] = u[i] + (u[i + 1] - u[i]) * (static_cast<double>(r) / static_cast<double>(L));
-        }
+        const double a = u[i], d = u[i + 1] - u[i];
+        double* f = fine_.data() + i * L;
+        for (size_t r = 0; r < L; ++r) f[r] = a + d * frac[r];
       }
       fine_.back() = u[n - 1];
       break;
+    }
     case InputInterpolation::kCubicSpline: {
       if (n < 4) throw InputError(FieldError("bw.input: u.size()", n, "the cubic spline needs at least 4 samples"));
       boost::math::interpolators::cardinal_cubic_b_spline<double> spline(u.data(), n, 0.0, 1.0);
@@ -243,6 +253,7 @@ BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : opt
       break;
     }
   }
+  samples_ = n;
 }
 
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y, BwState* state) {
@@ -255,24 +266,37 @@ Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double
   return params.nu == 1.0 ? Integrate<true>(params, input, y, state) : Integrate<false>(params, input, y, state);
 }
 
-std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
                                      const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
   for (int l = 0; l < 2; ++l) {
     ThrowIfError(params[l].Validate());
-    if (y[l].size() != input.samples()) {
-      throw InputError(FieldError("bw: y.size()", y[l].size(), "must equal the input's samples = " +
-                                                                  std::to_string(input.samples())));
+    if (inputs[l] == nullptr || inputs[l]->samples() == 0)
+      throw InputError("bw: input " + std::to_string(l) + " is empty (default-constructed BwInput)");
+    if (y[l].size() != inputs[l]->samples()) {
+      throw InputError(FieldError("bw: y[" + std::to_string(l) + "].size()", y[l].size(),
+                                  "must equal the input's samples = " + std::to_string(inputs[l]->samples())));
     }
   }
-  if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
+  const BwInput &a = *inputs[0], &b = *inputs[1];
+  if (b.samples() != a.samples() || b.substeps() != a.substeps() || b.sample_rate_hz() != a.sample_rate_hz()) {
+    throw InputError("bw: the pair's inputs differ in samples (" + std::to_string(a.samples()) + ", " +
+                     std::to_string(b.samples()) + "), sub-steps (" + std::to_string(a.substeps()) + ", " +
+                     std::to_string(b.substeps()) + ") or sample rate (" + Num(a.sample_rate_hz()) + ", " +
+                     Num(b.sample_rate_hz()) + " Hz): they must be equal");
+  }
   std::array<BwState, 2> st = states ? *states : std::array<BwState, 2>{};
-  if (params[0].nu == 1.0 && params[1].nu == 1.0 && IntegratePair(params, input, y, st)) {
+  if (params[0].nu == 1.0 && params[1].nu == 1.0 && IntegratePair(params, inputs, y, st)) {
     if (states) *states = st;
     return {Status::Ok(), Status::Ok()};
   }
   std::array<Status, 2> out;
-  for (int l = 0; l < 2; ++l) out[l] = SimulateBw(params[l], input, y[l], states ? &(*states)[l] : nullptr);
+  for (int l = 0; l < 2; ++l) out[l] = SimulateBw(params[l], *inputs[l], y[l], states ? &(*states)[l] : nullptr);
   return out;
+}
+
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
+  return SimulateBwPair(params, {&input, &input}, y, states);
 }
 
 BwParams BwFromIdentifiable(std::span<const double> theta) {

@@ -69,6 +69,10 @@ class BwInput {
   /// Throws InputError naming the option, the first non-finite sample, a short record (≥ 2
   /// samples; ≥ 4 for the spline), or the first sample where a "periodic" record is not.
   BwInput(std::span<const double> u, const BwInputOptions& options);
+  /// The same table for another drive, in this input's storage (no allocation when it is no
+  /// larger: a search's per-evaluation drives). Throws as the constructor does, leaving the input
+  /// empty (samples() = 0).
+  void Assign(std::span<const double> u, const BwInputOptions& options);
 
   size_t samples() const { return samples_; }
   int substeps() const { return options_.substeps; }
@@ -102,6 +106,11 @@ Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double
 /// same status each (ν = 1 runs as a pair; otherwise, or when a lane diverges, each lane alone).
 /// Throws InputError as SimulateBw does.
 std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+/// The same with each lane on its own input (e.g. each parameter set's own delayed or crept drive):
+/// y[l] and states[l] as SimulateBw(params[l], *inputs[l], y[l], …) has them, bit for bit. The
+/// inputs must have the same samples, sub-steps and sample rate (InputError naming them otherwise).
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
                                      const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
 
 /// The identifiable parameterisation for ν = 1 (β appears only in the products β·γ and β·δ, see

@@ -205,35 +205,55 @@ class BwOscillatorFamily final : public Family {
     if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
     const model::BwParams b = osc_.physical ? model::BwFromIdentifiable(p) : Scaled(p);
     if (!b.Validate().ok()) return Nan(y);  // outside any box (m <= 0, a non-finite value)
-    std::optional<model::BwInput> own;
+    // Unprepared (a drive effect's drive): the table in this thread's storage, made anew.
+    thread_local model::BwInput own;
     const auto* in = dynamic_cast<const Input*>(prepared);
-    const model::BwInput& input = in ? in->input : own.emplace(u, InputOptions(dt));
+    if (!in) own.Assign(u, InputOptions(dt));
+    const model::BwInput& input = in ? in->input : own;
     model::BwState state = Rest(b, u[0]);
     const Status st = model::SimulateBw(b, input, y, &state);
     if (!st.ok()) Nan(y);
   }
   // Two parameter sets side by side (model::SimulateBwPair): the RK4 loop is a chain of dependent
-  // operations, and two chains in one thread take about the time of one.
+  // operations, and two chains in one thread take about the time of one. On the prepared drive, or
+  // (a model with drive effects) each on its own.
   int lanes() const override { return 2; }
   void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                             std::span<const double> u, double dt, std::span<const std::span<double>> ys) const override {
     const auto* in = dynamic_cast<const Input*>(prepared);
     std::array<model::BwParams, 2> b;
-    bool pair = ps.size() == 2 && in;
-    for (size_t l = 0; pair && l < 2; ++l) {
-      if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
-      b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
-      pair = b[l].Validate().ok();
-    }
-    if (!pair) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
-    std::array<model::BwState, 2> states = {Rest(b[0], u[0]), Rest(b[1], u[0])};
-    const auto st = model::SimulateBwPair(b, in->input, {ys[0], ys[1]}, &states);
-    for (size_t l = 0; l < 2; ++l)
-      if (!st[l].ok()) Nan(ys[l]);
+    if (!in || !PairParams(ps, b)) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
+    Pair(b, {&in->input, &in->input}, {u[0], u[0]}, ys);
+  }
+  void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us, double dt,
+                    std::span<const std::span<double>> ys) const override {
+    std::array<model::BwParams, 2> b;
+    if (us.size() != 2 || us[0].size() != us[1].size() || !PairParams(ps, b)) return Family::SimulateMany(ps, us, dt, ys);
+    thread_local std::array<model::BwInput, 2> in;  // each lane's table, in this thread's storage
+    for (size_t l = 0; l < 2; ++l) in[l].Assign(us[l], InputOptions(dt));
+    Pair(b, {&in[0], &in[1]}, {us[0][0], us[1][0]}, ys);
   }
 
  private:
   static void Nan(std::span<double> y) { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); }
+  // b[l] of a pair of parameter sets, false unless both are valid (SimulatePrepared's NaN: alone).
+  bool PairParams(std::span<const std::span<const double>> ps, std::array<model::BwParams, 2>& b) const {
+    if (ps.size() != 2) return false;
+    for (size_t l = 0; l < 2; ++l) {
+      if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
+      b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
+      if (!b[l].Validate().ok()) return false;
+    }
+    return true;
+  }
+  // SimulatePrepared's simulation for both lanes at once, each from rest at its drive's u_0.
+  void Pair(const std::array<model::BwParams, 2>& b, const std::array<const model::BwInput*, 2>& inputs,
+            const std::array<double, 2>& u0, std::span<const std::span<double>> ys) const {
+    std::array<model::BwState, 2> states = {Rest(b[0], u0[0]), Rest(b[1], u0[1])};
+    const auto st = model::SimulateBwPair(b, inputs, {ys[0], ys[1]}, &states);
+    for (size_t l = 0; l < 2; ++l)
+      if (!st[l].ok()) Nan(ys[l]);
+  }
   // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.
   model::BwState Rest(const model::BwParams& b, double u0) const {
     return {!osc_.from_zero_state && b.k != 0 ? u0 / b.k : 0.0, 0, 0};
@@ -339,6 +359,11 @@ void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::s
 void Family::SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                                   std::span<const double> u, double dt, std::span<const std::span<double>> ys) const {
   for (size_t l = 0; l < ps.size(); ++l) SimulatePrepared(prepared, ps[l], u, dt, ys[l]);
+}
+
+void Family::SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us,
+                          double dt, std::span<const std::span<double>> ys) const {
+  for (size_t l = 0; l < ps.size(); ++l) Simulate(ps[l], us[l], dt, ys[l]);
 }
 
 DataScale MeasureScale(const std::vector<const io::Record*>& records) {
