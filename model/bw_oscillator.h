@@ -100,8 +100,7 @@ struct BwState {
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y,
                   BwState* state = nullptr);
 
-/// Two parameter sets on one input, side by side in one thread (two independent chains of dependent
-/// operations take about the time of one): y[l] and states[l] (rest when null) as
+/// Two parameter sets on one input, side by side in one thread (SimulateBwMany): y[l] and states[l] (rest when null) as
 /// SimulateBw(params[l], input, y[l], states ? &states[l] : nullptr) has them, bit for bit, with the
 /// same status each (ν = 1 runs as a pair; otherwise, or when a lane diverges, each lane alone).
 /// Throws InputError as SimulateBw does.
@@ -112,6 +111,12 @@ std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, cons
 /// inputs must have the same samples, sub-steps and sample rate (InputError naming them otherwise).
 std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
                                      const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+/// Any number of parameter sets, each on its own input (pointers may repeat), in groups of four
+/// side by side (two SSE2 vector chains of two lanes each: four sets in about the time of one),
+/// then two, then one: y[l], states[l] (rest when empty) and the status as SimulateBw has them, bit
+/// for bit. Throws InputError as SimulateBwPair does.
+std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<const BwInput* const> inputs,
+                                   std::span<const std::span<double>> y, std::span<BwState> states = {});
 
 /// The identifiable parameterisation for ν = 1 (β appears only in the products β·γ and β·δ, see
 /// the benchmark README): θ = (m, c, k, α, β·γ, β·δ) ↦ BwParams with β = 1, γ = β·γ, δ = β·δ,

@@ -214,44 +214,57 @@ class BwOscillatorFamily final : public Family {
     const Status st = model::SimulateBw(b, input, y, &state);
     if (!st.ok()) Nan(y);
   }
-  // Two parameter sets side by side (model::SimulateBwPair): the RK4 loop is a chain of dependent
-  // operations, and two chains in one thread take about the time of one. On the prepared drive, or
-  // (a model with drive effects) each on its own.
-  int lanes() const override { return 2; }
+  // Four parameter sets side by side (model::SimulateBwMany): the RK4 loop is a chain of dependent
+  // operations, and two chains of two-lane vector operations in one thread take about the time of
+  // one. On the prepared drive, or (a model with drive effects) each on its own.
+  int lanes() const override { return 4; }
   void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                             std::span<const double> u, double dt, std::span<const std::span<double>> ys) const override {
     const auto* in = dynamic_cast<const Input*>(prepared);
-    std::array<model::BwParams, 2> b;
-    if (!in || !PairParams(ps, b)) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
-    Pair(b, {&in->input, &in->input}, {u[0], u[0]}, ys);
+    std::vector<model::BwParams> b;
+    if (!in || !ManyParams(ps, b)) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
+    const std::vector<const model::BwInput*> inputs(ps.size(), &in->input);
+    Many(b, inputs, std::vector<double>(ps.size(), u[0]), ys);
   }
   void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us, double dt,
                     std::span<const std::span<double>> ys) const override {
-    std::array<model::BwParams, 2> b;
-    if (us.size() != 2 || us[0].size() != us[1].size() || !PairParams(ps, b)) return Family::SimulateMany(ps, us, dt, ys);
-    thread_local std::array<model::BwInput, 2> in;  // each lane's table, in this thread's storage
-    for (size_t l = 0; l < 2; ++l) in[l].Assign(us[l], InputOptions(dt));
-    Pair(b, {&in[0], &in[1]}, {us[0][0], us[1][0]}, ys);
+    std::vector<model::BwParams> b;
+    bool many = us.size() == ps.size();
+    for (const std::span<const double> u : us) many = many && u.size() == us[0].size();
+    if (!many || !ManyParams(ps, b)) return Family::SimulateMany(ps, us, dt, ys);
+    thread_local std::vector<model::BwInput> in;  // each lane's table, in this thread's storage
+    if (in.size() < us.size()) in.resize(us.size());
+    std::vector<const model::BwInput*> inputs(us.size());
+    std::vector<double> u0(us.size());
+    for (size_t l = 0; l < us.size(); ++l) {
+      in[l].Assign(us[l], InputOptions(dt));
+      inputs[l] = &in[l];
+      u0[l] = us[l][0];
+    }
+    Many(b, inputs, u0, ys);
   }
 
  private:
   static void Nan(std::span<double> y) { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); }
-  // b[l] of a pair of parameter sets, false unless both are valid (SimulatePrepared's NaN: alone).
-  bool PairParams(std::span<const std::span<const double>> ps, std::array<model::BwParams, 2>& b) const {
-    if (ps.size() != 2) return false;
-    for (size_t l = 0; l < 2; ++l) {
+  // b[l] of two or more parameter sets, false unless every one is valid (SimulatePrepared's NaN:
+  // each alone).
+  bool ManyParams(std::span<const std::span<const double>> ps, std::vector<model::BwParams>& b) const {
+    if (ps.size() < 2) return false;
+    b.resize(ps.size());
+    for (size_t l = 0; l < ps.size(); ++l) {
       if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
       b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
       if (!b[l].Validate().ok()) return false;
     }
     return true;
   }
-  // SimulatePrepared's simulation for both lanes at once, each from rest at its drive's u_0.
-  void Pair(const std::array<model::BwParams, 2>& b, const std::array<const model::BwInput*, 2>& inputs,
-            const std::array<double, 2>& u0, std::span<const std::span<double>> ys) const {
-    std::array<model::BwState, 2> states = {Rest(b[0], u0[0]), Rest(b[1], u0[1])};
-    const auto st = model::SimulateBwPair(b, inputs, {ys[0], ys[1]}, &states);
-    for (size_t l = 0; l < 2; ++l)
+  // SimulatePrepared's simulation for every lane at once, each from rest at its drive's u_0.
+  void Many(const std::vector<model::BwParams>& b, const std::vector<const model::BwInput*>& inputs,
+            const std::vector<double>& u0, std::span<const std::span<double>> ys) const {
+    std::vector<model::BwState> states(b.size());
+    for (size_t l = 0; l < b.size(); ++l) states[l] = Rest(b[l], u0[l]);
+    const std::vector<Status> st = model::SimulateBwMany(b, inputs, ys, states);
+    for (size_t l = 0; l < b.size(); ++l)
       if (!st[l].ok()) Nan(ys[l]);
   }
   // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.

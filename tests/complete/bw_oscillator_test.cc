@@ -179,7 +179,7 @@ TEST(BwOscillator, APairOnTwoInputsIsEachAloneBitForBit) {
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
                   (void)SimulateBwPair({BwParams{}, BwParams{}}, {&in0, &in2}, {std::span<double>(a), std::span<double>(b)});
                 }),
-                "the pair's inputs differ in samples (500, 400)");
+                "the inputs differ in samples (500, 400)");
 }
 
 TEST(BwOscillator, BadInputNamed) {

@@ -196,7 +196,7 @@ TEST(RecordFit, SameResultOnOneAndTwoThreads) {
 }
 
 TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
-  // The bw-oscillator runs two parameter sets at once (Family::lanes, model::SimulateBwPair): each
+  // The bw-oscillator runs up to four parameter sets at once (Family::lanes, model::SimulateBwMany): each
   // result is Evaluate's, bit for bit, for points in the box, a point outside (m <= 0 after the
   // scaling: NaN alone) and one that diverges — alone and with effects: drive effects give each
   // genome its own drive (Family::SimulateMany), output effects act on each lane's output; a family
@@ -223,7 +223,7 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
     }
     const RecordModel model(MakeFamily(c.family, scale), kinds, scale);
     const RecordFitness fitness(model, train);
-    ASSERT_EQ(fitness.lanes(), 2);
+    ASSERT_EQ(fitness.lanes(), 4);
     // Each genome's effects at its own point of their box (so each lane has its own drive).
     std::vector<opt::Genome> g(family.size());
     for (size_t a = 0; a < g.size(); ++a) {
@@ -234,17 +234,22 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
         g[a].reals.push_back(q.log_scale ? q.lower * std::pow(q.upper / q.lower, f) : q.lower + f * (q.upper - q.lower));
       }
     }
-    for (size_t a = 0; a < g.size(); ++a) {
-      for (size_t b = 0; b < g.size(); ++b) {
-        const opt::Genome* pair[2] = {&g[a], &g[b]};
-        opt::FitnessResult out[2];
-        fitness.EvaluateMany(pair, out);
-        for (int l = 0; l < 2; ++l) {
-          const opt::FitnessResult want = fitness.Evaluate(*pair[l]);
-          EXPECT_EQ(out[l].status, want.status) << a << " " << b;
-          EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost)) << a << " " << b;
-        }
+    auto check = [&](std::vector<const opt::Genome*> group) {
+      std::vector<opt::FitnessResult> out(group.size());
+      fitness.EvaluateMany(group, out);
+      for (size_t l = 0; l < group.size(); ++l) {
+        const opt::FitnessResult want = fitness.Evaluate(*group[l]);
+        EXPECT_EQ(out[l].status, want.status) << group.size() << " lanes, genome " << group[l] - g.data();
+        EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost))
+            << group.size() << " lanes, genome " << group[l] - g.data();
       }
+    };
+    for (size_t a = 0; a < g.size(); ++a) {
+      for (size_t b = 0; b < g.size(); ++b) check({&g[a], &g[b]});
+      // Groups of three (a pair and one alone) and four (two vector chains), with and without the
+      // invalid and the diverging genome.
+      check({&g[a], &g[(a + 1) % 6], &g[(a + 2) % 6]});
+      check({&g[a], &g[(a + 1) % 6], &g[(a + 2) % 6], &g[(a + 5) % 6]});
     }
     EXPECT_EQ(fitness.Evaluate(g[4]).status, opt::FitnessStatus::kPenalized);
     EXPECT_NE(fitness.Evaluate(g[1]).cost, fitness.Evaluate(g[2]).cost);
