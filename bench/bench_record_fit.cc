@@ -8,7 +8,9 @@
 // search does (the fin's other geometry costs its FE assembly and modal discretisation each time).
 //
 //   BM_RecordEvaluation/<family>       one evaluation
-//   BM_RecordEvaluationPair/<family>   two evaluations side by side (a family with lanes)
+//   BM_RecordEvaluationPair/<family>[+<effects>]   two evaluations side by side (a family with lanes;
+//       with drive effects each on its own drive)
+//   BM_RecordEvaluationFour/<family>[+<effects>]   four side by side (the bw-oscillator's lanes())
 //   BM_RecordEvaluation/<family>+<effects>   one evaluation with effects (issue 22's 10 s target): a
 //       linear family's weights solved for the effects' parameters (the regressors of the delayed /
 //       crept drive, the regularised normal equations, the non-negative solve, the output); the
@@ -136,8 +138,8 @@ void BM_RecordEvaluation(benchmark::State& state, const std::string& family, con
 }
 // The same two points evaluated side by side (RecordFitness::EvaluateMany, what the thread pool
 // hands a family with lanes): time per evaluation.
-void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family) {
-  const Setup setup(family);
+void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family, const std::string& effects = "") {
+  const Setup setup(family, effects);
   const RecordFitness& fitness = setup.fitness;
   const auto points = setup.points(family);
   opt::Genome a, b;
@@ -151,7 +153,35 @@ void BM_RecordEvaluationPair(benchmark::State& state, const std::string& family)
   }
   state.SetItemsProcessed(2 * static_cast<int64_t>(state.iterations()));  // evaluations/s
 }
+// Four at once (the bw-oscillator's lanes(): two vector chains), the two points twice.
+void BM_RecordEvaluationFour(benchmark::State& state, const std::string& family, const std::string& effects = "") {
+  const Setup setup(family, effects);
+  const auto points = setup.points(family);
+  std::vector<opt::Genome> g(4);
+  for (size_t l = 0; l < g.size(); ++l) g[l].reals = points[l % 2];
+  const opt::Genome* group[4] = {&g[0], &g[1], &g[2], &g[3]};
+  opt::FitnessResult out[4];
+  for (auto _ : state) {
+    setup.fitness.EvaluateMany(group, out);
+    benchmark::DoNotOptimize(out[0].cost);
+  }
+  state.SetItemsProcessed(4 * static_cast<int64_t>(state.iterations()));  // evaluations/s
+}
+BENCHMARK_CAPTURE(BM_RecordEvaluationFour, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationFour, bw-oscillator+delay, std::string("bw-oscillator"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationFour, bw-oscillator+creep-spectrum+delay, std::string("bw-oscillator"),
+                  std::string("creep-spectrum,delay"))
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator, std::string("bw-oscillator"))->Unit(benchmark::kMillisecond);
+// With effects: each genome its own delayed / crept drive, its own output effects.
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+delay, std::string("bw-oscillator"), std::string("delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+creep, std::string("bw-oscillator"), std::string("creep"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluationPair, bw-oscillator+creep-spectrum+delay, std::string("bw-oscillator"),
+                  std::string("creep-spectrum,delay"))
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_RecordEvaluation, stack-bouc-wen, std::string("stack-bouc-wen"))->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, duhem, std::string("duhem"))->Unit(benchmark::kMillisecond);

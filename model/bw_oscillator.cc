@@ -96,55 +96,77 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
   return Status::Ok();
 }
 
-// Integrate<true>'s loop for two parameter sets at once: every operation of a lane is the scalar
-// loop's, in the same order (no reassociation, no FMA), so each lane's values are its bits. Returns
-// false, leaving y and the states undefined, as soon as either lane leaves the scalar loop's bounds
-// (the caller then runs both alone, for the scalar loop's exact output and message).
-bool IntegratePair(const std::array<BwParams, 2>& p, const BwInput& in, const std::array<std::span<double>, 2>& y,
-                   std::array<BwState, 2>& st) {
-  const size_t n = in.samples();
-  const int S = in.substeps();
-  const double h = 1.0 / (in.sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
-  double inv_m[2], c[2], k[2], alpha[2], bg[2], bd[2], Y[2], V[2], Z[2];
-  for (int l = 0; l < 2; ++l) {
-    inv_m[l] = 1.0 / p[l].m;
-    c[l] = p[l].c;
-    k[l] = p[l].k;
-    alpha[l] = p[l].alpha;
-    bg[l] = p[l].beta * p[l].gamma;
-    bd[l] = p[l].beta * p[l].delta;
-    Y[l] = st[l].y;
-    V[l] = st[l].v;
-    Z[l] = st[l].z;
-    y[l][0] = Y[l];
+// Integrate<true>'s loop for 2 NV parameter sets at once, lanes 2v and 2v + 1 in the two halves of
+// SSE2 vectors (GCC vector extensions): every operation of a lane is the scalar loop's, in the same
+// order (packed multiplies, adds and subtractions round each half as the scalar ones do; |x| clears
+// the sign bit as fabs does; no reassociation, no FMA), so each lane's values are its bits. NV = 2
+// runs two independent chains of vector operations, four parameter sets in about the time of one
+// (the loop is bound by the latency of its chain, not by throughput). Returns false, leaving y and
+// the states undefined, as soon as a lane leaves the scalar loop's bounds (the caller then runs each
+// alone, for the scalar loop's exact output and message). Each lane reads its own input (the same
+// table for every lane that shares a drive); the inputs have the same samples, sub-steps and rate
+// (checked by the caller).
+typedef double V2 __attribute__((vector_size(16)));
+typedef long long V2i __attribute__((vector_size(16)));
+
+inline V2 Abs(V2 x) { return (V2)((V2i)x & (V2i){0x7fffffffffffffffLL, 0x7fffffffffffffffLL}); }
+inline V2 Splat(double x) { return (V2){x, x}; }
+
+template <int NV>
+bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span<double>* y, BwState* st) {
+  constexpr int L = 2 * NV;
+  const size_t n = in[0]->samples();
+  const int S = in[0]->substeps();
+  const double hs = 1.0 / (in[0]->sample_rate_hz() * S);
+  const V2 h = Splat(hs), h2 = Splat(0.5 * hs), h6 = Splat(hs / 6.0), two = Splat(2.0);
+  V2 inv_m[NV], c[NV], k[NV], alpha[NV], bg[NV], bd[NV], Y[NV], V[NV], Z[NV];
+  const double* u[L];
+  for (int v = 0; v < NV; ++v) {
+    const BwParams &a = p[2 * v], &b = p[2 * v + 1];
+    inv_m[v] = (V2){1.0 / a.m, 1.0 / b.m};
+    c[v] = (V2){a.c, b.c};
+    k[v] = (V2){a.k, b.k};
+    alpha[v] = (V2){a.alpha, b.alpha};
+    bg[v] = (V2){a.beta * a.gamma, b.beta * b.gamma};
+    bd[v] = (V2){a.beta * a.delta, b.beta * b.delta};
+    Y[v] = (V2){st[2 * v].y, st[2 * v + 1].y};
+    V[v] = (V2){st[2 * v].v, st[2 * v + 1].v};
+    Z[v] = (V2){st[2 * v].z, st[2 * v + 1].z};
   }
-  const double* u = in.half_steps().data();
+  for (int l = 0; l < L; ++l) {
+    y[l][0] = st[l].y;
+    u[l] = in[l]->half_steps().data();
+  }
   size_t j = 0;
   for (size_t i = 1; i < n; ++i) {
     for (int s = 0; s < S; ++s, j += 2) {
-      const double u0 = u[j], u1 = u[j + 1], u2 = u[j + 2];
-      for (int l = 0; l < 2; ++l) {
-        auto zdot = [&](double v, double z) { return alpha[l] * v - bg[l] * std::abs(v) * z - bd[l] * v * std::abs(z); };
-        const double a1 = (u0 - c[l] * V[l] - k[l] * Y[l] - Z[l]) * inv_m[l], z1 = zdot(V[l], Z[l]);
-        const double y2 = Y[l] + h2 * V[l], v2 = V[l] + h2 * a1, w2 = Z[l] + h2 * z1;
-        const double a2 = (u1 - c[l] * v2 - k[l] * y2 - w2) * inv_m[l], z2 = zdot(v2, w2);
-        const double y3 = Y[l] + h2 * v2, v3 = V[l] + h2 * a2, w3 = Z[l] + h2 * z2;
-        const double a3 = (u1 - c[l] * v3 - k[l] * y3 - w3) * inv_m[l], z3 = zdot(v3, w3);
-        const double y4 = Y[l] + h * v3, v4 = V[l] + h * a3, w4 = Z[l] + h * z3;
-        const double a4 = (u2 - c[l] * v4 - k[l] * y4 - w4) * inv_m[l], z4 = zdot(v4, w4);
-        Y[l] += h6 * (V[l] + 2 * (v2 + v3) + v4);
-        V[l] += h6 * (a1 + 2 * (a2 + a3) + a4);
-        Z[l] += h6 * (z1 + 2 * (z2 + z3) + z4);
+      for (int v = 0; v < NV; ++v) {
+        const double *ua = u[2 * v], *ub = u[2 * v + 1];
+        const V2 u0 = {ua[j], ub[j]}, u1 = {ua[j + 1], ub[j + 1]}, u2 = {ua[j + 2], ub[j + 2]};
+        auto zdot = [&](V2 x, V2 z) { return alpha[v] * x - bg[v] * Abs(x) * z - bd[v] * x * Abs(z); };
+        const V2 a1 = (u0 - c[v] * V[v] - k[v] * Y[v] - Z[v]) * inv_m[v], z1 = zdot(V[v], Z[v]);
+        const V2 y2 = Y[v] + h2 * V[v], v2 = V[v] + h2 * a1, w2 = Z[v] + h2 * z1;
+        const V2 a2 = (u1 - c[v] * v2 - k[v] * y2 - w2) * inv_m[v], z2 = zdot(v2, w2);
+        const V2 y3 = Y[v] + h2 * v2, v3 = V[v] + h2 * a2, w3 = Z[v] + h2 * z2;
+        const V2 a3 = (u1 - c[v] * v3 - k[v] * y3 - w3) * inv_m[v], z3 = zdot(v3, w3);
+        const V2 y4 = Y[v] + h * v3, v4 = V[v] + h * a3, w4 = Z[v] + h * z3;
+        const V2 a4 = (u2 - c[v] * v4 - k[v] * y4 - w4) * inv_m[v], z4 = zdot(v4, w4);
+        Y[v] += h6 * (V[v] + two * (v2 + v3) + v4);
+        V[v] += h6 * (a1 + two * (a2 + a3) + a4);
+        Z[v] += h6 * (z1 + two * (z2 + z3) + z4);
       }
     }
     bool ok = true;
-    for (int l = 0; l < 2; ++l) {
-      y[l][i] = Y[l];
-      ok &= std::abs(Y[l]) <= 1e3 && std::abs(Z[l]) <= 1e12 && std::abs(V[l]) <= 1e9;  // false for NaN too
+    for (int v = 0; v < NV; ++v) {
+      for (int e = 0; e < 2; ++e) {
+        y[2 * v + e][i] = Y[v][e];
+        ok &= std::abs(Y[v][e]) <= 1e3 && std::abs(Z[v][e]) <= 1e12 && std::abs(V[v][e]) <= 1e9;  // false for NaN too
+      }
     }
     if (!ok) return false;
   }
-  for (int l = 0; l < 2; ++l) st[l] = BwState{Y[l], V[l], Z[l]};
+  for (int v = 0; v < NV; ++v)
+    for (int e = 0; e < 2; ++e) st[2 * v + e] = BwState{Y[v][e], V[v][e], Z[v][e]};
   return true;
 }
 
@@ -187,14 +209,17 @@ Status BwInputOptions::Validate() const {
   return Status::Ok();
 }
 
-BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : options_(options) {
+BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) { Assign(u, options); }
+
+void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
+  samples_ = 0;  // empty until the table is made (an error leaves it so)
   ThrowIfError(options.Validate());
   const size_t n = u.size();
   if (n < 2) throw InputError(FieldError("bw.input: u.size()", n, "needs at least 2 samples"));
   for (size_t i = 0; i < n; ++i) {
     if (!std::isfinite(u[i])) throw InputError(FieldError("bw.input: u[" + std::to_string(i) + "]", u[i], "must be finite"));
   }
-  samples_ = n;
+  options_ = options;
   const size_t L = 2 * static_cast<size_t>(options.substeps);  // half steps per sample
   fine_.resize(L * (n - 1) + 1);
   switch (options.interpolation) {
@@ -203,14 +228,19 @@ BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : opt
       // sees it at its end point only).
       for (size_t j = 0; j < fine_.size(); ++j) fine_[j] = u[std::min(j / L, n - 1)];
       break;
-    case InputInterpolation::kLinear:
+    case InputInterpolation::kLinear: {
+      // u_i + (u_{i+1} − u_i) r/L, the fractions r/L divided once (the same values).
+      thread_local std::vector<double> frac;
+      frac.resize(L);
+      for (size_t r = 0; r < L; ++r) frac[r] = static_cast<double>(r) / static_cast<double>(L);
       for (size_t i = 0; i + 1 < n; ++i) {
-        for (size_t r = 0; r < L; ++r) {
-          fine_[i * L + r] = u[i] + (u[i + 1] - u[i]) * (static_cast<double>(r) / static_cast<double>(L));
-        }
+        const double a = u[i], d = u[i + 1] - u[i];
+        double* f = fine_.data() + i * L;
+        for (size_t r = 0; r < L; ++r) f[r] = a + d * frac[r];
       }
       fine_.back() = u[n - 1];
       break;
+    }
     case InputInterpolation::kCubicSpline: {
       if (n < 4) throw InputError(FieldError("bw.input: u.size()", n, "the cubic spline needs at least 4 samples"));
       boost::math::interpolators::cardinal_cubic_b_spline<double> spline(u.data(), n, 0.0, 1.0);
@@ -243,6 +273,7 @@ BwInput::BwInput(std::span<const double> u, const BwInputOptions& options) : opt
       break;
     }
   }
+  samples_ = n;
 }
 
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y, BwState* state) {
@@ -255,24 +286,64 @@ Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double
   return params.nu == 1.0 ? Integrate<true>(params, input, y, state) : Integrate<false>(params, input, y, state);
 }
 
-std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
-                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
-  for (int l = 0; l < 2; ++l) {
+std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<const BwInput* const> inputs,
+                                   std::span<const std::span<double>> y, std::span<BwState> states) {
+  const size_t N = params.size();
+  if (inputs.size() != N || y.size() != N || (!states.empty() && states.size() != N))
+    throw InputError("bw: one input, output (and state) per parameter set expected");
+  for (size_t l = 0; l < N; ++l) {
     ThrowIfError(params[l].Validate());
-    if (y[l].size() != input.samples()) {
-      throw InputError(FieldError("bw: y.size()", y[l].size(), "must equal the input's samples = " +
-                                                                  std::to_string(input.samples())));
+    if (inputs[l] == nullptr || inputs[l]->samples() == 0)
+      throw InputError("bw: input " + std::to_string(l) + " is empty (default-constructed BwInput)");
+    if (y[l].size() != inputs[l]->samples()) {
+      throw InputError(FieldError("bw: y[" + std::to_string(l) + "].size()", y[l].size(),
+                                  "must equal the input's samples = " + std::to_string(inputs[l]->samples())));
+    }
+    const BwInput &a = *inputs[0], &b = *inputs[l];
+    if (b.samples() != a.samples() || b.substeps() != a.substeps() || b.sample_rate_hz() != a.sample_rate_hz()) {
+      throw InputError("bw: the inputs differ in samples (" + std::to_string(a.samples()) + ", " +
+                       std::to_string(b.samples()) + "), sub-steps (" + std::to_string(a.substeps()) + ", " +
+                       std::to_string(b.substeps()) + ") or sample rate (" + Num(a.sample_rate_hz()) + ", " +
+                       Num(b.sample_rate_hz()) + " Hz): they must be equal");
     }
   }
-  if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
-  std::array<BwState, 2> st = states ? *states : std::array<BwState, 2>{};
-  if (params[0].nu == 1.0 && params[1].nu == 1.0 && IntegratePair(params, input, y, st)) {
-    if (states) *states = st;
-    return {Status::Ok(), Status::Ok()};
+  std::vector<Status> out(N);
+  std::vector<BwState> st(N);
+  for (size_t l = 0; l < N; ++l) st[l] = states.empty() ? BwState{} : states[l];
+  // Groups of four lanes (two vector chains), then of two, then one alone; a group with ν ≠ 1 or a
+  // lane that diverges runs each of its lanes alone.
+  for (size_t l0 = 0; l0 < N;) {
+    const size_t g = N - l0 >= 4 ? 4 : N - l0 >= 2 ? 2 : 1;
+    bool nu_one = true;
+    for (size_t l = l0; l < l0 + g; ++l) nu_one = nu_one && params[l].nu == 1.0;
+    std::vector<BwState> s(st.begin() + static_cast<std::ptrdiff_t>(l0), st.begin() + static_cast<std::ptrdiff_t>(l0 + g));
+    const bool grouped = g > 1 && nu_one &&
+                         (g == 4 ? IntegrateLanes<2>(&params[l0], &inputs[l0], &y[l0], s.data())
+                                 : IntegrateLanes<1>(&params[l0], &inputs[l0], &y[l0], s.data()));
+    for (size_t l = l0; l < l0 + g; ++l) {
+      if (grouped) {
+        st[l] = s[l - l0];
+        out[l] = Status::Ok();
+      } else {
+        out[l] = SimulateBw(params[l], *inputs[l], y[l], &st[l]);
+      }
+    }
+    l0 += g;
   }
-  std::array<Status, 2> out;
-  for (int l = 0; l < 2; ++l) out[l] = SimulateBw(params[l], input, y[l], states ? &(*states)[l] : nullptr);
+  if (!states.empty()) std::copy(st.begin(), st.end(), states.begin());
   return out;
+}
+
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
+  const std::vector<Status> st =
+      SimulateBwMany(params, inputs, y, states ? std::span<BwState>(*states) : std::span<BwState>());
+  return {st[0], st[1]};
+}
+
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
+  return SimulateBwPair(params, {&input, &input}, y, states);
 }
 
 BwParams BwFromIdentifiable(std::span<const double> theta) {

@@ -69,6 +69,10 @@ class BwInput {
   /// Throws InputError naming the option, the first non-finite sample, a short record (≥ 2
   /// samples; ≥ 4 for the spline), or the first sample where a "periodic" record is not.
   BwInput(std::span<const double> u, const BwInputOptions& options);
+  /// The same table for another drive, in this input's storage (no allocation when it is no
+  /// larger: a search's per-evaluation drives). Throws as the constructor does, leaving the input
+  /// empty (samples() = 0).
+  void Assign(std::span<const double> u, const BwInputOptions& options);
 
   size_t samples() const { return samples_; }
   int substeps() const { return options_.substeps; }
@@ -96,13 +100,23 @@ struct BwState {
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y,
                   BwState* state = nullptr);
 
-/// Two parameter sets on one input, side by side in one thread (two independent chains of dependent
-/// operations take about the time of one): y[l] and states[l] (rest when null) as
+/// Two parameter sets on one input, side by side in one thread (SimulateBwMany): y[l] and states[l] (rest when null) as
 /// SimulateBw(params[l], input, y[l], states ? &states[l] : nullptr) has them, bit for bit, with the
 /// same status each (ν = 1 runs as a pair; otherwise, or when a lane diverges, each lane alone).
 /// Throws InputError as SimulateBw does.
 std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
                                      const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+/// The same with each lane on its own input (e.g. each parameter set's own delayed or crept drive):
+/// y[l] and states[l] as SimulateBw(params[l], *inputs[l], y[l], …) has them, bit for bit. The
+/// inputs must have the same samples, sub-steps and sample rate (InputError naming them otherwise).
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
+                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+/// Any number of parameter sets, each on its own input (pointers may repeat), in groups of four
+/// side by side (two SSE2 vector chains of two lanes each: four sets in about the time of one),
+/// then two, then one: y[l], states[l] (rest when empty) and the status as SimulateBw has them, bit
+/// for bit. Throws InputError as SimulateBwPair does.
+std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<const BwInput* const> inputs,
+                                   std::span<const std::span<double>> y, std::span<BwState> states = {});
 
 /// The identifiable parameterisation for ν = 1 (β appears only in the products β·γ and β·δ, see
 /// the benchmark README): θ = (m, c, k, α, β·γ, β·δ) ↦ BwParams with β = 1, γ = β·γ, δ = β·δ,

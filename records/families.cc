@@ -205,35 +205,68 @@ class BwOscillatorFamily final : public Family {
     if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
     const model::BwParams b = osc_.physical ? model::BwFromIdentifiable(p) : Scaled(p);
     if (!b.Validate().ok()) return Nan(y);  // outside any box (m <= 0, a non-finite value)
-    std::optional<model::BwInput> own;
+    // Unprepared (a drive effect's drive): the table in this thread's storage, made anew.
+    thread_local model::BwInput own;
     const auto* in = dynamic_cast<const Input*>(prepared);
-    const model::BwInput& input = in ? in->input : own.emplace(u, InputOptions(dt));
+    if (!in) own.Assign(u, InputOptions(dt));
+    const model::BwInput& input = in ? in->input : own;
     model::BwState state = Rest(b, u[0]);
     const Status st = model::SimulateBw(b, input, y, &state);
     if (!st.ok()) Nan(y);
   }
-  // Two parameter sets side by side (model::SimulateBwPair): the RK4 loop is a chain of dependent
-  // operations, and two chains in one thread take about the time of one.
-  int lanes() const override { return 2; }
+  // Four parameter sets side by side (model::SimulateBwMany): the RK4 loop is a chain of dependent
+  // operations, and two chains of two-lane vector operations in one thread take about the time of
+  // one. On the prepared drive, or (a model with drive effects) each on its own.
+  int lanes() const override { return 4; }
   void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                             std::span<const double> u, double dt, std::span<const std::span<double>> ys) const override {
     const auto* in = dynamic_cast<const Input*>(prepared);
-    std::array<model::BwParams, 2> b;
-    bool pair = ps.size() == 2 && in;
-    for (size_t l = 0; pair && l < 2; ++l) {
-      if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
-      b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
-      pair = b[l].Validate().ok();
+    std::vector<model::BwParams> b;
+    if (!in || !ManyParams(ps, b)) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
+    const std::vector<const model::BwInput*> inputs(ps.size(), &in->input);
+    Many(b, inputs, std::vector<double>(ps.size(), u[0]), ys);
+  }
+  void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us, double dt,
+                    std::span<const std::span<double>> ys) const override {
+    std::vector<model::BwParams> b;
+    bool many = us.size() == ps.size();
+    for (const std::span<const double> u : us) many = many && u.size() == us[0].size();
+    if (!many || !ManyParams(ps, b)) return Family::SimulateMany(ps, us, dt, ys);
+    thread_local std::vector<model::BwInput> in;  // each lane's table, in this thread's storage
+    if (in.size() < us.size()) in.resize(us.size());
+    std::vector<const model::BwInput*> inputs(us.size());
+    std::vector<double> u0(us.size());
+    for (size_t l = 0; l < us.size(); ++l) {
+      in[l].Assign(us[l], InputOptions(dt));
+      inputs[l] = &in[l];
+      u0[l] = us[l][0];
     }
-    if (!pair) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
-    std::array<model::BwState, 2> states = {Rest(b[0], u[0]), Rest(b[1], u[0])};
-    const auto st = model::SimulateBwPair(b, in->input, {ys[0], ys[1]}, &states);
-    for (size_t l = 0; l < 2; ++l)
-      if (!st[l].ok()) Nan(ys[l]);
+    Many(b, inputs, u0, ys);
   }
 
  private:
   static void Nan(std::span<double> y) { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); }
+  // b[l] of two or more parameter sets, false unless every one is valid (SimulatePrepared's NaN:
+  // each alone).
+  bool ManyParams(std::span<const std::span<const double>> ps, std::vector<model::BwParams>& b) const {
+    if (ps.size() < 2) return false;
+    b.resize(ps.size());
+    for (size_t l = 0; l < ps.size(); ++l) {
+      if (ps[l].size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
+      b[l] = osc_.physical ? model::BwFromIdentifiable(ps[l]) : Scaled(ps[l]);
+      if (!b[l].Validate().ok()) return false;
+    }
+    return true;
+  }
+  // SimulatePrepared's simulation for every lane at once, each from rest at its drive's u_0.
+  void Many(const std::vector<model::BwParams>& b, const std::vector<const model::BwInput*>& inputs,
+            const std::vector<double>& u0, std::span<const std::span<double>> ys) const {
+    std::vector<model::BwState> states(b.size());
+    for (size_t l = 0; l < b.size(); ++l) states[l] = Rest(b[l], u0[l]);
+    const std::vector<Status> st = model::SimulateBwMany(b, inputs, ys, states);
+    for (size_t l = 0; l < b.size(); ++l)
+      if (!st[l].ok()) Nan(ys[l]);
+  }
   // At rest at u_0: k y = u_0 with no hysteretic force (a virgin state); or the zero state.
   model::BwState Rest(const model::BwParams& b, double u0) const {
     return {!osc_.from_zero_state && b.k != 0 ? u0 / b.k : 0.0, 0, 0};
@@ -339,6 +372,11 @@ void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::s
 void Family::SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                                   std::span<const double> u, double dt, std::span<const std::span<double>> ys) const {
   for (size_t l = 0; l < ps.size(); ++l) SimulatePrepared(prepared, ps[l], u, dt, ys[l]);
+}
+
+void Family::SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us,
+                          double dt, std::span<const std::span<double>> ys) const {
+  for (size_t l = 0; l < ps.size(); ++l) Simulate(ps[l], us[l], dt, ys[l]);
 }
 
 DataScale MeasureScale(const std::vector<const io::Record*>& records) {

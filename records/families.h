@@ -105,11 +105,17 @@ class Family {
   /// Simulate with `prepared` = Prepare(u, dt) of this family (null: as Simulate).
   virtual void SimulatePrepared(const Prepared* prepared, std::span<const double> p, std::span<const double> u,
                                 double dt, std::span<double> y) const;
-  /// How many parameter sets SimulatePreparedMany runs side by side to gain from it (1: none).
+  /// How many parameter sets SimulatePreparedMany and SimulateMany run side by side to gain from it
+  /// (1: none).
   virtual int lanes() const { return 1; }
   /// SimulatePrepared for each ps[l] into ys[l], bit for bit (the default calls it for each).
   virtual void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
                                     std::span<const double> u, double dt, std::span<const std::span<double>> ys) const;
+  /// Each parameter set on its own drive (us[l]: what a model's drive effects make of the record's
+  /// drive for that set, RecordModel::SimulateMany): Simulate(ps[l], us[l], dt, ys[l]) for each, bit
+  /// for bit (the default calls it for each). The drives have one length.
+  virtual void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us,
+                            double dt, std::span<const std::span<double>> ys) const;
   /// Linear-in-parameters families: the regressors of u (rows = samples, columns = weights, in
   /// row-major order), whose non-negative combination is the output. Others: not called.
   virtual bool linear() const { return false; }

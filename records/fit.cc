@@ -328,6 +328,35 @@ std::vector<double> RecordFitness::SolveWeights(std::span<const double> p,
   return std::vector<double>(w.data(), w.data() + w.size());
 }
 
+namespace {
+
+// A record's model output y (from the model's Simulate: ŷ without polarity and offset, and its rest
+// output) with polarity and the record's offset applied in place; its squared errors over the
+// scored window added to sse in sample order — Run's and EvaluateMany's one arithmetic.
+double ScoreRecord(const io::Record& r, int polarity, double rest_output, std::span<double> y, double& sse) {
+  const double rest = polarity * rest_output;
+  for (double& v : y) v *= polarity;
+  const double o = RecordOffset(r, y, rest);
+  for (double& v : y) v += o;
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    const double e = r.y[k] - y[k];
+    sse += e * e;
+  }
+  return o;
+}
+
+}  // namespace
+
+double RecordFitness::MeanSquare(double sse) const {
+  return std::isfinite(sse) ? sse / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+}
+
+opt::FitnessResult RecordFitness::Cost(double mse, std::span<const double> params) const {
+  if (!std::isfinite(mse)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
+  const double rough = SpectrumPenalty(params);
+  return {rough > 0 ? mse + rough / static_cast<double>(samples_) : mse, opt::FitnessStatus::kOk, ""};
+}
+
 RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   Output out;
   // A linear family: the regressors of the weights' solve give the output too (RecordModel::
@@ -335,84 +364,81 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   thread_local std::vector<std::vector<double>> regs;
   const bool kept = model_.family().linear() && !model_.has_linear_output_effects();
   if (model_.family().linear()) out.weights = SolveWeights(params, &regs);
-  const int pol = model_.scale().polarity;
   double sse = 0;
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record* r = records_[i];
     std::vector<double> y(r->end_scored);
-    const double rest =
-        pol * (!kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
-                            : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y));
-    for (double& v : y) v *= pol;
-    const double o = RecordOffset(*r, y, rest);
-    for (double& v : y) v += o;
-    for (size_t k = r->first_scored; k < r->end_scored; ++k) {
-      const double e = r->y[k] - y[k];
-      sse += e * e;
-    }
-    out.offsets.push_back(o);
+    const double rest = !kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
+                              : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y);
+    out.offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest, y, sse));
     out.yhat.push_back(std::move(y));
   }
-  out.mse = std::isfinite(sse) ? sse / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+  out.mse = MeanSquare(sse);
   return out;
 }
 
+void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const {
+  const size_t L = ps.size();
+  bool direct = lanes() > 1 && L > 1;
+  for (const std::span<const double> p : ps) direct = direct && p.size() == model_.params().size();
+  if (!direct) {
+    for (size_t l = 0; l < L; ++l) out[l] = Run(ps[l]);
+    return;
+  }
+  // Run's arithmetic for every vector, the simulations side by side (RecordModel::SimulateMany:
+  // each its own drive and output effects).
+  std::vector<double> sse(L, 0.0), rest(L);
+  std::vector<std::span<double>> ys(L);
+  for (size_t l = 0; l < L; ++l) out[l] = Output{};
+  for (size_t i = 0; i < records_.size(); ++i) {
+    const io::Record* r = records_[i];
+    for (size_t l = 0; l < L; ++l) ys[l] = out[l].yhat.emplace_back(r->end_scored);
+    model_.SimulateMany(*r, ps, r->end_scored, ys, rest, prepared_[i].get());
+    for (size_t l = 0; l < L; ++l) out[l].offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest[l], ys[l], sse[l]));
+  }
+  for (size_t l = 0; l < L; ++l) out[l].mse = MeanSquare(sse[l]);
+}
+
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
-  const Output o = Run(genome.reals);
-  if (!std::isfinite(o.mse)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
-  const double rough = SpectrumPenalty(genome.reals);
-  return {rough > 0 ? o.mse + rough / static_cast<double>(samples_) : o.mse, opt::FitnessStatus::kOk, ""};
+  return Cost(Run(genome.reals).mse, genome.reals);
 }
 
 int RecordFitness::lanes() const {
   const Family& fam = model_.family();
-  return model_.effects().empty() && !fam.linear() ? std::max(1, fam.lanes()) : 1;
+  return fam.linear() ? 1 : std::max(1, fam.lanes());
 }
+
+namespace {
+
+/// The genomes' parameter vectors.
+std::vector<std::span<const double>> Reals(std::span<const opt::Genome* const> genomes) {
+  std::vector<std::span<const double>> ps;
+  for (const opt::Genome* g : genomes) ps.push_back(g->reals);
+  return ps;
+}
+
+}  // namespace
 
 void RecordFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
                                  std::span<opt::FitnessResult> out) const {
-  const size_t L = genomes.size(), nf = model_.family_param_count();
-  bool direct = lanes() > 1 && L > 1;
-  for (const opt::Genome* g : genomes) direct = direct && g->reals.size() == nf;
-  if (!direct) return FitnessFunction::EvaluateMany(genomes, out);
-  // Run's arithmetic for every genome, the simulation as RecordModel::Simulate has it without
-  // effects (from the rest's last sample on the recorded drive; the rest at the first output).
-  const int pol = model_.scale().polarity;
-  std::vector<double> sse(L, 0.0);
-  std::vector<std::vector<double>> y(L);
-  std::vector<std::span<const double>> ps(L);
-  std::vector<std::span<double>> segs(L);
-  for (size_t l = 0; l < L; ++l) ps[l] = genomes[l]->reals;
-  for (size_t i = 0; i < records_.size(); ++i) {
-    const io::Record* r = records_[i];
-    const size_t end = r->end_scored, from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, end - 1);
-    for (size_t l = 0; l < L; ++l) {
-      y[l].assign(end, 0.0);
-      segs[l] = std::span<double>(y[l]).subspan(from, end - from);
-    }
-    model_.family().SimulatePreparedMany(prepared_[i].get(), ps, std::span<const double>(r->u).subspan(from, end - from),
-                                         r->dt, segs);
-    for (size_t l = 0; l < L; ++l) {
-      std::fill(y[l].begin(), y[l].begin() + static_cast<std::ptrdiff_t>(from), segs[l][0]);
-      const double rest = pol * segs[l][0];
-      for (double& v : y[l]) v *= pol;
-      const double o = RecordOffset(*r, y[l], rest);
-      for (double& v : y[l]) v += o;
-      for (size_t k = r->first_scored; k < end; ++k) {
-        const double e = r->y[k] - y[l][k];
-        sse[l] += e * e;
-      }
-    }
-  }
-  for (size_t l = 0; l < L; ++l) {
-    const double mse = std::isfinite(sse[l]) ? sse[l] / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
-    out[l] = std::isfinite(mse) ? opt::FitnessResult{mse, opt::FitnessStatus::kOk, ""}
-                                : opt::FitnessResult{penalty_, opt::FitnessStatus::kPenalized, "diverged"};
-  }
+  const std::vector<std::span<const double>> ps = Reals(genomes);
+  std::vector<Output> o(ps.size());
+  RunMany(ps, o);
+  for (size_t l = 0; l < ps.size(); ++l) out[l] = Cost(o[l].mse, ps[l]);
 }
 
 bool RecordFitness::Residuals(std::span<const double> params, std::vector<double>& r) const {
-  const Output o = Run(params);
+  return ResidualsOf(Run(params), params, r);
+}
+
+void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
+                                  std::span<bool> ok) const {
+  std::vector<Output> o(ps.size());
+  RunMany(ps, o);
+  for (size_t l = 0; l < ps.size(); ++l) ok[l] = ResidualsOf(o[l], ps[l], rs[l]);
+}
+
+bool RecordFitness::ResidualsOf(const Output& o, std::span<const double> params, std::vector<double>& r) const {
   if (!std::isfinite(o.mse)) return false;
   r.clear();
   r.reserve(samples_);
@@ -469,14 +495,27 @@ class RecordResidualFitness final : public opt::FitnessFunction {
  public:
   explicit RecordResidualFitness(const RecordFitness& fitness) : fitness_(fitness) {}
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override {
-    opt::FitnessResult out;
-    if (!fitness_.Residuals(genome.reals, out.residuals))
-      return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
-    for (double e : out.residuals) out.cost += e * e;
-    return out;
+    std::vector<double> r;
+    const bool ok = fitness_.Residuals(genome.reals, r);
+    return Result(ok, std::move(r));
+  }
+  // The records fitness's lanes: a Jacobian's columns side by side, each Evaluate's bit for bit.
+  int lanes() const override { return fitness_.lanes(); }
+  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override {
+    std::vector<std::vector<double>> rs(genomes.size());
+    const std::unique_ptr<bool[]> ok(new bool[genomes.size()]);
+    fitness_.ResidualsMany(Reals(genomes), rs, std::span<bool>(ok.get(), genomes.size()));
+    for (size_t l = 0; l < genomes.size(); ++l) out[l] = Result(ok[l], std::move(rs[l]));
   }
 
  private:
+  static opt::FitnessResult Result(bool ok, std::vector<double> residuals) {
+    if (!ok) return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
+    opt::FitnessResult out;
+    out.residuals = std::move(residuals);
+    for (double e : out.residuals) out.cost += e * e;
+    return out;
+  }
   const RecordFitness& fitness_;
 };
 

@@ -41,8 +41,9 @@ class RecordFitness final : public opt::FitnessFunction {
   RecordFitness(const RecordModel& model, std::vector<const io::Record*> records,
                 double penalty = opt::kDefaultErrorCost);
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
-  /// A family without effects that runs parameter sets side by side (Family::lanes): that many
-  /// genomes at once, each with Evaluate's result bit for bit.
+  /// A family that runs parameter sets side by side (Family::lanes; with any effects, each genome
+  /// its own drive and output effects): that many genomes at once, each with Evaluate's result bit
+  /// for bit.
   int lanes() const override;
   void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override;
 
@@ -56,9 +57,14 @@ class RecordFitness final : public opt::FitnessFunction {
     double mse = 0;
   };
   Output Run(std::span<const double> params) const;
+  /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l]) bit for bit).
+  void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
   /// that their sum of squares is the MSE; false if the output is not finite.
   bool Residuals(std::span<const double> params, std::vector<double>& r) const;
+  /// Residuals for several parameter vectors side by side (ok[l] = Residuals(ps[l], rs[l]), bit for bit).
+  void ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
+                     std::span<bool> ok) const;
 
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
@@ -100,6 +106,12 @@ class RecordFitness final : public opt::FitnessFunction {
   /// as SolveWeights'.
   void Accumulate(std::span<const double> params, BlockedNormalEquations& eq,
                   std::vector<std::vector<double>>* regs = nullptr) const;
+  /// Residuals from Run's output at `params`.
+  bool ResidualsOf(const Output& o, std::span<const double> params, std::vector<double>& r) const;
+  /// The MSE of a sum of squared errors over the scored samples (+inf when not finite).
+  double MeanSquare(double sse) const;
+  /// Evaluate's result for an MSE at `params` (the spectrum's penalty added; a penalty when not finite).
+  opt::FitnessResult Cost(double mse, std::span<const double> params) const;
   const RecordModel& model_;
   std::vector<const io::Record*> records_;
   std::vector<std::shared_ptr<const Family::Prepared>> prepared_;  ///< per record (null: none)

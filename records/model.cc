@@ -157,6 +157,12 @@ std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r
 
 double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
                              size_t end, std::span<double> yhat, const Family::Prepared* prepared) const {
+  if (!family_->linear()) {
+    double rest = 0;
+    SimulateMany(r, std::span<const std::span<const double>>(&p, 1), end, std::span<const std::span<double>>(&yhat, 1),
+                 std::span<double>(&rest, 1), prepared);
+    return rest;
+  }
   if (p.size() != params_.size()) {
     throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
                      std::to_string(params_.size()) + " expected");
@@ -166,17 +172,55 @@ double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std
   const size_t from = SimulatedFrom(r, end);
   std::vector<double> ue;
   EffectiveDrive(r, p.subspan(nf), from, end, ue);
-  std::span<double> seg = yhat.subspan(from, end - from);
-  if (family_->linear()) {
-    std::vector<double> reg(ue.size() * family_->regressors());
-    family_->Regressors(ue, reg);
-    return LinearOutput(r, p, weights, end, reg, yhat);
+  std::vector<double> reg(ue.size() * family_->regressors());
+  family_->Regressors(ue, reg);
+  return LinearOutput(r, p, weights, end, reg, yhat);
+}
+
+void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<const double>> ps, size_t end,
+                               std::span<const std::span<double>> yhats, std::span<double> rest,
+                               const Family::Prepared* prepared) const {
+  if (family_->linear()) throw InputError(Describe() + ": SimulateMany is for a family with searched parameters");
+  const size_t L = ps.size();
+  if (yhats.size() != L || rest.size() != L) throw InputError("RecordModel::SimulateMany: one output per parameter vector");
+  for (const std::span<const double> p : ps) {
+    if (p.size() != params_.size()) {
+      throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
+                       std::to_string(params_.size()) + " expected");
+    }
   }
-  family_->SimulatePrepared(prepared, p.first(nf), ue, r.dt, seg);
-  const double rest_output = seg[0];
-  std::fill(yhat.begin(), yhat.begin() + static_cast<std::ptrdiff_t>(from), rest_output);
-  ApplyOutputEffects(r, p.subspan(nf), 0, yhat.first(end));
-  return rest_output;
+  for (const std::span<double> y : yhats)
+    if (y.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::SimulateMany: bad end");
+  const size_t nf = family_->params().size();
+  const size_t from = SimulatedFrom(r, end);
+  // Per lane: the family's parameters, its segment [from, end), and (drive effects) its own drive.
+  thread_local std::vector<std::span<const double>> fp, us;
+  thread_local std::vector<std::span<double>> segs;
+  thread_local std::vector<std::vector<double>> ue;
+  fp.resize(L);
+  segs.resize(L);
+  for (size_t l = 0; l < L; ++l) {
+    fp[l] = ps[l].first(nf);
+    segs[l] = yhats[l].subspan(from, end - from);
+  }
+  const bool drive = std::any_of(defs_.begin(), defs_.end(),
+                                 [](const model::EffectDef* e) { return e->stage() == model::EffectStage::kDrive; });
+  if (!drive) {
+    family_->SimulatePreparedMany(prepared, fp, std::span<const double>(r.u).subspan(from, end - from), r.dt, segs);
+  } else {
+    if (ue.size() < L) ue.resize(L);
+    us.resize(L);
+    for (size_t l = 0; l < L; ++l) {
+      EffectiveDrive(r, ps[l].subspan(nf), from, end, ue[l]);
+      us[l] = ue[l];
+    }
+    family_->SimulateMany(fp, us, r.dt, segs);
+  }
+  for (size_t l = 0; l < L; ++l) {
+    rest[l] = segs[l][0];
+    std::fill(yhats[l].begin(), yhats[l].begin() + static_cast<std::ptrdiff_t>(from), rest[l]);
+    ApplyOutputEffects(r, ps[l].subspan(nf), 0, yhats[l].first(end));
+  }
 }
 
 double RecordModel::LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights,

@@ -71,6 +71,14 @@ class RecordModel {
   /// `prepared`: Prepare(r, end) (null: none; the output is the same bit for bit).
   double Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
                   std::span<double> yhat, const Family::Prepared* prepared = nullptr) const;
+  /// Simulate for several parameter vectors of a non-linear family at once (Family::lanes side by
+  /// side: Family::SimulatePreparedMany on the record's drive, or SimulateMany on each vector's own
+  /// drive when drive effects change it; then each vector's output effects): yhats[l] and rest[l]
+  /// as Simulate(r, ps[l], {}, end, yhats[l], prepared) has them, bit for bit. Throws InputError as
+  /// Simulate does, and for a linear family.
+  void SimulateMany(const io::Record& r, std::span<const std::span<const double>> ps, size_t end,
+                    std::span<const std::span<double>> yhats, std::span<double> rest,
+                    const Family::Prepared* prepared = nullptr) const;
   /// The family's per-record prepare step (Family::Prepare) on the drive that Simulate(r, …, end)
   /// hands the family; null when a drive effect changes that drive with the parameters, or when
   /// the family prepares nothing.

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 #include <vector>
 
@@ -137,6 +138,48 @@ TEST(BwOscillator, DivergenceIsNamedAndPenalised) {
   EXPECT_EQ(s.code(), StatusCode::kOutOfRange);
   PZ_EXPECT_HAS(s.message(), "diverged at sample");
   for (double v : y) EXPECT_TRUE(std::isfinite(v));
+}
+
+TEST(BwOscillator, APairOnTwoInputsIsEachAloneBitForBit) {
+  // SimulateBwPair with each lane on its own input (a model's delayed or crept drive per parameter
+  // set): each lane's output and final state are SimulateBw's on that input, bit for bit — also
+  // when one lane diverges (both then run alone) — and inputs of different shapes are refused.
+  std::vector<double> u0(500), u1(500);
+  for (size_t i = 0; i < u0.size(); ++i) {
+    u0[i] = 40 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750);
+    u1[i] = 35 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750 - 0.2) + 3;
+  }
+  const BwInputOptions o{.sample_rate_hz = 750, .substeps = 4, .interpolation = InputInterpolation::kLinear};
+  const BwInput in0(u0, o), in1(u1, o);
+  BwParams diverging;
+  diverging.gamma = -1e4;
+  diverging.delta = 0;
+  BwParams other;
+  other.k = 4e4;
+  other.c = 20;
+  for (const BwParams& second : {other, diverging}) {
+    const std::array<BwParams, 2> p = {BwParams{}, second};
+    std::vector<double> a(u0.size()), b(u0.size()), want(u0.size());
+    std::array<BwState, 2> st = {BwState{0.001, 0, 0}, BwState{0.002, 0, 0}};
+    const std::array<BwState, 2> start = st;
+    const auto status = SimulateBwPair(p, {&in0, &in1}, {std::span<double>(a), std::span<double>(b)}, &st);
+    const BwInput* in[2] = {&in0, &in1};
+    const std::vector<double>* got[2] = {&a, &b};
+    for (int l = 0; l < 2; ++l) {
+      BwState s = start[l];
+      const Status alone = SimulateBw(p[l], *in[l], want, &s);
+      EXPECT_EQ(status[l].code(), alone.code()) << l;
+      for (size_t i = 0; i < want.size(); ++i)
+        ASSERT_EQ(std::bit_cast<uint64_t>((*got[l])[i]), std::bit_cast<uint64_t>(want[i])) << l << " " << i;
+      EXPECT_EQ(std::bit_cast<uint64_t>(st[l].z), std::bit_cast<uint64_t>(s.z)) << l;
+    }
+  }
+  std::vector<double> shorter(u0.begin(), u0.begin() + 400), a(u0.size()), b(400);
+  const BwInput in2(shorter, o);
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  (void)SimulateBwPair({BwParams{}, BwParams{}}, {&in0, &in2}, {std::span<double>(a), std::span<double>(b)});
+                }),
+                "the inputs differ in samples (500, 400)");
 }
 
 TEST(BwOscillator, BadInputNamed) {

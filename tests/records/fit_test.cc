@@ -196,37 +196,64 @@ TEST(RecordFit, SameResultOnOneAndTwoThreads) {
 }
 
 TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
-  // The bw-oscillator runs two parameter sets at once (Family::lanes, model::SimulateBwPair): each
+  // The bw-oscillator runs up to four parameter sets at once (Family::lanes, model::SimulateBwMany): each
   // result is Evaluate's, bit for bit, for points in the box, a point outside (m <= 0 after the
-  // scaling: NaN alone) and one that diverges; a family without lanes and a pair of odd sizes take
-  // Evaluate one by one. (The thread pool's groups: tests/opt/ga_test.cc.)
+  // scaling: NaN alone) and one that diverges — alone and with effects: drive effects give each
+  // genome its own drive (Family::SimulateMany), output effects act on each lane's output; a family
+  // without lanes and a pair of odd sizes take Evaluate one by one. (The thread pool's groups:
+  // tests/opt/ga_test.cc.)
   const Case c = Cases()[4];
   const io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
   const auto train = set.WithRole(CaseRole::kTrain);
   const DataScale scale = MeasureScale(train);
-  const RecordModel model(MakeFamily(c.family, scale), {}, scale);
-  const RecordFitness fitness(model, train);
-  ASSERT_EQ(fitness.lanes(), 2);
-  std::vector<opt::Genome> g(6);
-  g[0].reals = c.truth;
-  g[1].reals = {0.12, 25, 0.5, 0.2, 0.3, 0.01};
-  g[2].reals = {0.1, 30, 0.3, 0.4, 0.15, -0.05};
-  g[3].reals = {-0.1, 30, 0.3, 0.4, 0.15, -0.05};  // K < 0: m < 0, invalid
-  g[4].reals = {0.1, 30, 0.3, 0.4, -50, -50};      // β·γ + β·δ ≪ 0: z grows without bound
-  g[5].reals = {0.1, 40, 0.2, 0.3, 0.2, 0.1};
-  for (size_t a = 0; a < g.size(); ++a) {
-    for (size_t b = 0; b < g.size(); ++b) {
-      const opt::Genome* pair[2] = {&g[a], &g[b]};
-      opt::FitnessResult out[2];
-      fitness.EvaluateMany(pair, out);
-      for (int l = 0; l < 2; ++l) {
-        const opt::FitnessResult want = fitness.Evaluate(*pair[l]);
-        EXPECT_EQ(out[l].status, want.status) << a << " " << b;
-        EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost)) << a << " " << b;
+  std::vector<std::vector<double>> family(6);
+  family[0] = c.truth;
+  family[1] = {0.12, 25, 0.5, 0.2, 0.3, 0.01};
+  family[2] = {0.1, 30, 0.3, 0.4, 0.15, -0.05};
+  family[3] = {-0.1, 30, 0.3, 0.4, 0.15, -0.05};  // K < 0: m < 0, invalid
+  family[4] = {0.1, 30, 0.3, 0.4, -50, -50};      // β·γ + β·δ ≪ 0: z grows without bound
+  family[5] = {0.1, 40, 0.2, 0.3, 0.2, 0.1};
+  for (const char* effects : {"", "delay", "creep", "creep-spectrum,delay", "quadratic-drive,drift"}) {
+    SCOPED_TRACE(effects);
+    std::vector<EffectKind> kinds;
+    for (std::string_view e = effects; !e.empty();) {
+      const size_t comma = std::min(e.find(','), e.size());
+      kinds.push_back(ParseEffect(e.substr(0, comma)));
+      e.remove_prefix(std::min(comma + 1, e.size()));
+    }
+    const RecordModel model(MakeFamily(c.family, scale), kinds, scale);
+    const RecordFitness fitness(model, train);
+    ASSERT_EQ(fitness.lanes(), 4);
+    // Each genome's effects at its own point of their box (so each lane has its own drive).
+    std::vector<opt::Genome> g(family.size());
+    for (size_t a = 0; a < g.size(); ++a) {
+      g[a].reals = family[a];
+      for (size_t i = model.family_param_count(); i < model.params().size(); ++i) {
+        const ParamInfo& q = model.params()[i];
+        const double f = 0.15 + 0.13 * static_cast<double>(a);
+        g[a].reals.push_back(q.log_scale ? q.lower * std::pow(q.upper / q.lower, f) : q.lower + f * (q.upper - q.lower));
       }
     }
+    auto check = [&](std::vector<const opt::Genome*> group) {
+      std::vector<opt::FitnessResult> out(group.size());
+      fitness.EvaluateMany(group, out);
+      for (size_t l = 0; l < group.size(); ++l) {
+        const opt::FitnessResult want = fitness.Evaluate(*group[l]);
+        EXPECT_EQ(out[l].status, want.status) << group.size() << " lanes, genome " << group[l] - g.data();
+        EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost))
+            << group.size() << " lanes, genome " << group[l] - g.data();
+      }
+    };
+    for (size_t a = 0; a < g.size(); ++a) {
+      for (size_t b = 0; b < g.size(); ++b) check({&g[a], &g[b]});
+      // Groups of three (a pair and one alone) and four (two vector chains), with and without the
+      // invalid and the diverging genome.
+      check({&g[a], &g[(a + 1) % 6], &g[(a + 2) % 6]});
+      check({&g[a], &g[(a + 1) % 6], &g[(a + 2) % 6], &g[(a + 5) % 6]});
+    }
+    EXPECT_EQ(fitness.Evaluate(g[4]).status, opt::FitnessStatus::kPenalized);
+    EXPECT_NE(fitness.Evaluate(g[1]).cost, fitness.Evaluate(g[2]).cost);
   }
-  EXPECT_EQ(fitness.Evaluate(g[4]).status, opt::FitnessStatus::kPenalized);
   const RecordModel plain(MakeFamily("backlash-like", scale), {}, scale);
   EXPECT_EQ(RecordFitness(plain, train).lanes(), 1);
 }
