@@ -332,15 +332,34 @@ constexpr long kRunPiece = 128;
   for (long p0 = 0; p0 < count; p0 += kRunPiece) {
     const long m = std::min(kRunPiece, count - p0);
     const modal::SampledSub* __restrict s = subs + p0;
-    for (long k = 0; k < m; ++k) {
+    long k = 0;
+    for (; k + 4 <= m; k += 4) {  // HoldCoefficients of four sub-steps at a time
+      const modal::SampledSub *s0 = s + k, *s1 = s + k + 1, *s2 = s + k + 2, *s3 = s + k + 3;
+      const V4 tau = {s0->tau, s1->tau, s2->tau, s3->tau};
+      const V4 tau2 = tau * tau;
+      const V4 zl = {s0->l.z, s1->l.z, s2->l.z, s3->l.z}, zr = {s0->r.z, s1->r.z, s2->r.z, s3->r.z};
+      const V4 zld = tau * V4{s0->l.zd, s1->l.zd, s2->l.zd, s3->l.zd};
+      const V4 zrd = tau * V4{s0->r.zd, s1->r.zd, s2->r.zd, s3->r.zd};
+      const V4 zldd = tau2 * V4{s0->l.zdd, s1->l.zdd, s2->l.zdd, s3->l.zdd};
+      const V4 zrdd = tau2 * V4{s0->r.zdd, s1->r.zdd, s2->r.zdd, s3->r.zdd};
+      for (int j = 0; j < 6; ++j) {
+        const double* hj = kHermite[j];
+        const V4 a = (((((zero + hj[0] * zl) + hj[1] * zld) + hj[2] * zldd) + hj[3] * zr) + hj[4] * zrd) + hj[5] * zrdd;
+        *At(fz[j] + k) = a * kFact[j];
+      }
+      *At(taus + k) = tau;
+      *At(fu0 + k) = V4{s0->u_a, s1->u_a, s2->u_a, s3->u_a};
+      *At(fu1 + k) = V4{s0->u_dot, s1->u_dot, s2->u_dot, s3->u_dot} * tau;
+    }
+    for (; k < m; ++k) {
       double h[6];
       HoldCoefficients(s[k].tau, s[k].l, s[k].r, h);
       for (int j = 0; j < 6; ++j) fz[j][k] = h[j];
       taus[k] = s[k].tau;
       fu0[k] = s[k].u_a;
       fu1[k] = s[k].u_dot * s[k].tau;
-      acc[k] = zero;
     }
+    for (k = 0; k < m; ++k) acc[k] = zero;
     for (int q = 0; q < n; q += 4) {
       const V4 w = *At(c.nwz + q), wu = *At(c.wu + q), e11 = *At(c.e11 + q), e12 = *At(c.e12 + q);
       const V4 e21 = *At(c.e21 + q), e22 = *At(c.e22 + q), d0 = *At(d[0] + q), d1 = *At(d[1] + q);
