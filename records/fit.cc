@@ -328,7 +328,7 @@ std::vector<double> RecordFitness::SolveWeights(std::span<const double> p,
   return std::vector<double>(w.data(), w.data() + w.size());
 }
 
-RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
+RecordFitness::Output RecordFitness::Run(std::span<const double> params, bool keep_outputs) const {
   Output out;
   // A linear family: the regressors of the weights' solve give the output too (RecordModel::
   // LinearOutput, Simulate's arithmetic), unless a linear output effect was applied to them.
@@ -339,7 +339,11 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   double sse = 0;
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record* r = records_[i];
-    std::vector<double> y(r->end_scored);
+    // Every sample of [0, end_scored) is written by Simulate / LinearOutput.
+    thread_local std::vector<double> buffer;
+    std::vector<double> own;
+    std::vector<double>& y = keep_outputs ? own : buffer;
+    y.resize(r->end_scored);
     const double rest =
         pol * (!kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
                             : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y));
@@ -351,14 +355,14 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
       sse += e * e;
     }
     out.offsets.push_back(o);
-    out.yhat.push_back(std::move(y));
+    if (keep_outputs) out.yhat.push_back(std::move(own));
   }
   out.mse = std::isfinite(sse) ? sse / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
   return out;
 }
 
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
-  const Output o = Run(genome.reals);
+  const Output o = Run(genome.reals, /*keep_outputs=*/false);
   if (!std::isfinite(o.mse)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
   const double rough = SpectrumPenalty(genome.reals);
   return {rough > 0 ? o.mse + rough / static_cast<double>(samples_) : o.mse, opt::FitnessStatus::kOk, ""};

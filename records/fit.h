@@ -55,7 +55,9 @@ class RecordFitness final : public opt::FitnessFunction {
     std::vector<double> offsets;
     double mse = 0;
   };
-  Output Run(std::span<const double> params) const;
+  /// keep_outputs = false: yhat left empty (the search's cost needs the MSE alone), the outputs
+  /// simulated into a buffer kept per thread instead of a fresh vector per record.
+  Output Run(std::span<const double> params, bool keep_outputs = true) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
   /// that their sum of squares is the MSE; false if the output is not finite.
   bool Residuals(std::span<const double> params, std::vector<double>& r) const;
