@@ -872,8 +872,10 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
       const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
       const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
       const double ts = nsub == 1 ? tau : tau / nsub;  // the same value, without the division
-      if (!Holds(params, ts, ws)) {  // a step that needs another discretisation: after the chunk's
-        if (k > k0) break;           // sub-steps have run on this one
+      // Holds(params, ts, ws) — the workspace holds this simulator's (μ, δ) since the Prepare above
+      // (finite: Admit validated them), so only the step is compared.
+      if (!(std::abs(ws.step_ - ts) <= kStepRelTol * ts)) {  // another discretisation: after the chunk's
+        if (k > k0) break;  // sub-steps have run on this one
         Prepare(params, ts, ws);
       }
       const double eps = kNodeRelTol * ts;
