@@ -57,6 +57,18 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
   return {z, sl * ud, sl * (udd - b.kappa * ud * ud)};
 }
 
+// False when z provably does not reach 0 on branch b before the input ub: then ZeroCrossing would
+// give a crossing beyond ub (or none), which the sampled path's loop ignores, so it is skipped — its
+// log1p and three divisions at every sample of a branch heading for zero. The bound: with
+// y = −κ z₀/α, |u_cross − u₀| = |z₀/α| log1p(y)/y ≥ |z₀| / (|α| (1 + max(y, 0))) (log1p(y) ≥ y/(1 + y));
+// the reach asked is |ub − u₀| with a margin (10⁻⁶ of it and 10⁻¹² of |u|) far above the roundings
+// of ZeroCrossing and of the sub-step's ends. NaN or overflow: true (ZeroCrossing decides).
+inline bool CrossingMayLie(const BoucWenBranch& b, double ub) {
+  const double ay = -b.kappa * b.z0 * (b.alpha > 0 ? 1.0 : -1.0);  // |α| y
+  const double reach = std::abs(ub - b.u0) * (1 + 1e-6) + 1e-12 * (std::abs(b.u0) + std::abs(ub));
+  return !(std::abs(b.z0) > (std::abs(b.alpha) + std::max(0.0, ay)) * reach);
+}
+
 // The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's scheme: a
 // short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
 inline double AtanSeries(double x) {
@@ -889,7 +901,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         const double ub = last ? u[k + 1] : u[k] + r * sb;
         bool split = false;
         double uc;
-        if (hyst && br.ZeroCrossing(&uc)) {
+        if (hyst && CrossingMayLie(br, ub) && br.ZeroCrossing(&uc)) {
           const double sc = (uc - u[k]) / r;
           if (sc < sb - eps) {
             if (sc > sa + eps) {
