@@ -203,6 +203,8 @@ BENCHMARK_CAPTURE(BM_RecordEvaluation, bw-oscillator+delay, std::string("bw-osci
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, bimorph-fin+delay, std::string("bimorph-fin"), std::string("delay"))
     ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, bimorph-fin+creep, std::string("bimorph-fin"), std::string("creep"))
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace pz::records

@@ -55,12 +55,35 @@ struct BoucWenBranch {
   double Slope(double z) const { return alpha - kappa * z; }
   /// The input at which z reaches 0 while u moves in direction s, if it does (before the branch's
   /// fixed point α/κ): writes it to *u_cross and returns true.
-  bool ZeroCrossing(double* u_cross) const;
+  bool ZeroCrossing(double* u_cross) const {
+    // z moves towards 0 iff dz = α du at z = 0 points back at the side z is on: α s σ < 0.
+    if (z0 == 0.0 || alpha == 0.0 || s == 0 || alpha * s * sigma >= 0) return false;
+    // z(u) = 0  ⇔  u − u₀ = log1p(y)/κ with y = −κ z₀/α; no crossing when 1 + y ≤ 0 (z stops at α/κ).
+    const double y = -kappa * z0 / alpha;
+    if (!(y > -1.0)) return false;
+    const double ratio = std::abs(y) < 1e-12 ? 1.0 - 0.5 * y : std::log1p(y) / y;
+    const double du = (-z0 / alpha) * ratio;
+    if (!std::isfinite(du)) return false;
+    *u_cross = u0 + du;
+    return true;
+  }
 };
 
 /// Starts a branch at (u0, z0) with u moving in direction s (sign taken; 0 freezes z). At z0 = 0 the
-/// sign σ is that of α s, the way z leaves zero.
-BoucWenBranch StartBranch(const BoucWenParams& p, double u0, double z0, double s);
+/// sign σ is that of α s, the way z leaves zero. Inline, as ZeroCrossing: the fin's sampled path
+/// starts a branch at every sample (model/modal_simulator.cc).
+inline BoucWenBranch StartBranch(const BoucWenParams& p, double u0, double z0, double s) {
+  const auto sign = [](double x) { return (x > 0) - (x < 0); };
+  BoucWenBranch b;
+  b.alpha = p.alpha;
+  b.u0 = u0;
+  b.z0 = z0;
+  b.s = sign(s);
+  b.sigma = z0 != 0.0 ? sign(z0) : sign(p.alpha) * b.s;
+  b.kappa = p.beta * b.s + p.gamma * b.sigma;
+  b.gain = b.kappa != 0.0 ? (b.kappa * z0 - p.alpha) / b.kappa : 0.0;
+  return b;
+}
 
 /// z along a piecewise-linear input path u_0, u_1, … (exact: z depends on the path of u only), from
 /// z(u_0) = z_init. z.size() must equal u.size(); returns false (and leaves z partly filled) if a

@@ -57,6 +57,18 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
   return {z, sl * ud, sl * (udd - b.kappa * ud * ud)};
 }
 
+// False when z provably does not reach 0 on branch b before the input ub: then ZeroCrossing would
+// give a crossing beyond ub (or none), which the sampled path's loop ignores, so it is skipped — its
+// log1p and three divisions at every sample of a branch heading for zero. The bound: with
+// y = −κ z₀/α, |u_cross − u₀| = |z₀/α| log1p(y)/y ≥ |z₀| / (|α| (1 + max(y, 0))) (log1p(y) ≥ y/(1 + y));
+// the reach asked is |ub − u₀| with a margin (10⁻⁶ of it and 10⁻¹² of |u|) far above the roundings
+// of ZeroCrossing and of the sub-step's ends. NaN or overflow: true (ZeroCrossing decides).
+inline bool CrossingMayLie(const BoucWenBranch& b, double ub) {
+  const double ay = -b.kappa * b.z0 * (b.alpha > 0 ? 1.0 : -1.0);  // |α| y
+  const double reach = std::abs(ub - b.u0) * (1 + 1e-6) + 1e-12 * (std::abs(b.u0) + std::abs(ub));
+  return !(std::abs(b.z0) > (std::abs(b.alpha) + std::max(0.0, ay)) * reach);
+}
+
 // The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's scheme: a
 // short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
 inline double AtanSeries(double x) {
@@ -197,21 +209,6 @@ struct StepCoeffs {
   const double* g[6];
 };
 
-// Runs body(s0, s1) on the mode state x0, x1 (NB blocks of 4 modes; NB = 0: not known at compile
-// time): with a known number of modes on a local copy, kept in registers for the whole run and
-// written back after it.
-template <int NB, class Body>
-[[gnu::always_inline]] inline void RunModes(double* __restrict x0, double* __restrict x1, Body&& body) {
-  if constexpr (NB > 0) {
-    double l0[4 * NB], l1[4 * NB];
-    for (int q = 0; q < 4 * NB; ++q) l0[q] = x0[q], l1[q] = x1[q];
-    body(l0, l1);
-    for (int q = 0; q < 4 * NB; ++q) x0[q] = l0[q], x1[q] = l1[q];
-  } else {
-    body(x0, x1);
-  }
-}
-
 // Regular steps i0 … i1−1 of a chunk: x ← E x + G·d_i⁺ (d scaled by the step hs) for every mode,
 // xs[i+1] = Σ_modes x0. NB blocks of 4 modes (NB = 0: n/4 blocks, not known at compile time).
 template <int NB>
@@ -319,46 +316,83 @@ struct SampledCoeffs {
   const double* d[modal::kMaxPhi + 1];
 };
 
+// Four doubles as one vector (GCC's vector extension): each operation acts on every element as the
+// scalar operation does, so a loop written with it rounds as the scalar loop. V4u reads and writes
+// four doubles anywhere (8-byte aligned, aliasing them).
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V4u __attribute__((vector_size(32), aligned(8), may_alias));
+inline const V4u* At(const double* p) { return reinterpret_cast<const V4u*>(p); }
+inline V4u* At(double* p) { return reinterpret_cast<V4u*>(p); }
+
+// Sub-steps a piece of a run holds at most (the hold data and partial sums are kept for a piece).
+constexpr long kRunPiece = 128;
+
 // A run of sub-steps over the cached step (the sampled path's regular steps): GeneralSubstep's
-// arithmetic for every mode, operation for operation (so bit for bit, without FMA contraction),
-// over the modes' arrays so that it vectorises; after an output sample's last sub-step, SumModes of
-// x0 (same partial sums) into xs[out]. NB blocks of 4 modes as StepRunImpl.
-template <int NB>
-[[gnu::always_inline]] inline void SampledRunImpl(const modal::SampledSub* __restrict subs,
-                                                  long count, int n, double* __restrict x0,
-                                                  double* __restrict x1, const SampledCoeffs& c,
-                                                  double* __restrict xs) {
-  const int nb = NB > 0 ? NB : n / 4;
+// arithmetic for every mode, operation for operation (so bit for bit, without FMA contraction);
+// after an output sample's last sub-step, SumModes of x0 (same partial sums) into xs[out]. The run
+// goes piece by piece: first the hold coefficients of every sub-step of the piece, then each block
+// of 4 modes over all of them — its 13 coefficient vectors and its state stay in registers — adding
+// its x0 into the sub-step's four partial sums in the blocks' order (SumModes' order), and last the
+// outputs.
+[[gnu::always_inline]] inline void SampledRunImpl(const modal::SampledSub* __restrict subs, long count, int n,
+                                                  double* __restrict x0, double* __restrict x1,
+                                                  const SampledCoeffs& c, double* __restrict xs) {
+  alignas(32) double fz[6][kRunPiece], fu0[kRunPiece], fu1[kRunPiece], taus[kRunPiece];
+  alignas(32) V4 acc[kRunPiece];
+  const V4 zero = {0, 0, 0, 0};
   const double* const* d = c.d;
-  RunModes<NB>(x0, x1, [&](double* __restrict s0, double* __restrict s1) __attribute__((always_inline)) {
-    for (long k = 0; k < count; ++k) {
-      const modal::SampledSub& st = subs[k];
-      const double tau = st.tau;
-      double fz[6];
-      HoldCoefficients(tau, st.l, st.r, fz);
-      const double fu0 = st.u_a, fu1 = st.u_dot * tau;
-      double acc[4] = {0, 0, 0, 0};
-      for (int blk = 0; blk < nb; ++blk) {
-        for (int j = 0; j < 4; ++j) {
-          const int q = 4 * blk + j;
-          const double w = c.nwz[q];
-          const double f[6] = {w * fz[0] + c.wu[q] * fu0, w * fz[1] + c.wu[q] * fu1, w * fz[2],
-                               w * fz[3], w * fz[4], w * fz[5]};
-          double r0 = 0, r1 = 0;
-          for (int i = 0; i < 6; ++i) {
-            r0 += f[i] * d[i + 1][q];
-            r1 += f[i] * d[i][q];
-          }
-          const double a = s0[q], b = s1[q];
-          const double na = c.e11[q] * a + c.e12[q] * b + tau * r0;
-          s1[q] = c.e21[q] * a + c.e22[q] * b + r1;
-          s0[q] = na;
-          acc[j] += na;
-        }
+  for (long p0 = 0; p0 < count; p0 += kRunPiece) {
+    const long m = std::min(kRunPiece, count - p0);
+    const modal::SampledSub* __restrict s = subs + p0;
+    long k = 0;
+    for (; k + 4 <= m; k += 4) {  // HoldCoefficients of four sub-steps at a time
+      const modal::SampledSub *s0 = s + k, *s1 = s + k + 1, *s2 = s + k + 2, *s3 = s + k + 3;
+      const V4 tau = {s0->tau, s1->tau, s2->tau, s3->tau};
+      const V4 tau2 = tau * tau;
+      const V4 zl = {s0->l.z, s1->l.z, s2->l.z, s3->l.z}, zr = {s0->r.z, s1->r.z, s2->r.z, s3->r.z};
+      const V4 zld = tau * V4{s0->l.zd, s1->l.zd, s2->l.zd, s3->l.zd};
+      const V4 zrd = tau * V4{s0->r.zd, s1->r.zd, s2->r.zd, s3->r.zd};
+      const V4 zldd = tau2 * V4{s0->l.zdd, s1->l.zdd, s2->l.zdd, s3->l.zdd};
+      const V4 zrdd = tau2 * V4{s0->r.zdd, s1->r.zdd, s2->r.zdd, s3->r.zdd};
+      for (int j = 0; j < 6; ++j) {
+        const double* hj = kHermite[j];
+        const V4 a = (((((zero + hj[0] * zl) + hj[1] * zld) + hj[2] * zldd) + hj[3] * zr) + hj[4] * zrd) + hj[5] * zrdd;
+        *At(fz[j] + k) = a * kFact[j];
       }
-      if (st.out >= 0) xs[st.out] = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+      *At(taus + k) = tau;
+      *At(fu0 + k) = V4{s0->u_a, s1->u_a, s2->u_a, s3->u_a};
+      *At(fu1 + k) = V4{s0->u_dot, s1->u_dot, s2->u_dot, s3->u_dot} * tau;
     }
-  });
+    for (; k < m; ++k) {
+      double h[6];
+      HoldCoefficients(s[k].tau, s[k].l, s[k].r, h);
+      for (int j = 0; j < 6; ++j) fz[j][k] = h[j];
+      taus[k] = s[k].tau;
+      fu0[k] = s[k].u_a;
+      fu1[k] = s[k].u_dot * s[k].tau;
+    }
+    for (k = 0; k < m; ++k) acc[k] = zero;
+    for (int q = 0; q < n; q += 4) {
+      const V4 w = *At(c.nwz + q), wu = *At(c.wu + q), e11 = *At(c.e11 + q), e12 = *At(c.e12 + q);
+      const V4 e21 = *At(c.e21 + q), e22 = *At(c.e22 + q), d0 = *At(d[0] + q), d1 = *At(d[1] + q);
+      const V4 d2 = *At(d[2] + q), d3 = *At(d[3] + q), d4 = *At(d[4] + q), d5 = *At(d[5] + q), d6 = *At(d[6] + q);
+      V4 a = *At(x0 + q), b = *At(x1 + q);
+      for (long k = 0; k < m; ++k) {
+        const V4 f0 = w * fz[0][k] + wu * fu0[k], f1 = w * fz[1][k] + wu * fu1[k];
+        const V4 f2 = w * fz[2][k], f3 = w * fz[3][k], f4 = w * fz[4][k], f5 = w * fz[5][k];
+        const V4 r0 = (((((zero + f0 * d1) + f1 * d2) + f2 * d3) + f3 * d4) + f4 * d5) + f5 * d6;
+        const V4 r1 = (((((zero + f0 * d0) + f1 * d1) + f2 * d2) + f3 * d3) + f4 * d4) + f5 * d5;
+        const V4 na = (e11 * a + e12 * b) + taus[k] * r0;
+        b = (e21 * a + e22 * b) + r1;
+        a = na;
+        acc[k] += na;
+      }
+      *At(x0 + q) = a;
+      *At(x1 + q) = b;
+    }
+    for (long k = 0; k < m; ++k)
+      if (s[k].out >= 0) xs[s[k].out] = (acc[k][0] + acc[k][1]) + (acc[k][2] + acc[k][3]);
+  }
 }
 
 // AVX2 without FMA next to the baseline: four modes a vector, and the same roundings in both.
@@ -367,13 +401,7 @@ __attribute__((target_clones("avx2", "default")))
 #endif
 void SampledRun(const modal::SampledSub* subs, long count, int n, double* x0, double* x1, const SampledCoeffs& c,
                 double* xs) {
-  switch (n) {
-    case 4: return SampledRunImpl<1>(subs, count, n, x0, x1, c, xs);
-    case 8: return SampledRunImpl<2>(subs, count, n, x0, x1, c, xs);
-    case 12: return SampledRunImpl<3>(subs, count, n, x0, x1, c, xs);
-    case 16: return SampledRunImpl<4>(subs, count, n, x0, x1, c, xs);
-    default: return SampledRunImpl<0>(subs, count, n, x0, x1, c, xs);
-  }
+  SampledRunImpl(subs, count, n, x0, x1, c, xs);
 }
 
 std::string NonFiniteMessage(size_t k, double t) {
@@ -855,9 +883,11 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
       const double tau = t[k + 1] - t[k];
       const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
       const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
-      const double ts = tau / nsub;
-      if (!Holds(params, ts, ws)) {  // a step that needs another discretisation: after the chunk's
-        if (k > k0) break;           // sub-steps have run on this one
+      const double ts = nsub == 1 ? tau : tau / nsub;  // the same value, without the division
+      // Holds(params, ts, ws) — the workspace holds this simulator's (μ, δ) since the Prepare above
+      // (finite: Admit validated them), so only the step is compared.
+      if (!(std::abs(ws.step_ - ts) <= kStepRelTol * ts)) {  // another discretisation: after the chunk's
+        if (k > k0) break;  // sub-steps have run on this one
         Prepare(params, ts, ws);
       }
       const double eps = kNodeRelTol * ts;
@@ -871,7 +901,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         const double ub = last ? u[k + 1] : u[k] + r * sb;
         bool split = false;
         double uc;
-        if (hyst && br.ZeroCrossing(&uc)) {
+        if (hyst && CrossingMayLie(br, ub) && br.ZeroCrossing(&uc)) {
           const double sc = (uc - u[k]) / r;
           if (sc < sb - eps) {
             if (sc > sa + eps) {

@@ -26,6 +26,11 @@ Status SampledSignal::Validate() const {
     return InvalidArgument("sampled signal: t has " + std::to_string(t.size()) + " samples but u has " +
                            std::to_string(u.size()));
   if (t.size() < 2) return InvalidArgument("sampled signal: needs at least 2 samples, has " + std::to_string(t.size()));
+  // A valid signal (every fitness evaluation's) in one branch-free pass; the loop below names the
+  // first offending sample otherwise.
+  bool ok = std::isfinite(t[0]) & std::isfinite(u[0]);
+  for (size_t k = 1; k < t.size(); ++k) ok &= std::isfinite(t[k]) & std::isfinite(u[k]) & (t[k] > t[k - 1]);
+  if (ok) return Status::Ok();
   for (size_t k = 0; k < t.size(); ++k) {
     if (!std::isfinite(t[k])) return InvalidArgument(FieldError("t[" + std::to_string(k) + "]", t[k], "must be finite"));
     if (!std::isfinite(u[k])) return InvalidArgument(FieldError("u[" + std::to_string(k) + "]", u[k], "must be finite"));

@@ -329,8 +329,12 @@ class BimorphFinFamily final : public Family {
     thread_local model::ModalWorkspace ws;
     thread_local std::vector<double> angle;
     auto& sig = std::get<model::SampledSignal>(drive);
-    sig.t.resize(u.size());
-    for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
+    thread_local double grid_dt = 0;  // the time grid depends on the size and the step alone
+    if (sig.t.size() != u.size() || grid_dt != dt) {
+      sig.t.resize(u.size());
+      for (size_t k = 0; k < u.size(); ++k) sig.t[k] = static_cast<double>(k) * dt;
+      grid_dt = dt;
+    }
     sig.u.assign(u.begin(), u.end());
     angle.resize(u.size());
     model::BeamGeometry geo = geometry_;

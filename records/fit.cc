@@ -357,7 +357,7 @@ opt::FitnessResult RecordFitness::Cost(double mse, std::span<const double> param
   return {rough > 0 ? mse + rough / static_cast<double>(samples_) : mse, opt::FitnessStatus::kOk, ""};
 }
 
-RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
+RecordFitness::Output RecordFitness::Run(std::span<const double> params, bool keep_outputs) const {
   Output out;
   // A linear family: the regressors of the weights' solve give the output too (RecordModel::
   // LinearOutput, Simulate's arithmetic), unless a linear output effect was applied to them.
@@ -367,11 +367,16 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params) const {
   double sse = 0;
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record* r = records_[i];
-    std::vector<double> y(r->end_scored);
+    // Every sample of [0, end_scored) is written by Simulate / LinearOutput; a search's evaluation
+    // (keep_outputs = false) simulates into a buffer kept per thread.
+    thread_local std::vector<double> buffer;
+    std::vector<double> own;
+    std::vector<double>& y = keep_outputs ? own : buffer;
+    y.resize(r->end_scored);
     const double rest = !kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
                               : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y);
     out.offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest, y, sse));
-    out.yhat.push_back(std::move(y));
+    if (keep_outputs) out.yhat.push_back(std::move(own));
   }
   out.mse = MeanSquare(sse);
   return out;
@@ -400,7 +405,7 @@ void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::sp
 }
 
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
-  return Cost(Run(genome.reals).mse, genome.reals);
+  return Cost(Run(genome.reals, /*keep_outputs=*/false).mse, genome.reals);
 }
 
 int RecordFitness::lanes() const {

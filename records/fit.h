@@ -56,7 +56,9 @@ class RecordFitness final : public opt::FitnessFunction {
     std::vector<double> offsets;
     double mse = 0;
   };
-  Output Run(std::span<const double> params) const;
+  /// keep_outputs = false: yhat left empty (the search's cost needs the MSE alone), the outputs
+  /// simulated into a buffer kept per thread instead of a fresh vector per record.
+  Output Run(std::span<const double> params, bool keep_outputs = true) const;
   /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l]) bit for bit).
   void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
