@@ -15,6 +15,7 @@
 #include <numbers>
 #include <optional>
 #include <sstream>
+#include <string_view>
 #include <unistd.h>
 
 #include "model/effects.h"
@@ -351,8 +352,8 @@ TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
       ModelSpec s = Spec(family, {e}, r);
       if (s.family == "stack-bouc-wen") s.params[0] = 0.3;  // monotone on each step (RateDependentInverseTracks)
       const std::string name = family + " + " + std::string(EffectName(e));
-      if (EffectName(e) == "delay") s.params.back() = 3 * kDt;
-      if (EffectName(e) == "rate-dependence") {
+      if (std::string_view(EffectName(e)) == "delay") s.params.back() = 3 * kDt;
+      if (std::string_view(EffectName(e)) == "rate-dependence") {
         s.params.back() = 0.2 * kDt;  // tau_r
         ASSERT_LT(Stepper(s).rate_dependence_inverse_gain(), 1) << name;
       }
@@ -361,7 +362,7 @@ TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
       EXPECT_EQ(exact.n, r.size() - 1 - st.preview_samples()) << name;
       EXPECT_LE(exact.rms_u, 1e-9 * span) << name;
       EXPECT_EQ(exact.clipped, 0u) << name;  // its own response is within the drive's reach
-      if (EffectName(e) == "rate-dependence") {
+      if (std::string_view(EffectName(e)) == "rate-dependence") {
         s.params.back() = 2 * kDt;  // a lag of two samples: one-step unstable, planned over two
         EXPECT_GT(Stepper(s).rate_dependence_inverse_gain(), 1) << name;
         EXPECT_EQ(Stepper(s).inverse_plan_samples(), 2) << name;
