@@ -90,6 +90,11 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   ga_option("--migration-margin", "migration_margin", opts->ga.migration_margin,
             "an island takes migrants only from sources whose best is below its own by more than this share "
             "of it, [0, 1) (0 = from every source)");
+  ga_option("--broadcast-interval", "broadcast_interval", opts->ga.broadcast_interval,
+            "generations between gated broadcasts: each island takes the best --migrants of every other island "
+            "better than its own by more than --broadcast-margin (0 = none; skipped at a migration's generation)");
+  ga_option("--broadcast-margin", "broadcast_margin", opts->ga.broadcast_margin,
+            "the broadcast's gate: a source's best must be below the island's by more than this share of it, (0, 1)");
   ga_option("--island-stall", "island_stall_generations", opts->ga.island_stall_generations,
             "restart an island (its sources' migrants + fresh random individuals) after this many "
             "generations without a better best of its own (0 = never)");

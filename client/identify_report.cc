@@ -244,6 +244,9 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     } else {
       md << "independent: multi-start";
     }
+    if (options.ga.broadcast_interval > 0)
+      md << "; a broadcast every " << options.ga.broadcast_interval << " generations from islands better by more than "
+         << options.ga.broadcast_margin * 100 << " %";
     if (!options.ga.island_mutation.empty()) {
       md << "; mutation by island";
       for (double p : options.ga.island_mutation) md << " " << p;

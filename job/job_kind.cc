@@ -22,6 +22,8 @@ opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   o.topology = g.topology;
   o.migration_margin = g.migration_margin;
   o.island_stall_generations = g.island_stall_generations;
+  o.broadcast_interval = g.broadcast_interval;
+  o.broadcast_margin = g.broadcast_margin;
   o.island_mutation = g.island_mutation;
   if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
   o.error_cost = spec.limits.penalty_cost;

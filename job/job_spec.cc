@@ -113,6 +113,11 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Require(ga->migration_margin >= 0 && ga->migration_margin < 1, "ga.migration_margin", ga->migration_margin,
               "must be in [0, 1) (0 = migrants from every source)");
     c.Range("ga.island_stall_generations", ga->island_stall_generations, 0, 100000000);
+    c.Range("ga.broadcast_interval", ga->broadcast_interval, 0, 100000000);
+    c.Require(ga->broadcast_interval == 0 || ga->migrants >= 1, "ga.migrants", ga->migrants,
+              "must be ≥ 1 when ga.broadcast_interval > 0");
+    c.Require(ga->broadcast_margin > 0 && ga->broadcast_margin < 1, "ga.broadcast_margin", ga->broadcast_margin,
+              "must be in (0, 1)");
     c.Require(ga->island_mutation.empty() || ga->island_mutation.size() == static_cast<size_t>(ga->islands),
               "ga.island_mutation.size()", ga->island_mutation.size(),
               "must be 0 (ga.mutation_probability for every island) or ga.islands = " + std::to_string(ga->islands));

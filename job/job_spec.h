@@ -191,6 +191,8 @@ struct GaSettings {
   opt::MigrationTopology topology = opt::MigrationTopology::kRing;
   double migration_margin = 0;         ///< [0, 1) (0 = migrants from every source; opt/ga.h)
   int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
+  int broadcast_interval = 0;          ///< ≥ 0 (0 = no gated broadcast; opt/ga.h), ≥ 1 migrant when > 0
+  double broadcast_margin = 0.2;       ///< (0, 1): the broadcast's gate (opt/ga.h)
   std::vector<double> island_mutation;  ///< empty or one rate per island, each 0..1 (opt/ga.h)
   int offspring() const;               ///< evaluated per generation: population − elite count
 };

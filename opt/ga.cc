@@ -108,6 +108,18 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
   if (!ValidTopology(topology)) {
     return InvalidArgument(FieldError(name("topology"), static_cast<int>(topology), kTopologyRule));
   }
+  if (broadcast_interval < 0) {
+    return InvalidArgument(
+        FieldError(name("broadcast_interval"), broadcast_interval, "must be >= 0 (0 = no broadcast)"));
+  }
+  if (broadcast_interval > 0 && migrants == 0) {
+    return InvalidArgument(FieldError(name("migrants"), migrants,
+                                      "must be >= 1 when " + name("broadcast_interval") + " = " +
+                                          std::to_string(broadcast_interval) + " > 0"));
+  }
+  if (!(broadcast_margin > 0 && broadcast_margin < 1)) {
+    return InvalidArgument(FieldError(name("broadcast_margin"), broadcast_margin, "must be in (0, 1)"));
+  }
   if (island_stall_generations < 0) {
     return InvalidArgument(
         FieldError(name("island_stall_generations"), island_stall_generations, "must be >= 0 (0 = never)"));
@@ -290,6 +302,9 @@ GeneticAlgorithm::GeneticAlgorithm(const GaOptions& options, BatchEvaluator* eva
     rngs_.emplace_back(StreamSeed(options_.seed, static_cast<uint64_t>(i)));
     state_.islands[i].rng = rngs_.back().state();
     sources_.push_back(options_.MigrationSources(i));
+    everyone_.emplace_back();
+    for (int j = 0; j < options_.islands; ++j)
+      if (j != i) everyone_.back().push_back(j);
   }
 }
 
@@ -431,11 +446,11 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   return d;
 }
 
-std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island, double below) const {
+std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island, const std::vector<int>& sources,
+                                                                            double below) const {
   std::vector<std::pair<Genome, FitnessResult>> in;
-  if (!options_.migrates()) return in;
   const int m = options_.migrants;
-  for (int s : sources_[island]) {
+  for (int s : sources) {
     const IslandState& src = state_.islands[s];
     if (!(src.fitness.front().cost < below)) continue;
     for (int r = 0; r < m; ++r) in.emplace_back(src.population[r], src.fitness[r]);
@@ -449,7 +464,10 @@ std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int i
 GeneticAlgorithm::Draft GeneticAlgorithm::Restart(int island) {
   Draft d;
   d.restarted = true;
-  for (auto& [g, f] : Immigrants(island)) {
+  // From the topology's sources as a migration would send them; none without migration.
+  const std::vector<int> none;
+  for (auto& [g, f] : Immigrants(island, options_.migrates() ? sources_[island] : none,
+                                 std::numeric_limits<double>::infinity())) {
     d.kept.push_back(std::move(g));
     d.kept_fitness.push_back(std::move(f));
   }
@@ -471,16 +489,15 @@ const GenerationSummary& GeneticAlgorithm::Step() {
   return Finish(std::move(drafts), std::move(evaluated), start);
 }
 
-std::vector<int> GeneticAlgorithm::Migrate() {
+std::vector<int> GeneticAlgorithm::Migrate(const std::vector<std::vector<int>>& sources, double m) {
   const int k_islands = options_.islands, n = options_.population_size;
   // Every island's immigrants are chosen before any island receives (the order cannot matter).
   std::vector<std::vector<std::pair<Genome, FitnessResult>>> incoming(k_islands);
   for (int k = 0; k < k_islands; ++k) {
     // The margin's gate (file comment of ga.h, 6.): sources better than this island's best by more
-    // than migration_margin · |its best|; without a margin, every source.
+    // than m · |its best|; without a margin, every source.
     const double own = state_.islands[k].fitness.front().cost;
-    const double m = options_.migration_margin;
-    incoming[k] = Immigrants(k, m > 0 ? own - m * std::abs(own) : std::numeric_limits<double>::infinity());
+    incoming[k] = Immigrants(k, sources[k], m > 0 ? own - m * std::abs(own) : std::numeric_limits<double>::infinity());
   }
   std::vector<int> taken(k_islands, 0);
   for (int k = 0; k < k_islands; ++k) {
@@ -611,7 +628,10 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
 
   std::vector<int> taken(k_islands, 0);
   if (options_.migrates() && s.generation > 0 && s.generation % options_.migration_interval == 0) {
-    taken = Migrate();
+    taken = Migrate(sources_, options_.migration_margin);
+    s.migrated = true;
+  } else if (options_.broadcasts() && s.generation > 0 && s.generation % options_.broadcast_interval == 0) {
+    taken = Migrate(everyone_, options_.broadcast_margin);
     s.migrated = true;
   }
   if (k_islands > 1) {

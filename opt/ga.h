@@ -39,6 +39,12 @@
 //      An island takes the best `migrants` of what it receives (ties: source order, then rank);
 //      they replace its worst individuals pair by pair (best migrant ↔ worst resident) where the
 //      migrant's cost is strictly lower; the island is re-ranked;
+//   6b. every broadcast_interval generations (0 = never), at a generation without the migration of
+//      6., a gated broadcast: each island takes the best `migrants` of every other island whose best
+//      is below its own by more than broadcast_margin · |its best|, as in 6. with the fully
+//      connected topology and that margin. With an ungated ring every 200 and a broadcast every 25
+//      (docs/performance.md, "Islands"), the islands on one plateau mix slowly while a lineage that
+//      steps down is copied to every island it leads within 25 generations;
 //   7. with island_mutation (one rate per island) island i's offspring flip each bit with
 //      probability island_mutation[i] instead of mutation_probability: heterogeneous islands, the
 //      same operators at different rates (empty = mutation_probability for every island);
@@ -99,6 +105,10 @@ struct GaOptions {
   double migration_margin = 0;          ///< a migration reaches an island only from sources whose best is
                                         ///< below its own by more than this share of |its best|, [0, 1)
                                         ///< (0 = every source, the rule before the margin)
+  int broadcast_interval = 0;           ///< generations between gated broadcasts to every island, ≥ 0
+                                        ///< (0 = none; file comment, 6b.); ≥ 1 migrant when > 0
+  double broadcast_margin = 0.2;        ///< the broadcast's gate, (0, 1): a source's best must be below the
+                                        ///< island's by more than this share of it
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
   std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0, 1];
@@ -116,6 +126,8 @@ struct GaOptions {
   std::vector<int> MigrationSources(int i) const;
   /// migration_interval > 0 and more than one island.
   bool migrates() const { return islands > 1 && migration_interval > 0; }
+  /// broadcast_interval > 0 and more than one island.
+  bool broadcasts() const { return islands > 1 && broadcast_interval > 0; }
   /// The per-bit mutation probability of island `i`: island_mutation[i], or mutation_probability.
   double MutationProbability(int i) const {
     return island_mutation.empty() ? mutation_probability : island_mutation[i];
@@ -283,18 +295,19 @@ class GeneticAlgorithm {
   void DrawUniform(Rng& rng, int count, std::vector<Genome>* out);
   Draft Breed(int island);
   Draft Restart(int island);
-  /// The best `migrants` individuals island `i` receives from its sources (ties: source order, rank),
-  /// counting only the sources whose best cost is below `below`.
-  std::vector<std::pair<Genome, FitnessResult>> Immigrants(
-      int island, double below = std::numeric_limits<double>::infinity()) const;
+  /// The best `migrants` individuals island `i` receives from its `sources` (ties: source order,
+  /// rank), counting only the sources whose best cost is below `below`.
+  std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island, const std::vector<int>& sources,
+                                                           double below) const;
   /// Evaluates every draft's fresh genomes as one batch (generation 0 if !initialized).
   std::vector<std::vector<FitnessResult>> Evaluate(std::vector<Draft>& drafts);
   /// Ranks each island by (cost, index), updates island and job best, stall and counters, migrates
   /// when due, logs the summary and calls the callbacks.
   const GenerationSummary& Finish(std::vector<Draft> drafts, std::vector<std::vector<FitnessResult>> evaluated,
                                   double start_s);
-  /// The migration at the end of a generation (file comment, 6.); immigrants taken per island.
-  std::vector<int> Migrate();
+  /// A migration at the end of a generation (file comment, 6. and 6b.) from each island's `sources`,
+  /// gated by `margin` (0 = every source); immigrants taken per island.
+  std::vector<int> Migrate(const std::vector<std::vector<int>>& sources, double margin);
 
   GaOptions options_;
   BatchEvaluator* evaluator_;
@@ -303,6 +316,7 @@ class GeneticAlgorithm {
   std::atomic<bool> cancel_{false};
   std::vector<Rng> rngs_;                  ///< one per island
   std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once
+  std::vector<std::vector<int>> everyone_;  ///< the broadcast's sources: every other island, in index order
   std::map<double, GeometricGaps> mutation_gaps_;  ///< by mutation probability
   GaState state_;
 };

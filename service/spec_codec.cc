@@ -281,6 +281,10 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
       g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
       g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
       if (s.ga->migration_margin != 0) g->set_migration_margin(s.ga->migration_margin);
+      if (s.ga->broadcast_interval != 0) {  // a spec without a broadcast serialises as before it existed
+        g->set_broadcast_interval(static_cast<uint32_t>(s.ga->broadcast_interval));
+        g->set_broadcast_margin(s.ga->broadcast_margin);
+      }
     }
     if (s.ga->island_stall_generations != 0)
       g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
@@ -328,6 +332,8 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
       g.topology = static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
     if (pg.has_migration_margin()) g.migration_margin = pg.migration_margin();
     if (pg.has_island_stall_generations()) g.island_stall_generations = ClampInt(pg.island_stall_generations());
+    if (pg.has_broadcast_interval()) g.broadcast_interval = ClampInt(pg.broadcast_interval());
+    if (pg.has_broadcast_margin()) g.broadcast_margin = pg.broadcast_margin();
     g.island_mutation.assign(pg.island_mutation().begin(), pg.island_mutation().end());
     s->ga = g;
   } else if (p.has_external()) {

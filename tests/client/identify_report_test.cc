@@ -111,6 +111,15 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   EXPECT_NE(mixed.find("from sources better by more than 20 %; mutation by island 0.01 0.02 0.05; 2 migrations"),
             std::string::npos)
       << mixed;
+  o.ga.island_mutation.clear();
+  o.ga.migration_margin = 0;
+  o.ga.broadcast_interval = 3;
+  o.ga.broadcast_margin = 0.25;
+  const std::string broadcast = report_line();
+  EXPECT_NE(broadcast.find("1 migrants every 2 generations, ring; a broadcast every 3 generations from islands "
+                           "better by more than 25 %;"),
+            std::string::npos)
+      << broadcast;
   // One island: the file is as before islands.
   EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
   EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
@@ -138,6 +147,11 @@ TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
   EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}), "--migration-margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
+  EXPECT_EQ(IdentifyRefusal({"--broadcast-interval", "-3"}),
+            "--broadcast-interval = -3: must be >= 0 (0 = no broadcast)");
+  EXPECT_EQ(IdentifyRefusal({"--broadcast-margin", "0"}), "--broadcast-margin = 0: must be in (0, 1)");
+  EXPECT_EQ(IdentifyRefusal({"--migration-interval", "0", "--migrants", "0", "--broadcast-interval", "25"}),
+            "--migrants = 0: must be >= 1 when --broadcast-interval = 25 > 0");
   EXPECT_EQ(IdentifyRefusal({"--islands", "3", "--island-mutation", "0.01,0.02"}),
             "--island-mutation.size() = 2: must be 0 (--mutation for every island) or --islands = 3");
   EXPECT_EQ(IdentifyRefusal({"--islands", "2", "--island-mutation", "0.01,2"}),

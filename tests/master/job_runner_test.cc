@@ -52,8 +52,24 @@ job::JobSpec IslandSpec() {
   return spec;
 }
 
+/// IslandSpec with a gated broadcast every 2 generations between its migrations (opt/ga.h, 6b.).
+job::JobSpec BroadcastSpec() {
+  job::JobSpec spec = IslandSpec();
+  spec.ga->topology = opt::MigrationTopology::kRing;
+  spec.ga->broadcast_interval = 2;
+  spec.ga->broadcast_margin = 1e-6;
+  return spec;
+}
+
+/// Whether generation g of the spec ends with a migration or a broadcast.
+bool Migrates(const job::JobSpec& spec, int g) {
+  return g > 0 && (g % spec.ga->migration_interval == 0 ||
+                   (spec.ga->broadcast_interval > 0 && g % spec.ga->broadcast_interval == 0));
+}
+
 TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
-  const job::JobSpec spec = IslandSpec();
+ for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
+  SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
   service::JobCheckpoint job;
   ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &job).ok());
 
@@ -72,7 +88,7 @@ TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
     EXPECT_EQ(job.log[g].islands.size(), 4u);
     migrations += job.log[g].migrated;
   }
-  EXPECT_EQ(migrations, 3);
+  EXPECT_EQ(migrations, spec.ga->broadcast_interval > 0 ? 7 : 3);  // 3, 6, 9 (and 2, 4, 8, 10)
   EXPECT_EQ(job.best.front().genome.bits, id.best.chromosome);
   EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
   EXPECT_EQ(job.optimizer.best_island, id.summary.best_island);
@@ -82,21 +98,23 @@ TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
   for (size_t i = 1; i < job.best.size(); ++i) EXPECT_LE(job.best[i - 1].fitness.cost, job.best[i].fitness.cost);
   const auto& top_island = job.optimizer.islands[job.optimizer.best_island];
   EXPECT_EQ(job.best.front().genome, top_island.population[0]);
+ }
 }
 
 TEST(JobRunner, ResumeFromAStoredCheckpointAtAMigrationIsBitIdentical) {
-  const job::JobSpec spec = IslandSpec();
+ for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
+  SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
   service::JobCheckpoint whole;
   ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &whole).ok());
   std::unique_ptr<opt::FitnessFunction> f;
   ASSERT_TRUE(kinds::All().MakeFitness(spec, &f).ok());
   opt::InlineEvaluator eval(*f, spec.limits.penalty_cost);
-  for (int stop : {3, 4}) {  // generation 3 migrates; 4 restarts islands that stalled
+  for (int stop : {2, 3, 4}) {  // 3 migrates; 4 restarts islands that stalled; 2 and 4 broadcast (BroadcastSpec)
     SCOPED_TRACE("stopped after generation " + std::to_string(stop));
     JobRunner first("t", spec);
     ASSERT_TRUE(first.Init(kinds::All()).ok());
     for (int g = 0; g <= stop; ++g) first.Step(eval);
-    ASSERT_EQ(first.checkpoint().log.back().migrated, stop == 3);
+    ASSERT_EQ(first.checkpoint().log.back().migrated, Migrates(spec, stop));
     // Through the stored bytes, as a master restart reads them.
     service::JobCheckpoint stored;
     ASSERT_TRUE(service::DecodeCheckpoint(service::EncodeCheckpoint(first.checkpoint()), &stored).ok());
@@ -113,6 +131,7 @@ TEST(JobRunner, ResumeFromAStoredCheckpointAtAMigrationIsBitIdentical) {
                 }()) == service::EncodeCheckpoint(whole))
         << "the resumed job's checkpoint differs from the uninterrupted one";
   }
+ }
 }
 
 }  // namespace

@@ -776,6 +776,17 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = 1; }), "migration_margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = -0.5; }).rfind("migration_margin = -0.5", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = std::nan(""); }).rfind("migration_margin = nan", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_interval = -1; }),
+            "broadcast_interval = -1: must be >= 0 (0 = no broadcast)");
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.migration_interval = 0;
+              o.migrants = 0;
+              o.broadcast_interval = 25;
+            }),
+            "migrants = 0: must be >= 1 when broadcast_interval = 25 > 0");
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 0; }), "broadcast_margin = 0: must be in (0, 1)");
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 1; }), "broadcast_margin = 1: must be in (0, 1)");
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = std::nan(""); }).rfind("broadcast_margin = nan", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.island_mutation = {0.01, 0.02}; }),
             "island_mutation.size() = 2: must be 0 (mutation_probability for every island) or islands = 1");
   EXPECT_EQ(error([](GaOptions& o) {
@@ -999,6 +1010,123 @@ TEST(GaIslands, MarginHearsOnlySourcesBetterByTheMargin) {
   }
 }
 
+/// A run stopped after each of `stops` generations (on `before`), its state restored into a new GA
+/// (on `after`) and run to the end, is `reference` bit for bit.
+void ExpectResumesBitForBit(const RunRecord& reference, const GaOptions& o, BatchEvaluator* before,
+                            BatchEvaluator* after, std::initializer_list<int> stops) {
+  for (int stop : stops) {
+    SCOPED_TRACE("checkpoint after generation " + std::to_string(stop));
+    GaState checkpoint;
+    {
+      GeneticAlgorithm first(o, before);
+      first.Initialize();
+      for (int g = 0; g < stop; ++g) first.Step();
+      checkpoint = first.state();
+    }
+    GeneticAlgorithm second(o, after);
+    second.RestoreState(checkpoint);
+    while (!second.CheckTermination()) second.Step();
+    ExpectSameRun(reference, {second.state(), second.MakeSummary(*second.CheckTermination())});
+  }
+}
+
+TEST(GaIslands, BroadcastReachesTheIslandsLedByItsMarginBetweenMigrations) {
+  // A ring every 4 generations, ungated, and a broadcast every generation from every island
+  // better by more than the broadcast's margin: at generations 1, 2, 3 the broadcast (every other
+  // island is a source, through its gate), at 4 the ring (one source, no gate).
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  for (double margin : {1e-12, 0.999}) {
+    SCOPED_TRACE(margin);
+    GaOptions o = IslandOptions(3);
+    o.migration_interval = 4;
+    o.broadcast_interval = 1;
+    o.broadcast_margin = margin;
+    o.max_generations = 4;
+    GeneticAlgorithm ga(o, &ev);
+    ga.Initialize();
+    for (int g = 1; g <= 4; ++g) {
+      // The islands' bests before the exchange: the same generation from the same state without one.
+      GaOptions apart = o;
+      apart.migration_interval = 0;
+      apart.broadcast_interval = 0;
+      GeneticAlgorithm alone(apart, &ev);
+      alone.RestoreState(ga.state());
+      alone.Step();
+      std::vector<double> before;
+      for (const IslandState& is : alone.state().islands) before.push_back(is.fitness[0].cost);
+      const GenerationSummary& s = ga.Step();
+      ASSERT_TRUE(s.migrated) << g;
+      // What island k takes from `from`: the best two of their top two (ties: source order),
+      // replacing its worst two pair by pair while strictly better.
+      const auto expected = [&](int k, const std::vector<int>& from) {
+        std::vector<double> in;
+        for (int j : from)
+          for (int r = 0; r < 2; ++r) in.push_back(alone.state().islands[j].fitness[r].cost);
+        std::stable_sort(in.begin(), in.end());
+        const auto& own = alone.state().islands[k].fitness;
+        int taken = 0;
+        while (taken < 2 && taken < static_cast<int>(in.size()) && in[taken] < own[own.size() - 1 - taken].cost) ++taken;
+        return taken;
+      };
+      for (int k = 0; k < 3; ++k) {
+        std::vector<int> from;
+        if (g == 4) {
+          from = {(k + 2) % 3};  // the ring: island k hears k − 1 whatever its best
+        } else {
+          for (int j = 0; j < 3; ++j)
+            if (j != k && before[j] < before[k] - margin * std::abs(before[k])) from.push_back(j);
+        }
+        EXPECT_EQ(s.islands[k].immigrants, expected(k, from)) << "island " << k << ", generation " << g;
+        if (from.empty()) {  // an island that hears nothing is the island of the run without migration
+          EXPECT_EQ(ga.state().islands[k].population, alone.state().islands[k].population);
+        }
+      }
+    }
+    int heard = 0;
+    for (const GenerationSummary& s : ga.state().log)
+      if (s.generation < 4)
+        for (const IslandSummary& i : s.islands) heard += i.immigrants;
+    if (margin < 0.5) {
+      EXPECT_GT(heard, 0) << "a tiny margin lets the better islands through";
+    } else {
+      EXPECT_EQ(heard, 0) << "the costs are not a thousandfold apart";
+    }
+  }
+  // Without a broadcast interval the margin is not used: the run is the run before broadcasts.
+  GaOptions plain = IslandOptions(3), unused = plain;
+  unused.broadcast_margin = 0.7;
+  ExpectSameRun(RunWith(&ev, plain), RunWith(&ev, unused));
+}
+
+TEST(GaIslands, BroadcastRunIsTheSameWhateverTheEvaluatorAndResumesFromACheckpoint) {
+  const HashFitness fitness;
+  InlineEvaluator inline_ev(fitness);
+  GaOptions o = IslandOptions(4);
+  o.migration_interval = 6;  // the ring at 6, the broadcast at 2, 4, 8, 10, …
+  o.broadcast_interval = 2;
+  o.broadcast_margin = 1e-9;
+  o.island_mutation = {0.01, 0.02, 0.03, 0.05};
+  const RunRecord reference = RunWith(&inline_ev, o);
+  ThreadPoolEvaluator pool4(fitness, 4);
+  ShuffledEvaluator shuffled(&pool4);
+  ExpectSameRun(reference, RunWith(&shuffled, o));
+  int broadcasts = 0, immigrants = 0;
+  for (const GenerationSummary& g : reference.state.log) {
+    EXPECT_EQ(g.migrated, g.generation > 0 && g.generation % 2 == 0) << g.generation;
+    broadcasts += g.migrated && g.generation % 6 != 0;
+    for (const IslandSummary& i : g.islands) immigrants += g.generation % 6 != 0 ? i.immigrants : 0;
+  }
+  EXPECT_GT(broadcasts, 0);
+  EXPECT_GT(immigrants, 0) << "the broadcasts moved individuals";
+  // Another setting is another run.
+  GaOptions none = o;
+  none.broadcast_interval = 0;
+  const RunRecord without = RunWith(&inline_ev, none);
+  EXPECT_NE(Digest(without.state, without.summary), Digest(reference.state, reference.summary));
+  ExpectResumesBitForBit(reference, o, &inline_ev, &shuffled, {1, 2, 3});  // before, at and after a broadcast
+}
+
 TEST(GaIslands, StalledIslandRestartsFromMigrantsAndFreshIndividuals) {
   const ConstantFitness fitness;  // nothing ever improves: every island stalls
   InlineEvaluator ev(fitness);
@@ -1051,22 +1179,7 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
   o.island_stall_generations = 3;
   o.island_mutation = {0.01, 0.02, 0.03, 0.05};
   const RunRecord reference = RunWith(&ev, o);
-  for (int stop : {2, 3, 4}) {  // before, at (interval 3) and after a migration
-    SCOPED_TRACE("checkpoint after generation " + std::to_string(stop));
-    GaState checkpoint;
-    {
-      GeneticAlgorithm first(o, &ev);
-      first.Initialize();
-      for (int g = 0; g < stop; ++g) first.Step();
-      checkpoint = first.state();
-    }
-    GeneticAlgorithm second(o, &ev);
-    second.RestoreState(checkpoint);
-    GaSummary summary;
-    while (!second.CheckTermination()) second.Step();
-    summary = second.MakeSummary(*second.CheckTermination());
-    ExpectSameRun(reference, {second.state(), summary});
-  }
+  ExpectResumesBitForBit(reference, o, &ev, &ev, {2, 3, 4});  // before, at (interval 3) and after a migration
   GaState bad = reference.state;
   bad.islands.pop_back();
   GeneticAlgorithm third(o, &ev);

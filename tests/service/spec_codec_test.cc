@@ -83,6 +83,10 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   s.ga->island_stall_generations = 9;
   s.ga->migration_margin = 0.2;
   s.ga->island_mutation = {0.01, 0.02, 0.03, 0.05};
+  JobSpec no_broadcast = s;
+  no_broadcast.ga->broadcast_margin = 0.5;  // not used without an interval: encoded as before broadcasts
+  s.ga->broadcast_interval = 25;
+  s.ga->broadcast_margin = 0.3;
   JobSpec back;
   std::vector<FieldViolation> v;
   ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(s), &back, &v).ok());
@@ -93,6 +97,8 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->island_stall_generations, 9);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
   EXPECT_EQ(back.ga->island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
+  EXPECT_EQ(back.ga->broadcast_interval, 25);
+  EXPECT_EQ(back.ga->broadcast_margin, 0.3);
   back = JobSpec{};
   ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(s), &back, &v).ok());
   ASSERT_TRUE(back.ga.has_value());
@@ -102,7 +108,10 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->island_stall_generations, 9);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
   EXPECT_EQ(back.ga->island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
+  EXPECT_EQ(back.ga->broadcast_interval, 25);
+  EXPECT_EQ(back.ga->broadcast_margin, 0.3);
   EXPECT_NE(JobSpecToJson(s).find("\"MIGRATION_TOPOLOGY_RANDOM\""), std::string::npos);
+  EXPECT_EQ(JobSpecToJson(no_broadcast).find("broadcast"), std::string::npos);
 
   auto violations = [&](auto mutate) {
     JobSpec bad = s;
@@ -119,12 +128,22 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                        "must be in [0, 1)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = std::nan(""); }),
                        "ga.migration_margin", "must be in [0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.broadcast_margin = 0; }), "ga.broadcast_margin",
+                       "must be in (0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.broadcast_margin = std::nan(""); }),
+                       "ga.broadcast_margin", "must be in (0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) {
+                         g.migration_interval = 0;
+                         g.migrants = 0;
+                       }),
+                       "ga.migrants", "must be ≥ 1 when ga.broadcast_interval > 0"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation = {0.01, 0.02}; }),
                        "ga.island_mutation.size()", "must be 0 (ga.mutation_probability for every island) or ga.islands = 4"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }), "ga.island_mutation[2]",
                        "must be in [0, 1]"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.island_mutation.clear(); }).empty());
-  EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0; }).empty());
+  EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0, g.broadcast_interval = 0; })
+                  .empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.
   const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);
   EXPECT_FALSE(st.ok());

@@ -133,6 +133,8 @@ TEST(Churn, AJobOfFourIslandsIsBitIdenticalUnderAKillEveryThirdOfASecond) {
   spec.ga->migrants = 2;
   spec.ga->topology = opt::MigrationTopology::kRandom;
   spec.ga->island_stall_generations = 8;
+  spec.ga->broadcast_interval = 2;  // and a gated broadcast at the even generations between them
+  spec.ga->broadcast_margin = 1e-6;
   ExpectUnchangedByChurn(spec, "churn-islands", 0.3, 1.0, 1);
 }
 

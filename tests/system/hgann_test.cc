@@ -103,7 +103,8 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
 }
 
 TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIdentify) {
-  // The quick job as an archipelago: 4 islands of 30, a ring migration every 4 generations,
+  // The quick job as an archipelago: 4 islands of 30, a ring migration every 4 generations and a
+  // gated broadcast every 3 between them,
   // islands restarted after 6 generations of their own stall, each island at its own mutation rate;
   // one dispatch of 4 × 15 per generation.
   job::JobSpec spec = QuickSpec();
@@ -114,6 +115,8 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   spec.ga->migrants = 2;
   spec.ga->island_stall_generations = 6;
   spec.ga->island_mutation = {0.01, 0.03, 0.01, 0.05};
+  spec.ga->broadcast_interval = 3;  // a gated broadcast at 3, 6, 9, 15 between the migrations
+  spec.ga->broadcast_margin = 1e-6;
   const service::JobCheckpoint ref = Reference(spec);
 
   hgann::IdentifyOptions o;
