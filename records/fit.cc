@@ -99,12 +99,7 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     const auto m = static_cast<Eigen::Index>(fam.regressors());
     if (R.size() != fam.regressors() * fam.regressors()) throw InputError(fam.name() + ": regularisation size mismatch");
     regularisation_ = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(R.data(), m, m);
-    std::vector<double> p(model_.family_param_count(), 0.0);
-    for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
-      const ParamInfo& q = model_.params()[i];
-      p.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
-    }
-    validation_ = ValidateAt(p);
+    validation_ = ValidateAt(NeutralParams());
   }
   std::tie(spectrum_first_, spectrum_count_) = model_.EffectParams(EffectKind::Named("creep-spectrum"));
   if (spectrum_count_ > 0) {
@@ -113,6 +108,34 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
   }
   spectrum_solved_ = SpectrumSolved(model_);
   searched_ = SearchedParams(model_);
+  if (spectrum_solved_) {  // the reference every evaluation's solve starts from: both starts, once
+    const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), NeutralParams());
+    if (s.ok) spectrum_start_ = s.w;
+  }
+}
+
+std::vector<double> RecordFitness::NeutralParams() const {
+  std::vector<double> p(model_.family_param_count(), 0.0);
+  for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
+    const ParamInfo& q = model_.params()[i];
+    p.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
+  }
+  return p;
+}
+
+SpectrumProblem RecordFitness::SpectrumProblemNow() const {
+  SpectrumProblem sp;
+  sp.model = &model_;
+  sp.records = records_;
+  sp.samples = samples_;
+  sp.first = spectrum_first_;
+  sp.count = spectrum_count_;
+  sp.regularisation = validation_.used ? &regularisation_ : nullptr;
+  sp.lambda = validation_.used ? validation_.lambda : 0;
+  sp.roughness = &spectrum_roughness_;
+  sp.mu = spectrum_validation_.lambda;
+  sp.start = spectrum_start_;
+  return sp;
 }
 
 std::vector<double> RecordFitness::Expand(std::span<const double> q, double* cost) const {
@@ -125,17 +148,7 @@ std::vector<double> RecordFitness::Expand(std::span<const double> q, double* cos
     if (cost) *cost = Run(p).mse + SpectrumPenalty(p) / static_cast<double>(samples_);
     return p;
   }
-  SpectrumProblem sp;
-  sp.model = &model_;
-  sp.records = records_;
-  sp.samples = samples_;
-  sp.first = spectrum_first_;
-  sp.count = spectrum_count_;
-  sp.regularisation = validation_.used ? &regularisation_ : nullptr;
-  sp.lambda = validation_.used ? validation_.lambda : 0;
-  sp.roughness = &spectrum_roughness_;
-  sp.mu = spectrum_validation_.lambda;
-  const SpectrumSolution s = SolveSpectrum(sp, p);
+  const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), p);
   for (size_t i = 0; i < spectrum_count_; ++i) p[spectrum_first_ + i] = s.w[i];
   if (cost) *cost = s.ok ? (s.sse + s.roughness) / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
   return p;

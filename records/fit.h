@@ -25,6 +25,7 @@
 #include "opt/param_search.h"
 #include "records/model.h"
 #include "records/regularisation.h"
+#include "records/spectrum_solve.h"
 
 namespace pz::records {
 
@@ -117,6 +118,10 @@ class RecordFitness final : public opt::FitnessFunction {
   /// changes them (else untouched).
   std::vector<double> SolveWeights(std::span<const double> params, std::vector<std::vector<double>>* regs = nullptr) const;
   WeightValidation ValidateAt(std::span<const double> params) const;
+  /// The family's parameters at 0, each effect's at 0 or, outside its box, at its lower bound.
+  std::vector<double> NeutralParams() const;
+  /// The joint solve's problem at the current strengths, from spectrum_start_.
+  SpectrumProblem SpectrumProblemNow() const;
   /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples; `regs`
   /// as SolveWeights'.
   void Accumulate(std::span<const double> params, BlockedNormalEquations& eq,
@@ -134,6 +139,9 @@ class RecordFitness final : public opt::FitnessFunction {
   std::vector<double> spectrum_sigma_;
   bool spectrum_solved_ = false;
   std::vector<size_t> searched_;
+  /// Where every joint solve starts: the spectrum solved from w = 0 and from log creep at the
+  /// neutral parameters, once (empty: those two starts in every solve).
+  std::vector<double> spectrum_start_;
 };
 
 /// Error figures of a model on one record's window.

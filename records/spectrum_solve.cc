@@ -22,7 +22,39 @@ struct RecordRows {
   std::vector<double> reg;
   Eigen::VectorXd t;
   Eigen::MatrixXd C;  ///< scored rows of pol · (L_w A − centre), at the w of the last normal equations
+  std::vector<double> a, c;  ///< each relaxation's discretisation at the record's dt
 };
+
+/// L_w on every column of a record's regressors at once (rows in the inner loop, so the columns
+/// vectorise): the creep spectrum's ApplyOutput arithmetic on each column, out = L_w reg.
+void FilterRows(const RecordRows& d, const Eigen::VectorXd& w, size_t m, std::vector<double>& out,
+                std::vector<double>& state) {
+  const size_t n = d.a.size();
+  out.resize(d.reg.size());
+  state.assign((n + 2) * m, 0.0);  // x_i (n × m), prev, corr
+  double* prev = state.data() + n * m;
+  double* corr = prev + m;
+  const double* row0 = d.reg.data();
+  std::copy_n(row0, m, out.data());
+  for (size_t k = 1; k < d.rows; ++k) {
+    const double* row = d.reg.data() + k * m;
+    double* o = out.data() + k * m;
+    std::fill_n(corr, m, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      double* x = state.data() + i * m;
+      const double a = d.a[i], b = 1 - d.a[i], c = d.c[i], wi = w(static_cast<Index>(i));
+      for (size_t j = 0; j < m; ++j) {
+        const double dj = row[j] - row0[j];
+        x[j] = a * x[j] + b * prev[j] + (dj - prev[j]) * c;
+        corr[j] += wi * (dj - x[j]);
+      }
+    }
+    for (size_t j = 0; j < m; ++j) {
+      prev[j] = row[j] - row0[j];
+      o[j] = row[j] - corr[j];
+    }
+  }
+}
 
 size_t Row(const RecordRows& d, size_t k) { return k < d.from ? 0 : k - d.from; }
 
@@ -34,6 +66,9 @@ class Solver {
     const auto& box = model_.params();
     for (size_t i = 0; i < n_; ++i) upper_.push_back(box[p.first + i].upper);
     std::vector<double> ue, c;
+    const std::vector<double> taus = EffectKind::Named("creep-spectrum")->KernelData(model_.scale());
+    if (taus.size() != n_) throw InputError("SolveSpectrum: " + std::to_string(n_) + " weights for " +
+                                            std::to_string(taus.size()) + " relaxations");
     data_.resize(p.records.size());
     for (size_t i = 0; i < p.records.size(); ++i) {
       RecordRows& d = data_[i];
@@ -45,6 +80,12 @@ class Solver {
       d.reg.resize(d.rows * m_);
       model_.family().Regressors(ue, d.reg);
       const double off = RecordCentre(r, d.from, d.reg, 0, c);
+      d.a.resize(n_);
+      d.c.resize(n_);
+      for (size_t i = 0; i < n_; ++i) {  // as the effect's ApplyOutput
+        d.a[i] = std::exp(-r.dt / taus[i]);
+        d.c[i] = 1 - taus[i] * (1 - d.a[i]) / r.dt;
+      }
       d.t.resize(static_cast<Index>(r.scored()));
       for (size_t k = r.first_scored; k < r.end_scored; ++k) d.t(static_cast<Index>(k - r.first_scored)) = r.y[k] - off;
     }
@@ -53,6 +94,10 @@ class Solver {
   }
 
   int grams() const { return grams_; }
+  static std::vector<RecordRows>& Cache() {
+    thread_local std::vector<RecordRows> cache;
+    return cache;
+  }
 
   SpectrumSolution Run(const Eigen::VectorXd& w0) {
     SpectrumSolution s;
@@ -161,7 +206,7 @@ class Solver {
 
  private:
   static constexpr int kMaxIterations = 40, kMaxHalvings = 30;
-  static constexpr double kTolerance = 1e-10;
+  static constexpr double kTolerance = 1e-9;
 
   /// The effect parameters with the spectrum's weights w.
   const std::vector<double>& EffectParams(const Eigen::VectorXd& w) {
@@ -172,12 +217,9 @@ class Solver {
   /// s = reg θ on a record's rows, then `weights` of the relaxations applied (L_weights s).
   void Output(const RecordRows& d, const Eigen::VectorXd& theta, std::vector<double>& s) const {
     s.resize(d.rows);
-    for (size_t k = 0; k < d.rows; ++k) {
-      const double* row = d.reg.data() + k * m_;
-      double acc = 0;
-      for (size_t j = 0; j < m_; ++j) acc += row[j] * theta(static_cast<Index>(j));
-      s[k] = acc;
-    }
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    const Eigen::Map<const RowMajor> A(d.reg.data(), static_cast<Index>(d.rows), static_cast<Index>(m_));
+    Eigen::Map<Eigen::VectorXd>(s.data(), static_cast<Index>(d.rows)).noalias() = A * theta;
   }
 
   /// pol · (v − centre) on the scored samples (v: one value per row).
@@ -215,13 +257,11 @@ class Solver {
   /// The normal equations of C(w) = L_w A (scored rows centred, polarity applied): G_, h_; each
   /// record's C kept.
   void Normal(const Eigen::VectorXd& w) {
-    const std::vector<double>& ep = EffectParams(w);
     const auto M = static_cast<Index>(m_);
     G_ = Eigen::MatrixXd::Zero(M, M);
     h_ = Eigen::VectorXd::Zero(M);
     for (RecordRows& d : data_) {
-      creg_ = d.reg;
-      model_.ApplyLinearOutputEffects(*d.r, ep, d.from, creg_, m_);
+      FilterRows(d, w, m_, creg_, state_);
       RecordCentre(*d.r, d.from, creg_, m_, centre_);
       const io::Record& r = *d.r;
       d.C.resize(static_cast<Index>(r.scored()), M);
@@ -278,12 +318,12 @@ class Solver {
   const int pol_;
   std::vector<double> effect_params_;
   std::vector<double> upper_;
-  std::vector<RecordRows> data_;
+  std::vector<RecordRows>& data_ = Cache();  ///< this thread's buffers, reused from call to call
   Eigen::MatrixXd R_, DtD_;
   Eigen::MatrixXd G_;
   Eigen::VectorXd h_, gram_w_;
   int grams_ = 0;
-  std::vector<double> creg_, s_, z_, centre_;
+  std::vector<double> creg_, s_, z_, centre_, state_;
 };
 
 }  // namespace
@@ -317,11 +357,18 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
                      std::to_string(model.params().size()) + " expected");
   if (problem.first < model.family_param_count() || problem.first + problem.count > params.size())
     throw InputError("SolveSpectrum: the spectrum's weights are not among the effects' parameters");
-  if (!problem.zero_start && !(problem.log_creep_start > 0)) throw InputError("SolveSpectrum: no start");
   Solver solver(problem, params);
   const auto n = static_cast<Eigen::Index>(problem.count);
   SpectrumSolution best;
   int iterations = 0;
+  if (!problem.start.empty()) {
+    if (problem.start.size() != problem.count) throw InputError("SolveSpectrum: the start has the wrong size");
+    best = solver.Run(Eigen::Map<const Eigen::VectorXd>(problem.start.data(), n));
+    best.start = 2;
+    best.grams = solver.grams();
+    return best;
+  }
+  if (!problem.zero_start && !(problem.log_creep_start > 0)) throw InputError("SolveSpectrum: no start");
   if (problem.zero_start) {
     best = solver.Run(Eigen::VectorXd::Zero(n));
     iterations = best.iterations;

@@ -18,8 +18,11 @@
 // Gram, as one evaluation of the searched spectrum costs; B_i θ = (I − L_i)(A θ) is one filtered
 // signal per relaxation). A step is kept only where the exact objective decreases (halved up to 30
 // times; a weight leaving its upper bound shortens it), so the objective never increases; it stops
-// when a step gains less than 1e-10 of the objective. The start is w = 0 with θ solved there (the
-// family's own solve); a second start from log creep (equal weights) is kept when lower.
+// when a step gains less than 1e-9 of the objective. The starts: w = 0 with θ solved there (the
+// family's own solve) and log creep (equal weights), the lower kept; or one given start — a fit
+// solves from both once, at the effects' neutral parameters, and starts every evaluation from that
+// reference (fixed, so the result does not depend on the order of the evaluations), a few steps
+// from the optimum at any delay.
 //
 // Deterministic: sums in a fixed order, no threads; the same result whatever the caller's thread.
 #pragma once
@@ -47,6 +50,9 @@ struct SpectrumProblem {
   /// optimum; ≤ 0: from w = 0 only.
   double log_creep_start = 0.01;
   bool zero_start = true;  ///< start from w = 0 (false: from log creep alone)
+  /// Non-empty (count values in the box): start from these weights alone instead (a fit's
+  /// reference: RecordFitness::spectrum_start).
+  std::vector<double> start;
 };
 
 struct SpectrumSolution {
@@ -58,7 +64,7 @@ struct SpectrumSolution {
   double objective = 0;         ///< sse + λ θᵀRθ + μ ‖D w‖²
   int iterations = 0;           ///< Gauss–Newton steps taken (all starts)
   int grams = 0;                ///< passes over the samples building normal equations
-  int start = 0;                ///< the start kept: 0 = w = 0, 1 = log creep
+  int start = 0;                ///< the start kept: 0 = w = 0, 1 = log creep, 2 = the given one
   std::vector<double> objectives;  ///< of the kept start: at its start, then after every step (non-increasing)
 };
 
