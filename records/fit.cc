@@ -110,7 +110,10 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
   searched_ = SearchedParams(model_);
   if (spectrum_solved_) {  // the reference every evaluation's solve starts from: both starts, once
     const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), NeutralParams());
-    if (s.ok) spectrum_start_ = s.w;
+    if (s.ok) {
+      spectrum_start_ = s.w;
+      spectrum_start_theta_ = s.theta;
+    }
   }
 }
 
@@ -135,6 +138,7 @@ SpectrumProblem RecordFitness::SpectrumProblemNow() const {
   sp.roughness = &spectrum_roughness_;
   sp.mu = spectrum_validation_.lambda;
   sp.start = spectrum_start_;
+  sp.start_theta = spectrum_start_theta_;
   return sp;
 }
 

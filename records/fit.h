@@ -141,7 +141,7 @@ class RecordFitness final : public opt::FitnessFunction {
   std::vector<size_t> searched_;
   /// Where every joint solve starts: the spectrum solved from w = 0 and from log creep at the
   /// neutral parameters, once (empty: those two starts in every solve).
-  std::vector<double> spectrum_start_;
+  std::vector<double> spectrum_start_, spectrum_start_theta_;
 };
 
 /// Error figures of a model on one record's window.

@@ -99,6 +99,36 @@ class Solver {
     return cache;
   }
 
+  /// The weights that best fit with the family's weights fixed at θ (the iteration's start from a
+  /// reference (θ, w) solved elsewhere: one small solve in n unknowns brings w near this problem's).
+  Eigen::VectorXd WeightsFor(const Eigen::VectorXd& theta) {
+    const auto N = static_cast<Index>(n_);
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(N, N);
+    Eigen::VectorXd h = Eigen::VectorXd::Zero(N), unit = Eigen::VectorXd::Zero(N);
+    for (RecordRows& d : data_) {
+      const io::Record& r = *d.r;
+      const auto S = static_cast<Index>(r.scored());
+      Output(d, theta, s_);
+      Eigen::MatrixXd Z(S, N);
+      for (size_t i = 0; i < n_; ++i) {
+        unit.setZero();
+        unit(static_cast<Index>(i)) = 1;
+        z_ = s_;
+        model_.ApplyLinearOutputEffects(r, EffectParams(unit), d.from, z_, 1);
+        for (size_t k = 0; k < d.rows; ++k) z_[k] = s_[k] - z_[k];
+        Centred(d, z_, Z.col(static_cast<Index>(i)));
+      }
+      Eigen::VectorXd e(S);
+      Centred(d, s_, e);
+      G.noalias() += Z.transpose() * Z;
+      h.noalias() += Z.transpose() * (e - d.t);  // t ≈ s − Z w
+    }
+    if (DtD_.size() > 0) G += p_.mu * DtD_;
+    Eigen::VectorXd w = NonNegativeLeastSquares(G, h);
+    for (size_t i = 0; i < n_; ++i) w(static_cast<Index>(i)) = std::min(w(static_cast<Index>(i)), upper_[i]);
+    return w;
+  }
+
   SpectrumSolution Run(const Eigen::VectorXd& w0) {
     SpectrumSolution s;
     Eigen::VectorXd w = w0, theta;
@@ -207,6 +237,10 @@ class Solver {
  private:
   static constexpr int kMaxIterations = 40, kMaxHalvings = 30;
   static constexpr double kTolerance = 1e-9;
+  /// The normal equations are rebuilt when a weight has moved more than kRefresh from where they
+  /// were built, or after kStaleSteps steps in their metric.
+  static constexpr double kRefresh = 0.02;
+  static constexpr int kStaleSteps = 3;
 
   /// The effect parameters with the spectrum's weights w.
   const std::vector<double>& EffectParams(const Eigen::VectorXd& w) {
@@ -275,23 +309,29 @@ class Solver {
     }
     G_.triangularView<Eigen::StrictlyUpper>() = G_.transpose();
     gram_w_ = w;
+    stale_ = 0;
     ++grams_;
   }
 
   /// The Gauss–Newton normal equations at (θ, w) in u = (θ', w'): H = MᵀM + diag(λR, μDᵀD),
-  /// rhs = Mᵀ(t − Z w) with M = [C(w) | −Z], Z = pol · centred (I − L_i)(A θ).
+  /// rhs = H x − g with g = ½∇f at x = (θ, w) exact and M = [C | −Z], Z = pol · centred
+  /// (I − L_i)(A θ) — C = C(w) where the last normal equations were built at this w (rhs = Mᵀ(t − Z w),
+  /// the plain Gauss–Newton step), else C at their w (kept for kStaleSteps steps while w stays within kRefresh of it: a
+  /// step in the metric of a nearby Hessian, the gradient exact through the relaxations' adjoint, so
+  /// the iteration still converges to the optimum of f).
   void Linearised(const Eigen::VectorXd& theta, const Eigen::VectorXd& w, Eigen::MatrixXd& H, Eigen::VectorXd& rhs) {
-    if (gram_w_.size() != w.size() || gram_w_ != w) Normal(w);
+    if (gram_w_.size() != w.size() || (gram_w_ - w).cwiseAbs().maxCoeff() > kRefresh || ++stale_ > kStaleSteps) Normal(w);
     const auto M = static_cast<Index>(m_), N = static_cast<Index>(n_);
     H = Eigen::MatrixXd::Zero(M + N, M + N);
-    rhs = Eigen::VectorXd::Zero(M + N);
     H.topLeftCorner(M, M) = G_;
-    rhs.head(M) = h_;
+    Eigen::VectorXd g = Eigen::VectorXd::Zero(M + N);  // ½∇ of the squared errors
     Eigen::VectorXd unit = Eigen::VectorXd::Zero(N);
+    using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     for (RecordRows& d : data_) {
       const io::Record& r = *d.r;
+      const auto S = static_cast<Index>(r.scored());
       Output(d, theta, s_);
-      Eigen::MatrixXd Z(static_cast<Index>(r.scored()), N);
+      Eigen::MatrixXd Z(S, N);
       for (size_t i = 0; i < n_; ++i) {
         unit.setZero();
         unit(static_cast<Index>(i)) = 1;
@@ -300,16 +340,53 @@ class Solver {
         for (size_t k = 0; k < d.rows; ++k) z_[k] = s_[k] - z_[k];  // (I − L_i) A θ
         Centred(d, z_, Z.col(static_cast<Index>(i)));
       }
+      // The residual at (θ, w), and ρ: its samples gathered on the rows, less what the offset removes.
+      z_ = s_;
+      model_.ApplyLinearOutputEffects(r, EffectParams(w), d.from, z_, 1);
+      Eigen::VectorXd e(S);
+      Centred(d, z_, e);
+      e = d.t - e;
+      rho_.assign(d.rows, 0.0);
+      for (size_t k = r.first_scored; k < r.end_scored; ++k) rho_[Row(d, k)] += e(static_cast<Index>(k - r.first_scored));
+      const double sum = e.sum();
+      if (r.offset_mode == io::OffsetMode::kFit) {
+        const double mean = sum / static_cast<double>(S);
+        for (size_t k = r.first_scored; k < r.end_scored; ++k) rho_[Row(d, k)] -= mean;
+      } else if (r.offset_mode == io::OffsetMode::kRest) {
+        rho_[0] -= sum;
+      }
+      // C(w)ᵀ e = pol Aᵀ L_wᵀ ρ, with L_w v = v − Σ w_i (I − F_i) P v (P v = v − v₀, F_i the
+      // relaxation x_k = a x_{k−1} + c d_k + (1 − a − c) d_{k−1} from 0): L_wᵀ ρ = ρ − Pᵀ Σ w_i (ρ − F_iᵀ ρ).
+      acc_.assign(d.rows, 0.0);
+      for (size_t i = 0; i < n_; ++i) {
+        const double a = d.a[i], c = d.c[i], b = 1 - a - c, wi = w(static_cast<Index>(i));
+        double u = 0, next = 0;  // u_{l+1}, ρ_{l+1}
+        for (size_t l = d.rows; l-- > 0;) {
+          u = a * u + c * rho_[l] + b * next;
+          next = rho_[l];
+          acc_[l] += wi * (rho_[l] - u);
+        }
+      }
+      double total = 0;
+      for (double v : acc_) total += v;
+      acc_[0] -= total;
+      for (size_t l = 0; l < d.rows; ++l) acc_[l] = rho_[l] - acc_[l];
+      const Eigen::Map<const RowMajor> A(d.reg.data(), static_cast<Index>(d.rows), M);
+      g.head(M).noalias() -= pol_ * (A.transpose() * Eigen::Map<const Eigen::VectorXd>(acc_.data(), static_cast<Index>(d.rows)));
+      g.tail(N).noalias() += Z.transpose() * e;
       // M's columns: C, then −Z.
       H.topRightCorner(M, N).noalias() -= d.C.transpose() * Z;
       H.bottomRightCorner(N, N).noalias() += Z.transpose() * Z;
-      rhs.tail(N).noalias() -= Z.transpose() * d.t;
     }
     EffectParams(w);
     H.bottomLeftCorner(N, M) = H.topRightCorner(M, N).transpose();
-    rhs += H.rightCols(N) * w;  // Mᵀ(t − Z w) = Mᵀt + Mᵀ(−Z) w
     if (R_.size() > 0) H.topLeftCorner(M, M) += p_.lambda * R_;
     if (DtD_.size() > 0) H.bottomRightCorner(N, N) += p_.mu * DtD_;
+    Eigen::VectorXd x(M + N);
+    x << theta, w;
+    rhs = H * x - g;  // the penalties' gradients cancel: H x − (g + P x) + P x
+    if (R_.size() > 0) rhs.head(M) -= p_.lambda * (R_ * theta);
+    if (DtD_.size() > 0) rhs.tail(N) -= p_.mu * (DtD_ * w);
   }
 
   const SpectrumProblem& p_;
@@ -322,8 +399,8 @@ class Solver {
   Eigen::MatrixXd R_, DtD_;
   Eigen::MatrixXd G_;
   Eigen::VectorXd h_, gram_w_;
-  int grams_ = 0;
-  std::vector<double> creg_, s_, z_, centre_, state_;
+  int grams_ = 0, stale_ = 0;
+  std::vector<double> creg_, s_, z_, centre_, state_, rho_, acc_;
 };
 
 }  // namespace
@@ -363,7 +440,11 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
   int iterations = 0;
   if (!problem.start.empty()) {
     if (problem.start.size() != problem.count) throw InputError("SolveSpectrum: the start has the wrong size");
-    best = solver.Run(Eigen::Map<const Eigen::VectorXd>(problem.start.data(), n));
+    Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(problem.start.data(), n);
+    if (problem.start_theta.size() == problem.model->family().regressors())
+      w = solver.WeightsFor(Eigen::Map<const Eigen::VectorXd>(problem.start_theta.data(),
+                                                               static_cast<Eigen::Index>(problem.start_theta.size())));
+    best = solver.Run(w);
     best.start = 2;
     best.grams = solver.grams();
     return best;

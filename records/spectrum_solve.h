@@ -53,6 +53,9 @@ struct SpectrumProblem {
   /// Non-empty (count values in the box): start from these weights alone instead (a fit's
   /// reference: RecordFitness::spectrum_start).
   std::vector<double> start;
+  /// With `start`: the family's weights solved there; the start is then the spectrum's weights
+  /// best for them on this problem (one solve in the n weights), else `start` itself.
+  std::vector<double> start_theta;
 };
 
 struct SpectrumSolution {
