@@ -99,25 +99,32 @@ class Solver {
     return cache;
   }
 
+  /// s_ = A θ on a record's rows, and Z's columns pol · centred (I − L_i) s_ (each relaxation's
+  /// share of the output, on the scored samples).
+  void Relaxations(const RecordRows& d, const Eigen::VectorXd& theta, Eigen::MatrixXd& Z) {
+    Output(d, theta, s_);
+    Eigen::VectorXd unit = Eigen::VectorXd::Zero(static_cast<Index>(n_));
+    for (size_t i = 0; i < n_; ++i) {
+      unit.setZero();
+      unit(static_cast<Index>(i)) = 1;
+      z_ = s_;
+      model_.ApplyLinearOutputEffects(*d.r, EffectParams(unit), d.from, z_, 1);
+      for (size_t k = 0; k < d.rows; ++k) z_[k] = s_[k] - z_[k];
+      Centred(d, z_, Z.col(static_cast<Index>(i)));
+    }
+  }
+
   /// The weights that best fit with the family's weights fixed at θ (the iteration's start from a
   /// reference (θ, w) solved elsewhere: one small solve in n unknowns brings w near this problem's).
   Eigen::VectorXd WeightsFor(const Eigen::VectorXd& theta) {
     const auto N = static_cast<Index>(n_);
     Eigen::MatrixXd G = Eigen::MatrixXd::Zero(N, N);
-    Eigen::VectorXd h = Eigen::VectorXd::Zero(N), unit = Eigen::VectorXd::Zero(N);
+    Eigen::VectorXd h = Eigen::VectorXd::Zero(N);
     for (RecordRows& d : data_) {
       const io::Record& r = *d.r;
       const auto S = static_cast<Index>(r.scored());
-      Output(d, theta, s_);
       Eigen::MatrixXd Z(S, N);
-      for (size_t i = 0; i < n_; ++i) {
-        unit.setZero();
-        unit(static_cast<Index>(i)) = 1;
-        z_ = s_;
-        model_.ApplyLinearOutputEffects(r, EffectParams(unit), d.from, z_, 1);
-        for (size_t k = 0; k < d.rows; ++k) z_[k] = s_[k] - z_[k];
-        Centred(d, z_, Z.col(static_cast<Index>(i)));
-      }
+      Relaxations(d, theta, Z);
       Eigen::VectorXd e(S);
       Centred(d, s_, e);
       G.noalias() += Z.transpose() * Z;
@@ -325,21 +332,12 @@ class Solver {
     H = Eigen::MatrixXd::Zero(M + N, M + N);
     H.topLeftCorner(M, M) = G_;
     Eigen::VectorXd g = Eigen::VectorXd::Zero(M + N);  // ½∇ of the squared errors
-    Eigen::VectorXd unit = Eigen::VectorXd::Zero(N);
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     for (RecordRows& d : data_) {
       const io::Record& r = *d.r;
       const auto S = static_cast<Index>(r.scored());
-      Output(d, theta, s_);
       Eigen::MatrixXd Z(S, N);
-      for (size_t i = 0; i < n_; ++i) {
-        unit.setZero();
-        unit(static_cast<Index>(i)) = 1;
-        z_ = s_;
-        model_.ApplyLinearOutputEffects(r, EffectParams(unit), d.from, z_, 1);
-        for (size_t k = 0; k < d.rows; ++k) z_[k] = s_[k] - z_[k];  // (I − L_i) A θ
-        Centred(d, z_, Z.col(static_cast<Index>(i)));
-      }
+      Relaxations(d, theta, Z);
       // The residual at (θ, w), and ρ: its samples gathered on the rows, less what the offset removes.
       z_ = s_;
       model_.ApplyLinearOutputEffects(r, EffectParams(w), d.from, z_, 1);
