@@ -113,6 +113,8 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     if (s.ok) {
       spectrum_start_ = s.w;
       spectrum_start_theta_ = s.theta;
+      spectrum_metric_ = std::make_shared<const SpectrumMetric>(
+          BuildSpectrumMetric(SpectrumProblemNow(), NeutralParams(), spectrum_start_));
     }
   }
 }
@@ -139,6 +141,7 @@ SpectrumProblem RecordFitness::SpectrumProblemNow() const {
   sp.mu = spectrum_validation_.lambda;
   sp.start = spectrum_start_;
   sp.start_theta = spectrum_start_theta_;
+  sp.metric = spectrum_metric_.get();
   return sp;
 }
 

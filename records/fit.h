@@ -142,6 +142,7 @@ class RecordFitness final : public opt::FitnessFunction {
   /// Where every joint solve starts: the spectrum solved from w = 0 and from log creep at the
   /// neutral parameters, once (empty: those two starts in every solve).
   std::vector<double> spectrum_start_, spectrum_start_theta_;
+  std::shared_ptr<const SpectrumMetric> spectrum_metric_;  ///< at the reference (null: none)
 };
 
 /// Error figures of a model on one record's window.

@@ -94,6 +94,12 @@ class Solver {
   }
 
   int grams() const { return grams_; }
+  void Metric(const Eigen::VectorXd& w, SpectrumMetric& out) {
+    Normal(w);
+    out.G = G_;
+    out.C.clear();
+    for (const RecordRows& d : data_) out.C.push_back(d.C);
+  }
   static std::vector<RecordRows>& Cache() {
     thread_local std::vector<RecordRows> cache;
     return cache;
@@ -136,12 +142,15 @@ class Solver {
     return w;
   }
 
-  SpectrumSolution Run(const Eigen::VectorXd& w0) {
+  /// From (θ0, w0) when θ0 is given (the steps then start in the problem's shared metric, if any),
+  /// else from w0 with θ solved there.
+  SpectrumSolution Run(const Eigen::VectorXd& w0, const Eigen::VectorXd* theta0 = nullptr) {
     SpectrumSolution s;
     Eigen::VectorXd w = w0, theta;
-    // θ at the start: the family's own solve at w (the normal equations of C(w) alone).
-    Normal(w);
-    {
+    if (theta0 != nullptr) {
+      theta = *theta0;
+    } else {  // θ at the start: the family's own solve at w (the normal equations of C(w) alone)
+      Normal(w);
       Eigen::MatrixXd H = G_;
       if (R_.size() > 0) H += p_.lambda * R_;
       theta = NonNegativeLeastSquares(H, h_);
@@ -248,6 +257,8 @@ class Solver {
   /// were built, or after kStaleSteps steps in their metric.
   static constexpr double kRefresh = 0.02;
   static constexpr int kStaleSteps = 3;
+  /// Steps in the problem's shared metric before the normal equations of this problem are built.
+  static constexpr int kSharedSteps = 8;
 
   /// The effect parameters with the spectrum's weights w.
   const std::vector<double>& EffectParams(const Eigen::VectorXd& w) {
@@ -327,10 +338,13 @@ class Solver {
   /// step in the metric of a nearby Hessian, the gradient exact through the relaxations' adjoint, so
   /// the iteration still converges to the optimum of f).
   void Linearised(const Eigen::VectorXd& theta, const Eigen::VectorXd& w, Eigen::MatrixXd& H, Eigen::VectorXd& rhs) {
-    if (gram_w_.size() != w.size() || (gram_w_ - w).cwiseAbs().maxCoeff() > kRefresh || ++stale_ > kStaleSteps) Normal(w);
+    const bool shared = p_.metric != nullptr && grams_ == 0 && ++shared_steps_ <= kSharedSteps;
+    if (!shared && (gram_w_.size() != w.size() || (gram_w_ - w).cwiseAbs().maxCoeff() > kRefresh || ++stale_ > kStaleSteps))
+      Normal(w);
     const auto M = static_cast<Index>(m_), N = static_cast<Index>(n_);
     H = Eigen::MatrixXd::Zero(M + N, M + N);
-    H.topLeftCorner(M, M) = G_;
+    H.topLeftCorner(M, M) = shared ? p_.metric->G : G_;
+    size_t record = 0;
     Eigen::VectorXd g = Eigen::VectorXd::Zero(M + N);  // ½∇ of the squared errors
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
     for (RecordRows& d : data_) {
@@ -373,7 +387,8 @@ class Solver {
       g.head(M).noalias() -= pol_ * (A.transpose() * Eigen::Map<const Eigen::VectorXd>(acc_.data(), static_cast<Index>(d.rows)));
       g.tail(N).noalias() += Z.transpose() * e;
       // M's columns: C, then −Z.
-      H.topRightCorner(M, N).noalias() -= d.C.transpose() * Z;
+      H.topRightCorner(M, N).noalias() -= (shared ? p_.metric->C[record] : d.C).transpose() * Z;
+      ++record;
       H.bottomRightCorner(N, N).noalias() += Z.transpose() * Z;
     }
     EffectParams(w);
@@ -397,7 +412,7 @@ class Solver {
   Eigen::MatrixXd R_, DtD_;
   Eigen::MatrixXd G_;
   Eigen::VectorXd h_, gram_w_;
-  int grams_ = 0, stale_ = 0;
+  int grams_ = 0, stale_ = 0, shared_steps_ = 0;
   std::vector<double> creg_, s_, z_, centre_, state_, rho_, acc_;
 };
 
@@ -422,6 +437,16 @@ std::vector<size_t> SearchedParams(const RecordModel& model) {
   return out;
 }
 
+SpectrumMetric BuildSpectrumMetric(const SpectrumProblem& problem, std::span<const double> params,
+                                   std::span<const double> w) {
+  SpectrumProblem p = problem;
+  p.metric = nullptr;
+  Solver solver(p, params);
+  SpectrumMetric out;
+  solver.Metric(Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())), out);
+  return out;
+}
+
 SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const double> params) {
   if (problem.model == nullptr) throw InputError("SolveSpectrum: no model");
   const RecordModel& model = *problem.model;
@@ -439,10 +464,14 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
   if (!problem.start.empty()) {
     if (problem.start.size() != problem.count) throw InputError("SolveSpectrum: the start has the wrong size");
     Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(problem.start.data(), n);
-    if (problem.start_theta.size() == problem.model->family().regressors())
-      w = solver.WeightsFor(Eigen::Map<const Eigen::VectorXd>(problem.start_theta.data(),
-                                                               static_cast<Eigen::Index>(problem.start_theta.size())));
-    best = solver.Run(w);
+    if (problem.start_theta.size() == problem.model->family().regressors()) {
+      const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(
+          problem.start_theta.data(), static_cast<Eigen::Index>(problem.start_theta.size()));
+      w = solver.WeightsFor(theta);
+      best = problem.metric != nullptr ? solver.Run(w, &theta) : solver.Run(w);
+    } else {
+      best = solver.Run(w);
+    }
     best.start = 2;
     best.grams = solver.grams();
     return best;

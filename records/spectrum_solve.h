@@ -16,7 +16,11 @@
 // linearised problem is one non-negative least squares in m + n unknowns over the normal equations
 // of [C(w) | −Z] (one pass over the samples: A's columns through the combined relaxations, then the
 // Gram, as one evaluation of the searched spectrum costs; B_i θ = (I − L_i)(A θ) is one filtered
-// signal per relaxation). A step is kept only where the exact objective decreases (halved up to 30
+// signal per relaxation); the steps after the first reuse those normal equations (rebuilt after 3
+// steps or a move of 0.02), and where a fit shares the reference's (SpectrumMetric) the first 8
+// steps take those and none is built unless they do not converge — the gradient is exact in every
+// step (the relaxations' adjoint on the residual, then Aᵀ), so the iteration still converges to the
+// optimum of f. A step is kept only where the exact objective decreases (halved up to 30
 // times; a weight leaving its upper bound shortens it), so the objective never increases; it stops
 // when a step gains less than 1e-9 of the objective. The starts: w = 0 with θ solved there (the
 // family's own solve) and log creep (equal weights), the lower kept; or one given start — a fit
@@ -35,6 +39,14 @@
 #include "records/model.h"
 
 namespace pz::records {
+
+/// The normal equations of C(w) = L_w A built once for a reference (the records' scored rows of C,
+/// centred, and CᵀC): a metric the steps of every solve of the same records can start in, before
+/// they build their own (BuildSpectrumMetric).
+struct SpectrumMetric {
+  std::vector<Eigen::MatrixXd> C;  ///< per record
+  Eigen::MatrixXd G;
+};
 
 /// What the joint solve needs; everything must outlive the call.
 struct SpectrumProblem {
@@ -56,6 +68,9 @@ struct SpectrumProblem {
   /// With `start`: the family's weights solved there; the start is then the spectrum's weights
   /// best for them on this problem (one solve in the n weights), else `start` itself.
   std::vector<double> start_theta;
+  /// With start and start_theta: the first steps from (start_theta, the weights best for it) in
+  /// this metric (no build of the normal equations unless they do not converge in 8 steps).
+  const SpectrumMetric* metric = nullptr;
 };
 
 struct SpectrumSolution {
@@ -78,6 +93,10 @@ bool SpectrumSolved(const RecordModel& model);
 /// The indices in model.params() of the parameters a fit searches: all of them, or all but the
 /// spectrum's weights where SpectrumSolved.
 std::vector<size_t> SearchedParams(const RecordModel& model);
+
+/// The metric of the problem's records at `params` and the spectrum's weights w.
+SpectrumMetric BuildSpectrumMetric(const SpectrumProblem& problem, std::span<const double> params,
+                                   std::span<const double> w);
 
 /// Solves (θ, w) at the model parameters `params` (the spectrum's entries ignored). Throws
 /// InputError on a model that is not a linear family with the spectrum among its leading linear
