@@ -5,6 +5,7 @@
 
 #include "opt/inline_evaluator.h"
 #include "records/criterion.h"
+#include "records/spectrum_solve.h"
 
 namespace pz::complete {
 namespace {
@@ -62,8 +63,8 @@ std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
   if (f == Family::kRecords) {
     try {
       const auto model = RecordModelOf(p);  // alive through the loop (a temporary would not be)
-      std::vector<std::string> names;
-      for (const auto& q : model->params()) names.push_back(q.name);
+      std::vector<std::string> names;  // the searched ones (a creep spectrum on a linear family is solved)
+      for (size_t i : records::SearchedParams(*model)) names.push_back(model->params()[i].name);
       return names;
     } catch (const InputError&) {
       return {};

@@ -9,6 +9,7 @@
 
 #include "io/csv.h"
 #include "records/excitation.h"
+#include "records/spectrum_solve.h"
 #include "model/format.h"
 #include "opt/thread_pool_evaluator.h"
 
@@ -98,18 +99,66 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     const auto m = static_cast<Eigen::Index>(fam.regressors());
     if (R.size() != fam.regressors() * fam.regressors()) throw InputError(fam.name() + ": regularisation size mismatch");
     regularisation_ = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(R.data(), m, m);
-    std::vector<double> p(model_.family_param_count(), 0.0);
-    for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
-      const ParamInfo& q = model_.params()[i];
-      p.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
-    }
-    validation_ = ValidateAt(p);
+    validation_ = ValidateAt(NeutralParams());
   }
   std::tie(spectrum_first_, spectrum_count_) = model_.EffectParams(EffectKind::Named("creep-spectrum"));
   if (spectrum_count_ > 0) {
     spectrum_roughness_ = SpectrumRoughness(spectrum_count_);
     spectrum_validation_.used = true;  // μ = 0 until RevalidateSpectrum
   }
+  spectrum_solved_ = SpectrumSolved(model_);
+  searched_ = SearchedParams(model_);
+  if (spectrum_solved_) {  // the reference every evaluation's solve starts from: both starts, once
+    const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), NeutralParams());
+    if (s.ok) {
+      spectrum_start_ = s.w;
+      spectrum_start_theta_ = s.theta;
+      spectrum_metric_ = std::make_shared<const SpectrumMetric>(
+          BuildSpectrumMetric(SpectrumProblemNow(), NeutralParams(), spectrum_start_));
+    }
+  }
+}
+
+std::vector<double> RecordFitness::NeutralParams() const {
+  std::vector<double> p(model_.family_param_count(), 0.0);
+  for (size_t i = model_.family_param_count(); i < model_.params().size(); ++i) {
+    const ParamInfo& q = model_.params()[i];
+    p.push_back(q.lower <= 0 && q.upper >= 0 ? 0.0 : q.lower);
+  }
+  return p;
+}
+
+SpectrumProblem RecordFitness::SpectrumProblemNow() const {
+  SpectrumProblem sp;
+  sp.model = &model_;
+  sp.records = records_;
+  sp.samples = samples_;
+  sp.first = spectrum_first_;
+  sp.count = spectrum_count_;
+  sp.regularisation = validation_.used ? &regularisation_ : nullptr;
+  sp.lambda = validation_.used ? validation_.lambda : 0;
+  sp.roughness = &spectrum_roughness_;
+  sp.mu = spectrum_validation_.lambda;
+  sp.start = spectrum_start_;
+  sp.start_theta = spectrum_start_theta_;
+  sp.metric = spectrum_metric_.get();
+  return sp;
+}
+
+std::vector<double> RecordFitness::Expand(std::span<const double> q, double* cost) const {
+  if (q.size() != searched_.size())
+    throw InputError(model_.Describe() + ": " + std::to_string(q.size()) + " searched parameters given, " +
+                     std::to_string(searched_.size()) + " expected");
+  std::vector<double> p(model_.params().size(), 0.0);
+  for (size_t i = 0; i < q.size(); ++i) p[searched_[i]] = q[i];
+  if (!spectrum_solved_) {
+    if (cost) *cost = Run(p).mse + SpectrumPenalty(p) / static_cast<double>(samples_);
+    return p;
+  }
+  const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), p);
+  for (size_t i = 0; i < spectrum_count_; ++i) p[spectrum_first_ + i] = s.w[i];
+  if (cost) *cost = s.ok ? (s.sse + s.roughness) / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+  return p;
 }
 
 namespace {
@@ -245,40 +294,16 @@ bool RecordFitness::Revalidate(std::span<const double> params) {
 void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations& eq,
                                std::vector<std::vector<double>>* regs) const {
   const Family& fam = model_.family();
-  const size_t m = fam.regressors(), nf = model_.family_param_count(), blocks = eq.G.size();
+  const size_t m = fam.regressors(), nf = model_.family_param_count();
   const int pol = model_.scale().polarity;
-  const auto mi = static_cast<Eigen::Index>(m);
-  for (size_t b = 0; b < blocks; ++b) {
-    eq.G[b] = Eigen::MatrixXd::Zero(mi, mi);
-    eq.h[b] = Eigen::VectorXd::Zero(mi);
-    eq.bb[b] = 0;
-    eq.samples[b] = 0;
-  }
-  std::vector<double> ue, c(m);
+  NormalEquationsBuilder builder(eq, m, samples_);
+  std::vector<double> ue;
   const bool linear_output = model_.has_linear_output_effects();
   // The regressors of a record: the caller's (kept for the output) or this thread's scratch; the
   // family writes every entry.
   thread_local std::vector<double> scratch;
   const bool keep = regs != nullptr && !linear_output;
   if (keep) regs->resize(records_.size());  // their buffers reused from call to call
-  size_t index = 0;  // of the scored sample over the records: its block is index · blocks / samples_
-  // Rows are gathered in chunks of one block and added as rank-k updates (a level-3 product, several
-  // times faster than a rank-1 update per sample on ~100 regressors).
-  constexpr Eigen::Index kChunk = 256;
-  Eigen::MatrixXd A(mi, kChunk);
-  Eigen::VectorXd bv(kChunk);
-  Eigen::Index filled = 0;
-  size_t chunk_block = 0;
-  auto flush = [&] {
-    if (filled == 0) return;
-    const auto cols = A.leftCols(filled);
-    const auto b = bv.head(filled);
-    eq.G[chunk_block].selfadjointView<Eigen::Lower>().rankUpdate(cols);
-    eq.h[chunk_block].noalias() += cols * b;
-    eq.bb[chunk_block] += b.squaredNorm();
-    eq.samples[chunk_block] += static_cast<size_t>(filled);
-    filled = 0;
-  };
   for (size_t ri = 0; ri < records_.size(); ++ri) {
     const io::Record* r = records_[ri];
     const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->end_scored - 1);
@@ -289,34 +314,43 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its output
       model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, reg, m);
     }
-    auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
-      return reg.data() + (k < from ? 0 : (k - from)) * m;
-    };
-    double d = 0;
-    std::fill(c.begin(), c.end(), 0.0);
-    if (r->offset_mode == io::OffsetMode::kFit) {
-      for (size_t k = r->first_scored; k < r->end_scored; ++k) {
-        for (size_t j = 0; j < m; ++j) c[j] += row(k)[j];
-        d += r->y[k];
-      }
-      for (double& v : c) v /= static_cast<double>(r->scored());
-      d /= static_cast<double>(r->scored());
-    } else if (r->offset_mode == io::OffsetMode::kRest) {
-      std::copy_n(row(0), m, c.begin());
-      d = r->offset;
-    } else {
-      d = r->offset;
-    }
-    for (size_t k = r->first_scored; k < r->end_scored; ++k, ++index) {
-      const size_t blk = blocks == 1 ? 0 : index * blocks / samples_;
-      if (blk != chunk_block || filled == kChunk) flush();
-      chunk_block = blk;
-      for (size_t j = 0; j < m; ++j) A(static_cast<Eigen::Index>(j), filled) = pol * (row(k)[j] - c[j]);
-      bv(filled++) = r->y[k] - d;
-    }
+    AddRecordRows(*r, from, reg, m, pol, builder);
   }
-  flush();
-  for (Eigen::MatrixXd& G : eq.G) G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+  builder.Finish();
+}
+
+double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m, std::vector<double>& c) {
+  auto row = [&](size_t k) { return reg.data() + (k < from ? 0 : (k - from)) * m; };
+  double d = 0;
+  c.assign(m, 0.0);
+  if (r.offset_mode == io::OffsetMode::kFit) {
+    for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+      for (size_t j = 0; j < m; ++j) c[j] += row(k)[j];
+      d += r.y[k];
+    }
+    for (double& v : c) v /= static_cast<double>(r.scored());
+    d /= static_cast<double>(r.scored());
+  } else if (r.offset_mode == io::OffsetMode::kRest) {
+    std::copy_n(row(0), m, c.begin());
+    d = r.offset;
+  } else {
+    d = r.offset;
+  }
+  return d;
+}
+
+void AddRecordRows(const io::Record& r, size_t from, std::span<const double> reg, size_t m, int pol,
+                   NormalEquationsBuilder& builder) {
+  auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
+    return reg.data() + (k < from ? 0 : (k - from)) * m;
+  };
+  thread_local std::vector<double> c;
+  const double d = RecordCentre(r, from, reg, m, c);
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    double* out = builder.Row();
+    for (size_t j = 0; j < m; ++j) out[j] = pol * (row(k)[j] - c[j]);
+    builder.Add(r.y[k] - d);
+  }
 }
 
 std::vector<double> RecordFitness::SolveWeights(std::span<const double> p,
@@ -405,6 +439,12 @@ void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::sp
 }
 
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
+  if (spectrum_solved_ && genome.reals.size() == searched_.size()) {  // the spectrum solved, not searched
+    double cost = 0;
+    Expand(genome.reals, &cost);
+    if (!std::isfinite(cost)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
+    return {cost, opt::FitnessStatus::kOk, ""};
+  }
   return Cost(Run(genome.reals, /*keep_outputs=*/false).mse, genome.reals);
 }
 
@@ -426,18 +466,26 @@ std::vector<std::span<const double>> Reals(std::span<const opt::Genome* const> g
 
 void RecordFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
                                  std::span<opt::FitnessResult> out) const {
+  if (spectrum_solved_) return FitnessFunction::EvaluateMany(genomes, out);  // one lane, each spectrum solved
   const std::vector<std::span<const double>> ps = Reals(genomes);
   std::vector<Output> o(ps.size());
   RunMany(ps, o);
   for (size_t l = 0; l < ps.size(); ++l) out[l] = Cost(o[l].mse, ps[l]);
 }
 
-bool RecordFitness::Residuals(std::span<const double> params, std::vector<double>& r) const {
+bool RecordFitness::Residuals(std::span<const double> searched_or_all, std::vector<double>& r) const {
+  std::vector<double> expanded;
+  if (spectrum_solved_ && searched_or_all.size() == searched_.size()) expanded = Expand(searched_or_all);
+  const std::span<const double> params = expanded.empty() ? searched_or_all : std::span<const double>(expanded);
   return ResidualsOf(Run(params), params, r);
 }
 
 void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
                                   std::span<bool> ok) const {
+  if (spectrum_solved_) {  // a linear family (one lane), each vector's spectrum solved: one at a time
+    for (size_t l = 0; l < ps.size(); ++l) ok[l] = Residuals(ps[l], rs[l]);
+    return;
+  }
   std::vector<Output> o(ps.size());
   RunMany(ps, o);
   for (size_t l = 0; l < ps.size(); ++l) ok[l] = ResidualsOf(o[l], ps[l], rs[l]);
@@ -558,21 +606,34 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   FitResult res;
   res.model = model;
   const auto& params = model->params();
-  std::vector<double> best;
+  // Searched: the model's parameters (a linear family's weights are solved, not among them; with
+  // the creep spectrum, its weights neither: records/spectrum_solve.h).
+  const std::vector<size_t>& searched = fitness.searched();
+  const bool solved = fitness.spectrum_solved();
+  std::vector<double> best;  // every parameter
   if (!params.empty()) {
-    opt::ParamBox box;
+    auto box_of = [&](bool only_searched, std::vector<std::string>& units) {
+      opt::ParamBox box;
+      units.clear();
+      for (size_t i = 0; i < params.size(); ++i) {
+        if (only_searched && std::find(searched.begin(), searched.end(), i) == searched.end()) continue;
+        const ParamInfo& p = params[i];
+        box.names.push_back(p.name);
+        box.lower.push_back(p.lower);
+        box.upper.push_back(p.upper);
+        box.log_scale.push_back(p.log_scale);
+        units.push_back(p.unit);
+      }
+      return box;
+    };
     std::vector<std::string> units;
-    for (const ParamInfo& p : params) {
-      box.names.push_back(p.name);
-      box.lower.push_back(p.lower);
-      box.upper.push_back(p.upper);
-      box.log_scale.push_back(p.log_scale);
-      units.push_back(p.unit);
-    }
-    const opt::BoxMap map(box, units);
+    const opt::BoxMap map(box_of(false, units), units);
+    const opt::ParamBox search_box = box_of(true, units);
+    const std::unique_ptr<opt::BoxMap> searched_map =
+        search_box.size() > 0 ? std::make_unique<opt::BoxMap>(search_box, units) : nullptr;
     const RecordResidualFitness residual_fitness(fitness);
     opt::FitProblem problem;
-    problem.map = &map;
+    problem.map = searched_map.get();
     problem.cost_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
       if (options.evaluator_factory) return options.evaluator_factory(fitness);
       return std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads);
@@ -586,10 +647,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     problem.residual_weight = 1 / std::sqrt(static_cast<double>(fitness.samples()));
     opt::FitOptions fo;
     fo.search_options = options.search;
-    // Searched: the model's parameters (a linear family's weights are solved, not among them).
-    res.searched_parameters = params.size();
+    res.searched_parameters = searched.size();
     if (options.sizing.enabled && fo.search_options.algorithm == opt::SearchAlgorithm::kPso) {
-      const SearchBudget b = SizedSearchBudget(params.size());
+      const SearchBudget b = SizedSearchBudget(searched.size());
       const FitOptions::Sizing& k = options.sizing;
       opt::SearchOptions& so = fo.search_options;
       if (!k.keep_particles) so.pso.particles = b.particles;
@@ -612,26 +672,36 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     }
     fo.polish = options.polish;
     fo.lm = options.lm;
-    fo.starts = options.extra_starts;
+    for (const std::vector<double>& u : options.extra_starts) {  // unit coordinates of every parameter
+      if (u.size() != params.size()) throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
+      std::vector<double> su;
+      for (size_t i : searched) su.push_back(u[i]);
+      fo.starts.push_back(std::move(su));
+    }
     fo.search_cost_is_sum_of_squares = true;  // the search's cost is the MSE = Σ r²
-    fo.uncertainty = options.uncertainty;
+    // With the spectrum solved, the table covers every parameter (below), not the searched ones.
+    fo.uncertainty = options.uncertainty && !solved;
     fo.uncertainty_fd_step = options.lm.fd_step;
     fo.threads = options.threads;
-    opt::FitResult fit = opt::Fit(problem, fo);
-    res.search = std::move(fit.search);
-    res.evaluations = fit.evaluations;
-    res.lm_iterations = fit.lm_iterations;
-    res.stop_reason = res.search.stop_reason;
-    res.polishes = fit.polishes;
-    res.best_polish_repetition = fit.best_polish_repetition;
-    res.polish_message = fit.message;
-    res.uncertainty = std::move(fit.uncertainty);
-    best = std::move(fit.x);
+    std::vector<double> best_searched;
+    if (searched_map) {
+      opt::FitResult fit = opt::Fit(problem, fo);
+      res.search = std::move(fit.search);
+      res.evaluations = fit.evaluations;
+      res.lm_iterations = fit.lm_iterations;
+      res.stop_reason = res.search.stop_reason;
+      res.polishes = fit.polishes;
+      res.best_polish_repetition = fit.best_polish_repetition;
+      res.polish_message = fit.message;
+      res.uncertainty = std::move(fit.uncertainty);
+      best_searched = std::move(fit.x);
+    }
+    best = solved ? fitness.Expand(best_searched) : best_searched;
     // A regularised linear family with effects: its strength was chosen with the effects at their
     // neutral values; re-chosen at the solution, and where it changes the solution is polished
     // again under the new strength (locally: a polish, no search). A creep spectrum's roughness
-    // penalty likewise (searched without it): chosen at the solution, polished under it, and
-    // chosen once more at the polished solution.
+    // penalty likewise (searched without it): chosen at the solution, polished under it (where
+    // the spectrum is solved: solved again under it), and chosen once more at the result.
     const bool spectrum = fitness.spectrum_validation().used && options.spectrum_roughness;
     for (int round = 0; round < (spectrum ? 2 : 1) && options.polish; ++round) {
       bool changed = false;
@@ -639,16 +709,22 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
         changed = fitness.Revalidate(best);
       if (spectrum) changed = fitness.RevalidateSpectrum(best, map, options.threads) || changed;
       if (!changed) break;
-      opt::FitOptions again = fo;
-      again.search = false;
-      again.starts = {map.ToUnit(best)};
-      opt::FitResult second = opt::Fit(problem, again);
-      res.evaluations += second.evaluations;
-      res.lm_iterations += second.lm_iterations;
-      res.polishes += second.polishes;
-      res.uncertainty = std::move(second.uncertainty);
-      best = std::move(second.x);
+      if (searched_map) {
+        opt::FitOptions again = fo;
+        again.search = false;
+        again.starts = {searched_map->ToUnit(best_searched)};
+        opt::FitResult second = opt::Fit(problem, again);
+        res.evaluations += second.evaluations;
+        res.lm_iterations += second.lm_iterations;
+        res.polishes += second.polishes;
+        if (!solved) res.uncertainty = std::move(second.uncertainty);
+        best_searched = std::move(second.x);
+      }
+      best = solved ? fitness.Expand(best_searched) : best_searched;
     }
+    if (solved && options.uncertainty)
+      res.uncertainty = opt::ComputeUncertainty(map, problem.physical_residuals, best, options.threads,
+                                                options.lm.fd_step, problem.residual_weight);
   }
   const RecordFitness::Output out = fitness.Run(best);
   res.params = best;

@@ -25,12 +25,23 @@
 #include "opt/param_search.h"
 #include "records/model.h"
 #include "records/regularisation.h"
+#include "records/spectrum_solve.h"
 
 namespace pz::records {
 
 /// min ‖A w − b‖² subject to w ≥ 0, from the normal equations G = AᵀA, h = Aᵀb (Lawson–Hanson
 /// active set). Returns w.
 Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::VectorXd& h);
+
+/// What record r's offset mode removes from the rows of `reg` (rows of samples from.., row-major, m
+/// columns; row 0 at rest, before it the rest row): c (m values: the means over the scored window,
+/// the rest row, or zeros) and, returned, d from the measured output (its mean over the scored
+/// window, or the given offset).
+double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m, std::vector<double>& c);
+/// Adds the scored samples of record r to `builder`: the rows pol · (reg row − c) with target y − d
+/// (RecordCentre).
+void AddRecordRows(const io::Record& r, size_t from, std::span<const double> reg, size_t m, int pol,
+                   NormalEquationsBuilder& builder);
 
 /// The training criterion: mean squared output error over the scored samples of the records.
 class RecordFitness final : public opt::FitnessFunction {
@@ -62,7 +73,8 @@ class RecordFitness final : public opt::FitnessFunction {
   /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l]) bit for bit).
   void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
-  /// that their sum of squares is the MSE; false if the output is not finite.
+  /// that their sum of squares is the MSE; false if the output is not finite. `params`: every
+  /// parameter, or the searched ones where spectrum_solved() (the spectrum's weights solved).
   bool Residuals(std::span<const double> params, std::vector<double>& r) const;
   /// Residuals for several parameter vectors side by side (ok[l] = Residuals(ps[l], rs[l]), bit for bit).
   void ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
@@ -96,6 +108,16 @@ class RecordFitness final : public opt::FitnessFunction {
   const std::vector<double>& spectrum_sigma() const { return spectrum_sigma_; }
   /// The roughness penalty μ ‖D w‖² at `params` (0 without the spectrum or μ).
   double SpectrumPenalty(std::span<const double> params) const;
+  /// A linear family with the creep spectrum (records/spectrum_solve.h SpectrumSolved): its weights
+  /// are solved with the family's in every evaluation, so the search covers the other parameters
+  /// only (searched()); Evaluate and Residuals take either those or every parameter.
+  bool spectrum_solved() const { return spectrum_solved_; }
+  /// The indices in model().params() of the searched parameters.
+  const std::vector<size_t>& searched() const { return searched_; }
+  /// Every parameter from the searched ones: the spectrum's weights solved jointly with the
+  /// family's at the current strengths (SolveSpectrum; `cost`: its Σ e² + μ ‖D w‖² over N, +inf
+  /// when not finite). Without spectrum_solved(): the values themselves.
+  std::vector<double> Expand(std::span<const double> searched, double* cost = nullptr) const;
   size_t samples() const { return samples_; }
   double penalty() const { return penalty_; }
 
@@ -104,6 +126,10 @@ class RecordFitness final : public opt::FitnessFunction {
   /// changes them (else untouched).
   std::vector<double> SolveWeights(std::span<const double> params, std::vector<std::vector<double>>* regs = nullptr) const;
   WeightValidation ValidateAt(std::span<const double> params) const;
+  /// The family's parameters at 0, each effect's at 0 or, outside its box, at its lower bound.
+  std::vector<double> NeutralParams() const;
+  /// The joint solve's problem at the current strengths, from spectrum_start_.
+  SpectrumProblem SpectrumProblemNow() const;
   /// The weights' normal equations over eq.G.size() contiguous blocks of the scored samples; `regs`
   /// as SolveWeights'.
   void Accumulate(std::span<const double> params, BlockedNormalEquations& eq,
@@ -125,6 +151,12 @@ class RecordFitness final : public opt::FitnessFunction {
   Eigen::MatrixXd spectrum_roughness_;               ///< D
   WeightValidation spectrum_validation_;
   std::vector<double> spectrum_sigma_;
+  bool spectrum_solved_ = false;
+  std::vector<size_t> searched_;
+  /// Where every joint solve starts: the spectrum solved from w = 0 and from log creep at the
+  /// neutral parameters, once (empty: those two starts in every solve).
+  std::vector<double> spectrum_start_, spectrum_start_theta_;
+  std::shared_ptr<const SpectrumMetric> spectrum_metric_;  ///< at the reference (null: none)
 };
 
 /// Error figures of a model on one record's window.

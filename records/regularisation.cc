@@ -31,6 +31,54 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
   return ChooseStrength(eq, R, trR > 0 ? G.trace() / trR : 0, StrengthRule{});
 }
 
+NormalEquationsBuilder::NormalEquationsBuilder(BlockedNormalEquations& eq, size_t columns, size_t samples)
+    : eq_(eq), samples_(samples) {
+  constexpr Eigen::Index kChunk = 256;
+  const auto m = static_cast<Eigen::Index>(columns);
+  for (size_t b = 0; b < eq.G.size(); ++b) {
+    eq.G[b] = Eigen::MatrixXd::Zero(m, m);
+    eq.h[b] = Eigen::VectorXd::Zero(m);
+    eq.bb[b] = 0;
+    eq.samples[b] = 0;
+  }
+  A_.resize(m, kChunk);
+  b_.resize(kChunk);
+}
+
+double* NormalEquationsBuilder::Row() {
+  if (filled_ == A_.cols()) Flush();
+  return A_.data() + filled_ * A_.rows();
+}
+
+void NormalEquationsBuilder::Add(double target) {
+  const size_t blocks = eq_.G.size();
+  const size_t blk = blocks == 1 ? 0 : index_ * blocks / samples_;
+  if (blk != block_ && filled_ > 0) {  // the chunk so far is the previous block's: flushed without this row
+    const Eigen::VectorXd row = A_.col(filled_);
+    Flush();
+    A_.col(0) = row;
+  }
+  block_ = blk;
+  b_(filled_++) = target;
+  ++index_;
+}
+
+void NormalEquationsBuilder::Flush() {
+  if (filled_ == 0) return;
+  const auto cols = A_.leftCols(filled_);
+  const auto b = b_.head(filled_);
+  eq_.G[block_].selfadjointView<Eigen::Lower>().rankUpdate(cols);
+  eq_.h[block_].noalias() += cols * b;
+  eq_.bb[block_] += b.squaredNorm();
+  eq_.samples[block_] += static_cast<size_t>(filled_);
+  filled_ = 0;
+}
+
+void NormalEquationsBuilder::Finish() {
+  Flush();
+  for (Eigen::MatrixXd& G : eq_.G) G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
+}
+
 Eigen::MatrixXd SpectrumRoughness(size_t n) {
   const auto m = static_cast<Eigen::Index>(n);
   Eigen::MatrixXd D = Eigen::MatrixXd::Zero(std::max<Eigen::Index>(m - 1, 0), m);

@@ -2,9 +2,9 @@
 // (records/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
-// weights stay non-negative; trained on the major loop alone, the roughness penalty on the weights
-// (chosen by validation on the training record) keeps the varying-amplitude and reversal records
-// within 2x the floor where the unpenalised spectrum is not; a record too short for the spectrum is
+// weights stay non-negative; trained on the major loop alone, the varying-amplitude and reversal
+// records stay within 2x the floor with the roughness penalty on the weights (chosen by validation
+// on the training record) and without it (the weights solved exactly); a record too short for the spectrum is
 // refused, naming what is missing (and left out of a diagnosis's default candidates).
 #include <gtest/gtest.h>
 
@@ -89,7 +89,7 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
 }
 
 
-TEST(CreepSpectrumTest, TheRoughnessPenaltyMakesAMajorLoopSpectrumExtrapolate) {
+TEST(CreepSpectrumTest, AMajorLoopSpectrumExtrapolatesWithinTwiceTheFloor) {
   // Trained on the major loop only (a 40 s constant-amplitude sine: what a user has), with the
   // sensor's lag: the set of `piezoid synth-stack --seed 4` (docs/real-recording.md).
   RealLikeOptions o;
@@ -126,12 +126,17 @@ TEST(CreepSpectrumTest, TheRoughnessPenaltyMakesAMajorLoopSpectrumExtrapolate) {
   // The training excitation still fits at the floor.
   EXPECT_LE(with.at("major"), 1.1);
   EXPECT_LE(with.at("major-2"), 1.1);
-  // The varying-amplitude and reversal records: within 2x the floor, where the unpenalised spectrum
-  // (ragged fast relaxations standing in for the loop's shape and the lag) is not.
-  for (const char* name : {"ramp", "reversals"}) EXPECT_LE(with.at(name), 2.0) << name;
-  EXPECT_GT(without.at("reversals"), 2.0);
-  EXPECT_LT(with.at("ramp"), 0.95 * without.at("ramp"));
-  EXPECT_LT(with.at("reversals"), 0.8 * without.at("reversals"));
+  // The varying-amplitude and reversal records: within 2x the floor. The spectrum is solved with
+  // the Preisach weights (records/spectrum_solve.h), so the unpenalised fit is the exact optimum,
+  // not the ragged spectrum a search of the weights used to stop at (fast relaxations at their bound
+  // standing in for the loop's shape and the lag: 2.7x the floor on the reversals, seed 4): it
+  // extrapolates as well, and the penalty (chosen by the blocks, which cannot tell the two apart)
+  // costs the withheld records nothing.
+  for (const char* name : {"ramp", "reversals"}) {
+    EXPECT_LE(with.at(name), 2.0) << name;
+    EXPECT_LE(without.at(name), 2.0) << name;
+    EXPECT_LE(with.at(name), 1.05 * without.at(name)) << name;
+  }
   std::cout << penalised.spectrum_regularisation.Describe() << "\n";
 }
 
