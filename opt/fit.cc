@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <utility>
 
@@ -263,12 +264,28 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
         ++added;
       }
     }
-    std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
-    const BatchResidualFunction f = UnitResiduals(map, *rev);
     const std::vector<double> lo(n, 0.0), hi(n, 1.0);
+    std::vector<LmResult> results(starts.size());
+    if (o.concurrent_polishes && o.threads > 1 && starts.size() > 1) {
+      std::vector<std::exception_ptr> errors(starts.size());
+      ParallelFor(static_cast<int>(starts.size()), o.threads, [&](int s) {
+        try {
+          std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+          results[static_cast<size_t>(s)] = LevenbergMarquardt(UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
+        } catch (...) {
+          errors[static_cast<size_t>(s)] = std::current_exception();
+        }
+      });
+      for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
+    } else {
+      std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+      const BatchResidualFunction f = UnitResiduals(map, *rev);
+      for (size_t s = 0; s < starts.size(); ++s) results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
+    }
     bool polished = false;
     for (size_t s = 0; s < starts.size(); ++s) {
-      LmResult r = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
+      LmResult& r = results[s];
       fit.evaluations += r.evaluations;
       fit.lm_iterations += r.iterations;
       ++fit.polishes;

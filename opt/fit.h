@@ -147,6 +147,11 @@ struct FitOptions {
   /// the search's best's polish. 0 = none.
   int polish_repetitions = 0;
   double basin_margin = 1e-4;  ///< ≥ 0
+  /// Run the polishes side by side on up to `threads` threads, each with its own residual evaluator
+  /// (problem.residual_evaluator called once per polish, concurrently: it must allow that); they are
+  /// then taken in start order exactly as one after another, so the fit is the same bit for bit.
+  /// A polish's trial steps are one evaluation each, so one polish at a time leaves a core idle.
+  bool concurrent_polishes = false;
   /// The search's cost is Σ r² of the residuals: a polished point is then kept only where it
   /// lowers the search's cost, and the search's best stands when every polish fails. Otherwise the
   /// best polish wins whatever the search's cost, and a fit whose polishes all fail fails.

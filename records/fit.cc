@@ -662,6 +662,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     res.algorithm = fo.search_options.algorithm;
     res.budget = BudgetOf(fo.search_options);
     fo.polish_repetitions = options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
+    fo.concurrent_polishes = true;  // each polish its own ThreadPoolEvaluator over the const fitness
     if (options.progress) {
       fo.search_options.on_progress = [&](const opt::SearchProgress& p) {
         if (p.iteration % 25 == 0) {

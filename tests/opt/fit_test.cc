@@ -277,6 +277,22 @@ TEST(Fit, EachRepetitionsBestIsPolishedAndTheDeeperBasinKept) {
   EXPECT_NE(all.best_polish_repetition, all.search.best_repetition);
   EXPECT_LT(all.search.repetition_best[static_cast<size_t>(all.best_polish_repetition)][0], 0.5);
   PZ_EXPECT_HAS(all.message, "from repetition");
+  // The polishes side by side (each its own evaluator) give the same fit, bit for bit; an error in
+  // one of them reaches the caller (not std::terminate).
+  o.threads = 2;
+  o.concurrent_polishes = true;
+  const FitResult side = Fit(problem, o);
+  EXPECT_EQ(side.x, all.x);
+  EXPECT_EQ(side.cost, all.cost);
+  EXPECT_EQ(side.polishes, all.polishes);
+  EXPECT_EQ(side.best_polish, all.best_polish);
+  EXPECT_EQ(side.evaluations, all.evaluations);
+  EXPECT_EQ(side.lm_iterations, all.lm_iterations);
+  EXPECT_EQ(side.message, all.message);
+  FitProblem failing = problem;
+  failing.residual_evaluator = []() -> std::unique_ptr<BatchEvaluator> { throw InputError("no residuals here"); };
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Fit(failing, o); }), "no residuals here");
+  o.concurrent_polishes = false;
   // A margin larger than the gain keeps the search's best's polish.
   o.basin_margin = 0.99;
   const FitResult kept = Fit(problem, o);
