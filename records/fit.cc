@@ -416,22 +416,32 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params, bool ke
   return out;
 }
 
-void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const {
+void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::span<Output> out,
+                            bool keep_outputs) const {
   const size_t L = ps.size();
   bool direct = lanes() > 1 && L > 1;
   for (const std::span<const double> p : ps) direct = direct && p.size() == model_.params().size();
   if (!direct) {
-    for (size_t l = 0; l < L; ++l) out[l] = Run(ps[l]);
+    for (size_t l = 0; l < L; ++l) out[l] = Run(ps[l], keep_outputs);
     return;
   }
   // Run's arithmetic for every vector, the simulations side by side (RecordModel::SimulateMany:
   // each its own drive and output effects).
   std::vector<double> sse(L, 0.0), rest(L);
   std::vector<std::span<double>> ys(L);
+  thread_local std::vector<std::vector<double>> buffers;  // keep_outputs = false: as Run's, one per lane
+  if (buffers.size() < L) buffers.resize(L);
   for (size_t l = 0; l < L; ++l) out[l] = Output{};
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record* r = records_[i];
-    for (size_t l = 0; l < L; ++l) ys[l] = out[l].yhat.emplace_back(r->end_scored);
+    for (size_t l = 0; l < L; ++l) {  // every sample of [0, end_scored) is written by SimulateMany
+      if (keep_outputs) {
+        ys[l] = out[l].yhat.emplace_back(r->end_scored);
+      } else {
+        buffers[l].resize(r->end_scored);
+        ys[l] = buffers[l];
+      }
+    }
     model_.SimulateMany(*r, ps, r->end_scored, ys, rest, prepared_[i].get());
     for (size_t l = 0; l < L; ++l) out[l].offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest[l], ys[l], sse[l]));
   }
@@ -466,10 +476,10 @@ std::vector<std::span<const double>> Reals(std::span<const opt::Genome* const> g
 
 void RecordFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
                                  std::span<opt::FitnessResult> out) const {
-  if (spectrum_solved_) return FitnessFunction::EvaluateMany(genomes, out);  // one lane, each spectrum solved
+  if (lanes() == 1) return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate each (a solved spectrum too)
   const std::vector<std::span<const double>> ps = Reals(genomes);
   std::vector<Output> o(ps.size());
-  RunMany(ps, o);
+  RunMany(ps, o, /*keep_outputs=*/false);
   for (size_t l = 0; l < ps.size(); ++l) out[l] = Cost(o[l].mse, ps[l]);
 }
 
@@ -482,7 +492,7 @@ bool RecordFitness::Residuals(std::span<const double> searched_or_all, std::vect
 
 void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
                                   std::span<bool> ok) const {
-  if (spectrum_solved_) {  // a linear family (one lane), each vector's spectrum solved: one at a time
+  if (lanes() == 1) {  // Residuals each (a solved spectrum's vectors expanded there)
     for (size_t l = 0; l < ps.size(); ++l) ok[l] = Residuals(ps[l], rs[l]);
     return;
   }

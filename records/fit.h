@@ -70,8 +70,9 @@ class RecordFitness final : public opt::FitnessFunction {
   /// keep_outputs = false: yhat left empty (the search's cost needs the MSE alone), the outputs
   /// simulated into a buffer kept per thread instead of a fresh vector per record.
   Output Run(std::span<const double> params, bool keep_outputs = true) const;
-  /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l]) bit for bit).
-  void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out) const;
+  /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l], keep_outputs)
+  /// bit for bit).
+  void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out, bool keep_outputs = true) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
   /// that their sum of squares is the MSE; false if the output is not finite. `params`: every
   /// parameter, or the searched ones where spectrum_solved() (the spectrum's weights solved).
