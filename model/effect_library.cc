@@ -19,8 +19,7 @@ namespace {
 /// exact first-order-hold discretisation.
 void LowpassInPlace(std::span<double> v, double tau, double dt) {
   if (!(tau > 1e-12 * dt) || v.empty()) return;
-  const double a = std::exp(-dt / tau);
-  const double c = 1 - tau * (1 - a) / dt;  // = 1 − τ(1−a)/h
+  const auto [a, c] = LowpassConsts(tau, dt);
   double x = v[0], prev = v[0];
   for (size_t k = 1; k < v.size(); ++k) {
     const double cur = v[k];
@@ -453,8 +452,9 @@ class CreepSpectrum final : public EffectDef {
     if (p.size() < n) throw std::logic_error("creep-spectrum: fewer weights than relaxations");
     std::vector<double> a(n), c(n), x(n, 0.0);
     for (size_t i = 0; i < n; ++i) {
-      a[i] = std::exp(-f.dt / taus[i]);
-      c[i] = 1 - taus[i] * (1 - a[i]) / f.dt;  // as LowpassInPlace and the kernel's pzk_lowpass_consts
+      const LowpassStep st = LowpassConsts(taus[i], f.dt);  // as the kernel's pzk_lowpass_consts
+      a[i] = st.a;
+      c[i] = st.c;
     }
     const double y0 = y[0];
     double prev = 0;

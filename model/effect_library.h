@@ -38,6 +38,7 @@
 // Pure library: no I/O. The effects are immutable singletons, safe from any thread.
 #pragma once
 
+#include <cmath>
 #include <compare>
 #include <cstddef>
 #include <functional>
@@ -215,6 +216,17 @@ class EffectKind {
 std::ostream& operator<<(std::ostream& os, EffectKind kind);
 /// kind.name().
 inline const char* EffectName(EffectKind kind) { return kind.name(); }
+
+/// The exact first-order-hold step of a first-order low-pass τ ẋ = v − x over a sample of dt (v
+/// linear in between): x ← a x + (1 − a) v_prev + (v − v_prev) c. One arithmetic for the drive
+/// low-passes, the creep spectrum's relaxations and their joint solve (records/spectrum_solve).
+struct LowpassStep {
+  double a, c;
+};
+inline LowpassStep LowpassConsts(double tau, double dt) {
+  const double a = std::exp(-dt / tau);
+  return {a, 1 - tau * (1 - a) / dt};
+}
 
 /// Every effect, in stage order (the order in which a chain applies them).
 const std::vector<const EffectDef*>& Effects();

@@ -83,8 +83,9 @@ class Solver {
       d.a.resize(n_);
       d.c.resize(n_);
       for (size_t i = 0; i < n_; ++i) {  // as the effect's ApplyOutput
-        d.a[i] = std::exp(-r.dt / taus[i]);
-        d.c[i] = 1 - taus[i] * (1 - d.a[i]) / r.dt;
+        const model::LowpassStep st = model::LowpassConsts(taus[i], r.dt);
+        d.a[i] = st.a;
+        d.c[i] = st.c;
       }
       d.t.resize(static_cast<Index>(r.scored()));
       for (size_t k = r.first_scored; k < r.end_scored; ++k) d.t(static_cast<Index>(k - r.first_scored)) = r.y[k] - off;
