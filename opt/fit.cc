@@ -265,21 +265,24 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       }
     }
     const std::vector<double> lo(n, 0.0), hi(n, 1.0);
-    // Each polish its own residual evaluator; side by side on the fit's threads when asked, one after
-    // another otherwise — taken in start order below either way.
     std::vector<LmResult> results(starts.size());
-    std::vector<std::exception_ptr> errors(starts.size());
-    ParallelFor(static_cast<int>(starts.size()), o.concurrent_polishes ? o.threads : 1, [&](int i) {
-      const size_t s = static_cast<size_t>(i);
-      try {
-        std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
-        results[s] = LevenbergMarquardt(UnitResiduals(map, *rev), starts[s], lo, hi, o.lm);
-      } catch (...) {
-        errors[s] = std::current_exception();
-      }
-    });
-    for (const std::exception_ptr& e : errors)
-      if (e) std::rethrow_exception(e);
+    if (o.concurrent_polishes && o.threads > 1 && starts.size() > 1) {
+      std::vector<std::exception_ptr> errors(starts.size());
+      ParallelFor(static_cast<int>(starts.size()), o.threads, [&](int s) {
+        try {
+          std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+          results[static_cast<size_t>(s)] = LevenbergMarquardt(UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
+        } catch (...) {
+          errors[static_cast<size_t>(s)] = std::current_exception();
+        }
+      });
+      for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
+    } else {
+      std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+      const BatchResidualFunction f = UnitResiduals(map, *rev);
+      for (size_t s = 0; s < starts.size(); ++s) results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
+    }
     bool polished = false;
     for (size_t s = 0; s < starts.size(); ++s) {
       LmResult& r = results[s];

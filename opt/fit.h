@@ -123,7 +123,7 @@ struct FitProblem {
   /// The cost of a genome, for the global search.
   EvaluatorMaker cost_evaluator;
   /// The residual vector of a genome (FitnessResult::residuals, ok ⇔ kOk), for the polish: every
-  /// Jacobian is one batch. Called once per polish.
+  /// Jacobian is one batch.
   EvaluatorMaker residual_evaluator;
   /// The residuals at physical points, on this machine (the uncertainty's Jacobian); thread-safe.
   ResidualFunction physical_residuals;
@@ -147,9 +147,9 @@ struct FitOptions {
   /// the search's best's polish. 0 = none.
   int polish_repetitions = 0;
   double basin_margin = 1e-4;  ///< ≥ 0
-  /// Run the polishes side by side on up to `threads` threads (problem.residual_evaluator is called
-  /// once per polish, then concurrently: it must allow that); they are taken in start order exactly
-  /// as one after another, so the fit is the same bit for bit.
+  /// Run the polishes side by side on up to `threads` threads, each with its own residual evaluator
+  /// (problem.residual_evaluator called once per polish, concurrently: it must allow that); they are
+  /// then taken in start order exactly as one after another, so the fit is the same bit for bit.
   /// A polish's trial steps are one evaluation each, so one polish at a time leaves a core idle.
   bool concurrent_polishes = false;
   /// The search's cost is Σ r² of the residuals: a polished point is then kept only where it
