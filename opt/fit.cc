@@ -278,7 +278,7 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       });
       for (const std::exception_ptr& e : errors)
         if (e) std::rethrow_exception(e);
-    } else {
+    } else {  // one evaluator for every polish: a service evaluator opens a session per evaluator
       std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
       const BatchResidualFunction f = UnitResiduals(map, *rev);
       for (size_t s = 0; s < starts.size(); ++s) results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
