@@ -141,6 +141,13 @@ opt::FitnessResult BwTraining::Evaluate(const opt::Genome& genome) const {
   return fitness_->Evaluate(genome);
 }
 
+void BwTraining::EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const {
+  for (const opt::Genome* g : genomes) {
+    if (g->reals.size() != 6) return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate's error each
+  }
+  fitness_->EvaluateMany(genomes, out);
+}
+
 opt::ParamBox BwTraining::Box() const { return records::ParamBoxOf(*model_); }
 
 std::vector<double> SimulateBwMultisineTest(std::span<const double> theta, const io::Record& test) {

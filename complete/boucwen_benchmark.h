@@ -73,6 +73,10 @@ class BwTraining final : public opt::FitnessFunction {
   BwTraining& operator=(const BwTraining&) = delete;
 
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
+  /// The records fitness's lanes (the oscillator runs four parameter sets side by side): each
+  /// genome's result Evaluate's, bit for bit.
+  int lanes() const override { return fitness_->lanes(); }
+  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override;
   const records::RecordFitness& fitness() const { return *fitness_; }
   /// The search box: the family's parameters and ranges.
   opt::ParamBox Box() const;

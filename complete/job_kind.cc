@@ -124,6 +124,12 @@ class OwningRecordFitness final : public opt::FitnessFunction {
       fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
   }
   opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_->Evaluate(g); }
+  // The records fitness's lanes (a family that runs parameter sets side by side): a worker's
+  // compute thread takes that many genomes of a lease at a time.
+  int lanes() const override { return fitness_->lanes(); }
+  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override {
+    fitness_->EvaluateMany(genomes, out);
+  }
 
  private:
   std::shared_ptr<records::RecordModel> model_;

@@ -1,5 +1,6 @@
 #include "opt/inline_evaluator.h"
 
+#include <algorithm>
 #include <cmath>
 #include <exception>
 #include <sstream>
@@ -40,6 +41,20 @@ void EvaluateManyGuarded(const FitnessFunction& fitness, std::span<const Genome*
     for (FitnessResult& r : out) SanitizeFitness(r, error_cost);
   } catch (...) {
     for (size_t i = 0; i < genomes.size(); ++i) out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost);
+  }
+}
+
+void EvaluateGroupGuarded(const FitnessFunction& fitness, std::span<const Genome> genomes,
+                          std::span<FitnessResult> out, double error_cost) noexcept {
+  const Genome* group[kMaxLanes];
+  for (size_t i = 0; i < genomes.size(); i += kMaxLanes) {
+    const size_t m = std::min(kMaxLanes, genomes.size() - i);
+    if (m == 1) {
+      out[i] = EvaluateGuarded(fitness, genomes[i], error_cost);
+      continue;
+    }
+    for (size_t j = 0; j < m; ++j) group[j] = &genomes[i + j];
+    EvaluateManyGuarded(fitness, std::span<const Genome* const>(group, m), out.subspan(i, m), error_cost);
   }
 }
 

@@ -6,10 +6,6 @@
 #include "model/status.h"
 
 namespace pz::opt {
-namespace {
-constexpr size_t kMaxLanes = 8;
-}  // namespace
-
 ThreadPoolEvaluator::ThreadPoolEvaluator(const FitnessFunction& fitness, int threads,
                                          double error_cost)
     : fitness_(fitness), error_cost_(error_cost) {
@@ -59,18 +55,10 @@ void ThreadPoolEvaluator::WorkerLoop() {
     }
     // A fitness with lanes takes that many genomes at a time (the same results as one by one).
     const size_t lanes = static_cast<size_t>(std::max(1, fitness_.lanes()));
-    const Genome* group[kMaxLanes];
     for (size_t i = next_.fetch_add(lanes, std::memory_order_relaxed); i < genomes.size();
          i = next_.fetch_add(lanes, std::memory_order_relaxed)) {
-      const size_t m = std::min({lanes, genomes.size() - i, kMaxLanes});
-      if (m == 1) {
-        out[i] = EvaluateGuarded(fitness_, genomes[i], error_cost_);
-        continue;
-      }
-      for (size_t j = 0; j < m; ++j) group[j] = &genomes[i + j];
-      EvaluateManyGuarded(fitness_, std::span<const Genome* const>(group, m), out.subspan(i, m), error_cost_);
-      for (size_t j = m; j < std::min(lanes, genomes.size() - i); ++j)  // lanes beyond kMaxLanes
-        out[i + j] = EvaluateGuarded(fitness_, genomes[i + j], error_cost_);
+      const size_t m = std::min(lanes, genomes.size() - i);
+      EvaluateGroupGuarded(fitness_, genomes.subspan(i, m), out.subspan(i, m), error_cost_);
     }
     {
       std::lock_guard<std::mutex> lock(mu_);

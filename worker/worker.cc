@@ -12,6 +12,7 @@
 #include <list>
 #include <map>
 #include <mutex>
+#include <span>
 #include <thread>
 #include <unordered_map>
 #include <zmq.hpp>
@@ -38,9 +39,9 @@ struct LocalLease {
   service::TaskBatchMsg batch;
   std::shared_ptr<const Context> context;
   std::vector<opt::FitnessResult> results;
-  // The compute threads take its tasks one at a time (a task per fetch_add), so a thread runs on
-  // to the next task without a round trip through anyone, and the lease's tail is shared to the
-  // last task.
+  // The compute threads take its tasks one at a time (a task per fetch_add; a fitness with lanes:
+  // that many consecutive ones), so a thread runs on to the next task without a round trip
+  // through anyone, and the lease's tail is shared to the last task (group).
   std::atomic<int> next{0};            // next task not yet taken by a thread
   std::atomic<bool> abandoned{false};  // its threads take no more tasks
   // Under Handout::mu:
@@ -83,13 +84,19 @@ void ComputeLoop(zmq::context_t& ctx, const std::string& endpoint, int id, Hando
     const int total = static_cast<int>(l.batch.genomes.size());
     int tasks = 0;
     double eval_s = 0;
+    // A fitness with lanes takes that many consecutive tasks of the lease at a time, side by side
+    // (opt::EvaluateGroupGuarded: each genome's result the single path's, bit for bit).
+    const int lanes = std::max(1, f.lanes());
+    const std::span<const opt::Genome> genomes = l.batch.genomes;
+    const std::span<opt::FitnessResult> results = l.results;
     while (!l.abandoned.load(std::memory_order_relaxed)) {
-      const int i = l.next.fetch_add(1, std::memory_order_relaxed);
+      const int i = l.next.fetch_add(lanes, std::memory_order_relaxed);
       if (i >= total) break;
+      const int m = std::min(lanes, total - i);
       const auto t0 = Clock::now();
-      l.results[i] = opt::EvaluateGuarded(f, l.batch.genomes[i], penalty);
+      opt::EvaluateGroupGuarded(f, genomes.subspan(i, m), results.subspan(i, m), penalty);
       eval_s += std::chrono::duration<double>(Clock::now() - t0).count();
-      ++tasks;
+      tasks += m;
     }
     lock.lock();
     if (l.queued) {  // nothing left to take (or abandoned: then the I/O thread dequeued it)

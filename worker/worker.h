@@ -1,10 +1,11 @@
 // piezoid-worker's engine: stateless evaluation of task batches for a master (conventions 9–11).
 // The calling thread is the I/O thread and owns the DEALER socket to the master; `threads`
 // compute threads take the leases it queues (a queue under a mutex, in arrival order) and their
-// tasks one at a time (an atomic counter per lease), going straight on to the next queued lease;
-// the last thread out of a lease tells the I/O thread over inproc:// (which replies). They never
-// block heartbeats. Job
-// contexts are fetched once by content hash and cached (LRU). When the master falls silent or
+// tasks one at a time (an atomic counter per lease; a fitness with lanes() > 1: that many
+// consecutive tasks of the lease at a time, side by side, each result the single path's bit for
+// bit), going straight on to the next queued lease; the last thread out of a lease tells the I/O
+// thread over inproc:// (which replies). They never block heartbeats. Job contexts are fetched
+// once by content hash and cached (LRU). When the master falls silent or
 // asks, the worker drops its leases (the master re-queues them) and reconnects with back-off.
 #pragma once
 

@@ -6,8 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <random>
+#include <thread>
 
 #include "client/complete_service.h"
+#include "opt/thread_pool_evaluator.h"
 #include "complete/job_kind.h"
 #include "records/synthetic.h"
 #include "complete_remote.h"
@@ -77,7 +80,9 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
                         Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}},
                         Case{"stack-bouc-wen", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kDescended},
                         Case{"backlash-like", {}, 2, 12, model::InitialState::kAscended},
-                        Case{"asymmetric-pi", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kAuto}}) {
+                        Case{"asymmetric-pi", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kAuto},
+                        Case{"bw-oscillator", {}},
+                        Case{"bw-oscillator", {EffectKind::Named("delay")}, 3}}) {
     SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
     records::FamilyOptions options;
     options.substeps = c.substeps;
@@ -94,12 +99,23 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     for (bool json : {false, true}) {
       const auto remote = RemoteCompleteFitness(spec, json);
       ASSERT_TRUE(remote);
+      // The workers' compute threads take lanes() genomes at a time (the bw-oscillator's four).
+      EXPECT_EQ(remote->lanes(), local.lanes());
+      std::vector<opt::Genome> gs;
       for (double x : {0.1, 0.37, 0.8}) {
-        opt::Genome g;
+        opt::Genome& g = gs.emplace_back();
         for (const auto& p : model.params()) g.reals.push_back(p.lower + x * (p.upper - p.lower));
         const opt::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
         EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
         EXPECT_EQ(a.status, b.status);
+      }
+      const std::vector<const opt::Genome*> group = {&gs[0], &gs[1], &gs[2]};
+      std::vector<opt::FitnessResult> many(group.size());
+      remote->EvaluateMany(group, many);
+      for (size_t l = 0; l < group.size(); ++l) {
+        const opt::FitnessResult a = local.Evaluate(gs[l]);
+        EXPECT_TRUE(SameBits(a.cost, many[l].cost)) << "lane " << l << ": " << a.cost << " vs " << many[l].cost;
+        EXPECT_EQ(a.status, many[l].status);
       }
     }
   }
@@ -173,6 +189,149 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   ASSERT_TRUE(client.List(&jobs).ok());
   ASSERT_EQ(jobs.size(), 1u);
   EXPECT_EQ(jobs[0].kind, "complete_model");
+}
+
+/// A records fit's evaluator that takes the genomes one at a time on two threads: the fitness's
+/// lanes hidden (how the workers evaluated before they took lanes() genomes at a time).
+class OneAtATimeEvaluator final : public opt::BatchEvaluator {
+ public:
+  explicit OneAtATimeEvaluator(const records::RecordFitness& f) : single_(f), pool_(single_, 2) {}
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override { pool_.Evaluate(batch, out); }
+
+ private:
+  struct Single final : opt::FitnessFunction {
+    explicit Single(const records::RecordFitness& f) : f(f) {}
+    opt::FitnessResult Evaluate(const opt::Genome& g) const override { return f.Evaluate(g); }
+    const records::RecordFitness& f;
+  } single_;
+  opt::ThreadPoolEvaluator pool_;
+};
+
+// The bw-oscillator runs four genomes side by side (RecordFitness::lanes): a fit whose search runs
+// on workers of two threads and of one, which take four genomes of a lease at a time, is the local
+// fit (a thread pool taking four at a time) bit for bit, and the fit whose evaluations are taken
+// one at a time (the workers before they took lanes). 10 particles: groups of 4, 4 and 2 where a
+// lease holds them all, shorter ones where the master splits them.
+/// A bw-oscillator + delay fit's options (10 particles: groups of 4, 4 and 2 where a lease holds
+/// a whole swarm, shorter ones where the master splits it).
+records::FitOptions BwFitOptions(int iterations) {
+  records::FitOptions o;
+  o.family = "bw-oscillator";
+  o.effects = {EffectKind::Named("delay")};
+  o.search.repetitions = 2;
+  o.search.pso.particles = 10;
+  o.search.pso.iterations = iterations;
+  o.lm.max_iterations = 5;
+  return o;
+}
+
+records::RecordEvaluatorFactory ServiceFactory(const Cluster& cluster, const records::FitOptions& o) {
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 120;
+  return client::RecordsServiceFactory(so, o.family_options, "test");
+}
+
+void ExpectSameFit(const records::FitResult& want, const records::FitResult& got) {
+  ASSERT_EQ(want.params.size(), got.params.size());
+  for (size_t i = 0; i < want.params.size(); ++i) EXPECT_TRUE(SameBits(want.params[i], got.params[i])) << i;
+  EXPECT_TRUE(SameBits(want.train_mse, got.train_mse)) << want.train_mse << " vs " << got.train_mse;
+  EXPECT_EQ(want.search.evaluations, got.search.evaluations);
+}
+
+// The bw-oscillator runs four genomes side by side (RecordFitness::lanes): a fit whose search runs
+// on workers of two threads and of one, which take four genomes of a lease at a time, is the local
+// fit (a thread pool taking four at a time) bit for bit, and the fit whose evaluations are taken
+// one at a time (the workers before they took lanes).
+TEST(RecordsServiceTest, ABwOscillatorFitOnWorkersTakingFourGenomesAtATimeIsTheLocalOneBitForBit) {
+  Cluster cluster("records-bw-fit");
+  cluster.AddWorker(2);
+  cluster.AddWorker(1);
+  const io::RecordSet set = MakeSet();
+  records::FitOptions o = BwFitOptions(8);
+  const records::FitResult local = records::FitRecords(set, o);
+  ASSERT_EQ(local.params.size(), 7u);
+  o.evaluator_factory = [](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+    EXPECT_EQ(f.lanes(), 4);
+    return std::make_unique<OneAtATimeEvaluator>(f);
+  };
+  {
+    SCOPED_TRACE("one at a time");
+    ExpectSameFit(local, records::FitRecords(set, o));
+  }
+  o.evaluator_factory = ServiceFactory(cluster, o);
+  try {
+    SCOPED_TRACE("on the service");
+    ExpectSameFit(local, records::FitRecords(set, o));
+  } catch (const std::exception& e) {
+    FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
+  }
+}
+
+/// A service evaluator that kills one of the cluster's workers (SIGKILL, at random) 1 ms into
+/// every third batch, while its leases are out, and starts a replacement of `threads` threads.
+class ChurningEvaluator final : public opt::BatchEvaluator {
+ public:
+  ChurningEvaluator(std::unique_ptr<opt::BatchEvaluator> inner, Cluster& cluster, int threads, int* kills)
+      : inner_(std::move(inner)), cluster_(cluster), threads_(threads), kills_(kills) {}
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
+    std::thread killer;
+    if (batches_++ % 3 == 1) {
+      killer = std::thread([this] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        auto& ws = cluster_.workers();
+        const size_t victim = rng_() % ws.size();
+        ws[victim]->Kill(SIGKILL);
+        ws.erase(ws.begin() + static_cast<long>(victim));
+        cluster_.AddWorker(threads_);
+        ++*kills_;
+      });
+    }
+    try {
+      inner_->Evaluate(batch, out);
+    } catch (...) {
+      if (killer.joinable()) killer.join();
+      throw;
+    }
+    if (killer.joinable()) killer.join();
+  }
+  int concurrency() const override { return inner_->concurrency(); }
+
+ private:
+  std::unique_ptr<opt::BatchEvaluator> inner_;
+  Cluster& cluster_;
+  int threads_;
+  int* kills_;
+  int batches_ = 0;
+  std::mt19937 rng_{5};
+};
+
+// Workers that die holding groups of a lease change nothing: the same fit, while one of three
+// 2-thread workers is killed 1 ms into every third batch of the search and replaced. (50 RK4
+// steps per sample: evaluations of milliseconds, so the kill lands while the leases are out.)
+TEST(RecordsServiceTest, ABwOscillatorFitIsBitIdenticalUnderWorkerChurn) {
+  Cluster cluster("records-bw-churn");
+  for (int i = 0; i < 3; ++i) cluster.AddWorker(2);
+  const io::RecordSet set = MakeSet();
+  records::FitOptions o = BwFitOptions(12);
+  o.family_options.substeps = 50;
+  const records::FitResult local = records::FitRecords(set, o);
+  int kills = 0;
+  const records::RecordEvaluatorFactory service = ServiceFactory(cluster, o);
+  o.evaluator_factory = [&](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+    return std::make_unique<ChurningEvaluator>(service(f), cluster, 2, &kills);
+  };
+  records::FitResult remote;
+  try {
+    remote = records::FitRecords(set, o);
+  } catch (const std::exception& e) {
+    FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
+  }
+  std::printf("%d workers killed during the fit\n", kills);
+  EXPECT_GE(kills, 8);
+  ExpectSameFit(local, remote);
 }
 
 }  // namespace
