@@ -133,6 +133,17 @@ std::string InverseCaveat(const records::Stepper& inv) {
          "; the compensator plans two samples instead (the reference one sample ahead): stable, not exact";
 }
 
+/// How the compensator undoes the delay's fraction: "" when in the one-step map (up to a half), else
+/// backwards over its horizon (records/kernels/effects.h).
+std::string DelayCaveat(const records::Stepper& inv) {
+  const int horizon = inv.delay_horizon();
+  if (horizon == 0) return "";
+  const double s = inv.delay_fraction(), r = (1 - s) / s;
+  return "; its fraction " + Fmt(s, 3) + " of a sample is over a half, undone backwards over " +
+         std::to_string(horizon) + " sample(s) of that preview (exact but for " + Fmt(std::pow(r, horizon), 2) +
+         " of the drive's curvature)";
+}
+
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
 /// value held), and the clipping events.
 std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
@@ -223,7 +234,8 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
             << "  predicted tracking error (forward model on that drive): RMSE " << Fmt(e.rmse) << " "
             << m.response_unit << ", max " << Fmt(e.max_abs) << " at " << Fmt(e.max_at) << " s\n";
   if (inv.has_delay()) {
-    std::cout << "  the model's delay cannot be undone: the reference's preview was used (the drive leads it)\n";
+    std::cout << "  the model's delay cannot be undone by a causal step: the reference's preview of "
+              << inv.preview_samples() << " sample(s) was used (the drive leads it)" << DelayCaveat(inv) << "\n";
   }
   if (const std::string caveat = InverseCaveat(inv); !caveat.empty()) std::cout << "  " << caveat << "\n";
   if (clips.empty()) {

@@ -193,18 +193,24 @@ bool Stepper::has_delay() const {
   return false;
 }
 
-int Stepper::inverse_plan_samples() const {
+double Stepper::delay_fraction() const {
   for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_BIMORPH_FIN || (b.kind == pzk::PZK_RATE_DEPENDENCE && pzk::pzk_rate_dependence_plans(&b)))
-      return 2;
-  return 1;
+    if (b.kind == pzk::PZK_DELAY && b.p[0] > 0) return pzk::pzk_delay_fraction(c_.data() + b.c_off);
+  return 0;
+}
+
+int Stepper::delay_horizon() const {
+  for (const auto& b : blocks_)
+    if (b.kind == pzk::PZK_DELAY) return static_cast<int>(c_[static_cast<size_t>(b.c_off) + 2]);
+  return 0;
+}
+
+int Stepper::inverse_plan_samples() const {
+  return 1 + pzk::pzk_chain_plans(blocks_.data(), static_cast<int>(blocks_.size()));
 }
 
 size_t Stepper::preview_samples() const {
-  size_t preview = static_cast<size_t>(inverse_plan_samples() - 1);
-  for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_DELAY) preview += static_cast<size_t>(std::lround(b.p[0] / spec_.dt));
-  return preview;
+  return static_cast<size_t>(pzk::pzk_chain_preview(blocks_.data(), static_cast<int>(blocks_.size()), c_.data()));
 }
 
 double Stepper::rate_dependence_inverse_gain() const {
@@ -237,7 +243,8 @@ double Stepper::InverseStep(double y_desired) {
 }
 
 double Stepper::Trial(double u) {
-  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u, 1);
+  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u,
+                             pzk::PZK_EVAL_UNDELAYED);
 }
 
 namespace {
