@@ -133,15 +133,18 @@ std::string InverseCaveat(const records::Stepper& inv) {
          "; the compensator plans two samples instead (the reference one sample ahead): stable, not exact";
 }
 
-/// How the compensator undoes the delay's fraction: "" when in the one-step map (up to a half), else
-/// backwards over its horizon (records/kernels/effects.h).
+/// How the compensator undoes the delay's fraction s ("" without one): in the one-step map (up to a
+/// half) or backwards over its horizon (records/kernels/effects.h), and what that costs a noisy
+/// reference: the exact inverse of the interpolation multiplies the Nyquist rate by 1 / |1 - 2 s|.
 std::string DelayCaveat(const records::Stepper& inv) {
+  const double s = inv.delay_fraction();
+  if (!(s > 0)) return "";
   const int horizon = inv.delay_horizon();
-  if (horizon == 0) return "";
-  const double s = inv.delay_fraction(), r = (1 - s) / s;
-  return "; its fraction " + Fmt(s, 3) + " of a sample is over a half, undone backwards over " +
-         std::to_string(horizon) + " sample(s) of that preview (exact but for " + Fmt(std::pow(r, horizon), 2) +
-         " of the drive's curvature)";
+  std::string how = "; its fraction " + Fmt(s, 3) + " of a sample is undone exactly" +
+                    (horizon > 0 ? ", backwards over " + std::to_string(horizon) + " sample(s) of that preview" : "");
+  return how + " (what the reference has at the Nyquist rate comes back " +
+         (std::abs(1 - 2 * s) > 1e-3 ? Fmt(1 / std::abs(1 - 2 * s), 3) + " ×" : "without bound") +
+         " in the drive)";
 }
 
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
@@ -283,6 +286,10 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
   }
   if (const std::string caveat = InverseCaveat(records::Stepper(m)); !caveat.empty()) {
     std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far from exact)\n";
+  }
+  if (const records::Stepper st(m); st.has_delay()) {
+    std::cout << "  the model's delay: each drive solved for the response " << st.preview_samples() << " sample(s) later"
+              << DelayCaveat(st) << "\n";
   }
   const std::string& du = m.drive_unit;
   const std::string& yu = m.response_unit;
