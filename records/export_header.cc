@@ -128,6 +128,7 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
      << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
      << "#define " << N << "_PREVIEW_SAMPLES " << st.preview_samples() << "\n"
+     << "#define " << N << "_PRIME_SAMPLES " << st.delay_horizon() << "\n"
      << "#define " << N << "_BLOCKS " << nb << "\n\n";
   for (int i = 0; i < nb; ++i) {
     const auto& p = st.block_params(static_cast<size_t>(i));
@@ -161,6 +162,10 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << "  return pzk_chain_step(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u);\n}\n\n"
      << "static inline double " << name << "_inverse_step(" << name << "_state *s, double y_desired) {\n"
      << "  return pzk_chain_inverse(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
+     << "/* " << N << "_PRIME_SAMPLES > 0 (a delay's fraction over a half): after init, the references of the\n"
+     << " * " << N << "_PRIME_SAMPLES samples before the first inverse step's, in order; returns -1 when none is wanted. */\n"
+     << "static inline int " << name << "_inverse_prime(" << name << "_state *s, double y_desired) {\n"
+     << "  return pzk_chain_inverse_prime(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
      << "#endif /* " << N << "_H_ */\n";
   return os.str();
 }

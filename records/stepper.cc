@@ -200,9 +200,7 @@ double Stepper::delay_fraction() const {
 }
 
 int Stepper::delay_horizon() const {
-  for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_DELAY) return static_cast<int>(c_[static_cast<size_t>(b.c_off) + 2]);
-  return 0;
+  return pzk::pzk_chain_prime_samples(blocks_.data(), static_cast<int>(blocks_.size()), c_.data());
 }
 
 int Stepper::inverse_plan_samples() const {
@@ -242,6 +240,11 @@ double Stepper::InverseStep(double y_desired) {
                                 &ctl_, y_desired);
 }
 
+bool Stepper::InversePrime(double y_desired) {
+  return pzk::pzk_chain_inverse_prime(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
+                                      t_.data(), &ctl_, y_desired) == 0;
+}
+
 double Stepper::Trial(double u) {
   return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u,
                              pzk::PZK_EVAL_UNDELAYED);
@@ -272,7 +275,8 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
   Stepper inv(spec);
   inv.Init(r.u[0]);
   WidenToRecord(inv, r);
-  const size_t preview = inv.preview_samples();
+  const size_t preview = inv.preview_samples(), horizon = static_cast<size_t>(inv.delay_horizon());
+  for (size_t k = preview + 1 - horizon; k <= preview && k < r.size(); ++k) inv.InversePrime(y[k]);
   const double h = 1e-6 * spec.scale.u_half;
   ReplayError e;
   double sse_u = 0, sse_y = 0;

@@ -78,6 +78,11 @@ class Stepper {
   double Init(double u0);
   double Step(double u);
   double InverseStep(double y_desired);
+  /// With a delay's horizon L (delay_horizon() > 0): the references of the L samples before the first
+  /// InverseStep's, in order (y[k] for k = preview_samples() - L + 1 … preview_samples() when the
+  /// first step gets y[1 + preview_samples()]), after Init and before that step; not given, the
+  /// compensator takes those samples at rest. False when no more is wanted.
+  bool InversePrime(double y_desired);
   /// The output the next step would give for drive u (not clipped), the state unchanged, the delay
   /// passing its input on: what a lasting change of the drive meets (ReplayDrive's local gain).
   double Trial(double u);

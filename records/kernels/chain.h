@@ -353,26 +353,33 @@ static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c
  * before it solved one step for that input x (none: x is the drive, clipped to the limits). A sample
  * either stage clips counts once in saturated; max_clip takes the shortfall of the stage after the
  * delay (response units). The blocks after the delay follow the solved w, not a clipped drive's. */
+static inline double pzk_chain_solve_after(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
+                                           const pzk_ctl *ctl, double y_desired, pzk_ctl *post) {
+  double *q = d + b[id].d_off + 1 + (long)c[b[id].c_off + 1]; /* head, w_last, y_last, dw_last, ... */
+  const double widen = id > 0 ? ctl->u_hi - ctl->u_lo : 0;
+  double w;
+  post->u_lo = ctl->u_lo - widen;
+  post->u_hi = ctl->u_hi + widen;
+  post->u_last = q[1];
+  post->y_last = q[2];
+  post->du_last = q[3];
+  post->saturated = 0;
+  post->max_clip = 0;
+  w = pzk_chain_solve(b + id + 1, nb - id - 1, c, d, t, post, y_desired);
+  q[1] = post->u_last;
+  q[2] = post->y_last;
+  q[3] = post->du_last;
+  return w;
+}
 static inline double pzk_chain_inverse_split(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
                                              pzk_ctl *ctl, double y_desired) {
-  const double *dc = c + b[id].c_off;
-  double *q = d + b[id].d_off + 1 + (long)dc[1]; /* head, w_last, y_last, dw_last, w[L + 1] */
-  const double span = ctl->u_hi - ctl->u_lo, widen = id > 0 ? span : 0, max_clip = ctl->max_clip;
+  const double span = ctl->u_hi - ctl->u_lo, max_clip = ctl->max_clip;
   const long saturated = ctl->saturated;
   pzk_ctl post;
   double x, u;
   int clipped;
-  post.u_lo = ctl->u_lo - widen;
-  post.u_hi = ctl->u_hi + widen;
-  post.u_last = q[1];
-  post.y_last = q[2];
-  post.du_last = q[3];
-  post.saturated = 0;
-  post.max_clip = 0;
-  x = pzk_delay_anticausal(dc, d + b[id].d_off, pzk_chain_solve(b + id + 1, nb - id - 1, c, d, t, &post, y_desired));
-  q[1] = post.u_last;
-  q[2] = post.y_last;
-  q[3] = post.du_last;
+  x = pzk_chain_solve_after(b, nb, id, c, d, t, ctl, y_desired, &post);
+  x = pzk_delay_anticausal(c + b[id].c_off, d + b[id].d_off, x);
   if (id > 0) {
     u = pzk_chain_solve(b, id, c, d, t, ctl, x);
     clipped = ctl->saturated != saturated;
@@ -386,6 +393,31 @@ static inline double pzk_chain_inverse_split(const pzk_block *b, int nb, int id,
   ctl->max_clip = post.max_clip > max_clip ? post.max_clip : max_clip;
   ctl->y_last = post.y_last;
   return u;
+}
+
+/* The references a delay's horizon wants before the first inverse step after init (0 without one):
+ * those of the L samples before the first step's, in order (pzk_chain_inverse_prime). */
+static inline int pzk_chain_prime_samples(const pzk_block *b, int nb, const double *c) {
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0) return (int)c[b[i].c_off + 2];
+  return 0;
+}
+/* One of them: the blocks after the delay solved for it (as a step does; a reference out of reach
+ * counted). Returns 0, or -1 when no more is wanted (no horizon, all given, or a step taken); not
+ * given, the blocks after the delay take those samples at rest. */
+static inline int pzk_chain_inverse_prime(const pzk_block *b, int nb, const double *c, double *d, double *t,
+                                          pzk_ctl *ctl, double y_desired) {
+  pzk_ctl post;
+  double w;
+  int id;
+  for (id = 0; id < nb; ++id)
+    if (b[id].kind == PZK_DELAY && c[b[id].c_off + 2] > 0) break;
+  if (id == nb || d[b[id].d_off + 1 + (long)c[b[id].c_off + 1] + 4] >= c[b[id].c_off + 2]) return -1;
+  w = pzk_chain_solve_after(b, nb, id, c, d, t, ctl, y_desired, &post);
+  if (post.saturated > 0) ++ctl->saturated;
+  if (post.max_clip > ctl->max_clip) ctl->max_clip = post.max_clip;
+  return pzk_delay_prime(c + b[id].c_off, d + b[id].d_off, w);
 }
 
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] for the desired output y_desired,

@@ -55,7 +55,7 @@ static inline double pzk_creep_step(const pzk_block *b, const double *c, const d
 /* delay: v(t - tau_d) by linear interpolation of the samples (the first before the start).
  * With shift = tau_d/dt = n + s (n whole, 0 <= s < 1) the output is y_k = (1 - s) v_{k-n} + s v_{k-n-1}.
  * c = {shift, capacity, horizon}, d = {k, ring[capacity]} (the last `capacity` inputs), and with a
- * horizon L > 0 the compensator's {head, w_last, y_last, dw_last, w[L + 1]} after them
+ * horizon L > 0 the compensator's {head, w_last, y_last, dw_last, primed, w[L + 1]} after them
  * (pzk_chain_inverse_split). Forward it only ever steps in place.
  *
  * The compensator (records/kernels/chain.h pzk_chain_inverse) reads the reference ahead; what remains
@@ -89,8 +89,8 @@ static inline int pzk_delay_horizon(const pzk_block *b) {
   h = (int)ceil(log(1e-13) / log(r));
   return h < 1 ? 1 : (h > PZK_DELAY_HORIZON_MAX ? PZK_DELAY_HORIZON_MAX : h);
 }
-/* The compensator's doubles after the ring: head, w_last, y_last, dw_last and the L + 1 outputs. */
-static inline int pzk_delay_inverse_size(int horizon) { return horizon > 0 ? horizon + 5 : 0; }
+/* The compensator's doubles after the ring: head, w_last, y_last, dw_last, primed and the L + 1 outputs. */
+static inline int pzk_delay_inverse_size(int horizon) { return horizon > 0 ? horizon + 6 : 0; }
 static inline double pzk_delay_init(const pzk_block *b, double *c, double *d, double v) {
   int i, cap = pzk_delay_capacity(b), h = pzk_delay_horizon(b);
   double *w = d + 1 + cap;
@@ -104,7 +104,8 @@ static inline double pzk_delay_init(const pzk_block *b, double *c, double *d, do
     w[1] = v;
     w[2] = 0; /* the output at rest: pzk_chain_init */
     w[3] = 0;
-    for (i = 0; i <= h; ++i) w[4 + i] = v;
+    w[4] = 0;
+    for (i = 0; i <= h; ++i) w[5 + i] = v;
   }
   return v;
 }
@@ -143,14 +144,27 @@ static inline double pzk_delay_inverse_step(const double *c, const double *d, do
   f = pos - (double)j;
   return j >= k ? v : prev + f * (v - prev);
 }
+/* The horizon's outputs before the first step: w_{n+1} ... w_{n+L} in order (at init they are the
+ * rest's, right for a reference that stays at rest that long). Returns 0, or -1 once L are in or a
+ * step has been taken. */
+static inline int pzk_delay_prime(const double *c, double *d, double w_new) {
+  const long cap = (long)c[1], h = (long)c[2];
+  double *q = d + 1 + cap, *w = q + 5;
+  const long primed = (long)q[4];
+  if (primed >= h) return -1;
+  w[((long)q[0] + primed + 1) % (h + 1)] = w_new;
+  q[4] = (double)(primed + 1);
+  return 0;
+}
 /* The horizon's step (s > 1/2): pushes the delay's output w solved n + L samples ahead, returns x_j. */
 static inline double pzk_delay_anticausal(const double *c, double *d, double w_new) {
   const long cap = (long)c[1], h = (long)c[2];
   const double s = pzk_delay_fraction(c), r = (1 - s) / s;
-  double *q = d + 1 + cap, *w = q + 4, sum = 0, gain = 1 / s, last, before;
+  double *q = d + 1 + cap, *w = q + 5, sum = 0, gain = 1 / s, last, before;
   long head = ((long)q[0] + 1) % (h + 1), i;
   w[(head + h) % (h + 1)] = w_new; /* w_{j+n+i} at (head + i) mod (L + 1), i = 0..L */
   q[0] = (double)head;
+  q[4] = (double)h; /* no priming after a step */
   for (i = 0; i < h; ++i) {
     sum += gain * w[(head + 1 + i) % (h + 1)];
     gain *= -r;
