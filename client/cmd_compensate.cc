@@ -318,8 +318,8 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
     std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
-    // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay,
-    // a drive the output does not depend on, and a rate-dependence lag's two-sample plan) and with
+    // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a drive the
+    // output does not depend on, and a rate-dependence lag's two-sample plan) and with
     // white noise of the floor's σ (a fixed seed per record).
     const records::ReplayError exact = records::ReplayDrive(m, r, sim);
     std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " " << du;

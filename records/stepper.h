@@ -148,7 +148,8 @@ struct ReplayError {
 
 /// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the
 /// record's first drive, the limits widened to the record's drive, each drive solved for the
-/// response preview_samples() later; the record's scored samples whose response lies within the
+/// response preview_samples() later (a delay's horizon primed with the responses before the first
+/// step: InversePrime); the record's scored samples whose response lies within the
 /// record are compared. On the model's own noiseless response (SimulateRecord) it is the inverse's
 /// exactness: ≈ 0 where the one-step map determines the drive (not within a play's band after a
 /// reversal). Throws InputError when no sample can be scored.
