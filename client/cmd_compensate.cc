@@ -133,13 +133,28 @@ std::string InverseCaveat(const records::Stepper& inv) {
          "; the compensator plans two samples instead (the reference one sample ahead): stable, not exact";
 }
 
+/// How the compensator undoes the delay's fraction s ("" without one): in the one-step map (up to a
+/// half) or backwards over its horizon (records/kernels/effects.h), and what that costs a noisy
+/// reference: the exact inverse of the interpolation multiplies the Nyquist rate by 1 / |1 - 2 s|.
+std::string DelayCaveat(const records::Stepper& inv) {
+  const double s = inv.delay_fraction();
+  if (!(s > 0)) return "";
+  const int horizon = inv.delay_horizon();
+  std::string how = "; its fraction " + Fmt(s, 3) + " of a sample is undone exactly" +
+                    (horizon > 0 ? ", backwards over " + std::to_string(horizon) + " sample(s) of that preview" : "");
+  return how + " (what the reference has at the Nyquist rate comes back " +
+         (std::abs(1 - 2 * s) > 1e-3 ? Fmt(1 / std::abs(1 - 2 * s), 3) + " ×" : "without bound") +
+         " in the drive)";
+}
+
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
 /// value held), and the clipping events.
 std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
-  const size_t preview = inv.preview_samples();
+  const size_t preview = inv.preview_samples(), horizon = static_cast<size_t>(inv.delay_horizon());
   std::vector<double> u(ref.y.size());
   u[0] = u0;
   inv.Init(u0);
+  for (size_t k = preview + 1 - horizon; k <= preview; ++k) inv.InversePrime(ref.y[std::min(k, ref.y.size() - 1)]);
   Clip open;
   for (size_t k = 1; k < ref.y.size(); ++k) {
     const long before = inv.ctl().saturated;
@@ -223,7 +238,8 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
             << "  predicted tracking error (forward model on that drive): RMSE " << Fmt(e.rmse) << " "
             << m.response_unit << ", max " << Fmt(e.max_abs) << " at " << Fmt(e.max_at) << " s\n";
   if (inv.has_delay()) {
-    std::cout << "  the model's delay cannot be undone: the reference's preview was used (the drive leads it)\n";
+    std::cout << "  the model's delay cannot be undone by a causal step: the reference's preview of "
+              << inv.preview_samples() << " sample(s) was used (the drive leads it)" << DelayCaveat(inv) << "\n";
   }
   if (const std::string caveat = InverseCaveat(inv); !caveat.empty()) std::cout << "  " << caveat << "\n";
   if (clips.empty()) {
@@ -272,6 +288,10 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
   if (const std::string caveat = InverseCaveat(records::Stepper(m)); !caveat.empty()) {
     std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far from exact)\n";
   }
+  if (const records::Stepper st(m); st.has_delay()) {
+    std::cout << "  the model's delay: each drive solved for the response " << st.preview_samples() << " sample(s) later"
+              << DelayCaveat(st) << "\n";
+  }
   const std::string& du = m.drive_unit;
   const std::string& yu = m.response_unit;
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -298,8 +318,8 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
     std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
-    // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a fractional delay,
-    // a drive the output does not depend on, and a rate-dependence lag's two-sample plan) and with
+    // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a drive the
+    // output does not depend on, and a rate-dependence lag's two-sample plan) and with
     // white noise of the floor's σ (a fixed seed per record).
     const records::ReplayError exact = records::ReplayDrive(m, r, sim);
     std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " " << du;

@@ -100,13 +100,14 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " * [s.ctl.u_lo, s.ctl.u_hi] (init sets " << N << "_U_MIN, " << N << "_U_MAX: the training records'\n"
      << " * drive range; change them after init for another amplifier); s.ctl.saturated counts clipped\n"
      << " * samples, s.ctl.max_clip the largest clipping (drive units forward, response units inverse).\n"
-     << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families); a delay\n"
-     << " * cannot be undone: the compensator skips it, so give it the reference " << N << "_DELAY_S ahead\n"
-     << " * when the reference is known in advance (preview)."
+     << " * The inverse solves the one-step map by a bracketed search (exact for the monotone families). Give\n"
+     << " * it the reference " << N << "_PREVIEW_SAMPLES ahead (preview) where the reference is known in advance:\n"
+     << " * a delay of n + s samples (" << N << "_DELAY_S) cannot be undone by a causal step; the compensator\n"
+     << " * reads n samples ahead and solves the fraction s in its one-step map for s <= 1/2; for s > 1/2 it\n"
+     << " * reads L more and undoes s backwards over them (records/kernels/effects.h: the delay)."
      << (st.inverse_plan_samples() > 1
              ? " This compensator plans two samples (the bimorph fin, or a rate-dependence lag over a\n"
-               " * quarter sample: records/kernels/chain.h pzk_chain_inverse_fin): give it the reference one\n"
-               " * sample ahead (and " + N + "_DELAY_S more)."
+               " * quarter sample: records/kernels/chain.h pzk_chain_inverse_fin): one sample of the preview."
              : std::string())
      << " Model: " << m.Model()->Describe()
      << (m.Model()->family().initial_state() != model::InitialState::kCentred
@@ -126,6 +127,8 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << " */\n"
      << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
      << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
+     << "#define " << N << "_PREVIEW_SAMPLES " << st.preview_samples() << "\n"
+     << "#define " << N << "_PRIME_SAMPLES " << st.delay_horizon() << "\n"
      << "#define " << N << "_BLOCKS " << nb << "\n\n";
   for (int i = 0; i < nb; ++i) {
     const auto& p = st.block_params(static_cast<size_t>(i));
@@ -159,6 +162,10 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
      << "  return pzk_chain_step(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u);\n}\n\n"
      << "static inline double " << name << "_inverse_step(" << name << "_state *s, double y_desired) {\n"
      << "  return pzk_chain_inverse(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
+     << "/* " << N << "_PRIME_SAMPLES > 0 (a delay's fraction over a half): after init, the references of the\n"
+     << " * " << N << "_PRIME_SAMPLES samples before the first inverse step's, in order; returns -1 when none is wanted. */\n"
+     << "static inline int " << name << "_inverse_prime(" << name << "_state *s, double y_desired) {\n"
+     << "  return pzk_chain_inverse_prime(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
      << "#endif /* " << N << "_H_ */\n";
   return os.str();
 }

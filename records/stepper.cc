@@ -193,18 +193,22 @@ bool Stepper::has_delay() const {
   return false;
 }
 
-int Stepper::inverse_plan_samples() const {
+double Stepper::delay_fraction() const {
   for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_BIMORPH_FIN || (b.kind == pzk::PZK_RATE_DEPENDENCE && pzk::pzk_rate_dependence_plans(&b)))
-      return 2;
-  return 1;
+    if (b.kind == pzk::PZK_DELAY && b.p[0] > 0) return pzk::pzk_delay_fraction(c_.data() + b.c_off);
+  return 0;
+}
+
+int Stepper::delay_horizon() const {
+  return pzk::pzk_chain_prime_samples(blocks_.data(), static_cast<int>(blocks_.size()), c_.data());
+}
+
+int Stepper::inverse_plan_samples() const {
+  return 1 + pzk::pzk_chain_plans(blocks_.data(), static_cast<int>(blocks_.size()));
 }
 
 size_t Stepper::preview_samples() const {
-  size_t preview = static_cast<size_t>(inverse_plan_samples() - 1);
-  for (const auto& b : blocks_)
-    if (b.kind == pzk::PZK_DELAY) preview += static_cast<size_t>(std::lround(b.p[0] / spec_.dt));
-  return preview;
+  return static_cast<size_t>(pzk::pzk_chain_preview(blocks_.data(), static_cast<int>(blocks_.size()), c_.data()));
 }
 
 double Stepper::rate_dependence_inverse_gain() const {
@@ -236,8 +240,14 @@ double Stepper::InverseStep(double y_desired) {
                                 &ctl_, y_desired);
 }
 
+bool Stepper::InversePrime(double y_desired) {
+  return pzk::pzk_chain_inverse_prime(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
+                                      t_.data(), &ctl_, y_desired) == 0;
+}
+
 double Stepper::Trial(double u) {
-  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u, 1);
+  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u,
+                             pzk::PZK_EVAL_UNDELAYED);
 }
 
 namespace {
@@ -265,7 +275,8 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
   Stepper inv(spec);
   inv.Init(r.u[0]);
   WidenToRecord(inv, r);
-  const size_t preview = inv.preview_samples();
+  const size_t preview = inv.preview_samples(), horizon = static_cast<size_t>(inv.delay_horizon());
+  for (size_t k = preview + 1 - horizon; k <= preview && k < r.size(); ++k) inv.InversePrime(y[k]);
   const double h = 1e-6 * spec.scale.u_half;
   ReplayError e;
   double sse_u = 0, sse_y = 0;

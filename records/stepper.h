@@ -7,10 +7,12 @@
 //            polarity and offset; equal to RecordModel::Simulate on the same drive (to rounding:
 //            the kernels do the same operations in the same order).
 //   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
-//            on the one-step map (records/kernels/chain.h: exact for the monotone families; a
-//            delay is skipped — it cannot be undone); the bimorph fin and a rate-dependence lag
-//            over a quarter sample plan two samples and want the reference one sample ahead
-//            (inverse_plan_samples()).
+//            on the one-step map (records/kernels/chain.h: exact for the monotone families); a
+//            delay of n + s samples wants the reference n samples ahead and keeps s in the map
+//            solved (s <= 1/2), or n + L and undoes s backwards over L samples (s > 1/2:
+//            delay_horizon()); the bimorph fin and a rate-dependence lag over a quarter sample plan
+//            two samples and want the reference one more sample ahead (inverse_plan_samples(),
+//            preview_samples()).
 // A Stepper is used either forward or inverse after Init, not both.
 #pragma once
 
@@ -76,8 +78,13 @@ class Stepper {
   double Init(double u0);
   double Step(double u);
   double InverseStep(double y_desired);
-  /// The output the next step would give for drive u (not clipped), the state unchanged: the
-  /// one-step map the inverse solves (without a delay).
+  /// With a delay's horizon L (delay_horizon() > 0): the references of the L samples before the first
+  /// InverseStep's, in order (y[k] for k = preview_samples() - L + 1 … preview_samples() when the
+  /// first step gets y[1 + preview_samples()]), after Init and before that step; not given, the
+  /// compensator takes those samples at rest. False when no more is wanted.
+  bool InversePrime(double y_desired);
+  /// The output the next step would give for drive u (not clipped), the state unchanged, the delay
+  /// passing its input on: what a lasting change of the drive meets (ReplayDrive's local gain).
   double Trial(double u);
 
   const ModelSpec& spec() const { return spec_; }
@@ -87,15 +94,20 @@ class Stepper {
   const std::vector<pzk::pzk_block>& blocks() const { return blocks_; }
   int constants() const { return nc_; }
   int dynamic() const { return nd_; }
-  /// True when the chain holds a delay (the inverse cannot undo it).
+  /// True when the chain holds a delay (the inverse reads the reference ahead: preview_samples()).
   bool has_delay() const;
+  /// The fraction s of the delay's n + s samples (0 without a delay), and the horizon over which the
+  /// inverse undoes it backwards (0: s <= 1/2, solved in the one-step map; records/kernels/effects.h).
+  double delay_fraction() const;
+  int delay_horizon() const;
   /// Samples the inverse plans ahead: 2 with the bimorph fin or a rate-dependence lag over a quarter
   /// sample (records/kernels/chain.h pzk_chain_inverse_fin: its InverseStep wants the reference one
   /// sample ahead), else 1.
   int inverse_plan_samples() const;
   /// Samples the inverse solves ahead of the drive it computes (a reference's preview, a replay's
-  /// look-ahead): a delay's whole samples (it cannot be undone: the response to the drive of sample k
-  /// shows that many samples later) plus inverse_plan_samples() - 1.
+  /// look-ahead; records/kernels/chain.h pzk_chain_preview): a delay of n + s samples (0 <= s < 1) n
+  /// plus its horizon (0 for s <= 1/2: the response to the drive of sample k shows from n samples
+  /// later; records/kernels/effects.h), plus inverse_plan_samples() - 1.
   size_t preview_samples() const;
   /// The rate-dependence play's inverse: below its knee the play is a lag of tau_r (z = v - tau_r
   /// v', v' the second-order backward difference), so the drive its one-step inverse solves carries
@@ -136,10 +148,11 @@ struct ReplayError {
 
 /// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the
 /// record's first drive, the limits widened to the record's drive, each drive solved for the
-/// response preview_samples() later; the record's scored samples whose response lies within the
+/// response preview_samples() later (a delay's horizon primed with the responses before the first
+/// step: InversePrime); the record's scored samples whose response lies within the
 /// record are compared. On the model's own noiseless response (SimulateRecord) it is the inverse's
 /// exactness: ≈ 0 where the one-step map determines the drive (not within a play's band after a
-/// reversal, nor by a fractional delay). Throws InputError when no sample can be scored.
+/// reversal). Throws InputError when no sample can be scored.
 ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<const double> y);
 
 }  // namespace pz::records

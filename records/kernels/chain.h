@@ -21,7 +21,7 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
     case PZK_LOWPASS: *nc = 3; *nd = 2; return 0;
     case PZK_QUADRATIC: return 0;
     case PZK_CREEP: *nc = 5; *nd = 2; return 0;
-    case PZK_DELAY: *nc = 2; *nd = 1 + pzk_delay_capacity(b); return 0;
+    case PZK_DELAY: *nc = 3; *nd = 1 + pzk_delay_capacity(b) + pzk_delay_inverse_size(pzk_delay_horizon(b)); return 0;
     case PZK_RATE_DEPENDENCE: *nd = 4; return 0;
     case PZK_STACK_BOUC_WEN: *nc = 4; *nd = 4; return 0;
     case PZK_BACKLASH_LIKE: *nd = 2; return 0;
@@ -109,6 +109,8 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
   double v = u0;
   int i;
   for (i = 0; i < nb; ++i) v = pzk_block_init(&b[i], c + b[i].c_off, d + b[i].d_off, v, u0);
+  for (i = 0; i < nb; ++i) /* a delay's horizon: the blocks after it at rest with this output */
+    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0) d[b[i].d_off + 1 + (long)c[b[i].c_off + 1] + 2] = v;
   ctl->u_last = u0;
   ctl->y_last = v;
   ctl->du_last = 0;
@@ -117,17 +119,25 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
   return v;
 }
 
+/* How pzk_chain_eval runs the chain: forward; the compensator's one-step map (the delay blocks
+ * stepping what remains of their delay once the reference is read ahead: pzk_delay_inverse_step);
+ * that with the fin's angle pushed up or down through its backlash (pzk_fin_step_through); the delay
+ * blocks passing their input on (what a lasting change of the drive meets: a replay's local gain). */
+enum { PZK_EVAL_FORWARD = 0, PZK_EVAL_INVERSE, PZK_EVAL_PUSH_UP, PZK_EVAL_PUSH_DOWN, PZK_EVAL_UNDELAYED };
+
 /* The output for drive u from state d, the next state written to o (o == d: a step; o the
- * scratch: a trial, which needs skip_delay). skip_delay: the delay blocks pass their input on; 2 or
- * 3: also the fin's angle pushed up or down through its backlash (pzk_fin_step_through). */
+ * scratch: a trial, which needs a mode other than PZK_EVAL_FORWARD). */
 static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d, double *o, double u,
-                                    int skip_delay) {
+                                    int mode) {
   double v = u;
   int i;
   for (i = 0; i < nb; ++i) {
-    if (b[i].kind == PZK_DELAY && skip_delay) continue;
-    if (b[i].kind == PZK_BIMORPH_FIN && skip_delay >= 2)
-      v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v, skip_delay == 2 ? 1 : -1);
+    if (b[i].kind == PZK_DELAY && mode == PZK_EVAL_UNDELAYED) continue;
+    if (b[i].kind == PZK_DELAY && mode != PZK_EVAL_FORWARD)
+      v = pzk_delay_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+    else if (b[i].kind == PZK_BIMORPH_FIN && (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
+      v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v,
+                               mode == PZK_EVAL_PUSH_UP ? 1 : -1);
     else
       v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
   }
@@ -144,8 +154,25 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
   }
   ctl->du_last = clipped - ctl->u_last;
   ctl->u_last = clipped;
-  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, clipped, 0);
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, clipped, PZK_EVAL_FORWARD);
   return ctl->y_last;
+}
+
+/* Samples ahead of the drive it computes that the compensator wants the reference: each delay's
+ * pzk_delay_preview, one more when it plans two samples (pzk_chain_inverse_fin). */
+static inline int pzk_chain_plans(const pzk_block *b, int nb) {
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_BIMORPH_FIN || (b[i].kind == PZK_RATE_DEPENDENCE && pzk_rate_dependence_plans(&b[i])))
+      return 1;
+  return 0;
+}
+static inline long pzk_chain_preview(const pzk_block *b, int nb, const double *c) {
+  long preview = pzk_chain_plans(b, nb);
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_DELAY) preview += pzk_delay_preview(c + b[i].c_off);
+  return preview;
 }
 
 /* The two-sample compensator of a chain that one sample cannot invert: the bimorph fin's (a chain
@@ -177,7 +204,8 @@ typedef struct {
   double *t, u_prev, lo, hi, y_desired;
 } pzk_fin_plan;
 /* The output two samples ahead less y_desired: the drive u at the next sample, its slope kept one
- * more (clipped), from state d on the scratch t (delays skipped; mode 2 / 3: the fin pushed through). */
+ * more (clipped), from state d on the scratch t (the compensator's chain; PZK_EVAL_PUSH_UP / DOWN:
+ * the fin pushed through). */
 static inline double pzk_fin_plan_miss(void *ctx, double u) {
   const pzk_fin_plan *p = (const pzk_fin_plan *)ctx;
   pzk_chain_eval(p->b, p->nb, p->c, p->d, p->t, u, p->mode);
@@ -208,7 +236,9 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
   plan.lo = ctl->u_lo;
   plan.hi = ctl->u_hi;
   plan.y_desired = y_desired;
-  plan.mode = (y_desired - ctl->y_last) * s_out > 0 ? 2 : ((y_desired - ctl->y_last) * s_out < 0 ? 3 : 1);
+  plan.mode = (y_desired - ctl->y_last) * s_out > 0   ? PZK_EVAL_PUSH_UP
+              : (y_desired - ctl->y_last) * s_out < 0 ? PZK_EVAL_PUSH_DOWN
+                                                      : PZK_EVAL_INVERSE;
   if (!pzk_fin_nearest_root(pzk_fin_plan_miss, &plan, pzk_clamp(ctl->u_last, plan.lo, plan.hi), plan.lo, plan.hi,
                             1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1), 100, &u)) {
     const double miss = fabs(pzk_fin_plan_miss(&plan, u));
@@ -217,13 +247,13 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
   }
   ctl->du_last = u - ctl->u_last;
   ctl->u_last = u;
-  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, PZK_EVAL_INVERSE);
   return u;
 }
 
-/* Inverse step (the compensator): the drive u in [u_lo, u_hi] whose one-step output from the
- * present state is y_desired, then the state advanced with it. The one-step map u -> y is evaluated
- * on the scratch t. From the last drive, the search walks in the direction the map must move (by
+/* The one-step inverse (pzk_chain_inverse without a delay's horizon): the drive u in [u_lo, u_hi]
+ * whose one-step output from the present state is y_desired, then the state advanced with it. The
+ * one-step map u -> y is evaluated on the scratch t. From the last drive, the search walks in the direction the map must move (by
  * its local slope's sign; where it is flat, by its sign over the limits), with a stride of 1.5 times
  * the last drive change, doubled until the reference is passed; then the bracket is closed by
  * regula falsi with the Illinois rule and a bisection every fourth step, until the output is the
@@ -235,25 +265,22 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
  * the one-step map is continuous and the root found is the one nearest the last drive. A
  * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
  * max_clip. The bimorph fin and a rate-dependence lag over a quarter sample plan two samples
- * (pzk_chain_inverse_fin). A delay cannot be undone: its block is skipped (the compensator drives the model
- * without its delay; give it the reference tau_d ahead where the reference is known: preview). */
-static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
-                                       double y_desired) {
+ * (pzk_chain_inverse_fin). A delay's fraction up to a half stays in the map solved
+ * (pzk_delay_inverse_step). */
+static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
+                                     double y_desired) {
   const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
   double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
-  int i;
-  for (i = 0; i < nb; ++i)
-    if (b[i].kind == PZK_BIMORPH_FIN || (b[i].kind == PZK_RATE_DEPENDENCE && pzk_rate_dependence_plans(&b[i])))
-      return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
-  f0 = pzk_chain_eval(b, nb, c, d, t, u0, 1);
+  if (pzk_chain_plans(b, nb)) return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
+  f0 = pzk_chain_eval(b, nb, c, d, t, u0, PZK_EVAL_INVERSE);
   if (u0 + eps < hi) {
-    f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, 1);
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 + eps, PZK_EVAL_INVERSE);
     sign = f1 > f0 ? 1.0 : (f1 < f0 ? -1.0 : 0.0);
   } else {
-    f1 = pzk_chain_eval(b, nb, c, d, t, u0 - eps, 1);
+    f1 = pzk_chain_eval(b, nb, c, d, t, u0 - eps, PZK_EVAL_INVERSE);
     sign = f1 < f0 ? 1.0 : (f1 > f0 ? -1.0 : 0.0);
   }
-  if (sign == 0) sign = pzk_chain_eval(b, nb, c, d, t, hi, 1) >= pzk_chain_eval(b, nb, c, d, t, lo, 1) ? 1.0 : -1.0;
+  if (sign == 0) sign = pzk_chain_eval(b, nb, c, d, t, hi, PZK_EVAL_INVERSE) >= pzk_chain_eval(b, nb, c, d, t, lo, PZK_EVAL_INVERSE) ? 1.0 : -1.0;
   ref = sign * y_desired; /* work on the rising map sign * f */
   f0 *= sign;
   if (f0 == ref) {
@@ -267,7 +294,7 @@ static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double 
     for (;;) {
       e = a + dir * stride;
       if (dir > 0 ? !(e < hi) : !(e > lo)) e = limit;
-      fe = sign * pzk_chain_eval(b, nb, c, d, t, e, 1);
+      fe = sign * pzk_chain_eval(b, nb, c, d, t, e, PZK_EVAL_INVERSE);
       if (dir * (fe - ref) >= 0 || e == limit) break;
       a = e;
       fa = fe;
@@ -287,7 +314,7 @@ static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double 
         double x = a - ga * (e - a) / (ge - ga), fx, gx;
         if (it % 4 == 3 || !((x - a) * (e - x) > 0)) x = a + 0.5 * (e - a);
         if (!((x - a) * (e - x) > 0)) break; /* adjacent doubles */
-        fx = sign * pzk_chain_eval(b, nb, c, d, t, x, 1);
+        fx = sign * pzk_chain_eval(b, nb, c, d, t, x, PZK_EVAL_INVERSE);
         gx = dir * (fx - ref);
         if (gx < 0) {
           if (-gx <= tol) {
@@ -314,6 +341,103 @@ static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double 
   }
   ctl->du_last = u - ctl->u_last;
   ctl->u_last = u;
-  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, 1);
+  ctl->y_last = pzk_chain_eval(b, nb, c, d, d, u, PZK_EVAL_INVERSE);
   return u;
+}
+
+/* The compensator with a delay whose fraction is over a half (its horizon L > 0, records/kernels/
+ * effects.h): the blocks after the delay solved one step for its output w, n + L samples ahead of the
+ * drive (their own limits, last drive and output kept in the delay's state: the drive's limits,
+ * widened by their span on both sides when drive effects come before the delay, which may take their
+ * output beyond it); the delay undone backwards over the horizon (pzk_delay_anticausal); the blocks
+ * before it solved one step for that input x (none: x is the drive, clipped to the limits). A sample
+ * either stage clips counts once in saturated; max_clip takes the shortfall of the stage after the
+ * delay (response units). The blocks after the delay follow the solved w, not a clipped drive's. */
+static inline double pzk_chain_solve_after(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
+                                           const pzk_ctl *ctl, double y_desired, pzk_ctl *post) {
+  double *q = d + b[id].d_off + 1 + (long)c[b[id].c_off + 1]; /* head, w_last, y_last, dw_last, ... */
+  const double widen = id > 0 ? ctl->u_hi - ctl->u_lo : 0;
+  double w;
+  post->u_lo = ctl->u_lo - widen;
+  post->u_hi = ctl->u_hi + widen;
+  post->u_last = q[1];
+  post->y_last = q[2];
+  post->du_last = q[3];
+  post->saturated = 0;
+  post->max_clip = 0;
+  w = pzk_chain_solve(b + id + 1, nb - id - 1, c, d, t, post, y_desired);
+  q[1] = post->u_last;
+  q[2] = post->y_last;
+  q[3] = post->du_last;
+  return w;
+}
+static inline double pzk_chain_inverse_split(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
+                                             pzk_ctl *ctl, double y_desired) {
+  const double span = ctl->u_hi - ctl->u_lo, max_clip = ctl->max_clip;
+  const long saturated = ctl->saturated;
+  pzk_ctl post;
+  double x, u;
+  int clipped;
+  x = pzk_chain_solve_after(b, nb, id, c, d, t, ctl, y_desired, &post);
+  x = pzk_delay_anticausal(c + b[id].c_off, d + b[id].d_off, x);
+  if (id > 0) {
+    u = pzk_chain_solve(b, id, c, d, t, ctl, x);
+    clipped = ctl->saturated != saturated;
+  } else { /* rounding of the sum at a limit is no clipping */
+    u = pzk_clamp(x, ctl->u_lo, ctl->u_hi);
+    clipped = fabs(u - x) > 1e-12 * span;
+    ctl->du_last = u - ctl->u_last;
+    ctl->u_last = u;
+  }
+  ctl->saturated = saturated + (clipped || post.saturated > 0 ? 1 : 0);
+  ctl->max_clip = post.max_clip > max_clip ? post.max_clip : max_clip;
+  ctl->y_last = post.y_last;
+  return u;
+}
+
+/* The references a delay's horizon wants before the first inverse step after init (0 without one):
+ * those of the L samples before the first step's, in order (pzk_chain_inverse_prime). */
+static inline int pzk_chain_prime_samples(const pzk_block *b, int nb, const double *c) {
+  int i;
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0) return (int)c[b[i].c_off + 2];
+  return 0;
+}
+/* One of them: the blocks after the delay solved for it (as a step does; a reference out of reach
+ * counted). Returns 0, or -1 when no more is wanted (no horizon, all given, or a step taken); not
+ * given, the blocks after the delay take those samples at rest. */
+static inline int pzk_chain_inverse_prime(const pzk_block *b, int nb, const double *c, double *d, double *t,
+                                          pzk_ctl *ctl, double y_desired) {
+  pzk_ctl post;
+  double w;
+  int id;
+  for (id = 0; id < nb; ++id)
+    if (b[id].kind == PZK_DELAY && c[b[id].c_off + 2] > 0) break;
+  if (id == nb || d[b[id].d_off + 1 + (long)c[b[id].c_off + 1] + 4] >= c[b[id].c_off + 2]) return -1;
+  w = pzk_chain_solve_after(b, nb, id, c, d, t, ctl, y_desired, &post);
+  if (post.saturated > 0) ++ctl->saturated;
+  if (post.max_clip > ctl->max_clip) ctl->max_clip = post.max_clip;
+  return pzk_delay_prime(c + b[id].c_off, d + b[id].d_off, w);
+}
+
+/* Inverse step (the compensator): the drive u in [u_lo, u_hi] for the desired output y_desired,
+ * then the state advanced with it. A delay cannot be undone by a causal step: give the compensator the
+ * reference pzk_chain_preview samples ahead (a delay's whole samples and its horizon; one more with a
+ * two-sample plan). A delay's fraction up to a half stays in the one-step map solved
+ * (pzk_chain_solve); over a half the delay is undone backwards over its horizon
+ * (pzk_chain_inverse_split). */
+static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
+                                       double y_desired) {
+  long lead = 0;
+  int i;
+  /* A drift after a delay: its clock is that of the output solved, the delays' preview ahead of the
+   * drive (set at the first step after init, where it is 0; it only grows after). */
+  for (i = 0; i < nb; ++i) {
+    if (b[i].kind == PZK_DELAY) lead += pzk_delay_preview(c + b[i].c_off);
+    if (b[i].kind == PZK_DRIFT && d[b[i].d_off] == 0) d[b[i].d_off] = (double)lead;
+  }
+  for (i = 0; i < nb; ++i)
+    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0)
+      return pzk_chain_inverse_split(b, nb, i, c, d, t, ctl, y_desired);
+  return pzk_chain_solve(b, nb, c, d, t, ctl, y_desired);
 }

@@ -53,19 +53,60 @@ static inline double pzk_creep_step(const pzk_block *b, const double *c, const d
 }
 
 /* delay: v(t - tau_d) by linear interpolation of the samples (the first before the start).
- * c = {shift = tau_d/dt, capacity}, d = {k, ring[capacity]} (the last `capacity` inputs).
- * A delay cannot be undone: the inverse skips this block (pzk_chain_inverse). It only ever
- * steps in place. */
+ * With shift = tau_d/dt = n + s (n whole, 0 <= s < 1) the output is y_k = (1 - s) v_{k-n} + s v_{k-n-1}.
+ * c = {shift, capacity, horizon}, d = {k, ring[capacity]} (the last `capacity` inputs), and with a
+ * horizon L > 0 the compensator's {head, w_last, y_last, dw_last, primed, w[L + 1]} after them
+ * (pzk_chain_inverse_split). Forward it only ever steps in place.
+ *
+ * The compensator (records/kernels/chain.h pzk_chain_inverse) reads the reference ahead; what remains
+ * of the delay is w_k = (1 - s) x_k + s x_{k-1} (x its input at the compensator's sample k):
+ *   s <= 1/2 (horizon 0): the reference n samples ahead, w kept in the one-step map solved
+ *     (pzk_delay_inverse_step): exact; an error in x_{k-1} comes back times -s / (1 - s), which
+ *     decays for s < 1/2 (at s = 1/2 it alternates without growing).
+ *   s > 1/2 (horizon L >= 1): solved that way an error would grow s / (1 - s) times per sample (the
+ *     zero of (1 - s) + s z^-1 lies outside the unit circle): the exact inverse is anti-causal. The
+ *     reference n + L samples ahead; the blocks after the delay are solved for w there (they run
+ *     n + L samples ahead of the drive), and x_j = (1/s) sum_{i<L} (-r)^i w_{j+n+1+i} + (-r)^L
+ *     x^_{j+L}, r = (1 - s) / s < 1, with x^_{j+L} = w_{j+n+L} + s (w_{j+n+L} - w_{j+n+L-1}) (the
+ *     delay's output extrapolated by s samples): its error, the drive's curvature, shrinks by r^L.
+ *     L is the smallest with r^L <= 1e-13, at most PZK_DELAY_HORIZON_MAX (a fraction under 0.615
+ *     keeps r^64 of the extrapolation's error). Then the blocks before the delay are solved for x_j.
+ * Both amplify what the reference has at the Nyquist rate by 1 / |1 - 2 s| (the inverse of the
+ * interpolation's gain there). */
+#define PZK_DELAY_HORIZON_MAX 64
 static inline int pzk_delay_capacity(const pzk_block *b) {
   double shift = b->p[0] / b->dt;
   return shift > 0 ? (int)shift + 2 : 1;
 }
+static inline int pzk_delay_horizon(const pzk_block *b) {
+  double shift = b->p[0] / b->dt, s, r;
+  int h;
+  if (!(shift > 0)) return 0;
+  s = shift - floor(shift);
+  if (s <= 0.5) return 0;
+  r = (1 - s) / s;
+  if (!(r > 1e-13)) return 1;
+  h = (int)ceil(log(1e-13) / log(r));
+  return h < 1 ? 1 : (h > PZK_DELAY_HORIZON_MAX ? PZK_DELAY_HORIZON_MAX : h);
+}
+/* The compensator's doubles after the ring: head, w_last, y_last, dw_last, primed and the L + 1 outputs. */
+static inline int pzk_delay_inverse_size(int horizon) { return horizon > 0 ? horizon + 6 : 0; }
 static inline double pzk_delay_init(const pzk_block *b, double *c, double *d, double v) {
-  int i, cap = pzk_delay_capacity(b);
+  int i, cap = pzk_delay_capacity(b), h = pzk_delay_horizon(b);
+  double *w = d + 1 + cap;
   c[0] = b->p[0] / b->dt;
   c[1] = cap;
+  c[2] = h;
   d[0] = 0;
   for (i = 0; i < cap; ++i) d[1 + i] = v;
+  if (h > 0) {
+    w[0] = 0;
+    w[1] = v;
+    w[2] = 0; /* the output at rest: pzk_chain_init */
+    w[3] = 0;
+    w[4] = 0;
+    for (i = 0; i <= h; ++i) w[5 + i] = v;
+  }
   return v;
 }
 static inline double pzk_delay_step(const double *c, double *d, double v) {
@@ -82,6 +123,55 @@ static inline double pzk_delay_step(const double *c, double *d, double v) {
   a = d[1 + j % cap];
   b = d[1 + (j + 1) % cap];
   return a + f * (b - a);
+}
+static inline double pzk_delay_fraction(const double *c) { return c[0] > 0 ? c[0] - floor(c[0]) : 0.0; }
+/* Samples of the reference ahead of the drive: n, plus the horizon. */
+static inline long pzk_delay_preview(const double *c) { return c[0] > 0 ? (long)floor(c[0]) + (long)c[2] : 0; }
+/* The one-step compensator's delay (horizon 0): (1 - s) v + s v_prev, computed as pzk_delay_step
+ * computes its output n samples later (the same operations: bit for bit the forward model's, so that
+ * where the map is flat — a play's band — the last drive is still a root). Trials (o the scratch)
+ * read d and write only k and the one slot the next trial on o reads. */
+static inline double pzk_delay_inverse_step(const double *c, const double *d, double *o, double v) {
+  double shift = c[0], pos, f, prev;
+  long cap = (long)c[1], k, j;
+  if (!(shift > 0)) return v;
+  k = (long)d[0] + 1;
+  prev = d[1 + (k - 1) % cap];
+  o[0] = (double)k;
+  o[1 + k % cap] = v;
+  pos = (double)(k + (long)floor(shift)) - shift; /* the forward's k - shift at its sample k + n */
+  j = (long)pos;
+  f = pos - (double)j;
+  return j >= k ? v : prev + f * (v - prev);
+}
+/* The horizon's outputs before the first step: w_{n+1} ... w_{n+L} in order (at init they are the
+ * rest's, right for a reference that stays at rest that long). Returns 0, or -1 once L are in or a
+ * step has been taken. */
+static inline int pzk_delay_prime(const double *c, double *d, double w_new) {
+  const long cap = (long)c[1], h = (long)c[2];
+  double *q = d + 1 + cap, *w = q + 5;
+  const long primed = (long)q[4];
+  if (primed >= h) return -1;
+  w[((long)q[0] + primed + 1) % (h + 1)] = w_new;
+  q[4] = (double)(primed + 1);
+  return 0;
+}
+/* The horizon's step (s > 1/2): pushes the delay's output w solved n + L samples ahead, returns x_j. */
+static inline double pzk_delay_anticausal(const double *c, double *d, double w_new) {
+  const long cap = (long)c[1], h = (long)c[2];
+  const double s = pzk_delay_fraction(c), r = (1 - s) / s;
+  double *q = d + 1 + cap, *w = q + 5, sum = 0, gain = 1 / s, last, before;
+  long head = ((long)q[0] + 1) % (h + 1), i;
+  w[(head + h) % (h + 1)] = w_new; /* w_{j+n+i} at (head + i) mod (L + 1), i = 0..L */
+  q[0] = (double)head;
+  q[4] = (double)h; /* no priming after a step */
+  for (i = 0; i < h; ++i) {
+    sum += gain * w[(head + 1 + i) % (h + 1)];
+    gain *= -r;
+  }
+  last = w[(head + h) % (h + 1)];
+  before = w[(head + h - 1) % (h + 1)];
+  return sum + gain * s * (last + s * (last - before));
 }
 
 /* rate-dependence: the play of half-width lambda = r_m tanh(tau_r |v'| / r_m) on the drive, v' =
