@@ -14,7 +14,12 @@
 //   BM_RecordEvaluation/<family>+<effects>   one evaluation with effects (issue 22's 10 s target): a
 //       linear family's weights solved for the effects' parameters (the regressors of the delayed /
 //       crept drive, the regularised normal equations, the non-negative solve, the output); the
-//       effects' parameters at 30 % / 31 % of their ranges (log ranges in log), the family's as above
+//       effects' parameters at 30 % / 31 % of their ranges (log ranges in log), the family's as above.
+//       A linear family with `creep-spectrum` (records/spectrum_solve.h): the search's genome is the
+//       other parameters (the delay), the spectrum's weights solved with the family's in every
+//       evaluation — what `piezoid fit` evaluates; `…/searched` evaluates every parameter given (the
+//       spectrum's weights too: one build of the normal equations of the filtered regressors, the
+//       path of a searched spectrum)
 //
 // Figures and the command: docs/performance.md, "Fits on records".
 #include <benchmark/benchmark.h>
@@ -118,11 +123,19 @@ struct Setup {
   RecordFitness fitness;
 };
 
-void BM_RecordEvaluation(benchmark::State& state, const std::string& family, const std::string& effects = "") {
+void BM_RecordEvaluation(benchmark::State& state, const std::string& family, const std::string& effects = "",
+                         bool every_parameter = false) {
   const io::Record& rec = Recording();
   const Setup setup(family, effects);
   const RecordFitness& fitness = setup.fitness;
-  const auto points = setup.points(family);
+  auto points = setup.points(family);
+  if (fitness.spectrum_solved() && !every_parameter) {  // the searched parameters alone: the solve's path
+    for (std::vector<double>& p : points) {
+      std::vector<double> q;
+      for (size_t i : fitness.searched()) q.push_back(p[i]);
+      p = std::move(q);
+    }
+  }
   opt::Genome g;
   size_t i = 0;
   for (auto _ : state) {
@@ -191,6 +204,12 @@ BENCHMARK_CAPTURE(BM_RecordEvaluation, bimorph-fin, std::string("bimorph-fin"))-
 BENCHMARK_CAPTURE(BM_RecordEvaluation, preisach+delay, std::string("preisach"), std::string("delay"))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, preisach+creep-spectrum+delay, std::string("preisach"),
+                  std::string("creep-spectrum,delay"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, preisach+creep-spectrum+delay/searched, std::string("preisach"),
+                  std::string("creep-spectrum,delay"), true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_RecordEvaluation, prandtl-ishlinskii+creep-spectrum+delay, std::string("prandtl-ishlinskii"),
                   std::string("creep-spectrum,delay"))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_RecordEvaluation, prandtl-ishlinskii+creep, std::string("prandtl-ishlinskii"), std::string("creep"))

@@ -71,6 +71,7 @@ struct FitArgs {
   bool quiet = false;
   CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
   records::FitOptions::Sizing sizing;  ///< the PSO budget sized by the searched parameters, but for the flags given
+  opt::LineOptions line;               ///< --line-grid, --line-brackets, --line-tolerance
 };
 
 /// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1 searched
@@ -78,12 +79,18 @@ struct FitArgs {
 /// (the search's best: repetition 1)".
 std::string SearchSentence(const records::FitResult& r) {
   if (r.searched_parameters == 0) return "nothing searched (the weights are solved by least squares)";
-  std::string s = r.algorithm == opt::SearchAlgorithm::kPso
-                      ? r.budget.Describe()
-                      : std::string(opt::SearchAlgorithmName(r.algorithm)) + ", " +
-                            std::to_string(r.budget.repetitions) + " repetitions";
-  s += r.budget_sized ? " (sized for " : " (as given, for ";
-  s += std::to_string(r.searched_parameters) + " searched parameter" + (r.searched_parameters == 1 ? "" : "s") + ")";
+  std::string s = r.algorithm == opt::SearchAlgorithm::kPso    ? r.budget.Describe()
+                  : r.algorithm == opt::SearchAlgorithm::kLine ? "line search: " + r.line.Describe()
+                                                               : std::string(opt::SearchAlgorithmName(r.algorithm)) +
+                                                                     ", " + std::to_string(r.budget.repetitions) +
+                                                                     " repetitions";
+  s += r.budget_sized ? (r.algorithm == opt::SearchAlgorithm::kLine ? " (the rule for " : " (sized for ")
+                      : " (as given, for ";
+  s += std::to_string(r.searched_parameters) + " searched parameter" + (r.searched_parameters == 1 ? "" : "s");
+  if (r.spectrum_solved)
+    s += "; the creep spectrum's " + std::to_string(r.solved_parameters) +
+         " weights solved with the family's in every evaluation, not searched";
+  s += ")";
   s += ": " + std::to_string(r.search.evaluations) + " search evaluations, " + std::to_string(r.evaluations) +
        " with the polish";
   if (r.polishes > 0) {
@@ -400,11 +407,17 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     x["searched_parameters"] = Num(static_cast<double>(r.searched_parameters));
     x["sized"] = Bool(r.budget_sized);
     x["repetitions"] = Num(r.budget.repetitions);
+    x["spectrum_solved"] = Bool(r.spectrum_solved);
+    if (r.spectrum_solved) x["solved_parameters"] = Num(static_cast<double>(r.solved_parameters));
     if (r.algorithm == opt::SearchAlgorithm::kPso) {
       x["particles"] = Num(r.budget.particles);
       x["iterations"] = Num(r.budget.iterations);
       x["stall"] = Num(r.budget.stall);
       x["converged_spread"] = Num(r.budget.converged_spread);
+    } else if (r.algorithm == opt::SearchAlgorithm::kLine) {
+      x["grid"] = Num(r.line.grid);
+      x["brackets"] = Num(r.line.brackets);
+      x["tolerance"] = Num(r.line.tolerance);
     }
     x["search_evaluations"] = Num(static_cast<double>(r.search.evaluations));
     x["stop_reason"] = Text(r.stop_reason);
@@ -433,6 +446,9 @@ int RunFit(const FitArgs& a) {
   if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
+  o.search.line.grid = a.line.grid;
+  o.search.line.brackets = a.line.brackets;
+  o.search.line.tolerance = a.line.tolerance;
   o.sizing = a.sizing;
   o.polish_repetitions = true;
   o.polish = !a.no_polish;
@@ -517,8 +533,30 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 1e6));
   AddInitialStateFlag(cmd, &a->initial_state);
   cmd->add_option("--out", a->out, "output folder")->default_str("fit-out");
-  cmd->add_option("--algorithm", a->algorithm, "pso, ga-real, ga-binary or de")->default_str("pso");
+  cmd->add_option("--algorithm", a->algorithm,
+                  "pso, ga-real, ga-binary, de or line (one searched parameter)")
+      ->default_str("pso; line for one searched parameter");
   AddSearchFlags(cmd, &a->search, /*sized=*/true);
+  // One searched parameter: the line search's budget (records::FitOptions::Sizing, opt::LineOptions).
+  const opt::LineOptions line;
+  cmd->add_option("--line-grid", a->line.grid,
+                  "one searched parameter (the default search then): grid points over its range, ends included")
+      ->check(CLI::Range(3, 100000))
+      ->default_str(std::to_string(line.grid));
+  cmd->add_option("--line-brackets", a->line.brackets,
+                  "one searched parameter: the grid's lowest local minima refined by Brent's method")
+      ->check(CLI::Range(1, 100000))
+      ->default_str(std::to_string(line.brackets));
+  cmd->add_option("--line-tolerance", a->line.tolerance,
+                  "one searched parameter: Brent's tolerance, a fraction of the range, in (0, 0.5)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            double x = 0;
+            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5)) return "Value " + v + " not in (0, 0.5)";
+            return "";
+          },
+          "in (0, 0.5)"))
+      ->default_str(io::FormatNumber(line.tolerance));
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
@@ -538,6 +576,9 @@ void RegisterFit(CLI::App& app, int& exit_code) {
     a->sizing.keep_iterations = cmd->count("--iterations") > 0;
     a->sizing.keep_stall = cmd->count("--stall") > 0;
     a->sizing.keep_repetitions = cmd->count("--repetitions") > 0;
+    a->sizing.keep_algorithm = cmd->count("--algorithm") > 0;
+    a->sizing.line_given =
+        cmd->count("--line-grid") > 0 || cmd->count("--line-brackets") > 0 || cmd->count("--line-tolerance") > 0;
     exit_code = RunFit(*a);
   });
 }

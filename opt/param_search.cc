@@ -464,6 +464,170 @@ RepetitionResult RunDe(Run& run, int repetition) {
   return r;
 }
 
+/// Brent's minimisation of one bracket [a, b] around its lowest point x (R. P. Brent, Algorithms for
+/// Minimization without Derivatives, 1973, ch. 5: the procedure `localmin`), as a state machine that
+/// proposes one point at a time (Propose) and is told its cost (Tell), so that several brackets can
+/// advance side by side. It starts from evaluated points: x (the grid's minimum) and its two
+/// neighbours as w and v, with the first step allowed to be the parabola through them.
+class BrentBracket {
+ public:
+  BrentBracket(double a, double b, double x, double fx, double w, double fw, double v, double fv, double tol)
+      : a_(a), b_(b), x_(x), w_(w), v_(v), fx_(fx), fw_(fw), fv_(fv), d_(b - a), e_(b - a), tol_(tol) {}
+
+  /// The next point to evaluate, or nothing once x is located within the tolerance.
+  std::optional<double> Propose() {
+    constexpr double kGolden = 0.3819660112501051;  // (3 − √5) / 2
+    constexpr double kEps = 1.4901161193847656e-08;  // √(machine ε)
+    const double xm = 0.5 * (a_ + b_);
+    const double tol1 = kEps * std::abs(x_) + tol_ / 3, tol2 = 2 * tol1;
+    if (std::abs(x_ - xm) <= tol2 - 0.5 * (b_ - a_)) return std::nullopt;
+    bool golden = true;
+    if (std::abs(e_) > tol1) {  // the parabola through x, w, v
+      double r = (x_ - w_) * (fx_ - fv_);
+      double q = (x_ - v_) * (fx_ - fw_);
+      double p = (x_ - v_) * q - (x_ - w_) * r;
+      q = 2 * (q - r);
+      if (q > 0) p = -p;
+      q = std::abs(q);
+      r = e_;
+      e_ = d_;
+      if (std::abs(p) < std::abs(0.5 * q * r) && p > q * (a_ - x_) && p < q * (b_ - x_)) {
+        d_ = p / q;
+        const double u = x_ + d_;
+        if (u - a_ < tol2 || b_ - u < tol2) d_ = xm >= x_ ? tol1 : -tol1;
+        golden = false;
+      }
+    }
+    if (golden) {
+      e_ = x_ >= xm ? a_ - x_ : b_ - x_;
+      d_ = kGolden * e_;
+    }
+    u_ = std::abs(d_) >= tol1 ? x_ + d_ : x_ + (d_ >= 0 ? tol1 : -tol1);
+    u_ = std::clamp(u_, a_, b_);
+    return u_;
+  }
+
+  void Tell(double fu) {
+    if (fu <= fx_) {
+      (u_ >= x_ ? a_ : b_) = x_;
+      v_ = w_;
+      fv_ = fw_;
+      w_ = x_;
+      fw_ = fx_;
+      x_ = u_;
+      fx_ = fu;
+    } else {
+      (u_ < x_ ? a_ : b_) = u_;
+      if (fu <= fw_ || w_ == x_) {
+        v_ = w_;
+        fv_ = fw_;
+        w_ = u_;
+        fw_ = fu;
+      } else if (fu <= fv_ || v_ == x_ || v_ == w_) {
+        v_ = u_;
+        fv_ = fu;
+      }
+    }
+    ++steps_;
+  }
+
+  double x() const { return x_; }
+  double fx() const { return fx_; }
+  int steps() const { return steps_; }
+
+ private:
+  double a_, b_, x_, w_, v_, fx_, fw_, fv_, d_, e_, u_ = 0;
+  double tol_;
+  int steps_ = 0;
+};
+
+RepetitionResult RunLine(Run& run, int repetition) {
+  // The grid, one batch: the unit interval's `grid` points, ends included.
+  const LineOptions& o = run.options.line;
+  const int g = o.grid;
+  std::vector<std::vector<double>> points(static_cast<size_t>(g), std::vector<double>(1));
+  for (int i = 0; i < g; ++i) points[static_cast<size_t>(i)][0] = static_cast<double>(i) / (g - 1);
+  std::vector<double> cost;
+  run.EvaluateUnit(points, cost);
+  auto at = [&](int i) { return points[static_cast<size_t>(i)][0]; };
+  auto c = [&](int i) { return cost[static_cast<size_t>(i)]; };
+  int best = ArgMin(cost);
+  double best_u = at(best), best_cost = c(best);
+  run.Record(repetition, 0, best_cost);
+  // The grid's local minima (not above the right neighbour, below the left one: a plateau counts
+  // once), lowest first (ties: the lower index).
+  std::vector<int> minima;
+  for (int i = 0; i < g; ++i)
+    if ((i == 0 || c(i) < c(i - 1)) && (i == g - 1 || c(i) <= c(i + 1))) minima.push_back(i);
+  std::stable_sort(minima.begin(), minima.end(), [&](int x, int y) { return c(x) < c(y); });
+  if (static_cast<int>(minima.size()) > o.brackets) minima.resize(static_cast<size_t>(o.brackets));
+  std::vector<BrentBracket> brackets;
+  for (int i : minima) {
+    const int lo = std::max(i - 1, 0), hi = std::min(i + 1, g - 1);
+    // w: the lower neighbour, v: the other (at an end of the grid, the one neighbour twice).
+    int w = lo == i ? hi : hi == i ? lo : (c(hi) < c(lo) ? hi : lo);
+    int v = w == lo ? hi : lo;
+    if (v == i) v = w;
+    brackets.emplace_back(at(lo), at(hi), at(i), c(i), at(w), c(w), at(v), c(v), o.tolerance);
+  }
+  // Brent's steps, the brackets side by side: one batch of the points of those still refining.
+  std::vector<char> done(brackets.size(), 0), capped(brackets.size(), 0);
+  std::vector<size_t> active;
+  std::string reason;
+  for (int step = 1;; ++step) {
+    points.clear();
+    active.clear();
+    for (size_t k = 0; k < brackets.size(); ++k) {
+      if (done[k]) continue;
+      if (brackets[k].steps() >= o.max_steps) {
+        done[k] = capped[k] = 1;
+        continue;
+      }
+      const std::optional<double> u = brackets[k].Propose();
+      if (!u) {
+        done[k] = 1;
+        continue;
+      }
+      points.push_back({*u});
+      active.push_back(k);
+    }
+    if (points.empty()) break;
+    run.EvaluateUnit(points, cost);
+    for (size_t j = 0; j < active.size(); ++j) {
+      brackets[active[j]].Tell(cost[j]);
+      if (cost[j] < best_cost) {
+        best_cost = cost[j];
+        best_u = points[j][0];
+      }
+    }
+    ++run.iterations;
+    run.Record(repetition, step, best_cost);
+    if (best_cost <= run.options.target_cost) {
+      std::ostringstream os;
+      os.precision(10);
+      os << "target: best cost " << best_cost << " <= " << run.options.target_cost;
+      reason = os.str();
+      break;
+    }
+  }
+  if (reason.empty()) {
+    std::ostringstream os;
+    os << "grid of " << g << ", " << brackets.size() << (brackets.size() == 1 ? " local minimum" : " local minima")
+       << " refined by Brent's method (";
+    for (size_t k = 0; k < brackets.size(); ++k) {
+      os << (k > 0 ? ", " : "") << brackets[k].steps() << " steps"
+         << (capped[k] ? " (the limit)" : "");
+    }
+    os << ") to " << o.tolerance << " of the range";
+    reason = os.str();
+  }
+  RepetitionResult r;
+  r.best_unit = {best_u};
+  r.best_cost = best_cost;
+  r.stop_reason = reason;
+  return r;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -534,6 +698,7 @@ const char* SearchAlgorithmName(SearchAlgorithm a) {
     case SearchAlgorithm::kGaReal: return "ga-real";
     case SearchAlgorithm::kGaBinary: return "ga-binary";
     case SearchAlgorithm::kDe: return "de";
+    case SearchAlgorithm::kLine: return "line";
   }
   return "unknown";
 }
@@ -543,7 +708,8 @@ SearchAlgorithm ParseSearchAlgorithm(const std::string& name) {
   if (name == "ga-real") return SearchAlgorithm::kGaReal;
   if (name == "ga-binary") return SearchAlgorithm::kGaBinary;
   if (name == "de") return SearchAlgorithm::kDe;
-  throw InputError("algorithm = " + name + ": must be pso, ga-real, ga-binary or de");
+  if (name == "line") return SearchAlgorithm::kLine;
+  throw InputError("algorithm = " + name + ": must be pso, ga-real, ga-binary, de or line");
 }
 
 Status DeOptions::Validate() const {
@@ -555,6 +721,23 @@ Status DeOptions::Validate() const {
   if (!(f > 0 && f <= 2)) return InvalidArgument(FieldError("de.f", f, "must be in (0, 2]"));
   if (!(cr >= 0 && cr <= 1)) return InvalidArgument(FieldError("de.cr", cr, "must be in [0, 1]"));
   return Status::Ok();
+}
+
+Status LineOptions::Validate() const {
+  if (grid < 3) return InvalidArgument(FieldError("line.grid", grid, "must be >= 3"));
+  if (brackets < 1) return InvalidArgument(FieldError("line.brackets", brackets, "must be >= 1"));
+  if (!(tolerance > 0 && tolerance < 0.5))
+    return InvalidArgument(FieldError("line.tolerance", tolerance, "must be in (0, 0.5)"));
+  if (max_steps < 1) return InvalidArgument(FieldError("line.max_steps", max_steps, "must be >= 1"));
+  return Status::Ok();
+}
+
+std::string LineOptions::Describe() const {
+  std::ostringstream os;
+  os << "a grid of " << grid << " points, then the lowest ";
+  if (brackets > 1) os << brackets << " ";
+  os << "of its local minima refined by Brent's method to " << tolerance << " of the range";
+  return os.str();
 }
 
 Status PsoOptions::Validate() const {
@@ -630,6 +813,14 @@ Status SearchOptions::Validate(const ParamBox& box) const {
     case SearchAlgorithm::kGaReal: s = ga_real.Validate(); break;
     case SearchAlgorithm::kGaBinary: s = ga_binary.Validate(box.size()); break;
     case SearchAlgorithm::kDe: s = de.Validate(); break;
+    case SearchAlgorithm::kLine:
+      s = line.Validate();
+      if (s.ok() && box.size() != 1)
+        s = InvalidArgument(FieldError("algorithm", "line", "searches one parameter; the box has " +
+                                                                std::to_string(box.size())));
+      if (s.ok() && repetitions != 1)
+        s = InvalidArgument(FieldError("repetitions", repetitions, "must be 1 for the line search (it has no random choice)"));
+      break;
   }
   if (!s.ok()) return s;
   if (!seeds.empty() && algorithm != SearchAlgorithm::kDe)
@@ -680,6 +871,7 @@ SearchResult Search(const ParamBox& box, const SearchOptions& options, BatchEval
       case SearchAlgorithm::kGaReal: r = RunGaReal(run, rep); break;
       case SearchAlgorithm::kGaBinary: r = RunGaBinary(run, rep); break;
       case SearchAlgorithm::kDe: r = RunDe(run, rep); break;
+      case SearchAlgorithm::kLine: r = RunLine(run, rep); break;
     }
     std::vector<double> physical(box.size());
     box.ToPhysical(r.best_unit.data(), physical.data());

@@ -13,7 +13,11 @@
 //              (Gray code by default) decoded to a real before evaluation;
 //   kDe        differential evolution DE/rand-to-best/1/bin, a trial coordinate leaving the box put
 //              between its parent and that bound; optional seeds take the first slots of the
-//              initial population (the fin-bench diagnosis's search).
+//              initial population (the fin-bench diagnosis's search);
+//   kLine      one parameter (a box of size 1): a uniform grid over the unit interval, evaluated as
+//              one batch, then the grid's lowest local minima each refined within its neighbours by
+//              Brent's method (parabolic interpolation with golden-section steps), the brackets
+//              advancing side by side, one batch per step. No random choice; one repetition.
 //
 // The search space is the unit box [0, 1]^d: coordinate x maps to lower + x (upper − lower), or to
 // 10^(log10 lower + x (log10 upper − log10 lower)) for log-scaled parameters. Genomes handed to the
@@ -63,8 +67,8 @@ struct ParamBox {
   void ToUnit(const double* physical, double* unit) const;
 };
 
-enum class SearchAlgorithm { kPso, kGaReal, kGaBinary, kDe };
-/// "pso", "ga-real", "ga-binary", "de".
+enum class SearchAlgorithm { kPso, kGaReal, kGaBinary, kDe, kLine };
+/// "pso", "ga-real", "ga-binary", "de", "line".
 const char* SearchAlgorithmName(SearchAlgorithm a);
 /// Parses the names above; throws InputError naming the value otherwise.
 SearchAlgorithm ParseSearchAlgorithm(const std::string& name);
@@ -145,6 +149,21 @@ struct BinaryGaOptions {
   Status Validate(size_t parameters) const;  ///< names the field: "ga_binary.bits_per_parameter"
 };
 
+/// The line search of one parameter (kLine). Its evaluations: `grid` (one batch), then at most
+/// `brackets` × `max_steps` (batches of one point per bracket still refining).
+struct LineOptions {
+  int grid = 17;            ///< grid points over [0, 1], ends included, ≥ 3
+  int brackets = 2;         ///< the lowest local minima of the grid refined, ≥ 1
+  /// A bracket stops once its minimum is located within this (unit coordinates, absolute; Brent's
+  /// tol), in (0, 0.5).
+  double tolerance = 1e-4;
+  int max_steps = 60;       ///< evaluations per bracket at most, ≥ 1
+  Status Validate() const;  ///< names the field: "line.grid = 2: must be >= 3"
+  /// "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's method to 0.0001
+  /// of the range".
+  std::string Describe() const;
+};
+
 /// Progress after each iteration / generation of any repetition.
 struct SearchProgress {
   int repetition = 0;
@@ -160,6 +179,7 @@ struct SearchOptions {
   RealGaOptions ga_real;
   BinaryGaOptions ga_binary;
   DeOptions de;
+  LineOptions line;
   /// Points of the unit box (each of the box's size, clamped into it) that take the first slots of
   /// the initial population; only the de search takes them.
   std::vector<std::vector<double>> seeds;

@@ -658,18 +658,35 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     opt::FitOptions fo;
     fo.search_options = options.search;
     res.searched_parameters = searched.size();
-    if (options.sizing.enabled && fo.search_options.algorithm == opt::SearchAlgorithm::kPso) {
-      const SearchBudget b = SizedSearchBudget(searched.size());
-      const FitOptions::Sizing& k = options.sizing;
-      opt::SearchOptions& so = fo.search_options;
-      if (!k.keep_particles) so.pso.particles = b.particles;
-      if (!k.keep_iterations) so.pso.iterations = b.iterations;
-      if (!k.keep_stall) so.pso.stall_iterations = b.stall;
-      if (!k.keep_repetitions) so.repetitions = b.repetitions;
-      so.pso.converged_spread = b.converged_spread;
+    res.spectrum_solved = solved;
+    res.solved_parameters = params.size() - searched.size();  // the spectrum's weights where solved
+    const FitOptions::Sizing& k = options.sizing;
+    opt::SearchOptions& so = fo.search_options;
+    if (k.enabled && so.algorithm == opt::SearchAlgorithm::kPso) {
+      if (searched.size() == 1 && !k.keep_algorithm && !k.keep_particles && !k.keep_iterations && !k.keep_stall &&
+          !k.keep_repetitions) {
+        so.algorithm = opt::SearchAlgorithm::kLine;  // one bounded scalar: a grid, then Brent
+        so.repetitions = 1;
+      } else {
+        const SearchBudget b = SizedSearchBudget(searched.size());
+        if (!k.keep_particles) so.pso.particles = b.particles;
+        if (!k.keep_iterations) so.pso.iterations = b.iterations;
+        if (!k.keep_stall) so.pso.stall_iterations = b.stall;
+        if (!k.keep_repetitions) so.repetitions = b.repetitions;
+        so.pso.converged_spread = b.converged_spread;
+      }
       res.budget_sized = true;
+    } else if (so.algorithm == opt::SearchAlgorithm::kLine && !k.keep_repetitions) {
+      so.repetitions = 1;  // asked for by name: its one repetition
     }
-    res.algorithm = fo.search_options.algorithm;
+    if (k.line_given && so.algorithm != opt::SearchAlgorithm::kLine)
+      throw InputError("--line-grid / --line-brackets / --line-tolerance: the line search's budget, for a search of one "
+                       "parameter with the sized budget; this fit searches " + std::to_string(searched.size()) +
+                       " parameter" + (searched.size() == 1 ? "" : "s") + " by " +
+                       opt::SearchAlgorithmName(so.algorithm) +
+                       (searched.size() == 1 ? " (--algorithm or a PSO budget flag was given)" : ""));
+    res.algorithm = so.algorithm;
+    res.line = so.line;
     res.budget = BudgetOf(fo.search_options);
     fo.polish_repetitions = options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
     fo.concurrent_polishes = true;  // each polish its own ThreadPoolEvaluator over the const fitness

@@ -185,6 +185,12 @@ struct RecordMetrics {
 ///   repetitions = d ≤ 2 ? 2 : 3
 ///   converged   = every particle within 1e-3 of the best (unit box): stop the repetition.
 ///
+/// One searched parameter (d = 1) takes the line search instead of a swarm (opt::SearchAlgorithm::
+/// kLine: a grid of 17 points over its range, one batch, then the grid's lowest two local minima
+/// refined by Brent's method side by side to 1e-4 of the range; no random choice): the cost of one
+/// bounded scalar (a delay) is cheap to bracket, and ≈ 40 evaluations find what a swarm of 10 × ≤ 30 × 2
+/// finds in ≈ 460 (docs/performance.md, "One searched parameter: a line search").
+///
 /// docs/performance.md, "The 10 s target on the 150 V recording".
 struct SearchBudget {
   int particles = 30, iterations = 150, stall = 40, repetitions = 3;
@@ -213,9 +219,14 @@ struct FitOptions {
   }();
   /// Size the PSO search by SizedSearchBudget(the searched parameters) — `piezoid fit`'s default —
   /// except the fields marked kept, which stay as `search` has them (the user's explicit flags).
+  /// With one searched parameter and neither the algorithm nor any of the PSO budget kept, the
+  /// search is the line search of `search.line` (its repetitions 1).
   struct Sizing {
     bool enabled = false;
     bool keep_particles = false, keep_iterations = false, keep_stall = false, keep_repetitions = false;
+    bool keep_algorithm = false;  ///< `--algorithm` given (pso stays pso)
+    /// The line search's budget was given (`--line-grid` …): an error where it is not the search.
+    bool line_given = false;
   } sizing;
   bool polish = true;   ///< Levenberg–Marquardt after the search
   /// Polish also each other repetition's best, keeping the lowest (opt::FitOptions::polish_repetitions:
@@ -257,6 +268,11 @@ struct FitResult {
   /// was sized, for how many searched parameters; the polishes run and the one kept.
   opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
   SearchBudget budget;
+  opt::LineOptions line;  ///< the line search's budget (algorithm kLine)
+  /// The creep spectrum's weights were solved with the family's weights in every evaluation
+  /// (records/spectrum_solve.h), not searched: `solved_parameters` of them.
+  bool spectrum_solved = false;
+  size_t solved_parameters = 0;
   bool budget_sized = false;
   size_t searched_parameters = 0;
   int polishes = 0;

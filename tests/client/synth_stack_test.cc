@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 #include "client/commands.h"
 #include "tests/testing/cli.h"
@@ -131,6 +133,34 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
                           (dir / "bad-ops").string(), "--quiet"});
                 }),
                 "--pi-operators 300: preisach.levels");
+
+  // One searched parameter (the delay; the weights are solved): the line search, said in the report,
+  // fit.json and on stdout; its bad budgets are refused naming the flag, and its budget where the
+  // search is not the line search.
+  const std::string lined = Captured({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--effects", "delay",
+                                     "--line-grid", "9", "--out", (dir / "line").string(), "--no-figures", "--quiet"});
+  PZ_EXPECT_HAS(lined, "search: line search: a grid of 9 points, then the lowest 2 of its local minima refined by "
+                      "Brent's method to 0.0001 of the range (the rule for 1 searched parameter)");
+  PZ_EXPECT_HAS(Read(dir / "line" / "report.md"), "Search: line search: a grid of 9 points");
+  const std::string line_json = Read(dir / "line" / "fit.json");
+  PZ_EXPECT_HAS(line_json, "\"algorithm\": \"line\"");
+  PZ_EXPECT_HAS(line_json, "\"grid\": 9");
+  PZ_EXPECT_HAS(line_json, "\"spectrum_solved\": false");
+  for (const auto& [flag, value] : std::vector<std::pair<std::string, std::string>>{
+           {"--line-grid", "2"}, {"--line-brackets", "0"}, {"--line-tolerance", "0"}, {"--line-tolerance", "0.5"}}) {
+    try {
+      RunCli({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--effects", "delay", flag, value, "--out",
+              (dir / "bad-line").string(), "--quiet"});
+      ADD_FAILURE() << flag << " " << value << " accepted";
+    } catch (const CLI::ValidationError& e) {
+      PZ_EXPECT_HAS(std::string(e.what()), flag);
+    }
+  }
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--effects", "delay", "--particles",
+                          "12", "--line-grid", "9", "--out", (dir / "bad-line").string(), "--quiet"});
+                }),
+                "--line-grid / --line-brackets / --line-tolerance: the line search's budget");
 
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"synth-stack", "--out", (dir / "bad").string(), "--fs", "100", "--train-drive",

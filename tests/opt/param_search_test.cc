@@ -1,6 +1,8 @@
 // Complete-model optimisers (opt/param_search.h): PSO, real-coded GA, binary GA and DE reach the
 // known minima of Rosenbrock and Rastrigin; the same seed gives the same result bit for bit inline
-// and on a 2-thread pool; bad boxes and options are refused naming the field; Gray decoding.
+// and on a 2-thread pool; bad boxes and options are refused naming the field; Gray decoding. The
+// line search of one parameter finds the minimum of known functions with local minima on its grid,
+// the same on any thread count, and names its bad budgets.
 #include "opt/param_search.h"
 
 #include <gtest/gtest.h>
@@ -359,6 +361,109 @@ TEST(ParamSearch, BadBoxAndOptionsNamed) {
   PZ_EXPECT_HAS(InputErrorOf([] { ParseSearchAlgorithm("nelder-mead"); }), "algorithm = nelder-mead");
   EXPECT_EQ(ParseSearchAlgorithm("ga-binary"), SearchAlgorithm::kGaBinary);
   EXPECT_EQ(ParseSearchAlgorithm("de"), SearchAlgorithm::kDe);
+}
+
+/// Two basins on [0, 0.1] (a delay's range): a broad one at 0.023 (cost 0) that the grid sees best,
+/// and a narrow, deeper one at 0.0771 (cost −1e-5) that falls between grid points, where the grid's
+/// nearest point is only its second local minimum; counts its evaluations.
+class TwoBasins final : public FitnessFunction {
+ public:
+  FitnessResult Evaluate(const Genome& g) const override {
+    ++calls;
+    const double x = g.reals[0];
+    const double broad = (x - 0.023) * (x - 0.023), narrow = 50 * (x - 0.0771) * (x - 0.0771) - 1e-5;
+    return {std::min(broad, narrow), FitnessStatus::kOk, {}};
+  }
+  mutable std::atomic<int> calls{0};
+};
+
+SearchOptions LineOptionsOf(int grid, int brackets, double tolerance) {
+  SearchOptions o;
+  o.algorithm = SearchAlgorithm::kLine;
+  o.repetitions = 1;
+  o.line.grid = grid;
+  o.line.brackets = brackets;
+  o.line.tolerance = tolerance;
+  return o;
+}
+
+TEST(ParamSearch, TheLineSearchRefinesTheGridsLowestLocalMinima) {
+  TwoBasins f;
+  const ParamBox box = Box(1, 0, 0.1);
+  // Grid of 17 (step 0.00625): the broad basin's nearest point 0.025 costs 4e-6; the narrow basin's
+  // 0.075 costs 50 · 2.1e-3² − 1e-5 ≈ 2.1e-4, a local minimum of the grid, but not its best.
+  const SearchResult two = RunSearch(f, box, LineOptionsOf(17, 2, 1e-6));
+  EXPECT_NEAR(two.best[0], 0.0771, 1e-6);
+  EXPECT_NEAR(two.best_cost, -1e-5, 1e-11);
+  EXPECT_EQ(two.evaluations, f.calls.load());
+  EXPECT_LE(two.evaluations, 17 + 2 * 60);
+  EXPECT_EQ(two.repetition_best.size(), 1u);
+  PZ_EXPECT_HAS(two.stop_reason, "grid of 17, 2 local minima refined by Brent's method");
+  // One bracket refines the grid's best alone: the broad basin's minimum, to the tolerance.
+  const SearchResult one = RunSearch(f, box, LineOptionsOf(17, 1, 1e-6));
+  EXPECT_NEAR(one.best[0], 0.023, 1e-6);
+  EXPECT_NEAR(one.best_cost, 0, 1e-12);
+  EXPECT_LT(one.evaluations, two.evaluations);
+  // Brent's parabolas: a parabola's vertex within two or three steps of the grid.
+  class Parabola final : public FitnessFunction {
+   public:
+    FitnessResult Evaluate(const Genome& g) const override {
+      return {(g.reals[0] - 0.3141) * (g.reals[0] - 0.3141) + 2, FitnessStatus::kOk, {}};
+    }
+  } parabola;
+  const SearchResult p = RunSearch(parabola, Box(1, -1, 1), LineOptionsOf(9, 2, 1e-8));
+  EXPECT_NEAR(p.best[0], 0.3141, 1e-7);
+  EXPECT_LE(p.evaluations, 9 + 12);  // one local minimum on the grid: one bracket (golden steps alone: 37)
+  // Ends of the range: a minimum at the bound is found there.
+  class Slope final : public FitnessFunction {
+   public:
+    FitnessResult Evaluate(const Genome& g) const override { return {g.reals[0], FitnessStatus::kOk, {}}; }
+  } slope;
+  const SearchResult end = RunSearch(slope, Box(1, 2, 3), LineOptionsOf(5, 2, 1e-6));
+  EXPECT_NEAR(end.best[0], 2, 1e-5);
+}
+
+TEST(ParamSearch, TheLineSearchIsTheSameOnAnyThreadCount) {
+  // Costs with local minima everywhere (Rastrigin in one dimension): the grid's minima, their
+  // refinements and so the result and its trace are the same inline and on pools of 2 and 3 threads.
+  Rastrigin f;
+  const ParamBox box = Box(1, -5.12, 5.12);
+  const SearchOptions o = LineOptionsOf(33, 3, 1e-7);
+  InlineEvaluator inl(f);
+  ThreadPoolEvaluator two(f, 2), three(f, 3);
+  const SearchResult x = Search(box, o, inl), y = Search(box, o, two), z = Search(box, o, three);
+  EXPECT_NEAR(x.best[0], 0, 1e-6);  // the global minimum among Rastrigin's 11 on the range
+  for (const SearchResult* r : {&y, &z}) {
+    EXPECT_EQ(x.best, r->best);
+    EXPECT_EQ(x.best_cost, r->best_cost);
+    EXPECT_EQ(x.evaluations, r->evaluations);
+    EXPECT_EQ(x.iterations, r->iterations);
+    EXPECT_EQ(x.trace.best_cost, r->trace.best_cost);
+    EXPECT_EQ(x.trace.evaluations, r->trace.evaluations);
+    EXPECT_EQ(x.stop_reason, r->stop_reason);
+  }
+}
+
+TEST(ParamSearch, TheLineSearchsBadBudgetsAreNamed) {
+  using pz::testing::InputErrorOf;
+  Rosenbrock f;
+  InlineEvaluator e(f);
+  auto search = [&](const ParamBox& b, const SearchOptions& o) { return InputErrorOf([&] { Search(b, o, e); }); };
+  const ParamBox box = Box(1, 0, 1);
+  PZ_EXPECT_HAS(search(box, LineOptionsOf(2, 2, 1e-4)), "line.grid = 2: must be >= 3");
+  PZ_EXPECT_HAS(search(box, LineOptionsOf(17, 0, 1e-4)), "line.brackets = 0: must be >= 1");
+  PZ_EXPECT_HAS(search(box, LineOptionsOf(17, 2, 0)), "line.tolerance = 0: must be in (0, 0.5)");
+  PZ_EXPECT_HAS(search(box, LineOptionsOf(17, 2, 0.5)), "line.tolerance = 0.5");
+  SearchOptions o = LineOptionsOf(17, 2, 1e-4);
+  o.line.max_steps = 0;
+  PZ_EXPECT_HAS(search(box, o), "line.max_steps = 0: must be >= 1");
+  PZ_EXPECT_HAS(search(Box(2, 0, 1), LineOptionsOf(17, 2, 1e-4)), "algorithm = line: searches one parameter; the box has 2");
+  o = LineOptionsOf(17, 2, 1e-4);
+  o.repetitions = 3;
+  PZ_EXPECT_HAS(search(box, o), "repetitions = 3: must be 1 for the line search");
+  EXPECT_EQ(ParseSearchAlgorithm("line"), SearchAlgorithm::kLine);
+  EXPECT_STREQ(SearchAlgorithmName(SearchAlgorithm::kLine), "line");
+  PZ_EXPECT_HAS(LineOptions{}.Describe(), "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's method to 0.0001 of the range");
 }
 
 TEST(ParamSearch, GrayAndPlainDecoding) {

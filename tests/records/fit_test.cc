@@ -307,14 +307,26 @@ TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
   const FitResult sized = FitRecords(set, o);
   EXPECT_TRUE(sized.budget_sized);
   EXPECT_EQ(sized.searched_parameters, 1u);
-  EXPECT_EQ(sized.budget.particles, 10);
-  EXPECT_EQ(sized.budget.repetitions, 2);
-  EXPECT_LE(sized.search.evaluations, 2 * 10 * 31);
+  EXPECT_FALSE(sized.spectrum_solved);
+  // One searched parameter: the line search (a grid of 17, two brackets refined), not a swarm.
+  EXPECT_EQ(sized.algorithm, opt::SearchAlgorithm::kLine);
+  EXPECT_EQ(sized.line.grid, 17);
+  EXPECT_EQ(sized.line.brackets, 2);
+  EXPECT_LE(sized.search.evaluations, 17 + 2 * 60);
+  // The same optimum as the swarm's (to the polish's precision): the delay's cost is one basin.
   o.sizing.keep_particles = o.sizing.keep_repetitions = true;  // --particles 24 --repetitions 1
   const FitResult kept = FitRecords(set, o);
+  EXPECT_EQ(kept.algorithm, opt::SearchAlgorithm::kPso);
+  EXPECT_LE(sized.train_mse, kept.train_mse * (1 + 1e-6));
+  EXPECT_NEAR(sized.params[0], kept.params[0], 1e-3 * sized.model->params()[0].upper);
   EXPECT_EQ(kept.budget.particles, 24);
   EXPECT_EQ(kept.budget.repetitions, 1);
   EXPECT_EQ(kept.budget.iterations, 30);
+  // The line search's budget given where the search is not the line search: refused, saying why.
+  o.sizing.line_given = true;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { FitRecords(set, o); }),
+                "--line-grid / --line-brackets / --line-tolerance: the line search's budget");
+  o.sizing.line_given = false;
   o.sizing.enabled = false;
   const FitResult given = FitRecords(set, o);
   EXPECT_FALSE(given.budget_sized);

@@ -2,7 +2,7 @@
 // from its spec alone (binary and JSON encodings), the fitness `piezoid fit` has — every family
 // with effects, records cut at their rest, each offset mode — cost for cost, bit for bit; bad
 // specs are refused field by field; and a fit whose global search runs on a local master with two
-// workers gives the local result bit for bit.
+// workers gives the local result bit for bit (a swarm, and the line search of one parameter).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -189,6 +189,28 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   ASSERT_TRUE(client.List(&jobs).ok());
   ASSERT_EQ(jobs.size(), 1u);
   EXPECT_EQ(jobs[0].kind, "complete_model");
+  // One searched parameter (prandtl-ishlinskii's weights are solved): the line search, its grid and
+  // then one point per bracket and step as the batches of the session, the local fit bit for bit.
+  records::FitOptions line = o;
+  line.family = "prandtl-ishlinskii";
+  line.sizing.enabled = true;
+  line.evaluator_factory = nullptr;
+  const records::FitResult local_line = records::FitRecords(set, line);
+  line.evaluator_factory = client::RecordsServiceFactory(so, line.family_options, "test");
+  records::FitResult remote_line;
+  try {
+    remote_line = records::FitRecords(set, line);
+  } catch (const std::exception& e) {
+    FAIL() << e.what() << " (see " << cluster.dir() << ")";
+  }
+  EXPECT_EQ(local_line.algorithm, opt::SearchAlgorithm::kLine);
+  EXPECT_EQ(remote_line.algorithm, opt::SearchAlgorithm::kLine);
+  ASSERT_EQ(local_line.params.size(), 1u);
+  ASSERT_EQ(remote_line.params.size(), 1u);
+  EXPECT_TRUE(SameBits(local_line.params[0], remote_line.params[0]));
+  EXPECT_TRUE(SameBits(local_line.train_mse, remote_line.train_mse));
+  EXPECT_EQ(local_line.search.evaluations, remote_line.search.evaluations);
+  EXPECT_EQ(local_line.search.trace.best_cost, remote_line.search.trace.best_cost);
 }
 
 /// A records fit's evaluator that takes the genomes one at a time on two threads: the fitness's
