@@ -244,11 +244,24 @@ class Creep final : public EffectDef {
   }
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
     if (p[0] == 0 || u.empty()) return;
-    const double u0 = u[0];
-    std::vector<double> x(u.size());
-    for (size_t k = 0; k < u.size(); ++k) x[k] = p[0] * (u[k] - u0);
-    LowpassInPlace(x, p[1], dt);
-    for (size_t k = 0; k < u.size(); ++k) u[k] += x[k];
+    // u += LowpassInPlace(k (u − u0)) in one pass over u, without a buffer: x_k is LowpassInPlace's
+    // recursion on v_k = k (u_k − u0), operation for operation (the same values bit for bit), and
+    // u_k is read before it is replaced. A search evaluates this once per genome.
+    const double k = p[0], u0 = u[0];
+    const double prev0 = k * (u[0] - u0);
+    if (!(p[1] > 1e-12 * dt)) {  // LowpassInPlace leaves v as it is
+      for (double& v : u) v += k * (v - u0);
+      return;
+    }
+    const auto [a, c] = LowpassConsts(p[1], dt);
+    double x = prev0, prev = prev0;
+    u[0] += x;
+    for (size_t i = 1; i < u.size(); ++i) {
+      const double cur = k * (u[i] - u0);
+      x = a * x + (1 - a) * prev + (cur - prev) * c;
+      prev = cur;
+      u[i] += x;
+    }
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);

@@ -167,8 +167,19 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
   res.cost = sq(res.r);
   double lambda = o.lambda0;
   std::vector<double> r_new;
+  bool central = o.central;
+  // Forward differences stopped (converged by a rule, not the iteration limit): finish with central
+  // ones from there when asked. False: stop.
+  auto finish_central = [&] {
+    if (central || !o.central_to_finish) return false;
+    central = true;
+    res.converged = false;
+    res.message.clear();
+    if (lambda > 1e10) lambda = o.lambda0;  // the forward Jacobian found no descent step
+    return true;
+  };
   for (int it = 0; it < o.max_iterations; ++it) {
-    NumericJacobian(fb, res.x, res.r, lower, upper, o.fd_step, o.central, res.jacobian, &res.evaluations);
+    NumericJacobian(fb, res.x, res.r, lower, upper, o.fd_step, central, res.jacobian, &res.evaluations);
     res.iterations = it + 1;
     const Eigen::Map<const Eigen::VectorXd> rv(res.r.data(), static_cast<Eigen::Index>(res.r.size()));
     const Eigen::MatrixXd a = res.jacobian.transpose() * res.jacobian;
@@ -183,6 +194,7 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
     if (free.empty()) {
       res.converged = true;
       res.message = "every parameter held at a bound";
+      if (finish_central()) continue;
       break;
     }
     const int nf = static_cast<int>(free.size());
@@ -238,7 +250,7 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
         }
       }
     }
-    if (done) break;
+    if (done && !finish_central()) break;
   }
   if (res.message.empty()) res.message = "iteration limit";
   return res;

@@ -39,6 +39,11 @@ struct LmOptions {
   double fd_step = 1e-3;     ///< finite-difference step in the coordinates of x, > 0 (large enough to
                              ///< step over the kinks of a backlash)
   bool central = true;       ///< central differences (else forward)
+  /// With forward differences: where the polish stops by a rule (ftol, xtol, no descent step, every
+  /// parameter held) rather than the iteration limit, go on from there with central differences
+  /// until it stops again (the same iteration limit in all). Forward differences cost p + 1
+  /// evaluations a Jacobian against 2p, and their O(step) error matters only near the end.
+  bool central_to_finish = false;
   int threads = 2;           ///< Jacobian columns in parallel, ≥ 1
   double ftol = 1e-7;        ///< stop when an accepted step lowers the cost by less than ftol × cost
   double xtol = 1e-9;        ///< stop when the step is smaller than this (max norm)

@@ -15,6 +15,7 @@
 #include <fstream>
 #include <numbers>
 #include <random>
+#include <regex>
 #include <sstream>
 
 #include "client/commands.h"
@@ -256,6 +257,37 @@ TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
   EXPECT_NEAR(NumberAfter(out, "record offset ", shifted) - NumberAfter(out, "record offset ", out.find("  rec (")), 3.0,
               0.01)
       << out;
+}
+
+// `piezoid fit` polishes with forward differences by default (a Jacobian of p + 1 evaluations, the
+// residuals at the point reused, against 2p central) and central ones once it has converged
+// (tests/opt/fit_test.cc for the evaluations): the same search, a fit as good; fit.json and report.md
+// say which; another value is refused.
+TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like", "--lm-differences", "central",
+            "--out", (dir_ / "other-central").string(), "--no-figures", "--quiet"});
+  const std::string fwd = io::ReadTextFile(dir_ / "other" / "fit.json");
+  const std::string cen = io::ReadTextFile(dir_ / "other-central" / "fit.json");
+  PZ_EXPECT_HAS(fwd, "\"lm_differences\": \"forward-central\"");
+  PZ_EXPECT_HAS(cen, "\"lm_differences\": \"central\"");
+  PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "other" / "report.md"), "(forward-central differences)");
+  auto number = [](const std::string& json, const std::string& key) {
+    std::smatch m;
+    EXPECT_TRUE(std::regex_search(json, m, std::regex("\"" + key + "\": ([-0-9.e+]+)"))) << key;
+    return m.empty() ? -1.0 : std::stod(m[1].str());
+  };
+  EXPECT_EQ(number(fwd, "search_evaluations"), number(cen, "search_evaluations"));
+  const double mse_fwd = number(fwd, "train_mse"), mse_cen = number(cen, "train_mse");
+  EXPECT_LE(mse_fwd, 1.01 * mse_cen) << mse_fwd << " forward, " << mse_cen << " central";
+  std::string refused;
+  try {
+    RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like", "--lm-differences",
+            "sideways", "--out", (dir_ / "bad").string(), "--no-figures", "--quiet"});
+  } catch (const std::exception& e) {
+    refused = e.what();
+  }
+  PZ_EXPECT_HAS(refused, "--lm-differences: sideways");
+  EXPECT_FALSE(fs::exists(dir_ / "bad"));
 }
 
 }  // namespace

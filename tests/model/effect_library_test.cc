@@ -113,6 +113,22 @@ TEST(EffectLibraryTest, LowpassIsTheExactFirstOrderHoldOfARamp) {
   }
 }
 
+TEST(EffectLibraryTest, CreepIsTheDrivePlusTheLowpassOfItsChangeBitForBit) {
+  // u_e = u + lowpass_τ(k (u − u0)): the one-pass recursion against the low-pass effect on its own
+  // buffer, including τ below the low-pass's floor (the low-pass then leaves its input as it is).
+  const double dt = 1e-3;
+  for (const double tau : {0.02, 0.7, 0.0}) {
+    const std::vector<double> base = Ramp(300);
+    const double k = -0.09;
+    std::vector<double> x(base.size());
+    for (size_t i = 0; i < base.size(); ++i) x[i] = k * (base[i] - base[0]);
+    FindEffect("driver-lowpass")->ApplyDrive(std::vector<double>{tau}, dt, x);
+    std::vector<double> u = base;
+    FindEffect("creep")->ApplyDrive(std::vector<double>{k, tau}, dt, u);
+    for (size_t i = 0; i < u.size(); ++i) EXPECT_EQ(u[i], base[i] + x[i]) << "tau " << tau << ", sample " << i;
+  }
+}
+
 TEST(EffectLibraryTest, DelayOfWholeSamplesShiftsAndHoldsTheRest) {
   const std::vector<double> base = Ramp(50);
   std::vector<double> v = base;

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 
 #include "opt/inline_evaluator.h"
@@ -319,6 +320,40 @@ TEST(Fit, AProblemOrOptionsThatCannotRunAreRefusedNamingWhy) {
   bare.map = &map;
   PZ_EXPECT_HAS(InputErrorOf([&] { Fit(bare, o); }), "needs a cost evaluator");
   PZ_EXPECT_HAS(InputErrorOf([&] { BoxMap(LineBox(2), {"V"}); }), "units.size() = 1");
+}
+
+// Forward differences (p + 1 evaluations a Jacobian) stop where their O(step) error balances the
+// gradient; `central_to_finish` goes on from there with central ones: the central polish's minimum
+// for fewer evaluations. y = a e^{-b t} in unit coordinates (a = 4 x0, b = 3 x1), a coarse step.
+TEST(LevenbergMarquardt, ForwardDifferencesFinishedCentrallyReachTheCentralMinimumForLess) {
+  std::vector<double> t, y;
+  for (int k = 0; k < 30; ++k) {
+    t.push_back(k / 10.0);
+    y.push_back(2.0 * std::exp(-1.3 * t.back()) + 0.01 * std::sin(12.9898 * k + 78.233 * k * k));
+  }
+  const ResidualFunction f = [&](std::span<const double> x, std::vector<double>& r) {
+    r.resize(t.size());
+    for (size_t k = 0; k < t.size(); ++k) r[k] = y[k] - 4 * x[0] * std::exp(-3 * x[1] * t[k]);
+    return true;
+  };
+  const std::vector<double> lo = {0, 0}, hi = {1, 1};
+  auto run = [&](bool central, bool finish) {
+    LmOptions o;
+    o.fd_step = 2e-2;
+    o.central = central;
+    o.central_to_finish = finish;
+    o.threads = 1;
+    return LevenbergMarquardt(f, {0.2, 0.2}, lo, hi, o);
+  };
+  const LmResult c = run(true, false), fw = run(false, false), fc = run(false, true);
+  ASSERT_TRUE(c.converged) << c.message;
+  ASSERT_TRUE(fc.converged) << fc.message;
+  // Each stops by its relative-decrease rule (ftol 1e-7): forward alone ~3e-7 above the central
+  // polish's cost here, finished centrally within 1e-6 of it and below forward alone.
+  EXPECT_GT(fw.cost, fc.cost);
+  EXPECT_LE(fc.cost, c.cost * (1 + 1e-6));
+  EXPECT_LT(fc.evaluations, c.evaluations);
+  EXPECT_LT(fw.evaluations, fc.evaluations);
 }
 
 }  // namespace
