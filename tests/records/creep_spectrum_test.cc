@@ -3,9 +3,12 @@
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
 // weights stay non-negative; trained on the major loop alone, the varying-amplitude and reversal
-// records stay within 2x the floor with the roughness penalty on the weights (chosen by validation
-// on the training record) and without it (the weights solved exactly); a record too short for the spectrum is
-// refused, naming what is missing (and left out of a diagnosis's default candidates).
+// records come within 1.25x the floor with the roughness penalty on the spectrum's weights (chosen
+// by validation on the training record) and without it (the weights solved exactly), the Preisach
+// weights under the roughness over the triangle that the validation keeps; the major loop
+// identifies the creep and the lag (with an oracle's Preisach weights every withheld record is at
+// the floor); a record too short for the spectrum is refused, naming what is missing (and left out
+// of a diagnosis's default candidates).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -91,7 +94,7 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
 }
 
 
-TEST(CreepSpectrumTest, AMajorLoopSpectrumExtrapolatesWithinTwiceTheFloor) {
+TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget) {
   // Trained on the major loop only (a 40 s constant-amplitude sine: what a user has), with the
   // sensor's lag: the set of `piezoid synth-stack --seed 4` (docs/real-recording.md).
   RealLikeOptions o;
@@ -128,15 +131,19 @@ TEST(CreepSpectrumTest, AMajorLoopSpectrumExtrapolatesWithinTwiceTheFloor) {
   // The training excitation still fits at the floor.
   EXPECT_LE(with.at("major"), 1.1);
   EXPECT_LE(with.at("major-2"), 1.1);
-  // The varying-amplitude and reversal records: within 2x the floor. The spectrum is solved with
-  // the Preisach weights (records/spectrum_solve.h), so the unpenalised fit is the exact optimum,
-  // not the ragged spectrum a search of the weights used to stop at (fast relaxations at their bound
-  // standing in for the loop's shape and the lag: 2.7x the floor on the reversals, seed 4): it
-  // extrapolates as well, and the penalty (chosen by the blocks, which cannot tell the two apart)
-  // costs the withheld records nothing.
+  // The varying-amplitude and reversal records: within the 1.25x of the floor (1.17x /
+  // 1.14x): the Preisach weights' penalty kept is the roughness over the triangle, which fills in
+  // the interior the major loop does not identify from its branches (with the roughness along the
+  // centre, the only one before: 1.47x / 1.64x). The spectrum is solved with the Preisach weights
+  // (records/spectrum_solve.h), so the unpenalised fit is the exact optimum, not the ragged
+  // spectrum a search of the weights used to stop at (fast relaxations at their bound standing in
+  // for the loop's shape and the lag: 2.7x the floor on the reversals, seed 4): it extrapolates as
+  // well, and the spectrum's penalty (chosen by the blocks, which cannot tell the two apart) costs
+  // the withheld records nothing.
+  EXPECT_EQ(penalised.regularisation.penalty_name, "roughness over the triangle");
   for (const char* name : {"ramp", "reversals"}) {
-    EXPECT_LE(with.at(name), 2.0) << name;
-    EXPECT_LE(without.at(name), 2.0) << name;
+    EXPECT_LE(with.at(name), 1.25) << name;
+    EXPECT_LE(without.at(name), 1.25) << name;
     EXPECT_LE(with.at(name), 1.05 * without.at(name)) << name;
   }
   std::cout << penalised.spectrum_regularisation.Describe() << "\n";
@@ -151,11 +158,12 @@ std::map<std::string, double> RatiosOf(const RealLikeSet& s, const RecordModel& 
   return out;
 }
 
-TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepAndTheLagNotThePreisachInterior) {
+TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePenaltyTheMinorLoops) {
   // The decomposition of the major-loop gap on `synth-stack --seed 1` (docs/real-recording.md,
   // "What the major loop's gap is made of"). The same plant without creep and lag (the same drives
-  // and noise) gives the Preisach weights alone: fitted on the major loop they leave the minor-loop
-  // records far above the floor; fitted on every record (an oracle) the grid reaches the floor.
+  // and noise) gives the Preisach weights alone: fitted on every record (an oracle) the grid
+  // reaches the floor; fitted on the major loop, the minor-loop records depend on how the penalty
+  // fills in the interior of the triangle, which the loop's branches do not identify.
   // With those oracle weights fixed, the creep spectrum and the delay fitted on the full plant's
   // major loop bring every withheld record to the floor: the major loop identifies creep and lag;
   // what it does not identify is the interior of the Preisach triangle (the minor loops).
@@ -230,9 +238,12 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepAndTheLagNotThePreisachInter
   }
   EXPECT_NEAR(fitted[delay], 1.35 / 200, 0.0005);  // truth: 1.35 samples at 200 Hz
   EXPECT_NEAR(total, 0.05, 0.01);                  // truth: 1.5 % per decade over 0.05 … 50 s
-  // The minor loops from the major loop's Preisach weights: the family's own gap, creep and lag
-  // aside (1.76x / 1.84x with the roughness along the centre).
-  for (const char* name : {"ramp", "reversals"}) EXPECT_GT(from_major.at(name), 1.5) << name;
+  // The minor loops from the major loop's own Preisach weights, creep and lag aside: the interior
+  // of the triangle comes from the penalty the validation keeps — the roughness over the triangle
+  // here (1.14x / 1.17x the floor); the roughness along the centre, the only one before, left
+  // 1.76x / 1.84x.
+  EXPECT_EQ(major.validation().penalty_name, "roughness over the triangle");
+  for (const char* name : {"major", "major-2", "ramp", "reversals"}) EXPECT_LE(from_major.at(name), 1.25) << name;
 }
 
 TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
