@@ -361,6 +361,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     Struct g;
     (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
     (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
+    if (!r.regularisation.penalty_name.empty()) (*g.mutable_fields())["penalty"] = Text(r.regularisation.penalty_name);
     f["regularisation"] = Obj(g);
   }
   if (r.spectrum_regularisation.used) {

@@ -157,21 +157,36 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::spa
   }
 }
 
-std::vector<double> PreisachRoughness(const PreisachGrid& grid) {
+namespace {
+
+/// The Gram matrix of Σ (w_a − w_b)² over the grid's neighbours along the centre and, with
+/// `triangle`, along α and β between the hysteron widths (PreisachRoughness, PreisachTriangleRoughness).
+std::vector<double> Roughness(const PreisachGrid& grid, bool triangle) {
   ThrowIfError(grid.Validate());
   const size_t m = grid.cells();
   std::vector<double> R(m * m, 0.0);
+  auto edge = [&](size_t a, size_t b) {
+    R[a * m + a] += 1;
+    R[b * m + b] += 1;
+    R[a * m + b] -= 1;
+    R[b * m + a] -= 1;
+  };
   for (int i = 0; i < grid.levels; ++i) {
-    for (int j = 0; j + 1 < grid.levels - i; ++j) {
-      const size_t a = grid.cell(i, j), b = grid.cell(i, j + 1);
-      R[a * m + a] += 1;
-      R[b * m + b] += 1;
-      R[a * m + b] -= 1;
-      R[b * m + a] -= 1;
+    for (int j = 0; j < grid.levels - i; ++j) {
+      if (j + 1 < grid.levels - i) edge(grid.cell(i, j), grid.cell(i, j + 1));  // along the centre: α and β + Δ
+      if (!triangle || i == 0 || i + 1 >= grid.levels) continue;  // the reversible cells: no neighbours across widths
+      if (j + 1 < grid.levels - i) edge(grid.cell(i, j), grid.cell(i + 1, j));  // along α: α + Δ, the same β
+      if (j >= 1) edge(grid.cell(i, j), grid.cell(i + 1, j - 1));               // along β: β − Δ, the same α
     }
   }
   return R;
 }
+
+}  // namespace
+
+std::vector<double> PreisachRoughness(const PreisachGrid& grid) { return Roughness(grid, false); }
+
+std::vector<double> PreisachTriangleRoughness(const PreisachGrid& grid) { return Roughness(grid, true); }
 
 InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> y_ref,
                              double u_lo, double u_hi, std::span<double> u, InitialState start) {

@@ -83,6 +83,17 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> weights, st
 /// squares. λ → ∞ leaves a density constant along every width: the PI operator on the grid's
 /// widths; the data bend it where they show asymmetry.
 std::vector<double> PreisachRoughness(const PreisachGrid& grid);
+/// The roughness of the density over the whole triangle: PreisachRoughness's squared differences
+/// along the centre plus, between the hysteron widths i ≥ 1, those along α, (w_{i+1,j} − w_{i,j})²
+/// (α + Δ, the same β), and along β, (w_{i+1,j−1} − w_{i,j})² (β − Δ, the same α) — every neighbour
+/// of the triangular grid alike (the reversible cells of width 0, a line density on the diagonal,
+/// are smoothed along the centre only). λ → ∞ leaves the hysterons' density uniform. A major loop
+/// identifies the density's integrals along α and along β (its ascending and descending branches),
+/// not how the mass lies inside the triangle, which the minor loops use: this penalty fills the
+/// interior in smoothly from the branches, PreisachRoughness towards the PI operator (a density of
+/// the width alone); the validation keeps the one the training records contradict less
+/// (records/regularisation.h ChoosePenalty).
+std::vector<double> PreisachTriangleRoughness(const PreisachGrid& grid);
 
 /// What an inverse met: samples whose reference lay beyond the reachable output (set to the drive
 /// limit), and the largest such shortfall.

@@ -12,8 +12,9 @@
 //   preisach            discrete Preisach model on a triangular grid of relays over the training
 //                       drive range (model/preisach.h), FamilyOptions::pi_operators levels: cell
 //                       weights by non-negative least squares with a roughness penalty along the
-//                       centre axis whose strength is chosen by blocked cross-validation
-//                       (records/regularisation.h); exact inverse by one-step bisection
+//                       centre axis or over the whole triangle, the penalty and its strength chosen
+//                       by blocked cross-validation (records/regularisation.h ChoosePenalty); exact
+//                       inverse by one-step bisection
 //   asymmetric-pi       PI operator plus a monotone memoryless bend from one-sided dead zones of the
 //                       drive (model/preisach.h): asymmetric loops, weights ≥ 0 (monotone, exact
 //                       inverse), a ridge on the dead zones chosen by the same validation
@@ -123,10 +124,16 @@ class Family {
   virtual void Regressors(std::span<const double> u, std::span<double> out) const;
   /// Names of the solved weights (linear families).
   virtual std::vector<std::string> weight_names() const { return {}; }
-  /// Linear families: the Gram matrix R (regressors × regressors, row-major, positive
-  /// semi-definite) of a penalty λ wᵀRw added to the weights' least squares, its strength λ chosen
-  /// by validation on the training records (records/regularisation.h). Empty: none.
-  virtual std::vector<double> regularisation() const { return {}; }
+  /// A penalty λ wᵀRw on a linear family's weights: its name (reports) and the Gram matrix R
+  /// (regressors × regressors, row-major, positive semi-definite).
+  struct Penalty {
+    std::string name;
+    std::vector<double> gram;
+  };
+  /// Linear families: the candidate penalties added to the weights' least squares; the validation
+  /// on the training records keeps one and chooses its strength λ (records/regularisation.h
+  /// ChoosePenalty). Empty: none.
+  virtual std::vector<Penalty> regularisation() const { return {}; }
   /// Throws InputError saying what is missing when the training records (scored windows) cannot
   /// support the family (e.g. no reversals for a Preisach grid). Default: accepts any records.
   virtual void CheckTraining(const std::vector<const io::Record*>& train) const { (void)train; }

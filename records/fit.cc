@@ -94,12 +94,19 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
   // A regularised linear family: its strength chosen by validation with the effects at their
   // neutral values (records/regularisation.h), re-chosen at a fit's solution (FitModel); every
   // evaluation uses the strength of the moment.
-  const std::vector<double> R = fam.linear() ? fam.regularisation() : std::vector<double>{};
-  if (!R.empty()) {
+  // With several candidate penalties, the validation keeps one too (records/regularisation.h ChoosePenalty).
+  const std::vector<Family::Penalty> penalties = fam.linear() ? fam.regularisation() : std::vector<Family::Penalty>{};
+  if (!penalties.empty()) {
     const auto m = static_cast<Eigen::Index>(fam.regressors());
-    if (R.size() != fam.regressors() * fam.regressors()) throw InputError(fam.name() + ": regularisation size mismatch");
-    regularisation_ = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(R.data(), m, m);
+    for (const Family::Penalty& pen : penalties) {
+      if (pen.gram.size() != fam.regressors() * fam.regressors())
+        throw InputError(fam.name() + ": regularisation size mismatch (" + pen.name + ")");
+      penalties_.push_back(
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(pen.gram.data(), m, m));
+      penalty_names_.push_back(pen.name);
+    }
     validation_ = ValidateAt(NeutralParams());
+    regularisation_ = penalties_[validation_.penalty];
   }
   std::tie(spectrum_first_, spectrum_count_) = model_.EffectParams(EffectKind::Named("creep-spectrum"));
   if (spectrum_count_ > 0) {
@@ -280,14 +287,15 @@ WeightValidation RecordFitness::ValidateAt(std::span<const double> p) const {
   BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
                             std::vector<size_t>(K)};
   Accumulate(p, eq);
-  return ChooseStrength(eq, regularisation_);
+  return ChoosePenalty(eq, penalties_, penalty_names_);
 }
 
 bool RecordFitness::Revalidate(std::span<const double> params) {
   if (!validation_.used) return false;
   WeightValidation v = ValidateAt(params);
-  const bool changed = v.relative != validation_.relative;
+  const bool changed = v.relative != validation_.relative || v.penalty != validation_.penalty;
   validation_ = std::move(v);
+  regularisation_ = penalties_[validation_.penalty];
   return changed;
 }
 

@@ -83,12 +83,12 @@ class RecordFitness final : public opt::FitnessFunction {
 
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
-  /// A regularised linear family: the strength chosen by validation at construction (the effects
-  /// at their neutral values), or by Revalidate.
+  /// A regularised linear family: the penalty kept and its strength chosen by validation at
+  /// construction (the effects at their neutral values), or by Revalidate.
   const WeightValidation& validation() const { return validation_; }
-  /// Re-chooses the strength by the same validation with the effects at `params` (a fit's
-  /// solution: effects far from neutral — a creep, a lag — make the neutral model's misfit look
-  /// like noise and its validation choose too strong a strength); true when it changed. Not
+  /// Re-chooses the penalty and its strength by the same validation with the effects at `params` (a
+  /// fit's solution: effects far from neutral — a creep, a lag — make the neutral model's misfit
+  /// look like noise and its validation choose too strong a strength); true when either changed. Not
   /// thread-safe: call between fits.
   bool Revalidate(std::span<const double> params);
   /// A model with `creep-spectrum`: the strength μ of its weights' roughness penalty
@@ -146,7 +146,9 @@ class RecordFitness final : public opt::FitnessFunction {
   std::vector<std::shared_ptr<const Family::Prepared>> prepared_;  ///< per record (null: none)
   size_t samples_ = 0;
   double penalty_;
-  Eigen::MatrixXd regularisation_;  ///< the family's R (empty: none)
+  std::vector<Eigen::MatrixXd> penalties_;  ///< the family's candidate penalties R_k (empty: none)
+  std::vector<std::string> penalty_names_;
+  Eigen::MatrixXd regularisation_;  ///< the one the validation keeps (empty: none)
   WeightValidation validation_;
   size_t spectrum_first_ = 0, spectrum_count_ = 0;  ///< the creep spectrum's weights in params (count 0: none)
   Eigen::MatrixXd spectrum_roughness_;               ///< D

@@ -70,7 +70,13 @@ class PreisachFamily final : public Family {
     return names;
   }
   std::vector<std::string> excluded_effects() const override { return {"friction"}; }
-  std::vector<double> regularisation() const override { return model::PreisachRoughness(grid_); }
+  /// The density's roughness along the centre (towards the PI operator) or over the whole triangle
+  /// (the interior filled in smoothly from the branches): a major loop identifies neither interior,
+  /// the validation keeps the one the training records contradict less.
+  std::vector<Penalty> regularisation() const override {
+    return {{"roughness along the centre", model::PreisachRoughness(grid_)},
+            {"roughness over the triangle", model::PreisachTriangleRoughness(grid_)}};
+  }
   /// A density falling with the relay width and leaning with the centre (an asymmetric loop).
   std::vector<double> CheckNominal() const override {
     const int n = grid_.levels;
@@ -166,11 +172,11 @@ class AsymmetricPiFamily final : public Family {
   }
   /// A ridge on the dead zones: it shrinks the bend towards the symmetric PI operator where the
   /// data do not ask for it (and resolves max(u − z, 0) + min(u − z, 0) = u − z).
-  std::vector<double> regularisation() const override {
+  std::vector<Penalty> regularisation() const override {
     const size_t m = regressors();
     std::vector<double> R(m * m, 0.0);
     for (size_t j = 1 + thresholds_.size(); j < m; ++j) R[j * m + j] = 1;
-    return R;
+    return {{"ridge on the dead zones", std::move(R)}};
   }
   void CheckTraining(const std::vector<const io::Record*>& train) const override {
     size_t samples = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <stdexcept>
 
 #include "model/format.h"
 #include "model/status.h"
@@ -18,10 +19,48 @@ std::string Short(double x) { return FormatG(x, 4); }
 std::string WeightValidation::Describe() const {
   if (!used) return "none";
   if (relatives.empty()) return "none chosen (no validation ran)";
-  std::string s = "strength " + Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
+  std::string s = (penalty_name.empty() ? "" : penalty_name + ", ") + "strength " + Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
                   std::to_string(folds) + "-fold blocked cross-validation; CV RMSE:";
   for (size_t i = 0; i < relatives.size(); ++i) s += (i ? ", " : " ") + Short(relatives[i]) + " → " + Short(cv_rmse[i]);
+  if (candidates.size() > 1) {
+    s += "; kept against";
+    for (size_t k = 0, n = 0; k < candidates.size(); ++k) {
+      if (k == penalty) continue;
+      s += std::string(n++ ? "," : "") + " " + candidates[k] + " (CV RMSE " + Short(candidates_cv_rmse[k]) + " at " +
+           Short(compared_at) + ", this one's " + Short(candidates_cv_rmse[penalty]) + ")";
+    }
+  }
   return s;
+}
+
+WeightValidation ChoosePenalty(const BlockedNormalEquations& eq, const std::vector<Eigen::MatrixXd>& Rs,
+                               const std::vector<std::string>& names) {
+  if (Rs.empty() || Rs.size() != names.size()) throw std::logic_error("ChoosePenalty: no penalty, or names mismatch");
+  std::vector<WeightValidation> v;
+  for (size_t k = 0; k < Rs.size(); ++k) {
+    v.push_back(ChooseStrength(eq, Rs[k]));
+    v.back().penalty = k;
+    v.back().penalty_name = names[k];
+  }
+  if (v.size() == 1) return v.front();
+  // The first candidate strength above every chosen one (the candidates are the same for all).
+  const std::vector<double>& rel = v.front().relatives;
+  size_t at = 0;
+  for (const WeightValidation& w : v) {
+    const size_t chosen = static_cast<size_t>(std::find(rel.begin(), rel.end(), w.relative) - rel.begin());
+    at = std::max(at, chosen + 1);
+  }
+  at = std::min(at, rel.size() - 1);
+  size_t kept = 0;
+  for (size_t k = 1; k < v.size(); ++k)
+    if (v[k].cv_rmse[at] < v[kept].cv_rmse[at]) kept = k;
+  WeightValidation out = v[kept];
+  out.compared_at = rel[at];
+  for (size_t k = 0; k < v.size(); ++k) {
+    out.candidates.push_back(names[k]);
+    out.candidates_cv_rmse.push_back(v[k].cv_rmse[at]);
+  }
+  return out;
 }
 
 WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R) {

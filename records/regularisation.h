@@ -9,8 +9,10 @@
 // The chosen strength is the largest ρ, going up from the one with the least cross-validated error,
 // whose extra error over that one is not larger than its standard error across the blocks (the
 // paired "one standard error" rule): the strongest regularisation the data cannot tell from the
-// best — what keeps a Preisach density that a major loop does not determine close to the PI
-// operator's instead of a sparse artefact. Deterministic (a fixed order of fixed-size sums).
+// best — what keeps a Preisach density that a major loop does not determine smooth instead of a
+// sparse artefact. A family with several candidate penalties (the Preisach grid: roughness along the
+// centre or over the triangle) has the one kept that the records contradict less (ChoosePenalty).
+// Deterministic (a fixed order of fixed-size sums).
 #pragma once
 
 #include <Eigen/Dense>
@@ -58,6 +60,13 @@ struct WeightValidation {
   std::vector<double> relatives;  ///< the candidates ρ
   std::vector<double> cv_rmse;    ///< their cross-validated RMSE [response unit]
   int folds = 0;
+  /// ChoosePenalty: the penalty kept (its index among the candidates and name), and, with more
+  /// than one candidate, the strength they were compared at and each one's CV RMSE there.
+  size_t penalty = 0;
+  std::string penalty_name;
+  double compared_at = 0;
+  std::vector<std::string> candidates;
+  std::vector<double> candidates_cv_rmse;
   std::string Describe() const;   ///< "ρ = 1e-3 (λ = …) by 5-fold blocked cross-validation: …"
 };
 
@@ -78,6 +87,14 @@ struct StrengthRule {
   /// record agree on a difference that only extrapolation would show).
   double rmse_tolerance = 0;
 };
+/// Several candidate penalties R_k (names: for the report): each one's strength by ChooseStrength,
+/// then the one kept whose CV RMSE is the lowest at the first candidate strength ρ above every
+/// one's chosen strength (the largest candidate if none is above): the first strength at which the
+/// training records object to a penalty, where its CV error says how much it contradicts what the
+/// records identify — a Preisach density's interior that a major loop leaves open is filled in by
+/// the penalty the branches contradict less. Ties keep the first. One candidate: ChooseStrength.
+WeightValidation ChoosePenalty(const BlockedNormalEquations& eq, const std::vector<Eigen::MatrixXd>& Rs,
+                               const std::vector<std::string>& names);
 /// The same with the candidates λ = ρ · scale (R penalising part of the unknowns only: the scale
 /// is then the trace of that part of G over tr(R)) and the rule `rule`.
 WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R, double scale,

@@ -3,13 +3,18 @@
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
 // weights stay non-negative; trained on the major loop alone, the varying-amplitude and reversal
-// records stay within 2x the floor with the roughness penalty on the weights (chosen by validation
-// on the training record) and without it (the weights solved exactly); a record too short for the spectrum is
-// refused, naming what is missing (and left out of a diagnosis's default candidates).
+// records come within 1.25x the floor with the roughness penalty on the spectrum's weights (chosen
+// by validation on the training record) and without it (the weights solved exactly), the Preisach
+// weights under the roughness over the triangle that the validation keeps; the major loop
+// identifies the creep and the lag (with an oracle's Preisach weights every withheld record is at
+// the floor); a record too short for the spectrum is refused, naming what is missing (and left out
+// of a diagnosis's default candidates).
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <iostream>
 #include <map>
 #include <numbers>
@@ -89,7 +94,7 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
 }
 
 
-TEST(CreepSpectrumTest, AMajorLoopSpectrumExtrapolatesWithinTwiceTheFloor) {
+TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget) {
   // Trained on the major loop only (a 40 s constant-amplitude sine: what a user has), with the
   // sensor's lag: the set of `piezoid synth-stack --seed 4` (docs/real-recording.md).
   RealLikeOptions o;
@@ -126,18 +131,119 @@ TEST(CreepSpectrumTest, AMajorLoopSpectrumExtrapolatesWithinTwiceTheFloor) {
   // The training excitation still fits at the floor.
   EXPECT_LE(with.at("major"), 1.1);
   EXPECT_LE(with.at("major-2"), 1.1);
-  // The varying-amplitude and reversal records: within 2x the floor. The spectrum is solved with
-  // the Preisach weights (records/spectrum_solve.h), so the unpenalised fit is the exact optimum,
-  // not the ragged spectrum a search of the weights used to stop at (fast relaxations at their bound
-  // standing in for the loop's shape and the lag: 2.7x the floor on the reversals, seed 4): it
-  // extrapolates as well, and the penalty (chosen by the blocks, which cannot tell the two apart)
-  // costs the withheld records nothing.
+  // The varying-amplitude and reversal records: within the 1.25x of the floor (1.17x /
+  // 1.14x): the Preisach weights' penalty kept is the roughness over the triangle, which fills in
+  // the interior the major loop does not identify from its branches (with the roughness along the
+  // centre, the only one before: 1.47x / 1.64x). The spectrum is solved with the Preisach weights
+  // (records/spectrum_solve.h), so the unpenalised fit is the exact optimum, not the ragged
+  // spectrum a search of the weights used to stop at (fast relaxations at their bound standing in
+  // for the loop's shape and the lag: 2.7x the floor on the reversals, seed 4): it extrapolates as
+  // well, and the spectrum's penalty (chosen by the blocks, which cannot tell the two apart) costs
+  // the withheld records nothing.
+  EXPECT_EQ(penalised.regularisation.penalty_name, "roughness over the triangle");
   for (const char* name : {"ramp", "reversals"}) {
-    EXPECT_LE(with.at(name), 2.0) << name;
-    EXPECT_LE(without.at(name), 2.0) << name;
+    EXPECT_LE(with.at(name), 1.25) << name;
+    EXPECT_LE(without.at(name), 1.25) << name;
     EXPECT_LE(with.at(name), 1.05 * without.at(name)) << name;
   }
   std::cout << penalised.spectrum_regularisation.Describe() << "\n";
+}
+
+/// Each record's RMSE / its true noise RMS for a model with given parameters and family weights.
+std::map<std::string, double> RatiosOf(const RealLikeSet& s, const RecordModel& model, const std::vector<double>& p,
+                                       const std::vector<double>& weights) {
+  std::map<std::string, double> out;
+  for (size_t i = 0; i < s.set.records.size(); ++i)
+    out[s.set.records[i].name] = Evaluate(model, p, weights, s.set.records[i]).rmse / s.truth[i].noise_rms_um;
+  return out;
+}
+
+TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePenaltyTheMinorLoops) {
+  // The decomposition of the major-loop gap on `synth-stack --seed 1` (docs/real-recording.md,
+  // "What the major loop's gap is made of"). The same plant without creep and lag (the same drives
+  // and noise) gives the Preisach weights alone: fitted on every record (an oracle) the grid
+  // reaches the floor; fitted on the major loop, the minor-loop records depend on how the penalty
+  // fills in the interior of the triangle, which the loop's branches do not identify.
+  // With those oracle weights fixed, the creep spectrum and the delay fitted on the full plant's
+  // major loop bring every withheld record to the floor: the major loop identifies creep and lag;
+  // what it does not identify is the interior of the Preisach triangle (the minor loops).
+  RealLikeOptions o;
+  o.seed = 1;
+  RealLikeSet full = GenerateRealLikeSet(o);
+  o.stack.creep_per_decade = 0;
+  o.sensor.lag_samples = 0;
+  RealLikeSet plain = GenerateRealLikeSet(o);
+  io::SkipSettling(full.set, 1.5, 100, "test");
+  io::SkipSettling(plain.set, 1.5, 100, "test");
+  const auto train = full.set.WithRole(model::CaseRole::kTrain);
+  const DataScale scale = MeasureScale(train);  // the same drives: the same grid for both plants
+  const std::shared_ptr<const Family> family = MakeFamily("preisach", scale);
+  const RecordModel alone(family, {}, scale);
+  // The Preisach weights from the major loop of the plant without creep and lag.
+  const RecordFitness major(alone, plain.set.WithRole(model::CaseRole::kTrain));
+  const auto from_major = RatiosOf(plain, alone, {}, major.Run({}).weights);
+  // From every record of it: the oracle.
+  std::vector<const io::Record*> every;
+  for (const io::Record& r : plain.set.records) every.push_back(&r);
+  const std::vector<double> oracle = RecordFitness(alone, every).Run({}).weights;
+  const auto grid = RatiosOf(plain, alone, {}, oracle);
+  // The oracle weights fixed; the creep spectrum's weights (non-negative least squares: the output
+  // is linear in them, the record's offset centred out) and the delay (on a grid of 0.25 ms)
+  // fitted on the full plant's major loop.
+  const RecordModel model(family, {EffectKind::Named("creep-spectrum"), EffectKind::Named("delay")}, scale);
+  const auto [first, count] = model.EffectParams(EffectKind::Named("creep-spectrum"));
+  const size_t delay = model.EffectParams(EffectKind::Named("delay")).first;
+  const io::Record& tr = *train.front();
+  const size_t n = tr.scored();
+  double best = std::numeric_limits<double>::infinity();
+  std::vector<double> fitted;
+  for (int step = 0; step <= 50; ++step) {
+    std::vector<double> p(model.params().size(), 0.0);
+    p[delay] = 0.00025 * step;
+    std::vector<double> y0(tr.end_scored), yi(tr.end_scored);
+    model.Simulate(tr, p, oracle, tr.end_scored, y0);
+    Eigen::MatrixXd A(n, count);
+    Eigen::VectorXd b(n);
+    for (size_t i = 0; i < count; ++i) {
+      std::vector<double> q = p;
+      q[first + i] = 1;
+      model.Simulate(tr, q, oracle, tr.end_scored, yi);
+      for (size_t k = 0; k < n; ++k) A(k, i) = yi[tr.first_scored + k] - y0[tr.first_scored + k];
+    }
+    for (size_t k = 0; k < n; ++k) b(k) = tr.y[tr.first_scored + k] - y0[tr.first_scored + k];
+    for (Eigen::Index j = 0; j < A.cols(); ++j) A.col(j).array() -= A.col(j).mean();
+    b.array() -= b.mean();
+    const Eigen::VectorXd w = NonNegativeLeastSquares(A.transpose() * A, A.transpose() * b);
+    const double sse = (A * w - b).squaredNorm();
+    if (sse < best) {
+      best = sse;
+      fitted = p;
+      for (size_t i = 0; i < count; ++i) fitted[first + i] = w(static_cast<Eigen::Index>(i));
+    }
+  }
+  const auto fixed = RatiosOf(full, model, fitted, oracle);
+  double total = 0;
+  for (size_t i = 0; i < count; ++i) total += fitted[first + i];
+  for (const char* name : {"major", "major-2", "ramp", "reversals"}) {
+    RecordProperty(std::string(name) + "_preisach_from_major", std::to_string(from_major.at(name)));
+    RecordProperty(std::string(name) + "_oracle_grid", std::to_string(grid.at(name)));
+    RecordProperty(std::string(name) + "_oracle_preisach_creep_lag_from_major", std::to_string(fixed.at(name)));
+    std::cout << name << ": Preisach from the major loop " << from_major.at(name) << ", oracle grid " << grid.at(name)
+              << ", oracle Preisach with creep and lag from the major loop " << fixed.at(name) << " x the floor\n";
+  }
+  std::cout << "delay " << fitted[delay] << " s, creep weights sum " << total << "\n";
+  for (const char* name : {"major", "major-2", "ramp", "reversals"}) {
+    EXPECT_LE(grid.at(name), 1.05) << name;
+    EXPECT_LE(fixed.at(name), 1.05) << name;
+  }
+  EXPECT_NEAR(fitted[delay], 1.35 / 200, 0.0005);  // truth: 1.35 samples at 200 Hz
+  EXPECT_NEAR(total, 0.05, 0.01);                  // truth: 1.5 % per decade over 0.05 … 50 s
+  // The minor loops from the major loop's own Preisach weights, creep and lag aside: the interior
+  // of the triangle comes from the penalty the validation keeps — the roughness over the triangle
+  // here (1.14x / 1.17x the floor); the roughness along the centre, the only one before, left
+  // 1.76x / 1.84x.
+  EXPECT_EQ(major.validation().penalty_name, "roughness over the triangle");
+  for (const char* name : {"major", "major-2", "ramp", "reversals"}) EXPECT_LE(from_major.at(name), 1.25) << name;
 }
 
 TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
