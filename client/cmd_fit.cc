@@ -66,7 +66,7 @@ struct FitArgs {
   int substeps = 2;
   int pi_operators = 12;
   int lm_iterations = 60;
-  std::string lm_differences = "forward-central";  ///< the polish's Jacobian: forward-central, forward or central
+  std::string lm_differences = "auto";  ///< the polish's Jacobian: auto, forward-central, forward or central
   bool no_polish = false;
   bool no_figures = false;
   bool quiet = false;
@@ -318,7 +318,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
      << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
-  os << "; LM iterations " << r.lm_iterations << " (" << a.lm_differences
+  os << "; LM iterations " << r.lm_iterations << " (" << r.lm_differences
      << " differences).\n\nCommand: `piezoid fit --records " << a.records << " --family "
      << a.family << "`.\n";
   WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
@@ -427,7 +427,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     x["polishes"] = Num(r.polishes);
     x["best_polish_repetition"] = Num(r.best_polish_repetition + 1);  // 1-based; 0 = none
     x["search_best_repetition"] = Num(r.search.best_repetition + 1);
-    x["lm_differences"] = Text(a.lm_differences);
+    x["lm_differences"] = Text(r.lm_differences);
     x["summary"] = Text(SearchSentence(r));
     f["search"] = Obj(g);
   }
@@ -459,6 +459,7 @@ int RunFit(const FitArgs& a) {
   o.lm.max_iterations = a.lm_iterations;
   o.lm.central = a.lm_differences == "central";
   o.lm.central_to_finish = a.lm_differences == "forward-central";
+  o.lm_differences_auto = a.lm_differences == "auto";
   o.threads = a.threads;
   if (!a.quiet) o.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
   std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
@@ -565,10 +566,11 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->default_str(io::FormatNumber(line.tolerance));
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
   cmd->add_option("--lm-differences", a->lm_differences,
-                  "the polish's Jacobian: forward-central (forward differences, p + 1 evaluations, until the polish "
+                  "the polish's Jacobian: auto (forward after the line search of one parameter, else "
+                  "forward-central), forward-central (forward differences, p + 1 evaluations, until the polish "
                   "converges, then central ones from there until it converges again), forward, or central (2 p)")
-      ->check(CLI::IsMember({"forward-central", "forward", "central"}))
-      ->default_str("forward-central");
+      ->check(CLI::IsMember({"auto", "forward-central", "forward", "central"}))
+      ->default_str("auto");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");

@@ -708,6 +708,11 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     }
     fo.polish = options.polish;
     fo.lm = options.lm;
+    if (options.lm_differences_auto) {
+      fo.lm.central = false;
+      fo.lm.central_to_finish = so.algorithm != opt::SearchAlgorithm::kLine;
+    }
+    res.lm_differences = fo.lm.central ? "central" : fo.lm.central_to_finish ? "forward-central" : "forward";
     for (const std::vector<double>& u : options.extra_starts) {  // unit coordinates of every parameter
       if (u.size() != params.size()) throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
       std::vector<double> su;

@@ -235,6 +235,11 @@ struct FitOptions {
   /// a better basin replaces the search's best's polish only by more than 1e-4 of its cost).
   bool polish_repetitions = false;
   opt::LmOptions lm{.max_iterations = 60, .fd_step = 1e-4};
+  /// The polish's differences chosen by the search (`--lm-differences auto`): forward throughout
+  /// after the line search (one searched parameter, already located to its tolerance: the central
+  /// finish only adds serial evaluations), else forward until the polish converges, then central
+  /// (lm.central = false, lm.central_to_finish set here). False: lm's as given.
+  bool lm_differences_auto = false;
   int threads = 2;
   RecordEvaluatorFactory evaluator_factory;
   /// Starting points for the polish besides the search's best (unit coordinates, e.g. a base fit
@@ -269,6 +274,8 @@ struct FitResult {
   /// The global search as run (records of it in fit.json and report.md): the PSO budget, whether it
   /// was sized, for how many searched parameters; the polishes run and the one kept.
   opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
+  /// The polish's Jacobian differences as run: "forward-central", "forward" or "central".
+  std::string lm_differences;
   SearchBudget budget;
   opt::LineOptions line;  ///< the line search's budget (algorithm kLine)
   /// The creep spectrum's weights were solved with the family's weights in every evaluation

@@ -260,7 +260,8 @@ TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
 }
 
 // `piezoid fit` polishes with forward differences by default (a Jacobian of p + 1 evaluations, the
-// residuals at the point reused, against 2p central) and central ones once it has converged
+// residuals at the point reused, against 2p central) and central ones once it has converged (after
+// the line search of one parameter, forward throughout)
 // (tests/opt/fit_test.cc for the evaluations): the same search, a fit as good; fit.json and report.md
 // say which; another value is refused.
 TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
@@ -288,6 +289,14 @@ TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
   }
   PZ_EXPECT_HAS(refused, "--lm-differences: sideways");
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
+  // One searched parameter (a linear family's delay): the line search has located it to its
+  // tolerance, and `auto` polishes with forward differences throughout.
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii", "--effects", "delay",
+            "--out", (dir_ / "line").string(), "--no-figures", "--quiet"});
+  const std::string line = io::ReadTextFile(dir_ / "line" / "fit.json");
+  PZ_EXPECT_HAS(line, "\"algorithm\": \"line\"");
+  PZ_EXPECT_HAS(line, "\"lm_differences\": \"forward\"");
+  PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "line" / "report.md"), "(forward differences)");
 }
 
 }  // namespace
