@@ -699,11 +699,15 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     fo.polish_repetitions = options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
     fo.concurrent_polishes = true;  // each polish its own ThreadPoolEvaluator over the const fitness
     if (options.progress) {
-      fo.search_options.on_progress = [&](const opt::SearchProgress& p) {
-        if (p.iteration % 25 == 0) {
-          options.progress("search repetition " + std::to_string(p.repetition) + " iteration " +
-                           std::to_string(p.iteration) + ": best MSE " + io::FormatNumber(p.overall_best_cost));
-        }
+      const bool line = so.algorithm == opt::SearchAlgorithm::kLine;
+      const int grid = so.line.grid;
+      fo.search_options.on_progress = [&options, line, grid](const opt::SearchProgress& p) {
+        if (p.iteration % 25 != 0) return;
+        const std::string where = !line ? "search repetition " + std::to_string(p.repetition) + " iteration " +
+                                              std::to_string(p.iteration)
+                                  : p.iteration == 0 ? "line search, the grid of " + std::to_string(grid)
+                                                     : "line search, Brent step " + std::to_string(p.iteration);
+        options.progress(where + ": best MSE " + io::FormatNumber(p.overall_best_cost));
       };
     }
     fo.polish = options.polish;
