@@ -15,18 +15,30 @@ namespace {
 
 // ---- shared arithmetic ----------------------------------------------------------------------------
 
-/// First-order low-pass τ ẋ = v − x over samples of v (linear in between), in place, from rest at v[0]:
-/// exact first-order-hold discretisation.
-void LowpassInPlace(std::span<double> v, double tau, double dt) {
-  if (!(tau > 1e-12 * dt) || v.empty()) return;
+/// First-order low-pass τ ẋ = s − x over the samples s_k = in(v_k) (linear in between), from rest at
+/// s_0: exact first-order-hold discretisation; each v_k replaced by out(v_k, x_k) in the same pass
+/// (v_k read before it is replaced). τ ≤ 1e-12 dt: x = s.
+template <class In, class Out>
+void LowpassMap(std::span<double> v, double tau, double dt, In in, Out out) {
+  if (v.empty()) return;
+  if (!(tau > 1e-12 * dt)) {
+    for (double& e : v) e = out(e, in(e));
+    return;
+  }
   const auto [a, c] = LowpassConsts(tau, dt);
-  double x = v[0], prev = v[0];
+  double prev = in(v[0]), x = prev;
+  v[0] = out(v[0], x);
   for (size_t k = 1; k < v.size(); ++k) {
-    const double cur = v[k];
+    const double cur = in(v[k]);
     x = a * x + (1 - a) * prev + (cur - prev) * c;
     prev = cur;
-    v[k] = x;
+    v[k] = out(v[k], x);
   }
+}
+
+/// The low-pass of v itself, in place.
+void LowpassInPlace(std::span<double> v, double tau, double dt) {
+  LowpassMap(v, tau, dt, [](double e) { return e; }, [](double, double x) { return x; });
 }
 
 // ---- CVODE extensions (the continuous-time forms) ------------------------------------------------
@@ -244,24 +256,10 @@ class Creep final : public EffectDef {
   }
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
     if (p[0] == 0 || u.empty()) return;
-    // u += LowpassInPlace(k (u − u0)) in one pass over u, without a buffer: x_k is LowpassInPlace's
-    // recursion on v_k = k (u_k − u0), operation for operation (the same values bit for bit), and
-    // u_k is read before it is replaced. A search evaluates this once per genome.
+    // u += the low-pass of k (u − u0), in one pass over u without a buffer (LowpassMap). A search
+    // evaluates this once per genome.
     const double k = p[0], u0 = u[0];
-    const double prev0 = k * (u[0] - u0);
-    if (!(p[1] > 1e-12 * dt)) {  // LowpassInPlace leaves v as it is
-      for (double& v : u) v += k * (v - u0);
-      return;
-    }
-    const auto [a, c] = LowpassConsts(p[1], dt);
-    double x = prev0, prev = prev0;
-    u[0] += x;
-    for (size_t i = 1; i < u.size(); ++i) {
-      const double cur = k * (u[i] - u0);
-      x = a * x + (1 - a) * prev + (cur - prev) * c;
-      prev = cur;
-      u[i] += x;
-    }
+    LowpassMap(u, p[1], dt, [k, u0](double e) { return k * (e - u0); }, [](double e, double x) { return e + x; });
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
