@@ -150,11 +150,11 @@ std::string DelayCaveat(const records::Stepper& inv) {
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
 /// value held), and the clipping events.
 std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
-  const size_t preview = inv.preview_samples(), horizon = static_cast<size_t>(inv.delay_horizon());
+  const size_t preview = inv.preview_samples();
   std::vector<double> u(ref.y.size());
   u[0] = u0;
   inv.Init(u0);
-  for (size_t k = preview + 1 - horizon; k <= preview; ++k) inv.InversePrime(ref.y[std::min(k, ref.y.size() - 1)]);
+  inv.InversePrimeFrom(ref.y);
   Clip open;
   for (size_t k = 1; k < ref.y.size(); ++k) {
     const long before = inv.ctl().saturated;

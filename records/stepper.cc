@@ -245,6 +245,12 @@ bool Stepper::InversePrime(double y_desired) {
                                       t_.data(), &ctl_, y_desired) == 0;
 }
 
+void Stepper::InversePrimeFrom(std::span<const double> y) {
+  const size_t preview = preview_samples(), horizon = static_cast<size_t>(delay_horizon());
+  if (horizon == 0 || y.empty()) return;
+  for (size_t k = preview + 1 - horizon; k <= preview; ++k) InversePrime(y[std::min(k, y.size() - 1)]);
+}
+
 double Stepper::Trial(double u) {
   return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u,
                              pzk::PZK_EVAL_UNDELAYED);
@@ -275,8 +281,8 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
   Stepper inv(spec);
   inv.Init(r.u[0]);
   WidenToRecord(inv, r);
-  const size_t preview = inv.preview_samples(), horizon = static_cast<size_t>(inv.delay_horizon());
-  for (size_t k = preview + 1 - horizon; k <= preview && k < r.size(); ++k) inv.InversePrime(y[k]);
+  const size_t preview = inv.preview_samples();
+  inv.InversePrimeFrom(y);
   const double h = 1e-6 * spec.scale.u_half;
   ReplayError e;
   double sse_u = 0, sse_y = 0;

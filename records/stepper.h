@@ -83,6 +83,10 @@ class Stepper {
   /// first step gets y[1 + preview_samples()]), after Init and before that step; not given, the
   /// compensator takes those samples at rest. False when no more is wanted.
   bool InversePrime(double y_desired);
+  /// InversePrime with the references of a whole record or reference y (the first InverseStep's at
+  /// y[1 + preview_samples()]): y[k] for k = preview_samples() - L + 1 … preview_samples(), the last
+  /// value held beyond y's end. Nothing without a horizon.
+  void InversePrimeFrom(std::span<const double> y);
   /// The output the next step would give for drive u (not clipped), the state unchanged, the delay
   /// passing its input on: what a lasting change of the drive meets (ReplayDrive's local gain).
   double Trial(double u);
