@@ -450,9 +450,7 @@ int RunFit(const FitArgs& a) {
   if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
-  o.search.line.grid = a.line.grid;
-  o.search.line.brackets = a.line.brackets;
-  o.search.line.tolerance = a.line.tolerance;
+  o.search.line = a.line;
   o.sizing = a.sizing;
   o.polish_repetitions = true;
   o.polish = !a.no_polish;
