@@ -203,6 +203,27 @@ int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::
 }
 
 /// report.md.
+// "α at its upper bound 0.01 N/V, a1 at its lower bound 0 deg" for the parameters the network holds
+// at a bound of their range on every training case; "" when none.
+std::string AtBoundList(const hgann::HgannFitness& fitness, const model::Network& network) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ", "α", "β", "γ", "a1", "a2"};
+  const auto side = fitness.ParametersAtBound(network);
+  std::string out;
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    if (side[k] == 0) continue;
+    const auto& r = fitness.config().ranges[k];
+    out += (out.empty() ? "" : ", ") + std::string(kSymbols[k]) + (side[k] > 0 ? " at its upper bound " : " at its lower bound ") +
+           Fmt(side[k] > 0 ? r.upper : r.lower, 4) + " " + model::OutputUnit(k);
+  }
+  return out;
+}
+
+constexpr const char* kAtBoundMeaning =
+    "on every training case: set by the range, not by the data. A range that binds may hide a lower cost "
+    "outside it (a job spec's `ranges` widen it), and several parameters held together can be a corner the GA "
+    "rarely leaves (the nominal bench's ≈ 2.3 deg² plateau is α, β, γ at their upper bounds: "
+    "docs/performance.md, \"Islands\"); more islands or seeds find the way out more often.";
+
 std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
                            const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression) {
   const double train_sum = t.train_sum, all_sum = t.all_sum;
@@ -288,6 +309,8 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
        << " | " << Fmt(q.beta, 3) << " | " << Fmt(q.gamma, 3) << " | " << Fmt(q.a1, 3) << " | " << Fmt(q.a2, 3)
        << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3) << " |\n";
   }
+  if (const std::string at = AtBoundList(fitness, result.best.network); !at.empty())
+    md << "\nHeld at a bound: " << at << " " << kAtBoundMeaning << "\n";
   auto param_grid = [&](const char* title, double model::BimorphParams::*field, int prec) {
     md << "\n### " << title << "\n\n"
        << Grid(set, [&](const io::BenchCase& c) { return Fmt(ResultOf(result, c.number).params.*field, prec); });
@@ -365,6 +388,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
        << "below the paper in " << totals.beaten << " of " << totals.compared << " cases; Σ training "
        << Fmt(totals.train_sum, 5) << "\n"
        << mu_regression << "\n";
+  if (const std::string at = AtBoundList(fitness, result.best.network); !at.empty())
+    term << "held at a bound on every training case (set by the range, not the data; report.md): " << at << "\n";
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
        << "parameters.csv, " << rendered << " figures)\n";

@@ -153,6 +153,23 @@ double HgannFitness::OutputSpread(const model::Network& network) const {
   return spread;
 }
 
+std::array<int, model::kNetworkOutputs> HgannFitness::ParametersAtBound(const model::Network& network) const {
+  std::array<int, model::kNetworkOutputs> side{};
+  bool first = true;
+  for (const auto& c : config_.cases) {
+    if (!c.training) continue;
+    const auto p = network.Predict(c.drive.amplitude_v, c.drive.frequency_hz).ToArray();
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const auto& r = config_.ranges[k];
+      const double tol = kAtBoundShare * (r.upper - r.lower);
+      const int here = !(r.upper > r.lower) ? 0 : p[k] <= r.lower + tol ? -1 : p[k] >= r.upper - tol ? 1 : 0;
+      side[k] = first ? here : (side[k] == here ? here : 0);
+    }
+    first = false;
+  }
+  return side;
+}
+
 std::vector<HgannCaseResult> HgannFitness::EvaluateCases(const model::Network& network) const {
   std::vector<HgannCaseResult> out;
   model::ModalWorkspace ws;

@@ -51,6 +51,22 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
                         "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
     EXPECT_TRUE(std::filesystem::exists(o.out_dir / f)) << f;
   EXPECT_NE(term.str().find("paper's Table 8"), std::string::npos);
+  // The parameters held at a bound on every training case are named in report.md and on the terminal,
+  // each with its side; a run with none has no such line.
+  {
+    std::ifstream in(o.out_dir / "report.md");
+    const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const auto side = fitness.ParametersAtBound(result.best.network);
+    const char* symbols[] = {"μ", "δ", "α", "β", "γ", "a1", "a2"};
+    const bool any = std::any_of(side.begin(), side.end(), [](int s) { return s != 0; });
+    EXPECT_EQ(md.find("Held at a bound:") != std::string::npos, any);
+    EXPECT_EQ(term.str().find("held at a bound on every training case") != std::string::npos, any);
+    for (int k = 0; k < 7; ++k)
+      if (side[k] != 0)
+        EXPECT_NE(md.find(std::string(symbols[k]) + (side[k] > 0 ? " at its upper bound" : " at its lower bound")),
+                  std::string::npos)
+            << symbols[k];
+  }
   for (const char* f : {"network.pb", "network.json"}) {
     io::SavedNetwork loaded;
     ASSERT_TRUE(io::LoadNetwork((o.out_dir / f).string(), &loaded).ok()) << f;

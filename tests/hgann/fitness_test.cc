@@ -127,6 +127,52 @@ TEST(HgannFitness, SpreadPenaltyIsZeroForConstantOutputsAndAddsToCost) {
   EXPECT_EQ(checked, 10);
 }
 
+// Which parameters a network holds at a bound on every training case (the report's "held at a
+// bound" line): hard limits at either end, a tribas at its peak, an interior logsig, a hard limit
+// that switches between the training cases, and a zero-width range.
+TEST(HgannFitness, ParametersAtBoundOnEveryTrainingCase) {
+  auto ranges = model::ParameterRanges{};
+  ranges.a2 = {0.5, 0.5};  // zero width: never "at a bound"
+  const auto fitness = MakeFitness(ranges);
+  Genome g;
+  g.bits.assign(model::kChromosomeBits, 0);
+  Rng rng(11);
+  for (auto& b : g.bits) b = static_cast<uint8_t>(rng.NextU64() & 1);
+  model::Network n = fitness.Decode(g);
+  // A hidden node whose output differs between the training cases, and a threshold between its values.
+  int node = -1;
+  double threshold = 0;
+  for (int tries = 0; node < 0 && tries < 200; ++tries) {
+    for (auto& b : g.bits) b = static_cast<uint8_t>(rng.NextU64() & 1);
+    n = fitness.Decode(g);
+    for (int j = 0; j < n.hidden() && node < 0; ++j) {
+      double lo = INFINITY, hi = -INFINITY;
+      for (const auto& c : fitness.config().cases) {
+        if (!c.training) continue;
+        const double b = n.Forward(c.drive.amplitude_v, c.drive.frequency_hz).b(j);
+        lo = std::min(lo, b), hi = std::max(hi, b);
+      }
+      if (hi - lo > 1e-3) node = j, threshold = (lo + hi) / 2;
+    }
+  }
+  ASSERT_GE(node, 0);
+  n.w2.setZero();
+  n.output_tf = {model::TransferFunction::kHardlim, model::TransferFunction::kHardlims,
+                 model::TransferFunction::kHardlim, model::TransferFunction::kLogsig,
+                 model::TransferFunction::kTribas, model::TransferFunction::kHardlims,
+                 model::TransferFunction::kHardlim};
+  n.c2 << 1, -1, -threshold, 0, 0, -1, 1;
+  n.w2(node, 2) = 1;  // α: switches between 0 and 1 over the training cases
+  const auto side = fitness.ParametersAtBound(n);
+  EXPECT_EQ(side[0], 1);   // μ: hardlim(1) = 1, the upper bound
+  EXPECT_EQ(side[1], -1);  // δ: hardlims(−1) = −1, the lower bound
+  EXPECT_EQ(side[2], 0);   // α: at the top on some training cases, the bottom on others
+  EXPECT_EQ(side[3], 0);   // β: logsig(0) = 0.5, inside
+  EXPECT_EQ(side[4], 1);   // γ: tribas(0) = 1, the upper bound
+  EXPECT_EQ(side[5], -1);  // a1
+  EXPECT_EQ(side[6], 0);   // a2: a zero-width range has no side
+}
+
 GaOptions SmallGa(uint64_t seed) {
   GaOptions o;
   o.population_size = 40;
