@@ -82,8 +82,8 @@ class HgannFitness final : public opt::FitnessFunction {
   /// Which of the seven parameters the network holds at a bound of its range on every training
   /// case: −1 at the lower bound, +1 at the upper, 0 otherwise (inside on some case, or a
   /// zero-width range). "At a bound" = within kAtBoundShare of the range's width. Such a parameter
-  /// is decided by the range, not by the data (the report says so: docs/performance.md, "Islands",
-  /// the ≈ 2.3 deg² plateau of the nominal bench is α, β, γ at their upper bounds).
+  /// is decided by the range, not by the data; the identify report names them (docs/performance.md,
+  /// "Islands": the nominal bench's ≈ 2.3 deg² plateau has α, β, γ at or near their upper bounds).
   std::array<int, model::kNetworkOutputs> ParametersAtBound(const model::Network& network) const;
   static constexpr double kAtBoundShare = 1e-6;
 
