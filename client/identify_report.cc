@@ -269,10 +269,8 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     if (options.ga.broadcast_interval > 0)
       md << "; a broadcast every " << options.ga.broadcast_interval << " generations from islands better by more than "
          << options.ga.broadcast_margin * 100 << " %";
-    if (!options.ga.island_mutation.empty()) {
-      md << "; mutation by island";
-      for (double p : options.ga.island_mutation) md << " " << p;
-    }
+    md << "; mutation by island";
+    for (int k = 0; k < options.ga.islands; ++k) md << " " << options.ga.MutationProbability(k);
     if (options.ga.island_stall_generations > 0)
       md << "; an island is restarted after " << options.ga.island_stall_generations << " generations of stall";
     int migrations = 0, restarts = 0;

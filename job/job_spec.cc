@@ -120,7 +120,7 @@ std::vector<FieldViolation> JobSpec::Validate() const {
               "must be in (0, 1)");
     c.Require(ga->island_mutation.empty() || ga->island_mutation.size() == static_cast<size_t>(ga->islands),
               "ga.island_mutation.size()", ga->island_mutation.size(),
-              "must be 0 (ga.mutation_probability for every island) or ga.islands = " + std::to_string(ga->islands));
+              "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = " + std::to_string(ga->islands));
     for (size_t i = 0; i < ga->island_mutation.size(); ++i)
       c.Range("ga.island_mutation[" + std::to_string(i) + "]", ga->island_mutation[i], 0.0, 1.0);
   }

@@ -186,14 +186,14 @@ struct GaSettings {
   int stall_generations = 200;         ///< ≥ 0 (0 = never stop for stall)
   // Islands (opt/ga.h GaOptions): population is per island.
   int islands = 1;                     ///< 1..1024
-  int migration_interval = 200;        ///< ≥ 0 (0 = never: independent islands)
+  int migration_interval = 25;         ///< ≥ 0 (0 = never: independent islands)
   int migrants = 4;                    ///< 0..population − 1, ≥ 1 when migration_interval > 0
-  opt::MigrationTopology topology = opt::MigrationTopology::kRing;
-  double migration_margin = 0;         ///< [0, 1) (0 = migrants from every source; opt/ga.h)
+  opt::MigrationTopology topology = opt::MigrationTopology::kFullyConnected;
+  double migration_margin = 0.2;       ///< [0, 1) (0 = migrants from every source; opt/ga.h)
   int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
   int broadcast_interval = 0;          ///< ≥ 0 (0 = no gated broadcast; opt/ga.h), ≥ 1 migrant when > 0
   double broadcast_margin = 0.2;       ///< (0, 1): the broadcast's gate (opt/ga.h)
-  std::vector<double> island_mutation;  ///< empty or one rate per island, each 0..1 (opt/ga.h)
+  std::vector<double> island_mutation;  ///< empty (the ladder of opt/ga.h) or one rate per island, each 0..1
   int offspring() const;               ///< evaluated per generation: population − elite count
 };
 

@@ -45,9 +45,11 @@
 //      connected topology and that margin. With an ungated ring every 200 and a broadcast every 25
 //      (docs/performance.md, "Islands"), the islands on one plateau mix slowly while a lineage that
 //      steps down is copied to every island it leads within 25 generations;
-//   7. with island_mutation (one rate per island) island i's offspring flip each bit with
-//      probability island_mutation[i] instead of mutation_probability: heterogeneous islands, the
-//      same operators at different rates (empty = mutation_probability for every island);
+//   7. island i's offspring flip each bit with probability MutationProbability(i): island_mutation[i]
+//      when one rate per island is given, else, with more than one island, the ladder
+//      mutation_probability · (1, 2, 3, 5)[i mod 4] (at 0.01: 0.01, 0.02, 0.03, 0.05; island 0 at
+//      the one-island rate) — heterogeneous islands, the same operators at different rates, the
+//      default by measurement (docs/performance.md, "Islands");
 //   8. an island whose own stall reaches island_stall_generations (0 = never) is restarted at the
 //      next generation: its population becomes the best `migrants` individuals its topology
 //      sources hold (as a migration would send them; none for multi-start or K = 1) plus fresh
@@ -57,6 +59,7 @@
 // generation's summary carries each island's best, stall, immigrants and restart (IslandSummary).
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -97,14 +100,16 @@ struct GaOptions {
   uint64_t seed = 0;                   ///< seeds the generators (island i: StreamSeed(seed, i))
   // Islands (file comment). With islands = 1 the other four are not used.
   int islands = 1;                      ///< populations, 1 … kMaxIslands
-  int migration_interval = 200;         ///< generations between migrations, ≥ 0 (0 = never: multi-start);
-                                        ///< 200 by measurement (docs/performance.md, "Islands")
+  // The migration defaults are the measured archipelago (docs/performance.md, "Islands"): with 4
+  // islands and 560 generations, every 25 generations, fully connected, gated by a margin of 0.2,
+  // mutation by the ladder of 7.
+  int migration_interval = 25;          ///< generations between migrations, ≥ 0 (0 = never: multi-start)
   int migrants = 4;                     ///< individuals each island sends per migration, 0 … population_size − 1
                                         ///< (≥ 1 when migration_interval > 0)
-  MigrationTopology topology = MigrationTopology::kRing;
-  double migration_margin = 0;          ///< a migration reaches an island only from sources whose best is
+  MigrationTopology topology = MigrationTopology::kFullyConnected;
+  double migration_margin = 0.2;        ///< a migration reaches an island only from sources whose best is
                                         ///< below its own by more than this share of |its best|, [0, 1)
-                                        ///< (0 = every source, the rule before the margin)
+                                        ///< (0 = every source)
   int broadcast_interval = 0;           ///< generations between gated broadcasts to every island, ≥ 0
                                         ///< (0 = none; file comment, 6b.); ≥ 1 migrant when > 0
   double broadcast_margin = 0.2;        ///< the broadcast's gate, (0, 1): a source's best must be below the
@@ -112,7 +117,7 @@ struct GaOptions {
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
   std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0, 1];
-                                        ///< empty (mutation_probability everywhere) or `islands` entries
+                                        ///< empty (the ladder of 7.) or `islands` entries
 
   /// What Validate() calls a field, given the member's name (e.g. "islands" → "--islands" for a
   /// command line); without one, the member's name.
@@ -128,10 +133,15 @@ struct GaOptions {
   bool migrates() const { return islands > 1 && migration_interval > 0; }
   /// broadcast_interval > 0 and more than one island.
   bool broadcasts() const { return islands > 1 && broadcast_interval > 0; }
-  /// The per-bit mutation probability of island `i`: island_mutation[i], or mutation_probability.
+  /// The per-bit mutation probability of island `i`: island_mutation[i]; else, with one island,
+  /// mutation_probability, and with several, min(1, mutation_probability · kIslandMutationLadder[i mod 4]).
   double MutationProbability(int i) const {
-    return island_mutation.empty() ? mutation_probability : island_mutation[i];
+    if (!island_mutation.empty()) return island_mutation[i];
+    if (islands <= 1) return mutation_probability;
+    return std::min(1.0, mutation_probability * kIslandMutationLadder[i % 4]);
   }
+  /// The default rates of the islands, as multiples of mutation_probability (file comment, 7.).
+  static constexpr double kIslandMutationLadder[4] = {1, 2, 3, 5};
 };
 
 /// One island's part of a generation's record (GenerationSummary::islands).

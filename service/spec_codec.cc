@@ -280,7 +280,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
       g->set_migration_interval(static_cast<uint32_t>(s.ga->migration_interval));
       g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
       g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
-      if (s.ga->migration_margin != 0) g->set_migration_margin(s.ga->migration_margin);
+      g->set_migration_margin(s.ga->migration_margin);
       if (s.ga->broadcast_interval != 0) {  // a spec without a broadcast serialises as before it existed
         g->set_broadcast_interval(static_cast<uint32_t>(s.ga->broadcast_interval));
         g->set_broadcast_margin(s.ga->broadcast_margin);

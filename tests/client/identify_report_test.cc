@@ -85,6 +85,8 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   o.ga.islands = 3;
   o.ga.migration_interval = 2;
   o.ga.migrants = 1;
+  o.ga.topology = opt::MigrationTopology::kRing;  // not the defaults: the report names what it ran
+  o.ga.migration_margin = 0;
   const auto result = hgann::RunIdentify(o, set, fitness, nullptr);
   std::ostringstream term;
   WriteIdentifyReport(o, set, fitness, result, term);
@@ -110,8 +112,8 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   EXPECT_NE(plot.find("island 2"), std::string::npos) << plot;
   std::ifstream md(o.out_dir / "report.md");
   const std::string report((std::istreambuf_iterator<char>(md)), {});
-  EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; 2 migrations"), std::string::npos) << report;
-  // The margin's gate and heterogeneous islands are named in the report's line.
+  EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; mutation by island 0.01 0.02 0.03; 2 migrations"), std::string::npos) << report;
+  // The margin's gate and the islands' rates (the default ladder above, or given) are named in the report's line.
   const auto report_line = [&] {
     WriteIdentifyReport(o, set, fitness, hgann::RunIdentify(o, set, fitness, nullptr), term);
     std::ifstream in(o.out_dir / "report.md");
@@ -119,7 +121,7 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   };
   o.ga.migration_margin = 0.2;
   const std::string gated = report_line();
-  EXPECT_NE(gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; 2 migrations"),
+  EXPECT_NE(gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; mutation by island 0.01 0.02 0.03; 2 migrations"),
             std::string::npos)
       << gated;
   o.ga.island_mutation = {0.01, 0.02, 0.05};
@@ -174,7 +176,7 @@ TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
             "--island-mutation[1] = 2: must be in [0, 1]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "0"}),
-            "--migrants = 0: must be >= 1 when --migration-interval = 200 > 0 (--migration-interval 0 runs the "
+            "--migrants = 0: must be >= 1 when --migration-interval = 25 > 0 (--migration-interval 0 runs the "
             "islands independently)");
   EXPECT_EQ(IdentifyRefusal({"--migration-interval", "-1"}),
             "--migration-interval = -1: must be >= 0 (0 = no migration)");

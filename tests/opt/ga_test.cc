@@ -348,13 +348,32 @@ TEST(GaOptions, DefaultsArePaperTable2) {
   EXPECT_EQ(o.mutation_probability, 0.01);
   EXPECT_EQ(o.max_generations, 1000);
   EXPECT_EQ(o.stall_generations, 200);
-  // One island (the paper's GA); the migration defaults chosen by measurement (docs/performance.md).
+  // One island (the paper's GA); the migration defaults chosen by measurement (docs/performance.md,
+  // "Islands"): 4 migrants every 25 generations, fully connected, gated by a margin of 0.2, the
+  // islands' rates on the ladder 1, 2, 3, 5 × the paper's.
   EXPECT_EQ(o.islands, 1);
-  EXPECT_EQ(o.migration_interval, 200);
+  EXPECT_EQ(o.migration_interval, 25);
   EXPECT_EQ(o.migrants, 4);
-  EXPECT_EQ(o.topology, MigrationTopology::kRing);
+  EXPECT_EQ(o.topology, MigrationTopology::kFullyConnected);
+  EXPECT_EQ(o.migration_margin, 0.2);
   EXPECT_EQ(o.island_stall_generations, 0);
+  EXPECT_EQ(o.broadcast_interval, 0);
+  EXPECT_TRUE(o.island_mutation.empty());
+  EXPECT_EQ(o.MutationProbability(0), 0.01) << "one island: the paper's rate";
   EXPECT_TRUE(o.Validate().ok());
+}
+
+TEST(GaOptions, SeveralIslandsMutateOnTheLadderUnlessGivenTheirRates) {
+  GaOptions o;
+  o.islands = 6;
+  const double ladder[] = {0.01, 0.02, 0.03, 0.05, 0.01, 0.02};
+  for (int i = 0; i < 6; ++i) EXPECT_DOUBLE_EQ(o.MutationProbability(i), ladder[i]) << i;
+  EXPECT_EQ(o.MutationProbability(0), o.mutation_probability) << "island 0 is the one-island run's rate";
+  o.mutation_probability = 0.3;  // 0.3 · 5 is capped at 1
+  EXPECT_DOUBLE_EQ(o.MutationProbability(2), 0.9);
+  EXPECT_EQ(o.MutationProbability(3), 1.0);
+  o.island_mutation = {0.1, 0.1, 0.1, 0.1, 0.1, 0.1};
+  for (int i = 0; i < 6; ++i) EXPECT_EQ(o.MutationProbability(i), 0.1) << "given rates win";
 }
 
 TEST(GaOptions, ValidateNamesTheField) {
@@ -731,11 +750,16 @@ uint64_t Digest(const GaState& st, const GaSummary& s) {
   return h;
 }
 
+// The tests of the mechanisms below name the rules they exercise: a ring without a margin, every
+// island at one rate (the defaults of the migration are tested in GaOptions.DefaultsArePaperTable2).
 GaOptions IslandOptions(int k, uint64_t seed = 42) {
   GaOptions o = SmallOptions(seed);
   o.islands = k;
   o.migration_interval = 3;
   o.migrants = 2;
+  o.topology = MigrationTopology::kRing;
+  o.migration_margin = 0;
+  o.island_mutation.assign(k, o.mutation_probability);
   return o;
 }
 
@@ -768,7 +792,7 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   EXPECT_EQ(error([](GaOptions& o) { o.islands = 1025; }).rfind("islands = 1025", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.migrants = 400; }), "migrants = 400: must be in [0, population_size - 1 = 399]");
   EXPECT_EQ(error([](GaOptions& o) { o.migrants = -1; }).rfind("migrants = -1", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 0; }).rfind("migrants = 0: must be >= 1 when migration_interval = 200", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 0; }).rfind("migrants = 0: must be >= 1 when migration_interval = 25", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.migration_interval = -1; }).rfind("migration_interval = -1", 0), 0u);
   EXPECT_NE(error([](GaOptions& o) { o.topology = static_cast<MigrationTopology>(9); }).find("topology = 9: must be \"ring\""),
             std::string::npos);

@@ -112,6 +112,22 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->broadcast_margin, 0.3);
   EXPECT_NE(JobSpecToJson(s).find("\"MIGRATION_TOPOLOGY_RANDOM\""), std::string::npos);
   EXPECT_EQ(JobSpecToJson(no_broadcast).find("broadcast"), std::string::npos);
+  // A margin of 0 (every source) is not the default (0.2): it is written, and comes back as 0; a
+  // spec that names only its islands gets the measured defaults.
+  JobSpec ungated = s;
+  ungated.ga->migration_margin = 0;
+  ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(ungated), &back, &v).ok());
+  EXPECT_EQ(back.ga->migration_margin, 0);
+  back = JobSpec{};
+  ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(ungated), &back, &v).ok());
+  EXPECT_EQ(back.ga->migration_margin, 0);
+  back = JobSpec{};
+  ASSERT_TRUE(JobSpecFromJson(R"({"version": 1, "ga": {"islands": 4}})", &back, &v).ok());
+  ASSERT_TRUE(back.ga.has_value());
+  EXPECT_EQ(back.ga->migration_interval, 25);
+  EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kFullyConnected);
+  EXPECT_EQ(back.ga->migration_margin, 0.2);
+  EXPECT_TRUE(back.ga->island_mutation.empty());
 
   auto violations = [&](auto mutate) {
     JobSpec bad = s;
@@ -138,7 +154,7 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                        }),
                        "ga.migrants", "must be ≥ 1 when ga.broadcast_interval > 0"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation = {0.01, 0.02}; }),
-                       "ga.island_mutation.size()", "must be 0 (ga.mutation_probability for every island) or ga.islands = 4"));
+                       "ga.island_mutation.size()", "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = 4"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }), "ga.island_mutation[2]",
                        "must be in [0, 1]"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.island_mutation.clear(); }).empty());
