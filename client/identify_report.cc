@@ -220,9 +220,9 @@ std::string AtBoundList(const hgann::HgannFitness& fitness, const model::Network
 
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. Widen a "
-    "range (a job spec's `ranges`) only as far as the physics allows: on the nominal bench, the runs that miss the "
-    "≈ 0.8 deg² basin end with β at or near the top of its range (the ≈ 2.3 deg² ones with α, β and γ there), "
-    "and wider ranges only moved them to the new tops (docs/performance.md, \"Islands\"); there, more islands or "
+    "range (a job spec's `ranges`) only as far as the physics allows: on the nominal bench, the ≈ 2.3 deg² "
+    "plateau where many runs stop has β at the top of its range and, mostly, α and γ near theirs, and wider "
+    "ranges only moved the runs to the new tops (docs/performance.md, \"Islands\"); there, more islands or "
     "seeds are the way out.";
 
 std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
