@@ -202,7 +202,6 @@ int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::
   return rendered;
 }
 
-/// report.md.
 // "α at its upper bound 0.01 N/V, a1 at its lower bound 0 deg" for the parameters the network holds
 // at a bound of their range on every training case; "" when none.
 std::string AtBoundList(const hgann::HgannFitness& fitness, const model::Network& network) {
@@ -225,6 +224,7 @@ constexpr const char* kAtBoundMeaning =
     "ranges only moved the runs to the new tops (docs/performance.md, \"Islands\"); there, more islands or "
     "seeds are the way out.";
 
+/// report.md.
 std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
                            const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression) {
   const double train_sum = t.train_sum, all_sum = t.all_sum;
