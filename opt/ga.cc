@@ -126,7 +126,7 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
   }
   if (!island_mutation.empty() && island_mutation.size() != static_cast<size_t>(islands)) {
     return InvalidArgument(FieldError(name("island_mutation") + ".size()", island_mutation.size(),
-                                      "must be 0 (" + name("mutation_probability") + " for every island) or " +
+                                      "must be 0 (the ladder: " + name("mutation_probability") + " × 1, 2, 3, 5) or " +
                                           name("islands") + " = " + std::to_string(islands)));
   }
   for (size_t i = 0; i < island_mutation.size(); ++i) {

@@ -171,7 +171,7 @@ TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--migration-interval", "0", "--migrants", "0", "--broadcast-interval", "25"}),
             "--migrants = 0: must be >= 1 when --broadcast-interval = 25 > 0");
   EXPECT_EQ(IdentifyRefusal({"--islands", "3", "--island-mutation", "0.01,0.02"}),
-            "--island-mutation.size() = 2: must be 0 (--mutation for every island) or --islands = 3");
+            "--island-mutation.size() = 2: must be 0 (the ladder: --mutation × 1, 2, 3, 5) or --islands = 3");
   EXPECT_EQ(IdentifyRefusal({"--islands", "2", "--island-mutation", "0.01,2"}),
             "--island-mutation[1] = 2: must be in [0, 1]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");

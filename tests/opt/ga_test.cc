@@ -812,7 +812,7 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 1; }), "broadcast_margin = 1: must be in (0, 1)");
   EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = std::nan(""); }).rfind("broadcast_margin = nan", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.island_mutation = {0.01, 0.02}; }),
-            "island_mutation.size() = 2: must be 0 (mutation_probability for every island) or islands = 1");
+            "island_mutation.size() = 2: must be 0 (the ladder: mutation_probability × 1, 2, 3, 5) or islands = 1");
   EXPECT_EQ(error([](GaOptions& o) {
               o.islands = 3;
               o.island_mutation = {0.01, 1.5, 0.02};
