@@ -49,6 +49,18 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(paper.ga->mutation_probability, 0.01);
   EXPECT_TRUE(kinds::All().Validate(paper).empty());
 
+  // The archipelago: the same job with islands and generations, the migration by its defaults.
+  JobSpec islands;
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_islands_job.json", &islands, &v).ok()) << All(v);
+  EXPECT_EQ(islands.ga->islands, 4);
+  EXPECT_EQ(islands.ga->generations, 560);
+  EXPECT_EQ(islands.ga->migration_interval, 25);
+  EXPECT_EQ(islands.ga->migration_margin, 0.2);
+  EXPECT_EQ(islands.ga->topology, opt::MigrationTopology::kFullyConnected);
+  EXPECT_TRUE(islands.ga->island_mutation.empty());
+  EXPECT_EQ(islands.seed, paper.seed);
+  EXPECT_TRUE(kinds::All().Validate(islands).empty());
+
   // Cases and a folder at once, or a folder that is not a case set: named.
   v.clear();
   Status st = client::JobSpecFromJsonFile(
