@@ -226,7 +226,8 @@ constexpr const char* kAtBoundMeaning =
 
 /// report.md.
 std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
-                           const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression) {
+                           const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression,
+                           const std::string& at_bound) {
   const double train_sum = t.train_sum, all_sum = t.all_sum;
   const int beaten = t.beaten, compared = t.compared;
   std::ostringstream md;
@@ -308,8 +309,7 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
        << " | " << Fmt(q.beta, 3) << " | " << Fmt(q.gamma, 3) << " | " << Fmt(q.a1, 3) << " | " << Fmt(q.a2, 3)
        << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3) << " |\n";
   }
-  if (const std::string at = AtBoundList(fitness, result.best.network); !at.empty())
-    md << "\nHeld at a bound: " << at << " " << kAtBoundMeaning << "\n";
+  if (!at_bound.empty()) md << "\nHeld at a bound: " << at_bound << " " << kAtBoundMeaning << "\n";
   auto param_grid = [&](const char* title, double model::BimorphParams::*field, int prec) {
     md << "\n### " << title << "\n\n"
        << Grid(set, [&](const io::BenchCase& c) { return Fmt(ResultOf(result, c.number).params.*field, prec); });
@@ -368,12 +368,13 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   WriteProgressCsv(out, result, written);
   const CaseTotals totals = WriteCaseTables(out, set, fitness, result, written);
   const std::string mu_regression = MuRegression(totals);
+  const std::string at_bound = AtBoundList(fitness, result.best.network);
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
-    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression);
+    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound);
     written.push_back(out / "report.md");
   }
   term << "\n" << result.summary.BriefReport() << "\n"
@@ -387,8 +388,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
        << "below the paper in " << totals.beaten << " of " << totals.compared << " cases; Σ training "
        << Fmt(totals.train_sum, 5) << "\n"
        << mu_regression << "\n";
-  if (const std::string at = AtBoundList(fitness, result.best.network); !at.empty())
-    term << "held at a bound on every training case (set by the range, not the data; report.md): " << at << "\n";
+  if (!at_bound.empty())
+    term << "held at a bound on every training case (set by the range, not the data; report.md): " << at_bound << "\n";
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
        << "parameters.csv, " << rendered << " figures)\n";

@@ -63,6 +63,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <optional>
@@ -138,7 +139,7 @@ struct GaOptions {
   double MutationProbability(int i) const {
     if (!island_mutation.empty()) return island_mutation[i];
     if (islands <= 1) return mutation_probability;
-    return std::min(1.0, mutation_probability * kIslandMutationLadder[i % 4]);
+    return std::min(1.0, mutation_probability * kIslandMutationLadder[i % std::size(kIslandMutationLadder)]);
   }
   /// The default rates of the islands, as multiples of mutation_probability (file comment, 7.).
   static constexpr double kIslandMutationLadder[4] = {1, 2, 3, 5};

@@ -61,11 +61,12 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
     const bool any = std::any_of(side.begin(), side.end(), [](int s) { return s != 0; });
     EXPECT_EQ(md.find("Held at a bound:") != std::string::npos, any);
     EXPECT_EQ(term.str().find("held at a bound on every training case") != std::string::npos, any);
-    for (int k = 0; k < 7; ++k)
-      if (side[k] != 0)
-        EXPECT_NE(md.find(std::string(symbols[k]) + (side[k] > 0 ? " at its upper bound" : " at its lower bound")),
-                  std::string::npos)
-            << symbols[k];
+    for (int k = 0; k < 7; ++k) {
+      if (side[k] == 0) continue;
+      EXPECT_NE(md.find(std::string(symbols[k]) + (side[k] > 0 ? " at its upper bound" : " at its lower bound")),
+                std::string::npos)
+          << symbols[k];
+    }
   }
   for (const char* f : {"network.pb", "network.json"}) {
     io::SavedNetwork loaded;
