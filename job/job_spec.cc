@@ -127,7 +127,7 @@ std::vector<FieldViolation> JobSpec::Validate() const {
                   (ga->output_moves >= 0 && ga->output_moves <= ga->population - elite),
               "ga.output_moves", ga->output_moves,
               "must be in [0, population − round(population · elite_fraction) = " +
-                  std::to_string(ga->population - elite) + "] (unset: 0 with one island, 8 % of the offspring with several)");
+                  std::to_string(ga->population - elite) + "] (unset: 0 with one island, 16 % of the offspring with several)");
   }
   return std::move(c.out);
 }

@@ -197,7 +197,7 @@ struct GaSettings {
   std::vector<double> island_mutation;  ///< empty (the ladder of opt/ga.h) or one rate per island, each 0..1
   int output_moves = opt::GaOptions::kAutoOutputMoves;  ///< offspring per island made by the kind's move
                                        ///< (opt/ga.h 9.), 0..population − elite; auto (−1): 0 with one
-                                       ///< island, 8 % of the offspring with several
+                                       ///< island, 16 % of the offspring with several
   int offspring() const;               ///< evaluated per generation: population − elite count
 };
 

@@ -139,7 +139,7 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
                                       "must be in [0, " + name("population_size") + " − the elite = " +
                                           std::to_string(population_size - e) + "] (" +
                                           std::to_string(kAutoOutputMoves) + ": 0 with one island, " +
-                                          "8 % of the offspring with several)"));
+                                          "16 % of the offspring with several)"));
   }
   return Status::Ok();
 }

@@ -157,14 +157,14 @@ struct GaOptions {
   static constexpr double kIslandMutationLadder[4] = {1, 2, 3, 5};
   /// The offspring per island made by the move (9.): output_moves, or with kAutoOutputMoves, 0 for
   /// one island (the paper's GA, bit for bit) and round(kIslandOutputMoveShare · offspring) for
-  /// several (16 of the paper's 200).
+  /// several (32 of the paper's 200).
   int OutputMoves() const {
     if (output_moves != kAutoOutputMoves) return output_moves;
     if (islands <= 1) return 0;
     return static_cast<int>(std::lround(kIslandOutputMoveShare * (population_size - elite_count())));
   }
   static constexpr int kAutoOutputMoves = -1;
-  static constexpr double kIslandOutputMoveShare = 0.08;
+  static constexpr double kIslandOutputMoveShare = 0.16;
 };
 
 /// One island's part of a generation's record (GenerationSummary::islands).

@@ -59,7 +59,7 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(islands.ga->topology, opt::MigrationTopology::kFullyConnected);
   EXPECT_TRUE(islands.ga->island_mutation.empty());
   EXPECT_EQ(islands.ga->output_moves, opt::GaOptions::kAutoOutputMoves);
-  EXPECT_EQ(job::ToGaOptions(islands, job::GenomeLayout{1415, 0}).OutputMoves(), 16);
+  EXPECT_EQ(job::ToGaOptions(islands, job::GenomeLayout{1415, 0}).OutputMoves(), 32);
   EXPECT_EQ(islands.seed, paper.seed);
   EXPECT_TRUE(kinds::All().Validate(islands).empty());
 

@@ -1246,14 +1246,14 @@ RunRecord RunWithMove(BatchEvaluator* evaluator, const GaOptions& options, Genet
   return r;
 }
 
-TEST(GaOutputMoves, NoneWithOneIslandEightPercentWithSeveralUnlessGiven) {
+TEST(GaOutputMoves, NoneWithOneIslandSixteenPercentWithSeveralUnlessGiven) {
   GaOptions o;
   EXPECT_EQ(o.output_moves, GaOptions::kAutoOutputMoves);
   EXPECT_EQ(o.OutputMoves(), 0) << "one island: the paper's GA";
   o.islands = 4;
-  EXPECT_EQ(o.OutputMoves(), 16) << "8 % of 200 offspring";
+  EXPECT_EQ(o.OutputMoves(), 32) << "16 % of 200 offspring";
   o.population_size = 30;
-  EXPECT_EQ(o.OutputMoves(), 1) << "8 % of 15, rounded";
+  EXPECT_EQ(o.OutputMoves(), 2) << "16 % of 15, rounded";
   o.population_size = 400;
   o.output_moves = 0;
   EXPECT_EQ(o.OutputMoves(), 0);
@@ -1265,7 +1265,7 @@ TEST(GaOutputMoves, NoneWithOneIslandEightPercentWithSeveralUnlessGiven) {
   EXPECT_TRUE(o.Validate().ok()) << "every offspring a move";
   o.output_moves = 201;
   EXPECT_EQ(o.Validate().message(),
-            "output_moves = 201: must be in [0, population_size − the elite = 200] (-1: 0 with one island, 8 % of the offspring with several)");
+            "output_moves = 201: must be in [0, population_size − the elite = 200] (-1: 0 with one island, 16 % of the offspring with several)");
   o.output_moves = -2;
   EXPECT_EQ(o.Validate().message().rfind("output_moves = -2: must be in [0, ", 0), 0u);
 }
@@ -1304,7 +1304,7 @@ TEST(GaOutputMoves, TheLastOffspringOfEachIslandAreMovesOfItsBest) {
 TEST(GaOutputMoves, WithoutAMoveOrWithNoneEveryOffspringIsBred) {
   const HashFitness fitness;
   InlineEvaluator ev(fitness);
-  GaOptions o = IslandOptions(3);  // auto: 2 moves per island (8 % of 30) when a move is set
+  GaOptions o = IslandOptions(3);  // auto: 5 moves per island (16 % of 30) when a move is set
   const RunRecord bred = RunWith(&ev, o);
   ExpectSameRun(bred, RunWithMove(&ev, o, nullptr));
   GaOptions none = o;
