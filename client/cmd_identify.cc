@@ -104,6 +104,12 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                   "0.01,0.01,0.01,0.01; default with several islands: the ladder --mutation × 1, 2, 3, 5, repeated, "
                   "which at 0.01 is 0.01,0.02,0.03,0.05)")
       ->delimiter(',');
+  (*flag_of)["output_moves"] = "--output-moves";
+  cmd->add_option("--output-moves", opts->ga.output_moves,
+                  "offspring per island and generation made by a step of the network's outputs in the model's "
+                  "parameter space instead of crossover and mutation, 0 … population − elite (default -1: 0 with one "
+                  "island, the paper's GA; with several, 16 % of the offspring, 32 of the paper's 200: the measured archipelago)")
+      ->capture_default_str();
   cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--ranges", opts->ranges,
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "

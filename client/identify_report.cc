@@ -281,6 +281,9 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     }
     md << "; " << migrations << " migrations, " << restarts << " restarts)";
   }
+  if (const int moves = options.ga.OutputMoves(); moves > 0)
+    md << ", " << moves << " offspring per island and generation made by an output move (a step of the best "
+       << "network's outputs in the parameter space)";
   md << ", seed " << options.ga.seed << ", ranges '"
      << options.ranges << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
      << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";

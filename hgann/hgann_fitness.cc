@@ -123,21 +123,38 @@ FitnessResult HgannFitness::EvaluateNetwork(const model::Network& network) const
     if (!std::isfinite(pi)) return {penalty_, FitnessStatus::kPenalized, "non_finite"};
     cost += pi;
   }
-  if (config_.spread_penalty > 0) cost += config_.spread_penalty * OutputSpread(network);
+  if (config_.spread_penalty > 0) {
+    // The grid of the spread penalty is the network's envelope: a network that gives an unbounded
+    // loop at a point of it is penalised like one that does so on a training case.
+    const Envelope e = GridOf(network);
+    if (!e.bounded) return {penalty_, FitnessStatus::kPenalized, "unbounded_hysteresis_in_envelope"};
+    cost += config_.spread_penalty * e.spread;
+  }
   if (!std::isfinite(cost) || cost >= penalty_)
     return {penalty_, FitnessStatus::kPenalized, "cost overflow (" + std::to_string(cost) + " deg^2)"};
   return {cost, FitnessStatus::kOk, {}};
 }
 
-double HgannFitness::OutputSpread(const model::Network& network) const {
+double HgannFitness::OutputSpread(const model::Network& network) const { return GridOf(network).spread; }
+
+bool HgannFitness::BoundedOnEnvelope(const model::Network& network) const { return GridOf(network).bounded; }
+
+HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const {
   constexpr int kGrid = 5;
   const auto& n = config_.normalization;
+  Envelope e;
   double sum[model::kNetworkOutputs] = {}, sum2[model::kNetworkOutputs] = {};
   for (int i = 0; i < kGrid; ++i) {
     for (int j = 0; j < kGrid; ++j) {
       const double v = n.amplitude_lo_v + (n.amplitude_hi_v - n.amplitude_lo_v) * i / (kGrid - 1);
       const double f = n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1);
-      const auto p = network.Predict(v, f).ToArray();
+      const model::NetworkParameters q = network.Predict(v, f);
+      model::BimorphParams bp;
+      bp.alpha = q.alpha;
+      bp.beta = q.beta;
+      bp.gamma = q.gamma;
+      if (!bp.HysteresisBounded()) e.bounded = false;
+      const auto p = q.ToArray();
       for (int k = 0; k < model::kNetworkOutputs; ++k) {
         const auto& r = config_.ranges[k];
         const double s = r.upper > r.lower ? (p[k] - r.lower) / (r.upper - r.lower) : 0.0;
@@ -146,11 +163,10 @@ double HgannFitness::OutputSpread(const model::Network& network) const {
       }
     }
   }
-  double spread = 0;
   constexpr double kN = kGrid * kGrid;
   for (int k = 0; k < model::kNetworkOutputs; ++k)
-    spread += std::max(0.0, sum2[k] / kN - (sum[k] / kN) * (sum[k] / kN));
-  return spread;
+    e.spread += std::max(0.0, sum2[k] / kN - (sum[k] / kN) * (sum[k] / kN));
+  return e;
 }
 
 std::array<int, model::kNetworkOutputs> HgannFitness::ParametersAtBound(const model::Network& network) const {

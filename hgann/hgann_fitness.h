@@ -32,7 +32,8 @@ struct HgannFitnessConfig {
   /// of each normalised output s_k ∈ [0, 1] over a 5 × 5 grid of the normalised training box
   /// [0, 1]². 0 = the paper's cost exactly. A positive λ prefers networks whose parameters vary over
   /// the operating envelope only where the data pay for it, which keeps predictions at untrained
-  /// operating points (corners of the box) from bending. Finite, ≥ 0.
+  /// operating points (corners of the box) from bending; and it penalises a network whose loop is
+  /// unbounded at a point of that grid (HgannFitness::BoundedOnEnvelope). Finite, ≥ 0.
   double spread_penalty = 0;
 
   /// Normalisation over the training cases' (V, f) (spec hgann.md §1).
@@ -78,6 +79,11 @@ class HgannFitness final : public opt::FitnessFunction {
  public:
   /// Σ_k Var_grid(s_k) of a network (without λ); see HgannFitnessConfig::spread_penalty.
   double OutputSpread(const model::Network& network) const;
+  /// The network gives a bounded Bouc–Wen loop (model::BimorphParams::HysteresisBounded) at every
+  /// point of the spread penalty's grid. With λ > 0 a network that does not is penalised (reason
+  /// "unbounded_hysteresis_in_envelope"), as on a training case: its model breaks at untrained
+  /// operating points inside the training box.
+  bool BoundedOnEnvelope(const model::Network& network) const;
 
   /// Which of the seven parameters the network holds at a bound of its range on every training
   /// case: −1 at the lower bound, +1 at the upper, 0 otherwise (inside on some case, or a
@@ -88,6 +94,11 @@ class HgannFitness final : public opt::FitnessFunction {
   static constexpr double kAtBoundShare = 1e-6;
 
  private:
+  struct Envelope {
+    double spread = 0;     ///< Σ_k Var_grid(s_k)
+    bool bounded = true;   ///< a bounded loop at every grid point
+  };
+  Envelope GridOf(const model::Network& network) const;
 
   HgannFitnessConfig config_;
   std::unique_ptr<model::BimorphPlant> plant_;

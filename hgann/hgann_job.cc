@@ -1,6 +1,7 @@
 #include "hgann/hgann_job.h"
 
 #include "hgann/identify.h"
+#include "hgann/output_move.h"
 
 #include <algorithm>
 #include <cmath>
@@ -343,6 +344,12 @@ JobKind HgannJobKind() {
       if (Status st = model::ValidateChromosome(g.bits); !st.ok()) return st;
       out->push_back(model::DecodeChromosome(g.bits, config.normalization, config.ranges));
     }
+    return Status::Ok();
+  };
+  k.move = [](const JobSpec& s, opt::GeneticAlgorithm::Move* out) -> Status {
+    HgannFitnessConfig config;  // the normalisation and training drives the fitness uses
+    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok()) return st;
+    *out = OutputMove(config);
     return Status::Ok();
   };
   k.describe = [](const JobSpec&, const Genome& g) {

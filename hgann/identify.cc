@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 
+#include "hgann/output_move.h"
 #include "model/chromosome.h"
 #include "opt/thread_pool_evaluator.h"
 
@@ -34,6 +35,7 @@ IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& se
   opt::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
   opt::GeneticAlgorithm algorithm(ga, &evaluator);
   algorithm.SetDescriber([](const opt::Genome& g) { return model::DescribeChromosome(g.bits); });
+  algorithm.SetMove(OutputMove(fitness.config()));  // the hgann job kind's move (hgann_job.cc)
   if (on_generation) algorithm.AddGenerationCallback(on_generation);
 
   IdentifyResult r;

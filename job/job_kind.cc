@@ -25,6 +25,7 @@ opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   o.broadcast_interval = g.broadcast_interval;
   o.broadcast_margin = g.broadcast_margin;
   o.island_mutation = g.island_mutation;
+  o.output_moves = g.output_moves;
   if (spec.limits.target_cost) o.target_cost = *spec.limits.target_cost;
   o.error_cost = spec.limits.penalty_cost;
   o.seed = spec.seed;
@@ -51,6 +52,10 @@ std::vector<FieldViolation> JobKindRegistry::Validate(const JobSpec& spec) const
     out.push_back({spec.kind(), spec.kind() + ": job kind not available on this master"});
     return out;
   }
+  if (!k->move && spec.ga && spec.ga->output_moves > 0) {
+    out.push_back({"ga.output_moves", "ga.output_moves = " + std::to_string(spec.ga->output_moves) + ": the " +
+                                          spec.kind() + " kind has no output move; must be 0 or unset"});
+  }
   if (k->validate) {
     auto more = k->validate(spec);
     out.insert(out.end(), more.begin(), more.end());
@@ -76,6 +81,13 @@ Status JobKindRegistry::Networks(const JobSpec& spec, std::span<const opt::Genom
   const JobKind* k = Find(spec.kind());
   if (!k || !k->networks) return NotFound("job kind '" + spec.kind() + "' has no networks");
   return k->networks(spec, genomes, out);
+}
+
+Status JobKindRegistry::Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* out) const {
+  *out = nullptr;
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->move) return Status::Ok();
+  return k->move(spec, out);
 }
 
 }  // namespace pz::job

@@ -45,6 +45,9 @@ struct JobKind {
   /// Optional, for kinds whose genomes are networks: decodes genomes into the networks a client
   /// deploys (with the spec's input normalisation and parameter ranges); fetch returns them.
   std::function<Status(const JobSpec&, std::span<const opt::Genome>, std::vector<model::Network>*)> networks;
+  /// Optional: the kind's move for the GA's output moves (opt/ga.h, file comment 9.). A kind
+  /// without one refuses a spec that asks for output moves.
+  std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Move*)> move;
 };
 
 /// The GA options of a spec's `ga` settings, limits and seed, for genomes of `layout` (what the
@@ -65,6 +68,8 @@ class JobKindRegistry {
   /// The kind's networks of `genomes`; NotFound for a kind without networks.
   Status Networks(const JobSpec& spec, std::span<const opt::Genome> genomes,
                   std::vector<model::Network>* out) const;
+  /// The kind's move for the GA (null when the kind has none: its genomes are only bred).
+  Status Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* out) const;
 
  private:
   mutable std::mutex mu_;

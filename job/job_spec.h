@@ -15,6 +15,7 @@
 
 #include "model/case_role.h"
 #include "model/status.h"
+#include "opt/ga.h"
 #include "opt/topology.h"
 
 namespace pz::job {
@@ -194,6 +195,9 @@ struct GaSettings {
   int broadcast_interval = 0;          ///< ≥ 0 (0 = no gated broadcast; opt/ga.h), ≥ 1 migrant when > 0
   double broadcast_margin = 0.2;       ///< (0, 1): the broadcast's gate (opt/ga.h)
   std::vector<double> island_mutation;  ///< empty (the ladder of opt/ga.h) or one rate per island, each 0..1
+  int output_moves = opt::GaOptions::kAutoOutputMoves;  ///< offspring per island made by the kind's move
+                                       ///< (opt/ga.h 9.), 0..population − elite; auto (−1): 0 with one
+                                       ///< island, 16 % of the offspring with several
   int offspring() const;               ///< evaluated per generation: population − elite count
 };
 

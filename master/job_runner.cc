@@ -38,6 +38,9 @@ Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume
     ga_ = std::make_unique<GeneticAlgorithm>(ToGaOptions(spec_, layout), &forward_);
     if (const JobKind* k = kinds.Find(spec_.kind()); k && k->describe)
       ga_->SetDescriber([this, describe = k->describe](const Genome& g) { return describe(spec_, g); });
+    opt::GeneticAlgorithm::Move move;
+    if (Status s = kinds.Move(spec_, &move); !s.ok()) return s;
+    if (move) ga_->SetMove(std::move(move));
     if (resume) {
       ga_->RestoreState(resume->optimizer);
       const std::string id = checkpoint_.job_id;

@@ -134,6 +134,13 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
         !s.ok())
       return s;
   }
+  if (output_moves < kAutoOutputMoves || output_moves > population_size - e) {
+    return InvalidArgument(FieldError(name("output_moves"), output_moves,
+                                      "must be in [0, " + name("population_size") + " − the elite = " +
+                                          std::to_string(population_size - e) + "] (" +
+                                          std::to_string(kAutoOutputMoves) + ": 0 with one island, " +
+                                          "16 % of the offspring with several)"));
+  }
   return Status::Ok();
 }
 
@@ -313,6 +320,7 @@ void GeneticAlgorithm::AddGenerationCallback(GenerationCallback callback) {
 }
 
 void GeneticAlgorithm::SetDescriber(Describer describer) { describer_ = std::move(describer); }
+void GeneticAlgorithm::SetMove(Move move) { move_ = std::move(move); }
 
 void GeneticAlgorithm::RestoreState(GaState state) {
   ThrowIfError(state.Validate(options_));
@@ -416,14 +424,16 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   Rng& rng = rngs_[island];
   const IslandState& is = state_.islands[island];
 
+  // The last `moves` offspring are the move's (file comment, 9.), made after the bred ones.
+  const int moves = move_ ? options_.OutputMoves() : 0, n_bred = n_off - moves;
   Draft d;
   d.fresh.resize(n_off);
-  for (int o = 0; o < n_off; o += 2) {
+  for (int o = 0; o < n_bred; o += 2) {
     const Genome& pa = is.population[Tournament(rng)];
     const Genome& pb = is.population[Tournament(rng)];
     Genome& c1 = d.fresh[o];
     Genome c2_storage;
-    Genome& c2 = o + 1 < n_off ? d.fresh[o + 1] : c2_storage;  // an odd last child is dropped
+    Genome& c2 = o + 1 < n_bred ? d.fresh[o + 1] : c2_storage;  // an odd last child is dropped
     c1.bits = pa.bits;
     c2.bits = pb.bits;
     if (rng.Bernoulli(cross)) {
@@ -441,6 +451,10 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
       // Bernoulli draw per bit.
       for (int pos = rng.Gap(mutate); pos < bits; pos += 1 + rng.Gap(mutate)) c->bits[pos] ^= 1u;
     }
+  }
+  for (int o = n_bred; o < n_off; ++o) {
+    move_(is.population.front(), rng, &d.fresh[o]);
+    PZ_CHECK_MSG(CheckGenome(d.fresh[o], bits, "move").ok(), "the move wrote a genome of the wrong length or non-0/1 bits");
   }
   d.elite = elite;  // kept: moved from the state once the generation is evaluated (Finish)
   return d;

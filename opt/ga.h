@@ -55,12 +55,21 @@
 //      sources hold (as a migration would send them; none for multi-start or K = 1) plus fresh
 //      uniform individuals drawn from its generator, which are evaluated in that generation's
 //      batch instead of its offspring.
+//   9. output moves: with a move set (SetMove; a problem hook) island i's last OutputMoves()
+//      offspring are not bred but made by the move from the island's best individual, with the
+//      island's generator, after the bred ones. For HGANN (hgann/output_move.h) the move decodes the
+//      network, takes its seven outputs' mean over the training cases, adds a random step and writes
+//      them back as a network of constant outputs: a search in the model's parameter space beside
+//      the GA's search in the network's bits, which leaves a plateau that bit flips cannot (the
+//      default with several islands, by measurement: docs/performance.md, "Islands"). Without a
+//      move (or with 0 moves) every offspring is bred.
 // The job's best, stall and termination are over all islands (the best of the best); the
 // generation's summary carries each island's best, stall, immigrants and restart (IslandSummary).
 #pragma once
 
 #include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <iterator>
@@ -119,6 +128,9 @@ struct GaOptions {
                                         ///< a lower best of its own, ≥ 0 (0 = never)
   std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0, 1];
                                         ///< empty (the ladder of 7.) or `islands` entries
+  int output_moves = kAutoOutputMoves;  ///< offspring per island and generation made by the move (9.),
+                                        ///< 0 … population_size − elite_count(); kAutoOutputMoves: 0 with
+                                        ///< one island, kIslandOutputMoveShare of the offspring with several
 
   /// What Validate() calls a field, given the member's name (e.g. "islands" → "--islands" for a
   /// command line); without one, the member's name.
@@ -143,6 +155,16 @@ struct GaOptions {
   }
   /// The default rates of the islands, as multiples of mutation_probability (file comment, 7.).
   static constexpr double kIslandMutationLadder[4] = {1, 2, 3, 5};
+  /// The offspring per island made by the move (9.): output_moves, or with kAutoOutputMoves, 0 for
+  /// one island (the paper's GA, bit for bit) and round(kIslandOutputMoveShare · offspring) for
+  /// several (32 of the paper's 200).
+  int OutputMoves() const {
+    if (output_moves != kAutoOutputMoves) return output_moves;
+    if (islands <= 1) return 0;
+    return static_cast<int>(std::lround(kIslandOutputMoveShare * (population_size - elite_count())));
+  }
+  static constexpr int kAutoOutputMoves = -1;
+  static constexpr double kIslandOutputMoveShare = 0.16;
 };
 
 /// One island's part of a generation's record (GenerationSummary::islands).
@@ -257,6 +279,11 @@ class GeneticAlgorithm {
   /// Optional problem hook describing an individual (e.g. its decoded architecture) for the
   /// per-generation summary. Called on the best individual of each generation.
   void SetDescriber(Describer describer);
+  /// A problem's move (file comment, 9.): writes into `child` a genome made from `parent` (an
+  /// island's best) with draws from `rng` only. Must be a function of (parent, the draws): the run
+  /// stays a function of (options, seed, fitness, move). Without one, every offspring is bred.
+  using Move = std::function<void(const Genome& parent, Rng& rng, Genome* child)>;
+  void SetMove(Move move);
 
   /// Creates generation 0: `seeds` (≤ population_size genomes of genome_bits 0/1 bits) fill the
   /// first slots of island 0, the rest are drawn uniformly (each island from its own generator);
@@ -324,6 +351,7 @@ class GeneticAlgorithm {
   BatchEvaluator* evaluator_;
   std::vector<GenerationCallback> callbacks_;
   Describer describer_;
+  Move move_;
   std::atomic<bool> cancel_{false};
   std::vector<Rng> rngs_;                  ///< one per island
   std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once

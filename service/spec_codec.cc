@@ -289,6 +289,7 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     if (s.ga->island_stall_generations != 0)
       g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
     for (double p : s.ga->island_mutation) g->add_island_mutation(p);
+    if (s.ga->output_moves >= 0) g->set_output_moves(static_cast<uint32_t>(s.ga->output_moves));  // unset = auto
   }
   if (s.external) {
     auto* e = p->mutable_external();
@@ -335,6 +336,7 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     if (pg.has_broadcast_interval()) g.broadcast_interval = ClampInt(pg.broadcast_interval());
     if (pg.has_broadcast_margin()) g.broadcast_margin = pg.broadcast_margin();
     g.island_mutation.assign(pg.island_mutation().begin(), pg.island_mutation().end());
+    if (pg.has_output_moves()) g.output_moves = ClampInt(pg.output_moves());
     s->ga = g;
   } else if (p.has_external()) {
     ExternalSettings e;

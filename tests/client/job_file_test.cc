@@ -58,6 +58,8 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(islands.ga->migration_margin, 0.2);
   EXPECT_EQ(islands.ga->topology, opt::MigrationTopology::kFullyConnected);
   EXPECT_TRUE(islands.ga->island_mutation.empty());
+  EXPECT_EQ(islands.ga->output_moves, opt::GaOptions::kAutoOutputMoves);
+  EXPECT_EQ(job::ToGaOptions(islands, job::GenomeLayout{1415, 0}).OutputMoves(), 32);
   EXPECT_EQ(islands.seed, paper.seed);
   EXPECT_TRUE(kinds::All().Validate(islands).empty());
 

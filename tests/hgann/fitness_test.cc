@@ -122,6 +122,11 @@ TEST(HgannFitness, SpreadPenaltyIsZeroForConstantOutputsAndAddsToCost) {
     ++checked;
     const double s = spread.OutputSpread(spread.Decode(g));
     EXPECT_GE(s, 0);
+    if (!spread.BoundedOnEnvelope(spread.Decode(g))) {  // (SpreadPenaltyRefusesALoopUnbounded…)
+      EXPECT_EQ(b.reason, "unbounded_hysteresis_in_envelope");
+      EXPECT_EQ(b.cost, spread.penalty_cost());
+      continue;
+    }
     EXPECT_NEAR(b.cost, a.cost + 10 * s, 1e-9 * b.cost);
   }
   EXPECT_EQ(checked, 10);
@@ -171,6 +176,52 @@ TEST(HgannFitness, ParametersAtBoundOnEveryTrainingCase) {
   EXPECT_EQ(side[4], 1);   // γ: tribas(0) = 1, the upper bound
   EXPECT_EQ(side[5], -1);  // a1
   EXPECT_EQ(side[6], 0);   // a2: a zero-width range has no side
+}
+
+// A network whose loop is bounded on the four training cases and unbounded at one corner of their
+// box, (375 V, 1 Hz) — an operating point between the training cases (case 3, withheld): γ rises
+// with f − V (normalised) and passes β only there. λ = 0 (the paper's cost) scores the training
+// cases alone; λ > 0 penalises the network (HgannFitnessConfig::spread_penalty).
+TEST(HgannFitness, SpreadPenaltyRefusesALoopUnboundedInsideTheTrainingBox) {
+  const auto ten = MakeFitness({}, 10);
+  const auto paper = MakeFitness({}, 0);
+  model::Network n;
+  using TF = model::TransferFunction;
+  n.input_tf = {TF::kSatlin, TF::kSatlin};  // A = x on [0, 1]
+  n.hidden_tf = {TF::kSatlin, TF::kSatlin};
+  n.output_tf.fill(TF::kSatlin);
+  n.w1 = Eigen::MatrixXd::Zero(2, 2);
+  n.w1(0, 0) = -1;  // B0 = satlin(x_f − x_V)
+  n.w1(1, 0) = 1;
+  n.c1 = Eigen::VectorXd::Zero(2);
+  n.w2 = Eigen::MatrixXd::Zero(2, 7);
+  n.c2 = Eigen::VectorXd(7);
+  n.c2 << 0.3, 0.1, 0.3, 0.5, 0.5, 0.05, 0.05;  // μ 90, δ 0.1, α 0.003, β 0.01, γ 0 at B0 = 0
+  n.w2(0, 4) = 0.3;                             // γ = 0.012 · B0: 0.012 > β where B0 = 1
+  n.normalization = ten.config().normalization;
+  n.ranges = ten.config().ranges;
+  ASSERT_TRUE(n.Validate().ok());
+  double gamma_max = -INFINITY;
+  for (const auto& c : ten.config().cases) {
+    if (!c.training) continue;
+    gamma_max = std::max(gamma_max, n.Predict(c.drive.amplitude_v, c.drive.frequency_hz).gamma);
+  }
+  EXPECT_NEAR(gamma_max, 0.008, 1e-12) << "(500 V, 1 Hz): B0 = 2/3, below β = 0.01";
+  EXPECT_NEAR(n.Predict(375, 1).gamma, 0.012, 1e-12);
+  EXPECT_FALSE(ten.BoundedOnEnvelope(n));
+  const auto scored = paper.EvaluateNetwork(n);
+  EXPECT_EQ(scored.status, FitnessStatus::kOk) << scored.reason;
+  const auto refused = ten.EvaluateNetwork(n);
+  EXPECT_EQ(refused.status, FitnessStatus::kPenalized);
+  EXPECT_EQ(refused.reason, "unbounded_hysteresis_in_envelope");
+  EXPECT_EQ(refused.cost, ten.penalty_cost());
+  // γ = 0.009 · B0 stays below β everywhere: scored, with the spread it has.
+  n.w2(0, 4) = 0.225;
+  EXPECT_TRUE(ten.BoundedOnEnvelope(n));
+  const auto kept = ten.EvaluateNetwork(n);
+  ASSERT_EQ(kept.status, FitnessStatus::kOk) << kept.reason;
+  EXPECT_NEAR(kept.cost, paper.EvaluateNetwork(n).cost + 10 * ten.OutputSpread(n), 1e-9 * kept.cost);
+  EXPECT_GT(ten.OutputSpread(n), 0);
 }
 
 GaOptions SmallGa(uint64_t seed) {

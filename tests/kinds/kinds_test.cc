@@ -72,5 +72,34 @@ TEST(Kinds, SpecsOfEachKindFindTheirKind) {
   EXPECT_EQ(f->Evaluate(g).status, opt::FitnessStatus::kOk);
 }
 
+// Output moves (opt/ga.h 9.): the hgann kind has its move (hgann/output_move.h); a kind without one
+// runs every offspring bred when the spec leaves them to their default, and refuses a spec that
+// asks for them, naming the field.
+TEST(Kinds, OnlyAKindWithAMoveTakesOutputMoves) {
+  job::JobSpec hgann = testing::NominalHgannSpec(10, 1);
+  opt::GeneticAlgorithm::Move move;
+  ASSERT_TRUE(All().Move(hgann, &move).ok());
+  EXPECT_TRUE(static_cast<bool>(move));
+  hgann.ga->output_moves = 3;
+  EXPECT_TRUE(All().Validate(hgann).empty()) << testing::Descriptions(All().Validate(hgann));
+
+  job::JobSpec synthetic;
+  job::SyntheticProblem p;
+  p.genome_bits = 24;
+  synthetic.problem = p;
+  synthetic.ga = job::GaSettings{};
+  synthetic.ga->islands = 4;
+  ASSERT_TRUE(All().Move(synthetic, &move).ok());
+  EXPECT_FALSE(static_cast<bool>(move));
+  EXPECT_TRUE(All().Validate(synthetic).empty()) << "unset: none for a kind without a move";
+  synthetic.ga->output_moves = 0;
+  EXPECT_TRUE(All().Validate(synthetic).empty());
+  synthetic.ga->output_moves = 2;
+  const std::vector<job::FieldViolation> v = All().Validate(synthetic);
+  ASSERT_EQ(v.size(), 1u) << testing::Descriptions(v);
+  EXPECT_EQ(v[0].field, "ga.output_moves");
+  EXPECT_EQ(v[0].description, "ga.output_moves = 2: the synthetic kind has no output move; must be 0 or unset");
+}
+
 }  // namespace
 }  // namespace pz::kinds

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <memory>
 #include <cmath>
 #include <numeric>
 #include <random>
@@ -892,29 +893,35 @@ TEST(GaIslands, SameRunWhateverTheEvaluatorItsThreadsAndTheCompletionOrder) {
   }
 }
 
+/// Passes each batch to `inner` and keeps its indices and genomes.
+struct RecordingEvaluator final : BatchEvaluator {
+  explicit RecordingEvaluator(BatchEvaluator* in) : inner(in) {}
+  void Evaluate(const EvalBatch& b, std::span<FitnessResult> out) override {
+    indices.emplace_back(b.indices.begin(), b.indices.end());
+    genomes.emplace_back(b.genomes.begin(), b.genomes.end());
+    inner->Evaluate(b, out);
+  }
+  BatchEvaluator* inner;
+  std::vector<std::vector<int>> indices;
+  std::vector<std::vector<Genome>> genomes;
+};
+
 TEST(GaIslands, OneDispatchPerGenerationWithEveryIslandsIndividuals) {
   const HashFitness fitness;
   InlineEvaluator inner(fitness);
-  struct Counting final : BatchEvaluator {
-    BatchEvaluator* inner;
-    std::vector<std::vector<int>> batches;
-    void Evaluate(const EvalBatch& b, std::span<FitnessResult> out) override {
-      batches.emplace_back(b.indices.begin(), b.indices.end());
-      inner->Evaluate(b, out);
-    }
-  } counting;
-  counting.inner = &inner;
+  RecordingEvaluator counting(&inner);
   GaOptions o = IslandOptions(4);
   o.max_generations = 5;
   GeneticAlgorithm ga(o, &counting);
   ga.Run();
-  ASSERT_EQ(counting.batches.size(), 6u);
-  EXPECT_EQ(counting.batches[0].size(), 240u);  // 4 × 60
+  const auto& batches = counting.indices;
+  ASSERT_EQ(batches.size(), 6u);
+  EXPECT_EQ(batches[0].size(), 240u);  // 4 × 60
   for (size_t g = 1; g < 6; ++g) {
-    ASSERT_EQ(counting.batches[g].size(), 120u);  // 4 × 30 offspring
-    EXPECT_EQ(counting.batches[g][0], 30);        // island 0, slots 30 … 59
-    EXPECT_EQ(counting.batches[g][30], 90);       // island 1 starts at 60 + 30
-    EXPECT_EQ(counting.batches[g][119], 239);
+    ASSERT_EQ(batches[g].size(), 120u);  // 4 × 30 offspring
+    EXPECT_EQ(batches[g][0], 30);        // island 0, slots 30 … 59
+    EXPECT_EQ(batches[g][30], 90);       // island 1 starts at 60 + 30
+    EXPECT_EQ(batches[g][119], 239);
   }
 }
 
@@ -1214,6 +1221,126 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
     EXPECT_NE(std::string(e.what()).find("state.islands.size() = 3: must equal islands = 4"), std::string::npos)
         << e.what();
   }
+}
+
+// ------------------------------------------------------------------------------------------
+// Output moves (file comment of ga.h, 9.)
+
+// A move for the tests: the parent with three bits flipped at drawn positions (a function of the
+// parent and the draws, as a move must be); it records what it was given and what it made.
+struct FlipMove {
+  std::shared_ptr<std::vector<std::pair<Genome, Genome>>> calls = std::make_shared<std::vector<std::pair<Genome, Genome>>>();
+  void operator()(const Genome& parent, Rng& rng, Genome* child) const {
+    child->bits = parent.bits;
+    for (int i = 0; i < 3; ++i) child->bits[rng.UniformBelow(child->bits.size())] ^= 1u;
+    calls->emplace_back(parent, *child);
+  }
+};
+
+RunRecord RunWithMove(BatchEvaluator* evaluator, const GaOptions& options, GeneticAlgorithm::Move move) {
+  GeneticAlgorithm ga(options, evaluator);
+  if (move) ga.SetMove(std::move(move));
+  RunRecord r;
+  r.summary = ga.Run();
+  r.state = ga.state();
+  return r;
+}
+
+TEST(GaOutputMoves, NoneWithOneIslandSixteenPercentWithSeveralUnlessGiven) {
+  GaOptions o;
+  EXPECT_EQ(o.output_moves, GaOptions::kAutoOutputMoves);
+  EXPECT_EQ(o.OutputMoves(), 0) << "one island: the paper's GA";
+  o.islands = 4;
+  EXPECT_EQ(o.OutputMoves(), 32) << "16 % of 200 offspring";
+  o.population_size = 30;
+  EXPECT_EQ(o.OutputMoves(), 2) << "16 % of 15, rounded";
+  o.population_size = 400;
+  o.output_moves = 0;
+  EXPECT_EQ(o.OutputMoves(), 0);
+  o.islands = 1;
+  o.output_moves = 5;
+  EXPECT_EQ(o.OutputMoves(), 5);
+  EXPECT_TRUE(o.Validate().ok());
+  o.output_moves = 200;
+  EXPECT_TRUE(o.Validate().ok()) << "every offspring a move";
+  o.output_moves = 201;
+  EXPECT_EQ(o.Validate().message(),
+            "output_moves = 201: must be in [0, population_size − the elite = 200] (-1: 0 with one island, 16 % of the offspring with several)");
+  o.output_moves = -2;
+  EXPECT_EQ(o.Validate().message().rfind("output_moves = -2: must be in [0, ", 0), 0u);
+}
+
+TEST(GaOutputMoves, TheLastOffspringOfEachIslandAreMovesOfItsBest) {
+  const HashFitness fitness;
+  InlineEvaluator inner(fitness);
+  RecordingEvaluator recording(&inner);
+  GaOptions o = IslandOptions(3);
+  o.output_moves = 4;
+  const FlipMove move;
+  GeneticAlgorithm ga(o, &recording);
+  ga.SetMove(move);
+  ga.Initialize();
+  EXPECT_TRUE(move.calls->empty()) << "generation 0 is drawn uniformly";
+  for (int g = 1; g <= 6; ++g) {
+    std::vector<Genome> bests;
+    for (const IslandState& is : ga.state().islands) bests.push_back(is.population.front());
+    move.calls->clear();
+    ga.Step();
+    ASSERT_EQ(move.calls->size(), 12u) << "4 per island, island by island";
+    const std::vector<Genome>& genomes = recording.genomes.back();
+    const std::vector<int>& indices = recording.indices.back();
+    ASSERT_EQ(genomes.size(), 90u) << "3 × 30 offspring: the moves replace bred ones";
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 4; ++j) {
+        const auto& [parent, child] = (*move.calls)[4 * k + j];
+        EXPECT_EQ(parent.bits, bests[k].bits) << "generation " << g << " island " << k;
+        const size_t at = 30 * k + 26 + j;  // island k's slots 56 … 59 of its 30 … 59
+        EXPECT_EQ(indices[at], 60 * k + 56 + j);
+        EXPECT_EQ(genomes[at].bits, child.bits);
+      }
+  }
+}
+
+TEST(GaOutputMoves, WithoutAMoveOrWithNoneEveryOffspringIsBred) {
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = IslandOptions(3);  // auto: 5 moves per island (16 % of 30) when a move is set
+  const RunRecord bred = RunWith(&ev, o);
+  ExpectSameRun(bred, RunWithMove(&ev, o, nullptr));
+  GaOptions none = o;
+  none.output_moves = 0;
+  ExpectSameRun(bred, RunWithMove(&ev, none, FlipMove{}));
+  const RunRecord moved = RunWithMove(&ev, o, FlipMove{});
+  EXPECT_NE(Digest(moved.state, moved.summary), Digest(bred.state, bred.summary));
+  // One island: none by default, the paper's GA draw for draw, with a move set or not.
+  const RunRecord one = RunWithMove(&ev, SmallOptions(), FlipMove{});
+  EXPECT_EQ(Digest(one.state, one.summary), 0xd70ed114cf6bb092ull);
+}
+
+TEST(GaOutputMoves, SameRunWhateverTheEvaluatorAndResumesFromACheckpoint) {
+  const HashFitness fitness;
+  InlineEvaluator ev(fitness);
+  ThreadPoolEvaluator pool(fitness, 3);
+  ShuffledEvaluator shuffled(&pool);
+  GaOptions o = IslandOptions(4);
+  o.output_moves = 6;
+  const RunRecord whole = RunWithMove(&ev, o, FlipMove{});
+  ExpectSameRun(whole, RunWithMove(&shuffled, o, FlipMove{}));
+  GaState saved;
+  {
+    GeneticAlgorithm first(o, &ev);
+    first.SetMove(FlipMove{});
+    first.Initialize();
+    for (int g = 0; g < 10; ++g) first.Step();
+    saved = first.state();
+  }
+  GeneticAlgorithm second(o, &shuffled);
+  second.SetMove(FlipMove{});
+  second.RestoreState(saved);
+  RunRecord resumed;
+  resumed.summary = second.Run();
+  resumed.state = second.state();
+  ExpectSameRun(whole, resumed);
 }
 
 }  // namespace islands

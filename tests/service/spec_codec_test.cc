@@ -128,6 +128,19 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kFullyConnected);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
   EXPECT_TRUE(back.ga->island_mutation.empty());
+  EXPECT_EQ(back.ga->output_moves, opt::GaOptions::kAutoOutputMoves) << "unset: 16 % of the offspring with several islands, 0 with one";
+  EXPECT_EQ(JobSpecToJson(s).find("output"), std::string::npos) << "auto is not written";
+  // Output moves, 0 (none) included, are written and come back.
+  for (int moves : {0, 16}) {
+    JobSpec m = s;
+    m.ga->output_moves = moves;
+    back = JobSpec{};
+    ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(m), &back, &v).ok());
+    EXPECT_EQ(back.ga->output_moves, moves);
+    back = JobSpec{};
+    ASSERT_TRUE(JobSpecFromJson(JobSpecToJson(m), &back, &v).ok());
+    EXPECT_EQ(back.ga->output_moves, moves);
+  }
 
   auto violations = [&](auto mutate) {
     JobSpec bad = s;
@@ -158,6 +171,12 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }), "ga.island_mutation[2]",
                        "must be in [0, 1]"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.island_mutation.clear(); }).empty());
+  // population 10, elite 5: 0 … 5 offspring made by moves.
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = 6; }), "ga.output_moves",
+                       "must be in [0, population − round(population · elite_fraction) = 5] (unset: 0 with one "
+                       "island, 16 % of the offspring with several)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = -2; }), "ga.output_moves", "must be in [0, "));
+  EXPECT_TRUE(violations([](job::GaSettings& g) { g.output_moves = 5; }).empty());
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0, g.broadcast_interval = 0; })
                   .empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.

@@ -122,6 +122,9 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   hgann::IdentifyOptions o;
   o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
   o.threads = 2;
+  // The islands' default: each island's last 2 offspring of its 15 (16 %, rounded) are output moves
+  // of its best, made by the master's job runner and by identify alike (a runner without them differs).
+  ASSERT_EQ(o.ga.OutputMoves(), 2);
   hgann::HgannFitnessConfig config;
   ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(spec.problem), &config).ok());
   const hgann::HgannFitness fitness(config);
