@@ -123,11 +123,13 @@ std::vector<FieldViolation> JobSpec::Validate() const {
               "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = " + std::to_string(ga->islands));
     for (size_t i = 0; i < ga->island_mutation.size(); ++i)
       c.Range("ga.island_mutation[" + std::to_string(i) + "]", ga->island_mutation[i], 0.0, 1.0);
+    // In 64 bits: population and elite_fraction may both be out of range here (a fuzzer found it).
+    const int64_t offspring = int64_t{ga->population} - elite;
     c.Require(ga->output_moves == opt::GaOptions::kAutoOutputMoves ||
-                  (ga->output_moves >= 0 && ga->output_moves <= ga->population - elite),
+                  (ga->output_moves >= 0 && ga->output_moves <= offspring),
               "ga.output_moves", ga->output_moves,
-              "must be in [0, population − round(population · elite_fraction) = " +
-                  std::to_string(ga->population - elite) + "] (unset: 0 with one island, 16 % of the offspring with several)");
+              "must be in [0, population − round(population · elite_fraction) = " + std::to_string(offspring) +
+                  "] (unset: 0 with one island, 16 % of the offspring with several)");
   }
   return std::move(c.out);
 }

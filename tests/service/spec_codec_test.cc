@@ -177,6 +177,15 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                        "island, 16 % of the offspring with several)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = -2; }), "ga.output_moves", "must be in [0, "));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.output_moves = 5; }).empty());
+  // Both population and elite fraction out of range (the fuzzer's input: 1826206566 − −774244904
+  // overflowed an int): every field named, the offspring counted in 64 bits.
+  const auto wild = violations([](job::GaSettings& g) {
+    g.population = 1826206566;
+    g.elite_fraction = -0.42396;
+    g.output_moves = 3;
+  });
+  EXPECT_TRUE(HasField(wild, "ga.population", "must be in [2, 1000000]"));
+  EXPECT_TRUE(HasField(wild, "ga.elite_fraction", "must be in (0, 1)"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0, g.broadcast_interval = 0; })
                   .empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.
