@@ -108,7 +108,7 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   cmd->add_option("--output-moves", opts->ga.output_moves,
                   "offspring per island and generation made by a step of the network's outputs in the model's "
                   "parameter space instead of crossover and mutation, 0 … population − elite (default -1: 0 with one "
-                  "island, the paper's GA; with several, 16 % of the offspring, 32 of the paper's 200: the measured archipelago)")
+                  "island, the paper's GA; with several and a --spread-penalty, 16 % of the offspring, 32 of the paper's 200: the measured archipelago)")
       ->capture_default_str();
   cmd->add_option("--threads", opts->threads, "evaluator threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--ranges", opts->ranges,

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "client/plots.h"
+#include "hgann/output_move.h"
 #include "io/trace_io.h"
 #include "model/metrics.h"
 #include "model/chromosome.h"
@@ -281,7 +282,7 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     }
     md << "; " << migrations << " migrations, " << restarts << " restarts)";
   }
-  if (const int moves = options.ga.OutputMoves(); moves > 0)
+  if (const int moves = hgann::HgannOutputMoves(options.ga, options.spread_penalty); moves > 0)
     md << ", " << moves << " offspring per island and generation made by an output move (a step of the best "
        << "network's outputs in the parameter space)";
   md << ", seed " << options.ga.seed << ", ranges '"

@@ -347,8 +347,12 @@ JobKind HgannJobKind() {
     return Status::Ok();
   };
   k.move = [](const JobSpec& s, opt::GeneticAlgorithm::Move* out) -> Status {
+    *out = nullptr;
+    const HgannProblem& problem = std::get<HgannProblem>(s.problem);
+    if (HgannOutputMoves(ToGaOptions(s, GenomeLayout{model::kChromosomeBits, 0}), problem.spread_penalty) == 0)
+      return Status::Ok();  // as identify: none unset without a spread penalty
     HgannFitnessConfig config;  // the normalisation and training drives the fitness uses
-    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok()) return st;
+    if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
     *out = OutputMove(config);
     return Status::Ok();
   };

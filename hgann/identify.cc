@@ -35,7 +35,8 @@ IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& se
   opt::ThreadPoolEvaluator evaluator(fitness, options.threads, fitness.penalty_cost());
   opt::GeneticAlgorithm algorithm(ga, &evaluator);
   algorithm.SetDescriber([](const opt::Genome& g) { return model::DescribeChromosome(g.bits); });
-  algorithm.SetMove(OutputMove(fitness.config()));  // the hgann job kind's move (hgann_job.cc)
+  if (HgannOutputMoves(ga, fitness.config().spread_penalty) > 0)
+    algorithm.SetMove(OutputMove(fitness.config()));  // the hgann job kind's move (hgann_job.cc)
   if (on_generation) algorithm.AddGenerationCallback(on_generation);
 
   IdentifyResult r;

@@ -9,6 +9,11 @@
 
 namespace pz::hgann {
 
+int HgannOutputMoves(const opt::GaOptions& ga, double spread_penalty) {
+  if (ga.output_moves == opt::GaOptions::kAutoOutputMoves && !(spread_penalty > 0)) return 0;
+  return ga.OutputMoves();
+}
+
 OutputMove::OutputMove(const HgannFitnessConfig& config)
     : normalization_(config.normalization), ranges_(config.ranges) {
   for (const HgannCase& c : config.cases)

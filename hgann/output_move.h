@@ -23,10 +23,18 @@
 
 #include "hgann/hgann_fitness.h"
 #include "opt/evaluator.h"
+#include "opt/ga.h"
 #include "opt/random.h"
 #include "model/network.h"
 
 namespace pz::hgann {
+
+/// The output moves per island of an hgann run: ga.OutputMoves(), except that unset (auto) means
+/// none without a spread penalty (λ = 0, the paper's cost). There nothing checks the network between
+/// the training cases, and the moves' lineages sit at the edge of a bounded loop (β ≈ γ): with 4
+/// islands, seeds 1 and 3 gave unbounded loops on withheld cases (docs/performance.md, "Islands").
+/// Given explicitly, the count holds at any λ.
+int HgannOutputMoves(const opt::GaOptions& ga, double spread_penalty);
 
 class OutputMove {
  public:

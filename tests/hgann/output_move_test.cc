@@ -49,6 +49,18 @@ bool InOutputLayer(int bit) {
   return bit >= model::kW2Offset;
 }
 
+TEST(OutputMove, UnsetTheyNeedSeveralIslandsAndASpreadPenalty) {
+  opt::GaOptions ga;
+  EXPECT_EQ(HgannOutputMoves(ga, 10), 0) << "one island";
+  ga.islands = 4;
+  EXPECT_EQ(HgannOutputMoves(ga, 10), 32);
+  EXPECT_EQ(HgannOutputMoves(ga, 0), 0) << "λ = 0: nothing checks the loop between the training cases";
+  ga.output_moves = 5;
+  EXPECT_EQ(HgannOutputMoves(ga, 0), 5) << "given: at any λ";
+  ga.output_moves = 0;
+  EXPECT_EQ(HgannOutputMoves(ga, 10), 0);
+}
+
 TEST(OutputMove, ConstantOutputsGiveTheTargetOnEveryInputAndKeepTheOtherGenes) {
   const std::array<double, model::kNetworkOutputs> t = {0, 1, 0.3, 0.123456, 0.5, 0.999, 0.0007};
   for (uint64_t seed : {1u, 2u, 3u}) {

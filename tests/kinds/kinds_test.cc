@@ -77,10 +77,17 @@ TEST(Kinds, SpecsOfEachKindFindTheirKind) {
 // asks for them, naming the field.
 TEST(Kinds, OnlyAKindWithAMoveTakesOutputMoves) {
   job::JobSpec hgann = testing::NominalHgannSpec(10, 1);
+  hgann.ga->islands = 4;
   opt::GeneticAlgorithm::Move move;
   ASSERT_TRUE(All().Move(hgann, &move).ok());
+  EXPECT_FALSE(static_cast<bool>(move)) << "unset, without a spread penalty: none (hgann::HgannOutputMoves)";
+  std::get<job::HgannProblem>(hgann.problem).spread_penalty = 10;
+  ASSERT_TRUE(All().Move(hgann, &move).ok());
   EXPECT_TRUE(static_cast<bool>(move));
-  hgann.ga->output_moves = 3;
+  std::get<job::HgannProblem>(hgann.problem).spread_penalty = 0;
+  hgann.ga->output_moves = 3;  // asked for: at any λ
+  ASSERT_TRUE(All().Move(hgann, &move).ok());
+  EXPECT_TRUE(static_cast<bool>(move));
   EXPECT_TRUE(All().Validate(hgann).empty()) << testing::Descriptions(All().Validate(hgann));
 
   job::JobSpec synthetic;

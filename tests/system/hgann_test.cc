@@ -15,6 +15,7 @@
 #include "io/network_io.h"
 #include "hgann/hgann_job.h"
 #include "hgann/identify.h"
+#include "hgann/output_move.h"
 #include "job/job_kind.h"
 #include "model/chromosome.h"
 #include "tests/system/service_harness.h"
@@ -117,6 +118,7 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   spec.ga->island_mutation = {0.01, 0.03, 0.01, 0.05};
   spec.ga->broadcast_interval = 3;  // a gated broadcast at 3, 6, 9, 15 between the migrations
   spec.ga->broadcast_margin = 1e-6;
+  std::get<job::HgannProblem>(spec.problem).spread_penalty = 10;  // with it, the islands' output moves
   const service::JobCheckpoint ref = Reference(spec);
 
   hgann::IdentifyOptions o;
@@ -124,7 +126,8 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   o.threads = 2;
   // The islands' default: each island's last 2 offspring of its 15 (16 %, rounded) are output moves
   // of its best, made by the master's job runner and by identify alike (a runner without them differs).
-  ASSERT_EQ(o.ga.OutputMoves(), 2);
+  ASSERT_EQ(hgann::HgannOutputMoves(o.ga, 10), 2);
+  o.spread_penalty = 10;
   hgann::HgannFitnessConfig config;
   ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(spec.problem), &config).ok());
   const hgann::HgannFitness fitness(config);
