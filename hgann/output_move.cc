@@ -41,18 +41,21 @@ void OutputMove::WriteConstantOutputs(std::vector<uint8_t>* bits, const std::arr
   }
 }
 
-void OutputMove::operator()(const opt::Genome& parent, opt::Rng& rng, opt::Genome* child) const {
+void OutputMove::operator()(const opt::Genome& parent, opt::Rng& rng, std::span<opt::Genome> children) const {
+  if (children.empty()) return;
   const std::array<double, model::kNetworkOutputs> mean =
       MeanOutputs(model::DecodeChromosome(parent.bits, normalization_, ranges_));
-  const double sigma = kSigmaMin * std::exp(rng.Uniform01() * std::log(kSigmaMax / kSigmaMin));
-  std::array<double, model::kNetworkOutputs> t{};
-  for (int k = 0; k < model::kNetworkOutputs; ++k) {
-    const double u1 = 1.0 - rng.Uniform01(), u2 = rng.Uniform01();  // u1 in (0, 1]
-    const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-    t[k] = std::clamp(mean[k] + sigma * z, 0.0, 1.0);
+  for (opt::Genome& child : children) {
+    const double sigma = kSigmaMin * std::exp(rng.Uniform01() * std::log(kSigmaMax / kSigmaMin));
+    std::array<double, model::kNetworkOutputs> t{};
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const double u1 = 1.0 - rng.Uniform01(), u2 = rng.Uniform01();  // u1 in (0, 1]
+      const double z = std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+      t[k] = std::clamp(mean[k] + sigma * z, 0.0, 1.0);
+    }
+    child.bits = parent.bits;
+    WriteConstantOutputs(&child.bits, t);
   }
-  child->bits = parent.bits;
-  WriteConstantOutputs(&child->bits, t);
 }
 
 }  // namespace pz::hgann

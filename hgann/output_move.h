@@ -18,6 +18,7 @@
 #pragma once
 
 #include <array>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -44,8 +45,9 @@ class OutputMove {
   /// The problem's input normalisation and training drives. Requires a valid configuration.
   explicit OutputMove(const HgannFitnessConfig& config);
 
-  /// opt::GeneticAlgorithm::Move: writes the moved child of `parent` (a valid chromosome).
-  void operator()(const opt::Genome& parent, opt::Rng& rng, opt::Genome* child) const;
+  /// opt::GeneticAlgorithm::Move: writes a moved child of `parent` (a valid chromosome) into each of
+  /// `children`, in order; the parent is decoded once.
+  void operator()(const opt::Genome& parent, opt::Rng& rng, std::span<opt::Genome> children) const;
 
   /// s̄: the mean over the training cases of the network's outputs scaled to [0, 1].
   std::array<double, model::kNetworkOutputs> MeanOutputs(const model::Network& network) const;

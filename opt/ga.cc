@@ -452,9 +452,10 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
       for (int pos = rng.Gap(mutate); pos < bits; pos += 1 + rng.Gap(mutate)) c->bits[pos] ^= 1u;
     }
   }
-  for (int o = n_bred; o < n_off; ++o) {
-    move_(is.population.front(), rng, &d.fresh[o]);
-    PZ_CHECK_MSG(CheckGenome(d.fresh[o], bits, "move").ok(), "the move wrote a genome of the wrong length or non-0/1 bits");
+  if (moves > 0) {
+    move_(is.population.front(), rng, std::span<Genome>(d.fresh).subspan(n_bred));
+    for (int o = n_bred; o < n_off; ++o)
+      PZ_CHECK_MSG(CheckGenome(d.fresh[o], bits, "move").ok(), "the move wrote a genome of the wrong length or non-0/1 bits");
   }
   d.elite = elite;  // kept: moved from the state once the generation is evaluated (Finish)
   return d;

@@ -279,10 +279,11 @@ class GeneticAlgorithm {
   /// Optional problem hook describing an individual (e.g. its decoded architecture) for the
   /// per-generation summary. Called on the best individual of each generation.
   void SetDescriber(Describer describer);
-  /// A problem's move (file comment, 9.): writes into `child` a genome made from `parent` (an
-  /// island's best) with draws from `rng` only. Must be a function of (parent, the draws): the run
+  /// A problem's move (file comment, 9.): writes into each of `children`, in order, a genome made
+  /// from `parent` (an island's best) with draws from `rng` only — one call per island and
+  /// generation, so the parent is read once. Must be a function of (parent, the draws): the run
   /// stays a function of (options, seed, fitness, move). Without one, every offspring is bred.
-  using Move = std::function<void(const Genome& parent, Rng& rng, Genome* child)>;
+  using Move = std::function<void(const Genome& parent, Rng& rng, std::span<Genome> children)>;
   void SetMove(Move move);
 
   /// Creates generation 0: `seeds` (≤ population_size genomes of genome_bits 0/1 bits) fill the

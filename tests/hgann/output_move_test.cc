@@ -109,13 +109,20 @@ TEST(OutputMove, StepsFromTheParentsMeanAtEveryScaleWithTheGeneratorOnly) {
   // A function of (parent, draws): the same generator state gives the same child, bit for bit.
   Rng a(5), b(5);
   Genome ca, cb;
-  move(parent, a, &ca);
-  move(parent, b, &cb);
+  move(parent, a, std::span(&ca, 1));
+  move(parent, b, std::span(&cb, 1));
   EXPECT_EQ(ca.bits, cb.bits);
   EXPECT_EQ(a, b) << "the same draws";
   Rng once(5);
   for (int i = 0; i < 15; ++i) once.NextU64();
   EXPECT_EQ(a, once) << "one draw for the step size, two for each of the seven outputs";
+  // Several children in one call (one decode of the parent) are the children of calls one by one.
+  Rng many(8), one_by_one(8);
+  std::vector<Genome> three(3), singles(3);
+  move(parent, many, three);
+  for (Genome& g : singles) move(parent, one_by_one, std::span(&g, 1));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(three[i].bits, singles[i].bits) << "child " << i;
+  EXPECT_EQ(many, one_by_one);
   // Over many moves: every target in [0, 1]; the largest step per child spans the log-uniform
   // range from below 3 · σ_min to above σ_max; the outputs off the bounds move by both signs.
   Rng rng(99);
@@ -123,7 +130,7 @@ TEST(OutputMove, StepsFromTheParentsMeanAtEveryScaleWithTheGeneratorOnly) {
   int up = 0, down = 0;
   for (int i = 0; i < 2000; ++i) {
     Genome child;
-    move(parent, rng, &child);
+    move(parent, rng, std::span(&child, 1));
     ASSERT_EQ(child.bits.size(), parent.bits.size());
     const auto s = move.MeanOutputs(Fitness().Decode(child));
     double step = 0;

@@ -1230,10 +1230,12 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
 // parent and the draws, as a move must be); it records what it was given and what it made.
 struct FlipMove {
   std::shared_ptr<std::vector<std::pair<Genome, Genome>>> calls = std::make_shared<std::vector<std::pair<Genome, Genome>>>();
-  void operator()(const Genome& parent, Rng& rng, Genome* child) const {
-    child->bits = parent.bits;
-    for (int i = 0; i < 3; ++i) child->bits[rng.UniformBelow(child->bits.size())] ^= 1u;
-    calls->emplace_back(parent, *child);
+  void operator()(const Genome& parent, Rng& rng, std::span<Genome> children) const {
+    for (Genome& child : children) {
+      child.bits = parent.bits;
+      for (int i = 0; i < 3; ++i) child.bits[rng.UniformBelow(child.bits.size())] ^= 1u;
+      calls->emplace_back(parent, child);
+    }
   }
 };
 
