@@ -101,7 +101,7 @@ double CriterionFitness::Cost(std::span<const double> params) const {
       if (params.size() != m.params().size())
         throw InputError(m.Describe() + ": " + std::to_string(params.size()) + " parameters given, " +
                          std::to_string(m.params().size()) + " expected");
-      const size_t end = r.end_scored, from = std::min(std::max<size_t>(r.rest_samples, 1) - 1, end - 1);
+      const size_t end = r.end_scored, from = SimulatedFrom(r, end);
       buffer.resize(end);
       const std::span<double> y(buffer.data(), end);
       m.family().Simulate(params, std::span<const double>(r.u).subspan(from, end - from), r.dt, y.subspan(from));

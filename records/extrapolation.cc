@@ -27,7 +27,7 @@ double MaxRate(const io::Record& r, double limit, size_t* above = nullptr) {
 
 /// The regressor rows of the record's samples [from, end_scored) at the fitted parameters.
 size_t RegressorRows(const RecordModel& m, std::span<const double> params, const io::Record& r, std::vector<double>& reg) {
-  const size_t from = std::min(std::max<size_t>(r.rest_samples, 1) - 1, r.end_scored - 1);
+  const size_t from = SimulatedFrom(r, r.end_scored);
   std::vector<double> ue;
   m.EffectiveDrive(r, params.subspan(m.family_param_count()), from, r.end_scored, ue);
   reg.resize(ue.size() * m.family().regressors());
@@ -66,7 +66,7 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
     for (const io::Record* r : set.WithRole(model::CaseRole::kTrain)) {
       const size_t from = RegressorRows(m, fit.params, *r, reg);
       for (size_t k = r->first_scored; k < r->end_scored; ++k) {
-        const double* row = reg.data() + (k - from) * nw;
+        const double* row = reg.data() + RegressorRow(k, from) * nw;
         for (size_t j = 0; j < nw; ++j) {
           lo[j] = std::min(lo[j], row[j]);
           hi[j] = std::max(hi[j], row[j]);
@@ -97,7 +97,7 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
       std::vector<char> left(nw, 0);
       double sq = 0;
       for (size_t k = r.first_scored; k < r.end_scored; ++k) {
-        const double* row = reg.data() + (k - from) * nw;
+        const double* row = reg.data() + RegressorRow(k, from) * nw;
         double e = 0;
         for (size_t j = 0; j < nw; ++j) {
           const double x = row[j], d = x - std::clamp(x, lo[j], hi[j]);

@@ -314,7 +314,7 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
   if (keep) regs->resize(records_.size());  // their buffers reused from call to call
   for (size_t ri = 0; ri < records_.size(); ++ri) {
     const io::Record* r = records_[ri];
-    const size_t from = std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->end_scored - 1);
+    const size_t from = SimulatedFrom(*r, r->end_scored);
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
     std::vector<double>& reg = keep ? (*regs)[ri] : scratch;
     reg.resize(ue.size() * m);
@@ -328,7 +328,7 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
 }
 
 double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m, std::vector<double>& c) {
-  auto row = [&](size_t k) { return reg.data() + (k < from ? 0 : (k - from)) * m; };
+  auto row = [&](size_t k) { return reg.data() + RegressorRow(k, from) * m; };
   double d = 0;
   c.assign(m, 0.0);
   if (r.offset_mode == io::OffsetMode::kFit) {
@@ -349,9 +349,7 @@ double RecordCentre(const io::Record& r, size_t from, std::span<const double> re
 
 void AddRecordRows(const io::Record& r, size_t from, std::span<const double> reg, size_t m, int pol,
                    NormalEquationsBuilder& builder) {
-  auto row = [&](size_t k) {  // regressor row of sample k (k ≥ 0); before `from`: the rest row
-    return reg.data() + (k < from ? 0 : (k - from)) * m;
-  };
+  auto row = [&](size_t k) { return reg.data() + RegressorRow(k, from) * m; };
   thread_local std::vector<double> c;
   const double d = RecordCentre(r, from, reg, m, c);
   for (size_t k = r.first_scored; k < r.end_scored; ++k) {

@@ -139,13 +139,9 @@ void RecordModel::ApplyLinearOutputEffects(const io::Record& r, std::span<const 
   });
 }
 
-namespace {
-
-// The first simulated sample of a record: the last sample of its rest segment (the model is at
-// rest before it), at most end − 1.
-size_t SimulatedFrom(const io::Record& r, size_t end) { return std::min(std::max<size_t>(r.rest_samples, 1) - 1, end - 1); }
-
-}  // namespace
+size_t SimulatedFrom(const io::Record& r, size_t end) {
+  return std::min(std::max<size_t>(r.rest_samples, 1) - 1, std::max<size_t>(end, 1) - 1);
+}
 
 std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r, size_t end) const {
   if (family_->linear() || end > r.size() || end == 0) return nullptr;

@@ -52,6 +52,15 @@ const std::vector<std::string>& EffectNames();
 /// and the known ones, or a beam effect and why.
 EffectKind ParseEffect(std::string_view name);
 
+/// The first simulated sample of a record: the last sample of its rest segment (the model is at
+/// rest before it), at most end − 1 (end ≥ 1). It may lie after the scored window's start when the
+/// window starts inside the rest: rows of regressors computed from here cover [from, end), and a
+/// sample k < from takes the rest row (RegressorRow).
+size_t SimulatedFrom(const io::Record& r, size_t end);
+/// The row of sample k in regressors computed from sample `from` (SimulatedFrom): k − from, or the
+/// rest row 0 for a sample before it.
+inline size_t RegressorRow(size_t k, size_t from) { return k < from ? 0 : k - from; }
+
 /// A family with effects; a parameter vector is the family's params then each effect's.
 class RecordModel {
  public:

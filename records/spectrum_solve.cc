@@ -56,7 +56,7 @@ void FilterRows(const RecordRows& d, const Eigen::VectorXd& w, size_t m, std::ve
   }
 }
 
-size_t Row(const RecordRows& d, size_t k) { return k < d.from ? 0 : k - d.from; }
+size_t Row(const RecordRows& d, size_t k) { return RegressorRow(k, d.from); }
 
 class Solver {
  public:
@@ -74,7 +74,7 @@ class Solver {
       RecordRows& d = data_[i];
       d.r = p.records[i];
       const io::Record& r = *d.r;
-      d.from = std::min(std::max<size_t>(r.rest_samples, 1) - 1, r.end_scored - 1);
+      d.from = SimulatedFrom(r, r.end_scored);
       model_.EffectiveDrive(r, effect_params_, d.from, r.end_scored, ue);
       d.rows = ue.size();
       d.reg.resize(d.rows * m_);

@@ -171,6 +171,25 @@ TEST(PreisachFamily, TheExtrapolationGuardFlagsADriveBeyondTheTrainingRangeOnly)
   }
 }
 
+// Issue 37: a withheld record whose scored window starts inside its leading rest (the manifest's
+// t_start_s before the drive moves) made CheckExtrapolation read its regressor rows at k − from
+// with k < from, a size_t that wrapped (a segmentation fault). Every window of the set starts in
+// the middle of the rest here; the rows before the first simulated sample are the rest row.
+TEST(PreisachFamily, AWindowStartingInsideTheRestIsFittedAndChecked) {
+  io::RecordSet set = MajorLoopSet();
+  for (io::Record& r : set.records) r.first_scored = r.rest_samples / 2;
+  for (const std::string family : {"preisach", "asymmetric-pi", "prandtl-ishlinskii"}) {
+    const FitResult f = FitRecords(set, Options(family));
+    ASSERT_EQ(f.metrics.size(), 3u);
+    for (const auto& m : f.metrics) EXPECT_TRUE(std::isfinite(m.rmse)) << family;
+    const auto checks = CheckExtrapolation(set, f);
+    ASSERT_EQ(checks.size(), 2u);
+    EXPECT_FALSE(checks[0].flagged) << family << ": " << checks[0].Describe("V", "um");
+    EXPECT_TRUE(checks[1].flagged) << family << ": " << checks[1].Describe("V", "um");
+    EXPECT_TRUE(std::isfinite(checks[1].term_rms)) << family;
+  }
+}
+
 TEST(PreisachFamily, ErrorAgainstReversalDepthBinsEveryMonotonePiece) {
   io::Record r;
   for (double x : {0.0, 100.0, 55.0, 100.0, 0.0}) {  // swings 100, 45, 45, 100 % of the range
