@@ -218,6 +218,89 @@ std::string AtBoundList(const hgann::HgannFitness& fitness, const model::Network
   return out;
 }
 
+/// The network against per-case fits (issue 36): every case fitted alone (hgann::FitCases), and
+/// where the network's parameter departs from that estimate by more than 2 σ. A parameter whose
+/// σ is infinite or above a quarter of its range is not pinned down by the case alone: no claim.
+struct PerCaseCheck {
+  std::string markdown;  ///< the report's section
+  std::string terminal;  ///< one line per departure
+  std::vector<hgann::CaseEstimate> estimates;
+};
+
+PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::CaseSet& set,
+                                     const hgann::HgannFitness& fitness, const IdentifyResult& result) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ", "α", "β", "γ", "a1", "a2"};
+  PerCaseCheck out;
+  std::vector<int> all;
+  for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
+  hgann::TrendSeedOptions so;
+  so.threads = std::max(1, options.threads > 0 ? options.threads : 2);
+  out.estimates = hgann::FitCases(fitness, all, so);
+  std::ostringstream md, term;
+  md << "## The network against per-case fits\n\n"
+     << "Each case fitted alone (the seven parameters, its b1 and b2; Levenberg–Marquardt from "
+     << so.case_starts << " starts): its PI and each parameter as `network / per-case ± σ`. **Bold**: the "
+     << "network departs from the case's own estimate by more than 2 σ; `(free)`: the case alone does not "
+     << "pin the parameter down (σ infinite or above a quarter of its range), so no claim is made.\n\n"
+     << "| case | role | PI network / per-case [deg²] |";
+  for (const char* s : kSymbols) md << " " << s << " |";
+  md << "\n|---|---|---|";
+  for (int k = 0; k < model::kNetworkOutputs; ++k) md << "---|";
+  md << "\n";
+  int departures = 0;
+  std::map<int, std::vector<int>> by_param;  // parameter → cases departing
+  for (size_t i = 0; i < out.estimates.size(); ++i) {
+    const hgann::CaseEstimate& e = out.estimates[i];
+    const auto& bc = set.cases[i];
+    const auto& r = ResultOf(result, bc.number);
+    const bool training = bc.role == io::CaseRole::kTrain;
+    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(r.pi, 3) << " / "
+       << (e.ok ? Fmt(e.pi, 3) : "failed") << " |";
+    const auto net = model::NetworkParameters{r.params.mu, r.params.delta, r.params.alpha, r.params.beta,
+                                              r.params.gamma, r.params.a1, r.params.a2}
+                         .ToArray();
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const auto& range = fitness.config().ranges[k];
+      const double width = range.upper - range.lower;
+      if (!e.ok) {
+        md << " " << Fmt(net[k], 3) << " / — |";
+        continue;
+      }
+      const bool free = !std::isfinite(e.sigma[k]) || e.sigma[k] > 0.25 * width;
+      const bool departs = !free && std::abs(net[k] - e.value[k]) > 2 * e.sigma[k];
+      const std::string cell = Fmt(net[k], 3) + " / " + Fmt(e.value[k], 3) +
+                               (free ? " (free)" : " ± " + Fmt(e.sigma[k], 2));
+      md << " " << (departs ? "**" + cell + "**" : cell) << " |";
+      if (departs) {
+        ++departures;
+        by_param[k].push_back(bc.number);
+        term << "  case " << bc.number << (training ? " (training)" : " (withheld)") << ": " << kSymbols[k]
+             << " network " << Fmt(net[k], 4) << ", per-case " << Fmt(e.value[k], 4) << " ± " << Fmt(e.sigma[k], 2)
+             << " " << model::OutputUnit(k) << "\n";
+      }
+    }
+    md << "\n";
+  }
+  md << "\n";
+  if (departures == 0) {
+    md << "The network agrees with every per-case estimate that its case pins down (within 2 σ).\n\n";
+  } else {
+    md << departures << " departures beyond 2 σ. ";
+    for (const auto& [k, cases] : by_param) {
+      md << kSymbols[k] << " in case" << (cases.size() > 1 ? "s" : "");
+      for (size_t m = 0; m < cases.size(); ++m) md << (m ? ", " : " ") << cases[m];
+      md << "; ";
+    }
+    md << "where the per-case PI is well below the network's, the case's own data want another value: a trend "
+          "the network misses (or, for parameters that trade against each other, such as α, β and γ, the "
+          "case's estimate is one point of a valley the network crosses elsewhere — compare the PIs).\n\n";
+  }
+  out.markdown = md.str();
+  out.terminal = departures == 0 ? std::string()
+                                 : "the network departs from a per-case fit by more than 2 σ (report.md):\n" + term.str();
+  return out;
+}
+
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. Widen a "
     "range (a job spec's `ranges`) only as far as the physics allows: on the nominal bench, the ≈ 2.3 deg² "
@@ -228,7 +311,7 @@ constexpr const char* kAtBoundMeaning =
 /// report.md.
 std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
                            const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression,
-                           const std::string& at_bound) {
+                           const std::string& at_bound, const std::string& per_case) {
   const double train_sum = t.train_sum, all_sum = t.all_sum;
   const int beaten = t.beaten, compared = t.compared;
   std::ostringstream md;
@@ -287,7 +370,17 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
        << "network's outputs in the parameter space)";
   md << ", seed " << options.ga.seed << ", ranges '"
      << options.ranges << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
-     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s\n\n";
+     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s"
+     << (options.preset.empty() ? std::string() : "; preset '" + options.preset + "'") << "\n";
+  if (result.seeds) {
+    md << "- generation 0 seeded with " << result.seeds->genomes.size()
+       << " networks fitted to per-case fits of the training cases (hgann/trend_seeds.h):";
+    for (size_t i = 0; i < result.seeds->genomes.size(); ++i)
+      md << (i ? "," : "") << " " << result.seeds->names[i] << " " << Fmt(result.seeds->costs[i], 5);
+    md << " (cost, deg²; " << result.seeds->simulations << " case simulations, " << Fmt(result.seeds->wall_time_s, 3)
+       << " s)\n";
+  }
+  md << "\n";
   if (options.ranges == "paper") {
     const auto& best = result.cases.front().params;
     md << "With the paper's Table 3 ranges (α, β, γ ≤ 0) every network with α ≠ 0 has an unbounded Bouc–Wen "
@@ -314,6 +407,7 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
        << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3) << " |\n";
   }
   if (!at_bound.empty()) md << "\nHeld at a bound: " << at_bound << " " << kAtBoundMeaning << "\n";
+  md << "\n" << per_case;
   auto param_grid = [&](const char* title, double model::BimorphParams::*field, int prec) {
     md << "\n### " << title << "\n\n"
        << Grid(set, [&](const io::BenchCase& c) { return Fmt(ResultOf(result, c.number).params.*field, prec); });
@@ -373,12 +467,13 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const CaseTotals totals = WriteCaseTables(out, set, fitness, result, written);
   const std::string mu_regression = MuRegression(totals);
   const std::string at_bound = AtBoundList(fitness, result.best.network);
+  const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
-    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound);
+    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound, per_case.markdown);
     written.push_back(out / "report.md");
   }
   term << "\n" << result.summary.BriefReport() << "\n"
@@ -394,6 +489,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
        << mu_regression << "\n";
   if (!at_bound.empty())
     term << "held at a bound on every training case (set by the range, not the data; report.md): " << at_bound << "\n";
+  term << per_case.terminal;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
        << "parameters.csv, " << rendered << " figures)\n";
