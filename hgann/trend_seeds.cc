@@ -59,15 +59,15 @@ std::vector<std::vector<double>> CaseStarts(int count) {
 
 /// 1-σ of each coordinate from the Jacobian: √(s² diag (JᵀJ)⁺), +inf where a column is (nearly) in
 /// the null space.
-Array7 Sigmas(const Eigen::MatrixXd& j, double cost) {
-  Array7 out;
-  out.fill(std::numeric_limits<double>::infinity());
-  if (j.cols() != kOut || j.rows() <= kOut) return out;
-  const double s2 = cost / static_cast<double>(j.rows() - kOut);
+std::vector<double> Sigmas(const Eigen::MatrixXd& j, double cost) {
+  const int n = static_cast<int>(j.cols());
+  std::vector<double> out(n, std::numeric_limits<double>::infinity());
+  if (n == 0 || j.rows() <= n) return out;
+  const double s2 = cost / static_cast<double>(j.rows() - n);
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(j, Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();
   const double cut = sv.size() ? sv(0) * 1e-6 : 0;
-  for (int k = 0; k < kOut; ++k) {
+  for (int k = 0; k < n; ++k) {
     double var = 0;
     bool weak = false;
     for (int m = 0; m < sv.size(); ++m) {
@@ -122,14 +122,29 @@ model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<doub
 }
 
 std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vector<int>& case_indices,
-                                   const TrendSeedOptions& options, int64_t* simulations) {
+                                   const TrendSeedOptions& options, int64_t* simulations, const Array7* hold) {
   const HgannFitnessConfig& cfg = fitness.config();
+  std::vector<int> free;  // the fitted coordinates (the others held)
+  for (int k = 0; k < kOut; ++k)
+    if (!hold || std::isnan((*hold)[k])) free.push_back(k);
+  const int nf = static_cast<int>(free.size());
+  const auto full = [&](std::span<const double> x) {
+    Array7 s{};
+    for (int k = 0; k < kOut; ++k) s[k] = hold && !std::isnan((*hold)[k]) ? (*hold)[k] : 0.0;
+    for (int m = 0; m < nf; ++m) s[free[m]] = x[m];
+    return s;
+  };
   std::atomic<int64_t> sims{0};
   opt::LmOptions lm;
   lm.max_iterations = options.lm_iterations;
   lm.threads = std::max(1, options.threads);
-  const std::vector<double> lower(kOut, 0.0), upper(kOut, 1.0);
-  const std::vector<std::vector<double>> fixed = CaseStarts(std::max(1, options.case_starts));
+  const std::vector<double> lower(nf, 0.0), upper(nf, 1.0);
+  std::vector<std::vector<double>> fixed;
+  for (const auto& s : CaseStarts(std::max(1, options.case_starts))) {
+    std::vector<double> x;
+    for (int k : free) x.push_back(s[k]);
+    fixed.push_back(std::move(x));
+  }
   std::vector<CaseEstimate> out;
   std::vector<double> previous;
   for (int index : case_indices) {
@@ -137,7 +152,7 @@ std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vecto
     const opt::ResidualFunction residual = [&](std::span<const double> s, std::vector<double>& r) {
       r.resize(c.measured_deg.size());
       ++sims;
-      if (!fitness.SimulateCase(ToParams(s, cfg.ranges), c, r)) return false;
+      if (!fitness.SimulateCase(ToParams(full(s), cfg.ranges), c, r)) return false;
       for (size_t k = 0; k < r.size(); ++k) r[k] -= c.measured_deg[k];
       return true;
     };
@@ -166,14 +181,16 @@ std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vecto
       }
       const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.95) : 0.0;
       const double inflation = std::sqrt((1 + rho) / (1 - rho));
-      Array7 sigma = Sigmas(best.jacobian, best.cost);
-      for (double& x : sigma) x *= inflation;
+      std::vector<double> sigma = Sigmas(best.jacobian, best.cost);
+      const Array7 x = full(best.x);
+      e.sigma.fill(std::numeric_limits<double>::infinity());
       for (int k = 0; k < kOut; ++k) {
         const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
-        e.s[k] = best.x[k];
-        e.value[k] = cfg.ranges[k].lower + best.x[k] * width;
-        e.sigma[k] = sigma[k] * width;
+        e.s[k] = x[k];
+        e.value[k] = cfg.ranges[k].lower + x[k] * width;
       }
+      for (int m = 0; m < nf; ++m)
+        e.sigma[free[m]] = sigma[m] * inflation * (cfg.ranges[free[m]].upper - cfg.ranges[free[m]].lower);
       previous = best.x;
     } else {
       e.sigma.fill(std::numeric_limits<double>::infinity());
@@ -206,6 +223,31 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
   for (size_t i = 0; i < cfg.cases.size(); ++i)
     if (cfg.cases[i].training) training.push_back(static_cast<int>(i));
   out.cases = FitCases(fitness, training, options, &out.simulations);
+  // A parameter that half the training cases or more do not pin down (σ infinite or above a quarter
+  // of its range: μ against δ on the fin, whose damping one frequency sees as one number) is held at
+  // the median of its per-case values and the cases refitted: their estimates of the other
+  // parameters then belong to one value of it, which a network can take.
+  {
+    Array7 hold;
+    hold.fill(std::nan(""));
+    bool any = false;
+    for (int k = 0; k < kOut; ++k) {
+      const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
+      std::vector<double> values;
+      int loose = 0;
+      for (const CaseEstimate& e : out.cases) {
+        if (!e.ok) continue;
+        values.push_back(e.s[k]);
+        loose += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * width);
+      }
+      if (values.empty() || 2 * loose < static_cast<int>(values.size())) continue;
+      std::sort(values.begin(), values.end());
+      const size_t n = values.size();
+      hold[k] = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+      any = true;
+    }
+    if (any) out.cases = FitCases(fitness, training, options, &out.simulations, &hold);
+  }
 
   // The template: the hidden layer of every seed (file comment, step 2), as the chromosome holds it.
   const auto& norm = cfg.normalization;
@@ -355,21 +397,31 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     lo[i] = i % per == 0 ? -2.0 : -3.0;
     hi[i] = i % per == 0 ? 2.0 : 3.0;
   }
-  // The structured trend polished within its structure (the other weights held at 0 by zero-width
-  // bounds). Not the full one (every weight free): on trends-dev it reached a training cost 4 %
-  // lower and withheld PIs 10–100 times the truth's — four cases cannot tell a hinge in V from one
-  // in f, the per-case estimates' structure can.
-  std::vector<double> lo_s = lo, hi_s = hi;
-  for (int i = 0; i < n_theta; ++i)
-    if (!free_theta[i]) lo_s[i] = hi_s[i] = 0.0;
-  const opt::LmResult rs = opt::LevenbergMarquardt(joint, structured, lo_s, hi_s, lm);
-  const std::vector<double> from_structured = std::isfinite(rs.cost) ? rs.x : structured;
-  // The constant polished alone: its hinge and slope weights held at 0 by zero-width bounds.
-  std::vector<double> lo_c = lo, hi_c = hi;
-  for (int i = 0; i < n_theta; ++i)
-    if (i % per != 0) lo_c[i] = hi_c[i] = 0.0;
-  const opt::LmResult rc = opt::LevenbergMarquardt(joint, constant, lo_c, hi_c, lm);
-  const std::vector<double> from_constant = std::isfinite(rc.cost) ? rc.x : constant;
+  // LM over the free coordinates only (the others stay 0).
+  const auto polish_free = [&](const std::vector<double>& th0, const std::vector<char>& free) {
+    std::vector<int> index;
+    for (int i = 0; i < n_theta; ++i)
+      if (free[i]) index.push_back(i);
+    std::vector<double> x0, flo, fhi;
+    for (int i : index) x0.push_back(th0[i]), flo.push_back(lo[i]), fhi.push_back(hi[i]);
+    const opt::ResidualFunction reduced = [&](std::span<const double> x, std::vector<double>& r) {
+      std::vector<double> th(n_theta, 0.0);
+      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = x[m];
+      return joint(th, r);
+    };
+    const opt::LmResult r = opt::LevenbergMarquardt(reduced, x0, flo, fhi, lm);
+    std::vector<double> th = th0;
+    if (std::isfinite(r.cost))
+      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = r.x[m];
+    return th;
+  };
+  // The structured trend polished within its structure. Not the full one (every weight free): on
+  // trends-dev it reached a training cost 4 % lower and withheld PIs 10–100 times the truth's — four
+  // cases cannot tell a hinge in V from one in f, the per-case estimates' structure can.
+  const std::vector<double> from_structured = polish_free(structured, free_theta);
+  std::vector<char> free_constant(n_theta, 0);
+  for (int k = 0; k < kOut; ++k) free_constant[per * k] = 1;
+  const std::vector<double> from_constant = polish_free(constant, free_constant);
   out.simulations += sims.load();
 
   // Step 3: the networks as chromosomes, their codes polished on the problem's own fitness.

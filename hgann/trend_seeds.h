@@ -8,6 +8,9 @@
 //     the lowest PI kept; σ of each s from the Jacobian at the solution (s² (JᵀJ)⁺, s² = PI/(N − 7);
 //     infinite along directions the case does not see), times √((1 + ρ)/(1 − ρ)) for the lag-1
 //     autocorrelation ρ of the residuals (they are not white: encoder rounding of a slow signal).
+//     A parameter that half the training cases or more do not pin down (μ: one frequency sees the
+//     Rayleigh damping as one number) is held at the median of its per-case values and the cases
+//     are fitted again, so that their other estimates belong to one value of it.
 //  2. Trend networks (TrendNetwork): hidden satlin nodes x_V, x_f and a hinge of each input at the
 //     middle level of the training cases (500 V and 0.5 Hz on the paper's split), outputs
 //     s_k = clamp(c_k + Σ_j B_j W2_jk, 0, 1): piecewise linear over the box. Per parameter, the
@@ -69,9 +72,11 @@ struct TrendSeeds {
 /// Steps 1–3 of the file comment on the fitness's training cases.
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
 
-/// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration.
+/// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration; `hold`
+/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf).
 std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vector<int>& case_indices,
-                                   const TrendSeedOptions& options, int64_t* simulations = nullptr);
+                                   const TrendSeedOptions& options, int64_t* simulations = nullptr,
+                                   const std::array<double, model::kNetworkOutputs>* hold = nullptr);
 
 /// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
 /// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0, 0.9));
