@@ -72,7 +72,7 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   };
   auto preset = std::make_shared<std::string>(hgann::kDefaultSearchPreset);
   cmd->add_option("--preset", *preset,
-                  "search settings: 'robust' (the default: 4 islands x 560 generations, spread penalty 10 deg², "
+                  "search settings: 'robust' (the default: 4 islands x 250 generations, spread penalty 10 deg², "
                   "generation 0 seeded with networks fitted to per-case fits of the training cases, output "
                   "moves; docs/performance.md, \"Trend seeds\") or 'paper' (the paper's Table 2: one population, "
                   "1000 generations, no penalty, uniform bits). A flag given beside it overrides its value")

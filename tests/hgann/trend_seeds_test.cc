@@ -163,7 +163,7 @@ TEST(SearchPresets, PaperIsTheGaDefaultsAndRobustTheMeasuredSetting) {
   const auto robust = SearchPreset(kDefaultSearchPreset);
   ASSERT_TRUE(robust.has_value());
   EXPECT_EQ(robust->islands, 4);
-  EXPECT_EQ(robust->generations, 560);
+  EXPECT_EQ(robust->generations, 250);
   EXPECT_EQ(robust->spread_penalty, 10);
   EXPECT_TRUE(robust->trend_seeds);
   EXPECT_FALSE(SearchPreset("fast").has_value());
