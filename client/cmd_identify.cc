@@ -71,11 +71,14 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
     (*given)[field] = cmd->add_option(flag, value, help)->capture_default_str();
   };
   auto preset = std::make_shared<std::string>(hgann::kDefaultSearchPreset);
-  cmd->add_option("--preset", *preset,
-                  "search settings: 'robust' (the default: 4 islands x 250 generations, spread penalty 10 deg², "
-                  "generation 0 seeded with networks fitted to per-case fits of the training cases, output "
-                  "moves; docs/performance.md, \"Trend seeds\") or 'paper' (the paper's Table 2: one population, "
-                  "1000 generations, no penalty, uniform bits). A flag given beside it overrides its value")
+  cmd->add_option(
+         "--preset", *preset,
+         "search settings: 'robust' (the default: 4 islands x 250 generations, spread penalty 10 "
+         "deg², "
+         "generation 0 seeded with networks fitted to per-case fits of the training cases, output "
+         "moves; docs/performance.md, \"Trend seeds\") or 'paper' (the paper's Table 2: one "
+         "population, "
+         "1000 generations, no penalty, uniform bits). A flag given beside it overrides its value")
       ->capture_default_str();
   ga_option("--seed", "seed", opts->ga.seed, "seed of the GA's generator");
   ga_option("--population", "population_size", opts->ga.population_size,
@@ -123,14 +126,18 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
                   "(Table 3: α, β, γ ∈ [-0.1, 0])")
       ->capture_default_str();
-  (*given)["trend_seeds"] = cmd->add_option("--trend-seeds", opts->trend_seeds,
-                  "true: generation 0 starts with networks fitted to per-case fits of the training cases "
-                  "(hgann/trend_seeds.h); false: uniform bits (the paper's GA)")
-      ->capture_default_str();
+  (*given)["trend_seeds"] =
+      cmd->add_option("--trend-seeds", opts->trend_seeds,
+                      "true: generation 0 starts with networks fitted to per-case fits of the "
+                      "training cases "
+                      "(hgann/trend_seeds.h); false: uniform bits (the paper's GA)")
+          ->capture_default_str();
   (*given)["spread_penalty"] = cmd->add_option("--spread-penalty", opts->spread_penalty,
-                  "λ [deg²]: adds λ·Σ Var(normalised outputs over the training box) to the cost, so that "
-                  "parameters vary over the envelope only where the data pay for it (0 = the paper's cost)")
-      ->capture_default_str();
+                                               "λ [deg²]: adds λ·Σ Var(normalised outputs over the "
+                                               "training box) to the cost, so that "
+                                               "parameters vary over the envelope only where the "
+                                               "data pay for it (0 = the paper's cost)")
+                                   ->capture_default_str();
   cmd->add_flag("--no-plots", *no_plots, "do not render figures (scripts are still written)");
   cmd->callback([=, &exit_code] {
     opts->cases_dir = *cases;

@@ -228,8 +228,10 @@ struct PerCaseCheck {
 };
 
 PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::CaseSet& set,
-                                     const hgann::HgannFitness& fitness, const IdentifyResult& result) {
-  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ", "α", "β", "γ", "a1", "a2"};
+                                     const hgann::HgannFitness& fitness,
+                                     const IdentifyResult& result) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
   PerCaseCheck out;
   std::vector<int> all;
   for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
@@ -239,9 +241,12 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
   std::ostringstream md, term;
   md << "## The network against per-case fits\n\n"
      << "Each case fitted alone (the seven parameters, its b1 and b2; Levenberg–Marquardt from "
-     << so.case_starts << " starts): its PI and each parameter as `network / per-case ± σ`. **Bold**: the "
-     << "network departs from the case's own estimate by more than 2 σ; `(free)`: the case alone does not "
-     << "pin the parameter down (σ infinite or above a quarter of its range), so no claim is made.\n\n"
+     << so.case_starts
+     << " starts): its PI and each parameter as `network / per-case ± σ`. **Bold**: the "
+     << "network departs from the case's own estimate by more than 2 σ; `(free)`: the case alone "
+        "does not "
+     << "pin the parameter down (σ infinite or above a quarter of its range), so no claim is "
+        "made.\n\n"
      << "| case | role | PI network / per-case [deg²] |";
   for (const char* s : kSymbols) md << " " << s << " |";
   md << "\n|---|---|---|";
@@ -256,9 +261,10 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
     const bool training = bc.role == io::CaseRole::kTrain;
     md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(r.pi, 3) << " / "
        << (e.ok ? Fmt(e.pi, 3) : "failed") << " |";
-    const auto net = model::NetworkParameters{r.params.mu, r.params.delta, r.params.alpha, r.params.beta,
-                                              r.params.gamma, r.params.a1, r.params.a2}
-                         .ToArray();
+    const auto net =
+        model::NetworkParameters{r.params.mu,    r.params.delta, r.params.alpha, r.params.beta,
+                                 r.params.gamma, r.params.a1,    r.params.a2}
+            .ToArray();
     for (int k = 0; k < model::kNetworkOutputs; ++k) {
       const auto& range = fitness.config().ranges[k];
       const double width = range.upper - range.lower;
@@ -274,16 +280,17 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
       if (departs) {
         ++departures;
         by_param[k].push_back(bc.number);
-        term << "  case " << bc.number << (training ? " (training)" : " (withheld)") << ": " << kSymbols[k]
-             << " network " << Fmt(net[k], 4) << ", per-case " << Fmt(e.value[k], 4) << " ± " << Fmt(e.sigma[k], 2)
-             << " " << model::OutputUnit(k) << "\n";
+        term << "  case " << bc.number << (training ? " (training)" : " (withheld)") << ": "
+             << kSymbols[k] << " network " << Fmt(net[k], 4) << ", per-case " << Fmt(e.value[k], 4)
+             << " ± " << Fmt(e.sigma[k], 2) << " " << model::OutputUnit(k) << "\n";
       }
     }
     md << "\n";
   }
   md << "\n";
   if (departures == 0) {
-    md << "The network agrees with every per-case estimate that its case pins down (within 2 σ).\n\n";
+    md << "The network agrees with every per-case estimate that its case pins down (within 2 "
+          "σ).\n\n";
   } else {
     md << departures << " departures beyond 2 σ. ";
     for (const auto& [k, cases] : by_param) {
@@ -291,13 +298,18 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
       for (size_t m = 0; m < cases.size(); ++m) md << (m ? ", " : " ") << cases[m];
       md << "; ";
     }
-    md << "where the per-case PI is well below the network's, the case's own data want another value: a trend "
-          "the network misses (or, for parameters that trade against each other, such as α, β and γ, the "
-          "case's estimate is one point of a valley the network crosses elsewhere — compare the PIs).\n\n";
+    md << "where the per-case PI is well below the network's, the case's own data want another "
+          "value: a trend "
+          "the network misses (or, for parameters that trade against each other, such as α, β and "
+          "γ, the "
+          "case's estimate is one point of a valley the network crosses elsewhere — compare the "
+          "PIs).\n\n";
   }
   out.markdown = md.str();
-  out.terminal = departures == 0 ? std::string()
-                                 : "the network departs from a per-case fit by more than 2 σ (report.md):\n" + term.str();
+  out.terminal =
+      departures == 0
+          ? std::string()
+          : "the network departs from a per-case fit by more than 2 σ (report.md):\n" + term.str();
   return out;
 }
 
@@ -309,8 +321,9 @@ constexpr const char* kAtBoundMeaning =
     "seeds are the way out.";
 
 /// report.md.
-std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set, const hgann::HgannFitness& fitness,
-                           const IdentifyResult& result, const CaseTotals& t, const std::string& mu_regression,
+std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set,
+                           const hgann::HgannFitness& fitness, const IdentifyResult& result,
+                           const CaseTotals& t, const std::string& mu_regression,
                            const std::string& at_bound, const std::string& per_case) {
   const double train_sum = t.train_sum, all_sum = t.all_sum;
   const int beaten = t.beaten, compared = t.compared;
@@ -368,17 +381,19 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   if (const int moves = hgann::HgannOutputMoves(options.ga, options.spread_penalty); moves > 0)
     md << ", " << moves << " offspring per island and generation made by an output move (a step of the best "
        << "network's outputs in the parameter space)";
-  md << ", seed " << options.ga.seed << ", ranges '"
-     << options.ranges << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
-     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time " << Fmt(s.wall_time_s, 4) << " s"
+  md << ", seed " << options.ga.seed << ", ranges '" << options.ranges
+     << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
+     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time "
+     << Fmt(s.wall_time_s, 4) << " s"
      << (options.preset.empty() ? std::string() : "; preset '" + options.preset + "'") << "\n";
   if (result.seeds) {
     md << "- generation 0 seeded with " << result.seeds->genomes.size()
        << " networks fitted to per-case fits of the training cases (hgann/trend_seeds.h):";
     for (size_t i = 0; i < result.seeds->genomes.size(); ++i)
-      md << (i ? "," : "") << " " << result.seeds->names[i] << " " << Fmt(result.seeds->costs[i], 5);
-    md << " (cost, deg²; " << result.seeds->simulations << " case simulations, " << Fmt(result.seeds->wall_time_s, 3)
-       << " s)\n";
+      md << (i ? "," : "") << " " << result.seeds->names[i] << " "
+         << Fmt(result.seeds->costs[i], 5);
+    md << " (cost, deg²; " << result.seeds->simulations << " case simulations, "
+       << Fmt(result.seeds->wall_time_s, 3) << " s)\n";
   }
   md << "\n";
   if (options.ranges == "paper") {
@@ -473,7 +488,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
-    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound, per_case.markdown);
+    f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound,
+                        per_case.markdown);
     written.push_back(out / "report.md");
   }
   term << "\n" << result.summary.BriefReport() << "\n"

@@ -1,9 +1,5 @@
 #include "hgann/hgann_job.h"
 
-#include "hgann/identify.h"
-#include "hgann/output_move.h"
-#include "hgann/trend_seeds.h"
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -12,6 +8,9 @@
 #include <sstream>
 #include <string>
 
+#include "hgann/identify.h"
+#include "hgann/output_move.h"
+#include "hgann/trend_seeds.h"
 #include "model/chromosome.h"
 
 namespace pz::hgann {

@@ -89,7 +89,8 @@ double Clamp01(double x) { return std::clamp(x, 0.0, 1.0); }
 
 model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<double>& c2,
                             const std::vector<std::vector<double>>& w2,
-                            const model::InputNormalization& normalization, const model::ParameterRanges& ranges) {
+                            const model::InputNormalization& normalization,
+                            const model::ParameterRanges& ranges) {
   using model::TransferFunction;
   model::Network n;
   n.input_tf = {TransferFunction::kSatlin, TransferFunction::kSatlin};
@@ -111,7 +112,8 @@ model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<doub
   n.w2 = Eigen::MatrixXd::Zero(h, kOut);
   n.c2 = Eigen::VectorXd::Zero(kOut);
   for (int k = 0; k < kOut; ++k) {
-    if (k < static_cast<int>(c2.size())) n.c2(k) = std::clamp(c2[k], model::kWeightMin, model::kWeightMax);
+    if (k < static_cast<int>(c2.size()))
+      n.c2(k) = std::clamp(c2[k], model::kWeightMin, model::kWeightMax);
     for (int j = 0; j < h; ++j)
       if (j < static_cast<int>(w2.size()) && k < static_cast<int>(w2[j].size()))
         n.w2(j, k) = std::clamp(w2[j][k], model::kWeightMin, model::kWeightMax);
@@ -121,8 +123,10 @@ model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<doub
   return n;
 }
 
-std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vector<int>& case_indices,
-                                   const TrendSeedOptions& options, int64_t* simulations, const Array7* hold) {
+std::vector<CaseEstimate> FitCases(const HgannFitness& fitness,
+                                   const std::vector<int>& case_indices,
+                                   const TrendSeedOptions& options, int64_t* simulations,
+                                   const Array7* hold) {
   const HgannFitnessConfig& cfg = fitness.config();
   std::vector<int> free;  // the fitted coordinates (the others held)
   for (int k = 0; k < kOut; ++k)
@@ -190,7 +194,8 @@ std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vecto
         e.value[k] = cfg.ranges[k].lower + x[k] * width;
       }
       for (int m = 0; m < nf; ++m)
-        e.sigma[free[m]] = sigma[m] * inflation * (cfg.ranges[free[m]].upper - cfg.ranges[free[m]].lower);
+        e.sigma[free[m]] =
+            sigma[m] * inflation * (cfg.ranges[free[m]].upper - cfg.ranges[free[m]].lower);
       previous = best.x;
     } else {
       e.sigma.fill(std::numeric_limits<double>::infinity());
@@ -209,7 +214,8 @@ double Knot(std::vector<double> x) {
   std::sort(x.begin(), x.end());
   double best = -1;
   for (double v : x)
-    if (v > 1e-9 && v < 1 - 1e-9 && (best < 0 || std::abs(v - 0.5) < std::abs(best - 0.5))) best = v;
+    if (v > 1e-9 && v < 1 - 1e-9 && (best < 0 || std::abs(v - 0.5) < std::abs(best - 0.5)))
+      best = v;
   return best;
 }
 
@@ -224,8 +230,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     if (cfg.cases[i].training) training.push_back(static_cast<int>(i));
   out.cases = FitCases(fitness, training, options, &out.simulations);
   // A parameter that half the training cases or more do not pin down (σ infinite or above a quarter
-  // of its range: μ against δ on the fin, whose damping one frequency sees as one number) is held at
-  // the median of its per-case values and the cases refitted: their estimates of the other
+  // of its range: μ against δ on the fin, whose damping one frequency sees as one number) is held
+  // at the median of its per-case values and the cases refitted: their estimates of the other
   // parameters then belong to one value of it, which a network can take.
   {
     Array7 hold;
@@ -249,7 +255,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     if (any) out.cases = FitCases(fitness, training, options, &out.simulations, &hold);
   }
 
-  // The template: the hidden layer of every seed (file comment, step 2), as the chromosome holds it.
+  // The template: the hidden layer of every seed (file comment, step 2), as the chromosome holds
+  // it.
   const auto& norm = cfg.normalization;
   std::vector<double> xv, xf;
   for (int i : training) {
@@ -257,19 +264,22 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     xf.push_back(norm.NormalizeFrequency(cfg.cases[i].drive.frequency_hz));
   }
   const model::Network net0 = model::DecodeChromosome(
-      model::EncodeChromosome(TrendNetwork(Knot(xv), Knot(xf), {}, {}, norm, cfg.ranges)), norm, cfg.ranges);
+      model::EncodeChromosome(TrendNetwork(Knot(xv), Knot(xf), {}, {}, norm, cfg.ranges)), norm,
+      cfg.ranges);
   const int h = net0.hidden();
   const auto hidden_of = [&](double v, double f) {
     const Eigen::VectorXd b = net0.Forward(v, f).b;
     return std::vector<double>(b.data(), b.data() + b.size());
   };
   std::vector<std::vector<double>> b_train, b_grid;
-  for (int i : training) b_train.push_back(hidden_of(cfg.cases[i].drive.amplitude_v, cfg.cases[i].drive.frequency_hz));
+  for (int i : training)
+    b_train.push_back(hidden_of(cfg.cases[i].drive.amplitude_v, cfg.cases[i].drive.frequency_hz));
   constexpr int kGrid = 5;  // the spread penalty's grid (HgannFitness::GridOf)
   for (int i = 0; i < kGrid; ++i)
     for (int j = 0; j < kGrid; ++j)
-      b_grid.push_back(hidden_of(norm.amplitude_lo_v + (norm.amplitude_hi_v - norm.amplitude_lo_v) * i / (kGrid - 1),
-                                 norm.frequency_lo_hz + (norm.frequency_hi_hz - norm.frequency_lo_hz) * j / (kGrid - 1)));
+      b_grid.push_back(hidden_of(
+          norm.amplitude_lo_v + (norm.amplitude_hi_v - norm.amplitude_lo_v) * i / (kGrid - 1),
+          norm.frequency_lo_hz + (norm.frequency_hi_hz - norm.frequency_lo_hz) * j / (kGrid - 1)));
   // θ = (c2_k, W2(0, k) … W2(h − 1, k)) for k = 0 … 6: (h + 1) · 7 coordinates.
   const int per = h + 1, n_theta = per * kOut;
   const auto s_of = [&](std::span<const double> th, const std::vector<double>& b, int k) {
@@ -290,7 +300,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       for (int k = 0; k < kOut; ++k) th[per * k] = guess[k];
       return th;
     }
-    Eigen::MatrixXd a(static_cast<int>(rows.size()), 1 + columns), y(static_cast<int>(rows.size()), kOut);
+    Eigen::MatrixXd a(static_cast<int>(rows.size()), 1 + columns),
+        y(static_cast<int>(rows.size()), kOut);
     for (size_t r = 0; r < rows.size(); ++r) {
       a(r, 0) = 1.0;
       for (int j = 0; j < columns; ++j) a(r, 1 + j) = b_train[rows[r]][j];
@@ -324,9 +335,12 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       Eigen::VectorXd y(static_cast<int>(rows.size()));
       for (size_t r = 0; r < rows.size(); ++r) {
         const CaseEstimate& e = out.cases[rows[r]];
-        const double sd = width > 0 && std::isfinite(e.sigma[k]) ? std::max(e.sigma[k] / width, kMinSigmaShare) : 0.25;
+        const double sd = width > 0 && std::isfinite(e.sigma[k])
+                              ? std::max(e.sigma[k] / width, kMinSigmaShare)
+                              : 0.25;
         a(r, 0) = 1.0 / sd;
-        for (int m = 0; m < static_cast<int>(cols.size()); ++m) a(r, 1 + m) = b_train[rows[r]][cols[m]] / sd;
+        for (int m = 0; m < static_cast<int>(cols.size()); ++m)
+          a(r, 1 + m) = b_train[rows[r]][cols[m]] / sd;
         y(r) = e.s[k] / sd;
       }
       if (rows.empty()) break;
@@ -416,8 +430,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     return th;
   };
   // The structured trend polished within its structure. Not the full one (every weight free): on
-  // trends-dev it reached a training cost 4 % lower and withheld PIs 10–100 times the truth's — four
-  // cases cannot tell a hinge in V from one in f, the per-case estimates' structure can.
+  // trends-dev it reached a training cost 4 % lower and withheld PIs 10–100 times the truth's —
+  // four cases cannot tell a hinge in V from one in f, the per-case estimates' structure can.
   const std::vector<double> from_structured = polish_free(structured, free_theta);
   std::vector<char> free_constant(n_theta, 0);
   for (int k = 0; k < kOut; ++k) free_constant[per * k] = 1;
@@ -429,7 +443,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     model::Network n = net0;
     for (int k = 0; k < kOut; ++k) {
       n.c2(k) = std::clamp(th[per * k], model::kWeightMin, model::kWeightMax);
-      for (int j = 0; j < h; ++j) n.w2(j, k) = std::clamp(th[per * k + 1 + j], model::kWeightMin, model::kWeightMax);
+      for (int j = 0; j < h; ++j)
+        n.w2(j, k) = std::clamp(th[per * k + 1 + j], model::kWeightMin, model::kWeightMax);
     }
     return model::EncodeChromosome(n);
   };
@@ -458,7 +473,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
         bool improved = false;
         for (int gene : genes) {
           for (int step : kSteps) {
-            const int code = static_cast<int>(model::ReadGene(cand.genome.bits, gene, model::kWeightCodeBits));
+            const int code =
+                static_cast<int>(model::ReadGene(cand.genome.bits, gene, model::kWeightCodeBits));
             const int next = code + step;
             if (next < 0 || next > static_cast<int>(model::kMaxWeightCode)) continue;
             opt::Genome trial = cand.genome;
@@ -480,8 +496,9 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   for (Candidate& c : candidates) {
-    const bool duplicate = std::any_of(out.genomes.begin(), out.genomes.end(),
-                                       [&](const opt::Genome& g) { return g.bits == c.genome.bits; });
+    const bool duplicate =
+        std::any_of(out.genomes.begin(), out.genomes.end(),
+                    [&](const opt::Genome& g) { return g.bits == c.genome.bits; });
     if (duplicate) continue;
     out.genomes.push_back(std::move(c.genome));
     out.costs.push_back(c.cost);

@@ -5,8 +5,8 @@
 //  1. Per-case fits: each training case alone, the seven parameters in the network's scaled units
 //     s ∈ [0, 1]⁷ (p = lower + s (upper − lower)), bounded Levenberg–Marquardt on the case's
 //     residuals y_model − y_meas from a fixed list of starts (the previous case's solution first),
-//     the lowest PI kept; σ of each s from the Jacobian at the solution (s² (JᵀJ)⁺, s² = PI/(N − 7);
-//     infinite along directions the case does not see), times √((1 + ρ)/(1 − ρ)) for the lag-1
+//     the lowest PI kept; σ of each s from the Jacobian at the solution (s² (JᵀJ)⁺, s² = PI/(N −
+//     7); infinite along directions the case does not see), times √((1 + ρ)/(1 − ρ)) for the lag-1
 //     autocorrelation ρ of the residuals (they are not white: encoder rounding of a slow signal).
 //     A parameter that half the training cases or more do not pin down (μ: one frequency sees the
 //     Rayleigh damping as one number) is held at the median of its per-case values and the cases
@@ -54,18 +54,18 @@ struct CaseEstimate {
 };
 
 struct TrendSeedOptions {
-  int threads = 1;            ///< Jacobian columns in parallel, ≥ 1 (does not change the result)
-  int case_starts = 6;        ///< starts of each per-case fit, ≥ 1
-  int lm_iterations = 60;     ///< per fit, ≥ 1
-  bool code_polish = true;    ///< step 3
+  int threads = 1;          ///< Jacobian columns in parallel, ≥ 1 (does not change the result)
+  int case_starts = 6;      ///< starts of each per-case fit, ≥ 1
+  int lm_iterations = 60;   ///< per fit, ≥ 1
+  bool code_polish = true;  ///< step 3
 };
 
 struct TrendSeeds {
-  std::vector<CaseEstimate> cases;  ///< the training cases, in case order
-  std::vector<opt::Genome> genomes; ///< the seeds, best (lowest cost) first
-  std::vector<double> costs;        ///< each seed's fitness cost
-  std::vector<std::string> names;   ///< "trend (polished)", …, "constant (polished)"
-  int64_t simulations = 0;          ///< case simulations spent
+  std::vector<CaseEstimate> cases;   ///< the training cases, in case order
+  std::vector<opt::Genome> genomes;  ///< the seeds, best (lowest cost) first
+  std::vector<double> costs;         ///< each seed's fitness cost
+  std::vector<std::string> names;    ///< "trend (polished)", …, "constant (polished)"
+  int64_t simulations = 0;           ///< case simulations spent
   double wall_time_s = 0;
 };
 
@@ -74,15 +74,17 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
 
 /// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration; `hold`
 /// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf).
-std::vector<CaseEstimate> FitCases(const HgannFitness& fitness, const std::vector<int>& case_indices,
-                                   const TrendSeedOptions& options, int64_t* simulations = nullptr,
-                                   const std::array<double, model::kNetworkOutputs>* hold = nullptr);
+std::vector<CaseEstimate> FitCases(
+    const HgannFitness& fitness, const std::vector<int>& case_indices,
+    const TrendSeedOptions& options, int64_t* simulations = nullptr,
+    const std::array<double, model::kNetworkOutputs>* hold = nullptr);
 
 /// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
-/// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0, 0.9));
-/// outputs satlin(Σ_j B_j w2[j][k] + c2[k]) (missing entries 0). H = 2 … 4.
+/// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0,
+/// 0.9)); outputs satlin(Σ_j B_j w2[j][k] + c2[k]) (missing entries 0). H = 2 … 4.
 model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<double>& c2,
                             const std::vector<std::vector<double>>& w2,
-                            const model::InputNormalization& normalization, const model::ParameterRanges& ranges);
+                            const model::InputNormalization& normalization,
+                            const model::ParameterRanges& ranges);
 
 }  // namespace pz::hgann

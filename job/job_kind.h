@@ -48,9 +48,10 @@ struct JobKind {
   /// Optional: the kind's move for the GA's output moves (opt/ga.h, file comment 9.). A kind
   /// without one refuses a spec that asks for output moves.
   std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Move*)> move;
-  /// Optional: the genomes that fill the first slots of generation 0 (GeneticAlgorithm::Initialize),
-  /// a function of the spec alone, computed once when a job starts (the master's job runner, a
-  /// local rerun): e.g. the hgann kind's trend seeds. None = uniform bits.
+  /// Optional: the genomes that fill the first slots of generation 0
+  /// (GeneticAlgorithm::Initialize), a function of the spec alone, computed once when a job starts
+  /// (the master's job runner, a local rerun): e.g. the hgann kind's trend seeds. None = uniform
+  /// bits.
   std::function<Status(const JobSpec&, std::vector<opt::Genome>*)> seeds;
 };
 

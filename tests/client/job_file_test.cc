@@ -1,10 +1,11 @@
 // Job files (client/job_file.h): an hgann spec's case_set_dir is read relative to the job file
 // and embedded; a folder and cases at once, or a folder that is not a case set, are named.
+#include "client/job_file.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "client/job_file.h"
 #include "hgann/identify.h"
 #include "kinds/kinds.h"
 #include "tests/testing/hgann_spec.h"
@@ -43,7 +44,8 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(s.ga->generations, 40);
 
   JobSpec paper;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_paper_job.json", &paper, &v).ok()) << All(v);
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_paper_job.json", &paper, &v).ok())
+      << All(v);
   EXPECT_EQ(paper.ga->population, 400);
   EXPECT_EQ(paper.ga->generations, 1000);
   EXPECT_EQ(paper.ga->stall_generations, 200);

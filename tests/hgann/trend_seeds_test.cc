@@ -2,6 +2,8 @@
 // no constant network reaches its floor, the default search (trend seeds + islands + spread
 // penalty) does on every case, training and withheld; the seeds do not depend on the thread count;
 // the presets.
+#include "hgann/trend_seeds.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include "hgann/hgann_fitness.h"
 #include "hgann/identify.h"
 #include "hgann/output_move.h"
-#include "hgann/trend_seeds.h"
 #include "model/chromosome.h"
 #include "opt/ga.h"
 #include "opt/lm.h"
@@ -26,11 +27,17 @@ constexpr double kQuantum = 360.0 / 8192;
 /// with V² and a2 with V (smooth laws of the kind of data/bimorph-fin/trends-dev).
 model::NetworkParameters Truth(double v, double f) {
   const double x = (v - 375) / 375;
-  return {95, 0.08 + 0.22 * std::exp(-2.2 * (f - 0.25)), 2.5e-3, 6e-3, 4e-3, 0.04 + 0.22 * x * x, 0.08 + 0.2 * x};
+  return {95,
+          0.08 + 0.22 * std::exp(-2.2 * (f - 0.25)),
+          2.5e-3,
+          6e-3,
+          4e-3,
+          0.04 + 0.22 * x * x,
+          0.08 + 0.2 * x};
 }
 
-/// The paper's nine operating points and split, three cycles at 100 Hz as on the bench, the angle of
-/// the truth read through the bench's encoder (rounded to its quantum).
+/// The paper's nine operating points and split, three cycles at 100 Hz as on the bench, the angle
+/// of the truth read through the bench's encoder (rounded to its quantum).
 HgannFitnessConfig TrendBench(double spread_penalty) {
   HgannFitnessConfig cfg;
   const double vs[] = {375, 500, 750}, fs[] = {0.25, 0.5, 1.0};
@@ -54,7 +61,8 @@ HgannFitnessConfig TrendBench(double spread_penalty) {
   for (HgannCase& c : cfg.cases) {
     std::vector<double> angle(c.measured_deg.size());
     PZ_CHECK(sim.SimulateCase(Truth(c.drive.amplitude_v, c.drive.frequency_hz), c, angle));
-    for (size_t k = 0; k < angle.size(); ++k) c.measured_deg[k] = std::round(angle[k] / kQuantum) * kQuantum;
+    for (size_t k = 0; k < angle.size(); ++k)
+      c.measured_deg[k] = std::round(angle[k] / kQuantum) * kQuantum;
   }
   return cfg;
 }
@@ -64,7 +72,8 @@ double TruthPi(const HgannFitness& fitness, const HgannCase& c) {
   std::vector<double> angle(c.measured_deg.size());
   PZ_CHECK(fitness.SimulateCase(Truth(c.drive.amplitude_v, c.drive.frequency_hz), c, angle));
   double pi = 0;
-  for (size_t k = 0; k < angle.size(); ++k) pi += (angle[k] - c.measured_deg[k]) * (angle[k] - c.measured_deg[k]);
+  for (size_t k = 0; k < angle.size(); ++k)
+    pi += (angle[k] - c.measured_deg[k]) * (angle[k] - c.measured_deg[k]);
   return pi;
 }
 
@@ -95,7 +104,8 @@ TEST(TrendSeeds, NoConstantReachesTheFloorTheDefaultSearchDoesOnEveryCase) {
     r.clear();
     std::array<double, model::kNetworkOutputs> p{};
     for (int k = 0; k < model::kNetworkOutputs; ++k)
-      p[k] = cfg.ranges[k].lower + std::clamp(s[k], 0.0, 1.0) * (cfg.ranges[k].upper - cfg.ranges[k].lower);
+      p[k] = cfg.ranges[k].lower +
+             std::clamp(s[k], 0.0, 1.0) * (cfg.ranges[k].upper - cfg.ranges[k].lower);
     for (int i : training) {
       const HgannCase& c = cfg.cases[i];
       std::vector<double> angle(c.measured_deg.size());
