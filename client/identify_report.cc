@@ -238,11 +238,41 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
   hgann::TrendSeedOptions so;
   so.threads = std::max(1, options.threads > 0 ? options.threads : 2);
   out.estimates = hgann::FitCases(fitness, all, so);
+  // A parameter that half the cases or more leave free (μ against δ: one frequency sees the
+  // damping as one number) is held at the network's own value in each case and the case refitted:
+  // the other estimates then answer "what does this case want, given the network's μ".
+  std::array<bool, model::kNetworkOutputs> loose{};
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    const auto& range = fitness.config().ranges[k];
+    int n = 0, free = 0;
+    for (const hgann::CaseEstimate& e : out.estimates) {
+      if (!e.ok) continue;
+      ++n;
+      free += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * (range.upper - range.lower));
+    }
+    loose[k] = n > 0 && 2 * free >= n;
+  }
+  if (std::any_of(loose.begin(), loose.end(), [](bool b) { return b; })) {
+    for (size_t i = 0; i < all.size(); ++i) {
+      const auto& r = ResultOf(result, fitness.config().cases[i].number).params;
+      const auto net =
+          model::NetworkParameters{r.mu, r.delta, r.alpha, r.beta, r.gamma, r.a1, r.a2}.ToArray();
+      std::array<double, model::kNetworkOutputs> hold;
+      for (int k = 0; k < model::kNetworkOutputs; ++k) {
+        const auto& range = fitness.config().ranges[k];
+        const double width = range.upper - range.lower;
+        hold[k] = loose[k] && width > 0 ? (net[k] - range.lower) / width : std::nan("");
+      }
+      out.estimates[i] = hgann::FitCases(fitness, {all[i]}, so, nullptr, &hold).front();
+    }
+  }
   std::ostringstream md, term;
   md << "## The network against per-case fits\n\n"
      << "Each case fitted alone (the seven parameters, its b1 and b2; Levenberg–Marquardt from "
      << so.case_starts
-     << " starts): its PI and each parameter as `network / per-case ± σ`. **Bold**: the "
+     << " starts; a parameter that most cases leave free is held at the network's "
+     << "value in each case, shown `(held)`): its PI and each parameter as `network / per-case ± "
+        "σ`. **Bold**: the "
      << "network departs from the case's own estimate by more than 2 σ; `(free)`: the case alone "
         "does not "
      << "pin the parameter down (σ infinite or above a quarter of its range), so no claim is "
@@ -273,6 +303,10 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
         continue;
       }
       const bool free = !std::isfinite(e.sigma[k]) || e.sigma[k] > 0.25 * width;
+      if (loose[k]) {
+        md << " " << Fmt(net[k], 3) << " (held) |";
+        continue;
+      }
       const bool departs = !free && std::abs(net[k] - e.value[k]) > 2 * e.sigma[k];
       const std::string cell = Fmt(net[k], 3) + " / " + Fmt(e.value[k], 3) +
                                (free ? " (free)" : " ± " + Fmt(e.sigma[k], 2));
