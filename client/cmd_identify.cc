@@ -138,6 +138,9 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                                                "parameters vary over the envelope only where the "
                                                "data pay for it (0 = the paper's cost)")
                                    ->capture_default_str();
+  // What the preset sets shows as its default in --help (the value is the preset's unless given).
+  for (const char* field : {"islands", "max_generations", "spread_penalty", "trend_seeds"})
+    given->at(field)->default_str("from --preset");
   cmd->add_flag("--no-plots", *no_plots, "do not render figures (scripts are still written)");
   cmd->callback([=, &exit_code] {
     opts->cases_dir = *cases;
