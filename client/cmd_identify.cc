@@ -65,10 +65,21 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   cmd->add_option("--out", *out, "result folder (created; files in it are overwritten)")->capture_default_str();
   // The GA's options, each with the GaOptions member it sets: a bad value is reported under its flag.
   auto flag_of = std::make_shared<std::map<std::string, std::string, std::less<>>>();
+  auto given = std::make_shared<std::map<std::string, CLI::Option*, std::less<>>>();  // by field
   const auto ga_option = [&](const char* flag, const char* field, auto& value, const std::string& help) {
     (*flag_of)[field] = flag;
-    cmd->add_option(flag, value, help)->capture_default_str();
+    (*given)[field] = cmd->add_option(flag, value, help)->capture_default_str();
   };
+  auto preset = std::make_shared<std::string>(hgann::kDefaultSearchPreset);
+  cmd->add_option(
+         "--preset", *preset,
+         "search settings: 'robust' (the default: 4 islands x 250 generations, spread penalty 10 "
+         "deg², "
+         "generation 0 seeded with networks fitted to per-case fits of the training cases, output "
+         "moves; docs/performance.md, \"Trend seeds\") or 'paper' (the paper's Table 2: one "
+         "population, "
+         "1000 generations, no penalty, uniform bits). A flag given beside it overrides its value")
+      ->capture_default_str();
   ga_option("--seed", "seed", opts->ga.seed, "seed of the GA's generator");
   ga_option("--population", "population_size", opts->ga.population_size,
             "individuals per generation, per island (paper: 400)");
@@ -115,15 +126,37 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
                   "parameter ranges: 'default' (spec: α∈[0,0.01], β∈[0,0.02], γ∈[-0.02,0.02] …) or 'paper' "
                   "(Table 3: α, β, γ ∈ [-0.1, 0])")
       ->capture_default_str();
-  cmd->add_option("--spread-penalty", opts->spread_penalty,
-                  "λ [deg²]: adds λ·Σ Var(normalised outputs over the training box) to the cost, so that "
-                  "parameters vary over the envelope only where the data pay for it (0 = the paper's cost)")
-      ->capture_default_str();
+  (*given)["trend_seeds"] =
+      cmd->add_option("--trend-seeds", opts->trend_seeds,
+                      "true: generation 0 starts with networks fitted to per-case fits of the "
+                      "training cases "
+                      "(hgann/trend_seeds.h); false: uniform bits (the paper's GA)")
+          ->capture_default_str();
+  (*given)["spread_penalty"] = cmd->add_option("--spread-penalty", opts->spread_penalty,
+                                               "λ [deg²]: adds λ·Σ Var(normalised outputs over the "
+                                               "training box) to the cost, so that "
+                                               "parameters vary over the envelope only where the "
+                                               "data pay for it (0 = the paper's cost)")
+                                   ->capture_default_str();
+  // What the preset sets shows as its default in --help (the value is the preset's unless given).
+  for (const char* field : {"islands", "max_generations", "spread_penalty", "trend_seeds"})
+    given->at(field)->default_str("from --preset");
   cmd->add_flag("--no-plots", *no_plots, "do not render figures (scripts are still written)");
   cmd->callback([=, &exit_code] {
     opts->cases_dir = *cases;
     opts->out_dir = *out;
     opts->plots = !*no_plots;
+    {
+      // The preset's settings where no flag says otherwise.
+      const auto search = hgann::SearchPreset(*preset);
+      if (!search) throw InputError(FieldError("--preset", *preset, hgann::kSearchPresetRule));
+      const auto unset = [&](const char* field) { return given->at(field)->count() == 0; };
+      if (unset("islands")) opts->ga.islands = search->islands;
+      if (unset("max_generations")) opts->ga.max_generations = search->generations;
+      if (unset("spread_penalty")) opts->spread_penalty = search->spread_penalty;
+      if (unset("trend_seeds")) opts->trend_seeds = search->trend_seeds;
+      opts->preset = *preset;
+    }
     const auto parsed_topology = opt::ParseTopology(*topology);
     if (!parsed_topology) throw InputError(FieldError(flag_of->at("topology"), *topology, opt::kTopologyRule));
     opts->ga.topology = *parsed_topology;

@@ -105,6 +105,7 @@ IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_
       for (const auto& r : h->ranges) o.ranges += " " + r.name;
     }
     o.spread_penalty = h->spread_penalty;
+    o.trend_seeds = h->trend_seeds;
   }
   o.plots = plots;
   o.job_id = job.info.job_id;

@@ -203,6 +203,13 @@ std::vector<HgannCaseResult> HgannFitness::EvaluateCases(const model::Network& n
   return out;
 }
 
+bool HgannFitness::SimulateCase(const model::NetworkParameters& p, const HgannCase& c,
+                                std::span<double> angle) const {
+  thread_local model::ModalWorkspace workspace;
+  if (angle.size() != c.measured_deg.size()) return false;
+  return simulator_->SimulateAngle(ParamsFor(p, c), c.drive, angle, workspace).ok();
+}
+
 model::BimorphTrace HgannFitness::Trace(const model::Network& network, const HgannCase& c) const {
   const auto params = ParamsFor(network.Predict(c.drive.amplitude_v, c.drive.frequency_hz), c);
   return simulator_->Simulate(params, model::DriveSignal{c.drive});

@@ -9,14 +9,15 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
-#include "opt/evaluator.h"
 #include "model/bimorph.h"
-#include "model/modal_simulator.h"
 #include "model/fin_case.h"
+#include "model/modal_simulator.h"
 #include "model/network.h"
+#include "opt/evaluator.h"
 
 namespace pz::hgann {
 
@@ -64,6 +65,10 @@ class HgannFitness final : public opt::FitnessFunction {
   std::vector<HgannCaseResult> EvaluateCases(const model::Network& network) const;
   /// Full traces of one case for plots.
   model::BimorphTrace Trace(const model::Network& network, const HgannCase& c) const;
+  /// The fin angle of case `c` (its drive, b1 and b2) for the seven parameters `p`, into `angle`
+  /// (c's sample count); false if the simulation fails (e.g. an unbounded loop). Thread-safe.
+  bool SimulateCase(const model::NetworkParameters& p, const HgannCase& c,
+                    std::span<double> angle) const;
   /// Decodes a genome with this problem's normalisation and ranges. Throws InputError on bad bits.
   model::Network Decode(const opt::Genome& genome) const;
 

@@ -1,8 +1,5 @@
 #include "hgann/hgann_job.h"
 
-#include "hgann/identify.h"
-#include "hgann/output_move.h"
-
 #include <algorithm>
 #include <cmath>
 #include <exception>
@@ -11,6 +8,9 @@
 #include <sstream>
 #include <string>
 
+#include "hgann/identify.h"
+#include "hgann/output_move.h"
+#include "hgann/trend_seeds.h"
 #include "model/chromosome.h"
 
 namespace pz::hgann {
@@ -354,6 +354,21 @@ JobKind HgannJobKind() {
     HgannFitnessConfig config;  // the normalisation and training drives the fitness uses
     if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
     *out = OutputMove(config);
+    return Status::Ok();
+  };
+  k.seeds = [](const JobSpec& s, std::vector<Genome>* out) -> Status {
+    out->clear();
+    const HgannProblem& problem = std::get<HgannProblem>(s.problem);
+    if (!problem.trend_seeds) return Status::Ok();
+    HgannFitnessConfig config;
+    if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
+    try {
+      const HgannFitness fitness(std::move(config));
+      // One thread: the master's job thread (the result does not depend on it).
+      *out = MakeTrendSeeds(fitness, TrendSeedOptions{}).genomes;
+    } catch (const std::exception& e) {
+      return InvalidArgument(std::string("hgann trend seeds: ") + e.what());
+    }
     return Status::Ok();
   };
   k.describe = [](const JobSpec&, const Genome& g) {

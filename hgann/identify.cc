@@ -1,5 +1,6 @@
 #include "hgann/identify.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -13,6 +14,14 @@ namespace pz::hgann {
 std::optional<model::ParameterRanges> RangesPreset(std::string_view name) {
   if (name.empty() || name == "default") return model::ParameterRanges{};
   if (name == "paper") return model::ParameterRanges::PaperTable3();
+  return std::nullopt;
+}
+
+std::optional<SearchSettings> SearchPreset(std::string_view name) {
+  if (name == "paper") return SearchSettings{};
+  if (name == "robust")
+    return SearchSettings{
+        .islands = 4, .generations = 250, .spread_penalty = 10, .trend_seeds = true};
   return std::nullopt;
 }
 
@@ -40,6 +49,13 @@ IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& se
   if (on_generation) algorithm.AddGenerationCallback(on_generation);
 
   IdentifyResult r;
+  if (options.trend_seeds) {
+    // As the hgann job kind's seeds (hgann_job.cc): the same genomes whatever the thread count.
+    TrendSeedOptions so;
+    so.threads = std::max(1, options.threads > 0 ? options.threads : 2);
+    r.seeds = MakeTrendSeeds(fitness, so);
+    algorithm.Initialize(r.seeds->genomes);
+  }
   r.summary = algorithm.Run();
   r.log = algorithm.state().log;
   r.best.network = fitness.Decode(r.summary.best);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hgann/hgann_fitness.h"
+#include "hgann/trend_seeds.h"
 #include "io/bench_data.h"
 #include "io/network_io.h"
 #include "model/network.h"
@@ -25,6 +26,8 @@ struct IdentifyOptions {
   int threads = 0;                  ///< evaluator threads (0 = all cores)
   std::string ranges = "default";   ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
   double spread_penalty = 0;        ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
+  bool trend_seeds = false;  ///< generation 0 starts with the trend seeds (hgann/trend_seeds.h)
+  std::string preset;        ///< the search preset the settings came from (reports; "" = none)
   std::string job_id = "local";     ///< provenance
 };
 
@@ -33,6 +36,8 @@ struct IdentifyResult {
   std::vector<opt::GenerationSummary> log;
   io::SavedNetwork best;
   std::vector<HgannCaseResult> cases;  ///< every case of the set, in manifest order
+  std::optional<TrendSeeds>
+      seeds;  ///< with IdentifyOptions::trend_seeds: the per-case fits and seeds
 };
 
 /// The parameter ranges of a preset: "" or "default" (spec §3), "paper" (the paper's Table 3);
@@ -41,6 +46,24 @@ struct IdentifyResult {
 std::optional<model::ParameterRanges> RangesPreset(std::string_view name);
 inline constexpr const char* kRangesPresetRule =
     "must be \"default\" (spec ranges) or \"paper\" (the paper's Table 3)";
+
+/// The settings of a search preset (`piezoid identify --preset`, what a job spec's defaults mean):
+/// "robust" — the default: the result does not depend on the seed beyond the noise of the fit
+/// (docs/performance.md, "Trend seeds") — and "paper" (the paper's Table 2: one population of 400,
+/// 1000 generations, the paper's cost, uniform bits). The other GA settings are GaOptions'
+/// defaults.
+struct SearchSettings {
+  int islands = 1;
+  int generations = 1000;
+  double spread_penalty = 0;  ///< λ [deg²]
+  bool trend_seeds = false;
+};
+/// nullopt for an unknown name (kSearchPresetRule).
+std::optional<SearchSettings> SearchPreset(std::string_view name);
+inline constexpr const char* kDefaultSearchPreset = "robust";
+inline constexpr const char* kSearchPresetRule =
+    "must be \"robust\" (the default: islands, spread penalty, trend seeds) or \"paper\" (the "
+    "paper's Table 2)";
 
 /// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
 IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,

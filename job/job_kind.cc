@@ -90,4 +90,11 @@ Status JobKindRegistry::Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* o
   return k->move(spec, out);
 }
 
+Status JobKindRegistry::Seeds(const JobSpec& spec, std::vector<opt::Genome>* out) const {
+  out->clear();
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->seeds) return Status::Ok();
+  return k->seeds(spec, out);
+}
+
 }  // namespace pz::job

@@ -48,6 +48,11 @@ struct JobKind {
   /// Optional: the kind's move for the GA's output moves (opt/ga.h, file comment 9.). A kind
   /// without one refuses a spec that asks for output moves.
   std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Move*)> move;
+  /// Optional: the genomes that fill the first slots of generation 0
+  /// (GeneticAlgorithm::Initialize), a function of the spec alone, computed once when a job starts
+  /// (the master's job runner, a local rerun): e.g. the hgann kind's trend seeds. None = uniform
+  /// bits.
+  std::function<Status(const JobSpec&, std::vector<opt::Genome>*)> seeds;
 };
 
 /// The GA options of a spec's `ga` settings, limits and seed, for genomes of `layout` (what the
@@ -70,6 +75,8 @@ class JobKindRegistry {
                   std::vector<model::Network>* out) const;
   /// The kind's move for the GA (null when the kind has none: its genomes are only bred).
   Status Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* out) const;
+  /// The kind's seeds of generation 0 (empty when the kind has none).
+  Status Seeds(const JobSpec& spec, std::vector<opt::Genome>* out) const;
 
  private:
   mutable std::mutex mu_;

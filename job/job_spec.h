@@ -89,6 +89,9 @@ struct HgannProblem {
   /// Overrides of the bench's beam (model/beam.h BeamGeometry), by field name, e.g.
   /// {"tip_length_m", 0.02}; n_active and n_tip are whole numbers.
   std::map<std::string, double> geometry;
+  /// Generation 0 holds the trend seeds of hgann/trend_seeds.h (networks fitted to per-case fits
+  /// of the training cases) in island 0's first slots; false = uniform bits (the paper's GA).
+  bool trend_seeds = false;
 };
 
 /// A synthetic problem for tests and benchmarks (job kind "synthetic").

@@ -41,6 +41,9 @@ Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume
     opt::GeneticAlgorithm::Move move;
     if (Status s = kinds.Move(spec_, &move); !s.ok()) return s;
     if (move) ga_->SetMove(std::move(move));
+    if (!resume || !resume->optimizer.initialized) {
+      if (Status s = kinds.Seeds(spec_, &seeds_); !s.ok()) return s;
+    }
     if (resume) {
       ga_->RestoreState(resume->optimizer);
       const std::string id = checkpoint_.job_id;
@@ -60,7 +63,7 @@ bool JobRunner::Done() const {
 const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   const auto t0 = std::chrono::steady_clock::now();
   forward_.target = &evaluator;
-  const GenerationSummary& s = ga_->state().initialized ? ga_->Step() : ga_->Initialize();
+  const GenerationSummary& s = ga_->state().initialized ? ga_->Step() : ga_->Initialize(seeds_);
   GenerationRecord rec = s;
   if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end()) rec.quarantined = q->second;
   forward_.target = nullptr;

@@ -46,6 +46,7 @@ class JobRunner {
   job::JobSpec spec_;
   Forward forward_;
   std::unique_ptr<opt::GeneticAlgorithm> ga_;
+  std::vector<opt::Genome> seeds_;  ///< the kind's seeds of generation 0 (JobKind::seeds)
   service::JobCheckpoint checkpoint_;
 };
 

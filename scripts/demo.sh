@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The main job: installs what is missing, builds, then runs the bundled HGANN identification
-# (examples/hgann_job.json: the nine bench cases of data/bimorph-fin/nominal with the paper's GA
-# settings, population 400, up to 1000 generations; well under a minute on 2 cores) as a real
+# (examples/hgann_job.json: the nine bench cases of data/bimorph-fin/nominal with the robust
+# settings, 4 islands of 400 and trend seeds; well under a minute on 2 cores) as a real
 # service session on this machine: a piezoid-master and 2 piezoid-workers
 # (deploy/local/piezoid-local.sh), `piezoid submit`, `piezoid watch` (progress bar), `piezoid fetch`
 # into out/demo/result (networks and the validation report), `piezoid export` (C header); the

@@ -65,6 +65,7 @@ void ProblemToProto(const HgannProblem& h, pw::JobSpec* p) {
     pr->set_max(r.max);
   }
   ph->set_spread_penalty(h.spread_penalty);
+  ph->set_trend_seeds(h.trend_seeds);
   ph->set_saturation(h.saturation == HgannProblem::Saturation::kGiven
                          ? pw::SATURATION_GIVEN
                          : pw::SATURATION_FROM_EXTREMES);
@@ -92,6 +93,7 @@ HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolati
   h.ranges_preset = ph.ranges_preset();
   for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
   h.spread_penalty = ph.spread_penalty();
+  h.trend_seeds = ph.trend_seeds();
   switch (ph.saturation()) {
     case pw::SATURATION_UNSPECIFIED:
     case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;

@@ -1,10 +1,12 @@
 // Job files (client/job_file.h): an hgann spec's case_set_dir is read relative to the job file
 // and embedded; a folder and cases at once, or a folder that is not a case set, are named.
+#include "client/job_file.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 
-#include "client/job_file.h"
+#include "hgann/identify.h"
 #include "kinds/kinds.h"
 #include "tests/testing/hgann_spec.h"
 
@@ -42,12 +44,27 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(s.ga->generations, 40);
 
   JobSpec paper;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_job.json", &paper, &v).ok()) << All(v);
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_paper_job.json", &paper, &v).ok())
+      << All(v);
   EXPECT_EQ(paper.ga->population, 400);
   EXPECT_EQ(paper.ga->generations, 1000);
   EXPECT_EQ(paper.ga->stall_generations, 200);
   EXPECT_EQ(paper.ga->mutation_probability, 0.01);
+  EXPECT_FALSE(std::get<job::HgannProblem>(paper.problem).trend_seeds);
   EXPECT_TRUE(kinds::All().Validate(paper).empty());
+
+  // The default job: the robust preset of `piezoid identify` (hgann::SearchPreset("robust")).
+  JobSpec robust;
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_job.json", &robust, &v).ok()) << All(v);
+  const auto preset = hgann::SearchPreset("robust");
+  ASSERT_TRUE(preset.has_value());
+  EXPECT_EQ(robust.ga->population, 400);
+  EXPECT_EQ(robust.ga->islands, preset->islands);
+  EXPECT_EQ(robust.ga->generations, preset->generations);
+  EXPECT_EQ(std::get<job::HgannProblem>(robust.problem).spread_penalty, preset->spread_penalty);
+  EXPECT_EQ(std::get<job::HgannProblem>(robust.problem).trend_seeds, preset->trend_seeds);
+  EXPECT_EQ(robust.seed, paper.seed);
+  EXPECT_TRUE(kinds::All().Validate(robust).empty());
 
   // The archipelago: the same job with islands and generations, the migration by its defaults.
   JobSpec islands;

@@ -156,6 +156,52 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   EXPECT_EQ(client::GaSummaryOfJob({info, spec, best, log, {}}).best_island, id.summary.best_island);
 }
 
+TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIdentify) {
+  // The new search (issue 36): generation 0 seeded by the master's job runner with the trend seeds
+  // (hgann/trend_seeds.h), 2 islands with their output moves, the spread penalty; the same run as
+  // `piezoid identify --trend-seeds true` bit for bit.
+  job::JobSpec spec = QuickSpec();
+  spec.ga->population = 30;
+  spec.ga->generations = 8;
+  spec.ga->islands = 2;
+  auto& h = std::get<job::HgannProblem>(spec.problem);
+  h.spread_penalty = 10;
+  h.trend_seeds = true;
+  const service::JobCheckpoint ref = Reference(spec);
+
+  hgann::IdentifyOptions o;
+  o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
+  o.threads = 2;
+  o.spread_penalty = 10;
+  o.trend_seeds = true;
+  hgann::HgannFitnessConfig config;
+  ASSERT_TRUE(hgann::HgannConfigFromProblem(h, &config).ok());
+  const hgann::HgannFitness fitness(config);
+  const io::CaseSet set = hgann::HgannCaseSet(h);
+  const hgann::IdentifyResult id = hgann::RunIdentify(o, set, fitness, nullptr);
+  ASSERT_TRUE(id.seeds.has_value());
+  ASSERT_FALSE(id.seeds->genomes.empty());
+  // The seeds are in generation 0: its best is no worse than the best seed.
+  EXPECT_LE(id.log.front().best_cost, id.seeds->costs.front());
+
+  Cluster c("hgann-seeds");
+  c.AddWorker(1);
+  c.AddWorker(1);
+  auto client = c.Client();
+  client::SubmitResult r;
+  ASSERT_TRUE(client.Submit(spec, &r).ok());
+  service::JobInfo info;
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, &info).ok());
+  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  std::vector<service::ScoredGenome> best;
+  std::vector<service::GenerationRecord> log;
+  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info).ok());
+  ExpectSameRun(ref, best, log);
+  ASSERT_EQ(log.size(), id.log.size());
+  for (size_t g = 0; g < log.size(); ++g) EXPECT_EQ(log[g], id.log[g]) << "generation " << g;
+  EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
+}
+
 TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
   Cluster c("hgann-cli");
   c.AddWorker(1);

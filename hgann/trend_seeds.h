@@ -1,0 +1,90 @@
+// Trend seeds (issue 36): networks for the GA's generation 0 that already follow the operating
+// point, made from per-case fits of the training cases — the paper's eq. 7 (a regression of the
+// per-case parameters on V and f), done by the network.
+//
+//  1. Per-case fits: each training case alone, the seven parameters in the network's scaled units
+//     s ∈ [0, 1]⁷ (p = lower + s (upper − lower)), bounded Levenberg–Marquardt on the case's
+//     residuals y_model − y_meas from a fixed list of starts (the previous case's solution first),
+//     the lowest PI kept; σ of each s from the Jacobian at the solution (s² (JᵀJ)⁺, s² = PI/(N −
+//     7); infinite along directions the case does not see), times √((1 + ρ)/(1 − ρ)) for the lag-1
+//     autocorrelation ρ of the residuals (they are not white: encoder rounding of a slow signal).
+//     A parameter that half the training cases or more do not pin down (μ: one frequency sees the
+//     Rayleigh damping as one number) is held at the median of its per-case values and the cases
+//     are fitted again, so that their other estimates belong to one value of it.
+//  2. Trend networks (TrendNetwork): hidden satlin nodes x_V, x_f and a hinge of each input at the
+//     middle level of the training cases (500 V and 0.5 Hz on the paper's split), outputs
+//     s_k = clamp(c_k + Σ_j B_j W2_jk, 0, 1): piecewise linear over the box. Per parameter, the
+//     structure its per-case estimates support: of constant, V only, f only, plane, V piecewise,
+//     f piecewise, plane + a hinge, the weighted least squares (weights 1/σ², σ at least 0.5 % of
+//     the range, a quarter of it where the case does not pin it down) with the lowest χ² + 2 p.
+//     On the paper's split two training cases share a V (5, 6) and two an f (1, 7), which is what
+//     tells a parameter of f alone (δ on trends-dev) from one of V alone (a1). Then polished by
+//     LM within that structure on all training cases at once, on the fitness's own cost: every
+//     training case's y_model − y_meas and, with a spread penalty λ, √(λ/25) (s_k(g) − mean s_k)
+//     over the penalty's 5 × 5 grid, an unbounded loop on the grid refused. Seeds: the structured
+//     trend polished, the same unpolished, and the constant network polished. (Every weight free
+//     fits the training cases better and the withheld ones far worse: docs/performance.md.)
+//  3. At the chromosome's resolution: each seed's output codes (c2 and W2 of the used hidden nodes)
+//     are polished by a coordinate search over the codes (steps ±1, ±4, ±16, three passes, only
+//     strictly lower costs of the problem's own fitness kept): the Lamarckian write-back of the
+//     polish into the bits.
+// Deterministic: a function of the fitness's configuration alone (the thread count changes only
+// how fast the Jacobians' columns are computed).
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "hgann/hgann_fitness.h"
+#include "model/network.h"
+#include "opt/evaluator.h"
+
+namespace pz::hgann {
+
+/// One training case fitted alone.
+struct CaseEstimate {
+  int number = 0;
+  double amplitude_v = 0, frequency_hz = 0;
+  std::array<double, model::kNetworkOutputs> s{};      ///< scaled parameters in [0, 1]
+  std::array<double, model::kNetworkOutputs> value{};  ///< in the parameters' units
+  std::array<double, model::kNetworkOutputs> sigma{};  ///< 1-σ of value (+inf: not identifiable)
+  double pi = 0;                                       ///< PI of the case with these [deg²]
+  bool ok = false;                                     ///< a start could be simulated
+};
+
+struct TrendSeedOptions {
+  int threads = 1;          ///< Jacobian columns in parallel, ≥ 1 (does not change the result)
+  int case_starts = 6;      ///< starts of each per-case fit, ≥ 1
+  int lm_iterations = 60;   ///< per fit, ≥ 1
+  bool code_polish = true;  ///< step 3
+};
+
+struct TrendSeeds {
+  std::vector<CaseEstimate> cases;   ///< the training cases, in case order
+  std::vector<opt::Genome> genomes;  ///< the seeds, best (lowest cost) first
+  std::vector<double> costs;         ///< each seed's fitness cost
+  std::vector<std::string> names;    ///< "trend (polished)", …, "constant (polished)"
+  int64_t simulations = 0;           ///< case simulations spent
+  double wall_time_s = 0;
+};
+
+/// Steps 1–3 of the file comment on the fitness's training cases.
+TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
+
+/// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration; `hold`
+/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf).
+std::vector<CaseEstimate> FitCases(
+    const HgannFitness& fitness, const std::vector<int>& case_indices,
+    const TrendSeedOptions& options, int64_t* simulations = nullptr,
+    const std::array<double, model::kNetworkOutputs>* hold = nullptr);
+
+/// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
+/// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0,
+/// 0.9)); outputs satlin(Σ_j B_j w2[j][k] + c2[k]) (missing entries 0). H = 2 … 4.
+model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<double>& c2,
+                            const std::vector<std::vector<double>>& w2,
+                            const model::InputNormalization& normalization,
+                            const model::ParameterRanges& ranges);
+
+}  // namespace pz::hgann
