@@ -41,15 +41,7 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
     for (Eigen::Index a = 0; a < m; ++a) s(idx[static_cast<size_t>(a)]) = sp(a);
   };
   for (int outer = 0; outer < 3 * n + 10; ++outer) {
-    const Eigen::VectorXd g = h - G * w;
-    Eigen::Index best = -1;
-    double gbest = tol;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (!passive[static_cast<size_t>(i)] && g(i) > gbest) {
-        gbest = g(i);
-        best = i;
-      }
-    }
+    const Eigen::Index best = EnteringVariable(h - G * w, passive, tol);
     if (best < 0) break;
     passive[static_cast<size_t>(best)] = 1;
     for (int inner = 0; inner < 3 * n + 10; ++inner) {

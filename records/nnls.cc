@@ -83,6 +83,19 @@ class PassiveFactor {
 
 }  // namespace
 
+Eigen::Index EnteringVariable(const Eigen::VectorXd& g, const std::vector<char>& passive,
+                              double tol) {
+  Eigen::Index best = -1;
+  double gbest = tol;
+  for (Eigen::Index i = 0; i < g.size(); ++i) {
+    if (!passive[static_cast<size_t>(i)] && g(i) > gbest) {
+      gbest = g(i);
+      best = i;
+    }
+  }
+  return best;
+}
+
 Eigen::VectorXd NonNegativeLeastSquaresFrom(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
                                             const Eigen::VectorXd& start) {
   const Eigen::Index n = h.size();
@@ -135,15 +148,7 @@ Eigen::VectorXd NonNegativeLeastSquaresFrom(const Eigen::MatrixXd& G, const Eige
   };
   if (F.size() > 0) inner();
   for (int outer = 0; outer < 3 * n + 10; ++outer) {
-    const Eigen::VectorXd g = h - G * w;
-    Eigen::Index best = -1;
-    double gbest = tol;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (!passive[static_cast<size_t>(i)] && g(i) > gbest) {
-        gbest = g(i);
-        best = i;
-      }
-    }
+    const Eigen::Index best = EnteringVariable(h - G * w, passive, tol);
     if (best < 0) break;
     passive[static_cast<size_t>(best)] = 1;
     F.Add(best);

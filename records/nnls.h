@@ -15,6 +15,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <vector>
 
 namespace pz::records {
 
@@ -22,6 +23,11 @@ namespace pz::records {
 /// Falls back to NonNegativeLeastSquares where the factor cannot be formed.
 Eigen::VectorXd NonNegativeLeastSquaresFrom(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
                                             const Eigen::VectorXd& start);
+
+/// Lawson–Hanson's entering variable: the one outside the passive set with the largest gradient
+/// g = h − G w above tol, or −1 (both active sets' step).
+Eigen::Index EnteringVariable(const Eigen::VectorXd& g, const std::vector<char>& passive,
+                              double tol);
 
 /// Unknowns from which the regularisation's validation and a linear family's solve use
 /// NonNegativeLeastSquaresFrom (fewer: NonNegativeLeastSquares, as before).
