@@ -587,6 +587,21 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "Prandtl-Ishlinskii / asymmetric-pi play operators (1 … 10000); preisach grid "
                   "levels (1 … 200), or auto: the levels chosen by cross-validation on the "
                   "training records")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            if (v == "auto") return "";
+            size_t used = 0;
+            int n = 0;
+            try {
+              n = std::stoi(v, &used);
+            } catch (const std::exception&) {
+              used = 0;
+            }
+            if (used == 0 || used != v.size() || n < 1 || n > 10000)
+              return "must be a count in 1 … 10000, or auto (preisach), not " + v;
+            return "";
+          },
+          "COUNT|auto"))
       ->default_str("12");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
