@@ -109,7 +109,7 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     regularisation_ = penalties_[validation_.penalty];
   }
   if (fam.linear() && fam.regressors() >= static_cast<size_t>(kIncrementalNnlsFrom)) {
-    const std::vector<double> w = SolveWeights(NeutralParams());  // from w = 0
+    const std::vector<double> w = SolveWeights(NeutralParams());  // from no start
     weights_start_ =
         Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size()));
   }

@@ -106,10 +106,20 @@ Eigen::VectorXd NonNegativeLeastSquaresFrom(const Eigen::MatrixXd& G, const Eige
   Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
   std::vector<char> passive(static_cast<size_t>(n), 0);
   std::vector<Eigen::Index> P;
-  if (start.size() == n) {
+  // No start: the unconstrained solution's positive part (one factorisation instead of a step per
+  // positive weight from w = 0).
+  Eigen::VectorXd ls;
+  if (start.size() != n) {
+    Eigen::MatrixXd G0 = G;
+    G0.diagonal().array() += 1e-13 * std::max(1.0, dmax);
+    ls = G0.ldlt().solve(h).cwiseMax(0.0);
+    if (!ls.allFinite()) ls = Eigen::VectorXd::Zero(n);
+  }
+  const Eigen::VectorXd& from = start.size() == n ? start : ls;
+  {
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (start(i) > 0 && std::isfinite(start(i))) {
-        w(i) = start(i);
+      if (from(i) > 0 && std::isfinite(from(i))) {
+        w(i) = from(i);
         passive[static_cast<size_t>(i)] = 1;
         P.push_back(i);
       }

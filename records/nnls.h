@@ -19,7 +19,8 @@
 
 namespace pz::records {
 
-/// min ‖A w − b‖², w ≥ 0, from G = AᵀA and h = Aᵀb, starting at max(start, 0) (empty: w = 0).
+/// min ‖A w − b‖², w ≥ 0, from G = AᵀA and h = Aᵀb, starting at max(start, 0) (empty: at the
+/// positive part of the unconstrained solution of G + εI).
 /// Falls back to NonNegativeLeastSquares where the factor cannot be formed.
 Eigen::VectorXd NonNegativeLeastSquaresFrom(const Eigen::MatrixXd& G, const Eigen::VectorXd& h,
                                             const Eigen::VectorXd& start);

@@ -181,12 +181,8 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
   // result whatever the threads).
   const bool incremental = G.rows() >= kIncrementalNnlsFrom;
   Eigen::VectorXd all;
-  if (incremental) {
-    Eigen::MatrixXd G0 = G;
-    G0.diagonal().array() += 1e-13 * std::max(1.0, G.diagonal().cwiseAbs().maxCoeff());
-    all = NonNegativeLeastSquaresFrom(G + (v.relatives[0] * scale) * R, h,
-                                      G0.ldlt().solve(h).cwiseMax(0.0));
-  }
+  if (incremental)  // from the unconstrained solution's positive part
+    all = NonNegativeLeastSquaresFrom(G + (v.relatives[0] * scale) * R, h, Eigen::VectorXd());
   auto block = [&](size_t b) {
     Eigen::VectorXd w = all;
     for (size_t c = 0; c < v.relatives.size(); ++c) {
