@@ -65,6 +65,7 @@ struct FitArgs {
   int threads = 2;
   int substeps = 2;
   int pi_operators = 12;
+  std::string pi_operators_text = "12";  ///< --pi-operators: a count, or auto (preisach)
   int lm_iterations = 60;
   std::string lm_differences = "auto";  ///< the polish's Jacobian: auto, forward-central, forward or central
   bool no_polish = false;
@@ -271,6 +272,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     if (!r.weights.empty()) os << " The solved weights are not in the table (they follow from the others).";
     os << "\n";
   }
+  if (r.resolution.used) os << "\nPreisach grid: " << r.resolution.Describe() << ".\n";
   if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   if (r.spectrum_regularisation.used)
     os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
@@ -331,7 +333,8 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   Struct root;
   auto& f = *root.mutable_fields();
   f["format_version"] = Num(kFitFormatVersion);
-  f["model"] = FitModelJson(set, r, a.substeps, a.pi_operators);
+  const int levels = r.resolution.used ? r.resolution.value() : a.pi_operators;  // auto: the chosen
+  f["model"] = FitModelJson(set, r, a.substeps, levels);
   f["description"] = Text(r.model->Describe());
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
@@ -357,6 +360,12 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
+  if (r.resolution.used) {
+    Struct g;
+    (*g.mutable_fields())["levels"] = Num(r.resolution.value());
+    (*g.mutable_fields())["description"] = Text(r.resolution.Describe());
+    f["resolution"] = Obj(g);
+  }
   if (r.regularisation.used) {
     Struct g;
     (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
@@ -443,7 +452,8 @@ int RunFit(const FitArgs& a) {
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
   o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
-  if (a.family == "preisach") {  // the grid's own bound, refused under the flag's name
+  // The grid's own bound, refused under the flag's name.
+  if (a.family == "preisach" && a.pi_operators != records::kAutoLevels) {
     const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
     if (!levels.ok()) throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
   }
@@ -498,6 +508,7 @@ int RunFit(const FitArgs& a) {
               << Fmt(e.max_at_s) << " s, NRMSE "
               << Fmt(e.nrmse_pct, 3) << " %\n";
   }
+  if (r.resolution.used) std::cout << "  preisach grid: " << r.resolution.Describe() << "\n";
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   if (r.spectrum_regularisation.used)
     std::cout << "  creep spectrum: roughness " << r.spectrum_regularisation.Describe() << "\n";
@@ -572,9 +583,25 @@ void RegisterFit(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
   cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
-  cmd->add_option("--pi-operators", a->pi_operators,
-                  "Prandtl-Ishlinskii / asymmetric-pi play operators (1 … 10000); preisach grid levels (1 … 200)")
-      ->check(CLI::Range(1, 10000))
+  cmd->add_option("--pi-operators", a->pi_operators_text,
+                  "Prandtl-Ishlinskii / asymmetric-pi play operators (1 … 10000); preisach grid "
+                  "levels (1 … 200), or auto: the levels chosen by cross-validation on the "
+                  "training records")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            if (v == "auto") return "";
+            size_t used = 0;
+            int n = 0;
+            try {
+              n = std::stoi(v, &used);
+            } catch (const std::exception&) {
+              used = 0;
+            }
+            if (used == 0 || used != v.size() || n < 1 || n > 10000)
+              return "must be a count in 1 … 10000, or auto (preisach), not " + v;
+            return "";
+          },
+          "COUNT|auto"))
       ->default_str("12");
   cmd->add_flag("--no-figures", a->no_figures, "no figures (the trace CSVs are still written)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines");
@@ -590,6 +617,28 @@ void RegisterFit(CLI::App& app, int& exit_code) {
     a->sizing.keep_algorithm = cmd->count("--algorithm") > 0;
     a->sizing.line_given =
         cmd->count("--line-grid") > 0 || cmd->count("--line-brackets") > 0 || cmd->count("--line-tolerance") > 0;
+    // --pi-operators: a count 1 … 10000, or auto for the preisach grid (its levels by validation).
+    const std::string& ops = a->pi_operators_text;
+    if (ops == "auto") {
+      if (a->family != "preisach")
+        throw InputError(
+            "--pi-operators auto: the levels chosen by validation are the preisach "
+            "family's; give a count for " +
+            a->family);
+      a->pi_operators = records::kAutoLevels;
+    } else {
+      size_t used = 0;
+      int n = 0;
+      try {
+        n = std::stoi(ops, &used);
+      } catch (const std::exception&) {
+        used = 0;
+      }
+      if (used == 0 || used != ops.size() || n < 1 || n > 10000)
+        throw InputError("--pi-operators " + ops +
+                         ": must be a count in 1 … 10000, or auto (preisach)");
+      a->pi_operators = n;
+    }
     exit_code = RunFit(*a);
   });
 }

@@ -362,6 +362,11 @@ class BimorphFinFamily final : public Family {
 
 }  // namespace
 
+bool Family::AddNormalEquations(const io::Record&, size_t, std::span<const double>, int,
+                                NormalEquationsBuilder&) const {
+  return false;
+}
+
 void Family::Regressors(std::span<const double>, std::span<double>) const {
   throw InputError(name() + " is not linear in its parameters");
 }

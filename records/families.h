@@ -43,6 +43,11 @@
 
 namespace pz::records {
 
+class NormalEquationsBuilder;  // records/regularisation.h
+
+/// FamilyOptions::pi_operators for a Preisach grid whose levels the validation chooses.
+inline constexpr int kAutoLevels = 0;
+
 /// Scales measured on the records a family is made for (model/effect_library.h: the effects' ranges
 /// are scaled by it too).
 using DataScale = model::DataScale;
@@ -68,7 +73,9 @@ struct OscillatorOptions {
 
 struct FamilyOptions {
   int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
-  int pi_operators = 12;     ///< Prandtl–Ishlinskii / asymmetric-pi plays; preisach grid levels
+  /// Prandtl–Ishlinskii / asymmetric-pi plays; preisach grid levels, or kAutoLevels: chosen by
+  /// validation on the training records (records/fit.h FitRecords, ChoosePreisachLevels).
+  int pi_operators = 12;
   /// The memory at rest at the first sample's drive u_0 (model/prandtl_ishlinskii.h InitialState)
   /// of the families that take it (TakesInitialState): the plays of prandtl-ishlinskii,
   /// asymmetric-pi and preisach at u_0, u_0 + r or u_0 − r; the Bouc–Wen h of stack-bouc-wen and the
@@ -122,6 +129,11 @@ class Family {
   virtual bool linear() const { return false; }
   virtual size_t regressors() const { return 0; }
   virtual void Regressors(std::span<const double> u, std::span<double> out) const;
+  /// A linear family whose rows have structure (preisach: records/preisach_normal.h): adds record
+  /// r's scored rows — AddRecordRows's of Regressors(u), u the drive of the rows from `from` — to
+  /// the builder without forming them. False (the default): the caller forms them.
+  virtual bool AddNormalEquations(const io::Record& r, size_t from, std::span<const double> u,
+                                  int pol, NormalEquationsBuilder& builder) const;
   /// Names of the solved weights (linear families).
   virtual std::vector<std::string> weight_names() const { return {}; }
   /// A penalty λ wᵀRw on a linear family's weights: its name (reports) and the Gram matrix R

@@ -8,10 +8,12 @@
 #include <tuple>
 
 #include "io/csv.h"
-#include "records/excitation.h"
-#include "records/spectrum_solve.h"
 #include "model/format.h"
 #include "opt/thread_pool_evaluator.h"
+#include "records/excitation.h"
+#include "records/nnls.h"
+#include "records/preisach_family.h"
+#include "records/spectrum_solve.h"
 
 namespace pz::records {
 
@@ -39,15 +41,7 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
     for (Eigen::Index a = 0; a < m; ++a) s(idx[static_cast<size_t>(a)]) = sp(a);
   };
   for (int outer = 0; outer < 3 * n + 10; ++outer) {
-    const Eigen::VectorXd g = h - G * w;
-    Eigen::Index best = -1;
-    double gbest = tol;
-    for (Eigen::Index i = 0; i < n; ++i) {
-      if (!passive[static_cast<size_t>(i)] && g(i) > gbest) {
-        gbest = g(i);
-        best = i;
-      }
-    }
+    const Eigen::Index best = EnteringVariable(h - G * w, passive, tol);
     if (best < 0) break;
     passive[static_cast<size_t>(best)] = 1;
     for (int inner = 0; inner < 3 * n + 10; ++inner) {
@@ -76,7 +70,8 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
   return w;
 }
 
-RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Record*> records, double penalty)
+RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Record*> records,
+                             double penalty, std::span<const double> validate_at)
     : model_(model), records_(std::move(records)), penalty_(penalty) {
   if (records_.empty()) throw InputError("no training records to fit on");
   if (!(std::isfinite(penalty_) && penalty_ > 0))
@@ -105,8 +100,18 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
           Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(pen.gram.data(), m, m));
       penalty_names_.push_back(pen.name);
     }
-    validation_ = ValidateAt(NeutralParams());
+    if (!validate_at.empty() && validate_at.size() != model_.params().size())
+      throw InputError("RecordFitness: " + std::to_string(validate_at.size()) +
+                       " parameters to validate at, " + std::to_string(model_.params().size()) +
+                       " expected");
+    validation_ =
+        ValidateAt(validate_at.empty() ? std::span<const double>(NeutralParams()) : validate_at);
     regularisation_ = penalties_[validation_.penalty];
+  }
+  if (fam.linear() && fam.regressors() >= static_cast<size_t>(kIncrementalNnlsFrom)) {
+    const std::vector<double> w = SolveWeights(NeutralParams());  // from no start
+    weights_start_ =
+        Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size()));
   }
   std::tie(spectrum_first_, spectrum_count_) = model_.EffectParams(EffectKind::Named("creep-spectrum"));
   if (spectrum_count_ > 0) {
@@ -316,6 +321,9 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     const io::Record* r = records_[ri];
     const size_t from = SimulatedFrom(*r, r->end_scored);
     model_.EffectiveDrive(*r, p.subspan(nf), from, r->end_scored, ue);
+    if (keep) (*regs)[ri].clear();  // none kept unless formed below
+    // Rows with structure (the Preisach grid): their normal equations without the rows.
+    if (!linear_output && fam.AddNormalEquations(*r, from, ue, pol, builder)) continue;
     std::vector<double>& reg = keep ? (*regs)[ri] : scratch;
     reg.resize(ue.size() * m);
     fam.Regressors(ue, reg);
@@ -364,7 +372,11 @@ std::vector<double> RecordFitness::SolveWeights(std::span<const double> p,
   BlockedNormalEquations eq{{Eigen::MatrixXd()}, {Eigen::VectorXd()}, {0.0}, {0}};
   Accumulate(p, eq, regs);
   if (validation_.used) eq.G[0] += validation_.lambda * regularisation_;
-  const Eigen::VectorXd w = NonNegativeLeastSquares(eq.G[0], eq.h[0]);
+  // Many unknowns: from the weights at the neutral parameters (records/nnls.h; a fixed start, so
+  // the result does not depend on the order of the evaluations).
+  const Eigen::VectorXd w = eq.G[0].rows() >= kIncrementalNnlsFrom
+                                ? NonNegativeLeastSquaresFrom(eq.G[0], eq.h[0], weights_start_)
+                                : NonNegativeLeastSquares(eq.G[0], eq.h[0]);
   return std::vector<double>(w.data(), w.data() + w.size());
 }
 
@@ -413,8 +425,11 @@ RecordFitness::Output RecordFitness::Run(std::span<const double> params, bool ke
     std::vector<double> own;
     std::vector<double>& y = keep_outputs ? own : buffer;
     y.resize(r->end_scored);
-    const double rest = !kept ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
-                              : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y);
+    // (A family that sums its rows itself kept none: simulated.)
+    const double rest =
+        !kept || regs[i].empty()
+            ? model_.Simulate(*r, params, out.weights, r->end_scored, y, prepared_[i].get())
+            : model_.LinearOutput(*r, params, out.weights, r->end_scored, regs[i], y);
     out.offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest, y, sse));
     if (keep_outputs) out.yhat.push_back(std::move(own));
   }
@@ -715,6 +730,15 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       fo.lm.central_to_finish = so.algorithm != opt::SearchAlgorithm::kLine;
     }
     res.lm_differences = fo.lm.central ? "central" : fo.lm.central_to_finish ? "forward-central" : "forward";
+    if (!options.polish_from.empty()) {  // no search: the polish from these physical values
+      if (options.polish_from.size() != params.size())
+        throw InputError(FieldError("polish_from", options.polish_from.size(),
+                                    "must have one value per parameter"));
+      std::vector<double> sp;
+      for (size_t i : searched) sp.push_back(options.polish_from[i]);
+      fo.search = false;
+      if (searched_map) fo.starts = {searched_map->ToUnit(sp)};
+    }
     for (const std::vector<double>& u : options.extra_starts) {  // unit coordinates of every parameter
       if (u.size() != params.size()) throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
       std::vector<double> su;
@@ -808,8 +832,67 @@ std::string FitResult::SpectrumIdentification() const {
          "slow ones a record several times longer than their time)";
 }
 
+namespace {
+
+/// FitRecords for preisach at kAutoLevels: the effects searched on the coarsest grid, the levels
+/// chosen at them (FitPreisachLevels), the chosen grid's weights solved there.
+FitResult FitPreisachAuto(const io::RecordSet& set, const DataScale& scale,
+                          const FitOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<const io::Record*> train = set.WithRole(model::CaseRole::kTrain);
+  const std::vector<int>& levels = PreisachLevelCandidates();
+  FitResult base;
+  if (!options.effects.empty()) {
+    FitOptions o = options;
+    o.family_options.pi_operators = levels.front();
+    base = FitRecords(set, o);
+  }
+  const PreisachLevelFits fits =
+      FitPreisachLevels(train, scale, options.family_options, options.effects, base.params, levels);
+  const size_t c = fits.choice.chosen;
+  FitResult r;
+  if (!options.effects.empty() && levels[c] == levels.front()) {
+    r = std::move(base);
+  } else {
+    // The chosen grid: its weights at the coarse fit's effects (no search, no polish), every record
+    // evaluated with the whole model.
+    FamilyOptions fo = options.family_options;
+    fo.pi_operators = levels[c];
+    r = std::move(base);
+    r.model = std::make_shared<RecordModel>(MakeFamily(options.family, scale, fo), options.effects,
+                                            scale);
+    if (r.params.empty()) r.params.assign(r.model->params().size(), 0.0);
+    r.weights = fits.fitness[c]->Run(fits.params, false).weights;
+    r.regularisation = fits.fitness[c]->validation();
+    r.metrics.clear();
+    r.yhat.clear();
+    double sse = 0;
+    size_t n = 0;
+    for (const io::Record& rec : set.records) {
+      std::vector<double> y;
+      r.metrics.push_back(Evaluate(*r.model, r.params, r.weights, rec, &y));
+      r.yhat.push_back(std::move(y));
+      if (rec.role == model::CaseRole::kTrain) {
+        sse += r.metrics.back().rmse * r.metrics.back().rmse *
+               static_cast<double>(r.metrics.back().samples);
+        n += r.metrics.back().samples;
+      }
+    }
+    r.train_sse = sse;
+    r.train_mse = n > 0 ? sse / static_cast<double>(n) : 0;
+    r.uncertainty = {};  // the coarse grid's: not this model's
+  }
+  r.resolution = fits.choice;
+  r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace
+
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options) {
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  if (options.family == "preisach" && options.family_options.pi_operators == kAutoLevels)
+    return FitPreisachAuto(set, scale, options);
   std::shared_ptr<const Family> fam = MakeFamily(options.family, scale, options.family_options);
   auto model = std::make_shared<RecordModel>(fam, options.effects, scale);
   return FitModel(set, model, options);

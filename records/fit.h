@@ -50,7 +50,7 @@ class RecordFitness final : public opt::FitnessFunction {
   /// (RecordModel::Prepare). A diverging parameter set costs `penalty`. Throws InputError on no
   /// records or a penalty that is not finite and > 0.
   RecordFitness(const RecordModel& model, std::vector<const io::Record*> records,
-                double penalty = opt::kDefaultErrorCost);
+                double penalty = opt::kDefaultErrorCost, std::span<const double> validate_at = {});
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
   /// A family that runs parameter sets side by side (Family::lanes; with any effects, each genome
   /// its own drive and output effects): that many genomes at once, each with Evaluate's result bit
@@ -84,7 +84,8 @@ class RecordFitness final : public opt::FitnessFunction {
   const RecordModel& model() const { return model_; }
   const std::vector<const io::Record*>& records() const { return records_; }
   /// A regularised linear family: the penalty kept and its strength chosen by validation at
-  /// construction (the effects at their neutral values), or by Revalidate.
+  /// construction (the effects at `validate_at`, every parameter; empty: their neutral values), or
+  /// by Revalidate.
   const WeightValidation& validation() const { return validation_; }
   /// Re-chooses the penalty and its strength by the same validation with the effects at `params` (a
   /// fit's solution: effects far from neutral — a creep, a lag — make the neutral model's misfit
@@ -149,6 +150,9 @@ class RecordFitness final : public opt::FitnessFunction {
   std::vector<Eigen::MatrixXd> penalties_;  ///< the family's candidate penalties R_k (empty: none)
   std::vector<std::string> penalty_names_;
   Eigen::MatrixXd regularisation_;  ///< the one the validation keeps (empty: none)
+  /// Many weights (records/nnls.h kIncrementalNnlsFrom): where every solve of them starts, the
+  /// weights at the neutral parameters (empty: from 0).
+  Eigen::VectorXd weights_start_;
   WeightValidation validation_;
   size_t spectrum_first_ = 0, spectrum_count_ = 0;  ///< the creep spectrum's weights in params (count 0: none)
   Eigen::MatrixXd spectrum_roughness_;               ///< D
@@ -245,6 +249,9 @@ struct FitOptions {
   /// Starting points for the polish besides the search's best (unit coordinates, e.g. a base fit
   /// with an effect at small magnitudes); the best polished one is kept.
   std::vector<std::vector<double>> extra_starts;
+  /// Non-empty (physical values of every parameter): no global search; the polish starts here (a
+  /// Preisach grid at the levels chosen by validation, from the coarsest grid's fit).
+  std::vector<double> polish_from;
   /// creep-spectrum: its weights' roughness penalty chosen by validation at the solution (false:
   /// the weights unpenalised, as the search has them; for comparisons).
   bool spectrum_roughness = true;
@@ -259,6 +266,9 @@ struct FitResult {
   std::vector<double> params;    ///< physical values, model().params() order
   std::vector<double> weights;   ///< linear family: the solved weights
   WeightValidation regularisation;  ///< a regularised linear family: the strength and its validation
+  /// preisach with FamilyOptions::pi_operators = kAutoLevels: the levels chosen by validation
+  /// (records/preisach_family.h ChoosePreisachLevels); unused otherwise.
+  ResolutionChoice resolution;
   WeightValidation spectrum_regularisation;  ///< creep-spectrum: its roughness penalty's strength
   /// creep-spectrum: each weight's standard error from the training records alone
   /// (RecordFitness::spectrum_sigma; empty without the penalty's validation).
@@ -298,7 +308,11 @@ struct FitResult {
 };
 
 /// Fits on the set's training records and evaluates on every record. Throws InputError on no
-/// training records, an unknown family / effect or invalid options.
+/// training records, an unknown family / effect or invalid options. preisach with
+/// FamilyOptions::pi_operators = kAutoLevels: the grid's levels chosen by validation on the
+/// training records (ChoosePreisachLevels over PreisachLevelCandidates; with effects, those are
+/// searched on the coarsest grid first, the levels chosen at them, and the chosen grid polished
+/// from there).
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options);
 /// The same for a given model (its scale already measured).
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options);

@@ -4,8 +4,10 @@
 #include <cmath>
 
 #include "io/csv.h"
-#include "model/preisach.h"
 #include "model/prandtl_ishlinskii.h"
+#include "model/preisach.h"
+#include "records/fit.h"
+#include "records/preisach_normal.h"
 
 namespace pz::records {
 namespace {
@@ -61,6 +63,10 @@ class PreisachFamily final : public Family {
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
     model::PreisachRegressors(grid_, u, out, Start(u));
+  }
+  bool AddNormalEquations(const io::Record& r, size_t from, std::span<const double> u, int pol,
+                          NormalEquationsBuilder& builder) const override {
+    return AddPreisachRecordRows(grid_, Start(u), r, from, u, pol, builder);
   }
   model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
@@ -211,6 +217,140 @@ class AsymmetricPiFamily final : public Family {
 };
 
 }  // namespace
+
+const std::vector<int>& PreisachLevelCandidates() {
+  static const std::vector<int> levels = {12, 20, 28, 40};
+  return levels;
+}
+
+namespace {
+
+/// The training records with the creep spectrum at `params` undone on their responses: the
+/// spectrum is a linear filter of the output (model/effect_library.h creep-spectrum, on the change
+/// since the first simulated sample), so the measured response through its inverse is the
+/// spectrum-free model's output plus the filtered noise and offset — and the family's rows keep
+/// their structure (records/preisach_normal.h) where the filtered rows of every evaluation would be
+/// dense. Copies; their other effects and parameters in `effects`, `params`.
+struct LevelsProblem {
+  std::vector<io::Record> records;
+  std::vector<EffectKind> effects;
+  std::vector<double> params;
+};
+
+LevelsProblem Undo(const std::vector<const io::Record*>& train, const DataScale& scale,
+                   const std::vector<EffectKind>& effects, std::span<const double> params) {
+  LevelsProblem lp;
+  for (const io::Record* r : train) lp.records.push_back(*r);
+  const EffectKind spectrum = EffectKind::Named("creep-spectrum");
+  bool undo =
+      !params.empty() && std::find(effects.begin(), effects.end(), spectrum) != effects.end();
+  for (const EffectKind& e : effects)  // another output effect: the filter is not the last stage
+    if (e != spectrum && e->stage() != model::EffectStage::kDrive) undo = false;
+  // The parameters by effect, in each model's own order (RecordModel::EffectParams).
+  FamilyOptions coarse;
+  coarse.pi_operators = 2;
+  const RecordModel full(MakePreisachFamily(scale, coarse), effects, scale);
+  if (!params.empty() && params.size() != full.params().size())
+    throw InputError("preisach levels: " + std::to_string(params.size()) + " effect parameters, " +
+                     std::to_string(full.params().size()) + " expected");
+  for (const EffectKind& e : effects)
+    if (!(undo && e == spectrum)) lp.effects.push_back(e);
+  if (params.empty()) return lp;
+  const RecordModel rest(MakePreisachFamily(scale, coarse), lp.effects, scale);
+  lp.params.assign(rest.params().size(), 0.0);
+  for (const EffectKind& e : lp.effects) {
+    const auto [from, count] = full.EffectParams(e);
+    const auto [to, n] = rest.EffectParams(e);
+    std::copy_n(params.begin() + static_cast<std::ptrdiff_t>(from), count,
+                lp.params.begin() + static_cast<std::ptrdiff_t>(to));
+    (void)n;
+  }
+  std::vector<double> w;
+  if (undo) {
+    const auto [from, count] = full.EffectParams(spectrum);
+    w.assign(params.begin() + static_cast<std::ptrdiff_t>(from),
+             params.begin() + static_cast<std::ptrdiff_t>(from + count));
+  }
+  if (!undo) return lp;
+  const std::vector<double> taus = spectrum->KernelData(scale);
+  for (io::Record& r : lp.records) {
+    // e_k − y0 = d_k (1 − Σ w_i (1 − c_i)) + Σ w_i x̃_i, x̃_i = a_i x_i + (1 − a_i − c_i) d_{k−1}:
+    // d_k.
+    std::vector<double> a, c, x(taus.size(), 0.0);
+    double gain = 1;
+    for (size_t i = 0; i < taus.size(); ++i) {
+      const model::LowpassStep st = model::LowpassConsts(taus[i], r.dt);
+      a.push_back(st.a);
+      c.push_back(st.c);
+      gain -= w[i] * (1 - st.c);
+    }
+    const size_t from = SimulatedFrom(r, r.end_scored);
+    const double y0 = r.y[from];
+    double prev = 0;
+    for (size_t k = from + 1; k < r.end_scored; ++k) {
+      double acc = 0;
+      for (size_t i = 0; i < taus.size(); ++i) {
+        x[i] = a[i] * x[i] + (1 - a[i]) * prev - prev * c[i];  // without this sample's c_i d_k
+        acc += w[i] * x[i];
+      }
+      const double d = (r.y[k] - y0 - acc) / gain;
+      for (size_t i = 0; i < taus.size(); ++i) x[i] += c[i] * d;
+      prev = d;
+      r.y[k] = y0 + d;
+    }
+  }
+  return lp;
+}
+
+}  // namespace
+
+PreisachLevelFits FitPreisachLevels(const std::vector<const io::Record*>& train,
+                                    const DataScale& scale, const FamilyOptions& options,
+                                    const std::vector<EffectKind>& effects,
+                                    std::span<const double> params,
+                                    const std::vector<int>& candidates) {
+  PreisachLevelFits out;
+  LevelsProblem lp = Undo(train, scale, effects, params);
+  out.records = std::make_shared<std::vector<io::Record>>(std::move(lp.records));
+  std::vector<const io::Record*> recs;
+  for (const io::Record& r : *out.records) recs.push_back(&r);
+  out.params = lp.params;
+  std::vector<WeightValidation> v;
+  std::vector<std::string> refused;
+  for (int levels : candidates) {
+    FamilyOptions o = options;
+    o.pi_operators = levels;
+    auto model = std::make_shared<RecordModel>(MakePreisachFamily(scale, o), lp.effects, scale);
+    try {
+      auto fitness =
+          std::make_shared<RecordFitness>(*model, recs, opt::kDefaultErrorCost, lp.params);
+      v.push_back(fitness->validation());
+      refused.emplace_back();
+      out.fitness.push_back(std::move(fitness));
+    } catch (const InputError& e) {
+      v.emplace_back();
+      refused.emplace_back(e.what());
+      out.fitness.push_back(nullptr);
+    }
+    out.models.push_back(std::move(model));
+  }
+  if (std::all_of(refused.begin(), refused.end(), [](const std::string& r) { return !r.empty(); }))
+    throw InputError("preisach: no grid of the candidate levels fits the training records: " +
+                     refused.front());
+  out.choice = ChooseResolution(candidates, v, refused);
+  for (std::string& r : out.choice.refused)  // the reason, short
+    if (r.find("samples between") != std::string::npos)
+      r = "a level with fewer than 4 training samples";
+  return out;
+}
+
+ResolutionChoice ChoosePreisachLevels(const std::vector<const io::Record*>& train,
+                                      const DataScale& scale, const FamilyOptions& options,
+                                      const std::vector<EffectKind>& effects,
+                                      std::span<const double> params,
+                                      const std::vector<int>& candidates) {
+  return FitPreisachLevels(train, scale, options, effects, params, candidates).choice;
+}
 
 std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyOptions& options) {
   return std::make_unique<PreisachFamily>(scale, options);

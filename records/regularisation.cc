@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "model/format.h"
 #include "model/status.h"
 #include "records/fit.h"
+#include "records/nnls.h"
 
 namespace pz::records {
 namespace {
@@ -113,6 +116,27 @@ void NormalEquationsBuilder::Flush() {
   filled_ = 0;
 }
 
+size_t NormalEquationsBuilder::BlockAhead(size_t ahead) const {
+  const size_t blocks = eq_.G.size();
+  return blocks == 1 ? 0 : (index_ + ahead) * blocks / samples_;
+}
+
+void NormalEquationsBuilder::AddSums(size_t block, const Eigen::MatrixXd& G,
+                                     const Eigen::VectorXd& h, double bb, size_t rows) {
+  if (rows == 0) return;
+  if (block >= eq_.G.size() || BlockAhead(0) != block || BlockAhead(rows - 1) != block ||
+      G.rows() != A_.rows() || h.size() != A_.rows())
+    throw std::logic_error(
+        "NormalEquationsBuilder::AddSums: rows outside their block or sizes mismatch");
+  Flush();  // the rows so far first (their block's sums in row order)
+  eq_.G[block].triangularView<Eigen::Lower>() += G;
+  eq_.h[block] += h;
+  eq_.bb[block] += bb;
+  eq_.samples[block] += rows;
+  index_ += rows;
+  block_ = block;
+}
+
 void NormalEquationsBuilder::Finish() {
   Flush();
   for (Eigen::MatrixXd& G : eq_.G) G.triangularView<Eigen::StrictlyUpper>() = G.transpose();
@@ -147,15 +171,40 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
   }
   v.relatives = {0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 1e-1, 1, 10, 100};
   std::vector<std::vector<double>> err(v.relatives.size(), std::vector<double>(K));
+  // Many unknowns (kIncrementalNnlsFrom): each block's solves in order of strength, each from the
+  // previous one's weights (records/nnls.h; the same optimum to rounding).
+  // Many unknowns (kIncrementalNnlsFrom): records/nnls.h, each solve from a neighbouring one's
+  // weights (the same optimum to rounding; a few steps instead of one per positive weight from
+  // w = 0): every block's first strength from all the blocks' weights there (four fifths of the
+  // same rows; those from the unconstrained solution's positive part), its next strengths from its
+  // previous one; the blocks on kValidationThreads threads (each block's solves its own: the same
+  // result whatever the threads).
+  const bool incremental = G.rows() >= kIncrementalNnlsFrom;
+  Eigen::VectorXd all;
+  if (incremental)  // from the unconstrained solution's positive part
+    all = NonNegativeLeastSquaresFrom(G + (v.relatives[0] * scale) * R, h, Eigen::VectorXd());
+  auto block = [&](size_t b) {
+    Eigen::VectorXd w = all;
+    for (size_t c = 0; c < v.relatives.size(); ++c) {
+      const Eigen::MatrixXd Gm = G - eq.G[b] + (v.relatives[c] * scale) * R;
+      w = incremental ? NonNegativeLeastSquaresFrom(Gm, h - eq.h[b], w)
+                      : NonNegativeLeastSquares(Gm, h - eq.h[b]);
+      err[c][b] = std::max(0.0, w.dot(eq.G[b] * w) - 2 * eq.h[b].dot(w) + eq.bb[b]);
+    }
+  };
+  if (incremental) {
+    std::vector<std::thread> pool;
+    for (size_t t = 0; t < static_cast<size_t>(kValidationThreads); ++t)
+      pool.emplace_back([&, t] {
+        for (size_t b = t; b < K; b += static_cast<size_t>(kValidationThreads)) block(b);
+      });
+    for (std::thread& th : pool) th.join();
+  } else {
+    for (size_t b = 0; b < K; ++b) block(b);
+  }
   for (size_t c = 0; c < v.relatives.size(); ++c) {
     double sse = 0;
-    for (size_t b = 0; b < K; ++b) {
-      const Eigen::MatrixXd Gm = G - eq.G[b] + (v.relatives[c] * scale) * R;
-      const Eigen::VectorXd w = NonNegativeLeastSquares(Gm, h - eq.h[b]);
-      const double e = std::max(0.0, w.dot(eq.G[b] * w) - 2 * eq.h[b].dot(w) + eq.bb[b]);
-      err[c][b] = e;
-      sse += e;
-    }
+    for (size_t b = 0; b < K; ++b) sse += err[c][b];
     v.cv_rmse.push_back(std::sqrt(sse / static_cast<double>(total)));
   }
   size_t best = 0;
@@ -177,7 +226,70 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
   }
   v.relative = v.relatives[chosen];
   v.lambda = v.relative * scale;
+  v.block_sse = err[chosen];
   return v;
+}
+
+std::string ResolutionChoice::Describe() const {
+  if (!used) return "given";
+  std::string s =
+      std::to_string(value()) + " " + what + " by " + std::to_string(kValidationBlocks) +
+      "-fold blocked cross-validation (the fewest within one standard error of the best, " +
+      std::to_string(candidates[best]) + "); CV RMSE:";
+  for (size_t i = 0; i < candidates.size(); ++i) {
+    s += (i ? ", " : " ") + std::to_string(candidates[i]) + " → " +
+         (refused[i].empty() ? Short(cv_rmse[i]) : "not tried (" + refused[i] + ")");
+  }
+  return s;
+}
+
+ResolutionChoice ChooseResolution(const std::vector<int>& candidates,
+                                  const std::vector<WeightValidation>& v,
+                                  const std::vector<std::string>& refused) {
+  if (candidates.empty() || v.size() != candidates.size() || refused.size() != candidates.size())
+    throw std::logic_error("ChooseResolution: sizes mismatch");
+  ResolutionChoice c;
+  c.used = true;
+  c.candidates = candidates;
+  c.refused = refused;
+  std::vector<double> sses;  // per candidate (refused: +inf)
+  bool any = false;
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (!refused[i].empty()) {
+      c.cv_rmse.push_back(std::numeric_limits<double>::infinity());
+      sses.push_back(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    if (v[i].block_sse.size() != static_cast<size_t>(kValidationBlocks) ||
+        v[i].folds != kValidationBlocks)
+      throw std::logic_error("ChooseResolution: a candidate without its blocks' errors");
+    double sse = 0;
+    for (double e : v[i].block_sse) sse += e;
+    sses.push_back(sse);
+    const auto at = std::find(v[i].relatives.begin(), v[i].relatives.end(), v[i].relative) -
+                    v[i].relatives.begin();
+    c.cv_rmse.push_back(v[i].cv_rmse.at(static_cast<size_t>(at)));  // the chosen strength's
+    if (!any || sse < sses[c.best]) c.best = i;
+    any = true;
+  }
+  if (!any) throw std::logic_error("ChooseResolution: every candidate refused");
+  const size_t K = static_cast<size_t>(kValidationBlocks);
+  c.chosen = c.best;
+  for (size_t i = 0; i < c.best; ++i) {
+    if (!refused[i].empty()) continue;
+    double mean = 0, sq = 0;
+    for (size_t b = 0; b < K; ++b) mean += v[i].block_sse[b] - v[c.best].block_sse[b];
+    mean /= static_cast<double>(K);
+    for (size_t b = 0; b < K; ++b) {
+      const double d = v[i].block_sse[b] - v[c.best].block_sse[b] - mean;
+      sq += d * d;
+    }
+    if (mean <= std::sqrt(sq / static_cast<double>(K - 1) / static_cast<double>(K))) {
+      c.chosen = i;
+      break;
+    }
+  }
+  return c;
 }
 
 }  // namespace pz::records

@@ -42,6 +42,13 @@ class NormalEquationsBuilder {
   /// Adds the row filled through Row() with its target.
   void Add(double target);
   void Finish();
+  /// Rows a caller sums itself (a structured family, records/preisach_normal.h): the block of the
+  /// row `ahead` rows after the next one.
+  size_t BlockAhead(size_t ahead) const;
+  /// Adds the sums of the next `rows` rows, every one of block `block` (BlockAhead): their AᵀA
+  /// (its lower triangle is used), Aᵀb and bᵀb. Throws std::logic_error when they are not.
+  void AddSums(size_t block, const Eigen::MatrixXd& G, const Eigen::VectorXd& h, double bb,
+               size_t rows);
 
  private:
   void Flush();
@@ -67,11 +74,39 @@ struct WeightValidation {
   double compared_at = 0;
   std::vector<std::string> candidates;
   std::vector<double> candidates_cv_rmse;
+  /// The chosen strength's squared error on each left-out block (in block order): what a choice
+  /// among resolutions compares (ChooseResolution).
+  std::vector<double> block_sse;
   std::string Describe() const;   ///< "ρ = 1e-3 (λ = …) by 5-fold blocked cross-validation: …"
 };
 
+/// A resolution (a Preisach grid's levels) chosen by the same blocked cross-validation (issue 37):
+/// each candidate's CV error at its own validated penalty and strength, and the fewest levels whose
+/// extra error over the best one's is not larger than its standard error across the blocks (the
+/// paired one-standard-error rule of ChooseStrength).
+struct ResolutionChoice {
+  bool used = false;
+  std::string what = "levels";       ///< what the candidates count
+  std::vector<int> candidates;       ///< ascending
+  std::vector<double> cv_rmse;       ///< [response unit]; +inf where the records cannot support it
+  std::vector<std::string> refused;  ///< "" or why a candidate was not tried (the training records)
+  size_t best = 0, chosen = 0;
+  int value() const { return candidates.at(chosen); }
+  /// "28 levels by 5-fold blocked cross-validation (one standard error from the best, 40): CV RMSE
+  /// 12 → …".
+  std::string Describe() const;
+};
+
+/// The rule above over candidates in ascending order (validations[i].block_sse; an empty one: a
+/// refused candidate). Throws std::logic_error when every candidate is refused.
+ResolutionChoice ChooseResolution(const std::vector<int>& candidates,
+                                  const std::vector<WeightValidation>& validations,
+                                  const std::vector<std::string>& refused);
+
 /// The number of time blocks.
 inline constexpr int kValidationBlocks = 5;
+/// Threads of the blocks' solves where the unknowns are many (records/nnls.h kIncrementalNnlsFrom).
+inline constexpr int kValidationThreads = 2;
 
 /// Chooses λ for the regularisation R (m×m) by the rule above. Throws InputError when a block is
 /// empty (fewer training samples than blocks).
