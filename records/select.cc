@@ -180,6 +180,31 @@ FitOptions ScreenOptions(const SelectOptions& o, size_t searched) {
   return s;
 }
 
+/// The finalists' fit options: `fit`'s search with its repetitions and polish capped (one searched
+/// parameter under the sized budget: its line search, as it is).
+FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
+  FitOptions f = o.fit;
+  const bool line = f.sizing.enabled && searched == 1;
+  if (!line && f.sizing.enabled) {  // the sized budget, its swarm and iterations capped too
+    const SearchBudget b = SizedSearchBudget(searched);
+    if (!f.sizing.keep_particles) f.search.pso.particles = std::min(b.particles, o.final_particles);
+    if (!f.sizing.keep_iterations) f.search.pso.iterations = std::min(b.iterations, o.final_iterations);
+    if (!f.sizing.keep_stall) f.search.pso.stall_iterations = std::min(b.stall, o.final_iterations / 2);
+    f.search.pso.converged_spread = b.converged_spread;
+    f.sizing.keep_particles = f.sizing.keep_iterations = f.sizing.keep_stall = true;
+  }
+  if (!line) {
+    if (f.sizing.enabled && !f.sizing.keep_repetitions) f.search.repetitions = SizedSearchBudget(searched).repetitions;
+    f.search.repetitions = std::min(f.search.repetitions, o.final_repetitions);
+    f.sizing.keep_repetitions = true;
+  }
+  f.lm.max_iterations = std::min(f.lm.max_iterations, o.final_lm_iterations);
+  f.polish_repetitions = false;
+  f.uncertainty = false;
+  f.progress = nullptr;
+  return f;
+}
+
 /// Cross-validates candidates: every (candidate, fold) fit as one task, side by side on
 /// `threads` (each fit on one thread) or one after another with a service. options_of(i): the fit
 /// options of candidate i.
@@ -397,7 +422,10 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
       bool ok = true;
       for (EffectKind e : effects) ok = ok && !Takes(excluded, EffectName(e)) && !Takes(unsupported, EffectName(e));
       if (!ok) continue;
-      const std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
+      // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
+      // only (each evaluation re-makes the regressors): the finalists get the others.
+      std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
+      if (LinearFamily(f) && !effects.empty() && !levels.empty()) levels = {*std::min_element(levels.begin(), levels.end())};
       for (int l : levels) out.push_back({f, effects, l, state});
     }
   }
@@ -492,22 +520,29 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
   std::vector<Candidate> finals;
   std::vector<double> final_screen;
-  for (size_t i : picked) {
+  auto add = [&](Candidate c, double screened, bool every_state) {
+    for (const Candidate& f : finals)
+      if (SameModel(f, c)) return;
     for (model::InitialState s : states) {
-      if (s != first && !TakesInitialState(grid[i].family)) continue;
-      Candidate c = grid[i];
+      if (s != first && (!every_state || !TakesInitialState(c.family))) continue;
       c.initial_state = s;
       finals.push_back(c);
-      final_screen.push_back(screen[i].cv_rmse);
+      final_screen.push_back(screened);
     }
-  }
+  };
+  for (size_t i : picked) add(grid[i], screen[i].cv_rmse, i == picked.front());
+  // The screening's best: with the other initial state (above), and, a linear family with effects
+  // screened at its coarsest resolution, at the others.
+  const Candidate& top = grid[picked.front()];
+  if (LinearFamily(top.family) && !top.effects.empty())
+    for (int l : options.levels) {
+      Candidate c = top;
+      c.levels = l;
+      add(c, std::numeric_limits<double>::quiet_NaN(), false);
+    }
   say("cross-validating " + std::to_string(finals.size()) + " finalists with the full search");
   std::vector<ModelScore> second = CrossValidateAll(
-      set, finals, [&](size_t, size_t) {
-        FitOptions f = options.fit;
-        f.uncertainty = false;
-        return f;
-      },
+      set, finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
       options.folds, threads, options.service, options.progress, &res.fold_fits);
   for (size_t i = 0; i < second.size(); ++i) {
     second[i].round = 2;
@@ -522,7 +557,9 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
   std::vector<FitResult> refits(finals.size());
   RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
-    FitOptions f = finals[i].Options(options.fit);
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    FitOptions f = finals[i].Options(
+        i == chosen ? options.fit : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
     if (options.service) f.evaluator_factory = options.service(f.family_options);
     f.threads = options.service ? threads : 1;
     f.progress = nullptr;

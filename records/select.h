@@ -14,11 +14,14 @@
 // differ in the scored samples alone.
 //
 // Rounds: a screening round fits every candidate of the grid (families × effect sets ×
-// resolutions) in every fold with a small search budget (the linear families without effects
-// search nothing and are exact already); the `finalists` best of it, and the simplest candidate
-// within one standard error of its best, are cross-validated again with the full search of
-// `piezoid fit` and with each initial state worth trying (the one the records' first rises show,
-// and the rest-level rule). The one-standard-error rule picks among those: the candidate with the
+// resolutions; a linear family with effects at its coarsest resolution only, each evaluation
+// re-making its regressors) in every fold with a small search budget (the linear families without
+// effects search nothing and are exact already); the `finalists` best of it and the simplest
+// candidate within one standard error of its best are cross-validated again with the search of
+// `piezoid fit` (one repetition of its sized budget, its swarm ≤ 15 × 40 iterations, a polish of
+// ≤ 30 iterations) — the best of the screening also with the other initial state worth trying
+// (the records' first branches show one, the rest-level rule another) and, a linear family with
+// effects, at every resolution. The one-standard-error rule picks among those: the candidate with the
 // fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
 // error of the lowest; ties by CV RMSE, then grid order. The standard error is the paired one (as
 // records/regularisation.h's): of the candidate's fold RMSEs less the best's, over the folds — the
@@ -112,12 +115,19 @@ struct SelectOptions {
   /// Effect sets tried (default: none, delay, creep, creep + delay); a set a family excludes or the
   /// data cannot support is left out.
   std::vector<std::vector<EffectKind>> effect_sets;
-  std::vector<int> levels = {8, 12, 20};  ///< resolutions of the linear families
+  /// Resolutions of the linear families: alone, each is screened; with effects, the coarsest is,
+  /// and a finalist is cross-validated at each.
+  std::vector<int> levels = {8, 12};
   int folds = 5;
-  size_t finalists = 4;
+  size_t finalists = 3;
   /// The screening round's search: PSO particles × iterations × 1 repetition, LM iterations, the
   /// line search's grid.
-  int screen_particles = 10, screen_iterations = 20, screen_lm_iterations = 10, screen_line_grid = 9;
+  int screen_particles = 8, screen_iterations = 10, screen_lm_iterations = 5, screen_line_grid = 9;
+  /// The finalists' folds: `fit`'s search with at most this many repetitions and LM iterations (the
+  /// chosen model's refit on every training record has `fit`'s own).
+  int final_repetitions = 1, final_lm_iterations = 30;
+  /// …and (the sized budget) at most this swarm and these iterations.
+  int final_particles = 15, final_iterations = 40;
   /// "" (detect: the first branches, DetectInitialStates) or a state given by the user (an override:
   /// every candidate takes it).
   bool initial_state_given = false;
