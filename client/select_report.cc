@@ -22,77 +22,100 @@ std::string FromBest(const records::SelectionResult& s, const records::ModelScor
   if (c.round != 2 || !std::isfinite(c.cv_rmse)) return "";
   if (c.cv_rmse <= s.best_cv_rmse) return "best";
   if (c.within_one_se) return "within 1 SE";
-  return c.se_vs_best > 0 ? G((c.cv_rmse - s.best_cv_rmse) / c.se_vs_best, 2) + " SE above" : "above";
+  return c.se_vs_best > 0 ? G((c.cv_rmse - s.best_cv_rmse) / c.se_vs_best, 2) + " SE above"
+                          : "above";
 }
 
 }  // namespace
 
-void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s, size_t screened) {
+void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s,
+                    size_t screened) {
   const std::string u = set.response_unit;
-  os << "  model selection: " << s.folds << "-fold blocked cross-validation on the training records ("
-     << s.fold_fits << " fold fits, " << G(s.wall_time_s, 3) << " s); the withheld records are scored after the "
+  os << "  model selection: " << s.folds
+     << "-fold blocked cross-validation on the training records (" << s.fold_fits << " fold fits, "
+     << G(s.wall_time_s, 3) << " s); the withheld records are scored after the "
      << "choice, never used for it\n";
   os << "  noise floor " << G(s.noise.sigma) << " " << u << " (" << s.noise.used << ")\n";
-  os << "    " << std::left << std::setw(52) << "candidate" << std::right << std::setw(7) << "params" << std::setw(12)
-     << "CV RMSE" << std::setw(10) << "SE*" << std::setw(12) << "withheld" << std::setw(8) << "/floor"
+  os << "    " << std::left << std::setw(52) << "candidate" << std::right << std::setw(7)
+     << "params" << std::setw(12) << "CV RMSE" << std::setw(10) << "SE*" << std::setw(12)
+     << "withheld" << std::setw(8) << "/floor"
      << "  \n";
   size_t shown = 0;
   for (size_t i = 0; i < s.ranking.size(); ++i) {
     const records::ModelScore& c = s.ranking[i];
     if (c.round == 1 && shown++ >= screened) break;
-    os << "  " << (i == s.chosen ? "* " : "  ") << std::left << std::setw(52) << c.candidate.Describe() << std::right
-       << std::setw(7) << c.parameters << std::setw(12) << G(c.cv_rmse) << std::setw(10)
-     << G(c.round == 2 ? c.se_vs_best : c.cv_se, 2)
+    os << "  " << (i == s.chosen ? "* " : "  ") << std::left << std::setw(52)
+       << c.candidate.Describe() << std::right << std::setw(7) << c.parameters << std::setw(12)
+       << G(c.cv_rmse) << std::setw(10) << G(c.round == 2 ? c.se_vs_best : c.cv_se, 2)
        << std::setw(12) << G(c.withheld_rmse) << std::setw(8)
-       << (std::isfinite(c.withheld_rmse) && s.noise.sigma > 0 ? G(c.withheld_rmse / s.noise.sigma, 3) : "—")
-       << "  " << (c.round == 1 ? "screened" : FromBest(s, c)) << (c.error.empty() ? "" : "; " + c.error) << "\n";
+       << (std::isfinite(c.withheld_rmse) && s.noise.sigma > 0
+               ? G(c.withheld_rmse / s.noise.sigma, 3)
+               : "—")
+       << "  " << (c.round == 1 ? "screened" : FromBest(s, c))
+       << (c.error.empty() ? "" : "; " + c.error) << "\n";
   }
-  os << "    (SE*: finalists, the paired SE of their fold RMSEs less the best's; screened, their own";
+  os << "    (SE*: finalists, the paired SE of their fold RMSEs less the best's; screened, their "
+        "own";
   if (s.ranking.size() > shown) os << "; " << s.ranking.size() << " candidates in all: report.md";
   os << ")\n";
   os << "  chosen (the fewest parameters within one SE of the best CV RMSE): "
      << s.ranking[s.chosen].candidate.Describe() << "\n";
   for (const auto& e : s.initial_states)
-    os << "  initial state, " << model::CaseRoleName(e.role) << " " << e.record << ": " << e.Describe(u)
-       << (e.role == model::CaseRole::kTrain ? "" : " (shown, not used)") << "\n";
+    os << "  initial state, " << model::CaseRoleName(e.role) << " " << e.record << ": "
+       << e.Describe(u) << (e.role == model::CaseRole::kTrain ? "" : " (shown, not used)") << "\n";
 }
 
-void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s) {
+void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
+                            const records::SelectionResult& s) {
   const std::string u = set.response_unit;
   const records::ModelScore& chosen = s.ranking[s.chosen];
   os << "\n## Model selection (`--family auto`)\n\n"
-     << "Chosen: **" << chosen.candidate.Describe() << "** — CV RMSE " << G(chosen.cv_rmse) << " ± " << G(chosen.cv_se, 2)
-     << " " << u << ", " << chosen.parameters << " parameters (searched + solved weights). The rule: the fewest "
-     << "parameters among the finalists whose CV RMSE is within one standard error of the lowest (" << G(s.best_cv_rmse)
-     << " " << u << "; the paired SE: of the candidate's fold RMSEs less the best's).\n\n"
-     << "How: each training record's scored window cut into " << s.folds << " contiguous blocks; each fold fits on "
-     << "the other blocks (simulated from the record's rest, only the scoring masked) and scores its block, the "
-     << "offset refitted on the fold's training samples. A screening round with a small search ranks the grid; "
-     << "the best of it and the simplest within one SE of its best are cross-validated again with the full search "
-     << "and each initial state worth trying (" << s.fold_fits << " fold fits, " << G(s.wall_time_s, 3) << " s). "
-     << "**The withheld records never choose**: their errors are those of each finalist refitted on all the "
-     << "training records, shown after the choice. Noise floor " << G(s.noise.sigma) << " " << u << " ("
-     << s.noise.used << ").\n\n"
-     << "| | candidate | parameters | CV RMSE [" << u << "] | ± SE | SE vs best | folds | round | withheld RMSE "
+     << "Chosen: **" << chosen.candidate.Describe() << "** — CV RMSE " << G(chosen.cv_rmse) << " ± "
+     << G(chosen.cv_se, 2) << " " << u << ", " << chosen.parameters
+     << " parameters (searched + solved weights). The rule: the fewest "
+     << "parameters among the finalists whose CV RMSE is within one standard error of the lowest ("
+     << G(s.best_cv_rmse) << " " << u
+     << "; the paired SE: of the candidate's fold RMSEs less the best's).\n\n"
+     << "How: each training record's scored window cut into " << s.folds
+     << " contiguous blocks; each fold fits on "
+     << "the other blocks (simulated from the record's rest, only the scoring masked) and scores "
+        "its block, the "
+     << "offset refitted on the fold's training samples. A screening round with a small search "
+        "ranks the grid; "
+     << "the best of it and the simplest within one SE of its best are cross-validated again with "
+        "the full search "
+     << "and each initial state worth trying (" << s.fold_fits << " fold fits, "
+     << G(s.wall_time_s, 3) << " s). "
+     << "**The withheld records never choose**: their errors are those of each finalist refitted "
+        "on all the "
+     << "training records, shown after the choice. Noise floor " << G(s.noise.sigma) << " " << u
+     << " (" << s.noise.used << ").\n\n"
+     << "| | candidate | parameters | CV RMSE [" << u
+     << "] | ± SE | SE vs best | folds | round | withheld RMSE "
      << "(after, not used) | withheld / floor |\n|---|---|---:|---:|---:|---:|---|---|---:|---:|\n";
   for (size_t i = 0; i < s.ranking.size(); ++i) {
     const records::ModelScore& c = s.ranking[i];
     std::string folds;
     for (double f : c.fold_rmse) folds += (folds.empty() ? "" : " ") + G(f, 3);
-    os << "| " << (i == s.chosen ? "**chosen**" : "") << " | " << c.candidate.Describe() << " | " << c.parameters
-       << " | " << G(c.cv_rmse) << " | " << G(c.cv_se, 2) << " | " << (c.round == 2 ? G(c.se_vs_best, 2) : "")
-       << " | " << folds << " | "
-       << (c.round == 2 ? "final (" + FromBest(s, c) + ")" : "screening") << (c.error.empty() ? "" : ": " + c.error)
-       << " | " << G(c.withheld_rmse) << " | "
-       << (std::isfinite(c.withheld_rmse) && s.noise.sigma > 0 ? G(c.withheld_rmse / s.noise.sigma, 3) : "—")
+    os << "| " << (i == s.chosen ? "**chosen**" : "") << " | " << c.candidate.Describe() << " | "
+       << c.parameters << " | " << G(c.cv_rmse) << " | " << G(c.cv_se, 2) << " | "
+       << (c.round == 2 ? G(c.se_vs_best, 2) : "") << " | " << folds << " | "
+       << (c.round == 2 ? "final (" + FromBest(s, c) + ")" : "screening")
+       << (c.error.empty() ? "" : ": " + c.error) << " | " << G(c.withheld_rmse) << " | "
+       << (std::isfinite(c.withheld_rmse) && s.noise.sigma > 0
+               ? G(c.withheld_rmse / s.noise.sigma, 3)
+               : "—")
        << " |\n";
   }
   os << "\n### The memory at rest from each record's first branch\n\n"
-     << "A 12-play Prandtl–Ishlinskii operator fitted on the training records; each record's first branch (from "
-     << "the end of its rest until its drive has been within 5 % of both ends of the training range) simulated from "
+     << "A 12-play Prandtl–Ishlinskii operator fitted on the training records; each record's first "
+        "branch (from "
+     << "the end of its rest until its drive has been within 5 % of both ends of the training "
+        "range) simulated from "
      << "each memory at rest with its weights. The training records' majority chose **"
      << model::InitialStateName(s.detected) << "**; the withheld records are shown, not used.\n\n"
-     << "| record | role | branch [samples] | drive change | centred | descended | ascended | shows |\n"
+     << "| record | role | branch [samples] | drive change | centred | descended | ascended | "
+        "shows |\n"
      << "|---|---|---|---:|---:|---:|---:|---|\n";
   for (const auto& e : s.initial_states) {
     os << "| " << e.record << " | " << model::CaseRoleName(e.role) << " | ";
@@ -100,8 +123,9 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set, const re
       os << e.note << " | | | | | |\n";
       continue;
     }
-    os << e.from << "–" << e.to << " | " << G(e.rise) << " " << set.drive_unit << " | " << G(e.rmse[0]) << " | "
-       << G(e.rmse[1]) << " | " << G(e.rmse[2]) << " | " << model::InitialStateName(e.state) << " |\n";
+    os << e.from << "–" << e.to << " | " << G(e.rise) << " " << set.drive_unit << " | "
+       << G(e.rmse[0]) << " | " << G(e.rmse[1]) << " | " << G(e.rmse[2]) << " | "
+       << model::InitialStateName(e.state) << " |\n";
   }
 }
 

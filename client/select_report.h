@@ -15,9 +15,11 @@ namespace pz::client {
 
 /// The terminal summary: the ranking (the finalists and the best `screened` of the screening
 /// round), the choice, the initial state per record.
-void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s, size_t screened = 6);
+void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s,
+                    size_t screened = 6);
 /// report.md's section "## Model selection (--family auto)".
-void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set, const records::SelectionResult& s);
+void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
+                            const records::SelectionResult& s);
 /// fit.json's / diagnosis.json's "selection" object.
 json::Value SelectionJson(const records::SelectionResult& s);
 

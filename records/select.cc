@@ -44,7 +44,9 @@ void RunTasks(size_t n, int threads, const F& f) {
     if (e) std::rethrow_exception(e);
 }
 
-bool Takes(const std::vector<std::string>& v, const std::string& x) { return std::find(v.begin(), v.end(), x) != v.end(); }
+bool Takes(const std::vector<std::string>& v, const std::string& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
 
 bool LinearFamily(const std::string& f) {
   return f == "prandtl-ishlinskii" || f == "asymmetric-pi" || f == "preisach";
@@ -54,8 +56,8 @@ bool LinearFamily(const std::string& f) {
 /// before and after it, role train) and each training record whole (role validate) for scoring.
 struct Fold {
   io::RecordSet set;
-  std::vector<size_t> whole;                        ///< per training record: its index in set
-  std::vector<std::pair<size_t, size_t>> block;     ///< per training record: the masked samples
+  std::vector<size_t> whole;                     ///< per training record: its index in set
+  std::vector<std::pair<size_t, size_t>> block;  ///< per training record: the masked samples
 };
 
 std::vector<Fold> MakeFolds(const io::RecordSet& set, int K) {
@@ -64,8 +66,9 @@ std::vector<Fold> MakeFolds(const io::RecordSet& set, int K) {
   if (train.empty()) throw InputError(set.source.string() + ": no record has the role 'train'");
   for (const io::Record* r : train)
     if (r->scored() < 2 * static_cast<size_t>(K))
-      throw InputError(r->Label() + ": " + std::to_string(r->scored()) + " scored samples, fewer than 2 × " +
-                       std::to_string(K) + " (the folds of the cross-validation)");
+      throw InputError(r->Label() + ": " + std::to_string(r->scored()) +
+                       " scored samples, fewer than 2 × " + std::to_string(K) +
+                       " (the folds of the cross-validation)");
   std::vector<Fold> folds(static_cast<size_t>(K));
   for (int k = 0; k < K; ++k) {
     Fold& f = folds[static_cast<size_t>(k)];
@@ -166,7 +169,8 @@ FitOptions ScreenOptions(const SelectOptions& o, size_t searched) {
     s.search.line.grid = o.screen_line_grid;
     s.search.line.brackets = 1;
   } else {
-    s.sizing.keep_particles = s.sizing.keep_iterations = s.sizing.keep_stall = s.sizing.keep_repetitions = true;
+    s.sizing.keep_particles = s.sizing.keep_iterations = s.sizing.keep_stall =
+        s.sizing.keep_repetitions = true;
     s.search.pso.particles = o.screen_particles;
     s.search.pso.iterations = o.screen_iterations;
     s.search.pso.stall_iterations = std::max(5, o.screen_iterations / 2);
@@ -188,13 +192,16 @@ FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
   if (!line && f.sizing.enabled) {  // the sized budget, its swarm and iterations capped too
     const SearchBudget b = SizedSearchBudget(searched);
     if (!f.sizing.keep_particles) f.search.pso.particles = std::min(b.particles, o.final_particles);
-    if (!f.sizing.keep_iterations) f.search.pso.iterations = std::min(b.iterations, o.final_iterations);
-    if (!f.sizing.keep_stall) f.search.pso.stall_iterations = std::min(b.stall, o.final_iterations / 2);
+    if (!f.sizing.keep_iterations)
+      f.search.pso.iterations = std::min(b.iterations, o.final_iterations);
+    if (!f.sizing.keep_stall)
+      f.search.pso.stall_iterations = std::min(b.stall, o.final_iterations / 2);
     f.search.pso.converged_spread = b.converged_spread;
     f.sizing.keep_particles = f.sizing.keep_iterations = f.sizing.keep_stall = true;
   }
   if (!line) {
-    if (f.sizing.enabled && !f.sizing.keep_repetitions) f.search.repetitions = SizedSearchBudget(searched).repetitions;
+    if (f.sizing.enabled && !f.sizing.keep_repetitions)
+      f.search.repetitions = SizedSearchBudget(searched).repetitions;
     f.search.repetitions = std::min(f.search.repetitions, o.final_repetitions);
     f.sizing.keep_repetitions = true;
   }
@@ -208,12 +215,11 @@ FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
 /// Cross-validates candidates: every (candidate, fold) fit as one task, side by side on
 /// `threads` (each fit on one thread) or one after another with a service. options_of(i): the fit
 /// options of candidate i.
-std::vector<ModelScore> CrossValidateAll(const io::RecordSet& set, const std::vector<Candidate>& cands,
-                                             const std::function<FitOptions(size_t, size_t)>& options_of,
-                                             int K, int threads,
-                                             const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
-                                             const std::function<void(const std::string&)>& progress,
-                                             size_t* fits) {
+std::vector<ModelScore> CrossValidateAll(
+    const io::RecordSet& set, const std::vector<Candidate>& cands,
+    const std::function<FitOptions(size_t, size_t)>& options_of, int K, int threads,
+    const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
+    const std::function<void(const std::string&)>& progress, size_t* fits) {
   const std::vector<Fold> folds = MakeFolds(set, K);
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   std::vector<ModelScore> out(cands.size());
@@ -249,7 +255,8 @@ std::vector<ModelScore> CrossValidateAll(const io::RecordSet& set, const std::ve
     std::lock_guard<std::mutex> lock(mu);
     if (++done[i] == K && progress) {
       double mean = 0;
-      for (int q = 0; q < K; ++q) mean += rmse[i * static_cast<size_t>(K) + static_cast<size_t>(q)] / K;
+      for (int q = 0; q < K; ++q)
+        mean += rmse[i * static_cast<size_t>(K) + static_cast<size_t>(q)] / K;
       progress(cands[i].Describe() + ": CV RMSE " + io::FormatNumber(mean));
     }
   });
@@ -285,8 +292,10 @@ bool SameModel(const Candidate& a, const Candidate& b) {
 
 std::string Candidate::Describe() const {
   std::string s = family;
-  if (levels > 0) s += " (" + std::to_string(levels) + (family == "preisach" ? " levels)" : " plays)");
-  for (size_t i = 0; i < effects.size(); ++i) s += std::string(i == 0 ? " + " : ", ") + EffectName(effects[i]);
+  if (levels > 0)
+    s += " (" + std::to_string(levels) + (family == "preisach" ? " levels)" : " plays)");
+  for (size_t i = 0; i < effects.size(); ++i)
+    s += std::string(i == 0 ? " + " : ", ") + EffectName(effects[i]);
   if (TakesInitialState(family)) s += std::string(", ") + model::InitialStateName(initial_state);
   return s;
 }
@@ -296,22 +305,26 @@ FitOptions Candidate::Options(const FitOptions& base) const {
   o.family = family;
   o.effects = effects;
   if (levels > 0) o.family_options.pi_operators = levels;
-  o.family_options.initial_state = TakesInitialState(family) ? initial_state : model::InitialState::kAuto;
+  o.family_options.initial_state =
+      TakesInitialState(family) ? initial_state : model::InitialState::kAuto;
   return o;
 }
 
 std::string InitialStateEvidence::Describe(const std::string& unit) const {
   if (!note.empty()) return note;
   std::string s;
-  const model::InitialState states[3] = {model::InitialState::kCentred, model::InitialState::kDescended,
+  const model::InitialState states[3] = {model::InitialState::kCentred,
+                                         model::InitialState::kDescended,
                                          model::InitialState::kAscended};
   for (int i = 0; i < 3; ++i)
-    s += std::string(i ? ", " : "") + model::InitialStateName(states[i]) + " " + FormatG(rmse[i], 3);
-  return s + " " + unit + " over samples " + std::to_string(from) + "–" + std::to_string(to) + ": " +
-         model::InitialStateName(state);
+    s +=
+        std::string(i ? ", " : "") + model::InitialStateName(states[i]) + " " + FormatG(rmse[i], 3);
+  return s + " " + unit + " over samples " + std::to_string(from) + "–" + std::to_string(to) +
+         ": " + model::InitialStateName(state);
 }
 
-std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set, const FitOptions& base) {
+std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set,
+                                                      const FitOptions& base) {
   FitOptions o = base;
   o.family = "prandtl-ishlinskii";
   o.effects.clear();
@@ -338,13 +351,15 @@ std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set, 
   }
   const DataScale& scale = fit.model->scale();
   const double range = scale.u_max - scale.u_min;
-  const model::InitialState states[3] = {model::InitialState::kCentred, model::InitialState::kDescended,
+  const model::InitialState states[3] = {model::InitialState::kCentred,
+                                         model::InitialState::kDescended,
                                          model::InitialState::kAscended};
   std::vector<std::shared_ptr<RecordModel>> models;
   for (model::InitialState s : states) {
     FamilyOptions fo = o.family_options;
     fo.initial_state = s;
-    models.push_back(std::make_shared<RecordModel>(MakeFamily(o.family, scale, fo), o.effects, scale));
+    models.push_back(
+        std::make_shared<RecordModel>(MakeFamily(o.family, scale, fo), o.effects, scale));
   }
   std::vector<InitialStateEvidence> out;
   for (const io::Record& r : set.records) {
@@ -401,7 +416,8 @@ model::InitialState TrainingInitialState(const std::vector<InitialStateEvidence>
   return static_cast<model::InitialState>(best);
 }
 
-std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptions& options, model::InitialState state) {
+std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptions& options,
+                                     model::InitialState state) {
   std::vector<std::string> families = options.families;
   if (families.empty())
     for (const auto& f : FamilyNames())
@@ -420,29 +436,34 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
     const std::vector<std::string> excluded = MakeFamily(f, scale)->excluded_effects();
     for (const auto& effects : sets) {
       bool ok = true;
-      for (EffectKind e : effects) ok = ok && !Takes(excluded, EffectName(e)) && !Takes(unsupported, EffectName(e));
+      for (EffectKind e : effects)
+        ok = ok && !Takes(excluded, EffectName(e)) && !Takes(unsupported, EffectName(e));
       if (!ok) continue;
       // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
       // only (each evaluation re-makes the regressors): the finalists get the others.
       std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
-      if (LinearFamily(f) && !effects.empty() && !levels.empty()) levels = {*std::min_element(levels.begin(), levels.end())};
+      if (LinearFamily(f) && !effects.empty() && !levels.empty())
+        levels = {*std::min_element(levels.begin(), levels.end())};
       for (int l : levels) out.push_back({f, effects, l, state});
     }
   }
   return out;
 }
 
-ModelScore CrossValidate(const io::RecordSet& set, const Candidate& c, const FitOptions& fit, int folds,
-                             const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service) {
+ModelScore CrossValidate(
+    const io::RecordSet& set, const Candidate& c, const FitOptions& fit, int folds,
+    const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service) {
   size_t fits = 0;
   return CrossValidateAll(
-      set, {c}, [&](size_t, size_t) { return fit; }, folds, fit.threads, service, nullptr, &fits)[0];
+      set, {c}, [&](size_t, size_t) { return fit; }, folds, fit.threads, service, nullptr,
+      &fits)[0];
 }
 
 size_t OneStandardErrorChoice(std::vector<ModelScore>& scores) {
   size_t best = scores.size();
   for (size_t i = 0; i < scores.size(); ++i)
-    if (std::isfinite(scores[i].cv_rmse) && (best == scores.size() || scores[i].cv_rmse < scores[best].cv_rmse))
+    if (std::isfinite(scores[i].cv_rmse) &&
+        (best == scores.size() || scores[i].cv_rmse < scores[best].cv_rmse))
       best = i;
   if (best == scores.size()) throw InputError("no candidate model could be fitted in every fold");
   const ModelScore& b = scores[best];
@@ -453,7 +474,8 @@ size_t OneStandardErrorChoice(std::vector<ModelScore>& scores) {
     const size_t K = b.fold_rmse.size();
     if (K >= 2 && s.fold_rmse.size() == K) {
       double mean = 0, var = 0;
-      for (size_t k = 0; k < K; ++k) mean += (s.fold_rmse[k] - b.fold_rmse[k]) / static_cast<double>(K);
+      for (size_t k = 0; k < K; ++k)
+        mean += (s.fold_rmse[k] - b.fold_rmse[k]) / static_cast<double>(K);
       for (size_t k = 0; k < K; ++k) {
         const double d = s.fold_rmse[k] - b.fold_rmse[k] - mean;
         var += d * d;
@@ -467,7 +489,8 @@ size_t OneStandardErrorChoice(std::vector<ModelScore>& scores) {
     const ModelScore& s = scores[i];
     if (!s.within_one_se) continue;
     const ModelScore& p = scores[pick];
-    if (s.parameters < p.parameters || (s.parameters == p.parameters && s.cv_rmse < p.cv_rmse)) pick = i;
+    if (s.parameters < p.parameters || (s.parameters == p.parameters && s.cv_rmse < p.cv_rmse))
+      pick = i;
   }
   return pick;
 }
@@ -492,18 +515,19 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   if (!options.initial_state_given) {
     const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
     for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
-      if (model::ResolveInitialState(model::InitialState::kAuto, r->u[0], scale.u_min, scale.u_max) != first) {
+      if (model::ResolveInitialState(model::InitialState::kAuto, r->u[0], scale.u_min,
+                                     scale.u_max) != first) {
         states.push_back(model::InitialState::kAuto);
         break;
       }
   }
   // 2. Screening: every candidate, a small search.
   const std::vector<Candidate> grid = CandidateGrid(set, options, first);
-  say("screening " + std::to_string(grid.size()) + " candidates by " + std::to_string(options.folds) +
-      "-fold blocked cross-validation on the training records");
+  say("screening " + std::to_string(grid.size()) + " candidates by " +
+      std::to_string(options.folds) + "-fold blocked cross-validation on the training records");
   std::vector<ModelScore> screen = CrossValidateAll(
-      set, grid, [&](size_t, size_t searched) { return ScreenOptions(options, searched); }, options.folds, threads,
-      options.service, options.progress, &res.fold_fits);
+      set, grid, [&](size_t, size_t searched) { return ScreenOptions(options, searched); },
+      options.folds, threads, options.service, options.progress, &res.fold_fits);
   for (auto& s : screen) s.screen_cv_rmse = s.cv_rmse;
   // 3. The finalists: the best of the screening and the simplest within one SE of its best,
   // each with every initial state worth trying, with the full search.
@@ -514,7 +538,8 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   std::vector<size_t> picked;
   for (size_t i : order)
     if (picked.size() < options.finalists && std::isfinite(screen[i].cv_rmse)) picked.push_back(i);
-  if (picked.empty()) throw InputError("no candidate model could be fitted in every fold of the screening");
+  if (picked.empty())
+    throw InputError("no candidate model could be fitted in every fold of the screening");
   const size_t simplest = OneStandardErrorChoice(screen);
   for (auto& s : screen) s.within_one_se = false;  // (the finals' rule is reported)
   if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
@@ -552,14 +577,17 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   const size_t chosen = OneStandardErrorChoice(second);
   res.best_cv_rmse = kInf;
   for (const auto& s : second) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
-  say("chosen: " + finals[chosen].Describe() + " (CV RMSE " + io::FormatNumber(second[chosen].cv_rmse) + " ± " +
-      io::FormatNumber(second[chosen].cv_se) + ")");
+  say("chosen: " + finals[chosen].Describe() + " (CV RMSE " +
+      io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
+      ")");
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
   std::vector<FitResult> refits(finals.size());
   RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
     const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
     FitOptions f = finals[i].Options(
-        i == chosen ? options.fit : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+        i == chosen
+            ? options.fit
+            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
     if (options.service) f.evaluator_factory = options.service(f.family_options);
     f.threads = options.service ? threads : 1;
     f.progress = nullptr;
@@ -593,7 +621,8 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   // The ranking: the finalists by CV RMSE, then the screened-only ones by theirs.
   std::vector<size_t> o2(second.size());
   for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
-  std::stable_sort(o2.begin(), o2.end(), [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
+  std::stable_sort(o2.begin(), o2.end(),
+                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
   for (size_t i : o2) {
     if (i == chosen) res.chosen = res.ranking.size();
     res.ranking.push_back(second[i]);

@@ -21,8 +21,8 @@
 // `piezoid fit` (one repetition of its sized budget, its swarm ≤ 15 × 40 iterations, a polish of
 // ≤ 30 iterations) — the best of the screening also with the other initial state worth trying
 // (the records' first branches show one, the rest-level rule another) and, a linear family with
-// effects, at every resolution. The one-standard-error rule picks among those: the candidate with the
-// fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
+// effects, at every resolution. The one-standard-error rule picks among those: the candidate with
+// the fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
 // error of the lowest; ties by CV RMSE, then grid order. The standard error is the paired one (as
 // records/regularisation.h's): of the candidate's fold RMSEs less the best's, over the folds — the
 // blocks of a record differ in difficulty (the first holds the jump from rest and the creep after
@@ -33,12 +33,12 @@
 //
 // The initial state from the data (DetectInitialStates): a Prandtl–Ishlinskii operator (12 plays,
 // weights by NNLS; with a transport delay where it lowers the training RMSE by 30 % or more: a
-// sensor's lag at the jump from rest would swamp the branch) is fitted on the training records; each record's first branch — from
-// the end of its rest until its drive has been within 5 % of both ends of the training range, when
-// the memory at rest is wiped out — is then simulated
-// from each memory at rest (centred, descended, ascended) with those weights, and the memory whose
-// branch matches the measured one best is the record's (a demagnetised stack rises on its virgin
-// curve, one that came down to rest rises on its major loop's ascending branch).
+// sensor's lag at the jump from rest would swamp the branch) is fitted on the training records;
+// each record's first branch — from the end of its rest until its drive has been within 5 % of both
+// ends of the training range, when the memory at rest is wiped out — is then simulated from each
+// memory at rest (centred, descended, ascended) with those weights, and the memory whose branch
+// matches the measured one best is the record's (a demagnetised stack rises on its virgin curve,
+// one that came down to rest rises on its major loop's ascending branch).
 //
 // Deterministic: the choice and the refitted model are functions of (records, options) alone, bit
 // for bit, whatever the number of threads or whether the searches run on a master's workers (the
@@ -71,10 +71,10 @@ struct Candidate {
 /// A candidate's cross-validation.
 struct ModelScore {
   Candidate candidate;
-  size_t parameters = 0;       ///< searched parameters + solved weights
-  int round = 1;               ///< 1: screened only; 2: cross-validated with the full search
+  size_t parameters = 0;  ///< searched parameters + solved weights
+  int round = 1;          ///< 1: screened only; 2: cross-validated with the full search
   double cv_rmse = std::numeric_limits<double>::infinity();
-  double cv_se = 0;            ///< standard error of the fold RMSEs
+  double cv_se = 0;  ///< standard error of the fold RMSEs
   std::vector<double> fold_rmse;
   /// Set by OneStandardErrorChoice: the standard error of (fold RMSEs − the best's), and whether
   /// the CV RMSE is within one of it above the best's.
@@ -84,26 +84,27 @@ struct ModelScore {
   /// After the choice: the candidate refitted on every training record (finalists only; NaN else).
   double train_rmse = std::numeric_limits<double>::quiet_NaN();
   double withheld_rmse = std::numeric_limits<double>::quiet_NaN();
-  std::string error;           ///< why it could not be fitted ("" when it was)
+  std::string error;  ///< why it could not be fitted ("" when it was)
 };
 
 /// The memory at rest a record's first branch shows.
 struct InitialStateEvidence {
   std::string record;
   model::CaseRole role = model::CaseRole::kTrain;
-  size_t from = 0, to = 0;     ///< the first branch: samples [from, to)
-  double rise = 0;             ///< the drive at its end less the rest level (drive unit)
+  size_t from = 0, to = 0;  ///< the first branch: samples [from, to)
+  double rise = 0;          ///< the drive at its end less the rest level (drive unit)
   /// The branch's RMSE from each memory: centred, descended, ascended (response unit).
   double rmse[3] = {0, 0, 0};
   model::InitialState state = model::InitialState::kCentred;  ///< the best of the three
-  std::string note;            ///< why there was no choice (no branch), "" else
+  std::string note;  ///< why there was no choice (no branch), "" else
   /// "centred 0.41, descended 0.052, ascended 0.93 µm over 0.24 s: descended".
   std::string Describe(const std::string& unit) const;
 };
 
 /// Each record's memory at rest from its first branch (training and withheld records; the
 /// withheld ones are reported, never used). Throws InputError as FitRecords does on bad training.
-std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set, const FitOptions& base);
+std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set,
+                                                      const FitOptions& base);
 /// The memory the training records show: the one most of them show (ties: centred first, then
 /// descended); kCentred without training evidence.
 model::InitialState TrainingInitialState(const std::vector<InitialStateEvidence>& evidence);
@@ -128,8 +129,8 @@ struct SelectOptions {
   int final_repetitions = 1, final_lm_iterations = 30;
   /// …and (the sized budget) at most this swarm and these iterations.
   int final_particles = 15, final_iterations = 40;
-  /// "" (detect: the first branches, DetectInitialStates) or a state given by the user (an override:
-  /// every candidate takes it).
+  /// "" (detect: the first branches, DetectInitialStates) or a state given by the user (an
+  /// override: every candidate takes it).
   bool initial_state_given = false;
   /// The full search and everything else of `piezoid fit` (its family, effects and
   /// family_options.pi_operators / initial_state are the candidates'; threads as given).
@@ -141,15 +142,15 @@ struct SelectOptions {
 
 struct SelectionResult {
   std::vector<ModelScore> ranking;  ///< round 2 first by CV RMSE, then round 1 by CV RMSE
-  size_t chosen = 0;                    ///< index in ranking
-  double best_cv_rmse = 0;              ///< the lowest round-2 CV RMSE
+  size_t chosen = 0;                ///< index in ranking
+  double best_cv_rmse = 0;          ///< the lowest round-2 CV RMSE
   std::vector<InitialStateEvidence> initial_states;  ///< per record (every record of the set)
   model::InitialState detected = model::InitialState::kCentred;  ///< TrainingInitialState
-  FitResult fit;                        ///< the chosen candidate refitted on all training records
-  FitOptions fit_options;               ///< its options
-  NoiseFloor noise;                     ///< the records' noise floor (EstimateNoiseFloor), beside the errors
+  FitResult fit;           ///< the chosen candidate refitted on all training records
+  FitOptions fit_options;  ///< its options
+  NoiseFloor noise;        ///< the records' noise floor (EstimateNoiseFloor), beside the errors
   int folds = 0;
-  size_t fold_fits = 0;                 ///< fits run for the cross-validation
+  size_t fold_fits = 0;  ///< fits run for the cross-validation
   double wall_time_s = 0;
 };
 
@@ -161,8 +162,9 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
 /// The blocked K-fold cross-validation of one candidate on the training records (options.fit
 /// the fit's options: search budget, threads; `service` as SelectOptions'). Throws InputError when
 /// a training window has fewer than 2 K samples.
-ModelScore CrossValidate(const io::RecordSet& set, const Candidate& c, const FitOptions& fit, int folds,
-                             const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service = {});
+ModelScore CrossValidate(
+    const io::RecordSet& set, const Candidate& c, const FitOptions& fit, int folds,
+    const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service = {});
 
 /// The one-standard-error rule over scores: the index of the candidate with the fewest parameters
 /// whose CV RMSE ≤ the lowest + the paired standard error of its fold RMSEs less the lowest's (the

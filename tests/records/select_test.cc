@@ -6,6 +6,8 @@
 // one-standard-error rule picks the simplest candidate within one SE of the best; the initial
 // state is read from each record's first branch (a stack Bouc–Wen made from a centred and from a
 // descended start, both resting mid-range, where the rest-level rule says centred for both).
+#include "records/select.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,7 +19,6 @@
 #include "records/families.h"
 #include "records/model.h"
 #include "records/reallike.h"
-#include "records/select.h"
 #include "records/synthetic.h"
 #include "tests/testing/expect_error.h"
 
@@ -92,7 +93,8 @@ TEST(SelectTest, ChoosesWithinATenthOfTheGridsBestWithheld) {
       best_name = c.Describe();
     }
   }
-  EXPECT_LE(chosen, 1.1 * best) << sel.ranking[sel.chosen].candidate.Describe() << " against " << best_name;
+  EXPECT_LE(chosen, 1.1 * best) << sel.ranking[sel.chosen].candidate.Describe() << " against "
+                                << best_name;
   // The chosen model obeys the one-SE rule among the finalists.
   const ModelScore& c = sel.ranking[sel.chosen];
   EXPECT_TRUE(c.within_one_se);
@@ -122,7 +124,8 @@ TEST(SelectTest, WithheldRecordsNeverChoose) {
     EXPECT_EQ(a.ranking[i].cv_rmse, b.ranking[i].cv_rmse);
   }
   EXPECT_EQ(a.fit.weights, b.fit.weights);
-  EXPECT_NE(a.ranking[a.chosen].withheld_rmse, b.ranking[b.chosen].withheld_rmse);  // shown, after the choice
+  EXPECT_NE(a.ranking[a.chosen].withheld_rmse,
+            b.ranking[b.chosen].withheld_rmse);  // shown, after the choice
 }
 
 TEST(SelectTest, OneAndTwoThreadsGiveTheSameChoiceBitForBit) {
@@ -136,7 +139,8 @@ TEST(SelectTest, OneAndTwoThreadsGiveTheSameChoiceBitForBit) {
   const SelectionResult a = SelectModel(s.set, o1), b = SelectModel(s.set, o2);
   EXPECT_EQ(a.ranking[a.chosen].candidate.Describe(), b.ranking[b.chosen].candidate.Describe());
   ASSERT_EQ(a.ranking.size(), b.ranking.size());
-  for (size_t i = 0; i < a.ranking.size(); ++i) EXPECT_EQ(a.ranking[i].fold_rmse, b.ranking[i].fold_rmse);
+  for (size_t i = 0; i < a.ranking.size(); ++i)
+    EXPECT_EQ(a.ranking[i].fold_rmse, b.ranking[i].fold_rmse);
   EXPECT_EQ(a.fit.params, b.fit.params);
   EXPECT_EQ(a.fit.weights, b.fit.weights);
 }
@@ -171,9 +175,11 @@ TEST(SelectTest, OneStandardErrorRulePicksTheSimplest) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { OneStandardErrorChoice(v); }), "no candidate model");
 }
 
-/// A record of the linear family `truth` with weights w (polarity +1): 0.5 s of rest at the bottom of the ±100 V range, then 3 s of
-/// a 1 Hz sine rising from there, at 500 Hz, with a small deterministic noise; offset fitted.
-io::Record BottomRestRecord(const RecordModel& truth, const std::vector<double>& w, const std::string& name) {
+/// A record of the linear family `truth` with weights w (polarity +1): 0.5 s of rest at the bottom
+/// of the ±100 V range, then 3 s of a 1 Hz sine rising from there, at 500 Hz, with a small
+/// deterministic noise; offset fitted.
+io::Record BottomRestRecord(const RecordModel& truth, const std::vector<double>& w,
+                            const std::string& name) {
   io::Record r;
   r.name = name;
   r.file = name + ".csv";
@@ -216,7 +222,8 @@ TEST(SelectTest, TheFirstBranchShowsTheMemoryAtRest) {
   EXPECT_GT(ev[0].rmse[1], 2 * ev[0].rmse[0]) << ev[0].Describe("um");
   EXPECT_GT(ev[1].rmse[0], 2 * ev[1].rmse[1]) << ev[1].Describe("um");
   for (const io::Record& r : set.records)
-    EXPECT_EQ(model::ResolveInitialState(model::InitialState::kAuto, r.u[0], -100, 100), model::InitialState::kDescended);
+    EXPECT_EQ(model::ResolveInitialState(model::InitialState::kAuto, r.u[0], -100, 100),
+              model::InitialState::kDescended);
   EXPECT_EQ(TrainingInitialState(ev), model::InitialState::kCentred);  // a tie: centred first
 }
 
