@@ -90,8 +90,13 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (!a.records.records.empty()) {
     if (!a.cases_dir.empty()) throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
     RecordsDiagnoseRequest r = a.records;
-    if (a.service.enabled())
+    if (a.service.enabled()) {
       r.evaluator_factory = RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
+      const ServiceEvaluatorOptions service = a.service.Options();
+      r.service = [service](const records::FamilyOptions& f) {
+        return RecordsServiceFactory(service, f, "piezoid diagnose");
+      };
+    }
     // (the family's options, its initial state among them, travel with each fit's model: CompleteModelProblemOf)
     r.out = a.out_dir;
     r.candidates = a.candidates;
@@ -271,9 +276,10 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
                   "CSV with windows), diagnosed for --family")
       ->type_name("PATH");
   cmd->add_option("--family", a->records.family,
-                  "with --records: stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin, "
-                  "preisach, asymmetric-pi")
-      ->default_str("backlash-like");
+                  "with --records: auto (chosen with its resolution and initial state by blocked cross-validation on "
+                  "the training records first, as `piezoid fit --family auto`), stack-bouc-wen, backlash-like, duhem, "
+                  "prandtl-ishlinskii, bw-oscillator, bimorph-fin, preisach, asymmetric-pi")
+      ->default_str("auto");
   cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
   cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");
   cmd->add_option("--test-window", a->records.test_windows, "with one CSV: a withheld test window START:END [s]");

@@ -24,6 +24,7 @@
 #include "client/excitation_report.h"
 #include "client/json_values.h"
 #include "client/search_flags.h"
+#include "client/select_report.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "io/csv.h"
@@ -33,6 +34,7 @@
 #include "records/excitation.h"
 #include "records/extrapolation.h"
 #include "records/fit.h"
+#include "records/select.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -74,6 +76,12 @@ struct FitArgs {
   CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
   records::FitOptions::Sizing sizing;  ///< the PSO budget sized by the searched parameters, but for the flags given
   opt::LineOptions line;               ///< --line-grid, --line-brackets, --line-tolerance
+  // --family auto (records/select.h)
+  bool pi_operators_given = false;     ///< --pi-operators: the one resolution tried
+  std::vector<std::string> auto_families;  ///< --auto-families (empty: every family but bimorph-fin)
+  int folds = 5;
+  int finalists = 4;
+  bool selected = false;               ///< the report's family was chosen by --family auto
 };
 
 /// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1 searched
@@ -322,13 +330,15 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
   os << "; LM iterations " << r.lm_iterations << " (" << r.lm_differences
      << " differences).\n\nCommand: `piezoid fit --records " << a.records << " --family "
-     << a.family << "`.\n";
+     << (a.selected ? "auto" : a.family) << "`" << (a.selected ? " (this model chosen: the section below)" : "")
+     << ".\n";
   WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
 }
 
 std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const records::ExcitationReport& excitation,
                     const records::TrainingDriveProposal& proposal,
-                    const std::vector<records::ExtrapolationCheck>& extrapolation, const FitArgs& a) {
+                    const std::vector<records::ExtrapolationCheck>& extrapolation, const FitArgs& a,
+                    const records::SelectionResult* selection = nullptr) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -441,23 +451,41 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     f["search"] = Obj(g);
   }
   f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
+  if (selection) f["selection"] = SelectionJson(*selection);
   return Print(root, "fit.json");
 }
 
-int RunFit(const FitArgs& a) {
+int RunFit(const FitArgs& args) {
+  FitArgs a = args;  // --family auto: the chosen family and resolution replace the flag's
+  const bool select = a.family == "auto";
   io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::FitOptions o;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
   o.family_options.substeps = a.substeps;
   o.family_options.pi_operators = a.pi_operators;
-  o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
-  // The grid's own bound, refused under the flag's name.
-  if (a.family == "preisach" && a.pi_operators != records::kAutoLevels) {
-    const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
-    if (!levels.ok()) throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
+  if (select) {
+    if (!a.initial_state.empty())
+      o.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
+    for (const auto& f : a.auto_families) {
+      const auto& known = records::FamilyNames();
+      if (std::find(known.begin(), known.end(), f) == known.end())
+        throw InputError("--auto-families '" + f + "': not a family (piezoid fit --help lists them)");
+    }
+  } else {
+    if (!a.auto_families.empty()) throw InputError("--auto-families: only with --family auto");
+    o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   }
-  if (a.service.enabled()) o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
+  // The grid's own bound, refused under the flag's name.
+  if ((a.family == "preisach" || (select && a.pi_operators_given)) &&
+      a.pi_operators != records::kAutoLevels) {
+    const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
+    if (!levels.ok() && (!select || a.auto_families.empty() ||
+                         std::find(a.auto_families.begin(), a.auto_families.end(), "preisach") != a.auto_families.end()))
+      throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
+  }
+  if (a.service.enabled() && !select)
+    o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
   o.search.line = a.line;
@@ -476,8 +504,36 @@ int RunFit(const FitArgs& a) {
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, excitation);
   PrintExcitationSummary(std::cout, set, excitation);
   records::FitResult r;
+  records::SelectionResult selection;
   try {
-    r = records::FitRecords(set, o);
+    if (select) {
+      records::SelectOptions so;
+      so.fit = o;
+      so.fit.progress = nullptr;
+      so.initial_state_given = !a.initial_state.empty();
+      so.families = a.auto_families;
+      if (a.pi_operators_given) so.levels = {a.pi_operators};
+      if (!o.effects.empty()) so.effect_sets = {o.effects};
+      so.folds = a.folds;
+      so.finalists = static_cast<size_t>(a.finalists);
+      if (a.service.enabled()) {
+        const ServiceEvaluatorOptions service = a.service.Options();
+        so.service = [service](const records::FamilyOptions& f) {
+          return RecordsServiceFactory(service, f, "piezoid fit --family auto");
+        };
+      }
+      if (!a.quiet) so.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
+      selection = records::SelectModel(set, so);
+      r = selection.fit;
+      a.family = r.model->family().name();
+      a.pi_operators = selection.fit_options.family_options.pi_operators;
+      a.effects.clear();
+      for (records::EffectKind e : r.model->effects()) a.effects.push_back(records::EffectName(e));
+      a.selected = true;
+      PrintSelection(std::cout, set, selection);
+    } else {
+      r = records::FitRecords(set, o);
+    }
   } catch (const ServiceError& e) {
     std::cerr << "piezoid fit: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
@@ -485,10 +541,13 @@ int RunFit(const FitArgs& a) {
   const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
   fs::create_directories(a.out);
   WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
-  io::WriteFileWith(fs::path(a.out) / "report.md",
-                    [&](std::ostream& os) { WriteFitReport(os, set, r, a, excitation, proposal, extrapolation); });
-  io::WriteFileWith(fs::path(a.out) / "fit.json",
-                    [&](std::ostream& os) { os << FitJson(set, r, excitation, proposal, extrapolation, a); });
+  io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) {
+    WriteFitReport(os, set, r, a, excitation, proposal, extrapolation);
+    if (select) WriteSelectionMarkdown(os, set, selection);
+  });
+  io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) {
+    os << FitJson(set, r, excitation, proposal, extrapolation, a, select ? &selection : nullptr);
+  });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
   if (!scripts.empty()) {
@@ -536,9 +595,20 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->required()
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
-                  "stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, bw-oscillator, bimorph-fin, preisach, "
-                  "asymmetric-pi")
+                  "auto (chosen with its effects, plays / levels and initial state by blocked cross-validation on the "
+                  "training records; records/select.h), stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, "
+                  "bw-oscillator, bimorph-fin, preisach, asymmetric-pi")
       ->default_str("backlash-like");
+  cmd->add_option("--auto-families", a->auto_families,
+                  "--family auto: the families tried (comma-separated; default every family but bimorph-fin)")
+      ->delimiter(',');
+  cmd->add_option("--folds", a->folds, "--family auto: blocks per training window (the cross-validation's folds)")
+      ->check(CLI::Range(2, 50))
+      ->default_str("5");
+  cmd->add_option("--finalists", a->finalists,
+                  "--family auto: the screening round's best cross-validated again with the full search")
+      ->check(CLI::Range(1, 100))
+      ->default_str("4");
   cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');
   cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
   cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
@@ -639,6 +709,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                          ": must be a count in 1 … 10000, or auto (preisach)");
       a->pi_operators = n;
     }
+    a->pi_operators_given = cmd->count("--pi-operators") > 0;
     exit_code = RunFit(*a);
   });
 }

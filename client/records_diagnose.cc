@@ -1,6 +1,7 @@
 #include "client/records_diagnose.h"
 
 #include "client/search_flags.h"
+#include "client/select_report.h"
 
 #include <cmath>
 #include <filesystem>
@@ -28,7 +29,8 @@ std::string G(double x, int prec = 4) {
 }  // namespace
 
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                                   const records::TrainingDriveProposal& proposal, double settle_s) {
+                                   const records::TrainingDriveProposal& proposal, double settle_s,
+                                   const records::SelectionResult* selection) {
   const std::string u = set.response_unit;
   os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
      << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
@@ -67,11 +69,13 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
   if (d.next) {
     os << "\n## Next measurement\n\n" << d.next->description << ".\n";
   }
+  if (selection) WriteSelectionMarkdown(os, set, *selection);
   WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                               const records::TrainingDriveProposal& proposal) {
+                               const records::TrainingDriveProposal& proposal,
+                               const records::SelectionResult* selection) {
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
@@ -130,6 +134,7 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
     g["ratio_to_noise"] = Num(d.next->ratio_to_noise);
     f["next_measurement"] = Obj(x);
   }
+  if (selection) f["selection"] = SelectionJson(*selection);
   os << Print(root, "diagnosis.json");
 }
 
@@ -137,7 +142,13 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
-  o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
+  const bool select = a.family == "auto";
+  if (select) {
+    if (!a.initial_state.empty())
+      o.fit.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
+  } else {
+    o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
+  }
   o.rules.significance_ratio = a.significance_ratio;
   std::stringstream ss(a.candidates);
   std::string name;
@@ -152,6 +163,25 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
     o.fit.search.pso.iterations = 60;
     o.fit.lm.max_iterations = 30;
   }
+  // No --family: the family, its resolution and initial state chosen by cross-validation on the
+  // training records first (records/select.h), the diagnosis then run on it.
+  records::SelectionResult selection;
+  if (select) {
+    records::SelectOptions so;
+    so.fit = o.fit;
+    so.fit.evaluator_factory = nullptr;
+    so.fit.sizing.enabled = !a.quick;  // `piezoid fit`'s search (sized), or the quick one
+    so.fit.polish_repetitions = true;
+    so.fit.lm_differences_auto = true;
+    so.initial_state_given = !a.initial_state.empty();
+    so.service = a.service;
+    if (!a.quiet) so.progress = [](const std::string& s) { std::cerr << s << std::endl; };
+    selection = records::SelectModel(set, so);
+    PrintSelection(std::cout, set, selection);
+    o.family = selection.fit_options.family;
+    o.fit.family_options = selection.fit_options.family_options;
+    if (a.service) o.fit.evaluator_factory = a.service(o.fit.family_options);
+  }
   if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
   const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
   std::cout << d.verdict << "\n";
@@ -160,8 +190,10 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
   WriteProposedDrive(out / kProposedDriveFile, set, proposal);
-  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s); });
-  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d, proposal); });
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s, select ? &selection : nullptr);
+  });
+  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d, proposal, select ? &selection : nullptr);
+  });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;
   const records::FitResult* best = d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;

@@ -3,18 +3,20 @@
 // excitation report and its proposed training drive excitation_drive.csv).
 #pragma once
 
+#include <functional>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "io/records.h"
 #include "records/diagnose.h"
+#include "records/select.h"
 
 namespace pz::client {
 
 struct RecordsDiagnoseRequest {
   std::string records;
-  std::string family = "backlash-like";
+  std::string family = "auto";  ///< "auto": chosen by records/select.h first (--family not given)
   std::vector<std::string> train_windows, validate_windows, test_windows;
   double settle_s = 0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
   std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default)
@@ -27,14 +29,18 @@ struct RecordsDiagnoseRequest {
   bool quiet = false;
   double significance_ratio = 1.25;
   records::RecordEvaluatorFactory evaluator_factory;  ///< --master (null: local threads)
+  /// --master with --family auto: the factory for a family's options (the chosen resolution's).
+  std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> service;
 };
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
 
 /// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                                   const records::TrainingDriveProposal& proposal, double settle_s = 0);
+                                   const records::TrainingDriveProposal& proposal, double settle_s = 0,
+                                   const records::SelectionResult* selection = nullptr);
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                               const records::TrainingDriveProposal& proposal);
+                               const records::TrainingDriveProposal& proposal,
+                               const records::SelectionResult* selection = nullptr);
 
 }  // namespace pz::client

@@ -1,0 +1,640 @@
+#include "records/select.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "io/csv.h"
+#include "model/format.h"
+#include "model/status.h"
+#include "records/model.h"
+#include "records/spectrum_solve.h"
+
+namespace pz::records {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+/// Runs f(0) … f(n − 1) on `threads` threads (one after another for 1); rethrows the exception of
+/// the lowest index that threw, after every task has ended.
+template <class F>
+void RunTasks(size_t n, int threads, const F& f) {
+  std::vector<std::exception_ptr> errors(n);
+  std::atomic<size_t> next{0};
+  auto work = [&] {
+    for (size_t i = next++; i < n; i = next++) {
+      try {
+        f(i);
+      } catch (...) {
+        errors[i] = std::current_exception();
+      }
+    }
+  };
+  const size_t t = std::min<size_t>(n, static_cast<size_t>(std::max(1, threads)));
+  std::vector<std::thread> pool;
+  for (size_t i = 1; i < t; ++i) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+bool Takes(const std::vector<std::string>& v, const std::string& x) {
+  return std::find(v.begin(), v.end(), x) != v.end();
+}
+
+bool LinearFamily(const std::string& f) {
+  return f == "prandtl-ishlinskii" || f == "asymmetric-pi" || f == "preisach";
+}
+
+/// One fold of the blocked cross-validation: the training records with block k masked (the pieces
+/// before and after it, role train) and each training record whole (role validate) for scoring.
+struct Fold {
+  io::RecordSet set;
+  std::vector<size_t> whole;                     ///< per training record: its index in set
+  std::vector<std::pair<size_t, size_t>> block;  ///< per training record: the masked samples
+};
+
+std::vector<Fold> MakeFolds(const io::RecordSet& set, int K) {
+  if (K < 2 || K > 50) throw InputError(FieldError("folds", K, "must be 2 … 50"));
+  const auto train = set.WithRole(model::CaseRole::kTrain);
+  if (train.empty()) throw InputError(set.source.string() + ": no record has the role 'train'");
+  for (const io::Record* r : train)
+    if (r->scored() < 2 * static_cast<size_t>(K))
+      throw InputError(r->Label() + ": " + std::to_string(r->scored()) +
+                       " scored samples, fewer than 2 × " + std::to_string(K) +
+                       " (the folds of the cross-validation)");
+  std::vector<Fold> folds(static_cast<size_t>(K));
+  for (int k = 0; k < K; ++k) {
+    Fold& f = folds[static_cast<size_t>(k)];
+    f.set.source = set.source;
+    f.set.format = set.format;
+    f.set.drive_unit = set.drive_unit;
+    f.set.response_unit = set.response_unit;
+    for (const io::Record* r : train) {
+      const size_t a = r->first_scored, n = r->scored();
+      const size_t s = a + static_cast<size_t>(k) * n / static_cast<size_t>(K);
+      const size_t e = a + static_cast<size_t>(k + 1) * n / static_cast<size_t>(K);
+      f.block.emplace_back(s, e);
+      if (s > a) {
+        io::Record p = *r;
+        p.name = r->name + "~before";
+        p.end_scored = s;
+        f.set.records.push_back(std::move(p));
+      }
+      if (e < r->end_scored) {
+        io::Record p = *r;
+        p.name = r->name + "~after";
+        p.first_scored = e;
+        f.set.records.push_back(std::move(p));
+      }
+    }
+    for (const io::Record* r : train) {
+      io::Record w = *r;
+      w.role = model::CaseRole::kValidate;
+      w.name = r->name + "~whole";
+      f.whole.push_back(f.set.records.size());
+      f.set.records.push_back(std::move(w));
+    }
+  }
+  return folds;
+}
+
+/// The fold's RMSE over the masked blocks (offset `fit`: refitted on the fold's training samples of
+/// each record); +inf when not finite.
+double FoldRmse(const Fold& f, const FitResult& r) {
+  double sse = 0;
+  size_t n = 0;
+  for (size_t j = 0; j < f.whole.size(); ++j) {
+    const io::Record& rec = f.set.records[f.whole[j]];
+    const std::vector<double>& yhat = r.yhat[f.whole[j]];
+    const auto [s, e] = f.block[j];
+    double o = 0;  // what to add to yhat
+    if (rec.offset_mode == io::OffsetMode::kFit) {
+      const double full = r.metrics[f.whole[j]].offset;
+      double sum = 0;
+      size_t m = 0;
+      for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
+        if (k >= s && k < e) continue;
+        sum += rec.y[k] - (yhat[k] - full);
+        ++m;
+      }
+      o = (m > 0 ? sum / static_cast<double>(m) : full) - full;
+    }
+    for (size_t k = s; k < e; ++k) {
+      const double d = rec.y[k] - (yhat[k] + o);
+      sse += d * d;
+    }
+    n += e - s;
+  }
+  const double rmse = std::sqrt(sse / static_cast<double>(std::max<size_t>(n, 1)));
+  return std::isfinite(rmse) ? rmse : kInf;
+}
+
+/// A candidate made for the training records' scale (the folds' models share it).
+struct Made {
+  std::shared_ptr<RecordModel> model;
+  FitOptions options;
+  size_t searched = 0;
+};
+
+Made MakeCandidate(const DataScale& scale, const Candidate& c, const FitOptions& base,
+                   const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service) {
+  Made m;
+  m.options = c.Options(base);
+  if (service) m.options.evaluator_factory = service(m.options.family_options);
+  std::shared_ptr<const Family> fam = MakeFamily(c.family, scale, m.options.family_options);
+  m.model = std::make_shared<RecordModel>(fam, c.effects, scale);
+  m.searched = SearchedParams(*m.model).size();
+  return m;
+}
+
+size_t ParameterCount(const RecordModel& m) {
+  return m.params().size() + (m.family().linear() ? m.family().regressors() : 0);
+}
+
+/// The screening round's fit options: a small search (the line search with a coarse grid for one
+/// searched parameter), a short polish, no uncertainty.
+FitOptions ScreenOptions(const SelectOptions& o, size_t searched) {
+  FitOptions s = o.fit;
+  s.sizing = {};
+  s.sizing.enabled = true;
+  s.search.algorithm = opt::SearchAlgorithm::kPso;
+  if (searched == 1) {
+    s.search.line.grid = o.screen_line_grid;
+    s.search.line.brackets = 1;
+  } else {
+    s.sizing.keep_particles = s.sizing.keep_iterations = s.sizing.keep_stall =
+        s.sizing.keep_repetitions = true;
+    s.search.pso.particles = o.screen_particles;
+    s.search.pso.iterations = o.screen_iterations;
+    s.search.pso.stall_iterations = std::max(5, o.screen_iterations / 2);
+    s.search.pso.converged_spread = 1e-3;
+    s.search.repetitions = 1;
+  }
+  s.polish_repetitions = false;
+  s.lm.max_iterations = o.screen_lm_iterations;
+  s.uncertainty = false;
+  s.progress = nullptr;
+  return s;
+}
+
+/// The finalists' fit options: `fit`'s search with its repetitions and polish capped (one searched
+/// parameter under the sized budget: its line search, as it is).
+FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
+  FitOptions f = o.fit;
+  const bool line = f.sizing.enabled && searched == 1;
+  if (!line && f.sizing.enabled) {  // the sized budget, its swarm and iterations capped too
+    const SearchBudget b = SizedSearchBudget(searched);
+    if (!f.sizing.keep_particles) f.search.pso.particles = std::min(b.particles, o.final_particles);
+    if (!f.sizing.keep_iterations)
+      f.search.pso.iterations = std::min(b.iterations, o.final_iterations);
+    if (!f.sizing.keep_stall)
+      f.search.pso.stall_iterations = std::min(b.stall, o.final_iterations / 2);
+    f.search.pso.converged_spread = b.converged_spread;
+    f.sizing.keep_particles = f.sizing.keep_iterations = f.sizing.keep_stall = true;
+  }
+  if (!line) {
+    if (f.sizing.enabled && !f.sizing.keep_repetitions)
+      f.search.repetitions = SizedSearchBudget(searched).repetitions;
+    f.search.repetitions = std::min(f.search.repetitions, o.final_repetitions);
+    f.sizing.keep_repetitions = true;
+  }
+  f.lm.max_iterations = std::min(f.lm.max_iterations, o.final_lm_iterations);
+  f.polish_repetitions = false;
+  f.uncertainty = false;
+  f.progress = nullptr;
+  return f;
+}
+
+/// Cross-validates candidates: every (candidate, fold) fit as one task, side by side on
+/// `threads` (each fit on one thread) or one after another with a service. options_of(i): the fit
+/// options of candidate i.
+std::vector<ModelScore> CrossValidateAll(
+    const io::RecordSet& set, const std::vector<Candidate>& cands,
+    const std::function<FitOptions(size_t, size_t)>& options_of, int K, int threads,
+    const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
+    const std::function<void(const std::string&)>& progress, size_t* fits) {
+  const std::vector<Fold> folds = MakeFolds(set, K);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  std::vector<ModelScore> out(cands.size());
+  std::vector<Made> made(cands.size());
+  for (size_t i = 0; i < cands.size(); ++i) {
+    out[i].candidate = cands[i];
+    try {
+      made[i] = MakeCandidate(scale, cands[i], FitOptions{}, {});
+      out[i].parameters = ParameterCount(*made[i].model);
+      FitOptions o = options_of(i, made[i].searched);
+      made[i].options = cands[i].Options(o);
+      if (service) made[i].options.evaluator_factory = service(made[i].options.family_options);
+      made[i].options.threads = service ? std::max(1, threads) : 1;
+      made[i].options.progress = nullptr;
+    } catch (const InputError& e) {
+      out[i].error = e.what();
+      made[i].model.reset();
+    }
+  }
+  std::vector<double> rmse(cands.size() * static_cast<size_t>(K), kInf);
+  std::vector<std::string> errors(rmse.size());
+  std::vector<int> done(cands.size(), 0);
+  std::mutex mu;
+  RunTasks(rmse.size(), service ? 1 : threads, [&](size_t t) {
+    const size_t i = t / static_cast<size_t>(K), k = t % static_cast<size_t>(K);
+    if (!made[i].model) return;
+    try {
+      const FitResult r = FitModel(folds[k].set, made[i].model, made[i].options);
+      rmse[t] = FoldRmse(folds[k], r);
+    } catch (const InputError& e) {
+      errors[t] = e.what();
+    }
+    std::lock_guard<std::mutex> lock(mu);
+    if (++done[i] == K && progress) {
+      double mean = 0;
+      for (int q = 0; q < K; ++q)
+        mean += rmse[i * static_cast<size_t>(K) + static_cast<size_t>(q)] / K;
+      progress(cands[i].Describe() + ": CV RMSE " + io::FormatNumber(mean));
+    }
+  });
+  for (size_t i = 0; i < cands.size(); ++i) {
+    if (!made[i].model) continue;
+    ModelScore& s = out[i];
+    double mean = 0;
+    for (int k = 0; k < K; ++k) {
+      const size_t t = i * static_cast<size_t>(K) + static_cast<size_t>(k);
+      if (!errors[t].empty() && s.error.empty()) s.error = errors[t];
+      s.fold_rmse.push_back(rmse[t]);
+      mean += rmse[t] / K;
+    }
+    if (!std::isfinite(mean)) {
+      s.cv_rmse = kInf;
+      if (s.error.empty()) s.error = "a fold's output is not finite";
+      continue;
+    }
+    double var = 0;
+    for (double r : s.fold_rmse) var += (r - mean) * (r - mean);
+    s.cv_rmse = mean;
+    s.cv_se = std::sqrt(var / (K - 1) / K);
+  }
+  if (fits) *fits += rmse.size();
+  return out;
+}
+
+bool SameModel(const Candidate& a, const Candidate& b) {
+  return a.family == b.family && a.effects == b.effects && a.levels == b.levels;
+}
+
+}  // namespace
+
+std::string Candidate::Describe() const {
+  std::string s = family;
+  if (levels > 0)
+    s += " (" + std::to_string(levels) + (family == "preisach" ? " levels)" : " plays)");
+  for (size_t i = 0; i < effects.size(); ++i)
+    s += std::string(i == 0 ? " + " : ", ") + EffectName(effects[i]);
+  if (TakesInitialState(family)) s += std::string(", ") + model::InitialStateName(initial_state);
+  return s;
+}
+
+FitOptions Candidate::Options(const FitOptions& base) const {
+  FitOptions o = base;
+  o.family = family;
+  o.effects = effects;
+  if (levels > 0) o.family_options.pi_operators = levels;
+  o.family_options.initial_state =
+      TakesInitialState(family) ? initial_state : model::InitialState::kAuto;
+  return o;
+}
+
+std::string InitialStateEvidence::Describe(const std::string& unit) const {
+  if (!note.empty()) return note;
+  std::string s;
+  const model::InitialState states[3] = {model::InitialState::kCentred,
+                                         model::InitialState::kDescended,
+                                         model::InitialState::kAscended};
+  for (int i = 0; i < 3; ++i)
+    s +=
+        std::string(i ? ", " : "") + model::InitialStateName(states[i]) + " " + FormatG(rmse[i], 3);
+  return s + " " + unit + " over samples " + std::to_string(from) + "–" + std::to_string(to) +
+         ": " + model::InitialStateName(state);
+}
+
+std::vector<InitialStateEvidence> DetectInitialStates(const io::RecordSet& set,
+                                                      const FitOptions& base) {
+  FitOptions o = base;
+  o.family = "prandtl-ishlinskii";
+  o.effects.clear();
+  o.family_options.pi_operators = 12;
+  o.family_options.initial_state = model::InitialState::kCentred;
+  o.uncertainty = false;
+  o.progress = nullptr;
+  o.evaluator_factory = nullptr;
+  FitResult fit = FitRecords(set, o);  // nothing searched: the weights by NNLS
+  // With a transport delay where it lowers the training RMSE by 30 % or more: a sensor's lag at the
+  // jump from rest would swamp the branch (the line search of one parameter, local). Not for less:
+  // a delay also takes up some of the misfit of an operator unlike the plant, and then reads the
+  // first branch wrong.
+  FitOptions od = o;
+  od.effects = {EffectKind::Named("delay")};
+  od.sizing = {};
+  od.sizing.enabled = true;
+  od.search.algorithm = opt::SearchAlgorithm::kPso;
+  od.search.line = {};
+  FitResult delayed = FitRecords(set, od);
+  if (delayed.train_mse < 0.49 * fit.train_mse) {
+    fit = std::move(delayed);
+    o = od;
+  }
+  const DataScale& scale = fit.model->scale();
+  const double range = scale.u_max - scale.u_min;
+  const model::InitialState states[3] = {model::InitialState::kCentred,
+                                         model::InitialState::kDescended,
+                                         model::InitialState::kAscended};
+  std::vector<std::shared_ptr<RecordModel>> models;
+  for (model::InitialState s : states) {
+    FamilyOptions fo = o.family_options;
+    fo.initial_state = s;
+    models.push_back(
+        std::make_shared<RecordModel>(MakeFamily(o.family, scale, fo), o.effects, scale));
+  }
+  std::vector<InitialStateEvidence> out;
+  for (const io::Record& r : set.records) {
+    InitialStateEvidence ev;
+    ev.record = r.name;
+    ev.role = r.role;
+    // The first branch: from the end of the rest until the drive has been within 5 % of both ends
+    // of the training range (the memory at rest is wiped out then: every state gives one output).
+    const size_t from = std::min(r.rest_samples, r.end_scored);
+    const double margin = 0.05 * range;
+    bool low = r.u[0] <= scale.u_min + margin, high = r.u[0] >= scale.u_max - margin;
+    size_t to = r.end_scored;
+    for (size_t k = from; k < r.end_scored; ++k) {
+      low = low || r.u[k] <= scale.u_min + margin;
+      high = high || r.u[k] >= scale.u_max - margin;
+      if (low && high) {
+        to = k + 1;
+        break;
+      }
+    }
+    ev.from = from;
+    ev.to = to;
+    if (to <= from + 2) {
+      ev.note = "no first branch (the drive does not leave its rest before the window ends)";
+      out.push_back(ev);
+      continue;
+    }
+    ev.rise = r.u[to - 1] - r.u[0];
+    double best = kInf;
+    for (int s = 0; s < 3; ++s) {
+      std::vector<double> yhat;
+      Evaluate(*models[static_cast<size_t>(s)], fit.params, fit.weights, r, &yhat);
+      double sse = 0;
+      for (size_t k = from; k < to; ++k) sse += (r.y[k] - yhat[k]) * (r.y[k] - yhat[k]);
+      ev.rmse[s] = std::sqrt(sse / static_cast<double>(to - from));
+      if (!std::isfinite(ev.rmse[s])) ev.rmse[s] = kInf;
+      if (ev.rmse[s] < best) {
+        best = ev.rmse[s];
+        ev.state = states[s];
+      }
+    }
+    out.push_back(ev);
+  }
+  return out;
+}
+
+model::InitialState TrainingInitialState(const std::vector<InitialStateEvidence>& evidence) {
+  int count[3] = {0, 0, 0};
+  for (const auto& e : evidence)
+    if (e.role == model::CaseRole::kTrain && e.note.empty()) ++count[static_cast<int>(e.state)];
+  int best = 0;
+  for (int s = 1; s < 3; ++s)
+    if (count[s] > count[best]) best = s;
+  return static_cast<model::InitialState>(best);
+}
+
+std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptions& options,
+                                     model::InitialState state) {
+  std::vector<std::string> families = options.families;
+  if (families.empty())
+    for (const auto& f : FamilyNames())
+      if (f != "bimorph-fin") families.push_back(f);
+  std::vector<std::vector<EffectKind>> sets = options.effect_sets;
+  if (sets.empty()) {
+    const EffectKind delay = ParseEffect("delay"), creep = ParseEffect("creep");
+    sets = {{}, {delay}, {creep}, {creep, delay}};
+  }
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  std::vector<std::string> unsupported;
+  for (const EffectInfo& e : EffectLibrary(scale))
+    if (!e.unsupported.empty()) unsupported.push_back(e.name);
+  std::vector<Candidate> out;
+  for (const std::string& f : families) {
+    const std::vector<std::string> excluded = MakeFamily(f, scale)->excluded_effects();
+    for (const auto& effects : sets) {
+      bool ok = true;
+      for (EffectKind e : effects)
+        ok = ok && !Takes(excluded, EffectName(e)) && !Takes(unsupported, EffectName(e));
+      if (!ok) continue;
+      // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
+      // only (each evaluation re-makes the regressors): the finalists get the others.
+      std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
+      if (LinearFamily(f) && !effects.empty() && !levels.empty())
+        levels = {*std::min_element(levels.begin(), levels.end())};
+      for (int l : levels) out.push_back({f, effects, l, state});
+    }
+  }
+  return out;
+}
+
+ModelScore CrossValidate(
+    const io::RecordSet& set, const Candidate& c, const FitOptions& fit, int folds,
+    const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service) {
+  size_t fits = 0;
+  return CrossValidateAll(
+      set, {c}, [&](size_t, size_t) { return fit; }, folds, fit.threads, service, nullptr,
+      &fits)[0];
+}
+
+size_t OneStandardErrorChoice(std::vector<ModelScore>& scores) {
+  size_t best = scores.size();
+  for (size_t i = 0; i < scores.size(); ++i)
+    if (std::isfinite(scores[i].cv_rmse) &&
+        (best == scores.size() || scores[i].cv_rmse < scores[best].cv_rmse))
+      best = i;
+  if (best == scores.size()) throw InputError("no candidate model could be fitted in every fold");
+  const ModelScore& b = scores[best];
+  for (ModelScore& s : scores) {
+    s.within_one_se = false;
+    s.se_vs_best = b.cv_se;
+    if (!std::isfinite(s.cv_rmse)) continue;
+    const size_t K = b.fold_rmse.size();
+    if (K >= 2 && s.fold_rmse.size() == K) {
+      double mean = 0, var = 0;
+      for (size_t k = 0; k < K; ++k)
+        mean += (s.fold_rmse[k] - b.fold_rmse[k]) / static_cast<double>(K);
+      for (size_t k = 0; k < K; ++k) {
+        const double d = s.fold_rmse[k] - b.fold_rmse[k] - mean;
+        var += d * d;
+      }
+      s.se_vs_best = std::sqrt(var / static_cast<double>(K - 1) / static_cast<double>(K));
+    }
+    s.within_one_se = s.cv_rmse - b.cv_rmse <= s.se_vs_best;
+  }
+  size_t pick = best;
+  for (size_t i = 0; i < scores.size(); ++i) {
+    const ModelScore& s = scores[i];
+    if (!s.within_one_se) continue;
+    const ModelScore& p = scores[pick];
+    if (s.parameters < p.parameters || (s.parameters == p.parameters && s.cv_rmse < p.cv_rmse))
+      pick = i;
+  }
+  return pick;
+}
+
+SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  SelectionResult res;
+  res.folds = options.folds;
+  auto say = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
+  const int threads = std::max(1, options.fit.threads);
+  // 1. The memory at rest the records' first rises show (reported per record; the training
+  // records' choose), unless the user gave one.
+  res.initial_states = DetectInitialStates(set, options.fit);
+  res.detected = TrainingInitialState(res.initial_states);
+  const model::InitialState first =
+      options.initial_state_given ? options.fit.family_options.initial_state : res.detected;
+  // The other state worth trying in the second round: the rest-level rule where it differs for a
+  // training record.
+  std::vector<model::InitialState> states = {first};
+  if (!options.initial_state_given) {
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
+      if (model::ResolveInitialState(model::InitialState::kAuto, r->u[0], scale.u_min,
+                                     scale.u_max) != first) {
+        states.push_back(model::InitialState::kAuto);
+        break;
+      }
+  }
+  // 2. Screening: every candidate, a small search.
+  const std::vector<Candidate> grid = CandidateGrid(set, options, first);
+  say("screening " + std::to_string(grid.size()) + " candidates by " +
+      std::to_string(options.folds) + "-fold blocked cross-validation on the training records");
+  std::vector<ModelScore> screen = CrossValidateAll(
+      set, grid, [&](size_t, size_t searched) { return ScreenOptions(options, searched); },
+      options.folds, threads, options.service, options.progress, &res.fold_fits);
+  for (auto& s : screen) s.screen_cv_rmse = s.cv_rmse;
+  // 3. The finalists: the best of the screening and the simplest within one SE of its best,
+  // each with every initial state worth trying, with the full search.
+  std::vector<size_t> order(screen.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return screen[a].cv_rmse < screen[b].cv_rmse; });
+  std::vector<size_t> picked;
+  for (size_t i : order)
+    if (picked.size() < options.finalists && std::isfinite(screen[i].cv_rmse)) picked.push_back(i);
+  if (picked.empty())
+    throw InputError("no candidate model could be fitted in every fold of the screening");
+  const size_t simplest = OneStandardErrorChoice(screen);
+  for (auto& s : screen) s.within_one_se = false;  // (the finals' rule is reported)
+  if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
+  std::vector<Candidate> finals;
+  std::vector<double> final_screen;
+  auto add = [&](Candidate c, double screened, bool every_state) {
+    for (const Candidate& f : finals)
+      if (SameModel(f, c)) return;
+    for (model::InitialState s : states) {
+      if (s != first && (!every_state || !TakesInitialState(c.family))) continue;
+      c.initial_state = s;
+      finals.push_back(c);
+      final_screen.push_back(screened);
+    }
+  };
+  for (size_t i : picked) add(grid[i], screen[i].cv_rmse, i == picked.front());
+  // The screening's best: with the other initial state (above), and, a linear family with effects
+  // screened at its coarsest resolution, at the others.
+  const Candidate& top = grid[picked.front()];
+  if (LinearFamily(top.family) && !top.effects.empty())
+    for (int l : options.levels) {
+      Candidate c = top;
+      c.levels = l;
+      add(c, std::numeric_limits<double>::quiet_NaN(), false);
+    }
+  say("cross-validating " + std::to_string(finals.size()) + " finalists with the full search");
+  std::vector<ModelScore> second = CrossValidateAll(
+      set, finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
+      options.folds, threads, options.service, options.progress, &res.fold_fits);
+  for (size_t i = 0; i < second.size(); ++i) {
+    second[i].round = 2;
+    second[i].screen_cv_rmse = final_screen[i];
+  }
+  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
+  const size_t chosen = OneStandardErrorChoice(second);
+  res.best_cv_rmse = kInf;
+  for (const auto& s : second) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
+  say("chosen: " + finals[chosen].Describe() + " (CV RMSE " +
+      io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
+      ")");
+  // 5. After the choice: the finalists refitted on every training record; the withheld errors.
+  std::vector<FitResult> refits(finals.size());
+  RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    FitOptions f = finals[i].Options(
+        i == chosen
+            ? options.fit
+            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+    if (options.service) f.evaluator_factory = options.service(f.family_options);
+    f.threads = options.service ? threads : 1;
+    f.progress = nullptr;
+    f.uncertainty = i == chosen && options.fit.uncertainty;
+    try {
+      refits[i] = FitRecords(set, f);
+    } catch (const InputError& e) {
+      if (i == chosen) throw;
+      second[i].error = e.what();
+    }
+  });
+  for (size_t i = 0; i < finals.size(); ++i) {
+    if (!refits[i].model) continue;
+    double tr = 0, wh = 0;
+    size_t nt = 0, nw = 0;
+    for (const RecordMetrics& m : refits[i].metrics) {
+      const double sse = m.rmse * m.rmse * static_cast<double>(m.samples);
+      if (m.role == model::CaseRole::kTrain) {
+        tr += sse;
+        nt += m.samples;
+      } else {
+        wh += sse;
+        nw += m.samples;
+      }
+    }
+    second[i].train_rmse = nt ? std::sqrt(tr / static_cast<double>(nt)) : kInf;
+    if (nw) second[i].withheld_rmse = std::sqrt(wh / static_cast<double>(nw));
+  }
+  res.fit = std::move(refits[chosen]);
+  res.fit_options = finals[chosen].Options(options.fit);
+  // The ranking: the finalists by CV RMSE, then the screened-only ones by theirs.
+  std::vector<size_t> o2(second.size());
+  for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
+  std::stable_sort(o2.begin(), o2.end(),
+                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
+  for (size_t i : o2) {
+    if (i == chosen) res.chosen = res.ranking.size();
+    res.ranking.push_back(second[i]);
+  }
+  for (size_t i : order) {
+    bool final = false;
+    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
+    if (!final) res.ranking.push_back(screen[i]);
+  }
+  res.noise = EstimateNoiseFloor(set);
+  res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return res;
+}
+
+}  // namespace pz::records
