@@ -112,6 +112,12 @@ std::string Fmt(double x, int prec = 4) {
   return s.str();
 }
 
+/// The NRMSE with its unit, or why there is none: a record whose measured response is constant
+/// over its window has no range to divide by (records::RecordMetrics::nrmse_pct is infinite).
+std::string NrmseText(const records::RecordMetrics& e) {
+  return std::isfinite(e.nrmse_pct) ? Fmt(e.nrmse_pct, 3) + " %" : "— (the measured response is constant)";
+}
+
 /// The averaging window of the creep figure: one period of the dominant drive frequency (a whole
 /// loop's error averages out, the drift stays), at least 5 samples.
 double TrendWindow(const records::DataScale& s) {
@@ -287,7 +293,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
        << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
        << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
-       << Fmt(e.max_at_s) << " | " << Fmt(e.nrmse_pct, 3) << " |\n";
+       << Fmt(e.max_at_s) << " | " << NrmseText(e) << " |\n";
   }
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (records/extrapolation.h)\n\n";
@@ -353,7 +359,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     g["rmse"] = Num(e.rmse);
     g["max_abs"] = Num(e.max_abs);
     g["max_at_s"] = Num(e.max_at_s);
-    g["nrmse_pct"] = Num(e.nrmse_pct);
+    if (std::isfinite(e.nrmse_pct)) g["nrmse_pct"] = Num(e.nrmse_pct);  // none: a constant response
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
@@ -495,8 +501,7 @@ int RunFit(const FitArgs& a) {
     const auto& e = r.metrics[i];
     std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
               << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
-              << Fmt(e.max_at_s) << " s, NRMSE "
-              << Fmt(e.nrmse_pct, 3) << " %\n";
+              << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
   }
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   if (r.spectrum_regularisation.used)

@@ -60,8 +60,8 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
     os << "\n| record | role | RMSE before | RMSE after | NRMSE after |\n|---|---|---|---|---|\n";
     for (size_t i = 0; i < set.records.size(); ++i) {
       os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role) << " | "
-         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << G(c.fit.metrics[i].nrmse_pct, 3)
-         << " % |\n";
+         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << (std::isfinite(c.fit.metrics[i].nrmse_pct) ? G(c.fit.metrics[i].nrmse_pct, 3) + " %" : "— (constant response)")
+         << " |\n";
     }
   }
   if (d.next) {

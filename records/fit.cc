@@ -770,6 +770,16 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
                                                 options.lm.fd_step, problem.residual_weight);
   }
   const RecordFitness::Output out = fitness.Run(best);
+  if (!std::isfinite(out.mse)) {
+    // Every vector the search tried diverged (each cost the penalty), so the best is one of them:
+    // a named error, not metrics and a fit.json of NaN.
+    std::string names;
+    for (const io::Record* r : train) names += (names.empty() ? "" : ", ") + r->name;
+    throw InputError(model->Describe() + ": the model's output on the training records (" + names +
+                     ") is not finite at any of the " + std::to_string(res.evaluations) +
+                     " parameter vectors evaluated in the search box (every simulation diverged): try more "
+                     "integration sub-steps (--substeps), a smoother drive, or another family");
+  }
   res.params = best;
   res.weights = out.weights;
   res.regularisation = fitness.validation();
