@@ -316,6 +316,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
               << "; the model's " << Fmt(m.offset) << ")";
     if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
+    if (e.no_gain > 0)
+      std::cout << "; " << e.no_gain << " sample(s) where the model's local gain is not finite, left out of the "
+                << yu << " figures";
     std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
     // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a drive the

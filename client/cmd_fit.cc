@@ -112,6 +112,11 @@ std::string Fmt(double x, int prec = 4) {
   return s.str();
 }
 
+/// The fitted model's prediction is finite on the record (a withheld record's may diverge: a drive
+/// beyond the training range, an oscillator's resonance).
+bool Finite(const records::RecordMetrics& e) { return std::isfinite(e.rmse); }
+constexpr const char* kDiverges = "— (the model's prediction is not finite: it diverges on this record)";
+
 /// The NRMSE with its unit, or why there is none: a record whose measured response is constant
 /// over its window has no range to divide by (records::RecordMetrics::nrmse_pct is infinite).
 std::string NrmseText(const records::RecordMetrics& e) {
@@ -292,8 +297,12 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     const auto& e = r.metrics[i];
     os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
        << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
-       << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
-       << Fmt(e.max_at_s) << " | " << NrmseText(e) << " |\n";
+       << io::OffsetModeName(rec.offset_mode) << ") | ";
+    if (Finite(e)) {
+      os << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | " << Fmt(e.max_at_s) << " | " << NrmseText(e) << " |\n";
+    } else {
+      os << kDiverges << " | | | |\n";
+    }
   }
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (records/extrapolation.h)\n\n";
@@ -359,7 +368,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     g["rmse"] = Num(e.rmse);
     g["max_abs"] = Num(e.max_abs);
     g["max_at_s"] = Num(e.max_at_s);
-    if (std::isfinite(e.nrmse_pct)) g["nrmse_pct"] = Num(e.nrmse_pct);  // none: a constant response
+    g["nrmse_pct"] = Num(e.nrmse_pct);  // null: a constant response
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
@@ -500,8 +509,13 @@ int RunFit(const FitArgs& a) {
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
     std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
-              << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
-              << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
+              << " ";
+    if (Finite(e)) {
+      std::cout << "RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
+                << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
+    } else {
+      std::cout << kDiverges << "\n";
+    }
   }
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   if (r.spectrum_regularisation.used)

@@ -112,6 +112,9 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
     candidates.push_back(Obj(x));
   }
   f["candidates"] = List(candidates);
+  std::vector<Value> diverged;
+  for (const auto& n : d.diverged) diverged.push_back(Text(n));
+  f["diverged"] = List(diverged);  // candidates left out: their prediction diverges on withheld records
   f["named"] = d.named >= 0 ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : Null();
   f["confidence"] = Num(d.confidence);
   f["verdict_kind"] = Text(d.verdict_kind);

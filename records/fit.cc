@@ -211,6 +211,10 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
     J.col(col) /= scale[c];
     ok[c] = J.col(col).squaredNorm() > 0;
   }
+  // A Jacobian of no column (every perturbed evaluation failed: the bimorph fin on issue 37's
+  // random records) or one that overflowed has no strength to choose: the strength stays (Eigen's
+  // decomposition of the 0 × 0 covariance below crashed).
+  if (!J.allFinite() || std::none_of(ok.begin(), ok.end(), [](char c) { return c != 0; })) return false;
   // Unknowns: the spectrum's weights (≥ 0), then every other parameter as a difference of two
   // non-negative ones (free); target t = r + J p₀, r = y − ŷ.
   std::vector<Eigen::Index> cols;  // column of J of each unknown, its sign

@@ -295,16 +295,20 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
     if (inv.ctl().saturated != saturated) ++e.clipped;
     const double du = u - r.u[k], dy = g * du;
     sse_u += du * du;
+    ++e.n;
+    if (!std::isfinite(dy)) {  // no local gain here (issue 37: an oscillator at a clipped drive gave NaN)
+      ++e.no_gain;
+      continue;
+    }
     sse_y += dy * dy;
     e.max_y = std::max(e.max_y, std::abs(dy));
-    ++e.n;
   }
   if (e.n == 0) {
     throw InputError(r.Label() + ": no scored sample has its response within the record (the inverse reads " +
                      std::to_string(preview) + " sample(s) ahead: the model's delay)");
   }
   e.rms_u = std::sqrt(sse_u / static_cast<double>(e.n));
-  e.rms_y = std::sqrt(sse_y / static_cast<double>(e.n));
+  e.rms_y = e.n > e.no_gain ? std::sqrt(sse_y / static_cast<double>(e.n - e.no_gain)) : 0.0;
   return e;
 }
 

@@ -14,7 +14,7 @@
 // constant (held) and clipped drive segments; clipped and quantised responses; sample rates from
 // 40 Hz to 5 kHz in s or ms; offsets fit / rest / fixed; settling windows.
 //
-// The default run is a fixed seed and 16 sets (about 30 s on one core). More:
+// The default run is a fixed seed and 128 sets (about 4 s of CPU). More:
 //   PIEZOID_PROPERTY_CASES=500 PIEZOID_PROPERTY_SEED=7 build/tests/client/client_records_property_test
 // A failure names the set's seed; PIEZOID_PROPERTY_VERBOSE=1 prints every set and what its fit
 // gave; PIEZOID_PROPERTY_KEEP=1 keeps the sets' folders (the test's
@@ -481,7 +481,7 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
 }
 
 TEST(RecordsProperty, EveryFamilyGivesAResultOrANamedErrorOnRandomSets) {
-  const long cases = EnvLong("PIEZOID_PROPERTY_CASES", 16);
+  const long cases = EnvLong("PIEZOID_PROPERTY_CASES", 128);
   const uint64_t seed = static_cast<uint64_t>(EnvLong("PIEZOID_PROPERTY_SEED", 37));
   const bool keep = EnvLong("PIEZOID_PROPERTY_KEEP", 0) > 0;
   const fs::path root = fs::temp_directory_path() / ("pz_records_property_" + std::to_string(::getpid()));
@@ -492,6 +492,7 @@ TEST(RecordsProperty, EveryFamilyGivesAResultOrANamedErrorOnRandomSets) {
     const uint64_t s = seed * 1000003 + static_cast<uint64_t>(i);
     const DrawnSet set = DrawSet(s, static_cast<size_t>(i));
     watchdog.Start(set.description);
+    if (EnvLong("PIEZOID_PROPERTY_VERBOSE", 0) > 0) std::fprintf(stderr, "set %ld: %s\n", i, set.description.c_str());
     const fs::path dir = root / std::to_string(i);
     Check(set, dir, i % 4 == 3, tally);
     if (!keep) fs::remove_all(dir);
