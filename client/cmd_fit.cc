@@ -313,7 +313,9 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
       const auto& rec = set.records[i];
       if (rec.role == model::CaseRole::kTrain) continue;
       os << "- " << rec.name << ": "
-         << records::DescribeDepthBins(records::ErrorByReversalDepth(rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+         << (Finite(r.metrics[i]) ? records::DescribeDepthBins(records::ErrorByReversalDepth(
+                                        rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+                                  : std::string(kDiverges))
          << "\n";
     }
   }
