@@ -224,10 +224,15 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
   records::Stepper fwd(m);
   const std::vector<double> y = Forward(fwd, u);
   const Tracking e = TrackingError(ref.t, ref.y, y);
+  // The forward model may diverge on the drive (an unstable oscillator fitted on little data): its
+  // prediction from there on is left empty, and said so, rather than written as NaN.
+  const size_t diverged = static_cast<size_t>(
+      std::find_if(y.begin(), y.end(), [](double v) { return !std::isfinite(v); }) - y.begin());
   io::WriteFileWith(a.out, [&](std::ostream& os) {
     os << "t_s,drive_" << m.drive_unit << ",predicted_" << m.response_unit << "\n";
     for (size_t k = 0; k < u.size(); ++k)
-      os << io::FormatNumber(ref.t[k]) << "," << io::FormatNumber(u[k]) << "," << io::FormatNumber(y[k]) << "\n";
+      os << io::FormatNumber(ref.t[k]) << "," << io::FormatNumber(u[k]) << ","
+         << (k < diverged ? io::FormatNumber(y[k]) : std::string()) << "\n";
   });
   const auto range = std::minmax_element(ref.y.begin(), ref.y.end());
   std::cout << "piezoid compensate: " << m.Model()->Describe() << " from " << a.model << ", reference " << a.reference
@@ -235,8 +240,14 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
             << m.response_unit << ")\n"
             << "  drive written to " << a.out << " (rest drive " << Fmt(u0) << " " << m.drive_unit << ", limits "
             << Fmt(inv.ctl().u_lo) << " … " << Fmt(inv.ctl().u_hi) << " " << m.drive_unit << ")\n"
-            << "  predicted tracking error (forward model on that drive): RMSE " << Fmt(e.rmse) << " "
-            << m.response_unit << ", max " << Fmt(e.max_abs) << " at " << Fmt(e.max_at) << " s\n";
+            << "  predicted tracking error (forward model on that drive): ";
+  if (diverged < y.size()) {
+    std::cout << "none: the forward model's output on that drive is not finite from " << Fmt(ref.t[diverged])
+              << " s on (it diverges: the model is unstable there; the prediction column is left empty)\n";
+  } else {
+    std::cout << "RMSE " << Fmt(e.rmse) << " " << m.response_unit << ", max " << Fmt(e.max_abs) << " at "
+              << Fmt(e.max_at) << " s\n";
+  }
   if (inv.has_delay()) {
     std::cout << "  the model's delay cannot be undone by a causal step: the reference's preview of "
               << inv.preview_samples() << " sample(s) was used (the drive leads it)" << DelayCaveat(inv) << "\n";
@@ -316,6 +327,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
               << "; the model's " << Fmt(m.offset) << ")";
     if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
+    if (e.no_gain > 0)
+      std::cout << "; " << e.no_gain << " sample(s) where the model's local gain is not finite, left out of the "
+                << yu << " figures";
     std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
     // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a drive the

@@ -121,6 +121,17 @@ std::string Fmt(double x, int prec = 4) {
   return s.str();
 }
 
+/// The fitted model's prediction is finite on the record (a withheld record's may diverge: a drive
+/// beyond the training range, an oscillator's resonance).
+bool Finite(const records::RecordMetrics& e) { return std::isfinite(e.rmse); }
+constexpr const char* kDiverges = "— (the model's prediction is not finite: it diverges on this record)";
+
+/// The NRMSE with its unit, or why there is none: a record whose measured response is constant
+/// over its window has no range to divide by (records::RecordMetrics::nrmse_pct is infinite).
+std::string NrmseText(const records::RecordMetrics& e) {
+  return std::isfinite(e.nrmse_pct) ? Fmt(e.nrmse_pct, 3) + " %" : "— (the measured response is constant)";
+}
+
 /// The averaging window of the creep figure: one period of the dominant drive frequency (a whole
 /// loop's error averages out, the drift stays), at least 5 samples.
 double TrendWindow(const records::DataScale& s) {
@@ -296,8 +307,12 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     const auto& e = r.metrics[i];
     os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
        << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
-       << io::OffsetModeName(rec.offset_mode) << ") | " << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | "
-       << Fmt(e.max_at_s) << " | " << Fmt(e.nrmse_pct, 3) << " |\n";
+       << io::OffsetModeName(rec.offset_mode) << ") | ";
+    if (Finite(e)) {
+      os << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | " << Fmt(e.max_at_s) << " | " << NrmseText(e) << " |\n";
+    } else {
+      os << kDiverges << " | | | |\n";
+    }
   }
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (records/extrapolation.h)\n\n";
@@ -308,7 +323,9 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
       const auto& rec = set.records[i];
       if (rec.role == model::CaseRole::kTrain) continue;
       os << "- " << rec.name << ": "
-         << records::DescribeDepthBins(records::ErrorByReversalDepth(rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+         << (Finite(r.metrics[i]) ? records::DescribeDepthBins(records::ErrorByReversalDepth(
+                                        rec, r.yhat[i], m.scale().u_max - m.scale().u_min))
+                                  : std::string(kDiverges))
          << "\n";
     }
   }
@@ -366,7 +383,7 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     g["rmse"] = Num(e.rmse);
     g["max_abs"] = Num(e.max_abs);
     g["max_at_s"] = Num(e.max_at_s);
-    g["nrmse_pct"] = Num(e.nrmse_pct);
+    g["nrmse_pct"] = Num(e.nrmse_pct);  // null: a constant response
     records.push_back(Obj(m));
   }
   f["records"] = List(records);
@@ -563,9 +580,13 @@ int RunFit(const FitArgs& args) {
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
     std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
-              << " RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
-              << Fmt(e.max_at_s) << " s, NRMSE "
-              << Fmt(e.nrmse_pct, 3) << " %\n";
+              << " ";
+    if (Finite(e)) {
+      std::cout << "RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
+                << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
+    } else {
+      std::cout << kDiverges << "\n";
+    }
   }
   if (r.resolution.used) std::cout << "  preisach grid: " << r.resolution.Describe() << "\n";
   if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";

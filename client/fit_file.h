@@ -26,6 +26,8 @@ google::protobuf::Value FitModelJson(const io::RecordSet& set, const records::Fi
 /// The spec of a fit.json's model section. Throws InputError naming the file and the field, the
 /// version needed, or a family/effect/parameter that does not fit.
 records::ModelSpec LoadFit(const std::string& path);
+/// LoadFit of a fit.json's text (`path` names it in the errors): the fuzzer's entry point.
+records::ModelSpec LoadFitText(const std::string& path, const std::string& text);
 
 /// True when the file is a fit.json (a JSON object with format_version or model), not a network file.
 bool LooksLikeFitJson(const std::string& path);

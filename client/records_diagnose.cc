@@ -62,8 +62,8 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
     os << "\n| record | role | RMSE before | RMSE after | NRMSE after |\n|---|---|---|---|---|\n";
     for (size_t i = 0; i < set.records.size(); ++i) {
       os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role) << " | "
-         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << G(c.fit.metrics[i].nrmse_pct, 3)
-         << " % |\n";
+         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << (std::isfinite(c.fit.metrics[i].nrmse_pct) ? G(c.fit.metrics[i].nrmse_pct, 3) + " %" : "— (constant response)")
+         << " |\n";
     }
   }
   if (d.next) {
@@ -116,6 +116,9 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
     candidates.push_back(Obj(x));
   }
   f["candidates"] = List(candidates);
+  std::vector<Value> diverged;
+  for (const auto& n : d.diverged) diverged.push_back(Text(n));
+  f["diverged"] = List(diverged);  // candidates left out: their prediction diverges on withheld records
   f["named"] = d.named >= 0 ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : Null();
   f["confidence"] = Num(d.confidence);
   f["verdict_kind"] = Text(d.verdict_kind);

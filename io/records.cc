@@ -6,6 +6,7 @@
 #include <map>
 #include <numbers>
 #include <sstream>
+#include <tuple>
 
 #include "io/bench_data.h"
 #include "io/csv.h"
@@ -182,6 +183,13 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
     d.t[i] = csv.Number(i, ct) * tu.factor;
     d.u[i] = csv.Number(i, cu) * d.drive.factor;
     d.y[i] = csv.Number(i, cy) * d.response.factor;
+    // A finite number can leave the doubles in its unit's conversion (1e306 kV): named, not inf.
+    for (const auto& [value, col, unit] : {std::tuple{d.t[i], ct, tu.canonical}, std::tuple{d.u[i], cu, d.drive.canonical},
+                                           std::tuple{d.y[i], cy, d.response.canonical}}) {
+      if (!std::isfinite(value))
+        throw InputError(csv.Where(i, col) + ": " + csv.Field(i, col) + " is beyond the range of a number in " + unit +
+                         " (converted to the set's unit)");
+    }
     if (i > 0 && !(d.t[i] > d.t[i - 1])) {
       throw InputError(csv.Where(i, ct) + ": time " + csv.Field(i, ct) + " is not after the previous " +
                        csv.Field(i - 1, ct) + " (times must increase strictly: unsorted or repeated rows)");
@@ -346,6 +354,9 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
       }
       r.offset_mode = OffsetMode::kFixed;
       r.offset = *v * it->second.response.factor;
+      if (!std::isfinite(r.offset))
+        throw InputError(csv.Where(i, *c) + ": offset '" + off + "' is beyond the range of a number in " +
+                         it->second.response.canonical + " (converted to the set's unit)");
     }
     FinishRecord(r, opt);
     used.emplace_back(name, &it->second);

@@ -155,6 +155,15 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     for (size_t k = r.first_scored; k < r.end_scored; ++k) e.push_back(r.y[k] - d.base.yhat[i][k]);
     base_res.push_back(std::move(e));
   }
+  if (const double s = Sse(set, d.base, true); !std::isfinite(s)) {
+    std::string names;
+    for (size_t i = 0; i < set.records.size(); ++i)
+      if (Withheld(set.records[i]) && !std::isfinite(d.base.metrics[i].rmse))
+        names += (names.empty() ? "" : ", ") + set.records[i].name;
+    throw InputError(d.base.model->Describe() + ": the fitted model's prediction is not finite on the withheld " +
+                     "record(s) " + names + " (it diverges there): no gap to diagnose; train on records that " +
+                     "cover their drive, or try more integration sub-steps or another family");
+  }
   d.noise = EstimateNoiseFloor(set, &base_res);
   const double sigma2 = d.noise.sigma * d.noise.sigma;
   const double nw = static_cast<double>(d.withheld_samples), nt = static_cast<double>(d.train_samples);
@@ -211,7 +220,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     }
     c.fit = FitModel(set, model, ce);
     const int k = static_cast<int>(e->Params(scale).size());
-    ScoreCandidate(gap, Sse(set, c.fit, true), Sse(set, c.fit, false), k,
+    const double s_withheld = Sse(set, c.fit, true);
+    if (!std::isfinite(s_withheld)) {  // diverges on a withheld record: nothing to score
+      d.diverged.push_back(EffectName(e));
+      continue;
+    }
+    ScoreCandidate(gap, s_withheld, Sse(set, c.fit, false), k,
                    PatternExplained(base_ex, BinExcess(set, c.fit, sigma2, scale)), o.rules, c);
     c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.rules.blocks);
     d.candidates.push_back(std::move(c));
@@ -245,6 +259,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   std::vector<VerdictCandidate> ranked_names;
   for (const RecordCandidate& c : d.candidates) ranked_names.push_back({EffectName(c.kind), &c});
   d.verdict = ComposeVerdict(gap, ranked_names, naming, o.rules, text);
+  if (!d.diverged.empty()) {
+    std::string names;
+    for (const auto& n : d.diverged) names += (names.empty() ? "" : ", ") + n;
+    d.verdict += " Left out: " + names + " (the fitted model's prediction is not finite on the withheld records: it " +
+                 "diverges there).";
+  }
   return d;
 }
 

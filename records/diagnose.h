@@ -77,9 +77,13 @@ struct RecordDiagnosis {
   std::optional<ProposedExperiment> next;
   ExcitationReport excitation;  ///< what training excites, what each withheld record needs (records/excitation.h)
   std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict (empty: none)
+  /// Candidates left out because their fitted model's prediction is not finite on a withheld
+  /// record (it diverges there: no score to rank), named at the end of the verdict.
+  std::vector<std::string> diverged;
 };
 
-/// Throws InputError when the set has no training or no withheld record, or on bad options.
+/// Throws InputError when the set has no training or no withheld record, on bad options, or when
+/// the base model's prediction is not finite on a withheld record (no gap to measure).
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
 /// What a diagnosis said, as a calibration check counts it (records/verdict.h).

@@ -140,7 +140,7 @@ void RecordModel::ApplyLinearOutputEffects(const io::Record& r, std::span<const 
 }
 
 size_t SimulatedFrom(const io::Record& r, size_t end) {
-  return std::min(std::max<size_t>(r.rest_samples, 1) - 1, std::max<size_t>(end, 1) - 1);
+  return std::min(std::max<size_t>(r.rest_samples, 1) - 1, end >= 2 ? end - 2 : 0);
 }
 
 std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r, size_t end) const {

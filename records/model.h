@@ -53,9 +53,12 @@ const std::vector<std::string>& EffectNames();
 EffectKind ParseEffect(std::string_view name);
 
 /// The first simulated sample of a record: the last sample of its rest segment (the model is at
-/// rest before it), at most end − 1 (end ≥ 1). It may lie after the scored window's start when the
-/// window starts inside the rest: rows of regressors computed from here cover [from, end), and a
-/// sample k < from takes the rest row (RegressorRow).
+/// rest before it), at most end − 2 (end ≥ 2): two samples at least, as a sampled drive has them
+/// (the bimorph fin's, the Bouc–Wen oscillator's; a window that ends inside the rest gave NaN or
+/// an error naming their internals), exact because the model is at rest all along the rest. It
+/// may lie after the scored window's start when the window starts inside the rest: rows of
+/// regressors computed from here cover [from, end), and a sample k < from takes the rest row
+/// (RegressorRow).
 size_t SimulatedFrom(const io::Record& r, size_t end);
 /// The row of sample k in regressors computed from sample `from` (SimulatedFrom): k − from, or the
 /// rest row 0 for a sample before it.

@@ -148,6 +148,9 @@ struct ReplayError {
   double rms_u = 0, rms_y = 0, max_y = 0;
   size_t n = 0;  ///< samples scored
   size_t clipped = 0;  ///< scored samples whose drive the inverse clipped to a limit (the record's drive range)
+  /// Scored samples where the model's local gain is not finite (its one-step map overflows there):
+  /// left out of rms_y and max_y, which are over the others.
+  size_t no_gain = 0;
 };
 
 /// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the

@@ -1,17 +1,22 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, and runs the test suite; then, when clang is installed, the
-# libFuzzer target of the master's decoders for a bounded time (fuzz/run.sh, built in build-fuzz/;
-# PIEZOID_FUZZ_SECONDS, default 60, 0 = skip). Extra arguments go to ctest.
+# records and client tests under AddressSanitizer + UndefinedBehaviorSanitizer (scripts/sanitize.sh,
+# built in build-fuzz/; PIEZOID_SANITIZE=0 skips it) and the libFuzzer targets for a bounded time
+# (fuzz/run.sh in the same build-fuzz/: the master's decoders, the record-set reader, the fit.json
+# loader; PIEZOID_FUZZ_SECONDS, default 60 in all, 0 = skip). Extra arguments go to ctest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/deps.sh
 scripts/build.sh
 (cd "${PIEZOID_BUILD_DIR:-build}" && ctest --output-on-failure -j"$(nproc)" --timeout 600 "$@")
+if ! command -v "${PIEZOID_FUZZ_CXX:-clang++}" >/dev/null 2>&1; then
+  echo "test: clang++ not installed: sanitizer tests and fuzzing skipped"
+  exit 0
+fi
+if [ "${PIEZOID_SANITIZE:-1}" != 0 ]; then
+  scripts/sanitize.sh
+fi
 FUZZ_SECONDS=${PIEZOID_FUZZ_SECONDS:-60}
 if [ "$FUZZ_SECONDS" != 0 ]; then
-  if command -v "${PIEZOID_FUZZ_CXX:-clang++}" >/dev/null 2>&1; then
-    fuzz/run.sh "$FUZZ_SECONDS"
-  else
-    echo "test: clang++ not installed: fuzzing skipped"
-  fi
+  fuzz/run.sh "$FUZZ_SECONDS"
 fi

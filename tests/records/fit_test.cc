@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <iostream>
+#include <limits>
 #include <numbers>
 
 #include "model/bimorph.h"
@@ -401,6 +402,61 @@ TEST(RecordFit, NonNegativeLeastSquaresMatchesAnActiveSetByHand) {
   const Eigen::VectorXd w = NonNegativeLeastSquares(A.transpose() * A, A.transpose() * b);
   EXPECT_NEAR(w(0), 0.5, 1e-12);
   EXPECT_EQ(w(1), 0);
+}
+
+TEST(RecordFit, AWindowThatEndsInsideTheRestGivesEveryFamilyItsRestOutput) {
+  // Issue 37: a withheld record whose scored window lies inside its rest is simulated from the
+  // rest's last sample of the window, one sample; the bimorph fin's sampled drive needs two and
+  // gave NaN (its fits then diverged on every vector, or reported RMSE nan).
+  for (const Case& c : Cases()) {
+    SCOPED_TRACE(c.family);
+    const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
+    io::Record r = set.records[0];
+    ASSERT_GT(r.rest_samples, 100u);
+    io::SetWindow(r, r.t[10], r.t[60], 20, "inside the rest");
+    const DataScale scale = TruthScale(c);
+    const RecordModel m(std::shared_ptr<const Family>(MakeFamily(c.family, scale)), {}, scale);
+    const std::vector<double> params = m.family().linear() ? std::vector<double>{} : c.truth;
+    const std::vector<double> weights = m.family().linear() ? c.truth : std::vector<double>{};
+    std::vector<double> whole(r.size()), inside(r.end_scored);
+    const double rest = m.Simulate(r, params, weights, r.size(), whole);
+    m.Simulate(r, params, weights, r.end_scored, inside);
+    ASSERT_TRUE(std::isfinite(rest));
+    for (size_t k = 0; k < r.end_scored; ++k) {
+      ASSERT_TRUE(std::isfinite(inside[k])) << k;
+      EXPECT_NEAR(inside[k], rest, 1e-12 * std::max(1.0, std::abs(rest))) << k;
+    }
+    const RecordMetrics e = Evaluate(m, params, weights, r);
+    EXPECT_TRUE(std::isfinite(e.rmse));
+  }
+}
+
+/// A plant whose every simulation diverges (an unstable plant at this sample step).
+class DivergingFamily final : public Family {
+ public:
+  std::string name() const override { return "diverging"; }
+  std::string title() const override { return "diverging"; }
+  std::string equation() const override { return "y = inf"; }
+  const std::vector<ParamInfo>& params() const override { return params_; }
+  void Simulate(std::span<const double>, std::span<const double>, double, std::span<double> y) const override {
+    std::fill(y.begin(), y.end(), std::numeric_limits<double>::infinity());
+  }
+
+ private:
+  std::vector<ParamInfo> params_{{"a", "1", 0, 1, false}};
+};
+
+TEST(RecordFit, AFitWhoseEverySimulationDivergesIsANamedError) {
+  // Issue 37: `piezoid fit` reported RMSE nan on every record and wrote a fit.json of NaN.
+  const io::RecordSet set = MakeSet(Cases()[1], Waveform::kSine, 1);
+  const DataScale scale = TruthScale(Cases()[1]);
+  FitOptions o = QuickOptions("backlash-like");
+  o.search.pso.particles = 4;
+  o.search.pso.iterations = 2;
+  const std::string e = pz::testing::InputErrorOf(
+      [&] { FitModel(set, std::make_shared<RecordModel>(std::make_shared<DivergingFamily>(), std::vector<EffectKind>{}, scale), o); });
+  PZ_EXPECT_HAS(e, "diverging: the model's output on the training records (rec) is not finite");
+  PZ_EXPECT_HAS(e, "--substeps");
 }
 
 TEST(RecordFit, BadRequestsAreNamed) {

@@ -241,6 +241,18 @@ TEST(PreisachFamily, ResidualTrendAveragesOnePeriodAndLeavesTheDrift) {
   EXPECT_DOUBLE_EQ(raw[7], r.y[57]);
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, yhat, -1); }), "averaging window");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, std::vector<double>(10), 1); }), "shorter");
+  // A window far longer than the record (a drive whose dominant frequency is ~0: `piezoid fit`'s
+  // averaging window is one period of it): the whole window's mean everywhere, not a cast of a
+  // count beyond size_t (undefined; the sanitizer run stops on it).
+  for (double w : {1e6, 1e300}) {
+    const std::vector<double> whole = ResidualTrend(r, yhat, w);
+    ASSERT_EQ(whole.size(), r.scored());
+    double mean = 0;
+    for (size_t k = r.first_scored; k < r.end_scored; ++k) mean += r.y[k];
+    mean /= static_cast<double>(r.scored());
+    EXPECT_NEAR(whole.front(), mean, 1e-12);
+    EXPECT_NEAR(whole.back(), mean, 1e-12);
+  }
 }
 
 TEST(PreisachFamily, RecordsThatCannotSupportTheGridSayWhatIsMissing) {
