@@ -242,11 +242,13 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
             << Fmt(inv.ctl().u_lo) << " … " << Fmt(inv.ctl().u_hi) << " " << m.drive_unit << ")\n"
             << "  predicted tracking error (forward model on that drive): ";
   if (diverged < y.size()) {
-    std::cout << "none: the forward model's output on that drive is not finite from " << Fmt(ref.t[diverged])
-              << " s on (it diverges: the model is unstable there; the prediction column is left empty)\n";
+    std::cout << "none: the forward model's output on that drive is not finite from "
+              << Fmt(ref.t[diverged])
+              << " s on (it diverges: the model is unstable there; the prediction column is left "
+                 "empty)\n";
   } else {
-    std::cout << "RMSE " << Fmt(e.rmse) << " " << m.response_unit << ", max " << Fmt(e.max_abs) << " at "
-              << Fmt(e.max_at) << " s\n";
+    std::cout << "RMSE " << Fmt(e.rmse) << " " << m.response_unit << ", max " << Fmt(e.max_abs)
+              << " at " << Fmt(e.max_at) << " s\n";
   }
   if (inv.has_delay()) {
     std::cout << "  the model's delay cannot be undone by a causal step: the reference's preview of "
@@ -328,8 +330,9 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
               << "; the model's " << Fmt(m.offset) << ")";
     if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
     if (e.no_gain > 0)
-      std::cout << "; " << e.no_gain << " sample(s) where the model's local gain is not finite, left out of the "
-                << yu << " figures";
+      std::cout << "; " << e.no_gain
+                << " sample(s) where the model's local gain is not finite, left out of the " << yu
+                << " figures";
     std::cout << "\n";
     // What the inverse itself and the noise give without model error: the model's own response to
     // the applied drive replayed, noiseless (the inverse's exactness: ≈ 0 but for a drive the

@@ -78,7 +78,8 @@ struct FitArgs {
   opt::LineOptions line;               ///< --line-grid, --line-brackets, --line-tolerance
   // --family auto (records/select.h)
   bool pi_operators_given = false;     ///< --pi-operators: the one resolution tried
-  std::vector<std::string> auto_families;  ///< --auto-families (empty: every family but bimorph-fin)
+  std::vector<std::string>
+      auto_families;  ///< --auto-families (empty: every family but bimorph-fin)
   int folds = 5;
   int finalists = 4;
   bool selected = false;               ///< the report's family was chosen by --family auto
@@ -124,12 +125,14 @@ std::string Fmt(double x, int prec = 4) {
 /// The fitted model's prediction is finite on the record (a withheld record's may diverge: a drive
 /// beyond the training range, an oscillator's resonance).
 bool Finite(const records::RecordMetrics& e) { return std::isfinite(e.rmse); }
-constexpr const char* kDiverges = "— (the model's prediction is not finite: it diverges on this record)";
+constexpr const char* kDiverges =
+    "— (the model's prediction is not finite: it diverges on this record)";
 
 /// The NRMSE with its unit, or why there is none: a record whose measured response is constant
 /// over its window has no range to divide by (records::RecordMetrics::nrmse_pct is infinite).
 std::string NrmseText(const records::RecordMetrics& e) {
-  return std::isfinite(e.nrmse_pct) ? Fmt(e.nrmse_pct, 3) + " %" : "— (the measured response is constant)";
+  return std::isfinite(e.nrmse_pct) ? Fmt(e.nrmse_pct, 3) + " %"
+                                    : "— (the measured response is constant)";
 }
 
 /// The averaging window of the creep figure: one period of the dominant drive frequency (a whole
@@ -309,7 +312,8 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
        << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
        << io::OffsetModeName(rec.offset_mode) << ") | ";
     if (Finite(e)) {
-      os << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | " << Fmt(e.max_at_s) << " | " << NrmseText(e) << " |\n";
+      os << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | " << Fmt(e.max_at_s) << " | "
+         << NrmseText(e) << " |\n";
     } else {
       os << kDiverges << " | | | |\n";
     }
@@ -347,8 +351,8 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
   os << "; LM iterations " << r.lm_iterations << " (" << r.lm_differences
      << " differences).\n\nCommand: `piezoid fit --records " << a.records << " --family "
-     << (a.selected ? "auto" : a.family) << "`" << (a.selected ? " (this model chosen: the section below)" : "")
-     << ".\n";
+     << (a.selected ? "auto" : a.family) << "`"
+     << (a.selected ? " (this model chosen: the section below)" : "") << ".\n";
   WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
 }
 
@@ -487,7 +491,8 @@ int RunFit(const FitArgs& args) {
     for (const auto& f : a.auto_families) {
       const auto& known = records::FamilyNames();
       if (std::find(known.begin(), known.end(), f) == known.end())
-        throw InputError("--auto-families '" + f + "': not a family (piezoid fit --help lists them)");
+        throw InputError("--auto-families '" + f +
+                         "': not a family (piezoid fit --help lists them)");
     }
   } else {
     if (!a.auto_families.empty()) throw InputError("--auto-families: only with --family auto");
@@ -498,11 +503,14 @@ int RunFit(const FitArgs& args) {
       a.pi_operators != records::kAutoLevels) {
     const Status levels = model::PreisachGrid{0, 1, a.pi_operators}.Validate();
     if (!levels.ok() && (!select || a.auto_families.empty() ||
-                         std::find(a.auto_families.begin(), a.auto_families.end(), "preisach") != a.auto_families.end()))
-      throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " + levels.message());
+                         std::find(a.auto_families.begin(), a.auto_families.end(), "preisach") !=
+                             a.auto_families.end()))
+      throw InputError("--pi-operators " + std::to_string(a.pi_operators) + ": " +
+                       levels.message());
   }
   if (a.service.enabled() && !select)
-    o.evaluator_factory = RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
+    o.evaluator_factory =
+        RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
   o.search.line = a.line;
@@ -582,8 +590,8 @@ int RunFit(const FitArgs& args) {
     std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
               << " ";
     if (Finite(e)) {
-      std::cout << "RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs) << " at "
-                << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
+      std::cout << "RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs)
+                << " at " << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
     } else {
       std::cout << kDiverges << "\n";
     }
@@ -616,18 +624,23 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->required()
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
-                  "auto (chosen with its effects, plays / levels and initial state by blocked cross-validation on the "
-                  "training records; records/select.h), stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii, "
+                  "auto (chosen with its effects, plays / levels and initial state by blocked "
+                  "cross-validation on the "
+                  "training records; records/select.h), stack-bouc-wen, backlash-like, duhem, "
+                  "prandtl-ishlinskii, "
                   "bw-oscillator, bimorph-fin, preisach, asymmetric-pi")
       ->default_str("backlash-like");
   cmd->add_option("--auto-families", a->auto_families,
-                  "--family auto: the families tried (comma-separated; default every family but bimorph-fin)")
+                  "--family auto: the families tried (comma-separated; default every family but "
+                  "bimorph-fin)")
       ->delimiter(',');
-  cmd->add_option("--folds", a->folds, "--family auto: blocks per training window (the cross-validation's folds)")
+  cmd->add_option("--folds", a->folds,
+                  "--family auto: blocks per training window (the cross-validation's folds)")
       ->check(CLI::Range(2, 50))
       ->default_str("5");
-  cmd->add_option("--finalists", a->finalists,
-                  "--family auto: the screening round's best cross-validated again with the full search")
+  cmd->add_option(
+         "--finalists", a->finalists,
+         "--family auto: the screening round's best cross-validated again with the full search")
       ->check(CLI::Range(1, 100))
       ->default_str("4");
   cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');

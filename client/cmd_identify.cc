@@ -59,10 +59,11 @@ struct IdentifyFlags {
   std::string cases, out, preset = std::string(hgann::kDefaultSearchPreset), topology;
   bool no_plots = false;
   std::map<std::string, std::string, std::less<>> flag_of;  ///< GaOptions field → its flag
-  std::map<std::string, CLI::Option*, std::less<>> given;   ///< field → its option (set by a preset)
+  std::map<std::string, CLI::Option*, std::less<>> given;  ///< field → its option (set by a preset)
 };
 
-/// The GA's options, each with the GaOptions member it sets: a bad value is reported under its flag.
+/// The GA's options, each with the GaOptions member it sets: a bad value is reported under its
+/// flag.
 void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
   const auto ga_option = [&](const char* flag, const char* field, auto& value, const std::string& help) {
     f.flag_of[field] = flag;
@@ -84,9 +85,10 @@ void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
   ga_option("--islands", "islands", ga.islands,
             "populations of --population each, bred apart and evaluated together (1 = one "
             "population, the paper's; robust: 4)");
-  ga_option("--migration-interval", "migration_interval", ga.migration_interval,
-            "generations between migrations of the islands' best (0 = never: independent runs, best "
-            "kept)");
+  ga_option(
+      "--migration-interval", "migration_interval", ga.migration_interval,
+      "generations between migrations of the islands' best (0 = never: independent runs, best "
+      "kept)");
   ga_option("--migrants", "migrants", ga.migrants, "individuals each island sends per migration");
   f.topology = opt::TopologyName(ga.topology);
   ga_option("--topology", "topology", f.topology,
@@ -94,10 +96,11 @@ void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
   ga_option("--migration-margin", "migration_margin", ga.migration_margin,
             "an island takes migrants only from sources whose best is below its own by more than "
             "this share of it, [0, 1) (0 = from every source)");
-  ga_option("--broadcast-interval", "broadcast_interval", ga.broadcast_interval,
-            "generations between gated broadcasts: each island takes the best --migrants of every "
-            "other island better than its own by more than --broadcast-margin (0 = none; skipped at "
-            "a migration's generation)");
+  ga_option(
+      "--broadcast-interval", "broadcast_interval", ga.broadcast_interval,
+      "generations between gated broadcasts: each island takes the best --migrants of every "
+      "other island better than its own by more than --broadcast-margin (0 = none; skipped at "
+      "a migration's generation)");
   ga_option("--broadcast-margin", "broadcast_margin", ga.broadcast_margin,
             "the broadcast's gate: a source's best must be below the island's by more than this "
             "share of it, (0, 1)");
@@ -105,10 +108,11 @@ void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
             "restart an island (its sources' migrants + fresh random individuals) after this many "
             "generations without a better best of its own (0 = never)");
   f.flag_of["island_mutation"] = "--island-mutation";
-  cmd->add_option("--island-mutation", ga.island_mutation,
-                  "per-bit mutation probability of each island, one per island, comma-separated "
-                  "(e.g. 0.01,0.01,0.01,0.01; default with several islands: the ladder --mutation × "
-                  "1, 2, 3, 5, repeated, which at 0.01 is 0.01,0.02,0.03,0.05)")
+  cmd->add_option(
+         "--island-mutation", ga.island_mutation,
+         "per-bit mutation probability of each island, one per island, comma-separated "
+         "(e.g. 0.01,0.01,0.01,0.01; default with several islands: the ladder --mutation × "
+         "1, 2, 3, 5, repeated, which at 0.01 is 0.01,0.02,0.03,0.05)")
       ->delimiter(',');
   f.flag_of["output_moves"] = "--output-moves";
   cmd->add_option("--output-moves", ga.output_moves,

@@ -52,7 +52,9 @@ bool LooksLikeFitJson(const std::string& path) {
   }
 }
 
-records::ModelSpec LoadFit(const std::string& path) { return LoadFitText(path, io::ReadTextFile(path)); }
+records::ModelSpec LoadFit(const std::string& path) {
+  return LoadFitText(path, io::ReadTextFile(path));
+}
 
 records::ModelSpec LoadFitText(const std::string& path, const std::string& text) {
   const io::FitModelFile m = io::ParseFitJson(path, text);

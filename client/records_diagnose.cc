@@ -61,8 +61,10 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
     }
     os << "\n| record | role | RMSE before | RMSE after | NRMSE after |\n|---|---|---|---|---|\n";
     for (size_t i = 0; i < set.records.size(); ++i) {
-      os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role) << " | "
-         << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | " << (std::isfinite(c.fit.metrics[i].nrmse_pct) ? G(c.fit.metrics[i].nrmse_pct, 3) + " %" : "— (constant response)")
+      os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role)
+         << " | " << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | "
+         << (std::isfinite(c.fit.metrics[i].nrmse_pct) ? G(c.fit.metrics[i].nrmse_pct, 3) + " %"
+                                                       : "— (constant response)")
          << " |\n";
     }
   }
@@ -118,7 +120,8 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
   f["candidates"] = List(candidates);
   std::vector<Value> diverged;
   for (const auto& n : d.diverged) diverged.push_back(Text(n));
-  f["diverged"] = List(diverged);  // candidates left out: their prediction diverges on withheld records
+  f["diverged"] =
+      List(diverged);  // candidates left out: their prediction diverges on withheld records
   f["named"] = d.named >= 0 ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : Null();
   f["confidence"] = Num(d.confidence);
   f["verdict_kind"] = Text(d.verdict_kind);
@@ -148,7 +151,8 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const bool select = a.family == "auto";
   if (select) {
     if (!a.initial_state.empty())
-      o.fit.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
+      o.fit.family_options.initial_state =
+          model::ParseInitialState(a.initial_state, "--initial-state");
   } else {
     o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
   }
@@ -193,9 +197,11 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
   WriteProposedDrive(out / kProposedDriveFile, set, proposal);
-  io::WriteFileWith(out / "report.md", [&](std::ostream& os) { WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s, select ? &selection : nullptr);
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) {
+    WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s, select ? &selection : nullptr);
   });
-  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) { WriteRecordsDiagnosisJson(os, set, d, proposal, select ? &selection : nullptr);
+  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) {
+    WriteRecordsDiagnosisJson(os, set, d, proposal, select ? &selection : nullptr);
   });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;

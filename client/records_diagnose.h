@@ -36,8 +36,10 @@ struct RecordsDiagnoseRequest {
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
 
 /// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
-void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
-                                   const records::TrainingDriveProposal& proposal, double settle_s = 0,
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
+                                   const records::RecordDiagnosis& d,
+                                   const records::TrainingDriveProposal& proposal,
+                                   double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,

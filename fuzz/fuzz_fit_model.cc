@@ -46,7 +46,8 @@ void Run(const pz::records::ModelSpec& m) {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
-  google::protobuf::SetLogHandler(nullptr);  // the JSON parser's complaints: the answers are checked
+  google::protobuf::SetLogHandler(
+      nullptr);  // the JSON parser's complaints: the answers are checked
   return 0;
 }
 

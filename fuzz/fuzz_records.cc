@@ -60,18 +60,23 @@ std::vector<std::string_view> Split(std::string_view in) {
 // What io::Record promises to every reader of a loaded set.
 void CheckRecord(const Record& r, const pz::io::RecordReadOptions& o) {
   const size_t n = r.size();
-  if (r.u.size() != n || r.y.size() != n) Fail("record '" + r.name + "': columns of different lengths");
+  if (r.u.size() != n || r.y.size() != n)
+    Fail("record '" + r.name + "': columns of different lengths");
   if (n < 2) Fail("record '" + r.name + "': fewer than two samples");
-  if (!(r.first_scored < r.end_scored && r.end_scored <= n)) Fail("record '" + r.name + "': window outside the record");
+  if (!(r.first_scored < r.end_scored && r.end_scored <= n))
+    Fail("record '" + r.name + "': window outside the record");
   if (r.scored() < o.min_scored) Fail("record '" + r.name + "': window shorter than min_scored");
-  if (r.rest_samples < 1 || r.rest_samples > n) Fail("record '" + r.name + "': rest outside the record");
-  if (!(std::isfinite(r.dt) && r.dt > 0)) Fail("record '" + r.name + "': sample step not finite and > 0");
+  if (r.rest_samples < 1 || r.rest_samples > n)
+    Fail("record '" + r.name + "': rest outside the record");
+  if (!(std::isfinite(r.dt) && r.dt > 0))
+    Fail("record '" + r.name + "': sample step not finite and > 0");
   for (size_t k = 0; k < n; ++k) {
     if (!std::isfinite(r.t[k]) || !std::isfinite(r.u[k]) || !std::isfinite(r.y[k]))
       Fail("record '" + r.name + "': a sample that is not finite");
     if (k > 0 && !(r.t[k] > r.t[k - 1])) Fail("record '" + r.name + "': time not increasing");
   }
-  if (!std::isfinite(r.offset) || !std::isfinite(r.quantum)) Fail("record '" + r.name + "': offset not finite");
+  if (!std::isfinite(r.offset) || !std::isfinite(r.quantum))
+    Fail("record '" + r.name + "': offset not finite");
   (void)r.Label();
 }
 
@@ -105,7 +110,8 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const int mode = data[0] % 4;
-  const std::vector<std::string_view> parts = Split(std::string_view(reinterpret_cast<const char*>(data) + 1, size - 1));
+  const std::vector<std::string_view> parts =
+      Split(std::string_view(reinterpret_cast<const char*>(data) + 1, size - 1));
   for (const auto& e : fs::directory_iterator(g_dir)) fs::remove(e.path());
   static const char* const kManifest[] = {"manifest.csv", "record.csv", "records.csv", "cases.csv"};
   Write(g_dir / kManifest[mode], parts[0]);
@@ -117,8 +123,11 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     RecordSet set = pz::io::LoadRecordSet(mode == 1 ? g_dir / "record.csv" : g_dir, options);
     if (mode == 1 && parts.size() > 1) {
-      std::vector<pz::io::WindowSpec> w{pz::io::ParseWindow(parts[1], pz::model::CaseRole::kTrain, "--train-window")};
-      if (parts.size() > 2) w.push_back(pz::io::ParseWindow(parts[2], pz::model::CaseRole::kValidate, "--validate-window"));
+      std::vector<pz::io::WindowSpec> w{
+          pz::io::ParseWindow(parts[1], pz::model::CaseRole::kTrain, "--train-window")};
+      if (parts.size() > 2)
+        w.push_back(
+            pz::io::ParseWindow(parts[2], pz::model::CaseRole::kValidate, "--validate-window"));
       pz::io::SplitIntoWindows(set, w, options);
     }
     if (set.records.empty()) Fail("a set without records");

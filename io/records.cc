@@ -184,10 +184,12 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
     d.u[i] = csv.Number(i, cu) * d.drive.factor;
     d.y[i] = csv.Number(i, cy) * d.response.factor;
     // A finite number can leave the doubles in its unit's conversion (1e306 kV): named, not inf.
-    for (const auto& [value, col, unit] : {std::tuple{d.t[i], ct, tu.canonical}, std::tuple{d.u[i], cu, d.drive.canonical},
-                                           std::tuple{d.y[i], cy, d.response.canonical}}) {
+    for (const auto& [value, col, unit] :
+         {std::tuple{d.t[i], ct, tu.canonical}, std::tuple{d.u[i], cu, d.drive.canonical},
+          std::tuple{d.y[i], cy, d.response.canonical}}) {
       if (!std::isfinite(value))
-        throw InputError(csv.Where(i, col) + ": " + csv.Field(i, col) + " is beyond the range of a number in " + unit +
+        throw InputError(csv.Where(i, col) + ": " + csv.Field(i, col) +
+                         " is beyond the range of a number in " + unit +
                          " (converted to the set's unit)");
     }
     if (i > 0 && !(d.t[i] > d.t[i - 1])) {
@@ -355,8 +357,9 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
       r.offset_mode = OffsetMode::kFixed;
       r.offset = *v * it->second.response.factor;
       if (!std::isfinite(r.offset))
-        throw InputError(csv.Where(i, *c) + ": offset '" + off + "' is beyond the range of a number in " +
-                         it->second.response.canonical + " (converted to the set's unit)");
+        throw InputError(csv.Where(i, *c) + ": offset '" + off +
+                         "' is beyond the range of a number in " + it->second.response.canonical +
+                         " (converted to the set's unit)");
     }
     FinishRecord(r, opt);
     used.emplace_back(name, &it->second);

@@ -160,8 +160,10 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     for (size_t i = 0; i < set.records.size(); ++i)
       if (Withheld(set.records[i]) && !std::isfinite(d.base.metrics[i].rmse))
         names += (names.empty() ? "" : ", ") + set.records[i].name;
-    throw InputError(d.base.model->Describe() + ": the fitted model's prediction is not finite on the withheld " +
-                     "record(s) " + names + " (it diverges there): no gap to diagnose; train on records that " +
+    throw InputError(d.base.model->Describe() +
+                     ": the fitted model's prediction is not finite on the withheld " +
+                     "record(s) " + names +
+                     " (it diverges there): no gap to diagnose; train on records that " +
                      "cover their drive, or try more integration sub-steps or another family");
   }
   d.noise = EstimateNoiseFloor(set, &base_res);
@@ -262,7 +264,8 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   if (!d.diverged.empty()) {
     std::string names;
     for (const auto& n : d.diverged) names += (names.empty() ? "" : ", ") + n;
-    d.verdict += " Left out: " + names + " (the fitted model's prediction is not finite on the withheld records: it " +
+    d.verdict += " Left out: " + names +
+                 " (the fitted model's prediction is not finite on the withheld records: it " +
                  "diverges there).";
   }
   return d;

@@ -206,7 +206,8 @@ std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> y
   }
   // Half the window in samples, at most the window's length (a window of years on a record of
   // seconds: the cast of a huge count would be undefined).
-  const size_t half = static_cast<size_t>(std::min(std::floor(0.5 * window_s / r.dt), static_cast<double>(n)));
+  const size_t half =
+      static_cast<size_t>(std::min(std::floor(0.5 * window_s / r.dt), static_cast<double>(n)));
   std::vector<double> out(n);
   for (size_t i = 0; i < n; ++i) {
     const size_t a = i >= half ? i - half : 0, b = std::min(n, i + half + 1);

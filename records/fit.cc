@@ -219,7 +219,8 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
   // A Jacobian of no column (every perturbed evaluation failed: the bimorph fin on issue 37's
   // random records) or one that overflowed has no strength to choose: the strength stays (Eigen's
   // decomposition of the 0 × 0 covariance below crashed).
-  if (!J.allFinite() || std::none_of(ok.begin(), ok.end(), [](char c) { return c != 0; })) return false;
+  if (!J.allFinite() || std::none_of(ok.begin(), ok.end(), [](char c) { return c != 0; }))
+    return false;
   // Unknowns: the spectrum's weights (≥ 0), then every other parameter as a difference of two
   // non-negative ones (free); target t = r + J p₀, r = y − ŷ.
   std::vector<Eigen::Index> cols;  // column of J of each unknown, its sign
@@ -803,10 +804,11 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     // a named error, not metrics and a fit.json of NaN.
     std::string names;
     for (const io::Record* r : train) names += (names.empty() ? "" : ", ") + r->name;
-    throw InputError(model->Describe() + ": the model's output on the training records (" + names +
-                     ") is not finite at any of the " + std::to_string(res.evaluations) +
-                     " parameter vectors evaluated in the search box (every simulation diverged): try more "
-                     "integration sub-steps (--substeps), a smoother drive, or another family");
+    throw InputError(
+        model->Describe() + ": the model's output on the training records (" + names +
+        ") is not finite at any of the " + std::to_string(res.evaluations) +
+        " parameter vectors evaluated in the search box (every simulation diverged): try more "
+        "integration sub-steps (--substeps), a smoother drive, or another family");
   }
   res.params = best;
   res.weights = out.weights;

@@ -174,7 +174,8 @@ struct RecordMetrics {
   double rmse = 0;       ///< [response unit]
   double max_abs = 0;    ///< largest |error|
   double max_at_s = 0;   ///< the record's time of the largest |error| [s] (the first, on ties)
-  double nrmse_pct = 0;  ///< RMSE / measured range over the window × 100; infinite when the range is 0
+  double nrmse_pct =
+      0;  ///< RMSE / measured range over the window × 100; infinite when the range is 0
   double range = 0;      ///< measured max − min over the window
   double offset = 0;     ///< the offset used
 };

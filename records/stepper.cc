@@ -103,15 +103,16 @@ void ModelSpec::Validate() const {
   if (polarity != 1 && polarity != -1) throw InputError(FieldError("model.polarity", polarity, "must be 1 or -1"));
   CheckFinite("model.offset", offset);
   if (!(std::isfinite(dt) && dt > 0)) throw InputError(FieldError("model.sample_period_s", dt, "must be finite and > 0"));
-  // The delay's kernel keeps its delay in samples (an int, and a ring of that many doubles): a fit's
-  // is at most 500 samples (its range); a fit.json of a delay of years, or of a sample period of
-  // 1e-300 s, is refused here (the kernel's cast overflowed: the fuzzer of issue 37).
+  // The delay's kernel keeps its delay in samples (an int, and a ring of that many doubles): a
+  // fit's is at most 500 samples (its range); a fit.json of a delay of years, or of a sample period
+  // of 1e-300 s, is refused here (the kernel's cast overflowed: the fuzzer of issue 37).
   if (const auto [at, count] = model->EffectParams(EffectKind::Named("delay")); count > 0) {
     constexpr double kMaxDelaySamples = 1e6;
     if (!(params[at] / dt <= kMaxDelaySamples)) {
-      throw InputError(FieldError("model.params[" + model->params()[at].name + "]", params[at],
-                                  "is " + io::FormatNumber(params[at] / dt) + " samples of model.sample_period_s = " +
-                                      io::FormatNumber(dt) + " s; at most 1e6"));
+      throw InputError(FieldError(
+          "model.params[" + model->params()[at].name + "]", params[at],
+          "is " + io::FormatNumber(params[at] / dt) +
+              " samples of model.sample_period_s = " + io::FormatNumber(dt) + " s; at most 1e6"));
     }
   }
   if (!(std::isfinite(drive_min) && std::isfinite(drive_max) && drive_min < drive_max)) {
@@ -307,7 +308,8 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
     const double du = u - r.u[k], dy = g * du;
     sse_u += du * du;
     ++e.n;
-    if (!std::isfinite(dy)) {  // no local gain here (issue 37: an oscillator at a clipped drive gave NaN)
+    if (!std::isfinite(
+            dy)) {  // no local gain here (issue 37: an oscillator at a clipped drive gave NaN)
       ++e.no_gain;
       continue;
     }

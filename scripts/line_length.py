@@ -1,7 +1,12 @@
 #!/usr/bin/env python3
-"""Fails when a line of the project's own C, C++ or proto source is longer than the column limit of
-.clang-format (ColumnLimit, 100), counted in characters (a UTF-8 'µ' or '≥' is one column, as
-clang-format counts them).
+"""Fails when the project's own C, C++ and proto source has more lines longer than the column
+limit of .clang-format (ColumnLimit, 100) than MAX_OVER, counted in characters (a UTF-8 'µ' or '≥'
+is one column, as clang-format counts them).
+
+MAX_OVER is a ratchet: the tree had 4,047 such lines when the check came in (issue 38), written
+before the limit was 100. A change may not add one (the check then lists every offender with the
+mend); a change that removes some lowers MAX_OVER to the new count. The goal is 0, when the
+check lists every line over the limit and fails on the first.
 
 The files are the ones git tracks (or, outside a checkout, every file under the root) ending in .c,
 .cc, .h or .proto, except generated and vendored ones (EXCLUDED below). A line that cannot be
@@ -23,6 +28,7 @@ import tempfile
 SUFFIXES = (".c", ".cc", ".h", ".proto")
 EXCLUDED = ("build", "build-", "third_party/", "client/dashboard_assets.h")
 ALLOW = "// NOLINT(length)"
+MAX_OVER = 4047
 
 
 def column_limit(root):
@@ -59,15 +65,21 @@ def offenders(root, limit):
     return found
 
 
-def check(root, out=sys.stdout):
+def check(root, out=sys.stdout, max_over=MAX_OVER):
     limit = column_limit(root)
     found = offenders(root, limit)
-    for name, i, n in found:
-        print(f"{name}:{i}: {n} columns (limit {limit}): clang-format -i --lines={i}:{i} {name}", file=out)
-    if found:
-        print(f"line_length: {len(found)} line(s) over {limit} columns", file=out)
+    if len(found) > max_over:
+        for name, i, n in found:
+            print(f"{name}:{i}: {n} columns (limit {limit}): clang-format -i --lines={i}:{i} {name}",
+                  file=out)
+        print(f"line_length: {len(found)} line(s) over {limit} columns, {max_over} allowed "
+              f"(MAX_OVER): format the new ones (git diff shows which)", file=out)
         return 1
-    print(f"line_length: every line within {limit} columns", file=out)
+    if len(found) < max_over:
+        print(f"line_length: {len(found)} line(s) over {limit} columns: lower MAX_OVER in "
+              f"scripts/line_length.py to {len(found)}", file=out)
+        return 0
+    print(f"line_length: {len(found)} line(s) over {limit} columns (MAX_OVER)", file=out)
     return 0
 
 
@@ -80,12 +92,12 @@ def self_test():
         with open(os.path.join(d, "b.txt"), "w", encoding="utf-8") as f:
             f.write("x" * 50 + "\n")  # not a source file
         with open(os.devnull, "w", encoding="utf-8") as sink:
-            if check(d, sink) != 0:
+            if check(d, sink, 0) != 0:
                 print("self-test: a 20-column line (multi-byte) or a non-source file was refused")
                 return 1
             with open(os.path.join(d, "c.h"), "w", encoding="utf-8") as f:
                 f.write("int planted_long_line = 0;\n")
-            if check(d, sink) != 1:
+            if check(d, sink, 0) != 1:
                 print("self-test: a planted 26-column line passed a 20-column limit")
                 return 1
     print("self-test: a planted long line fails, a short multi-byte one passes")

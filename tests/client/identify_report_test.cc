@@ -164,9 +164,10 @@ std::string IdentifyRefusal(std::vector<std::string> args) {
 
 TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
-  EXPECT_EQ(IdentifyRefusal({"--preset", "fast"}),
-            "--preset = fast: must be \"robust\" (the default: islands, spread penalty, trend seeds) or "
-            "\"paper\" (the paper's Table 2)");
+  EXPECT_EQ(
+      IdentifyRefusal({"--preset", "fast"}),
+      "--preset = fast: must be \"robust\" (the default: islands, spread penalty, trend seeds) or "
+      "\"paper\" (the paper's Table 2)");
   EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}), "--migration-margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
   EXPECT_EQ(IdentifyRefusal({"--broadcast-interval", "-3"}),

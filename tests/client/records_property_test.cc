@@ -15,7 +15,8 @@
 // 40 Hz to 5 kHz in s or ms; offsets fit / rest / fixed; settling windows.
 //
 // The default run is a fixed seed and 128 sets (about 4 s of CPU). More:
-//   PIEZOID_PROPERTY_CASES=500 PIEZOID_PROPERTY_SEED=7 build/tests/client/client_records_property_test
+//   PIEZOID_PROPERTY_CASES=500 PIEZOID_PROPERTY_SEED=7
+//   build/tests/client/client_records_property_test
 // A failure names the set's seed; PIEZOID_PROPERTY_VERBOSE=1 prints every set and what its fit
 // gave; PIEZOID_PROPERTY_KEEP=1 keeps the sets' folders (the test's
 // temporary folder is printed) to run the failing command by hand.
@@ -74,7 +75,9 @@ class Draw {
   double U(double a, double b) { return a + (b - a) * U01(); }
   size_t I(size_t n) { return static_cast<size_t>(g_() % n); }  ///< in [0, n)
   bool P(double p) { return U01() < p; }
-  double Normal() { return std::sqrt(-2 * std::log(1 - U01())) * std::cos(2 * std::numbers::pi * U01()); }
+  double Normal() {
+    return std::sqrt(-2 * std::log(1 - U01())) * std::cos(2 * std::numbers::pi * U01());
+  }
 
  private:
   std::mt19937_64 g_;
@@ -105,8 +108,8 @@ struct DrawnSet {
 /// A record: a rest at u0, then a sine / triangle / multisine / steps between lo and hi with an
 /// optional hold and clip; the response a play (backlash) of the drive, a slow creep, noise,
 /// optionally clipped and quantised.
-DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest, double fs, double lo, double hi,
-                       double u0, bool ms, double y_scale, bool hazard) {
+DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest, double fs,
+                       double lo, double hi, double u0, bool ms, double y_scale, bool hazard) {
   DrawnRecord r;
   const double dt = 1 / fs;
   const size_t body = n > rest ? n - rest : 0;
@@ -117,7 +120,9 @@ DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest,
   for (size_t k = 0; k < n; ++k) {
     double u = u0;
     if (k >= rest && body > 0) {
-      const double x = 2 * std::numbers::pi * cycles * static_cast<double>(k - rest) / static_cast<double>(body) + phase;
+      const double x = 2 * std::numbers::pi * cycles * static_cast<double>(k - rest) /
+                           static_cast<double>(body) +
+                       phase;
       double s = 0;
       switch (wave) {
         case 0: s = std::sin(x); break;
@@ -145,7 +150,8 @@ DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest,
   for (size_t k = 0; k < n; ++k) {
     play = std::clamp(play, r.u[k] - width, r.u[k] + width);
     const double t = static_cast<double>(k) * dt;
-    r.y.push_back(gain * play + 0.01 * std::abs(gain) * (hi - lo) * std::log1p(t) + noise * d.Normal());
+    r.y.push_back(gain * play + 0.01 * std::abs(gain) * (hi - lo) * std::log1p(t) +
+                  noise * d.Normal());
   }
   if (d.P(0.2)) {  // a sensor at its limit
     const auto [mn, mx] = std::minmax_element(r.y.begin(), r.y.end());
@@ -213,7 +219,10 @@ DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest,
       break;
   }
   const size_t off = d.I(6);  // 'rest' needs 10 samples of rest: refused with fewer (a hazard)
-  r.offset = off == 0 && (rest >= 10 || hazard) ? "rest" : off == 1 ? Num(d.U(-1, 1)) : off == 2 ? "fit" : "";
+  r.offset = off == 0 && (rest >= 10 || hazard) ? "rest"
+             : off == 1                         ? Num(d.U(-1, 1))
+             : off == 2                         ? "fit"
+                                                : "";
   if (d.P(0.3)) r.frequency = Num(cycles * fs / static_cast<double>(std::max<size_t>(body, 1)));
   desc << ", offset '" << r.offset << "'";
   return r;
@@ -228,7 +237,8 @@ DrawnSet DrawSet(uint64_t seed, size_t index) {
   const auto& effects = records::EffectNames();
   for (size_t e = d.I(3); e > 0; --e) {
     const std::string& name = effects[d.I(effects.size())];
-    if (std::find(s.effects.begin(), s.effects.end(), name) == s.effects.end()) s.effects.push_back(name);
+    if (std::find(s.effects.begin(), s.effects.end(), name) == s.effects.end())
+      s.effects.push_back(name);
   }
   static const double kRates[] = {40, 200, 500, 1000, 5000};
   const double fs = kRates[d.I(5)];
@@ -252,11 +262,13 @@ DrawnSet DrawSet(uint64_t seed, size_t index) {
     // Withheld: shorter or longer than training, sometimes beyond its drive range.
     const size_t n = is_train ? n_train : d.P(0.5) ? 20 + d.I(60) : n_train + d.I(400);
     const double ext = !is_train && d.P(0.4) ? d.U(0.2, 1.0) * (hi - lo) : 0;
-    const size_t rest = d.P(0.2) ? 0 : d.P(0.15) ? n : d.I(std::max<size_t>(n / 2, 1));  // none, all, some
+    const size_t rest = d.P(0.2)    ? 0
+                        : d.P(0.15) ? n
+                                    : d.I(std::max<size_t>(n / 2, 1));  // none, all, some
     desc << "\n  " << (is_train ? "train" : "withheld") << " " << i << ": ";
     if (ext > 0) desc << "beyond by " << ext << ", ";
-    DrawnRecord r =
-        DrawRecord(d, desc, n, rest, fs, lo - ext, hi + ext, d.P(0.7) ? lo - ext : hi + ext, ms, y_scale, i == hazard);
+    DrawnRecord r = DrawRecord(d, desc, n, rest, fs, lo - ext, hi + ext,
+                               d.P(0.7) ? lo - ext : hi + ext, ms, y_scale, i == hazard);
     r.name = "r" + std::to_string(i);
     r.role = is_train ? "train" : d.P(0.5) ? "validate" : "test";
     r.file = r.name + ".csv";
@@ -271,11 +283,12 @@ void WriteSet(const DrawnSet& s, const fs::path& dir) {
   std::ofstream m(dir / "manifest.csv");
   m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,time_column\n";
   for (const DrawnRecord& r : s.records) {
-    m << r.name << "," << r.file << "," << r.role << "," << r.t_start << "," << r.t_end << "," << r.offset << ","
-      << r.frequency << "," << s.time_column << "\n";
+    m << r.name << "," << r.file << "," << r.role << "," << r.t_start << "," << r.t_end << ","
+      << r.offset << "," << r.frequency << "," << s.time_column << "\n";
     std::ofstream f(dir / r.file);
     f << s.time_column << ",voltage_V,displacement_um\n";
-    for (size_t k = 0; k < r.t.size(); ++k) f << Num(r.t[k]) << "," << Num(r.u[k]) << "," << Num(r.y[k]) << "\n";
+    for (size_t k = 0; k < r.t.size(); ++k)
+      f << Num(r.t[k]) << "," << Num(r.u[k]) << "," << Num(r.y[k]) << "\n";
   }
 }
 
@@ -297,7 +310,8 @@ std::string ReadAll(const fs::path& file) {
 
 /// A "nan" or "inf" printed as a number (not inside a word).
 bool HasNonFinite(const std::string& text) {
-  static const std::regex kBad("(^|[^A-Za-z_])[-+]?(nan|NaN|NAN|inf|Inf|INF|infinity|Infinity)([^A-Za-z_]|$)");
+  static const std::regex kBad(
+      "(^|[^A-Za-z_])[-+]?(nan|NaN|NAN|inf|Inf|INF|infinity|Infinity)([^A-Za-z_]|$)");
   return std::regex_search(text, kBad);
 }
 
@@ -381,7 +395,8 @@ std::string Joined(const std::vector<std::string>& args) {
   return s;
 }
 
-/// Counts of what the sets gave, printed at the end (a run whose every set is refused tests little).
+/// Counts of what the sets gave, printed at the end (a run whose every set is refused tests
+/// little).
 struct Tally {
   int sets = 0, fits = 0, fit_errors = 0, exports = 0, replays = 0, references = 0, diagnoses = 0,
       diagnose_errors = 0;
@@ -391,10 +406,29 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
   const std::string what = s.description;
   const fs::path set_dir = dir / "set", out = dir / "fit";
   WriteSet(s, set_dir);
-  std::vector<std::string> fit = {"fit", "--records", set_dir.string(), "--family", s.family, "--out", out.string(),
-                                  "--algorithm", "pso", "--repetitions", "1", "--particles", "6", "--iterations", "4",
-                                  "--lm-iterations", "4", "--threads", "1", "--no-figures", "--quiet",
-                                  "--pi-operators", "4"};
+  std::vector<std::string> fit = {"fit",
+                                  "--records",
+                                  set_dir.string(),
+                                  "--family",
+                                  s.family,
+                                  "--out",
+                                  out.string(),
+                                  "--algorithm",
+                                  "pso",
+                                  "--repetitions",
+                                  "1",
+                                  "--particles",
+                                  "6",
+                                  "--iterations",
+                                  "4",
+                                  "--lm-iterations",
+                                  "4",
+                                  "--threads",
+                                  "1",
+                                  "--no-figures",
+                                  "--quiet",
+                                  "--pi-operators",
+                                  "4"};
   std::string effects;
   for (const auto& e : s.effects) effects += (effects.empty() ? "" : ",") + e;
   if (!effects.empty()) fit.insert(fit.end(), {"--effects", effects});
@@ -412,7 +446,9 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
   for (const char* file : {"fit.json", "report.md"}) {
     const std::string text = ReadAll(out / file);
     ASSERT_FALSE(text.empty()) << file << "\n" << what;
-    EXPECT_FALSE(HasNonFinite(text)) << file << " holds a NaN or infinity\n" << what << "\n" << text;
+    EXPECT_FALSE(HasNonFinite(text)) << file << " holds a NaN or infinity\n"
+                                     << what << "\n"
+                                     << text;
   }
   const std::string fit_json = (out / "fit.json").string();
   const std::vector<std::string> exp = {"export", fit_json, "--out", (out / "model.h").string()};
@@ -422,13 +458,19 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     ++tally.exports;
     EXPECT_FALSE(HasNonFinite(ReadAll(out / "model.h"))) << "model.h\n" << what;
   }
-  std::vector<std::string> replay = {"compensate", "--model", fit_json, "--replay", set_dir.string()};
+  std::vector<std::string> replay = {"compensate", "--model", fit_json, "--replay",
+                                     set_dir.string()};
   const Outcome r = Run(replay);
   ASSERT_EQ(r.failure, "") << Joined(replay) << "\n" << what;
   tally.replays += r.ok;
   WriteReference(s, dir / "reference.csv");
-  std::vector<std::string> ref = {"compensate", "--model", fit_json, "--reference", (dir / "reference.csv").string(),
-                                  "--out", (dir / "drive.csv").string()};
+  std::vector<std::string> ref = {"compensate",
+                                  "--model",
+                                  fit_json,
+                                  "--reference",
+                                  (dir / "reference.csv").string(),
+                                  "--out",
+                                  (dir / "drive.csv").string()};
   const Outcome c = Run(ref);
   ASSERT_EQ(c.failure, "") << Joined(ref) << "\n" << what;
   if (c.ok) {
@@ -439,9 +481,13 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
   // report writers on the others.
   const std::string candidate = records::EffectNames()[s.seed % records::EffectNames().size()];
   if (cli_diagnose) {
-    std::vector<std::string> diag = {"diagnose", "--records", set_dir.string(), "--family", s.family, "--quick",
-                                     "--candidates", candidate, "--threads", "1", "--no-plots", "--quiet", "--out",
-                                     (dir / "diagnose").string()};
+    std::vector<std::string> diag = {"diagnose",       "--records",
+                                     set_dir.string(), "--family",
+                                     s.family,         "--quick",
+                                     "--candidates",   candidate,
+                                     "--threads",      "1",
+                                     "--no-plots",     "--quiet",
+                                     "--out",          (dir / "diagnose").string()};
     if (s.settle_s > 0) diag.insert(diag.end(), {"--settle-s", Num(s.settle_s)});
     const Outcome g = Run(diag);
     ASSERT_EQ(g.failure, "") << Joined(diag) << "\n" << what;
@@ -465,7 +511,8 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     o.fit.lm.max_iterations = 4;
     o.fit.family_options.pi_operators = 4;
     const records::RecordDiagnosis dg = records::DiagnoseRecords(set, o);
-    const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, dg.excitation);
+    const records::TrainingDriveProposal proposal =
+        records::ProposeTrainingDrive(set, dg.excitation);
     std::ostringstream md, json;
     WriteRecordsDiagnosisMarkdown(md, set, dg, proposal, s.settle_s);
     WriteRecordsDiagnosisJson(json, set, dg, proposal);
@@ -476,7 +523,9 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     EXPECT_STRNE(x.what(), "") << what;
     ++tally.diagnose_errors;
   } catch (const std::exception& x) {
-    ADD_FAILURE() << "the diagnosis threw an exception that is not an InputError: " << x.what() << "\n" << what;
+    ADD_FAILURE() << "the diagnosis threw an exception that is not an InputError: " << x.what()
+                  << "\n"
+                  << what;
   }
 }
 
@@ -484,7 +533,8 @@ TEST(RecordsProperty, EveryFamilyGivesAResultOrANamedErrorOnRandomSets) {
   const long cases = EnvLong("PIEZOID_PROPERTY_CASES", 128);
   const uint64_t seed = static_cast<uint64_t>(EnvLong("PIEZOID_PROPERTY_SEED", 37));
   const bool keep = EnvLong("PIEZOID_PROPERTY_KEEP", 0) > 0;
-  const fs::path root = fs::temp_directory_path() / ("pz_records_property_" + std::to_string(::getpid()));
+  const fs::path root =
+      fs::temp_directory_path() / ("pz_records_property_" + std::to_string(::getpid()));
   if (keep) std::printf("sets kept in %s\n", root.string().c_str());
   Watchdog watchdog(std::chrono::seconds(EnvLong("PIEZOID_PROPERTY_CASE_SECONDS", 120)));
   Tally tally;
@@ -492,16 +542,19 @@ TEST(RecordsProperty, EveryFamilyGivesAResultOrANamedErrorOnRandomSets) {
     const uint64_t s = seed * 1000003 + static_cast<uint64_t>(i);
     const DrawnSet set = DrawSet(s, static_cast<size_t>(i));
     watchdog.Start(set.description);
-    if (EnvLong("PIEZOID_PROPERTY_VERBOSE", 0) > 0) std::fprintf(stderr, "set %ld: %s\n", i, set.description.c_str());
+    if (EnvLong("PIEZOID_PROPERTY_VERBOSE", 0) > 0)
+      std::fprintf(stderr, "set %ld: %s\n", i, set.description.c_str());
     const fs::path dir = root / std::to_string(i);
     Check(set, dir, i % 4 == 3, tally);
     if (!keep) fs::remove_all(dir);
     if (::testing::Test::HasFatalFailure()) break;
   }
   if (!keep) fs::remove_all(root);
-  std::printf("%d sets: %d fitted (%d refused), %d exported, %d replayed, %d compensated, %d diagnosed (%d refused)\n",
-              tally.sets, tally.fits, tally.fit_errors, tally.exports, tally.replays, tally.references, tally.diagnoses,
-              tally.diagnose_errors);
+  std::printf(
+      "%d sets: %d fitted (%d refused), %d exported, %d replayed, %d compensated, %d diagnosed (%d "
+      "refused)\n",
+      tally.sets, tally.fits, tally.fit_errors, tally.exports, tally.replays, tally.references,
+      tally.diagnoses, tally.diagnose_errors);
   // A draw that gets every set refused would test the readers only.
   EXPECT_GT(tally.fits, 0);
 }

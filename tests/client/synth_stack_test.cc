@@ -134,11 +134,12 @@ TEST(SynthStack, WritesTheSetWithItsTruthAndTheFitReportsItsExcitation) {
                 }),
                 "--pi-operators 300: preisach.levels");
   // auto: the preisach grid's levels by validation; another family's count is its own.
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
-                  RunCli({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--pi-operators", "auto",
-                          "--out", (dir / "bad-ops").string(), "--quiet"});
-                }),
-                "preisach");
+  PZ_EXPECT_HAS(
+      testing::InputErrorOf([&] {
+        RunCli({"fit", "--records", set, "--family", "prandtl-ishlinskii", "--pi-operators", "auto",
+                "--out", (dir / "bad-ops").string(), "--quiet"});
+      }),
+      "preisach");
 
   // One searched parameter (the delay; the weights are solved): the line search, said in the report,
   // fit.json and on stdout; its bad budgets are refused naming the flag, and its budget where the

@@ -189,13 +189,16 @@ TEST_F(RecordsDir, BadRecordsAreNamed) {
   // A finite number that its unit's conversion takes beyond the doubles (issue 37, the reader's
   // fuzzer): named with its line and column, not read as inf.
   rows = "t_s,voltage_kV,displacement_um\n";
-  for (int k = 0; k < 30; ++k) rows += std::to_string(k * 1e-3) + "," + (k == 5 ? "1e306" : "1") + ",1\n";
+  for (int k = 0; k < 30; ++k)
+    rows += std::to_string(k * 1e-3) + "," + (k == 5 ? "1e306" : "1") + ",1\n";
   Write("huge.csv", rows);
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "huge.csv"); }),
                 "huge.csv:7: column 'voltage_kV' (2): 1e306 is beyond the range of a number in V");
   Write("big.csv", RecordText("t_s,voltage_V,displacement_m"));
-  Write("manifest.csv", "record,file,role,offset,response_column\none,big.csv,train,1e303,displacement_m\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "offset '1e303' is beyond the range of a number in um");
+  Write("manifest.csv",
+        "record,file,role,offset,response_column\none,big.csv,train,1e303,displacement_m\n");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "offset '1e303' is beyond the range of a number in um");
   // A unit that is not declared anywhere.
   Write("nounit.csv", "time,drive,response\n0,0,1\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nounit.csv"); }), "the unit of the time column 'time' is not declared");

@@ -438,7 +438,8 @@ class DivergingFamily final : public Family {
   std::string title() const override { return "diverging"; }
   std::string equation() const override { return "y = inf"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double>, std::span<const double>, double, std::span<double> y) const override {
+  void Simulate(std::span<const double>, std::span<const double>, double,
+                std::span<double> y) const override {
     std::fill(y.begin(), y.end(), std::numeric_limits<double>::infinity());
   }
 
@@ -453,8 +454,12 @@ TEST(RecordFit, AFitWhoseEverySimulationDivergesIsANamedError) {
   FitOptions o = QuickOptions("backlash-like");
   o.search.pso.particles = 4;
   o.search.pso.iterations = 2;
-  const std::string e = pz::testing::InputErrorOf(
-      [&] { FitModel(set, std::make_shared<RecordModel>(std::make_shared<DivergingFamily>(), std::vector<EffectKind>{}, scale), o); });
+  const std::string e = pz::testing::InputErrorOf([&] {
+    FitModel(set,
+             std::make_shared<RecordModel>(std::make_shared<DivergingFamily>(),
+                                           std::vector<EffectKind>{}, scale),
+             o);
+  });
   PZ_EXPECT_HAS(e, "diverging: the model's output on the training records (rec) is not finite");
   PZ_EXPECT_HAS(e, "--substeps");
 }

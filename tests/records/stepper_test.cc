@@ -522,16 +522,18 @@ TEST(Stepper, UnreachableReferenceIsClippedAndCounted) {
 }
 
 TEST(Stepper, ADelayOfMoreSamplesThanTheKernelKeepsIsNamed) {
-  // Issue 37, the fit.json fuzzer: a delay of 1e12 s, or a sample period of 1e-300 s, overflowed the
-  // kernel's int count of delay samples (undefined; then a vector beyond max_size()).
+  // Issue 37, the fit.json fuzzer: a delay of 1e12 s, or a sample period of 1e-300 s, overflowed
+  // the kernel's int count of delay samples (undefined; then a vector beyond max_size()).
   const io::Record r = TestRecord();
   ModelSpec s = Spec("backlash-like", {EffectKind::Named("delay")}, r);
   const size_t at = s.params.size() - 1;
   s.params[at] = 1e12;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { Stepper st(s); }), "model.params[delay.tau_d_s] = 1000000000000: is 1e+15 samples");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { Stepper st(s); }),
+                "model.params[delay.tau_d_s] = 1000000000000: is 1e+15 samples");
   s.params[at] = 1e-3;
   s.dt = 1e-300;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { Stepper st(s); }), "samples of model.sample_period_s = 1e-300 s");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { Stepper st(s); }),
+                "samples of model.sample_period_s = 1e-300 s");
   s.dt = r.dt;
   s.params[at] = 0.999e6 * r.dt;  // within the bound
   EXPECT_NO_THROW(Stepper st(s));
