@@ -24,6 +24,7 @@
 #include "opt/random.h"
 #include "opt/thread_pool_evaluator.h"
 #include "complete_remote.h"
+#include "json_report.h"
 #include "service_harness.h"
 #include "kinds/kinds.h"
 
@@ -386,31 +387,13 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
 
 // A report without what depends on the machine (wall times, rates, threads, where it ran).
 google::protobuf::Struct ReadReport(const fs::path& file) {
-  std::ifstream in(file);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  google::protobuf::Struct s;
-  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(ss.str(), &s).ok()) << file;
-  std::function<void(google::protobuf::Struct*)> drop = [&](google::protobuf::Struct* x) {
-    for (const char* key : {"wall_time_s", "threads", "evaluations_per_s", "seconds_to_final", "evaluated_on"})
-      x->mutable_fields()->erase(key);
-    for (auto& [key, v] : *x->mutable_fields()) {
-      if (v.has_struct_value()) drop(v.mutable_struct_value());
-      if (v.has_list_value())
-        for (auto& item : *v.mutable_list_value()->mutable_values())
-          if (item.has_struct_value()) drop(item.mutable_struct_value());
-    }
-  };
-  drop(&s);
-  return s;
+  return ReadJsonWithout(
+      file, {"wall_time_s", "threads", "evaluations_per_s", "seconds_to_final", "evaluated_on"});
 }
 
 // Same keys and values, bit for bit (numbers are printed with 17 digits).
 void ExpectSameReport(const google::protobuf::Struct& a, const google::protobuf::Struct& b) {
-  google::protobuf::util::MessageDifferencer d;
-  std::string diff;
-  d.ReportDifferencesToString(&diff);
-  EXPECT_TRUE(d.Compare(a, b)) << diff;
+  ExpectSameJson(a, b);
 }
 
 TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {

@@ -2,18 +2,25 @@
 // from its spec alone (binary and JSON encodings), the fitness `piezoid fit` has — every family
 // with effects, records cut at their rest, each offset mode — cost for cost, bit for bit; bad
 // specs are refused field by field; and a fit whose global search runs on a local master with two
-// workers gives the local result bit for bit (a swarm, and the line search of one parameter).
+// workers gives the local result bit for bit (a swarm, and the line search of one parameter);
+// `piezoid fit --family auto --master` runs the selection's fold fits and the chosen model's refit
+// on the workers and writes the local run's fit.json bit for bit but for its wall time (issue 37).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
+#include <map>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "client/complete_service.h"
-#include "opt/thread_pool_evaluator.h"
 #include "complete/job_kind.h"
-#include "records/synthetic.h"
 #include "complete_remote.h"
+#include "io/records.h"
+#include "json_report.h"
+#include "opt/thread_pool_evaluator.h"
+#include "records/synthetic.h"
 #include "service_harness.h"
 #include "tests/testing/expect_error.h"
 
@@ -213,12 +220,112 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   EXPECT_EQ(local_line.search.trace.best_cost, remote_line.search.trace.best_cost);
 }
 
+// `piezoid fit --family auto --master ENDPOINT` (issue 37): the screening's and the finalists'
+// fold fits and the chosen model's refit search on the workers (one evaluation session each), and
+// the choice, every CV figure, the parameters and weights — the whole fit.json but its wall time —
+// are the local run's bit for bit (the local run's folds side by side on 2 threads, the service
+// run's one after another). A small grid: backlash-like and prandtl-ishlinskii of 8 plays, each
+// with the default effect sets (none, delay, creep, creep + delay): swarms, the line search of one
+// parameter (prandtl-ishlinskii + delay) and nothing searched (prandtl-ishlinskii alone); 3 folds,
+// 2 finalists.
+TEST(RecordsServiceTest, AnAutoFamilyFitWithMasterWritesTheLocalFitJsonBitForBit) {
+  Cluster cluster("records-auto");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  const fs::path root = cluster.dir() / "auto";
+  io::WriteRecordSet(MakeSet(), root / "records");
+  auto run = [&](const std::string& out, std::vector<std::string> more, std::string* stdout_text) {
+    std::vector<std::string> args = {"fit", "--records", (root / "records").string(), "--out",
+                                     (root / out).string()};
+    const std::string grid =
+        "--family auto --auto-families backlash-like,prandtl-ishlinskii --pi-operators 8 "
+        "--folds 3 --finalists 2 --lm-iterations 10 --no-figures --quiet";
+    std::istringstream words(grid);
+    for (std::string w; words >> w;) args.push_back(w);
+    args.insert(args.end(), more.begin(), more.end());
+    std::string err;
+    EXPECT_EQ(RunCli(args, stdout_text, &err), 0) << err << " (see " << cluster.dir() << ")";
+    // Its wall times: the one figure the service may change.
+    return ReadJsonWithout(root / out / "fit.json", {"wall_time_s"});
+  };
+  std::string local_out, service_out;
+  const google::protobuf::Struct local = run("local", {"--threads", "2"}, &local_out);
+  const google::protobuf::Struct service = run(
+      "service", {"--master", cluster.client_endpoint(), "--timeout-ms", "2000", "--retries", "3"},
+      &service_out);
+  EXPECT_EQ(local_out.find("on the workers of"), std::string::npos) << local_out;
+  EXPECT_NE(service_out.find("(global search on the workers of " + cluster.client_endpoint()),
+            std::string::npos)
+      << service_out;
+  // The choice and the CV figures, then the chosen model's parameters and weights, then the rest.
+  ASSERT_TRUE(local.fields().contains("selection"));
+  ASSERT_TRUE(service.fields().contains("selection"));
+  const auto& ls = local.fields().at("selection").struct_value().fields();
+  const auto& ss = service.fields().at("selection").struct_value().fields();
+  for (const char* key : {"chosen", "best_cv_rmse", "ranking", "initial_states", "fold_fits"}) {
+    ASSERT_TRUE(ls.contains(key)) << key;
+    ASSERT_TRUE(ss.contains(key)) << key;
+    ExpectSameJson(ls.at(key), ss.at(key), std::string("selection.") + key);
+  }
+  const auto& ranking = ls.at("ranking").list_value().values();
+  ASSERT_GE(ranking.size(), 4u);
+  size_t finite = 0;
+  for (const auto& r : ranking) {
+    const auto& f = r.struct_value().fields();
+    if (f.contains("cv_rmse") && f.at("cv_rmse").has_number_value() &&
+        std::isfinite(f.at("cv_rmse").number_value()) && f.at("cv_rmse").number_value() > 0)
+      ++finite;
+  }
+  EXPECT_GE(finite, 4u);  // the figures compared are the CV's, not missing ones
+  for (const char* key : {"model", "params", "weights", "train_mse", "records", "search"}) {
+    ASSERT_TRUE(local.fields().contains(key)) << key;
+    ASSERT_TRUE(service.fields().contains(key)) << key;
+    ExpectSameJson(local.fields().at(key), service.fields().at(key), key);
+  }
+  EXPECT_GT(local.fields().at("params").struct_value().fields_size(), 0);
+  ExpectSameJson(local, service, "fit.json");
+  // The searches ran on the workers: one session per fit that searches (the folds' and the
+  // refit's), each named for the selection; the chosen model's refit among them.
+  auto client = cluster.Client();
+  std::vector<service::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  std::map<std::string, int> per_model;
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.kind, "complete_model");
+    EXPECT_EQ(j.name.rfind("piezoid fit --family auto: ", 0), 0u) << j.name;
+    EXPECT_GT(j.evaluations, 0u) << j.name;
+    ++per_model[j.name.substr(0, j.name.rfind(" on "))];
+  }
+  for (const auto& [name, n] : per_model) std::printf("%d session(s): %s\n", n, name.c_str());
+  // 7 of the 8 candidates search (prandtl-ishlinskii alone solves its weights): 7 × 3 screening
+  // folds, 2 finalists × 3 folds, and the 2 finalists' refits on every training record.
+  EXPECT_EQ(jobs.size(), 7u * 3 + 2 * 3 + 2);
+  // The chosen model: its 3 screening folds, its 3 final folds and its refit, whose session
+  // evaluated the whole global search of fit.json.
+  const auto& model = local.fields().at("model").struct_value().fields();
+  std::string chosen = "piezoid fit --family auto: " + model.at("family").string_value();
+  for (const auto& e : model.at("effects").list_value().values())
+    chosen += " + " + e.string_value();
+  EXPECT_EQ(per_model[chosen], 7) << chosen;
+  const double searched =
+      local.fields().at("search").struct_value().fields().at("search_evaluations").number_value();
+  EXPECT_GT(searched, 0);
+  bool refit = false;
+  for (const auto& j : jobs)
+    refit = refit || (j.name == chosen + " on 2 record(s)" &&
+                      static_cast<double>(j.evaluations) == searched);
+  EXPECT_TRUE(refit) << chosen << ": no session of " << searched
+                     << " evaluations on the 2 training records";
+}
+
 /// A records fit's evaluator that takes the genomes one at a time on two threads: the fitness's
 /// lanes hidden (how the workers evaluated before they took lanes() genomes at a time).
 class OneAtATimeEvaluator final : public opt::BatchEvaluator {
  public:
   explicit OneAtATimeEvaluator(const records::RecordFitness& f) : single_(f), pool_(single_, 2) {}
-  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override { pool_.Evaluate(batch, out); }
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
+    pool_.Evaluate(batch, out);
+  }
 
  private:
   struct Single final : opt::FitnessFunction {
