@@ -82,7 +82,13 @@ double Percentile95(std::vector<double> v) {
   return v[k];
 }
 
-int Bin(double x, int bins) { return std::clamp(static_cast<int>(std::floor(x * bins)), 0, bins - 1); }
+/// The bin of x ∈ [0, 1] among `bins`; clamped in double before the cast (x far outside [0, 1] on a
+/// degenerate range, or NaN, goes to an end bin: the fuzzer's 4.9e121 overflowed an int).
+int Bin(double x, int bins) {
+  const double b = std::floor(x * bins);
+  if (!(b > 0)) return 0;
+  return b >= bins - 1 ? bins - 1 : static_cast<int>(b);
+}
 
 /// "10–40 %, 90–100 %" for the bins set in `on`.
 std::string BinRanges(const std::vector<bool>& on) {
