@@ -28,7 +28,7 @@ import tempfile
 SUFFIXES = (".c", ".cc", ".h", ".proto")
 EXCLUDED = ("build", "build-", "third_party/", "client/dashboard_assets.h")
 ALLOW = "// NOLINT(length)"
-MAX_OVER = 4045
+MAX_OVER = 4044
 
 
 def column_limit(root):
