@@ -14,6 +14,7 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -613,6 +614,25 @@ int RunFit(const FitArgs& args) {
 
 }  // namespace
 
+namespace {
+
+constexpr const char* kPiOperatorsRule = "must be a count in 1 … 10000, or auto (preisach)";
+
+/// --pi-operators as a count 1 … 10000 (the whole text a number), or none.
+std::optional<int> PiOperatorsCount(const std::string& text) {
+  size_t used = 0;
+  int n = 0;
+  try {
+    n = std::stoi(text, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != text.size() || n < 1 || n > 10000) return std::nullopt;
+  return n;
+}
+
+}  // namespace
+
 void RegisterFit(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<FitArgs>();
   CLI::App* cmd = app.add_subcommand(
@@ -693,17 +713,8 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "training records")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
-            if (v == "auto") return "";
-            size_t used = 0;
-            int n = 0;
-            try {
-              n = std::stoi(v, &used);
-            } catch (const std::exception&) {
-              used = 0;
-            }
-            if (used == 0 || used != v.size() || n < 1 || n > 10000)
-              return "must be a count in 1 … 10000, or auto (preisach), not " + v;
-            return "";
+            return v == "auto" || PiOperatorsCount(v) ? ""
+                                                      : std::string(kPiOperatorsRule) + ", not " + v;
           },
           "COUNT|auto"))
       ->default_str("12");
@@ -731,17 +742,9 @@ void RegisterFit(CLI::App& app, int& exit_code) {
             a->family);
       a->pi_operators = records::kAutoLevels;
     } else {
-      size_t used = 0;
-      int n = 0;
-      try {
-        n = std::stoi(ops, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used == 0 || used != ops.size() || n < 1 || n > 10000)
-        throw InputError("--pi-operators " + ops +
-                         ": must be a count in 1 … 10000, or auto (preisach)");
-      a->pi_operators = n;
+      const std::optional<int> n = PiOperatorsCount(ops);
+      if (!n) throw InputError("--pi-operators " + ops + ": " + kPiOperatorsRule);
+      a->pi_operators = *n;
     }
     a->pi_operators_given = cmd->count("--pi-operators") > 0;
     exit_code = RunFit(*a);
