@@ -713,8 +713,8 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "training records")
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
-            return v == "auto" || PiOperatorsCount(v) ? ""
-                                                      : std::string(kPiOperatorsRule) + ", not " + v;
+            if (v == "auto" || PiOperatorsCount(v)) return "";
+            return std::string(kPiOperatorsRule) + ", not " + v;
           },
           "COUNT|auto"))
       ->default_str("12");
