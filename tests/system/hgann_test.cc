@@ -47,6 +47,21 @@ const service::JobCheckpoint& QuickReference() {
   return ref;
 }
 
+/// The job on a master with two 1-thread workers, run to its end (succeeded) and fetched.
+void RunOnMasterAndTwoWorkers(const std::string& name, const job::JobSpec& spec,
+                              service::JobInfo* info, std::vector<service::ScoredGenome>* best,
+                              std::vector<service::GenerationRecord>* log) {
+  Cluster c(name);
+  c.AddWorker(1);
+  c.AddWorker(1);
+  auto client = c.Client();
+  client::SubmitResult r;
+  ASSERT_TRUE(client.Submit(spec, &r).ok());
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, info).ok());
+  ASSERT_EQ(info->state, service::JobState::kSucceeded) << info->message;
+  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, best, log, info).ok());
+}
+
 TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   const job::JobSpec spec = QuickSpec();
   ASSERT_EQ(spec.kind(), "hgann");
@@ -134,19 +149,11 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   const io::CaseSet set = hgann::HgannCaseSet(std::get<job::HgannProblem>(spec.problem));
   const hgann::IdentifyResult id = hgann::RunIdentify(o, set, fitness, nullptr);
 
-  Cluster c("hgann-islands");
-  c.AddWorker(1);
-  c.AddWorker(1);
-  auto client = c.Client();
-  client::SubmitResult r;
-  ASSERT_TRUE(client.Submit(spec, &r).ok());
   service::JobInfo info;
-  ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, &info).ok());
-  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
-  EXPECT_EQ(info.termination, opt::GaTermination::kMaxGenerations);
   std::vector<service::ScoredGenome> best;
   std::vector<service::GenerationRecord> log;
-  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info).ok());
+  ASSERT_NO_FATAL_FAILURE(RunOnMasterAndTwoWorkers("hgann-islands", spec, &info, &best, &log));
+  EXPECT_EQ(info.termination, opt::GaTermination::kMaxGenerations);
   ExpectSameRun(ref, best, log);
   ASSERT_EQ(log.size(), id.log.size());
   for (size_t g = 0; g < log.size(); ++g) EXPECT_EQ(log[g], id.log[g]) << "generation " << g;
@@ -184,18 +191,10 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   // The seeds are in generation 0: its best is no worse than the best seed.
   EXPECT_LE(id.log.front().best_cost, id.seeds->costs.front());
 
-  Cluster c("hgann-seeds");
-  c.AddWorker(1);
-  c.AddWorker(1);
-  auto client = c.Client();
-  client::SubmitResult r;
-  ASSERT_TRUE(client.Submit(spec, &r).ok());
   service::JobInfo info;
-  ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, &info).ok());
-  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
   std::vector<service::ScoredGenome> best;
   std::vector<service::GenerationRecord> log;
-  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info).ok());
+  ASSERT_NO_FATAL_FAILURE(RunOnMasterAndTwoWorkers("hgann-seeds", spec, &info, &best, &log));
   ExpectSameRun(ref, best, log);
   ASSERT_EQ(log.size(), id.log.size());
   for (size_t g = 0; g < log.size(); ++g) EXPECT_EQ(log[g], id.log[g]) << "generation " << g;
