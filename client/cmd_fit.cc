@@ -364,9 +364,8 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
-  f["format_version"] = Num(kFitFormatVersion);
   const int levels = r.resolution.used ? r.resolution.value() : a.pi_operators;  // auto: the chosen
-  f["model"] = FitModelJson(set, r, a.substeps, levels);
+  WriteFitModel(FittedModelSpec(set, r, a.substeps, levels), &root);
   f["description"] = Text(r.model->Describe());
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
@@ -490,8 +489,7 @@ int RunFit(const FitArgs& args) {
     if (!a.initial_state.empty())
       o.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
     for (const auto& f : a.auto_families) {
-      const auto& known = records::FamilyNames();
-      if (std::find(known.begin(), known.end(), f) == known.end())
+      if (!IsRecordsFamily(f))
         throw InputError("--auto-families '" + f +
                          "': not a family (piezoid fit --help lists them)");
     }
