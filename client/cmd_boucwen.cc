@@ -22,7 +22,7 @@
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
 #include "client/json_values.h"
 #include "client/plots.h"
 #include "complete/boucwen_benchmark.h"

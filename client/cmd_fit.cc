@@ -21,7 +21,7 @@
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
 #include "client/excitation_report.h"
 #include "client/json_values.h"
 #include "client/search_flags.h"
