@@ -665,8 +665,10 @@ ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
 
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
   cmd->add_option("--master", f.master,
-                  "run every evaluation of the searches on the workers of this piezoid-master (its client endpoint, "
-                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search or fit: the same result, bit for "
+                  "run every evaluation of the searches on the workers of this piezoid-master (its "
+                  "client endpoint, "
+                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search or fit: the same "
+                  "result, bit for "
                   "bit, as the local run")
       ->type_name("ENDPOINT");
   cmd->add_option("--timeout-ms", f.timeout_ms, "with --master: per-request timeout [ms]")
@@ -675,12 +677,13 @@ void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
   cmd->add_option("--retries", f.retries, "with --master: attempts per request")
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
-  cmd->add_option("--curve-secret", f.curve_secret,
-                  "with --master, CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: "
-                  "$PIEZOID_CURVE_SECRET)");
-  cmd->add_option("--master-public", f.master_public,
-                  "with --master, CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
+  cmd->add_option(
+      "--curve-secret", f.curve_secret,
+      "with --master, CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: "
+      "$PIEZOID_CURVE_SECRET)");
+  cmd->add_option(
+      "--master-public", f.master_public,
+      "with --master, CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
-
 
 }  // namespace pz::client

@@ -41,7 +41,8 @@ struct CompleteServiceFlags {
   std::string master;  ///< the master's client endpoint; empty = evaluate locally
   int timeout_ms = 4000;
   int retries = 3;
-  std::string curve_secret, master_public;  ///< default: $PIEZOID_CURVE_SECRET, $PIEZOID_MASTER_PUBLIC
+  std::string curve_secret,
+      master_public;  ///< default: $PIEZOID_CURVE_SECRET, $PIEZOID_MASTER_PUBLIC
   CompleteServiceFlags();
   bool enabled() const { return !master.empty(); }
   /// The session options of these flags (CURVE keys loaded); throws InputError naming the flag.

@@ -8,15 +8,16 @@
 #include <string>
 
 #include "complete/committee.h"
-#include "svcclient/service_evaluator.h"
 #include "records/fit.h"
+#include "svcclient/service_evaluator.h"
 
 namespace pz::client {
 
 /// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS), its
 /// family made with `family` as locally (sub-steps, plays), so that the costs are the local ones.
 records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
-                                                      const records::FamilyOptions& family, const std::string& owner);
+                                                      const records::FamilyOptions& family,
+                                                      const std::string& owner);
 
 /// One session per search of the committee, on the master of `options`; `family`: the committee's
 /// family options (sub-steps, PI plays).

@@ -3,6 +3,8 @@
 // (fuzz/corpus-fit-model: fit.json model sections `piezoid fit` wrote, one per family and effect,
 // and the regressions the fuzzer found): each loads to a model or a named InputError, and a model
 // it loads is written back to the same values (what `piezoid fit` writes for that model).
+#include "client/fit_file.h"
+
 #include <google/protobuf/util/json_util.h>
 #include <gtest/gtest.h>
 
@@ -11,7 +13,6 @@
 #include <string>
 #include <vector>
 
-#include "client/fit_file.h"
 #include "client/json_values.h"
 #include "io/csv.h"
 
@@ -22,8 +23,8 @@ namespace fs = std::filesystem;
 
 std::vector<fs::path> Corpus() {
   std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(fs::path(PIEZOID_DATA_DIR) / ".." / "fuzz" /
-                                              "corpus-fit-model"))
+  for (const auto& e :
+       fs::directory_iterator(fs::path(PIEZOID_DATA_DIR) / ".." / "fuzz" / "corpus-fit-model"))
     if (e.path().extension() == ".json") files.push_back(e.path());
   std::sort(files.begin(), files.end());
   return files;

@@ -2,16 +2,15 @@
 // that links only pz::svcclient (and what its line names) submits, asks and watches through
 // ServiceClient, and gets the library's answers — here from a master that is not there: every
 // request is kUnavailable naming the endpoint, after its retries, within its timeouts.
-#include <gtest/gtest.h>
+#include "svcclient/service_client.h"
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
-
-#include "svcclient/service_client.h"
 
 namespace pz::client {
 namespace {
