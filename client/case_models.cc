@@ -129,6 +129,12 @@ void SetSaturation(CaseModel& c, const model::SaturationPair& s, std::string sou
   c.saturation_source = std::move(source);
 }
 
+/// A bench case's b1, b2 from its measured extremes: the fin case's one rule (io::MakeFinCase).
+model::SaturationPair FittedSaturation(const io::BenchCase& bc) {
+  const model::FinCase f = io::MakeFinCase(bc);
+  return {f.b1, f.b2};
+}
+
 std::string NoMeasurement(const char* mode) {
   return std::string("--saturation ") + mode +
          " needs measured data: use it with a bench case set (--cases)";
@@ -143,7 +149,7 @@ std::vector<CaseModel> ResolveBenchCases(const ParamFlags& flags, const io::Case
   if (mode == SaturationMode::kRegression) {
     std::vector<model::SaturationSample> samples;
     for (const auto& c : set.cases) {
-      const auto s = model::SaturationFromExtremes(c.angle_deg);
+      const auto s = FittedSaturation(c);
       samples.push_back({c.amplitude_v, c.frequency_hz, s.b1, s.b2});
     }
     regression = model::FitSaturationRegression(samples);
@@ -156,13 +162,7 @@ std::vector<CaseModel> ResolveBenchCases(const ParamFlags& flags, const io::Case
     c.amplitude_v = bc.amplitude_v;
     c.frequency_hz = bc.frequency_hz;
     c.params = BaseParams(flags, file, bc.number);
-    auto fitted = [&] {
-      try {
-        return model::SaturationFromExtremes(bc.angle_deg);
-      } catch (const InputError& e) {
-        throw InputError(bc.file.string() + ": " + e.what());
-      }
-    };
+    auto fitted = [&] { return FittedSaturation(bc); };
     const auto given = GivenSaturation(flags, file, bc.number);
     switch (mode) {
       case SaturationMode::kAuto:

@@ -8,7 +8,6 @@
 // multisine and sine-sweep sets (the protocol: complete/boucwen_benchmark.h). Writes report.json,
 // report.md, CSVs and gnuplot figures.
 #include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <chrono>
 #include <cmath>
@@ -16,13 +15,15 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
+#include "client/json_values.h"
 #include "client/plots.h"
 #include "complete/boucwen_benchmark.h"
 #include "complete/job_kind.h"
@@ -92,229 +93,295 @@ opt::SearchOptions MakeOptions(const BoucwenArgs& a) {
   return o;
 }
 
-int RunBoucwen(const BoucwenArgs& a) {
-  namespace fs = std::filesystem;
-  const fs::path data(a.data_dir), out(a.out_dir);
-  const io::RecordSet train = LoadBwBenchmark(data, model::CaseRole::kTrain);
+/// The training problem: train_A from rest and train_B after a one-period warm-up (all their whole
+/// periods, or the first --train-periods), output-error MSE; a diverging simulation costs 1 m².
+complete::BwTraining MakeTraining(const BoucwenArgs& a, const io::RecordSet& train) {
   auto samples_of = [&](const io::Record& r) {
     const size_t all = r.size() - r.size() % kBwPeriod;
-    return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kBwPeriod) : all;
+    return a.train_periods > 0 ? std::min(all, static_cast<size_t>(a.train_periods) * kBwPeriod)
+                               : all;
   };
   const io::Record& train_a = *train.Find("train_A");
   const io::Record& train_b = *train.Find("train_B");
   std::vector<io::Record> records;
   records.push_back(MakeBwTrainingRecord(train_a, samples_of(train_a), false));
   records.push_back(MakeBwTrainingRecord(train_b, samples_of(train_b), true));
-  // Output-error MSE; a diverging simulation costs 1 m² (penalised).
-  const complete::BwTraining fitness(
-      std::move(records), complete::BwProtocol(a.substeps, model::InputInterpolation::kPeriodicFourier, kBwPeriod),
+  return complete::BwTraining(
+      std::move(records),
+      complete::BwProtocol(a.substeps, model::InputInterpolation::kPeriodicFourier, kBwPeriod),
       1.0);
-  const size_t n_train = fitness.counted_samples();
+}
 
-  const opt::ParamBox box = fitness.Box();
-  opt::SearchOptions options = MakeOptions(a);
-  const int progress = a.progress;
-  options.on_progress = [progress](const opt::SearchProgress& p) {
-    if (progress > 0 && p.iteration % progress == 0) {
-      std::fprintf(stderr, "rep %d it %4d  evals %7lld  best rms %.4e m  overall %.4e m\n", p.repetition,
-                   p.iteration, static_cast<long long>(p.evaluations), std::sqrt(p.best_cost),
-                   std::sqrt(p.overall_best_cost));
-    }
-  };
-  ThrowIfError(options.Validate(box));
-  const std::string where =
-      a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)");
+/// What a run found and how: the search, where it ran, the benchmark's true parameters and the
+/// test sets' scores (read only after the search).
+struct BwOutcome {
+  opt::SearchOptions options;
+  opt::ParamBox box;
   opt::SearchResult result;
   int threads = 0;
+  size_t n_train = 0;
+  std::string where;  ///< " thread(s)" or " worker thread(s) of <master>"
+  std::vector<double> theta_true;
+  double train_rms = 0;
+  size_t reach = 0;  ///< the first trace point within 1 % of the final best cost
+  std::vector<double> measured_ms, measured_sw;  ///< the test sets' measured outputs
+  std::vector<double> yms, ysw, yms_true, ysw_true;
+  double rms_ms = 0, rms_sw = 0, rms_ms_true = 0, rms_sw_true = 0, max_ms = 0, max_sw = 0;
+};
+
+/// The search on a thread pool, or with --master in one evaluation session (the spec carries the
+/// records). Fills options, box, result, threads, n_train and where; a service error is printed
+/// and its exit code returned.
+std::optional<int> Search(const BoucwenArgs& a, const complete::BwTraining& fitness, BwOutcome* o) {
+  o->n_train = fitness.counted_samples();
+  o->box = fitness.Box();
+  o->options = MakeOptions(a);
+  const int progress = a.progress;
+  o->options.on_progress = [progress](const opt::SearchProgress& p) {
+    if (progress > 0 && p.iteration % progress == 0) {
+      std::fprintf(stderr, "rep %d it %4d  evals %7lld  best rms %.4e m  overall %.4e m\n",
+                   p.repetition, p.iteration, static_cast<long long>(p.evaluations),
+                   std::sqrt(p.best_cost), std::sqrt(p.overall_best_cost));
+    }
+  };
+  ThrowIfError(o->options.Validate(o->box));
+  o->where =
+      a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)");
   try {
-    // Locally a thread pool; with --master one evaluation session (the spec carries the records).
     std::unique_ptr<opt::BatchEvaluator> evaluator;
     if (a.service.enabled()) {
       evaluator = std::make_unique<ServiceEvaluator>(
           a.service.Options(),
-          complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness),
-                                         std::string("boucwen ") + opt::SearchAlgorithmName(options.algorithm)),
+          complete::CompleteModelJobSpec(
+              complete::CompleteModelProblemOf(fitness),
+              std::string("boucwen ") + opt::SearchAlgorithmName(o->options.algorithm)),
           "piezoid boucwen");
     } else {
       evaluator = std::make_unique<opt::ThreadPoolEvaluator>(fitness, a.threads);
     }
-    std::cout << "piezoid boucwen: " << opt::SearchAlgorithmName(options.algorithm) << ", "
-              << options.repetitions << " repetition(s) from seed " << a.seed << ", " << evaluator->concurrency()
-              << where << "; training on " << n_train
-              << " samples (train_A from rest, train_B in steady state after a one-period warm-up), RK4 with "
+    std::cout << "piezoid boucwen: " << opt::SearchAlgorithmName(o->options.algorithm) << ", "
+              << o->options.repetitions << " repetition(s) from seed " << a.seed << ", "
+              << evaluator->concurrency() << o->where << "; training on " << o->n_train
+              << " samples (train_A from rest, train_B in steady state after a one-period "
+                 "warm-up), RK4 with "
               << a.substeps << " sub-steps per sample, Fourier-interpolated input" << std::endl;
-    result = opt::Search(box, options, *evaluator);
-    threads = evaluator->concurrency();
+    o->result = opt::Search(o->box, o->options, *evaluator);
+    o->threads = evaluator->concurrency();
   } catch (const ServiceError& e) {  // the evaluator's destructor has closed the session
     std::cerr << "piezoid boucwen: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }
+  return std::nullopt;
+}
 
-  const std::vector<double> theta_true = model::BwIdentifiable(model::BwParams{});  // benchmark Table 1
-  const double train_rms = std::sqrt(result.best_cost);
-
-  // Test sets: read only now.
+/// The identified and the true model on the test sets (read only now), and the trace's reach.
+void ScoreTests(const std::filesystem::path& data, BwOutcome* o) {
+  o->theta_true = model::BwIdentifiable(model::BwParams{});  // benchmark Table 1
+  o->train_rms = std::sqrt(o->result.best_cost);
   const io::RecordSet test = LoadBwBenchmark(data, model::CaseRole::kTest);
   const io::Record& test_ms = *test.Find("test_multisine");
   const io::Record& test_sw = *test.Find("test_sinesweep");
-  const std::vector<double> yms = SimulateBwMultisineTest(result.best, test_ms);
-  const std::vector<double> ysw = SimulateBwSweepTest(result.best, test_sw);
-  const std::vector<double> yms_true = SimulateBwMultisineTest(theta_true, test_ms);
-  const std::vector<double> ysw_true = SimulateBwSweepTest(theta_true, test_sw);
-  const double rms_ms = model::Rmse(test_ms.y, yms), rms_sw = model::Rmse(test_sw.y, ysw);
-  const double rms_ms_true = model::Rmse(test_ms.y, yms_true), rms_sw_true = model::Rmse(test_sw.y, ysw_true);
-  const double max_ms = model::MaxAbsError(test_ms.y, yms, 1 / kBwSampleRateHz, 0, (test_ms.y.size() - 1) / kBwSampleRateHz);
-  const double max_sw = model::MaxAbsError(test_sw.y, ysw, 1 / kBwSampleRateHz, 0, (test_sw.y.size() - 1) / kBwSampleRateHz);
-  // Time to reach the final criterion: the first trace point within 1 % of the final best cost.
-  size_t reach = 0;
-  while (reach + 1 < result.trace.best_cost.size() && result.trace.best_cost[reach] > result.best_cost * 1.01) ++reach;
+  o->measured_ms = test_ms.y;
+  o->measured_sw = test_sw.y;
+  o->yms = SimulateBwMultisineTest(o->result.best, test_ms);
+  o->ysw = SimulateBwSweepTest(o->result.best, test_sw);
+  o->yms_true = SimulateBwMultisineTest(o->theta_true, test_ms);
+  o->ysw_true = SimulateBwSweepTest(o->theta_true, test_sw);
+  o->rms_ms = model::Rmse(test_ms.y, o->yms), o->rms_sw = model::Rmse(test_sw.y, o->ysw);
+  o->rms_ms_true = model::Rmse(test_ms.y, o->yms_true),
+  o->rms_sw_true = model::Rmse(test_sw.y, o->ysw_true);
+  o->max_ms = model::MaxAbsError(test_ms.y, o->yms, 1 / kBwSampleRateHz, 0,
+                                 (test_ms.y.size() - 1) / kBwSampleRateHz);
+  o->max_sw = model::MaxAbsError(test_sw.y, o->ysw, 1 / kBwSampleRateHz, 0,
+                                 (test_sw.y.size() - 1) / kBwSampleRateHz);
+  const auto& best_cost = o->result.trace.best_cost;
+  o->reach = 0;
+  while (o->reach + 1 < best_cost.size() && best_cost[o->reach] > o->result.best_cost * 1.01)
+    ++o->reach;
+}
 
+void PrintSummary(const BwOutcome& o) {
+  const opt::SearchResult& result = o.result;
   std::cout.precision(6);
-  std::cout << "best of " << options.repetitions << ": training RMS " << Sci(train_rms) << " m (repetition "
-            << result.best_repetition << ", " << result.stop_reason << ")\n"
+  std::cout << "best of " << o.options.repetitions << ": training RMS " << Sci(o.train_rms)
+            << " m (repetition " << result.best_repetition << ", " << result.stop_reason << ")\n"
             << result.evaluations << " evaluations, " << result.iterations << " iterations, "
-            << result.wall_time_s << " s (" << result.evaluations / result.wall_time_s << " evaluations/s); "
-            << "within 1 % of the final cost after " << result.trace.evaluations[reach] << " evaluations, "
-            << result.trace.wall_time_s[reach] << " s\n";
-  for (size_t i = 0; i < box.size(); ++i) {
-    std::cout << "  " << box.names[i] << " = " << Sci(result.best[i], 6) << "  (true " << Sci(theta_true[i], 6)
-              << ", " << std::showpos << 100 * (result.best[i] / theta_true[i] - 1) << std::noshowpos << " %)\n";
+            << result.wall_time_s << " s (" << result.evaluations / result.wall_time_s
+            << " evaluations/s); "
+            << "within 1 % of the final cost after " << result.trace.evaluations[o.reach]
+            << " evaluations, " << result.trace.wall_time_s[o.reach] << " s\n";
+  for (size_t i = 0; i < o.box.size(); ++i) {
+    std::cout << "  " << o.box.names[i] << " = " << Sci(result.best[i], 6) << "  (true "
+              << Sci(o.theta_true[i], 6) << ", " << std::showpos
+              << 100 * (result.best[i] / o.theta_true[i] - 1) << std::noshowpos << " %)\n";
   }
-  std::cout << "test multisine: simulation RMS error " << Sci(rms_ms) << " m (true model " << Sci(rms_ms_true)
-            << " m; best published black-box 7.53e-06 m)\n"
-            << "test sine sweep: simulation RMS error " << Sci(rms_sw) << " m (true model " << Sci(rms_sw_true)
-            << " m)\n";
+  std::cout << "test multisine: simulation RMS error " << Sci(o.rms_ms) << " m (true model "
+            << Sci(o.rms_ms_true) << " m; best published black-box 7.53e-06 m)\n"
+            << "test sine sweep: simulation RMS error " << Sci(o.rms_sw) << " m (true model "
+            << Sci(o.rms_sw_true) << " m)\n";
+}
 
-  // Report files.
-  fs::create_directories(out);
+void WriteReportJson(const std::filesystem::path& file, const BoucwenArgs& a, const BwOutcome& o) {
+  const opt::SearchResult& result = o.result;
   google::protobuf::Struct report;
   auto& f = *report.mutable_fields();
-  auto num = [](double v) {
-    google::protobuf::Value x;
-    x.set_number_value(v);
-    return x;
-  };
-  auto str = [](const std::string& v) {
-    google::protobuf::Value x;
-    x.set_string_value(v);
-    return x;
-  };
-  f["algorithm"] = str(opt::SearchAlgorithmName(options.algorithm));
+  const auto num = json::Num;
+  const auto str = json::Text;
+  f["algorithm"] = str(opt::SearchAlgorithmName(o.options.algorithm));
   f["seed"] = num(static_cast<double>(a.seed));
-  f["repetitions"] = num(options.repetitions);
-  f["threads"] = num(threads);
+  f["repetitions"] = num(o.options.repetitions);
+  f["threads"] = num(o.threads);
   f["evaluated_on"] = str(a.service.enabled() ? "service" : "local");
   f["substeps"] = num(a.substeps);
-  f["training_samples"] = num(static_cast<double>(n_train));
+  f["training_samples"] = num(static_cast<double>(o.n_train));
   f["evaluations"] = num(static_cast<double>(result.evaluations));
   f["iterations"] = num(result.iterations);
   f["wall_time_s"] = num(result.wall_time_s);
   f["evaluations_per_s"] = num(result.evaluations / result.wall_time_s);
-  f["evaluations_to_final"] = num(static_cast<double>(result.trace.evaluations[reach]));
-  f["seconds_to_final"] = num(result.trace.wall_time_s[reach]);
+  f["evaluations_to_final"] = num(static_cast<double>(result.trace.evaluations[o.reach]));
+  f["seconds_to_final"] = num(result.trace.wall_time_s[o.reach]);
   f["stop_reason"] = str(result.stop_reason);
   f["best_repetition"] = num(result.best_repetition);
-  f["training_rms_m"] = num(train_rms);
-  f["test_multisine_rms_m"] = num(rms_ms);
-  f["test_sinesweep_rms_m"] = num(rms_sw);
-  f["test_multisine_max_abs_m"] = num(max_ms);
-  f["test_sinesweep_max_abs_m"] = num(max_sw);
-  f["true_model_multisine_rms_m"] = num(rms_ms_true);
-  f["true_model_sinesweep_rms_m"] = num(rms_sw_true);
+  f["training_rms_m"] = num(o.train_rms);
+  f["test_multisine_rms_m"] = num(o.rms_ms);
+  f["test_sinesweep_rms_m"] = num(o.rms_sw);
+  f["test_multisine_max_abs_m"] = num(o.max_ms);
+  f["test_sinesweep_max_abs_m"] = num(o.max_sw);
+  f["true_model_multisine_rms_m"] = num(o.rms_ms_true);
+  f["true_model_sinesweep_rms_m"] = num(o.rms_sw_true);
   google::protobuf::Struct params;
-  for (size_t i = 0; i < box.size(); ++i) {
+  for (size_t i = 0; i < o.box.size(); ++i) {
     google::protobuf::Struct p;
     (*p.mutable_fields())["identified"] = num(result.best[i]);
-    (*p.mutable_fields())["true"] = num(theta_true[i]);
-    (*p.mutable_fields())["relative_error"] = num(result.best[i] / theta_true[i] - 1);
-    (*p.mutable_fields())["lower"] = num(box.lower[i]);
-    (*p.mutable_fields())["upper"] = num(box.upper[i]);
-    *(*params.mutable_fields())[box.names[i]].mutable_struct_value() = p;
+    (*p.mutable_fields())["true"] = num(o.theta_true[i]);
+    (*p.mutable_fields())["relative_error"] = num(result.best[i] / o.theta_true[i] - 1);
+    (*p.mutable_fields())["lower"] = num(o.box.lower[i]);
+    (*p.mutable_fields())["upper"] = num(o.box.upper[i]);
+    *(*params.mutable_fields())[o.box.names[i]].mutable_struct_value() = p;
   }
   *f["parameters"].mutable_struct_value() = params;
   google::protobuf::ListValue reps;
   for (double c : result.repetition_costs) *reps.add_values() = num(std::sqrt(c));
   *f["repetition_training_rms_m"].mutable_list_value() = reps;
-  std::string json;
-  google::protobuf::util::JsonPrintOptions jo;
-  jo.add_whitespace = true;
-  jo.preserve_proto_field_names = true;
-  if (!google::protobuf::util::MessageToJsonString(report, &json, jo).ok()) {
-    throw std::runtime_error("cannot format report.json");
-  }
-  io::WriteFileWith(out / "report.json", [&](std::ostream& os) { os << json; });
+  // Printed by json::Print: keys sorted, the same bytes for the same run (a Struct's own printer
+  // follows its map's hash order).
+  io::WriteFileWith(file, [&](std::ostream& os) { os << json::Print(report, "report.json"); });
+}
 
-  io::WriteFileWith(out / "report.md", [&](std::ostream& os) {
+void WriteReportMarkdown(const std::filesystem::path& file, const BoucwenArgs& a,
+                         const BwOutcome& o) {
+  const opt::SearchResult& result = o.result;
+  io::WriteFileWith(file, [&](std::ostream& os) {
     os << "# Bouc–Wen benchmark: complete-model identification\n\n"
-       << "Algorithm " << opt::SearchAlgorithmName(options.algorithm) << ", " << options.repetitions
-       << " repetitions from seed " << a.seed << " (best kept: repetition " << result.best_repetition << ", "
-       << result.stop_reason << "); " << result.evaluations << " evaluations in " << result.wall_time_s
-       << " s on " << threads << where << ". Training: train_A + train_B (" << n_train
-       << " samples; train_A simulated from rest, train_B, a steady-state record, after a one-period warm-up), "
-          "output-error MSE of a free-run simulation (RK4, " << a.substeps
-       << " sub-steps per sample).\n\n"
+       << "Algorithm " << opt::SearchAlgorithmName(o.options.algorithm) << ", "
+       << o.options.repetitions << " repetitions from seed " << a.seed << " (best kept: repetition "
+       << result.best_repetition << ", " << result.stop_reason << "); " << result.evaluations
+       << " evaluations in " << result.wall_time_s << " s on " << o.threads << o.where
+       << ". Training: train_A + train_B (" << o.n_train
+       << " samples; train_A simulated from rest, train_B, a steady-state record, after a "
+          "one-period warm-up), "
+          "output-error MSE of a free-run simulation (RK4, "
+       << a.substeps << " sub-steps per sample).\n\n"
        << "| parameter | identified | true | error |\n| --- | --- | --- | --- |\n";
-    for (size_t i = 0; i < box.size(); ++i) {
+    for (size_t i = 0; i < o.box.size(); ++i) {
       char e[32];
-      std::snprintf(e, sizeof e, "%+.3f %%", 100 * (result.best[i] / theta_true[i] - 1));
-      os << "| " << box.names[i] << " | " << Sci(result.best[i], 6) << " | " << Sci(theta_true[i], 6) << " | " << e
-         << " |\n";
+      std::snprintf(e, sizeof e, "%+.3f %%", 100 * (result.best[i] / o.theta_true[i] - 1));
+      os << "| " << o.box.names[i] << " | " << Sci(result.best[i], 6) << " | "
+         << Sci(o.theta_true[i], 6) << " | " << e << " |\n";
     }
-    os << "\n| set | simulation RMS error [m] | max abs error [m] | true model RMS [m] |\n| --- | --- | --- | --- |\n"
-       << "| training (A + B, noisy) | " << Sci(train_rms) << " | | |\n"
-       << "| test multisine | " << Sci(rms_ms) << " | " << Sci(max_ms) << " | " << Sci(rms_ms_true) << " |\n"
-       << "| test sine sweep | " << Sci(rms_sw) << " | " << Sci(max_sw) << " | " << Sci(rms_sw_true) << " |\n\n"
-       << "Best published black-box result on the multisine test set: 7.53e-6 m (gr-SS-NN). Target: <= 5e-6 m "
+    os << "\n| set | simulation RMS error [m] | max abs error [m] | true model RMS [m] |\n| --- | "
+          "--- | --- | --- |\n"
+       << "| training (A + B, noisy) | " << Sci(o.train_rms) << " | | |\n"
+       << "| test multisine | " << Sci(o.rms_ms) << " | " << Sci(o.max_ms) << " | "
+       << Sci(o.rms_ms_true) << " |\n"
+       << "| test sine sweep | " << Sci(o.rms_sw) << " | " << Sci(o.max_sw) << " | "
+       << Sci(o.rms_sw_true) << " |\n\n"
+       << "Best published black-box result on the multisine test set: 7.53e-6 m (gr-SS-NN). "
+          "Target: <= 5e-6 m "
           "on both sets.\n";
   });
+}
 
-  // Data for the figures.
+/// The figures' data (convergence, both test sets) and, unless --no-plots, their gnuplot figures.
+void WriteFigures(const std::filesystem::path& out, const BoucwenArgs& a, const BwOutcome& o) {
+  namespace fs = std::filesystem;
+  const std::vector<double>&y_ms = o.measured_ms, &y_sw = o.measured_sw;
+  const opt::SearchResult& result = o.result;
   io::WriteFileWith(out / "convergence.csv", [&](std::ostream& os) {
     os << "evaluations,best_rms_m,wall_time_s\n";
     for (size_t i = 0; i < result.trace.evaluations.size(); ++i) {
-      os << result.trace.evaluations[i] << "," << io::FormatNumber(std::sqrt(result.trace.best_cost[i])) << ","
+      os << result.trace.evaluations[i] << ","
+         << io::FormatNumber(std::sqrt(result.trace.best_cost[i])) << ","
          << io::FormatNumber(result.trace.wall_time_s[i]) << "\n";
     }
   });
   io::WriteFileWith(out / "test_multisine.csv", [&](std::ostream& os) {
     os << "t_s,y_test_m,y_model_m,error_m\n";
-    for (size_t i = 0; i < yms.size(); ++i) {
-      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(test_ms.y[i]) << "," << io::FormatNumber(yms[i])
-         << "," << io::FormatNumber(test_ms.y[i] - yms[i]) << "\n";
+    for (size_t i = 0; i < o.yms.size(); ++i) {
+      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(y_ms[i]) << ","
+         << io::FormatNumber(o.yms[i]) << "," << io::FormatNumber(y_ms[i] - o.yms[i]) << "\n";
     }
   });
   io::WriteFileWith(out / "test_sinesweep.csv", [&](std::ostream& os) {
     os << "t_s,y_test_m,y_model_m,error_m,error_true_model_m\n";
-    for (size_t i = 0; i < ysw.size(); i += 5) {
-      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(test_sw.y[i]) << "," << io::FormatNumber(ysw[i])
-         << "," << io::FormatNumber(test_sw.y[i] - ysw[i]) << "," << io::FormatNumber(test_sw.y[i] - ysw_true[i])
-         << "\n";
+    for (size_t i = 0; i < o.ysw.size(); i += 5) {
+      os << io::FormatNumber(i / kBwSampleRateHz) << "," << io::FormatNumber(y_sw[i]) << ","
+         << io::FormatNumber(o.ysw[i]) << "," << io::FormatNumber(y_sw[i] - o.ysw[i]) << ","
+         << io::FormatNumber(y_sw[i] - o.ysw_true[i]) << "\n";
     }
   });
-  if (!a.no_plots) {
-    std::vector<fs::path> scripts;
-    scripts.push_back(WritePlotScript(out, Plot{"convergence", "Best training RMS error vs evaluations",
-                                                 "evaluations", "RMS error [m]", true,
-                                                 {PlotSeries{"convergence.csv", 1, 2, "best so far", "lines"}}}));
-    scripts.push_back(WritePlotScript(
-        out, Plot{"test_multisine", "Multisine test set: simulation of the identified model", "t [s]", "y [m]", false,
-                  {PlotSeries{"test_multisine.csv", 1, 2, "y test", "lines"},
-                   PlotSeries{"test_multisine.csv", 1, 3, "y model", "lines"},
-                   PlotSeries{"test_multisine.csv", 1, 4, "error", "lines"}}}));
-    scripts.push_back(WritePlotScript(
-        out, Plot{"test_sinesweep_error", "Sine-sweep test set: simulation error", "t [s]", "error [m]", false,
-                  {PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"},
-                   PlotSeries{"test_sinesweep.csv", 1, 4, "identified model (drawn on top)", "lines"}}}));
-    if (GnuplotAvailable()) {
-      std::vector<std::string> errors;
-      RenderPlots(out, scripts, &errors);
-      for (const auto& e : errors) std::cerr << "piezoid boucwen: warning: " << e << "\n";
-    } else {
-      std::cerr << "piezoid boucwen: warning: gnuplot not found; render with: cd " << out.string()
-                << " && gnuplot *.gp\n";
-    }
+  if (a.no_plots) return;
+  std::vector<fs::path> scripts;
+  scripts.push_back(
+      WritePlotScript(out, Plot{"convergence",
+                                "Best training RMS error vs evaluations",
+                                "evaluations",
+                                "RMS error [m]",
+                                true,
+                                {PlotSeries{"convergence.csv", 1, 2, "best so far", "lines"}}}));
+  scripts.push_back(
+      WritePlotScript(out, Plot{"test_multisine",
+                                "Multisine test set: simulation of the identified model",
+                                "t [s]",
+                                "y [m]",
+                                false,
+                                {PlotSeries{"test_multisine.csv", 1, 2, "y test", "lines"},
+                                 PlotSeries{"test_multisine.csv", 1, 3, "y model", "lines"},
+                                 PlotSeries{"test_multisine.csv", 1, 4, "error", "lines"}}}));
+  scripts.push_back(WritePlotScript(
+      out,
+      Plot{"test_sinesweep_error",
+           "Sine-sweep test set: simulation error",
+           "t [s]",
+           "error [m]",
+           false,
+           {PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"},
+            PlotSeries{"test_sinesweep.csv", 1, 4, "identified model (drawn on top)", "lines"}}}));
+  if (GnuplotAvailable()) {
+    std::vector<std::string> errors;
+    RenderPlots(out, scripts, &errors);
+    for (const auto& e : errors) std::cerr << "piezoid boucwen: warning: " << e << "\n";
+  } else {
+    std::cerr << "piezoid boucwen: warning: gnuplot not found; render with: cd " << out.string()
+              << " && gnuplot *.gp\n";
   }
-  std::cout << "report: " << (out / "report.md").string() << ", " << (out / "report.json").string() << std::endl;
+}
+
+int RunBoucwen(const BoucwenArgs& a) {
+  namespace fs = std::filesystem;
+  const fs::path data(a.data_dir), out(a.out_dir);
+  const complete::BwTraining fitness =
+      MakeTraining(a, LoadBwBenchmark(data, model::CaseRole::kTrain));
+  BwOutcome o;
+  if (const std::optional<int> code = Search(a, fitness, &o)) return *code;
+  ScoreTests(data, &o);
+  PrintSummary(o);
+  fs::create_directories(out);
+  WriteReportJson(out / "report.json", a, o);
+  WriteReportMarkdown(out / "report.md", a, o);
+  WriteFigures(out, a, o);
+  std::cout << "report: " << (out / "report.md").string() << ", " << (out / "report.json").string()
+            << std::endl;
   return 0;
 }
 

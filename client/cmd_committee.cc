@@ -14,7 +14,7 @@
 #include "client/commands.h"
 #include "client/committee_report.h"
 #include "complete/committee.h"
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
 #include "client/search_flags.h"
 #include "io/csv.h"
 

@@ -21,7 +21,7 @@
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
 #include "client/excitation_report.h"
 #include "client/json_values.h"
 #include "client/search_flags.h"
@@ -364,9 +364,8 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   using namespace json;  // NOLINT
   Struct root;
   auto& f = *root.mutable_fields();
-  f["format_version"] = Num(kFitFormatVersion);
   const int levels = r.resolution.used ? r.resolution.value() : a.pi_operators;  // auto: the chosen
-  f["model"] = FitModelJson(set, r, a.substeps, levels);
+  WriteFitModel(FittedModelSpec(set, r, a.substeps, levels), &root);
   f["description"] = Text(r.model->Describe());
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
@@ -477,10 +476,10 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   return Print(root, "fit.json");
 }
 
-int RunFit(const FitArgs& args) {
-  FitArgs a = args;  // --family auto: the chosen family and resolution replace the flag's
+/// The fit's options of the flags (--family auto: the selection's fit options), checked: the
+/// families of --auto-families, --initial-state, the preisach grid's bound on --pi-operators.
+records::FitOptions FitOptionsOf(const FitArgs& a) {
   const bool select = a.family == "auto";
-  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
   records::FitOptions o;
   o.family = a.family;
   for (const auto& e : a.effects) o.effects.push_back(records::ParseEffect(e));
@@ -490,8 +489,7 @@ int RunFit(const FitArgs& args) {
     if (!a.initial_state.empty())
       o.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
     for (const auto& f : a.auto_families) {
-      const auto& known = records::FamilyNames();
-      if (std::find(known.begin(), known.end(), f) == known.end())
+      if (!IsRecordsFamily(f))
         throw InputError("--auto-families '" + f +
                          "': not a family (piezoid fit --help lists them)");
     }
@@ -524,13 +522,14 @@ int RunFit(const FitArgs& args) {
   o.lm_differences_auto = a.lm_differences == "auto";
   o.threads = a.threads;
   if (!a.quiet) o.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
-  std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
-            << "), family " << a.family << std::endl;
-  const records::ExcitationReport excitation = records::AnalyseExcitation(set);
-  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, excitation);
-  PrintExcitationSummary(std::cout, set, excitation);
-  records::FitResult r;
-  records::SelectionResult selection;
+  return o;
+}
+
+/// The fit, or with --family auto the selection and its fit (`a` then names the chosen family,
+/// resolution and effects). A service error is printed and its exit code returned.
+std::optional<int> FitOrSelect(const io::RecordSet& set, const records::FitOptions& o, FitArgs& a,
+                               records::FitResult& r, records::SelectionResult& selection) {
+  const bool select = a.family == "auto";
   try {
     if (select) {
       records::SelectOptions so;
@@ -564,15 +563,24 @@ int RunFit(const FitArgs& args) {
     std::cerr << "piezoid fit: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }
-  const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
+  return std::nullopt;
+}
+
+/// report.md, fit.json, the proposed training drive, the traces and (unless --no-figures) the
+/// figures in --out.
+void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
+                     const records::ExcitationReport& excitation,
+                     const records::TrainingDriveProposal& proposal,
+                     const std::vector<records::ExtrapolationCheck>& extrapolation,
+                     const records::SelectionResult* selection) {
   fs::create_directories(a.out);
   WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
   io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) {
     WriteFitReport(os, set, r, a, excitation, proposal, extrapolation);
-    if (select) WriteSelectionMarkdown(os, set, selection);
+    if (selection) WriteSelectionMarkdown(os, set, *selection);
   });
   io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) {
-    os << FitJson(set, r, excitation, proposal, extrapolation, a, select ? &selection : nullptr);
+    os << FitJson(set, r, excitation, proposal, extrapolation, a, selection);
   });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
@@ -585,6 +593,12 @@ int RunFit(const FitArgs& args) {
     }
     for (const auto& e : errors) std::cerr << "piezoid fit: warning: " << e << "\n";
   }
+}
+
+/// The console's summary: each record's errors, the resolution and regularisation chosen, the
+/// extrapolation warnings and the search.
+void PrintFitSummary(const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
+                     const std::vector<records::ExtrapolationCheck>& extrapolation) {
   const int name_width = NameColumnWidth(set), role_width = RoleColumnWidth(set);
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
@@ -609,6 +623,24 @@ int RunFit(const FitArgs& args) {
             << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
             << "; report in "
             << (fs::path(a.out) / "report.md").string() << "\n";
+}
+
+int RunFit(const FitArgs& args) {
+  FitArgs a = args;  // --family auto: the chosen family and resolution replace the flag's
+  const bool select = a.family == "auto";
+  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
+  const records::FitOptions o = FitOptionsOf(a);
+  std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
+            << "), family " << a.family << std::endl;
+  const records::ExcitationReport excitation = records::AnalyseExcitation(set);
+  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, excitation);
+  PrintExcitationSummary(std::cout, set, excitation);
+  records::FitResult r;
+  records::SelectionResult selection;
+  if (const std::optional<int> code = FitOrSelect(set, o, a, r, selection)) return *code;
+  const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
+  WriteFitOutputs(set, r, a, excitation, proposal, extrapolation, select ? &selection : nullptr);
+  PrintFitSummary(set, r, a, extrapolation);
   return 0;
 }
 

@@ -1,5 +1,5 @@
 // `piezoid submit | status | list | watch | cancel | fetch | export`: the service commands, thin
-// wrappers of client/service_client.h, client/job_file.h, client/job_report.h and
+// wrappers of svcclient/service_client.h, svcclient/job_file.h, client/job_report.h and
 // client/export_c.h. Register with RegisterServiceCommands(app, exit_code).
 #include <pthread.h>
 #include <signal.h>
@@ -22,9 +22,9 @@
 #include "client/commands.h"
 #include "client/export_c.h"
 #include "client/fit_file.h"
-#include "client/job_file.h"
+#include "svcclient/job_file.h"
 #include "client/job_report.h"
-#include "client/service_client.h"
+#include "svcclient/service_client.h"
 #include "hgann/hgann_job.h"
 #include "job/job_kind.h"
 #include "service/wire_codec.h"
@@ -650,6 +650,40 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   RegisterExport(app, exit_code);
   RegisterDashboard(app, exit_code);
   RegisterKeygen(app, exit_code);
+}
+
+// ---- the flags of searches on a master ----
+
+CompleteServiceFlags::CompleteServiceFlags()
+    : curve_secret(Env("PIEZOID_CURVE_SECRET")), master_public(Env("PIEZOID_MASTER_PUBLIC")) {}
+
+ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
+  ServiceEvaluatorOptions o;
+  o.client = ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public);
+  return o;
+}
+
+void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
+  cmd->add_option("--master", f.master,
+                  "run every evaluation of the searches on the workers of this piezoid-master (its "
+                  "client endpoint, "
+                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search or fit: the same "
+                  "result, bit for "
+                  "bit, as the local run")
+      ->type_name("ENDPOINT");
+  cmd->add_option("--timeout-ms", f.timeout_ms, "with --master: per-request timeout [ms]")
+      ->check(CLI::Range(10, 3600000))
+      ->capture_default_str();
+  cmd->add_option("--retries", f.retries, "with --master: attempts per request")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  cmd->add_option(
+      "--curve-secret", f.curve_secret,
+      "with --master, CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: "
+      "$PIEZOID_CURVE_SECRET)");
+  cmd->add_option(
+      "--master-public", f.master_public,
+      "with --master, CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
 
 }  // namespace pz::client

@@ -1,11 +1,15 @@
 // The service subcommands of `piezoid`: submit, status, list, watch, cancel, fetch (client of a
-// piezoid-master), export (a network file as a standalone C header) and keygen (CURVE keys).
+// piezoid-master), export (a network file as a standalone C header) and keygen (CURVE keys); the
+// flags that run another command's searches on a master (CompleteServiceFlags: `piezoid fit`,
+// `boucwen`, `committee`, `diagnose`) over the service-client library (svcclient/).
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <string>
 
-#include "client/service_client.h"
 #include "model/status.h"
+#include "svcclient/complete_service.h"
+#include "svcclient/service_client.h"
 
 namespace pz::client {
 
@@ -30,6 +34,23 @@ int ExitCodeOf(const Status& s);
 /// or a bad key file. Used by every command that talks to a master.
 ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
                                      const std::string& curve_secret, const std::string& master_public);
+
+/// The flags of a command whose searches run every evaluation as evaluation sessions on a master
+/// (--master, --timeout-ms, --retries, --curve-secret, --master-public).
+struct CompleteServiceFlags {
+  std::string master;  ///< the master's client endpoint; empty = evaluate locally
+  int timeout_ms = 4000;
+  int retries = 3;
+  std::string curve_secret,
+      master_public;  ///< default: $PIEZOID_CURVE_SECRET, $PIEZOID_MASTER_PUBLIC
+  CompleteServiceFlags();
+  bool enabled() const { return !master.empty(); }
+  /// The session options of these flags (CURVE keys loaded); throws InputError naming the flag.
+  ServiceEvaluatorOptions Options() const;
+};
+
+/// Adds the flags to `cmd`.
+void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
 
 /// Adds submit, status, list (alias jobs), watch, cancel, fetch and export; their callbacks set
 /// exit_code.

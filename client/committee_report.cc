@@ -111,9 +111,8 @@ std::string MemorySentence(const CommitteeResult& r) {
   return out;
 }
 
-}  // namespace
-
-void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
+/// The settings: records, bands, criterion, searches, memory at rest, the selection rule.
+void WriteSettings(std::ostream& o, const CommitteeResult& r) {
   const io::RecordSet& set = r.set;
   const CommitteeOptions& opt = r.options;
   const FrequencyBands& bands = opt.bands;
@@ -140,6 +139,12 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
                       : "hard switch on the record's excitation frequency")
     << ".\n\n";
 
+}
+
+/// The complete models' tables (one parameter set over all bands), if any were fitted.
+void WriteCompleteModels(std::ostream& o, const CommitteeResult& r) {
+  const CommitteeOptions& opt = r.options;
+  const FrequencyBands& bands = opt.bands;
   std::vector<const IdentifiedModel*> complete;
   for (const auto& m : r.complete) complete.push_back(&m);
   if (!complete.empty()) {
@@ -154,6 +159,13 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
     o << "\n";
   }
 
+}
+
+/// The committee's sub-models (one parameter set per band): parameters and per-band metrics.
+void WriteSubModels(std::ostream& o, const CommitteeResult& r) {
+  const CommitteeOptions& opt = r.options;
+  const FrequencyBands& bands = opt.bands;
+  const int nb = bands.size();
   o << "## Committee sub-models (one parameter set per band; cf. the paper's Tables 11–16)\n\n";
   std::vector<const IdentifiedModel*> all_band;
   for (const auto& v : r.band_models)
@@ -192,6 +204,13 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
             bands, rows,
             sub([](const BandMetrics& x) { return 0.5 * (x.train.rmse + x.test.rmse); }), mark);
 
+}
+
+/// The selection per band and the committee against the best complete model.
+void WriteSelection(std::ostream& o, const CommitteeResult& r) {
+  const CommitteeOptions& opt = r.options;
+  const FrequencyBands& bands = opt.bands;
+  const int nb = bands.size();
   o << "## Selection and the committee against the complete model\n\n";
   o << "| band | selected | A [µm] | committee test RMSE [µm] | committee test max [µm] |";
   if (r.best_complete >= 0) o << " best complete test RMSE [µm] | best complete test max [µm] | RMSE reduction |";
@@ -218,6 +237,13 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
       << "committee: " << FormatPercent(r.rmse_reduction) << " in RMSE, " << FormatPercent(r.max_reduction)
       << " in max error.**";
   }
+}
+
+/// Wall time and evaluations per scope.
+void WriteTiming(std::ostream& o, const CommitteeResult& r) {
+  const CommitteeOptions& opt = r.options;
+  const FrequencyBands& bands = opt.bands;
+  const int nb = bands.size();
   o << "\n\n## Timing\n\n| scope | wall [s] | evaluations | evaluations/s |\n|---|---:|---:|---:|\n";
   auto evals = [](const std::vector<IdentifiedModel>& v) {
     int64_t e = 0;
@@ -236,6 +262,16 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
   }
   o << "| total | " << FormatFigure(r.wall_s) << " | " << r.evaluations << " | "
     << FormatFigure(r.evaluations / std::max(r.wall_s, 1e-9)) << " |\n";
+}
+
+}  // namespace
+
+void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
+  WriteSettings(o, r);
+  WriteCompleteModels(o, r);
+  WriteSubModels(o, r);
+  WriteSelection(o, r);
+  WriteTiming(o, r);
 }
 
 // ---- JSON ----------------------------------------------------------------------------------

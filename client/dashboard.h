@@ -21,7 +21,7 @@
 #include <memory>
 #include <string>
 
-#include "client/service_client.h"
+#include "svcclient/service_client.h"
 #include "model/status.h"
 
 namespace pz::client {

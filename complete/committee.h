@@ -85,7 +85,7 @@ struct CommitteeOptions {
 };
 
 /// Makes the evaluator a search runs on, for a fitness that outlives it (locally a thread pool over
-/// it; on the service a session whose spec carries its records, client/complete_service.h).
+/// it; on the service a session whose spec carries its records, svcclient/complete_service.h).
 using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const records::CriterionFitness&)>;
 /// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
 EvaluatorFactory LocalEvaluatorFactory(int threads);

@@ -1,7 +1,7 @@
 // The "complete_model" job kind (issue 7): complete-model identification on the service. The
 // optimiser (PSO, real or binary GA, opt/param_search.h) runs in the client (`piezoid boucwen
 // --master`, `piezoid committee --master`) and evaluates its swarms / generations through an
-// evaluation session (client/service_evaluator.h); the spec (proto CompleteModelProblem) carries
+// evaluation session (svcclient/service_evaluator.h); the spec (proto CompleteModelProblem) carries
 // the model family, the records and the criterion, so that the workers rebuild the client's
 // fitness (the Bouc–Wen benchmark's BwTraining, complete/boucwen_benchmark.h; the records engine's
 // RecordFitness and CriterionFitness for any records/families.h family, the committee's included)

@@ -3,8 +3,8 @@
 // DiagnoseProblem) carries the bench cases, the structure (effect names), the parameter boxes and
 // the simulation options, so that DiagnosisFitness is a pure function of (genome.reals, spec); the
 // optimiser (DE, Levenberg–Marquardt) runs in the client and evaluates through an evaluation session
-// (JobSpec.external, client/service_evaluator.h). The master and the workers register the kind from
-// their main(); pz::master cannot depend on pz::diagnose.
+// (JobSpec.external, svcclient/service_evaluator.h). The master and the workers register the kind
+// from their main(); pz::master cannot depend on pz::diagnose.
 #pragma once
 
 #include "diagnose/problem.h"

@@ -45,18 +45,8 @@ double FromUnitOne(const ParamSpec& s, double u) {
 // ---- cases ---------------------------------------------------------------------------------------
 
 DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured, bool training) {
-  DiagCase c;
-  c.number = number;
-  c.drive = drive;
-  c.training = training;
-  if (measured.size() != static_cast<size_t>(drive.NumSamples()))
-    throw InputError("case " + std::to_string(number) + ": " + std::to_string(measured.size()) +
-                     " samples, the drive has " + std::to_string(drive.NumSamples()));
-  const model::SaturationPair sat = model::SaturationFromExtremes(measured);
-  c.b1 = sat.b1;
-  c.b2 = sat.b2;
-  c.noise = records::EstimateCaseNoise(measured, std::max(1, static_cast<int>(std::lround(drive.cycles))));
-  c.measured_deg = std::move(measured);
+  DiagCase c{model::MakeFinCase(number, drive, std::move(measured), training)};
+  c.noise = records::EstimateCaseNoise(c.measured_deg, std::max(1, static_cast<int>(std::lround(drive.cycles))));
   return c;
 }
 

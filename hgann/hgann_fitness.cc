@@ -222,25 +222,14 @@ model::BimorphTrace HgannFitness::Trace(const model::Network& network, const Hga
 
 namespace pz::hgann {
 
-HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges) {
+HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges,
+                                          const std::vector<model::SaturationPair>& given) {
+  PZ_CHECK(given.empty() || given.size() == set.cases.size());
   HgannFitnessConfig config;
   config.ranges = ranges;
-  for (const auto& bc : set.cases) {
-    HgannCase c;
-    c.number = bc.number;
-    c.drive = bc.Drive();
-    c.measured_deg = bc.angle_deg;
-    model::SaturationPair sat;
-    try {
-      sat = model::SaturationFromExtremes(bc.angle_deg);
-    } catch (const InputError& e) {
-      throw InputError(bc.file.string() + ": cannot fit the saturations b1, b2: " + e.what());
-    }
-    c.b1 = sat.b1;
-    c.b2 = sat.b2;
-    c.training = bc.role == io::CaseRole::kTrain;
-    config.cases.push_back(std::move(c));
-  }
+  for (size_t i = 0; i < set.cases.size(); ++i)
+    config.cases.push_back(io::MakeFinCase(
+        set.cases[i], given.empty() ? std::nullopt : std::optional(given[i])));
   bool any_training = false;
   for (const auto& c : config.cases) any_training |= c.training;
   if (!any_training) throw InputError((set.dir / "cases.csv").string() + ": no case has role 'train'");

@@ -120,8 +120,10 @@ struct CaseSet;
 namespace pz::hgann {
 
 /// Builds the problem of a bench case set: every case with its drive (stated V, f on the record's
-/// grid), measured angle and saturations fitted from its measured extremes (spec §3); training =
-/// the manifest's "train" role; normalisation over the training cases. Throws InputError.
-HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges);
+/// grid), measured angle and saturations — `given` (one per case), or fitted from its measured
+/// extremes (spec §3) — through io::MakeFinCase; training = the manifest's "train" role;
+/// normalisation over the training cases. Throws InputError.
+HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges,
+                                          const std::vector<model::SaturationPair>& given = {});
 
 }  // namespace pz::hgann

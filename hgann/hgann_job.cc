@@ -258,31 +258,15 @@ Status HgannConfigFromProblem(const HgannProblem& h, HgannFitnessConfig* config)
     model::BeamGeometry geometry;
     if (Status s = ApplyGeometry(h.geometry, &geometry); !s.ok()) return s;
     const io::CaseSet set = HgannCaseSet(h);
-    HgannFitnessConfig cfg;
+    std::vector<model::SaturationPair> given;  // empty: from the measured extremes
     if (h.saturation == HgannProblem::Saturation::kGiven) {
-      // HgannConfigFromCaseSet fits the saturations from the extremes, which may not be possible
-      // here (a record that stays ≥ 0): build the cases directly in the same way instead.
-      cfg.ranges = ranges;
-      for (size_t i = 0; i < set.cases.size(); ++i) {
-        const io::BenchCase& bc = set.cases[i];
-        HgannCase c;
-        c.number = bc.number;
-        c.drive = bc.Drive();
-        c.measured_deg = bc.angle_deg;
+      for (size_t i = 0; i < h.cases.size(); ++i) {
         if (!h.cases[i].b1 || !h.cases[i].b2)
           return InvalidArgument("hgann.cases[" + std::to_string(i) + "]: b1 and b2 are required with SATURATION_GIVEN");
-        c.b1 = *h.cases[i].b1;
-        c.b2 = *h.cases[i].b2;
-        c.training = bc.role == io::CaseRole::kTrain;
-        cfg.cases.push_back(std::move(c));
+        given.push_back({*h.cases[i].b1, *h.cases[i].b2});
       }
-      bool any = false;
-      for (const auto& c : cfg.cases) any |= c.training;
-      if (!any) return InvalidArgument("hgann.cases: needs at least one case with role CASE_ROLE_TRAIN");
-      cfg.normalization = cfg.FromTrainingCases();
-    } else {
-      cfg = HgannConfigFromCaseSet(set, ranges);
     }
+    HgannFitnessConfig cfg = HgannConfigFromCaseSet(set, ranges, given);
     cfg.geometry = geometry;
     cfg.spread_penalty = h.spread_penalty;
     if (Status s = cfg.Validate(); !s.ok()) {

@@ -4,9 +4,10 @@
 //   spec.hgann (cases with their samples, ranges preset + overrides, saturation policy, geometry
 //   overrides, spread penalty)
 //     → io::CaseSet (t_k = k / fs, as LoadCaseSet would have read it)
-//     → HgannConfigFromCaseSet(set, ranges)   (saturations from the measured extremes, training =
-//                                              role train, normalisation over the training cases)
-//     → given saturations, geometry, spread penalty → HgannFitness.
+//     → HgannConfigFromCaseSet(set, ranges, given)   (each case by io::MakeFinCase: the given
+//          saturations or those of the measured extremes; training = role train; normalisation
+//          over the training cases)
+//     → geometry, spread penalty → HgannFitness.
 //
 // The genome is the 1415-bit chromosome of model/chromosome.h. Registered in
 // kinds::All(), so the master (validation, in-process runs) and every worker have it.

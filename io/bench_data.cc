@@ -46,6 +46,11 @@ std::vector<const BenchCase*> CaseSet::WithRole(CaseRole role) const {
   return out;
 }
 
+model::FinCase MakeFinCase(const BenchCase& c, const std::optional<model::SaturationPair>& given) {
+  return model::MakeFinCase(c.number, c.Drive(), c.angle_deg, c.role == CaseRole::kTrain, given,
+                            c.file.string());
+}
+
 BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options, const BenchCaseWhere& where,
                         const std::string& context) {
   ThrowIfError(options.Validate());

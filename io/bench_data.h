@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "model/case_role.h"
+#include "model/fin_case.h"
 #include "model/signal.h"
 #include "model/status.h"
 
@@ -124,6 +125,12 @@ BenchCaseWhere SpecCaseWhere(std::string prefix);
 /// with options.check_voltage, u against V sin(2π f t) within the tolerance. Throws InputError.
 BenchCase MakeBenchCase(BenchCaseSamples samples, const BenchReadOptions& options, const BenchCaseWhere& where,
                         const std::string& context = "");
+
+/// The case ready to simulate (model::MakeFinCase, the one builder of a fin case): its stated
+/// drive, its measured angle, trained on when its role is train, the saturations `given` or from
+/// the measured extremes. Errors name the case's file.
+model::FinCase MakeFinCase(const BenchCase& c,
+                           const std::optional<model::SaturationPair>& given = std::nullopt);
 
 /// Reads dir/cases.csv and every case file it lists. Throws pz::InputError (file:line: column …).
 CaseSet LoadCaseSet(const std::filesystem::path& dir, const BenchReadOptions& options = {});

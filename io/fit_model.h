@@ -1,7 +1,7 @@
-// fit.json's model section (proto/fit.proto, issue 23) as plain values: written by `piezoid fit`,
-// read by `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model. The protobuf
-// JSON is parsed and printed here (io owns the generated messages); client/fit_file.h turns the
-// values into a records::ModelSpec.
+// fit.json's codec (proto/fit.proto, issue 23): the JSON of its model section <-> the stored shape
+// proto::FitModel, through protobuf's JSON util, here only. Written by `piezoid fit`, read by
+// `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model; the one conversion of
+// the message to the model (records::ModelSpec) is client/fit_file.h's.
 //
 // Versioning: fit.json's top-level "format_version" and the model's are kFitFormatVersion; a file
 // of another version (or one of a piezoid before versions, without it) is refused with the version
@@ -9,36 +9,26 @@
 #pragma once
 
 #include <string>
-#include <utility>
-#include <vector>
 
-#include "model/effect_library.h"
+namespace google::protobuf {
+class Struct;
+}
+
+namespace pz::proto {
+class FitModel;
+}
 
 namespace pz::io {
 
 inline constexpr int kFitFormatVersion = 1;
 
-struct FitModelFile {
-  std::string family;
-  int substeps = 2, pi_operators = 12;
-  model::DataScale scale;  ///< the data scale the family and effects were made for (duration 0: not stored)
-  double sample_period_s = 0;
-  std::vector<std::string> effects;
-  std::vector<std::pair<std::string, double>> params;
-  std::vector<double> weights;
-  int polarity = 1;
-  double offset = 0;
-  double drive_min = 0, drive_max = 0;
-  std::string drive_unit, response_unit;
-  std::string initial_state = "centred";  ///< FamilyOptions::initial_state by name ("" read: centred)
-};
+/// fit.json text → its model section (`out` replaced). Throws InputError naming `path` and: no or
+/// another format_version (with the one needed), no "model" object, a bad field or value.
+void ReadFitModel(const std::string& path, const std::string& text, proto::FitModel* out);
 
-/// The model section as a JSON object (protobuf JSON, field names as in fit.proto).
-std::string FitModelJson(const FitModelFile& m);
-
-/// fit.json text → its model section. Throws InputError naming `path` and: no or another
-/// format_version (with the one needed), no "model" object, a bad field.
-FitModelFile ParseFitJson(const std::string& path, const std::string& text);
+/// Sets fit.json's "format_version" and its "model" section (`m`, its format_version set here) on
+/// the document `fit_json`; the rest of the document is the writer's report.
+void WriteFitModel(const proto::FitModel& m, google::protobuf::Struct* fit_json);
 
 /// True when the text is a JSON object with "model" (a fit.json; a network's JSON has none).
 bool LooksLikeFitJson(const std::string& text);

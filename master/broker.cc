@@ -621,7 +621,7 @@ struct Broker::Impl {
         for (const auto& f : envelope) key += f + '\0';
         // At the maximum, the watcher registered longest ago makes room: a watcher that stopped
         // reading (or went) cannot shut out a new one, and a live one re-registers after a quiet
-        // spell of its watch (client/service_client.h).
+        // spell of its watch (svcclient/service_client.h).
         if (!of_job.count(key) && static_cast<int>(of_job.size()) >= options.max_watchers_per_job) {
           auto oldest = std::min_element(of_job.begin(), of_job.end(), [](const auto& a, const auto& b) {
             return a.second.registered < b.second.registered;

@@ -1,11 +1,15 @@
 // One case of a bimorph-fin bench, ready to simulate and score: what the HGANN fitness
 // (hgann/hgann_fitness.h) and the diagnosis (diagnose/problem.h) both work on. The same case exists
 // as a file record (io/bench_data.h BenchCase: t, u, angle as read) and in a job spec
-// (job/job_spec.h HgannCaseSpec: what travels on the wire); this is the form the plants take.
+// (job/job_spec.h HgannCaseSpec: what travels on the wire); both become this form through
+// MakeFinCase (a BenchCase through io::MakeFinCase), the one builder.
 #pragma once
 
+#include <optional>
+#include <string>
 #include <vector>
 
+#include "model/saturation.h"
 #include "model/signal.h"
 
 namespace pz::model {
@@ -18,5 +22,13 @@ struct FinCase {
   double b2 = -1.0;                  ///< saturation [deg], < 0
   bool training = true;              ///< fitted (counted in the cost); else withheld
 };
+
+/// The one builder of a fin case: the measured angle on the drive's grid (as many samples as
+/// drive.NumSamples()) and the saturations — `given`, or the one rule, b1 and b2 from the
+/// measured extremes (SaturationFromExtremes). Throws InputError naming `where` (empty: "case
+/// <number>").
+FinCase MakeFinCase(int number, const Sinusoid& drive, std::vector<double> measured_deg,
+                    bool training, const std::optional<SaturationPair>& given = std::nullopt,
+                    const std::string& where = "");
 
 }  // namespace pz::model

@@ -31,7 +31,7 @@ using BatchResidualFunction =
 /// f on up to `threads` threads.
 BatchResidualFunction ParallelResiduals(ResidualFunction f, int threads);
 /// Through a BatchEvaluator whose fitness returns residuals (genome.reals = x; ok ⇔ status kOk),
-/// e.g. the service's workers (client/service_evaluator.h). The evaluator must outlive the function.
+/// e.g. the service's workers (svcclient/service_evaluator.h). The evaluator must outlive the function.
 BatchResidualFunction EvaluatorResiduals(opt::BatchEvaluator& evaluator);
 
 struct LmOptions {

@@ -1,7 +1,7 @@
 """The piezoid service client: a ZeroMQ DEALER to the master's client endpoint speaking proto/wire.proto.
 
-Same protocol as the C++ client (client/service_client.h, docs/service.md "For a client in another
-language"): one ClientRequest per message, version 1, a fresh request_id each; replies echo it.
+Same protocol as the C++ client (svcclient/service_client.h, docs/service.md "For a client in
+another language"): one ClientRequest per message, version 1, a fresh request_id each; replies echo it.
 Requests are Lazy-Pirate: a timeout closes the socket, opens a fresh one and retries (bounded);
 submissions are idempotent through their client token, so a retry is the same job.
 """

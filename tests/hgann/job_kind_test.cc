@@ -1,7 +1,7 @@
 // The "hgann" job kind: a spec built from the bundled case set gives the same fitness as
 // `piezoid identify` on that folder; every bad field is named; extreme but valid specs evaluate to
 // finite costs. (The same run through the job runner: tests/master/job_runner_test.cc; the spec
-// through the wire and JSON: tests/service/spec_codec_test.cc; job files: tests/client/job_file_test.cc.)
+// through the wire and JSON: tests/service/spec_codec_test.cc; job files: tests/svcclient/job_file_test.cc.)
 #include <gtest/gtest.h>
 
 #include <cmath>

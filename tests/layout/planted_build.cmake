@@ -19,12 +19,15 @@ set(cases
   "opt/ga.cc|wire.pb.h|fails"
   "hgann/hgann_job.cc|kinds/kinds.h|fails"
   "worker/worker.cc|master/broker.h|fails"
-  "client/job_file.cc|master/job_store.h|fails"
-  "client/job_file.cc|worker/worker.h|fails"
+  "client/cmd_service.cc|master/job_store.h|fails"
+  "client/cmd_service.cc|worker/worker.h|fails"
+  "svcclient/job_file.cc|client/commands.h|fails"
+  "svcclient/job_file.cc|kinds/kinds.h|fails"
   "tests/model/beam_test.cc|opt/ga.h|fails"
   "opt/ga.cc|model/signal.h|builds"
   "worker/worker.cc|service/wire_codec.h|builds"
-  "client/job_file.cc|kinds/kinds.h|builds")
+  "client/cmd_service.cc|kinds/kinds.h|builds"
+  "client/cmd_service.cc|svcclient/job_file.h|builds")
 
 # In a folder of its own: a quoted include searches the including file's folder first, and the
 # build folder may hold anything (generated files of an older layout, say).

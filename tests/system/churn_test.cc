@@ -10,7 +10,7 @@
 
 #include <random>
 
-#include "client/job_file.h"
+#include "svcclient/job_file.h"
 #include "kinds/kinds.h"
 #include "master/job_runner.h"
 #include "opt/thread_pool_evaluator.h"

@@ -17,8 +17,8 @@
 #include <thread>
 
 #include "complete/committee.h"
-#include "client/complete_service.h"
-#include "client/service_evaluator.h"
+#include "svcclient/complete_service.h"
+#include "svcclient/service_evaluator.h"
 #include "complete/job_kind.h"
 #include "model/stack_models.h"
 #include "opt/random.h"

@@ -9,7 +9,7 @@
 #include <cstdlib>
 #include <regex>
 
-#include "client/job_file.h"
+#include "svcclient/job_file.h"
 #include "tests/system/service_harness.h"
 
 // Last: <resolv.h>, which httplib.h includes, defines a macro `_res` that Eigen's headers use as a name.

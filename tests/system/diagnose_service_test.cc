@@ -6,7 +6,7 @@
 
 #include <cstring>
 
-#include "client/service_evaluator.h"
+#include "svcclient/service_evaluator.h"
 #include "diagnose/diagnose.h"
 #include "diagnose/job_kind.h"
 #include "diagnose/synthetic.h"

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "client/job_file.h"
+#include "svcclient/job_file.h"
 #include "client/job_report.h"
 #include "io/network_io.h"
 #include "hgann/hgann_job.h"

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <thread>
 
-#include "client/complete_service.h"
+#include "svcclient/complete_service.h"
 #include "complete/job_kind.h"
 #include "complete_remote.h"
 #include "io/records.h"

@@ -23,7 +23,7 @@
 #include <thread>
 #include <vector>
 
-#include "client/service_client.h"
+#include "svcclient/service_client.h"
 #include "master/job_runner.h"
 #include "service/wire_codec.h"
 #include "kinds/kinds.h"

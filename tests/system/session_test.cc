@@ -1,4 +1,4 @@
-// Evaluation sessions (JobSpec.external, master/session.h, client/service_evaluator.h): an optimiser
+// Evaluation sessions (JobSpec.external, master/session.h, svcclient/service_evaluator.h): an optimiser
 // in the client process evaluates its batches on the service's workers. The results equal an
 // InlineEvaluator's bit for bit with one or two workers and when a worker is killed mid-batch; the
 // session shows in status (batches, evaluations) and succeeds when closed; bad requests get clear
@@ -7,7 +7,7 @@
 
 #include <cstring>
 
-#include "client/service_evaluator.h"
+#include "svcclient/service_evaluator.h"
 #include "opt/inline_evaluator.h"
 #include "opt/random.h"
 #include "service_harness.h"

@@ -91,7 +91,7 @@ class ServiceClient {
   Status Watch(const std::string& job_id,
                const std::function<bool(const service::JobEvent&)>& on_event,
                std::chrono::milliseconds timeout);
-  /// Evaluation sessions (JobSpec.external, client/service_evaluator.h): submits batch `batch_seq`
+  /// Evaluation sessions (JobSpec.external, svcclient/service_evaluator.h): submits batch `batch_seq`
   /// of a session (genomes non-empty; a retry is a poll) or polls it (genomes empty). *done says
   /// whether *results holds its results (one per genome). A batch the master does not hold is
   /// kNotFound: send it again with its genomes.

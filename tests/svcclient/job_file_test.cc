@@ -1,6 +1,6 @@
-// Job files (client/job_file.h): an hgann spec's case_set_dir is read relative to the job file
+// Job files (svcclient/job_file.h): an hgann spec's case_set_dir is read relative to the job file
 // and embedded; a folder and cases at once, or a folder that is not a case set, are named.
-#include "client/job_file.h"
+#include "svcclient/job_file.h"
 
 #include <gtest/gtest.h>
 

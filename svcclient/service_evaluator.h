@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "client/service_client.h"
+#include "svcclient/service_client.h"
 #include "opt/evaluator.h"
 #include "job/job_spec.h"
 

@@ -1,4 +1,4 @@
-#include "client/service_client.h"
+#include "svcclient/service_client.h"
 
 #include <optional>
 #include <random>
@@ -72,6 +72,14 @@ struct ServiceClient::Impl {
         return true;
     }
     return false;
+  }
+
+  /// A request of `type` about one job (status, cancel, close).
+  Status CallOnJob(ClientRequestMsg::Type type, const std::string& job_id, ClientReplyMsg* reply) {
+    ClientRequestMsg req;
+    req.type = type;
+    req.job_id = job_id;
+    return Call(req, reply);
   }
 
   Status Call(ClientRequestMsg& req, ClientReplyMsg* reply) {
@@ -158,11 +166,8 @@ Status ServiceClient::SubmitJson(const std::string& json, SubmitResult* out,
 }
 
 Status ServiceClient::GetStatus(const std::string& job_id, service::JobInfo* info) {
-  ClientRequestMsg req;
-  req.type = ClientRequestMsg::Type::kStatus;
-  req.job_id = job_id;
   ClientReplyMsg reply;
-  Status s = impl_->Call(req, &reply);
+  Status s = impl_->CallOnJob(ClientRequestMsg::Type::kStatus, job_id, &reply);
   if (s.ok()) *info = reply.info;
   return s;
 }
@@ -210,11 +215,8 @@ Status ServiceClient::FetchLog(const std::string& job_id, uint64_t from_generati
 }
 
 Status ServiceClient::Cancel(const std::string& job_id) {
-  ClientRequestMsg req;
-  req.type = ClientRequestMsg::Type::kCancel;
-  req.job_id = job_id;
   ClientReplyMsg reply;
-  return impl_->Call(req, &reply);
+  return impl_->CallOnJob(ClientRequestMsg::Type::kCancel, job_id, &reply);
 }
 
 Status ServiceClient::Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep, bool dry_run,
@@ -321,11 +323,8 @@ Status ServiceClient::Evaluate(const std::string& job_id, uint64_t batch_seq,
 }
 
 Status ServiceClient::Close(const std::string& job_id) {
-  ClientRequestMsg req;
-  req.type = ClientRequestMsg::Type::kClose;
-  req.job_id = job_id;
   ClientReplyMsg reply;
-  return impl_->Call(req, &reply);
+  return impl_->CallOnJob(ClientRequestMsg::Type::kClose, job_id, &reply);
 }
 
 Status ServiceClient::WaitFinal(const std::string& job_id, std::chrono::milliseconds timeout,

@@ -1,4 +1,4 @@
-#include "client/service_evaluator.h"
+#include "svcclient/service_evaluator.h"
 
 #include <algorithm>
 #include <chrono>
