@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/check.h"
-#include "diagnose/diagnose.h"
+#include "diagnose/fin_check.h"
+#include "diagnose/fin_diagnose.h"
 
 namespace pz::client {
 

@@ -1,5 +1,6 @@
 // The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14):
-// the rules of diagnose/diagnose.h (docs/diagnosis.md) on records instead of the nine-case grid.
+// the rules of diagnose/fin_diagnose.h (docs/diagnosis.md) on records instead of the nine-case
+// grid.
 //
 //  1. Noise floor σ from what the records allow (records/noise_floor.h EstimateNoiseFloor: rest,
 //     periods, repeats, the base model's residual; every available estimate is reported, and which

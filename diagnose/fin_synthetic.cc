@@ -1,4 +1,4 @@
-#include "diagnose/synthetic.h"
+#include "diagnose/fin_synthetic.h"
 
 #include <cmath>
 #include <numbers>

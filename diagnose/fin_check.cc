@@ -1,4 +1,4 @@
-#include "diagnose/check.h"
+#include "diagnose/fin_check.h"
 
 #include <chrono>
 #include <cmath>

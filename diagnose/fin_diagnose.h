@@ -34,7 +34,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/fit.h"
+#include "diagnose/fin_fit.h"
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
 #include "records/decision.h"

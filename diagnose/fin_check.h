@@ -1,15 +1,15 @@
 // The check of the diagnosis on data whose effect is withheld from it: random synthetic benches
-// (diagnose/synthetic.h), each diagnosed as a real bench would be, and the confusion matrix of the
-// true effect against the named one ("none" when no significant gap is found, "unexplained" when
-// a significant gap is not attributed), with the distribution of the share of the gap closed.
+// (diagnose/fin_synthetic.h), each diagnosed as a real bench would be, and the confusion matrix of
+// the true effect against the named one ("none" when no significant gap is found, "unexplained"
+// when a significant gap is not attributed), with the distribution of the share of the gap closed.
 #pragma once
 
 #include <functional>
 #include <string>
 #include <vector>
 
-#include "diagnose/diagnose.h"
-#include "diagnose/synthetic.h"
+#include "diagnose/fin_diagnose.h"
+#include "diagnose/fin_synthetic.h"
 
 namespace pz::diagnose {
 

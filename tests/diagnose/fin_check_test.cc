@@ -14,7 +14,7 @@
 #include <regex>
 #include <sstream>
 
-#include "diagnose/check.h"
+#include "diagnose/fin_check.h"
 #include "io/bench_data.h"
 
 namespace pz::diagnose {

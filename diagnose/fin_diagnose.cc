@@ -1,4 +1,4 @@
-#include "diagnose/diagnose.h"
+#include "diagnose/fin_diagnose.h"
 
 #include <algorithm>
 #include <chrono>
