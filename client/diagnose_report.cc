@@ -14,7 +14,7 @@
 #include "client/pi_report.h"
 #include "client/plots.h"
 #include "io/csv.h"
-#include "records/verdict.h"
+#include "diagnose/verdict.h"
 
 namespace pz::client {
 namespace {
@@ -555,7 +555,7 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     << Pct(Quantile(s.closed, 0.5)) << ", 90 % " << Pct(Quantile(s.closed, 0.9)) << ", max "
     << Pct(Quantile(s.closed, 1)) << "\n";
   // The counts and the calibration (is a stated confidence of 90 % right 90 % of the time?) in the
-  // words of every check (records/verdict.h).
+  // words of every check (diagnose/verdict.h).
   o << records::TallyText(s, "benches") << F("%.0f", s.wall_time_s) << " s in all\n";
 }
 

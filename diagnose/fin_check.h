@@ -38,7 +38,7 @@ struct CheckTrial {
 
 /// The counts (effect_trials: benches with one effect whose gap was significant, effect_right: …
 /// where that effect was named, clean, clean_alarms) and the reliability table are those of every
-/// calibration check (records/decision.h); the confusion matrix and the shares closed are the bench's.
+/// calibration check (diagnose/decision.h); the confusion matrix and the shares closed are the bench's.
 struct CheckSummary : records::CalibrationTally {
   std::vector<CheckTrial> trials;
   /// [truth][named], CheckRows() × CheckCols().

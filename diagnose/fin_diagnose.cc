@@ -9,7 +9,7 @@
 
 #include "model/model_comparison.h"
 #include "records/noise_floor.h"
-#include "records/verdict.h"
+#include "diagnose/verdict.h"
 #include "model/saturation.h"
 
 namespace pz::diagnose {
@@ -212,7 +212,7 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
   return out;
 }
 
-// The candidates of a round as the verdict names them (records/verdict.h), in ranked order.
+// The candidates of a round as the verdict names them (diagnose/verdict.h), in ranked order.
 std::vector<records::VerdictCandidate> VerdictCandidates(const std::vector<CandidateResult>& ranked) {
   std::vector<records::VerdictCandidate> v;
   for (const CandidateResult& c : ranked) v.push_back({model::EffectName(c.kind), &c});
@@ -233,7 +233,7 @@ records::VerdictText RoundText(const RoundResult& round, const FitResult& start)
 }
 
 // The gap of `start` against the floors, and its candidates scored, ranked and judged by the rules
-// of records/decision.h; the bench supplies the floors, the localised excess and the squared errors.
+// of diagnose/decision.h; the bench supplies the floors, the localised excess and the squared errors.
 RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const model::ResidualAnalysis& start_analysis,
                        std::span<const double> floors, std::vector<CandidateResult> candidates,
                        const DiagnoseOptions& o) {

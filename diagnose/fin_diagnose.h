@@ -13,7 +13,7 @@
 //     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
 //     t statistics): a trend a global model lacks is evidence of an unmodelled effect.
 //  5. Which: each candidate is scored on the withheld cases by the decision rules of
-//     records/decision.h (the same for every effect, family and data shape: significance, score,
+//     diagnose/decision.h (the same for every effect, family and data shape: significance, score,
 //     training BIC, closed share, pattern, ranking, paired block tests, separation, verdict kind);
 //     what the bench supplies is its floor (σ_c per case), its localised excess (phase bins,
 //     branches, reversals, saturation, first/later cycles, odd/even harmonics, low frequency: the
@@ -21,7 +21,7 @@
 //     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
 //     have explained: the base parameters that move by more than 2 σ when it is added), or "a
 //     significant gap that no candidate explains". The sentences are those of every diagnosis
-//     (records/verdict.h ComposeVerdict); the bench adds the absorbed parameters, the second
+//     (diagnose/verdict.h ComposeVerdict); the bench adds the absorbed parameters, the second
 //     effect and, for a tie, what would separate the two on its sinusoids.
 //  6. Greedy: with the first effect in the model, the others are tried again on top of it (only if
 //     the gap left is still significant: otherwise nothing could be named and no fit is run).
@@ -37,7 +37,7 @@
 #include "diagnose/fin_fit.h"
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
-#include "records/decision.h"
+#include "diagnose/decision.h"
 
 namespace pz::diagnose {
 
@@ -58,14 +58,14 @@ struct DiagnoseOptions {
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
   std::vector<double> cvode_start_fractions = {0.03, 0.15};
   model::EffectSimOptions sim;
-  records::DecisionRules rules;  ///< the decision rules: the same for every effect (records/decision.h)
+  records::DecisionRules rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
   bool second_effect = true;         ///< greedy search for a second effect
   bool trends = true;                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
   Status Validate() const;
 };
 
-/// One candidate structure, fitted and scored by the rules of records/decision.h.
+/// One candidate structure, fitted and scored by the rules of diagnose/decision.h.
 struct CandidateResult : records::CandidateScore {
   model::EffectKind kind;  ///< the effect added in this round (none: the base)
   FitResult fit;
@@ -84,7 +84,7 @@ struct RoundResult {
   int runner_up = -1;          ///< a qualifying candidate the data cannot separate from the named one
   double z_runner_up = 0;      ///< its paired block z against the named one
   records::Gap gap;            ///< the starting model's gap, as the rules measured it
-  std::string verdict;         ///< the round's verdict (records/verdict.h)
+  std::string verdict;         ///< the round's verdict (diagnose/verdict.h)
 };
 
 /// A parameter trend over the V × f grid from the per-case fits.

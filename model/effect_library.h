@@ -181,7 +181,7 @@ class EffectDef {
   virtual int kernel() const { return 0; }
 
   // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
-  /// The parameters of a records check's truth (records/check.cc), on the synthetic stack's scale
+  /// The parameters of a records check's truth (diagnose/check.cc), on the synthetic stack's scale
   /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect whose
   /// parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
   virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const { return {}; }

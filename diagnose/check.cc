@@ -1,4 +1,4 @@
-#include "records/check.h"
+#include "diagnose/check.h"
 
 #include <algorithm>
 #include <chrono>

@@ -1,7 +1,7 @@
-// The records diagnosis checked on data whose effect is withheld (records/check.h, issue 14): on
+// The records diagnosis checked on data whose effect is withheld (diagnose/check.h, issue 14): on
 // random synthetic stack records it names the right effect, raises no alarm on clean records, and
 // its stated confidence is calibrated — when it says ≥ 99 % it is right at least 90 % of the time.
-#include "records/check.h"
+#include "diagnose/check.h"
 
 #include <gtest/gtest.h>
 

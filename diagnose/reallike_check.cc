@@ -1,4 +1,4 @@
-#include "records/reallike_check.h"
+#include "diagnose/reallike_check.h"
 
 #include <algorithm>
 #include <chrono>

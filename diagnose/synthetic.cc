@@ -1,4 +1,4 @@
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,6 +1,6 @@
 // The verdict sentence of a diagnosis, composed once for every data shape: the records diagnosis
-// (records/diagnose.h) and the nine-case bench diagnosis (diagnose/fin_diagnose.h, its rounds and
-// its summary) state what the rules of records/decision.h decided in the same words, from the gap,
+// (diagnose/diagnose.h) and the nine-case bench diagnosis (diagnose/fin_diagnose.h, its rounds and
+// its summary) state what the rules of diagnose/decision.h decided in the same words, from the gap,
 // the ranked candidates and the naming; each supplies only its unit, where its floor comes from and
 // what it alone knows (the next measurement, the parameters that absorb an effect, a second
 // effect).
@@ -21,14 +21,14 @@
 // Numbers: three significant digits; thresholds as given.
 //
 // The calibration checks speak once too: a trial's line and the tally (CalibrationTally of
-// records/decision.h) of every `diagnose-check`.
+// diagnose/decision.h) of every `diagnose-check`.
 #pragma once
 
 #include <span>
 #include <string>
 #include <vector>
 
-#include "records/decision.h"
+#include "diagnose/decision.h"
 
 namespace pz::records {
 

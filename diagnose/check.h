@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "records/decision.h"
-#include "records/diagnose.h"
+#include "diagnose/decision.h"
+#include "diagnose/diagnose.h"
 
 namespace pz::records {
 
@@ -24,7 +24,7 @@ struct RecordsCheckOptions {
   RecordDiagnoseOptions diagnose;        ///< family and candidates are set per trial
 };
 
-/// A trial: its truth and what the diagnosis said of it (records/verdict.h).
+/// A trial: its truth and what the diagnosis said of it (diagnose/verdict.h).
 struct RecordsCheckTrial : TrialVerdict {
   uint64_t seed = 0;
   std::string truth = "none";  ///< effect name or "none"
@@ -32,7 +32,7 @@ struct RecordsCheckTrial : TrialVerdict {
   bool correct = false;        ///< named the truth (or "none" on a clean record)
 };
 
-/// The counts and the reliability table are those of every calibration check (records/decision.h).
+/// The counts and the reliability table are those of every calibration check (diagnose/decision.h).
 struct RecordsCheckSummary : CalibrationTally {
   std::vector<RecordsCheckTrial> trials;
   double wall_time_s = 0;

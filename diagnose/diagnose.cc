@@ -1,4 +1,4 @@
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 
 #include <algorithm>
 #include <cmath>

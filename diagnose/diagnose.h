@@ -9,14 +9,14 @@
 //     excluded_effects leaves out what the family already holds) is added and the model re-fitted
 //     (global search + LM, with the base fit as extra starting points).
 //  3. Withheld = the records with role validate or test (records or time windows). S = Σe² there,
-//     S_floor = N_w σ². The decision is that of records/decision.h (the same rules as the bench
+//     S_floor = N_w σ². The decision is that of diagnose/decision.h (the same rules as the bench
 //     diagnosis): significance, score, training ΔBIC, closed share, pattern (here the localised
 //     excess over drive level × direction bins of the withheld samples), the best-ranked candidate
 //     named if it qualifies.
 //  4. Confidence, made honest: residuals are correlated in time, so two models are compared by a
-//     paired test on blocks of the withheld samples (records/decision.h, model/model_comparison.h);
-//     when the runner-up qualifies too and cannot be separated,
-//     the verdict is "cannot separate A from B", the confidence is shared among the candidates that
+//     paired test on blocks of the withheld samples (diagnose/decision.h,
+//     model/model_comparison.h); when the runner-up qualifies too and cannot be separated, the
+//     verdict is "cannot separate A from B", the confidence is shared among the candidates that
 //     cannot be separated, and the next measurement is proposed: among sines, triangles and
 //     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
 //     the two fitted models' predictions differ most (RMS, offsets removed), with that difference
@@ -31,12 +31,12 @@
 #include <vector>
 
 #include "io/records.h"
-#include "records/decision.h"
+#include "diagnose/decision.h"
 #include "records/excitation.h"
 #include "records/fit.h"
 #include "records/noise_floor.h"
-#include "records/synthetic.h"
-#include "records/verdict.h"
+#include "diagnose/synthetic.h"
+#include "diagnose/verdict.h"
 
 namespace pz::records {
 
@@ -47,7 +47,7 @@ struct ProposedExperiment {
   std::string description;
 };
 
-/// One effect added to the base family, fitted and scored by the rules of records/decision.h.
+/// One effect added to the base family, fitted and scored by the rules of diagnose/decision.h.
 struct RecordCandidate : CandidateScore {
   EffectKind kind;
   FitResult fit;
@@ -87,7 +87,7 @@ struct RecordDiagnosis {
 /// the base model's prediction is not finite on a withheld record (no gap to measure).
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
-/// What a diagnosis said, as a calibration check counts it (records/verdict.h).
+/// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
 
 /// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
