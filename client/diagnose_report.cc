@@ -323,93 +323,109 @@ void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::Dia
   o << "]},\n \"wall_time_s\": " << Num(d.wall_time_s) << ", \"evaluations\": " << d.evaluations << "}\n";
 }
 
-// ---- HTML ----------------------------------------------------------------------------------------
+// ---- HTML ---------------------------------------------------------------------------------------
 
-std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir, const Diagnosis& d,
-                                                      const diagnose::DiagnosisModel& model,
-                                                      const diagnose::DiagnoseOptions& opt, bool plots,
-                                                      std::vector<std::string>* warnings) {
-  namespace fs = std::filesystem;
-  fs::create_directories(dir / "figures");
-  const fs::path fig = dir / "figures";
-  std::vector<fs::path> written, scripts;
-  const diagnose::ParameterLayout base_layout(d.base.structure), final_layout(d.final_fit.structure);
+namespace {
+
+namespace fs = std::filesystem;
+
+// Case c's trace (time, phase, drive, measured, both models, residuals, cycle) and residual spectra
+// as CSV, and the scripts of its three figures (residual vs phase, spectrum, loop).
+void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
+                      const diagnose::DiagnosisModel& model, size_t c,
+                      std::vector<fs::path>& written, std::vector<fs::path>& scripts) {
+  const diagnose::ParameterLayout base_layout(d.base.structure),
+      final_layout(d.final_fit.structure);
   const bool has_final = d.final_fit.description != d.base.description;
-  // Per case: trace data, spectrum data, three figures.
-  for (size_t c = 0; c < model.cases().size(); ++c) {
-    const diagnose::DiagCase& dc = model.cases()[c];
-    std::vector<double> yb, yf;
-    model.Simulate(base_layout, d.base.x, c, yb);
-    model.Simulate(final_layout, d.final_fit.x, c, yf);
-    const std::string stem = "case" + std::to_string(dc.number);
-    const fs::path trace = fig / (stem + "_trace.csv");
-    {
-      std::ofstream t(trace);
-      t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,cycle\n";
-      const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
-      const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
-      for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
-        const double tk = k / fs_hz;
-        const double ph = std::fmod(360.0 * f * tk, 360.0);
-        t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << "," << io::FormatNumber(dc.drive.Value(tk)) << ","
-          << io::FormatNumber(dc.measured_deg[k]) << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k])
-          << "," << io::FormatNumber(dc.measured_deg[k] - yb[k]) << "," << io::FormatNumber(dc.measured_deg[k] - yf[k])
-          << "," << (p ? k / p + 1 : 1) << "\n";
-      }
-      written.push_back(trace);
+  const diagnose::DiagCase& dc = model.cases()[c];
+  std::vector<double> yb, yf;
+  model.Simulate(base_layout, d.base.x, c, yb);
+  model.Simulate(final_layout, d.final_fit.x, c, yf);
+  const std::string stem = "case" + std::to_string(dc.number);
+  const fs::path trace = fig / (stem + "_trace.csv");
+  {
+    std::ofstream t(trace);
+    t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,"
+         "cycle\n";
+    const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
+    const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
+    for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
+      const double tk = k / fs_hz;
+      const double ph = std::fmod(360.0 * f * tk, 360.0);
+      t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << ","
+        << io::FormatNumber(dc.drive.Value(tk)) << "," << io::FormatNumber(dc.measured_deg[k])
+        << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k]) << ","
+        << io::FormatNumber(dc.measured_deg[k] - yb[k]) << ","
+        << io::FormatNumber(dc.measured_deg[k] - yf[k]) << "," << (p ? k / p + 1 : 1) << "\n";
     }
-    const fs::path spec = fig / (stem + "_spectrum.csv");
-    {
-      std::ofstream s(spec);
-      s << "harmonic,base_deg,final_deg,noise_deg\n";
-      const auto& rb = d.base_residuals.cases[c];
-      const auto& rf = d.final_residuals.cases[c];
-      for (int k = 0; k <= model::kHarmonics; ++k)
-        s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k]) << ","
-          << io::FormatNumber(rb.harmonic_noise) << "\n";
-      written.push_back(spec);
-    }
-    const std::string label = " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
-                              F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
-    Plot ph{stem + "_phase", "Residual vs drive phase" + label, "drive phase [deg]", "measured - model [deg]", false, {}};
-    ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
-    if (has_final) ph.series.push_back({trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
-    Plot sp{stem + "_spectrum", "Residual spectrum, later cycles" + label, "harmonic of the drive frequency",
-            "amplitude [deg]", false, {}};
-    sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
-    if (has_final) sp.series.push_back({spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
-    sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
-    Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
-    lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
-    lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
-    if (has_final) lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
-    for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
+    written.push_back(trace);
   }
-  if (plots) {
-    if (GnuplotAvailable()) {
-      RenderPlots(fig, scripts, warnings);
-    } else if (warnings) {
-      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() + " (run gnuplot *.gp there)");
-    }
+  const fs::path spec = fig / (stem + "_spectrum.csv");
+  {
+    std::ofstream s(spec);
+    s << "harmonic,base_deg,final_deg,noise_deg\n";
+    const auto& rb = d.base_residuals.cases[c];
+    const auto& rf = d.final_residuals.cases[c];
+    for (int k = 0; k <= model::kHarmonics; ++k)
+      s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k])
+        << "," << io::FormatNumber(rb.harmonic_noise) << "\n";
+    written.push_back(spec);
   }
-  for (const auto& s : scripts) written.push_back(s);
+  const std::string label =
+      " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
+      F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
+  Plot ph{stem + "_phase",
+          "Residual vs drive phase" + label,
+          "drive phase [deg]",
+          "measured - model [deg]",
+          false,
+          {}};
+  ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
+  if (has_final)
+    ph.series.push_back(
+        {trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
+  Plot sp{stem + "_spectrum",
+          "Residual spectrum, later cycles" + label,
+          "harmonic of the drive frequency",
+          "amplitude [deg]",
+          false,
+          {}};
+  sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
+  if (has_final)
+    sp.series.push_back(
+        {spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
+  sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
+  Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
+  lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
+  lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
+  if (has_final)
+    lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
+  for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
+}
 
-  // The page.
-  const fs::path html = dir / "report.html";
-  std::ofstream h(html);
-  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: " << Html(d.bench)
+// The page's head, the verdict and the noise floor.
+void HtmlHead(std::ostream& h, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: "
+    << Html(d.bench)
     << "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
-       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0.8em;border:1px "
+       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px "
+       "8px;text-align:right}"
+       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0."
+       "8em;border:1px "
        "solid #9bd}img{max-width:100%}</style></head><body>\n";
-  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> " << Html(d.verdict)
-    << "</p>\n";
-  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
-    << " deg (training), " << F("%.4f", d.floor_withheld)
-    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
-       "saturation plateaus of " << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
+  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> "
+    << Html(d.verdict) << "</p>\n";
+  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
+    << F("%.4f", d.floor_train) << " deg (training), " << F("%.4f", d.floor_withheld)
+    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and "
+       "the rounding of the "
+       "saturation plateaus of "
+    << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
     << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
-  // Grid of PI before/after.
+}
+
+// The V × f grid of each case's PI before / after, shaded by its RMS over the floor.
+void HtmlGrid(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
   std::set<double> vs, fs_set;
   for (const auto& c : model.cases()) {
     vs.insert(c.drive.amplitude_v);
@@ -417,7 +433,8 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
   }
   const std::vector<double> V = Sorted(vs), Fr = Sorted(fs_set);
   h << "<h2>Where: the grid of PI before / after</h2>\n<p>PI = Σ e² [deg²] per case, base model → "
-    << Html(d.final_fit.description) << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
+    << Html(d.final_fit.description)
+    << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
   for (double f : Fr) h << "<th>" << F("%.3g Hz", f) << "</th>";
   h << "</tr>\n";
   for (double v : V) {
@@ -432,103 +449,170 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
       }
       const double ratio = g->rms_before / std::max(g->floor_rms, 1e-12);
       const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
-      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">" << (g->training ? "" : "<i>") << "case "
-        << g->number << ": " << F("%.3g", g->pi_before) << " → " << F("%.3g", g->pi_after) << " ("
-        << F("%.1f", ratio) << " → " << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
+      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">"
+        << (g->training ? "" : "<i>") << "case " << g->number << ": " << F("%.3g", g->pi_before)
+        << " → " << F("%.3g", g->pi_after) << " (" << F("%.1f", ratio) << " → "
+        << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
         << (g->training ? "" : "</i>") << "</td>";
     }
     h << "</tr>\n";
   }
-  h << "</table>\n<h3>Localisation of the base model's residual</h3>\n<ul>";
+  h << "</table>\n";
+}
+
+// Where the base model's residual lies (the findings and the table per case) and the parameter
+// trends of the per-case fits.
+void HtmlLocalisation(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
+  h << "<h3>Localisation of the base model's residual</h3>\n<ul>";
   for (const auto& f : d.base_residuals.findings) h << "<li>" << Html(f) << "</li>";
-  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</th><th>falling</th><th>near "
-       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend [deg/s]</th><th>odd "
-       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width meas./model "
+  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</"
+       "th><th>falling</th><th>near "
+       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend "
+       "[deg/s]</th><th>odd "
+       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width "
+       "meas./model "
        "[deg]</th></tr>\n";
   for (const auto& c : d.base_residuals.cases) {
-    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld") << "</td><td>"
-      << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>" << F("%.4f", c.rising.rms)
-      << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>" << F("%.4f", c.near_reversal.rms) << "</td><td>"
-      << F("%.4f", c.in_saturation.rms) << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>"
-      << F("%.4f", c.later_cycles.rms) << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>"
-      << F("%.4f", c.odd_rms) << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms)
-      << "</td><td>" << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
-      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / " << F("%.3f", c.model_loop.width_deg)
-      << "</td></tr>\n";
+    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld")
+      << "</td><td>" << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>"
+      << F("%.4f", c.rising.rms) << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>"
+      << F("%.4f", c.near_reversal.rms) << "</td><td>" << F("%.4f", c.in_saturation.rms)
+      << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>" << F("%.4f", c.later_cycles.rms)
+      << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>" << F("%.4f", c.odd_rms)
+      << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms) << "</td><td>"
+      << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
+      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / "
+      << F("%.3f", c.model_loop.width_deg) << "</td></tr>\n";
   }
   h << "</table>\n";
-  if (!d.trends.empty()) {
-    h << "<h3>Parameter trends of per-case fits over the V × f grid</h3>\n<table><tr><th>parameter</th>";
-    for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
-    h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
-    for (const auto& t : d.trends) {
-      h << "<tr><td class=l>" << Html(t.name) << "</td>";
-      for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
-      h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
-        << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
-    }
-    h << "</table>\n";
+  if (d.trends.empty()) return;
+  h << "<h3>Parameter trends of per-case fits over the V × f "
+       "grid</h3>\n<table><tr><th>parameter</th>";
+  for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
+  h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
+  for (const auto& t : d.trends) {
+    h << "<tr><td class=l>" << Html(t.name) << "</td>";
+    for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
+    h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
+      << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
   }
+  h << "</table>\n";
+}
+
+// Each round's candidates, and what the base parameters absorbed.
+void HtmlWhich(std::ostream& h, const Diagnosis& d) {
   h << "<h2>Which effect</h2>\n";
   for (size_t r = 0; r < d.rounds.size(); ++r) {
     const auto& rr = d.rounds[r];
-    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict) << "</p>\n<table><tr><th>candidate</th><th>added "
-         "parameters</th><th>withheld RMS [deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
+    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict)
+      << "</p>\n<table><tr><th>candidate</th><th>added "
+         "parameters</th><th>withheld RMS "
+         "[deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
          "parameters</th><th>notes</th></tr>\n";
     for (const auto& c : rr.candidates) {
-      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params << "</td><td>"
-        << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>" << F("%.1f", c.score) << "</td><td>"
-        << Pct(c.closed) << "</td><td>" << Pct(c.pattern) << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>"
-        << Html(EffectParams(c.fit)) << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note)
-        << "</td></tr>\n";
+      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params
+        << "</td><td>" << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>"
+        << F("%.1f", c.score) << "</td><td>" << Pct(c.closed) << "</td><td>" << Pct(c.pattern)
+        << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>" << Html(EffectParams(c.fit))
+        << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note) << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   if (!d.absorbed.empty()) {
-    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by) << "</b> is added (|shift| &gt; 2 σ): ";
+    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by)
+      << "</b> is added (|shift| &gt; 2 σ): ";
     for (const auto& a : d.absorbed)
-      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " " << Html(a.unit) << "; ";
+      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " "
+        << Html(a.unit) << "; ";
     h << "</p>\n";
   }
-  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS before</th><th>RMS "
+}
+
+// The gap per case before / after and in total.
+void HtmlHowFar(std::ostream& h, const Diagnosis& d) {
+  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS "
+       "before</th><th>RMS "
        "after</th><th>closed</th></tr>\n";
   for (const auto& g : d.gaps)
-    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld") << "</td><td>"
-      << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)
-      << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
-  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → " << F("%.4f", d.withheld_after)
-    << " deg² (floor " << F("%.4f", d.withheld_floor) << "): " << Pct(d.closed_total) << " of the gap closed, "
-    << F("%.2f", d.remaining_ratio) << " × floor remains.</p>\n";
-  auto params_table = [&](const FitResult& f) {
-    h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity [deg]</th><th>identifiability</th>"
-         "</tr>\n";
-    for (const auto& p : f.params)
-      h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>" << F("%.5g", p.value) << "</td><td>"
-        << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>" << F("%.4f", p.sensitivity)
-        << "</td><td class=l>" << diagnose::IdentifiabilityName(p.identifiability)
-        << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
-    h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
-  };
+    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld")
+      << "</td><td>" << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before)
+      << "</td><td>" << F("%.4f", g.rms_after) << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
+  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → "
+    << F("%.4f", d.withheld_after) << " deg² (floor " << F("%.4f", d.withheld_floor)
+    << "): " << Pct(d.closed_total) << " of the gap closed, " << F("%.2f", d.remaining_ratio)
+    << " × floor remains.</p>\n";
+}
+
+// A fit's parameters with σ, sensitivity and identifiability, and its weakest direction.
+void HtmlParams(std::ostream& h, const FitResult& f) {
+  h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity "
+       "[deg]</th><th>identifiability</th>"
+       "</tr>\n";
+  for (const auto& p : f.params)
+    h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>"
+      << F("%.5g", p.value) << "</td><td>"
+      << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>"
+      << F("%.4f", p.sensitivity) << "</td><td class=l>"
+      << diagnose::IdentifiabilityName(p.identifiability)
+      << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
+  h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
+}
+
+// The identifiability tables, the figures of every case and the run's cost.
+void HtmlTail(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
   h << "<h2>Identifiability</h2>\n<p>" << Html(d.final_fit.description)
-    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the parameter.</p>\n";
-  params_table(d.final_fit);
-  if (has_final) {
+    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the "
+       "parameter.</p>\n";
+  HtmlParams(h, d.final_fit);
+  if (d.final_fit.description != d.base.description) {
     h << "<p>Base model:</p>\n";
-    params_table(d.base);
+    HtmlParams(h, d.base);
   }
   h << "<h2>Figures</h2>\n";
   for (const auto& c : model.cases()) {
     const std::string stem = "figures/case" + std::to_string(c.number);
-    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem << "_phase.png\" alt=\"residual vs phase\">\n<img src=\""
-      << stem << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem << "_loop.png\" alt=\"loop\">\n";
+    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem
+      << "_phase.png\" alt=\"residual vs phase\">\n<img src=\"" << stem
+      << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem
+      << "_loop.png\" alt=\"loop\">\n";
   }
-  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations.</small></p>\n";
+  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations
+    << " model evaluations.</small></p>\n";
   h << "</body></html>\n";
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> WriteDiagnosisHtml(
+    const std::filesystem::path& dir, const Diagnosis& d, const diagnose::DiagnosisModel& model,
+    const diagnose::DiagnoseOptions& opt, bool plots, std::vector<std::string>* warnings) {
+  fs::create_directories(dir / "figures");
+  const fs::path fig = dir / "figures";
+  std::vector<fs::path> written, scripts;
+  for (size_t c = 0; c < model.cases().size(); ++c)
+    WriteCaseFigures(fig, d, model, c, written, scripts);
+  if (plots) {
+    if (GnuplotAvailable()) {
+      RenderPlots(fig, scripts, warnings);
+    } else if (warnings) {
+      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() +
+                          " (run gnuplot *.gp there)");
+    }
+  }
+  for (const auto& s : scripts) written.push_back(s);
+  const fs::path html = dir / "report.html";
+  std::ofstream h(html);
+  HtmlHead(h, d, opt);
+  HtmlGrid(h, d, model);
+  HtmlLocalisation(h, d, model);
+  HtmlWhich(h, d);
+  HtmlHowFar(h, d);
+  HtmlTail(h, d, model);
   written.push_back(html);
   return written;
 }
 
-// ---- check ---------------------------------------------------------------------------------------
+// ---- check --------------------------------------------------------------------------------------
 
 namespace {
 double Quantile(std::vector<double> v, double q) {
