@@ -9,9 +9,10 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <span>
 #include <sstream>
 
-#include "client/pi_report.h"
+#include "client/json_values.h"
 #include "client/plots.h"
 #include "io/csv.h"
 #include "diagnose/verdict.h"
@@ -31,8 +32,6 @@ std::string F(const char* fmt, double a) {
   return buf;
 }
 std::string Pct(double share) { return std::isfinite(share) ? F("%.0f %%", 100 * share) : "n/a"; }
-std::string Num(double x) { return std::isfinite(x) ? io::FormatNumber(x) : "null"; }
-std::string Str(const std::string& s) { return "\"" + JsonEscape(s) + "\""; }
 std::string Html(const std::string& s) {
   std::string r;
   for (char c : s) {
@@ -169,158 +168,291 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   o << "\n" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations\n";
 }
 
-// ---- JSON ----------------------------------------------------------------------------------------
+// ---- JSON
+// ---------------------------------------------------------------------------------------- Through
+// protobuf's Struct and its JSON printer (client/json_values.h), as every report of the client:
+// non-finite numbers are null, the keys sorted.
 
 namespace {
 
-void FitJson(std::ostream& o, const FitResult& f) {
-  o << "{\"structure\": " << Str(f.description) << ", \"ok\": " << (f.ok ? "true" : "false")
-    << ", \"train_pi_deg2\": " << Num(f.train_pi) << ", \"withheld_pi_deg2\": " << Num(f.withheld_pi)
-    << ", \"train_rms_deg\": " << Num(Rms(f.train_pi, f.train_samples))
-    << ", \"withheld_rms_deg\": " << Num(Rms(f.withheld_pi, f.withheld_samples))
-    << ", \"residual_sigma_deg\": " << Num(f.residual_sigma) << ", \"case_pi_deg2\": [";
-  for (size_t i = 0; i < f.case_pi.size(); ++i) o << (i ? ", " : "") << Num(f.case_pi[i]);
-  o << "], \"parameters\": [";
-  for (size_t i = 0; i < f.params.size(); ++i) {
-    const auto& p = f.params[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(p.name) << ", \"unit\": " << Str(p.unit) << ", \"value\": " << Num(p.value)
-      << ", \"std_error\": " << Num(p.std_error) << ", \"sensitivity_deg\": " << Num(p.sensitivity)
-      << ", \"identifiability\": " << Str(diagnose::IdentifiabilityName(p.identifiability))
-      << ", \"note\": " << Str(p.note) << "}";
+using json::Bool;
+using json::List;
+using json::Num;
+using json::Obj;
+using json::Struct;
+using json::Text;
+using json::Value;
+
+Value Nums(std::span<const double> v) {
+  std::vector<Value> out;
+  out.reserve(v.size());
+  for (double x : v) out.push_back(Num(x));
+  return List(out);
+}
+
+Value Count(int64_t n) { return Num(static_cast<double>(n)); }
+
+Value FitJson(const FitResult& f) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["structure"] = Text(f.description);
+  o["ok"] = Bool(f.ok);
+  o["train_pi_deg2"] = Num(f.train_pi);
+  o["withheld_pi_deg2"] = Num(f.withheld_pi);
+  o["train_rms_deg"] = Num(Rms(f.train_pi, f.train_samples));
+  o["withheld_rms_deg"] = Num(Rms(f.withheld_pi, f.withheld_samples));
+  o["residual_sigma_deg"] = Num(f.residual_sigma);
+  o["case_pi_deg2"] = Nums(f.case_pi);
+  std::vector<Value> params;
+  for (const auto& p : f.params) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(p.name);
+    g["unit"] = Text(p.unit);
+    g["value"] = Num(p.value);
+    g["std_error"] = Num(p.std_error);
+    g["sensitivity_deg"] = Num(p.sensitivity);
+    g["identifiability"] = Text(diagnose::IdentifiabilityName(p.identifiability));
+    g["note"] = Text(p.note);
+    params.push_back(Obj(x));
   }
-  o << "], \"singular_values\": [";
-  for (size_t i = 0; i < f.singular_values.size(); ++i) o << (i ? ", " : "") << Num(f.singular_values[i]);
-  o << "], \"weakest_direction\": " << Str(f.weakest_direction) << ", \"evaluations\": " << f.evaluations
-    << ", \"wall_time_s\": " << Num(f.wall_time_s) << ", \"message\": " << Str(f.message) << "}";
+  o["parameters"] = List(params);
+  o["singular_values"] = Nums(f.singular_values);
+  o["weakest_direction"] = Text(f.weakest_direction);
+  o["evaluations"] = Count(f.evaluations);
+  o["wall_time_s"] = Num(f.wall_time_s);
+  o["message"] = Text(f.message);
+  return Obj(s);
 }
 
-void BinJson(std::ostream& o, const char* name, const model::BinStat& b) {
-  o << "\"" << name << "\": {\"rms_deg\": " << Num(b.rms) << ", \"mean_deg\": " << Num(b.mean) << ", \"n\": " << b.n
-    << "}";
+Value BinJson(const model::BinStat& b) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["rms_deg"] = Num(b.rms);
+  o["mean_deg"] = Num(b.mean);
+  o["n"] = Count(b.n);
+  return Obj(s);
 }
 
-void LoopJson(std::ostream& o, const model::LoopFeatures& l) {
-  o << "{\"width_deg\": " << Num(l.width_deg) << ", \"area_deg_V\": " << Num(l.area_deg_v)
-    << ", \"offset_deg\": " << Num(l.offset_deg) << ", \"peak_to_peak_deg\": " << Num(l.peak_to_peak_deg)
-    << ", \"top_phase_deg\": " << Num(l.top_phase_deg) << ", \"phase_lag_deg\": " << Num(l.phase_lag_deg)
-    << ", \"fundamental_deg\": " << Num(l.fundamental_deg) << "}";
+Value LoopJson(const model::LoopFeatures& l) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["width_deg"] = Num(l.width_deg);
+  o["area_deg_V"] = Num(l.area_deg_v);
+  o["offset_deg"] = Num(l.offset_deg);
+  o["peak_to_peak_deg"] = Num(l.peak_to_peak_deg);
+  o["top_phase_deg"] = Num(l.top_phase_deg);
+  o["phase_lag_deg"] = Num(l.phase_lag_deg);
+  o["fundamental_deg"] = Num(l.fundamental_deg);
+  return Obj(s);
 }
 
-void AnalysisJson(std::ostream& o, const model::ResidualAnalysis& a) {
-  o << "{\"cases\": [";
-  for (size_t i = 0; i < a.cases.size(); ++i) {
-    const auto& c = a.cases[i];
-    o << (i ? ",\n    " : "") << "{\"case\": " << c.number << ", \"training\": " << (c.training ? "true" : "false")
-      << ", \"amplitude_V\": " << Num(c.amplitude_v) << ", \"frequency_Hz\": " << Num(c.frequency_hz)
-      << ", \"pi_deg2\": " << Num(c.pi) << ", \"rms_deg\": " << Num(c.rms) << ", \"max_abs_deg\": " << Num(c.max_abs)
-      << ", \"share\": " << Num(c.share) << ", \"floor_rms_deg\": " << Num(c.floor_rms)
-      << ", \"rms_over_floor\": " << Num(c.rms_over_floor) << ", \"phase_bins_rms_deg\": [";
-    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].rms);
-    o << "], \"phase_bins_mean_deg\": [";
-    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].mean);
-    o << "], ";
-    const std::pair<const char*, const model::BinStat*> bins[] = {
-        {"rising", &c.rising},           {"falling", &c.falling},         {"near_reversal", &c.near_reversal},
-        {"in_saturation", &c.in_saturation}, {"first_cycle", &c.first_cycle}, {"later_cycles", &c.later_cycles}};
-    for (const auto& [name, bin] : bins) {
-      BinJson(o, name, *bin);
-      o << ", ";
-    }
-    o << "\"cycle_mean_deg\": [";
-    for (size_t k = 0; k < c.cycle_mean.size(); ++k) o << (k ? ", " : "") << Num(c.cycle_mean[k]);
-    o << "], \"trend_deg_per_s\": " << Num(c.trend_deg_per_s) << ", \"trend_se\": " << Num(c.trend_se)
-      << ", \"harmonics_deg\": [";
-    for (int k = 0; k <= model::kHarmonics; ++k) o << (k ? ", " : "") << Num(c.harmonic[k]);
-    o << "], \"harmonic_noise_deg\": " << Num(c.harmonic_noise) << ", \"odd_rms_deg\": " << Num(c.odd_rms)
-      << ", \"even_rms_deg\": " << Num(c.even_rms) << ", \"low_frequency_rms_deg\": " << Num(c.low_rms)
-      << ", \"measured_loop\": ";
-    LoopJson(o, c.measured_loop);
-    o << ", \"model_loop\": ";
-    LoopJson(o, c.model_loop);
-    o << "}";
+Value CaseResidualJson(const model::CaseResidual& c) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["case"] = Count(c.number);
+  o["training"] = Bool(c.training);
+  o["amplitude_V"] = Num(c.amplitude_v);
+  o["frequency_Hz"] = Num(c.frequency_hz);
+  o["pi_deg2"] = Num(c.pi);
+  o["rms_deg"] = Num(c.rms);
+  o["max_abs_deg"] = Num(c.max_abs);
+  o["share"] = Num(c.share);
+  o["floor_rms_deg"] = Num(c.floor_rms);
+  o["rms_over_floor"] = Num(c.rms_over_floor);
+  std::vector<double> rms, mean;
+  for (int b = 0; b < model::kPhaseBins; ++b) {
+    rms.push_back(c.phase[b].rms);
+    mean.push_back(c.phase[b].mean);
   }
-  o << "],\n   \"findings\": [";
-  for (size_t i = 0; i < a.findings.size(); ++i) o << (i ? ", " : "") << Str(a.findings[i]);
-  o << "]}";
+  o["phase_bins_rms_deg"] = Nums(rms);
+  o["phase_bins_mean_deg"] = Nums(mean);
+  o["rising"] = BinJson(c.rising);
+  o["falling"] = BinJson(c.falling);
+  o["near_reversal"] = BinJson(c.near_reversal);
+  o["in_saturation"] = BinJson(c.in_saturation);
+  o["first_cycle"] = BinJson(c.first_cycle);
+  o["later_cycles"] = BinJson(c.later_cycles);
+  o["cycle_mean_deg"] = Nums(c.cycle_mean);
+  o["trend_deg_per_s"] = Num(c.trend_deg_per_s);
+  o["trend_se"] = Num(c.trend_se);
+  o["harmonics_deg"] = Nums(c.harmonic);
+  o["harmonic_noise_deg"] = Num(c.harmonic_noise);
+  o["odd_rms_deg"] = Num(c.odd_rms);
+  o["even_rms_deg"] = Num(c.even_rms);
+  o["low_frequency_rms_deg"] = Num(c.low_rms);
+  o["measured_loop"] = LoopJson(c.measured_loop);
+  o["model_loop"] = LoopJson(c.model_loop);
+  return Obj(s);
+}
+
+Value AnalysisJson(const model::ResidualAnalysis& a) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  std::vector<Value> cases, findings;
+  for (const auto& c : a.cases) cases.push_back(CaseResidualJson(c));
+  for (const auto& f : a.findings) findings.push_back(Text(f));
+  o["cases"] = List(cases);
+  o["findings"] = List(findings);
+  return Obj(s);
+}
+
+// The noise floor: the encoder's quantum, the pooled floors and each case's.
+Value NoiseJson(const Diagnosis& d) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["quantum_deg"] = Num(d.quantum_deg);
+  o["floor_train_deg"] = Num(d.floor_train);
+  o["floor_withheld_deg"] = Num(d.floor_withheld);
+  o["floor_model"] = Text(d.floor_model);
+  std::vector<Value> cases;
+  for (size_t i = 0; i < d.cases.size(); ++i) {
+    const auto& c = d.cases[i];
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["case"] = Count(c.number);
+    g["quantum_deg"] = Num(c.noise.quantum_deg);
+    g["quantisation_rms_deg"] = Num(c.noise.quantisation_rms_deg);
+    g["scatter_rms_deg"] = Num(c.noise.scatter_rms_deg);
+    g["floor_rms_deg"] = Num(c.noise.floor_rms_deg);
+    g["saturation_aware_floor_deg"] = Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN);
+    g["b1_deg"] = Num(c.b1);
+    g["b2_deg"] = Num(c.b2);
+    cases.push_back(Obj(x));
+  }
+  o["cases"] = List(cases);
+  return Obj(s);
+}
+
+Value TrendsJson(const std::vector<diagnose::ParamTrend>& trends) {
+  std::vector<Value> out;
+  for (const auto& t : trends) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(t.name);
+    g["per_case"] = Nums(t.per_case);
+    g["slope_per_V"] = Num(t.slope_v);
+    g["slope_per_Hz"] = Num(t.slope_f);
+    g["p_V"] = Num(t.p_v);
+    g["p_f"] = Num(t.p_f);
+    g["r2"] = Num(t.r2);
+    g["relative_range"] = Num(t.relative_range);
+    g["significant"] = Bool(t.significant);
+    out.push_back(Obj(x));
+  }
+  return List(out);
+}
+
+Value CandidateJson(const CandidateResult& c) {
+  Struct x;
+  auto& g = *x.mutable_fields();
+  g["effect"] = Text(model::EffectName(c.kind));
+  g["added_parameters"] = Count(c.added_params);
+  g["score"] = Num(c.score);
+  g["train_delta_bic"] = Num(c.train_delta_bic);
+  g["closed"] = Num(c.closed);
+  g["raw_reduction"] = Num(c.raw_reduction);
+  g["pattern"] = Num(c.pattern);
+  g["weight"] = Num(c.weight);
+  g["qualifies"] = Bool(c.qualifies);
+  g["note"] = Text(c.note);
+  g["fit"] = FitJson(c.fit);
+  return Obj(x);
+}
+
+Value RoundJson(const RoundResult& r) {
+  Struct x;
+  auto& g = *x.mutable_fields();
+  std::vector<Value> from, candidates;
+  for (const auto& k : r.base_structure) from.push_back(Text(model::EffectName(k)));
+  for (const auto& c : r.candidates) candidates.push_back(CandidateJson(c));
+  g["from"] = List(from);
+  g["withheld_pi_deg2"] = Num(r.s0);
+  g["floor_pi_deg2"] = Num(r.s_floor);
+  g["rms_over_floor"] = Num(r.rms_ratio);
+  g["significant"] = Bool(r.significant);
+  g["named"] = r.named >= 0 ? Text(model::EffectName(r.candidates[r.named].kind)) : json::Null();
+  g["verdict"] = Text(r.verdict);
+  g["candidates"] = List(candidates);
+  return Obj(x);
+}
+
+Value AbsorbedJson(const std::vector<diagnose::Absorption>& absorbed) {
+  std::vector<Value> out;
+  for (const auto& a : absorbed) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(a.name);
+    g["unit"] = Text(a.unit);
+    g["without"] = Num(a.without);
+    g["with"] = Num(a.with);
+    g["z"] = Num(a.z);
+    out.push_back(Obj(x));
+  }
+  return List(out);
+}
+
+// The withheld gap before / after the named effects, in total and per case.
+Value GapJson(const Diagnosis& d) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["withheld_pi_before_deg2"] = Num(d.withheld_before);
+  o["withheld_pi_after_deg2"] = Num(d.withheld_after);
+  o["withheld_floor_pi_deg2"] = Num(d.withheld_floor);
+  o["closed"] = Num(d.closed_total);
+  o["remaining_over_floor"] = Num(d.remaining_ratio);
+  std::vector<Value> cases;
+  for (const auto& g : d.gaps) {
+    Struct x;
+    auto& c = *x.mutable_fields();
+    c["case"] = Count(g.number);
+    c["training"] = Bool(g.training);
+    c["floor_rms_deg"] = Num(g.floor_rms);
+    c["rms_before_deg"] = Num(g.rms_before);
+    c["rms_after_deg"] = Num(g.rms_after);
+    c["pi_before_deg2"] = Num(g.pi_before);
+    c["pi_after_deg2"] = Num(g.pi_after);
+    c["closed"] = Num(g.closed);
+    cases.push_back(Obj(x));
+  }
+  o["cases"] = List(cases);
+  return Obj(s);
 }
 
 }  // namespace
 
-void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
-  o << "{\"bench\": " << Str(d.bench) << ",\n \"verdict_kind\": " << Str(d.verdict_kind)
-    << ",\n \"verdict\": " << Str(d.verdict) << ",\n \"named\": [";
-  for (size_t i = 0; i < d.named.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(d.named[i]));
-  o << "],\n \"confidence\": " << Num(d.named.empty() ? NAN : d.confidence)
-    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.rules.significance_ratio)
-    << ", \"min_closed\": " << Num(opt.rules.min_closed) << ", \"min_pattern\": " << Num(opt.rules.min_pattern) << "}"
-    << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
-    << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"floor_model\": " << Str(d.floor_model)
-    << ", \"cases\": [";
-  for (size_t i = 0; i < d.cases.size(); ++i) {
-    const auto& c = d.cases[i];
-    o << (i ? ", " : "") << "{\"case\": " << c.number << ", \"quantum_deg\": " << Num(c.noise.quantum_deg)
-      << ", \"quantisation_rms_deg\": " << Num(c.noise.quantisation_rms_deg)
-      << ", \"scatter_rms_deg\": " << Num(c.noise.scatter_rms_deg) << ", \"floor_rms_deg\": " << Num(c.noise.floor_rms_deg)
-      << ", \"saturation_aware_floor_deg\": " << Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN)
-      << ", \"b1_deg\": " << Num(c.b1) << ", \"b2_deg\": " << Num(c.b2) << "}";
-  }
-  o << "]},\n \"base\": ";
-  FitJson(o, d.base);
-  o << ",\n \"base_residuals\": ";
-  AnalysisJson(o, d.base_residuals);
-  o << ",\n \"trends\": [";
-  for (size_t i = 0; i < d.trends.size(); ++i) {
-    const auto& t = d.trends[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(t.name) << ", \"per_case\": [";
-    for (size_t k = 0; k < t.per_case.size(); ++k) o << (k ? ", " : "") << Num(t.per_case[k]);
-    o << "], \"slope_per_V\": " << Num(t.slope_v) << ", \"slope_per_Hz\": " << Num(t.slope_f)
-      << ", \"p_V\": " << Num(t.p_v) << ", \"p_f\": " << Num(t.p_f) << ", \"r2\": " << Num(t.r2)
-      << ", \"relative_range\": " << Num(t.relative_range) << ", \"significant\": " << (t.significant ? "true" : "false")
-      << "}";
-  }
-  o << "],\n \"rounds\": [";
-  for (size_t r = 0; r < d.rounds.size(); ++r) {
-    const auto& rr = d.rounds[r];
-    o << (r ? ",\n  " : "") << "{\"from\": [";
-    for (size_t i = 0; i < rr.base_structure.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(rr.base_structure[i]));
-    o << "], \"withheld_pi_deg2\": " << Num(rr.s0) << ", \"floor_pi_deg2\": " << Num(rr.s_floor)
-      << ", \"rms_over_floor\": " << Num(rr.rms_ratio) << ", \"significant\": " << (rr.significant ? "true" : "false")
-      << ", \"named\": " << (rr.named >= 0 ? Str(model::EffectName(rr.candidates[rr.named].kind)) : "null")
-      << ", \"verdict\": " << Str(rr.verdict) << ",\n   \"candidates\": [";
-    for (size_t i = 0; i < rr.candidates.size(); ++i) {
-      const auto& c = rr.candidates[i];
-      o << (i ? ",\n    " : "") << "{\"effect\": " << Str(model::EffectName(c.kind)) << ", \"added_parameters\": "
-        << c.added_params << ", \"score\": " << Num(c.score) << ", \"train_delta_bic\": " << Num(c.train_delta_bic)
-        << ", \"closed\": " << Num(c.closed) << ", \"raw_reduction\": " << Num(c.raw_reduction)
-        << ", \"pattern\": " << Num(c.pattern) << ", \"weight\": " << Num(c.weight)
-        << ", \"qualifies\": " << (c.qualifies ? "true" : "false") << ", \"note\": " << Str(c.note) << ", \"fit\": ";
-      FitJson(o, c.fit);
-      o << "}";
-    }
-    o << "]}";
-  }
-  o << "],\n \"absorbed_by\": " << Str(d.absorbed_by) << ", \"absorbed\": [";
-  for (size_t i = 0; i < d.absorbed.size(); ++i) {
-    const auto& a = d.absorbed[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(a.name) << ", \"unit\": " << Str(a.unit)
-      << ", \"without\": " << Num(a.without) << ", \"with\": " << Num(a.with) << ", \"z\": " << Num(a.z) << "}";
-  }
-  o << "],\n \"final\": ";
-  FitJson(o, d.final_fit);
-  o << ",\n \"final_residuals\": ";
-  AnalysisJson(o, d.final_residuals);
-  o << ",\n \"gap\": {\"withheld_pi_before_deg2\": " << Num(d.withheld_before)
-    << ", \"withheld_pi_after_deg2\": " << Num(d.withheld_after) << ", \"withheld_floor_pi_deg2\": " << Num(d.withheld_floor)
-    << ", \"closed\": " << Num(d.closed_total) << ", \"remaining_over_floor\": " << Num(d.remaining_ratio)
-    << ", \"cases\": [";
-  for (size_t i = 0; i < d.gaps.size(); ++i) {
-    const auto& g = d.gaps[i];
-    o << (i ? ", " : "") << "{\"case\": " << g.number << ", \"training\": " << (g.training ? "true" : "false")
-      << ", \"floor_rms_deg\": " << Num(g.floor_rms) << ", \"rms_before_deg\": " << Num(g.rms_before)
-      << ", \"rms_after_deg\": " << Num(g.rms_after) << ", \"pi_before_deg2\": " << Num(g.pi_before)
-      << ", \"pi_after_deg2\": " << Num(g.pi_after) << ", \"closed\": " << Num(g.closed) << "}";
-  }
-  o << "]},\n \"wall_time_s\": " << Num(d.wall_time_s) << ", \"evaluations\": " << d.evaluations << "}\n";
+void WriteDiagnosisJson(std::ostream& out, const Diagnosis& d,
+                        const diagnose::DiagnoseOptions& opt) {
+  Struct root;
+  auto& o = *root.mutable_fields();
+  o["bench"] = Text(d.bench);
+  o["verdict_kind"] = Text(d.verdict_kind);
+  o["verdict"] = Text(d.verdict);
+  std::vector<Value> named;
+  for (const auto& k : d.named) named.push_back(Text(model::EffectName(k)));
+  o["named"] = List(named);
+  o["confidence"] = Num(d.named.empty() ? NAN : d.confidence);
+  Struct thresholds;
+  auto& t = *thresholds.mutable_fields();
+  t["significance_ratio"] = Num(opt.rules.significance_ratio);
+  t["min_closed"] = Num(opt.rules.min_closed);
+  t["min_pattern"] = Num(opt.rules.min_pattern);
+  o["thresholds"] = Obj(thresholds);
+  o["noise"] = NoiseJson(d);
+  o["base"] = FitJson(d.base);
+  o["base_residuals"] = AnalysisJson(d.base_residuals);
+  o["trends"] = TrendsJson(d.trends);
+  std::vector<Value> rounds;
+  for (const auto& r : d.rounds) rounds.push_back(RoundJson(r));
+  o["rounds"] = List(rounds);
+  o["absorbed_by"] = Text(d.absorbed_by);
+  o["absorbed"] = AbsorbedJson(d.absorbed);
+  o["final"] = FitJson(d.final_fit);
+  o["final_residuals"] = AnalysisJson(d.final_residuals);
+  o["gap"] = GapJson(d);
+  o["wall_time_s"] = Num(d.wall_time_s);
+  o["evaluations"] = Count(d.evaluations);
+  out << json::Print(root, "diagnosis.json");
 }
 
 // ---- HTML ---------------------------------------------------------------------------------------
@@ -643,31 +775,48 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
   o << records::TallyText(s, "benches") << F("%.0f", s.wall_time_s) << " s in all\n";
 }
 
-void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {
-  o << "{\"columns\": [";
-  for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << Str(diagnose::CheckColumnName(c));
-  o << "],\n \"confusion\": {";
+void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s) {
+  Struct root;
+  auto& o = *root.mutable_fields();
+  std::vector<Value> columns;
+  for (int c = 0; c < diagnose::CheckCols(); ++c)
+    columns.push_back(Text(diagnose::CheckColumnName(c)));
+  o["columns"] = List(columns);
+  Struct confusion;
   for (int r = 0; r < diagnose::CheckRows(); ++r) {
-    o << (r ? ", " : "") << Str(diagnose::CheckColumnName(r)) << ": [";
-    for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << s.confusion[r][c];
-    o << "]";
+    std::vector<Value> row;
+    for (int c = 0; c < diagnose::CheckCols(); ++c) row.push_back(Count(s.confusion[r][c]));
+    (*confusion.mutable_fields())[diagnose::CheckColumnName(r)] = List(row);
   }
-  o << "},\n \"single_significant\": " << s.effect_trials
-    << ", \"single_significant_right\": " << s.effect_right << ", \"accuracy\": " << Num(s.accuracy())
-    << ", \"clean\": " << s.clean << ", \"clean_alarms\": " << s.clean_alarms
-    << ", \"false_alarm_rate\": " << Num(s.false_alarm_rate()) << ",\n \"closed\": [";
-  for (size_t i = 0; i < s.closed.size(); ++i) o << (i ? ", " : "") << Num(s.closed[i]);
-  o << "],\n \"trials\": [";
-  for (size_t i = 0; i < s.trials.size(); ++i) {
-    const auto& t = s.trials[i];
-    o << (i ? ",\n  " : "") << "{\"seed\": " << t.seed << ", \"truth\": " << Str(model::EffectName(t.truth))
-      << ", \"truth_description\": " << Str(t.truth_description) << ", \"magnitude\": " << Num(t.magnitude)
-      << ", \"verdict_kind\": " << Str(t.verdict_kind) << ", \"named\": " << Str(model::EffectName(t.named))
-      << ", \"confidence\": " << Num(t.confidence) << ", \"significant\": " << (t.significant ? "true" : "false")
-      << ", \"rms_over_floor\": " << Num(t.rms_ratio) << ", \"closed\": " << Num(t.closed)
-      << ", \"correct\": " << (t.correct() ? "true" : "false") << ", \"wall_time_s\": " << Num(t.wall_time_s) << "}";
+  o["confusion"] = Obj(confusion);
+  o["single_significant"] = Count(s.effect_trials);
+  o["single_significant_right"] = Count(s.effect_right);
+  o["accuracy"] = Num(s.accuracy());
+  o["clean"] = Count(s.clean);
+  o["clean_alarms"] = Count(s.clean_alarms);
+  o["false_alarm_rate"] = Num(s.false_alarm_rate());
+  o["closed"] = Nums(s.closed);
+  std::vector<Value> trials;
+  for (const auto& t : s.trials) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["seed"] = Num(static_cast<double>(t.seed));  // exact up to 2^53
+    g["truth"] = Text(model::EffectName(t.truth));
+    g["truth_description"] = Text(t.truth_description);
+    g["magnitude"] = Num(t.magnitude);
+    g["verdict_kind"] = Text(t.verdict_kind);
+    g["named"] = Text(model::EffectName(t.named));
+    g["confidence"] = Num(t.confidence);
+    g["significant"] = Bool(t.significant);
+    g["rms_over_floor"] = Num(t.rms_ratio);
+    g["closed"] = Num(t.closed);
+    g["correct"] = Bool(t.correct());
+    g["wall_time_s"] = Num(t.wall_time_s);
+    trials.push_back(Obj(x));
   }
-  o << "],\n \"wall_time_s\": " << Num(s.wall_time_s) << "}\n";
+  o["trials"] = List(trials);
+  o["wall_time_s"] = Num(s.wall_time_s);
+  out << json::Print(root, "check.json");
 }
 
 }  // namespace pz::client
