@@ -7,18 +7,12 @@
 #include <sstream>
 #include <utility>
 
+#include "diagnose/synthetic.h"
 #include "opt/random.h"
 #include "records/excitation.h"
 #include "records/preisach_family.h"
 
 namespace pz::records {
-namespace {
-
-/// The nominal parameters of a searched family, or the weights of a linear one (for 200 V peak to
-/// peak and a gain of about 0.1 y/V, the synthetic stack's scale).
-double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
-
-}  // namespace
 
 RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
                                     const std::function<void(const RecordsCheckTrial&, int)>& on_trial) {
@@ -50,7 +44,7 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     t.seed = o.seed + static_cast<uint64_t>(i);
     opt::Rng rng(t.seed * 104729 + 7);
     std::vector<double> p = nominal, weights;
-    for (double& v : p) v *= Uniform(rng, 0.8, 1.25);
+    for (double& v : p) v *= UniformDraw(rng, 0.8, 1.25);
     if (fam->linear()) weights = std::exchange(p, {});  // the truth's weights; p: the effect's parameters
     std::vector<EffectKind> effects;
     std::ostringstream desc;
@@ -73,7 +67,7 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     d.amplitude = 100;
     d.frequency_hz = 1;
     d.frequency_end_hz = 6;
-    d.phase_rad = Uniform(rng, 0, 2 * std::numbers::pi);
+    d.phase_rad = UniformDraw(rng, 0, 2 * std::numbers::pi);
     d.rest_s = 0.5;
     d.duration_s = 6;
     d.fs_hz = 500;
@@ -83,7 +77,7 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     desc << ", " << WaveformName(d.waveform);
     t.description = desc.str();
     RecordModel truth(fam, effects, scale);
-    io::Record r = SynthesizeRecord(truth, p, weights, d, {Uniform(rng, -2, 2), 0.02, 0.005, t.seed}, "rec", model::CaseRole::kTrain);
+    io::Record r = SynthesizeRecord(truth, p, weights, d, {UniformDraw(rng, -2, 2), 0.02, 0.005, t.seed}, "rec", model::CaseRole::kTrain);
     const double t0 = r.t[r.rest_samples] + 0.2, t2 = r.t.back(), t1 = t0 + 0.6 * (t2 - t0);
     io::RecordSet set;
     set.source = "synthetic";

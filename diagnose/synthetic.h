@@ -49,6 +49,11 @@ DataScale SyntheticStackScale();
 
 /// A standard normal draw (Box–Muller on the generator's uniform grid).
 double NormalDraw(opt::Rng& rng);
+/// A uniform draw in [lo, hi) (one Uniform01): the synthetic draws of every check (records, fin
+/// benches, real-like stacks).
+inline double UniformDraw(opt::Rng& rng, double lo, double hi) {
+  return lo + (hi - lo) * rng.Uniform01();
+}
 
 /// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
