@@ -33,10 +33,10 @@
 #include "io/records.h"
 #include "model/format.h"
 #include "opt/random.h"
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/export_header.h"
 #include "records/stepper.h"
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;

@@ -1,6 +1,6 @@
 // `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
-// and how far it shrinks once the effect is in the model (diagnose/diagnose.h). Writes a terminal
-// summary, diagnosis.json and report.html with figures.
+// and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h). Writes a
+// terminal summary, diagnosis.json and report.html with figures.
 // `piezoid diagnose-check`: the same diagnosis on random synthetic benches whose effect is withheld
 // from it; prints the confusion matrix and the distribution of the share of the gap closed.
 #include <cstdio>
@@ -15,9 +15,9 @@
 #include "client/diagnose_report.h"
 #include "client/records_diagnose.h"
 #include "client/search_flags.h"
-#include "records/check.h"
-#include "records/reallike_check.h"
-#include "records/verdict.h"
+#include "diagnose/check.h"
+#include "diagnose/reallike_check.h"
+#include "diagnose/verdict.h"
 #include "svcclient/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
@@ -28,7 +28,7 @@ namespace {
 
 struct DiagnoseArgs {
   std::string cases_dir;
-  RecordsDiagnoseRequest records;  ///< --records: a record set of any drive (records/diagnose.h)
+  RecordsDiagnoseRequest records;  ///< --records: a record set of any drive (diagnose/diagnose.h)
   std::string out_dir;
   std::string json_file;
   std::string candidates;
@@ -167,7 +167,7 @@ struct CheckArgs {
   bool second = false;
   bool quick = false;
   double significance_ratio = 1.25;
-  bool real_like = false;          ///< --real-like: real-like stack sets (records/reallike.h) instead
+  bool real_like = false;          ///< --real-like: real-like stack sets (diagnose/reallike.h) instead
   double real_like_train_s = 20;   ///< their training sine's length
   double real_like_withheld_s = 10;
 };
@@ -186,7 +186,7 @@ records::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
   return d;
 }
 
-/// The records diagnosis on real-like stack sets, checked against their truth (records/reallike_check.h).
+/// The records diagnosis on real-like stack sets, checked against their truth (diagnose/reallike_check.h).
 int RunRealLikeCheckCommand(const CheckArgs& a) {
   records::RealLikeCheckOptions o;
   o.family = a.records_family;

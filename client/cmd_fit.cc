@@ -33,7 +33,7 @@
 #include "client/fit_file.h"
 #include "model/preisach.h"
 #include "records/excitation.h"
-#include "records/extrapolation.h"
+#include "diagnose/extrapolation.h"
 #include "records/fit.h"
 #include "records/select.h"
 
@@ -320,7 +320,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     }
   }
   if (!extrapolation.empty()) {
-    os << "\n## Extrapolation (records/extrapolation.h)\n\n";
+    os << "\n## Extrapolation (diagnose/extrapolation.h)\n\n";
     for (const auto& c : extrapolation) os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
     os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the training drive "
           "range; minor loops are the shallow pieces):\n\n";

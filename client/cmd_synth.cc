@@ -1,4 +1,4 @@
-// `piezoid synth-stack`: writes a real-like stack record set (records/reallike.h, issue 22 item 5)
+// `piezoid synth-stack`: writes a real-like stack record set (diagnose/reallike.h, issue 22 item 5)
 // in the manifest format (io/records.h; `piezoid fit`, `diagnose --records` and `records` read it)
 // with its truth: truth.json (the plant, the sensor, each record's drive, offset and realised noise,
 // the true noise floor) and a README.md saying how it was made.
@@ -13,7 +13,7 @@
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/status.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -122,7 +122,7 @@ int RunSynth(const SynthArgs& a) {
   io::WriteFileWith(out / "truth.json", [&](std::ostream& os) { os << TruthJson(s); });
   io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
     os << "# A real-like stack record set (generated)\n\nMade by `piezoid synth-stack --out " << a.out << " --seed "
-       << o.seed << "` (records/reallike.h; the other options at their values in truth.json). The plant is "
+       << o.seed << "` (diagnose/reallike.h; the other options at their values in truth.json). The plant is "
        << "written independently of the product's families: a Preisach model (return-point memory) with an "
        << "asymmetric density, a reversible quadratic part, log creep, a sensor lag of " << o.sensor.lag_samples
        << " samples, white and coloured noise, quantisation, an offset per record and a rest before each record.\n\n"

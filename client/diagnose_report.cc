@@ -9,12 +9,13 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <span>
 #include <sstream>
 
-#include "client/pi_report.h"
+#include "client/json_values.h"
 #include "client/plots.h"
 #include "io/csv.h"
-#include "records/verdict.h"
+#include "diagnose/verdict.h"
 
 namespace pz::client {
 namespace {
@@ -31,8 +32,6 @@ std::string F(const char* fmt, double a) {
   return buf;
 }
 std::string Pct(double share) { return std::isfinite(share) ? F("%.0f %%", 100 * share) : "n/a"; }
-std::string Num(double x) { return std::isfinite(x) ? io::FormatNumber(x) : "null"; }
-std::string Str(const std::string& s) { return "\"" + JsonEscape(s) + "\""; }
 std::string Html(const std::string& s) {
   std::string r;
   for (char c : s) {
@@ -169,247 +168,396 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   o << "\n" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations\n";
 }
 
-// ---- JSON ----------------------------------------------------------------------------------------
+// ---- JSON
+// ---------------------------------------------------------------------------------------- Through
+// protobuf's Struct and its JSON printer (client/json_values.h), as every report of the client:
+// non-finite numbers are null, the keys sorted.
 
 namespace {
 
-void FitJson(std::ostream& o, const FitResult& f) {
-  o << "{\"structure\": " << Str(f.description) << ", \"ok\": " << (f.ok ? "true" : "false")
-    << ", \"train_pi_deg2\": " << Num(f.train_pi) << ", \"withheld_pi_deg2\": " << Num(f.withheld_pi)
-    << ", \"train_rms_deg\": " << Num(Rms(f.train_pi, f.train_samples))
-    << ", \"withheld_rms_deg\": " << Num(Rms(f.withheld_pi, f.withheld_samples))
-    << ", \"residual_sigma_deg\": " << Num(f.residual_sigma) << ", \"case_pi_deg2\": [";
-  for (size_t i = 0; i < f.case_pi.size(); ++i) o << (i ? ", " : "") << Num(f.case_pi[i]);
-  o << "], \"parameters\": [";
-  for (size_t i = 0; i < f.params.size(); ++i) {
-    const auto& p = f.params[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(p.name) << ", \"unit\": " << Str(p.unit) << ", \"value\": " << Num(p.value)
-      << ", \"std_error\": " << Num(p.std_error) << ", \"sensitivity_deg\": " << Num(p.sensitivity)
-      << ", \"identifiability\": " << Str(diagnose::IdentifiabilityName(p.identifiability))
-      << ", \"note\": " << Str(p.note) << "}";
+using json::Bool;
+using json::List;
+using json::Num;
+using json::Obj;
+using json::Struct;
+using json::Text;
+using json::Value;
+
+Value Nums(std::span<const double> v) {
+  std::vector<Value> out;
+  out.reserve(v.size());
+  for (double x : v) out.push_back(Num(x));
+  return List(out);
+}
+
+Value Count(int64_t n) { return Num(static_cast<double>(n)); }
+
+Value FitJson(const FitResult& f) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["structure"] = Text(f.description);
+  o["ok"] = Bool(f.ok);
+  o["train_pi_deg2"] = Num(f.train_pi);
+  o["withheld_pi_deg2"] = Num(f.withheld_pi);
+  o["train_rms_deg"] = Num(Rms(f.train_pi, f.train_samples));
+  o["withheld_rms_deg"] = Num(Rms(f.withheld_pi, f.withheld_samples));
+  o["residual_sigma_deg"] = Num(f.residual_sigma);
+  o["case_pi_deg2"] = Nums(f.case_pi);
+  std::vector<Value> params;
+  for (const auto& p : f.params) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(p.name);
+    g["unit"] = Text(p.unit);
+    g["value"] = Num(p.value);
+    g["std_error"] = Num(p.std_error);
+    g["sensitivity_deg"] = Num(p.sensitivity);
+    g["identifiability"] = Text(diagnose::IdentifiabilityName(p.identifiability));
+    g["note"] = Text(p.note);
+    params.push_back(Obj(x));
   }
-  o << "], \"singular_values\": [";
-  for (size_t i = 0; i < f.singular_values.size(); ++i) o << (i ? ", " : "") << Num(f.singular_values[i]);
-  o << "], \"weakest_direction\": " << Str(f.weakest_direction) << ", \"evaluations\": " << f.evaluations
-    << ", \"wall_time_s\": " << Num(f.wall_time_s) << ", \"message\": " << Str(f.message) << "}";
+  o["parameters"] = List(params);
+  o["singular_values"] = Nums(f.singular_values);
+  o["weakest_direction"] = Text(f.weakest_direction);
+  o["evaluations"] = Count(f.evaluations);
+  o["wall_time_s"] = Num(f.wall_time_s);
+  o["message"] = Text(f.message);
+  return Obj(s);
 }
 
-void BinJson(std::ostream& o, const char* name, const model::BinStat& b) {
-  o << "\"" << name << "\": {\"rms_deg\": " << Num(b.rms) << ", \"mean_deg\": " << Num(b.mean) << ", \"n\": " << b.n
-    << "}";
+Value BinJson(const model::BinStat& b) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["rms_deg"] = Num(b.rms);
+  o["mean_deg"] = Num(b.mean);
+  o["n"] = Count(b.n);
+  return Obj(s);
 }
 
-void LoopJson(std::ostream& o, const model::LoopFeatures& l) {
-  o << "{\"width_deg\": " << Num(l.width_deg) << ", \"area_deg_V\": " << Num(l.area_deg_v)
-    << ", \"offset_deg\": " << Num(l.offset_deg) << ", \"peak_to_peak_deg\": " << Num(l.peak_to_peak_deg)
-    << ", \"top_phase_deg\": " << Num(l.top_phase_deg) << ", \"phase_lag_deg\": " << Num(l.phase_lag_deg)
-    << ", \"fundamental_deg\": " << Num(l.fundamental_deg) << "}";
+Value LoopJson(const model::LoopFeatures& l) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["width_deg"] = Num(l.width_deg);
+  o["area_deg_V"] = Num(l.area_deg_v);
+  o["offset_deg"] = Num(l.offset_deg);
+  o["peak_to_peak_deg"] = Num(l.peak_to_peak_deg);
+  o["top_phase_deg"] = Num(l.top_phase_deg);
+  o["phase_lag_deg"] = Num(l.phase_lag_deg);
+  o["fundamental_deg"] = Num(l.fundamental_deg);
+  return Obj(s);
 }
 
-void AnalysisJson(std::ostream& o, const model::ResidualAnalysis& a) {
-  o << "{\"cases\": [";
-  for (size_t i = 0; i < a.cases.size(); ++i) {
-    const auto& c = a.cases[i];
-    o << (i ? ",\n    " : "") << "{\"case\": " << c.number << ", \"training\": " << (c.training ? "true" : "false")
-      << ", \"amplitude_V\": " << Num(c.amplitude_v) << ", \"frequency_Hz\": " << Num(c.frequency_hz)
-      << ", \"pi_deg2\": " << Num(c.pi) << ", \"rms_deg\": " << Num(c.rms) << ", \"max_abs_deg\": " << Num(c.max_abs)
-      << ", \"share\": " << Num(c.share) << ", \"floor_rms_deg\": " << Num(c.floor_rms)
-      << ", \"rms_over_floor\": " << Num(c.rms_over_floor) << ", \"phase_bins_rms_deg\": [";
-    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].rms);
-    o << "], \"phase_bins_mean_deg\": [";
-    for (int b = 0; b < model::kPhaseBins; ++b) o << (b ? ", " : "") << Num(c.phase[b].mean);
-    o << "], ";
-    const std::pair<const char*, const model::BinStat*> bins[] = {
-        {"rising", &c.rising},           {"falling", &c.falling},         {"near_reversal", &c.near_reversal},
-        {"in_saturation", &c.in_saturation}, {"first_cycle", &c.first_cycle}, {"later_cycles", &c.later_cycles}};
-    for (const auto& [name, bin] : bins) {
-      BinJson(o, name, *bin);
-      o << ", ";
-    }
-    o << "\"cycle_mean_deg\": [";
-    for (size_t k = 0; k < c.cycle_mean.size(); ++k) o << (k ? ", " : "") << Num(c.cycle_mean[k]);
-    o << "], \"trend_deg_per_s\": " << Num(c.trend_deg_per_s) << ", \"trend_se\": " << Num(c.trend_se)
-      << ", \"harmonics_deg\": [";
-    for (int k = 0; k <= model::kHarmonics; ++k) o << (k ? ", " : "") << Num(c.harmonic[k]);
-    o << "], \"harmonic_noise_deg\": " << Num(c.harmonic_noise) << ", \"odd_rms_deg\": " << Num(c.odd_rms)
-      << ", \"even_rms_deg\": " << Num(c.even_rms) << ", \"low_frequency_rms_deg\": " << Num(c.low_rms)
-      << ", \"measured_loop\": ";
-    LoopJson(o, c.measured_loop);
-    o << ", \"model_loop\": ";
-    LoopJson(o, c.model_loop);
-    o << "}";
+Value CaseResidualJson(const model::CaseResidual& c) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["case"] = Count(c.number);
+  o["training"] = Bool(c.training);
+  o["amplitude_V"] = Num(c.amplitude_v);
+  o["frequency_Hz"] = Num(c.frequency_hz);
+  o["pi_deg2"] = Num(c.pi);
+  o["rms_deg"] = Num(c.rms);
+  o["max_abs_deg"] = Num(c.max_abs);
+  o["share"] = Num(c.share);
+  o["floor_rms_deg"] = Num(c.floor_rms);
+  o["rms_over_floor"] = Num(c.rms_over_floor);
+  std::vector<double> rms, mean;
+  for (int b = 0; b < model::kPhaseBins; ++b) {
+    rms.push_back(c.phase[b].rms);
+    mean.push_back(c.phase[b].mean);
   }
-  o << "],\n   \"findings\": [";
-  for (size_t i = 0; i < a.findings.size(); ++i) o << (i ? ", " : "") << Str(a.findings[i]);
-  o << "]}";
+  o["phase_bins_rms_deg"] = Nums(rms);
+  o["phase_bins_mean_deg"] = Nums(mean);
+  o["rising"] = BinJson(c.rising);
+  o["falling"] = BinJson(c.falling);
+  o["near_reversal"] = BinJson(c.near_reversal);
+  o["in_saturation"] = BinJson(c.in_saturation);
+  o["first_cycle"] = BinJson(c.first_cycle);
+  o["later_cycles"] = BinJson(c.later_cycles);
+  o["cycle_mean_deg"] = Nums(c.cycle_mean);
+  o["trend_deg_per_s"] = Num(c.trend_deg_per_s);
+  o["trend_se"] = Num(c.trend_se);
+  o["harmonics_deg"] = Nums(c.harmonic);
+  o["harmonic_noise_deg"] = Num(c.harmonic_noise);
+  o["odd_rms_deg"] = Num(c.odd_rms);
+  o["even_rms_deg"] = Num(c.even_rms);
+  o["low_frequency_rms_deg"] = Num(c.low_rms);
+  o["measured_loop"] = LoopJson(c.measured_loop);
+  o["model_loop"] = LoopJson(c.model_loop);
+  return Obj(s);
+}
+
+Value AnalysisJson(const model::ResidualAnalysis& a) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  std::vector<Value> cases, findings;
+  for (const auto& c : a.cases) cases.push_back(CaseResidualJson(c));
+  for (const auto& f : a.findings) findings.push_back(Text(f));
+  o["cases"] = List(cases);
+  o["findings"] = List(findings);
+  return Obj(s);
+}
+
+// The noise floor: the encoder's quantum, the pooled floors and each case's.
+Value NoiseJson(const Diagnosis& d) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["quantum_deg"] = Num(d.quantum_deg);
+  o["floor_train_deg"] = Num(d.floor_train);
+  o["floor_withheld_deg"] = Num(d.floor_withheld);
+  o["floor_model"] = Text(d.floor_model);
+  std::vector<Value> cases;
+  for (size_t i = 0; i < d.cases.size(); ++i) {
+    const auto& c = d.cases[i];
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["case"] = Count(c.number);
+    g["quantum_deg"] = Num(c.noise.quantum_deg);
+    g["quantisation_rms_deg"] = Num(c.noise.quantisation_rms_deg);
+    g["scatter_rms_deg"] = Num(c.noise.scatter_rms_deg);
+    g["floor_rms_deg"] = Num(c.noise.floor_rms_deg);
+    g["saturation_aware_floor_deg"] = Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN);
+    g["b1_deg"] = Num(c.b1);
+    g["b2_deg"] = Num(c.b2);
+    cases.push_back(Obj(x));
+  }
+  o["cases"] = List(cases);
+  return Obj(s);
+}
+
+Value TrendsJson(const std::vector<diagnose::ParamTrend>& trends) {
+  std::vector<Value> out;
+  for (const auto& t : trends) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(t.name);
+    g["per_case"] = Nums(t.per_case);
+    g["slope_per_V"] = Num(t.slope_v);
+    g["slope_per_Hz"] = Num(t.slope_f);
+    g["p_V"] = Num(t.p_v);
+    g["p_f"] = Num(t.p_f);
+    g["r2"] = Num(t.r2);
+    g["relative_range"] = Num(t.relative_range);
+    g["significant"] = Bool(t.significant);
+    out.push_back(Obj(x));
+  }
+  return List(out);
+}
+
+Value CandidateJson(const CandidateResult& c) {
+  Struct x;
+  auto& g = *x.mutable_fields();
+  g["effect"] = Text(model::EffectName(c.kind));
+  g["added_parameters"] = Count(c.added_params);
+  g["score"] = Num(c.score);
+  g["train_delta_bic"] = Num(c.train_delta_bic);
+  g["closed"] = Num(c.closed);
+  g["raw_reduction"] = Num(c.raw_reduction);
+  g["pattern"] = Num(c.pattern);
+  g["weight"] = Num(c.weight);
+  g["qualifies"] = Bool(c.qualifies);
+  g["note"] = Text(c.note);
+  g["fit"] = FitJson(c.fit);
+  return Obj(x);
+}
+
+Value RoundJson(const RoundResult& r) {
+  Struct x;
+  auto& g = *x.mutable_fields();
+  std::vector<Value> from, candidates;
+  for (const auto& k : r.base_structure) from.push_back(Text(model::EffectName(k)));
+  for (const auto& c : r.candidates) candidates.push_back(CandidateJson(c));
+  g["from"] = List(from);
+  g["withheld_pi_deg2"] = Num(r.s0);
+  g["floor_pi_deg2"] = Num(r.s_floor);
+  g["rms_over_floor"] = Num(r.rms_ratio);
+  g["significant"] = Bool(r.significant);
+  g["named"] = r.named >= 0 ? Text(model::EffectName(r.candidates[r.named].kind)) : json::Null();
+  g["verdict"] = Text(r.verdict);
+  g["candidates"] = List(candidates);
+  return Obj(x);
+}
+
+Value AbsorbedJson(const std::vector<diagnose::Absorption>& absorbed) {
+  std::vector<Value> out;
+  for (const auto& a : absorbed) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["name"] = Text(a.name);
+    g["unit"] = Text(a.unit);
+    g["without"] = Num(a.without);
+    g["with"] = Num(a.with);
+    g["z"] = Num(a.z);
+    out.push_back(Obj(x));
+  }
+  return List(out);
+}
+
+// The withheld gap before / after the named effects, in total and per case.
+Value GapJson(const Diagnosis& d) {
+  Struct s;
+  auto& o = *s.mutable_fields();
+  o["withheld_pi_before_deg2"] = Num(d.withheld_before);
+  o["withheld_pi_after_deg2"] = Num(d.withheld_after);
+  o["withheld_floor_pi_deg2"] = Num(d.withheld_floor);
+  o["closed"] = Num(d.closed_total);
+  o["remaining_over_floor"] = Num(d.remaining_ratio);
+  std::vector<Value> cases;
+  for (const auto& g : d.gaps) {
+    Struct x;
+    auto& c = *x.mutable_fields();
+    c["case"] = Count(g.number);
+    c["training"] = Bool(g.training);
+    c["floor_rms_deg"] = Num(g.floor_rms);
+    c["rms_before_deg"] = Num(g.rms_before);
+    c["rms_after_deg"] = Num(g.rms_after);
+    c["pi_before_deg2"] = Num(g.pi_before);
+    c["pi_after_deg2"] = Num(g.pi_after);
+    c["closed"] = Num(g.closed);
+    cases.push_back(Obj(x));
+  }
+  o["cases"] = List(cases);
+  return Obj(s);
 }
 
 }  // namespace
 
-void WriteDiagnosisJson(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
-  o << "{\"bench\": " << Str(d.bench) << ",\n \"verdict_kind\": " << Str(d.verdict_kind)
-    << ",\n \"verdict\": " << Str(d.verdict) << ",\n \"named\": [";
-  for (size_t i = 0; i < d.named.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(d.named[i]));
-  o << "],\n \"confidence\": " << Num(d.named.empty() ? NAN : d.confidence)
-    << ",\n \"thresholds\": {\"significance_ratio\": " << Num(opt.rules.significance_ratio)
-    << ", \"min_closed\": " << Num(opt.rules.min_closed) << ", \"min_pattern\": " << Num(opt.rules.min_pattern) << "}"
-    << ",\n \"noise\": {\"quantum_deg\": " << Num(d.quantum_deg) << ", \"floor_train_deg\": " << Num(d.floor_train)
-    << ", \"floor_withheld_deg\": " << Num(d.floor_withheld) << ", \"floor_model\": " << Str(d.floor_model)
-    << ", \"cases\": [";
-  for (size_t i = 0; i < d.cases.size(); ++i) {
-    const auto& c = d.cases[i];
-    o << (i ? ", " : "") << "{\"case\": " << c.number << ", \"quantum_deg\": " << Num(c.noise.quantum_deg)
-      << ", \"quantisation_rms_deg\": " << Num(c.noise.quantisation_rms_deg)
-      << ", \"scatter_rms_deg\": " << Num(c.noise.scatter_rms_deg) << ", \"floor_rms_deg\": " << Num(c.noise.floor_rms_deg)
-      << ", \"saturation_aware_floor_deg\": " << Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN)
-      << ", \"b1_deg\": " << Num(c.b1) << ", \"b2_deg\": " << Num(c.b2) << "}";
-  }
-  o << "]},\n \"base\": ";
-  FitJson(o, d.base);
-  o << ",\n \"base_residuals\": ";
-  AnalysisJson(o, d.base_residuals);
-  o << ",\n \"trends\": [";
-  for (size_t i = 0; i < d.trends.size(); ++i) {
-    const auto& t = d.trends[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(t.name) << ", \"per_case\": [";
-    for (size_t k = 0; k < t.per_case.size(); ++k) o << (k ? ", " : "") << Num(t.per_case[k]);
-    o << "], \"slope_per_V\": " << Num(t.slope_v) << ", \"slope_per_Hz\": " << Num(t.slope_f)
-      << ", \"p_V\": " << Num(t.p_v) << ", \"p_f\": " << Num(t.p_f) << ", \"r2\": " << Num(t.r2)
-      << ", \"relative_range\": " << Num(t.relative_range) << ", \"significant\": " << (t.significant ? "true" : "false")
-      << "}";
-  }
-  o << "],\n \"rounds\": [";
-  for (size_t r = 0; r < d.rounds.size(); ++r) {
-    const auto& rr = d.rounds[r];
-    o << (r ? ",\n  " : "") << "{\"from\": [";
-    for (size_t i = 0; i < rr.base_structure.size(); ++i) o << (i ? ", " : "") << Str(model::EffectName(rr.base_structure[i]));
-    o << "], \"withheld_pi_deg2\": " << Num(rr.s0) << ", \"floor_pi_deg2\": " << Num(rr.s_floor)
-      << ", \"rms_over_floor\": " << Num(rr.rms_ratio) << ", \"significant\": " << (rr.significant ? "true" : "false")
-      << ", \"named\": " << (rr.named >= 0 ? Str(model::EffectName(rr.candidates[rr.named].kind)) : "null")
-      << ", \"verdict\": " << Str(rr.verdict) << ",\n   \"candidates\": [";
-    for (size_t i = 0; i < rr.candidates.size(); ++i) {
-      const auto& c = rr.candidates[i];
-      o << (i ? ",\n    " : "") << "{\"effect\": " << Str(model::EffectName(c.kind)) << ", \"added_parameters\": "
-        << c.added_params << ", \"score\": " << Num(c.score) << ", \"train_delta_bic\": " << Num(c.train_delta_bic)
-        << ", \"closed\": " << Num(c.closed) << ", \"raw_reduction\": " << Num(c.raw_reduction)
-        << ", \"pattern\": " << Num(c.pattern) << ", \"weight\": " << Num(c.weight)
-        << ", \"qualifies\": " << (c.qualifies ? "true" : "false") << ", \"note\": " << Str(c.note) << ", \"fit\": ";
-      FitJson(o, c.fit);
-      o << "}";
-    }
-    o << "]}";
-  }
-  o << "],\n \"absorbed_by\": " << Str(d.absorbed_by) << ", \"absorbed\": [";
-  for (size_t i = 0; i < d.absorbed.size(); ++i) {
-    const auto& a = d.absorbed[i];
-    o << (i ? ", " : "") << "{\"name\": " << Str(a.name) << ", \"unit\": " << Str(a.unit)
-      << ", \"without\": " << Num(a.without) << ", \"with\": " << Num(a.with) << ", \"z\": " << Num(a.z) << "}";
-  }
-  o << "],\n \"final\": ";
-  FitJson(o, d.final_fit);
-  o << ",\n \"final_residuals\": ";
-  AnalysisJson(o, d.final_residuals);
-  o << ",\n \"gap\": {\"withheld_pi_before_deg2\": " << Num(d.withheld_before)
-    << ", \"withheld_pi_after_deg2\": " << Num(d.withheld_after) << ", \"withheld_floor_pi_deg2\": " << Num(d.withheld_floor)
-    << ", \"closed\": " << Num(d.closed_total) << ", \"remaining_over_floor\": " << Num(d.remaining_ratio)
-    << ", \"cases\": [";
-  for (size_t i = 0; i < d.gaps.size(); ++i) {
-    const auto& g = d.gaps[i];
-    o << (i ? ", " : "") << "{\"case\": " << g.number << ", \"training\": " << (g.training ? "true" : "false")
-      << ", \"floor_rms_deg\": " << Num(g.floor_rms) << ", \"rms_before_deg\": " << Num(g.rms_before)
-      << ", \"rms_after_deg\": " << Num(g.rms_after) << ", \"pi_before_deg2\": " << Num(g.pi_before)
-      << ", \"pi_after_deg2\": " << Num(g.pi_after) << ", \"closed\": " << Num(g.closed) << "}";
-  }
-  o << "]},\n \"wall_time_s\": " << Num(d.wall_time_s) << ", \"evaluations\": " << d.evaluations << "}\n";
+void WriteDiagnosisJson(std::ostream& out, const Diagnosis& d,
+                        const diagnose::DiagnoseOptions& opt) {
+  Struct root;
+  auto& o = *root.mutable_fields();
+  o["bench"] = Text(d.bench);
+  o["verdict_kind"] = Text(d.verdict_kind);
+  o["verdict"] = Text(d.verdict);
+  std::vector<Value> named;
+  for (const auto& k : d.named) named.push_back(Text(model::EffectName(k)));
+  o["named"] = List(named);
+  o["confidence"] = Num(d.named.empty() ? NAN : d.confidence);
+  Struct thresholds;
+  auto& t = *thresholds.mutable_fields();
+  t["significance_ratio"] = Num(opt.rules.significance_ratio);
+  t["min_closed"] = Num(opt.rules.min_closed);
+  t["min_pattern"] = Num(opt.rules.min_pattern);
+  o["thresholds"] = Obj(thresholds);
+  o["noise"] = NoiseJson(d);
+  o["base"] = FitJson(d.base);
+  o["base_residuals"] = AnalysisJson(d.base_residuals);
+  o["trends"] = TrendsJson(d.trends);
+  std::vector<Value> rounds;
+  for (const auto& r : d.rounds) rounds.push_back(RoundJson(r));
+  o["rounds"] = List(rounds);
+  o["absorbed_by"] = Text(d.absorbed_by);
+  o["absorbed"] = AbsorbedJson(d.absorbed);
+  o["final"] = FitJson(d.final_fit);
+  o["final_residuals"] = AnalysisJson(d.final_residuals);
+  o["gap"] = GapJson(d);
+  o["wall_time_s"] = Num(d.wall_time_s);
+  o["evaluations"] = Count(d.evaluations);
+  out << json::Print(root, "diagnosis.json");
 }
 
-// ---- HTML ----------------------------------------------------------------------------------------
+// ---- HTML ---------------------------------------------------------------------------------------
 
-std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir, const Diagnosis& d,
-                                                      const diagnose::DiagnosisModel& model,
-                                                      const diagnose::DiagnoseOptions& opt, bool plots,
-                                                      std::vector<std::string>* warnings) {
-  namespace fs = std::filesystem;
-  fs::create_directories(dir / "figures");
-  const fs::path fig = dir / "figures";
-  std::vector<fs::path> written, scripts;
-  const diagnose::ParameterLayout base_layout(d.base.structure), final_layout(d.final_fit.structure);
+namespace {
+
+namespace fs = std::filesystem;
+
+// Case c's trace (time, phase, drive, measured, both models, residuals, cycle) and residual spectra
+// as CSV, and the scripts of its three figures (residual vs phase, spectrum, loop).
+void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
+                      const diagnose::DiagnosisModel& model, size_t c,
+                      std::vector<fs::path>& written, std::vector<fs::path>& scripts) {
+  const diagnose::ParameterLayout base_layout(d.base.structure),
+      final_layout(d.final_fit.structure);
   const bool has_final = d.final_fit.description != d.base.description;
-  // Per case: trace data, spectrum data, three figures.
-  for (size_t c = 0; c < model.cases().size(); ++c) {
-    const diagnose::DiagCase& dc = model.cases()[c];
-    std::vector<double> yb, yf;
-    model.Simulate(base_layout, d.base.x, c, yb);
-    model.Simulate(final_layout, d.final_fit.x, c, yf);
-    const std::string stem = "case" + std::to_string(dc.number);
-    const fs::path trace = fig / (stem + "_trace.csv");
-    {
-      std::ofstream t(trace);
-      t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,cycle\n";
-      const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
-      const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
-      for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
-        const double tk = k / fs_hz;
-        const double ph = std::fmod(360.0 * f * tk, 360.0);
-        t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << "," << io::FormatNumber(dc.drive.Value(tk)) << ","
-          << io::FormatNumber(dc.measured_deg[k]) << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k])
-          << "," << io::FormatNumber(dc.measured_deg[k] - yb[k]) << "," << io::FormatNumber(dc.measured_deg[k] - yf[k])
-          << "," << (p ? k / p + 1 : 1) << "\n";
-      }
-      written.push_back(trace);
+  const diagnose::DiagCase& dc = model.cases()[c];
+  std::vector<double> yb, yf;
+  model.Simulate(base_layout, d.base.x, c, yb);
+  model.Simulate(final_layout, d.final_fit.x, c, yf);
+  const std::string stem = "case" + std::to_string(dc.number);
+  const fs::path trace = fig / (stem + "_trace.csv");
+  {
+    std::ofstream t(trace);
+    t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,"
+         "cycle\n";
+    const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
+    const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
+    for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
+      const double tk = k / fs_hz;
+      const double ph = std::fmod(360.0 * f * tk, 360.0);
+      t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << ","
+        << io::FormatNumber(dc.drive.Value(tk)) << "," << io::FormatNumber(dc.measured_deg[k])
+        << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k]) << ","
+        << io::FormatNumber(dc.measured_deg[k] - yb[k]) << ","
+        << io::FormatNumber(dc.measured_deg[k] - yf[k]) << "," << (p ? k / p + 1 : 1) << "\n";
     }
-    const fs::path spec = fig / (stem + "_spectrum.csv");
-    {
-      std::ofstream s(spec);
-      s << "harmonic,base_deg,final_deg,noise_deg\n";
-      const auto& rb = d.base_residuals.cases[c];
-      const auto& rf = d.final_residuals.cases[c];
-      for (int k = 0; k <= model::kHarmonics; ++k)
-        s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k]) << ","
-          << io::FormatNumber(rb.harmonic_noise) << "\n";
-      written.push_back(spec);
-    }
-    const std::string label = " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
-                              F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
-    Plot ph{stem + "_phase", "Residual vs drive phase" + label, "drive phase [deg]", "measured - model [deg]", false, {}};
-    ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
-    if (has_final) ph.series.push_back({trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
-    Plot sp{stem + "_spectrum", "Residual spectrum, later cycles" + label, "harmonic of the drive frequency",
-            "amplitude [deg]", false, {}};
-    sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
-    if (has_final) sp.series.push_back({spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
-    sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
-    Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
-    lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
-    lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
-    if (has_final) lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
-    for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
+    written.push_back(trace);
   }
-  if (plots) {
-    if (GnuplotAvailable()) {
-      RenderPlots(fig, scripts, warnings);
-    } else if (warnings) {
-      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() + " (run gnuplot *.gp there)");
-    }
+  const fs::path spec = fig / (stem + "_spectrum.csv");
+  {
+    std::ofstream s(spec);
+    s << "harmonic,base_deg,final_deg,noise_deg\n";
+    const auto& rb = d.base_residuals.cases[c];
+    const auto& rf = d.final_residuals.cases[c];
+    for (int k = 0; k <= model::kHarmonics; ++k)
+      s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k])
+        << "," << io::FormatNumber(rb.harmonic_noise) << "\n";
+    written.push_back(spec);
   }
-  for (const auto& s : scripts) written.push_back(s);
+  const std::string label =
+      " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
+      F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
+  Plot ph{stem + "_phase",
+          "Residual vs drive phase" + label,
+          "drive phase [deg]",
+          "measured - model [deg]",
+          false,
+          {}};
+  ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
+  if (has_final)
+    ph.series.push_back(
+        {trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
+  Plot sp{stem + "_spectrum",
+          "Residual spectrum, later cycles" + label,
+          "harmonic of the drive frequency",
+          "amplitude [deg]",
+          false,
+          {}};
+  sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
+  if (has_final)
+    sp.series.push_back(
+        {spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
+  sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
+  Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
+  lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
+  lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
+  if (has_final)
+    lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
+  for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
+}
 
-  // The page.
-  const fs::path html = dir / "report.html";
-  std::ofstream h(html);
-  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: " << Html(d.bench)
+// The page's head, the verdict and the noise floor.
+void HtmlHead(std::ostream& h, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: "
+    << Html(d.bench)
     << "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
-       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px 8px;text-align:right}"
-       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0.8em;border:1px "
+       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px "
+       "8px;text-align:right}"
+       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0."
+       "8em;border:1px "
        "solid #9bd}img{max-width:100%}</style></head><body>\n";
-  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> " << Html(d.verdict)
-    << "</p>\n";
-  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
-    << " deg (training), " << F("%.4f", d.floor_withheld)
-    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and the rounding of the "
-       "saturation plateaus of " << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
+  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> "
+    << Html(d.verdict) << "</p>\n";
+  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
+    << F("%.4f", d.floor_train) << " deg (training), " << F("%.4f", d.floor_withheld)
+    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and "
+       "the rounding of the "
+       "saturation plateaus of "
+    << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
     << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
-  // Grid of PI before/after.
+}
+
+// The V × f grid of each case's PI before / after, shaded by its RMS over the floor.
+void HtmlGrid(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
   std::set<double> vs, fs_set;
   for (const auto& c : model.cases()) {
     vs.insert(c.drive.amplitude_v);
@@ -417,7 +565,8 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
   }
   const std::vector<double> V = Sorted(vs), Fr = Sorted(fs_set);
   h << "<h2>Where: the grid of PI before / after</h2>\n<p>PI = Σ e² [deg²] per case, base model → "
-    << Html(d.final_fit.description) << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
+    << Html(d.final_fit.description)
+    << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
   for (double f : Fr) h << "<th>" << F("%.3g Hz", f) << "</th>";
   h << "</tr>\n";
   for (double v : V) {
@@ -432,103 +581,170 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
       }
       const double ratio = g->rms_before / std::max(g->floor_rms, 1e-12);
       const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
-      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">" << (g->training ? "" : "<i>") << "case "
-        << g->number << ": " << F("%.3g", g->pi_before) << " → " << F("%.3g", g->pi_after) << " ("
-        << F("%.1f", ratio) << " → " << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
+      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">"
+        << (g->training ? "" : "<i>") << "case " << g->number << ": " << F("%.3g", g->pi_before)
+        << " → " << F("%.3g", g->pi_after) << " (" << F("%.1f", ratio) << " → "
+        << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
         << (g->training ? "" : "</i>") << "</td>";
     }
     h << "</tr>\n";
   }
-  h << "</table>\n<h3>Localisation of the base model's residual</h3>\n<ul>";
+  h << "</table>\n";
+}
+
+// Where the base model's residual lies (the findings and the table per case) and the parameter
+// trends of the per-case fits.
+void HtmlLocalisation(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
+  h << "<h3>Localisation of the base model's residual</h3>\n<ul>";
   for (const auto& f : d.base_residuals.findings) h << "<li>" << Html(f) << "</li>";
-  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</th><th>falling</th><th>near "
-       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend [deg/s]</th><th>odd "
-       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width meas./model "
+  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</"
+       "th><th>falling</th><th>near "
+       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend "
+       "[deg/s]</th><th>odd "
+       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width "
+       "meas./model "
        "[deg]</th></tr>\n";
   for (const auto& c : d.base_residuals.cases) {
-    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld") << "</td><td>"
-      << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>" << F("%.4f", c.rising.rms)
-      << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>" << F("%.4f", c.near_reversal.rms) << "</td><td>"
-      << F("%.4f", c.in_saturation.rms) << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>"
-      << F("%.4f", c.later_cycles.rms) << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>"
-      << F("%.4f", c.odd_rms) << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms)
-      << "</td><td>" << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
-      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / " << F("%.3f", c.model_loop.width_deg)
-      << "</td></tr>\n";
+    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld")
+      << "</td><td>" << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>"
+      << F("%.4f", c.rising.rms) << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>"
+      << F("%.4f", c.near_reversal.rms) << "</td><td>" << F("%.4f", c.in_saturation.rms)
+      << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>" << F("%.4f", c.later_cycles.rms)
+      << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>" << F("%.4f", c.odd_rms)
+      << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms) << "</td><td>"
+      << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
+      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / "
+      << F("%.3f", c.model_loop.width_deg) << "</td></tr>\n";
   }
   h << "</table>\n";
-  if (!d.trends.empty()) {
-    h << "<h3>Parameter trends of per-case fits over the V × f grid</h3>\n<table><tr><th>parameter</th>";
-    for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
-    h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
-    for (const auto& t : d.trends) {
-      h << "<tr><td class=l>" << Html(t.name) << "</td>";
-      for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
-      h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
-        << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
-    }
-    h << "</table>\n";
+  if (d.trends.empty()) return;
+  h << "<h3>Parameter trends of per-case fits over the V × f "
+       "grid</h3>\n<table><tr><th>parameter</th>";
+  for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
+  h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
+  for (const auto& t : d.trends) {
+    h << "<tr><td class=l>" << Html(t.name) << "</td>";
+    for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
+    h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
+      << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
   }
+  h << "</table>\n";
+}
+
+// Each round's candidates, and what the base parameters absorbed.
+void HtmlWhich(std::ostream& h, const Diagnosis& d) {
   h << "<h2>Which effect</h2>\n";
   for (size_t r = 0; r < d.rounds.size(); ++r) {
     const auto& rr = d.rounds[r];
-    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict) << "</p>\n<table><tr><th>candidate</th><th>added "
-         "parameters</th><th>withheld RMS [deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
+    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict)
+      << "</p>\n<table><tr><th>candidate</th><th>added "
+         "parameters</th><th>withheld RMS "
+         "[deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
          "parameters</th><th>notes</th></tr>\n";
     for (const auto& c : rr.candidates) {
-      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params << "</td><td>"
-        << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>" << F("%.1f", c.score) << "</td><td>"
-        << Pct(c.closed) << "</td><td>" << Pct(c.pattern) << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>"
-        << Html(EffectParams(c.fit)) << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note)
-        << "</td></tr>\n";
+      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params
+        << "</td><td>" << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>"
+        << F("%.1f", c.score) << "</td><td>" << Pct(c.closed) << "</td><td>" << Pct(c.pattern)
+        << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>" << Html(EffectParams(c.fit))
+        << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note) << "</td></tr>\n";
     }
     h << "</table>\n";
   }
   if (!d.absorbed.empty()) {
-    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by) << "</b> is added (|shift| &gt; 2 σ): ";
+    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by)
+      << "</b> is added (|shift| &gt; 2 σ): ";
     for (const auto& a : d.absorbed)
-      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " " << Html(a.unit) << "; ";
+      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " "
+        << Html(a.unit) << "; ";
     h << "</p>\n";
   }
-  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS before</th><th>RMS "
+}
+
+// The gap per case before / after and in total.
+void HtmlHowFar(std::ostream& h, const Diagnosis& d) {
+  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS "
+       "before</th><th>RMS "
        "after</th><th>closed</th></tr>\n";
   for (const auto& g : d.gaps)
-    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld") << "</td><td>"
-      << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)
-      << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
-  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → " << F("%.4f", d.withheld_after)
-    << " deg² (floor " << F("%.4f", d.withheld_floor) << "): " << Pct(d.closed_total) << " of the gap closed, "
-    << F("%.2f", d.remaining_ratio) << " × floor remains.</p>\n";
-  auto params_table = [&](const FitResult& f) {
-    h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity [deg]</th><th>identifiability</th>"
-         "</tr>\n";
-    for (const auto& p : f.params)
-      h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>" << F("%.5g", p.value) << "</td><td>"
-        << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>" << F("%.4f", p.sensitivity)
-        << "</td><td class=l>" << diagnose::IdentifiabilityName(p.identifiability)
-        << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
-    h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
-  };
+    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld")
+      << "</td><td>" << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before)
+      << "</td><td>" << F("%.4f", g.rms_after) << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
+  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → "
+    << F("%.4f", d.withheld_after) << " deg² (floor " << F("%.4f", d.withheld_floor)
+    << "): " << Pct(d.closed_total) << " of the gap closed, " << F("%.2f", d.remaining_ratio)
+    << " × floor remains.</p>\n";
+}
+
+// A fit's parameters with σ, sensitivity and identifiability, and its weakest direction.
+void HtmlParams(std::ostream& h, const FitResult& f) {
+  h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity "
+       "[deg]</th><th>identifiability</th>"
+       "</tr>\n";
+  for (const auto& p : f.params)
+    h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>"
+      << F("%.5g", p.value) << "</td><td>"
+      << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>"
+      << F("%.4f", p.sensitivity) << "</td><td class=l>"
+      << diagnose::IdentifiabilityName(p.identifiability)
+      << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
+  h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
+}
+
+// The identifiability tables, the figures of every case and the run's cost.
+void HtmlTail(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
   h << "<h2>Identifiability</h2>\n<p>" << Html(d.final_fit.description)
-    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the parameter.</p>\n";
-  params_table(d.final_fit);
-  if (has_final) {
+    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the "
+       "parameter.</p>\n";
+  HtmlParams(h, d.final_fit);
+  if (d.final_fit.description != d.base.description) {
     h << "<p>Base model:</p>\n";
-    params_table(d.base);
+    HtmlParams(h, d.base);
   }
   h << "<h2>Figures</h2>\n";
   for (const auto& c : model.cases()) {
     const std::string stem = "figures/case" + std::to_string(c.number);
-    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem << "_phase.png\" alt=\"residual vs phase\">\n<img src=\""
-      << stem << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem << "_loop.png\" alt=\"loop\">\n";
+    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem
+      << "_phase.png\" alt=\"residual vs phase\">\n<img src=\"" << stem
+      << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem
+      << "_loop.png\" alt=\"loop\">\n";
   }
-  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations.</small></p>\n";
+  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations
+    << " model evaluations.</small></p>\n";
   h << "</body></html>\n";
+}
+
+}  // namespace
+
+std::vector<std::filesystem::path> WriteDiagnosisHtml(
+    const std::filesystem::path& dir, const Diagnosis& d, const diagnose::DiagnosisModel& model,
+    const diagnose::DiagnoseOptions& opt, bool plots, std::vector<std::string>* warnings) {
+  fs::create_directories(dir / "figures");
+  const fs::path fig = dir / "figures";
+  std::vector<fs::path> written, scripts;
+  for (size_t c = 0; c < model.cases().size(); ++c)
+    WriteCaseFigures(fig, d, model, c, written, scripts);
+  if (plots) {
+    if (GnuplotAvailable()) {
+      RenderPlots(fig, scripts, warnings);
+    } else if (warnings) {
+      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() +
+                          " (run gnuplot *.gp there)");
+    }
+  }
+  for (const auto& s : scripts) written.push_back(s);
+  const fs::path html = dir / "report.html";
+  std::ofstream h(html);
+  HtmlHead(h, d, opt);
+  HtmlGrid(h, d, model);
+  HtmlLocalisation(h, d, model);
+  HtmlWhich(h, d);
+  HtmlHowFar(h, d);
+  HtmlTail(h, d, model);
   written.push_back(html);
   return written;
 }
 
-// ---- check ---------------------------------------------------------------------------------------
+// ---- check --------------------------------------------------------------------------------------
 
 namespace {
 double Quantile(std::vector<double> v, double q) {
@@ -555,35 +771,52 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
     << Pct(Quantile(s.closed, 0.5)) << ", 90 % " << Pct(Quantile(s.closed, 0.9)) << ", max "
     << Pct(Quantile(s.closed, 1)) << "\n";
   // The counts and the calibration (is a stated confidence of 90 % right 90 % of the time?) in the
-  // words of every check (records/verdict.h).
+  // words of every check (diagnose/verdict.h).
   o << records::TallyText(s, "benches") << F("%.0f", s.wall_time_s) << " s in all\n";
 }
 
-void WriteCheckJson(std::ostream& o, const diagnose::CheckSummary& s) {
-  o << "{\"columns\": [";
-  for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << Str(diagnose::CheckColumnName(c));
-  o << "],\n \"confusion\": {";
+void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s) {
+  Struct root;
+  auto& o = *root.mutable_fields();
+  std::vector<Value> columns;
+  for (int c = 0; c < diagnose::CheckCols(); ++c)
+    columns.push_back(Text(diagnose::CheckColumnName(c)));
+  o["columns"] = List(columns);
+  Struct confusion;
   for (int r = 0; r < diagnose::CheckRows(); ++r) {
-    o << (r ? ", " : "") << Str(diagnose::CheckColumnName(r)) << ": [";
-    for (int c = 0; c < diagnose::CheckCols(); ++c) o << (c ? ", " : "") << s.confusion[r][c];
-    o << "]";
+    std::vector<Value> row;
+    for (int c = 0; c < diagnose::CheckCols(); ++c) row.push_back(Count(s.confusion[r][c]));
+    (*confusion.mutable_fields())[diagnose::CheckColumnName(r)] = List(row);
   }
-  o << "},\n \"single_significant\": " << s.effect_trials
-    << ", \"single_significant_right\": " << s.effect_right << ", \"accuracy\": " << Num(s.accuracy())
-    << ", \"clean\": " << s.clean << ", \"clean_alarms\": " << s.clean_alarms
-    << ", \"false_alarm_rate\": " << Num(s.false_alarm_rate()) << ",\n \"closed\": [";
-  for (size_t i = 0; i < s.closed.size(); ++i) o << (i ? ", " : "") << Num(s.closed[i]);
-  o << "],\n \"trials\": [";
-  for (size_t i = 0; i < s.trials.size(); ++i) {
-    const auto& t = s.trials[i];
-    o << (i ? ",\n  " : "") << "{\"seed\": " << t.seed << ", \"truth\": " << Str(model::EffectName(t.truth))
-      << ", \"truth_description\": " << Str(t.truth_description) << ", \"magnitude\": " << Num(t.magnitude)
-      << ", \"verdict_kind\": " << Str(t.verdict_kind) << ", \"named\": " << Str(model::EffectName(t.named))
-      << ", \"confidence\": " << Num(t.confidence) << ", \"significant\": " << (t.significant ? "true" : "false")
-      << ", \"rms_over_floor\": " << Num(t.rms_ratio) << ", \"closed\": " << Num(t.closed)
-      << ", \"correct\": " << (t.correct() ? "true" : "false") << ", \"wall_time_s\": " << Num(t.wall_time_s) << "}";
+  o["confusion"] = Obj(confusion);
+  o["single_significant"] = Count(s.effect_trials);
+  o["single_significant_right"] = Count(s.effect_right);
+  o["accuracy"] = Num(s.accuracy());
+  o["clean"] = Count(s.clean);
+  o["clean_alarms"] = Count(s.clean_alarms);
+  o["false_alarm_rate"] = Num(s.false_alarm_rate());
+  o["closed"] = Nums(s.closed);
+  std::vector<Value> trials;
+  for (const auto& t : s.trials) {
+    Struct x;
+    auto& g = *x.mutable_fields();
+    g["seed"] = Num(static_cast<double>(t.seed));  // exact up to 2^53
+    g["truth"] = Text(model::EffectName(t.truth));
+    g["truth_description"] = Text(t.truth_description);
+    g["magnitude"] = Num(t.magnitude);
+    g["verdict_kind"] = Text(t.verdict_kind);
+    g["named"] = Text(model::EffectName(t.named));
+    g["confidence"] = Num(t.confidence);
+    g["significant"] = Bool(t.significant);
+    g["rms_over_floor"] = Num(t.rms_ratio);
+    g["closed"] = Num(t.closed);
+    g["correct"] = Bool(t.correct());
+    g["wall_time_s"] = Num(t.wall_time_s);
+    trials.push_back(Obj(x));
   }
-  o << "],\n \"wall_time_s\": " << Num(s.wall_time_s) << "}\n";
+  o["trials"] = List(trials);
+  o["wall_time_s"] = Num(s.wall_time_s);
+  out << json::Print(root, "check.json");
 }
 
 }  // namespace pz::client

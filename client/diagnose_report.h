@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/check.h"
-#include "diagnose/diagnose.h"
+#include "diagnose/fin_check.h"
+#include "diagnose/fin_diagnose.h"
 
 namespace pz::client {
 
@@ -17,7 +17,8 @@ namespace pz::client {
 /// the gap shrinks, the identifiability table.
 void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
 
-/// The whole diagnosis as one JSON object (non-finite numbers as null).
+/// The whole diagnosis as one JSON object, through protobuf's Struct as every report's JSON
+/// (client/json_values.h): keys sorted, non-finite numbers as null.
 void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
 
 /// Writes dir/report.html with its data (CSV) and figures (gnuplot scripts, PNG if gnuplot runs).

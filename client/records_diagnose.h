@@ -1,4 +1,4 @@
-// `piezoid diagnose --records PATH --family NAME`: the diagnosis of records/diagnose.h on a record
+// `piezoid diagnose --records PATH --family NAME`: the diagnosis of diagnose/diagnose.h on a record
 // set of any drive, with its report (report.md, diagnosis.json, withheld traces and figures, the
 // excitation report and its proposed training drive excitation_drive.csv).
 #pragma once
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "io/records.h"
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/select.h"
 
 namespace pz::client {

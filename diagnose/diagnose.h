@@ -1,154 +1,100 @@
-// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect causes
-// it, and how far it shrinks once that effect is in the model.
+// The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14):
+// the rules of diagnose/fin_diagnose.h (docs/diagnosis.md) on records instead of the nine-case
+// grid.
 //
-//  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
-//     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
-//  2. Every candidate effect of the library is added to the base model and re-identified on the
-//     training cases (drive/output effects on the fast path with a global search; beam effects on
-//     CVODE, refined from the base fit with a few starting magnitudes).
-//  3. Noise floor per case (records/noise_floor.h): rounding and scatter, and on the saturation
-//     plateaus of the best-fitting model (lowest training PI) the rounding of the plateau: σ_c.
-//     Withheld floor S_floor = Σ_withheld N_c σ_c². Gap of a model: its withheld Σe² = S.
-//  4. Where: the residual analysis of the base model (model/residual_analysis.h), and per-case
-//     fits (each case alone) whose parameter trends over the V × f grid are regressed (OLS with
-//     t statistics): a trend a global model lacks is evidence of an unmodelled effect.
-//  5. Which: each candidate is scored on the withheld cases by the decision rules of
-//     records/decision.h (the same for every effect, family and data shape: significance, score,
-//     training BIC, closed share, pattern, ranking, paired block tests, separation, verdict kind);
-//     what the bench supplies is its floor (σ_c per case), its localised excess (phase bins,
-//     branches, reversals, saturation, first/later cycles, odd/even harmonics, low frequency: the
-//     pattern features) and the withheld squared errors of each model.
-//     Otherwise: "no significant gap" (and which parameters absorbed what the best candidate would
-//     have explained: the base parameters that move by more than 2 σ when it is added), or "a
-//     significant gap that no candidate explains". The sentences are those of every diagnosis
-//     (records/verdict.h ComposeVerdict); the bench adds the absorbed parameters, the second
-//     effect and, for a tie, what would separate the two on its sinusoids.
-//  6. Greedy: with the first effect in the model, the others are tried again on top of it (only if
-//     the gap left is still significant: otherwise nothing could be named and no fit is run).
-//  7. How far: per case and in total, the withheld gap before and after, the share closed, what
-//     remains above the floor; the effect parameters with σ; the identifiability table.
+//  1. Noise floor σ from what the records allow (records/noise_floor.h EstimateNoiseFloor: rest,
+//     periods, repeats, the base model's residual; every available estimate is reported, and which
+//     one was used; none below the quantisation floor q/√12).
+//  2. The base family is fitted on the training records; each applicable effect (Family::
+//     excluded_effects leaves out what the family already holds) is added and the model re-fitted
+//     (global search + LM, with the base fit as extra starting points).
+//  3. Withheld = the records with role validate or test (records or time windows). S = Σe² there,
+//     S_floor = N_w σ². The decision is that of diagnose/decision.h (the same rules as the bench
+//     diagnosis): significance, score, training ΔBIC, closed share, pattern (here the localised
+//     excess over drive level × direction bins of the withheld samples), the best-ranked candidate
+//     named if it qualifies.
+//  4. Confidence, made honest: residuals are correlated in time, so two models are compared by a
+//     paired test on blocks of the withheld samples (diagnose/decision.h,
+//     model/model_comparison.h); when the runner-up qualifies too and cannot be separated, the
+//     verdict is "cannot separate A from B", the confidence is shared among the candidates that
+//     cannot be separated, and the next measurement is proposed: among sines, triangles and
+//     square waves at 0.25 … 8× the training frequency and 0.5 or 1× its amplitude, the one where
+//     the two fitted models' predictions differ most (RMS, offsets removed), with that difference
+//     against σ.
+//  5. Excitation (records/excitation.h), before any fit: what the training records excite and what
+//     each withheld record needs beyond it; when the withheld records that need more carry the
+//     gap, the verdict says it is an excitation gap rather than missing physics.
 #pragma once
 
-#include <functional>
-#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "diagnose/fit.h"
-#include "diagnose/problem.h"
-#include "model/residual_analysis.h"
-#include "records/decision.h"
+#include "io/records.h"
+#include "diagnose/decision.h"
+#include "records/excitation.h"
+#include "records/fit.h"
+#include "records/noise_floor.h"
+#include "diagnose/synthetic.h"
+#include "diagnose/verdict.h"
 
-namespace pz::diagnose {
+namespace pz::records {
 
-struct DiagnoseOptions {
-  std::vector<model::EffectKind> candidates;  ///< empty = the whole library
-  int threads = 2;                            ///< ≥ 1
-  uint64_t seed = 1;
-  /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
-  EvaluatorFactory evaluator_factory;
-  /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
-  /// sessions), ≥ 1; the results do not depend on it.
-  int concurrent_fits = 1;
-  opt::DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
-  opt::DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
-  opt::LmOptions lm{.max_iterations = 40};
-  int cvode_lm_iterations = 15;              ///< LM iterations of a beam (CVODE) candidate, ≥ 1
-  /// Starting magnitudes of a beam candidate, as fractions of the upper end of its magnitude range
-  /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
-  std::vector<double> cvode_start_fractions = {0.03, 0.15};
-  model::EffectSimOptions sim;
-  records::DecisionRules rules;  ///< the decision rules: the same for every effect (records/decision.h)
-  bool second_effect = true;         ///< greedy search for a second effect
-  bool trends = true;                ///< per-case fits and their V × f trends
-  std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
-  Status Validate() const;
+struct ProposedExperiment {
+  DriveShape shape;
+  double rms_difference = 0;  ///< between the two models' predictions [response unit]
+  double ratio_to_noise = 0;  ///< rms_difference / σ
+  std::string description;
 };
 
-/// One candidate structure, fitted and scored by the rules of records/decision.h.
-struct CandidateResult : records::CandidateScore {
-  model::EffectKind kind;  ///< the effect added in this round (none: the base)
+/// One effect added to the base family, fitted and scored by the rules of diagnose/decision.h.
+struct RecordCandidate : CandidateScore {
+  EffectKind kind;
   FitResult fit;
-  int added_params = 0;
+  double z_vs_base = 0;      ///< paired block test against the base model (> 0: better)
 };
 
-/// One greedy round: the model it starts from, its gap, the candidates on top of it.
-struct RoundResult {
-  std::vector<model::EffectKind> base_structure;
-  double s0 = 0;               ///< withheld Σe² of the starting model [deg²]
-  double s_floor = 0;          ///< withheld floor Σ N σ² [deg²]
-  double rms_ratio = 0;        ///< √(s0 / s_floor)
-  bool significant = false;
-  std::vector<CandidateResult> candidates;  ///< ranked by score, best first
-  int named = -1;              ///< index into candidates, −1 if none named
-  int runner_up = -1;          ///< a qualifying candidate the data cannot separate from the named one
-  double z_runner_up = 0;      ///< its paired block z against the named one
-  records::Gap gap;            ///< the starting model's gap, as the rules measured it
-  std::string verdict;         ///< the round's verdict (records/verdict.h)
+struct RecordDiagnoseOptions {
+  std::string family = "backlash-like";
+  std::vector<EffectKind> candidates;  ///< empty = every effect that applies to the family
+  FitOptions fit;                      ///< family options, search and polish of every fit
+  DecisionRules rules;                 ///< the decision rules: the same for every effect
+  bool propose = true;
 };
 
-/// A parameter trend over the V × f grid from the per-case fits.
-struct ParamTrend {
-  std::string name, unit;
-  std::vector<double> per_case;   ///< value per case (case order)
-  double slope_v = 0, slope_f = 0;  ///< per V, per Hz
-  double p_v = 1, p_f = 1;          ///< two-sided p-values
-  double r2 = 0;
-  double relative_range = 0;        ///< (max − min)/|mean|
-  bool significant = false;         ///< p < 0.01 on V or f and relative range > 10 %
-};
-
-/// A base parameter that moves when an effect is added (what absorbed the effect).
-struct Absorption {
-  std::string name, unit;
-  double without = 0, with = 0;  ///< base model / model with the effect
-  double z = 0;                  ///< shift / combined σ
-};
-
-/// Per-case before/after of the final model.
-struct CaseGap {
-  int number = 0;
-  bool training = false;
-  double amplitude_v = 0, frequency_hz = 0;
-  double floor_rms = 0;                 ///< σ_c [deg]
-  double rms_before = 0, rms_after = 0; ///< [deg]
-  double pi_before = 0, pi_after = 0;   ///< [deg²]
-  double closed = 0;                    ///< (PI_b − PI_a)/(PI_b − N σ²), clamped to [−9, 1]
-};
-
-struct Diagnosis {
-  std::string bench;                 ///< the folder or a label
-  std::vector<DiagCase> cases;
-  double quantum_deg = 0;
-  double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
-  std::string floor_model;                     ///< the model whose saturations the floor uses
+struct RecordDiagnosis {
+  NoiseFloor noise;
   FitResult base;
-  model::ResidualAnalysis base_residuals;
-  std::vector<ParamTrend> trends;
-  std::vector<RoundResult> rounds;
-  std::vector<model::EffectKind> named;       ///< effects named, in order
-  double confidence = 0;                       ///< of the first named effect (or of "none")
-  FitResult final_fit;                         ///< the base model plus the named effects
-  model::ResidualAnalysis final_residuals;
-  std::vector<CaseGap> gaps;
-  double withheld_before = 0, withheld_after = 0;  ///< Σe² [deg²]
-  double withheld_floor = 0;                       ///< S_floor [deg²]
-  double closed_total = 0;                         ///< share of the excess closed
-  double remaining_ratio = 0;                      ///< √(after / floor)
-  std::vector<Absorption> absorbed;                ///< when an effect is mimicked by the base terms
-  std::string absorbed_by;                         ///< the candidate whose addition shows it
-  std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as well),
-                             ///< "none" (no significant gap), "unexplained"
-  std::string verdict;       ///< the summary sentence(s)
-  double wall_time_s = 0;
-  int64_t evaluations = 0;
+  size_t withheld_samples = 0, train_samples = 0;
+  double s0 = 0, s_floor = 0, rms_ratio = 0;
+  bool significant = false;
+  std::vector<RecordCandidate> candidates;  ///< ranked by score, best first
+  int named = -1;                           ///< index into candidates
+  int runner_up = -1;                       ///< a qualifying candidate that cannot be separated, or −1
+  double z_runner_up = 0;
+  double confidence = 0;
+  std::string verdict_kind;  ///< "effect", "inseparable", "none", "unexplained"
+  std::string verdict;
+  std::optional<ProposedExperiment> next;
+  ExcitationReport excitation;  ///< what training excites, what each withheld record needs (records/excitation.h)
+  std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict (empty: none)
+  /// Candidates left out because their fitted model's prediction is not finite on a withheld
+  /// record (it diverges there: no score to rank), named at the end of the verdict.
+  std::vector<std::string> diverged;
 };
 
-/// Runs the whole diagnosis. Throws InputError on invalid options.
-Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
+/// Throws InputError when the set has no training or no withheld record, on bad options, or when
+/// the base model's prediction is not finite on a withheld record (no gap to measure).
+RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
-/// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
-model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,
-                                   std::span<const double> case_floor);
+/// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).
+TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
 
-}  // namespace pz::diagnose
+/// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a, const FitResult& b, double sigma);
+
+/// Simulates a fitted model on a drive shape (the record's rest and excitation, window = the
+/// excitation after its first period), output with polarity; offsets not applied.
+std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape, io::Record* record = nullptr);
+
+}  // namespace pz::records

@@ -1,51 +1,64 @@
-// Synthetic benches for checking the diagnosis on data whose effect is withheld from it
-// (`piezoid diagnose-check`): the bench plant (spec "bimorph-fin model") with parameters drawn around
-// the physical bench's, an effect drawn at random from the library — in its library form or in
-// another functional form the library does not have (a second-order amplifier, creep with two
-// relaxations) — or none, at a random magnitude; the paper's nine cases and split; saturations from
-// the paper's regression (Appendix B) with a random spread; read through the bench's encoder
-// (2048-line quadrature, quantum 360/8192 deg) after a vibration jitter (RMS 0.003 deg).
+// Synthetic records from the project's own plants (issue 14), in the shape of real recordings: a
+// rest segment, a drive that starts at an arbitrary phase (a sine, a multisine, a triangle, a
+// square wave with finite slew, a sweep), a response offset, white noise and quantisation. Tests
+// and `piezoid diagnose-check` identify and diagnose these, so every figure can be checked against
+// the truth that made them.
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
-#include "diagnose/problem.h"
+#include "io/records.h"
 #include "opt/random.h"
+#include "records/model.h"
 
-namespace pz::diagnose {
+namespace pz::records {
 
-/// One drawn bench: what it holds (never shown to the diagnosis) and its cases.
-struct SyntheticTrial {
-  uint64_t seed = 0;
-  model::EffectKind truth;                               ///< the effect family (none: a clean bench)
-  std::string form;                                      ///< e.g. "first-order", "two relaxations"
-  std::vector<model::Effect> effects;                    ///< as simulated (library building blocks)
-  double magnitude = 0;                                  ///< the drawn magnitude (physical units)
-  model::BimorphParams plant;                            ///< μ … a2 of the bench (b1, b2 per case)
-  std::vector<DiagCase> cases;
-  std::string Describe() const;
+enum class Waveform : int { kSine, kMultisine, kTriangle, kSquare, kSweep };
+const char* WaveformName(Waveform w);
+
+struct DriveShape {
+  Waveform waveform = Waveform::kSine;
+  double amplitude = 100;   ///< peak of the oscillating part [V]
+  double bias = 0;          ///< mean drive [V] (also the rest level)
+  double frequency_hz = 1;  ///< sine / triangle / square; multisine: the lowest line; sweep: start
+  double frequency_end_hz = 10;  ///< sweep: end frequency; multisine: the highest line
+  double phase_rad = 0;     ///< of the first excited sample (arbitrary phase: the drive jumps)
+  double rest_s = 0.5;      ///< rest at `bias` before the excitation
+  double duration_s = 3;    ///< excitation length
+  double fs_hz = 1000;
+  double slew_s = 0;        ///< square: rise time (0 = one sample)
+  int lines = 8;            ///< multisine: log-spaced lines, random phases from seed
+  uint64_t seed = 1;
+};
+/// The drive samples (t_k = k / fs from 0, rest then excitation). Throws InputError on bad shapes.
+std::vector<double> MakeDrive(const DriveShape& shape);
+
+struct Measurement {
+  double offset = 0;     ///< added to the response
+  double noise_std = 0;  ///< white Gaussian noise
+  double quantum = 0;    ///< response rounded to multiples of it (0 = none)
+  uint64_t seed = 1;
 };
 
-struct SyntheticOptions {
-  double quantum_deg = 360.0 / 8192;  ///< encoder quantum [deg], ≥ 0 (0: no quantisation)
-  double jitter_rms_deg = 0.003;      ///< vibration jitter before quantisation [deg], ≥ 0
-  double none_probability = 0.2;      ///< share of clean benches, in [0, 1]
-  double other_form_probability = 0.3;  ///< share of effects drawn in a form the library lacks
-  std::vector<model::EffectKind> kinds;  ///< effects to draw from; empty = the whole library
-};
+/// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
+/// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
+DataScale SyntheticStackScale();
 
-/// Draws and simulates one bench (deterministic for the seed). Throws InputError if the plant
-/// cannot be simulated (a bug: the drawn ranges are valid).
-SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t seed, const SyntheticOptions& options);
+/// A standard normal draw (Box–Muller on the generator's uniform grid).
+double NormalDraw(opt::Rng& rng);
+/// A uniform draw in [lo, hi) (one Uniform01): the synthetic draws of every check (records, fin
+/// benches, real-like stacks).
+inline double UniformDraw(opt::Rng& rng, double lo, double hi) {
+  return lo + (hi - lo) * rng.Uniform01();
+}
 
-/// Simulates a bench with given plant parameters and effects (paper's nine cases and split,
-/// saturations given per case as b1 = sat[c].first, b2 = sat[c].second), quantised with jitter
-/// drawn from rng.
-std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
-                                    const std::vector<model::Effect>& effects,
-                                    const std::vector<std::pair<double, double>>& saturations,
-                                    const SyntheticOptions& options, opt::Rng& rng);
+/// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
+/// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
+io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params, std::span<const double> weights,
+                            const DriveShape& shape, const Measurement& measurement, const std::string& name,
+                            model::CaseRole role, double t0_s = 0, double t1_s = 0);
 
-}  // namespace pz::diagnose
+}  // namespace pz::records

@@ -1,8 +1,8 @@
 // The noise floor: the part of a residual no model can remove, estimated from the data alone. One
 // module for both diagnoses: the nine-case fin bench (diagnose/, per case) and record sets of any
-// drive (records/diagnose.h). The quantum of a series (the grid its readings lie on) is measured by
-// the record reader (io/quantum.h: io/records.cc, the lowest user, cannot include records/); every
-// estimator of the floor is here.
+// drive (diagnose/diagnose.h). The quantum of a series (the grid its readings lie on) is measured
+// by the record reader (io/quantum.h: io/records.cc, the lowest user, cannot include records/);
+// every estimator of the floor is here.
 //
 // A bench case of C whole cycles (issue 6):
 //   quantisation:  the encoder's quantum q [deg] is the grid the readings lie on (every reading an

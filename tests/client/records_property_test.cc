@@ -48,7 +48,7 @@
 #include "client/records_diagnose.h"
 #include "client/record_windows.h"
 #include "io/records.h"
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/excitation.h"
 #include "records/families.h"
 #include "records/model.h"

@@ -1,5 +1,5 @@
 // Creep over decades (model/effect_library.h `creep-spectrum`, issue 22): on a real-like stack
-// (records/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
+// (diagnose/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
 // weights stay non-negative; trained on the major loop alone, the varying-amplitude and reversal
@@ -20,9 +20,9 @@
 #include <numbers>
 #include <string>
 
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/fit.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 #include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 

@@ -1,5 +1,5 @@
 // The excitation and identifiability report (records/excitation.h, issue 22 item 3) on real-like
-// stack records (records/reallike.h): it catches every withheld record whose reversals the
+// stack records (diagnose/reallike.h): it catches every withheld record whose reversals the
 // training lacks (the ramped sine, the random reversals, a smaller sine), says nothing for a
 // withheld record within the training excitation, names a drive beyond the range, faster rates
 // and holds; the proposed training drive covers what the withheld records needed; the diagnosis
@@ -12,9 +12,9 @@
 #include <map>
 #include <string>
 
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/fit.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

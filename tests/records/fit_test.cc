@@ -1,7 +1,7 @@
 // Identification of every plant family on records shaped like a real recording (records/fit.h,
 // issue 14): a rest segment, a drive that starts at an arbitrary phase, a response offset, noise
 // and quantisation — and on a multisine record. The records are made by the project's own plants
-// (records/synthetic.h) with known parameters; each family must explain the withheld window down
+// (diagnose/synthetic.h) with known parameters; each family must explain the withheld window down
 // to the noise (RMSE < 1.5 × the noise floor) and the result must not depend on the thread count.
 #include "records/fit.h"
 
@@ -16,7 +16,7 @@
 
 #include <cmath>
 
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

@@ -1,7 +1,7 @@
 // The Preisach family at 40+ levels (issue 37): the normal equations summed without the rows
 // (records/preisach_normal.h) equal the dense rows' to rounding, the incremental active set
 // (records/nnls.h) gives the Lawson–Hanson optimum, the levels are chosen by cross-validation, and
-// on the independent relay plant (records/relay_preisach_check.h, never tuned on) the family
+// on the independent relay plant (diagnose/relay_preisach_check.h, never tuned on) the family
 // reaches the noise floor in sample and on withheld records inside the training excitation.
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "records/nnls.h"
 #include "records/preisach_family.h"
 #include "records/preisach_normal.h"
-#include "records/relay_preisach_check.h"
+#include "diagnose/relay_preisach_check.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "records/fit.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 
 namespace pz::testing {
 

@@ -1,5 +1,5 @@
 // Rate dependence (model/effect_library.h `rate-dependence`, issue 22): on a real-like stack
-// (records/reallike.h, an independent plant) whose loops widen with the drive rate up to a bound,
+// (diagnose/reallike.h, an independent plant) whose loops widen with the drive rate up to a bound,
 // trained on sines at 0.5, 2 and 8 Hz, the preisach family with the effect predicts withheld sines
 // at other frequencies and a chirp within 1.25 × their true noise floor, where the family alone
 // does not, and the records diagnosis names rate dependence; on the same records of a plant with an
@@ -11,11 +11,11 @@
 #include <map>
 #include <string>
 
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/excitation.h"
-#include "records/extrapolation.h"
+#include "diagnose/extrapolation.h"
 #include "records/fit.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 #include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 

@@ -18,8 +18,8 @@
 
 #include "records/families.h"
 #include "records/model.h"
-#include "records/reallike.h"
-#include "records/synthetic.h"
+#include "diagnose/reallike.h"
+#include "diagnose/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

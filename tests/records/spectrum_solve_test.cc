@@ -13,7 +13,7 @@
 #include <numbers>
 
 #include "records/fit.h"
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {

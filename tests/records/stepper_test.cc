@@ -23,7 +23,7 @@
 #include "model/effects.h"
 #include "records/export_header.h"
 #include "records/stepper.h"
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

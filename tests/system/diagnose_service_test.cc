@@ -7,9 +7,9 @@
 #include <cstring>
 
 #include "svcclient/service_evaluator.h"
-#include "diagnose/diagnose.h"
+#include "diagnose/fin_diagnose.h"
 #include "diagnose/job_kind.h"
-#include "diagnose/synthetic.h"
+#include "diagnose/fin_synthetic.h"
 #include "opt/inline_evaluator.h"
 #include "tests/system/service_harness.h"
 #include "kinds/kinds.h"

@@ -20,7 +20,7 @@
 #include "io/records.h"
 #include "json_report.h"
 #include "opt/thread_pool_evaluator.h"
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 #include "service_harness.h"
 #include "tests/testing/expect_error.h"
 

@@ -1,4 +1,4 @@
-#include "diagnose/fit.h"
+#include "diagnose/fin_fit.h"
 
 #include <chrono>
 #include <cmath>

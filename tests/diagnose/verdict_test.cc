@@ -1,8 +1,8 @@
-// The one verdict of every diagnosis (records/verdict.h): each verdict kind in its words with the
+// The one verdict of every diagnosis (diagnose/verdict.h): each verdict kind in its words with the
 // numbers of the gap and the candidates; what only a protocol knows (a second effect, absorbed
 // parameters, the next measurement, a closing note) where it belongs; and the words of a
 // calibration check (a trial's line, the tally).
-#include "records/verdict.h"
+#include "diagnose/verdict.h"
 
 #include <gtest/gtest.h>
 

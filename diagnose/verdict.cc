@@ -1,4 +1,4 @@
-#include "records/verdict.h"
+#include "diagnose/verdict.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "records/decision.h"
+#include "diagnose/decision.h"
 
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,6 @@
 // An independent check plant for the `preisach` family (issue 37), never tuned on: a classical
 // Preisach model of discrete relays, written here from its definition and sharing nothing with
-// model/preisach.h (no plays, no cells) or records/reallike.h (no Everett table, no log creep).
+// model/preisach.h (no plays, no cells) or diagnose/reallike.h (no Everett table, no log creep).
 //
 //  - Drive nonlinearity: the relays and the reversible part see u_q = u + q (u − u_lo)² / (u_hi −
 //  u_lo)

@@ -1,4 +1,4 @@
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "model/status.h"
 #include "opt/random.h"
-#include "records/synthetic.h"
+#include "diagnose/synthetic.h"
 
 namespace pz::records {
 namespace {

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <memory>
 
-#include "diagnose/fit.h"
+#include "diagnose/fin_fit.h"
 #include "opt/inline_evaluator.h"
 #include "opt/thread_pool_evaluator.h"
 

@@ -1,19 +1,15 @@
-#include "records/reallike_check.h"
+#include "diagnose/reallike_check.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
 
+#include "diagnose/synthetic.h"
 #include "model/status.h"
 #include "opt/random.h"
 
 namespace pz::records {
-namespace {
-
-double Uniform(opt::Rng& rng, double lo, double hi) { return lo + (hi - lo) * rng.Uniform01(); }
-
-}  // namespace
 
 RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
                                       const std::function<void(const RealLikeCheckTrial&, int)>& on_trial) {
@@ -27,13 +23,13 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
     RealLikeOptions g = o.base;
     g.seed = t.seed;
     g.ramp = g.reversals = g.second_sine = true;
-    g.stack.creep_per_decade = rng.Uniform01() < 1.0 / 3 ? 0 : Uniform(rng, 0.005, 0.03);
-    g.sensor.lag_samples = rng.Uniform01() < 1.0 / 3 ? 0 : Uniform(rng, 0.5, 3);
-    g.stack.asymmetry = Uniform(rng, -1.5, 1.5);
-    g.stack.hysteresis_share = Uniform(rng, 0.1, 0.25);
-    g.stack.quadratic = Uniform(rng, -0.2, 0.2);
-    g.amplitude_share = Uniform(rng, 0.35, 0.48);
-    g.sensor.noise_white_um = Uniform(rng, 0.03, 0.1);
+    g.stack.creep_per_decade = rng.Uniform01() < 1.0 / 3 ? 0 : UniformDraw(rng, 0.005, 0.03);
+    g.sensor.lag_samples = rng.Uniform01() < 1.0 / 3 ? 0 : UniformDraw(rng, 0.5, 3);
+    g.stack.asymmetry = UniformDraw(rng, -1.5, 1.5);
+    g.stack.hysteresis_share = UniformDraw(rng, 0.1, 0.25);
+    g.stack.quadratic = UniformDraw(rng, -0.2, 0.2);
+    g.amplitude_share = UniformDraw(rng, 0.35, 0.48);
+    g.sensor.noise_white_um = UniformDraw(rng, 0.03, 0.1);
     if (g.stack.creep_per_decade > 0) t.truth_effects.push_back("creep");
     if (g.sensor.lag_samples > 0) t.truth_effects.push_back("delay");
     if (std::abs(g.stack.quadratic) >= 0.05) t.truth_effects.push_back("quadratic-drive");

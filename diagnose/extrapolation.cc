@@ -1,4 +1,4 @@
-#include "records/extrapolation.h"
+#include "diagnose/extrapolation.h"
 
 #include <algorithm>
 #include <cmath>

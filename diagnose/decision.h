@@ -1,7 +1,7 @@
 // The decision of a diagnosis (docs/diagnosis.md section 4): the rules that turn a starting
 // model's gap and its candidates' fits into a ranking and a verdict. They exist once and are the
 // same for every effect, every family and every data shape: the records diagnosis
-// (records/diagnose.h) and the nine-case bench diagnosis (diagnose/diagnose.h) call them, each
+// (diagnose/diagnose.h) and the nine-case bench diagnosis (diagnose/fin_diagnose.h) call them, each
 // supplying what only its data shape knows (the floor, the localised excess, the squared errors).
 //
 //   significant gap  ⇔  √(S0 / S_floor) > significance_ratio

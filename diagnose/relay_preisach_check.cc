@@ -1,4 +1,4 @@
-#include "records/relay_preisach_check.h"
+#include "diagnose/relay_preisach_check.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,16 +1,16 @@
-// The real-like stack generator (records/reallike.h, issue 22 item 5), checked without the
+// The real-like stack generator (diagnose/reallike.h, issue 22 item 5), checked without the
 // product's families: its Preisach loops have return-point memory and wipe out minor loops; its
 // creep is logarithmic; its sensor lag is the stated number of samples; the product's noise floor
 // (records/noise_floor.h EstimateNoiseFloor) finds the true floor of its records; the set it writes
 // reads back through io/records.h with its rest and quantum; bad input is named.
-#include "records/reallike.h"
+#include "diagnose/reallike.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 
-#include "records/diagnose.h"
+#include "diagnose/diagnose.h"
 #include "records/fit.h"
 #include "tests/testing/expect_error.h"
 

@@ -1,10 +1,11 @@
-// The diagnosis on record sets (records/diagnose.h, issue 14), on records made by the project's own
-// plants with a known withheld effect: a stack (not the bimorph grid) whose creep is named by the
-// same rules; a clean stack with no gap; a low-pass bench where driver-lowpass and delay explain the
-// single-frequency records equally — the verdict says the data cannot separate them and proposes a
-// measurement, and that measurement, simulated from the truth and added to the records, separates
-// them. The noise floor comes from the rest, the periods, or the residual, and says which.
-#include "records/diagnose.h"
+// The diagnosis on record sets (diagnose/diagnose.h, issue 14), on records made by the project's
+// own plants with a known withheld effect: a stack (not the bimorph grid) whose creep is named by
+// the same rules; a clean stack with no gap; a low-pass bench where driver-lowpass and delay
+// explain the single-frequency records equally — the verdict says the data cannot separate them and
+// proposes a measurement, and that measurement, simulated from the truth and added to the records,
+// separates them. The noise floor comes from the rest, the periods, or the residual, and says
+// which.
+#include "diagnose/diagnose.h"
 
 #include <gtest/gtest.h>
 

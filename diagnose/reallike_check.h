@@ -1,5 +1,5 @@
-// `piezoid diagnose-check --records-family F --real-like`: the records diagnosis (records/diagnose.h)
-// on real-like stack sets (records/reallike.h) whose plant is not any family of the product: per
+// `piezoid diagnose-check --records-family F --real-like`: the records diagnosis (diagnose/diagnose.h)
+// on real-like stack sets (diagnose/reallike.h) whose plant is not any family of the product: per
 // trial a plant drawn around the defaults (creep on or off, a lag of 0 or 0.5–3 samples, the
 // density's asymmetry, the hysteresis share, the reversible curvature, the amplitude, the noise),
 // a major-loop training sine and the withheld records (a second sine, a ramped amplitude, random
@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "records/diagnose.h"
-#include "records/reallike.h"
+#include "diagnose/diagnose.h"
+#include "diagnose/reallike.h"
 
 namespace pz::records {
 
@@ -28,7 +28,7 @@ struct RealLikeCheckOptions {
   RecordDiagnoseOptions diagnose;  ///< family set per trial; no proposal
 };
 
-/// A trial: the drawn plant, what the diagnosis said (records/verdict.h) and how it compares.
+/// A trial: the drawn plant, what the diagnosis said (diagnose/verdict.h) and how it compares.
 struct RealLikeCheckTrial : TrialVerdict {
   uint64_t seed = 0;
   std::string description;                ///< the drawn plant

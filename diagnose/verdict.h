@@ -1,13 +1,16 @@
 // The verdict sentence of a diagnosis, composed once for every data shape: the records diagnosis
-// (records/diagnose.h) and the nine-case bench diagnosis (diagnose/diagnose.h, its rounds and its
-// summary) state what the rules of records/decision.h decided in the same words, from the gap, the
-// ranked candidates and the naming; each supplies only its unit, where its floor comes from and what
-// it alone knows (the next measurement, the parameters that absorb an effect, a second effect).
+// (diagnose/diagnose.h) and the nine-case bench diagnosis (diagnose/fin_diagnose.h, its rounds and
+// its summary) state what the rules of diagnose/decision.h decided in the same words, from the gap,
+// the ranked candidates and the naming; each supplies only its unit, where its floor comes from and
+// what it alone knows (the next measurement, the parameters that absorb an effect, a second
+// effect).
 //
 //   none         "No significant gap: the withheld RMS error of M is r × the noise floor (σ u, from
-//                 S), at most R." [+ the best candidate, when it scores above 0, and what absorbs it]
+//                 S), at most R." [+ the best candidate, when it scores above 0, and what absorbs
+//                 it]
 //   unexplained  "A significant gap (withheld RMS e u = r × the noise floor of σ u, from S) that no
-//                 candidate explains by the rules." [+ the best candidate and why it does not qualify]
+//                 candidate explains by the rules." [+ the best candidate and why it does not
+//                 qualify]
 //   effect       "The gap is A (confidence c %)[, with a second effect: B (confidence d %)]: adding
 //                 it closes x % of the excess withheld gap; withheld RMS e → e' u against a noise
 //                 floor of σ u (S)."
@@ -18,14 +21,14 @@
 // Numbers: three significant digits; thresholds as given.
 //
 // The calibration checks speak once too: a trial's line and the tally (CalibrationTally of
-// records/decision.h) of every `diagnose-check`.
+// diagnose/decision.h) of every `diagnose-check`.
 #pragma once
 
 #include <span>
 #include <string>
 #include <vector>
 
-#include "records/decision.h"
+#include "diagnose/decision.h"
 
 namespace pz::records {
 

@@ -1,9 +1,9 @@
-// The decision rules of a diagnosis (records/decision.h), the one place both the records diagnosis
+// The decision rules of a diagnosis (diagnose/decision.h), the one place both the records diagnosis
 // and the nine-case bench diagnosis take them from: worked numbers for the gap, the score, the
 // training ΔBIC, the closed share and the pattern; every rule refusing on its own; the best-ranked
 // candidate named only when it qualifies; a rival the paired block test cannot separate shares the
 // confidence and makes the verdict "inseparable"; the tally of a calibration check.
-#include "records/decision.h"
+#include "diagnose/decision.h"
 
 #include <gtest/gtest.h>
 

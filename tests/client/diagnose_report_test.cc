@@ -1,0 +1,102 @@
+// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h), written through
+// protobuf's Struct: it parses back, a string with quotes and a newline keeps them, a non-finite
+// number is null, and the names the users read are there.
+#include "client/diagnose_report.h"
+
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/util/json_util.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace pz::client {
+namespace {
+
+using google::protobuf::Struct;
+using google::protobuf::Value;
+
+Struct Parse(const std::string& text) {
+  Struct s;
+  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(text, &s).ok()) << text;
+  return s;
+}
+
+const Value& Field(const Struct& s, const std::string& name) {
+  static const Value missing;
+  const auto it = s.fields().find(name);
+  EXPECT_NE(it, s.fields().end()) << name;
+  return it == s.fields().end() ? missing : it->second;
+}
+
+TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
+  diagnose::Diagnosis d;
+  d.bench = "bench \"a\"\nline 2";
+  d.verdict_kind = "none";
+  d.verdict = "No significant gap.";
+  d.quantum_deg = 360.0 / 8192;
+  d.withheld_before = 0.5;
+  d.closed_total = NAN;  // no excess: undefined
+  d.evaluations = 123456789;
+  diagnose::CaseGap g;
+  g.number = 3;
+  g.rms_before = 0.0798;
+  d.gaps.push_back(g);
+  diagnose::RoundResult r;
+  r.s0 = 1.5;
+  d.rounds.push_back(r);
+  diagnose::DiagnoseOptions o;
+  std::ostringstream out;
+  WriteDiagnosisJson(out, d, o);
+  const Struct s = Parse(out.str());
+  EXPECT_EQ(Field(s, "bench").string_value(), d.bench);
+  EXPECT_EQ(Field(s, "verdict_kind").string_value(), "none");
+  EXPECT_EQ(Field(s, "confidence").kind_case(), Value::kNullValue);  // nothing named
+  EXPECT_EQ(Field(s, "evaluations").number_value(), 123456789);
+  EXPECT_EQ(Field(Field(s, "noise").struct_value(), "quantum_deg").number_value(), d.quantum_deg);
+  EXPECT_EQ(Field(Field(s, "thresholds").struct_value(), "significance_ratio").number_value(),
+            o.rules.significance_ratio);
+  const Struct& gap = Field(s, "gap").struct_value();
+  EXPECT_EQ(Field(gap, "closed").kind_case(), Value::kNullValue);
+  EXPECT_EQ(Field(gap, "withheld_pi_before_deg2").number_value(), 0.5);
+  ASSERT_EQ(Field(gap, "cases").list_value().values_size(), 1);
+  const Struct& c = Field(gap, "cases").list_value().values(0).struct_value();
+  EXPECT_EQ(Field(c, "case").number_value(), 3);
+  EXPECT_EQ(Field(c, "rms_before_deg").number_value(), 0.0798);
+  ASSERT_EQ(Field(s, "rounds").list_value().values_size(), 1);
+  const Struct& round = Field(s, "rounds").list_value().values(0).struct_value();
+  EXPECT_EQ(Field(round, "withheld_pi_deg2").number_value(), 1.5);
+  EXPECT_EQ(Field(round, "named").kind_case(), Value::kNullValue);
+  for (const char* name : {"base", "final", "base_residuals", "final_residuals", "trends",
+                           "absorbed", "absorbed_by", "named", "wall_time_s"})
+    EXPECT_TRUE(s.fields().contains(name)) << name;
+}
+
+TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
+  diagnose::CheckSummary s;
+  diagnose::CheckTrial t;
+  t.seed = 1000;
+  t.verdict_kind = "none";
+  t.truth_description = "seed 1000: none";
+  t.closed = NAN;
+  diagnose::Tally(s, t);
+  std::ostringstream out;
+  WriteCheckJson(out, s);
+  const Struct j = Parse(out.str());
+  EXPECT_EQ(Field(j, "columns").list_value().values_size(), diagnose::CheckCols());
+  const Struct& confusion = Field(j, "confusion").struct_value();
+  EXPECT_EQ(confusion.fields_size(), diagnose::CheckRows());
+  EXPECT_EQ(Field(confusion, "none").list_value().values(0).number_value(), 1);  // none → none
+  EXPECT_EQ(Field(j, "clean").number_value(), 1);
+  EXPECT_EQ(Field(j, "clean_alarms").number_value(), 0);
+  ASSERT_EQ(Field(j, "trials").list_value().values_size(), 1);
+  const Struct& trial = Field(j, "trials").list_value().values(0).struct_value();
+  EXPECT_EQ(Field(trial, "seed").number_value(), 1000);
+  EXPECT_TRUE(Field(trial, "correct").bool_value());
+  EXPECT_EQ(Field(trial, "closed").kind_case(), Value::kNullValue);
+  EXPECT_EQ(Field(trial, "truth_description").string_value(), "seed 1000: none");
+}
+
+}  // namespace
+}  // namespace pz::client
