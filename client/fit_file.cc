@@ -74,12 +74,7 @@ records::ModelSpec LoadFitText(const std::string& path, const std::string& text)
       throw InputError("model.scale: u_half, y_half, f_dom_hz and fs_hz must be > 0");
     }
     s.dt = m.sample_period_s;
-    const auto& families = records::FamilyNames();
-    if (std::find(families.begin(), families.end(), s.family) == families.end()) {
-      std::string known;
-      for (const auto& n : families) known += (known.empty() ? "" : ", ") + n;
-      throw InputError("model.family '" + s.family + "' is unknown (families: " + known + ")");
-    }
+    records::FamilyNamed(s.family, "model.family");
     for (const auto& e : m.effects) {
       try {
         s.effects.push_back(records::ParseEffect(e));

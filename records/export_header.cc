@@ -3,6 +3,7 @@
 #include <cctype>
 #include <cstdint>
 #include <cstdio>
+#include <map>
 #include <sstream>
 #include <string_view>
 
@@ -16,28 +17,30 @@ extern const std::string_view kCommon, kEffects, kStackModels, kPlayOperators, k
 
 namespace {
 
-const char* KindMacro(int kind) {
-  switch (kind) {
-    case pzk::PZK_LOWPASS: return "PZK_LOWPASS";
-    case pzk::PZK_QUADRATIC: return "PZK_QUADRATIC";
-    case pzk::PZK_CREEP: return "PZK_CREEP";
-    case pzk::PZK_DELAY: return "PZK_DELAY";
-    case pzk::PZK_RATE_DEPENDENCE: return "PZK_RATE_DEPENDENCE";
-    case pzk::PZK_STACK_BOUC_WEN: return "PZK_STACK_BOUC_WEN";
-    case pzk::PZK_BACKLASH_LIKE: return "PZK_BACKLASH_LIKE";
-    case pzk::PZK_DUHEM: return "PZK_DUHEM";
-    case pzk::PZK_PRANDTL_ISHLINSKII: return "PZK_PRANDTL_ISHLINSKII";
-    case pzk::PZK_BW_OSCILLATOR: return "PZK_BW_OSCILLATOR";
-    case pzk::PZK_PREISACH: return "PZK_PREISACH";
-    case pzk::PZK_ASYMMETRIC_PI: return "PZK_ASYMMETRIC_PI";
-    case pzk::PZK_BIMORPH_FIN: return "PZK_BIMORPH_FIN";
-    case pzk::PZK_CREEP_SPECTRUM: return "PZK_CREEP_SPECTRUM";
-    case pzk::PZK_FRICTION: return "PZK_FRICTION";
-    case pzk::PZK_STIFFENING: return "PZK_STIFFENING";
-    case pzk::PZK_DRIFT: return "PZK_DRIFT";
-    case pzk::PZK_AFFINE: return "PZK_AFFINE";
-  }
-  return "0";
+// The PZK_* name of a block kind, read from the kernels' own enum (records/kernels/common.h, the
+// one list of the ids that the families' and effects' registrations give): `NAME` or `NAME = N`,
+// comma-separated, comments skipped.
+std::string KindMacro(int kind) {
+  static const std::map<int, std::string> names = [] {
+    std::map<int, std::string> m;
+    const std::string_view text = kernel_text::kCommon;
+    const size_t at = text.find("enum {") + 6;
+    std::string body(text.substr(at, text.find("};", at) - at));
+    for (size_t c = body.find("/*"); c != std::string::npos; c = body.find("/*"))
+      body.erase(c, body.find("*/", c) + 2 - c);
+    std::istringstream items(body);
+    int next = 0;
+    for (std::string item; std::getline(items, item, ',');) {
+      std::istringstream is(item);
+      std::string name, eq;
+      if (!(is >> name)) continue;
+      if (is >> eq && eq == "=") is >> next;
+      m[next++] = name;
+    }
+    return m;
+  }();
+  const auto it = names.find(kind);
+  return it == names.end() ? "0" : it->second;
 }
 
 void Array(std::ostream& os, const std::string& name, const double* v, int n) {

@@ -129,7 +129,7 @@ class Stepper {
   ModelSpec spec_;
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
-  std::vector<double> modal_;  ///< bimorph fin: {1/L, omega_i^2, tip gains} of its geometry
+  std::vector<double> family_data_;  ///< KernelShape::data (the fin's modal data), else empty
   std::vector<std::vector<double>> kernel_data_;  ///< per block: an effect's EffectDef::KernelData (else empty)
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};
