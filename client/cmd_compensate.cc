@@ -134,7 +134,7 @@ std::string InverseCaveat(const records::Stepper& inv) {
 }
 
 /// How the compensator undoes the delay's fraction s ("" without one): in the one-step map (up to a
-/// half) or backwards over its horizon (records/kernels/effects.h), and what that costs a noisy
+/// half) or backwards over its horizon (model/kernels/effects.h), and what that costs a noisy
 /// reference: the exact inverse of the interpolation multiplies the Nyquist rate by 1 / |1 - 2 s|.
 std::string DelayCaveat(const records::Stepper& inv) {
   const double s = inv.delay_fraction();

@@ -10,8 +10,8 @@
 // The recursion is ModalSimulator::RunSampled's for one sample of a uniform grid, operation for
 // operation: the same poles and exact discretisation of each mode (model/modal_discretise.h) at the
 // same sub-steps, the same closed-form Bouc–Wen branches and zero-crossing splits, the same quintic
-// Hermite hold, atan series and backlash step — those helpers are records/kernels/fin_modal.h, the
-// records bimorph-fin kernel's (records/kernels/bimorph_fin.h), copied into the header before the plant. The plant's modal data (ω_i², tip gains, L) and the
+// Hermite hold, atan series and backlash step — those helpers are model/kernels/fin_modal.h, the
+// records bimorph-fin kernel's (model/kernels/bimorph_fin.h), copied into the header before the plant. The plant's modal data (ω_i², tip gains, L) and the
 // sample period are computed here by the library and written as exact hex-float literals; μ, δ
 // (hence the discretisation), α, β, γ, a1, a2 come from the network at run time (NAME_init).
 #pragma once

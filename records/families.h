@@ -185,7 +185,7 @@ struct FamilyDef {
   bool takes_initial_state;  ///< FamilyOptions::initial_state sets its memory at rest
   bool linear;               ///< weights solved by non-negative least squares (Family::linear)
   bool auto_grid;            ///< tried by `--family auto` unless the families are named
-  int kernel;                ///< its step's id in the C kernels (PZK_*, records/kernels/common.h)
+  int kernel;                ///< its step's id in the C kernels (PZK_*, model/kernels/common.h)
   std::unique_ptr<Family> (*make)(const DataScale&, const FamilyOptions&);
   /// The kernel block's sizes for a model's options and fitted parameters; throws InputError
   /// naming the fit.json field for parameters the step cannot take.

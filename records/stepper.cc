@@ -15,7 +15,7 @@ int KernelOf(EffectKind e) {
   const int k = e.none() ? 0 : e->kernel();
   const bool drive = e.none() || e->stage() == model::EffectStage::kDrive;
   if (k <= 0 || (drive ? k >= pzk::PZK_STACK_BOUC_WEN : k < pzk::PZK_FRICTION || k >= pzk::PZK_AFFINE))
-    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (records/kernels/effects.h)");
+    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (model/kernels/effects.h)");
   return k;
 }
 

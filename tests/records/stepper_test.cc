@@ -23,6 +23,7 @@
 #include <utility>
 
 #include "model/effects.h"
+#include "model/kernels/kernel_text.h"
 #include "records/export_header.h"
 #include "records/fit.h"
 #include "records/synthetic.h"
@@ -390,7 +391,7 @@ ModelSpec WithDelay(ModelSpec s, double samples) {
   return s;
 }
 
-/// A delay of a fractional number of samples n + s (records/kernels/effects.h): for s <= 1/2 the
+/// A delay of a fractional number of samples n + s (model/kernels/effects.h): for s <= 1/2 the
 /// compensator reads the reference n samples ahead and keeps (1 - s) x + s x_prev in the map it
 /// solves; for s > 1/2 it reads n + L ahead (0.79 samples: L = 23, r^L <= 1e-13 with r = (1 - s)/s)
 /// and undoes the delay backwards over them. The model's own noiseless response replays its drive to
@@ -652,7 +653,7 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     if (delay >= 0) name += "_d" + std::to_string(static_cast<int>(100 * delay));
     // The kernels' guard is their text's hash: the same for every header of these kernels.
     const std::string text = ExportHeader(st, name, "test model");
-    EXPECT_NE(text.find("#ifndef " + KernelGuard() + "\n"), std::string::npos) << name;
+    EXPECT_NE(text.find("#ifndef " + pzk::KernelGuard() + "\n"), std::string::npos) << name;
     const HeaderRun run = CompileAndRun(st, name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size()) << name;
     EXPECT_LE(MaxDiff(run.forward, ref), 1e-12 * Range(ref)) << name;
@@ -686,7 +687,7 @@ TEST(FamilyRegistry, EveryFamilyFitsExportsAndStepsAsTheCxxModel) {
     SCOPED_TRACE(name);
     EXPECT_EQ(FindFamily(name), def);
     EXPECT_EQ(&FamilyNamed(name, "model.family"), def);
-    EXPECT_NE(def->kernel, 0) << "a family needs its step kernel (records/kernels/)";
+    EXPECT_NE(def->kernel, 0) << "a family needs its step kernel (model/kernels/)";
     const DataScale scale = MeasureScale({&r});
     FamilyOptions descended;
     descended.initial_state = model::InitialState::kDescended;
@@ -744,7 +745,7 @@ TEST(FamilyRegistry, EveryFamilyFitsExportsAndStepsAsTheCxxModel) {
 }
 #endif
 
-/// The fin's compensator plans two samples (records/kernels/chain.h pzk_chain_horizon): given the
+/// The fin's compensator plans two samples (model/kernels/chain.h pzk_chain_horizon): given the
 /// reference one sample ahead it follows a reachable one closely where the fin has no dead band;
 /// with one, where theta must cross the band (the angle held) within two samples it cannot: a
 /// few per cent of the band.

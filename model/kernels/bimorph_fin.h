@@ -132,7 +132,7 @@ static inline double pzk_fin_step(const pzk_block *b, const double *c, const dou
   return p[9] * o[2 * n + 3];
 }
 
-/* The inverse's trial step (records/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
+/* The inverse's trial step (model/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
  * the angle pushed through the backlash: theta - a1 (dir > 0) or theta + a2 (dir < 0), within the
  * saturations [b2, b1]. */
 static inline double pzk_fin_step_through(const pzk_block *b, const double *c, const double *d, double *o, double v,

@@ -345,7 +345,7 @@ static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c
   return u;
 }
 
-/* The compensator with a delay whose fraction is over a half (its horizon L > 0, records/kernels/
+/* The compensator with a delay whose fraction is over a half (its horizon L > 0, model/kernels/
  * effects.h): the blocks after the delay solved one step for its output w, n + L samples ahead of the
  * drive (their own limits, last drive and output kept in the delay's state: the drive's limits,
  * widened by their span on both sides when drive effects come before the delay, which may take their
