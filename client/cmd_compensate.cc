@@ -29,12 +29,12 @@
 #include "client/commands.h"
 #include "client/fit_file.h"
 #include "client/record_windows.h"
+#include "controller/export_header.h"
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/format.h"
 #include "opt/random.h"
 #include "records/diagnose.h"
-#include "records/export_header.h"
 #include "records/stepper.h"
 #include "records/synthetic.h"
 
@@ -371,7 +371,8 @@ int ExportFit(const std::string& fit_json, const std::string& out, const std::st
       if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
     if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) name = "pz_" + name;
   }
-  const std::string header = records::ExportHeader(st, name, m.Model()->Describe() + " from " + fit_json);
+  const std::string header =
+      controller::ExportHeader(st, name, m.Model()->Describe() + " from " + fit_json);
   if (out.empty()) {
     std::cout << header;
     return 0;

@@ -1,7 +1,7 @@
 // A fitted record model (records/model.h) one sample at a time, forward and inverse, for a
 // controller (issue 23): the C99 step kernels of model/kernels/ — the one source of the
 // per-sample arithmetic, also copied verbatim into the headers `piezoid export` writes
-// (records/export_header.h) — driven from C++.
+// (controller/export_header.h) — driven from C++.
 //
 //   forward  y = Step(u): the drive clipped to the drive limits (counted), the model's output with
 //            polarity and offset; equal to RecordModel::Simulate on the same drive (to rounding:

@@ -13,7 +13,7 @@ std::string KernelSource();
 /// KernelSource() in hex (headers exported from the same kernels share them).
 std::string KernelGuard();
 /// The bimorph fin's modal helpers (model/kernels/fin_modal.h): also the base of the HGANN fin plant's
-/// header (client/export_fin_c.h).
+/// header (controller/export_fin_c.h).
 std::string FinModalSource();
 /// The PZK_* name of a block kind, read from the kernels' own enum (model/kernels/common.h: the one list
 /// of the ids the families' and effects' registrations give); "0" for none.

@@ -1,5 +1,5 @@
 // The per-sample model of issue 23 (records/stepper.h) and its exported C header
-// (records/export_header.h): for every family with a kernel and every effect, the forward step
+// (controller/export_header.h): for every family with a kernel and every effect, the forward step
 // equals RecordModel::Simulate (polarity and offset applied) to 1e-12 of the output range on a
 // drive with rests, reversals and minor loops; the exported header compiles with the C compiler
 // under -std=c99 -Wall -Wextra -Werror -pedantic and gives the same numbers; the inverse then the
@@ -24,7 +24,7 @@
 
 #include "model/effects.h"
 #include "model/kernels/kernel_text.h"
-#include "records/export_header.h"
+#include "controller/export_header.h"
 #include "records/fit.h"
 #include "records/synthetic.h"
 #include "tests/testing/expect_error.h"
@@ -577,7 +577,7 @@ HeaderRun CompileAndRun(const Stepper& st, const std::string& name, const std::v
                    ("pz_stepper_" + name + "_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
                     "_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  std::ofstream(dir / (name + ".h")) << ExportHeader(st, name, "test model");
+  std::ofstream(dir / (name + ".h")) << controller::ExportHeader(st, name, "test model");
   std::ofstream(dir / "main.c") << "#include <stdio.h>\n#include <stdlib.h>\n#include \"" << name << ".h\"\n"
                                 << "int main(void) {\n  " << name << "_state s, v;\n  double u, y;\n  int first = 1;\n"
                                 << "  FILE *in = fopen(\"in.txt\", \"r\");\n  if (!in) return 2;\n"
@@ -652,7 +652,7 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     name += "_" + std::to_string(effects.size()) + "_" + model::InitialStateName(state);
     if (delay >= 0) name += "_d" + std::to_string(static_cast<int>(100 * delay));
     // The kernels' guard is their text's hash: the same for every header of these kernels.
-    const std::string text = ExportHeader(st, name, "test model");
+    const std::string text = controller::ExportHeader(st, name, "test model");
     EXPECT_NE(text.find("#ifndef " + pzk::KernelGuard() + "\n"), std::string::npos) << name;
     const HeaderRun run = CompileAndRun(st, name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size()) << name;
@@ -736,7 +736,7 @@ TEST(FamilyRegistry, EveryFamilyFitsExportsAndStepsAsTheCxxModel) {
     EXPECT_LE(MaxDiff(mine, ref), 1e-12 * Range(ref));
     std::string c_name = "pz_registry_" + name;
     std::replace(c_name.begin(), c_name.end(), '-', '_');
-    EXPECT_NE(ExportHeader(st, c_name, "registry").find("PZK_"), std::string::npos);
+    EXPECT_NE(controller::ExportHeader(st, c_name, "registry").find("PZK_"), std::string::npos);
     const HeaderRun run = CompileAndRun(st, c_name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size());
     EXPECT_LE(MaxDiff(run.forward, mine), 1e-12 * Range(ref));

@@ -1,13 +1,12 @@
-#include "client/export_fin_c.h"
+#include "controller/export_fin_c.h"
 
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
 #include "model/kernels/kernel_text.h"
-#include "records/export_header.h"
 
-namespace pz::client {
+namespace pz::controller {
 namespace {
 
 // The C text of the plant with "pzf_" / "PZF_" for the header's name and prefix, and @TABLES@ for
@@ -366,4 +365,4 @@ Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& netwo
   return Status::Ok();
 }
 
-}  // namespace pz::client
+}  // namespace pz::controller

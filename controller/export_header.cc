@@ -1,4 +1,4 @@
-#include "records/export_header.h"
+#include "controller/export_header.h"
 
 #include <cctype>
 #include <cstdint>
@@ -10,7 +10,7 @@
 #include "model/c_text.h"
 #include "model/kernels/kernel_text.h"
 
-namespace pz::records {
+namespace pz::controller {
 
 namespace {
 
@@ -23,11 +23,11 @@ void Array(std::ostream& os, const std::string& name, const double* v, int n) {
 
 }  // namespace
 
-std::string ExportHeader(const Stepper& st, const std::string& name, const std::string& comment) {
+std::string ExportHeader(const records::Stepper& st, const std::string& name, const std::string& comment) {
   if (!IsCIdentifier(name)) {
     throw InputError("--name '" + name + "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
   }
-  const ModelSpec& m = st.spec();
+  const records::ModelSpec& m = st.spec();
   const std::string N = CUpper(name);
   const auto& blocks = st.blocks();
   const int nb = static_cast<int>(blocks.size());
@@ -133,4 +133,4 @@ std::string ExportHeader(const Stepper& st, const std::string& name, const std::
   return os.str();
 }
 
-}  // namespace pz::records
+}  // namespace pz::controller

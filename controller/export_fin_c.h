@@ -1,5 +1,5 @@
 // `piezoid export --plant`: the bimorph-fin plant (model/modal_simulator.h, sampled-drive path) as a
-// per-sample C recursion, appended to the network header of client/export_c.h so that a controller
+// per-sample C recursion, appended to the network header of controller/export_c.h so that a controller
 // computes the fin angle for any drive and the drive for a desired angle:
 //
 //   int    NAME_params(amplitude_v, frequency_hz, p)       the network, with a range check
@@ -18,11 +18,11 @@
 
 #include <string>
 
-#include "client/export_c.h"
+#include "controller/export_c.h"
 #include "model/modal_simulator.h"
 #include "model/status.h"
 
-namespace pz::client {
+namespace pz::controller {
 
 /// The plant part (types, NAME_params, NAME_init, NAME_step, NAME_inverse_step) for `sim`'s plant,
 /// to follow the network's function in the header. kInvalidArgument naming the flag on a bad
@@ -30,4 +30,4 @@ namespace pz::client {
 Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& network, const FinPlantExport& options,
                    const std::string& name, std::string* text);
 
-}  // namespace pz::client
+}  // namespace pz::controller
