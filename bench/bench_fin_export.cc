@@ -1,13 +1,15 @@
-// Cost per sample of the fin header of `piezoid export --plant` (client/export_fin_c.h), compiled by the
-// build's C compiler (-std=c99 -O2, as a controller would) into a shared object that this benchmark
-// loads; the calls go through function pointers (a nanosecond or two of the figures):
+// Cost per sample of the fin header of `piezoid export --plant` (controller/export_fin_c.h),
+// compiled by the build's C compiler (-std=c99 -O2, as a controller would) into a shared object
+// that this benchmark loads; the calls go through function pointers (a nanosecond or two of the
+// figures):
 //   BM_FinParams                 NAME_params: the network, once per (amplitude, frequency)
-//   BM_FinStep/rate              NAME_step on bench case 9's drive (750 V, 1 Hz) at 100 Hz and 1 kHz
-//   BM_FinStepJumps              NAME_step on a drive jumping ±600 V every sample (sub-steps, z crossing 0)
-//   BM_FinInverseStep/rate       NAME_inverse_step (horizon 2) following that drive's response; counter
+//   BM_FinStep/rate              NAME_step on bench case 9's drive (750 V, 1 Hz) at 100 Hz and 1
+//   kHz BM_FinStepJumps              NAME_step on a drive jumping ±600 V every sample (sub-steps, z
+//   crossing 0) BM_FinInverseStep/rate       NAME_inverse_step (horizon 2) following that drive's
+//   response; counter
 //                                trials = steps of the forward recursion per inverse step
-// The network: tests/data/networks/fin_nominal.json, identified on the nominal bench. Figures and the
-// operation count: docs/performance.md, "Fin header".
+// The network: tests/data/networks/fin_nominal.json, identified on the nominal bench. Figures and
+// the operation count: docs/performance.md, "Fin header".
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>
 #include <sys/wait.h>
@@ -23,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "client/export_c.h"
+#include "controller/export_c.h"
 #include "io/network_io.h"
 #include "model/modal_simulator.h"
 
@@ -81,9 +83,10 @@ const Compiled& Header(double fs) {
   const model::BimorphPlant plant;
   const model::ModalSimulator sim(plant);
   std::string h;
-  FinPlantExport options;
+  controller::FinPlantExport options;
   options.sample_rate_hz = fs;
-  if (!NetworkAndFinToCHeader(Network(), sim, options, "fin", &h).ok()) throw std::runtime_error("export");
+  if (!controller::NetworkAndFinToCHeader(Network(), sim, options, "fin", &h).ok())
+    throw std::runtime_error("export");
   std::ofstream(dir / "fin.h") << h;
   std::ofstream(dir / "glue.c") << kGlue;
   const std::string cmd = "cd '" + dir.string() + "' && '" PIEZOID_C_COMPILER

@@ -1,5 +1,5 @@
 // Cost per sample of a fitted model in a controller (records/stepper.h, issue 23): the step kernels
-// of records/kernels/ — the code the exported C header runs — one sample at a time, on a 1 Hz sine of
+// of model/kernels/ — the code the exported C header runs — one sample at a time, on a 1 Hz sine of
 // slowly varying amplitude with a 7 Hz ripple at 5 kHz (minor loops):
 //   BM_Forward/<case>   NAME_step: drive -> response
 //   BM_Inverse/<case>   NAME_inverse_step: desired response -> drive (bisection on the one-step map)

@@ -29,12 +29,12 @@
 #include "client/commands.h"
 #include "client/fit_file.h"
 #include "client/record_windows.h"
+#include "controller/export_header.h"
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/format.h"
 #include "opt/random.h"
 #include "diagnose/diagnose.h"
-#include "records/export_header.h"
 #include "records/stepper.h"
 #include "diagnose/synthetic.h"
 
@@ -134,7 +134,7 @@ std::string InverseCaveat(const records::Stepper& inv) {
 }
 
 /// How the compensator undoes the delay's fraction s ("" without one): in the one-step map (up to a
-/// half) or backwards over its horizon (records/kernels/effects.h), and what that costs a noisy
+/// half) or backwards over its horizon (model/kernels/effects.h), and what that costs a noisy
 /// reference: the exact inverse of the interpolation multiplies the Nyquist rate by 1 / |1 - 2 s|.
 std::string DelayCaveat(const records::Stepper& inv) {
   const double s = inv.delay_fraction();
@@ -371,7 +371,8 @@ int ExportFit(const std::string& fit_json, const std::string& out, const std::st
       if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
     if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) name = "pz_" + name;
   }
-  const std::string header = records::ExportHeader(st, name, m.Model()->Describe() + " from " + fit_json);
+  const std::string header =
+      controller::ExportHeader(st, name, m.Model()->Describe() + " from " + fit_json);
   if (out.empty()) {
     std::cout << header;
     return 0;

@@ -278,9 +278,8 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--family", a->records.family,
                   "with --records: auto (chosen with its resolution and initial state by blocked "
                   "cross-validation on "
-                  "the training records first, as `piezoid fit --family auto`), stack-bouc-wen, "
-                  "backlash-like, duhem, "
-                  "prandtl-ishlinskii, bw-oscillator, bimorph-fin, preisach, asymmetric-pi")
+                  "the training records first, as `piezoid fit --family auto`), " +
+                      records::FamilyList())
       ->default_str("auto");
   cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
   cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");

@@ -41,6 +41,14 @@ namespace pz::client {
 namespace fs = std::filesystem;
 namespace {
 
+/// The families `--family auto` tries when none are named (records::FamilyDef::auto_grid).
+std::string AutoGridList() {
+  std::string s;
+  for (const records::FamilyDef* f : records::Families())
+    if (f->auto_grid) s += (s.empty() ? "" : ", ") + std::string(f->name);
+  return s;
+}
+
 /// The width of a column of record names: the longest name and two spaces, at least 16.
 int NameColumnWidth(const io::RecordSet& set) {
   size_t w = 14;
@@ -79,8 +87,7 @@ struct FitArgs {
   opt::LineOptions line;               ///< --line-grid, --line-brackets, --line-tolerance
   // --family auto (records/select.h)
   bool pi_operators_given = false;     ///< --pi-operators: the one resolution tried
-  std::vector<std::string>
-      auto_families;  ///< --auto-families (empty: every family but bimorph-fin)
+  std::vector<std::string> auto_families;  ///< --auto-families (empty: the registry's auto grid)
   int folds = 5;
   int finalists = 4;
   bool selected = false;               ///< the report's family was chosen by --family auto
@@ -488,11 +495,10 @@ records::FitOptions FitOptionsOf(const FitArgs& a) {
   if (select) {
     if (!a.initial_state.empty())
       o.family_options.initial_state = model::ParseInitialState(a.initial_state, "--initial-state");
-    for (const auto& f : a.auto_families) {
-      if (!IsRecordsFamily(f))
+    for (const auto& f : a.auto_families)
+      if (records::FindFamily(f) == nullptr)
         throw InputError("--auto-families '" + f +
-                         "': not a family (piezoid fit --help lists them)");
-    }
+                         "': not a family (families: " + records::FamilyList() + ")");
   } else {
     if (!a.auto_families.empty()) throw InputError("--auto-families: only with --family auto");
     o.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
@@ -677,14 +683,12 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
                   "auto (chosen with its effects, plays / levels and initial state by blocked "
-                  "cross-validation on the "
-                  "training records; records/select.h), stack-bouc-wen, backlash-like, duhem, "
-                  "prandtl-ishlinskii, "
-                  "bw-oscillator, bimorph-fin, preisach, asymmetric-pi")
+                  "cross-validation on the training records; records/select.h), " +
+                      records::FamilyList())
       ->default_str("backlash-like");
-  cmd->add_option("--auto-families", a->auto_families,
-                  "--family auto: the families tried (comma-separated; default every family but "
-                  "bimorph-fin)")
+  cmd->add_option(
+         "--auto-families", a->auto_families,
+         "--family auto: the families tried (comma-separated; default " + AutoGridList() + ")")
       ->delimiter(',');
   cmd->add_option("--folds", a->folds,
                   "--family auto: blocks per training window (the cross-validation's folds)")

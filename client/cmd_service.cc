@@ -1,6 +1,8 @@
 // `piezoid submit | status | list | watch | cancel | fetch | export`: the service commands, thin
 // wrappers of svcclient/service_client.h, svcclient/job_file.h, client/job_report.h and
-// client/export_c.h. Register with RegisterServiceCommands(app, exit_code).
+// controller/export_c.h. Register with RegisterServiceCommands(app, exit_code).
+#include "client/cmd_service.h"
+
 #include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
@@ -17,19 +19,18 @@
 #include <iostream>
 #include <sstream>
 
-#include "client/cmd_service.h"
-#include "client/dashboard.h"
 #include "client/commands.h"
-#include "client/export_c.h"
+#include "client/dashboard.h"
 #include "client/fit_file.h"
 #include "svcclient/job_file.h"
 #include "client/job_report.h"
 #include "svcclient/service_client.h"
+#include "controller/export_c.h"
 #include "hgann/hgann_job.h"
 #include "job/job_kind.h"
-#include "service/wire_codec.h"
 #include "kinds/kinds.h"
 #include "model/modal_simulator.h"
+#include "service/wire_codec.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -455,7 +456,7 @@ void RegisterFetch(CLI::App& app, int& exit_code) {
 struct ExportOptions {
   std::string network, out, name = "piezoid_predict", job;
   bool plant = false;
-  FinPlantExport fin;
+  controller::FinPlantExport fin;
 };
 
 /// The beam of the job spec `file` (its hgann.geometry overrides), and its cases' saturations as a
@@ -502,15 +503,15 @@ int ExportNetwork(const ExportOptions& o) {
   std::string header;
   if (o.plant) {
     model::BeamGeometry geometry;  // the spec's beam, as the HGANN fitness's default …
-    FinPlantExport fin = o.fin;
+    controller::FinPlantExport fin = o.fin;
     if (!o.job.empty()) {          // … or the job's
       if (int code = JobBeam(o.job, &geometry, &fin.note); code != kExitOk) return code;
     }
     const model::BimorphPlant plant(geometry);
     const model::ModalSimulator sim(plant);
-    s = NetworkAndFinToCHeader(net, sim, fin, o.name, &header);
+    s = controller::NetworkAndFinToCHeader(net, sim, fin, o.name, &header);
   } else {
-    s = NetworkToCHeader(net, o.name, &header);
+    s = controller::NetworkToCHeader(net, o.name, &header);
   }
   if (!s.ok()) return Report(s);
   if (o.out.empty()) {

@@ -71,11 +71,7 @@ records::ModelSpec FromProto(const proto::FitModel& m) {
     throw InputError("model.scale: u_half, y_half, f_dom_hz and fs_hz must be > 0");
   }
   s.dt = m.sample_period_s();
-  if (!IsRecordsFamily(s.family)) {
-    std::string known;
-    for (const auto& n : records::FamilyNames()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("model.family '" + s.family + "' is unknown (families: " + known + ")");
-  }
+  records::FamilyNamed(s.family, "model.family");
   for (const auto& e : m.effects()) {
     try {
       s.effects.push_back(records::ParseEffect(e));
@@ -113,11 +109,6 @@ records::ModelSpec FromProto(const proto::FitModel& m) {
 }
 
 }  // namespace
-
-bool IsRecordsFamily(const std::string& name) {
-  const auto& families = records::FamilyNames();
-  return std::find(families.begin(), families.end(), name) != families.end();
-}
 
 records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitResult& r,
                                    int substeps, int pi_operators) {

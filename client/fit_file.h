@@ -18,9 +18,6 @@ namespace pz::client {
 
 using io::kFitFormatVersion;
 
-/// True for a records family's name (the one lookup of the client's: `fit --auto-families`,
-/// fit.json's model.family).
-bool IsRecordsFamily(const std::string& name);
 
 /// The model of a fit (the offset: the mean of the training records' offsets; the drive limits:
 /// the training records' drive range; the sample step: the first training record's).

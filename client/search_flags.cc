@@ -43,12 +43,13 @@ void ApplySearchFlags(const SearchFlags& f, opt::SearchOptions* o) {
 void AddInitialStateFlag(CLI::App* cmd, std::string* value) {
   const char* dflt = model::InitialStateName(records::FamilyOptions{}.initial_state);
   cmd->add_option("--initial-state", *value,
-                  std::string("the memory at rest at the first sample's drive of prandtl-ishlinskii, asymmetric-pi, "
-                              "preisach, stack-bouc-wen and backlash-like: centred (demagnetised), descended (the drive "
-                              "came down to the rest from the top of its range: a stack resting at the bottom of its "
-                              "range after use), ascended, or auto (descended for a rest at the bottom of the training "
-                              "drive range, ascended at its top, else centred; resolved on each record's first drive; "
-                              "docs/records.md)"))
+                  "the memory at rest at the first sample's drive of " + records::FamilyList(true) +
+                      std::string(": centred (demagnetised), descended (the drive came down to "
+                                  "the rest from the top of its range: a stack resting at the "
+                                  "bottom of its range after use), ascended, or auto (descended "
+                                  "for a rest at the bottom of the training drive range, ascended "
+                                  "at its top, else centred; resolved on each record's first "
+                                  "drive; docs/records.md)"))
       ->type_name("NAME")
       ->default_str(dflt);
 }
@@ -59,8 +60,7 @@ model::InitialState InitialStateOfFlag(const std::string& value, const std::stri
   const model::InitialState s = model::ParseInitialState(value, "--initial-state");
   if (!records::TakesInitialState(family) && s != model::InitialState::kCentred) {
     throw InputError("--initial-state " + value + ": family " + family +
-                     " starts centred (the flag applies to prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen "
-                     "and backlash-like)");
+                     " starts centred (the flag applies to " + records::FamilyList(true) + ")");
   }
   return s;
 }

@@ -1,22 +1,22 @@
 // libFuzzer target: the fit.json loader (client/fit_file.h LoadFitText over io/fit_model.h) and
 // what `piezoid export FIT.json` and `piezoid compensate` do with a model it accepts: the step
-// kernels built (records::Stepper), the C header written (records/export_header.h), the model run
-// forward and inverse over a short drive sweep between its drive limits. The whole input is the
+// kernels built (records::Stepper), the C header written (controller/export_header.h), the model
+// run forward and inverse over a short drive sweep between its drive limits. The whole input is the
 // fit.json text. Every outcome must be a model or a pz::InputError with a message; anything else
 // (a signal, a sanitizer report, another exception) is a finding. The outputs are not checked for
 // NaN: a fitted oscillator can be unstable on a drive (`compensate` says so where it meets one).
 // Build and run: fuzz/run.sh (clang, -fsanitize=fuzzer,address,undefined).
+#include <google/protobuf/stubs/logging.h>
+
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
 #include <string_view>
 
-#include <google/protobuf/stubs/logging.h>
-
 #include "client/fit_file.h"
+#include "controller/export_header.h"
 #include "model/status.h"
-#include "records/export_header.h"
 #include "records/stepper.h"
 
 namespace {
@@ -28,7 +28,7 @@ namespace {
 
 void Run(const pz::records::ModelSpec& m) {
   pz::records::Stepper fwd(m);
-  (void)pz::records::ExportHeader(fwd, "pz_fuzz", "fuzz");
+  (void)pz::controller::ExportHeader(fwd, "pz_fuzz", "fuzz");
   constexpr int kSteps = 24;
   auto drive = [&](int k) {  // a triangle between the limits
     const double x = k < kSteps / 2 ? 2.0 * k / kSteps : 2.0 - 2.0 * k / kSteps;

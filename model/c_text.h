@@ -1,5 +1,5 @@
-// Text of generated C code: the helpers both C exporters use (records/export_header.h for fitted
-// record models, client/export_c.h for HGANN networks and the fin plant).
+// Text of generated C code: the helpers both C exporters use (controller/export_header.h for fitted
+// record models, controller/export_c.h for HGANN networks and the fin plant).
 #pragma once
 
 #include <cctype>

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "model/bimorph_ode.h"
+#include "model/kernels/pzk.h"
 #include "model/status.h"
 
 namespace pz::model {
@@ -192,7 +193,7 @@ class DriverLowpass final : public EffectDef {
   const char* title() const override { return "driver (amplifier) first-order low-pass"; }
   const char* equation() const override { return "tau u_e' = u - u_e"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
-  int kernel() const override { return 1; }  // PZK_LOWPASS
+  int kernel() const override { return pzk::PZK_LOWPASS; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double dt = 1 / s.fs;
     const double tau_hi = std::max(0.5 / (2 * std::numbers::pi * s.f_dom), 20 * dt);
@@ -219,7 +220,7 @@ class QuadraticDrive final : public EffectDef {
   const char* title() const override { return "quadratic (electrostrictive) drive term"; }
   const char* equation() const override { return "u_e = u + c2 u^2"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
-  int kernel() const override { return 2; }  // PZK_QUADRATIC
+  int kernel() const override { return pzk::PZK_QUADRATIC; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double umax = std::max(std::abs(s.u_min), std::abs(s.u_max));
     return {{"c2", "1/V", -0.3 / umax, 0.3 / umax, false}};
@@ -249,7 +250,7 @@ class Creep final : public EffectDef {
   const char* title() const override { return "piezo creep of the drive (one relaxation)"; }
   const char* equation() const override { return "tau_c x' = k_c (u - u0) - x, u_e = u + x"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
-  int kernel() const override { return 3; }  // PZK_CREEP
+  int kernel() const override { return pzk::PZK_CREEP; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double lo = 0.5 / s.f_dom, hi = std::max(10 * s.duration, 2 * lo);
     return {{"k_c", "-", -0.3, 0.3, false}, {"tau_c_s", "s", lo, hi, true}};
@@ -287,7 +288,7 @@ class Delay final : public EffectDef {
   const char* title() const override { return "measurement / transport delay"; }
   const char* equation() const override { return "u_e(t) = u(t - tau_d)"; }
   EffectStage stage() const override { return EffectStage::kDrive; }
-  int kernel() const override { return 4; }  // PZK_DELAY
+  int kernel() const override { return pzk::PZK_DELAY; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double dt = 1 / s.fs;
     return {{"tau_d_s", "s", 0, std::max(std::min(0.25 / s.f_dom, 500 * dt), 2 * dt), false}};
@@ -343,7 +344,7 @@ class RateDependence final : public EffectDef {
     return "u_e = play_lambda[u], lambda = r_m tanh(tau_r |u'| / r_m), u' = (3u_k - 4u_k-1 + u_k-2)/(2 dt)";
   }
   EffectStage stage() const override { return EffectStage::kDrive; }
-  int kernel() const override { return 5; }  // PZK_RATE_DEPENDENCE
+  int kernel() const override { return pzk::PZK_RATE_DEPENDENCE; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     const double dt = 1 / s.fs;
     const double tau_hi = std::max(0.5 / (2 * std::numbers::pi * s.f_dom), 20 * dt);
@@ -368,7 +369,7 @@ class RateDependence final : public EffectDef {
   }
 
  private:
-  // As the kernel's pzk_rate_dependence_step (records/kernels/effects.h), operation for operation.
+  // As the kernel's pzk_rate_dependence_step (model/kernels/effects.h), operation for operation.
   static double Lagged(double r_m, double tau, double dt, double v, double prev1, double prev2, double z,
                        double& rate_prev) {
     const double rate = (3 * v - 4 * prev1 + prev2) / (2 * dt);
@@ -482,7 +483,7 @@ class CreepSpectrum final : public EffectDef {
   }
   bool linear_output() const override { return true; }
   std::vector<double> KernelData(const DataScale& s) const override { return Times(s.duration); }
-  int kernel() const override { return 33; }  // PZK_CREEP_SPECTRUM
+  int kernel() const override { return pzk::PZK_CREEP_SPECTRUM; }
   /// Log creep: equal weights, 1–4 % of the output per relaxation.
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
     return std::vector<double>(Times(s.duration).size(), d.Uniform(0.01, 0.04));
@@ -514,7 +515,7 @@ class Friction final : public EffectDef {
   const char* title() const override { return "friction dead band at the output"; }
   const char* equation() const override { return "y_e = play_r[y]"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
-  int kernel() const override { return 30; }  // PZK_FRICTION
+  int kernel() const override { return pzk::PZK_FRICTION; }
   std::vector<ParamInfo> Params(const DataScale& s) const override { return {{"r", "y", 0, 0.2 * s.y_half, false}}; }
   void ApplyOutput(std::span<const double> p, const OutputFrame&, std::span<double> y) const override {
     const double r = std::max(p[0], 0.0);
@@ -534,7 +535,7 @@ class Stiffening final : public EffectDef {
   const char* title() const override { return "cubic stiffening"; }
   const char* equation() const override { return "y_e = y - k3 Y ((y - y0)/Y)^3"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
-  int kernel() const override { return 31; }  // PZK_STIFFENING
+  int kernel() const override { return pzk::PZK_STIFFENING; }
   std::vector<ParamInfo> Params(const DataScale&) const override { return {{"k3", "-", -0.3, 0.3, false}}; }
   void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
     if (y.empty()) return;
@@ -556,7 +557,7 @@ class Drift final : public EffectDef {
   const char* title() const override { return "drift of the reading"; }
   const char* equation() const override { return "y_e = y + rate (t - t_window)"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
-  int kernel() const override { return 32; }  // PZK_DRIFT
+  int kernel() const override { return pzk::PZK_DRIFT; }
   const char* former_name() const override { return "output-drift"; }  // its name before the one library
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     return {{"rate", "y/s", -s.y_half / s.duration, s.y_half / s.duration, false}};

@@ -174,8 +174,8 @@ class EffectDef {
   virtual FinBox Fin() const { return {}; }
 
   // ---- per-sample step (controller export) ----
-  /// The id of the effect's step in the C kernels (records/kernels/common.h PZK_*, run by
-  /// records/kernels/chain.h for records/stepper.h and copied into `piezoid export` headers); 0:
+  /// The id of the effect's step in the C kernels (model/kernels/common.h PZK_*, run by
+  /// model/kernels/chain.h for records/stepper.h and copied into `piezoid export` headers); 0:
   /// none (beam effects, which only the fin bench's CVODE path runs). Drive effects take ids below
   /// PZK_STACK_BOUC_WEN (10), output effects from PZK_FRICTION (30).
   virtual int kernel() const { return 0; }

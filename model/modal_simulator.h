@@ -114,7 +114,7 @@ class ModalSimulator {
   /// Number of modes simulated (modes invisible at the tip are dropped).
   int num_modes() const { return n_; }
   /// The simulated modes' ω_i² [1/s²], tip_i g_u,i and tip_i g_z,i (num_modes() each), and the fin
-  /// length L [m]: what a per-sample export of the plant (client/export_fin_c.h) needs.
+  /// length L [m]: what a per-sample export of the plant (controller/export_fin_c.h) needs.
   std::span<const double> omega2() const { return omega2_; }
   std::span<const double> tip_gain_u() const { return wu_; }
   std::span<const double> tip_gain_z() const { return wz_; }

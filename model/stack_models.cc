@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "model/kernels/pzk.h"
+
 namespace pz::model {
 namespace {
 
@@ -204,17 +206,17 @@ void SimulateBacklashLike(const BacklashLikeParams& p, std::span<const double> u
                           std::span<double> yhat, double w0) {
   ThrowIfError(p.Validate());
   CheckLengths(u, yhat, "SimulateBacklashLike");
-  // w = c u − ŷ obeys dw/du = (c − B1) − α s w on a piece of sign s: w1 = w + (c − B1 − α s w) Δu
+  // The step is the backlash-like kernel's (model/kernels/stack_models.h pzk_backlash_step):
+  // w = c u − ŷ obeys dw/du = (c − B1) − α s w on a piece of sign s, w1 = w + (c − B1 − α s w) Δu
   // φ(α s Δu), with α s Δu = α |Δu| ≥ 0 (a decaying exponential).
-  const double g = p.c - p.b1;
-  double w = w0;
-  yhat[0] = p.c * u[0] - w;
-  for (size_t k = 1; k < u.size(); ++k) {
-    const double du = u[k] - u[k - 1];
-    const double as = du >= 0 ? p.alpha : -p.alpha;
-    w += (g - as * w) * du * Phi(as * du);
-    yhat[k] = p.c * u[k] - w;
-  }
+  const double params[3] = {p.alpha, p.c, p.b1};
+  pzk::pzk_block b{};
+  b.kind = pzk::PZK_BACKLASH_LIKE;
+  b.p = params;
+  b.np = 3;
+  double d[2] = {w0, u[0]};
+  yhat[0] = p.c * u[0] - w0;
+  for (size_t k = 1; k < u.size(); ++k) yhat[k] = pzk::pzk_backlash_step(&b, d, d, u[k]);
 }
 
 void SimulateStack(StackFamily family, std::span<const double> params, std::span<const double> u,

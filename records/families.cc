@@ -4,25 +4,39 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <numbers>
+#include <optional>
 
 #include "io/csv.h"
 #include "model/bimorph.h"
 #include "model/bw_oscillator.h"
-#include "model/modal_simulator.h"
 #include "model/duhem.h"
+#include "model/modal_simulator.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
 #include "records/preisach_family.h"
+#include "records/stepper.h"
 
 namespace pz::records {
 namespace {
 
 constexpr double kTwoPi = 2 * std::numbers::pi;
 
+template <class F>
+std::unique_ptr<Family> Make(const DataScale& scale, const FamilyOptions& options) {
+  return std::make_unique<F>(scale, options);
+}
+KernelShape Substeps(const FamilyOptions& o, std::span<const double>) {
+  return KernelSizes(o.substeps);
+}
+KernelShape Plays(const FamilyOptions& o, std::span<const double>) {
+  return KernelSizes(o.pi_operators);
+}
+KernelShape NoShape(const FamilyOptions&, std::span<const double>) { return {}; }
+
 class StackBoucWenFamily final : public Family {
  public:
+  static const FamilyDef kDef;
   StackBoucWenFamily(const DataScale& s, const FamilyOptions& o)
       : sim_{.substeps = o.substeps}, start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
     ThrowIfError(sim_.Validate());
@@ -33,7 +47,7 @@ class StackBoucWenFamily final : public Family {
                {"d", "y/V", 0.3 * g, 10 * g, true},
                {"fc_Hz", "Hz", std::min(2 * s.f_dom, 0.04 * s.fs), 0.45 * s.fs, true}};
   }
-  std::string name() const override { return "stack-bouc-wen"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "Bouc–Wen stack with driver filter"; }
   std::string equation() const override {
     return "y = LPF_fc[d (u - h)], dh/dt = alpha du/dt - beta |du/dt| h - gamma du/dt |h|";
@@ -57,8 +71,13 @@ class StackBoucWenFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+const FamilyDef StackBoucWenFamily::kDef = {
+    "stack-bouc-wen",         true,    false, true, pzk::PZK_STACK_BOUC_WEN,
+    Make<StackBoucWenFamily>, Substeps};
+
 class BacklashLikeFamily final : public Family {
  public:
+  static const FamilyDef kDef;
   // kAuto is centred for this family (docs/records.md "The initial state at rest": started descended
   // at a rest at the bottom of the range, its fits on real-like stacks predict the minor loops worse,
   // the reversal records by up to 1.8 ×); descended and ascended are taken as given.
@@ -68,7 +87,7 @@ class BacklashLikeFamily final : public Family {
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true}, {"c", "y/V", 0.3 * g, 3 * g, true}, {"B1", "y/V", -3 * g, 5 * g, false}};
   }
-  std::string name() const override { return "backlash-like"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "backlash-like (Coleman–Hodgdon)"; }
   std::string equation() const override { return "dy/dt = alpha |du/dt| (c u - y) + B1 du/dt"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
@@ -86,9 +105,13 @@ class BacklashLikeFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+const FamilyDef BacklashLikeFamily::kDef = {
+    "backlash-like", true, false, true, pzk::PZK_BACKLASH_LIKE, Make<BacklashLikeFamily>, NoShape};
+
 class DuhemFamily final : public Family {
  public:
-  explicit DuhemFamily(const DataScale& s) {
+  static const FamilyDef kDef;
+  DuhemFamily(const DataScale& s, const FamilyOptions&) {
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true},
                {"c", "y/V", 0.3 * g, 3 * g, true},
@@ -96,7 +119,7 @@ class DuhemFamily final : public Family {
                {"b", "y/V", -3 * g, 5 * g, false},
                {"lambda", "1/s", 0, 10 * kTwoPi * s.f_dom, false}};
   }
-  std::string name() const override { return "duhem"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "Duhem-type (cubic curve, relaxation)"; }
   std::string equation() const override {
     return "dy/dt = alpha |du/dt| (f(u) - y) + b du/dt + lambda (f(u) - y), f(u) = c u + c3 u^3";
@@ -112,11 +135,15 @@ class DuhemFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+const FamilyDef DuhemFamily::kDef = {"duhem",           false,  false, true, pzk::PZK_DUHEM,
+                                     Make<DuhemFamily>, NoShape};
+
 class PrandtlIshlinskiiFamily final : public Family {
  public:
+  static const FamilyDef kDef;
   PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)), start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
-  std::string name() const override { return "prandtl-ishlinskii"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "Prandtl–Ishlinskii operator"; }
   std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
@@ -161,8 +188,13 @@ class PrandtlIshlinskiiFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+const FamilyDef PrandtlIshlinskiiFamily::kDef = {
+    "prandtl-ishlinskii",          true, true, true, pzk::PZK_PRANDTL_ISHLINSKII,
+    Make<PrandtlIshlinskiiFamily>, Plays};
+
 class BwOscillatorFamily final : public Family {
  public:
+  static const FamilyDef kDef;
   BwOscillatorFamily(const DataScale& s, const FamilyOptions& o)
       : osc_(o.oscillator), substeps_(o.oscillator.rk4_steps > 0 ? o.oscillator.rk4_steps : 2 * o.substeps) {
     if (substeps_ < 1 || substeps_ > 1000)
@@ -180,7 +212,7 @@ class BwOscillatorFamily final : public Family {
                {"zeta", "-", 0.02, 3, true},               {"share", "-", 0.0, 0.95, false},
                {"beta_gamma", "1/y", 0.01 / y, 100 / y, true}, {"beta_delta", "1/y", -100 / y, 100 / y, false}};
   }
-  std::string name() const override { return "bw-oscillator"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "Bouc–Wen hysteretic oscillator"; }
   std::string equation() const override {
     if (osc_.physical) return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z|";
@@ -297,8 +329,19 @@ class BwOscillatorFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+// RK4 steps per sample: OscillatorOptions' default of the fit (2 × substeps).
+const FamilyDef BwOscillatorFamily::kDef = {
+    "bw-oscillator",
+    false,
+    false,
+    true,
+    pzk::PZK_BW_OSCILLATOR,
+    Make<BwOscillatorFamily>,
+    [](const FamilyOptions& o, std::span<const double>) { return KernelSizes(2 * o.substeps); }};
+
 class BimorphFinFamily final : public Family {
  public:
+  static const FamilyDef kDef;
   BimorphFinFamily(const DataScale& s, const FamilyOptions& o) : geometry_(o.geometry), plant_(o.geometry) {
     // The spec's ranges (model/network.h) are for drives up to 375 V; α scales with 1/drive.
     const double a = 375.0 / s.u_half, g = s.y_half;  // gain: output units per degree
@@ -312,11 +355,42 @@ class BimorphFinFamily final : public Family {
                {"active_length", "m", 0.5 * lp, 2 * lp, true}};
     if (le > 0 && o.geometry.n_tip > 0) params_.push_back({"tip_length", "m", 0.25 * le, 3 * le, true});
   }
-  std::string name() const override { return "bimorph-fin"; }
+  std::string name() const override { return kDef.name; }
   std::string title() const override { return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)"; }
   std::string equation() const override {
     return "M(L_p, L_e) q'' + C q' + K(L_p, L_e) q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, "
            "y = gain * Backlash(atan(w_tip/L))";
+  }
+  /// The step's modal data for the fitted geometry (p[10] = L_p, p[11] = L_e when fitted):
+  /// {1/L, omega_i^2, tip_i g_u,i, tip_i g_z,i} of the modes the library simulates, their number
+  /// in n. The library's FE assembly and eigen-decomposition (model::BimorphPlant,
+  /// model::ModalSimulator), as Simulate does; the kernel discretises from these.
+  static KernelShape Kernel(const FamilyOptions& o, std::span<const double> p) {
+    model::BeamGeometry geo = o.geometry;
+    geo.active_length_m = p[10];
+    const bool tip = p.size() > 11;
+    if (tip) geo.tip_length_m = p[11];
+    if (Status s = geo.Validate(); !s.ok()) {
+      throw InputError("model.params[" +
+                       std::string(tip ? "active_length, tip_length" : "active_length") +
+                       "]: " + s.message());
+    }
+    const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
+    if (Status s = b.Validate(); !s.ok())
+      throw InputError("model.params (bimorph-fin): " + s.message());
+    if (!b.HysteresisBounded()) {
+      throw InputError("model.params[alpha, beta, gamma] = [" + io::FormatNumber(p[2]) + ", " +
+                       io::FormatNumber(p[3]) + ", " + io::FormatNumber(p[4]) +
+                       "]: the Bouc-Wen loop is unbounded (needs alpha = 0, or beta + gamma > 0 "
+                       "and beta - gamma >= 0)");
+    }
+    const model::BimorphPlant plant(geo);
+    const model::ModalSimulator sim(plant);
+    KernelShape shape = KernelSizes(sim.num_modes());
+    shape.data = {1.0 / sim.length_m()};
+    for (auto part : {sim.omega2(), sim.tip_gain_u(), sim.tip_gain_z()})
+      shape.data.insert(shape.data.end(), part.begin(), part.end());
+    return shape;
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
@@ -359,6 +433,11 @@ class BimorphFinFamily final : public Family {
   model::BimorphPlant plant_;
   std::vector<ParamInfo> params_;
 };
+
+// Not in the `--family auto` grid: the fin's bench has its own geometry and protocol.
+const FamilyDef BimorphFinFamily::kDef = {
+    "bimorph-fin",           false, false, false, pzk::PZK_BIMORPH_FIN, Make<BimorphFinFamily>,
+    BimorphFinFamily::Kernel};
 
 }  // namespace
 
@@ -448,31 +527,53 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
   return s;
 }
 
+const std::vector<const FamilyDef*>& Families() {
+  static const std::vector<const FamilyDef*> all = {
+      &StackBoucWenFamily::kDef, &BacklashLikeFamily::kDef,
+      &DuhemFamily::kDef,        &PrandtlIshlinskiiFamily::kDef,
+      &BwOscillatorFamily::kDef, &BimorphFinFamily::kDef,
+      &kPreisachFamily,          &kAsymmetricPiFamily};
+  return all;
+}
+
+const FamilyDef* FindFamily(std::string_view name) {
+  for (const FamilyDef* f : Families())
+    if (name == f->name) return f;
+  return nullptr;
+}
+
+std::string FamilyList(bool initial_state_only) {
+  std::string s;
+  for (const FamilyDef* f : Families())
+    if (!initial_state_only || f->takes_initial_state)
+      s += (s.empty() ? "" : ", ") + std::string(f->name);
+  return s;
+}
+
+const FamilyDef& FamilyNamed(std::string_view name, std::string_view field) {
+  if (const FamilyDef* f = FindFamily(name)) return *f;
+  throw InputError(std::string(field) + " '" + std::string(name) +
+                   "' is unknown (families: " + FamilyList() + ")");
+}
+
 const std::vector<std::string>& FamilyNames() {
-  static const std::vector<std::string> names = {"stack-bouc-wen", "backlash-like", "duhem",
-                                                 "prandtl-ishlinskii", "bw-oscillator", "bimorph-fin",
-                                                 "preisach", "asymmetric-pi"};
+  static const std::vector<std::string> names = [] {
+    std::vector<std::string> v;
+    for (const FamilyDef* f : Families()) v.emplace_back(f->name);
+    return v;
+  }();
   return names;
 }
 
 bool TakesInitialState(std::string_view family) {
-  return family == "prandtl-ishlinskii" || family == "asymmetric-pi" || family == "preisach" ||
-         family == "stack-bouc-wen" || family == "backlash-like";
+  const FamilyDef* f = FindFamily(family);
+  return f != nullptr && f->takes_initial_state;
 }
 
-std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale, const FamilyOptions& o) {
+std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale,
+                                   const FamilyOptions& o) {
   if (o.substeps < 1 || o.substeps > 512) throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
-  if (name == "stack-bouc-wen") return std::make_unique<StackBoucWenFamily>(scale, o);
-  if (name == "backlash-like") return std::make_unique<BacklashLikeFamily>(scale, o);
-  if (name == "duhem") return std::make_unique<DuhemFamily>(scale);
-  if (name == "prandtl-ishlinskii") return std::make_unique<PrandtlIshlinskiiFamily>(scale, o);
-  if (name == "bw-oscillator") return std::make_unique<BwOscillatorFamily>(scale, o);
-  if (name == "bimorph-fin") return std::make_unique<BimorphFinFamily>(scale, o);
-  if (name == "preisach") return MakePreisachFamily(scale, o);
-  if (name == "asymmetric-pi") return MakeAsymmetricPiFamily(scale, o);
-  std::string known;
-  for (const auto& n : FamilyNames()) known += (known.empty() ? "" : ", ") + n;
-  throw InputError("--family '" + std::string(name) + "' is unknown (families: " + known + ")");
+  return FamilyNamed(name, "--family").make(scale, o);
 }
 
 }  // namespace pz::records

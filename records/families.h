@@ -162,15 +162,57 @@ class Family {
   virtual std::vector<double> CheckNominal() const { return {}; }
 };
 
-/// True for the families whose memory at rest FamilyOptions::initial_state sets: prandtl-ishlinskii,
-/// asymmetric-pi, preisach, stack-bouc-wen, backlash-like. (duhem relaxes to its curve at rest, the
-/// oscillator and the fin start from their own equilibrium.)
+/// A family's step in the C kernels (records/stepper.h): the block's sizes beyond its parameters,
+/// and the constants of a family whose block does not take its solved weights.
+struct KernelShape {
+  int n = 0;                 ///< pzk_block::n (plays, levels, sub-steps, modes)
+  int m = 0;                 ///< pzk_block::m (the asymmetric PI's dead-zone knots)
+  std::vector<double> data;  ///< the block's w in place of the weights (the fin's modal data)
+};
+inline KernelShape KernelSizes(int n, int m = 0) {
+  KernelShape s;
+  s.n = n;
+  s.m = m;
+  return s;
+}
+
+/// A plant family as registered (Families()): what is known of it before any data. Each family's
+/// class holds its own as `static const FamilyDef kDef` beside it, and one line of Families()
+/// registers it; the CLI's family list and the `--family auto` grid, the initial-state support, the
+/// stepper's and the export's kernel id and a fit.json's family name are read from here.
+struct FamilyDef {
+  const char* name;
+  bool takes_initial_state;  ///< FamilyOptions::initial_state sets its memory at rest
+  bool linear;               ///< weights solved by non-negative least squares (Family::linear)
+  bool auto_grid;            ///< tried by `--family auto` unless the families are named
+  int kernel;                ///< its step's id in the C kernels (PZK_*, model/kernels/common.h)
+  std::unique_ptr<Family> (*make)(const DataScale&, const FamilyOptions&);
+  /// The kernel block's sizes for a model's options and fitted parameters; throws InputError
+  /// naming the fit.json field for parameters the step cannot take.
+  KernelShape (*kernel_shape)(const FamilyOptions&, std::span<const double> params);
+};
+
+/// Every family, in registration order (the order of the header comment, of `--family auto`'s grid
+/// and of every list shown to a user).
+const std::vector<const FamilyDef*>& Families();
+/// The registered family of that name; null for none.
+const FamilyDef* FindFamily(std::string_view name);
+/// FindFamily, or throws InputError "FIELD 'NAME' is unknown (families: …)".
+const FamilyDef& FamilyNamed(std::string_view name, std::string_view field);
+/// The registered families' names joined by ", " (help texts, errors); `initial_state_only`: those
+/// that take an initial state.
+std::string FamilyList(bool initial_state_only = false);
+
+/// True for the families whose memory at rest FamilyOptions::initial_state sets
+/// (FamilyDef::takes_initial_state). (duhem relaxes to its curve at rest, the oscillator and the
+/// fin start from their own equilibrium.)
 bool TakesInitialState(std::string_view family);
 
-/// Every family name, in the order of the header comment.
+/// Every family name, in registration order.
 const std::vector<std::string>& FamilyNames();
 /// Makes a family for the scale. Throws InputError naming an unknown family (and the known ones)
 /// or bad options.
-std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale, const FamilyOptions& options = {});
+std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale,
+                                   const FamilyOptions& options = {});
 
 }  // namespace pz::records

@@ -8,6 +8,7 @@
 #include "model/preisach.h"
 #include "records/fit.h"
 #include "records/preisach_normal.h"
+#include "records/stepper.h"
 
 namespace pz::records {
 namespace {
@@ -46,7 +47,7 @@ class PreisachFamily final : public Family {
       : grid_{s.u_min, s.u_max, o.pi_operators}, start_(o.initial_state) {
     ThrowIfError(grid_.Validate());
   }
-  std::string name() const override { return "preisach"; }
+  std::string name() const override { return kPreisachFamily.name; }
   std::string title() const override {
     return "discrete Preisach model (" + std::to_string(grid_.levels) + " levels, " + std::to_string(grid_.cells()) +
            " cells on the triangle over the training drive range)";
@@ -139,7 +140,7 @@ class AsymmetricPiFamily final : public Family {
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
         knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)),
         start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
-  std::string name() const override { return "asymmetric-pi"; }
+  std::string name() const override { return kAsymmetricPiFamily.name; }
   std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
   std::string equation() const override {
     return "y = w0 u + sum_i w_i play_{r_i}[u] + sum_j a_j max(u - z_j, 0) + sum_j b_j min(u - z_j, 0), all >= 0";
@@ -359,5 +360,23 @@ std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyO
 std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale, const FamilyOptions& options) {
   return std::make_unique<AsymmetricPiFamily>(scale, options);
 }
+
+const FamilyDef kPreisachFamily = {
+    "preisach",
+    true,
+    true,
+    true,
+    pzk::PZK_PREISACH,
+    MakePreisachFamily,
+    [](const FamilyOptions& o, std::span<const double>) { return KernelSizes(o.pi_operators); }};
+const FamilyDef kAsymmetricPiFamily = {"asymmetric-pi",
+                                       true,
+                                       true,
+                                       true,
+                                       pzk::PZK_ASYMMETRIC_PI,
+                                       MakeAsymmetricPiFamily,
+                                       [](const FamilyOptions& o, std::span<const double>) {
+                                         return KernelSizes(o.pi_operators, kAsymmetricPiKnots);
+                                       }};
 
 }  // namespace pz::records

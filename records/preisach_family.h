@@ -19,6 +19,9 @@ std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyO
 /// each way.
 std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale, const FamilyOptions& options);
 
+/// Their registrations (records/families.cc Families()).
+extern const FamilyDef kPreisachFamily, kAsymmetricPiFamily;
+
 /// One-sided dead zones per side of the asymmetric PI (evenly inside the training drive range).
 inline constexpr int kAsymmetricPiKnots = 6;
 

@@ -49,7 +49,8 @@ bool Takes(const std::vector<std::string>& v, const std::string& x) {
 }
 
 bool LinearFamily(const std::string& f) {
-  return f == "prandtl-ishlinskii" || f == "asymmetric-pi" || f == "preisach";
+  const FamilyDef* def = FindFamily(f);
+  return def != nullptr && def->linear;
 }
 
 /// One fold of the blocked cross-validation: the training records with block k masked (the pieces
@@ -420,8 +421,8 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
                                      model::InitialState state) {
   std::vector<std::string> families = options.families;
   if (families.empty())
-    for (const auto& f : FamilyNames())
-      if (f != "bimorph-fin") families.push_back(f);
+    for (const FamilyDef* f : Families())
+      if (f->auto_grid) families.emplace_back(f->name);
   std::vector<std::vector<EffectKind>> sets = options.effect_sets;
   if (sets.empty()) {
     const EffectKind delay = ParseEffect("delay"), creep = ParseEffect("creep");

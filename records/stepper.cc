@@ -10,24 +10,12 @@
 namespace pz::records {
 namespace {
 
-int FamilyKind(const std::string& family) {
-  if (family == "stack-bouc-wen") return pzk::PZK_STACK_BOUC_WEN;
-  if (family == "backlash-like") return pzk::PZK_BACKLASH_LIKE;
-  if (family == "duhem") return pzk::PZK_DUHEM;
-  if (family == "prandtl-ishlinskii") return pzk::PZK_PRANDTL_ISHLINSKII;
-  if (family == "bw-oscillator") return pzk::PZK_BW_OSCILLATOR;
-  if (family == "preisach") return pzk::PZK_PREISACH;
-  if (family == "asymmetric-pi") return pzk::PZK_ASYMMETRIC_PI;
-  if (family == "bimorph-fin") return pzk::PZK_BIMORPH_FIN;
-  return 0;
-}
-
 // The C step of a records effect (its class's kernel id, model/effect_library.cc).
 int KernelOf(EffectKind e) {
   const int k = e.none() ? 0 : e->kernel();
   const bool drive = e.none() || e->stage() == model::EffectStage::kDrive;
   if (k <= 0 || (drive ? k >= pzk::PZK_STACK_BOUC_WEN : k < pzk::PZK_FRICTION || k >= pzk::PZK_AFFINE))
-    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (records/kernels/effects.h)");
+    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (model/kernels/effects.h)");
   return k;
 }
 
@@ -37,37 +25,12 @@ void CheckFinite(const std::string& field, double v) {
   if (!std::isfinite(v)) throw InputError(FieldError(field, v, "must be finite"));
 }
 
-/// The bimorph fin's modal data for the fitted geometry (p[10] = L_p, p[11] = L_e when fitted):
-/// {1/L, omega_i^2, tip_i g_u,i, tip_i g_z,i} of the modes the library simulates, and their
-/// number into `modes`. The library's FE assembly and eigen-decomposition (model::BimorphPlant,
-/// model::ModalSimulator), as BimorphFinFamily::Simulate does; the kernel discretises from these.
-std::vector<double> FinModalData(const ModelSpec& spec, int& modes) {
-  const std::vector<double>& p = spec.params;
-  model::BeamGeometry geo = spec.family_options().geometry;
-  geo.active_length_m = p[10];
-  const bool tip = p.size() > 11;
-  if (tip) geo.tip_length_m = p[11];
-  if (Status s = geo.Validate(); !s.ok())
-    throw InputError("model.params[" + std::string(tip ? "active_length, tip_length" : "active_length") +
-                     "]: " + s.message());
-  const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
-  if (Status s = b.Validate(); !s.ok()) throw InputError("model.params (bimorph-fin): " + s.message());
-  if (!b.HysteresisBounded()) {
-    throw InputError("model.params[alpha, beta, gamma] = [" + io::FormatNumber(p[2]) + ", " + io::FormatNumber(p[3]) +
-                     ", " + io::FormatNumber(p[4]) +
-                     "]: the Bouc-Wen loop is unbounded (needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0)");
-  }
-  const model::BimorphPlant plant(geo);
-  const model::ModalSimulator sim(plant);
-  modes = sim.num_modes();
-  std::vector<double> w{1.0 / sim.length_m()};
-  for (auto part : {sim.omega2(), sim.tip_gain_u(), sim.tip_gain_z()}) w.insert(w.end(), part.begin(), part.end());
-  return w;
-}
-
 }  // namespace
 
-bool HasStepKernel(const std::string& family) { return FamilyKind(family) != 0; }
+bool HasStepKernel(const std::string& family) {
+  const FamilyDef* f = FindFamily(family);
+  return f != nullptr && f->kernel != 0;
+}
 
 FamilyOptions ModelSpec::family_options() const {
   FamilyOptions o;
@@ -84,9 +47,9 @@ std::shared_ptr<RecordModel> ModelSpec::Model() const {
 
 void ModelSpec::Validate() const {
   if (initial_state != model::InitialState::kCentred && !TakesInitialState(family)) {
-    throw InputError("model.initial_state '" + std::string(model::InitialStateName(initial_state)) + "': " + family +
-                     " starts centred (only prandtl-ishlinskii, asymmetric-pi, preisach, stack-bouc-wen and "
-                     "backlash-like take an initial state)");
+    throw InputError("model.initial_state '" + std::string(model::InitialStateName(initial_state)) +
+                     "': " + family + " starts centred (only " + FamilyList(true) +
+                     " take an initial state)");
   }
   const auto model = Model();
   if (params.size() != model->params().size()) {
@@ -122,13 +85,13 @@ void ModelSpec::Validate() const {
 }
 
 Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
-  const int family_kind = FamilyKind(spec_.family);
-  if (family_kind == 0) {
+  if (!HasStepKernel(spec_.family)) {
     std::string known;
-    for (const auto& n : FamilyNames())
-      if (HasStepKernel(n)) known += (known.empty() ? "" : ", ") + n;
+    for (const FamilyDef* f : Families())
+      if (f->kernel != 0) known += (known.empty() ? "" : ", ") + std::string(f->name);
     throw InputError("family '" + spec_.family + "' has no step kernel (exportable families: " + known + ")");
   }
+  const FamilyDef& def = *FindFamily(spec_.family);
   spec_.Validate();
   std::sort(spec_.effects.begin(), spec_.effects.end());
   const auto model = spec_.Model();
@@ -157,23 +120,15 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   for (size_t i = 0; i < spec_.effects.size(); ++i)
     if (IsDriveEffect(spec_.effects[i]))
       block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
-  block(family_kind, std::vector<double>(spec_.params.begin(), spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
-  size_t family_block = blocks_.size() - 1;
-  auto& fb = blocks_[family_block];
+  block(def.kernel, std::vector<double>(spec_.params.begin(),
+                                        spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
+  const size_t family_block = blocks_.size() - 1;
   // pzk PZK_CENTRED / DESCENDED / ASCENDED / AUTO: the family's own (backlash-like's auto is centred)
-  fb.init = static_cast<int>(model->family().initial_state());
-  switch (family_kind) {
-    case pzk::PZK_STACK_BOUC_WEN: fb.n = spec_.substeps; break;
-    case pzk::PZK_BW_OSCILLATOR: fb.n = 2 * spec_.substeps; break;  // OscillatorOptions' default of the fit
-    case pzk::PZK_PRANDTL_ISHLINSKII:
-    case pzk::PZK_PREISACH: fb.n = spec_.pi_operators; break;
-    case pzk::PZK_ASYMMETRIC_PI:
-      fb.n = spec_.pi_operators;
-      fb.m = kAsymmetricPiKnots;
-      break;
-    case pzk::PZK_BIMORPH_FIN: modal_ = FinModalData(spec_, blocks_[family_block].n); break;
-    default: break;
-  }
+  blocks_[family_block].init = static_cast<int>(model->family().initial_state());
+  KernelShape shape = def.kernel_shape(spec_.family_options(), spec_.params);
+  blocks_[family_block].n = shape.n;
+  blocks_[family_block].m = shape.m;
+  family_data_ = std::move(shape.data);
   for (size_t i = 0; i < spec_.effects.size(); ++i)
     if (!IsDriveEffect(spec_.effects[i]))
       block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
@@ -187,7 +142,8 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
       blocks_[i].n = blocks_[i].nw;
     }
   }
-  const std::vector<double>& w = family_kind == pzk::PZK_BIMORPH_FIN ? modal_ : spec_.weights;
+  // The family's constants: its own (the fin's modal data), else a linear family's solved weights.
+  const std::vector<double>& w = family_data_.empty() ? spec_.weights : family_data_;
   blocks_[family_block].w = w.data();
   blocks_[family_block].nw = static_cast<int>(w.size());
   if (pzk::pzk_layout(blocks_.data(), static_cast<int>(blocks_.size()), &nc_, &nd_) != 0) {

@@ -1,13 +1,13 @@
 // A fitted record model (records/model.h) one sample at a time, forward and inverse, for a
-// controller (issue 23): the C99 step kernels of records/kernels/ — the one source of the
+// controller (issue 23): the C99 step kernels of model/kernels/ — the one source of the
 // per-sample arithmetic, also copied verbatim into the headers `piezoid export` writes
-// (records/export_header.h) — driven from C++.
+// (controller/export_header.h) — driven from C++.
 //
 //   forward  y = Step(u): the drive clipped to the drive limits (counted), the model's output with
 //            polarity and offset; equal to RecordModel::Simulate on the same drive (to rounding:
 //            the kernels do the same operations in the same order).
 //   inverse  u = InverseStep(y_desired): the drive whose one-step output is y_desired, by bisection
-//            on the one-step map (records/kernels/chain.h: exact for the monotone families); a
+//            on the one-step map (model/kernels/chain.h: exact for the monotone families); a
 //            delay of n + s samples wants the reference n samples ahead and keeps s in the map
 //            solved (s <= 1/2), or n + L and undoes s backwards over L samples (s > 1/2:
 //            delay_horizon()); the bimorph fin and a rate-dependence lag over a quarter sample plan
@@ -16,27 +16,16 @@
 // A Stepper is used either forward or inverse after Init, not both.
 #pragma once
 
-#include <cmath>
-#include <math.h>  // NOLINT: the kernels are C99 and call the C library's functions
-
 #include <span>
 #include <string>
 #include <vector>
 
+#include "model/kernels/pzk.h"
 #include "records/families.h"
 #include "records/model.h"
 
 namespace pz::records {
-namespace pzk {
-#include "records/kernels/common.h"
-#include "records/kernels/effects.h"
-#include "records/kernels/stack_models.h"
-#include "records/kernels/play_operators.h"
-#include "records/kernels/bw_oscillator.h"
-#include "records/kernels/fin_modal.h"
-#include "records/kernels/bimorph_fin.h"
-#include "records/kernels/chain.h"
-}  // namespace pzk
+namespace pzk = ::pz::pzk;  // the step kernels (model/kernels/pzk.h)
 
 /// Everything that rebuilds a fitted model (fit.json's "model" section, client/fit_file.h).
 struct ModelSpec {
@@ -100,18 +89,19 @@ class Stepper {
   int dynamic() const { return nd_; }
   /// True when the chain holds a delay (the inverse reads the reference ahead: preview_samples()).
   bool has_delay() const;
-  /// The fraction s of the delay's n + s samples (0 without a delay), and the horizon over which the
-  /// inverse undoes it backwards (0: s <= 1/2, solved in the one-step map; records/kernels/effects.h).
+  /// The fraction s of the delay's n + s samples (0 without a delay), and the horizon over which
+  /// the inverse undoes it backwards (0: s <= 1/2, solved in the one-step map;
+  /// model/kernels/effects.h).
   double delay_fraction() const;
   int delay_horizon() const;
-  /// Samples the inverse plans ahead: 2 with the bimorph fin or a rate-dependence lag over a quarter
-  /// sample (records/kernels/chain.h pzk_chain_inverse_fin: its InverseStep wants the reference one
-  /// sample ahead), else 1.
+  /// Samples the inverse plans ahead: 2 with the bimorph fin or a rate-dependence lag over a
+  /// quarter sample (model/kernels/chain.h pzk_chain_inverse_fin: its InverseStep wants the
+  /// reference one sample ahead), else 1.
   int inverse_plan_samples() const;
   /// Samples the inverse solves ahead of the drive it computes (a reference's preview, a replay's
-  /// look-ahead; records/kernels/chain.h pzk_chain_preview): a delay of n + s samples (0 <= s < 1) n
+  /// look-ahead; model/kernels/chain.h pzk_chain_preview): a delay of n + s samples (0 <= s < 1) n
   /// plus its horizon (0 for s <= 1/2: the response to the drive of sample k shows from n samples
-  /// later; records/kernels/effects.h), plus inverse_plan_samples() - 1.
+  /// later; model/kernels/effects.h), plus inverse_plan_samples() - 1.
   size_t preview_samples() const;
   /// The rate-dependence play's inverse: below its knee the play is a lag of tau_r (z = v - tau_r
   /// v', v' the second-order backward difference), so the drive its one-step inverse solves carries
@@ -129,7 +119,7 @@ class Stepper {
   ModelSpec spec_;
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
-  std::vector<double> modal_;  ///< bimorph fin: {1/L, omega_i^2, tip gains} of its geometry
+  std::vector<double> family_data_;  ///< KernelShape::data (the fin's modal data), else empty
   std::vector<std::vector<double>> kernel_data_;  ///< per block: an effect's EffectDef::KernelData (else empty)
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};

@@ -5,7 +5,7 @@ and the longest functions. A figure to compare before and after a move, not a ch
   scripts/house.py [--root DIR] [--longest N]
 
 Counted: the .cc, .h and .c files git tracks, outside tests/, fuzz/, bench/, build trees and
-generated files. A folder is the first path component (`records/kernels/x.h` is in `records/`).
+generated files. A folder is the first path component (`model/kernels/x.h` is in `model/`).
 An include between folders is an `#include "a/b.h"` whose first component names another folder.
 Function lengths come from scripts/long_functions.py's scanner (signature to closing brace).
 """

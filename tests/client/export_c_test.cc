@@ -12,7 +12,7 @@
 #include <set>
 #include <sstream>
 
-#include "client/export_c.h"
+#include "controller/export_c.h"
 #include "io/network_io.h"
 #include "model/chromosome.h"
 #include "tests/testing/shell.h"
@@ -62,10 +62,10 @@ TEST(ExportC, NamesMustBeCIdentifiers) {
   EXPECT_FALSE(IsCIdentifier(""));
   std::string h;
   const auto nets = Networks();
-  EXPECT_EQ(NetworkToCHeader(nets[0], "my fn", &h).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(controller::NetworkToCHeader(nets[0], "my fn", &h).code(), StatusCode::kInvalidArgument);
   io::SavedNetwork bad = nets[0];
   bad.network.w1(0, 0) = std::nan("");
-  EXPECT_EQ(NetworkToCHeader(bad, "f", &h).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(controller::NetworkToCHeader(bad, "f", &h).code(), StatusCode::kInvalidArgument);
 }
 
 TEST(ExportC, CompiledHeaderPredictsLikeTheLibrary) {
@@ -99,7 +99,7 @@ TEST(ExportC, CompiledHeaderPredictsLikeTheLibrary) {
   }
   for (size_t i = 1; i < nets.size(); ++i) {
     std::string h;
-    ASSERT_TRUE(NetworkToCHeader(nets[i], "net" + std::to_string(i), &h).ok());
+    ASSERT_TRUE(controller::NetworkToCHeader(nets[i], "net" + std::to_string(i), &h).ok());
     std::ofstream(dir / ("net" + std::to_string(i) + ".h")) << h;
   }
 

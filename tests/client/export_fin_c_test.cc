@@ -14,7 +14,7 @@
 #include <iterator>
 #include <sstream>
 
-#include "client/export_c.h"
+#include "controller/export_c.h"
 #include "io/network_io.h"
 #include "tests/testing/shell.h"
 #include "model/modal_simulator.h"
@@ -147,7 +147,7 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
                           "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
   ASSERT_EQ(Shell(cli), 0) << cli << "\n" << std::ifstream(dir_ / "cli.err").rdbuf();
   std::string h;
-  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{1000.0, 0.0, 2, {}}, "finms", &h).ok());
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{1000.0, 0.0, 2, {}}, "finms", &h).ok());
   std::ofstream(dir_ / "finms.h") << h;
 
   struct Case {
@@ -232,9 +232,9 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
   const io::SavedNetwork net = FinNetwork();
   const double b1 = 3.1640625, b2 = -3.076171875;
   std::string h;
-  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{}, "fin", &h).ok());  // horizon 2
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "fin", &h).ok());  // horizon 2
   std::ofstream(dir_ / "fin.h") << h;
-  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, 0.0, 1, {}}, "fin1", &h).ok());
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, 0.0, 1, {}}, "fin1", &h).ok());
   std::ofstream(dir_ / "fin1.h") << h;
   const auto params = net.network.Predict(750, 0.5);
   model::BimorphParams p;
@@ -353,11 +353,11 @@ TEST_F(ExportFinC, BadInputIsReportedNotExtrapolatedSilently) {
   const model::ModalSimulator sim(plant);
   const io::SavedNetwork net = FinNetwork();
   std::string h;
-  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{0.0, 0.0, 2, {}}, "fin", &h).code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, -1.0, 2, {}}, "fin", &h).code(),
+  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{0.0, 0.0, 2, {}}, "fin", &h).code(), StatusCode::kInvalidArgument);
+  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, -1.0, 2, {}}, "fin", &h).code(),
             StatusCode::kInvalidArgument);
-  EXPECT_EQ(NetworkAndFinToCHeader(net, sim, FinPlantExport{}, "2fin", &h).code(), StatusCode::kInvalidArgument);
-  ASSERT_TRUE(NetworkAndFinToCHeader(net, sim, FinPlantExport{100.0, 600.0, 2, {}}, "fin", &h).ok());
+  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "2fin", &h).code(), StatusCode::kInvalidArgument);
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, 600.0, 2, {}}, "fin", &h).ok());
   std::ofstream(dir_ / "fin.h") << h;
   const std::string prog = std::string("#include <stdio.h>\n#include \"fin.h\"\n") + R"(int main(void) {
   double p[7], q[7];

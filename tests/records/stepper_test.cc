@@ -1,11 +1,14 @@
 // The per-sample model of issue 23 (records/stepper.h) and its exported C header
-// (records/export_header.h): for every family with a kernel and every effect, the forward step
+// (controller/export_header.h): for every family with a kernel and every effect, the forward step
 // equals RecordModel::Simulate (polarity and offset applied) to 1e-12 of the output range on a
 // drive with rests, reversals and minor loops; the exported header compiles with the C compiler
 // under -std=c99 -Wall -Wextra -Werror -pedantic and gives the same numbers; the inverse then the
 // forward model returns the reference within 1e-9 of its range for the exactly invertible
 // families; a reference beyond the drive limits is clipped and counted.
+#include "records/stepper.h"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,11 +20,12 @@
 #include <optional>
 #include <sstream>
 #include <string_view>
-#include <unistd.h>
 #include <utility>
 
 #include "model/effects.h"
-#include "records/export_header.h"
+#include "model/kernels/kernel_text.h"
+#include "controller/export_header.h"
+#include "records/fit.h"
 #include "records/stepper.h"
 #include "diagnose/synthetic.h"
 #include "tests/testing/expect_error.h"
@@ -131,8 +135,8 @@ RoundTrip InverseThenForward(const ModelSpec& s, const std::vector<double>& driv
   return rt;
 }
 
-const std::vector<std::string> kFamilies = {"stack-bouc-wen", "backlash-like", "duhem",        "prandtl-ishlinskii",
-                                            "bw-oscillator",  "preisach",      "asymmetric-pi", "bimorph-fin"};
+// Every registered family (records::Families()): a new one is checked without an edit here.
+const std::vector<std::string>& kFamilies = FamilyNames();
 // Every records effect of the library: a new one is checked without an edit here.
 const std::vector<EffectKind>& kEffects = RecordEffects();
 
@@ -388,7 +392,7 @@ ModelSpec WithDelay(ModelSpec s, double samples) {
   return s;
 }
 
-/// A delay of a fractional number of samples n + s (records/kernels/effects.h): for s <= 1/2 the
+/// A delay of a fractional number of samples n + s (model/kernels/effects.h): for s <= 1/2 the
 /// compensator reads the reference n samples ahead and keeps (1 - s) x + s x_prev in the map it
 /// solves; for s > 1/2 it reads n + L ahead (0.79 samples: L = 23, r^L <= 1e-13 with r = (1 - s)/s)
 /// and undoes the delay backwards over them. The model's own noiseless response replays its drive to
@@ -574,7 +578,7 @@ HeaderRun CompileAndRun(const Stepper& st, const std::string& name, const std::v
                    ("pz_stepper_" + name + "_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
                     "_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  std::ofstream(dir / (name + ".h")) << ExportHeader(st, name, "test model");
+  std::ofstream(dir / (name + ".h")) << controller::ExportHeader(st, name, "test model");
   std::ofstream(dir / "main.c") << "#include <stdio.h>\n#include <stdlib.h>\n#include \"" << name << ".h\"\n"
                                 << "int main(void) {\n  " << name << "_state s, v;\n  double u, y;\n  int first = 1;\n"
                                 << "  FILE *in = fopen(\"in.txt\", \"r\");\n  if (!in) return 2;\n"
@@ -649,8 +653,8 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     name += "_" + std::to_string(effects.size()) + "_" + model::InitialStateName(state);
     if (delay >= 0) name += "_d" + std::to_string(static_cast<int>(100 * delay));
     // The kernels' guard is their text's hash: the same for every header of these kernels.
-    const std::string text = ExportHeader(st, name, "test model");
-    EXPECT_NE(text.find("#ifndef " + KernelGuard() + "\n"), std::string::npos) << name;
+    const std::string text = controller::ExportHeader(st, name, "test model");
+    EXPECT_NE(text.find("#ifndef " + pzk::KernelGuard() + "\n"), std::string::npos) << name;
     const HeaderRun run = CompileAndRun(st, name, r.u, mine);
     ASSERT_EQ(run.forward.size(), r.size()) << name;
     EXPECT_LE(MaxDiff(run.forward, ref), 1e-12 * Range(ref)) << name;
@@ -661,9 +665,88 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     }
   }
 }
+
+// The family registry (records/families.h Families()), walked end to end: each registered family is
+// found by its name (the fit.json reader's records::FamilyNamed) and made under it, says whether it
+// is linear and takes an initial state as its registration does, fits a short record of its own
+// response (a few Levenberg–Marquardt steps from its truth, or its weights solved), and its
+// fit's exported C header steps as the C++ stepper and RecordModel::Simulate do, to 1e-12 of the
+// output's range. A new family is covered by its registration line.
+TEST(FamilyRegistry, EveryFamilyFitsExportsAndStepsAsTheCxxModel) {
+  io::Record r = TestRecord();
+  const size_t n = 1200;
+  r.t.resize(n);
+  r.u.resize(n);
+  r.y.resize(n);
+  r.end_scored = n;
+  ASSERT_FALSE(Families().empty());
+  EXPECT_EQ(FindFamily("jiles-atherton"), nullptr);
+  PZ_EXPECT_HAS(testing::InputErrorOf([] { FamilyNamed("jiles-atherton", "model.family"); }),
+                "model.family 'jiles-atherton' is unknown (families: " + FamilyList() + ")");
+  for (const FamilyDef* def : Families()) {
+    const std::string name = def->name;
+    SCOPED_TRACE(name);
+    EXPECT_EQ(FindFamily(name), def);
+    EXPECT_EQ(&FamilyNamed(name, "model.family"), def);
+    EXPECT_NE(def->kernel, 0) << "a family needs its step kernel (model/kernels/)";
+    const DataScale scale = MeasureScale({&r});
+    FamilyOptions descended;
+    descended.initial_state = model::InitialState::kDescended;
+    const auto family = MakeFamily(name, scale, descended);
+    EXPECT_EQ(family->name(), name);
+    EXPECT_EQ(family->linear(), def->linear);
+    EXPECT_EQ(TakesInitialState(name), def->takes_initial_state);
+    EXPECT_EQ(family->initial_state(), def->takes_initial_state ? model::InitialState::kDescended
+                                                                : model::InitialState::kCentred);
+    // The truth: the family's own response on the drive, fitted from beside it.
+    ModelSpec truth = Spec(name, {}, r);
+    truth.polarity = 1;  // the record's offset is fixed at 0 (TestRecord)
+    truth.offset = 0;
+    io::RecordSet set;
+    set.records.push_back(r);
+    set.records[0].y = Reference(truth, r);
+    set.records[0].role = model::CaseRole::kTrain;
+    FitOptions o;
+    o.family = name;
+    o.family_options.pi_operators = truth.pi_operators;
+    o.threads = 1;
+    o.uncertainty = false;
+    o.lm.max_iterations = 2;
+    o.polish_from = truth.params;
+    const FitResult fit = FitRecords(set, o);
+    const double y_half = fit.model->scale().y_half;
+    // rms within 1 % of the half range (a linear family's weights are regularised).
+    EXPECT_LE(fit.train_mse, 1e-4 * y_half * y_half) << "its own response, fitted from its truth";
+    // The model section of its fit.json (client/fit_file.cc FitModelJson), as a ModelSpec.
+    ModelSpec s;
+    s.family = fit.model->family().name();
+    s.pi_operators = truth.pi_operators;
+    s.initial_state = fit.model->family().initial_state();
+    s.scale = fit.model->scale();
+    s.dt = r.dt;
+    s.params = fit.params;
+    s.weights = fit.weights;
+    s.polarity = s.scale.polarity;
+    s.offset = fit.metrics[0].offset;
+    s.drive_min = s.scale.u_min;
+    s.drive_max = s.scale.u_max;
+    const auto ref = Reference(s, r);
+    ASSERT_GT(Range(ref), 0);
+    Stepper st(s);
+    const auto mine = Forward(st, r.u);
+    EXPECT_LE(MaxDiff(mine, ref), 1e-12 * Range(ref));
+    std::string c_name = "pz_registry_" + name;
+    std::replace(c_name.begin(), c_name.end(), '-', '_');
+    EXPECT_NE(controller::ExportHeader(st, c_name, "registry").find("PZK_"), std::string::npos);
+    const HeaderRun run = CompileAndRun(st, c_name, r.u, mine);
+    ASSERT_EQ(run.forward.size(), r.size());
+    EXPECT_LE(MaxDiff(run.forward, mine), 1e-12 * Range(ref));
+    EXPECT_LE(MaxDiff(run.forward, ref), 1e-12 * Range(ref));
+  }
+}
 #endif
 
-/// The fin's compensator plans two samples (records/kernels/chain.h pzk_chain_horizon): given the
+/// The fin's compensator plans two samples (model/kernels/chain.h pzk_chain_horizon): given the
 /// reference one sample ahead it follows a reachable one closely where the fin has no dead band;
 /// with one, where theta must cross the band (the angle held) within two samples it cannot: a
 /// few per cent of the band.

@@ -1,16 +1,16 @@
-#include "client/export_fin_c.h"
+#include "controller/export_fin_c.h"
 
 #include <cmath>
 #include <cstdio>
 #include <sstream>
 
-#include "records/export_header.h"
+#include "model/kernels/kernel_text.h"
 
-namespace pz::client {
+namespace pz::controller {
 namespace {
 
 // The C text of the plant with "pzf_" / "PZF_" for the header's name and prefix, and @TABLES@ for
-// the plant's constants; it follows the modal helpers of records/kernels/fin_modal.h (the records
+// the plant's constants; it follows the modal helpers of model/kernels/fin_modal.h (the records
 // bimorph-fin kernel's too: one source). Each function names the C++ it mirrors; keep them in step.
 constexpr const char* kPlant = R"C(
 /* ======================================================================================== */
@@ -361,8 +361,8 @@ Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& netwo
   Replace(s, "@NAME@", name);
   Replace(s, "pzf_", name + "_");
   Replace(s, "PZF_", CUpper(name) + "_");
-  *text = "\n" + records::FinModalSource() + s;
+  *text = "\n" + pzk::FinModalSource() + s;
   return Status::Ok();
 }
 
-}  // namespace pz::client
+}  // namespace pz::controller

@@ -58,7 +58,7 @@ static inline double pzk_creep_step(const pzk_block *b, const double *c, const d
  * horizon L > 0 the compensator's {head, w_last, y_last, dw_last, primed, w[L + 1]} after them
  * (pzk_chain_inverse_split). Forward it only ever steps in place.
  *
- * The compensator (records/kernels/chain.h pzk_chain_inverse) reads the reference ahead; what remains
+ * The compensator (model/kernels/chain.h pzk_chain_inverse) reads the reference ahead; what remains
  * of the delay is w_k = (1 - s) x_k + s x_{k-1} (x its input at the compensator's sample k):
  *   s <= 1/2 (horizon 0): the reference n samples ahead, w kept in the one-step map solved
  *     (pzk_delay_inverse_step): exact; an error in x_{k-1} comes back times -s / (1 - s), which

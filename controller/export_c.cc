@@ -1,12 +1,12 @@
-#include "client/export_c.h"
+#include "controller/export_c.h"
 
 #include <cctype>
 #include <cstdio>
 #include <sstream>
 
-#include "client/export_fin_c.h"
+#include "controller/export_fin_c.h"
 
-namespace pz::client {
+namespace pz::controller {
 
 namespace {
 
@@ -206,4 +206,4 @@ Status NetworkAndFinToCHeader(const io::SavedNetwork& saved, const model::ModalS
   return WriteHeader(saved, name, &plant, options, header);
 }
 
-}  // namespace pz::client
+}  // namespace pz::controller

@@ -176,7 +176,7 @@ static inline long pzk_chain_preview(const pzk_block *b, int nb, const double *c
 }
 
 /* The two-sample compensator of a chain that one sample cannot invert: the bimorph fin's (a chain
- * holding a PZK_BIMORPH_FIN block), after the HGANN fin plant's header (client/export_fin_c.h
+ * holding a PZK_BIMORPH_FIN block), after the HGANN fin plant's header (controller/export_fin_c.h
  * pzf_inverse_step), and a chain whose rate-dependence lags over a quarter sample
  * (pzk_rate_dependence_plans: its one-step inverse is unstable; planned, the drive stays within a
  * few tenths of a volt of a model's own on the rate sets of docs/deploy.md). It plans two samples: the drive goes to
@@ -345,7 +345,7 @@ static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c
   return u;
 }
 
-/* The compensator with a delay whose fraction is over a half (its horizon L > 0, records/kernels/
+/* The compensator with a delay whose fraction is over a half (its horizon L > 0, model/kernels/
  * effects.h): the blocks after the delay solved one step for its output w, n + L samples ahead of the
  * drive (their own limits, last drive and output kept in the delay's state: the drive's limits,
  * widened by their span on both sides when drive effects come before the delay, which may take their

@@ -3,7 +3,7 @@
  * their zero crossings, the quintic Hermite hold of z, one mode's update, the atan series and the
  * backlash step, operation for operation as the library. One source for the records family's
  * kernel (bimorph_fin.h) and the HGANN fin plant of `piezoid export --plant`
- * (client/export_fin_c.cc), which copies this file into its header. Guarded, so that both kinds of
+ * (controller/export_fin_c.cc), which copies this file into its header. Guarded, so that both kinds of
  * header can be included in one translation unit. */
 #ifndef PZK_FIN_MODAL_H_
 #define PZK_FIN_MODAL_H_
@@ -335,7 +335,7 @@ typedef void (*pzk_fin_substep_fn)(void *ctx, double tau, int regular, pzk_fin_z
  * nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero (ModalSimulator::RunSampled's loop
  * body): the modes advance through `substep` (ctx its data); returns z at the sample's end. The one
  * loop of the records kernel (bimorph_fin.h pzk_fin_step) and the HGANN fin header
- * (client/export_fin_c.cc pzf_advance). */
+ * (controller/export_fin_c.cc pzf_advance). */
 static inline double pzk_fin_sample(double alpha, double beta, double gamma, double u0, double z0, double v,
                                     double tau, int nsub, pzk_fin_substep_fn substep, void *ctx) {
   const double r = (v - u0) / tau, ts = tau / nsub, eps = 1e-9 * ts;

@@ -1,6 +1,6 @@
 /* bimorph-fin (records/families.h, model/modal_simulator.h): the fin's modal path on the sampled
  * drive (u linear between samples), times the output gain. The same recursion as the --plant header
- * of the HGANN fin (client/export_fin_c.cc pzf_advance: the one sample loop of fin_modal.h,
+ * of the HGANN fin (controller/export_fin_c.cc pzf_advance: the one sample loop of fin_modal.h,
  * pzk_fin_sample, over the same helpers), over the block's arrays for any number of modes.
  * p = {mu, delta, alpha, beta, gamma, a1, a2, b1, b2_abs, gain, L_p[, L_e]} (b2 = -b2_abs);
  * n = modes; w = {1/L, omega_i^2 (n), tip_i g_u,i (n), tip_i g_z,i (n)}: the beam's modal data for
@@ -132,7 +132,7 @@ static inline double pzk_fin_step(const pzk_block *b, const double *c, const dou
   return p[9] * o[2 * n + 3];
 }
 
-/* The inverse's trial step (records/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
+/* The inverse's trial step (model/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
  * the angle pushed through the backlash: theta - a1 (dir > 0) or theta + a2 (dir < 0), within the
  * saturations [b2, b1]. */
 static inline double pzk_fin_step_through(const pzk_block *b, const double *c, const double *d, double *o, double v,

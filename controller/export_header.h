@@ -1,5 +1,5 @@
 // The self-contained C99 header of a fitted record model (issue 23, `piezoid export FIT.json`):
-// the step kernels of records/kernels/ copied verbatim (embedded at build time, so the header and
+// the step kernels of model/kernels/ copied verbatim (embedded at build time, so the header and
 // the C++ Stepper run the same source), the model's blocks with every parameter as an exact
 // hex-float literal, a state struct of fixed size and
 //
@@ -14,20 +14,10 @@
 
 #include "records/stepper.h"
 
-namespace pz::records {
-
-/// The kernels' C source, in include order (records/kernels/*.h).
-std::string KernelSource();
-/// The include guard of the kernels in an exported header: PZK_KERNELS_ and a 64-bit hash of
-/// KernelSource() in hex (headers exported from the same kernels share them).
-std::string KernelGuard();
-
-/// The bimorph fin's modal helpers (records/kernels/fin_modal.h, guarded): also the base of the
-/// HGANN fin plant's header (client/export_fin_c.h).
-std::string FinModalSource();
+namespace pz::controller {
 
 /// The header text for `name` (a C identifier, checked: InputError). `comment` goes into the
 /// header's first comment (provenance).
-std::string ExportHeader(const Stepper& stepper, const std::string& name, const std::string& comment);
+std::string ExportHeader(const records::Stepper& stepper, const std::string& name, const std::string& comment);
 
-}  // namespace pz::records
+}  // namespace pz::controller

@@ -1,4 +1,4 @@
-/* piezoid step kernels, part 1 of the one source (records/stepper.h, docs/deploy.md): the block
+/* piezoid step kernels, part 1 of the one source (model/kernels/pzk.h, docs/deploy.md): the block
  * descriptor and the exact-integration helpers. Plain C99 over double arrays, compiled into the
  * C++ stepper (records/stepper.cc) and copied verbatim into every header `piezoid export` writes.
  * Nothing here allocates, keeps a global or needs more than <math.h>. */
