@@ -126,7 +126,7 @@ model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<doub
 std::vector<CaseEstimate> FitCases(const HgannFitness& fitness,
                                    const std::vector<int>& case_indices,
                                    const TrendSeedOptions& options, int64_t* simulations,
-                                   const Array7* hold) {
+                                   const Array7* hold, const Array7* start) {
   const HgannFitnessConfig& cfg = fitness.config();
   std::vector<int> free;  // the fitted coordinates (the others held)
   for (int k = 0; k < kOut; ++k)
@@ -161,8 +161,13 @@ std::vector<CaseEstimate> FitCases(const HgannFitness& fitness,
       return true;
     };
     std::vector<std::vector<double>> starts;
-    if (!previous.empty()) starts.push_back(previous);
-    for (const auto& s : fixed) starts.push_back(s);
+    if (start) {
+      starts.emplace_back();
+      for (int k : free) starts.back().push_back(std::clamp((*start)[k], 0.0, 1.0));
+    } else {
+      if (!previous.empty()) starts.push_back(previous);
+      for (const auto& s : fixed) starts.push_back(s);
+    }
     opt::LmResult best;
     best.cost = std::numeric_limits<double>::infinity();
     for (const auto& s0 : starts) {
@@ -185,6 +190,9 @@ std::vector<CaseEstimate> FitCases(const HgannFitness& fitness,
       }
       const double rho = den > 0 ? std::clamp(num / den, 0.0, 0.95) : 0.0;
       const double inflation = std::sqrt((1 + rho) / (1 - rho));
+      if (static_cast<int>(best.r.size()) > nf)
+        e.residual_var =
+            best.cost / static_cast<double>(best.r.size() - nf) * inflation * inflation;
       std::vector<double> sigma = Sigmas(best.jacobian, best.cost);
       const Array7 x = full(best.x);
       e.sigma.fill(std::numeric_limits<double>::infinity());

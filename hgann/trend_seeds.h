@@ -57,6 +57,8 @@ struct CaseEstimate {
   std::array<double, model::kNetworkOutputs> value{};  ///< in the parameters' units
   std::array<double, model::kNetworkOutputs> sigma{};  ///< 1-σ of value (+inf: not identifiable)
   double pi = 0;                                       ///< PI of the case with these [deg²]
+  /// The variance of one residual that σ is scaled by: PI / (N − free) · (1 + ρ) / (1 − ρ).
+  double residual_var = 0;
   bool ok = false;                                     ///< a start could be simulated
 };
 
@@ -80,11 +82,13 @@ struct TrendSeeds {
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
 
 /// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration; `hold`
-/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf).
+/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf);
+/// `start` (scaled values) is then the only start of every case's fit.
 std::vector<CaseEstimate> FitCases(
     const HgannFitness& fitness, const std::vector<int>& case_indices,
     const TrendSeedOptions& options, int64_t* simulations = nullptr,
-    const std::array<double, model::kNetworkOutputs>* hold = nullptr);
+    const std::array<double, model::kNetworkOutputs>* hold = nullptr,
+    const std::array<double, model::kNetworkOutputs>* start = nullptr);
 
 /// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
 /// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0,
