@@ -252,45 +252,53 @@ bool ProfileDeparts(const hgann::HgannFitness& fitness, int index, const hgann::
   return !p.ok || p.pi - e.pi > std::max(4 * e.residual_var, e.pi);
 }
 
+/// Every case fitted alone; a parameter that half the cases or more leave free (μ against δ: one
+/// frequency sees the damping as one number) is held at the network's own value in each case and
+/// the case refitted: the other estimates then answer "what does this case want, given the
+/// network's μ". `loose` says which were held.
+std::vector<hgann::CaseEstimate> PerCaseEstimates(
+    const hgann::HgannFitness& fitness, const IdentifyResult& result,
+    const hgann::TrendSeedOptions& so, std::array<bool, model::kNetworkOutputs>* loose) {
+  std::vector<int> all;
+  for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
+  std::vector<hgann::CaseEstimate> estimates = hgann::FitCases(fitness, all, so);
+  loose->fill(false);
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    const auto& range = fitness.config().ranges[k];
+    int n = 0, free = 0;
+    for (const hgann::CaseEstimate& e : estimates) {
+      if (!e.ok) continue;
+      ++n;
+      free += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * (range.upper - range.lower));
+    }
+    (*loose)[k] = n > 0 && 2 * free >= n;
+  }
+  if (std::none_of(loose->begin(), loose->end(), [](bool b) { return b; })) return estimates;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const auto& r = ResultOf(result, fitness.config().cases[i].number).params;
+    const auto net =
+        model::NetworkParameters{r.mu, r.delta, r.alpha, r.beta, r.gamma, r.a1, r.a2}.ToArray();
+    std::array<double, model::kNetworkOutputs> hold;
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const auto& range = fitness.config().ranges[k];
+      const double width = range.upper - range.lower;
+      hold[k] = (*loose)[k] && width > 0 ? (net[k] - range.lower) / width : std::nan("");
+    }
+    estimates[i] = hgann::FitCases(fitness, {all[i]}, so, nullptr, &hold).front();
+  }
+  return estimates;
+}
+
 PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::CaseSet& set,
                                      const hgann::HgannFitness& fitness,
                                      const IdentifyResult& result) {
   static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
                                                                    "γ", "a1", "a2"};
   PerCaseCheck out;
-  std::vector<int> all;
-  for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
   hgann::TrendSeedOptions so;
   so.threads = std::max(1, options.threads > 0 ? options.threads : 2);
-  out.estimates = hgann::FitCases(fitness, all, so);
-  // A parameter that half the cases or more leave free (μ against δ: one frequency sees the
-  // damping as one number) is held at the network's own value in each case and the case refitted:
-  // the other estimates then answer "what does this case want, given the network's μ".
   std::array<bool, model::kNetworkOutputs> loose{};
-  for (int k = 0; k < model::kNetworkOutputs; ++k) {
-    const auto& range = fitness.config().ranges[k];
-    int n = 0, free = 0;
-    for (const hgann::CaseEstimate& e : out.estimates) {
-      if (!e.ok) continue;
-      ++n;
-      free += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * (range.upper - range.lower));
-    }
-    loose[k] = n > 0 && 2 * free >= n;
-  }
-  if (std::any_of(loose.begin(), loose.end(), [](bool b) { return b; })) {
-    for (size_t i = 0; i < all.size(); ++i) {
-      const auto& r = ResultOf(result, fitness.config().cases[i].number).params;
-      const auto net =
-          model::NetworkParameters{r.mu, r.delta, r.alpha, r.beta, r.gamma, r.a1, r.a2}.ToArray();
-      std::array<double, model::kNetworkOutputs> hold;
-      for (int k = 0; k < model::kNetworkOutputs; ++k) {
-        const auto& range = fitness.config().ranges[k];
-        const double width = range.upper - range.lower;
-        hold[k] = loose[k] && width > 0 ? (net[k] - range.lower) / width : std::nan("");
-      }
-      out.estimates[i] = hgann::FitCases(fitness, {all[i]}, so, nullptr, &hold).front();
-    }
-  }
+  out.estimates = PerCaseEstimates(fitness, result, so, &loose);
   std::ostringstream md, term, missed;
   md << "## The network against per-case fits\n\n"
      << "Each case fitted alone (the seven parameters, its b1 and b2; Levenberg–Marquardt from "
@@ -336,7 +344,7 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
         continue;
       }
       bool departs = !free && std::abs(net[k] - e.value[k]) > 2 * e.sigma[k];
-      if (departs) departs = ProfileDeparts(fitness, all[i], e, k, net, loose, so);
+      if (departs) departs = ProfileDeparts(fitness, static_cast<int>(i), e, k, net, loose, so);
       const std::string cell = Fmt(net[k], 3) + " / " + Fmt(e.value[k], 3) +
                                (free ? " (free)" : " ± " + Fmt(e.sigma[k], 2));
       md << " " << (departs ? "**" + cell + "**" : cell) << " |";
