@@ -227,54 +227,90 @@ struct PerCaseCheck {
   std::vector<hgann::CaseEstimate> estimates;
 };
 
+/// The profile test of a departure beyond 2 σ (σ is the linearisation's, which understates the
+/// α–β–γ–backlash valley): parameter k held at the network's value (and the loose ones at theirs,
+/// as in the estimate), the case refitted from the network's parameters (LM only lowers the PI
+/// from there; from the case's own estimate it stuck on backlash kinks). The network's value
+/// departs only if that leaves the case's PI above its own by more than 4 residual variances
+/// (Δχ² > 4: 2 σ of the profile) and by more than its own PI: the per-case fit absorbs correlated
+/// noise and model error that the residuals' lag-1 correction does not see (the nominal bench's
+/// truth, quantised into a network, is within 1.9 × every case's own PI and was flagged in 9
+/// places by Δχ² alone).
+bool ProfileDeparts(const hgann::HgannFitness& fitness, int index, const hgann::CaseEstimate& e,
+                    int k, const std::array<double, model::kNetworkOutputs>& net,
+                    const std::array<bool, model::kNetworkOutputs>& loose,
+                    const hgann::TrendSeedOptions& options) {
+  std::array<double, model::kNetworkOutputs> hold, start;
+  for (int m = 0; m < model::kNetworkOutputs; ++m) {
+    const auto& range = fitness.config().ranges[m];
+    const double width = range.upper - range.lower;
+    start[m] = width > 0 ? (net[m] - range.lower) / width : 0.0;
+    hold[m] = (m == k || loose[m]) ? start[m] : std::nan("");
+  }
+  const hgann::CaseEstimate p = hgann::FitCases(fitness, {index}, options, nullptr, &hold, &start)
+                                    .front();
+  return !p.ok || p.pi - e.pi > std::max(4 * e.residual_var, e.pi);
+}
+
+/// Every case fitted alone; a parameter that half the cases or more leave free (μ against δ: one
+/// frequency sees the damping as one number) is held at the network's own value in each case and
+/// the case refitted: the other estimates then answer "what does this case want, given the
+/// network's μ". `loose` says which were held.
+std::vector<hgann::CaseEstimate> PerCaseEstimates(
+    const hgann::HgannFitness& fitness, const IdentifyResult& result,
+    const hgann::TrendSeedOptions& so, std::array<bool, model::kNetworkOutputs>* loose) {
+  std::vector<int> all;
+  for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
+  std::vector<hgann::CaseEstimate> estimates = hgann::FitCases(fitness, all, so);
+  loose->fill(false);
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    const auto& range = fitness.config().ranges[k];
+    int n = 0, free = 0;
+    for (const hgann::CaseEstimate& e : estimates) {
+      if (!e.ok) continue;
+      ++n;
+      free += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * (range.upper - range.lower));
+    }
+    (*loose)[k] = n > 0 && 2 * free >= n;
+  }
+  if (std::none_of(loose->begin(), loose->end(), [](bool b) { return b; })) return estimates;
+  for (size_t i = 0; i < all.size(); ++i) {
+    const auto& r = ResultOf(result, fitness.config().cases[i].number).params;
+    const auto net =
+        model::NetworkParameters{r.mu, r.delta, r.alpha, r.beta, r.gamma, r.a1, r.a2}.ToArray();
+    std::array<double, model::kNetworkOutputs> hold;
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const auto& range = fitness.config().ranges[k];
+      const double width = range.upper - range.lower;
+      hold[k] = (*loose)[k] && width > 0 ? (net[k] - range.lower) / width : std::nan("");
+    }
+    estimates[i] = hgann::FitCases(fitness, {all[i]}, so, nullptr, &hold).front();
+  }
+  return estimates;
+}
+
 PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::CaseSet& set,
                                      const hgann::HgannFitness& fitness,
                                      const IdentifyResult& result) {
   static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
                                                                    "γ", "a1", "a2"};
   PerCaseCheck out;
-  std::vector<int> all;
-  for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
   hgann::TrendSeedOptions so;
   so.threads = std::max(1, options.threads > 0 ? options.threads : 2);
-  out.estimates = hgann::FitCases(fitness, all, so);
-  // A parameter that half the cases or more leave free (μ against δ: one frequency sees the
-  // damping as one number) is held at the network's own value in each case and the case refitted:
-  // the other estimates then answer "what does this case want, given the network's μ".
   std::array<bool, model::kNetworkOutputs> loose{};
-  for (int k = 0; k < model::kNetworkOutputs; ++k) {
-    const auto& range = fitness.config().ranges[k];
-    int n = 0, free = 0;
-    for (const hgann::CaseEstimate& e : out.estimates) {
-      if (!e.ok) continue;
-      ++n;
-      free += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * (range.upper - range.lower));
-    }
-    loose[k] = n > 0 && 2 * free >= n;
-  }
-  if (std::any_of(loose.begin(), loose.end(), [](bool b) { return b; })) {
-    for (size_t i = 0; i < all.size(); ++i) {
-      const auto& r = ResultOf(result, fitness.config().cases[i].number).params;
-      const auto net =
-          model::NetworkParameters{r.mu, r.delta, r.alpha, r.beta, r.gamma, r.a1, r.a2}.ToArray();
-      std::array<double, model::kNetworkOutputs> hold;
-      for (int k = 0; k < model::kNetworkOutputs; ++k) {
-        const auto& range = fitness.config().ranges[k];
-        const double width = range.upper - range.lower;
-        hold[k] = loose[k] && width > 0 ? (net[k] - range.lower) / width : std::nan("");
-      }
-      out.estimates[i] = hgann::FitCases(fitness, {all[i]}, so, nullptr, &hold).front();
-    }
-  }
-  std::ostringstream md, term;
+  out.estimates = PerCaseEstimates(fitness, result, so, &loose);
+  std::ostringstream md, term, missed;
   md << "## The network against per-case fits\n\n"
      << "Each case fitted alone (the seven parameters, its b1 and b2; Levenberg–Marquardt from "
      << so.case_starts
      << " starts; a parameter that most cases leave free is held at the network's "
      << "value in each case, shown `(held)`): its PI and each parameter as `network / per-case ± "
         "σ`. **Bold**: the "
-     << "network departs from the case's own estimate by more than 2 σ; `(free)`: the case alone "
-        "does not "
+     << "network departs from the case's own estimate by more than 2 σ and the case, refitted "
+        "with the parameter held at the network's value, gains more PI than 4 residual variances "
+        "(the profile's 2 σ: the linear σ understates the α–β–γ–backlash valley) and than its own "
+        "PI (the profile's PI above twice the case's); `(free)`: "
+        "the case alone does not "
      << "pin the parameter down (σ infinite or above a quarter of its range), so no claim is "
         "made.\n\n"
      << "| case | role | PI network / per-case [deg²] |";
@@ -307,7 +343,8 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
         md << " " << Fmt(net[k], 3) << " (held) |";
         continue;
       }
-      const bool departs = !free && std::abs(net[k] - e.value[k]) > 2 * e.sigma[k];
+      bool departs = !free && std::abs(net[k] - e.value[k]) > 2 * e.sigma[k];
+      if (departs) departs = ProfileDeparts(fitness, static_cast<int>(i), e, k, net, loose, so);
       const std::string cell = Fmt(net[k], 3) + " / " + Fmt(e.value[k], 3) +
                                (free ? " (free)" : " ± " + Fmt(e.sigma[k], 2));
       md << " " << (departs ? "**" + cell + "**" : cell) << " |";
@@ -320,12 +357,28 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
       }
     }
     md << "\n";
+    // A case the network misses as a whole (its PI above twice the case's own and by more than 4
+    // residual variances) that no parameter explains alone: they trade along the valley.
+    if (e.ok && r.pi - e.pi > std::max(4 * e.residual_var, e.pi) &&
+        std::none_of(by_param.begin(), by_param.end(), [&](const auto& kv) {
+          return std::find(kv.second.begin(), kv.second.end(), bc.number) != kv.second.end();
+        })) {
+      missed << (missed.tellp() > 0 ? "; " : "") << "case " << bc.number << ": "
+             << Fmt(r.pi, 3) << " against its own " << Fmt(e.pi, 3) << " deg²";
+      term << "  case " << bc.number << (training ? " (training)" : " (withheld)") << ": PI "
+           << Fmt(r.pi, 3) << " deg², its own fit's " << Fmt(e.pi, 3)
+           << " (no one parameter explains it)\n";
+    }
   }
   md << "\n";
-  if (departures == 0) {
+  if (missed.tellp() > 0)
+    md << "Missed as a whole (the network's PI above twice the case's own, but no parameter "
+          "departs alone: they trade along the α–β–γ–backlash valley): "
+       << missed.str() << ".\n\n";
+  if (departures == 0 && missed.tellp() == 0) {
     md << "The network agrees with every per-case estimate that its case pins down (within 2 "
           "σ).\n\n";
-  } else {
+  } else if (departures > 0) {
     md << departures << " departures beyond 2 σ. ";
     for (const auto& [k, cases] : by_param) {
       md << kSymbols[k] << " in case" << (cases.size() > 1 ? "s" : "");
@@ -341,7 +394,7 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
   }
   out.markdown = md.str();
   out.terminal =
-      departures == 0
+      term.tellp() == 0
           ? std::string()
           : "the network departs from a per-case fit by more than 2 σ (report.md):\n" + term.str();
   return out;

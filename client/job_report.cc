@@ -106,6 +106,7 @@ IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const fs::path& out_
     }
     o.spread_penalty = h->spread_penalty;
     o.trend_seeds = h->trend_seeds;
+    o.preset = h->preset.empty() ? job::kDefaultHgannPreset : h->preset;
   }
   o.plots = plots;
   o.job_id = job.info.job_id;

@@ -202,6 +202,8 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
             "must be finite and >= 0 [deg^2]");
   c.Require(RangesPreset(h.ranges_preset).has_value(), "hgann.ranges_preset", "\"" + h.ranges_preset + "\"",
             kRangesPresetRule);
+  c.Require(job::HgannSearchPreset(h.preset).has_value(), "hgann.preset", "\"" + h.preset + "\"",
+            job::kHgannPresetRule);
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];

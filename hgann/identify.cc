@@ -18,11 +18,8 @@ std::optional<model::ParameterRanges> RangesPreset(std::string_view name) {
 }
 
 std::optional<SearchSettings> SearchPreset(std::string_view name) {
-  if (name == "paper") return SearchSettings{};
-  if (name == "robust")
-    return SearchSettings{
-        .islands = 4, .generations = 250, .spread_penalty = 10, .trend_seeds = true};
-  return std::nullopt;
+  if (name.empty()) return std::nullopt;  // `--preset ""`: a name is asked for
+  return job::HgannSearchPreset(name);
 }
 
 double PaperTable8Pi(double v, double f) {

@@ -15,6 +15,7 @@
 #include "hgann/trend_seeds.h"
 #include "io/bench_data.h"
 #include "io/network_io.h"
+#include "job/job_spec.h"
 #include "model/network.h"
 #include "opt/ga.h"
 
@@ -47,23 +48,14 @@ std::optional<model::ParameterRanges> RangesPreset(std::string_view name);
 inline constexpr const char* kRangesPresetRule =
     "must be \"default\" (spec ranges) or \"paper\" (the paper's Table 3)";
 
-/// The settings of a search preset (`piezoid identify --preset`, what a job spec's defaults mean):
-/// "robust" — the default: the result does not depend on the seed beyond the noise of the fit
-/// (docs/performance.md, "Trend seeds") — and "paper" (the paper's Table 2: one population of 400,
-/// 1000 generations, the paper's cost, uniform bits). The other GA settings are GaOptions'
-/// defaults.
-struct SearchSettings {
-  int islands = 1;
-  int generations = 1000;
-  double spread_penalty = 0;  ///< λ [deg²]
-  bool trend_seeds = false;
-};
-/// nullopt for an unknown name (kSearchPresetRule).
+/// The settings of a search preset (`piezoid identify --preset`): the job spec's presets
+/// (job::HgannSearchPreset: "robust", the default, and "paper"), so that a spec's defaults and
+/// identify's are one table. The other GA settings are GaOptions' defaults.
+using SearchSettings = job::HgannSearchSettings;
+/// nullopt for an unknown or empty name (kSearchPresetRule).
 std::optional<SearchSettings> SearchPreset(std::string_view name);
-inline constexpr const char* kDefaultSearchPreset = "robust";
-inline constexpr const char* kSearchPresetRule =
-    "must be \"robust\" (the default: islands, spread penalty, trend seeds) or \"paper\" (the "
-    "paper's Table 2)";
+inline constexpr const char* kDefaultSearchPreset = job::kDefaultHgannPreset;
+inline constexpr const char* kSearchPresetRule = job::kHgannPresetRule;
 
 /// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
 IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,

@@ -10,20 +10,27 @@
 //     autocorrelation ρ of the residuals (they are not white: encoder rounding of a slow signal).
 //     A parameter that half the training cases or more do not pin down (μ: one frequency sees the
 //     Rayleigh damping as one number) is held at the median of its per-case values and the cases
-//     are fitted again, so that their other estimates belong to one value of it.
+//     are fitted again, so that their other estimates belong to one value of it; one parameter at
+//     a time, the loosest first, until none is loose (μ and δ are loose together; holding μ pins
+//     δ down).
 //  2. Trend networks (TrendNetwork): hidden satlin nodes x_V, x_f and a hinge of each input at the
 //     middle level of the training cases (500 V and 0.5 Hz on the paper's split), outputs
 //     s_k = clamp(c_k + Σ_j B_j W2_jk, 0, 1): piecewise linear over the box. Per parameter, the
 //     structure its per-case estimates support: of constant, V only, f only, plane, V piecewise,
 //     f piecewise, plane + a hinge, the weighted least squares (weights 1/σ², σ at least 0.5 % of
-//     the range, a quarter of it where the case does not pin it down) with the lowest χ² + 2 p.
+//     the range, a quarter of it where the case does not pin it down) with the lowest χ² + 2 p;
+//     of shapes that score alike (a hinge in V or one in f through four cases), the one that
+//     varies least over the spread penalty's 5 × 5 grid. When the loop's shapes (α, β, γ) leave it
+//     unbounded at a training case or a grid point, they are made constant (the estimates' mean).
 //     On the paper's split two training cases share a V (5, 6) and two an f (1, 7), which is what
 //     tells a parameter of f alone (δ on trends-dev) from one of V alone (a1). Then polished by
 //     LM within that structure on all training cases at once, on the fitness's own cost: every
 //     training case's y_model − y_meas and, with a spread penalty λ, √(λ/25) (s_k(g) − mean s_k)
 //     over the penalty's 5 × 5 grid, an unbounded loop on the grid refused. Seeds: the structured
-//     trend polished, the same unpolished, and the constant network polished. (Every weight free
-//     fits the training cases better and the withheld ones far worse: docs/performance.md.)
+//     trend polished, the same unpolished, the constant network polished, and the structure
+//     polished again from that constant (slopes from 0: a start the fitness accepts). (Every
+//     weight free fits the training cases better and the withheld ones far worse:
+//     docs/performance.md.)
 //  3. At the chromosome's resolution: each seed's output codes (c2 and W2 of the used hidden nodes)
 //     are polished by a coordinate search over the codes (steps ±1, ±4, ±16, three passes, only
 //     strictly lower costs of the problem's own fitness kept): the Lamarckian write-back of the
@@ -50,6 +57,8 @@ struct CaseEstimate {
   std::array<double, model::kNetworkOutputs> value{};  ///< in the parameters' units
   std::array<double, model::kNetworkOutputs> sigma{};  ///< 1-σ of value (+inf: not identifiable)
   double pi = 0;                                       ///< PI of the case with these [deg²]
+  /// The variance of one residual that σ is scaled by: PI / (N − free) · (1 + ρ) / (1 − ρ).
+  double residual_var = 0;
   bool ok = false;                                     ///< a start could be simulated
 };
 
@@ -73,11 +82,13 @@ struct TrendSeeds {
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
 
 /// Per-case fits (step 1) of the given cases (any role) of the fitness's configuration; `hold`
-/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf).
+/// (scaled values, NaN = fitted) keeps parameters at given values (their σ is then +inf);
+/// `start` (scaled values) is then the only start of every case's fit.
 std::vector<CaseEstimate> FitCases(
     const HgannFitness& fitness, const std::vector<int>& case_indices,
     const TrendSeedOptions& options, int64_t* simulations = nullptr,
-    const std::array<double, model::kNetworkOutputs>* hold = nullptr);
+    const std::array<double, model::kNetworkOutputs>* hold = nullptr,
+    const std::array<double, model::kNetworkOutputs>* start = nullptr);
 
 /// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
 /// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0,

@@ -35,6 +35,14 @@ std::vector<std::string> KindNames(std::index_sequence<I...>) {
 
 }  // namespace
 
+std::optional<HgannSearchSettings> HgannSearchPreset(std::string_view name) {
+  if (name == "paper") return HgannSearchSettings{};
+  if (name.empty() || name == kDefaultHgannPreset)
+    return HgannSearchSettings{
+        .islands = 4, .generations = 250, .spread_penalty = 10, .trend_seeds = true};
+  return std::nullopt;
+}
+
 std::string JobSpec::kind() const {
   return std::visit([](const auto& p) { return std::string(KindOf<std::decay_t<decltype(p)>>()); }, problem);
 }

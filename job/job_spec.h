@@ -75,6 +75,25 @@ struct HgannCaseSpec {
   std::optional<double> b1, b2;    ///< saturations [deg] (only with Saturation::kGiven)
 };
 
+/// The search settings of an hgann preset (proto HgannProblem.preset; `piezoid identify
+/// --preset`): what a spec's unset ga.islands, ga.generations, hgann.spread_penalty and
+/// hgann.trend_seeds mean. "robust" — the default: 4 islands × 250 generations, λ 10, trend seeds;
+/// the result does not depend on the seed beyond the noise of the fit (docs/performance.md,
+/// "Trend seeds") — and "paper" (the paper's Table 2: one population, 1000 generations, the
+/// paper's cost, uniform bits).
+struct HgannSearchSettings {
+  int islands = 1;
+  int generations = 1000;
+  double spread_penalty = 0;  ///< λ [deg²]
+  bool trend_seeds = false;
+};
+inline constexpr const char* kDefaultHgannPreset = "robust";
+/// "" (= kDefaultHgannPreset), "robust" or "paper"; nullopt for another name (kHgannPresetRule).
+std::optional<HgannSearchSettings> HgannSearchPreset(std::string_view name);
+inline constexpr const char* kHgannPresetRule =
+    "must be \"robust\" (the default: islands, spread penalty, trend seeds) or \"paper\" (the "
+    "paper's Table 2)";
+
 /// The HGANN identification problem (job kind "hgann", hgann/hgann_job.h).
 struct HgannProblem {
   static constexpr std::string_view kKind = "hgann";  ///< JobSpec::kind()
@@ -92,6 +111,10 @@ struct HgannProblem {
   /// Generation 0 holds the trend seeds of hgann/trend_seeds.h (networks fitted to per-case fits
   /// of the training cases) in island 0's first slots; false = uniform bits (the paper's GA).
   bool trend_seeds = false;
+  /// The preset that filled the spec's unset settings when it was decoded (HgannSearchPreset;
+  /// "" = the default, robust). The fields here hold the values: a spec encodes only what
+  /// differs from its preset.
+  std::string preset;
 };
 
 /// A synthetic problem for tests and benchmarks (job kind "synthetic").

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Makes the bimorph-fin benches whose truth changes with the operating point (issue 36).
 
-    scripts/make_trend_benches.py build/client/piezoid data/bimorph-fin
+    scripts/make_trend_benches.py build/client/piezoid data/bimorph-fin [NAME ...]
 
-writes data/bimorph-fin/trends-dev (for developing) and data/bimorph-fin/trends-check (only for
-checking). Each is the paper's nine cases (V in {375, 500, 750} V, f in {0.25, 0.5, 1} Hz, three
-cycles from rest at 100 Hz, training cases 1, 5, 6, 7) of a bench whose damping (mu, delta) and
+writes data/bimorph-fin/trends-dev and trends-dev2 (for developing) and
+data/bimorph-fin/trends-check (only for checking), or only the benches NAME given. Each is
+the paper's nine cases (V in {375, 500, 750} V, f in {0.25, 0.5, 1} Hz, three cycles from rest at
+100 Hz, training cases 1, 5, 6, 7) of a bench whose damping (mu, delta) and
 backlash thresholds (a1, a2) follow smooth laws of V and f chosen here (LAWS below: our own, not the
 paper's per-case Tables 9-13, which stay an independent check), with the Bouc-Wen loop (alpha, beta,
 gamma) constant and the saturations b1, b2 of the nominal bench (the paper's Table B1).
@@ -59,6 +60,21 @@ LAWS = {
         "delta": lambda v, f: 0.08 + 0.22 * math.exp(-2.2 * (f - 0.25)),
         "a1": lambda v, f: 0.04 + 0.22 * x_of(v) ** 2,
         "a2": lambda v, f: 0.08 + 0.20 * x_of(v) * (1 - 0.3 * (f - 0.25)),
+    },
+    # The second development bench: other shapes again (saturating in V, non-monotone in f, a
+    # cross term V * f), so that a search developed on both is not fitted to trends-dev's forms.
+    "trends-dev2": {
+        "seed": 363,
+        "text": {
+            "mu": "mu = 92 + 14 tanh(3 (x - 0.4)) - 12 (f - 0.25)   [1/s], x = (V - 375) / 375",
+            "delta": "delta = 0.10 + 0.60 (f - 0.25) (1 - f) + 0.10 x f   [s]",
+            "a1": "a1 = 0.03 + 0.20 (1 - exp(-3 x))   [deg]",
+            "a2": "a2 = 0.06 + 0.18 x f   [deg]",
+        },
+        "mu": lambda v, f: 92 + 14 * math.tanh(3 * (x_of(v) - 0.4)) - 12 * (f - 0.25),
+        "delta": lambda v, f: 0.10 + 0.60 * (f - 0.25) * (1 - f) + 0.10 * x_of(v) * f,
+        "a1": lambda v, f: 0.03 + 0.20 * (1 - math.exp(-3 * x_of(v))),
+        "a2": lambda v, f: 0.06 + 0.18 * x_of(v) * f,
     },
     "trends-check": {
         "seed": 362,
@@ -145,13 +161,16 @@ def make(piezoid, root, name, laws):
 
 
 def main():
-    if len(sys.argv) != 3:
-        sys.exit("usage: make_trend_benches.py PIEZOID_BINARY OUT_ROOT (e.g. build/client/piezoid data/bimorph-fin)")
-    piezoid, root = sys.argv[1], sys.argv[2]
+    if len(sys.argv) < 3:
+        sys.exit("usage: make_trend_benches.py PIEZOID_BINARY OUT_ROOT [NAME ...] "
+                 "(e.g. build/client/piezoid data/bimorph-fin trends-dev2)")
+    piezoid, root, names = sys.argv[1], sys.argv[2], sys.argv[3:] or list(LAWS)
     if not os.access(piezoid, os.X_OK):
         sys.exit(f"{piezoid}: not an executable piezoid binary")
-    for name, laws in LAWS.items():
-        make(piezoid, root, name, laws)
+    for name in names:
+        if name not in LAWS:
+            sys.exit(f"bench name = {name}: must be one of {', '.join(LAWS)}")
+        make(piezoid, root, name, LAWS[name])
 
 
 if __name__ == "__main__":

@@ -64,8 +64,13 @@ void ProblemToProto(const HgannProblem& h, pw::JobSpec* p) {
     pr->set_min(r.min);
     pr->set_max(r.max);
   }
-  ph->set_spread_penalty(h.spread_penalty);
-  ph->set_trend_seeds(h.trend_seeds);
+  // What the preset gives is left unset (a paper-preset spec encodes as before presets, but
+  // for the name); an unknown preset's name is refused by validation, its fields written.
+  const auto preset = job::HgannSearchPreset(h.preset);
+  ph->set_preset(h.preset);
+  if (!preset || h.spread_penalty != preset->spread_penalty)
+    ph->set_spread_penalty(h.spread_penalty);
+  if (!preset || h.trend_seeds != preset->trend_seeds) ph->set_trend_seeds(h.trend_seeds);
   ph->set_saturation(h.saturation == HgannProblem::Saturation::kGiven
                          ? pw::SATURATION_GIVEN
                          : pw::SATURATION_FROM_EXTREMES);
@@ -92,8 +97,12 @@ HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolati
   h.source = ph.source();
   h.ranges_preset = ph.ranges_preset();
   for (const auto& pr : ph.ranges()) h.ranges.push_back({pr.name(), pr.min(), pr.max()});
-  h.spread_penalty = ph.spread_penalty();
-  h.trend_seeds = ph.trend_seeds();
+  h.preset = ph.preset();
+  // Unset: the preset's (an unknown preset: the default's, and validation names the preset).
+  const job::HgannSearchSettings preset =
+      job::HgannSearchPreset(h.preset).value_or(*job::HgannSearchPreset(""));
+  h.spread_penalty = ph.has_spread_penalty() ? ph.spread_penalty() : preset.spread_penalty;
+  h.trend_seeds = ph.has_trend_seeds() ? ph.trend_seeds() : preset.trend_seeds;
   switch (ph.saturation()) {
     case pw::SATURATION_UNSPECIFIED:
     case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
@@ -258,6 +267,13 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm, 
   return m;
 }
 
+/// The islands of a spec whose ga leaves them unset: an hgann problem's preset's, else 1.
+int DefaultIslands(const JobSpec& s) {
+  if (const auto* h = std::get_if<HgannProblem>(&s.problem))  // as decoded: unknown = default
+    return job::HgannSearchPreset(h->preset).value_or(*job::HgannSearchPreset("")).islands;
+  return 1;
+}
+
 void ToProto(const JobSpec& s, pw::JobSpec* p) {
   p->set_version(s.version);
   p->set_name(s.name);
@@ -277,8 +293,9 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     g->set_mutation_probability(s.ga->mutation_probability);
     g->set_generations(static_cast<uint32_t>(s.ga->generations));
     g->set_stall_generations(static_cast<uint32_t>(s.ga->stall_generations));
+    // The islands that differ from the problem's default (one island, or an hgann preset's).
+    if (s.ga->islands != DefaultIslands(s)) g->set_islands(static_cast<uint32_t>(s.ga->islands));
     if (s.ga->islands != 1) {  // a one-island spec serialises as before islands existed (the same job id)
-      g->set_islands(static_cast<uint32_t>(s.ga->islands));
       g->set_migration_interval(static_cast<uint32_t>(s.ga->migration_interval));
       g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
       g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
@@ -326,6 +343,11 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     g.tournament = ClampInt(OrDefault<uint32_t>(pg.tournament(), 2));
     if (pg.has_crossover_probability()) g.crossover_probability = pg.crossover_probability();
     if (pg.has_mutation_probability()) g.mutation_probability = pg.mutation_probability();
+    if (const auto* h = std::get_if<HgannProblem>(&s->problem)) {  // its preset's search
+      const auto preset = job::HgannSearchPreset(h->preset).value_or(*job::HgannSearchPreset(""));
+      g.generations = preset.generations;
+      g.islands = preset.islands;
+    }
     if (pg.has_generations()) g.generations = ClampInt(pg.generations());
     if (pg.has_stall_generations()) g.stall_generations = ClampInt(pg.stall_generations());
     if (pg.has_islands()) g.islands = ClampInt(pg.islands());

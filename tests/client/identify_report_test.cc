@@ -14,6 +14,8 @@
 #include "client/commands.h"
 #include "client/identify_report.h"
 #include "hgann/hgann_fitness.h"
+#include "hgann/trend_seeds.h"
+#include "model/chromosome.h"
 #include "io/bench_data.h"
 #include "io/network_io.h"
 
@@ -77,6 +79,49 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
     EXPECT_EQ(a, b) << f;
   }
   std::filesystem::remove_all(o.out_dir);
+}
+
+/// report.md of a result whose network is `net` (a small run's result with its network replaced).
+std::string ReportOf(const std::string& name, const hgann::HgannFitness& fitness,
+                     const model::Network& net, std::string* terminal) {
+  IdentifyOptions o = SmallRun(name, 10, 0);
+  auto result = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
+  result.best.chromosome = model::EncodeChromosome(net);
+  result.best.network = fitness.Decode(opt::Genome{result.best.chromosome, {}});
+  result.cases = fitness.EvaluateCases(result.best.network);
+  std::ostringstream term;
+  WriteIdentifyReport(o, Nominal(), fitness, result, term);
+  std::ifstream in(o.out_dir / "report.md");
+  const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::filesystem::remove_all(o.out_dir);
+  *terminal = term.str();
+  return md;
+}
+
+TEST(IdentifyReport, ThePerCaseCheckFlagsAPlantedMissAndNotTheTruth) {
+  // The nominal bench's truth as a constant network (μ 95 1/s, δ 0.1 s, α 2.5e-3 N/V, β 6e-3,
+  // γ 4e-3 1/V, a1 0.1, a2 0.15 deg; data/bimorph-fin/README.md), and the same with a2 planted at
+  // 0.3 deg. The truth is flagged nowhere (the linear 2 σ alone flagged α and a1 where the
+  // per-case estimates sit elsewhere in the α–β–γ–backlash valley); the planted a2 is.
+  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(Nominal(), {}));
+  const auto& cfg = fitness.config();
+  const auto constant = [&](std::array<double, 7> p) {
+    std::vector<double> c2;
+    for (int k = 0; k < 7; ++k)
+      c2.push_back((p[k] - cfg.ranges[k].lower) / (cfg.ranges[k].upper - cfg.ranges[k].lower));
+    return hgann::TrendNetwork(-1, -1, c2, {}, cfg.normalization, cfg.ranges);
+  };
+  std::string term;
+  const std::string truth =
+      ReportOf("check-truth", fitness, constant({95, 0.1, 2.5e-3, 6e-3, 4e-3, 0.1, 0.15}), &term);
+  EXPECT_NE(truth.find("The network agrees with every per-case estimate"), std::string::npos)
+      << truth.substr(truth.find("## The network against per-case fits"), 3000);
+  EXPECT_EQ(term.find("departs from a per-case fit"), std::string::npos) << term;
+  const std::string planted =
+      ReportOf("check-planted", fitness, constant({95, 0.1, 2.5e-3, 6e-3, 4e-3, 0.1, 0.3}), &term);
+  EXPECT_NE(planted.find("a2 in cases"), std::string::npos)
+      << planted.substr(planted.find("## The network against per-case fits"), 3000);
+  EXPECT_NE(term.find("a2 network 0.3"), std::string::npos) << term;
 }
 
 TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {

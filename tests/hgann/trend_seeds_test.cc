@@ -8,11 +8,13 @@
 
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 
 #include "hgann/hgann_fitness.h"
 #include "hgann/identify.h"
 #include "hgann/output_move.h"
+#include "io/bench_data.h"
 #include "model/chromosome.h"
 #include "opt/ga.h"
 #include "opt/lm.h"
@@ -160,6 +162,33 @@ TEST(TrendSeeds, TheSameGenomesWhateverTheThreads) {
     EXPECT_TRUE(model::ValidateChromosome(a.genomes[i].bits).ok());
   }
   EXPECT_EQ(a.names, b.names);
+}
+
+TEST(TrendSeeds, MuIsHeldAndDeltaPinnedDownInsteadOfBothHeld) {
+  // On data/bimorph-fin/trends-dev2 μ and δ are both loose in most training cases fitted alone
+  // (one frequency sees one damping); holding μ pins δ down, and δ's estimates then follow its
+  // law, which is not monotone in f (holding both made δ one constant, every case far off).
+  const io::CaseSet set =
+      io::LoadCaseSet(std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "trends-dev2");
+  HgannFitnessConfig cfg = HgannConfigFromCaseSet(set, model::ParameterRanges{});
+  cfg.spread_penalty = 10;
+  const HgannFitness fitness(cfg);
+  const TrendSeeds seeds = MakeTrendSeeds(fitness);
+  ASSERT_EQ(seeds.cases.size(), 4u);  // cases 1, 5, 6, 7
+  const double width = cfg.ranges[1].upper - cfg.ranges[1].lower;
+  for (const CaseEstimate& e : seeds.cases) {
+    ASSERT_TRUE(e.ok) << e.number;
+    EXPECT_FALSE(std::isfinite(e.sigma[0])) << "μ held, case " << e.number;
+    EXPECT_EQ(e.s[0], seeds.cases.front().s[0]) << "one μ, case " << e.number;
+    EXPECT_LT(e.sigma[1], 0.25 * width) << "δ pinned down, case " << e.number;
+  }
+  // The truth's δ: 0.100 s (case 1, 0.25 Hz), 0.192 s (case 5, 0.5 Hz), 0.133 s (case 6, 1 Hz).
+  EXPECT_NEAR(seeds.cases[0].value[1], 0.100, 0.02);
+  EXPECT_NEAR(seeds.cases[1].value[1], 0.192, 0.02);
+  EXPECT_NEAR(seeds.cases[2].value[1], 0.133, 0.02);
+  // The seeds reach the training cases' floor (CF of the truth ≈ 0.53 deg²), where the constant
+  // network (polished) stays above 8 deg².
+  EXPECT_LT(seeds.costs.front(), 1.0);
 }
 
 TEST(SearchPresets, PaperIsTheGaDefaultsAndRobustTheMeasuredSetting) {

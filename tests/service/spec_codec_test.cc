@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hgann/hgann_job.h"
+#include "job.pb.h"
 #include "kinds/kinds.h"
 #include "service/wire_codec.h"
 #include "tests/testing/hgann_spec.h"
@@ -200,6 +201,81 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   // A negative count is refused by the JSON's unsigned type, naming the field.
   const Status negative = JobSpecFromJson(R"({"version": 1, "ga": {"islands": -1}})", &back, &v);
   EXPECT_NE(negative.message().find("(ga.islands)"), std::string::npos) << negative.message();
+}
+
+/// The hgann spec of the nominal bench with `extra` fields in "hgann" and `ga` as "ga", as JSON.
+JobSpec FromJson(const std::string& extra, const std::string& ga, std::vector<FieldViolation>* v) {
+  JobSpec s;
+  const std::string json = R"({"version": 1, "hgann": {"cases": [{"number": 1, "amplitude_v": 500,
+      "frequency_hz": 0.5, "role": "CASE_ROLE_TRAIN", "sample_rate_hz": 100,
+      "angle_deg": [0, 0.1, -0.2]}])" + extra + "}, \"ga\": " + ga + "}";
+  EXPECT_TRUE(JobSpecFromJson(json, &s, v).ok()) << json;
+  return s;
+}
+
+TEST(SpecCodec, AnEmptyHgannSpecIsTheRobustPresetAndThePaperPresetIsNamed) {
+  std::vector<FieldViolation> v;
+  // Nothing said: the robust preset (identify's default), for the problem and the GA alike.
+  const JobSpec robust = FromJson("", "{}", &v);
+  const auto preset = job::HgannSearchPreset("robust");
+  ASSERT_TRUE(preset.has_value());
+  const auto& hr = std::get<HgannProblem>(robust.problem);
+  EXPECT_EQ(robust.ga->islands, 4);
+  EXPECT_EQ(robust.ga->generations, 250);
+  EXPECT_EQ(hr.spread_penalty, 10);
+  EXPECT_TRUE(hr.trend_seeds);
+  EXPECT_EQ(robust.ga->islands, preset->islands);
+  EXPECT_EQ(robust.ga->generations, preset->generations);
+  EXPECT_EQ(job::ToGaOptions(robust, job::GenomeLayout{1415, 0}).OutputMoves(), 32);
+  EXPECT_EQ(robust.ga->population, 400);
+
+  // The paper's settings by name: one island, 1000 generations, the paper's cost, uniform bits.
+  const JobSpec paper = FromJson(R"(, "preset": "paper")", "{}", &v);
+  const auto& hp = std::get<HgannProblem>(paper.problem);
+  EXPECT_EQ(paper.ga->islands, 1);
+  EXPECT_EQ(paper.ga->generations, 1000);
+  EXPECT_EQ(hp.spread_penalty, 0);
+  EXPECT_FALSE(hp.trend_seeds);
+  EXPECT_EQ(hp.preset, "paper");
+  EXPECT_EQ(job::ToGaOptions(paper, job::GenomeLayout{1415, 0}).OutputMoves(), 0);
+  // Encoded, a paper-preset spec leaves out what the preset gives (as before presets: islands,
+  // λ and the seeds unset).
+  wire::JobSpec pw;
+  ASSERT_TRUE(pw.ParseFromString(EncodeJobSpec(paper)));
+  EXPECT_FALSE(pw.hgann().has_spread_penalty());
+  EXPECT_FALSE(pw.hgann().has_trend_seeds());
+  EXPECT_FALSE(pw.ga().has_islands());
+  EXPECT_EQ(pw.hgann().preset(), "paper");
+
+  // A field given beside a preset is kept, and every spec survives the wire: a robust spec with
+  // the paper's values spelled out, a paper spec with the robust ones.
+  const JobSpec mixed =
+      FromJson(R"(, "spread_penalty": 0, "trend_seeds": false)", R"({"islands": 1})", &v);
+  EXPECT_EQ(mixed.ga->islands, 1);
+  EXPECT_EQ(std::get<HgannProblem>(mixed.problem).spread_penalty, 0);
+  EXPECT_FALSE(std::get<HgannProblem>(mixed.problem).trend_seeds);
+  const JobSpec paper_robust = FromJson(R"(, "preset": "paper", "spread_penalty": 10,
+      "trend_seeds": true)", R"({"islands": 4, "generations": 250})", &v);
+  EXPECT_EQ(paper_robust.ga->islands, 4);
+  EXPECT_TRUE(std::get<HgannProblem>(paper_robust.problem).trend_seeds);
+  for (const JobSpec* s : {&robust, &paper, &mixed, &paper_robust}) {
+    JobSpec back;
+    ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(*s), &back, &v).ok());
+    EXPECT_TRUE(EncodeJobSpec(back) == EncodeJobSpec(*s));
+    EXPECT_EQ(back.ga->islands, s->ga->islands);
+    EXPECT_EQ(back.ga->generations, s->ga->generations);
+    EXPECT_EQ(std::get<HgannProblem>(back.problem).spread_penalty,
+              std::get<HgannProblem>(s->problem).spread_penalty);
+    EXPECT_EQ(std::get<HgannProblem>(back.problem).trend_seeds,
+              std::get<HgannProblem>(s->problem).trend_seeds);
+    EXPECT_TRUE(kinds::All().Validate(back).empty()) << All(kinds::All().Validate(back));
+  }
+
+  // An unknown preset is named with the allowed ones.
+  const JobSpec bad = FromJson(R"(, "preset": "fast")", "{}", &v);
+  const auto violations = kinds::All().Validate(bad);
+  EXPECT_TRUE(HasField(violations, "hgann.preset", "hgann.preset = \"fast\": must be \"robust\""))
+      << All(violations);
 }
 
 TEST(SpecCodec, BadEnumsInJsonAreNamed) {

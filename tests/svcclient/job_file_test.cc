@@ -51,9 +51,13 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(paper.ga->stall_generations, 200);
   EXPECT_EQ(paper.ga->mutation_probability, 0.01);
   EXPECT_FALSE(std::get<job::HgannProblem>(paper.problem).trend_seeds);
+  EXPECT_EQ(std::get<job::HgannProblem>(paper.problem).preset, "paper");
+  EXPECT_EQ(paper.ga->islands, 1);
+  EXPECT_EQ(std::get<job::HgannProblem>(paper.problem).spread_penalty, 10);  // given beside it
   EXPECT_TRUE(kinds::All().Validate(paper).empty());
 
-  // The default job: the robust preset of `piezoid identify` (hgann::SearchPreset("robust")).
+  // The default job: the robust preset of `piezoid identify` (hgann::SearchPreset("robust")),
+  // which the file does not spell out: it is what the spec's unset fields mean.
   JobSpec robust;
   ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_job.json", &robust, &v).ok()) << All(v);
   const auto preset = hgann::SearchPreset("robust");

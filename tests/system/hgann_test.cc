@@ -201,6 +201,58 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
 }
 
+/// FNV-1a over a run's generation log (best cost's bits, evaluations) and best genomes (bits,
+/// cost).
+uint64_t RunDigest(const service::JobCheckpoint& run) {
+  uint64_t h = 1469598103934665603ull;
+  const auto mix = [&h](const void* p, size_t n) {
+    for (size_t i = 0; i < n; ++i)
+      h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+  };
+  for (const service::GenerationRecord& g : run.log) {
+    mix(&g.best_cost, sizeof g.best_cost);
+    mix(&g.evaluations, sizeof g.evaluations);
+  }
+  for (const service::ScoredGenome& b : run.best) {
+    for (bool bit : b.genome.bits) mix(&bit, 1);
+    mix(&b.fitness.cost, sizeof b.fitness.cost);
+  }
+  return h;
+}
+
+/// A small job of the nominal bench as a user writes it: only the population, generations and the
+/// fields in `extra`; everything else the spec's defaults.
+job::JobSpec SmallJsonSpec(const std::string& extra) {
+  job::JobSpec s;
+  std::vector<job::FieldViolation> v;
+  const std::string json = R"({"version": 1, "seed": "3", "hgann": {"case_set_dir": "nominal")" +
+                           extra + R"(}, "ga": {"population": 20, "generations": 6}})";
+  const Status st =
+      client::JobSpecFromJsonFile(json, fs::path(PIEZOID_DATA_DIR) / "bimorph-fin", &s, &v);
+  PZ_CHECK_MSG(st.ok(), st.message());
+  return s;
+}
+
+TEST(ServiceHgann, ThePaperPresetReproducesTheRunOfTheSpecDefaultsBeforeTheRobustOnes) {
+  // Pinned from the same JSON without a preset before the spec's defaults became the robust
+  // preset (one island, λ 0, no trend seeds): the paper preset gives that run bit for bit.
+  const job::JobSpec paper = SmallJsonSpec(R"(, "preset": "paper")");
+  const service::JobCheckpoint run = Reference(paper);
+  EXPECT_EQ(RunDigest(run), 0x2642364f9f918defull) << std::hex << RunDigest(run);
+  EXPECT_EQ(run.log[0].evaluations, 20u);
+
+  // Without a preset the same JSON is the robust search: 4 islands of 20, λ 10, generation 0
+  // seeded with the trend seeds (its best is no worse than theirs).
+  const job::JobSpec robust = SmallJsonSpec("");
+  const service::JobCheckpoint r = Reference(robust);
+  EXPECT_EQ(r.log[0].evaluations, 80u);
+  std::vector<opt::Genome> seeds;
+  ASSERT_TRUE(kinds::All().Seeds(robust, &seeds).ok());
+  ASSERT_FALSE(seeds.empty());
+  EXPECT_LT(r.log[0].best_cost, 2.0);  // the seeds' ≈ 0.64 deg²; uniform bits start far above
+  EXPECT_NE(RunDigest(r), RunDigest(run));
+}
+
 TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
   Cluster c("hgann-cli");
   c.AddWorker(1);
