@@ -24,20 +24,7 @@ LIMIT = 120
 
 # Allowed long functions: (file or file prefix, function name or "*" for every function of the
 # file), each with why. Keep it short: a long function that is not a table is split, not listed.
-ALLOWED = [
-    # Being rewritten on another branch (the one engine of issue 21 part 1); split there.
-    ("client/cmd_diagnose.cc", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/cmd_fit.cc", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/cmd_committee.cc", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/cmd_boucwen.cc", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/records_diagnose.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/diagnose_report.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/committee_report.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/complete_service.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/case_models.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/record_windows.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-    ("client/search_flags.", "*", "rewritten with the one records engine (issue 21 part 1)"),
-]
+ALLOWED = []
 
 FUNCTION_QUALIFIERS = {"const", "override", "final", "noexcept", "mutable", "try", "volatile", "&", "&&"}
 CONTAINER = re.compile(r"^(?:template\s*<.*>\s*)?(?:namespace|class|struct|union|enum|extern\s*\"C\")\b", re.S)
