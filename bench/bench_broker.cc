@@ -9,8 +9,10 @@
 //    of K × (population − elite) evaluations; efficiency = evals/s ÷ (64 / 10 ms).
 //  * BM_SleepCost50us/<workers>/<threads>: the same with 50 µs per evaluation, population 4000.
 //  * BM_SleepCeiling/<threads>: those 50 µs sleeps on threads of one process with no master (the
-//    machine's ceiling for BM_SleepCost50us; one thread: the kernel's real length of a 50 µs sleep).
-// Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5; docs/performance.md):
+//    machine's ceiling for BM_SleepCost50us; one thread: the kernel's real length of a 50 µs
+//    sleep).
+// Measured 2026-11-22 on the 2-core shared build VM (Release, load average 3–5;
+// docs/performance.md):
 //   null cost, 2000-genome generations: 255 k individuals/s; 20000-genome generations: 580 k/s
 //   10 ms fixed cost, 64 threads / 4 workers, population 4000 (2000 new): 5960 evals/s = 93.1 %
 //   same, population 400 (200 new): 4330 evals/s = 67.6 % (ceiling 78 %: 200/64 → 4 rounds)
@@ -77,8 +79,7 @@ job::JobSpec Synthetic(bool null_cost, double sleep_ms, int population, int isla
   job::JobSpec s;
   s.seed = 1;
   job::SyntheticProblem p;
-  p.cost = null_cost ? job::SyntheticProblem::Cost::kNull
-                     : job::SyntheticProblem::Cost::kFunction;
+  p.cost = null_cost ? job::SyntheticProblem::Cost::kNull : job::SyntheticProblem::Cost::kFunction;
   p.genome_bits = 64;
   p.sleep_ms = sleep_ms;
   s.problem = p;
@@ -141,8 +142,8 @@ void BM_NullCostThroughput(benchmark::State& state) {
     done += n;
   }
   const double cpu = BrokerThreadCpuSeconds() - cpu0, job_cpu = ThisThreadCpuSeconds() - job0;
-  state.counters["individuals/s"] = benchmark::Counter(static_cast<double>(done),
-                                                       benchmark::Counter::kIsRate);
+  state.counters["individuals/s"] =
+      benchmark::Counter(static_cast<double>(done), benchmark::Counter::kIsRate);
   // The master's own cost: its broker thread's CPU per individual dispatched and collected, and the
   // rate one master core could sustain at that cost.
   if (cpu0 >= 0 && cpu > 0) {
@@ -150,7 +151,8 @@ void BM_NullCostThroughput(benchmark::State& state) {
     state.counters["one_core_individuals/s"] = static_cast<double>(done) / cpu;
   }
   // The submitting (job) thread's CPU: packing the genomes into wire bytes, and taking the results.
-  state.counters["job_thread_us/individual"] = 1e6 * job_cpu / static_cast<double>(std::max<int64_t>(1, done));
+  state.counters["job_thread_us/individual"] =
+      1e6 * job_cpu / static_cast<double>(std::max<int64_t>(1, done));
 }
 // Args: genomes per generation, bits per genome (64; the paper's 1415).
 BENCHMARK(BM_NullCostThroughput)
@@ -208,9 +210,12 @@ void FixedCost(benchmark::State& state, int workers, int threads, double sleep_m
   const double total_threads = static_cast<double>(workers) * threads;
   const double e = static_cast<double>(std::max<int64_t>(1, evals));
   state.counters["threads"] = total_threads;
-  state.counters["evals/generation"] = static_cast<double>(evals) / std::max<int64_t>(1, generations);
-  state.counters["evals/s"] = benchmark::Counter(static_cast<double>(evals), benchmark::Counter::kIsRate);
-  state.counters["efficiency"] = static_cast<double>(evals) * sleep_ms / 1000.0 / (total_threads * wall);
+  state.counters["evals/generation"] =
+      static_cast<double>(evals) / std::max<int64_t>(1, generations);
+  state.counters["evals/s"] =
+      benchmark::Counter(static_cast<double>(evals), benchmark::Counter::kIsRate);
+  state.counters["efficiency"] =
+      static_cast<double>(evals) * sleep_ms / 1000.0 / (total_threads * wall);
   state.counters["utilisation"] = (s1.eval_seconds - s0.eval_seconds) / (total_threads * wall);
   state.counters["eval_us"] = 1e6 * (s1.eval_seconds - s0.eval_seconds) / e;
   state.counters["leases/generation"] =
@@ -251,7 +256,8 @@ BENCHMARK(BM_FixedCostEfficiency)
 // 50 µs per evaluation (issue 24), population 4000 (2000 new individuals a generation).
 // Args: workers, threads per worker: 16 = 1 × 16, 64 = 4 × 16, 256 = 4 × 64.
 void BM_SleepCost50us(benchmark::State& state) {
-  FixedCost(state, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 0.05, 4000, 1);
+  FixedCost(state, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)), 0.05, 4000,
+            1);
 }
 BENCHMARK(BM_SleepCost50us)
     ->Args({1, 16})
@@ -285,7 +291,9 @@ void BM_SleepCeiling(benchmark::State& state) {
         while (next.fetch_add(1, std::memory_order_relaxed) < kEvals) {
           const auto t0 = std::chrono::steady_clock::now();
           std::this_thread::sleep_for(kCost);
-          ns += std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+          ns += std::chrono::duration_cast<std::chrono::nanoseconds>(
+                    std::chrono::steady_clock::now() - t0)
+                    .count();
         }
         slept_ns += ns;
         end.arrive_and_wait();
@@ -307,9 +315,17 @@ void BM_SleepCeiling(benchmark::State& state) {
   state.counters["threads"] = threads;
   state.counters["efficiency"] = evals * 50e-6 / (threads * wall);
   state.counters["eval_us"] = 1e-3 * static_cast<double>(slept_ns.load()) / evals;
-  state.counters["generation_ms"] = 1e3 * wall / static_cast<double>(std::max<int64_t>(1, generations));
+  state.counters["generation_ms"] =
+      1e3 * wall / static_cast<double>(std::max<int64_t>(1, generations));
 }
-BENCHMARK(BM_SleepCeiling)->Arg(1)->Arg(16)->Arg(64)->Arg(256)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(2);
+BENCHMARK(BM_SleepCeiling)
+    ->Arg(1)
+    ->Arg(16)
+    ->Arg(64)
+    ->Arg(256)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->MinTime(2);
 
 }  // namespace
 }  // namespace pz

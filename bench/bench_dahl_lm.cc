@@ -2,12 +2,13 @@
 // data set (7,001 training samples, P = 301 weights), against this machine's BLAS-level speed.
 //
 //   BM_Dsyrk / BM_DgemmJtJ / BM_Dgemm1000   this build's dense backend (model/dense_kernels.h)
-//   BM_EigenRankUpdate / BM_EigenGemmJtJ      Eigen's own kernels at the build's ISA, for comparison
-//   BM_Jacobian                               J (7,001 × 301) alone: the tansig layer and its derivatives
-//   BM_NormalEquations/<block_rows>           J, JᵀJ and Jᵀe as the trainers form them, by row block
-//   BM_Predict                                one forward pass over the training samples (a trial step)
-//   BM_DampedSolve                            Cholesky + rcond + solve of the 301 × 301 damped system
-//   BM_LmEpochs / BM_BrEpochs                 whole trainer epochs (TrainLm / TrainBr, 20 epochs per run)
+//   BM_EigenRankUpdate / BM_EigenGemmJtJ      Eigen's own kernels at the build's ISA, for
+//   comparison BM_Jacobian                               J (7,001 × 301) alone: the tansig layer
+//   and its derivatives BM_NormalEquations/<block_rows>           J, JᵀJ and Jᵀe as the trainers
+//   form them, by row block BM_Predict                                one forward pass over the
+//   training samples (a trial step) BM_DampedSolve                            Cholesky + rcond +
+//   solve of the 301 × 301 damped system BM_LmEpochs / BM_BrEpochs                 whole trainer
+//   epochs (TrainLm / TrainBr, 20 epochs per run)
 //
 // Flop counts: SYRK n p (p + 1) (= 636 Mflop for 7,001 × 301), GEMM 2 n p². GFLOP/s counters are on
 // the benchmark's CPU time (single thread), so they hold when other processes share the cores.
@@ -24,8 +25,8 @@ namespace {
 
 using namespace pz;
 
-constexpr int kRows = 7001;  // training samples of a 10,001-point case (70 %)
-constexpr int kParams = 301; // 1-100-1 network
+constexpr int kRows = 7001;   // training samples of a 10,001-point case (70 %)
+constexpr int kParams = 301;  // 1-100-1 network
 
 struct Case1 {
   client::DahlDataset ds;
@@ -50,7 +51,8 @@ const Case1& Data() {
 }
 
 void SetFlops(benchmark::State& state, double flops_per_iter) {
-  state.counters["GFLOP/s"] = benchmark::Counter(flops_per_iter * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops_per_iter * 1e-9, benchmark::Counter::kIsIterationInvariantRate);
   state.SetLabel(model::DenseBackendName());
 }
 
@@ -77,7 +79,8 @@ void BM_DgemmJtJ(benchmark::State& state) {
 BENCHMARK(BM_DgemmJtJ)->Unit(benchmark::kMillisecond);
 
 void BM_Dgemm1000(benchmark::State& state) {
-  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(1000, 1000), B = Eigen::MatrixXd::Random(1000, 1000);
+  const Eigen::MatrixXd A = Eigen::MatrixXd::Random(1000, 1000),
+                        B = Eigen::MatrixXd::Random(1000, 1000);
   Eigen::MatrixXd C(1000, 1000);
   for (auto _ : state) {
     model::GemmTn(A, B, 1.0, 0.0, C);
@@ -135,7 +138,14 @@ void BM_NormalEquations(benchmark::State& state) {
   }
   SetFlops(state, double(c.xn_train.rows()) * kParams * (kParams + 1));
 }
-BENCHMARK(BM_NormalEquations)->Arg(64)->Arg(128)->Arg(256)->Arg(512)->Arg(1024)->Arg(kRows)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NormalEquations)
+    ->Arg(64)
+    ->Arg(128)
+    ->Arg(256)
+    ->Arg(512)
+    ->Arg(1024)
+    ->Arg(kRows)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_Predict(benchmark::State& state) {
   const Case1& c = Data();
@@ -189,8 +199,8 @@ void RunEpochs(benchmark::State& state, bool br) {
   state.counters["ms_per_epoch_wall"] = 1e3 * wall / (n * kEpochs);
   state.counters["ms_per_JtJ_wall"] = 1e3 * jtj / static_cast<double>(forms);
   state.counters["solves_per_epoch"] = static_cast<double>(solves) / (n * kEpochs);
-  state.counters["ms_per_epoch_cpu"] =
-      benchmark::Counter(kEpochs * 1e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ms_per_epoch_cpu"] = benchmark::Counter(
+      kEpochs * 1e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   state.SetLabel(model::DenseBackendName());
 }
 void BM_LmEpochs(benchmark::State& state) { RunEpochs(state, false); }

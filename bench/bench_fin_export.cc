@@ -42,7 +42,9 @@ io::SavedNetwork Network() {
   return s;
 }
 
-constexpr const char* kGlue = "#include <stddef.h>\n#include \"fin.h\"\n" R"C(
+constexpr const char* kGlue =
+    "#include <stddef.h>\n#include \"fin.h\"\n"
+    R"C(
 size_t glue_size(void) { return sizeof(fin_state); }
 int glue_params(double v, double f, double* p) { return fin_params(v, f, p); }
 int glue_init(void* s, double v, double f, double u0) {
@@ -77,8 +79,8 @@ const Compiled& Header(double fs) {
   static std::vector<std::pair<double, Compiled>> cache;
   for (const auto& [rate, c] : cache)
     if (rate == fs) return c;
-  const fs::path dir = fs::temp_directory_path() / ("pz-bench-fin-" + std::to_string(::getpid()) + "-" +
-                                                    std::to_string(static_cast<long>(fs)));
+  const fs::path dir = fs::temp_directory_path() / ("pz-bench-fin-" + std::to_string(::getpid()) +
+                                                    "-" + std::to_string(static_cast<long>(fs)));
   fs::create_directories(dir);
   const model::BimorphPlant plant;
   const model::ModalSimulator sim(plant);
@@ -89,8 +91,10 @@ const Compiled& Header(double fs) {
     throw std::runtime_error("export");
   std::ofstream(dir / "fin.h") << h;
   std::ofstream(dir / "glue.c") << kGlue;
-  const std::string cmd = "cd '" + dir.string() + "' && '" PIEZOID_C_COMPILER
-                          "' -std=c99 -O2 -Wall -Wextra -Werror -pedantic -fPIC -shared -o glue.so glue.c -lm";
+  const std::string cmd =
+      "cd '" + dir.string() +
+      "' && '" PIEZOID_C_COMPILER
+      "' -std=c99 -O2 -Wall -Wextra -Werror -pedantic -fPIC -shared -o glue.so glue.c -lm";
   const int st = std::system(cmd.c_str());
   if (!WIFEXITED(st) || WEXITSTATUS(st) != 0) throw std::runtime_error(cmd);
   void* lib = dlopen((dir / "glue.so").c_str(), RTLD_NOW | RTLD_LOCAL);
@@ -111,7 +115,8 @@ const Compiled& Header(double fs) {
 /// Bench case 9's drive, 750 V sin(2π t), one period at fs.
 std::vector<double> Sine(double fs) {
   std::vector<double> u(static_cast<size_t>(std::lround(fs)));
-  for (size_t k = 0; k < u.size(); ++k) u[k] = 750 * std::sin(2 * std::numbers::pi * static_cast<double>(k) / fs);
+  for (size_t k = 0; k < u.size(); ++k)
+    u[k] = 750 * std::sin(2 * std::numbers::pi * static_cast<double>(k) / fs);
   return u;
 }
 
@@ -171,11 +176,13 @@ void BM_FinInverseStep(benchmark::State& state) {
   c.init(s.data(), 750, 1, 0);
   size_t k = 0;
   for (auto _ : state) {
-    benchmark::DoNotOptimize(c.inverse(s.data(), ref[(k + 2) % ref.size()]));  // one sample of preview
+    benchmark::DoNotOptimize(
+        c.inverse(s.data(), ref[(k + 2) % ref.size()]));  // one sample of preview
     k = k + 1 == ref.size() ? 0 : k + 1;
   }
   state.SetItemsProcessed(state.iterations());
-  state.counters["trials"] = static_cast<double>(c.trials(s.data())) / static_cast<double>(state.iterations());
+  state.counters["trials"] =
+      static_cast<double>(c.trials(s.data())) / static_cast<double>(state.iterations());
 }
 BENCHMARK(BM_FinInverseStep)->Arg(100)->Arg(1000);
 

@@ -1,7 +1,7 @@
 // Wall time of one GA fitness evaluation: the four training cases of the spec (1: 375 V 0.25 Hz,
-// 5: 500 V 0.5 Hz, 6: 500 V 1 Hz, 7: 750 V 0.25 Hz; three cycles at 100 Hz) simulated at the nominal
-// truth parameters of data/bimorph-fin/nominal/truth.json, on the fast modal path and on the CVODE path.
-// Figures and the command line: docs/performance.md, "Plant simulation".
+// 5: 500 V 0.5 Hz, 6: 500 V 1 Hz, 7: 750 V 0.25 Hz; three cycles at 100 Hz) simulated at the
+// nominal truth parameters of data/bimorph-fin/nominal/truth.json, on the fast modal path and on
+// the CVODE path. Figures and the command line: docs/performance.md, "Plant simulation".
 #include <benchmark/benchmark.h>
 
 #include <array>
@@ -20,7 +20,8 @@ struct TrainingCase {
   BimorphParams params;
 };
 
-// Nominal truth (data/bimorph-fin/nominal/truth.json): μ, δ, α, β, γ, a1, a2 shared, b1/b2 per case.
+// Nominal truth (data/bimorph-fin/nominal/truth.json): μ, δ, α, β, γ, a1, a2 shared, b1/b2 per
+// case.
 std::array<TrainingCase, 4> TrainingCases() {
   auto p = [](double b1, double b2) {
     BimorphParams x;
@@ -75,7 +76,8 @@ void BM_FitnessModal(benchmark::State& state) {
     benchmark::DoNotOptimize(cost);
     ++evaluations;
   }
-  state.counters["evals/s"] = benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
+  state.counters["evals/s"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_FitnessModal)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 

@@ -1,7 +1,7 @@
-// Speed of the GA's operators alone (selection, two-point crossover, mutation by geometric gaps, ranking,
-// bookkeeping) at the paper's size, population 400 × 1415 bits, with a null or a cheap fitness;
-// and of the chromosome decode + forward pass that every HGANN fitness evaluation starts with.
-// Figures: docs/performance.md, "Genetic algorithm operators".
+// Speed of the GA's operators alone (selection, two-point crossover, mutation by geometric gaps,
+// ranking, bookkeeping) at the paper's size, population 400 × 1415 bits, with a null or a cheap
+// fitness; and of the chromosome decode + forward pass that every HGANN fitness evaluation starts
+// with. Figures: docs/performance.md, "Genetic algorithm operators".
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -24,7 +24,8 @@ class NullFitness final : public FitnessFunction {
 class OneMax final : public FitnessFunction {
  public:
   FitnessResult Evaluate(const Genome& g) const override {
-    return {static_cast<double>(std::count(g.bits.begin(), g.bits.end(), 0)), FitnessStatus::kOk, ""};
+    return {static_cast<double>(std::count(g.bits.begin(), g.bits.end(), 0)), FitnessStatus::kOk,
+            ""};
   }
 };
 
@@ -36,7 +37,8 @@ void RunSteps(benchmark::State& state, BatchEvaluator* evaluator) {
   for (auto _ : state) {
     benchmark::DoNotOptimize(ga.Step().best_cost);
   }
-  state.counters["generations/s"] = benchmark::Counter(state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["generations/s"] =
+      benchmark::Counter(state.iterations(), benchmark::Counter::kIsRate);
   state.counters["offspring/s"] =
       benchmark::Counter(state.iterations() * (options.population_size - options.elite_count()),
                          benchmark::Counter::kIsRate);
@@ -61,11 +63,15 @@ void BM_GaStep_NullFitness_ThreadPool(benchmark::State& state) {
   ThreadPoolEvaluator evaluator(fitness, static_cast<int>(state.range(0)));
   RunSteps(state, &evaluator);
 }
-BENCHMARK(BM_GaStep_NullFitness_ThreadPool)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GaStep_NullFitness_ThreadPool)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 // The generator alone: one Bernoulli draw (the crossover decision), and one geometric gap (the
-// mutation: one per flipped bit plus one per genome, ≈ 15 a genome at p = 0.01 on 1415 bits, where a
-// per-bit test would take 1415 Bernoulli draws).
+// mutation: one per flipped bit plus one per genome, ≈ 15 a genome at p = 0.01 on 1415 bits, where
+// a per-bit test would take 1415 Bernoulli draws).
 void BM_RngBernoulli(benchmark::State& state) {
   Rng rng(1);
   const BernoulliThreshold p(0.01);

@@ -1,9 +1,11 @@
 // Speed of the complete-model optimisers (opt/param_search.h) on the Bouc–Wen benchmark
 // oscillator's fitness, and of the simulator itself (model/bw_oscillator.h).
 //   BM_BwSimulate/S          one 8192-sample multisine period at S RK4 sub-steps: samples/s
-//   BM_Search_Bw/alg/threads a whole search (1 repetition, 20 particles / individuals, 10 iterations)
+//   BM_Search_Bw/alg/threads a whole search (1 repetition, 20 particles / individuals, 10
+//   iterations)
 //                            on one 8192-sample period of train_A at 4 sub-steps, the benchmark's
-//                            fitness (complete/boucwen_benchmark.h, the records engine's): evaluations/s
+//                            fitness (complete/boucwen_benchmark.h, the records engine's):
+//                            evaluations/s
 //   BM_Search_Sphere/alg     the same search on a 6-D sphere: the optimisers' own overhead
 // Figures and the command: docs/performance.md, "Complete models: PSO and GA".
 #include <benchmark/benchmark.h>
@@ -28,7 +30,8 @@ struct Data {
 
 const Data& TrainA() {
   static const Data d = [] {
-    const io::CsvTable t = io::ReadCsvFile(std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark/train_A_multisine.csv");
+    const io::CsvTable t =
+        io::ReadCsvFile(std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark/train_A_multisine.csv");
     Data r;
     for (size_t i = 0; i < 8192; ++i) {
       r.u.push_back(t.Number(i, t.RequireColumn("u_N")));
@@ -53,9 +56,10 @@ void BM_BwSimulate(benchmark::State& state) {
     benchmark::DoNotOptimize(model::SimulateBw(model::BwParams{}, in, y).ok());
     benchmark::ClobberMemory();
   }
-  state.counters["samples/s"] = benchmark::Counter(state.iterations() * in.samples(), benchmark::Counter::kIsRate);
-  state.counters["rk4_steps/s"] =
-      benchmark::Counter(state.iterations() * (in.samples() - 1) * state.range(0), benchmark::Counter::kIsRate);
+  state.counters["samples/s"] =
+      benchmark::Counter(state.iterations() * in.samples(), benchmark::Counter::kIsRate);
+  state.counters["rk4_steps/s"] = benchmark::Counter(
+      state.iterations() * (in.samples() - 1) * state.range(0), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_BwSimulate)->Arg(4)->Arg(20)->Unit(benchmark::kMillisecond);
 
@@ -79,20 +83,25 @@ void RunSearch(benchmark::State& state, const ParamBox& box, const FitnessFuncti
   BatchEvaluator& evaluator = threads == 0 ? static_cast<BatchEvaluator&>(inline_evaluator) : pool;
   int64_t evaluations = 0;
   for (auto _ : state) evaluations += Search(box, SmallSearch(algorithm), evaluator).evaluations;
-  state.SetLabel(std::string(SearchAlgorithmName(algorithm)) + (threads == 0 ? " inline" : " pool"));
-  state.counters["evaluations/s"] = benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
+  state.SetLabel(std::string(SearchAlgorithmName(algorithm)) +
+                 (threads == 0 ? " inline" : " pool"));
+  state.counters["evaluations/s"] =
+      benchmark::Counter(static_cast<double>(evaluations), benchmark::Counter::kIsRate);
 }
 
 void BM_Search_Bw(benchmark::State& state) {
   // The benchmark's protocol (complete/boucwen_benchmark.h): the records engine's fitness.
   std::vector<io::Record> records;
-  records.push_back(complete::MakeBwRecord("train_A", model::CaseRole::kTrain, TrainA().u, TrainA().y, 0));
+  records.push_back(
+      complete::MakeBwRecord("train_A", model::CaseRole::kTrain, TrainA().u, TrainA().y, 0));
   const complete::BwTraining fitness(
-      std::move(records), complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 8192), 1.0);
+      std::move(records),
+      complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 8192), 1.0);
   RunSearch(state, fitness.Box(), fitness);
 }
 BENCHMARK(BM_Search_Bw)
-    ->ArgsProduct({{static_cast<int>(SearchAlgorithm::kPso), static_cast<int>(SearchAlgorithm::kGaReal),
+    ->ArgsProduct({{static_cast<int>(SearchAlgorithm::kPso),
+                    static_cast<int>(SearchAlgorithm::kGaReal),
                     static_cast<int>(SearchAlgorithm::kGaBinary)},
                    {0, 2}})
     ->Unit(benchmark::kMillisecond)
@@ -113,7 +122,8 @@ void BM_Search_Sphere(benchmark::State& state) {
   RunSearch(state, box, fitness);
 }
 BENCHMARK(BM_Search_Sphere)
-    ->ArgsProduct({{static_cast<int>(SearchAlgorithm::kPso), static_cast<int>(SearchAlgorithm::kGaReal),
+    ->ArgsProduct({{static_cast<int>(SearchAlgorithm::kPso),
+                    static_cast<int>(SearchAlgorithm::kGaReal),
                     static_cast<int>(SearchAlgorithm::kGaBinary)},
                    {0}})
     ->Unit(benchmark::kMicrosecond);

@@ -2,8 +2,8 @@
 // issue 22) on a 15,000-sample record (3 s at 5 kHz, the real recording's training window; a 1 Hz
 // sine whose amplitude ramps down and back: nested minor loops):
 //   BM_PreisachApply/levels        the forward model with given weights: samples/s
-//   BM_PreisachRegressors/levels   the cell regressors (what every least-squares evaluation computes)
-//   BM_PreisachInverse/levels      the exact inverse (one-step bisection): samples/s
+//   BM_PreisachRegressors/levels   the cell regressors (what every least-squares evaluation
+//   computes) BM_PreisachInverse/levels      the exact inverse (one-step bisection): samples/s
 //   BM_AsymmetricPiApply / BM_AsymmetricPiInverse   the same for asymmetric-pi (12 plays, 6 knots)
 // Figures and the command: docs/performance.md, "Fits on records".
 #include <benchmark/benchmark.h>
@@ -35,7 +35,8 @@ const std::vector<double>& Drive() {
 std::vector<double> Weights(const PreisachGrid& g) {
   std::vector<double> w;
   for (int i = 0; i < g.levels; ++i)
-    for (int j = 0; j < g.levels - i; ++j) w.push_back(0.02 * std::exp(-i / 4.0) * (1 + 0.2 * j / g.levels));
+    for (int j = 0; j < g.levels - i; ++j)
+      w.push_back(0.02 * std::exp(-i / 4.0) * (1 + 0.2 * j / g.levels));
   return w;
 }
 
@@ -78,7 +79,8 @@ AsymmetricPi Operator() {
   AsymmetricPi op;
   op.w0 = 0.05;
   op.thresholds = PiThresholds(12, 75);
-  for (size_t i = 0; i < 12; ++i) op.weights.push_back(0.02 * std::exp(-static_cast<double>(i) / 4));
+  for (size_t i = 0; i < 12; ++i)
+    op.weights.push_back(0.02 * std::exp(-static_cast<double>(i) / 4));
   op.knots = AsymmetricPiKnots(6, 0, 150);
   op.up = {0, 0, 0, 0.005, 0.01, 0.02};
   op.down = {0.01, 0.005, 0, 0, 0, 0};

@@ -2,7 +2,8 @@
 // of model/kernels/ — the code the exported C header runs — one sample at a time, on a 1 Hz sine of
 // slowly varying amplitude with a 7 Hz ripple at 5 kHz (minor loops):
 //   BM_Forward/<case>   NAME_step: drive -> response
-//   BM_Inverse/<case>   NAME_inverse_step: desired response -> drive (bisection on the one-step map)
+//   BM_Inverse/<case>   NAME_inverse_step: desired response -> drive (bisection on the one-step
+//   map)
 // cases: 0 prandtl-ishlinskii (30 plays), 1 backlash-like, 2 stack-bouc-wen + driver-lowpass,
 // 3 duhem, 4 preisach (12 levels), 5 asymmetric-pi (12 plays), 6 bw-oscillator (4 RK4 steps).
 // Figures and the command: docs/performance.md, "A model in a controller".
@@ -25,9 +26,13 @@ struct Case {
   std::vector<EffectKind> effects;
   int operators;
 };
-const Case kCases[] = {{"prandtl-ishlinskii", {}, 30}, {"backlash-like", {}, 12},
-                       {"stack-bouc-wen", {EffectKind::Named("driver-lowpass")}, 12}, {"duhem", {}, 12},
-                       {"preisach", {}, 12}, {"asymmetric-pi", {}, 12}, {"bw-oscillator", {}, 12}};
+const Case kCases[] = {{"prandtl-ishlinskii", {}, 30},
+                       {"backlash-like", {}, 12},
+                       {"stack-bouc-wen", {EffectKind::Named("driver-lowpass")}, 12},
+                       {"duhem", {}, 12},
+                       {"preisach", {}, 12},
+                       {"asymmetric-pi", {}, 12},
+                       {"bw-oscillator", {}, 12}};
 
 const io::Record& Drive() {
   static const io::Record r = [] {
@@ -35,7 +40,8 @@ const io::Record& Drive() {
     for (size_t k = 0; k < kSamples; ++k) {
       const double t = static_cast<double>(k) * kDt;
       rec.t.push_back(t);
-      rec.u.push_back(75 + 60 * std::sin(2 * std::numbers::pi * t) * (0.7 + 0.3 * std::sin(0.9 * t)) +
+      rec.u.push_back(75 +
+                      60 * std::sin(2 * std::numbers::pi * t) * (0.7 + 0.3 * std::sin(0.9 * t)) +
                       5 * std::sin(2 * std::numbers::pi * 7 * t));
       rec.y.push_back(0.3 * rec.u.back());
     }
@@ -61,9 +67,11 @@ ModelSpec Spec(const Case& c) {
   const auto model = s.Model();
   for (const auto& p : model->params())
     s.params.push_back(p.log_scale ? std::sqrt(p.lower * p.upper) : 0.5 * (p.lower + p.upper));
-  if (s.family == "backlash-like") s.params = {2 / s.scale.u_half, 0.4, 0.25};  // B1 >= c/2: monotone
+  if (s.family == "backlash-like")
+    s.params = {2 / s.scale.u_half, 0.4, 0.25};  // B1 >= c/2: monotone
   if (model->family().linear())
-    for (size_t j = 0; j < model->family().regressors(); ++j) s.weights.push_back(0.01 + 0.002 * static_cast<double>(j % 7));
+    for (size_t j = 0; j < model->family().regressors(); ++j)
+      s.weights.push_back(0.01 + 0.002 * static_cast<double>(j % 7));
   return s;
 }
 

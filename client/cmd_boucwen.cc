@@ -54,11 +54,11 @@ struct BoucwenArgs {
   int repetitions = 5;
   uint64_t seed = 1;
   int threads = 0;
-  int iterations = -1;   // PSO iterations / GA generations; -1 = the algorithm's default below
-  int population = -1;   // particles / individuals; -1 = default
+  int iterations = -1;  // PSO iterations / GA generations; -1 = the algorithm's default below
+  int population = -1;  // particles / individuals; -1 = default
   int stall = -1;
-  int substeps = 4;      // RK4 steps per sample during the search
-  int train_periods = 0; // 0 = all periods of both training records
+  int substeps = 4;       // RK4 steps per sample during the search
+  int train_periods = 0;  // 0 = all periods of both training records
   int progress = 25;
   bool no_plots = false;
   CompleteServiceFlags service;  ///< --master: the search's evaluations on the service
@@ -87,9 +87,13 @@ opt::SearchOptions MakeOptions(const BoucwenArgs& a) {
   o.ga_binary.ga.population_size = 60;
   o.ga_binary.ga.max_generations = 400;
   o.ga_binary.ga.stall_generations = 60;
-  if (a.iterations >= 0) o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = a.iterations;
-  if (a.population > 0) o.pso.particles = o.ga_real.population = o.ga_binary.ga.population_size = a.population;
-  if (a.stall >= 0) o.pso.stall_iterations = o.ga_real.stall_generations = o.ga_binary.ga.stall_generations = a.stall;
+  if (a.iterations >= 0)
+    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = a.iterations;
+  if (a.population > 0)
+    o.pso.particles = o.ga_real.population = o.ga_binary.ga.population_size = a.population;
+  if (a.stall >= 0)
+    o.pso.stall_iterations = o.ga_real.stall_generations = o.ga_binary.ga.stall_generations =
+        a.stall;
   return o;
 }
 
@@ -389,27 +393,31 @@ int RunBoucwen(const BoucwenArgs& a) {
 
 void RegisterBoucwen(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<BoucwenArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "boucwen",
-      "Bouc-Wen benchmark (Noel & Schoukens): identify (m, c, k, alpha, beta*gamma, beta*delta) from the training "
-      "records by PSO or a GA, then report the simulation RMS error on the official multisine and sine-sweep "
-      "test sets.");
+  CLI::App* cmd = app.add_subcommand("boucwen",
+                                     "Bouc-Wen benchmark (Noel & Schoukens): identify (m, c, k, "
+                                     "alpha, beta*gamma, beta*delta) from the training "
+                                     "records by PSO or a GA, then report the simulation RMS error "
+                                     "on the official multisine and sine-sweep "
+                                     "test sets.");
   cmd->add_option("--algorithm", a->algorithm, "pso, ga-real or ga-binary")
       ->check(CLI::IsMember({"pso", "ga-real", "ga-binary"}))
       ->capture_default_str();
-  cmd->add_option("--repetitions", a->repetitions, "runs with seeds seed, seed+1, ...; the best is kept")
+  cmd->add_option("--repetitions", a->repetitions,
+                  "runs with seeds seed, seed+1, ...; the best is kept")
       ->check(CLI::Range(1, 1000))
       ->capture_default_str();
   cmd->add_option("--seed", a->seed, "seed of the first repetition")->capture_default_str();
   cmd->add_option("--threads", a->threads, "evaluator threads (0 = all cores)")
       ->check(CLI::Range(0, 256))
       ->capture_default_str();
-  cmd->add_option("--iterations", a->iterations, "PSO iterations / GA generations per repetition (default 400)")
+  cmd->add_option("--iterations", a->iterations,
+                  "PSO iterations / GA generations per repetition (default 400)")
       ->check(CLI::Range(0, 100000000));
   cmd->add_option("--population", a->population, "particles / individuals (default 40 PSO, 60 GA)")
       ->check(CLI::Range(2, 1000000));
-  cmd->add_option("--stall", a->stall, "stop a repetition after this many iterations without a 1e-4 relative "
-                                       "improvement (default 60; 0 = never)")
+  cmd->add_option("--stall", a->stall,
+                  "stop a repetition after this many iterations without a 1e-4 relative "
+                  "improvement (default 60; 0 = never)")
       ->check(CLI::Range(0, 100000000));
   cmd->add_option("--substeps", a->substeps, "RK4 steps per sample during the search")
       ->check(CLI::Range(1, 1000))
@@ -418,8 +426,10 @@ void RegisterBoucwen(CLI::App& app, int& exit_code) {
                   "use only the first N 8192-sample periods of each training record (0 = all)")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  cmd->add_option("--data-dir", a->data_dir, "folder with the benchmark CSVs")->capture_default_str();
-  cmd->add_option("--out", a->out_dir, "output folder (report.json, report.md, CSVs, figures)")->capture_default_str();
+  cmd->add_option("--data-dir", a->data_dir, "folder with the benchmark CSVs")
+      ->capture_default_str();
+  cmd->add_option("--out", a->out_dir, "output folder (report.json, report.md, CSVs, figures)")
+      ->capture_default_str();
   cmd->add_option("--progress", a->progress, "print every N-th iteration to stderr (0 = none)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();

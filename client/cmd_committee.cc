@@ -51,7 +51,8 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   o.t1_s = a.t1;
   o.family_options.substeps = a.substeps;
   // One state for every family on the committee; an explicit one a family cannot take is an error.
-  for (const std::string& f : a.families) o.family_options.initial_state = InitialStateOfFlag(a.initial_state, f);
+  for (const std::string& f : a.families)
+    o.family_options.initial_state = InitialStateOfFlag(a.initial_state, f);
   o.averaging = a.averaging;
   ApplySearchFlags(a.search, &o.search);
   ThrowIfError(o.Validate());
@@ -67,7 +68,7 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   if (!a.quiet) log = [](const std::string& line) { std::cout << "  " << line << std::endl; };
   const EvaluatorFactory factory =
       a.service.enabled() ? CommitteeServiceFactory(a.service.Options(), o.family_options)
-                           : LocalEvaluatorFactory(a.threads);
+                          : LocalEvaluatorFactory(a.threads);
   CommitteeResult r;
   try {
     r = RunCommittee(set, o, factory, log);
@@ -92,8 +93,10 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
     std::cout << "; best complete model " << r.complete[r.best_complete].Name() << " RMSE "
               << r.complete[r.best_complete].all_test.rmse << " um: reduction "
               << 100 * r.rmse_reduction << " % (max error " << 100 * r.max_reduction << " %)";
-  std::cout << "\n" << r.evaluations << " evaluations in " << r.wall_s << " s on " << r.threads
-            << (a.service.enabled() ? " worker thread(s) of " + a.service.master : std::string(" thread(s)"))
+  std::cout << "\n"
+            << r.evaluations << " evaluations in " << r.wall_s << " s on " << r.threads
+            << (a.service.enabled() ? " worker thread(s) of " + a.service.master
+                                    : std::string(" thread(s)"))
             << "; report in " << (fs::path(a.out) / "report.md").string() << "\n";
   return 0;
 }
@@ -105,12 +108,15 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "committee",
       "Committee machine (seed 002): identify model families (default the stack Bouc-Wen and "
-      "backlash-like models; any records family) by PSO and GA on all training records (complete) and "
+      "backlash-like models; any records family) by PSO and GA on all training records (complete) "
+      "and "
       "per frequency band, select a sub-model per band by "
-      "A = (RMSE_train + RMSE_test)/2, and compare the committee with the best complete model on the "
+      "A = (RMSE_train + RMSE_test)/2, and compare the committee with the best complete model on "
+      "the "
       "test records; writes report.md, committee.json and loop figures.");
   cmd->add_option("--records", a->records,
-                  "record set whose records state their excitation frequency: a stack bench folder (records.csv), "
+                  "record set whose records state their excitation frequency: a stack bench folder "
+                  "(records.csv), "
                   "a fin bench (cases.csv) or a manifest.csv with a frequency_Hz column")
       ->type_name("DIR")
       ->default_str("data/piezo-stack-bench");
@@ -120,23 +126,26 @@ void RegisterCommittee(CLI::App& app, int& exit_code) {
                   "belongs to [lo, hi), the last band closed")
       ->default_str("0,50,150,250,350");
   std::string families;
-  for (const std::string& f : records::FamilyNames()) families += (families.empty() ? "" : ", ") + f;
+  for (const std::string& f : records::FamilyNames())
+    families += (families.empty() ? "" : ", ") + f;
   cmd->add_option("--families", a->families, "model families, any of `piezoid fit`'s: " + families)
       ->delimiter(',')
       ->default_str("stack-bouc-wen,backlash-like");
   cmd->add_option("--optimisers", a->optimisers, "optimisers: pso, ga-real, ga-binary")
       ->delimiter(',')
       ->default_str("pso,ga-real");
-  cmd->add_option("--criterion", a->criterion, "identification criterion over the window: iae, sse, rmse (each "
-                                               "summed over the training records), max (the largest over them) or "
-                                               "mse (pooled)")
+  cmd->add_option("--criterion", a->criterion,
+                  "identification criterion over the window: iae, sse, rmse (each "
+                  "summed over the training records), max (the largest over them) or "
+                  "mse (pooled)")
       ->default_str("iae");
   cmd->add_option("--t0", a->t0, "criterion window start [s]")->default_str("0.5");
   cmd->add_option("--t1", a->t1, "criterion window end [s] (clipped to each record's end)")
       ->default_str("2.5");
   AddSearchFlags(cmd, &a->search);
   cmd->add_option("--substeps", a->substeps,
-                  "sub-steps per sample interval of the families that take them (stack Bouc-Wen driver filter, "
+                  "sub-steps per sample interval of the families that take them (stack Bouc-Wen "
+                  "driver filter, "
                   "Duhem; oscillator RK4 steps x2), 1 … 512")
       ->default_str("2");
   AddInitialStateFlag(cmd, &a->initial_state);

@@ -64,19 +64,22 @@ Reference ReadReference(const std::string& path, const records::ModelSpec& m) {
   const io::CsvTable csv = io::ReadCsvFile(path);
   csv.RequireRows();
   if (csv.header.size() != 2) {
-    throw InputError(path + ": " + std::to_string(csv.header.size()) +
-                     " columns; a reference has two: time and desired response (e.g. t_s,displacement_" +
-                     m.response_unit + ")");
+    throw InputError(
+        path + ": " + std::to_string(csv.header.size()) +
+        " columns; a reference has two: time and desired response (e.g. t_s,displacement_" +
+        m.response_unit + ")");
   }
   const io::UnitConversion tu = io::ConvertUnit(UnitOf(csv.header[0]));
   if (tu.quantity != "time") {
-    throw InputError(path + ": column '" + csv.header[0] + "': the first column must be time with its unit (t_s, t_ms)");
+    throw InputError(path + ": column '" + csv.header[0] +
+                     "': the first column must be time with its unit (t_s, t_ms)");
   }
   const std::string yu_name = UnitOf(csv.header[1]);
   const io::UnitConversion yu = io::ConvertUnit(yu_name);
   if (yu_name.empty() || yu.canonical != m.response_unit) {
-    throw InputError(path + ": column '" + csv.header[1] + "' is in '" + yu_name + "', the model's response is in '" +
-                     m.response_unit + "': give the reference in " + m.response_unit);
+    throw InputError(path + ": column '" + csv.header[1] + "' is in '" + yu_name +
+                     "', the model's response is in '" + m.response_unit +
+                     "': give the reference in " + m.response_unit);
   }
   Reference r;
   for (size_t i = 0; i < csv.rows.size(); ++i) {
@@ -86,8 +89,8 @@ Reference ReadReference(const std::string& path, const records::ModelSpec& m) {
   if (r.t.size() < 2) throw InputError(path + ": at least two samples are needed");
   const double dt = (r.t.back() - r.t.front()) / static_cast<double>(r.t.size() - 1);
   if (!(std::abs(dt - m.dt) <= 0.01 * m.dt)) {
-    throw InputError(path + ": sample step " + Fmt(dt, 6) + " s; the model runs at " + Fmt(m.dt, 6) +
-                     " s per step (resample the reference)");
+    throw InputError(path + ": sample step " + Fmt(dt, 6) + " s; the model runs at " +
+                     Fmt(m.dt, 6) + " s per step (resample the reference)");
   }
   for (size_t k = 1; k < r.t.size(); ++k) {
     if (!(r.t[k] > r.t[k - 1])) throw InputError(csv.Where(k, 0) + ": time must increase");
@@ -105,7 +108,8 @@ struct Tracking {
   double rmse = 0, max_abs = 0, max_at = 0;
 };
 
-Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& ref, const std::vector<double>& y) {
+Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& ref,
+                       const std::vector<double>& y) {
   Tracking e;
   double sse = 0;
   for (size_t k = 0; k < ref.size(); ++k) {
@@ -118,19 +122,23 @@ Tracking TrackingError(const std::vector<double>& t, const std::vector<double>& 
 }
 
 /// What keeps the inverse from giving a model's own drive back ("" when nothing does): the
-/// rate-dependence play's lag over a quarter of a sample (records::Stepper::rate_dependence_inverse_gain),
-/// which the compensator meets by planning two samples.
+/// rate-dependence play's lag over a quarter of a sample
+/// (records::Stepper::rate_dependence_inverse_gain), which the compensator meets by planning two
+/// samples.
 std::string InverseCaveat(const records::Stepper& inv) {
   const double gain = inv.rate_dependence_inverse_gain();
   if (!(gain > 1)) return "";
   double tau = 0;
   for (size_t i = 0; i < inv.blocks().size(); ++i)
-    if (inv.blocks()[i].kind == records::pzk::PZK_RATE_DEPENDENCE) tau = std::max(tau, inv.block_params(i)[1]);
-  return "the rate-dependence play lags the drive by tau_r = " + Fmt(1e3 * tau) + " ms below its knee (" +
-         Fmt(tau / inv.spec().dt, 3) + " samples): solved one sample at a time, its inverse would carry a drive " +
+    if (inv.blocks()[i].kind == records::pzk::PZK_RATE_DEPENDENCE)
+      tau = std::max(tau, inv.block_params(i)[1]);
+  return "the rate-dependence play lags the drive by tau_r = " + Fmt(1e3 * tau) +
+         " ms below its knee (" + Fmt(tau / inv.spec().dt, 3) +
+         " samples): solved one sample at a time, its inverse would carry a drive " +
          "difference forward " + Fmt(gain, 3) + " × per sample" +
          (tau / inv.spec().dt > 2.0 / 3 ? " (and several drives give the same output)" : "") +
-         "; the compensator plans two samples instead (the reference one sample ahead): stable, not exact";
+         "; the compensator plans two samples instead (the reference one sample ahead): stable, "
+         "not exact";
 }
 
 /// How the compensator undoes the delay's fraction s ("" without one): in the one-step map (up to a
@@ -140,8 +148,10 @@ std::string DelayCaveat(const records::Stepper& inv) {
   const double s = inv.delay_fraction();
   if (!(s > 0)) return "";
   const int horizon = inv.delay_horizon();
-  std::string how = "; its fraction " + Fmt(s, 3) + " of a sample is undone exactly" +
-                    (horizon > 0 ? ", backwards over " + std::to_string(horizon) + " sample(s) of that preview" : "");
+  std::string how =
+      "; its fraction " + Fmt(s, 3) + " of a sample is undone exactly" +
+      (horizon > 0 ? ", backwards over " + std::to_string(horizon) + " sample(s) of that preview"
+                   : "");
   return how + " (what the reference has at the Nyquist rate comes back " +
          (std::abs(1 - 2 * s) > 1e-3 ? Fmt(1 / std::abs(1 - 2 * s), 3) + " ×" : "without bound") +
          " in the drive)";
@@ -149,7 +159,8 @@ std::string DelayCaveat(const records::Stepper& inv) {
 
 /// The drive for the reference (the preview: the reference Stepper::preview_samples ahead, the last
 /// value held), and the clipping events.
-std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0, std::vector<Clip>* clips) {
+std::vector<double> Compensate(records::Stepper& inv, const Reference& ref, double u0,
+                               std::vector<Clip>* clips) {
   const size_t preview = inv.preview_samples();
   std::vector<double> u(ref.y.size());
   u[0] = u0;
@@ -213,8 +224,9 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
   if (!a.check_model.empty()) {
     other = LoadFit(a.check_model);
     if (other->response_unit != m.response_unit || other->drive_unit != m.drive_unit) {
-      throw InputError("--check-model " + a.check_model + ": drive in " + other->drive_unit + ", response in " +
-                       other->response_unit + "; the model's are " + m.drive_unit + ", " + m.response_unit);
+      throw InputError("--check-model " + a.check_model + ": drive in " + other->drive_unit +
+                       ", response in " + other->response_unit + "; the model's are " +
+                       m.drive_unit + ", " + m.response_unit);
     }
   }
   const double u0 = std::isnan(a.rest_drive) ? RestDrive(m, ref.y[0]) : a.rest_drive;
@@ -235,11 +247,12 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
          << (k < diverged ? io::FormatNumber(y[k]) : std::string()) << "\n";
   });
   const auto range = std::minmax_element(ref.y.begin(), ref.y.end());
-  std::cout << "piezoid compensate: " << m.Model()->Describe() << " from " << a.model << ", reference " << a.reference
-            << " (" << ref.y.size() << " samples, range " << Fmt(*range.second - *range.first) << " "
-            << m.response_unit << ")\n"
-            << "  drive written to " << a.out << " (rest drive " << Fmt(u0) << " " << m.drive_unit << ", limits "
-            << Fmt(inv.ctl().u_lo) << " … " << Fmt(inv.ctl().u_hi) << " " << m.drive_unit << ")\n"
+  std::cout << "piezoid compensate: " << m.Model()->Describe() << " from " << a.model
+            << ", reference " << a.reference << " (" << ref.y.size() << " samples, range "
+            << Fmt(*range.second - *range.first) << " " << m.response_unit << ")\n"
+            << "  drive written to " << a.out << " (rest drive " << Fmt(u0) << " " << m.drive_unit
+            << ", limits " << Fmt(inv.ctl().u_lo) << " … " << Fmt(inv.ctl().u_hi) << " "
+            << m.drive_unit << ")\n"
             << "  predicted tracking error (forward model on that drive): ";
   if (diverged < y.size()) {
     std::cout << "none: the forward model's output on that drive is not finite from "
@@ -251,22 +264,27 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
               << " at " << Fmt(e.max_at) << " s\n";
   }
   if (inv.has_delay()) {
-    std::cout << "  the model's delay cannot be undone by a causal step: the reference's preview of "
-              << inv.preview_samples() << " sample(s) was used (the drive leads it)" << DelayCaveat(inv) << "\n";
+    std::cout
+        << "  the model's delay cannot be undone by a causal step: the reference's preview of "
+        << inv.preview_samples() << " sample(s) was used (the drive leads it)" << DelayCaveat(inv)
+        << "\n";
   }
-  if (const std::string caveat = InverseCaveat(inv); !caveat.empty()) std::cout << "  " << caveat << "\n";
+  if (const std::string caveat = InverseCaveat(inv); !caveat.empty())
+    std::cout << "  " << caveat << "\n";
   if (clips.empty()) {
     std::cout << "  clipping: none (the reference is reachable within the drive limits)\n";
   } else {
     size_t total = 0;
     double worst = 0;
     for (const Clip& c : clips) total += c.samples, worst = std::max(worst, c.worst);
-    std::cout << "  clipping: " << total << " sample(s) in " << clips.size()
-              << " event(s) where the reference is beyond what the drive limits reach; largest shortfall "
-              << Fmt(worst) << " " << m.response_unit << "\n";
+    std::cout
+        << "  clipping: " << total << " sample(s) in " << clips.size()
+        << " event(s) where the reference is beyond what the drive limits reach; largest shortfall "
+        << Fmt(worst) << " " << m.response_unit << "\n";
     for (size_t i = 0; i < clips.size() && i < 10; ++i) {
-      std::cout << "    " << Fmt(clips[i].t_start) << "–" << Fmt(clips[i].t_end) << " s: " << clips[i].samples
-                << " sample(s), shortfall up to " << Fmt(clips[i].worst) << " " << m.response_unit << "\n";
+      std::cout << "    " << Fmt(clips[i].t_start) << "–" << Fmt(clips[i].t_end)
+                << " s: " << clips[i].samples << " sample(s), shortfall up to "
+                << Fmt(clips[i].worst) << " " << m.response_unit << "\n";
     }
     if (clips.size() > 10) std::cout << "    … " << clips.size() - 10 << " more\n";
   }
@@ -274,21 +292,23 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
     records::Stepper check(*other);
     const std::vector<double> yo = Forward(check, u);
     const Tracking eo = TrackingError(ref.t, ref.y, yo);
-    std::cout << "  exposure to model error: " << other->Model()->Describe() << " (" << a.check_model
-              << ") predicts RMSE " << Fmt(eo.rmse) << " " << m.response_unit << ", max " << Fmt(eo.max_abs) << " at "
-              << Fmt(eo.max_at) << " s on this drive\n";
+    std::cout << "  exposure to model error: " << other->Model()->Describe() << " ("
+              << a.check_model << ") predicts RMSE " << Fmt(eo.rmse) << " " << m.response_unit
+              << ", max " << Fmt(eo.max_abs) << " at " << Fmt(eo.max_at) << " s on this drive\n";
   }
   return 0;
 }
 
 int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
-  const io::RecordSet set = LoadRecordSetWithWindows(a.replay, a.train_windows, a.validate_windows, a.test_windows);
+  const io::RecordSet set =
+      LoadRecordSetWithWindows(a.replay, a.train_windows, a.validate_windows, a.test_windows);
   if (set.response_unit != m.response_unit || set.drive_unit != m.drive_unit) {
-    throw InputError("--replay " + a.replay + ": drive in " + set.drive_unit + ", response in " + set.response_unit +
-                     "; the model's are " + m.drive_unit + ", " + m.response_unit);
+    throw InputError("--replay " + a.replay + ": drive in " + set.drive_unit + ", response in " +
+                     set.response_unit + "; the model's are " + m.drive_unit + ", " +
+                     m.response_unit);
   }
-  std::cout << "piezoid compensate --replay: " << m.Model()->Describe() << " from " << a.model << " on " << a.replay
-            << "\n";
+  std::cout << "piezoid compensate --replay: " << m.Model()->Describe() << " from " << a.model
+            << " on " << a.replay << "\n";
   double noise = NAN;
   std::string noise_how;
   try {
@@ -299,18 +319,20 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     noise_how = std::string("no estimate: ") + e.what();
   }
   if (const std::string caveat = InverseCaveat(records::Stepper(m)); !caveat.empty()) {
-    std::cout << "  " << caveat << " (the noiseless replay of the model's own response shows how far from exact)\n";
+    std::cout << "  " << caveat
+              << " (the noiseless replay of the model's own response shows how far from exact)\n";
   }
   if (const records::Stepper st(m); st.has_delay()) {
-    std::cout << "  the model's delay: each drive solved for the response " << st.preview_samples() << " sample(s) later"
-              << DelayCaveat(st) << "\n";
+    std::cout << "  the model's delay: each drive solved for the response " << st.preview_samples()
+              << " sample(s) later" << DelayCaveat(st) << "\n";
   }
   const std::string& du = m.drive_unit;
   const std::string& yu = m.response_unit;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
     if (std::abs(r.dt - m.dt) > 0.01 * m.dt) {
-      throw InputError(r.Label() + ": sample step " + Fmt(r.dt, 6) + " s; the model runs at " + Fmt(m.dt, 6) + " s");
+      throw InputError(r.Label() + ": sample step " + Fmt(r.dt, 6) + " s; the model runs at " +
+                       Fmt(m.dt, 6) + " s");
     }
     // The model on the applied drive; the record's offset as the fit takes it (its offset mode: by
     // default the least-squares offset over the scored window), so that the inverse sees the
@@ -322,13 +344,15 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     std::vector<double> measured(r.size());
     for (size_t k = 0; k < r.size(); ++k) measured[k] = r.y[k] - offset + m.offset;
     const records::ReplayError e = records::ReplayDrive(m, r, measured);
-    std::cout << "  " << r.name << " (" << model::CaseRoleName(r.role) << ", " << e.n << " samples): drive RMSE "
-              << Fmt(e.rms_u) << " " << du << "; through the local gain " << Fmt(e.rms_y) << " " << yu << " RMS, max "
+    std::cout << "  " << r.name << " (" << model::CaseRoleName(r.role) << ", " << e.n
+              << " samples): drive RMSE " << Fmt(e.rms_u) << " " << du
+              << "; through the local gain " << Fmt(e.rms_y) << " " << yu << " RMS, max "
               << Fmt(e.max_y) << " " << yu;
     if (std::isfinite(noise)) std::cout << " (" << Fmt(e.rms_y / noise, 3) << " × the noise floor)";
-    std::cout << "; record offset " << Fmt(offset) << " " << yu << " (" << io::OffsetModeName(r.offset_mode)
-              << "; the model's " << Fmt(m.offset) << ")";
-    if (e.clipped > 0) std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
+    std::cout << "; record offset " << Fmt(offset) << " " << yu << " ("
+              << io::OffsetModeName(r.offset_mode) << "; the model's " << Fmt(m.offset) << ")";
+    if (e.clipped > 0)
+      std::cout << "; " << e.clipped << " sample(s) clipped to the record's drive range";
     if (e.no_gain > 0)
       std::cout << "; " << e.no_gain
                 << " sample(s) where the model's local gain is not finite, left out of the " << yu
@@ -339,14 +363,17 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     // output does not depend on, and a rate-dependence lag's two-sample plan) and with
     // white noise of the floor's σ (a fixed seed per record).
     const records::ReplayError exact = records::ReplayDrive(m, r, sim);
-    std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " " << du;
+    std::cout << "    the model's own response replayed: noiseless " << Fmt(exact.rms_u) << " "
+              << du;
     if (std::isfinite(noise)) {
       opt::Rng rng(opt::StreamSeed(kReplayNoiseSeed, i));
       std::vector<double> noisy(sim);
       for (double& v : noisy) v += noise * records::NormalDraw(rng);
       const records::ReplayError floor = records::ReplayDrive(m, r, noisy);
-      std::cout << ", with noise of the floor's σ " << Fmt(floor.rms_u) << " " << du << " (" << Fmt(floor.rms_y) << " "
-                << yu << " through the local gain): the drive error of the inverse and the noise, without model error";
+      std::cout << ", with noise of the floor's σ " << Fmt(floor.rms_u) << " " << du << " ("
+                << Fmt(floor.rms_y) << " " << yu
+                << " through the local gain): the drive error of the inverse and the noise, "
+                   "without model error";
       if (floor.rms_u > 0) std::cout << "; measured " << Fmt(e.rms_u / floor.rms_u, 3) << " × that";
     }
     std::cout << "\n";
@@ -385,28 +412,39 @@ int ExportFit(const std::string& fit_json, const std::string& out, const std::st
 
 void RegisterCompensate(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<CompensateArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "compensate",
-      "Feed-forward compensation with a fitted model (fit.json): the drive that makes the model follow a reference "
-      "(--reference), or the inverse replayed on measured records (--replay).");
-  cmd->add_option("--model", a->model, "fit.json of piezoid fit")->required()->type_name("FIT.json");
-  auto* ref = cmd->add_option("--reference", a->reference, "CSV: time and desired response (units in the column names)");
-  auto* replay = cmd->add_option("--replay", a->replay, "record set: run the inverse on the measured responses");
+  CLI::App* cmd =
+      app.add_subcommand("compensate",
+                         "Feed-forward compensation with a fitted model (fit.json): the drive that "
+                         "makes the model follow a reference "
+                         "(--reference), or the inverse replayed on measured records (--replay).");
+  cmd->add_option("--model", a->model, "fit.json of piezoid fit")
+      ->required()
+      ->type_name("FIT.json");
+  auto* ref = cmd->add_option("--reference", a->reference,
+                              "CSV: time and desired response (units in the column names)");
+  auto* replay = cmd->add_option("--replay", a->replay,
+                                 "record set: run the inverse on the measured responses");
   ref->excludes(replay);
   cmd->add_option("--out", a->out, "the drive CSV (with --reference)")->type_name("DRIVE.csv");
-  cmd->add_option("--check-model", a->check_model, "another fit.json: the tracking error it predicts for the drive");
-  cmd->add_option("--rest-drive", a->rest_drive, "the drive at rest before the reference (default: the rest drive "
-                                                 "whose output is the reference's first value)");
-  cmd->add_option("--train-window", a->train_windows, "--replay of one CSV: a training window START:END [s]");
-  cmd->add_option("--validate-window", a->validate_windows, "--replay of one CSV: a validation window START:END [s]");
-  cmd->add_option("--test-window", a->test_windows, "--replay of one CSV: a test window START:END [s]");
+  cmd->add_option("--check-model", a->check_model,
+                  "another fit.json: the tracking error it predicts for the drive");
+  cmd->add_option("--rest-drive", a->rest_drive,
+                  "the drive at rest before the reference (default: the rest drive "
+                  "whose output is the reference's first value)");
+  cmd->add_option("--train-window", a->train_windows,
+                  "--replay of one CSV: a training window START:END [s]");
+  cmd->add_option("--validate-window", a->validate_windows,
+                  "--replay of one CSV: a validation window START:END [s]");
+  cmd->add_option("--test-window", a->test_windows,
+                  "--replay of one CSV: a test window START:END [s]");
   cmd->callback([a, &exit_code] {
     const records::ModelSpec m = LoadFit(a->model);
     if (!a->replay.empty()) {
       exit_code = RunReplay(*a, m);
       return;
     }
-    if (a->reference.empty()) throw InputError("compensate: give --reference REF.csv (with --out) or --replay RECORDS");
+    if (a->reference.empty())
+      throw InputError("compensate: give --reference REF.csv (with --out) or --replay RECORDS");
     if (a->out.empty()) throw InputError("compensate --reference: give --out DRIVE.csv");
     exit_code = RunReference(*a, m);
   });

@@ -40,17 +40,21 @@ struct DiagnoseArgs {
   bool quick = false;
   bool quiet = false;
   double significance_ratio = 1.25;
-  CompleteServiceFlags service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
+  CompleteServiceFlags
+      service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
   int concurrent_fits = 0;  ///< 0: 1 locally, 3 with --master
 };
 
 /// Every candidate fit's evaluations as evaluation sessions on the master of `a.service`: one
 /// session per global search (costs) and one per refinement (residuals, a Jacobian per batch).
 diagnose::EvaluatorFactory ServiceFactory(const DiagnoseArgs& a) {
-  const ServiceEvaluatorOptions so = a.service.Options();  // CURVE keys loaded (InputError naming the flag)
+  const ServiceEvaluatorOptions so =
+      a.service.Options();  // CURVE keys loaded (InputError naming the flag)
   return [so](const diagnose::DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
-    const std::string what = "diagnose " + f.layout().Describe() + (f.residuals() ? " (refinement)" : " (global search)");
-    return std::make_unique<ServiceEvaluator>(so, diagnose::DiagnoseJobSpec(f, what), "piezoid diagnose");
+    const std::string what = "diagnose " + f.layout().Describe() +
+                             (f.residuals() ? " (refinement)" : " (global search)");
+    return std::make_unique<ServiceEvaluator>(so, diagnose::DiagnoseJobSpec(f, what),
+                                              "piezoid diagnose");
   };
 }
 
@@ -67,8 +71,8 @@ std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   return kinds;
 }
 
-diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, uint64_t seed, bool quick,
-                                  double significance_ratio, bool quiet) {
+diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, uint64_t seed,
+                                  bool quick, double significance_ratio, bool quiet) {
   diagnose::DiagnoseOptions o;
   o.candidates = ParseKinds(candidates);
   o.threads = threads;
@@ -88,16 +92,19 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
 
 int RunDiagnose(const DiagnoseArgs& a) {
   if (!a.records.records.empty()) {
-    if (!a.cases_dir.empty()) throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
+    if (!a.cases_dir.empty())
+      throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
     RecordsDiagnoseRequest r = a.records;
     if (a.service.enabled()) {
-      r.evaluator_factory = RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
+      r.evaluator_factory =
+          RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
       const ServiceEvaluatorOptions service = a.service.Options();
       r.service = [service](const records::FamilyOptions& f) {
         return RecordsServiceFactory(service, f, "piezoid diagnose");
       };
     }
-    // (the family's options, its initial state among them, travel with each fit's model: CompleteModelProblemOf)
+    // (the family's options, its initial state among them, travel with each fit's model:
+    // CompleteModelProblemOf)
     r.out = a.out_dir;
     r.candidates = a.candidates;
     r.threads = a.threads;
@@ -113,12 +120,16 @@ int RunDiagnose(const DiagnoseArgs& a) {
       return ExitCodeOf(e.status());
     }
   }
-  if (a.cases_dir.empty()) throw InputError("piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
+  if (a.cases_dir.empty())
+    throw InputError(
+        "piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
   diagnose::EvaluatorFactory service;
-  if (a.service.enabled()) service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
+  if (a.service.enabled())
+    service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
   const std::filesystem::path dir(a.cases_dir);
   const io::CaseSet set = io::LoadCaseSet(dir);
-  diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
+  diagnose::DiagnoseOptions o =
+      Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
   o.trends = !a.no_trends;
   if (a.service.enabled()) o.evaluator_factory = std::move(service);
@@ -135,7 +146,8 @@ int RunDiagnose(const DiagnoseArgs& a) {
   d.bench = a.cases_dir;
   PrintDiagnosis(std::cout, d, o);
   const std::filesystem::path out =
-      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string()) : std::filesystem::path(a.out_dir);
+      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string())
+                        : std::filesystem::path(a.out_dir);
   std::filesystem::create_directories(out);
   std::vector<std::filesystem::path> files;
   io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
@@ -150,12 +162,14 @@ int RunDiagnose(const DiagnoseArgs& a) {
   for (const auto& w : warnings) std::cerr << "piezoid diagnose: warning: " << w << "\n";
   std::cout << "written: ";
   for (size_t i = 0; i < files.size(); ++i) std::cout << (i ? ", " : "") << files[i].string();
-  std::cout << " (+ " << html.size() - 1 << " figure files in " << (out / "figures").string() << ")\n";
+  std::cout << " (+ " << html.size() - 1 << " figure files in " << (out / "figures").string()
+            << ")\n";
   return 0;
 }
 
 struct CheckArgs {
-  std::string records_family;  ///< --records-family: the records diagnosis on synthetic records of it
+  std::string
+      records_family;  ///< --records-family: the records diagnosis on synthetic records of it
   int trials = 50;
   uint64_t seed = 1;
   int threads = 2;
@@ -167,8 +181,8 @@ struct CheckArgs {
   bool second = false;
   bool quick = false;
   double significance_ratio = 1.25;
-  bool real_like = false;          ///< --real-like: real-like stack sets (diagnose/reallike.h) instead
-  double real_like_train_s = 20;   ///< their training sine's length
+  bool real_like = false;  ///< --real-like: real-like stack sets (diagnose/reallike.h) instead
+  double real_like_train_s = 20;  ///< their training sine's length
   double real_like_withheld_s = 10;
 };
 
@@ -186,7 +200,8 @@ records::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
   return d;
 }
 
-/// The records diagnosis on real-like stack sets, checked against their truth (diagnose/reallike_check.h).
+/// The records diagnosis on real-like stack sets, checked against their truth
+/// (diagnose/reallike_check.h).
 int RunRealLikeCheckCommand(const CheckArgs& a) {
   records::RealLikeCheckOptions o;
   o.family = a.records_family;
@@ -195,21 +210,25 @@ int RunRealLikeCheckCommand(const CheckArgs& a) {
   o.base.train_s = a.real_like_train_s;
   o.base.withheld_s = a.real_like_withheld_s;
   o.diagnose = CheckDiagnoseOptions(a);
-  const records::RealLikeCheckSummary s = records::RunRealLikeCheck(o, [](const records::RealLikeCheckTrial& t, int i) {
-    char floor[300];
-    std::snprintf(floor, sizeof floor, "%-52s floor %.4f/%.4f (%s) excitation %-5s [%s]", t.description.c_str(),
-                  t.floor_estimate, t.floor_truth, t.floor_used.c_str(), t.excitation_right ? "right" : "WRONG",
-                  t.excitation.c_str());
-    std::cout << records::TrialLine(i + 1, "", floor, 0, t,
-                                    t.named == "none" ? "" : (t.named_present ? " (in truth)" : " (not in truth)"),
-                                    t.excitation_note ? "; excitation gap said" : "")
-              << std::endl;
-  });
+  const records::RealLikeCheckSummary s =
+      records::RunRealLikeCheck(o, [](const records::RealLikeCheckTrial& t, int i) {
+        char floor[300];
+        std::snprintf(floor, sizeof floor, "%-52s floor %.4f/%.4f (%s) excitation %-5s [%s]",
+                      t.description.c_str(), t.floor_estimate, t.floor_truth, t.floor_used.c_str(),
+                      t.excitation_right ? "right" : "WRONG", t.excitation.c_str());
+        std::cout << records::TrialLine(i + 1, "", floor, 0, t,
+                                        t.named == "none"
+                                            ? ""
+                                            : (t.named_present ? " (in truth)" : " (not in truth)"),
+                                        t.excitation_note ? "; excitation gap said" : "")
+                  << std::endl;
+      });
   const int n = static_cast<int>(s.trials.size());
-  std::cout << "real-like stacks: " << n << "; noise floor estimate / truth " << s.floor_ratio_min << " … "
-            << s.floor_ratio_max << "; excitation report right in " << s.excitation_right << " of " << n
-            << "; significant gaps " << s.significant << ", excitation gap said in " << s.excitation_notes
-            << "; effects named " << s.named << ", of which in the truth " << s.named_present << "\n"
+  std::cout << "real-like stacks: " << n << "; noise floor estimate / truth " << s.floor_ratio_min
+            << " … " << s.floor_ratio_max << "; excitation report right in " << s.excitation_right
+            << " of " << n << "; significant gaps " << s.significant << ", excitation gap said in "
+            << s.excitation_notes << "; effects named " << s.named << ", of which in the truth "
+            << s.named_present << "\n"
             << static_cast<int>(s.wall_time_s) << " s in all\n";
   return 0;
 }
@@ -221,19 +240,23 @@ int RunRecordsCheckCommand(const CheckArgs& a) {
   o.seed = a.seed;
   o.none_probability = a.none_probability;
   o.diagnose = CheckDiagnoseOptions(a);
-  const records::RecordsCheckSummary s = records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
-    std::cout << records::TrialLine(i + 1, t.correct ? "right" : "WRONG", t.description, 42, t) << std::endl;
-  });
+  const records::RecordsCheckSummary s =
+      records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
+        std::cout << records::TrialLine(i + 1, t.correct ? "right" : "WRONG", t.description, 42, t)
+                  << std::endl;
+      });
   std::cout << records::TallyText(s, "records") << static_cast<int>(s.wall_time_s) << " s in all\n";
   return 0;
 }
 
 int RunCheckCommand(const CheckArgs& a) {
   if (a.real_like && a.records_family.empty())
-    throw InputError("diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
+    throw InputError(
+        "diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
   if (a.real_like) return RunRealLikeCheckCommand(a);
   if (!a.records_family.empty()) return RunRecordsCheckCommand(a);
-  diagnose::DiagnoseOptions o = Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
+  diagnose::DiagnoseOptions o =
+      Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
   o.second_effect = a.second;
   o.trends = false;
   diagnose::SyntheticOptions so;
@@ -243,21 +266,29 @@ int RunCheckCommand(const CheckArgs& a) {
   if (!(so.none_probability >= 0 && so.none_probability <= 1))
     throw InputError(FieldError("--none-probability", so.none_probability, "must be in [0, 1]"));
   if (!(so.other_form_probability >= 0 && so.other_form_probability <= 1))
-    throw InputError(FieldError("--other-form-probability", so.other_form_probability, "must be in [0, 1]"));
+    throw InputError(
+        FieldError("--other-form-probability", so.other_form_probability, "must be in [0, 1]"));
   const diagnose::CheckSummary s =
       diagnose::RunCheck(a.trials, a.seed, o, so, [&](const diagnose::CheckTrial& t, int i) {
         char extra[100];
-        std::snprintf(extra, sizeof extra, " closed %6s (%.0f s)",
-                      std::isfinite(t.closed) ? (std::to_string(static_cast<int>(std::lround(100 * t.closed))) + "%").c_str()
-                                              : "n/a",
-                      t.wall_time_s);
-        const records::TrialVerdict v{.verdict_kind = t.verdict_kind, .named = model::EffectName(t.named),
-                                      .confidence = t.confidence, .rms_ratio = t.rms_ratio, .significant = t.significant};
-        std::cout << records::TrialLine(i + 1, t.correct() ? "right" : "WRONG", t.truth_description, 70, v, "", extra)
+        std::snprintf(
+            extra, sizeof extra, " closed %6s (%.0f s)",
+            std::isfinite(t.closed)
+                ? (std::to_string(static_cast<int>(std::lround(100 * t.closed))) + "%").c_str()
+                : "n/a",
+            t.wall_time_s);
+        const records::TrialVerdict v{.verdict_kind = t.verdict_kind,
+                                      .named = model::EffectName(t.named),
+                                      .confidence = t.confidence,
+                                      .rms_ratio = t.rms_ratio,
+                                      .significant = t.significant};
+        std::cout << records::TrialLine(i + 1, t.correct() ? "right" : "WRONG", t.truth_description,
+                                        70, v, "", extra)
                   << std::endl;
       });
   PrintCheckSummary(std::cout, s);
-  if (!a.json_file.empty()) io::WriteFileWith(a.json_file, [&](std::ostream& out) { WriteCheckJson(out, s); });
+  if (!a.json_file.empty())
+    io::WriteFileWith(a.json_file, [&](std::ostream& out) { WriteCheckJson(out, s); });
   return 0;
 }
 
@@ -265,14 +296,18 @@ int RunCheckCommand(const CheckArgs& a) {
 
 void RegisterDiagnose(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<DiagnoseArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "diagnose",
-      "Diagnose the sim-to-real gap of a bench: localise the residual of a global model against the noise floor, "
-      "re-identify the model with each candidate unmodelled effect on the training cases, score it on the withheld "
-      "cases, name the effect (or say that no gap is significant) and report how far the gap shrinks.");
-  cmd->add_option("--cases", a->cases_dir, "bench case set folder (cases.csv + one CSV per case)")->type_name("DIR");
+  CLI::App* cmd = app.add_subcommand("diagnose",
+                                     "Diagnose the sim-to-real gap of a bench: localise the "
+                                     "residual of a global model against the noise floor, "
+                                     "re-identify the model with each candidate unmodelled effect "
+                                     "on the training cases, score it on the withheld "
+                                     "cases, name the effect (or say that no gap is significant) "
+                                     "and report how far the gap shrinks.");
+  cmd->add_option("--cases", a->cases_dir, "bench case set folder (cases.csv + one CSV per case)")
+      ->type_name("DIR");
   cmd->add_option("--records", a->records.records,
-                  "instead of --cases: any record set (folder with manifest.csv, a stack or fin bench folder, or one "
+                  "instead of --cases: any record set (folder with manifest.csv, a stack or fin "
+                  "bench folder, or one "
                   "CSV with windows), diagnosed for --family")
       ->type_name("PATH");
   cmd->add_option("--family", a->records.family,
@@ -281,18 +316,25 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
                   "the training records first, as `piezoid fit --family auto`), " +
                       records::FamilyList())
       ->default_str("auto");
-  cmd->add_option("--train-window", a->records.train_windows, "with one CSV: a training window START:END [s]");
-  cmd->add_option("--validate-window", a->records.validate_windows, "with one CSV: a withheld window START:END [s]");
-  cmd->add_option("--test-window", a->records.test_windows, "with one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--train-window", a->records.train_windows,
+                  "with one CSV: a training window START:END [s]");
+  cmd->add_option("--validate-window", a->records.validate_windows,
+                  "with one CSV: a withheld window START:END [s]");
+  cmd->add_option("--test-window", a->records.test_windows,
+                  "with one CSV: a withheld test window START:END [s]");
   cmd->add_option("--settle-s", a->records.settle_s,
-                  "with --records: score every record from this long after the end of its rest [s] (the models start "
+                  "with --records: score every record from this long after the end of its rest [s] "
+                  "(the models start "
                   "at rest with the memory of --initial-state; docs/records.md)")
       ->check(CLI::Range(0.0, 1e6));
   AddInitialStateFlag(cmd, &a->records.initial_state);
-  cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")->type_name("DIR");
-  cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")->type_name("FILE");
+  cmd->add_option("--out", a->out_dir, "report folder (default: diagnose_<set name>)")
+      ->type_name("DIR");
+  cmd->add_option("--json", a->json_file, "also write the diagnosis JSON to this file")
+      ->type_name("FILE");
   cmd->add_option("--candidates", a->candidates,
-                  "comma-separated effects to try (default: the whole library: driver-lowpass, creep, hinge-friction, "
+                  "comma-separated effects to try (default: the whole library: driver-lowpass, "
+                  "creep, hinge-friction, "
                   "delay, cubic-stiffening, quadratic-drive, drift)")
       ->type_name("LIST");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
@@ -305,9 +347,11 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");
   cmd->add_flag("--quick", a->quick, "smaller global searches (a quick look)");
   cmd->add_flag("--quiet", a->quiet, "no progress lines on stderr");
-  AddCompleteServiceFlags(cmd, a->service);  // --master, --timeout-ms, --retries, --curve-secret, --master-public
+  AddCompleteServiceFlags(
+      cmd, a->service);  // --master, --timeout-ms, --retries, --curve-secret, --master-public
   cmd->add_option("--concurrent-fits", a->concurrent_fits,
-                  "candidate fits run at the same time (default 1 locally, 3 with --master: sessions in parallel keep "
+                  "candidate fits run at the same time (default 1 locally, 3 with --master: "
+                  "sessions in parallel keep "
                   "the workers busy); the result does not depend on it")
       ->check(CLI::Range(1, 64));
   cmd->callback([a, &exit_code] { exit_code = RunDiagnose(*a); });
@@ -315,34 +359,46 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
 
 void RegisterDiagnoseCheck(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<CheckArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "diagnose-check",
-      "Check the diagnosis on synthetic benches: the bench plant with an effect drawn at random from the library "
-      "(random magnitude and seed, sometimes in a functional form the library lacks) or none, quantised and noisy "
-      "like the encoder; the effect is withheld from the model; prints the confusion matrix (true x named effect) "
-      "and the distribution of the share of the gap closed.");
+  CLI::App* cmd = app.add_subcommand("diagnose-check",
+                                     "Check the diagnosis on synthetic benches: the bench plant "
+                                     "with an effect drawn at random from the library "
+                                     "(random magnitude and seed, sometimes in a functional form "
+                                     "the library lacks) or none, quantised and noisy "
+                                     "like the encoder; the effect is withheld from the model; "
+                                     "prints the confusion matrix (true x named effect) "
+                                     "and the distribution of the share of the gap closed.");
   cmd->add_option("--trials", a->trials, "number of benches")->check(CLI::Range(1, 100000));
   cmd->add_option("--records-family", a->records_family,
-                  "check the records diagnosis instead (diagnose --records) on synthetic records of this family: "
+                  "check the records diagnosis instead (diagnose --records) on synthetic records "
+                  "of this family: "
                   "stack-bouc-wen, backlash-like or duhem");
   cmd->add_flag("--real-like", a->real_like,
-                "with --records-family: diagnose real-like stack record sets (synth-stack: a Preisach plant with log "
-                "creep and sensor lag, not a family of the product) and check the floor, the excitation report and "
+                "with --records-family: diagnose real-like stack record sets (synth-stack: a "
+                "Preisach plant with log "
+                "creep and sensor lag, not a family of the product) and check the floor, the "
+                "excitation report and "
                 "the named effect against their truth");
-  cmd->add_option("--real-like-train-s", a->real_like_train_s, "with --real-like: training sine length [s]")
+  cmd->add_option("--real-like-train-s", a->real_like_train_s,
+                  "with --real-like: training sine length [s]")
       ->check(CLI::Range(2.0, 1000.0));
-  cmd->add_option("--real-like-withheld-s", a->real_like_withheld_s, "with --real-like: withheld record length [s]")
+  cmd->add_option("--real-like-withheld-s", a->real_like_withheld_s,
+                  "with --real-like: withheld record length [s]")
       ->check(CLI::Range(2.0, 1000.0));
   cmd->add_option("--seed", a->seed, "first bench seed (bench i uses seed + i)");
   cmd->add_option("--threads", a->threads, "evaluator threads")->check(CLI::Range(1, 256));
-  cmd->add_option("--json", a->json_file, "write the trials and the matrix as JSON")->type_name("FILE");
-  cmd->add_option("--candidates", a->candidates, "effects the diagnosis tries (default: the library)")
+  cmd->add_option("--json", a->json_file, "write the trials and the matrix as JSON")
+      ->type_name("FILE");
+  cmd->add_option("--candidates", a->candidates,
+                  "effects the diagnosis tries (default: the library)")
       ->type_name("LIST");
-  cmd->add_option("--kinds", a->kinds, "effects drawn for the benches (default: the library)")->type_name("LIST");
+  cmd->add_option("--kinds", a->kinds, "effects drawn for the benches (default: the library)")
+      ->type_name("LIST");
   cmd->add_option("--none-probability", a->none_probability, "share of clean benches");
   cmd->add_option("--other-form-probability", a->other_form_probability,
-                  "share of effects drawn in a form the library lacks (second-order amplifier, two creep relaxations)");
-  cmd->add_option("--significance-ratio", a->significance_ratio, "as for diagnose")->check(CLI::Range(1.0001, 100.0));
+                  "share of effects drawn in a form the library lacks (second-order amplifier, two "
+                  "creep relaxations)");
+  cmd->add_option("--significance-ratio", a->significance_ratio, "as for diagnose")
+      ->check(CLI::Range(1.0001, 100.0));
   cmd->add_flag("--second", a->second, "also run the greedy search for a second effect");
   cmd->add_flag("--quick", a->quick, "smaller global searches");
   cmd->callback([a, &exit_code] { exit_code = RunCheckCommand(*a); });

@@ -59,7 +59,8 @@ int NameColumnWidth(const io::RecordSet& set) {
 /// The width of a column of roles: the longest role name of the set and two spaces.
 int RoleColumnWidth(const io::RecordSet& set) {
   size_t w = 5;
-  for (const io::Record& r : set.records) w = std::max(w, std::string_view(model::CaseRoleName(r.role)).size());
+  for (const io::Record& r : set.records)
+    w = std::max(w, std::string_view(model::CaseRoleName(r.role)).size());
   return static_cast<int>(w + 2);
 }
 
@@ -78,47 +79,54 @@ struct FitArgs {
   int pi_operators = 12;
   std::string pi_operators_text = "12";  ///< --pi-operators: a count, or auto (preisach)
   int lm_iterations = 60;
-  std::string lm_differences = "auto";  ///< the polish's Jacobian: auto, forward-central, forward or central
+  std::string lm_differences =
+      "auto";  ///< the polish's Jacobian: auto, forward-central, forward or central
   bool no_polish = false;
   bool no_figures = false;
   bool quiet = false;
   CompleteServiceFlags service;  ///< --master: the global search's evaluations on the service
-  records::FitOptions::Sizing sizing;  ///< the PSO budget sized by the searched parameters, but for the flags given
-  opt::LineOptions line;               ///< --line-grid, --line-brackets, --line-tolerance
+  records::FitOptions::Sizing
+      sizing;  ///< the PSO budget sized by the searched parameters, but for the flags given
+  opt::LineOptions line;  ///< --line-grid, --line-brackets, --line-tolerance
   // --family auto (records/select.h)
-  bool pi_operators_given = false;     ///< --pi-operators: the one resolution tried
+  bool pi_operators_given = false;         ///< --pi-operators: the one resolution tried
   std::vector<std::string> auto_families;  ///< --auto-families (empty: the registry's auto grid)
   int folds = 5;
   int finalists = 4;
-  bool selected = false;               ///< the report's family was chosen by --family auto
+  bool selected = false;  ///< the report's family was chosen by --family auto
 };
 
-/// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1 searched
-/// parameter): 340 search evaluations, 357 with the polish; 2 polishes, the kept one from repetition 2's best
-/// (the search's best: repetition 1)".
+/// The global search as run: "PSO 10 particles × ≤ 30 iterations, …, 2 repetitions (sized for 1
+/// searched parameter): 340 search evaluations, 357 with the polish; 2 polishes, the kept one from
+/// repetition 2's best (the search's best: repetition 1)".
 std::string SearchSentence(const records::FitResult& r) {
-  if (r.searched_parameters == 0) return "nothing searched (the weights are solved by least squares)";
-  std::string s = r.algorithm == opt::SearchAlgorithm::kPso    ? r.budget.Describe()
-                  : r.algorithm == opt::SearchAlgorithm::kLine ? "line search: " + r.line.Describe()
-                                                               : std::string(opt::SearchAlgorithmName(r.algorithm)) +
-                                                                     ", " + std::to_string(r.budget.repetitions) +
-                                                                     " repetitions";
-  s += r.budget_sized ? (r.algorithm == opt::SearchAlgorithm::kLine ? " (the rule for " : " (sized for ")
-                      : " (as given, for ";
-  s += std::to_string(r.searched_parameters) + " searched parameter" + (r.searched_parameters == 1 ? "" : "s");
+  if (r.searched_parameters == 0)
+    return "nothing searched (the weights are solved by least squares)";
+  std::string s = r.algorithm == opt::SearchAlgorithm::kPso ? r.budget.Describe()
+                  : r.algorithm == opt::SearchAlgorithm::kLine
+                      ? "line search: " + r.line.Describe()
+                      : std::string(opt::SearchAlgorithmName(r.algorithm)) + ", " +
+                            std::to_string(r.budget.repetitions) + " repetitions";
+  s += r.budget_sized
+           ? (r.algorithm == opt::SearchAlgorithm::kLine ? " (the rule for " : " (sized for ")
+           : " (as given, for ";
+  s += std::to_string(r.searched_parameters) + " searched parameter" +
+       (r.searched_parameters == 1 ? "" : "s");
   if (r.spectrum_solved)
     s += "; the creep spectrum's " + std::to_string(r.solved_parameters) +
          " weights solved with the family's in every evaluation, not searched";
   s += ")";
-  s += ": " + std::to_string(r.search.evaluations) + " search evaluations, " + std::to_string(r.evaluations) +
-       " with the polish";
+  s += ": " + std::to_string(r.search.evaluations) + " search evaluations, " +
+       std::to_string(r.evaluations) + " with the polish";
   if (r.polishes > 0) {
     s += "; " + std::to_string(r.polishes) + (r.polishes == 1 ? " polish" : " polishes");
     if (r.best_polish_repetition >= 0 && r.best_polish_repetition == r.search.best_repetition) {
-      s += ", the kept one from the search's best (repetition " + std::to_string(r.best_polish_repetition + 1) + ")";
+      s += ", the kept one from the search's best (repetition " +
+           std::to_string(r.best_polish_repetition + 1) + ")";
     } else if (r.best_polish_repetition >= 0) {
       s += ", the kept one from repetition " + std::to_string(r.best_polish_repetition + 1) +
-           "'s best (the search's best: repetition " + std::to_string(r.search.best_repetition + 1) + ")";
+           "'s best (the search's best: repetition " +
+           std::to_string(r.search.best_repetition + 1) + ")";
     }
   }
   return s;
@@ -155,8 +163,8 @@ double TrendWindow(const records::DataScale& s) {
 /// model less the offset and the training records' straight line a·u + b) and its
 /// error by reversal depth (depth_<name>.csv). Figures (when `scripts`): the trace, the loop of
 /// each record less the line (measured as dots, model as a line, over the training records'
-/// measured major loop in grey: minor loops inside it), one figure of error against reversal depth for every record and
-/// one of the averaged error over time (creep).
+/// measured major loop in grey: minor loops inside it), one figure of error against reversal depth
+/// for every record and one of the averaged error over time (creep).
 void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::FitResult& r,
                  std::vector<fs::path>* scripts) {
   fs::create_directories(dir);
@@ -171,7 +179,8 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& rec = set.records[i];
     if (rec.role != model::CaseRole::kTrain) continue;
-    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) b += rec.y[k] - r.metrics[i].offset - a * rec.u[k];
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k)
+      b += rec.y[k] - r.metrics[i].offset - a * rec.u[k];
     nb += static_cast<double>(rec.scored());
     major.push_back({"trace_" + rec.name + ".csv", 2, 9, "training " + rec.name + " (measured)",
                      "lines lc rgb '#c8c8c8'"});
@@ -183,15 +192,18 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
     const double offset = r.metrics[i].offset;
     const std::vector<double> trend = records::ResidualTrend(rec, r.yhat[i], window_s);
     io::WriteFileWith(dir / (stem + ".csv"), [&](std::ostream& os) {
-      os << "t_s,drive_" << du << ",measured_" << yu << ",model_" << yu << ",error_" << yu << ",measured_less_offset_"
-         << yu << ",model_less_offset_" << yu << ",error_mean_" << io::FormatNumber(window_s) << "s_" << yu
-         << ",measured_less_line_" << yu << ",model_less_line_" << yu << "\n";
+      os << "t_s,drive_" << du << ",measured_" << yu << ",model_" << yu << ",error_" << yu
+         << ",measured_less_offset_" << yu << ",model_less_offset_" << yu << ",error_mean_"
+         << io::FormatNumber(window_s) << "s_" << yu << ",measured_less_line_" << yu
+         << ",model_less_line_" << yu << "\n";
       for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
-        os << io::FormatNumber(rec.t[k]) << "," << io::FormatNumber(rec.u[k]) << "," << io::FormatNumber(rec.y[k])
-           << "," << io::FormatNumber(r.yhat[i][k]) << "," << io::FormatNumber(rec.y[k] - r.yhat[i][k]) << ","
-           << io::FormatNumber(rec.y[k] - offset) << "," << io::FormatNumber(r.yhat[i][k] - offset) << ","
-           << io::FormatNumber(trend[k - rec.first_scored]) << "," << io::FormatNumber(rec.y[k] - offset - a * rec.u[k] - b)
-           << "," << io::FormatNumber(r.yhat[i][k] - offset - a * rec.u[k] - b) << "\n";
+        os << io::FormatNumber(rec.t[k]) << "," << io::FormatNumber(rec.u[k]) << ","
+           << io::FormatNumber(rec.y[k]) << "," << io::FormatNumber(r.yhat[i][k]) << ","
+           << io::FormatNumber(rec.y[k] - r.yhat[i][k]) << ","
+           << io::FormatNumber(rec.y[k] - offset) << "," << io::FormatNumber(r.yhat[i][k] - offset)
+           << "," << io::FormatNumber(trend[k - rec.first_scored]) << ","
+           << io::FormatNumber(rec.y[k] - offset - a * rec.u[k] - b) << ","
+           << io::FormatNumber(r.yhat[i][k] - offset - a * rec.u[k] - b) << "\n";
       }
     });
     const std::vector<records::DepthBin> bins =
@@ -202,7 +214,8 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
       for (const records::DepthBin& b : bins) {
         if (b.samples == 0) continue;  // an empty bin has no error to show
         const double hi = std::isfinite(b.hi) ? b.hi : b.lo + 0.2;
-        os << io::FormatNumber(100 * b.lo) << "," << (std::isfinite(b.hi) ? io::FormatNumber(100 * b.hi) : "inf") << ","
+        os << io::FormatNumber(100 * b.lo) << ","
+           << (std::isfinite(b.hi) ? io::FormatNumber(100 * b.hi) : "inf") << ","
            << io::FormatNumber(50 * (b.lo + hi)) << "," << b.pieces << "," << b.samples << ","
            << io::FormatNumber(b.rmse) << "\n";
       }
@@ -210,17 +223,25 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
     if (!scripts) continue;
     const std::string role = model::CaseRoleName(rec.role);
     const bool train = rec.role == model::CaseRole::kTrain;
-    Plot trace{stem, rec.name + " (" + role + "): measured and " + r.model->Describe(), "t [s]",
-               "response [" + yu + "]", false,
-               {{stem + ".csv", 1, 3, "measured", "lines"}, {stem + ".csv", 1, 4, "model", "lines"},
+    Plot trace{stem,
+               rec.name + " (" + role + "): measured and " + r.model->Describe(),
+               "t [s]",
+               "response [" + yu + "]",
+               false,
+               {{stem + ".csv", 1, 3, "measured", "lines"},
+                {stem + ".csv", 1, 4, "model", "lines"},
                 {stem + ".csv", 1, 5, "error", "lines"}}};
     scripts->push_back(WritePlotScript(dir, trace));
     Plot loop{"loop_" + rec.name,
-              rec.name + " (" + role + "): loop less the training line " + Fmt(a) + "·u + " + Fmt(b) + " " + yu,
-              "drive [" + du + "]", "response − offset (" + Fmt(offset) + ") − line [" + yu + "]", false, {}};
-    // The y range of the loop: the model's and 99.8 % of the measured samples, so that a sample or two
-    // at a jump from rest (a sensor lag reads the old level) does not squash the loops; they stay in
-    // the trace figure and the CSV, and the title counts them.
+              rec.name + " (" + role + "): loop less the training line " + Fmt(a) + "·u + " +
+                  Fmt(b) + " " + yu,
+              "drive [" + du + "]",
+              "response − offset (" + Fmt(offset) + ") − line [" + yu + "]",
+              false,
+              {}};
+    // The y range of the loop: the model's and 99.8 % of the measured samples, so that a sample or
+    // two at a jump from rest (a sensor lag reads the old level) does not squash the loops; they
+    // stay in the trace figure and the CSV, and the title counts them.
     std::vector<double> measured, model;
     for (size_t k = rec.first_scored; k < rec.end_scored; ++k) {
       measured.push_back(rec.y[k] - offset - a * rec.u[k] - b);
@@ -237,30 +258,37 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
     const double pad = 0.08 * std::max(hi - lo, 1e-12);
     lo -= pad;
     hi += pad;
-    const auto outside = std::count_if(measured.begin(), measured.end(), [&](double x) { return x < lo || x > hi; });
+    const auto outside =
+        std::count_if(measured.begin(), measured.end(), [&](double x) { return x < lo || x > hi; });
     if (outside > 0) {
       loop.yrange = "[" + io::FormatNumber(lo) + ":" + io::FormatNumber(hi) + "]";
       loop.title += "; " + std::to_string(outside) + " sample(s) off-scale";
     }
     if (!train) loop.series = major;  // the major loop behind: the withheld minor loops inside it
-    loop.series.push_back({stem + ".csv", 2, 9, rec.name + " measured", "points pt 7 ps 0.3 lc rgb '#1f77b4'"});
+    loop.series.push_back(
+        {stem + ".csv", 2, 9, rec.name + " measured", "points pt 7 ps 0.3 lc rgb '#1f77b4'"});
     loop.series.push_back({stem + ".csv", 2, 10, rec.name + " model", "lines lc rgb '#d62728'"});
     scripts->push_back(WritePlotScript(dir, loop));
-    depth.push_back({depth_file, 3, 6, rec.name + " (" + role + ")", train ? "points pt 5 ps 1.5" : "linespoints pt 7 ps 1.2"});
+    depth.push_back({depth_file, 3, 6, rec.name + " (" + role + ")",
+                     train ? "points pt 5 ps 1.5" : "linespoints pt 7 ps 1.2"});
     creep.push_back({stem + ".csv", 1, 8, rec.name + " (" + role + ")", "lines"});
   }
   if (!scripts) return;
-  scripts->push_back(WritePlotScript(
-      dir, Plot{"error_vs_depth",
-                "RMSE of each monotone piece of the drive by its swing (minor loops are the shallow pieces)",
-                "swing [% of the training drive range], bin centre", "RMSE [" + yu + "]", true, depth, "[0:100]"}));
-  scripts->push_back(WritePlotScript(
-      dir, Plot{"creep", "error (measured − model) averaged over " + Fmt(window_s, 3) + " s: slow drift is creep the model lacks",
-                "t [s]", "mean error [" + yu + "]", false, creep}));
+  scripts->push_back(WritePlotScript(dir, Plot{"error_vs_depth",
+                                               "RMSE of each monotone piece of the drive by its "
+                                               "swing (minor loops are the shallow pieces)",
+                                               "swing [% of the training drive range], bin centre",
+                                               "RMSE [" + yu + "]", true, depth, "[0:100]"}));
+  scripts->push_back(
+      WritePlotScript(dir, Plot{"creep",
+                                "error (measured − model) averaged over " + Fmt(window_s, 3) +
+                                    " s: slow drift is creep the model lacks",
+                                "t [s]", "mean error [" + yu + "]", false, creep}));
 }
 
-void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r, const FitArgs& a,
-                    const records::ExcitationReport& excitation, const records::TrainingDriveProposal& proposal,
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r,
+                    const FitArgs& a, const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal,
                     const std::vector<records::ExtrapolationCheck>& extrapolation) {
   const auto& m = *r.model;
   os << "# piezoid fit: " << m.Describe() << "\n\n"
@@ -270,40 +298,47 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
   os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
      << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
-     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min) << " … "
-     << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range " << Fmt(m.scale().y_half) << " "
-     << set.response_unit << ", gain " << Fmt(m.scale().gain) << " " << set.response_unit << "/" << set.drive_unit
-     << ", dominant frequency " << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
+     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min)
+     << " … " << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range "
+     << Fmt(m.scale().y_half) << " " << set.response_unit << ", gain " << Fmt(m.scale().gain) << " "
+     << set.response_unit << "/" << set.drive_unit << ", dominant frequency "
+     << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
   const auto& u = r.uncertainty;
-  os << "## Parameters\n\n| parameter | value | unit | search range | ± σ | sensitivity [" << set.response_unit
-     << "] | identifiability |\n|---|---|---|---|---|---|---|\n";
+  os << "## Parameters\n\n| parameter | value | unit | search range | ± σ | sensitivity ["
+     << set.response_unit << "] | identifiability |\n|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < m.params().size(); ++i) {
     const auto& p = m.params()[i];
-    os << "| " << p.name << " | " << Fmt(r.params[i], 6) << " | " << p.unit << " | [" << Fmt(p.lower) << ", "
-       << Fmt(p.upper) << "]" << (p.log_scale ? " log" : "") << " | ";
+    os << "| " << p.name << " | " << Fmt(r.params[i], 6) << " | " << p.unit << " | ["
+       << Fmt(p.lower) << ", " << Fmt(p.upper) << "]" << (p.log_scale ? " log" : "") << " | ";
     if (i < u.params.size()) {
       const auto& e = u.params[i];
-      os << (std::isfinite(e.std_error) ? Fmt(e.std_error, 3) : "—") << " | " << Fmt(e.sensitivity, 3) << " | "
-         << opt::IdentifiabilityName(e.identifiability) << (e.note.empty() ? "" : "; " + e.note) << " |\n";
+      os << (std::isfinite(e.std_error) ? Fmt(e.std_error, 3) : "—") << " | "
+         << Fmt(e.sensitivity, 3) << " | " << opt::IdentifiabilityName(e.identifiability)
+         << (e.note.empty() ? "" : "; " + e.note) << " |\n";
     } else {
       os << " | | |\n";
     }
   }
   const auto wn = m.family().weight_names();
   for (size_t i = 0; i < r.weights.size(); ++i) {
-    os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6) << " | y/V | ≥ 0 (least squares) | | | |\n";
+    os << "| " << wn[i] << " | " << Fmt(r.weights[i], 6)
+       << " | y/V | ≥ 0 (least squares) | | | |\n";
   }
   if (!u.params.empty()) {
-    os << "\nσ from the training residuals (s = " << Fmt(u.residual_sigma, 4) << " " << set.response_unit
-       << ") and their Jacobian at the solution; sensitivity: the RMS change of the output per step of one "
+    os << "\nσ from the training residuals (s = " << Fmt(u.residual_sigma, 4) << " "
+       << set.response_unit
+       << ") and their Jacobian at the solution; sensitivity: the RMS change of the output per "
+          "step of one "
           "unit range (a log-scaled parameter: ∂x/∂u). Singular values of J·diag(scale):";
     for (double v : u.singular_values) os << " " << Fmt(v, 3);
     os << "; weakest direction: " << u.weakest_direction << ".";
-    if (!r.weights.empty()) os << " The solved weights are not in the table (they follow from the others).";
+    if (!r.weights.empty())
+      os << " The solved weights are not in the table (they follow from the others).";
     os << "\n";
   }
   if (r.resolution.used) os << "\nPreisach grid: " << r.resolution.Describe() << ".\n";
-  if (r.regularisation.used) os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
+  if (r.regularisation.used)
+    os << "\nRegularisation of the weights: " << r.regularisation.Describe() << ".\n";
   if (r.spectrum_regularisation.used)
     os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
        << r.spectrum_regularisation.Describe() << ".\n";
@@ -311,14 +346,16 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   os << "\n## Errors\n\n";
   if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
-  os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of range] |\n"
+  os << "| record | role | window [s] | samples | offset | RMSE | max | max at [s] | NRMSE [% of "
+        "range] |\n"
      << "|---|---|---|---|---|---|---|---|---|\n";
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& rec = set.records[i];
     const auto& e = r.metrics[i];
-    os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | " << Fmt(rec.t[rec.first_scored]) << "–"
-       << Fmt(rec.t[rec.end_scored - 1]) << " | " << e.samples << " | " << Fmt(e.offset) << " ("
-       << io::OffsetModeName(rec.offset_mode) << ") | ";
+    os << "| " << rec.name << " | " << model::CaseRoleName(rec.role) << " | "
+       << Fmt(rec.t[rec.first_scored]) << "–" << Fmt(rec.t[rec.end_scored - 1]) << " | "
+       << e.samples << " | " << Fmt(e.offset) << " (" << io::OffsetModeName(rec.offset_mode)
+       << ") | ";
     if (Finite(e)) {
       os << Fmt(e.rmse) << " | " << Fmt(e.max_abs) << " | " << Fmt(e.max_at_s) << " | "
          << NrmseText(e) << " |\n";
@@ -328,8 +365,10 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   }
   if (!extrapolation.empty()) {
     os << "\n## Extrapolation (diagnose/extrapolation.h)\n\n";
-    for (const auto& c : extrapolation) os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
-    os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the training drive "
+    for (const auto& c : extrapolation)
+      os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+    os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the "
+          "training drive "
           "range; minor loops are the shallow pieces):\n\n";
     for (size_t i = 0; i < set.records.size(); ++i) {
       const auto& rec = set.records[i];
@@ -343,19 +382,24 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   }
   if (!a.no_figures) {
     os << "\n## Figures (figures/)\n\n"
-       << "- `loop_<record>.png`: the hysteresis loop, response less the record's offset and the training records' "
-          "straight line a·u + b against drive (the loop at the scale of its width), measured (dots) and model (line); "
-          "a withheld record's loops over the training records' measured major loop (grey): its minor loops inside it.\n"
-       << "- `error_vs_depth.png`: the RMSE of each record's monotone drive pieces by their swing (the table above, "
+       << "- `loop_<record>.png`: the hysteresis loop, response less the record's offset and the "
+          "training records' "
+          "straight line a·u + b against drive (the loop at the scale of its width), measured "
+          "(dots) and model (line); "
+          "a withheld record's loops over the training records' measured major loop (grey): its "
+          "minor loops inside it.\n"
+       << "- `error_vs_depth.png`: the RMSE of each record's monotone drive pieces by their swing "
+          "(the table above, "
           "`depth_<record>.csv`): shallow swings are minor loops.\n"
        << "- `creep.png`: the error averaged over " << Fmt(TrendWindow(m.scale()), 3)
-       << " s (one period of the dominant drive frequency, column 8 of `trace_<record>.csv`): a slow drift is creep "
+       << " s (one period of the dominant drive frequency, column 8 of `trace_<record>.csv`): a "
+          "slow drift is creep "
           "the model lacks.\n"
        << "- `trace_<record>.png`: measured, model and error over time.\n";
   }
   os << "\nSearch: " << SearchSentence(r) << ".\n";
-  os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; " << r.evaluations
-     << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
+  os << "\nUnits: " << set.response_unit << ". Training MSE " << Fmt(r.train_mse, 6) << "; "
+     << r.evaluations << " evaluations, " << Fmt(r.wall_time_s, 3) << " s";
   if (!r.stop_reason.empty()) os << "; search stop: " << r.stop_reason;
   os << "; LM iterations " << r.lm_iterations << " (" << r.lm_differences
      << " differences).\n\nCommand: `piezoid fit --records " << a.records << " --family "
@@ -364,7 +408,8 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
   WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
 }
 
-std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const records::ExcitationReport& excitation,
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
+                    const records::ExcitationReport& excitation,
                     const records::TrainingDriveProposal& proposal,
                     const std::vector<records::ExtrapolationCheck>& extrapolation, const FitArgs& a,
                     const records::SelectionResult* selection = nullptr) {
@@ -377,9 +422,11 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
   f["response_unit"] = Text(set.response_unit);
   f["drive_unit"] = Text(set.drive_unit);
   f["polarity"] = Num(r.model->scale().polarity);
-  f["settle_s"] = Num(a.settle_s);  // each record scored from this long after its rest (0: from the rest's end)
+  f["settle_s"] =
+      Num(a.settle_s);  // each record scored from this long after its rest (0: from the rest's end)
   Struct params;
-  for (size_t i = 0; i < r.params.size(); ++i) (*params.mutable_fields())[r.model->params()[i].name] = Num(r.params[i]);
+  for (size_t i = 0; i < r.params.size(); ++i)
+    (*params.mutable_fields())[r.model->params()[i].name] = Num(r.params[i]);
   f["params"] = Obj(params);
   std::vector<Value> weights, records;
   for (double w : r.weights) weights.push_back(Num(w));
@@ -408,7 +455,8 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r, const
     Struct g;
     (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
     (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
-    if (!r.regularisation.penalty_name.empty()) (*g.mutable_fields())["penalty"] = Text(r.regularisation.penalty_name);
+    if (!r.regularisation.penalty_name.empty())
+      (*g.mutable_fields())["penalty"] = Text(r.regularisation.penalty_name);
     f["regularisation"] = Obj(g);
   }
   if (r.spectrum_regularisation.used) {
@@ -595,7 +643,8 @@ void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, cons
     if (GnuplotAvailable()) {
       RenderPlots(fs::path(a.out) / "figures", scripts, &errors);
     } else {
-      errors.push_back("gnuplot not found: figure scripts written to " + (fs::path(a.out) / "figures").string());
+      errors.push_back("gnuplot not found: figure scripts written to " +
+                       (fs::path(a.out) / "figures").string());
     }
     for (const auto& e : errors) std::cerr << "piezoid fit: warning: " << e << "\n";
   }
@@ -608,8 +657,8 @@ void PrintFitSummary(const io::RecordSet& set, const records::FitResult& r, cons
   const int name_width = NameColumnWidth(set), role_width = RoleColumnWidth(set);
   for (size_t i = 0; i < set.records.size(); ++i) {
     const auto& e = r.metrics[i];
-    std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role) << std::setw(name_width) << e.name
-              << " ";
+    std::cout << "  " << std::left << std::setw(role_width) << model::CaseRoleName(e.role)
+              << std::setw(name_width) << e.name << " ";
     if (Finite(e)) {
       std::cout << "RMSE " << Fmt(e.rmse) << " " << set.response_unit << ", max " << Fmt(e.max_abs)
                 << " at " << Fmt(e.max_at_s) << " s, NRMSE " << NrmseText(e) << "\n";
@@ -618,33 +667,39 @@ void PrintFitSummary(const io::RecordSet& set, const records::FitResult& r, cons
     }
   }
   if (r.resolution.used) std::cout << "  preisach grid: " << r.resolution.Describe() << "\n";
-  if (r.regularisation.used) std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
+  if (r.regularisation.used)
+    std::cout << "  regularisation: " << r.regularisation.Describe() << "\n";
   if (r.spectrum_regularisation.used)
     std::cout << "  creep spectrum: roughness " << r.spectrum_regularisation.Describe() << "\n";
-  if (const std::string s = r.SpectrumIdentification(); !s.empty()) std::cout << "  note: " << s << "\n";
+  if (const std::string s = r.SpectrumIdentification(); !s.empty())
+    std::cout << "  note: " << s << "\n";
   for (const auto& c : extrapolation)
-    if (c.flagged) std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit) << "\n";
+    if (c.flagged)
+      std::cout << "  warning: extrapolation: " << c.Describe(set.drive_unit, set.response_unit)
+                << "\n";
   std::cout << "  search: " << SearchSentence(r) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
-            << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")" : std::string())
-            << "; report in "
-            << (fs::path(a.out) / "report.md").string() << "\n";
+            << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")"
+                                    : std::string())
+            << "; report in " << (fs::path(a.out) / "report.md").string() << "\n";
 }
 
 int RunFit(const FitArgs& args) {
   FitArgs a = args;  // --family auto: the chosen family and resolution replace the flag's
   const bool select = a.family == "auto";
-  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
+  io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows,
+                                               a.test_windows, a.settle_s);
   const records::FitOptions o = FitOptionsOf(a);
-  std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " (" << set.format
-            << "), family " << a.family << std::endl;
+  std::cout << "piezoid fit: " << set.records.size() << " record(s) from " << a.records << " ("
+            << set.format << "), family " << a.family << std::endl;
   const records::ExcitationReport excitation = records::AnalyseExcitation(set);
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, excitation);
   PrintExcitationSummary(std::cout, set, excitation);
   records::FitResult r;
   records::SelectionResult selection;
   if (const std::optional<int> code = FitOrSelect(set, o, a, r, selection)) return *code;
-  const std::vector<records::ExtrapolationCheck> extrapolation = records::CheckExtrapolation(set, r);
+  const std::vector<records::ExtrapolationCheck> extrapolation =
+      records::CheckExtrapolation(set, r);
   WriteFitOutputs(set, r, a, excitation, proposal, extrapolation, select ? &selection : nullptr);
   PrintFitSummary(set, r, a, extrapolation);
   return 0;
@@ -673,12 +728,15 @@ std::optional<int> PiOperatorsCount(const std::string& text) {
 
 void RegisterFit(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<FitArgs>();
-  CLI::App* cmd = app.add_subcommand(
-      "fit",
-      "Identify a plant family on measured records of any drive (a record-set folder with manifest.csv, "
-      "a stack or fin bench folder, or one CSV file with windows): global search + Levenberg-Marquardt, "
-      "offsets explicit; writes report.md, fit.json, traces and loop figures.");
-  cmd->add_option("--records", a->records, "record set: folder (manifest.csv) or one CSV (time, drive, response)")
+  CLI::App* cmd =
+      app.add_subcommand("fit",
+                         "Identify a plant family on measured records of any drive (a record-set "
+                         "folder with manifest.csv, "
+                         "a stack or fin bench folder, or one CSV file with windows): global "
+                         "search + Levenberg-Marquardt, "
+                         "offsets explicit; writes report.md, fit.json, traces and loop figures.");
+  cmd->add_option("--records", a->records,
+                  "record set: folder (manifest.csv) or one CSV (time, drive, response)")
       ->required()
       ->type_name("PATH");
   cmd->add_option("--family", a->family,
@@ -699,12 +757,17 @@ void RegisterFit(CLI::App& app, int& exit_code) {
          "--family auto: the screening round's best cross-validated again with the full search")
       ->check(CLI::Range(1, 100))
       ->default_str("4");
-  cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")->delimiter(',');
-  cmd->add_option("--train-window", a->train_windows, "one CSV: a training window START:END [s] (repeatable)");
-  cmd->add_option("--validate-window", a->validate_windows, "one CSV: a withheld validation window START:END [s]");
-  cmd->add_option("--test-window", a->test_windows, "one CSV: a withheld test window START:END [s]");
+  cmd->add_option("--effects", a->effects, "effects added to the family (comma-separated)")
+      ->delimiter(',');
+  cmd->add_option("--train-window", a->train_windows,
+                  "one CSV: a training window START:END [s] (repeatable)");
+  cmd->add_option("--validate-window", a->validate_windows,
+                  "one CSV: a withheld validation window START:END [s]");
+  cmd->add_option("--test-window", a->test_windows,
+                  "one CSV: a withheld test window START:END [s]");
   cmd->add_option("--settle-s", a->settle_s,
-                  "score every record from this long after the end of its rest [s] (the models start at rest with the "
+                  "score every record from this long after the end of its rest [s] (the models "
+                  "start at rest with the "
                   "memory of --initial-state; docs/records.md)")
       ->check(CLI::Range(0.0, 1e6));
   AddInitialStateFlag(cmd, &a->initial_state);
@@ -713,14 +776,17 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "pso, ga-real, ga-binary, de or line (one searched parameter)")
       ->default_str("pso; line for one searched parameter");
   AddSearchFlags(cmd, &a->search, /*sized=*/true);
-  // One searched parameter: the line search's budget (records::FitOptions::Sizing, opt::LineOptions).
+  // One searched parameter: the line search's budget (records::FitOptions::Sizing,
+  // opt::LineOptions).
   const opt::LineOptions line;
   cmd->add_option("--line-grid", a->line.grid,
-                  "one searched parameter (the default search then): grid points over its range, ends included")
+                  "one searched parameter (the default search then): grid points over its range, "
+                  "ends included")
       ->check(CLI::Range(3, 100000))
       ->default_str(std::to_string(line.grid));
-  cmd->add_option("--line-brackets", a->line.brackets,
-                  "one searched parameter: the grid's lowest local minima refined by Brent's method")
+  cmd->add_option(
+         "--line-brackets", a->line.brackets,
+         "one searched parameter: the grid's lowest local minima refined by Brent's method")
       ->check(CLI::Range(1, 100000))
       ->default_str(std::to_string(line.brackets));
   cmd->add_option("--line-tolerance", a->line.tolerance,
@@ -728,21 +794,27 @@ void RegisterFit(CLI::App& app, int& exit_code) {
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {
             double x = 0;
-            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5)) return "Value " + v + " not in (0, 0.5)";
+            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5))
+              return "Value " + v + " not in (0, 0.5)";
             return "";
           },
           "in (0, 0.5)"))
       ->default_str(io::FormatNumber(line.tolerance));
-  cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")->default_str("60");
-  cmd->add_option("--lm-differences", a->lm_differences,
-                  "the polish's Jacobian: auto (forward after the line search of one parameter, else "
-                  "forward-central), forward-central (forward differences, p + 1 evaluations, until the polish "
-                  "converges, then central ones from there until it converges again), forward, or central (2 p)")
+  cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")
+      ->default_str("60");
+  cmd->add_option(
+         "--lm-differences", a->lm_differences,
+         "the polish's Jacobian: auto (forward after the line search of one parameter, else "
+         "forward-central), forward-central (forward differences, p + 1 evaluations, until the "
+         "polish "
+         "converges, then central ones from there until it converges again), forward, or central "
+         "(2 p)")
       ->check(CLI::IsMember({"auto", "forward-central", "forward", "central"}))
       ->default_str("auto");
   cmd->add_flag("--no-polish", a->no_polish, "no Levenberg-Marquardt after the search");
   cmd->add_option("--threads", a->threads, "evaluation threads")->default_str("2");
-  cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")->default_str("2");
+  cmd->add_option("--substeps", a->substeps, "integration sub-steps per sample (1 … 512)")
+      ->default_str("2");
   cmd->add_option("--pi-operators", a->pi_operators_text,
                   "Prandtl-Ishlinskii / asymmetric-pi play operators (1 … 10000); preisach grid "
                   "levels (1 … 200), or auto: the levels chosen by cross-validation on the "
@@ -766,8 +838,8 @@ void RegisterFit(CLI::App& app, int& exit_code) {
     a->sizing.keep_stall = cmd->count("--stall") > 0;
     a->sizing.keep_repetitions = cmd->count("--repetitions") > 0;
     a->sizing.keep_algorithm = cmd->count("--algorithm") > 0;
-    a->sizing.line_given =
-        cmd->count("--line-grid") > 0 || cmd->count("--line-brackets") > 0 || cmd->count("--line-tolerance") > 0;
+    a->sizing.line_given = cmd->count("--line-grid") > 0 || cmd->count("--line-brackets") > 0 ||
+                           cmd->count("--line-tolerance") > 0;
     // --pi-operators: a count 1 … 10000, or auto for the preisach grid (its levels by validation).
     const std::string& ops = a->pi_operators_text;
     if (ops == "auto") {
@@ -791,20 +863,23 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
   auto path = std::make_shared<std::string>();
   auto convert = std::make_shared<std::string>();
   CLI::App* cmd = app.add_subcommand(
-      "records", "Check a record set and describe it (records, roles, windows, units, rest, sample rate, "
-                 "quantum); --convert writes it in the manifest format.");
+      "records",
+      "Check a record set and describe it (records, roles, windows, units, rest, sample rate, "
+      "quantum); --convert writes it in the manifest format.");
   cmd->add_option("path,--records", *path, "record set folder or CSV file")->required();
   cmd->add_option("--convert", *convert, "write the set as a manifest-format folder");
   cmd->callback([path, convert, &exit_code] {
     const io::RecordSet set = io::LoadRecordSet(*path);
-    std::cout << set.source.string() << ": " << set.format << ", " << set.records.size() << " record(s), drive in "
-              << set.drive_unit << ", response in " << set.response_unit << "\n";
+    std::cout << set.source.string() << ": " << set.format << ", " << set.records.size()
+              << " record(s), drive in " << set.drive_unit << ", response in " << set.response_unit
+              << "\n";
     const int name_width = NameColumnWidth(set), role_width = RoleColumnWidth(set);
     for (const io::Record& r : set.records) {
       std::cout << "  " << std::left << std::setw(name_width) << r.name << std::setw(role_width)
-                << model::CaseRoleName(r.role) << r.size() << " samples at " << Fmt(r.sample_rate_hz(), 6) << " Hz, scored "
-                << Fmt(r.t[r.first_scored]) << "–" << Fmt(r.t[r.end_scored - 1]) << " s (" << r.scored()
-                << "), rest " << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);
+                << model::CaseRoleName(r.role) << r.size() << " samples at "
+                << Fmt(r.sample_rate_hz(), 6) << " Hz, scored " << Fmt(r.t[r.first_scored]) << "–"
+                << Fmt(r.t[r.end_scored - 1]) << " s (" << r.scored() << "), rest "
+                << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);
       if (r.offset_mode != io::OffsetMode::kFit) std::cout << " " << Fmt(r.offset);
       if (r.quantum > 0) std::cout << ", quantum " << Fmt(r.quantum);
       std::cout << "\n";

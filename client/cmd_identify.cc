@@ -19,7 +19,8 @@ namespace pz::client {
 namespace {
 
 std::filesystem::path DefaultCasesDir() {
-  if (const char* env = std::getenv("PIEZOID_DATA")) return std::filesystem::path(env) / "bimorph-fin/nominal";
+  if (const char* env = std::getenv("PIEZOID_DATA"))
+    return std::filesystem::path(env) / "bimorph-fin/nominal";
   return std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal";
 }
 
@@ -37,14 +38,16 @@ struct Progress {
     last_print = now;
     const double rate = elapsed > 0 ? g.evaluations_total / elapsed : 0;
     const int width = 24;
-    const int filled = max_generations > 0 ? static_cast<int>(width * g.generation / max_generations) : width;
+    const int filled =
+        max_generations > 0 ? static_cast<int>(width * g.generation / max_generations) : width;
     std::string bar(filled, '#');
     bar.resize(width, '.');
     const std::string islands = IslandsBrief(g);
-    std::fprintf(stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s%s  %.0f s%s",
-                 tty ? "\r" : "", bar.c_str(), static_cast<unsigned long long>(g.generation), max_generations,
-                 g.best_cost, g.mean_cost, g.stall, rate, g.best_description.substr(0, 5).c_str(), islands.c_str(),
-                 elapsed, tty ? "   " : "\n");
+    std::fprintf(
+        stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s%s  %.0f s%s",
+        tty ? "\r" : "", bar.c_str(), static_cast<unsigned long long>(g.generation),
+        max_generations, g.best_cost, g.mean_cost, g.stall, rate,
+        g.best_description.substr(0, 5).c_str(), islands.c_str(), elapsed, tty ? "   " : "\n");
     std::fflush(stderr);
   }
 };
@@ -65,7 +68,8 @@ struct IdentifyFlags {
 /// The GA's options, each with the GaOptions member it sets: a bad value is reported under its
 /// flag.
 void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
-  const auto ga_option = [&](const char* flag, const char* field, auto& value, const std::string& help) {
+  const auto ga_option = [&](const char* flag, const char* field, auto& value,
+                             const std::string& help) {
     f.flag_of[field] = flag;
     f.given[field] = cmd->add_option(flag, value, help)->capture_default_str();
   };
@@ -190,8 +194,8 @@ void RunIdentifyCommand(IdentifyFlags& f) {
                static_cast<unsigned long long>(opts.ga.seed));
   Progress progress;
   progress.max_generations = opts.ga.max_generations;
-  const auto result = hgann::RunIdentify(opts, set, fitness,
-                                         [&](const opt::GenerationSummary& g) { progress(g); });
+  const auto result =
+      hgann::RunIdentify(opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
   if (progress.tty) std::fprintf(stderr, "\n");
   WriteIdentifyReport(opts, set, fitness, result, std::cout);
 }

@@ -14,18 +14,21 @@ void RegisterKeygen(CLI::App& app, int& exit_code) {
   auto out = std::make_shared<std::string>();
   auto name = std::make_shared<std::string>();
   auto* c = app.add_subcommand(
-      "keygen", "write a CURVE key pair for the service: NAME.key (secret, mode 0600) and NAME.pub");
+      "keygen",
+      "write a CURVE key pair for the service: NAME.key (secret, mode 0600) and NAME.pub");
   c->add_option("--out,-o", *out, "directory to write to (created if missing)")->required();
-  c->add_option("--name", *name, "file name of the pair, e.g. master, worker-node3, alice")->required();
+  c->add_option("--name", *name, "file name of the pair, e.g. master, worker-node3, alice")
+      ->required();
   c->callback([=, &exit_code] {
     service::CurveKeyPair pair;
     Status s = service::GenerateCurveKeyPair(&pair);
     if (s.ok()) s = service::WriteCurveKeyFiles(*out, *name, pair);
     if (!s.ok()) {
       std::fprintf(stderr, "piezoid: error: %s\n", s.message().c_str());
-      exit_code = s.code() == StatusCode::kInvalidArgument || s.code() == StatusCode::kFailedPrecondition
-                      ? kExitBadInput
-                      : kExitFailure;
+      exit_code =
+          s.code() == StatusCode::kInvalidArgument || s.code() == StatusCode::kFailedPrecondition
+              ? kExitBadInput
+              : kExitFailure;
       return;
     }
     const std::string base = (std::filesystem::path(*out) / *name).string();

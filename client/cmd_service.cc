@@ -37,25 +37,33 @@ namespace fs = std::filesystem;
 
 int ExitCodeOf(const Status& s) {
   switch (s.code()) {
-    case StatusCode::kOk: return kExitOk;
-    case StatusCode::kInvalidArgument: return kExitBadInput;
-    case StatusCode::kUnavailable: return kExitUnreachable;
-    case StatusCode::kNotFound: return kExitUnknownJob;
-    case StatusCode::kFailedPrecondition: return kExitJobNotOk;
-    default: return kExitFailure;
+    case StatusCode::kOk:
+      return kExitOk;
+    case StatusCode::kInvalidArgument:
+      return kExitBadInput;
+    case StatusCode::kUnavailable:
+      return kExitUnreachable;
+    case StatusCode::kNotFound:
+      return kExitUnknownJob;
+    case StatusCode::kFailedPrecondition:
+      return kExitJobNotOk;
+    default:
+      return kExitFailure;
   }
 }
 
 ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
-                                     const std::string& curve_secret, const std::string& master_public) {
+                                     const std::string& curve_secret,
+                                     const std::string& master_public) {
   ServiceClientOptions o;
   o.endpoint = master;
   o.timeout_ms = timeout_ms;
   o.retries = retries;
   if (curve_secret.empty() != master_public.empty())
-    throw InputError(curve_secret.empty()
-                         ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs --curve-secret (or PIEZOID_CURVE_SECRET)"
-                         : "--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public (or PIEZOID_MASTER_PUBLIC)");
+    throw InputError(curve_secret.empty() ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs "
+                                            "--curve-secret (or PIEZOID_CURVE_SECRET)"
+                                          : "--curve-secret (or PIEZOID_CURVE_SECRET) needs "
+                                            "--master-public (or PIEZOID_MASTER_PUBLIC)");
   if (!curve_secret.empty()) {
     service::CurveKeyPair keys;
     if (Status s = service::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
@@ -78,7 +86,8 @@ struct Common {
   std::string master;
   int timeout_ms = 4000;
   int retries = 2;
-  std::string curve_secret = Env("PIEZOID_CURVE_SECRET"), master_public = Env("PIEZOID_MASTER_PUBLIC");
+  std::string curve_secret = Env("PIEZOID_CURVE_SECRET"),
+              master_public = Env("PIEZOID_MASTER_PUBLIC");
   /// The client of these options; a bad key file throws InputError (exit code 2).
   ServiceClient Client() const {
     return ServiceClient(ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public));
@@ -88,7 +97,8 @@ struct Common {
 std::string DefaultMaster() { return Env("PIEZOID_MASTER", "tcp://127.0.0.1:5556"); }
 
 void AddCommon(CLI::App* c, Common& o) {
-  c->add_option("--master", o.master, "the master's client endpoint (default: $PIEZOID_MASTER or tcp://127.0.0.1:5556)")
+  c->add_option("--master", o.master,
+                "the master's client endpoint (default: $PIEZOID_MASTER or tcp://127.0.0.1:5556)")
       ->capture_default_str();
   c->add_option("--timeout-ms", o.timeout_ms, "per-request timeout [ms]")
       ->check(CLI::Range(10, 3600000))
@@ -97,7 +107,8 @@ void AddCommon(CLI::App* c, Common& o) {
       ->check(CLI::Range(1, 100))
       ->capture_default_str();
   c->add_option("--curve-secret", o.curve_secret,
-                "CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: $PIEZOID_CURVE_SECRET)");
+                "CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: "
+                "$PIEZOID_CURVE_SECRET)");
   c->add_option("--master-public", o.master_public,
                 "CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
@@ -109,7 +120,8 @@ int Report(const Status& s) {
 }
 
 /// Prints every violation; returns the exit code for an invalid spec.
-int ReportViolations(const std::string& what, const std::vector<job::FieldViolation>& v, const Status& s) {
+int ReportViolations(const std::string& what, const std::vector<job::FieldViolation>& v,
+                     const Status& s) {
   if (v.empty()) return Report(s);
   std::fprintf(stderr, "piezoid: error: %s is invalid (%zu violation%s):\n", what.c_str(), v.size(),
                v.size() == 1 ? "" : "s");
@@ -133,21 +145,22 @@ std::string Generation(const service::JobInfo& i) {
 }
 
 void PrintInfo(const service::JobInfo& i) {
-  std::printf("%-17s %-9s %-9s gen %-9s best %-12s evals %-8llu %6.1f s  %s%s%s\n", i.job_id.c_str(),
-              (std::string(service::JobStateName(i.state)) + (i.archived ? "*" : "")).c_str(), i.kind.c_str(),
-              Generation(i).c_str(),
-              i.generation == 0 ? "-" : Num(i.best_cost, 8).c_str(),
-              static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
-              i.quarantined.empty() ? "" : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
-              i.message.empty() ? "" : ("  (" + i.message + ")").c_str());
+  std::printf(
+      "%-17s %-9s %-9s gen %-9s best %-12s evals %-8llu %6.1f s  %s%s%s\n", i.job_id.c_str(),
+      (std::string(service::JobStateName(i.state)) + (i.archived ? "*" : "")).c_str(),
+      i.kind.c_str(), Generation(i).c_str(), i.generation == 0 ? "-" : Num(i.best_cost, 8).c_str(),
+      static_cast<unsigned long long>(i.evaluations), i.elapsed_s, i.name.c_str(),
+      i.quarantined.empty() ? ""
+                            : ("  quarantined " + std::to_string(i.quarantined.size())).c_str(),
+      i.message.empty() ? "" : ("  (" + i.message + ")").c_str());
   if (!i.storage_error.empty())
     std::printf("%-17s   ! checkpoints not written: %s\n", "", i.storage_error.c_str());
   if (!i.notice.empty()) std::printf("%-17s   ! on loading: %s\n", "", i.notice.c_str());
 }
 
 void PrintList(const std::vector<service::JobInfo>& all, int workers, int threads) {
-  std::printf("%d worker%s (%d thread%s), %zu job%s\n", workers, workers == 1 ? "" : "s", threads, threads == 1 ? "" : "s", all.size(),
-              all.size() == 1 ? "" : "s");
+  std::printf("%d worker%s (%d thread%s), %zu job%s\n", workers, workers == 1 ? "" : "s", threads,
+              threads == 1 ? "" : "s", all.size(), all.size() == 1 ? "" : "s");
   bool archived = false;
   for (const auto& i : all) {
     PrintInfo(i);
@@ -167,9 +180,11 @@ class Progress {
     if (e.storage_error != storage_error_) {  // said once when it starts and once when it ends
       storage_error_ = e.storage_error;
       std::printf("%s%s\n", tty_ && printed_ ? "\n" : "",
-                  storage_error_.empty() ? "checkpoints are written again"
-                                         : ("! checkpoints not written (a master restart would lose progress): " +
-                                            storage_error_).c_str());
+                  storage_error_.empty()
+                      ? "checkpoints are written again"
+                      : ("! checkpoints not written (a master restart would lose progress): " +
+                         storage_error_)
+                            .c_str());
     }
     if (!e.record) return;
     const auto& r = *e.record;
@@ -193,9 +208,11 @@ class Progress {
     for (int i = 0; i < static_cast<int>(std::lround(frac * kWidth)); ++i) bar[i] = '#';
     char line[384];
     const std::string best = Num(r.best_cost, 6) + (hgann_ ? " deg²" : "");
-    std::snprintf(line, sizeof line, "gen %4llu/%-4llu [%s] best %-*s %7.0f evals/s  %d worker%s (%d threads)",
-                  static_cast<unsigned long long>(r.generation), static_cast<unsigned long long>(max_), bar.c_str(),
-                  hgann_ ? 17 : 14, best.c_str(), rate, e.workers, e.workers == 1 ? "" : "s", e.worker_threads);
+    std::snprintf(line, sizeof line,
+                  "gen %4llu/%-4llu [%s] best %-*s %7.0f evals/s  %d worker%s (%d threads)",
+                  static_cast<unsigned long long>(r.generation),
+                  static_cast<unsigned long long>(max_), bar.c_str(), hgann_ ? 17 : 14,
+                  best.c_str(), rate, e.workers, e.workers == 1 ? "" : "s", e.worker_threads);
     const std::string islands = IslandsBrief(r);
     std::strncat(line, islands.c_str(), sizeof line - std::strlen(line) - 1);
     if (tty_) {
@@ -256,29 +273,39 @@ int SubmitJob(const SubmitOptions& o) {
   v = kinds::All().Validate(spec);
   if (!v.empty()) return ReportViolations("job spec " + o.spec, v, InvalidArgument("invalid"));
   if (!o.embedded_out.empty()) {
-    if (int code = WriteFile(o.embedded_out, service::JobSpecToJson(spec) + "\n"); code != kExitOk) return code;
-    std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n", o.embedded_out.c_str());
+    if (int code = WriteFile(o.embedded_out, service::JobSpecToJson(spec) + "\n"); code != kExitOk)
+      return code;
+    std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n",
+                 o.embedded_out.c_str());
     return kExitOk;
   }
   SubmitResult r;
   s = o.Client().Submit(spec, &r, &v, o.token);
-  if (!s.ok()) return s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + o.spec, v, s) : Report(s);
+  if (!s.ok())
+    return s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + o.spec, v, s)
+                                                    : Report(s);
   std::printf("%s\n", r.job_id.c_str());
-  if (r.existed) std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
+  if (r.existed)
+    std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
   return kExitOk;
 }
 
 void RegisterSubmit(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<SubmitOptions>();
-  auto* c = AddMasterCommand(app, "submit", "submit a job spec (protobuf JSON, see examples/): prints the job id on stdout", *o);
-  c->add_option("spec", o->spec, "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
+  auto* c = AddMasterCommand(
+      app, "submit",
+      "submit a job spec (protobuf JSON, see examples/): prints the job id on stdout", *o);
+  c->add_option("spec", o->spec,
+                "job spec file (an hgann spec's case_set_dir is read here, relative to it)")
       ->required();
-  c->add_option("--client-token", o->token,
-                "idempotence token: submitting the same spec with the same token again returns the same job "
-                "(default: a random one)");
-  c->add_option("--write-embedded", o->embedded_out,
-                "write the checked spec with its case data embedded (protobuf JSON, what the Python client "
-                "submits) to this file instead of submitting it");
+  c->add_option(
+      "--client-token", o->token,
+      "idempotence token: submitting the same spec with the same token again returns the same job "
+      "(default: a random one)");
+  c->add_option(
+      "--write-embedded", o->embedded_out,
+      "write the checked spec with its case data embedded (protobuf JSON, what the Python client "
+      "submits) to this file instead of submitting it");
   OnRun(c, o, exit_code, SubmitJob);
 }
 
@@ -306,7 +333,8 @@ int ShowStatus(const StatusOptions& o) {
 
 void RegisterStatus(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<StatusOptions>();
-  auto* c = AddMasterCommand(app, "status", "a job's state and progress (every job without an id)", *o);
+  auto* c =
+      AddMasterCommand(app, "status", "a job's state and progress (every job without an id)", *o);
   c->add_option("job", o->job_id, "job id (optional)");
   OnRun(c, o, exit_code, ShowStatus);
 }
@@ -332,7 +360,8 @@ int CancelJob(const JobOptions& o) {
 
 void RegisterCancel(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<JobOptions>();
-  auto* c = AddMasterCommand(app, "cancel", "cancel a running job (its checkpoint stays fetchable)", *o);
+  auto* c =
+      AddMasterCommand(app, "cancel", "cancel a running job (its checkpoint stays fetchable)", *o);
   c->add_option("job", o->job_id, "job id")->required();
   OnRun(c, o, exit_code, CancelJob);
 }
@@ -353,22 +382,29 @@ int PruneJobs(const PruneOptions& o) {
   }
   std::vector<std::string> pruned;
   std::vector<job::FieldViolation> refused;
-  Status s = o.Client().Prune(o.job_ids, o.older_days * 86400.0, o.keep, o.dry_run, &pruned, &refused);
+  Status s =
+      o.Client().Prune(o.job_ids, o.older_days * 86400.0, o.keep, o.dry_run, &pruned, &refused);
   if (!s.ok()) return Report(s);
-  for (const auto& id : pruned) std::printf("%s %s\n", o.dry_run ? "would prune" : "pruned", id.c_str());
-  for (const auto& v : refused) std::fprintf(stderr, "piezoid prune: %s: %s\n", v.field.c_str(), v.description.c_str());
+  for (const auto& id : pruned)
+    std::printf("%s %s\n", o.dry_run ? "would prune" : "pruned", id.c_str());
+  for (const auto& v : refused)
+    std::fprintf(stderr, "piezoid prune: %s: %s\n", v.field.c_str(), v.description.c_str());
   if (pruned.empty() && refused.empty()) std::printf("nothing to prune\n");
   return refused.empty() ? kExitOk : kExitJobNotOk;
 }
 
 void RegisterPrune(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<PruneOptions>();
-  auto* c = AddMasterCommand(
-      app, "prune", "delete ended jobs from the master (memory and state directory): those named, or by age / count", *o);
+  auto* c = AddMasterCommand(app, "prune",
+                             "delete ended jobs from the master (memory and state directory): "
+                             "those named, or by age / count",
+                             *o);
   c->add_option("jobs", o->job_ids, "ended jobs to delete (running ones are refused)");
-  c->add_option("--older-than", o->older_days, "delete the ended jobs that ended more than DAYS ago")
+  c->add_option("--older-than", o->older_days,
+                "delete the ended jobs that ended more than DAYS ago")
       ->check(CLI::PositiveNumber);
-  c->add_option("--keep", o->keep, "delete all but the N most recently ended jobs")->check(CLI::Range(1, 100000000));
+  c->add_option("--keep", o->keep, "delete all but the N most recently ended jobs")
+      ->check(CLI::Range(1, 100000000));
   c->add_flag("--dry-run", o->dry_run, "list what would be deleted, delete nothing");
   OnRun(c, o, exit_code, PruneJobs);
 }
@@ -409,7 +445,9 @@ int WatchJob(const JobOptions& o) {
 void RegisterWatch(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<JobOptions>();
   auto* c = AddMasterCommand(
-      app, "watch", "follow a job until it ends: generation, best cost, evaluations/s, workers; then the result", *o);
+      app, "watch",
+      "follow a job until it ends: generation, best cost, evaluations/s, workers; then the result",
+      *o);
   c->add_option("job", o->job_id, "job id")->required();
   OnRun(c, o, exit_code, WatchJob);
 }
@@ -424,10 +462,12 @@ struct FetchOptions : JobOptions {
 
 int FetchJob(const FetchOptions& o) {
   FetchedJob job;
-  Status s = o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
+  Status s =
+      o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
   if (!s.ok()) return Report(s);
   if (!service::IsFinal(job.info.state))
-    std::fprintf(stderr, "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
+    std::fprintf(stderr,
+                 "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
                  o.job_id.c_str(), service::JobStateName(job.info.state),
                  static_cast<unsigned long long>(job.info.generation));
   const fs::path dir = o.out.empty() ? fs::path(o.job_id) : fs::path(o.out);
@@ -440,14 +480,17 @@ int FetchJob(const FetchOptions& o) {
 
 void RegisterFetch(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<FetchOptions>();
-  auto* c = AddMasterCommand(
-      app, "fetch", "write a job's best networks (.pb, .json) and, for hgann jobs, the report of `piezoid identify`", *o);
+  auto* c = AddMasterCommand(app, "fetch",
+                             "write a job's best networks (.pb, .json) and, for hgann jobs, the "
+                             "report of `piezoid identify`",
+                             *o);
   c->add_option("job", o->job_id, "job id")->required();
   c->add_option("--best,-n", o->count, "how many of the best individuals (1 … 32)")
       ->check(CLI::Range(1, 32))
       ->capture_default_str();
   c->add_option("--out,-o", o->out, "result folder (default: ./<job id>)");
-  c->add_flag("--no-plots", o->no_plots, "do not render figures (gnuplot scripts are still written)");
+  c->add_flag("--no-plots", o->no_plots,
+              "do not render figures (gnuplot scripts are still written)");
   OnRun(c, o, exit_code, FetchJob);
 }
 
@@ -472,10 +515,12 @@ int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string*
   if (s = hgann::HgannConfigFromProblem(*h, &config); !s.ok()) return Report(s);
   *geometry = config.geometry;
   std::ostringstream n;
-  n << "The beam of job spec " << fs::path(file).filename().string() << "; its cases' saturations [deg]";
+  n << "The beam of job spec " << fs::path(file).filename().string()
+    << "; its cases' saturations [deg]";
   for (const auto& c : config.cases)
-    n << (&c == &config.cases.front() ? ": " : ", ") << "case " << c.number << " (" << c.drive.amplitude_v << " V, "
-      << c.drive.frequency_hz << " Hz) b1 " << CDecimal(c.b1) << " b2 " << CDecimal(c.b2);
+    n << (&c == &config.cases.front() ? ": " : ", ") << "case " << c.number << " ("
+      << c.drive.amplitude_v << " V, " << c.drive.frequency_hz << " Hz) b1 " << CDecimal(c.b1)
+      << " b2 " << CDecimal(c.b2);
   *note = n.str() + ".";
   return kExitOk;
 }
@@ -489,14 +534,17 @@ std::string ExportSource(const std::string& path) {
     const fs::path p = fs::path(path) / name;
     if (fs::is_regular_file(p, ec)) return p.string();
   }
-  throw InputError(path + ": a folder without fit.json, network.pb or networks/best-1.pb (what piezoid fit, identify "
-                   "and fetch write)");
+  throw InputError(
+      path +
+      ": a folder without fit.json, network.pb or networks/best-1.pb (what piezoid fit, identify "
+      "and fetch write)");
 }
 
 int ExportNetwork(const ExportOptions& o) {
   const std::string source = ExportSource(o.network);
   // A fit.json (piezoid fit): the record model's header (client/cmd_compensate.cc).
-  if (LooksLikeFitJson(source)) return ExportFit(source, o.out, o.name == "piezoid_predict" ? "" : o.name);
+  if (LooksLikeFitJson(source))
+    return ExportFit(source, o.out, o.name == "piezoid_predict" ? "" : o.name);
   io::SavedNetwork net;
   Status s = io::LoadNetwork(source, &net);
   if (!s.ok()) return Report(InvalidArgument(s.message()));
@@ -504,7 +552,7 @@ int ExportNetwork(const ExportOptions& o) {
   if (o.plant) {
     model::BeamGeometry geometry;  // the spec's beam, as the HGANN fitness's default …
     controller::FinPlantExport fin = o.fin;
-    if (!o.job.empty()) {          // … or the job's
+    if (!o.job.empty()) {  // … or the job's
       if (int code = JobBeam(o.job, &geometry, &fin.note); code != kExitOk) return code;
     }
     const model::BimorphPlant plant(geometry);
@@ -520,26 +568,37 @@ int ExportNetwork(const ExportOptions& o) {
   }
   if (int code = WriteFile(o.out, header); code != kExitOk) return code;
   if (o.plant)
-    std::fprintf(stderr, "piezoid: wrote %s: %s_params, %s_init, %s_step, %s_inverse_step at %g Hz\n", o.out.c_str(),
-                 o.name.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(), o.fin.sample_rate_hz);
+    std::fprintf(stderr,
+                 "piezoid: wrote %s: %s_params, %s_init, %s_step, %s_inverse_step at %g Hz\n",
+                 o.out.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(),
+                 o.fin.sample_rate_hz);
   else
-    std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(), o.name.c_str());
+    std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(),
+                 o.name.c_str());
   return kExitOk;
 }
 
 void RegisterExport(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<ExportOptions>();
-  auto* c = app.add_subcommand("export", "write a network file (.pb or .json) or a fit.json (piezoid fit) as a standalone C header for a controller");
+  auto* c = app.add_subcommand("export",
+                               "write a network file (.pb or .json) or a fit.json (piezoid fit) as "
+                               "a standalone C header for a controller");
   c->add_option("network", o->network,
-                "network file (from fetch or identify), fit.json of piezoid fit, or their folder (fit.json, network.pb or "
+                "network file (from fetch or identify), fit.json of piezoid fit, or their folder "
+                "(fit.json, network.pb or "
                 "networks/best-1.pb in it)")
       ->required();
   c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
-  c->add_option("--name", o->name, "name of the C function (a C identifier; for a fit.json the prefix of its functions, default the header's file stem)")->capture_default_str();
+  c->add_option("--name", o->name,
+                "name of the C function (a C identifier; for a fit.json the prefix of its "
+                "functions, default the header's file stem)")
+      ->capture_default_str();
   auto* plant = c->add_flag("--plant", o->plant,
-              "add the bimorph-fin plant (spec beam) as a per-sample recursion: NAME_init, NAME_step (drive -> angle), "
-              "NAME_inverse_step (angle -> drive)");
-  c->add_option("--sample-rate", o->fin.sample_rate_hz, "the controller's sample rate [Hz] (with --plant)")
+                            "add the bimorph-fin plant (spec beam) as a per-sample recursion: "
+                            "NAME_init, NAME_step (drive -> angle), "
+                            "NAME_inverse_step (angle -> drive)");
+  c->add_option("--sample-rate", o->fin.sample_rate_hz,
+                "the controller's sample rate [Hz] (with --plant)")
       ->needs(plant)
       ->capture_default_str();
   c->add_option("--drive-limit", o->fin.drive_limit_v,
@@ -547,11 +606,13 @@ void RegisterExport(CLI::App& app, int& exit_code) {
       ->needs(plant)
       ->capture_default_str();
   c->add_option("--job", o->job,
-                "the HGANN job spec (.json) the network was identified with: its beam (hgann.geometry) and, in a "
+                "the HGANN job spec (.json) the network was identified with: its beam "
+                "(hgann.geometry) and, in a "
                 "comment, its cases' saturations (with --plant; default: the spec's beam)")
       ->needs(plant);
   c->add_option("--inverse-horizon", o->fin.inverse_horizon,
-                "samples over which NAME_inverse_step reaches the desired angle (with --plant; 1 = exact one-step "
+                "samples over which NAME_inverse_step reaches the desired angle (with --plant; 1 = "
+                "exact one-step "
                 "inversion, unstable on this plant)")
       ->needs(plant)
       ->capture_default_str();
@@ -573,7 +634,8 @@ Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
   if (colon == std::string::npos || colon + 1 == f.listen.size())
     return InvalidArgument("--listen '" + f.listen + "': must be HOST:PORT, e.g. 127.0.0.1:8080");
   o->host = f.listen.substr(0, colon);
-  if (o->host.size() > 2 && o->host.front() == '[' && o->host.back() == ']') o->host = o->host.substr(1, o->host.size() - 2);
+  if (o->host.size() > 2 && o->host.front() == '[' && o->host.back() == ']')
+    o->host = o->host.substr(1, o->host.size() - 2);
   try {
     size_t used = 0;
     o->port = std::stoi(f.listen.substr(colon + 1), &used);
@@ -585,7 +647,8 @@ Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
     std::ifstream in(f.token_file);
     if (!in || !std::getline(in, o->token))
       return InvalidArgument("--token-file " + f.token_file + ": cannot read its first line");
-    while (!o->token.empty() && std::isspace(static_cast<unsigned char>(o->token.back()))) o->token.pop_back();
+    while (!o->token.empty() && std::isspace(static_cast<unsigned char>(o->token.back())))
+      o->token.pop_back();
   }
   o->poll_ms = f.poll_ms;
   o->reports_dir = f.reports;
@@ -597,7 +660,8 @@ Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
 int ServeDashboard(const DashboardFlags& f) {
   DashboardOptions o;
   if (Status s = DashboardOptionsOf(f, &o); !s.ok()) return Report(s);
-  // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited below.
+  // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited
+  // below.
   sigset_t signals;
   sigemptyset(&signals);
   sigaddset(&signals, SIGINT);
@@ -611,8 +675,8 @@ int ServeDashboard(const DashboardFlags& f) {
     std::error_code ec;
     fs::rename(tmp, f.url_file, ec);
   }
-  std::printf("piezoid dashboard of %s on %s%s (Ctrl-C to stop)\n", o.client.endpoint.c_str(), d.url().c_str(),
-              o.token.empty() ? "" : "?token=…");
+  std::printf("piezoid dashboard of %s on %s%s (Ctrl-C to stop)\n", o.client.endpoint.c_str(),
+              d.url().c_str(), o.token.empty() ? "" : "?token=…");
   std::fflush(stdout);
   int sig = 0;
   sigwait(&signals, &sig);
@@ -623,17 +687,24 @@ int ServeDashboard(const DashboardFlags& f) {
 void RegisterDashboard(CLI::App& app, int& exit_code) {
   auto o = std::make_shared<DashboardFlags>();
   auto* c = AddMasterCommand(
-      app, "dashboard", "serve a live web page of the master's jobs, fitness curves, workers and reports (read-only)", *o);
+      app, "dashboard",
+      "serve a live web page of the master's jobs, fitness curves, workers and reports (read-only)",
+      *o);
   c->add_option("--listen", o->listen,
                 "HOST:PORT to serve on (PORT 0: any free port; beyond loopback needs --token-file)")
       ->capture_default_str();
-  c->add_option("--token-file", o->token_file,
-                "file whose first line is the access token every request must carry (?token= or a Bearer "
-                "header); required beyond loopback or with CURVE");
-  c->add_option("--poll-ms", o->poll_ms, "how often the master is polled [ms]")->capture_default_str();
-  c->add_option("--reports", o->reports, "also serve the report folders (each with a report.md) under this folder");
-  c->add_option("--cache", o->cache, "where ended jobs' reports are built (default: a temporary folder)");
-  c->add_option("--url-file", o->url_file, "write the dashboard's URL to this file once it listens");
+  c->add_option(
+      "--token-file", o->token_file,
+      "file whose first line is the access token every request must carry (?token= or a Bearer "
+      "header); required beyond loopback or with CURVE");
+  c->add_option("--poll-ms", o->poll_ms, "how often the master is polled [ms]")
+      ->capture_default_str();
+  c->add_option("--reports", o->reports,
+                "also serve the report folders (each with a report.md) under this folder");
+  c->add_option("--cache", o->cache,
+                "where ended jobs' reports are built (default: a temporary folder)");
+  c->add_option("--url-file", o->url_file,
+                "write the dashboard's URL to this file once it listens");
   c->add_flag("--no-plots", o->no_plots, "build job reports without figures (no gnuplot)");
   OnRun(c, o, exit_code, ServeDashboard);
 }

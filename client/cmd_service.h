@@ -16,12 +16,12 @@ namespace pz::client {
 /// Exit codes of the service subcommands (documented in docs/service.md and `piezoid --help`).
 enum ExitCode : int {
   kExitOk = 0,
-  kExitFailure = 1,       ///< any other runtime failure (I/O, internal error)
-  kExitBadInput = 2,      ///< bad command line, unreadable or invalid job spec / network file
-  kExitUnreachable = 3,   ///< the master did not answer (or answered "unavailable, retry later")
-  kExitUnknownJob = 4,    ///< no such job at the master
-  kExitJobNotOk = 5,      ///< the job failed or was cancelled (watch), or cannot do that now
-                          ///< (cancel of a finished job, fetch before the first generation)
+  kExitFailure = 1,      ///< any other runtime failure (I/O, internal error)
+  kExitBadInput = 2,     ///< bad command line, unreadable or invalid job spec / network file
+  kExitUnreachable = 3,  ///< the master did not answer (or answered "unavailable, retry later")
+  kExitUnknownJob = 4,   ///< no such job at the master
+  kExitJobNotOk = 5,     ///< the job failed or was cancelled (watch), or cannot do that now
+                         ///< (cancel of a finished job, fetch before the first generation)
 };
 
 /// The exit code of a status (kOk → 0, kInvalidArgument → 2, kUnavailable → 3, kNotFound → 4,
@@ -33,7 +33,8 @@ int ExitCodeOf(const Status& s);
 /// key). Throws InputError naming the flag (--curve-secret, --master-public) on a missing partner
 /// or a bad key file. Used by every command that talks to a master.
 ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
-                                     const std::string& curve_secret, const std::string& master_public);
+                                     const std::string& curve_secret,
+                                     const std::string& master_public);
 
 /// The flags of a command whose searches run every evaluation as evaluation sessions on a master
 /// (--master, --timeout-ms, --retries, --curve-secret, --master-public).

@@ -1,7 +1,7 @@
 // `piezoid synth-stack`: writes a real-like stack record set (diagnose/reallike.h, issue 22 item 5)
 // in the manifest format (io/records.h; `piezoid fit`, `diagnose --records` and `records` read it)
-// with its truth: truth.json (the plant, the sensor, each record's drive, offset and realised noise,
-// the true noise floor) and a README.md saying how it was made.
+// with its truth: truth.json (the plant, the sensor, each record's drive, offset and realised
+// noise, the true noise floor) and a README.md saying how it was made.
 #include <cmath>
 #include <filesystem>
 #include <iostream>
@@ -30,7 +30,8 @@ struct SynthArgs {
 std::vector<double> ReadDrive(const std::string& path, double fs) {
   const io::CsvTable csv = io::ReadCsvFile(path);
   csv.RequireRows();
-  if (csv.header.size() < 2) throw InputError(path + ": --train-drive needs two columns (time [s], drive [V])");
+  if (csv.header.size() < 2)
+    throw InputError(path + ": --train-drive needs two columns (time [s], drive [V])");
   std::vector<double> t, u;
   for (size_t r = 0; r < csv.rows.size(); ++r) {
     t.push_back(csv.Number(r, 0));
@@ -38,8 +39,8 @@ std::vector<double> ReadDrive(const std::string& path, double fs) {
   }
   const double rate = io::CheckUniformTimeGrid(csv, 0, t, 0.01, "the played drive starts at t = 0");
   if (std::abs(rate - fs) > 1e-6 * fs) {
-    throw InputError(path + ": sampled at " + io::FormatNumber(rate) + " Hz; --fs is " + io::FormatNumber(fs) +
-                     " Hz (give --fs " + io::FormatNumber(rate) + ")");
+    throw InputError(path + ": sampled at " + io::FormatNumber(rate) + " Hz; --fs is " +
+                     io::FormatNumber(fs) + " Hz (give --fs " + io::FormatNumber(rate) + ")");
   }
   return u;
 }
@@ -52,8 +53,10 @@ std::string TruthJson(const records::RealLikeSet& s) {
   auto& f = *root.mutable_fields();
   Struct plant;
   auto& p = *plant.mutable_fields();
-  p["model"] = Text("Preisach (Everett function of a Gaussian width x Gaussian centre density, skewed) + reversible "
-                    "linear-quadratic part, then log creep (relaxations 3 per decade), then the sensor's lag");
+  p["model"] = Text(
+      "Preisach (Everett function of a Gaussian width x Gaussian centre density, skewed) + "
+      "reversible "
+      "linear-quadratic part, then log creep (relaxations 3 per decade), then the sensor's lag");
   p["u_lo_V"] = Num(st.u_lo);
   p["u_hi_V"] = Num(st.u_hi);
   p["stroke_um"] = Num(st.stroke_um);
@@ -68,11 +71,15 @@ std::string TruthJson(const records::RealLikeSet& s) {
   p["creep_tau_max_s"] = Num(st.creep_tau_max_s);
   p["everett_grid"] = Num(st.everett_grid);
   p["major_loop_width_share"] = Num(s.major_loop_width);
-  if (st.rate_lag_v > 0) {  // keys only when present: the default set's truth.json stays the same bytes
+  if (st.rate_lag_v >
+      0) {  // keys only when present: the default set's truth.json stays the same bytes
     p["rate_lag_V"] = Num(st.rate_lag_v);
     p["rate_time_s"] = Num(st.rate_time_s);
-    p["rate_model"] = Text("effective drive held within +- lambda of the applied u, lambda = rate_lag_V tanh(rate_time_s "
-                           "|du/dt| / rate_lag_V), into the Preisach and reversible parts (du/dt after the amplifier)");
+    p["rate_model"] = Text(
+        "effective drive held within +- lambda of the applied u, lambda = rate_lag_V "
+        "tanh(rate_time_s "
+        "|du/dt| / rate_lag_V), into the Preisach and reversible parts (du/dt after the "
+        "amplifier)");
   }
   if (st.driver_tau_s > 0) p["driver_tau_s"] = Num(st.driver_tau_s);
   f["plant"] = Obj(plant);
@@ -92,8 +99,9 @@ std::string TruthJson(const records::RealLikeSet& s) {
   auto& n = *floor.mutable_fields();
   n["nominal_um"] = Num(s.nominal_floor_um);
   n["realised_um"] = Num(s.realised_floor_um);
-  n["definition"] = Text("RMS of measured - (noise-free response + offset): what a perfect model leaves; nominal = "
-                         "sqrt(white^2 + coloured^2 + quantum^2/12), realised = over every scored sample");
+  n["definition"] = Text(
+      "RMS of measured - (noise-free response + offset): what a perfect model leaves; nominal = "
+      "sqrt(white^2 + coloured^2 + quantum^2/12), realised = over every scored sample");
   f["noise_floor"] = Obj(floor);
   std::vector<Value> recs;
   for (const records::RealLikeRecordTruth& t : s.truth) {
@@ -121,21 +129,26 @@ int RunSynth(const SynthArgs& a) {
   io::WriteRecordSet(s.set, out);
   io::WriteFileWith(out / "truth.json", [&](std::ostream& os) { os << TruthJson(s); });
   io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
-    os << "# A real-like stack record set (generated)\n\nMade by `piezoid synth-stack --out " << a.out << " --seed "
-       << o.seed << "` (diagnose/reallike.h; the other options at their values in truth.json). The plant is "
-       << "written independently of the product's families: a Preisach model (return-point memory) with an "
-       << "asymmetric density, a reversible quadratic part, log creep, a sensor lag of " << o.sensor.lag_samples
-       << " samples, white and coloured noise, quantisation, an offset per record and a rest before each record.\n\n"
+    os << "# A real-like stack record set (generated)\n\nMade by `piezoid synth-stack --out "
+       << a.out << " --seed " << o.seed
+       << "` (diagnose/reallike.h; the other options at their values in truth.json). The plant is "
+       << "written independently of the product's families: a Preisach model (return-point memory) "
+          "with an "
+       << "asymmetric density, a reversible quadratic part, log creep, a sensor lag of "
+       << o.sensor.lag_samples
+       << " samples, white and coloured noise, quantisation, an offset per record and a rest "
+          "before each record.\n\n"
        << "| record | role | drive | offset [um] | noise RMS [um] |\n|---|---|---|---|---|\n";
     for (const auto& t : s.truth)
-      os << "| " << t.name << " | " << t.role << " | " << t.drive << " | " << io::FormatNumber(t.offset_um) << " | "
-         << io::FormatNumber(t.noise_rms_um) << " |\n";
+      os << "| " << t.name << " | " << t.role << " | " << t.drive << " | "
+         << io::FormatNumber(t.offset_um) << " | " << io::FormatNumber(t.noise_rms_um) << " |\n";
     os << "\nThe true noise floor: " << io::FormatNumber(s.realised_floor_um) << " um (nominal "
-       << io::FormatNumber(s.nominal_floor_um) << " um). The major loop is " << io::FormatNumber(100 * s.major_loop_width)
-       << " % of its stroke wide.\n";
+       << io::FormatNumber(s.nominal_floor_um) << " um). The major loop is "
+       << io::FormatNumber(100 * s.major_loop_width) << " % of its stroke wide.\n";
   });
-  std::cout << "written " << s.set.records.size() << " records to " << out.string() << " (true noise floor "
-            << io::FormatNumber(s.realised_floor_um) << " um; truth.json, README.md)\n";
+  std::cout << "written " << s.set.records.size() << " records to " << out.string()
+            << " (true noise floor " << io::FormatNumber(s.realised_floor_um)
+            << " um; truth.json, README.md)\n";
   return 0;
 }
 
@@ -144,48 +157,68 @@ int RunSynth(const SynthArgs& a) {
 void RegisterSynthStack(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<SynthArgs>();
   records::RealLikeOptions& o = a->o;
-  CLI::App* cmd = app.add_subcommand(
-      "synth-stack",
-      "Write a real-like piezo stack record set with its truth (a Preisach plant with an asymmetric density, log "
-      "creep, sensor lag, noise, quantisation, offsets, rests; independent of the product's families): a major-loop "
-      "training sine and withheld records (a second sine, an amplitude ramped to zero and back, random reversals).");
-  cmd->add_option("--out", a->out, "output folder (manifest.csv, one CSV per record, truth.json, README.md)")
+  CLI::App* cmd = app.add_subcommand("synth-stack",
+                                     "Write a real-like piezo stack record set with its truth (a "
+                                     "Preisach plant with an asymmetric density, log "
+                                     "creep, sensor lag, noise, quantisation, offsets, rests; "
+                                     "independent of the product's families): a major-loop "
+                                     "training sine and withheld records (a second sine, an "
+                                     "amplitude ramped to zero and back, random reversals).");
+  cmd->add_option("--out", a->out,
+                  "output folder (manifest.csv, one CSV per record, truth.json, README.md)")
       ->required()
       ->type_name("DIR");
   cmd->add_option("--seed", o.seed, "seed of phases, reversals, offsets and noise");
   cmd->add_option("--fs", o.sensor.fs_hz, "sample rate [Hz]")->check(CLI::Range(10.0, 1e6));
-  cmd->add_option("--frequency", o.frequency_hz, "sine frequency [Hz]")->check(CLI::Range(1e-3, 1e5));
+  cmd->add_option("--frequency", o.frequency_hz, "sine frequency [Hz]")
+      ->check(CLI::Range(1e-3, 1e5));
   cmd->add_option("--train-s", o.train_s, "training sine length [s]")->check(CLI::Range(0.5, 1e5));
-  cmd->add_option("--withheld-s", o.withheld_s, "each withheld record's length [s]")->check(CLI::Range(0.5, 1e5));
-  cmd->add_option("--amplitude-share", o.amplitude_share, "sine amplitude, share of the 0-150 V range")
+  cmd->add_option("--withheld-s", o.withheld_s, "each withheld record's length [s]")
+      ->check(CLI::Range(0.5, 1e5));
+  cmd->add_option("--amplitude-share", o.amplitude_share,
+                  "sine amplitude, share of the 0-150 V range")
       ->check(CLI::Range(0.01, 0.5));
-  cmd->add_option("--lag-samples", o.sensor.lag_samples, "sensor lag [samples], whole and fractional")
+  cmd->add_option("--lag-samples", o.sensor.lag_samples,
+                  "sensor lag [samples], whole and fractional")
       ->check(CLI::Range(0.0, 1000.0));
-  cmd->add_option("--noise", o.sensor.noise_white_um, "white noise RMS [um]")->check(CLI::Range(0.0, 100.0));
-  cmd->add_option("--colored-noise", o.sensor.noise_colored_um, "coloured noise RMS [um]")->check(CLI::Range(0.0, 100.0));
-  cmd->add_option("--quantum", o.sensor.quantum_um, "response resolution [um] (0: none)")->check(CLI::Range(0.0, 100.0));
-  cmd->add_option("--creep-per-decade", o.stack.creep_per_decade, "log creep per decade of time (share)")
+  cmd->add_option("--noise", o.sensor.noise_white_um, "white noise RMS [um]")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--colored-noise", o.sensor.noise_colored_um, "coloured noise RMS [um]")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--quantum", o.sensor.quantum_um, "response resolution [um] (0: none)")
+      ->check(CLI::Range(0.0, 100.0));
+  cmd->add_option("--creep-per-decade", o.stack.creep_per_decade,
+                  "log creep per decade of time (share)")
       ->check(CLI::Range(0.0, 0.099));
   cmd->add_flag("--no-creep", a->no_creep, "no creep");
-  cmd->add_option("--train-drive", a->train_drive,
-                  "a CSV (time [s] from 0 at --fs, drive [V]) the training record plays instead of the sine, e.g. "
-                  "the excitation_drive.csv of a fit or diagnosis; the withheld records stay the same")
+  cmd->add_option(
+         "--train-drive", a->train_drive,
+         "a CSV (time [s] from 0 at --fs, drive [V]) the training record plays instead of the "
+         "sine, e.g. "
+         "the excitation_drive.csv of a fit or diagnosis; the withheld records stay the same")
       ->type_name("FILE");
   cmd->add_option("--rate-lag", o.stack.rate_lag_v,
                   "rate dependence: the bound of the drive's rate-dependent lag [V] (0: none)")
       ->check(CLI::Range(0.0, 150.0));
-  cmd->add_option("--rate-time", o.stack.rate_time_s, "rate dependence: lag per rate below the knee [s]")
+  cmd->add_option("--rate-time", o.stack.rate_time_s,
+                  "rate dependence: lag per rate below the knee [s]")
       ->check(CLI::Range(1e-6, 10.0));
-  cmd->add_option("--driver-tau", o.stack.driver_tau_s, "an amplifier first-order low-pass [s] (0: none)")
+  cmd->add_option("--driver-tau", o.stack.driver_tau_s,
+                  "an amplifier first-order low-pass [s] (0: none)")
       ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--train-frequencies", o.train_frequencies_hz,
-                  "training sines at these frequencies [Hz] (records that cover rates) instead of one at --frequency")
+                  "training sines at these frequencies [Hz] (records that cover rates) instead of "
+                  "one at --frequency")
       ->delimiter(',');
-  cmd->add_option("--withheld-frequencies", o.withheld_frequencies_hz, "withheld sines at these frequencies [Hz]")
+  cmd->add_option("--withheld-frequencies", o.withheld_frequencies_hz,
+                  "withheld sines at these frequencies [Hz]")
       ->delimiter(',');
-  cmd->add_flag("--chirp", o.chirp, "a withheld logarithmic chirp over the training frequencies' span");
-  cmd->add_option("--asymmetry", o.stack.asymmetry, "skew of the Preisach density")->check(CLI::Range(-10.0, 10.0));
-  cmd->add_option("--hysteresis-share", o.stack.hysteresis_share, "share of the stroke carried by the hysterons")
+  cmd->add_flag("--chirp", o.chirp,
+                "a withheld logarithmic chirp over the training frequencies' span");
+  cmd->add_option("--asymmetry", o.stack.asymmetry, "skew of the Preisach density")
+      ->check(CLI::Range(-10.0, 10.0));
+  cmd->add_option("--hysteresis-share", o.stack.hysteresis_share,
+                  "share of the stroke carried by the hysterons")
       ->check(CLI::Range(0.0, 0.95));
   cmd->callback([a, &exit_code] { exit_code = RunSynth(*a); });
 }

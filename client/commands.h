@@ -22,9 +22,9 @@ void RegisterRecords(CLI::App& app, int& exit_code);
 void RegisterSynthStack(CLI::App& app, int& exit_code);
 void RegisterCompensate(CLI::App& app, int& exit_code);
 
-/// `piezoid export FIT.json`: the fitted model as a self-contained C99 header (controller/export_header.h)
-/// written to `out` (stdout when empty), its functions named `name` (default: out's stem). Throws
-/// InputError on a bad fit.json. Returns the exit code.
+/// `piezoid export FIT.json`: the fitted model as a self-contained C99 header
+/// (controller/export_header.h) written to `out` (stdout when empty), its functions named `name`
+/// (default: out's stem). Throws InputError on a bad fit.json. Returns the exit code.
 int ExportFit(const std::string& fit_json, const std::string& out, const std::string& name);
 
 }  // namespace pz::client

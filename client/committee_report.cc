@@ -106,7 +106,9 @@ std::string MemorySentence(const CommitteeResult& r) {
     for (const auto& c : r.complete) m = !m && c.family == f ? &c : m;
     for (const auto& band : r.band_models)
       for (const auto& c : band) m = !m && c.family == f ? &c : m;
-    if (m) out += (out.empty() ? "" : " ") + InitialStateSentence(m->model->family().initial_state(), "The " + f + " model starts");
+    if (m)
+      out += (out.empty() ? "" : " ") +
+             InitialStateSentence(m->model->family().initial_state(), "The " + f + " model starts");
   }
   return out;
 }
@@ -131,14 +133,14 @@ void WriteSettings(std::ostream& o, const CommitteeResult& r) {
     << " generations (stall " << opt.search.ga_real.stall_generations << "); binary GA "
     << opt.search.ga_binary.ga.population_size << " × " << opt.search.ga_binary.ga.max_generations
     << ", " << opt.search.ga_binary.bits_per_parameter << " bits/parameter. Bouc–Wen filter "
-    << opt.family_options.substeps << " sub-step(s) per sample. " << r.threads << " evaluation thread(s).\n\n";
+    << opt.family_options.substeps << " sub-step(s) per sample. " << r.threads
+    << " evaluation thread(s).\n\n";
   if (const std::string s = MemorySentence(r); !s.empty()) o << s << "\n\n";
   o << "Selection per band: A = ½ (RMSE_train + RMSE_test) over the window, pooled over the band's "
        "records of each role; lowest A. Committee output: "
     << (opt.averaging ? "averaging (triangular memberships over the band centres)"
                       : "hard switch on the record's excitation frequency")
     << ".\n\n";
-
 }
 
 /// The complete models' tables (one parameter set over all bands), if any were fitted.
@@ -158,7 +160,6 @@ void WriteCompleteModels(std::ostream& o, const CommitteeResult& r) {
         << FormatFigure(m->all_test.rmse) << " | " << FormatFigure(m->all_test.max_abs) << " |\n";
     o << "\n";
   }
-
 }
 
 /// The committee's sub-models (one parameter set per band): parameters and per-band metrics.
@@ -200,10 +201,10 @@ void WriteSubModels(std::ostream& o, const CommitteeResult& r) {
             sub([](const BandMetrics& x) { return x.test.max_abs / x.train.max_abs; }), mark);
   BandTable(o, "Committee: test/train ratio of the RMSE", bands, rows,
             sub([](const BandMetrics& x) { return x.test.rmse / x.train.rmse; }), mark);
-  BandTable(o, "Committee: selection aggregate A = ½ (RMSE_train + RMSE_test) [µm] (selected in bold)",
+  BandTable(o,
+            "Committee: selection aggregate A = ½ (RMSE_train + RMSE_test) [µm] (selected in bold)",
             bands, rows,
             sub([](const BandMetrics& x) { return 0.5 * (x.train.rmse + x.test.rmse); }), mark);
-
 }
 
 /// The selection per band and the committee against the best complete model.
@@ -213,14 +214,16 @@ void WriteSelection(std::ostream& o, const CommitteeResult& r) {
   const int nb = bands.size();
   o << "## Selection and the committee against the complete model\n\n";
   o << "| band | selected | A [µm] | committee test RMSE [µm] | committee test max [µm] |";
-  if (r.best_complete >= 0) o << " best complete test RMSE [µm] | best complete test max [µm] | RMSE reduction |";
+  if (r.best_complete >= 0)
+    o << " best complete test RMSE [µm] | best complete test max [µm] | RMSE reduction |";
   o << "\n|---|---|---:|---:|---:|";
   if (r.best_complete >= 0) o << "---:|---:|---:|";
   o << "\n";
   for (int b = 0; b < nb; ++b) {
     const BandMetrics& c = r.committee_per_band[b];
     o << "| " << bands.Label(b) << " | " << r.band_models[b][r.selected[b]].Name() << " | "
-      << FormatFigure(r.aggregate[b]) << " | " << FormatFigure(c.test.rmse) << " | " << FormatFigure(c.test.max_abs) << " |";
+      << FormatFigure(r.aggregate[b]) << " | " << FormatFigure(c.test.rmse) << " | "
+      << FormatFigure(c.test.max_abs) << " |";
     if (r.best_complete >= 0) {
       const BandMetrics& x = r.complete[r.best_complete].per_band[b];
       o << " " << FormatFigure(x.test.rmse) << " | " << FormatFigure(x.test.max_abs) << " | "
@@ -228,14 +231,15 @@ void WriteSelection(std::ostream& o, const CommitteeResult& r) {
     }
     o << "\n";
   }
-  o << "\nAll test records: committee RMSE " << FormatFigure(r.committee_test.rmse) << " µm, max error "
-    << FormatFigure(r.committee_test.max_abs) << " µm";
+  o << "\nAll test records: committee RMSE " << FormatFigure(r.committee_test.rmse)
+    << " µm, max error " << FormatFigure(r.committee_test.max_abs) << " µm";
   if (r.best_complete >= 0) {
     const RoleMetrics& c = r.complete[r.best_complete].all_test;
     o << "; best complete model (" << r.complete[r.best_complete].Name() << ") RMSE "
-      << FormatFigure(c.rmse) << " µm, max error " << FormatFigure(c.max_abs) << " µm. **Error reduction of the "
-      << "committee: " << FormatPercent(r.rmse_reduction) << " in RMSE, " << FormatPercent(r.max_reduction)
-      << " in max error.**";
+      << FormatFigure(c.rmse) << " µm, max error " << FormatFigure(c.max_abs)
+      << " µm. **Error reduction of the "
+      << "committee: " << FormatPercent(r.rmse_reduction) << " in RMSE, "
+      << FormatPercent(r.max_reduction) << " in max error.**";
   }
 }
 
@@ -244,7 +248,8 @@ void WriteTiming(std::ostream& o, const CommitteeResult& r) {
   const CommitteeOptions& opt = r.options;
   const FrequencyBands& bands = opt.bands;
   const int nb = bands.size();
-  o << "\n\n## Timing\n\n| scope | wall [s] | evaluations | evaluations/s |\n|---|---:|---:|---:|\n";
+  o << "\n\n## Timing\n\n| scope | wall [s] | evaluations | evaluations/s "
+       "|\n|---|---:|---:|---:|\n";
   auto evals = [](const std::vector<IdentifiedModel>& v) {
     int64_t e = 0;
     for (const auto& m : v) e += m.search.evaluations;
@@ -295,14 +300,17 @@ Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
   Struct s;
   auto& f = *s.mutable_fields();
   f["family"] = Text(m.family);
-  if (records::TakesInitialState(m.family)) f["initial_state"] = Text(model::InitialStateName(m.model->family().initial_state()));
+  if (records::TakesInitialState(m.family))
+    f["initial_state"] = Text(model::InitialStateName(m.model->family().initial_state()));
   f["optimiser"] = Text(opt::SearchAlgorithmName(m.algorithm));
   f["scope"] = Text(m.band < 0 ? "complete" : bands.Label(m.band));
   Struct p;
   const auto& params = m.model->params();
-  for (size_t i = 0; i < params.size(); ++i) (*p.mutable_fields())[params[i].name] = Num(m.params[i]);
+  for (size_t i = 0; i < params.size(); ++i)
+    (*p.mutable_fields())[params[i].name] = Num(m.params[i]);
   const auto weights = m.model->family().weight_names();
-  for (size_t i = 0; i < weights.size() && i < m.weights.size(); ++i) (*p.mutable_fields())[weights[i]] = Num(m.weights[i]);
+  for (size_t i = 0; i < weights.size() && i < m.weights.size(); ++i)
+    (*p.mutable_fields())[weights[i]] = Num(m.weights[i]);
   f["parameters"] = Obj(p);
   f["best_cost"] = Num(m.search.best_cost);
   f["evaluations"] = Num(static_cast<double>(m.search.evaluations));
@@ -408,12 +416,13 @@ std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const Com
     });
     Plot p;
     p.name = stem;
-    p.title = "Band " + r.options.bands.Label(b) + ": " + rec.Label() + " at " + io::FormatNumber(rec.frequency_hz) + " Hz, last cycle";
+    p.title = "Band " + r.options.bands.Label(b) + ": " + rec.Label() + " at " +
+              io::FormatNumber(rec.frequency_hz) + " Hz, last cycle";
     p.xlabel = "voltage [V]";
     p.ylabel = "displacement [µm]";
     p.series.push_back({stem + ".csv", 1, 2, "measured", "points pt 7 ps 0.4"});
-    p.series.push_back(
-        {stem + ".csv", 1, 3, "committee (" + r.band_models[b][r.selected[b]].Name() + ")", "lines"});
+    p.series.push_back({stem + ".csv", 1, 3,
+                        "committee (" + r.band_models[b][r.selected[b]].Name() + ")", "lines"});
     if (complete)
       p.series.push_back({stem + ".csv", 1, 4, "complete (" + complete->Name() + ")", "lines"});
     scripts.push_back(WritePlotScript(dir, p));

@@ -67,7 +67,9 @@ const PaperDahlRow& PaperDahlTable(int id) {
   return kPaper[id - 1];
 }
 
-const char* DahlInitName(DahlInit i) { return i == DahlInit::kAdaptive ? "adaptive" : "nguyen-widrow"; }
+const char* DahlInitName(DahlInit i) {
+  return i == DahlInit::kAdaptive ? "adaptive" : "nguyen-widrow";
+}
 
 DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const DahlStudyOptions& o,
                         const model::EpochCallback& on_epoch) {
@@ -129,9 +131,11 @@ DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const 
 
 void PrintDahlTable(std::ostream& out, const std::vector<DahlNetRun>& runs) {
   char line[512];
-  out << "Time: all restarts, wall (CPU of this process in brackets); the paper's is MATLAB's wall time.\n";
-  std::snprintf(line, sizeof line, "%-4s %-3s %-6s %-10s %-10s %-10s %-9s %-6s %-8s %-7s %-6s %-18s %s\n",
-                "case", "", "", "MSE train", "MSE val", "MSE test", "R (all)", "epochs", "gradient", "mu",
+  out << "Time: all restarts, wall (CPU of this process in brackets); the paper's is MATLAB's wall "
+         "time.\n";
+  std::snprintf(line, sizeof line,
+                "%-4s %-3s %-6s %-10s %-10s %-10s %-9s %-6s %-8s %-7s %-6s %-18s %s\n", "case", "",
+                "", "MSE train", "MSE val", "MSE test", "R (all)", "epochs", "gradient", "mu",
                 "gamma", "time s", "ms/epoch");
   out << line;
   for (const DahlNetRun& r : runs) {
@@ -140,38 +144,44 @@ void PrintDahlTable(std::ostream& out, const std::vector<DahlNetRun>& runs) {
     const bool br = r.method == model::TrainMethod::kBayesianRegularization;
     char time[64];
     std::snprintf(time, sizeof time, "%.2f (%.2f)", r.total_wall_s, r.total_cpu_s);
-    std::snprintf(line, sizeof line,
-                  "%-4d %-3s %-6s %-10.3e %-10.3e %-10.3e %-9.6f %-6d %-8.2e %-7.0e %-6.1f %-18s %.1f\n",
-                  r.case_id, model::TrainMethodName(r.method), "ours", s.train.mse, s.val.mse, s.test.mse,
-                  s.all.r, s.epochs, s.gradient, s.mu, s.gamma, time, r.ms_per_epoch);
+    std::snprintf(
+        line, sizeof line,
+        "%-4d %-3s %-6s %-10.3e %-10.3e %-10.3e %-9.6f %-6d %-8.2e %-7.0e %-6.1f %-18s %.1f\n",
+        r.case_id, model::TrainMethodName(r.method), "ours", s.train.mse, s.val.mse, s.test.mse,
+        s.all.r, s.epochs, s.gradient, s.mu, s.gamma, time, r.ms_per_epoch);
     out << line;
     if (br) {
-      std::snprintf(line, sizeof line,
-                    "%-4s %-3s %-6s %-10.3e %-10s %-10.3e %-9s %-6d %-8.2e %-7.0e %-6.0f %-18.0f %.1f\n", "", "",
-                    "paper", p.br_train, "-", p.br_test, "-", p.br_epochs, p.br_gradient, p.br_mu, p.br_gamma,
-                    p.br_time_s, 1e3 * p.br_time_s / p.br_epochs);
+      std::snprintf(
+          line, sizeof line,
+          "%-4s %-3s %-6s %-10.3e %-10s %-10.3e %-9s %-6d %-8.2e %-7.0e %-6.0f %-18.0f %.1f\n", "",
+          "", "paper", p.br_train, "-", p.br_test, "-", p.br_epochs, p.br_gradient, p.br_mu,
+          p.br_gamma, p.br_time_s, 1e3 * p.br_time_s / p.br_epochs);
     } else {
-      std::snprintf(line, sizeof line,
-                    "%-4s %-3s %-6s %-10.3e %-10.3e %-10.3e %-9s %-6d %-8.2e %-7.0e %-6s %-18.0f %.1f\n", "", "",
-                    "paper", p.lm_train, p.lm_val, p.lm_test, "-", p.lm_epochs, p.lm_gradient, p.lm_mu, "-",
-                    p.lm_time_s, 1e3 * p.lm_time_s / p.lm_epochs);
+      std::snprintf(
+          line, sizeof line,
+          "%-4s %-3s %-6s %-10.3e %-10.3e %-10.3e %-9s %-6d %-8.2e %-7.0e %-6s %-18.0f %.1f\n", "",
+          "", "paper", p.lm_train, p.lm_val, p.lm_test, "-", p.lm_epochs, p.lm_gradient, p.lm_mu,
+          "-", p.lm_time_s, 1e3 * p.lm_time_s / p.lm_epochs);
     }
     out << line;
     const bool mse_ok = br ? AtOrBelow(s.train.mse, p.br_train) && AtOrBelow(s.test.mse, p.br_test)
                            : AtOrBelow(s.train.mse, p.lm_train) && AtOrBelow(s.val.mse, p.lm_val) &&
                                  AtOrBelow(s.test.mse, p.lm_test);
     const double paper_time = br ? p.br_time_s : p.lm_time_s;
-    std::snprintf(line, sizeof line,
-                  "%-4s %-3s %-6s MSE %s the paper's on every subset it prints; time %s (wall), %s (CPU); "
-                  "restart %d of %d, %s\n",
-                  "", "", "", mse_ok ? "at or below" : "NOT at or below", r.total_wall_s < paper_time ? "below" : "NOT below",
-                  r.total_cpu_s < paper_time ? "below" : "NOT below", r.chosen + 1, r.restarts,
-                  model::TrainTerminationName(s.termination));
+    std::snprintf(
+        line, sizeof line,
+        "%-4s %-3s %-6s MSE %s the paper's on every subset it prints; time %s (wall), %s (CPU); "
+        "restart %d of %d, %s\n",
+        "", "", "", mse_ok ? "at or below" : "NOT at or below",
+        r.total_wall_s < paper_time ? "below" : "NOT below",
+        r.total_cpu_s < paper_time ? "below" : "NOT below", r.chosen + 1, r.restarts,
+        model::TrainTerminationName(s.termination));
     out << line;
   }
 }
 
-void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs, const std::string& backend) {
+void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs,
+                   const std::string& backend) {
   out << "{\n  \"dense_backend\": \"" << backend << "\",\n  \"runs\": [";
   for (size_t i = 0; i < runs.size(); ++i) {
     const DahlNetRun& r = runs[i];
@@ -179,8 +189,9 @@ void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs, const
     const PaperDahlRow& p = PaperDahlTable(r.case_id);
     const bool br = r.method == model::TrainMethod::kBayesianRegularization;
     out << (i ? ",\n" : "\n") << "    {\"case\": " << r.case_id << ", \"method\": \""
-        << model::TrainMethodName(r.method) << "\", \"seed\": " << r.seed << ", \"hidden\": " << r.hidden
-        << ", \"termination\": \"" << model::TrainTerminationName(s.termination) << "\""
+        << model::TrainMethodName(r.method) << "\", \"seed\": " << r.seed
+        << ", \"hidden\": " << r.hidden << ", \"termination\": \""
+        << model::TrainTerminationName(s.termination) << "\""
         << ", \"epochs\": " << s.epochs << ", \"best_epoch\": " << s.best_epoch
         << ", \"mse_train\": " << JsonNum(s.train.mse) << ", \"mse_val\": " << JsonNum(s.val.mse)
         << ", \"mse_test\": " << JsonNum(s.test.mse) << ", \"r_train\": " << JsonNum(s.train.r)
@@ -188,13 +199,15 @@ void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs, const
         << ", \"r_all\": " << JsonNum(s.all.r) << ", \"gradient\": " << JsonNum(s.gradient)
         << ", \"mu\": " << JsonNum(s.mu) << ", \"gamma\": " << JsonNum(s.gamma)
         << ", \"ssw\": " << JsonNum(s.ssw) << ", \"wall_time_s\": " << JsonNum(s.wall_time_s)
-        << ", \"cpu_time_s\": " << JsonNum(s.cpu_time_s) << ", \"jtj_time_s\": " << JsonNum(s.jtj_time_s)
+        << ", \"cpu_time_s\": " << JsonNum(s.cpu_time_s)
+        << ", \"jtj_time_s\": " << JsonNum(s.jtj_time_s)
         << ", \"ms_per_epoch\": " << JsonNum(r.ms_per_epoch) << ", \"restarts\": " << r.restarts
         << ", \"chosen\": " << r.chosen << ", \"total_wall_s\": " << JsonNum(r.total_wall_s)
         << ", \"total_cpu_s\": " << JsonNum(r.total_cpu_s) << ", \"restart_val_mse\": [";
-    for (size_t k = 0; k < r.restart_val_mse.size(); ++k) out << (k ? ", " : "") << JsonNum(r.restart_val_mse[k]);
-    out << "], \"solves\": " << s.solves
-        << ", \"rejected_steps\": " << s.rejected_steps << ", \"paper\": {";
+    for (size_t k = 0; k < r.restart_val_mse.size(); ++k)
+      out << (k ? ", " : "") << JsonNum(r.restart_val_mse[k]);
+    out << "], \"solves\": " << s.solves << ", \"rejected_steps\": " << s.rejected_steps
+        << ", \"paper\": {";
     if (br)
       out << "\"mse_train\": " << JsonNum(p.br_train) << ", \"mse_test\": " << JsonNum(p.br_test)
           << ", \"gradient\": " << JsonNum(p.br_gradient) << ", \"gamma\": " << JsonNum(p.br_gamma)
@@ -202,30 +215,33 @@ void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs, const
           << ", \"epochs\": " << p.br_epochs << ", \"time_s\": " << JsonNum(p.br_time_s);
     else
       out << "\"mse_train\": " << JsonNum(p.lm_train) << ", \"mse_val\": " << JsonNum(p.lm_val)
-          << ", \"mse_test\": " << JsonNum(p.lm_test) << ", \"gradient\": " << JsonNum(p.lm_gradient)
-          << ", \"mu\": " << JsonNum(p.lm_mu) << ", \"epochs\": " << p.lm_epochs
-          << ", \"time_s\": " << JsonNum(p.lm_time_s);
+          << ", \"mse_test\": " << JsonNum(p.lm_test)
+          << ", \"gradient\": " << JsonNum(p.lm_gradient) << ", \"mu\": " << JsonNum(p.lm_mu)
+          << ", \"epochs\": " << p.lm_epochs << ", \"time_s\": " << JsonNum(p.lm_time_s);
     out << "}}";
   }
   out << "\n  ]\n}\n";
 }
 
 void WriteDahlCsv(std::ostream& out, const std::vector<DahlNetRun>& runs) {
-  out << "case,method,seed,hidden,termination,epochs,best_epoch,mse_train,mse_val,mse_test,r_train,r_val,"
-         "r_test,r_all,gradient,mu,gamma,ssw,wall_time_s,cpu_time_s,jtj_time_s,ms_per_epoch,restarts,chosen,"
+  out << "case,method,seed,hidden,termination,epochs,best_epoch,mse_train,mse_val,mse_test,r_train,"
+         "r_val,"
+         "r_test,r_all,gradient,mu,gamma,ssw,wall_time_s,cpu_time_s,jtj_time_s,ms_per_epoch,"
+         "restarts,chosen,"
          "total_wall_s,total_cpu_s,"
          "paper_mse_train,paper_mse_val,paper_mse_test,paper_epochs,paper_time_s\n";
   for (const DahlNetRun& r : runs) {
     const auto& s = r.summary;
     const PaperDahlRow& p = PaperDahlTable(r.case_id);
     const bool br = r.method == model::TrainMethod::kBayesianRegularization;
-    out << r.case_id << ',' << model::TrainMethodName(r.method) << ',' << r.seed << ',' << r.hidden << ','
-        << model::TrainTerminationName(s.termination) << ',' << s.epochs << ',' << s.best_epoch << ','
-        << Num(s.train.mse) << ',' << Num(s.val.mse) << ',' << Num(s.test.mse) << ',' << Num(s.train.r)
-        << ',' << Num(s.val.r) << ',' << Num(s.test.r) << ',' << Num(s.all.r) << ',' << Num(s.gradient)
-        << ',' << Num(s.mu) << ',' << Num(s.gamma) << ',' << Num(s.ssw) << ',' << Num(s.wall_time_s)
-        << ',' << Num(s.cpu_time_s) << ',' << Num(s.jtj_time_s) << ',' << Num(r.ms_per_epoch) << ','
-        << r.restarts << ',' << r.chosen << ',' << Num(r.total_wall_s) << ',' << Num(r.total_cpu_s) << ','
+    out << r.case_id << ',' << model::TrainMethodName(r.method) << ',' << r.seed << ',' << r.hidden
+        << ',' << model::TrainTerminationName(s.termination) << ',' << s.epochs << ','
+        << s.best_epoch << ',' << Num(s.train.mse) << ',' << Num(s.val.mse) << ','
+        << Num(s.test.mse) << ',' << Num(s.train.r) << ',' << Num(s.val.r) << ',' << Num(s.test.r)
+        << ',' << Num(s.all.r) << ',' << Num(s.gradient) << ',' << Num(s.mu) << ',' << Num(s.gamma)
+        << ',' << Num(s.ssw) << ',' << Num(s.wall_time_s) << ',' << Num(s.cpu_time_s) << ','
+        << Num(s.jtj_time_s) << ',' << Num(r.ms_per_epoch) << ',' << r.restarts << ',' << r.chosen
+        << ',' << Num(r.total_wall_s) << ',' << Num(r.total_cpu_s) << ','
         << Num(br ? p.br_train : p.lm_train) << ',' << (br ? "" : Num(p.lm_val)) << ','
         << Num(br ? p.br_test : p.lm_test) << ',' << (br ? p.br_epochs : p.lm_epochs) << ','
         << Num(br ? p.br_time_s : p.lm_time_s) << '\n';
@@ -243,8 +259,8 @@ void WriteDahlDatasetCsv(std::ostream& out, const DahlDataset& ds, const model::
   }
   out << "t_s,v_V,d" << (split ? ",subset" : "") << (prediction ? ",d_net" : "") << '\n';
   for (int i = 0; i < n; ++i) {
-    out << io::FormatNumber(ds.data.x(i, 0)) << ',' << io::FormatNumber(ds.v[static_cast<size_t>(i)]) << ','
-        << io::FormatNumber(ds.data.t(i));
+    out << io::FormatNumber(ds.data.x(i, 0)) << ','
+        << io::FormatNumber(ds.v[static_cast<size_t>(i)]) << ',' << io::FormatNumber(ds.data.t(i));
     if (split) out << ',' << subset[static_cast<size_t>(i)];
     if (prediction) out << ',' << io::FormatNumber((*prediction)(i));
     out << '\n';
@@ -254,9 +270,9 @@ void WriteDahlDatasetCsv(std::ostream& out, const DahlDataset& ds, const model::
 void WriteDahlHistoryCsv(std::ostream& out, const DahlNetRun& run) {
   out << "epoch,time_s,mse_train,mse_val,mse_test,mu,gradient,gamma,ssw,val_fail\n";
   for (const auto& e : run.summary.history)
-    out << e.epoch << ',' << Num(e.time_s) << ',' << Num(e.mse_train) << ',' << Num(e.mse_val) << ','
-        << Num(e.mse_test) << ',' << Num(e.mu) << ',' << Num(e.gradient) << ',' << Num(e.gamma) << ','
-        << Num(e.ssw) << ',' << e.val_fail << '\n';
+    out << e.epoch << ',' << Num(e.time_s) << ',' << Num(e.mse_train) << ',' << Num(e.mse_val)
+        << ',' << Num(e.mse_test) << ',' << Num(e.mu) << ',' << Num(e.gradient) << ','
+        << Num(e.gamma) << ',' << Num(e.ssw) << ',' << e.val_fail << '\n';
 }
 
 }  // namespace pz::client

@@ -4,8 +4,8 @@
 //
 // Network input and target: the paper's networks map time to displacement (nftool fitting with one
 // input; "input data x" of the Adams solver; 100 hidden neurons and 301 parameters ⇒ one input).
-// v(t) alone cannot be the input (case 1's sin t is not one-to-one over [0, 10] s while d is), and a
-// second input would give 401 parameters; so x = t [s], target = d, both mapminmax-normalised.
+// v(t) alone cannot be the input (case 1's sin t is not one-to-one over [0, 10] s while d is), and
+// a second input would give 401 parameters; so x = t [s], target = d, both mapminmax-normalised.
 #pragma once
 
 #include <cstdint>
@@ -31,7 +31,8 @@ struct DahlCase {
 /// Throws InputError unless 1 ≤ id ≤ 4.
 DahlCase PaperDahlCase(int id, DahlB1Policy b1 = DahlB1Policy::kPaper);
 
-/// The data set of a case: t = 0, 0.001, …, 10 s (10,001 points), x = t, target d; v kept for the CSV.
+/// The data set of a case: t = 0, 0.001, …, 10 s (10,001 points), x = t, target d; v kept for the
+/// CSV.
 struct DahlDataset {
   DahlCase dcase;
   std::vector<double> v;  ///< input voltage at each t [V]
@@ -62,21 +63,21 @@ struct DahlNetRun {
   model::TrainSummary summary;  ///< of the chosen restart
   double ms_per_epoch = 0;      ///< summary.wall_time_s / max(epochs, 1), in ms
   int restarts = 1;
-  int chosen = 0;                           ///< index of the chosen restart
-  std::vector<double> restart_val_mse;      ///< validation MSE of each restart (the selection key)
-  double total_wall_s = 0;                  ///< all restarts, as the caller waited for them [s]
-  double total_cpu_s = 0;                   ///< CPU time of all restarts [s]
-  model::DataSplit split;                   ///< the subsets every restart used
-  Eigen::VectorXd prediction;               ///< the chosen network's d at every t of the data set
+  int chosen = 0;                       ///< index of the chosen restart
+  std::vector<double> restart_val_mse;  ///< validation MSE of each restart (the selection key)
+  double total_wall_s = 0;              ///< all restarts, as the caller waited for them [s]
+  double total_cpu_s = 0;               ///< CPU time of all restarts [s]
+  model::DataSplit split;               ///< the subsets every restart used
+  Eigen::VectorXd prediction;           ///< the chosen network's d at every t of the data set
 };
 
 /// How the study trains a network. One generator seeded with `seed` draws, in order: the 70/15/15
 /// split (MATLAB dividerand), the swaps that pin t = 0 and t = 10 s to training (if pin_ends), then
-/// the Nguyen–Widrow weights of each restart. Every restart trains on the same split; the one with the
-/// lowest validation MSE is kept (validation data are never trained on, by LM or BR), so the test
-/// subset stays untouched by the selection. Restarts run one after another: Debian's serial OpenBLAS
-/// is not safe to call from two threads at once. Deterministic for a seed.
-/// How a network's weights start: MATLAB's Nguyen–Widrow, or its data-adaptive variant
+/// the Nguyen–Widrow weights of each restart. Every restart trains on the same split; the one with
+/// the lowest validation MSE is kept (validation data are never trained on, by LM or BR), so the
+/// test subset stays untouched by the selection. Restarts run one after another: Debian's serial
+/// OpenBLAS is not safe to call from two threads at once. Deterministic for a seed. How a network's
+/// weights start: MATLAB's Nguyen–Widrow, or its data-adaptive variant
 /// (model::FeedForwardNet::InitAdaptive: neuron centres denser where the training target varies,
 /// from the training samples only).
 enum class DahlInit { kNguyenWidrow, kAdaptive };
@@ -87,9 +88,9 @@ struct DahlStudyOptions {
   bool lm = true;
   bool br = true;
   uint64_t seed = 1;
-  int lm_restarts = 1;  ///< initialisations per LM network, ≥ 1
-  int br_restarts = 1;  ///< initialisations per BR network, ≥ 1
-  bool pin_ends = true; ///< keep the end points in training (no extrapolation in val / test)
+  int lm_restarts = 1;   ///< initialisations per LM network, ≥ 1
+  int br_restarts = 1;   ///< initialisations per BR network, ≥ 1
+  bool pin_ends = true;  ///< keep the end points in training (no extrapolation in val / test)
   int hidden = 100;
   /// LM starts from the adaptive initialisation: from Nguyen–Widrow's, every LM network of cases 1,
   /// 3 and 4 stopped on validation on the plateau before the 30 ms rise at t = 0 (training MSE
@@ -122,7 +123,8 @@ DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const 
 /// The paper-style table: per case and method our MSE train / val / test, R, epochs, time beside
 /// the paper's, and whether ours is at or below the paper's MSE (each subset) and time.
 void PrintDahlTable(std::ostream& out, const std::vector<DahlNetRun>& runs);
-void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs, const std::string& backend);
+void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs,
+                   const std::string& backend);
 void WriteDahlCsv(std::ostream& out, const std::vector<DahlNetRun>& runs);
 /// Data set CSV: t_s, v_V, d, subset (train/val/test of the given split), prediction if given.
 void WriteDahlDatasetCsv(std::ostream& out, const DahlDataset& ds, const model::DataSplit* split,

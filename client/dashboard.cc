@@ -16,7 +16,8 @@
 #include "client/job_report.h"
 #include "service/wire_codec.h"
 
-// Last: <resolv.h>, which httplib.h includes, defines a macro `_res` that Eigen's headers use as a name.
+// Last: <resolv.h>, which httplib.h includes, defines a macro `_res` that Eigen's headers use as a
+// name.
 #include "client/http_guard.h"
 
 namespace pz::client {
@@ -35,7 +36,8 @@ bool IsLoopback(const std::string& host) {
 /// Equal strings in a time that does not depend on where they differ.
 bool SameSecret(const std::string& a, const std::string& b) {
   unsigned char diff = a.size() == b.size() ? 0 : 1;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i % std::max<size_t>(1, b.size())]);
+  for (size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned char>(a[i] ^ b[i % std::max<size_t>(1, b.size())]);
   return diff == 0;
 }
 
@@ -70,8 +72,8 @@ fs::path SafeFile(const fs::path& base, const std::string& rel) {
 std::string FilesJson(const fs::path& dir) {
   std::vector<std::string> files;
   std::error_code ec;
-  for (auto it = fs::recursive_directory_iterator(dir, ec); !ec && it != fs::recursive_directory_iterator();
-       it.increment(ec))
+  for (auto it = fs::recursive_directory_iterator(dir, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec))
     if (it->is_regular_file() && it->path().filename() != ".complete")
       files.push_back(fs::relative(it->path(), dir).string());
   std::sort(files.begin(), files.end());
@@ -124,7 +126,8 @@ struct Dashboard::Impl {
     if (options.reports_dir.empty()) return names;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(options.reports_dir, ec))
-      if (e.is_directory() && fs::exists(e.path() / "report.md")) names.push_back(e.path().filename().string());
+      if (e.is_directory() && fs::exists(e.path() / "report.md"))
+        names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
   }
@@ -140,12 +143,13 @@ struct Dashboard::Impl {
       *error = "";
       *polled_at = UnixNow();
       // Running jobs first (longest running first), then the ended ones, most recent first.
-      std::stable_sort(jobs.begin(), jobs.end(), [](const service::JobInfo& a, const service::JobInfo& b) {
-        const bool ra = !service::IsFinal(a.state), rb = !service::IsFinal(b.state);
-        if (ra != rb) return ra;
-        if (ra) return a.elapsed_s > b.elapsed_s;
-        return a.ended_unix_s > b.ended_unix_s;
-      });
+      std::stable_sort(
+          jobs.begin(), jobs.end(), [](const service::JobInfo& a, const service::JobInfo& b) {
+            const bool ra = !service::IsFinal(a.state), rb = !service::IsFinal(b.state);
+            if (ra != rb) return ra;
+            if (ra) return a.elapsed_s > b.elapsed_s;
+            return a.ended_unix_s > b.ended_unix_s;
+          });
       for (const service::JobInfo& j : jobs) {
         if (j.archived) continue;
         uint64_t from = 0;
@@ -157,11 +161,13 @@ struct Dashboard::Impl {
           auto it = infos.find(j.job_id);
           // Caught up: a GA job's last record is generation `generation − 1` (generation counts
           // generation 0 too), a session's batch `generation`; nothing new unless the state moved.
-          complete = !log.empty() && from >= j.generation && it != infos.end() && it->second.state == j.state;
+          complete = !log.empty() && from >= j.generation && it != infos.end() &&
+                     it->second.state == j.state;
         }
         if (complete) continue;
         std::vector<service::GenerationRecord> more;
-        if (!client.FetchLog(j.job_id, from, nullptr, &more).ok()) continue;  // e.g. pruned meanwhile
+        if (!client.FetchLog(j.job_id, from, nullptr, &more).ok())
+          continue;  // e.g. pruned meanwhile
         std::lock_guard lock(mu);
         auto& log = logs[j.job_id];
         for (auto& r : more)
@@ -175,15 +181,16 @@ struct Dashboard::Impl {
     if (s.ok()) {
       infos.clear();
       for (const auto& j : jobs) infos[j.job_id] = j;
-      for (auto it = logs.begin(); it != logs.end();)  // jobs pruned from the master: forget their curves
+      for (auto it = logs.begin();
+           it != logs.end();)  // jobs pruned from the master: forget their curves
         it = infos.count(it->first) ? std::next(it) : logs.erase(it);
       ++polls;
     }
     std::vector<service::JobInfo> shown = jobs;
     if (!s.ok())  // keep showing what was last known
       for (const auto& [id, j] : infos) shown.push_back(j);
-    state_json = service::DashboardStateJson(options.client.endpoint, *polled_at, polls, *error, shown, snapshot,
-                                             workers_error, reports);
+    state_json = service::DashboardStateJson(options.client.endpoint, *polled_at, polls, *error,
+                                             shown, snapshot, workers_error, reports);
   }
 
   void PollLoop() {
@@ -193,14 +200,16 @@ struct Dashboard::Impl {
     while (!stop.load()) {
       PollOnce(client, &polled_at, &error);
       std::unique_lock lock(stop_mu);
-      stop_cv.wait_for(lock, std::chrono::milliseconds(options.poll_ms), [this] { return stop.load(); });
+      stop_cv.wait_for(lock, std::chrono::milliseconds(options.poll_ms),
+                       [this] { return stop.load(); });
     }
   }
 
   // ------------------------------------------------------------------ HTTP
   bool Authorised(const httplib::Request& req) const {
     if (options.token.empty()) return true;
-    if (req.has_param("token") && SameSecret(req.get_param_value("token"), options.token)) return true;
+    if (req.has_param("token") && SameSecret(req.get_param_value("token"), options.token))
+      return true;
     const std::string auth = req.get_header_value("Authorization");
     return auth.rfind("Bearer ", 0) == 0 && SameSecret(auth.substr(7), options.token);
   }
@@ -231,7 +240,8 @@ struct Dashboard::Impl {
     if (!known) {  // not polled (archived, or new): ask the master
       std::lock_guard lock(request_mu);
       Status s = request_client->FetchLog(job, from, nullptr, &records);
-      if (s.code() == StatusCode::kNotFound) return Text(res, 404, "job " + job + ": " + s.message());
+      if (s.code() == StatusCode::kNotFound)
+        return Text(res, 404, "job " + job + ": " + s.message());
       if (!s.ok()) return Text(res, 503, "the master did not answer: " + s.message());
     }
     res.set_content(service::DashboardCurveJson(job, records), "application/json");
@@ -239,7 +249,8 @@ struct Dashboard::Impl {
 
   /// Builds an ended job's report (once) into cache_dir/ID; the folder, or an error response.
   std::optional<fs::path> JobReport(const std::string& job, httplib::Response& res) {
-    if (job.empty() || job.size() > 64 || job.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos) {
+    if (job.empty() || job.size() > 64 ||
+        job.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789_-") != std::string::npos) {
       Text(res, 400, "job id '" + job + "': not a job id");
       return std::nullopt;
     }
@@ -250,7 +261,8 @@ struct Dashboard::Impl {
     Status s;
     {
       std::lock_guard rl(request_mu);
-      s = request_client->Fetch(job, 5, &fetched.best, &fetched.log, &fetched.info, &fetched.spec, &fetched.networks);
+      s = request_client->Fetch(job, 5, &fetched.best, &fetched.log, &fetched.info, &fetched.spec,
+                                &fetched.networks);
     }
     if (s.code() == StatusCode::kNotFound) {
       Text(res, 404, "job " + job + ": " + s.message());
@@ -261,8 +273,11 @@ struct Dashboard::Impl {
       return std::nullopt;
     }
     if (!service::IsFinal(fetched.info.state)) {
-      Text(res, 409, "job " + job + " is still running (generation " + std::to_string(fetched.info.generation) +
-                         "): its report is built when it has ended; `piezoid fetch " + job + "` gives the best so far");
+      Text(res, 409,
+           "job " + job + " is still running (generation " +
+               std::to_string(fetched.info.generation) +
+               "): its report is built when it has ended; `piezoid fetch " + job +
+               "` gives the best so far");
       return std::nullopt;
     }
     std::error_code ec;
@@ -282,7 +297,8 @@ struct Dashboard::Impl {
 
   /// A report folder's files; its index is the report page (report.md rendered), whose links to the
   /// dashboard go up `root` ("../../" from /reports/NAME/).
-  void ServeFolder(const fs::path& dir, const std::string& rel, const std::string& root, httplib::Response& res) {
+  void ServeFolder(const fs::path& dir, const std::string& rel, const std::string& root,
+                   httplib::Response& res) {
     if (rel.empty() || rel == "index.html") {
       std::string page(assets::kReportHtml);
       for (size_t at; (at = page.find("@ROOT@")) != std::string::npos;) page.replace(at, 6, root);
@@ -290,7 +306,8 @@ struct Dashboard::Impl {
     }
     if (rel == "files.json") return res.set_content(FilesJson(dir), "application/json");
     const fs::path file = SafeFile(dir, rel);
-    if (file.empty() || file.filename() == ".complete") return Text(res, 404, "no file '" + rel + "' in this report");
+    if (file.empty() || file.filename() == ".complete")
+      return Text(res, 404, "no file '" + rel + "' in this report");
     std::ifstream in(file, std::ios::binary);
     std::ostringstream data;
     data << in.rdbuf();
@@ -306,7 +323,8 @@ struct Dashboard::Impl {
                      "script-src 'self' 'unsafe-inline'; frame-ancestors 'none'");
       if (Authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
       Text(res, 401,
-           "this dashboard needs its access token: open it as http://HOST:PORT/?token=TOKEN (the token of "
+           "this dashboard needs its access token: open it as http://HOST:PORT/?token=TOKEN (the "
+           "token of "
            "`piezoid dashboard --token-file`), or send 'Authorization: Bearer TOKEN'");
       return httplib::Server::HandlerResponse::Handled;
     });
@@ -315,38 +333,49 @@ struct Dashboard::Impl {
       std::string_view body;
       const char* type;
     };
-    for (const Asset& a : {Asset{"/", assets::kIndexHtml, "text/html; charset=utf-8"},
-                           Asset{"/static/dashboard.js", assets::kDashboardJs, "text/javascript; charset=utf-8"},
-                           Asset{"/static/chart.min.js", assets::kChartJs, "text/javascript; charset=utf-8"},
-                           Asset{"/static/marked.min.js", assets::kMarkedJs, "text/javascript; charset=utf-8"}})
-      server.Get(a.path, [a](const httplib::Request&, httplib::Response& res) { res.set_content(std::string(a.body), a.type); });
+    for (const Asset& a :
+         {Asset{"/", assets::kIndexHtml, "text/html; charset=utf-8"},
+          Asset{"/static/dashboard.js", assets::kDashboardJs, "text/javascript; charset=utf-8"},
+          Asset{"/static/chart.min.js", assets::kChartJs, "text/javascript; charset=utf-8"},
+          Asset{"/static/marked.min.js", assets::kMarkedJs, "text/javascript; charset=utf-8"}})
+      server.Get(a.path, [a](const httplib::Request&, httplib::Response& res) {
+        res.set_content(std::string(a.body), a.type);
+      });
     server.Get("/api/state", [this](const httplib::Request&, httplib::Response& res) {
       std::string json;
       {
         std::lock_guard lock(mu);
         json = state_json;
       }
-      if (json.empty()) return Text(res, 503, "the dashboard has not polled the master yet; retry in a moment");
+      if (json.empty())
+        return Text(res, 503, "the dashboard has not polled the master yet; retry in a moment");
       res.set_content(json, "application/json");
     });
-    server.Get("/api/curve", [this](const httplib::Request& req, httplib::Response& res) { Curve(req, res); });
-    server.Get(R"(/jobs/([^/]+)/report/(.*))", [this](const httplib::Request& req, httplib::Response& res) {
-      if (auto dir = JobReport(req.matches[1], res)) ServeFolder(*dir, req.matches[2], "../../../", res);
-    });
-    server.Get(R"(/reports/([^/]+)/(.*))", [this](const httplib::Request& req, httplib::Response& res) {
-      const std::string name = req.matches[1];
-      const std::vector<std::string> names = Reports();
-      if (std::find(names.begin(), names.end(), name) == names.end())
-        return Text(res, 404, "no report folder '" + name + "' under --reports");
-      ServeFolder(options.reports_dir / name, req.matches[2], "../../", res);
-    });
+    server.Get("/api/curve",
+               [this](const httplib::Request& req, httplib::Response& res) { Curve(req, res); });
+    server.Get(R"(/jobs/([^/]+)/report/(.*))",
+               [this](const httplib::Request& req, httplib::Response& res) {
+                 if (auto dir = JobReport(req.matches[1], res))
+                   ServeFolder(*dir, req.matches[2], "../../../", res);
+               });
+    server.Get(R"(/reports/([^/]+)/(.*))",
+               [this](const httplib::Request& req, httplib::Response& res) {
+                 const std::string name = req.matches[1];
+                 const std::vector<std::string> names = Reports();
+                 if (std::find(names.begin(), names.end(), name) == names.end())
+                   return Text(res, 404, "no report folder '" + name + "' under --reports");
+                 ServeFolder(options.reports_dir / name, req.matches[2], "../../", res);
+               });
     server.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
-      if (res.body.empty()) Text(res, res.status, "HTTP " + std::to_string(res.status) + ": " + req.method + " " + req.path);
+      if (res.body.empty())
+        Text(res, res.status,
+             "HTTP " + std::to_string(res.status) + ": " + req.method + " " + req.path);
     });
   }
 };
 
-Dashboard::Dashboard(DashboardOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+Dashboard::Dashboard(DashboardOptions options)
+    : impl_(std::make_unique<Impl>(std::move(options))) {}
 
 Dashboard::~Dashboard() {
   Stop();
@@ -360,21 +389,25 @@ Status Dashboard::Start() {
   DashboardOptions& o = impl_->options;
   if (o.poll_ms < 100 || o.poll_ms > 3600000)
     return InvalidArgument(FieldError("--poll-ms", o.poll_ms, "must be in [100, 3600000]"));
-  if (o.port < 0 || o.port > 65535) return InvalidArgument(FieldError("--listen port", o.port, "must be in [0, 65535]"));
+  if (o.port < 0 || o.port > 65535)
+    return InvalidArgument(FieldError("--listen port", o.port, "must be in [0, 65535]"));
   if (!o.token.empty() && o.token.size() < 16)
     return InvalidArgument("--token-file: the token has " + std::to_string(o.token.size()) +
                            " characters; use at least 16 (e.g. `openssl rand -hex 16 > token`)");
   if (o.token.empty() && !IsLoopback(o.host))
-    return InvalidArgument("--listen " + o.host + ": beyond loopback the dashboard needs an access token "
+    return InvalidArgument("--listen " + o.host +
+                           ": beyond loopback the dashboard needs an access token "
                            "(--token-file FILE; e.g. `openssl rand -hex 16 > FILE`)");
   if (o.token.empty() && o.client.curve)
-    return InvalidArgument("the master uses CURVE: the dashboard needs its own access token too "
-                           "(--token-file FILE; e.g. `openssl rand -hex 16 > FILE`)");
+    return InvalidArgument(
+        "the master uses CURVE: the dashboard needs its own access token too "
+        "(--token-file FILE; e.g. `openssl rand -hex 16 > FILE`)");
   if (!o.reports_dir.empty() && !fs::is_directory(o.reports_dir))
     return InvalidArgument("--reports " + o.reports_dir.string() + ": not a folder");
   std::error_code ec;
   if (o.cache_dir.empty()) {
-    impl_->cache_dir = fs::temp_directory_path(ec) / ("piezoid-dashboard-" + std::to_string(::getpid()));
+    impl_->cache_dir =
+        fs::temp_directory_path(ec) / ("piezoid-dashboard-" + std::to_string(::getpid()));
     impl_->own_cache = true;
   } else {
     impl_->cache_dir = o.cache_dir;
@@ -385,8 +418,9 @@ Status Dashboard::Start() {
   impl_->Routes();
   impl_->port = impl_->server.Bind(o.host, o.port);
   if (impl_->port <= 0)
-    return Status(StatusCode::kUnavailable, "--listen " + o.host + ":" + std::to_string(o.port) +
-                                                ": cannot listen there (address in use, or not this machine's)");
+    return Status(StatusCode::kUnavailable,
+                  "--listen " + o.host + ":" + std::to_string(o.port) +
+                      ": cannot listen there (address in use, or not this machine's)");
   impl_->http_thread = std::thread([this] { impl_->server.listen_after_bind(); });
   impl_->poll_thread = std::thread([this] { impl_->PollLoop(); });
   return Status::Ok();

@@ -1,9 +1,9 @@
 // `piezoid dashboard`: a read-only web page of a master's jobs, their fitness curves (best and
-// median cost per generation), its workers and their failures, and the jobs' reports. It is a client
-// of the master like the others (List, Workers and Fetch with log_only, over ZeroMQ, CURVE if
-// configured); an embedded HTTP server (cpp-httplib) serves the page, its scripts (Debian's Chart.js
-// and marked, embedded at build time: nothing is fetched at run time) and the JSON it polls
-// (proto/dashboard.proto through protobuf's JSON printer).
+// median cost per generation), its workers and their failures, and the jobs' reports. It is a
+// client of the master like the others (List, Workers and Fetch with log_only, over ZeroMQ, CURVE
+// if configured); an embedded HTTP server (cpp-httplib) serves the page, its scripts (Debian's
+// Chart.js and marked, embedded at build time: nothing is fetched at run time) and the JSON it
+// polls (proto/dashboard.proto through protobuf's JSON printer).
 //
 //   GET /                           the page
 //   GET /static/{dashboard.js,chart.min.js,marked.min.js}
@@ -27,10 +27,10 @@
 namespace pz::client {
 
 struct DashboardOptions {
-  std::string host = "127.0.0.1";  ///< address to listen on
-  int port = 0;                    ///< 0: any free port (see Dashboard::url())
-  std::string token;               ///< access token; empty: none (loopback, plain master only)
-  int poll_ms = 1000;              ///< how often the master is polled [ms], ≥ 100
+  std::string host = "127.0.0.1";     ///< address to listen on
+  int port = 0;                       ///< 0: any free port (see Dashboard::url())
+  std::string token;                  ///< access token; empty: none (loopback, plain master only)
+  int poll_ms = 1000;                 ///< how often the master is polled [ms], ≥ 100
   std::filesystem::path reports_dir;  ///< optional: folders with a report.md, served read-only
   std::filesystem::path cache_dir;    ///< where job reports are built; empty: a temporary folder
   bool plots = true;                  ///< job reports with figures (gnuplot)

@@ -35,10 +35,14 @@ std::string Pct(double share) { return std::isfinite(share) ? F("%.0f %%", 100 *
 std::string Html(const std::string& s) {
   std::string r;
   for (char c : s) {
-    if (c == '<') r += "&lt;";
-    else if (c == '>') r += "&gt;";
-    else if (c == '&') r += "&amp;";
-    else r += c;
+    if (c == '<')
+      r += "&lt;";
+    else if (c == '>')
+      r += "&gt;";
+    else if (c == '&')
+      r += "&amp;";
+    else
+      r += c;
   }
   return r;
 }
@@ -54,16 +58,17 @@ std::string Pad(std::string s, size_t w) {
 }
 
 void PrintParams(std::ostream& o, const FitResult& f, const std::string& indent) {
-  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12) << Pad("sensitivity", 13)
-    << "identifiability\n";
+  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12)
+    << Pad("sensitivity", 13) << "identifiability\n";
   for (const auto& p : f.params) {
     o << indent << Pad(p.name + " [" + p.unit + "]", 30) << Pad(F("%.5g", p.value), 14)
-      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12) << Pad(F("%.4f deg", p.sensitivity), 13)
-      << diagnose::IdentifiabilityName(p.identifiability) << (p.note.empty() ? "" : "; " + p.note) << "\n";
+      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12)
+      << Pad(F("%.4f deg", p.sensitivity), 13) << diagnose::IdentifiabilityName(p.identifiability)
+      << (p.note.empty() ? "" : "; " + p.note) << "\n";
   }
-  if (!f.weakest_direction.empty()) o << indent << "weakest direction: " << f.weakest_direction << "\n";
+  if (!f.weakest_direction.empty())
+    o << indent << "weakest direction: " << f.weakest_direction << "\n";
 }
-
 
 std::string EffectParams(const FitResult& f) {
   std::string s;
@@ -79,42 +84,48 @@ std::vector<double> Sorted(std::set<double> s) { return {s.begin(), s.end()}; }
 
 }  // namespace
 
-// ---- terminal ------------------------------------------------------------------------------------
+// ---- terminal
+// ------------------------------------------------------------------------------------
 
 void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
   int nt = 0, nw = 0;
   for (const auto& c : d.cases) (c.training ? nt : nw) += 1;
-  o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt << " training, " << nw
-    << " withheld)\n";
-  o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor " << F("%.4f", d.floor_train)
-    << " (training) / " << F("%.4f", d.floor_withheld) << " (withheld) deg RMS (plateaus of " << d.floor_model
-    << ")\n";
+  o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt
+    << " training, " << nw << " withheld)\n";
+  o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
+    << F("%.4f", d.floor_train) << " (training) / " << F("%.4f", d.floor_withheld)
+    << " (withheld) deg RMS (plateaus of " << d.floor_model << ")\n";
   const FitResult& b = d.base;
-  o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training RMS "
-    << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS " << F("%.4f", Rms(b.withheld_pi, b.withheld_samples))
-    << " deg\n\n";
+  o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training "
+       "RMS "
+    << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS "
+    << F("%.4f", Rms(b.withheld_pi, b.withheld_samples)) << " deg\n\n";
 
   o << "WHERE the gap lies (base model, each against the floor)\n";
   o << "  case   V [V]  f [Hz]  role      floor   RMS      x floor  share of PI\n";
   for (size_t i = 0; i < d.base_residuals.cases.size(); ++i) {
     const auto& c = d.base_residuals.cases[i];
     char buf[200];
-    std::snprintf(buf, sizeof buf, "  %-5d %6.0f %7.3g  %-8s %7.4f  %7.4f  %6.2f   %5.1f %%\n", c.number, c.amplitude_v,
-                  c.frequency_hz, c.training ? "training" : "withheld", c.floor_rms, c.rms, c.rms_over_floor,
-                  100 * c.share);
+    std::snprintf(buf, sizeof buf, "  %-5d %6.0f %7.3g  %-8s %7.4f  %7.4f  %6.2f   %5.1f %%\n",
+                  c.number, c.amplitude_v, c.frequency_hz, c.training ? "training" : "withheld",
+                  c.floor_rms, c.rms, c.rms_over_floor, 100 * c.share);
     o << buf;
   }
   for (const auto& f : d.base_residuals.findings) o << "  - " << f << "\n";
   bool any_trend = false;
   for (const auto& t : d.trends) {
     if (!t.significant) continue;
-    if (!any_trend) o << "  parameter trends over the V x f grid (per-case fits; a global model cannot follow them):\n";
+    if (!any_trend)
+      o << "  parameter trends over the V x f grid (per-case fits; a global model cannot follow "
+           "them):\n";
     any_trend = true;
-    o << "    " << Pad(t.name, 7) << " slope " << F("%.3g", t.slope_v) << " /V (p = " << F("%.2g", t.p_v) << "), "
-      << F("%.3g", t.slope_f) << " /Hz (p = " << F("%.2g", t.p_f) << "), range " << Pct(t.relative_range)
+    o << "    " << Pad(t.name, 7) << " slope " << F("%.3g", t.slope_v)
+      << " /V (p = " << F("%.2g", t.p_v) << "), " << F("%.3g", t.slope_f)
+      << " /Hz (p = " << F("%.2g", t.p_f) << "), range " << Pct(t.relative_range)
       << " of its mean\n";
   }
-  if (!d.trends.empty() && !any_trend) o << "  no significant parameter trend over the V x f grid (per-case fits)\n";
+  if (!d.trends.empty() && !any_trend)
+    o << "  no significant parameter trend over the V x f grid (per-case fits)\n";
 
   o << "\nWHICH effect (re-identified on the training cases, scored on the withheld ones)\n";
   for (size_t r = 0; r < d.rounds.size(); ++r) {
@@ -122,16 +133,17 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
     std::string start = "base";
     for (auto k : rr.base_structure) start += std::string(" + ") + model::EffectName(k);
     o << "  round " << r + 1 << " from " << start << ": withheld RMS "
-      << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples))) << " deg = " << F("%.2f", rr.rms_ratio)
-      << " x floor (" << (rr.significant ? "significant" : "not significant") << ", threshold "
+      << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples)))
+      << " deg = " << F("%.2f", rr.rms_ratio) << " x floor ("
+      << (rr.significant ? "significant" : "not significant") << ", threshold "
       << F("%.2f", opt.rules.significance_ratio) << ")\n";
-    o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14) << Pad("score", 10)
-      << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
+    o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14)
+      << Pad("score", 10) << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
     for (const CandidateResult& c : rr.candidates) {
       o << "    " << Pad(model::EffectName(c.kind), 18) << Pad(std::to_string(c.added_params), 4)
-        << Pad(F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)), 14) << Pad(F("%.1f", c.score), 10)
-        << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9) << Pad(F("%.3f", c.weight), 8)
-        << (c.qualifies ? "qualifies" : c.note) << "\n";
+        << Pad(F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)), 14)
+        << Pad(F("%.1f", c.score), 10) << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9)
+        << Pad(F("%.3f", c.weight), 8) << (c.qualifies ? "qualifies" : c.note) << "\n";
     }
     o << "    => " << rr.verdict << "\n";
   }
@@ -140,8 +152,8 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   if (!d.absorbed.empty()) {
     o << "  base parameters that move when " << d.absorbed_by << " is added (|shift| > 2 σ):";
     for (const auto& a : d.absorbed)
-      o << " " << a.name << " " << F("%.4g", a.without) << " -> " << F("%.4g", a.with) << " " << a.unit << " (z "
-        << F("%.1f", a.z) << ");";
+      o << " " << a.name << " " << F("%.4g", a.without) << " -> " << F("%.4g", a.with) << " "
+        << a.unit << " (z " << F("%.1f", a.z) << ");";
     o << "\n";
   }
 
@@ -154,9 +166,10 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
                   g.floor_rms > 0 ? g.rms_after / g.floor_rms : NAN, Pct(g.closed).c_str());
     o << buf;
   }
-  o << "  withheld total: PI " << F("%.4f", d.withheld_before) << " -> " << F("%.4f", d.withheld_after)
-    << " deg^2 (floor " << F("%.4f", d.withheld_floor) << "), share of the gap closed " << Pct(d.closed_total)
-    << ", remaining " << F("%.2f", d.remaining_ratio) << " x floor\n";
+  o << "  withheld total: PI " << F("%.4f", d.withheld_before) << " -> "
+    << F("%.4f", d.withheld_after) << " deg^2 (floor " << F("%.4f", d.withheld_floor)
+    << "), share of the gap closed " << Pct(d.closed_total) << ", remaining "
+    << F("%.2f", d.remaining_ratio) << " x floor\n";
   if (!d.named.empty()) o << "  effect parameters: " << EffectParams(d.final_fit) << "\n";
 
   o << "\nIDENTIFIABILITY (" << d.final_fit.description << ", σ from s² (JᵀJ)⁺ at the solution)\n";
@@ -759,7 +772,8 @@ double Quantile(std::vector<double> v, double q) {
 void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
   o << "confusion matrix (rows: true effect, columns: named; " << s.trials.size() << " benches)\n";
   o << "  " << Pad("true \\ named", 18);
-  for (int c = 0; c < diagnose::CheckCols(); ++c) o << Pad(diagnose::CheckColumnName(c).substr(0, 11), 12);
+  for (int c = 0; c < diagnose::CheckCols(); ++c)
+    o << Pad(diagnose::CheckColumnName(c).substr(0, 11), 12);
   o << "\n";
   for (int r = 0; r < diagnose::CheckRows(); ++r) {
     o << "  " << Pad(diagnose::CheckColumnName(r), 18);

@@ -15,17 +15,21 @@ namespace pz::client {
 
 /// The terminal summary: noise floor, where the gap lies, the candidates, the verdict, how far
 /// the gap shrinks, the identifiability table.
-void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
+void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d,
+                    const diagnose::DiagnoseOptions& options);
 
 /// The whole diagnosis as one JSON object, through protobuf's Struct as every report's JSON
 /// (client/json_values.h): keys sorted, non-finite numbers as null.
-void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options);
+void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d,
+                        const diagnose::DiagnoseOptions& options);
 
 /// Writes dir/report.html with its data (CSV) and figures (gnuplot scripts, PNG if gnuplot runs).
 /// Returns the files written; gnuplot problems are appended to `warnings`.
-std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir, const diagnose::Diagnosis& d,
+std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir,
+                                                      const diagnose::Diagnosis& d,
                                                       const diagnose::DiagnosisModel& model,
-                                                      const diagnose::DiagnoseOptions& options, bool plots,
+                                                      const diagnose::DiagnoseOptions& options,
+                                                      bool plots,
                                                       std::vector<std::string>* warnings);
 
 /// The confusion matrix (true effect × named effect) and the distribution of the share closed.

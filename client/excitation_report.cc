@@ -12,31 +12,37 @@ std::string G(double x) { return FormatG(x, 4); }
 
 }  // namespace
 
-void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set, const records::ExcitationReport& r,
-                             const records::TrainingDriveProposal& p, const std::string& drive_file) {
+void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set,
+                             const records::ExcitationReport& r,
+                             const records::TrainingDriveProposal& p,
+                             const std::string& drive_file) {
   os << "\n## Excitation (before fitting)\n\nWhat the training records excite:\n\n";
   for (const std::string& line : r.training_lines) os << "- " << line << "\n";
   if (r.withheld.empty()) {
-    os << "\nNo withheld records: nothing to compare with the training excitation. A richer training drive is in `"
+    os << "\nNo withheld records: nothing to compare with the training excitation. A richer "
+          "training drive is in `"
        << drive_file << "`: " << p.description << ".\n";
     return;
   }
-  os << "\n| withheld record | drive [" << r.drive_unit << "] | reversals | cycles outside training | needs beyond training |\n"
+  os << "\n| withheld record | drive [" << r.drive_unit
+     << "] | reversals | cycles outside training | needs beyond training |\n"
      << "|---|---|---|---|---|\n";
   for (const records::WithheldExcitation& w : r.withheld) {
     std::string needs;
     for (const records::ExcitationNeed& n : w.needs) needs += (needs.empty() ? "" : "; ") + n.text;
-    os << "| " << set.records[w.record].name << " | " << G(w.drive.u_min) << " … " << G(w.drive.u_max) << " | "
-       << w.drive.turns << " | " << G(100 * w.uncovered_share) << " % | "
-       << (needs.empty() ? "nothing: within the training excitation" : needs) << " |\n";
+    os << "| " << set.records[w.record].name << " | " << G(w.drive.u_min) << " … "
+       << G(w.drive.u_max) << " | " << w.drive.turns << " | " << G(100 * w.uncovered_share)
+       << " % | " << (needs.empty() ? "nothing: within the training excitation" : needs) << " |\n";
   }
   if (r.HasGap()) {
-    os << "\nA withheld error on a record that needs what training lacks is an **excitation gap** (the model "
+    os << "\nA withheld error on a record that needs what training lacks is an **excitation gap** "
+          "(the model "
           "extrapolates), not necessarily missing physics. Proposed training drive (`"
        << drive_file << "`): " << p.description << ".\n";
   } else {
-    os << "\nEvery withheld record lies within the training excitation. A richer training drive is in `" << drive_file
-       << "`: " << p.description << ".\n";
+    os << "\nEvery withheld record lies within the training excitation. A richer training drive is "
+          "in `"
+       << drive_file << "`: " << p.description << ".\n";
   }
 }
 
@@ -100,7 +106,8 @@ json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationRe
   return Obj(root);
 }
 
-void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set, const records::ExcitationReport& r) {
+void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,
+                            const records::ExcitationReport& r) {
   if (r.withheld.empty()) {
     os << "excitation: no withheld records\n";
     return;
@@ -120,7 +127,8 @@ void WriteProposedDrive(const std::filesystem::path& path, const io::RecordSet& 
   io::WriteFileWith(path, [&](std::ostream& os) {
     os << "t_s,drive_" << set.drive_unit << "\n";
     for (size_t k = 0; k < p.u.size(); ++k)
-      os << io::FormatNumber(static_cast<double>(k) / p.fs_hz) << "," << io::FormatNumber(p.u[k]) << "\n";
+      os << io::FormatNumber(static_cast<double>(k) / p.fs_hz) << "," << io::FormatNumber(p.u[k])
+         << "\n";
   });
 }
 

@@ -17,13 +17,17 @@ namespace pz::client {
 inline constexpr const char* kProposedDriveFile = "excitation_drive.csv";
 
 /// "## Excitation" section: what training excites, each withheld record's needs, the proposal.
-void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set, const records::ExcitationReport& report,
-                             const records::TrainingDriveProposal& proposal, const std::string& drive_file);
+void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set,
+                             const records::ExcitationReport& report,
+                             const records::TrainingDriveProposal& proposal,
+                             const std::string& drive_file);
 /// The report and the proposal as a JSON object.
 json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationReport& report,
-                           const records::TrainingDriveProposal& proposal, const std::string& drive_file);
+                           const records::TrainingDriveProposal& proposal,
+                           const std::string& drive_file);
 /// One line per withheld record with needs (none: one line saying so).
-void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set, const records::ExcitationReport& report);
+void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,
+                            const records::ExcitationReport& report);
 /// Writes the proposal as t_s,drive_<unit> (t = k / fs).
 void WriteProposedDrive(const std::filesystem::path& path, const io::RecordSet& set,
                         const records::TrainingDriveProposal& proposal);

@@ -18,7 +18,6 @@ namespace pz::client {
 
 using io::kFitFormatVersion;
 
-
 /// The model of a fit (the offset: the mean of the training records' offsets; the drive limits:
 /// the training records' drive range; the sample step: the first training record's).
 records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitResult& r,

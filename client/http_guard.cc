@@ -72,7 +72,10 @@ void ReplyAndClose(int fd, const char* reply) {
 class HeadFirstStream final : public httplib::Stream {
  public:
   HeadFirstStream(int fd, std::string buffered, int read_timeout_ms, int write_timeout_ms)
-      : fd_(fd), buffered_(std::move(buffered)), read_ms_(read_timeout_ms), write_ms_(write_timeout_ms) {}
+      : fd_(fd),
+        buffered_(std::move(buffered)),
+        read_ms_(read_timeout_ms),
+        write_ms_(write_timeout_ms) {}
 
   bool is_readable() const override { return pos_ < buffered_.size() || Wait(POLLIN, read_ms_); }
   bool is_writable() const override { return Wait(POLLOUT, write_ms_); }
@@ -96,8 +99,12 @@ class HeadFirstStream final : public httplib::Stream {
     while (n < 0 && errno == EINTR);
     return n;
   }
-  void get_remote_ip_and_port(std::string& ip, int& port) const override { AddressOf(fd_, true, ip, port); }
-  void get_local_ip_and_port(std::string& ip, int& port) const override { AddressOf(fd_, false, ip, port); }
+  void get_remote_ip_and_port(std::string& ip, int& port) const override {
+    AddressOf(fd_, true, ip, port);
+  }
+  void get_local_ip_and_port(std::string& ip, int& port) const override {
+    AddressOf(fd_, false, ip, port);
+  }
   socket_t socket() const override { return fd_; }
 
  private:
@@ -209,7 +216,9 @@ void GuardedServer::Drop(int fd, uint64_t HttpGuardCounters::*counter) {
     counters_.pending = pending_.size();
   }
   if (counter == &HttpGuardCounters::oversized)
-    ReplyAndClose(fd, "HTTP/1.1 431 Request Header Fields Too Large\r\nConnection: close\r\nContent-Length: 0\r\n\r\n");
+    ReplyAndClose(fd,
+                  "HTTP/1.1 431 Request Header Fields Too Large\r\nConnection: "
+                  "close\r\nContent-Length: 0\r\n\r\n");
   else if (counter != nullptr)
     CloseSocket(fd);
 }
@@ -224,7 +233,8 @@ void GuardedServer::ReadFrom(int fd) {
     if (n > 0) {
       const size_t scan_from = p.head.size() >= 3 ? p.head.size() - 3 : 0;
       p.head.append(buf, static_cast<size_t>(n));
-      if (p.head.find("\r\n\r\n", scan_from) != std::string::npos || p.head.find("\n\n", scan_from) != std::string::npos) {
+      if (p.head.find("\r\n\r\n", scan_from) != std::string::npos ||
+          p.head.find("\n\n", scan_from) != std::string::npos) {
         Ready r{fd, std::move(p.head)};
         Drop(fd, nullptr);  // leaves the socket open
         SetBlocking(fd, true);
@@ -232,7 +242,9 @@ void GuardedServer::ReadFrom(int fd) {
         if (static_cast<int>(ready_.size()) >= options_.max_queued) {
           ++counters_.overloaded;
           lock.unlock();
-          ReplyAndClose(fd, "HTTP/1.1 503 Service Unavailable\r\nConnection: close\r\nContent-Length: 0\r\n\r\n");
+          ReplyAndClose(
+              fd,
+              "HTTP/1.1 503 Service Unavailable\r\nConnection: close\r\nContent-Length: 0\r\n\r\n");
           return;
         }
         ready_.push_back(std::move(r));
@@ -245,7 +257,8 @@ void GuardedServer::ReadFrom(int fd) {
     }
     if (n < 0 && errno == EINTR) continue;
     if (n < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) return;
-    return Drop(fd, &HttpGuardCounters::timed_out);  // closed by the peer or an error: nothing to answer
+    return Drop(
+        fd, &HttpGuardCounters::timed_out);  // closed by the peer or an error: nothing to answer
   }
 }
 
@@ -312,7 +325,8 @@ void GuardedServer::ReaderLoop() {
       timeout_ms = static_cast<int>(std::clamp<int64_t>(
           std::chrono::duration_cast<std::chrono::milliseconds>(left).count() + 1, 0, 1000));
     }
-    const int n = ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), timeout_ms);
+    const int n =
+        ::epoll_wait(epoll_fd_, events.data(), static_cast<int>(events.size()), timeout_ms);
     for (int i = 0; i < n; ++i) {
       const int fd = events[i].data.fd;
       if (fd == wake_fd_) {

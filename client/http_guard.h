@@ -45,10 +45,10 @@ struct HttpGuardOptions {
 
 /// What the guard did since it started.
 struct HttpGuardCounters {
-  uint64_t accepted = 0;    ///< connections taken from httplib
-  uint64_t answered = 0;    ///< complete requests handed to httplib's routing
-  uint64_t timed_out = 0;   ///< closed: head not complete within head_timeout
-  uint64_t dropped = 0;     ///< closed: a newer connection of the same peer (or of all) took its place
+  uint64_t accepted = 0;   ///< connections taken from httplib
+  uint64_t answered = 0;   ///< complete requests handed to httplib's routing
+  uint64_t timed_out = 0;  ///< closed: head not complete within head_timeout
+  uint64_t dropped = 0;  ///< closed: a newer connection of the same peer (or of all) took its place
   uint64_t oversized = 0;   ///< closed: head longer than max_head_bytes
   uint64_t overloaded = 0;  ///< answered 503: too many complete requests waiting
   uint64_t pending = 0;     ///< connections reading their head now
@@ -62,8 +62,8 @@ class GuardedServer : public httplib::Server {
   GuardedServer& operator=(const GuardedServer&) = delete;
 
   /// Binds like httplib's bind_to_port (port 0: any free port) with a listen backlog of SOMAXCONN
-  /// instead of httplib's 5, so a burst of connections is not turned away by the kernel. Returns the
-  /// port, or −1.
+  /// instead of httplib's 5, so a burst of connections is not turned away by the kernel. Returns
+  /// the port, or −1.
   int Bind(const std::string& host, int port);
   /// Stops httplib's listener, the head reader and the workers, and closes every pending
   /// connection. Idempotent; the destructor calls it.
@@ -88,7 +88,7 @@ class GuardedServer : public httplib::Server {
   void WorkerLoop();
   void Serve(Ready r);
   void Drop(int fd, uint64_t HttpGuardCounters::*counter);  // reader thread only
-  void ReadFrom(int fd);                                      // reader thread only
+  void ReadFrom(int fd);                                    // reader thread only
   void Wake();
 
   HttpGuardOptions options_;
@@ -105,12 +105,12 @@ class GuardedServer : public httplib::Server {
   HttpGuardCounters counters_;
 
   // Reader thread only.
-  using Entry = std::pair<int, uint64_t>;     ///< (fd, seq)
+  using Entry = std::pair<int, uint64_t>;  ///< (fd, seq)
   bool Live(const Entry& e) const;
-  std::map<int, Pending> pending_;            ///< by fd
-  std::deque<Entry> arrival_;                 ///< in arrival order; entries of closed fds are skipped
+  std::map<int, Pending> pending_;  ///< by fd
+  std::deque<Entry> arrival_;       ///< in arrival order; entries of closed fds are skipped
   std::map<std::string, std::deque<Entry>> by_peer_;
-  std::map<std::string, int> peer_count_;     ///< live pending connections per peer
+  std::map<std::string, int> peer_count_;  ///< live pending connections per peer
   uint64_t next_seq_ = 0;
 };
 

@@ -32,7 +32,8 @@ std::string Fmt(double x, int prec = 4) {
 }
 
 // Grid of a per-case value over amplitude (rows) × frequency (columns), markdown.
-std::string Grid(const io::CaseSet& set, const std::function<std::string(const io::BenchCase&)>& cell) {
+std::string Grid(const io::CaseSet& set,
+                 const std::function<std::string(const io::BenchCase&)>& cell) {
   std::set<double> vs, fs_;
   for (const auto& c : set.cases) {
     vs.insert(c.amplitude_v);
@@ -72,22 +73,26 @@ struct CaseTotals {
 };
 
 /// progress.csv: one line per generation.
-void WriteProgressCsv(const fs::path& out, const IdentifyResult& result, std::vector<fs::path>& written) {
+void WriteProgressCsv(const fs::path& out, const IdentifyResult& result,
+                      std::vector<fs::path>& written) {
   std::ofstream f(out / "progress.csv");
-  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,"
+       "failures,penalized,"
        "errors,wall_time_s,best_network"
     << IslandCsvHeader(result.log) << "\n";
   f << std::setprecision(17);
   for (const auto& g : result.log)
-    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
-      << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << ","
-      << g.errors << "," << g.wall_time_s << ",\"" << g.best_description << "\"" << IslandCsvCells(g) << "\n";
+    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << ","
+      << g.worst_cost << "," << g.stall << "," << g.evaluations << "," << g.evaluations_total << ","
+      << g.failures << "," << g.penalized << "," << g.errors << "," << g.wall_time_s << ",\""
+      << g.best_description << "\"" << IslandCsvCells(g) << "\n";
   written.push_back(out / "progress.csv");
 }
 
 /// validation.csv, parameters.csv and every case's trace (traces/caseN.csv).
-CaseTotals WriteCaseTables(const fs::path& out, const io::CaseSet& set, const hgann::HgannFitness& fitness,
-                           const IdentifyResult& result, std::vector<fs::path>& written) {
+CaseTotals WriteCaseTables(const fs::path& out, const io::CaseSet& set,
+                           const hgann::HgannFitness& fitness, const IdentifyResult& result,
+                           std::vector<fs::path>& written) {
   auto add = [&](const fs::path& p) { written.push_back(p); };
   CaseTotals t;
   auto& [v_all, f_all, mu_all, train_sum, all_sum, beaten, compared] = t;
@@ -98,16 +103,20 @@ CaseTotals WriteCaseTables(const fs::path& out, const io::CaseSet& set, const hg
   par << std::setprecision(10);
   for (const auto& bc : set.cases) {
     const auto& r = ResultOf(result, bc.number);
-    const auto trace = fitness.Trace(result.best.network, fitness.config().cases[&bc - set.cases.data()]);
-    const auto m = trace.summary.ok() ? model::CompareSeries(bc.angle_deg, trace.angle_deg) : model::ErrorMetrics{};
+    const auto trace =
+        fitness.Trace(result.best.network, fitness.config().cases[&bc - set.cases.data()]);
+    const auto m = trace.summary.ok() ? model::CompareSeries(bc.angle_deg, trace.angle_deg)
+                                      : model::ErrorMetrics{};
     const double paper = PaperTable8Pi(bc.amplitude_v, bc.frequency_hz);
-    val << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
-        << r.pi << "," << m.rmse << "," << m.max_abs << "," << (std::isnan(paper) ? std::string("") : Fmt(paper, 6))
-        << "," << model::SimStatusName(r.summary.status) << "\n";
+    val << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << ","
+        << io::CaseRoleName(bc.role) << "," << r.pi << "," << m.rmse << "," << m.max_abs << ","
+        << (std::isnan(paper) ? std::string("") : Fmt(paper, 6)) << ","
+        << model::SimStatusName(r.summary.status) << "\n";
     const auto& q = r.params;
-    par << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << "," << io::CaseRoleName(bc.role) << ","
-        << q.mu << "," << q.delta << "," << q.alpha << "," << q.beta << "," << q.gamma << "," << q.a1 << ","
-        << q.a2 << "," << q.b1 << "," << q.b2 << "\n";
+    par << bc.number << "," << bc.amplitude_v << "," << bc.frequency_hz << ","
+        << io::CaseRoleName(bc.role) << "," << q.mu << "," << q.delta << "," << q.alpha << ","
+        << q.beta << "," << q.gamma << "," << q.a1 << "," << q.a2 << "," << q.b1 << "," << q.b2
+        << "\n";
     all_sum += r.pi;
     if (bc.role == io::CaseRole::kTrain) train_sum += r.pi;
     if (!std::isnan(paper)) {
@@ -137,20 +146,22 @@ CaseTotals WriteCaseTables(const fs::path& out, const io::CaseSet& set, const hg
 
 /// The regression of μ on V and f (paper eq. 7), as a sentence.
 std::string MuRegression(const CaseTotals& t) {
-  const std::vector<double> &v_all = t.v_all, &f_all = t.f_all, &mu_all = t.mu_all;
+  const std::vector<double>&v_all = t.v_all, &f_all = t.f_all, &mu_all = t.mu_all;
   std::string mu_regression;
   double mn = *std::min_element(mu_all.begin(), mu_all.end());
   double mx = *std::max_element(mu_all.begin(), mu_all.end());
   if (mx - mn <= 1e-12 * std::max(1.0, std::abs(mx))) {
-    mu_regression = "μ = " + Fmt(mn, 6) + " 1/s in every case: no trend over V and f (R² undefined).";
+    mu_regression =
+        "μ = " + Fmt(mn, 6) + " 1/s in every case: no trend over V and f (R² undefined).";
   } else {
     try {
       const auto fit = model::FitPlane(v_all, f_all, mu_all);
       std::ostringstream os;
-      os << "μ = " << Fmt(fit.v.coef, 4) << " V " << (fit.f.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.f.coef), 5)
-         << " f " << (fit.intercept.coef < 0 ? "− " : "+ ") << Fmt(std::abs(fit.intercept.coef), 6)
-         << "  (R² " << Fmt(fit.r2, 3) << "; p-values V " << Fmt(fit.v.p_value, 2) << ", f "
-         << Fmt(fit.f.p_value, 2) << ", intercept " << Fmt(fit.intercept.p_value, 2) << "; n = " << fit.n
+      os << "μ = " << Fmt(fit.v.coef, 4) << " V " << (fit.f.coef < 0 ? "− " : "+ ")
+         << Fmt(std::abs(fit.f.coef), 5) << " f " << (fit.intercept.coef < 0 ? "− " : "+ ")
+         << Fmt(std::abs(fit.intercept.coef), 6) << "  (R² " << Fmt(fit.r2, 3) << "; p-values V "
+         << Fmt(fit.v.p_value, 2) << ", f " << Fmt(fit.f.p_value, 2) << ", intercept "
+         << Fmt(fit.intercept.p_value, 2) << "; n = " << fit.n
          << "). Paper eq. 7: μ = 0.020 V − 36.525 f + 102.361 (R² 0.988).";
       mu_regression = os.str();
     } catch (const InputError& e) {
@@ -161,30 +172,44 @@ std::string MuRegression(const CaseTotals& t) {
 }
 
 /// The figures' gnuplot scripts and, with options.plots, their renderings; the number rendered.
-int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::CaseSet& set, size_t islands,
-                 std::vector<fs::path>& written, std::vector<std::string>* plot_errors_out) {
+int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::CaseSet& set,
+                 size_t islands, std::vector<fs::path>& written,
+                 std::vector<std::string>* plot_errors_out) {
   auto add = [&](const fs::path& p) { written.push_back(p); };
   auto& plot_errors = *plot_errors_out;
   int rendered = 0;
   std::vector<fs::path> scripts;
-  Plot p{"fitness", "HGANN fitness progress (CF = Σ PI over the training cases)", "generation",
-         "cost [deg²]", true,
+  Plot p{"fitness",
+         "HGANN fitness progress (CF = Σ PI over the training cases)",
+         "generation",
+         "cost [deg²]",
+         true,
          {{"progress.csv", 1, 2, "best", "lines"}, {"progress.csv", 1, 3, "mean", "lines"}}};
   // With islands, one line per island's best (progress.csv's island_<k>_best, from column 18).
   for (size_t k = 0; k < islands; ++k)
-    p.series.push_back({"progress.csv", 1, 18 + static_cast<int>(k), "island " + std::to_string(k), "lines"});
+    p.series.push_back(
+        {"progress.csv", 1, 18 + static_cast<int>(k), "island " + std::to_string(k), "lines"});
   scripts.push_back(WritePlotScript(out, p));
   for (const auto& bc : set.cases) {
     const std::string tf = "traces/case" + std::to_string(bc.number) + ".csv";
     if (!fs::exists(out / tf)) continue;
-    const std::string label = "case " + std::to_string(bc.number) + " (" + Fmt(bc.amplitude_v) + " V, " +
-                              Fmt(bc.frequency_hz) + " Hz, " + io::CaseRoleName(bc.role) + ")";
-    scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_angle",
-                                                "Fin angle, " + label, "t [s]", "fin angle [deg]", false,
-                                                {{tf, 1, 3, "measured", "lines"}, {tf, 1, 4, "model", "lines"}}}));
-    scripts.push_back(WritePlotScript(out, Plot{"case" + std::to_string(bc.number) + "_loop",
-                                                "Hysteresis loop, " + label, "voltage [V]", "fin angle [deg]", false,
-                                                {{tf, 2, 3, "measured", "lines"}, {tf, 2, 4, "model", "lines"}}}));
+    const std::string label = "case " + std::to_string(bc.number) + " (" + Fmt(bc.amplitude_v) +
+                              " V, " + Fmt(bc.frequency_hz) + " Hz, " + io::CaseRoleName(bc.role) +
+                              ")";
+    scripts.push_back(WritePlotScript(
+        out, Plot{"case" + std::to_string(bc.number) + "_angle",
+                  "Fin angle, " + label,
+                  "t [s]",
+                  "fin angle [deg]",
+                  false,
+                  {{tf, 1, 3, "measured", "lines"}, {tf, 1, 4, "model", "lines"}}}));
+    scripts.push_back(WritePlotScript(
+        out, Plot{"case" + std::to_string(bc.number) + "_loop",
+                  "Hysteresis loop, " + label,
+                  "voltage [V]",
+                  "fin angle [deg]",
+                  false,
+                  {{tf, 2, 3, "measured", "lines"}, {tf, 2, 4, "model", "lines"}}}));
   }
   for (const auto& s : scripts) add(s);
   if (options.plots) {
@@ -196,8 +221,10 @@ int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::
         if (fs::exists(png)) add(png);
       }
     } else {
-      plot_errors.push_back("gnuplot not found: figures not rendered (install gnuplot-nox, then run gnuplot on each .gp in " +
-                            out.string() + ")");
+      plot_errors.push_back(
+          "gnuplot not found: figures not rendered (install gnuplot-nox, then run gnuplot on each "
+          ".gp in " +
+          out.string() + ")");
     }
   }
   return rendered;
@@ -206,13 +233,15 @@ int WriteFigures(const IdentifyOptions& options, const fs::path& out, const io::
 // "α at its upper bound 0.01 N/V, a1 at its lower bound 0 deg" for the parameters the network holds
 // at a bound of their range on every training case; "" when none.
 std::string AtBoundList(const hgann::HgannFitness& fitness, const model::Network& network) {
-  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ", "α", "β", "γ", "a1", "a2"};
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
   const auto side = fitness.ParametersAtBound(network);
   std::string out;
   for (int k = 0; k < model::kNetworkOutputs; ++k) {
     if (side[k] == 0) continue;
     const auto& r = fitness.config().ranges[k];
-    out += (out.empty() ? "" : ", ") + std::string(kSymbols[k]) + (side[k] > 0 ? " at its upper bound " : " at its lower bound ") +
+    out += (out.empty() ? "" : ", ") + std::string(kSymbols[k]) +
+           (side[k] > 0 ? " at its upper bound " : " at its lower bound ") +
            Fmt(side[k] > 0 ? r.upper : r.lower, 4) + " " + model::OutputUnit(k);
   }
   return out;
@@ -247,8 +276,8 @@ bool ProfileDeparts(const hgann::HgannFitness& fitness, int index, const hgann::
     start[m] = width > 0 ? (net[m] - range.lower) / width : 0.0;
     hold[m] = (m == k || loose[m]) ? start[m] : std::nan("");
   }
-  const hgann::CaseEstimate p = hgann::FitCases(fitness, {index}, options, nullptr, &hold, &start)
-                                    .front();
+  const hgann::CaseEstimate p =
+      hgann::FitCases(fitness, {index}, options, nullptr, &hold, &start).front();
   return !p.ok || p.pi - e.pi > std::max(4 * e.residual_var, e.pi);
 }
 
@@ -256,9 +285,10 @@ bool ProfileDeparts(const hgann::HgannFitness& fitness, int index, const hgann::
 /// frequency sees the damping as one number) is held at the network's own value in each case and
 /// the case refitted: the other estimates then answer "what does this case want, given the
 /// network's μ". `loose` says which were held.
-std::vector<hgann::CaseEstimate> PerCaseEstimates(
-    const hgann::HgannFitness& fitness, const IdentifyResult& result,
-    const hgann::TrendSeedOptions& so, std::array<bool, model::kNetworkOutputs>* loose) {
+std::vector<hgann::CaseEstimate> PerCaseEstimates(const hgann::HgannFitness& fitness,
+                                                  const IdentifyResult& result,
+                                                  const hgann::TrendSeedOptions& so,
+                                                  std::array<bool, model::kNetworkOutputs>* loose) {
   std::vector<int> all;
   for (size_t i = 0; i < fitness.config().cases.size(); ++i) all.push_back(static_cast<int>(i));
   std::vector<hgann::CaseEstimate> estimates = hgann::FitCases(fitness, all, so);
@@ -363,8 +393,8 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
         std::none_of(by_param.begin(), by_param.end(), [&](const auto& kv) {
           return std::find(kv.second.begin(), kv.second.end(), bc.number) != kv.second.end();
         })) {
-      missed << (missed.tellp() > 0 ? "; " : "") << "case " << bc.number << ": "
-             << Fmt(r.pi, 3) << " against its own " << Fmt(e.pi, 3) << " deg²";
+      missed << (missed.tellp() > 0 ? "; " : "") << "case " << bc.number << ": " << Fmt(r.pi, 3)
+             << " against its own " << Fmt(e.pi, 3) << " deg²";
       term << "  case " << bc.number << (training ? " (training)" : " (withheld)") << ": PI "
            << Fmt(r.pi, 3) << " deg², its own fit's " << Fmt(e.pi, 3)
            << " (no one parameter explains it)\n";
@@ -401,10 +431,14 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
 }
 
 constexpr const char* kAtBoundMeaning =
-    "on every training case: set by the range, not by the data, which may want it past the bound. Widen a "
-    "range (a job spec's `ranges`) only as far as the physics allows: on the nominal bench, the ≈ 2.3 deg² "
-    "plateau where many runs stop has β at the top of its range and, mostly, α and γ near theirs, and wider "
-    "ranges only moved the runs to the new tops (docs/performance.md, \"Islands\"); there, more islands or "
+    "on every training case: set by the range, not by the data, which may want it past the bound. "
+    "Widen a "
+    "range (a job spec's `ranges`) only as far as the physics allows: on the nominal bench, the ≈ "
+    "2.3 deg² "
+    "plateau where many runs stop has β at the top of its range and, mostly, α and γ near theirs, "
+    "and wider "
+    "ranges only moved the runs to the new tops (docs/performance.md, \"Islands\"); there, more "
+    "islands or "
     "seeds are the way out.";
 
 /// report.md.
@@ -425,12 +459,14 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   }
   md << "# HGANN identification of " << set.dir.string() << "\n\n"
      << "- best network: " << result.best.network.Describe() << "\n"
-     << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6) << " deg² (found in generation "
-     << s.best_generation << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
+     << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6)
+     << " deg² (found in generation " << s.best_generation
+     << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
      << ")\n"
      << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
      << " generations (" << s.message << ")\n"
-     << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors " << errors;
+     << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors "
+     << errors;
   if (!reasons.empty()) {
     md << " (";
     bool first = true;
@@ -444,20 +480,22 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   if (options.ga.islands > 1) {
     md << " × " << options.ga.islands << " islands (";
     if (options.ga.migration_interval > 0) {
-      md << options.ga.migrants << " migrants every " << options.ga.migration_interval << " generations, "
-         << opt::TopologyName(options.ga.topology);
+      md << options.ga.migrants << " migrants every " << options.ga.migration_interval
+         << " generations, " << opt::TopologyName(options.ga.topology);
       if (options.ga.migration_margin > 0)
         md << ", from sources better by more than " << options.ga.migration_margin * 100 << " %";
     } else {
       md << "independent: multi-start";
     }
     if (options.ga.broadcast_interval > 0)
-      md << "; a broadcast every " << options.ga.broadcast_interval << " generations from islands better by more than "
-         << options.ga.broadcast_margin * 100 << " %";
+      md << "; a broadcast every " << options.ga.broadcast_interval
+         << " generations from islands better by more than " << options.ga.broadcast_margin * 100
+         << " %";
     md << "; mutation by island";
     for (int k = 0; k < options.ga.islands; ++k) md << " " << options.ga.MutationProbability(k);
     if (options.ga.island_stall_generations > 0)
-      md << "; an island is restarted after " << options.ga.island_stall_generations << " generations of stall";
+      md << "; an island is restarted after " << options.ga.island_stall_generations
+         << " generations of stall";
     int migrations = 0, restarts = 0;
     for (const auto& g : result.log) {
       migrations += g.migrated;
@@ -466,7 +504,8 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     md << "; " << migrations << " migrations, " << restarts << " restarts)";
   }
   if (const int moves = hgann::HgannOutputMoves(options.ga, options.spread_penalty); moves > 0)
-    md << ", " << moves << " offspring per island and generation made by an output move (a step of the best "
+    md << ", " << moves
+       << " offspring per island and generation made by an output move (a step of the best "
        << "network's outputs in the parameter space)";
   md << ", seed " << options.ga.seed << ", ranges '" << options.ranges
      << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
@@ -485,44 +524,58 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
   md << "\n";
   if (options.ranges == "paper") {
     const auto& best = result.cases.front().params;
-    md << "With the paper's Table 3 ranges (α, β, γ ≤ 0) every network with α ≠ 0 has an unbounded Bouc–Wen "
-          "loop and is penalised (" << reasons["unbounded_hysteresis"] << " evaluations). The surviving networks "
-          "put α exactly at the top of its range, α = " << Fmt(best.alpha, 3) << ": then z ≡ 0 and β, γ have no "
+    md << "With the paper's Table 3 ranges (α, β, γ ≤ 0) every network with α ≠ 0 has an unbounded "
+          "Bouc–Wen "
+          "loop and is penalised ("
+       << reasons["unbounded_hysteresis"]
+       << " evaluations). The surviving networks "
+          "put α exactly at the top of its range, α = "
+       << Fmt(best.alpha, 3)
+       << ": then z ≡ 0 and β, γ have no "
           "effect at all — which is why the paper found α = 0 in every case.\n\n";
   }
   md << "## Performance index per case (PI [deg²]; paper's Table 8 in brackets)\n\n"
-     << Grid(set, [&](const io::BenchCase& c) {
-          const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
-          return "case " + std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") + ": " +
-                 Fmt(ResultOf(result, c.number).pi, 3) + (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
-        })
-     << "\n\\* training case. Σ over training cases " << Fmt(train_sum, 5) << ", over all cases " << Fmt(all_sum, 5)
-     << "; below the paper's value in " << beaten << " of " << compared << " cases.\n\n";
+     << Grid(set,
+             [&](const io::BenchCase& c) {
+               const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
+               return "case " + std::to_string(c.number) +
+                      (c.role == io::CaseRole::kTrain ? "*" : "") + ": " +
+                      Fmt(ResultOf(result, c.number).pi, 3) +
+                      (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
+             })
+     << "\n\\* training case. Σ over training cases " << Fmt(train_sum, 5) << ", over all cases "
+     << Fmt(all_sum, 5) << "; below the paper's value in " << beaten << " of " << compared
+     << " cases.\n\n";
   md << "## Identified parameters per case (paper Tables 6, 7)\n\n"
-     << "| case | role | V [V] | f [Hz] | μ [1/s] | δ [s] | α [N/V] | β [1/V] | γ [1/V] | a1 [deg] | a2 [deg] | b1 [deg] | b2 [deg] |\n"
+     << "| case | role | V [V] | f [Hz] | μ [1/s] | δ [s] | α [N/V] | β [1/V] | γ [1/V] | a1 [deg] "
+        "| a2 [deg] | b1 [deg] | b2 [deg] |\n"
      << "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& bc : set.cases) {
     const auto& q = ResultOf(result, bc.number).params;
-    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(bc.amplitude_v) << " | "
-       << Fmt(bc.frequency_hz) << " | " << Fmt(q.mu, 5) << " | " << Fmt(q.delta, 4) << " | " << Fmt(q.alpha, 3)
-       << " | " << Fmt(q.beta, 3) << " | " << Fmt(q.gamma, 3) << " | " << Fmt(q.a1, 3) << " | " << Fmt(q.a2, 3)
-       << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3) << " |\n";
+    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(bc.amplitude_v)
+       << " | " << Fmt(bc.frequency_hz) << " | " << Fmt(q.mu, 5) << " | " << Fmt(q.delta, 4)
+       << " | " << Fmt(q.alpha, 3) << " | " << Fmt(q.beta, 3) << " | " << Fmt(q.gamma, 3) << " | "
+       << Fmt(q.a1, 3) << " | " << Fmt(q.a2, 3) << " | " << Fmt(q.b1, 3) << " | " << Fmt(q.b2, 3)
+       << " |\n";
   }
   if (!at_bound.empty()) md << "\nHeld at a bound: " << at_bound << " " << kAtBoundMeaning << "\n";
   md << "\n" << per_case;
   auto param_grid = [&](const char* title, double model::BimorphParams::*field, int prec) {
     md << "\n### " << title << "\n\n"
-       << Grid(set, [&](const io::BenchCase& c) { return Fmt(ResultOf(result, c.number).params.*field, prec); });
+       << Grid(set, [&](const io::BenchCase& c) {
+            return Fmt(ResultOf(result, c.number).params.*field, prec);
+          });
   };
   param_grid("δ over the grid (paper Table 9)", &model::BimorphParams::delta, 4);
   param_grid("μ over the grid (paper Table 10)", &model::BimorphParams::mu, 5);
   param_grid("a1 over the grid (paper Table 12)", &model::BimorphParams::a1, 3);
   param_grid("a2 over the grid (paper Table 13)", &model::BimorphParams::a2, 3);
-  md << "\n## Regression of μ on V and f (paper eq. 7)\n\n" << mu_regression << "\n\n## Figures\n\n";
+  md << "\n## Regression of μ on V and f (paper eq. 7)\n\n"
+     << mu_regression << "\n\n## Figures\n\n";
   md << "![fitness](fitness.png)\n\n";
   for (const auto& bc : set.cases)
-    md << "![case " << bc.number << "](case" << bc.number << "_angle.png) ![loop " << bc.number << "](case"
-       << bc.number << "_loop.png)\n";
+    md << "![case " << bc.number << "](case" << bc.number << "_angle.png) ![loop " << bc.number
+       << "](case" << bc.number << "_loop.png)\n";
   return md.str();
 }
 
@@ -531,17 +584,19 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
 std::string IslandCsvHeader(const std::vector<opt::GenerationSummary>& log) {
   if (log.empty() || log.front().islands.empty()) return "";
   std::string h = ",best_island,migrated,immigrants,restarted";
-  for (size_t k = 0; k < log.front().islands.size(); ++k) h += ",island_" + std::to_string(k) + "_best";
+  for (size_t k = 0; k < log.front().islands.size(); ++k)
+    h += ",island_" + std::to_string(k) + "_best";
   return h;
 }
 
 std::string IslandCsvCells(const opt::GenerationSummary& g) {
   if (g.islands.empty()) return "";
   int immigrants = 0, restarted = 0;
-  for (const opt::IslandSummary& i : g.islands) immigrants += i.immigrants, restarted += i.restarted;
+  for (const opt::IslandSummary& i : g.islands)
+    immigrants += i.immigrants, restarted += i.restarted;
   std::ostringstream os;
-  os << std::setprecision(17) << "," << g.best_island << "," << (g.migrated ? 1 : 0) << "," << immigrants << ","
-     << restarted;
+  os << std::setprecision(17) << "," << g.best_island << "," << (g.migrated ? 1 : 0) << ","
+     << immigrants << "," << restarted;
   for (const opt::IslandSummary& i : g.islands) os << "," << i.best_cost;
   return os.str();
 }
@@ -549,15 +604,17 @@ std::string IslandCsvCells(const opt::GenerationSummary& g) {
 std::string IslandsBrief(const opt::GenerationSummary& g) {
   if (g.islands.empty()) return "";
   double lo = g.islands.front().best_cost, hi = lo;
-  for (const opt::IslandSummary& i : g.islands) lo = std::min(lo, i.best_cost), hi = std::max(hi, i.best_cost);
+  for (const opt::IslandSummary& i : g.islands)
+    lo = std::min(lo, i.best_cost), hi = std::max(hi, i.best_cost);
   char buf[128];
-  std::snprintf(buf, sizeof buf, "  island %d/%zu (islands %.4g…%.4g)", g.best_island, g.islands.size(), lo, hi);
+  std::snprintf(buf, sizeof buf, "  island %d/%zu (islands %.4g…%.4g)", g.best_island,
+                g.islands.size(), lo, hi);
   return buf;
 }
 
 std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
-                                          const hgann::HgannFitness& fitness, const IdentifyResult& result,
-                                          std::ostream& term) {
+                                          const hgann::HgannFitness& fitness,
+                                          const IdentifyResult& result, std::ostream& term) {
   std::vector<fs::path> written;
   const fs::path out = options.out_dir;
   fs::create_directories(out / "traces");
@@ -579,22 +636,27 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
                         per_case.markdown);
     written.push_back(out / "report.md");
   }
-  term << "\n" << result.summary.BriefReport() << "\n"
+  term << "\n"
+       << result.summary.BriefReport() << "\n"
        << "best network " << result.best.network.Describe() << "\n\n"
        << "PI per case [deg²] (paper's Table 8 in brackets; * = training):\n"
-       << Grid(set, [&](const io::BenchCase& c) {
-            const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
-            return std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") + " " +
-                   Fmt(ResultOf(result, c.number).pi, 3) + (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
-          })
-       << "below the paper in " << totals.beaten << " of " << totals.compared << " cases; Σ training "
-       << Fmt(totals.train_sum, 5) << "\n"
+       << Grid(set,
+               [&](const io::BenchCase& c) {
+                 const double paper = PaperTable8Pi(c.amplitude_v, c.frequency_hz);
+                 return std::to_string(c.number) + (c.role == io::CaseRole::kTrain ? "*" : "") +
+                        " " + Fmt(ResultOf(result, c.number).pi, 3) +
+                        (std::isnan(paper) ? "" : " (" + Fmt(paper, 3) + ")");
+               })
+       << "below the paper in " << totals.beaten << " of " << totals.compared
+       << " cases; Σ training " << Fmt(totals.train_sum, 5) << "\n"
        << mu_regression << "\n";
   if (!at_bound.empty())
-    term << "held at a bound on every training case (set by the range, not the data; report.md): " << at_bound << "\n";
+    term << "held at a bound on every training case (set by the range, not the data; report.md): "
+         << at_bound << "\n";
   term << per_case.terminal;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
-  term << "results in " << out.string() << " (report.md, network.pb/.json, progress.csv, validation.csv, "
+  term << "results in " << out.string()
+       << " (report.md, network.pb/.json, progress.csv, validation.csv, "
        << "parameters.csv, " << rendered << " figures)\n";
   return written;
 }

@@ -1,7 +1,7 @@
 // `piezoid identify`'s result folder: best network (.pb, .json), per-generation progress log,
 // validation of every case (PI grid beside the paper's Table 8), identified parameters per case
-// (paper Tables 6, 7, 9, 10, 12, 13) with the regression of μ on V and f (paper eq. 7), figures, and
-// a report. The run itself is hgann/identify.h.
+// (paper Tables 6, 7, 9, 10, 12, 13) with the regression of μ on V and f (paper eq. 7), figures,
+// and a report. The run itself is hgann/identify.h.
 #pragma once
 
 #include <filesystem>
@@ -30,8 +30,10 @@ std::string IslandCsvCells(const opt::GenerationSummary& g);
 std::string IslandsBrief(const opt::GenerationSummary& g);
 
 /// Writes the result folder and prints a summary to `terminal`. Returns the files written.
-std::vector<std::filesystem::path> WriteIdentifyReport(const IdentifyOptions& options, const io::CaseSet& set,
+std::vector<std::filesystem::path> WriteIdentifyReport(const IdentifyOptions& options,
+                                                       const io::CaseSet& set,
                                                        const hgann::HgannFitness& fitness,
-                                                       const hgann::IdentifyResult& result, std::ostream& terminal);
+                                                       const hgann::IdentifyResult& result,
+                                                       std::ostream& terminal);
 
 }  // namespace pz::client

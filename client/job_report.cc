@@ -39,7 +39,8 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
   const std::string& m = job.info.message;
   const auto rule = job.info.termination;
   const int stall = job.log.empty() ? 0 : static_cast<int>(job.log.back().stall);
-  const double target = job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
+  const double target =
+      job.spec.limits.target_cost.value_or(-std::numeric_limits<double>::infinity());
   std::ostringstream os;
   if (job.info.state == service::JobState::kRunning) {
     s.termination = opt::GaTermination::kCancelled;
@@ -53,14 +54,15 @@ opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
     os << "job failed after generation " << s.generations << ": " << m;
   } else {
     s.termination = rule.value_or(opt::GaTermination::kMaxGenerations);
-    os << opt::DescribeTermination(s.termination, s.best_fitness.cost, stall, s.best_generation, s.generations,
-                                   ga.generations, target);
+    os << opt::DescribeTermination(s.termination, s.best_fitness.cost, stall, s.best_generation,
+                                   s.generations, ga.generations, target);
   }
   s.message = os.str();
   return s;
 }
 
-io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness, size_t k) {
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness,
+                                   size_t k) {
   PZ_CHECK(k < job.best.size());
   io::SavedNetwork n;
   n.network = fitness.Decode(job.best[k].genome);
@@ -82,7 +84,8 @@ io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitn
   return n;
 }
 
-hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness) {
+hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job,
+                                          const hgann::HgannFitness& fitness) {
   hgann::IdentifyResult r;
   r.summary = GaSummaryOfJob(job);
   r.log = job.log;  // the records are the GA's own summaries
@@ -117,14 +120,16 @@ namespace {
 
 void WriteProgressCsv(const fs::path& file, const std::vector<service::GenerationRecord>& log) {
   std::ofstream f(file);
-  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,failures,penalized,"
+  f << "generation,best_cost,median_cost,mean_cost,worst_cost,stall,evaluations,evaluations_total,"
+       "failures,penalized,"
        "quarantined,wall_time_s,best_description"
     << IslandCsvHeader(log) << "\n";
   f << std::setprecision(17);
   for (const auto& g : log)
-    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << "," << g.worst_cost << "," << g.stall << ","
-      << g.evaluations << "," << g.evaluations_total << "," << g.failures << "," << g.penalized << "," << g.quarantined << ","
-      << g.wall_time_s << ",\"" << g.best_description << "\"" << IslandCsvCells(g) << "\n";
+    f << g.generation << "," << g.best_cost << "," << g.median_cost << "," << g.mean_cost << ","
+      << g.worst_cost << "," << g.stall << "," << g.evaluations << "," << g.evaluations_total << ","
+      << g.failures << "," << g.penalized << "," << g.quarantined << "," << g.wall_time_s << ",\""
+      << g.best_description << "\"" << IslandCsvCells(g) << "\n";
 }
 
 }  // namespace
@@ -148,16 +153,17 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
       f << "rank,index,cost,status,reason,bits\n" << std::setprecision(17);
       for (size_t k = 0; k < job.best.size(); ++k) {
         const auto& b = job.best[k];
-        f << k + 1 << "," << b.index << "," << b.fitness.cost << "," << static_cast<int>(b.fitness.status) << ",\""
-          << b.fitness.reason << "\"," << service::BitString(b.genome) << "\n";
+        f << k + 1 << "," << b.index << "," << b.fitness.cost << ","
+          << static_cast<int>(b.fitness.status) << ",\"" << b.fitness.reason << "\","
+          << service::BitString(b.genome) << "\n";
       }
     }
     o.written.push_back(out / "best.csv");
     WriteProgressCsv(out / "progress.csv", job.log);
     o.written.push_back(out / "progress.csv");
-    term << "job " << job.info.job_id << " (" << job.info.kind << "): best cost " << job.best.front().fitness.cost
-         << "; " << job.best.size() << " individuals in " << (out / "best.csv").string() << ", log in "
-         << (out / "progress.csv").string() << "\n";
+    term << "job " << job.info.job_id << " (" << job.info.kind << "): best cost "
+         << job.best.front().fitness.cost << "; " << job.best.size() << " individuals in "
+         << (out / "best.csv").string() << ", log in " << (out / "progress.csv").string() << "\n";
     return Status::Ok();
   }
 
@@ -169,7 +175,8 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
     fs::create_directories(out / "networks");
     for (size_t k = 0; k < job.best.size(); ++k) {
       // The master's networks; a master from before fetch returned them: decoded here.
-      const io::SavedNetwork n = k < job.networks.size() ? job.networks[k] : SavedNetworkOfJob(job, fitness, k);
+      const io::SavedNetwork n =
+          k < job.networks.size() ? job.networks[k] : SavedNetworkOfJob(job, fitness, k);
       for (const char* ext : {".pb", ".json"}) {
         const fs::path p = out / "networks" / ("best-" + std::to_string(k + 1) + ext);
         if (Status s = io::SaveNetwork(n, p.string()); !s.ok()) return s;
@@ -179,11 +186,12 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
     io::CaseSet set = hgann::HgannCaseSet(*h);
     if (set.dir.empty()) set.dir = "job " + job.info.job_id;
     const hgann::IdentifyResult r = IdentifyResultOfJob(job, fitness);
-    const auto files = WriteIdentifyReport(IdentifyOptionsOfJob(job, out, plots), set, fitness, r, term);
+    const auto files =
+        WriteIdentifyReport(IdentifyOptionsOfJob(job, out, plots), set, fitness, r, term);
     o.written.insert(o.written.end(), files.begin(), files.end());
     o.report = out / "report.md";
-    term << job.best.size() << " best networks in " << (out / "networks").string() << " (best-1 … best-"
-         << job.best.size() << ", .pb and .json)\n";
+    term << job.best.size() << " best networks in " << (out / "networks").string()
+         << " (best-1 … best-" << job.best.size() << ", .pb and .json)\n";
   } catch (const InputError& e) {
     return InvalidArgument(e.what());
   }

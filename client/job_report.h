@@ -17,9 +17,9 @@ namespace pz::client {
 struct FetchedJob {
   service::JobInfo info;
   job::JobSpec spec;
-  std::vector<service::ScoredGenome> best;      ///< best first
+  std::vector<service::ScoredGenome> best;     ///< best first
   std::vector<service::GenerationRecord> log;  ///< one record per generation
-  std::vector<io::SavedNetwork> networks;      ///< best[i] as the master decoded it (hgann), or empty
+  std::vector<io::SavedNetwork> networks;  ///< best[i] as the master decoded it (hgann), or empty
 };
 
 /// The GA's final summary of a job: termination from its state and message, best from best[0],
@@ -27,13 +27,16 @@ struct FetchedJob {
 opt::GaSummary GaSummaryOfJob(const FetchedJob& job);
 
 /// A job's k-th best genome as a network file (chromosome, decoded network, provenance).
-io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness, size_t k);
+io::SavedNetwork SavedNetworkOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness,
+                                   size_t k);
 
 /// The identification result of an hgann job (what RunIdentify returns for a local run).
-hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job, const hgann::HgannFitness& fitness);
+hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job,
+                                          const hgann::HgannFitness& fitness);
 
 /// The report options of an hgann job: population, seed, ranges, spread penalty from its spec.
-IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots);
+IdentifyOptions IdentifyOptionsOfJob(const FetchedJob& job, const std::filesystem::path& out_dir,
+                                     bool plots);
 
 struct FetchOutput {
   std::vector<std::filesystem::path> written;
@@ -41,10 +44,10 @@ struct FetchOutput {
 };
 
 /// Writes a fetched job into out_dir: for hgann jobs networks/best-<k>.pb and .json for each
-/// fetched individual and the identify report (report.md, network.pb/.json = the best, progress.csv,
-/// validation.csv, parameters.csv, traces, figures); for other kinds best.csv and progress.csv.
-/// Prints a summary to `terminal`. Errors (no individual yet, a spec that does not build) are a
-/// Status; files already written stay.
+/// fetched individual and the identify report (report.md, network.pb/.json = the best,
+/// progress.csv, validation.csv, parameters.csv, traces, figures); for other kinds best.csv and
+/// progress.csv. Prints a summary to `terminal`. Errors (no individual yet, a spec that does not
+/// build) are a Status; files already written stay.
 Status WriteFetchedJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots,
                        std::ostream& terminal, FetchOutput* out);
 

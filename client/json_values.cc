@@ -60,14 +60,15 @@ std::string Print(const Struct& root, const std::string& what) {
     if (!root.SerializeToCodedStream(&coded)) throw std::runtime_error("cannot format " + what);
   }
   static const std::unique_ptr<google::protobuf::util::TypeResolver> resolver(
-      google::protobuf::util::NewTypeResolverForDescriptorPool("type.googleapis.com",
-                                                              google::protobuf::DescriptorPool::generated_pool()));
+      google::protobuf::util::NewTypeResolverForDescriptorPool(
+          "type.googleapis.com", google::protobuf::DescriptorPool::generated_pool()));
   std::string out;
   google::protobuf::util::JsonPrintOptions o;
   o.add_whitespace = true;
   o.preserve_proto_field_names = true;
-  if (!google::protobuf::util::BinaryToJsonString(resolver.get(), "type.googleapis.com/" + Struct::descriptor()->full_name(),
-                                                  binary, &out, o)
+  if (!google::protobuf::util::BinaryToJsonString(
+           resolver.get(), "type.googleapis.com/" + Struct::descriptor()->full_name(), binary, &out,
+           o)
            .ok())
     throw std::runtime_error("cannot format " + what);
   if (out.empty() || out.back() != '\n') out += '\n';

@@ -7,8 +7,9 @@
 #include "model/status.h"
 
 int main(int argc, char** argv) {
-  CLI::App app{"piezoid — identification of piezoelectric actuator dynamics (HGANN) and diagnosis of "
-               "the sim-to-real gap"};
+  CLI::App app{
+      "piezoid — identification of piezoelectric actuator dynamics (HGANN) and diagnosis of "
+      "the sim-to-real gap"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "piezoid 0.1.0");
   int exit_code = 0;
@@ -26,8 +27,10 @@ int main(int argc, char** argv) {
   pz::client::RegisterCompensate(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(
-      "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every violated field, "
-      "network file); 3 master unreachable or unavailable; 4 unknown job; 5 job failed or cancelled (watch), "
+      "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every "
+      "violated field, "
+      "network file); 3 master unreachable or unavailable; 4 unknown job; 5 job failed or "
+      "cancelled (watch), "
       "or not in a state for the request.");
   try {
     app.parse(argc, argv);

@@ -43,8 +43,8 @@ std::filesystem::path WritePlotScript(const std::filesystem::path& dir, const Pl
   gp << "plot ";
   for (size_t i = 0; i < plot.series.size(); ++i) {
     const auto& s = plot.series[i];
-    gp << (i ? ", \\\n     " : "") << Quote(s.data_file) << " using " << s.x_column << ":" << s.y_column
-       << " skip 1 with " << s.style << " lw 1.5 title " << Quote(s.title);
+    gp << (i ? ", \\\n     " : "") << Quote(s.data_file) << " using " << s.x_column << ":"
+       << s.y_column << " skip 1 with " << s.style << " lw 1.5 title " << Quote(s.title);
   }
   gp << "\n";
   if (!gp) throw std::runtime_error("cannot write " + path.string());

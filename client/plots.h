@@ -1,5 +1,6 @@
 // Figures through gnuplot: each figure is a gnuplot script written next to its data, then rendered
-// to PNG (pngcairo). Without gnuplot on the PATH the scripts stay, and a warning says how to render.
+// to PNG (pngcairo). Without gnuplot on the PATH the scripts stay, and a warning says how to
+// render.
 #pragma once
 
 #include <filesystem>
@@ -17,7 +18,7 @@ struct PlotSeries {
 };
 
 struct Plot {
-  std::string name;    ///< file stem: <name>.gp and <name>.png
+  std::string name;  ///< file stem: <name>.gp and <name>.png
   std::string title;
   std::string xlabel;
   std::string ylabel;

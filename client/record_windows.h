@@ -11,9 +11,10 @@
 
 namespace pz::client {
 
-io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vector<std::string>& train,
-                                       const std::vector<std::string>& validate, const std::vector<std::string>& test,
-                                       double settle_s = 0);
+io::RecordSet LoadRecordSetWithWindows(const std::string& path,
+                                       const std::vector<std::string>& train,
+                                       const std::vector<std::string>& validate,
+                                       const std::vector<std::string>& test, double settle_s = 0);
 
 /// The report's sentence on the settling window ("" when settle_s is 0).
 std::string SettlingSentence(double settle_s);
@@ -22,7 +23,8 @@ std::string SettlingSentence(double settle_s);
 /// that does not take one).
 std::string InitialStateSentence(const records::Family& family);
 
-/// The same sentence for state `s` after `subject` ("The model starts", "The backlash-like model starts").
+/// The same sentence for state `s` after `subject` ("The model starts", "The backlash-like model
+/// starts").
 std::string InitialStateSentence(model::InitialState s, const std::string& subject);
 
 }  // namespace pz::client

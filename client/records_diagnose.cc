@@ -28,33 +28,42 @@ std::string G(double x, int prec = 4) {
 
 }  // namespace
 
-void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
+                                   const records::RecordDiagnosis& d,
                                    const records::TrainingDriveProposal& proposal, double settle_s,
                                    const records::SelectionResult* selection) {
   const std::string u = set.response_unit;
-  os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string() << "`\n\n"
+  os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string()
+     << "`\n\n"
      << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
   if (settle_s > 0) os << SettlingSentence(settle_s) << "\n\n";
-  if (const std::string s = InitialStateSentence(d.base.model->family()); !s.empty()) os << s << "\n\n";
+  if (const std::string s = InitialStateSentence(d.base.model->family()); !s.empty())
+    os << s << "\n\n";
   os << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
   for (const auto& e : d.noise.estimates) {
-    os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma) << " | " << e.samples
-       << " | " << e.detail << " |\n";
+    os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma)
+       << " | " << e.samples << " | " << e.detail << " |\n";
   }
-  os << "\nWithheld: " << d.withheld_samples << " samples; training: " << d.train_samples << ". Base model "
-     << d.base.model->Describe() << ": withheld RMS " << G(std::sqrt(d.s0 / d.withheld_samples)) << " " << u << " = "
-     << G(d.rms_ratio, 3) << " × the floor (significant above 1.25: " << (d.significant ? "yes" : "no") << ").\n\n"
+  os << "\nWithheld: " << d.withheld_samples << " samples; training: " << d.train_samples
+     << ". Base model " << d.base.model->Describe() << ": withheld RMS "
+     << G(std::sqrt(d.s0 / d.withheld_samples)) << " " << u << " = " << G(d.rms_ratio, 3)
+     << " × the floor (significant above 1.25: " << (d.significant ? "yes" : "no") << ").\n\n"
      << "## Candidates (ranked by score)\n\n"
-     << "| effect | withheld RMS [" << u << "] | score | train ΔBIC | closed | pattern | z vs base | qualifies |\n"
+     << "| effect | withheld RMS [" << u
+     << "] | score | train ΔBIC | closed | pattern | z vs base | qualifies |\n"
      << "|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : d.candidates) {
-    os << "| " << records::EffectName(c.kind) << " | " << G(std::sqrt(c.s_withheld / d.withheld_samples)) << " | "
-       << G(c.score, 5) << " | " << G(c.train_delta_bic, 5) << " | " << (std::isfinite(c.closed) ? G(100 * c.closed, 3) + " %" : "—") << " | "
-       << G(100 * c.pattern, 3) << " % | " << G(c.z_vs_base, 3) << " | " << (c.qualifies ? "yes" : c.note) << " |\n";
+    os << "| " << records::EffectName(c.kind) << " | "
+       << G(std::sqrt(c.s_withheld / d.withheld_samples)) << " | " << G(c.score, 5) << " | "
+       << G(c.train_delta_bic, 5) << " | "
+       << (std::isfinite(c.closed) ? G(100 * c.closed, 3) + " %" : "—") << " | "
+       << G(100 * c.pattern, 3) << " % | " << G(c.z_vs_base, 3) << " | "
+       << (c.qualifies ? "yes" : c.note) << " |\n";
   }
   if (d.named >= 0) {
     const auto& c = d.candidates[static_cast<size_t>(d.named)];
-    os << "\n## The named model: " << c.fit.model->Describe() << "\n\n| parameter | value | unit |\n|---|---|---|\n";
+    os << "\n## The named model: " << c.fit.model->Describe()
+       << "\n\n| parameter | value | unit |\n|---|---|---|\n";
     for (size_t i = 0; i < c.fit.params.size(); ++i) {
       os << "| " << c.fit.model->params()[i].name << " | " << G(c.fit.params[i], 6) << " | "
          << c.fit.model->params()[i].unit << " |\n";
@@ -75,7 +84,8 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set, c
   WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
-void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
+                               const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection) {
   using namespace json;  // NOLINT
@@ -122,7 +132,9 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
   for (const auto& n : d.diverged) diverged.push_back(Text(n));
   f["diverged"] =
       List(diverged);  // candidates left out: their prediction diverges on withheld records
-  f["named"] = d.named >= 0 ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind)) : Null();
+  f["named"] = d.named >= 0
+                   ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind))
+                   : Null();
   f["confidence"] = Num(d.confidence);
   f["verdict_kind"] = Text(d.verdict_kind);
   f["verdict"] = Text(d.verdict);
@@ -145,7 +157,8 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const
 }
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
-  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
+  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows,
+                                                     a.test_windows, a.settle_s);
   records::RecordDiagnoseOptions o;
   o.family = a.family;
   const bool select = a.family == "auto";
@@ -192,7 +205,8 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
   const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
   std::cout << d.verdict << "\n";
-  const fs::path out = a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
+  const fs::path out =
+      a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
   PrintExcitationSummary(std::cout, set, d.excitation);
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
@@ -205,7 +219,8 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;
-  const records::FitResult* best = d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;
+  const records::FitResult* best =
+      d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
     const std::string stem = "withheld_" + r.name;
@@ -218,15 +233,17 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
            << io::FormatNumber(best ? r.y[k] - best->yhat[i][k] : 0.0) << "\n";
       }
     });
-    Plot p{stem, r.name + ": error of the base and the named model", "t [s]", "error [" + set.response_unit + "]", false,
-           {{stem + ".csv", 1, 3, d.base.model->Describe(), "lines"}}};
+    Plot p{stem,    r.name + ": error of the base and the named model",
+           "t [s]", "error [" + set.response_unit + "]",
+           false,   {{stem + ".csv", 1, 3, d.base.model->Describe(), "lines"}}};
     if (best) p.series.push_back({stem + ".csv", 1, 4, best->model->Describe(), "lines"});
     scripts.push_back(WritePlotScript(out / "figures", p));
   }
   std::vector<std::string> errors;
   if (!a.no_plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
   for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";
-  std::cout << "written: " << (out / "report.md").string() << ", " << (out / "diagnosis.json").string() << "\n";
+  std::cout << "written: " << (out / "report.md").string() << ", "
+            << (out / "diagnosis.json").string() << "\n";
   return 0;
 }
 

@@ -18,7 +18,8 @@ struct RecordsDiagnoseRequest {
   std::string records;
   std::string family = "auto";  ///< "auto": chosen by records/select.h first (--family not given)
   std::vector<std::string> train_windows, validate_windows, test_windows;
-  double settle_s = 0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
+  double settle_s =
+      0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
   std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default)
   std::string out;
   std::string candidates;  ///< comma-separated, empty = every applicable effect
@@ -41,7 +42,8 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
                                    const records::TrainingDriveProposal& proposal,
                                    double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
-void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set, const records::RecordDiagnosis& d,
+void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
+                               const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection = nullptr);
 

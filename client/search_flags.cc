@@ -7,19 +7,27 @@ namespace pz::client {
 void AddSearchFlags(CLI::App* cmd, SearchFlags* f, bool sized) {
   // A sized flag shows the rule's values (records::SizedSearchBudget) for d searched parameters.
   auto s = [sized](auto v, const char* rule = nullptr) {
-    return sized && rule ? std::string(rule) + " for d searched parameters (PSO)" : std::to_string(v);
+    return sized && rule ? std::string(rule) + " for d searched parameters (PSO)"
+                         : std::to_string(v);
   };
   cmd->add_option("--repetitions", f->repetitions, "seeded searches (seed, seed+1, …), best kept")
       ->default_str(s(f->repetitions, "d <= 2 ? 2 : 3"));
   cmd->add_option("--seed", f->seed, "seed of the first repetition")->default_str(s(f->seed));
-  cmd->add_option("--particles", f->particles, "PSO swarm size")->default_str(s(f->particles, "min(30, 5 d + 5)"));
-  cmd->add_option("--iterations", f->iterations, "PSO iterations")->default_str(s(f->iterations, "min(150, 30 d)"));
-  cmd->add_option("--population", f->population, "GA / DE population")->default_str(s(f->population));
-  cmd->add_option("--generations", f->generations, "GA / DE generations")->default_str(s(f->generations));
-  cmd->add_option("--stall", f->stall,
-                  "stop a repetition after this many iterations / generations without a relative "
-                  "improvement of 1e-6 (DE: 1e-4; 0: never)" +
-                      std::string(sized ? "; a sized PSO also stops when every particle is within 1e-3 of the best" : ""))
+  cmd->add_option("--particles", f->particles, "PSO swarm size")
+      ->default_str(s(f->particles, "min(30, 5 d + 5)"));
+  cmd->add_option("--iterations", f->iterations, "PSO iterations")
+      ->default_str(s(f->iterations, "min(150, 30 d)"));
+  cmd->add_option("--population", f->population, "GA / DE population")
+      ->default_str(s(f->population));
+  cmd->add_option("--generations", f->generations, "GA / DE generations")
+      ->default_str(s(f->generations));
+  cmd->add_option(
+         "--stall", f->stall,
+         "stop a repetition after this many iterations / generations without a relative "
+         "improvement of 1e-6 (DE: 1e-4; 0: never)" +
+             std::string(
+                 sized ? "; a sized PSO also stops when every particle is within 1e-3 of the best"
+                       : ""))
       ->default_str(s(f->stall, "min(40, 10 d)"));
 }
 

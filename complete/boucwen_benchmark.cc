@@ -21,33 +21,39 @@ std::vector<std::pair<std::string, std::string>> FilesOf(model::CaseRole role) {
 
 // θ's output on [0, n) of a test record of the benchmark's protocol with 20 RK4 sub-steps.
 std::vector<double> SimulateTest(std::span<const double> theta, const io::Record& r,
-                                 model::InputInterpolation interpolation, size_t period, const char* what) {
+                                 model::InputInterpolation interpolation, size_t period,
+                                 const char* what) {
   const auto model = MakeBwModel(BwProtocol(20, interpolation, period));
   std::vector<double> y(r.size());
   model->Simulate(r, theta, {}, r.size(), y);
   for (size_t k = 0; k < y.size(); ++k)
     if (!std::isfinite(y[k]))
-      throw std::runtime_error(std::string(what) + ": the simulation diverged before sample " + std::to_string(k));
+      throw std::runtime_error(std::string(what) + ": the simulation diverged before sample " +
+                               std::to_string(k));
   return y;
 }
 
 }  // namespace
 
-io::Record MakeBwRecord(std::string name, model::CaseRole role, std::vector<double> u, std::vector<double> y,
-                        size_t first_scored, double sample_rate_hz) {
+io::Record MakeBwRecord(std::string name, model::CaseRole role, std::vector<double> u,
+                        std::vector<double> y, size_t first_scored, double sample_rate_hz) {
   const std::string what = "bw record " + name;
   if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0))
-    throw InputError(FieldError(what + ": sample_rate_hz", sample_rate_hz, "must be finite and > 0"));
+    throw InputError(
+        FieldError(what + ": sample_rate_hz", sample_rate_hz, "must be finite and > 0"));
   if (y.size() != u.size())
     throw InputError(FieldError(what + ": y", std::to_string(y.size()) + " samples",
                                 "must have as many as u (" + std::to_string(u.size()) + ")"));
-  if (u.size() < 2) throw InputError(FieldError(what + ": u", std::to_string(u.size()) + " samples", "needs >= 2"));
+  if (u.size() < 2)
+    throw InputError(FieldError(what + ": u", std::to_string(u.size()) + " samples", "needs >= 2"));
   if (first_scored >= u.size())
     throw InputError(FieldError(what + ": first_counted", first_scored,
                                 "leaves no counted sample of " + std::to_string(u.size())));
   for (size_t i = 0; i < u.size(); ++i) {
-    if (!std::isfinite(u[i])) throw InputError(FieldError(what + ": u[" + std::to_string(i) + "]", u[i], "must be finite"));
-    if (!std::isfinite(y[i])) throw InputError(FieldError(what + ": y[" + std::to_string(i) + "]", y[i], "must be finite"));
+    if (!std::isfinite(u[i]))
+      throw InputError(FieldError(what + ": u[" + std::to_string(i) + "]", u[i], "must be finite"));
+    if (!std::isfinite(y[i]))
+      throw InputError(FieldError(what + ": y[" + std::to_string(i) + "]", y[i], "must be finite"));
   }
   io::Record r;
   r.name = std::move(name);
@@ -91,9 +97,10 @@ io::RecordSet LoadBwBenchmark(const std::filesystem::path& dir, model::CaseRole 
 
 io::Record MakeBwTrainingRecord(const io::Record& raw, size_t samples, bool steady_state) {
   if (samples % kBwPeriod != 0 || samples == 0 || samples > raw.size())
-    throw InputError(FieldError(raw.name + ": samples", samples,
-                                "must be a whole number of 8192-sample periods, at most the record's " +
-                                    std::to_string(raw.size())));
+    throw InputError(
+        FieldError(raw.name + ": samples", samples,
+                   "must be a whole number of 8192-sample periods, at most the record's " +
+                       std::to_string(raw.size())));
   const size_t warmup = steady_state ? kBwPeriod : 0;
   const auto n = static_cast<std::ptrdiff_t>(samples);
   std::vector<double> u(raw.u.begin(), raw.u.begin() + static_cast<std::ptrdiff_t>(warmup));
@@ -106,7 +113,8 @@ io::Record MakeBwTrainingRecord(const io::Record& raw, size_t samples, bool stea
   return r;
 }
 
-records::OscillatorOptions BwProtocol(int rk4_steps, model::InputInterpolation interpolation, size_t period_samples) {
+records::OscillatorOptions BwProtocol(int rk4_steps, model::InputInterpolation interpolation,
+                                      size_t period_samples) {
   records::OscillatorOptions o;
   o.physical = true;
   o.rk4_steps = rk4_steps;
@@ -126,7 +134,8 @@ std::shared_ptr<records::RecordModel> MakeBwModel(const records::OscillatorOptio
   return std::make_shared<records::RecordModel>(family, std::vector<records::EffectKind>{}, scale);
 }
 
-BwTraining::BwTraining(std::vector<io::Record> records, const records::OscillatorOptions& options, double penalty)
+BwTraining::BwTraining(std::vector<io::Record> records, const records::OscillatorOptions& options,
+                       double penalty)
     : records_(std::move(records)), options_(options), model_(MakeBwModel(options)) {
   if (records_.empty()) throw InputError("bw fitness: no records to fit");
   std::vector<const io::Record*> ptrs;
@@ -137,13 +146,16 @@ BwTraining::BwTraining(std::vector<io::Record> records, const records::Oscillato
 opt::FitnessResult BwTraining::Evaluate(const opt::Genome& genome) const {
   if (genome.reals.size() != 6)
     return {penalty(), opt::FitnessStatus::kError,
-            "genome has " + std::to_string(genome.reals.size()) + " reals, the Bouc-Wen oscillator has 6 parameters"};
+            "genome has " + std::to_string(genome.reals.size()) +
+                " reals, the Bouc-Wen oscillator has 6 parameters"};
   return fitness_->Evaluate(genome);
 }
 
-void BwTraining::EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const {
+void BwTraining::EvaluateMany(std::span<const opt::Genome* const> genomes,
+                              std::span<opt::FitnessResult> out) const {
   for (const opt::Genome* g : genomes) {
-    if (g->reals.size() != 6) return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate's error each
+    if (g->reals.size() != 6)
+      return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate's error each
   }
   fitness_->EvaluateMany(genomes, out);
 }
@@ -155,8 +167,8 @@ std::vector<double> SimulateBwMultisineTest(std::span<const double> theta, const
   std::vector<double> u3, y3(2 * n, 0.0);
   for (int k = 0; k < 3; ++k) u3.insert(u3.end(), test.u.begin(), test.u.end());
   y3.insert(y3.end(), test.y.begin(), test.y.end());
-  const io::Record three =
-      MakeBwRecord(test.name, test.role, std::move(u3), std::move(y3), 2 * n, test.sample_rate_hz());
+  const io::Record three = MakeBwRecord(test.name, test.role, std::move(u3), std::move(y3), 2 * n,
+                                        test.sample_rate_hz());
   const std::vector<double> y =
       SimulateTest(theta, three, model::InputInterpolation::kPeriodicFourier, n, "multisine test");
   return std::vector<double>(y.end() - static_cast<std::ptrdiff_t>(n), y.end());

@@ -28,8 +28,8 @@
 
 namespace pz::complete {
 
-inline constexpr size_t kBwPeriod = 8192;          ///< samples per multisine period
-inline constexpr double kBwSampleRateHz = 750;     ///< the benchmark's sample rate [Hz]
+inline constexpr size_t kBwPeriod = 8192;       ///< samples per multisine period
+inline constexpr double kBwSampleRateHz = 750;  ///< the benchmark's sample rate [Hz]
 
 /// A benchmark record from its samples: t = k / fs, dt = 1 / fs, scored from `first_scored` to the
 /// end, offset fixed at 0, simulated from its first sample (rest_samples = 1: the zero state is no
@@ -37,8 +37,9 @@ inline constexpr double kBwSampleRateHz = 750;     ///< the benchmark's sample r
 /// benchmark's records (the CSV reader, the training cut, the service's workers). Throws
 /// InputError naming the record: u and y of different lengths, fewer than 2 samples, a
 /// non-finite sample, first_scored leaving no scored sample, a bad sample rate.
-io::Record MakeBwRecord(std::string name, model::CaseRole role, std::vector<double> u, std::vector<double> y,
-                        size_t first_scored, double sample_rate_hz = kBwSampleRateHz);
+io::Record MakeBwRecord(std::string name, model::CaseRole role, std::vector<double> u,
+                        std::vector<double> y, size_t first_scored,
+                        double sample_rate_hz = kBwSampleRateHz);
 
 /// Reads the benchmark's records of one role from its folder as a record set (format
 /// "boucwen-benchmark"; drive N, response m, as the files: not converted): train → train_A,
@@ -58,7 +59,8 @@ io::Record MakeBwTrainingRecord(const io::Record& raw, size_t samples, bool stea
 /// input reconstructed by `interpolation` (period_samples for FOURIER), from the zero state.
 records::OscillatorOptions BwProtocol(int rk4_steps, model::InputInterpolation interpolation,
                                       size_t period_samples);
-/// The records engine's model of it (bw-oscillator, no effect; not scaled to the data: polarity +1).
+/// The records engine's model of it (bw-oscillator, no effect; not scaled to the data: polarity
+/// +1).
 std::shared_ptr<records::RecordModel> MakeBwModel(const records::OscillatorOptions& options);
 
 /// The identification on training records: owns them and the model; its cost is the records
@@ -68,7 +70,8 @@ class BwTraining final : public opt::FitnessFunction {
  public:
   /// Throws InputError naming the record: none given, a record the input reconstruction refuses
   /// (not periodic, too short), or a penalty that is not finite and > 0.
-  BwTraining(std::vector<io::Record> records, const records::OscillatorOptions& options, double penalty = 1.0);
+  BwTraining(std::vector<io::Record> records, const records::OscillatorOptions& options,
+             double penalty = 1.0);
   BwTraining(const BwTraining&) = delete;
   BwTraining& operator=(const BwTraining&) = delete;
 
@@ -76,7 +79,8 @@ class BwTraining final : public opt::FitnessFunction {
   /// The records fitness's lanes (the oscillator runs four parameter sets side by side): each
   /// genome's result Evaluate's, bit for bit.
   int lanes() const override { return fitness_->lanes(); }
-  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override;
+  void EvaluateMany(std::span<const opt::Genome* const> genomes,
+                    std::span<opt::FitnessResult> out) const override;
   const records::RecordFitness& fitness() const { return *fitness_; }
   /// The search box: the family's parameters and ranges.
   opt::ParamBox Box() const;

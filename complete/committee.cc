@@ -98,12 +98,12 @@ Status FrequencyBands::Validate() const {
     return InvalidArgument(FieldError("bands", edges.size(), "need at least 2 edges (one band)"));
   for (size_t i = 0; i < edges.size(); ++i) {
     if (!(std::isfinite(edges[i]) && edges[i] >= 0))
-      return InvalidArgument(FieldError("bands edge " + std::to_string(i + 1), edges[i],
-                                        "must be finite and >= 0"));
+      return InvalidArgument(
+          FieldError("bands edge " + std::to_string(i + 1), edges[i], "must be finite and >= 0"));
     if (i > 0 && !(edges[i] > edges[i - 1]))
-      return InvalidArgument(FieldError("bands edge " + std::to_string(i + 1), edges[i],
-                                        "must be > the previous edge " +
-                                            io::FormatNumber(edges[i - 1])));
+      return InvalidArgument(
+          FieldError("bands edge " + std::to_string(i + 1), edges[i],
+                     "must be > the previous edge " + io::FormatNumber(edges[i - 1])));
   }
   return Status::Ok();
 }
@@ -150,7 +150,8 @@ std::map<std::string, opt::ParamBox> Seed002Boxes() {
                              {0.01, 1e-5, -0.05, 0.02, 100},
                              {3.0, 0.1, 0.05, 0.08, 20000},
                              {true, true, false, false, true}};
-  boxes["backlash-like"] = {{"alpha", "c", "B1"}, {1e-4, 0.02, -0.05}, {1.0, 0.08, 0.1}, {true, false, false}};
+  boxes["backlash-like"] = {
+      {"alpha", "c", "B1"}, {1e-4, 0.02, -0.05}, {1.0, 0.08, 0.1}, {true, false, false}};
   return boxes;
 }
 
@@ -163,10 +164,12 @@ Status CommitteeOptions::Validate() const {
     if (std::find(known.begin(), known.end(), families[i]) == known.end()) {
       std::string list;
       for (const auto& n : known) list += (list.empty() ? "" : ", ") + n;
-      return InvalidArgument("families: unknown family '" + families[i] + "' (families: " + list + ")");
+      return InvalidArgument("families: unknown family '" + families[i] + "' (families: " + list +
+                             ")");
     }
     for (size_t j = 0; j < i; ++j)
-      if (families[i] == families[j]) return InvalidArgument("families: " + families[i] + " given twice");
+      if (families[i] == families[j])
+        return InvalidArgument("families: " + families[i] + " given twice");
   }
   for (size_t i = 0; i < algorithms.size(); ++i)
     for (size_t j = 0; j < i; ++j)
@@ -179,12 +182,15 @@ Status CommitteeOptions::Validate() const {
     return InvalidArgument(FieldError("window t1_s", t1_s, "must be finite and > t0_s"));
   if (family_options.substeps < 1 || family_options.substeps > 512)
     return InvalidArgument(FieldError("substeps", family_options.substeps, "must be 1 … 512"));
-  if (Status s = records::CriterionOptions{criterion, t0_s, t1_s, search.error_cost}.Validate(); !s.ok()) return s;
+  if (Status s = records::CriterionOptions{criterion, t0_s, t1_s, search.error_cost}.Validate();
+      !s.ok())
+    return s;
   for (const auto& [name, box] : boxes) {
     opt::SearchOptions so = search;
     for (opt::SearchAlgorithm a : algorithms) {
       so.algorithm = a;
-      if (Status s = so.Validate(box); !s.ok()) return InvalidArgument("box of " + name + ": " + s.message());
+      if (Status s = so.Validate(box); !s.ok())
+        return InvalidArgument("box of " + name + ": " + s.message());
     }
   }
   return Status::Ok();
@@ -198,7 +204,9 @@ EvaluatorFactory LocalEvaluatorFactory(int threads) {
   };
 }
 
-std::string IdentifiedModel::Name() const { return family + "/" + opt::SearchAlgorithmName(algorithm); }
+std::string IdentifiedModel::Name() const {
+  return family + "/" + opt::SearchAlgorithmName(algorithm);
+}
 
 std::vector<double> PredictModel(const IdentifiedModel& m, const io::Record& record) {
   std::vector<double> y;
@@ -223,7 +231,8 @@ std::vector<double> PredictCommittee(const CommitteeResult& r, const io::Record&
   return y;
 }
 
-RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s, double t1_s) {
+RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s,
+                          double t1_s) {
   return Errors(record, yhat, t0_s, t1_s).m;
 }
 
@@ -272,11 +281,13 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
   std::vector<const io::Record*> all_train;
   for (io::Record& r : res.set.records) {
     if (!(r.frequency_hz > 0))
-      throw InputError(r.Label() + " states no excitation frequency (the committee bands the records by it: a "
+      throw InputError(r.Label() +
+                       " states no excitation frequency (the committee bands the records by it: a "
                        "bench's, or a manifest's frequency_Hz column)");
     const int b = options.bands.BandOf(r.frequency_hz);
     if (b < 0)
-      throw InputError(r.Label() + " (" + io::FormatNumber(r.frequency_hz) + " Hz) is outside every band (edges " +
+      throw InputError(r.Label() + " (" + io::FormatNumber(r.frequency_hz) +
+                       " Hz) is outside every band (edges " +
                        [&] {
                          std::string s;
                          for (double e : options.bands.edges)
@@ -287,8 +298,9 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
     // The criterion's window in the record's own time, t1 clipped to its last sample.
     const double t_end = r.t.back() - r.t.front();
     if (!(t_end > options.t0_s))
-      throw InputError(r.Label() + " ends at " + io::FormatNumber(t_end) + " s, before the window start t0_s = " +
-                       io::FormatNumber(options.t0_s) + " s");
+      throw InputError(r.Label() + " ends at " + io::FormatNumber(t_end) +
+                       " s, before the window start t0_s = " + io::FormatNumber(options.t0_s) +
+                       " s");
     io::SetWindow(r, r.t.front() + options.t0_s, r.t.front() + std::min(options.t1_s, t_end), 1,
                   r.Label() + ": the criterion window");
     if (r.role == model::CaseRole::kTrain) {
@@ -313,16 +325,18 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
     m.algorithm = algo;
     m.band = band;
     const records::DataScale scale = records::MeasureScale(train);
-    auto model = std::make_shared<records::RecordModel>(records::MakeFamily(family, scale, options.family_options),
-                                                         std::vector<records::EffectKind>{}, scale);
+    auto model = std::make_shared<records::RecordModel>(
+        records::MakeFamily(family, scale, options.family_options),
+        std::vector<records::EffectKind>{}, scale);
     m.model = model;
-    const records::CriterionFitness fitness(*model, train,
-                                            {options.criterion, options.t0_s, options.t1_s, options.search.error_cost});
+    const records::CriterionFitness fitness(
+        *model, train, {options.criterion, options.t0_s, options.t1_s, options.search.error_cost});
     const auto given = options.boxes.find(family);
-    const opt::ParamBox box = given != options.boxes.end() ? given->second : records::ParamBoxOf(*model);
+    const opt::ParamBox box =
+        given != options.boxes.end() ? given->second : records::ParamBoxOf(*model);
     if (box.names.size() != model->params().size())
-      throw InputError("box of " + family + ": " + std::to_string(box.names.size()) + " parameters, the family has " +
-                       std::to_string(model->params().size()));
+      throw InputError("box of " + family + ": " + std::to_string(box.names.size()) +
+                       " parameters, the family has " + std::to_string(model->params().size()));
     if (!box.names.empty()) {
       auto evaluator = factory(fitness);
       if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
@@ -338,15 +352,18 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
       m.search.stop_reason = "weights solved by least squares";
     }
     if (model->family().linear()) m.weights = fitness.outputs().Run(m.params).weights;
-    Score(set, options, [&](const io::Record& r) { return PredictModel(m, r); }, &m.per_band, &m.all_test, nullptr);
+    Score(
+        set, options, [&](const io::Record& r) { return PredictModel(m, r); }, &m.per_band,
+        &m.all_test, nullptr);
     if (log) {
       std::ostringstream os;
       os << (band < 0 ? std::string("complete") : options.bands.Label(band)) << " " << m.Name()
-         << ": " << records::CriterionName(options.criterion) << " " << FormatFigure(m.search.best_cost, 5)
-         << " after " << m.search.evaluations << " evaluations in " << FormatFigure(m.search.wall_time_s)
-         << " s (" << FormatFigure(m.search.evaluations / std::max(m.search.wall_time_s, 1e-9))
-         << " evaluations/s), best of " << m.search.repetition_costs.size()
-         << " repetitions: #" << m.search.best_repetition;
+         << ": " << records::CriterionName(options.criterion) << " "
+         << FormatFigure(m.search.best_cost, 5) << " after " << m.search.evaluations
+         << " evaluations in " << FormatFigure(m.search.wall_time_s) << " s ("
+         << FormatFigure(m.search.evaluations / std::max(m.search.wall_time_s, 1e-9))
+         << " evaluations/s), best of " << m.search.repetition_costs.size() << " repetitions: #"
+         << m.search.best_repetition;
       log(os.str());
     }
     return m;
@@ -383,8 +400,9 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
       log("band " + options.bands.Label(b) + ": selected " +
           res.band_models[b][res.selected[b]].Name() + " (A = " + FormatFigure(best, 4) + " µm)");
   }
-  Score(set, options, [&](const io::Record& r) { return PredictCommittee(res, r); },
-        &res.committee_per_band, &res.committee_test, &res.committee_train);
+  Score(
+      set, options, [&](const io::Record& r) { return PredictCommittee(res, r); },
+      &res.committee_per_band, &res.committee_test, &res.committee_train);
   if (!res.complete.empty()) {
     double best = std::numeric_limits<double>::infinity();
     for (size_t i = 0; i < res.complete.size(); ++i)

@@ -66,9 +66,10 @@ std::map<std::string, opt::ParamBox> Seed002Boxes();
 
 struct CommitteeOptions {
   FrequencyBands bands;
-  std::vector<std::string> families{"stack-bouc-wen", "backlash-like"};  ///< records/families.h names
+  std::vector<std::string> families{"stack-bouc-wen",
+                                    "backlash-like"};  ///< records/families.h names
   std::vector<opt::SearchAlgorithm> algorithms{opt::SearchAlgorithm::kPso,
-                                                  opt::SearchAlgorithm::kGaReal};
+                                               opt::SearchAlgorithm::kGaReal};
   /// Settings of every search (the algorithm field is set per run; repetitions, seeds, swarm and
   /// population sizes are used as given).
   opt::SearchOptions search;
@@ -86,7 +87,8 @@ struct CommitteeOptions {
 
 /// Makes the evaluator a search runs on, for a fitness that outlives it (locally a thread pool over
 /// it; on the service a session whose spec carries its records, svcclient/complete_service.h).
-using EvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const records::CriterionFitness&)>;
+using EvaluatorFactory =
+    std::function<std::unique_ptr<opt::BatchEvaluator>(const records::CriterionFitness&)>;
 /// Inline when threads == 1, else a ThreadPoolEvaluator of that many threads (0 = all cores).
 EvaluatorFactory LocalEvaluatorFactory(int threads);
 
@@ -107,8 +109,8 @@ struct IdentifiedModel {
   opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
   int band = -1;  ///< −1: the complete model (all training records)
   std::shared_ptr<const records::RecordModel> model;  ///< made for its training records' scale
-  std::vector<double> params;   ///< model->params() order
-  std::vector<double> weights;  ///< a linear family's solved weights
+  std::vector<double> params;                         ///< model->params() order
+  std::vector<double> weights;                        ///< a linear family's solved weights
   opt::SearchResult search;
   std::vector<BandMetrics> per_band;  ///< its errors on every band's records
   RoleMetrics all_test;               ///< on all test records
@@ -118,10 +120,10 @@ struct IdentifiedModel {
 struct CommitteeResult {
   CommitteeOptions options;
   io::RecordSet set;  ///< the records, their scored windows set to the criterion's window
-  std::vector<IdentifiedModel> complete;                 ///< families × algorithms (may be empty)
+  std::vector<IdentifiedModel> complete;                  ///< families × algorithms (may be empty)
   std::vector<std::vector<IdentifiedModel>> band_models;  ///< [band][families × algorithms]
-  std::vector<int> selected;        ///< per band: index into band_models[band]
-  std::vector<double> aggregate;    ///< per band: A of the selected model
+  std::vector<int> selected;      ///< per band: index into band_models[band]
+  std::vector<double> aggregate;  ///< per band: A of the selected model
   std::vector<BandMetrics> committee_per_band;
   RoleMetrics committee_test;       ///< all test records
   RoleMetrics committee_train;      ///< all training records
@@ -147,7 +149,8 @@ std::vector<double> PredictModel(const IdentifiedModel& m, const io::Record& rec
 /// The committee's output for a record (hard switch or averaging, as in the result's options).
 std::vector<double> PredictCommittee(const CommitteeResult& r, const io::Record& record);
 /// Window errors of a prediction on a record, as a one-record RoleMetrics.
-RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s, double t1_s);
+RoleMetrics RecordMetrics(const io::Record& record, std::span<const double> yhat, double t0_s,
+                          double t1_s);
 
 /// x with 3 significant digits (scientific below 1e-3 and from 1e5), "—" when not finite.
 std::string FormatFigure(double x, int precision = 3);

@@ -50,7 +50,8 @@ std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& 
   records::FamilyOptions fo;
   fo.substeps = Substeps(p);
   fo.pi_operators = p.pi_operators;
-  if (!p.initial_state.empty()) fo.initial_state = model::ParseInitialState(p.initial_state, "complete_model.initial_state");
+  if (!p.initial_state.empty())
+    fo.initial_state = model::ParseInitialState(p.initial_state, "complete_model.initial_state");
   std::shared_ptr<const records::Family> fam = records::MakeFamily(p.record_family, scale, fo);
   std::vector<records::EffectKind> effects;
   for (const std::string& e : p.effects) effects.push_back(records::ParseEffect(e));
@@ -63,7 +64,8 @@ std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
   if (f == Family::kRecords) {
     try {
       const auto model = RecordModelOf(p);  // alive through the loop (a temporary would not be)
-      std::vector<std::string> names;  // the searched ones (a creep spectrum on a linear family is solved)
+      std::vector<std::string>
+          names;  // the searched ones (a creep spectrum on a linear family is solved)
       for (size_t i : records::SearchedParams(*model)) names.push_back(model->params()[i].name);
       return names;
     } catch (const InputError&) {
@@ -75,20 +77,28 @@ std::vector<std::string> ParameterNames(const CompleteModelProblem& p) {
 
 records::Criterion CriterionOf(SpecCriterion c) {
   switch (c) {
-    case SpecCriterion::kIae: return records::Criterion::kIae;
-    case SpecCriterion::kSse: return records::Criterion::kSse;
-    case SpecCriterion::kRmse: return records::Criterion::kRmse;
-    case SpecCriterion::kMax: return records::Criterion::kMax;
+    case SpecCriterion::kIae:
+      return records::Criterion::kIae;
+    case SpecCriterion::kSse:
+      return records::Criterion::kSse;
+    case SpecCriterion::kRmse:
+      return records::Criterion::kRmse;
+    case SpecCriterion::kMax:
+      return records::Criterion::kMax;
   }
   return records::Criterion::kIae;
 }
 
 SpecCriterion SpecOf(records::Criterion c) {
   switch (c) {
-    case records::Criterion::kSse: return SpecCriterion::kSse;
-    case records::Criterion::kRmse: return SpecCriterion::kRmse;
-    case records::Criterion::kMax: return SpecCriterion::kMax;
-    default: return SpecCriterion::kIae;
+    case records::Criterion::kSse:
+      return SpecCriterion::kSse;
+    case records::Criterion::kRmse:
+      return SpecCriterion::kRmse;
+    case records::Criterion::kMax:
+      return SpecCriterion::kMax;
+    default:
+      return SpecCriterion::kIae;
   }
 }
 
@@ -119,7 +129,8 @@ class OwningRecordFitness final : public opt::FitnessFunction {
     for (const auto& r : records_) ptrs.push_back(&r);
     if (Windowed(p))
       fitness_ = std::make_unique<records::CriterionFitness>(
-          *model_, ptrs, records::CriterionOptions{CriterionOf(p.criterion), p.t0_s, p.t1_s, p.error_cost});
+          *model_, ptrs,
+          records::CriterionOptions{CriterionOf(p.criterion), p.t0_s, p.t1_s, p.error_cost});
     else
       fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
   }
@@ -127,7 +138,8 @@ class OwningRecordFitness final : public opt::FitnessFunction {
   // The records fitness's lanes (a family that runs parameter sets side by side): a worker's
   // compute thread takes that many genomes of a lease at a time.
   int lanes() const override { return fitness_->lanes(); }
-  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override {
+  void EvaluateMany(std::span<const opt::Genome* const> genomes,
+                    std::span<opt::FitnessResult> out) const override {
     fitness_->EvaluateMany(genomes, out);
   }
 
@@ -139,20 +151,28 @@ class OwningRecordFitness final : public opt::FitnessFunction {
 
 model::InputInterpolation InterpolationOf(SpecInterpolation i) {
   switch (i) {
-    case SpecInterpolation::kZoh: return model::InputInterpolation::kZeroOrderHold;
-    case SpecInterpolation::kLinear: return model::InputInterpolation::kLinear;
-    case SpecInterpolation::kSpline: return model::InputInterpolation::kCubicSpline;
-    case SpecInterpolation::kFourier: return model::InputInterpolation::kPeriodicFourier;
+    case SpecInterpolation::kZoh:
+      return model::InputInterpolation::kZeroOrderHold;
+    case SpecInterpolation::kLinear:
+      return model::InputInterpolation::kLinear;
+    case SpecInterpolation::kSpline:
+      return model::InputInterpolation::kCubicSpline;
+    case SpecInterpolation::kFourier:
+      return model::InputInterpolation::kPeriodicFourier;
   }
   return model::InputInterpolation::kCubicSpline;
 }
 
 SpecInterpolation SpecOf(model::InputInterpolation i) {
   switch (i) {
-    case model::InputInterpolation::kZeroOrderHold: return SpecInterpolation::kZoh;
-    case model::InputInterpolation::kLinear: return SpecInterpolation::kLinear;
-    case model::InputInterpolation::kCubicSpline: return SpecInterpolation::kSpline;
-    case model::InputInterpolation::kPeriodicFourier: return SpecInterpolation::kFourier;
+    case model::InputInterpolation::kZeroOrderHold:
+      return SpecInterpolation::kZoh;
+    case model::InputInterpolation::kLinear:
+      return SpecInterpolation::kLinear;
+    case model::InputInterpolation::kCubicSpline:
+      return SpecInterpolation::kSpline;
+    case model::InputInterpolation::kPeriodicFourier:
+      return SpecInterpolation::kFourier;
   }
   return SpecInterpolation::kSpline;
 }
@@ -161,9 +181,11 @@ SpecInterpolation SpecOf(model::InputInterpolation i) {
 std::unique_ptr<BwTraining> BwTrainingOf(const CompleteModelProblem& p) {
   std::vector<io::Record> records;
   for (const CompleteModelRecord& r : p.records)
-    records.push_back(MakeBwRecord(r.name, model::CaseRole::kTrain, r.input, r.output, r.first_counted, r.sample_rate_hz));
+    records.push_back(MakeBwRecord(r.name, model::CaseRole::kTrain, r.input, r.output,
+                                   r.first_counted, r.sample_rate_hz));
   return std::make_unique<BwTraining>(
-      std::move(records), BwProtocol(Substeps(p), InterpolationOf(p.interpolation), p.period_samples), p.error_cost);
+      std::move(records),
+      BwProtocol(Substeps(p), InterpolationOf(p.interpolation), p.period_samples), p.error_cost);
 }
 
 Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction>* out) {
@@ -173,7 +195,8 @@ Status Build(const CompleteModelProblem& p, std::unique_ptr<opt::FitnessFunction
     else if (p.family == Family::kRecords)
       *out = std::make_unique<OwningRecordFitness>(p);
     else
-      return InvalidArgument("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
+      return InvalidArgument(
+          "complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set");
   } catch (const InputError& e) {
     return InvalidArgument(std::string("complete_model: ") + e.what());
   }
@@ -200,7 +223,8 @@ constexpr uint64_t kMaxPeriodPrimeFactor = 1000;
 template <typename Add>
 void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
   if (Windowed(p)) {
-    if (!(std::isfinite(p.t0_s) && p.t0_s >= 0)) add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
+    if (!(std::isfinite(p.t0_s) && p.t0_s >= 0))
+      add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
     if (!(std::isfinite(p.t1_s) && p.t1_s > p.t0_s))
       add("complete_model.t1_s", Num(p.t1_s), "must be finite and > t0_s = " + Num(p.t0_s));
   } else if (p.criterion != SpecCriterion::kIae) {
@@ -208,20 +232,25 @@ void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
         "without a window (t0_s, t1_s) records are scored by the MSE: leave unset");
   }
   if (p.interpolation != SpecInterpolation::kSpline)
-    add("complete_model.interpolation", model::InputInterpolationName(InterpolationOf(p.interpolation)),
-        "only the oscillator's input is interpolated (the records families take it as sampled): leave unset");
+    add("complete_model.interpolation",
+        model::InputInterpolationName(InterpolationOf(p.interpolation)),
+        "only the oscillator's input is interpolated (the records families take it as sampled): "
+        "leave unset");
   if (p.period_samples != 0)
     add("complete_model.period_samples", std::to_string(p.period_samples),
         "only the oscillator's FOURIER input has periods: must be 0");
   if (p.pi_operators < 1 || p.pi_operators > 10000)
     add("complete_model.pi_operators", std::to_string(p.pi_operators), "must be in [1, 10000]");
   if (p.scale.size() != 9) {
-    add("complete_model.scale", std::to_string(p.scale.size()) + " values", "must hold 9 (u_min … duration)");
+    add("complete_model.scale", std::to_string(p.scale.size()) + " values",
+        "must hold 9 (u_min … duration)");
   } else {
     for (size_t i = 0; i < 9; ++i)
-      if (!std::isfinite(p.scale[i])) add("complete_model.scale[" + std::to_string(i) + "]", Num(p.scale[i]), "must be finite");
+      if (!std::isfinite(p.scale[i]))
+        add("complete_model.scale[" + std::to_string(i) + "]", Num(p.scale[i]), "must be finite");
   }
-  if (Substeps(p) < 1 || Substeps(p) > 512) add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 512] (0 = 2)");
+  if (Substeps(p) < 1 || Substeps(p) > 512)
+    add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 512] (0 = 2)");
   if (p.scale.size() == 9 && p.pi_operators >= 1 && p.pi_operators <= 10000) {
     try {
       RecordModelOf(p);
@@ -233,11 +262,14 @@ void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
     const CompleteModelRecord& r = p.records[i];
     const std::string f = "complete_model.records[" + std::to_string(i) + "]";
     const size_t n = r.input.size();
-    if (r.name.size() > 200) add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
-    if (!(std::isfinite(r.dt_s) && r.dt_s > 0)) add(f + ".dt_s", Num(r.dt_s), "must be finite and > 0");
+    if (r.name.size() > 200)
+      add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
+    if (!(std::isfinite(r.dt_s) && r.dt_s > 0))
+      add(f + ".dt_s", Num(r.dt_s), "must be finite and > 0");
     if (n < 2) add(f + ".input", std::to_string(n) + " samples", "needs >= 2");
     if (r.output.size() != n)
-      add(f + ".output", std::to_string(r.output.size()) + " samples", "must have as many as input (" + std::to_string(n) + ")");
+      add(f + ".output", std::to_string(r.output.size()) + " samples",
+          "must have as many as input (" + std::to_string(n) + ")");
     for (size_t k = 0; k < n; ++k)
       if (!std::isfinite(r.input[k])) {
         add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]), "must be finite");
@@ -250,16 +282,20 @@ void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
       }
     if (!(r.first_counted < r.end_counted && r.end_counted <= n))
       add(f + ".end_counted", std::to_string(r.end_counted),
-          "must be > first_counted = " + std::to_string(r.first_counted) + " and <= " + std::to_string(n) + " samples");
+          "must be > first_counted = " + std::to_string(r.first_counted) +
+              " and <= " + std::to_string(n) + " samples");
     if (r.rest_samples < 1 || r.rest_samples > n)
-      add(f + ".rest_samples", std::to_string(r.rest_samples), "must be in [1, " + std::to_string(n) + "]");
-    if (r.offset_mode < 0 || r.offset_mode > 2) add(f + ".offset_mode", std::to_string(r.offset_mode), "must be 0, 1 or 2");
+      add(f + ".rest_samples", std::to_string(r.rest_samples),
+          "must be in [1, " + std::to_string(n) + "]");
+    if (r.offset_mode < 0 || r.offset_mode > 2)
+      add(f + ".offset_mode", std::to_string(r.offset_mode), "must be 0, 1 or 2");
     if (!std::isfinite(r.offset)) add(f + ".offset", Num(r.offset), "must be finite");
-    if (Windowed(p) && std::isfinite(p.t0_s) && std::isfinite(p.t1_s) && std::isfinite(r.dt_s) && r.dt_s > 0 &&
-        r.end_counted >= 1 && r.end_counted <= n) {
+    if (Windowed(p) && std::isfinite(p.t0_s) && std::isfinite(p.t1_s) && std::isfinite(r.dt_s) &&
+        r.dt_s > 0 && r.end_counted >= 1 && r.end_counted <= n) {
       const double end = static_cast<double>(r.end_counted - 1) * r.dt_s;
       if (!(std::min(p.t1_s, end) > p.t0_s))
-        add(f, "ends at " + Num(end) + " s", "before the window start t0_s = " + Num(p.t0_s) + " s");
+        add(f, "ends at " + Num(end) + " s",
+            "before the window start t0_s = " + Num(p.t0_s) + " s");
     }
   }
 }
@@ -277,35 +313,43 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     return v;
   }
   if (IsStack(p.family)) {
-    add("complete_model.family", p.family == Family::kStackBoucWen ? "STACK_BOUC_WEN" : "STACK_BACKLASH_LIKE",
-        "the stack models are records families: family RECORDS with record_family 'stack-bouc-wen' or "
+    add("complete_model.family",
+        p.family == Family::kStackBoucWen ? "STACK_BOUC_WEN" : "STACK_BACKLASH_LIKE",
+        "the stack models are records families: family RECORDS with record_family 'stack-bouc-wen' "
+        "or "
         "'backlash-like' (and the criterion's window)");
     return v;
   }
   // The Bouc–Wen oscillator of the benchmark protocol.
   const int sub = Substeps(p);
-  if (sub < 1 || sub > 1000) add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 1000] (0 = 4)");
+  if (sub < 1 || sub > 1000)
+    add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 1000] (0 = 4)");
   if (p.t0_s != 0 || p.t1_s != 0)
     add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s),
-        "the oscillator has no window (its cost is the MSE over the counted samples): leave both unset");
+        "the oscillator has no window (its cost is the MSE over the counted samples): leave both "
+        "unset");
   if (p.criterion != SpecCriterion::kIae)
     add("complete_model.criterion", records::CriterionName(CriterionOf(p.criterion)),
         "the oscillator's cost is the output-error MSE: leave criterion unset");
   if (p.interpolation != SpecInterpolation::kFourier && p.period_samples != 0)
-    add("complete_model.period_samples", std::to_string(p.period_samples), "only the FOURIER input has periods");
+    add("complete_model.period_samples", std::to_string(p.period_samples),
+        "only the FOURIER input has periods");
   const size_t min_samples = p.interpolation == SpecInterpolation::kSpline ? 4 : 2;
   for (size_t i = 0; i < p.records.size(); ++i) {
     const CompleteModelRecord& r = p.records[i];
     const std::string f = "complete_model.records[" + std::to_string(i) + "]";
     const size_t n = r.input.size();
-    if (r.name.size() > 200) add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
+    if (r.name.size() > 200)
+      add(f + ".name", std::to_string(r.name.size()) + " characters", "must be <= 200");
     const bool fs_ok = std::isfinite(r.sample_rate_hz) && r.sample_rate_hz > 0;
     if (!fs_ok) add(f + ".sample_rate_hz", Num(r.sample_rate_hz), "must be finite and > 0");
     if (n < min_samples)
       add(f + ".input", std::to_string(n) + " samples",
-          "needs >= " + std::to_string(min_samples) + (min_samples == 4 ? " (the cubic-spline input)" : ""));
+          "needs >= " + std::to_string(min_samples) +
+              (min_samples == 4 ? " (the cubic-spline input)" : ""));
     if (r.output.size() != n)
-      add(f + ".output", std::to_string(r.output.size()) + " samples", "must have as many as input (" + std::to_string(n) + ")");
+      add(f + ".output", std::to_string(r.output.size()) + " samples",
+          "must have as many as input (" + std::to_string(n) + ")");
     for (size_t k = 0; k < n; ++k)
       if (!std::isfinite(r.input[k])) {
         add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]), "must be finite");
@@ -317,7 +361,8 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
         break;
       }
     if (n > 0 && r.first_counted >= n)
-      add(f + ".first_counted", std::to_string(r.first_counted), "leaves no counted sample of " + std::to_string(n));
+      add(f + ".first_counted", std::to_string(r.first_counted),
+          "leaves no counted sample of " + std::to_string(n));
     const uint64_t period = p.period_samples > 0 ? p.period_samples : n;
     if (p.interpolation == SpecInterpolation::kFourier && n >= 2) {
       if (n % period != 0) {
@@ -326,7 +371,8 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
       } else if (LargestPrimeFactor(period) > kMaxPeriodPrimeFactor) {
         add(f + ".input", std::to_string(period) + " samples per period",
             "has the prime factor " + std::to_string(LargestPrimeFactor(period)) +
-                " > 1000: the FOURIER input's FFT would be too slow (use SPLINE or a smoother period)");
+                " > 1000: the FOURIER input's FFT would be too slow (use SPLINE or a smoother "
+                "period)");
       } else {
         // Every period equal to the first (model/bw_oscillator.h's rule, 1e-9 of the largest |u|).
         double scale = 0;
@@ -334,7 +380,8 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
         for (size_t k = period; k < n; ++k)
           if (std::abs(r.input[k] - r.input[k % period]) > 1e-9 * scale) {
             add(f + ".input[" + std::to_string(k) + "]", Num(r.input[k]),
-                "differs from input[" + std::to_string(k % period) + "] = " + Num(r.input[k % period]) +
+                "differs from input[" + std::to_string(k % period) +
+                    "] = " + Num(r.input[k % period]) +
                     ": not periodic with period_samples = " + std::to_string(period));
             break;
           }
@@ -362,7 +409,8 @@ job::CompleteModelProblem CompleteModelProblemOf(const BwTraining& training) {
 namespace {
 
 // A records problem; `cut`: without the part of each record's leading rest that is not scored.
-CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int pi_operators, bool cut) {
+CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int pi_operators,
+                                    bool cut) {
   CompleteModelProblem p;
   p.family = Family::kRecords;
   const records::RecordModel& m = fitness.model();
@@ -372,14 +420,18 @@ CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int p
   // The state the family was made with, so the workers' family starts where the client's does.
   p.initial_state = model::InitialStateName(m.family().initial_state());
   const records::DataScale& s = m.scale();
-  p.scale = {s.u_min, s.u_max, s.u_half, s.y_half, s.gain, static_cast<double>(s.polarity), s.f_dom, s.fs, s.duration};
+  p.scale = {s.u_min, s.u_max, s.u_half,  s.y_half, s.gain, static_cast<double>(s.polarity),
+             s.f_dom, s.fs,    s.duration};
   for (const io::Record* r : fitness.records()) {
-    const size_t from = cut ? std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored) : 0;
+    const size_t from =
+        cut ? std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored) : 0;
     CompleteModelRecord c;
     c.name = r->name.substr(0, 200);
     c.sample_rate_hz = r->sample_rate_hz();
-    c.input.assign(r->u.begin() + static_cast<std::ptrdiff_t>(from), r->u.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
-    c.output.assign(r->y.begin() + static_cast<std::ptrdiff_t>(from), r->y.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+    c.input.assign(r->u.begin() + static_cast<std::ptrdiff_t>(from),
+                   r->u.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+    c.output.assign(r->y.begin() + static_cast<std::ptrdiff_t>(from),
+                    r->y.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
     c.first_counted = r->first_scored - from;
     c.end_counted = r->end_scored - from;
     c.rest_samples = r->rest_samples - from;
@@ -424,7 +476,8 @@ job::JobSpec CompleteModelJobSpec(job::CompleteModelProblem problem, const std::
   return spec;
 }
 
-Status MakeCompleteModelFitness(const job::JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out) {
+Status MakeCompleteModelFitness(const job::JobSpec& spec,
+                                std::unique_ptr<opt::FitnessFunction>* out) {
   const auto* p = std::get_if<CompleteModelProblem>(&spec.problem);
   if (!p) return InvalidArgument("problem: not a complete_model spec");
   const std::vector<FieldViolation> v = CheckFields(*p);
@@ -438,18 +491,24 @@ job::JobKind CompleteModelJobKind() {
   k.validate = [](const job::JobSpec& s) {
     std::vector<FieldViolation> v = CheckFields(std::get<CompleteModelProblem>(s.problem));
     if (s.ga)
-      v.push_back({"ga", "ga: the project GA searches binary genomes; a complete_model genome is the family's real "
-                         "parameters: drive it as an evaluation session (external; piezoid boucwen / committee "
-                         "--master)"});
+      v.push_back(
+          {"ga",
+           "ga: the project GA searches binary genomes; a complete_model genome is the family's "
+           "real "
+           "parameters: drive it as an evaluation session (external; piezoid boucwen / committee "
+           "--master)"});
     return v;
   };
   k.layout = [](const job::JobSpec& s, job::GenomeLayout* l) {
     const auto& p = std::get<CompleteModelProblem>(s.problem);
     const auto names = ParameterNames(p);
     if (names.empty()) {
-      return InvalidArgument(p.family == Family::kRecords
-                                 ? "complete_model: the records model '" + p.record_family + "' has no searched parameter"
-                                 : std::string("complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set"));
+      return InvalidArgument(
+          p.family == Family::kRecords
+              ? "complete_model: the records model '" + p.record_family +
+                    "' has no searched parameter"
+              : std::string(
+                    "complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be set"));
     }
     l->bits = 0;
     l->reals = static_cast<int>(names.size());
@@ -468,6 +527,5 @@ job::JobKind CompleteModelJobKind() {
   };
   return k;
 }
-
 
 }  // namespace pz::complete

@@ -41,7 +41,8 @@ job::JobSpec CompleteModelJobSpec(job::CompleteModelProblem problem, const std::
 
 /// The fitness a spec describes (what a worker evaluates). InvalidArgument naming the field when
 /// the spec is not valid.
-Status MakeCompleteModelFitness(const job::JobSpec& spec, std::unique_ptr<opt::FitnessFunction>* out);
+Status MakeCompleteModelFitness(const job::JobSpec& spec,
+                                std::unique_ptr<opt::FitnessFunction>* out);
 
 job::JobKind CompleteModelJobKind();
 

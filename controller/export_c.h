@@ -27,19 +27,21 @@ namespace pz::controller {
 // CHexLiteral, CDecimal, CUpper and IsCIdentifier: model/c_text.h.
 
 /// The header text. Requires a valid network and a C identifier (kInvalidArgument otherwise).
-Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name, std::string* header);
+Status NetworkToCHeader(const io::SavedNetwork& saved, const std::string& name,
+                        std::string* header);
 
 /// What the fin plant's part of the header needs besides the network (controller/export_fin_c.h).
 struct FinPlantExport {
   double sample_rate_hz = 100.0;  ///< the controller's sample rate (the bench cases' 100 Hz), > 0
   double drive_limit_v = 0.0;     ///< |u| ≤ this [V]; 0 = the largest training amplitude
-  int inverse_horizon = 2;        ///< samples over which NAME_inverse_step reaches its target, ≥ 1
-  std::string note;               ///< a sentence for the plant's comment (e.g. the job and its saturations)
+  int inverse_horizon = 2;  ///< samples over which NAME_inverse_step reaches its target, ≥ 1
+  std::string note;  ///< a sentence for the plant's comment (e.g. the job and its saturations)
 };
 
-/// The same header with the bimorph-fin plant of `plant` after the network (controller/export_fin_c.h):
-/// NAME_params, NAME_init, NAME_step, NAME_inverse_step.
+/// The same header with the bimorph-fin plant of `plant` after the network
+/// (controller/export_fin_c.h): NAME_params, NAME_init, NAME_step, NAME_inverse_step.
 Status NetworkAndFinToCHeader(const io::SavedNetwork& saved, const model::ModalSimulator& plant,
-                              const FinPlantExport& options, const std::string& name, std::string* header);
+                              const FinPlantExport& options, const std::string& name,
+                              std::string* header);
 
 }  // namespace pz::controller

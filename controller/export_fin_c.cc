@@ -20,43 +20,47 @@ constexpr const char* kPlant = R"C(
 
 /* Status bits: returned by pzf_params / pzf_init, accumulated in state.status. */
 #define PZF_OK 0
-#define PZF_AMPLITUDE_OUT_OF_RANGE 1   /* amplitude outside the training range: p extrapolated */
-#define PZF_FREQUENCY_OUT_OF_RANGE 2   /* frequency outside the training range: p extrapolated */
-#define PZF_INVALID_INPUT 4            /* a non-finite input (ignored: the drive is held) */
-#define PZF_INVALID_PARAMETERS 8       /* init: a parameter non-finite or out of its physical range */
-#define PZF_UNBOUNDED_HYSTERESIS 16    /* init: alpha != 0 and not (beta + gamma > 0, beta - gamma >= 0) */
-#define PZF_NOT_FINITE 32              /* the state became non-finite (the step was not taken) */
-#define PZF_UNREACHABLE 64             /* inverse: the desired angle was not reachable in one step */
+#define PZF_AMPLITUDE_OUT_OF_RANGE 1 /* amplitude outside the training range: p extrapolated */
+#define PZF_FREQUENCY_OUT_OF_RANGE 2 /* frequency outside the training range: p extrapolated */
+#define PZF_INVALID_INPUT 4          /* a non-finite input (ignored: the drive is held) */
+/* init: a parameter non-finite or out of its physical range */
+#define PZF_INVALID_PARAMETERS 8
+/* init: alpha != 0 and not (beta + gamma > 0, beta - gamma >= 0) */
+#define PZF_UNBOUNDED_HYSTERESIS 16
+#define PZF_NOT_FINITE 32 /* the state became non-finite (the step was not taken) */
+/* inverse: the desired angle was not reachable in one step */
+#define PZF_UNREACHABLE 64
 
 @TABLES@
 /* What one sample changes (saved and restored by the inverse's trial steps). */
 typedef struct {
-  double x0[PZF_MODES_PADDED], x1[PZF_MODES_PADDED]; /* modal states scaled by tip_i: w_tip = sum x0 */
-  double u;      /* drive at the last sample [V] */
-  double z;      /* Bouc-Wen force [N] */
-  double theta;  /* linear fin angle atan(w_tip / L) [deg] */
-  double y;      /* fin angle after the backlash [deg] */
+  double x0[PZF_MODES_PADDED],
+      x1[PZF_MODES_PADDED]; /* modal states scaled by tip_i: w_tip = sum x0 */
+  double u;                 /* drive at the last sample [V] */
+  double z;                 /* Bouc-Wen force [N] */
+  double theta;             /* linear fin angle atan(w_tip / L) [deg] */
+  double y;                 /* fin angle after the backlash [deg] */
 } pzf_dynamic;
 
 typedef struct {
   double mu, delta, alpha, beta, gamma, a1, a2, b1, b2, kappa_max;
-  double u_min, u_max;         /* drive limits [V] (PZF_U_MIN, PZF_U_MAX; may be narrowed after init) */
+  double u_min, u_max; /* drive limits [V] (PZF_U_MIN, PZF_U_MAX; may be narrowed after init) */
   pzk_fin_poles poles[PZF_MODES];
   pzk_fin_step_t full[PZF_MODES]; /* discretisation over PZF_DT */
   pzk_fin_step_t sub[PZF_MODES];  /* over PZF_DT / sub_n, cached */
   int sub_n;
   pzf_dynamic d;
-  long samples;                /* steps taken */
-  long saturations;            /* drives clipped to [u_min, u_max] */
-  long unreachable;            /* inverse steps whose desired angle was out of reach (clipped) */
-  long trials;                 /* the inverse's trials (PZF_INVERSE_HORIZON steps each) */
-  int status;                  /* PZF_* bits seen since init */
+  long samples;     /* steps taken */
+  long saturations; /* drives clipped to [u_min, u_max] */
+  long unreachable; /* inverse steps whose desired angle was out of reach (clipped) */
+  long trials;      /* the inverse's trials (PZF_INVERSE_HORIZON steps each) */
+  int status;       /* PZF_* bits seen since init */
 } pzf_state;
 
 /* One sub-step tau of every mode, z held by the quintic Hermite of (zl, zr), u linear from u_a with
  * slope u_dot (modal_simulator.cc GeneralSubstep). steps == 0: discretised here for tau. */
-static inline void pzf_substep(pzf_state* st, const pzk_fin_step_t* steps, double tau, pzk_fin_zdata zl,
-                               pzk_fin_zdata zr, double u_a, double u_dot) {
+static inline void pzf_substep(pzf_state* st, const pzk_fin_step_t* steps, double tau,
+                               pzk_fin_zdata zl, pzk_fin_zdata zr, double u_a, double u_dot) {
   const double* wu = pzf_tip_gain_u();
   const double* wz = pzf_tip_gain_z();
   double fz[6];
@@ -66,7 +70,8 @@ static inline void pzf_substep(pzf_state* st, const pzk_fin_step_t* steps, doubl
   for (i = 0; i < PZF_MODES; ++i) {
     pzk_fin_step_t local;
     if (!steps) pzk_fin_discretise(&st->poles[i], tau, &local);
-    pzk_fin_mode_update(steps ? steps + i : &local, wu[i], wz[i], fz, u_a, u_dot, tau, &st->d.x0[i], &st->d.x1[i]);
+    pzk_fin_mode_update(steps ? steps + i : &local, wu[i], wz[i], fz, u_a, u_dot, tau, &st->d.x0[i],
+                        &st->d.x1[i]);
   }
 }
 
@@ -82,9 +87,12 @@ static inline double pzf_backlash(const pzf_state* st, double theta, double y_pr
 
 /* pzk_fin_sample's sub-step over the state: a regular one with the cached discretisation, a piece
  * cut at a zero crossing of z discretised for its tau. */
-typedef struct { pzf_state* st; const pzk_fin_step_t* cached; } pzf_walk;
-static inline void pzf_walk_substep(void* ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
-                                    double u_a, double u_dot) {
+typedef struct {
+  pzf_state* st;
+  const pzk_fin_step_t* cached;
+} pzf_walk;
+static inline void pzf_walk_substep(void* ctx, double tau, int regular, pzk_fin_zdata zl,
+                                    pzk_fin_zdata zr, double u_a, double u_dot) {
   const pzf_walk* w = (const pzf_walk*)ctx;
   pzf_substep(w->st, regular ? w->cached : 0, tau, zl, zr, u_a, u_dot);
 }
@@ -108,7 +116,8 @@ static inline double pzf_advance(pzf_state* st, double u1) {
     w.cached = st->sub;
   }
   w.st = st;
-  z = pzk_fin_sample(st->alpha, st->beta, st->gamma, u0, st->d.z, u1, tau, nsub, pzf_walk_substep, &w);
+  z = pzk_fin_sample(st->alpha, st->beta, st->gamma, u0, st->d.z, u1, tau, nsub, pzf_walk_substep,
+                     &w);
   theta = pzf_degrees(st, &finite);
   if (!finite) { /* the step is not taken */
     st->d = before;
@@ -161,16 +170,18 @@ static inline double pzf_trial(pzf_state* st, double u) {
 }
 
 /* p[7] = the network's parameters for a drive amplitude_v sin(2 pi frequency_hz t); returns PZF_OK,
- * or PZF_AMPLITUDE_OUT_OF_RANGE | PZF_FREQUENCY_OUT_OF_RANGE when an input lies outside the training
- * range [PZF_AMPLITUDE_LO, PZF_AMPLITUDE_HI] x [PZF_FREQUENCY_LO, PZF_FREQUENCY_HI] (p is then the
- * network's extrapolation: do not trust it without checking), PZF_INVALID_INPUT for a non-finite
- * input (p untouched). */
+ * or PZF_AMPLITUDE_OUT_OF_RANGE | PZF_FREQUENCY_OUT_OF_RANGE when an input lies outside the
+ * training range [PZF_AMPLITUDE_LO, PZF_AMPLITUDE_HI] x [PZF_FREQUENCY_LO, PZF_FREQUENCY_HI] (p is
+ * then the network's extrapolation: do not trust it without checking), PZF_INVALID_INPUT for a
+ * non-finite input (p untouched). */
 static inline int pzf_params(double amplitude_v, double frequency_hz, double p[7]) {
   int status = PZF_OK;
   if (!isfinite(amplitude_v) || !isfinite(frequency_hz)) return PZF_INVALID_INPUT;
-  if (!(amplitude_v >= PZF_AMPLITUDE_LO && amplitude_v <= PZF_AMPLITUDE_HI)) status |= PZF_AMPLITUDE_OUT_OF_RANGE;
-  if (!(frequency_hz >= PZF_FREQUENCY_LO && frequency_hz <= PZF_FREQUENCY_HI)) status |= PZF_FREQUENCY_OUT_OF_RANGE;
-  @NAME@(amplitude_v, frequency_hz, p);
+  if (!(amplitude_v >= PZF_AMPLITUDE_LO && amplitude_v <= PZF_AMPLITUDE_HI))
+    status |= PZF_AMPLITUDE_OUT_OF_RANGE;
+  if (!(frequency_hz >= PZF_FREQUENCY_LO && frequency_hz <= PZF_FREQUENCY_HI))
+    status |= PZF_FREQUENCY_OUT_OF_RANGE;
+  @NAME@ (amplitude_v, frequency_hz, p);
   return status;
 }
 
@@ -200,10 +211,11 @@ static inline int pzf_init(pzf_state* st, const double p[7], double b1, double b
   st->kappa_max = fabs(st->beta) + fabs(st->gamma);
   for (k = 0; k < 7; ++k)
     if (!isfinite(p[k])) st->status = PZF_INVALID_PARAMETERS;
-  if (!isfinite(b1) || !isfinite(b2) || !isfinite(u0) || st->mu < 0 || st->delta < 0 || st->a1 < 0 ||
-      st->a2 < 0 || !(b1 > 0) || !(b2 < 0))
+  if (!isfinite(b1) || !isfinite(b2) || !isfinite(u0) || st->mu < 0 || st->delta < 0 ||
+      st->a1 < 0 || st->a2 < 0 || !(b1 > 0) || !(b2 < 0))
     st->status = PZF_INVALID_PARAMETERS;
-  if (st->status == PZF_OK && !(st->alpha == 0.0 || (st->beta + st->gamma > 0.0 && st->beta - st->gamma >= 0.0)))
+  if (st->status == PZF_OK &&
+      !(st->alpha == 0.0 || (st->beta + st->gamma > 0.0 && st->beta - st->gamma >= 0.0)))
     st->status = PZF_UNBOUNDED_HYSTERESIS;
   if (st->status != PZF_OK) return st->status;
   for (i = 0; i < PZF_MODES; ++i) {
@@ -219,36 +231,39 @@ static inline int pzf_init(pzf_state* st, const double p[7], double b1, double b
 /* The angle at the last sample [deg]. */
 static inline double pzf_angle(const pzf_state* st) { return st->d.y; }
 
-/* Forward: the drive u [V] at the next sample (clipped to [u_min, u_max]) -> the angle there [deg]. */
+/* Forward: the drive u [V] at the next sample (clipped to [u_min, u_max]) -> the angle there [deg].
+ */
 static inline double pzf_step(pzf_state* st, double u) {
   if (st->status & (PZF_INVALID_PARAMETERS | PZF_UNBOUNDED_HYSTERESIS)) return 0.0;
   return pzf_advance(st, pzf_clip(st, u));
 }
 
-
-/* Inverse: the drive u for the next sample that brings the angle to angle_desired PZF_INVERSE_HORIZON
- * samples after the current one, and the step taken with it (the state advances as pzf_step(st, u)
- * would; call it again at the next sample: receding horizon). Give it the reference that far ahead
- * if the controller knows it (preview); the reference at the next sample otherwise, with a lag of
- * PZF_INVERSE_HORIZON - 1 samples.
- *   The backlash is inverted exactly: moving up needs theta = y + a1, moving down theta = y - a2;
- * inside the dead band (angle_desired = the current angle) the theta nearest its course is kept.
- * theta(u) = target is solved on the horizon's map (drive ramped to u at the next sample, then
- * continuing its slope) by a bracket search on both sides of the last drive (the root nearest to
- * it) and the Illinois method: at most PZF_INVERSE_ITERATIONS trials of PZF_INVERSE_HORIZON steps
- * each, until theta is within 1e-13 deg (relative above 1 deg) or the bracket is two adjacent doubles.
- *   What it cannot do. It undoes no dynamics beyond its horizon: the drive's linear hold between
- * samples gives the sampled plant a zero outside the unit circle (the second sample's response to a
- * drive step is several times the first's), so an exact one-step inverse (horizon 1) makes the drive
- * oscillate; a horizon of 2 plans the next two samples and follows a reachable reference to a small
- * fraction of the dead band, not exactly (errors where the reference leaves the dead band or turns).
- * The plan is greedy: where the reference's state was reached by a path the plan did not take (the
- * Bouc-Wen force remembers it) a target can be out of reach for a few samples, and theta(u) need not
- * be monotone. docs/deploy.md has the figures. A target out of reach within [u_min, u_max], or an
- * angle outside [b2, b1], is clipped: the drive that came nearest is applied, and the step is
- * counted in st->unreachable (bit PZF_UNREACHABLE). */
+/* Inverse: the drive u for the next sample that brings the angle to angle_desired
+ * PZF_INVERSE_HORIZON samples after the current one, and the step taken with it (the state advances
+ * as pzf_step(st, u) would; call it again at the next sample: receding horizon). Give it the
+ * reference that far ahead if the controller knows it (preview); the reference at the next sample
+ * otherwise, with a lag of PZF_INVERSE_HORIZON - 1 samples. The backlash is inverted exactly:
+ * moving up needs theta = y + a1, moving down theta = y - a2; inside the dead band (angle_desired =
+ * the current angle) the theta nearest its course is kept. theta(u) = target is solved on the
+ * horizon's map (drive ramped to u at the next sample, then continuing its slope) by a bracket
+ * search on both sides of the last drive (the root nearest to it) and the Illinois method: at most
+ * PZF_INVERSE_ITERATIONS trials of PZF_INVERSE_HORIZON steps each, until theta is within 1e-13 deg
+ * (relative above 1 deg) or the bracket is two adjacent doubles. What it cannot do. It undoes no
+ * dynamics beyond its horizon: the drive's linear hold between samples gives the sampled plant a
+ * zero outside the unit circle (the second sample's response to a drive step is several times the
+ * first's), so an exact one-step inverse (horizon 1) makes the drive oscillate; a horizon of 2
+ * plans the next two samples and follows a reachable reference to a small fraction of the dead
+ * band, not exactly (errors where the reference leaves the dead band or turns). The plan is greedy:
+ * where the reference's state was reached by a path the plan did not take (the Bouc-Wen force
+ * remembers it) a target can be out of reach for a few samples, and theta(u) need not be monotone.
+ * docs/deploy.md has the figures. A target out of reach within [u_min, u_max], or an angle outside
+ * [b2, b1], is clipped: the drive that came nearest is applied, and the step is counted in
+ * st->unreachable (bit PZF_UNREACHABLE). */
 /* theta PZF_INVERSE_HORIZON samples ahead less the target: the inverse's map. */
-typedef struct { pzf_state* st; double th; } pzf_target;
+typedef struct {
+  pzf_state* st;
+  double th;
+} pzf_target;
 static inline double pzf_miss(void* ctx, double u) {
   const pzf_target* t = (const pzf_target*)ctx;
   return pzf_trial(t->st, u) - t->th;
@@ -268,8 +283,8 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
     reached = 0;
   }
   /* The backlash inverted: the theta that gives yd after y. Inside the dead band (and at a
-   * saturation) any theta of [yd - a2, yd + a1] does; the one nearest its course with the drive held
-   * is taken, which keeps theta at the band's edge, ready to move. */
+   * saturation) any theta of [yd - a2, yd + a1] does; the one nearest its course with the drive
+   * held is taken, which keeps theta at the band's edge, ready to move. */
   if (yd > st->d.y) {
     th = yd + st->a1;
   } else if (yd < st->d.y) {
@@ -285,7 +300,8 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
     target.st = st;
     target.th = th;
     if (!pzk_fin_nearest_root(pzf_miss, &target, st->d.u, st->u_min, st->u_max,
-                              1e-13 * (fabs(th) > 1 ? fabs(th) : 1), PZF_INVERSE_ITERATIONS, &best_u))
+                              1e-13 * (fabs(th) > 1 ? fabs(th) : 1), PZF_INVERSE_ITERATIONS,
+                              &best_u))
       reached = 0; /* out of reach: the drive that came nearest */
   }
   if (!reached) {
@@ -298,13 +314,16 @@ static inline double pzf_inverse_step(pzf_state* st, double angle_desired) {
 )C";
 
 void Replace(std::string& s, const std::string& from, const std::string& to) {
-  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
 }
 
 /// A table of the plant's constants as a function returning it (no globals), hex literals with the
 /// decimal values in a comment.
-void WriteTable(std::ostream& o, const std::string& fn, const char* what, std::span<const double> v) {
-  o << "/* " << what << " */\nstatic inline const double* pzf_" << fn << "(void) {\n  static const double v[PZF_MODES] = {";
+void WriteTable(std::ostream& o, const std::string& fn, const char* what,
+                std::span<const double> v) {
+  o << "/* " << what << " */\nstatic inline const double* pzf_" << fn
+    << "(void) {\n  static const double v[PZF_MODES] = {";
   for (size_t i = 0; i < v.size(); ++i) o << (i ? ", " : "") << CHexLiteral(v[i]);
   o << "};\n  /* ";
   for (size_t i = 0; i < v.size(); ++i) o << (i ? " " : "") << CDecimal(v[i]);
@@ -313,23 +332,30 @@ void WriteTable(std::ostream& o, const std::string& fn, const char* what, std::s
 
 }  // namespace
 
-Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& network, const FinPlantExport& options,
-                   const std::string& name, std::string* text) {
+Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& network,
+                   const FinPlantExport& options, const std::string& name, std::string* text) {
   if (!(std::isfinite(options.sample_rate_hz) && options.sample_rate_hz > 0))
-    return InvalidArgument(FieldError("--sample-rate", options.sample_rate_hz, "must be finite and > 0 [Hz]"));
+    return InvalidArgument(
+        FieldError("--sample-rate", options.sample_rate_hz, "must be finite and > 0 [Hz]"));
   if (!(std::isfinite(options.drive_limit_v) && options.drive_limit_v >= 0))
-    return InvalidArgument(FieldError("--drive-limit", options.drive_limit_v, "must be finite and >= 0 [V] (0: the training range)"));
+    return InvalidArgument(FieldError("--drive-limit", options.drive_limit_v,
+                                      "must be finite and >= 0 [V] (0: the training range)"));
   if (!(options.inverse_horizon >= 1 && options.inverse_horizon <= 100))
-    return InvalidArgument(FieldError("--inverse-horizon", options.inverse_horizon, "must be in [1, 100] [samples]"));
+    return InvalidArgument(
+        FieldError("--inverse-horizon", options.inverse_horizon, "must be in [1, 100] [samples]"));
   const auto& norm = network.normalization;
-  const double limit = options.drive_limit_v > 0 ? options.drive_limit_v : std::max(std::abs(norm.amplitude_lo_v), std::abs(norm.amplitude_hi_v));
+  const double limit = options.drive_limit_v > 0
+                           ? options.drive_limit_v
+                           : std::max(std::abs(norm.amplitude_lo_v), std::abs(norm.amplitude_hi_v));
   if (!(limit > 0))
-    return InvalidArgument(FieldError("--drive-limit", limit, "must be > 0 [V] (the training amplitudes are all 0)"));
+    return InvalidArgument(
+        FieldError("--drive-limit", limit, "must be > 0 [V] (the training amplitudes are all 0)"));
   const int n = sim.num_modes();
   const double dt = 1.0 / options.sample_rate_hz;
   std::ostringstream t;
-  t << "/* The plant: " << n << " modes of the beam (those visible at the tip), fin length L = "
-    << CDecimal(sim.length_m()) << " m, sampled at " << CDecimal(options.sample_rate_hz) << " Hz.";
+  t << "/* The plant: " << n
+    << " modes of the beam (those visible at the tip), fin length L = " << CDecimal(sim.length_m())
+    << " m, sampled at " << CDecimal(options.sample_rate_hz) << " Hz.";
   if (!options.note.empty()) {  // wrapped at about 100 columns, "*/" kept out of the comment
     std::string note = options.note;
     Replace(note, "*/", "* /");
@@ -344,17 +370,25 @@ Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& netwo
   t << " */\n"
     << "#define PZF_MODES " << n << "\n#define PZF_MODES_PADDED " << (n + 3) / 4 * 4 << "\n"
     << "#define PZF_DT " << CHexLiteral(dt) << " /* " << CDecimal(dt) << " s */\n"
-    << "#define PZF_INV_LENGTH " << CHexLiteral(1.0 / sim.length_m()) << " /* 1/L = " << CDecimal(1.0 / sim.length_m()) << " 1/m */\n"
-    << "#define PZF_U_MIN " << CHexLiteral(-limit) << " /* " << CDecimal(-limit) << " V: drive limits */\n"
+    << "#define PZF_INV_LENGTH " << CHexLiteral(1.0 / sim.length_m())
+    << " /* 1/L = " << CDecimal(1.0 / sim.length_m()) << " 1/m */\n"
+    << "#define PZF_U_MIN " << CHexLiteral(-limit) << " /* " << CDecimal(-limit)
+    << " V: drive limits */\n"
     << "#define PZF_U_MAX " << CHexLiteral(limit) << " /* " << CDecimal(limit) << " V */\n"
-    << "#define PZF_AMPLITUDE_LO " << CHexLiteral(norm.amplitude_lo_v) << " /* " << CDecimal(norm.amplitude_lo_v) << " V: training range */\n"
-    << "#define PZF_AMPLITUDE_HI " << CHexLiteral(norm.amplitude_hi_v) << " /* " << CDecimal(norm.amplitude_hi_v) << " V */\n"
-    << "#define PZF_FREQUENCY_LO " << CHexLiteral(norm.frequency_lo_hz) << " /* " << CDecimal(norm.frequency_lo_hz) << " Hz */\n"
-    << "#define PZF_FREQUENCY_HI " << CHexLiteral(norm.frequency_hi_hz) << " /* " << CDecimal(norm.frequency_hi_hz) << " Hz */\n"
+    << "#define PZF_AMPLITUDE_LO " << CHexLiteral(norm.amplitude_lo_v) << " /* "
+    << CDecimal(norm.amplitude_lo_v) << " V: training range */\n"
+    << "#define PZF_AMPLITUDE_HI " << CHexLiteral(norm.amplitude_hi_v) << " /* "
+    << CDecimal(norm.amplitude_hi_v) << " V */\n"
+    << "#define PZF_FREQUENCY_LO " << CHexLiteral(norm.frequency_lo_hz) << " /* "
+    << CDecimal(norm.frequency_lo_hz) << " Hz */\n"
+    << "#define PZF_FREQUENCY_HI " << CHexLiteral(norm.frequency_hi_hz) << " /* "
+    << CDecimal(norm.frequency_hi_hz) << " Hz */\n"
     << "#define PZF_INVERSE_ITERATIONS 100 /* trials of one pzf_inverse_step, at most */\n"
     << "#define PZF_INVERSE_HORIZON " << options.inverse_horizon << " /* samples */\n";
   WriteTable(t, "omega2", "omega_i^2 [1/s^2]", sim.omega2());
-  WriteTable(t, "tip_gain_u", "tip_i g_u,i: drive to tip deflection, per unit modal acceleration [m/V]", sim.tip_gain_u());
+  WriteTable(t, "tip_gain_u",
+             "tip_i g_u,i: drive to tip deflection, per unit modal acceleration [m/V]",
+             sim.tip_gain_u());
   WriteTable(t, "tip_gain_z", "tip_i g_z,i: Bouc-Wen force to tip deflection", sim.tip_gain_z());
   std::string s = kPlant;
   Replace(s, "@TABLES@", t.str());

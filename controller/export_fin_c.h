@@ -1,6 +1,6 @@
-// `piezoid export --plant`: the bimorph-fin plant (model/modal_simulator.h, sampled-drive path) as a
-// per-sample C recursion, appended to the network header of controller/export_c.h so that a controller
-// computes the fin angle for any drive and the drive for a desired angle:
+// `piezoid export --plant`: the bimorph-fin plant (model/modal_simulator.h, sampled-drive path) as
+// a per-sample C recursion, appended to the network header of controller/export_c.h so that a
+// controller computes the fin angle for any drive and the drive for a desired angle:
 //
 //   int    NAME_params(amplitude_v, frequency_hz, p)       the network, with a range check
 //   int    NAME_init(&state, p, b1, b2, u0)                 zero state at drive u0
@@ -11,9 +11,10 @@
 // operation: the same poles and exact discretisation of each mode (model/modal_discretise.h) at the
 // same sub-steps, the same closed-form Bouc–Wen branches and zero-crossing splits, the same quintic
 // Hermite hold, atan series and backlash step — those helpers are model/kernels/fin_modal.h, the
-// records bimorph-fin kernel's (model/kernels/bimorph_fin.h), copied into the header before the plant. The plant's modal data (ω_i², tip gains, L) and the
-// sample period are computed here by the library and written as exact hex-float literals; μ, δ
-// (hence the discretisation), α, β, γ, a1, a2 come from the network at run time (NAME_init).
+// records bimorph-fin kernel's (model/kernels/bimorph_fin.h), copied into the header before the
+// plant. The plant's modal data (ω_i², tip gains, L) and the sample period are computed here by the
+// library and written as exact hex-float literals; μ, δ (hence the discretisation), α, β, γ, a1, a2
+// come from the network at run time (NAME_init).
 #pragma once
 
 #include <string>
@@ -27,7 +28,7 @@ namespace pz::controller {
 /// The plant part (types, NAME_params, NAME_init, NAME_step, NAME_inverse_step) for `sim`'s plant,
 /// to follow the network's function in the header. kInvalidArgument naming the flag on a bad
 /// sample rate or drive limit.
-Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& network, const FinPlantExport& options,
-                   const std::string& name, std::string* text);
+Status FinPlantToC(const model::ModalSimulator& sim, const model::Network& network,
+                   const FinPlantExport& options, const std::string& name, std::string* text);
 
 }  // namespace pz::controller

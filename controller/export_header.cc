@@ -16,16 +16,19 @@ namespace {
 
 void Array(std::ostream& os, const std::string& name, const double* v, int n) {
   os << "static const double " << name << "[" << std::max(n, 1) << "] = {";
-  for (int i = 0; i < n; ++i) os << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << CHexLiteral(v[i]);
+  for (int i = 0; i < n; ++i)
+    os << (i ? ", " : "") << (i % 4 == 0 ? "\n  " : "") << CHexLiteral(v[i]);
   if (n == 0) os << "0";
   os << "};\n";
 }
 
 }  // namespace
 
-std::string ExportHeader(const records::Stepper& st, const std::string& name, const std::string& comment) {
+std::string ExportHeader(const records::Stepper& st, const std::string& name,
+                         const std::string& comment) {
   if (!IsCIdentifier(name)) {
-    throw InputError("--name '" + name + "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
+    throw InputError("--name '" + name +
+                     "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
   }
   const records::ModelSpec& m = st.spec();
   const std::string N = CUpper(name);
@@ -85,10 +88,10 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name, co
   double delay = 0;
   for (int i = 0; i < nb; ++i)
     if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];
-  os << "#define " << N << "_U_MIN " << CHexLiteral(m.drive_min) << " /* " << io::FormatNumber(m.drive_min) << " " << m.drive_unit
-     << " */\n"
-     << "#define " << N << "_U_MAX " << CHexLiteral(m.drive_max) << " /* " << io::FormatNumber(m.drive_max) << " " << m.drive_unit
-     << " */\n"
+  os << "#define " << N << "_U_MIN " << CHexLiteral(m.drive_min) << " /* "
+     << io::FormatNumber(m.drive_min) << " " << m.drive_unit << " */\n"
+     << "#define " << N << "_U_MAX " << CHexLiteral(m.drive_max) << " /* "
+     << io::FormatNumber(m.drive_max) << " " << m.drive_unit << " */\n"
      << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
      << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
      << "#define " << N << "_PREVIEW_SAMPLES " << st.preview_samples() << "\n"
@@ -97,7 +100,8 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name, co
   for (int i = 0; i < nb; ++i) {
     const auto& p = st.block_params(static_cast<size_t>(i));
     Array(os, name + "_p" + std::to_string(i) + "_", p.data(), static_cast<int>(p.size()));
-    if (blocks[i].nw > 0) Array(os, name + "_w" + std::to_string(i) + "_", blocks[i].w, blocks[i].nw);
+    if (blocks[i].nw > 0)
+      Array(os, name + "_w" + std::to_string(i) + "_", blocks[i].w, blocks[i].nw);
   }
   os << "static const pzk_block " << name << "_blocks_[" << nb << "] = {\n";
   for (int i = 0; i < nb; ++i) {
@@ -115,20 +119,30 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name, co
   }
   os << "};\n\n";
   const int nc = std::max(st.constants(), 1), nd = std::max(st.dynamic(), 1);
-  os << "typedef struct {\n  double c[" << nc << "]; /* constants derived at init */\n  double d[" << nd
-     << "]; /* dynamic state */\n  double t[" << nd << "]; /* the inverse's trial state */\n"
-     << "  pzk_ctl ctl;  /* limits, last drive and output, saturation counter */\n} " << name << "_state;\n\n"
+  os << "typedef struct {\n  double c[" << nc << "]; /* constants derived at init */\n  double d["
+     << nd << "]; /* dynamic state */\n  double t[" << nd << "]; /* the inverse's trial state */\n"
+     << "  pzk_ctl ctl;  /* limits, last drive and output, saturation counter */\n} " << name
+     << "_state;\n\n"
      << "static inline double " << name << "_init(" << name << "_state *s, double u0) {\n"
      << "  s->ctl.u_lo = " << N << "_U_MIN;\n  s->ctl.u_hi = " << N << "_U_MAX;\n"
-     << "  return pzk_chain_init(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u0);\n}\n\n"
+     << "  return pzk_chain_init(" << name << "_blocks_, " << N
+     << "_BLOCKS, s->c, s->d, &s->ctl, u0);\n}\n\n"
      << "static inline double " << name << "_step(" << name << "_state *s, double u) {\n"
-     << "  return pzk_chain_step(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, &s->ctl, u);\n}\n\n"
-     << "static inline double " << name << "_inverse_step(" << name << "_state *s, double y_desired) {\n"
-     << "  return pzk_chain_inverse(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
-     << "/* " << N << "_PRIME_SAMPLES > 0 (a delay's fraction over a half): after init, the references of the\n"
-     << " * " << N << "_PRIME_SAMPLES samples before the first inverse step's, in order; returns -1 when none is wanted. */\n"
-     << "static inline int " << name << "_inverse_prime(" << name << "_state *s, double y_desired) {\n"
-     << "  return pzk_chain_inverse_prime(" << name << "_blocks_, " << N << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
+     << "  return pzk_chain_step(" << name << "_blocks_, " << N
+     << "_BLOCKS, s->c, s->d, &s->ctl, u);\n}\n\n"
+     << "static inline double " << name << "_inverse_step(" << name
+     << "_state *s, double y_desired) {\n"
+     << "  return pzk_chain_inverse(" << name << "_blocks_, " << N
+     << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
+     << "/* " << N
+     << "_PRIME_SAMPLES > 0 (a delay's fraction over a half): after init, the references of the\n"
+     << " * " << N
+     << "_PRIME_SAMPLES samples before the first inverse step's, in order; returns -1 when none is "
+        "wanted. */\n"
+     << "static inline int " << name << "_inverse_prime(" << name
+     << "_state *s, double y_desired) {\n"
+     << "  return pzk_chain_inverse_prime(" << name << "_blocks_, " << N
+     << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
      << "#endif /* " << N << "_H_ */\n";
   return os.str();
 }

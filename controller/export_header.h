@@ -18,6 +18,7 @@ namespace pz::controller {
 
 /// The header text for `name` (a C identifier, checked: InputError). `comment` goes into the
 /// header's first comment (provenance).
-std::string ExportHeader(const records::Stepper& stepper, const std::string& name, const std::string& comment);
+std::string ExportHeader(const records::Stepper& stepper, const std::string& name,
+                         const std::string& comment);
 
 }  // namespace pz::controller

@@ -14,8 +14,9 @@
 
 namespace pz::records {
 
-RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
-                                    const std::function<void(const RecordsCheckTrial&, int)>& on_trial) {
+RecordsCheckSummary RunRecordsCheck(
+    const RecordsCheckOptions& o,
+    const std::function<void(const RecordsCheckTrial&, int)>& on_trial) {
   if (o.trials < 1) throw InputError(FieldError("trials", o.trials, "must be >= 1"));
   const auto start = std::chrono::steady_clock::now();
   const DataScale scale = SyntheticStackScale();
@@ -24,9 +25,11 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   if (nominal.empty()) {
     std::string with;
     for (const std::string& name : FamilyNames())
-      if (!MakeFamily(name, scale)->CheckNominal().empty()) with += (with.empty() ? "" : ", ") + name;
+      if (!MakeFamily(name, scale)->CheckNominal().empty())
+        with += (with.empty() ? "" : ", ") + name;
     throw InputError("diagnose-check --records-family: '" + o.family +
-                     "' has no nominal parameter set for synthetic records (Family::CheckNominal; families with one: " +
+                     "' has no nominal parameter set for synthetic records (Family::CheckNominal; "
+                     "families with one: " +
                      with + ")");
   }
   // The truths drawn: every records effect the family does not hold, but those that only records
@@ -36,7 +39,8 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
   std::vector<EffectKind> kinds;
   const auto excluded = fam->excluded_effects();
   for (EffectKind k : RecordEffects())
-    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end() && !NeedsRateCoverage(k))
+    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end() &&
+        !NeedsRateCoverage(k))
       kinds.push_back(k);
   RecordsCheckSummary sum;
   for (int i = 0; i < o.trials; ++i) {
@@ -45,7 +49,8 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     opt::Rng rng(t.seed * 104729 + 7);
     std::vector<double> p = nominal, weights;
     for (double& v : p) v *= UniformDraw(rng, 0.8, 1.25);
-    if (fam->linear()) weights = std::exchange(p, {});  // the truth's weights; p: the effect's parameters
+    if (fam->linear())
+      weights = std::exchange(p, {});  // the truth's weights; p: the effect's parameters
     std::vector<EffectKind> effects;
     std::ostringstream desc;
     if (rng.Uniform01() >= o.none_probability) {
@@ -77,7 +82,9 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     desc << ", " << WaveformName(d.waveform);
     t.description = desc.str();
     RecordModel truth(fam, effects, scale);
-    io::Record r = SynthesizeRecord(truth, p, weights, d, {UniformDraw(rng, -2, 2), 0.02, 0.005, t.seed}, "rec", model::CaseRole::kTrain);
+    io::Record r =
+        SynthesizeRecord(truth, p, weights, d, {UniformDraw(rng, -2, 2), 0.02, 0.005, t.seed},
+                         "rec", model::CaseRole::kTrain);
     const double t0 = r.t[r.rest_samples] + 0.2, t2 = r.t.back(), t1 = t0 + 0.6 * (t2 - t0);
     io::RecordSet set;
     set.source = "synthetic";
@@ -94,8 +101,8 @@ RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& o,
     dopt.propose = false;
     const RecordDiagnosis dg = DiagnoseRecords(set, dopt);
     static_cast<TrialVerdict&>(t) = TrialVerdictOf(dg);
-    t.correct = sum.Add(t.truth == "none", dg.significant, dg.verdict_kind, dg.named >= 0 && t.named == t.truth,
-                        t.confidence);
+    t.correct = sum.Add(t.truth == "none", dg.significant, dg.verdict_kind,
+                        dg.named >= 0 && t.named == t.truth, t.confidence);
     sum.trials.push_back(t);
     if (on_trial) on_trial(t, i);
   }

@@ -17,11 +17,12 @@
 namespace pz::records {
 
 struct RecordsCheckOptions {
-  std::string family = "backlash-like";  ///< stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii
+  std::string family =
+      "backlash-like";  ///< stack-bouc-wen, backlash-like, duhem, prandtl-ishlinskii
   int trials = 40;
   uint64_t seed = 1;
   double none_probability = 0.25;
-  RecordDiagnoseOptions diagnose;        ///< family and candidates are set per trial
+  RecordDiagnoseOptions diagnose;  ///< family and candidates are set per trial
 };
 
 /// A trial: its truth and what the diagnosis said of it (diagnose/verdict.h).
@@ -39,7 +40,8 @@ struct RecordsCheckSummary : CalibrationTally {
 };
 
 /// Runs the trials (seeds seed, seed + 1, …). Throws InputError on a family without a nominal set.
-RecordsCheckSummary RunRecordsCheck(const RecordsCheckOptions& options,
-                                    const std::function<void(const RecordsCheckTrial&, int)>& on_trial = {});
+RecordsCheckSummary RunRecordsCheck(
+    const RecordsCheckOptions& options,
+    const std::function<void(const RecordsCheckTrial&, int)>& on_trial = {});
 
 }  // namespace pz::records

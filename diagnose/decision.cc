@@ -24,13 +24,14 @@ Status DecisionRules::Validate() const {
     return InvalidArgument(FieldError("min_closed", min_closed, "must be in (0, 1]"));
   if (!(min_pattern >= 0 && min_pattern <= 1))
     return InvalidArgument(FieldError("min_pattern", min_pattern, "must be in [0, 1]"));
-  if (!std::isfinite(separation_z)) return InvalidArgument(FieldError("separation_z", separation_z, "must be finite"));
+  if (!std::isfinite(separation_z))
+    return InvalidArgument(FieldError("separation_z", separation_z, "must be finite"));
   if (blocks < 4) return InvalidArgument(FieldError("blocks", blocks, "must be >= 4"));
   return Status::Ok();
 }
 
-Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t, double nw, double nt,
-               const DecisionRules& rules) {
+Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t, double nw,
+               double nt, const DecisionRules& rules) {
   Gap g;
   g.s0 = s0;
   g.t0 = t0;
@@ -49,8 +50,8 @@ double ClosedShare(double s0, double s_c, double s_floor) {
   return excess > 0 ? (s0 - s_c) / excess : std::numeric_limits<double>::quiet_NaN();
 }
 
-void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added_params, double pattern,
-                    const DecisionRules& rules, CandidateScore& c) {
+void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added_params,
+                    double pattern, const DecisionRules& rules, CandidateScore& c) {
   const double k = added_params;
   const double excess = gap.s0 - gap.s_floor;  // the gap above the floor (≤ 0: none to close)
   c.s_withheld = s_withheld;
@@ -67,10 +68,12 @@ void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added
   if (!(excess > 0)) {
     why.push_back("no gap above the floor to close");
   } else if (!(c.closed >= rules.min_closed)) {
-    why.push_back(Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * rules.min_closed));
+    why.push_back(
+        Fmt("closes %.0f %% of the gap (< %.0f %%)", 100 * c.closed, 100 * rules.min_closed));
   }
   if (!(c.pattern >= rules.min_pattern))
-    why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern, 100 * rules.min_pattern));
+    why.push_back(Fmt("explains %.0f %% of the localised pattern (< %.0f %%)", 100 * c.pattern,
+                      100 * rules.min_pattern));
   c.qualifies = why.empty();
   c.note.clear();
   for (size_t i = 0; i < why.size(); ++i) c.note += (i ? "; " : "") + why[i];
@@ -102,15 +105,16 @@ void AssignWeights(const Gap& gap, std::span<CandidateScore* const> ranked) {
   double z = std::exp(-lmax);
   for (const CandidateScore* c : ranked)
     if (std::isfinite(c->score)) z += std::exp(c->score / (2 * phi) - lmax);
-  for (CandidateScore* c : ranked) c->weight = std::isfinite(c->score) ? std::exp(c->score / (2 * phi) - lmax) / z : 0;
+  for (CandidateScore* c : ranked)
+    c->weight = std::isfinite(c->score) ? std::exp(c->score / (2 * phi) - lmax) / z : 0;
 }
 
 bool AtFloor(const Gap& gap, const CandidateScore& c, const DecisionRules& rules) {
   return gap.s_floor > 0 && std::sqrt(c.s_withheld / gap.s_floor) <= rules.significance_ratio;
 }
 
-Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const SquaredErrors& squares,
-                  const DecisionRules& rules) {
+Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked,
+                  const SquaredErrors& squares, const DecisionRules& rules) {
   Naming n;
   if (!gap.significant || ranked.empty() || !ranked[0]->qualifies) return n;
   n.named = 0;
@@ -124,7 +128,8 @@ Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const
     // Practically equivalent only when both leave no significant gap and the paired test does not
     // separate them; a rival that leaves a significant gap is evidence against itself however
     // small z is (never a tie).
-    if (n.runner_up < 0 && z < rules.separation_z && AtFloor(gap, best, rules) && AtFloor(gap, other, rules)) {
+    if (n.runner_up < 0 && z < rules.separation_z && AtFloor(gap, best, rules) &&
+        AtFloor(gap, other, rules)) {
       n.runner_up = static_cast<int>(i);
       n.z_runner_up = z;
     }
@@ -144,8 +149,8 @@ std::string VerdictKind(bool significant, const Naming& naming) {
   return naming.runner_up >= 0 ? "inseparable" : "effect";
 }
 
-bool CalibrationTally::Add(bool clean_truth, bool significant, const std::string& verdict_kind, bool named_is_truth,
-                           double stated_confidence) {
+bool CalibrationTally::Add(bool clean_truth, bool significant, const std::string& verdict_kind,
+                           bool named_is_truth, double stated_confidence) {
   const bool named = verdict_kind == "effect" || verdict_kind == "inseparable";
   const bool verdict_right = clean_truth ? verdict_kind == "none" : named && named_is_truth;
   if (clean_truth) {

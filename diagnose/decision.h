@@ -6,17 +6,18 @@
 //
 //   significant gap  ⇔  √(S0 / S_floor) > significance_ratio
 //   score            =  (S0 − S_c)/σ²_w − k ln N_w            (held-out χ² gain − BIC penalty)
-//   train ΔBIC       =  (T_c − T0)/σ²_t + k ln N_t            (< 0: better on the training data too)
-//   closed           =  (S0 − S_c)/(S0 − S_floor)             (share of the excess gap; undefined
+//   train ΔBIC       =  (T_c − T0)/σ²_t + k ln N_t            (< 0: better on the training data
+//   too) closed           =  (S0 − S_c)/(S0 − S_floor)             (share of the excess gap;
+//   undefined
 //                                                              without an excess)
 //   pattern          =  share of the localised excess removed (PatternExplained)
-//   qualifies        ⇔  significant, score > 0, ΔBIC < 0, closed ≥ min_closed, pattern ≥ min_pattern
-//   ranking          :  by score, best first (stable); posterior weights against "none"
+//   qualifies        ⇔  significant, score > 0, ΔBIC < 0, closed ≥ min_closed, pattern ≥
+//   min_pattern ranking          :  by score, best first (stable); posterior weights against "none"
 //   named            ⇔  the best-ranked candidate qualifies; its confidence is Π Φ(z) of paired
 //                       block tests of the withheld squared errors against the starting model and
-//                       every other qualifying candidate, tied or not (Φ(z): the probability that the
-//                       named one is the better of the two; a tie at z = 0 states ½); a qualifying
-//                       rival is practically equivalent (cannot be separated: verdict
+//                       every other qualifying candidate, tied or not (Φ(z): the probability that
+//                       the named one is the better of the two; a tie at z = 0 states ½); a
+//                       qualifying rival is practically equivalent (cannot be separated: verdict
 //                       "inseparable") only when both bring the withheld gap within the
 //                       significance threshold of the floor (√(S_c / S_floor) ≤ significance_ratio)
 //                       and the paired test does not separate them (z < separation_z).
@@ -38,49 +39,50 @@ namespace pz::records {
 /// The thresholds of the rules: the same for every effect.
 struct DecisionRules {
   double significance_ratio = 1.25;  ///< withheld RMS / floor above which a gap is significant, > 1
-  double min_closed = 0.5;           ///< share of the excess gap a named effect must close, in (0, 1]
-  double min_pattern = 0.5;          ///< share of the localised excess it must remove, in [0, 1]
-  double separation_z = 2.0;         ///< a qualifying rival within this paired z, both at the floor:
-                                     ///< cannot separate
-  int blocks = 20;                   ///< of the paired block tests, ≥ 4
+  double min_closed = 0.5;    ///< share of the excess gap a named effect must close, in (0, 1]
+  double min_pattern = 0.5;   ///< share of the localised excess it must remove, in [0, 1]
+  double separation_z = 2.0;  ///< a qualifying rival within this paired z, both at the floor:
+                              ///< cannot separate
+  int blocks = 20;            ///< of the paired block tests, ≥ 4
   Status Validate() const;
 };
 
 /// The gap of a starting model over the withheld and the training data, against the floor.
 struct Gap {
-  double s0 = 0, t0 = 0;            ///< withheld / training Σe² of the starting model
-  double s_floor = 0;               ///< withheld floor Σ N σ²
-  double nw = 0, nt = 0;            ///< withheld / training samples
-  double var_w = 0, var_t = 0;      ///< floor variance per sample σ²_w, σ²_t
-  double rms_ratio = 0;             ///< √(s0 / s_floor)
+  double s0 = 0, t0 = 0;        ///< withheld / training Σe² of the starting model
+  double s_floor = 0;           ///< withheld floor Σ N σ²
+  double nw = 0, nt = 0;        ///< withheld / training samples
+  double var_w = 0, var_t = 0;  ///< floor variance per sample σ²_w, σ²_t
+  double rms_ratio = 0;         ///< √(s0 / s_floor)
   bool significant = false;
 };
 /// The gap from the starting model's Σe² (withheld s0, training t0), the withheld floor Σ N σ²
 /// and the per-sample floor variances of both parts.
-Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t, double nw, double nt,
-               const DecisionRules& rules);
+Gap MeasureGap(double s0, double t0, double s_floor, double var_w, double var_t, double nw,
+               double nt, const DecisionRules& rules);
 
-/// The share of the excess gap closed: (s0 − s_c)/(s0 − s_floor); NaN when s0 ≤ s_floor (no excess).
+/// The share of the excess gap closed: (s0 − s_c)/(s0 − s_floor); NaN when s0 ≤ s_floor (no
+/// excess).
 double ClosedShare(double s0, double s_c, double s_floor);
 
 /// What the rules say of one candidate. Protocols' candidate types derive from it.
 struct CandidateScore {
   double s_withheld = 0, s_train = 0;  ///< Σe² of the candidate on the withheld / training data
   double score = 0;                    ///< held-out χ² gain − penalty
-  double train_delta_bic = 0;          ///< (T_c − T_0)/σ²_t + k ln N_t (< 0: better on training too)
-  double closed = 0;                   ///< share of the excess withheld gap closed (NaN without an excess)
-  double raw_reduction = 0;            ///< (S0 − S_c)/S0
-  double pattern = 0;                  ///< share of the localised excess removed
-  double weight = 0;                   ///< posterior weight exp(score/2φ) against the others and "none"
-  double confidence = 0;               ///< if named: Π Φ(z) of the paired block tests
-  bool qualifies = false;              ///< passes every rule but the ranking
-  std::string note;                    ///< why it does not qualify
+  double train_delta_bic = 0;  ///< (T_c − T_0)/σ²_t + k ln N_t (< 0: better on training too)
+  double closed = 0;           ///< share of the excess withheld gap closed (NaN without an excess)
+  double raw_reduction = 0;    ///< (S0 − S_c)/S0
+  double pattern = 0;          ///< share of the localised excess removed
+  double weight = 0;           ///< posterior weight exp(score/2φ) against the others and "none"
+  double confidence = 0;       ///< if named: Π Φ(z) of the paired block tests
+  bool qualifies = false;      ///< passes every rule but the ranking
+  std::string note;            ///< why it does not qualify
 };
 
 /// Scores a fitted candidate with `added_params` parameters more than the starting model and the
 /// given pattern share.
-void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added_params, double pattern,
-                    const DecisionRules& rules, CandidateScore& c);
+void ScoreCandidate(const Gap& gap, double s_withheld, double s_train, int added_params,
+                    double pattern, const DecisionRules& rules, CandidateScore& c);
 /// A candidate whose fit failed: ranked last, never named.
 void FailCandidate(const std::string& message, CandidateScore& c);
 
@@ -121,8 +123,8 @@ struct Naming {
 /// Squared withheld errors of the starting model (index −1) or of the ranked candidate i, in the
 /// same sample order for every model.
 using SquaredErrors = std::function<std::vector<double>(int)>;
-Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked, const SquaredErrors& squares,
-                  const DecisionRules& rules);
+Naming NameEffect(const Gap& gap, std::span<CandidateScore* const> ranked,
+                  const SquaredErrors& squares, const DecisionRules& rules);
 
 /// "none" (no significant gap), "unexplained" (nothing named), "effect" or "inseparable".
 std::string VerdictKind(bool significant, const Naming& naming);

@@ -46,7 +46,8 @@ std::vector<double> WithheldSquares(const io::RecordSet& set, const FitResult& f
 }
 
 /// Localised excess over drive-level × direction bins of the withheld samples.
-std::vector<double> BinExcess(const io::RecordSet& set, const FitResult& f, double sigma2, const DataScale& s) {
+std::vector<double> BinExcess(const io::RecordSet& set, const FitResult& f, double sigma2,
+                              const DataScale& s) {
   constexpr int kLevels = 10;
   std::vector<double> sse(2 * kLevels, 0.0), n(2 * kLevels, 0.0);
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -77,7 +78,8 @@ std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape
   for (size_t k = 0; k < n; ++k) r.t[k] = static_cast<double>(k) * r.dt;
   r.rest_samples = 1;
   while (r.rest_samples < n && r.u[r.rest_samples] == r.u[0]) ++r.rest_samples;
-  r.first_scored = std::min(n - 1, r.rest_samples + static_cast<size_t>(shape.fs_hz / shape.frequency_hz));
+  r.first_scored =
+      std::min(n - 1, r.rest_samples + static_cast<size_t>(shape.fs_hz / shape.frequency_hz));
   r.end_scored = n;
   std::vector<double> y(n);
   fit.model->Simulate(r, fit.params, fit.weights, n, y);
@@ -86,7 +88,8 @@ std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape
   return y;
 }
 
-ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a, const FitResult& b, double sigma) {
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a,
+                                     const FitResult& b, double sigma) {
   const DataScale& s = a.model->scale();
   const double fs = s.fs;
   ProposedExperiment best;
@@ -112,7 +115,8 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
         for (size_t k = r.first_scored; k < r.end_scored; ++k) mean += ya[k] - yb[k];
         mean /= static_cast<double>(r.scored());
         double ss = 0;
-        for (size_t k = r.first_scored; k < r.end_scored; ++k) ss += (ya[k] - yb[k] - mean) * (ya[k] - yb[k] - mean);
+        for (size_t k = r.first_scored; k < r.end_scored; ++k)
+          ss += (ya[k] - yb[k] - mean) * (ya[k] - yb[k] - mean);
         const double rms = std::sqrt(ss / static_cast<double>(r.scored()));
         if (std::isfinite(rms) && rms / sigma > best.ratio_to_noise) {
           best.shape = d;
@@ -123,11 +127,12 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
     }
   }
   const DriveShape& d = best.shape;
-  best.description = std::string("a ") + WaveformName(d.waveform) + " of ±" + Fmt(d.amplitude, 4) + " " +
-                     set.drive_unit + " around " + Fmt(d.bias, 4) + " " + set.drive_unit + " at " +
-                     Fmt(d.frequency_hz, 4) + " Hz for " + Fmt(d.duration_s, 3) + " s (sampled at " + Fmt(d.fs_hz, 5) +
-                     " Hz), where " + a.model->Describe() + " and " + b.model->Describe() + " differ by " +
-                     Fmt(best.rms_difference, 3) + " " + set.response_unit + " RMS = " + Fmt(best.ratio_to_noise, 3) +
+  best.description = std::string("a ") + WaveformName(d.waveform) + " of ±" + Fmt(d.amplitude, 4) +
+                     " " + set.drive_unit + " around " + Fmt(d.bias, 4) + " " + set.drive_unit +
+                     " at " + Fmt(d.frequency_hz, 4) + " Hz for " + Fmt(d.duration_s, 3) +
+                     " s (sampled at " + Fmt(d.fs_hz, 5) + " Hz), where " + a.model->Describe() +
+                     " and " + b.model->Describe() + " differ by " + Fmt(best.rms_difference, 3) +
+                     " " + set.response_unit + " RMS = " + Fmt(best.ratio_to_noise, 3) +
                      " × the noise floor";
   return best;
 }
@@ -135,10 +140,14 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& o) {
   if (auto st = o.rules.Validate(); !st.ok()) throw InputError("rules." + st.message());
   RecordDiagnosis d;
-  for (const io::Record& r : set.records) (Withheld(r) ? d.withheld_samples : d.train_samples) += r.scored();
-  if (d.train_samples == 0) throw InputError(set.source.string() + ": no training record (role train)");
+  for (const io::Record& r : set.records)
+    (Withheld(r) ? d.withheld_samples : d.train_samples) += r.scored();
+  if (d.train_samples == 0)
+    throw InputError(set.source.string() + ": no training record (role train)");
   if (d.withheld_samples == 0) {
-    throw InputError(set.source.string() + ": no withheld record or window (role validate or test): the diagnosis scores effects on data the fits did not see");
+    throw InputError(set.source.string() +
+                     ": no withheld record or window (role validate or test): the diagnosis scores "
+                     "effects on data the fits did not see");
   }
   d.excitation = AnalyseExcitation(set);
   const auto progress = o.fit.progress;
@@ -168,9 +177,10 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   }
   d.noise = EstimateNoiseFloor(set, &base_res);
   const double sigma2 = d.noise.sigma * d.noise.sigma;
-  const double nw = static_cast<double>(d.withheld_samples), nt = static_cast<double>(d.train_samples);
-  const records::Gap gap =
-      MeasureGap(Sse(set, d.base, true), Sse(set, d.base, false), nw * sigma2, sigma2, sigma2, nw, nt, o.rules);
+  const double nw = static_cast<double>(d.withheld_samples),
+               nt = static_cast<double>(d.train_samples);
+  const records::Gap gap = MeasureGap(Sse(set, d.base, true), Sse(set, d.base, false), nw * sigma2,
+                                      sigma2, sigma2, nw, nt, o.rules);
   d.s0 = gap.s0;
   d.s_floor = gap.s_floor;
   d.rms_ratio = gap.rms_ratio;
@@ -188,8 +198,8 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     const auto excluded = d.base.model->family().excluded_effects();
     const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
     for (const EffectInfo& e : lib)
-      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() && e.unsupported.empty() &&
-          (rates || !NeedsRateCoverage(e.kind)))
+      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() &&
+          e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
         cands.push_back(e.kind);
   }
   const auto base_ex = BinExcess(set, d.base, sigma2, scale);
@@ -199,7 +209,8 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     RecordCandidate c;
     c.kind = e;
     FitOptions ce = fo;
-    auto model = std::make_shared<RecordModel>(d.base.model->family_ptr(), std::vector<EffectKind>{e}, scale);
+    auto model = std::make_shared<RecordModel>(d.base.model->family_ptr(),
+                                               std::vector<EffectKind>{e}, scale);
     // Extra starts: the base fit with the effect at small magnitudes (unit coordinates).
     const auto& params = model->params();
     opt::ParamBox box;
@@ -212,8 +223,9 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     for (double frac : {0.02, 0.1, 0.3}) {
       std::vector<double> phys = d.base.params;
       for (const ParamInfo& p : e->Params(scale)) {
-        const double mid = p.lower <= 0 && p.upper >= 0 ? frac * (p.upper > 0 ? p.upper : p.lower)
-                                                         : p.lower * std::pow(p.upper / p.lower, frac);
+        const double mid = p.lower <= 0 && p.upper >= 0
+                               ? frac * (p.upper > 0 ? p.upper : p.lower)
+                               : p.lower * std::pow(p.upper / p.lower, frac);
         phys.push_back(mid);
       }
       std::vector<double> unit(box.size());
@@ -237,7 +249,9 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   AssignWeights(gap, ranked);
   const Naming naming = NameEffect(
       gap, ranked,
-      [&](int i) { return i < 0 ? base_sq : WithheldSquares(set, d.candidates[static_cast<size_t>(i)].fit); },
+      [&](int i) {
+        return i < 0 ? base_sq : WithheldSquares(set, d.candidates[static_cast<size_t>(i)].fit);
+      },
       o.rules);
   d.named = naming.named;
   d.runner_up = naming.runner_up;
@@ -256,7 +270,8 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   }
   std::vector<double> ratios;
   for (const RecordMetrics& m : d.base.metrics) ratios.push_back(m.rmse / d.noise.sigma);
-  if (d.significant && d.noise.sigma > 0) d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
+  if (d.significant && d.noise.sigma > 0)
+    d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
   text.closing = d.excitation_note;
   std::vector<VerdictCandidate> ranked_names;
   for (const RecordCandidate& c : d.candidates) ranked_names.push_back({EffectName(c.kind), &c});

@@ -51,7 +51,7 @@ struct ProposedExperiment {
 struct RecordCandidate : CandidateScore {
   EffectKind kind;
   FitResult fit;
-  double z_vs_base = 0;      ///< paired block test against the base model (> 0: better)
+  double z_vs_base = 0;  ///< paired block test against the base model (> 0: better)
 };
 
 struct RecordDiagnoseOptions {
@@ -70,14 +70,16 @@ struct RecordDiagnosis {
   bool significant = false;
   std::vector<RecordCandidate> candidates;  ///< ranked by score, best first
   int named = -1;                           ///< index into candidates
-  int runner_up = -1;                       ///< a qualifying candidate that cannot be separated, or −1
+  int runner_up = -1;  ///< a qualifying candidate that cannot be separated, or −1
   double z_runner_up = 0;
   double confidence = 0;
   std::string verdict_kind;  ///< "effect", "inseparable", "none", "unexplained"
   std::string verdict;
   std::optional<ProposedExperiment> next;
-  ExcitationReport excitation;  ///< what training excites, what each withheld record needs (records/excitation.h)
-  std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict (empty: none)
+  ExcitationReport excitation;  ///< what training excites, what each withheld record needs
+                                ///< (records/excitation.h)
+  std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict
+                                ///< (empty: none)
   /// Candidates left out because their fitted model's prediction is not finite on a withheld
   /// record (it diverges there: no score to rank), named at the end of the verdict.
   std::vector<std::string> diverged;
@@ -91,10 +93,12 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
 
 /// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
-ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a, const FitResult& b, double sigma);
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a,
+                                     const FitResult& b, double sigma);
 
 /// Simulates a fitted model on a drive shape (the record's rest and excitation, window = the
 /// excitation after its first period), output with polarity; offsets not applied.
-std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape, io::Record* record = nullptr);
+std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape,
+                                   io::Record* record = nullptr);
 
 }  // namespace pz::records

@@ -26,7 +26,8 @@ double MaxRate(const io::Record& r, double limit, size_t* above = nullptr) {
 }
 
 /// The regressor rows of the record's samples [from, end_scored) at the fitted parameters.
-size_t RegressorRows(const RecordModel& m, std::span<const double> params, const io::Record& r, std::vector<double>& reg) {
+size_t RegressorRows(const RecordModel& m, std::span<const double> params, const io::Record& r,
+                     std::vector<double>& reg) {
   const size_t from = SimulatedFrom(r, r.end_scored);
   std::vector<double> ue;
   m.EffectiveDrive(r, params.subspan(m.family_param_count()), from, r.end_scored, ue);
@@ -41,15 +42,19 @@ std::string ExtrapolationCheck::Describe(const std::string& du, const std::strin
   std::string s = record + ": " + (flagged ? "FLAGGED" : "inside the training range");
   if (rate_ratio > 1) {
     s += "; rates up to " + io::FormatNumber(rate_ratio) + " × the fastest in training (" +
-         io::FormatNumber(100 * rate_beyond_share) + " % of its samples faster): the rate-dependent lag is extrapolated";
+         io::FormatNumber(100 * rate_beyond_share) +
+         " % of its samples faster): the rate-dependent lag is extrapolated";
   }
   if (drive_beyond > 0) {
-    s += "; the drive goes " + io::FormatNumber(drive_beyond) + " " + du + " beyond the training drive range (" +
-         io::FormatNumber(100 * drive_beyond_share) + " % of its samples)";
+    s += "; the drive goes " + io::FormatNumber(drive_beyond) + " " + du +
+         " beyond the training drive range (" + io::FormatNumber(100 * drive_beyond_share) +
+         " % of its samples)";
   }
   if (terms > 0) {
-    s += "; " + std::to_string(terms) + " weighted term(s) leave their training range, carrying up to " +
-         io::FormatNumber(term_max) + " " + yu + " of the prediction (RMS " + io::FormatNumber(term_rms) + " " + yu + ")";
+    s += "; " + std::to_string(terms) +
+         " weighted term(s) leave their training range, carrying up to " +
+         io::FormatNumber(term_max) + " " + yu + " of the prediction (RMS " +
+         io::FormatNumber(term_rms) + " " + yu + ")";
   }
   return s;
 }
@@ -60,7 +65,8 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
   const double train_rmse = std::sqrt(std::max(fit.train_mse, 0.0));
   const bool linear = m.family().linear() && fit.weights.size() == m.family().regressors();
   const size_t nw = linear ? fit.weights.size() : 0;
-  std::vector<double> lo(nw, std::numeric_limits<double>::infinity()), hi(nw, -std::numeric_limits<double>::infinity());
+  std::vector<double> lo(nw, std::numeric_limits<double>::infinity()),
+      hi(nw, -std::numeric_limits<double>::infinity());
   std::vector<double> reg;
   if (linear) {
     for (const io::Record* r : set.WithRole(model::CaseRole::kTrain)) {
@@ -77,7 +83,8 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
   const bool rates = std::any_of(m.effects().begin(), m.effects().end(), NeedsRateCoverage);
   double train_rate = 0;
   if (rates)
-    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain)) train_rate = std::max(train_rate, MaxRate(*r, 0));
+    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
+      train_rate = std::max(train_rate, MaxRate(*r, 0));
   std::vector<ExtrapolationCheck> out;
   for (const io::Record& r : set.records) {
     if (r.role == model::CaseRole::kTrain) continue;
@@ -112,7 +119,8 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
       c.term_rms = std::sqrt(sq / static_cast<double>(r.scored()));
       c.terms = static_cast<size_t>(std::count(left.begin(), left.end(), 1));
     }
-    c.flagged = c.drive_beyond > kDriveShare * (s.u_max - s.u_min) || c.term_max >= kTermRmse * train_rmse;
+    c.flagged =
+        c.drive_beyond > kDriveShare * (s.u_max - s.u_min) || c.term_max >= kTermRmse * train_rmse;
     if (c.term_max == 0 && c.drive_beyond == 0) c.flagged = false;
     if (rates && train_rate > 0) {
       size_t faster = 0;
@@ -125,15 +133,18 @@ std::vector<ExtrapolationCheck> CheckExtrapolation(const io::RecordSet& set, con
   return out;
 }
 
-std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat, double range) {
-  if (yhat.size() < r.end_scored) throw InputError("ErrorByReversalDepth: model output shorter than the window");
+std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat,
+                                           double range) {
+  if (yhat.size() < r.end_scored)
+    throw InputError("ErrorByReversalDepth: model output shorter than the window");
   if (!(range > 0)) throw InputError("ErrorByReversalDepth: the training drive range must be > 0");
   constexpr int kBins = 5;
   std::vector<DepthBin> bins(kBins);
   std::vector<double> sse(kBins, 0.0);
   for (int b = 0; b < kBins; ++b) {
     bins[static_cast<size_t>(b)].lo = 0.2 * b;
-    bins[static_cast<size_t>(b)].hi = b + 1 < kBins ? 0.2 * (b + 1) : std::numeric_limits<double>::infinity();
+    bins[static_cast<size_t>(b)].hi =
+        b + 1 < kBins ? 0.2 * (b + 1) : std::numeric_limits<double>::infinity();
   }
   const double thr = 0.01 * range;
   auto close = [&](size_t first, size_t end) {  // the piece [first, end): its swing and errors
@@ -153,7 +164,8 @@ std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const 
       ++bins[b].samples;
     }
   };
-  // Turning points with a dead band of thr: a piece ends at the extreme the drive then leaves by thr.
+  // Turning points with a dead band of thr: a piece ends at the extreme the drive then leaves by
+  // thr.
   size_t start = r.first_scored, hi = start, lo = start;
   int dir = 0;  // +1 rising, −1 falling, 0 not yet known
   for (size_t k = r.first_scored; k < r.end_scored; ++k) {
@@ -177,7 +189,8 @@ std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const 
   }
   close(start, r.end_scored);
   for (size_t b = 0; b < bins.size(); ++b)
-    if (bins[b].samples > 0) bins[b].rmse = std::sqrt(sse[b] / static_cast<double>(bins[b].samples));
+    if (bins[b].samples > 0)
+      bins[b].rmse = std::sqrt(sse[b] / static_cast<double>(bins[b].samples));
   return bins;
 }
 
@@ -185,18 +198,23 @@ std::string DescribeDepthBins(const std::vector<DepthBin>& bins) {
   std::string s;
   for (const DepthBin& b : bins) {
     if (b.samples == 0) continue;
-    s += (s.empty() ? "" : "; ") + std::string("swing ") + io::FormatNumber(std::round(100 * b.lo)) +
-         (std::isfinite(b.hi) ? "–" + io::FormatNumber(std::round(100 * b.hi)) + " %" : " % and more") + ": RMSE " +
-         io::FormatNumber(std::round(b.rmse * 1e4) / 1e4) + " (" + std::to_string(b.pieces) + " piece(s), " +
-         std::to_string(b.samples) + " samples)";
+    s += (s.empty() ? "" : "; ") + std::string("swing ") +
+         io::FormatNumber(std::round(100 * b.lo)) +
+         (std::isfinite(b.hi) ? "–" + io::FormatNumber(std::round(100 * b.hi)) + " %"
+                              : " % and more") +
+         ": RMSE " + io::FormatNumber(std::round(b.rmse * 1e4) / 1e4) + " (" +
+         std::to_string(b.pieces) + " piece(s), " + std::to_string(b.samples) + " samples)";
   }
   return s;
 }
 
-std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat, double window_s) {
-  if (yhat.size() < r.end_scored) throw InputError("ResidualTrend: model output shorter than the window");
+std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat,
+                                  double window_s) {
+  if (yhat.size() < r.end_scored)
+    throw InputError("ResidualTrend: model output shorter than the window");
   if (!std::isfinite(window_s) || window_s < 0) {
-    throw InputError("ResidualTrend: the averaging window must be finite and ≥ 0, got " + io::FormatNumber(window_s));
+    throw InputError("ResidualTrend: the averaging window must be finite and ≥ 0, got " +
+                     io::FormatNumber(window_s));
   }
   const size_t n = r.end_scored - r.first_scored;
   std::vector<double> prefix(n + 1, 0.0);  // Σ of the residual over the first i scored samples

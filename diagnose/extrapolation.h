@@ -28,15 +28,17 @@ namespace pz::records {
 
 struct ExtrapolationCheck {
   std::string record;
-  double drive_beyond = 0;           ///< largest excursion beyond the training drive range (drive units)
-  double drive_beyond_share = 0;     ///< share of the scored samples outside it
-  double term_max = 0;               ///< largest |e_k| (response units; linear families)
-  double term_rms = 0;               ///< RMS of e_k over the scored samples
-  size_t terms = 0;                  ///< weighted terms that leave their training range
-  double rate_ratio = 0;             ///< largest |du/dt| / the training's largest (rate-dependent models; 0 else)
-  double rate_beyond_share = 0;      ///< share of the scored samples faster than any in training
+  double drive_beyond = 0;  ///< largest excursion beyond the training drive range (drive units)
+  double drive_beyond_share = 0;  ///< share of the scored samples outside it
+  double term_max = 0;            ///< largest |e_k| (response units; linear families)
+  double term_rms = 0;            ///< RMS of e_k over the scored samples
+  size_t terms = 0;               ///< weighted terms that leave their training range
+  double rate_ratio =
+      0;  ///< largest |du/dt| / the training's largest (rate-dependent models; 0 else)
+  double rate_beyond_share = 0;  ///< share of the scored samples faster than any in training
   bool flagged = false;
-  /// One line: "ramp: flagged — the drive reaches 12 V beyond the training range (8 % of samples); …".
+  /// One line: "ramp: flagged — the drive reaches 12 V beyond the training range (8 % of samples);
+  /// …".
   std::string Describe(const std::string& drive_unit, const std::string& response_unit) const;
 };
 
@@ -51,8 +53,10 @@ struct DepthBin {
   size_t pieces = 0, samples = 0;
   double rmse = 0;
 };
-/// Bins [0, 0.2), [0.2, 0.4) … [0.8, ∞) (empty bins included). yhat: the model output [0, end_scored).
-std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat, double training_range);
+/// Bins [0, 0.2), [0.2, 0.4) … [0.8, ∞) (empty bins included). yhat: the model output [0,
+/// end_scored).
+std::vector<DepthBin> ErrorByReversalDepth(const io::Record& r, std::span<const double> yhat,
+                                           double training_range);
 /// "swing 0–20 %: 0.05 (3 pieces); …" over the non-empty bins.
 std::string DescribeDepthBins(const std::vector<DepthBin>& bins);
 
@@ -60,6 +64,7 @@ std::string DescribeDepthBins(const std::vector<DepthBin>& bins);
 /// averaged over a centred window of `window_s` (one drive period removes the loop's periodic
 /// error and leaves the drift), truncated at the window's ends. One value per scored sample,
 /// [first_scored, end_scored). window_s ≤ one sample: the residual itself.
-std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat, double window_s);
+std::vector<double> ResidualTrend(const io::Record& r, std::span<const double> yhat,
+                                  double window_s);
 
 }  // namespace pz::records

@@ -20,18 +20,22 @@ bool CheckTrial::correct() const {
 
 int CheckColumn(const CheckTrial& t) {
   if (t.verdict_kind == "unexplained") return UnexplainedColumn();
-  if (t.verdict_kind == "effect" || t.verdict_kind == "inseparable") return model::FinIndex(t.named);
+  if (t.verdict_kind == "effect" || t.verdict_kind == "inseparable")
+    return model::FinIndex(t.named);
   return 0;
 }
 
 void Tally(CheckSummary& s, const CheckTrial& t) {
-  s.confusion[static_cast<size_t>(model::FinIndex(t.truth))][static_cast<size_t>(CheckColumn(t))] += 1;
-  s.Add(t.truth.none(), t.significant, t.verdict_kind, !t.truth.none() && t.named == t.truth, t.confidence);
+  s.confusion[static_cast<size_t>(model::FinIndex(t.truth))][static_cast<size_t>(CheckColumn(t))] +=
+      1;
+  s.Add(t.truth.none(), t.significant, t.verdict_kind, !t.truth.none() && t.named == t.truth,
+        t.confidence);
   if (!t.truth.none() && t.correct() && std::isfinite(t.closed)) s.closed.push_back(t.closed);
   s.trials.push_back(t);
 }
 
-CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o, const SyntheticOptions& so,
+CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o,
+                      const SyntheticOptions& so,
                       const std::function<void(const CheckTrial&, int)>& on_trial) {
   if (trials < 1) throw InputError(FieldError("trials", trials, "must be >= 1"));
   ThrowIfError(o.Validate());
@@ -60,7 +64,8 @@ CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o, const
     Tally(summary, t);
     if (on_trial) on_trial(t, i);
   }
-  summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 

@@ -23,28 +23,29 @@ std::string CheckColumnName(int column);
 
 struct CheckTrial {
   uint64_t seed = 0;
-  model::EffectKind truth;  ///< none: a clean bench
+  model::EffectKind truth;        ///< none: a clean bench
   std::string truth_description;  ///< form and parameters
   double magnitude = 0;
-  std::string verdict_kind;       ///< "effect", "none", "unexplained"
-  model::EffectKind named;        ///< first named effect (none otherwise)
+  std::string verdict_kind;  ///< "effect", "none", "unexplained"
+  model::EffectKind named;   ///< first named effect (none otherwise)
   double confidence = 0;
-  bool significant = false;       ///< the diagnosis found a significant gap
-  double rms_ratio = 0;           ///< base withheld RMS / floor
-  double closed = 0;              ///< share of the withheld gap closed by the named effect(s)
+  bool significant = false;  ///< the diagnosis found a significant gap
+  double rms_ratio = 0;      ///< base withheld RMS / floor
+  double closed = 0;         ///< share of the withheld gap closed by the named effect(s)
   double wall_time_s = 0;
-  bool correct() const;           ///< named the true effect (or "none" on a clean bench)
+  bool correct() const;  ///< named the true effect (or "none" on a clean bench)
 };
 
 /// The counts (effect_trials: benches with one effect whose gap was significant, effect_right: …
 /// where that effect was named, clean, clean_alarms) and the reliability table are those of every
-/// calibration check (diagnose/decision.h); the confusion matrix and the shares closed are the bench's.
+/// calibration check (diagnose/decision.h); the confusion matrix and the shares closed are the
+/// bench's.
 struct CheckSummary : records::CalibrationTally {
   std::vector<CheckTrial> trials;
   /// [truth][named], CheckRows() × CheckCols().
-  std::vector<std::vector<int>> confusion =
-      std::vector<std::vector<int>>(static_cast<size_t>(CheckRows()), std::vector<int>(static_cast<size_t>(CheckCols()), 0));
-  std::vector<double> closed;        ///< share closed, over correctly named effects
+  std::vector<std::vector<int>> confusion = std::vector<std::vector<int>>(
+      static_cast<size_t>(CheckRows()), std::vector<int>(static_cast<size_t>(CheckCols()), 0));
+  std::vector<double> closed;  ///< share closed, over correctly named effects
   double wall_time_s = 0;
 };
 
@@ -52,7 +53,8 @@ struct CheckSummary : records::CalibrationTally {
 int CheckColumn(const CheckTrial& t);
 
 /// Runs `trials` benches with seeds seed, seed + 1, …; `on_trial` sees each finished trial.
-CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& diagnose, const SyntheticOptions& synthetic,
+CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& diagnose,
+                      const SyntheticOptions& synthetic,
                       const std::function<void(const CheckTrial&, int index)>& on_trial = {});
 
 /// Adds a trial to the counters of a summary (RunCheck uses it; exposed for tests).

@@ -24,17 +24,23 @@ namespace {
 // What would separate two effects that the bench cannot: the physics of their difference (the fin
 // benches are nine sinusoids; `diagnose --records` simulates candidate drives for record sets).
 std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
-  auto is = [&](model::EffectKind x, model::EffectKind y) { return (a == x && b == y) || (a == y && b == x); };
+  auto is = [&](model::EffectKind x, model::EffectKind y) {
+    return (a == x && b == y) || (a == y && b == x);
+  };
   if (is(model::EffectKind::Named("driver-lowpass"), model::EffectKind::Named("delay")))
-    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) and rounds edges: "
-           "a square-wave (step) drive, or sinusoids at several times the bench's highest frequency, would separate them";
-  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) would separate them; "
+    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) "
+           "and rounds edges: "
+           "a square-wave (step) drive, or sinusoids at several times the bench's highest "
+           "frequency, would separate them";
+  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) "
+         "would separate them; "
          "`piezoid diagnose --records` proposes one for record sets";
 }
 
 using model::EffectKind;
 
-std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0, double e = 0, double f = 0) {
+std::string Fmt(const char* fmt, double a = 0, double b = 0, double c = 0, double d = 0,
+                double e = 0, double f = 0) {
   char buf[512];
   std::snprintf(buf, sizeof buf, fmt, a, b, c, d, e, f);
   return buf;
@@ -51,8 +57,9 @@ std::vector<double> CaseFloors(const DiagnosisModel& m, const FitResult& fit) {
   for (size_t c = 0; c < m.cases().size(); ++c) {
     const DiagCase& dc = m.cases()[c];
     const model::SimulationSummary s = m.Simulate(layout, fit.x, c, y);
-    floors.push_back(s.ok() ? records::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
-                            : dc.noise.floor_rms_deg);
+    floors.push_back(s.ok()
+                         ? records::SaturationAwareFloor(dc.noise, dc.measured_deg, y, dc.b1, dc.b2)
+                         : dc.noise.floor_rms_deg);
   }
   return floors;
 }
@@ -65,17 +72,20 @@ std::vector<double> FeatureExcess(const model::GroupResidual& g) {
   std::vector<double> ex;
   auto bin = [&](const model::BinStat& b) { ex.push_back(b.n * std::max(0.0, b.rms * b.rms - v)); };
   for (const auto& b : g.phase) bin(b);
-  for (const auto* b : {&g.rising, &g.falling, &g.near_reversal, &g.in_saturation, &g.first_cycle, &g.later_cycles})
+  for (const auto* b :
+       {&g.rising, &g.falling, &g.near_reversal, &g.in_saturation, &g.first_cycle, &g.later_cycles})
     bin(*b);
   const double hn = g.harmonic_noise * g.harmonic_noise;
-  for (double a : {g.odd_rms, g.even_rms, g.low_rms}) ex.push_back(0.5 * g.samples * std::max(0.0, a * a - hn));
+  for (double a : {g.odd_rms, g.even_rms, g.low_rms})
+    ex.push_back(0.5 * g.samples * std::max(0.0, a * a - hn));
   return ex;
 }
 
 // Fits a structure: fast structures get a global search seeded around `from`, beam structures are
 // refined from `from` with a few starting magnitudes of the new effect.
-FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, const ParameterLayout* from_layout,
-                       const std::vector<double>* from_x, EffectKind added, const DiagnoseOptions& o) {
+FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout,
+                       const ParameterLayout* from_layout, const std::vector<double>* from_x,
+                       EffectKind added, const DiagnoseOptions& o) {
   FitOptions fo;
   fo.threads = o.threads;
   fo.evaluator_factory = o.evaluator_factory;
@@ -92,7 +102,8 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
   const model::EffectInfo& info = model::GetEffectInfo(added);
   for (int i = ParameterLayout::kBase; i < layout.size(); ++i) {
     const ParamSpec& s = layout.specs()[i];
-    if (s.effect == static_cast<int>(layout.structure().size()) - 1 && s.effect_param == info.magnitude_param)
+    if (s.effect == static_cast<int>(layout.structure().size()) - 1 &&
+        s.effect_param == info.magnitude_param)
       mag = i;
   }
   // Starting magnitudes: fractions of the upper end of the range; for a parameter of either sign
@@ -109,7 +120,8 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
     }
   }
   bool beam = false;
-  for (EffectKind k : layout.structure()) beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
+  for (EffectKind k : layout.structure())
+    beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
   if (beam) {
     fo.global_search = false;
     fo.lm.max_iterations = o.cvode_lm_iterations;
@@ -118,7 +130,8 @@ FitResult FitStructure(const DiagnosisModel& m, const ParameterLayout& layout, c
     if (fo.starts.empty()) fo.starts.push_back(x0);
   } else {
     fo.de = o.de_candidate;
-    fo.de.seed = o.seed + 1000 * (static_cast<uint64_t>(model::FinIndex(added)) + 1) + 17 * layout.structure().size();
+    fo.de.seed = o.seed + 1000 * (static_cast<uint64_t>(model::FinIndex(added)) + 1) +
+                 17 * layout.structure().size();
     fo.seeds = starts;
     fo.seeds.insert(fo.seeds.begin(), x0);
     fo.starts = {x0};
@@ -149,20 +162,24 @@ std::vector<Absorption> Compare(const FitResult& without, const FitResult& with)
     const ParamEstimate& b = with.params[i];
     const double se = std::sqrt(a.std_error * a.std_error + b.std_error * b.std_error);
     const double z = se > 0 && std::isfinite(se) ? (a.value - b.value) / se : 0.0;
-    const double rel = std::abs(a.value - b.value) / std::max({std::abs(a.value), std::abs(b.value), 1e-300});
+    const double rel =
+        std::abs(a.value - b.value) / std::max({std::abs(a.value), std::abs(b.value), 1e-300});
     if (std::abs(z) > 2.0 && rel > 0.05) r.push_back({a.name, a.unit, a.value, b.value, z});
   }
-  std::sort(r.begin(), r.end(), [](const Absorption& x, const Absorption& y) { return std::abs(x.z) > std::abs(y.z); });
+  std::sort(r.begin(), r.end(),
+            [](const Absorption& x, const Absorption& y) { return std::abs(x.z) > std::abs(y.z); });
   return r;
 }
 
 // Fits every candidate effect on top of `start` (no scoring).
 std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitResult& start,
-                                           const ParameterLayout& start_layout, const std::vector<EffectKind>& kinds,
+                                           const ParameterLayout& start_layout,
+                                           const std::vector<EffectKind>& kinds,
                                            const DiagnoseOptions& o, int64_t* evals) {
   std::vector<EffectKind> todo;
   for (EffectKind k : kinds)
-    if (std::find(start.structure.begin(), start.structure.end(), k) == start.structure.end()) todo.push_back(k);
+    if (std::find(start.structure.begin(), start.structure.end(), k) == start.structure.end())
+      todo.push_back(k);
   std::vector<CandidateResult> out(todo.size());
   std::vector<std::string> lines(todo.size());
   std::vector<std::exception_ptr> errors(todo.size());
@@ -184,13 +201,16 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
       nested.description = layout.Describe();
       nested.x = layout.Extend(start.x, start_layout);
       nested.evaluations = c.fit.evaluations;
-      nested.message = "refinement ended above the starting model (" + c.fit.message + "): effect kept at zero";
+      nested.message =
+          "refinement ended above the starting model (" + c.fit.message + "): effect kept at zero";
       ComputeUncertainty(m, layout, nested, o.threads);
       c.fit = std::move(nested);
     }
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     lines[i] = std::string("  ") + model::EffectName(k) +
-               (c.fit.ok ? Fmt(": training RMS %.4f, withheld RMS %.4f deg", std::sqrt(c.fit.train_pi / m.training_samples()),
+               (c.fit.ok ? Fmt(": training RMS %.4f, withheld RMS %.4f deg",
+                               std::sqrt(c.fit.train_pi / m.training_samples()),
                                std::sqrt(c.fit.withheld_pi / m.withheld_samples()))
                          : ": fit failed: " + c.fit.message) +
                Fmt(" (%.1f s)", wall);
@@ -213,7 +233,8 @@ std::vector<CandidateResult> FitCandidates(const DiagnosisModel& m, const FitRes
 }
 
 // The candidates of a round as the verdict names them (diagnose/verdict.h), in ranked order.
-std::vector<records::VerdictCandidate> VerdictCandidates(const std::vector<CandidateResult>& ranked) {
+std::vector<records::VerdictCandidate> VerdictCandidates(
+    const std::vector<CandidateResult>& ranked) {
   std::vector<records::VerdictCandidate> v;
   for (const CandidateResult& c : ranked) v.push_back({model::EffectName(c.kind), &c});
   return v;
@@ -233,8 +254,10 @@ records::VerdictText RoundText(const RoundResult& round, const FitResult& start)
 }
 
 // The gap of `start` against the floors, and its candidates scored, ranked and judged by the rules
-// of diagnose/decision.h; the bench supplies the floors, the localised excess and the squared errors.
-RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const model::ResidualAnalysis& start_analysis,
+// of diagnose/decision.h; the bench supplies the floors, the localised excess and the squared
+// errors.
+RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start,
+                       const model::ResidualAnalysis& start_analysis,
                        std::span<const double> floors, std::vector<CandidateResult> candidates,
                        const DiagnoseOptions& o) {
   RoundResult round;
@@ -243,15 +266,17 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
   const double s_floor = SumWithheld(m, CaseFloorVariance(m, floors));
   double s_floor_t = 0;
   for (size_t c = 0; c < m.cases().size(); ++c)
-    if (m.cases()[c].training) s_floor_t += floors[c] * floors[c] * m.cases()[c].measured_deg.size();
-  const records::Gap gap =
-      records::MeasureGap(start.withheld_pi, start.train_pi, s_floor, s_floor / nw, s_floor_t / nt, nw, nt, o.rules);
+    if (m.cases()[c].training)
+      s_floor_t += floors[c] * floors[c] * m.cases()[c].measured_deg.size();
+  const records::Gap gap = records::MeasureGap(start.withheld_pi, start.train_pi, s_floor,
+                                               s_floor / nw, s_floor_t / nt, nw, nt, o.rules);
   round.s0 = gap.s0;
   round.s_floor = gap.s_floor;
   round.rms_ratio = gap.rms_ratio;
   round.significant = gap.significant;
-  Say(o, "  starting model: " + start.description +
-             Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
+  Say(o,
+      "  starting model: " + start.description +
+          Fmt(" withheld RMS %.4f deg = %.2f x floor", std::sqrt(round.s0 / nw), round.rms_ratio));
   const std::vector<double> start_excess = FeatureExcess(start_analysis.withheld);
   for (CandidateResult& c : candidates) {
     if (!c.fit.ok) {
@@ -260,10 +285,11 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
     }
     const model::ResidualAnalysis ra = AnalyseFit(m, c.fit, floors);
     records::ScoreCandidate(gap, c.fit.withheld_pi, c.fit.train_pi, c.added_params,
-                            records::PatternExplained(start_excess, FeatureExcess(ra.withheld)), o.rules, c);
+                            records::PatternExplained(start_excess, FeatureExcess(ra.withheld)),
+                            o.rules, c);
     Say(o, std::string("  ") + model::EffectName(c.kind) +
-               Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%", std::sqrt(c.s_withheld / nw),
-                   c.score, 100 * c.closed, 100 * c.pattern));
+               Fmt(": withheld RMS %.4f deg, score %.1f, closed %.0f %%, pattern %.0f %%",
+                   std::sqrt(c.s_withheld / nw), c.score, 100 * c.closed, 100 * c.pattern));
   }
   round.candidates = std::move(candidates);
   records::RankByScore(round.candidates);
@@ -289,8 +315,8 @@ RoundResult ScoreRound(const DiagnosisModel& m, const FitResult& start, const mo
   return round;
 }
 
-std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& base, const DiagnoseOptions& o,
-                                      int64_t* evals) {
+std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& base,
+                                      const DiagnoseOptions& o, int64_t* evals) {
   const ParameterLayout layout({});
   const int n = layout.size();
   const size_t nc = m.cases().size();
@@ -352,24 +378,30 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
 
 Status DiagnoseOptions::Validate() const {
   if (threads < 1) return InvalidArgument(FieldError("threads", threads, "must be >= 1"));
-  if (concurrent_fits < 1) return InvalidArgument(FieldError("concurrent_fits", concurrent_fits, "must be >= 1"));
+  if (concurrent_fits < 1)
+    return InvalidArgument(FieldError("concurrent_fits", concurrent_fits, "must be >= 1"));
   if (auto s = de_base.Validate(); !s.ok()) return InvalidArgument("de_base." + s.message());
-  if (auto s = de_candidate.Validate(); !s.ok()) return InvalidArgument("de_candidate." + s.message());
+  if (auto s = de_candidate.Validate(); !s.ok())
+    return InvalidArgument("de_candidate." + s.message());
   if (auto s = lm.Validate(); !s.ok()) return InvalidArgument("lm." + s.message());
   if (cvode_lm_iterations < 1)
     return InvalidArgument(FieldError("cvode_lm_iterations", cvode_lm_iterations, "must be >= 1"));
-  if (cvode_start_fractions.empty()) return InvalidArgument("cvode_start_fractions: needs at least one entry");
+  if (cvode_start_fractions.empty())
+    return InvalidArgument("cvode_start_fractions: needs at least one entry");
   for (double f : cvode_start_fractions)
-    if (!(f > 0 && f <= 1)) return InvalidArgument(FieldError("cvode_start_fractions[]", f, "must be in (0, 1]"));
+    if (!(f > 0 && f <= 1))
+      return InvalidArgument(FieldError("cvode_start_fractions[]", f, "must be in (0, 1]"));
   if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
   if (auto s = rules.Validate(); !s.ok()) return InvalidArgument("rules." + s.message());
   for (EffectKind k : candidates)
     if (!model::IsFinEffect(k))
-      return InvalidArgument(FieldError("candidates[]", std::string(k.name()), "not an effect of the fin bench"));
+      return InvalidArgument(
+          FieldError("candidates[]", std::string(k.name()), "not an effect of the fin bench"));
   return Status::Ok();
 }
 
-model::ResidualAnalysis AnalyseFit(const DiagnosisModel& m, const FitResult& fit, std::span<const double> floors) {
+model::ResidualAnalysis AnalyseFit(const DiagnosisModel& m, const FitResult& fit,
+                                   std::span<const double> floors) {
   const ParameterLayout layout(fit.structure);
   std::vector<std::vector<double>> ys(m.cases().size());
   std::vector<model::ResidualCaseInput> in;
@@ -411,7 +443,8 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   if (!d.base.ok) throw InputError("the base model could not be fitted: " + d.base.message);
   // 2. Round-1 fits: every candidate on top of the base model.
   Say(o, "candidates: each effect added to the base model");
-  std::vector<CandidateResult> first_fits = FitCandidates(m, d.base, base_layout, kinds, o, &d.evaluations);
+  std::vector<CandidateResult> first_fits =
+      FitCandidates(m, d.base, base_layout, kinds, o, &d.evaluations);
   // 3. Floors where the best-fitting model (lowest training PI) sits on its saturations.
   const FitResult* floor_model = &d.base;
   for (const CandidateResult& c : first_fits)
@@ -429,10 +462,11 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     d.withheld_floor = sw;
   }
   d.base_residuals = AnalyseFit(m, d.base, floors);
-  Say(o, Fmt("base model: train RMS %.4f, withheld RMS %.4f deg; floor %.4f / %.4f deg",
-             std::sqrt(d.base.train_pi / m.training_samples()), std::sqrt(d.base.withheld_pi / m.withheld_samples()),
-             d.floor_train, d.floor_withheld) +
-             " (saturations of " + d.floor_model + ")");
+  Say(o,
+      Fmt("base model: train RMS %.4f, withheld RMS %.4f deg; floor %.4f / %.4f deg",
+          std::sqrt(d.base.train_pi / m.training_samples()),
+          std::sqrt(d.base.withheld_pi / m.withheld_samples()), d.floor_train, d.floor_withheld) +
+          " (saturations of " + d.floor_model + ")");
   // 4. Trends of per-case fits.
   if (o.trends) {
     Say(o, "per-case fits (trends over the V x f grid)");
@@ -449,7 +483,8 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
       const double ratio = std::sqrt(current.withheld_pi / std::max(d.withheld_floor, 1e-300));
       if (ratio > o.rules.significance_ratio) {
         Say(o, "second effect: the others on top of the first");
-        fits = FitCandidates(m, current, ParameterLayout(current.structure), kinds, o, &d.evaluations);
+        fits =
+            FitCandidates(m, current, ParameterLayout(current.structure), kinds, o, &d.evaluations);
       }
     }
     RoundResult round = ScoreRound(m, current, current_analysis, floors, std::move(fits), o);
@@ -486,7 +521,9 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     g.rms_before = std::sqrt(g.pi_before / n);
     g.rms_after = std::sqrt(g.pi_after / n);
     const double floor_c = n * floors[c] * floors[c];
-    g.closed = g.pi_before > floor_c ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0) : 0.0;
+    g.closed = g.pi_before > floor_c
+                   ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0)
+                   : 0.0;
     d.gaps.push_back(g);
   }
   // What the base terms absorb: the best candidate of the first round against the base fit.
@@ -497,19 +534,23 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     d.absorbed_by = model::EffectName(best.kind);
   }
   // Verdict: the first round's, with what the base terms absorb and the second effect.
-  d.verdict_kind = records::VerdictKind(first.significant, {.named = first.named, .runner_up = first.runner_up});
+  d.verdict_kind =
+      records::VerdictKind(first.significant, {.named = first.named, .runner_up = first.runner_up});
   records::VerdictText text = RoundText(first, d.base);
   for (const Absorption& a : d.absorbed)
     text.absorbed.push_back(a.name + Fmt(" (%.3g without it, %.3g with it)", a.without, a.with));
   if (d.named.size() > 1) {
     text.second = model::EffectName(d.named[1]);
-    text.second_confidence = d.rounds[1].candidates[static_cast<size_t>(d.rounds[1].named)].confidence;
+    text.second_confidence =
+        d.rounds[1].candidates[static_cast<size_t>(d.rounds[1].named)].confidence;
     text.s_final = d.withheld_after;
   }
-  d.verdict = records::ComposeVerdict(
-      first.gap, VerdictCandidates(first.candidates),
-      {.named = first.named, .runner_up = first.runner_up, .z_runner_up = first.z_runner_up, .confidence = d.confidence},
-      o.rules, text);
+  d.verdict = records::ComposeVerdict(first.gap, VerdictCandidates(first.candidates),
+                                      {.named = first.named,
+                                       .runner_up = first.runner_up,
+                                       .z_runner_up = first.z_runner_up,
+                                       .confidence = d.confidence},
+                                      o.rules, text);
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Say(o, d.verdict);
   return d;

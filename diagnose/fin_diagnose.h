@@ -1,5 +1,5 @@
-// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect causes
-// it, and how far it shrinks once that effect is in the model.
+// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect
+// causes it, and how far it shrinks once that effect is in the model.
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
@@ -53,14 +53,15 @@ struct DiagnoseOptions {
   opt::DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
   opt::DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
   opt::LmOptions lm{.max_iterations = 40};
-  int cvode_lm_iterations = 15;              ///< LM iterations of a beam (CVODE) candidate, ≥ 1
+  int cvode_lm_iterations = 15;  ///< LM iterations of a beam (CVODE) candidate, ≥ 1
   /// Starting magnitudes of a beam candidate, as fractions of the upper end of its magnitude range
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
   std::vector<double> cvode_start_fractions = {0.03, 0.15};
   model::EffectSimOptions sim;
-  records::DecisionRules rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
-  bool second_effect = true;         ///< greedy search for a second effect
-  bool trends = true;                ///< per-case fits and their V × f trends
+  records::DecisionRules
+      rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
+  bool second_effect = true;                         ///< greedy search for a second effect
+  bool trends = true;                                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
   Status Validate() const;
 };
@@ -75,27 +76,27 @@ struct CandidateResult : records::CandidateScore {
 /// One greedy round: the model it starts from, its gap, the candidates on top of it.
 struct RoundResult {
   std::vector<model::EffectKind> base_structure;
-  double s0 = 0;               ///< withheld Σe² of the starting model [deg²]
-  double s_floor = 0;          ///< withheld floor Σ N σ² [deg²]
-  double rms_ratio = 0;        ///< √(s0 / s_floor)
+  double s0 = 0;         ///< withheld Σe² of the starting model [deg²]
+  double s_floor = 0;    ///< withheld floor Σ N σ² [deg²]
+  double rms_ratio = 0;  ///< √(s0 / s_floor)
   bool significant = false;
   std::vector<CandidateResult> candidates;  ///< ranked by score, best first
-  int named = -1;              ///< index into candidates, −1 if none named
-  int runner_up = -1;          ///< a qualifying candidate the data cannot separate from the named one
-  double z_runner_up = 0;      ///< its paired block z against the named one
-  records::Gap gap;            ///< the starting model's gap, as the rules measured it
-  std::string verdict;         ///< the round's verdict (diagnose/verdict.h)
+  int named = -1;                           ///< index into candidates, −1 if none named
+  int runner_up = -1;      ///< a qualifying candidate the data cannot separate from the named one
+  double z_runner_up = 0;  ///< its paired block z against the named one
+  records::Gap gap;        ///< the starting model's gap, as the rules measured it
+  std::string verdict;     ///< the round's verdict (diagnose/verdict.h)
 };
 
 /// A parameter trend over the V × f grid from the per-case fits.
 struct ParamTrend {
   std::string name, unit;
-  std::vector<double> per_case;   ///< value per case (case order)
+  std::vector<double> per_case;     ///< value per case (case order)
   double slope_v = 0, slope_f = 0;  ///< per V, per Hz
   double p_v = 1, p_f = 1;          ///< two-sided p-values
   double r2 = 0;
-  double relative_range = 0;        ///< (max − min)/|mean|
-  bool significant = false;         ///< p < 0.01 on V or f and relative range > 10 %
+  double relative_range = 0;  ///< (max − min)/|mean|
+  bool significant = false;   ///< p < 0.01 on V or f and relative range > 10 %
 };
 
 /// A base parameter that moves when an effect is added (what absorbed the effect).
@@ -110,14 +111,14 @@ struct CaseGap {
   int number = 0;
   bool training = false;
   double amplitude_v = 0, frequency_hz = 0;
-  double floor_rms = 0;                 ///< σ_c [deg]
-  double rms_before = 0, rms_after = 0; ///< [deg]
-  double pi_before = 0, pi_after = 0;   ///< [deg²]
-  double closed = 0;                    ///< (PI_b − PI_a)/(PI_b − N σ²), clamped to [−9, 1]
+  double floor_rms = 0;                  ///< σ_c [deg]
+  double rms_before = 0, rms_after = 0;  ///< [deg]
+  double pi_before = 0, pi_after = 0;    ///< [deg²]
+  double closed = 0;  ///< (PI_b − PI_a)/(PI_b − N σ²), clamped to [−9, 1]
 };
 
 struct Diagnosis {
-  std::string bench;                 ///< the folder or a label
+  std::string bench;  ///< the folder or a label
   std::vector<DiagCase> cases;
   double quantum_deg = 0;
   double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
@@ -126,9 +127,9 @@ struct Diagnosis {
   model::ResidualAnalysis base_residuals;
   std::vector<ParamTrend> trends;
   std::vector<RoundResult> rounds;
-  std::vector<model::EffectKind> named;       ///< effects named, in order
-  double confidence = 0;                       ///< of the first named effect (or of "none")
-  FitResult final_fit;                         ///< the base model plus the named effects
+  std::vector<model::EffectKind> named;  ///< effects named, in order
+  double confidence = 0;                 ///< of the first named effect (or of "none")
+  FitResult final_fit;                   ///< the base model plus the named effects
   model::ResidualAnalysis final_residuals;
   std::vector<CaseGap> gaps;
   double withheld_before = 0, withheld_after = 0;  ///< Σe² [deg²]
@@ -137,9 +138,9 @@ struct Diagnosis {
   double remaining_ratio = 0;                      ///< √(after / floor)
   std::vector<Absorption> absorbed;                ///< when an effect is mimicked by the base terms
   std::string absorbed_by;                         ///< the candidate whose addition shows it
-  std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as well),
-                             ///< "none" (no significant gap), "unexplained"
-  std::string verdict;       ///< the summary sentence(s)
+  std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as
+                             ///< well), "none" (no significant gap), "unexplained"
+  std::string verdict;  ///< the summary sentence(s)
   double wall_time_s = 0;
   int64_t evaluations = 0;
 };

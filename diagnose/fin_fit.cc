@@ -16,7 +16,8 @@ void LayoutMap::Bounds(std::span<const double> x, int i, double* lower, double* 
 
 namespace {
 
-opt::ResidualFunction TrainingResiduals(const DiagnosisModel& model, const ParameterLayout& layout) {
+opt::ResidualFunction TrainingResiduals(const DiagnosisModel& model,
+                                        const ParameterLayout& layout) {
   return [&model, &layout](std::span<const double> x, std::vector<double>& r) {
     return model.Residuals(layout, x, true, r);
   };
@@ -24,7 +25,8 @@ opt::ResidualFunction TrainingResiduals(const DiagnosisModel& model, const Param
 
 void SetUncertainty(opt::Uncertainty u, FitResult& fit) {
   for (ParamEstimate& p : u.params) {
-    if (p.identifiability == Identifiability::kNoEffect && (p.name == "beta" || p.name == "gamma") && fit.x[2] == 0.0)
+    if (p.identifiability == Identifiability::kNoEffect &&
+        (p.name == "beta" || p.name == "gamma") && fit.x[2] == 0.0)
       p.note += " (alpha = 0: z stays 0)";
   }
   fit.params = std::move(u.params);
@@ -36,14 +38,15 @@ void SetUncertainty(opt::Uncertainty u, FitResult& fit) {
 
 }  // namespace
 
-void ComputeUncertainty(const DiagnosisModel& model, const ParameterLayout& layout, FitResult& fit, int threads,
-                        double fd_step) {
+void ComputeUncertainty(const DiagnosisModel& model, const ParameterLayout& layout, FitResult& fit,
+                        int threads, double fd_step) {
   const LayoutMap map(layout);
-  SetUncertainty(opt::ComputeUncertainty(map, TrainingResiduals(model, layout), fit.x, threads, fd_step),
-                 fit);
+  SetUncertainty(
+      opt::ComputeUncertainty(map, TrainingResiduals(model, layout), fit.x, threads, fd_step), fit);
 }
 
-FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, const FitOptions& o) {
+FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout,
+                    const FitOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   ThrowIfError(o.de.Validate());
   ThrowIfError(o.lm.Validate());
@@ -59,7 +62,8 @@ FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, 
     std::vector<std::vector<double>> u;
     for (const auto& s : pts) {
       if (s.size() != static_cast<size_t>(n))
-        throw InputError(FieldError(std::string(what) + "[].size()", s.size(), "must be " + std::to_string(n)));
+        throw InputError(
+            FieldError(std::string(what) + "[].size()", s.size(), "must be " + std::to_string(n)));
       u.push_back(layout.ToUnit(s));
     }
     return u;
@@ -92,7 +96,8 @@ FitResult FitGlobal(const DiagnosisModel& model, const ParameterLayout& layout, 
   fit.evaluations = r.evaluations;
   fit.message = r.message;
   if (!r.ok) {
-    fit.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    fit.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return fit;
   }
   fit.x = r.x;

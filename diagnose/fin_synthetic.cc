@@ -42,7 +42,8 @@ std::string SyntheticTrial::Describe() const {
   return os.str();
 }
 
-std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
+std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant,
+                                    const model::BimorphParams& params,
                                     const std::vector<Effect>& effects,
                                     const std::vector<std::pair<double, double>>& saturations,
                                     const SyntheticOptions& o, opt::Rng& rng) {
@@ -55,7 +56,9 @@ std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const mode
     p.b2 = saturations[c].second;
     std::vector<double> y(d.NumSamples());
     const model::SimulationSummary s = sim.SimulateAngle(p, effects, d, y);
-    if (!s.ok()) throw InputError("synthetic bench, case " + std::to_string(kCases[c].number) + ": " + s.message);
+    if (!s.ok())
+      throw InputError("synthetic bench, case " + std::to_string(kCases[c].number) + ": " +
+                       s.message);
     for (double& v : y) {
       v += o.jitter_rms_deg * Normal(rng);
       if (o.quantum_deg > 0) v = o.quantum_deg * std::round(v / o.quantum_deg);
@@ -65,7 +68,8 @@ std::vector<DiagCase> SimulateBench(const model::BimorphPlant& plant, const mode
   return cases;
 }
 
-SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t seed, const SyntheticOptions& o) {
+SyntheticTrial MakeSyntheticTrial(const model::BimorphPlant& plant, uint64_t seed,
+                                  const SyntheticOptions& o) {
   opt::Rng rng(seed);
   SyntheticTrial t;
   t.seed = seed;

@@ -22,12 +22,14 @@ std::string Num(double v) {
 }
 
 std::shared_ptr<const model::BimorphPlant> DefaultPlant() {
-  static const std::shared_ptr<const model::BimorphPlant> plant = std::make_shared<const model::BimorphPlant>();
+  static const std::shared_ptr<const model::BimorphPlant> plant =
+      std::make_shared<const model::BimorphPlant>();
   return plant;
 }
 
 // The structure of the spec, or the violations of its names.
-std::vector<model::EffectKind> Structure(const job::DiagnoseProblem& d, std::vector<FieldViolation>* v) {
+std::vector<model::EffectKind> Structure(const job::DiagnoseProblem& d,
+                                         std::vector<FieldViolation>* v) {
   std::vector<model::EffectKind> kinds;
   std::set<model::EffectKind> seen;
   for (size_t i = 0; i < d.structure.size(); ++i) {
@@ -60,7 +62,8 @@ std::vector<FieldViolation> Validate(const job::JobSpec& spec) {
   auto add = [&](const std::string& field, const std::string& value, const std::string& rule) {
     v.push_back({field, field + " = " + value + ": " + rule});
   };
-  if (d.cases.empty()) v.push_back({"diagnose.cases", "diagnose.cases: at least one training case is needed"});
+  if (d.cases.empty())
+    v.push_back({"diagnose.cases", "diagnose.cases: at least one training case is needed"});
   if (d.cycles.size() != d.cases.size())
     add("diagnose.cycles", std::to_string(d.cycles.size()) + " values",
         "must have one per case (" + std::to_string(d.cases.size()) + ")");
@@ -70,26 +73,34 @@ std::vector<FieldViolation> Validate(const job::JobSpec& spec) {
     const job::HgannCaseSpec& c = d.cases[i];
     const std::string f = "diagnose.cases[" + std::to_string(i) + "]";
     if (c.number <= 0) add(f + ".number", std::to_string(c.number), "must be > 0");
-    if (!numbers.insert(c.number).second) add(f + ".number", std::to_string(c.number), "must be unique");
-    if (!(std::isfinite(c.amplitude_v) && c.amplitude_v >= 0)) add(f + ".amplitude_v", Num(c.amplitude_v), "must be finite and >= 0");
-    if (!(std::isfinite(c.frequency_hz) && c.frequency_hz > 0)) add(f + ".frequency_hz", Num(c.frequency_hz), "must be finite and > 0");
+    if (!numbers.insert(c.number).second)
+      add(f + ".number", std::to_string(c.number), "must be unique");
+    if (!(std::isfinite(c.amplitude_v) && c.amplitude_v >= 0))
+      add(f + ".amplitude_v", Num(c.amplitude_v), "must be finite and >= 0");
+    if (!(std::isfinite(c.frequency_hz) && c.frequency_hz > 0))
+      add(f + ".frequency_hz", Num(c.frequency_hz), "must be finite and > 0");
     if (!(std::isfinite(c.sample_rate_hz) && c.sample_rate_hz > 0))
       add(f + ".sample_rate_hz", Num(c.sample_rate_hz), "must be finite and > 0");
-    if (c.role == job::CaseRole::kUnspecified) add(f + ".role", "CASE_ROLE_UNSPECIFIED", "must be set");
+    if (c.role == job::CaseRole::kUnspecified)
+      add(f + ".role", "CASE_ROLE_UNSPECIFIED", "must be set");
     train += c.role == job::CaseRole::kTrain;
-    if (c.angle_deg.size() < 2) add(f + ".angle_deg", std::to_string(c.angle_deg.size()) + " samples", "needs >= 2");
+    if (c.angle_deg.size() < 2)
+      add(f + ".angle_deg", std::to_string(c.angle_deg.size()) + " samples", "needs >= 2");
     for (size_t k = 0; k < c.angle_deg.size(); ++k)
       if (!std::isfinite(c.angle_deg[k])) {
         add(f + ".angle_deg[" + std::to_string(k) + "]", Num(c.angle_deg[k]), "must be finite");
         break;
       }
-    if (c.b1 || c.b2) add(f + ".b1", "set", "must be unset (the saturations come from the measured extremes)");
+    if (c.b1 || c.b2)
+      add(f + ".b1", "set", "must be unset (the saturations come from the measured extremes)");
     if (i < d.cycles.size()) {
       const double cy = d.cycles[i];
       if (!(std::isfinite(cy) && cy > 0)) {
         add("diagnose.cycles[" + std::to_string(i) + "]", Num(cy), "must be finite and > 0");
-      } else if (std::isfinite(c.frequency_hz) && c.frequency_hz > 0 && std::isfinite(c.sample_rate_hz) &&
-                 std::lround(cy * c.sample_rate_hz / c.frequency_hz) != static_cast<long>(c.angle_deg.size())) {
+      } else if (std::isfinite(c.frequency_hz) && c.frequency_hz > 0 &&
+                 std::isfinite(c.sample_rate_hz) &&
+                 std::lround(cy * c.sample_rate_hz / c.frequency_hz) !=
+                     static_cast<long>(c.angle_deg.size())) {
         add("diagnose.cycles[" + std::to_string(i) + "]", Num(cy),
             "gives " + std::to_string(std::lround(cy * c.sample_rate_hz / c.frequency_hz)) +
                 " samples at fs / f, the case has " + std::to_string(c.angle_deg.size()));
@@ -103,23 +114,27 @@ std::vector<FieldViolation> Validate(const job::JobSpec& spec) {
     const ParameterLayout layout(kinds);
     if (d.params.size() != static_cast<size_t>(layout.size())) {
       add("diagnose.params", std::to_string(d.params.size()) + " boxes",
-          "the structure '" + layout.Describe() + "' has " + std::to_string(layout.size()) + " parameters here");
+          "the structure '" + layout.Describe() + "' has " + std::to_string(layout.size()) +
+              " parameters here");
     } else {
       for (int i = 0; i < layout.size(); ++i) {
         const ParamSpec& s = layout.specs()[i];
         const job::DiagnoseParamBox& b = d.params[i];
-        if (b.name != s.name || b.lower != s.lower || b.upper != s.upper || b.log_scale != s.log_scale ||
-            b.ratio != s.ratio)
-          add("diagnose.params[" + std::to_string(i) + "]", b.name + " [" + Num(b.lower) + ", " + Num(b.upper) + "]",
-              "differs from this effect library's " + s.name + " [" + Num(s.lower) + ", " + Num(s.upper) +
-                  "] (client and service of different versions?)");
+        if (b.name != s.name || b.lower != s.lower || b.upper != s.upper ||
+            b.log_scale != s.log_scale || b.ratio != s.ratio)
+          add("diagnose.params[" + std::to_string(i) + "]",
+              b.name + " [" + Num(b.lower) + ", " + Num(b.upper) + "]",
+              "differs from this effect library's " + s.name + " [" + Num(s.lower) + ", " +
+                  Num(s.upper) + "] (client and service of different versions?)");
       }
     }
   }
-  if (d.oversample < 1 || d.oversample > 64) add("diagnose.oversample", std::to_string(d.oversample), "must be in [1, 64]");
+  if (d.oversample < 1 || d.oversample > 64)
+    add("diagnose.oversample", std::to_string(d.oversample), "must be in [1, 64]");
   if (Status s = SimOptions(d).Validate(); !s.ok() && d.oversample >= 1 && d.oversample <= 64)
     v.push_back({"diagnose", "diagnose: " + s.message()});
-  if (d.source.size() > 1000) add("diagnose.source", std::to_string(d.source.size()) + " characters", "must be <= 1000");
+  if (d.source.size() > 1000)
+    add("diagnose.source", std::to_string(d.source.size()) + " characters", "must be <= 1000");
   return v;
 }
 
@@ -151,7 +166,8 @@ job::DiagnoseProblem DiagnoseProblemOf(const DiagnosisFitness& fitness) {
     d.cases.push_back(std::move(s));
     d.cycles.push_back(c.drive.cycles);
   }
-  for (model::EffectKind k : fitness.layout().structure()) d.structure.push_back(model::EffectName(k));
+  for (model::EffectKind k : fitness.layout().structure())
+    d.structure.push_back(model::EffectName(k));
   for (const ParamSpec& s : fitness.layout().specs())
     d.params.push_back({s.name, s.lower, s.upper, s.log_scale, s.ratio});
   d.residuals = fitness.residuals();
@@ -198,12 +214,15 @@ job::JobKind DiagnoseJobKind() {
         io::BenchCaseSamples b = io::SamplesOfSpecCase(d.cases[i]);
         b.u.clear();  // the diagnosis simulates the stated drive
         b.cycles = d.cycles[i];
-        const io::BenchCase bc =
-            io::MakeBenchCase(std::move(b), options, io::SpecCaseWhere("diagnose.cases[" + std::to_string(i) + "]"));
-        cases.push_back(MakeCase(bc.number, bc.Drive(), bc.angle_deg, bc.role == io::CaseRole::kTrain));
+        const io::BenchCase bc = io::MakeBenchCase(
+            std::move(b), options, io::SpecCaseWhere("diagnose.cases[" + std::to_string(i) + "]"));
+        cases.push_back(
+            MakeCase(bc.number, bc.Drive(), bc.angle_deg, bc.role == io::CaseRole::kTrain));
       }
-      auto model = std::make_unique<DiagnosisModel>(DefaultPlant(), std::move(cases), SimOptions(d));
-      *f = std::make_unique<OwningFitness>(std::move(model), ParameterLayout(Structure(d, &ignored)), d.residuals);
+      auto model =
+          std::make_unique<DiagnosisModel>(DefaultPlant(), std::move(cases), SimOptions(d));
+      *f = std::make_unique<OwningFitness>(std::move(model),
+                                           ParameterLayout(Structure(d, &ignored)), d.residuals);
     } catch (const InputError& e) {
       return InvalidArgument(std::string("diagnose: ") + e.what());
     }
@@ -217,6 +236,5 @@ job::JobKind DiagnoseJobKind() {
   };
   return k;
 }
-
 
 }  // namespace pz::diagnose

@@ -2,9 +2,9 @@
 // (issue 6: "re-identify the augmented model … as jobs on the service"). Its spec (proto
 // DiagnoseProblem) carries the bench cases, the structure (effect names), the parameter boxes and
 // the simulation options, so that DiagnosisFitness is a pure function of (genome.reals, spec); the
-// optimiser (DE, Levenberg–Marquardt) runs in the client and evaluates through an evaluation session
-// (JobSpec.external, svcclient/service_evaluator.h). The master and the workers register the kind
-// from their main(); pz::master cannot depend on pz::diagnose.
+// optimiser (DE, Levenberg–Marquardt) runs in the client and evaluates through an evaluation
+// session (JobSpec.external, svcclient/service_evaluator.h). The master and the workers register
+// the kind from their main(); pz::master cannot depend on pz::diagnose.
 #pragma once
 
 #include "diagnose/problem.h"

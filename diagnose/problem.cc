@@ -42,11 +42,14 @@ double FromUnitOne(const ParamSpec& s, double u) {
 
 }  // namespace
 
-// ---- cases ---------------------------------------------------------------------------------------
+// ---- cases
+// ---------------------------------------------------------------------------------------
 
-DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured, bool training) {
+DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured,
+                  bool training) {
   DiagCase c{model::MakeFinCase(number, drive, std::move(measured), training)};
-  c.noise = records::EstimateCaseNoise(c.measured_deg, std::max(1, static_cast<int>(std::lround(drive.cycles))));
+  c.noise = records::EstimateCaseNoise(c.measured_deg,
+                                       std::max(1, static_cast<int>(std::lround(drive.cycles))));
   return c;
 }
 
@@ -58,15 +61,18 @@ std::vector<DiagCase> CasesFromCaseSet(const io::CaseSet& set) {
     train += training;
     cases.push_back(MakeCase(bc.number, bc.Drive(), bc.angle_deg, training));
   }
-  if (train == 0) throw InputError(set.dir.string() + ": no training case (role train) to identify on");
+  if (train == 0)
+    throw InputError(set.dir.string() + ": no training case (role train) to identify on");
   if (train == static_cast<int>(cases.size()))
     throw InputError(set.dir.string() + ": no withheld case (role validate/test) to score on");
   return cases;
 }
 
-// ---- layout --------------------------------------------------------------------------------------
+// ---- layout
+// --------------------------------------------------------------------------------------
 
-ParameterLayout::ParameterLayout(std::vector<model::EffectKind> structure) : structure_(std::move(structure)) {
+ParameterLayout::ParameterLayout(std::vector<model::EffectKind> structure)
+    : structure_(std::move(structure)) {
   specs_ = BaseSpecs();
   for (size_t e = 0; e < structure_.size(); ++e) {
     const model::EffectInfo& info = model::GetEffectInfo(structure_[e]);
@@ -107,7 +113,8 @@ std::vector<double> ParameterLayout::UnitJacobian(std::span<const double> unit) 
     const ParamSpec& s = specs_[i];
     const double xi = FromUnitOne(s, unit[i]);
     plain[i] = xi;
-    t[static_cast<size_t>(i) * n + i] = s.log_scale ? xi * std::log(s.upper / s.lower) : (s.upper - s.lower);
+    t[static_cast<size_t>(i) * n + i] =
+        s.log_scale ? xi * std::log(s.upper / s.lower) : (s.upper - s.lower);
   }
   // γ = g β: ∂γ/∂u_g = β ∂g/∂u_g, ∂γ/∂u_β = g ∂β/∂u_β.
   const double dg = t[4 * n + 4], db = t[3 * n + 3];
@@ -148,7 +155,8 @@ std::vector<double> ParameterLayout::Encode(const model::BimorphParams& p,
   return x;
 }
 
-std::vector<double> ParameterLayout::Extend(std::span<const double> from_x, const ParameterLayout& from) const {
+std::vector<double> ParameterLayout::Extend(std::span<const double> from_x,
+                                            const ParameterLayout& from) const {
   std::vector<double> x(specs_.size());
   for (int i = 0; i < kBase; ++i) x[i] = from_x[i];
   for (size_t e = 0; e < structure_.size(); ++e) {
@@ -165,7 +173,8 @@ std::vector<double> ParameterLayout::Extend(std::span<const double> from_x, cons
       double v = zero.params[specs_[i].effect_param];
       if (src >= 0)
         for (size_t j = kBase; j < from.specs_.size(); ++j)
-          if (from.specs_[j].effect == src && from.specs_[j].effect_param == specs_[i].effect_param) v = from_x[j];
+          if (from.specs_[j].effect == src && from.specs_[j].effect_param == specs_[i].effect_param)
+            v = from_x[j];
       x[i] = v;
     }
   }
@@ -178,18 +187,21 @@ std::string ParameterLayout::Describe() const {
   return s;
 }
 
-// ---- model ---------------------------------------------------------------------------------------
+// ---- model
+// ---------------------------------------------------------------------------------------
 
-DiagnosisModel::DiagnosisModel(std::shared_ptr<const model::BimorphPlant> plant, std::vector<DiagCase> cases,
-                               model::EffectSimOptions sim)
+DiagnosisModel::DiagnosisModel(std::shared_ptr<const model::BimorphPlant> plant,
+                               std::vector<DiagCase> cases, model::EffectSimOptions sim)
     : plant_(std::move(plant)), cases_(std::move(cases)), sim_options_(sim) {
   PZ_CHECK(plant_ != nullptr);
   ThrowIfError(sim_options_.Validate());
   sim_ = std::make_unique<model::EffectSimulator>(*plant_);
-  for (const DiagCase& c : cases_) (c.training ? n_train_ : n_withheld_) += static_cast<int>(c.measured_deg.size());
+  for (const DiagCase& c : cases_)
+    (c.training ? n_train_ : n_withheld_) += static_cast<int>(c.measured_deg.size());
 }
 
-model::SimulationSummary DiagnosisModel::Simulate(const ParameterLayout& layout, std::span<const double> x, size_t c,
+model::SimulationSummary DiagnosisModel::Simulate(const ParameterLayout& layout,
+                                                  std::span<const double> x, size_t c,
                                                   std::vector<double>& angle) const {
   model::BimorphParams p;
   std::vector<model::Effect> effects;
@@ -201,8 +213,8 @@ model::SimulationSummary DiagnosisModel::Simulate(const ParameterLayout& layout,
   return sim_->SimulateAngle(p, effects, dc.drive, angle, sim_options_);
 }
 
-bool DiagnosisModel::Residuals(const ParameterLayout& layout, std::span<const double> x, bool training,
-                               std::vector<double>& r) const {
+bool DiagnosisModel::Residuals(const ParameterLayout& layout, std::span<const double> x,
+                               bool training, std::vector<double>& r) const {
   r.clear();
   thread_local std::vector<double> y;
   bool ok = true;
@@ -219,7 +231,8 @@ bool DiagnosisModel::Residuals(const ParameterLayout& layout, std::span<const do
   return ok;
 }
 
-std::vector<double> DiagnosisModel::CasePi(const ParameterLayout& layout, std::span<const double> x) const {
+std::vector<double> DiagnosisModel::CasePi(const ParameterLayout& layout,
+                                           std::span<const double> x) const {
   std::vector<double> pi(cases_.size());
   std::vector<double> y;
   for (size_t c = 0; c < cases_.size(); ++c) {
@@ -238,15 +251,18 @@ std::vector<double> DiagnosisModel::CasePi(const ParameterLayout& layout, std::s
   return pi;
 }
 
-// ---- fitness -------------------------------------------------------------------------------------
+// ---- fitness
+// -------------------------------------------------------------------------------------
 
-DiagnosisFitness::DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout, bool residuals)
+DiagnosisFitness::DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout,
+                                   bool residuals)
     : model_(model), layout_(std::move(layout)), residuals_(residuals) {
   // Strictly above any valid cost: every residual bounded by |y| + max(b1, −b2) per sample.
   for (const DiagCase& c : model_.cases()) {
     if (!c.training) continue;
     const double b = std::max(c.b1, -c.b2);
-    for (double y : c.measured_deg) penalty_ += 2.0 * (std::abs(y) + b + 10.0) * (std::abs(y) + b + 10.0);
+    for (double y : c.measured_deg)
+      penalty_ += 2.0 * (std::abs(y) + b + 10.0) * (std::abs(y) + b + 10.0);
   }
 }
 

@@ -36,7 +36,8 @@ struct DiagCase : model::FinCase {
 /// without withheld cases, or a case whose extremes give no saturation.
 std::vector<DiagCase> CasesFromCaseSet(const io::CaseSet& set);
 /// The same from raw records (synthetic benches): cycles = 3, saturations from the extremes.
-DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured, bool training);
+DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured,
+                  bool training);
 
 /// One parameter of the search.
 struct ParamSpec {
@@ -45,8 +46,8 @@ struct ParamSpec {
   double lower = 0, upper = 1;  ///< physical range (γ: ratio range)
   double scale = 1;             ///< typical magnitude (finite-difference steps, report)
   bool log_scale = false;
-  bool ratio = false;           ///< true for γ: searched as g = γ/β
-  int effect = -1;              ///< index into the structure, −1 for the base model
+  bool ratio = false;  ///< true for γ: searched as g = γ/β
+  int effect = -1;     ///< index into the structure, −1 for the base model
   int effect_param = -1;
 };
 
@@ -67,9 +68,11 @@ class ParameterLayout {
   void Decode(std::span<const double> physical, model::BimorphParams* params,
               std::vector<model::Effect>* effects) const;
   /// Plant parameters and effects (matching the structure) → physical vector.
-  std::vector<double> Encode(const model::BimorphParams& params, std::span<const model::Effect> effects) const;
+  std::vector<double> Encode(const model::BimorphParams& params,
+                             std::span<const model::Effect> effects) const;
   /// Physical vector of the base parameters with every effect at zero magnitude (identity).
-  std::vector<double> Extend(std::span<const double> base_physical, const ParameterLayout& from) const;
+  std::vector<double> Extend(std::span<const double> base_physical,
+                             const ParameterLayout& from) const;
   /// ∂physical/∂unit at a point (size × size, column j = unit coordinate j): diagonal but for γ,
   /// which depends on g and β.
   std::vector<double> UnitJacobian(std::span<const double> unit) const;
@@ -95,8 +98,8 @@ class DiagnosisModel {
   int withheld_samples() const { return n_withheld_; }
 
   /// Model output of case c [deg]; returns the simulation summary (angle_deg sized by the call).
-  model::SimulationSummary Simulate(const ParameterLayout& layout, std::span<const double> physical, size_t c,
-                                    std::vector<double>& angle_deg) const;
+  model::SimulationSummary Simulate(const ParameterLayout& layout, std::span<const double> physical,
+                                    size_t c, std::vector<double>& angle_deg) const;
   /// Residuals y_meas − y_model of the selected cases (training or withheld, concatenated in case
   /// order) into r. Returns false if a simulation failed (r then holds a large finite penalty).
   bool Residuals(const ParameterLayout& layout, std::span<const double> physical, bool training,

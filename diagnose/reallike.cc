@@ -37,33 +37,51 @@ std::vector<double> CreepTimes(const RealLikeStack& s) {
 std::string RealLikeStack::Validate() const {
   if (!(u_hi > u_lo)) return FieldError("stack.u_hi", u_hi, "must be above u_lo = " + Num(u_lo));
   if (!(stroke_um > 0)) return FieldError("stack.stroke_um", stroke_um, "must be > 0");
-  if (!(hysteresis_share >= 0 && hysteresis_share < 1)) return FieldError("stack.hysteresis_share", hysteresis_share, "must be in [0, 1)");
-  if (!(density_width > 0 && density_width <= 1)) return FieldError("stack.density_width", density_width, "must be in (0, 1]");
-  if (!(density_width_spread > 0)) return FieldError("stack.density_width_spread", density_width_spread, "must be > 0");
-  if (!(density_center_spread > 0)) return FieldError("stack.density_center_spread", density_center_spread, "must be > 0");
-  if (!(std::abs(asymmetry) <= 10)) return FieldError("stack.asymmetry", asymmetry, "must be in [-10, 10]");
-  if (!(std::abs(quadratic) < 1)) return FieldError("stack.quadratic", quadratic, "must be in (-1, 1) (a monotone reversible part)");
-  if (!(creep_per_decade >= 0 && creep_per_decade < 0.1)) return FieldError("stack.creep_per_decade", creep_per_decade, "must be in [0, 0.1)");
+  if (!(hysteresis_share >= 0 && hysteresis_share < 1))
+    return FieldError("stack.hysteresis_share", hysteresis_share, "must be in [0, 1)");
+  if (!(density_width > 0 && density_width <= 1))
+    return FieldError("stack.density_width", density_width, "must be in (0, 1]");
+  if (!(density_width_spread > 0))
+    return FieldError("stack.density_width_spread", density_width_spread, "must be > 0");
+  if (!(density_center_spread > 0))
+    return FieldError("stack.density_center_spread", density_center_spread, "must be > 0");
+  if (!(std::abs(asymmetry) <= 10))
+    return FieldError("stack.asymmetry", asymmetry, "must be in [-10, 10]");
+  if (!(std::abs(quadratic) < 1))
+    return FieldError("stack.quadratic", quadratic,
+                      "must be in (-1, 1) (a monotone reversible part)");
+  if (!(creep_per_decade >= 0 && creep_per_decade < 0.1))
+    return FieldError("stack.creep_per_decade", creep_per_decade, "must be in [0, 0.1)");
   if (!(creep_tau_min_s > 0 && creep_tau_max_s >= creep_tau_min_s))
     return FieldError("stack.creep_tau_max_s", creep_tau_max_s, "must be >= creep_tau_min_s > 0");
-  if (everett_grid < 8 || everett_grid > 2000) return FieldError("stack.everett_grid", everett_grid, "must be in [8, 2000]");
+  if (everett_grid < 8 || everett_grid > 2000)
+    return FieldError("stack.everett_grid", everett_grid, "must be in [8, 2000]");
   if (!(rate_lag_v >= 0 && rate_lag_v <= u_hi - u_lo))
     return FieldError("stack.rate_lag_v", rate_lag_v, "must be in [0, u_hi - u_lo]");
-  if (!(rate_time_s > 0 && rate_time_s <= 10)) return FieldError("stack.rate_time_s", rate_time_s, "must be in (0, 10]");
-  if (!(driver_tau_s >= 0 && driver_tau_s <= 10)) return FieldError("stack.driver_tau_s", driver_tau_s, "must be in [0, 10]");
+  if (!(rate_time_s > 0 && rate_time_s <= 10))
+    return FieldError("stack.rate_time_s", rate_time_s, "must be in (0, 10]");
+  if (!(driver_tau_s >= 0 && driver_tau_s <= 10))
+    return FieldError("stack.driver_tau_s", driver_tau_s, "must be in [0, 10]");
   return "";
 }
 
 std::string RealLikeSensor::Validate() const {
   if (!(fs_hz > 0)) return FieldError("sensor.fs_hz", fs_hz, "must be > 0");
-  if (oversample < 1 || oversample > 64) return FieldError("sensor.oversample", oversample, "must be in [1, 64]");
-  if (!(lag_samples >= 0 && lag_samples <= 1000)) return FieldError("sensor.lag_samples", lag_samples, "must be in [0, 1000]");
-  if (!(noise_white_um >= 0)) return FieldError("sensor.noise_white_um", noise_white_um, "must be >= 0");
-  if (!(noise_colored_um >= 0)) return FieldError("sensor.noise_colored_um", noise_colored_um, "must be >= 0");
-  if (!(colored_time_s > 0)) return FieldError("sensor.colored_time_s", colored_time_s, "must be > 0");
+  if (oversample < 1 || oversample > 64)
+    return FieldError("sensor.oversample", oversample, "must be in [1, 64]");
+  if (!(lag_samples >= 0 && lag_samples <= 1000))
+    return FieldError("sensor.lag_samples", lag_samples, "must be in [0, 1000]");
+  if (!(noise_white_um >= 0))
+    return FieldError("sensor.noise_white_um", noise_white_um, "must be >= 0");
+  if (!(noise_colored_um >= 0))
+    return FieldError("sensor.noise_colored_um", noise_colored_um, "must be >= 0");
+  if (!(colored_time_s > 0))
+    return FieldError("sensor.colored_time_s", colored_time_s, "must be > 0");
   if (!(quantum_um >= 0)) return FieldError("sensor.quantum_um", quantum_um, "must be >= 0");
-  if (!(drive_quantum_v >= 0)) return FieldError("sensor.drive_quantum_v", drive_quantum_v, "must be >= 0");
-  if (!(offset_range_um >= 0)) return FieldError("sensor.offset_range_um", offset_range_um, "must be >= 0");
+  if (!(drive_quantum_v >= 0))
+    return FieldError("sensor.drive_quantum_v", drive_quantum_v, "must be >= 0");
+  if (!(offset_range_um >= 0))
+    return FieldError("sensor.offset_range_um", offset_range_um, "must be >= 0");
   return "";
 }
 
@@ -76,19 +94,24 @@ std::string RealLikeDrive::Describe() const {
   std::ostringstream s;
   s << "rest " << Num(rest_s) << " s at " << Num(rest_level) << " V, then ";
   switch (kind) {
-    case Kind::kSine: s << "a sine " << Num(bias) << " ± " << Num(amplitude) << " V at " << Num(frequency_hz) << " Hz"; break;
+    case Kind::kSine:
+      s << "a sine " << Num(bias) << " ± " << Num(amplitude) << " V at " << Num(frequency_hz)
+        << " Hz";
+      break;
     case Kind::kRampedSine:
       s << "a sine " << Num(bias) << " ± " << Num(amplitude) << " V at " << Num(frequency_hz)
         << " Hz whose amplitude ramps down to zero and back";
       break;
     case Kind::kReversals:
-      s << "a random reversal sequence in " << Num(bias - amplitude) << " … " << Num(bias + amplitude) << " V (seed "
-        << seed << ")";
+      s << "a random reversal sequence in " << Num(bias - amplitude) << " … "
+        << Num(bias + amplitude) << " V (seed " << seed << ")";
       break;
-    case Kind::kSamples: s << "a played drive of " << samples.size() << " samples at " << Num(samples_fs_hz) << " Hz"; break;
+    case Kind::kSamples:
+      s << "a played drive of " << samples.size() << " samples at " << Num(samples_fs_hz) << " Hz";
+      break;
     case Kind::kChirp:
-      s << "a logarithmic chirp " << Num(bias) << " ± " << Num(amplitude) << " V from " << Num(frequency_hz) << " to "
-        << Num(frequency_end_hz) << " Hz";
+      s << "a logarithmic chirp " << Num(bias) << " ± " << Num(amplitude) << " V from "
+        << Num(frequency_hz) << " to " << Num(frequency_end_hz) << " Hz";
       break;
   }
   if (kind != Kind::kSamples) s << " from phase " << Num(phase_rad) << " rad";
@@ -97,30 +120,36 @@ std::string RealLikeDrive::Describe() const {
 }
 
 std::function<double(double)> DriveFunction(const RealLikeDrive& d) {
-  if (!(d.rest_s >= 0) || !(d.duration_s > 0)) throw InputError(FieldError("drive.duration_s", d.duration_s, "must be > 0 (rest >= 0)"));
+  if (!(d.rest_s >= 0) || !(d.duration_s > 0))
+    throw InputError(FieldError("drive.duration_s", d.duration_s, "must be > 0 (rest >= 0)"));
   const double rest = d.rest_s, level = d.rest_level;
   switch (d.kind) {
     case RealLikeDrive::Kind::kSine:
     case RealLikeDrive::Kind::kRampedSine: {
-      if (!(d.frequency_hz > 0)) throw InputError(FieldError("drive.frequency_hz", d.frequency_hz, "must be > 0"));
+      if (!(d.frequency_hz > 0))
+        throw InputError(FieldError("drive.frequency_hz", d.frequency_hz, "must be > 0"));
       const bool ramp = d.kind == RealLikeDrive::Kind::kRampedSine;
       return [d, ramp](double t) {
         if (t < d.rest_s) return d.rest_level;
         const double tau = t - d.rest_s;
-        const double a = ramp ? d.amplitude * std::abs(1 - 2 * std::min(tau, d.duration_s) / d.duration_s) : d.amplitude;
+        const double a =
+            ramp ? d.amplitude * std::abs(1 - 2 * std::min(tau, d.duration_s) / d.duration_s)
+                 : d.amplitude;
         return d.bias + a * std::sin(2 * kPi * d.frequency_hz * tau + d.phase_rad);
       };
     }
     case RealLikeDrive::Kind::kChirp: {
       if (!(d.frequency_hz > 0) || !(d.frequency_end_hz > 0))
-        throw InputError(FieldError("drive.frequency_end_hz", d.frequency_end_hz, "and frequency_hz must be > 0 (a chirp)"));
+        throw InputError(FieldError("drive.frequency_end_hz", d.frequency_end_hz,
+                                    "and frequency_hz must be > 0 (a chirp)"));
       // Phase of f(τ) = f0 k^{τ/T}, k = f1/f0: 2π f0 T (k^{τ/T} − 1) / ln k (2π f0 τ for k = 1).
       const double k = d.frequency_end_hz / d.frequency_hz, T = d.duration_s, lnk = std::log(k);
       return [d, k, T, lnk](double t) {
         if (t < d.rest_s) return d.rest_level;
         const double tau = std::min(t - d.rest_s, T);
-        const double phase = std::abs(lnk) < 1e-12 ? 2 * kPi * d.frequency_hz * tau
-                                                   : 2 * kPi * d.frequency_hz * T * (std::pow(k, tau / T) - 1) / lnk;
+        const double phase = std::abs(lnk) < 1e-12
+                                 ? 2 * kPi * d.frequency_hz * tau
+                                 : 2 * kPi * d.frequency_hz * T * (std::pow(k, tau / T) - 1) / lnk;
         return d.bias + d.amplitude * std::sin(phase + d.phase_rad);
       };
     }
@@ -134,14 +163,16 @@ std::function<double(double)> DriveFunction(const RealLikeDrive& d) {
       std::vector<double> times{0}, levels{d.bias + d.amplitude * std::sin(d.phase_rad)};
       while (times.back() < d.duration_s) {
         double next = levels.back();
-        while (std::abs(next - levels.back()) < 0.05 * span) next = d.bias - d.amplitude + span * rng.Uniform01();
+        while (std::abs(next - levels.back()) < 0.05 * span)
+          next = d.bias - d.amplitude + span * rng.Uniform01();
         times.push_back(times.back() + std::max(0.05, std::abs(next - levels.back()) / rate));
         levels.push_back(next);
       }
       return [rest, level, times, levels](double t) {
         if (t < rest) return level;
         const double tau = t - rest;
-        const size_t i = static_cast<size_t>(std::upper_bound(times.begin(), times.end(), tau) - times.begin());
+        const size_t i =
+            static_cast<size_t>(std::upper_bound(times.begin(), times.end(), tau) - times.begin());
         if (i >= times.size()) return levels.back();
         const double s = (tau - times[i - 1]) / (times[i] - times[i - 1]);
         return levels[i - 1] + (levels[i] - levels[i - 1]) * (1 - std::cos(kPi * s)) / 2;
@@ -151,7 +182,8 @@ std::function<double(double)> DriveFunction(const RealLikeDrive& d) {
       if (d.samples.empty() || !(d.samples_fs_hz > 0))
         throw InputError("drive: a played drive needs samples and samples_fs_hz > 0");
       for (size_t i = 0; i < d.samples.size(); ++i)
-        if (!std::isfinite(d.samples[i])) throw InputError("drive: sample " + std::to_string(i) + " is not finite");
+        if (!std::isfinite(d.samples[i]))
+          throw InputError("drive: sample " + std::to_string(i) + " is not finite");
       return [rest, level, s = d.samples, fs = d.samples_fs_hz](double t) {
         if (t < rest) return level;
         const double x = (t - rest) * fs;
@@ -212,7 +244,8 @@ RealLikePlant::RealLikePlant(const RealLikeStack& s) : stack_(s) {
     for (int j = 0; j <= i; ++j) {
       const double a = (i + 0.5) * h, b = (j + 0.5) * h;
       const double w = i == j ? h / 3 : a - b, c = (a + b) / 2 - 0.5;
-      const double dw = (w - s.density_width) / s.density_width_spread, dc = c / s.density_center_spread;
+      const double dw = (w - s.density_width) / s.density_width_spread,
+                   dc = c / s.density_center_spread;
       const double mu = std::exp(-0.5 * dw * dw - 0.5 * dc * dc + s.asymmetry * c);
       mass[static_cast<size_t>(i) * g + j] = mu * h * h * (i == j ? 0.5 : 1.0);
     }
@@ -223,7 +256,8 @@ RealLikePlant::RealLikePlant(const RealLikeStack& s) : stack_(s) {
     double row = 0;
     for (int B = 1; B <= g; ++B) {
       row += mass[static_cast<size_t>(A - 1) * g + (B - 1)];
-      table_[static_cast<size_t>(A) * (g + 1) + B] = table_[static_cast<size_t>(A - 1) * (g + 1) + B] + row;
+      table_[static_cast<size_t>(A) * (g + 1) + B] =
+          table_[static_cast<size_t>(A - 1) * (g + 1) + B] + row;
     }
   }
   total_ = table_.back();
@@ -254,7 +288,8 @@ double RealLikePlant::Hysteretic(const std::vector<double>& e) const {
 }
 
 double RealLikePlant::Reversible(double u) const {
-  const double x = (std::clamp(u, stack_.u_lo, stack_.u_hi) - stack_.u_lo) / (stack_.u_hi - stack_.u_lo) - 0.5;
+  const double x =
+      (std::clamp(u, stack_.u_lo, stack_.u_hi) - stack_.u_lo) / (stack_.u_hi - stack_.u_lo) - 0.5;
   return rev_scale_ * (x + stack_.quadratic * (x * x - 0.25));
 }
 
@@ -282,8 +317,9 @@ std::vector<double> RealLikePlant::Respond(const std::function<double(double)>& 
   for (size_t i = 0; i < taus.size(); ++i) decay[i] = std::exp(-dtf / taus[i]);
   Memory m(stack_.u_lo, stack_.u_hi);
   std::vector<double> z, s(fine);
-  // The amplifier's low-pass τ ẋ = u − x, integrated exactly over each fine step for u linear in it,
-  // from rest; its rate is (u − x)/τ. Without it, the analytic drive's rate by a central difference.
+  // The amplifier's low-pass τ ẋ = u − x, integrated exactly over each fine step for u linear in
+  // it, from rest; its rate is (u − x)/τ. Without it, the analytic drive's rate by a central
+  // difference.
   const double tau_d = stack_.driver_tau_s, a_d = tau_d > 0 ? std::exp(-dtf / tau_d) : 0;
   const double hd = 1e-3 * dtf;
   double x_d = 0, u_prev = 0, v_rate = 0;
@@ -297,7 +333,8 @@ std::vector<double> RealLikePlant::Respond(const std::function<double(double)>& 
         if (j == 0) {
           x_d = applied;
         } else {
-          const double slope = (applied - u_prev) / dtf;  // u over the step: u_prev + slope (t' − t_prev)
+          const double slope =
+              (applied - u_prev) / dtf;  // u over the step: u_prev + slope (t' − t_prev)
           x_d = applied - tau_d * slope + a_d * (x_d - u_prev + tau_d * slope);
         }
         u_prev = applied;
@@ -307,7 +344,8 @@ std::vector<double> RealLikePlant::Respond(const std::function<double(double)>& 
         rate = (u(t + hd) - u(t - hd)) / (2 * hd);
       }
       if (stack_.rate_lag_v > 0) {  // the effective drive held within ± lag of the applied one
-        const double lag = stack_.rate_lag_v * std::tanh(stack_.rate_time_s * std::abs(rate) / stack_.rate_lag_v);
+        const double lag =
+            stack_.rate_lag_v * std::tanh(stack_.rate_time_s * std::abs(rate) / stack_.rate_lag_v);
         v_rate = j == 0 ? v : std::clamp(v_rate, v - lag, v + lag);
         v = v_rate;
       }
@@ -336,13 +374,17 @@ std::vector<double> RealLikePlant::Respond(const std::function<double(double)>& 
   return y;
 }
 
-io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSensor& sensor, const RealLikeDrive& drive,
-                                    const std::string& name, model::CaseRole role, uint64_t seed,
-                                    RealLikeRecordTruth* truth, std::vector<double>* clean_out) {
+io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSensor& sensor,
+                                    const RealLikeDrive& drive, const std::string& name,
+                                    model::CaseRole role, uint64_t seed, RealLikeRecordTruth* truth,
+                                    std::vector<double>* clean_out) {
   if (const std::string e = sensor.Validate(); !e.empty()) throw InputError(e);
   const auto u = DriveFunction(drive);
-  const size_t n = static_cast<size_t>(std::llround((drive.rest_s + drive.duration_s) * sensor.fs_hz)) + 1;
-  if (n < 40) throw InputError("drive '" + name + "': " + std::to_string(n) + " samples; at least 40 are needed");
+  const size_t n =
+      static_cast<size_t>(std::llround((drive.rest_s + drive.duration_s) * sensor.fs_hz)) + 1;
+  if (n < 40)
+    throw InputError("drive '" + name + "': " + std::to_string(n) +
+                     " samples; at least 40 are needed");
   io::Record r;
   r.name = name;
   r.role = role;
@@ -361,8 +403,10 @@ io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSe
   double colored = sensor.noise_colored_um * NormalDraw(rng);
   r.y.resize(n);
   for (size_t k = 0; k < n; ++k) {
-    if (k > 0) colored = a * colored + sensor.noise_colored_um * std::sqrt(1 - a * a) * NormalDraw(rng);
-    r.y[k] = Quantise(clean[k] + offset + sensor.noise_white_um * NormalDraw(rng) + colored, sensor.quantum_um);
+    if (k > 0)
+      colored = a * colored + sensor.noise_colored_um * std::sqrt(1 - a * a) * NormalDraw(rng);
+    r.y[k] = Quantise(clean[k] + offset + sensor.noise_white_um * NormalDraw(rng) + colored,
+                      sensor.quantum_um);
   }
   r.quantum = sensor.quantum_um;
   r.rest_samples = 1;
@@ -377,7 +421,8 @@ io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSe
     truth->drive = drive.Describe();
     truth->offset_um = offset;
     double ss = 0;
-    for (size_t k = r.first_scored; k < r.end_scored; ++k) ss += (r.y[k] - clean[k] - offset) * (r.y[k] - clean[k] - offset);
+    for (size_t k = r.first_scored; k < r.end_scored; ++k)
+      ss += (r.y[k] - clean[k] - offset) * (r.y[k] - clean[k] - offset);
     truth->scored = r.scored();
     truth->noise_rms_um = std::sqrt(ss / static_cast<double>(r.scored()));
   }
@@ -386,7 +431,8 @@ io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSe
 }
 
 RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
-  if (!(o.train_s > 0) || !(o.withheld_s > 0)) throw InputError(FieldError("train_s", o.train_s, "and withheld_s must be > 0"));
+  if (!(o.train_s > 0) || !(o.withheld_s > 0))
+    throw InputError(FieldError("train_s", o.train_s, "and withheld_s must be > 0"));
   if (!(o.frequency_hz > 0) || o.frequency_hz > o.sensor.fs_hz / 8)
     throw InputError(FieldError("frequency_hz", o.frequency_hz, "must be in (0, fs/8]"));
   if (!(o.amplitude_share > 0 && o.amplitude_share <= 0.5))
@@ -394,8 +440,9 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
   for (const auto* list : {&o.train_frequencies_hz, &o.withheld_frequencies_hz})
     for (double f : *list)
       if (!(f > 0) || f > o.sensor.fs_hz / 8)
-        throw InputError(FieldError(list == &o.train_frequencies_hz ? "train_frequencies_hz" : "withheld_frequencies_hz",
-                                    f, "must be in (0, fs/8]"));
+        throw InputError(FieldError(
+            list == &o.train_frequencies_hz ? "train_frequencies_hz" : "withheld_frequencies_hz", f,
+            "must be in (0, fs/8]"));
   if (o.chirp && o.train_frequencies_hz.empty())
     throw InputError("chirp: a chirp spans the training frequencies; give train_frequencies_hz");
   const RealLikePlant plant(o.stack);
@@ -424,16 +471,26 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
     items.push_back({"major", model::CaseRole::kTrain, RealLikeDrive::Kind::kSine, o.train_s});
   } else {
     for (double f : o.train_frequencies_hz)
-      items.push_back({"train-" + Num(f) + "hz", model::CaseRole::kTrain, RealLikeDrive::Kind::kSine, o.train_s, f});
+      items.push_back({"train-" + Num(f) + "hz", model::CaseRole::kTrain,
+                       RealLikeDrive::Kind::kSine, o.train_s, f});
   }
-  if (o.second_sine) items.push_back({"major-2", model::CaseRole::kValidate, RealLikeDrive::Kind::kSine, o.withheld_s});
-  if (o.ramp) items.push_back({"ramp", model::CaseRole::kValidate, RealLikeDrive::Kind::kRampedSine, o.withheld_s});
-  if (o.reversals) items.push_back({"reversals", model::CaseRole::kTest, RealLikeDrive::Kind::kReversals, o.withheld_s});
+  if (o.second_sine)
+    items.push_back(
+        {"major-2", model::CaseRole::kValidate, RealLikeDrive::Kind::kSine, o.withheld_s});
+  if (o.ramp)
+    items.push_back(
+        {"ramp", model::CaseRole::kValidate, RealLikeDrive::Kind::kRampedSine, o.withheld_s});
+  if (o.reversals)
+    items.push_back(
+        {"reversals", model::CaseRole::kTest, RealLikeDrive::Kind::kReversals, o.withheld_s});
   for (double f : o.withheld_frequencies_hz)
-    items.push_back({"sine-" + Num(f) + "hz", model::CaseRole::kValidate, RealLikeDrive::Kind::kSine, o.withheld_s, f});
+    items.push_back({"sine-" + Num(f) + "hz", model::CaseRole::kValidate,
+                     RealLikeDrive::Kind::kSine, o.withheld_s, f});
   if (o.chirp) {
-    const auto [lo, hi] = std::minmax_element(o.train_frequencies_hz.begin(), o.train_frequencies_hz.end());
-    items.push_back({"chirp", model::CaseRole::kValidate, RealLikeDrive::Kind::kChirp, o.withheld_s, *lo, *hi});
+    const auto [lo, hi] =
+        std::minmax_element(o.train_frequencies_hz.begin(), o.train_frequencies_hz.end());
+    items.push_back(
+        {"chirp", model::CaseRole::kValidate, RealLikeDrive::Kind::kChirp, o.withheld_s, *lo, *hi});
   }
   double ss = 0;
   size_t n = 0;
@@ -455,8 +512,8 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
       d.duration_s = static_cast<double>(o.train_drive.size() - 1) / o.sensor.fs_hz;
     }
     RealLikeRecordTruth t;
-    out.set.records.push_back(
-        SynthesizeRealLikeRecord(plant, o.sensor, d, items[i].name, items[i].role, o.seed * 1000 + 500 + i, &t));
+    out.set.records.push_back(SynthesizeRealLikeRecord(plant, o.sensor, d, items[i].name,
+                                                       items[i].role, o.seed * 1000 + 500 + i, &t));
     ss += t.noise_rms_um * t.noise_rms_um * static_cast<double>(t.scored);
     n += t.scored;
     out.truth.push_back(t);
@@ -466,15 +523,18 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
   // The noise-free major loop's width: the branches up and down over the training amplitude.
   const int steps = 400;
   std::vector<double> u;
-  for (int k = 0; k <= steps; ++k) u.push_back(base.bias - base.amplitude + 2 * base.amplitude * k / steps);
+  for (int k = 0; k <= steps; ++k)
+    u.push_back(base.bias - base.amplitude + 2 * base.amplitude * k / steps);
   std::vector<double> loop = u;
   for (int k = steps; k >= 0; --k) loop.push_back(u[static_cast<size_t>(k)]);
-  for (int k = 0; k <= steps; ++k) loop.push_back(u[static_cast<size_t>(k)]);  // the loop closes from here
+  for (int k = 0; k <= steps; ++k)
+    loop.push_back(u[static_cast<size_t>(k)]);  // the loop closes from here
   const std::vector<double> y = plant.Static(loop);
   const size_t up0 = 2 * (steps + 1);
   double width = 0, lo = y[up0], hi = y[up0];
   for (int k = 0; k <= steps; ++k) {
-    const double up = y[up0 + static_cast<size_t>(k)], down = y[2 * (steps + 1) - 1 - static_cast<size_t>(k)];
+    const double up = y[up0 + static_cast<size_t>(k)],
+                 down = y[2 * (steps + 1) - 1 - static_cast<size_t>(k)];
     width = std::max(width, std::abs(up - down));
     lo = std::min(lo, up);
     hi = std::max(hi, up);

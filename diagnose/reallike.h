@@ -40,17 +40,19 @@ namespace pz::records {
 
 /// The true plant of a real-like stack. Defaults: a 150 V stack with ≈ 45 µm stroke.
 struct RealLikeStack {
-  double u_lo = 0, u_hi = 150;       ///< drive range of the Preisach triangle [V] (saturation outside)
-  double stroke_um = 45;             ///< response over the range on the major loop (approximately)
-  double hysteresis_share = 0.18;    ///< share of the stroke carried by the hysterons (the rest: reversible)
-  double density_width = 0.45;       ///< mean hysteron width (α − β) as a share of the range
-  double density_width_spread = 0.3; ///< its Gaussian spread, share of the range
-  double density_center_spread = 0.3;///< Gaussian spread of the hysterons' centres, share of the range
-  double asymmetry = 1.2;            ///< density × exp(asymmetry · centre'), centre' in [−½, ½]
-  double quadratic = 0.12;           ///< reversible part: x' + quadratic · (x'² − ¼), x' in [−½, ½]
-  double creep_per_decade = 0.015;   ///< creep per decade of time, share of the displacement
+  double u_lo = 0, u_hi = 150;  ///< drive range of the Preisach triangle [V] (saturation outside)
+  double stroke_um = 45;        ///< response over the range on the major loop (approximately)
+  double hysteresis_share =
+      0.18;  ///< share of the stroke carried by the hysterons (the rest: reversible)
+  double density_width = 0.45;        ///< mean hysteron width (α − β) as a share of the range
+  double density_width_spread = 0.3;  ///< its Gaussian spread, share of the range
+  double density_center_spread =
+      0.3;                  ///< Gaussian spread of the hysterons' centres, share of the range
+  double asymmetry = 1.2;   ///< density × exp(asymmetry · centre'), centre' in [−½, ½]
+  double quadratic = 0.12;  ///< reversible part: x' + quadratic · (x'² − ¼), x' in [−½, ½]
+  double creep_per_decade = 0.015;  ///< creep per decade of time, share of the displacement
   double creep_tau_min_s = 0.05, creep_tau_max_s = 50;
-  int everett_grid = 240;            ///< cells per axis of the density's table
+  int everett_grid = 240;  ///< cells per axis of the density's table
   /// Rate dependence (0 = none): the stack's polarisation follows an effective drive held within
   /// ± λ of the applied one (it lags by λ in the direction of motion and waits at a reversal),
   /// λ = rate_lag_v · tanh(rate_time_s · |u̇| / rate_lag_v) — proportional to the rate below the
@@ -60,20 +62,20 @@ struct RealLikeStack {
   double rate_time_s = 0.01;
   /// A first-order low-pass of the amplifier ahead of the stack [s] (0 = none).
   double driver_tau_s = 0;
-  std::string Validate() const;      ///< "" or what is wrong (field and value)
+  std::string Validate() const;  ///< "" or what is wrong (field and value)
 };
 
 /// The recorder and its sensor.
 struct RealLikeSensor {
   double fs_hz = 200;
-  int oversample = 8;            ///< plant steps per recorded sample
-  double lag_samples = 1.35;     ///< sensor / transport lag [recorded samples], whole + fractional
+  int oversample = 8;         ///< plant steps per recorded sample
+  double lag_samples = 1.35;  ///< sensor / transport lag [recorded samples], whole + fractional
   double noise_white_um = 0.06;
-  double noise_colored_um = 0.02;///< first-order (AR(1)) coloured noise, RMS
-  double colored_time_s = 0.3;   ///< its correlation time
-  double quantum_um = 0.02;      ///< response resolution (0 = none)
+  double noise_colored_um = 0.02;         ///< first-order (AR(1)) coloured noise, RMS
+  double colored_time_s = 0.3;            ///< its correlation time
+  double quantum_um = 0.02;               ///< response resolution (0 = none)
   double drive_quantum_v = 150.0 / 4096;  ///< the drive channel's resolution (0 = none)
-  double offset_range_um = 5;    ///< each record's response offset is uniform in ±this
+  double offset_range_um = 5;             ///< each record's response offset is uniform in ±this
   std::string Validate() const;
   /// The RMS a perfect model leaves: √(white² + coloured² + q²/12).
   double NominalFloor() const;
@@ -83,16 +85,18 @@ struct RealLikeSensor {
 struct RealLikeDrive {
   enum class Kind { kSine, kRampedSine, kReversals, kSamples, kChirp };
   Kind kind = Kind::kSine;
-  double rest_level = 0;       ///< the rest segment's drive
+  double rest_level = 0;  ///< the rest segment's drive
   double rest_s = 1;
-  double bias = 75;            ///< centre of the waveform
-  double amplitude = 70;       ///< peak; kRampedSine: at the ends (zero in the middle)
-  double frequency_hz = 1;     ///< kSine / kRampedSine / kChirp (its start); kReversals: mean rate of 4·A·f as a sine
-  double frequency_end_hz = 0; ///< kChirp: the frequency at its end (logarithmic sweep)
+  double bias = 75;       ///< centre of the waveform
+  double amplitude = 70;  ///< peak; kRampedSine: at the ends (zero in the middle)
+  double frequency_hz =
+      1;  ///< kSine / kRampedSine / kChirp (its start); kReversals: mean rate of 4·A·f as a sine
+  double frequency_end_hz = 0;  ///< kChirp: the frequency at its end (logarithmic sweep)
   double phase_rad = 0;
-  double duration_s = 20;      ///< after the rest
-  uint64_t seed = 1;           ///< kReversals: the turning points
-  std::vector<double> samples; ///< kSamples: the drive at fs after the rest (linear between samples)
+  double duration_s = 20;  ///< after the rest
+  uint64_t seed = 1;       ///< kReversals: the turning points
+  std::vector<double>
+      samples;  ///< kSamples: the drive at fs after the rest (linear between samples)
   double samples_fs_hz = 0;
   std::string Describe() const;
 };
@@ -125,9 +129,10 @@ class RealLikePlant {
 struct RealLikeRecordTruth {
   std::string name;
   std::string role;
-  std::string drive;        ///< RealLikeDrive::Describe
-  double offset_um = 0;     ///< added to the response
-  double noise_rms_um = 0;  ///< realised RMS of (measured − noise-free − offset) over the scored window
+  std::string drive;     ///< RealLikeDrive::Describe
+  double offset_um = 0;  ///< added to the response
+  double noise_rms_um =
+      0;  ///< realised RMS of (measured − noise-free − offset) over the scored window
   size_t scored = 0;
 };
 
@@ -139,8 +144,9 @@ struct RealLikeOptions {
   double frequency_hz = 1;
   double amplitude_share = 0.47;  ///< the major loop's amplitude, share of the range
   bool ramp = true, reversals = true, second_sine = true;
-  /// Non-empty: the training record ("played") plays this drive (samples at sensor.fs_hz from t = 0,
-  /// its leading constant samples the rest) instead of the sine; the withheld records are the same.
+  /// Non-empty: the training record ("played") plays this drive (samples at sensor.fs_hz from t =
+  /// 0, its leading constant samples the rest) instead of the sine; the withheld records are the
+  /// same.
   std::vector<double> train_drive;
   /// Rates (issue 22, rate dependence): non-empty, the training records are one sine per frequency
   /// ("train-<f>hz", train_s each) instead of the major-loop sine at frequency_hz; the withheld
@@ -155,9 +161,10 @@ struct RealLikeSet {
   io::RecordSet set;
   std::vector<RealLikeRecordTruth> truth;  ///< in set order
   RealLikeOptions options;
-  double nominal_floor_um = 0;    ///< RealLikeSensor::NominalFloor
-  double realised_floor_um = 0;   ///< RMS over every scored sample of every record
-  double major_loop_width = 0;    ///< widest gap between the branches of the noise-free major loop, share of its stroke
+  double nominal_floor_um = 0;   ///< RealLikeSensor::NominalFloor
+  double realised_floor_um = 0;  ///< RMS over every scored sample of every record
+  double major_loop_width =
+      0;  ///< widest gap between the branches of the noise-free major loop, share of its stroke
 };
 
 /// Generates the set (deterministic in the seed). Throws InputError on bad options.
@@ -165,9 +172,11 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& options);
 
 /// One record of the plant on a drive (noise, quantisation and offset from `seed`); window: the
 /// excitation after the rest. `clean` (optional) receives the noise-free readings.
-io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSensor& sensor, const RealLikeDrive& drive,
-                                    const std::string& name, model::CaseRole role, uint64_t seed,
-                                    RealLikeRecordTruth* truth = nullptr, std::vector<double>* clean = nullptr);
+io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSensor& sensor,
+                                    const RealLikeDrive& drive, const std::string& name,
+                                    model::CaseRole role, uint64_t seed,
+                                    RealLikeRecordTruth* truth = nullptr,
+                                    std::vector<double>* clean = nullptr);
 
 /// The drive as a function of time (rest then waveform); throws InputError on a bad drive.
 std::function<double(double)> DriveFunction(const RealLikeDrive& drive);

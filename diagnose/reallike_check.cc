@@ -11,8 +11,9 @@
 
 namespace pz::records {
 
-RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
-                                      const std::function<void(const RealLikeCheckTrial&, int)>& on_trial) {
+RealLikeCheckSummary RunRealLikeCheck(
+    const RealLikeCheckOptions& o,
+    const std::function<void(const RealLikeCheckTrial&, int)>& on_trial) {
   if (o.trials < 1) throw InputError(FieldError("trials", o.trials, "must be >= 1"));
   const auto start = std::chrono::steady_clock::now();
   RealLikeCheckSummary sum;
@@ -35,8 +36,9 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
     if (std::abs(g.stack.quadratic) >= 0.05) t.truth_effects.push_back("quadratic-drive");
     std::ostringstream desc;
     desc.precision(3);
-    desc << "creep " << g.stack.creep_per_decade << "/dec, lag " << g.sensor.lag_samples << ", quad "
-         << g.stack.quadratic << ", asym " << g.stack.asymmetry << ", hyst " << g.stack.hysteresis_share;
+    desc << "creep " << g.stack.creep_per_decade << "/dec, lag " << g.sensor.lag_samples
+         << ", quad " << g.stack.quadratic << ", asym " << g.stack.asymmetry << ", hyst "
+         << g.stack.hysteresis_share;
     t.description = desc.str();
     const RealLikeSet s = GenerateRealLikeSet(g);
     t.floor_truth = s.realised_floor_um;
@@ -60,7 +62,8 @@ RealLikeCheckSummary RunRealLikeCheck(const RealLikeCheckOptions& o,
     t.excitation_note = !d.excitation_note.empty();
     static_cast<TrialVerdict&>(t) = TrialVerdictOf(d);
     if (d.named >= 0)
-      t.named_present = std::find(t.truth_effects.begin(), t.truth_effects.end(), t.named) != t.truth_effects.end();
+      t.named_present = std::find(t.truth_effects.begin(), t.truth_effects.end(), t.named) !=
+                        t.truth_effects.end();
     const double ratio = t.floor_estimate / t.floor_truth;
     sum.floor_ratio_min = i == 0 ? ratio : std::min(sum.floor_ratio_min, ratio);
     sum.floor_ratio_max = i == 0 ? ratio : std::max(sum.floor_ratio_max, ratio);

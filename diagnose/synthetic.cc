@@ -3,7 +3,6 @@
 #include <cmath>
 #include <numbers>
 
-
 namespace pz::records {
 
 double NormalDraw(opt::Rng& rng) {
@@ -13,18 +12,25 @@ double NormalDraw(opt::Rng& rng) {
 
 const char* WaveformName(Waveform w) {
   switch (w) {
-    case Waveform::kSine: return "sine";
-    case Waveform::kMultisine: return "multisine";
-    case Waveform::kTriangle: return "triangle";
-    case Waveform::kSquare: return "square";
-    case Waveform::kSweep: return "sweep";
+    case Waveform::kSine:
+      return "sine";
+    case Waveform::kMultisine:
+      return "multisine";
+    case Waveform::kTriangle:
+      return "triangle";
+    case Waveform::kSquare:
+      return "square";
+    case Waveform::kSweep:
+      return "sweep";
   }
   return "?";
 }
 
 std::vector<double> MakeDrive(const DriveShape& s) {
-  if (!(s.fs_hz > 0) || !(s.duration_s > 0) || !(s.rest_s >= 0) || !(s.frequency_hz > 0) || !(s.amplitude >= 0)) {
-    throw InputError("drive shape: fs, duration and frequency must be > 0, rest and amplitude >= 0");
+  if (!(s.fs_hz > 0) || !(s.duration_s > 0) || !(s.rest_s >= 0) || !(s.frequency_hz > 0) ||
+      !(s.amplitude >= 0)) {
+    throw InputError(
+        "drive shape: fs, duration and frequency must be > 0, rest and amplitude >= 0");
   }
   const double pi2 = 2 * std::numbers::pi;
   const size_t rest = static_cast<size_t>(std::llround(s.rest_s * s.fs_hz));
@@ -36,7 +42,8 @@ std::vector<double> MakeDrive(const DriveShape& s) {
     const int L = std::max(1, s.lines);
     for (int i = 0; i < L; ++i) {
       const double f = L == 1 ? s.frequency_hz
-                              : s.frequency_hz * std::pow(s.frequency_end_hz / s.frequency_hz, double(i) / (L - 1));
+                              : s.frequency_hz * std::pow(s.frequency_end_hz / s.frequency_hz,
+                                                          double(i) / (L - 1));
       freqs.push_back(f);
       phases.push_back(pi2 * rng.Uniform01());
     }
@@ -47,7 +54,9 @@ std::vector<double> MakeDrive(const DriveShape& s) {
     double v = 0;
     const double cyc = s.frequency_hz * t + s.phase_rad / pi2;
     switch (s.waveform) {
-      case Waveform::kSine: v = std::sin(pi2 * cyc); break;
+      case Waveform::kSine:
+        v = std::sin(pi2 * cyc);
+        break;
       case Waveform::kTriangle: {
         const double x = cyc + 0.25 - std::floor(cyc + 0.25);  // sin-aligned triangle
         v = x < 0.5 ? 4 * x - 1 : 3 - 4 * x;
@@ -58,10 +67,14 @@ std::vector<double> MakeDrive(const DriveShape& s) {
         const double period = 1 / s.frequency_hz;
         const double x = (cyc - std::floor(cyc)) * period;
         const double half = period / 2;
-        if (x < slew) v = -1 + 2 * x / slew;
-        else if (x < half) v = 1;
-        else if (x < half + slew) v = 1 - 2 * (x - half) / slew;
-        else v = -1;
+        if (x < slew)
+          v = -1 + 2 * x / slew;
+        else if (x < half)
+          v = 1;
+        else if (x < half + slew)
+          v = 1 - 2 * (x - half) / slew;
+        else
+          v = -1;
         break;
       }
       case Waveform::kSweep: {
@@ -98,9 +111,10 @@ DataScale SyntheticStackScale() {
   return s;
 }
 
-io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params, std::span<const double> weights,
-                            const DriveShape& shape, const Measurement& m, const std::string& name,
-                            model::CaseRole role, double t0_s, double t1_s) {
+io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params,
+                            std::span<const double> weights, const DriveShape& shape,
+                            const Measurement& m, const std::string& name, model::CaseRole role,
+                            double t0_s, double t1_s) {
   io::Record r;
   r.name = name;
   r.role = role;

@@ -25,12 +25,12 @@ struct DriveShape {
   double bias = 0;          ///< mean drive [V] (also the rest level)
   double frequency_hz = 1;  ///< sine / triangle / square; multisine: the lowest line; sweep: start
   double frequency_end_hz = 10;  ///< sweep: end frequency; multisine: the highest line
-  double phase_rad = 0;     ///< of the first excited sample (arbitrary phase: the drive jumps)
-  double rest_s = 0.5;      ///< rest at `bias` before the excitation
-  double duration_s = 3;    ///< excitation length
+  double phase_rad = 0;          ///< of the first excited sample (arbitrary phase: the drive jumps)
+  double rest_s = 0.5;           ///< rest at `bias` before the excitation
+  double duration_s = 3;         ///< excitation length
   double fs_hz = 1000;
-  double slew_s = 0;        ///< square: rise time (0 = one sample)
-  int lines = 8;            ///< multisine: log-spaced lines, random phases from seed
+  double slew_s = 0;  ///< square: rise time (0 = one sample)
+  int lines = 8;      ///< multisine: log-spaced lines, random phases from seed
   uint64_t seed = 1;
 };
 /// The drive samples (t_k = k / fs from 0, rest then excitation). Throws InputError on bad shapes.
@@ -57,8 +57,9 @@ inline double UniformDraw(opt::Rng& rng, double lo, double hi) {
 
 /// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
-io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params, std::span<const double> weights,
-                            const DriveShape& shape, const Measurement& measurement, const std::string& name,
+io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params,
+                            std::span<const double> weights, const DriveShape& shape,
+                            const Measurement& measurement, const std::string& name,
                             model::CaseRole role, double t0_s = 0, double t1_s = 0);
 
 }  // namespace pz::records

@@ -25,8 +25,8 @@ std::string Padded(const std::string& s, size_t width, bool right) {
 
 }  // namespace
 
-std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ranked, const Naming& naming,
-                           const DecisionRules& rules, const VerdictText& t) {
+std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ranked,
+                           const Naming& naming, const DecisionRules& rules, const VerdictText& t) {
   const std::string kind = VerdictKind(gap.significant, naming);
   const double floor = t.floor >= 0 ? t.floor : std::sqrt(gap.s_floor / gap.nw);
   const double rms0 = std::sqrt(gap.s0 / gap.nw);
@@ -46,35 +46,44 @@ std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ran
       v += ".";
     }
   } else if (kind == "unexplained") {
-    v = "A significant gap (withheld RMS " + G(rms0) + u + " = " + G(gap.rms_ratio) + " × the noise floor of " +
-        G(floor) + u + ", from " + t.floor_source + ") that no candidate explains by the rules.";
-    if (!ranked.empty()) v += " Best candidate: " + ranked[0].name + " (" + ranked[0].score->note + ").";
+    v = "A significant gap (withheld RMS " + G(rms0) + u + " = " + G(gap.rms_ratio) +
+        " × the noise floor of " + G(floor) + u + ", from " + t.floor_source +
+        ") that no candidate explains by the rules.";
+    if (!ranked.empty())
+      v += " Best candidate: " + ranked[0].name + " (" + ranked[0].score->note + ").";
   } else {
     const VerdictCandidate& best = ranked[static_cast<size_t>(naming.named)];
     const std::string confidence = G(100 * naming.confidence) + " %";
-    const std::string second =
-        t.second.empty() ? "" : ", with a second effect: " + t.second + " (confidence " + G(100 * t.second_confidence) + " %)";
+    const std::string second = t.second.empty()
+                                   ? ""
+                                   : ", with a second effect: " + t.second + " (confidence " +
+                                         G(100 * t.second_confidence) + " %)";
     const double s_final = t.s_final >= 0 ? t.s_final : best.score->s_withheld;
     if (kind == "inseparable") {
       const VerdictCandidate& ru = ranked[static_cast<size_t>(naming.runner_up)];
       v = "The data cannot separate " + best.name + " from " + ru.name +
-          ": both bring the withheld gap to the noise floor (" + G(std::sqrt(best.score->s_withheld / gap.s_floor)) +
-          " × and " + G(std::sqrt(ru.score->s_withheld / gap.s_floor)) + " ×, at most " +
+          ": both bring the withheld gap to the noise floor (" +
+          G(std::sqrt(best.score->s_withheld / gap.s_floor)) + " × and " +
+          G(std::sqrt(ru.score->s_withheld / gap.s_floor)) + " ×, at most " +
           T(rules.significance_ratio) + "; they close " + G(100 * best.score->closed) + " % and " +
           G(100 * ru.score->closed) + " %) and the paired block test does not separate them (z = " +
-          FormatG(naming.z_runner_up, 2) + " < " + T(rules.separation_z) + "); confidence in " + best.name + " " +
-          confidence + ".";
+          FormatG(naming.z_runner_up, 2) + " < " + T(rules.separation_z) + "); confidence in " +
+          best.name + " " + confidence + ".";
       if (!t.second.empty()) {
         v += " A second effect on top of " + best.name + ": " + t.second + " (confidence " +
-             G(100 * t.second_confidence) + " %); the two close " + G(100 * ClosedShare(gap.s0, s_final, gap.s_floor)) +
-             " % of the excess withheld gap; withheld RMS " + G(rms0) + " → " + G(std::sqrt(s_final / gap.nw)) + u + ".";
+             G(100 * t.second_confidence) + " %); the two close " +
+             G(100 * ClosedShare(gap.s0, s_final, gap.s_floor)) +
+             " % of the excess withheld gap; withheld RMS " + G(rms0) + " → " +
+             G(std::sqrt(s_final / gap.nw)) + u + ".";
       }
       if (!t.next.empty()) v += " Next measurement: " + t.next + ".";
     } else {
       v = "The gap is " + best.name + " (confidence " + confidence + ")" + second + ": adding " +
-          (t.second.empty() ? "it" : "them") + " closes " + G(100 * ClosedShare(gap.s0, s_final, gap.s_floor)) +
-          " % of the excess withheld gap; withheld RMS " + G(rms0) + " → " + G(std::sqrt(s_final / gap.nw)) + u +
-          " against a noise floor of " + G(floor) + u + " (" + t.floor_source + ").";
+          (t.second.empty() ? "it" : "them") + " closes " +
+          G(100 * ClosedShare(gap.s0, s_final, gap.s_floor)) +
+          " % of the excess withheld gap; withheld RMS " + G(rms0) + " → " +
+          G(std::sqrt(s_final / gap.nw)) + u + " against a noise floor of " + G(floor) + u + " (" +
+          t.floor_source + ").";
     }
   }
   if (!t.closing.empty()) v += " " + t.closing;
@@ -82,29 +91,36 @@ std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ran
 }
 
 std::string TrialLine(int index, const std::string& mark, const std::string& description, int width,
-                      const TrialVerdict& v, const std::string& after_named, const std::string& extra) {
+                      const TrialVerdict& v, const std::string& after_named,
+                      const std::string& extra) {
   char buf[200];
-  std::snprintf(buf, sizeof buf, "%-11s %-16s%s ratio %6.2f conf %.2f", v.verdict_kind.c_str(), v.named.c_str(),
-                after_named.c_str(), v.rms_ratio, v.confidence);
+  std::snprintf(buf, sizeof buf, "%-11s %-16s%s ratio %6.2f conf %.2f", v.verdict_kind.c_str(),
+                v.named.c_str(), after_named.c_str(), v.rms_ratio, v.confidence);
   std::string head = "trial " + Padded(std::to_string(index), 3, true) + " ";
   if (!mark.empty()) head += Padded(mark, 6, false) + " ";
-  return head + Padded(description, static_cast<size_t>(std::max(width, 0)), false) + " -> " + buf + extra;
+  return head + Padded(description, static_cast<size_t>(std::max(width, 0)), false) + " -> " + buf +
+         extra;
 }
 
 std::string TallyText(const CalibrationTally& t, const std::string& noun) {
-  auto pct = [](double share) { return std::isfinite(share) ? FormatFixed(100 * share, 0) + " %" : std::string("n/a"); };
-  std::string s = noun + " with an effect and a significant gap: " + std::to_string(t.effect_trials) +
-                  ", right effect named in " + std::to_string(t.effect_right) + " (" + pct(t.accuracy()) +
-                  "); verdicts 'cannot separate': " + std::to_string(t.inseparable) + "\n";
-  s += "clean " + noun + ": " + std::to_string(t.clean) + ", false alarms " + std::to_string(t.clean_alarms) + " (" +
-       pct(t.false_alarm_rate()) + ")\n";
+  auto pct = [](double share) {
+    return std::isfinite(share) ? FormatFixed(100 * share, 0) + " %" : std::string("n/a");
+  };
+  std::string s =
+      noun + " with an effect and a significant gap: " + std::to_string(t.effect_trials) +
+      ", right effect named in " + std::to_string(t.effect_right) + " (" + pct(t.accuracy()) +
+      "); verdicts 'cannot separate': " + std::to_string(t.inseparable) + "\n";
+  s += "clean " + noun + ": " + std::to_string(t.clean) + ", false alarms " +
+       std::to_string(t.clean_alarms) + " (" + pct(t.false_alarm_rate()) + ")\n";
   s += "calibration of the stated confidence (" + std::to_string(t.confidence.size()) + " " + noun +
        " with a named effect):\n";
   for (const model::ReliabilityBin& b : t.Reliability()) {
     if (b.count == 0) continue;
     char buf[200];
-    std::snprintf(buf, sizeof buf, "  confidence %.2f – %.2f: %3d %s, mean stated %5.1f %%, right %5.1f %%\n", b.lo,
-                  std::min(b.hi, 1.0), b.count, noun.c_str(), 100 * b.mean_confidence, 100 * b.frequency_right);
+    std::snprintf(buf, sizeof buf,
+                  "  confidence %.2f – %.2f: %3d %s, mean stated %5.1f %%, right %5.1f %%\n", b.lo,
+                  std::min(b.hi, 1.0), b.count, noun.c_str(), 100 * b.mean_confidence,
+                  100 * b.frequency_right);
     s += buf;
   }
   return s;

@@ -34,29 +34,36 @@ namespace pz::records {
 
 /// A ranked candidate as the verdict names it.
 struct VerdictCandidate {
-  std::string name;              ///< the effect's name
+  std::string name;  ///< the effect's name
   const CandidateScore* score = nullptr;
 };
 
 /// What only the protocol knows.
 struct VerdictText {
-  std::string model;         ///< the starting model, as the sentence names it ("backlash-like", "the base model")
-  std::string unit;          ///< of the response ("deg", "µm")
-  std::string floor_source;  ///< where the floor comes from ("rest", "rounding and scatter per case")
-  double floor = -1;         ///< σ as the protocol states it (< 0: √(S_floor / N_w))
-  std::string next;          ///< inseparable: what would separate the two ("": nothing said)
-  std::vector<std::string> absorbed;  ///< no gap: base parameters that absorb the best candidate ("α (1 without it, 2 with it)")
-  std::string second;        ///< a second effect named on top of the first ("": none)
+  std::string
+      model;  ///< the starting model, as the sentence names it ("backlash-like", "the base model")
+  std::string unit;  ///< of the response ("deg", "µm")
+  std::string
+      floor_source;   ///< where the floor comes from ("rest", "rounding and scatter per case")
+  double floor = -1;  ///< σ as the protocol states it (< 0: √(S_floor / N_w))
+  std::string next;   ///< inseparable: what would separate the two ("": nothing said)
+  std::vector<std::string> absorbed;  ///< no gap: base parameters that absorb the best candidate
+                                      ///< ("α (1 without it, 2 with it)")
+  std::string second;                 ///< a second effect named on top of the first ("": none)
   double second_confidence = 0;
-  double s_final = -1;       ///< withheld Σe² of the model with every named effect (< 0: the named one's)
-  std::string closing;       ///< a last sentence ("": none)
+  double s_final =
+      -1;  ///< withheld Σe² of the model with every named effect (< 0: the named one's)
+  std::string closing;  ///< a last sentence ("": none)
 };
 
-/// The verdict of a gap, its ranked candidates (best first, as NameEffect saw them) and their naming.
-std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ranked, const Naming& naming,
-                           const DecisionRules& rules, const VerdictText& text);
+/// The verdict of a gap, its ranked candidates (best first, as NameEffect saw them) and their
+/// naming.
+std::string ComposeVerdict(const Gap& gap, std::span<const VerdictCandidate> ranked,
+                           const Naming& naming, const DecisionRules& rules,
+                           const VerdictText& text);
 
-// ---- the calibration checks (`diagnose-check`: benches, records, real-like record sets) -----------
+// ---- the calibration checks (`diagnose-check`: benches, records, real-like record sets)
+// -----------
 
 /// What a diagnosis said on one trial of a check.
 struct TrialVerdict {
@@ -67,11 +74,12 @@ struct TrialVerdict {
   bool significant = false;    ///< the gap was significant
 };
 
-/// One trial of a check as a line: "trial   3 right  DESCRIPTION -> effect      delay           
+/// One trial of a check as a line: "trial   3 right  DESCRIPTION -> effect      delay
 /// ratio   2.31 conf 0.99EXTRA". `mark`: "right" / "WRONG", or "" for a check without one truth;
 /// the description padded to `width`; `after_named` right after the named effect.
 std::string TrialLine(int index, const std::string& mark, const std::string& description, int width,
-                      const TrialVerdict& verdict, const std::string& after_named = "", const std::string& extra = "");
+                      const TrialVerdict& verdict, const std::string& after_named = "",
+                      const std::string& extra = "");
 
 /// The counts and the reliability table of a check, one line each; `noun` names the trials
 /// ("benches", "records").

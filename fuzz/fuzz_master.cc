@@ -42,7 +42,8 @@ void Validate(const JobSpec& spec) {
     const std::string bytes = EncodeJobSpec(spec);
     JobSpec again;
     std::vector<FieldViolation> v2;
-    if (!DecodeJobSpec(bytes, &again, &v2).ok() || !v2.empty()) Fail("a valid spec's encoding does not decode");
+    if (!DecodeJobSpec(bytes, &again, &v2).ok() || !v2.empty())
+      Fail("a valid spec's encoding does not decode");
     if (EncodeJobSpec(again) != bytes) Fail("a valid spec's encoding is not stable");
   }
 }
@@ -72,7 +73,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     case 1: {
       ClientRequestMsg m;
       if (!DecodeClientRequest(in, &m).ok()) break;
-      if (m.type == ClientRequestMsg::Type::kSubmit && m.decode_violations.empty()) Validate(m.spec);
+      if (m.type == ClientRequestMsg::Type::kSubmit && m.decode_violations.empty())
+        Validate(m.spec);
       ClientRequestMsg again;
       if (!DecodeClientRequest(EncodeClientRequest(m), &again).ok())
         Fail("a decoded client request does not survive re-encoding");

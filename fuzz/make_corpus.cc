@@ -19,7 +19,8 @@ namespace {
 std::filesystem::path g_dir;
 
 void Write(char selector, const std::string& name, const std::string& bytes) {
-  std::ofstream f(g_dir / (std::to_string(static_cast<int>(selector)) + "-" + name), std::ios::binary);
+  std::ofstream f(g_dir / (std::to_string(static_cast<int>(selector)) + "-" + name),
+                  std::ios::binary);
   f.put(selector);
   f << bytes;
 }
@@ -137,8 +138,9 @@ int main(int argc, char** argv) {
   m.context_hash = ContentHash(m.context_spec);
   Write(4, "context", EncodeMasterToWorker(m));
 
-  Write(5, "key", "#   ZeroMQ CURVE **Secret** Certificate\nmetadata\ncurve\n"
-                  "    public-key = \"rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7\"\n"
-                  "    secret-key = \"JTKVSB%%)wK0E.X)V>+}o?pNmC{O&4W4b!Ni{Lh6\"\n");
+  Write(5, "key",
+        "#   ZeroMQ CURVE **Secret** Certificate\nmetadata\ncurve\n"
+        "    public-key = \"rq:rM>}U?@Lns47E1%kR.o@n%FcmmsL/@{H8]yf7\"\n"
+        "    secret-key = \"JTKVSB%%)wK0E.X)V>+}o?pNmC{O&4W4b!Ni{Lh6\"\n");
   return 0;
 }

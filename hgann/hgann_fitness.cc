@@ -31,25 +31,30 @@ Status HgannFitnessConfig::Validate() const {
     if (c.number <= 0) return InvalidArgument(FieldError(f + ".number", c.number, "must be > 0"));
     if (auto s = c.drive.Validate(); !s.ok()) return InvalidArgument(f + ".drive." + s.message());
     if (static_cast<int>(c.measured_deg.size()) != c.drive.NumSamples())
-      return InvalidArgument(FieldError(f + ".measured_deg.size()", c.measured_deg.size(),
-                                        "must equal the drive's sample count " +
-                                            std::to_string(c.drive.NumSamples())));
+      return InvalidArgument(FieldError(
+          f + ".measured_deg.size()", c.measured_deg.size(),
+          "must equal the drive's sample count " + std::to_string(c.drive.NumSamples())));
     for (size_t k = 0; k < c.measured_deg.size(); ++k)
       if (!std::isfinite(c.measured_deg[k]))
-        return InvalidArgument(FieldError(f + ".measured_deg[" + std::to_string(k) + "]", c.measured_deg[k],
-                                          "must be finite"));
-    if (!(std::isfinite(c.b1) && c.b1 > 0)) return InvalidArgument(FieldError(f + ".b1", c.b1, "must be finite and > 0"));
-    if (!(std::isfinite(c.b2) && c.b2 < 0)) return InvalidArgument(FieldError(f + ".b2", c.b2, "must be finite and < 0"));
+        return InvalidArgument(FieldError(f + ".measured_deg[" + std::to_string(k) + "]",
+                                          c.measured_deg[k], "must be finite"));
+    if (!(std::isfinite(c.b1) && c.b1 > 0))
+      return InvalidArgument(FieldError(f + ".b1", c.b1, "must be finite and > 0"));
+    if (!(std::isfinite(c.b2) && c.b2 < 0))
+      return InvalidArgument(FieldError(f + ".b2", c.b2, "must be finite and < 0"));
     for (size_t j = 0; j < i; ++j)
       if (cases[j].number == c.number)
-        return InvalidArgument(FieldError(f + ".number", c.number, "duplicates cases[" + std::to_string(j) + "]"));
+        return InvalidArgument(
+            FieldError(f + ".number", c.number, "duplicates cases[" + std::to_string(j) + "]"));
     training += c.training;
   }
   if (training == 0) return InvalidArgument("cases: needs at least one training case");
   if (!(std::isfinite(spread_penalty) && spread_penalty >= 0))
-    return InvalidArgument(FieldError("spread_penalty", spread_penalty, "must be finite and >= 0 [deg^2]"));
+    return InvalidArgument(
+        FieldError("spread_penalty", spread_penalty, "must be finite and >= 0 [deg^2]"));
   if (auto s = ranges.Validate(); !s.ok()) return s;
-  if (auto s = normalization.Validate(); !s.ok()) return InvalidArgument("normalization." + s.message());
+  if (auto s = normalization.Validate(); !s.ok())
+    return InvalidArgument("normalization." + s.message());
   if (auto s = geometry.Validate(); !s.ok()) return InvalidArgument("geometry." + s.message());
   return Status::Ok();
 }
@@ -74,7 +79,8 @@ model::Network HgannFitness::Decode(const Genome& genome) const {
   return model::DecodeChromosome(genome.bits, config_.normalization, config_.ranges);
 }
 
-model::BimorphParams HgannFitness::ParamsFor(const model::NetworkParameters& p, const HgannCase& c) const {
+model::BimorphParams HgannFitness::ParamsFor(const model::NetworkParameters& p,
+                                             const HgannCase& c) const {
   model::BimorphParams bp;
   bp.mu = p.mu;
   bp.delta = p.delta;
@@ -115,8 +121,9 @@ FitnessResult HgannFitness::EvaluateNetwork(const model::Network& network) const
     angle.resize(c.measured_deg.size());
     const auto summary = simulator_->SimulateAngle(ParamsFor(p, c), c.drive, angle, workspace);
     if (!summary.ok()) {
-      return {penalty_, summary.status == model::SimStatus::kInvalidInput ? FitnessStatus::kError
-                                                                           : FitnessStatus::kPenalized,
+      return {penalty_,
+              summary.status == model::SimStatus::kInvalidInput ? FitnessStatus::kError
+                                                                : FitnessStatus::kPenalized,
               model::SimStatusName(summary.status)};
     }
     const double pi = model::PerformanceIndex(c.measured_deg, angle);
@@ -127,17 +134,23 @@ FitnessResult HgannFitness::EvaluateNetwork(const model::Network& network) const
     // The grid of the spread penalty is the network's envelope: a network that gives an unbounded
     // loop at a point of it is penalised like one that does so on a training case.
     const Envelope e = GridOf(network);
-    if (!e.bounded) return {penalty_, FitnessStatus::kPenalized, "unbounded_hysteresis_in_envelope"};
+    if (!e.bounded)
+      return {penalty_, FitnessStatus::kPenalized, "unbounded_hysteresis_in_envelope"};
     cost += config_.spread_penalty * e.spread;
   }
   if (!std::isfinite(cost) || cost >= penalty_)
-    return {penalty_, FitnessStatus::kPenalized, "cost overflow (" + std::to_string(cost) + " deg^2)"};
+    return {penalty_, FitnessStatus::kPenalized,
+            "cost overflow (" + std::to_string(cost) + " deg^2)"};
   return {cost, FitnessStatus::kOk, {}};
 }
 
-double HgannFitness::OutputSpread(const model::Network& network) const { return GridOf(network).spread; }
+double HgannFitness::OutputSpread(const model::Network& network) const {
+  return GridOf(network).spread;
+}
 
-bool HgannFitness::BoundedOnEnvelope(const model::Network& network) const { return GridOf(network).bounded; }
+bool HgannFitness::BoundedOnEnvelope(const model::Network& network) const {
+  return GridOf(network).bounded;
+}
 
 HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const {
   constexpr int kGrid = 5;
@@ -147,7 +160,8 @@ HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const
   for (int i = 0; i < kGrid; ++i) {
     for (int j = 0; j < kGrid; ++j) {
       const double v = n.amplitude_lo_v + (n.amplitude_hi_v - n.amplitude_lo_v) * i / (kGrid - 1);
-      const double f = n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1);
+      const double f =
+          n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1);
       const model::NetworkParameters q = network.Predict(v, f);
       model::BimorphParams bp;
       bp.alpha = q.alpha;
@@ -169,7 +183,8 @@ HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const
   return e;
 }
 
-std::array<int, model::kNetworkOutputs> HgannFitness::ParametersAtBound(const model::Network& network) const {
+std::array<int, model::kNetworkOutputs> HgannFitness::ParametersAtBound(
+    const model::Network& network) const {
   std::array<int, model::kNetworkOutputs> side{};
   bool first = true;
   for (const auto& c : config_.cases) {
@@ -178,7 +193,10 @@ std::array<int, model::kNetworkOutputs> HgannFitness::ParametersAtBound(const mo
     for (int k = 0; k < model::kNetworkOutputs; ++k) {
       const auto& r = config_.ranges[k];
       const double tol = kAtBoundShare * (r.upper - r.lower);
-      const int here = !(r.upper > r.lower) ? 0 : p[k] <= r.lower + tol ? -1 : p[k] >= r.upper - tol ? 1 : 0;
+      const int here = !(r.upper > r.lower)    ? 0
+                       : p[k] <= r.lower + tol ? -1
+                       : p[k] >= r.upper - tol ? 1
+                                               : 0;
       side[k] = first ? here : (side[k] == here ? here : 0);
     }
     first = false;
@@ -222,17 +240,19 @@ model::BimorphTrace HgannFitness::Trace(const model::Network& network, const Hga
 
 namespace pz::hgann {
 
-HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges,
+HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set,
+                                          const model::ParameterRanges& ranges,
                                           const std::vector<model::SaturationPair>& given) {
   PZ_CHECK(given.empty() || given.size() == set.cases.size());
   HgannFitnessConfig config;
   config.ranges = ranges;
   for (size_t i = 0; i < set.cases.size(); ++i)
-    config.cases.push_back(io::MakeFinCase(
-        set.cases[i], given.empty() ? std::nullopt : std::optional(given[i])));
+    config.cases.push_back(
+        io::MakeFinCase(set.cases[i], given.empty() ? std::nullopt : std::optional(given[i])));
   bool any_training = false;
   for (const auto& c : config.cases) any_training |= c.training;
-  if (!any_training) throw InputError((set.dir / "cases.csv").string() + ": no case has role 'train'");
+  if (!any_training)
+    throw InputError((set.dir / "cases.csv").string() + ": no case has role 'train'");
   config.normalization = config.FromTrainingCases();
   ThrowIfError(config.Validate());
   return config;

@@ -1,4 +1,5 @@
-// The HGANN fitness (spec hgann.md §1–3, paper eq. 6): a genome is a whole 2-H-7 network; its cost is
+// The HGANN fitness (spec hgann.md §1–3, paper eq. 6): a genome is a whole 2-H-7 network; its cost
+// is
 //
 //   CF = Σ_{c ∈ training cases} PI_c,    PI_c = Σ_k (y_meas,c,k − y_model,c,k)²   [deg²]
 //
@@ -31,10 +32,10 @@ struct HgannFitnessConfig {
   model::BeamGeometry geometry;             ///< the beam (default: the spec's)
   /// λ [deg²] of the optional spread penalty added to the cost: λ · Σ_k Var_grid(s_k), the variance
   /// of each normalised output s_k ∈ [0, 1] over a 5 × 5 grid of the normalised training box
-  /// [0, 1]². 0 = the paper's cost exactly. A positive λ prefers networks whose parameters vary over
-  /// the operating envelope only where the data pay for it, which keeps predictions at untrained
-  /// operating points (corners of the box) from bending; and it penalises a network whose loop is
-  /// unbounded at a point of that grid (HgannFitness::BoundedOnEnvelope). Finite, ≥ 0.
+  /// [0, 1]². 0 = the paper's cost exactly. A positive λ prefers networks whose parameters vary
+  /// over the operating envelope only where the data pay for it, which keeps predictions at
+  /// untrained operating points (corners of the box) from bending; and it penalises a network whose
+  /// loop is unbounded at a point of that grid (HgannFitness::BoundedOnEnvelope). Finite, ≥ 0.
   double spread_penalty = 0;
 
   /// Normalisation over the training cases' (V, f) (spec hgann.md §1).
@@ -49,7 +50,7 @@ struct HgannCaseResult {
   bool training = false;
   model::BimorphParams params;  ///< predicted μ…a2 with the case's b1, b2
   model::SimulationSummary summary;
-  double pi = 0;                ///< PI [deg²] (penalty share if the simulation failed)
+  double pi = 0;  ///< PI [deg²] (penalty share if the simulation failed)
 };
 
 class HgannFitness final : public opt::FitnessFunction {
@@ -100,8 +101,8 @@ class HgannFitness final : public opt::FitnessFunction {
 
  private:
   struct Envelope {
-    double spread = 0;     ///< Σ_k Var_grid(s_k)
-    bool bounded = true;   ///< a bounded loop at every grid point
+    double spread = 0;    ///< Σ_k Var_grid(s_k)
+    bool bounded = true;  ///< a bounded loop at every grid point
   };
   Envelope GridOf(const model::Network& network) const;
 
@@ -123,7 +124,8 @@ namespace pz::hgann {
 /// grid), measured angle and saturations — `given` (one per case), or fitted from its measured
 /// extremes (spec §3) — through io::MakeFinCase; training = the manifest's "train" role;
 /// normalisation over the training cases. Throws InputError.
-HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set, const model::ParameterRanges& ranges,
+HgannFitnessConfig HgannConfigFromCaseSet(const io::CaseSet& set,
+                                          const model::ParameterRanges& ranges,
                                           const std::vector<model::SaturationPair>& given = {});
 
 }  // namespace pz::hgann

@@ -22,8 +22,8 @@ using job::HgannCaseSpec;
 using job::HgannProblem;
 using job::JobKind;
 using job::JobSpec;
-using job::Violations;
 using job::ParameterRange;
+using job::Violations;
 using opt::FitnessFunction;
 using opt::Genome;
 namespace {
@@ -73,7 +73,9 @@ Status ApplyGeometry(const std::map<std::string, double>& overrides, model::Beam
   for (const auto& [name, value] : overrides) {
     const std::string field = "hgann.geometry." + name;
     const GeometryField* f = FindGeometryField(name);
-    if (!f) return InvalidArgument(FieldError(field, value, "unknown field (known: " + GeometryFieldNames() + ")"));
+    if (!f)
+      return InvalidArgument(
+          FieldError(field, value, "unknown field (known: " + GeometryFieldNames() + ")"));
     if (f->real) {
       g->*(f->real) = value;
     } else {
@@ -101,10 +103,10 @@ int NameIndex(const std::string& name) {
 
 std::string OutputNames() {
   std::string s;
-  for (int k = 0; k < model::kNetworkOutputs; ++k) s += (k ? ", " : "") + std::string(model::OutputName(k));
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    s += (k ? ", " : "") + std::string(model::OutputName(k));
   return s;
 }
-
 
 /// The first non-finite sample of `v`, checked as "<field>[k] = nan: must be finite".
 void RequireFiniteSamples(Violations& c, const std::string& field, const std::vector<double>& v) {
@@ -121,19 +123,24 @@ void RequireFiniteSamples(Violations& c, const std::string& field, const std::ve
 Status HgannRanges(const HgannProblem& h, model::ParameterRanges* ranges) {
   const auto preset = RangesPreset(h.ranges_preset);
   if (!preset)
-    return InvalidArgument(FieldError("hgann.ranges_preset", "\"" + h.ranges_preset + "\"", kRangesPresetRule));
+    return InvalidArgument(
+        FieldError("hgann.ranges_preset", "\"" + h.ranges_preset + "\"", kRangesPresetRule));
   *ranges = *preset;
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];
     const std::string f = "hgann.ranges[" + std::to_string(i) + "]";
     const int k = NameIndex(r.name);
-    if (k < 0) return InvalidArgument(FieldError(f + ".name", "\"" + r.name + "\"", "must be one of " + OutputNames()));
+    if (k < 0)
+      return InvalidArgument(
+          FieldError(f + ".name", "\"" + r.name + "\"", "must be one of " + OutputNames()));
     if (!seen.insert(r.name).second)
       return InvalidArgument(FieldError(f + ".name", r.name, "is given twice"));
-    if (!std::isfinite(r.min)) return InvalidArgument(FieldError(f + ".min", r.min, "must be finite"));
+    if (!std::isfinite(r.min))
+      return InvalidArgument(FieldError(f + ".min", r.min, "must be finite"));
     if (!(std::isfinite(r.max) && r.max >= r.min))
-      return InvalidArgument(FieldError(f + ".max", r.max, "must be finite and >= min (" + Num(r.min) + ")"));
+      return InvalidArgument(
+          FieldError(f + ".max", r.max, "must be finite and >= min (" + Num(r.min) + ")"));
     (*ranges)[k] = {r.min, r.max};
   }
   return ranges->Validate();
@@ -142,10 +149,12 @@ Status HgannRanges(const HgannProblem& h, model::ParameterRanges* ranges) {
 std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
   Violations c;
   c.Require(h.case_set_dir.empty(), "hgann.case_set_dir", "\"" + h.case_set_dir + "\"",
-            "is read by the client (piezoid submit), which embeds the cases: a master never reads client paths");
+            "is read by the client (piezoid submit), which embeds the cases: a master never reads "
+            "client paths");
   c.Require(h.source.size() <= kMaxSourceChars, "hgann.source", h.source.size(),
             "must be <= " + std::to_string(kMaxSourceChars) + " characters");
-  c.Require(!h.cases.empty(), "hgann.cases", "[]", "needs at least one case with role CASE_ROLE_TRAIN");
+  c.Require(!h.cases.empty(), "hgann.cases", "[]",
+            "needs at least one case with role CASE_ROLE_TRAIN");
   c.Require(h.cases.size() <= kMaxCases, "hgann.cases", h.cases.size(),
             "at most " + std::to_string(kMaxCases) + " cases");
   const bool given = h.saturation == HgannProblem::Saturation::kGiven;
@@ -159,27 +168,37 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
               "duplicates an earlier case's number");
     c.Require(std::isfinite(x.amplitude_v) && x.amplitude_v >= 0, f + ".amplitude_v", x.amplitude_v,
               "must be finite and >= 0 [V]");
-    c.Require(std::isfinite(x.frequency_hz) && x.frequency_hz > 0, f + ".frequency_hz", x.frequency_hz,
-              "must be finite and > 0 [Hz]");
+    c.Require(std::isfinite(x.frequency_hz) && x.frequency_hz > 0, f + ".frequency_hz",
+              x.frequency_hz, "must be finite and > 0 [Hz]");
     c.Require(x.role != CaseRole::kUnspecified, f + ".role", "CASE_ROLE_UNSPECIFIED",
               "must be CASE_ROLE_TRAIN, CASE_ROLE_VALIDATE or CASE_ROLE_TEST");
     training += x.role == CaseRole::kTrain;
-    c.Require(std::isfinite(x.sample_rate_hz) && x.sample_rate_hz > 0, f + ".sample_rate_hz", x.sample_rate_hz,
-              "must be finite and > 0 [Hz]");
-    c.Require(x.angle_deg.size() >= 2 && x.angle_deg.size() <= kMaxSamplesPerCase, f + ".angle_deg.size()",
-              x.angle_deg.size(), "must be in [2, " + std::to_string(kMaxSamplesPerCase) + "]");
+    c.Require(std::isfinite(x.sample_rate_hz) && x.sample_rate_hz > 0, f + ".sample_rate_hz",
+              x.sample_rate_hz, "must be finite and > 0 [Hz]");
+    c.Require(x.angle_deg.size() >= 2 && x.angle_deg.size() <= kMaxSamplesPerCase,
+              f + ".angle_deg.size()", x.angle_deg.size(),
+              "must be in [2, " + std::to_string(kMaxSamplesPerCase) + "]");
     RequireFiniteSamples(c, f + ".angle_deg", x.angle_deg);
-    c.Require(x.voltage_v.empty() || x.voltage_v.size() == x.angle_deg.size(), f + ".voltage_v.size()",
-              x.voltage_v.size(), "must be 0 or the number of angle samples (" + std::to_string(x.angle_deg.size()) + ")");
+    c.Require(
+        x.voltage_v.empty() || x.voltage_v.size() == x.angle_deg.size(), f + ".voltage_v.size()",
+        x.voltage_v.size(),
+        "must be 0 or the number of angle samples (" + std::to_string(x.angle_deg.size()) + ")");
     RequireFiniteSamples(c, f + ".voltage_v", x.voltage_v);
     if (given) {
-      c.Require(x.b1.has_value(), f + ".b1", "unset", "is required with saturation SATURATION_GIVEN");
-      c.Require(x.b2.has_value(), f + ".b2", "unset", "is required with saturation SATURATION_GIVEN");
-      if (x.b1) c.Require(std::isfinite(*x.b1) && *x.b1 > 0, f + ".b1", *x.b1, "must be finite and > 0 [deg]");
-      if (x.b2) c.Require(std::isfinite(*x.b2) && *x.b2 < 0, f + ".b2", *x.b2, "must be finite and < 0 [deg]");
+      c.Require(x.b1.has_value(), f + ".b1", "unset",
+                "is required with saturation SATURATION_GIVEN");
+      c.Require(x.b2.has_value(), f + ".b2", "unset",
+                "is required with saturation SATURATION_GIVEN");
+      if (x.b1)
+        c.Require(std::isfinite(*x.b1) && *x.b1 > 0, f + ".b1", *x.b1,
+                  "must be finite and > 0 [deg]");
+      if (x.b2)
+        c.Require(std::isfinite(*x.b2) && *x.b2 < 0, f + ".b2", *x.b2,
+                  "must be finite and < 0 [deg]");
     } else {
       c.Require(!x.b1 && !x.b2, f + (x.b1 ? ".b1" : ".b2"), x.b1 ? *x.b1 : x.b2.value_or(0),
-                "set only with saturation SATURATION_GIVEN (the default fits b1, b2 from the measured extremes)");
+                "set only with saturation SATURATION_GIVEN (the default fits b1, b2 from the "
+                "measured extremes)");
       bool finite = true;
       double lo = 0, hi = 0;
       for (double y : x.angle_deg) {
@@ -188,28 +207,32 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
         hi = std::max(hi, y);
       }
       if (finite && x.angle_deg.size() >= 2) {
-        c.Require(hi > 0, f + ".angle_deg", "max " + std::to_string(hi),
-                  "never rises above 0, so b1 cannot be fitted from the extremes (use SATURATION_GIVEN)");
-        c.Require(lo < 0, f + ".angle_deg", "min " + std::to_string(lo),
-                  "never falls below 0, so b2 cannot be fitted from the extremes (use SATURATION_GIVEN)");
+        c.Require(
+            hi > 0, f + ".angle_deg", "max " + std::to_string(hi),
+            "never rises above 0, so b1 cannot be fitted from the extremes (use SATURATION_GIVEN)");
+        c.Require(
+            lo < 0, f + ".angle_deg", "min " + std::to_string(lo),
+            "never falls below 0, so b2 cannot be fitted from the extremes (use SATURATION_GIVEN)");
       }
     }
   }
   if (!h.cases.empty())
     c.Require(training > 0, "hgann.cases", std::to_string(h.cases.size()) + " cases",
               "needs at least one case with role CASE_ROLE_TRAIN");
-  c.Require(std::isfinite(h.spread_penalty) && h.spread_penalty >= 0, "hgann.spread_penalty", h.spread_penalty,
-            "must be finite and >= 0 [deg^2]");
-  c.Require(RangesPreset(h.ranges_preset).has_value(), "hgann.ranges_preset", "\"" + h.ranges_preset + "\"",
-            kRangesPresetRule);
+  c.Require(std::isfinite(h.spread_penalty) && h.spread_penalty >= 0, "hgann.spread_penalty",
+            h.spread_penalty, "must be finite and >= 0 [deg^2]");
+  c.Require(RangesPreset(h.ranges_preset).has_value(), "hgann.ranges_preset",
+            "\"" + h.ranges_preset + "\"", kRangesPresetRule);
   c.Require(job::HgannSearchPreset(h.preset).has_value(), "hgann.preset", "\"" + h.preset + "\"",
             job::kHgannPresetRule);
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];
     const std::string f = "hgann.ranges[" + std::to_string(i) + "]";
-    c.Require(NameIndex(r.name) >= 0, f + ".name", "\"" + r.name + "\"", "must be one of " + OutputNames());
-    c.Require(NameIndex(r.name) < 0 || seen.insert(r.name).second, f + ".name", r.name, "is given twice");
+    c.Require(NameIndex(r.name) >= 0, f + ".name", "\"" + r.name + "\"",
+              "must be one of " + OutputNames());
+    c.Require(NameIndex(r.name) < 0 || seen.insert(r.name).second, f + ".name", r.name,
+              "is given twice");
     c.Require(std::isfinite(r.min), f + ".min", r.min, "must be finite");
     c.Require(!std::isfinite(r.min) || (std::isfinite(r.max) && r.max >= r.min), f + ".max", r.max,
               "must be finite and >= min (" + Num(r.min) + ")");
@@ -220,8 +243,8 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
     const GeometryField* g = FindGeometryField(name);
     c.Require(g != nullptr, f, value, "unknown field (known: " + GeometryFieldNames() + ")");
     if (g && !g->real)
-      c.Require(std::isfinite(value) && value >= 0 && value <= 1e6 && value == std::floor(value), f, value,
-                "must be a whole number");
+      c.Require(std::isfinite(value) && value >= 0 && value <= 1e6 && value == std::floor(value), f,
+                value, "must be a whole number");
     geometry_named = geometry_named && g != nullptr;
   }
   model::BeamGeometry geometry;
@@ -235,7 +258,8 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
     // Everything the fields say is fine: what remains is the problem as a whole (e.g. a record
     // whose sample count does not match its drive).
     HgannFitnessConfig config;
-    if (Status s = HgannConfigFromProblem(h, &config); !s.ok()) c.Add("hgann", "hgann: " + s.message());
+    if (Status s = HgannConfigFromProblem(h, &config); !s.ok())
+      c.Add("hgann", "hgann: " + s.message());
   }
   return c.out;
 }
@@ -243,12 +267,14 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
 io::CaseSet HgannCaseSet(const HgannProblem& h) {
   io::CaseSet set;
   set.dir = h.source;
-  io::BenchReadOptions options;  // the spec's samples are the measured ones: no stated length or drive to check
+  io::BenchReadOptions
+      options;  // the spec's samples are the measured ones: no stated length or drive to check
   options.cycles = 0;
   options.check_voltage = false;
   for (size_t i = 0; i < h.cases.size(); ++i) {
-    set.cases.push_back(io::MakeBenchCase(io::SamplesOfSpecCase(h.cases[i]), options,
-                                          io::SpecCaseWhere("hgann.cases[" + std::to_string(i) + "]")));
+    set.cases.push_back(
+        io::MakeBenchCase(io::SamplesOfSpecCase(h.cases[i]), options,
+                          io::SpecCaseWhere("hgann.cases[" + std::to_string(i) + "]")));
   }
   return set;
 }
@@ -264,7 +290,8 @@ Status HgannConfigFromProblem(const HgannProblem& h, HgannFitnessConfig* config)
     if (h.saturation == HgannProblem::Saturation::kGiven) {
       for (size_t i = 0; i < h.cases.size(); ++i) {
         if (!h.cases[i].b1 || !h.cases[i].b2)
-          return InvalidArgument("hgann.cases[" + std::to_string(i) + "]: b1 and b2 are required with SATURATION_GIVEN");
+          return InvalidArgument("hgann.cases[" + std::to_string(i) +
+                                 "]: b1 and b2 are required with SATURATION_GIVEN");
         given.push_back({*h.cases[i].b1, *h.cases[i].b2});
       }
     }
@@ -306,7 +333,9 @@ HgannProblem HgannProblemFromCaseSet(const io::CaseSet& set) {
 JobKind HgannJobKind() {
   JobKind k;
   k.name = "hgann";
-  k.validate = [](const JobSpec& s) { return ValidateHgannProblem(std::get<HgannProblem>(s.problem)); };
+  k.validate = [](const JobSpec& s) {
+    return ValidateHgannProblem(std::get<HgannProblem>(s.problem));
+  };
   k.layout = [](const JobSpec&, GenomeLayout* l) {
     l->bits = model::kChromosomeBits;
     l->reals = 0;
@@ -314,7 +343,8 @@ JobKind HgannJobKind() {
   };
   k.make_fitness = [](const JobSpec& s, std::unique_ptr<FitnessFunction>* f) -> Status {
     HgannFitnessConfig config;
-    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok()) return st;
+    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok())
+      return st;
     try {
       *f = std::make_unique<HgannFitness>(std::move(config));
     } catch (const std::exception& e) {
@@ -322,9 +352,11 @@ JobKind HgannJobKind() {
     }
     return Status::Ok();
   };
-  k.networks = [](const JobSpec& s, std::span<const Genome> genomes, std::vector<model::Network>* out) {
+  k.networks = [](const JobSpec& s, std::span<const Genome> genomes,
+                  std::vector<model::Network>* out) {
     HgannFitnessConfig config;  // the normalisation and ranges the fitness decodes with
-    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok()) return st;
+    if (Status st = HgannConfigFromProblem(std::get<HgannProblem>(s.problem), &config); !st.ok())
+      return st;
     out->clear();
     for (const Genome& g : genomes) {
       if (Status st = model::ValidateChromosome(g.bits); !st.ok()) return st;
@@ -335,8 +367,9 @@ JobKind HgannJobKind() {
   k.move = [](const JobSpec& s, opt::GeneticAlgorithm::Move* out) -> Status {
     *out = nullptr;
     const HgannProblem& problem = std::get<HgannProblem>(s.problem);
-    if (HgannOutputMoves(ToGaOptions(s, GenomeLayout{model::kChromosomeBits, 0}), problem.spread_penalty) == 0)
-      return Status::Ok();  // as identify: none unset without a spread penalty
+    if (HgannOutputMoves(ToGaOptions(s, GenomeLayout{model::kChromosomeBits, 0}),
+                         problem.spread_penalty) == 0)
+      return Status::Ok();      // as identify: none unset without a spread penalty
     HgannFitnessConfig config;  // the normalisation and training drives the fitness uses
     if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
     *out = OutputMove(config);
@@ -358,8 +391,9 @@ JobKind HgannJobKind() {
     return Status::Ok();
   };
   k.describe = [](const JobSpec&, const Genome& g) {
-    return g.bits.size() == static_cast<size_t>(model::kChromosomeBits) ? model::DescribeChromosome(g.bits)
-                                                                        : std::string();
+    return g.bits.size() == static_cast<size_t>(model::kChromosomeBits)
+               ? model::DescribeChromosome(g.bits)
+               : std::string();
   };
   return k;
 }

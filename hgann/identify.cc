@@ -24,17 +24,18 @@ std::optional<SearchSettings> SearchPreset(std::string_view name) {
 
 double PaperTable8Pi(double v, double f) {
   static const std::map<std::pair<int, int>, double> table = {
-      {{375, 25}, 1.42}, {{375, 50}, 2.08}, {{375, 100}, 2.38}, {{500, 25}, 2.49}, {{500, 50}, 1.96},
-      {{500, 100}, 1.51}, {{750, 25}, 5.64}, {{750, 50}, 3.23}, {{750, 100}, 6.78}};
+      {{375, 25}, 1.42}, {{375, 50}, 2.08}, {{375, 100}, 2.38},
+      {{500, 25}, 2.49}, {{500, 50}, 1.96}, {{500, 100}, 1.51},
+      {{750, 25}, 5.64}, {{750, 50}, 3.23}, {{750, 100}, 6.78}};
   const int vi = static_cast<int>(std::lround(v)), fi = static_cast<int>(std::lround(f * 100));
   if (std::abs(v - vi) > 1e-9 || std::abs(f * 100 - fi) > 1e-9) return std::nan("");
   auto it = table.find({vi, fi});
   return it == table.end() ? std::nan("") : it->second;
 }
 
-IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
-                           const HgannFitness& fitness,
-                           const std::function<void(const opt::GenerationSummary&)>& on_generation) {
+IdentifyResult RunIdentify(
+    const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,
+    const std::function<void(const opt::GenerationSummary&)>& on_generation) {
   opt::GaOptions ga = options.ga;
   ga.genome_bits = model::kChromosomeBits;
   ga.error_cost = fitness.penalty_cost();
@@ -66,7 +67,8 @@ IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& se
                           std::chrono::system_clock::now().time_since_epoch())
                           .count();
   p.piezoid_version = PIEZOID_VERSION;
-  for (const auto* c : set.Training()) p.training_cases.push_back("case" + std::to_string(c->number));
+  for (const auto* c : set.Training())
+    p.training_cases.push_back("case" + std::to_string(c->number));
   r.cases = fitness.EvaluateCases(r.best.network);
   return r;
 }

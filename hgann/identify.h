@@ -25,11 +25,12 @@ struct IdentifyOptions {
   std::filesystem::path cases_dir;  ///< bench case set (cases.csv + per-case CSV)
   opt::GaOptions ga;                ///< population, generations, stall, seed, …
   int threads = 0;                  ///< evaluator threads (0 = all cores)
-  std::string ranges = "default";   ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
-  double spread_penalty = 0;        ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
-  bool trend_seeds = false;  ///< generation 0 starts with the trend seeds (hgann/trend_seeds.h)
-  std::string preset;        ///< the search preset the settings came from (reports; "" = none)
-  std::string job_id = "local";     ///< provenance
+  std::string ranges =
+      "default";  ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
+  double spread_penalty = 0;  ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
+  bool trend_seeds = false;      ///< generation 0 starts with the trend seeds (hgann/trend_seeds.h)
+  std::string preset;            ///< the search preset the settings came from (reports; "" = none)
+  std::string job_id = "local";  ///< provenance
 };
 
 struct IdentifyResult {
@@ -58,7 +59,8 @@ inline constexpr const char* kDefaultSearchPreset = job::kDefaultHgannPreset;
 inline constexpr const char* kSearchPresetRule = job::kHgannPresetRule;
 
 /// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
-IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,
+IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,
+                           const HgannFitness& fitness,
                            const std::function<void(const opt::GenerationSummary&)>& on_generation);
 
 /// The paper's Table 8 PI [deg²] for an operating point, or NaN if it is not one of the nine.

@@ -20,7 +20,8 @@ OutputMove::OutputMove(const HgannFitnessConfig& config)
     if (c.training) training_.emplace_back(c.drive.amplitude_v, c.drive.frequency_hz);
 }
 
-std::array<double, model::kNetworkOutputs> OutputMove::MeanOutputs(const model::Network& network) const {
+std::array<double, model::kNetworkOutputs> OutputMove::MeanOutputs(
+    const model::Network& network) const {
   std::array<double, model::kNetworkOutputs> s{};
   for (const auto& [v, f] : training_) {
     const model::NetworkActivations a = network.Forward(v, f);
@@ -30,18 +31,22 @@ std::array<double, model::kNetworkOutputs> OutputMove::MeanOutputs(const model::
   return s;
 }
 
-void OutputMove::WriteConstantOutputs(std::vector<uint8_t>* bits, const std::array<double, model::kNetworkOutputs>& t) {
+void OutputMove::WriteConstantOutputs(std::vector<uint8_t>* bits,
+                                      const std::array<double, model::kNetworkOutputs>& t) {
   std::span<uint8_t> b(*bits);
   const uint32_t zero = model::EncodeWeight(0.0);
   for (int k = 0; k < model::kNetworkOutputs; ++k) {
     model::WriteGene(b, model::OutputTfBit(k), model::kTransferCodeBits,
                      static_cast<uint32_t>(model::TransferFunction::kSatlin));
-    for (int j = 0; j < model::kMaxHidden; ++j) model::WriteGene(b, model::W2Bit(j, k), model::kWeightCodeBits, zero);
-    model::WriteGene(b, model::C2Bit(k), model::kWeightCodeBits, model::EncodeWeight(std::clamp(t[k], 0.0, 1.0)));
+    for (int j = 0; j < model::kMaxHidden; ++j)
+      model::WriteGene(b, model::W2Bit(j, k), model::kWeightCodeBits, zero);
+    model::WriteGene(b, model::C2Bit(k), model::kWeightCodeBits,
+                     model::EncodeWeight(std::clamp(t[k], 0.0, 1.0)));
   }
 }
 
-void OutputMove::operator()(const opt::Genome& parent, opt::Rng& rng, std::span<opt::Genome> children) const {
+void OutputMove::operator()(const opt::Genome& parent, opt::Rng& rng,
+                            std::span<opt::Genome> children) const {
   if (children.empty()) return;
   const std::array<double, model::kNetworkOutputs> mean =
       MeanOutputs(model::DecodeChromosome(parent.bits, normalization_, ranges_));

@@ -59,7 +59,7 @@ struct CaseEstimate {
   double pi = 0;                                       ///< PI of the case with these [deg²]
   /// The variance of one residual that σ is scaled by: PI / (N − free) · (1 + ρ) / (1 − ρ).
   double residual_var = 0;
-  bool ok = false;                                     ///< a start could be simulated
+  bool ok = false;  ///< a start could be simulated
 };
 
 struct TrendSeedOptions {

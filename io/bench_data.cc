@@ -51,36 +51,43 @@ model::FinCase MakeFinCase(const BenchCase& c, const std::optional<model::Satura
                             c.file.string());
 }
 
-BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options, const BenchCaseWhere& where,
-                        const std::string& context) {
+BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options,
+                        const BenchCaseWhere& where, const std::string& context) {
   ThrowIfError(options.Validate());
   constexpr size_t kWhole = std::string::npos;
   auto fail = [&](std::string_view field, size_t index, const std::string& what) {
     throw InputError(where(field, index) + ": " + what + context);
   };
   if (!(std::isfinite(s.amplitude_v) && s.amplitude_v >= 0))
-    fail("amplitude_v", kWhole, "amplitude " + FormatNumber(s.amplitude_v) + " V must be finite and >= 0");
+    fail("amplitude_v", kWhole,
+         "amplitude " + FormatNumber(s.amplitude_v) + " V must be finite and >= 0");
   if (!(std::isfinite(s.frequency_hz) && s.frequency_hz > 0))
-    fail("frequency_hz", kWhole, "frequency " + FormatNumber(s.frequency_hz) + " Hz must be finite and > 0");
+    fail("frequency_hz", kWhole,
+         "frequency " + FormatNumber(s.frequency_hz) + " Hz must be finite and > 0");
   if (!(std::isfinite(s.sample_rate_hz) && s.sample_rate_hz > 0))
-    fail("sample_rate_hz", kWhole, "sample rate " + FormatNumber(s.sample_rate_hz) + " Hz must be finite and > 0");
+    fail("sample_rate_hz", kWhole,
+         "sample rate " + FormatNumber(s.sample_rate_hz) + " Hz must be finite and > 0");
   const size_t n = s.angle_deg.size();
   if (n < 2) fail("angle_deg", kWhole, std::to_string(n) + " samples; a case needs at least 2");
   for (size_t k = 0; k < n; ++k)
-    if (!std::isfinite(s.angle_deg[k])) fail("angle_deg", k, FormatNumber(s.angle_deg[k]) + " deg must be finite");
+    if (!std::isfinite(s.angle_deg[k]))
+      fail("angle_deg", k, FormatNumber(s.angle_deg[k]) + " deg must be finite");
   if (!s.t.empty() && s.t.size() != n)
-    fail("t", kWhole, std::to_string(s.t.size()) + " times for " + std::to_string(n) + " angle samples");
+    fail("t", kWhole,
+         std::to_string(s.t.size()) + " times for " + std::to_string(n) + " angle samples");
   if (!s.u.empty() && s.u.size() != n)
-    fail("u", kWhole, std::to_string(s.u.size()) + " drive samples for " + std::to_string(n) + " angle samples");
+    fail("u", kWhole,
+         std::to_string(s.u.size()) + " drive samples for " + std::to_string(n) + " angle samples");
   for (size_t k = 0; k < s.u.size(); ++k)
     if (!std::isfinite(s.u[k])) fail("u", k, FormatNumber(s.u[k]) + " V must be finite");
   const double cycles = s.cycles > 0 ? s.cycles : options.cycles;
   if (cycles > 0) {
     const long expected = std::lround(cycles * s.sample_rate_hz / s.frequency_hz);
     if (static_cast<long>(n) != expected)
-      fail("", kWhole, std::to_string(n) + " samples, expected round(" + FormatNumber(cycles) + " cycles * " +
-                           FormatNumber(s.sample_rate_hz) + " Hz / " + FormatNumber(s.frequency_hz) +
-                           " Hz) = " + std::to_string(expected));
+      fail("", kWhole,
+           std::to_string(n) + " samples, expected round(" + FormatNumber(cycles) + " cycles * " +
+               FormatNumber(s.sample_rate_hz) + " Hz / " + FormatNumber(s.frequency_hz) +
+               " Hz) = " + std::to_string(expected));
   }
   BenchCase c;
   c.number = s.number;
@@ -98,16 +105,18 @@ BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options, con
   c.u = std::move(s.u);
   if (c.u.empty()) {
     c.u.resize(n);
-    for (size_t k = 0; k < n; ++k) c.u[k] = s.amplitude_v * std::sin(2 * std::numbers::pi * s.frequency_hz * c.t[k]);
+    for (size_t k = 0; k < n; ++k)
+      c.u[k] = s.amplitude_v * std::sin(2 * std::numbers::pi * s.frequency_hz * c.t[k]);
   } else if (options.check_voltage) {
     const double vtol = options.voltage_rel_tol * c.amplitude_v + options.voltage_abs_tol_v;
     for (size_t k = 0; k < n; ++k) {
       const double want = c.amplitude_v * std::sin(2 * std::numbers::pi * c.frequency_hz * c.t[k]);
       if (!(std::abs(c.u[k] - want) <= vtol))
         fail("u", k,
-             FormatNumber(c.u[k]) + " V is not V sin(2 pi f t) = " + FormatNumber(want) + " V (V = " +
-                 FormatNumber(c.amplitude_v) + " V, f = " + FormatNumber(c.frequency_hz) + " Hz, t = " +
-                 FormatNumber(c.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)");
+             FormatNumber(c.u[k]) + " V is not V sin(2 pi f t) = " + FormatNumber(want) +
+                 " V (V = " + FormatNumber(c.amplitude_v) +
+                 " V, f = " + FormatNumber(c.frequency_hz) + " Hz, t = " + FormatNumber(c.t[k]) +
+                 " s; tolerance " + FormatNumber(vtol) + " V)");
     }
   }
   c.angle_deg = std::move(s.angle_deg);
@@ -116,7 +125,8 @@ BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options, con
 
 BenchCaseWhere SpecCaseWhere(std::string prefix) {
   return [prefix = std::move(prefix)](std::string_view field, size_t k) {
-    const std::string name = field.empty() ? "" : "." + std::string(field == "u" ? "voltage_v" : field);
+    const std::string name =
+        field.empty() ? "" : "." + std::string(field == "u" ? "voltage_v" : field);
     return prefix + name + (k == std::string::npos ? "" : "[" + std::to_string(k) + "]");
   };
 }
@@ -140,7 +150,9 @@ BenchCase LoadCaseFile(const fs::path& file, int number, double amplitude_v, dou
   s.file = file;
   const BenchCaseWhere where = [&](std::string_view field, size_t k) {
     if (k == std::string::npos) return csv.source;
-    return csv.Where(k, field == "u" ? cols.u_column : field == "t" ? cols.t_column : cols.y_column);
+    return csv.Where(k, field == "u"   ? cols.u_column
+                        : field == "t" ? cols.t_column
+                                       : cols.y_column);
   };
   return MakeBenchCase(std::move(s), options, where, ctx);
 }

@@ -123,8 +123,8 @@ BenchCaseWhere SpecCaseWhere(std::string prefix);
 /// least 2 angle samples, all finite; u and t empty or as many as the angle samples, u finite;
 /// the sample count round(cycles · fs / f) for the stated cycles, else options.cycles (when > 0);
 /// with options.check_voltage, u against V sin(2π f t) within the tolerance. Throws InputError.
-BenchCase MakeBenchCase(BenchCaseSamples samples, const BenchReadOptions& options, const BenchCaseWhere& where,
-                        const std::string& context = "");
+BenchCase MakeBenchCase(BenchCaseSamples samples, const BenchReadOptions& options,
+                        const BenchCaseWhere& where, const std::string& context = "");
 
 /// The case ready to simulate (model::MakeFinCase, the one builder of a fin case): its stated
 /// drive, its measured angle, trained on when its role is train, the saturations `given` or from

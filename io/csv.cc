@@ -180,16 +180,16 @@ void CsvTable::RequireRows() const {
     throw InputError(source + ": no data rows after the header (" + JoinNames(header) + ")");
 }
 
-double CheckUniformTimeGrid(const CsvTable& csv, int ct, const std::vector<double>& t, double rel_tol,
-                            const std::string& start_note) {
+double CheckUniformTimeGrid(const CsvTable& csv, int ct, const std::vector<double>& t,
+                            double rel_tol, const std::string& start_note) {
   const double dt0 = t[1] - t[0];
   if (!(dt0 > 0))
     throw InputError(csv.Where(1, ct) + ": time " + FormatNumber(t[1]) +
                      " s is not after the previous sample's " + FormatNumber(t[0]) + " s");
   const double tol = rel_tol * dt0;
   if (!(std::abs(t[0]) <= tol))
-    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(t[0]) + " s; " +
-                     start_note);
+    throw InputError(csv.Where(0, ct) + ": the first sample time is " + FormatNumber(t[0]) +
+                     " s; " + start_note);
   const double rate = 1.0 / dt0;
   for (size_t k = 1; k < t.size(); ++k) {
     const double dt = t[k] - t[k - 1];
@@ -199,15 +199,16 @@ double CheckUniformTimeGrid(const CsvTable& csv, int ct, const std::vector<doubl
                        " s (time must be strictly increasing)");
     if (!(std::abs(dt - dt0) <= tol))
       throw InputError(csv.Where(k, ct) + ": step " + FormatNumber(dt) +
-                       " s from the previous sample differs from the first step " + FormatNumber(dt0) +
-                       " s (sample rate " + FormatNumber(rate) + " Hz inferred from it; relative tolerance " +
-                       FormatNumber(rel_tol) + ")");
+                       " s from the previous sample differs from the first step " +
+                       FormatNumber(dt0) + " s (sample rate " + FormatNumber(rate) +
+                       " Hz inferred from it; relative tolerance " + FormatNumber(rel_tol) + ")");
   }
   return rate;
 }
 
-SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output, const std::string& what,
-                                  double rel_tol, const std::string& start_note, const std::string& context) {
+SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output,
+                                  const std::string& what, double rel_tol,
+                                  const std::string& start_note, const std::string& context) {
   csv.RequireColumns({"t_s", "voltage_V", output});
   SampledColumns s;
   s.t_column = *csv.FindColumn("t_s");

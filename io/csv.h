@@ -84,7 +84,8 @@ struct SampledColumns {
   int t_column = 0, u_column = 0, y_column = 0;
   double sample_rate_hz = 0;
 };
-SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output, const std::string& what,
-                                  double rel_tol, const std::string& start_note, const std::string& context);
+SampledColumns ReadSampledColumns(const CsvTable& csv, const std::string& output,
+                                  const std::string& what, double rel_tol,
+                                  const std::string& start_note, const std::string& context);
 
 }  // namespace pz::io

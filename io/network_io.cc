@@ -26,8 +26,9 @@ pb::NetworkTransferFunction TfToProto(model::TransferFunction tf) {
 Status TfFromProto(int value, const std::string& field, model::TransferFunction* tf) {
   const int code = value - 1;
   if (!model::IsValidTransferCode(code)) {
-    return InvalidArgument(FieldError(field, value, "must be a transfer function NETWORK_TF_HARDLIM (1) … "
-                                                    "NETWORK_TF_RADBAS (8)"));
+    return InvalidArgument(FieldError(field, value,
+                                      "must be a transfer function NETWORK_TF_HARDLIM (1) … "
+                                      "NETWORK_TF_RADBAS (8)"));
   }
   *tf = model::TransferFromCode(code);
   return Status::Ok();
@@ -43,8 +44,8 @@ template <typename Repeated>
 Status CheckFiniteValues(const Repeated& values, const char* field) {
   for (int i = 0; i < values.size(); ++i) {
     if (!std::isfinite(values.Get(i))) {
-      return InvalidArgument(FieldError(std::string(field) + "[" + std::to_string(i) + "]", values.Get(i),
-                                        "must be finite"));
+      return InvalidArgument(FieldError(std::string(field) + "[" + std::to_string(i) + "]",
+                                        values.Get(i), "must be finite"));
     }
   }
   return Status::Ok();
@@ -59,22 +60,25 @@ Status CheckName(const std::string& field, const std::string& have, const char* 
 
 NetworkFormat NetworkFormatForPath(const std::string& path) {
   std::string lower = path;
-  std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-  return lower.size() >= 5 && lower.compare(lower.size() - 5, 5, ".json") == 0 ? NetworkFormat::kJson
-                                                                               : NetworkFormat::kBinary;
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
+  return lower.size() >= 5 && lower.compare(lower.size() - 5, 5, ".json") == 0
+             ? NetworkFormat::kJson
+             : NetworkFormat::kBinary;
 }
 
 Status ValidateSavedNetwork(const SavedNetwork& saved) {
   Status s = saved.network.Validate();
   if (!s.ok()) return s;
   if (!std::isfinite(saved.provenance.fitness)) {
-    return InvalidArgument(FieldError("provenance.fitness", saved.provenance.fitness, "must be finite"));
+    return InvalidArgument(
+        FieldError("provenance.fitness", saved.provenance.fitness, "must be finite"));
   }
   if (saved.chromosome.empty()) return Status::Ok();
   s = model::ValidateChromosome(saved.chromosome);
   if (!s.ok()) return s;
-  const model::Network decoded = model::DecodeChromosome(saved.chromosome, saved.network.normalization,
-                                                         saved.network.ranges);
+  const model::Network decoded =
+      model::DecodeChromosome(saved.chromosome, saved.network.normalization, saved.network.ranges);
   if (!(decoded == saved.network)) {
     return InvalidArgument("chromosome: does not decode to the stored network (stored " +
                            saved.network.Describe() + ", chromosome " + decoded.Describe() +
@@ -100,8 +104,10 @@ void ToProto(const SavedNetwork& saved, pb::NetworkFile* out) {
     for (int k = 0; k < n.w2.cols(); ++k) out->add_w2(n.w2(j, k));
   }
   for (int k = 0; k < n.c2.size(); ++k) out->add_c2(n.c2(k));
-  const double lo[kNetworkInputs] = {n.normalization.amplitude_lo_v, n.normalization.frequency_lo_hz};
-  const double hi[kNetworkInputs] = {n.normalization.amplitude_hi_v, n.normalization.frequency_hi_hz};
+  const double lo[kNetworkInputs] = {n.normalization.amplitude_lo_v,
+                                     n.normalization.frequency_lo_hz};
+  const double hi[kNetworkInputs] = {n.normalization.amplitude_hi_v,
+                                     n.normalization.frequency_hi_hz};
   for (int i = 0; i < kNetworkInputs; ++i) {
     pb::NetworkInput* in = out->add_inputs();
     in->set_name(model::InputName(i));
@@ -145,12 +151,15 @@ Status FromProto(const pb::NetworkFile& file, SavedNetwork* out) {
   if (h < model::kMinHidden || h > model::kMaxHidden) {
     return InvalidArgument(FieldError("hidden", file.hidden(), "hidden-node count must be 2 … 9"));
   }
-  if (file.input_tf_size() != kNetworkInputs) return CountError("input_tf", file.input_tf_size(), "2", 2);
+  if (file.input_tf_size() != kNetworkInputs)
+    return CountError("input_tf", file.input_tf_size(), "2", 2);
   if (file.hidden_tf_size() != h) return CountError("hidden_tf", file.hidden_tf_size(), "H", h);
-  if (file.output_tf_size() != kNetworkOutputs) return CountError("output_tf", file.output_tf_size(), "7", 7);
+  if (file.output_tf_size() != kNetworkOutputs)
+    return CountError("output_tf", file.output_tf_size(), "7", 7);
   if (file.w1_size() != kNetworkInputs * h) return CountError("w1", file.w1_size(), "2 x H", 2 * h);
   if (file.c1_size() != h) return CountError("c1", file.c1_size(), "H", h);
-  if (file.w2_size() != h * kNetworkOutputs) return CountError("w2", file.w2_size(), "H x 7", 7 * h);
+  if (file.w2_size() != h * kNetworkOutputs)
+    return CountError("w2", file.w2_size(), "H x 7", 7 * h);
   if (file.c2_size() != kNetworkOutputs) return CountError("c2", file.c2_size(), "7", 7);
   if (file.inputs_size() != kNetworkInputs) return CountError("inputs", file.inputs_size(), "2", 2);
   if (file.parameters_size() != kNetworkOutputs) {
@@ -169,11 +178,13 @@ Status FromProto(const pb::NetworkFile& file, SavedNetwork* out) {
   }
   n.hidden_tf.resize(h);
   for (int j = 0; j < h; ++j) {
-    Status s = TfFromProto(file.hidden_tf(j), "hidden_tf[" + std::to_string(j) + "]", &n.hidden_tf[j]);
+    Status s =
+        TfFromProto(file.hidden_tf(j), "hidden_tf[" + std::to_string(j) + "]", &n.hidden_tf[j]);
     if (!s.ok()) return s;
   }
   for (int k = 0; k < kNetworkOutputs; ++k) {
-    Status s = TfFromProto(file.output_tf(k), "output_tf[" + std::to_string(k) + "]", &n.output_tf[k]);
+    Status s =
+        TfFromProto(file.output_tf(k), "output_tf[" + std::to_string(k) + "]", &n.output_tf[k]);
     if (!s.ok()) return s;
   }
   n.w1.resize(kNetworkInputs, h);
@@ -222,13 +233,15 @@ Status FromProto(const pb::NetworkFile& file, SavedNetwork* out) {
   saved.provenance.fitness = prov.fitness();
   if (prov.has_created()) {
     if (prov.created().nanos() < 0 || prov.created().nanos() > 999999999) {
-      return InvalidArgument(FieldError("provenance.created.nanos", prov.created().nanos(),
-                                        "must be 0 … 999999999"));
+      return InvalidArgument(
+          FieldError("provenance.created.nanos", prov.created().nanos(), "must be 0 … 999999999"));
     }
-    saved.provenance.created_unix_ms = prov.created().seconds() * 1000 + prov.created().nanos() / 1000000;
+    saved.provenance.created_unix_ms =
+        prov.created().seconds() * 1000 + prov.created().nanos() / 1000000;
   }
   saved.provenance.piezoid_version = prov.piezoid_version();
-  saved.provenance.training_cases.assign(prov.training_cases().begin(), prov.training_cases().end());
+  saved.provenance.training_cases.assign(prov.training_cases().begin(),
+                                         prov.training_cases().end());
 
   Status s = ValidateSavedNetwork(saved);
   if (!s.ok()) return s;
@@ -242,7 +255,8 @@ Status SerializeNetwork(const SavedNetwork& saved, NetworkFormat format, std::st
   pb::NetworkFile file;
   ToProto(saved, &file);
   if (format == NetworkFormat::kBinary) {
-    if (!file.SerializeToString(out)) return Internal("network file: protobuf serialisation failed");
+    if (!file.SerializeToString(out))
+      return Internal("network file: protobuf serialisation failed");
     return Status::Ok();
   }
   google::protobuf::util::JsonPrintOptions options;
@@ -251,7 +265,8 @@ Status SerializeNetwork(const SavedNetwork& saved, NetworkFormat format, std::st
   options.preserve_proto_field_names = true;
   out->clear();
   auto js = google::protobuf::util::MessageToJsonString(file, out, options);
-  if (!js.ok()) return Internal("network file: JSON conversion failed: " + std::string(js.message()));
+  if (!js.ok())
+    return Internal("network file: JSON conversion failed: " + std::string(js.message()));
   return Status::Ok();
 }
 

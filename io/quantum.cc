@@ -29,7 +29,8 @@ double EstimateQuantum(std::span<const double> y) {
   // A printed grid: refine q on the values in order of magnitude (n = round(x / q) is sure for
   // small |x| while q is still rough), then check every value against the refined q.
   std::vector<double> by_size = v;
-  std::sort(by_size.begin(), by_size.end(), [](double a, double b) { return std::abs(a) < std::abs(b); });
+  std::sort(by_size.begin(), by_size.end(),
+            [](double a, double b) { return std::abs(a) < std::abs(b); });
   for (int div = 1; div <= 16; ++div) {
     double q = dmin / div, sxn = 0, snn = 0;
     bool ok = true;

@@ -19,9 +19,12 @@ using model::CaseRole;
 
 const char* OffsetModeName(OffsetMode m) {
   switch (m) {
-    case OffsetMode::kFit: return "fit";
-    case OffsetMode::kRest: return "rest";
-    case OffsetMode::kFixed: return "fixed";
+    case OffsetMode::kFit:
+      return "fit";
+    case OffsetMode::kRest:
+      return "rest";
+    case OffsetMode::kFixed:
+      return "fixed";
   }
   return "?";
 }
@@ -57,11 +60,14 @@ UnitConversion ConvertUnit(std::string_view unit) {
     const char* quantity;
   };
   static const Row kTable[] = {
-      {"s", "s", 1, "time"},          {"ms", "s", 1e-3, "time"},     {"us", "s", 1e-6, "time"},
-      {"µs", "s", 1e-6, "time"},      {"V", "V", 1, "voltage"},      {"mV", "V", 1e-3, "voltage"},
-      {"kV", "V", 1e3, "voltage"},    {"m", "um", 1e6, "length"},    {"mm", "um", 1e3, "length"},
-      {"um", "um", 1, "length"},      {"µm", "um", 1, "length"},     {"nm", "um", 1e-3, "length"},
-      {"deg", "deg", 1, "angle"},     {"rad", "deg", 180 / std::numbers::pi, "angle"}, {"N", "N", 1, "force"},
+      {"s", "s", 1, "time"},       {"ms", "s", 1e-3, "time"},
+      {"us", "s", 1e-6, "time"},   {"µs", "s", 1e-6, "time"},
+      {"V", "V", 1, "voltage"},    {"mV", "V", 1e-3, "voltage"},
+      {"kV", "V", 1e3, "voltage"}, {"m", "um", 1e6, "length"},
+      {"mm", "um", 1e3, "length"}, {"um", "um", 1, "length"},
+      {"µm", "um", 1, "length"},   {"nm", "um", 1e-3, "length"},
+      {"deg", "deg", 1, "angle"},  {"rad", "deg", 180 / std::numbers::pi, "angle"},
+      {"N", "N", 1, "force"},
   };
   for (const Row& r : kTable)
     if (unit == r.name) return {r.canonical, r.factor, r.quantity};
@@ -79,7 +85,8 @@ std::string SuffixUnit(const std::string& column) {
 bool ValidName(const std::string& s) {
   if (s.empty() || s.size() > 100) return false;
   for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.')) return false;
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.'))
+      return false;
   return true;
 }
 
@@ -97,22 +104,27 @@ struct ColumnSpec {
   std::string time_unit, drive_unit, response_unit;  // declared in the manifest (may be empty)
 };
 
-UnitConversion ResolveUnit(const CsvTable& csv, const std::string& column, const std::string& declared,
-                           const std::string& where_declared, const char* what) {
+UnitConversion ResolveUnit(const CsvTable& csv, const std::string& column,
+                           const std::string& declared, const std::string& where_declared,
+                           const char* what) {
   const std::string suffix = SuffixUnit(column);
   std::string unit = declared;
   const bool suffix_is_unit = !suffix.empty() && ConvertUnit(suffix).quantity != suffix;
   if (!declared.empty() && suffix_is_unit &&
       (ConvertUnit(suffix).canonical != ConvertUnit(declared).canonical ||
        ConvertUnit(suffix).factor != ConvertUnit(declared).factor)) {
-    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": mismatched units: column '" +
-                     column + "' says " + suffix + " but " + where_declared + " declares " + declared);
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) +
+                     ": mismatched units: column '" + column + "' says " + suffix + " but " +
+                     where_declared + " declares " + declared);
   }
   if (unit.empty()) unit = suffix;
   if (unit.empty()) {
-    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": the unit of the " + what +
-                     " column '" + column + "' is not declared (name it <name>_<unit>, e.g. " +
-                     (std::string(what) == "time" ? "t_s" : std::string(what) == "drive" ? "voltage_V" : "displacement_um") +
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": the unit of the " +
+                     what + " column '" + column +
+                     "' is not declared (name it <name>_<unit>, e.g. " +
+                     (std::string(what) == "time"    ? "t_s"
+                      : std::string(what) == "drive" ? "voltage_V"
+                                                     : "displacement_um") +
                      ", or give " + what + "_unit in the manifest)");
   }
   return ConvertUnit(unit);
@@ -125,7 +137,8 @@ CsvTable ReadRecordCsv(const fs::path& file) {
   const std::string text = ReadTextFile(file);
   const size_t start = text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
   const size_t eol = text.find('\n', start);
-  std::string first = text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
+  std::string first =
+      text.substr(start, eol == std::string::npos ? std::string::npos : eol - start);
   if (!first.empty() && first.back() == '\r') first.pop_back();
   int numbers = 0, words = 0;
   for (size_t a = 0; a <= first.size();) {
@@ -138,10 +151,12 @@ CsvTable ReadRecordCsv(const fs::path& file) {
     a = b + 1;
   }
   if (numbers > 0 && words == 0) {
-    throw InputError(file.string() + ":1: no header line (the first line is data: '" + first.substr(0, 60) +
-                     "'): add a header that names the columns with their units, e.g. t_s,voltage_V,displacement_um "
-                     "(name an empty column too, e.g. unused), or name the columns in a manifest.csv "
-                     "(time_column, drive_column, response_column; docs/records.md)");
+    throw InputError(
+        file.string() + ":1: no header line (the first line is data: '" + first.substr(0, 60) +
+        "'): add a header that names the columns with their units, e.g. "
+        "t_s,voltage_V,displacement_um "
+        "(name an empty column too, e.g. unused), or name the columns in a manifest.csv "
+        "(time_column, drive_column, response_column; docs/records.md)");
   }
   return ParseCsv(text, file.string());
 }
@@ -166,14 +181,16 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
   FileData d;
   const UnitConversion tu = ResolveUnit(csv, cols.time, cols.time_unit, where_declared, "time");
   if (tu.quantity != "time") {
-    throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": mismatched units: the time column '" +
-                     cols.time + "' is in " + tu.canonical + ", not a time (s, ms, us)");
+    throw InputError(csv.source + ":" + std::to_string(csv.header_line) +
+                     ": mismatched units: the time column '" + cols.time + "' is in " +
+                     tu.canonical + ", not a time (s, ms, us)");
   }
   d.drive = ResolveUnit(csv, cols.drive, cols.drive_unit, where_declared, "drive");
   d.response = ResolveUnit(csv, cols.response, cols.response_unit, where_declared, "response");
   const size_t n = csv.rows.size();
   if (n < 2) {
-    throw InputError(csv.source + ": " + std::to_string(n) + " data rows; a record needs at least " +
+    throw InputError(csv.source + ": " + std::to_string(n) +
+                     " data rows; a record needs at least " +
                      std::to_string(std::max<size_t>(2, opt.min_scored)) + " samples (too short)");
   }
   d.t.resize(n);
@@ -193,22 +210,26 @@ FileData ReadRecordFile(const fs::path& file, const ColumnSpec& cols, const Reco
                          " (converted to the set's unit)");
     }
     if (i > 0 && !(d.t[i] > d.t[i - 1])) {
-      throw InputError(csv.Where(i, ct) + ": time " + csv.Field(i, ct) + " is not after the previous " +
-                       csv.Field(i - 1, ct) + " (times must increase strictly: unsorted or repeated rows)");
+      throw InputError(csv.Where(i, ct) + ": time " + csv.Field(i, ct) +
+                       " is not after the previous " + csv.Field(i - 1, ct) +
+                       " (times must increase strictly: unsorted or repeated rows)");
     }
   }
   // Steps are checked against the median step (a gap does not shift it); dt is the mean step.
   std::vector<double> steps(n - 1);
   for (size_t i = 1; i < n; ++i) steps[i - 1] = d.t[i] - d.t[i - 1];
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                   steps.end());
   const double median = steps[steps.size() / 2];
   d.dt = (d.t.back() - d.t.front()) / static_cast<double>(n - 1);
   for (size_t i = 1; i < n; ++i) {
     const double step = d.t[i] - d.t[i - 1];
     if (std::abs(step - median) > opt.time_jitter * median) {
-      throw InputError(csv.Where(i, ct) + ": step " + FormatNumber(step / tu.factor) + " differs from the usual step " +
-                       FormatNumber(median / tu.factor) + " by more than " + FormatNumber(100 * opt.time_jitter) +
-                       " % (the samples must be uniform: resample the record, or a gap is missing)");
+      throw InputError(
+          csv.Where(i, ct) + ": step " + FormatNumber(step / tu.factor) +
+          " differs from the usual step " + FormatNumber(median / tu.factor) + " by more than " +
+          FormatNumber(100 * opt.time_jitter) +
+          " % (the samples must be uniform: resample the record, or a gap is missing)");
     }
   }
   FinishFileData(d, opt);
@@ -251,24 +272,28 @@ void CheckSameUnits(RecordSet& set, const std::vector<std::pair<std::string, Fil
   set.response_unit = d0->response.canonical;
   for (const auto& [n, d] : files) {
     if (d->drive.canonical != d0->drive.canonical) {
-      throw InputError("mismatched units: record '" + n + "' has its drive in " + d->drive.canonical +
-                       " but record '" + n0 + "' in " + d0->drive.canonical);
+      throw InputError("mismatched units: record '" + n + "' has its drive in " +
+                       d->drive.canonical + " but record '" + n0 + "' in " + d0->drive.canonical);
     }
     if (d->response.canonical != d0->response.canonical) {
-      throw InputError("mismatched units: record '" + n + "' has its response in " + d->response.canonical +
-                       " but record '" + n0 + "' in " + d0->response.canonical);
+      throw InputError("mismatched units: record '" + n + "' has its response in " +
+                       d->response.canonical + " but record '" + n0 + "' in " +
+                       d0->response.canonical);
     }
   }
 }
 
 void FinishRecord(Record& r, const RecordReadOptions& opt) {
   if (r.scored() < opt.min_scored) {
-    throw InputError(r.file.string() + ": record '" + r.name + "' has " + std::to_string(r.scored()) +
-                     " samples; at least " + std::to_string(opt.min_scored) + " are needed (too short)");
+    throw InputError(r.file.string() + ": record '" + r.name + "' has " +
+                     std::to_string(r.scored()) + " samples; at least " +
+                     std::to_string(opt.min_scored) + " are needed (too short)");
   }
   if (r.offset_mode == OffsetMode::kRest) {
     if (r.rest_samples < 10) {
-      throw InputError(r.file.string() + ": record '" + r.name + "': offset 'rest' needs a rest segment (a constant drive) of at least 10 samples at the start; this record has " +
+      throw InputError(r.file.string() + ": record '" + r.name +
+                       "': offset 'rest' needs a rest segment (a constant drive) of at least 10 "
+                       "samples at the start; this record has " +
                        std::to_string(r.rest_samples));
     }
     double s = 0;
@@ -282,13 +307,16 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   const CsvTable csv = ReadCsvFile(manifest);
   csv.RequireColumns({"record", "file", "role"});
   csv.RequireRows();
-  static const std::vector<std::string> kKnown = {"record", "file", "role", "t_start_s", "t_end_s", "offset",
-                                                  "frequency_Hz", "time_column", "drive_column", "response_column",
-                                                  "time_unit", "drive_unit", "response_unit"};
+  static const std::vector<std::string> kKnown = {
+      "record",    "file",         "role",         "t_start_s",    "t_end_s",
+      "offset",    "frequency_Hz", "time_column",  "drive_column", "response_column",
+      "time_unit", "drive_unit",   "response_unit"};
   for (size_t c = 0; c < csv.header.size(); ++c) {
     if (std::find(kKnown.begin(), kKnown.end(), csv.header[c]) == kKnown.end()) {
-      throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" + csv.header[c] +
-                       "' (columns: record, file, role, t_start_s, t_end_s, offset, frequency_Hz, time_column, drive_column, "
+      throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" +
+                       csv.header[c] +
+                       "' (columns: record, file, role, t_start_s, t_end_s, offset, frequency_Hz, "
+                       "time_column, drive_column, "
                        "response_column, time_unit, drive_unit, response_unit)");
     }
   }
@@ -297,7 +325,8 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   set.format = "manifest";
   std::map<std::string, FileData> files;
   std::vector<std::pair<std::string, FileData*>> used;
-  const int c_rec = csv.RequireColumn("record"), c_file = csv.RequireColumn("file"), c_role = csv.RequireColumn("role");
+  const int c_rec = csv.RequireColumn("record"), c_file = csv.RequireColumn("file"),
+            c_role = csv.RequireColumn("role");
   for (size_t i = 0; i < csv.rows.size(); ++i) {
     const std::string name = csv.Field(i, c_rec);
     if (!ValidName(name)) {
@@ -319,28 +348,35 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
     cols.time_unit = OptionalField(csv, i, "time_unit");
     cols.drive_unit = OptionalField(csv, i, "drive_unit");
     cols.response_unit = OptionalField(csv, i, "response_unit");
-    const std::string key = file + "\n" + cols.time + "\n" + cols.drive + "\n" + cols.response + "\n" +
-                            cols.time_unit + "\n" + cols.drive_unit + "\n" + cols.response_unit;
+    const std::string key = file + "\n" + cols.time + "\n" + cols.drive + "\n" + cols.response +
+                            "\n" + cols.time_unit + "\n" + cols.drive_unit + "\n" +
+                            cols.response_unit;
     auto it = files.find(key);
     if (it == files.end()) {
       const fs::path path = dir / file;
       if (!fs::is_regular_file(path)) {
-        throw InputError(csv.Where(i, c_file) + ": record file '" + file + "' not found in " + dir.string());
+        throw InputError(csv.Where(i, c_file) + ": record file '" + file + "' not found in " +
+                         dir.string());
       }
-      it = files.emplace(key, ReadRecordFile(path, cols, opt, "manifest line " + std::to_string(csv.rows[i].line))).first;
+      it = files
+               .emplace(key, ReadRecordFile(path, cols, opt,
+                                            "manifest line " + std::to_string(csv.rows[i].line)))
+               .first;
     }
     Record r = MakeRecord(it->second, name, *role, dir / file);
     r.manifest_line = csv.rows[i].line;
     const auto t0 = OptionalNumber(csv, i, "t_start_s");
     const auto t1 = OptionalNumber(csv, i, "t_end_s");
     if (t0 || t1) {
-      SetWindow(r, t0.value_or(r.t.front()), t1.value_or(r.t.back()), opt.min_scored,
-                csv.source + ":" + std::to_string(csv.rows[i].line) + ": record '" + name + "' window");
+      SetWindow(
+          r, t0.value_or(r.t.front()), t1.value_or(r.t.back()), opt.min_scored,
+          csv.source + ":" + std::to_string(csv.rows[i].line) + ": record '" + name + "' window");
     }
     if (const auto f = OptionalNumber(csv, i, "frequency_Hz")) {
       if (!(std::isfinite(*f) && *f > 0))
         throw InputError(csv.Where(i, *csv.FindColumn("frequency_Hz")) + ": frequency " +
-                         csv.Field(i, *csv.FindColumn("frequency_Hz")) + " Hz must be finite and > 0");
+                         csv.Field(i, *csv.FindColumn("frequency_Hz")) +
+                         " Hz must be finite and > 0");
       r.frequency_hz = *f;
     }
     const std::string off = OptionalField(csv, i, "offset");
@@ -352,7 +388,8 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
       const auto v = ParseDouble(off);
       const auto c = csv.FindColumn("offset");
       if (!v || !std::isfinite(*v)) {
-        throw InputError(csv.Where(i, *c) + ": offset '" + off + "' is not fit, rest or a finite number");
+        throw InputError(csv.Where(i, *c) + ": offset '" + off +
+                         "' is not fit, rest or a finite number");
       }
       r.offset_mode = OffsetMode::kFixed;
       r.offset = *v * it->second.response.factor;
@@ -375,12 +412,14 @@ void CheckStatedDrive(const CsvTable& csv, int cu, const Record& r, double offse
                       const std::string& ctx) {
   const double vtol = 1e-4 * (std::abs(offset) + amplitude) + 1e-3;
   for (size_t k = 0; k < r.u.size(); ++k) {
-    const double want = offset + amplitude * std::sin(2 * std::numbers::pi * r.frequency_hz * r.t[k]);
+    const double want =
+        offset + amplitude * std::sin(2 * std::numbers::pi * r.frequency_hz * r.t[k]);
     if (!(std::abs(r.u[k] - want) <= vtol))
-      throw InputError(csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) + " V is not offset + A sin(2 pi f t) = " +
-                       FormatNumber(want) + " V (offset = " + FormatNumber(offset) + " V, A = " +
-                       FormatNumber(amplitude) + " V, f = " + FormatNumber(r.frequency_hz) + " Hz, t = " +
-                       FormatNumber(r.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)" + ctx);
+      throw InputError(
+          csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) + " V is not offset + A sin(2 pi f t) = " +
+          FormatNumber(want) + " V (offset = " + FormatNumber(offset) +
+          " V, A = " + FormatNumber(amplitude) + " V, f = " + FormatNumber(r.frequency_hz) +
+          " Hz, t = " + FormatNumber(r.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)" + ctx);
   }
 }
 
@@ -404,38 +443,45 @@ RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
   for (size_t row = 0; row < csv.rows.size(); ++row) {
     const long number = csv.Integer(row, cr);
     if (number <= 0 || number > 1000000)
-      throw InputError(csv.Where(row, cr) + ": record number " + csv.Field(row, cr) + " must be a positive integer");
+      throw InputError(csv.Where(row, cr) + ": record number " + csv.Field(row, cr) +
+                       " must be a positive integer");
     for (const auto& [n, line] : seen)
       if (n == number)
-        throw InputError(csv.Where(row, cr) + ": duplicate record " + std::to_string(number) + " (first on line " +
-                         std::to_string(line) + ")");
+        throw InputError(csv.Where(row, cr) + ": duplicate record " + std::to_string(number) +
+                         " (first on line " + std::to_string(line) + ")");
     const double f = csv.Number(row, cf);
-    if (!(f > 0)) throw InputError(csv.Where(row, cf) + ": frequency " + csv.Field(row, cf) + " Hz must be > 0");
+    if (!(f > 0))
+      throw InputError(csv.Where(row, cf) + ": frequency " + csv.Field(row, cf) +
+                       " Hz must be > 0");
     const double offset = csv.Number(row, co), amplitude = csv.Number(row, ca);
     if (amplitude < 0)
-      throw InputError(csv.Where(row, ca) + ": amplitude " + csv.Field(row, ca) + " V must be >= 0");
+      throw InputError(csv.Where(row, ca) + ": amplitude " + csv.Field(row, ca) +
+                       " V must be >= 0");
     const std::string& role_name = csv.Field(row, crole);
     if (role_name != "train" && role_name != "test")
-      throw InputError(csv.Where(row, crole) + ": unknown role '" + role_name + "' (expected train or test)");
+      throw InputError(csv.Where(row, crole) + ": unknown role '" + role_name +
+                       "' (expected train or test)");
     const std::string& name = csv.Field(row, cfile);
     if (name.empty()) throw InputError(csv.Where(row, cfile) + ": empty file name");
     const fs::path file = dir / name;
     std::error_code ec;
     if (!fs::is_regular_file(file, ec))
-      throw InputError(csv.Where(row, cfile) + ": record file '" + name + "' not found (" + file.string() + ")");
-    const std::string ctx = " (record " + std::to_string(number) + " of " + manifest.string() + " line " +
-                            std::to_string(csv.rows[row].line) + ")";
+      throw InputError(csv.Where(row, cfile) + ": record file '" + name + "' not found (" +
+                       file.string() + ")");
+    const std::string ctx = " (record " + std::to_string(number) + " of " + manifest.string() +
+                            " line " + std::to_string(csv.rows[row].line) + ")";
     const CsvTable data = ReadCsvFile(file);
-    SampledColumns cols = ReadSampledColumns(data, "displacement_um", "record", 1e-6,
-                                             "a record starts at t = 0 (from rest at the offset)", ctx);
+    SampledColumns cols =
+        ReadSampledColumns(data, "displacement_um", "record", 1e-6,
+                           "a record starts at t = 0 (from rest at the offset)", ctx);
     FileData d;
     d.t = std::move(cols.t);
     d.u = std::move(cols.u);
     d.y = std::move(cols.y);
     d.dt = 1.0 / cols.sample_rate_hz;
     FinishFileData(d, opt);
-    Record r = MakeRecord(d, "record" + std::to_string(number), role_name == "train" ? CaseRole::kTrain : CaseRole::kTest,
-                          file);
+    Record r = MakeRecord(d, "record" + std::to_string(number),
+                          role_name == "train" ? CaseRole::kTrain : CaseRole::kTest, file);
     r.offset_mode = OffsetMode::kFixed;
     r.offset = 0;
     r.frequency_hz = f;
@@ -519,11 +565,13 @@ RecordSet FromCsv(const fs::path& file, const RecordReadOptions& opt) {
 
 void SetWindow(Record& r, double t0, double t1, size_t min_scored, const std::string& what) {
   if (!(t0 < t1)) {
-    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s: the start must be before the end");
+    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) +
+                     "] s: the start must be before the end");
   }
   if (t0 < r.t.front() - 0.5 * r.dt || t1 > r.t.back() + 0.5 * r.dt) {
-    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s is outside the record (" +
-                     FormatNumber(r.t.front()) + " … " + FormatNumber(r.t.back()) + " s)");
+    throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) +
+                     "] s is outside the record (" + FormatNumber(r.t.front()) + " … " +
+                     FormatNumber(r.t.back()) + " s)");
   }
   const auto first = std::lower_bound(r.t.begin(), r.t.end(), t0 - 1e-9 * r.dt) - r.t.begin();
   const auto end = std::upper_bound(r.t.begin(), r.t.end(), t1 + 1e-9 * r.dt) - r.t.begin();
@@ -531,24 +579,28 @@ void SetWindow(Record& r, double t0, double t1, size_t min_scored, const std::st
   r.end_scored = static_cast<size_t>(end);
   if (r.end_scored <= r.first_scored || r.scored() < min_scored) {
     throw InputError(what + " [" + FormatNumber(t0) + ", " + FormatNumber(t1) + "] s holds " +
-                     std::to_string(r.end_scored > r.first_scored ? r.scored() : 0) + " samples; at least " +
-                     std::to_string(min_scored) + " are needed (too short)");
+                     std::to_string(r.end_scored > r.first_scored ? r.scored() : 0) +
+                     " samples; at least " + std::to_string(min_scored) +
+                     " are needed (too short)");
   }
 }
 
 void SkipSettling(RecordSet& set, double settle_s, size_t min_scored, const std::string& what) {
-  if (!std::isfinite(settle_s) || settle_s < 0) throw InputError(what + ": must be finite and ≥ 0 s");
+  if (!std::isfinite(settle_s) || settle_s < 0)
+    throw InputError(what + ": must be finite and ≥ 0 s");
   if (settle_s == 0) return;
   for (Record& r : set.records) {
     const size_t moved = std::min(r.rest_samples, r.size() - 1);  // the first sample off the rest
     const double t0 = r.t[moved] + settle_s;
-    const auto first = static_cast<size_t>(std::lower_bound(r.t.begin(), r.t.end(), t0 - 1e-9 * r.dt) - r.t.begin());
+    const auto first = static_cast<size_t>(
+        std::lower_bound(r.t.begin(), r.t.end(), t0 - 1e-9 * r.dt) - r.t.begin());
     if (first <= r.first_scored) continue;
     if (first >= r.end_scored || r.end_scored - first < min_scored) {
       throw InputError(what + ": record " + r.name + " would keep " +
-                       std::to_string(first < r.end_scored ? r.end_scored - first : 0) + " scored samples (window " +
-                       FormatNumber(r.t[r.first_scored]) + "–" + FormatNumber(r.t[r.end_scored - 1]) +
-                       " s, settled from " + FormatNumber(t0) + " s); at least " + std::to_string(min_scored) +
+                       std::to_string(first < r.end_scored ? r.end_scored - first : 0) +
+                       " scored samples (window " + FormatNumber(r.t[r.first_scored]) + "–" +
+                       FormatNumber(r.t[r.end_scored - 1]) + " s, settled from " +
+                       FormatNumber(t0) + " s); at least " + std::to_string(min_scored) +
                        " are needed");
     }
     r.first_scored = first;
@@ -559,21 +611,26 @@ WindowSpec ParseWindow(std::string_view text, CaseRole role, const std::string& 
   const size_t colon = text.find(':');
   WindowSpec w;
   w.role = role;
-  const auto a = colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(0, colon));
-  const auto b = colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(colon + 1));
+  const auto a =
+      colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(0, colon));
+  const auto b =
+      colon == std::string_view::npos ? std::nullopt : ParseDouble(text.substr(colon + 1));
   if (!a || !b || !std::isfinite(*a) || !std::isfinite(*b) || !(*a < *b)) {
-    throw InputError(flag + " '" + std::string(text) + "': expected START:END in seconds with START < END, e.g. 4:7");
+    throw InputError(flag + " '" + std::string(text) +
+                     "': expected START:END in seconds with START < END, e.g. 4:7");
   }
   w.t0_s = *a;
   w.t1_s = *b;
   return w;
 }
 
-void SplitIntoWindows(RecordSet& set, const std::vector<WindowSpec>& windows, const RecordReadOptions& opt) {
+void SplitIntoWindows(RecordSet& set, const std::vector<WindowSpec>& windows,
+                      const RecordReadOptions& opt) {
   if (windows.empty()) return;
   if (set.records.size() != 1) {
-    throw InputError("windows on the command line need a single record (a CSV file); " + set.source.string() +
-                     " holds " + std::to_string(set.records.size()) + ": give t_start_s / t_end_s in its manifest");
+    throw InputError("windows on the command line need a single record (a CSV file); " +
+                     set.source.string() + " holds " + std::to_string(set.records.size()) +
+                     ": give t_start_s / t_end_s in its manifest");
   }
   const Record whole = set.records.front();
   set.records.clear();
@@ -583,20 +640,24 @@ void SplitIntoWindows(RecordSet& set, const std::vector<WindowSpec>& windows, co
     const int k = ++count[w.role];
     r.name = std::string(model::CaseRoleName(w.role)) + (k > 1 ? std::to_string(k) : "");
     r.role = w.role;
-    SetWindow(r, w.t0_s, w.t1_s, opt.min_scored, std::string(model::CaseRoleName(w.role)) + " window");
+    SetWindow(r, w.t0_s, w.t1_s, opt.min_scored,
+              std::string(model::CaseRoleName(w.role)) + " window");
     set.records.push_back(std::move(r));
   }
 }
 
 RecordSet LoadRecordSet(const fs::path& path, const RecordReadOptions& opt) {
-  if (!(opt.time_jitter > 0 && opt.time_jitter < 0.5)) throw InputError("time_jitter must be in (0, 0.5)");
+  if (!(opt.time_jitter > 0 && opt.time_jitter < 0.5))
+    throw InputError("time_jitter must be in (0, 0.5)");
   if (fs::is_regular_file(path)) return FromCsv(path, opt);
-  if (!fs::is_directory(path)) throw InputError("records '" + path.string() + "': no such file or folder");
+  if (!fs::is_directory(path))
+    throw InputError("records '" + path.string() + "': no such file or folder");
   if (fs::exists(path / "manifest.csv")) return LoadManifest(path, opt);
   if (fs::exists(path / "records.csv")) return FromStackBench(path, opt);
   if (fs::exists(path / "cases.csv")) return FromFinBench(path, opt);
   throw InputError("records '" + path.string() +
-                   "': no manifest.csv (nor a stack bench's records.csv or a fin bench's cases.csv) in the folder");
+                   "': no manifest.csv (nor a stack bench's records.csv or a fin bench's "
+                   "cases.csv) in the folder");
 }
 
 void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
@@ -605,14 +666,17 @@ void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
     m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,drive_column,response_column\n";
     for (const Record& r : set.records) {
       const std::string file = r.name + ".csv";
-      m << r.name << "," << file << "," << model::CaseRoleName(r.role) << "," << FormatNumber(r.t[r.first_scored])
-        << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
-        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset) : OffsetModeName(r.offset_mode)) << ","
-        << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
+      m << r.name << "," << file << "," << model::CaseRoleName(r.role) << ","
+        << FormatNumber(r.t[r.first_scored]) << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
+        << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset)
+                                                : OffsetModeName(r.offset_mode))
+        << "," << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ",drive_"
+        << set.drive_unit << ",response_" << set.response_unit << "\n";
       WriteFileWith(dir / file, [&](std::ostream& f) {
         f << "t_s,drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
         for (size_t i = 0; i < r.size(); ++i)
-          f << FormatNumber(r.t[i]) << "," << FormatNumber(r.u[i]) << "," << FormatNumber(r.y[i]) << "\n";
+          f << FormatNumber(r.t[i]) << "," << FormatNumber(r.u[i]) << "," << FormatNumber(r.y[i])
+            << "\n";
       });
     }
   });

@@ -3,7 +3,7 @@
 //
 // A record set is a folder with a manifest `manifest.csv`, one row per record:
 //
-//   record,file,role[,t_start_s,t_end_s,offset,frequency_Hz,time_column,drive_column,response_column,
+//   record,file,role[,t_start_s,t_end_s,offset,frequency_Hz,time_column,drive_column,response_column,  // NOLINT(length)
 //                     time_unit,drive_unit,response_unit]
 //
 //   record    a unique name (letters, digits, - _ .)
@@ -61,10 +61,11 @@ struct Record {
   std::string name;
   model::CaseRole role = model::CaseRole::kTrain;
   std::filesystem::path file;
-  std::vector<double> t;  ///< [s], the file's own times (strictly increasing, uniform within jitter)
-  std::vector<double> u;  ///< drive, canonical drive unit
-  std::vector<double> y;  ///< response, canonical response unit
-  double dt = 0;          ///< mean step (t.back() − t.front()) / (n − 1) [s]
+  std::vector<double>
+      t;  ///< [s], the file's own times (strictly increasing, uniform within jitter)
+  std::vector<double> u;    ///< drive, canonical drive unit
+  std::vector<double> y;    ///< response, canonical response unit
+  double dt = 0;            ///< mean step (t.back() − t.front()) / (n − 1) [s]
   size_t first_scored = 0;  ///< the window: samples [first_scored, end_scored) are scored
   size_t end_scored = 0;
   size_t rest_samples = 0;  ///< leading samples with the drive of sample 0 (the rest segment)
@@ -83,9 +84,9 @@ struct Record {
 };
 
 struct RecordSet {
-  std::filesystem::path source;   ///< the folder or file read
-  std::string format;             ///< "manifest", "stack-bench", "bimorph-fin-bench", "csv"
-  std::string drive_unit = "V";   ///< canonical units of the set
+  std::filesystem::path source;  ///< the folder or file read
+  std::string format;            ///< "manifest", "stack-bench", "bimorph-fin-bench", "csv"
+  std::string drive_unit = "V";  ///< canonical units of the set
   std::string response_unit = "um";
   std::vector<Record> records;
 
@@ -94,22 +95,23 @@ struct RecordSet {
 };
 
 struct RecordReadOptions {
-  double time_jitter = 0.01;    ///< every step within this fraction of the mean step, in (0, 0.5)
-  size_t min_scored = 20;       ///< a window must hold at least this many samples
-  double rest_tolerance = 1e-9; ///< rest: |u − u_0| ≤ this × max |u| (plus 1e-12)
+  double time_jitter = 0.01;     ///< every step within this fraction of the mean step, in (0, 0.5)
+  size_t min_scored = 20;        ///< a window must hold at least this many samples
+  double rest_tolerance = 1e-9;  ///< rest: |u − u_0| ≤ this × max |u| (plus 1e-12)
   /// A bench that states its drive (the stack bench: offset + A sin(2π f t)): check the measured
   /// drive against it (`piezoid committee`); off by default (the drive is the measured samples).
   bool check_stated_drive = false;
 };
 
-/// Reads a record set: a folder with manifest.csv, a stack bench folder (records.csv), a bimorph-fin
-/// bench folder (cases.csv), or one CSV file. Throws pz::InputError.
+/// Reads a record set: a folder with manifest.csv, a stack bench folder (records.csv), a
+/// bimorph-fin bench folder (cases.csv), or one CSV file. Throws pz::InputError.
 RecordSet LoadRecordSet(const std::filesystem::path& path, const RecordReadOptions& options = {});
 
 /// A window [t0, t1] of the file time as [first, end) sample indices of a record; throws
 /// InputError naming `what` when it is empty, reversed, outside the record or shorter than
 /// min_scored samples.
-void SetWindow(Record& record, double t0_s, double t1_s, size_t min_scored, const std::string& what);
+void SetWindow(Record& record, double t0_s, double t1_s, size_t min_scored,
+               const std::string& what);
 
 /// The settling convention (issue 22): every model of this project starts at rest at the first
 /// sample's drive, by default with its memory centred there (the plays of a Prandtl–Ishlinskii
@@ -117,10 +119,11 @@ void SetWindow(Record& record, double t0_s, double t1_s, size_t min_scored, cons
 /// FamilyOptions::initial_state sets another), while a real stack at rest sits where its last move
 /// left it — resting at the bottom of its range, below every hysteron, as after a descent. Until
 /// the first large reversal wipes that memory out the two differ (on a real-like 45 µm stack,
-/// 0.6–1.4 µm RMS over the first 0.5 s for prandtl-ishlinskii; docs/records.md), so a record can be scored
-/// from `settle_s` after the end of its rest (its first sample whose drive leaves the rest level)
-/// instead: its scored window starts at the later of that and its own start. settle_s ≥ 0 and
-/// finite; each record must keep min_scored samples, else InputError naming `what` and the record.
+/// 0.6–1.4 µm RMS over the first 0.5 s for prandtl-ishlinskii; docs/records.md), so a record can be
+/// scored from `settle_s` after the end of its rest (its first sample whose drive leaves the rest
+/// level) instead: its scored window starts at the later of that and its own start. settle_s ≥ 0
+/// and finite; each record must keep min_scored samples, else InputError naming `what` and the
+/// record.
 void SkipSettling(RecordSet& set, double settle_s, size_t min_scored, const std::string& what);
 
 /// Splits a one-record set (a single CSV) into windows: each (role, t0, t1) becomes a record named

@@ -1,6 +1,5 @@
 #include "job/job_kind.h"
 
-
 namespace pz::job {
 
 using opt::FitnessFunction;
@@ -53,8 +52,9 @@ std::vector<FieldViolation> JobKindRegistry::Validate(const JobSpec& spec) const
     return out;
   }
   if (!k->move && spec.ga && spec.ga->output_moves > 0) {
-    out.push_back({"ga.output_moves", "ga.output_moves = " + std::to_string(spec.ga->output_moves) + ": the " +
-                                          spec.kind() + " kind has no output move; must be 0 or unset"});
+    out.push_back({"ga.output_moves", "ga.output_moves = " + std::to_string(spec.ga->output_moves) +
+                                          ": the " + spec.kind() +
+                                          " kind has no output move; must be 0 or unset"});
   }
   if (k->validate) {
     auto more = k->validate(spec);

@@ -1,7 +1,7 @@
-// Job kinds: how a job spec's problem becomes a genome layout and a FitnessFunction. Each kind lives
-// with its problem (hgann/, diagnose/, complete/); the one list of them is kinds/kinds.h, which the
-// master, the workers, the fuzzer and the client all use, so a kind added there is available
-// everywhere. A kind:
+// Job kinds: how a job spec's problem becomes a genome layout and a FitnessFunction. Each kind
+// lives with its problem (hgann/, diagnose/, complete/); the one list of them is kinds/kinds.h,
+// which the master, the workers, the fuzzer and the client all use, so a kind added there is
+// available everywhere. A kind:
 //
 //   pz::job::JobKind k;
 //   k.name = "hgann";
@@ -44,7 +44,8 @@ struct JobKind {
   std::function<std::string(const JobSpec&, const opt::Genome&)> describe;
   /// Optional, for kinds whose genomes are networks: decodes genomes into the networks a client
   /// deploys (with the spec's input normalisation and parameter ranges); fetch returns them.
-  std::function<Status(const JobSpec&, std::span<const opt::Genome>, std::vector<model::Network>*)> networks;
+  std::function<Status(const JobSpec&, std::span<const opt::Genome>, std::vector<model::Network>*)>
+      networks;
   /// Optional: the kind's move for the GA's output moves (opt/ga.h, file comment 9.). A kind
   /// without one refuses a spec that asks for output moves.
   std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Move*)> move;
@@ -82,6 +83,5 @@ class JobKindRegistry {
   mutable std::mutex mu_;
   std::map<std::string, std::shared_ptr<const JobKind>> kinds_;
 };
-
 
 }  // namespace pz::job

@@ -44,7 +44,8 @@ std::optional<HgannSearchSettings> HgannSearchPreset(std::string_view name) {
 }
 
 std::string JobSpec::kind() const {
-  return std::visit([](const auto& p) { return std::string(KindOf<std::decay_t<decltype(p)>>()); }, problem);
+  return std::visit([](const auto& p) { return std::string(KindOf<std::decay_t<decltype(p)>>()); },
+                    problem);
 }
 
 std::vector<std::string> JobKindNames() {
@@ -53,9 +54,9 @@ std::vector<std::string> JobKindNames() {
 
 std::vector<FieldViolation> JobSpec::Validate() const {
   Violations c;
-  c.Require(version == kJobSpecVersion, "version", version,
-            "unsupported job spec version (this master reads " + std::to_string(kJobSpecVersion) +
-                ")");
+  c.Require(
+      version == kJobSpecVersion, "version", version,
+      "unsupported job spec version (this master reads " + std::to_string(kJobSpecVersion) + ")");
   c.Require(name.size() <= 200, "name", name.size(), "must be ≤ 200 characters");
   c.Range("limits.task_timeout_s", limits.task_timeout_s, 0.001, 86400.0);
   c.Range("limits.quarantine_after", limits.quarantine_after, 1, 100);
@@ -78,10 +79,12 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Require(m->family != CompleteModelProblem::Family::kUnspecified, "complete_model.family",
               "COMPLETE_MODEL_FAMILY_UNSPECIFIED",
               "must be BW_OSCILLATOR, STACK_BOUC_WEN or STACK_BACKLASH_LIKE");
-    c.Require(!m->records.empty(), "complete_model.records", "0 records", "at least one record is needed");
-    c.Require(std::isfinite(m->error_cost) && m->error_cost > 0, "complete_model.error_cost", m->error_cost,
-              "must be finite and > 0");
-    c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(), "must be ≤ 1000 characters");
+    c.Require(!m->records.empty(), "complete_model.records", "0 records",
+              "at least one record is needed");
+    c.Require(std::isfinite(m->error_cost) && m->error_cost > 0, "complete_model.error_cost",
+              m->error_cost, "must be finite and > 0");
+    c.Require(m->source.size() <= 1000, "complete_model.source", m->source.size(),
+              "must be ≤ 1000 characters");
   } else if (std::holds_alternative<std::monostate>(problem)) {
     std::string kinds;
     for (const std::string& k : JobKindNames()) kinds += (kinds.empty() ? "" : ", ") + k;
@@ -110,25 +113,30 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Range("ga.generations", ga->generations, 0, 100000000);
     c.Range("ga.stall_generations", ga->stall_generations, 0, 100000000);
     c.Range("ga.islands", ga->islands, 1, 1024);
-    c.Require(static_cast<int64_t>(ga->islands) * ga->population <= 1000000, "ga.islands", ga->islands,
-              "islands · population must be ≤ 1000000 (population " + std::to_string(ga->population) + ")");
+    c.Require(static_cast<int64_t>(ga->islands) * ga->population <= 1000000, "ga.islands",
+              ga->islands,
+              "islands · population must be ≤ 1000000 (population " +
+                  std::to_string(ga->population) + ")");
     c.Range("ga.migration_interval", ga->migration_interval, 0, 100000000);
     c.Range("ga.migrants", ga->migrants, 0, std::max(0, ga->population - 1));
     c.Require(ga->migration_interval == 0 || ga->migrants >= 1, "ga.migrants", ga->migrants,
               "must be ≥ 1 when ga.migration_interval > 0 (0 runs the islands independently)");
     c.Require(opt::ValidTopology(ga->topology), "ga.topology", static_cast<int>(ga->topology),
               "must be MIGRATION_TOPOLOGY_RING, _FULLY_CONNECTED or _RANDOM");
-    c.Require(ga->migration_margin >= 0 && ga->migration_margin < 1, "ga.migration_margin", ga->migration_margin,
-              "must be in [0, 1) (0 = migrants from every source)");
+    c.Require(ga->migration_margin >= 0 && ga->migration_margin < 1, "ga.migration_margin",
+              ga->migration_margin, "must be in [0, 1) (0 = migrants from every source)");
     c.Range("ga.island_stall_generations", ga->island_stall_generations, 0, 100000000);
     c.Range("ga.broadcast_interval", ga->broadcast_interval, 0, 100000000);
     c.Require(ga->broadcast_interval == 0 || ga->migrants >= 1, "ga.migrants", ga->migrants,
               "must be ≥ 1 when ga.broadcast_interval > 0");
-    c.Require(ga->broadcast_margin > 0 && ga->broadcast_margin < 1, "ga.broadcast_margin", ga->broadcast_margin,
-              "must be in (0, 1)");
-    c.Require(ga->island_mutation.empty() || ga->island_mutation.size() == static_cast<size_t>(ga->islands),
-              "ga.island_mutation.size()", ga->island_mutation.size(),
-              "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = " + std::to_string(ga->islands));
+    c.Require(ga->broadcast_margin > 0 && ga->broadcast_margin < 1, "ga.broadcast_margin",
+              ga->broadcast_margin, "must be in (0, 1)");
+    c.Require(
+        ga->island_mutation.empty() ||
+            ga->island_mutation.size() == static_cast<size_t>(ga->islands),
+        "ga.island_mutation.size()", ga->island_mutation.size(),
+        "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = " +
+            std::to_string(ga->islands));
     for (size_t i = 0; i < ga->island_mutation.size(); ++i)
       c.Range("ga.island_mutation[" + std::to_string(i) + "]", ga->island_mutation[i], 0.0, 1.0);
     // In 64 bits: population and elite_fraction may both be out of range here (a fuzzer found it).
@@ -136,7 +144,8 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     c.Require(ga->output_moves == opt::GaOptions::kAutoOutputMoves ||
                   (ga->output_moves >= 0 && ga->output_moves <= offspring),
               "ga.output_moves", ga->output_moves,
-              "must be in [0, population − round(population · elite_fraction) = " + std::to_string(offspring) +
+              "must be in [0, population − round(population · elite_fraction) = " +
+                  std::to_string(offspring) +
                   "] (unset: 0 with one island, 16 % of the offspring with several)");
   }
   return std::move(c.out);

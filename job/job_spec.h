@@ -39,10 +39,15 @@ class Violations {
   }
   template <typename T>
   void Range(const std::string& field, T value, T lo, T hi) {
-    Require(value >= lo && value <= hi, field, value, "must be in [" + Num(lo) + ", " + Num(hi) + "]");
+    Require(value >= lo && value <= hi, field, value,
+            "must be in [" + Num(lo) + ", " + Num(hi) + "]");
   }
-  void Finite(const std::string& field, double value) { Require(std::isfinite(value), field, value, "must be finite"); }
-  void Add(const std::string& field, const std::string& description) { out.push_back({field, description}); }
+  void Finite(const std::string& field, double value) {
+    Require(std::isfinite(value), field, value, "must be finite");
+  }
+  void Add(const std::string& field, const std::string& description) {
+    out.push_back({field, description});
+  }
   std::vector<FieldViolation> out;
 
  private:
@@ -65,14 +70,14 @@ using model::CaseRole;  // model/case_role.h: the one train / validate / test en
 
 /// One bench case of a bimorph-fin case set (proto HgannCase; io/bench_data.h BenchCase).
 struct HgannCaseSpec {
-  int number = 0;                  ///< > 0, unique
-  double amplitude_v = 0;          ///< V [V], finite, ≥ 0
-  double frequency_hz = 0;         ///< f [Hz], finite, > 0
+  int number = 0;                          ///< > 0, unique
+  double amplitude_v = 0;                  ///< V [V], finite, ≥ 0
+  double frequency_hz = 0;                 ///< f [Hz], finite, > 0
   CaseRole role = CaseRole::kUnspecified;  ///< must be set
-  double sample_rate_hz = 0;       ///< fs [Hz], finite, > 0
-  std::vector<double> angle_deg;   ///< measured fin angle [deg] at t = k / fs, ≥ 2 samples, finite
-  std::vector<double> voltage_v;   ///< recorded drive [V]: empty or as many as angle_deg, finite
-  std::optional<double> b1, b2;    ///< saturations [deg] (only with Saturation::kGiven)
+  double sample_rate_hz = 0;               ///< fs [Hz], finite, > 0
+  std::vector<double> angle_deg;  ///< measured fin angle [deg] at t = k / fs, ≥ 2 samples, finite
+  std::vector<double> voltage_v;  ///< recorded drive [V]: empty or as many as angle_deg, finite
+  std::optional<double> b1, b2;   ///< saturations [deg] (only with Saturation::kGiven)
 };
 
 /// The search settings of an hgann preset (proto HgannProblem.preset; `piezoid identify
@@ -139,16 +144,16 @@ struct DiagnoseParamBox {
 /// genome.reals = search coordinates in [0, 1]; cost = Σ training e² [deg²].
 struct DiagnoseProblem {
   static constexpr std::string_view kKind = "diagnose";
-  std::vector<HgannCaseSpec> cases;     ///< role kTrain = fitted; b1, b2 unset (from extremes)
-  std::vector<double> cycles;           ///< drive cycles per case (as many as cases), > 0
-  std::vector<std::string> structure;   ///< effect names added to the base model, in order
-  std::vector<DiagnoseParamBox> params; ///< the search box in layout order
-  bool residuals = false;               ///< results carry the training residual vector
-  int oversample = 4;                   ///< model/effects.h EffectSimOptions
+  std::vector<HgannCaseSpec> cases;      ///< role kTrain = fitted; b1, b2 unset (from extremes)
+  std::vector<double> cycles;            ///< drive cycles per case (as many as cases), > 0
+  std::vector<std::string> structure;    ///< effect names added to the base model, in order
+  std::vector<DiagnoseParamBox> params;  ///< the search box in layout order
+  bool residuals = false;                ///< results carry the training residual vector
+  int oversample = 4;                    ///< model/effects.h EffectSimOptions
   double rtol = 1e-6, atol = 1e-13;
   int64_t max_steps = 5000000;
   bool force_cvode = false;
-  std::string source;                   ///< free text, ≤ 1000 chars
+  std::string source;  ///< free text, ≤ 1000 chars
 };
 
 /// One sampled record of a complete-model identification (proto CompleteModelRecord).
@@ -160,34 +165,40 @@ struct CompleteModelRecord {
   uint64_t first_counted = 0;  ///< oscillator: warm-up samples simulated but not counted;
                                ///< records: the first scored sample
   // Family kRecords only (records/fit.h, io::Record):
-  double dt_s = 0;             ///< the record's step [s] (exact; sample_rate_hz is informative)
-  uint64_t end_counted = 0;    ///< one past the last scored sample, ≤ samples
-  uint64_t rest_samples = 1;   ///< leading samples at the first sample's drive, 1 … samples
-  int offset_mode = 0;         ///< io::OffsetMode: 0 fit, 1 rest, 2 fixed
-  double offset = 0;           ///< rest: the measured rest level; fixed: the offset
+  double dt_s = 0;            ///< the record's step [s] (exact; sample_rate_hz is informative)
+  uint64_t end_counted = 0;   ///< one past the last scored sample, ≤ samples
+  uint64_t rest_samples = 1;  ///< leading samples at the first sample's drive, 1 … samples
+  int offset_mode = 0;        ///< io::OffsetMode: 0 fit, 1 rest, 2 fixed
+  double offset = 0;          ///< rest: the measured rest level; fixed: the offset
 };
 
 /// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
 /// the family's physical parameters; cost = the family's criterion on the records.
 struct CompleteModelProblem {
   static constexpr std::string_view kKind = "complete_model";
-  enum class Family { kUnspecified = 0, kBwOscillator = 1, kStackBoucWen = 2, kStackBacklashLike = 3, kRecords = 4 };
+  enum class Family {
+    kUnspecified = 0,
+    kBwOscillator = 1,
+    kStackBoucWen = 2,
+    kStackBacklashLike = 3,
+    kRecords = 4
+  };
   enum class Criterion { kIae = 1, kSse = 2, kRmse = 3, kMax = 4 };
   enum class Interpolation { kZoh = 1, kLinear = 2, kSpline = 3, kFourier = 4 };
   Family family = Family::kUnspecified;
-  std::vector<CompleteModelRecord> records;      ///< ≥ 1
-  Criterion criterion = Criterion::kIae;         ///< records with a window
-  double t0_s = 0, t1_s = 0;                     ///< records: the criterion's window [s] (0, 0: none, the MSE)
-  int substeps = 0;                              ///< 0 = the family's default (oscillator 4, records 2)
+  std::vector<CompleteModelRecord> records;  ///< ≥ 1
+  Criterion criterion = Criterion::kIae;     ///< records with a window
+  double t0_s = 0, t1_s = 0;  ///< records: the criterion's window [s] (0, 0: none, the MSE)
+  int substeps = 0;           ///< 0 = the family's default (oscillator 4, records 2)
   Interpolation interpolation = Interpolation::kSpline;  ///< oscillator
-  uint64_t period_samples = 0;                   ///< oscillator, Fourier (0 = whole record)
-  double error_cost = 1e30;                      ///< cost of a diverged / invalid parameter set
-  std::string source;                            ///< free text, ≤ 1000 chars
+  uint64_t period_samples = 0;                           ///< oscillator, Fourier (0 = whole record)
+  double error_cost = 1e30;  ///< cost of a diverged / invalid parameter set
+  std::string source;        ///< free text, ≤ 1000 chars
   // Family kRecords: `piezoid fit` / `diagnose --records` on the service (records/fit.h).
-  std::string record_family;                     ///< records/families.h name
-  std::vector<std::string> effects;              ///< records/model.h effect names
-  int pi_operators = 12;                         ///< Prandtl–Ishlinskii plays, 1 … 10000
-  std::string initial_state;                     ///< FamilyOptions::initial_state by name ("" = its default, auto)
+  std::string record_family;         ///< records/families.h name
+  std::vector<std::string> effects;  ///< records/model.h effect names
+  int pi_operators = 12;             ///< Prandtl–Ishlinskii plays, 1 … 10000
+  std::string initial_state;  ///< FamilyOptions::initial_state by name ("" = its default, auto)
   /// The data scale the client measured (records::DataScale, in this order): u_min, u_max, u_half,
   /// y_half, gain, polarity, f_dom, fs, duration — sent so that the workers' search box and model
   /// are the client's, bit for bit.
@@ -204,27 +215,29 @@ struct ExternalSettings {
 /// Settings of the HGANN binary GA (opt/ga.h GaOptions; genome length, seed, target and error
 /// cost come from the problem, the spec's seed and its limits).
 struct GaSettings {
-  int population = 400;                ///< 2..1000000
-  double elite_fraction = 0.5;         ///< (0, 1); round(population · fraction) in 1..population−1
-  int tournament = 2;                  ///< ≥ 1
+  int population = 400;         ///< 2..1000000
+  double elite_fraction = 0.5;  ///< (0, 1); round(population · fraction) in 1..population−1
+  int tournament = 2;           ///< ≥ 1
   double crossover_probability = 1.0;  ///< 0..1
   double mutation_probability = 0.01;  ///< 0..1
   int generations = 1000;              ///< max generations after the initial one, ≥ 0
   int stall_generations = 200;         ///< ≥ 0 (0 = never stop for stall)
   // Islands (opt/ga.h GaOptions): population is per island.
-  int islands = 1;                     ///< 1..1024
-  int migration_interval = 25;         ///< ≥ 0 (0 = never: independent islands)
-  int migrants = 4;                    ///< 0..population − 1, ≥ 1 when migration_interval > 0
+  int islands = 1;              ///< 1..1024
+  int migration_interval = 25;  ///< ≥ 0 (0 = never: independent islands)
+  int migrants = 4;             ///< 0..population − 1, ≥ 1 when migration_interval > 0
   opt::MigrationTopology topology = opt::MigrationTopology::kFullyConnected;
-  double migration_margin = 0.2;       ///< [0, 1) (0 = migrants from every source; opt/ga.h)
-  int island_stall_generations = 0;    ///< ≥ 0 (0 = never restart an island)
-  int broadcast_interval = 0;          ///< ≥ 0 (0 = no gated broadcast; opt/ga.h), ≥ 1 migrant when > 0
-  double broadcast_margin = 0.2;       ///< (0, 1): the broadcast's gate (opt/ga.h)
-  std::vector<double> island_mutation;  ///< empty (the ladder of opt/ga.h) or one rate per island, each 0..1
-  int output_moves = opt::GaOptions::kAutoOutputMoves;  ///< offspring per island made by the kind's move
-                                       ///< (opt/ga.h 9.), 0..population − elite; auto (−1): 0 with one
-                                       ///< island, 16 % of the offspring with several
-  int offspring() const;               ///< evaluated per generation: population − elite count
+  double migration_margin = 0.2;     ///< [0, 1) (0 = migrants from every source; opt/ga.h)
+  int island_stall_generations = 0;  ///< ≥ 0 (0 = never restart an island)
+  int broadcast_interval = 0;  ///< ≥ 0 (0 = no gated broadcast; opt/ga.h), ≥ 1 migrant when > 0
+  double broadcast_margin = 0.2;  ///< (0, 1): the broadcast's gate (opt/ga.h)
+  std::vector<double>
+      island_mutation;  ///< empty (the ladder of opt/ga.h) or one rate per island, each 0..1
+  int output_moves =
+      opt::GaOptions::kAutoOutputMoves;  ///< offspring per island made by the kind's move
+                                         ///< (opt/ga.h 9.), 0..population − elite; auto (−1): 0
+                                         ///< with one island, 16 % of the offspring with several
+  int offspring() const;  ///< evaluated per generation: population − elite count
 };
 
 /// Service limits of a job.
@@ -241,7 +254,9 @@ struct JobSpec {
   uint64_t seed = 0;
   JobLimits limits;
   /// The problem; each names its job kind (kKind). A new kind adds its problem struct here.
-  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem, CompleteModelProblem> problem;
+  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem,
+               CompleteModelProblem>
+      problem;
   /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
   /// evaluation session driven by the client).
   std::optional<GaSettings> ga;

@@ -79,7 +79,6 @@ JobKind SyntheticJobKind() {
   return k;
 }
 
-
 const job::JobKindRegistry& All() {
   static const job::JobKindRegistry* registry = [] {
     auto* r = new job::JobKindRegistry;

@@ -37,13 +37,13 @@ using service::EncodeMasterToWorker;
 using service::IsFinal;
 using service::IsTransient;
 using service::JobEvent;
+using service::kZapDomainClients;
+using service::kZapDomainWorkers;
 using service::PeerLiveness;
 using service::TimePoint;
 using service::WireCode;
 using service::WorkerMsg;
 using service::ZapHandler;
-using service::kZapDomainClients;
-using service::kZapDomainWorkers;
 namespace {
 
 struct Command {
@@ -100,8 +100,10 @@ struct Broker::Impl {
         workers(ctx, zmq::socket_type::router),
         clients(ctx, zmq::socket_type::router),
         liveness(std::chrono::milliseconds(options.heartbeat_ms), options.liveness),
-        dispatcher(WithQuietWindow(options), std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {
-    if (!options.allow_mixed_arithmetic && !options.pinned_arithmetic.empty()) Serve(options.pinned_arithmetic);
+        dispatcher(WithQuietWindow(options),
+                   std::random_device{}() | (uint64_t{std::random_device{}()} << 32)) {
+    if (!options.allow_mixed_arithmetic && !options.pinned_arithmetic.empty())
+      Serve(options.pinned_arithmetic);
   }
 
   void Serve(const std::string& profile) {
@@ -150,10 +152,11 @@ struct Broker::Impl {
   /// Submit reply, and ends before its final event): a Watch sent right after Submit, or a cancel,
   /// loses nothing. A job's watchers are dropped with its final event.
   std::map<std::string, std::map<std::string, Watcher>> watchers;  // job → envelope key → watcher
-  std::map<std::string, std::set<std::string>> jobs_of_client;  // client identity → job ids
+  std::map<std::string, std::set<std::string>> jobs_of_client;     // client identity → job ids
   BrokerStats local;
   LogThrottle log_throttle{std::chrono::seconds(10)};
-  /// What the workers announced, for the Workers request (dashboards); departures kept: the last 32.
+  /// What the workers announced, for the Workers request (dashboards); departures kept: the
+  /// last 32.
   struct WorkerMeta {
     std::string host, key;
     int64_t pid = 0;
@@ -161,15 +164,17 @@ struct Broker::Impl {
     uint64_t tasks_done = 0;
     std::string arithmetic;
   };
-  std::optional<std::string> arithmetic;  // the profile served (the first worker's), unless mixing is allowed
-  mutable std::mutex served_mu;             // the served profile for other threads
+  std::optional<std::string>
+      arithmetic;  // the profile served (the first worker's), unless mixing is allowed
+  mutable std::mutex served_mu;  // the served profile for other threads
   std::string served;
   std::map<std::string, WorkerMeta> worker_meta;
   std::deque<service::WorkerDepartureView> departed;
   const TimePoint started = Clock::now();
 
   static double UnixNow() {
-    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+    return std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
   }
   void Departed(const std::string& id, const std::string& why) {
     auto it = worker_meta.find(id);
@@ -254,8 +259,9 @@ struct Broker::Impl {
     ++local.bad_frames;
     uint64_t suppressed = 0;  // a flood is one line every 10 s per endpoint, with its count
     if (log_throttle.Allow(where, Clock::now(), &suppressed))
-      spdlog::warn("broker: bad {} frame ({}), ignored{}", where, why,
-                   suppressed ? " (" + std::to_string(suppressed) + " more since the last line)" : "");
+      spdlog::warn(
+          "broker: bad {} frame ({}), ignored{}", where, why,
+          suppressed ? " (" + std::to_string(suppressed) + " more since the last line)" : "");
   }
 
   // ------------------------------------------------------------------ commands from job threads
@@ -302,7 +308,9 @@ struct Broker::Impl {
           if (j.indices.empty()) CompleteGeneration(c.job_id, j);
           break;
         }
-        case Command::Type::kPublish: PublishEvent(c.event); break;
+        case Command::Type::kPublish:
+          PublishEvent(c.event);
+          break;
       }
     }
   }
@@ -343,9 +351,10 @@ struct Broker::Impl {
                                          "quarantined"};
         j.ticket->quarantined.push_back({q.generation, index, static_cast<uint32_t>(q.strikes)});
       }
-      spdlog::warn("job {}: individual {} of generation {} quarantined: it killed or hung {} workers that "
-                   "ran it alone while the rest of the cluster was healthy",
-                   q.job_id, index, q.generation, q.strikes);
+      spdlog::warn(
+          "job {}: individual {} of generation {} quarantined: it killed or hung {} workers that "
+          "ran it alone while the rest of the cluster was healthy",
+          q.job_id, index, q.generation, q.strikes);
       if (dispatcher.remaining(q.job_id) == 0) CompleteGeneration(q.job_id, j);
     }
   }
@@ -364,7 +373,8 @@ struct Broker::Impl {
   void RefuseWorker(const std::string& id, const WorkerMsg& m) {
     const std::string theirs = m.arithmetic.empty() ? "(not announced)" : m.arithmetic;
     const std::string pinned = options.pinned_by.empty() ? "" : " (" + options.pinned_by + ")";
-    const std::string why = "this master's workers compute as '" + *arithmetic + "'" + pinned + " and this one as '" + theirs +
+    const std::string why = "this master's workers compute as '" + *arithmetic + "'" + pinned +
+                            " and this one as '" + theirs +
                             "': results would differ in their last bits (start the master with "
                             "--allow-mixed-arithmetic to accept both)";
     uint64_t suppressed = 0;
@@ -422,7 +432,8 @@ struct Broker::Impl {
       case WorkerMsg::Type::kDisconnect:
         RemoveWorker(id, false, "disconnected");
         return;
-      default: break;
+      default:
+        break;
     }
     if (!known) {  // e.g. after a master restart: ask it to announce itself
       WorkerMsg answer;
@@ -516,12 +527,14 @@ struct Broker::Impl {
       char* out = static_cast<char*>(payload.data());
       std::memcpy(out, prefix.data(), prefix.size());
       j.tasks.Write(lease->positions, out + prefix.size());
-      workers.send(zmq::buffer(lease->worker), zmq::send_flags::sndmore | zmq::send_flags::dontwait);
+      workers.send(zmq::buffer(lease->worker),
+                   zmq::send_flags::sndmore | zmq::send_flags::dontwait);
       workers.send(payload, zmq::send_flags::dontwait);
       ++local.leases_sent;
       if (lease->speculative) {
         ++local.speculative_leases;
-        spdlog::debug("job {}: a copy of a straggling lease to worker {}", lease->job_id, Hex(lease->worker));
+        spdlog::debug("job {}: a copy of a straggling lease to worker {}", lease->job_id,
+                      Hex(lease->worker));
       }
     }
   }
@@ -562,9 +575,10 @@ struct Broker::Impl {
     const auto bytes = static_cast<int64_t>(req.spec_bytes.size());
     if (bytes > options.max_spec_bytes) {
       reply->code = WireCode::kInvalidArgument;
-      reply->error = "spec: " + std::to_string(bytes) +
-                     " bytes serialised, above the master's maximum data size per job (--max-spec-bytes = " +
-                     std::to_string(options.max_spec_bytes) + ")";
+      reply->error =
+          "spec: " + std::to_string(bytes) +
+          " bytes serialised, above the master's maximum data size per job (--max-spec-bytes = " +
+          std::to_string(options.max_spec_bytes) + ")";
       reply->violations.push_back({"spec", reply->error});
       return false;
     }
@@ -623,10 +637,12 @@ struct Broker::Impl {
         // reading (or went) cannot shut out a new one, and a live one re-registers after a quiet
         // spell of its watch (svcclient/service_client.h).
         if (!of_job.count(key) && static_cast<int>(of_job.size()) >= options.max_watchers_per_job) {
-          auto oldest = std::min_element(of_job.begin(), of_job.end(), [](const auto& a, const auto& b) {
-            return a.second.registered < b.second.registered;
-          });
-          spdlog::debug("job {}: {} watchers, the maximum; the oldest is dropped", req.job_id, of_job.size());
+          auto oldest =
+              std::min_element(of_job.begin(), of_job.end(), [](const auto& a, const auto& b) {
+                return a.second.registered < b.second.registered;
+              });
+          spdlog::debug("job {}: {} watchers, the maximum; the oldest is dropped", req.job_id,
+                        of_job.size());
           of_job.erase(oldest);
           ++local.dropped_watchers;
         }
@@ -639,9 +655,11 @@ struct Broker::Impl {
     } else {
       reply = handler->Handle(req);
       reply.request_id = req.request_id;
-      if (req.type == ClientRequestMsg::Type::kSubmit && reply.code == WireCode::kOk && !reply.existed)
+      if (req.type == ClientRequestMsg::Type::kSubmit && reply.code == WireCode::kOk &&
+          !reply.existed)
         jobs_of_client[ClientIdentity(last)].insert(reply.job_id);
-      if (req.type == ClientRequestMsg::Type::kList || req.type == ClientRequestMsg::Type::kEvaluate) {
+      if (req.type == ClientRequestMsg::Type::kList ||
+          req.type == ClientRequestMsg::Type::kEvaluate) {
         reply.workers = dispatcher.worker_count();
         reply.worker_threads = dispatcher.total_threads();
       }
@@ -673,8 +691,9 @@ struct Broker::Impl {
     std::vector<zmq::message_t> frames;
     while (!stop.load()) {
       const TimePoint before = Clock::now();
-      TimePoint next = std::min({liveness.next_heartbeat(), liveness.NextExpiry(),
-                                 dispatcher.NextDeadline(), before + std::chrono::milliseconds(200)});
+      TimePoint next =
+          std::min({liveness.next_heartbeat(), liveness.NextExpiry(), dispatcher.NextDeadline(),
+                    before + std::chrono::milliseconds(200)});
       const long timeout_ms = std::max<long>(
           0, std::chrono::duration_cast<std::chrono::milliseconds>(next - before).count() + 1);
       zmq::pollitem_t items[] = {{workers.handle(), 0, ZMQ_POLLIN, 0},
@@ -735,7 +754,6 @@ struct Broker::Impl {
       if (c.ticket) Finish(c.ticket, true);
     inbox.clear();
   }
-
 };
 
 Broker::Broker(BrokerOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
@@ -763,8 +781,7 @@ Status Broker::Start(ClientHandler* handler) {
       if (m.options.curve) {
         s->set(zmq::sockopt::curve_server, true);
         s->set(zmq::sockopt::curve_secretkey, m.options.curve->keys.secret_z85);
-        s->set(zmq::sockopt::zap_domain,
-               s == &m.workers ? kZapDomainWorkers : kZapDomainClients);
+        s->set(zmq::sockopt::zap_domain, s == &m.workers ? kZapDomainWorkers : kZapDomainClients);
       }
     }
     m.workers.bind(m.options.worker_endpoint);

@@ -36,16 +36,16 @@ namespace pz::master {
 struct BrokerOptions {
   std::string worker_endpoint = "tcp://127.0.0.1:5555";  ///< "tcp://127.0.0.1:*" = any free port
   std::string client_endpoint = "tcp://127.0.0.1:5556";
-  int heartbeat_ms = 500;                  ///< heartbeat interval, both ways [ms]
-  int liveness = 6;                        ///< missed intervals before a worker is dead
-  int64_t max_message_bytes = 64 << 20;    ///< larger frames are refused
+  int heartbeat_ms = 500;                ///< heartbeat interval, both ways [ms]
+  int liveness = 6;                      ///< missed intervals before a worker is dead
+  int64_t max_message_bytes = 64 << 20;  ///< larger frames are refused
   int max_watchers_per_job = 64;
   /// Messages the client socket queues per client at most (ZeroMQ's send high-water mark): a client
   /// that stops reading loses its watch events beyond this, and the master's memory stays bounded
   /// (≈ client_queue × event size × watchers). Workers keep their own, larger queue.
   int client_queue = 1000;
-  int64_t max_spec_bytes = 16 << 20;       ///< serialised job spec (with its data) at most
-  int max_jobs_per_client = 16;            ///< running jobs submitted by one client identity
+  int64_t max_spec_bytes = 16 << 20;  ///< serialised job spec (with its data) at most
+  int max_jobs_per_client = 16;       ///< running jobs submitted by one client identity
   std::optional<service::CurveServerConfig> curve;  ///< CURVE on both endpoints (ZAP-checked keys)
   /// Workers announce their arithmetic profile (model::ArithmeticProfile()): the first one accepted
   /// fixes it for the master's lifetime and a worker announcing another is refused (DISCONNECT with

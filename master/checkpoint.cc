@@ -37,7 +37,8 @@ bool ValidJobId(const std::string& id) {
 
 }  // namespace
 
-Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durable, const fs::path& previous) {
+Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durable,
+                       const fs::path& previous) {
   std::error_code ec;
   fs::create_directories(path.parent_path(), ec);
   if (ec) return Internal("cannot create " + path.parent_path().string() + ": " + ec.message());
@@ -67,7 +68,8 @@ Status WriteFileAtomic(const fs::path& path, std::string_view bytes, bool durabl
     const fs::path link_tmp = previous.string() + ".tmp";
     (void)::unlink(link_tmp.c_str());
     if (::link(path.c_str(), link_tmp.c_str()) == 0) {
-      if (::rename(link_tmp.c_str(), previous.c_str()) != 0) return Errno("cannot rename onto", previous);
+      if (::rename(link_tmp.c_str(), previous.c_str()) != 0)
+        return Errno("cannot rename onto", previous);
     } else if (errno != ENOENT) {
       return Errno("cannot link " + path.string() + " to", link_tmp);
     }
@@ -128,8 +130,9 @@ Status JobDirectory::LoadSpec(const std::string& job_id, std::string* spec_bytes
 
 Status JobDirectory::SaveCheckpoint(const JobCheckpoint& c, bool durable) const {
   if (!ValidJobId(c.job_id)) return InvalidArgument("bad job id '" + c.job_id + "'");
-  return WriteFileAtomic(dir(c.job_id) / kCheckpointFile, EncodeStoredFile(kCheckpointType, EncodeCheckpoint(c)),
-                         durable, dir(c.job_id) / kPreviousFile);
+  return WriteFileAtomic(dir(c.job_id) / kCheckpointFile,
+                         EncodeStoredFile(kCheckpointType, EncodeCheckpoint(c)), durable,
+                         dir(c.job_id) / kPreviousFile);
 }
 
 namespace {
@@ -145,22 +148,26 @@ Status LoadOne(const fs::path& file, const std::string& job_id, JobCheckpoint* c
     return {StatusCode::kDataLoss, s.message()};
   }
   if (Status d = DecodeCheckpoint(payload, c); !d.ok())
-    return {StatusCode::kDataLoss, s.code() == StatusCode::kNotFound ? "not a checkpoint" : d.message()};
+    return {StatusCode::kDataLoss,
+            s.code() == StatusCode::kNotFound ? "not a checkpoint" : d.message()};
   if (c->job_id != job_id) return {StatusCode::kDataLoss, "the checkpoint of job " + c->job_id};
   return Status::Ok();
 }
 
 }  // namespace
 
-Status JobDirectory::LoadCheckpoint(const std::string& job_id, JobCheckpoint* c, std::string* notice) const {
+Status JobDirectory::LoadCheckpoint(const std::string& job_id, JobCheckpoint* c,
+                                    std::string* notice) const {
   if (!ValidJobId(job_id)) return InvalidArgument("bad job id '" + job_id + "'");
   notice->clear();
   const fs::path current = dir(job_id) / kCheckpointFile, previous = dir(job_id) / kPreviousFile;
   const Status a = LoadOne(current, job_id, c);
   if (a.ok()) return a;
   const Status b = LoadOne(previous, job_id, c);
-  if (a.code() == StatusCode::kNotFound && b.code() == StatusCode::kNotFound) return a;  // a new job
-  std::string why = current.string() + ": " + (a.code() == StatusCode::kNotFound ? "missing" : a.message());
+  if (a.code() == StatusCode::kNotFound && b.code() == StatusCode::kNotFound)
+    return a;  // a new job
+  std::string why =
+      current.string() + ": " + (a.code() == StatusCode::kNotFound ? "missing" : a.message());
   if (b.ok()) {
     *notice = why + "; resumed from " + previous.string() + " (after generation " +
               std::to_string(c->log.size()) + ")";
@@ -185,8 +192,11 @@ std::optional<PinnedProfile> PinnedArithmetic(const JobDirectory& dir) {
   for (const std::string& id : dir.List()) {
     service::JobCheckpoint c;
     std::string notice;
-    if (!dir.LoadCheckpoint(id, &c, &notice).ok() || service::IsFinal(c.state) || c.arithmetic.empty()) continue;
-    return PinnedProfile{c.arithmetic, "fixed by job " + id + ", computed on it before this master started"};
+    if (!dir.LoadCheckpoint(id, &c, &notice).ok() || service::IsFinal(c.state) ||
+        c.arithmetic.empty())
+      continue;
+    return PinnedProfile{c.arithmetic,
+                         "fixed by job " + id + ", computed on it before this master started"};
   }
   return std::nullopt;
 }

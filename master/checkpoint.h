@@ -25,8 +25,8 @@ namespace pz::master {
 
 /// Writes `bytes` to path.tmp and renames it over `path`; when `previous` is given, the file it
 /// replaces first becomes `previous` (hard link + rename: `path` exists at every instant).
-Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes, bool durable = true,
-                       const std::filesystem::path& previous = {});
+Status WriteFileAtomic(const std::filesystem::path& path, std::string_view bytes,
+                       bool durable = true, const std::filesystem::path& previous = {});
 /// Reads a whole file (at most max_bytes); NotFound if it does not exist.
 Status ReadWholeFile(const std::filesystem::path& path, std::string* out,
                      size_t max_bytes = size_t{1} << 31);
@@ -50,7 +50,8 @@ class JobDirectory {
   /// The job's checkpoint, or the previous one when it is unusable (*notice says which file was
   /// bad and why, and what was used). NotFound when there is no usable checkpoint: a new job, or
   /// (with *notice set) one whose checkpoints are both unusable, to be restarted from its spec.
-  Status LoadCheckpoint(const std::string& job_id, service::JobCheckpoint* c, std::string* notice) const;
+  Status LoadCheckpoint(const std::string& job_id, service::JobCheckpoint* c,
+                        std::string* notice) const;
   /// Removes the job's folder (a submission whose spec could not be written, a pruned job).
   Status Remove(const std::string& job_id) const;
 
@@ -66,6 +67,5 @@ struct PinnedProfile {
   std::string profile, why;
 };
 std::optional<PinnedProfile> PinnedArithmetic(const JobDirectory& dir);
-
 
 }  // namespace pz::master

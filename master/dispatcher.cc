@@ -94,7 +94,8 @@ void Dispatcher::RemoveWorker(const std::string& id, bool lost, TimePoint now) {
     (void)Requeue(l, lost ? RequeueCause::kWorkerLost : RequeueCause::kTransient, now);
   }
   departures_.push_back(d);
-  while (!departures_.empty() && now - departures_.front().at > 2 * quiet_window()) departures_.pop_front();
+  while (!departures_.empty() && now - departures_.front().at > 2 * quiet_window())
+    departures_.pop_front();
   auto w = workers_.find(id);
   if (w != workers_.end()) {
     total_threads_ -= w->second.threads;
@@ -111,11 +112,12 @@ bool Dispatcher::Departure::Held(const std::string& job, uint64_t gen, int pos) 
 }
 
 Duration Dispatcher::quiet_window() const {
-  return std::chrono::duration_cast<Duration>(std::chrono::duration<double>(std::max(0.0, options_.quiet_window_s)));
+  return std::chrono::duration_cast<Duration>(
+      std::chrono::duration<double>(std::max(0.0, options_.quiet_window_s)));
 }
 
-std::optional<Quarantined> Dispatcher::Strike(const std::string& job_id, uint64_t generation, int position,
-                                              const std::string& worker) {
+std::optional<Quarantined> Dispatcher::Strike(const std::string& job_id, uint64_t generation,
+                                              int position, const std::string& worker) {
   auto it = jobs_.find(job_id);
   if (it == jobs_.end() || it->second.generation != generation) return std::nullopt;
   JobTasks& j = it->second;
@@ -160,7 +162,8 @@ bool Dispatcher::HasRoom(const WorkerSlot& w) const {
 int Dispatcher::BatchSize(const WorkerSlot& w, const JobTasks& j) const {
   const int pending = static_cast<int>(j.pending.size());
   long rounds = 1;
-  if (w.item_s > 0) rounds = std::max(1L, std::lround(std::floor(options_.target_batch_s / w.item_s)));
+  if (w.item_s > 0)
+    rounds = std::max(1L, std::lround(std::floor(options_.target_batch_s / w.item_s)));
   long target = std::min<long>(options_.max_batch, rounds * w.threads);
   long guided = static_cast<long>(
       std::ceil(static_cast<double>(pending) * w.threads / (2.0 * std::max(1, total_threads_))));
@@ -248,8 +251,9 @@ std::optional<Lease> Dispatcher::NextLease(TimePoint now) {
   const std::string* worker_id = nullptr;
   for (auto& [id, w] : workers_) {
     if (!HasRoom(w) || (drain && id == *drain)) continue;
-    if (!worker || static_cast<double>(w.items) / w.threads <
-                       static_cast<double>(worker->items) / worker->threads ||
+    if (!worker ||
+        static_cast<double>(w.items) / w.threads <
+            static_cast<double>(worker->items) / worker->threads ||
         (w.items * worker->threads == worker->items * w.threads &&
          w.last_served < worker->last_served)) {
       worker = &w;
@@ -286,8 +290,8 @@ std::optional<Lease> Dispatcher::Complete(const std::string& worker, uint64_t le
     const double item = std::max(1e-7, eval_seconds / static_cast<double>(l.positions.size()));
     w->second.item_s = w->second.item_s < 0 ? item : 0.7 * w->second.item_s + 0.3 * item;
     // The generation's time per task, for its stragglers: per thread, as the holder ran it.
-    if (auto j = jobs_.find(l.job_id); j != jobs_.end() && j->second.generation == l.generation &&
-        !l.speculative) {
+    if (auto j = jobs_.find(l.job_id);
+        j != jobs_.end() && j->second.generation == l.generation && !l.speculative) {
       j->second.task_s.push_back(item);
       j->second.median_task_s = -1;
     }
@@ -349,7 +353,8 @@ std::optional<Lease> Dispatcher::Speculate(TimePoint now) {
   }
 }
 
-std::vector<Quarantined> Dispatcher::Requeue(const Lease& lease, RequeueCause cause, TimePoint now) {
+std::vector<Quarantined> Dispatcher::Requeue(const Lease& lease, RequeueCause cause,
+                                             TimePoint now) {
   std::vector<Quarantined> out;
   auto it = jobs_.find(lease.job_id);
   if (it == jobs_.end() || it->second.generation != lease.generation) return out;
@@ -399,7 +404,8 @@ TimePoint Dispatcher::NextDeadline() const {
     t = std::min(t, l.deadline);
     if (!idle) continue;
     auto j = jobs_.find(l.job_id);
-    if (j != jobs_.end() && j->second.pending.empty() && j->second.suspects.empty()) t = std::min(t, StragglerAt(l));
+    if (j != jobs_.end() && j->second.pending.empty() && j->second.suspects.empty())
+      t = std::min(t, StragglerAt(l));
   }
   if (!candidates_.empty()) t = std::min(t, candidates_.front().at + quiet_window());
   return t;
@@ -413,7 +419,8 @@ double Dispatcher::worker_item_seconds(const std::string& id) const {
 std::vector<Dispatcher::WorkerLoad> Dispatcher::Workers() const {
   std::vector<WorkerLoad> out;
   out.reserve(workers_.size());
-  for (const auto& [id, w] : workers_) out.push_back({id, w.threads, w.item_s, w.leases, w.items, w.exclusive});
+  for (const auto& [id, w] : workers_)
+    out.push_back({id, w.threads, w.item_s, w.leases, w.items, w.exclusive});
   return out;
 }
 

@@ -12,8 +12,8 @@
 //  * Deadline: now + rounds × task_timeout_s, rounds = ⌈tasks held by the worker / threads⌉.
 //  * Quarantine only on evidence that the task itself kills workers (issue 12.1), never because the
 //    cluster churns. A lease lost to a dead worker or a passed deadline makes its unfinished tasks
-//    suspects, re-run ALONE: a suspect goes only to an idle worker, which gets nothing else until it
-//    answers (if no worker is idle, the least loaded one is drained). Evidence (a strike) is:
+//    suspects, re-run ALONE: a suspect goes only to an idle worker, which gets nothing else until
+//    it answers (if no worker is idle, the least loaded one is drained). Evidence (a strike) is:
 //      - the worker running a suspect alone dies, and no other worker (one not running that same
 //        task) left the cluster within quiet_window_s before or after: the cluster was otherwise
 //        healthy, so the death is the task's; decided quiet_window_s after the death
@@ -23,7 +23,8 @@
 //    Under churn, deaths are never isolated, so they never strike: the result stays bit-identical.
 //  * Results count once: a position already done, or a lease no longer held by the sender, or an
 //    old generation, is ignored.
-//  * Stragglers (speculative re-dispatch): once a job has nothing left to hand out, a lease that has
+//  * Stragglers (speculative re-dispatch): once a job has nothing left to hand out, a lease that
+//  has
 //    run longer than `speculate_after` × the expected time (the generation's median time per task
 //    of the leases completed so far × the lease's rounds, and at least `speculate_min_s`) gets one
 //    copy, on an idle worker other than its holder. The first answer for each task counts and the
@@ -71,7 +72,8 @@ struct Lease {
   uint64_t generation = 0;
   std::vector<int> positions;
   TimePoint granted{}, deadline{};
-  bool solo = false;  ///< one suspect on an otherwise idle worker, which gets nothing else meanwhile
+  bool solo =
+      false;  ///< one suspect on an otherwise idle worker, which gets nothing else meanwhile
   bool speculative = false;  ///< a copy of a straggling lease (see Stragglers above)
   bool copied = false;       ///< a copy of this lease was handed out
   int rounds = 1;            ///< ⌈tasks / the holder's threads⌉ when granted
@@ -183,8 +185,8 @@ class Dispatcher {
   std::optional<Lease> Speculate(TimePoint now);
   int BatchSize(const WorkerSlot& w, const JobTasks& j) const;
   void Release(const Lease& lease);
-  Lease Grant(const std::string& job_id, JobTasks& job, const std::string& worker_id, WorkerSlot& worker,
-              std::vector<int> positions, bool solo, TimePoint now);
+  Lease Grant(const std::string& job_id, JobTasks& job, const std::string& worker_id,
+              WorkerSlot& worker, std::vector<int> positions, bool solo, TimePoint now);
   /// Adds one strike of `worker` to a task (once per worker); the quarantine it causes, if any.
   std::optional<Quarantined> Strike(const std::string& job_id, uint64_t generation, int position,
                                     const std::string& worker);

@@ -37,7 +37,8 @@ Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume
   try {
     ga_ = std::make_unique<GeneticAlgorithm>(ToGaOptions(spec_, layout), &forward_);
     if (const JobKind* k = kinds.Find(spec_.kind()); k && k->describe)
-      ga_->SetDescriber([this, describe = k->describe](const Genome& g) { return describe(spec_, g); });
+      ga_->SetDescriber(
+          [this, describe = k->describe](const Genome& g) { return describe(spec_, g); });
     opt::GeneticAlgorithm::Move move;
     if (Status s = kinds.Move(spec_, &move); !s.ok()) return s;
     if (move) ga_->SetMove(std::move(move));
@@ -65,7 +66,8 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   forward_.target = &evaluator;
   const GenerationSummary& s = ga_->state().initialized ? ga_->Step() : ga_->Initialize(seeds_);
   GenerationRecord rec = s;
-  if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end()) rec.quarantined = q->second;
+  if (auto q = s.failure_reasons.find("quarantined"); q != s.failure_reasons.end())
+    rec.quarantined = q->second;
   forward_.target = nullptr;
   // The runner keeps the records (checkpoint_.log): the GA's own log would grow by one a generation
   // and be copied with its state at every generation (quadratic in the generations).
@@ -98,8 +100,8 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
   return checkpoint_.log.back();
 }
 
-Status RunJobInProcess(const std::string& job_id, const JobSpec& spec,
-                       const JobKindRegistry& kinds, JobCheckpoint* out) {
+Status RunJobInProcess(const std::string& job_id, const JobSpec& spec, const JobKindRegistry& kinds,
+                       JobCheckpoint* out) {
   std::unique_ptr<FitnessFunction> fitness;
   if (Status s = kinds.MakeFitness(spec, &fitness); !s.ok()) return s;
   InlineEvaluator eval(*fitness, spec.limits.penalty_cost);

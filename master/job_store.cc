@@ -18,8 +18,9 @@ double UnixNow() {
 }
 
 /// The reply to req that its handler fills: req's request id, code OK.
-service::ClientReplyMsg ReplyTo(const service::ClientRequestMsg& req,
-                                service::ClientReplyMsg::Type type = service::ClientReplyMsg::Type::kNone) {
+service::ClientReplyMsg ReplyTo(
+    const service::ClientRequestMsg& req,
+    service::ClientReplyMsg::Type type = service::ClientReplyMsg::Type::kNone) {
   service::ClientReplyMsg r;
   r.request_id = req.request_id;
   r.type = type;
@@ -27,7 +28,8 @@ service::ClientReplyMsg ReplyTo(const service::ClientRequestMsg& req,
 }
 
 /// r refused with code and error.
-service::ClientReplyMsg Refused(service::ClientReplyMsg r, service::WireCode code, std::string error) {
+service::ClientReplyMsg Refused(service::ClientReplyMsg r, service::WireCode code,
+                                std::string error) {
   r.code = code;
   r.error = std::move(error);
   return r;
@@ -41,16 +43,16 @@ using job::JobKindRegistry;
 using opt::FitnessResult;
 using opt::Genome;
 using service::ClientReplyMsg;
-using service::JobEvent;
 using service::ClientRequestMsg;
 using service::DecodeJobSpec;
 using service::GenerationRecord;
-using service::ScoredGenome;
 using service::IsFinal;
 using service::JobCheckpoint;
+using service::JobEvent;
 using service::JobInfo;
 using service::JobState;
 using service::JobStateName;
+using service::ScoredGenome;
 using service::WireCode;
 
 JobStore::JobStore(JobStoreOptions options, Broker& broker, const JobKindRegistry& kinds)
@@ -79,7 +81,8 @@ Status JobStore::Resume() {
     if (!s.ok()) {
       // The job cannot run again, but it does not vanish: it is listed, failed, with the reason
       // (and what its checkpoint holds, if that is readable).
-      if (!dir_.LoadCheckpoint(id, &job->checkpoint, &notice).ok()) job->checkpoint = JobCheckpoint{};
+      if (!dir_.LoadCheckpoint(id, &job->checkpoint, &notice).ok())
+        job->checkpoint = JobCheckpoint{};
       job->checkpoint.job_id = id;
       job->checkpoint.state = JobState::kFailed;
       job->checkpoint.message = "its spec cannot be read, so it cannot be resumed: " + s.message();
@@ -96,18 +99,21 @@ Status JobStore::Resume() {
     }
     job->arithmetic = job->checkpoint.arithmetic;
     const std::string served = broker_.served_arithmetic();
-    if (!IsFinal(job->checkpoint.state) && !job->arithmetic.empty() && !served.empty() && served != job->arithmetic)
-      notice += std::string(notice.empty() ? "" : "; ") + "computed on arithmetic '" + job->arithmetic +
-                "' and resumed on '" + served + "' (another job running on this state directory fixed it): " +
+    if (!IsFinal(job->checkpoint.state) && !job->arithmetic.empty() && !served.empty() &&
+        served != job->arithmetic)
+      notice += std::string(notice.empty() ? "" : "; ") + "computed on arithmetic '" +
+                job->arithmetic + "' and resumed on '" + served +
+                "' (another job running on this state directory fixed it): " +
                 "its results may differ in their last bits from an uninterrupted run";
     if (!notice.empty()) {
       job->notice = notice;
       spdlog::warn("job {}: {}", id, notice);
     }
     if (IsFinal(job->checkpoint.state)) {  // ended when its last checkpoint was written
-      struct stat st{};
+      struct stat st {};
       if (::stat((dir_.dir(id) / JobDirectory::kCheckpointFile).c_str(), &st) == 0)
-        job->ended_unix_s = static_cast<double>(st.st_mtim.tv_sec) + 1e-9 * static_cast<double>(st.st_mtim.tv_nsec);
+        job->ended_unix_s =
+            static_cast<double>(st.st_mtim.tv_sec) + 1e-9 * static_cast<double>(st.st_mtim.tv_nsec);
     }
     {
       std::lock_guard lock(mu_);
@@ -126,7 +132,8 @@ void JobStore::Start(const std::shared_ptr<Job>& job) {
   if (job->spec.external) {
     GenomeLayout layout;
     (void)kinds_.Layout(job->spec, &layout);  // a failure fails the job in RunSession
-    job->session = std::make_shared<Session>(job->id, *job->spec.external, layout, job->spec.kind());
+    job->session =
+        std::make_shared<Session>(job->id, *job->spec.external, layout, job->spec.kind());
   }
   job->thread = std::thread([this, job] { job->session ? RunSession(*job) : Run(*job); });
 }
@@ -163,10 +170,12 @@ void JobStore::RunSession(Job& job) {
         t0 = now;
         for (const auto& q : eval.TakeQuarantined()) c.quarantined.push_back(q);
         const bool durable = options_.checkpoint_interval_s <= 0 ||
-                             std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
+                             std::chrono::duration<double>(now - last_write).count() >=
+                                 options_.checkpoint_interval_s;
         Save(job, c, /*write=*/true, durable);
         if (durable) last_write = now;
-        spdlog::debug("session {}: batch {} ({} genomes) best {:.9g}", job.id, seq, genomes.size(), rec.best_cost);
+        spdlog::debug("session {}: batch {} ({} genomes) best {:.9g}", job.id, seq, genomes.size(),
+                      rec.best_cost);
         PublishGeneration(job, c.state, rec);
         return true;
       });
@@ -178,7 +187,8 @@ void JobStore::RunSession(Job& job) {
     finish(JobState::kSucceeded, "closed by its client");
   } else if (end == Session::End::kIdle) {
     finish(JobState::kCancelled, "its client sent nothing for " +
-                                     std::to_string(job.spec.external->idle_timeout_s) + " s (external.idle_timeout_s)");
+                                     std::to_string(job.spec.external->idle_timeout_s) +
+                                     " s (external.idle_timeout_s)");
   } else {  // shutdown: resumed on the next start
     JobCheckpoint last;
     {
@@ -203,7 +213,8 @@ void JobStore::PublishGeneration(Job& job, JobState state, const GenerationRecor
   broker_.Publish(e);
 }
 
-void JobStore::PublishFinal(Job& job, const JobCheckpoint& c, JobState state, const std::string& message) {
+void JobStore::PublishFinal(Job& job, const JobCheckpoint& c, JobState state,
+                            const std::string& message) {
   JobEvent e;
   e.job_id = job.id;
   e.state = state;
@@ -235,17 +246,20 @@ void JobStore::Save(Job& job, const JobCheckpoint& checkpoint, bool write, bool 
     // The job runs on (its state is in memory), but status and watch say that a restart would
     // lose what was not written; the log says it once a minute, with the count in between.
     if (job.storage_error.empty())
-      job.storage_error_since = std::chrono::duration<double>(
-                                    std::chrono::system_clock::now().time_since_epoch()).count();
+      job.storage_error_since =
+          std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch())
+              .count();
     job.storage_error = s.message();
     uint64_t suppressed = 0;
     if (log_throttle_.Allow("checkpoint " + job.id, now, &suppressed))
-      spdlog::error("job {}: checkpoint not saved: {}{}", job.id, s.message(),
-                    suppressed ? " (" + std::to_string(suppressed) + " more failed writes not logged)" : "");
+      spdlog::error(
+          "job {}: checkpoint not saved: {}{}", job.id, s.message(),
+          suppressed ? " (" + std::to_string(suppressed) + " more failed writes not logged)" : "");
   } else if (!job.storage_error.empty()) {
-    spdlog::info("job {}: checkpoints are written again (failing since {:.0f} s ago)", job.id,
-                 std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() -
-                     job.storage_error_since);
+    spdlog::info(
+        "job {}: checkpoints are written again (failing since {:.0f} s ago)", job.id,
+        std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count() -
+            job.storage_error_since);
     job.storage_error.clear();
     job.storage_error_since = 0;
   }
@@ -288,8 +302,9 @@ void JobStore::Run(Job& job) {
     JobCheckpoint& c = runner.mutable_checkpoint();
     for (const auto& q : eval.TakeQuarantined()) c.quarantined.push_back(q);
     const auto now = std::chrono::steady_clock::now();
-    const bool durable = IsFinal(c.state) || options_.checkpoint_interval_s <= 0 ||
-                         std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
+    const bool durable =
+        IsFinal(c.state) || options_.checkpoint_interval_s <= 0 ||
+        std::chrono::duration<double>(now - last_write).count() >= options_.checkpoint_interval_s;
     Save(job, c, /*write=*/true, durable);
     if (durable) last_write = now;
     unwritten = !durable;
@@ -319,9 +334,11 @@ void JobStore::Run(Job& job) {
   Retain();
 }
 
-std::vector<io::SavedNetwork> JobStore::NetworksOf(const std::string& job_id, const job::JobSpec& spec,
+std::vector<io::SavedNetwork> JobStore::NetworksOf(const std::string& job_id,
+                                                   const job::JobSpec& spec,
                                                    const std::vector<ScoredGenome>& best,
-                                                   uint64_t best_generation, size_t generations) const {
+                                                   uint64_t best_generation,
+                                                   size_t generations) const {
   std::vector<io::SavedNetwork> out;
   std::vector<Genome> genomes;
   for (const auto& b : best) genomes.push_back(b.genome);
@@ -337,7 +354,8 @@ std::vector<io::SavedNetwork> JobStore::NetworksOf(const std::string& job_id, co
     for (const auto& c : h->cases)
       if (c.role == job::CaseRole::kTrain) training.push_back("case" + std::to_string(c.number));
   const int64_t now_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
-                             std::chrono::system_clock::now().time_since_epoch()).count();
+                             std::chrono::system_clock::now().time_since_epoch())
+                             .count();
   for (size_t k = 0; k < best.size(); ++k) {
     io::SavedNetwork n;
     n.network = std::move(nets[k]);
@@ -415,19 +433,23 @@ void JobStore::Retain() {
 
 Status JobStore::LoadArchived(const Job& job, job::JobSpec* spec, JobCheckpoint* c) const {
   std::string bytes, notice;
-  if (Status s = dir_.LoadSpec(job.id, &bytes); !s.ok()) return {StatusCode::kDataLoss, s.message()};
+  if (Status s = dir_.LoadSpec(job.id, &bytes); !s.ok())
+    return {StatusCode::kDataLoss, s.message()};
   std::vector<FieldViolation> v;
-  if (Status s = DecodeJobSpec(bytes, spec, &v); !s.ok()) return {StatusCode::kDataLoss, s.message()};
+  if (Status s = DecodeJobSpec(bytes, spec, &v); !s.ok())
+    return {StatusCode::kDataLoss, s.message()};
   if (Status s = dir_.LoadCheckpoint(job.id, c, &notice); !s.ok())
-    return {StatusCode::kDataLoss, "archived job " + job.id + ": " + (notice.empty() ? s.message() : notice)};
+    return {StatusCode::kDataLoss,
+            "archived job " + job.id + ": " + (notice.empty() ? s.message() : notice)};
   return Status::Ok();
 }
 
 ClientReplyMsg JobStore::AnswerPrune(const ClientRequestMsg& req) {
   ClientReplyMsg r = ReplyTo(req, ClientReplyMsg::Type::kPrune);
   if (req.job_ids.empty() && req.older_than_s <= 0 && req.keep <= 0)
-    return Refused(std::move(r), WireCode::kInvalidArgument,
-                   "prune: name the jobs, or give older_than_s or keep (nothing is pruned without a rule)");
+    return Refused(
+        std::move(r), WireCode::kInvalidArgument,
+        "prune: name the jobs, or give older_than_s or keep (nothing is pruned without a rule)");
   // The candidates: the jobs named, or every job; running ones are refused when named.
   struct Candidate {
     std::shared_ptr<Job> job;
@@ -444,7 +466,8 @@ ClientReplyMsg JobStore::AnswerPrune(const ClientRequestMsg& req) {
       }
       std::lock_guard jl(it->second->mu);
       if (!IsFinal(it->second->checkpoint.state)) {
-        if (named) r.refused.push_back({id, "running: cancel it first (only ended jobs are pruned)"});
+        if (named)
+          r.refused.push_back({id, "running: cancel it first (only ended jobs are pruned)"});
         return;
       }
       ended.push_back({it->second, it->second->ended_unix_s});
@@ -460,7 +483,7 @@ ClientReplyMsg JobStore::AnswerPrune(const ClientRequestMsg& req) {
   });
   const double now = UnixNow();
   for (size_t k = 0; k < ended.size(); ++k) {
-    if (req.keep > 0 && k < static_cast<size_t>(req.keep)) continue;            // among the newest
+    if (req.keep > 0 && k < static_cast<size_t>(req.keep)) continue;  // among the newest
     if (req.older_than_s > 0 && now - ended[k].ended < req.older_than_s) continue;  // too recent
     r.pruned.push_back(ended[k].job->id);
   }
@@ -484,15 +507,20 @@ ClientReplyMsg JobStore::AnswerPrune(const ClientRequestMsg& req) {
 ClientReplyMsg JobStore::Handle(const ClientRequestMsg& req) {
   using T = ClientRequestMsg::Type;
   switch (req.type) {
-    case T::kSubmit: return AnswerSubmit(req);
-    case T::kList: return AnswerList(req);
-    case T::kPrune: return AnswerPrune(req);
+    case T::kSubmit:
+      return AnswerSubmit(req);
+    case T::kList:
+      return AnswerList(req);
+    case T::kPrune:
+      return AnswerPrune(req);
     case T::kStatus:
     case T::kCancel:
     case T::kFetch:
     case T::kEvaluate:
-    case T::kClose: return AnswerAboutJob(req);
-    default: return Refused(ReplyTo(req), WireCode::kInvalidArgument, "unsupported request");
+    case T::kClose:
+      return AnswerAboutJob(req);
+    default:
+      return Refused(ReplyTo(req), WireCode::kInvalidArgument, "unsupported request");
   }
 }
 
@@ -518,7 +546,8 @@ ClientReplyMsg JobStore::AnswerSubmit(const ClientRequestMsg& req) {
     running += !IsFinal(j->checkpoint.state);
   }
   if (running >= options_.max_running_jobs)
-    return Refused(std::move(r), WireCode::kResourceExhausted, "too many running jobs (" + std::to_string(running) + ")");
+    return Refused(std::move(r), WireCode::kResourceExhausted,
+                   "too many running jobs (" + std::to_string(running) + ")");
   if (Status s = dir_.SaveSpec(r.job_id, req.spec_bytes); !s.ok()) {
     (void)dir_.Remove(r.job_id);  // no empty folder left for every restart to complain about
     r = Refused(std::move(r), WireCode::kUnavailable,
@@ -535,7 +564,8 @@ ClientReplyMsg JobStore::AnswerSubmit(const ClientRequestMsg& req) {
   j->spec_bytes = req.spec_bytes;
   j->checkpoint.job_id = r.job_id;
   jobs_[r.job_id] = j;
-  spdlog::info("job {} submitted: {} '{}' seed {}", r.job_id, req.spec.kind(), req.spec.name, req.spec.seed);
+  spdlog::info("job {} submitted: {} '{}' seed {}", r.job_id, req.spec.kind(), req.spec.name,
+               req.spec.seed);
   Start(j);
   return r;
 }
@@ -558,13 +588,18 @@ ClientReplyMsg JobStore::AnswerAboutJob(const ClientRequestMsg& req) {
     auto it = jobs_.find(req.job_id);
     if (it != jobs_.end()) job = it->second;
   }
-  if (!job) return Refused(ReplyTo(req), WireCode::kNotFound, "job_id = " + req.job_id + ": no such job");
+  if (!job)
+    return Refused(ReplyTo(req), WireCode::kNotFound, "job_id = " + req.job_id + ": no such job");
   using T = ClientRequestMsg::Type;
   switch (req.type) {
-    case T::kStatus: return AnswerStatus(req, *job);
-    case T::kCancel: return AnswerCancel(req, *job);
-    case T::kFetch: return AnswerFetch(req, *job);
-    default: return AnswerSessionRequest(req, *job);  // kEvaluate, kClose
+    case T::kStatus:
+      return AnswerStatus(req, *job);
+    case T::kCancel:
+      return AnswerCancel(req, *job);
+    case T::kFetch:
+      return AnswerFetch(req, *job);
+    default:
+      return AnswerSessionRequest(req, *job);  // kEvaluate, kClose
   }
 }
 
@@ -588,20 +623,23 @@ ClientReplyMsg JobStore::AnswerFetch(const ClientRequestMsg& req, Job& job) {
   ClientReplyMsg r = ReplyTo(req);
   if (req.count < 1 || req.count > kBestKept) {
     r = Refused(std::move(r), WireCode::kInvalidArgument,
-                "count = " + std::to_string(req.count) + ": must be in [1, " + std::to_string(kBestKept) +
-                    "] (the master keeps the " + std::to_string(kBestKept) + " best individuals of a job)");
+                "count = " + std::to_string(req.count) + ": must be in [1, " +
+                    std::to_string(kBestKept) + "] (the master keeps the " +
+                    std::to_string(kBestKept) + " best individuals of a job)");
     r.violations.push_back({"count", r.error});
     return r;
   }
   r.type = ClientReplyMsg::Type::kFetch;
   r.info = Info(job);
   if (req.log_only) {  // a live view's poll: the info and the log's tail, nothing else
-    if (Status s = LogFrom(job, req.log_from, &r.log); !s.ok()) return Refused(std::move(r), WireCode::kInternal, s.message());
+    if (Status s = LogFrom(job, req.log_from, &r.log); !s.ok())
+      return Refused(std::move(r), WireCode::kInternal, s.message());
     return r;
   }
   JobCheckpoint c;
   job::JobSpec spec;
-  if (Status s = SpecAndCheckpoint(job, &spec, &c); !s.ok()) return Refused(std::move(r), WireCode::kInternal, s.message());
+  if (Status s = SpecAndCheckpoint(job, &spec, &c); !s.ok())
+    return Refused(std::move(r), WireCode::kInternal, s.message());
   r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
   r.log = std::move(c.log);
   r.networks = NetworksOf(job.id, spec, r.best, c.optimizer.best_generation, r.log.size());
@@ -644,8 +682,8 @@ ClientReplyMsg JobStore::AnswerSessionRequest(const ClientRequestMsg& req, Job& 
   if (!job.session)
     return Refused(std::move(r), WireCode::kFailedPrecondition,
                    "job " + job.id + " runs the GA (algorithm " + job.spec.algorithm() +
-                       "): only an evaluation session (algorithm external) takes " + (close ? "close" : "evaluate") +
-                       " requests");
+                       "): only an evaluation session (algorithm external) takes " +
+                       (close ? "close" : "evaluate") + " requests");
   r.info = Info(job);
   if (IsFinal(r.info.state)) {
     if (close && r.info.state == JobState::kSucceeded) {  // a retried close

@@ -54,13 +54,13 @@ class JobStore final : public ClientHandler {
     std::atomic<bool> cancel{false}, shutdown{false};
     std::thread thread;
     std::shared_ptr<Session> session;  // external jobs (evaluation sessions) only
-    std::string notice;                 // what loading it repaired (JobInfo.notice)
-    std::string arithmetic;             // under mu: the profile that computed it (stamped on its checkpoints)
-    std::string storage_error;          // under mu: the last checkpoint write failed (JobInfo)
-    double storage_error_since = 0;     // under mu: since when [unix s]
-    double ended_unix_s = 0;            // under mu: when it ended (0 while running)
-    bool archived = false;              // under mu: state on disk only; `summary` answers status
-    service::JobInfo summary;           // under mu: when archived
+    std::string notice;                // what loading it repaired (JobInfo.notice)
+    std::string arithmetic;  // under mu: the profile that computed it (stamped on its checkpoints)
+    std::string storage_error;       // under mu: the last checkpoint write failed (JobInfo)
+    double storage_error_since = 0;  // under mu: since when [unix s]
+    double ended_unix_s = 0;         // under mu: when it ended (0 while running)
+    bool archived = false;           // under mu: state on disk only; `summary` answers status
+    service::JobInfo summary;        // under mu: when archived
   };
   // One handler per client request (Handle picks it by the request's type).
   service::ClientReplyMsg AnswerSubmit(const service::ClientRequestMsg& req);
@@ -99,7 +99,8 @@ class JobStore final : public ClientHandler {
   /// A generation's (or batch's) event for the job's watchers, with its storage condition.
   void PublishGeneration(Job& job, service::JobState state, const service::GenerationRecord& rec);
   /// The job's final event (state, message, its last record).
-  void PublishFinal(Job& job, const service::JobCheckpoint& c, service::JobState state, const std::string& message);
+  void PublishFinal(Job& job, const service::JobCheckpoint& c, service::JobState state,
+                    const std::string& message);
 
   JobStoreOptions options_;
   Broker& broker_;

@@ -62,7 +62,8 @@ struct Flags {
 };
 
 void AddFlags(CLI::App& app, Flags& flags) {
-  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
+  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] =
+      flags;
   app.add_option("--workers", broker.worker_endpoint, "endpoint workers connect to")
       ->capture_default_str();
   app.add_option("--clients", broker.client_endpoint, "endpoint clients connect to")
@@ -79,57 +80,66 @@ void AddFlags(CLI::App& app, Flags& flags) {
       ->check(CLI::Range(int64_t{1024}, int64_t{1} << 32))
       ->capture_default_str();
   app.add_option("--max-spec-bytes", broker.max_spec_bytes,
-                 "maximum data size per job: a submitted spec (with its embedded data) larger than this serialised is refused [bytes]")
+                 "maximum data size per job: a submitted spec (with its embedded data) larger than "
+                 "this serialised is refused [bytes]")
       ->check(CLI::Range(int64_t{1024}, int64_t{1} << 32))
       ->capture_default_str();
   app.add_option("--max-jobs-per-client", broker.max_jobs_per_client,
-                 "running jobs one client may have (a client = its CURVE key, or its IP address without CURVE)")
+                 "running jobs one client may have (a client = its CURVE key, or its IP address "
+                 "without CURVE)")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
-  app.add_option("--client-queue", broker.client_queue,
-                 "messages queued for one client at most; beyond, a client that does not read loses watch "
-                 "events (it re-syncs when it reads again) instead of the master growing")
+  app.add_option(
+         "--client-queue", broker.client_queue,
+         "messages queued for one client at most; beyond, a client that does not read loses watch "
+         "events (it re-syncs when it reads again) instead of the master growing")
       ->check(CLI::Range(16, 1000000))
       ->capture_default_str();
-  auto* secret_opt = app.add_option(
-      "--curve-secret", curve_secret,
-      "require CURVE on both endpoints with this key pair (NAME.key from `piezoid keygen`, mode 0600)");
+  auto* secret_opt = app.add_option("--curve-secret", curve_secret,
+                                    "require CURVE on both endpoints with this key pair (NAME.key "
+                                    "from `piezoid keygen`, mode 0600)");
   app.add_option("--allow-workers", allow_workers,
                  "with --curve-secret: directory of the workers' allowed public keys (*.pub)")
       ->needs(secret_opt);
   app.add_option("--allow-clients", allow_clients,
                  "with --curve-secret: directory of the clients' allowed public keys (*.pub)")
       ->needs(secret_opt);
-  app.add_flag("--allow-mixed-arithmetic", broker.allow_mixed_arithmetic,
-               "accept workers of any arithmetic profile (CPU instruction-set level, build, C library); by "
-               "default the first worker's profile is the only one served, so that no result depends on "
-               "which machine computed it");
+  app.add_flag(
+      "--allow-mixed-arithmetic", broker.allow_mixed_arithmetic,
+      "accept workers of any arithmetic profile (CPU instruction-set level, build, C library); by "
+      "default the first worker's profile is the only one served, so that no result depends on "
+      "which machine computed it");
   app.add_option("--max-batch", broker.dispatch.max_batch, "tasks per lease at most")
       ->check(CLI::Range(1, 1000000))
       ->capture_default_str();
   app.add_option("--target-batch-s", broker.dispatch.target_batch_s,
                  "work per lease, by the worker's measured speed [s]")
       ->capture_default_str();
-  app.add_option("--speculate-after", broker.dispatch.speculate_after,
-                 "a lease running this many times longer than expected (the generation's median time per "
-                 "task) once its job has nothing else to hand out gets a copy on an idle worker; the first "
-                 "answer counts (0 = never)")
+  app.add_option(
+         "--speculate-after", broker.dispatch.speculate_after,
+         "a lease running this many times longer than expected (the generation's median time per "
+         "task) once its job has nothing else to hand out gets a copy on an idle worker; the first "
+         "answer counts (0 = never)")
       ->check(CLI::Range(0.0, 1000.0))
       ->capture_default_str();
-  app.add_option("--quiet-window-s", broker.dispatch.quiet_window_s,
-                 "a worker's death while it runs a suspect task alone counts against the task only if no "
-                 "other worker left this long before or after (at least 2 liveness timeouts) [s]")
+  app.add_option(
+         "--quiet-window-s", broker.dispatch.quiet_window_s,
+         "a worker's death while it runs a suspect task alone counts against the task only if no "
+         "other worker left this long before or after (at least 2 liveness timeouts) [s]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
-  app.add_option("--keep-in-memory", store.keep_in_memory,
-                 "ended jobs kept whole in memory (the most recent); older ones are answered from the state "
-                 "directory (status from a summary, fetch from disk); `piezoid prune` deletes ended jobs")
+  app.add_option(
+         "--keep-in-memory", store.keep_in_memory,
+         "ended jobs kept whole in memory (the most recent); older ones are answered from the "
+         "state "
+         "directory (status from a summary, fetch from disk); `piezoid prune` deletes ended jobs")
       ->check(CLI::Range(0, 1000000))
       ->capture_default_str();
   app.add_option("--max-jobs", store.max_running_jobs, "running jobs at most")
       ->capture_default_str();
   app.add_option("--checkpoint-interval-s", store.checkpoint_interval_s,
-                 "the checkpoint is replaced after every generation; make it durable (fsync) at most this often (0 = every generation) [s]")
+                 "the checkpoint is replaced after every generation; make it durable (fsync) at "
+                 "most this often (0 = every generation) [s]")
       ->check(CLI::Range(0.0, 3600.0))
       ->capture_default_str();
   app.add_option("--endpoints-file", endpoints_file,
@@ -141,10 +151,13 @@ void AddFlags(CLI::App& app, Flags& flags) {
 /// CURVE on both endpoints with --curve-secret (or a warning for an endpoint beyond loopback
 /// without it); the exit code 2 after saying why it cannot, else 0.
 int ConfigureCurve(Flags& flags) {
-  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
+  auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] =
+      flags;
   if (!curve_secret.empty()) {
     if (allow_workers.empty() || allow_clients.empty()) {
-      spdlog::critical("--curve-secret needs --allow-workers DIR and --allow-clients DIR (the allowed public keys)");
+      spdlog::critical(
+          "--curve-secret needs --allow-workers DIR and --allow-clients DIR (the allowed public "
+          "keys)");
       return 2;
     }
     pz::service::CurveServerConfig curve;
@@ -158,16 +171,21 @@ int ConfigureCurve(Flags& flags) {
   } else {
     for (const std::string* ep : {&broker.worker_endpoint, &broker.client_endpoint})
       if (!pz::service::IsLoopbackEndpoint(*ep))
-        spdlog::warn("{} is reachable from other hosts and CURVE is off: anyone who can connect may {}; "
-                     "start with --curve-secret, --allow-workers and --allow-clients (see docs/service.md, Security)",
-                     *ep, ep == &broker.worker_endpoint ? "join as a worker and see job specs" : "submit, fetch and cancel jobs");
+        spdlog::warn(
+            "{} is reachable from other hosts and CURVE is off: anyone who can connect may {}; "
+            "start with --curve-secret, --allow-workers and --allow-clients (see docs/service.md, "
+            "Security)",
+            *ep,
+            ep == &broker.worker_endpoint ? "join as a worker and see job specs"
+                                          : "submit, fetch and cancel jobs");
   }
   return 0;
 }
 
 /// Serves until SIGINT or SIGTERM; the exit code.
 int Serve(const Flags& flags) {
-  const auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers, allow_clients] = flags;
+  const auto& [broker, store, log_level, endpoints_file, curve_secret, allow_workers,
+               allow_clients] = flags;
   std::string lock_error;
   const int lock_fd = LockStateDir(store.state_dir, &lock_error);
   if (lock_fd < 0) {
@@ -193,9 +211,10 @@ int Serve(const Flags& flags) {
     spdlog::critical("{}", s.message());
     return 1;
   }
-  spdlog::info("workers on {}, clients on {}, state in {}{}", b.worker_endpoint(),
-               b.client_endpoint(), store.state_dir.string(),
-               broker.curve ? ", CURVE required (public key " + broker.curve->keys.public_z85 + ")" : "");
+  spdlog::info(
+      "workers on {}, clients on {}, state in {}{}", b.worker_endpoint(), b.client_endpoint(),
+      store.state_dir.string(),
+      broker.curve ? ", CURVE required (public key " + broker.curve->keys.public_z85 + ")" : "");
   if (!endpoints_file.empty()) {
     const std::string tmp = endpoints_file + ".tmp";
     std::ofstream(tmp) << b.worker_endpoint() << "\n" << b.client_endpoint() << "\n";

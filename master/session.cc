@@ -20,14 +20,16 @@ using service::JobCheckpoint;
 using service::ScoredGenome;
 using service::WireCode;
 
-Session::Session(std::string job_id, ExternalSettings settings, GenomeLayout layout, std::string kind)
+Session::Session(std::string job_id, ExternalSettings settings, GenomeLayout layout,
+                 std::string kind)
     : job_id_(std::move(job_id)),
       settings_(std::move(settings)),
       layout_(layout),
       kind_(std::move(kind)),
       last_request_(std::chrono::steady_clock::now()) {}
 
-ClientReplyMsg Session::Error(const ClientRequestMsg& req, WireCode code, std::string message) const {
+ClientReplyMsg Session::Error(const ClientRequestMsg& req, WireCode code,
+                              std::string message) const {
   ClientReplyMsg r;
   r.request_id = req.request_id;
   r.code = code;
@@ -50,19 +52,21 @@ void Session::Close() {
 }
 
 ClientReplyMsg Session::Evaluate(const ClientRequestMsg& req) {
-  if (req.batch_seq == 0) return Error(req, WireCode::kInvalidArgument, "batch_seq = 0: must be >= 1");
+  if (req.batch_seq == 0)
+    return Error(req, WireCode::kInvalidArgument, "batch_seq = 0: must be >= 1");
   if (req.genomes.size() > static_cast<size_t>(kMaxSessionBatch))
     return Error(req, WireCode::kInvalidArgument,
                  "genomes: " + std::to_string(req.genomes.size()) + " in one batch, at most " +
                      std::to_string(kMaxSessionBatch));
   for (size_t i = 0; i < req.genomes.size(); ++i) {
     const Genome& g = req.genomes[i];
-    if (g.bits.size() != static_cast<size_t>(layout_.bits) || g.reals.size() != static_cast<size_t>(layout_.reals))
+    if (g.bits.size() != static_cast<size_t>(layout_.bits) ||
+        g.reals.size() != static_cast<size_t>(layout_.reals))
       return Error(req, WireCode::kInvalidArgument,
-                   "genomes[" + std::to_string(i) + "] has " + std::to_string(g.bits.size()) + " bits and " +
-                       std::to_string(g.reals.size()) + " reals: the " + kind_ + " genomes of session " + job_id_ +
-                       " have " + std::to_string(layout_.bits) + " bits and " + std::to_string(layout_.reals) +
-                       " reals");
+                   "genomes[" + std::to_string(i) + "] has " + std::to_string(g.bits.size()) +
+                       " bits and " + std::to_string(g.reals.size()) + " reals: the " + kind_ +
+                       " genomes of session " + job_id_ + " have " + std::to_string(layout_.bits) +
+                       " bits and " + std::to_string(layout_.reals) + " reals");
   }
   ClientReplyMsg r;
   r.request_id = req.request_id;
@@ -74,7 +78,8 @@ ClientReplyMsg Session::Evaluate(const ClientRequestMsg& req) {
   {
     std::lock_guard lock(mu_);
     last_request_ = std::chrono::steady_clock::now();
-    if (closed_) return Error(req, WireCode::kFailedPrecondition, "session " + job_id_ + " is closed");
+    if (closed_)
+      return Error(req, WireCode::kFailedPrecondition, "session " + job_id_ + " is closed");
     auto it = batches_.find(req.batch_seq);
     if (it == batches_.end()) {
       if (req.genomes.empty())
@@ -99,9 +104,10 @@ ClientReplyMsg Session::Evaluate(const ClientRequestMsg& req) {
   return r;
 }
 
-Session::End Session::Run(
-    BatchEvaluator& evaluator, uint64_t generation, const std::function<bool()>& stop,
-    const std::function<bool(uint64_t, std::span<const Genome>, std::span<const FitnessResult>)>& on_batch) {
+Session::End Session::Run(BatchEvaluator& evaluator, uint64_t generation,
+                          const std::function<bool()>& stop,
+                          const std::function<bool(uint64_t, std::span<const Genome>,
+                                                   std::span<const FitnessResult>)>& on_batch) {
   const auto idle = std::chrono::duration<double>(settings_.idle_timeout_s);
   for (;;) {
     uint64_t seq = 0;
@@ -146,7 +152,8 @@ Session::End Session::Run(
 }
 
 const GenerationRecord& FoldSessionBatch(JobCheckpoint& c, std::span<const Genome> genomes,
-                                         std::span<const FitnessResult> results, double wall_time_s) {
+                                         std::span<const FitnessResult> results,
+                                         double wall_time_s) {
   GenerationRecord rec;
   rec.generation = c.log.size() + 1;
   rec.evaluations = static_cast<int>(results.size());
@@ -186,8 +193,9 @@ const GenerationRecord& FoldSessionBatch(JobCheckpoint& c, std::span<const Genom
     f.residuals.clear();
     merged.push_back({static_cast<int>(i), genomes[i], std::move(f)});
   }
-  std::stable_sort(merged.begin(), merged.end(),
-                   [](const ScoredGenome& a, const ScoredGenome& b) { return a.fitness.cost < b.fitness.cost; });
+  std::stable_sort(merged.begin(), merged.end(), [](const ScoredGenome& a, const ScoredGenome& b) {
+    return a.fitness.cost < b.fitness.cost;
+  });
   if (merged.size() > static_cast<size_t>(kBestKept)) merged.resize(kBestKept);
   c.best = std::move(merged);
   const double after = c.best.empty() ? INFINITY : c.best.front().fitness.cost;

@@ -35,7 +35,8 @@ inline constexpr int kSessionBatchesHeld = 4;     ///< completed batches kept fo
 
 class Session {
  public:
-  Session(std::string job_id, job::ExternalSettings settings, job::GenomeLayout layout, std::string kind);
+  Session(std::string job_id, job::ExternalSettings settings, job::GenomeLayout layout,
+          std::string kind);
 
   /// An evaluate request (submit or poll): the reply (type kEvaluate, or an error code).
   service::ClientReplyMsg Evaluate(const service::ClientRequestMsg& request);
@@ -49,9 +50,10 @@ class Session {
   /// idle too long, or stop() / an interrupted evaluation ends it. After each batch, on_batch gets
   /// its genomes and results (the broker generation is `evaluations so far`-independent: numbered
   /// first_generation, first_generation + 1, …). `stop` is polled at least every 100 ms.
-  End Run(opt::BatchEvaluator& evaluator, uint64_t first_generation, const std::function<bool()>& stop,
-          const std::function<bool(uint64_t batch_seq, std::span<const opt::Genome>, std::span<const opt::FitnessResult>)>&
-              on_batch);
+  End Run(opt::BatchEvaluator& evaluator, uint64_t first_generation,
+          const std::function<bool()>& stop,
+          const std::function<bool(uint64_t batch_seq, std::span<const opt::Genome>,
+                                   std::span<const opt::FitnessResult>)>& on_batch);
 
  private:
   struct Batch {
@@ -59,7 +61,8 @@ class Session {
     std::vector<opt::FitnessResult> results;
     bool done = false;
   };
-  service::ClientReplyMsg Error(const service::ClientRequestMsg& req, service::WireCode code, std::string message) const;
+  service::ClientReplyMsg Error(const service::ClientRequestMsg& req, service::WireCode code,
+                                std::string message) const;
 
   const std::string job_id_;
   const job::ExternalSettings settings_;
@@ -76,7 +79,9 @@ class Session {
 /// Folds one evaluated batch into a session's checkpoint: a GenerationRecord (generation = the
 /// number of batches so far, evaluated, best / mean / worst cost, errors, failure reasons), the
 /// evaluation count, and the best individuals seen (at most kBestKept, without residuals).
-const service::GenerationRecord& FoldSessionBatch(service::JobCheckpoint& checkpoint, std::span<const opt::Genome> genomes,
-                                         std::span<const opt::FitnessResult> results, double wall_time_s);
+const service::GenerationRecord& FoldSessionBatch(service::JobCheckpoint& checkpoint,
+                                                  std::span<const opt::Genome> genomes,
+                                                  std::span<const opt::FitnessResult> results,
+                                                  double wall_time_s);
 
 }  // namespace pz::master

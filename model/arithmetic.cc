@@ -24,7 +24,8 @@ std::string InstructionSetLevel() {
 }
 
 std::string ArithmeticProfile() {
-  std::string p = std::string("piezoid ") + PIEZOID_VERSION + " (" + PIEZOID_BUILD_ID + "); " + InstructionSetLevel();
+  std::string p = std::string("piezoid ") + PIEZOID_VERSION + " (" + PIEZOID_BUILD_ID + "); " +
+                  InstructionSetLevel();
 #if defined(__GLIBC__)
   p += std::string("; glibc ") + gnu_get_libc_version();
 #else

@@ -10,9 +10,9 @@
 namespace pz::model {
 
 /// E.g. "piezoid 0.1.0 (142f992abcde); x86-64-v3; glibc 2.36": the build's version and commit (`git
-/// describe --always --dirty` of its checkout, "unknown" outside one), the instruction-set level the
-/// cloned kernels and the C library's maths run at on this CPU, and the C library. Processes with
-/// equal profiles compute every fitness bit for bit alike.
+/// describe --always --dirty` of its checkout, "unknown" outside one), the instruction-set level
+/// the cloned kernels and the C library's maths run at on this CPU, and the C library. Processes
+/// with equal profiles compute every fitness bit for bit alike.
 std::string ArithmeticProfile();
 
 /// The instruction-set part alone: "x86-64-v3", "x86-64+fma" (FMA and AVX2 without the rest of

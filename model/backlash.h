@@ -13,10 +13,10 @@
 namespace pz::model {
 
 struct BacklashParams {
-  double a1 = 0.0;  ///< rising threshold [deg], ≥ 0
-  double a2 = 0.0;  ///< falling threshold [deg], ≥ 0
-  double b1 = 1.0;  ///< upper saturation [deg], > 0
-  double b2 = -1.0; ///< lower saturation [deg], < 0
+  double a1 = 0.0;   ///< rising threshold [deg], ≥ 0
+  double a2 = 0.0;   ///< falling threshold [deg], ≥ 0
+  double b1 = 1.0;   ///< upper saturation [deg], > 0
+  double b2 = -1.0;  ///< lower saturation [deg], < 0
 };
 
 /// One step of the operator. The formula above, rearranged so that y_{k−1} meets two operations
@@ -30,13 +30,14 @@ inline double BacklashStep(const BacklashParams& p, double theta, double y_prev)
   return std::max(a, std::min(b, y_prev));
 }
 
-/// The operator over theta[0, n) into y[0, n) (may alias theta), from y_{−1} = y_prev; returns y_{n−1}
-/// (y_prev when n = 0). The same values as n BacklashSteps in a row, with a quarter of their serial
-/// chain: the steps' maps y ↦ max(A, min(B, y)) compose into one of the same form,
+/// The operator over theta[0, n) into y[0, n) (may alias theta), from y_{−1} = y_prev; returns
+/// y_{n−1} (y_prev when n = 0). The same values as n BacklashSteps in a row, with a quarter of
+/// their serial chain: the steps' maps y ↦ max(A, min(B, y)) compose into one of the same form,
 ///   f_k ∘ f = y ↦ max(max(A_k, min(B_k, A)), min(min(B_k, B), y))   (min distributes over max),
-/// so each of the first three quarters is reduced to one map (giving where the next quarter starts),
-/// then the four quarters run side by side. Only min and max touch the chain: exact.
-inline double BacklashRun(const BacklashParams& p, const double* theta, double* y, long n, double y_prev) {
+/// so each of the first three quarters is reduced to one map (giving where the next quarter
+/// starts), then the four quarters run side by side. Only min and max touch the chain: exact.
+inline double BacklashRun(const BacklashParams& p, const double* theta, double* y, long n,
+                          double y_prev) {
   constexpr int kParts = 4;
   const long len = n / kParts;  // the first three parts; the last takes the remainder too
   if (len < 4) {
@@ -62,7 +63,8 @@ inline double BacklashRun(const BacklashParams& p, const double* theta, double* 
   ys[0] = y_prev;
   for (int q = 0; q + 1 < kParts; ++q) ys[q + 1] = std::max(fa[q], std::min(fb[q], ys[q]));
   for (long i = 0; i < len; ++i) {
-    for (int q = 0; q < kParts; ++q) ys[q] = y[q * len + i] = BacklashStep(p, theta[q * len + i], ys[q]);
+    for (int q = 0; q < kParts; ++q)
+      ys[q] = y[q * len + i] = BacklashStep(p, theta[q * len + i], ys[q]);
   }
   double last = ys[kParts - 1];
   for (long k = kParts * len; k < n; ++k) last = y[k] = BacklashStep(p, theta[k], last);
@@ -70,8 +72,8 @@ inline double BacklashRun(const BacklashParams& p, const double* theta, double* 
 }
 
 /// Applies the operator to theta (deg) into y (same length; may alias theta).
-inline void ApplyBacklash(const BacklashParams& p, std::span<const double> theta, std::span<double> y,
-                          double y0 = 0.0) {
+inline void ApplyBacklash(const BacklashParams& p, std::span<const double> theta,
+                          std::span<double> y, double y0 = 0.0) {
   BacklashRun(p, theta.data(), y.data(), static_cast<long>(theta.size()), y0);
 }
 

@@ -7,24 +7,22 @@ namespace pz::model {
 namespace {
 
 Status Positive(const char* field, double v) {
-  if (!(std::isfinite(v) && v > 0)) return InvalidArgument(FieldError(field, v, "must be finite and > 0"));
+  if (!(std::isfinite(v) && v > 0))
+    return InvalidArgument(FieldError(field, v, "must be finite and > 0"));
   return Status::Ok();
 }
 
 }  // namespace
 
 Status BeamGeometry::Validate() const {
-  for (auto [name, v] : {std::pair{"active_length_m", active_length_m},
-                         std::pair{"core_width_m", core_width_m},
-                         std::pair{"core_thickness_m", core_thickness_m},
-                         std::pair{"mfc_width_m", mfc_width_m},
-                         std::pair{"mfc_thickness_m", mfc_thickness_m},
-                         std::pair{"core_modulus_pa", core_modulus_pa},
-                         std::pair{"core_density", core_density},
-                         std::pair{"mfc_modulus_pa", mfc_modulus_pa},
-                         std::pair{"mfc_density", mfc_density},
-                         std::pair{"d33_m_per_v", d33_m_per_v},
-                         std::pair{"electrode_spacing_m", electrode_spacing_m}}) {
+  for (auto [name, v] :
+       {std::pair{"active_length_m", active_length_m}, std::pair{"core_width_m", core_width_m},
+        std::pair{"core_thickness_m", core_thickness_m}, std::pair{"mfc_width_m", mfc_width_m},
+        std::pair{"mfc_thickness_m", mfc_thickness_m},
+        std::pair{"core_modulus_pa", core_modulus_pa}, std::pair{"core_density", core_density},
+        std::pair{"mfc_modulus_pa", mfc_modulus_pa}, std::pair{"mfc_density", mfc_density},
+        std::pair{"d33_m_per_v", d33_m_per_v},
+        std::pair{"electrode_spacing_m", electrode_spacing_m}}) {
     if (auto s = Positive(name, v); !s.ok()) return s;
   }
   if (!(std::isfinite(tip_length_m) && tip_length_m >= 0))
@@ -69,14 +67,14 @@ FeModel AssembleBeam(const BeamGeometry& g) {
     const double ei = active ? g.EiActive() : g.EiTip();
     const double ra = active ? g.RhoAActive() : g.RhoATip();
     Eigen::Matrix4d ke, me;
-    ke << 12, 6 * l, -12, 6 * l,  //
+    ke << 12, 6 * l, -12, 6 * l,              //
         6 * l, 4 * l * l, -6 * l, 2 * l * l,  //
-        -12, -6 * l, 12, -6 * l,  //
+        -12, -6 * l, 12, -6 * l,              //
         6 * l, 2 * l * l, -6 * l, 4 * l * l;
     ke *= ei / (l * l * l);
-    me << 156, 22 * l, 54, -13 * l,  //
+    me << 156, 22 * l, 54, -13 * l,             //
         22 * l, 4 * l * l, 13 * l, -3 * l * l,  //
-        54, 13 * l, 156, -22 * l,  //
+        54, 13 * l, 156, -22 * l,               //
         -13 * l, -3 * l * l, -22 * l, 4 * l * l;
     me *= ra * l / 420.0;
     K.block<4, 4>(2 * e, 2 * e) += ke;

@@ -10,9 +10,9 @@
 namespace pz::model {
 
 Status BimorphParams::Validate() const {
-  const std::pair<const char*, double> all[] = {{"mu", mu},       {"delta", delta}, {"alpha", alpha},
-                                                {"beta", beta},   {"gamma", gamma}, {"a1", a1},
-                                                {"a2", a2},       {"b1", b1},       {"b2", b2}};
+  const std::pair<const char*, double> all[] = {{"mu", mu},     {"delta", delta}, {"alpha", alpha},
+                                                {"beta", beta}, {"gamma", gamma}, {"a1", a1},
+                                                {"a2", a2},     {"b1", b1},       {"b2", b2}};
   for (auto [name, v] : all)
     if (!std::isfinite(v)) return InvalidArgument(FieldError(name, v, "must be finite"));
   if (mu < 0) return InvalidArgument(FieldError("mu", mu, "must be >= 0 [1/s]"));
@@ -38,14 +38,16 @@ double BimorphPlant::TipToDegrees(double w_tip) const {
 const char* SolverName(Solver s) { return s == Solver::kModal ? "modal" : "cvode"; }
 
 Status SimulateOptions::Validate() const {
-  if (!(rtol > 0 && rtol <= 1e-2)) return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
-  if (!(atol > 0 && std::isfinite(atol))) return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
+  if (!(rtol > 0 && rtol <= 1e-2))
+    return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
+  if (!(atol > 0 && std::isfinite(atol)))
+    return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
   if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
   return Status::Ok();
 }
 
-BimorphTrace Simulate(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
-                      const SimulateOptions& options) {
+BimorphTrace Simulate(const BimorphPlant& plant, const BimorphParams& params,
+                      const DriveSignal& drive, const SimulateOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   BimorphTrace trace;
   auto fail = [&](SimStatus st, std::string msg) {
@@ -59,11 +61,13 @@ BimorphTrace Simulate(const BimorphPlant& plant, const BimorphParams& params, co
   if (auto s = Validate(drive); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
   if (auto s = options.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
   if (!params.HysteresisBounded()) {
-    return fail(SimStatus::kUnboundedHysteresis,
-                FieldError("(alpha, beta, gamma)",
-                           "(" + std::to_string(params.alpha) + ", " + std::to_string(params.beta) + ", " +
-                               std::to_string(params.gamma) + ")",
-                           "Bouc-Wen loop unbounded: needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0"));
+    return fail(
+        SimStatus::kUnboundedHysteresis,
+        FieldError(
+            "(alpha, beta, gamma)",
+            "(" + std::to_string(params.alpha) + ", " + std::to_string(params.beta) + ", " +
+                std::to_string(params.gamma) + ")",
+            "Bouc-Wen loop unbounded: needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0"));
   }
   trace = options.solver == Solver::kModal ? SimulateModal(plant, params, drive)
                                            : SimulateCvode(plant, params, drive, options);

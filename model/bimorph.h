@@ -20,15 +20,15 @@ namespace pz::model {
 /// The nine parameters of one case. Damping and hysteresis are identified; a1, a2 too; b1, b2 are
 /// fitted from the measured extremes (paper Appendix B).
 struct BimorphParams {
-  double mu = 95.0;      ///< μ, mass coefficient of the Rayleigh damping [1/s], finite, ≥ 0
-  double delta = 0.1;    ///< δ, stiffness coefficient of the Rayleigh damping [s], finite, ≥ 0
-  double alpha = 2.5e-3; ///< α, Bouc–Wen input gain [N/V], finite
-  double beta = 6e-3;    ///< β [1/V], finite
-  double gamma = 4e-3;   ///< γ [1/V], finite
-  double a1 = 0.1;       ///< rising backlash threshold [deg], finite, ≥ 0
-  double a2 = 0.15;      ///< falling backlash threshold [deg], finite, ≥ 0
-  double b1 = 1.0;       ///< upper saturation [deg], finite, > 0
-  double b2 = -1.0;      ///< lower saturation [deg], finite, < 0
+  double mu = 95.0;       ///< μ, mass coefficient of the Rayleigh damping [1/s], finite, ≥ 0
+  double delta = 0.1;     ///< δ, stiffness coefficient of the Rayleigh damping [s], finite, ≥ 0
+  double alpha = 2.5e-3;  ///< α, Bouc–Wen input gain [N/V], finite
+  double beta = 6e-3;     ///< β [1/V], finite
+  double gamma = 4e-3;    ///< γ [1/V], finite
+  double a1 = 0.1;        ///< rising backlash threshold [deg], finite, ≥ 0
+  double a2 = 0.15;       ///< falling backlash threshold [deg], finite, ≥ 0
+  double b1 = 1.0;        ///< upper saturation [deg], finite, > 0
+  double b2 = -1.0;       ///< lower saturation [deg], finite, < 0
 
   /// Field-named error for non-finite values or broken ranges. An unbounded Bouc–Wen loop is NOT a
   /// validation error (it is a runtime outcome, see HysteresisBounded()).
@@ -84,7 +84,7 @@ struct SimulateOptions {
 /// Simulates the plant. Never throws for a parameter set that is merely bad physics: an unbounded
 /// hysteresis loop, a failed solve or a non-finite state come back in trace.summary.
 /// Invalid parameters or signals come back as SimStatus::kInvalidInput with the field named.
-BimorphTrace Simulate(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
-                      const SimulateOptions& options = {});
+BimorphTrace Simulate(const BimorphPlant& plant, const BimorphParams& params,
+                      const DriveSignal& drive, const SimulateOptions& options = {});
 
 }  // namespace pz::model

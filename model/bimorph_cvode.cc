@@ -8,8 +8,9 @@
 
 namespace pz::model {
 
-BimorphTrace SimulateBimorphOde(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
-                                const SimulateOptions& options, std::vector<const BimorphExtension*> extensions) {
+BimorphTrace SimulateBimorphOde(const BimorphPlant& plant, const BimorphParams& params,
+                                const DriveSignal& drive, const SimulateOptions& options,
+                                std::vector<const BimorphExtension*> extensions) {
   const auto start = std::chrono::steady_clock::now();
   BimorphTrace trace;
   trace.t = SampleTimes(drive);
@@ -48,12 +49,13 @@ BimorphTrace SimulateBimorphOde(const BimorphPlant& plant, const BimorphParams& 
     trace.theta_deg[k] = plant.TipToDegrees(trace.w_tip[k]);
   }
   ApplyBacklash(params.backlash(), trace.theta_deg, trace.angle_deg);
-  trace.summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  trace.summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return trace;
 }
 
-BimorphTrace SimulateCvode(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
-                           const SimulateOptions& options) {
+BimorphTrace SimulateCvode(const BimorphPlant& plant, const BimorphParams& params,
+                           const DriveSignal& drive, const SimulateOptions& options) {
   return SimulateBimorphOde(plant, params, drive, options);
 }
 

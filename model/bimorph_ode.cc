@@ -6,7 +6,8 @@
 
 namespace pz::model {
 
-// ---- DriveInput ----------------------------------------------------------------------------------
+// ---- DriveInput
+// ----------------------------------------------------------------------------------
 
 DriveInput::DriveInput(const DriveSignal& signal)
     : sinusoid_(std::get_if<Sinusoid>(&signal)), sampled_(std::get_if<SampledSignal>(&signal)) {}
@@ -30,7 +31,8 @@ std::vector<double> DriveInput::Breakpoints() const {
     return b;
   }
   // u̇ = V ω cos(ω t) vanishes at t = (2m + 1) / (4 f); the last sample is at (N − 1) / fs.
-  const double t_last = static_cast<double>(sinusoid_->NumSamples() - 1) / sinusoid_->sample_rate_hz;
+  const double t_last =
+      static_cast<double>(sinusoid_->NumSamples() - 1) / sinusoid_->sample_rate_hz;
   for (long m = 0;; ++m) {
     const double tb = (2.0 * m + 1.0) / (4.0 * sinusoid_->frequency_hz);
     if (tb >= t_last) break;
@@ -47,11 +49,15 @@ void DriveInput::SelectPieceAt(double t) {
   piece_ = std::min(k, ts.size() - 2);
 }
 
-// ---- BimorphExtension ----------------------------------------------------------------------------
+// ---- BimorphExtension
+// ----------------------------------------------------------------------------
 
-void BimorphExtension::InitialState(std::span<double> x) const { std::fill(x.begin(), x.end(), 0.0); }
+void BimorphExtension::InitialState(std::span<double> x) const {
+  std::fill(x.begin(), x.end(), 0.0);
+}
 
-// ---- BeamOdeMatrices -----------------------------------------------------------------------------
+// ---- BeamOdeMatrices
+// -----------------------------------------------------------------------------
 
 BeamOdeMatrices::BeamOdeMatrices(const FeModel& fe) : mass_llt(fe.M) {
   PZ_CHECK_MSG(mass_llt.info() == Eigen::Success, "mass matrix not positive definite");
@@ -60,10 +66,11 @@ BeamOdeMatrices::BeamOdeMatrices(const FeModel& fe) : mass_llt(fe.M) {
   minv_e = mass_llt.solve(fe.e_tip);
 }
 
-// ---- BimorphOde ----------------------------------------------------------------------------------
+// ---- BimorphOde
+// ----------------------------------------------------------------------------------
 
-BimorphOde::BimorphOde(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive,
-                       std::vector<const BimorphExtension*> extensions)
+BimorphOde::BimorphOde(const BimorphPlant& plant, const BimorphParams& params,
+                       const DriveSignal& drive, std::vector<const BimorphExtension*> extensions)
     : plant_(plant),
       params_(params),
       drive_(drive),
@@ -83,11 +90,13 @@ BimorphOde::BimorphOde(const BimorphPlant& plant, const BimorphParams& params, c
 std::vector<double> BimorphOde::InitialState() const {
   std::vector<double> y(size_, 0.0);
   for (size_t i = 0; i < extensions_.size(); ++i)
-    extensions_[i]->InitialState(std::span<double>(y.data() + ext_offset_[i], extensions_[i]->num_states()));
+    extensions_[i]->InitialState(
+        std::span<double>(y.data() + ext_offset_[i], extensions_[i]->num_states()));
   return y;
 }
 
-BimorphPoint BimorphOde::Point(double t, const double* y, size_t ext, double u, double u_dot) const {
+BimorphPoint BimorphOde::Point(double t, const double* y, size_t ext, double u,
+                               double u_dot) const {
   BimorphPoint p;
   p.t = t;
   p.y = {y, static_cast<size_t>(size_)};
@@ -130,7 +139,8 @@ int BimorphOde::Rhs(double t, const double* y, double* ydot) const {
   const double mu = params_.mu, delta = params_.delta;
   const Eigen::MatrixXd& mk = mats_.minv_k;
   for (int i = 0; i < nd; ++i) ydot[i] = v[i];
-  for (int i = 0; i < nd; ++i) ydot[nd + i] = mats_.minv_bu[i] * u - mats_.minv_e[i] * z - mu * v[i];
+  for (int i = 0; i < nd; ++i)
+    ydot[nd + i] = mats_.minv_bu[i] * u - mats_.minv_e[i] * z - mu * v[i];
   for (int j = 0; j < nd; ++j) {
     const double qj = q[j] + delta * v[j];
     const double* col = mk.data() + static_cast<long>(j) * nd;
@@ -141,7 +151,8 @@ int BimorphOde::Rhs(double t, const double* y, double* ydot) const {
     for (int i = 0; i < nd; ++i) ydot[nd + i] += a[i];
   }
   // Bouc–Wen, exponent 1.
-  ydot[2 * nd] = params_.alpha * u_dot - params_.beta * std::abs(u_dot) * z - params_.gamma * u_dot * std::abs(z);
+  ydot[2 * nd] = params_.alpha * u_dot - params_.beta * std::abs(u_dot) * z -
+                 params_.gamma * u_dot * std::abs(z);
   return 0;
 }
 
@@ -163,7 +174,8 @@ int BimorphOde::Jacobian(double t, const double* y, const double*, JacobianView&
     for (size_t i = 0; i < extensions_.size(); ++i) {
       const BimorphExtension& e = *extensions_[i];
       BimorphPoint p = Point(t, y, i, u, u_dot);
-      const std::vector<double> du_in = du, dud_in = dud;  // p's gradient, stable while du, dud change
+      const std::vector<double> du_in = du,
+                                dud_in = dud;  // p's gradient, stable while du, dud change
       p.du_dy = du_in;
       p.du_dot_dy = dud_in;
       ExtensionJacobian ej(force, state.middleRows(ext_offset_[i] - iz - 1, e.num_states()));
@@ -191,7 +203,8 @@ int BimorphOde::Jacobian(double t, const double* y, const double*, JacobianView&
 
   // Extension blocks, and the chain rule through the final drive: v̇ gets M⁻¹B_u ∂u/∂y, ż gets
   // ∂ż/∂u̇ · ∂u̇/∂y with ∂ż/∂u̇ = α − β sgn(u̇) z − γ|z|.
-  const double dzdot_dudot = params_.alpha - params_.beta * sgn_ud * z - params_.gamma * std::abs(z);
+  const double dzdot_dudot =
+      params_.alpha - params_.beta * sgn_ud * z - params_.gamma * std::abs(z);
   const Eigen::MatrixXd minv_force = mats_.mass_llt.solve(force);
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < nd; ++i) jac.Add(nd + i, j, minv_force(i, j) + mats_.minv_bu[i] * du[j]);

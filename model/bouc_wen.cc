@@ -14,7 +14,8 @@ bool BoucWenAlongPath(const BoucWenParams& p, std::span<const double> u, std::sp
     BoucWenBranch b = StartBranch(p, ua, zc, ub - ua);
     double uc;
     // At most one crossing per monotone segment: after it, z moves away from 0.
-    if (b.ZeroCrossing(&uc) && (uc - ua) * b.s > 0 && (ub - uc) * b.s > 0) b = StartBranch(p, uc, 0.0, b.s);
+    if (b.ZeroCrossing(&uc) && (uc - ua) * b.s > 0 && (ub - uc) * b.s > 0)
+      b = StartBranch(p, uc, 0.0, b.s);
     zc = b.s == 0 ? zc : b.Z(ub);
     z[k + 1] = zc;
     if (!std::isfinite(zc)) return false;

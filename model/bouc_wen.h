@@ -8,8 +8,8 @@
 //
 // (z₀ + α (u − u₀) when κ = 0). Branches end at the reversals of u and at the zero crossings of z.
 // For α > 0 the loop is bounded for every input iff β + γ > 0 and β − γ ≥ 0 (the spec's rule,
-// BimorphParams::HysteresisBounded()); the model is symmetric under (α, γ, z) → (−α, −γ, −z), so for
-// α < 0 the rule reads β − γ > 0 and β + γ ≥ 0 — the same open region, other boundary lines.
+// BimorphParams::HysteresisBounded()); the model is symmetric under (α, γ, z) → (−α, −γ, −z), so
+// for α < 0 the rule reads β − γ > 0 and β + γ ≥ 0 — the same open region, other boundary lines.
 #pragma once
 
 #include <cmath>
@@ -19,7 +19,9 @@ namespace pz::model {
 
 /// e^x − 1 by its Taylor series to x⁴: FastExpm1's branch for |x| < 1e-3, and the modal simulator's
 /// batched z (model/modal_simulator.cc ZBatch).
-inline double Expm1Taylor4(double x) { return x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24)))); }
+inline double Expm1Taylor4(double x) {
+  return x * (1.0 + x * (0.5 + x * (1.0 / 6 + x * (1.0 / 24))));
+}
 
 /// e^x − 1 with an absolute error of a few ulps of 1 (relative too for |x| < 1e-3), cheaper than
 /// std::expm1. Branch values are z₀ + gain·(e^x − 1), so the absolute error is what counts.
@@ -44,7 +46,7 @@ struct BoucWenBranch {
   int s = 0;         ///< direction of u on the branch: +1, −1, or 0 (u constant: z frozen)
   int sigma = 0;     ///< sign of z on the branch (0 only when z stays 0)
 
-  double gain = 0;   ///< (κ z₀ − α)/κ [N] (unused when κ = 0); set by StartBranch
+  double gain = 0;  ///< (κ z₀ − α)/κ [N] (unused when κ = 0); set by StartBranch
 
   /// z [N] at input u [V] (exact on the branch; the formula extends smoothly past its ends).
   double Z(double u) const {
@@ -58,7 +60,8 @@ struct BoucWenBranch {
   bool ZeroCrossing(double* u_cross) const {
     // z moves towards 0 iff dz = α du at z = 0 points back at the side z is on: α s σ < 0.
     if (z0 == 0.0 || alpha == 0.0 || s == 0 || alpha * s * sigma >= 0) return false;
-    // z(u) = 0  ⇔  u − u₀ = log1p(y)/κ with y = −κ z₀/α; no crossing when 1 + y ≤ 0 (z stops at α/κ).
+    // z(u) = 0  ⇔  u − u₀ = log1p(y)/κ with y = −κ z₀/α; no crossing when 1 + y ≤ 0 (z stops at
+    // α/κ).
     const double y = -kappa * z0 / alpha;
     if (!(y > -1.0)) return false;
     const double ratio = std::abs(y) < 1e-12 ? 1.0 - 0.5 * y : std::log1p(y) / y;
@@ -69,9 +72,9 @@ struct BoucWenBranch {
   }
 };
 
-/// Starts a branch at (u0, z0) with u moving in direction s (sign taken; 0 freezes z). At z0 = 0 the
-/// sign σ is that of α s, the way z leaves zero. Inline, as ZeroCrossing: the fin's sampled path
-/// starts a branch at every sample (model/modal_simulator.cc).
+/// Starts a branch at (u0, z0) with u moving in direction s (sign taken; 0 freezes z). At z0 = 0
+/// the sign σ is that of α s, the way z leaves zero. Inline, as ZeroCrossing: the fin's sampled
+/// path starts a branch at every sample (model/modal_simulator.cc).
 inline BoucWenBranch StartBranch(const BoucWenParams& p, double u0, double z0, double s) {
   const auto sign = [](double x) { return (x > 0) - (x < 0); };
   BoucWenBranch b;

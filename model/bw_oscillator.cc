@@ -87,9 +87,9 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
     if (!(std::abs(Y) <= 1e3 && std::abs(Z) <= 1e12 && std::abs(V) <= 1e9)) {
       std::fill(y.begin() + static_cast<std::ptrdiff_t>(i), y.end(), 0.0);
       if (state) *state = BwState{Y, V, Z};
-      return OutOfRange("bw: the simulation diverged at sample " + std::to_string(i) + " (t = " +
-                        Num(static_cast<double>(i) / in.sample_rate_hz()) + " s): y = " + Num(Y) +
-                        " m, z = " + Num(Z) + " N");
+      return OutOfRange("bw: the simulation diverged at sample " + std::to_string(i) +
+                        " (t = " + Num(static_cast<double>(i) / in.sample_rate_hz()) +
+                        " s): y = " + Num(Y) + " m, z = " + Num(Z) + " N");
     }
   }
   if (state) *state = BwState{Y, V, Z};
@@ -102,10 +102,10 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
 // the sign bit as fabs does; no reassociation, no FMA), so each lane's values are its bits. NV = 2
 // runs two independent chains of vector operations, four parameter sets in about the time of one
 // (the loop is bound by the latency of its chain, not by throughput). Returns false, leaving y and
-// the states undefined, as soon as a lane leaves the scalar loop's bounds (the caller then runs each
-// alone, for the scalar loop's exact output and message). Each lane reads its own input (the same
-// table for every lane that shares a drive); the inputs have the same samples, sub-steps and rate
-// (checked by the caller).
+// the states undefined, as soon as a lane leaves the scalar loop's bounds (the caller then runs
+// each alone, for the scalar loop's exact output and message). Each lane reads its own input (the
+// same table for every lane that shares a drive); the inputs have the same samples, sub-steps and
+// rate (checked by the caller).
 typedef double V2 __attribute__((vector_size(16)));
 typedef long long V2i __attribute__((vector_size(16)));
 
@@ -113,7 +113,8 @@ inline V2 Abs(V2 x) { return (V2)((V2i)x & (V2i){0x7fffffffffffffffLL, 0x7ffffff
 inline V2 Splat(double x) { return (V2){x, x}; }
 
 template <int NV>
-bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span<double>* y, BwState* st) {
+bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span<double>* y,
+                    BwState* st) {
   constexpr int L = 2 * NV;
   const size_t n = in[0]->samples();
   const int S = in[0]->substeps();
@@ -143,7 +144,9 @@ bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span
       for (int v = 0; v < NV; ++v) {
         const double *ua = u[2 * v], *ub = u[2 * v + 1];
         const V2 u0 = {ua[j], ub[j]}, u1 = {ua[j + 1], ub[j + 1]}, u2 = {ua[j + 2], ub[j + 2]};
-        auto zdot = [&](V2 x, V2 z) { return alpha[v] * x - bg[v] * Abs(x) * z - bd[v] * x * Abs(z); };
+        auto zdot = [&](V2 x, V2 z) {
+          return alpha[v] * x - bg[v] * Abs(x) * z - bd[v] * x * Abs(z);
+        };
         const V2 a1 = (u0 - c[v] * V[v] - k[v] * Y[v] - Z[v]) * inv_m[v], z1 = zdot(V[v], Z[v]);
         const V2 y2 = Y[v] + h2 * V[v], v2 = V[v] + h2 * a1, w2 = Z[v] + h2 * z1;
         const V2 a2 = (u1 - c[v] * v2 - k[v] * y2 - w2) * inv_m[v], z2 = zdot(v2, w2);
@@ -160,7 +163,8 @@ bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span
     for (int v = 0; v < NV; ++v) {
       for (int e = 0; e < 2; ++e) {
         y[2 * v + e][i] = Y[v][e];
-        ok &= std::abs(Y[v][e]) <= 1e3 && std::abs(Z[v][e]) <= 1e12 && std::abs(V[v][e]) <= 1e9;  // false for NaN too
+        ok &= std::abs(Y[v][e]) <= 1e3 && std::abs(Z[v][e]) <= 1e12 &&
+              std::abs(V[v][e]) <= 1e9;  // false for NaN too
       }
     }
     if (!ok) return false;
@@ -174,8 +178,8 @@ bool IntegrateLanes(const BwParams* p, const BwInput* const* in, const std::span
 
 Status BwParams::Validate() const {
   if (!(std::isfinite(m) && m > 0)) return Bad("m", m, "must be finite and > 0");
-  const std::pair<const char*, double> finite[] = {{"c", c},         {"k", k},         {"alpha", alpha},
-                                                   {"beta", beta},   {"gamma", gamma}, {"delta", delta}};
+  const std::pair<const char*, double> finite[] = {
+      {"c", c}, {"k", k}, {"alpha", alpha}, {"beta", beta}, {"gamma", gamma}, {"delta", delta}};
   for (const auto& [name, v] : finite) {
     if (!std::isfinite(v)) return Bad(name, v, "must be finite");
   }
@@ -185,17 +189,22 @@ Status BwParams::Validate() const {
 
 const char* InputInterpolationName(InputInterpolation i) {
   switch (i) {
-    case InputInterpolation::kZeroOrderHold: return "zoh";
-    case InputInterpolation::kLinear: return "linear";
-    case InputInterpolation::kCubicSpline: return "spline";
-    case InputInterpolation::kPeriodicFourier: return "fourier";
+    case InputInterpolation::kZeroOrderHold:
+      return "zoh";
+    case InputInterpolation::kLinear:
+      return "linear";
+    case InputInterpolation::kCubicSpline:
+      return "spline";
+    case InputInterpolation::kPeriodicFourier:
+      return "fourier";
   }
   return "unknown";
 }
 
 InputInterpolation ParseInputInterpolation(const std::string& name) {
-  for (InputInterpolation i : {InputInterpolation::kZeroOrderHold, InputInterpolation::kLinear,
-                               InputInterpolation::kCubicSpline, InputInterpolation::kPeriodicFourier}) {
+  for (InputInterpolation i :
+       {InputInterpolation::kZeroOrderHold, InputInterpolation::kLinear,
+        InputInterpolation::kCubicSpline, InputInterpolation::kPeriodicFourier}) {
     if (name == InputInterpolationName(i)) return i;
   }
   throw InputError("interpolation = " + name + ": must be zoh, linear, spline or fourier");
@@ -205,7 +214,8 @@ Status BwInputOptions::Validate() const {
   if (!(std::isfinite(sample_rate_hz) && sample_rate_hz > 0)) {
     return Bad("input.sample_rate_hz", sample_rate_hz, "must be finite and > 0");
   }
-  if (substeps < 1 || substeps > 1000) return Bad("input.substeps", substeps, "must be in 1 … 1000");
+  if (substeps < 1 || substeps > 1000)
+    return Bad("input.substeps", substeps, "must be in 1 … 1000");
   return Status::Ok();
 }
 
@@ -217,7 +227,9 @@ void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
   const size_t n = u.size();
   if (n < 2) throw InputError(FieldError("bw.input: u.size()", n, "needs at least 2 samples"));
   for (size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(u[i])) throw InputError(FieldError("bw.input: u[" + std::to_string(i) + "]", u[i], "must be finite"));
+    if (!std::isfinite(u[i]))
+      throw InputError(
+          FieldError("bw.input: u[" + std::to_string(i) + "]", u[i], "must be finite"));
   }
   options_ = options;
   const size_t L = 2 * static_cast<size_t>(options.substeps);  // half steps per sample
@@ -242,12 +254,15 @@ void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
       break;
     }
     case InputInterpolation::kCubicSpline: {
-      if (n < 4) throw InputError(FieldError("bw.input: u.size()", n, "the cubic spline needs at least 4 samples"));
+      if (n < 4)
+        throw InputError(
+            FieldError("bw.input: u.size()", n, "the cubic spline needs at least 4 samples"));
       boost::math::interpolators::cardinal_cubic_b_spline<double> spline(u.data(), n, 0.0, 1.0);
       for (size_t i = 0; i + 1 < n; ++i) {
         fine_[i * L] = u[i];
         for (size_t r = 1; r < L; ++r) {
-          fine_[i * L + r] = spline(static_cast<double>(i) + static_cast<double>(r) / static_cast<double>(L));
+          fine_[i * L + r] =
+              spline(static_cast<double>(i) + static_cast<double>(r) / static_cast<double>(L));
         }
       }
       fine_.back() = u[n - 1];
@@ -263,9 +278,10 @@ void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
       for (double v : u) scale = std::max(scale, std::abs(v));
       for (size_t i = period; i < n; ++i) {
         if (std::abs(u[i] - u[i % period]) > 1e-9 * scale) {
-          throw InputError("bw.input: u[" + std::to_string(i) + "] = " + Num(u[i]) + " differs from u[" +
-                           std::to_string(i % period) + "] = " + Num(u[i % period]) +
-                           ": the record is not periodic with period_samples = " + std::to_string(period));
+          throw InputError(
+              "bw.input: u[" + std::to_string(i) + "] = " + Num(u[i]) + " differs from u[" +
+              std::to_string(i % period) + "] = " + Num(u[i % period]) +
+              ": the record is not periodic with period_samples = " + std::to_string(period));
         }
       }
       const std::vector<double> one = FourierUpsample(u.subspan(0, period), L);
@@ -276,34 +292,44 @@ void BwInput::Assign(std::span<const double> u, const BwInputOptions& options) {
   samples_ = n;
 }
 
-Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y, BwState* state) {
+Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y,
+                  BwState* state) {
   ThrowIfError(params.Validate());
   if (y.size() != input.samples()) {
-    throw InputError(FieldError("bw: y.size()", y.size(), "must equal the input's samples = " +
-                                                             std::to_string(input.samples())));
+    throw InputError(
+        FieldError("bw: y.size()", y.size(),
+                   "must equal the input's samples = " + std::to_string(input.samples())));
   }
-  if (input.samples() == 0) throw InputError("bw: the input is empty (default-constructed BwInput)");
-  return params.nu == 1.0 ? Integrate<true>(params, input, y, state) : Integrate<false>(params, input, y, state);
+  if (input.samples() == 0)
+    throw InputError("bw: the input is empty (default-constructed BwInput)");
+  return params.nu == 1.0 ? Integrate<true>(params, input, y, state)
+                          : Integrate<false>(params, input, y, state);
 }
 
-std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<const BwInput* const> inputs,
-                                   std::span<const std::span<double>> y, std::span<BwState> states) {
+std::vector<Status> SimulateBwMany(std::span<const BwParams> params,
+                                   std::span<const BwInput* const> inputs,
+                                   std::span<const std::span<double>> y,
+                                   std::span<BwState> states) {
   const size_t N = params.size();
   if (inputs.size() != N || y.size() != N || (!states.empty() && states.size() != N))
     throw InputError("bw: one input, output (and state) per parameter set expected");
   for (size_t l = 0; l < N; ++l) {
     ThrowIfError(params[l].Validate());
     if (inputs[l] == nullptr || inputs[l]->samples() == 0)
-      throw InputError("bw: input " + std::to_string(l) + " is empty (default-constructed BwInput)");
+      throw InputError("bw: input " + std::to_string(l) +
+                       " is empty (default-constructed BwInput)");
     if (y[l].size() != inputs[l]->samples()) {
-      throw InputError(FieldError("bw: y[" + std::to_string(l) + "].size()", y[l].size(),
-                                  "must equal the input's samples = " + std::to_string(inputs[l]->samples())));
+      throw InputError(
+          FieldError("bw: y[" + std::to_string(l) + "].size()", y[l].size(),
+                     "must equal the input's samples = " + std::to_string(inputs[l]->samples())));
     }
     const BwInput &a = *inputs[0], &b = *inputs[l];
-    if (b.samples() != a.samples() || b.substeps() != a.substeps() || b.sample_rate_hz() != a.sample_rate_hz()) {
+    if (b.samples() != a.samples() || b.substeps() != a.substeps() ||
+        b.sample_rate_hz() != a.sample_rate_hz()) {
       throw InputError("bw: the inputs differ in samples (" + std::to_string(a.samples()) + ", " +
-                       std::to_string(b.samples()) + "), sub-steps (" + std::to_string(a.substeps()) + ", " +
-                       std::to_string(b.substeps()) + ") or sample rate (" + Num(a.sample_rate_hz()) + ", " +
+                       std::to_string(b.samples()) + "), sub-steps (" +
+                       std::to_string(a.substeps()) + ", " + std::to_string(b.substeps()) +
+                       ") or sample rate (" + Num(a.sample_rate_hz()) + ", " +
                        Num(b.sample_rate_hz()) + " Hz): they must be equal");
     }
   }
@@ -316,7 +342,8 @@ std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<c
     const size_t g = N - l0 >= 4 ? 4 : N - l0 >= 2 ? 2 : 1;
     bool nu_one = true;
     for (size_t l = l0; l < l0 + g; ++l) nu_one = nu_one && params[l].nu == 1.0;
-    std::vector<BwState> s(st.begin() + static_cast<std::ptrdiff_t>(l0), st.begin() + static_cast<std::ptrdiff_t>(l0 + g));
+    std::vector<BwState> s(st.begin() + static_cast<std::ptrdiff_t>(l0),
+                           st.begin() + static_cast<std::ptrdiff_t>(l0 + g));
     const bool grouped = g > 1 && nu_one &&
                          (g == 4 ? IntegrateLanes<2>(&params[l0], &inputs[l0], &y[l0], s.data())
                                  : IntegrateLanes<1>(&params[l0], &inputs[l0], &y[l0], s.data()));
@@ -334,20 +361,24 @@ std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<c
   return out;
 }
 
-std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
-                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
-  const std::vector<Status> st =
-      SimulateBwMany(params, inputs, y, states ? std::span<BwState>(*states) : std::span<BwState>());
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params,
+                                     const std::array<const BwInput*, 2>& inputs,
+                                     const std::array<std::span<double>, 2>& y,
+                                     std::array<BwState, 2>* states) {
+  const std::vector<Status> st = SimulateBwMany(
+      params, inputs, y, states ? std::span<BwState>(*states) : std::span<BwState>());
   return {st[0], st[1]};
 }
 
 std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
-                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states) {
+                                     const std::array<std::span<double>, 2>& y,
+                                     std::array<BwState, 2>* states) {
   return SimulateBwPair(params, {&input, &input}, y, states);
 }
 
 BwParams BwFromIdentifiable(std::span<const double> theta) {
-  if (theta.size() != 6) throw InputError(FieldError("bw: theta.size()", theta.size(), "must be 6"));
+  if (theta.size() != 6)
+    throw InputError(FieldError("bw: theta.size()", theta.size(), "must be 6"));
   BwParams p;
   p.m = theta[0];
   p.c = theta[1];
@@ -365,7 +396,8 @@ std::vector<double> BwIdentifiable(const BwParams& p) {
 }
 
 const std::vector<std::string>& BwIdentifiableNames() {
-  static const std::vector<std::string> names = {"m", "c", "k", "alpha", "beta_gamma", "beta_delta"};
+  static const std::vector<std::string> names = {"m",     "c",          "k",
+                                                 "alpha", "beta_gamma", "beta_delta"};
   return names;
 }
 

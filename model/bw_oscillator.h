@@ -18,8 +18,8 @@
 //   3. returns y at the input samples (y[0] = the initial state's y).
 //
 // With the true parameters, 20 sub-steps and Fourier interpolation, the simulated multisine test
-// output is within 2.3e-7 m RMS of the official one (tests/complete/bw_oscillator_test.cc), the floor
-// the benchmark README measured: the integrator matches the generator.
+// output is within 2.3e-7 m RMS of the official one (tests/complete/bw_oscillator_test.cc), the
+// floor the benchmark README measured: the integrator matches the generator.
 #pragma once
 
 #include <array>
@@ -34,14 +34,14 @@ namespace pz::model {
 
 /// Parameters of the oscillator; defaults are the benchmark's true values (README Table 1).
 struct BwParams {
-  double m = 2;        ///< mass m_L [kg], > 0
-  double c = 10;       ///< viscous damping c_L [N s/m], finite
-  double k = 5e4;      ///< linear stiffness k_L [N/m], finite
-  double alpha = 5e4;  ///< α [N/m], finite
-  double beta = 1e3;   ///< β [m^-ν], finite
-  double gamma = 0.8;  ///< γ [-], finite
-  double delta = -1.1; ///< δ [-], finite
-  double nu = 1;       ///< ν [-], ≥ 1 (ν = 1 takes a fast path without pow)
+  double m = 2;         ///< mass m_L [kg], > 0
+  double c = 10;        ///< viscous damping c_L [N s/m], finite
+  double k = 5e4;       ///< linear stiffness k_L [N/m], finite
+  double alpha = 5e4;   ///< α [N/m], finite
+  double beta = 1e3;    ///< β [m^-ν], finite
+  double gamma = 0.8;   ///< γ [-], finite
+  double delta = -1.1;  ///< δ [-], finite
+  double nu = 1;        ///< ν [-], ≥ 1 (ν = 1 takes a fast path without pow)
   /// The error names the field: "bw.m = -1: must be finite and > 0".
   Status Validate() const;
 };
@@ -95,28 +95,33 @@ struct BwState {
 
 /// Simulates the record from `state` (rest when null) and writes y at the n input samples into
 /// `y` (size n, checked). On return *state (if given) holds the final state. Returns OutOfRange
-/// naming the sample and time when the solution diverges (non-finite, or |y| > 1e3 m, |z| > 1e12 N):
-/// y is then filled up to that sample and zero after. Throws InputError on invalid parameters.
+/// naming the sample and time when the solution diverges (non-finite, or |y| > 1e3 m, |z| > 1e12
+/// N): y is then filled up to that sample and zero after. Throws InputError on invalid parameters.
 Status SimulateBw(const BwParams& params, const BwInput& input, std::span<double> y,
                   BwState* state = nullptr);
 
-/// Two parameter sets on one input, side by side in one thread (SimulateBwMany): y[l] and states[l] (rest when null) as
-/// SimulateBw(params[l], input, y[l], states ? &states[l] : nullptr) has them, bit for bit, with the
-/// same status each (ν = 1 runs as a pair; otherwise, or when a lane diverges, each lane alone).
-/// Throws InputError as SimulateBw does.
+/// Two parameter sets on one input, side by side in one thread (SimulateBwMany): y[l] and states[l]
+/// (rest when null) as SimulateBw(params[l], input, y[l], states ? &states[l] : nullptr) has them,
+/// bit for bit, with the same status each (ν = 1 runs as a pair; otherwise, or when a lane
+/// diverges, each lane alone). Throws InputError as SimulateBw does.
 std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const BwInput& input,
-                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+                                     const std::array<std::span<double>, 2>& y,
+                                     std::array<BwState, 2>* states = nullptr);
 /// The same with each lane on its own input (e.g. each parameter set's own delayed or crept drive):
 /// y[l] and states[l] as SimulateBw(params[l], *inputs[l], y[l], …) has them, bit for bit. The
 /// inputs must have the same samples, sub-steps and sample rate (InputError naming them otherwise).
-std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params, const std::array<const BwInput*, 2>& inputs,
-                                     const std::array<std::span<double>, 2>& y, std::array<BwState, 2>* states = nullptr);
+std::array<Status, 2> SimulateBwPair(const std::array<BwParams, 2>& params,
+                                     const std::array<const BwInput*, 2>& inputs,
+                                     const std::array<std::span<double>, 2>& y,
+                                     std::array<BwState, 2>* states = nullptr);
 /// Any number of parameter sets, each on its own input (pointers may repeat), in groups of four
 /// side by side (two SSE2 vector chains of two lanes each: four sets in about the time of one),
 /// then two, then one: y[l], states[l] (rest when empty) and the status as SimulateBw has them, bit
 /// for bit. Throws InputError as SimulateBwPair does.
-std::vector<Status> SimulateBwMany(std::span<const BwParams> params, std::span<const BwInput* const> inputs,
-                                   std::span<const std::span<double>> y, std::span<BwState> states = {});
+std::vector<Status> SimulateBwMany(std::span<const BwParams> params,
+                                   std::span<const BwInput* const> inputs,
+                                   std::span<const std::span<double>> y,
+                                   std::span<BwState> states = {});
 
 /// The identifiable parameterisation for ν = 1 (β appears only in the products β·γ and β·δ, see
 /// the benchmark README): θ = (m, c, k, α, β·γ, β·δ) ↦ BwParams with β = 1, γ = β·γ, δ = β·δ,

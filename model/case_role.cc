@@ -4,10 +4,14 @@ namespace pz::model {
 
 const char* CaseRoleName(CaseRole role) {
   switch (role) {
-    case CaseRole::kTrain: return "train";
-    case CaseRole::kValidate: return "validate";
-    case CaseRole::kTest: return "test";
-    case CaseRole::kUnspecified: return "unspecified";
+    case CaseRole::kTrain:
+      return "train";
+    case CaseRole::kValidate:
+      return "validate";
+    case CaseRole::kTest:
+      return "test";
+    case CaseRole::kUnspecified:
+      return "unspecified";
   }
   return "unknown";
 }

@@ -19,22 +19,25 @@ uint32_t EncodeWeight(double w, const std::string& field) {
 }
 
 uint32_t ReadGene(std::span<const uint8_t> bits, int offset, int width) {
-  PZ_CHECK(offset >= 0 && width > 0 && width <= 32 && offset + width <= static_cast<int>(bits.size()));
+  PZ_CHECK(offset >= 0 && width > 0 && width <= 32 &&
+           offset + width <= static_cast<int>(bits.size()));
   uint32_t v = 0;
   for (int b = 0; b < width; ++b) v = (v << 1) | (bits[offset + b] != 0 ? 1u : 0u);
   return v;
 }
 
 void WriteGene(std::span<uint8_t> bits, int offset, int width, uint32_t value) {
-  PZ_CHECK(offset >= 0 && width > 0 && width < 32 && offset + width <= static_cast<int>(bits.size()));
+  PZ_CHECK(offset >= 0 && width > 0 && width < 32 &&
+           offset + width <= static_cast<int>(bits.size()));
   PZ_CHECK(value < (1u << width));
-  for (int b = 0; b < width; ++b) bits[offset + b] = static_cast<uint8_t>((value >> (width - 1 - b)) & 1u);
+  for (int b = 0; b < width; ++b)
+    bits[offset + b] = static_cast<uint8_t>((value >> (width - 1 - b)) & 1u);
 }
 
 Status ValidateChromosome(std::span<const uint8_t> bits) {
   if (bits.size() != static_cast<size_t>(kChromosomeBits)) {
-    return InvalidArgument(FieldError("chromosome length", bits.size(),
-                                      "an HGANN chromosome has exactly 1415 bits"));
+    return InvalidArgument(
+        FieldError("chromosome length", bits.size(), "an HGANN chromosome has exactly 1415 bits"));
   }
   for (size_t i = 0; i < bits.size(); ++i) {
     if (bits[i] > 1) {
@@ -56,7 +59,9 @@ Network DecodeChromosome(std::span<const uint8_t> bits, const InputNormalization
   auto tf = [&bits](int offset) {
     return TransferFromCode(static_cast<int>(ReadGene(bits, offset, kTransferCodeBits)));
   };
-  auto weight = [&bits](int offset) { return DecodeWeight(ReadGene(bits, offset, kWeightCodeBits)); };
+  auto weight = [&bits](int offset) {
+    return DecodeWeight(ReadGene(bits, offset, kWeightCodeBits));
+  };
   const int h = DecodeHiddenCount(bits);
   Network n;
   for (int i = 0; i < kNetworkInputs; ++i) n.input_tf[i] = tf(InputTfBit(i));
@@ -89,7 +94,8 @@ std::vector<uint8_t> EncodeChromosome(const Network& network, std::span<const ui
     WriteGene(bits, offset, kWeightCodeBits, EncodeWeight(w, field));
   };
   auto idx = [](const char* name, int a, int b) {
-    return std::string(name) + "(" + std::to_string(a) + (b >= 0 ? ", " + std::to_string(b) : "") + ")";
+    return std::string(name) + "(" + std::to_string(a) + (b >= 0 ? ", " + std::to_string(b) : "") +
+           ")";
   };
   const int h = network.hidden();
   WriteGene(bits, kHiddenCountOffset, kHiddenCodeBits, static_cast<uint32_t>(h - kMinHidden));
@@ -103,9 +109,11 @@ std::vector<uint8_t> EncodeChromosome(const Network& network, std::span<const ui
     WriteGene(bits, OutputTfBit(k), kTransferCodeBits, static_cast<uint32_t>(network.output_tf[k]));
   }
   for (int j = 0; j < h; ++j) {
-    for (int i = 0; i < kNetworkInputs; ++i) put_weight(W1Bit(i, j), network.w1(i, j), idx("w1", i, j));
+    for (int i = 0; i < kNetworkInputs; ++i)
+      put_weight(W1Bit(i, j), network.w1(i, j), idx("w1", i, j));
     put_weight(C1Bit(j), network.c1(j), idx("c1", j, -1));
-    for (int k = 0; k < kNetworkOutputs; ++k) put_weight(W2Bit(j, k), network.w2(j, k), idx("w2", j, k));
+    for (int k = 0; k < kNetworkOutputs; ++k)
+      put_weight(W2Bit(j, k), network.w2(j, k), idx("w2", j, k));
   }
   for (int k = 0; k < kNetworkOutputs; ++k) put_weight(C2Bit(k), network.c2(k), idx("c2", k, -1));
   return bits;

@@ -33,18 +33,21 @@ inline constexpr int kNumTransferGenes = kNetworkInputs + kMaxHidden + kNetworkO
 
 // Bit offsets of each gene group.
 inline constexpr int kHiddenCountOffset = 0;
-inline constexpr int kTransferOffset = kHiddenCountOffset + kHiddenCodeBits;                   // 3
-inline constexpr int kW1Offset = kTransferOffset + kNumTransferGenes * kTransferCodeBits;      // 57
-inline constexpr int kC1Offset = kW1Offset + kNetworkInputs * kMaxHidden * kWeightCodeBits;    // 309
-inline constexpr int kW2Offset = kC1Offset + kMaxHidden * kWeightCodeBits;                     // 435
-inline constexpr int kC2Offset = kW2Offset + kMaxHidden * kNetworkOutputs * kWeightCodeBits;   // 1317
-inline constexpr int kChromosomeBits = kC2Offset + kNetworkOutputs * kWeightCodeBits;          // 1415
+inline constexpr int kTransferOffset = kHiddenCountOffset + kHiddenCodeBits;                 // 3
+inline constexpr int kW1Offset = kTransferOffset + kNumTransferGenes * kTransferCodeBits;    // 57
+inline constexpr int kC1Offset = kW1Offset + kNetworkInputs * kMaxHidden * kWeightCodeBits;  // 309
+inline constexpr int kW2Offset = kC1Offset + kMaxHidden * kWeightCodeBits;                   // 435
+inline constexpr int kC2Offset =
+    kW2Offset + kMaxHidden * kNetworkOutputs * kWeightCodeBits;                        // 1317
+inline constexpr int kChromosomeBits = kC2Offset + kNetworkOutputs * kWeightCodeBits;  // 1415
 static_assert(kChromosomeBits == 1415);
 
 /// First bit of the transfer-function gene of input node i (0 … 1).
 constexpr int InputTfBit(int i) { return kTransferOffset + kTransferCodeBits * i; }
 /// First bit of the transfer-function gene of hidden node j (0 … 8).
-constexpr int HiddenTfBit(int j) { return kTransferOffset + kTransferCodeBits * (kNetworkInputs + j); }
+constexpr int HiddenTfBit(int j) {
+  return kTransferOffset + kTransferCodeBits * (kNetworkInputs + j);
+}
 /// First bit of the transfer-function gene of output node k (0 … 6).
 constexpr int OutputTfBit(int k) {
   return kTransferOffset + kTransferCodeBits * (kNetworkInputs + kMaxHidden + k);
@@ -54,7 +57,9 @@ constexpr int W1Bit(int i, int j) { return kW1Offset + kWeightCodeBits * (kMaxHi
 /// First bit of the bias gene c1(j).
 constexpr int C1Bit(int j) { return kC1Offset + kWeightCodeBits * j; }
 /// First bit of the weight gene W2(j, k).
-constexpr int W2Bit(int j, int k) { return kW2Offset + kWeightCodeBits * (kNetworkOutputs * j + k); }
+constexpr int W2Bit(int j, int k) {
+  return kW2Offset + kWeightCodeBits * (kNetworkOutputs * j + k);
+}
 /// First bit of the bias gene c2(k).
 constexpr int C2Bit(int k) { return kC2Offset + kWeightCodeBits * k; }
 
@@ -86,7 +91,8 @@ Network DecodeChromosome(std::span<const uint8_t> bits, const InputNormalization
 /// EncodeChromosome(DecodeChromosome(b, …), b) == b for every valid b, and
 /// DecodeChromosome(EncodeChromosome(n), …) == n for every decoded network n. Throws InputError if
 /// the network is invalid, a weight is outside [−10, 10], or the carrier is invalid.
-std::vector<uint8_t> EncodeChromosome(const Network& network, std::span<const uint8_t> carrier = {});
+std::vector<uint8_t> EncodeChromosome(const Network& network,
+                                      std::span<const uint8_t> carrier = {});
 
 /// Network::Describe() of the decoded chromosome, or the validation error. Never throws.
 std::string DescribeChromosome(std::span<const uint8_t> bits);
@@ -94,8 +100,8 @@ std::string DescribeChromosome(std::span<const uint8_t> bits);
 /// Packs 0/1 bytes into bytes, LSB first as in wire.proto's Genome (bit i is
 /// (packed[i / 8] >> (i % 8)) & 1); the last byte is zero-padded.
 std::vector<uint8_t> PackBits(std::span<const uint8_t> bits);
-/// Inverse of PackBits for `count` bits. Throws InputError if packed has the wrong size or a padding
-/// bit is set.
+/// Inverse of PackBits for `count` bits. Throws InputError if packed has the wrong size or a
+/// padding bit is set.
 std::vector<uint8_t> UnpackBits(std::span<const uint8_t> packed, int count);
 
 }  // namespace pz::model

@@ -16,24 +16,31 @@ void CheckSeries(std::span<const double> y, std::span<const double> yhat) {
   }
   if (y.empty()) throw InputError("criteria: y and yhat are empty");
   for (size_t k = 0; k < y.size(); ++k) {
-    if (!std::isfinite(y[k])) throw InputError(FieldError("criteria: y[" + std::to_string(k) + "]", y[k], "must be finite"));
+    if (!std::isfinite(y[k]))
+      throw InputError(
+          FieldError("criteria: y[" + std::to_string(k) + "]", y[k], "must be finite"));
     if (!std::isfinite(yhat[k])) {
-      throw InputError(FieldError("criteria: yhat[" + std::to_string(k) + "]", yhat[k], "must be finite"));
+      throw InputError(
+          FieldError("criteria: yhat[" + std::to_string(k) + "]", yhat[k], "must be finite"));
     }
   }
 }
 
 void CheckWindow(size_t n, double dt, double t0, double t1) {
-  if (!(std::isfinite(dt) && dt > 0)) throw InputError(FieldError("criteria: dt", dt, "must be finite and > 0"));
+  if (!(std::isfinite(dt) && dt > 0))
+    throw InputError(FieldError("criteria: dt", dt, "must be finite and > 0"));
   const double end = static_cast<double>(n - 1) * dt;
-  if (!std::isfinite(t0) || t0 < 0) throw InputError(FieldError("criteria: t0", t0, "must be finite and >= 0"));
+  if (!std::isfinite(t0) || t0 < 0)
+    throw InputError(FieldError("criteria: t0", t0, "must be finite and >= 0"));
   if (!std::isfinite(t1) || t1 < t0) {
-    throw InputError(FieldError("criteria: t1", t1, "must be finite and >= t0 = " + std::to_string(t0)));
+    throw InputError(
+        FieldError("criteria: t1", t1, "must be finite and >= t0 = " + std::to_string(t0)));
   }
   // A window end may exceed the last sample time by rounding only (relative 1e-12).
   if (t1 > end * (1 + 1e-12) + 1e-300) {
-    throw InputError(FieldError("criteria: t1", t1,
-                                "is after the last sample at (n - 1) dt = " + std::to_string(end) + " s"));
+    throw InputError(
+        FieldError("criteria: t1", t1,
+                   "is after the last sample at (n - 1) dt = " + std::to_string(end) + " s"));
   }
 }
 
@@ -55,7 +62,8 @@ void SampleRange(size_t n, double dt, double t0, double t1, size_t* first, size_
 
 }  // namespace
 
-double Iae(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1) {
+double Iae(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+           double t1) {
   CheckSeries(y, yhat);
   CheckWindow(y.size(), dt, t0, t1);
   const size_t n = y.size();
@@ -86,7 +94,8 @@ double Iae(std::span<const double> y, std::span<const double> yhat, double dt) {
   return Iae(y, yhat, dt, 0.0, static_cast<double>(y.size() - 1) * dt);
 }
 
-double Sse(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1) {
+double Sse(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+           double t1) {
   CheckSeries(y, yhat);
   size_t f, l;
   SampleRange(y.size(), dt, t0, t1, &f, &l);
@@ -98,11 +107,13 @@ double Sse(std::span<const double> y, std::span<const double> yhat) {
   return PerformanceIndex(y, yhat);
 }
 
-double Rmse(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1) {
+double Rmse(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+            double t1) {
   CheckSeries(y, yhat);
   size_t f, l;
   SampleRange(y.size(), dt, t0, t1, &f, &l);
-  return std::sqrt(Sse(y.subspan(f, l - f + 1), yhat.subspan(f, l - f + 1)) / static_cast<double>(l - f + 1));
+  return std::sqrt(Sse(y.subspan(f, l - f + 1), yhat.subspan(f, l - f + 1)) /
+                   static_cast<double>(l - f + 1));
 }
 
 double Rmse(std::span<const double> y, std::span<const double> yhat) {

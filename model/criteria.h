@@ -20,13 +20,16 @@
 
 namespace pz::model {
 
-double Iae(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1);
+double Iae(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+           double t1);
 double Iae(std::span<const double> y, std::span<const double> yhat, double dt);
 
-double Sse(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1);
+double Sse(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+           double t1);
 double Sse(std::span<const double> y, std::span<const double> yhat);
 
-double Rmse(std::span<const double> y, std::span<const double> yhat, double dt, double t0, double t1);
+double Rmse(std::span<const double> y, std::span<const double> yhat, double dt, double t0,
+            double t1);
 double Rmse(std::span<const double> y, std::span<const double> yhat);
 
 double MaxAbsError(std::span<const double> y, std::span<const double> yhat, double dt, double t0,

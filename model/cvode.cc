@@ -28,7 +28,8 @@ namespace pz::model {
 
 const char* OdeMethodName(OdeMethod m) { return m == OdeMethod::kBdf ? "bdf" : "adams"; }
 
-JacobianView JacobianView::Banded(double* data, int n, int upper, int lower, int storage_upper, int ldim) {
+JacobianView JacobianView::Banded(double* data, int n, int upper, int lower, int storage_upper,
+                                  int ldim) {
   JacobianView v;
   v.data_ = data;
   v.n_ = n;
@@ -41,16 +42,19 @@ JacobianView JacobianView::Banded(double* data, int n, int upper, int lower, int
 }
 
 Status CvodeOptions::Validate(int n) const {
-  if (!(rtol > 0 && rtol < 1)) return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1)"));
+  if (!(rtol > 0 && rtol < 1))
+    return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1)"));
   if (atol_vector.empty()) {
-    if (!(atol > 0 && std::isfinite(atol))) return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
+    if (!(atol > 0 && std::isfinite(atol)))
+      return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
   } else {
     if (static_cast<int>(atol_vector.size()) != n)
       return InvalidArgument(FieldError("atol_vector.size()", atol_vector.size(),
                                         "must equal the number of states " + std::to_string(n)));
     for (size_t i = 0; i < atol_vector.size(); ++i)
       if (!(atol_vector[i] > 0 && std::isfinite(atol_vector[i])))
-        return InvalidArgument(FieldError("atol_vector[" + std::to_string(i) + "]", atol_vector[i], "must be finite and > 0"));
+        return InvalidArgument(FieldError("atol_vector[" + std::to_string(i) + "]", atol_vector[i],
+                                          "must be finite and > 0"));
   }
   if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
   if (!(max_step >= 0 && std::isfinite(max_step)))
@@ -59,17 +63,20 @@ Status CvodeOptions::Validate(int n) const {
     return InvalidArgument(FieldError("initial_step", initial_step, "must be finite and >= 0 [s]"));
   const int order_cap = method == OdeMethod::kBdf ? 5 : 12;
   if (max_order < 0 || max_order > order_cap)
-    return InvalidArgument(FieldError("max_order", max_order, "must be in [0, " + std::to_string(order_cap) + "] for " +
-                                                                  OdeMethodName(method)));
+    return InvalidArgument(FieldError(
+        "max_order", max_order,
+        "must be in [0, " + std::to_string(order_cap) + "] for " + OdeMethodName(method)));
   for (size_t i = 0; i < breakpoints.size(); ++i)
     if (!std::isfinite(breakpoints[i]))
-      return InvalidArgument(FieldError("breakpoints[" + std::to_string(i) + "]", breakpoints[i], "must be finite"));
+      return InvalidArgument(
+          FieldError("breakpoints[" + std::to_string(i) + "]", breakpoints[i], "must be finite"));
   return Status::Ok();
 }
 
 namespace {
 
-// ---- RAII handles for the SUNDIALS objects -------------------------------------------------------
+// ---- RAII handles for the SUNDIALS objects
+// -------------------------------------------------------
 struct ContextFree {
   void operator()(SUNContext c) const { SUNContext_Free(&c); }
 };
@@ -92,7 +99,8 @@ using ContextPtr = std::unique_ptr<std::remove_pointer_t<SUNContext>, ContextFre
 using VectorPtr = std::unique_ptr<std::remove_pointer_t<N_Vector>, VectorFree>;
 using MatrixPtr = std::unique_ptr<std::remove_pointer_t<SUNMatrix>, MatrixFree>;
 using LinearSolverPtr = std::unique_ptr<std::remove_pointer_t<SUNLinearSolver>, LinearSolverFree>;
-using NonlinearSolverPtr = std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, NonlinearSolverFree>;
+using NonlinearSolverPtr =
+    std::unique_ptr<std::remove_pointer_t<SUNNonlinearSolver>, NonlinearSolverFree>;
 using CvodePtr = std::unique_ptr<void, CvodeFree>;
 
 std::string FlagName(int flag) {
@@ -118,8 +126,8 @@ struct RunData {
   void Note(std::string s) { callback_note = std::move(s); }
 };
 
-// Runs a user callback with no exception escaping into SUNDIALS: a throw becomes a fatal −1, and any
-// non-zero return is noted with the callback's name and t for the summary message.
+// Runs a user callback with no exception escaping into SUNDIALS: a throw becomes a fatal −1, and
+// any non-zero return is noted with the callback's name and t for the summary message.
 template <typename Body>
 int Guarded(RunData* d, const char* what, double t, Body&& body) {
   try {
@@ -137,7 +145,9 @@ int Guarded(RunData* d, const char* what, double t, Body&& body) {
 int RhsCallback(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
   auto* d = static_cast<RunData*>(user_data);
   double* f = N_VGetArrayPointer(ydot);
-  if (const int r = Guarded(d, "right-hand side", t, [&] { return d->system->Rhs(t, N_VGetArrayPointer(y), f); }); r != 0)
+  if (const int r = Guarded(d, "right-hand side", t,
+                            [&] { return d->system->Rhs(t, N_VGetArrayPointer(y), f); });
+      r != 0)
     return r;
   for (int i = 0; i < d->n; ++i) {
     if (!std::isfinite(f[i])) {
@@ -148,15 +158,16 @@ int RhsCallback(sunrealtype t, N_Vector y, N_Vector ydot, void* user_data) {
   return 0;
 }
 
-int JacobianCallback(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix jac, void* user_data, N_Vector,
-                     N_Vector, N_Vector) {
+int JacobianCallback(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix jac, void* user_data,
+                     N_Vector, N_Vector, N_Vector) {
   auto* d = static_cast<RunData*>(user_data);
   return Guarded(d, "Jacobian", t, [&] {
     SUNMatZero(jac);
     const int n = d->n;
     JacobianView view =
         SUNMatGetID(jac) == SUNMATRIX_BAND
-            ? JacobianView::Banded(SUNBandMatrix_Data(jac), n, static_cast<int>(SUNBandMatrix_UpperBandwidth(jac)),
+            ? JacobianView::Banded(SUNBandMatrix_Data(jac), n,
+                                   static_cast<int>(SUNBandMatrix_UpperBandwidth(jac)),
                                    static_cast<int>(SUNBandMatrix_LowerBandwidth(jac)),
                                    static_cast<int>(SUNBandMatrix_StoredUpperBandwidth(jac)),
                                    static_cast<int>(SUNBandMatrix_LDim(jac)))
@@ -167,28 +178,32 @@ int JacobianCallback(sunrealtype t, N_Vector y, N_Vector fy, SUNMatrix jac, void
 
 int RootCallback(sunrealtype t, N_Vector y, sunrealtype* g, void* user_data) {
   auto* d = static_cast<RunData*>(user_data);
-  return Guarded(d, "root functions", t, [&] { return d->system->Roots(t, N_VGetArrayPointer(y), g); });
+  return Guarded(d, "root functions", t,
+                 [&] { return d->system->Roots(t, N_VGetArrayPointer(y), g); });
 }
 
-void ErrorHandler(int error_code, const char* module, const char* function, char* msg, void* user_data) {
+void ErrorHandler(int error_code, const char* module, const char* function, char* msg,
+                  void* user_data) {
   auto* d = static_cast<RunData*>(user_data);
   try {
-    d->cvode_message = std::string(module ? module : "") + "/" + (function ? function : "") + ": " + (msg ? msg : "");
+    d->cvode_message = std::string(module ? module : "") + "/" + (function ? function : "") + ": " +
+                       (msg ? msg : "");
   } catch (...) {
   }
 }
 
 // ---- reduced dense linear solver for systems with kinematic rows --------------------------------
-// CVODE hands a matrix-based solver A = I − γJ. When rows i < k of J are exactly e_{k+i} (ẏ_i = y_{k+i}),
-// rows i < k of A x = b read x_i − γ x_{k+i} = b_i, so x_i = b_i + γ x_{k+i}; substituting into the
-// other rows leaves S x_r = b_r − A_rq b_q with S = A_rr plus γ A_rq added to its first k columns.
+// CVODE hands a matrix-based solver A = I − γJ. When rows i < k of J are exactly e_{k+i} (ẏ_i =
+// y_{k+i}), rows i < k of A x = b read x_i − γ x_{k+i} = b_i, so x_i = b_i + γ x_{k+i};
+// substituting into the other rows leaves S x_r = b_r − A_rq b_q with S = A_rr plus γ A_rq added to
+// its first k columns.
 struct ReducedContent {
   int n = 0, k = 0;
   void* cvode_mem = nullptr;  // for γ: the one CVODE formed A with
   double gamma = 0;
   Eigen::MatrixXd a_rq;                     // (n − k) × k block of A
   Eigen::PartialPivLU<Eigen::MatrixXd> lu;  // of S
-  Eigen::VectorXd rhs, xr, xq;  // scratch, sized once
+  Eigen::VectorXd rhs, xr, xq;              // scratch, sized once
   int last_flag = 0;
 };
 
@@ -198,12 +213,14 @@ int ReducedSetup(SUNLinearSolver s, SUNMatrix a) {
   ReducedContent* c = Reduced(s);
   const int n = c->n, k = c->k, m = n - k;
   const Eigen::Map<const Eigen::MatrixXd> am(SUNDenseMatrix_Data(a), n, n);
-  if (CVodeGetCurrentGamma(c->cvode_mem, &c->gamma) != CV_SUCCESS) return c->last_flag = SUNLS_MEM_NULL;
+  if (CVodeGetCurrentGamma(c->cvode_mem, &c->gamma) != CV_SUCCESS)
+    return c->last_flag = SUNLS_MEM_NULL;
   c->a_rq = am.bottomLeftCorner(m, k);
   Eigen::MatrixXd reduced = am.bottomRightCorner(m, m);
   reduced.leftCols(k) += c->gamma * c->a_rq;
   c->lu.compute(reduced);
-  // PartialPivLU does not report singularity: look for a zero pivot (recoverable, as SUNLinSol_Dense).
+  // PartialPivLU does not report singularity: look for a zero pivot (recoverable, as
+  // SUNLinSol_Dense).
   const Eigen::VectorXd pivots = c->lu.matrixLU().diagonal();
   for (int i = 0; i < m; ++i) {
     if (pivots[i] == 0.0 || !std::isfinite(pivots[i])) return c->last_flag = SUNLS_LUFACT_FAIL;
@@ -244,7 +261,9 @@ SUNLinearSolver NewReducedSolver(int n, int k, void* cvode_mem, SUNContext ctx) 
   s->ops->initialize = [](SUNLinearSolver) { return static_cast<int>(SUNLS_SUCCESS); };
   s->ops->setup = ReducedSetup;
   s->ops->solve = ReducedSolve;
-  s->ops->lastflag = [](SUNLinearSolver ls) { return static_cast<sunindextype>(Reduced(ls)->last_flag); };
+  s->ops->lastflag = [](SUNLinearSolver ls) {
+    return static_cast<sunindextype>(Reduced(ls)->last_flag);
+  };
   s->ops->free = [](SUNLinearSolver ls) {
     if (ls == nullptr) return static_cast<int>(SUNLS_SUCCESS);
     delete Reduced(ls);
@@ -255,7 +274,8 @@ SUNLinearSolver NewReducedSolver(int n, int k, void* cvode_mem, SUNContext ctx) 
   return s;
 }
 
-// ---- stops: output times and breakpoints merged --------------------------------------------------
+// ---- stops: output times and breakpoints merged
+// --------------------------------------------------
 struct Stop {
   double t = 0;
   int first_output = -1;  // outputs [first_output, last_output] are recorded here
@@ -263,9 +283,11 @@ struct Stop {
   bool breakpoint = false;
 };
 
-std::vector<Stop> MergeStops(double t0, std::span<const double> t_out, const std::vector<double>& breakpoints) {
+std::vector<Stop> MergeStops(double t0, std::span<const double> t_out,
+                             const std::vector<double>& breakpoints) {
   const double t_end = t_out.back();
-  const double tol = 64 * std::numeric_limits<double>::epsilon() * std::max({std::abs(t0), std::abs(t_end), t_end - t0});
+  const double tol = 64 * std::numeric_limits<double>::epsilon() *
+                     std::max({std::abs(t0), std::abs(t_end), t_end - t0});
   struct Item {
     double t;
     int output;
@@ -276,7 +298,8 @@ std::vector<Stop> MergeStops(double t0, std::span<const double> t_out, const std
   for (size_t k = 0; k < t_out.size(); ++k) items.push_back({t_out[k], static_cast<int>(k)});
   for (double b : breakpoints)
     if (b > t0 && b < t_end + tol) items.push_back({b, -1});
-  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.t < b.t; });
+  std::stable_sort(items.begin(), items.end(),
+                   [](const Item& a, const Item& b) { return a.t < b.t; });
   std::vector<Stop> stops;
   for (size_t i = 0; i < items.size();) {
     Stop s;
@@ -290,7 +313,8 @@ std::vector<Stop> MergeStops(double t0, std::span<const double> t_out, const std
       } else if (it.output >= 0) {
         if (!has_output) s.first_output = it.output;
         s.last_output = it.output;
-        if (!has_output && !is_start) s.t = it.t;  // an output time wins over a breakpoint close to it
+        if (!has_output && !is_start)
+          s.t = it.t;  // an output time wins over a breakpoint close to it
         has_output = true;
       } else {
         s.breakpoint = true;
@@ -321,8 +345,9 @@ OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const d
   // BDF at high order can stall at a kink of f that is not a breakpoint (repeated error-test
   // failures with h at its minimum, e.g. a Bouc–Wen |z| crossing zero): once more at order ≤ 2,
   // which steps through it, with the same tolerances. A run that succeeded is untouched.
-  if (sol.summary.status == SimStatus::kSolverFailure && sol.summary.solver_flag == CV_ERR_FAILURE &&
-      options.method == OdeMethod::kBdf && (options.max_order == 0 || options.max_order > 2)) {
+  if (sol.summary.status == SimStatus::kSolverFailure &&
+      sol.summary.solver_flag == CV_ERR_FAILURE && options.method == OdeMethod::kBdf &&
+      (options.max_order == 0 || options.max_order > 2)) {
     CvodeOptions low = options;
     low.max_order = 2;
     sol = IntegrateOnce(system, t0, y0, t_out, low);
@@ -340,7 +365,8 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   sol.n = n;
   SimulationSummary& sum = sol.summary;
   auto finish = [&]() -> OdeSolution {
-    sum.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+    sum.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
     return std::move(sol);
   };
   auto invalid = [&](std::string msg) {
@@ -353,15 +379,21 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   if (n < 1) return invalid(FieldError("system.size()", n, "must be >= 1"));
   if (auto s = options.Validate(n); !s.ok()) return invalid(s.message());
   if (static_cast<int>(y0.size()) != n)
-    return invalid(FieldError("y0.size()", y0.size(), "must equal the number of states " + std::to_string(n)));
+    return invalid(
+        FieldError("y0.size()", y0.size(), "must equal the number of states " + std::to_string(n)));
   if (!std::isfinite(t0)) return invalid(FieldError("t0", t0, "must be finite"));
   for (int i = 0; i < n; ++i)
-    if (!std::isfinite(y0[i])) return invalid(FieldError("y0[" + std::to_string(i) + "]", y0[i], "must be finite"));
+    if (!std::isfinite(y0[i]))
+      return invalid(FieldError("y0[" + std::to_string(i) + "]", y0[i], "must be finite"));
   for (size_t k = 0; k < t_out.size(); ++k) {
-    if (!std::isfinite(t_out[k])) return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be finite"));
-    if (t_out[k] < t0) return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be >= t0 = " + Num(t0)));
+    if (!std::isfinite(t_out[k]))
+      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be finite"));
+    if (t_out[k] < t0)
+      return invalid(
+          FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be >= t0 = " + Num(t0)));
     if (k > 0 && !(t_out[k] > t_out[k - 1]))
-      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "output times must be strictly increasing"));
+      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k],
+                                "output times must be strictly increasing"));
   }
   const JacobianStructure js = system.jacobian_structure();
   const bool newton = options.iteration == NonlinearIteration::kNewton;
@@ -371,12 +403,13 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
                        (options.linear_solver == LinearSolverKind::kReduced ||
                         (options.linear_solver == LinearSolverKind::kAuto && js.kinematic > 0));
   if (reduced && !(js.kinematic > 0 && 2 * js.kinematic <= n))
-    return invalid(FieldError("system kinematic rows", js.kinematic, "must be in [1, n/2] for linear_solver = reduced"));
+    return invalid(FieldError("system kinematic rows", js.kinematic,
+                              "must be in [1, n/2] for linear_solver = reduced"));
   if (banded) {
     if (!js.banded) return invalid("linear_solver = banded but the system declares no band");
     if (js.upper < 0 || js.upper >= n || js.lower < 0 || js.lower >= n)
-      return invalid("system bandwidths (upper " + std::to_string(js.upper) + ", lower " + std::to_string(js.lower) +
-                     ") must be in [0, n-1]");
+      return invalid("system bandwidths (upper " + std::to_string(js.upper) + ", lower " +
+                     std::to_string(js.lower) + ") must be in [0, n-1]");
   }
   const int n_roots = system.num_roots();
   if (n_roots < 0) return invalid(FieldError("system.num_roots()", n_roots, "must be >= 0"));
@@ -394,7 +427,8 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
     sum.solver_flag = flag;
     sum.message = what;
     if (!data.cvode_message.empty()) sum.message += ": " + data.cvode_message;
-    if (!data.callback_note.empty()) sum.message += " (last callback problem: " + data.callback_note + ")";
+    if (!data.callback_note.empty())
+      sum.message += " (last callback problem: " + data.callback_note + ")";
   };
   auto fail = [&](int flag, const std::string& what) {
     set_failure(flag, what);
@@ -402,7 +436,8 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   };
 
   SUNContext raw_ctx = nullptr;
-  if (SUNContext_Create(nullptr, &raw_ctx) != 0 || raw_ctx == nullptr) return fail(-1, "SUNContext_Create failed");
+  if (SUNContext_Create(nullptr, &raw_ctx) != 0 || raw_ctx == nullptr)
+    return fail(-1, "SUNContext_Create failed");
   ContextPtr ctx(raw_ctx);
   VectorPtr y(N_VNew_Serial(n, ctx.get()));
   if (!y) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
@@ -424,15 +459,19 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   if (!check(CVodeInit(cv, RhsCallback, t0, y.get()), "CVodeInit")) return finish();
   if (!check(CVodeSetUserData(cv, &data), "CVodeSetUserData")) return finish();
   if (options.atol_vector.empty()) {
-    if (!check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances")) return finish();
+    if (!check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances"))
+      return finish();
   } else {
     VectorPtr abstol(N_VNew_Serial(n, ctx.get()));
     if (!abstol) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
-    std::copy(options.atol_vector.begin(), options.atol_vector.end(), N_VGetArrayPointer(abstol.get()));
-    if (!check(CVodeSVtolerances(cv, options.rtol, abstol.get()), "CVodeSVtolerances")) return finish();
+    std::copy(options.atol_vector.begin(), options.atol_vector.end(),
+              N_VGetArrayPointer(abstol.get()));
+    if (!check(CVodeSVtolerances(cv, options.rtol, abstol.get()), "CVodeSVtolerances"))
+      return finish();
   }
   if (newton) {
-    matrix.reset(banded ? SUNBandMatrix(n, js.upper, js.lower, ctx.get()) : SUNDenseMatrix(n, n, ctx.get()));
+    matrix.reset(banded ? SUNBandMatrix(n, js.upper, js.lower, ctx.get())
+                        : SUNDenseMatrix(n, n, ctx.get()));
     if (!matrix) return fail(CV_MEM_FAIL, "SUNMatrix creation failed");
     linear_solver.reset(banded    ? SUNLinSol_Band(y.get(), matrix.get(), ctx.get())
                         : reduced ? NewReducedSolver(n, js.kinematic, cv, ctx.get())
@@ -445,12 +484,16 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   } else {
     nonlinear_solver.reset(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()));
     if (!nonlinear_solver) return fail(CV_MEM_FAIL, "SUNNonlinSol_FixedPoint failed");
-    if (!check(CVodeSetNonlinearSolver(cv, nonlinear_solver.get()), "CVodeSetNonlinearSolver")) return finish();
+    if (!check(CVodeSetNonlinearSolver(cv, nonlinear_solver.get()), "CVodeSetNonlinearSolver"))
+      return finish();
   }
-  if (options.max_step > 0 && !check(CVodeSetMaxStep(cv, options.max_step), "CVodeSetMaxStep")) return finish();
-  if (options.initial_step > 0 && !check(CVodeSetInitStep(cv, options.initial_step), "CVodeSetInitStep"))
+  if (options.max_step > 0 && !check(CVodeSetMaxStep(cv, options.max_step), "CVodeSetMaxStep"))
     return finish();
-  if (options.max_order > 0 && !check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd")) return finish();
+  if (options.initial_step > 0 &&
+      !check(CVodeSetInitStep(cv, options.initial_step), "CVodeSetInitStep"))
+    return finish();
+  if (options.max_order > 0 && !check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd"))
+    return finish();
   if (options.stability_limit_detection && options.method == OdeMethod::kBdf &&
       !check(CVodeSetStabLimDet(cv, SUNTRUE), "CVodeSetStabLimDet"))
     return finish();
@@ -480,13 +523,18 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
   };
 
   const std::vector<Stop> stops = MergeStops(t0, t_out, options.breakpoints);
-  auto stopping = [&](const Stop& s) { return s.breakpoint || (options.restart_at_outputs && s.first_output >= 0); };
+  auto stopping = [&](const Stop& s) {
+    return s.breakpoint || (options.restart_at_outputs && s.first_output >= 0);
+  };
   size_t next_tstop = 0;  // index of the next stop where the integrator must halt exactly
   auto arm_tstop = [&](double t_now) -> bool {
-    while (next_tstop < stops.size() && !(stops[next_tstop].t > t_now && stopping(stops[next_tstop]))) ++next_tstop;
-    if (next_tstop < stops.size()) return check(CVodeSetStopTime(cv, stops[next_tstop].t), "CVodeSetStopTime");
-    // SUNDIALS 6.4 cannot clear a stop time, and one reached by a CV_SUCCESS return (not CV_TSTOP_RETURN)
-    // stays armed: move it beyond the last output, where it never acts.
+    while (next_tstop < stops.size() &&
+           !(stops[next_tstop].t > t_now && stopping(stops[next_tstop])))
+      ++next_tstop;
+    if (next_tstop < stops.size())
+      return check(CVodeSetStopTime(cv, stops[next_tstop].t), "CVodeSetStopTime");
+    // SUNDIALS 6.4 cannot clear a stop time, and one reached by a CV_SUCCESS return (not
+    // CV_TSTOP_RETURN) stays armed: move it beyond the last output, where it never acts.
     const double t_end = stops.back().t;
     return check(CVodeSetStopTime(cv, t_end + std::max(1.0, t_end - t0)), "CVodeSetStopTime");
   };
@@ -537,14 +585,16 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
     if (s.t > t0) {
       for (;;) {
         publish();
-        const long remaining = options.max_steps - sum.steps;  // CVODE's mxstep counts per CVode() call
+        const long remaining =
+            options.max_steps - sum.steps;  // CVODE's mxstep counts per CVode() call
         if (remaining <= 0) {
           flag = CV_TOO_MUCH_WORK;
           sum.solver_flag = flag;
           double tc = t0;
           CVodeGetCurrentTime(cv, &tc);
-          return fail(flag, "CVODE CV_TOO_MUCH_WORK at t = " + Num(tc) + ": step budget max_steps = " +
-                                std::to_string(options.max_steps) + " used up before t = " + Num(s.t));
+          return fail(flag, "CVODE CV_TOO_MUCH_WORK at t = " + Num(tc) +
+                                ": step budget max_steps = " + std::to_string(options.max_steps) +
+                                " used up before t = " + Num(s.t));
         }
         CVodeSetMaxNumSteps(cv, remaining);
         double tret = s.t;
@@ -555,7 +605,8 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
           double tc = tret;
           CVodeGetCurrentTime(cv, &tc);
           std::string what = "CVODE " + FlagName(flag) + " at t = " + Num(tc);
-          if (flag == CV_TOO_MUCH_WORK) what += " (step budget max_steps = " + std::to_string(options.max_steps) + ")";
+          if (flag == CV_TOO_MUCH_WORK)
+            what += " (step budget max_steps = " + std::to_string(options.max_steps) + ")";
           return fail(flag, what);
         }
         if (flag != CV_ROOT_RETURN) break;
@@ -567,7 +618,9 @@ OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const do
         bool need_restart = false;
         if (!call_hook(ev, need_restart)) return finish();
         if (need_restart && !restart(tret)) return finish();
-        if (s.t - tret <= 64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(s.t))) break;
+        if (s.t - tret <=
+            64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(s.t)))
+          break;
       }
     }
     if (!record(s)) {

@@ -11,8 +11,9 @@
 namespace pz::model {
 
 Status DahlParams::Validate() const {
-  const std::pair<const char*, double> all[] = {{"m", m},   {"epsilon", epsilon}, {"g", g},   {"k", k},
-                                                {"b1", b1}, {"b0", b0},           {"a1", a1}, {"a2", a2}};
+  const std::pair<const char*, double> all[] = {
+      {"m", m},   {"epsilon", epsilon}, {"g", g},   {"k", k},
+      {"b1", b1}, {"b0", b0},           {"a1", a1}, {"a2", a2}};
   for (auto [name, v] : all)
     if (!std::isfinite(v)) return InvalidArgument(FieldError(name, v, "must be finite"));
   if (!(m > 0)) return InvalidArgument(FieldError("m", m, "must be > 0 [kg]"));
@@ -22,8 +23,10 @@ Status DahlParams::Validate() const {
 }
 
 Status DahlOptions::Validate() const {
-  if (!(rtol > 0 && rtol <= 1e-2)) return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
-  if (!(atol > 0 && std::isfinite(atol))) return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
+  if (!(rtol > 0 && rtol <= 1e-2))
+    return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
+  if (!(atol > 0 && std::isfinite(atol)))
+    return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
   if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
   return Status::Ok();
 }
@@ -31,11 +34,15 @@ Status DahlOptions::Validate() const {
 double DahlSignalValue(DahlSignal s, double t) {
   constexpr double pi = std::numbers::pi;
   switch (s) {
-    case DahlSignal::kSine: return std::sin(t);
-    case DahlSignal::kOffsetSine: return 50.0 + 50.0 * std::sin(pi * t);
+    case DahlSignal::kSine:
+      return std::sin(t);
+    case DahlSignal::kOffsetSine:
+      return 50.0 + 50.0 * std::sin(pi * t);
     case DahlSignal::kChirp:
-      return 5.0 * std::exp(-0.13 * t) * (std::cos(3.0 * pi * t * std::exp(-0.09 * t)) - 3.15) + 1.0;
-    case DahlSignal::kDampedCosine: return 5.0 + 3.4 * std::exp(-0.24 * t) * std::cos(2.0 * pi * t);
+      return 5.0 * std::exp(-0.13 * t) * (std::cos(3.0 * pi * t * std::exp(-0.09 * t)) - 3.15) +
+             1.0;
+    case DahlSignal::kDampedCosine:
+      return 5.0 + 3.4 * std::exp(-0.24 * t) * std::cos(2.0 * pi * t);
   }
   return 0.0;
 }
@@ -43,8 +50,10 @@ double DahlSignalValue(DahlSignal s, double t) {
 double DahlSignalRate(DahlSignal s, double t) {
   constexpr double pi = std::numbers::pi;
   switch (s) {
-    case DahlSignal::kSine: return std::cos(t);
-    case DahlSignal::kOffsetSine: return 50.0 * pi * std::cos(pi * t);
+    case DahlSignal::kSine:
+      return std::cos(t);
+    case DahlSignal::kOffsetSine:
+      return 50.0 * pi * std::cos(pi * t);
     case DahlSignal::kChirp: {
       const double decay = std::exp(-0.13 * t);
       const double phase = 3.0 * pi * t * std::exp(-0.09 * t);
@@ -131,7 +140,9 @@ class DahlOde final : public OdeSystem {
 
  private:
   // k v − g d − a1 b1: every force but damping and the Coulomb term [N].
-  double DrivingForce(double t, double d) const { return p_.k * input_(t) - p_.g * d - p_.a1 * p_.b1; }
+  double DrivingForce(double t, double d) const {
+    return p_.k * input_(t) - p_.g * d - p_.a1 * p_.b1;
+  }
 
   DahlParams p_;
   const DahlInput& input_;
@@ -141,14 +152,15 @@ class DahlOde final : public OdeSystem {
 
 }  // namespace
 
-DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input, std::span<const double> times,
-                       const DahlOptions& options) {
+DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input,
+                       std::span<const double> times, const DahlOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   DahlTrace trace;
   auto fail = [&](SimStatus st, std::string msg) {
     trace.summary.status = st;
     trace.summary.message = std::move(msg);
-    trace.summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    trace.summary.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return trace;
   };
   if (auto s = params.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
@@ -156,7 +168,8 @@ DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input, std::sp
   if (!input) return fail(SimStatus::kInvalidInput, "input: no signal given");
   for (size_t k = 0; k < times.size(); ++k) {
     if (!(std::isfinite(times[k]) && times[k] >= 0))
-      return fail(SimStatus::kInvalidInput, FieldError("times[" + std::to_string(k) + "]", times[k], "must be finite and >= 0"));
+      return fail(SimStatus::kInvalidInput, FieldError("times[" + std::to_string(k) + "]", times[k],
+                                                       "must be finite and >= 0"));
   }
   try {
     DahlOde ode(params, input);
@@ -184,7 +197,8 @@ DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input, std::sp
   } catch (const std::exception& e) {  // the input function threw outside a CVODE callback
     return fail(SimStatus::kInvalidInput, std::string("input: ") + e.what());
   }
-  trace.summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  trace.summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return trace;
 }
 

@@ -4,12 +4,13 @@
 //
 // integrated with CVODE's Adams method (as the paper's reference, Mathematica NDSolve with Adams).
 //
-// The sgn(ḋ) term is a Coulomb-like force c sgn(ḋ), c = b0 a2, discontinuous at ḋ = 0. It is handled
-// exactly, event by event: the sign s ∈ {−1, 0, +1} is a discrete state held constant between events;
-// a root function stops the integrator where ḋ crosses 0 (while sliding) or where the driving force
-// F0 = k v − g d − a1 b1 leaves [−c, c] (while stuck), and the mode is then chosen Filippov-style: slide
-// up if F0 > c, down if F0 < −c, else stick (ḋ = 0, d held) until F0 leaves [−c, c]. With the spec's
-// b0 = 0 the term vanishes, the system is linear and smooth, and no events are needed.
+// The sgn(ḋ) term is a Coulomb-like force c sgn(ḋ), c = b0 a2, discontinuous at ḋ = 0. It is
+// handled exactly, event by event: the sign s ∈ {−1, 0, +1} is a discrete state held constant
+// between events; a root function stops the integrator where ḋ crosses 0 (while sliding) or where
+// the driving force F0 = k v − g d − a1 b1 leaves [−c, c] (while stuck), and the mode is then
+// chosen Filippov-style: slide up if F0 > c, down if F0 < −c, else stick (ḋ = 0, d held) until F0
+// leaves [−c, c]. With the spec's b0 = 0 the term vanishes, the system is linear and smooth, and no
+// events are needed.
 #pragma once
 
 #include <functional>
@@ -23,14 +24,14 @@ namespace pz::model {
 
 /// Parameters of the Dahl plant, defaults from the spec's table.
 struct DahlParams {
-  double m = 0.1828;        ///< mass [kg], finite, > 0
-  double epsilon = 190.154; ///< ε, damping [N s/m], finite, ≥ 0
-  double g = 2.6e4;         ///< stiffness [N/m], finite, ≥ 0
-  double k = 0.0336;        ///< input gain [C/m = N/V], finite
-  double b1 = 3.09292e5;    ///< Dahl coefficient b1 [N per unit a1], finite
-  double b0 = 0.0;          ///< Dahl coefficient b0 [N per unit a2], finite
-  double a1 = -0.25886;     ///< [-], finite
-  double a2 = 7.0626;       ///< [-], finite
+  double m = 0.1828;         ///< mass [kg], finite, > 0
+  double epsilon = 190.154;  ///< ε, damping [N s/m], finite, ≥ 0
+  double g = 2.6e4;          ///< stiffness [N/m], finite, ≥ 0
+  double k = 0.0336;         ///< input gain [C/m = N/V], finite
+  double b1 = 3.09292e5;     ///< Dahl coefficient b1 [N per unit a1], finite
+  double b0 = 0.0;           ///< Dahl coefficient b0 [N per unit a2], finite
+  double a1 = -0.25886;      ///< [-], finite
+  double a2 = 7.0626;        ///< [-], finite
   Status Validate() const;
   /// Coulomb level c = b0 a2 of the sgn(ḋ) term [N].
   double coulomb() const { return b0 * a2; }
@@ -38,10 +39,10 @@ struct DahlParams {
 
 /// The spec's four input signals v(t) [V], t ∈ [0, 10] s.
 enum class DahlSignal : int {
-  kSine = 1,           ///< 1: sin(t)
-  kOffsetSine = 2,     ///< 2: 50 + 50 sin(π t)
-  kChirp = 3,          ///< 3: 5 e^(−0.13 t) (cos(3π t e^(−0.09 t)) − 3.15) + 1
-  kDampedCosine = 4,   ///< 4: 5 + 3.4 e^(−0.24 t) cos(2π t)
+  kSine = 1,          ///< 1: sin(t)
+  kOffsetSine = 2,    ///< 2: 50 + 50 sin(π t)
+  kChirp = 3,         ///< 3: 5 e^(−0.13 t) (cos(3π t e^(−0.09 t)) − 3.15) + 1
+  kDampedCosine = 4,  ///< 4: 5 + 3.4 e^(−0.24 t) cos(2π t)
 };
 
 /// v(t) [V] of a spec signal.
@@ -73,11 +74,11 @@ struct DahlTrace {
 /// The paper's output grid: 0, dt, …, t_end (10,001 points for the defaults).
 std::vector<double> DahlGridTimes(double t_end = 10.0, double dt = 1e-3);
 
-/// Simulates from rest at t = 0 (CVODE Adams, Newton iteration with the analytic Jacobian) and samples
-/// at times (finite, strictly increasing, ≥ 0). Never throws: invalid input comes back as
+/// Simulates from rest at t = 0 (CVODE Adams, Newton iteration with the analytic Jacobian) and
+/// samples at times (finite, strictly increasing, ≥ 0). Never throws: invalid input comes back as
 /// SimStatus::kInvalidInput, a failed solve as kSolverFailure, each with a message.
-DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input, std::span<const double> times,
-                       const DahlOptions& options = {});
+DahlTrace SimulateDahl(const DahlParams& params, const DahlInput& input,
+                       std::span<const double> times, const DahlOptions& options = {});
 /// The same for a spec signal.
 DahlTrace SimulateDahl(const DahlParams& params, DahlSignal signal, std::span<const double> times,
                        const DahlOptions& options = {});

@@ -60,10 +60,9 @@ const char* DenseBackendName() {
   }();
   return name.c_str();
 #else
-  static const std::string name = "Eigen " + std::to_string(EIGEN_WORLD_VERSION) + "." +
-                                  std::to_string(EIGEN_MAJOR_VERSION) + "." +
-                                  std::to_string(EIGEN_MINOR_VERSION) + " (" +
-                                  Eigen::SimdInstructionSetsInUse() + ")";
+  static const std::string name =
+      "Eigen " + std::to_string(EIGEN_WORLD_VERSION) + "." + std::to_string(EIGEN_MAJOR_VERSION) +
+      "." + std::to_string(EIGEN_MINOR_VERSION) + " (" + Eigen::SimdInstructionSetsInUse() + ")";
   return name.c_str();
 #endif
 }
@@ -112,7 +111,8 @@ bool CholeskyLower(Eigen::Ref<Eigen::MatrixXd> A, double* rcond) {
   std::vector<double> work(3 * static_cast<size_t>(n) + 1);
   std::vector<int> iwork(static_cast<size_t>(n) + 1);
   std::lock_guard<std::mutex> lock(blas_mutex);
-  const double anorm = rcond != nullptr ? dlansy_("1", "L", &n, A.data(), &lda, work.data(), 1, 1) : 0;
+  const double anorm =
+      rcond != nullptr ? dlansy_("1", "L", &n, A.data(), &lda, work.data(), 1, 1) : 0;
   int info = 0;
   dpotrf_("L", &n, A.data(), &lda, &info, 1);
   if (info != 0) return false;

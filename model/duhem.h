@@ -27,11 +27,11 @@
 namespace pz::model {
 
 struct DuhemParams {
-  double alpha = 0.02;  ///< [1/V], ≥ 0
-  double c = 0.1;       ///< [y/V]
-  double c3 = 0;        ///< [y/V³]
-  double b = 0.05;      ///< [y/V]
-  double lambda = 0;    ///< [1/s], ≥ 0
+  double alpha = 0.02;      ///< [1/V], ≥ 0
+  double c = 0.1;           ///< [y/V]
+  double c3 = 0;            ///< [y/V³]
+  double b = 0.05;          ///< [y/V]
+  double lambda = 0;        ///< [1/s], ≥ 0
   Status Validate() const;  ///< finite, α ≥ 0, λ ≥ 0; names the field
 };
 

@@ -14,11 +14,12 @@
 namespace pz::model {
 namespace {
 
-// ---- shared arithmetic ----------------------------------------------------------------------------
+// ---- shared arithmetic
+// ----------------------------------------------------------------------------
 
-/// First-order low-pass τ ẋ = s − x over the samples s_k = in(v_k) (linear in between), from rest at
-/// s_0: exact first-order-hold discretisation; each v_k replaced by out(v_k, x_k) in the same pass
-/// (v_k read before it is replaced). τ ≤ 1e-12 dt: x = s.
+/// First-order low-pass τ ẋ = s − x over the samples s_k = in(v_k) (linear in between), from rest
+/// at s_0: exact first-order-hold discretisation; each v_k replaced by out(v_k, x_k) in the same
+/// pass (v_k read before it is replaced). τ ≤ 1e-12 dt: x = s.
 template <class In, class Out>
 void LowpassMap(std::span<double> v, double tau, double dt, In in, Out out) {
   if (v.empty()) return;
@@ -39,12 +40,16 @@ void LowpassMap(std::span<double> v, double tau, double dt, In in, Out out) {
 
 /// The low-pass of v itself, in place.
 void LowpassInPlace(std::span<double> v, double tau, double dt) {
-  LowpassMap(v, tau, dt, [](double e) { return e; }, [](double, double x) { return x; });
+  LowpassMap(
+      v, tau, dt, [](double e) { return e; }, [](double, double x) { return x; });
 }
 
-// ---- CVODE extensions (the continuous-time forms) ------------------------------------------------
+// ---- CVODE extensions (the continuous-time forms)
+// ------------------------------------------------
 
-int StateIndex(const BimorphPoint& p, int i) { return static_cast<int>(p.x.data() - p.y.data()) + i; }
+int StateIndex(const BimorphPoint& p, int i) {
+  return static_cast<int>(p.x.data() - p.y.data()) + i;
+}
 
 // τ ẋ = u − x; drive out (x, (u − x)/τ).
 class LowpassExtension final : public BimorphExtension {
@@ -58,7 +63,8 @@ class LowpassExtension final : public BimorphExtension {
     u = p.x[0];
     return 0;
   }
-  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du,
+                          std::span<double> dud) const override {
     const int ix = StateIndex(p, 0);
     for (size_t j = 0; j < du.size(); ++j) {
       dud[j] = du[j] / tau_;
@@ -92,7 +98,8 @@ class QuadraticExtension final : public BimorphExtension {
     u_dot = p.u_dot * (1.0 + 2.0 * c_ * p.u);
     return 0;
   }
-  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du,
+                          std::span<double> dud) const override {
     const double g = 1.0 + 2.0 * c_ * p.u;
     for (size_t j = 0; j < du.size(); ++j) {
       dud[j] = dud[j] * g + 2.0 * c_ * p.u_dot * du[j];
@@ -118,7 +125,8 @@ class CreepExtension final : public BimorphExtension {
     u_dot = p.u_dot + (k_ * p.u - p.x[0]) / tau_;
     return 0;
   }
-  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du,
+                          std::span<double> dud) const override {
     const int ix = StateIndex(p, 0);
     for (size_t j = 0; j < du.size(); ++j) dud[j] += k_ * du[j] / tau_;
     dud[ix] -= 1.0 / tau_;
@@ -184,8 +192,8 @@ class CubicExtension final : public BimorphExtension {
   double k3_;
 };
 
-
-// ---- the effects ----------------------------------------------------------------------------------
+// ---- the effects
+// ----------------------------------------------------------------------------------
 
 class DriverLowpass final : public EffectDef {
  public:
@@ -205,13 +213,18 @@ class DriverLowpass final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<LowpassExtension>(p[0]);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.004, 0.03)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
+    return {d.Uniform(0.004, 0.03)};
+  }
   FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
     const double tau = d.LogUniform(0.005, 0.08);
-    if (other_form) return {"second-order (two poles)", tau, {{tau / 2}, {tau / 2}}};  // same total lag
+    if (other_form)
+      return {"second-order (two poles)", tau, {{tau / 2}, {tau / 2}}};  // same total lag
     return {"first-order", tau, {{tau}}};
   }
-  FinBox Fin() const override { return {1, {{0.0, 0.2, 0.01, false, "time constant of the amplifier"}}}; }
+  FinBox Fin() const override {
+    return {1, {{0.0, 0.2, 0.01, false, "time constant of the amplifier"}}};
+  }
 };
 
 class QuadraticDrive final : public EffectDef {
@@ -241,7 +254,9 @@ class QuadraticDrive final : public EffectDef {
     const double c2 = s * d.LogUniform(1e-5, 2e-4);
     return {"quadratic", c2, {{c2}}};
   }
-  FinBox Fin() const override { return {6, {{-5e-4, 5e-4, 2e-5, false, "quadratic drive coefficient"}}}; }
+  FinBox Fin() const override {
+    return {6, {{-5e-4, 5e-4, 2e-5, false, "quadratic drive coefficient"}}};
+  }
 };
 
 class Creep final : public EffectDef {
@@ -260,7 +275,9 @@ class Creep final : public EffectDef {
     // u += the low-pass of k (u − u0), in one pass over u without a buffer (LowpassMap). A search
     // evaluates this once per genome.
     const double k = p[0], u0 = u[0];
-    LowpassMap(u, p[1], dt, [k, u0](double e) { return k * (e - u0); }, [](double e, double x) { return e + x; });
+    LowpassMap(
+        u, p[1], dt, [k, u0](double e) { return k * (e - u0); },
+        [](double e, double x) { return e + x; });
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
@@ -272,7 +289,9 @@ class Creep final : public EffectDef {
   }
   FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
     const double k = d.LogUniform(0.02, 0.3), tau = d.LogUniform(0.5, 10);
-    if (other_form) return {"two relaxations", k, {{k / 2, tau / 3}, {k / 2, tau * 3}}};  // a decade apart, one gain
+    if (other_form)
+      return {
+          "two relaxations", k, {{k / 2, tau / 3}, {k / 2, tau * 3}}};  // a decade apart, one gain
     return {"one relaxation", k, {{k, tau}}};
   }
   FinBox Fin() const override {
@@ -309,7 +328,9 @@ class Delay final : public EffectDef {
     }
   }
   double TimeShift(std::span<const double> p) const override { return p[0]; }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.003, 0.02)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
+    return {d.Uniform(0.003, 0.02)};
+  }
   FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
     const double tau = d.LogUniform(0.003, 0.05);
     return {"pure delay", tau, {{tau}}};
@@ -320,28 +341,33 @@ class Delay final : public EffectDef {
 // Rate dependence (issue 22): the loop widens with the drive rate, and the widening saturates. In
 // the rate-dependent Prandtl–Ishlinskii model (Al Janaideh & Krejčí) every play's threshold grows
 // with the drive rate, r_j(u̇) = r_j + λ(u̇); the part λ common to every threshold is, for any
-// family, a play of half-width λ(u̇) ahead of it: the drive the hysteresis sees lags the applied one
+// family, a play of half-width λ(u̇) ahead of it: the drive the hysteresis sees lags the applied
+// one
 // by λ in the direction of motion, and holds at a reversal (never beyond the drive's extremes).
 // Measured stacks show the loop width growing with frequency sub-linearly, towards a bound (domain
 // walls cannot switch faster than their mobility allows), so λ saturates:
 //   u_e = play_λ[u] = max(u − λ, min(u + λ, u_e⁻)),   λ = r_m tanh(τ_r |u̇| / r_m),
 // with the rate u̇ at t_k estimated by the second-order backward difference (3u_k − 4u_{k−1} +
-// u_{k−2}) / 2dt (exact for a drive quadratic over the last two samples; at rest at u[0] before it).
-// A reversal between two samples (the estimate changes sign) passes the vertex of the drive there,
-// u_k − u̇_k² dt / 2(u̇_k − u̇_{k−1}) (the parabola through the two rates), where λ = 0: the play
-// waits at the drive's extreme, not at the sample nearest it (at 8 Hz and 200 Hz they differ by
-// up to 0.4 % of the swing, and λ at that sample can be many times more).
-// Below the knee rate r_m/τ_r the lag is τ_r u̇ — what a driver low-pass or a delay of τ_r gives to
-// first order —, above it the lag tends to r_m whatever the rate: a loop that stops widening with
-// frequency, which neither a low-pass (whose lag grows with the rate and whose gain falls) nor a
-// delay (a phase growing with frequency) can give. So records at several rates that reach the knee
-// tell it apart; records at one rate do not (records/excitation.h, the rate span).
+// u_{k−2}) / 2dt (exact for a drive quadratic over the last two samples; at rest at u[0] before
+// it). A reversal between two samples (the estimate changes sign) passes the vertex of the drive
+// there, u_k − u̇_k² dt / 2(u̇_k − u̇_{k−1}) (the parabola through the two rates), where λ = 0: the
+// play waits at the drive's extreme, not at the sample nearest it (at 8 Hz and 200 Hz they differ
+// by up to 0.4 % of the swing, and λ at that sample can be many times more). Below the knee rate
+// r_m/τ_r the lag is τ_r u̇ — what a driver low-pass or a delay of τ_r gives to first order —,
+// above
+// it the lag tends to r_m whatever the rate: a loop that stops widening with frequency, which
+// neither a low-pass (whose lag grows with the rate and whose gain falls) nor a delay (a phase
+// growing with frequency) can give. So records at several rates that reach the knee tell it apart;
+// records at one rate do not (records/excitation.h, the rate span).
 class RateDependence final : public EffectDef {
  public:
   const char* name() const override { return "rate-dependence"; }
-  const char* title() const override { return "rate-dependent lag of the drive, saturating (loop width grows with rate)"; }
+  const char* title() const override {
+    return "rate-dependent lag of the drive, saturating (loop width grows with rate)";
+  }
   const char* equation() const override {
-    return "u_e = play_lambda[u], lambda = r_m tanh(tau_r |u'| / r_m), u' = (3u_k - 4u_k-1 + u_k-2)/(2 dt)";
+    return "u_e = play_lambda[u], lambda = r_m tanh(tau_r |u'| / r_m), u' = (3u_k - 4u_k-1 + "
+           "u_k-2)/(2 dt)";
   }
   EffectStage stage() const override { return EffectStage::kDrive; }
   int kernel() const override { return pzk::PZK_RATE_DEPENDENCE; }
@@ -370,10 +396,11 @@ class RateDependence final : public EffectDef {
 
  private:
   // As the kernel's pzk_rate_dependence_step (model/kernels/effects.h), operation for operation.
-  static double Lagged(double r_m, double tau, double dt, double v, double prev1, double prev2, double z,
-                       double& rate_prev) {
+  static double Lagged(double r_m, double tau, double dt, double v, double prev1, double prev2,
+                       double z, double& rate_prev) {
     const double rate = (3 * v - 4 * prev1 + prev2) / (2 * dt);
-    if (rate * rate_prev < 0) z = v - rate * rate * dt / (2 * (rate - rate_prev));  // the vertex between
+    if (rate * rate_prev < 0)
+      z = v - rate * rate * dt / (2 * (rate - rate_prev));  // the vertex between
     rate_prev = rate;
     const double lambda = r_m * std::tanh(tau * std::abs(rate) / r_m);
     return std::max(v - lambda, std::min(v + lambda, z));
@@ -384,7 +411,9 @@ class HingeFriction final : public EffectDef {
  public:
   const char* name() const override { return "hinge-friction"; }
   const char* title() const override { return "Dahl friction at the fin hinge"; }
-  const char* equation() const override { return "F' = sigma w_tip' (1 - F/F_c sgn w_tip'), tip force -F"; }
+  const char* equation() const override {
+    return "F' = sigma w_tip' (1 - F/F_c sgn w_tip'), tip force -F";
+  }
   EffectStage stage() const override { return EffectStage::kBeam; }
   std::vector<ParamInfo> Params(const DataScale&) const override {  // physical: the beam's units
     return {{"fc_n", "N", 0.0, 1.0, false}, {"sigma_n_per_m", "N/m", 20.0, 2e5, true}};
@@ -420,7 +449,9 @@ class CubicStiffening final : public EffectDef {
     return {"cubic", k3, {{k3}}};
   }
   FinBox Fin() const override {
-    return {5, {{-5e6, 2e7, 1e6, false, "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}};
+    return {
+        5,
+        {{-5e6, 2e7, 1e6, false, "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}};
   }
 };
 
@@ -438,14 +469,17 @@ class CubicStiffening final : public EffectDef {
 // zero at rest).
 class CreepSpectrum final : public EffectDef {
  public:
-  static constexpr double kTauMin = 0.05;    ///< [s] the fastest relaxation
-  static constexpr double kPerDecade = 2;    ///< relaxations per decade of time
-  static constexpr double kMaxWeight = 0.05; ///< per relaxation: 10 % of the output per decade
+  static constexpr double kTauMin = 0.05;     ///< [s] the fastest relaxation
+  static constexpr double kPerDecade = 2;     ///< relaxations per decade of time
+  static constexpr double kMaxWeight = 0.05;  ///< per relaxation: 10 % of the output per decade
 
   const char* name() const override { return "creep-spectrum"; }
-  const char* title() const override { return "creep over decades (relaxations from 0.05 s to the window's length)"; }
+  const char* title() const override {
+    return "creep over decades (relaxations from 0.05 s to the window's length)";
+  }
   const char* equation() const override {
-    return "y_e = y - sum_i w_i (y - x_i), tau_i x_i' = y - x_i, w_i >= 0, tau_i = 0.05 s .. T log-spaced";
+    return "y_e = y - sum_i w_i (y - x_i), tau_i x_i' = y - x_i, w_i >= 0, tau_i = 0.05 s .. T "
+           "log-spaced";
   }
   EffectStage stage() const override { return EffectStage::kOutput; }
   std::vector<ParamInfo> Params(const DataScale& s) const override {
@@ -457,9 +491,11 @@ class CreepSpectrum final : public EffectDef {
     }
     return out;
   }
-  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f,
+                   std::span<double> y) const override {
     if (y.empty()) return;
-    const std::vector<double> taus = Times(f.duration);  // p holds these weights first (then later effects')
+    const std::vector<double> taus =
+        Times(f.duration);  // p holds these weights first (then later effects')
     const size_t n = taus.size();
     if (p.size() < n) throw std::logic_error("creep-spectrum: fewer weights than relaxations");
     std::vector<double> a(n), c(n), x(n, 0.0);
@@ -494,17 +530,21 @@ class CreepSpectrum final : public EffectDef {
   static std::vector<double> Times(double T) {
     if (!(std::isfinite(T) && T >= 10 * kTauMin)) {
       char msg[400];
-      std::snprintf(msg, sizeof msg,
-                    "effect 'creep-spectrum' needs a scored window of at least %g s (relaxations from %g s up to "
-                    "the window's length, one decade at least); the longest training window is %g s: record "
-                    "longer, or use 'creep' (one relaxation)",
-                    10 * kTauMin, kTauMin, T);
+      std::snprintf(
+          msg, sizeof msg,
+          "effect 'creep-spectrum' needs a scored window of at least %g s (relaxations from %g s "
+          "up to "
+          "the window's length, one decade at least); the longest training window is %g s: record "
+          "longer, or use 'creep' (one relaxation)",
+          10 * kTauMin, kTauMin, T);
       throw InputError(msg);
     }
-    const size_t count = static_cast<size_t>(std::ceil(kPerDecade * std::log10(T / kTauMin) - 1e-9)) + 1;
+    const size_t count =
+        static_cast<size_t>(std::ceil(kPerDecade * std::log10(T / kTauMin) - 1e-9)) + 1;
     std::vector<double> taus(count, kTauMin);
     for (size_t i = 1; i < count; ++i)
-      taus[i] = kTauMin * std::pow(T / kTauMin, static_cast<double>(i) / static_cast<double>(count - 1));
+      taus[i] =
+          kTauMin * std::pow(T / kTauMin, static_cast<double>(i) / static_cast<double>(count - 1));
     return taus;
   }
 };
@@ -516,8 +556,11 @@ class Friction final : public EffectDef {
   const char* equation() const override { return "y_e = play_r[y]"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
   int kernel() const override { return pzk::PZK_FRICTION; }
-  std::vector<ParamInfo> Params(const DataScale& s) const override { return {{"r", "y", 0, 0.2 * s.y_half, false}}; }
-  void ApplyOutput(std::span<const double> p, const OutputFrame&, std::span<double> y) const override {
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    return {{"r", "y", 0, 0.2 * s.y_half, false}};
+  }
+  void ApplyOutput(std::span<const double> p, const OutputFrame&,
+                   std::span<double> y) const override {
     const double r = std::max(p[0], 0.0);
     if (r == 0 || y.empty()) return;
     double z = y[0];
@@ -526,7 +569,9 @@ class Friction final : public EffectDef {
       v = z;
     }
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override { return {d.Uniform(0.05, 0.4)}; }
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
+    return {d.Uniform(0.05, 0.4)};
+  }
 };
 
 class Stiffening final : public EffectDef {
@@ -536,8 +581,11 @@ class Stiffening final : public EffectDef {
   const char* equation() const override { return "y_e = y - k3 Y ((y - y0)/Y)^3"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
   int kernel() const override { return pzk::PZK_STIFFENING; }
-  std::vector<ParamInfo> Params(const DataScale&) const override { return {{"k3", "-", -0.3, 0.3, false}}; }
-  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+  std::vector<ParamInfo> Params(const DataScale&) const override {
+    return {{"k3", "-", -0.3, 0.3, false}};
+  }
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f,
+                   std::span<double> y) const override {
     if (y.empty()) return;
     const double y0 = y[0], Y = f.y_half;
     for (double& v : y) {
@@ -558,11 +606,14 @@ class Drift final : public EffectDef {
   const char* equation() const override { return "y_e = y + rate (t - t_window)"; }
   EffectStage stage() const override { return EffectStage::kOutput; }
   int kernel() const override { return pzk::PZK_DRIFT; }
-  const char* former_name() const override { return "output-drift"; }  // its name before the one library
+  const char* former_name() const override {
+    return "output-drift";
+  }  // its name before the one library
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     return {{"rate", "y/s", -s.y_half / s.duration, s.y_half / s.duration, false}};
   }
-  void ApplyOutput(std::span<const double> p, const OutputFrame& f, std::span<double> y) const override {
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f,
+                   std::span<double> y) const override {
     for (size_t k = 0; k < y.size(); ++k) y[k] += p[0] * (static_cast<double>(k) - f.origin) * f.dt;
   }
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
@@ -593,10 +644,10 @@ const Drift kDrift;
 }  // namespace
 
 const std::vector<const EffectDef*>& Effects() {
-  static const std::vector<const EffectDef*> all = {&kDriverLowpass,    &kQuadraticDrive, &kCreep,
-                                                    &kDelay,            &kRateDependence, &kHingeFriction,  &kCubicStiffening,
-                                                    &kCreepSpectrum,    &kFriction,       &kStiffening,
-                                                    &kDrift};
+  static const std::vector<const EffectDef*> all = {
+      &kDriverLowpass, &kQuadraticDrive,  &kCreep,         &kDelay,    &kRateDependence,
+      &kHingeFriction, &kCubicStiffening, &kCreepSpectrum, &kFriction, &kStiffening,
+      &kDrift};
   return all;
 }
 
@@ -608,7 +659,8 @@ const EffectDef* FindEffect(std::string_view name) {
 
 EffectKind EffectKind::Named(std::string_view name) {
   const EffectDef* def = FindEffect(name);
-  if (def == nullptr) throw std::logic_error("no effect named '" + std::string(name) + "' in model::Effects()");
+  if (def == nullptr)
+    throw std::logic_error("no effect named '" + std::string(name) + "' in model::Effects()");
   return *def;
 }
 
@@ -627,24 +679,32 @@ size_t EffectIndex(const EffectDef& effect) {
   const auto& all = Effects();
   for (size_t i = 0; i < all.size(); ++i)
     if (all[i] == &effect) return i;
-  throw std::logic_error(std::string("effect '") + effect.name() + "' is not registered in model::Effects()");
+  throw std::logic_error(std::string("effect '") + effect.name() +
+                         "' is not registered in model::Effects()");
 }
 
 const char* StageName(EffectStage stage) {
   switch (stage) {
-    case EffectStage::kDrive: return "drive";
-    case EffectStage::kBeam: return "beam";
-    case EffectStage::kOutput: return "output";
+    case EffectStage::kDrive:
+      return "drive";
+    case EffectStage::kBeam:
+      return "beam";
+    case EffectStage::kOutput:
+      return "output";
   }
   return "?";
 }
 
 double TruthDraw::Uniform(double lo, double hi) { return lo + (hi - lo) * u01_(); }
-double TruthDraw::LogUniform(double lo, double hi) { return lo * std::exp(std::log(hi / lo) * u01_()); }
+double TruthDraw::LogUniform(double lo, double hi) {
+  return lo * std::exp(std::log(hi / lo) * u01_());
+}
 double TruthDraw::Sign() { return u01_() < 0.5 ? -1.0 : 1.0; }
 
 void EffectDef::ApplyDrive(std::span<const double>, double, std::span<double>) const {}
 void EffectDef::ApplyOutput(std::span<const double>, const OutputFrame&, std::span<double>) const {}
-std::unique_ptr<BimorphExtension> EffectDef::MakeExtension(std::span<const double>) const { return nullptr; }
+std::unique_ptr<BimorphExtension> EffectDef::MakeExtension(std::span<const double>) const {
+  return nullptr;
+}
 
 }  // namespace pz::model

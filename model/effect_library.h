@@ -19,10 +19,10 @@
 //   rate-dependence  drive   u_e = play_λ[u], λ = r_m tanh(τ_r |u̇|/r_m)  r_m, tau_r_s
 //   hinge-friction   beam    Ḟ = σ ẇ (1 − F/F_c sgn ẇ), tip force −F    fc_n, sigma_n_per_m
 //   cubic-stiffening beam    tip force −k₃ w_tip³                       k3_n_per_m3
-//   creep-spectrum   output  y_e = y − Σ w_i (y − x_i), τ_i ẋ_i = y − x_i    w_i ≥ 0 at τ_i = 0.05 s … T
-//   friction         output  y_e = play_r[y]                            r
-//   stiffening       output  y_e = y − k₃ Y ((y − y_0)/Y)³              k3
-//   drift            output  y_e = y + ρ (t − t_w)                      rate
+//   creep-spectrum   output  y_e = y − Σ w_i (y − x_i), τ_i ẋ_i = y − x_i    w_i ≥ 0 at τ_i = 0.05
+//   s … T friction         output  y_e = play_r[y]                            r stiffening output
+//   y_e = y − k₃ Y ((y − y_0)/Y)³              k3 drift            output  y_e = y + ρ (t − t_w)
+//   rate
 //
 // Drive effects act on u in registry order, output effects on y in registry order; params[0] is the
 // magnitude (zero: identity; the creep spectrum's weights are each their relaxation's magnitude,
@@ -92,7 +92,8 @@ struct OutputFrame {
 
 /// One parameter of the bimorph-fin bench's search box (model/effects.h), in the library's order:
 /// the physical range, a typical magnitude (search scaling, finite-difference steps, > 0), a doc
-/// line and, where the fin's output differs from the library's scale, the unit (null: the library's).
+/// line and, where the fin's output differs from the library's scale, the unit (null: the
+/// library's).
 struct FinParam {
   double lower = 0, upper = 0, scale = 1;
   bool log_scale = false;
@@ -146,15 +147,17 @@ class EffectDef {
   // ---- drive stage ----
   /// In place on a drive sampled every dt (linear in between, at rest at u[0] before u[0]).
   virtual void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const;
-  /// True when ApplyDrive acts sample by sample without memory (valid on any, even non-uniform, grid).
+  /// True when ApplyDrive acts sample by sample without memory (valid on any, even non-uniform,
+  /// grid).
   virtual bool memoryless() const { return false; }
-  /// The effect's pure time shift [s] (the delay's τ_d; 0 else): for a caller with an analytic drive
-  /// and a time-invariant chain started from rest, exact in place of ApplyDrive.
+  /// The effect's pure time shift [s] (the delay's τ_d; 0 else): for a caller with an analytic
+  /// drive and a time-invariant chain started from rest, exact in place of ApplyDrive.
   virtual double TimeShift(std::span<const double>) const { return 0; }
 
   // ---- output stage ----
   /// In place on the output y (y[0] = rest output).
-  virtual void ApplyOutput(std::span<const double> p, const OutputFrame& frame, std::span<double> y) const;
+  virtual void ApplyOutput(std::span<const double> p, const OutputFrame& frame,
+                           std::span<double> y) const;
   /// True when ApplyOutput is linear and homogeneous in y (L[a y₁ + b y₂] = a L[y₁] + b L[y₂], the
   /// rest output a fixed point): a linear family can take it on each of its regressors.
   virtual bool linear_output() const { return false; }
@@ -184,9 +187,12 @@ class EffectDef {
   /// The parameters of a records check's truth (diagnose/check.cc), on the synthetic stack's scale
   /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect whose
   /// parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
-  virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const { return {}; }
+  virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const {
+    return {};
+  }
   /// A fin-bench check's truth (diagnose/fin_synthetic.cc) in the fin bench's units; `other_form`
-  /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer it.
+  /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer
+  /// it.
   virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }
 };
 
@@ -239,5 +245,7 @@ size_t EffectIndex(const EffectDef& effect);
 
 template <>
 struct std::hash<pz::model::EffectKind> {
-  size_t operator()(pz::model::EffectKind k) const noexcept { return std::hash<const void*>()(k.def()); }
+  size_t operator()(pz::model::EffectKind k) const noexcept {
+    return std::hash<const void*>()(k.def());
+  }
 };

@@ -26,11 +26,13 @@ std::vector<EffectInfo> BuildLibrary() {
     EffectInfo info{*def, def, def->name(), def->title(), def->stage(), def->equation(), 0, {}};
     for (size_t i = 0; i < names.size(); ++i) {
       const FinParam& p = box.params[i];
-      info.params.push_back({names[i].name, p.unit ? p.unit : names[i].unit, p.lower, p.upper, p.scale, p.log_scale, p.doc});
+      info.params.push_back({names[i].name, p.unit ? p.unit : names[i].unit, p.lower, p.upper,
+                             p.scale, p.log_scale, p.doc});
     }
     for (const auto& [order, other] : lib)
       if (order == box.order)
-        throw std::logic_error(std::string("fin boxes of '") + other.name + "' and '" + def->name() + "': same order");
+        throw std::logic_error(std::string("fin boxes of '") + other.name + "' and '" +
+                               def->name() + "': same order");
     lib.push_back({box.order, std::move(info)});
   }
   std::sort(lib.begin(), lib.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -40,7 +42,8 @@ std::vector<EffectInfo> BuildLibrary() {
 }
 
 const EffectInfo& NoneInfo() {
-  static const EffectInfo none{EffectKind(), nullptr, "none", "no unmodelled effect", EffectStage::kOutput, "", -1, {}};
+  static const EffectInfo none{EffectKind(),         nullptr, "none", "no unmodelled effect",
+                               EffectStage::kOutput, "",      -1,     {}};
   return none;
 }
 
@@ -58,12 +61,15 @@ std::vector<Link> Chain(std::span<const Effect> effects, const EffectStage* stag
     if (e.IsIdentity()) continue;
     const EffectInfo& info = GetEffectInfo(e.kind);
     const EffectDef* def = info.def;
-    if (def == nullptr || e.params.size() != info.params.size())  // callers validate first; never read past
-      throw std::invalid_argument("invalid effect: " + e.Describe() + " (Effect::Validate says why)");
+    if (def == nullptr ||
+        e.params.size() != info.params.size())  // callers validate first; never read past
+      throw std::invalid_argument("invalid effect: " + e.Describe() +
+                                  " (Effect::Validate says why)");
     if (stage != nullptr && def->stage() != *stage) continue;
     r.push_back({EffectIndex(*def), Link{def, e.params}});
   }
-  std::stable_sort(r.begin(), r.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(r.begin(), r.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Link> out;
   for (auto& [i, l] : r) out.push_back(l);
   return out;
@@ -101,7 +107,8 @@ int FinIndex(EffectKind kind) {
   const auto& lib = EffectLibrary();
   for (size_t i = 0; i < lib.size(); ++i)
     if (lib[i].kind == kind) return static_cast<int>(i) + 1;
-  throw std::logic_error(std::string("effect '") + kind.name() + "' is not an effect of the fin bench");
+  throw std::logic_error(std::string("effect '") + kind.name() +
+                         "' is not an effect of the fin bench");
 }
 
 std::optional<EffectKind> ParseEffectKind(std::string_view name) {
@@ -117,14 +124,17 @@ std::string FinEffectError(std::string_view name) {
   const EffectDef* def = FindEffect(name);
   if (def != nullptr)
     return "not an effect of the fin bench: '" + std::string(name) + "' is the library's " +
-           StageName(def->stage()) + "-stage effect of the records families (fin effects: " + known + ")";
-  return "not an effect of the library: '" + std::string(name) + "' is unknown (fin effects: " + known + ")";
+           StageName(def->stage()) +
+           "-stage effect of the records families (fin effects: " + known + ")";
+  return "not an effect of the library: '" + std::string(name) +
+         "' is unknown (fin effects: " + known + ")";
 }
 
 Status Effect::Validate() const {
   const EffectInfo& info = GetEffectInfo(kind);
   if (!kind.none() && info.kind != kind)
-    return InvalidArgument(FieldError("effect.kind", std::string(kind.name()), "not an effect of the fin bench"));
+    return InvalidArgument(
+        FieldError("effect.kind", std::string(kind.name()), "not an effect of the fin bench"));
   if (params.size() != info.params.size())
     return InvalidArgument(FieldError(info.name + ".params.size()", params.size(),
                                       "must be " + std::to_string(info.params.size())));
@@ -158,8 +168,10 @@ std::string Effect::Describe() const {
   os << "(";
   for (size_t i = 0; i < info.params.size(); ++i) {
     os << (i ? ", " : "") << info.params[i].name << " = ";
-    if (i < params.size()) os << params[i];
-    else os << "?";
+    if (i < params.size())
+      os << params[i];
+    else
+      os << "?";
     if (info.params[i].unit != "-") os << " " << info.params[i].unit;
   }
   os << ")";
@@ -187,13 +199,16 @@ bool NeedsCvode(std::span<const Effect> effects) {
 Status EffectSimOptions::Validate() const {
   if (oversample < 1 || oversample > 64)
     return InvalidArgument(FieldError("oversample", oversample, "must be in [1, 64]"));
-  if (!(rtol > 0 && rtol <= 1e-2)) return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
-  if (!(atol > 0 && std::isfinite(atol))) return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
+  if (!(rtol > 0 && rtol <= 1e-2))
+    return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
+  if (!(atol > 0 && std::isfinite(atol)))
+    return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
   if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
   return Status::Ok();
 }
 
-std::vector<double> ShapedDrive(std::span<const Effect> effects, const Sinusoid& drive, std::span<const double> t) {
+std::vector<double> ShapedDrive(std::span<const Effect> effects, const Sinusoid& drive,
+                                std::span<const double> t) {
   std::vector<double> out(t.size(), 0.0);
   if (t.empty()) return out;
   const double V = drive.amplitude_v, om = 2 * std::numbers::pi * drive.frequency_hz;
@@ -244,7 +259,8 @@ std::vector<std::unique_ptr<BimorphExtension>> MakeExtensions(std::span<const Ef
 
 EffectSimulator::EffectSimulator(const BimorphPlant& plant) : plant_(&plant), modal_(plant) {}
 
-SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params, std::span<const Effect> effects,
+SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params,
+                                                 std::span<const Effect> effects,
                                                  const Sinusoid& drive, std::span<double> angle_deg,
                                                  const EffectSimOptions& options,
                                                  std::span<double> theta_deg) const {
@@ -253,7 +269,8 @@ SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params, st
   auto fail = [&](SimStatus st, std::string msg) {
     summary.status = st;
     summary.message = std::move(msg);
-    summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    summary.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return summary;
   };
   if (auto s = params.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
@@ -263,11 +280,14 @@ SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params, st
     if (auto s = e.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
   const size_t n_out = static_cast<size_t>(drive.NumSamples());
   if (angle_deg.size() != n_out || (!theta_deg.empty() && theta_deg.size() != n_out))
-    return fail(SimStatus::kInvalidInput, "output buffers must have " + std::to_string(n_out) + " samples");
-  if (!params.HysteresisBounded()) return fail(SimStatus::kUnboundedHysteresis, "Bouc-Wen loop unbounded");
+    return fail(SimStatus::kInvalidInput,
+                "output buffers must have " + std::to_string(n_out) + " samples");
+  if (!params.HysteresisBounded())
+    return fail(SimStatus::kUnboundedHysteresis, "Bouc-Wen loop unbounded");
 
   const EffectStage kDrive = EffectStage::kDrive, kOutput = EffectStage::kOutput;
-  const std::vector<Link> drive_chain = Chain(effects, &kDrive), output_chain = Chain(effects, &kOutput);
+  const std::vector<Link> drive_chain = Chain(effects, &kDrive),
+                          output_chain = Chain(effects, &kOutput);
   const bool any_drive = !drive_chain.empty();
   double delay = 0;
   for (const Link& l : drive_chain) delay += l.def->TimeShift(l.p);
@@ -339,11 +359,14 @@ SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params, st
     if (!summary.ok()) return fail(summary.status, summary.message);
   }
   for (size_t k = 0; k < n_out; ++k)
-    if (!std::isfinite(theta[k])) return fail(SimStatus::kNonFinite, "non-finite fin angle at sample " + std::to_string(k));
+    if (!std::isfinite(theta[k]))
+      return fail(SimStatus::kNonFinite, "non-finite fin angle at sample " + std::to_string(k));
   ApplyBacklash(params.backlash(), theta, angle_deg);
-  const OutputFrame frame{1.0 / fs, 0.0, 1.0};  // time from the record's start; the fin has no y scale
+  const OutputFrame frame{1.0 / fs, 0.0,
+                          1.0};  // time from the record's start; the fin has no y scale
   for (const Link& l : output_chain) l.def->ApplyOutput(l.p, frame, angle_deg);
-  summary.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  summary.wall_time_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }
 

@@ -14,15 +14,15 @@
 //   drift              output   rate ∈ [−0.2, 0.2] deg/s  (former name output-drift)
 //
 // The arithmetic is the library's: drive effects run in the library's chain order (low-pass →
-// quadratic → creep → delay) through EffectDef::ApplyDrive, output effects through ApplyOutput on the
-// fin angle, beam effects (and, on the CVODE path, the drive filters) as the library's
+// quadratic → creep → delay) through EffectDef::ApplyDrive, output effects through ApplyOutput on
+// the fin angle, beam effects (and, on the CVODE path, the drive filters) as the library's
 // BimorphExtensions. EffectSimulator runs a plant with any list of effects on the fastest exact
 // path: without beam effects the shaped drive is computed on a fine grid (the library's exact
 // first-order-hold filters; without filters pointwise, the delay as an exact time shift) and fed to
-// the fast modal path as a SampledSignal, the linear fin angle θ is read on the record's grid and the
-// backlash is applied there (spec §3: the backlash lives on the sample grid); with a beam effect the
-// whole chain runs on CVODE (drive stages as extensions, the delay as a shift of the output times,
-// which is exact for a time-invariant plant started from rest).
+// the fast modal path as a SampledSignal, the linear fin angle θ is read on the record's grid and
+// the backlash is applied there (spec §3: the backlash lives on the sample grid); with a beam
+// effect the whole chain runs on CVODE (drive stages as extensions, the delay as a shift of the
+// output times, which is exact for a time-invariant plant started from rest).
 //
 // Pure library: no I/O. EffectSimulator is immutable and thread-safe (per-thread scratch, which
 // never carries a result from one call to the next).
@@ -45,11 +45,11 @@ namespace pz::model {
 
 /// One physical parameter of an effect.
 struct EffectParamInfo {
-  std::string name;      ///< e.g. "tau_s"
-  std::string unit;      ///< e.g. "s"
-  double lower = 0;      ///< valid range, lower ≤ value ≤ upper
+  std::string name;  ///< e.g. "tau_s"
+  std::string unit;  ///< e.g. "s"
+  double lower = 0;  ///< valid range, lower ≤ value ≤ upper
   double upper = 0;
-  double scale = 1;      ///< typical magnitude (search scaling, finite-difference steps), > 0
+  double scale = 1;        ///< typical magnitude (search scaling, finite-difference steps), > 0
   bool log_scale = false;  ///< searched on a log scale (then lower > 0)
   std::string doc;
 };
@@ -57,8 +57,8 @@ struct EffectParamInfo {
 struct EffectInfo {
   EffectKind kind;                 ///< the library's effect (none: the entry "none")
   const EffectDef* def = nullptr;  ///< kind.def()
-  std::string name;      ///< selectable name, e.g. "driver-lowpass"
-  std::string title;     ///< e.g. "driver (amplifier) low-pass"
+  std::string name;                ///< selectable name, e.g. "driver-lowpass"
+  std::string title;               ///< e.g. "driver (amplifier) low-pass"
   EffectStage stage = EffectStage::kDrive;
   std::string equation;  ///< one line
   /// Index of the parameter whose zero makes the effect the identity (the magnitude), or -1.
@@ -87,7 +87,8 @@ struct Effect {
   EffectKind kind;
   std::vector<double> params;
 
-  /// Count, finiteness and ranges; the error names the effect, the parameter, the value and the range.
+  /// Count, finiteness and ranges; the error names the effect, the parameter, the value and the
+  /// range.
   Status Validate() const;
   /// True when the effect changes nothing (none, or its magnitude parameter is 0).
   bool IsIdentity() const;
@@ -102,11 +103,11 @@ bool NeedsCvode(std::span<const Effect> effects);
 
 /// Options of EffectSimulator.
 struct EffectSimOptions {
-  int oversample = 4;          ///< fine-grid factor of the sampled fast path, 1 … 64
-  double rtol = 1e-6;          ///< CVODE relative tolerance, in (0, 1e-2] (≈ 2e-6 deg on the bench)
-  double atol = 1e-13;         ///< CVODE absolute tolerance, > 0
-  long max_steps = 5000000;    ///< CVODE step budget, > 0
-  bool force_cvode = false;    ///< run on CVODE even without beam effects (accuracy checks)
+  int oversample = 4;        ///< fine-grid factor of the sampled fast path, 1 … 64
+  double rtol = 1e-6;        ///< CVODE relative tolerance, in (0, 1e-2] (≈ 2e-6 deg on the bench)
+  double atol = 1e-13;       ///< CVODE absolute tolerance, > 0
+  long max_steps = 5000000;  ///< CVODE step budget, > 0
+  bool force_cvode = false;  ///< run on CVODE even without beam effects (accuracy checks)
   Status Validate() const;
 };
 
@@ -131,7 +132,8 @@ class EffectSimulator {
   /// Fin angle y_k [deg] on the drive's sample grid into angle_deg (drive.NumSamples() entries);
   /// optionally the linear fin angle θ_k [deg] into theta_deg (same size, or empty). Never throws:
   /// invalid parameters / effects / options come back as kInvalidInput, physical failures as in
-  /// model::Simulate(). A CVODE run that stalls is tried once more at BDF order ≤ 2 (model/cvode.h).
+  /// model::Simulate(). A CVODE run that stalls is tried once more at BDF order ≤ 2
+  /// (model/cvode.h).
   SimulationSummary SimulateAngle(const BimorphParams& params, std::span<const Effect> effects,
                                   const Sinusoid& drive, std::span<double> angle_deg,
                                   const EffectSimOptions& options = {},

@@ -50,12 +50,14 @@ Eigen::MatrixXd MinMaxMap::Apply(const Eigen::MatrixXd& X) const {
 }
 
 Status MinMaxMap::Validate() const {
-  if (xmin.size() < 1) return InvalidArgument(FieldError("map channels", xmin.size(), "must be >= 1"));
+  if (xmin.size() < 1)
+    return InvalidArgument(FieldError("map channels", xmin.size(), "must be >= 1"));
   if (gain.size() != xmin.size())
     return InvalidArgument(FieldError("map gain size", gain.size(), "must equal the xmin size"));
   for (Eigen::Index k = 0; k < xmin.size(); ++k) {
     if (!std::isfinite(xmin(k)))
-      return InvalidArgument(FieldError("xmin[" + std::to_string(k) + "]", xmin(k), "must be finite"));
+      return InvalidArgument(
+          FieldError("xmin[" + std::to_string(k) + "]", xmin(k), "must be finite"));
     if (!(std::isfinite(gain(k)) && gain(k) > 0))
       return InvalidArgument(
           FieldError("gain[" + std::to_string(k) + "]", gain(k), "must be finite and > 0"));
@@ -77,8 +79,10 @@ namespace {
 // |r| ≤ ln2/2, a degree-13 Taylor polynomial (truncation < 1e−17 relative) and 2^k assembled in the
 // exponent bits; |v| is clamped at 20 (tansig(20) rounds to ±1). Error ≤ 3e−16 absolute against
 // std::tanh. Branch-free so GCC vectorises it (this file is compiled with -fno-trapping-math, see
-// model/CMakeLists.txt); target_clones adds an AVX2+FMA copy chosen at load time on CPUs that have it.
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void TansigKernel(double* x, std::ptrdiff_t n) {
+// model/CMakeLists.txt); target_clones adds an AVX2+FMA copy chosen at load time on CPUs that have
+// it.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void TansigKernel(double* x,
+                                                                              std::ptrdiff_t n) {
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const double v = x[i];
     const double a0 = 2.0 * std::fabs(v);
@@ -110,17 +114,20 @@ void FeedForwardNet::set_params(const Eigen::VectorXd& w) {
     throw InputError(FieldError("params size", w.size(),
                                 "must equal H R + 2H + 1 = " + std::to_string(num_params())));
   for (Eigen::Index i = 0; i < w.size(); ++i)
-    if (!std::isfinite(w(i))) throw InputError(FieldError("params[" + std::to_string(i) + "]", w(i), "must be finite"));
+    if (!std::isfinite(w(i)))
+      throw InputError(FieldError("params[" + std::to_string(i) + "]", w(i), "must be finite"));
   w_ = w;
 }
 
 void FeedForwardNet::ConfigureMaps(const Eigen::MatrixXd& X, const Eigen::VectorXd& t) {
   if (X.cols() != inputs())
-    throw InputError(FieldError("input columns", X.cols(), "must equal the network's inputs (" +
-                                                               std::to_string(inputs()) + ")"));
+    throw InputError(
+        FieldError("input columns", X.cols(),
+                   "must equal the network's inputs (" + std::to_string(inputs()) + ")"));
   if (t.size() != X.rows())
-    throw InputError(FieldError("targets", t.size(),
-                                "must have one entry per input row (" + std::to_string(X.rows()) + ")"));
+    throw InputError(
+        FieldError("targets", t.size(),
+                   "must have one entry per input row (" + std::to_string(X.rows()) + ")"));
   input_map_ = MinMaxMap::Fit(X);
   output_map_ = MinMaxMap::Fit(t);
 }
@@ -129,8 +136,10 @@ void FeedForwardNet::set_maps(const MinMaxMap& input, const MinMaxMap& output) {
   ThrowIfError(input.Validate());
   ThrowIfError(output.Validate());
   if (input.size() != inputs())
-    throw InputError(FieldError("input map channels", input.size(), "must equal the network's inputs"));
-  if (output.size() != 1) throw InputError(FieldError("output map channels", output.size(), "must be 1"));
+    throw InputError(
+        FieldError("input map channels", input.size(), "must equal the network's inputs"));
+  if (output.size() != 1)
+    throw InputError(FieldError("output map channels", output.size(), "must be 1"));
   input_map_ = input;
   output_map_ = output;
 }
@@ -172,31 +181,38 @@ void FeedForwardNet::InitNguyenWidrow(std::mt19937_64& rng) {
   w_ = w;
 }
 
-void FeedForwardNet::InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const Eigen::VectorXd>& x_train,
+void FeedForwardNet::InitAdaptive(std::mt19937_64& rng,
+                                  const Eigen::Ref<const Eigen::VectorXd>& x_train,
                                   const Eigen::Ref<const Eigen::VectorXd>& t_train, double lambda,
                                   double min_samples_per_neuron) {
   const int H = hidden();
   if (inputs() != 1)
-    throw InputError(FieldError("inputs", inputs(), "the adaptive initialisation needs a one-input network"));
+    throw InputError(
+        FieldError("inputs", inputs(), "the adaptive initialisation needs a one-input network"));
   if (x_train.size() != t_train.size())
-    throw InputError(FieldError("training targets", t_train.size(),
-                                "must have one entry per training input (" + std::to_string(x_train.size()) + ")"));
+    throw InputError(FieldError(
+        "training targets", t_train.size(),
+        "must have one entry per training input (" + std::to_string(x_train.size()) + ")"));
   const Eigen::Index n = x_train.size();
-  if (n < 2) throw InputError(FieldError("training samples", n, "the adaptive initialisation needs >= 2"));
+  if (n < 2)
+    throw InputError(FieldError("training samples", n, "the adaptive initialisation needs >= 2"));
   if (!(lambda >= 0.0 && lambda <= 1.0))
     throw InputError(FieldError("adaptive fraction", lambda, "must be in [0, 1]"));
   if (!(std::isfinite(min_samples_per_neuron) && min_samples_per_neuron >= 0))
-    throw InputError(FieldError("samples per neuron", min_samples_per_neuron, "must be finite and >= 0"));
+    throw InputError(
+        FieldError("samples per neuron", min_samples_per_neuron, "must be finite and >= 0"));
   for (Eigen::Index i = 0; i < n; ++i)
     if (!std::isfinite(x_train(i)) || !std::isfinite(t_train(i)))
       throw InputError(FieldError("training sample " + std::to_string(i),
-                                  std::isfinite(x_train(i)) ? t_train(i) : x_train(i), "must be finite"));
+                                  std::isfinite(x_train(i)) ? t_train(i) : x_train(i),
+                                  "must be finite"));
 
   // Normalised samples sorted by input (stable: ties keep their order), and the cumulative
   // variation of the normalised target along them.
   std::vector<Eigen::Index> order(static_cast<size_t>(n));
   for (Eigen::Index i = 0; i < n; ++i) order[static_cast<size_t>(i)] = i;
-  std::stable_sort(order.begin(), order.end(), [&](Eigen::Index a, Eigen::Index b) { return x_train(a) < x_train(b); });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Eigen::Index a, Eigen::Index b) { return x_train(a) < x_train(b); });
   const double gx = input_map_.gain(0), gt = output_map_.gain(0);
   std::vector<double> xs(static_cast<size_t>(n)), cv(static_cast<size_t>(n), 0.0);
   for (size_t k = 0; k < xs.size(); ++k) {
@@ -233,7 +249,8 @@ void FeedForwardNet::InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const E
   gaps.reserve(static_cast<size_t>(n - 1));
   for (size_t k = 1; k < xs.size(); ++k)
     if (xs[k] > xs[k - 1]) gaps.push_back(xs[k] - xs[k - 1]);
-  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
+  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2),
+                   gaps.end());
   const double s_min = min_samples_per_neuron * gaps[gaps.size() / 2] * kappa / 4.0;
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
@@ -241,10 +258,14 @@ void FeedForwardNet::InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const E
   for (int j = 0; j < H; ++j) {
     const size_t u = static_cast<size_t>(j);
     double s;
-    if (H == 1) s = x1 - x0;
-    else if (j == 0) s = c[1] - c[0];
-    else if (j == H - 1) s = c[u] - c[u - 1];
-    else s = (c[u + 1] - c[u - 1]) / 2;
+    if (H == 1)
+      s = x1 - x0;
+    else if (j == 0)
+      s = c[1] - c[0];
+    else if (j == H - 1)
+      s = c[u] - c[u - 1];
+    else
+      s = (c[u + 1] - c[u - 1]) / 2;
     s = std::max(s, s_min);
     const double sign = normal(rng) >= 0 ? 1.0 : -1.0;  // NW's random direction, in one dimension
     w(j) = sign * kappa / s;
@@ -255,7 +276,8 @@ void FeedForwardNet::InitAdaptive(std::mt19937_64& rng, const Eigen::Ref<const E
   set_params(w);
 }
 
-Eigen::VectorXd FeedForwardNet::PredictNormalised(const Eigen::Ref<const Eigen::MatrixXd>& Xn) const {
+Eigen::VectorXd FeedForwardNet::PredictNormalised(
+    const Eigen::Ref<const Eigen::MatrixXd>& Xn) const {
   PZ_CHECK(Xn.cols() == inputs());
   const Eigen::Index n = Xn.rows();
   Eigen::VectorXd y(n);
@@ -278,8 +300,9 @@ Eigen::VectorXd FeedForwardNet::PredictNormalised(const Eigen::Ref<const Eigen::
 
 Eigen::VectorXd FeedForwardNet::Predict(const Eigen::MatrixXd& X) const {
   if (X.cols() != inputs())
-    throw InputError(FieldError("input columns", X.cols(), "must equal the network's inputs (" +
-                                                               std::to_string(inputs()) + ")"));
+    throw InputError(
+        FieldError("input columns", X.cols(),
+                   "must equal the network's inputs (" + std::to_string(inputs()) + ")"));
   return PredictNormalised(input_map_.Apply(X));
 }
 
@@ -298,8 +321,7 @@ void FeedForwardNet::JacobianNormalised(const Eigen::Ref<const Eigen::MatrixXd>&
   TansigInPlace(A);
   y.noalias() = A * lw;
   y = ((y.array() + b2() + 1.0) * c + output_map_.xmin(0)).matrix();
-  for (int j = 0; j < H; ++j)
-    D.col(j) = ((1.0 - A.col(j).array().square()) * (c * lw(j))).matrix();
+  for (int j = 0; j < H; ++j) D.col(j) = ((1.0 - A.col(j).array().square()) * (c * lw(j))).matrix();
   for (int k = 0; k < R; ++k)
     J.middleCols(k * H, H) = (D.array().colwise() * Xn.col(k).array()).matrix();
   A *= c;

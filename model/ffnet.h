@@ -28,7 +28,8 @@ namespace pz::model {
 using RowMajorMatrixXd = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 /// MATLAB mapminmax with ymin = −1, ymax = 1, one entry per row of the data (input or target):
-/// x̃ = −1 + gain (x − xmin), gain = 2/(xmax − xmin); a constant row gets gain 1 (x̃ = x − xmin − 1).
+/// x̃ = −1 + gain (x − xmin), gain = 2/(xmax − xmin); a constant row gets gain 1 (x̃ = x − xmin −
+/// 1).
 struct MinMaxMap {
   Eigen::VectorXd xmin;  ///< per-channel minimum [channel unit]
   Eigen::VectorXd gain;  ///< per-channel 2/(xmax − xmin) [1/channel unit], finite, > 0
@@ -112,8 +113,8 @@ class FeedForwardNet {
   /// Outputs y (n) and Jacobian J = ∂y/∂w (n × P, column-major, target units) for the rows of
   /// normalised inputs Xn. J must already have n rows and P columns (so callers can reuse a buffer
   /// or pass a block of a larger matrix).
-  void JacobianNormalised(const Eigen::Ref<const Eigen::MatrixXd>& Xn, Eigen::Ref<Eigen::VectorXd> y,
-                          Eigen::Ref<Eigen::MatrixXd> J) const;
+  void JacobianNormalised(const Eigen::Ref<const Eigen::MatrixXd>& Xn,
+                          Eigen::Ref<Eigen::VectorXd> y, Eigen::Ref<Eigen::MatrixXd> J) const;
 
   /// Views of the parameter blocks inside params().
   Eigen::Map<const Eigen::MatrixXd> IW() const;  ///< H × R

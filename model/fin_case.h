@@ -18,9 +18,9 @@ struct FinCase {
   int number = 0;                    ///< case number (> 0)
   Sinusoid drive;                    ///< V sin(2π f t) on the record's grid
   std::vector<double> measured_deg;  ///< y_meas,k [deg], drive.NumSamples() values, finite
-  double b1 = 1.0;                   ///< saturation [deg], > 0 (from the measured extremes, or given)
-  double b2 = -1.0;                  ///< saturation [deg], < 0
-  bool training = true;              ///< fitted (counted in the cost); else withheld
+  double b1 = 1.0;       ///< saturation [deg], > 0 (from the measured extremes, or given)
+  double b2 = -1.0;      ///< saturation [deg], < 0
+  bool training = true;  ///< fitted (counted in the cost); else withheld
 };
 
 /// The one builder of a fin case: the measured angle on the drive's grid (as many samples as

@@ -21,8 +21,8 @@ namespace pz::model {
 Status RegressionData::Validate() const {
   if (t.size() < 3) return InvalidArgument(FieldError("samples", t.size(), "need at least 3"));
   if (x.rows() != t.size())
-    return InvalidArgument(FieldError("x rows", x.rows(),
-                                      "must equal the number of targets (" + std::to_string(t.size()) + ")"));
+    return InvalidArgument(FieldError(
+        "x rows", x.rows(), "must equal the number of targets (" + std::to_string(t.size()) + ")"));
   if (x.cols() < 1) return InvalidArgument(FieldError("x columns", x.cols(), "must be >= 1"));
   for (Eigen::Index i = 0; i < t.size(); ++i) {
     if (!std::isfinite(t(i)))
@@ -46,8 +46,10 @@ Status DataSplit::Validate(int n) const {
       const std::string field = std::string(name) + "[" + std::to_string(i) + "]";
       if (r < 0 || r >= n)
         return InvalidArgument(FieldError(field, r, "must be in [0, " + std::to_string(n) + ")"));
-      if (i > 0 && r <= (*rows)[i - 1]) return InvalidArgument(FieldError(field, r, "must be ascending"));
-      if (used[static_cast<size_t>(r)]) return InvalidArgument(FieldError(field, r, "is in two subsets"));
+      if (i > 0 && r <= (*rows)[i - 1])
+        return InvalidArgument(FieldError(field, r, "must be ascending"));
+      if (used[static_cast<size_t>(r)])
+        return InvalidArgument(FieldError(field, r, "is in two subsets"));
       used[static_cast<size_t>(r)] = 1;
     }
   }
@@ -55,12 +57,15 @@ Status DataSplit::Validate(int n) const {
 }
 
 Status SplitRatios::Validate() const {
-  const std::pair<const char*, double> r[] = {{"ratios.train", train}, {"ratios.val", val}, {"ratios.test", test}};
+  const std::pair<const char*, double> r[] = {
+      {"ratios.train", train}, {"ratios.val", val}, {"ratios.test", test}};
   for (const auto& [name, v] : r)
-    if (!(std::isfinite(v) && v >= 0 && v <= 1)) return InvalidArgument(FieldError(name, v, "must be in [0, 1]"));
+    if (!(std::isfinite(v) && v >= 0 && v <= 1))
+      return InvalidArgument(FieldError(name, v, "must be in [0, 1]"));
   if (!(train > 0)) return InvalidArgument(FieldError("ratios.train", train, "must be > 0"));
   if (std::abs(train + val + test - 1.0) > 1e-9)
-    return InvalidArgument(FieldError("ratios sum", train + val + test, "train + val + test must be 1"));
+    return InvalidArgument(
+        FieldError("ratios sum", train + val + test, "train + val + test must be 1"));
   return Status::Ok();
 }
 
@@ -90,16 +95,21 @@ DataSplit DivideRand(int n, const SplitRatios& ratios, std::mt19937_64& rng) {
 }
 
 void PinToTraining(DataSplit& split, const std::vector<int>& rows, std::mt19937_64& rng) {
-  auto contains = [](const std::vector<int>& v, int r) { return std::binary_search(v.begin(), v.end(), r); };
+  auto contains = [](const std::vector<int>& v, int r) {
+    return std::binary_search(v.begin(), v.end(), r);
+  };
   for (int r : rows) {
     if (contains(split.train, r)) continue;
-    std::vector<int>* from = contains(split.val, r) ? &split.val : contains(split.test, r) ? &split.test : nullptr;
+    std::vector<int>* from = contains(split.val, r)    ? &split.val
+                             : contains(split.test, r) ? &split.test
+                                                       : nullptr;
     if (from == nullptr) throw InputError(FieldError("pinned row", r, "is in no subset"));
     // A training sample that is not itself pinned takes r's place.
     std::vector<int> candidates;
     for (int t : split.train)
       if (std::find(rows.begin(), rows.end(), t) == rows.end()) candidates.push_back(t);
-    if (candidates.empty()) throw InputError(FieldError("pinned row", r, "no training sample to swap with"));
+    if (candidates.empty())
+      throw InputError(FieldError("pinned row", r, "no training sample to swap with"));
     const int swap = candidates[static_cast<size_t>(rng() % candidates.size())];
     split.train.erase(std::lower_bound(split.train.begin(), split.train.end(), swap));
     split.train.insert(std::lower_bound(split.train.begin(), split.train.end(), r), r);
@@ -109,18 +119,25 @@ void PinToTraining(DataSplit& split, const std::vector<int>& rows, std::mt19937_
 }
 
 Status LmOptions::Validate() const {
-  if (epochs < 0 || epochs > 1000000000) return InvalidArgument(FieldError("epochs", epochs, "must be in [0, 1e9]"));
-  if (!(std::isfinite(goal) && goal >= 0)) return InvalidArgument(FieldError("goal", goal, "must be finite and >= 0"));
+  if (epochs < 0 || epochs > 1000000000)
+    return InvalidArgument(FieldError("epochs", epochs, "must be in [0, 1e9]"));
+  if (!(std::isfinite(goal) && goal >= 0))
+    return InvalidArgument(FieldError("goal", goal, "must be finite and >= 0"));
   if (!(std::isfinite(min_grad) && min_grad >= 0))
     return InvalidArgument(FieldError("min_grad", min_grad, "must be finite and >= 0"));
-  if (max_fail < 0) return InvalidArgument(FieldError("max_fail", max_fail, "must be >= 0 (0 disables)"));
-  if (!(std::isfinite(mu) && mu > 0)) return InvalidArgument(FieldError("mu", mu, "must be finite and > 0"));
-  if (!(mu_dec > 0 && mu_dec < 1)) return InvalidArgument(FieldError("mu_dec", mu_dec, "must be in (0, 1)"));
+  if (max_fail < 0)
+    return InvalidArgument(FieldError("max_fail", max_fail, "must be >= 0 (0 disables)"));
+  if (!(std::isfinite(mu) && mu > 0))
+    return InvalidArgument(FieldError("mu", mu, "must be finite and > 0"));
+  if (!(mu_dec > 0 && mu_dec < 1))
+    return InvalidArgument(FieldError("mu_dec", mu_dec, "must be in (0, 1)"));
   if (!(std::isfinite(mu_inc) && mu_inc > 1))
     return InvalidArgument(FieldError("mu_inc", mu_inc, "must be finite and > 1"));
   if (!(std::isfinite(mu_max) && mu_max > mu))
-    return InvalidArgument(FieldError("mu_max", mu_max, "must be finite and > mu (" + std::to_string(mu) + ")"));
-  if (!(time_limit_s > 0)) return InvalidArgument(FieldError("time_limit_s", time_limit_s, "must be > 0"));
+    return InvalidArgument(
+        FieldError("mu_max", mu_max, "must be finite and > mu (" + std::to_string(mu) + ")"));
+  if (!(time_limit_s > 0))
+    return InvalidArgument(FieldError("time_limit_s", time_limit_s, "must be > 0"));
   if (block_rows < 1 || block_rows > 1000000)
     return InvalidArgument(FieldError("block_rows", block_rows, "must be in [1, 1e6]"));
   return Status::Ok();
@@ -132,13 +149,20 @@ const char* TrainMethodName(TrainMethod m) {
 
 const char* TrainTerminationName(TrainTermination t) {
   switch (t) {
-    case TrainTermination::kMaxEpochs: return "max_epochs";
-    case TrainTermination::kGoalMet: return "goal_met";
-    case TrainTermination::kMinGradient: return "min_gradient";
-    case TrainTermination::kMuMax: return "mu_max";
-    case TrainTermination::kValidationStop: return "validation_stop";
-    case TrainTermination::kTimeLimit: return "time_limit";
-    case TrainTermination::kNonFinite: return "non_finite";
+    case TrainTermination::kMaxEpochs:
+      return "max_epochs";
+    case TrainTermination::kGoalMet:
+      return "goal_met";
+    case TrainTermination::kMinGradient:
+      return "min_gradient";
+    case TrainTermination::kMuMax:
+      return "mu_max";
+    case TrainTermination::kValidationStop:
+      return "validation_stop";
+    case TrainTermination::kTimeLimit:
+      return "time_limit";
+    case TrainTermination::kNonFinite:
+      return "non_finite";
   }
   return "unknown";
 }
@@ -146,13 +170,20 @@ const char* TrainTerminationName(TrainTermination t) {
 namespace {
 const char* TerminationMessage(TrainTermination t) {
   switch (t) {
-    case TrainTermination::kMaxEpochs: return "maximum epoch reached";
-    case TrainTermination::kGoalMet: return "performance goal met";
-    case TrainTermination::kMinGradient: return "minimum gradient reached";
-    case TrainTermination::kMuMax: return "maximum mu reached";
-    case TrainTermination::kValidationStop: return "validation stop";
-    case TrainTermination::kTimeLimit: return "maximum time elapsed";
-    case TrainTermination::kNonFinite: return "the initial network gives a non-finite error or Jacobian";
+    case TrainTermination::kMaxEpochs:
+      return "maximum epoch reached";
+    case TrainTermination::kGoalMet:
+      return "performance goal met";
+    case TrainTermination::kMinGradient:
+      return "minimum gradient reached";
+    case TrainTermination::kMuMax:
+      return "maximum mu reached";
+    case TrainTermination::kValidationStop:
+      return "validation stop";
+    case TrainTermination::kTimeLimit:
+      return "maximum time elapsed";
+    case TrainTermination::kNonFinite:
+      return "the initial network gives a non-finite error or Jacobian";
   }
   return "unknown";
 }
@@ -162,8 +193,8 @@ std::string TrainSummary::BriefReport() const {
   std::ostringstream o;
   o.precision(4);
   o << TrainMethodName(method) << ": " << TrainTerminationName(termination) << " after " << epochs
-    << " epochs (best " << best_epoch << "); MSE train " << train.mse << " val " << val.mse << " test "
-    << test.mse << "; R " << all.r << "; gradient " << gradient << ", mu " << mu;
+    << " epochs (best " << best_epoch << "); MSE train " << train.mse << " val " << val.mse
+    << " test " << test.mse << "; R " << all.r << "; gradient " << gradient << ", mu " << mu;
   if (method == TrainMethod::kBayesianRegularization) o << ", gamma " << gamma << ", ssw " << ssw;
   o << "; " << wall_time_s << " s (" << (epochs > 0 ? 1e3 * jtj_time_s / (epochs + 1) : 0.0)
     << " ms JtJ per epoch)";
@@ -216,7 +247,9 @@ double ThreadCpuSeconds() {
 }
 
 using Clock = std::chrono::steady_clock;
-double Since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double Since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 // Solves (scale·JJ + shift·I) δ = −rhs by Cholesky; false if the factorisation fails, is
 // ill-conditioned (rcond < ε, MATLAB's singular-matrix warning) or δ is not finite.
@@ -237,7 +270,9 @@ bool DampedSolve(const Eigen::MatrixXd& JJ, double scale, double shift, const Ei
 }  // namespace
 
 NormalEquations::NormalEquations(int block_rows, int num_params)
-    : block_(std::max(block_rows, 1)), J_(std::max(block_rows, 1), num_params), y_(std::max(block_rows, 1)) {}
+    : block_(std::max(block_rows, 1)),
+      J_(std::max(block_rows, 1), num_params),
+      y_(std::max(block_rows, 1)) {}
 
 bool NormalEquations::Form(const FeedForwardNet& net, const Eigen::Ref<const Eigen::MatrixXd>& Xn,
                            const Eigen::Ref<const Eigen::VectorXd>& t, Eigen::MatrixXd& JJ,
@@ -260,7 +295,8 @@ bool NormalEquations::Form(const FeedForwardNet& net, const Eigen::Ref<const Eig
   JJ.triangularView<Eigen::Lower>() = JJ * inv_n;
   JE *= inv_n;
   mse = sse * inv_n;
-  return std::isfinite(mse) && JE.allFinite() && JJ.triangularView<Eigen::Lower>().toDenseMatrix().allFinite();
+  return std::isfinite(mse) && JE.allFinite() &&
+         JJ.triangularView<Eigen::Lower>().toDenseMatrix().allFinite();
 }
 
 BayesianEstimate ReestimateBayesian(const Eigen::MatrixXd& JJ, double mse, double ssw, int n,
@@ -276,7 +312,8 @@ BayesianEstimate ReestimateBayesian(const Eigen::MatrixXd& JJ, double mse, doubl
   } else {  // rare: β JJ swamps α numerically; use the spectrum (negative rounding clipped to 0)
     Eigen::MatrixXd S = JJ.selfadjointView<Eigen::Lower>();
     Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S, Eigen::EigenvaluesOnly);
-    for (Eigen::Index i = 0; i < p; ++i) trace_inv += 1.0 / (beta * std::max(0.0, es.eigenvalues()(i)) + alpha);
+    for (Eigen::Index i = 0; i < p; ++i)
+      trace_inv += 1.0 / (beta * std::max(0.0, es.eigenvalues()(i)) + alpha);
   }
   BayesianEstimate e;
   e.gamma = static_cast<double>(p) - alpha * trace_inv;
@@ -285,13 +322,15 @@ BayesianEstimate ReestimateBayesian(const Eigen::MatrixXd& JJ, double mse, doubl
   return e;
 }
 
-SplitFit EvaluateFit(const FeedForwardNet& net, const RegressionData& data, const std::vector<int>& rows) {
+SplitFit EvaluateFit(const FeedForwardNet& net, const RegressionData& data,
+                     const std::vector<int>& rows) {
   if (rows.empty()) return {};
   Subset s = Gather(net.input_map().Apply(data.x), data.t, rows);
   return FitOf(net.PredictNormalised(s.xn), s.t);
 }
 
-FitSetup SetUpFit(const RegressionData& data, int hidden, const SplitRatios& ratios, uint64_t seed) {
+FitSetup SetUpFit(const RegressionData& data, int hidden, const SplitRatios& ratios,
+                  uint64_t seed) {
   ThrowIfError(data.Validate());
   ThrowIfError(ratios.Validate());
   FfnetShape shape;
@@ -319,8 +358,9 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
   ThrowIfError(data.Validate());
   ThrowIfError(split.Validate(data.size()));
   if (data.x.cols() != net.inputs())
-    throw InputError(FieldError("data inputs", data.x.cols(),
-                                "must equal the network's inputs (" + std::to_string(net.inputs()) + ")"));
+    throw InputError(
+        FieldError("data inputs", data.x.cols(),
+                   "must equal the network's inputs (" + std::to_string(net.inputs()) + ")"));
   const bool br = method == TrainMethod::kBayesianRegularization;
   const Eigen::MatrixXd xn = net.input_map().Apply(data.x);
   const Subset tr = Gather(xn, data.t, split.train);
@@ -379,13 +419,20 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
 
     // Stopping criteria, in trainlm's order.
     std::optional<TrainTermination> stop;
-    if (!finite0) stop = TrainTermination::kNonFinite;
-    else if (mse <= opt.goal) stop = TrainTermination::kGoalMet;
-    else if (epoch >= opt.epochs) stop = TrainTermination::kMaxEpochs;
-    else if (elapsed >= opt.time_limit_s) stop = TrainTermination::kTimeLimit;
-    else if (gradient * min_grad_scale <= opt.min_grad) stop = TrainTermination::kMinGradient;
-    else if (mu >= opt.mu_max) stop = TrainTermination::kMuMax;
-    else if (opt.max_fail > 0 && va.n() > 0 && val_fail >= opt.max_fail) stop = TrainTermination::kValidationStop;
+    if (!finite0)
+      stop = TrainTermination::kNonFinite;
+    else if (mse <= opt.goal)
+      stop = TrainTermination::kGoalMet;
+    else if (epoch >= opt.epochs)
+      stop = TrainTermination::kMaxEpochs;
+    else if (elapsed >= opt.time_limit_s)
+      stop = TrainTermination::kTimeLimit;
+    else if (gradient * min_grad_scale <= opt.min_grad)
+      stop = TrainTermination::kMinGradient;
+    else if (mu >= opt.mu_max)
+      stop = TrainTermination::kMuMax;
+    else if (opt.max_fail > 0 && va.n() > 0 && val_fail >= opt.max_fail)
+      stop = TrainTermination::kValidationStop;
     if (stop) {
       sum.termination = *stop;
       sum.message = TerminationMessage(*stop);

@@ -111,7 +111,8 @@ void SeriesRegime(const ModePoles& p, double tau, ModeStep& out) {
 void PhiReal(double x, double* phi) {
   const double ax = std::abs(x);
   if (ax < 1.0) {
-    // Taylor terms of φ_6 up to x^N with |x|^{N+1} 6!/(N+7)! < 2^-53: N = 7, 9, 14 for |x| ≤ 1/16, 1/4, 1.
+    // Taylor terms of φ_6 up to x^N with |x|^{N+1} 6!/(N+7)! < 2^-53: N = 7, 9, 14 for |x| ≤ 1/16,
+    // 1/4, 1.
     const int top = ax <= 0.0625 ? 7 : (ax <= 0.25 ? 9 : 14);
     double p = kInvFact[kMaxPhi + top];
     for (int m = top - 1; m >= 0; --m) p = p * x + kInvFact[m + kMaxPhi];
@@ -119,7 +120,8 @@ void PhiReal(double x, double* phi) {
     for (int j = kMaxPhi; j >= 1; --j) phi[j - 1] = x * phi[j] + kInvFact[j - 1];
     return;
   }
-  phi[0] = x > -745.0 ? std::exp(x) : 0.0;  // below −745 e^x underflows (and exp() takes a slow path)
+  phi[0] =
+      x > -745.0 ? std::exp(x) : 0.0;  // below −745 e^x underflows (and exp() takes a slow path)
   const double inv = 1.0 / x;
   for (int j = 1; j <= kMaxPhi; ++j) phi[j] = (phi[j - 1] - kInvFact[j - 1]) * inv;
 }
@@ -135,8 +137,8 @@ ModePoles MakePoles(double omega2, double c) {
     p.re = -0.5 * c;
     p.im = 0.5 * std::sqrt(-disc);
   } else {
-    p.l1 = -0.5 * (c + std::sqrt(disc));           // the larger magnitude root, no cancellation
-    p.l2 = p.l1 != 0.0 ? omega2 / p.l1 : 0.0;      // λ₁λ₂ = ω²
+    p.l1 = -0.5 * (c + std::sqrt(disc));       // the larger magnitude root, no cancellation
+    p.l2 = p.l1 != 0.0 ? omega2 / p.l1 : 0.0;  // λ₁λ₂ = ω²
   }
   return p;
 }
@@ -177,9 +179,9 @@ void Discretise(const ModePoles& p, double tau, ModeStep& out) {
     return;
   }
   // Close roots away from the origin (near-critical damping, |τ m| > 0.75 with m = −c/2):
-  // e^{τA} = e^{τm} (C I + S τ (A − m I)), C = cosh(τ g/2), S = sinh(τ g/2)/(τ g/2) (cos / sinc when
-  // complex), and the upward recurrence D_j = (D_{j−1}/τ − avg_j)/m, avg_j = (φ_j(τλ₁) + φ_j(τλ₂))/2,
-  // from (λ φ_j(τλ))[λ₁, λ₂] = m D_j + avg_j; its error factor 1/|τm| is < 4/3.
+  // e^{τA} = e^{τm} (C I + S τ (A − m I)), C = cosh(τ g/2), S = sinh(τ g/2)/(τ g/2) (cos / sinc
+  // when complex), and the upward recurrence D_j = (D_{j−1}/τ − avg_j)/m, avg_j = (φ_j(τλ₁) +
+  // φ_j(τλ₂))/2, from (λ φ_j(τλ))[λ₁, λ₂] = m D_j + avg_j; its error factor 1/|τm| is < 4/3.
   const double m = -0.5 * p.c;
   const double y = 0.5 * gap;
   const double em = tau * m > -745.0 ? std::exp(tau * m) : 0.0;
@@ -254,7 +256,8 @@ void PhiRealBatch(int n, const double* __restrict xs, double* __restrict phi, in
 
 }  // namespace
 
-void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch, int* idx) {
+void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, double* scratch,
+                     int* idx) {
   // The batch: real roots, τ|λ₁| > 1, gap ≥ 0.5 (Discretise's "well separated" real branch). Its
   // modes' indices go to `idx`, τλ₁ and τλ₂ side by side to `xs`.
   double* xs = scratch;  // 2n: τλ₁ of the batch, then τλ₂
@@ -273,8 +276,8 @@ void DiscretiseBatch(int n, const ModePoles* poles, double tau, ModeStep* out, d
     xs[b] = tau * poles[idx[b]].l1;
     xs[nb + b] = tau * poles[idx[b]].l2;
   }
-  double* phi = scratch + 2 * n;  // 7 rows of 2 nb
-  PhiRealLargeBatch(nb, xs, phi, 2 * nb);      // τ|λ₁| > 1 in the batch
+  double* phi = scratch + 2 * n;                // 7 rows of 2 nb
+  PhiRealLargeBatch(nb, xs, phi, 2 * nb);       // τ|λ₁| > 1 in the batch
   PhiRealBatch(nb, xs + nb, phi + nb, 2 * nb);  // τλ₂ of any size
   const int s = 2 * nb;
   for (int b = 0; b < nb; ++b) {

@@ -58,19 +58,20 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
 }
 
 // False when z provably does not reach 0 on branch b before the input ub: then ZeroCrossing would
-// give a crossing beyond ub (or none), which the sampled path's loop ignores, so it is skipped — its
-// log1p and three divisions at every sample of a branch heading for zero. The bound: with
-// y = −κ z₀/α, |u_cross − u₀| = |z₀/α| log1p(y)/y ≥ |z₀| / (|α| (1 + max(y, 0))) (log1p(y) ≥ y/(1 + y));
-// the reach asked is |ub − u₀| with a margin (10⁻⁶ of it and 10⁻¹² of |u|) far above the roundings
-// of ZeroCrossing and of the sub-step's ends. NaN or overflow: true (ZeroCrossing decides).
+// give a crossing beyond ub (or none), which the sampled path's loop ignores, so it is skipped —
+// its log1p and three divisions at every sample of a branch heading for zero. The bound: with y =
+// −κ z₀/α, |u_cross − u₀| = |z₀/α| log1p(y)/y ≥ |z₀| / (|α| (1 + max(y, 0))) (log1p(y) ≥ y/(1 +
+// y)); the reach asked is |ub − u₀| with a margin (10⁻⁶ of it and 10⁻¹² of |u|) far above the
+// roundings of ZeroCrossing and of the sub-step's ends. NaN or overflow: true (ZeroCrossing
+// decides).
 inline bool CrossingMayLie(const BoucWenBranch& b, double ub) {
   const double ay = -b.kappa * b.z0 * (b.alpha > 0 ? 1.0 : -1.0);  // |α| y
   const double reach = std::abs(ub - b.u0) * (1 + 1e-6) + 1e-12 * (std::abs(b.u0) + std::abs(ub));
   return !(std::abs(b.z0) > (std::abs(b.alpha) + std::max(0.0, ay)) * reach);
 }
 
-// The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's scheme: a
-// short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
+// The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's
+// scheme: a short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
 inline double AtanSeries(double x) {
   constexpr double kC[10] = {1.0,       -1.0 / 3, 1.0 / 5,   -1.0 / 7, 1.0 / 9,
                              -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
@@ -96,8 +97,8 @@ inline double Degrees(double w, double inv_length) {
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
 bool ZBatch(long from, long to, const double* __restrict u, const double* __restrict ud,
-            const double* __restrict udd, double u0, double z0, double gain, double kappa, double alpha,
-            double* __restrict z, double* __restrict zd, double* __restrict zdd) {
+            const double* __restrict udd, double u0, double z0, double gain, double kappa,
+            double alpha, double* __restrict z, double* __restrict zd, double* __restrict zdd) {
   int far = 0;
   for (long j = from; j < to; ++j) {
     const double du = u[j] - u0;
@@ -121,8 +122,8 @@ bool ZBatch(long from, long to, const double* __restrict u, const double* __rest
 
 // θ [deg] of tip deflections w[0 … n): the vectorised FastAtan; |w/L| ≥ 1/8 (beyond 7 deg) is
 // redone with std::atan by the caller (returns false when some are).
-[[gnu::always_inline]] inline bool DegreesLoop(long n, const double* __restrict w, double inv_length,
-                                               double* __restrict theta) {
+[[gnu::always_inline]] inline bool DegreesLoop(long n, const double* __restrict w,
+                                               double inv_length, double* __restrict theta) {
   int far = 0;
   for (long q = 0; q < n; ++q) {
     const double x = w[q] * inv_length;
@@ -138,11 +139,13 @@ __attribute__((target_clones("arch=x86-64-v3", "default")))
 bool DegreesBatch(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
   return DegreesLoop(n, w, inv_length, theta);
 }
-// The sampled path's: AVX2 without FMA, so the same roundings as Degrees (the baseline's) everywhere.
+// The sampled path's: AVX2 without FMA, so the same roundings as Degrees (the baseline's)
+// everywhere.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-bool DegreesBatchExact(long n, const double* __restrict w, double inv_length, double* __restrict theta) {
+bool DegreesBatchExact(long n, const double* __restrict w, double inv_length,
+                       double* __restrict theta) {
   return DegreesLoop(n, w, inv_length, theta);
 }
 
@@ -151,8 +154,10 @@ bool DegreesBatchExact(long n, const double* __restrict w, double inv_length, do
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
-void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re, const double* __restrict rpow_im,
-                double ere, double eim, double V, double om, double* __restrict nre, double* __restrict nim,
+void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re,
+                const double* __restrict rpow_im,
+                double ere, double eim, double V, double om, double* __restrict nre,
+                double* __restrict nim,
                 double* __restrict nu, double* __restrict nud, double* __restrict nudd) {
   for (long j = j0; j < j1; ++j) {
     const long r = j - b0;
@@ -166,18 +171,22 @@ void DriveNodes(long j0, long j1, long b0, const double* __restrict rpow_re, con
   }
 }
 
-// Feed-through of a node's hold data d to w_tip: t1c · (z, ż, z̈) with t1c = Σ_i P1_i row 0 scaled by
-// the step (1, h, h²).
-inline double Feedthrough(const double* t1c, const ZData& d) { return t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd; }
+// Feed-through of a node's hold data d to w_tip: t1c · (z, ż, z̈) with t1c = Σ_i P1_i row 0 scaled
+// by the step (1, h, h²).
+inline double Feedthrough(const double* t1c, const ZData& d) {
+  return t1c[0] * d.z + t1c[1] * d.zd + t1c[2] * d.zdd;
+}
 
-// Pass 1c's end: the hold data of the nodes 1 … len as right limits for the recursion (the left ones
-// are (zz, zzd, zzdd) themselves; the right ones of the nodes with a jump are redone by the caller),
-// and the state-free part of w_tip there: Feedthrough plus V Im(H_tip e^{iΩt}).
+// Pass 1c's end: the hold data of the nodes 1 … len as right limits for the recursion (the left
+// ones are (zz, zzd, zzdd) themselves; the right ones of the nodes with a jump are redone by the
+// caller), and the state-free part of w_tip there: Feedthrough plus V Im(H_tip e^{iΩt}).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
-void NodeData(long len, const double* __restrict zz, const double* __restrict zzd, const double* __restrict zzdd,
-              const double* __restrict nre, const double* __restrict nim, const double* __restrict t1c, double V,
+void NodeData(long len, const double* __restrict zz, const double* __restrict zzd,
+              const double* __restrict zzdd,
+              const double* __restrict nre, const double* __restrict nim,
+              const double* __restrict t1c, double V,
               double htip_re, double htip_im, ZData* __restrict zr, double* __restrict base) {
   for (long j = 1; j <= len; ++j) {
     const ZData d{zz[j], zzd[j], zzdd[j]};
@@ -214,7 +223,8 @@ struct StepCoeffs {
 template <int NB>
 [[gnu::always_inline]] inline void StepRunImpl(long i0, long i1, int n, double* __restrict x0,
                                                double* __restrict x1, const StepCoeffs& c,
-                                               const ZData* __restrict d, double hs, double* __restrict xs) {
+                                               const ZData* __restrict d, double hs,
+                                               double* __restrict xs) {
   const int nb = NB > 0 ? NB : n / 4;
   const double* __restrict e11 = c.e11;
   const double* __restrict e12 = c.e12;
@@ -266,20 +276,26 @@ template <int NB>
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=x86-64-v3", "default")))
 #endif
-void StepRun(long i0, long i1, int n, double* __restrict x0, double* __restrict x1, const StepCoeffs& c,
+void StepRun(long i0, long i1, int n, double* __restrict x0, double* __restrict x1,
+             const StepCoeffs& c,
              const ZData* __restrict d, double hs, double* __restrict xs) {
   switch (n) {
-    case 4: return StepRunImpl<1>(i0, i1, n, x0, x1, c, d, hs, xs);
-    case 8: return StepRunImpl<2>(i0, i1, n, x0, x1, c, d, hs, xs);
-    case 12: return StepRunImpl<3>(i0, i1, n, x0, x1, c, d, hs, xs);
-    case 16: return StepRunImpl<4>(i0, i1, n, x0, x1, c, d, hs, xs);
-    default: return StepRunImpl<0>(i0, i1, n, x0, x1, c, d, hs, xs);
+    case 4:
+      return StepRunImpl<1>(i0, i1, n, x0, x1, c, d, hs, xs);
+    case 8:
+      return StepRunImpl<2>(i0, i1, n, x0, x1, c, d, hs, xs);
+    case 12:
+      return StepRunImpl<3>(i0, i1, n, x0, x1, c, d, hs, xs);
+    case 16:
+      return StepRunImpl<4>(i0, i1, n, x0, x1, c, d, hs, xs);
+    default:
+      return StepRunImpl<0>(i0, i1, n, x0, x1, c, d, hs, xs);
   }
 }
 
 // x += sign · M·d for a per-mode 2×3 matrix M stored as six arrays.
-inline void AddMatVec(int n, double* __restrict x0, double* __restrict x1, const std::vector<double>* m,
-                      double d0, double d1, double d2) {
+inline void AddMatVec(int n, double* __restrict x0, double* __restrict x1,
+                      const std::vector<double>* m, double d0, double d1, double d2) {
   for (int i = 0; i < n; ++i) {
     x0[i] += m[0][i] * d0 + m[1][i] * d1 + m[2][i] * d2;
     x1[i] += m[3][i] * d0 + m[4][i] * d1 + m[5][i] * d2;
@@ -300,8 +316,10 @@ inline double SumModes(int n, const double* __restrict x0) {
 
 // The quintic hold of z over a sub-step τ from its end data: f_j = j! a_j (kHermite), the input's
 // Taylor coefficients in the discretisation's convention.
-[[gnu::always_inline]] inline void HoldCoefficients(double tau, const ZData& zl, const ZData& zr, double* fz) {
-  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd, zr.z, tau * zr.zd, tau * tau * zr.zdd};
+[[gnu::always_inline]] inline void HoldCoefficients(double tau, const ZData& zl, const ZData& zr,
+                                                    double* fz) {
+  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd,
+                         zr.z, tau * zr.zd, tau * tau * zr.zdd};
   for (int j = 0; j < 6; ++j) {
     double a = 0;
     for (int c = 0; c < 6; ++c) a += kHermite[j][c] * dat[c];
@@ -334,9 +352,10 @@ constexpr long kRunPiece = 128;
 // of 4 modes over all of them — its 13 coefficient vectors and its state stay in registers — adding
 // its x0 into the sub-step's four partial sums in the blocks' order (SumModes' order), and last the
 // outputs.
-[[gnu::always_inline]] inline void SampledRunImpl(const modal::SampledSub* __restrict subs, long count, int n,
-                                                  double* __restrict x0, double* __restrict x1,
-                                                  const SampledCoeffs& c, double* __restrict xs) {
+[[gnu::always_inline]] inline void SampledRunImpl(const modal::SampledSub* __restrict subs,
+                                                  long count, int n, double* __restrict x0,
+                                                  double* __restrict x1, const SampledCoeffs& c,
+                                                  double* __restrict xs) {
   alignas(32) double fz[6][kRunPiece], fu0[kRunPiece], fu1[kRunPiece], taus[kRunPiece];
   alignas(32) V4 acc[kRunPiece];
   const V4 zero = {0, 0, 0, 0};
@@ -356,7 +375,9 @@ constexpr long kRunPiece = 128;
       const V4 zrdd = tau2 * V4{s0->r.zdd, s1->r.zdd, s2->r.zdd, s3->r.zdd};
       for (int j = 0; j < 6; ++j) {
         const double* hj = kHermite[j];
-        const V4 a = (((((zero + hj[0] * zl) + hj[1] * zld) + hj[2] * zldd) + hj[3] * zr) + hj[4] * zrd) + hj[5] * zrdd;
+        const V4 a =
+            (((((zero + hj[0] * zl) + hj[1] * zld) + hj[2] * zldd) + hj[3] * zr) + hj[4] * zrd) +
+            hj[5] * zrdd;
         *At(fz[j] + k) = a * kFact[j];
       }
       *At(taus + k) = tau;
@@ -375,7 +396,8 @@ constexpr long kRunPiece = 128;
     for (int q = 0; q < n; q += 4) {
       const V4 w = *At(c.nwz + q), wu = *At(c.wu + q), e11 = *At(c.e11 + q), e12 = *At(c.e12 + q);
       const V4 e21 = *At(c.e21 + q), e22 = *At(c.e22 + q), d0 = *At(d[0] + q), d1 = *At(d[1] + q);
-      const V4 d2 = *At(d[2] + q), d3 = *At(d[3] + q), d4 = *At(d[4] + q), d5 = *At(d[5] + q), d6 = *At(d[6] + q);
+      const V4 d2 = *At(d[2] + q), d3 = *At(d[3] + q), d4 = *At(d[4] + q), d5 = *At(d[5] + q),
+               d6 = *At(d[6] + q);
       V4 a = *At(x0 + q), b = *At(x1 + q);
       for (long k = 0; k < m; ++k) {
         const V4 f0 = w * fz[0][k] + wu * fu0[k], f1 = w * fz[1][k] + wu * fu1[k];
@@ -399,13 +421,15 @@ constexpr long kRunPiece = 128;
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
-void SampledRun(const modal::SampledSub* subs, long count, int n, double* x0, double* x1, const SampledCoeffs& c,
+void SampledRun(const modal::SampledSub* subs, long count, int n, double* x0, double* x1,
+                const SampledCoeffs& c,
                 double* xs) {
   SampledRunImpl(subs, count, n, x0, x1, c, xs);
 }
 
 std::string NonFiniteMessage(size_t k, double t) {
-  return "non-finite tip deflection at sample " + std::to_string(k) + " (t = " + std::to_string(t) + " s)";
+  return "non-finite tip deflection at sample " + std::to_string(k) + " (t = " + std::to_string(t) +
+         " s)";
 }
 
 }  // namespace
@@ -424,13 +448,16 @@ ModalSimulator::ModalSimulator(const BimorphPlant& plant)
   npad_ = (n_ + 3) / 4 * 4;
 }
 
-bool ModalSimulator::Holds(const BimorphParams& params, double step, const ModalWorkspace& ws) const {
+bool ModalSimulator::Holds(const BimorphParams& params, double step,
+                           const ModalWorkspace& ws) const {
   return ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
          std::abs(ws.step_ - step) <= kStepRelTol * step;
 }
 
-void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact) const {
-  if (exact ? ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta && ws.step_ == step
+void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWorkspace& ws,
+                             bool exact) const {
+  if (exact ? ws.sim_id_ == id_ && ws.mu_ == params.mu && ws.delta_ == params.delta &&
+                  ws.step_ == step
             : Holds(params, step, ws))
     return;
   ws.sim_id_ = id_;
@@ -492,9 +519,10 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
 // (zl, zr), u (sampled path) linear from u_a with slope u̇. `cached` uses ws.steps_ (τ = ws.step_).
 // Without `cached`, the step's discretisation of every mode is made by DiscretiseBatch in the
 // workspace's sub_ (with its scratch).
-static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached, modal::SubStep& sub,
-                           const double* wu, const double* wz, double* x0, double* x1, double tau,
-                           const ZData& zl, const ZData& zr, double u_a, double u_dot) {
+static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached,
+                           modal::SubStep& sub, const double* wu, const double* wz, double* x0,
+                           double* x1, double tau, const ZData& zl, const ZData& zr, double u_a,
+                           double u_dot) {
   if (!(tau > 0)) return;
   if (!cached) {
     modal::DiscretiseBatch(n, poles, tau, sub.steps.data(), sub.scratch.data(), sub.idx.data());
@@ -521,15 +549,16 @@ static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached
 }
 
 template <class Sink>
-void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws,
-                                 Sink& sink, SimulationSummary& summary) const {
+void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& drive,
+                                 ModalWorkspace& ws, Sink& sink, SimulationSummary& summary) const {
   const size_t n_out = static_cast<size_t>(drive.NumSamples());
   const double fs = drive.sample_rate_hz, f = drive.frequency_hz, V = drive.amplitude_v;
   const double om = 2 * std::numbers::pi * f;
   const double h = 1.0 / fs;
   const BoucWenParams bw{params.alpha, params.beta, params.gamma};
   const bool hyst = params.alpha != 0.0 && V != 0.0;
-  const int m = hyst ? SubstepsFor(std::max((std::abs(params.beta) + std::abs(params.gamma)) * V * om * h, om * h))
+  const int m = hyst ? SubstepsFor(std::max(
+                           (std::abs(params.beta) + std::abs(params.gamma)) * V * om * h, om * h))
                      : 1;
   const double hs = h / m;  // internal step
   const long n_steps = static_cast<long>(n_out - 1) * m;
@@ -601,13 +630,16 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       *udd = -om * om * br.s * V;
     }
   };
-  auto eval = [&](double u, double ud, double udd) { return hyst ? EvalZ(br, u, ud, udd) : ZData{}; };
+  auto eval = [&](double u, double ud, double udd) {
+    return hyst ? EvalZ(br, u, ud, udd) : ZData{};
+  };
   compute_end();
 
   // The run goes chunk by chunk through three passes that each keep a short dependency chain:
   //  1. z: the hold data at the nodes (left and right limits) and the breakpoints inside steps,
   //     which depend on u alone, plus the state-free part of w_tip at the output nodes;
-  //  2. the modal recursion on x̄ = x − P1 d⁻: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺), with
+  //  2. the modal recursion on x̄ = x − P1 d⁻: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺),
+  //  with
   //     sub-steps on the full state x where a step holds breakpoints;
   //  3. outputs: w_tip, θ, the backlash.
   constexpr long kChunk = 256;
@@ -617,12 +649,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   ZData* zr = ws.zr_.data();  //                                 right limits
   double* xs = ws.xs_.data();
   double* base = ws.base_.data();
-  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_, &ws.wo_, &ws.tho_,
-                  &ws.yo_})
+  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_,
+                  &ws.wo_, &ws.tho_, &ws.yo_})
     v->resize(kChunk + 1);
   ws.io_.resize(kChunk + 1);
-  double *wo = ws.wo_.data(), *tho = ws.tho_.data(), *yo = ws.yo_.data();  // pass 3: w, θ, y at the outputs
-  long* io = ws.io_.data();                                                 //         and their nodes
+  double *wo = ws.wo_.data(), *tho = ws.tho_.data(),
+         *yo = ws.yo_.data();  // pass 3: w, θ, y at the outputs
+  long* io = ws.io_.data();    //         and their nodes
   double *nu = ws.nu_.data(), *nud = ws.nud_.data(), *nudd = ws.nudd_.data(), *nre = ws.nre_.data(),
          *nim = ws.nim_.data();
   double *zz = ws.zz_.data(), *zzd = ws.zzd_.data(), *zzdd = ws.zzdd_.data();
@@ -631,11 +664,12 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
                           ws.e12_.data(),
                           ws.e21_.data(),
                           ws.e22_.data(),
-                          {ws.g_[0].data(), ws.g_[1].data(), ws.g_[2].data(), ws.g_[3].data(), ws.g_[4].data(),
-                           ws.g_[5].data()}};
+                          {ws.g_[0].data(), ws.g_[1].data(), ws.g_[2].data(), ws.g_[3].data(),
+                           ws.g_[4].data(), ws.g_[5].data()}};
   const double t1c[3] = {ws.t1_[0], hs * ws.t1_[1], hs * hs * ws.t1_[2]};
 
-  // Left limits at the nodes are (zz, zzd, zzdd) themselves; node 0 of a chunk carries the last one.
+  // Left limits at the nodes are (zz, zzd, zzdd) themselves; node 0 of a chunk carries the last
+  // one.
   auto zl = [&](long j) { return ZData{zz[j], zzd[j], zzdd[j]}; };
   zr[0] = eval(0.0, V * om, 0.0);
   zz[0] = zr[0].z;
@@ -643,7 +677,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   zzdd[0] = zr[0].zdd;
   AddMatVec(np, x0, x1, ws.p1_, -zl(0).z, -hs * zl(0).zd, -hs * hs * zl(0).zdd);
   double y = 0.0;
-  // Output sample j: tip deflection w, its angle θ (NaN-safe: only used once w is checked), backlash.
+  // Output sample j: tip deflection w, its angle θ (NaN-safe: only used once w is checked),
+  // backlash.
   auto output = [&](size_t j, double w, double theta, double u, double z) -> bool {
     const double t = static_cast<double>(j) / fs;
     if (!std::isfinite(w)) {
@@ -659,8 +694,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl(0).z)) return;
 
   // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
-  // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the nodes
-  // of a chunk are independent of each other and their drive is one vectorised loop.
+  // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the
+  // nodes of a chunk are independent of each other and their drive is one vectorised loop.
   constexpr long kBlock = 64;
   static_assert(kChunk % kBlock == 0);
   const double rot_re = std::cos(om * hs), rot_im = std::sin(om * hs);
@@ -684,7 +719,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
       const double tb = static_cast<double>(b) * hs;
       const double ere = b == 0 ? 1.0 : std::cos(om * tb), eim = b == 0 ? 0.0 : std::sin(om * tb);
       const long j0 = std::max<long>(1, q * kBlock), j1 = std::min(len, q * kBlock + kBlock - 1);
-      DriveNodes(j0, j1 + 1, q * kBlock, rpow_re, rpow_im, ere, eim, V, om, nre, nim, nu, nud, nudd);
+      DriveNodes(j0, j1 + 1, q * kBlock, rpow_re, rpow_im, ere, eim, V, om, nre, nim, nu, nud,
+                 nudd);
     }
     // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
     // make it special (sub-steps, z data now); on a node its data jump there. Between them the
@@ -702,11 +738,12 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     bool jump_at_node = jump_at_start;
     for (long i = 0; i < len; ++i) {
       if (!jump_at_node) {
-        // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then to
-        // the first that the test below passes (it is monotone in i).
+        // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then
+        // to the first that the test below passes (it is monotone in i).
         const double kf = std::floor((t_end - eps) / hs) - 2.0;
         if (kf > static_cast<double>(c0 + i))
-          i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len : static_cast<long>(kf) - c0;
+          i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len
+                                                                       : static_cast<long>(kf) - c0;
         while (i < len && !(t_end <= static_cast<double>(c0 + i + 1) * hs + eps)) ++i;
         if (i == len) break;
       }
@@ -722,7 +759,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
         ws.inner_.push_back({tb - static_cast<double>(k) * hs, left, eval(ub, udb, uddb)});
       }
       const int inner_end = static_cast<int>(ws.inner_.size());
-      if (jump_at_node || inner_end > inner_begin) ws.special_.push_back({i, inner_begin, inner_end});
+      if (jump_at_node || inner_end > inner_begin)
+        ws.special_.push_back({i, inner_begin, inner_end});
       if (inner_end > inner_begin) {  // node i + 1 is on the new branch
         close_segment(i + 1);
         cur = br;
@@ -732,7 +770,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
         advance();
         jump_at_node = true;
       }
-      if (jump_at_node) {  // node i + 1's left limit stays on `cur`, its right one and the next on br
+      if (jump_at_node) {  // node i + 1's left limit stays on `cur`, its right one and the next on
+                           // br
         ws.jumps_.emplace_back(i + 1, br);
         close_segment(i + 2);
         cur = br;
@@ -740,11 +779,13 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     }
     close_segment(len + 1);
     jump_at_start = jump_at_node;
-    // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the node.
+    // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the
+    // node.
     if (hyst) {
       for (const Segment& sg : segments) {
         const BoucWenBranch& b = sg.branch;
-        if (!ZBatch(sg.from, sg.to, nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd, zzdd)) {
+        if (!ZBatch(sg.from, sg.to, nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd,
+                    zzdd)) {
           for (long j = sg.from; j < sg.to; ++j) {  // arguments beyond ±700: as EvalZ has it
             const ZData d = EvalZ(b, nu[j], nud[j], nudd[j]);
             zz[j] = d.z;
@@ -785,8 +826,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
           dcur = in.right;
           scur = in.offset;
         }
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, hs - scur,
-                       dcur, zl(i + 1), 0.0, 0.0);
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
+                       hs - scur, dcur, zl(i + 1), 0.0, 0.0);
         AddMatVec(np, x0, x1, ws.p1_, -zl(i + 1).z, -hs * zl(i + 1).zd, -hs * hs * zl(i + 1).zdd);
         steps += sp.inner_end - sp.inner_begin;
       }
@@ -795,7 +836,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     }
     if (i < len) StepRun(i, len, np, x0, x1, coeffs, zr, hs, xs);
     steps += len;
-    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash (BacklashRun).
+    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash
+    // (BacklashRun).
     long n_o = 0;
     if (m == 1) {  // every node is an output
       for (long q = 0; q < len; ++q) {
@@ -820,7 +862,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     y = BacklashRun(bl, tho, yo, n_ok, y);
     for (long q = 0; q < n_ok; ++q, ++next_out) {
       const long i3 = io[q];
-      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl(i3).z, wo[q], tho[q], yo[q]);
+      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl(i3).z, wo[q], tho[q],
+                yo[q]);
     }
     if (n_ok < n_o) {
       summary.status = SimStatus::kNonFinite;
@@ -836,8 +879,8 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
 }
 
 template <class Sink>
-void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal& drive, ModalWorkspace& ws,
-                                Sink& sink, SimulationSummary& summary) const {
+void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal& drive,
+                                ModalWorkspace& ws, Sink& sink, SimulationSummary& summary) const {
   const std::vector<double>& t = drive.t;
   const std::vector<double>& u = drive.u;
   const size_t n_out = t.size();
@@ -886,8 +929,9 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
       const double ts = nsub == 1 ? tau : tau / nsub;  // the same value, without the division
       // Holds(params, ts, ws) — the workspace holds this simulator's (μ, δ) since the Prepare above
       // (finite: Admit validated them), so only the step is compared.
-      if (!(std::abs(ws.step_ - ts) <= kStepRelTol * ts)) {  // another discretisation: after the chunk's
-        if (k > k0) break;  // sub-steps have run on this one
+      if (!(std::abs(ws.step_ - ts) <=
+            kStepRelTol * ts)) {  // another discretisation: after the chunk's
+        if (k > k0) break;        // sub-steps have run on this one
         Prepare(params, ts, ws);
       }
       const double eps = kNodeRelTol * ts;
@@ -925,9 +969,14 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
     }
     steps += static_cast<long>(subs.size());
     // Pass 2.
-    const SampledCoeffs coeffs{ws.e11_.data(), ws.e12_.data(), ws.e21_.data(), ws.e22_.data(), ws.nwz_.data(),
-                               ws.wu_.data(),  {ws.d_[0].data(), ws.d_[1].data(), ws.d_[2].data(), ws.d_[3].data(),
-                                                ws.d_[4].data(), ws.d_[5].data(), ws.d_[6].data()}};
+    const SampledCoeffs coeffs{ws.e11_.data(),
+                               ws.e12_.data(),
+                               ws.e21_.data(),
+                               ws.e22_.data(),
+                               ws.nwz_.data(),
+                               ws.wu_.data(),
+                               {ws.d_[0].data(), ws.d_[1].data(), ws.d_[2].data(), ws.d_[3].data(),
+                                ws.d_[4].data(), ws.d_[5].data(), ws.d_[6].data()}};
     for (size_t i = 0; i < subs.size();) {
       if (subs[i].cached) {
         size_t j = i + 1;
@@ -936,8 +985,8 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         i = j;
       } else {
         const modal::SampledSub& st = subs[i];
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1, st.tau, st.l, st.r,
-                       st.u_a, st.u_dot);
+        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
+                       st.tau, st.l, st.r, st.u_a, st.u_dot);
         if (st.out >= 0) xs[st.out] = SumModes(npad_, x0);
         ++i;
       }
@@ -980,7 +1029,8 @@ SimulationSummary ModalSimulator::Run(const BimorphParams& params, const DriveSi
 namespace {
 
 // Validation shared by every entry point; returns false with the summary filled on failure.
-bool Admit(const BimorphParams& params, size_t n_out, size_t expected_out, SimulationSummary& summary) {
+bool Admit(const BimorphParams& params, size_t n_out, size_t expected_out,
+           SimulationSummary& summary) {
   auto fail = [&](SimStatus st, std::string msg) {
     summary.status = st;
     summary.message = std::move(msg);
@@ -988,20 +1038,23 @@ bool Admit(const BimorphParams& params, size_t n_out, size_t expected_out, Simul
   };
   if (auto s = params.Validate(); !s.ok()) return fail(SimStatus::kInvalidInput, s.message());
   if (!params.HysteresisBounded())
-    return fail(SimStatus::kUnboundedHysteresis,
-                FieldError("(alpha, beta, gamma)",
-                           "(" + std::to_string(params.alpha) + ", " + std::to_string(params.beta) + ", " +
-                               std::to_string(params.gamma) + ")",
-                           "Bouc-Wen loop unbounded: needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0"));
+    return fail(
+        SimStatus::kUnboundedHysteresis,
+        FieldError(
+            "(alpha, beta, gamma)",
+            "(" + std::to_string(params.alpha) + ", " + std::to_string(params.beta) + ", " +
+                std::to_string(params.gamma) + ")",
+            "Bouc-Wen loop unbounded: needs alpha = 0, or beta + gamma > 0 and beta - gamma >= 0"));
   if (n_out != expected_out)
-    return fail(SimStatus::kInvalidInput, FieldError("angle_deg.size()", n_out,
-                                                     "must equal the number of samples " +
-                                                         std::to_string(expected_out)));
+    return fail(SimStatus::kInvalidInput,
+                FieldError("angle_deg.size()", n_out,
+                           "must equal the number of samples " + std::to_string(expected_out)));
   return true;
 }
 
 size_t NumSamples(const DriveSignal& drive) {
-  if (const auto* s = std::get_if<Sinusoid>(&drive)) return static_cast<size_t>(std::max(0, s->NumSamples()));
+  if (const auto* s = std::get_if<Sinusoid>(&drive))
+    return static_cast<size_t>(std::max(0, s->NumSamples()));
   return std::get<SampledSignal>(drive).t.size();
 }
 
@@ -1012,7 +1065,8 @@ double Seconds(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
-                                                std::span<double> angle_deg, ModalWorkspace& ws) const {
+                                                std::span<double> angle_deg,
+                                                ModalWorkspace& ws) const {
   const auto start = std::chrono::steady_clock::now();
   SimulationSummary summary;
   // Validate the sinusoid first: NumSamples() is only meaningful for a valid one.
@@ -1033,8 +1087,10 @@ SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, con
   return SimulateAngle(params, drive, angle_deg, ws);
 }
 
-SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, const DriveSignal& drive,
-                                                std::span<double> angle_deg, ModalWorkspace& ws) const {
+SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params,
+                                                const DriveSignal& drive,
+                                                std::span<double> angle_deg,
+                                                ModalWorkspace& ws) const {
   const auto start = std::chrono::steady_clock::now();
   SimulationSummary summary;
   if (auto s = Validate(drive); !s.ok()) {
@@ -1048,8 +1104,8 @@ SimulationSummary ModalSimulator::SimulateAngle(const BimorphParams& params, con
   return summary;
 }
 
-void ModalSimulator::Simulate(const BimorphParams& params, const DriveSignal& drive, BimorphTrace& trace,
-                              ModalWorkspace& ws) const {
+void ModalSimulator::Simulate(const BimorphParams& params, const DriveSignal& drive,
+                              BimorphTrace& trace, ModalWorkspace& ws) const {
   const auto start = std::chrono::steady_clock::now();
   trace.summary = SimulationSummary{};
   size_t n = 0;
@@ -1066,7 +1122,8 @@ void ModalSimulator::Simulate(const BimorphParams& params, const DriveSignal& dr
     trace.summary = Run(params, drive, ws, sink);
   }
   if (!trace.summary.ok() && trace.summary.status != SimStatus::kNonFinite) {
-    for (auto* v : {&trace.t, &trace.u, &trace.z, &trace.w_tip, &trace.theta_deg, &trace.angle_deg}) v->clear();
+    for (auto* v : {&trace.t, &trace.u, &trace.z, &trace.w_tip, &trace.theta_deg, &trace.angle_deg})
+      v->clear();
   }
   trace.summary.wall_time_s = Seconds(start);
 }

@@ -1,4 +1,5 @@
-// The fast path of the bimorph-fin plant as a reusable, allocation-free simulator for the GA fitness.
+// The fast path of the bimorph-fin plant as a reusable, allocation-free simulator for the GA
+// fitness.
 //
 // With C = μM + δK the mass-normalised modes decouple (spec §6):
 //
@@ -8,8 +9,8 @@
 // advanced by its exact discretisation (model/modal_discretise.h) with a quintic Hermite hold of z
 // built from the analytic z, ż, z̈ at the step ends; steps are split at the zero crossings of z and
 // the reversals of u. For a sinusoid the response to u is the exact particular solution
-// Im(H_i(iΩ) g_u,i V e^{iΩt}), so only z drives the recursion; for a sampled signal u is linear between
-// samples and held exactly.
+// Im(H_i(iΩ) g_u,i V e^{iΩt}), so only z drives the recursion; for a sampled signal u is linear
+// between samples and held exactly.
 //
 // Threading: a ModalSimulator is immutable after construction and can be shared by any number of
 // threads; all mutable state lives in a ModalWorkspace, one per thread (the overloads without a
@@ -36,11 +37,11 @@ struct ZData {
 };
 /// A sub-step of the sampled path (u linear, z held by the quintic Hermite of its end data).
 struct SampledSub {
-  double tau = 0;            ///< length [s]
-  double u_a = 0, u_dot = 0; ///< u at its start [V], its slope [V/s]
-  ZData l, r;                ///< the hold data at its ends
-  bool cached = false;       ///< over the workspace's step (its discretisation), else made for tau
-  int out = -1;              ///< ≥ 0: the last sub-step of output sample `out` of the chunk
+  double tau = 0;             ///< length [s]
+  double u_a = 0, u_dot = 0;  ///< u at its start [V], its slope [V/s]
+  ZData l, r;                 ///< the hold data at its ends
+  bool cached = false;        ///< over the workspace's step (its discretisation), else made for tau
+  int out = -1;               ///< ≥ 0: the last sub-step of output sample `out` of the chunk
 };
 /// The discretisation of a sub-step of arbitrary length (all modes) and DiscretiseBatch's scratch.
 struct SubStep {
@@ -92,9 +93,10 @@ class ModalWorkspace {
     BoucWenBranch branch;
   };
   std::vector<SegmentData> segments_;
-  std::vector<std::pair<long, BoucWenBranch>> jumps_;  // nodes whose right limit is on another branch
-  std::vector<double> wo_, tho_, yo_;                  // pass 3: w_tip, θ and y at the chunk's outputs
-  std::vector<long> io_;                               //         and their nodes
+  std::vector<std::pair<long, BoucWenBranch>>
+      jumps_;                          // nodes whose right limit is on another branch
+  std::vector<double> wo_, tho_, yo_;  // pass 3: w_tip, θ and y at the chunk's outputs
+  std::vector<long> io_;               //         and their nodes
   std::vector<Special> special_;
   std::vector<Inner> inner_;
   // Sampled path, one chunk of samples at a time: pass 1 lists the sub-steps with their hold data,
@@ -120,9 +122,10 @@ class ModalSimulator {
   std::span<const double> tip_gain_z() const { return wz_; }
   double length_m() const { return length_m_; }
 
-  /// Hot path of the GA fitness: the fin angle y_k [deg] of a sinusoid drive into `angle_deg`, whose
-  /// size must be drive.NumSamples(). Validates params and drive, returns kUnboundedHysteresis for
-  /// an unbounded loop; never throws. No heap allocation once `ws` has served a run of this plant.
+  /// Hot path of the GA fitness: the fin angle y_k [deg] of a sinusoid drive into `angle_deg`,
+  /// whose size must be drive.NumSamples(). Validates params and drive, returns
+  /// kUnboundedHysteresis for an unbounded loop; never throws. No heap allocation once `ws` has
+  /// served a run of this plant.
   SimulationSummary SimulateAngle(const BimorphParams& params, const Sinusoid& drive,
                                   std::span<double> angle_deg, ModalWorkspace& ws) const;
   /// Same with a thread_local workspace.
@@ -142,23 +145,24 @@ class ModalSimulator {
   SimulationSummary Run(const BimorphParams& params, const DriveSignal& drive, ModalWorkspace& ws,
                         Sink& sink) const;
   template <class Sink>
-  void RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws, Sink& sink,
-                   SimulationSummary& summary) const;
+  void RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws,
+                   Sink& sink, SimulationSummary& summary) const;
   template <class Sink>
   void RunSampled(const BimorphParams& params, const SampledSignal& drive, ModalWorkspace& ws,
                   Sink& sink, SimulationSummary& summary) const;
   /// Discretises the modes over `step` into ws, unless ws holds (μ, δ) and a step within 1e-10 of
-  /// it. `exact`: only the same step is reused — every run starts so, so a run's result never depends
-  /// on what the thread's workspace ran before (within a run the tolerance saves the re-discretising
-  /// of a sampled grid's steps, which differ in their last bits).
-  void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws, bool exact = false) const;
+  /// it. `exact`: only the same step is reused — every run starts so, so a run's result never
+  /// depends on what the thread's workspace ran before (within a run the tolerance saves the
+  /// re-discretising of a sampled grid's steps, which differ in their last bits).
+  void Prepare(const BimorphParams& params, double step, ModalWorkspace& ws,
+               bool exact = false) const;
   /// True when Prepare(params, step, ws) (not exact) would keep ws's discretisation.
   bool Holds(const BimorphParams& params, double step, const ModalWorkspace& ws) const;
 
   const BimorphPlant* plant_;
   uint64_t id_;
-  int n_ = 0;      // modes kept
-  int npad_ = 0;   // n_ rounded up to a multiple of 4
+  int n_ = 0;     // modes kept
+  int npad_ = 0;  // n_ rounded up to a multiple of 4
   double length_m_ = 0;
   std::vector<double> omega2_;  // ω_i² [1/s²]
   std::vector<double> wu_;      // tip_i g_u,i [m/V per unit modal acceleration]

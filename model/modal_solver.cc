@@ -4,7 +4,8 @@
 
 namespace pz::model {
 
-BimorphTrace SimulateModal(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive) {
+BimorphTrace SimulateModal(const BimorphPlant& plant, const BimorphParams& params,
+                           const DriveSignal& drive) {
   const ModalSimulator sim(plant);
   ModalWorkspace ws;
   BimorphTrace trace;

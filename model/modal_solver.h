@@ -9,6 +9,7 @@ namespace pz::model {
 
 /// Simulates the spec'd plant on the fast path. Assumes params/drive validated and the loop bounded
 /// (Simulate() in bimorph.h does that); never throws.
-BimorphTrace SimulateModal(const BimorphPlant& plant, const BimorphParams& params, const DriveSignal& drive);
+BimorphTrace SimulateModal(const BimorphPlant& plant, const BimorphParams& params,
+                           const DriveSignal& drive);
 
 }  // namespace pz::model

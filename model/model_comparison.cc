@@ -22,8 +22,10 @@ double PairedBlockZ(std::span<const double> a, std::span<const double> b, int bl
   return std::clamp(mean / se, -50.0, 50.0);
 }
 
-std::vector<ReliabilityBin> ReliabilityTable(std::span<const double> confidence, std::span<const char> right) {
-  std::vector<ReliabilityBin> bins = {{0, 0.5}, {0.5, 0.7}, {0.7, 0.9}, {0.9, 0.99}, {0.99, 1.0000001}};
+std::vector<ReliabilityBin> ReliabilityTable(std::span<const double> confidence,
+                                             std::span<const char> right) {
+  std::vector<ReliabilityBin> bins = {
+      {0, 0.5}, {0.5, 0.7}, {0.7, 0.9}, {0.9, 0.99}, {0.99, 1.0000001}};
   for (size_t i = 0; i < confidence.size() && i < right.size(); ++i) {
     for (ReliabilityBin& b : bins) {
       if (confidence[i] >= b.lo && confidence[i] < b.hi) {

@@ -9,9 +9,10 @@ namespace {
 
 constexpr const char* kTfNames[kNumTransferFunctions] = {"hardlim", "hardlims", "satlin", "satlins",
                                                          "tribas",  "tansig",   "logsig", "radbas"};
-constexpr const char* kOutputNames[kNetworkOutputs] = {"mu", "delta", "alpha", "beta",
-                                                       "gamma", "a1", "a2"};
-constexpr const char* kOutputUnits[kNetworkOutputs] = {"1/s", "s", "N/V", "1/V", "1/V", "deg", "deg"};
+constexpr const char* kOutputNames[kNetworkOutputs] = {"mu",    "delta", "alpha", "beta",
+                                                       "gamma", "a1",    "a2"};
+constexpr const char* kOutputUnits[kNetworkOutputs] = {"1/s", "s",   "N/V", "1/V",
+                                                       "1/V", "deg", "deg"};
 
 std::string Index2(const char* name, int i, int j) {
   std::ostringstream os;
@@ -39,7 +40,8 @@ Status CheckFinite(const Eigen::MatrixXd& m, const char* name) {
 
 Status CheckTf(TransferFunction tf, const std::string& field) {
   if (!IsValidTransferCode(static_cast<int>(tf))) {
-    return InvalidArgument(FieldError(field, static_cast<int>(tf), "transfer-function code must be 0 … 7"));
+    return InvalidArgument(
+        FieldError(field, static_cast<int>(tf), "transfer-function code must be 0 … 7"));
   }
   return Status::Ok();
 }
@@ -83,14 +85,22 @@ TransferFunction TransferFromCode(int code) {
 
 double ApplyTransfer(TransferFunction tf, double n) {
   switch (tf) {
-    case TransferFunction::kHardlim: return n >= 0 ? 1.0 : 0.0;
-    case TransferFunction::kHardlims: return n >= 0 ? 1.0 : -1.0;
-    case TransferFunction::kSatlin: return n <= 0 ? 0.0 : (n >= 1 ? 1.0 : n);
-    case TransferFunction::kSatlins: return n <= -1 ? -1.0 : (n >= 1 ? 1.0 : n);
-    case TransferFunction::kTribas: return (n >= -1 && n <= 1) ? 1.0 - std::abs(n) : 0.0;
-    case TransferFunction::kTansig: return 2.0 / (1.0 + std::exp(-2.0 * n)) - 1.0;
-    case TransferFunction::kLogsig: return 1.0 / (1.0 + std::exp(-n));
-    case TransferFunction::kRadbas: return std::exp(-n * n);
+    case TransferFunction::kHardlim:
+      return n >= 0 ? 1.0 : 0.0;
+    case TransferFunction::kHardlims:
+      return n >= 0 ? 1.0 : -1.0;
+    case TransferFunction::kSatlin:
+      return n <= 0 ? 0.0 : (n >= 1 ? 1.0 : n);
+    case TransferFunction::kSatlins:
+      return n <= -1 ? -1.0 : (n >= 1 ? 1.0 : n);
+    case TransferFunction::kTribas:
+      return (n >= -1 && n <= 1) ? 1.0 - std::abs(n) : 0.0;
+    case TransferFunction::kTansig:
+      return 2.0 / (1.0 + std::exp(-2.0 * n)) - 1.0;
+    case TransferFunction::kLogsig:
+      return 1.0 / (1.0 + std::exp(-n));
+    case TransferFunction::kRadbas:
+      return std::exp(-n * n);
   }
   PZ_CHECK_MSG(false, "transfer-function code " + std::to_string(static_cast<int>(tf)));
   return 0;
@@ -100,8 +110,10 @@ TransferRange RangeOf(TransferFunction tf) {
   switch (tf) {
     case TransferFunction::kHardlims:
     case TransferFunction::kSatlins:
-    case TransferFunction::kTansig: return {-1.0, 1.0};
-    default: return {0.0, 1.0};
+    case TransferFunction::kTansig:
+      return {-1.0, 1.0};
+    default:
+      return {0.0, 1.0};
   }
 }
 
@@ -150,7 +162,8 @@ ParameterRange& ParameterRanges::operator[](int k) {
 Status ParameterRanges::Validate() const {
   for (int k = 0; k < kNetworkOutputs; ++k) {
     const std::string base = std::string("ranges.") + kOutputNames[k];
-    Status s = CheckInterval((*this)[k].lower, (*this)[k].upper, base + ".lower", base + ".upper", false);
+    Status s =
+        CheckInterval((*this)[k].lower, (*this)[k].upper, base + ".lower", base + ".upper", false);
     if (!s.ok()) return s;
   }
   return Status::Ok();
@@ -160,17 +173,18 @@ InputNormalization InputNormalization::FromCases(std::span<const double> amplitu
                                                  std::span<const double> frequencies_hz) {
   if (amplitudes_v.empty()) throw InputError("normalization: no training cases");
   if (amplitudes_v.size() != frequencies_hz.size()) {
-    throw InputError(FieldError("normalization: frequencies", frequencies_hz.size(),
-                                "must have as many entries as amplitudes (" +
-                                    std::to_string(amplitudes_v.size()) + ")"));
+    throw InputError(FieldError(
+        "normalization: frequencies", frequencies_hz.size(),
+        "must have as many entries as amplitudes (" + std::to_string(amplitudes_v.size()) + ")"));
   }
   auto span_of = [](std::span<const double> v, const char* name, double* lo, double* hi) {
     *lo = v[0];
     *hi = v[0];
     for (size_t i = 0; i < v.size(); ++i) {
       if (!std::isfinite(v[i])) {
-        throw InputError(FieldError(std::string("normalization: ") + name + "[" + std::to_string(i) + "]",
-                                    v[i], "must be finite"));
+        throw InputError(
+            FieldError(std::string("normalization: ") + name + "[" + std::to_string(i) + "]", v[i],
+                       "must be finite"));
       }
       *lo = std::min(*lo, v[i]);
       *hi = std::max(*hi, v[i]);
@@ -216,8 +230,9 @@ Status Network::Validate() const {
     if (m.rows() == rows && m.cols() == cols) return Status::Ok();
     std::ostringstream os;
     os << m.rows() << "x" << m.cols();
-    return InvalidArgument(FieldError(std::string(name) + " shape", os.str(),
-                                      "must be " + std::to_string(rows) + "x" + std::to_string(cols)));
+    return InvalidArgument(
+        FieldError(std::string(name) + " shape", os.str(),
+                   "must be " + std::to_string(rows) + "x" + std::to_string(cols)));
   };
   for (Status s : {shape(w1, "w1", kNetworkInputs, h), shape(c1, "c1", h, 1),
                    shape(w2, "w2", h, kNetworkOutputs), shape(c2, "c2", kNetworkOutputs, 1),
@@ -233,10 +248,13 @@ NetworkActivations Network::Forward(double amplitude_v, double frequency_hz) con
   PZ_CHECK_MSG(w1.rows() == kNetworkInputs && w1.cols() == h && c1.size() == h && w2.rows() == h &&
                    w2.cols() == kNetworkOutputs && c2.size() == kNetworkOutputs,
                "network shapes inconsistent: Validate() it before use");
-  if (!std::isfinite(amplitude_v)) throw InputError(FieldError("amplitude_v", amplitude_v, "must be finite"));
-  if (!std::isfinite(frequency_hz)) throw InputError(FieldError("frequency_hz", frequency_hz, "must be finite"));
+  if (!std::isfinite(amplitude_v))
+    throw InputError(FieldError("amplitude_v", amplitude_v, "must be finite"));
+  if (!std::isfinite(frequency_hz))
+    throw InputError(FieldError("frequency_hz", frequency_hz, "must be finite"));
   NetworkActivations act;
-  act.x << normalization.NormalizeAmplitude(amplitude_v), normalization.NormalizeFrequency(frequency_hz);
+  act.x << normalization.NormalizeAmplitude(amplitude_v),
+      normalization.NormalizeFrequency(frequency_hz);
   for (int i = 0; i < kNetworkInputs; ++i) act.a(i) = ApplyTransfer(input_tf[i], act.x(i));
   act.b.resize(h);
   for (int j = 0; j < h; ++j) {
@@ -262,7 +280,8 @@ std::string Network::Describe() const {
   std::ostringstream os;
   auto list = [&os](const char* label, auto begin, auto end) {
     os << " " << label << "[";
-    for (auto it = begin; it != end; ++it) os << (it == begin ? "" : ",") << TransferFunctionName(*it);
+    for (auto it = begin; it != end; ++it)
+      os << (it == begin ? "" : ",") << TransferFunctionName(*it);
     os << "]";
   };
   os << kNetworkInputs << "-" << hidden() << "-" << kNetworkOutputs;

@@ -79,13 +79,13 @@ struct ParameterRange {
 
 /// The range of each identified parameter (part of a job's configuration). Defaults: spec §3.
 struct ParameterRanges {
-  ParameterRange mu{0, 300};         ///< μ [1/s]
-  ParameterRange delta{0, 1};        ///< δ [s]
-  ParameterRange alpha{0, 0.01};     ///< α [N/V]
-  ParameterRange beta{0, 0.02};      ///< β [1/V]
-  ParameterRange gamma{-0.02, 0.02}; ///< γ [1/V]
-  ParameterRange a1{0, 2};           ///< a1 [deg]
-  ParameterRange a2{0, 2};           ///< a2 [deg]
+  ParameterRange mu{0, 300};          ///< μ [1/s]
+  ParameterRange delta{0, 1};         ///< δ [s]
+  ParameterRange alpha{0, 0.01};      ///< α [N/V]
+  ParameterRange beta{0, 0.02};       ///< β [1/V]
+  ParameterRange gamma{-0.02, 0.02};  ///< γ [1/V]
+  ParameterRange a1{0, 2};            ///< a1 [deg]
+  ParameterRange a2{0, 2};            ///< a2 [deg]
 
   /// The paper's Table 3 (with μ and δ in their physical roles, spec §3): α, β, γ in [−0.1, 0].
   static ParameterRanges PaperTable3();
@@ -99,10 +99,10 @@ struct ParameterRanges {
 
 /// x = (v − lo)/(hi − lo) for each input. Values outside [lo, hi] extrapolate (x outside [0, 1]).
 struct InputNormalization {
-  double amplitude_lo_v = 0;    ///< [V], finite
-  double amplitude_hi_v = 1;    ///< [V], finite, > amplitude_lo_v
-  double frequency_lo_hz = 0;   ///< [Hz], finite
-  double frequency_hi_hz = 1;   ///< [Hz], finite, > frequency_lo_hz
+  double amplitude_lo_v = 0;   ///< [V], finite
+  double amplitude_hi_v = 1;   ///< [V], finite, > amplitude_lo_v
+  double frequency_lo_hz = 0;  ///< [Hz], finite
+  double frequency_hi_hz = 1;  ///< [Hz], finite, > frequency_lo_hz
 
   /// The spec's default: min and max over the training cases. If all cases share one value, the
   /// interval is widened to [v, v + 1] so that x = 0 for them. Throws InputError on empty or
@@ -129,19 +129,21 @@ struct NetworkParameters {
   double a1 = 0;     ///< [deg]
   double a2 = 0;     ///< [deg]
   /// Output order μ, δ, α, β, γ, a1, a2.
-  std::array<double, kNetworkOutputs> ToArray() const { return {mu, delta, alpha, beta, gamma, a1, a2}; }
+  std::array<double, kNetworkOutputs> ToArray() const {
+    return {mu, delta, alpha, beta, gamma, a1, a2};
+  }
   static NetworkParameters FromArray(const std::array<double, kNetworkOutputs>& p);
   bool operator==(const NetworkParameters&) const = default;
 };
 
 /// Every layer's values for one input (diagnostics and tests).
 struct NetworkActivations {
-  Eigen::Vector2d x;                               ///< normalised inputs
-  Eigen::Vector2d a;                               ///< input-layer outputs A
-  Eigen::VectorXd b;                               ///< hidden-layer outputs B (H)
-  Eigen::Matrix<double, kNetworkOutputs, 1> o;     ///< output-layer outputs O
-  Eigen::Matrix<double, kNetworkOutputs, 1> s;     ///< O scaled to [0, 1]
-  NetworkParameters parameters;                    ///< p
+  Eigen::Vector2d x;                            ///< normalised inputs
+  Eigen::Vector2d a;                            ///< input-layer outputs A
+  Eigen::VectorXd b;                            ///< hidden-layer outputs B (H)
+  Eigen::Matrix<double, kNetworkOutputs, 1> o;  ///< output-layer outputs O
+  Eigen::Matrix<double, kNetworkOutputs, 1> s;  ///< O scaled to [0, 1]
+  NetworkParameters parameters;                 ///< p
 };
 
 /// A 2-H-7 network. A plain value: build it by hand, decode it from a chromosome

@@ -16,16 +16,21 @@ std::string Num(double x) { return FormatG(x, 17); }
 
 const char* InitialStateName(InitialState s) {
   switch (s) {
-    case InitialState::kCentred: return "centred";
-    case InitialState::kDescended: return "descended";
-    case InitialState::kAscended: return "ascended";
-    case InitialState::kAuto: return "auto";
+    case InitialState::kCentred:
+      return "centred";
+    case InitialState::kDescended:
+      return "descended";
+    case InitialState::kAscended:
+      return "ascended";
+    case InitialState::kAuto:
+      return "auto";
   }
   return "centred";
 }
 
 InitialState ParseInitialState(std::string_view name, std::string_view field) {
-  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended, InitialState::kAuto})
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended,
+                         InitialState::kAuto})
     if (name == InitialStateName(s)) return s;
   throw InputError(std::string(field) + " '" + std::string(name) +
                    "' is unknown (allowed: centred, descended, ascended, auto)");
@@ -33,7 +38,8 @@ InitialState ParseInitialState(std::string_view name, std::string_view field) {
 
 void RequireResolved(InitialState s, std::string_view what) {
   if (s == InitialState::kAuto) {
-    throw InputError(std::string(what) + ": initial state 'auto' must be resolved on the drive range first "
+    throw InputError(std::string(what) +
+                     ": initial state 'auto' must be resolved on the drive range first "
                      "(ResolveInitialState)");
   }
 }
@@ -45,12 +51,14 @@ Status PiOperator::Validate() const {
                            std::to_string(thresholds.size()) + " thresholds");
   }
   for (size_t i = 0; i < thresholds.size(); ++i) {
-    if (!std::isfinite(thresholds[i]) || thresholds[i] <= 0 || (i > 0 && thresholds[i] <= thresholds[i - 1])) {
+    if (!std::isfinite(thresholds[i]) || thresholds[i] <= 0 ||
+        (i > 0 && thresholds[i] <= thresholds[i - 1])) {
       return InvalidArgument("pi.thresholds[" + std::to_string(i) + "] = " + Num(thresholds[i]) +
                              ": must be finite, > 0 and above the previous one");
     }
     if (!std::isfinite(weights[i])) {
-      return InvalidArgument("pi.weights[" + std::to_string(i) + "] = " + Num(weights[i]) + ": must be finite");
+      return InvalidArgument("pi.weights[" + std::to_string(i) + "] = " + Num(weights[i]) +
+                             ": must be finite");
     }
   }
   return Status::Ok();
@@ -62,16 +70,19 @@ bool PiOperator::Invertible() const {
 }
 
 std::vector<double> PiThresholds(int n, double half_range) {
-  if (n < 1 || n > 10000) throw InputError("pi operators = " + std::to_string(n) + ": must be 1 … 10000");
+  if (n < 1 || n > 10000)
+    throw InputError("pi operators = " + std::to_string(n) + ": must be 1 … 10000");
   if (!(half_range > 0) || !std::isfinite(half_range)) {
-    throw InputError("pi: the drive's half range " + Num(half_range) + " must be finite and > 0 (a constant drive?)");
+    throw InputError("pi: the drive's half range " + Num(half_range) +
+                     " must be finite and > 0 (a constant drive?)");
   }
   std::vector<double> r(static_cast<size_t>(n));
   for (int i = 0; i < n; ++i) r[static_cast<size_t>(i)] = half_range * (i + 1) / (n + 1);
   return r;
 }
 
-void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out, InitialState start) {
+void PiPlayOutputs(std::span<const double> r, std::span<const double> u, std::span<double> out,
+                   InitialState start) {
   const size_t n = r.size(), len = u.size();
   if (out.size() != len * n) throw InputError("PiPlayOutputs: output size mismatch");
   if (len == 0) return;
@@ -127,7 +138,8 @@ PiOperator InvertPi(const PiOperator& op) {
     inv.weights[j] = -op.weights[j] / (upto * below);
     below = upto;
   }
-  // Equal thresholds can only come from a zero spacing, impossible with w0 > 0: r' strictly increases.
+  // Equal thresholds can only come from a zero spacing, impossible with w0 > 0: r' strictly
+  // increases.
   return inv;
 }
 

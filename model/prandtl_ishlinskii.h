@@ -21,10 +21,11 @@
 //   w'_0 = 1 / w₀,   w'_j = −w_j / ((w₀ + Σ_{i≤j} w_i)(w₀ + Σ_{i<j} w_i)),
 //
 // started at rest at ŷ_0, the forward operator's output at rest, in the same initial state (each
-// inverse play at ŷ_0, ŷ_0 + r'_j or ŷ_0 − r'_j: a descent of the drive is a descent of the output):
-// then Inverse(Forward(u)) = u exactly, sample by sample (tests/model/prandtl_ishlinskii_test.cc).
-// The play operators are exact on the samples (rate-independent: the drive between samples does
-// not matter for a monotone piece). Pure; no allocation in Apply with a caller's state buffer.
+// inverse play at ŷ_0, ŷ_0 + r'_j or ŷ_0 − r'_j: a descent of the drive is a descent of the
+// output): then Inverse(Forward(u)) = u exactly, sample by sample
+// (tests/model/prandtl_ishlinskii_test.cc). The play operators are exact on the samples
+// (rate-independent: the drive between samples does not matter for a monotone piece). Pure; no
+// allocation in Apply with a caller's state buffer.
 #pragma once
 
 #include <span>
@@ -42,7 +43,8 @@ namespace pz::model {
 enum class InitialState : int { kCentred = 0, kDescended = 1, kAscended = 2, kAuto = 3 };
 /// "centred", "descended", "ascended", "auto".
 const char* InitialStateName(InitialState s);
-/// Parses a name of InitialStateName; throws InputError naming `field`, the value and the allowed ones.
+/// Parses a name of InitialStateName; throws InputError naming `field`, the value and the allowed
+/// ones.
 InitialState ParseInitialState(std::string_view name, std::string_view field);
 /// The play of half-width r at rest at u0 in state s: u0, u0 + r or u0 − r (s resolved, not kAuto).
 inline double PlayRest(double u0, double r, InitialState s) {
@@ -55,14 +57,15 @@ void RequireResolved(InitialState s, std::string_view what);
 inline InitialState ResolveInitialState(InitialState s, double u0, double u_min, double u_max) {
   if (s != InitialState::kAuto) return s;
   const double margin = 0.05 * (u_max - u_min);
-  return u0 <= u_min + margin ? InitialState::kDescended
-                              : (u0 >= u_max - margin ? InitialState::kAscended : InitialState::kCentred);
+  return u0 <= u_min + margin
+             ? InitialState::kDescended
+             : (u0 >= u_max - margin ? InitialState::kAscended : InitialState::kCentred);
 }
 
 struct PiOperator {
-  double w0 = 1;                   ///< linear weight, > 0 for an invertible operator
-  std::vector<double> thresholds;  ///< r_1 < … < r_n, > 0
-  std::vector<double> weights;     ///< w_1 … w_n (≥ 0 for an invertible operator)
+  double w0 = 1;                                ///< linear weight, > 0 for an invertible operator
+  std::vector<double> thresholds;               ///< r_1 < … < r_n, > 0
+  std::vector<double> weights;                  ///< w_1 … w_n (≥ 0 for an invertible operator)
   InitialState start = InitialState::kCentred;  ///< the plays at rest at u_0
   /// Finite values, equal sizes, thresholds positive and strictly increasing. The error names the
   /// field ("pi.thresholds[2] = …").
@@ -82,10 +85,11 @@ void ApplyPi(const PiOperator& op, std::span<const double> u, std::span<double> 
 
 /// The play outputs F_{r_i}[u] (column i of an n-column matrix in row-major order, rows = samples)
 /// — the regressors of a linear least-squares fit of the weights. out.size() == u.size() · n.
-void PiPlayOutputs(std::span<const double> thresholds, std::span<const double> u, std::span<double> out,
-                   InitialState start = InitialState::kCentred);
+void PiPlayOutputs(std::span<const double> thresholds, std::span<const double> u,
+                   std::span<double> out, InitialState start = InitialState::kCentred);
 
-/// The inverse operator (formulas above), in op's initial state. Throws InputError unless op.Invertible().
+/// The inverse operator (formulas above), in op's initial state. Throws InputError unless
+/// op.Invertible().
 PiOperator InvertPi(const PiOperator& op);
 
 }  // namespace pz::model

@@ -35,7 +35,8 @@ struct GridTables {
     double acc = 0;
     for (size_t i = 0; i < r.size(); ++i) {
       const double pi = p[i];
-      for (size_t q = first[i]; q < first[i + 1]; ++q) acc += w[q] * (std::clamp(pi, c[q], c[q] + delta) - c[q] + k[i]);
+      for (size_t q = first[i]; q < first[i + 1]; ++q)
+        acc += w[q] * (std::clamp(pi, c[q], c[q] + delta) - c[q] + k[i]);
     }
     return acc;
   }
@@ -66,7 +67,8 @@ double Bisect(const F& f, double lo, double hi, double flo, double fhi, double r
 /// One inverse step of a monotone operator: the drive v with f(v) = ref, starting from the previous
 /// drive v0 (f(v0) = y0) within [lo, hi]; out-of-reach references give the limit and are counted.
 template <class F>
-double SolveStep(const F& f, double v0, double y0, double ref, double lo, double hi, InverseReport* rep) {
+double SolveStep(const F& f, double v0, double y0, double ref, double lo, double hi,
+                 InverseReport* rep) {
   if (ref == y0) return v0;
   if (ref > y0) {
     const double fh = f(hi);
@@ -108,14 +110,15 @@ Status PreisachGrid::Validate() const {
     return InvalidArgument("preisach.range = [" + Num(u_min) + ", " + Num(u_max) +
                            "]: must be finite with u_min < u_max (a constant drive?)");
   }
-  if (levels < 1 || levels > 200) return InvalidArgument(FieldError("preisach.levels", levels, "must be 1 … 200"));
+  if (levels < 1 || levels > 200)
+    return InvalidArgument(FieldError("preisach.levels", levels, "must be 1 … 200"));
   return Status::Ok();
 }
 
 size_t PreisachGrid::cell(int i, int j) const {
   // Widths 0 … i−1 hold n + (n−1) + … + (n−i+1) cells.
-  return static_cast<size_t>(i) * static_cast<size_t>(levels) - static_cast<size_t>(i) * static_cast<size_t>(i - 1) / 2 +
-         static_cast<size_t>(j);
+  return static_cast<size_t>(i) * static_cast<size_t>(levels) -
+         static_cast<size_t>(i) * static_cast<size_t>(i - 1) / 2 + static_cast<size_t>(j);
 }
 
 std::string PreisachGrid::CellName(int i, int j) const {
@@ -123,7 +126,8 @@ std::string PreisachGrid::CellName(int i, int j) const {
   return "w(a=" + Num(c + half_width(i)) + ",b=" + Num(c - half_width(i)) + ")";
 }
 
-void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out, InitialState start) {
+void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std::span<double> out,
+                        InitialState start) {
   const GridTables t(grid);
   const size_t m = grid.cells(), n = t.widths();
   if (out.size() != u.size() * m) throw InputError("PreisachRegressors: output size mismatch");
@@ -135,16 +139,18 @@ void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std
     double* row = out.data() + s * m;
     for (size_t i = 0; i < n; ++i) {
       p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
-      for (size_t q = t.first[i]; q < t.first[i + 1]; ++q) row[q] = std::clamp(p[i], t.c[q], t.c[q] + t.delta) - t.c[q] + t.k[i];
+      for (size_t q = t.first[i]; q < t.first[i + 1]; ++q)
+        row[q] = std::clamp(p[i], t.c[q], t.c[q] + t.delta) - t.c[q] + t.k[i];
     }
   }
 }
 
-void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u, std::span<double> y,
-                   InitialState start) {
+void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u,
+                   std::span<double> y, InitialState start) {
   const GridTables t(grid);
   if (w.size() != grid.cells()) {
-    throw InputError("preisach: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) + " cells");
+    throw InputError("preisach: " + std::to_string(w.size()) + " weights for " +
+                     std::to_string(grid.cells()) + " cells");
   }
   if (y.size() != u.size()) throw InputError("ApplyPreisach: output size mismatch");
   if (u.empty()) return;
@@ -152,7 +158,8 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::spa
   std::vector<double> p(t.widths());
   for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], t.r[i], start);
   for (size_t s = 0; s < u.size(); ++s) {
-    for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
+    for (size_t i = 0; i < p.size(); ++i)
+      p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
     y[s] = t.Output(w, p.data());
   }
 }
@@ -160,7 +167,8 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::spa
 namespace {
 
 /// The Gram matrix of Σ (w_a − w_b)² over the grid's neighbours along the centre and, with
-/// `triangle`, along α and β between the hysteron widths (PreisachRoughness, PreisachTriangleRoughness).
+/// `triangle`, along α and β between the hysteron widths (PreisachRoughness,
+/// PreisachTriangleRoughness).
 std::vector<double> Roughness(const PreisachGrid& grid, bool triangle) {
   ThrowIfError(grid.Validate());
   const size_t m = grid.cells();
@@ -173,10 +181,13 @@ std::vector<double> Roughness(const PreisachGrid& grid, bool triangle) {
   };
   for (int i = 0; i < grid.levels; ++i) {
     for (int j = 0; j < grid.levels - i; ++j) {
-      if (j + 1 < grid.levels - i) edge(grid.cell(i, j), grid.cell(i, j + 1));  // along the centre: α and β + Δ
-      if (!triangle || i == 0 || i + 1 >= grid.levels) continue;  // the reversible cells: no neighbours across widths
-      if (j + 1 < grid.levels - i) edge(grid.cell(i, j), grid.cell(i + 1, j));  // along α: α + Δ, the same β
-      if (j >= 1) edge(grid.cell(i, j), grid.cell(i + 1, j - 1));               // along β: β − Δ, the same α
+      if (j + 1 < grid.levels - i)
+        edge(grid.cell(i, j), grid.cell(i, j + 1));  // along the centre: α and β + Δ
+      if (!triangle || i == 0 || i + 1 >= grid.levels)
+        continue;  // the reversible cells: no neighbours across widths
+      if (j + 1 < grid.levels - i)
+        edge(grid.cell(i, j), grid.cell(i + 1, j));                // along α: α + Δ, the same β
+      if (j >= 1) edge(grid.cell(i, j), grid.cell(i + 1, j - 1));  // along β: β − Δ, the same α
     }
   }
   return R;
@@ -186,14 +197,17 @@ std::vector<double> Roughness(const PreisachGrid& grid, bool triangle) {
 
 std::vector<double> PreisachRoughness(const PreisachGrid& grid) { return Roughness(grid, false); }
 
-std::vector<double> PreisachTriangleRoughness(const PreisachGrid& grid) { return Roughness(grid, true); }
+std::vector<double> PreisachTriangleRoughness(const PreisachGrid& grid) {
+  return Roughness(grid, true);
+}
 
-InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> y_ref,
-                             double u_lo, double u_hi, std::span<double> u, InitialState start) {
+InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w,
+                             std::span<const double> y_ref, double u_lo, double u_hi,
+                             std::span<double> u, InitialState start) {
   const GridTables t(grid);
   if (w.size() != grid.cells()) {
-    throw InputError("preisach inverse: " + std::to_string(w.size()) + " weights for " + std::to_string(grid.cells()) +
-                     " cells");
+    throw InputError("preisach inverse: " + std::to_string(w.size()) + " weights for " +
+                     std::to_string(grid.cells()) + " cells");
   }
   for (size_t q = 0; q < w.size(); ++q) {
     if (!(w[q] >= 0) || !std::isfinite(w[q])) {
@@ -202,7 +216,8 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
     }
   }
   if (!std::isfinite(u_lo) || !std::isfinite(u_hi) || !(u_lo < u_hi)) {
-    throw InputError("preisach inverse: drive limits [" + Num(u_lo) + ", " + Num(u_hi) + "] must be finite, lo < hi");
+    throw InputError("preisach inverse: drive limits [" + Num(u_lo) + ", " + Num(u_hi) +
+                     "] must be finite, lo < hi");
   }
   if (u.size() != y_ref.size()) throw InputError("InvertPreisach: output size mismatch");
   InverseReport rep;
@@ -210,7 +225,8 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
   RequireResolved(start, "InvertPreisach");
   const size_t n = t.widths();
   std::vector<double> p(n), trial(n);
-  // The first sample: a rest state (every play at PlayRest(v)), whose output is non-decreasing in v.
+  // The first sample: a rest state (every play at PlayRest(v)), whose output is non-decreasing in
+  // v.
   auto rest = [&](double v) {
     for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, t.r[i], start);
     return t.Output(w, trial.data());
@@ -234,22 +250,27 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
 }
 
 Status AsymmetricPi::Validate() const {
-  if (!std::isfinite(w0)) return InvalidArgument("asymmetric-pi.w0 = " + Num(w0) + ": must be finite");
+  if (!std::isfinite(w0))
+    return InvalidArgument("asymmetric-pi.w0 = " + Num(w0) + ": must be finite");
   if (thresholds.size() != weights.size()) {
-    return InvalidArgument("asymmetric-pi.weights has " + std::to_string(weights.size()) + " values for " +
-                           std::to_string(thresholds.size()) + " thresholds");
+    return InvalidArgument("asymmetric-pi.weights has " + std::to_string(weights.size()) +
+                           " values for " + std::to_string(thresholds.size()) + " thresholds");
   }
   if (up.size() != knots.size() || down.size() != knots.size()) {
     return InvalidArgument("asymmetric-pi.up / down have " + std::to_string(up.size()) + " / " +
-                           std::to_string(down.size()) + " values for " + std::to_string(knots.size()) + " knots");
+                           std::to_string(down.size()) + " values for " +
+                           std::to_string(knots.size()) + " knots");
   }
   for (size_t i = 0; i < thresholds.size(); ++i) {
-    if (!std::isfinite(thresholds[i]) || thresholds[i] <= 0 || (i > 0 && thresholds[i] <= thresholds[i - 1])) {
-      return InvalidArgument("asymmetric-pi.thresholds[" + std::to_string(i) + "] = " + Num(thresholds[i]) +
+    if (!std::isfinite(thresholds[i]) || thresholds[i] <= 0 ||
+        (i > 0 && thresholds[i] <= thresholds[i - 1])) {
+      return InvalidArgument("asymmetric-pi.thresholds[" + std::to_string(i) +
+                             "] = " + Num(thresholds[i]) +
                              ": must be finite, > 0 and above the previous one");
     }
     if (!std::isfinite(weights[i])) {
-      return InvalidArgument("asymmetric-pi.weights[" + std::to_string(i) + "] = " + Num(weights[i]) + ": must be finite");
+      return InvalidArgument("asymmetric-pi.weights[" + std::to_string(i) +
+                             "] = " + Num(weights[i]) + ": must be finite");
     }
   }
   for (size_t j = 0; j < knots.size(); ++j) {
@@ -266,22 +287,27 @@ Status AsymmetricPi::Validate() const {
 
 bool AsymmetricPi::Monotone() const {
   if (!Validate().ok() || !(w0 >= 0)) return false;
-  auto nonneg = [](const std::vector<double>& v) { return std::all_of(v.begin(), v.end(), [](double x) { return x >= 0; }); };
+  auto nonneg = [](const std::vector<double>& v) {
+    return std::all_of(v.begin(), v.end(), [](double x) { return x >= 0; });
+  };
   return nonneg(weights) && nonneg(up) && nonneg(down);
 }
 
 std::vector<double> AsymmetricPiKnots(int count, double u_min, double u_max) {
-  if (count < 1 || count > 1000) throw InputError(FieldError("asymmetric-pi knots", count, "must be 1 … 1000"));
+  if (count < 1 || count > 1000)
+    throw InputError(FieldError("asymmetric-pi knots", count, "must be 1 … 1000"));
   if (!std::isfinite(u_min) || !std::isfinite(u_max) || !(u_min < u_max)) {
-    throw InputError("asymmetric-pi: the drive range [" + Num(u_min) + ", " + Num(u_max) + "] is empty (a constant drive?)");
+    throw InputError("asymmetric-pi: the drive range [" + Num(u_min) + ", " + Num(u_max) +
+                     "] is empty (a constant drive?)");
   }
   std::vector<double> z(static_cast<size_t>(count));
-  for (int j = 0; j < count; ++j) z[static_cast<size_t>(j)] = u_min + (u_max - u_min) * (j + 1) / (count + 1);
+  for (int j = 0; j < count; ++j)
+    z[static_cast<size_t>(j)] = u_min + (u_max - u_min) * (j + 1) / (count + 1);
   return z;
 }
 
-void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z, std::span<const double> u,
-                            std::span<double> out, InitialState start) {
+void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z,
+                            std::span<const double> u, std::span<double> out, InitialState start) {
   const size_t n = r.size(), K = z.size(), m = 1 + n + 2 * K;
   if (out.size() != u.size() * m) throw InputError("AsymmetricPiRegressors: output size mismatch");
   if (u.empty()) return;
@@ -325,21 +351,26 @@ void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::s
   std::vector<double> p(op.thresholds.size());
   for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], op.thresholds[i], op.start);
   for (size_t s = 0; s < u.size(); ++s) {
-    for (size_t i = 0; i < p.size(); ++i) p[i] = std::max(u[s] - op.thresholds[i], std::min(u[s] + op.thresholds[i], p[i]));
+    for (size_t i = 0; i < p.size(); ++i)
+      p[i] = std::max(u[s] - op.thresholds[i], std::min(u[s] + op.thresholds[i], p[i]));
     y[s] = AsymmetricOutput(op, u[s], p.data());
   }
 }
 
-void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref, std::span<double> u) {
-  if (!op.Monotone()) throw InputError("asymmetric-pi inverse: the operator needs finite weights >= 0 (monotone)");
+void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref,
+                        std::span<double> u) {
+  if (!op.Monotone())
+    throw InputError("asymmetric-pi inverse: the operator needs finite weights >= 0 (monotone)");
   double total = op.w0;
   for (double w : op.weights) total += w;
   for (size_t j = 0; j < op.knots.size(); ++j) total += op.up[j] + op.down[j];
-  if (!(total > 0)) throw InputError("asymmetric-pi inverse: every weight is zero (no drive reaches a reference)");
+  if (!(total > 0))
+    throw InputError("asymmetric-pi inverse: every weight is zero (no drive reaches a reference)");
   if (u.size() != y_ref.size()) throw InputError("InvertAsymmetricPi: output size mismatch");
   if (u.empty()) return;
   for (double v : y_ref)
-    if (!std::isfinite(v)) throw InputError("asymmetric-pi inverse: a reference sample is not finite");
+    if (!std::isfinite(v))
+      throw InputError("asymmetric-pi inverse: a reference sample is not finite");
   RequireResolved(op.start, "InvertAsymmetricPi");
   const size_t n = op.thresholds.size();
   std::vector<double> p(n), trial(n);
@@ -356,12 +387,14 @@ void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref, s
   u[0] = v;
   for (size_t s = 1; s < y_ref.size(); ++s) {
     auto step = [&](double x) {
-      for (size_t i = 0; i < n; ++i) trial[i] = std::max(x - op.thresholds[i], std::min(x + op.thresholds[i], p[i]));
+      for (size_t i = 0; i < n; ++i)
+        trial[i] = std::max(x - op.thresholds[i], std::min(x + op.thresholds[i], p[i]));
       return AsymmetricOutput(op, x, trial.data());
     };
     Bracket(step, v, y_ref[s], &lo, &hi);
     v = SolveStep(step, v, y, y_ref[s], lo, hi, &rep);
-    for (size_t i = 0; i < n; ++i) p[i] = std::max(v - op.thresholds[i], std::min(v + op.thresholds[i], p[i]));
+    for (size_t i = 0; i < n; ++i)
+      p[i] = std::max(v - op.thresholds[i], std::min(v + op.thresholds[i], p[i]));
     y = AsymmetricOutput(op, v, p.data());
     u[s] = v;
   }

@@ -16,14 +16,15 @@
 // weight w_ij ≥ 0 per unit of centre, so its output is continuous (piecewise linear in u on a
 // monotone piece, not a staircase of relays):
 //
-//   ŷ = Σ_ij w_ij φ_ij(p_{r_i}),   φ_ij(p) = clamp(p, c_ij, c_ij + Δ) − c_ij + (u_min + r_i)/(n − i)
+//   ŷ = Σ_ij w_ij φ_ij(p_{r_i}),   φ_ij(p) = clamp(p, c_ij, c_ij + Δ) − c_ij + (u_min + r_i)/(n −
+//   i)
 //
 // (the constant makes a density constant along the centre exactly the PI play Σ_j φ_ij = p_{r_i}
 // while p_{r_i} stays inside the grid). Every play starts at rest at the first sample u_0 in the
 // initial state given (model/prandtl_ishlinskii.h InitialState): centred on u_0 (relays with centre
-// below u_0 on, the demagnetised state of the PI operator), descended (p_r = u_0 + r: the drive came
-// down to u_0 from the top, only relays with β < u_0 on) or ascended (p_r = u_0 − r: relays with
-// α ≤ u_0 on). A rest at or below the grid has every relay off in all three. Wiping-out and
+// below u_0 on, the demagnetised state of the PI operator), descended (p_r = u_0 + r: the drive
+// came down to u_0 from the top, only relays with β < u_0 on) or ascended (p_r = u_0 − r: relays
+// with α ≤ u_0 on). A rest at or below the grid has every relay off in all three. Wiping-out and
 // return-point memory are those of the plays: exact. Beyond the grid's drive range the output is
 // flat (relays outside the grid are not modelled): a prediction there is an extrapolation.
 //
@@ -75,8 +76,9 @@ void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std
                         InitialState start = InitialState::kCentred);
 
 /// Runs the model (weights: grid.cells() values) over u into y. Throws InputError on sizes.
-void ApplyPreisach(const PreisachGrid& grid, std::span<const double> weights, std::span<const double> u,
-                   std::span<double> y, InitialState start = InitialState::kCentred);
+void ApplyPreisach(const PreisachGrid& grid, std::span<const double> weights,
+                   std::span<const double> u, std::span<double> y,
+                   InitialState start = InitialState::kCentred);
 
 /// The roughness of the density along the centre axis, Σ_i Σ_j (w_{i,j+1} − w_{i,j})², as its
 /// m×m Gram matrix R (row-major, m = cells): the regularisation λ wᵀRw of the weights' least
@@ -106,16 +108,16 @@ struct InverseReport {
 /// [u_lo, u_hi] (the amplifier's range; u_lo < u_hi), the first sample a rest in state `start`.
 /// Weights must be ≥ 0 (a monotone operator); throws InputError otherwise or on sizes.
 InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> weights,
-                             std::span<const double> y_ref, double u_lo, double u_hi, std::span<double> u,
-                             InitialState start = InitialState::kCentred);
+                             std::span<const double> y_ref, double u_lo, double u_hi,
+                             std::span<double> u, InitialState start = InitialState::kCentred);
 
 struct AsymmetricPi {
   double w0 = 1;
-  std::vector<double> thresholds;  ///< play half-widths r_1 < … < r_n, > 0
-  std::vector<double> weights;     ///< w_i ≥ 0
-  std::vector<double> knots;       ///< z_1 < … < z_K (drive units)
-  std::vector<double> up;          ///< a_j ≥ 0 on max(u − z_j, 0)
-  std::vector<double> down;        ///< b_j ≥ 0 on min(u − z_j, 0)
+  std::vector<double> thresholds;               ///< play half-widths r_1 < … < r_n, > 0
+  std::vector<double> weights;                  ///< w_i ≥ 0
+  std::vector<double> knots;                    ///< z_1 < … < z_K (drive units)
+  std::vector<double> up;                       ///< a_j ≥ 0 on max(u − z_j, 0)
+  std::vector<double> down;                     ///< b_j ≥ 0 on min(u − z_j, 0)
   InitialState start = InitialState::kCentred;  ///< the plays at rest at u_0
   /// Finite values, matching sizes, increasing thresholds and knots; the error names the field.
   Status Validate() const;

@@ -28,7 +28,8 @@ void Merge(BinStat& into, const BinStat& b) {
 }
 
 // Fourier coefficient (2/M Σ x_j e^{−i k ω t_j}) over samples [a, b).
-std::complex<double> Coef(std::span<const double> x, size_t a, size_t b, double om, double fs, int k) {
+std::complex<double> Coef(std::span<const double> x, size_t a, size_t b, double om, double fs,
+                          int k) {
   std::complex<double> s = 0;
   for (size_t j = a; j < b; ++j) {
     const double ph = k * om * (static_cast<double>(j) / fs);
@@ -48,8 +49,8 @@ void BinStat::Finish() {
   }
 }
 
-LoopFeatures ComputeLoop(std::span<const double> y, double amplitude_v, double frequency_hz, double sample_rate_hz,
-                         int cycles, double quantum_deg) {
+LoopFeatures ComputeLoop(std::span<const double> y, double amplitude_v, double frequency_hz,
+                         double sample_rate_hz, int cycles, double quantum_deg) {
   LoopFeatures lf;
   const size_t n = y.size();
   const size_t p = PerCycle(n, cycles);
@@ -146,14 +147,17 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
       if (!later) continue;
       c.phase[std::min(kPhaseBins - 1, static_cast<int>(phase / (360.0 / kPhaseBins)))].Add(ek);
       (std::cos(om * t) > 0 ? c.rising : c.falling).Add(ek);
-      if (std::abs(phase - 90.0) < kReversalHalfWidthDeg || std::abs(phase - 270.0) < kReversalHalfWidthDeg)
+      if (std::abs(phase - 90.0) < kReversalHalfWidthDeg ||
+          std::abs(phase - 270.0) < kReversalHalfWidthDeg)
         c.near_reversal.Add(ek);
-      if (in.measured[k] >= ymax - sat_tol || in.measured[k] <= ymin + sat_tol) c.in_saturation.Add(ek);
+      if (in.measured[k] >= ymax - sat_tol || in.measured[k] <= ymin + sat_tol)
+        c.in_saturation.Add(ek);
     }
     c.rms = std::sqrt(c.pi / n);
     c.rms_over_floor = c.floor_rms > 0 ? c.rms / c.floor_rms : INFINITY;
     for (auto& b : c.phase) b.Finish();
-    for (BinStat* b : {&c.rising, &c.falling, &c.near_reversal, &c.in_saturation, &c.first_cycle, &c.later_cycles})
+    for (BinStat* b : {&c.rising, &c.falling, &c.near_reversal, &c.in_saturation, &c.first_cycle,
+                       &c.later_cycles})
       b->Finish();
     // Time: cycle means, trend over the later cycles.
     for (int cy = 0; cy < in.cycles && p > 0; ++cy) {
@@ -207,8 +211,10 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
       }
       c.low_rms = std::sqrt(s2 / cnt);
     }
-    c.measured_loop = ComputeLoop(in.measured, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
-    c.model_loop = ComputeLoop(in.model, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
+    c.measured_loop =
+        ComputeLoop(in.measured, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
+    c.model_loop =
+        ComputeLoop(in.model, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
     total_pi += c.pi;
     out.cases.push_back(std::move(c));
   }
@@ -253,22 +259,26 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
     const GroupResidual& g = *gp;
     if (g.cases == 0) continue;
     const char* name = gp == &out.withheld ? "withheld" : "training";
-    f.push_back(std::string(name) + Fmt(" cases: RMS %.4f deg = %.2f x the noise floor %.4f deg; worst case %.0f", g.rms,
-                                        g.floor_rms > 0 ? g.rms / g.floor_rms : INFINITY, g.floor_rms,
-                                        g.worst_case) +
+    f.push_back(std::string(name) +
+                Fmt(" cases: RMS %.4f deg = %.2f x the noise floor %.4f deg; worst case %.0f",
+                    g.rms, g.floor_rms > 0 ? g.rms / g.floor_rms : INFINITY, g.floor_rms,
+                    g.worst_case) +
                 Fmt(" at %.4f deg", g.worst_rms));
   }
   const GroupResidual& w = out.withheld.cases ? out.withheld : out.training;
   if (w.cases) {
     const double fl = std::max(w.floor_rms, 1e-12);
-    f.push_back(Fmt("over the cycle: rising branch %.4f, falling %.4f, near reversals %.4f, in saturation %.4f deg RMS",
+    f.push_back(Fmt("over the cycle: rising branch %.4f, falling %.4f, near reversals %.4f, in "
+                    "saturation %.4f deg RMS",
                     w.rising.rms, w.falling.rms, w.near_reversal.rms, w.in_saturation.rms) +
                 Fmt(" (floor %.4f)", fl));
-    f.push_back(Fmt("over time: first cycle %.4f vs later cycles %.4f deg RMS (%.2f vs %.2f x floor)", w.first_cycle.rms,
-                    w.later_cycles.rms, w.first_cycle.rms / fl, w.later_cycles.rms / fl));
-    f.push_back(Fmt("in frequency: odd harmonics %.4f, even harmonics %.4f, DC/low frequency %.4f deg RMS", w.odd_rms,
-                    w.even_rms, w.low_rms) +
-                Fmt(" (one-bin noise %.4f deg)", w.harmonic_noise));
+    f.push_back(Fmt(
+        "over time: first cycle %.4f vs later cycles %.4f deg RMS (%.2f vs %.2f x floor)",
+        w.first_cycle.rms, w.later_cycles.rms, w.first_cycle.rms / fl, w.later_cycles.rms / fl));
+    f.push_back(
+        Fmt("in frequency: odd harmonics %.4f, even harmonics %.4f, DC/low frequency %.4f deg RMS",
+            w.odd_rms, w.even_rms, w.low_rms) +
+        Fmt(" (one-bin noise %.4f deg)", w.harmonic_noise));
     double lag_m = 0, lag_s = 0, width_m = 0, width_s = 0;
     int cnt = 0;
     for (const CaseResidual& c : out.cases) {
@@ -280,9 +290,11 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
       ++cnt;
     }
     if (cnt)
-      f.push_back(Fmt("in the loop (mean over cases): phase lag measured %.2f vs model %.2f deg, width at u = 0 measured "
-                      "%.4f vs model %.4f deg",
-                      lag_m / cnt, lag_s / cnt, width_m / cnt, width_s / cnt));
+      f.push_back(
+          Fmt("in the loop (mean over cases): phase lag measured %.2f vs model %.2f deg, width at "
+              "u = 0 measured "
+              "%.4f vs model %.4f deg",
+              lag_m / cnt, lag_s / cnt, width_m / cnt, width_s / cnt));
   }
   return out;
 }

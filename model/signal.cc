@@ -23,20 +23,26 @@ Status Sinusoid::Validate() const {
 
 Status SampledSignal::Validate() const {
   if (t.size() != u.size())
-    return InvalidArgument("sampled signal: t has " + std::to_string(t.size()) + " samples but u has " +
-                           std::to_string(u.size()));
-  if (t.size() < 2) return InvalidArgument("sampled signal: needs at least 2 samples, has " + std::to_string(t.size()));
+    return InvalidArgument("sampled signal: t has " + std::to_string(t.size()) +
+                           " samples but u has " + std::to_string(u.size()));
+  if (t.size() < 2)
+    return InvalidArgument("sampled signal: needs at least 2 samples, has " +
+                           std::to_string(t.size()));
   // A valid signal (every fitness evaluation's) in one branch-free pass; the loop below names the
   // first offending sample otherwise.
   bool ok = std::isfinite(t[0]) & std::isfinite(u[0]);
-  for (size_t k = 1; k < t.size(); ++k) ok &= std::isfinite(t[k]) & std::isfinite(u[k]) & (t[k] > t[k - 1]);
+  for (size_t k = 1; k < t.size(); ++k)
+    ok &= std::isfinite(t[k]) & std::isfinite(u[k]) & (t[k] > t[k - 1]);
   if (ok) return Status::Ok();
   for (size_t k = 0; k < t.size(); ++k) {
-    if (!std::isfinite(t[k])) return InvalidArgument(FieldError("t[" + std::to_string(k) + "]", t[k], "must be finite"));
-    if (!std::isfinite(u[k])) return InvalidArgument(FieldError("u[" + std::to_string(k) + "]", u[k], "must be finite"));
+    if (!std::isfinite(t[k]))
+      return InvalidArgument(FieldError("t[" + std::to_string(k) + "]", t[k], "must be finite"));
+    if (!std::isfinite(u[k]))
+      return InvalidArgument(FieldError("u[" + std::to_string(k) + "]", u[k], "must be finite"));
     if (k > 0 && !(t[k] > t[k - 1]))
-      return InvalidArgument(FieldError("t[" + std::to_string(k) + "]", t[k],
-                                        "time must be strictly increasing (previous " + std::to_string(t[k - 1]) + ")"));
+      return InvalidArgument(FieldError(
+          "t[" + std::to_string(k) + "]", t[k],
+          "time must be strictly increasing (previous " + std::to_string(t[k - 1]) + ")"));
   }
   return Status::Ok();
 }
@@ -88,8 +94,8 @@ std::vector<double> SampleValues(const DriveSignal& s) {
 std::string Describe(const DriveSignal& s) {
   std::ostringstream os;
   if (const auto* sin = std::get_if<Sinusoid>(&s)) {
-    os << "sinusoid " << sin->amplitude_v << " V " << sin->frequency_hz << " Hz x" << sin->cycles << " @"
-       << sin->sample_rate_hz << " Hz";
+    os << "sinusoid " << sin->amplitude_v << " V " << sin->frequency_hz << " Hz x" << sin->cycles
+       << " @" << sin->sample_rate_hz << " Hz";
   } else {
     const auto& ss = std::get<SampledSignal>(s);
     os << "sampled input, " << ss.t.size() << " samples";

@@ -18,22 +18,28 @@ struct Sinusoid {
   double cycles = 3.0;            ///< number of cycles, > 0
   double sample_rate_hz = 100.0;  ///< fs [Hz], > 0
   Status Validate() const;
-  int NumSamples() const { return static_cast<int>(std::lround(cycles * sample_rate_hz / frequency_hz)); }
-  double Value(double t) const { return amplitude_v * std::sin(2 * std::numbers::pi * frequency_hz * t); }
+  int NumSamples() const {
+    return static_cast<int>(std::lround(cycles * sample_rate_hz / frequency_hz));
+  }
+  double Value(double t) const {
+    return amplitude_v * std::sin(2 * std::numbers::pi * frequency_hz * t);
+  }
   double Derivative(double t) const {
     const double w = 2 * std::numbers::pi * frequency_hz;
     return amplitude_v * w * std::cos(w * t);
   }
 };
 
-/// Sampled input u_k at strictly increasing times t_k, linear in between (so u̇ is piecewise constant).
-/// The outputs of a simulation live on the same t_k. t_0 is the start of the simulation (zero state).
+/// Sampled input u_k at strictly increasing times t_k, linear in between (so u̇ is piecewise
+/// constant). The outputs of a simulation live on the same t_k. t_0 is the start of the simulation
+/// (zero state).
 struct SampledSignal {
   std::vector<double> t;  ///< [s], strictly increasing, finite, ≥ 2 samples
   std::vector<double> u;  ///< [V], finite, same length as t
   Status Validate() const;
-  double Value(double time) const;       ///< linear interpolation, clamped at the ends
-  double Derivative(double time) const;  ///< slope of the segment containing time (right-continuous)
+  double Value(double time) const;  ///< linear interpolation, clamped at the ends
+  double Derivative(
+      double time) const;  ///< slope of the segment containing time (right-continuous)
 };
 
 using DriveSignal = std::variant<Sinusoid, SampledSignal>;

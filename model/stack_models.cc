@@ -191,9 +191,11 @@ double BacklashLikeStateStep(double w, double du, const BacklashLikeParams& p) {
 }
 
 double StackRestState(const StackBoucWenParams& p, double range, InitialState s) {
-  if (s == InitialState::kCentred || s == InitialState::kAuto) return 0.0;  // kAuto: resolve it first
+  if (s == InitialState::kCentred || s == InitialState::kAuto)
+    return 0.0;  // kAuto: resolve it first
   const double first = s == InitialState::kDescended ? range : -range;
-  return BoucWenStateStep(BoucWenStateStep(0.0, first, p.alpha, p.beta, p.gamma), -first, p.alpha, p.beta, p.gamma);
+  return BoucWenStateStep(BoucWenStateStep(0.0, first, p.alpha, p.beta, p.gamma), -first, p.alpha,
+                          p.beta, p.gamma);
 }
 
 double StackRestState(const BacklashLikeParams& p, double range, InitialState s) {

@@ -21,7 +21,8 @@
 //    is evaluated (first-order hold): x = d (u − h) is evaluated at M equal sub-steps of every
 //    sample interval (StackSimOptions::substeps, default 2); the only discretisation error left is
 //    the curvature of x inside a sub-step, second order in Δt / M.
-//  - initial state: at rest at the first sample u_0 (the 400 V offset of the bench), by default with
+//  - initial state: at rest at the first sample u_0 (the 400 V offset of the bench), by default
+//  with
 //    no hysteretic memory, h(0) = 0 and ŷ(0) = d u_0 (the filter in steady state) for Bouc–Wen;
 //    ŷ(0) = c u_0 (on the anhysteretic line, w = 0) for the backlash-like model. StackRestState
 //    gives the memory of a stack resting after use (model/prandtl_ishlinskii.h InitialState): the
@@ -46,11 +47,11 @@
 namespace pz::model {
 
 struct StackBoucWenParams {
-  double alpha = 0.3;    ///< [-]
-  double beta = 0.0045;  ///< [1/V]
-  double gamma = 0.0015; ///< [1/V]
-  double d = 0.05;       ///< stack gain [µm/V]
-  double fc_hz = 1500;   ///< driver filter cut-off [Hz], > 0
+  double alpha = 0.3;     ///< [-]
+  double beta = 0.0045;   ///< [1/V]
+  double gamma = 0.0015;  ///< [1/V]
+  double d = 0.05;        ///< stack gain [µm/V]
+  double fc_hz = 1500;    ///< driver filter cut-off [Hz], > 0
   /// Finite values and fc > 0; the error names the field.
   Status Validate() const;
 };

@@ -11,7 +11,8 @@
 
 namespace pz {
 
-/// Status codes. 0 = kOk. kInvalidArgument is deterministic (never retry); kUnavailable is transient.
+/// Status codes. 0 = kOk. kInvalidArgument is deterministic (never retry); kUnavailable is
+/// transient.
 enum class StatusCode : int {
   kOk = 0,
   kInvalidArgument = 1,
@@ -42,7 +43,9 @@ class [[nodiscard]] Status {
   std::string message_;
 };
 
-inline Status InvalidArgument(std::string msg) { return {StatusCode::kInvalidArgument, std::move(msg)}; }
+inline Status InvalidArgument(std::string msg) {
+  return {StatusCode::kInvalidArgument, std::move(msg)};
+}
 inline Status NotFound(std::string msg) { return {StatusCode::kNotFound, std::move(msg)}; }
 inline Status OutOfRange(std::string msg) { return {StatusCode::kOutOfRange, std::move(msg)}; }
 inline Status Internal(std::string msg) { return {StatusCode::kInternal, std::move(msg)}; }
@@ -79,11 +82,11 @@ std::string FieldError(const std::string& field, const T& value, const std::stri
 }  // namespace pz
 
 /// Always-on invariant check: a failure is a bug and aborts with the location.
-#define PZ_CHECK(cond)                                                     \
-  do {                                                                     \
+#define PZ_CHECK(cond)                                                        \
+  do {                                                                        \
     if (!(cond)) ::pz::CheckFailed(#cond, __FILE__, __LINE__, std::string()); \
   } while (0)
-#define PZ_CHECK_MSG(cond, msg)                                            \
-  do {                                                                     \
-    if (!(cond)) ::pz::CheckFailed(#cond, __FILE__, __LINE__, (msg));      \
+#define PZ_CHECK_MSG(cond, msg)                                       \
+  do {                                                                \
+    if (!(cond)) ::pz::CheckFailed(#cond, __FILE__, __LINE__, (msg)); \
   } while (0)

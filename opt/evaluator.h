@@ -43,7 +43,8 @@ class FitnessFunction {
   /// one thread); 1 = none. The thread pool then hands its threads that many at a time.
   virtual int lanes() const { return 1; }
   /// out[i] = Evaluate(*genomes[i]) for every i, bit for bit (the default calls Evaluate).
-  virtual void EvaluateMany(std::span<const Genome* const> genomes, std::span<FitnessResult> out) const {
+  virtual void EvaluateMany(std::span<const Genome* const> genomes,
+                            std::span<FitnessResult> out) const {
     for (size_t i = 0; i < genomes.size(); ++i) out[i] = Evaluate(*genomes[i]);
   }
 };

@@ -12,19 +12,25 @@ namespace pz::opt {
 
 const char* IdentifiabilityName(Identifiability i) {
   switch (i) {
-    case Identifiability::kWell: return "well constrained";
-    case Identifiability::kPoorly: return "poorly constrained";
-    case Identifiability::kNoEffect: return "no effect";
+    case Identifiability::kWell:
+      return "well constrained";
+    case Identifiability::kPoorly:
+      return "poorly constrained";
+    case Identifiability::kNoEffect:
+      return "no effect";
   }
   return "?";
 }
 
-// ---- maps ------------------------------------------------------------------------------------------
+// ---- maps
+// ------------------------------------------------------------------------------------------
 
-BoxMap::BoxMap(ParamBox box, std::vector<std::string> units) : box_(std::move(box)), units_(std::move(units)) {
+BoxMap::BoxMap(ParamBox box, std::vector<std::string> units)
+    : box_(std::move(box)), units_(std::move(units)) {
   ThrowIfError(box_.Validate());
   if (!units_.empty() && units_.size() != box_.size())
-    throw InputError(FieldError("units.size()", units_.size(), "must be 0 or " + std::to_string(box_.size())));
+    throw InputError(
+        FieldError("units.size()", units_.size(), "must be 0 or " + std::to_string(box_.size())));
 }
 
 std::vector<double> BoxMap::ToPhysical(std::span<const double> unit) const {
@@ -60,7 +66,8 @@ ParamBox UnitBox(const ParameterMap& map) {
   return box;
 }
 
-// ---- uncertainty -----------------------------------------------------------------------------------
+// ---- uncertainty
+// -----------------------------------------------------------------------------------
 
 bool ScaledJacobian(const ParameterMap& map, const ResidualFunction& f, std::span<const double> x,
                     std::span<const double> f0, double fd_step, int threads, Eigen::MatrixXd& js,
@@ -85,8 +92,9 @@ bool ScaledJacobian(const ParameterMap& map, const ResidualFunction& f, std::spa
   return NumericJacobian(fs, s0, f0, slo, shi, fd_step, true, threads, js, evaluations);
 }
 
-Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& residuals, std::span<const double> x,
-                               int threads, double fd_step, double weight) {
+Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& residuals,
+                               std::span<const double> x, int threads, double fd_step,
+                               double weight) {
   Uncertainty out;
   const int n = map.size();
   std::vector<double> r0;
@@ -141,7 +149,8 @@ Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& 
     } else {
       p.std_error = std::sqrt(std::max(0.0, cov(i, i))) * scale[i];
       const double ref = std::max(std::abs(p.value), 0.1 * scale[i]);
-      p.identifiability = p.std_error <= 0.3 * ref ? Identifiability::kWell : Identifiability::kPoorly;
+      p.identifiability =
+          p.std_error <= 0.3 * ref ? Identifiability::kWell : Identifiability::kPoorly;
       // Strongest correlation with another parameter.
       double best = 0;
       int bj = -1;
@@ -164,7 +173,8 @@ Uncertainty ComputeUncertainty(const ParameterMap& map, const ResidualFunction& 
   return out;
 }
 
-// ---- the fit ---------------------------------------------------------------------------------------
+// ---- the fit
+// ---------------------------------------------------------------------------------------
 
 namespace {
 
@@ -195,7 +205,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
   if (!(o.uncertainty_fd_step > 0))
     throw InputError(FieldError("uncertainty_fd_step", o.uncertainty_fd_step, "must be > 0"));
   if (!(std::isfinite(problem.residual_weight) && problem.residual_weight > 0))
-    throw InputError(FieldError("residual_weight", problem.residual_weight, "must be finite and > 0"));
+    throw InputError(
+        FieldError("residual_weight", problem.residual_weight, "must be finite and > 0"));
   for (size_t i = 0; i < o.starts.size(); ++i) {
     if (o.starts[i].size() != static_cast<size_t>(n))
       throw InputError(FieldError("starts[" + std::to_string(i) + "].size()", o.starts[i].size(),
@@ -203,8 +214,10 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
   }
   if (!o.search && (!o.polish || o.starts.empty()))
     throw InputError("fit: no global search and no starting point to polish");
-  if (o.search && !problem.cost_evaluator) throw InputError("fit: a global search needs a cost evaluator");
-  if (o.polish && !problem.residual_evaluator) throw InputError("fit: a polish needs a residual evaluator");
+  if (o.search && !problem.cost_evaluator)
+    throw InputError("fit: a global search needs a cost evaluator");
+  if (o.polish && !problem.residual_evaluator)
+    throw InputError("fit: a polish needs a residual evaluator");
   if (o.polish_repetitions < 0)
     throw InputError(FieldError("polish_repetitions", o.polish_repetitions, "must be >= 0"));
   if (!(o.basin_margin >= 0 && std::isfinite(o.basin_margin)))
@@ -217,7 +230,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
   double best_cost = std::numeric_limits<double>::infinity();
   std::vector<std::vector<double>> starts;
   std::vector<int> start_repetition;  // per start: its repetition (−1: a caller's start)
-  size_t first_basin = 0;  // starts from here on are other repetitions' bests (kept only by basin_margin)
+  size_t first_basin =
+      0;  // starts from here on are other repetitions' bests (kept only by basin_margin)
   if (o.search) {
     const ParamBox box = map.physical_genomes() ? map.SearchBox() : UnitBox(map);
     std::unique_ptr<BatchEvaluator> ev = problem.cost_evaluator();
@@ -244,20 +258,24 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       const SearchResult& sr = fit.search;
       std::vector<int> order;
       for (int r = 0; r < static_cast<int>(sr.repetition_best.size()); ++r)
-        if (r != sr.best_repetition && std::isfinite(sr.repetition_costs[static_cast<size_t>(r)])) order.push_back(r);
+        if (r != sr.best_repetition && std::isfinite(sr.repetition_costs[static_cast<size_t>(r)]))
+          order.push_back(r);
       std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-        return sr.repetition_costs[static_cast<size_t>(a)] < sr.repetition_costs[static_cast<size_t>(b)];
+        return sr.repetition_costs[static_cast<size_t>(a)] <
+               sr.repetition_costs[static_cast<size_t>(b)];
       });
       int added = 0;
       for (int r : order) {
         if (added == o.polish_repetitions) break;
         std::vector<double> u(box.size());
         box.ToUnit(sr.repetition_best[static_cast<size_t>(r)].data(), u.data());
-        const bool seen = std::any_of(starts.begin(), starts.end(), [&](const std::vector<double>& s) {
-          for (int i = 0; i < n; ++i)
-            if (std::abs(s[static_cast<size_t>(i)] - u[static_cast<size_t>(i)]) > 1e-3) return false;
-          return true;
-        });
+        const bool seen =
+            std::any_of(starts.begin(), starts.end(), [&](const std::vector<double>& s) {
+              for (int i = 0; i < n; ++i)
+                if (std::abs(s[static_cast<size_t>(i)] - u[static_cast<size_t>(i)]) > 1e-3)
+                  return false;
+              return true;
+            });
         if (seen) continue;
         starts.push_back(std::move(u));
         start_repetition.push_back(r);
@@ -271,7 +289,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       ParallelFor(static_cast<int>(starts.size()), o.threads, [&](int s) {
         try {
           std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
-          results[static_cast<size_t>(s)] = LevenbergMarquardt(UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
+          results[static_cast<size_t>(s)] = LevenbergMarquardt(
+              UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
         } catch (...) {
           errors[static_cast<size_t>(s)] = std::current_exception();
         }
@@ -281,7 +300,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     } else {  // one evaluator for every polish: a service evaluator opens a session per evaluator
       std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
       const BatchResidualFunction f = UnitResiduals(map, *rev);
-      for (size_t s = 0; s < starts.size(); ++s) results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
+      for (size_t s = 0; s < starts.size(); ++s)
+        results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
     }
     bool polished = false;
     for (size_t s = 0; s < starts.size(); ++s) {
@@ -289,7 +309,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       fit.evaluations += r.evaluations;
       fit.lm_iterations += r.iterations;
       ++fit.polishes;
-      const double bar = s >= first_basin && polished ? best_cost * (1 - o.basin_margin) : best_cost;
+      const double bar =
+          s >= first_basin && polished ? best_cost * (1 - o.basin_margin) : best_cost;
       if (std::isfinite(r.cost) && r.cost < bar) {
         best_cost = r.cost;
         best_unit = std::move(r.x);
@@ -307,11 +328,11 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
       fit.cost = best_cost;
       fit.x = map.ToPhysical(best_unit);
       fit.ok = true;
-      fit.message += "refinement: " + fit.polish_message + " after " + std::to_string(fit.best_polish_iterations) +
-                     " iterations";
+      fit.message += "refinement: " + fit.polish_message + " after " +
+                     std::to_string(fit.best_polish_iterations) + " iterations";
       if (fit.best_polish >= static_cast<int>(first_basin))
-        fit.message += " from repetition " + std::to_string(fit.best_polish_repetition + 1) + "'s best (" +
-                       std::to_string(fit.polishes) + " polishes)";
+        fit.message += " from repetition " + std::to_string(fit.best_polish_repetition + 1) +
+                       "'s best (" + std::to_string(fit.polishes) + " polishes)";
     } else if (o.search_cost_is_sum_of_squares && fit.searched) {
       fit.message += "refinement: no polish lowered the search's cost";
     } else {
@@ -320,8 +341,8 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     }
   }
   if (o.uncertainty && fit.ok)
-    fit.uncertainty = ComputeUncertainty(map, problem.physical_residuals, fit.x, o.threads, o.uncertainty_fd_step,
-                                         problem.residual_weight);
+    fit.uncertainty = ComputeUncertainty(map, problem.physical_residuals, fit.x, o.threads,
+                                         o.uncertainty_fd_step, problem.residual_weight);
   fit.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return fit;
 }

@@ -39,9 +39,9 @@ namespace pz::opt {
 
 /// How strongly the data constrain one parameter.
 enum class Identifiability : int {
-  kWell = 0,       ///< relative uncertainty ≤ 30 %
-  kPoorly = 1,     ///< larger uncertainty (flat or correlated direction)
-  kNoEffect = 2,   ///< the output does not depend on it at this point
+  kWell = 0,      ///< relative uncertainty ≤ 30 %
+  kPoorly = 1,    ///< larger uncertainty (flat or correlated direction)
+  kNoEffect = 2,  ///< the output does not depend on it at this point
 };
 /// "well constrained", "poorly constrained", "no effect".
 const char* IdentifiabilityName(Identifiability i);
@@ -54,7 +54,7 @@ struct ParamEstimate {
   double sensitivity = 0;  ///< RMS output change per `scale` of the parameter
   double scale = 1;
   Identifiability identifiability = Identifiability::kWell;
-  std::string note;        ///< e.g. "correlated with delta (r = -0.980)"
+  std::string note;  ///< e.g. "correlated with delta (r = -0.980)"
 };
 
 /// The uncertainty table at a solution (empty when the residuals there could not be computed).
@@ -132,52 +132,53 @@ struct FitProblem {
 };
 
 struct FitOptions {
-  bool search = true;         ///< run the global search
+  bool search = true;            ///< run the global search
   SearchOptions search_options;  ///< seeds: unit coordinates
-  bool polish = true;         ///< Levenberg–Marquardt from the search's best and `starts`
-  LmOptions lm;               ///< lm.threads unused (the residual evaluator has its own)
+  bool polish = true;            ///< Levenberg–Marquardt from the search's best and `starts`
+  LmOptions lm;                  ///< lm.threads unused (the residual evaluator has its own)
   /// Starting points of the polish besides the search's best (unit coordinates), in this order.
   /// Without a search at least one is needed.
   std::vector<std::vector<double>> starts;
   /// Polish also the best points of up to this many other repetitions of the search (by their cost,
-  /// skipping one within 1e-3 of an earlier start in every unit coordinate), after the search's best
-  /// and `starts`: the search's best is one basin among the repetitions'. Such a polish replaces the
-  /// one kept only when its cost is lower by more than the relative `basin_margin` (a polish of the
-  /// same basin from elsewhere lands within it), so that where the repetitions agree the result is
-  /// the search's best's polish. 0 = none.
+  /// skipping one within 1e-3 of an earlier start in every unit coordinate), after the search's
+  /// best and `starts`: the search's best is one basin among the repetitions'. Such a polish
+  /// replaces the one kept only when its cost is lower by more than the relative `basin_margin` (a
+  /// polish of the same basin from elsewhere lands within it), so that where the repetitions agree
+  /// the result is the search's best's polish. 0 = none.
   int polish_repetitions = 0;
   double basin_margin = 1e-4;  ///< ≥ 0
   /// Run the polishes side by side on up to `threads` threads, each with its own residual evaluator
-  /// (problem.residual_evaluator called once per polish, concurrently: it must allow that); they are
-  /// then taken in start order exactly as one after another, so the fit is the same bit for bit.
-  /// A polish's trial steps are one evaluation each, so one polish at a time leaves a core idle.
+  /// (problem.residual_evaluator called once per polish, concurrently: it must allow that); they
+  /// are then taken in start order exactly as one after another, so the fit is the same bit for
+  /// bit. A polish's trial steps are one evaluation each, so one polish at a time leaves a core
+  /// idle.
   bool concurrent_polishes = false;
   /// The search's cost is Σ r² of the residuals: a polished point is then kept only where it
   /// lowers the search's cost, and the search's best stands when every polish fails. Otherwise the
   /// best polish wins whatever the search's cost, and a fit whose polishes all fail fails.
   bool search_cost_is_sum_of_squares = false;
-  bool uncertainty = true;    ///< compute the uncertainty table at the solution
+  bool uncertainty = true;            ///< compute the uncertainty table at the solution
   double uncertainty_fd_step = 1e-3;  ///< in the scaled coordinates x / scale, > 0
-  int threads = 2;            ///< Jacobian columns of the uncertainty, ≥ 1
+  int threads = 2;                    ///< Jacobian columns of the uncertainty, ≥ 1
 };
 
 struct FitResult {
   bool ok = false;
-  std::vector<double> x;       ///< physical parameters
-  double cost = 0;             ///< Σ r² of the polished solution, or the search's cost
+  std::vector<double> x;  ///< physical parameters
+  double cost = 0;        ///< Σ r² of the polished solution, or the search's cost
   bool searched = false;
-  SearchResult search;         ///< when searched
-  int lm_iterations = 0;       ///< all polishes
-  int best_polish = -1;        ///< index of the polish kept (0 = from the search's best when
-                               ///< searched, then `starts`, then the other repetitions' bests), −1 = none
-  int polishes = 0;            ///< polishes run
+  SearchResult search;    ///< when searched
+  int lm_iterations = 0;  ///< all polishes
+  int best_polish = -1;   ///< index of the polish kept (0 = from the search's best when
+                         ///< searched, then `starts`, then the other repetitions' bests), −1 = none
+  int polishes = 0;                 ///< polishes run
   int best_polish_repetition = -1;  ///< the search repetition whose best the kept polish started
                                     ///< from (−1: a caller's start, or none)
   int best_polish_iterations = 0;
   std::string polish_message;  ///< of the polish kept, or of the last one that failed
   int64_t evaluations = 0;     ///< search and polish (not the uncertainty's)
   Uncertainty uncertainty;
-  std::string message;         ///< "global search: …; refinement: … after n iterations"
+  std::string message;  ///< "global search: …; refinement: … after n iterations"
   double wall_time_s = 0;
 };
 

@@ -26,13 +26,13 @@ Status CheckGenome(const Genome& g, int bits, const std::string& field) {
   }
   for (size_t i = 0; i < g.bits.size(); ++i) {
     if (g.bits[i] > 1) {
-      return InvalidArgument(FieldError(field + ".bits[" + std::to_string(i) + "]", int(g.bits[i]),
-                                        "must be 0 or 1"));
+      return InvalidArgument(
+          FieldError(field + ".bits[" + std::to_string(i) + "]", int(g.bits[i]), "must be 0 or 1"));
     }
   }
   if (!g.reals.empty()) {
-    return InvalidArgument(FieldError(field + ".reals.size()", g.reals.size(),
-                                      "the binary GA carries no real genes"));
+    return InvalidArgument(
+        FieldError(field + ".reals.size()", g.reals.size(), "the binary GA carries no real genes"));
   }
   return Status::Ok();
 }
@@ -52,20 +52,23 @@ int GaOptions::elite_count() const {
 
 Status GaOptions::Validate(const FieldNamer& namer) const {
   // The name of a field in the messages: the member's own, or what the caller's user wrote.
-  const auto name = [&namer](const char* field) { return namer ? namer(field) : std::string(field); };
+  const auto name = [&namer](const char* field) {
+    return namer ? namer(field) : std::string(field);
+  };
   if (population_size < 2) {
     return InvalidArgument(FieldError(name("population_size"), population_size, "must be >= 2"));
   }
-  if (genome_bits < 3) return InvalidArgument(FieldError(name("genome_bits"), genome_bits, "must be >= 3"));
+  if (genome_bits < 3)
+    return InvalidArgument(FieldError(name("genome_bits"), genome_bits, "must be >= 3"));
   if (!(elite_fraction > 0 && elite_fraction < 1)) {
     return InvalidArgument(FieldError(name("elite_fraction"), elite_fraction, "must be in (0, 1)"));
   }
   const int e = elite_count();
   if (e < 1 || e > population_size - 1) {
     return InvalidArgument(FieldError(name("elite_fraction"), elite_fraction,
-                                      "round(" + name("population_size") + " * " + name("elite_fraction") +
-                                          ") = " + std::to_string(e) + " must be 1 … " + name("population_size") +
-                                          " − 1"));
+                                      "round(" + name("population_size") + " * " +
+                                          name("elite_fraction") + ") = " + std::to_string(e) +
+                                          " must be 1 … " + name("population_size") + " − 1"));
   }
   if (tournament_size < 1) {
     return InvalidArgument(FieldError(name("tournament_size"), tournament_size, "must be >= 1"));
@@ -78,39 +81,43 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
     return InvalidArgument(FieldError(name("max_generations"), max_generations, "must be >= 0"));
   }
   if (stall_generations < 0) {
-    return InvalidArgument(FieldError(name("stall_generations"), stall_generations, "must be >= 0 (0 = never)"));
-  }
-  if (std::isnan(target_cost)) return InvalidArgument(FieldError(name("target_cost"), target_cost, "must not be NaN"));
-  if (!std::isfinite(error_cost)) return InvalidArgument(FieldError(name("error_cost"), error_cost, "must be finite"));
-  if (islands < 1 || islands > kMaxIslands) {
     return InvalidArgument(
-        FieldError(name("islands"), islands, "must be in [1, " + std::to_string(kMaxIslands) + "]"));
+        FieldError(name("stall_generations"), stall_generations, "must be >= 0 (0 = never)"));
+  }
+  if (std::isnan(target_cost))
+    return InvalidArgument(FieldError(name("target_cost"), target_cost, "must not be NaN"));
+  if (!std::isfinite(error_cost))
+    return InvalidArgument(FieldError(name("error_cost"), error_cost, "must be finite"));
+  if (islands < 1 || islands > kMaxIslands) {
+    return InvalidArgument(FieldError(name("islands"), islands,
+                                      "must be in [1, " + std::to_string(kMaxIslands) + "]"));
   }
   if (migration_interval < 0) {
-    return InvalidArgument(
-        FieldError(name("migration_interval"), migration_interval, "must be >= 0 (0 = no migration)"));
+    return InvalidArgument(FieldError(name("migration_interval"), migration_interval,
+                                      "must be >= 0 (0 = no migration)"));
   }
   if (migrants < 0 || migrants >= population_size) {
     return InvalidArgument(FieldError(name("migrants"), migrants,
-                                      "must be in [0, " + name("population_size") + " - 1 = " +
-                                          std::to_string(population_size - 1) + "]"));
+                                      "must be in [0, " + name("population_size") +
+                                          " - 1 = " + std::to_string(population_size - 1) + "]"));
   }
   if (migration_interval > 0 && migrants == 0) {
     return InvalidArgument(FieldError(name("migrants"), migrants,
                                       "must be >= 1 when " + name("migration_interval") + " = " +
                                           std::to_string(migration_interval) + " > 0 (" +
-                                          name("migration_interval") + " 0 runs the islands independently)"));
+                                          name("migration_interval") +
+                                          " 0 runs the islands independently)"));
   }
   if (!(migration_margin >= 0 && migration_margin < 1)) {
-    return InvalidArgument(
-        FieldError(name("migration_margin"), migration_margin, "must be in [0, 1) (0 = every source)"));
+    return InvalidArgument(FieldError(name("migration_margin"), migration_margin,
+                                      "must be in [0, 1) (0 = every source)"));
   }
   if (!ValidTopology(topology)) {
     return InvalidArgument(FieldError(name("topology"), static_cast<int>(topology), kTopologyRule));
   }
   if (broadcast_interval < 0) {
-    return InvalidArgument(
-        FieldError(name("broadcast_interval"), broadcast_interval, "must be >= 0 (0 = no broadcast)"));
+    return InvalidArgument(FieldError(name("broadcast_interval"), broadcast_interval,
+                                      "must be >= 0 (0 = no broadcast)"));
   }
   if (broadcast_interval > 0 && migrants == 0) {
     return InvalidArgument(FieldError(name("migrants"), migrants,
@@ -118,28 +125,31 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
                                           std::to_string(broadcast_interval) + " > 0"));
   }
   if (!(broadcast_margin > 0 && broadcast_margin < 1)) {
-    return InvalidArgument(FieldError(name("broadcast_margin"), broadcast_margin, "must be in (0, 1)"));
+    return InvalidArgument(
+        FieldError(name("broadcast_margin"), broadcast_margin, "must be in (0, 1)"));
   }
   if (island_stall_generations < 0) {
-    return InvalidArgument(
-        FieldError(name("island_stall_generations"), island_stall_generations, "must be >= 0 (0 = never)"));
+    return InvalidArgument(FieldError(name("island_stall_generations"), island_stall_generations,
+                                      "must be >= 0 (0 = never)"));
   }
   if (!island_mutation.empty() && island_mutation.size() != static_cast<size_t>(islands)) {
     return InvalidArgument(FieldError(name("island_mutation") + ".size()", island_mutation.size(),
-                                      "must be 0 (the ladder: " + name("mutation_probability") + " × 1, 2, 3, 5) or " +
-                                          name("islands") + " = " + std::to_string(islands)));
+                                      "must be 0 (the ladder: " + name("mutation_probability") +
+                                          " × 1, 2, 3, 5) or " + name("islands") + " = " +
+                                          std::to_string(islands)));
   }
   for (size_t i = 0; i < island_mutation.size(); ++i) {
-    if (Status s = CheckProbability(name("island_mutation") + "[" + std::to_string(i) + "]", island_mutation[i]);
+    if (Status s = CheckProbability(name("island_mutation") + "[" + std::to_string(i) + "]",
+                                    island_mutation[i]);
         !s.ok())
       return s;
   }
   if (output_moves < kAutoOutputMoves || output_moves > population_size - e) {
-    return InvalidArgument(FieldError(name("output_moves"), output_moves,
-                                      "must be in [0, " + name("population_size") + " − the elite = " +
-                                          std::to_string(population_size - e) + "] (" +
-                                          std::to_string(kAutoOutputMoves) + ": 0 with one island, " +
-                                          "16 % of the offspring with several)"));
+    return InvalidArgument(FieldError(
+        name("output_moves"), output_moves,
+        "must be in [0, " + name("population_size") + " − the elite = " +
+            std::to_string(population_size - e) + "] (" + std::to_string(kAutoOutputMoves) +
+            ": 0 with one island, " + "16 % of the offspring with several)"));
   }
   return Status::Ok();
 }
@@ -148,7 +158,8 @@ std::vector<int> GaOptions::MigrationSources(int i) const {
   const int k = islands;
   if (k < 2) return {};
   switch (topology) {
-    case MigrationTopology::kRing: return {(i + k - 1) % k};
+    case MigrationTopology::kRing:
+      return {(i + k - 1) % k};
     case MigrationTopology::kFullyConnected: {
       std::vector<int> all;
       for (int j = 0; j < k; ++j)
@@ -170,13 +181,12 @@ std::vector<int> GaOptions::MigrationSources(int i) const {
 
 bool GenerationSummary::SameOutcome(const GenerationSummary& o) const {
   return generation == o.generation && best_cost == o.best_cost && mean_cost == o.mean_cost &&
-         median_cost == o.median_cost &&
-         worst_cost == o.worst_cost && improved == o.improved && stall == o.stall &&
-         best_description == o.best_description && evaluations == o.evaluations &&
-         evaluations_total == o.evaluations_total && failures == o.failures &&
-         penalized == o.penalized && errors == o.errors && quarantined == o.quarantined &&
-         failure_reasons == o.failure_reasons && best_island == o.best_island && migrated == o.migrated &&
-         islands == o.islands;
+         median_cost == o.median_cost && worst_cost == o.worst_cost && improved == o.improved &&
+         stall == o.stall && best_description == o.best_description &&
+         evaluations == o.evaluations && evaluations_total == o.evaluations_total &&
+         failures == o.failures && penalized == o.penalized && errors == o.errors &&
+         quarantined == o.quarantined && failure_reasons == o.failure_reasons &&
+         best_island == o.best_island && migrated == o.migrated && islands == o.islands;
 }
 
 std::string GenerationSummary::BriefReport() const {
@@ -201,16 +211,21 @@ std::string GenerationSummary::BriefReport() const {
 
 const char* GaTerminationName(GaTermination t) {
   switch (t) {
-    case GaTermination::kMaxGenerations: return "MAX_GENERATIONS";
-    case GaTermination::kStall: return "STALL";
-    case GaTermination::kCancelled: return "CANCELLED";
-    case GaTermination::kTargetReached: return "TARGET_REACHED";
+    case GaTermination::kMaxGenerations:
+      return "MAX_GENERATIONS";
+    case GaTermination::kStall:
+      return "STALL";
+    case GaTermination::kCancelled:
+      return "CANCELLED";
+    case GaTermination::kTargetReached:
+      return "TARGET_REACHED";
   }
   return "UNKNOWN";
 }
 
-std::string DescribeTermination(GaTermination termination, double best_cost, int stall, uint64_t best_generation,
-                                uint64_t generations, int max_generations, double target_cost) {
+std::string DescribeTermination(GaTermination termination, double best_cost, int stall,
+                                uint64_t best_generation, uint64_t generations, int max_generations,
+                                double target_cost) {
   std::ostringstream os;
   os.precision(10);
   switch (termination) {
@@ -218,11 +233,15 @@ std::string DescribeTermination(GaTermination termination, double best_cost, int
       os << "reached the maximum of " << max_generations << " generations";
       break;
     case GaTermination::kStall:
-      os << "no improvement of the best cost " << best_cost << " in " << stall << " generations (since generation "
-         << best_generation << ")";
+      os << "no improvement of the best cost " << best_cost << " in " << stall
+         << " generations (since generation " << best_generation << ")";
       break;
-    case GaTermination::kCancelled: os << "cancelled after generation " << generations; break;
-    case GaTermination::kTargetReached: os << "best cost " << best_cost << " <= target " << target_cost; break;
+    case GaTermination::kCancelled:
+      os << "cancelled after generation " << generations;
+      break;
+    case GaTermination::kTargetReached:
+      os << "best cost " << best_cost << " <= target " << target_cost;
+      break;
   }
   return os.str();
 }
@@ -230,11 +249,12 @@ std::string DescribeTermination(GaTermination termination, double best_cost, int
 std::string GaSummary::BriefReport() const {
   std::ostringstream os;
   os.precision(10);
-  os << "GA " << GaTerminationName(termination) << " after generation " << generations << ": best cost "
-     << best_fitness.cost << " (generation " << best_generation
-     << (islands > 1 ? ", island " + std::to_string(best_island) + " of " + std::to_string(islands) : std::string())
-     << "), " << evaluations
-     << " evaluations, " << failures << " failures, " << wall_time_s << " s. " << message;
+  os << "GA " << GaTerminationName(termination) << " after generation " << generations
+     << ": best cost " << best_fitness.cost << " (generation " << best_generation
+     << (islands > 1 ? ", island " + std::to_string(best_island) + " of " + std::to_string(islands)
+                     : std::string())
+     << "), " << evaluations << " evaluations, " << failures << " failures, " << wall_time_s
+     << " s. " << message;
   return os.str();
 }
 
@@ -258,19 +278,24 @@ Status GaState::Validate(const GaOptions& options) const {
                                         "must equal population_size = " + std::to_string(n)));
     }
     for (size_t i = 0; i < n; ++i) {
-      Status s = CheckGenome(is.population[i], options.genome_bits, f + ".population[" + std::to_string(i) + "]");
+      Status s = CheckGenome(is.population[i], options.genome_bits,
+                             f + ".population[" + std::to_string(i) + "]");
       if (!s.ok()) return s;
       const std::string fc = f + ".fitness[" + std::to_string(i) + "].cost";
-      if (!std::isfinite(is.fitness[i].cost)) return InvalidArgument(FieldError(fc, is.fitness[i].cost, "must be finite"));
+      if (!std::isfinite(is.fitness[i].cost))
+        return InvalidArgument(FieldError(fc, is.fitness[i].cost, "must be finite"));
       if (i > 0 && is.fitness[i].cost < is.fitness[i - 1].cost) {
-        return InvalidArgument(FieldError(fc, is.fitness[i].cost, "population must be ranked: cost below its predecessor's"));
+        return InvalidArgument(FieldError(
+            fc, is.fitness[i].cost, "population must be ranked: cost below its predecessor's"));
       }
     }
     if (!std::isfinite(is.best_cost) || is.best_cost < is.fitness[0].cost) {
-      return InvalidArgument(FieldError(f + ".best_cost", is.best_cost, "must be finite and not below the island's best"));
+      return InvalidArgument(FieldError(f + ".best_cost", is.best_cost,
+                                        "must be finite and not below the island's best"));
     }
     if (is.stall < 0) return InvalidArgument(FieldError(f + ".stall", is.stall, "must be >= 0"));
-    if (is.restarts < 0) return InvalidArgument(FieldError(f + ".restarts", is.restarts, "must be >= 0"));
+    if (is.restarts < 0)
+      return InvalidArgument(FieldError(f + ".restarts", is.restarts, "must be >= 0"));
     if (Status s = is.rng.Validate(); !s.ok()) return InvalidArgument(f + "." + s.message());
     top = std::min(top, is.fitness[0].cost);
   }
@@ -281,18 +306,20 @@ Status GaState::Validate(const GaOptions& options) const {
                                       "must be finite and not below the islands' best"));
   }
   if (best_island < 0 || best_island >= options.islands) {
-    return InvalidArgument(FieldError("state.best_island", best_island,
-                                      "must be in [0, islands - 1 = " + std::to_string(options.islands - 1) + "]"));
+    return InvalidArgument(
+        FieldError("state.best_island", best_island,
+                   "must be in [0, islands - 1 = " + std::to_string(options.islands - 1) + "]"));
   }
   if (stall < 0) return InvalidArgument(FieldError("state.stall", stall, "must be >= 0"));
   if (best_generation > generation) {
-    return InvalidArgument(FieldError("state.best_generation", best_generation,
-                                      "must be <= state.generation = " + std::to_string(generation)));
+    return InvalidArgument(
+        FieldError("state.best_generation", best_generation,
+                   "must be <= state.generation = " + std::to_string(generation)));
   }
   if (evaluations < 0 || failures < 0 || failures > evaluations) {
-    return InvalidArgument(FieldError("state.failures", failures,
-                                      "counters must satisfy 0 <= failures <= evaluations = " +
-                                          std::to_string(evaluations)));
+    return InvalidArgument(FieldError(
+        "state.failures", failures,
+        "counters must satisfy 0 <= failures <= evaluations = " + std::to_string(evaluations)));
   }
   return Status::Ok();
 }
@@ -324,7 +351,8 @@ void GeneticAlgorithm::SetMove(Move move) { move_ = std::move(move); }
 
 void GeneticAlgorithm::RestoreState(GaState state) {
   ThrowIfError(state.Validate(options_));
-  if (!state.initialized) state.islands = state_.islands;  // nothing drawn yet: the seeded generators
+  if (!state.initialized)
+    state.islands = state_.islands;  // nothing drawn yet: the seeded generators
   for (int i = 0; i < options_.islands; ++i) rngs_[i] = Rng(state.islands[i].rng);
   state_ = std::move(state);
 }
@@ -333,7 +361,8 @@ int GeneticAlgorithm::Tournament(Rng& rng) {
   const uint64_t elite = static_cast<uint64_t>(options_.elite_count());
   // The population is ranked, so the best of the draws is the smallest index.
   uint64_t winner = rng.UniformBelow(elite);
-  for (int k = 1; k < options_.tournament_size; ++k) winner = std::min(winner, rng.UniformBelow(elite));
+  for (int k = 1; k < options_.tournament_size; ++k)
+    winner = std::min(winner, rng.UniformBelow(elite));
   return static_cast<int>(winner);
 }
 
@@ -371,8 +400,9 @@ std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(std::vector<D
       indices.push_back(first + static_cast<int>(j));
     }
   }
-  const std::span<const Genome> genomes =
-      drafts.size() == 1 ? std::span<const Genome>(drafts[0].fresh) : std::span<const Genome>(joined);
+  const std::span<const Genome> genomes = drafts.size() == 1
+                                              ? std::span<const Genome>(drafts[0].fresh)
+                                              : std::span<const Genome>(joined);
   std::vector<FitnessResult> out(genomes.size());
   const uint64_t generation = state_.initialized ? state_.generation + 1 : 0;
   try {
@@ -455,14 +485,15 @@ GeneticAlgorithm::Draft GeneticAlgorithm::Breed(int island) {
   if (moves > 0) {
     move_(is.population.front(), rng, std::span<Genome>(d.fresh).subspan(n_bred));
     for (int o = n_bred; o < n_off; ++o)
-      PZ_CHECK_MSG(CheckGenome(d.fresh[o], bits, "move").ok(), "the move wrote a genome of the wrong length or non-0/1 bits");
+      PZ_CHECK_MSG(CheckGenome(d.fresh[o], bits, "move").ok(),
+                   "the move wrote a genome of the wrong length or non-0/1 bits");
   }
   d.elite = elite;  // kept: moved from the state once the generation is evaluated (Finish)
   return d;
 }
 
-std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int island, const std::vector<int>& sources,
-                                                                            double below) const {
+std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(
+    int island, const std::vector<int>& sources, double below) const {
   std::vector<std::pair<Genome, FitnessResult>> in;
   const int m = options_.migrants;
   for (int s : sources) {
@@ -471,7 +502,8 @@ std::vector<std::pair<Genome, FitnessResult>> GeneticAlgorithm::Immigrants(int i
     for (int r = 0; r < m; ++r) in.emplace_back(src.population[r], src.fitness[r]);
   }
   // Best first; ties keep source order, then rank.
-  std::stable_sort(in.begin(), in.end(), [](const auto& a, const auto& b) { return a.second.cost < b.second.cost; });
+  std::stable_sort(in.begin(), in.end(),
+                   [](const auto& a, const auto& b) { return a.second.cost < b.second.cost; });
   if (in.size() > static_cast<size_t>(m)) in.resize(m);
   return in;
 }
@@ -512,7 +544,8 @@ std::vector<int> GeneticAlgorithm::Migrate(const std::vector<std::vector<int>>& 
     // The margin's gate (file comment of ga.h, 6.): sources better than this island's best by more
     // than m · |its best|; without a margin, every source.
     const double own = state_.islands[k].fitness.front().cost;
-    incoming[k] = Immigrants(k, sources[k], m > 0 ? own - m * std::abs(own) : std::numeric_limits<double>::infinity());
+    incoming[k] = Immigrants(
+        k, sources[k], m > 0 ? own - m * std::abs(own) : std::numeric_limits<double>::infinity());
   }
   std::vector<int> taken(k_islands, 0);
   for (int k = 0; k < k_islands; ++k) {
@@ -547,8 +580,8 @@ std::vector<int> GeneticAlgorithm::Migrate(const std::vector<std::vector<int>>& 
 }
 
 const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
-                                                   std::vector<std::vector<FitnessResult>> evaluated,
-                                                   double start_s) {
+                                                  std::vector<std::vector<FitnessResult>> evaluated,
+                                                  double start_s) {
   const int k_islands = options_.islands;
   GenerationSummary s;
   s.generation = state_.initialized ? state_.generation + 1 : 0;
@@ -563,12 +596,15 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
       ++s.failure_reasons[f.reason];
     }
     IslandState& is = state_.islands[k];
-    if (d.elite > 0) {  // the elite, left in the state while the generation was evaluated, goes first
+    if (d.elite >
+        0) {  // the elite, left in the state while the generation was evaluated, goes first
       std::vector<Genome> kept(std::make_move_iterator(is.population.begin()),
                                std::make_move_iterator(is.population.begin() + d.elite));
-      std::vector<FitnessResult> kept_fitness(std::make_move_iterator(is.fitness.begin()),
-                                              std::make_move_iterator(is.fitness.begin() + d.elite));
-      kept.insert(kept.end(), std::make_move_iterator(d.kept.begin()), std::make_move_iterator(d.kept.end()));
+      std::vector<FitnessResult> kept_fitness(
+          std::make_move_iterator(is.fitness.begin()),
+          std::make_move_iterator(is.fitness.begin() + d.elite));
+      kept.insert(kept.end(), std::make_move_iterator(d.kept.begin()),
+                  std::make_move_iterator(d.kept.end()));
       kept_fitness.insert(kept_fitness.end(), std::make_move_iterator(d.kept_fitness.begin()),
                           std::make_move_iterator(d.kept_fitness.end()));
       d.kept = std::move(kept);
@@ -585,7 +621,8 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
     };
     std::vector<int> order(n);
     std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(), [&fit](int a, int b) { return Better(fit(a), a, fit(b), b); });
+    std::sort(order.begin(), order.end(),
+              [&fit](int a, int b) { return Better(fit(a), a, fit(b), b); });
     is.population.resize(n);
     is.fitness.resize(n);
     for (int r = 0; r < n; ++r) {
@@ -606,7 +643,8 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
   // The job's best: the best island's (ties: the lowest island index).
   int best_island = 0;
   for (int k = 1; k < k_islands; ++k)
-    if (state_.islands[k].fitness.front().cost < state_.islands[best_island].fitness.front().cost) best_island = k;
+    if (state_.islands[k].fitness.front().cost < state_.islands[best_island].fitness.front().cost)
+      best_island = k;
   const IslandState& bi = state_.islands[best_island];
   const FitnessResult& top = bi.fitness.front();
   s.improved = !state_.initialized || top.cost < state_.best_fitness.cost;
@@ -645,7 +683,8 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
   if (options_.migrates() && s.generation > 0 && s.generation % options_.migration_interval == 0) {
     taken = Migrate(sources_, options_.migration_margin);
     s.migrated = true;
-  } else if (options_.broadcasts() && s.generation > 0 && s.generation % options_.broadcast_interval == 0) {
+  } else if (options_.broadcasts() && s.generation > 0 &&
+             s.generation % options_.broadcast_interval == 0) {
     taken = Migrate(everyone_, options_.broadcast_margin);
     s.migrated = true;
   }
@@ -666,10 +705,13 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
 }
 
 std::optional<GaTermination> GeneticAlgorithm::CheckTermination() const {
-  if (!state_.initialized) return cancel_.load() ? std::optional(GaTermination::kCancelled) : std::nullopt;
+  if (!state_.initialized)
+    return cancel_.load() ? std::optional(GaTermination::kCancelled) : std::nullopt;
   if (state_.best_fitness.cost <= options_.target_cost) return GaTermination::kTargetReached;
-  if (options_.stall_generations > 0 && state_.stall >= options_.stall_generations) return GaTermination::kStall;
-  if (state_.generation >= static_cast<uint64_t>(options_.max_generations)) return GaTermination::kMaxGenerations;
+  if (options_.stall_generations > 0 && state_.stall >= options_.stall_generations)
+    return GaTermination::kStall;
+  if (state_.generation >= static_cast<uint64_t>(options_.max_generations))
+    return GaTermination::kMaxGenerations;
   if (cancel_.load()) return GaTermination::kCancelled;
   return std::nullopt;
 }
@@ -686,15 +728,17 @@ GaSummary GeneticAlgorithm::MakeSummary(GaTermination termination, double wall_t
   s.evaluations = state_.evaluations;
   s.failures = state_.failures;
   s.wall_time_s = wall_time_s;
-  s.message = DescribeTermination(termination, state_.best_fitness.cost, state_.stall, state_.best_generation,
-                                  state_.generation, options_.max_generations, options_.target_cost);
+  s.message = DescribeTermination(termination, state_.best_fitness.cost, state_.stall,
+                                  state_.best_generation, state_.generation,
+                                  options_.max_generations, options_.target_cost);
   return s;
 }
 
 GaSummary GeneticAlgorithm::Run() {
   const double start = NowSeconds();
   for (;;) {
-    if (std::optional<GaTermination> t = CheckTermination()) return MakeSummary(*t, NowSeconds() - start);
+    if (std::optional<GaTermination> t = CheckTermination())
+      return MakeSummary(*t, NowSeconds() - start);
     if (!state_.initialized) {
       Initialize();
     } else {

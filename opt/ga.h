@@ -40,12 +40,13 @@
 //      they replace its worst individuals pair by pair (best migrant ↔ worst resident) where the
 //      migrant's cost is strictly lower; the island is re-ranked;
 //   6b. every broadcast_interval generations (0 = never), at a generation without the migration of
-//      6., a gated broadcast: each island takes the best `migrants` of every other island whose best
-//      is below its own by more than broadcast_margin · |its best|, as in 6. with the fully
+//      6., a gated broadcast: each island takes the best `migrants` of every other island whose
+//      best is below its own by more than broadcast_margin · |its best|, as in 6. with the fully
 //      connected topology and that margin. With an ungated ring every 200 and a broadcast every 25
 //      (docs/performance.md, "Islands"), the islands on one plateau mix slowly while a lineage that
 //      steps down is copied to every island it leads within 25 generations;
-//   7. island i's offspring flip each bit with probability MutationProbability(i): island_mutation[i]
+//   7. island i's offspring flip each bit with probability MutationProbability(i):
+//   island_mutation[i]
 //      when one rate per island is given, else, with more than one island, the ladder
 //      mutation_probability · (1, 2, 3, 5)[i mod 4] (at 0.01: 0.01, 0.02, 0.03, 0.05; island 0 at
 //      the one-island rate) — heterogeneous islands, the same operators at different rates, the
@@ -57,12 +58,12 @@
 //      batch instead of its offspring.
 //   9. output moves: with a move set (SetMove; a problem hook) island i's last OutputMoves()
 //      offspring are not bred but made by the move from the island's best individual, with the
-//      island's generator, after the bred ones. For HGANN (hgann/output_move.h) the move decodes the
-//      network, takes its seven outputs' mean over the training cases, adds a random step and writes
-//      them back as a network of constant outputs: a search in the model's parameter space beside
-//      the GA's search in the network's bits, which leaves a plateau that bit flips cannot (the
-//      default with several islands, by measurement: docs/performance.md, "Islands"). Without a
-//      move (or with 0 moves) every offspring is bred.
+//      island's generator, after the bred ones. For HGANN (hgann/output_move.h) the move decodes
+//      the network, takes its seven outputs' mean over the training cases, adds a random step and
+//      writes them back as a network of constant outputs: a search in the model's parameter space
+//      beside the GA's search in the network's bits, which leaves a plateau that bit flips cannot
+//      (the default with several islands, by measurement: docs/performance.md, "Islands"). Without
+//      a move (or with 0 moves) every offspring is bred.
 // The job's best, stall and termination are over all islands (the best of the best); the
 // generation's summary carries each island's best, stall, immigrants and restart (IslandSummary).
 #pragma once
@@ -95,42 +96,44 @@ inline constexpr uint64_t kTopologyStream = uint64_t{1} << 32;
 
 /// Every setting of the GA; defaults are the paper's Table 2 / spec §4.
 struct GaOptions {
-  int population_size = 400;           ///< individuals, ≥ 2
-  int genome_bits = 1415;              ///< bits per genome, ≥ 3 (two distinct cut points)
-  double elite_fraction = 0.5;         ///< share passed unchanged, in (0, 1); the elite count
-                                       ///< round(population_size · elite_fraction) must be 1 … N − 1
-  int tournament_size = 2;             ///< parent = best of k uniform draws from the elite, k ≥ 1
-  double crossover_probability = 1.0; ///< two-point crossover of an offspring pair, in [0, 1]
+  int population_size = 400;    ///< individuals, ≥ 2
+  int genome_bits = 1415;       ///< bits per genome, ≥ 3 (two distinct cut points)
+  double elite_fraction = 0.5;  ///< share passed unchanged, in (0, 1); the elite count
+                                ///< round(population_size · elite_fraction) must be 1 … N − 1
+  int tournament_size = 2;      ///< parent = best of k uniform draws from the elite, k ≥ 1
+  double crossover_probability = 1.0;  ///< two-point crossover of an offspring pair, in [0, 1]
   double mutation_probability = 0.01;  ///< flip probability of each offspring bit, in [0, 1]
   int max_generations = 1000;          ///< generations after the initial one, ≥ 0
   int stall_generations = 200;         ///< stop after this many generations without a strictly
                                        ///< lower best cost, ≥ 0 (0 = never stop for stall)
-  double target_cost = -std::numeric_limits<double>::infinity();  ///< stop once best ≤ this; not NaN
-  double error_cost = kDefaultErrorCost;  ///< cost given to non-finite results, finite
-  uint64_t seed = 0;                   ///< seeds the generators (island i: StreamSeed(seed, i))
+  double target_cost =
+      -std::numeric_limits<double>::infinity();  ///< stop once best ≤ this; not NaN
+  double error_cost = kDefaultErrorCost;         ///< cost given to non-finite results, finite
+  uint64_t seed = 0;  ///< seeds the generators (island i: StreamSeed(seed, i))
   // Islands (file comment). With islands = 1 the other four are not used.
-  int islands = 1;                      ///< populations, 1 … kMaxIslands
+  int islands = 1;  ///< populations, 1 … kMaxIslands
   // The migration defaults are the measured archipelago (docs/performance.md, "Islands"): with 4
   // islands and 560 generations, every 25 generations, fully connected, gated by a margin of 0.2,
   // mutation by the ladder of 7.
-  int migration_interval = 25;          ///< generations between migrations, ≥ 0 (0 = never: multi-start)
-  int migrants = 4;                     ///< individuals each island sends per migration, 0 … population_size − 1
-                                        ///< (≥ 1 when migration_interval > 0)
+  int migration_interval = 25;  ///< generations between migrations, ≥ 0 (0 = never: multi-start)
+  int migrants = 4;  ///< individuals each island sends per migration, 0 … population_size − 1
+                     ///< (≥ 1 when migration_interval > 0)
   MigrationTopology topology = MigrationTopology::kFullyConnected;
-  double migration_margin = 0.2;        ///< a migration reaches an island only from sources whose best is
-                                        ///< below its own by more than this share of |its best|, [0, 1)
-                                        ///< (0 = every source)
-  int broadcast_interval = 0;           ///< generations between gated broadcasts to every island, ≥ 0
-                                        ///< (0 = none; file comment, 6b.); ≥ 1 migrant when > 0
-  double broadcast_margin = 0.2;        ///< the broadcast's gate, (0, 1): a source's best must be below the
-                                        ///< island's by more than this share of it
+  double migration_margin = 0.2;  ///< a migration reaches an island only from sources whose best is
+                                  ///< below its own by more than this share of |its best|, [0, 1)
+                                  ///< (0 = every source)
+  int broadcast_interval = 0;     ///< generations between gated broadcasts to every island, ≥ 0
+                                  ///< (0 = none; file comment, 6b.); ≥ 1 migrant when > 0
+  double broadcast_margin = 0.2;  ///< the broadcast's gate, (0, 1): a source's best must be below
+                                  ///< the island's by more than this share of it
   int island_stall_generations = 0;     ///< restart an island after this many generations without
                                         ///< a lower best of its own, ≥ 0 (0 = never)
-  std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0, 1];
-                                        ///< empty (the ladder of 7.) or `islands` entries
-  int output_moves = kAutoOutputMoves;  ///< offspring per island and generation made by the move (9.),
-                                        ///< 0 … population_size − elite_count(); kAutoOutputMoves: 0 with
-                                        ///< one island, kIslandOutputMoveShare of the offspring with several
+  std::vector<double> island_mutation;  ///< per-bit mutation probability of island i, each in [0,
+                                        ///< 1]; empty (the ladder of 7.) or `islands` entries
+  int output_moves =
+      kAutoOutputMoves;  ///< offspring per island and generation made by the move (9.),
+                         ///< 0 … population_size − elite_count(); kAutoOutputMoves: 0 with
+                         ///< one island, kIslandOutputMoveShare of the offspring with several
 
   /// What Validate() calls a field, given the member's name (e.g. "islands" → "--islands" for a
   /// command line); without one, the member's name.
@@ -147,11 +150,13 @@ struct GaOptions {
   /// broadcast_interval > 0 and more than one island.
   bool broadcasts() const { return islands > 1 && broadcast_interval > 0; }
   /// The per-bit mutation probability of island `i`: island_mutation[i]; else, with one island,
-  /// mutation_probability, and with several, min(1, mutation_probability · kIslandMutationLadder[i mod 4]).
+  /// mutation_probability, and with several, min(1, mutation_probability · kIslandMutationLadder[i
+  /// mod 4]).
   double MutationProbability(int i) const {
     if (!island_mutation.empty()) return island_mutation[i];
     if (islands <= 1) return mutation_probability;
-    return std::min(1.0, mutation_probability * kIslandMutationLadder[i % std::size(kIslandMutationLadder)]);
+    return std::min(
+        1.0, mutation_probability * kIslandMutationLadder[i % std::size(kIslandMutationLadder)]);
   }
   /// The default rates of the islands, as multiples of mutation_probability (file comment, 7.).
   static constexpr double kIslandMutationLadder[4] = {1, 2, 3, 5};
@@ -161,7 +166,8 @@ struct GaOptions {
   int OutputMoves() const {
     if (output_moves != kAutoOutputMoves) return output_moves;
     if (islands <= 1) return 0;
-    return static_cast<int>(std::lround(kIslandOutputMoveShare * (population_size - elite_count())));
+    return static_cast<int>(
+        std::lround(kIslandOutputMoveShare * (population_size - elite_count())));
   }
   static constexpr int kAutoOutputMoves = -1;
   static constexpr double kIslandOutputMoveShare = 0.16;
@@ -185,18 +191,18 @@ struct GenerationSummary {
   double worst_cost = 0;    ///< finite
   bool improved = false;    ///< best cost strictly lower than before (always true for generation 0)
   int stall = 0;            ///< generations since the best cost last improved
-  std::string best_description;  ///< from the describer hook (e.g. "2-3-7 …"), empty without one
-  int evaluations = 0;           ///< genomes evaluated in this generation
-  int64_t evaluations_total = 0; ///< since the start of the run
-  int failures = 0;              ///< non-ok results among this generation's evaluations
-  int penalized = 0;             ///< of which FitnessStatus::kPenalized
-  int errors = 0;                ///< of which FitnessStatus::kError
-  int quarantined = 0;           ///< of which quarantined by the service (a kError each; 0 in a local run)
+  std::string best_description;   ///< from the describer hook (e.g. "2-3-7 …"), empty without one
+  int evaluations = 0;            ///< genomes evaluated in this generation
+  int64_t evaluations_total = 0;  ///< since the start of the run
+  int failures = 0;               ///< non-ok results among this generation's evaluations
+  int penalized = 0;              ///< of which FitnessStatus::kPenalized
+  int errors = 0;                 ///< of which FitnessStatus::kError
+  int quarantined = 0;  ///< of which quarantined by the service (a kError each; 0 in a local run)
   std::map<std::string, int> failure_reasons;  ///< reason → count, this generation
-  int best_island = 0;           ///< island holding this generation's best (0 with one island)
-  bool migrated = false;         ///< a migration took place at the end of this generation
+  int best_island = 0;    ///< island holding this generation's best (0 with one island)
+  bool migrated = false;  ///< a migration took place at the end of this generation
   std::vector<IslandSummary> islands;  ///< one per island when there are several; empty for one
-  double wall_time_s = 0;        ///< wall time of the generation (the only non-deterministic field)
+  double wall_time_s = 0;  ///< wall time of the generation (the only non-deterministic field)
 
   /// Equal in every field but wall_time_s.
   bool SameOutcome(const GenerationSummary& other) const;
@@ -219,19 +225,19 @@ struct IslandState {
   std::vector<Genome> population;      ///< ranked, best first; population_size genomes
   std::vector<FitnessResult> fitness;  ///< fitness[i] of population[i]
   RngState rng;                        ///< the island's generator, ready for the next generation
-  int stall = 0;                       ///< generations since its best last went down (since its restart)
-  double best_cost = 0;                ///< its best since its last restart
-  int restarts = 0;                    ///< times it was restarted
+  int stall = 0;         ///< generations since its best last went down (since its restart)
+  double best_cost = 0;  ///< its best since its last restart
+  int restarts = 0;      ///< times it was restarted
 };
 
 /// The complete state of a run between generations. Plain data: save it to checkpoint, restore it
 /// with GeneticAlgorithm::RestoreState() to continue bit for bit.
 struct GaState {
-  bool initialized = false;            ///< generation 0 has been evaluated
-  uint64_t generation = 0;             ///< last completed generation
-  int stall = 0;                       ///< generations since the best cost (over islands) last improved
-  std::vector<IslandState> islands;    ///< options.islands of them (one before Initialize too)
-  Genome best;                         ///< best so far, over all islands
+  bool initialized = false;  ///< generation 0 has been evaluated
+  uint64_t generation = 0;   ///< last completed generation
+  int stall = 0;             ///< generations since the best cost (over islands) last improved
+  std::vector<IslandState> islands;  ///< options.islands of them (one before Initialize too)
+  Genome best;                       ///< best so far, over all islands
   FitnessResult best_fitness;
   uint64_t best_generation = 0;        ///< generation in which the best cost was reached
   int best_island = 0;                 ///< island in which it was found
@@ -247,30 +253,32 @@ struct GaState {
 /// The final record of Run().
 struct GaSummary {
   GaTermination termination = GaTermination::kMaxGenerations;
-  std::string message;             ///< why it stopped, with the figures
-  uint64_t generations = 0;        ///< last completed generation
+  std::string message;       ///< why it stopped, with the figures
+  uint64_t generations = 0;  ///< last completed generation
   Genome best;
   FitnessResult best_fitness;
   uint64_t best_generation = 0;
-  int best_island = 0;             ///< island in which the best was found
-  int islands = 1;                 ///< the run's islands
+  int best_island = 0;  ///< island in which the best was found
+  int islands = 1;      ///< the run's islands
   int64_t evaluations = 0;
   int64_t failures = 0;
-  double wall_time_s = 0;          ///< of the Run() call
+  double wall_time_s = 0;  ///< of the Run() call
   std::string BriefReport() const;
 };
 
 /// Why a run stopped, with the figures (GaSummary::message): what Run() says, and what a client
 /// that holds only a job's stored state (its termination, best, stall and settings) says too.
-std::string DescribeTermination(GaTermination termination, double best_cost, int stall, uint64_t best_generation,
-                                uint64_t generations, int max_generations, double target_cost);
+std::string DescribeTermination(GaTermination termination, double best_cost, int stall,
+                                uint64_t best_generation, uint64_t generations, int max_generations,
+                                double target_cost);
 
 class GeneticAlgorithm {
  public:
   using GenerationCallback = std::function<void(const GenerationSummary&)>;
   using Describer = std::function<std::string(const Genome&)>;
 
-  /// Throws InputError if the options are invalid. `evaluator` is not owned and must outlive the GA.
+  /// Throws InputError if the options are invalid. `evaluator` is not owned and must outlive the
+  /// GA.
   GeneticAlgorithm(const GaOptions& options, BatchEvaluator* evaluator);
 
   /// Called after every generation (0 included), once state() is complete for that generation:
@@ -336,16 +344,18 @@ class GeneticAlgorithm {
   Draft Restart(int island);
   /// The best `migrants` individuals island `i` receives from its `sources` (ties: source order,
   /// rank), counting only the sources whose best cost is below `below`.
-  std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island, const std::vector<int>& sources,
+  std::vector<std::pair<Genome, FitnessResult>> Immigrants(int island,
+                                                           const std::vector<int>& sources,
                                                            double below) const;
   /// Evaluates every draft's fresh genomes as one batch (generation 0 if !initialized).
   std::vector<std::vector<FitnessResult>> Evaluate(std::vector<Draft>& drafts);
   /// Ranks each island by (cost, index), updates island and job best, stall and counters, migrates
   /// when due, logs the summary and calls the callbacks.
-  const GenerationSummary& Finish(std::vector<Draft> drafts, std::vector<std::vector<FitnessResult>> evaluated,
+  const GenerationSummary& Finish(std::vector<Draft> drafts,
+                                  std::vector<std::vector<FitnessResult>> evaluated,
                                   double start_s);
-  /// A migration at the end of a generation (file comment, 6. and 6b.) from each island's `sources`,
-  /// gated by `margin` (0 = every source); immigrants taken per island.
+  /// A migration at the end of a generation (file comment, 6. and 6b.) from each island's
+  /// `sources`, gated by `margin` (0 = every source); immigrants taken per island.
   std::vector<int> Migrate(const std::vector<std::vector<int>>& sources, double margin);
 
   GaOptions options_;
@@ -356,7 +366,8 @@ class GeneticAlgorithm {
   std::atomic<bool> cancel_{false};
   std::vector<Rng> rngs_;                  ///< one per island
   std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once
-  std::vector<std::vector<int>> everyone_;  ///< the broadcast's sources: every other island, in index order
+  std::vector<std::vector<int>>
+      everyone_;  ///< the broadcast's sources: every other island, in index order
   std::map<double, GeometricGaps> mutation_gaps_;  ///< by mutation probability
   GaState state_;
 };

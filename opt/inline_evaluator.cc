@@ -40,7 +40,8 @@ void EvaluateManyGuarded(const FitnessFunction& fitness, std::span<const Genome*
     fitness.EvaluateMany(genomes, out);
     for (FitnessResult& r : out) SanitizeFitness(r, error_cost);
   } catch (...) {
-    for (size_t i = 0; i < genomes.size(); ++i) out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost);
+    for (size_t i = 0; i < genomes.size(); ++i)
+      out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost);
   }
 }
 
@@ -54,7 +55,8 @@ void EvaluateGroupGuarded(const FitnessFunction& fitness, std::span<const Genome
       continue;
     }
     for (size_t j = 0; j < m; ++j) group[j] = &genomes[i + j];
-    EvaluateManyGuarded(fitness, std::span<const Genome* const>(group, m), out.subspan(i, m), error_cost);
+    EvaluateManyGuarded(fitness, std::span<const Genome* const>(group, m), out.subspan(i, m),
+                        error_cost);
   }
 }
 

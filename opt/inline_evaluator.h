@@ -24,7 +24,8 @@ FitnessResult EvaluateGuarded(const FitnessFunction& fitness, const Genome& geno
 /// out[i] = EvaluateGuarded(fitness, *genomes[i], error_cost) for every i, through
 /// fitness.EvaluateMany (an exception there: each genome by EvaluateGuarded). Never throws.
 void EvaluateManyGuarded(const FitnessFunction& fitness, std::span<const Genome* const> genomes,
-                         std::span<FitnessResult> out, double error_cost = kDefaultErrorCost) noexcept;
+                         std::span<FitnessResult> out,
+                         double error_cost = kDefaultErrorCost) noexcept;
 /// The most genomes one EvaluateMany call takes (a fitness with more lanes gets them in groups of
 /// this many).
 inline constexpr size_t kMaxLanes = 8;
@@ -33,7 +34,8 @@ inline constexpr size_t kMaxLanes = 8;
 /// them): side by side through EvaluateManyGuarded in groups of at most kMaxLanes, one alone by
 /// EvaluateGuarded. Never throws.
 void EvaluateGroupGuarded(const FitnessFunction& fitness, std::span<const Genome> genomes,
-                          std::span<FitnessResult> out, double error_cost = kDefaultErrorCost) noexcept;
+                          std::span<FitnessResult> out,
+                          double error_cost = kDefaultErrorCost) noexcept;
 
 /// Evaluates a batch in order on the calling thread (tests, single-core runs).
 class InlineEvaluator final : public BatchEvaluator {

@@ -28,10 +28,12 @@ void ParallelFor(int n, int threads, const std::function<void(int)>& fn) {
   for (auto& t : pool) t.join();
 }
 
-// ---- Levenberg–Marquardt -------------------------------------------------------------------------
+// ---- Levenberg–Marquardt
+// -------------------------------------------------------------------------
 
 Status LmOptions::Validate() const {
-  if (max_iterations < 1) return InvalidArgument(FieldError("max_iterations", max_iterations, "must be >= 1"));
+  if (max_iterations < 1)
+    return InvalidArgument(FieldError("max_iterations", max_iterations, "must be >= 1"));
   if (!(fd_step > 0)) return InvalidArgument(FieldError("fd_step", fd_step, "must be > 0"));
   if (threads < 1) return InvalidArgument(FieldError("threads", threads, "must be >= 1"));
   if (!(ftol >= 0)) return InvalidArgument(FieldError("ftol", ftol, "must be >= 0"));
@@ -40,17 +42,18 @@ Status LmOptions::Validate() const {
 }
 
 BatchResidualFunction ParallelResiduals(ResidualFunction f, int threads) {
-  return [f = std::move(f), threads](const std::vector<std::vector<double>>& xs, std::vector<std::vector<double>>& rs,
-                                     std::vector<char>& ok) {
+  return [f = std::move(f), threads](const std::vector<std::vector<double>>& xs,
+                                     std::vector<std::vector<double>>& rs, std::vector<char>& ok) {
     rs.assign(xs.size(), {});
     ok.assign(xs.size(), 0);
-    ParallelFor(static_cast<int>(xs.size()), threads, [&](int i) { ok[i] = f(xs[i], rs[i]) ? 1 : 0; });
+    ParallelFor(static_cast<int>(xs.size()), threads,
+                [&](int i) { ok[i] = f(xs[i], rs[i]) ? 1 : 0; });
   };
 }
 
 BatchResidualFunction EvaluatorResiduals(opt::BatchEvaluator& evaluator) {
-  return [&evaluator](const std::vector<std::vector<double>>& xs, std::vector<std::vector<double>>& rs,
-                      std::vector<char>& ok) {
+  return [&evaluator](const std::vector<std::vector<double>>& xs,
+                      std::vector<std::vector<double>>& rs, std::vector<char>& ok) {
     std::vector<opt::Genome> genomes(xs.size());
     std::vector<int> idx(xs.size());
     for (size_t i = 0; i < xs.size(); ++i) {
@@ -68,15 +71,18 @@ BatchResidualFunction EvaluatorResiduals(opt::BatchEvaluator& evaluator) {
   };
 }
 
-bool NumericJacobian(const ResidualFunction& f, std::span<const double> x, std::span<const double> r0,
-                     std::span<const double> lower, std::span<const double> upper, double step, bool central,
-                     int threads, Eigen::MatrixXd& jac, int64_t* evaluations) {
-  return NumericJacobian(ParallelResiduals(f, threads), x, r0, lower, upper, step, central, jac, evaluations);
+bool NumericJacobian(const ResidualFunction& f, std::span<const double> x,
+                     std::span<const double> r0, std::span<const double> lower,
+                     std::span<const double> upper, double step, bool central, int threads,
+                     Eigen::MatrixXd& jac, int64_t* evaluations) {
+  return NumericJacobian(ParallelResiduals(f, threads), x, r0, lower, upper, step, central, jac,
+                         evaluations);
 }
 
-bool NumericJacobian(const BatchResidualFunction& f, std::span<const double> x, std::span<const double> r0,
-                     std::span<const double> lower, std::span<const double> upper, double step, bool central,
-                     Eigen::MatrixXd& jac, int64_t* evaluations) {
+bool NumericJacobian(const BatchResidualFunction& f, std::span<const double> x,
+                     std::span<const double> r0, std::span<const double> lower,
+                     std::span<const double> upper, double step, bool central, Eigen::MatrixXd& jac,
+                     int64_t* evaluations) {
   const int n = static_cast<int>(x.size());
   const int m = static_cast<int>(r0.size());
   jac.setZero(m, n);
@@ -130,14 +136,16 @@ bool NumericJacobian(const BatchResidualFunction& f, std::span<const double> x, 
   return all_ok;
 }
 
-LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x, std::span<const double> lower,
-                            std::span<const double> upper, const LmOptions& o) {
+LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x,
+                            std::span<const double> lower, std::span<const double> upper,
+                            const LmOptions& o) {
   ThrowIfError(o.Validate());
   return LevenbergMarquardt(ParallelResiduals(f, o.threads), std::move(x), lower, upper, o);
 }
 
-LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double> x, std::span<const double> lower,
-                            std::span<const double> upper, const LmOptions& o) {
+LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double> x,
+                            std::span<const double> lower, std::span<const double> upper,
+                            const LmOptions& o) {
   ThrowIfError(o.Validate());
   // One point at a time (the start and the trial steps).
   std::vector<std::vector<double>> one(1), rs1;
@@ -179,9 +187,11 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
     return true;
   };
   for (int it = 0; it < o.max_iterations; ++it) {
-    NumericJacobian(fb, res.x, res.r, lower, upper, o.fd_step, central, res.jacobian, &res.evaluations);
+    NumericJacobian(fb, res.x, res.r, lower, upper, o.fd_step, central, res.jacobian,
+                    &res.evaluations);
     res.iterations = it + 1;
-    const Eigen::Map<const Eigen::VectorXd> rv(res.r.data(), static_cast<Eigen::Index>(res.r.size()));
+    const Eigen::Map<const Eigen::VectorXd> rv(res.r.data(),
+                                               static_cast<Eigen::Index>(res.r.size()));
     const Eigen::MatrixXd a = res.jacobian.transpose() * res.jacobian;
     const Eigen::VectorXd g = res.jacobian.transpose() * rv;
     // Free variables: not held at a bound by a gradient pointing out of the box.

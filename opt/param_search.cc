@@ -62,7 +62,8 @@ bool Significant(double new_best, double reference, double tolerance) {
 
 // Shared bookkeeping of one search (all repetitions).
 struct Run {
-  Run(const ParamBox& b, const SearchOptions& o, BatchEvaluator& e) : box(b), options(o), evaluator(e) {}
+  Run(const ParamBox& b, const SearchOptions& o, BatchEvaluator& e)
+      : box(b), options(o), evaluator(e) {}
   const ParamBox& box;
   const SearchOptions& options;
   BatchEvaluator& evaluator;
@@ -103,7 +104,8 @@ struct Run {
     trace.best_cost.push_back(overall_best);
     trace.wall_time_s.push_back(NowSeconds() - start_s);
     if (options.on_progress) {
-      options.on_progress(SearchProgress{repetition, iteration, evaluations, rep_best, overall_best});
+      options.on_progress(
+          SearchProgress{repetition, iteration, evaluations, rep_best, overall_best});
     }
   }
 
@@ -118,7 +120,8 @@ struct Run {
       os << "stall: no relative improvement > " << tolerance << " in " << stall << " " << unit;
     } else if (iteration >= max_iterations) {
       os << "limit: " << max_iterations << " " << unit;
-    } else if (options.max_wall_time_s > 0 && NowSeconds() - rep_start_s >= options.max_wall_time_s) {
+    } else if (options.max_wall_time_s > 0 &&
+               NowSeconds() - rep_start_s >= options.max_wall_time_s) {
       os << "time: " << options.max_wall_time_s << " s";
     }
     return os.str();
@@ -165,8 +168,8 @@ RepetitionResult RunPso(Run& run, int repetition) {
     if (!(o.converged_spread > 0 && spread <= o.converged_spread)) return "";
     std::ostringstream os;
     os.precision(10);
-    os << "converged: every particle within " << o.converged_spread << " of the best after " << iteration
-       << " iterations";
+    os << "converged: every particle within " << o.converged_spread << " of the best after "
+       << iteration << " iterations";
     return os.str();
   };
   while ((reason = run.Stop(iteration, o.iterations, stall, o.stall_iterations, o.tolerance, gcost,
@@ -260,19 +263,21 @@ RepetitionResult RunGaReal(Run& run, int repetition) {
   run.Record(repetition, 0, cost[0]);
   auto tournament = [&]() {
     uint64_t w = rng.UniformBelow(static_cast<uint64_t>(n));
-    for (int k = 1; k < o.tournament; ++k) w = std::min(w, rng.UniformBelow(static_cast<uint64_t>(n)));
+    for (int k = 1; k < o.tournament; ++k)
+      w = std::min(w, rng.UniformBelow(static_cast<uint64_t>(n)));
     return static_cast<int>(w);  // ranked population: the lowest index is the best
   };
   std::string reason;
-  while ((reason = run.Stop(generation, o.generations, stall, o.stall_generations, o.tolerance, cost[0],
-                            rep_start, "generations"))
+  while ((reason = run.Stop(generation, o.generations, stall, o.stall_generations, o.tolerance,
+                            cost[0], rep_start, "generations"))
              .empty()) {
     ++generation;
     const int n_off = n - elite;
-    const double sigma =
-        o.generations <= 1 || o.mutation_sigma_end == 0 ? o.mutation_sigma
-                           : o.mutation_sigma * std::pow(o.mutation_sigma_end / o.mutation_sigma,
-                                                         static_cast<double>(generation - 1) / (o.generations - 1));
+    const double sigma = o.generations <= 1 || o.mutation_sigma_end == 0
+                             ? o.mutation_sigma
+                             : o.mutation_sigma * std::pow(o.mutation_sigma_end / o.mutation_sigma,
+                                                           static_cast<double>(generation - 1) /
+                                                               (o.generations - 1));
     std::vector<std::vector<double>> off(n_off);
     for (int c = 0; c < n_off; c += 2) {
       const std::vector<double>& pa = pop[tournament()];
@@ -373,7 +378,8 @@ RepetitionResult RunGaBinary(Run& run, int repetition) {
       reason = algorithm.MakeSummary(*t).message;
       break;
     }
-    if (run.options.max_wall_time_s > 0 && NowSeconds() - rep_start >= run.options.max_wall_time_s) {
+    if (run.options.max_wall_time_s > 0 &&
+        NowSeconds() - rep_start >= run.options.max_wall_time_s) {
       std::ostringstream os;
       os << "time: " << run.options.max_wall_time_s << " s";
       reason = os.str();
@@ -419,14 +425,16 @@ RepetitionResult RunDe(Run& run, int repetition) {
   run.Record(repetition, 0, cost[best]);
   std::vector<std::vector<double>> trial(np, std::vector<double>(d));
   std::string reason;
-  while ((reason = run.Stop(generation, o.generations, stall, o.stall_generations, o.tolerance, cost[best],
-                            rep_start, "generations"))
+  while ((reason = run.Stop(generation, o.generations, stall, o.stall_generations, o.tolerance,
+                            cost[best], rep_start, "generations"))
              .empty()) {
     ++generation;
     for (int i = 0; i < np; ++i) {
       int r1, r2;
-      do r1 = static_cast<int>(rng.UniformBelow(np)); while (r1 == i);
-      do r2 = static_cast<int>(rng.UniformBelow(np)); while (r2 == i || r2 == r1);
+      do r1 = static_cast<int>(rng.UniformBelow(np));
+      while (r1 == i);
+      do r2 = static_cast<int>(rng.UniformBelow(np));
+      while (r2 == i || r2 == r1);
       const int jr = static_cast<int>(rng.UniformBelow(dim));
       for (int k = 0; k < dim; ++k) {
         const double xi = pop[i][k];
@@ -448,8 +456,9 @@ RepetitionResult RunDe(Run& run, int repetition) {
       }
     }
     best = ArgMin(cost);
-    if (reference - cost[best] > o.tolerance * std::abs(reference)) {  // (the rule of Significant, as
-      reference = cost[best];                                             // the fin's seeded fits ran it)
+    if (reference - cost[best] >
+        o.tolerance * std::abs(reference)) {  // (the rule of Significant, as
+      reference = cost[best];                 // the fin's seeded fits ran it)
       stall = 0;
     } else {
       ++stall;
@@ -464,19 +473,30 @@ RepetitionResult RunDe(Run& run, int repetition) {
   return r;
 }
 
-/// Brent's minimisation of one bracket [a, b] around its lowest point x (R. P. Brent, Algorithms for
-/// Minimization without Derivatives, 1973, ch. 5: the procedure `localmin`), as a state machine that
-/// proposes one point at a time (Propose) and is told its cost (Tell), so that several brackets can
-/// advance side by side. It starts from evaluated points: x (the grid's minimum) and its two
-/// neighbours as w and v, with the first step allowed to be the parabola through them.
+/// Brent's minimisation of one bracket [a, b] around its lowest point x (R. P. Brent, Algorithms
+/// for Minimization without Derivatives, 1973, ch. 5: the procedure `localmin`), as a state machine
+/// that proposes one point at a time (Propose) and is told its cost (Tell), so that several
+/// brackets can advance side by side. It starts from evaluated points: x (the grid's minimum) and
+/// its two neighbours as w and v, with the first step allowed to be the parabola through them.
 class BrentBracket {
  public:
-  BrentBracket(double a, double b, double x, double fx, double w, double fw, double v, double fv, double tol)
-      : a_(a), b_(b), x_(x), w_(w), v_(v), fx_(fx), fw_(fw), fv_(fv), d_(b - a), e_(b - a), tol_(tol) {}
+  BrentBracket(double a, double b, double x, double fx, double w, double fw, double v, double fv,
+               double tol)
+      : a_(a),
+        b_(b),
+        x_(x),
+        w_(w),
+        v_(v),
+        fx_(fx),
+        fw_(fw),
+        fv_(fv),
+        d_(b - a),
+        e_(b - a),
+        tol_(tol) {}
 
   /// The next point to evaluate, or nothing once x is located within the tolerance.
   std::optional<double> Propose() {
-    constexpr double kGolden = 0.3819660112501051;  // (3 − √5) / 2
+    constexpr double kGolden = 0.3819660112501051;   // (3 − √5) / 2
     constexpr double kEps = 1.4901161193847656e-08;  // √(machine ε)
     const double xm = 0.5 * (a_ + b_);
     const double tol1 = kEps * std::abs(x_) + tol_ / 3, tol2 = 2 * tol1;
@@ -612,7 +632,8 @@ RepetitionResult RunLine(Run& run, int repetition) {
   }
   if (reason.empty()) {
     std::ostringstream os;
-    os << "grid of " << g << ", " << brackets.size() << (brackets.size() == 1 ? " local minimum" : " local minima")
+    os << "grid of " << g << ", " << brackets.size()
+       << (brackets.size() == 1 ? " local minimum" : " local minima")
        << " refined by Brent's method (";
     for (size_t k = 0; k < brackets.size(); ++k) {
       os << (k > 0 ? ", " : "") << brackets[k].steps() << " steps"
@@ -637,10 +658,12 @@ Status ParamBox::Validate() const {
   const size_t d = names.size();
   if (d == 0) return InvalidArgument("box.names: empty, the box needs at least one parameter");
   if (lower.size() != d) {
-    return InvalidArgument(FieldError("box.lower.size()", lower.size(), "must equal box.names.size() = " + std::to_string(d)));
+    return InvalidArgument(FieldError("box.lower.size()", lower.size(),
+                                      "must equal box.names.size() = " + std::to_string(d)));
   }
   if (upper.size() != d) {
-    return InvalidArgument(FieldError("box.upper.size()", upper.size(), "must equal box.names.size() = " + std::to_string(d)));
+    return InvalidArgument(FieldError("box.upper.size()", upper.size(),
+                                      "must equal box.names.size() = " + std::to_string(d)));
   }
   if (!log_scale.empty() && log_scale.size() != d) {
     return InvalidArgument(FieldError("box.log_scale.size()", log_scale.size(),
@@ -649,17 +672,21 @@ Status ParamBox::Validate() const {
   std::set<std::string> seen;
   for (size_t i = 0; i < d; ++i) {
     const std::string at = "[" + std::to_string(i) + "] (" + names[i] + ")";
-    if (names[i].empty()) return InvalidArgument("box.names[" + std::to_string(i) + "]: empty name");
+    if (names[i].empty())
+      return InvalidArgument("box.names[" + std::to_string(i) + "]: empty name");
     if (!seen.insert(names[i]).second) {
-      return InvalidArgument("box.names[" + std::to_string(i) + "] = " + names[i] + ": duplicate name");
+      return InvalidArgument("box.names[" + std::to_string(i) + "] = " + names[i] +
+                             ": duplicate name");
     }
-    if (!std::isfinite(lower[i])) return InvalidArgument(FieldError("box.lower" + at, lower[i], "must be finite"));
+    if (!std::isfinite(lower[i]))
+      return InvalidArgument(FieldError("box.lower" + at, lower[i], "must be finite"));
     if (!std::isfinite(upper[i]) || !(upper[i] > lower[i])) {
-      return InvalidArgument(FieldError("box.upper" + at, upper[i],
-                                        "must be finite and > lower = " + Num(lower[i])));
+      return InvalidArgument(
+          FieldError("box.upper" + at, upper[i], "must be finite and > lower = " + Num(lower[i])));
     }
     if (!log_scale.empty() && log_scale[i] && !(lower[i] > 0)) {
-      return InvalidArgument(FieldError("box.lower" + at, lower[i], "must be > 0 for a log-scaled parameter"));
+      return InvalidArgument(
+          FieldError("box.lower" + at, lower[i], "must be > 0 for a log-scaled parameter"));
     }
   }
   return Status::Ok();
@@ -694,11 +721,16 @@ void ParamBox::ToUnit(const double* physical, double* unit) const {
 
 const char* SearchAlgorithmName(SearchAlgorithm a) {
   switch (a) {
-    case SearchAlgorithm::kPso: return "pso";
-    case SearchAlgorithm::kGaReal: return "ga-real";
-    case SearchAlgorithm::kGaBinary: return "ga-binary";
-    case SearchAlgorithm::kDe: return "de";
-    case SearchAlgorithm::kLine: return "line";
+    case SearchAlgorithm::kPso:
+      return "pso";
+    case SearchAlgorithm::kGaReal:
+      return "ga-real";
+    case SearchAlgorithm::kGaBinary:
+      return "ga-binary";
+    case SearchAlgorithm::kDe:
+      return "de";
+    case SearchAlgorithm::kLine:
+      return "line";
   }
   return "unknown";
 }
@@ -713,11 +745,15 @@ SearchAlgorithm ParseSearchAlgorithm(const std::string& name) {
 }
 
 Status DeOptions::Validate() const {
-  if (population < 4) return InvalidArgument(FieldError("de.population", population, "must be >= 4"));
-  if (generations < 0) return InvalidArgument(FieldError("de.generations", generations, "must be >= 0"));
+  if (population < 4)
+    return InvalidArgument(FieldError("de.population", population, "must be >= 4"));
+  if (generations < 0)
+    return InvalidArgument(FieldError("de.generations", generations, "must be >= 0"));
   if (stall_generations < 0)
-    return InvalidArgument(FieldError("de.stall_generations", stall_generations, "must be >= 0 (0 = never)"));
-  if (!(tolerance >= 0)) return InvalidArgument(FieldError("de.tolerance", tolerance, "must be >= 0"));
+    return InvalidArgument(
+        FieldError("de.stall_generations", stall_generations, "must be >= 0 (0 = never)"));
+  if (!(tolerance >= 0))
+    return InvalidArgument(FieldError("de.tolerance", tolerance, "must be >= 0"));
   if (!(f > 0 && f <= 2)) return InvalidArgument(FieldError("de.f", f, "must be in (0, 2]"));
   if (!(cr >= 0 && cr <= 1)) return InvalidArgument(FieldError("de.cr", cr, "must be in [0, 1]"));
   return Status::Ok();
@@ -728,7 +764,8 @@ Status LineOptions::Validate() const {
   if (brackets < 1) return InvalidArgument(FieldError("line.brackets", brackets, "must be >= 1"));
   if (!(tolerance > 0 && tolerance < 0.5))
     return InvalidArgument(FieldError("line.tolerance", tolerance, "must be in (0, 0.5)"));
-  if (max_steps < 1) return InvalidArgument(FieldError("line.max_steps", max_steps, "must be >= 1"));
+  if (max_steps < 1)
+    return InvalidArgument(FieldError("line.max_steps", max_steps, "must be >= 1"));
   return Status::Ok();
 }
 
@@ -752,9 +789,11 @@ Status PsoOptions::Validate() const {
     if (!s.ok()) return s;
   }
   if (!(velocity_clamp > 0 && velocity_clamp <= 1)) {
-    return Field(p, "velocity_clamp", velocity_clamp, "must be in (0, 1] (a fraction of the unit box)");
+    return Field(p, "velocity_clamp", velocity_clamp,
+                 "must be in (0, 1] (a fraction of the unit box)");
   }
-  if (stall_iterations < 0) return Field(p, "stall_iterations", stall_iterations, "must be >= 0 (0 = never)");
+  if (stall_iterations < 0)
+    return Field(p, "stall_iterations", stall_iterations, "must be >= 0 (0 = never)");
   if (!(converged_spread >= 0 && converged_spread < 1))
     return Field(p, "converged_spread", converged_spread, "must be in [0, 1) (0 = never)");
   return Status::Ok();
@@ -764,7 +803,8 @@ Status RealGaOptions::Validate() const {
   const std::string p = "ga_real";
   if (population < 2) return Field(p, "population", population, "must be >= 2");
   if (generations < 0) return Field(p, "generations", generations, "must be >= 0");
-  if (!(elite_fraction >= 0 && elite_fraction < 1)) return Field(p, "elite_fraction", elite_fraction, "must be in [0, 1)");
+  if (!(elite_fraction >= 0 && elite_fraction < 1))
+    return Field(p, "elite_fraction", elite_fraction, "must be in [0, 1)");
   const long e = std::lround(population * elite_fraction);
   if (e < 1 || e > population - 1) {
     return InvalidArgument(FieldError(p + ".elite_fraction", elite_fraction,
@@ -778,21 +818,26 @@ Status RealGaOptions::Validate() const {
                    CheckNonNegativeFinite(p, "tolerance", tolerance)}) {
     if (!s.ok()) return s;
   }
-  if (!(std::isfinite(sbx_eta) && sbx_eta > 0)) return Field(p, "sbx_eta", sbx_eta, "must be finite and > 0");
+  if (!(std::isfinite(sbx_eta) && sbx_eta > 0))
+    return Field(p, "sbx_eta", sbx_eta, "must be finite and > 0");
   if (!(std::isfinite(mutation_sigma) && mutation_sigma > 0)) {
     return Field(p, "mutation_sigma", mutation_sigma, "must be finite and > 0");
   }
-  if (!(std::isfinite(mutation_sigma_end) && mutation_sigma_end >= 0 && mutation_sigma_end <= mutation_sigma)) {
-    return InvalidArgument(FieldError(p + ".mutation_sigma_end", mutation_sigma_end,
-                                      "must be 0 (constant step) or in (0, mutation_sigma = " + Num(mutation_sigma) + "]"));
+  if (!(std::isfinite(mutation_sigma_end) && mutation_sigma_end >= 0 &&
+        mutation_sigma_end <= mutation_sigma)) {
+    return InvalidArgument(FieldError(
+        p + ".mutation_sigma_end", mutation_sigma_end,
+        "must be 0 (constant step) or in (0, mutation_sigma = " + Num(mutation_sigma) + "]"));
   }
-  if (stall_generations < 0) return Field(p, "stall_generations", stall_generations, "must be >= 0 (0 = never)");
+  if (stall_generations < 0)
+    return Field(p, "stall_generations", stall_generations, "must be >= 0 (0 = never)");
   return Status::Ok();
 }
 
 Status BinaryGaOptions::Validate(size_t parameters) const {
   if (bits_per_parameter < 2 || bits_per_parameter > 52) {
-    return InvalidArgument(FieldError("ga_binary.bits_per_parameter", bits_per_parameter, "must be in 2 … 52"));
+    return InvalidArgument(
+        FieldError("ga_binary.bits_per_parameter", bits_per_parameter, "must be in 2 … 52"));
   }
   if (parameters * static_cast<size_t>(bits_per_parameter) < 3) {
     return InvalidArgument(FieldError("ga_binary.bits_per_parameter", bits_per_parameter,
@@ -809,33 +854,48 @@ Status SearchOptions::Validate(const ParamBox& box) const {
   Status s = box.Validate();
   if (!s.ok()) return s;
   switch (algorithm) {
-    case SearchAlgorithm::kPso: s = pso.Validate(); break;
-    case SearchAlgorithm::kGaReal: s = ga_real.Validate(); break;
-    case SearchAlgorithm::kGaBinary: s = ga_binary.Validate(box.size()); break;
-    case SearchAlgorithm::kDe: s = de.Validate(); break;
+    case SearchAlgorithm::kPso:
+      s = pso.Validate();
+      break;
+    case SearchAlgorithm::kGaReal:
+      s = ga_real.Validate();
+      break;
+    case SearchAlgorithm::kGaBinary:
+      s = ga_binary.Validate(box.size());
+      break;
+    case SearchAlgorithm::kDe:
+      s = de.Validate();
+      break;
     case SearchAlgorithm::kLine:
       s = line.Validate();
       if (s.ok() && box.size() != 1)
-        s = InvalidArgument(FieldError("algorithm", "line", "searches one parameter; the box has " +
-                                                                std::to_string(box.size())));
+        s = InvalidArgument(
+            FieldError("algorithm", "line",
+                       "searches one parameter; the box has " + std::to_string(box.size())));
       if (s.ok() && repetitions != 1)
-        s = InvalidArgument(FieldError("repetitions", repetitions, "must be 1 for the line search (it has no random choice)"));
+        s = InvalidArgument(FieldError("repetitions", repetitions,
+                                       "must be 1 for the line search (it has no random choice)"));
       break;
   }
   if (!s.ok()) return s;
   if (!seeds.empty() && algorithm != SearchAlgorithm::kDe)
-    return InvalidArgument(FieldError("seeds.size()", seeds.size(), "must be 0: only the de search takes seeds"));
+    return InvalidArgument(
+        FieldError("seeds.size()", seeds.size(), "must be 0: only the de search takes seeds"));
   for (size_t i = 0; i < seeds.size(); ++i) {
     if (seeds[i].size() != box.size())
       return InvalidArgument(FieldError("seeds[" + std::to_string(i) + "].size()", seeds[i].size(),
                                         "must be " + std::to_string(box.size())));
   }
-  if (repetitions < 1) return InvalidArgument(FieldError("repetitions", repetitions, "must be >= 1"));
-  if (std::isnan(target_cost)) return InvalidArgument(FieldError("target_cost", target_cost, "must not be NaN"));
+  if (repetitions < 1)
+    return InvalidArgument(FieldError("repetitions", repetitions, "must be >= 1"));
+  if (std::isnan(target_cost))
+    return InvalidArgument(FieldError("target_cost", target_cost, "must not be NaN"));
   if (!(std::isfinite(max_wall_time_s) && max_wall_time_s >= 0)) {
-    return InvalidArgument(FieldError("max_wall_time_s", max_wall_time_s, "must be finite and >= 0 (0 = none)"));
+    return InvalidArgument(
+        FieldError("max_wall_time_s", max_wall_time_s, "must be finite and >= 0 (0 = none)"));
   }
-  if (!std::isfinite(error_cost)) return InvalidArgument(FieldError("error_cost", error_cost, "must be finite"));
+  if (!std::isfinite(error_cost))
+    return InvalidArgument(FieldError("error_cost", error_cost, "must be finite"));
   return Status::Ok();
 }
 
@@ -867,11 +927,21 @@ SearchResult Search(const ParamBox& box, const SearchOptions& options, BatchEval
   for (int rep = 0; rep < options.repetitions; ++rep) {
     RepetitionResult r;
     switch (options.algorithm) {
-      case SearchAlgorithm::kPso: r = RunPso(run, rep); break;
-      case SearchAlgorithm::kGaReal: r = RunGaReal(run, rep); break;
-      case SearchAlgorithm::kGaBinary: r = RunGaBinary(run, rep); break;
-      case SearchAlgorithm::kDe: r = RunDe(run, rep); break;
-      case SearchAlgorithm::kLine: r = RunLine(run, rep); break;
+      case SearchAlgorithm::kPso:
+        r = RunPso(run, rep);
+        break;
+      case SearchAlgorithm::kGaReal:
+        r = RunGaReal(run, rep);
+        break;
+      case SearchAlgorithm::kGaBinary:
+        r = RunGaBinary(run, rep);
+        break;
+      case SearchAlgorithm::kDe:
+        r = RunDe(run, rep);
+        break;
+      case SearchAlgorithm::kLine:
+        r = RunLine(run, rep);
+        break;
     }
     std::vector<double> physical(box.size());
     box.ToPhysical(r.best_unit.data(), physical.data());

@@ -32,8 +32,8 @@
 // Stopping (per repetition): the iteration / generation limit; `stall` iterations without a
 // significant improvement of the best cost (an improvement counts when the new best is below
 // old − tolerance · |old|: a relative tolerance, as costs here are tiny MSEs); the target cost;
-// the optional wall-time limit (the only non-deterministic criterion, off by default); PSO only, when
-// asked (PsoOptions::converged_spread): a swarm that has collapsed onto its best.
+// the optional wall-time limit (the only non-deterministic criterion, off by default); PSO only,
+// when asked (PsoOptions::converged_spread): a swarm that has collapsed onto its best.
 #pragma once
 
 #include <cstdint>
@@ -74,15 +74,15 @@ const char* SearchAlgorithmName(SearchAlgorithm a);
 SearchAlgorithm ParseSearchAlgorithm(const std::string& name);
 
 struct PsoOptions {
-  int particles = 40;                 ///< ≥ 2
-  int iterations = 300;               ///< swarm updates after the initial evaluation, ≥ 0
-  double inertia_start = 0.9;         ///< w at the first update, finite ≥ 0
-  double inertia_end = 0.4;           ///< w at the last update (linear in between), finite ≥ 0
-  double cognitive = 1.49618;         ///< c1, finite ≥ 0
-  double social = 1.49618;            ///< c2, finite ≥ 0
-  double velocity_clamp = 0.2;        ///< |v| ≤ this fraction of the (unit) box width, in (0, 1]
-  int stall_iterations = 60;          ///< ≥ 0 (0 = never stop for stall)
-  double tolerance = 1e-6;            ///< relative improvement that resets the stall count, ≥ 0
+  int particles = 40;           ///< ≥ 2
+  int iterations = 300;         ///< swarm updates after the initial evaluation, ≥ 0
+  double inertia_start = 0.9;   ///< w at the first update, finite ≥ 0
+  double inertia_end = 0.4;     ///< w at the last update (linear in between), finite ≥ 0
+  double cognitive = 1.49618;   ///< c1, finite ≥ 0
+  double social = 1.49618;      ///< c2, finite ≥ 0
+  double velocity_clamp = 0.2;  ///< |v| ≤ this fraction of the (unit) box width, in (0, 1]
+  int stall_iterations = 60;    ///< ≥ 0 (0 = never stop for stall)
+  double tolerance = 1e-6;      ///< relative improvement that resets the stall count, ≥ 0
   /// Stop when the swarm has converged: every particle within this distance (max-norm, unit box) of
   /// the swarm's best after an update — what is left is local, the polish's work. In [0, 1); 0 =
   /// never (the default: the iteration and stall limits alone).
@@ -94,12 +94,12 @@ struct PsoOptions {
 enum class RealCrossover { kSbx, kBlxAlpha };
 
 struct RealGaOptions {
-  int population = 60;                ///< ≥ 2
-  int generations = 300;              ///< after the initial one, ≥ 0
-  double elite_fraction = 0.1;        ///< round(population · f) individuals pass unchanged; the
-                                      ///< count must be 1 … population − 1
-  int tournament = 2;                 ///< parent = best of k uniform draws of the population, ≥ 1
-  double crossover_probability = 0.9; ///< per offspring pair, in [0, 1]
+  int population = 60;          ///< ≥ 2
+  int generations = 300;        ///< after the initial one, ≥ 0
+  double elite_fraction = 0.1;  ///< round(population · f) individuals pass unchanged; the
+                                ///< count must be 1 … population − 1
+  int tournament = 2;           ///< parent = best of k uniform draws of the population, ≥ 1
+  double crossover_probability = 0.9;  ///< per offspring pair, in [0, 1]
   RealCrossover crossover = RealCrossover::kSbx;
   double sbx_eta = 15;                ///< SBX distribution index, finite > 0
   double blx_alpha = 0.5;             ///< BLX-α extension, finite ≥ 0
@@ -107,26 +107,26 @@ struct RealGaOptions {
   double mutation_sigma = 0.1;        ///< Gaussian step at the first generation, fraction of the
                                       ///< unit box, finite > 0
   double mutation_sigma_end = 0;      ///< if > 0: the step decreases geometrically to this at the
-                                      ///< last generation, in (0, sigma]; 0 = constant step. (On the
-                                      ///< Bouc–Wen benchmark 0.1 → 0.001 converged early to a local
-                                      ///< minimum: docs/performance.md.)
-  int stall_generations = 60;         ///< ≥ 0 (0 = never stop for stall)
-  double tolerance = 1e-6;            ///< relative improvement that resets the stall count, ≥ 0
+                                  ///< last generation, in (0, sigma]; 0 = constant step. (On the
+                                  ///< Bouc–Wen benchmark 0.1 → 0.001 converged early to a local
+                                  ///< minimum: docs/performance.md.)
+  int stall_generations = 60;  ///< ≥ 0 (0 = never stop for stall)
+  double tolerance = 1e-6;     ///< relative improvement that resets the stall count, ≥ 0
   uint64_t seed = 1;
   Status Validate() const;  ///< names the field: "ga_real.tournament = 0: must be >= 1"
 };
 
 /// Differential evolution DE/rand-to-best/1/bin.
 struct DeOptions {
-  int population = 32;        ///< ≥ 4
-  int generations = 60;       ///< generations after the initial one, ≥ 0
-  int stall_generations = 15; ///< stop after this many generations without a relative gain > tolerance,
-                              ///< ≥ 0 (0 = never stop for stall)
-  double tolerance = 1e-4;    ///< relative gain that counts as progress, ≥ 0
-  double f = 0.6;             ///< differential weight, in (0, 2]
-  double cr = 0.9;            ///< crossover probability, in [0, 1]
+  int population = 32;         ///< ≥ 4
+  int generations = 60;        ///< generations after the initial one, ≥ 0
+  int stall_generations = 15;  ///< stop after this many generations without a relative gain >
+                               ///< tolerance, ≥ 0 (0 = never stop for stall)
+  double tolerance = 1e-4;  ///< relative gain that counts as progress, ≥ 0
+  double f = 0.6;           ///< differential weight, in (0, 2]
+  double cr = 0.9;          ///< crossover probability, in [0, 1]
   uint64_t seed = 1;
-  Status Validate() const;    ///< names the field: "de.population = 3: must be >= 4"
+  Status Validate() const;  ///< names the field: "de.population = 3: must be >= 4"
 };
 
 struct BinaryGaOptions {
@@ -152,25 +152,25 @@ struct BinaryGaOptions {
 /// The line search of one parameter (kLine). Its evaluations: `grid` (one batch), then at most
 /// `brackets` × `max_steps` (batches of one point per bracket still refining).
 struct LineOptions {
-  int grid = 17;            ///< grid points over [0, 1], ends included, ≥ 3
-  int brackets = 2;         ///< the lowest local minima of the grid refined, ≥ 1
+  int grid = 17;     ///< grid points over [0, 1], ends included, ≥ 3
+  int brackets = 2;  ///< the lowest local minima of the grid refined, ≥ 1
   /// A bracket stops once its minimum is located within this (unit coordinates, absolute; Brent's
   /// tol), in (0, 0.5).
   double tolerance = 1e-4;
   int max_steps = 60;       ///< evaluations per bracket at most, ≥ 1
   Status Validate() const;  ///< names the field: "line.grid = 2: must be >= 3"
-  /// "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's method to 0.0001
-  /// of the range".
+  /// "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's method to
+  /// 0.0001 of the range".
   std::string Describe() const;
 };
 
 /// Progress after each iteration / generation of any repetition.
 struct SearchProgress {
   int repetition = 0;
-  int iteration = 0;            ///< 0 = the initial evaluation
-  int64_t evaluations = 0;      ///< since the start of the search (all repetitions)
-  double best_cost = 0;         ///< best of this repetition so far
-  double overall_best_cost = 0; ///< best of the search so far
+  int iteration = 0;             ///< 0 = the initial evaluation
+  int64_t evaluations = 0;       ///< since the start of the search (all repetitions)
+  double best_cost = 0;          ///< best of this repetition so far
+  double overall_best_cost = 0;  ///< best of the search so far
 };
 
 struct SearchOptions {
@@ -183,10 +183,11 @@ struct SearchOptions {
   /// Points of the unit box (each of the box's size, clamped into it) that take the first slots of
   /// the initial population; only the de search takes them.
   std::vector<std::vector<double>> seeds;
-  int repetitions = 5;  ///< seeds seed, seed+1, … (seed of the chosen algorithm's options); best kept
+  int repetitions =
+      5;  ///< seeds seed, seed+1, … (seed of the chosen algorithm's options); best kept
   double target_cost = -std::numeric_limits<double>::infinity();  ///< stop a repetition at ≤ this
   double max_wall_time_s = 0;  ///< per repetition, 0 = none (non-deterministic when it triggers)
-  double error_cost = kDefaultErrorCost;  ///< given to non-finite costs, finite
+  double error_cost = kDefaultErrorCost;                   ///< given to non-finite costs, finite
   std::function<void(const SearchProgress&)> on_progress;  ///< optional, called on this thread
   /// The chosen algorithm's options, repetitions ≥ 1, target not NaN, error_cost finite, …
   Status Validate(const ParamBox& box) const;
@@ -201,16 +202,16 @@ struct SearchTrace {
 };
 
 struct SearchResult {
-  std::vector<double> best;      ///< physical values, box order
+  std::vector<double> best;  ///< physical values, box order
   double best_cost = 0;
-  int64_t evaluations = 0;       ///< all repetitions
-  int iterations = 0;            ///< iterations / generations, all repetitions
+  int64_t evaluations = 0;  ///< all repetitions
+  int iterations = 0;       ///< iterations / generations, all repetitions
   double wall_time_s = 0;
-  std::string stop_reason;       ///< of the best repetition, e.g. "stall: no relative improvement
-                                 ///< > 1e-06 in 60 iterations"
+  std::string stop_reason;  ///< of the best repetition, e.g. "stall: no relative improvement
+                            ///< > 1e-06 in 60 iterations"
   int best_repetition = 0;
   SearchTrace trace;
-  std::vector<double> repetition_costs;  ///< best cost of each repetition
+  std::vector<double> repetition_costs;              ///< best cost of each repetition
   std::vector<std::vector<double>> repetition_best;  ///< best parameters of each repetition
 };
 
@@ -228,8 +229,9 @@ class FunctionFitness final : public FitnessFunction {
 };
 
 /// Minimises the FitnessFunction behind `evaluator` over the box (genomes carry reals = physical
-/// values; for kGaBinary the bits are decoded to reals before evaluation). Deterministic for a seed,
-/// whatever the evaluator (inline, thread pool, service). Throws InputError on invalid box/options.
+/// values; for kGaBinary the bits are decoded to reals before evaluation). Deterministic for a
+/// seed, whatever the evaluator (inline, thread pool, service). Throws InputError on invalid
+/// box/options.
 SearchResult Search(const ParamBox& box, const SearchOptions& options, BatchEvaluator& evaluator);
 
 /// Decodes `bits` (bits_per_parameter per parameter, most significant first, Gray or plain) to

@@ -3,9 +3,9 @@
 //
 // The engine is the standard's std::mt19937_64 (same seeding, same output sequence; a test checks
 // it against the standard library), written out here because the textual state of
-// std::mt19937_64 is implementation-defined (libstdc++ appends its position index, libc++ does not),
-// and a checkpoint must restore on any platform. The state is a plain struct: 312 words + position.
-// The std:: distributions are not used: their algorithms are implementation-defined.
+// std::mt19937_64 is implementation-defined (libstdc++ appends its position index, libc++ does
+// not), and a checkpoint must restore on any platform. The state is a plain struct: 312 words +
+// position. The std:: distributions are not used: their algorithms are implementation-defined.
 #pragma once
 
 #include <algorithm>
@@ -58,9 +58,9 @@ struct BernoulliThreshold {
 /// failures before the next success) has P(G ≥ k) = (1 − p)^k; the table holds
 /// T_k = ⌊(1 − p)^k · 2⁶⁴⌋ for k = 1 … max_gap, and a draw x gives G = #{k : x < T_k}, i.e. G ≥ k
 /// iff x < T_k, exactly as k successive Bernoulli(1 − p) tests with the thresholds' ratios would.
-/// (1 − p)^k is formed by repeated IEEE multiplication, so the table — and every run — is the same on
-/// every platform (no libm call). Draws beyond max_gap are returned as max_gap: the caller's
-/// "no further success in this block". One draw per gap; p = 0 and p = 1 need none.
+/// (1 − p)^k is formed by repeated IEEE multiplication, so the table — and every run — is the same
+/// on every platform (no libm call). Draws beyond max_gap are returned as max_gap: the caller's "no
+/// further success in this block". One draw per gap; p = 0 and p = 1 need none.
 class GeometricGaps {
  public:
   /// p in [0, 1] (checked), max_gap ≥ 0.
@@ -74,7 +74,8 @@ class GeometricGaps {
     for (int k = 1; k <= max_gap; ++k) {
       qk *= q;
       const double scaled = std::ldexp(qk, 64);  // qk = 1 when p < 2⁻⁵³: clamp
-      const uint64_t t = scaled >= 18446744073709551616.0 ? ~uint64_t{0} : static_cast<uint64_t>(scaled);
+      const uint64_t t =
+          scaled >= 18446744073709551616.0 ? ~uint64_t{0} : static_cast<uint64_t>(scaled);
       if (t == 0) break;  // P(G ≥ k) < 2⁻⁶⁴: never reached, the table ends here
       thresholds_.push_back(t);
     }
@@ -157,8 +158,9 @@ class Rng {
   }
   bool Bernoulli(double p) { return Bernoulli(BernoulliThreshold(p)); }
 
-  /// The failures before the next success of Bernoulli(p) trials, capped at gaps.max_gap() (the table
-  /// has at most max_gap entries); one draw (none if p = 0: returns max_gap; none if p = 1: returns 0).
+  /// The failures before the next success of Bernoulli(p) trials, capped at gaps.max_gap() (the
+  /// table has at most max_gap entries); one draw (none if p = 0: returns max_gap; none if p = 1:
+  /// returns 0).
   int Gap(const GeometricGaps& gaps) {
     if (gaps.never()) return gaps.max_gap();
     if (gaps.always()) return 0;

@@ -13,15 +13,18 @@ enum class MigrationTopology : int {
   kRandom = 3,          ///< a ring in an order drawn from the seed (fixed for the run)
 };
 
-inline constexpr MigrationTopology kTopologies[] = {MigrationTopology::kRing, MigrationTopology::kFullyConnected,
-                                                    MigrationTopology::kRandom};
+inline constexpr MigrationTopology kTopologies[] = {
+    MigrationTopology::kRing, MigrationTopology::kFullyConnected, MigrationTopology::kRandom};
 
 /// "ring", "fully_connected", "random".
 inline const char* TopologyName(MigrationTopology t) {
   switch (t) {
-    case MigrationTopology::kRing: return "ring";
-    case MigrationTopology::kFullyConnected: return "fully_connected";
-    case MigrationTopology::kRandom: return "random";
+    case MigrationTopology::kRing:
+      return "ring";
+    case MigrationTopology::kFullyConnected:
+      return "fully_connected";
+    case MigrationTopology::kRandom:
+      return "random";
   }
   return "unknown";
 }

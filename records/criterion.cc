@@ -10,8 +10,8 @@
 namespace pz::records {
 namespace {
 
-constexpr Criterion kCriteria[] = {Criterion::kMse, Criterion::kIae, Criterion::kSse, Criterion::kRmse,
-                                   Criterion::kMax};
+constexpr Criterion kCriteria[] = {Criterion::kMse, Criterion::kIae, Criterion::kSse,
+                                   Criterion::kRmse, Criterion::kMax};
 
 // Samples k with t0 ≤ k dt ≤ t1 (as model/criteria.h counts them).
 size_t WindowCount(size_t n, double dt, double t0, double t1) {
@@ -27,11 +27,16 @@ size_t WindowCount(size_t n, double dt, double t0, double t1) {
 
 const char* CriterionName(Criterion c) {
   switch (c) {
-    case Criterion::kMse: return "mse";
-    case Criterion::kIae: return "iae";
-    case Criterion::kSse: return "sse";
-    case Criterion::kRmse: return "rmse";
-    case Criterion::kMax: return "max";
+    case Criterion::kMse:
+      return "mse";
+    case Criterion::kIae:
+      return "iae";
+    case Criterion::kSse:
+      return "sse";
+    case Criterion::kRmse:
+      return "rmse";
+    case Criterion::kMax:
+      return "max";
   }
   return "unknown";
 }
@@ -46,7 +51,8 @@ Status CriterionOptions::Validate() const {
   if (!(std::isfinite(error_cost) && error_cost > 0))
     return InvalidArgument(FieldError("error_cost", error_cost, "must be finite and > 0"));
   if (!windowed()) return Status::Ok();
-  if (!(std::isfinite(t0_s) && t0_s >= 0)) return InvalidArgument(FieldError("window t0_s", t0_s, "must be finite and >= 0"));
+  if (!(std::isfinite(t0_s) && t0_s >= 0))
+    return InvalidArgument(FieldError("window t0_s", t0_s, "must be finite and >= 0"));
   if (!(std::isfinite(t1_s) && t1_s > t0_s))
     return InvalidArgument(FieldError("window t1_s", t1_s, "must be finite and > t0_s"));
   return Status::Ok();
@@ -75,8 +81,10 @@ CriterionFitness::CriterionFitness(const RecordModel& model, std::vector<const i
   if (!criterion_.windowed()) return;
   for (const io::Record* r : fitness_.records()) {
     if (!(WindowEnd(*r, criterion_.t1_s) > criterion_.t0_s))
-      throw InputError(r->Label() + " ends at " + io::FormatNumber(static_cast<double>(r->end_scored - 1) * r->dt) +
-                       " s, before the window start t0_s = " + io::FormatNumber(criterion_.t0_s) + " s");
+      throw InputError(r->Label() + " ends at " +
+                       io::FormatNumber(static_cast<double>(r->end_scored - 1) * r->dt) +
+                       " s, before the window start t0_s = " + io::FormatNumber(criterion_.t0_s) +
+                       " s");
   }
 }
 
@@ -84,8 +92,9 @@ double CriterionFitness::Cost(std::span<const double> params) const {
   if (!criterion_.windowed()) return fitness_.Run(params).mse;
   const RecordModel& m = fitness_.model();
   // The hot path of a family without effects (the committee's): the family's simulation straight
-  // on the record's samples into a per-thread buffer — RecordModel::Simulate's numbers (from rest at
-  // the end of the rest segment, the rest output before it, polarity and offset), without its copies.
+  // on the record's samples into a per-thread buffer — RecordModel::Simulate's numbers (from rest
+  // at the end of the rest segment, the rest output before it, polarity and offset), without its
+  // copies.
   const bool direct = m.effects().empty() && !m.family().linear();
   const RecordFitness::Output out = direct ? RecordFitness::Output{} : fitness_.Run(params);
   thread_local std::vector<double> buffer;
@@ -99,12 +108,13 @@ double CriterionFitness::Cost(std::span<const double> params) const {
     std::span<const double> yhat;
     if (direct) {
       if (params.size() != m.params().size())
-        throw InputError(m.Describe() + ": " + std::to_string(params.size()) + " parameters given, " +
-                         std::to_string(m.params().size()) + " expected");
+        throw InputError(m.Describe() + ": " + std::to_string(params.size()) +
+                         " parameters given, " + std::to_string(m.params().size()) + " expected");
       const size_t end = r.end_scored, from = SimulatedFrom(r, end);
       buffer.resize(end);
       const std::span<double> y(buffer.data(), end);
-      m.family().Simulate(params, std::span<const double>(r.u).subspan(from, end - from), r.dt, y.subspan(from));
+      m.family().Simulate(params, std::span<const double>(r.u).subspan(from, end - from), r.dt,
+                          y.subspan(from));
       std::fill(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(from), y[from]);
       const double rest = pol * y[from];
       if (pol != 1)
@@ -121,11 +131,20 @@ double CriterionFitness::Cost(std::span<const double> params) const {
     const std::span<const double> y(r.y.data(), r.end_scored);
     const double end = WindowEnd(r, criterion_.t1_s);
     switch (criterion_.kind) {
-      case Criterion::kIae: total += model::Iae(y, yhat, r.dt, t0, end); break;
-      case Criterion::kSse: total += model::Sse(y, yhat, r.dt, t0, end); break;
-      case Criterion::kRmse: total += model::Rmse(y, yhat, r.dt, t0, end); break;
-      case Criterion::kMax: total = std::max(total, model::MaxAbsError(y, yhat, r.dt, t0, end)); break;
-      case Criterion::kMse: break;
+      case Criterion::kIae:
+        total += model::Iae(y, yhat, r.dt, t0, end);
+        break;
+      case Criterion::kSse:
+        total += model::Sse(y, yhat, r.dt, t0, end);
+        break;
+      case Criterion::kRmse:
+        total += model::Rmse(y, yhat, r.dt, t0, end);
+        break;
+      case Criterion::kMax:
+        total = std::max(total, model::MaxAbsError(y, yhat, r.dt, t0, end));
+        break;
+      case Criterion::kMse:
+        break;
     }
   }
   return total;
@@ -135,16 +154,18 @@ opt::FitnessResult CriterionFitness::Evaluate(const opt::Genome& genome) const {
   const size_t want = model().params().size();
   if (genome.reals.size() != want)
     return {criterion_.error_cost, opt::FitnessStatus::kError,
-            "genome has " + std::to_string(genome.reals.size()) + " reals, " + model().Describe() + " has " +
-                std::to_string(want) + " parameters"};
+            "genome has " + std::to_string(genome.reals.size()) + " reals, " + model().Describe() +
+                " has " + std::to_string(want) + " parameters"};
   double cost;
   try {
     cost = Cost(genome.reals);
   } catch (const InputError& e) {
-    return {criterion_.error_cost, opt::FitnessStatus::kPenalized, std::string("invalid parameters: ") + e.what()};
+    return {criterion_.error_cost, opt::FitnessStatus::kPenalized,
+            std::string("invalid parameters: ") + e.what()};
   }
   if (!std::isfinite(cost) || cost >= criterion_.error_cost)
-    return {criterion_.error_cost, opt::FitnessStatus::kPenalized, "simulation diverged (non-finite output)"};
+    return {criterion_.error_cost, opt::FitnessStatus::kPenalized,
+            "simulation diverged (non-finite output)"};
   return {cost, opt::FitnessStatus::kOk, ""};
 }
 

@@ -33,7 +33,7 @@ Criterion ParseCriterion(const std::string& name);
 
 struct CriterionOptions {
   Criterion kind = Criterion::kMse;
-  double t0_s = 0, t1_s = 0;  ///< the window of every criterion but mse [s]
+  double t0_s = 0, t1_s = 0;                   ///< the window of every criterion but mse [s]
   double error_cost = opt::kDefaultErrorCost;  ///< the cost of a diverged or invalid parameter set
   bool windowed() const { return kind != Criterion::kMse; }
   /// A window 0 ≤ t0 < t1 (finite) for a windowed criterion; error_cost finite and > 0.
@@ -52,7 +52,8 @@ struct WindowErrors {
 };
 /// yhat holds samples [0, record.end_scored) (records/fit.h's Evaluate). Throws InputError when
 /// the window holds no sample.
-WindowErrors ScoreWindow(const io::Record& record, std::span<const double> yhat, double t0_s, double t1_s);
+WindowErrors ScoreWindow(const io::Record& record, std::span<const double> yhat, double t0_s,
+                         double t1_s);
 
 /// The fitness of a parameter vector (the model's params() order, physical values) by a criterion.
 /// Thread-safe. A non-finite output or invalid parameters are penalised (the error cost); a genome
@@ -61,7 +62,8 @@ class CriterionFitness final : public opt::FitnessFunction {
  public:
   /// The model and records must outlive the fitness. Throws InputError on no records, invalid
   /// options or a record that ends before the window starts.
-  CriterionFitness(const RecordModel& model, std::vector<const io::Record*> records, CriterionOptions criterion);
+  CriterionFitness(const RecordModel& model, std::vector<const io::Record*> records,
+                   CriterionOptions criterion);
   opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
   /// The cost of one parameter vector (+inf when the output is not finite); throws InputError on
   /// invalid parameters.

@@ -38,14 +38,16 @@ std::vector<double> Turns(const io::Record& r, double h) {
         ext = dir > 0 ? hi : lo;
       }
     } else if (dir > 0) {
-      if (u > ext) ext = u;
+      if (u > ext)
+        ext = u;
       else if (ext - u > h) {
         turns.push_back(ext);
         dir = -1;
         ext = u;
       }
     } else {
-      if (u < ext) ext = u;
+      if (u < ext)
+        ext = u;
       else if (u - ext > h) {
         turns.push_back(ext);
         dir = 1;
@@ -71,13 +73,15 @@ std::vector<ReversalCycle> Rainflow(const std::vector<double>& turns) {
       s.erase(s.end() - 3, s.end() - 1);
     }
   }
-  for (size_t i = 1; i < s.size(); ++i) cycles.push_back({std::max(s[i - 1], s[i]), std::min(s[i - 1], s[i]), 0.5});
+  for (size_t i = 1; i < s.size(); ++i)
+    cycles.push_back({std::max(s[i - 1], s[i]), std::min(s[i - 1], s[i]), 0.5});
   return cycles;
 }
 
 double Percentile95(std::vector<double> v) {
   if (v.empty()) return 0;
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(0.95 * static_cast<double>(v.size())));
+  const size_t k =
+      std::min(v.size() - 1, static_cast<size_t>(0.95 * static_cast<double>(v.size())));
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
   return v[k];
 }
@@ -101,7 +105,8 @@ std::string BinRanges(const std::vector<bool>& on) {
     }
     int j = i;
     while (j + 1 < n && on[static_cast<size_t>(j + 1)]) ++j;
-    out += (out.empty() ? "" : ", ") + std::to_string(100 * i / n) + "–" + std::to_string(100 * (j + 1) / n) + " %";
+    out += (out.empty() ? "" : ", ") + std::to_string(100 * i / n) + "–" +
+           std::to_string(100 * (j + 1) / n) + " %";
     i = j + 1;
   }
   return out.empty() ? "none" : out;
@@ -110,11 +115,12 @@ std::string BinRanges(const std::vector<bool>& on) {
 /// The peak |du/dt| of each complete half cycle of the record's scored window with its duration
 /// [s]: between two turns (a retreat of more than `threshold` from the running extreme); the
 /// partial first and last are left out.
-void HalfCyclePeakRates(const io::Record& r, double threshold, std::vector<std::pair<double, double>>& peaks) {
+void HalfCyclePeakRates(const io::Record& r, double threshold,
+                        std::vector<std::pair<double, double>>& peaks) {
   if (r.scored() < 2) return;
   double ext = r.u[r.first_scored], lo = ext, hi = ext, peak = 0;
-  int dir = 0;            // +1 rising, −1 falling, 0 not yet known
-  bool started = false;   // the half cycle in progress began at a turn (the first one did not)
+  int dir = 0;           // +1 rising, −1 falling, 0 not yet known
+  bool started = false;  // the half cycle in progress began at a turn (the first one did not)
   size_t begin = r.first_scored;
   for (size_t k = r.first_scored; k + 1 < r.end_scored; ++k) {
     const double v = r.u[k + 1], rate = std::abs(v - r.u[k]) / r.dt;
@@ -138,9 +144,10 @@ void HalfCyclePeakRates(const io::Record& r, double threshold, std::vector<std::
   }
 }
 
-/// The excitation of records (together), with levels and depths on the training range [lo, lo + range].
-DriveExcitation Describe(const std::string& name, const std::vector<const io::Record*>& recs, double lo, double range,
-                         const ExcitationOptions& o) {
+/// The excitation of records (together), with levels and depths on the training range [lo, lo +
+/// range].
+DriveExcitation Describe(const std::string& name, const std::vector<const io::Record*>& recs,
+                         double lo, double range, const ExcitationOptions& o) {
   DriveExcitation d;
   d.name = name;
   d.records = recs.size();
@@ -161,7 +168,8 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
       if (std::abs(r->u[k] - r->u[hold_start]) > o.hold_level * range) hold_start = k;
       d.longest_hold_s = std::max(d.longest_hold_s, static_cast<double>(k - hold_start) * r->dt);
     }
-    const double p95 = Percentile95(std::vector<double>(rates.begin() + static_cast<std::ptrdiff_t>(first_rate), rates.end()));
+    const double p95 = Percentile95(
+        std::vector<double>(rates.begin() + static_cast<std::ptrdiff_t>(first_rate), rates.end()));
     d.rate_p95_lo = r == recs.front() ? p95 : std::min(d.rate_p95_lo, p95);
     d.rate_p95_hi = r == recs.front() ? p95 : std::max(d.rate_p95_hi, p95);
     d.duration_s += static_cast<double>(r->scored()) * r->dt;
@@ -192,13 +200,15 @@ DriveExcitation Describe(const std::string& name, const std::vector<const io::Re
   return d;
 }
 
-/// The cells (upper bin, lower bin) of the plane that the training's cycles cover, with their neighbours.
+/// The cells (upper bin, lower bin) of the plane that the training's cycles cover, with their
+/// neighbours.
 std::vector<bool> CoveredCells(const DriveExcitation& t, double lo, double range, int bins) {
   std::vector<bool> cov(static_cast<size_t>(bins * bins), false);
   for (const ReversalCycle& c : t.cycles) {
     const int i = Bin((c.upper - lo) / range, bins), j = Bin((c.lower - lo) / range, bins);
     for (int a = std::max(0, i - 1); a <= std::min(bins - 1, i + 1); ++a)
-      for (int b = std::max(0, j - 1); b <= std::min(bins - 1, j + 1); ++b) cov[static_cast<size_t>(a * bins + b)] = true;
+      for (int b = std::max(0, j - 1); b <= std::min(bins - 1, j + 1); ++b)
+        cov[static_cast<size_t>(a * bins + b)] = true;
   }
   return cov;
 }
@@ -211,7 +221,9 @@ std::vector<bool> Present(const std::vector<double>& w) {
 
 }  // namespace
 
-bool NeedsRateCoverage(model::EffectKind effect) { return effect == model::EffectKind::Named("rate-dependence"); }
+bool NeedsRateCoverage(model::EffectKind effect) {
+  return effect == model::EffectKind::Named("rate-dependence");
+}
 
 std::string RateCoverageError(const io::RecordSet& set, std::span<const model::EffectKind> effects,
                               const ExcitationOptions& options) {
@@ -221,38 +233,49 @@ std::string RateCoverageError(const io::RecordSet& set, std::span<const model::E
   const DriveExcitation& t = rep.training;
   if (t.rate_span() >= kMinRateSpan) return "";
   std::ostringstream s;
-  s << "effect '" << it->name() << "' needs training records that cover rates: the peak drive rate of their half "
+  s << "effect '" << it->name()
+    << "' needs training records that cover rates: the peak drive rate of their half "
     << "cycles must span a factor " << Num(kMinRateSpan) << " at least, and the " << t.half_cycles
-    << " complete half cycles of the training records peak at " << Num(t.rate_peak_lo) << " … " << Num(t.rate_peak_hi)
-    << " " << set.drive_unit << "/s (" << Num(t.rate_span(), 3)
-    << "×): at one rate a rate-dependent lag is not told from the loop's shape. Train on records at several rates "
+    << " complete half cycles of the training records peak at " << Num(t.rate_peak_lo) << " … "
+    << Num(t.rate_peak_hi) << " " << set.drive_unit << "/s (" << Num(t.rate_span(), 3)
+    << "×): at one rate a rate-dependent lag is not told from the loop's shape. Train on records "
+       "at several rates "
        "(sines at 0.5, 2 and 8 Hz, or a chirp), or leave the effect out";
   return s.str();
 }
 
 std::string ExcitationOptions::Validate() const {
-  if (!(turn_threshold > 0 && turn_threshold < 0.5)) return FieldError("turn_threshold", turn_threshold, "must be in (0, 0.5)");
+  if (!(turn_threshold > 0 && turn_threshold < 0.5))
+    return FieldError("turn_threshold", turn_threshold, "must be in (0, 0.5)");
   if (bins < 2 || bins > 100) return FieldError("bins", bins, "must be in [2, 100]");
   if (!(range_margin >= 0)) return FieldError("range_margin", range_margin, "must be >= 0");
-  if (!(uncovered_share > 0 && uncovered_share <= 1)) return FieldError("uncovered_share", uncovered_share, "must be in (0, 1]");
-  if (!(rate_faster > 1) || !(rate_slower > 1)) return FieldError("rate_faster", rate_faster, "and rate_slower must be > 1");
-  if (!(hold_level > 0 && hold_level < 0.5)) return FieldError("hold_level", hold_level, "must be in (0, 0.5)");
+  if (!(uncovered_share > 0 && uncovered_share <= 1))
+    return FieldError("uncovered_share", uncovered_share, "must be in (0, 1]");
+  if (!(rate_faster > 1) || !(rate_slower > 1))
+    return FieldError("rate_faster", rate_faster, "and rate_slower must be > 1");
+  if (!(hold_level > 0 && hold_level < 0.5))
+    return FieldError("hold_level", hold_level, "must be in (0, 0.5)");
   if (!(min_hold_s > 0)) return FieldError("min_hold_s", min_hold_s, "must be > 0");
   return "";
 }
 
 const char* ExcitationNeedName(ExcitationNeed::Kind k) {
   switch (k) {
-    case ExcitationNeed::Kind::kRange: return "range";
-    case ExcitationNeed::Kind::kReversals: return "reversals";
-    case ExcitationNeed::Kind::kRate: return "rate";
-    case ExcitationNeed::Kind::kHold: return "hold";
+    case ExcitationNeed::Kind::kRange:
+      return "range";
+    case ExcitationNeed::Kind::kReversals:
+      return "reversals";
+    case ExcitationNeed::Kind::kRate:
+      return "rate";
+    case ExcitationNeed::Kind::kHold:
+      return "hold";
   }
   return "?";
 }
 
 bool ExcitationReport::HasGap() const {
-  return std::any_of(withheld.begin(), withheld.end(), [](const WithheldExcitation& w) { return !w.needs.empty(); });
+  return std::any_of(withheld.begin(), withheld.end(),
+                     [](const WithheldExcitation& w) { return !w.needs.empty(); });
 }
 
 ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOptions& o) {
@@ -260,7 +283,9 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
   std::vector<const io::Record*> train;
   for (const io::Record& r : set.records)
     if (r.role == CaseRole::kTrain && r.scored() > 0) train.push_back(&r);
-  if (train.empty()) throw InputError(set.source.string() + ": no training record (role train) to analyse the excitation of");
+  if (train.empty())
+    throw InputError(set.source.string() +
+                     ": no training record (role train) to analyse the excitation of");
   double lo = train.front()->u[train.front()->first_scored], hi = lo;
   for (const io::Record* r : train)
     for (size_t k = r->first_scored; k < r->end_scored; ++k) {
@@ -268,8 +293,8 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
       hi = std::max(hi, r->u[k]);
     }
   if (!(hi > lo)) {
-    throw InputError(set.source.string() + ": the training drive is constant (" + Num(lo) + " " + set.drive_unit +
-                     " over every scored sample): it excites nothing to identify");
+    throw InputError(set.source.string() + ": the training drive is constant (" + Num(lo) + " " +
+                     set.drive_unit + " over every scored sample): it excites nothing to identify");
   }
   const double range = hi - lo;
   const std::string unit = set.drive_unit;
@@ -279,8 +304,8 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
   const DriveExcitation& t = rep.training;
   {
     std::ostringstream s;
-    s << "drive " << Num(t.u_min, 4) << " … " << Num(t.u_max, 4) << " " << unit << " over " << Num(t.duration_s) << " s in "
-      << t.records << " training record(s)";
+    s << "drive " << Num(t.u_min, 4) << " … " << Num(t.u_max, 4) << " " << unit << " over "
+      << Num(t.duration_s) << " s in " << t.records << " training record(s)";
     rep.training_lines.push_back(s.str());
   }
   {
@@ -290,32 +315,38 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
     std::string depths;
     for (int b = o.bins - 1; b >= 0; --b) {
       const double w = t.depth_weight[static_cast<size_t>(b)];
-      if (w > 0) depths += (depths.empty() ? "" : ", ") + std::to_string(100 * b / o.bins) + "–" +
-                           std::to_string(100 * (b + 1) / o.bins) + " %: " + Num(w) + " cycles";
+      if (w > 0)
+        depths += (depths.empty() ? "" : ", ") + std::to_string(100 * b / o.bins) + "–" +
+                  std::to_string(100 * (b + 1) / o.bins) + " %: " + Num(w) + " cycles";
     }
     s << (depths.empty() ? "none" : depths);
     rep.training_lines.push_back(s.str());
   }
-  rep.training_lines.push_back("rates: |du/dt| up to " + Num(t.rate_max) + " " + unit + "/s (95th percentile " +
-                               (t.records > 1 ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit +
-                                                    "/s over the records)"
-                                              : Num(t.rate_p95) + " " + unit + "/s)"));
+  rep.training_lines.push_back(
+      "rates: |du/dt| up to " + Num(t.rate_max) + " " + unit + "/s (95th percentile " +
+      (t.records > 1
+           ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit + "/s over the records)"
+           : Num(t.rate_p95) + " " + unit + "/s)"));
   {
     std::ostringstream s;
-    s << "rate span: " << t.half_cycles << " complete half cycles peaking at " << Num(t.rate_peak_lo) << " … "
-      << Num(t.rate_peak_hi) << " " << unit << "/s (10th–90th percentile over time, " << Num(t.rate_span(), 3) << "×)";
+    s << "rate span: " << t.half_cycles << " complete half cycles peaking at "
+      << Num(t.rate_peak_lo) << " … " << Num(t.rate_peak_hi) << " " << unit
+      << "/s (10th–90th percentile over time, " << Num(t.rate_span(), 3) << "×)";
     if (t.rate_span() < kMinRateSpan)
-      s << ": one rate only — rate dependence cannot be told from the loop's shape; record at rates " << Num(kMinRateSpan)
-        << "× apart at least (e.g. sines at 0.5, 2 and 8 Hz)";
+      s << ": one rate only — rate dependence cannot be told from the loop's shape; record at "
+           "rates "
+        << Num(kMinRateSpan) << "× apart at least (e.g. sines at 0.5, 2 and 8 Hz)";
     rep.training_lines.push_back(s.str());
   }
   {
     std::ostringstream s;
-    const double period = t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;
-    s << "duration against the creep times: " << Num(t.duration_s) << " s of excitation, longest hold "
-      << Num(t.longest_hold_s) << " s";
+    const double period =
+        t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;
+    s << "duration against the creep times: " << Num(t.duration_s)
+      << " s of excitation, longest hold " << Num(t.longest_hold_s) << " s";
     if (t.longest_hold_s < o.min_hold_s) {
-      s << ": relaxations slower than the drive's period (" << Num(period) << " s) show only as a drift over the record";
+      s << ": relaxations slower than the drive's period (" << Num(period)
+        << " s) show only as a drift over the record";
     } else {
       s << ": relaxations up to ≈ " << Num(t.longest_hold_s) << " s show in the holds";
     }
@@ -332,11 +363,13 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
     const double beyond = std::max(d.u_max - hi, lo - d.u_min) / range;
     if (beyond > o.range_margin) {
       w.needs.push_back({ExcitationNeed::Kind::kRange, beyond,
-                         "drive beyond the training range by " + Num(100 * beyond, 2) + " % (" + Num(d.u_min, 4) + " … " +
-                             Num(d.u_max, 4) + " " + unit + "; training " + Num(lo, 4) + " … " + Num(hi, 4) + " " + unit + ")"});
+                         "drive beyond the training range by " + Num(100 * beyond, 2) + " % (" +
+                             Num(d.u_min, 4) + " … " + Num(d.u_max, 4) + " " + unit +
+                             "; training " + Num(lo, 4) + " … " + Num(hi, 4) + " " + unit + ")"});
     }
     double total = 0, outside = 0;
-    std::vector<bool> out_levels(static_cast<size_t>(o.bins), false), out_depths(static_cast<size_t>(o.bins), false);
+    std::vector<bool> out_levels(static_cast<size_t>(o.bins), false),
+        out_depths(static_cast<size_t>(o.bins), false);
     for (const ReversalCycle& c : d.cycles) {
       total += c.weight;
       const int a = Bin((c.upper - lo) / range, o.bins), b = Bin((c.lower - lo) / range, o.bins);
@@ -347,44 +380,52 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
     }
     w.uncovered_share = total > 0 ? outside / total : 0;
     if (outside >= 1 && w.uncovered_share >= o.uncovered_share) {
-      w.needs.push_back({ExcitationNeed::Kind::kReversals, w.uncovered_share,
-                         Num(100 * w.uncovered_share, 2) + " % of its reversal cycles turn where training has none: turns at " +
-                             BinRanges(out_levels) + " of the range, depths " + BinRanges(out_depths) +
-                             "; training turns only at " + BinRanges(Present(t.level_weight)) + " (depths " +
-                             BinRanges(Present(t.depth_weight)) + "): its minor loops are extrapolated"});
+      w.needs.push_back(
+          {ExcitationNeed::Kind::kReversals, w.uncovered_share,
+           Num(100 * w.uncovered_share, 2) +
+               " % of its reversal cycles turn where training has none: turns at " +
+               BinRanges(out_levels) + " of the range, depths " + BinRanges(out_depths) +
+               "; training turns only at " + BinRanges(Present(t.level_weight)) + " (depths " +
+               BinRanges(Present(t.depth_weight)) + "): its minor loops are extrapolated"});
     }
     if (t.rate_p95_hi > 0 && d.rate_p95 > o.rate_faster * t.rate_p95_hi) {
       const double k = d.rate_p95 / t.rate_p95_hi;
       w.needs.push_back({ExcitationNeed::Kind::kRate, k,
-                         "rates " + Num(k, 2) + "× faster than training (95th percentile of |du/dt| " + Num(d.rate_p95) + " " +
-                             unit + "/s; training up to " + Num(t.rate_p95_hi) + " " + unit + "/s)"});
+                         "rates " + Num(k, 2) +
+                             "× faster than training (95th percentile of |du/dt| " +
+                             Num(d.rate_p95) + " " + unit + "/s; training up to " +
+                             Num(t.rate_p95_hi) + " " + unit + "/s)"});
     } else if (d.rate_p95 * o.rate_slower < t.rate_p95_lo) {
       const double k = d.rate_p95 > 0 ? t.rate_p95_lo / d.rate_p95 : INFINITY;
       w.needs.push_back({ExcitationNeed::Kind::kRate, 1 / k,
                          "rates " + (std::isfinite(k) ? Num(k, 2) + "×" : std::string("far")) +
-                             " slower than training (95th percentile of |du/dt| " + Num(d.rate_p95) + " " + unit +
-                             "/s; training down to " + Num(t.rate_p95_lo) + " " + unit +
+                             " slower than training (95th percentile of |du/dt| " +
+                             Num(d.rate_p95) + " " + unit + "/s; training down to " +
+                             Num(t.rate_p95_lo) + " " + unit +
                              "/s): slow creep and rate dependence are extrapolated"});
     }
     if (d.longest_hold_s >= o.min_hold_s && d.longest_hold_s > 2 * t.longest_hold_s) {
       w.needs.push_back({ExcitationNeed::Kind::kHold, d.longest_hold_s,
-                         "holds of " + Num(d.longest_hold_s) + " s; training's longest hold " + Num(t.longest_hold_s) +
-                             " s: creep over " + Num(d.longest_hold_s) + " s is extrapolated"});
+                         "holds of " + Num(d.longest_hold_s) + " s; training's longest hold " +
+                             Num(t.longest_hold_s) + " s: creep over " + Num(d.longest_hold_s) +
+                             " s is extrapolated"});
     }
     rep.withheld.push_back(std::move(w));
   }
   return rep;
 }
 
-std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& rep, const std::vector<double>& ratio,
-                              double significance) {
+std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& rep,
+                              const std::vector<double>& ratio, double significance) {
   std::string needing, within;
   double worst_needing = 0, worst_within = 0;
   for (const WithheldExcitation& w : rep.withheld) {
     const double x = w.record < ratio.size() ? ratio[w.record] : 0;
     std::string needs;
-    for (const ExcitationNeed& n : w.needs) needs += (needs.empty() ? "" : ", ") + std::string(ExcitationNeedName(n.kind));
-    const std::string item = set.records[w.record].name + " " + Num(x) + "×" + (needs.empty() ? "" : " (" + needs + ")");
+    for (const ExcitationNeed& n : w.needs)
+      needs += (needs.empty() ? "" : ", ") + std::string(ExcitationNeedName(n.kind));
+    const std::string item =
+        set.records[w.record].name + " " + Num(x) + "×" + (needs.empty() ? "" : " (" + needs + ")");
     if (w.needs.empty()) {
       within += (within.empty() ? "" : ", ") + item;
       worst_within = std::max(worst_within, x);
@@ -395,13 +436,16 @@ std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& 
   }
   if (needing.empty() || worst_needing <= significance) return "";
   std::string s = "Excitation gap: withheld record(s) " + needing +
-                  " the floor need excitation the training records lack, so their error is partly extrapolation";
+                  " the floor need excitation the training records lack, so their error is partly "
+                  "extrapolation";
   if (within.empty()) {
-    s += "; no withheld record lies within the training excitation, so the data cannot tell an excitation gap from "
+    s += "; no withheld record lies within the training excitation, so the data cannot tell an "
+         "excitation gap from "
          "missing physics: train on the proposed drive (excitation_drive.csv) and diagnose again";
   } else if (worst_within <= significance) {
     s += ", while the record(s) within the training excitation (" + within +
-         ") are within the significance threshold: the gap is an excitation gap rather than missing physics; train on "
+         ") are within the significance threshold: the gap is an excitation gap rather than "
+         "missing physics; train on "
          "the proposed drive (excitation_drive.csv)";
   } else {
     s += "; the record(s) within the training excitation (" + within +
@@ -410,7 +454,8 @@ std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& 
   return s + ".";
 }
 
-TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const ExcitationReport& rep, uint64_t seed) {
+TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const ExcitationReport& rep,
+                                           uint64_t seed) {
   const DriveExcitation& t = rep.training;
   double lo = t.u_min, hi = t.u_max, rate = t.rate_p95, fs = 0;
   for (const WithheldExcitation& w : rep.withheld) {
@@ -425,7 +470,8 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     fs = std::max(fs, r.sample_rate_hz());
   }
   const double range = hi - lo, mid = (lo + hi) / 2, amp = range / 2;
-  if (!(range > 0) || !(fs > 0)) throw InputError("proposed drive: the records have no drive range or sample rate");
+  if (!(range > 0) || !(fs > 0))
+    throw InputError("proposed drive: the records have no drive range or sample rate");
   if (!(rate > 0)) rate = range;  // one range per second
   // A sine of amplitude `amp` whose 95th-percentile rate is `rate`: 2π f A ≈ rate.
   const double f = std::min(fs / 20, rate / (2 * std::numbers::pi * amp));
@@ -442,7 +488,8 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     const double seconds = std::max(0.05, std::abs(level - from) / (rate * 2 / std::numbers::pi));
     const size_t n = std::max<size_t>(1, static_cast<size_t>(std::llround(seconds * fs)));
     for (size_t k = 1; k <= n; ++k)
-      p.u.push_back(from + (level - from) * (1 - std::cos(std::numbers::pi * static_cast<double>(k) / n)) / 2);
+      p.u.push_back(from + (level - from) *
+                               (1 - std::cos(std::numbers::pi * static_cast<double>(k) / n)) / 2);
   };
   p.rest_s = 1;
   rest_level = std::clamp(rest_level, lo, hi);
@@ -455,8 +502,9 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     const double tau = static_cast<double>(k) * dt, a = amp * (1 - static_cast<double>(k) / nd);
     p.u.push_back(mid - a * std::cos(2 * std::numbers::pi * f * tau));
   }
-  p.segments.push_back("a decaying-amplitude sine " + Num(mid, 4) + " ± " + Num(amp, 4) + " → 0 " + rep.drive_unit + " at " +
-                       Num(f) + " Hz, " + std::to_string(cycles) + " cycles: nested minor loops of every depth");
+  p.segments.push_back("a decaying-amplitude sine " + Num(mid, 4) + " ± " + Num(amp, 4) + " → 0 " +
+                       rep.drive_unit + " at " + Num(f) + " Hz, " + std::to_string(cycles) +
+                       " cycles: nested minor loops of every depth");
   // 2. A random reversal sequence over the range: turning points in every cell of the plane.
   opt::Rng rng(seed * 2862933555777941757ull + 3037000493ull);
   const int reversals = 60;
@@ -465,8 +513,9 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     while (std::abs(next - p.u.back()) < 0.05 * range) next = lo + range * rng.Uniform01();
     move(next);
   }
-  p.segments.push_back("a random reversal sequence: " + std::to_string(reversals) + " turning points uniform in " +
-                       Num(lo, 4) + " … " + Num(hi, 4) + " " + rep.drive_unit + " (seed " + std::to_string(seed) +
+  p.segments.push_back("a random reversal sequence: " + std::to_string(reversals) +
+                       " turning points uniform in " + Num(lo, 4) + " … " + Num(hi, 4) + " " +
+                       rep.drive_unit + " (seed " + std::to_string(seed) +
                        "): minor loops at every level");
   // 3. A staircase of holds: creep over seconds.
   const double hold_s = std::clamp(t.duration_s / 8, 2.0, 10.0);
@@ -474,11 +523,13 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
     move(lo + share * range);
     hold(lo + share * range, hold_s);
   }
-  p.segments.push_back("a staircase of holds at 0, 25, 50, 75, 100, 75, 50, 25, 0 % of the range, " + Num(hold_s) +
-                       " s each: creep from 0.05 s to " + Num(hold_s) + " s");
+  p.segments.push_back(
+      "a staircase of holds at 0, 25, 50, 75, 100, 75, 50, 25, 0 % of the range, " + Num(hold_s) +
+      " s each: creep from 0.05 s to " + Num(hold_s) + " s");
   std::ostringstream d;
-  d << "a proposed training drive of " << Num(static_cast<double>(p.u.size()) * dt) << " s at " << Num(fs, 5)
-    << " Hz (after a " << Num(p.rest_s) << " s rest at " << Num(rest_level, 4) << " " << rep.drive_unit << "): ";
+  d << "a proposed training drive of " << Num(static_cast<double>(p.u.size()) * dt) << " s at "
+    << Num(fs, 5) << " Hz (after a " << Num(p.rest_s) << " s rest at " << Num(rest_level, 4) << " "
+    << rep.drive_unit << "): ";
   for (size_t i = 0; i < p.segments.size(); ++i) d << (i ? "; then " : "") << p.segments[i];
   p.description = d.str();
   return p;

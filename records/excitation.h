@@ -12,9 +12,10 @@
 //    grid of the training range; its depth is (upper − lower) / training range;
 //  - its rates: the 95th percentile and the maximum of |du/dt|, and the rate span: the peak |du/dt|
 //    of each complete half cycle (between turning points), its 10th and 90th percentiles over the
-//    records' time together (each half cycle weighted by its duration) — one sine at one amplitude and frequency has a span of 1, sines at 0.5, 2
-//    and 8 Hz one of 16; rate dependence (the effect `rate-dependence`) needs a span of
-//    kMinRateSpan at least, else it cannot be told from the loop's shape (RateCoverageError);
+//    records' time together (each half cycle weighted by its duration) — one sine at one amplitude
+//    and frequency has a span of 1, sines at 0.5, 2 and 8 Hz one of 16; rate dependence (the effect
+//    `rate-dependence`) needs a span of kMinRateSpan at least, else it cannot be told from the
+//    loop's shape (RateCoverageError);
 //  - its duration and longest hold (the drive within `hold_level` of the range) against the creep
 //    times: a relaxation slower than the longest hold shows only as a drift.
 // A withheld record needs:
@@ -58,22 +59,25 @@ struct DriveExcitation {
   size_t records = 0;
   double u_min = 0, u_max = 0;
   double duration_s = 0;
-  double rate_p95 = 0, rate_max = 0;  ///< |du/dt| [drive unit / s], over the records together
+  double rate_p95 = 0, rate_max = 0;        ///< |du/dt| [drive unit / s], over the records together
   double rate_p95_lo = 0, rate_p95_hi = 0;  ///< the slowest and fastest record's 95th percentile
   double longest_hold_s = 0;
-  size_t half_cycles = 0;                   ///< complete half cycles (between two turns)
-  double rate_peak_lo = 0, rate_peak_hi = 0;  ///< 10th / 90th percentile of their peak |du/dt| over time
+  size_t half_cycles = 0;  ///< complete half cycles (between two turns)
+  double rate_peak_lo = 0,
+         rate_peak_hi = 0;  ///< 10th / 90th percentile of their peak |du/dt| over time
   double rate_span() const { return rate_peak_lo > 0 ? rate_peak_hi / rate_peak_lo : 1; }
   size_t turns = 0;
   std::vector<ReversalCycle> cycles;
-  std::vector<double> depth_weight;  ///< rainflow weight per depth bin (share of the training range)
+  std::vector<double>
+      depth_weight;  ///< rainflow weight per depth bin (share of the training range)
   std::vector<double> level_weight;  ///< turning points per level bin of the training range
 };
 
 struct ExcitationNeed {
   enum class Kind { kRange, kReversals, kRate, kHold };
   Kind kind = Kind::kReversals;
-  double amount = 0;  ///< range: share beyond; reversals: uncovered share; rate: ratio; hold: seconds
+  double amount =
+      0;  ///< range: share beyond; reversals: uncovered share; rate: ratio; hold: seconds
   std::string text;
 };
 const char* ExcitationNeedName(ExcitationNeed::Kind k);  ///< "range", "reversals", "rate", "hold"
@@ -88,7 +92,7 @@ struct WithheldExcitation {
 struct ExcitationReport {
   std::string drive_unit;
   DriveExcitation training;
-  std::vector<std::string> training_lines;  ///< what the training records excite, one line each
+  std::vector<std::string> training_lines;   ///< what the training records excite, one line each
   std::vector<WithheldExcitation> withheld;  ///< set order
   bool HasGap() const;
 };
@@ -120,8 +124,8 @@ std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& 
 /// at the faster of the training's and the withheld records' rates, sampled at the training rate.
 struct TrainingDriveProposal {
   double fs_hz = 0;
-  std::vector<double> u;  ///< from t = 0
-  double rest_s = 0;      ///< the leading rest
+  std::vector<double> u;              ///< from t = 0
+  double rest_s = 0;                  ///< the leading rest
   std::vector<std::string> segments;  ///< what each part is for
   std::string description;
 };

@@ -38,7 +38,11 @@ class StackBoucWenFamily final : public Family {
  public:
   static const FamilyDef kDef;
   StackBoucWenFamily(const DataScale& s, const FamilyOptions& o)
-      : sim_{.substeps = o.substeps}, start_(o.initial_state), range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
+      : sim_{.substeps = o.substeps},
+        start_(o.initial_state),
+        range_(2 * s.u_half),
+        u_min_(s.u_min),
+        u_max_(s.u_max) {
     ThrowIfError(sim_.Validate());
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "-", 0.01, 1.5, false},
@@ -53,10 +57,12 @@ class StackBoucWenFamily final : public Family {
     return "y = LPF_fc[d (u - h)], dh/dt = alpha du/dt - beta |du/dt| h - gamma du/dt |h|";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt,
+                std::span<double> y) const override {
     const model::StackBoucWenParams b = model::BoucWenFromVector(p);
     model::StackSimOptions sim = sim_;
-    sim.rest_state = model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_));
+    sim.rest_state =
+        model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_));
     model::SimulateStackBoucWen(b, u, dt, y, sim);
   }
   std::vector<std::string> excluded_effects() const override { return {"driver-lowpass"}; }
@@ -66,7 +72,7 @@ class StackBoucWenFamily final : public Family {
  private:
   model::StackSimOptions sim_;
   model::InitialState start_;
-  double range_;  ///< the rise and fall of the rest state: the data's full drive range
+  double range_;          ///< the rise and fall of the rest state: the data's full drive range
   double u_min_, u_max_;  ///< the data's drive range (kAuto)
   std::vector<ParamInfo> params_;
 };
@@ -78,23 +84,30 @@ const FamilyDef StackBoucWenFamily::kDef = {
 class BacklashLikeFamily final : public Family {
  public:
   static const FamilyDef kDef;
-  // kAuto is centred for this family (docs/records.md "The initial state at rest": started descended
-  // at a rest at the bottom of the range, its fits on real-like stacks predict the minor loops worse,
-  // the reversal records by up to 1.8 ×); descended and ascended are taken as given.
+  // kAuto is centred for this family (docs/records.md "The initial state at rest": started
+  // descended at a rest at the bottom of the range, its fits on real-like stacks predict the minor
+  // loops worse, the reversal records by up to 1.8 ×); descended and ascended are taken as given.
   BacklashLikeFamily(const DataScale& s, const FamilyOptions& o)
-      : start_(o.initial_state == model::InitialState::kAuto ? model::InitialState::kCentred : o.initial_state),
-        range_(2 * s.u_half), u_min_(s.u_min), u_max_(s.u_max) {
+      : start_(o.initial_state == model::InitialState::kAuto ? model::InitialState::kCentred
+                                                             : o.initial_state),
+        range_(2 * s.u_half),
+        u_min_(s.u_min),
+        u_max_(s.u_max) {
     const double a = s.u_half, g = s.gain;
-    params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true}, {"c", "y/V", 0.3 * g, 3 * g, true}, {"B1", "y/V", -3 * g, 5 * g, false}};
+    params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true},
+               {"c", "y/V", 0.3 * g, 3 * g, true},
+               {"B1", "y/V", -3 * g, 5 * g, false}};
   }
   std::string name() const override { return kDef.name; }
   std::string title() const override { return "backlash-like (Coleman–Hodgdon)"; }
   std::string equation() const override { return "dy/dt = alpha |du/dt| (c u - y) + B1 du/dt"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double,
+                std::span<double> y) const override {
     const model::BacklashLikeParams b = model::BacklashLikeFromVector(p);
-    model::SimulateBacklashLike(b, u, y,
-                                model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_)));
+    model::SimulateBacklashLike(
+        b, u, y,
+        model::StackRestState(b, range_, model::ResolveInitialState(start_, u[0], u_min_, u_max_)));
   }
   model::InitialState initial_state() const override { return start_; }
   std::vector<double> CheckNominal() const override { return {0.02, 0.1, 0.05}; }
@@ -125,7 +138,8 @@ class DuhemFamily final : public Family {
     return "dy/dt = alpha |du/dt| (f(u) - y) + b du/dt + lambda (f(u) - y), f(u) = c u + c3 u^3";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt,
+                std::span<double> y) const override {
     model::SimulateDuhem(model::DuhemFromVector(p), u, dt, y);
   }
   std::vector<std::string> excluded_effects() const override { return {"creep"}; }
@@ -142,14 +156,18 @@ class PrandtlIshlinskiiFamily final : public Family {
  public:
   static const FamilyDef kDef;
   PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
-      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)), start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
+      : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
+        start_(o.initial_state),
+        u_min_(s.u_min),
+        u_max_(s.u_max) {}
   std::string name() const override { return kDef.name; }
   std::string title() const override { return "Prandtl–Ishlinskii operator"; }
   std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
   bool linear() const override { return true; }
   size_t regressors() const override { return thresholds_.size() + 1; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double,
+                std::span<double> y) const override {
     if (p.size() != regressors()) {
       throw InputError("prandtl-ishlinskii: " + std::to_string(p.size()) + " weights given, " +
                        std::to_string(regressors()) + " expected");
@@ -196,31 +214,39 @@ class BwOscillatorFamily final : public Family {
  public:
   static const FamilyDef kDef;
   BwOscillatorFamily(const DataScale& s, const FamilyOptions& o)
-      : osc_(o.oscillator), substeps_(o.oscillator.rk4_steps > 0 ? o.oscillator.rk4_steps : 2 * o.substeps) {
+      : osc_(o.oscillator),
+        substeps_(o.oscillator.rk4_steps > 0 ? o.oscillator.rk4_steps : 2 * o.substeps) {
     if (substeps_ < 1 || substeps_ > 1000)
       throw InputError(FieldError("bw-oscillator: rk4_steps", substeps_, "must be 1 … 1000"));
     if (osc_.physical) {
       const auto& names = model::BwIdentifiableNames();
-      params_ = {{names[0], "u s^2/y", 0.2, 20, true},  {names[1], "u s/y", 0.1, 1e3, true},
-                 {names[2], "u/y", 1e3, 1e6, true},     {names[3], "u/y", 1e3, 1e6, true},
-                 {names[4], "1/y", 1, 1e5, true},       {names[5], "1/y", -1e4, 1e4, false}};
+      params_ = {{names[0], "u s^2/y", 0.2, 20, true}, {names[1], "u s/y", 0.1, 1e3, true},
+                 {names[2], "u/y", 1e3, 1e6, true},    {names[3], "u/y", 1e3, 1e6, true},
+                 {names[4], "1/y", 1, 1e5, true},      {names[5], "1/y", -1e4, 1e4, false}};
       return;
     }
     const double g = s.gain, y = s.y_half;
-    const double fn_lo = std::min(3 * s.f_dom, 0.05 * s.fs), fn_hi = std::max(fn_lo * 2, 0.3 * s.fs);
-    params_ = {{"K", "y/V", 0.3 * g, 3 * g, true},        {"fn_Hz", "Hz", fn_lo, fn_hi, true},
-               {"zeta", "-", 0.02, 3, true},               {"share", "-", 0.0, 0.95, false},
-               {"beta_gamma", "1/y", 0.01 / y, 100 / y, true}, {"beta_delta", "1/y", -100 / y, 100 / y, false}};
+    const double fn_lo = std::min(3 * s.f_dom, 0.05 * s.fs),
+                 fn_hi = std::max(fn_lo * 2, 0.3 * s.fs);
+    params_ = {{"K", "y/V", 0.3 * g, 3 * g, true},
+               {"fn_Hz", "Hz", fn_lo, fn_hi, true},
+               {"zeta", "-", 0.02, 3, true},
+               {"share", "-", 0.0, 0.95, false},
+               {"beta_gamma", "1/y", 0.01 / y, 100 / y, true},
+               {"beta_delta", "1/y", -100 / y, 100 / y, false}};
   }
   std::string name() const override { return kDef.name; }
   std::string title() const override { return "Bouc–Wen hysteretic oscillator"; }
   std::string equation() const override {
-    if (osc_.physical) return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z|";
-    return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z| (k = (1-share)/K, "
+    if (osc_.physical)
+      return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z|";
+    return "m y'' + c y' + k y + z = u, z' = alpha y' - beta_gamma |y'| z - beta_delta y' |z| (k = "
+           "(1-share)/K, "
            "alpha = share/K, m = (k+alpha)/(2 pi fn)^2, c = 2 zeta sqrt((k+alpha) m))";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt,
+                std::span<double> y) const override {
     SimulatePrepared(nullptr, p, u, dt, y);
   }
   // The input table (model::BwInput: the drive at every half RK4 step) depends on the drive alone.
@@ -232,8 +258,8 @@ class BwOscillatorFamily final : public Family {
     in->input = model::BwInput(u, InputOptions(dt));
     return in;
   }
-  void SimulatePrepared(const Prepared* prepared, std::span<const double> p, std::span<const double> u, double dt,
-                        std::span<double> y) const override {
+  void SimulatePrepared(const Prepared* prepared, std::span<const double> p,
+                        std::span<const double> u, double dt, std::span<double> y) const override {
     if (p.size() != 6) throw InputError("bw-oscillator: 6 parameters expected");
     const model::BwParams b = osc_.physical ? model::BwFromIdentifiable(p) : Scaled(p);
     if (!b.Validate().ok()) return Nan(y);  // outside any box (m <= 0, a non-finite value)
@@ -251,14 +277,16 @@ class BwOscillatorFamily final : public Family {
   // one. On the prepared drive, or (a model with drive effects) each on its own.
   int lanes() const override { return 4; }
   void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
-                            std::span<const double> u, double dt, std::span<const std::span<double>> ys) const override {
+                            std::span<const double> u, double dt,
+                            std::span<const std::span<double>> ys) const override {
     const auto* in = dynamic_cast<const Input*>(prepared);
     std::vector<model::BwParams> b;
     if (!in || !ManyParams(ps, b)) return Family::SimulatePreparedMany(prepared, ps, u, dt, ys);
     const std::vector<const model::BwInput*> inputs(ps.size(), &in->input);
     Many(b, inputs, std::vector<double>(ps.size(), u[0]), ys);
   }
-  void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us, double dt,
+  void SimulateMany(std::span<const std::span<const double>> ps,
+                    std::span<const std::span<const double>> us, double dt,
                     std::span<const std::span<double>> ys) const override {
     std::vector<model::BwParams> b;
     bool many = us.size() == ps.size();
@@ -277,10 +305,13 @@ class BwOscillatorFamily final : public Family {
   }
 
  private:
-  static void Nan(std::span<double> y) { std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN()); }
+  static void Nan(std::span<double> y) {
+    std::fill(y.begin(), y.end(), std::numeric_limits<double>::quiet_NaN());
+  }
   // b[l] of two or more parameter sets, false unless every one is valid (SimulatePrepared's NaN:
   // each alone).
-  bool ManyParams(std::span<const std::span<const double>> ps, std::vector<model::BwParams>& b) const {
+  bool ManyParams(std::span<const std::span<const double>> ps,
+                  std::vector<model::BwParams>& b) const {
     if (ps.size() < 2) return false;
     b.resize(ps.size());
     for (size_t l = 0; l < ps.size(); ++l) {
@@ -342,23 +373,33 @@ const FamilyDef BwOscillatorFamily::kDef = {
 class BimorphFinFamily final : public Family {
  public:
   static const FamilyDef kDef;
-  BimorphFinFamily(const DataScale& s, const FamilyOptions& o) : geometry_(o.geometry), plant_(o.geometry) {
+  BimorphFinFamily(const DataScale& s, const FamilyOptions& o)
+      : geometry_(o.geometry), plant_(o.geometry) {
     // The spec's ranges (model/network.h) are for drives up to 375 V; α scales with 1/drive.
     const double a = 375.0 / s.u_half, g = s.y_half;  // gain: output units per degree
     const double lp = o.geometry.active_length_m, le = o.geometry.tip_length_m;
-    params_ = {{"mu", "1/s", 0, 300, false},          {"delta", "s", 1e-5, 1, true},
-               {"alpha", "N/V", 1e-5 * a, 0.02 * a, true}, {"beta", "1/V", 0, 0.02 * a, false},
-               {"gamma", "1/V", -0.02 * a, 0.02 * a, false}, {"a1", "deg", 0, 2, false},
-               {"a2", "deg", 0, 2, false},             {"b1", "deg", 0.05, 60, true},
-               {"b2_abs", "deg", 0.05, 60, true},       {"gain", "y/deg", 0.01 * g, 100 * g, true},
+    params_ = {{"mu", "1/s", 0, 300, false},
+               {"delta", "s", 1e-5, 1, true},
+               {"alpha", "N/V", 1e-5 * a, 0.02 * a, true},
+               {"beta", "1/V", 0, 0.02 * a, false},
+               {"gamma", "1/V", -0.02 * a, 0.02 * a, false},
+               {"a1", "deg", 0, 2, false},
+               {"a2", "deg", 0, 2, false},
+               {"b1", "deg", 0.05, 60, true},
+               {"b2_abs", "deg", 0.05, 60, true},
+               {"gain", "y/deg", 0.01 * g, 100 * g, true},
                // The beam's geometry: the active (MFC) and passive tip lengths set the modes.
                {"active_length", "m", 0.5 * lp, 2 * lp, true}};
-    if (le > 0 && o.geometry.n_tip > 0) params_.push_back({"tip_length", "m", 0.25 * le, 3 * le, true});
+    if (le > 0 && o.geometry.n_tip > 0)
+      params_.push_back({"tip_length", "m", 0.25 * le, 3 * le, true});
   }
   std::string name() const override { return kDef.name; }
-  std::string title() const override { return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)"; }
+  std::string title() const override {
+    return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)";
+  }
   std::string equation() const override {
-    return "M(L_p, L_e) q'' + C q' + K(L_p, L_e) q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, "
+    return "M(L_p, L_e) q'' + C q' + K(L_p, L_e) q = B u - e* z, z' = alpha u' - beta |u'| z - "
+           "gamma u' |z|, "
            "y = gain * Backlash(atan(w_tip/L))";
   }
   /// The step's modal data for the fitted geometry (p[10] = L_p, p[11] = L_e when fitted):
@@ -393,7 +434,8 @@ class BimorphFinFamily final : public Family {
     return shape;
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  void Simulate(std::span<const double> p, std::span<const double> u, double dt, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double dt,
+                std::span<double> y) const override {
     if (p.size() != params_.size())
       throw InputError("bimorph-fin: " + std::to_string(params_.size()) + " parameters expected");
     model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
@@ -418,7 +460,8 @@ class BimorphFinFamily final : public Family {
     if (!geo.Validate().ok()) return nan();
     // The nominal geometry's plant is assembled once; another geometry costs one FE assembly and
     // eigen-decomposition of 2 (n_active + n_tip) DOFs, small against the simulation.
-    const bool nominal = geo.active_length_m == geometry_.active_length_m && geo.tip_length_m == geometry_.tip_length_m;
+    const bool nominal = geo.active_length_m == geometry_.active_length_m &&
+                         geo.tip_length_m == geometry_.tip_length_m;
     std::optional<model::BimorphPlant> other;
     if (!nominal) other.emplace(geo);
     // The fast path's angle alone (model::Simulate's modal path without the full trace): the same
@@ -450,20 +493,25 @@ void Family::Regressors(std::span<const double>, std::span<double>) const {
   throw InputError(name() + " is not linear in its parameters");
 }
 
-std::shared_ptr<const Family::Prepared> Family::Prepare(std::span<const double>, double) const { return nullptr; }
+std::shared_ptr<const Family::Prepared> Family::Prepare(std::span<const double>, double) const {
+  return nullptr;
+}
 
-void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::span<const double> u, double dt,
-                              std::span<double> y) const {
+void Family::SimulatePrepared(const Prepared*, std::span<const double> p, std::span<const double> u,
+                              double dt, std::span<double> y) const {
   Simulate(p, u, dt, y);
 }
 
-void Family::SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
-                                  std::span<const double> u, double dt, std::span<const std::span<double>> ys) const {
+void Family::SimulatePreparedMany(const Prepared* prepared,
+                                  std::span<const std::span<const double>> ps,
+                                  std::span<const double> u, double dt,
+                                  std::span<const std::span<double>> ys) const {
   for (size_t l = 0; l < ps.size(); ++l) SimulatePrepared(prepared, ps[l], u, dt, ys[l]);
 }
 
-void Family::SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us,
-                          double dt, std::span<const std::span<double>> ys) const {
+void Family::SimulateMany(std::span<const std::span<const double>> ps,
+                          std::span<const std::span<const double>> us, double dt,
+                          std::span<const std::span<double>> ys) const {
   for (size_t l = 0; l < ps.size(); ++l) Simulate(ps[l], us[l], dt, ys[l]);
 }
 
@@ -495,14 +543,16 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
   if (!(s.u_half > 0)) {
     std::string names;
     for (const io::Record* r : records) names += (names.empty() ? "" : ", ") + r->name;
-    throw InputError("the drive is constant over the scored samples of " + names + ": nothing to identify");
+    throw InputError("the drive is constant over the scored samples of " + names +
+                     ": nothing to identify");
   }
   s.y_half = std::max((ymax - ymin) / 2, 1e-300);
   const double var = suu - su * su / n, cov = suy - su * sy / n;
   const double slope = var > 0 ? cov / var : 0;
   s.polarity = slope < 0 ? -1 : 1;
   s.gain = std::abs(slope) > 0 ? std::abs(slope) : s.y_half / s.u_half;
-  // Dominant frequency: reversals of the drive by more than 10 % of its half range, over the scored time.
+  // Dominant frequency: reversals of the drive by more than 10 % of its half range, over the scored
+  // time.
   for (const io::Record* r : records) {
     const double thr = 0.1 * s.u_half;
     double hi = r->u[r->first_scored], lo = hi;
@@ -572,7 +622,8 @@ bool TakesInitialState(std::string_view family) {
 
 std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale,
                                    const FamilyOptions& o) {
-  if (o.substeps < 1 || o.substeps > 512) throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
+  if (o.substeps < 1 || o.substeps > 512)
+    throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
   return FamilyNamed(name, "--family").make(scale, o);
 }
 

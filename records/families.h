@@ -15,7 +15,8 @@
 //                       centre axis or over the whole triangle, the penalty and its strength chosen
 //                       by blocked cross-validation (records/regularisation.h ChoosePenalty); exact
 //                       inverse by one-step bisection
-//   asymmetric-pi       PI operator plus a monotone memoryless bend from one-sided dead zones of the
+//   asymmetric-pi       PI operator plus a monotone memoryless bend from one-sided dead zones of
+//   the
 //                       drive (model/preisach.h): asymmetric loops, weights ≥ 0 (monotone, exact
 //                       inverse), a ridge on the dead zones chosen by the same validation
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
@@ -66,20 +67,22 @@ struct OscillatorOptions {
   /// β·δ ±1e4 1/m; not scaled to the data), instead of (K, f_n, ζ, share, β·γ, β·δ) scaled to it.
   bool physical = false;
   int rk4_steps = 0;  ///< RK4 steps per sample, 1 … 1000; 0 = 2 × FamilyOptions::substeps
-  model::InputInterpolation interpolation = model::InputInterpolation::kLinear;  ///< the drive between samples
-  size_t period_samples = 0;     ///< kPeriodicFourier: samples per period (0 = the whole record)
-  bool from_zero_state = false;  ///< start at y = ẏ = z = 0 (the benchmark's generator), not at rest under u_0
+  model::InputInterpolation interpolation =
+      model::InputInterpolation::kLinear;  ///< the drive between samples
+  size_t period_samples = 0;  ///< kPeriodicFourier: samples per period (0 = the whole record)
+  bool from_zero_state =
+      false;  ///< start at y = ẏ = z = 0 (the benchmark's generator), not at rest under u_0
 };
 
 struct FamilyOptions {
-  int substeps = 2;          ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
+  int substeps = 2;  ///< stack Bouc–Wen filter / Duhem sub-steps; oscillator RK4 steps (×2)
   /// Prandtl–Ishlinskii / asymmetric-pi plays; preisach grid levels, or kAutoLevels: chosen by
   /// validation on the training records (records/fit.h FitRecords, ChoosePreisachLevels).
   int pi_operators = 12;
   /// The memory at rest at the first sample's drive u_0 (model/prandtl_ishlinskii.h InitialState)
   /// of the families that take it (TakesInitialState): the plays of prandtl-ishlinskii,
-  /// asymmetric-pi and preisach at u_0, u_0 + r or u_0 − r; the Bouc–Wen h of stack-bouc-wen and the
-  /// w of backlash-like after a rise by the data's full range 2 u_half and a fall back to u_0
+  /// asymmetric-pi and preisach at u_0, u_0 + r or u_0 − r; the Bouc–Wen h of stack-bouc-wen and
+  /// the w of backlash-like after a rise by the data's full range 2 u_half and a fall back to u_0
   /// (model/stack_models.h StackRestState), or the mirror. Others start centred (and ignore it).
   /// Default kAuto: resolved on each record's first drive against the data's drive range
   /// (model::ResolveInitialState: descended at a rest at the bottom, ascended at the top, else
@@ -111,19 +114,22 @@ class Family {
   };
   virtual std::shared_ptr<const Prepared> Prepare(std::span<const double> u, double dt) const;
   /// Simulate with `prepared` = Prepare(u, dt) of this family (null: as Simulate).
-  virtual void SimulatePrepared(const Prepared* prepared, std::span<const double> p, std::span<const double> u,
-                                double dt, std::span<double> y) const;
+  virtual void SimulatePrepared(const Prepared* prepared, std::span<const double> p,
+                                std::span<const double> u, double dt, std::span<double> y) const;
   /// How many parameter sets SimulatePreparedMany and SimulateMany run side by side to gain from it
   /// (1: none).
   virtual int lanes() const { return 1; }
   /// SimulatePrepared for each ps[l] into ys[l], bit for bit (the default calls it for each).
-  virtual void SimulatePreparedMany(const Prepared* prepared, std::span<const std::span<const double>> ps,
-                                    std::span<const double> u, double dt, std::span<const std::span<double>> ys) const;
+  virtual void SimulatePreparedMany(const Prepared* prepared,
+                                    std::span<const std::span<const double>> ps,
+                                    std::span<const double> u, double dt,
+                                    std::span<const std::span<double>> ys) const;
   /// Each parameter set on its own drive (us[l]: what a model's drive effects make of the record's
-  /// drive for that set, RecordModel::SimulateMany): Simulate(ps[l], us[l], dt, ys[l]) for each, bit
-  /// for bit (the default calls it for each). The drives have one length.
-  virtual void SimulateMany(std::span<const std::span<const double>> ps, std::span<const std::span<const double>> us,
-                            double dt, std::span<const std::span<double>> ys) const;
+  /// drive for that set, RecordModel::SimulateMany): Simulate(ps[l], us[l], dt, ys[l]) for each,
+  /// bit for bit (the default calls it for each). The drives have one length.
+  virtual void SimulateMany(std::span<const std::span<const double>> ps,
+                            std::span<const std::span<const double>> us, double dt,
+                            std::span<const std::span<double>> ys) const;
   /// Linear-in-parameters families: the regressors of u (rows = samples, columns = weights, in
   /// row-major order), whose non-negative combination is the output. Others: not called.
   virtual bool linear() const { return false; }

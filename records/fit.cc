@@ -32,7 +32,8 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
     Eigen::VectorXd hp(m);
     for (Eigen::Index a = 0; a < m; ++a) {
       hp(a) = h(idx[static_cast<size_t>(a)]);
-      for (Eigen::Index b = 0; b < m; ++b) Gp(a, b) = G(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+      for (Eigen::Index b = 0; b < m; ++b)
+        Gp(a, b) = G(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
     }
     // A tiny ridge keeps nearly collinear plays solvable.
     Gp.diagonal().array() += 1e-13 * std::max(1.0, Gp.diagonal().maxCoeff());
@@ -56,11 +57,13 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
       }
       double alpha = 1;
       for (Eigen::Index i = 0; i < n; ++i) {
-        if (passive[static_cast<size_t>(i)] && s(i) <= 0) alpha = std::min(alpha, w(i) / (w(i) - s(i)));
+        if (passive[static_cast<size_t>(i)] && s(i) <= 0)
+          alpha = std::min(alpha, w(i) / (w(i) - s(i)));
       }
       w += alpha * (s - w);
       for (Eigen::Index i = 0; i < n; ++i) {
-        if (passive[static_cast<size_t>(i)] && w(i) <= 1e-15 * std::max(1.0, w.cwiseAbs().maxCoeff())) {
+        if (passive[static_cast<size_t>(i)] &&
+            w(i) <= 1e-15 * std::max(1.0, w.cwiseAbs().maxCoeff())) {
           passive[static_cast<size_t>(i)] = 0;
           w(i) = 0;
         }
@@ -89,15 +92,18 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
   // A regularised linear family: its strength chosen by validation with the effects at their
   // neutral values (records/regularisation.h), re-chosen at a fit's solution (FitModel); every
   // evaluation uses the strength of the moment.
-  // With several candidate penalties, the validation keeps one too (records/regularisation.h ChoosePenalty).
-  const std::vector<Family::Penalty> penalties = fam.linear() ? fam.regularisation() : std::vector<Family::Penalty>{};
+  // With several candidate penalties, the validation keeps one too (records/regularisation.h
+  // ChoosePenalty).
+  const std::vector<Family::Penalty> penalties =
+      fam.linear() ? fam.regularisation() : std::vector<Family::Penalty>{};
   if (!penalties.empty()) {
     const auto m = static_cast<Eigen::Index>(fam.regressors());
     for (const Family::Penalty& pen : penalties) {
       if (pen.gram.size() != fam.regressors() * fam.regressors())
         throw InputError(fam.name() + ": regularisation size mismatch (" + pen.name + ")");
       penalties_.push_back(
-          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(pen.gram.data(), m, m));
+          Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+              pen.gram.data(), m, m));
       penalty_names_.push_back(pen.name);
     }
     if (!validate_at.empty() && validate_at.size() != model_.params().size())
@@ -113,7 +119,8 @@ RecordFitness::RecordFitness(const RecordModel& model, std::vector<const io::Rec
     weights_start_ =
         Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size()));
   }
-  std::tie(spectrum_first_, spectrum_count_) = model_.EffectParams(EffectKind::Named("creep-spectrum"));
+  std::tie(spectrum_first_, spectrum_count_) =
+      model_.EffectParams(EffectKind::Named("creep-spectrum"));
   if (spectrum_count_ > 0) {
     spectrum_roughness_ = SpectrumRoughness(spectrum_count_);
     spectrum_validation_.used = true;  // μ = 0 until RevalidateSpectrum
@@ -159,8 +166,9 @@ SpectrumProblem RecordFitness::SpectrumProblemNow() const {
 
 std::vector<double> RecordFitness::Expand(std::span<const double> q, double* cost) const {
   if (q.size() != searched_.size())
-    throw InputError(model_.Describe() + ": " + std::to_string(q.size()) + " searched parameters given, " +
-                     std::to_string(searched_.size()) + " expected");
+    throw InputError(model_.Describe() + ": " + std::to_string(q.size()) +
+                     " searched parameters given, " + std::to_string(searched_.size()) +
+                     " expected");
   std::vector<double> p(model_.params().size(), 0.0);
   for (size_t i = 0; i < q.size(); ++i) p[searched_[i]] = q[i];
   if (!spectrum_solved_) {
@@ -169,7 +177,9 @@ std::vector<double> RecordFitness::Expand(std::span<const double> q, double* cos
   }
   const SpectrumSolution s = SolveSpectrum(SpectrumProblemNow(), p);
   for (size_t i = 0; i < spectrum_count_; ++i) p[spectrum_first_ + i] = s.w[i];
-  if (cost) *cost = s.ok ? (s.sse + s.roughness) / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+  if (cost)
+    *cost = s.ok ? (s.sse + s.roughness) / static_cast<double>(samples_)
+                 : std::numeric_limits<double>::infinity();
   return p;
 }
 
@@ -185,11 +195,13 @@ constexpr StrengthRule kSpectrumRule{.contiguous = false, .rmse_tolerance = 0.01
 
 double RecordFitness::SpectrumPenalty(std::span<const double> p) const {
   if (spectrum_count_ == 0 || spectrum_validation_.lambda == 0) return 0;
-  const Eigen::Map<const Eigen::VectorXd> w(p.data() + spectrum_first_, static_cast<Eigen::Index>(spectrum_count_));
+  const Eigen::Map<const Eigen::VectorXd> w(p.data() + spectrum_first_,
+                                            static_cast<Eigen::Index>(spectrum_count_));
   return spectrum_validation_.lambda * (spectrum_roughness_ * w).squaredNorm();
 }
 
-bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::ParameterMap& map, int threads) {
+bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::ParameterMap& map,
+                                       int threads) {
   if (spectrum_count_ == 0) return false;
   const size_t P = model_.params().size(), n = spectrum_count_;
   if (p0.size() != P || static_cast<size_t>(map.size()) != P)
@@ -201,7 +213,8 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
     y.clear();
     y.reserve(samples_);
     for (size_t i = 0; i < records_.size(); ++i)
-      for (size_t k = records_[i]->first_scored; k < records_[i]->end_scored; ++k) y.push_back(o.yhat[i][k]);
+      for (size_t k = records_[i]->first_scored; k < records_[i]->end_scored; ++k)
+        y.push_back(o.yhat[i][k]);
     return std::isfinite(o.mse);
   };
   std::vector<double> y0;
@@ -246,19 +259,24 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
     double sse = 0;
     size_t idx = 0;
     for (const io::Record* r : records_)
-      for (size_t k = r->first_scored; k < r->end_scored; ++k, ++idx) sse += (r->y[k] - y0[idx]) * (r->y[k] - y0[idx]);
-    const double dof = std::max<double>(1, static_cast<double>(samples_) - static_cast<double>(used.size()));
-    const Eigen::MatrixXd cov = (Ju.transpose() * Ju).completeOrthogonalDecomposition().pseudoInverse() * (sse / dof);
+      for (size_t k = r->first_scored; k < r->end_scored; ++k, ++idx)
+        sse += (r->y[k] - y0[idx]) * (r->y[k] - y0[idx]);
+    const double dof =
+        std::max<double>(1, static_cast<double>(samples_) - static_cast<double>(used.size()));
+    const Eigen::MatrixXd cov =
+        (Ju.transpose() * Ju).completeOrthogonalDecomposition().pseudoInverse() * (sse / dof);
     spectrum_sigma_.assign(n, std::numeric_limits<double>::infinity());
     for (size_t j = 0; j < used.size(); ++j) {
       const auto c = static_cast<size_t>(used[j]);
       if (c >= spectrum_first_ && c < spectrum_first_ + n)
-        spectrum_sigma_[c - spectrum_first_] = std::sqrt(std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
+        spectrum_sigma_[c - spectrum_first_] = std::sqrt(
+            std::max(0.0, cov(static_cast<Eigen::Index>(j), static_cast<Eigen::Index>(j))));
     }
   }
   const auto m = static_cast<Eigen::Index>(cols.size());
   Eigen::MatrixXd A(N, m);
-  for (Eigen::Index j = 0; j < m; ++j) A.col(j) = sign[static_cast<size_t>(j)] * J.col(cols[static_cast<size_t>(j)]);
+  for (Eigen::Index j = 0; j < m; ++j)
+    A.col(j) = sign[static_cast<size_t>(j)] * J.col(cols[static_cast<size_t>(j)]);
   const Eigen::Map<const Eigen::VectorXd> x0(p0.data(), static_cast<Eigen::Index>(P));
   Eigen::VectorXd t = J * x0;
   {
@@ -268,10 +286,11 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
         t(static_cast<Eigen::Index>(idx)) += r->y[k] - y0[idx];
   }
   const size_t K = kValidationBlocks;
-  BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
-                            std::vector<size_t>(K)};
+  BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K),
+                            std::vector<double>(K), std::vector<size_t>(K)};
   for (size_t b = 0; b < K; ++b) {
-    const auto from = static_cast<Eigen::Index>((b * samples_ + K - 1) / K);  // first index with index·K/N = b
+    const auto from =
+        static_cast<Eigen::Index>((b * samples_ + K - 1) / K);  // first index with index·K/N = b
     const auto to = static_cast<Eigen::Index>(((b + 1) * samples_ + K - 1) / K);
     const auto rows = A.middleRows(from, to - from);
     const auto tb = t.segment(from, to - from);
@@ -294,8 +313,8 @@ bool RecordFitness::RevalidateSpectrum(std::span<const double> p0, const opt::Pa
 
 WeightValidation RecordFitness::ValidateAt(std::span<const double> p) const {
   const size_t K = kValidationBlocks;
-  BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K), std::vector<double>(K),
-                            std::vector<size_t>(K)};
+  BlockedNormalEquations eq{std::vector<Eigen::MatrixXd>(K), std::vector<Eigen::VectorXd>(K),
+                            std::vector<double>(K), std::vector<size_t>(K)};
   Accumulate(p, eq);
   return ChoosePenalty(eq, penalties_, penalty_names_);
 }
@@ -332,7 +351,8 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
     std::vector<double>& reg = keep ? (*regs)[ri] : scratch;
     reg.resize(ue.size() * m);
     fam.Regressors(ue, reg);
-    if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its output
+    if (linear_output) {  // creep-spectrum: on each regressor, so the weights are solved for its
+                          // output
       model_.ApplyLinearOutputEffects(*r, p.subspan(nf), from, reg, m);
     }
     AddRecordRows(*r, from, reg, m, pol, builder);
@@ -340,7 +360,8 @@ void RecordFitness::Accumulate(std::span<const double> p, BlockedNormalEquations
   builder.Finish();
 }
 
-double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m, std::vector<double>& c) {
+double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m,
+                    std::vector<double>& c) {
   auto row = [&](size_t k) { return reg.data() + RegressorRow(k, from) * m; };
   double d = 0;
   c.assign(m, 0.0);
@@ -390,7 +411,8 @@ namespace {
 // A record's model output y (from the model's Simulate: ŷ without polarity and offset, and its rest
 // output) with polarity and the record's offset applied in place; its squared errors over the
 // scored window added to sse in sample order — Run's and EvaluateMany's one arithmetic.
-double ScoreRecord(const io::Record& r, int polarity, double rest_output, std::span<double> y, double& sse) {
+double ScoreRecord(const io::Record& r, int polarity, double rest_output, std::span<double> y,
+                   double& sse) {
   const double rest = polarity * rest_output;
   for (double& v : y) v *= polarity;
   const double o = RecordOffset(r, y, rest);
@@ -405,13 +427,15 @@ double ScoreRecord(const io::Record& r, int polarity, double rest_output, std::s
 }  // namespace
 
 double RecordFitness::MeanSquare(double sse) const {
-  return std::isfinite(sse) ? sse / static_cast<double>(samples_) : std::numeric_limits<double>::infinity();
+  return std::isfinite(sse) ? sse / static_cast<double>(samples_)
+                            : std::numeric_limits<double>::infinity();
 }
 
 opt::FitnessResult RecordFitness::Cost(double mse, std::span<const double> params) const {
   if (!std::isfinite(mse)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
   const double rough = SpectrumPenalty(params);
-  return {rough > 0 ? mse + rough / static_cast<double>(samples_) : mse, opt::FitnessStatus::kOk, ""};
+  return {rough > 0 ? mse + rough / static_cast<double>(samples_) : mse, opt::FitnessStatus::kOk,
+          ""};
 }
 
 RecordFitness::Output RecordFitness::Run(std::span<const double> params, bool keep_outputs) const {
@@ -455,7 +479,8 @@ void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::sp
   // each its own drive and output effects).
   std::vector<double> sse(L, 0.0), rest(L);
   std::vector<std::span<double>> ys(L);
-  thread_local std::vector<std::vector<double>> buffers;  // keep_outputs = false: as Run's, one per lane
+  thread_local std::vector<std::vector<double>>
+      buffers;  // keep_outputs = false: as Run's, one per lane
   if (buffers.size() < L) buffers.resize(L);
   for (size_t l = 0; l < L; ++l) out[l] = Output{};
   for (size_t i = 0; i < records_.size(); ++i) {
@@ -469,13 +494,15 @@ void RecordFitness::RunMany(std::span<const std::span<const double>> ps, std::sp
       }
     }
     model_.SimulateMany(*r, ps, r->end_scored, ys, rest, prepared_[i].get());
-    for (size_t l = 0; l < L; ++l) out[l].offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest[l], ys[l], sse[l]));
+    for (size_t l = 0; l < L; ++l)
+      out[l].offsets.push_back(ScoreRecord(*r, model_.scale().polarity, rest[l], ys[l], sse[l]));
   }
   for (size_t l = 0; l < L; ++l) out[l].mse = MeanSquare(sse[l]);
 }
 
 opt::FitnessResult RecordFitness::Evaluate(const opt::Genome& genome) const {
-  if (spectrum_solved_ && genome.reals.size() == searched_.size()) {  // the spectrum solved, not searched
+  if (spectrum_solved_ &&
+      genome.reals.size() == searched_.size()) {  // the spectrum solved, not searched
     double cost = 0;
     Expand(genome.reals, &cost);
     if (!std::isfinite(cost)) return {penalty_, opt::FitnessStatus::kPenalized, "diverged"};
@@ -502,22 +529,26 @@ std::vector<std::span<const double>> Reals(std::span<const opt::Genome* const> g
 
 void RecordFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
                                  std::span<opt::FitnessResult> out) const {
-  if (lanes() == 1) return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate each (a solved spectrum too)
+  if (lanes() == 1)
+    return FitnessFunction::EvaluateMany(genomes, out);  // Evaluate each (a solved spectrum too)
   const std::vector<std::span<const double>> ps = Reals(genomes);
   std::vector<Output> o(ps.size());
   RunMany(ps, o, /*keep_outputs=*/false);
   for (size_t l = 0; l < ps.size(); ++l) out[l] = Cost(o[l].mse, ps[l]);
 }
 
-bool RecordFitness::Residuals(std::span<const double> searched_or_all, std::vector<double>& r) const {
+bool RecordFitness::Residuals(std::span<const double> searched_or_all,
+                              std::vector<double>& r) const {
   std::vector<double> expanded;
-  if (spectrum_solved_ && searched_or_all.size() == searched_.size()) expanded = Expand(searched_or_all);
-  const std::span<const double> params = expanded.empty() ? searched_or_all : std::span<const double>(expanded);
+  if (spectrum_solved_ && searched_or_all.size() == searched_.size())
+    expanded = Expand(searched_or_all);
+  const std::span<const double> params =
+      expanded.empty() ? searched_or_all : std::span<const double>(expanded);
   return ResidualsOf(Run(params), params, r);
 }
 
-void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
-                                  std::span<bool> ok) const {
+void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps,
+                                  std::span<std::vector<double>> rs, std::span<bool> ok) const {
   if (lanes() == 1) {  // Residuals each (a solved spectrum's vectors expanded there)
     for (size_t l = 0; l < ps.size(); ++l) ok[l] = Residuals(ps[l], rs[l]);
     return;
@@ -527,17 +558,20 @@ void RecordFitness::ResidualsMany(std::span<const std::span<const double>> ps, s
   for (size_t l = 0; l < ps.size(); ++l) ok[l] = ResidualsOf(o[l], ps[l], rs[l]);
 }
 
-bool RecordFitness::ResidualsOf(const Output& o, std::span<const double> params, std::vector<double>& r) const {
+bool RecordFitness::ResidualsOf(const Output& o, std::span<const double> params,
+                                std::vector<double>& r) const {
   if (!std::isfinite(o.mse)) return false;
   r.clear();
   r.reserve(samples_);
   const double s = 1 / std::sqrt(static_cast<double>(samples_));
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record& rec = *records_[i];
-    for (size_t k = rec.first_scored; k < rec.end_scored; ++k) r.push_back((rec.y[k] - o.yhat[i][k]) * s);
+    for (size_t k = rec.first_scored; k < rec.end_scored; ++k)
+      r.push_back((rec.y[k] - o.yhat[i][k]) * s);
   }
   if (spectrum_count_ > 0 && spectrum_validation_.lambda > 0) {  // the roughness penalty's rows
-    const Eigen::Map<const Eigen::VectorXd> w(params.data() + spectrum_first_, static_cast<Eigen::Index>(spectrum_count_));
+    const Eigen::Map<const Eigen::VectorXd> w(params.data() + spectrum_first_,
+                                              static_cast<Eigen::Index>(spectrum_count_));
     const Eigen::VectorXd d = spectrum_roughness_ * w;
     const double f = std::sqrt(spectrum_validation_.lambda) * s;
     for (Eigen::Index i = 0; i < d.size(); ++i) r.push_back(f * d(i));
@@ -545,8 +579,9 @@ bool RecordFitness::ResidualsOf(const Output& o, std::span<const double> params,
   return true;
 }
 
-RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params, std::span<const double> weights,
-                       const io::Record& r, std::vector<double>* yhat_out) {
+RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
+                       std::span<const double> weights, const io::Record& r,
+                       std::vector<double>* yhat_out) {
   std::vector<double> y(r.end_scored);
   const double rest = model.scale().polarity * model.Simulate(r, params, weights, r.end_scored, y);
   for (double& v : y) v *= model.scale().polarity;
@@ -590,7 +625,8 @@ class RecordResidualFitness final : public opt::FitnessFunction {
   }
   // The records fitness's lanes: a Jacobian's columns side by side, each Evaluate's bit for bit.
   int lanes() const override { return fitness_.lanes(); }
-  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override {
+  void EvaluateMany(std::span<const opt::Genome* const> genomes,
+                    std::span<opt::FitnessResult> out) const override {
     std::vector<std::vector<double>> rs(genomes.size());
     const std::unique_ptr<bool[]> ok(new bool[genomes.size()]);
     fitness_.ResidualsMany(Reals(genomes), rs, std::span<bool>(ok.get(), genomes.size()));
@@ -622,22 +658,26 @@ SearchBudget SizedSearchBudget(size_t searched) {
 }
 
 SearchBudget BudgetOf(const opt::SearchOptions& s) {
-  return {s.pso.particles, s.pso.iterations, s.pso.stall_iterations, s.repetitions, s.pso.converged_spread};
+  return {s.pso.particles, s.pso.iterations, s.pso.stall_iterations, s.repetitions,
+          s.pso.converged_spread};
 }
 
 std::string SearchBudget::Describe() const {
-  std::string s = "PSO " + std::to_string(particles) + " particles × ≤ " + std::to_string(iterations) +
-                  " iterations, stall " + std::to_string(stall);
+  std::string s = "PSO " + std::to_string(particles) + " particles × ≤ " +
+                  std::to_string(iterations) + " iterations, stall " + std::to_string(stall);
   if (converged_spread > 0) s += ", converged at a spread of " + io::FormatNumber(converged_spread);
-  return s + ", " + std::to_string(repetitions) + (repetitions == 1 ? " repetition" : " repetitions");
+  return s + ", " + std::to_string(repetitions) +
+         (repetitions == 1 ? " repetition" : " repetitions");
 }
 
-FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options) {
+FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
+                   const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   auto train = set.WithRole(model::CaseRole::kTrain);
   if (train.empty()) throw InputError(set.source.string() + ": no record has the role 'train'");
   if (options.threads < 1) throw InputError(FieldError("threads", options.threads, "must be >= 1"));
-  if (const std::string e = RateCoverageError(set, model->effects()); !e.empty()) throw InputError(e);
+  if (const std::string e = RateCoverageError(set, model->effects()); !e.empty())
+    throw InputError(e);
   RecordFitness fitness(*model, train);
   FitResult res;
   res.model = model;
@@ -652,7 +692,8 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       opt::ParamBox box;
       units.clear();
       for (size_t i = 0; i < params.size(); ++i) {
-        if (only_searched && std::find(searched.begin(), searched.end(), i) == searched.end()) continue;
+        if (only_searched && std::find(searched.begin(), searched.end(), i) == searched.end())
+          continue;
         const ParamInfo& p = params[i];
         box.names.push_back(p.name);
         box.lower.push_back(p.lower);
@@ -689,8 +730,8 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     const FitOptions::Sizing& k = options.sizing;
     opt::SearchOptions& so = fo.search_options;
     if (k.enabled && so.algorithm == opt::SearchAlgorithm::kPso) {
-      if (searched.size() == 1 && !k.keep_algorithm && !k.keep_particles && !k.keep_iterations && !k.keep_stall &&
-          !k.keep_repetitions) {
+      if (searched.size() == 1 && !k.keep_algorithm && !k.keep_particles && !k.keep_iterations &&
+          !k.keep_stall && !k.keep_repetitions) {
         so.algorithm = opt::SearchAlgorithm::kLine;  // one bounded scalar: a grid, then Brent
         so.repetitions = 1;
       } else {
@@ -706,25 +747,30 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       so.repetitions = 1;  // asked for by name: its one repetition
     }
     if (k.line_given && so.algorithm != opt::SearchAlgorithm::kLine)
-      throw InputError("--line-grid / --line-brackets / --line-tolerance: the line search's budget, for a search of one "
-                       "parameter with the sized budget; this fit searches " + std::to_string(searched.size()) +
-                       " parameter" + (searched.size() == 1 ? "" : "s") + " by " +
-                       opt::SearchAlgorithmName(so.algorithm) +
-                       (searched.size() == 1 ? " (--algorithm or a PSO budget flag was given)" : ""));
+      throw InputError(
+          "--line-grid / --line-brackets / --line-tolerance: the line search's budget, for a "
+          "search of one "
+          "parameter with the sized budget; this fit searches " +
+          std::to_string(searched.size()) + " parameter" + (searched.size() == 1 ? "" : "s") +
+          " by " + opt::SearchAlgorithmName(so.algorithm) +
+          (searched.size() == 1 ? " (--algorithm or a PSO budget flag was given)" : ""));
     res.algorithm = so.algorithm;
     res.line = so.line;
     res.budget = BudgetOf(fo.search_options);
-    fo.polish_repetitions = options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
-    fo.concurrent_polishes = true;  // each polish its own ThreadPoolEvaluator over the const fitness
+    fo.polish_repetitions =
+        options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
+    fo.concurrent_polishes =
+        true;  // each polish its own ThreadPoolEvaluator over the const fitness
     if (options.progress) {
       const bool line = so.algorithm == opt::SearchAlgorithm::kLine;
       const int grid = so.line.grid;
       fo.search_options.on_progress = [&options, line, grid](const opt::SearchProgress& p) {
         if (p.iteration % 25 != 0) return;
-        const std::string where = !line ? "search repetition " + std::to_string(p.repetition) + " iteration " +
-                                              std::to_string(p.iteration)
-                                  : p.iteration == 0 ? "line search, the grid of " + std::to_string(grid)
-                                                     : "line search, Brent step " + std::to_string(p.iteration);
+        const std::string where = !line ? "search repetition " + std::to_string(p.repetition) +
+                                              " iteration " + std::to_string(p.iteration)
+                                  : p.iteration == 0
+                                      ? "line search, the grid of " + std::to_string(grid)
+                                      : "line search, Brent step " + std::to_string(p.iteration);
         options.progress(where + ": best MSE " + io::FormatNumber(p.overall_best_cost));
       };
     }
@@ -734,7 +780,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       fo.lm.central = false;
       fo.lm.central_to_finish = so.algorithm != opt::SearchAlgorithm::kLine;
     }
-    res.lm_differences = fo.lm.central ? "central" : fo.lm.central_to_finish ? "forward-central" : "forward";
+    res.lm_differences = fo.lm.central             ? "central"
+                         : fo.lm.central_to_finish ? "forward-central"
+                                                   : "forward";
     if (!options.polish_from.empty()) {  // no search: the polish from these physical values
       if (options.polish_from.size() != params.size())
         throw InputError(FieldError("polish_from", options.polish_from.size(),
@@ -744,8 +792,10 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       fo.search = false;
       if (searched_map) fo.starts = {searched_map->ToUnit(sp)};
     }
-    for (const std::vector<double>& u : options.extra_starts) {  // unit coordinates of every parameter
-      if (u.size() != params.size()) throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
+    for (const std::vector<double>& u :
+         options.extra_starts) {  // unit coordinates of every parameter
+      if (u.size() != params.size())
+        throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
       std::vector<double> su;
       for (size_t i : searched) su.push_back(u[i]);
       fo.starts.push_back(std::move(su));
@@ -795,8 +845,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       best = solved ? fitness.Expand(best_searched) : best_searched;
     }
     if (solved && options.uncertainty)
-      res.uncertainty = opt::ComputeUncertainty(map, problem.physical_residuals, best, options.threads,
-                                                options.lm.fd_step, problem.residual_weight);
+      res.uncertainty =
+          opt::ComputeUncertainty(map, problem.physical_residuals, best, options.threads,
+                                  options.lm.fd_step, problem.residual_weight);
   }
   const RecordFitness::Output out = fitness.Run(best);
   if (!std::isfinite(out.mse)) {
@@ -841,10 +892,13 @@ std::string FitResult::SpectrumIdentification() const {
     names += (names.empty() ? "" : ", ") + box[first + i].name;
     sigmas += (sigmas.empty() ? "" : ", ") + FormatG(spectrum_sigma[i], 2);
   }
-  return "the training excitation does not identify the creep spectrum's " + names + " (σ " + sigmas +
-         " from the training records alone, above the mean fitted weight " + FormatG(mean, 2) +
-         "): the roughness penalty holds them to their neighbours, and what they add to a withheld prediction "
-         "is extrapolated (fast relaxations need steps and holds at several amplitudes in the training drive, "
+  return "the training excitation does not identify the creep spectrum's " + names + " (σ " +
+         sigmas + " from the training records alone, above the mean fitted weight " +
+         FormatG(mean, 2) +
+         "): the roughness penalty holds them to their neighbours, and what they add to a withheld "
+         "prediction "
+         "is extrapolated (fast relaxations need steps and holds at several amplitudes in the "
+         "training drive, "
          "slow ones a record several times longer than their time)";
 }
 

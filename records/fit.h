@@ -4,9 +4,9 @@
 // global search (PSO / real GA / binary GA / DE of opt/param_search.h, through the evaluator seam:
 // threads here, the service's workers with --master), a bounded Levenberg–Marquardt polish (its
 // Jacobians one batch of a residual evaluator, threads here) and the uncertainty table (σ,
-// sensitivity, identifiability, singular values) at the solution. A linear-in-parameters family (the
-// Prandtl–Ishlinskii operator) has its weights solved exactly by non-negative least squares inside
-// every evaluation (variable projection), so only effect parameters are searched.
+// sensitivity, identifiability, singular values) at the solution. A linear-in-parameters family
+// (the Prandtl–Ishlinskii operator) has its weights solved exactly by non-negative least squares
+// inside every evaluation (variable projection), so only effect parameters are searched.
 //
 // Deterministic: the result is a function of (records, model, options) alone, bit for bit,
 // whatever the evaluator or its thread count.
@@ -37,7 +37,8 @@ Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::V
 /// columns; row 0 at rest, before it the rest row): c (m values: the means over the scored window,
 /// the rest row, or zeros) and, returned, d from the measured output (its mean over the scored
 /// window, or the given offset).
-double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m, std::vector<double>& c);
+double RecordCentre(const io::Record& r, size_t from, std::span<const double> reg, size_t m,
+                    std::vector<double>& c);
 /// Adds the scored samples of record r to `builder`: the rows pol · (reg row − c) with target y − d
 /// (RecordCentre).
 void AddRecordRows(const io::Record& r, size_t from, std::span<const double> reg, size_t m, int pol,
@@ -56,7 +57,8 @@ class RecordFitness final : public opt::FitnessFunction {
   /// its own drive and output effects): that many genomes at once, each with Evaluate's result bit
   /// for bit.
   int lanes() const override;
-  void EvaluateMany(std::span<const opt::Genome* const> genomes, std::span<opt::FitnessResult> out) const override;
+  void EvaluateMany(std::span<const opt::Genome* const> genomes,
+                    std::span<opt::FitnessResult> out) const override;
 
   /// Everything about one parameter vector: the weights of a linear family (solved), each record's
   /// output (polarity and offset applied) and offset, the mean squared error. Non-finite output
@@ -72,12 +74,14 @@ class RecordFitness final : public opt::FitnessFunction {
   Output Run(std::span<const double> params, bool keep_outputs = true) const;
   /// Run for several parameter vectors, side by side in lanes() (out[l] = Run(ps[l], keep_outputs)
   /// bit for bit).
-  void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out, bool keep_outputs = true) const;
+  void RunMany(std::span<const std::span<const double>> ps, std::span<Output> out,
+               bool keep_outputs = true) const;
   /// The residuals (measured − model) over the scored samples of every record, divided by √N so
   /// that their sum of squares is the MSE; false if the output is not finite. `params`: every
   /// parameter, or the searched ones where spectrum_solved() (the spectrum's weights solved).
   bool Residuals(std::span<const double> params, std::vector<double>& r) const;
-  /// Residuals for several parameter vectors side by side (ok[l] = Residuals(ps[l], rs[l]), bit for bit).
+  /// Residuals for several parameter vectors side by side (ok[l] = Residuals(ps[l], rs[l]), bit for
+  /// bit).
   void ResidualsMany(std::span<const std::span<const double>> ps, std::span<std::vector<double>> rs,
                      std::span<bool> ok) const;
 
@@ -89,8 +93,8 @@ class RecordFitness final : public opt::FitnessFunction {
   const WeightValidation& validation() const { return validation_; }
   /// Re-chooses the penalty and its strength by the same validation with the effects at `params` (a
   /// fit's solution: effects far from neutral — a creep, a lag — make the neutral model's misfit
-  /// look like noise and its validation choose too strong a strength); true when either changed. Not
-  /// thread-safe: call between fits.
+  /// look like noise and its validation choose too strong a strength); true when either changed.
+  /// Not thread-safe: call between fits.
   bool Revalidate(std::span<const double> params);
   /// A model with `creep-spectrum`: the strength μ of its weights' roughness penalty
   /// μ ‖D w‖² (records/regularisation.h SpectrumRoughness; added to the sum of squared errors, so
@@ -99,11 +103,13 @@ class RecordFitness final : public opt::FitnessFunction {
   const WeightValidation& spectrum_validation() const { return spectrum_validation_; }
   /// Chooses μ by the blocked cross-validation of records/regularisation.h on the training
   /// records, linearised at `params` (a fit's solution): the output's Jacobian J with respect to
-  /// every searched parameter (opt::ScaledJacobian over `map`, the fit's box; a linear family's weights re-solved inside,
-  /// so its columns carry the trade-off with the loop's shape), the step p from `params` solved
-  /// per left-out block as min ‖J p − (r + J p₀)‖² + μ ‖D w‖² with the spectrum's weights ≥ 0 and
-  /// the other parameters free. True when μ changed. Not thread-safe: call between fits.
-  bool RevalidateSpectrum(std::span<const double> params, const opt::ParameterMap& map, int threads);
+  /// every searched parameter (opt::ScaledJacobian over `map`, the fit's box; a linear family's
+  /// weights re-solved inside, so its columns carry the trade-off with the loop's shape), the step
+  /// p from `params` solved per left-out block as min ‖J p − (r + J p₀)‖² + μ ‖D w‖² with the
+  /// spectrum's weights ≥ 0 and the other parameters free. True when μ changed. Not thread-safe:
+  /// call between fits.
+  bool RevalidateSpectrum(std::span<const double> params, const opt::ParameterMap& map,
+                          int threads);
   /// The standard error of each spectrum weight from the training records alone (no penalty), at
   /// the last RevalidateSpectrum's point: s² (JᵀJ)⁺ of the same linearisation, s² = Σ r² / (N − p).
   /// Empty before it.
@@ -126,7 +132,8 @@ class RecordFitness final : public opt::FitnessFunction {
  private:
   /// `regs` (optional): each record's regressors, kept for the output when no linear output effect
   /// changes them (else untouched).
-  std::vector<double> SolveWeights(std::span<const double> params, std::vector<std::vector<double>>* regs = nullptr) const;
+  std::vector<double> SolveWeights(std::span<const double> params,
+                                   std::vector<std::vector<double>>* regs = nullptr) const;
   WeightValidation ValidateAt(std::span<const double> params) const;
   /// The family's parameters at 0, each effect's at 0 or, outside its box, at its lower bound.
   std::vector<double> NeutralParams() const;
@@ -140,7 +147,8 @@ class RecordFitness final : public opt::FitnessFunction {
   bool ResidualsOf(const Output& o, std::span<const double> params, std::vector<double>& r) const;
   /// The MSE of a sum of squared errors over the scored samples (+inf when not finite).
   double MeanSquare(double sse) const;
-  /// Evaluate's result for an MSE at `params` (the spectrum's penalty added; a penalty when not finite).
+  /// Evaluate's result for an MSE at `params` (the spectrum's penalty added; a penalty when not
+  /// finite).
   opt::FitnessResult Cost(double mse, std::span<const double> params) const;
   const RecordModel& model_;
   std::vector<const io::Record*> records_;
@@ -154,8 +162,9 @@ class RecordFitness final : public opt::FitnessFunction {
   /// weights at the neutral parameters (empty: from 0).
   Eigen::VectorXd weights_start_;
   WeightValidation validation_;
-  size_t spectrum_first_ = 0, spectrum_count_ = 0;  ///< the creep spectrum's weights in params (count 0: none)
-  Eigen::MatrixXd spectrum_roughness_;               ///< D
+  size_t spectrum_first_ = 0,
+         spectrum_count_ = 0;           ///< the creep spectrum's weights in params (count 0: none)
+  Eigen::MatrixXd spectrum_roughness_;  ///< D
   WeightValidation spectrum_validation_;
   std::vector<double> spectrum_sigma_;
   bool spectrum_solved_ = false;
@@ -171,20 +180,20 @@ struct RecordMetrics {
   std::string name;
   model::CaseRole role = model::CaseRole::kTrain;
   size_t samples = 0;
-  double rmse = 0;       ///< [response unit]
-  double max_abs = 0;    ///< largest |error|
-  double max_at_s = 0;   ///< the record's time of the largest |error| [s] (the first, on ties)
+  double rmse = 0;      ///< [response unit]
+  double max_abs = 0;   ///< largest |error|
+  double max_at_s = 0;  ///< the record's time of the largest |error| [s] (the first, on ties)
   double nrmse_pct =
-      0;  ///< RMSE / measured range over the window × 100; infinite when the range is 0
-  double range = 0;      ///< measured max − min over the window
-  double offset = 0;     ///< the offset used
+      0;             ///< RMSE / measured range over the window × 100; infinite when the range is 0
+  double range = 0;  ///< measured max − min over the window
+  double offset = 0;  ///< the offset used
 };
 
-/// The default global search of `piezoid fit`, sized by the number of parameters the search actually
-/// searches (a linear family's weights are solved in every evaluation, so with effects only the
-/// effects' parameters are searched): a one-parameter search needs neither a swarm of 30 nor 150
-/// iterations, and a swarm that has collapsed onto its best has converged (the polish does the
-/// rest). d searched parameters:
+/// The default global search of `piezoid fit`, sized by the number of parameters the search
+/// actually searches (a linear family's weights are solved in every evaluation, so with effects
+/// only the effects' parameters are searched): a one-parameter search needs neither a swarm of 30
+/// nor 150 iterations, and a swarm that has collapsed onto its best has converged (the polish does
+/// the rest). d searched parameters:
 ///
 ///   particles   = min(30, 10 + 5 (d − 1))        10, 15, 20, 25, 30 …
 ///   iterations  = min(150, 30 + 30 (d − 1))      30, 60, 90, 120, 150 …
@@ -195,8 +204,8 @@ struct RecordMetrics {
 /// One searched parameter (d = 1) takes the line search instead of a swarm (opt::SearchAlgorithm::
 /// kLine: a grid of 17 points over its range, one batch, then the grid's lowest two local minima
 /// refined by Brent's method side by side to 1e-4 of the range; no random choice): the cost of one
-/// bounded scalar (a delay) is cheap to bracket, and ≈ 40 evaluations find what a swarm of 10 × ≤ 30 × 2
-/// finds in ≈ 460 (docs/performance.md, "One searched parameter: a line search").
+/// bounded scalar (a delay) is cheap to bracket, and ≈ 40 evaluations find what a swarm of 10 × ≤
+/// 30 × 2 finds in ≈ 460 (docs/performance.md, "One searched parameter: a line search").
 ///
 /// docs/performance.md, "The 10 s target on the 150 V recording".
 struct SearchBudget {
@@ -210,7 +219,8 @@ SearchBudget SizedSearchBudget(size_t searched);
 SearchBudget BudgetOf(const opt::SearchOptions& search);
 
 /// Builds the evaluator of a global search (null = a thread pool of `threads`).
-using RecordEvaluatorFactory = std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&)>;
+using RecordEvaluatorFactory =
+    std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&)>;
 
 struct FitOptions {
   std::string family = "backlash-like";
@@ -230,14 +240,16 @@ struct FitOptions {
   /// search is the line search of `search.line` (its repetitions 1).
   struct Sizing {
     bool enabled = false;
-    bool keep_particles = false, keep_iterations = false, keep_stall = false, keep_repetitions = false;
+    bool keep_particles = false, keep_iterations = false, keep_stall = false,
+         keep_repetitions = false;
     bool keep_algorithm = false;  ///< `--algorithm` given (pso stays pso)
     /// The line search's budget was given (`--line-grid` …): an error where it is not the search.
     bool line_given = false;
   } sizing;
-  bool polish = true;   ///< Levenberg–Marquardt after the search
-  /// Polish also each other repetition's best, keeping the lowest (opt::FitOptions::polish_repetitions:
-  /// a better basin replaces the search's best's polish only by more than 1e-4 of its cost).
+  bool polish = true;  ///< Levenberg–Marquardt after the search
+  /// Polish also each other repetition's best, keeping the lowest
+  /// (opt::FitOptions::polish_repetitions: a better basin replaces the search's best's polish only
+  /// by more than 1e-4 of its cost).
   bool polish_repetitions = false;
   opt::LmOptions lm{.max_iterations = 60, .fd_step = 1e-4};
   /// The polish's differences chosen by the search (`--lm-differences auto`): forward throughout
@@ -264,9 +276,10 @@ struct FitOptions {
 
 struct FitResult {
   std::shared_ptr<RecordModel> model;
-  std::vector<double> params;    ///< physical values, model().params() order
-  std::vector<double> weights;   ///< linear family: the solved weights
-  WeightValidation regularisation;  ///< a regularised linear family: the strength and its validation
+  std::vector<double> params;   ///< physical values, model().params() order
+  std::vector<double> weights;  ///< linear family: the solved weights
+  WeightValidation
+      regularisation;  ///< a regularised linear family: the strength and its validation
   /// preisach with FamilyOptions::pi_operators = kAutoLevels: the levels chosen by validation
   /// (records/preisach_family.h ChoosePreisachLevels); unused otherwise.
   ResolutionChoice resolution;
@@ -279,9 +292,9 @@ struct FitResult {
   std::string SpectrumIdentification() const;
   double train_mse = 0;
   double train_sse = 0;
-  std::vector<RecordMetrics> metrics;              ///< every record of the set, set order
-  std::vector<std::vector<double>> yhat;           ///< every record: the model output [0, end_scored)
-  opt::SearchResult search;                        ///< empty when nothing was searched
+  std::vector<RecordMetrics> metrics;     ///< every record of the set, set order
+  std::vector<std::vector<double>> yhat;  ///< every record: the model output [0, end_scored)
+  opt::SearchResult search;               ///< empty when nothing was searched
   /// The global search as run (records of it in fit.json and report.md): the PSO budget, whether it
   /// was sized, for how many searched parameters; the polishes run and the one kept.
   opt::SearchAlgorithm algorithm = opt::SearchAlgorithm::kPso;
@@ -296,10 +309,11 @@ struct FitResult {
   bool budget_sized = false;
   size_t searched_parameters = 0;
   int polishes = 0;
-  int best_polish_repetition = -1;  ///< the repetition whose best the kept polish started from (−1: other)
+  int best_polish_repetition =
+      -1;  ///< the repetition whose best the kept polish started from (−1: other)
   std::string polish_message;
   int lm_iterations = 0;
-  int64_t evaluations = 0;                         ///< search and polish
+  int64_t evaluations = 0;  ///< search and polish
   /// σ, sensitivity (RMS change of the output, response unit, per scale: the unit range of a
   /// linear parameter, ∂x/∂u of a log-scaled one), identifiability, singular values, weakest
   /// direction; empty without options.uncertainty or parameters. Its evaluations are its own.
@@ -316,10 +330,12 @@ struct FitResult {
 /// from there).
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options);
 /// The same for a given model (its scale already measured).
-FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model, const FitOptions& options);
+FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
+                   const FitOptions& options);
 
 /// Evaluates a fitted model on any record (output with polarity and offset, metrics).
-RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params, std::span<const double> weights,
-                       const io::Record& r, std::vector<double>* yhat = nullptr);
+RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
+                       std::span<const double> weights, const io::Record& r,
+                       std::vector<double>* yhat = nullptr);
 
 }  // namespace pz::records

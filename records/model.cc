@@ -45,13 +45,16 @@ EffectKind ParseEffect(std::string_view name) {
   for (const auto& n : EffectNames()) known += (known.empty() ? "" : ", ") + n;
   if (e != nullptr) {
     throw InputError("effect '" + std::string(name) + "' acts on the beam (" + e->title() +
-                     "): it runs on the bimorph-fin bench's beam (`piezoid diagnose --cases`); records families, "
-                     "bimorph-fin included, take drive and output effects only (effects: " + known + ")");
+                     "): it runs on the bimorph-fin bench's beam (`piezoid diagnose --cases`); "
+                     "records families, "
+                     "bimorph-fin included, take drive and output effects only (effects: " +
+                     known + ")");
   }
   throw InputError("effect '" + std::string(name) + "' is unknown (effects: " + known + ")");
 }
 
-RecordModel::RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects, const DataScale& scale)
+RecordModel::RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects,
+                         const DataScale& scale)
     : family_(std::move(family)), effects_(std::move(effects)), scale_(scale) {
   std::sort(effects_.begin(), effects_.end());
   if (std::adjacent_find(effects_.begin(), effects_.end()) != effects_.end()) {
@@ -80,17 +83,20 @@ std::string RecordModel::Describe() const {
 std::pair<size_t, size_t> RecordModel::EffectParams(EffectKind e) const {
   for (size_t i = 0; i < effects_.size(); ++i) {
     if (effects_[i] != e) continue;
-    const size_t end = i + 1 < effects_.size() ? effect_offset_[i + 1] : params_.size() - family_param_count();
+    const size_t end =
+        i + 1 < effects_.size() ? effect_offset_[i + 1] : params_.size() - family_param_count();
     return {family_param_count() + effect_offset_[i], end - effect_offset_[i]};
   }
   return {0, 0};
 }
 
-void RecordModel::EffectiveDrive(const io::Record& r, std::span<const double> ep, size_t from, size_t end,
-                                 std::vector<double>& ue) const {
-  ue.assign(r.u.begin() + static_cast<std::ptrdiff_t>(from), r.u.begin() + static_cast<std::ptrdiff_t>(end));
+void RecordModel::EffectiveDrive(const io::Record& r, std::span<const double> ep, size_t from,
+                                 size_t end, std::vector<double>& ue) const {
+  ue.assign(r.u.begin() + static_cast<std::ptrdiff_t>(from),
+            r.u.begin() + static_cast<std::ptrdiff_t>(end));
   for (size_t i = 0; i < defs_.size(); ++i)
-    if (defs_[i]->stage() == model::EffectStage::kDrive) defs_[i]->ApplyDrive(ep.subspan(effect_offset_[i]), r.dt, ue);
+    if (defs_[i]->stage() == model::EffectStage::kDrive)
+      defs_[i]->ApplyDrive(ep.subspan(effect_offset_[i]), r.dt, ue);
 }
 
 void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double> ep, size_t,
@@ -98,9 +104,11 @@ void RecordModel::ApplyOutputEffects(const io::Record& r, std::span<const double
   if (y.empty()) return;
   // Time from the window's start on the record's uniform grid (the same wherever the record is cut:
   // the service's workers receive it without its leading rest).
-  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored), scale_.y_half, scale_.duration};
+  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored), scale_.y_half,
+                                 scale_.duration};
   for (size_t i = 0; i < defs_.size(); ++i)
-    if (defs_[i]->stage() == model::EffectStage::kOutput) defs_[i]->ApplyOutput(ep.subspan(effect_offset_[i]), frame, y);
+    if (defs_[i]->stage() == model::EffectStage::kOutput)
+      defs_[i]->ApplyOutput(ep.subspan(effect_offset_[i]), frame, y);
 }
 
 namespace {
@@ -123,12 +131,13 @@ bool RecordModel::has_linear_output_effects() const {
   return any;
 }
 
-void RecordModel::ApplyLinearOutputEffects(const io::Record& r, std::span<const double> ep, size_t from,
-                                           std::span<double> reg, size_t m) const {
+void RecordModel::ApplyLinearOutputEffects(const io::Record& r, std::span<const double> ep,
+                                           size_t from, std::span<double> reg, size_t m) const {
   if (m == 0 || reg.empty()) return;
   const size_t n = reg.size() / m;
-  const model::OutputFrame frame{r.dt, static_cast<double>(r.first_scored) - static_cast<double>(from), scale_.y_half,
-                                 scale_.duration};
+  const model::OutputFrame frame{r.dt,
+                                 static_cast<double>(r.first_scored) - static_cast<double>(from),
+                                 scale_.y_half, scale_.duration};
   std::vector<double> col(n);
   ForLeadingLinearOutput(defs_, [&](size_t i) {
     for (size_t j = 0; j < m; ++j) {
@@ -143,7 +152,8 @@ size_t SimulatedFrom(const io::Record& r, size_t end) {
   return std::min(std::max<size_t>(r.rest_samples, 1) - 1, end >= 2 ? end - 2 : 0);
 }
 
-std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r, size_t end) const {
+std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r,
+                                                             size_t end) const {
   if (family_->linear() || end > r.size() || end == 0) return nullptr;
   for (const model::EffectDef* e : defs_)
     if (e->stage() == model::EffectStage::kDrive) return nullptr;
@@ -151,19 +161,22 @@ std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r
   return family_->Prepare(std::span<const double>(r.u).subspan(from, end - from), r.dt);
 }
 
-double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
-                             size_t end, std::span<double> yhat, const Family::Prepared* prepared) const {
+double RecordModel::Simulate(const io::Record& r, std::span<const double> p,
+                             std::span<const double> weights, size_t end, std::span<double> yhat,
+                             const Family::Prepared* prepared) const {
   if (!family_->linear()) {
     double rest = 0;
-    SimulateMany(r, std::span<const std::span<const double>>(&p, 1), end, std::span<const std::span<double>>(&yhat, 1),
-                 std::span<double>(&rest, 1), prepared);
+    SimulateMany(r, std::span<const std::span<const double>>(&p, 1), end,
+                 std::span<const std::span<double>>(&yhat, 1), std::span<double>(&rest, 1),
+                 prepared);
     return rest;
   }
   if (p.size() != params_.size()) {
     throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
                      std::to_string(params_.size()) + " expected");
   }
-  if (yhat.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::Simulate: bad end");
+  if (yhat.size() < end || end > r.size() || end == 0)
+    throw InputError("RecordModel::Simulate: bad end");
   const size_t nf = family_->params().size();
   const size_t from = SimulatedFrom(r, end);
   std::vector<double> ue;
@@ -173,12 +186,14 @@ double RecordModel::Simulate(const io::Record& r, std::span<const double> p, std
   return LinearOutput(r, p, weights, end, reg, yhat);
 }
 
-void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<const double>> ps, size_t end,
-                               std::span<const std::span<double>> yhats, std::span<double> rest,
-                               const Family::Prepared* prepared) const {
-  if (family_->linear()) throw InputError(Describe() + ": SimulateMany is for a family with searched parameters");
+void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<const double>> ps,
+                               size_t end, std::span<const std::span<double>> yhats,
+                               std::span<double> rest, const Family::Prepared* prepared) const {
+  if (family_->linear())
+    throw InputError(Describe() + ": SimulateMany is for a family with searched parameters");
   const size_t L = ps.size();
-  if (yhats.size() != L || rest.size() != L) throw InputError("RecordModel::SimulateMany: one output per parameter vector");
+  if (yhats.size() != L || rest.size() != L)
+    throw InputError("RecordModel::SimulateMany: one output per parameter vector");
   for (const std::span<const double> p : ps) {
     if (p.size() != params_.size()) {
       throw InputError(Describe() + ": " + std::to_string(p.size()) + " parameters given, " +
@@ -186,7 +201,8 @@ void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<co
     }
   }
   for (const std::span<double> y : yhats)
-    if (y.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::SimulateMany: bad end");
+    if (y.size() < end || end > r.size() || end == 0)
+      throw InputError("RecordModel::SimulateMany: bad end");
   const size_t nf = family_->params().size();
   const size_t from = SimulatedFrom(r, end);
   // Per lane: the family's parameters, its segment [from, end), and (drive effects) its own drive.
@@ -199,10 +215,12 @@ void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<co
     fp[l] = ps[l].first(nf);
     segs[l] = yhats[l].subspan(from, end - from);
   }
-  const bool drive = std::any_of(defs_.begin(), defs_.end(),
-                                 [](const model::EffectDef* e) { return e->stage() == model::EffectStage::kDrive; });
+  const bool drive = std::any_of(defs_.begin(), defs_.end(), [](const model::EffectDef* e) {
+    return e->stage() == model::EffectStage::kDrive;
+  });
   if (!drive) {
-    family_->SimulatePreparedMany(prepared, fp, std::span<const double>(r.u).subspan(from, end - from), r.dt, segs);
+    family_->SimulatePreparedMany(
+        prepared, fp, std::span<const double>(r.u).subspan(from, end - from), r.dt, segs);
   } else {
     if (ue.size() < L) ue.resize(L);
     us.resize(L);
@@ -219,13 +237,16 @@ void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<co
   }
 }
 
-double RecordModel::LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights,
-                                 size_t end, std::span<const double> reg, std::span<double> yhat) const {
+double RecordModel::LinearOutput(const io::Record& r, std::span<const double> p,
+                                 std::span<const double> weights, size_t end,
+                                 std::span<const double> reg, std::span<double> yhat) const {
   const size_t m = family_->regressors(), nf = family_->params().size();
   if (weights.size() != m) throw InputError(family_->name() + ": weights not solved");
-  if (yhat.size() < end || end > r.size() || end == 0) throw InputError("RecordModel::LinearOutput: bad end");
+  if (yhat.size() < end || end > r.size() || end == 0)
+    throw InputError("RecordModel::LinearOutput: bad end");
   const size_t from = SimulatedFrom(r, end);
-  if (reg.size() != (end - from) * m) throw InputError("RecordModel::LinearOutput: regressor size mismatch");
+  if (reg.size() != (end - from) * m)
+    throw InputError("RecordModel::LinearOutput: regressor size mismatch");
   std::span<double> seg = yhat.subspan(from, end - from);
   for (size_t k = 0; k < seg.size(); ++k) {
     double acc = 0;
@@ -240,8 +261,10 @@ double RecordModel::LinearOutput(const io::Record& r, std::span<const double> p,
 
 double RecordOffset(const io::Record& r, std::span<const double> y, double rest_output) {
   switch (r.offset_mode) {
-    case io::OffsetMode::kFixed: return r.offset;
-    case io::OffsetMode::kRest: return r.offset - rest_output;
+    case io::OffsetMode::kFixed:
+      return r.offset;
+    case io::OffsetMode::kRest:
+      return r.offset - rest_output;
     case io::OffsetMode::kFit: {
       double s = 0;
       for (size_t k = r.first_scored; k < r.end_scored; ++k) s += r.y[k] - y[k];

@@ -3,9 +3,9 @@
 //
 // Effects: the one library's (model/effect_library.h) drive and output effects — driver-lowpass,
 // quadratic-drive, creep, delay (drive, before the family), creep-spectrum, friction, stiffening,
-// drift (output, after it) — with ranges scaled to the data; zero magnitude is the identity. A model applies them in
-// the library's chain order through EffectDef::ApplyDrive / ApplyOutput. Beam effects
-// (hinge-friction, cubic-stiffening) need a plant with a beam (the bimorph fin of `piezoid
+// drift (output, after it) — with ranges scaled to the data; zero magnitude is the identity. A
+// model applies them in the library's chain order through EffectDef::ApplyDrive / ApplyOutput. Beam
+// effects (hinge-friction, cubic-stiffening) need a plant with a beam (the bimorph fin of `piezoid
 // diagnose`); a records family has none, and ParseEffect says so.
 // Offsets (io::OffsetMode): ŷ_total = polarity · ŷ + o with o the least-squares offset over the
 // scored window (fit), the measured rest level minus the model's rest output (rest: the family's
@@ -39,7 +39,8 @@ struct EffectInfo {
   std::string title;
   std::string equation;
   std::vector<ParamInfo> params;  ///< scaled to the data; params[0] is the magnitude
-  std::string unsupported;        ///< why the data cannot support it (creep-spectrum on a short window; params empty)
+  std::string unsupported;  ///< why the data cannot support it (creep-spectrum on a short window;
+                            ///< params empty)
 };
 /// Every records effect, in chain order, with ranges scaled to the data (an effect the data cannot
 /// support says why in `unsupported`; a model that takes it throws that).
@@ -67,7 +68,8 @@ inline size_t RegressorRow(size_t k, size_t from) { return k < from ? 0 : k - fr
 /// A family with effects; a parameter vector is the family's params then each effect's.
 class RecordModel {
  public:
-  RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects, const DataScale& scale);
+  RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects,
+              const DataScale& scale);
   const Family& family() const { return *family_; }
   std::shared_ptr<const Family> family_ptr() const { return family_; }
   const std::vector<EffectKind>& effects() const { return effects_; }
@@ -81,8 +83,9 @@ class RecordModel {
   /// [rest, end) is simulated. For a linear family, `weights` are the solved weights; else empty.
   /// Returns the model's rest output (before the output effects: what a rest measurement is).
   /// `prepared`: Prepare(r, end) (null: none; the output is the same bit for bit).
-  double Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
-                  std::span<double> yhat, const Family::Prepared* prepared = nullptr) const;
+  double Simulate(const io::Record& r, std::span<const double> p, std::span<const double> weights,
+                  size_t end, std::span<double> yhat,
+                  const Family::Prepared* prepared = nullptr) const;
   /// Simulate for several parameter vectors of a non-linear family at once (Family::lanes side by
   /// side: Family::SimulatePreparedMany on the record's drive, or SimulateMany on each vector's own
   /// drive when drive effects change it; then each vector's output effects): yhats[l] and rest[l]
@@ -97,8 +100,8 @@ class RecordModel {
   std::shared_ptr<const Family::Prepared> Prepare(const io::Record& r, size_t end) const;
   /// The effective drive after the drive effects, on samples [from, end); and the family's
   /// regressors for a linear family (rows = samples from..end).
-  void EffectiveDrive(const io::Record& r, std::span<const double> effect_params, size_t from, size_t end,
-                      std::vector<double>& ue) const;
+  void EffectiveDrive(const io::Record& r, std::span<const double> effect_params, size_t from,
+                      size_t end, std::vector<double>& ue) const;
   /// Applies the output effects in place to y on samples [from, end) of the record (y[0] = rest).
   void ApplyOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
                           std::span<double> y) const;
@@ -108,14 +111,15 @@ class RecordModel {
   bool has_linear_output_effects() const;
   /// Applies those leading linear output effects to the columns of `reg` (rows = samples from..,
   /// row-major, m columns; row 0 at rest).
-  void ApplyLinearOutputEffects(const io::Record& r, std::span<const double> effect_params, size_t from,
-                                std::span<double> reg, size_t m) const;
+  void ApplyLinearOutputEffects(const io::Record& r, std::span<const double> effect_params,
+                                size_t from, std::span<double> reg, size_t m) const;
   /// A linear family's output from its regressors: yhat[from + k] = Σ_j reg[k m + j] w_j on the
   /// simulated samples (rows from SimulatedFrom(r, end) on), the rest output before them, then the
   /// output effects — what Simulate does after computing the regressors (the same arithmetic: a
   /// fit that already has them passes them here). Returns the rest output.
-  double LinearOutput(const io::Record& r, std::span<const double> p, std::span<const double> weights, size_t end,
-                      std::span<const double> reg, std::span<double> yhat) const;
+  double LinearOutput(const io::Record& r, std::span<const double> p,
+                      std::span<const double> weights, size_t end, std::span<const double> reg,
+                      std::span<double> yhat) const;
   size_t family_param_count() const { return family_->params().size(); }
   /// Where effect e's parameters are in params(): {first index, count}; {0, 0} when the model
   /// does not take e.
@@ -127,11 +131,12 @@ class RecordModel {
   DataScale scale_;
   std::vector<ParamInfo> params_;
   std::vector<const model::EffectDef*> defs_;  ///< the library's effect of each of effects_
-  std::vector<size_t> effect_offset_;  ///< index of each effect's first parameter in p
+  std::vector<size_t> effect_offset_;          ///< index of each effect's first parameter in p
 };
 
 /// The offset o of a record given the model output over the window and its rest output (polarity
 /// applied to both by the caller).
-double RecordOffset(const io::Record& r, std::span<const double> signed_yhat, double signed_rest_output);
+double RecordOffset(const io::Record& r, std::span<const double> signed_yhat,
+                    double signed_rest_output);
 
 }  // namespace pz::records

@@ -36,8 +36,9 @@ double QuantisationRms(double quantum) { return quantum / std::sqrt(12.0); }
 
 double PeriodDifferenceSquares(std::span<const double> y, size_t a, size_t period) {
   if (period < 2 || a + 2 * period > y.size())
-    throw InputError("period difference: periods of " + std::to_string(period) + " samples from sample " +
-                     std::to_string(a) + " need " + std::to_string(a + 2 * period) + " samples, the series has " +
+    throw InputError("period difference: periods of " + std::to_string(period) +
+                     " samples from sample " + std::to_string(a) + " need " +
+                     std::to_string(a + 2 * period) + " samples, the series has " +
                      std::to_string(y.size()));
   const size_t b = a + period;
   // d_k = y_{b+k} − y_{a+k} = noise difference (variance 2 s²) + whatever is not periodic (creep,
@@ -71,8 +72,8 @@ CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantu
   return n;
 }
 
-double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
-                            double b1, double b2) {
+double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured,
+                            std::span<const double> model, double b1, double b2) {
   if (measured.size() != model.size() || measured.empty())
     throw InputError("saturation-aware floor: measured has " + std::to_string(measured.size()) +
                      " samples, model " + std::to_string(model.size()));
@@ -91,7 +92,8 @@ double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> meas
   return std::sqrt(sum / static_cast<double>(measured.size()));
 }
 
-NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::vector<double>>* residuals) {
+NoiseFloor EstimateNoiseFloor(const io::RecordSet& set,
+                              const std::vector<std::vector<double>>* residuals) {
   NoiseFloor nf;
   // Rest segments (one per file: records that share a file share its rest).
   {
@@ -99,13 +101,16 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
     size_t n = 0;
     std::vector<std::string> seen;
     for (const io::Record& r : set.records) {
-      if (r.rest_samples < 50 || std::find(seen.begin(), seen.end(), r.file.string()) != seen.end()) continue;
+      if (r.rest_samples < 50 || std::find(seen.begin(), seen.end(), r.file.string()) != seen.end())
+        continue;
       seen.push_back(r.file.string());
       const double s = DetrendedStd(std::span<const double>(r.y).first(r.rest_samples));
       ss += s * s * static_cast<double>(r.rest_samples);
       n += r.rest_samples;
     }
-    if (n > 0) nf.estimates.push_back({"rest", std::sqrt(ss / static_cast<double>(n)), n, std::to_string(seen.size()) + " rest segment(s)"});
+    if (n > 0)
+      nf.estimates.push_back({"rest", std::sqrt(ss / static_cast<double>(n)), n,
+                              std::to_string(seen.size()) + " rest segment(s)"});
   }
   // Periods: the drive repeats after P samples over the excited part.
   {
@@ -124,7 +129,8 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
       size_t period = 0;
       for (size_t P = 10; P <= len / 2 && !period; ++P) {  // two periods at least
         bool ok = true;
-        for (size_t k = start; k + P < r.size() && ok; k += std::max<size_t>(1, P / 50)) ok = std::abs(r.u[k + P] - r.u[k]) <= tol;
+        for (size_t k = start; k + P < r.size() && ok; k += std::max<size_t>(1, P / 50))
+          ok = std::abs(r.u[k + P] - r.u[k]) <= tol;
         if (ok) period = P;
       }
       if (!period) continue;
@@ -134,7 +140,9 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
       n += period - 1;
       ++found;
     }
-    if (n > 0) nf.estimates.push_back({"periods", std::sqrt(ss / static_cast<double>(n)), n, std::to_string(found) + " periodic record(s)"});
+    if (n > 0)
+      nf.estimates.push_back({"periods", std::sqrt(ss / static_cast<double>(n)), n,
+                              std::to_string(found) + " periodic record(s)"});
   }
   // Repeats: records with the same drive.
   {
@@ -145,7 +153,8 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
         const io::Record &a = set.records[i], &b = set.records[j];
         if (a.file == b.file || a.size() != b.size()) continue;
         bool same = true;
-        for (size_t k = 0; k < a.size() && same; ++k) same = std::abs(a.u[k] - b.u[k]) <= 1e-9 * (1 + std::abs(a.u[k]));
+        for (size_t k = 0; k < a.size() && same; ++k)
+          same = std::abs(a.u[k] - b.u[k]) <= 1e-9 * (1 + std::abs(a.u[k]));
         if (!same) continue;
         double mean = 0;
         for (size_t k = 0; k < a.size(); ++k) mean += a.y[k] - b.y[k];
@@ -157,7 +166,9 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
         n += a.size();
       }
     }
-    if (n > 0) nf.estimates.push_back({"repeats", std::sqrt(ss / static_cast<double>(n)), n, "records with the same drive"});
+    if (n > 0)
+      nf.estimates.push_back(
+          {"repeats", std::sqrt(ss / static_cast<double>(n)), n, "records with the same drive"});
   }
   if (residuals) {
     double ss = 0;
@@ -166,10 +177,14 @@ NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::v
       for (size_t k = 1; k < e.size(); ++k) ss += (e[k] - e[k - 1]) * (e[k] - e[k - 1]) / 2;
       n += e.size() > 1 ? e.size() - 1 : 0;
     }
-    if (n > 0) nf.estimates.push_back({"residual", std::sqrt(ss / static_cast<double>(n)), n, "high-frequency part of the base model's residual"});
+    if (n > 0)
+      nf.estimates.push_back({"residual", std::sqrt(ss / static_cast<double>(n)), n,
+                              "high-frequency part of the base model's residual"});
   }
   if (nf.estimates.empty()) {
-    throw InputError("no noise estimate is possible: no rest segment of 50 samples, no periodic drive, no repeated record, no residual");
+    throw InputError(
+        "no noise estimate is possible: no rest segment of 50 samples, no periodic drive, no "
+        "repeated record, no residual");
   }
   // A reading rounded to a quantum q is at least q/√12 RMS from a continuous model on a varying
   // signal, while a rest or two identical periods can cancel the rounding (σ ≪ q): no estimate

@@ -8,20 +8,22 @@
 //   quantisation:  the encoder's quantum q [deg] is the grid the readings lie on (every reading an
 //                  integer multiple of q); a moving signal read through it carries an error of
 //                  RMS q/√12.
-//   scatter:       the difference between the last two steady cycles, d_k = y_{k+(C−1)P} − y_{k+(C−2)P}
-//                  (P samples per cycle), differenced once more so that slow non-periodic parts (creep,
-//                  drift) drop out: s² = mean((d_k − d_{k−1})²)/4 is the sample-to-sample noise that is
-//                  not repeated from cycle to cycle (vibration jitter).
+//   scatter:       the difference between the last two steady cycles, d_k = y_{k+(C−1)P} −
+//   y_{k+(C−2)P}
+//                  (P samples per cycle), differenced once more so that slow non-periodic parts
+//                  (creep, drift) drop out: s² = mean((d_k − d_{k−1})²)/4 is the sample-to-sample
+//                  noise that is not repeated from cycle to cycle (vibration jitter).
 //   floor:         σ = √(q²/12 + s²) [deg], per case. On a quantised record the scatter holds the
-//                  jitter and some of the rounding flips it causes, so the sum errs on the high side:
-//                  conservative, it makes a gap harder to call significant (an exact model of the
-//                  bundled nominal bench lands at 0.9 × this floor; with √max(q²/12, s²) instead it
-//                  would land at 1.1 ×).
-//   saturations:   where a model clips at the measured extremes, the plateau's rounding is the floor
+//                  jitter and some of the rounding flips it causes, so the sum errs on the high
+//                  side: conservative, it makes a gap harder to call significant (an exact model of
+//                  the bundled nominal bench lands at 0.9 × this floor; with √max(q²/12, s²)
+//                  instead it would land at 1.1 ×).
+//   saturations:   where a model clips at the measured extremes, the plateau's rounding is the
+//   floor
 //                  there (SaturationAwareFloor).
 //
-// A record set (issue 14), from what the records allow, in this order of preference (every available
-// estimate is reported, and which one was used):
+// A record set (issue 14), from what the records allow, in this order of preference (every
+// available estimate is reported, and which one was used):
 //   rest           the response's scatter over a rest segment (≥ 50 samples), linear trend removed;
 //   periods        the drive repeats with a period P: the scatter of the last two periods, as for a
 //                  bench case (PeriodDifferenceSquares);
@@ -47,21 +49,22 @@ double QuantisationRms(double quantum);
 
 /// The scatter term of two consecutive periods of `period` samples starting at sample a:
 /// Σ_{k=1}^{P−1} (d_k − d_{k−1})² with d_k = y_{a+P+k} − y_{a+k}. The difference of the periods
-/// holds the noise twice and whatever is not periodic; differencing once more removes the slow part,
-/// so each term has expectation 4 s² (s the sample-to-sample noise not repeated from period to
-/// period). Used by the bench cases (EstimateCaseNoise: the last two cycles) and by records with a
-/// periodic drive (EstimateNoiseFloor). Throws InputError unless period ≥ 2 and a + 2P ≤ y.size().
+/// holds the noise twice and whatever is not periodic; differencing once more removes the slow
+/// part, so each term has expectation 4 s² (s the sample-to-sample noise not repeated from period
+/// to period). Used by the bench cases (EstimateCaseNoise: the last two cycles) and by records with
+/// a periodic drive (EstimateNoiseFloor). Throws InputError unless period ≥ 2 and a + 2P ≤
+/// y.size().
 double PeriodDifferenceSquares(std::span<const double> y, size_t a, size_t period);
 
 // ---- a bench case -------------------------------------------------------------------------------
 
 /// Noise estimate of one bench case.
 struct CaseNoise {
-  double quantum_deg = 0;         ///< q [deg] (0: not quantised)
+  double quantum_deg = 0;           ///< q [deg] (0: not quantised)
   double quantisation_rms_deg = 0;  ///< q/√12 [deg]
-  double scatter_rms_deg = 0;     ///< s [deg], from the last two cycles (0 with fewer than 2 cycles)
-  int compared_samples = 0;       ///< P, samples per cycle compared
-  double floor_rms_deg = 0;       ///< σ = √(q²/12 + s²) [deg]
+  double scatter_rms_deg = 0;  ///< s [deg], from the last two cycles (0 with fewer than 2 cycles)
+  int compared_samples = 0;    ///< P, samples per cycle compared
+  double floor_rms_deg = 0;    ///< σ = √(q²/12 + s²) [deg]
 };
 
 /// Estimates the noise of a record of `cycles` whole drive cycles (y.size() divisible by cycles is
@@ -77,8 +80,8 @@ CaseNoise EstimateCaseNoise(std::span<const double> y, int cycles, double quantu
 /// is σ_c² = floor_rms²:
 ///   σ = √([Σ_{k ∈ plateau} (y_k − ŷ_k)² + N_other σ_c²] / N)   [deg].
 /// Throws InputError on mismatched lengths.
-double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured, std::span<const double> model,
-                            double b1, double b2);
+double SaturationAwareFloor(const CaseNoise& noise, std::span<const double> measured,
+                            std::span<const double> model, double b1, double b2);
 
 // ---- a record set -------------------------------------------------------------------------------
 
@@ -95,6 +98,7 @@ struct NoiseFloor {
 };
 /// Rest, periods and repeats from the records; `residuals` (the base model's, per record over its
 /// scored window) adds the residual estimate. Throws InputError when no estimate is possible.
-NoiseFloor EstimateNoiseFloor(const io::RecordSet& set, const std::vector<std::vector<double>>* residuals = nullptr);
+NoiseFloor EstimateNoiseFloor(const io::RecordSet& set,
+                              const std::vector<std::vector<double>>* residuals = nullptr);
 
 }  // namespace pz::records

@@ -49,17 +49,19 @@ class PreisachFamily final : public Family {
   }
   std::string name() const override { return kPreisachFamily.name; }
   std::string title() const override {
-    return "discrete Preisach model (" + std::to_string(grid_.levels) + " levels, " + std::to_string(grid_.cells()) +
-           " cells on the triangle over the training drive range)";
+    return "discrete Preisach model (" + std::to_string(grid_.levels) + " levels, " +
+           std::to_string(grid_.cells()) + " cells on the triangle over the training drive range)";
   }
   std::string equation() const override {
-    return "y = sum_ij w_ij (clamp(play_{r_i}[u], c_ij, c_ij + D) - c_ij + k_i), w >= 0, r_i = i D/2, "
+    return "y = sum_ij w_ij (clamp(play_{r_i}[u], c_ij, c_ij + D) - c_ij + k_i), w >= 0, r_i = i "
+           "D/2, "
            "c_ij = u_min + r_i + j D, D = (u_max - u_min)/n";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   bool linear() const override { return true; }
   size_t regressors() const override { return grid_.cells(); }
-  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double,
+                std::span<double> y) const override {
     model::ApplyPreisach(grid_, p, u, y, Start(u));
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
@@ -91,7 +93,8 @@ class PreisachFamily final : public Family {
     for (int i = 0; i < n; ++i) norm += std::exp(-i / 3.0);
     std::vector<double> w;
     for (int i = 0; i < n; ++i)
-      for (int j = 0; j < n - i; ++j) w.push_back(0.1 * std::exp(-i / 3.0) / norm * (1 + 0.3 * (2.0 * (j + 0.5) / (n - i) - 1)));
+      for (int j = 0; j < n - i; ++j)
+        w.push_back(0.1 * std::exp(-i / 3.0) / norm * (1 + 0.3 * (2.0 * (j + 0.5) / (n - i) - 1)));
     return w;
   }
   void CheckTraining(const std::vector<const io::Record*>& train) const override {
@@ -106,20 +109,24 @@ class PreisachFamily final : public Family {
       }
     }
     if (reversals < 2) {
-      throw InputError("preisach: the training drive of " + Names(train) + " has " + std::to_string(reversals) +
-                       " reversal(s) deeper than one grid step (" + io::FormatNumber(delta) +
-                       "); a Preisach grid needs at least 2 (a rise and a fall through the range) to identify its "
-                       "relays: train on a record that goes up and down, or use fewer levels (--pi-operators)");
+      throw InputError(
+          "preisach: the training drive of " + Names(train) + " has " + std::to_string(reversals) +
+          " reversal(s) deeper than one grid step (" + io::FormatNumber(delta) +
+          "); a Preisach grid needs at least 2 (a rise and a fall through the range) to identify "
+          "its "
+          "relays: train on a record that goes up and down, or use fewer levels (--pi-operators)");
     }
     for (size_t j = 0; j < per_level.size(); ++j) {
       if (per_level[j] < kMinSamplesPerLevel) {
-        throw InputError("preisach: the training drive of " + Names(train) + " has " + std::to_string(per_level[j]) +
-                         " sample(s) between " + io::FormatNumber(grid_.u_min + static_cast<double>(j) * delta) +
-                         " and " + io::FormatNumber(grid_.u_min + static_cast<double>(j + 1) * delta) +
-                         " (grid level " + std::to_string(j + 1) + " of " + std::to_string(grid_.levels) + "); at least " +
-                         std::to_string(kMinSamplesPerLevel) +
-                         " per level are needed to identify its cells: use fewer levels (--pi-operators) or a "
-                         "drive that passes through that range");
+        throw InputError(
+            "preisach: the training drive of " + Names(train) + " has " +
+            std::to_string(per_level[j]) + " sample(s) between " +
+            io::FormatNumber(grid_.u_min + static_cast<double>(j) * delta) + " and " +
+            io::FormatNumber(grid_.u_min + static_cast<double>(j + 1) * delta) + " (grid level " +
+            std::to_string(j + 1) + " of " + std::to_string(grid_.levels) + "); at least " +
+            std::to_string(kMinSamplesPerLevel) +
+            " per level are needed to identify its cells: use fewer levels (--pi-operators) or a "
+            "drive that passes through that range");
       }
     }
   }
@@ -139,32 +146,42 @@ class AsymmetricPiFamily final : public Family {
   AsymmetricPiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
         knots_(model::AsymmetricPiKnots(kAsymmetricPiKnots, s.u_min, s.u_max)),
-        start_(o.initial_state), u_min_(s.u_min), u_max_(s.u_max) {}
+        start_(o.initial_state),
+        u_min_(s.u_min),
+        u_max_(s.u_max) {}
   std::string name() const override { return kAsymmetricPiFamily.name; }
-  std::string title() const override { return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)"; }
+  std::string title() const override {
+    return "asymmetric Prandtl–Ishlinskii operator (plays + one-sided dead zones)";
+  }
   std::string equation() const override {
-    return "y = w0 u + sum_i w_i play_{r_i}[u] + sum_j a_j max(u - z_j, 0) + sum_j b_j min(u - z_j, 0), all >= 0";
+    return "y = w0 u + sum_i w_i play_{r_i}[u] + sum_j a_j max(u - z_j, 0) + sum_j b_j min(u - "
+           "z_j, 0), all >= 0";
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
   bool linear() const override { return true; }
   size_t regressors() const override { return 1 + thresholds_.size() + 2 * knots_.size(); }
-  void Simulate(std::span<const double> p, std::span<const double> u, double, std::span<double> y) const override {
+  void Simulate(std::span<const double> p, std::span<const double> u, double,
+                std::span<double> y) const override {
     model::AsymmetricPi op = Operator(p);
     if (!u.empty()) op.start = model::ResolveInitialState(start_, u[0], u_min_, u_max_);
     model::ApplyAsymmetricPi(op, u, y);
   }
   void Regressors(std::span<const double> u, std::span<double> out) const override {
-    if (out.size() != u.size() * regressors()) throw InputError("asymmetric-pi: regressor size mismatch");
-    model::AsymmetricPiRegressors(thresholds_, knots_, u, out,
-                                  u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_));
+    if (out.size() != u.size() * regressors())
+      throw InputError("asymmetric-pi: regressor size mismatch");
+    model::AsymmetricPiRegressors(
+        thresholds_, knots_, u, out,
+        u.empty() ? start_ : model::ResolveInitialState(start_, u[0], u_min_, u_max_));
   }
   model::InitialState initial_state() const override { return start_; }
   std::vector<std::string> weight_names() const override {
     std::vector<std::string> names = {"w0"};
     for (size_t i = 0; i < thresholds_.size(); ++i)
       names.push_back("w" + std::to_string(i + 1) + "(r=" + io::FormatNumber(thresholds_[i]) + ")");
-    for (size_t j = 0; j < knots_.size(); ++j) names.push_back("a" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
-    for (size_t j = 0; j < knots_.size(); ++j) names.push_back("b" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
+    for (size_t j = 0; j < knots_.size(); ++j)
+      names.push_back("a" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
+    for (size_t j = 0; j < knots_.size(); ++j)
+      names.push_back("b" + std::to_string(j + 1) + "(z=" + io::FormatNumber(knots_[j]) + ")");
     return names;
   }
   std::vector<std::string> excluded_effects() const override { return {"friction"}; }
@@ -189,15 +206,16 @@ class AsymmetricPiFamily final : public Family {
     size_t samples = 0;
     for (const io::Record* r : train) samples += r->scored();
     if (samples < 2 * regressors()) {
-      throw InputError("asymmetric-pi: " + std::to_string(samples) + " training samples in " + Names(train) + " for " +
-                       std::to_string(regressors()) + " weights; at least " + std::to_string(2 * regressors()) +
+      throw InputError("asymmetric-pi: " + std::to_string(samples) + " training samples in " +
+                       Names(train) + " for " + std::to_string(regressors()) +
+                       " weights; at least " + std::to_string(2 * regressors()) +
                        " are needed (a longer window or fewer plays, --pi-operators)");
     }
   }
   model::AsymmetricPi Operator(std::span<const double> p) const {
     if (p.size() != regressors()) {
-      throw InputError("asymmetric-pi: " + std::to_string(p.size()) + " weights given, " + std::to_string(regressors()) +
-                       " expected");
+      throw InputError("asymmetric-pi: " + std::to_string(p.size()) + " weights given, " +
+                       std::to_string(regressors()) + " expected");
     }
     const size_t n = thresholds_.size(), K = knots_.size();
     model::AsymmetricPi op;
@@ -205,7 +223,8 @@ class AsymmetricPiFamily final : public Family {
     op.thresholds = thresholds_;
     op.weights.assign(p.begin() + 1, p.begin() + 1 + static_cast<std::ptrdiff_t>(n));
     op.knots = knots_;
-    op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n), p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
+    op.up.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n),
+                 p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K));
     op.down.assign(p.begin() + 1 + static_cast<std::ptrdiff_t>(n + K), p.end());
     return op;  // centred: Simulate sets the state resolved on the drive
   }
@@ -357,7 +376,8 @@ std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyO
   return std::make_unique<PreisachFamily>(scale, options);
 }
 
-std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale, const FamilyOptions& options) {
+std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale,
+                                               const FamilyOptions& options) {
   return std::make_unique<AsymmetricPiFamily>(scale, options);
 }
 

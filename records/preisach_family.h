@@ -17,7 +17,8 @@ namespace pz::records {
 std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyOptions& options);
 /// The asymmetric PI operator: FamilyOptions::pi_operators plays and kAsymmetricPiKnots dead zones
 /// each way.
-std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale, const FamilyOptions& options);
+std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale,
+                                               const FamilyOptions& options);
 
 /// Their registrations (records/families.cc Families()).
 extern const FamilyDef kPreisachFamily, kAsymmetricPiFamily;

@@ -22,23 +22,28 @@ std::string Short(double x) { return FormatG(x, 4); }
 std::string WeightValidation::Describe() const {
   if (!used) return "none";
   if (relatives.empty()) return "none chosen (no validation ran)";
-  std::string s = (penalty_name.empty() ? "" : penalty_name + ", ") + "strength " + Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
+  std::string s = (penalty_name.empty() ? "" : penalty_name + ", ") + "strength " +
+                  Short(relative) + " × tr(AᵀA)/tr(R) (λ = " + Short(lambda) + ") chosen by " +
                   std::to_string(folds) + "-fold blocked cross-validation; CV RMSE:";
-  for (size_t i = 0; i < relatives.size(); ++i) s += (i ? ", " : " ") + Short(relatives[i]) + " → " + Short(cv_rmse[i]);
+  for (size_t i = 0; i < relatives.size(); ++i)
+    s += (i ? ", " : " ") + Short(relatives[i]) + " → " + Short(cv_rmse[i]);
   if (candidates.size() > 1) {
     s += "; kept against";
     for (size_t k = 0, n = 0; k < candidates.size(); ++k) {
       if (k == penalty) continue;
-      s += std::string(n++ ? "," : "") + " " + candidates[k] + " (CV RMSE " + Short(candidates_cv_rmse[k]) + " at " +
-           Short(compared_at) + ", this one's " + Short(candidates_cv_rmse[penalty]) + ")";
+      s += std::string(n++ ? "," : "") + " " + candidates[k] + " (CV RMSE " +
+           Short(candidates_cv_rmse[k]) + " at " + Short(compared_at) + ", this one's " +
+           Short(candidates_cv_rmse[penalty]) + ")";
     }
   }
   return s;
 }
 
-WeightValidation ChoosePenalty(const BlockedNormalEquations& eq, const std::vector<Eigen::MatrixXd>& Rs,
+WeightValidation ChoosePenalty(const BlockedNormalEquations& eq,
+                               const std::vector<Eigen::MatrixXd>& Rs,
                                const std::vector<std::string>& names) {
-  if (Rs.empty() || Rs.size() != names.size()) throw std::logic_error("ChoosePenalty: no penalty, or names mismatch");
+  if (Rs.empty() || Rs.size() != names.size())
+    throw std::logic_error("ChoosePenalty: no penalty, or names mismatch");
   std::vector<WeightValidation> v;
   for (size_t k = 0; k < Rs.size(); ++k) {
     v.push_back(ChooseStrength(eq, Rs[k]));
@@ -50,7 +55,8 @@ WeightValidation ChoosePenalty(const BlockedNormalEquations& eq, const std::vect
   const std::vector<double>& rel = v.front().relatives;
   size_t at = 0;
   for (const WeightValidation& w : v) {
-    const size_t chosen = static_cast<size_t>(std::find(rel.begin(), rel.end(), w.relative) - rel.begin());
+    const size_t chosen =
+        static_cast<size_t>(std::find(rel.begin(), rel.end(), w.relative) - rel.begin());
     at = std::max(at, chosen + 1);
   }
   at = std::min(at, rel.size() - 1);
@@ -73,7 +79,8 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
   return ChooseStrength(eq, R, trR > 0 ? G.trace() / trR : 0, StrengthRule{});
 }
 
-NormalEquationsBuilder::NormalEquationsBuilder(BlockedNormalEquations& eq, size_t columns, size_t samples)
+NormalEquationsBuilder::NormalEquationsBuilder(BlockedNormalEquations& eq, size_t columns,
+                                               size_t samples)
     : eq_(eq), samples_(samples) {
   constexpr Eigen::Index kChunk = 256;
   const auto m = static_cast<Eigen::Index>(columns);
@@ -95,7 +102,8 @@ double* NormalEquationsBuilder::Row() {
 void NormalEquationsBuilder::Add(double target) {
   const size_t blocks = eq_.G.size();
   const size_t blk = blocks == 1 ? 0 : index_ * blocks / samples_;
-  if (blk != block_ && filled_ > 0) {  // the chunk so far is the previous block's: flushed without this row
+  if (blk != block_ &&
+      filled_ > 0) {  // the chunk so far is the previous block's: flushed without this row
     const Eigen::VectorXd row = A_.col(filled_);
     Flush();
     A_.col(0) = row;
@@ -152,15 +160,16 @@ Eigen::MatrixXd SpectrumRoughness(size_t n) {
   return D;
 }
 
-WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R, double scale,
-                                const StrengthRule& rule) {
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R,
+                                double scale, const StrengthRule& rule) {
   const size_t K = eq.G.size();
   WeightValidation v;
   v.used = true;
   v.folds = static_cast<int>(K);
   size_t total = 0;
   for (size_t b = 0; b < K; ++b) {
-    if (eq.samples[b] == 0) throw InputError("regularisation: fewer training samples than validation blocks");
+    if (eq.samples[b] == 0)
+      throw InputError("regularisation: fewer training samples than validation blocks");
     total += eq.samples[b];
   }
   Eigen::MatrixXd G = eq.G[0];
@@ -215,9 +224,11 @@ WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::M
     double mean = 0, sq = 0;
     for (size_t b = 0; b < K; ++b) mean += err[c][b] - err[best][b];
     mean /= static_cast<double>(K);
-    for (size_t b = 0; b < K; ++b) sq += (err[c][b] - err[best][b] - mean) * (err[c][b] - err[best][b] - mean);
+    for (size_t b = 0; b < K; ++b)
+      sq += (err[c][b] - err[best][b] - mean) * (err[c][b] - err[best][b] - mean);
     const double se = std::sqrt(sq / static_cast<double>(K - 1) / static_cast<double>(K));
-    const bool negligible = rule.rmse_tolerance > 0 && v.cv_rmse[c] <= (1 + rule.rmse_tolerance) * v.cv_rmse[best];
+    const bool negligible =
+        rule.rmse_tolerance > 0 && v.cv_rmse[c] <= (1 + rule.rmse_tolerance) * v.cv_rmse[best];
     if (mean > se && !negligible) {
       if (rule.contiguous) break;
       continue;

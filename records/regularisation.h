@@ -10,9 +10,9 @@
 // whose extra error over that one is not larger than its standard error across the blocks (the
 // paired "one standard error" rule): the strongest regularisation the data cannot tell from the
 // best — what keeps a Preisach density that a major loop does not determine smooth instead of a
-// sparse artefact. A family with several candidate penalties (the Preisach grid: roughness along the
-// centre or over the triangle) has the one kept that the records contradict less (ChoosePenalty).
-// Deterministic (a fixed order of fixed-size sums).
+// sparse artefact. A family with several candidate penalties (the Preisach grid: roughness along
+// the centre or over the triangle) has the one kept that the records contradict less
+// (ChoosePenalty). Deterministic (a fixed order of fixed-size sums).
 #pragma once
 
 #include <Eigen/Dense>
@@ -30,9 +30,9 @@ struct BlockedNormalEquations {
 };
 
 /// Accumulates the normal equations of rows given one at a time into eq's blocks (eq.G.size()
-/// contiguous blocks of `samples` rows: row i goes to block i · blocks / samples). Rows are gathered
-/// in chunks of 256 of one block and added as rank-k updates (a level-3 product, several times faster
-/// than a rank-1 update per row on ~100 columns). Finish() symmetrises G.
+/// contiguous blocks of `samples` rows: row i goes to block i · blocks / samples). Rows are
+/// gathered in chunks of 256 of one block and added as rank-k updates (a level-3 product, several
+/// times faster than a rank-1 update per row on ~100 columns). Finish() symmetrises G.
 class NormalEquationsBuilder {
  public:
   /// Zeroes eq's blocks at `columns` unknowns.
@@ -77,7 +77,7 @@ struct WeightValidation {
   /// The chosen strength's squared error on each left-out block (in block order): what a choice
   /// among resolutions compares (ChooseResolution).
   std::vector<double> block_sse;
-  std::string Describe() const;   ///< "ρ = 1e-3 (λ = …) by 5-fold blocked cross-validation: …"
+  std::string Describe() const;  ///< "ρ = 1e-3 (λ = …) by 5-fold blocked cross-validation: …"
 };
 
 /// A resolution (a Preisach grid's levels) chosen by the same blocked cross-validation (issue 37):
@@ -128,17 +128,19 @@ struct StrengthRule {
 /// training records object to a penalty, where its CV error says how much it contradicts what the
 /// records identify — a Preisach density's interior that a major loop leaves open is filled in by
 /// the penalty the branches contradict less. Ties keep the first. One candidate: ChooseStrength.
-WeightValidation ChoosePenalty(const BlockedNormalEquations& eq, const std::vector<Eigen::MatrixXd>& Rs,
+WeightValidation ChoosePenalty(const BlockedNormalEquations& eq,
+                               const std::vector<Eigen::MatrixXd>& Rs,
                                const std::vector<std::string>& names);
 /// The same with the candidates λ = ρ · scale (R penalising part of the unknowns only: the scale
 /// is then the trace of that part of G over tr(R)) and the rule `rule`.
-WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R, double scale,
-                                const StrengthRule& rule);
+WeightValidation ChooseStrength(const BlockedNormalEquations& eq, const Eigen::MatrixXd& R,
+                                double scale, const StrengthRule& rule);
 
-/// The roughness of a creep spectrum's n weights (log-spaced relaxation times, model/effect_library.h
-/// `creep-spectrum`) across log-time: the first differences of neighbouring weights, D (n−1 × n),
-/// whose penalty ‖D w‖² = wᵀDᵀD w vanishes on equal weights per decade — log creep, the limit the
-/// penalty shrinks a spectrum towards — and grows with a spectrum's raggedness.
+/// The roughness of a creep spectrum's n weights (log-spaced relaxation times,
+/// model/effect_library.h `creep-spectrum`) across log-time: the first differences of neighbouring
+/// weights, D (n−1 × n), whose penalty ‖D w‖² = wᵀDᵀD w vanishes on equal weights per decade — log
+/// creep, the limit the penalty shrinks a spectrum towards — and grows with a spectrum's
+/// raggedness.
 Eigen::MatrixXd SpectrumRoughness(size_t n);
 
 }  // namespace pz::records

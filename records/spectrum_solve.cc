@@ -21,7 +21,8 @@ struct RecordRows {
   size_t from = 0, rows = 0;
   std::vector<double> reg;
   Eigen::VectorXd t;
-  Eigen::MatrixXd C;  ///< scored rows of pol · (L_w A − centre), at the w of the last normal equations
+  Eigen::MatrixXd
+      C;  ///< scored rows of pol · (L_w A − centre), at the w of the last normal equations
   std::vector<double> a, c;  ///< each relaxation's discretisation at the record's dt
 };
 
@@ -61,14 +62,21 @@ size_t Row(const RecordRows& d, size_t k) { return RegressorRow(k, d.from); }
 class Solver {
  public:
   Solver(const SpectrumProblem& p, std::span<const double> params)
-      : p_(p), model_(*p.model), m_(model_.family().regressors()), n_(p.count), nf_(model_.family_param_count()),
-        pol_(model_.scale().polarity), effect_params_(params.begin() + static_cast<std::ptrdiff_t>(nf_), params.end()) {
+      : p_(p),
+        model_(*p.model),
+        m_(model_.family().regressors()),
+        n_(p.count),
+        nf_(model_.family_param_count()),
+        pol_(model_.scale().polarity),
+        effect_params_(params.begin() + static_cast<std::ptrdiff_t>(nf_), params.end()) {
     const auto& box = model_.params();
     for (size_t i = 0; i < n_; ++i) upper_.push_back(box[p.first + i].upper);
     std::vector<double> ue, c;
-    const std::vector<double> taus = EffectKind::Named("creep-spectrum")->KernelData(model_.scale());
-    if (taus.size() != n_) throw InputError("SolveSpectrum: " + std::to_string(n_) + " weights for " +
-                                            std::to_string(taus.size()) + " relaxations");
+    const std::vector<double> taus =
+        EffectKind::Named("creep-spectrum")->KernelData(model_.scale());
+    if (taus.size() != n_)
+      throw InputError("SolveSpectrum: " + std::to_string(n_) + " weights for " +
+                       std::to_string(taus.size()) + " relaxations");
     data_.resize(p.records.size());
     for (size_t i = 0; i < p.records.size(); ++i) {
       RecordRows& d = data_[i];
@@ -88,10 +96,12 @@ class Solver {
         d.c[i] = st.c;
       }
       d.t.resize(static_cast<Index>(r.scored()));
-      for (size_t k = r.first_scored; k < r.end_scored; ++k) d.t(static_cast<Index>(k - r.first_scored)) = r.y[k] - off;
+      for (size_t k = r.first_scored; k < r.end_scored; ++k)
+        d.t(static_cast<Index>(k - r.first_scored)) = r.y[k] - off;
     }
     if (p.regularisation != nullptr && p.regularisation->size() > 0) R_ = *p.regularisation;
-    if (p.roughness != nullptr && p.roughness->size() > 0) DtD_ = p.roughness->transpose() * *p.roughness;
+    if (p.roughness != nullptr && p.roughness->size() > 0)
+      DtD_ = p.roughness->transpose() * *p.roughness;
   }
 
   int grams() const { return grams_; }
@@ -122,7 +132,8 @@ class Solver {
   }
 
   /// The weights that best fit with the family's weights fixed at θ (the iteration's start from a
-  /// reference (θ, w) solved elsewhere: one small solve in n unknowns brings w near this problem's).
+  /// reference (θ, w) solved elsewhere: one small solve in n unknowns brings w near this
+  /// problem's).
   Eigen::VectorXd WeightsFor(const Eigen::VectorXd& theta) {
     const auto N = static_cast<Index>(n_);
     Eigen::MatrixXd G = Eigen::MatrixXd::Zero(N, N);
@@ -139,7 +150,8 @@ class Solver {
     }
     if (DtD_.size() > 0) G += p_.mu * DtD_;
     Eigen::VectorXd w = NonNegativeLeastSquares(G, h);
-    for (size_t i = 0; i < n_; ++i) w(static_cast<Index>(i)) = std::min(w(static_cast<Index>(i)), upper_[i]);
+    for (size_t i = 0; i < n_; ++i)
+      w(static_cast<Index>(i)) = std::min(w(static_cast<Index>(i)), upper_[i]);
     return w;
   }
 
@@ -178,14 +190,17 @@ class Solver {
       for (Index a = 0; a < F; ++a) {
         rf(a) = rhs(free[static_cast<size_t>(a)]);
         for (size_t i = 0; i < n_; ++i)
-          if (at_upper[i]) rf(a) -= H(free[static_cast<size_t>(a)], M + static_cast<Index>(i)) * upper_[i];
-        for (Index b = 0; b < F; ++b) Hf(a, b) = H(free[static_cast<size_t>(a)], free[static_cast<size_t>(b)]);
+          if (at_upper[i])
+            rf(a) -= H(free[static_cast<size_t>(a)], M + static_cast<Index>(i)) * upper_[i];
+        for (Index b = 0; b < F; ++b)
+          Hf(a, b) = H(free[static_cast<size_t>(a)], free[static_cast<size_t>(b)]);
       }
       const Eigen::VectorXd uf = NonNegativeLeastSquares(Hf, rf);
       Eigen::VectorXd u(M + N);
       for (size_t i = 0; i < n_; ++i) u(M + static_cast<Index>(i)) = upper_[i];
       for (Index a = 0; a < F; ++a) u(free[static_cast<size_t>(a)]) = uf(a);
-      // A weight held at its bound whose linearised gradient points inside is freed for the next step.
+      // A weight held at its bound whose linearised gradient points inside is freed for the next
+      // step.
       const Eigen::VectorXd grad = H * u - rhs;
       bool released = false;
       for (size_t i = 0; i < n_; ++i)
@@ -216,7 +231,8 @@ class Solver {
         const Eigen::VectorXd xn = x + alpha * dx;
         tn = xn.head(M).cwiseMax(0.0);
         wn = xn.tail(N).cwiseMax(0.0);
-        for (size_t i = 0; i < n_; ++i) wn(static_cast<Index>(i)) = std::min(wn(static_cast<Index>(i)), upper_[i]);
+        for (size_t i = 0; i < n_; ++i)
+          wn(static_cast<Index>(i)) = std::min(wn(static_cast<Index>(i)), upper_[i]);
         if (half == 0 && hits >= 0) wn(hits - M) = upper_[static_cast<size_t>(hits - M)];
         double e = 0;
         const double fn = Objective(tn, wn, &e);
@@ -271,7 +287,8 @@ class Solver {
   void Output(const RecordRows& d, const Eigen::VectorXd& theta, std::vector<double>& s) const {
     s.resize(d.rows);
     using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-    const Eigen::Map<const RowMajor> A(d.reg.data(), static_cast<Index>(d.rows), static_cast<Index>(m_));
+    const Eigen::Map<const RowMajor> A(d.reg.data(), static_cast<Index>(d.rows),
+                                       static_cast<Index>(m_));
     Eigen::Map<Eigen::VectorXd>(s.data(), static_cast<Index>(d.rows)).noalias() = A * theta;
   }
 
@@ -321,7 +338,8 @@ class Solver {
       for (size_t k = r.first_scored; k < r.end_scored; ++k) {
         const double* row = creg_.data() + Row(d, k) * m_;
         const auto i = static_cast<Index>(k - r.first_scored);
-        for (size_t j = 0; j < m_; ++j) d.C(i, static_cast<Index>(j)) = pol_ * (row[j] - centre_[j]);
+        for (size_t j = 0; j < m_; ++j)
+          d.C(i, static_cast<Index>(j)) = pol_ * (row[j] - centre_[j]);
       }
       G_.selfadjointView<Eigen::Lower>().rankUpdate(d.C.transpose());
       h_.noalias() += d.C.transpose() * d.t;
@@ -334,13 +352,15 @@ class Solver {
 
   /// The Gauss–Newton normal equations at (θ, w) in u = (θ', w'): H = MᵀM + diag(λR, μDᵀD),
   /// rhs = H x − g with g = ½∇f at x = (θ, w) exact and M = [C | −Z], Z = pol · centred
-  /// (I − L_i)(A θ) — C = C(w) where the last normal equations were built at this w (rhs = Mᵀ(t − Z w),
-  /// the plain Gauss–Newton step), else C at their w (kept for kStaleSteps steps while w stays within kRefresh of it: a
-  /// step in the metric of a nearby Hessian, the gradient exact through the relaxations' adjoint, so
-  /// the iteration still converges to the optimum of f).
-  void Linearised(const Eigen::VectorXd& theta, const Eigen::VectorXd& w, Eigen::MatrixXd& H, Eigen::VectorXd& rhs) {
+  /// (I − L_i)(A θ) — C = C(w) where the last normal equations were built at this w (rhs = Mᵀ(t − Z
+  /// w), the plain Gauss–Newton step), else C at their w (kept for kStaleSteps steps while w stays
+  /// within kRefresh of it: a step in the metric of a nearby Hessian, the gradient exact through
+  /// the relaxations' adjoint, so the iteration still converges to the optimum of f).
+  void Linearised(const Eigen::VectorXd& theta, const Eigen::VectorXd& w, Eigen::MatrixXd& H,
+                  Eigen::VectorXd& rhs) {
     const bool shared = p_.metric != nullptr && grams_ == 0 && ++shared_steps_ <= kSharedSteps;
-    if (!shared && (gram_w_.size() != w.size() || (gram_w_ - w).cwiseAbs().maxCoeff() > kRefresh || ++stale_ > kStaleSteps))
+    if (!shared && (gram_w_.size() != w.size() || (gram_w_ - w).cwiseAbs().maxCoeff() > kRefresh ||
+                    ++stale_ > kStaleSteps))
       Normal(w);
     const auto M = static_cast<Index>(m_), N = static_cast<Index>(n_);
     H = Eigen::MatrixXd::Zero(M + N, M + N);
@@ -353,14 +373,16 @@ class Solver {
       const auto S = static_cast<Index>(r.scored());
       Eigen::MatrixXd Z(S, N);
       Relaxations(d, theta, Z);
-      // The residual at (θ, w), and ρ: its samples gathered on the rows, less what the offset removes.
+      // The residual at (θ, w), and ρ: its samples gathered on the rows, less what the offset
+      // removes.
       z_ = s_;
       model_.ApplyLinearOutputEffects(r, EffectParams(w), d.from, z_, 1);
       Eigen::VectorXd e(S);
       Centred(d, z_, e);
       e = d.t - e;
       rho_.assign(d.rows, 0.0);
-      for (size_t k = r.first_scored; k < r.end_scored; ++k) rho_[Row(d, k)] += e(static_cast<Index>(k - r.first_scored));
+      for (size_t k = r.first_scored; k < r.end_scored; ++k)
+        rho_[Row(d, k)] += e(static_cast<Index>(k - r.first_scored));
       const double sum = e.sum();
       if (r.offset_mode == io::OffsetMode::kFit) {
         const double mean = sum / static_cast<double>(S);
@@ -369,7 +391,8 @@ class Solver {
         rho_[0] -= sum;
       }
       // C(w)ᵀ e = pol Aᵀ L_wᵀ ρ, with L_w v = v − Σ w_i (I − F_i) P v (P v = v − v₀, F_i the
-      // relaxation x_k = a x_{k−1} + c d_k + (1 − a − c) d_{k−1} from 0): L_wᵀ ρ = ρ − Pᵀ Σ w_i (ρ − F_iᵀ ρ).
+      // relaxation x_k = a x_{k−1} + c d_k + (1 − a − c) d_{k−1} from 0): L_wᵀ ρ = ρ − Pᵀ Σ w_i (ρ
+      // − F_iᵀ ρ).
       acc_.assign(d.rows, 0.0);
       for (size_t i = 0; i < n_; ++i) {
         const double a = d.a[i], c = d.c[i], b = 1 - a - c, wi = w(static_cast<Index>(i));
@@ -385,7 +408,8 @@ class Solver {
       acc_[0] -= total;
       for (size_t l = 0; l < d.rows; ++l) acc_[l] = rho_[l] - acc_[l];
       const Eigen::Map<const RowMajor> A(d.reg.data(), static_cast<Index>(d.rows), M);
-      g.head(M).noalias() -= pol_ * (A.transpose() * Eigen::Map<const Eigen::VectorXd>(acc_.data(), static_cast<Index>(d.rows)));
+      g.head(M).noalias() -= pol_ * (A.transpose() * Eigen::Map<const Eigen::VectorXd>(
+                                                         acc_.data(), static_cast<Index>(d.rows)));
       g.tail(N).noalias() += Z.transpose() * e;
       // M's columns: C, then −Z.
       H.topRightCorner(M, N).noalias() -= (shared ? p_.metric->C[record] : d.C).transpose() * Z;
@@ -431,8 +455,9 @@ bool SpectrumSolved(const RecordModel& model) {
 
 std::vector<size_t> SearchedParams(const RecordModel& model) {
   std::vector<size_t> out;
-  const auto [first, count] = SpectrumSolved(model) ? model.EffectParams(EffectKind::Named("creep-spectrum"))
-                                                    : std::pair<size_t, size_t>{0, 0};
+  const auto [first, count] = SpectrumSolved(model)
+                                  ? model.EffectParams(EffectKind::Named("creep-spectrum"))
+                                  : std::pair<size_t, size_t>{0, 0};
   for (size_t i = 0; i < model.params().size(); ++i)
     if (i < first || i >= first + count) out.push_back(i);
   return out;
@@ -444,7 +469,8 @@ SpectrumMetric BuildSpectrumMetric(const SpectrumProblem& problem, std::span<con
   p.metric = nullptr;
   Solver solver(p, params);
   SpectrumMetric out;
-  solver.Metric(Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())), out);
+  solver.Metric(Eigen::Map<const Eigen::VectorXd>(w.data(), static_cast<Eigen::Index>(w.size())),
+                out);
   return out;
 }
 
@@ -452,7 +478,8 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
   if (problem.model == nullptr) throw InputError("SolveSpectrum: no model");
   const RecordModel& model = *problem.model;
   if (!model.family().linear() || !model.has_linear_output_effects() || problem.count == 0)
-    throw InputError("SolveSpectrum: " + model.Describe() + " is not a linear family with a creep spectrum");
+    throw InputError("SolveSpectrum: " + model.Describe() +
+                     " is not a linear family with a creep spectrum");
   if (params.size() != model.params().size())
     throw InputError("SolveSpectrum: " + std::to_string(params.size()) + " parameters given, " +
                      std::to_string(model.params().size()) + " expected");
@@ -463,7 +490,8 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
   SpectrumSolution best;
   int iterations = 0;
   if (!problem.start.empty()) {
-    if (problem.start.size() != problem.count) throw InputError("SolveSpectrum: the start has the wrong size");
+    if (problem.start.size() != problem.count)
+      throw InputError("SolveSpectrum: the start has the wrong size");
     Eigen::VectorXd w = Eigen::Map<const Eigen::VectorXd>(problem.start.data(), n);
     if (problem.start_theta.size() == problem.model->family().regressors()) {
       const Eigen::VectorXd theta = Eigen::Map<const Eigen::VectorXd>(
@@ -477,7 +505,8 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
     best.grams = solver.grams();
     return best;
   }
-  if (!problem.zero_start && !(problem.log_creep_start > 0)) throw InputError("SolveSpectrum: no start");
+  if (!problem.zero_start && !(problem.log_creep_start > 0))
+    throw InputError("SolveSpectrum: no start");
   if (problem.zero_start) {
     best = solver.Run(Eigen::VectorXd::Zero(n));
     iterations = best.iterations;
@@ -485,11 +514,13 @@ SpectrumSolution SolveSpectrum(const SpectrumProblem& problem, std::span<const d
   if (problem.log_creep_start > 0) {
     Eigen::VectorXd w(n);
     for (Eigen::Index i = 0; i < n; ++i)
-      w(i) = std::min(problem.log_creep_start, model.params()[problem.first + static_cast<size_t>(i)].upper);
+      w(i) = std::min(problem.log_creep_start,
+                      model.params()[problem.first + static_cast<size_t>(i)].upper);
     SpectrumSolution other = solver.Run(w);
     other.start = 1;
     iterations += other.iterations;
-    if (!problem.zero_start || (other.ok && (!best.ok || other.objective < best.objective))) best = std::move(other);
+    if (!problem.zero_start || (other.ok && (!best.ok || other.objective < best.objective)))
+      best = std::move(other);
   }
   best.iterations = iterations;
   best.grams = solver.grams();

@@ -52,12 +52,12 @@ struct SpectrumMetric {
 struct SpectrumProblem {
   const RecordModel* model = nullptr;
   std::span<const io::Record* const> records;
-  size_t samples = 0;                      ///< scored samples over the records
-  size_t first = 0, count = 0;             ///< the spectrum's weights in the model's parameters
+  size_t samples = 0;           ///< scored samples over the records
+  size_t first = 0, count = 0;  ///< the spectrum's weights in the model's parameters
   const Eigen::MatrixXd* regularisation = nullptr;  ///< R (null or empty: none)
-  double lambda = 0;                       ///< its strength
+  double lambda = 0;                                ///< its strength
   const Eigen::MatrixXd* roughness = nullptr;       ///< D (n−1 × n)
-  double mu = 0;                           ///< its strength
+  double mu = 0;                                    ///< its strength
   /// Also start from log creep (equal weights of this value, clamped to the box) and keep the lower
   /// optimum; ≤ 0: from w = 0 only.
   double log_creep_start = 0.01;
@@ -74,16 +74,17 @@ struct SpectrumProblem {
 };
 
 struct SpectrumSolution {
-  bool ok = false;              ///< false: the output was not finite
-  std::vector<double> w;        ///< the spectrum's weights
-  std::vector<double> theta;    ///< the family's weights at w (as the iteration has them)
-  double sse = 0;               ///< Σ e² over the scored samples
-  double roughness = 0;         ///< μ ‖D w‖²
-  double objective = 0;         ///< sse + λ θᵀRθ + μ ‖D w‖²
-  int iterations = 0;           ///< Gauss–Newton steps taken (all starts)
-  int grams = 0;                ///< passes over the samples building normal equations
-  int start = 0;                ///< the start kept: 0 = w = 0, 1 = log creep, 2 = the given one
-  std::vector<double> objectives;  ///< of the kept start: at its start, then after every step (non-increasing)
+  bool ok = false;            ///< false: the output was not finite
+  std::vector<double> w;      ///< the spectrum's weights
+  std::vector<double> theta;  ///< the family's weights at w (as the iteration has them)
+  double sse = 0;             ///< Σ e² over the scored samples
+  double roughness = 0;       ///< μ ‖D w‖²
+  double objective = 0;       ///< sse + λ θᵀRθ + μ ‖D w‖²
+  int iterations = 0;         ///< Gauss–Newton steps taken (all starts)
+  int grams = 0;              ///< passes over the samples building normal equations
+  int start = 0;              ///< the start kept: 0 = w = 0, 1 = log creep, 2 = the given one
+  std::vector<double>
+      objectives;  ///< of the kept start: at its start, then after every step (non-increasing)
 };
 
 /// True when a fit solves the model's creep spectrum with the family's weights instead of searching

@@ -14,8 +14,10 @@ namespace {
 int KernelOf(EffectKind e) {
   const int k = e.none() ? 0 : e->kernel();
   const bool drive = e.none() || e->stage() == model::EffectStage::kDrive;
-  if (k <= 0 || (drive ? k >= pzk::PZK_STACK_BOUC_WEN : k < pzk::PZK_FRICTION || k >= pzk::PZK_AFFINE))
-    throw InputError(std::string("effect '") + e.name() + "' has no step kernel of its stage (model/kernels/effects.h)");
+  if (k <= 0 ||
+      (drive ? k >= pzk::PZK_STACK_BOUC_WEN : k < pzk::PZK_FRICTION || k >= pzk::PZK_AFFINE))
+    throw InputError(std::string("effect '") + e.name() +
+                     "' has no step kernel of its stage (model/kernels/effects.h)");
   return k;
 }
 
@@ -41,8 +43,8 @@ FamilyOptions ModelSpec::family_options() const {
 }
 
 std::shared_ptr<RecordModel> ModelSpec::Model() const {
-  return std::make_shared<RecordModel>(std::shared_ptr<const Family>(MakeFamily(family, scale, family_options())),
-                                       effects, scale);
+  return std::make_shared<RecordModel>(
+      std::shared_ptr<const Family>(MakeFamily(family, scale, family_options())), effects, scale);
 }
 
 void ModelSpec::Validate() const {
@@ -53,19 +55,24 @@ void ModelSpec::Validate() const {
   }
   const auto model = Model();
   if (params.size() != model->params().size()) {
-    throw InputError("model.params: " + std::to_string(params.size()) + " values for " + model->Describe() + ", " +
-                     std::to_string(model->params().size()) + " expected");
+    throw InputError("model.params: " + std::to_string(params.size()) + " values for " +
+                     model->Describe() + ", " + std::to_string(model->params().size()) +
+                     " expected");
   }
   const size_t m = model->family().linear() ? model->family().regressors() : 0;
   if (weights.size() != m) {
-    throw InputError("model.weights: " + std::to_string(weights.size()) + " values for " + family + ", " +
-                     std::to_string(m) + " expected");
+    throw InputError("model.weights: " + std::to_string(weights.size()) + " values for " + family +
+                     ", " + std::to_string(m) + " expected");
   }
-  for (size_t i = 0; i < params.size(); ++i) CheckFinite("model.params[" + model->params()[i].name + "]", params[i]);
-  for (size_t i = 0; i < weights.size(); ++i) CheckFinite("model.weights[" + std::to_string(i) + "]", weights[i]);
-  if (polarity != 1 && polarity != -1) throw InputError(FieldError("model.polarity", polarity, "must be 1 or -1"));
+  for (size_t i = 0; i < params.size(); ++i)
+    CheckFinite("model.params[" + model->params()[i].name + "]", params[i]);
+  for (size_t i = 0; i < weights.size(); ++i)
+    CheckFinite("model.weights[" + std::to_string(i) + "]", weights[i]);
+  if (polarity != 1 && polarity != -1)
+    throw InputError(FieldError("model.polarity", polarity, "must be 1 or -1"));
   CheckFinite("model.offset", offset);
-  if (!(std::isfinite(dt) && dt > 0)) throw InputError(FieldError("model.sample_period_s", dt, "must be finite and > 0"));
+  if (!(std::isfinite(dt) && dt > 0))
+    throw InputError(FieldError("model.sample_period_s", dt, "must be finite and > 0"));
   // The delay's kernel keeps its delay in samples (an int, and a ring of that many doubles): a
   // fit's is at most 500 samples (its range); a fit.json of a delay of years, or of a sample period
   // of 1e-300 s, is refused here (the kernel's cast overflowed: the fuzzer of issue 37).
@@ -89,7 +96,8 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
     std::string known;
     for (const FamilyDef* f : Families())
       if (f->kernel != 0) known += (known.empty() ? "" : ", ") + std::string(f->name);
-    throw InputError("family '" + spec_.family + "' has no step kernel (exportable families: " + known + ")");
+    throw InputError("family '" + spec_.family +
+                     "' has no step kernel (exportable families: " + known + ")");
   }
   const FamilyDef& def = *FindFamily(spec_.family);
   spec_.Validate();
@@ -119,11 +127,13 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   }
   for (size_t i = 0; i < spec_.effects.size(); ++i)
     if (IsDriveEffect(spec_.effects[i]))
-      block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
+      block(KernelOf(spec_.effects[i]), effect_params[i],
+            spec_.effects[i]->KernelData(spec_.scale));
   block(def.kernel, std::vector<double>(spec_.params.begin(),
                                         spec_.params.begin() + static_cast<std::ptrdiff_t>(nf)));
   const size_t family_block = blocks_.size() - 1;
-  // pzk PZK_CENTRED / DESCENDED / ASCENDED / AUTO: the family's own (backlash-like's auto is centred)
+  // pzk PZK_CENTRED / DESCENDED / ASCENDED / AUTO: the family's own (backlash-like's auto is
+  // centred)
   blocks_[family_block].init = static_cast<int>(model->family().initial_state());
   KernelShape shape = def.kernel_shape(spec_.family_options(), spec_.params);
   blocks_[family_block].n = shape.n;
@@ -131,12 +141,14 @@ Stepper::Stepper(const ModelSpec& spec) : spec_(spec) {
   family_data_ = std::move(shape.data);
   for (size_t i = 0; i < spec_.effects.size(); ++i)
     if (!IsDriveEffect(spec_.effects[i]))
-      block(KernelOf(spec_.effects[i]), effect_params[i], spec_.effects[i]->KernelData(spec_.scale));
+      block(KernelOf(spec_.effects[i]), effect_params[i],
+            spec_.effects[i]->KernelData(spec_.scale));
   block(pzk::PZK_AFFINE, {static_cast<double>(spec_.polarity), spec_.offset});
   for (size_t i = 0; i < blocks_.size(); ++i) {
     blocks_[i].p = params_[i].data();
     blocks_[i].np = static_cast<int>(params_[i].size());
-    if (!kernel_data_[i].empty()) {  // an effect's constants (the creep spectrum's times: n of them)
+    if (!kernel_data_[i]
+             .empty()) {  // an effect's constants (the creep spectrum's times: n of them)
       blocks_[i].w = kernel_data_[i].data();
       blocks_[i].nw = static_cast<int>(kernel_data_[i].size());
       blocks_[i].n = blocks_[i].nw;
@@ -176,7 +188,8 @@ int Stepper::inverse_plan_samples() const {
 }
 
 size_t Stepper::preview_samples() const {
-  return static_cast<size_t>(pzk::pzk_chain_preview(blocks_.data(), static_cast<int>(blocks_.size()), c_.data()));
+  return static_cast<size_t>(
+      pzk::pzk_chain_preview(blocks_.data(), static_cast<int>(blocks_.size()), c_.data()));
 }
 
 double Stepper::rate_dependence_inverse_gain() const {
@@ -187,7 +200,8 @@ double Stepper::rate_dependence_inverse_gain() const {
     if (lead == 0) return INFINITY;
     // lead rho^2 + 2 a rho - a / 2 = 0: the discriminant 4 a^2 + 2 a lead = a (a + 2) >= 0.
     const double s = std::sqrt(a * (a + 2));
-    const double g = std::max(std::abs((-2 * a + s) / (2 * lead)), std::abs((-2 * a - s) / (2 * lead)));
+    const double g =
+        std::max(std::abs((-2 * a + s) / (2 * lead)), std::abs((-2 * a - s) / (2 * lead)));
     gain = std::max(gain, g);
   }
   return gain;
@@ -196,32 +210,35 @@ double Stepper::rate_dependence_inverse_gain() const {
 double Stepper::Init(double u0) {
   ctl_.u_lo = spec_.drive_min;
   ctl_.u_hi = spec_.drive_max;
-  return pzk::pzk_chain_init(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), &ctl_, u0);
+  return pzk::pzk_chain_init(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
+                             &ctl_, u0);
 }
 
 double Stepper::Step(double u) {
-  return pzk::pzk_chain_step(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), &ctl_, u);
+  return pzk::pzk_chain_step(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
+                             &ctl_, u);
 }
 
 double Stepper::InverseStep(double y_desired) {
-  return pzk::pzk_chain_inverse(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(),
-                                &ctl_, y_desired);
+  return pzk::pzk_chain_inverse(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(),
+                                d_.data(), t_.data(), &ctl_, y_desired);
 }
 
 bool Stepper::InversePrime(double y_desired) {
-  return pzk::pzk_chain_inverse_prime(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
-                                      t_.data(), &ctl_, y_desired) == 0;
+  return pzk::pzk_chain_inverse_prime(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(),
+                                      d_.data(), t_.data(), &ctl_, y_desired) == 0;
 }
 
 void Stepper::InversePrimeFrom(std::span<const double> y) {
   const size_t preview = preview_samples(), horizon = static_cast<size_t>(delay_horizon());
   if (horizon == 0 || y.empty()) return;
-  for (size_t k = preview + 1 - horizon; k <= preview; ++k) InversePrime(y[std::min(k, y.size() - 1)]);
+  for (size_t k = preview + 1 - horizon; k <= preview; ++k)
+    InversePrime(y[std::min(k, y.size() - 1)]);
 }
 
 double Stepper::Trial(double u) {
-  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(), t_.data(), u,
-                             pzk::PZK_EVAL_UNDELAYED);
+  return pzk::pzk_chain_eval(blocks_.data(), static_cast<int>(blocks_.size()), c_.data(), d_.data(),
+                             t_.data(), u, pzk::PZK_EVAL_UNDELAYED);
 }
 
 namespace {
@@ -273,7 +290,8 @@ ReplayError ReplayDrive(const ModelSpec& spec, const io::Record& r, std::span<co
     e.max_y = std::max(e.max_y, std::abs(dy));
   }
   if (e.n == 0) {
-    throw InputError(r.Label() + ": no scored sample has its response within the record (the inverse reads " +
+    throw InputError(r.Label() +
+                     ": no scored sample has its response within the record (the inverse reads " +
                      std::to_string(preview) + " sample(s) ahead: the model's delay)");
   }
   e.rms_u = std::sqrt(sse_u / static_cast<double>(e.n));

@@ -30,12 +30,12 @@ namespace pzk = ::pz::pzk;  // the step kernels (model/kernels/pzk.h)
 /// Everything that rebuilds a fitted model (fit.json's "model" section, client/fit_file.h).
 struct ModelSpec {
   std::string family;
-  int substeps = 2;      ///< FamilyOptions::substeps
-  int pi_operators = 12; ///< FamilyOptions::pi_operators
+  int substeps = 2;       ///< FamilyOptions::substeps
+  int pi_operators = 12;  ///< FamilyOptions::pi_operators
   /// FamilyOptions::initial_state (centred for a fit.json without it: the convention before it).
   model::InitialState initial_state = model::InitialState::kCentred;
-  DataScale scale;       ///< the data scale the family was made for (sets its ranges and grids)
-  double dt = 0;         ///< sample step the model was identified at [s]
+  DataScale scale;  ///< the data scale the family was made for (sets its ranges and grids)
+  double dt = 0;    ///< sample step the model was identified at [s]
   std::vector<EffectKind> effects;
   std::vector<double> params;   ///< RecordModel::params() order
   std::vector<double> weights;  ///< a linear family's solved weights
@@ -67,14 +67,14 @@ class Stepper {
   double Init(double u0);
   double Step(double u);
   double InverseStep(double y_desired);
-  /// With a delay's horizon L (delay_horizon() > 0): the references of the L samples before the first
-  /// InverseStep's, in order (y[k] for k = preview_samples() - L + 1 … preview_samples() when the
-  /// first step gets y[1 + preview_samples()]), after Init and before that step; not given, the
+  /// With a delay's horizon L (delay_horizon() > 0): the references of the L samples before the
+  /// first InverseStep's, in order (y[k] for k = preview_samples() - L + 1 … preview_samples() when
+  /// the first step gets y[1 + preview_samples()]), after Init and before that step; not given, the
   /// compensator takes those samples at rest. False when no more is wanted.
   bool InversePrime(double y_desired);
   /// InversePrime with the references of a whole record or reference y (the first InverseStep's at
-  /// y[1 + preview_samples()]): y[k] for k = preview_samples() - L + 1 … preview_samples(), the last
-  /// value held beyond y's end. Nothing without a horizon.
+  /// y[1 + preview_samples()]): y[k] for k = preview_samples() - L + 1 … preview_samples(), the
+  /// last value held beyond y's end. Nothing without a horizon.
   void InversePrimeFrom(std::span<const double> y);
   /// The output the next step would give for drive u (not clipped), the state unchanged, the delay
   /// passing its input on: what a lasting change of the drive meets (ReplayDrive's local gain).
@@ -120,7 +120,8 @@ class Stepper {
   std::vector<std::vector<double>> params_;  ///< per block
   std::vector<pzk::pzk_block> blocks_;
   std::vector<double> family_data_;  ///< KernelShape::data (the fin's modal data), else empty
-  std::vector<std::vector<double>> kernel_data_;  ///< per block: an effect's EffectDef::KernelData (else empty)
+  std::vector<std::vector<double>>
+      kernel_data_;  ///< per block: an effect's EffectDef::KernelData (else empty)
   std::vector<double> c_, d_, t_;
   pzk::pzk_ctl ctl_{};
   int nc_ = 0, nd_ = 0;
@@ -137,14 +138,15 @@ std::vector<double> SimulateRecord(const ModelSpec& spec, const io::Record& r);
 struct ReplayError {
   double rms_u = 0, rms_y = 0, max_y = 0;
   size_t n = 0;  ///< samples scored
-  size_t clipped = 0;  ///< scored samples whose drive the inverse clipped to a limit (the record's drive range)
+  size_t clipped =
+      0;  ///< scored samples whose drive the inverse clipped to a limit (the record's drive range)
   /// Scored samples where the model's local gain is not finite (its one-step map overflows there):
   /// left out of rms_y and max_y, which are over the others.
   size_t no_gain = 0;
 };
 
-/// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at the
-/// record's first drive, the limits widened to the record's drive, each drive solved for the
+/// The inverse run on the response y (in the model's frame: its polarity and offset) from rest at
+/// the record's first drive, the limits widened to the record's drive, each drive solved for the
 /// response preview_samples() later (a delay's horizon primed with the responses before the first
 /// step: InversePrime); the record's scored samples whose response lies within the
 /// record are compared. On the model's own noiseless response (SimulateRecord) it is the inverse's

@@ -3,10 +3,9 @@
 limit of .clang-format (ColumnLimit, 100) than MAX_OVER, counted in characters (a UTF-8 'µ' or '≥'
 is one column, as clang-format counts them).
 
-MAX_OVER is a ratchet: the tree had 4,047 such lines when the check came in (issue 38), written
-before the limit was 100. A change may not add one (the check then lists every offender with the
-mend); a change that removes some lowers MAX_OVER to the new count. The goal is 0, when the
-check lists every line over the limit and fails on the first.
+MAX_OVER is 0: the tree was formatted whole by clang-format (`--sort-includes=false`: the C kernels
+depend on their include order), so the check lists every line over the limit and fails on the first.
+(It was a ratchet from 4,047 lines when the check came in, issue 38, to that format.)
 
 The files are the ones git tracks (or, outside a checkout, every file under the root) ending in .c,
 .cc, .h or .proto, except generated and vendored ones (EXCLUDED below). A line that cannot be
@@ -28,7 +27,7 @@ import tempfile
 SUFFIXES = (".c", ".cc", ".h", ".proto")
 EXCLUDED = ("build", "build-", "third_party/", "client/dashboard_assets.h")
 ALLOW = "// NOLINT(length)"
-MAX_OVER = 3827
+MAX_OVER = 0
 
 
 def column_limit(root):

@@ -50,7 +50,8 @@ std::string EncodeCheckpoint(const JobCheckpoint& c) {
   o->set_stall(g.stall);
   // One island that is the job (its stall and best are the job's, never restarted): the layout
   // from before islands, byte for byte; otherwise every island in `islands`.
-  const bool single = g.islands.size() == 1 && g.islands[0].stall == g.stall && g.islands[0].restarts == 0 &&
+  const bool single = g.islands.size() == 1 && g.islands[0].stall == g.stall &&
+                      g.islands[0].restarts == 0 &&
                       (!g.initialized || g.islands[0].best_cost == g.best_fitness.cost);
   if (single) {
     PopulationToProto(g.islands[0], o);
@@ -134,22 +135,24 @@ std::string EncodeStoredFile(std::string_view type, std::string_view payload) {
   f.set_type(std::string(type));
   f.set_payload(std::string(payload));
   f.set_length(payload.size());
-  f.set_crc32(static_cast<uint32_t>(
-      crc32(0L, reinterpret_cast<const Bytef*>(payload.data()), static_cast<uInt>(payload.size()))));
+  f.set_crc32(static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(payload.data()),
+                                          static_cast<uInt>(payload.size()))));
   return Deterministic(f);
 }
 
 Status DecodeStoredFile(std::string_view bytes, std::string_view type, std::string* payload) {
   pw::StoredFile f;
   if (!Parse(bytes, &f) || f.type().empty())
-    return {StatusCode::kNotFound, "not a stored file (" + std::to_string(bytes.size()) + " bytes)"};
+    return {StatusCode::kNotFound,
+            "not a stored file (" + std::to_string(bytes.size()) + " bytes)"};
   if (f.type() != type)
     return {StatusCode::kDataLoss, "holds a " + f.type() + ", not a " + std::string(type)};
   if (f.payload().size() != f.length())
     return {StatusCode::kDataLoss, "truncated: " + std::to_string(f.payload().size()) + " of " +
                                        std::to_string(f.length()) + " payload bytes"};
-  const auto crc = static_cast<uint32_t>(crc32(
-      0L, reinterpret_cast<const Bytef*>(f.payload().data()), static_cast<uInt>(f.payload().size())));
+  const auto crc =
+      static_cast<uint32_t>(crc32(0L, reinterpret_cast<const Bytef*>(f.payload().data()),
+                                  static_cast<uInt>(f.payload().size())));
   if (crc != f.crc32()) return {StatusCode::kDataLoss, "checksum mismatch (the file was altered)"};
   *payload = std::move(*f.mutable_payload());
   return Status::Ok();

@@ -16,7 +16,6 @@
 
 namespace pz::service::detail {
 
-
 Status Malformed(const std::string& what) { return {StatusCode::kDataLoss, what}; }
 
 std::string Deterministic(const google::protobuf::MessageLite& msg) {
@@ -33,8 +32,8 @@ std::string Deterministic(const google::protobuf::MessageLite& msg) {
 bool Parse(std::string_view bytes, google::protobuf::MessageLite* msg) {
   if (bytes.size() > static_cast<size_t>(INT32_MAX)) return false;
   // The callers say what is wrong with bytes that do not decode; protobuf's own log lines ("String
-  // field … contains invalid UTF-8 data", when a damaged checkpoint is tried as a bare one or a peer
-  // sends garbage) would only repeat it on stderr, once per frame a peer chooses to send.
+  // field … contains invalid UTF-8 data", when a damaged checkpoint is tried as a bare one or a
+  // peer sends garbage) would only repeat it on stderr, once per frame a peer chooses to send.
   google::protobuf::LogSilencer quiet;
   return msg->ParseFromArray(bytes.data(), static_cast<int>(bytes.size()));
 }
@@ -43,14 +42,15 @@ bool Parse(std::string_view bytes, google::protobuf::MessageLite* msg) {
 
 namespace {
 
-static_assert(std::endian::native == std::endian::little, "the genome packing reads eight bytes as one word");
+static_assert(std::endian::native == std::endian::little,
+              "the genome packing reads eight bytes as one word");
 
 /// Eight genome bits (one byte each, nonzero = set) as one byte, bit k = genome bit k.
 inline uint8_t PackEight(const uint8_t* bits) {
   uint64_t x;
   std::memcpy(&x, bits, 8);
   constexpr uint64_t kLow7 = 0x7F7F7F7F7F7F7F7FULL, kHigh = 0x8080808080808080ULL;
-  const uint64_t set = ((((x & kLow7) + kLow7) | x) & kHigh) >> 7;  // 1 in each nonzero byte
+  const uint64_t set = ((((x & kLow7) + kLow7) | x) & kHigh) >> 7;   // 1 in each nonzero byte
   return static_cast<uint8_t>((set * 0x0102040810204080ULL) >> 56);  // byte k's 1 → bit k
 }
 
@@ -65,8 +65,9 @@ constexpr std::array<uint64_t, 256> kUnpacked = [] {
 }  // namespace
 
 void ToProto(const Genome& g, pw::Genome* p) {
-  // Sixteen or eight bits at a time: the master packs every genome it leases (the paper's has 1415 bits).
-  // Written into the message's own string, whose capacity a reused message keeps (PackedTasks).
+  // Sixteen or eight bits at a time: the master packs every genome it leases (the paper's has 1415
+  // bits). Written into the message's own string, whose capacity a reused message keeps
+  // (PackedTasks).
   const size_t n = g.bits.size(), whole = n / 8;
   std::string& packed = *p->mutable_bits();
   packed.assign((n + 7) / 8, '\0');
@@ -74,8 +75,10 @@ void ToProto(const Genome& g, pw::Genome* p) {
 #if defined(__SSE2__)
   // Sixteen bits at a time: the mask of the zero bytes, inverted, is the packed pair of bytes.
   for (; b + 2 <= whole; b += 2) {
-    const __m128i sixteen = _mm_loadu_si128(reinterpret_cast<const __m128i*>(g.bits.data() + 8 * b));
-    const auto set = static_cast<uint16_t>(~_mm_movemask_epi8(_mm_cmpeq_epi8(sixteen, _mm_setzero_si128())));
+    const __m128i sixteen =
+        _mm_loadu_si128(reinterpret_cast<const __m128i*>(g.bits.data() + 8 * b));
+    const auto set =
+        static_cast<uint16_t>(~_mm_movemask_epi8(_mm_cmpeq_epi8(sixteen, _mm_setzero_si128())));
     packed[b] = static_cast<char>(set & 0xFF);
     packed[b + 1] = static_cast<char>(set >> 8);
   }
@@ -98,27 +101,38 @@ Status FromProto(const pw::Genome& p, Genome* g) {
     const uint64_t eight = kUnpacked[static_cast<uint8_t>(p.bits()[b])];
     std::memcpy(g->bits.data() + 8 * b, &eight, 8);
   }
-  for (size_t i = 8 * whole; i < n; ++i) g->bits[i] = (static_cast<uint8_t>(p.bits()[i / 8]) >> (i % 8)) & 1u;
+  for (size_t i = 8 * whole; i < n; ++i)
+    g->bits[i] = (static_cast<uint8_t>(p.bits()[i / 8]) >> (i % 8)) & 1u;
   g->reals.assign(p.reals().begin(), p.reals().end());
   return Status::Ok();
 }
 
 pw::FitnessCode ToProto(FitnessStatus s) {
   switch (s) {
-    case FitnessStatus::kOk: return pw::FITNESS_OK;
-    case FitnessStatus::kPenalized: return pw::FITNESS_PENALIZED;
-    case FitnessStatus::kError: return pw::FITNESS_ERROR;
+    case FitnessStatus::kOk:
+      return pw::FITNESS_OK;
+    case FitnessStatus::kPenalized:
+      return pw::FITNESS_PENALIZED;
+    case FitnessStatus::kError:
+      return pw::FITNESS_ERROR;
   }
   return pw::FITNESS_UNSPECIFIED;
 }
 
 Status FromProto(pw::FitnessCode c, double cost, FitnessStatus* s) {
   switch (c) {
-    case pw::FITNESS_OK: *s = FitnessStatus::kOk; break;
-    case pw::FITNESS_PENALIZED: *s = FitnessStatus::kPenalized; break;
+    case pw::FITNESS_OK:
+      *s = FitnessStatus::kOk;
+      break;
+    case pw::FITNESS_PENALIZED:
+      *s = FitnessStatus::kPenalized;
+      break;
     case pw::FITNESS_ERROR:
-    case pw::FITNESS_QUARANTINED: *s = FitnessStatus::kError; break;
-    default: return Malformed("fitness code unspecified");
+    case pw::FITNESS_QUARANTINED:
+      *s = FitnessStatus::kError;
+      break;
+    default:
+      return Malformed("fitness code unspecified");
   }
   if (!std::isfinite(cost)) return Malformed("cost is not finite");
   return Status::Ok();
@@ -166,7 +180,8 @@ void ToProto(const GenerationRecord& r, pw::GenerationRecord* p) {
   p->set_stall(static_cast<uint32_t>(std::max(0, r.stall)));
   p->set_evaluated(static_cast<uint32_t>(std::max(0, r.evaluations)));
   p->set_penalized(static_cast<uint32_t>(std::max(0, r.penalized)));
-  for (const auto& [k, n] : r.failure_reasons) (*p->mutable_failure_reasons())[k] = static_cast<uint32_t>(std::max(0, n));
+  for (const auto& [k, n] : r.failure_reasons)
+    (*p->mutable_failure_reasons())[k] = static_cast<uint32_t>(std::max(0, n));
   p->set_best_description(r.best_description);
   p->set_wall_time_s(r.wall_time_s);
   p->set_improved(r.improved);
@@ -203,7 +218,8 @@ GenerationRecord FromProto(const pw::GenerationRecord& p) {
   r.best_island = ClampInt(p.best_island());
   r.migrated = p.migrated();
   for (const auto& q : p.islands())
-    r.islands.push_back({q.best_cost(), ClampInt(q.stall()), ClampInt(q.immigrants()), q.restarted()});
+    r.islands.push_back(
+        {q.best_cost(), ClampInt(q.stall()), ClampInt(q.immigrants()), q.restarted()});
   return r;
 }
 
@@ -225,7 +241,6 @@ void ToProto(const QuarantineRecord& q, pw::QuarantineRecord* p) {
 QuarantineRecord FromProto(const pw::QuarantineRecord& p) {
   return {p.generation(), p.index(), p.strikes()};
 }
-
 
 bool ValidState(int s) { return pw::JobState_IsValid(s); }
 

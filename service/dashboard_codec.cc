@@ -36,7 +36,8 @@ std::string DashboardStateJson(const std::string& master, double polled_unix_s, 
   return Json(s);
 }
 
-std::string DashboardCurveJson(const std::string& job_id, const std::vector<GenerationRecord>& records) {
+std::string DashboardCurveJson(const std::string& job_id,
+                               const std::vector<GenerationRecord>& records) {
   pw::DashboardCurve c;
   c.set_job_id(job_id);
   for (const GenerationRecord& r : records) ToProto(r, c.add_records());

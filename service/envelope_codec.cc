@@ -50,7 +50,8 @@ void ResultToProto(const BatchResultMsg& r, pw::BatchResult* p) {
   p->set_code(static_cast<pw::Code>(r.code));
   p->set_error(r.error);
   p->set_eval_seconds(r.eval_seconds);
-  for (size_t i = 0; i < r.indices.size(); ++i) ToProto(r.results[i], r.indices[i], p->add_results());
+  for (size_t i = 0; i < r.indices.size(); ++i)
+    ToProto(r.results[i], r.indices[i], p->add_results());
 }
 
 Status CodeFromProto(int c, WireCode* out) {
@@ -78,7 +79,6 @@ Status ResultFromProto(const pw::BatchResult& p, BatchResultMsg* r) {
 
 }  // namespace
 
-
 std::string EncodeWorkerToMaster(const WorkerMsg& m) {
   pw::WorkerToMaster p;
   p.set_version(kProtocolVersion);
@@ -91,12 +91,18 @@ std::string EncodeWorkerToMaster(const WorkerMsg& m) {
       r->set_arithmetic(m.arithmetic);
       break;
     }
-    case WorkerMsg::Type::kDisconnect: p.mutable_disconnect()->set_reason(m.reason); break;
+    case WorkerMsg::Type::kDisconnect:
+      p.mutable_disconnect()->set_reason(m.reason);
+      break;
     case WorkerMsg::Type::kContextRequest:
       p.mutable_context_request()->set_context_hash(m.context_hash);
       break;
-    case WorkerMsg::Type::kResult: ResultToProto(m.result, p.mutable_result()); break;
-    default: p.mutable_heartbeat(); break;
+    case WorkerMsg::Type::kResult:
+      ResultToProto(m.result, p.mutable_result());
+      break;
+    default:
+      p.mutable_heartbeat();
+      break;
   }
   return p.SerializeAsString();
 }
@@ -116,7 +122,9 @@ Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m) {
       m->pid = p.ready().pid();
       m->arithmetic = p.ready().arithmetic();
       return Status::Ok();
-    case pw::WorkerToMaster::kHeartbeat: m->type = WorkerMsg::Type::kHeartbeat; return Status::Ok();
+    case pw::WorkerToMaster::kHeartbeat:
+      m->type = WorkerMsg::Type::kHeartbeat;
+      return Status::Ok();
     case pw::WorkerToMaster::kDisconnect:
       m->type = WorkerMsg::Type::kDisconnect;
       m->reason = p.disconnect().reason();
@@ -128,7 +136,8 @@ Status DecodeWorkerToMaster(std::string_view bytes, WorkerMsg* m) {
     case pw::WorkerToMaster::kResult:
       m->type = WorkerMsg::Type::kResult;
       return ResultFromProto(p.result(), &m->result);
-    default: return Malformed("worker message has no body");
+    default:
+      return Malformed("worker message has no body");
   }
 }
 
@@ -211,7 +220,9 @@ std::string EncodeMasterToWorker(const WorkerMsg& m) {
   p.set_version(kProtocolVersion);
   p.set_code(static_cast<pw::Code>(m.code));
   switch (m.type) {
-    case WorkerMsg::Type::kBatch: BatchToProto(m.batch, p.mutable_batch()); break;
+    case WorkerMsg::Type::kBatch:
+      BatchToProto(m.batch, p.mutable_batch());
+      break;
     case WorkerMsg::Type::kContext: {
       auto* c = p.mutable_context();
       c->set_context_hash(m.context_hash);
@@ -223,7 +234,9 @@ std::string EncodeMasterToWorker(const WorkerMsg& m) {
       p.mutable_disconnect()->set_reason(m.reason);
       p.set_error(m.reason);
       break;
-    default: p.mutable_heartbeat(); break;
+    default:
+      p.mutable_heartbeat();
+      break;
   }
   return p.SerializeAsString();
 }
@@ -245,12 +258,15 @@ Status DecodeMasterToWorker(std::string_view bytes, WorkerMsg* m) {
       m->code = pw::Code_IsValid(p.context().code()) ? static_cast<WireCode>(p.context().code())
                                                      : WireCode::kUnspecified;
       return Status::Ok();
-    case pw::MasterToWorker::kHeartbeat: m->type = WorkerMsg::Type::kHeartbeat; return Status::Ok();
+    case pw::MasterToWorker::kHeartbeat:
+      m->type = WorkerMsg::Type::kHeartbeat;
+      return Status::Ok();
     case pw::MasterToWorker::kDisconnect:
       m->type = WorkerMsg::Type::kDisconnect;
       m->reason = p.disconnect().reason();
       return Status::Ok();
-    default: return Malformed("master message has no body");
+    default:
+      return Malformed("master message has no body");
   }
 }
 
@@ -264,18 +280,30 @@ std::string EncodeClientRequest(const ClientRequestMsg& m) {
       ToProto(m.spec, p.mutable_submit()->mutable_spec());
       p.mutable_submit()->set_client_token(m.client_token);
       break;
-    case T::kStatus: p.mutable_status()->set_job_id(m.job_id); break;
-    case T::kWatch: p.mutable_watch()->set_job_id(m.job_id); break;
-    case T::kCancel: p.mutable_cancel()->set_job_id(m.job_id); break;
-    case T::kList: p.mutable_list(); break;
+    case T::kStatus:
+      p.mutable_status()->set_job_id(m.job_id);
+      break;
+    case T::kWatch:
+      p.mutable_watch()->set_job_id(m.job_id);
+      break;
+    case T::kCancel:
+      p.mutable_cancel()->set_job_id(m.job_id);
+      break;
+    case T::kList:
+      p.mutable_list();
+      break;
     case T::kFetch:
       p.mutable_fetch()->set_job_id(m.job_id);
       p.mutable_fetch()->set_count(static_cast<uint32_t>(std::max(0, m.count)));
       p.mutable_fetch()->set_log_only(m.log_only);
       p.mutable_fetch()->set_log_from(m.log_from);
       break;
-    case T::kWorkers: p.mutable_workers(); break;
-    case T::kPing: p.mutable_ping(); break;
+    case T::kWorkers:
+      p.mutable_workers();
+      break;
+    case T::kPing:
+      p.mutable_ping();
+      break;
     case T::kEvaluate: {
       auto* e = p.mutable_evaluate();
       e->set_job_id(m.job_id);
@@ -283,7 +311,9 @@ std::string EncodeClientRequest(const ClientRequestMsg& m) {
       for (const Genome& g : m.genomes) ToProto(g, e->add_genomes());
       break;
     }
-    case T::kClose: p.mutable_close()->set_job_id(m.job_id); break;
+    case T::kClose:
+      p.mutable_close()->set_job_id(m.job_id);
+      break;
     case T::kPrune: {
       auto* q = p.mutable_prune();
       for (const auto& id : m.job_ids) q->add_job_ids(id);
@@ -310,10 +340,21 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
       m->spec_bytes = EncodeJobSpec(m->spec);
       m->client_token = p.submit().client_token();
       break;
-    case pw::ClientRequest::kStatus: m->type = T::kStatus; m->job_id = p.status().job_id(); break;
-    case pw::ClientRequest::kWatch: m->type = T::kWatch; m->job_id = p.watch().job_id(); break;
-    case pw::ClientRequest::kCancel: m->type = T::kCancel; m->job_id = p.cancel().job_id(); break;
-    case pw::ClientRequest::kList: m->type = T::kList; break;
+    case pw::ClientRequest::kStatus:
+      m->type = T::kStatus;
+      m->job_id = p.status().job_id();
+      break;
+    case pw::ClientRequest::kWatch:
+      m->type = T::kWatch;
+      m->job_id = p.watch().job_id();
+      break;
+    case pw::ClientRequest::kCancel:
+      m->type = T::kCancel;
+      m->job_id = p.cancel().job_id();
+      break;
+    case pw::ClientRequest::kList:
+      m->type = T::kList;
+      break;
     case pw::ClientRequest::kFetch:
       m->type = T::kFetch;
       m->job_id = p.fetch().job_id();
@@ -321,8 +362,12 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
       m->log_only = p.fetch().log_only();
       m->log_from = p.fetch().log_from();
       break;
-    case pw::ClientRequest::kWorkers: m->type = T::kWorkers; break;
-    case pw::ClientRequest::kPing: m->type = T::kPing; break;
+    case pw::ClientRequest::kWorkers:
+      m->type = T::kWorkers;
+      break;
+    case pw::ClientRequest::kPing:
+      m->type = T::kPing;
+      break;
     case pw::ClientRequest::kEvaluate: {
       const auto& e = p.evaluate();
       m->type = T::kEvaluate;
@@ -334,21 +379,27 @@ Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m) {
           return Malformed("evaluate.genomes[" + std::to_string(i) + "]: " + s.message());
       break;
     }
-    case pw::ClientRequest::kClose: m->type = T::kClose; m->job_id = p.close().job_id(); break;
+    case pw::ClientRequest::kClose:
+      m->type = T::kClose;
+      m->job_id = p.close().job_id();
+      break;
     case pw::ClientRequest::kPrune: {
       const auto& q = p.prune();
       m->type = T::kPrune;
       if (q.job_ids_size() > 100000) return Malformed("prune.job_ids: more than 100000");
       m->job_ids.assign(q.job_ids().begin(), q.job_ids().end());
       if (!std::isfinite(q.older_than_s()) || q.older_than_s() < 0)
-        return Malformed("prune.older_than_s = " + std::to_string(q.older_than_s()) + ": must be finite and >= 0");
-      if (q.keep() < 0) return Malformed("prune.keep = " + std::to_string(q.keep()) + ": must be >= 0");
+        return Malformed("prune.older_than_s = " + std::to_string(q.older_than_s()) +
+                         ": must be finite and >= 0");
+      if (q.keep() < 0)
+        return Malformed("prune.keep = " + std::to_string(q.keep()) + ": must be >= 0");
       m->older_than_s = q.older_than_s();
       m->keep = q.keep();
       m->dry_run = q.dry_run();
       break;
     }
-    default: return Malformed("client request has no body");
+    default:
+      return Malformed("client request has no body");
   }
   return Status::Ok();
 }
@@ -370,7 +421,9 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       p.mutable_submit()->set_job_id(m.job_id);
       p.mutable_submit()->set_existed(m.existed);
       break;
-    case T::kStatus: InfoToProto(m.info, p.mutable_status()); break;
+    case T::kStatus:
+      InfoToProto(m.info, p.mutable_status());
+      break;
     case T::kList:
       for (const auto& j : m.jobs) InfoToProto(j, p.mutable_list()->add_jobs());
       p.mutable_list()->set_workers(static_cast<uint32_t>(m.workers));
@@ -406,7 +459,9 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       e->set_worker_threads(static_cast<uint32_t>(std::max(0, m.worker_threads)));
       break;
     }
-    case T::kWorkers: ToProto(m.workers_snapshot, p.mutable_workers()); break;
+    case T::kWorkers:
+      ToProto(m.workers_snapshot, p.mutable_workers());
+      break;
     case T::kPrune: {
       auto* q = p.mutable_prune();
       for (const auto& id : m.pruned) q->add_pruned(id);
@@ -417,7 +472,8 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       }
       break;
     }
-    case T::kNone: break;
+    case T::kNone:
+      break;
   }
   return p.SerializeAsString();
 }
@@ -485,7 +541,8 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->worker_threads = ClampInt(e.worker_threads());
       m->results.resize(e.results_size());
       for (int i = 0; i < e.results_size(); ++i) {
-        if (e.results(i).index() != i) return Malformed("evaluate.results[" + std::to_string(i) + "].index");
+        if (e.results(i).index() != i)
+          return Malformed("evaluate.results[" + std::to_string(i) + "].index");
         if (Status s = FromProto(e.results(i), &m->results[i]); !s.ok()) return s;
       }
       break;
@@ -499,7 +556,9 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
       m->type = T::kWorkers;
       m->workers_snapshot = FromProto(p.workers());
       break;
-    default: m->type = T::kNone; break;
+    default:
+      m->type = T::kNone;
+      break;
   }
   return Status::Ok();
 }

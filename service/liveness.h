@@ -63,7 +63,10 @@ class ServerLiveness {
  public:
   ServerLiveness(Duration heartbeat_interval, int liveness)
       : interval_(heartbeat_interval), liveness_(liveness) {}
-  void Reset(TimePoint now) { last_seen_ = now; next_heartbeat_ = now + interval_; }
+  void Reset(TimePoint now) {
+    last_seen_ = now;
+    next_heartbeat_ = now + interval_;
+  }
   void Seen(TimePoint now) { last_seen_ = now; }
   bool Expired(TimePoint now) const { return now - last_seen_ > interval_ * liveness_; }
   /// True when a heartbeat should be sent now; schedules the next one.

@@ -25,8 +25,10 @@ bool IsZ85Key(std::string_view s) {
 }
 
 std::string_view Trim(std::string_view s) {
-  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r')) s.remove_prefix(1);
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t' || s.front() == '\r'))
+    s.remove_prefix(1);
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
   return s;
 }
 
@@ -36,7 +38,8 @@ Status ReadSmallFile(const fs::path& path, std::string* text) {
   std::ostringstream ss;
   ss << f.rdbuf();
   *text = ss.str();
-  if (text->size() > 64 * 1024) return InvalidArgument(path.string() + ": too large for a key file");
+  if (text->size() > 64 * 1024)
+    return InvalidArgument(path.string() + ": too large for a key file");
   return Status::Ok();
 }
 
@@ -104,7 +107,8 @@ Status ParseCurveKeyFile(std::string_view text, const std::string& source, Curve
     (name == "public-key" ? out->public_z85 : out->secret_z85) = std::string(value);
     any_key = true;
   }
-  if (!any_key) return InvalidArgument(source + ": no public-key or secret-key line (not a CURVE key file)");
+  if (!any_key)
+    return InvalidArgument(source + ": no public-key or secret-key line (not a CURVE key file)");
   if (!out->secret_z85.empty()) {
     char derived[41];
     if (zmq_curve_public(derived, out->secret_z85.c_str()) != 0)
@@ -120,7 +124,8 @@ Status ParseCurveKeyFile(std::string_view text, const std::string& source, Curve
 
 Status WriteCurveKeyFiles(const fs::path& dir, const std::string& name, const CurveKeyPair& pair) {
   if (name.empty() || name.find('/') != std::string::npos || name.front() == '.')
-    return InvalidArgument("--name = '" + name + "': must be a plain file name (no '/', not starting with '.')");
+    return InvalidArgument("--name = '" + name +
+                           "': must be a plain file name (no '/', not starting with '.')");
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) return Internal(dir.string() + ": cannot create (" + ec.message() + ")");
@@ -133,20 +138,23 @@ Status WriteCurveKeyFiles(const fs::path& dir, const std::string& name, const Cu
 }
 
 Status LoadCurveSecretFile(const fs::path& path, CurveKeyPair* out) {
-  struct stat st{};
+  struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
-    return NotFound(path.string() + ": secret key file: cannot stat (" + std::strerror(errno) + ")");
+    return NotFound(path.string() + ": secret key file: cannot stat (" + std::strerror(errno) +
+                    ")");
   if (st.st_mode & 0077) {
     char mode[8];
     std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
     return InvalidArgument(path.string() + ": secret key file has mode " + mode +
-                           ": group or others may access it; refused (chmod 600 " + path.string() + ")");
+                           ": group or others may access it; refused (chmod 600 " + path.string() +
+                           ")");
   }
   std::string text;
   if (Status s = ReadSmallFile(path, &text); !s.ok()) return s;
   if (Status s = ParseCurveKeyFile(text, path.string(), out); !s.ok()) return s;
   if (out->secret_z85.empty())
-    return InvalidArgument(path.string() + ": no secret-key line (is this the .pub file? give NAME.key)");
+    return InvalidArgument(path.string() +
+                           ": no secret-key line (is this the .pub file? give NAME.key)");
   return Status::Ok();
 }
 
@@ -204,8 +212,10 @@ ZapHandler::ZapHandler(zmq::context_t& ctx, const CurveServerConfig& config)
 ZapHandler::~ZapHandler() { Stop(); }
 
 Status ZapHandler::Start() {
-  if (Status s = workers_.Load(config_.allow_workers); !s.ok()) return {s.code(), "--allow-workers: " + s.message()};
-  if (Status s = clients_.Load(config_.allow_clients); !s.ok()) return {s.code(), "--allow-clients: " + s.message()};
+  if (Status s = workers_.Load(config_.allow_workers); !s.ok())
+    return {s.code(), "--allow-workers: " + s.message()};
+  if (Status s = clients_.Load(config_.allow_clients); !s.ok())
+    return {s.code(), "--allow-clients: " + s.message()};
   try {
     sock_ = std::make_unique<zmq::socket_t>(ctx_, zmq::socket_type::rep);
     sock_->set(zmq::sockopt::linger, 0);
@@ -300,7 +310,8 @@ void ZapHandler::Run() {
 
 // ------------------------------------------------------------------ client side
 
-void SetCurveClient(zmq::socket_t& sock, const CurveKeyPair& own, const std::string& server_public) {
+void SetCurveClient(zmq::socket_t& sock, const CurveKeyPair& own,
+                    const std::string& server_public) {
   sock.set(zmq::sockopt::curve_serverkey, server_public);
   sock.set(zmq::sockopt::curve_publickey, own.public_z85);
   sock.set(zmq::sockopt::curve_secretkey, own.secret_z85);
@@ -346,7 +357,8 @@ std::optional<std::string> HandshakeMonitor::Poll() {
       case ZMQ_EVENT_HANDSHAKE_FAILED_PROTOCOL:
         if (value == ZMQ_PROTOCOL_ERROR_ZMTP_MECHANISM_MISMATCH)
           out = "the master at " + where + " uses another security mechanism than this " + who_ +
-                ": it may require CURVE keys (--curve-secret and --master-public), or not expect them";
+                ": it may require CURVE keys (--curve-secret and --master-public), or not expect "
+                "them";
         else if (value == ZMQ_PROTOCOL_ERROR_ZMTP_CRYPTOGRAPHIC)
           out = "CURVE handshake with the master at " + where +
                 " failed (cryptographic error): is --master-public the master's public key?";

@@ -67,10 +67,10 @@ struct JobInfo {
   uint64_t seed = 0;
   std::string algorithm;  ///< "ga" or "external" (a session: generation = batches evaluated)
   std::string notice;     ///< what the master repaired on loading the job (names the file), or ""
-  std::string storage_error;            ///< checkpoints cannot be written now: why, or ""
+  std::string storage_error;  ///< checkpoints cannot be written now: why, or ""
   double storage_error_since_unix_s = 0;
-  bool archived = false;   ///< ended, kept on disk only: fetch reads it from the state directory
-  double ended_unix_s = 0; ///< when it ended (0 while running)
+  bool archived = false;    ///< ended, kept on disk only: fetch reads it from the state directory
+  double ended_unix_s = 0;  ///< when it ended (0 while running)
   std::optional<opt::GaTermination> termination;  ///< the GA's rule, for a GA job that ended by it
 };
 
@@ -80,7 +80,7 @@ struct JobEvent {
   std::optional<GenerationRecord> record;
   std::string message;
   int workers = 0, worker_threads = 0;  ///< connected when sent (filled in by the broker)
-  std::string storage_error;  ///< the job's checkpoints cannot be written now (JobInfo)
+  std::string storage_error;            ///< the job's checkpoints cannot be written now (JobInfo)
 };
 
 // ------------------------------------------------------------------ worker protocol
@@ -111,38 +111,50 @@ struct BatchResultMsg {
 struct WorkerMsg {
   enum class Type { kReady, kHeartbeat, kDisconnect, kContextRequest, kContext, kBatch, kResult };
   Type type = Type::kHeartbeat;
-  int threads = 0;                  ///< kReady
-  std::string host;                 ///< kReady
-  int64_t pid = 0;                  ///< kReady
-  std::string arithmetic;           ///< kReady: model::ArithmeticProfile() of the worker
-  std::string reason;               ///< kDisconnect
-  std::string context_hash;         ///< kContextRequest, kContext
-  std::string context_spec;         ///< kContext: serialised JobSpec
-  WireCode code = WireCode::kOk;    ///< kContext (not found), or an error answer
-  TaskBatchMsg batch;               ///< kBatch
-  BatchResultMsg result;            ///< kResult
+  int threads = 0;                ///< kReady
+  std::string host;               ///< kReady
+  int64_t pid = 0;                ///< kReady
+  std::string arithmetic;         ///< kReady: model::ArithmeticProfile() of the worker
+  std::string reason;             ///< kDisconnect
+  std::string context_hash;       ///< kContextRequest, kContext
+  std::string context_spec;       ///< kContext: serialised JobSpec
+  WireCode code = WireCode::kOk;  ///< kContext (not found), or an error answer
+  TaskBatchMsg batch;             ///< kBatch
+  BatchResultMsg result;          ///< kResult
 };
 
 // ------------------------------------------------------------------ client protocol
 
 struct ClientRequestMsg {
-  enum class Type { kSubmit, kStatus, kWatch, kCancel, kList, kFetch, kPing, kEvaluate, kClose, kPrune, kWorkers };
+  enum class Type {
+    kSubmit,
+    kStatus,
+    kWatch,
+    kCancel,
+    kList,
+    kFetch,
+    kPing,
+    kEvaluate,
+    kClose,
+    kPrune,
+    kWorkers
+  };
   Type type = Type::kPing;
   uint64_t request_id = 0;
-  job::JobSpec spec;              ///< kSubmit (decoded)
-  std::string spec_bytes;    ///< kSubmit: the deterministic serialisation of the spec
+  job::JobSpec spec;       ///< kSubmit (decoded)
+  std::string spec_bytes;  ///< kSubmit: the deterministic serialisation of the spec
   std::vector<job::FieldViolation> decode_violations;  ///< kSubmit: fields that did not decode
-  std::string client_token;  ///< kSubmit
-  std::string job_id;        ///< kStatus, kWatch, kCancel, kFetch, kEvaluate, kClose
-  int count = 1;             ///< kFetch
-  bool log_only = false;     ///< kFetch: only the info and the log (records of generations ≥ log_from)
-  uint64_t log_from = 0;     ///< kFetch with log_only
-  uint64_t batch_seq = 0;         ///< kEvaluate: ≥ 1
-  std::vector<opt::Genome> genomes;    ///< kEvaluate: the batch, or empty (a poll)
-  std::vector<std::string> job_ids;    ///< kPrune: jobs named
-  double older_than_s = 0;             ///< kPrune: ended longer ago than this (> 0)
-  int keep = 0;                        ///< kPrune: all but the `keep` most recently ended (> 0)
-  bool dry_run = false;                ///< kPrune
+  std::string client_token;                            ///< kSubmit
+  std::string job_id;     ///< kStatus, kWatch, kCancel, kFetch, kEvaluate, kClose
+  int count = 1;          ///< kFetch
+  bool log_only = false;  ///< kFetch: only the info and the log (records of generations ≥ log_from)
+  uint64_t log_from = 0;             ///< kFetch with log_only
+  uint64_t batch_seq = 0;            ///< kEvaluate: ≥ 1
+  std::vector<opt::Genome> genomes;  ///< kEvaluate: the batch, or empty (a poll)
+  std::vector<std::string> job_ids;  ///< kPrune: jobs named
+  double older_than_s = 0;           ///< kPrune: ended longer ago than this (> 0)
+  int keep = 0;                      ///< kPrune: all but the `keep` most recently ended (> 0)
+  bool dry_run = false;              ///< kPrune
 };
 
 /// A connected worker as the scheduler sees it (proto WorkerInfo).
@@ -183,22 +195,22 @@ struct ClientReplyMsg {
   WireCode code = WireCode::kOk;
   std::string error;
   std::vector<job::FieldViolation> violations;
-  std::string job_id;  ///< kSubmit
-  bool existed = false;  ///< kSubmit
-  JobInfo info;        ///< kStatus, kFetch
-  std::vector<JobInfo> jobs;  ///< kList
-  int workers = 0, worker_threads = 0;  ///< kList
-  std::vector<ScoredGenome> best;       ///< kFetch
-  std::vector<GenerationRecord> log;    ///< kFetch
+  std::string job_id;                        ///< kSubmit
+  bool existed = false;                      ///< kSubmit
+  JobInfo info;                              ///< kStatus, kFetch
+  std::vector<JobInfo> jobs;                 ///< kList
+  int workers = 0, worker_threads = 0;       ///< kList
+  std::vector<ScoredGenome> best;            ///< kFetch
+  std::vector<GenerationRecord> log;         ///< kFetch
   std::optional<job::JobSpec> spec;          ///< kFetch: the job's spec
   std::vector<io::SavedNetwork> networks;    ///< kFetch: best[i] as networks (hgann), or empty
-  JobEvent event;                       ///< kEvent
-  uint64_t batch_seq = 0;               ///< kEvaluate
-  bool done = false;                    ///< kEvaluate: results holds the batch's results
+  JobEvent event;                            ///< kEvent
+  uint64_t batch_seq = 0;                    ///< kEvaluate
+  bool done = false;                         ///< kEvaluate: results holds the batch's results
   std::vector<opt::FitnessResult> results;   ///< kEvaluate (worker_threads: connected threads)
-  std::vector<std::string> pruned;            ///< kPrune: deleted (dry run: would be)
-  std::vector<job::FieldViolation> refused;   ///< kPrune: {job id, why not}
-  WorkersSnapshot workers_snapshot;           ///< kWorkers
+  std::vector<std::string> pruned;           ///< kPrune: deleted (dry run: would be)
+  std::vector<job::FieldViolation> refused;  ///< kPrune: {job id, why not}
+  WorkersSnapshot workers_snapshot;          ///< kWorkers
 };
 
 }  // namespace pz::service

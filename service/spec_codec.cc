@@ -12,7 +12,9 @@ namespace pz::service {
 namespace detail {
 namespace {
 template <typename T>
-T OrDefault(T v, T def) { return v == T{} ? def : v; }
+T OrDefault(T v, T def) {
+  return v == T{} ? def : v;
+}
 }  // namespace
 
 void CaseToProto(const HgannCaseSpec& c, pw::HgannCase* pc) {
@@ -28,7 +30,8 @@ void CaseToProto(const HgannCaseSpec& c, pw::HgannCase* pc) {
 }
 
 /// `field` names the case in violations ("hgann.cases[3]").
-HgannCaseSpec CaseFromProto(const pw::HgannCase& pc, const std::string& field, std::vector<FieldViolation>* v) {
+HgannCaseSpec CaseFromProto(const pw::HgannCase& pc, const std::string& field,
+                            std::vector<FieldViolation>* v) {
   HgannCaseSpec c;
   c.number = ClampInt(pc.number());
   c.amplitude_v = pc.amplitude_v();
@@ -84,7 +87,8 @@ void ProblemToProto(const HgannProblem& h, pw::JobSpec* p) {
       if (f->cpp_type() == google::protobuf::FieldDescriptor::CPPTYPE_DOUBLE)
         refl->SetDouble(g, f, value);
       else
-        refl->SetUInt32(g, f, value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
+        refl->SetUInt32(g, f,
+                        value >= 0 && value <= 4294967295.0 ? static_cast<uint32_t>(value) : 0u);
     }
   }
 }
@@ -105,11 +109,17 @@ HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolati
   h.trend_seeds = ph.has_trend_seeds() ? ph.trend_seeds() : preset.trend_seeds;
   switch (ph.saturation()) {
     case pw::SATURATION_UNSPECIFIED:
-    case pw::SATURATION_FROM_EXTREMES: h.saturation = HgannProblem::Saturation::kFromExtremes; break;
-    case pw::SATURATION_GIVEN: h.saturation = HgannProblem::Saturation::kGiven; break;
+    case pw::SATURATION_FROM_EXTREMES:
+      h.saturation = HgannProblem::Saturation::kFromExtremes;
+      break;
+    case pw::SATURATION_GIVEN:
+      h.saturation = HgannProblem::Saturation::kGiven;
+      break;
     default:
-      if (v) v->push_back({"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
-                                                   ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
+      if (v)
+        v->push_back(
+            {"hgann.saturation", "hgann.saturation = " + std::to_string(ph.saturation()) +
+                                     ": must be SATURATION_FROM_EXTREMES or SATURATION_GIVEN"});
   }
   if (ph.has_geometry()) {
     const auto& g = ph.geometry();
@@ -129,20 +139,26 @@ HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolati
 void ProblemToProto(const SyntheticProblem& y, pw::JobSpec* p) {
   auto* py = p->mutable_synthetic();
   py->set_cost(y.cost == SyntheticProblem::Cost::kNull ? pw::SyntheticProblem::COST_NULL
-                                                        : pw::SyntheticProblem::COST_FUNCTION);
+                                                       : pw::SyntheticProblem::COST_FUNCTION);
   py->set_genome_bits(static_cast<uint32_t>(y.genome_bits));
   py->set_sleep_ms(y.sleep_ms);
   py->set_crash_prefix(y.crash_prefix);
 }
 
-SyntheticProblem SyntheticFromProto(const pw::SyntheticProblem& py, std::vector<FieldViolation>* v) {
+SyntheticProblem SyntheticFromProto(const pw::SyntheticProblem& py,
+                                    std::vector<FieldViolation>* v) {
   SyntheticProblem y;
   switch (py.cost()) {
-    case pw::SyntheticProblem::COST_NULL: y.cost = SyntheticProblem::Cost::kNull; break;
-    case pw::SyntheticProblem::COST_FUNCTION: y.cost = SyntheticProblem::Cost::kFunction; break;
+    case pw::SyntheticProblem::COST_NULL:
+      y.cost = SyntheticProblem::Cost::kNull;
+      break;
+    case pw::SyntheticProblem::COST_FUNCTION:
+      y.cost = SyntheticProblem::Cost::kFunction;
+      break;
     default:
-      if (v) v->push_back({"synthetic.cost", "synthetic.cost = " + std::to_string(py.cost()) +
-                                                 ": must be COST_NULL or COST_FUNCTION"});
+      if (v)
+        v->push_back({"synthetic.cost", "synthetic.cost = " + std::to_string(py.cost()) +
+                                            ": must be COST_NULL or COST_FUNCTION"});
   }
   y.genome_bits = ClampInt(OrDefault<uint32_t>(py.genome_bits(), 64));
   y.sleep_ms = py.sleep_ms();
@@ -184,7 +200,8 @@ DiagnoseProblem DiagnoseFromProto(const pw::DiagnoseProblem& pd, std::vector<Fie
   d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
   d.rtol = OrDefault(pd.rtol(), 1e-6);
   d.atol = OrDefault(pd.atol(), 1e-13);
-  d.max_steps = static_cast<int64_t>(std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
+  d.max_steps = static_cast<int64_t>(
+      std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
   d.force_cvode = pd.force_cvode();
   d.source = pd.source();
   return d;
@@ -221,15 +238,19 @@ void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
   pm->mutable_scale()->Assign(m.scale.begin(), m.scale.end());
 }
 
-CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm, std::vector<FieldViolation>* v) {
+CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm,
+                                            std::vector<FieldViolation>* v) {
   CompleteModelProblem m;
   auto bad_enum = [&](const char* field, int value, const char* known) {
-    if (v) v->push_back({field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
+    if (v)
+      v->push_back(
+          {field, std::string(field) + " = " + std::to_string(value) + ": must be " + known});
   };
   if (pm.family() >= 0 && pm.family() <= 4)
     m.family = static_cast<CompleteModelProblem::Family>(pm.family());
   else
-    bad_enum("complete_model.family", pm.family(), "BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
+    bad_enum("complete_model.family", pm.family(),
+             "BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
   for (const auto& pr : pm.records()) {
     CompleteModelRecord r;
     r.name = pr.name();
@@ -245,15 +266,17 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm, 
     m.records.push_back(std::move(r));
   }
   if (pm.criterion() >= 0 && pm.criterion() <= 4)
-    m.criterion = static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
+    m.criterion =
+        static_cast<CompleteModelProblem::Criterion>(std::max(1, static_cast<int>(pm.criterion())));
   else
     bad_enum("complete_model.criterion", pm.criterion(), "IAE, SSE, RMSE or MAX");
   m.t0_s = pm.t0_s();
   m.t1_s = pm.t1_s();
   m.substeps = ClampInt(pm.substeps());
   if (pm.interpolation() >= 0 && pm.interpolation() <= 4)
-    m.interpolation = pm.interpolation() == 0 ? CompleteModelProblem::Interpolation::kSpline
-                                              : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
+    m.interpolation = pm.interpolation() == 0
+                          ? CompleteModelProblem::Interpolation::kSpline
+                          : static_cast<CompleteModelProblem::Interpolation>(pm.interpolation());
   else
     bad_enum("complete_model.interpolation", pm.interpolation(), "ZOH, LINEAR, SPLINE or FOURIER");
   m.period_samples = pm.period_samples();
@@ -295,12 +318,14 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     g->set_stall_generations(static_cast<uint32_t>(s.ga->stall_generations));
     // The islands that differ from the problem's default (one island, or an hgann preset's).
     if (s.ga->islands != DefaultIslands(s)) g->set_islands(static_cast<uint32_t>(s.ga->islands));
-    if (s.ga->islands != 1) {  // a one-island spec serialises as before islands existed (the same job id)
+    if (s.ga->islands !=
+        1) {  // a one-island spec serialises as before islands existed (the same job id)
       g->set_migration_interval(static_cast<uint32_t>(s.ga->migration_interval));
       g->set_migrants(static_cast<uint32_t>(s.ga->migrants));
       g->set_topology(static_cast<pw::MigrationTopology>(s.ga->topology));
       g->set_migration_margin(s.ga->migration_margin);
-      if (s.ga->broadcast_interval != 0) {  // a spec without a broadcast serialises as before it existed
+      if (s.ga->broadcast_interval !=
+          0) {  // a spec without a broadcast serialises as before it existed
         g->set_broadcast_interval(static_cast<uint32_t>(s.ga->broadcast_interval));
         g->set_broadcast_margin(s.ga->broadcast_margin);
       }
@@ -308,7 +333,8 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     if (s.ga->island_stall_generations != 0)
       g->set_island_stall_generations(static_cast<uint32_t>(s.ga->island_stall_generations));
     for (double p : s.ga->island_mutation) g->add_island_mutation(p);
-    if (s.ga->output_moves >= 0) g->set_output_moves(static_cast<uint32_t>(s.ga->output_moves));  // unset = auto
+    if (s.ga->output_moves >= 0)
+      g->set_output_moves(static_cast<uint32_t>(s.ga->output_moves));  // unset = auto
   }
   if (s.external) {
     auto* e = p->mutable_external();
@@ -316,8 +342,6 @@ void ToProto(const JobSpec& s, pw::JobSpec* p) {
     e->set_owner(s.external->owner);
   }
 }
-
-
 
 void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v) {
   *s = JobSpec{};
@@ -329,11 +353,20 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
   s->limits.penalty_cost = OrDefault(p.limits().penalty_cost(), 1e9);
   if (p.limits().has_target_cost()) s->limits.target_cost = p.limits().target_cost();
   switch (p.problem_case()) {
-    case pw::JobSpec::kHgann: s->problem = HgannFromProto(p.hgann(), v); break;
-    case pw::JobSpec::kSynthetic: s->problem = SyntheticFromProto(p.synthetic(), v); break;
-    case pw::JobSpec::kDiagnose: s->problem = DiagnoseFromProto(p.diagnose(), v); break;
-    case pw::JobSpec::kCompleteModel: s->problem = CompleteModelFromProto(p.complete_model(), v); break;
-    case pw::JobSpec::PROBLEM_NOT_SET: break;
+    case pw::JobSpec::kHgann:
+      s->problem = HgannFromProto(p.hgann(), v);
+      break;
+    case pw::JobSpec::kSynthetic:
+      s->problem = SyntheticFromProto(p.synthetic(), v);
+      break;
+    case pw::JobSpec::kDiagnose:
+      s->problem = DiagnoseFromProto(p.diagnose(), v);
+      break;
+    case pw::JobSpec::kCompleteModel:
+      s->problem = CompleteModelFromProto(p.complete_model(), v);
+      break;
+    case pw::JobSpec::PROBLEM_NOT_SET:
+      break;
   }
   if (p.has_ga()) {
     const auto& pg = p.ga();
@@ -354,9 +387,11 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     if (pg.has_migration_interval()) g.migration_interval = ClampInt(pg.migration_interval());
     if (pg.has_migrants()) g.migrants = ClampInt(pg.migrants());
     if (pg.topology() != pw::MIGRATION_TOPOLOGY_UNSPECIFIED)
-      g.topology = static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
+      g.topology =
+          static_cast<opt::MigrationTopology>(pg.topology());  // unknown values: JobSpec::Validate
     if (pg.has_migration_margin()) g.migration_margin = pg.migration_margin();
-    if (pg.has_island_stall_generations()) g.island_stall_generations = ClampInt(pg.island_stall_generations());
+    if (pg.has_island_stall_generations())
+      g.island_stall_generations = ClampInt(pg.island_stall_generations());
     if (pg.has_broadcast_interval()) g.broadcast_interval = ClampInt(pg.broadcast_interval());
     if (pg.has_broadcast_margin()) g.broadcast_margin = pg.broadcast_margin();
     g.island_mutation.assign(pg.island_mutation().begin(), pg.island_mutation().end());
@@ -373,7 +408,6 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
 }  // namespace detail
 
 using namespace detail;
-
 
 std::string ContentHash(std::string_view bytes) {
   uint64_t h = 0xcbf29ce484222325ull;
@@ -404,17 +438,20 @@ std::string BitString(const Genome& g) {
   return s;
 }
 
-const char* WireCodeName(WireCode c) {
-  return pw::Code_Name(static_cast<pw::Code>(c)).c_str();
-}
+const char* WireCodeName(WireCode c) { return pw::Code_Name(static_cast<pw::Code>(c)).c_str(); }
 
 const char* JobStateName(JobState s) {
   switch (s) {
-    case JobState::kRunning: return "running";
-    case JobState::kSucceeded: return "succeeded";
-    case JobState::kFailed: return "failed";
-    case JobState::kCancelled: return "cancelled";
-    default: return "unspecified";
+    case JobState::kRunning:
+      return "running";
+    case JobState::kSucceeded:
+      return "succeeded";
+    case JobState::kFailed:
+      return "failed";
+    case JobState::kCancelled:
+      return "cancelled";
+    default:
+      return "unspecified";
   }
 }
 
@@ -442,10 +479,12 @@ std::string AllowedEnumNames(std::string_view message) {
   if (at == std::string_view::npos) return "";
   std::string_view name = message.substr(at + kType.size());
   name = name.substr(0, name.find_first_of(" \t\n"));
-  const auto* e = google::protobuf::DescriptorPool::generated_pool()->FindEnumTypeByName(std::string(name));
+  const auto* e =
+      google::protobuf::DescriptorPool::generated_pool()->FindEnumTypeByName(std::string(name));
   if (e == nullptr) return "";
   std::string names;
-  for (int i = 0; i < e->value_count(); ++i) names += (i ? ", " : "") + std::string(e->value(i)->name());
+  for (int i = 0; i < e->value_count(); ++i)
+    names += (i ? ", " : "") + std::string(e->value(i)->name());
   return " (allowed: " + names + ")";
 }
 

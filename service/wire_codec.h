@@ -74,7 +74,8 @@ std::string DashboardStateJson(const std::string& master, double polled_unix_s, 
                                const std::string& error, const std::vector<JobInfo>& jobs,
                                const WorkersSnapshot& workers, const std::string& workers_error,
                                const std::vector<std::string>& reports);
-std::string DashboardCurveJson(const std::string& job_id, const std::vector<GenerationRecord>& records);
+std::string DashboardCurveJson(const std::string& job_id,
+                               const std::vector<GenerationRecord>& records);
 
 std::string EncodeClientRequest(const ClientRequestMsg& m);
 Status DecodeClientRequest(std::string_view bytes, ClientRequestMsg* m);

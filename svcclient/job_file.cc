@@ -21,7 +21,7 @@ Status ResolveCaseSetDir(job::JobSpec* spec, const fs::path& base_dir,
   };
   if (!h->cases.empty()) return fail("cannot be combined with hgann.cases (give one or the other)");
   const fs::path dir = (fs::path(h->case_set_dir).is_absolute() ? fs::path(h->case_set_dir)
-                                                                  : base_dir / h->case_set_dir)
+                                                                : base_dir / h->case_set_dir)
                            .lexically_normal();
   io::CaseSet set;
   try {

@@ -15,14 +15,21 @@ using service::WireCode;
 
 Status StatusFromWire(WireCode code, const std::string& error) {
   switch (code) {
-    case WireCode::kOk: return Status::Ok();
-    case WireCode::kInvalidArgument: return {StatusCode::kInvalidArgument, error};
-    case WireCode::kNotFound: return {StatusCode::kNotFound, error};
+    case WireCode::kOk:
+      return Status::Ok();
+    case WireCode::kInvalidArgument:
+      return {StatusCode::kInvalidArgument, error};
+    case WireCode::kNotFound:
+      return {StatusCode::kNotFound, error};
     case WireCode::kFailedPrecondition:
-    case WireCode::kVersionMismatch: return {StatusCode::kFailedPrecondition, error};
-    case WireCode::kMalformed: return {StatusCode::kDataLoss, error};
-    case WireCode::kInternal: return {StatusCode::kInternal, error};
-    default: return {StatusCode::kUnavailable, error.empty() ? "master unavailable" : error};
+    case WireCode::kVersionMismatch:
+      return {StatusCode::kFailedPrecondition, error};
+    case WireCode::kMalformed:
+      return {StatusCode::kDataLoss, error};
+    case WireCode::kInternal:
+      return {StatusCode::kInternal, error};
+    default:
+      return {StatusCode::kUnavailable, error.empty() ? "master unavailable" : error};
   }
 }
 
@@ -34,7 +41,7 @@ struct ServiceClient::Impl {
   zmq::context_t ctx{1};
   std::unique_ptr<zmq::socket_t> sock;
   std::unique_ptr<service::HandshakeMonitor> monitor;  // of sock
-  std::string refused;  // the master refused the handshake: why
+  std::string refused;                                 // the master refused the handshake: why
   std::mt19937_64 rng;
   uint64_t next_id = 1;
 
@@ -68,7 +75,8 @@ struct ServiceClient::Impl {
       }
       zmq::message_t msg;
       if (!sock->recv(msg, zmq::recv_flags::dontwait)) continue;
-      if (service::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply).ok())
+      if (service::DecodeClientReply({static_cast<const char*>(msg.data()), msg.size()}, reply)
+              .ok())
         return true;
     }
     return false;
@@ -96,8 +104,8 @@ struct ServiceClient::Impl {
                                " bytes: above the maximum message size (max_message_bytes = " +
                                std::to_string(options.max_message_bytes) + ")");
       sock->send(zmq::buffer(payload), zmq::send_flags::dontwait);
-      const auto until = std::chrono::steady_clock::now() +
-                         std::chrono::milliseconds(options.timeout_ms);
+      const auto until =
+          std::chrono::steady_clock::now() + std::chrono::milliseconds(options.timeout_ms);
       while (std::chrono::steady_clock::now() < until) {
         if (!Receive(reply, std::chrono::duration_cast<std::chrono::milliseconds>(
                                 until - std::chrono::steady_clock::now())))
@@ -115,17 +123,19 @@ struct ServiceClient::Impl {
       monitor.reset();
       return {StatusCode::kUnavailable, refused};
     }
-    std::string hint = options.curve
-                           ? "; or it refused this client's CURVE key, or --master-public is not its key"
-                           : "; the master may require CURVE keys (--curve-secret and --master-public, or "
-                             "PIEZOID_CURVE_SECRET and PIEZOID_MASTER_PUBLIC)";
+    std::string hint =
+        options.curve
+            ? "; or it refused this client's CURVE key, or --master-public is not its key"
+            : "; the master may require CURVE keys (--curve-secret and --master-public, or "
+              "PIEZOID_CURVE_SECRET and PIEZOID_MASTER_PUBLIC)";
     if (!handshake.empty()) hint += " (" + handshake + ")";
     if (sent_bytes > (1u << 20))
       hint += "; the request was " + std::to_string(sent_bytes) +
               " bytes: a master drops the connection of a request above its --max-message-bytes";
     return {StatusCode::kUnavailable,
-            "cannot reach the master at " + options.endpoint + ": is piezoid-master running? (no answer to " +
-                std::to_string(options.retries) + (options.retries == 1 ? " attempt" : " attempts") + " of " +
+            "cannot reach the master at " + options.endpoint +
+                ": is piezoid-master running? (no answer to " + std::to_string(options.retries) +
+                (options.retries == 1 ? " attempt" : " attempts") + " of " +
                 std::to_string(options.timeout_ms) + " ms)" + hint};
   }
 };
@@ -191,12 +201,14 @@ Status ServiceClient::Workers(service::WorkersSnapshot* out) {
   Status s = impl_->Call(req, &reply);
   if (!s.ok()) return s;
   if (reply.type != ClientReplyMsg::Type::kWorkers)
-    return Status(StatusCode::kUnavailable, "the master did not answer the workers request (an older version?)");
+    return Status(StatusCode::kUnavailable,
+                  "the master did not answer the workers request (an older version?)");
   *out = std::move(reply.workers_snapshot);
   return s;
 }
 
-Status ServiceClient::FetchLog(const std::string& job_id, uint64_t from_generation, service::JobInfo* info,
+Status ServiceClient::FetchLog(const std::string& job_id, uint64_t from_generation,
+                               service::JobInfo* info,
                                std::vector<service::GenerationRecord>* log) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kFetch;
@@ -219,8 +231,9 @@ Status ServiceClient::Cancel(const std::string& job_id) {
   return impl_->CallOnJob(ClientRequestMsg::Type::kCancel, job_id, &reply);
 }
 
-Status ServiceClient::Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep, bool dry_run,
-                            std::vector<std::string>* pruned, std::vector<job::FieldViolation>* refused) {
+Status ServiceClient::Prune(const std::vector<std::string>& job_ids, double older_than_s, int keep,
+                            bool dry_run, std::vector<std::string>* pruned,
+                            std::vector<job::FieldViolation>* refused) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kPrune;
   req.job_ids = job_ids;
@@ -273,7 +286,8 @@ Status ServiceClient::Watch(const std::string& job_id,
       if (!impl_->refused.empty()) return s;
       const auto now = std::chrono::steady_clock::now();
       if (!unreachable_since) unreachable_since = now;
-      if (std::chrono::duration<double>(now - *unreachable_since).count() >= impl_->options.watch_reconnect_s)
+      if (std::chrono::duration<double>(now - *unreachable_since).count() >=
+          impl_->options.watch_reconnect_s)
         return s;
       continue;
     }
@@ -315,7 +329,8 @@ Status ServiceClient::Evaluate(const std::string& job_id, uint64_t batch_seq,
   Status s = impl_->Call(req, &reply);
   if (!s.ok()) return s;
   if (reply.type != ClientReplyMsg::Type::kEvaluate || reply.batch_seq != batch_seq)
-    return {StatusCode::kDataLoss, "the master's evaluate reply does not answer batch " + std::to_string(batch_seq)};
+    return {StatusCode::kDataLoss,
+            "the master's evaluate reply does not answer batch " + std::to_string(batch_seq)};
   *done = reply.done;
   if (reply.done) *results = std::move(reply.results);
   if (worker_threads) *worker_threads = reply.worker_threads;

@@ -40,10 +40,10 @@ struct ServiceClientOptions {
 
 // Errors: a request that gets no answer at all returns kUnavailable, "cannot reach the master at
 // <endpoint>: is piezoid-master running? … may require CURVE keys …"; a master that refuses this
-// client's CURVE key (or expects another mechanism) returns kUnavailable at once, saying so, without
-// retrying; a request above max_message_bytes is kInvalidArgument; the master's answers map by
-// StatusFromWire (unknown
-// job → kNotFound, invalid spec → kInvalidArgument with the violations, …).
+// client's CURVE key (or expects another mechanism) returns kUnavailable at once, saying so,
+// without retrying; a request above max_message_bytes is kInvalidArgument; the master's answers map
+// by StatusFromWire (unknown job → kNotFound, invalid spec → kInvalidArgument with the violations,
+// …).
 
 struct SubmitResult {
   std::string job_id;
@@ -91,12 +91,13 @@ class ServiceClient {
   Status Watch(const std::string& job_id,
                const std::function<bool(const service::JobEvent&)>& on_event,
                std::chrono::milliseconds timeout);
-  /// Evaluation sessions (JobSpec.external, svcclient/service_evaluator.h): submits batch `batch_seq`
-  /// of a session (genomes non-empty; a retry is a poll) or polls it (genomes empty). *done says
-  /// whether *results holds its results (one per genome). A batch the master does not hold is
-  /// kNotFound: send it again with its genomes.
-  Status Evaluate(const std::string& job_id, uint64_t batch_seq, const std::vector<opt::Genome>& genomes,
-                  bool* done, std::vector<opt::FitnessResult>* results, int* worker_threads = nullptr);
+  /// Evaluation sessions (JobSpec.external, svcclient/service_evaluator.h): submits batch
+  /// `batch_seq` of a session (genomes non-empty; a retry is a poll) or polls it (genomes empty).
+  /// *done says whether *results holds its results (one per genome). A batch the master does not
+  /// hold is kNotFound: send it again with its genomes.
+  Status Evaluate(const std::string& job_id, uint64_t batch_seq,
+                  const std::vector<opt::Genome>& genomes, bool* done,
+                  std::vector<opt::FitnessResult>* results, int* worker_threads = nullptr);
   /// Ends an evaluation session: it succeeds (a retried close of a succeeded session is Ok).
   Status Close(const std::string& job_id);
   /// Waits (polling status) until the job is final; its last info in *info.

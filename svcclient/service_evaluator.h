@@ -35,8 +35,9 @@ class ServiceError : public std::runtime_error {
 
 struct ServiceEvaluatorOptions {
   ServiceClientOptions client;
-  double idle_timeout_s = 120;  ///< the master cancels the session after this long without a request
-  int max_poll_ms = 5;          ///< polls of a pending batch back off up to this interval [ms]
+  double idle_timeout_s =
+      120;              ///< the master cancels the session after this long without a request
+  int max_poll_ms = 5;  ///< polls of a pending batch back off up to this interval [ms]
   /// A batch not done after this long (e.g. no worker connected) fails with ServiceError; 0 = wait
   /// for ever [s].
   double batch_timeout_s = 0;
@@ -47,7 +48,8 @@ class ServiceEvaluator final : public opt::BatchEvaluator {
   /// Opens a session for `spec` (its algorithm becomes `external`, with `owner` as the owner).
   /// Throws InputError with every violated field if the master refuses the spec, ServiceError if
   /// it cannot be reached.
-  ServiceEvaluator(ServiceEvaluatorOptions options, job::JobSpec spec, const std::string& owner = {});
+  ServiceEvaluator(ServiceEvaluatorOptions options, job::JobSpec spec,
+                   const std::string& owner = {});
   /// Closes the session (errors are ignored: an unclosed session ends by its idle timeout).
   ~ServiceEvaluator() override;
   ServiceEvaluator(const ServiceEvaluator&) = delete;

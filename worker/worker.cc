@@ -141,7 +141,8 @@ struct Worker::Impl {
   Handout handout;
   std::unordered_map<LocalLease*, std::unique_ptr<LocalLease>> leases;
   std::map<std::string, std::vector<std::unique_ptr<LocalLease>>> parked;  // by context hash
-  std::list<std::pair<std::string, std::shared_ptr<const Context>>> contexts;  // LRU, front = newest
+  std::list<std::pair<std::string, std::shared_ptr<const Context>>>
+      contexts;  // LRU, front = newest
   service::ServerLiveness server;
   service::Backoff backoff;
   WorkerStats stats;
@@ -168,7 +169,8 @@ struct Worker::Impl {
     ::gethostname(host, sizeof host - 1);
     ready_msg.host = host;
     ready_msg.pid = ::getpid();
-    ready_msg.arithmetic = options.arithmetic.empty() ? model::ArithmeticProfile() : options.arithmetic;
+    ready_msg.arithmetic =
+        options.arithmetic.empty() ? model::ArithmeticProfile() : options.arithmetic;
     Send(ready_msg);
     server.Reset(Clock::now());
   }
@@ -280,7 +282,9 @@ struct Worker::Impl {
         }
         break;
       }
-      case WorkerMsg::Type::kContext: OnContext(m); break;
+      case WorkerMsg::Type::kContext:
+        OnContext(m);
+        break;
       case WorkerMsg::Type::kDisconnect:
         if (m.code == WireCode::kInvalidArgument) {  // refused for good: retrying cannot help
           spdlog::error("master {} refused this worker: {}", options.master, m.reason);
@@ -292,7 +296,8 @@ struct Worker::Impl {
         }
         Reconnect(stop, ("master says: " + m.reason).c_str());
         break;
-      default: break;
+      default:
+        break;
     }
   }
 
@@ -327,7 +332,8 @@ struct Worker::Impl {
     }
     ++stats.contexts_fetched;
     contexts.emplace_front(m.context_hash, c);
-    while (static_cast<int>(contexts.size()) > std::max(1, options.max_contexts)) contexts.pop_back();
+    while (static_cast<int>(contexts.size()) > std::max(1, options.max_contexts))
+      contexts.pop_back();
     for (auto& l : leases_waiting) Enqueue(std::move(l), c);
   }
 
@@ -348,7 +354,8 @@ struct Worker::Impl {
       done = l.done;
     }
     stats.tasks += static_cast<uint64_t>(done);
-    if (!l.abandoned && done == static_cast<int>(l.batch.genomes.size())) Reply(l, WireCode::kOk, {});
+    if (!l.abandoned && done == static_cast<int>(l.batch.genomes.size()))
+      Reply(l, WireCode::kOk, {});
     leases.erase(it);
   }
 
@@ -378,15 +385,15 @@ struct Worker::Impl {
     Connect();
     while (!stop.load()) {
       const TimePoint now = Clock::now();
-      const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(
-          server.next_heartbeat() - now);
+      const auto wait =
+          std::chrono::duration_cast<std::chrono::milliseconds>(server.next_heartbeat() - now);
       zmq::pollitem_t items[] = {{master->handle(), 0, ZMQ_POLLIN, 0},
                                  {inproc.handle(), 0, ZMQ_POLLIN, 0},
                                  {monitor->handle(), 0, ZMQ_POLLIN, 0}};
       try {
-        zmq::poll(items, monitor->handle() ? 3 : 2, std::clamp(wait, std::chrono::milliseconds(0),
-                                       std::chrono::milliseconds(100)) +
-                                std::chrono::milliseconds(1));
+        zmq::poll(items, monitor->handle() ? 3 : 2,
+                  std::clamp(wait, std::chrono::milliseconds(0), std::chrono::milliseconds(100)) +
+                      std::chrono::milliseconds(1));
       } catch (const zmq::error_t& e) {
         if (e.num() != EINTR) throw;
       }
@@ -428,7 +435,8 @@ struct Worker::Impl {
       handout.stop = true;
     }
     handout.cv.notify_all();
-    const TimePoint give_up = Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
+    const TimePoint give_up =
+        Clock::now() + std::chrono::milliseconds(std::max(0, options.stop_grace_ms));
     while (stopped_threads < options.threads && Clock::now() < give_up)
       PollInproc(std::chrono::milliseconds(50));
     const int stopped = stopped_threads;
@@ -440,8 +448,8 @@ struct Worker::Impl {
     }
     if (stopped < options.threads) {  // a computation would not end: see WorkerStats::stuck_threads
       stats.stuck_threads = options.threads - stopped;
-      spdlog::warn("{} compute thread(s) still inside an evaluation after {} ms", stats.stuck_threads,
-                   options.stop_grace_ms);
+      spdlog::warn("{} compute thread(s) still inside an evaluation after {} ms",
+                   stats.stuck_threads, options.stop_grace_ms);
       return stats;
     }
     threads.clear();

@@ -22,14 +22,14 @@ namespace pz::worker {
 
 struct WorkerOptions {
   std::string master = "tcp://127.0.0.1:5555";  ///< the master's worker endpoint
-  int threads = 1;                    ///< compute threads, 1..4096
-  int heartbeat_ms = 500;             ///< heartbeat interval; match the master's [ms]
-  int liveness = 6;                   ///< silent intervals before the master is presumed gone
-  int backoff_initial_ms = 100;       ///< first reconnect delay [ms]
-  int backoff_max_ms = 5000;          ///< reconnect delay cap [ms]
+  int threads = 1;                              ///< compute threads, 1..4096
+  int heartbeat_ms = 500;                       ///< heartbeat interval; match the master's [ms]
+  int liveness = 6;              ///< silent intervals before the master is presumed gone
+  int backoff_initial_ms = 100;  ///< first reconnect delay [ms]
+  int backoff_max_ms = 5000;     ///< reconnect delay cap [ms]
   int64_t max_message_bytes = 64 << 20;
-  int max_contexts = 8;               ///< job contexts cached
-  int stop_grace_ms = 10000;          ///< on stop, how long running evaluations may finish [ms]
+  int max_contexts = 8;       ///< job contexts cached
+  int stop_grace_ms = 10000;  ///< on stop, how long running evaluations may finish [ms]
   /// CURVE: this worker's key pair and the master's public key (Z85); plain when unset.
   std::optional<service::CurveKeyPair> curve;
   std::string master_public;

@@ -31,18 +31,20 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app.add_option("--backoff-max-ms", o.backoff_max_ms, "reconnect delay cap [ms]")
       ->capture_default_str();
-  auto* secret = app.add_option("--curve-secret", curve_secret,
-                                "CURVE: this worker's key pair (NAME.key from `piezoid keygen`, mode 0600; "
-                                "its NAME.pub must be in the master's --allow-workers directory)");
+  auto* secret =
+      app.add_option("--curve-secret", curve_secret,
+                     "CURVE: this worker's key pair (NAME.key from `piezoid keygen`, mode 0600; "
+                     "its NAME.pub must be in the master's --allow-workers directory)");
   auto* pub = app.add_option("--master-public", master_public,
                              "CURVE: the master's public key file (its NAME.pub)");
   secret->needs(pub);
   pub->needs(secret);
-  app.add_option("--arithmetic", o.arithmetic,
-                 "announce this arithmetic profile instead of the detected one (" +
-                     pz::model::ArithmeticProfile() +
-                     " here); only to declare two kinds of machine equivalent after checking that they "
-                     "give the same results");
+  app.add_option(
+      "--arithmetic", o.arithmetic,
+      "announce this arithmetic profile instead of the detected one (" +
+          pz::model::ArithmeticProfile() +
+          " here); only to declare two kinds of machine equivalent after checking that they "
+          "give the same results");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);

@@ -54,8 +54,9 @@ static inline pzk_fin_step_t pzk_fin_step_of(const double *c) {
 /* One sub-step tau of every mode (x0, x1 in place), z held by the quintic Hermite of (zl, zr), u
  * linear from u_a with slope u_dot (modal_simulator.cc GeneralSubstep). Each mode's discretisation:
  * the constants' full sample when disc_tau == 0, else computed here for disc_tau. */
-static inline void pzk_fin_substep(const pzk_block *b, const double *c, double *x0, double *x1, double tau,
-                                   double disc_tau, pzk_fin_zdata zl, pzk_fin_zdata zr, double u_a, double u_dot) {
+static inline void pzk_fin_substep(const pzk_block *b, const double *c, double *x0, double *x1,
+                                   double tau, double disc_tau, pzk_fin_zdata zl, pzk_fin_zdata zr,
+                                   double u_a, double u_dot) {
   const int n = b->n;
   const double *wu = b->w + 1 + n, *wz = b->w + 1 + 2 * n;
   double fz[6];
@@ -92,22 +93,24 @@ static inline double pzk_fin_init(const pzk_block *b, double *c, double *d, doub
   return p[9] * d[2 * n + 3];
 }
 
-/* pzk_fin_sample's sub-step over the block: a regular one with the constants' full sample (disc == 0,
- * one sub-step per sample) or discretised for disc (the sample / nsub), a cut piece for its tau. */
+/* pzk_fin_sample's sub-step over the block: a regular one with the constants' full sample (disc ==
+ * 0, one sub-step per sample) or discretised for disc (the sample / nsub), a cut piece for its tau.
+ */
 typedef struct {
   const pzk_block *b;
   const double *c;
   double *x0, *x1;
   double disc;
 } pzk_fin_walk;
-static inline void pzk_fin_walk_substep(void *ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
-                                        double u_a, double u_dot) {
+static inline void pzk_fin_walk_substep(void *ctx, double tau, int regular, pzk_fin_zdata zl,
+                                        pzk_fin_zdata zr, double u_a, double u_dot) {
   const pzk_fin_walk *w = (const pzk_fin_walk *)ctx;
   pzk_fin_substep(w->b, w->c, w->x0, w->x1, tau, regular ? w->disc : tau, zl, zr, u_a, u_dot);
 }
 
 /* One sample from the drive d[2n] to v (fin_modal.h pzk_fin_sample); returns gain * angle. */
-static inline double pzk_fin_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_fin_step(const pzk_block *b, const double *c, const double *d, double *o,
+                                  double v) {
   const int n = b->n;
   const double *p = b->p;
   const double tau = b->dt, u0 = d[2 * n];
@@ -135,8 +138,8 @@ static inline double pzk_fin_step(const pzk_block *b, const double *c, const dou
 /* The inverse's trial step (model/kernels/chain.h pzk_chain_inverse_fin): pzk_fin_step, its output
  * the angle pushed through the backlash: theta - a1 (dir > 0) or theta + a2 (dir < 0), within the
  * saturations [b2, b1]. */
-static inline double pzk_fin_step_through(const pzk_block *b, const double *c, const double *d, double *o, double v,
-                                          int dir) {
+static inline double pzk_fin_step_through(const pzk_block *b, const double *c, const double *d,
+                                          double *o, double v, int dir) {
   const int n = b->n;
   const double *p = b->p;
   pzk_fin_step(b, c, d, o, v);

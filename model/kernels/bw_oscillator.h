@@ -1,8 +1,8 @@
 /* bw-oscillator (records/families.h, model/bw_oscillator.h): m y'' + c y' + k y + z = u,
- * z' = alpha y' - bg |y'| z - bd y' |z| (nu = 1), classical RK4 with n steps per sample on the drive
- * linear between samples (the fit's interpolation), from rest at k y = u_0.
- * p = {K, fn_Hz, zeta, share, beta_gamma, beta_delta} (scaled) or {m, c, k, alpha, bg, bd} (m = 1:
- * physical); c = {inv_m, c, k, alpha, bg, bd}; d = {y, v, z, u_prev}. */
+ * z' = alpha y' - bg |y'| z - bd y' |z| (nu = 1), classical RK4 with n steps per sample on the
+ * drive linear between samples (the fit's interpolation), from rest at k y = u_0. p = {K, fn_Hz,
+ * zeta, share, beta_gamma, beta_delta} (scaled) or {m, c, k, alpha, bg, bd} (m = 1: physical); c =
+ * {inv_m, c, k, alpha, bg, bd}; d = {y, v, z, u_prev}. */
 static inline void pzk_bw_osc_params(const pzk_block *b, double *c) {
   const double *p = b->p;
   double m, cc, k, alpha;
@@ -37,7 +37,8 @@ static inline double pzk_bw_osc_init(const pzk_block *b, double *c, double *d, d
 static inline double pzk_bw_osc_zdot(const double *c, double v, double z) {
   return c[3] * v - c[4] * fabs(v) * z - c[5] * v * fabs(z);
 }
-static inline double pzk_bw_osc_step(const pzk_block *b, const double *c, const double *d, double *o, double u) {
+static inline double pzk_bw_osc_step(const pzk_block *b, const double *c, const double *d,
+                                     double *o, double u) {
   const int S = b->n, L = 2 * S;
   const double h = 1.0 / ((1.0 / b->dt) * S), h2 = 0.5 * h, h6 = h / 6.0;
   const double inv_m = c[0], cc = c[1], k = c[2];

@@ -5,11 +5,11 @@
  * kernel file and one case in pzk_block_sizes, pzk_block_init and pzk_block_step. */
 
 typedef struct {
-  double u_lo, u_hi;      /* drive limits (the training records' range unless changed) */
-  double u_last, y_last;  /* the last drive applied / computed and the model's output for it */
-  double du_last;         /* the last change of the drive (the inverse's first stride) */
-  long saturated;         /* samples whose drive was clipped to a limit */
-  double max_clip;        /* largest clipping: drive units (forward), response units (inverse) */
+  double u_lo, u_hi;     /* drive limits (the training records' range unless changed) */
+  double u_last, y_last; /* the last drive applied / computed and the model's output for it */
+  double du_last;        /* the last change of the drive (the inverse's first stride) */
+  long saturated;        /* samples whose drive was clipped to a limit */
+  double max_clip;       /* largest clipping: drive units (forward), response units (inverse) */
 } pzk_ctl;
 
 /* Constants and dynamic doubles a block needs; -1 for an unknown kind. */
@@ -18,25 +18,70 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
   *nc = 0;
   *nd = 0;
   switch (b->kind) {
-    case PZK_LOWPASS: *nc = 3; *nd = 2; return 0;
-    case PZK_QUADRATIC: return 0;
-    case PZK_CREEP: *nc = 5; *nd = 2; return 0;
-    case PZK_DELAY: *nc = 3; *nd = 1 + pzk_delay_capacity(b) + pzk_delay_inverse_size(pzk_delay_horizon(b)); return 0;
-    case PZK_RATE_DEPENDENCE: *nd = 4; return 0;
-    case PZK_STACK_BOUC_WEN: *nc = 4; *nd = 4; return 0;
-    case PZK_BACKLASH_LIKE: *nd = 2; return 0;
-    case PZK_DUHEM: *nd = 2; return 0;
-    case PZK_PRANDTL_ISHLINSKII: *nc = n; *nd = n; return 0;
-    case PZK_ASYMMETRIC_PI: *nc = n + b->m; *nd = n; return 0;
-    case PZK_PREISACH: *nc = 1 + 2 * n + n * (n + 1) / 2; *nd = n; return 0;
-    case PZK_BW_OSCILLATOR: *nc = 6; *nd = 4; return 0;
-    case PZK_BIMORPH_FIN: *nc = PZK_FIN_C * n; *nd = 2 * n + 4; return 0;
-    case PZK_CREEP_SPECTRUM: *nc = 1 + 2 * n; *nd = 1 + n; return 0;
-    case PZK_FRICTION: *nd = 1; return 0;
-    case PZK_STIFFENING: *nc = 1; return 0;
-    case PZK_DRIFT: *nd = 1; return 0;
-    case PZK_AFFINE: return 0;
-    default: return -1;
+    case PZK_LOWPASS:
+      *nc = 3;
+      *nd = 2;
+      return 0;
+    case PZK_QUADRATIC:
+      return 0;
+    case PZK_CREEP:
+      *nc = 5;
+      *nd = 2;
+      return 0;
+    case PZK_DELAY:
+      *nc = 3;
+      *nd = 1 + pzk_delay_capacity(b) + pzk_delay_inverse_size(pzk_delay_horizon(b));
+      return 0;
+    case PZK_RATE_DEPENDENCE:
+      *nd = 4;
+      return 0;
+    case PZK_STACK_BOUC_WEN:
+      *nc = 4;
+      *nd = 4;
+      return 0;
+    case PZK_BACKLASH_LIKE:
+      *nd = 2;
+      return 0;
+    case PZK_DUHEM:
+      *nd = 2;
+      return 0;
+    case PZK_PRANDTL_ISHLINSKII:
+      *nc = n;
+      *nd = n;
+      return 0;
+    case PZK_ASYMMETRIC_PI:
+      *nc = n + b->m;
+      *nd = n;
+      return 0;
+    case PZK_PREISACH:
+      *nc = 1 + 2 * n + n * (n + 1) / 2;
+      *nd = n;
+      return 0;
+    case PZK_BW_OSCILLATOR:
+      *nc = 6;
+      *nd = 4;
+      return 0;
+    case PZK_BIMORPH_FIN:
+      *nc = PZK_FIN_C * n;
+      *nd = 2 * n + 4;
+      return 0;
+    case PZK_CREEP_SPECTRUM:
+      *nc = 1 + 2 * n;
+      *nd = 1 + n;
+      return 0;
+    case PZK_FRICTION:
+      *nd = 1;
+      return 0;
+    case PZK_STIFFENING:
+      *nc = 1;
+      return 0;
+    case PZK_DRIFT:
+      *nd = 1;
+      return 0;
+    case PZK_AFFINE:
+      return 0;
+    default:
+      return -1;
   }
 }
 
@@ -55,62 +100,106 @@ static inline int pzk_layout(pzk_block *b, int nb, int *nc_total, int *nd_total)
   return 0;
 }
 
-static inline double pzk_block_init(const pzk_block *b, double *c, double *d, double v, double u_raw) {
+static inline double pzk_block_init(const pzk_block *b, double *c, double *d, double v,
+                                    double u_raw) {
   switch (b->kind) {
-    case PZK_LOWPASS: return pzk_driver_lowpass_init(b, c, d, v, u_raw);
-    case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
-    case PZK_CREEP: return pzk_creep_init(b, c, d, v);
-    case PZK_DELAY: return pzk_delay_init(b, c, d, v);
-    case PZK_RATE_DEPENDENCE: return pzk_rate_dependence_init(d, v);
-    case PZK_STACK_BOUC_WEN: return pzk_stack_bw_init(b, c, d, v);
-    case PZK_BACKLASH_LIKE: return pzk_backlash_init(b, d, v);
-    case PZK_DUHEM: return pzk_duhem_init(b, d, v);
-    case PZK_PRANDTL_ISHLINSKII: return pzk_pi_init(b, c, d, v);
-    case PZK_ASYMMETRIC_PI: return pzk_asym_pi_init(b, c, d, v);
-    case PZK_PREISACH: return pzk_preisach_init(b, c, d, v);
-    case PZK_BW_OSCILLATOR: return pzk_bw_osc_init(b, c, d, v);
-    case PZK_BIMORPH_FIN: return pzk_fin_init(b, c, d, v);
-    case PZK_CREEP_SPECTRUM: return pzk_creep_spectrum_init(b, c, d, v);
-    case PZK_FRICTION: return pzk_friction_init(d, v);
-    case PZK_STIFFENING: c[0] = v; return v;
-    case PZK_DRIFT: d[0] = 0; return v;
-    case PZK_AFFINE: return b->p[0] * v + b->p[1];
-    default: return v;
+    case PZK_LOWPASS:
+      return pzk_driver_lowpass_init(b, c, d, v, u_raw);
+    case PZK_QUADRATIC:
+      return pzk_quadratic_step(b, v);
+    case PZK_CREEP:
+      return pzk_creep_init(b, c, d, v);
+    case PZK_DELAY:
+      return pzk_delay_init(b, c, d, v);
+    case PZK_RATE_DEPENDENCE:
+      return pzk_rate_dependence_init(d, v);
+    case PZK_STACK_BOUC_WEN:
+      return pzk_stack_bw_init(b, c, d, v);
+    case PZK_BACKLASH_LIKE:
+      return pzk_backlash_init(b, d, v);
+    case PZK_DUHEM:
+      return pzk_duhem_init(b, d, v);
+    case PZK_PRANDTL_ISHLINSKII:
+      return pzk_pi_init(b, c, d, v);
+    case PZK_ASYMMETRIC_PI:
+      return pzk_asym_pi_init(b, c, d, v);
+    case PZK_PREISACH:
+      return pzk_preisach_init(b, c, d, v);
+    case PZK_BW_OSCILLATOR:
+      return pzk_bw_osc_init(b, c, d, v);
+    case PZK_BIMORPH_FIN:
+      return pzk_fin_init(b, c, d, v);
+    case PZK_CREEP_SPECTRUM:
+      return pzk_creep_spectrum_init(b, c, d, v);
+    case PZK_FRICTION:
+      return pzk_friction_init(d, v);
+    case PZK_STIFFENING:
+      c[0] = v;
+      return v;
+    case PZK_DRIFT:
+      d[0] = 0;
+      return v;
+    case PZK_AFFINE:
+      return b->p[0] * v + b->p[1];
+    default:
+      return v;
   }
 }
 
 /* One block's step: reads its state in d, writes the next one to o (o may be d). */
-static inline double pzk_block_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_block_step(const pzk_block *b, const double *c, const double *d, double *o,
+                                    double v) {
   switch (b->kind) {
-    case PZK_LOWPASS: return pzk_driver_lowpass_step(c, d, o, v);
-    case PZK_QUADRATIC: return pzk_quadratic_step(b, v);
-    case PZK_CREEP: return pzk_creep_step(b, c, d, o, v);
-    case PZK_DELAY: return pzk_delay_step(c, o, v); /* in place only (o == d) */
-    case PZK_RATE_DEPENDENCE: return pzk_rate_dependence_step(b, d, o, v);
-    case PZK_STACK_BOUC_WEN: return pzk_stack_bw_step(b, c, d, o, v);
-    case PZK_BACKLASH_LIKE: return pzk_backlash_step(b, d, o, v);
-    case PZK_DUHEM: return pzk_duhem_step(b, d, o, v);
-    case PZK_PRANDTL_ISHLINSKII: return pzk_pi_step(b, c, d, o, v);
-    case PZK_ASYMMETRIC_PI: return pzk_asym_pi_step(b, c, d, o, v);
-    case PZK_PREISACH: return pzk_preisach_step(b, c, d, o, v);
-    case PZK_BW_OSCILLATOR: return pzk_bw_osc_step(b, c, d, o, v);
-    case PZK_BIMORPH_FIN: return pzk_fin_step(b, c, d, o, v);
-    case PZK_CREEP_SPECTRUM: return pzk_creep_spectrum_step(b, c, d, o, v);
-    case PZK_FRICTION: return pzk_friction_step(b, d, o, v);
-    case PZK_STIFFENING: return pzk_stiffening_step(b, c, v);
-    case PZK_DRIFT: return pzk_drift_step(b, d, o, v);
-    case PZK_AFFINE: return b->p[0] * v + b->p[1];
-    default: return v;
+    case PZK_LOWPASS:
+      return pzk_driver_lowpass_step(c, d, o, v);
+    case PZK_QUADRATIC:
+      return pzk_quadratic_step(b, v);
+    case PZK_CREEP:
+      return pzk_creep_step(b, c, d, o, v);
+    case PZK_DELAY:
+      return pzk_delay_step(c, o, v); /* in place only (o == d) */
+    case PZK_RATE_DEPENDENCE:
+      return pzk_rate_dependence_step(b, d, o, v);
+    case PZK_STACK_BOUC_WEN:
+      return pzk_stack_bw_step(b, c, d, o, v);
+    case PZK_BACKLASH_LIKE:
+      return pzk_backlash_step(b, d, o, v);
+    case PZK_DUHEM:
+      return pzk_duhem_step(b, d, o, v);
+    case PZK_PRANDTL_ISHLINSKII:
+      return pzk_pi_step(b, c, d, o, v);
+    case PZK_ASYMMETRIC_PI:
+      return pzk_asym_pi_step(b, c, d, o, v);
+    case PZK_PREISACH:
+      return pzk_preisach_step(b, c, d, o, v);
+    case PZK_BW_OSCILLATOR:
+      return pzk_bw_osc_step(b, c, d, o, v);
+    case PZK_BIMORPH_FIN:
+      return pzk_fin_step(b, c, d, o, v);
+    case PZK_CREEP_SPECTRUM:
+      return pzk_creep_spectrum_step(b, c, d, o, v);
+    case PZK_FRICTION:
+      return pzk_friction_step(b, d, o, v);
+    case PZK_STIFFENING:
+      return pzk_stiffening_step(b, c, v);
+    case PZK_DRIFT:
+      return pzk_drift_step(b, d, o, v);
+    case PZK_AFFINE:
+      return b->p[0] * v + b->p[1];
+    default:
+      return v;
   }
 }
 
 /* At rest under the drive u0 (every block at equilibrium); returns the output there. */
-static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, double *d, pzk_ctl *ctl, double u0) {
+static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, double *d, pzk_ctl *ctl,
+                                    double u0) {
   double v = u0;
   int i;
   for (i = 0; i < nb; ++i) v = pzk_block_init(&b[i], c + b[i].c_off, d + b[i].d_off, v, u0);
   for (i = 0; i < nb; ++i) /* a delay's horizon: the blocks after it at rest with this output */
-    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0) d[b[i].d_off + 1 + (long)c[b[i].c_off + 1] + 2] = v;
+    if (b[i].kind == PZK_DELAY && c[b[i].c_off + 2] > 0)
+      d[b[i].d_off + 1 + (long)c[b[i].c_off + 1] + 2] = v;
   ctl->u_last = u0;
   ctl->y_last = v;
   ctl->du_last = 0;
@@ -121,21 +210,29 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
 
 /* How pzk_chain_eval runs the chain: forward; the compensator's one-step map (the delay blocks
  * stepping what remains of their delay once the reference is read ahead: pzk_delay_inverse_step);
- * that with the fin's angle pushed up or down through its backlash (pzk_fin_step_through); the delay
- * blocks passing their input on (what a lasting change of the drive meets: a replay's local gain). */
-enum { PZK_EVAL_FORWARD = 0, PZK_EVAL_INVERSE, PZK_EVAL_PUSH_UP, PZK_EVAL_PUSH_DOWN, PZK_EVAL_UNDELAYED };
+ * that with the fin's angle pushed up or down through its backlash (pzk_fin_step_through); the
+ * delay blocks passing their input on (what a lasting change of the drive meets: a replay's local
+ * gain). */
+enum {
+  PZK_EVAL_FORWARD = 0,
+  PZK_EVAL_INVERSE,
+  PZK_EVAL_PUSH_UP,
+  PZK_EVAL_PUSH_DOWN,
+  PZK_EVAL_UNDELAYED
+};
 
 /* The output for drive u from state d, the next state written to o (o == d: a step; o the
  * scratch: a trial, which needs a mode other than PZK_EVAL_FORWARD). */
-static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d, double *o, double u,
-                                    int mode) {
+static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c, const double *d,
+                                    double *o, double u, int mode) {
   double v = u;
   int i;
   for (i = 0; i < nb; ++i) {
     if (b[i].kind == PZK_DELAY && mode == PZK_EVAL_UNDELAYED) continue;
     if (b[i].kind == PZK_DELAY && mode != PZK_EVAL_FORWARD)
       v = pzk_delay_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
-    else if (b[i].kind == PZK_BIMORPH_FIN && (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
+    else if (b[i].kind == PZK_BIMORPH_FIN &&
+             (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
       v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v,
                                mode == PZK_EVAL_PUSH_UP ? 1 : -1);
     else
@@ -145,7 +242,8 @@ static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c,
 }
 
 /* Forward step: the drive clipped to [u_lo, u_hi] (counted), the model's output. */
-static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c, double *d, pzk_ctl *ctl, double u) {
+static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c, double *d,
+                                    pzk_ctl *ctl, double u) {
   double clipped = pzk_clamp(u, ctl->u_lo, ctl->u_hi);
   if (clipped != u) {
     double excess = fabs(u - clipped);
@@ -163,7 +261,8 @@ static inline double pzk_chain_step(const pzk_block *b, int nb, const double *c,
 static inline int pzk_chain_plans(const pzk_block *b, int nb) {
   int i;
   for (i = 0; i < nb; ++i)
-    if (b[i].kind == PZK_BIMORPH_FIN || (b[i].kind == PZK_RATE_DEPENDENCE && pzk_rate_dependence_plans(&b[i])))
+    if (b[i].kind == PZK_BIMORPH_FIN ||
+        (b[i].kind == PZK_RATE_DEPENDENCE && pzk_rate_dependence_plans(&b[i])))
       return 1;
   return 0;
 }
@@ -179,24 +278,24 @@ static inline long pzk_chain_preview(const pzk_block *b, int nb, const double *c
  * holding a PZK_BIMORPH_FIN block), after the HGANN fin plant's header (controller/export_fin_c.h
  * pzf_inverse_step), and a chain whose rate-dependence lags over a quarter sample
  * (pzk_rate_dependence_plans: its one-step inverse is unstable; planned, the drive stays within a
- * few tenths of a volt of a model's own on the rate sets of docs/deploy.md). It plans two samples: the drive goes to
- * u at the next sample and keeps its slope from the last drive one more (clipped to the limits), and
- * u is solved so that the output two samples ahead is y_desired: give it the reference one sample
- * ahead (preview), else it follows with a lag of one sample. One sample would not do: the drive's
- * linear hold gives the sampled modes a zero outside the unit circle (the second sample's response to
- * a drive step is several times the first's), and an exact one-step inverse makes the drive
- * oscillate. The backlash is passed through: where the angle must rise (fall) to reach y_desired,
- * the trials give the fin's output as theta - a1 (theta + a2), the angle it reaches once theta has
- * crossed the dead band, so that a target beyond the band drives theta across it rather than holding
- * (an angle that must stay: the trials are the model's). The map u -> y need not be monotone (at
- * small drives the Bouc-Wen force can outweigh the drive's moment): the bracket is
- * searched on both sides of the last drive with steps growing 4-fold from 1e-3 of the drive range,
- * the sign change nearest to it taken, and closed by the Illinois method until the output is
- * y_desired to 1e-13 of its magnitude (at least 1e-13) or the bracket is two adjacent doubles: at
- * most 100 plans of two steps. Not reached within the limits: the drive that came nearest, counted
- * in saturated (max_clip: the largest shortfall). What it reaches is not exact: the plan is greedy,
- * and a reference whose state came by another path (the Bouc-Wen force remembers it) can be out of
- * reach for some samples (docs/deploy.md has the figures). */
+ * few tenths of a volt of a model's own on the rate sets of docs/deploy.md). It plans two samples:
+ * the drive goes to u at the next sample and keeps its slope from the last drive one more (clipped
+ * to the limits), and u is solved so that the output two samples ahead is y_desired: give it the
+ * reference one sample ahead (preview), else it follows with a lag of one sample. One sample would
+ * not do: the drive's linear hold gives the sampled modes a zero outside the unit circle (the
+ * second sample's response to a drive step is several times the first's), and an exact one-step
+ * inverse makes the drive oscillate. The backlash is passed through: where the angle must rise
+ * (fall) to reach y_desired, the trials give the fin's output as theta - a1 (theta + a2), the angle
+ * it reaches once theta has crossed the dead band, so that a target beyond the band drives theta
+ * across it rather than holding (an angle that must stay: the trials are the model's). The map u ->
+ * y need not be monotone (at small drives the Bouc-Wen force can outweigh the drive's moment): the
+ * bracket is searched on both sides of the last drive with steps growing 4-fold from 1e-3 of the
+ * drive range, the sign change nearest to it taken, and closed by the Illinois method until the
+ * output is y_desired to 1e-13 of its magnitude (at least 1e-13) or the bracket is two adjacent
+ * doubles: at most 100 plans of two steps. Not reached within the limits: the drive that came
+ * nearest, counted in saturated (max_clip: the largest shortfall). What it reaches is not exact:
+ * the plan is greedy, and a reference whose state came by another path (the Bouc-Wen force
+ * remembers it) can be out of reach for some samples (docs/deploy.md has the figures). */
 typedef struct {
   const pzk_block *b;
   int nb, mode;
@@ -209,11 +308,12 @@ typedef struct {
 static inline double pzk_fin_plan_miss(void *ctx, double u) {
   const pzk_fin_plan *p = (const pzk_fin_plan *)ctx;
   pzk_chain_eval(p->b, p->nb, p->c, p->d, p->t, u, p->mode);
-  return pzk_chain_eval(p->b, p->nb, p->c, p->t, p->t, pzk_clamp(u + (u - p->u_prev), p->lo, p->hi), p->mode) -
+  return pzk_chain_eval(p->b, p->nb, p->c, p->t, p->t, pzk_clamp(u + (u - p->u_prev), p->lo, p->hi),
+                        p->mode) -
          p->y_desired;
 }
-static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const double *c, double *d, double *t,
-                                           pzk_ctl *ctl, double y_desired) {
+static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const double *c, double *d,
+                                           double *t, pzk_ctl *ctl, double y_desired) {
   pzk_fin_plan plan;
   double s_out = 1, u;
   int i, after = 0;
@@ -239,8 +339,9 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
   plan.mode = (y_desired - ctl->y_last) * s_out > 0   ? PZK_EVAL_PUSH_UP
               : (y_desired - ctl->y_last) * s_out < 0 ? PZK_EVAL_PUSH_DOWN
                                                       : PZK_EVAL_INVERSE;
-  if (!pzk_fin_nearest_root(pzk_fin_plan_miss, &plan, pzk_clamp(ctl->u_last, plan.lo, plan.hi), plan.lo, plan.hi,
-                            1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1), 100, &u)) {
+  if (!pzk_fin_nearest_root(pzk_fin_plan_miss, &plan, pzk_clamp(ctl->u_last, plan.lo, plan.hi),
+                            plan.lo, plan.hi, 1e-13 * (fabs(y_desired) > 1 ? fabs(y_desired) : 1),
+                            100, &u)) {
     const double miss = fabs(pzk_fin_plan_miss(&plan, u));
     ++ctl->saturated;
     if (miss > ctl->max_clip) ctl->max_clip = miss;
@@ -253,22 +354,22 @@ static inline double pzk_chain_inverse_fin(const pzk_block *b, int nb, const dou
 
 /* The one-step inverse (pzk_chain_inverse without a delay's horizon): the drive u in [u_lo, u_hi]
  * whose one-step output from the present state is y_desired, then the state advanced with it. The
- * one-step map u -> y is evaluated on the scratch t. From the last drive, the search walks in the direction the map must move (by
- * its local slope's sign; where it is flat, by its sign over the limits), with a stride of 1.5 times
- * the last drive change, doubled until the reference is passed; then the bracket is closed by
- * regula falsi with the Illinois rule and a bisection every fourth step, until the output is the
- * reference to 1e-15 of the outputs' magnitude or the bracket is two adjacent doubles (about 5 to
- * 10 evaluations of the map per sample; at most 200): the nearest drive with that output.
- * Exact for the families monotone on each step: Prandtl-Ishlinskii, asymmetric PI and Preisach
- * with weights >= 0, backlash-like with alpha >= 0 and B1 >= c/2 > 0 (its slope after a reversal
- * is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem, oscillator, the filters)
- * the one-step map is continuous and the root found is the one nearest the last drive. A
- * reference the limits cannot reach gives the limit, counted in saturated, the shortfall in
- * max_clip. The bimorph fin and a rate-dependence lag over a quarter sample plan two samples
- * (pzk_chain_inverse_fin). A delay's fraction up to a half stays in the map solved
+ * one-step map u -> y is evaluated on the scratch t. From the last drive, the search walks in the
+ * direction the map must move (by its local slope's sign; where it is flat, by its sign over the
+ * limits), with a stride of 1.5 times the last drive change, doubled until the reference is passed;
+ * then the bracket is closed by regula falsi with the Illinois rule and a bisection every fourth
+ * step, until the output is the reference to 1e-15 of the outputs' magnitude or the bracket is two
+ * adjacent doubles (about 5 to 10 evaluations of the map per sample; at most 200): the nearest
+ * drive with that output. Exact for the families monotone on each step: Prandtl-Ishlinskii,
+ * asymmetric PI and Preisach with weights >= 0, backlash-like with alpha >= 0 and B1 >= c/2 > 0
+ * (its slope after a reversal is at least 2 B1 - c). For the rate-dependent ones (Bouc-Wen, Duhem,
+ * oscillator, the filters) the one-step map is continuous and the root found is the one nearest the
+ * last drive. A reference the limits cannot reach gives the limit, counted in saturated, the
+ * shortfall in max_clip. The bimorph fin and a rate-dependence lag over a quarter sample plan two
+ * samples (pzk_chain_inverse_fin). A delay's fraction up to a half stays in the map solved
  * (pzk_delay_inverse_step). */
-static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
-                                     double y_desired) {
+static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c, double *d,
+                                     double *t, pzk_ctl *ctl, double y_desired) {
   const double lo = ctl->u_lo, hi = ctl->u_hi, span = hi - lo;
   double u0 = pzk_clamp(ctl->u_last, lo, hi), f0, f1, sign, ref, u, eps = 1e-9 * span;
   if (pzk_chain_plans(b, nb)) return pzk_chain_inverse_fin(b, nb, c, d, t, ctl, y_desired);
@@ -280,14 +381,18 @@ static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c
     f1 = pzk_chain_eval(b, nb, c, d, t, u0 - eps, PZK_EVAL_INVERSE);
     sign = f1 < f0 ? 1.0 : (f1 > f0 ? -1.0 : 0.0);
   }
-  if (sign == 0) sign = pzk_chain_eval(b, nb, c, d, t, hi, PZK_EVAL_INVERSE) >= pzk_chain_eval(b, nb, c, d, t, lo, PZK_EVAL_INVERSE) ? 1.0 : -1.0;
+  if (sign == 0)
+    sign = pzk_chain_eval(b, nb, c, d, t, hi, PZK_EVAL_INVERSE) >=
+                   pzk_chain_eval(b, nb, c, d, t, lo, PZK_EVAL_INVERSE)
+               ? 1.0
+               : -1.0;
   ref = sign * y_desired; /* work on the rising map sign * f */
   f0 *= sign;
   if (f0 == ref) {
     u = u0;
   } else {
-    /* Walk from u0 towards the reference: up when the output must rise, else down. g = dir (f - ref)
-     * is < 0 at the near end a of the bracket and >= 0 at its far end e. */
+    /* Walk from u0 towards the reference: up when the output must rise, else down. g = dir (f -
+     * ref) is < 0 at the near end a of the bracket and >= 0 at its far end e. */
     const double dir = ref > f0 ? 1.0 : -1.0, limit = dir > 0 ? hi : lo;
     double a = u0, fa = f0, e, fe, stride = 1.5 * fabs(ctl->du_last), tol;
     if (stride < 1e-6 * span) stride = 1e-6 * span;
@@ -346,16 +451,19 @@ static inline double pzk_chain_solve(const pzk_block *b, int nb, const double *c
 }
 
 /* The compensator with a delay whose fraction is over a half (its horizon L > 0, model/kernels/
- * effects.h): the blocks after the delay solved one step for its output w, n + L samples ahead of the
- * drive (their own limits, last drive and output kept in the delay's state: the drive's limits,
- * widened by their span on both sides when drive effects come before the delay, which may take their
- * output beyond it); the delay undone backwards over the horizon (pzk_delay_anticausal); the blocks
- * before it solved one step for that input x (none: x is the drive, clipped to the limits). A sample
- * either stage clips counts once in saturated; max_clip takes the shortfall of the stage after the
- * delay (response units). The blocks after the delay follow the solved w, not a clipped drive's. */
-static inline double pzk_chain_solve_after(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
-                                           const pzk_ctl *ctl, double y_desired, pzk_ctl *post) {
-  double *q = d + b[id].d_off + 1 + (long)c[b[id].c_off + 1]; /* head, w_last, y_last, dw_last, ... */
+ * effects.h): the blocks after the delay solved one step for its output w, n + L samples ahead of
+ * the drive (their own limits, last drive and output kept in the delay's state: the drive's limits,
+ * widened by their span on both sides when drive effects come before the delay, which may take
+ * their output beyond it); the delay undone backwards over the horizon (pzk_delay_anticausal); the
+ * blocks before it solved one step for that input x (none: x is the drive, clipped to the limits).
+ * A sample either stage clips counts once in saturated; max_clip takes the shortfall of the stage
+ * after the delay (response units). The blocks after the delay follow the solved w, not a clipped
+ * drive's. */
+static inline double pzk_chain_solve_after(const pzk_block *b, int nb, int id, const double *c,
+                                           double *d, double *t, const pzk_ctl *ctl,
+                                           double y_desired, pzk_ctl *post) {
+  double *q =
+      d + b[id].d_off + 1 + (long)c[b[id].c_off + 1]; /* head, w_last, y_last, dw_last, ... */
   const double widen = id > 0 ? ctl->u_hi - ctl->u_lo : 0;
   double w;
   post->u_lo = ctl->u_lo - widen;
@@ -371,8 +479,8 @@ static inline double pzk_chain_solve_after(const pzk_block *b, int nb, int id, c
   q[3] = post->du_last;
   return w;
 }
-static inline double pzk_chain_inverse_split(const pzk_block *b, int nb, int id, const double *c, double *d, double *t,
-                                             pzk_ctl *ctl, double y_desired) {
+static inline double pzk_chain_inverse_split(const pzk_block *b, int nb, int id, const double *c,
+                                             double *d, double *t, pzk_ctl *ctl, double y_desired) {
   const double span = ctl->u_hi - ctl->u_lo, max_clip = ctl->max_clip;
   const long saturated = ctl->saturated;
   pzk_ctl post;
@@ -406,14 +514,15 @@ static inline int pzk_chain_prime_samples(const pzk_block *b, int nb, const doub
 /* One of them: the blocks after the delay solved for it (as a step does; a reference out of reach
  * counted). Returns 0, or -1 when no more is wanted (no horizon, all given, or a step taken); not
  * given, the blocks after the delay take those samples at rest. */
-static inline int pzk_chain_inverse_prime(const pzk_block *b, int nb, const double *c, double *d, double *t,
-                                          pzk_ctl *ctl, double y_desired) {
+static inline int pzk_chain_inverse_prime(const pzk_block *b, int nb, const double *c, double *d,
+                                          double *t, pzk_ctl *ctl, double y_desired) {
   pzk_ctl post;
   double w;
   int id;
   for (id = 0; id < nb; ++id)
     if (b[id].kind == PZK_DELAY && c[b[id].c_off + 2] > 0) break;
-  if (id == nb || d[b[id].d_off + 1 + (long)c[b[id].c_off + 1] + 4] >= c[b[id].c_off + 2]) return -1;
+  if (id == nb || d[b[id].d_off + 1 + (long)c[b[id].c_off + 1] + 4] >= c[b[id].c_off + 2])
+    return -1;
   w = pzk_chain_solve_after(b, nb, id, c, d, t, ctl, y_desired, &post);
   if (post.saturated > 0) ++ctl->saturated;
   if (post.max_clip > ctl->max_clip) ctl->max_clip = post.max_clip;
@@ -421,13 +530,13 @@ static inline int pzk_chain_inverse_prime(const pzk_block *b, int nb, const doub
 }
 
 /* Inverse step (the compensator): the drive u in [u_lo, u_hi] for the desired output y_desired,
- * then the state advanced with it. A delay cannot be undone by a causal step: give the compensator the
- * reference pzk_chain_preview samples ahead (a delay's whole samples and its horizon; one more with a
- * two-sample plan). A delay's fraction up to a half stays in the one-step map solved
+ * then the state advanced with it. A delay cannot be undone by a causal step: give the compensator
+ * the reference pzk_chain_preview samples ahead (a delay's whole samples and its horizon; one more
+ * with a two-sample plan). A delay's fraction up to a half stays in the one-step map solved
  * (pzk_chain_solve); over a half the delay is undone backwards over its horizon
  * (pzk_chain_inverse_split). */
-static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d, double *t, pzk_ctl *ctl,
-                                       double y_desired) {
+static inline double pzk_chain_inverse(const pzk_block *b, int nb, const double *c, double *d,
+                                       double *t, pzk_ctl *ctl, double y_desired) {
   long lead = 0;
   int i;
   /* A drift after a delay: its clock is that of the output solved, the delays' preview ahead of the

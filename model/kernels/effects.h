@@ -17,7 +17,8 @@ static inline double pzk_lowpass_filter(const double *c, const double *d, double
 }
 
 /* driver-lowpass: c = {on, a, c}, d = {x, prev}. */
-static inline double pzk_driver_lowpass_init(const pzk_block *b, double *c, double *d, double v, double u_raw) {
+static inline double pzk_driver_lowpass_init(const pzk_block *b, double *c, double *d, double v,
+                                             double u_raw) {
   (void)u_raw;
   c[0] = pzk_lowpass_on(b->p[0], b->dt);
   if (c[0] != 0) pzk_lowpass_consts(b->p[0], b->dt, c + 1);
@@ -25,13 +26,16 @@ static inline double pzk_driver_lowpass_init(const pzk_block *b, double *c, doub
   d[1] = v;
   return v;
 }
-static inline double pzk_driver_lowpass_step(const double *c, const double *d, double *o, double v) {
+static inline double pzk_driver_lowpass_step(const double *c, const double *d, double *o,
+                                             double v) {
   if (c[0] == 0) return v;
   return pzk_lowpass_filter(c + 1, d, o, v);
 }
 
 /* quadratic-drive: v + c2 v^2, memoryless. */
-static inline double pzk_quadratic_step(const pzk_block *b, double v) { return v + b->p[0] * v * v; }
+static inline double pzk_quadratic_step(const pzk_block *b, double v) {
+  return v + b->p[0] * v * v;
+}
 
 /* creep: x = LPF_tau_c[k_c (v - v0)], v + x, at rest at its own first input v0 (as the effect
  * library's Creep::ApplyDrive); c = {on, filter on, a, c, v0}, d = {x, prev}. */
@@ -44,7 +48,8 @@ static inline double pzk_creep_init(const pzk_block *b, double *c, double *d, do
   d[1] = 0;
   return v;
 }
-static inline double pzk_creep_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_creep_step(const pzk_block *b, const double *c, const double *d, double *o,
+                                    double v) {
   double x;
   if (c[0] == 0) return v;
   x = b->p[0] * (v - c[4]);
@@ -53,10 +58,10 @@ static inline double pzk_creep_step(const pzk_block *b, const double *c, const d
 }
 
 /* delay: v(t - tau_d) by linear interpolation of the samples (the first before the start).
- * With shift = tau_d/dt = n + s (n whole, 0 <= s < 1) the output is y_k = (1 - s) v_{k-n} + s v_{k-n-1}.
- * c = {shift, capacity, horizon}, d = {k, ring[capacity]} (the last `capacity` inputs), and with a
- * horizon L > 0 the compensator's {head, w_last, y_last, dw_last, primed, w[L + 1]} after them
- * (pzk_chain_inverse_split). Forward it only ever steps in place.
+ * With shift = tau_d/dt = n + s (n whole, 0 <= s < 1) the output is y_k = (1 - s) v_{k-n} + s
+ * v_{k-n-1}. c = {shift, capacity, horizon}, d = {k, ring[capacity]} (the last `capacity` inputs),
+ * and with a horizon L > 0 the compensator's {head, w_last, y_last, dw_last, primed, w[L + 1]}
+ * after them (pzk_chain_inverse_split). Forward it only ever steps in place.
  *
  * The compensator (model/kernels/chain.h pzk_chain_inverse) reads the reference ahead; what remains
  * of the delay is w_k = (1 - s) x_k + s x_{k-1} (x its input at the compensator's sample k):
@@ -70,8 +75,8 @@ static inline double pzk_creep_step(const pzk_block *b, const double *c, const d
  *     x^_{j+L}, r = (1 - s) / s < 1, with x^_{j+L} = w_{j+n+L} + s (w_{j+n+L} - w_{j+n+L-1}) (the
  *     delay's output extrapolated by s samples): its error, the drive's curvature, shrinks by r^L.
  *     L is the smallest with r^L <= 1e-13, at most PZK_DELAY_HORIZON_MAX (a fraction under 0.615
- *     keeps r^64 of the extrapolation's error). Then the blocks before the delay are solved for x_j.
- * Both amplify what the reference has at the Nyquist rate by 1 / |1 - 2 s| (the inverse of the
+ *     keeps r^64 of the extrapolation's error). Then the blocks before the delay are solved for
+ * x_j. Both amplify what the reference has at the Nyquist rate by 1 / |1 - 2 s| (the inverse of the
  * interpolation's gain there). */
 #define PZK_DELAY_HORIZON_MAX 64
 static inline int pzk_delay_capacity(const pzk_block *b) {
@@ -89,7 +94,8 @@ static inline int pzk_delay_horizon(const pzk_block *b) {
   h = (int)ceil(log(1e-13) / log(r));
   return h < 1 ? 1 : (h > PZK_DELAY_HORIZON_MAX ? PZK_DELAY_HORIZON_MAX : h);
 }
-/* The compensator's doubles after the ring: head, w_last, y_last, dw_last, primed and the L + 1 outputs. */
+/* The compensator's doubles after the ring: head, w_last, y_last, dw_last, primed and the L + 1
+ * outputs. */
 static inline int pzk_delay_inverse_size(int horizon) { return horizon > 0 ? horizon + 6 : 0; }
 static inline double pzk_delay_init(const pzk_block *b, double *c, double *d, double v) {
   int i, cap = pzk_delay_capacity(b), h = pzk_delay_horizon(b);
@@ -124,13 +130,17 @@ static inline double pzk_delay_step(const double *c, double *d, double v) {
   b = d[1 + (j + 1) % cap];
   return a + f * (b - a);
 }
-static inline double pzk_delay_fraction(const double *c) { return c[0] > 0 ? c[0] - floor(c[0]) : 0.0; }
+static inline double pzk_delay_fraction(const double *c) {
+  return c[0] > 0 ? c[0] - floor(c[0]) : 0.0;
+}
 /* Samples of the reference ahead of the drive: n, plus the horizon. */
-static inline long pzk_delay_preview(const double *c) { return c[0] > 0 ? (long)floor(c[0]) + (long)c[2] : 0; }
+static inline long pzk_delay_preview(const double *c) {
+  return c[0] > 0 ? (long)floor(c[0]) + (long)c[2] : 0;
+}
 /* The one-step compensator's delay (horizon 0): (1 - s) v + s v_prev, computed as pzk_delay_step
- * computes its output n samples later (the same operations: bit for bit the forward model's, so that
- * where the map is flat — a play's band — the last drive is still a root). Trials (o the scratch)
- * read d and write only k and the one slot the next trial on o reads. */
+ * computes its output n samples later (the same operations: bit for bit the forward model's, so
+ * that where the map is flat — a play's band — the last drive is still a root). Trials (o the
+ * scratch) read d and write only k and the one slot the next trial on o reads. */
 static inline double pzk_delay_inverse_step(const double *c, const double *d, double *o, double v) {
   double shift = c[0], pos, f, prev;
   long cap = (long)c[1], k, j;
@@ -156,7 +166,8 @@ static inline int pzk_delay_prime(const double *c, double *d, double w_new) {
   q[4] = (double)(primed + 1);
   return 0;
 }
-/* The horizon's step (s > 1/2): pushes the delay's output w solved n + L samples ahead, returns x_j. */
+/* The horizon's step (s > 1/2): pushes the delay's output w solved n + L samples ahead, returns
+ * x_j. */
 static inline double pzk_delay_anticausal(const double *c, double *d, double w_new) {
   const long cap = (long)c[1], h = (long)c[2];
   const double s = pzk_delay_fraction(c), r = (1 - s) / s;
@@ -186,12 +197,15 @@ static inline double pzk_rate_dependence_init(double *d, double v) {
   d[3] = 0;
   return v;
 }
-/* Below its knee the play is a lag of tau_r (z = v - tau_r v'): solved for the drive one sample at a
- * time it carries a difference of the past drives forward, unstably once tau_r > dt / 4
+/* Below its knee the play is a lag of tau_r (z = v - tau_r v'): solved for the drive one sample at
+ * a time it carries a difference of the past drives forward, unstably once tau_r > dt / 4
  * (records/stepper.h rate_dependence_inverse_gain), and the compensator then plans two samples
  * (pzk_chain_inverse_fin). */
-static inline int pzk_rate_dependence_plans(const pzk_block *b) { return b->p[0] > 0 && b->p[1] > 0.25 * b->dt; }
-static inline double pzk_rate_dependence_step(const pzk_block *b, const double *d, double *o, double v) {
+static inline int pzk_rate_dependence_plans(const pzk_block *b) {
+  return b->p[0] > 0 && b->p[1] > 0.25 * b->dt;
+}
+static inline double pzk_rate_dependence_step(const pzk_block *b, const double *d, double *o,
+                                              double v) {
   double rate, lambda, z, r_m = b->p[0];
   if (!(r_m > 0)) return v;
   rate = (3 * v - 4 * d[0] + d[1]) / (2 * b->dt);
@@ -206,8 +220,8 @@ static inline double pzk_rate_dependence_step(const pzk_block *b, const double *
 }
 
 /* creep-spectrum: v - sum_i p_i (e - x_i), e = v - v0, tau_i x_i' = e - x_i (first-order hold, from
- * rest), v0 the output at rest (as the effect library's CreepSpectrum::ApplyOutput); n = relaxations,
- * w = their times. c = {v0, a_0, c_0, a_1, c_1, ...}, d = {e_prev, x_0, x_1, ...}. */
+ * rest), v0 the output at rest (as the effect library's CreepSpectrum::ApplyOutput); n =
+ * relaxations, w = their times. c = {v0, a_0, c_0, a_1, c_1, ...}, d = {e_prev, x_0, x_1, ...}. */
 static inline double pzk_creep_spectrum_init(const pzk_block *b, double *c, double *d, double v) {
   int i;
   c[0] = v;
@@ -218,8 +232,8 @@ static inline double pzk_creep_spectrum_init(const pzk_block *b, double *c, doub
   }
   return v;
 }
-static inline double pzk_creep_spectrum_step(const pzk_block *b, const double *c, const double *d, double *o,
-                                             double v) {
+static inline double pzk_creep_spectrum_step(const pzk_block *b, const double *c, const double *d,
+                                             double *o, double v) {
   double e = v - c[0], prev = d[0], corr = 0, x;
   int i;
   for (i = 0; i < b->n; ++i) {

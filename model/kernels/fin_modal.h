@@ -3,15 +3,27 @@
  * their zero crossings, the quintic Hermite hold of z, one mode's update, the atan series and the
  * backlash step, operation for operation as the library. One source for the records family's
  * kernel (bimorph_fin.h) and the HGANN fin plant of `piezoid export --plant`
- * (controller/export_fin_c.cc), which copies this file into its header. Guarded, so that both kinds of
- * header can be included in one translation unit. */
+ * (controller/export_fin_c.cc), which copies this file into its header. Guarded, so that both kinds
+ * of header can be included in one translation unit. */
 #ifndef PZK_FIN_MODAL_H_
 #define PZK_FIN_MODAL_H_
-typedef struct { double re, im; } pzk_fin_cx;
-typedef struct { double omega2, c, l1, l2, re, im; int complex_pair; } pzk_fin_poles;
-typedef struct { double e11, e12, e21, e22, d[7]; } pzk_fin_step_t;
-typedef struct { double alpha, kappa, u0, z0, gain; int s, sigma; } pzk_fin_branch;
-typedef struct { double z, zd, zdd; } pzk_fin_zdata;
+typedef struct {
+  double re, im;
+} pzk_fin_cx;
+typedef struct {
+  double omega2, c, l1, l2, re, im;
+  int complex_pair;
+} pzk_fin_poles;
+typedef struct {
+  double e11, e12, e21, e22, d[7];
+} pzk_fin_step_t;
+typedef struct {
+  double alpha, kappa, u0, z0, gain;
+  int s, sigma;
+} pzk_fin_branch;
+typedef struct {
+  double z, zd, zdd;
+} pzk_fin_zdata;
 
 static inline int pzk_fin_sign(double x) { return (x > 0) - (x < 0); }
 static inline double pzk_fin_min(double a, double b) { return (b < a) ? b : a; }
@@ -19,12 +31,31 @@ static inline double pzk_fin_max(double a, double b) { return (a < b) ? b : a; }
 
 /* 1/n!, n = 0 ... 24 (modal_discretise.cc kInvFact). */
 static inline const double *pzk_fin_inv_fact(void) {
-  static const double f[25] = {1.0, 1.0, 1.0 / 2, 1.0 / 6, 1.0 / 24, 1.0 / 120, 1.0 / 720, 1.0 / 5040,
-      1.0 / 40320, 1.0 / 362880, 1.0 / 3628800, 1.0 / 39916800, 1.0 / 479001600, 1.0 / 6227020800.0,
-      1.0 / 87178291200.0, 1.0 / 1307674368000.0, 1.0 / 20922789888000.0, 1.0 / 355687428096000.0,
-      1.0 / 6402373705728000.0, 1.0 / 121645100408832000.0, 1.0 / 2432902008176640000.0,
-      1.0 / 51090942171709440000.0, 1.0 / 1124000727777607680000.0, 1.0 / 25852016738884976640000.0,
-      1.0 / 620448401733239439360000.0};
+  static const double f[25] = {1.0,
+                               1.0,
+                               1.0 / 2,
+                               1.0 / 6,
+                               1.0 / 24,
+                               1.0 / 120,
+                               1.0 / 720,
+                               1.0 / 5040,
+                               1.0 / 40320,
+                               1.0 / 362880,
+                               1.0 / 3628800,
+                               1.0 / 39916800,
+                               1.0 / 479001600,
+                               1.0 / 6227020800.0,
+                               1.0 / 87178291200.0,
+                               1.0 / 1307674368000.0,
+                               1.0 / 20922789888000.0,
+                               1.0 / 355687428096000.0,
+                               1.0 / 6402373705728000.0,
+                               1.0 / 121645100408832000.0,
+                               1.0 / 2432902008176640000.0,
+                               1.0 / 51090942171709440000.0,
+                               1.0 / 1124000727777607680000.0,
+                               1.0 / 25852016738884976640000.0,
+                               1.0 / 620448401733239439360000.0};
   return f;
 }
 
@@ -141,7 +172,8 @@ static inline void pzk_fin_series(const pzk_fin_poles *p, double tau, pzk_fin_st
   out->e22 = out->e11 - p->c * d[0];
 }
 
-/* One mode over a step tau: E = e^{tau A} and the divided differences D_0 ... D_6 (modal::Discretise). */
+/* One mode over a step tau: E = e^{tau A} and the divided differences D_0 ... D_6
+ * (modal::Discretise). */
 static inline void pzk_fin_discretise(const pzk_fin_poles *p, double tau, pzk_fin_step_t *out) {
   double *d = out->d;
   double rho, gap, m, y, em, C, S, inv_m, inv_tau;
@@ -218,11 +250,10 @@ static inline void pzk_fin_discretise(const pzk_fin_poles *p, double tau, pzk_fi
   for (j = 1; j <= 6; ++j) d[j] = (d[j - 1] * inv_tau - avg[j]) * inv_m;
 }
 
-
 /* Bouc-Wen branch from (u0, z0) moving in the direction of s (model/bouc_wen.h StartBranch,
  * BoucWenBranch::Z, ::ZeroCrossing). */
-static inline pzk_fin_branch pzk_fin_start_branch(double alpha, double beta, double gamma, double u0, double z0,
-                                                  double s) {
+static inline pzk_fin_branch pzk_fin_start_branch(double alpha, double beta, double gamma,
+                                                  double u0, double z0, double s) {
   pzk_fin_branch b;
   b.alpha = alpha;
   b.u0 = u0;
@@ -256,8 +287,10 @@ static inline int pzk_fin_zero_crossing(const pzk_fin_branch *b, double *u_cross
   return 1;
 }
 
-/* z, dz/dt, d2z/dt2 on a branch at input u moving at ud (modal_simulator.cc EvalZ; ramp: u'' = 0). */
-static inline pzk_fin_zdata pzk_fin_eval_z(double alpha, const pzk_fin_branch *b, double u, double ud) {
+/* z, dz/dt, d2z/dt2 on a branch at input u moving at ud (modal_simulator.cc EvalZ; ramp: u'' = 0).
+ */
+static inline pzk_fin_zdata pzk_fin_eval_z(double alpha, const pzk_fin_branch *b, double u,
+                                           double ud) {
   pzk_fin_zdata r;
   if (alpha == 0.0) {
     r.z = r.zd = r.zdd = 0.0;
@@ -287,9 +320,9 @@ static inline int pzk_fin_substeps(int hysteresis, double kappa_max, double r, d
 /* The force's Taylor coefficients over a sub-step tau: z held by the quintic Hermite of (zl, zr)
  * (modal_simulator.cc GeneralSubstep). */
 static inline void pzk_fin_hermite(double tau, pzk_fin_zdata zl, pzk_fin_zdata zr, double *fz) {
-  static const double hermite[6][6] = {{1, 0, 0, 0, 0, 0},           {0, 1, 0, 0, 0, 0},
-                                       {0, 0, 0.5, 0, 0, 0},         {-10, -6, -1.5, 10, -4, 0.5},
-                                       {15, 8, 1.5, -15, 7, -1},     {-6, -3, -0.5, 6, -3, 0.5}};
+  static const double hermite[6][6] = {{1, 0, 0, 0, 0, 0},       {0, 1, 0, 0, 0, 0},
+                                       {0, 0, 0.5, 0, 0, 0},     {-10, -6, -1.5, 10, -4, 0.5},
+                                       {15, 8, 1.5, -15, 7, -1}, {-6, -3, -0.5, 6, -3, 0.5}};
   static const double fact[6] = {1, 1, 2, 6, 24, 120};
   double dat[6];
   int j, k;
@@ -308,8 +341,9 @@ static inline void pzk_fin_hermite(double tau, pzk_fin_zdata zl, pzk_fin_zdata z
 
 /* One mode's state (x0, x1) over a sub-step tau with step sp, tip gains wu, wz, the force's
  * coefficients fz and the drive u_a + u_dot s (GeneralSubstep's per-mode update). */
-static inline void pzk_fin_mode_update(const pzk_fin_step_t *sp, double wu, double wz, const double *fz, double u_a,
-                                       double u_dot, double tau, double *x0, double *x1) {
+static inline void pzk_fin_mode_update(const pzk_fin_step_t *sp, double wu, double wz,
+                                       const double *fz, double u_a, double u_dot, double tau,
+                                       double *x0, double *x1) {
   double f[6], s0 = 0, s1 = 0, a, b;
   int j;
   for (j = 0; j < 6; ++j) f[j] = -wz * fz[j];
@@ -326,18 +360,20 @@ static inline void pzk_fin_mode_update(const pzk_fin_step_t *sp, double wu, doub
 }
 
 /* One sub-step of pzk_fin_sample's walk: tau long, the drive u_a + u_dot s, z held by the quintic
- * Hermite of (zl, zr). regular != 0: one of the sample's nsub equal sub-steps (tau = the sample / nsub:
- * a discretisation the caller holds); 0: a piece cut at a zero crossing of z (discretised for tau). */
-typedef void (*pzk_fin_substep_fn)(void *ctx, double tau, int regular, pzk_fin_zdata zl, pzk_fin_zdata zr,
-                                   double u_a, double u_dot);
+ * Hermite of (zl, zr). regular != 0: one of the sample's nsub equal sub-steps (tau = the sample /
+ * nsub: a discretisation the caller holds); 0: a piece cut at a zero crossing of z (discretised for
+ * tau). */
+typedef void (*pzk_fin_substep_fn)(void *ctx, double tau, int regular, pzk_fin_zdata zl,
+                                   pzk_fin_zdata zr, double u_a, double u_dot);
 
-/* One sample of the fin's drive from u0 (Bouc-Wen force z0) to v over tau, u linear between them, in
- * nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero (ModalSimulator::RunSampled's loop
- * body): the modes advance through `substep` (ctx its data); returns z at the sample's end. The one
- * loop of the records kernel (bimorph_fin.h pzk_fin_step) and the HGANN fin header
+/* One sample of the fin's drive from u0 (Bouc-Wen force z0) to v over tau, u linear between them,
+ * in nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero (ModalSimulator::RunSampled's
+ * loop body): the modes advance through `substep` (ctx its data); returns z at the sample's end.
+ * The one loop of the records kernel (bimorph_fin.h pzk_fin_step) and the HGANN fin header
  * (controller/export_fin_c.cc pzf_advance). */
-static inline double pzk_fin_sample(double alpha, double beta, double gamma, double u0, double z0, double v,
-                                    double tau, int nsub, pzk_fin_substep_fn substep, void *ctx) {
+static inline double pzk_fin_sample(double alpha, double beta, double gamma, double u0, double z0,
+                                    double v, double tau, int nsub, pzk_fin_substep_fn substep,
+                                    void *ctx) {
   const double r = (v - u0) / tau, ts = tau / nsub, eps = 1e-9 * ts;
   const int hyst = alpha != 0.0;
   int q;
@@ -381,7 +417,7 @@ static inline double pzk_fin_angle(const double *x0, int n, double inv_length, i
   *finite = isfinite(w);
   x = w * inv_length;
   if (fabs(x) < 0.125) {
-    static const double k[10] = {1.0, -1.0 / 3, 1.0 / 5, -1.0 / 7, 1.0 / 9,
+    static const double k[10] = {1.0,       -1.0 / 3, 1.0 / 5,   -1.0 / 7, 1.0 / 9,
                                  -1.0 / 11, 1.0 / 13, -1.0 / 15, 1.0 / 17, -1.0 / 19};
     const double x2 = x * x, x4 = x2 * x2, x8 = x4 * x4, x16 = x8 * x8;
     const double p01 = k[0] + k[1] * x2, p23 = k[2] + k[3] * x2, p45 = k[4] + k[5] * x2;
@@ -393,7 +429,8 @@ static inline double pzk_fin_angle(const double *x0, int n, double inv_length, i
 }
 
 /* The backlash step (model/backlash.h BacklashStep): dead band a1, a2, saturations b1 > 0 > b2. */
-static inline double pzk_fin_backlash(double a1, double a2, double b1, double b2, double theta, double y_prev) {
+static inline double pzk_fin_backlash(double a1, double a2, double b1, double b2, double theta,
+                                      double y_prev) {
   const double a = pzk_fin_min(b1, pzk_fin_max(b2, theta - a1));
   const double b = pzk_fin_min(b1, theta + a2);
   return pzk_fin_max(a, pzk_fin_min(b, y_prev));
@@ -403,11 +440,11 @@ static inline double pzk_fin_backlash(double a1, double a2, double b1, double b2
  * is searched on both sides of u0 with steps growing 4-fold from 1e-3 of the range, the first sign
  * change taken, then closed by the Illinois method until |g| <= tol or the bracket is two adjacent
  * doubles; at most max_trials evaluations of g. Returns 1 when bracketed (else the limits hold no
- * sign change); *u_best: the u of the smallest |g| seen. The fin's compensators (the records chain's
- * pzk_chain_inverse_fin and the HGANN fin header's inverse step) both use it. */
+ * sign change); *u_best: the u of the smallest |g| seen. The fin's compensators (the records
+ * chain's pzk_chain_inverse_fin and the HGANN fin header's inverse step) both use it. */
 typedef double (*pzk_fin_map)(void *ctx, double u);
-static inline int pzk_fin_nearest_root(pzk_fin_map g, void *ctx, double u0, double lo, double hi, double tol,
-                                       int max_trials, double *u_best) {
+static inline int pzk_fin_nearest_root(pzk_fin_map g, void *ctx, double u0, double lo, double hi,
+                                       double tol, int max_trials, double *u_best) {
   double a, b, ga, gb, l, r, gl, gr, step, best_u, best_g;
   int it, side = 0, found;
   best_u = a = b = l = r = u0;

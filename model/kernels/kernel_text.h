@@ -1,5 +1,5 @@
-// The step kernels' C source as text (model/kernels/pzk.h lists the files, in order; the build embeds
-// them byte for byte), for the headers `piezoid export` writes.
+// The step kernels' C source as text (model/kernels/pzk.h lists the files, in order; the build
+// embeds them byte for byte), for the headers `piezoid export` writes.
 #pragma once
 
 #include <string>
@@ -12,11 +12,11 @@ std::string KernelSource();
 /// The include guard of the kernels in an exported header: PZK_KERNELS_ and a 64-bit hash of
 /// KernelSource() in hex (headers exported from the same kernels share them).
 std::string KernelGuard();
-/// The bimorph fin's modal helpers (model/kernels/fin_modal.h): also the base of the HGANN fin plant's
-/// header (controller/export_fin_c.h).
+/// The bimorph fin's modal helpers (model/kernels/fin_modal.h): also the base of the HGANN fin
+/// plant's header (controller/export_fin_c.h).
 std::string FinModalSource();
-/// The PZK_* name of a block kind, read from the kernels' own enum (model/kernels/common.h: the one list
-/// of the ids the families' and effects' registrations give); "0" for none.
+/// The PZK_* name of a block kind, read from the kernels' own enum (model/kernels/common.h: the one
+/// list of the ids the families' and effects' registrations give); "0" for none.
 std::string KindName(int kind);
 
 }  // namespace pz::pzk

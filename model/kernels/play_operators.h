@@ -3,7 +3,8 @@
  * The plays start at rest in the block's initial state (pzk_play_rest). */
 
 /* prandtl-ishlinskii: n plays r_i = u_half (i+1)/(n+1); c = {r_1 .. r_n}; d = {z_1 .. z_n}. */
-static inline double pzk_pi_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_pi_step(const pzk_block *b, const double *c, const double *d, double *o,
+                                 double v) {
   double acc = 0;
   int i;
   acc += v * b->w[0];
@@ -25,7 +26,8 @@ static inline double pzk_pi_init(const pzk_block *b, double *c, double *d, doubl
 
 /* asymmetric-pi: n plays, m knots z_j = u_min + (u_max - u_min)(j+1)/(m+1);
  * c = {r_1 .. r_n, z_1 .. z_m}; d = {plays}. */
-static inline double pzk_asym_pi_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_asym_pi_step(const pzk_block *b, const double *c, const double *d,
+                                      double *o, double v) {
   const int n = b->n, K = b->m;
   double acc = 0;
   int i, j;
@@ -55,10 +57,11 @@ static inline double pzk_asym_pi_init(const pzk_block *b, double *c, double *d, 
   return pzk_asym_pi_step(b, c, d, d, v);
 }
 
-/* preisach: n levels, delta = (u_max - u_min)/n, widths r_i = 0.5 i delta, cells j = 0 .. n-1-i with
- * lower centres u_min + r_i + j delta, k_i = (u_min + r_i)/(n - i). c = {delta, r_0 .. r_{n-1},
- * k_0 .. k_{n-1}, centres (n(n+1)/2)}; d = {plays (n)}. */
-static inline double pzk_preisach_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+/* preisach: n levels, delta = (u_max - u_min)/n, widths r_i = 0.5 i delta, cells j = 0 .. n-1-i
+ * with lower centres u_min + r_i + j delta, k_i = (u_min + r_i)/(n - i). c = {delta, r_0 ..
+ * r_{n-1}, k_0 .. k_{n-1}, centres (n(n+1)/2)}; d = {plays (n)}. */
+static inline double pzk_preisach_step(const pzk_block *b, const double *c, const double *d,
+                                       double *o, double v) {
   const int n = b->n;
   const double delta = c[0], *r = c + 1, *k = c + 1 + n, *cen = c + 1 + 2 * n;
   double acc = 0;
@@ -66,7 +69,8 @@ static inline double pzk_preisach_step(const pzk_block *b, const double *c, cons
   for (i = 0; i < n; ++i) {
     double p = pzk_play(v, r[i], d[i]);
     o[i] = p;
-    for (j = 0; j < n - i; ++j, ++q) acc += (pzk_clamp(p, cen[q], cen[q] + delta) - cen[q] + k[i]) * b->w[q];
+    for (j = 0; j < n - i; ++j, ++q)
+      acc += (pzk_clamp(p, cen[q], cen[q] + delta) - cen[q] + k[i]) * b->w[q];
   }
   return acc;
 }

@@ -3,8 +3,8 @@
 // compiled into the C++ side here, in namespace pz::pzk (records/stepper.h runs the chain of a
 // fitted model; the effects' and families' registrations take their ids), and copied verbatim, in
 // the order of the includes below, into every header `piezoid export` writes
-// (model/kernels/kernel_text.h: the build embeds the files this header lists, model/CMakeLists.txt).
-// A new kernel file: its include line here, nothing else.
+// (model/kernels/kernel_text.h: the build embeds the files this header lists,
+// model/CMakeLists.txt). A new kernel file: its include line here, nothing else.
 #pragma once
 
 #include <math.h>  // NOLINT: the kernels are C99 and call the C library's functions

@@ -12,7 +12,9 @@ static inline double pzk_backlash_state_step(const pzk_block *b, double w, doubl
 static inline double pzk_backlash_init(const pzk_block *b, double *d, double v) {
   int state = pzk_rest_state(b, v);
   double first = state == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
-  d[0] = state == PZK_CENTRED ? 0.0 : pzk_backlash_state_step(b, pzk_backlash_state_step(b, 0.0, first), -first);
+  d[0] = state == PZK_CENTRED
+             ? 0.0
+             : pzk_backlash_state_step(b, pzk_backlash_state_step(b, 0.0, first), -first);
   d[1] = v;
   return b->p[1] * v - d[0];
 }
@@ -26,7 +28,8 @@ static inline double pzk_backlash_step(const pzk_block *b, const double *d, doub
 }
 
 /* The exact Bouc-Wen state update over a straight piece of drive du (BoucWenStateStep). */
-static inline double pzk_bouc_wen_state_step(double h, double du, double alpha, double beta, double gamma) {
+static inline double pzk_bouc_wen_state_step(double h, double du, double alpha, double beta,
+                                             double gamma) {
   double s, k, h1, z, v0, rest, k2;
   int positive;
   if (du == 0) return h;
@@ -57,15 +60,16 @@ static inline double pzk_stack_bw_init(const pzk_block *b, double *c, double *d,
   d[0] = 0.0; /* centred; else h after a rise by 2 u_half and a fall back (StackRestState) */
   if (pzk_rest_state(b, v) != PZK_CENTRED) {
     double first = pzk_rest_state(b, v) == PZK_DESCENDED ? 2 * b->u_half : -2 * b->u_half;
-    d[0] = pzk_bouc_wen_state_step(pzk_bouc_wen_state_step(0.0, first, b->p[0], b->p[1], b->p[2]), -first, b->p[0],
-                                   b->p[1], b->p[2]);
+    d[0] = pzk_bouc_wen_state_step(pzk_bouc_wen_state_step(0.0, first, b->p[0], b->p[1], b->p[2]),
+                                   -first, b->p[0], b->p[1], b->p[2]);
   }
   d[1] = b->p[3] * (v - d[0]);
   d[2] = d[1];
   d[3] = v;
   return d[2];
 }
-static inline double pzk_stack_bw_step(const pzk_block *b, const double *c, const double *d, double *o, double v) {
+static inline double pzk_stack_bw_step(const pzk_block *b, const double *c, const double *d,
+                                       double *o, double v) {
   const double alpha = b->p[0], beta = b->p[1], gamma = b->p[2], dd = b->p[3];
   const int m = b->n;
   double h = d[0], x = d[1], y = d[2], u0 = d[3];
@@ -84,7 +88,8 @@ static inline double pzk_stack_bw_step(const pzk_block *b, const double *c, cons
         if (!have_n) phn = pzk_phi(kn * du), have_n = 1;
         h1 = h + (alpha - kn * h) * du * phn;
       }
-      if ((h > 0 && h1 < 0) || (h < 0 && h1 > 0)) h1 = pzk_bouc_wen_state_step(h, du, alpha, beta, gamma);
+      if ((h > 0 && h1 < 0) || (h < 0 && h1 > 0))
+        h1 = pzk_bouc_wen_state_step(h, du, alpha, beta, gamma);
       h = h1;
     }
     x1 = dd * (uj - h);
@@ -122,14 +127,17 @@ static inline void pzk_phi123(double z, double *p1, double *p2, double *p3) {
 }
 
 /* duhem: p = {alpha, c, c3, b, lambda}; d = {w, u_prev}, w = f(u) - y. */
-static inline double pzk_duhem_f(const pzk_block *b, double v) { return b->p[1] * v + b->p[2] * v * v * v; }
+static inline double pzk_duhem_f(const pzk_block *b, double v) {
+  return b->p[1] * v + b->p[2] * v * v * v;
+}
 static inline double pzk_duhem_init(const pzk_block *b, double *d, double v) {
   d[0] = 0;
   d[1] = v;
   return pzk_duhem_f(b, v);
 }
 static inline double pzk_duhem_step(const pzk_block *b, const double *d, double *o, double v) {
-  const double alpha = b->p[0], cc = b->p[1], c3 = b->p[2], bb = b->p[3], lambda = b->p[4], dt = b->dt;
+  const double alpha = b->p[0], cc = b->p[1], c3 = b->p[2], bb = b->p[3], lambda = b->p[4],
+               dt = b->dt;
   double u0 = d[1], s = (v - u0) / dt, kk = alpha * fabs(s) + lambda;
   double g0 = s * (cc - bb + 3 * c3 * u0 * u0), g1 = 6 * c3 * s * s * u0, g2 = 6 * c3 * s * s * s;
   double p1, p2, p3, z = -kk * dt, w;

@@ -1,6 +1,6 @@
 // `piezoid boucwen` run in-process on the bundled benchmark data with a tiny search: the true model
-// reproduces the benchmark's floor (the integrator matches the generator), the search improves on its
-// first swarm, the result does not depend on the thread count, and bad input is refused.
+// reproduces the benchmark's floor (the integrator matches the generator), the search improves on
+// its first swarm, the result does not depend on the thread count, and bad input is refused.
 #include <gtest/gtest.h>
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
@@ -47,9 +47,25 @@ double Num(const google::protobuf::Struct& s, const std::string& key) {
 }
 
 std::vector<std::string> Tiny(const fs::path& out, int threads) {
-  return {"--algorithm", "pso", "--iterations", "6", "--population", "8", "--repetitions", "1",
-          "--train-periods", "1", "--threads", std::to_string(threads), "--data-dir", kData.string(),
-          "--out", out.string(), "--no-plots", "--progress", "0"};
+  return {"--algorithm",
+          "pso",
+          "--iterations",
+          "6",
+          "--population",
+          "8",
+          "--repetitions",
+          "1",
+          "--train-periods",
+          "1",
+          "--threads",
+          std::to_string(threads),
+          "--data-dir",
+          kData.string(),
+          "--out",
+          out.string(),
+          "--no-plots",
+          "--progress",
+          "0"};
 }
 
 TEST(BoucwenCli, TinyRunWritesAReportAndDoesNotDependOnThreads) {
@@ -59,7 +75,8 @@ TEST(BoucwenCli, TinyRunWritesAReportAndDoesNotDependOnThreads) {
   ASSERT_EQ(RunBoucwen(Tiny(root / "t2", 2)), 0);
   const auto a = ReadReport(root / "t1");
   const auto b = ReadReport(root / "t2");
-  // The true parameters reproduce the benchmark's own floor (README: about 2.3e-7 m on the multisine).
+  // The true parameters reproduce the benchmark's own floor (README: about 2.3e-7 m on the
+  // multisine).
   EXPECT_LT(Num(a, "true_model_multisine_rms_m"), 3e-7);
   EXPECT_LT(Num(a, "true_model_sinesweep_rms_m"), 4e-6);
   EXPECT_EQ(Num(a, "evaluations"), Num(b, "evaluations"));
@@ -86,8 +103,8 @@ TEST(BoucwenCli, TinyRunWritesAReportAndDoesNotDependOnThreads) {
 TEST(BoucwenCli, BadInputIsRefused) {
   const fs::path root = fs::path(::testing::TempDir()) / "boucwen_cli_bad";
   EXPECT_THROW(RunBoucwen({"--algorithm", "simplex", "--out", root.string()}), CLI::ParseError);
-  EXPECT_ANY_THROW(RunBoucwen({"--data-dir", (root / "missing").string(), "--iterations", "2", "--out",
-                               root.string(), "--no-plots"}));
+  EXPECT_ANY_THROW(RunBoucwen({"--data-dir", (root / "missing").string(), "--iterations", "2",
+                               "--out", root.string(), "--no-plots"}));
 }
 
 }  // namespace

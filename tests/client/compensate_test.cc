@@ -2,11 +2,11 @@
 // inverse (a Prandtl–Ishlinskii operator written here, with measurement noise), the drive the
 // compensator computes from the fitted model, played on the true plant, tracks the reference within
 // the noise; a reference beyond the drive's reach is clipped and reported (how much, where); a
-// reference in other units is refused naming both; a fit.json of another version is refused with the
-// version needed, a bad field is named; --check-model reports another model's error; --replay of
-// the training record is close to the noise, and so is the replay of a record whose sensor zero is
-// another (each record's offset is taken as the fit takes it), beside the noiseless replay of the
-// model's own response (≈ 0) and the drive error the noise alone implies.
+// reference in other units is refused naming both; a fit.json of another version is refused with
+// the version needed, a bad field is named; --check-model reports another model's error; --replay
+// of the training record is close to the noise, and so is the replay of a record whose sensor zero
+// is another (each record's offset is taken as the fit takes it), beside the noiseless replay of
+// the model's own response (≈ 0) and the drive error the noise alone implies.
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
@@ -75,18 +75,19 @@ class Compensate : public ::testing::Test {
       rec << io::FormatNumber(static_cast<double>(k) * 1e-3) << "," << io::FormatNumber(u[k]) << ","
           << io::FormatNumber(y[k] + noise(rng)) << "\n";
     rec.close();
-    Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii", "--pi-operators",
-              "24", "--out", (dir_ / "fit").string(), "--no-figures", "--quiet"});
+    Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
+              "--pi-operators", "24", "--out", (dir_ / "fit").string(), "--no-figures", "--quiet"});
     Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like", "--out",
               (dir_ / "other").string(), "--no-figures", "--quiet"});
   }
-  static void WriteReference(const fs::path& p, double amplitude, const std::string& column = "displacement_um") {
+  static void WriteReference(const fs::path& p, double amplitude,
+                             const std::string& column = "displacement_um") {
     std::ofstream ref(p);
     ref << "t_s," << column << "\n";
     for (size_t k = 0; k < 2000; ++k) {
       const double t = static_cast<double>(k) * 1e-3;
-      ref << io::FormatNumber(t) << "," << io::FormatNumber(25 + amplitude * std::sin(2 * std::numbers::pi * 1.5 * t))
-          << "\n";
+      ref << io::FormatNumber(t) << ","
+          << io::FormatNumber(25 + amplitude * std::sin(2 * std::numbers::pi * 1.5 * t)) << "\n";
     }
   }
   static std::vector<double> Column(const fs::path& p, int col) {
@@ -101,9 +102,10 @@ fs::path Compensate::dir_;
 
 TEST_F(Compensate, TheDriveMakesTheTruePlantTrackWithinTheNoise) {
   WriteReference(dir_ / "ref.csv", 12);
-  const std::string out = Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
-                                    (dir_ / "ref.csv").string(), "--out", (dir_ / "drive.csv").string(),
-                                    "--check-model", (dir_ / "other" / "fit.json").string()});
+  const std::string out =
+      Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
+                (dir_ / "ref.csv").string(), "--out", (dir_ / "drive.csv").string(),
+                "--check-model", (dir_ / "other" / "fit.json").string()});
   PZ_EXPECT_HAS(out, "clipping: none");
   PZ_EXPECT_HAS(out, "exposure to model error: backlash-like");
   const std::vector<double> ref = Column(dir_ / "ref.csv", 1), u = Column(dir_ / "drive.csv", 1);
@@ -117,9 +119,11 @@ TEST_F(Compensate, TheDriveMakesTheTruePlantTrackWithinTheNoise) {
 
 TEST_F(Compensate, AnUnreachableReferenceIsClippedAndReported) {
   WriteReference(dir_ / "big.csv", 60);
-  const std::string out = Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
-                                    (dir_ / "big.csv").string(), "--out", (dir_ / "big_drive.csv").string()});
-  PZ_EXPECT_HAS(out, "event(s) where the reference is beyond what the drive limits reach; largest shortfall");
+  const std::string out =
+      Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
+                (dir_ / "big.csv").string(), "--out", (dir_ / "big_drive.csv").string()});
+  PZ_EXPECT_HAS(
+      out, "event(s) where the reference is beyond what the drive limits reach; largest shortfall");
   PZ_EXPECT_HAS(out, " s: ");  // where
   const std::vector<double> u = Column(dir_ / "big_drive.csv", 1);
   const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
@@ -130,11 +134,12 @@ TEST_F(Compensate, AnUnreachableReferenceIsClippedAndReported) {
 
 TEST_F(Compensate, BadInputIsNamed) {
   WriteReference(dir_ / "deg.csv", 5, "angle_deg");
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
-                  RunCli({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
-                          (dir_ / "deg.csv").string(), "--out", (dir_ / "x.csv").string()});
-                }),
-                "is in 'deg', the model's response is in 'um'");
+  PZ_EXPECT_HAS(
+      testing::InputErrorOf([&] {
+        RunCli({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--reference",
+                (dir_ / "deg.csv").string(), "--out", (dir_ / "x.csv").string()});
+      }),
+      "is in 'deg', the model's response is in 'um'");
   std::string json = io::ReadTextFile(dir_ / "fit" / "fit.json");
   const size_t at = json.find("\"format_version\": 1");
   ASSERT_NE(at, std::string::npos);
@@ -157,20 +162,25 @@ TEST_F(Compensate, BadInputIsNamed) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "family.json").string()); }),
                 "model.family 'no-such-");
   std::ofstream(dir_ / "old.json") << "{\"model\": \"prandtl-ishlinskii\", \"params\": {}}\n";
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "old.json").string()); }), "no format_version");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "old.json").string()); }),
+                "no format_version");
 }
 
-/// --initial-state reaches fit.json's model section and LoadFit reads it back; without the flag it is
-/// auto (the default); a fit.json without the field (proto3: empty; fitted before it, centred) reads
-/// as centred; bad values name the flag / field.
+/// --initial-state reaches fit.json's model section and LoadFit reads it back; without the flag it
+/// is auto (the default); a fit.json without the field (proto3: empty; fitted before it, centred)
+/// reads as centred; bad values name the flag / field.
 TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
-  EXPECT_EQ(LoadFit((dir_ / "fit" / "fit.json").string()).initial_state, model::InitialState::kAuto);
+  EXPECT_EQ(LoadFit((dir_ / "fit" / "fit.json").string()).initial_state,
+            model::InitialState::kAuto);
   PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "fit" / "fit.json"), "\"initial_state\": \"auto\"");
-  PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "fit" / "report.md"), "in the **auto** state (descended at a rest at the bottom");
+  PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "fit" / "report.md"),
+                "in the **auto** state (descended at a rest at the bottom");
   // backlash-like's auto is centred (records/families.cc; measured: docs/records.md).
-  EXPECT_EQ(LoadFit((dir_ / "other" / "fit.json").string()).initial_state, model::InitialState::kCentred);
-  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii", "--pi-operators", "6",
-            "--initial-state", "ascended", "--out", (dir_ / "asc").string(), "--no-figures", "--quiet"});
+  EXPECT_EQ(LoadFit((dir_ / "other" / "fit.json").string()).initial_state,
+            model::InitialState::kCentred);
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
+            "--pi-operators", "6", "--initial-state", "ascended", "--out", (dir_ / "asc").string(),
+            "--no-figures", "--quiet"});
   const fs::path fit = dir_ / "asc" / "fit.json";
   EXPECT_EQ(LoadFit(fit.string()).initial_state, model::InitialState::kAscended);
   const std::string report = io::ReadTextFile(dir_ / "asc" / "report.md");
@@ -182,27 +192,31 @@ TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
   std::string old = json;
   old.replace(at, field.size(), "\"initial_state\": \"\"");
   std::ofstream(dir_ / "no_state.json") << old;
-  EXPECT_EQ(LoadFit((dir_ / "no_state.json").string()).initial_state, model::InitialState::kCentred);
+  EXPECT_EQ(LoadFit((dir_ / "no_state.json").string()).initial_state,
+            model::InitialState::kCentred);
   std::string bad = json;
   bad.replace(at, field.size(), "\"initial_state\": \"upward\"");
   std::ofstream(dir_ / "bad_state.json") << bad;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "bad_state.json").string()); }),
-                "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended, auto)");
+  PZ_EXPECT_HAS(
+      testing::InputErrorOf([&] { LoadFit((dir_ / "bad_state.json").string()); }),
+      "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended, auto)");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
-                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
-                          "--initial-state", "down", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});
+                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family",
+                          "prandtl-ishlinskii", "--initial-state", "down", "--out",
+                          (dir_ / "x").string(), "--no-figures", "--quiet"});
                 }),
                 "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
-                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "duhem", "--initial-state",
-                          "descended", "--out", (dir_ / "x").string(), "--no-figures", "--quiet"});
+                  RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "duhem",
+                          "--initial-state", "descended", "--out", (dir_ / "x").string(),
+                          "--no-figures", "--quiet"});
                 }),
                 "--initial-state descended: family duhem starts centred");
 }
 
 TEST_F(Compensate, ReplayOfTheTrainingRecordIsNearTheNoise) {
-  const std::string out = Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--replay",
-                                    (dir_ / "rec.csv").string()});
+  const std::string out = Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(),
+                                    "--replay", (dir_ / "rec.csv").string()});
   // "… through the local gain X um RMS …": the replay error in response units.
   const size_t at = out.find("through the local gain ");
   ASSERT_NE(at, std::string::npos) << out;
@@ -226,7 +240,8 @@ TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
   const fs::path set = dir_ / "offsets";
   fs::create_directories(set);
   fs::copy_file(dir_ / "rec.csv", set / "rec.csv", fs::copy_options::overwrite_existing);
-  const std::vector<double> t = Column(dir_ / "rec.csv", 0), u = Column(dir_ / "rec.csv", 1), y = Plant(u);
+  const std::vector<double> t = Column(dir_ / "rec.csv", 0), u = Column(dir_ / "rec.csv", 1),
+                            y = Plant(u);
   {
     // The same drive measured again: its own noise, the sensor's zero 3 um up.
     std::mt19937_64 rng(8);
@@ -234,12 +249,13 @@ TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
     std::ofstream shifted(set / "shifted.csv");
     shifted << "t_s,voltage_V,displacement_um\n";
     for (size_t k = 0; k < u.size(); ++k)
-      shifted << io::FormatNumber(t[k]) << "," << io::FormatNumber(u[k]) << "," << io::FormatNumber(y[k] + 3.0 + noise(rng))
-              << "\n";
+      shifted << io::FormatNumber(t[k]) << "," << io::FormatNumber(u[k]) << ","
+              << io::FormatNumber(y[k] + 3.0 + noise(rng)) << "\n";
   }
-  std::ofstream(set / "manifest.csv") << "record,file,role\nrec,rec.csv,train\nshifted,shifted.csv,validate\n";
-  const std::string out =
-      Captured({"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--replay", set.string()});
+  std::ofstream(set / "manifest.csv")
+      << "record,file,role\nrec,rec.csv,train\nshifted,shifted.csv,validate\n";
+  const std::string out = Captured(
+      {"compensate", "--model", (dir_ / "fit" / "fit.json").string(), "--replay", set.string()});
   for (const std::string name : {"  rec (", "  shifted ("}) {
     const size_t at = out.find(name);
     ASSERT_NE(at, std::string::npos) << out;
@@ -254,19 +270,21 @@ TEST_F(Compensate, ReplayTakesEachRecordsOwnOffset) {
     EXPECT_LT(ratio, 2.0) << name << out;
   }
   const size_t shifted = out.find("  shifted (");
-  EXPECT_NEAR(NumberAfter(out, "record offset ", shifted) - NumberAfter(out, "record offset ", out.find("  rec (")), 3.0,
-              0.01)
+  EXPECT_NEAR(NumberAfter(out, "record offset ", shifted) -
+                  NumberAfter(out, "record offset ", out.find("  rec (")),
+              3.0, 0.01)
       << out;
 }
 
 // `piezoid fit` polishes with forward differences by default (a Jacobian of p + 1 evaluations, the
 // residuals at the point reused, against 2p central) and central ones once it has converged (after
 // the line search of one parameter, forward throughout)
-// (tests/opt/fit_test.cc for the evaluations): the same search, a fit as good; fit.json and report.md
-// say which; another value is refused.
+// (tests/opt/fit_test.cc for the evaluations): the same search, a fit as good; fit.json and
+// report.md say which; another value is refused.
 TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
-  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like", "--lm-differences", "central",
-            "--out", (dir_ / "other-central").string(), "--no-figures", "--quiet"});
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like",
+            "--lm-differences", "central", "--out", (dir_ / "other-central").string(),
+            "--no-figures", "--quiet"});
   const std::string fwd = io::ReadTextFile(dir_ / "other" / "fit.json");
   const std::string cen = io::ReadTextFile(dir_ / "other-central" / "fit.json");
   PZ_EXPECT_HAS(fwd, "\"lm_differences\": \"forward-central\"");
@@ -282,8 +300,9 @@ TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
   EXPECT_LE(mse_fwd, 1.01 * mse_cen) << mse_fwd << " forward, " << mse_cen << " central";
   std::string refused;
   try {
-    RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like", "--lm-differences",
-            "sideways", "--out", (dir_ / "bad").string(), "--no-figures", "--quiet"});
+    RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "backlash-like",
+            "--lm-differences", "sideways", "--out", (dir_ / "bad").string(), "--no-figures",
+            "--quiet"});
   } catch (const std::exception& e) {
     refused = e.what();
   }
@@ -291,8 +310,8 @@ TEST_F(Compensate, FitPolishesWithForwardDifferencesByDefault) {
   EXPECT_FALSE(fs::exists(dir_ / "bad"));
   // One searched parameter (a linear family's delay): the line search has located it to its
   // tolerance, and `auto` polishes with forward differences throughout.
-  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii", "--effects", "delay",
-            "--out", (dir_ / "line").string(), "--no-figures", "--quiet"});
+  Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
+            "--effects", "delay", "--out", (dir_ / "line").string(), "--no-figures", "--quiet"});
   const std::string line = io::ReadTextFile(dir_ / "line" / "fit.json");
   PZ_EXPECT_HAS(line, "\"algorithm\": \"line\"");
   PZ_EXPECT_HAS(line, "\"lm_differences\": \"forward\"");

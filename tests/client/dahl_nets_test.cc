@@ -47,7 +47,8 @@ TEST(DahlDataset, CasesOneThreeFourDifferOnlyInTheSixthDigit) {
     EXPECT_LT(raw, 1e-4) << "case " << id;
     EXPECT_LT((normalised(c) - n1).cwiseAbs().maxCoeff(), 2e-5) << "case " << id;
   }
-  // Case 2 (b1 = 3.09292e4) spans a tenth of the range: the reason for DahlStudyOptions' min_grad units.
+  // Case 2 (b1 = 3.09292e4) spans a tenth of the range: the reason for DahlStudyOptions' min_grad
+  // units.
   const DahlDataset c2 = MakeDahlDataset(PaperDahlCase(2), 2.0, 1e-3);
   EXPECT_NEAR(c2.data.t.maxCoeff() / c1.data.t.maxCoeff(), 0.1, 0.001);
   EXPECT_TRUE(DahlStudyOptions{}.lm_options.min_grad_normalised);
@@ -69,7 +70,7 @@ TEST(DahlStudy, RestartsAreDeterministicAndChosenByValidation) {
   EXPECT_EQ(a.restart_val_mse[static_cast<size_t>(a.chosen)],
             *std::min_element(a.restart_val_mse.begin(), a.restart_val_mse.end()));
   EXPECT_EQ(a.summary.val.mse, a.restart_val_mse[static_cast<size_t>(a.chosen)]);
-  EXPECT_TRUE(std::binary_search(a.split.train.begin(), a.split.train.end(), 0));     // pinned ends
+  EXPECT_TRUE(std::binary_search(a.split.train.begin(), a.split.train.end(), 0));  // pinned ends
   EXPECT_TRUE(std::binary_search(a.split.train.begin(), a.split.train.end(), 1000));
   EXPECT_GE(a.total_cpu_s, a.summary.cpu_time_s);
 

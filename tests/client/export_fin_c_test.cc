@@ -45,15 +45,16 @@ io::SavedNetwork FinNetwork() {
   return s;
 }
 
-/// Rests, ramps, reversals, nested minor loops, jumps of several hundred volts in one sample (the step
-/// splits into sub-steps and z crosses 0 inside them), a drive beyond the limit (clipped), then a
-/// decaying sine: `n` samples at `fs`.
+/// Rests, ramps, reversals, nested minor loops, jumps of several hundred volts in one sample (the
+/// step splits into sub-steps and z crosses 0 inside them), a drive beyond the limit (clipped),
+/// then a decaying sine: `n` samples at `fs`.
 std::vector<double> RichDrive(double fs) {
   std::vector<double> u;
   auto ramp = [&](double to, double seconds) {
     const double from = u.empty() ? 0.0 : u.back();
     const long m = std::lround(seconds * fs);
-    for (long k = 1; k <= m; ++k) u.push_back(from + (to - from) * static_cast<double>(k) / static_cast<double>(m));
+    for (long k = 1; k <= m; ++k)
+      u.push_back(from + (to - from) * static_cast<double>(k) / static_cast<double>(m));
   };
   u.push_back(0.0);
   ramp(0, 0.2);     // rest
@@ -64,10 +65,11 @@ std::vector<double> RichDrive(double fs) {
   ramp(100, 0.3);   // … inside it another
   ramp(250, 0.2);
   ramp(-700, 0.9);
-  u.push_back(400);  // a jump up in one sample
+  u.push_back(400);   // a jump up in one sample
   u.push_back(-500);  // and down: sub-steps and z crossing 0
   u.push_back(-500);
-  u.push_back(900);  // beyond the limit: clipped to 750 (the C side counts it; the reference gets 750)
+  u.push_back(
+      900);  // beyond the limit: clipped to 750 (the C side counts it; the reference gets 750)
   ramp(0, 0.4);
   const long m = std::lround(1.5 * fs);
   for (long k = 1; k <= m; ++k) {
@@ -82,8 +84,8 @@ struct Trace {
 };
 
 /// The library's trace of a sampled drive at fs (u clipped to ±limit as the header does).
-Trace Library(const model::ModalSimulator& sim, const model::BimorphParams& p, std::vector<double> u, double fs,
-            double limit) {
+Trace Library(const model::ModalSimulator& sim, const model::BimorphParams& p,
+              std::vector<double> u, double fs, double limit) {
   model::SampledSignal s;
   for (size_t k = 0; k < u.size(); ++k) {
     s.t.push_back(static_cast<double>(k) / fs);
@@ -103,8 +105,9 @@ double MaxAbs(const std::vector<double>& v) {
 class ExportFinC : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("pz-export-fin-" + std::to_string(::getpid()) + "-" +
-                                        ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir_ = fs::temp_directory_path() /
+           ("pz-export-fin-" + std::to_string(::getpid()) + "-" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -114,9 +117,11 @@ class ExportFinC : public ::testing::Test {
   /// Compiles prog.c (with the headers in dir_) and returns its stdout lines.
   std::vector<std::string> CompileAndRun(const std::string& prog) {
     std::ofstream(dir_ / "prog.c") << prog;
-    const std::string cc = std::string("'") + PIEZOID_C_COMPILER +
-                           "' -std=c99 -O2 -Wall -Wextra -Werror -pedantic -o prog prog.c -lm 2>cc.err";
-    EXPECT_EQ(Shell("cd '" + dir_.string() + "' && " + cc), 0) << std::ifstream(dir_ / "cc.err").rdbuf();
+    const std::string cc =
+        std::string("'") + PIEZOID_C_COMPILER +
+        "' -std=c99 -O2 -Wall -Wextra -Werror -pedantic -o prog prog.c -lm 2>cc.err";
+    EXPECT_EQ(Shell("cd '" + dir_.string() + "' && " + cc), 0)
+        << std::ifstream(dir_ / "cc.err").rdbuf();
     EXPECT_EQ(Shell("cd '" + dir_.string() + "' && ./prog > out.txt"), 0);
     std::ifstream in(dir_ / "out.txt");
     std::vector<std::string> lines;
@@ -143,11 +148,14 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
   // The 100 Hz header through the CLI (what users run), a 1 kHz one through the library.
   ASSERT_TRUE(io::SaveNetwork(net, (dir_ / "fin.json").string()).ok());
   const std::string cli = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '" +
-                          (dir_ / "fin.json").string() + "' --plant --out '" + (dir_ / "fin.h").string() +
-                          "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
+                          (dir_ / "fin.json").string() + "' --plant --out '" +
+                          (dir_ / "fin.h").string() + "' --name fin 2>'" +
+                          (dir_ / "cli.err").string() + "'";
   ASSERT_EQ(Shell(cli), 0) << cli << "\n" << std::ifstream(dir_ / "cli.err").rdbuf();
   std::string h;
-  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{1000.0, 0.0, 2, {}}, "finms", &h).ok());
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(
+                  net, sim, controller::FinPlantExport{1000.0, 0.0, 2, {}}, "finms", &h)
+                  .ok());
   std::ofstream(dir_ / "finms.h") << h;
 
   struct Case {
@@ -170,8 +178,10 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
   for (size_t c = 0; c < cases.size(); ++c) {
     const std::string n = cases[c].header, u = "u" + std::to_string(c);
     prog << "  {\n    " << n << "_state s;\n"
-         << "    if (" << n << "_params(" << cases[c].amplitude << ", " << cases[c].frequency << ", p) != 0) return 1;\n"
-         << "    if (" << n << "_init(&s, p, " << b1 << ", " << b2 << ", " << u << "[0]) != 0) return 2;\n"
+         << "    if (" << n << "_params(" << cases[c].amplitude << ", " << cases[c].frequency
+         << ", p) != 0) return 1;\n"
+         << "    if (" << n << "_init(&s, p, " << b1 << ", " << b2 << ", " << u
+         << "[0]) != 0) return 2;\n"
          << "    printf(\"%a %a\\n\", " << n << "_angle(&s), s.d.theta);\n"
          << "    for (k = 1; k < " << cases[c].u.size() << "; ++k) {\n"
          << "      double y = " << n << "_step(&s, " << u << "[k]);\n"
@@ -186,7 +196,8 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
     const Case& cs = cases[c];
     const auto params = net.network.Predict(cs.amplitude, cs.frequency);
     model::BimorphParams p;
-    p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+    p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta,
+    p.gamma = params.gamma;
     p.a1 = params.a1, p.a2 = params.a2, p.b1 = b1, p.b2 = b2;
     const Trace want = Library(sim, p, cs.u, cs.fs, limit);
     ASSERT_EQ(want.y.size(), cs.u.size());
@@ -208,20 +219,32 @@ TEST_F(ExportFinC, HeaderStepsLikeTheModalSimulator) {
     EXPECT_LE(err_th, 1e-12 * scale_th) << "case " << c;
     ASSERT_LT(at, lines.size());
     const std::string tail = lines[at++];
-    const long expected_saturations = std::count_if(cs.u.begin(), cs.u.end(), [&](double x) { return std::abs(x) > limit; });
-    EXPECT_EQ(tail, "saturations " + std::to_string(expected_saturations) + " status 0") << "case " << c;
-    if (c == 2) {  // for the record: the GA's sinusoid path (exact sine between samples) against the ramp
+    const long expected_saturations =
+        std::count_if(cs.u.begin(), cs.u.end(), [&](double x) { return std::abs(x) > limit; });
+    EXPECT_EQ(tail, "saturations " + std::to_string(expected_saturations) + " status 0")
+        << "case " << c;
+    if (c == 2) {  // for the record: the GA's sinusoid path (exact sine between samples) against
+                   // the ramp
       const model::BimorphTrace exact = sim.Simulate(p, model::Sinusoid{500, 1, 3, 100});
       ASSERT_TRUE(exact.summary.ok());
       double hold = 0;
-      for (size_t k = 0; k < want.y.size(); ++k) hold = std::max(hold, std::abs(exact.angle_deg[k] - want.y[k]));
-      EXPECT_LE(hold, 0.002 * scale_y);  // the linear hold's error at 100 Hz (measured 3e-4), not the header's
-      std::printf("bench case 6: the sampled (linear-hold) path differs from the sinusoid path by %.3g deg (%.3g of "
-                  "the range)\n", hold, hold / scale_y);
+      for (size_t k = 0; k < want.y.size(); ++k)
+        hold = std::max(hold, std::abs(exact.angle_deg[k] - want.y[k]));
+      EXPECT_LE(
+          hold,
+          0.002 * scale_y);  // the linear hold's error at 100 Hz (measured 3e-4), not the header's
+      std::printf(
+          "bench case 6: the sampled (linear-hold) path differs from the sinusoid path by %.3g deg "
+          "(%.3g of "
+          "the range)\n",
+          hold, hold / scale_y);
     }
-    std::printf("case %zu (%s, %g Hz, %zu samples): max |y_C - y_lib| = %.3g deg (%.3g of the range), theta %.3g; "
-                "%d of %zu bit-identical\n",
-                c, cs.header.c_str(), cs.fs, cs.u.size(), err_y, err_y / scale_y, err_th, exact, cs.u.size());
+    std::printf(
+        "case %zu (%s, %g Hz, %zu samples): max |y_C - y_lib| = %.3g deg (%.3g of the range), "
+        "theta %.3g; "
+        "%d of %zu bit-identical\n",
+        c, cs.header.c_str(), cs.fs, cs.u.size(), err_y, err_y / scale_y, err_th, exact,
+        cs.u.size());
   }
   EXPECT_EQ(at, lines.size()) << "extra output";
 }
@@ -232,17 +255,23 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
   const io::SavedNetwork net = FinNetwork();
   const double b1 = 3.1640625, b2 = -3.076171875;
   std::string h;
-  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "fin", &h).ok());  // horizon 2
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "fin", &h)
+                  .ok());  // horizon 2
   std::ofstream(dir_ / "fin.h") << h;
-  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, 0.0, 1, {}}, "fin1", &h).ok());
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(
+                  net, sim, controller::FinPlantExport{100.0, 0.0, 1, {}}, "fin1", &h)
+                  .ok());
   std::ofstream(dir_ / "fin1.h") << h;
   const auto params = net.network.Predict(750, 0.5);
   model::BimorphParams p;
-  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta,
+  p.gamma = params.gamma;
   p.a1 = params.a1, p.a2 = params.a2, p.b1 = b1, p.b2 = b2;
-  // The references: the library's responses to drives within the limits (reachable by construction):
-  // the rich drive (rests, reversals, minor loops, one-sample jumps) and bench case 9's sine.
-  std::vector<std::vector<double>> drives = {RichDrive(100), model::SampleValues(model::Sinusoid{740, 1, 3, 100})};
+  // The references: the library's responses to drives within the limits (reachable by
+  // construction): the rich drive (rests, reversals, minor loops, one-sample jumps) and bench case
+  // 9's sine.
+  std::vector<std::vector<double>> drives = {RichDrive(100),
+                                             model::SampleValues(model::Sinusoid{740, 1, 3, 100})};
   for (double& x : drives[0]) x = std::clamp(x, -740.0, 740.0);
   std::vector<Trace> refs;
   for (const auto& u : drives) refs.push_back(Library(sim, p, u, 100, 750));
@@ -252,8 +281,9 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
   std::ostringstream prog;
   prog << "#include <stdio.h>\n#include \"fin.h\"\n#include \"fin1.h\"\n";
   for (size_t r = 0; r < refs.size(); ++r) prog << CArray("ref" + std::to_string(r), refs[r].y);
-  prog << "int main(void) {\n  double p[7], drive;\n  fin_state s, f;\n  fin1_state s1;\n  long k;\n"
-       << "  fin_params(750, 0.5, p);\n";
+  prog
+      << "int main(void) {\n  double p[7], drive;\n  fin_state s, f;\n  fin1_state s1;\n  long k;\n"
+      << "  fin_params(750, 0.5, p);\n";
   for (size_t r = 0; r < refs.size(); ++r) {
     const std::string ref = "ref" + std::to_string(r);
     const long n = static_cast<long>(refs[r].y.size());
@@ -287,20 +317,25 @@ TEST_F(ExportFinC, InverseThenForwardTracksAReachableReference) {
     }
     ASSERT_LT(at, lines.size());
     long unreachable = -1, saturations = -1;
-    ASSERT_EQ(std::sscanf(lines[at++].c_str(), "unreachable %ld saturations %ld", &unreachable, &saturations), 2);
+    ASSERT_EQ(std::sscanf(lines[at++].c_str(), "unreachable %ld saturations %ld", &unreachable,
+                          &saturations),
+              2);
     EXPECT_EQ(saturations, 0) << "reference " << r;
     const double rms = std::sqrt(sq / static_cast<double>(y_ref.size() - 1));
-    // The forward model run on the computed drive gives the same angles, bit for bit (one recursion).
+    // The forward model run on the computed drive gives the same angles, bit for bit (one
+    // recursion).
     EXPECT_EQ(replay, 0.0) << "reference " << r;
-    // Horizon 2 with one sample of preview: what docs/deploy.md says (measured: rms 0.23 % and 0.26 %
-    // of the range, max 2.5 % and 1.5 %; 1 and 63 steps out of reach, on the sine near its negative
-    // peaks, where the greedy two-sample plan cannot make up the lag of the steps before).
+    // Horizon 2 with one sample of preview: what docs/deploy.md says (measured: rms 0.23 % and 0.26
+    // % of the range, max 2.5 % and 1.5 %; 1 and 63 steps out of reach, on the sine near its
+    // negative peaks, where the greedy two-sample plan cannot make up the lag of the steps before).
     EXPECT_LE(rms, 0.005 * range) << "reference " << r;
     EXPECT_LE(err, 0.03 * range) << "reference " << r;
     EXPECT_LE(unreachable, static_cast<long>(y_ref.size()) / 4) << "reference " << r;
-    std::printf("reference %zu (range %.3g deg, %zu samples): horizon 2: rms %.3g deg (%.3g of the range), max %.3g "
-                "deg, %ld steps out of reach; horizon 1: max %.3g deg\n",
-                r, range, y_ref.size(), rms, rms / range, err, unreachable, err1);
+    std::printf(
+        "reference %zu (range %.3g deg, %zu samples): horizon 2: rms %.3g deg (%.3g of the range), "
+        "max %.3g "
+        "deg, %ld steps out of reach; horizon 1: max %.3g deg\n",
+        r, range, y_ref.size(), rms, rms / range, err, unreachable, err1);
   }
   EXPECT_EQ(at, lines.size());
 }
@@ -312,12 +347,14 @@ TEST_F(ExportFinC, TheJobSpecGivesTheBeamAndTheSaturations) {
   const std::string from = "\"case_set_dir\": \"../data/bimorph-fin/nominal\"";
   ASSERT_NE(spec.find(from), std::string::npos);
   spec.replace(spec.find(from), from.size(),
-               "\"case_set_dir\": \"" PIEZOID_DATA_DIR "/bimorph-fin/nominal\", \"geometry\": {\"tip_length_m\": 0.03}");
+               "\"case_set_dir\": \"" PIEZOID_DATA_DIR
+               "/bimorph-fin/nominal\", \"geometry\": {\"tip_length_m\": 0.03}");
   std::ofstream(dir_ / "job.json") << spec;
   ASSERT_TRUE(io::SaveNetwork(FinNetwork(), (dir_ / "fin.json").string()).ok());
   const std::string cli = "'" + (BuildDir() / "client" / "piezoid").string() + "' export '" +
-                          (dir_ / "fin.json").string() + "' --plant --job '" + (dir_ / "job.json").string() +
-                          "' --out '" + (dir_ / "fin.h").string() + "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
+                          (dir_ / "fin.json").string() + "' --plant --job '" +
+                          (dir_ / "job.json").string() + "' --out '" + (dir_ / "fin.h").string() +
+                          "' --name fin 2>'" + (dir_ / "cli.err").string() + "'";
   ASSERT_EQ(Shell(cli), 0) << cli << "\n" << std::ifstream(dir_ / "cli.err").rdbuf();
   std::ifstream hin(dir_ / "fin.h");
   const std::string h((std::istreambuf_iterator<char>(hin)), std::istreambuf_iterator<char>());
@@ -332,19 +369,24 @@ TEST_F(ExportFinC, TheJobSpecGivesTheBeamAndTheSaturations) {
   // And it steps like the library's simulation of that beam (bench case 9's sine).
   const std::vector<double> u = model::SampleValues(model::Sinusoid{750, 1, 3, 100});
   std::ostringstream prog;
-  prog << "#include <stdio.h>\n#include \"fin.h\"\n" << CArray("u", u)
+  prog << "#include <stdio.h>\n#include \"fin.h\"\n"
+       << CArray("u", u)
        << "int main(void) {\n  double p[7];\n  fin_state s;\n  long k;\n  fin_params(750, 1, p);\n"
-       << "  if (fin_init(&s, p, 3.1640625, -3.076171875, 0) != 0) return 2;\n  printf(\"%a\\n\", fin_angle(&s));\n"
-       << "  for (k = 1; k < " << u.size() << "; ++k) printf(\"%a\\n\", fin_step(&s, u[k]));\n  return 0;\n}\n";
+       << "  if (fin_init(&s, p, 3.1640625, -3.076171875, 0) != 0) return 2;\n  printf(\"%a\\n\", "
+          "fin_angle(&s));\n"
+       << "  for (k = 1; k < " << u.size()
+       << "; ++k) printf(\"%a\\n\", fin_step(&s, u[k]));\n  return 0;\n}\n";
   const auto lines = CompileAndRun(prog.str());
   const auto params = FinNetwork().network.Predict(750, 1);
   model::BimorphParams p;
-  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta, p.gamma = params.gamma;
+  p.mu = params.mu, p.delta = params.delta, p.alpha = params.alpha, p.beta = params.beta,
+  p.gamma = params.gamma;
   p.a1 = params.a1, p.a2 = params.a2, p.b1 = 3.1640625, p.b2 = -3.076171875;
   const Trace want = Library(sim, p, u, 100, 750);
   ASSERT_EQ(lines.size(), want.y.size());
   double err = 0;
-  for (size_t k = 0; k < lines.size(); ++k) err = std::max(err, std::abs(std::strtod(lines[k].c_str(), nullptr) - want.y[k]));
+  for (size_t k = 0; k < lines.size(); ++k)
+    err = std::max(err, std::abs(std::strtod(lines[k].c_str(), nullptr) - want.y[k]));
   EXPECT_LE(err, 1e-12 * MaxAbs(want.y));
 }
 
@@ -353,16 +395,27 @@ TEST_F(ExportFinC, BadInputIsReportedNotExtrapolatedSilently) {
   const model::ModalSimulator sim(plant);
   const io::SavedNetwork net = FinNetwork();
   std::string h;
-  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{0.0, 0.0, 2, {}}, "fin", &h).code(), StatusCode::kInvalidArgument);
-  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, -1.0, 2, {}}, "fin", &h).code(),
+  EXPECT_EQ(controller::NetworkAndFinToCHeader(
+                net, sim, controller::FinPlantExport{0.0, 0.0, 2, {}}, "fin", &h)
+                .code(),
             StatusCode::kInvalidArgument);
-  EXPECT_EQ(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "2fin", &h).code(), StatusCode::kInvalidArgument);
-  ASSERT_TRUE(controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{100.0, 600.0, 2, {}}, "fin", &h).ok());
+  EXPECT_EQ(controller::NetworkAndFinToCHeader(
+                net, sim, controller::FinPlantExport{100.0, -1.0, 2, {}}, "fin", &h)
+                .code(),
+            StatusCode::kInvalidArgument);
+  EXPECT_EQ(
+      controller::NetworkAndFinToCHeader(net, sim, controller::FinPlantExport{}, "2fin", &h).code(),
+      StatusCode::kInvalidArgument);
+  ASSERT_TRUE(controller::NetworkAndFinToCHeader(
+                  net, sim, controller::FinPlantExport{100.0, 600.0, 2, {}}, "fin", &h)
+                  .ok());
   std::ofstream(dir_ / "fin.h") << h;
-  const std::string prog = std::string("#include <stdio.h>\n#include \"fin.h\"\n") + R"(int main(void) {
+  const std::string prog =
+      std::string("#include <stdio.h>\n#include \"fin.h\"\n") + R"(int main(void) {
   double p[7], q[7];
   fin_state s;
-  printf("%d %d %d %d %d\n", fin_params(500, 0.5, p), fin_params(900, 0.5, q), fin_params(500, 2, q),
+  printf("%d %d %d %d %d\n", fin_params(500, 0.5, p), fin_params(900, 0.5, q), fin_params(500, 2,
+  q),
          fin_params(100, 0.1, q), fin_params(0.0 / 0.0, 0.5, q));
   q[0] = p[0]; q[1] = p[1]; q[2] = p[2]; q[3] = 0.001; q[4] = 0.004; q[5] = p[5]; q[6] = p[6];
   printf("%d\n", fin_init(&s, q, 1.0, -1.0, 0));            /* beta - gamma < 0: unbounded */

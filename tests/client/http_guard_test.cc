@@ -20,7 +20,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-int HalfOpen(int port, const std::string& bytes, int from = 1) { return testing::RawConnection(port, bytes, from); }
+int HalfOpen(int port, const std::string& bytes, int from = 1) {
+  return testing::RawConnection(port, bytes, from);
+}
 
 /// True once the server has closed the connection (recv returns 0 or an error within timeout).
 bool ClosedByServer(int fd, int timeout_ms, std::string* got = nullptr) {
@@ -42,7 +44,9 @@ class GuardedServerTest : public ::testing::Test {
  protected:
   void Start(HttpGuardOptions o) {
     server = std::make_unique<GuardedServer>(o);
-    server->Get("/ping", [](const httplib::Request&, httplib::Response& res) { res.set_content("pong", "text/plain"); });
+    server->Get("/ping", [](const httplib::Request&, httplib::Response& res) {
+      res.set_content("pong", "text/plain");
+    });
     port = server->Bind("127.0.0.1", 0);
     ASSERT_GT(port, 0);
     thread = std::thread([this] { server->listen_after_bind(); });
@@ -143,7 +147,8 @@ TEST_F(GuardedServerTest, PendingConnectionsAndMemoryAreBounded) {
   o.max_pending = 32;
   Start(o);
   const long rss0 = testing::RssKiB();
-  // 400 connections from 50 addresses (127.0.0.2 …), each with a large part of a head, never finished.
+  // 400 connections from 50 addresses (127.0.0.2 …), each with a large part of a head, never
+  // finished.
   for (int i = 0; i < 400; ++i) {
     const int fd = HalfOpen(port, std::string(8000, 'x'), 2 + i % 50);
     ASSERT_GE(fd, 0) << i;
@@ -160,7 +165,9 @@ TEST_F(GuardedServerTest, PendingConnectionsAndMemoryAreBounded) {
 
 TEST_F(GuardedServerTest, ARequestWithABodyIsAnswered) {
   Start({});
-  server->Post("/echo", [](const httplib::Request& req, httplib::Response& res) { res.set_content(req.body, "text/plain"); });
+  server->Post("/echo", [](const httplib::Request& req, httplib::Response& res) {
+    res.set_content(req.body, "text/plain");
+  });
   httplib::Client c("127.0.0.1", port);
   auto res = c.Post("/echo", std::string(100000, 'b'), "text/plain");
   ASSERT_TRUE(res);

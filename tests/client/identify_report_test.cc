@@ -23,7 +23,8 @@ namespace pz::client {
 namespace {
 
 const io::CaseSet& Nominal() {
-  static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
+  static const io::CaseSet set =
+      io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
   return set;
 }
 
@@ -31,7 +32,8 @@ const io::CaseSet& Nominal() {
 IdentifyOptions SmallRun(const std::string& name, int population, int generations) {
   IdentifyOptions o;
   o.cases_dir = Nominal().dir;
-  o.out_dir = std::filesystem::temp_directory_path() / ("piezoid-" + name + "-" + std::to_string(::getpid()));
+  o.out_dir = std::filesystem::temp_directory_path() /
+              ("piezoid-" + name + "-" + std::to_string(::getpid()));
   o.ga.population_size = population;
   o.ga.max_generations = generations;
   o.ga.seed = 4;
@@ -45,16 +47,18 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
   const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
   IdentifyOptions o = SmallRun("identify-test", 20, 3);
   int generations = 0;
-  const auto result = hgann::RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
+  const auto result =
+      hgann::RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
   EXPECT_EQ(generations, 4);
   std::ostringstream term;
   const auto files = WriteIdentifyReport(o, set, fitness, result, term);
-  for (const char* f : {"network.pb", "network.json", "progress.csv", "validation.csv", "parameters.csv",
-                        "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
+  for (const char* f :
+       {"network.pb", "network.json", "progress.csv", "validation.csv", "parameters.csv",
+        "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
     EXPECT_TRUE(std::filesystem::exists(o.out_dir / f)) << f;
   EXPECT_NE(term.str().find("paper's Table 8"), std::string::npos);
-  // The parameters held at a bound on every training case are named in report.md and on the terminal,
-  // each with its side; a run with none has no such line.
+  // The parameters held at a bound on every training case are named in report.md and on the
+  // terminal, each with its side; a run with none has no such line.
   {
     std::ifstream in(o.out_dir / "report.md");
     const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -65,7 +69,8 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
     EXPECT_EQ(term.str().find("held at a bound on every training case") != std::string::npos, any);
     for (int k = 0; k < 7; ++k) {
       if (side[k] == 0) continue;
-      EXPECT_NE(md.find(std::string(symbols[k]) + (side[k] > 0 ? " at its upper bound" : " at its lower bound")),
+      EXPECT_NE(md.find(std::string(symbols[k]) +
+                        (side[k] > 0 ? " at its upper bound" : " at its lower bound")),
                 std::string::npos)
           << symbols[k];
     }
@@ -75,7 +80,8 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
     ASSERT_TRUE(io::LoadNetwork((o.out_dir / f).string(), &loaded).ok()) << f;
     EXPECT_EQ(loaded.network, result.best.network) << f;
     EXPECT_EQ(loaded.provenance.fitness, result.summary.best_fitness.cost);
-    const auto a = loaded.network.Predict(600, 0.7), b = fitness.Decode(result.summary.best).Predict(600, 0.7);
+    const auto a = loaded.network.Predict(600, 0.7),
+               b = fitness.Decode(result.summary.best).Predict(600, 0.7);
     EXPECT_EQ(a, b) << f;
   }
   std::filesystem::remove_all(o.out_dir);
@@ -139,27 +145,36 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   std::ifstream csv(o.out_dir / "progress.csv");
   std::string header, row;
   std::getline(csv, header);
-  EXPECT_NE(header.find(",best_network,best_island,migrated,immigrants,restarted,island_0_best,island_1_best,"
-                        "island_2_best"),
-            std::string::npos)
+  EXPECT_NE(
+      header.find(
+          ",best_network,best_island,migrated,immigrants,restarted,island_0_best,island_1_best,"
+          "island_2_best"),
+      std::string::npos)
       << header;
   int rows = 0;
   while (std::getline(csv, row)) {
     ++rows;
     // The columns after the quoted network description (which holds commas) match the header's.
-    const std::string tail = row.substr(row.rfind('"')), head = header.substr(header.find("best_network"));
-    EXPECT_EQ(std::count(tail.begin(), tail.end(), ','), std::count(head.begin(), head.end(), ',')) << row;
+    const std::string tail = row.substr(row.rfind('"')),
+                      head = header.substr(header.find("best_network"));
+    EXPECT_EQ(std::count(tail.begin(), tail.end(), ','), std::count(head.begin(), head.end(), ','))
+        << row;
   }
   EXPECT_EQ(rows, 5);
-  EXPECT_EQ(IslandCsvCells(result.log[2]).substr(0, 3), "," + std::to_string(result.log[2].best_island) + ",");
+  EXPECT_EQ(IslandCsvCells(result.log[2]).substr(0, 3),
+            "," + std::to_string(result.log[2].best_island) + ",");
   EXPECT_NE(IslandsBrief(result.log.back()).find("/3 (islands "), std::string::npos);
   std::ifstream gp(o.out_dir / "fitness.gp");
   const std::string plot((std::istreambuf_iterator<char>(gp)), {});
   EXPECT_NE(plot.find("island 2"), std::string::npos) << plot;
   std::ifstream md(o.out_dir / "report.md");
   const std::string report((std::istreambuf_iterator<char>(md)), {});
-  EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; mutation by island 0.01 0.02 0.03; 2 migrations"), std::string::npos) << report;
-  // The margin's gate and the islands' rates (the default ladder above, or given) are named in the report's line.
+  EXPECT_NE(report.find("× 3 islands (1 migrants every 2 generations, ring; mutation by island "
+                        "0.01 0.02 0.03; 2 migrations"),
+            std::string::npos)
+      << report;
+  // The margin's gate and the islands' rates (the default ladder above, or given) are named in the
+  // report's line.
   const auto report_line = [&] {
     WriteIdentifyReport(o, set, fitness, hgann::RunIdentify(o, set, fitness, nullptr), term);
     std::ifstream in(o.out_dir / "report.md");
@@ -167,22 +182,27 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   };
   o.ga.migration_margin = 0.2;
   const std::string gated = report_line();
-  EXPECT_NE(gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 %; mutation by island 0.01 0.02 0.03; 2 migrations"),
+  EXPECT_NE(gated.find("1 migrants every 2 generations, ring, from sources better by more than 20 "
+                       "%; mutation by island 0.01 0.02 0.03; 2 migrations"),
             std::string::npos)
       << gated;
   o.ga.island_mutation = {0.01, 0.02, 0.05};
   const std::string mixed = report_line();
-  EXPECT_NE(mixed.find("from sources better by more than 20 %; mutation by island 0.01 0.02 0.05; 2 migrations"),
-            std::string::npos)
+  EXPECT_NE(
+      mixed.find(
+          "from sources better by more than 20 %; mutation by island 0.01 0.02 0.05; 2 migrations"),
+      std::string::npos)
       << mixed;
   o.ga.island_mutation.clear();
   o.ga.migration_margin = 0;
   o.ga.broadcast_interval = 3;
   o.ga.broadcast_margin = 0.25;
   const std::string broadcast = report_line();
-  EXPECT_NE(broadcast.find("1 migrants every 2 generations, ring; a broadcast every 3 generations from islands "
-                           "better by more than 25 %;"),
-            std::string::npos)
+  EXPECT_NE(
+      broadcast.find(
+          "1 migrants every 2 generations, ring; a broadcast every 3 generations from islands "
+          "better by more than 25 %;"),
+      std::string::npos)
       << broadcast;
   // One island: the file is as before islands.
   EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
@@ -213,32 +233,40 @@ TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
       IdentifyRefusal({"--preset", "fast"}),
       "--preset = fast: must be \"robust\" (the default: islands, spread penalty, trend seeds) or "
       "\"paper\" (the paper's Table 2)");
-  EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}), "--migration-margin = 1: must be in [0, 1) (0 = every source)");
+  EXPECT_EQ(IdentifyRefusal({"--migration-margin", "1"}),
+            "--migration-margin = 1: must be in [0, 1) (0 = every source)");
   EXPECT_EQ(IdentifyRefusal({"--islands", "1025"}), "--islands = 1025: must be in [1, 1024]");
   EXPECT_EQ(IdentifyRefusal({"--broadcast-interval", "-3"}),
             "--broadcast-interval = -3: must be >= 0 (0 = no broadcast)");
-  EXPECT_EQ(IdentifyRefusal({"--broadcast-margin", "0"}), "--broadcast-margin = 0: must be in (0, 1)");
-  EXPECT_EQ(IdentifyRefusal({"--migration-interval", "0", "--migrants", "0", "--broadcast-interval", "25"}),
+  EXPECT_EQ(IdentifyRefusal({"--broadcast-margin", "0"}),
+            "--broadcast-margin = 0: must be in (0, 1)");
+  EXPECT_EQ(IdentifyRefusal(
+                {"--migration-interval", "0", "--migrants", "0", "--broadcast-interval", "25"}),
             "--migrants = 0: must be >= 1 when --broadcast-interval = 25 > 0");
   EXPECT_EQ(IdentifyRefusal({"--islands", "3", "--island-mutation", "0.01,0.02"}),
-            "--island-mutation.size() = 2: must be 0 (the ladder: --mutation × 1, 2, 3, 5) or --islands = 3");
+            "--island-mutation.size() = 2: must be 0 (the ladder: --mutation × 1, 2, 3, 5) or "
+            "--islands = 3");
   EXPECT_EQ(IdentifyRefusal({"--islands", "2", "--island-mutation", "0.01,2"}),
             "--island-mutation[1] = 2: must be in [0, 1]");
-  EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}), "--migrants = 400: must be in [0, --population - 1 = 399]");
+  EXPECT_EQ(IdentifyRefusal({"--migrants", "400"}),
+            "--migrants = 400: must be in [0, --population - 1 = 399]");
   EXPECT_EQ(IdentifyRefusal({"--migrants", "0"}),
-            "--migrants = 0: must be >= 1 when --migration-interval = 25 > 0 (--migration-interval 0 runs the "
+            "--migrants = 0: must be >= 1 when --migration-interval = 25 > 0 (--migration-interval "
+            "0 runs the "
             "islands independently)");
   EXPECT_EQ(IdentifyRefusal({"--migration-interval", "-1"}),
             "--migration-interval = -1: must be >= 0 (0 = no migration)");
   EXPECT_EQ(IdentifyRefusal({"--topology", "star"}),
             "--topology = star: must be \"ring\", \"fully_connected\" or \"random\"");
-  EXPECT_EQ(IdentifyRefusal({"--island-stall", "-2"}), "--island-stall = -2: must be >= 0 (0 = never)");
+  EXPECT_EQ(IdentifyRefusal({"--island-stall", "-2"}),
+            "--island-stall = -2: must be >= 0 (0 = never)");
   EXPECT_EQ(IdentifyRefusal({"--population", "1"}), "--population = 1: must be >= 2");
   EXPECT_EQ(IdentifyRefusal({"--generations", "-1"}), "--generations = -1: must be >= 0");
   EXPECT_EQ(IdentifyRefusal({"--stall", "-1"}), "--stall = -1: must be >= 0 (0 = never)");
   EXPECT_EQ(IdentifyRefusal({"--mutation", "2"}), "--mutation = 2: must be in [0, 1]");
   EXPECT_EQ(IdentifyRefusal({"--elite", "1"}), "--elite = 1: must be in (0, 1)");
-  EXPECT_NE(IdentifyRefusal({"--islands", "4", "--migration-interval", "0", "--migrants", "0"}).find("nonexistent-case-set"),
+  EXPECT_NE(IdentifyRefusal({"--islands", "4", "--migration-interval", "0", "--migrants", "0"})
+                .find("nonexistent-case-set"),
             std::string::npos);
 }
 

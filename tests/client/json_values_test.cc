@@ -11,11 +11,13 @@ namespace pz::client::json {
 namespace {
 
 TEST(JsonPrint, KeysAreSortedWhateverTheInsertionOrder) {
-  const std::vector<std::string> keys = {"zeta", "alpha", "mid", "beta", "omega", "gamma", "a1", "a10", "a2"};
+  const std::vector<std::string> keys = {"zeta",  "alpha", "mid", "beta", "omega",
+                                         "gamma", "a1",    "a10", "a2"};
   Struct forward, backward;
   for (size_t i = 0; i < keys.size(); ++i) {
     (*forward.mutable_fields())[keys[i]] = Num(static_cast<double>(i));
-    (*backward.mutable_fields())[keys[keys.size() - 1 - i]] = Num(static_cast<double>(keys.size() - 1 - i));
+    (*backward.mutable_fields())[keys[keys.size() - 1 - i]] =
+        Num(static_cast<double>(keys.size() - 1 - i));
   }
   Struct inner;
   (*inner.mutable_fields())["y"] = Text("b");
@@ -25,8 +27,8 @@ TEST(JsonPrint, KeysAreSortedWhateverTheInsertionOrder) {
   const std::string a = Print(forward, "test"), b = Print(backward, "test");
   EXPECT_EQ(a, b);
   size_t last = 0;
-  for (const char* k : {"\"a1\"", "\"a10\"", "\"a2\"", "\"alpha\"", "\"beta\"", "\"gamma\"", "\"mid\"", "\"nested\"",
-                        "\"omega\"", "\"zeta\""}) {
+  for (const char* k : {"\"a1\"", "\"a10\"", "\"a2\"", "\"alpha\"", "\"beta\"", "\"gamma\"",
+                        "\"mid\"", "\"nested\"", "\"omega\"", "\"zeta\""}) {
     const size_t at = a.find(k);
     ASSERT_NE(at, std::string::npos) << k;
     EXPECT_GT(at, last) << k << " out of order in\n" << a;

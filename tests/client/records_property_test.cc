@@ -125,10 +125,18 @@ DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest,
                        phase;
       double s = 0;
       switch (wave) {
-        case 0: s = std::sin(x); break;
-        case 1: s = 2 / std::numbers::pi * std::asin(std::sin(x)); break;
-        case 2: s = 0.6 * std::sin(x) + 0.4 * std::sin(3.7 * x + 1); break;
-        default: s = std::sin(x) >= 0 ? 1 : -1; break;
+        case 0:
+          s = std::sin(x);
+          break;
+        case 1:
+          s = 2 / std::numbers::pi * std::asin(std::sin(x));
+          break;
+        case 2:
+          s = 0.6 * std::sin(x) + 0.4 * std::sin(3.7 * x + 1);
+          break;
+        default:
+          s = std::sin(x) >= 0 ? 1 : -1;
+          break;
       }
       u = 0.5 * (lo + hi) + 0.5 * (hi - lo) * s;
     }
@@ -174,8 +182,9 @@ DrawnRecord DrawRecord(Draw& d, std::ostringstream& desc, size_t n, size_t rest,
   auto at = [&](size_t k) { return Num(t0 + static_cast<double>(k) * dt); };
   const size_t kind = hazard ? 6 + d.I(2) : d.I(6);
   switch (kind) {
-    case 0: break;  // the whole record
-    case 1:  // starts inside the rest (the crash of issue 37)
+    case 0:
+      break;  // the whole record
+    case 1:   // starts inside the rest (the crash of issue 37)
       r.t_start = at(rest > 0 ? d.I(std::min(rest, n - 19)) : 0);
       desc << ", window from inside the rest";
       break;
@@ -362,10 +371,10 @@ class Watchdog {
 
 /// One command's outcome: "" when it gave a result or a named error, else what went wrong.
 struct Outcome {
-  bool ok = false;        ///< the command finished with exit code 0
-  std::string error;      ///< the InputError's message
-  std::string failure;    ///< a broken property
-  std::string out;        ///< what it printed
+  bool ok = false;      ///< the command finished with exit code 0
+  std::string error;    ///< the InputError's message
+  std::string failure;  ///< a broken property
+  std::string out;      ///< what it printed
 };
 
 Outcome Run(const std::vector<std::string>& args) {

@@ -33,7 +33,8 @@ TEST(BoucwenBenchmark, TheDataAreARecordSet) {
   EXPECT_EQ(train.records[1].size(), 4 * kBwPeriod);
   for (const io::Record& r : train.records) {
     EXPECT_EQ(r.role, model::CaseRole::kTrain);
-    EXPECT_EQ(r.sample_rate_hz(), kBwSampleRateHz);  // exactly: the spec carries it, the workers rebuild dt
+    EXPECT_EQ(r.sample_rate_hz(),
+              kBwSampleRateHz);  // exactly: the spec carries it, the workers rebuild dt
     EXPECT_EQ(r.offset_mode, io::OffsetMode::kFixed);
     EXPECT_EQ(r.offset, 0);
     EXPECT_EQ(r.first_scored, 0u);
@@ -48,7 +49,8 @@ TEST(BoucwenBenchmark, TheDataAreARecordSet) {
 }
 
 TEST(BoucwenBenchmark, TheTrueModelReachesTheTestFloors) {
-  const std::vector<double> truth = model::BwIdentifiable(model::BwParams{});  // the benchmark's Table 1
+  const std::vector<double> truth =
+      model::BwIdentifiable(model::BwParams{});  // the benchmark's Table 1
   const io::RecordSet test = LoadBwBenchmark(kData, model::CaseRole::kTest);
   const io::Record& ms = *test.Find("test_multisine");
   ASSERT_EQ(ms.size(), kBwPeriod);
@@ -76,7 +78,8 @@ TEST(BoucwenBenchmark, TheEngineSimulatesAsTheSimulatorBitForBit) {
   ASSERT_TRUE(model::SimulateBw(truth, model::BwInput(u3, o), y3).ok());
   const std::vector<double> ms_engine = SimulateBwMultisineTest(model::BwIdentifiable(truth), ms);
   ASSERT_EQ(ms_engine.size(), kBwPeriod);
-  EXPECT_EQ(0, std::memcmp(ms_engine.data(), y3.data() + 2 * kBwPeriod, kBwPeriod * sizeof(double)));
+  EXPECT_EQ(0,
+            std::memcmp(ms_engine.data(), y3.data() + 2 * kBwPeriod, kBwPeriod * sizeof(double)));
 
   const io::Record& sw = *test.Find("test_sinesweep");
   o.interpolation = model::InputInterpolation::kCubicSpline;
@@ -95,7 +98,8 @@ TEST(BoucwenBenchmark, TheTrainingCostIsThePooledOutputErrorMse) {
   std::vector<io::Record> records;
   records.push_back(MakeBwTrainingRecord(*train.Find("train_A"), kBwPeriod, false));
   records.push_back(MakeBwTrainingRecord(*train.Find("train_B"), kBwPeriod, true));
-  const BwTraining training(records, BwProtocol(4, model::InputInterpolation::kPeriodicFourier, kBwPeriod), 7.0);
+  const BwTraining training(
+      records, BwProtocol(4, model::InputInterpolation::kPeriodicFourier, kBwPeriod), 7.0);
   EXPECT_EQ(training.counted_samples(), 2 * kBwPeriod);
   const std::vector<double> theta = model::BwIdentifiable(model::BwParams{});
   double sse = 0;
@@ -123,7 +127,8 @@ TEST(BoucwenBenchmark, TheTrainingCostIsThePooledOutputErrorMse) {
   for (size_t i = 0; i < records.size(); ++i) {
     std::vector<double> fresh;
     records::Evaluate(training.fitness().model(), theta, {}, records[i], &fresh);
-    EXPECT_EQ(0, std::memcmp(fresh.data(), out.yhat[i].data(), fresh.size() * sizeof(double))) << records[i].name;
+    EXPECT_EQ(0, std::memcmp(fresh.data(), out.yhat[i].data(), fresh.size() * sizeof(double)))
+        << records[i].name;
   }
   // β·γ = −1e7: z grows without bound — the penalty, named.
   g.reals = {2, 10, 5e4, 5e4, -1e7, 0};
@@ -139,7 +144,7 @@ TEST(BoucwenBenchmark, TrainingRecordsAreWholePeriodsWithTheirWarmUp) {
   const io::RecordSet train = LoadBwBenchmark(kData, model::CaseRole::kTrain);
   const io::Record& b = *train.Find("train_B");
   const io::Record r = MakeBwTrainingRecord(b, kBwPeriod, /*steady_state=*/true);
-  EXPECT_EQ(r.first_scored, kBwPeriod);          // one period of warm-up, not scored
+  EXPECT_EQ(r.first_scored, kBwPeriod);  // one period of warm-up, not scored
   EXPECT_EQ(r.size(), 2 * kBwPeriod);
   EXPECT_EQ(r.scored(), kBwPeriod);
   EXPECT_EQ(r.y[kBwPeriod], b.y[0]);
@@ -150,24 +155,36 @@ TEST(BoucwenBenchmark, TrainingRecordsAreWholePeriodsWithTheirWarmUp) {
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { MakeBwTrainingRecord(b, kBwPeriod + 1, false); }),
                 "train_B: samples = 8193: must be a whole number of 8192-sample periods");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { MakeBwTrainingRecord(b, 5 * kBwPeriod, false); }),
-                "train_B: samples = 40960: must be a whole number of 8192-sample periods, at most the record's 32768");
+                "train_B: samples = 40960: must be a whole number of 8192-sample periods, at most "
+                "the record's 32768");
 }
 
 TEST(BoucwenBenchmark, BadRecordsAreNamed) {
   using testing::InputErrorOf;
-  PZ_EXPECT_HAS(InputErrorOf([] { MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, 2}, 0); }),
+  PZ_EXPECT_HAS(InputErrorOf([] {
+                  MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, 2}, 0);
+                }),
                 "bw record r: y = 2 samples: must have as many as u (3)");
-  PZ_EXPECT_HAS(InputErrorOf([] { MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, NAN, 2}, 0); }),
+  PZ_EXPECT_HAS(InputErrorOf([] {
+                  MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, NAN, 2}, 0);
+                }),
                 "bw record r: y[1] = nan: must be finite");
-  PZ_EXPECT_HAS(InputErrorOf([] { MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, 2, 3}, 3); }),
+  PZ_EXPECT_HAS(InputErrorOf([] {
+                  MakeBwRecord("r", model::CaseRole::kTrain, {1, 2, 3}, {1, 2, 3}, 3);
+                }),
                 "bw record r: first_counted = 3: leaves no counted sample of 3");
   // A record that is not periodic with the protocol's period: the input reconstruction names it.
   std::vector<io::Record> records;
-  records.push_back(MakeBwRecord("odd", model::CaseRole::kTrain, {1, 2, 3, 4, 5, 6, 7, 9}, {0, 0, 0, 0, 0, 0, 0, 0}, 0));
-  PZ_EXPECT_HAS(InputErrorOf([&] { BwTraining(records, BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 4)); }),
+  records.push_back(MakeBwRecord("odd", model::CaseRole::kTrain, {1, 2, 3, 4, 5, 6, 7, 9},
+                                 {0, 0, 0, 0, 0, 0, 0, 0}, 0));
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  BwTraining(records,
+                             BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 4));
+                }),
                 "record 'odd'");
-  PZ_EXPECT_HAS(InputErrorOf([&] { BwTraining({}, BwProtocol(4, model::InputInterpolation::kLinear, 0)); }),
-                "no records");
+  PZ_EXPECT_HAS(
+      InputErrorOf([&] { BwTraining({}, BwProtocol(4, model::InputInterpolation::kLinear, 0)); }),
+      "no records");
 }
 
 }  // namespace

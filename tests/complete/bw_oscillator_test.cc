@@ -1,6 +1,6 @@
-// The Bouc–Wen benchmark oscillator (model/bw_oscillator.h): the linear limit against the closed-form
-// step response; the true parameters reproduce the official noiseless test outputs to the floor the
-// benchmark README measured (the integrator matches the benchmark's generator); input
+// The Bouc–Wen benchmark oscillator (model/bw_oscillator.h): the linear limit against the
+// closed-form step response; the true parameters reproduce the official noiseless test outputs to
+// the floor the benchmark README measured (the integrator matches the benchmark's generator); input
 // reconstruction; divergence and bad input named. (The training cost at the noise level and its
 // penalty: tests/complete/boucwen_benchmark_test.cc, the records engine's.)
 #include "model/bw_oscillator.h"
@@ -22,7 +22,8 @@ struct Record {
 };
 
 Record Load(const char* name) {
-  const io::CsvTable t = io::ReadCsvFile(std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark/" + name);
+  const io::CsvTable t =
+      io::ReadCsvFile(std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark/" + name);
   Record r;
   const int cu = t.RequireColumn("u_N"), cy = t.RequireColumn("y_m");
   for (size_t i = 0; i < t.rows.size(); ++i) {
@@ -42,7 +43,8 @@ TEST(BwOscillator, LinearLimitMatchesStepResponse) {
   // β = 0: z = α y exactly, a linear oscillator of stiffness K = k + α under a constant force.
   BwParams p;
   p.beta = 0;
-  const double F = 10, K = p.k + p.alpha, w0 = std::sqrt(K / p.m), zeta = p.c / (2 * std::sqrt(K * p.m));
+  const double F = 10, K = p.k + p.alpha, w0 = std::sqrt(K / p.m),
+               zeta = p.c / (2 * std::sqrt(K * p.m));
   const double wd = w0 * std::sqrt(1 - zeta * zeta);
   std::vector<double> u(751, F);
   BwInputOptions o;
@@ -54,7 +56,9 @@ TEST(BwOscillator, LinearLimitMatchesStepResponse) {
   double worst = 0;
   for (size_t i = 0; i < y.size(); ++i) {
     const double t = static_cast<double>(i) / 750;
-    const double exact = F / K * (1 - std::exp(-zeta * w0 * t) * (std::cos(wd * t) + zeta * w0 / wd * std::sin(wd * t)));
+    const double exact =
+        F / K *
+        (1 - std::exp(-zeta * w0 * t) * (std::cos(wd * t) + zeta * w0 / wd * std::sin(wd * t)));
     worst = std::max(worst, std::abs(y[i] - exact));
   }
   EXPECT_LT(worst, 1e-11);  // static deflection 1e-4 m
@@ -112,7 +116,8 @@ TEST(BwOscillator, SineSweepFloorWithSpline) {
 TEST(BwOscillator, NuAboveOneUsesThePowerLaw) {
   // ν = 2 against ν = 1 differ, both finite; ν = 1 through the general path equals the fast one.
   std::vector<double> u(400);
-  for (size_t i = 0; i < u.size(); ++i) u[i] = 40 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750);
+  for (size_t i = 0; i < u.size(); ++i)
+    u[i] = 40 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750);
   BwInput in(u, BwInputOptions{});
   std::vector<double> y1(u.size()), y2(u.size());
   BwParams p;
@@ -149,7 +154,8 @@ TEST(BwOscillator, APairOnTwoInputsIsEachAloneBitForBit) {
     u0[i] = 40 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750);
     u1[i] = 35 * std::sin(2 * M_PI * 30 * static_cast<double>(i) / 750 - 0.2) + 3;
   }
-  const BwInputOptions o{.sample_rate_hz = 750, .substeps = 4, .interpolation = InputInterpolation::kLinear};
+  const BwInputOptions o{
+      .sample_rate_hz = 750, .substeps = 4, .interpolation = InputInterpolation::kLinear};
   const BwInput in0(u0, o), in1(u1, o);
   BwParams diverging;
   diverging.gamma = -1e4;
@@ -162,7 +168,8 @@ TEST(BwOscillator, APairOnTwoInputsIsEachAloneBitForBit) {
     std::vector<double> a(u0.size()), b(u0.size()), want(u0.size());
     std::array<BwState, 2> st = {BwState{0.001, 0, 0}, BwState{0.002, 0, 0}};
     const std::array<BwState, 2> start = st;
-    const auto status = SimulateBwPair(p, {&in0, &in1}, {std::span<double>(a), std::span<double>(b)}, &st);
+    const auto status =
+        SimulateBwPair(p, {&in0, &in1}, {std::span<double>(a), std::span<double>(b)}, &st);
     const BwInput* in[2] = {&in0, &in1};
     const std::vector<double>* got[2] = {&a, &b};
     for (int l = 0; l < 2; ++l) {
@@ -170,14 +177,16 @@ TEST(BwOscillator, APairOnTwoInputsIsEachAloneBitForBit) {
       const Status alone = SimulateBw(p[l], *in[l], want, &s);
       EXPECT_EQ(status[l].code(), alone.code()) << l;
       for (size_t i = 0; i < want.size(); ++i)
-        ASSERT_EQ(std::bit_cast<uint64_t>((*got[l])[i]), std::bit_cast<uint64_t>(want[i])) << l << " " << i;
+        ASSERT_EQ(std::bit_cast<uint64_t>((*got[l])[i]), std::bit_cast<uint64_t>(want[i]))
+            << l << " " << i;
       EXPECT_EQ(std::bit_cast<uint64_t>(st[l].z), std::bit_cast<uint64_t>(s.z)) << l;
     }
   }
   std::vector<double> shorter(u0.begin(), u0.begin() + 400), a(u0.size()), b(400);
   const BwInput in2(shorter, o);
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
-                  (void)SimulateBwPair({BwParams{}, BwParams{}}, {&in0, &in2}, {std::span<double>(a), std::span<double>(b)});
+                  (void)SimulateBwPair({BwParams{}, BwParams{}}, {&in0, &in2},
+                                       {std::span<double>(a), std::span<double>(b)});
                 }),
                 "the inputs differ in samples (500, 400)");
 }

@@ -41,7 +41,8 @@ TEST(RecordsCheck, NamesWithheldEffectsWithACalibratedConfidence) {
 TEST(RecordsCheck, FamiliesWithoutANominalSetAreNamed) {
   RecordsCheckOptions o;
   o.family = "bimorph-fin";
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { RunRecordsCheck(o); }), "'bimorph-fin' has no nominal parameter set");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { RunRecordsCheck(o); }),
+                "'bimorph-fin' has no nominal parameter set");
 }
 
 }  // namespace

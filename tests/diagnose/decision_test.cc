@@ -15,7 +15,9 @@ namespace pz::records {
 namespace {
 
 // s0 = 400, s_floor = 100 over 100 withheld samples (σ² = 1), t0 = 300 over 200 training samples.
-Gap TestGap(const DecisionRules& rules = {}) { return MeasureGap(400, 300, 100, 1.0, 1.0, 100, 200, rules); }
+Gap TestGap(const DecisionRules& rules = {}) {
+  return MeasureGap(400, 300, 100, 1.0, 1.0, 100, 200, rules);
+}
 
 TEST(DecisionTest, GapAndScoreFollowTheFormulas) {
   const Gap g = TestGap();
@@ -57,9 +59,11 @@ TEST(DecisionTest, EachRuleRefusesOnItsOwn) {
 }
 
 TEST(DecisionTest, PatternCountsOnlyFeaturesThatCarriedExcessAndPenalisesGrowth) {
-  EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{4, 0, 4}, std::vector<double>{0, 5, 2}), 0.75);
+  EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{4, 0, 4}, std::vector<double>{0, 5, 2}),
+                   0.75);
   EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{4, 4}, std::vector<double>{8, 0}), 0.0);
-  EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{1}, std::vector<double>{100}), -9.0);  // capped at 10 ×
+  EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{1}, std::vector<double>{100}),
+                   -9.0);  // capped at 10 ×
   EXPECT_DOUBLE_EQ(PatternExplained(std::vector<double>{0, 0}, std::vector<double>{1, 1}), 0.0);
 }
 
@@ -127,9 +131,9 @@ TEST(DecisionTest, ARivalThatCannotBeSeparatedIsATieWhoseConfidenceCarriesZ) {
 }
 
 TEST(DecisionTest, ARivalThatLeavesASignificantGapIsNeverEquivalent) {
-  // The case of issue 22: the rival closes most of the gap too but leaves 1.41 × the floor where the
-  // named one leaves 1.14 ×. Even with a paired z below the threshold, it is evidence, not a tie:
-  // its Φ(z) multiplies into the confidence and the verdict names one effect.
+  // The case of issue 22: the rival closes most of the gap too but leaves 1.41 × the floor where
+  // the named one leaves 1.14 ×. Even with a paired z below the threshold, it is evidence, not a
+  // tie: its Φ(z) multiplies into the confidence and the verdict names one effect.
   const Gap g = TestGap();
   std::vector<CandidateScore> cs(2);
   ScoreCandidate(g, 130, 180, 2, 0.8, {}, cs[0]);
@@ -144,12 +148,15 @@ TEST(DecisionTest, ARivalThatLeavesASignificantGapIsNeverEquivalent) {
   const Naming n = NameEffect(g, ranked, squares, {});
   ASSERT_EQ(n.named, 0);
   EXPECT_EQ(n.runner_up, -1);
-  EXPECT_DOUBLE_EQ(n.confidence, model::NormalCdf(model::PairedBlockZ(squares(-1), squares(0), 20)) *
-                                     model::NormalCdf(model::PairedBlockZ(squares(1), squares(0), 20)));
+  EXPECT_DOUBLE_EQ(n.confidence,
+                   model::NormalCdf(model::PairedBlockZ(squares(-1), squares(0), 20)) *
+                       model::NormalCdf(model::PairedBlockZ(squares(1), squares(0), 20)));
   EXPECT_EQ(VerdictKind(g.significant, n), "effect");
   // With a large z it is separated as well.
   ScoreCandidate(g, 220, 180, 2, 0.8, {}, cs[1]);
-  const auto far = [](int i) { return i < 0 ? Squares(4, 3) : (i == 0 ? Squares(1.3, 0.2) : Squares(2.2, 0.9)); };
+  const auto far = [](int i) {
+    return i < 0 ? Squares(4, 3) : (i == 0 ? Squares(1.3, 0.2) : Squares(2.2, 0.9));
+  };
   const Naming m = NameEffect(g, ranked, far, {});
   EXPECT_EQ(m.runner_up, -1);
   EXPECT_DOUBLE_EQ(m.confidence, model::NormalCdf(model::PairedBlockZ(far(-1), far(0), 20)) *
@@ -159,12 +166,12 @@ TEST(DecisionTest, ARivalThatLeavesASignificantGapIsNeverEquivalent) {
 
 TEST(DecisionTest, CalibrationTallyCountsRightVerdictsAlarmsAndStatedConfidence) {
   CalibrationTally t;
-  EXPECT_TRUE(t.Add(false, true, "effect", true, 0.99));        // right effect
-  EXPECT_TRUE(t.Add(false, true, "inseparable", true, 0.5));    // right, but shared
-  EXPECT_FALSE(t.Add(false, true, "effect", false, 0.9));       // wrong effect
-  EXPECT_FALSE(t.Add(false, false, "none", false, 0));          // an effect below the floor: not counted
-  EXPECT_TRUE(t.Add(true, false, "none", false, 0));            // clean, quiet
-  EXPECT_FALSE(t.Add(true, true, "unexplained", false, 0));     // clean, alarm
+  EXPECT_TRUE(t.Add(false, true, "effect", true, 0.99));      // right effect
+  EXPECT_TRUE(t.Add(false, true, "inseparable", true, 0.5));  // right, but shared
+  EXPECT_FALSE(t.Add(false, true, "effect", false, 0.9));     // wrong effect
+  EXPECT_FALSE(t.Add(false, false, "none", false, 0));  // an effect below the floor: not counted
+  EXPECT_TRUE(t.Add(true, false, "none", false, 0));    // clean, quiet
+  EXPECT_FALSE(t.Add(true, true, "unexplained", false, 0));  // clean, alarm
   EXPECT_EQ(t.effect_trials, 3);
   EXPECT_EQ(t.effect_right, 2);
   EXPECT_EQ(t.clean, 2);

@@ -32,12 +32,14 @@ FitOptions Quick() {
 }
 
 /// A record of truth = family + effects, cut into a training and a withheld window.
-void AddRecord(io::RecordSet& set, const std::string& family, std::vector<EffectKind> effects, std::vector<double> params,
-               const DriveShape& d, uint64_t seed, const std::string& name, double split_fraction = 0.6) {
+void AddRecord(io::RecordSet& set, const std::string& family, std::vector<EffectKind> effects,
+               std::vector<double> params, const DriveShape& d, uint64_t seed,
+               const std::string& name, double split_fraction = 0.6) {
   const DataScale s = SyntheticStackScale();
   auto fam = std::shared_ptr<const Family>(MakeFamily(family, s));
   RecordModel truth(fam, std::move(effects), s);
-  io::Record r = SynthesizeRecord(truth, params, {}, d, {-1.2, kNoise, 0.005, seed}, name, CaseRole::kTrain);
+  io::Record r =
+      SynthesizeRecord(truth, params, {}, d, {-1.2, kNoise, 0.005, seed}, name, CaseRole::kTrain);
   const double t0 = r.t[r.rest_samples] + 0.2, t2 = r.t.back();
   const double t1 = t0 + split_fraction * (t2 - t0);
   io::Record train = r, withheld = r;
@@ -81,10 +83,12 @@ TEST(RecordDiagnosis, NamesCreepOnAStack) {
   EXPECT_EQ(r.noise.used, "rest");
   EXPECT_NEAR(r.noise.sigma, std::sqrt(kNoise * kNoise + 0.005 * 0.005 / 12), 0.004);
   ASSERT_GE(r.named, 0) << r.verdict;
-  EXPECT_EQ(r.candidates[static_cast<size_t>(r.named)].kind, EffectKind::Named("creep")) << r.verdict;
+  EXPECT_EQ(r.candidates[static_cast<size_t>(r.named)].kind, EffectKind::Named("creep"))
+      << r.verdict;
   EXPECT_EQ(r.verdict_kind, "effect") << r.verdict;
   EXPECT_GT(r.confidence, 0.9) << r.verdict;
-  for (const auto& c : r.candidates) EXPECT_NE(c.kind, EffectKind::Named("driver-lowpass"));  // the stack family has its filter
+  for (const auto& c : r.candidates)
+    EXPECT_NE(c.kind, EffectKind::Named("driver-lowpass"));  // the stack family has its filter
 }
 
 TEST(RecordDiagnosis, NoGapOnACleanStack) {
@@ -106,7 +110,8 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
   const std::vector<double> truth = {0.02, 0.1, 0.05, 0.01};
   io::RecordSet set;
   set.source = "synthetic low-pass bench";
-  AddRecord(set, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, Sine(1, 0), 5, "sine");
+  AddRecord(set, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, Sine(1, 0), 5,
+            "sine");
   RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
@@ -125,11 +130,14 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
   DriveShape next = r.next->shape;
   next.rest_s = 0.5;
   next.duration_s = std::max(next.duration_s, 4.0);
-  AddRecord(more, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, next, 6, "proposed", 0.5);
+  AddRecord(more, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, next, 6,
+            "proposed", 0.5);
   const RecordDiagnosis again = DiagnoseRecords(more, o);
   std::cout << "after: " << again.verdict << "\n";
   ASSERT_GE(again.named, 0) << again.verdict;
-  EXPECT_EQ(again.candidates[static_cast<size_t>(again.named)].kind, EffectKind::Named("driver-lowpass")) << again.verdict;
+  EXPECT_EQ(again.candidates[static_cast<size_t>(again.named)].kind,
+            EffectKind::Named("driver-lowpass"))
+      << again.verdict;
   EXPECT_EQ(again.verdict_kind, "effect") << again.verdict;
   EXPECT_GT(again.confidence, 0.95) << again.verdict;
 }
@@ -152,7 +160,8 @@ TEST(RecordDiagnosis, NeedsAWithheldRecord) {
   set.records.pop_back();
   RecordDiagnoseOptions o;
   o.fit = Quick();
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }), "no withheld record or window");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }),
+                "no withheld record or window");
 }
 
 }  // namespace

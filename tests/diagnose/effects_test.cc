@@ -1,6 +1,6 @@
-// The effect library (model/effects.h): every effect at zero magnitude is the identity, each changes
-// the output the way its physics says, and the fast path (shaped drive as a sampled signal) agrees
-// with the CVODE path (effects as BimorphExtensions) where both apply.
+// The effect library (model/effects.h): every effect at zero magnitude is the identity, each
+// changes the output the way its physics says, and the fast path (shaped drive as a sampled signal)
+// agrees with the CVODE path (effects as BimorphExtensions) where both apply.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -32,8 +32,8 @@ class EffectsTest : public ::testing::Test {
     if (!hysteresis) p.alpha = 0.0;
     return p;
   }
-  std::vector<double> Run(const BimorphParams& p, std::vector<Effect> e, const Sinusoid& d, bool cvode = false,
-                          std::vector<double>* theta = nullptr) const {
+  std::vector<double> Run(const BimorphParams& p, std::vector<Effect> e, const Sinusoid& d,
+                          bool cvode = false, std::vector<double>* theta = nullptr) const {
     std::vector<double> y(d.NumSamples()), th(d.NumSamples());
     EffectSimOptions o;
     o.force_cvode = cvode;
@@ -53,8 +53,8 @@ TEST_F(EffectsTest, LibraryNamesRoundTripAndEveryEffectHasUnitsAndRanges) {
   // The fin's order (EffectDef::Fin's order): its check draws truths and lists rows in it.
   std::vector<std::string> names;
   for (const EffectInfo& e : EffectLibrary()) names.push_back(e.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"driver-lowpass", "creep", "hinge-friction", "delay", "cubic-stiffening",
-                                             "quadratic-drive", "drift"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"driver-lowpass", "creep", "hinge-friction", "delay",
+                                             "cubic-stiffening", "quadratic-drive", "drift"}));
   for (const EffectInfo& e : EffectLibrary()) {
     ASSERT_TRUE(ParseEffectKind(e.name).has_value()) << e.name;
     EXPECT_EQ(*ParseEffectKind(e.name), e.kind);
@@ -82,10 +82,12 @@ TEST_F(EffectsTest, FinOffersItsEffectsOfTheOneLibraryAndSaysWhyNotTheOthers) {
   }
   EXPECT_EQ(*ParseEffectKind("drift"), EffectKind::Named("drift"));
   EXPECT_EQ(*ParseEffectKind("output-drift"), EffectKind::Named("drift"));  // its former name
-  EXPECT_NE(FinEffectError("friction").find("not an effect of the fin bench: 'friction' is the library's output-stage"),
+  EXPECT_NE(FinEffectError("friction")
+                .find("not an effect of the fin bench: 'friction' is the library's output-stage"),
             std::string::npos)
       << FinEffectError("friction");
-  EXPECT_NE(FinEffectError("hum").find("not an effect of the library: 'hum' is unknown"), std::string::npos);
+  EXPECT_NE(FinEffectError("hum").find("not an effect of the library: 'hum' is unknown"),
+            std::string::npos);
 }
 
 TEST_F(EffectsTest, ResultDoesNotDependOnWhatTheThreadRanBefore) {
@@ -140,7 +142,8 @@ TEST_F(EffectsTest, SampledFastPathMatchesTheSinusoidPath) {
 TEST_F(EffectsTest, DelayShiftsTheOutputBySamples) {
   const Sinusoid d{500, 1.0};
   const std::vector<double> base = Run(Params(), {}, d);
-  const std::vector<double> y = Run(Params(), {{EffectKind::Named("delay"), {0.03}}}, d);  // 3 samples
+  const std::vector<double> y =
+      Run(Params(), {{EffectKind::Named("delay"), {0.03}}}, d);  // 3 samples
   for (size_t k = 0; k < 3; ++k) EXPECT_EQ(y[k], 0.0);
   for (size_t k = 3; k < y.size(); ++k) ASSERT_NEAR(y[k], base[k - 3], kSampledPathTolDeg) << k;
 }
@@ -154,7 +157,8 @@ TEST_F(EffectsTest, LowpassAddsPhaseLagAndAttenuatesAsAFirstOrderLag) {
   Run(Params(false), {{EffectKind::Named("driver-lowpass"), {tau}}}, d, false, &th1);
   const LoopFeatures l0 = ComputeLoop(th0, d.amplitude_v, d.frequency_hz, 100, 3, 0);
   const LoopFeatures l1 = ComputeLoop(th1, d.amplitude_v, d.frequency_hz, 100, 3, 0);
-  EXPECT_NEAR(l1.phase_lag_deg - l0.phase_lag_deg, std::atan(w * tau) * 180 / std::numbers::pi, 0.5);
+  EXPECT_NEAR(l1.phase_lag_deg - l0.phase_lag_deg, std::atan(w * tau) * 180 / std::numbers::pi,
+              0.5);
   EXPECT_NEAR(l1.fundamental_deg / l0.fundamental_deg, 1 / std::hypot(1.0, w * tau), 0.01);
 }
 
@@ -228,7 +232,7 @@ TEST_F(EffectsTest, HingeFrictionOpensALoopAndResistsTheMotion) {
   const LoopFeatures l0 = ComputeLoop(th0, d.amplitude_v, d.frequency_hz, 100, 3, 0);
   const LoopFeatures l1 = ComputeLoop(th1, d.amplitude_v, d.frequency_hz, 100, 3, 0);
   EXPECT_LT(std::abs(l0.width_deg), 0.03);
-  EXPECT_GT(l1.width_deg, l0.width_deg + 0.05);         // the friction loop
+  EXPECT_GT(l1.width_deg, l0.width_deg + 0.05);  // the friction loop
   EXPECT_GT(l1.area_deg_v, l0.area_deg_v + 10.0);
   EXPECT_LT(l1.peak_to_peak_deg, l0.peak_to_peak_deg);  // a smaller swing
 }
@@ -241,7 +245,9 @@ TEST_F(EffectsTest, CvodePathMatchesTheFastPathForDriveAndOutputEffects) {
       {{EffectKind::Named("quadratic-drive"), {1e-4}}},
       {{EffectKind::Named("delay"), {0.013}}},
       {{EffectKind::Named("drift"), {0.01}}},
-      {{EffectKind::Named("driver-lowpass"), {0.02}}, {EffectKind::Named("quadratic-drive"), {1e-4}}, {EffectKind::Named("creep"), {0.1, 2.0}}},
+      {{EffectKind::Named("driver-lowpass"), {0.02}},
+       {EffectKind::Named("quadratic-drive"), {1e-4}},
+       {EffectKind::Named("creep"), {0.1, 2.0}}},
   };
   for (const auto& e : cases) {
     const std::vector<double> fast = Run(Params(), e, d);
@@ -259,8 +265,9 @@ TEST_F(EffectsTest, ShapedDriveOfALowpassIsTheAnalyticResponse) {
   const std::vector<Effect> lp = {{EffectKind::Named("driver-lowpass"), {tau}}};
   const std::vector<double> u = ShapedDrive(lp, d, t);
   for (size_t k = 0; k < t.size(); ++k) {
-    const double x = 100 / (1 + w * w * tau * tau) *
-                     (std::sin(w * t[k]) - w * tau * std::cos(w * t[k]) + w * tau * std::exp(-t[k] / tau));
+    const double x =
+        100 / (1 + w * w * tau * tau) *
+        (std::sin(w * t[k]) - w * tau * std::cos(w * t[k]) + w * tau * std::exp(-t[k] / tau));
     ASSERT_NEAR(u[k], x, 1e-3) << k;  // 1e-5 of V
   }
 }

@@ -1,8 +1,8 @@
-// The diagnosis on data whose effect is withheld from it (a small diagnose-check): synthetic benches
-// are deterministic and read like the encoder; a withheld delay is named and its gap closed, a clean
-// bench gets "no significant gap"; the check tallies its confusion matrix; and on the bundled
-// driver-lowpass bench the right effect is named, with a time constant that matches the bench's
-// truth.json (read only here, after the diagnosis, to check its answer).
+// The diagnosis on data whose effect is withheld from it (a small diagnose-check): synthetic
+// benches are deterministic and read like the encoder; a withheld delay is named and its gap
+// closed, a clean bench gets "no significant gap"; the check tallies its confusion matrix; and on
+// the bundled driver-lowpass bench the right effect is named, with a time constant that matches the
+// bench's truth.json (read only here, after the diagnosis, to check its answer).
 #include <gtest/gtest.h>
 
 #include "tests/testing/expect_error.h"
@@ -60,8 +60,8 @@ TEST(SyntheticTest, BenchesAreDeterministicAndReadThroughTheEncoder) {
 
 // Seed 14 draws a cubic stiffening whose case 9 (750 V, 1 Hz) stopped CVODE's BDF at order 5 with
 // repeated error-test failures at t = 2.33 s (h = 2e-8 s): the check stopped there with an error.
-// IntegrateCvode retries such a run at order ≤ 2 (model/cvode.h); the bench is then simulated, and every
-// reading is finite and on the encoder's grid.
+// IntegrateCvode retries such a run at order ≤ 2 (model/cvode.h); the bench is then simulated, and
+// every reading is finite and on the encoder's grid.
 TEST(SyntheticTest, AStiffeningTheHighOrderBdfCannotPassIsSimulated) {
   const model::BimorphPlant plant;
   const SyntheticOptions so;
@@ -77,12 +77,14 @@ TEST(SyntheticTest, AStiffeningTheHighOrderBdfCannotPassIsSimulated) {
 
 TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
   auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnoseOptions o = Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"), EffectKind::Named("drift")});
+  const DiagnoseOptions o = Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
+                                   EffectKind::Named("drift")});
   SyntheticOptions so;
   model::BimorphParams p;  // the physical bench's values
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
-    for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
+    for (double f : {0.25, 0.5, 1.0})
+      sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   CheckSummary summary;
   for (const bool with_delay : {true, false}) {
     opt::Rng rng(with_delay ? 1 : 2);
@@ -98,8 +100,8 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
     t.closed = d.closed_total;
     Tally(summary, t);
     if (with_delay) {
-      // On phase-zero sines a delay and a driver low-pass explain the grid equally: the verdict says
-      // so (issue 14) rather than claiming certainty, and still names the better one.
+      // On phase-zero sines a delay and a driver low-pass explain the grid equally: the verdict
+      // says so (issue 14) rather than claiming certainty, and still names the better one.
       EXPECT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
       if (d.verdict_kind == "inseparable") {
         PZ_EXPECT_HAS(d.verdict, "cannot separate");
@@ -118,7 +120,9 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
       EXPECT_LT(d.rounds.front().rms_ratio, o.rules.significance_ratio);
     }
   }
-  EXPECT_EQ(summary.confusion[model::FinIndex(EffectKind::Named("delay"))][model::FinIndex(EffectKind::Named("delay"))], 1);
+  EXPECT_EQ(summary.confusion[model::FinIndex(EffectKind::Named("delay"))]
+                             [model::FinIndex(EffectKind::Named("delay"))],
+            1);
   EXPECT_EQ(summary.confusion[0][0], 1);
   EXPECT_EQ(summary.accuracy(), 1.0);
   EXPECT_EQ(summary.false_alarm_rate(), 0.0);
@@ -130,11 +134,12 @@ TEST(CheckTest, RunCheckTalliesEveryTrial) {
   so.kinds = {EffectKind::Named("drift")};
   so.none_probability = 0.0;
   int seen = 0;
-  const CheckSummary s = RunCheck(1, 3, Quick({EffectKind::Named("drift"), EffectKind::Named("delay")}), so,
-                                  [&](const CheckTrial& t, int) {
-                                    ++seen;
-                                    EXPECT_EQ(t.truth, EffectKind::Named("drift"));
-                                  });
+  const CheckSummary s =
+      RunCheck(1, 3, Quick({EffectKind::Named("drift"), EffectKind::Named("delay")}), so,
+               [&](const CheckTrial& t, int) {
+                 ++seen;
+                 EXPECT_EQ(t.truth, EffectKind::Named("drift"));
+               });
   EXPECT_EQ(seen, 1);
   ASSERT_EQ(s.trials.size(), 1u);
   int total = 0;
@@ -142,8 +147,8 @@ TEST(CheckTest, RunCheckTalliesEveryTrial) {
     for (int n : row) total += n;
   EXPECT_EQ(total, 1);
   const CheckTrial& t = s.trials[0];
-  EXPECT_TRUE(t.verdict_kind == "effect" || t.verdict_kind == "inseparable" || t.verdict_kind == "none" ||
-              t.verdict_kind == "unexplained");
+  EXPECT_TRUE(t.verdict_kind == "effect" || t.verdict_kind == "inseparable" ||
+              t.verdict_kind == "none" || t.verdict_kind == "unexplained");
   if (t.significant) {
     EXPECT_TRUE(t.correct()) << t.truth_description << " -> " << t.verdict_kind;
   }
@@ -153,8 +158,11 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   const std::string dir = std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/driver-lowpass";
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, CasesFromCaseSet(io::LoadCaseSet(dir)));
-  const Diagnosis d = RunDiagnosis(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"), EffectKind::Named("creep")}));
-  // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says so.
+  const Diagnosis d =
+      RunDiagnosis(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
+                             EffectKind::Named("creep")}));
+  // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says
+  // so.
   ASSERT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
   if (d.verdict_kind == "inseparable") {
     PZ_EXPECT_HAS(d.verdict, "The data cannot separate driver-lowpass from");
@@ -167,7 +175,8 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   ss << in.rdbuf();
   std::smatch mt;
   const std::string text = ss.str();
-  ASSERT_TRUE(std::regex_search(text, mt, std::regex("\"lpf\"\\s*:\\s*\\{\\s*\"fc\"\\s*:\\s*([0-9.eE+-]+)")));
+  ASSERT_TRUE(std::regex_search(text, mt,
+                                std::regex("\"lpf\"\\s*:\\s*\\{\\s*\"fc\"\\s*:\\s*([0-9.eE+-]+)")));
   const double tau_truth = 1.0 / (2 * std::numbers::pi * std::stod(mt[1]));
   EXPECT_NEAR(d.final_fit.params[7].value, tau_truth, 0.1 * tau_truth);
 }

@@ -58,7 +58,8 @@ TEST(ParameterLayoutTest, UnitJacobianMatchesFiniteDifferences) {
     const std::vector<double> xp = l.FromUnit(up), xm = l.FromUnit(dn);
     for (int i = 0; i < n; ++i) {
       const double fd = (xp[i] - xm[i]) / 2e-6;
-      EXPECT_NEAR(t[static_cast<size_t>(j) * n + i], fd, 1e-6 * (std::abs(fd) + 1e-3)) << i << "," << j;
+      EXPECT_NEAR(t[static_cast<size_t>(j) * n + i], fd, 1e-6 * (std::abs(fd) + 1e-3))
+          << i << "," << j;
     }
   }
 }
@@ -82,7 +83,8 @@ class Sphere final : public opt::FitnessFunction {
  public:
   opt::FitnessResult Evaluate(const opt::Genome& g) const override {
     double s = 0;
-    for (size_t i = 0; i < g.reals.size(); ++i) s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
+    for (size_t i = 0; i < g.reals.size(); ++i)
+      s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
     return {s, opt::FitnessStatus::kOk, ""};
   }
 };
@@ -99,11 +101,13 @@ TEST(OptimizeTest, LevenbergMarquardtFitsAnExponentialAndRespectsBounds) {
   };
   LmOptions o;
   o.fd_step = 1e-6;
-  const LmResult r = LevenbergMarquardt(f, {1.0, 0.1}, std::vector<double>{0, 0}, std::vector<double>{5, 5}, o);
+  const LmResult r =
+      LevenbergMarquardt(f, {1.0, 0.1}, std::vector<double>{0, 0}, std::vector<double>{5, 5}, o);
   EXPECT_NEAR(r.x[0], 2.0, 1e-6);
   EXPECT_NEAR(r.x[1], 0.7, 1e-6);
   EXPECT_TRUE(r.converged) << r.message;
-  const LmResult c = LevenbergMarquardt(f, {1.0, 0.1}, std::vector<double>{0, 0}, std::vector<double>{5, 0.5}, o);
+  const LmResult c =
+      LevenbergMarquardt(f, {1.0, 0.1}, std::vector<double>{0, 0}, std::vector<double>{5, 0.5}, o);
   EXPECT_DOUBLE_EQ(c.x[1], 0.5);
   EXPECT_GT(c.cost, r.cost);
 }
@@ -135,7 +139,7 @@ TEST(FitTest, GlobalFitRecoversTheParametersOfAQuantisedSyntheticBench) {
   const FitResult fit = FitGlobal(m, layout, o);
   ASSERT_TRUE(fit.ok) << fit.message;
   EXPECT_LT(std::sqrt(fit.train_pi / fit.train_samples), q / std::sqrt(12.0) * 1.2);
-  EXPECT_NEAR(fit.x[2], truth.alpha, 0.1 * truth.alpha);    // α
+  EXPECT_NEAR(fit.x[2], truth.alpha, 0.1 * truth.alpha);     // α
   EXPECT_NEAR(fit.x[5], truth.a1, 0.02);                     // a1 [deg]
   EXPECT_NEAR(fit.x[1] + fit.x[0] / 1.35e5, 0.1007, 0.005);  // the slow time constant δ + μ/ω₁²
   ASSERT_EQ(fit.params.size(), 7u);

@@ -55,10 +55,12 @@ TEST(RealLikeTest, PreisachLoopsHaveReturnPointMemory) {
   Ramp(v, 100);
   Ramp(v, 110);
   const std::vector<double> w = plant.Static(v);
-  for (int k = 1; k <= 200; ++k) EXPECT_EQ(y[back_at_a + static_cast<size_t>(k)], w[at_a + static_cast<size_t>(k)]) << k;
+  for (int k = 1; k <= 200; ++k)
+    EXPECT_EQ(y[back_at_a + static_cast<size_t>(k)], w[at_a + static_cast<size_t>(k)]) << k;
   // The minor loop is a loop (its branches differ), and the memory is real: at 100 V, the branch
   // from below (30 V) is not the branch from above (120 V).
-  EXPECT_GT(std::abs(y[at_b + 100] - y[at_a + 100]), 0.05);  // at 75 V: rising vs falling branch of the minor loop
+  EXPECT_GT(std::abs(y[at_b + 100] - y[at_a + 100]),
+            0.05);  // at 75 V: rising vs falling branch of the minor loop
   std::vector<double> up{0};
   Ramp(up, 100);
   std::vector<double> down{0};
@@ -78,7 +80,8 @@ TEST(RealLikeTest, RecordsKeepReturnPointMemoryWithoutCreep) {
   RealLikeSensor se;
   se.lag_samples = 0;
   se.oversample = 1;
-  se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v = se.offset_range_um = 0;
+  se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v =
+      se.offset_range_um = 0;
   // A played drive: up to 140, down to 20, up to 90, minor loop to 60 and back to 90, on to 140.
   RealLikeDrive d;
   d.kind = RealLikeDrive::Kind::kSamples;
@@ -88,7 +91,8 @@ TEST(RealLikeTest, RecordsKeepReturnPointMemoryWithoutCreep) {
   for (double to : {140.0, 20.0, 90.0, 60.0, 90.0, 140.0}) Ramp(d.samples, to, 100);
   d.duration_s = static_cast<double>(d.samples.size()) / se.fs_hz;
   std::vector<double> clean;
-  const io::Record r = SynthesizeRealLikeRecord(plant, se, d, "memory", model::CaseRole::kTrain, 1, nullptr, &clean);
+  const io::Record r =
+      SynthesizeRealLikeRecord(plant, se, d, "memory", model::CaseRole::kTrain, 1, nullptr, &clean);
   const size_t start = r.rest_samples;  // record sample start + i is d.samples[i]
   const size_t first_90 = start + 299, second_90 = start + 499;
   ASSERT_NEAR(r.u[first_90], 90, 1e-9);
@@ -101,17 +105,21 @@ TEST(RealLikeTest, CreepIsLogarithmicAndTheLagIsTheStatedSamples) {
   const RealLikePlant plant(RealLikeStack{});
   RealLikeSensor se;
   se.lag_samples = 0;
-  se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v = se.offset_range_um = 0;
+  se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v =
+      se.offset_range_um = 0;
   // A step from 0 to 100 V held 40 s: the increments per decade of time are alike (log creep).
   const auto step = [](double t) { return t < 0.5 ? 0.0 : 100.0; };
   const size_t n = static_cast<size_t>(40.5 * se.fs_hz) + 1;
   const std::vector<double> y = plant.Respond(step, n, se);
-  const auto at = [&](double t) { return y[static_cast<size_t>(std::lround((0.5 + t) * se.fs_hz))]; };
+  const auto at = [&](double t) {
+    return y[static_cast<size_t>(std::lround((0.5 + t) * se.fs_hz))];
+  };
   const double d1 = at(1) - at(0.1), d2 = at(10) - at(1), jump = at(0.01) - y[0];
   EXPECT_GT(d1, 0);
   EXPECT_NEAR(d2 / d1, 1.0, 0.3);
   EXPECT_NEAR(d2 / jump, RealLikeStack{}.creep_per_decade, 0.005);
-  // Lag: two whole samples later, exactly; half a sample: between its neighbours (away from the turns).
+  // Lag: two whole samples later, exactly; half a sample: between its neighbours (away from the
+  // turns).
   const auto sine = [](double t) { return 75 + 60 * std::sin(2 * 3.14159265358979 * t); };
   const std::vector<double> y0 = plant.Respond(sine, 400, se);
   se.lag_samples = 2;
@@ -120,7 +128,8 @@ TEST(RealLikeTest, CreepIsLogarithmicAndTheLagIsTheStatedSamples) {
   const std::vector<double> yh = plant.Respond(sine, 400, se);
   for (size_t k = 3; k < 400; ++k) {
     EXPECT_EQ(y2[k], y0[k - 2]) << k;
-    if (k % 100 >= 48 && k % 100 <= 52) continue;  // the sine's turns (samples 50, 150, …): a lagged peak
+    if (k % 100 >= 48 && k % 100 <= 52)
+      continue;  // the sine's turns (samples 50, 150, …): a lagged peak
     EXPECT_GE(yh[k], std::min(y0[k], y0[k - 1]) - 1e-12) << k;
     EXPECT_LE(yh[k], std::max(y0[k], y0[k - 1]) + 1e-12) << k;
   }
@@ -133,7 +142,8 @@ TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
     EXPECT_NEAR(s.realised_floor_um / s.nominal_floor_um, 1, 0.1);
     const NoiseFloor nf = EstimateNoiseFloor(s.set);
     EXPECT_EQ(nf.used, "rest");
-    EXPECT_NEAR(nf.sigma / s.realised_floor_um, 1, 0.15) << "seed " << seed << ": " << nf.sigma << " vs " << s.realised_floor_um;
+    EXPECT_NEAR(nf.sigma / s.realised_floor_um, 1, 0.15)
+        << "seed " << seed << ": " << nf.sigma << " vs " << s.realised_floor_um;
     bool periods = false;
     for (const NoiseEstimate& e : nf.estimates) {
       if (e.method != "periods") continue;
@@ -154,7 +164,8 @@ TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
 // not, while the default state, auto, is descended there), and the first large reversal wipes the
 // difference out (before it, centred, ramp and reversals differ by 1.4 and 0.6 µm RMS over the
 // first 0.5 s).
-/// A plant whose density depends on the width alone (a PI operator), no creep, lag or coloured noise.
+/// A plant whose density depends on the width alone (a PI operator), no creep, lag or coloured
+/// noise.
 RealLikeSet WidthOnlySet() {
   RealLikeOptions o = Short(4);
   o.stack.density_center_spread = 1e3;
@@ -166,26 +177,29 @@ RealLikeSet WidthOnlySet() {
 
 TEST(RealLikeTest, AWidthOnlyDensityIsWhatThePrandtlIshlinskiiFamilyPredicts) {
   RealLikeSet s = WidthOnlySet();
-  for (io::Record& r : s.set.records) io::SetWindow(r, r.t[r.rest_samples] + 1.5, r.t.back(), 20, r.name);
+  for (io::Record& r : s.set.records)
+    io::SetWindow(r, r.t[r.rest_samples] + 1.5, r.t.back(), 20, r.name);
   FitOptions f;
   f.family = "prandtl-ishlinskii";
   f.family_options.pi_operators = 40;
   const FitResult r = FitRecords(s.set, f);
   for (const RecordMetrics& m : r.metrics) {
-    EXPECT_LT(m.rmse / s.realised_floor_um, 1.25) << m.name << ": " << m.rmse << " vs floor " << s.realised_floor_um;
+    EXPECT_LT(m.rmse / s.realised_floor_um, 1.25)
+        << m.name << ": " << m.rmse << " vs floor " << s.realised_floor_um;
   }
 }
 
-/// The same plant scored from the end of the rest (issue 22's initial-state defect): the plant rests
-/// at the bottom of its range (below every hysteron); the family started in the descended state —
-/// the state after the drive came down to the rest — matches the first 0.5 s of every excitation as
-/// well as the rest of it, within 1.25 × the floor; started centred on the rest drive it does not
-/// (its first 0.5 s are several times the floor: the test can fail).
+/// The same plant scored from the end of the rest (issue 22's initial-state defect): the plant
+/// rests at the bottom of its range (below every hysteron); the family started in the descended
+/// state — the state after the drive came down to the rest — matches the first 0.5 s of every
+/// excitation as well as the rest of it, within 1.25 × the floor; started centred on the rest drive
+/// it does not (its first 0.5 s are several times the floor: the test can fail).
 TEST(RealLikeTest, TheDescendedStateMatchesTheFirstHalfSecondOfAStackRestingAtTheBottom) {
   RealLikeSet s = WidthOnlySet();
   for (io::Record& r : s.set.records) io::SetWindow(r, r.t[r.rest_samples], r.t.back(), 20, r.name);
   double worst_centred = 0;
-  for (model::InitialState state : {model::InitialState::kDescended, model::InitialState::kCentred}) {
+  for (model::InitialState state :
+       {model::InitialState::kDescended, model::InitialState::kCentred}) {
     FitOptions f;
     f.family = "prandtl-ishlinskii";
     f.family_options.pi_operators = 40;
@@ -206,7 +220,8 @@ TEST(RealLikeTest, TheDescendedStateMatchesTheFirstHalfSecondOfAStackRestingAtTh
       late = std::sqrt(late / static_cast<double>(nl));
       const std::string what = rec.name + " " + model::InitialStateName(state);
       if (state == model::InitialState::kDescended) {
-        EXPECT_LT(early / s.realised_floor_um, 1.25) << what << ": first 0.5 s " << early << ", floor " << s.realised_floor_um;
+        EXPECT_LT(early / s.realised_floor_um, 1.25)
+            << what << ": first 0.5 s " << early << ", floor " << s.realised_floor_um;
         EXPECT_LT(late / s.realised_floor_um, 1.25) << what << ": after 1.5 s " << late;
         EXPECT_LT(r.metrics[i].rmse / s.realised_floor_um, 1.25) << what;
       } else {
@@ -214,11 +229,13 @@ TEST(RealLikeTest, TheDescendedStateMatchesTheFirstHalfSecondOfAStackRestingAtTh
       }
     }
   }
-  EXPECT_GT(worst_centred, 3) << "centred plays should miss the first 0.5 s of a stack resting at the bottom";
+  EXPECT_GT(worst_centred, 3)
+      << "centred plays should miss the first 0.5 s of a stack resting at the bottom";
 }
 
 TEST(RealLikeTest, DeterministicAndReadBackInTheRecordFormat) {
-  const RealLikeSet a = GenerateRealLikeSet(Short(7)), b = GenerateRealLikeSet(Short(7)), c = GenerateRealLikeSet(Short(8));
+  const RealLikeSet a = GenerateRealLikeSet(Short(7)), b = GenerateRealLikeSet(Short(7)),
+                    c = GenerateRealLikeSet(Short(8));
   for (size_t i = 0; i < a.set.records.size(); ++i) {
     EXPECT_EQ(a.set.records[i].y, b.set.records[i].y);
     EXPECT_EQ(a.set.records[i].u, b.set.records[i].u);

@@ -16,7 +16,8 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 using pz::testing::Sine;
 
-ResidualCaseInput Input(const std::vector<double>& meas, const std::vector<double>& model, double f = 0.5) {
+ResidualCaseInput Input(const std::vector<double>& meas, const std::vector<double>& model,
+                        double f = 0.5) {
   ResidualCaseInput in;
   in.number = 1;
   in.amplitude_v = 500;
@@ -33,7 +34,8 @@ ResidualCaseInput Input(const std::vector<double>& meas, const std::vector<doubl
 TEST(ResidualAnalysisTest, EvenHarmonicResidualIsSeenAsAsymmetry) {
   const std::vector<double> model = Sine(600, 0.5, 1.0);
   std::vector<double> meas = model;
-  for (size_t k = 0; k < meas.size(); ++k) meas[k] += 0.02 * std::cos(2 * 2 * kPi * 0.5 * k / 100.0);
+  for (size_t k = 0; k < meas.size(); ++k)
+    meas[k] += 0.02 * std::cos(2 * 2 * kPi * 0.5 * k / 100.0);
   const ResidualAnalysis a = AnalyseResiduals(std::vector<ResidualCaseInput>{Input(meas, model)});
   const CaseResidual& c = a.cases[0];
   EXPECT_NEAR(c.harmonic[2], 0.02, 1e-9);
@@ -61,7 +63,8 @@ TEST(ResidualAnalysisTest, TransientOnlyResidualSitsInTheFirstCycle) {
   const std::vector<double> model = Sine(300, 1.0, 1.0);
   std::vector<double> meas = model;
   for (int k = 0; k < 100; ++k) meas[k] += 0.05 * std::exp(-k / 20.0);
-  const ResidualAnalysis a = AnalyseResiduals(std::vector<ResidualCaseInput>{Input(meas, model, 1.0)});
+  const ResidualAnalysis a =
+      AnalyseResiduals(std::vector<ResidualCaseInput>{Input(meas, model, 1.0)});
   EXPECT_GT(a.cases[0].first_cycle.rms, 0.01);
   EXPECT_NEAR(a.cases[0].later_cycles.rms, 0.0, 1e-12);
 }
@@ -92,8 +95,9 @@ TEST(ResidualAnalysisTest, GroupsSplitTrainingAndWithheldAndSharesSumToOne) {
   EXPECT_EQ(r.withheld.worst_case, 2);
   EXPECT_FALSE(r.findings.empty());
   const std::vector<double> short_model(5, 0.0);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf(
-                    [&] { AnalyseResiduals(std::vector<ResidualCaseInput>{Input(m1, short_model)}); }),
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  AnalyseResiduals(std::vector<ResidualCaseInput>{Input(m1, short_model)});
+                }),
                 "case 1");
 }
 

@@ -36,7 +36,8 @@ TEST(VerdictTest, ANamedEffectClosesItsShareOfTheGap) {
   const std::vector<VerdictCandidate> ranked = {{"delay", &a}, {"creep", &b}};
   const Naming n{.named = 0, .runner_up = -1, .z_runner_up = 0, .confidence = 0.987};
   EXPECT_EQ(ComposeVerdict(g, ranked, n, {}, Text()),
-            "The gap is delay (confidence 98.7 %): adding it closes 93 % of the excess withheld gap; withheld RMS 2 → "
+            "The gap is delay (confidence 98.7 %): adding it closes 93 % of the excess withheld "
+            "gap; withheld RMS 2 → "
             "1.1 µm against a noise floor of 1 µm (rest).");
   VerdictText two = Text();
   two.second = "creep";
@@ -44,8 +45,10 @@ TEST(VerdictTest, ANamedEffectClosesItsShareOfTheGap) {
   two.s_final = 100;
   two.closing = "Excitation gap: none.";
   EXPECT_EQ(ComposeVerdict(g, ranked, n, {}, two),
-            "The gap is delay (confidence 98.7 %), with a second effect: creep (confidence 90 %): adding them closes "
-            "100 % of the excess withheld gap; withheld RMS 2 → 1 µm against a noise floor of 1 µm (rest). "
+            "The gap is delay (confidence 98.7 %), with a second effect: creep (confidence 90 %): "
+            "adding them closes "
+            "100 % of the excess withheld gap; withheld RMS 2 → 1 µm against a noise floor of 1 µm "
+            "(rest). "
             "Excitation gap: none.");
 }
 
@@ -55,18 +58,23 @@ TEST(VerdictTest, ATieSaysWhatWouldSeparateIt) {
   const std::vector<VerdictCandidate> ranked = {{"driver-lowpass", &a}, {"delay", &b}};
   VerdictText t = Text();
   t.next = "a square wave";
-  const std::string v = ComposeVerdict(g, ranked, {.named = 0, .runner_up = 1, .z_runner_up = 1.234, .confidence = 0.6},
-                                       {}, t);
+  const std::string v = ComposeVerdict(
+      g, ranked, {.named = 0, .runner_up = 1, .z_runner_up = 1.234, .confidence = 0.6}, {}, t);
   EXPECT_EQ(v,
-            "The data cannot separate driver-lowpass from delay: both bring the withheld gap to the noise floor (1.1 × "
-            "and 1.2 ×, at most 1.25; they close 93 % and 85.3 %) and the paired block test does not separate them "
+            "The data cannot separate driver-lowpass from delay: both bring the withheld gap to "
+            "the noise floor (1.1 × "
+            "and 1.2 ×, at most 1.25; they close 93 % and 85.3 %) and the paired block test does "
+            "not separate them "
             "(z = 1.2 < 2); confidence in driver-lowpass 60 %. Next measurement: a square wave.");
   t.second = "creep";
   t.second_confidence = 0.75;
   t.s_final = 110.25;
-  PZ_EXPECT_HAS(ComposeVerdict(g, ranked, {.named = 0, .runner_up = 1, .z_runner_up = 1.234, .confidence = 0.6}, {}, t),
-                "A second effect on top of driver-lowpass: creep (confidence 75 %); the two close 96.6 % of the excess "
-                "withheld gap; withheld RMS 2 → 1.05 µm. Next measurement");
+  PZ_EXPECT_HAS(
+      ComposeVerdict(g, ranked,
+                     {.named = 0, .runner_up = 1, .z_runner_up = 1.234, .confidence = 0.6}, {}, t),
+      "A second effect on top of driver-lowpass: creep (confidence 75 %); the two close 96.6 % of "
+      "the excess "
+      "withheld gap; withheld RMS 2 → 1.05 µm. Next measurement");
 }
 
 TEST(VerdictTest, NoGapNamesTheBestCandidateAndWhatAbsorbsIt) {
@@ -77,12 +85,16 @@ TEST(VerdictTest, NoGapNamesTheBestCandidateAndWhatAbsorbsIt) {
   t.floor = 1.0;
   t.absorbed = {"alpha (1 without it, 2 with it)", "beta (3 without it, 4 with it)"};
   EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, t),
-            "No significant gap: the withheld RMS error of the base model is 1.05 × the noise floor (1 µm, from rest), "
-            "at most 1.25. The best candidate, creep, would lower it to 0.949 µm, within the floor band; what it would "
-            "explain is absorbed by the base model's alpha (1 without it, 2 with it), beta (3 without it, 4 with it).");
+            "No significant gap: the withheld RMS error of the base model is 1.05 × the noise "
+            "floor (1 µm, from rest), "
+            "at most 1.25. The best candidate, creep, would lower it to 0.949 µm, within the floor "
+            "band; what it would "
+            "explain is absorbed by the base model's alpha (1 without it, 2 with it), beta (3 "
+            "without it, 4 with it).");
   a.score = -1;  // nothing scores above 0: nothing more to say
   EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, Text()),
-            "No significant gap: the withheld RMS error of the base model is 1.05 × the noise floor (1 µm, from rest), "
+            "No significant gap: the withheld RMS error of the base model is 1.05 × the noise "
+            "floor (1 µm, from rest), "
             "at most 1.25.");
 }
 
@@ -92,7 +104,8 @@ TEST(VerdictTest, AnUnexplainedGapSaysWhyTheBestCandidateFails) {
   const std::vector<VerdictCandidate> ranked = {{"creep", &a}};
   ASSERT_FALSE(a.qualifies);
   EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, Text()),
-            "A significant gap (withheld RMS 2 µm = 2 × the noise floor of 1 µm, from rest) that no candidate explains "
+            "A significant gap (withheld RMS 2 µm = 2 × the noise floor of 1 µm, from rest) that "
+            "no candidate explains "
             "by the rules. Best candidate: creep (closes 33 % of the gap (< 50 %)).");
 }
 
@@ -103,16 +116,21 @@ TEST(VerdictTest, ACheckSpeaksOnceForEveryDataShape) {
   v.confidence = 0.987;
   v.rms_ratio = 2.346;
   EXPECT_EQ(TrialLine(3, "right", "delay 0.01, sine", 20, v),
-            "trial   3 right  delay 0.01, sine     -> effect      delay            ratio   2.35 conf 0.99");
-  EXPECT_EQ(TrialLine(12, "", "plant", 0, v, " (in truth)", "; said"),
-            "trial  12 plant -> effect      delay            (in truth) ratio   2.35 conf 0.99; said");
+            "trial   3 right  delay 0.01, sine     -> effect      delay            ratio   2.35 "
+            "conf 0.99");
+  EXPECT_EQ(
+      TrialLine(12, "", "plant", 0, v, " (in truth)", "; said"),
+      "trial  12 plant -> effect      delay            (in truth) ratio   2.35 conf 0.99; said");
   CalibrationTally t;
   t.Add(false, true, "effect", true, 0.995);
   t.Add(true, false, "none", false, 0);
   EXPECT_EQ(TallyText(t, "records"),
-            "records with an effect and a significant gap: 1, right effect named in 1 (100 %); verdicts 'cannot "
-            "separate': 0\nclean records: 1, false alarms 0 (0 %)\ncalibration of the stated confidence (1 records "
-            "with a named effect):\n  confidence 0.99 – 1.00:   1 records, mean stated  99.5 %, right 100.0 %\n");
+            "records with an effect and a significant gap: 1, right effect named in 1 (100 %); "
+            "verdicts 'cannot "
+            "separate': 0\nclean records: 1, false alarms 0 (0 %)\ncalibration of the stated "
+            "confidence (1 records "
+            "with a named effect):\n  confidence 0.99 – 1.00:   1 records, mean stated  99.5 %, "
+            "right 100.0 %\n");
 }
 
 }  // namespace

@@ -31,7 +31,8 @@ using opt::ThreadPoolEvaluator;
 namespace {
 
 const io::CaseSet& Nominal() {
-  static const io::CaseSet set = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
+  static const io::CaseSet set =
+      io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal");
   return set;
 }
 
@@ -40,7 +41,6 @@ HgannFitness MakeFitness(const model::ParameterRanges& ranges = {}, double sprea
   config.spread_penalty = spread;
   return HgannFitness(std::move(config));
 }
-
 
 TEST(HgannConfig, FromCaseSetUsesTrainingRolesAndFittedSaturations) {
   const auto config = HgannConfigFromCaseSet(Nominal(), {});
@@ -144,7 +144,8 @@ TEST(HgannFitness, ParametersAtBoundOnEveryTrainingCase) {
   Rng rng(11);
   for (auto& b : g.bits) b = static_cast<uint8_t>(rng.NextU64() & 1);
   model::Network n = fitness.Decode(g);
-  // A hidden node whose output differs between the training cases, and a threshold between its values.
+  // A hidden node whose output differs between the training cases, and a threshold between its
+  // values.
   int node = -1;
   double threshold = 0;
   for (int tries = 0; node < 0 && tries < 200; ++tries) {
@@ -164,7 +165,7 @@ TEST(HgannFitness, ParametersAtBoundOnEveryTrainingCase) {
   n.w2.setZero();
   n.output_tf = {model::TransferFunction::kHardlim, model::TransferFunction::kHardlims,
                  model::TransferFunction::kHardlim, model::TransferFunction::kLogsig,
-                 model::TransferFunction::kTribas, model::TransferFunction::kHardlims,
+                 model::TransferFunction::kTribas,  model::TransferFunction::kHardlims,
                  model::TransferFunction::kHardlim};
   n.c2 << 1, -1, -threshold, 0, 0, -1, 1;
   n.w2(node, 2) = 1;  // α: switches between 0 and 1 over the training cases
@@ -220,7 +221,8 @@ TEST(HgannFitness, SpreadPenaltyRefusesALoopUnboundedInsideTheTrainingBox) {
   EXPECT_TRUE(ten.BoundedOnEnvelope(n));
   const auto kept = ten.EvaluateNetwork(n);
   ASSERT_EQ(kept.status, FitnessStatus::kOk) << kept.reason;
-  EXPECT_NEAR(kept.cost, paper.EvaluateNetwork(n).cost + 10 * ten.OutputSpread(n), 1e-9 * kept.cost);
+  EXPECT_NEAR(kept.cost, paper.EvaluateNetwork(n).cost + 10 * ten.OutputSpread(n),
+              1e-9 * kept.cost);
   EXPECT_GT(ten.OutputSpread(n), 0);
 }
 
@@ -306,7 +308,8 @@ TEST(HgannIdentification, PaperTable3RangesDriveAlphaToZero) {
       EXPECT_TRUE(c.summary.ok()) << "case " << c.number;
     } else {
       // Untrained operating points: α = 0 again, or an unbounded loop reported as a status.
-      EXPECT_TRUE(c.params.alpha == 0.0 || c.summary.status == model::SimStatus::kUnboundedHysteresis);
+      EXPECT_TRUE(c.params.alpha == 0.0 ||
+                  c.summary.status == model::SimStatus::kUnboundedHysteresis);
       EXPECT_TRUE(std::isfinite(c.pi));
     }
   }

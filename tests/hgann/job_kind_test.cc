@@ -1,7 +1,8 @@
 // The "hgann" job kind: a spec built from the bundled case set gives the same fitness as
 // `piezoid identify` on that folder; every bad field is named; extreme but valid specs evaluate to
 // finite costs. (The same run through the job runner: tests/master/job_runner_test.cc; the spec
-// through the wire and JSON: tests/service/spec_codec_test.cc; job files: tests/svcclient/job_file_test.cc.)
+// through the wire and JSON: tests/service/spec_codec_test.cc; job files:
+// tests/svcclient/job_file_test.cc.)
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -24,18 +25,21 @@ using job::HgannProblem;
 using job::JobKind;
 using job::JobKindRegistry;
 using job::JobSpec;
-using opt::FitnessStatus;
-using opt::SanitizeFitness;
 using opt::FitnessFunction;
 using opt::FitnessResult;
+using opt::FitnessStatus;
 using opt::Genome;
+using opt::SanitizeFitness;
 namespace {
 
 using testing::Descriptions;
 using testing::HasViolation;
 const io::CaseSet& Nominal() { return testing::NominalCaseSet(); }
-JobSpec NominalSpec(int population, int generations) { return testing::NominalHgannSpec(population, generations); }
-bool HasField(const std::vector<FieldViolation>& v, const std::string& field, const std::string& text = "") {
+JobSpec NominalSpec(int population, int generations) {
+  return testing::NominalHgannSpec(population, generations);
+}
+bool HasField(const std::vector<FieldViolation>& v, const std::string& field,
+              const std::string& text = "") {
   return HasViolation(v, field, text);
 }
 
@@ -63,7 +67,8 @@ TEST(HgannJob, KindIsRegisteredWithThe1415BitLayout) {
 TEST(HgannJob, SpecOfTheCaseSetBuildsTheSameFitnessAsIdentify) {
   const HgannFitnessConfig direct = HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{});
   HgannFitnessConfig via;
-  ASSERT_TRUE(HgannConfigFromProblem(std::get<HgannProblem>(NominalSpec(10, 1).problem), &via).ok());
+  ASSERT_TRUE(
+      HgannConfigFromProblem(std::get<HgannProblem>(NominalSpec(10, 1).problem), &via).ok());
   ASSERT_EQ(via.cases.size(), direct.cases.size());
   for (size_t i = 0; i < via.cases.size(); ++i) {
     EXPECT_EQ(via.cases[i].number, direct.cases[i].number);
@@ -111,8 +116,12 @@ TEST(HgannJob, EveryBadFieldIsNamed) {
   h.source = std::string(2000, 'x');
   const auto v = Kinds().Validate(s);
   const std::string all = All(v);
-  EXPECT_TRUE(HasField(v, "hgann.cases[3].angle_deg[17]", "hgann.cases[3].angle_deg[17] = nan: must be finite")) << all;
-  EXPECT_TRUE(HasField(v, "hgann.cases[1].voltage_v.size()", "must be 0 or the number of angle samples")) << all;
+  EXPECT_TRUE(HasField(v, "hgann.cases[3].angle_deg[17]",
+                       "hgann.cases[3].angle_deg[17] = nan: must be finite"))
+      << all;
+  EXPECT_TRUE(
+      HasField(v, "hgann.cases[1].voltage_v.size()", "must be 0 or the number of angle samples"))
+      << all;
   EXPECT_TRUE(HasField(v, "hgann.cases[2].role", "must be CASE_ROLE_TRAIN")) << all;
   EXPECT_TRUE(HasField(v, "hgann.cases[4].number", "duplicates")) << all;
   EXPECT_TRUE(HasField(v, "hgann.cases[5].frequency_hz", "= 0: must be finite and > 0")) << all;
@@ -168,9 +177,17 @@ TEST(HgannJob, ExtremeButValidSpecsNeverCrashAnEvaluation) {
       [](HgannProblem& h) { h.cases[0].amplitude_v = 1e300; },
       [](HgannProblem& h) { h.cases[0].frequency_hz = 1e300; },
       [](HgannProblem& h) { h.cases[0].frequency_hz = 1e-300; },
-      [](HgannProblem& h) { h.cases[0].angle_deg.assign(2, 1e300); h.cases[0].angle_deg[1] = -1e300; h.cases[0].voltage_v.clear(); },
-      [](HgannProblem& h) { h.ranges = {{"mu", -1e300, 1e300}, {"alpha", 1e300, 1e300}}; },
-      [](HgannProblem& h) { h.geometry = {{"core_modulus_pa", 1e-300}, {"n_active", 200}, {"n_tip", 200}}; },
+      [](HgannProblem& h) {
+        h.cases[0].angle_deg.assign(2, 1e300);
+        h.cases[0].angle_deg[1] = -1e300;
+        h.cases[0].voltage_v.clear();
+      },
+      [](HgannProblem& h) {
+        h.ranges = {{"mu", -1e300, 1e300}, {"alpha", 1e300, 1e300}};
+      },
+      [](HgannProblem& h) {
+        h.geometry = {{"core_modulus_pa", 1e-300}, {"n_active", 200}, {"n_tip", 200}};
+      },
       [](HgannProblem& h) { h.spread_penalty = 1e300; },
   };
   int evaluated = 0;
@@ -204,7 +221,8 @@ TEST(HgannJob, ExtremeButValidSpecsNeverCrashAnEvaluation) {
       EXPECT_EQ(std::memcmp(&r.cost, &again.cost, sizeof r.cost), 0) << "edit " << e;
       EXPECT_EQ(r.status, again.status) << "edit " << e;
       FitnessResult sanitised = r;
-      EXPECT_FALSE(SanitizeFitness(sanitised)) << "edit " << e << ": the guard had to repair " << r.reason;
+      EXPECT_FALSE(SanitizeFitness(sanitised))
+          << "edit " << e << ": the guard had to repair " << r.reason;
     }
     ++evaluated;
     std::printf("edit %zu evaluated\n", e);

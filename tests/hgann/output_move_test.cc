@@ -21,8 +21,8 @@ using opt::Genome;
 using opt::Rng;
 
 const HgannFitness& Fitness() {
-  static const HgannFitness f(
-      HgannConfigFromCaseSet(io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal"), {}));
+  static const HgannFitness f(HgannConfigFromCaseSet(
+      io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/nominal"), {}));
   return f;
 }
 
@@ -45,7 +45,8 @@ std::array<double, model::kNetworkOutputs> Outputs(const model::Network& n, doub
 // The output layer (transfer functions of the outputs, W2, c2) and nothing else.
 bool InOutputLayer(int bit) {
   for (int k = 0; k < model::kNetworkOutputs; ++k)
-    if (bit >= model::OutputTfBit(k) && bit < model::OutputTfBit(k) + model::kTransferCodeBits) return true;
+    if (bit >= model::OutputTfBit(k) && bit < model::OutputTfBit(k) + model::kTransferCodeBits)
+      return true;
   return bit >= model::kW2Offset;
 }
 
@@ -54,7 +55,8 @@ TEST(OutputMove, UnsetTheyNeedSeveralIslandsAndASpreadPenalty) {
   EXPECT_EQ(HgannOutputMoves(ga, 10), 0) << "one island";
   ga.islands = 4;
   EXPECT_EQ(HgannOutputMoves(ga, 10), 32);
-  EXPECT_EQ(HgannOutputMoves(ga, 0), 0) << "λ = 0: nothing checks the loop between the training cases";
+  EXPECT_EQ(HgannOutputMoves(ga, 0), 0)
+      << "λ = 0: nothing checks the loop between the training cases";
   ga.output_moves = 5;
   EXPECT_EQ(HgannOutputMoves(ga, 0), 5) << "given: at any λ";
   ga.output_moves = 0;
@@ -72,11 +74,13 @@ TEST(OutputMove, ConstantOutputsGiveTheTargetOnEveryInputAndKeepTheOtherGenes) {
       ASSERT_EQ(bits[b], parent.bits[b]) << "bit " << b << " is not in the output layer";
     }
     const model::Network n = Fitness().Decode(Genome{bits, {}});
-    for (int k = 0; k < model::kNetworkOutputs; ++k) EXPECT_EQ(n.output_tf[k], model::TransferFunction::kSatlin);
+    for (int k = 0; k < model::kNetworkOutputs; ++k)
+      EXPECT_EQ(n.output_tf[k], model::TransferFunction::kSatlin);
     EXPECT_EQ(n.w2.cwiseAbs().maxCoeff(), model::DecodeWeight(model::EncodeWeight(0.0)));
     // Every input, trained or not (also outside the training box): the bias code nearest t, plus at
     // most H · 6.1e-4 from the hidden nodes' weights nearest 0.
-    const double slack = 0.5 * 20.0 / model::kMaxWeightCode + n.hidden() * std::abs(model::DecodeWeight(8192));
+    const double slack =
+        0.5 * 20.0 / model::kMaxWeightCode + n.hidden() * std::abs(model::DecodeWeight(8192));
     for (double v : {375.0, 500.0, 750.0, 100.0, 1000.0})
       for (double f : {0.25, 0.5, 1.0, 0.1, 3.0}) {
         const auto s = Outputs(n, v, f);

@@ -121,25 +121,32 @@ TEST(NetworkIo, BadContentsGiveFieldNamedErrors) {
   has(LoadError(good, [](F& f) { f.set_format_version(2); }), "format_version = 2");
   has(LoadError(good, [](F& f) { f.set_hidden(10); }), "hidden = 10");
   has(LoadError(good, [](F& f) { f.mutable_w1()->RemoveLast(); }),
-      "w1: has " + std::to_string(2 * h - 1) + " values, expected 2 x H = " + std::to_string(2 * h));
+      "w1: has " + std::to_string(2 * h - 1) +
+          " values, expected 2 x H = " + std::to_string(2 * h));
   has(LoadError(good, [](F& f) { f.add_c2(0); }), "c2: has 8 values");
   has(LoadError(good, [](F& f) { f.mutable_hidden_tf()->RemoveLast(); }), "hidden_tf: has");
-  has(LoadError(good, [](F& f) { f.set_hidden_tf(1, static_cast<proto::NetworkTransferFunction>(9)); }),
+  has(LoadError(good,
+                [](F& f) { f.set_hidden_tf(1, static_cast<proto::NetworkTransferFunction>(9)); }),
       "hidden_tf[1] = 9");
-  has(LoadError(good, [](F& f) { f.set_output_tf(0, proto::NETWORK_TF_UNSPECIFIED); }), "output_tf[0] = 0");
+  has(LoadError(good, [](F& f) { f.set_output_tf(0, proto::NETWORK_TF_UNSPECIFIED); }),
+      "output_tf[0] = 0");
   has(LoadError(good, [](F& f) { f.set_w2(3, std::numeric_limits<double>::quiet_NaN()); }),
       "w2[3] = nan: must be finite");
-  has(LoadError(good, [](F& f) { f.set_c1(0, std::numeric_limits<double>::infinity()); }), "c1[0] = inf");
+  has(LoadError(good, [](F& f) { f.set_c1(0, std::numeric_limits<double>::infinity()); }),
+      "c1[0] = inf");
   has(LoadError(good, [](F& f) { f.mutable_parameters(2)->set_name("beta"); }),
       "parameters[2].name = \"beta\": expected \"alpha\"");
   has(LoadError(good, [](F& f) { f.mutable_parameters(4)->set_upper(-1); }), "ranges.gamma.upper");
-  has(LoadError(good, [](F& f) { f.mutable_inputs(1)->set_hi(0.1); }), "normalization.frequency_hi_hz");
+  has(LoadError(good, [](F& f) { f.mutable_inputs(1)->set_hi(0.1); }),
+      "normalization.frequency_hi_hz");
   has(LoadError(good, [](F& f) { f.mutable_inputs()->RemoveLast(); }), "inputs: has 1 values");
   has(LoadError(good, [](F& f) { f.set_w1(0, f.w1(0) + 1e-3); }), "chromosome: does not decode");
-  has(LoadError(good, [](F& f) { f.mutable_chromosome()->pop_back(); }), "chromosome: packed bits size");
-  has(LoadError(good, [](F& f) {
-        f.mutable_provenance()->set_fitness(std::numeric_limits<double>::quiet_NaN());
-      }),
+  has(LoadError(good, [](F& f) { f.mutable_chromosome()->pop_back(); }),
+      "chromosome: packed bits size");
+  has(LoadError(good,
+                [](F& f) {
+                  f.mutable_provenance()->set_fitness(std::numeric_limits<double>::quiet_NaN());
+                }),
       "provenance.fitness");
 }
 

@@ -23,7 +23,8 @@ TEST(QuantumTest, QuantumIsTheGridOfTheReadings) {
   // A recorder's export: a 2^-17 mm grid printed with 7 decimals (-1.6174316 µm …) over ±40 µm.
   const double q = 1000.0 / 131072.0;
   std::vector<double> printed;
-  for (double x : Sine(5000, 0.5, 40.0)) printed.push_back(std::round(std::round(x / q) * q * 1e7) / 1e7);
+  for (double x : Sine(5000, 0.5, 40.0))
+    printed.push_back(std::round(std::round(x / q) * q * 1e7) / 1e7);
   EXPECT_NEAR(EstimateQuantum(printed), q, 1e-7 * q);
   // Continuous data printed with 7 decimals is not on a grid.
   std::vector<double> rounded;

@@ -1,7 +1,7 @@
 // Record sets of any drive (io/records.h, issue 14): the manifest format with windows, units and
 // offsets; the old bench formats read as record sets; a single CSV split into windows; and bad
-// records (NaN, unsorted time, mismatched units, too short, unknown roles) rejected with errors that
-// name the file, the line and the column, or the record.
+// records (NaN, unsorted time, mismatched units, too short, unknown roles) rejected with errors
+// that name the file, the line and the column, or the record.
 #include "io/records.h"
 
 #include <gtest/gtest.h>
@@ -35,8 +35,8 @@ class RecordsDir : public ::testing::Test {
   }
   /// A 1 kHz record: 0.1 s of rest at 0 V, then a sine of 50 V at 5 Hz that starts at 1 rad,
   /// response in `unit` (0.1 µm/V, offset −1.5 µm, expressed in that unit).
-  std::string RecordText(const std::string& header = "t_s,voltage_V,displacement_um", double scale = 1,
-                     int n = 1000) {
+  std::string RecordText(const std::string& header = "t_s,voltage_V,displacement_um",
+                         double scale = 1, int n = 1000) {
     std::ostringstream s;
     s << header << "\n";
     for (int k = 0; k < n; ++k) {
@@ -102,7 +102,9 @@ TEST_F(RecordsDir, SingleCsvSplitsIntoWindows) {
   PZ_EXPECT_HAS(InputErrorOf([] { ParseWindow("7-10", CaseRole::kTrain, "--train-window"); }),
                 "--train-window '7-10': expected START:END");
   RecordSet again = LoadRecordSet(dir_ / "r.csv");
-  PZ_EXPECT_HAS(InputErrorOf([&] { SplitIntoWindows(again, {{CaseRole::kTrain, 0.5, 2.0}}); }),
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  SplitIntoWindows(again, {{CaseRole::kTrain, 0.5, 2.0}});
+                }),
                 "train window [0.5, 2] s is outside the record (0 … 0.999 s)");
 }
 
@@ -120,11 +122,13 @@ TEST_F(RecordsDir, TheSettlingWindowStartsAfterTheRest) {
   SkipSettling(set, 0, 20, "--settle-s 0");
   EXPECT_EQ(set.records[0].first_scored, whole);
   SkipSettling(set, 0.25, 20, "--settle-s 0.25");
-  EXPECT_NEAR(set.records[0].t[set.records[0].first_scored], 0.35, 1e-12);  // 0.1 s rest end + 0.25 s
-  EXPECT_EQ(set.records[1].first_scored, late);                              // its window starts later
+  EXPECT_NEAR(set.records[0].t[set.records[0].first_scored], 0.35,
+              1e-12);                            // 0.1 s rest end + 0.25 s
+  EXPECT_EQ(set.records[1].first_scored, late);  // its window starts later
   PZ_EXPECT_HAS(InputErrorOf([&] { SkipSettling(set, 0.89, 20, "--settle-s 0.89"); }),
                 "--settle-s 0.89: record whole would keep 10 scored samples");
-  PZ_EXPECT_HAS(InputErrorOf([&] { SkipSettling(set, -1, 20, "--settle-s -1"); }), "must be finite and ≥ 0");
+  PZ_EXPECT_HAS(InputErrorOf([&] { SkipSettling(set, -1, 20, "--settle-s -1"); }),
+                "must be finite and ≥ 0");
 }
 
 // A recorder's export: no header (refused with the fix), then columns in another order with an
@@ -138,8 +142,10 @@ TEST_F(RecordsDir, ColumnsAreFoundByTheirUnitsAndAMissingHeaderIsNamed) {
     const size_t a = line.find(','), b = line.rfind(',');
     const double t = std::stod(line.substr(0, a)), u = std::stod(line.substr(a + 1, b - a - 1)),
                  y = std::stod(line.substr(b + 1));
-    headerless += "," + line.substr(0, a) + "," + line.substr(b + 1) + "," + line.substr(a + 1, b - a - 1) + "\n";
-    reordered += "," + std::to_string(t * 1e3) + "," + std::to_string(y * 1e3) + "," + std::to_string(u) + "\n";
+    headerless += "," + line.substr(0, a) + "," + line.substr(b + 1) + "," +
+                  line.substr(a + 1, b - a - 1) + "\n";
+    reordered += "," + std::to_string(t * 1e3) + "," + std::to_string(y * 1e3) + "," +
+                 std::to_string(u) + "\n";
   }
   Write("export.csv", headerless);
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "export.csv"); }),
@@ -158,34 +164,41 @@ TEST_F(RecordsDir, ColumnsAreFoundByTheirUnitsAndAMissingHeaderIsNamed) {
 
 TEST_F(RecordsDir, RecorderJitterIsAcceptedButGapsAreNot) {
   std::string text = RecordText();
-  Write("ok.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.000200010001,0,1\n0.0004,0,1\n0.00059999,1,1\n" +
-                      [] {
-                        std::string s;
-                        for (int k = 4; k < 40; ++k) s += std::to_string(k * 2e-4) + ",1,1\n";
-                        return s;
-                      }());
+  Write(
+      "ok.csv",
+      "t_s,voltage_V,displacement_um\n0,0,1\n0.000200010001,0,1\n0.0004,0,1\n0.00059999,1,1\n" +
+          [] {
+            std::string s;
+            for (int k = 4; k < 40; ++k) s += std::to_string(k * 2e-4) + ",1,1\n";
+            return s;
+          }());
   EXPECT_NO_THROW(LoadRecordSet(dir_ / "ok.csv"));
-  Write("gap.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.001,0,1\n0.003,1,1\n0.004,1,1\n" + [] {
-    std::string s;
-    for (int k = 5; k < 40; ++k) s += std::to_string(k * 1e-3) + ",1,1\n";
-    return s;
-  }());
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "gap.csv"); }), "gap.csv:4: column 't_s' (1): step 0.002");
+  Write(
+      "gap.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.001,0,1\n0.003,1,1\n0.004,1,1\n" + [] {
+        std::string s;
+        for (int k = 5; k < 40; ++k) s += std::to_string(k * 1e-3) + ",1,1\n";
+        return s;
+      }());
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "gap.csv"); }),
+                "gap.csv:4: column 't_s' (1): step 0.002");
 }
 
 TEST_F(RecordsDir, BadRecordsAreNamed) {
   // NaN in the response.
   Write("nan.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.001,1,nan\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nan.csv"); }), "nan.csv:3: column 'displacement_um' (3)");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nan.csv"); }),
+                "nan.csv:3: column 'displacement_um' (3)");
   // Unsorted time.
   std::string rows = "t_s,voltage_V,displacement_um\n";
   for (int k = 0; k < 30; ++k) rows += std::to_string(k == 10 ? 0.0085 : k * 1e-3) + ",1,1\n";
   Write("unsorted.csv", rows);
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "unsorted.csv"); }),
-                "unsorted.csv:12: column 't_s' (1): time 0.008500 is not after the previous 0.009000");
+  PZ_EXPECT_HAS(
+      InputErrorOf([&] { LoadRecordSet(dir_ / "unsorted.csv"); }),
+      "unsorted.csv:12: column 't_s' (1): time 0.008500 is not after the previous 0.009000");
   // Too short.
   Write("short.csv", "t_s,voltage_V,displacement_um\n0,0,1\n0.001,1,2\n0.002,2,3\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "short.csv"); }), "has 3 samples; at least 20 are needed (too short)");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "short.csv"); }),
+                "has 3 samples; at least 20 are needed (too short)");
   // A finite number that its unit's conversion takes beyond the doubles (issue 37, the reader's
   // fuzzer): named with its line and column, not read as inf.
   rows = "t_s,voltage_kV,displacement_um\n";
@@ -201,32 +214,39 @@ TEST_F(RecordsDir, BadRecordsAreNamed) {
                 "offset '1e303' is beyond the range of a number in um");
   // A unit that is not declared anywhere.
   Write("nounit.csv", "time,drive,response\n0,0,1\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nounit.csv"); }), "the unit of the time column 'time' is not declared");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nounit.csv"); }),
+                "the unit of the time column 'time' is not declared");
 }
 
 TEST_F(RecordsDir, MismatchedUnitsAreNamed) {
   Write("a.csv", RecordText());
   Write("b.csv", RecordText("t_s,voltage_V,angle_deg"));
-  Write("manifest.csv", "record,file,role,response_column\none,a.csv,train,\ntwo,b.csv,test,angle_deg\n");
+  Write("manifest.csv",
+        "record,file,role,response_column\none,a.csv,train,\ntwo,b.csv,test,angle_deg\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
                 "mismatched units: record 'two' has its response in deg but record 'one' in um");
   Write("manifest.csv", "record,file,role,response_unit\none,a.csv,train,nm\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
-                "a.csv:1: mismatched units: column 'displacement_um' says um but manifest line 2 declares nm");
+                "a.csv:1: mismatched units: column 'displacement_um' says um but manifest line 2 "
+                "declares nm");
 }
 
 TEST_F(RecordsDir, BadManifestsAreNamed) {
   Write("a.csv", RecordText());
   Write("manifest.csv", "record,file,role\none,a.csv,training\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "manifest.csv:2: column 'role' (3): unknown role 'training'");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "manifest.csv:2: column 'role' (3): unknown role 'training'");
   Write("manifest.csv", "record,file,role\none,a.csv,train\none,a.csv,test\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "manifest.csv:3: column 'record' (1): duplicate record 'one'");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "manifest.csv:3: column 'record' (1): duplicate record 'one'");
   Write("manifest.csv", "record,file,role\none,missing.csv,train\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "record file 'missing.csv' not found");
   Write("manifest.csv", "record,file,role,t_start_s,t_end_s\none,a.csv,train,0.5,0.51\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "record 'one' window [0.5, 0.51] s holds 11 samples; at least 20");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "record 'one' window [0.5, 0.51] s holds 11 samples; at least 20");
   Write("manifest.csv", "record,file,role,offset\none,a.csv,train,zero\n");
-  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "offset 'zero' is not fit, rest or a finite number");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "offset 'zero' is not fit, rest or a finite number");
   Write("manifest.csv", "record,file,role,gain\none,a.csv,train,1\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "unknown column 'gain'");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nowhere"); }), "no such file or folder");
@@ -246,7 +266,8 @@ TEST(RecordSets, OldBenchFormatsAreReadAsRecordSets) {
 
 TEST_F(RecordsDir, WrittenSetsReadBackTheSame) {
   Write("a.csv", RecordText());
-  Write("manifest.csv", "record,file,role,t_start_s,t_end_s\none,a.csv,train,0.2,0.6\ntwo,a.csv,test,0.6,\n");
+  Write("manifest.csv",
+        "record,file,role,t_start_s,t_end_s\none,a.csv,train,0.2,0.6\ntwo,a.csv,test,0.6,\n");
   const RecordSet set = LoadRecordSet(dir_);
   WriteRecordSet(set, dir_ / "copy");
   const RecordSet back = LoadRecordSet(dir_ / "copy");

@@ -1,6 +1,7 @@
-// The stack bench as a record set (io/records.h, the one reader): the bundled data/piezo-stack-bench
-// loads as its README describes it, and malformed manifests and record files (written by the test
-// into a temporary folder) are rejected with a message naming the file, the line and the column.
+// The stack bench as a record set (io/records.h, the one reader): the bundled
+// data/piezo-stack-bench loads as its README describes it, and malformed manifests and record files
+// (written by the test into a temporary folder) are rejected with a message naming the file, the
+// line and the column.
 #include "io/records.h"
 
 #include <gtest/gtest.h>
@@ -106,9 +107,11 @@ TEST_F(BadRecords, ManifestErrorsNameLineAndColumn) {
   Write("records.csv", "record,frequency_Hz,offset_V,file,role\n1,10,400,a.csv,train\n");
   PZ_EXPECT_HAS(SetError(), "missing column 'amplitude_V'");
   Write("records.csv", Manifest("1,10,400,100,a.csv,train\n1,10,400,100,a.csv,test\n"));
-  PZ_EXPECT_HAS(SetError(), "records.csv:3: column 'record' (1): duplicate record 1 (first on line 2)");
+  PZ_EXPECT_HAS(SetError(),
+                "records.csv:3: column 'record' (1): duplicate record 1 (first on line 2)");
   Write("records.csv", Manifest("1,-5,400,100,a.csv,train\n"));
-  PZ_EXPECT_HAS(SetError(), "records.csv:2: column 'frequency_Hz' (2): frequency -5 Hz must be > 0");
+  PZ_EXPECT_HAS(SetError(),
+                "records.csv:2: column 'frequency_Hz' (2): frequency -5 Hz must be > 0");
   Write("records.csv", Manifest("1,10,400,-1,a.csv,train\n"));
   PZ_EXPECT_HAS(SetError(), "column 'amplitude_V' (4): amplitude -1 V must be >= 0");
   Write("records.csv", Manifest("1,10,400,100,a.csv,validate\n"));
@@ -147,13 +150,15 @@ TEST_F(BadRecords, RecordFileErrorsNameLineAndColumn) {
   PZ_EXPECT_HAS(SetError(), "a.csv:4: column 'displacement_um' (3)");
   Write("a.csv", "t_s,voltage_V,displacement_um\n0.5,400,20\n0.501,400,20\n");
   PZ_EXPECT_HAS(SetError(), "a.csv:2: column 't_s' (1): the first sample time is 0.5 s");
-  Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,20\n0.001,406.279,20\n0.0025,"
-                 "400.6,20\n");
+  Write("a.csv",
+        "t_s,voltage_V,displacement_um\n0,400,20\n0.001,406.279,20\n0.0025,"
+        "400.6,20\n");
   PZ_EXPECT_HAS(SetError(), "a.csv:4: column 't_s' (1): step 0.0015 s from the previous sample");
   Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,20\n0.001,406.279,20\n0.001,400.6,20\n");
   PZ_EXPECT_HAS(SetError(), "a.csv:4: column 't_s' (1): time 0.001 s is not after");
   Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,20\n0.001,410,20\n");
-  PZ_EXPECT_HAS(SetError(), "a.csv:3: column 'voltage_V' (2): 410 V is not offset + A sin(2 pi f t)");
+  PZ_EXPECT_HAS(SetError(),
+                "a.csv:3: column 'voltage_V' (2): 410 V is not offset + A sin(2 pi f t)");
   Write("a.csv", "t_s,voltage_V,displacement_um\n0,400,nan\n0.001,406.279,20\n");
   PZ_EXPECT_HAS(SetError(), "a.csv:2: column 'displacement_um' (3)");
   // The voltage check is on request (`piezoid committee`); else the drive is the measured samples.

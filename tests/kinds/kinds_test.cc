@@ -80,7 +80,8 @@ TEST(Kinds, OnlyAKindWithAMoveTakesOutputMoves) {
   hgann.ga->islands = 4;
   opt::GeneticAlgorithm::Move move;
   ASSERT_TRUE(All().Move(hgann, &move).ok());
-  EXPECT_FALSE(static_cast<bool>(move)) << "unset, without a spread penalty: none (hgann::HgannOutputMoves)";
+  EXPECT_FALSE(static_cast<bool>(move))
+      << "unset, without a spread penalty: none (hgann::HgannOutputMoves)";
   std::get<job::HgannProblem>(hgann.problem).spread_penalty = 10;
   ASSERT_TRUE(All().Move(hgann, &move).ok());
   EXPECT_TRUE(static_cast<bool>(move));
@@ -105,7 +106,8 @@ TEST(Kinds, OnlyAKindWithAMoveTakesOutputMoves) {
   const std::vector<job::FieldViolation> v = All().Validate(synthetic);
   ASSERT_EQ(v.size(), 1u) << testing::Descriptions(v);
   EXPECT_EQ(v[0].field, "ga.output_moves");
-  EXPECT_EQ(v[0].description, "ga.output_moves = 2: the synthetic kind has no output move; must be 0 or unset");
+  EXPECT_EQ(v[0].description,
+            "ga.output_moves = 2: the synthetic kind has no output move; must be 0 or unset");
 }
 
 }  // namespace

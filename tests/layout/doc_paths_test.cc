@@ -26,7 +26,8 @@ std::vector<std::string> ExpandBraces(const std::string& pattern) {
   const std::string alts = pattern.substr(open + 1, close - open - 1);
   for (size_t start = 0;;) {
     const auto comma = alts.find(',', start);
-    const std::string alt = alts.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    const std::string alt =
+        alts.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
     for (auto& s : ExpandBraces(pattern.substr(0, open) + alt + pattern.substr(close + 1))) {
       out.push_back(std::move(s));
     }
@@ -39,9 +40,10 @@ std::vector<std::string> ExpandBraces(const std::string& pattern) {
 // Whether `name` matches `glob` ('*' = any run of characters).
 bool Matches(const std::string& glob, const std::string& name) {
   std::string re;
-  for (char c : glob) re += c == '*' ? std::string(".*") : std::regex_replace(std::string(1, c),
-                                                                              std::regex(R"([.^$|()\[\]{}+?\\])"),
-                                                                              R"(\$&)");
+  for (char c : glob)
+    re += c == '*' ? std::string(".*")
+                   : std::regex_replace(std::string(1, c), std::regex(R"([.^$|()\[\]{}+?\\])"),
+                                        R"(\$&)");
   return std::regex_match(name, std::regex(re));
 }
 
@@ -51,7 +53,8 @@ bool Exists(const fs::path& root, const std::string& rel) {
   size_t start = 0;
   while (start < rel.size()) {
     const auto slash = rel.find('/', start);
-    const std::string part = rel.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
+    const std::string part =
+        rel.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
     start = slash == std::string::npos ? rel.size() : slash + 1;
     if (part.empty()) continue;
     std::vector<fs::path> next;
@@ -80,12 +83,14 @@ std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc)
   const std::string doc_dir = fs::relative(doc.parent_path(), root).generic_string();
   // A token: optional ../ steps, then parts of path characters separated by '/', not preceded by
   // a character that would make it part of a URL or a longer word.
-  static const std::regex kToken(R"((^|[^A-Za-z0-9_./:~@$<-])((?:\.\./)*[A-Za-z0-9_.-]+(?:/[A-Za-z0-9_.*@{},-]+)+/?))");
+  static const std::regex kToken(
+      R"((^|[^A-Za-z0-9_./:~@$<-])((?:\.\./)*[A-Za-z0-9_.-]+(?:/[A-Za-z0-9_.*@{},-]+)+/?))");
   std::vector<std::string> out;
   std::ifstream in(doc);
   std::string line;
   for (int n = 1; std::getline(in, line); ++n) {
-    for (auto it = std::sregex_iterator(line.begin(), line.end(), kToken); it != std::sregex_iterator(); ++it) {
+    for (auto it = std::sregex_iterator(line.begin(), line.end(), kToken);
+         it != std::sregex_iterator(); ++it) {
       std::string token = (*it)[2];
       while (!token.empty() && (token.back() == '.' || token.back() == ',')) token.pop_back();
       std::string rel = token;
@@ -98,8 +103,8 @@ std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc)
       if (!top.count(rel.substr(0, rel.find('/')))) continue;
       for (const auto& alt : ExpandBraces(rel)) {
         if (!Exists(root, alt)) {
-          out.push_back(fs::relative(doc, root).generic_string() + ":" + std::to_string(n) + ": " + token +
-                        (alt == rel ? "" : " (" + alt + ")"));
+          out.push_back(fs::relative(doc, root).generic_string() + ":" + std::to_string(n) + ": " +
+                        token + (alt == rel ? "" : " (" + alt + ")"));
         }
       }
     }
@@ -147,7 +152,8 @@ TEST(DocPaths, AStalePathIsCaught) {
   std::ofstream(root / "opt" / "ga.cc") << "";
   std::ofstream(root / "tests" / "deploy" / "netns_test.sh") << "";
   std::ofstream(root / "docs" / "a.md")
-      << "The GA: `opt/ga.h`, `opt/ga.{h,cc}` and [the page](../opt/ga.h), tests/deploy/*_test.sh.\n"
+      << "The GA: `opt/ga.h`, `opt/ga.{h,cc}` and [the page](../opt/ga.h), "
+         "tests/deploy/*_test.sh.\n"
          "See https://example.org/opt/nothing.h, state/jobs/<id>/spec.pb and ../../outside/x.h.\n"
          "Moved: `master/ga.h`, opt/{ga,gone}.h, tests/deploy/*_validate.sh, ../opt/old.h.\n";
   const auto missing = MissingPaths(root, root / "docs" / "a.md");

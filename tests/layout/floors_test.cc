@@ -37,7 +37,8 @@ std::vector<std::string> IgnoredTopFolders(const fs::path& root) {
   std::vector<std::string> out;
   std::ifstream in(root / ".gitignore");
   for (std::string line; std::getline(in, line);)
-    if (line.size() > 2 && line.front() == '/' && line.back() == '/') out.push_back(line.substr(1, line.size() - 2));
+    if (line.size() > 2 && line.front() == '/' && line.back() == '/')
+      out.push_back(line.substr(1, line.size() - 2));
   return out;
 }
 
@@ -84,7 +85,8 @@ Floors ParseFloors(const fs::path& file, std::vector<std::string>& errors) {
       if (!f.allowed.count(next)) continue;
       if (state[next] == 1) {
         std::string loop;
-        for (auto it = std::find(path.begin(), path.end(), next); it != path.end(); ++it) loop += *it + " -> ";
+        for (auto it = std::find(path.begin(), path.end(), next); it != path.end(); ++it)
+          loop += *it + " -> ";
         errors.push_back("cmake/floors.txt: a loop: " + loop + next);
       } else if (state[next] == 0) {
         visit(next);
@@ -143,9 +145,11 @@ std::vector<std::string> CheckFloors(const fs::path& root) {
       // Hidden folders, build trees (anything configured by CMake) and the top-level folders
       // .gitignore keeps out (scripts/demo.sh writes a C header into out/) are not sources.
       const std::string name = p.filename().string();
-      const bool ignored = it.depth() == 0 && std::any_of(ignored_top.begin(), ignored_top.end(), [&](const std::string& g) {
-                             return ::fnmatch(g.c_str(), name.c_str(), 0) == 0;
-                           });
+      const bool ignored =
+          it.depth() == 0 &&
+          std::any_of(ignored_top.begin(), ignored_top.end(), [&](const std::string& g) {
+            return ::fnmatch(g.c_str(), name.c_str(), 0) == 0;
+          });
       if (name[0] == '.' || fs::exists(p / "CMakeCache.txt") || ignored) {
         it.disable_recursion_pending();
       }
@@ -194,9 +198,10 @@ std::vector<std::string> CheckFloors(const fs::path& root) {
       if (name == "tests/testing" && folder.rfind("tests/", 0) == 0) continue;  // test helpers
       std::string line_of;
       for (const auto& a : allowed) line_of += " " + a;
-      out.push_back(rel + ":" + std::to_string(n) + ": #include " + std::string(1, line[m.position(1)]) +
-                    inc + (quoted ? "\"" : ">") + ": " + folder + "/ may not include " + name +
-                    " (cmake/floors.txt: " + folder + ":" + line_of + ")");
+      out.push_back(rel + ":" + std::to_string(n) + ": #include " +
+                    std::string(1, line[m.position(1)]) + inc + (quoted ? "\"" : ">") + ": " +
+                    folder + "/ may not include " + name + " (cmake/floors.txt: " + folder + ":" +
+                    line_of + ")");
     }
   }
   std::sort(out.begin(), out.end());
@@ -215,8 +220,9 @@ bool HasWord(const std::string& text, const std::string& word) {
 }
 
 // Every .cc of the checkout is built: its folder's CMakeLists.txt names it (its file name or
-// stem; a test tests/<folder>/<name>_test.cc by <name> in tests/CMakeLists.txt's PZ_TESTS_<folder>).
-// The CMakeLists list their sources, so a file they do not name would silently not be compiled.
+// stem; a test tests/<folder>/<name>_test.cc by <name> in tests/CMakeLists.txt's
+// PZ_TESTS_<folder>). The CMakeLists list their sources, so a file they do not name would silently
+// not be compiled.
 std::vector<std::string> UnlistedSources(const fs::path& root) {
   std::vector<std::string> out;
   std::vector<std::string> errors;
@@ -241,8 +247,9 @@ std::vector<std::string> UnlistedSources(const fs::path& root) {
         listed = cmake.find(name) != std::string::npos || HasWord(cmake, stem);
       }
       if (!listed) {
-        out.push_back(folder + "/" + name + ": not named in " +
-                      (folder.rfind("tests/", 0) == 0 ? "tests/CMakeLists.txt" : folder + "/CMakeLists.txt"));
+        out.push_back(
+            folder + "/" + name + ": not named in " +
+            (folder.rfind("tests/", 0) == 0 ? "tests/CMakeLists.txt" : folder + "/CMakeLists.txt"));
       }
     }
   }
@@ -270,7 +277,8 @@ class ScratchTree : public ::testing::Test {
              ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(root_);
     fs::create_directories(root_ / "cmake");
-    fs::copy_file(fs::path(PIEZOID_SOURCE_DIR) / "cmake" / "floors.txt", root_ / "cmake" / "floors.txt");
+    fs::copy_file(fs::path(PIEZOID_SOURCE_DIR) / "cmake" / "floors.txt",
+                  root_ / "cmake" / "floors.txt");
     std::vector<std::string> errors;
     for (const auto& folder : ParseFloors(root_ / "cmake" / "floors.txt", errors).order) {
       fs::create_directories(root_ / folder);
@@ -311,37 +319,56 @@ TEST_F(ScratchTree, APlantedUpwardIncludeIsCaught) {
   ASSERT_TRUE(CheckFloors(root_).empty()) << Join(CheckFloors(root_));
 
   Write(root_ / "model" / "planted.h", "#pragma once\n#include \"opt/ga.h\"\n");
-  Write(root_ / "opt" / "planted.cc", "#include <zmq.hpp>\n#include \"wire.pb.h\"\n"
-                                      "#include <google/protobuf/message.h>\n");
+  Write(root_ / "opt" / "planted.cc",
+        "#include <zmq.hpp>\n#include \"wire.pb.h\"\n"
+        "#include <google/protobuf/message.h>\n");
   Write(root_ / "worker" / "planted.cc", "#include \"master/broker.h\"\n");
-  Write(root_ / "client" / "planted.cc", "#include \"worker/worker.h\"\n\n#include \"master/job_store.h\"\n");
+  Write(root_ / "client" / "planted.cc",
+        "#include \"worker/worker.h\"\n\n#include \"master/job_store.h\"\n");
   const auto v = CheckFloors(root_);
   ASSERT_EQ(v.size(), 7u) << Join(v);
-  EXPECT_NE(v[0].find("client/planted.cc:1: #include \"worker/worker.h\": client/ may not include worker"),
-            std::string::npos) << v[0];
-  EXPECT_NE(v[1].find("client/planted.cc:3: #include \"master/job_store.h\""), std::string::npos) << v[1];
+  EXPECT_NE(
+      v[0].find(
+          "client/planted.cc:1: #include \"worker/worker.h\": client/ may not include worker"),
+      std::string::npos)
+      << v[0];
+  EXPECT_NE(v[1].find("client/planted.cc:3: #include \"master/job_store.h\""), std::string::npos)
+      << v[1];
   EXPECT_NE(v[2].find("model/planted.h:2: #include \"opt/ga.h\": model/ may not include opt"),
-            std::string::npos) << v[2];
-  EXPECT_NE(v[3].find("opt/planted.cc:1: #include <zmq.hpp>: opt/ may not include zmq"), std::string::npos)
+            std::string::npos)
+      << v[2];
+  EXPECT_NE(v[3].find("opt/planted.cc:1: #include <zmq.hpp>: opt/ may not include zmq"),
+            std::string::npos)
       << v[3];
   EXPECT_NE(v[4].find("opt/planted.cc:2: #include \"wire.pb.h\": opt/ may not include proto"),
-            std::string::npos) << v[4];
-  EXPECT_NE(v[5].find("opt/planted.cc:3: #include <google/protobuf/message.h>: opt/ may not include protobuf"),
-            std::string::npos) << v[5];
-  EXPECT_NE(v[6].find("worker/planted.cc:1: #include \"master/broker.h\": worker/ may not include master"),
-            std::string::npos) << v[6];
+            std::string::npos)
+      << v[4];
+  EXPECT_NE(
+      v[5].find(
+          "opt/planted.cc:3: #include <google/protobuf/message.h>: opt/ may not include protobuf"),
+      std::string::npos)
+      << v[5];
+  EXPECT_NE(
+      v[6].find(
+          "worker/planted.cc:1: #include \"master/broker.h\": worker/ may not include master"),
+      std::string::npos)
+      << v[6];
 }
 
 TEST_F(ScratchTree, AFolderWithoutALineAndAnUnknownIncludeAreCaught) {
   Write(root_ / "newfloor" / "x.cc", "int x;\n");
-  Write(root_ / "model" / "y.cc", "#include \"nowhere.h\"\n#include \"tests/testing/expect_error.h\"\n");
+  Write(root_ / "model" / "y.cc",
+        "#include \"nowhere.h\"\n#include \"tests/testing/expect_error.h\"\n");
   Write(root_ / "tests" / "model" / "y_test.cc", "#include \"tests/testing/expect_error.h\"\n");
   const auto v = CheckFloors(root_);
   ASSERT_EQ(v.size(), 3u) << Join(v);
-  EXPECT_NE(v[0].find("model/y.cc:1: #include \"nowhere.h\" is neither beside"), std::string::npos) << v[0];
-  EXPECT_NE(v[1].find("model/y.cc:2: #include \"tests/testing/expect_error.h\": model/ may not include "
-                      "tests/testing"),
-            std::string::npos) << v[1];
+  EXPECT_NE(v[0].find("model/y.cc:1: #include \"nowhere.h\" is neither beside"), std::string::npos)
+      << v[0];
+  EXPECT_NE(
+      v[1].find("model/y.cc:2: #include \"tests/testing/expect_error.h\": model/ may not include "
+                "tests/testing"),
+      std::string::npos)
+      << v[1];
   EXPECT_EQ(v[2], "newfloor/x.cc: its folder has no line in cmake/floors.txt");
 }
 
@@ -379,7 +406,8 @@ TEST(Floors, TheArchitectureTableIsTheList) {
     for (std::string name; names >> name;) {
       if (name != "—") listed.insert(name);
     }
-    EXPECT_EQ(listed, f.allowed.at(folder)) << where << ": the names on its line of cmake/floors.txt";
+    EXPECT_EQ(listed, f.allowed.at(folder))
+        << where << ": the names on its line of cmake/floors.txt";
   }
   for (const auto& folder : f.order) {
     if (folder.find('/') == std::string::npos && folder != "bench" && folder != "fuzz") {

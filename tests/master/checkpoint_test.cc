@@ -39,8 +39,9 @@ job::JobSpec Spec() {
 class CheckpointFiles : public ::testing::Test {
  protected:
   void SetUp() override {
-    root_ = fs::temp_directory_path() / ("pz-ckpt-" + std::to_string(::getpid()) + "-" +
-                                         ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    root_ = fs::temp_directory_path() /
+            ("pz-ckpt-" + std::to_string(::getpid()) + "-" +
+             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(root_);
     // The checkpoints of generations 3 and 4 of a real run: the previous and the current one.
     JobRunner runner("j1", Spec());
@@ -100,9 +101,12 @@ TEST_F(CheckpointFiles, AFlippedBitAnywhereFallsBackToThePreviousOne) {
       JobCheckpoint c;
       std::string notice;
       ASSERT_TRUE(dir().LoadCheckpoint("j1", &c, &notice).ok()) << "byte " << pos;
-      EXPECT_EQ(Encoded(c), Encoded(previous_)) << "byte " << pos << " bit " << bit << ": " << notice;
-      EXPECT_NE(notice.find(file(JobDirectory::kCheckpointFile).string()), std::string::npos) << notice;
-      EXPECT_NE(notice.find("resumed from " + file(JobDirectory::kPreviousFile).string()), std::string::npos)
+      EXPECT_EQ(Encoded(c), Encoded(previous_))
+          << "byte " << pos << " bit " << bit << ": " << notice;
+      EXPECT_NE(notice.find(file(JobDirectory::kCheckpointFile).string()), std::string::npos)
+          << notice;
+      EXPECT_NE(notice.find("resumed from " + file(JobDirectory::kPreviousFile).string()),
+                std::string::npos)
           << notice;
       ++tried;
     }
@@ -115,9 +119,9 @@ TEST_F(CheckpointFiles, AFlippedBitAnywhereFallsBackToThePreviousOne) {
 
 TEST_F(CheckpointFiles, TruncatedOverwrittenOrMissingFallsBack) {
   const std::string good = Read(JobDirectory::kCheckpointFile);
-  for (const std::string& bad : {good.substr(0, good.size() / 2), good.substr(0, good.size() - 1),
-                                 std::string("garbage garbage garbage"), std::string(),
-                                 std::string(good.size(), '\0')}) {
+  for (const std::string& bad :
+       {good.substr(0, good.size() / 2), good.substr(0, good.size() - 1),
+        std::string("garbage garbage garbage"), std::string(), std::string(good.size(), '\0')}) {
     Write(JobDirectory::kCheckpointFile, bad);
     JobCheckpoint c;
     std::string notice;
@@ -186,7 +190,8 @@ TEST_F(CheckpointFiles, ACorruptSpecIsNamed) {
   std::string bytes;
   const Status s = dir().LoadSpec("j1", &bytes);
   EXPECT_EQ(s.code(), StatusCode::kDataLoss);
-  EXPECT_NE(s.message().find(file(JobDirectory::kSpecFile).string()), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find(file(JobDirectory::kSpecFile).string()), std::string::npos)
+      << s.message();
 }
 
 }  // namespace

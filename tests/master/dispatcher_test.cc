@@ -258,7 +258,8 @@ TEST(Dispatcher, AStragglingLeaseGetsOneCopyOnAnIdleWorkerAndTheFirstAnswerCount
     ASSERT_TRUE(d.MarkDone("j", 0, ls[i].positions[0]));
   }
   const Lease& slow = ls[2];
-  EXPECT_LE(d.NextDeadline(), t0 + milliseconds(200)) << "the broker wakes when the straggler is due";
+  EXPECT_LE(d.NextDeadline(), t0 + milliseconds(200))
+      << "the broker wakes when the straggler is due";
   EXPECT_FALSE(d.NextLease(t0 + milliseconds(150))) << "not yet a straggler";
   auto copy = d.NextLease(t0 + milliseconds(250));
   ASSERT_TRUE(copy);

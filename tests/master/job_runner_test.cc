@@ -14,7 +14,9 @@ namespace pz::master {
 namespace {
 
 const io::CaseSet& Nominal() { return testing::NominalCaseSet(); }
-job::JobSpec NominalSpec(int population, int generations) { return testing::NominalHgannSpec(population, generations); }
+job::JobSpec NominalSpec(int population, int generations) {
+  return testing::NominalHgannSpec(population, generations);
+}
 
 TEST(JobRunner, InProcessJobRunsExactlyAsPiezoidIdentify) {
   const job::JobSpec spec = NominalSpec(16, 4);
@@ -25,7 +27,8 @@ TEST(JobRunner, InProcessJobRunsExactlyAsPiezoidIdentify) {
   job::GenomeLayout layout{model::kChromosomeBits, 0};
   o.ga = ToGaOptions(spec, layout);
   o.threads = 2;
-  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
+  const hgann::HgannFitness fitness(
+      hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
   const hgann::IdentifyResult id = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
 
   ASSERT_EQ(job.log.size(), id.log.size());
@@ -68,70 +71,76 @@ bool Migrates(const job::JobSpec& spec, int g) {
 }
 
 TEST(JobRunner, FourIslandsInProcessAreExactlyPiezoidIdentify) {
- for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
-  SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
-  service::JobCheckpoint job;
-  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &job).ok());
+  for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
+    SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
+    service::JobCheckpoint job;
+    ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &job).ok());
 
-  hgann::IdentifyOptions o;
-  o.ga = ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
-  EXPECT_EQ(o.ga.islands, 4);
-  EXPECT_EQ(o.ga.island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
-  o.threads = 2;
-  const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
-  const hgann::IdentifyResult id = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
+    hgann::IdentifyOptions o;
+    o.ga = ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
+    EXPECT_EQ(o.ga.islands, 4);
+    EXPECT_EQ(o.ga.island_mutation, (std::vector<double>{0.01, 0.02, 0.03, 0.05}));
+    o.threads = 2;
+    const hgann::HgannFitness fitness(
+        hgann::HgannConfigFromCaseSet(Nominal(), model::ParameterRanges{}));
+    const hgann::IdentifyResult id = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
 
-  ASSERT_EQ(job.log.size(), id.log.size());
-  int migrations = 0;
-  for (size_t g = 0; g < job.log.size(); ++g) {
-    EXPECT_EQ(job.log[g], id.log[g]) << g;  // every field, the islands' records included
-    EXPECT_EQ(job.log[g].islands.size(), 4u);
-    migrations += job.log[g].migrated;
+    ASSERT_EQ(job.log.size(), id.log.size());
+    int migrations = 0;
+    for (size_t g = 0; g < job.log.size(); ++g) {
+      EXPECT_EQ(job.log[g], id.log[g]) << g;  // every field, the islands' records included
+      EXPECT_EQ(job.log[g].islands.size(), 4u);
+      migrations += job.log[g].migrated;
+    }
+    EXPECT_EQ(migrations, spec.ga->broadcast_interval > 0 ? 7 : 3);  // 3, 6, 9 (and 2, 4, 8, 10)
+    EXPECT_EQ(job.best.front().genome.bits, id.best.chromosome);
+    EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
+    EXPECT_EQ(job.optimizer.best_island, id.summary.best_island);
+    EXPECT_EQ(job.termination, opt::GaTermination::kMaxGenerations);
+    // The kept best are over all islands, best first, indexed island · population + rank.
+    ASSERT_EQ(job.best.size(), static_cast<size_t>(kBestKept));
+    for (size_t i = 1; i < job.best.size(); ++i)
+      EXPECT_LE(job.best[i - 1].fitness.cost, job.best[i].fitness.cost);
+    const auto& top_island = job.optimizer.islands[job.optimizer.best_island];
+    EXPECT_EQ(job.best.front().genome, top_island.population[0]);
   }
-  EXPECT_EQ(migrations, spec.ga->broadcast_interval > 0 ? 7 : 3);  // 3, 6, 9 (and 2, 4, 8, 10)
-  EXPECT_EQ(job.best.front().genome.bits, id.best.chromosome);
-  EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
-  EXPECT_EQ(job.optimizer.best_island, id.summary.best_island);
-  EXPECT_EQ(job.termination, opt::GaTermination::kMaxGenerations);
-  // The kept best are over all islands, best first, indexed island · population + rank.
-  ASSERT_EQ(job.best.size(), static_cast<size_t>(kBestKept));
-  for (size_t i = 1; i < job.best.size(); ++i) EXPECT_LE(job.best[i - 1].fitness.cost, job.best[i].fitness.cost);
-  const auto& top_island = job.optimizer.islands[job.optimizer.best_island];
-  EXPECT_EQ(job.best.front().genome, top_island.population[0]);
- }
 }
 
 TEST(JobRunner, ResumeFromAStoredCheckpointAtAMigrationIsBitIdentical) {
- for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
-  SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
-  service::JobCheckpoint whole;
-  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &whole).ok());
-  std::unique_ptr<opt::FitnessFunction> f;
-  ASSERT_TRUE(kinds::All().MakeFitness(spec, &f).ok());
-  opt::InlineEvaluator eval(*f, spec.limits.penalty_cost);
-  for (int stop : {2, 3, 4}) {  // 3 migrates; 4 restarts islands that stalled; 2 and 4 broadcast (BroadcastSpec)
-    SCOPED_TRACE("stopped after generation " + std::to_string(stop));
-    JobRunner first("t", spec);
-    ASSERT_TRUE(first.Init(kinds::All()).ok());
-    for (int g = 0; g <= stop; ++g) first.Step(eval);
-    ASSERT_EQ(first.checkpoint().log.back().migrated, Migrates(spec, stop));
-    // Through the stored bytes, as a master restart reads them.
-    service::JobCheckpoint stored;
-    ASSERT_TRUE(service::DecodeCheckpoint(service::EncodeCheckpoint(first.checkpoint()), &stored).ok());
-    ASSERT_EQ(stored.optimizer.islands.size(), 4u);
-    JobRunner second("t", spec);
-    ASSERT_TRUE(second.Init(kinds::All(), &stored).ok());
-    while (!second.Done()) second.Step(eval);
-    const service::JobCheckpoint& resumed = second.checkpoint();
-    EXPECT_TRUE(service::EncodeCheckpoint([&] {
-                  auto c = resumed;
-                  c.elapsed_s = whole.elapsed_s;
-                  for (size_t g = 0; g < c.log.size() && g < whole.log.size(); ++g) c.log[g].wall_time_s = whole.log[g].wall_time_s;
-                  return c;
-                }()) == service::EncodeCheckpoint(whole))
-        << "the resumed job's checkpoint differs from the uninterrupted one";
+  for (const job::JobSpec& spec : {IslandSpec(), BroadcastSpec()}) {
+    SCOPED_TRACE("broadcast interval " + std::to_string(spec.ga->broadcast_interval));
+    service::JobCheckpoint whole;
+    ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &whole).ok());
+    std::unique_ptr<opt::FitnessFunction> f;
+    ASSERT_TRUE(kinds::All().MakeFitness(spec, &f).ok());
+    opt::InlineEvaluator eval(*f, spec.limits.penalty_cost);
+    for (int stop :
+         {2, 3,
+          4}) {  // 3 migrates; 4 restarts islands that stalled; 2 and 4 broadcast (BroadcastSpec)
+      SCOPED_TRACE("stopped after generation " + std::to_string(stop));
+      JobRunner first("t", spec);
+      ASSERT_TRUE(first.Init(kinds::All()).ok());
+      for (int g = 0; g <= stop; ++g) first.Step(eval);
+      ASSERT_EQ(first.checkpoint().log.back().migrated, Migrates(spec, stop));
+      // Through the stored bytes, as a master restart reads them.
+      service::JobCheckpoint stored;
+      ASSERT_TRUE(
+          service::DecodeCheckpoint(service::EncodeCheckpoint(first.checkpoint()), &stored).ok());
+      ASSERT_EQ(stored.optimizer.islands.size(), 4u);
+      JobRunner second("t", spec);
+      ASSERT_TRUE(second.Init(kinds::All(), &stored).ok());
+      while (!second.Done()) second.Step(eval);
+      const service::JobCheckpoint& resumed = second.checkpoint();
+      EXPECT_TRUE(service::EncodeCheckpoint([&] {
+                    auto c = resumed;
+                    c.elapsed_s = whole.elapsed_s;
+                    for (size_t g = 0; g < c.log.size() && g < whole.log.size(); ++g)
+                      c.log[g].wall_time_s = whole.log[g].wall_time_s;
+                    return c;
+                  }()) == service::EncodeCheckpoint(whole))
+          << "the resumed job's checkpoint differs from the uninterrupted one";
+    }
   }
- }
 }
 
 }  // namespace

@@ -15,7 +15,8 @@
 namespace pz::model {
 namespace {
 
-std::vector<double> Apply(const BacklashParams& p, const std::vector<double>& theta, double y0 = 0.0) {
+std::vector<double> Apply(const BacklashParams& p, const std::vector<double>& theta,
+                          double y0 = 0.0) {
   std::vector<double> y(theta.size());
   ApplyBacklash(p, theta, y, y0);
   return y;
@@ -122,15 +123,25 @@ TEST(Backlash, MonotoneInTheta) {
   }
 }
 
-// Spec §3: from rest the output stays 0 until θ exceeds a1, follows θ − a1 up to b1, holds b1 after the
-// reversal until θ + a2 falls below it, then follows θ + a2 down to b2.
+// Spec §3: from rest the output stays 0 until θ exceeds a1, follows θ − a1 up to b1, holds b1 after
+// the reversal until θ + a2 falls below it, then follows θ + a2 down to b2.
 TEST(Backlash, SpecSequenceOnASinusoid) {
   const BacklashParams p{0.281, 0.294, 4.21, -4.03};  // case 7 of the paper
   const double amp = 5.0;
   std::vector<double> theta(240);  // up, down, and up again (stopping before the second peak)
-  for (size_t k = 0; k < theta.size(); ++k) theta[k] = amp * std::sin(2 * std::numbers::pi * k / 200.0);
+  for (size_t k = 0; k < theta.size(); ++k)
+    theta[k] = amp * std::sin(2 * std::numbers::pi * k / 200.0);
   const std::vector<double> y = Apply(p, theta);
-  enum Phase { kRest, kRising, kTop, kHoldTop, kFalling, kBottom, kHoldBottom, kRising2 } phase = kRest;
+  enum Phase {
+    kRest,
+    kRising,
+    kTop,
+    kHoldTop,
+    kFalling,
+    kBottom,
+    kHoldBottom,
+    kRising2
+  } phase = kRest;
   for (size_t k = 0; k < theta.size(); ++k) {
     const double th = theta[k];
     const bool rising = k > 0 && th > theta[k - 1];
@@ -160,14 +171,24 @@ TEST(Backlash, SpecSequenceOnASinusoid) {
         break;
     }
     switch (phase) {
-      case kRest: EXPECT_EQ(y[k], 0.0) << k; break;
+      case kRest:
+        EXPECT_EQ(y[k], 0.0) << k;
+        break;
       case kRising:
-      case kRising2: EXPECT_DOUBLE_EQ(y[k], std::min(th - p.a1, p.b1)) << k; break;
+      case kRising2:
+        EXPECT_DOUBLE_EQ(y[k], std::min(th - p.a1, p.b1)) << k;
+        break;
       case kTop:
-      case kHoldTop: EXPECT_EQ(y[k], p.b1) << k; break;
-      case kFalling: EXPECT_DOUBLE_EQ(y[k], th + p.a2) << k; break;
+      case kHoldTop:
+        EXPECT_EQ(y[k], p.b1) << k;
+        break;
+      case kFalling:
+        EXPECT_DOUBLE_EQ(y[k], th + p.a2) << k;
+        break;
       case kBottom:
-      case kHoldBottom: EXPECT_EQ(y[k], p.b2) << k; break;
+      case kHoldBottom:
+        EXPECT_EQ(y[k], p.b2) << k;
+        break;
     }
   }
   EXPECT_EQ(phase, kRising2);  // the sinusoid went through every stage
@@ -184,16 +205,17 @@ TEST(Backlash, InPlaceApplicationAndInitialOutput) {
 }
 
 // In the plant the measured angle is the operator applied to the sampled linear angle.
-// BacklashRun cuts the serial chain into four parts joined by composed maps: every value must be the
-// one of the plain step-by-step recursion, bit for bit, for any length (including those too short to
-// split and those with a remainder), any start value and parameters that saturate or not.
+// BacklashRun cuts the serial chain into four parts joined by composed maps: every value must be
+// the one of the plain step-by-step recursion, bit for bit, for any length (including those too
+// short to split and those with a remainder), any start value and parameters that saturate or not.
 TEST(Backlash, RunInPartsEqualsTheStepByStepRecursionBitForBit) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(0, 1);
   for (int trial = 0; trial < 400; ++trial) {
     const BacklashParams p{0.5 * u(rng), 0.5 * u(rng), 0.2 + 3 * u(rng), -0.2 - 3 * u(rng)};
     const int n = trial < 40 ? trial : 40 + static_cast<int>(400 * u(rng));
-    const std::vector<double> theta = RandomWalk(static_cast<unsigned>(trial), n, 0.05 + 0.5 * u(rng));
+    const std::vector<double> theta =
+        RandomWalk(static_cast<unsigned>(trial), n, 0.05 + 0.5 * u(rng));
     const double y0 = 2 * u(rng) - 1;
     std::vector<double> y(theta.size());
     const double last = BacklashRun(p, theta.data(), y.data(), n, y0);

@@ -26,7 +26,8 @@ TEST(BeamModes, DefaultMeshFrequenciesMatchSpec) {
   const ModalBasis mb = ComputeModalBasis(fe);
   ASSERT_EQ(mb.omega.size(), 12);
   const double expected_hz[] = {58.57, 343.09, 815.69, 1359.57};
-  for (int i = 0; i < 4; ++i) EXPECT_NEAR(mb.omega(i) / (2 * std::numbers::pi), expected_hz[i], 0.006) << i;
+  for (int i = 0; i < 4; ++i)
+    EXPECT_NEAR(mb.omega(i) / (2 * std::numbers::pi), expected_hz[i], 0.006) << i;
   // Mass normalisation: Φᵀ M Φ = I, Φᵀ K Φ = diag(ω²).
   const Eigen::MatrixXd mm = mb.phi.transpose() * fe.M * mb.phi;
   EXPECT_LT((mm - Eigen::MatrixXd::Identity(12, 12)).norm(), 1e-9);
@@ -75,9 +76,11 @@ TEST(BeamModes, UniformCantileverConvergesToEulerBernoulli) {
     const ModalBasis mb = ComputeModalBasis(AssembleBeam(g));
     const double L = g.active_length_m;
     for (int i = 0; i < 4; ++i) {
-      const double exact = betaL[i] * betaL[i] * std::sqrt(g.EiActive() / (g.RhoAActive() * std::pow(L, 4)));
+      const double exact =
+          betaL[i] * betaL[i] * std::sqrt(g.EiActive() / (g.RhoAActive() * std::pow(L, 4)));
       const double err = (mb.omega(i) - exact) / exact;
-      EXPECT_GE(err, -1e-10) << "FE (consistent mass) must bound from above, mode " << i << " n " << n;
+      EXPECT_GE(err, -1e-10) << "FE (consistent mass) must bound from above, mode " << i << " n "
+                             << n;
       // Hermite cubic elements converge as h⁴ in frequency: halving h divides the error by ~16.
       if (n >= 16) {
         EXPECT_GT(prev_err[i] / err, 12.0) << "mode " << i << " n " << n;

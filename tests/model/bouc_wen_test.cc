@@ -17,7 +17,8 @@
 namespace pz::model {
 namespace {
 
-// RK4 with 2000 sub-steps per sample: its error (second order at the kinks of |z|) is below this [N].
+// RK4 with 2000 sub-steps per sample: its error (second order at the kinks of |z|) is below this
+// [N].
 constexpr double kRk4Tol = 1e-8;
 
 const BimorphPlant& DefaultPlant() {
@@ -25,7 +26,8 @@ const BimorphPlant& DefaultPlant() {
   return plant;
 }
 
-// ż = α u̇ − β |u̇| z − γ u̇ |z| by classical RK4 on a fine grid, u = V sin(2π f t); z at t_k = k/fs.
+// ż = α u̇ − β |u̇| z − γ u̇ |z| by classical RK4 on a fine grid, u = V sin(2π f t); z at t_k =
+// k/fs.
 std::vector<double> IntegrateRk4(const BoucWenParams& p, const Sinusoid& s, int substeps) {
   const double w = 2 * std::numbers::pi * s.frequency_hz;
   auto rhs = [&](double t, double z) {
@@ -39,8 +41,8 @@ std::vector<double> IntegrateRk4(const BoucWenParams& p, const Sinusoid& s, int 
   for (int k = 1; k < n; ++k) {
     for (int q = 0; q < substeps; ++q) {
       const double t = ((k - 1) * substeps + q) * h;
-      const double k1 = rhs(t, zc), k2 = rhs(t + h / 2, zc + h / 2 * k1), k3 = rhs(t + h / 2, zc + h / 2 * k2),
-                   k4 = rhs(t + h, zc + h * k3);
+      const double k1 = rhs(t, zc), k2 = rhs(t + h / 2, zc + h / 2 * k1),
+                   k3 = rhs(t + h / 2, zc + h / 2 * k2), k4 = rhs(t + h, zc + h * k3);
       zc += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
     }
     z[k] = zc;
@@ -54,11 +56,11 @@ TEST(BoucWenClosedForm, MatchesFineRk4IntegrationOnBothDrivePaths) {
     Sinusoid drive;
   };
   const Case cases[] = {
-      {{2.5e-3, 6e-3, 4e-3}, {375, 0.25, 3, 100}},   // the paper's stable loop
-      {{2.5e-3, 6e-3, 4e-3}, {750, 1.0, 3, 100}},    // fast: κ u̇ h up to 0.47
+      {{2.5e-3, 6e-3, 4e-3}, {375, 0.25, 3, 100}},     // the paper's stable loop
+      {{2.5e-3, 6e-3, 4e-3}, {750, 1.0, 3, 100}},      // fast: κ u̇ h up to 0.47
       {{3.7e-3, 1.8e-2, 2.6e-3}, {750, 0.5, 3, 100}},  // random3: sharp loop, sub-stepped
-      {{1e-3, 2e-3, -1.5e-3}, {500, 0.5, 3, 100}},   // γ < 0 (still bounded: β + γ > 0, β − γ ≥ 0)
-      {{-2e-3, 5e-3, 5e-3}, {500, 1.0, 3, 100}},     // α < 0, β = γ (κ = 0 on two branches)
+      {{1e-3, 2e-3, -1.5e-3}, {500, 0.5, 3, 100}},  // γ < 0 (still bounded: β + γ > 0, β − γ ≥ 0)
+      {{-2e-3, 5e-3, 5e-3}, {500, 1.0, 3, 100}},  // α < 0, β = γ (κ = 0 on two branches)
   };
   for (const Case& c : cases) {
     const std::vector<double> ref = IntegrateRk4(c.bw, c.drive, 2000);
@@ -70,9 +72,9 @@ TEST(BoucWenClosedForm, MatchesFineRk4IntegrationOnBothDrivePaths) {
     // Sinusoid path (branches in time, crossings located by asin).
     const BimorphTrace tr = Simulate(DefaultPlant(), p, c.drive);
     ASSERT_TRUE(tr.summary.ok()) << tr.summary.BriefReport();
-    // Path function on the samples: z depends on u alone along each monotone stretch, and the polyline
-    // through the samples has the sinusoid's extremes (they fall on the 100 Hz grid here), so z agrees
-    // at every sample.
+    // Path function on the samples: z depends on u alone along each monotone stretch, and the
+    // polyline through the samples has the sinusoid's extremes (they fall on the 100 Hz grid here),
+    // so z agrees at every sample.
     std::vector<double> zpath(ref.size());
     ASSERT_TRUE(BoucWenAlongPath(c.bw, SampleValues(c.drive), zpath));
     double worst = 0, worst_path = 0;
@@ -80,8 +82,10 @@ TEST(BoucWenClosedForm, MatchesFineRk4IntegrationOnBothDrivePaths) {
       worst = std::max(worst, std::abs(tr.z[k] - ref[k]));
       worst_path = std::max(worst_path, std::abs(zpath[k] - ref[k]));
     }
-    EXPECT_LT(worst, kRk4Tol) << "alpha " << c.bw.alpha << " beta " << c.bw.beta << " gamma " << c.bw.gamma;
-    EXPECT_LT(worst_path, kRk4Tol) << "alpha " << c.bw.alpha << " beta " << c.bw.beta << " gamma " << c.bw.gamma;
+    EXPECT_LT(worst, kRk4Tol) << "alpha " << c.bw.alpha << " beta " << c.bw.beta << " gamma "
+                              << c.bw.gamma;
+    EXPECT_LT(worst_path, kRk4Tol)
+        << "alpha " << c.bw.alpha << " beta " << c.bw.beta << " gamma " << c.bw.gamma;
   }
 }
 
@@ -102,7 +106,9 @@ TEST(BoucWenClosedForm, SampledDriveMatchesRk4OnThePolyline) {
   double z = 0, worst = 0;
   for (size_t k = 0; k + 1 < s.t.size(); ++k) {
     const double ud = (s.u[k + 1] - s.u[k]) / (s.t[k + 1] - s.t[k]);
-    auto f = [&](double zz) { return p.alpha * ud - p.beta * std::abs(ud) * zz - p.gamma * ud * std::abs(zz); };
+    auto f = [&](double zz) {
+      return p.alpha * ud - p.beta * std::abs(ud) * zz - p.gamma * ud * std::abs(zz);
+    };
     const int n = 4000;
     const double h = (s.t[k + 1] - s.t[k]) / n;
     for (int q = 0; q < n; ++q) {
@@ -114,9 +120,9 @@ TEST(BoucWenClosedForm, SampledDriveMatchesRk4OnThePolyline) {
   EXPECT_LT(worst, kRk4Tol);
 }
 
-// Numerical boundedness: the exact z along triangle waves of growing amplitude 1e2 … 1e6 V. A bounded
-// loop saturates in the first half (amplitudes ≤ 1e4 V, where κ·A ≥ 10) and grows no further; an
-// unbounded one grows by orders of magnitude or overflows.
+// Numerical boundedness: the exact z along triangle waves of growing amplitude 1e2 … 1e6 V. A
+// bounded loop saturates in the first half (amplitudes ≤ 1e4 V, where κ·A ≥ 10) and grows no
+// further; an unbounded one grows by orders of magnitude or overflows.
 bool NumericallyBounded(const BoucWenParams& p) {
   std::vector<double> u{0.0};
   for (int k = 0; k <= 16; ++k) {
@@ -144,7 +150,8 @@ TEST(BoucWenBoundedness, NumericalCheckAgreesWithThePredicate) {
   for (int trial = 0; trial < 400; ++trial) {
     const double beta = coef(rng), gamma = coef(rng);
     // Stay clear of the boundaries, where "bounded" needs amplitudes beyond any finite test.
-    if (std::abs(beta + gamma) < 1e-3 || std::abs(beta - gamma) < 1e-3 || std::abs(beta) < 1e-3) continue;
+    if (std::abs(beta + gamma) < 1e-3 || std::abs(beta - gamma) < 1e-3 || std::abs(beta) < 1e-3)
+      continue;
     for (double alpha : {2.5e-3, -1e-3}) {
       BimorphParams p;
       p.alpha = alpha;
@@ -158,8 +165,10 @@ TEST(BoucWenBoundedness, NumericalCheckAgreesWithThePredicate) {
         ++bounded_seen;
       } else if (beta > 0 && beta + gamma_eff > 0) {
         // β ≥ 0 > β − γ (Ikhouane & Rodellar's class II): from z(0) = 0 the loop stays within
-        // |α|/(β+γ) too, but it is not dissipative and the spec (§2) rejects it with class I's rule.
-        EXPECT_TRUE(numerically) << "class II: alpha " << alpha << " beta " << beta << " gamma " << gamma;
+        // |α|/(β+γ) too, but it is not dissipative and the spec (§2) rejects it with class I's
+        // rule.
+        EXPECT_TRUE(numerically) << "class II: alpha " << alpha << " beta " << beta << " gamma "
+                                 << gamma;
         ++class2_seen;
       } else {
         EXPECT_FALSE(numerically) << "alpha " << alpha << " beta " << beta << " gamma " << gamma;
@@ -211,8 +220,8 @@ TEST(BoucWenSimulate, PaperTable3RangesWithNonzeroAlphaAreUnbounded) {
   }
 }
 
-// α = 0 with z(0) = 0 gives z ≡ 0 whatever β and γ (paper's identified α = 0): the fin angle is then
-// that of the linear beam alone.
+// α = 0 with z(0) = 0 gives z ≡ 0 whatever β and γ (paper's identified α = 0): the fin angle is
+// then that of the linear beam alone.
 TEST(BoucWenSimulate, ZeroAlphaGivesZeroHysteresis) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> r(-0.1, 0.0);
@@ -235,8 +244,8 @@ TEST(BoucWenSimulate, ZeroAlphaGivesZeroHysteresis) {
   }
 }
 
-// Branch algebra: the zero crossing is where the branch formula vanishes, and z leaves 0 the way α·s
-// points.
+// Branch algebra: the zero crossing is where the branch formula vanishes, and z leaves 0 the way
+// α·s points.
 TEST(BoucWenBranch, ZeroCrossingAndStartSign) {
   const BoucWenParams p{2.5e-3, 6e-3, 4e-3};
   const BoucWenBranch b = StartBranch(p, 375.0, 0.2, -1.0);  // falling from z > 0: κ = −β + γ

@@ -97,15 +97,15 @@ TEST(ChromosomeCodec, WeightCodeExtremesAndResolution) {
 }
 
 TEST(ChromosomeCodec, GenesLandInTheirNetworkFields) {
-  std::vector<uint8_t> bits(kChromosomeBits, 0);  // H = 2, all TFs hardlim, all weights −10
-  SetGene(bits, 0, 3, "001");                                // H = 3
-  SetGene(bits, InputTfBit(1), 3, "100");                    // input 1: tribas (4)
-  SetGene(bits, HiddenTfBit(2), 3, "011");                   // hidden 2: satlins (3)
-  SetGene(bits, OutputTfBit(6), 3, "111");                   // output 6 (a2): radbas (7)
-  SetGene(bits, W1Bit(1, 2), 14, "11111111111111");          // +10
-  SetGene(bits, C1Bit(1), 14, "10000000000000");             // code 8192
-  SetGene(bits, W2Bit(2, 5), 14, "11111111111111");          // +10
-  SetGene(bits, C2Bit(3), 14, "00000000000001");             // code 1
+  std::vector<uint8_t> bits(kChromosomeBits, 0);     // H = 2, all TFs hardlim, all weights −10
+  SetGene(bits, 0, 3, "001");                        // H = 3
+  SetGene(bits, InputTfBit(1), 3, "100");            // input 1: tribas (4)
+  SetGene(bits, HiddenTfBit(2), 3, "011");           // hidden 2: satlins (3)
+  SetGene(bits, OutputTfBit(6), 3, "111");           // output 6 (a2): radbas (7)
+  SetGene(bits, W1Bit(1, 2), 14, "11111111111111");  // +10
+  SetGene(bits, C1Bit(1), 14, "10000000000000");     // code 8192
+  SetGene(bits, W2Bit(2, 5), 14, "11111111111111");  // +10
+  SetGene(bits, C2Bit(3), 14, "00000000000001");     // code 1
   const Network n = DecodeChromosome(bits, {}, {});
   ASSERT_TRUE(n.Validate().ok()) << n.Validate().message();
   EXPECT_EQ(n.hidden(), 3);
@@ -144,7 +144,8 @@ TEST(ChromosomeCodec, EncodeDecodeRoundTrips) {
     ASSERT_EQ(EncodeChromosome(n, bits), bits) << "seed " << seed;
     // … and encode ∘ decode the identity on decoded networks.
     const std::vector<uint8_t> fresh = EncodeChromosome(n);
-    ASSERT_TRUE(DecodeChromosome(fresh, {}, ParameterRanges::PaperTable3()) == n) << "seed " << seed;
+    ASSERT_TRUE(DecodeChromosome(fresh, {}, ParameterRanges::PaperTable3()) == n)
+        << "seed " << seed;
     // Without a carrier the unused genes are zero, everything else equal.
     std::vector<uint8_t> expected = bits;
     for (int j = n.hidden(); j < kMaxHidden; ++j) {

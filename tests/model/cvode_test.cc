@@ -1,7 +1,7 @@
 // The CVODE path: the wrapper on reference problems with known answers (decay, oscillator, a stiff
-// linear system, a banded heat equation, breakpoints, roots), its failure modes as statuses, its use
-// from many threads; then the bimorph ODE on it (analytic Jacobian against difference quotients, the
-// extension seam, sampled input against the exact first-order-hold solution).
+// linear system, a banded heat equation, breakpoints, roots), its failure modes as statuses, its
+// use from many threads; then the bimorph ODE on it (analytic Jacobian against difference
+// quotients, the extension seam, sampled input against the exact first-order-hold solution).
 #include <cvode/cvode.h>
 #include <gtest/gtest.h>
 
@@ -52,14 +52,17 @@ class Decay final : public OdeSystem {
 // ẍ = −ω² x as [x, v]: x = cos ωt, v = −ω sin ωt. Optionally declares ẋ = v as a kinematic row.
 class Oscillator final : public OdeSystem {
  public:
-  explicit Oscillator(double omega, bool kinematic = false) : omega_(omega), kinematic_(kinematic) {}
+  explicit Oscillator(double omega, bool kinematic = false)
+      : omega_(omega), kinematic_(kinematic) {}
   int size() const override { return 2; }
   int Rhs(double, const double* y, double* ydot) const override {
     ydot[0] = y[1];
     ydot[1] = -omega_ * omega_ * y[0];
     return 0;
   }
-  JacobianStructure jacobian_structure() const override { return {.analytic = true, .kinematic = kinematic_ ? 1 : 0}; }
+  JacobianStructure jacobian_structure() const override {
+    return {.analytic = true, .kinematic = kinematic_ ? 1 : 0};
+  }
   int Jacobian(double, const double*, const double*, JacobianView& j) const override {
     j.Set(0, 1, 1.0);
     j.Set(1, 0, -omega_ * omega_);
@@ -139,10 +142,15 @@ class Faulty final : public OdeSystem {
     ydot[0] = 1.0;
     if (t <= t_bad_) return 0;
     switch (mode_) {
-      case kFatal: return -1;
-      case kRecoverable: return 1;
-      case kThrow: throw std::runtime_error("model blew up");
-      case kNaN: ydot[0] = std::nan(""); return 0;
+      case kFatal:
+        return -1;
+      case kRecoverable:
+        return 1;
+      case kThrow:
+        throw std::runtime_error("model blew up");
+      case kNaN:
+        ydot[0] = std::nan("");
+        return 0;
     }
     return 0;
   }
@@ -168,7 +176,8 @@ TEST(CvodeReferenceProblems, ExponentialDecayBdfAndAdams) {
     ASSERT_EQ(s.t.size(), t.size());
     EXPECT_EQ(s.at(0, 0), 1.0);  // the output at t0 is y0
     for (size_t k = 0; k < t.size(); ++k)
-      EXPECT_NEAR(s.at(k, 0), std::exp(-2.0 * t[k]), 3e-9 * std::exp(-2.0 * t[k]) + 1e-13) << OdeMethodName(m) << " t=" << t[k];
+      EXPECT_NEAR(s.at(k, 0), std::exp(-2.0 * t[k]), 3e-9 * std::exp(-2.0 * t[k]) + 1e-13)
+          << OdeMethodName(m) << " t=" << t[k];
     EXPECT_GT(s.summary.steps, 0);
     EXPECT_GT(s.summary.rhs_calls, s.summary.steps);
   }
@@ -195,7 +204,8 @@ TEST(CvodeReferenceProblems, HarmonicOscillatorTenPeriods) {
     ASSERT_TRUE(s.summary.ok()) << s.summary.BriefReport();
     for (size_t k = 0; k < t.size(); ++k) {
       EXPECT_NEAR(s.at(k, 0), std::cos(w * t[k]), 2e-8) << OdeMethodName(v.method) << " t=" << t[k];
-      EXPECT_NEAR(s.at(k, 1), -w * std::sin(w * t[k]), 2e-7) << OdeMethodName(v.method) << " t=" << t[k];
+      EXPECT_NEAR(s.at(k, 1), -w * std::sin(w * t[k]), 2e-7)
+          << OdeMethodName(v.method) << " t=" << t[k];
     }
     if (v.iteration == NonlinearIteration::kFixedPoint) {
       EXPECT_EQ(s.summary.jacobian_calls, 0);
@@ -214,7 +224,8 @@ TEST(CvodeReferenceProblems, StiffLinearSystemBdfTakesFewSteps) {
   ASSERT_TRUE(s.summary.ok()) << s.summary.BriefReport();
   for (size_t k = 0; k < t.size(); ++k) {
     const Eigen::Vector3d exact = sys.Exact(t[k], y0);
-    for (int i = 0; i < 3; ++i) EXPECT_NEAR(s.at(k, i), exact[i], 1e-8 * (1 + std::abs(exact[i]))) << "t=" << t[k];
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(s.at(k, i), exact[i], 1e-8 * (1 + std::abs(exact[i]))) << "t=" << t[k];
   }
   // An explicit method would need ~5e6 steps (|λ| h < 2 over 5 s); BDF follows the slow mode.
   EXPECT_LT(s.summary.steps, 3000) << s.summary.BriefReport();
@@ -226,8 +237,9 @@ TEST(CvodeReferenceProblems, DenseAndBandedJacobianAgree) {
   const std::vector<double> y0(30, 0.0);
   const std::vector<double> t = Linspace(0, 4, 9);
   std::vector<OdeSolution> runs;
-  for (auto [kind, analytic] : {std::pair{LinearSolverKind::kDense, true}, std::pair{LinearSolverKind::kBanded, true},
-                                std::pair{LinearSolverKind::kDense, false}, std::pair{LinearSolverKind::kBanded, false}}) {
+  for (auto [kind, analytic] :
+       {std::pair{LinearSolverKind::kDense, true}, std::pair{LinearSolverKind::kBanded, true},
+        std::pair{LinearSolverKind::kDense, false}, std::pair{LinearSolverKind::kBanded, false}}) {
     CvodeOptions o;
     o.linear_solver = kind;
     o.use_analytic_jacobian = analytic;
@@ -237,7 +249,8 @@ TEST(CvodeReferenceProblems, DenseAndBandedJacobianAgree) {
     ASSERT_TRUE(runs.back().summary.ok()) << runs.back().summary.BriefReport();
   }
   for (size_t r = 1; r < runs.size(); ++r)
-    for (size_t i = 0; i < runs[0].y.size(); ++i) EXPECT_NEAR(runs[r].y[i], runs[0].y[i], 1e-8) << "run " << r << " entry " << i;
+    for (size_t i = 0; i < runs[0].y.size(); ++i)
+      EXPECT_NEAR(runs[r].y[i], runs[0].y[i], 1e-8) << "run " << r << " entry " << i;
 }
 
 TEST(CvodeReferenceProblems, ReducedSolverEliminatesKinematicRowsExactly) {
@@ -250,12 +263,14 @@ TEST(CvodeReferenceProblems, ReducedSolverEliminatesKinematicRowsExactly) {
   o.atol = 1e-13;
   o.linear_solver = LinearSolverKind::kDense;
   const OdeSolution dense = IntegrateCvode(sys, 0.0, y0, t, o);
-  o.linear_solver = LinearSolverKind::kAuto;  // picks the reduced solver from the declared structure
+  o.linear_solver =
+      LinearSolverKind::kAuto;  // picks the reduced solver from the declared structure
   const OdeSolution reduced = IntegrateCvode(sys, 0.0, y0, t, o);
   ASSERT_TRUE(dense.summary.ok() && reduced.summary.ok()) << reduced.summary.BriefReport();
   EXPECT_EQ(reduced.summary.steps, dense.summary.steps);
   for (size_t i = 0; i < dense.y.size(); ++i) EXPECT_NEAR(reduced.y[i], dense.y[i], 1e-12) << i;
-  for (size_t k = 0; k < t.size(); ++k) EXPECT_NEAR(reduced.at(k, 0), std::cos(2 * std::numbers::pi * t[k]), 1e-7);
+  for (size_t k = 0; k < t.size(); ++k)
+    EXPECT_NEAR(reduced.at(k, 0), std::cos(2 * std::numbers::pi * t[k]), 1e-7);
   // A system that declares no kinematic rows cannot use it.
   o.linear_solver = LinearSolverKind::kReduced;
   const OdeSolution bad = IntegrateCvode(Oscillator(1.0), 0.0, y0, t, o);
@@ -340,7 +355,8 @@ TEST(CvodeStops, RootResetMakesASawtooth) {
   ASSERT_TRUE(s.summary.ok()) << s.summary.BriefReport();
   ASSERT_EQ(root_times.size(), 2u);
   for (size_t i = 0; i < 2; ++i) EXPECT_NEAR(root_times[i], 0.37 * (i + 1), 1e-10);
-  for (size_t k = 0; k < t.size(); ++k) EXPECT_NEAR(s.at(k, 0), std::fmod(t[k], 0.37), 1e-9) << "t=" << t[k];
+  for (size_t k = 0; k < t.size(); ++k)
+    EXPECT_NEAR(s.at(k, 0), std::fmod(t[k], 0.37), 1e-9) << "t=" << t[k];
 }
 
 // ---- failures are statuses, never aborts -------------------------------------------------------
@@ -353,7 +369,8 @@ TEST(CvodeFailures, FatalRhsReturnIsASolverFailure) {
   EXPECT_EQ(s.summary.status, SimStatus::kSolverFailure);
   EXPECT_EQ(s.summary.solver_flag, CV_RHSFUNC_FAIL);
   EXPECT_NE(s.summary.message.find("CV_RHSFUNC_FAIL"), std::string::npos) << s.summary.message;
-  EXPECT_NE(s.summary.message.find("right-hand side returned -1"), std::string::npos) << s.summary.message;
+  EXPECT_NE(s.summary.message.find("right-hand side returned -1"), std::string::npos)
+      << s.summary.message;
   EXPECT_EQ(s.t.size(), 2u);  // the outputs reached before the failure
 }
 
@@ -364,13 +381,15 @@ TEST(CvodeFailures, RecoverableRhsErrorsEndInASolverFailure) {
   OdeSolution s = IntegrateCvode(Faulty(Faulty::kRecoverable, -1.0), 0.0, y0, t, CvodeOptions{});
   EXPECT_EQ(s.summary.status, SimStatus::kSolverFailure);
   EXPECT_EQ(s.summary.solver_flag, CV_FIRST_RHSFUNC_ERR) << s.summary.BriefReport();
-  EXPECT_NE(s.summary.message.find("right-hand side returned 1"), std::string::npos) << s.summary.message;
+  EXPECT_NE(s.summary.message.find("right-hand side returned 1"), std::string::npos)
+      << s.summary.message;
   // Failing beyond t = 0.5: the steps shrink towards 0.5 until the budget runs out.
   CvodeOptions o;
   o.max_steps = 2000;
   s = IntegrateCvode(Faulty(Faulty::kRecoverable, 0.5), 0.0, y0, t, o);
   EXPECT_EQ(s.summary.status, SimStatus::kSolverFailure);
-  EXPECT_NE(s.summary.message.find("right-hand side returned 1"), std::string::npos) << s.summary.message;
+  EXPECT_NE(s.summary.message.find("right-hand side returned 1"), std::string::npos)
+      << s.summary.message;
 }
 
 TEST(CvodeFailures, ExceptionInRhsIsCaughtAtTheBoundary) {
@@ -387,7 +406,8 @@ TEST(CvodeFailures, NonFiniteRhsIsASolverFailure) {
   const double y0[] = {0.0};
   const std::vector<double> t = {0.0, 1.0};
   CvodeOptions o;
-  o.max_steps = 2000;  // a non-finite f is recoverable: the steps shrink towards 0.5 until the budget ends
+  o.max_steps =
+      2000;  // a non-finite f is recoverable: the steps shrink towards 0.5 until the budget ends
   const OdeSolution s = IntegrateCvode(sys, 0.0, y0, t, o);
   EXPECT_EQ(s.summary.status, SimStatus::kSolverFailure);
   EXPECT_NE(s.summary.message.find("non-finite"), std::string::npos) << s.summary.message;
@@ -464,24 +484,26 @@ BimorphParams Case1Params() {
 }
 
 // Central differences of f, column by column. The step is 1e-5: f is linear in q, q̇ and the
-// extension states used here, so only rounding limits the quotient, and it shrinks with a larger step;
-// a non-zero w_tip (the cubic spring's nonlinearity) gets a relative step of 1e-3. rounding(r, c)
-// bounds the rounding error of each quotient: a few ulps of f_r over the step.
-Eigen::MatrixXd FiniteDifferenceJacobian(const BimorphOde& sys, double t, const std::vector<double>& y,
-                                         Eigen::MatrixXd& rounding) {
+// extension states used here, so only rounding limits the quotient, and it shrinks with a larger
+// step; a non-zero w_tip (the cubic spring's nonlinearity) gets a relative step of 1e-3.
+// rounding(r, c) bounds the rounding error of each quotient: a few ulps of f_r over the step.
+Eigen::MatrixXd FiniteDifferenceJacobian(const BimorphOde& sys, double t,
+                                         const std::vector<double>& y, Eigen::MatrixXd& rounding) {
   const int n = sys.size();
   Eigen::MatrixXd j(n, n);
   rounding.resize(n, n);
   std::vector<double> yp = y, ym = y, fp(n), fm(n);
   for (int c = 0; c < n; ++c) {
-    const double h = (c == sys.tip_index() && y[c] != 0) ? 1e-3 * std::abs(y[c]) : 1e-5 * std::max(1.0, std::abs(y[c]));
+    const double h = (c == sys.tip_index() && y[c] != 0) ? 1e-3 * std::abs(y[c])
+                                                         : 1e-5 * std::max(1.0, std::abs(y[c]));
     yp[c] = y[c] + h;
     ym[c] = y[c] - h;
     sys.Rhs(t, yp.data(), fp.data());
     sys.Rhs(t, ym.data(), fm.data());
     for (int r = 0; r < n; ++r) {
       j(r, c) = (fp[r] - fm[r]) / (2 * h);
-      rounding(r, c) = 16 * std::numeric_limits<double>::epsilon() * (std::abs(fp[r]) + std::abs(fm[r])) / (2 * h);
+      rounding(r, c) = 16 * std::numeric_limits<double>::epsilon() *
+                       (std::abs(fp[r]) + std::abs(fm[r])) / (2 * h);
     }
     yp[c] = ym[c] = y[c];
   }
@@ -498,8 +520,8 @@ Eigen::MatrixXd AnalyticJacobian(const OdeSystem& sys, double t, const std::vect
   return j;
 }
 
-// A point away from the kinks of |u̇| and |z|. The beam part of f is linear, so its Jacobian does not
-// depend on q, q̇: they are left zero but for a tiny w_tip (for the cubic spring), so that the
+// A point away from the kinks of |u̇| and |z|. The beam part of f is linear, so its Jacobian does
+// not depend on q, q̇: they are left zero but for a tiny w_tip (for the cubic spring), so that the
 // difference quotients are not swamped by rounding in the stiff terms M⁻¹K q.
 std::vector<double> SomeState(const BimorphOde& ode) {
   std::vector<double> y = ode.InitialState();
@@ -512,10 +534,12 @@ std::vector<double> SomeState(const BimorphOde& ode) {
 void ExpectJacobianMatchesDifferences(const BimorphOde& ode, double t) {
   const std::vector<double> y = SomeState(ode);
   Eigen::MatrixXd rounding;
-  const Eigen::MatrixXd a = AnalyticJacobian(ode, t, y), fd = FiniteDifferenceJacobian(ode, t, y, rounding);
+  const Eigen::MatrixXd a = AnalyticJacobian(ode, t, y),
+                        fd = FiniteDifferenceJacobian(ode, t, y, rounding);
   for (int r = 0; r < a.rows(); ++r)
     for (int c = 0; c < a.cols(); ++c)
-      EXPECT_NEAR(a(r, c), fd(r, c), 1e-6 * (1.0 + std::abs(a(r, c))) + rounding(r, c)) << "row " << r << " col " << c;
+      EXPECT_NEAR(a(r, c), fd(r, c), 1e-6 * (1.0 + std::abs(a(r, c))) + rounding(r, c))
+          << "row " << r << " col " << c;
 }
 
 TEST(BimorphOde, LayoutOfTheStateVector) {
@@ -529,7 +553,8 @@ TEST(BimorphOde, LayoutOfTheStateVector) {
 }
 
 // Difference quotients cannot resolve the μ entries next to δ M⁻¹K (up to ~1e15) in double
-// precision, so they check the Jacobian with δ = 0, and the δ blocks are checked against M⁻¹ directly.
+// precision, so they check the Jacobian with δ = 0, and the δ blocks are checked against M⁻¹
+// directly.
 TEST(BimorphOde, AnalyticJacobianMatchesDifferences) {
   const BimorphPlant plant;
   const DriveSignal drive = Sinusoid{};
@@ -573,7 +598,8 @@ class Amplifier final : public BimorphExtension {
     u_dot = (p.u - p.x[0]) / tau_;
     return 0;
   }
-  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du, std::span<double> dud) const override {
+  void ShapeDriveJacobian(const BimorphPoint& p, std::span<double> du,
+                          std::span<double> dud) const override {
     const int ix = static_cast<int>(p.x.data() - p.y.data());
     std::fill(du.begin(), du.end(), 0.0);
     std::fill(dud.begin(), dud.end(), 0.0);
@@ -640,9 +666,11 @@ TEST(BimorphOde, ReducedAndDenseNewtonSolversAgree) {
   const OdeSolution reduced = IntegrateCvode(ode, 0.0, y0, t, o);
   ASSERT_TRUE(dense.summary.ok() && reduced.summary.ok()) << reduced.summary.BriefReport();
   double w_max = 0;
-  for (size_t k = 0; k < t.size(); ++k) w_max = std::max(w_max, std::abs(dense.at(k, ode.tip_index())));
   for (size_t k = 0; k < t.size(); ++k)
-    EXPECT_NEAR(reduced.at(k, ode.tip_index()), dense.at(k, ode.tip_index()), 1e-9 * w_max) << "k=" << k;
+    w_max = std::max(w_max, std::abs(dense.at(k, ode.tip_index())));
+  for (size_t k = 0; k < t.size(); ++k)
+    EXPECT_NEAR(reduced.at(k, ode.tip_index()), dense.at(k, ode.tip_index()), 1e-9 * w_max)
+        << "k=" << k;
 }
 
 TEST(BimorphOdeExtensions, JacobianWithStagesAndForcesMatchesDifferences) {
@@ -671,7 +699,8 @@ TEST(BimorphOdeExtensions, DecoupledExtensionLeavesTheBeamUnchanged) {
   ASSERT_TRUE(plain.summary.ok()) << plain.summary.BriefReport();
   ASSERT_TRUE(with.summary.ok()) << with.summary.BriefReport();
   // Equal up to the integration error (the extra state changes the step sequence).
-  for (size_t k = 0; k < plain.theta_deg.size(); ++k) EXPECT_NEAR(with.theta_deg[k], plain.theta_deg[k], 1e-7);
+  for (size_t k = 0; k < plain.theta_deg.size(); ++k)
+    EXPECT_NEAR(with.theta_deg[k], plain.theta_deg[k], 1e-7);
 }
 
 TEST(BimorphOdeExtensions, FastAmplifierApproachesTheDirectDrive) {
@@ -680,14 +709,17 @@ TEST(BimorphOdeExtensions, FastAmplifierApproachesTheDirectDrive) {
   const DriveSignal drive = Sinusoid{375.0, 1.0, 1.0, 100.0};
   const Amplifier amp(1e-6);
   const BimorphTrace plain = SimulateBimorphOde(plant, Case1Params(), drive, SimulateOptions{});
-  const BimorphTrace with = SimulateBimorphOde(plant, Case1Params(), drive, SimulateOptions{}, {&amp});
+  const BimorphTrace with =
+      SimulateBimorphOde(plant, Case1Params(), drive, SimulateOptions{}, {&amp});
   ASSERT_TRUE(with.summary.ok()) << with.summary.BriefReport();
-  for (size_t k = 0; k < plain.theta_deg.size(); ++k) EXPECT_NEAR(with.theta_deg[k], plain.theta_deg[k], 1e-4);
+  for (size_t k = 0; k < plain.theta_deg.size(); ++k)
+    EXPECT_NEAR(with.theta_deg[k], plain.theta_deg[k], 1e-4);
 }
 
 // With α = 0 the plant is linear in u, and each mode obeys η̈ + (μ + δω²) η̇ + ω² η = g u(t). For a
 // piecewise-linear u the exact solution over a sample step is the first-order hold
-// x_{k+1} = Φ x_k + Γ0 u_k + Γ1 (u_{k+1} − u_k), from the exponential of a 4 × 4 augmented matrix per mode.
+// x_{k+1} = Φ x_k + Γ0 u_k + Γ1 (u_{k+1} − u_k), from the exponential of a 4 × 4 augmented matrix
+// per mode.
 TEST(BimorphOdeSampledInput, MatchesExactFirstOrderHold) {
   const BimorphPlant plant;
   BimorphParams p = Case1Params();
@@ -729,7 +761,8 @@ TEST(BimorphOdeSampledInput, MatchesExactFirstOrderHold) {
     for (int i = 0; i < modes; ++i) w_tip += mb.tip[i] * x[i][0];
     EXPECT_NEAR(tr.w_tip[k], w_tip, 1e-12 + 1e-7 * std::abs(w_tip)) << "k=" << k;
     if (k + 1 < s.t.size())
-      for (int i = 0; i < modes; ++i) x[i] = phi[i] * x[i] + g0[i] * s.u[k] + g1[i] * (s.u[k + 1] - s.u[k]);
+      for (int i = 0; i < modes; ++i)
+        x[i] = phi[i] * x[i] + g0[i] * s.u[k] + g1[i] * (s.u[k + 1] - s.u[k]);
   }
 }
 

@@ -18,7 +18,9 @@ std::vector<double> Drive(int n, double dt) {
   std::vector<double> u(n);
   for (int k = 0; k < n; ++k) {
     const double t = k * dt;
-    u[k] = t < 0.05 ? 10 : 10 + 100 * std::sin(2 * std::numbers::pi * 7 * (t - 0.05) + 2) + 20 * std::sin(60 * t);
+    u[k] = t < 0.05 ? 10
+                    : 10 + 100 * std::sin(2 * std::numbers::pi * 7 * (t - 0.05) + 2) +
+                          20 * std::sin(60 * t);
   }
   return u;
 }
@@ -50,8 +52,8 @@ TEST(Duhem, ExactForThePiecewiseLinearDrive) {
     };
     for (int j = 0; j < M; ++j) {
       const double t = j * h;
-      const double k1 = rhs(t, yr), k2 = rhs(t + h / 2, yr + h / 2 * k1), k3 = rhs(t + h / 2, yr + h / 2 * k2),
-                   k4 = rhs(t + h, yr + h * k3);
+      const double k1 = rhs(t, yr), k2 = rhs(t + h / 2, yr + h / 2 * k1),
+                   k3 = rhs(t + h / 2, yr + h / 2 * k2), k4 = rhs(t + h, yr + h * k3);
       yr += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4);
     }
     worst = std::max(worst, std::abs(yr - y[k]));
@@ -63,9 +65,18 @@ TEST(Duhem, ExactForThePiecewiseLinearDrive) {
 TEST(Duhem, BadParametersAreNamed) {
   using pz::testing::InputErrorOf;
   std::vector<double> u = {0, 1}, y(2);
-  PZ_EXPECT_HAS(InputErrorOf([&] { SimulateDuhem({-1, 0.1, 0, 0, 0}, u, 1e-3, y); }), "duhem.alpha = -1: must be >= 0");
-  PZ_EXPECT_HAS(InputErrorOf([&] { SimulateDuhem({0, 0.1, 0, 0, NAN}, u, 1e-3, y); }), "duhem.lambda = nan: must be finite");
-  PZ_EXPECT_HAS(InputErrorOf([&] { DuhemFromVector(std::vector<double>{1, 2}); }), "2 parameters given, 5 expected");
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  SimulateDuhem({-1, 0.1, 0, 0, 0}, u, 1e-3, y);
+                }),
+                "duhem.alpha = -1: must be >= 0");
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  SimulateDuhem({0, 0.1, 0, 0, NAN}, u, 1e-3, y);
+                }),
+                "duhem.lambda = nan: must be finite");
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  DuhemFromVector(std::vector<double>{1, 2});
+                }),
+                "2 parameters given, 5 expected");
 }
 
 }  // namespace

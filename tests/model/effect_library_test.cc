@@ -92,10 +92,16 @@ TEST(EffectLibraryTest, EachStageHasItsForm) {
         e->ApplyOutput(p, OutputFrame{}, one);
         EXPECT_EQ(one, (std::vector<double>{1.0, 2.0})) << e->name();
         break;
-      case EffectStage::kOutput: EXPECT_EQ(e->MakeExtension(p), nullptr) << e->name(); break;
-      case EffectStage::kDrive:  // on the fin bench (its CVODE path): a continuous-time form, or a pure time shift
-        if (!IsFinEffect(*e)) break;  // a records-only drive effect (rate-dependence) runs on samples only
-        EXPECT_TRUE(e->MakeExtension(p) != nullptr || e->TimeShift(std::vector<double>{0.01}) == 0.01) << e->name();
+      case EffectStage::kOutput:
+        EXPECT_EQ(e->MakeExtension(p), nullptr) << e->name();
+        break;
+      case EffectStage::kDrive:  // on the fin bench (its CVODE path): a continuous-time form, or a
+                                 // pure time shift
+        if (!IsFinEffect(*e))
+          break;  // a records-only drive effect (rate-dependence) runs on samples only
+        EXPECT_TRUE(e->MakeExtension(p) != nullptr ||
+                    e->TimeShift(std::vector<double>{0.01}) == 0.01)
+            << e->name();
         break;
     }
   }
@@ -125,7 +131,8 @@ TEST(EffectLibraryTest, CreepIsTheDrivePlusTheLowpassOfItsChangeBitForBit) {
     FindEffect("driver-lowpass")->ApplyDrive(std::vector<double>{tau}, dt, x);
     std::vector<double> u = base;
     FindEffect("creep")->ApplyDrive(std::vector<double>{k, tau}, dt, u);
-    for (size_t i = 0; i < u.size(); ++i) EXPECT_EQ(u[i], base[i] + x[i]) << "tau " << tau << ", sample " << i;
+    for (size_t i = 0; i < u.size(); ++i)
+      EXPECT_EQ(u[i], base[i] + x[i]) << "tau " << tau << ", sample " << i;
   }
 }
 
@@ -139,7 +146,8 @@ TEST(EffectLibraryTest, DelayOfWholeSamplesShiftsAndHoldsTheRest) {
 TEST(EffectLibraryTest, DriftCountsTimeFromTheWindowStart) {
   std::vector<double> y(10, 1.0);
   FindEffect("drift")->ApplyOutput(std::vector<double>{2.0}, OutputFrame{0.5, 4, 1}, y);
-  for (size_t k = 0; k < y.size(); ++k) EXPECT_DOUBLE_EQ(y[k], 1.0 + 2.0 * (static_cast<double>(k) - 4) * 0.5);
+  for (size_t k = 0; k < y.size(); ++k)
+    EXPECT_DOUBLE_EQ(y[k], 1.0 + 2.0 * (static_cast<double>(k) - 4) * 0.5);
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // The fast path must not drift as it is optimised: its outputs for 28 sinusoid runs (four random
 // parameter sets, seven drives incl. 1 kHz sampling and sub-stepped 2 Hz, δ = 0 and a large β) are
-// kept as made before the second round of speed work (tests/data/fast_path_reference.csv), and every
-// later version must land within 1e-12 deg of them (issue 15's bound).
+// kept as made before the second round of speed work (tests/data/fast_path_reference.csv), and
+// every later version must land within 1e-12 deg of them (issue 15's bound).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -106,9 +106,11 @@ TEST(FeedForwardNet, JacobianMatchesCentralDifferences) {
       wm(p) -= h;
       plus.set_params(wp);
       minus.set_params(wm);
-      const Eigen::VectorXd fd = (plus.PredictNormalised(Xn) - minus.PredictNormalised(Xn)) / (2 * h);
+      const Eigen::VectorXd fd =
+          (plus.PredictNormalised(Xn) - minus.PredictNormalised(Xn)) / (2 * h);
       const double scale = std::max(1.0, fd.cwiseAbs().maxCoeff());
-      EXPECT_LT((J.col(p) - fd).cwiseAbs().maxCoeff(), 1e-7 * scale) << "inputs " << inputs << " param " << p;
+      EXPECT_LT((J.col(p) - fd).cwiseAbs().maxCoeff(), 1e-7 * scale)
+          << "inputs " << inputs << " param " << p;
     }
   }
 }
@@ -146,7 +148,8 @@ TEST(FeedForwardNet, AdaptiveInitWithoutVariationWeightIsNguyenWidrowsTiling) {
     centres.push_back(-net.b1()(j) / net.IW()(j, 0));
   }
   std::sort(centres.begin(), centres.end());
-  for (int j = 0; j < H; ++j) EXPECT_NEAR(centres[static_cast<size_t>(j)], -1.0 + 2.0 * j / (H - 1), 1e-12);
+  for (int j = 0; j < H; ++j)
+    EXPECT_NEAR(centres[static_cast<size_t>(j)], -1.0 + 2.0 * j / (H - 1), 1e-12);
   // Deterministic for a seed; another seed flips other signs.
   FeedForwardNet again(FfnetShape{1, H}), other(FfnetShape{1, H});
   again.ConfigureMaps(x, t);
@@ -196,9 +199,12 @@ TEST(FeedForwardNet, AdaptiveInitRejectsBadInput) {
   net.ConfigureMaps(x, t);
   std::mt19937_64 rng(1);
   PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t, 1.5); }), "adaptive fraction = 1.5");
-  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t, 0.5, -1.0); }), "samples per neuron = -1");
-  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t.head(5), 0.5); }), "training targets = 5");
-  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x.head(1), t.head(1), 0.5); }), "training samples = 1");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t, 0.5, -1.0); }),
+                "samples per neuron = -1");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, t.head(5), 0.5); }),
+                "training targets = 5");
+  PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x.head(1), t.head(1), 0.5); }),
+                "training samples = 1");
   Eigen::VectorXd bad = t;
   bad(3) = std::nan("");
   PZ_EXPECT_HAS(InputErrorOf([&] { net.InitAdaptive(rng, x, bad, 0.5); }), "training sample 3");
@@ -216,7 +222,8 @@ TEST(FeedForwardNet, RejectsBadShapesAndParameters) {
   Eigen::VectorXd w = Eigen::VectorXd::Zero(net.num_params());
   w(2) = std::nan("");
   PZ_EXPECT_HAS(InputErrorOf([&] { net.set_params(w); }), "params[2]");
-  PZ_EXPECT_HAS(InputErrorOf([&] { (void)net.Predict(Eigen::MatrixXd::Zero(2, 2)); }), "input columns = 2");
+  PZ_EXPECT_HAS(InputErrorOf([&] { (void)net.Predict(Eigen::MatrixXd::Zero(2, 2)); }),
+                "input columns = 2");
 }
 
 TEST(DenseKernels, SyrkGemmAndCholeskyAgreeWithEigen) {
@@ -225,12 +232,18 @@ TEST(DenseKernels, SyrkGemmAndCholeskyAgreeWithEigen) {
   SyrkTnLower(J, 2.0, 0.0, C);
   const Eigen::MatrixXd ref = 2.0 * J.transpose() * J;
   EXPECT_LT((C.triangularView<Eigen::Lower>().toDenseMatrix() -
-             ref.triangularView<Eigen::Lower>().toDenseMatrix()).cwiseAbs().maxCoeff(), 1e-12);
-  EXPECT_EQ(C(0, 12), 7.0);  // upper triangle untouched
+             ref.triangularView<Eigen::Lower>().toDenseMatrix())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-12);
+  EXPECT_EQ(C(0, 12), 7.0);                 // upper triangle untouched
   SyrkTnLower(J.topRows(20), 1.0, 1.0, C);  // accumulate a block with a row stride
   const Eigen::MatrixXd ref2 = ref + J.topRows(20).transpose() * J.topRows(20);
   EXPECT_LT((C.triangularView<Eigen::Lower>().toDenseMatrix() -
-             ref2.triangularView<Eigen::Lower>().toDenseMatrix()).cwiseAbs().maxCoeff(), 1e-12);
+             ref2.triangularView<Eigen::Lower>().toDenseMatrix())
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-12);
 
   const Eigen::MatrixXd B = Eigen::MatrixXd::Random(57, 4);
   Eigen::MatrixXd G(13, 4);

@@ -1,8 +1,9 @@
-// Golden vectors of the bimorph-fin model (tests/data/golden: README.md says how they were made, and
-// that an implementation must reproduce every file to 1e-5 deg in theta_linear_deg and angle_deg),
-// on both solver paths through model::Simulate. Then the fast path's own reference problems: its
-// sampled-signal branch against the goldens, the reusable ModalSimulator (workspace cache, threads,
-// errors), and the modal discretisation against an augmented matrix exponential in every regime.
+// Golden vectors of the bimorph-fin model (tests/data/golden: README.md says how they were made,
+// and that an implementation must reproduce every file to 1e-5 deg in theta_linear_deg and
+// angle_deg), on both solver paths through model::Simulate. Then the fast path's own reference
+// problems: its sampled-signal branch against the goldens, the reusable ModalSimulator (workspace
+// cache, threads, errors), and the modal discretisation against an augmented matrix exponential in
+// every regime.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -32,8 +33,9 @@ constexpr double kGoldenTolDeg = 1e-5;  // README.md: max abs error in both angl
 
 const std::string kGoldenDir = std::string(PIEZOID_TEST_DATA_DIR) + "/golden";
 
-const std::vector<std::string> kGoldenFiles = {"case1", "case2", "case3", "case4",   "case5",   "case6",  "case7",
-                                               "case8", "case9", "random1", "random2", "random3", "random4"};
+const std::vector<std::string> kGoldenFiles = {"case1",   "case2",   "case3",  "case4", "case5",
+                                               "case6",   "case7",   "case8",  "case9", "random1",
+                                               "random2", "random3", "random4"};
 
 struct GoldenCase {
   std::string name;
@@ -51,7 +53,8 @@ GoldenCase LoadGolden(const std::string& name) {
   for (const auto& [key, entry] : index) {
     if (entry.get<std::string>("name") != name) continue;
     found = true;
-    g.drive = Sinusoid{entry.get<double>("amplitude_V"), entry.get<double>("frequency_Hz"), 3.0, 100.0};
+    g.drive =
+        Sinusoid{entry.get<double>("amplitude_V"), entry.get<double>("frequency_Hz"), 3.0, 100.0};
     const auto& p = entry.get_child("params");
     g.params.mu = p.get<double>("mu");
     g.params.delta = p.get<double>("delta");
@@ -94,7 +97,8 @@ struct MaxErrors {
   size_t theta_at = 0, angle_at = 0;
 };
 
-MaxErrors Compare(const GoldenCase& g, const std::vector<double>& theta, const std::vector<double>& angle) {
+MaxErrors Compare(const GoldenCase& g, const std::vector<double>& theta,
+                  const std::vector<double>& angle) {
   MaxErrors e;
   for (size_t k = 0; k < g.theta.size(); ++k) {
     const double dt = std::abs(theta[k] - g.theta[k]), da = std::abs(angle[k] - g.angle[k]);
@@ -112,7 +116,8 @@ TEST(GoldenIndex, ListsExactlyTheThirteenFiles) {
   EXPECT_EQ(names, kGoldenFiles);
 }
 
-// ---- Both solvers, every file --------------------------------------------------------------------
+// ---- Both solvers, every file
+// --------------------------------------------------------------------
 
 class GoldenTest : public ::testing::TestWithParam<std::tuple<Solver, std::string>> {};
 
@@ -122,7 +127,8 @@ TEST_P(GoldenTest, ReproducesFileWithinTolerance) {
   SimulateOptions options;
   options.solver = solver;
   const BimorphTrace tr = Simulate(DefaultPlant(), g.params, g.drive, options);
-  ASSERT_TRUE(tr.summary.ok()) << SolverName(solver) << " " << name << ": " << tr.summary.BriefReport();
+  ASSERT_TRUE(tr.summary.ok()) << SolverName(solver) << " " << name << ": "
+                               << tr.summary.BriefReport();
   ASSERT_EQ(tr.theta_deg.size(), g.theta.size());
   ASSERT_EQ(tr.angle_deg.size(), g.angle.size());
   for (size_t k = 0; k < g.t.size(); ++k) {
@@ -131,8 +137,8 @@ TEST_P(GoldenTest, ReproducesFileWithinTolerance) {
   }
   const MaxErrors e = Compare(g, tr.theta_deg, tr.angle_deg);
   std::cout << "[golden] " << SolverName(solver) << " " << name << ": max |theta err| = " << e.theta
-            << " deg (sample " << e.theta_at << "), max |angle err| = " << e.angle << " deg (sample "
-            << e.angle_at << "); " << tr.summary.BriefReport() << "\n";
+            << " deg (sample " << e.theta_at << "), max |angle err| = " << e.angle
+            << " deg (sample " << e.angle_at << "); " << tr.summary.BriefReport() << "\n";
   RecordProperty("max_theta_err_deg", std::to_string(e.theta));
   RecordProperty("max_angle_err_deg", std::to_string(e.angle));
   EXPECT_LE(e.theta, kGoldenTolDeg) << "at sample " << e.theta_at;
@@ -147,7 +153,8 @@ INSTANTIATE_TEST_SUITE_P(AllFiles, GoldenTest,
                                   std::get<1>(info.param);
                          });
 
-// ---- The fast path's own checks ------------------------------------------------------------------
+// ---- The fast path's own checks
+// ------------------------------------------------------------------
 
 // The sinusoid sampled `refine` times finer than its own grid, as a sampled signal.
 SampledSignal FineSamples(const Sinusoid& drive, int refine) {
@@ -161,9 +168,9 @@ SampledSignal FineSamples(const Sinusoid& drive, int refine) {
   return s;
 }
 
-// A sampled drive (u linear between samples) takes the general branch of the fast path: sampling the
-// sinusoid at 10 kHz (linear-interpolation error (Ωh)²V/8 ≤ 4e-5 V) must land on the goldens' θ at
-// their sample times. Files: stiff overdamped (case1), δ = 0 (case6), sharp loop (random3).
+// A sampled drive (u linear between samples) takes the general branch of the fast path: sampling
+// the sinusoid at 10 kHz (linear-interpolation error (Ωh)²V/8 ≤ 4e-5 V) must land on the goldens' θ
+// at their sample times. Files: stiff overdamped (case1), δ = 0 (case6), sharp loop (random3).
 TEST(ModalSampledDrive, FinelySampledSinusoidMatchesGoldenTheta) {
   for (const std::string name : {"case1", "case6", "random3"}) {
     const GoldenCase g = LoadGolden(name);
@@ -178,13 +185,16 @@ TEST(ModalSampledDrive, FinelySampledSinusoidMatchesGoldenTheta) {
 }
 
 // Off the goldens' grid: reversals between samples (0.3 Hz), a fast drive (7 Hz, Ωh = 0.44) and a
-// sharp loop that the sinusoid branch sub-steps (m > 1), against the same sinusoid sampled at 20 kHz.
+// sharp loop that the sinusoid branch sub-steps (m > 1), against the same sinusoid sampled at 20
+// kHz.
 TEST(ModalSinusoidDrive, OffGridReversalsAndSubstepsMatchFineSampledDrive) {
   struct Case {
     Sinusoid drive;
     double beta, gamma;
   };
-  const Case cases[] = {{{600, 0.3, 2, 100}, 6e-3, 4e-3}, {{400, 7.0, 2, 100}, 6e-3, 4e-3}, {{700, 1.3, 2, 100}, 0.05, 0.02}};
+  const Case cases[] = {{{600, 0.3, 2, 100}, 6e-3, 4e-3},
+                        {{400, 7.0, 2, 100}, 6e-3, 4e-3},
+                        {{700, 1.3, 2, 100}, 0.05, 0.02}};
   for (const Case& c : cases) {
     BimorphParams p;
     p.beta = c.beta;
@@ -263,19 +273,22 @@ TEST(ModalSimulator, AngleOnlyRunEqualsFullTraceAndSurvivesWorkspaceReuse) {
 TEST(ModalSimulator, ThreadsSharingOneSimulatorGetSerialResults) {
   const ModalSimulator sim(DefaultPlant());
   std::vector<GoldenCase> cases;
-  for (const std::string name : {"case1", "case6", "random1", "random3"}) cases.push_back(LoadGolden(name));
+  for (const std::string name : {"case1", "case6", "random1", "random3"})
+    cases.push_back(LoadGolden(name));
   std::vector<std::vector<double>> serial(cases.size());
   for (size_t c = 0; c < cases.size(); ++c) {
     serial[c].resize(cases[c].drive.NumSamples());
     ASSERT_TRUE(sim.SimulateAngle(cases[c].params, cases[c].drive, serial[c]).ok());
   }
-  std::vector<std::vector<std::vector<double>>> got(2, std::vector<std::vector<double>>(cases.size()));
+  std::vector<std::vector<std::vector<double>>> got(2,
+                                                    std::vector<std::vector<double>>(cases.size()));
   auto work = [&](int id) {
     for (int rep = 0; rep < 20; ++rep) {
       for (size_t c = 0; c < cases.size(); ++c) {
         const size_t cc = (c + id) % cases.size();
         got[id][cc].assign(cases[cc].drive.NumSamples(), 0.0);
-        if (!sim.SimulateAngle(cases[cc].params, cases[cc].drive, got[id][cc]).ok()) got[id][cc].clear();
+        if (!sim.SimulateAngle(cases[cc].params, cases[cc].drive, got[id][cc]).ok())
+          got[id][cc].clear();
       }
     }
   };
@@ -283,7 +296,8 @@ TEST(ModalSimulator, ThreadsSharingOneSimulatorGetSerialResults) {
   t0.join();
   t1.join();
   for (int id = 0; id < 2; ++id)
-    for (size_t c = 0; c < cases.size(); ++c) EXPECT_EQ(got[id][c], serial[c]) << "thread " << id << " case " << c;
+    for (size_t c = 0; c < cases.size(); ++c)
+      EXPECT_EQ(got[id][c], serial[c]) << "thread " << id << " case " << c;
 }
 
 TEST(ModalSimulator, RejectsWrongOutputSizeAndBadInputWithoutThrowing) {
@@ -313,7 +327,8 @@ TEST(ModalSimulator, FillsEveryTraceFieldConsistently) {
   const BimorphTrace tr = SimulateModal(DefaultPlant(), g.params, g.drive);
   ASSERT_TRUE(tr.summary.ok()) << tr.summary.BriefReport();
   const size_t n = g.t.size();
-  for (const auto* v : {&tr.t, &tr.u, &tr.z, &tr.w_tip, &tr.theta_deg, &tr.angle_deg}) ASSERT_EQ(v->size(), n);
+  for (const auto* v : {&tr.t, &tr.u, &tr.z, &tr.w_tip, &tr.theta_deg, &tr.angle_deg})
+    ASSERT_EQ(v->size(), n);
   EXPECT_GE(tr.summary.steps, static_cast<long>(n - 1));
   EXPECT_GT(tr.summary.wall_time_s, 0.0);
   std::vector<double> y(n);
@@ -321,18 +336,20 @@ TEST(ModalSimulator, FillsEveryTraceFieldConsistently) {
   for (size_t k = 0; k < n; ++k) {
     EXPECT_DOUBLE_EQ(tr.theta_deg[k], DefaultPlant().TipToDegrees(tr.w_tip[k])) << k;
     EXPECT_EQ(tr.angle_deg[k], y[k]) << k;
-    EXPECT_LE(std::abs(tr.z[k]), g.params.alpha / (g.params.beta + g.params.gamma) * (1 + 1e-12)) << k;
+    EXPECT_LE(std::abs(tr.z[k]), g.params.alpha / (g.params.beta + g.params.gamma) * (1 + 1e-12))
+        << k;
   }
 }
 
-// ---- Modal discretisation: against exp of the augmented matrix ------------------------------------
+// ---- Modal discretisation: against exp of the augmented matrix
+// ------------------------------------
 //
 // In the scaled time σ = t/τ and state y = (η/τ, η̇) a step is exp of [[τA', B eᵀ], [0, N]] with
 // τA' = [[0, 1], [−(ωτ)², −cτ]], B = [0, 1]ᵀ and the 6×6 shift N: its top-right block holds
-// φ_{j+1}(τA') B = [D_{j+1}/τ, D_j/τ], and its top-left block e^{τA'} = [[E11, E12/τ], [τ E21, E22]].
-// All entries are O(1), so Eigen's Padé scaling-and-squaring is a fair reference while ‖τA‖ is
-// moderate — which still covers each regime of Discretise(): the series (|τλ| ≤ 1), separated roots
-// (real and complex), and the near-critical midpoint form.
+// φ_{j+1}(τA') B = [D_{j+1}/τ, D_j/τ], and its top-left block e^{τA'} = [[E11, E12/τ], [τ E21,
+// E22]]. All entries are O(1), so Eigen's Padé scaling-and-squaring is a fair reference while ‖τA‖
+// is moderate — which still covers each regime of Discretise(): the series (|τλ| ≤ 1), separated
+// roots (real and complex), and the near-critical midpoint form.
 TEST(ModalDiscretisation, MatchesAugmentedMatrixExponentialInEveryRegime) {
   struct Case {
     double omega, c, tau;
@@ -355,8 +372,8 @@ TEST(ModalDiscretisation, MatchesAugmentedMatrixExponentialInEveryRegime) {
     const Eigen::Matrix<double, 8, 8> ex = m.exp();
     modal::ModeStep st;
     modal::Discretise(modal::MakePoles(cs.omega * cs.omega, cs.c), cs.tau, st);
-    const std::string where = "omega " + std::to_string(cs.omega) + ", c " + std::to_string(cs.c) + ", tau " +
-                              std::to_string(cs.tau);
+    const std::string where = "omega " + std::to_string(cs.omega) + ", c " + std::to_string(cs.c) +
+                              ", tau " + std::to_string(cs.tau);
     const double tol = 1e-12 * (1 + wt + ct) * (1 + wt + ct);
     EXPECT_NEAR(st.e11, ex(0, 0), tol) << where;
     EXPECT_NEAR(st.e12 / cs.tau, ex(0, 1), tol) << where;
@@ -385,8 +402,10 @@ TEST(ModalDiscretisation, StiffModesStayFiniteAndConsistent) {
         for (int j = 1; j < 6; ++j) {
           ASSERT_TRUE(std::isfinite(st.d[j]));
           const double rhs = tau / fact[j] - c * tau * st.d[j] - w2 * tau * tau * st.d[j + 1];
-          const double scale = tau / fact[j] + std::abs(c * tau * st.d[j]) + std::abs(w2 * tau * tau * st.d[j + 1]);
-          EXPECT_NEAR(st.d[j - 1], rhs, 1e-12 * scale) << "mode " << i << " delta " << delta << " tau " << tau;
+          const double scale =
+              tau / fact[j] + std::abs(c * tau * st.d[j]) + std::abs(w2 * tau * tau * st.d[j + 1]);
+          EXPECT_NEAR(st.d[j - 1], rhs, 1e-12 * scale)
+              << "mode " << i << " delta " << delta << " tau " << tau;
         }
         // |eigenvalues of E| ≤ 1 (no growth): trace and determinant of a contraction-like 2×2.
         const double det = st.e11 * st.e22 - st.e12 * st.e21, tr = st.e11 + st.e22;

@@ -94,8 +94,9 @@ TEST(ReestimateBayesian, MatchesMacKayOnADiagonalHessian) {
   EXPECT_NEAR(e.beta, (n - gamma) / (2 * mse), 1e-9);
 }
 
-// Noisy sine, σ = 0.1: BR's β per MSE settles near N/(2σ²), i.e. the data term's weight recovers the
-// noise variance (β' = β/N = 1/(2σ²) = 50 for E_D = Σe²), with γ well below the parameter count.
+// Noisy sine, σ = 0.1: BR's β per MSE settles near N/(2σ²), i.e. the data term's weight recovers
+// the noise variance (β' = β/N = 1/(2σ²) = 50 for E_D = Σe²), with γ well below the parameter
+// count.
 TEST(TrainBr, RecoversTheNoiseLevel) {
   const double sigma = 0.1;
   const RegressionData d = SineData(400, sigma, 3);
@@ -161,7 +162,8 @@ TEST(TrainBr, MinGradInNormalisedUnitsDoesNotDependOnTheTargetScale) {
   EXPECT_EQ(target_units.termination, TrainTermination::kMinGradient) << target_units.BriefReport();
   EXPECT_LT(target_units.epochs, ref.epochs);
   const double gain2 = std::pow(f0.net.output_map().gain(0), 2);  // of the unscaled targets
-  for (const TrainSummary& s : {run(d, true, min_grad * gain2), run(small, true, min_grad * gain2)}) {
+  for (const TrainSummary& s :
+       {run(d, true, min_grad * gain2), run(small, true, min_grad * gain2)}) {
     EXPECT_EQ(s.termination, TrainTermination::kMaxEpochs) << s.BriefReport();
     EXPECT_EQ(s.epochs, ref.epochs);
   }
@@ -218,10 +220,12 @@ TEST(TrainOptions, BadValuesAreRejectedNamingTheField) {
   DataSplit overlap = f.split;
   overlap.val.push_back(overlap.train.front());
   std::sort(overlap.val.begin(), overlap.val.end());
-  PZ_EXPECT_HAS(InputErrorOf([&] { TrainLm(f.net, d, overlap, LmOptions{}); }), "is in two subsets");
+  PZ_EXPECT_HAS(InputErrorOf([&] { TrainLm(f.net, d, overlap, LmOptions{}); }),
+                "is in two subsets");
   RegressionData two_inputs = d;
   two_inputs.x = Eigen::MatrixXd::Zero(30, 2);
-  PZ_EXPECT_HAS(InputErrorOf([&] { TrainLm(f.net, two_inputs, f.split, LmOptions{}); }), "data inputs = 2");
+  PZ_EXPECT_HAS(InputErrorOf([&] { TrainLm(f.net, two_inputs, f.split, LmOptions{}); }),
+                "data inputs = 2");
   RegressionData nan = d;
   nan.t(4) = std::nan("");
   PZ_EXPECT_HAS(InputErrorOf([&] { TrainLm(f.net, nan, f.split, LmOptions{}); }), "t[4]");

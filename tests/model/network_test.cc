@@ -60,7 +60,8 @@ TEST(TransferFunctions, InteriorPointsAndSaturation) {
 }
 
 TEST(TransferFunctions, NamesCodesAndRanges) {
-  const char* names[] = {"hardlim", "hardlims", "satlin", "satlins", "tribas", "tansig", "logsig", "radbas"};
+  const char* names[] = {"hardlim", "hardlims", "satlin", "satlins",
+                         "tribas",  "tansig",   "logsig", "radbas"};
   for (int c = 0; c < kNumTransferFunctions; ++c) {
     EXPECT_STREQ(TransferFunctionName(TransferFromCode(c)), names[c]);
     TF parsed;
@@ -208,9 +209,9 @@ Network AppendixDNetwork() {
   n.c1.resize(3);
   n.c1 << -0.9587, 0.6075, 0.1368;
   // Paper rows (per output, paper order a1, a2, α, β, γ, δ, μ), columns = hidden nodes.
-  const double paper_w2[7][3] = {{0.4087, -0.1336, 0.6655},  {-0.7645, 0.7950, 0.8903},
+  const double paper_w2[7][3] = {{0.4087, -0.1336, 0.6655},   {-0.7645, 0.7950, 0.8903},
                                  {-0.0727, -0.8490, -0.0146}, {0.5457, -0.7805, -0.6846},
-                                 {0.2659, -0.4597, 0.3016},  {0.9394, -0.7958, -0.0425},
+                                 {0.2659, -0.4597, 0.3016},   {0.9394, -0.7958, -0.0425},
                                  {0.5949, -0.9322, 0.8555}};
   const double paper_c2[7] = {0.1787, -0.5144, -0.1008, -0.3780, 0.1154, 0.7307, 0.0825};
   const TF paper_tf[7] = {TF::kSatlin, TF::kSatlin, TF::kHardlim, TF::kSatlin,
@@ -242,8 +243,8 @@ TEST(Network, AppendixDForwardPassMatchesHandComputation) {
   const double x = 1.0 / 3.0;
   EXPECT_NEAR(act.x(0), x, kTight);
   EXPECT_NEAR(act.x(1), x, kTight);
-  const double a1 = x;        // satlin(1/3)
-  const double a2 = 1 - x;    // tribas(1/3)
+  const double a1 = x;      // satlin(1/3)
+  const double a2 = 1 - x;  // tribas(1/3)
   EXPECT_NEAR(act.a(0), a1, kTight);
   EXPECT_NEAR(act.a(1), a2, kTight);
   // Hidden: n_j = A1 W1(0, j) + A2 W1(1, j) + c1_j.
@@ -251,8 +252,8 @@ TEST(Network, AppendixDForwardPassMatchesHandComputation) {
   const double n2 = a1 * 0.4876 + a2 * -0.1596 + 0.6075;   // = 0.66363…
   const double n3 = a1 * -0.2992 + a2 * -0.4471 + 0.1368;  // = −0.261
   const double b1 = 1 - std::abs(n1);                      // tribas, |n1| ≤ 1
-  const double b2 = n2;                                     // satlins, |n2| < 1
-  const double b3 = std::tanh(n3);                          // tansig ≡ tanh
+  const double b2 = n2;                                    // satlins, |n2| < 1
+  const double b3 = std::tanh(n3);                         // tansig ≡ tanh
   EXPECT_NEAR(b1, 0.1003333333333333, 1e-13);
   EXPECT_NEAR(b2, 0.6636333333333333, 1e-13);
   EXPECT_NEAR(b3, std::tanh(-0.261), 1e-13);
@@ -260,7 +261,9 @@ TEST(Network, AppendixDForwardPassMatchesHandComputation) {
   EXPECT_NEAR(act.b(1), b2, kTight);
   EXPECT_NEAR(act.b(2), b3, 1e-15);
   // Outputs, paper order a1, a2, α, β, γ, δ, μ: O = TF(B · W2 + c2), then mapped on Table 3.
-  auto dot = [&](double w1, double w2, double w3, double c) { return b1 * w1 + b2 * w2 + b3 * w3 + c; };
+  auto dot = [&](double w1, double w2, double w3, double c) {
+    return b1 * w1 + b2 * w2 + b3 * w3 + c;
+  };
   auto satlin = [](double v) { return std::clamp(v, 0.0, 1.0); };
   auto logsig = [](double v) { return 1 / (1 + std::exp(-v)); };
   const double o_a1 = satlin(dot(0.4087, -0.1336, 0.6655, 0.1787));

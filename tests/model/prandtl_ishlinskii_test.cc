@@ -23,8 +23,9 @@ std::vector<double> MinorLoopDrive() {
   std::vector<double> u;
   for (int k = 0; k < 4000; ++k) {
     const double t = k * 1e-3;
-    u.push_back(20 + 80 * std::sin(2 * std::numbers::pi * 1.3 * t + 0.7) * (0.4 + 0.6 * std::cos(0.9 * t)) +
-                10 * std::sin(2 * std::numbers::pi * 11 * t));
+    u.push_back(
+        20 + 80 * std::sin(2 * std::numbers::pi * 1.3 * t + 0.7) * (0.4 + 0.6 * std::cos(0.9 * t)) +
+        10 * std::sin(2 * std::numbers::pi * 11 * t));
   }
   return u;
 }
@@ -43,7 +44,8 @@ PiOperator TestOperator() {
   PiOperator op;
   op.w0 = 0.08;
   op.thresholds = PiThresholds(10, 90);
-  for (size_t i = 0; i < op.thresholds.size(); ++i) op.weights.push_back(0.01 + 0.004 * std::sin(double(i)));
+  for (size_t i = 0; i < op.thresholds.size(); ++i)
+    op.weights.push_back(0.01 + 0.004 * std::sin(double(i)));
   return op;
 }
 
@@ -74,7 +76,8 @@ TEST(PrandtlIshlinskii, InitialStatesAreTheStatesAfterAMajorSwingAndInvertExactl
     PiOperator s = op;
     s.start = start;
     ApplyPi(s, u, y);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
     // Not the centred output: the first samples differ by the plays' offsets.
     std::vector<double> centred(u.size());
     ApplyPi(op, u, centred);
@@ -89,7 +92,8 @@ TEST(PrandtlIshlinskii, InitialStatesAreTheStatesAfterAMajorSwingAndInvertExactl
 }
 
 TEST(PrandtlIshlinskii, InitialStateNamesParseAndABadOneIsNamed) {
-  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended, InitialState::kAuto})
+  for (InitialState s : {InitialState::kCentred, InitialState::kDescended, InitialState::kAscended,
+                         InitialState::kAuto})
     EXPECT_EQ(ParseInitialState(InitialStateName(s), "--initial-state"), s);
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([] { ParseInitialState("down", "--initial-state"); }),
                 "--initial-state 'down' is unknown (allowed: centred, descended, ascended, auto)");
@@ -110,7 +114,10 @@ TEST(PrandtlIshlinskii, InitialStateNamesParseAndABadOneIsNamed) {
 
 TEST(PrandtlIshlinskii, InvalidOperatorsAreNamed) {
   using pz::testing::InputErrorOf;
-  PZ_EXPECT_HAS(InputErrorOf([] { InvertPi(PiOperator{0.1, {1, 2}, {0.1, -0.2}}); }), "not invertible");
+  PZ_EXPECT_HAS(InputErrorOf([] {
+                  InvertPi(PiOperator{0.1, {1, 2}, {0.1, -0.2}});
+                }),
+                "not invertible");
   PZ_EXPECT_HAS(InputErrorOf([] {
                   std::vector<double> y(2);
                   ApplyPi(PiOperator{0.1, {2, 1}, {0.1, 0.2}}, std::vector<double>{0, 1}, y);

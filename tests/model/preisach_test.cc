@@ -35,7 +35,8 @@ std::vector<double> RandomWeights(size_t n, uint64_t seed, double zero_share) {
   return w;
 }
 
-std::vector<double> Forward(const PreisachGrid& g, const std::vector<double>& w, const std::vector<double>& u) {
+std::vector<double> Forward(const PreisachGrid& g, const std::vector<double>& w,
+                            const std::vector<double>& u) {
   std::vector<double> y(u.size());
   ApplyPreisach(g, w, u, y);
   return y;
@@ -56,7 +57,8 @@ TEST(Preisach, WipingOutErasesTheMinorLoopsAMaximumExceeds) {
   EXPECT_GT(compared, 10);
   // Below 8 the minor loop is still remembered: the two differ somewhere.
   double diff = 0;
-  for (size_t ka = ua.size() - 1, kb = ub.size() - 1; ua[ka] > 5.5; --ka, --kb) diff = std::max(diff, std::abs(ya[ka] - yb[kb]));
+  for (size_t ka = ua.size() - 1, kb = ub.size() - 1; ua[ka] > 5.5; --ka, --kb)
+    diff = std::max(diff, std::abs(ya[ka] - yb[kb]));
   EXPECT_GT(diff, 1e-6);
 }
 
@@ -73,7 +75,8 @@ TEST(Preisach, ReturnPointMemoryClosesEveryMinorLoop) {
   ASSERT_EQ(at4.size(), 5u);
   for (size_t i = 2; i < 5; ++i) EXPECT_NEAR(at4[i], at4[1], 1e-12) << i;
   EXPECT_GT(std::abs(at4[0] - at4[1]), 1e-6);  // the first rise (from −5) is another branch
-  // And the outer loop closes: back at −1 from above after the nested loops equals the first −1 turn's state.
+  // And the outer loop closes: back at −1 from above after the nested loops equals the first −1
+  // turn's state.
   std::vector<double> at_m1;
   for (size_t k = 1; k < u.size(); ++k)
     if (u[k] == -1 && u[k - 1] > -1) at_m1.push_back(y[k]);
@@ -85,7 +88,8 @@ TEST(Preisach, RegressorsTimesWeightsIsTheModel) {
   const PreisachGrid g{0, 150, 12};
   const auto w = RandomWeights(g.cells(), 3, 0.1);
   std::vector<double> u;
-  for (int k = 0; k < 900; ++k) u.push_back(75 - 75 * std::cos(2 * std::numbers::pi * k / 300.0) * (1 - k / 1200.0));
+  for (int k = 0; k < 900; ++k)
+    u.push_back(75 - 75 * std::cos(2 * std::numbers::pi * k / 300.0) * (1 - k / 1200.0));
   const auto y = Forward(g, w, u);
   std::vector<double> reg(u.size() * g.cells());
   PreisachRegressors(g, u, reg);
@@ -109,7 +113,8 @@ TEST(Preisach, ADensityConstantAlongTheCentreIsThePiOperator) {
     pi.weights.push_back(per_width[static_cast<size_t>(i)]);
   }
   std::vector<double> u;  // starts at the range's middle, sweeps it whole, then minor loops
-  for (int k = 0; k < 2000; ++k) u.push_back(4 + 6 * std::sin(2 * std::numbers::pi * k / 400.0) * (k < 800 ? 1 : 0.4));
+  for (int k = 0; k < 2000; ++k)
+    u.push_back(4 + 6 * std::sin(2 * std::numbers::pi * k / 400.0) * (k < 800 ? 1 : 0.4));
   std::vector<double> ypi(u.size());
   ApplyPi(pi, u, ypi);
   const auto y = Forward(g, w, u);
@@ -119,7 +124,8 @@ TEST(Preisach, ADensityConstantAlongTheCentreIsThePiOperator) {
 TEST(Preisach, InverseThenForwardReturnsTheReference) {
   const PreisachGrid g{0, 100, 12};
   for (uint64_t seed : {4u, 5u, 6u}) {
-    const auto w = RandomWeights(g.cells(), seed, seed == 6 ? 0.6 : 0.1);  // 60 % zero cells: flat pieces
+    const auto w =
+        RandomWeights(g.cells(), seed, seed == 6 ? 0.6 : 0.1);  // 60 % zero cells: flat pieces
     // The reference: the model's own output on nested minor loops (reachable by construction),
     // and a smooth reference inside its range.
     std::vector<double> u;
@@ -128,12 +134,14 @@ TEST(Preisach, InverseThenForwardReturnsTheReference) {
       u.push_back(50 - 50 * a * std::cos(2 * std::numbers::pi * k / 250.0));
     }
     const auto ref = Forward(g, w, u);
-    const double range = *std::max_element(ref.begin(), ref.end()) - *std::min_element(ref.begin(), ref.end());
+    const double range =
+        *std::max_element(ref.begin(), ref.end()) - *std::min_element(ref.begin(), ref.end());
     std::vector<double> v(ref.size());
     const InverseReport rep = InvertPreisach(g, w, ref, 0, 100, v);
     EXPECT_EQ(rep.saturated, 0u);
     const auto back = Forward(g, w, v);
-    for (size_t k = 0; k < ref.size(); ++k) ASSERT_NEAR(back[k], ref[k], 1e-9 * range) << "seed " << seed << " k " << k;
+    for (size_t k = 0; k < ref.size(); ++k)
+      ASSERT_NEAR(back[k], ref[k], 1e-9 * range) << "seed " << seed << " k " << k;
   }
 }
 
@@ -155,12 +163,27 @@ TEST(Preisach, InverseSaturatesAtTheDriveLimitsAndSaysSo) {
 
 TEST(Preisach, BadInputIsNamed) {
   std::vector<double> y(3), u = {0, 1, 2}, w(3, 1.0);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { ApplyPreisach(PreisachGrid{1, 1, 2}, w, u, y); }), "preisach.range");
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { ApplyPreisach(PreisachGrid{0, 1, 0}, w, u, y); }), "preisach.levels");
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { ApplyPreisach(PreisachGrid{0, 1, 3}, w, u, y); }), "weights for 6 cells");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  ApplyPreisach(PreisachGrid{1, 1, 2}, w, u, y);
+                }),
+                "preisach.range");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  ApplyPreisach(PreisachGrid{0, 1, 0}, w, u, y);
+                }),
+                "preisach.levels");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  ApplyPreisach(PreisachGrid{0, 1, 3}, w, u, y);
+                }),
+                "weights for 6 cells");
   std::vector<double> bad = {1, -0.5, 1};
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { InvertPreisach(PreisachGrid{0, 1, 2}, bad, u, 0, 1, y); }), ">= 0");
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { InvertPreisach(PreisachGrid{0, 1, 2}, w, u, 1, 0, y); }), "drive limits");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  InvertPreisach(PreisachGrid{0, 1, 2}, bad, u, 0, 1, y);
+                }),
+                ">= 0");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] {
+                  InvertPreisach(PreisachGrid{0, 1, 2}, w, u, 1, 0, y);
+                }),
+                "drive limits");
 }
 
 AsymmetricPi MakeAsymmetric(uint64_t seed, double w0) {
@@ -205,11 +228,13 @@ TEST(AsymmetricPi, InverseThenForwardReturnsTheReferenceAndTheDrive) {
     std::vector<double> u;
     for (int k = 0; k < 3000; ++k) {
       const double a = std::abs(1 - 2 * k / 3000.0);
-      u.push_back(50 - 50 * a * std::cos(2 * std::numbers::pi * k / 250.0) + (k > 2500 ? 30 : 0));  // and beyond the knots
+      u.push_back(50 - 50 * a * std::cos(2 * std::numbers::pi * k / 250.0) +
+                  (k > 2500 ? 30 : 0));  // and beyond the knots
     }
     std::vector<double> ref(u.size()), v(u.size()), back(u.size());
     ApplyAsymmetricPi(op, u, ref);
-    const double range = *std::max_element(ref.begin(), ref.end()) - *std::min_element(ref.begin(), ref.end());
+    const double range =
+        *std::max_element(ref.begin(), ref.end()) - *std::min_element(ref.begin(), ref.end());
     InvertAsymmetricPi(op, ref, v);
     ApplyAsymmetricPi(op, v, back);
     for (size_t k = 0; k < u.size(); ++k) {
@@ -227,7 +252,8 @@ TEST(Preisach, InitialStatesAreHistoriesAndInvertExactly) {
   const auto w = RandomWeights(g.cells(), 11, 0.1);
   const AsymmetricPi a = MakeAsymmetric(12, 0.2);
   std::vector<double> u;
-  for (int k = 0; k < 2000; ++k) u.push_back(40 + 35 * std::sin(2 * std::numbers::pi * k / 300.0 + 0.4));
+  for (int k = 0; k < 2000; ++k)
+    u.push_back(40 + 35 * std::sin(2 * std::numbers::pi * k / 300.0 + 0.4));
   for (InitialState start : {InitialState::kDescended, InitialState::kAscended}) {
     const double swing = start == InitialState::kDescended ? 200 : -200;
     std::vector<double> history = {u[0], u[0] + swing};
@@ -235,21 +261,26 @@ TEST(Preisach, InitialStatesAreHistoriesAndInvertExactly) {
     std::vector<double> y(u.size()), v(u.size()), back(u.size());
     const auto y_hist = Forward(g, w, history);
     ApplyPreisach(g, w, u, y, start);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
     EXPECT_GT(std::abs(y[0] - Forward(g, w, u)[0]), 1e-3) << InitialStateName(start);
-    const double range = *std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end());
+    const double range =
+        *std::max_element(y.begin(), y.end()) - *std::min_element(y.begin(), y.end());
     EXPECT_EQ(InvertPreisach(g, w, y, 0, 100, v, start).saturated, 0u);
     ApplyPreisach(g, w, v, back, start);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(back[k], y[k], 1e-9 * range) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(back[k], y[k], 1e-9 * range) << InitialStateName(start) << " " << k;
 
     AsymmetricPi s = a;
     s.start = start;
     std::vector<double> ya_hist(history.size()), ya(u.size());
     ApplyAsymmetricPi(a, history, ya_hist);
     ApplyAsymmetricPi(s, u, ya);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(ya[k], ya_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(ya[k], ya_hist[k + 2], 1e-12) << InitialStateName(start) << " " << k;
     InvertAsymmetricPi(s, ya, v);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(v[k], u[k], 1e-8 * 100) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(v[k], u[k], 1e-8 * 100) << InitialStateName(start) << " " << k;
   }
 }
 
@@ -259,12 +290,14 @@ TEST(AsymmetricPi, BadInputIsNamed) {
   std::vector<double> y(2), u = {0, 1};
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { InvertAsymmetricPi(op, u, y); }), "monotone");
   op.up.pop_back();
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { ApplyAsymmetricPi(op, u, y); }), "asymmetric-pi.up");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { ApplyAsymmetricPi(op, u, y); }),
+                "asymmetric-pi.up");
   AsymmetricPi zero = MakeAsymmetric(1, 0);
   std::fill(zero.weights.begin(), zero.weights.end(), 0.0);
   std::fill(zero.up.begin(), zero.up.end(), 0.0);
   std::fill(zero.down.begin(), zero.down.end(), 0.0);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { InvertAsymmetricPi(zero, u, y); }), "every weight is zero");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { InvertAsymmetricPi(zero, u, y); }),
+                "every weight is zero");
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { AsymmetricPiKnots(0, 0, 1); }), "knots");
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { AsymmetricPiKnots(3, 1, 1); }), "empty");
 }

@@ -16,7 +16,8 @@
 namespace pz::model {
 namespace {
 
-// Case 6 of the spec (500 V, 1 Hz, three cycles at 100 Hz) with b1, b2 from the paper's Appendix B fit.
+// Case 6 of the spec (500 V, 1 Hz, three cycles at 100 Hz) with b1, b2 from the paper's Appendix B
+// fit.
 Sinusoid Case6Drive() { return Sinusoid{500.0, 1.0, 3.0, 100.0}; }
 void SetSaturations(BimorphParams& p, double v, double f) {
   p.b1 = 0.00645 * v - 0.84771 * f - 0.63061;
@@ -29,7 +30,8 @@ void ExpectWellFormed(const BimorphTrace& tr, size_t n_samples, const std::strin
     ASSERT_EQ(tr.theta_deg.size(), n_samples) << where;
     ASSERT_EQ(tr.angle_deg.size(), n_samples) << where;
     for (size_t k = 0; k < n_samples; ++k) {
-      ASSERT_TRUE(std::isfinite(tr.theta_deg[k]) && std::isfinite(tr.angle_deg[k])) << where << " sample " << k;
+      ASSERT_TRUE(std::isfinite(tr.theta_deg[k]) && std::isfinite(tr.angle_deg[k]))
+          << where << " sample " << k;
     }
   } else {
     EXPECT_FALSE(tr.summary.message.empty()) << where << ": " << tr.summary.BriefReport();
@@ -80,15 +82,16 @@ TEST(Robustness, PaperTable3RangesGiveOkOrAStatusOnBothSolvers) {
   }
   for (Solver s : {Solver::kModal, Solver::kCvode}) {
     EXPECT_EQ((outcomes[{static_cast<int>(s), SimStatus::kOk}]), 50) << SolverName(s);
-    EXPECT_EQ((outcomes[{static_cast<int>(s), SimStatus::kUnboundedHysteresis}]), 150) << SolverName(s);
+    EXPECT_EQ((outcomes[{static_cast<int>(s), SimStatus::kUnboundedHysteresis}]), 150)
+        << SolverName(s);
   }
 }
 
 TEST(Robustness, StableHysteresisSetsAgreeAcrossSolvers) {
   // Beyond Table 3: bounded Bouc–Wen loops (α > 0, β ≥ |γ|), so z ≠ 0 and both paths integrate it.
   std::mt19937_64 rng(7);
-  std::uniform_real_distribution<double> mu(0, 300), delta(0.01, 1), alpha(0, 0.01), beta(0, 0.02), unit(-1, 1),
-      play(0, 0.5);
+  std::uniform_real_distribution<double> mu(0, 300), delta(0.01, 1), alpha(0, 0.01), beta(0, 0.02),
+      unit(-1, 1), play(0, 0.5);
   const BimorphPlant plant;
   const Sinusoid drive = Case6Drive();
   const size_t n = static_cast<size_t>(drive.NumSamples());
@@ -161,7 +164,8 @@ TEST(Robustness, ConcurrentSimulationsEqualSerialOnes) {
     for (auto& t : threads) t.join();
     for (size_t i = 0; i < sets.size(); ++i) {
       ASSERT_TRUE(serial[i].summary.ok()) << serial[i].summary.BriefReport();
-      EXPECT_EQ(parallel[i].angle_deg, serial[i].angle_deg) << SolverName(s) << " set " << i;  // bit for bit
+      EXPECT_EQ(parallel[i].angle_deg, serial[i].angle_deg)
+          << SolverName(s) << " set " << i;  // bit for bit
     }
   }
 }

@@ -65,7 +65,8 @@ TEST(StackModels, RestStatesAreTheStatesAfterAMajorSwing) {
     const double w0 = StackRestState(bl, range, start);
     SimulateBacklashLike(bl, u, y, w0);
     EXPECT_GT(std::abs(w0), 1.0) << InitialStateName(start);
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12 * 400) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(y[k], y_hist[k + 2], 1e-12 * 400) << InitialStateName(start) << " " << k;
 
     std::vector<double> h_hist(history.size()), yb_hist(history.size()), h(u.size()), yb(u.size());
     SimulateStackBoucWen(bw, history, 2e-4, yb_hist, {}, h_hist);
@@ -74,9 +75,11 @@ TEST(StackModels, RestStatesAreTheStatesAfterAMajorSwing) {
     SimulateStackBoucWen(bw, u, 2e-4, yb, o, h);
     EXPECT_EQ(h[0], o.rest_state);
     EXPECT_DOUBLE_EQ(yb[0], bw.d * (u[0] - o.rest_state));
-    for (size_t k = 0; k < u.size(); ++k) ASSERT_NEAR(h[k], h_hist[k + 2], 1e-9 * 400) << InitialStateName(start) << " " << k;
+    for (size_t k = 0; k < u.size(); ++k)
+      ASSERT_NEAR(h[k], h_hist[k + 2], 1e-9 * 400) << InitialStateName(start) << " " << k;
   }
-  EXPECT_GT(StackRestState(bw, range, InitialState::kAscended), 0);   // h > 0 after a rise: the output below d u
+  EXPECT_GT(StackRestState(bw, range, InitialState::kAscended),
+            0);  // h > 0 after a rise: the output below d u
   EXPECT_LT(StackRestState(bw, range, InitialState::kDescended), 0);  // and above it after a fall
   EXPECT_EQ(StackRestState(bw, range, InitialState::kCentred), 0);
 }
@@ -178,8 +181,8 @@ TEST(StackBacklashLike, ReducesToTheClosedFormOnRampsUpAndDown) {
   const double ws = (p.c - p.b1) / p.alpha;
   const int n = 2001;
   std::vector<double> u(2 * n - 1);
-  for (int k = 0; k < n; ++k) u[k] = 400 + 0.2 * k;               // up to 800 V
-  for (int k = 1; k < n; ++k) u[n - 1 + k] = 800 - 0.3 * k;       // down to 200 V
+  for (int k = 0; k < n; ++k) u[k] = 400 + 0.2 * k;          // up to 800 V
+  for (int k = 1; k < n; ++k) u[n - 1 + k] = 800 - 0.3 * k;  // down to 200 V
   const auto y = Backlash(p, u);
   for (int k = 0; k < n; ++k) {
     const double want = p.c * u[k] - ws * (1 - std::exp(-p.alpha * (u[k] - 400)));
@@ -271,8 +274,7 @@ TEST(StackModels, BadInputIsNamed) {
                 "substeps = 0");
   PZ_EXPECT_HAS(InputErrorOf([&] { SimulateStackBoucWen(p, u, 2e-4, shorter); }),
                 "u has 10 samples, yhat has 5");
-  PZ_EXPECT_HAS(InputErrorOf([&] { SimulateBacklashLike({-1, 0.05, 0.01}, u, y); }),
-                "alpha = -1");
+  PZ_EXPECT_HAS(InputErrorOf([&] { SimulateBacklashLike({-1, 0.05, 0.01}, u, y); }), "alpha = -1");
   const std::vector<double> four(4);
   PZ_EXPECT_HAS(InputErrorOf([&] { SimulateStack(StackFamily::kBacklashLike, four, u, 2e-4, y); }),
                 "4 values given, 3 expected");

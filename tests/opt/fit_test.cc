@@ -93,7 +93,8 @@ LineFit MakeProblem(const Line& line, const ParameterMap& map, double w, int thr
     if (threads > 1) return std::make_unique<ThreadPoolEvaluator>(*c, threads);
     return std::make_unique<InlineEvaluator>(*c);
   };
-  f.problem.residual_evaluator = [r = f.residuals.get(), threads]() -> std::unique_ptr<BatchEvaluator> {
+  f.problem.residual_evaluator = [r = f.residuals.get(),
+                                  threads]() -> std::unique_ptr<BatchEvaluator> {
     if (threads > 1) return std::make_unique<ThreadPoolEvaluator>(*r, threads);
     return std::make_unique<InlineEvaluator>(*r);
   };
@@ -155,7 +156,8 @@ TEST(Fit, AParameterWithoutEffectIsNamedAndTheOthersStillHaveTheirErrors) {
   EXPECT_EQ(r.uncertainty.params[2].identifiability, Identifiability::kNoEffect);
   EXPECT_TRUE(std::isinf(r.uncertainty.params[2].std_error));
   EXPECT_TRUE(std::isfinite(r.uncertainty.params[0].std_error));
-  EXPECT_NE(r.uncertainty.weakest_direction.find("c"), std::string::npos) << r.uncertainty.weakest_direction;
+  EXPECT_NE(r.uncertainty.weakest_direction.find("c"), std::string::npos)
+      << r.uncertainty.weakest_direction;
   // A log-scaled parameter's scale is ∂x/∂u = x ln(upper / lower).
   EXPECT_NEAR(r.uncertainty.params[2].scale, r.x[2] * std::log(100.0), 1e-12);
 }
@@ -213,7 +215,9 @@ TEST(Fit, ThePolishIsKeptOnlyWhereItLowersAComparableSearchCost) {
   // fails (not comparable).
   class Failing final : public FitnessFunction {
    public:
-    FitnessResult Evaluate(const Genome&) const override { return {1e30, FitnessStatus::kPenalized, "no"}; }
+    FitnessResult Evaluate(const Genome&) const override {
+      return {1e30, FitnessStatus::kPenalized, "no"};
+    }
   };
   static const Failing failing;
   p.problem.residual_evaluator = [] { return std::make_unique<InlineEvaluator>(failing); };
@@ -233,8 +237,9 @@ TEST(Fit, ThePolishIsKeptOnlyWhereItLowersAComparableSearchCost) {
 
 TEST(Fit, EachRepetitionsBestIsPolishedAndTheDeeperBasinKept) {
   // Two basins of the residuals, r = (4 (x − 0.25)(x − 0.75), 0.3 x): Σ r² ≈ 0.0056 near 0.25 and
-  // 0.051 near 0.75. The search's cost prefers x near 0.9, and its repetitions (two random particles,
-  // no update) land on both sides of 0.5: the search's best polishes into the shallow basin.
+  // 0.051 near 0.75. The search's cost prefers x near 0.9, and its repetitions (two random
+  // particles, no update) land on both sides of 0.5: the search's best polishes into the shallow
+  // basin.
   const BoxMap map(ParamBox{{"x"}, {0.0}, {1.0}, {}});
   const FunctionFitness search_cost([](std::span<const double> x) {
     return FitnessResult{(x[0] - 0.9) * (x[0] - 0.9), FitnessStatus::kOk, ""};
@@ -291,7 +296,9 @@ TEST(Fit, EachRepetitionsBestIsPolishedAndTheDeeperBasinKept) {
   EXPECT_EQ(side.lm_iterations, all.lm_iterations);
   EXPECT_EQ(side.message, all.message);
   FitProblem failing = problem;
-  failing.residual_evaluator = []() -> std::unique_ptr<BatchEvaluator> { throw InputError("no residuals here"); };
+  failing.residual_evaluator = []() -> std::unique_ptr<BatchEvaluator> {
+    throw InputError("no residuals here");
+  };
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Fit(failing, o); }), "no residuals here");
   o.concurrent_polishes = false;
   // A margin larger than the gain keeps the search's best's polish.

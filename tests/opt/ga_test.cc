@@ -49,7 +49,8 @@ class HashFitness final : public FitnessFunction {
 class OneMax final : public FitnessFunction {
  public:
   FitnessResult Evaluate(const Genome& g) const override {
-    return {static_cast<double>(std::count(g.bits.begin(), g.bits.end(), 0)), FitnessStatus::kOk, ""};
+    return {static_cast<double>(std::count(g.bits.begin(), g.bits.end(), 0)), FitnessStatus::kOk,
+            ""};
   }
 };
 
@@ -67,7 +68,8 @@ class ShuffledEvaluator final : public BatchEvaluator {
     const size_t n = batch.genomes.size();
     std::vector<size_t> perm(n);
     std::iota(perm.begin(), perm.end(), 0);
-    std::shuffle(perm.begin(), perm.end(), std::mt19937(static_cast<unsigned>(batch.generation * 7919 + 1)));
+    std::shuffle(perm.begin(), perm.end(),
+                 std::mt19937(static_cast<unsigned>(batch.generation * 7919 + 1)));
     std::vector<Genome> genomes;
     std::vector<int> indices;
     for (size_t p : perm) {
@@ -109,7 +111,8 @@ class LaneFitness final : public FitnessFunction {
     return {g.reals[0] * g.reals[0], FitnessStatus::kOk, ""};
   }
   int lanes() const override { return 3; }
-  void EvaluateMany(std::span<const Genome* const> gs, std::span<FitnessResult> out) const override {
+  void EvaluateMany(std::span<const Genome* const> gs,
+                    std::span<FitnessResult> out) const override {
     groups.fetch_add(1);
     largest.store(std::max<int>(largest.load(), static_cast<int>(gs.size())));
     FitnessFunction::EvaluateMany(gs, out);
@@ -140,7 +143,8 @@ TEST(Rng, MatchesStdMt19937_64) {
   for (uint64_t seed : {5489ull, 0ull, 42ull, 0xFFFFFFFFFFFFFFFFull}) {
     Rng r(seed);
     std::mt19937_64 ref(seed);
-    for (int i = 0; i < 20000; ++i) ASSERT_EQ(r.NextU64(), ref()) << "seed " << seed << " draw " << i;
+    for (int i = 0; i < 20000; ++i)
+      ASSERT_EQ(r.NextU64(), ref()) << "seed " << seed << " draw " << i;
   }
   // The standard's check value: the 10000th output of a default-constructed engine.
   Rng r;
@@ -252,7 +256,8 @@ TEST(GeometricGaps, GapsFollowTheTruncatedGeometricLaw) {
         expected_bin = observed_bin = 0;
       }
     }
-    EXPECT_LT(std::abs(ChiSquareZ(chi2, bins - 1)), 4) << "p " << p << ": chi2 " << chi2 << " over " << bins << " bins";
+    EXPECT_LT(std::abs(ChiSquareZ(chi2, bins - 1)), 4)
+        << "p " << p << ": chi2 " << chi2 << " over " << bins << " bins";
   }
 }
 
@@ -308,8 +313,9 @@ TEST(GaMutation, FlipsAreIndependentBitsWithTheRateAndPositionsOfTheOptions) {
   double binom_chi2 = 0, eb = 0, ob = 0;
   int bins = 0;
   for (int k = 0; k < 60; ++k) {
-    const double pk = std::exp(std::lgamma(bits + 1.0) - std::lgamma(k + 1.0) - std::lgamma(bits - k + 1.0) +
-                               k * std::log(p) + (bits - k) * std::log1p(-p));
+    const double pk =
+        std::exp(std::lgamma(bits + 1.0) - std::lgamma(k + 1.0) - std::lgamma(bits - k + 1.0) +
+                 k * std::log(p) + (bits - k) * std::log1p(-p));
     eb += genomes * pk;
     ob += per_genome_hist[k];
     if (eb >= 20 || k == 59) {
@@ -318,15 +324,19 @@ TEST(GaMutation, FlipsAreIndependentBitsWithTheRateAndPositionsOfTheOptions) {
       eb = ob = 0;
     }
   }
-  EXPECT_LT(std::abs(ChiSquareZ(binom_chi2, bins - 1)), 4) << "flips per genome chi2 " << binom_chi2;
+  EXPECT_LT(std::abs(ChiSquareZ(binom_chi2, bins - 1)), 4)
+      << "flips per genome chi2 " << binom_chi2;
   // Independence of neighbours: adjacent pairs both flipped ≈ p² per pair.
   const double pairs = genomes * (bits - 1), ea = pairs * p * p;
-  EXPECT_LT(std::abs(adjacent - ea) / std::sqrt(ea), 4) << adjacent << " adjacent pairs, expected " << ea;
+  EXPECT_LT(std::abs(adjacent - ea) / std::sqrt(ea), 4)
+      << adjacent << " adjacent pairs, expected " << ea;
 }
 
 TEST(GaMutation, ProbabilityZeroKeepsAndOneFlipsEveryBit) {
-  for (const Genome& g : MutatedZeros(0.0, 3, 20, 100)) EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 0);
-  for (const Genome& g : MutatedZeros(1.0, 3, 20, 100)) EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 100);
+  for (const Genome& g : MutatedZeros(0.0, 3, 20, 100))
+    EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 0);
+  for (const Genome& g : MutatedZeros(1.0, 3, 20, 100))
+    EXPECT_EQ(std::count(g.bits.begin(), g.bits.end(), 1), 100);
   // A higher rate too (the gaps' table is not only for small p).
   double ones = 0, n = 0;
   for (const Genome& g : MutatedZeros(0.37, 4, 200, 333)) {
@@ -369,7 +379,8 @@ TEST(GaOptions, SeveralIslandsMutateOnTheLadderUnlessGivenTheirRates) {
   o.islands = 6;
   const double ladder[] = {0.01, 0.02, 0.03, 0.05, 0.01, 0.02};
   for (int i = 0; i < 6; ++i) EXPECT_DOUBLE_EQ(o.MutationProbability(i), ladder[i]) << i;
-  EXPECT_EQ(o.MutationProbability(0), o.mutation_probability) << "island 0 is the one-island run's rate";
+  EXPECT_EQ(o.MutationProbability(0), o.mutation_probability)
+      << "island 0 is the one-island run's rate";
   o.mutation_probability = 0.3;  // 0.3 · 5 is capped at 1
   EXPECT_DOUBLE_EQ(o.MutationProbability(2), 0.9);
   EXPECT_EQ(o.MutationProbability(3), 1.0);
@@ -390,10 +401,15 @@ TEST(GaOptions, ValidateNamesTheField) {
   EXPECT_EQ(error([](GaOptions& o) { o.elite_fraction = 1; }).rfind("elite_fraction = 1", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.elite_fraction = 0.001; }).rfind("elite_fraction", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.tournament_size = 0; }).rfind("tournament_size", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.mutation_probability = 1.5; }).rfind("mutation_probability", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.crossover_probability = -1; }).rfind("crossover_probability", 0), 0u);
+  EXPECT_EQ(
+      error([](GaOptions& o) { o.mutation_probability = 1.5; }).rfind("mutation_probability", 0),
+      0u);
+  EXPECT_EQ(
+      error([](GaOptions& o) { o.crossover_probability = -1; }).rfind("crossover_probability", 0),
+      0u);
   EXPECT_EQ(error([](GaOptions& o) { o.max_generations = -1; }).rfind("max_generations", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.stall_generations = -1; }).rfind("stall_generations", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.stall_generations = -1; }).rfind("stall_generations", 0),
+            0u);
   EXPECT_EQ(error([](GaOptions& o) { o.target_cost = std::nan(""); }).rfind("target_cost", 0), 0u);
   EXPECT_EQ(error([](GaOptions& o) { o.error_cost = INFINITY; }).rfind("error_cost", 0), 0u);
   const ConstantFitness fitness;
@@ -504,7 +520,9 @@ TEST(GaDeterminism, StepByStepWithCheckpointRestoreEqualsOneRun) {
     third.RestoreState(bad);
     FAIL() << "no throw";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("state.islands[0].population[3].bits.size()"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("state.islands[0].population[3].bits.size()"),
+              std::string::npos)
+        << e.what();
   }
   bad = checkpoint;
   std::swap(bad.islands[0].fitness[0], bad.islands[0].fitness[59]);
@@ -542,8 +560,9 @@ TEST(GaInvariants, ElitismBestNeverWorsensAndOnlyOffspringAreEvaluated) {
   const auto& fit = st.islands[0].fitness;
   EXPECT_EQ(seen.back().median_cost, fit[29].cost + (fit[30].cost - fit[29].cost) / 2);
   EXPECT_LE(seen.back().best_cost, seen.back().median_cost);
-  EXPECT_TRUE(std::is_sorted(fit.begin(), fit.end(),
-                             [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
+  EXPECT_TRUE(std::is_sorted(
+      fit.begin(), fit.end(),
+      [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
   EXPECT_EQ(summary.termination, GaTermination::kMaxGenerations);
   EXPECT_EQ(summary.generations, 40u);
   EXPECT_EQ(summary.evaluations, 60 + 30 * 40);
@@ -559,7 +578,8 @@ TEST(GaInvariants, PenalisedAndFailedIndividualsNeverPutNaNInSummaries) {
   int penalized = 0, errors = 0;
   std::map<std::string, int> reasons;
   for (const GenerationSummary& s : ga.state().log) {
-    EXPECT_TRUE(std::isfinite(s.best_cost) && std::isfinite(s.mean_cost) && std::isfinite(s.worst_cost))
+    EXPECT_TRUE(std::isfinite(s.best_cost) && std::isfinite(s.mean_cost) &&
+                std::isfinite(s.worst_cost))
         << s.BriefReport();
     EXPECT_EQ(s.failures, s.penalized + s.errors);
     int total = 0;
@@ -726,7 +746,8 @@ namespace islands {
 uint64_t Digest(const GaState& st, const GaSummary& s) {
   uint64_t h = 1469598103934665603ull;
   auto add = [&h](const void* p, size_t n) {
-    for (size_t i = 0; i < n; ++i) h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
+    for (size_t i = 0; i < n; ++i)
+      h = (h ^ static_cast<const unsigned char*>(p)[i]) * 1099511628211ull;
   };
   auto d = [&add](double x) { add(&x, 8); };
   auto u = [&add](uint64_t x) { add(&x, 8); };
@@ -752,7 +773,8 @@ uint64_t Digest(const GaState& st, const GaSummary& s) {
 }
 
 // The tests of the mechanisms below name the rules they exercise: a ring without a margin, every
-// island at one rate (the defaults of the migration are tested in GaOptions.DefaultsArePaperTable2).
+// island at one rate (the defaults of the migration are tested in
+// GaOptions.DefaultsArePaperTable2).
 GaOptions IslandOptions(int k, uint64_t seed = 42) {
   GaOptions o = SmallOptions(seed);
   o.islands = k;
@@ -791,16 +813,33 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
   };
   EXPECT_EQ(error([](GaOptions& o) { o.islands = 0; }), "islands = 0: must be in [1, 1024]");
   EXPECT_EQ(error([](GaOptions& o) { o.islands = 1025; }).rfind("islands = 1025", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 400; }), "migrants = 400: must be in [0, population_size - 1 = 399]");
+  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 400; }),
+            "migrants = 400: must be in [0, population_size - 1 = 399]");
   EXPECT_EQ(error([](GaOptions& o) { o.migrants = -1; }).rfind("migrants = -1", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migrants = 0; }).rfind("migrants = 0: must be >= 1 when migration_interval = 25", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migration_interval = -1; }).rfind("migration_interval = -1", 0), 0u);
-  EXPECT_NE(error([](GaOptions& o) { o.topology = static_cast<MigrationTopology>(9); }).find("topology = 9: must be \"ring\""),
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.migrants = 0;
+            }).rfind("migrants = 0: must be >= 1 when migration_interval = 25", 0),
+            0u);
+  EXPECT_EQ(
+      error([](GaOptions& o) { o.migration_interval = -1; }).rfind("migration_interval = -1", 0),
+      0u);
+  EXPECT_NE(error([](GaOptions& o) {
+              o.topology = static_cast<MigrationTopology>(9);
+            }).find("topology = 9: must be \"ring\""),
             std::string::npos);
-  EXPECT_EQ(error([](GaOptions& o) { o.island_stall_generations = -2; }).rfind("island_stall_generations = -2", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = 1; }), "migration_margin = 1: must be in [0, 1) (0 = every source)");
-  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = -0.5; }).rfind("migration_margin = -0.5", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = std::nan(""); }).rfind("migration_margin = nan", 0), 0u);
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.island_stall_generations = -2;
+            }).rfind("island_stall_generations = -2", 0),
+            0u);
+  EXPECT_EQ(error([](GaOptions& o) { o.migration_margin = 1; }),
+            "migration_margin = 1: must be in [0, 1) (0 = every source)");
+  EXPECT_EQ(
+      error([](GaOptions& o) { o.migration_margin = -0.5; }).rfind("migration_margin = -0.5", 0),
+      0u);
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.migration_margin = std::nan("");
+            }).rfind("migration_margin = nan", 0),
+            0u);
   EXPECT_EQ(error([](GaOptions& o) { o.broadcast_interval = -1; }),
             "broadcast_interval = -1: must be >= 0 (0 = no broadcast)");
   EXPECT_EQ(error([](GaOptions& o) {
@@ -809,11 +848,19 @@ TEST(GaIslands, ValidateNamesTheFieldAndTheRange) {
               o.broadcast_interval = 25;
             }),
             "migrants = 0: must be >= 1 when broadcast_interval = 25 > 0");
-  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 0; }), "broadcast_margin = 0: must be in (0, 1)");
-  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 1; }), "broadcast_margin = 1: must be in (0, 1)");
-  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = std::nan(""); }).rfind("broadcast_margin = nan", 0), 0u);
-  EXPECT_EQ(error([](GaOptions& o) { o.island_mutation = {0.01, 0.02}; }),
-            "island_mutation.size() = 2: must be 0 (the ladder: mutation_probability × 1, 2, 3, 5) or islands = 1");
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 0; }),
+            "broadcast_margin = 0: must be in (0, 1)");
+  EXPECT_EQ(error([](GaOptions& o) { o.broadcast_margin = 1; }),
+            "broadcast_margin = 1: must be in (0, 1)");
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.broadcast_margin = std::nan("");
+            }).rfind("broadcast_margin = nan", 0),
+            0u);
+  EXPECT_EQ(error([](GaOptions& o) {
+              o.island_mutation = {0.01, 0.02};
+            }),
+            "island_mutation.size() = 2: must be 0 (the ladder: mutation_probability × 1, 2, 3, 5) "
+            "or islands = 1");
   EXPECT_EQ(error([](GaOptions& o) {
               o.islands = 3;
               o.island_mutation = {0.01, 1.5, 0.02};
@@ -859,7 +906,8 @@ TEST(GaIslands, TopologiesAreFixedAndConnected) {
   bool differs = false;
   for (uint64_t seed = 1; seed < 20 && !differs; ++seed) {
     again.seed = seed;
-    for (int i = 0; i < 5; ++i) differs = differs || again.MigrationSources(i) != o.MigrationSources(i);
+    for (int i = 0; i < 5; ++i)
+      differs = differs || again.MigrationSources(i) != o.MigrationSources(i);
   }
   EXPECT_TRUE(differs) << "the random topology should depend on the seed";
   EXPECT_TRUE(IslandOptions(1).MigrationSources(0).empty());
@@ -930,7 +978,8 @@ TEST(GaIslands, MultiStartIsIndependentRunsOnTheIslandStreams) {
   // mutation probability island_mutation[k] when the islands have their own rates.
   const HashFitness fitness;
   InlineEvaluator ev(fitness);
-  for (const std::vector<double>& rates : {std::vector<double>{}, std::vector<double>{0.002, 0.05, 0.2}}) {
+  for (const std::vector<double>& rates :
+       {std::vector<double>{}, std::vector<double>{0.002, 0.05, 0.2}}) {
     SCOPED_TRACE("island_mutation of " + std::to_string(rates.size()));
     GaOptions o = IslandOptions(3);
     o.migration_interval = 0;
@@ -947,9 +996,11 @@ TEST(GaIslands, MultiStartIsIndependentRunsOnTheIslandStreams) {
       const IslandState &x = single.state.islands[0], &y = multi.state.islands[k];
       EXPECT_EQ(x.population, y.population) << "island " << k;
       ASSERT_EQ(x.fitness.size(), y.fitness.size());
-      for (size_t i = 0; i < x.fitness.size(); ++i) EXPECT_EQ(x.fitness[i].cost, y.fitness[i].cost) << k << " " << i;
+      for (size_t i = 0; i < x.fitness.size(); ++i)
+        EXPECT_EQ(x.fitness[i].cost, y.fitness[i].cost) << k << " " << i;
       EXPECT_EQ(x.rng, y.rng) << "island " << k;
-      if (single.summary.best_fitness.cost < best) best = single.summary.best_fitness.cost, best_island = k;
+      if (single.summary.best_fitness.cost < best)
+        best = single.summary.best_fitness.cost, best_island = k;
     }
     EXPECT_EQ(multi.summary.best_fitness.cost, best);
     EXPECT_EQ(multi.summary.best_island, best_island);
@@ -994,15 +1045,18 @@ TEST(GaIslands, MigrantsReplaceTheWorstWhenBetter) {
   for (int k = 0; k < 2; ++k) {
     const IslandState& is = ga.state().islands[k];
     EXPECT_EQ(g.islands[k].immigrants, 2);
-    EXPECT_TRUE(std::is_sorted(is.fitness.begin(), is.fitness.end(),
-                               [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
+    EXPECT_TRUE(std::is_sorted(
+        is.fitness.begin(), is.fitness.end(),
+        [](const FitnessResult& a, const FitnessResult& b) { return a.cost < b.cost; }));
     EXPECT_EQ(g.islands[k].best_cost, is.fitness[0].cost);
   }
   // The other island's top two (after its breeding, before the exchange) are in each island: the
   // exchange takes copies, so both islands hold both.
   const IslandState &a = ga.state().islands[0], &b = ga.state().islands[1];
-  EXPECT_NE(std::find(b.population.begin(), b.population.end(), a.population[0]), b.population.end());
-  EXPECT_NE(std::find(a.population.begin(), a.population.end(), b.population[0]), a.population.end());
+  EXPECT_NE(std::find(b.population.begin(), b.population.end(), a.population[0]),
+            b.population.end());
+  EXPECT_NE(std::find(a.population.begin(), a.population.end(), b.population[0]),
+            a.population.end());
 }
 
 TEST(GaIslands, MarginHearsOnlySourcesBetterByTheMargin) {
@@ -1022,7 +1076,8 @@ TEST(GaIslands, MarginHearsOnlySourcesBetterByTheMargin) {
     GeneticAlgorithm alone(apart, &ev);
     alone.Initialize();
     alone.Step();
-    const double b0 = alone.state().islands[0].fitness[0].cost, b1 = alone.state().islands[1].fitness[0].cost;
+    const double b0 = alone.state().islands[0].fitness[0].cost,
+                 b1 = alone.state().islands[1].fitness[0].cost;
     ASSERT_GT(b0, 0);
     ASSERT_GT(b1, 0);
     ASSERT_NE(b0, b1);
@@ -1077,7 +1132,8 @@ TEST(GaIslands, BroadcastReachesTheIslandsLedByItsMarginBetweenMigrations) {
     GeneticAlgorithm ga(o, &ev);
     ga.Initialize();
     for (int g = 1; g <= 4; ++g) {
-      // The islands' bests before the exchange: the same generation from the same state without one.
+      // The islands' bests before the exchange: the same generation from the same state without
+      // one.
       GaOptions apart = o;
       apart.migration_interval = 0;
       apart.broadcast_interval = 0;
@@ -1097,7 +1153,9 @@ TEST(GaIslands, BroadcastReachesTheIslandsLedByItsMarginBetweenMigrations) {
         std::stable_sort(in.begin(), in.end());
         const auto& own = alone.state().islands[k].fitness;
         int taken = 0;
-        while (taken < 2 && taken < static_cast<int>(in.size()) && in[taken] < own[own.size() - 1 - taken].cost) ++taken;
+        while (taken < 2 && taken < static_cast<int>(in.size()) &&
+               in[taken] < own[own.size() - 1 - taken].cost)
+          ++taken;
         return taken;
       };
       for (int k = 0; k < 3; ++k) {
@@ -1108,8 +1166,10 @@ TEST(GaIslands, BroadcastReachesTheIslandsLedByItsMarginBetweenMigrations) {
           for (int j = 0; j < 3; ++j)
             if (j != k && before[j] < before[k] - margin * std::abs(before[k])) from.push_back(j);
         }
-        EXPECT_EQ(s.islands[k].immigrants, expected(k, from)) << "island " << k << ", generation " << g;
-        if (from.empty()) {  // an island that hears nothing is the island of the run without migration
+        EXPECT_EQ(s.islands[k].immigrants, expected(k, from))
+            << "island " << k << ", generation " << g;
+        if (from.empty()) {  // an island that hears nothing is the island of the run without
+                             // migration
           EXPECT_EQ(ga.state().islands[k].population, alone.state().islands[k].population);
         }
       }
@@ -1155,7 +1215,8 @@ TEST(GaIslands, BroadcastRunIsTheSameWhateverTheEvaluatorAndResumesFromACheckpoi
   none.broadcast_interval = 0;
   const RunRecord without = RunWith(&inline_ev, none);
   EXPECT_NE(Digest(without.state, without.summary), Digest(reference.state, reference.summary));
-  ExpectResumesBitForBit(reference, o, &inline_ev, &shuffled, {1, 2, 3});  // before, at and after a broadcast
+  ExpectResumesBitForBit(reference, o, &inline_ev, &shuffled,
+                         {1, 2, 3});  // before, at and after a broadcast
 }
 
 TEST(GaIslands, StalledIslandRestartsFromMigrantsAndFreshIndividuals) {
@@ -1184,8 +1245,9 @@ TEST(GaIslands, StalledIslandRestartsFromMigrantsAndFreshIndividuals) {
     // Equal costs rank by index: the migrants first, in the source's order.
     EXPECT_EQ(is.population[0], src.population[0]);
     EXPECT_EQ(is.population[1], src.population[1]);
-    EXPECT_EQ(std::find(is.population.begin() + 2, is.population.end(), before.islands[k].population[0]),
-              is.population.end())
+    EXPECT_EQ(
+        std::find(is.population.begin() + 2, is.population.end(), before.islands[k].population[0]),
+        is.population.end())
         << "the fresh individuals are new draws";
   }
   // The job's stall is over the islands' best, and a restart does not reset it.
@@ -1210,7 +1272,8 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
   o.island_stall_generations = 3;
   o.island_mutation = {0.01, 0.02, 0.03, 0.05};
   const RunRecord reference = RunWith(&ev, o);
-  ExpectResumesBitForBit(reference, o, &ev, &ev, {2, 3, 4});  // before, at (interval 3) and after a migration
+  ExpectResumesBitForBit(reference, o, &ev, &ev,
+                         {2, 3, 4});  // before, at (interval 3) and after a migration
   GaState bad = reference.state;
   bad.islands.pop_back();
   GeneticAlgorithm third(o, &ev);
@@ -1218,7 +1281,8 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
     third.RestoreState(bad);
     FAIL() << "no throw";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("state.islands.size() = 3: must equal islands = 4"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("state.islands.size() = 3: must equal islands = 4"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -1229,7 +1293,8 @@ TEST(GaIslands, CheckpointAtAndAroundAMigrationResumesBitForBit) {
 // A move for the tests: the parent with three bits flipped at drawn positions (a function of the
 // parent and the draws, as a move must be); it records what it was given and what it made.
 struct FlipMove {
-  std::shared_ptr<std::vector<std::pair<Genome, Genome>>> calls = std::make_shared<std::vector<std::pair<Genome, Genome>>>();
+  std::shared_ptr<std::vector<std::pair<Genome, Genome>>> calls =
+      std::make_shared<std::vector<std::pair<Genome, Genome>>>();
   void operator()(const Genome& parent, Rng& rng, std::span<Genome> children) const {
     for (Genome& child : children) {
       child.bits = parent.bits;
@@ -1239,7 +1304,8 @@ struct FlipMove {
   }
 };
 
-RunRecord RunWithMove(BatchEvaluator* evaluator, const GaOptions& options, GeneticAlgorithm::Move move) {
+RunRecord RunWithMove(BatchEvaluator* evaluator, const GaOptions& options,
+                      GeneticAlgorithm::Move move) {
   GeneticAlgorithm ga(options, evaluator);
   if (move) ga.SetMove(std::move(move));
   RunRecord r;
@@ -1267,7 +1333,8 @@ TEST(GaOutputMoves, NoneWithOneIslandSixteenPercentWithSeveralUnlessGiven) {
   EXPECT_TRUE(o.Validate().ok()) << "every offspring a move";
   o.output_moves = 201;
   EXPECT_EQ(o.Validate().message(),
-            "output_moves = 201: must be in [0, population_size − the elite = 200] (-1: 0 with one island, 16 % of the offspring with several)");
+            "output_moves = 201: must be in [0, population_size − the elite = 200] (-1: 0 with one "
+            "island, 16 % of the offspring with several)");
   o.output_moves = -2;
   EXPECT_EQ(o.Validate().message().rfind("output_moves = -2: must be in [0, ", 0), 0u);
 }

@@ -172,10 +172,11 @@ TEST(ParamSearch, LogScaleFindsSmallValue) {
 
 TEST(ParamSearch, SameSeedSameResultInlineAndThreadPool) {
   Rastrigin f;
-  for (SearchAlgorithm a :
-       {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
+  for (SearchAlgorithm a : {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal,
+                            SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
     SearchOptions o = Options(a, 2);
-    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations = 60;
+    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations =
+        60;
     InlineEvaluator inl(f);
     ThreadPoolEvaluator pool(f, 2);
     SearchResult x = Search(Box(3, -5.12, 5.12), o, inl);
@@ -202,7 +203,8 @@ TEST(ParamSearch, DifferentialEvolutionFindsTheMinimumFromItsSeeds) {
    public:
     FitnessResult Evaluate(const Genome& g) const override {
       double s = 0;
-      for (size_t i = 0; i < g.reals.size(); ++i) s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
+      for (size_t i = 0; i < g.reals.size(); ++i)
+        s += (g.reals[i] - 0.3 - 0.1 * i) * (g.reals[i] - 0.3 - 0.1 * i);
       return {s, FitnessStatus::kOk, {}};
     }
   } f;
@@ -239,7 +241,8 @@ TEST(ParamSearch, TraceAndCountersConsistent) {
   EXPECT_EQ(calls.load(), 42);
   ASSERT_EQ(r.trace.evaluations.size(), 42u);
   EXPECT_EQ(r.trace.evaluations.back(), r.evaluations);
-  for (size_t i = 1; i < r.trace.best_cost.size(); ++i) EXPECT_LE(r.trace.best_cost[i], r.trace.best_cost[i - 1]);
+  for (size_t i = 1; i < r.trace.best_cost.size(); ++i)
+    EXPECT_LE(r.trace.best_cost[i], r.trace.best_cost[i - 1]);
   EXPECT_EQ(r.trace.best_cost.back(), r.best_cost);
   PZ_EXPECT_HAS(r.stop_reason, "limit: 20 iterations");
   // The reported best is what the fitness says of it.
@@ -284,15 +287,17 @@ TEST(ParamSearch, APsoSwarmThatHasConvergedStopsItsRepetition) {
   EXPECT_EQ(again.evaluations, r.evaluations);
   o.pso.converged_spread = 1;
   InlineEvaluator e(f);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Search(Box(2, -2, 2), o, e); }), "pso.converged_spread = 1");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { Search(Box(2, -2, 2), o, e); }),
+                "pso.converged_spread = 1");
 }
 
 TEST(ParamSearch, NanAndExceptionsAreSanitised) {
   Awkward f;
-  for (SearchAlgorithm a :
-       {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal, SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
+  for (SearchAlgorithm a : {SearchAlgorithm::kPso, SearchAlgorithm::kGaReal,
+                            SearchAlgorithm::kGaBinary, SearchAlgorithm::kDe}) {
     SearchOptions o = Options(a, 1);
-    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations = 100;
+    o.pso.iterations = o.ga_real.generations = o.ga_binary.ga.max_generations = o.de.generations =
+        100;
     SearchResult r = RunSearch(f, Box(2, -1, 1), o);
     SCOPED_TRACE(SearchAlgorithmName(a));
     EXPECT_TRUE(std::isfinite(r.best_cost));
@@ -304,13 +309,16 @@ TEST(ParamSearch, BadBoxAndOptionsNamed) {
   using pz::testing::InputErrorOf;
   Rosenbrock f;
   InlineEvaluator e(f);
-  auto search = [&](const ParamBox& b, const SearchOptions& o) { return InputErrorOf([&] { Search(b, o, e); }); };
+  auto search = [&](const ParamBox& b, const SearchOptions& o) {
+    return InputErrorOf([&] { Search(b, o, e); });
+  };
   SearchOptions ok = Options(SearchAlgorithm::kPso, 1);
   PZ_EXPECT_HAS(search(ParamBox{}, ok), "box.names");
   PZ_EXPECT_HAS(search(ParamBox{{"k", "c"}, {1, 2}, {5, 1}, {}}, ok), "box.upper[1] (c) = 1");
   PZ_EXPECT_HAS(search(ParamBox{{"k"}, {1, 2}, {5}, {}}, ok), "box.lower.size()");
   PZ_EXPECT_HAS(search(ParamBox{{"k", "k"}, {1, 2}, {5, 6}, {}}, ok), "duplicate");
-  PZ_EXPECT_HAS(search(ParamBox{{"k"}, {-1}, {5}, {true}}, ok), "box.lower[0] (k) = -1: must be > 0");
+  PZ_EXPECT_HAS(search(ParamBox{{"k"}, {-1}, {5}, {true}}, ok),
+                "box.lower[0] (k) = -1: must be > 0");
   PZ_EXPECT_HAS(search(ParamBox{{"k"}, {std::nan("")}, {5}, {}}, ok), "box.lower[0]");
   const ParamBox box = Box(2, -1, 1);
   SearchOptions o = ok;
@@ -358,7 +366,8 @@ TEST(ParamSearch, BadBoxAndOptionsNamed) {
   o = ok;
   o.seeds = {{0.5, 0.5}};
   PZ_EXPECT_HAS(search(box, o), "only the de search takes seeds");
-  PZ_EXPECT_HAS(InputErrorOf([] { ParseSearchAlgorithm("nelder-mead"); }), "algorithm = nelder-mead");
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseSearchAlgorithm("nelder-mead"); }),
+                "algorithm = nelder-mead");
   EXPECT_EQ(ParseSearchAlgorithm("ga-binary"), SearchAlgorithm::kGaBinary);
   EXPECT_EQ(ParseSearchAlgorithm("de"), SearchAlgorithm::kDe);
 }
@@ -371,7 +380,8 @@ class TwoBasins final : public FitnessFunction {
   FitnessResult Evaluate(const Genome& g) const override {
     ++calls;
     const double x = g.reals[0];
-    const double broad = (x - 0.023) * (x - 0.023), narrow = 50 * (x - 0.0771) * (x - 0.0771) - 1e-5;
+    const double broad = (x - 0.023) * (x - 0.023),
+                 narrow = 50 * (x - 0.0771) * (x - 0.0771) - 1e-5;
     return {std::min(broad, narrow), FitnessStatus::kOk, {}};
   }
   mutable std::atomic<int> calls{0};
@@ -413,11 +423,14 @@ TEST(ParamSearch, TheLineSearchRefinesTheGridsLowestLocalMinima) {
   } parabola;
   const SearchResult p = RunSearch(parabola, Box(1, -1, 1), LineOptionsOf(9, 2, 1e-8));
   EXPECT_NEAR(p.best[0], 0.3141, 1e-7);
-  EXPECT_LE(p.evaluations, 9 + 12);  // one local minimum on the grid: one bracket (golden steps alone: 37)
+  EXPECT_LE(p.evaluations,
+            9 + 12);  // one local minimum on the grid: one bracket (golden steps alone: 37)
   // Ends of the range: a minimum at the bound is found there.
   class Slope final : public FitnessFunction {
    public:
-    FitnessResult Evaluate(const Genome& g) const override { return {g.reals[0], FitnessStatus::kOk, {}}; }
+    FitnessResult Evaluate(const Genome& g) const override {
+      return {g.reals[0], FitnessStatus::kOk, {}};
+    }
   } slope;
   const SearchResult end = RunSearch(slope, Box(1, 2, 3), LineOptionsOf(5, 2, 1e-6));
   EXPECT_NEAR(end.best[0], 2, 1e-5);
@@ -425,7 +438,8 @@ TEST(ParamSearch, TheLineSearchRefinesTheGridsLowestLocalMinima) {
 
 TEST(ParamSearch, TheLineSearchIsTheSameOnAnyThreadCount) {
   // Costs with local minima everywhere (Rastrigin in one dimension): the grid's minima, their
-  // refinements and so the result and its trace are the same inline and on pools of 2 and 3 threads.
+  // refinements and so the result and its trace are the same inline and on pools of 2 and 3
+  // threads.
   Rastrigin f;
   const ParamBox box = Box(1, -5.12, 5.12);
   const SearchOptions o = LineOptionsOf(33, 3, 1e-7);
@@ -448,7 +462,9 @@ TEST(ParamSearch, TheLineSearchsBadBudgetsAreNamed) {
   using pz::testing::InputErrorOf;
   Rosenbrock f;
   InlineEvaluator e(f);
-  auto search = [&](const ParamBox& b, const SearchOptions& o) { return InputErrorOf([&] { Search(b, o, e); }); };
+  auto search = [&](const ParamBox& b, const SearchOptions& o) {
+    return InputErrorOf([&] { Search(b, o, e); });
+  };
   const ParamBox box = Box(1, 0, 1);
   PZ_EXPECT_HAS(search(box, LineOptionsOf(2, 2, 1e-4)), "line.grid = 2: must be >= 3");
   PZ_EXPECT_HAS(search(box, LineOptionsOf(17, 0, 1e-4)), "line.brackets = 0: must be >= 1");
@@ -457,13 +473,16 @@ TEST(ParamSearch, TheLineSearchsBadBudgetsAreNamed) {
   SearchOptions o = LineOptionsOf(17, 2, 1e-4);
   o.line.max_steps = 0;
   PZ_EXPECT_HAS(search(box, o), "line.max_steps = 0: must be >= 1");
-  PZ_EXPECT_HAS(search(Box(2, 0, 1), LineOptionsOf(17, 2, 1e-4)), "algorithm = line: searches one parameter; the box has 2");
+  PZ_EXPECT_HAS(search(Box(2, 0, 1), LineOptionsOf(17, 2, 1e-4)),
+                "algorithm = line: searches one parameter; the box has 2");
   o = LineOptionsOf(17, 2, 1e-4);
   o.repetitions = 3;
   PZ_EXPECT_HAS(search(box, o), "repetitions = 3: must be 1 for the line search");
   EXPECT_EQ(ParseSearchAlgorithm("line"), SearchAlgorithm::kLine);
   EXPECT_STREQ(SearchAlgorithmName(SearchAlgorithm::kLine), "line");
-  PZ_EXPECT_HAS(LineOptions{}.Describe(), "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's method to 0.0001 of the range");
+  PZ_EXPECT_HAS(LineOptions{}.Describe(),
+                "a grid of 17 points, then the lowest 2 of its local minima refined by Brent's "
+                "method to 0.0001 of the range");
 }
 
 TEST(ParamSearch, GrayAndPlainDecoding) {

@@ -31,7 +31,8 @@ namespace {
 
 /// The library entry of that name (fails the test if missing).
 const EffectInfo& Find(const std::vector<EffectInfo>& lib, const std::string& name) {
-  const auto it = std::find_if(lib.begin(), lib.end(), [&](const EffectInfo& e) { return e.name == name; });
+  const auto it =
+      std::find_if(lib.begin(), lib.end(), [&](const EffectInfo& e) { return e.name == name; });
   if (it == lib.end()) throw std::logic_error("no records effect " + name);
   return *it;
 }
@@ -61,7 +62,8 @@ RealLikeOptions Small(uint64_t seed) {
 }
 
 /// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
-std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects, FitResult* out = nullptr) {
+std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects,
+                                     FitResult* out = nullptr) {
   return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
@@ -84,7 +86,8 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
     RecordProperty(std::string(name) + "_plant_without_creep", std::to_string(no_creep.at(name)));
     // The creep is explained: what is left is the family's own error on a plant without creep.
     EXPECT_LE(spectrum.at(name), std::max(1.25, 1.1 * no_creep.at(name)))
-        << name << " (one relaxation: " << single.at(name) << ", no creep: " << no_creep.at(name) << ")";
+        << name << " (one relaxation: " << single.at(name) << ", no creep: " << no_creep.at(name)
+        << ")";
     // One relaxation cannot follow a creep spread over decades.
     EXPECT_GT(single.at(name), 1.25) << name;
     EXPECT_GT(single.at(name), 1.3 * spectrum.at(name)) << name;
@@ -92,7 +95,6 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
   EXPECT_LE(spectrum.at("played"), 1.25);
   EXPECT_LE(spectrum.at("ramp"), 1.25);
 }
-
 
 TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget) {
   // Trained on the major loop only (a 40 s constant-amplitude sine: what a user has), with the
@@ -110,7 +112,8 @@ TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget)
   f.search.pso.iterations = 15;
   auto ratios = [&](const FitResult& r) {
     std::map<std::string, double> out;
-    for (size_t i = 0; i < s.set.records.size(); ++i) out[s.set.records[i].name] = r.metrics[i].rmse / s.truth[i].noise_rms_um;
+    for (size_t i = 0; i < s.set.records.size(); ++i)
+      out[s.set.records[i].name] = r.metrics[i].rmse / s.truth[i].noise_rms_um;
     return out;
   };
   const FitResult penalised = FitRecords(s.set, f);
@@ -118,7 +121,8 @@ TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget)
   const FitResult ragged = FitRecords(s.set, f);
   const auto with = ratios(penalised), without = ratios(ragged);
   ASSERT_TRUE(penalised.spectrum_regularisation.used);
-  EXPECT_EQ(penalised.spectrum_regularisation.cv_rmse.size(), penalised.spectrum_regularisation.relatives.size());
+  EXPECT_EQ(penalised.spectrum_regularisation.cv_rmse.size(),
+            penalised.spectrum_regularisation.relatives.size());
   EXPECT_GT(penalised.spectrum_regularisation.lambda, 0);
   const auto [first, count] = penalised.model->EffectParams(EffectKind::Named("creep-spectrum"));
   ASSERT_GT(count, 3u);
@@ -126,7 +130,8 @@ TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget)
   for (const char* name : {"major", "major-2", "ramp", "reversals"}) {
     RecordProperty(std::string(name) + "_penalised", std::to_string(with.at(name)));
     RecordProperty(std::string(name) + "_unpenalised", std::to_string(without.at(name)));
-    std::cout << name << ": " << with.at(name) << " x the floor (unpenalised " << without.at(name) << ")\n";
+    std::cout << name << ": " << with.at(name) << " x the floor (unpenalised " << without.at(name)
+              << ")\n";
   }
   // The training excitation still fits at the floor.
   EXPECT_LE(with.at("major"), 1.1);
@@ -150,11 +155,13 @@ TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget)
 }
 
 /// Each record's RMSE / its true noise RMS for a model with given parameters and family weights.
-std::map<std::string, double> RatiosOf(const RealLikeSet& s, const RecordModel& model, const std::vector<double>& p,
+std::map<std::string, double> RatiosOf(const RealLikeSet& s, const RecordModel& model,
+                                       const std::vector<double>& p,
                                        const std::vector<double>& weights) {
   std::map<std::string, double> out;
   for (size_t i = 0; i < s.set.records.size(); ++i)
-    out[s.set.records[i].name] = Evaluate(model, p, weights, s.set.records[i]).rmse / s.truth[i].noise_rms_um;
+    out[s.set.records[i].name] =
+        Evaluate(model, p, weights, s.set.records[i]).rmse / s.truth[i].noise_rms_um;
   return out;
 }
 
@@ -190,7 +197,8 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePena
   // The oracle weights fixed; the creep spectrum's weights (non-negative least squares: the output
   // is linear in them, the record's offset centred out) and the delay (on a grid of 0.25 ms)
   // fitted on the full plant's major loop.
-  const RecordModel model(family, {EffectKind::Named("creep-spectrum"), EffectKind::Named("delay")}, scale);
+  const RecordModel model(family, {EffectKind::Named("creep-spectrum"), EffectKind::Named("delay")},
+                          scale);
   const auto [first, count] = model.EffectParams(EffectKind::Named("creep-spectrum"));
   const size_t delay = model.EffectParams(EffectKind::Named("delay")).first;
   const io::Record& tr = *train.front();
@@ -227,9 +235,12 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePena
   for (const char* name : {"major", "major-2", "ramp", "reversals"}) {
     RecordProperty(std::string(name) + "_preisach_from_major", std::to_string(from_major.at(name)));
     RecordProperty(std::string(name) + "_oracle_grid", std::to_string(grid.at(name)));
-    RecordProperty(std::string(name) + "_oracle_preisach_creep_lag_from_major", std::to_string(fixed.at(name)));
-    std::cout << name << ": Preisach from the major loop " << from_major.at(name) << ", oracle grid " << grid.at(name)
-              << ", oracle Preisach with creep and lag from the major loop " << fixed.at(name) << " x the floor\n";
+    RecordProperty(std::string(name) + "_oracle_preisach_creep_lag_from_major",
+                   std::to_string(fixed.at(name)));
+    std::cout << name << ": Preisach from the major loop " << from_major.at(name)
+              << ", oracle grid " << grid.at(name)
+              << ", oracle Preisach with creep and lag from the major loop " << fixed.at(name)
+              << " x the floor\n";
   }
   std::cout << "delay " << fitted[delay] << " s, creep weights sum " << total << "\n";
   for (const char* name : {"major", "major-2", "ramp", "reversals"}) {
@@ -243,7 +254,8 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePena
   // here (1.14x / 1.17x the floor); the roughness along the centre, the only one before, left
   // 1.76x / 1.84x.
   EXPECT_EQ(major.validation().penalty_name, "roughness over the triangle");
-  for (const char* name : {"major", "major-2", "ramp", "reversals"}) EXPECT_LE(from_major.at(name), 1.25) << name;
+  for (const char* name : {"major", "major-2", "ramp", "reversals"})
+    EXPECT_LE(from_major.at(name), 1.25) << name;
 }
 
 TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {

@@ -54,9 +54,10 @@ TEST(CriterionFitness, WindowedCostsAreTheCriteriaOfTheFamilysSimulationBitForBi
     model::StackFamily stack;
     std::vector<double> p;
   };
-  for (const Case& c : {Case{"stack-bouc-wen", model::StackFamily::kBoucWen, {0.3, 0.004, 0.002, 0.05, 400}},
-                        Case{"stack-bouc-wen", model::StackFamily::kBoucWen, {1.5, 0.02, -0.01, 0.03, 5000}},
-                        Case{"backlash-like", model::StackFamily::kBacklashLike, {0.012, 0.052, 0.015}}}) {
+  for (const Case& c :
+       {Case{"stack-bouc-wen", model::StackFamily::kBoucWen, {0.3, 0.004, 0.002, 0.05, 400}},
+        Case{"stack-bouc-wen", model::StackFamily::kBoucWen, {1.5, 0.02, -0.01, 0.03, 5000}},
+        Case{"backlash-like", model::StackFamily::kBacklashLike, {0.012, 0.052, 0.015}}}) {
     FamilyOptions fo;
     fo.substeps = 3;
     const RecordModel model(MakeFamily(c.family, scale, fo), {}, scale);
@@ -69,11 +70,20 @@ TEST(CriterionFitness, WindowedCostsAreTheCriteriaOfTheFamilysSimulationBitForBi
         model::SimulateStack(c.stack, c.p, r->u, r->dt, y, model::StackSimOptions{3});
         const double end = std::min(t1, static_cast<double>(r->t.size() - 1) * r->dt);
         switch (k) {
-          case Criterion::kIae: want += model::Iae(r->y, y, r->dt, t0, end); break;
-          case Criterion::kSse: want += model::Sse(r->y, y, r->dt, t0, end); break;
-          case Criterion::kRmse: want += model::Rmse(r->y, y, r->dt, t0, end); break;
-          case Criterion::kMax: want = std::max(want, model::MaxAbsError(r->y, y, r->dt, t0, end)); break;
-          default: break;
+          case Criterion::kIae:
+            want += model::Iae(r->y, y, r->dt, t0, end);
+            break;
+          case Criterion::kSse:
+            want += model::Sse(r->y, y, r->dt, t0, end);
+            break;
+          case Criterion::kRmse:
+            want += model::Rmse(r->y, y, r->dt, t0, end);
+            break;
+          case Criterion::kMax:
+            want = std::max(want, model::MaxAbsError(r->y, y, r->dt, t0, end));
+            break;
+          default:
+            break;
         }
       }
       EXPECT_TRUE(SameBits(fitness.Cost(c.p), want)) << fitness.Cost(c.p) << " vs " << want;
@@ -91,9 +101,13 @@ TEST(CriterionFitness, TheDirectPathIsTheRecordModelsOutput) {
   // (polarity −1): the windowed cost is the criterion of RecordFitness::Run's output, bit for bit.
   io::Record a = StackRecord(40, 400, 3);
   for (size_t k = 0; k < a.u.size(); ++k)
-    a.u[k] = k < 50 ? 400 : 400 + 400 * std::sin(2 * std::numbers::pi * 40 * static_cast<double>(k - 50) / kFs);
+    a.u[k] =
+        k < 50
+            ? 400
+            : 400 + 400 * std::sin(2 * std::numbers::pi * 40 * static_cast<double>(k - 50) / kFs);
   model::SimulateBacklashLike({0.01, 0.05, 0.01}, a.u, a.y);
-  for (size_t k = 0; k < a.y.size(); ++k) a.y[k] = 7 - a.y[k] + 0.01 * std::sin(0.37 * static_cast<double>(k));
+  for (size_t k = 0; k < a.y.size(); ++k)
+    a.y[k] = 7 - a.y[k] + 0.01 * std::sin(0.37 * static_cast<double>(k));
   a.rest_samples = 50;
   a.offset_mode = io::OffsetMode::kFit;
   a.first_scored = 100;
@@ -136,15 +150,25 @@ TEST(CriterionFitness, ErrorsPenaltiesAndChecks) {
   const CriterionFitness mse(model, records, {});
   const std::vector<double> p{0.3, 0.004, 0.002, 0.05, 400};
   EXPECT_TRUE(SameBits(mse.Cost(p), RecordFitness(model, records).Run(p).mse));
-  PZ_EXPECT_HAS(InputErrorOf([&] { CriterionFitness(model, records, {Criterion::kIae, 0.5, 0.6}); }),
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  CriterionFitness(model, records, {Criterion::kIae, 0.5, 0.6});
+                }),
                 "before the window start t0_s = 0.5 s");
-  PZ_EXPECT_HAS(InputErrorOf([&] { CriterionFitness(model, records, {Criterion::kIae, 0.1, 0.1}); }),
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  CriterionFitness(model, records, {Criterion::kIae, 0.1, 0.1});
+                }),
                 "must be finite and > t0_s");
-  PZ_EXPECT_HAS(InputErrorOf([&] { CriterionFitness(model, records, {Criterion::kSse, 0, 1, -1}); }),
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  CriterionFitness(model, records, {Criterion::kSse, 0, 1, -1});
+                }),
                 "error_cost = -1");
-  PZ_EXPECT_HAS(InputErrorOf([&] { CriterionFitness(model, {}, {Criterion::kIae, 0, 1}); }), "no training records");
+  PZ_EXPECT_HAS(InputErrorOf([&] {
+                  CriterionFitness(model, {}, {Criterion::kIae, 0, 1});
+                }),
+                "no training records");
   EXPECT_EQ(ParseCriterion("rmse"), Criterion::kRmse);
-  PZ_EXPECT_HAS(InputErrorOf([] { ParseCriterion("mae"); }), "criterion 'mae': expected mse, iae, sse, rmse or max");
+  PZ_EXPECT_HAS(InputErrorOf([] { ParseCriterion("mae"); }),
+                "criterion 'mae': expected mse, iae, sse, rmse or max");
   // Window errors of one output: the samples with t0 ≤ k dt ≤ t1, and the three figures.
   std::vector<double> yhat(a.y);
   yhat[500] += 1;

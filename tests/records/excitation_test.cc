@@ -32,7 +32,8 @@ RealLikeOptions Short(uint64_t seed) {
   return o;
 }
 
-const WithheldExcitation& Of(const ExcitationReport& r, const io::RecordSet& set, const std::string& name) {
+const WithheldExcitation& Of(const ExcitationReport& r, const io::RecordSet& set,
+                             const std::string& name) {
   for (const WithheldExcitation& w : r.withheld)
     if (set.records[w.record].name == name) return w;
   throw std::runtime_error("no withheld record " + name);
@@ -47,14 +48,17 @@ bool Needs(const WithheldExcitation& w, ExcitationNeed::Kind k) {
 /// Adds a withheld record of the set's plant on `d` (the training's bias and amplitude by default).
 void AddWithheld(RealLikeSet& s, RealLikeDrive d, const std::string& name, uint64_t seed) {
   const RealLikePlant plant(s.options.stack);
-  s.set.records.push_back(SynthesizeRealLikeRecord(plant, s.options.sensor, d, name, CaseRole::kValidate, seed));
+  s.set.records.push_back(
+      SynthesizeRealLikeRecord(plant, s.options.sensor, d, name, CaseRole::kValidate, seed));
 }
 
-RealLikeDrive Sine(const RealLikeSet& s, double amplitude_factor, double frequency_factor, double phase) {
+RealLikeDrive Sine(const RealLikeSet& s, double amplitude_factor, double frequency_factor,
+                   double phase) {
   RealLikeDrive d;
   d.rest_level = s.options.stack.u_lo;
   d.bias = (s.options.stack.u_lo + s.options.stack.u_hi) / 2;
-  d.amplitude = amplitude_factor * s.options.amplitude_share * (s.options.stack.u_hi - s.options.stack.u_lo);
+  d.amplitude =
+      amplitude_factor * s.options.amplitude_share * (s.options.stack.u_hi - s.options.stack.u_lo);
   d.frequency_hz = frequency_factor * s.options.frequency_hz;
   d.phase_rad = phase;
   d.duration_s = 6;
@@ -75,11 +79,13 @@ TEST(ExcitationTest, CatchesEveryWithheldRecordWhoseReversalsTrainingLacks) {
     }
     // The second major-loop sine (another phase, another length) is within the training excitation.
     const WithheldExcitation& within = Of(r, s.set, "major-2");
-    EXPECT_TRUE(within.needs.empty()) << "seed " << seed << ": " << (within.needs.empty() ? "" : within.needs[0].text);
+    EXPECT_TRUE(within.needs.empty())
+        << "seed " << seed << ": " << (within.needs.empty() ? "" : within.needs[0].text);
     // Training: a major loop turns only at the ends, with depths near the whole range.
     EXPECT_GE(r.training.turns, 20u);
     EXPECT_GT(r.training.depth_weight.back() + r.training.depth_weight[8], 9.0);
-    for (size_t b = 1; b + 1 < r.training.level_weight.size(); ++b) EXPECT_EQ(r.training.level_weight[b], 0) << b;
+    for (size_t b = 1; b + 1 < r.training.level_weight.size(); ++b)
+      EXPECT_EQ(r.training.level_weight[b], 0) << b;
     PZ_EXPECT_HAS(Of(r, s.set, "ramp").needs.front().text, "its minor loops are extrapolated");
     PZ_EXPECT_HAS(r.training_lines[1], "turning at 0–10 %, 90–100 % of the range");
   }
@@ -102,7 +108,8 @@ TEST(ExcitationTest, NamesRangeRatesAndHolds) {
   const ExcitationReport r = AnalyseExcitation(s.set);
   const WithheldExcitation& wider = Of(r, s.set, "wider");
   ASSERT_TRUE(Needs(wider, ExcitationNeed::Kind::kRange));
-  EXPECT_NEAR(wider.needs.front().amount, 0.06, 0.01);  // 12 % more amplitude: 6 % of the range each side
+  EXPECT_NEAR(wider.needs.front().amount, 0.06,
+              0.01);  // 12 % more amplitude: 6 % of the range each side
   EXPECT_FALSE(Needs(wider, ExcitationNeed::Kind::kRate));
   const WithheldExcitation& faster = Of(r, s.set, "faster");
   ASSERT_TRUE(Needs(faster, ExcitationNeed::Kind::kRate));
@@ -124,11 +131,13 @@ void TrainOnProposal(RealLikeSet& s, const TrainingDriveProposal& p) {
   d.kind = RealLikeDrive::Kind::kSamples;
   d.rest_level = p.u.front();
   d.rest_s = p.rest_s;
-  d.samples.assign(p.u.begin() + static_cast<std::ptrdiff_t>(std::llround(p.rest_s * p.fs_hz)), p.u.end());
+  d.samples.assign(p.u.begin() + static_cast<std::ptrdiff_t>(std::llround(p.rest_s * p.fs_hz)),
+                   p.u.end());
   d.samples_fs_hz = p.fs_hz;
   d.duration_s = static_cast<double>(d.samples.size()) / p.fs_hz;
   const RealLikePlant plant(s.options.stack);
-  s.set.records[0] = SynthesizeRealLikeRecord(plant, s.options.sensor, d, "proposed", CaseRole::kTrain, 9);
+  s.set.records[0] =
+      SynthesizeRealLikeRecord(plant, s.options.sensor, d, "proposed", CaseRole::kTrain, 9);
 }
 
 TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
@@ -142,7 +151,8 @@ TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
   TrainOnProposal(s, p);  // train on the proposal instead of the major loop
   const ExcitationReport after = AnalyseExcitation(s.set);
   for (const WithheldExcitation& w : after.withheld) {
-    EXPECT_FALSE(Needs(w, ExcitationNeed::Kind::kReversals)) << s.set.records[w.record].name << ": " << w.needs.front().text;
+    EXPECT_FALSE(Needs(w, ExcitationNeed::Kind::kReversals))
+        << s.set.records[w.record].name << ": " << w.needs.front().text;
     EXPECT_FALSE(Needs(w, ExcitationNeed::Kind::kRange)) << s.set.records[w.record].name;
   }
   EXPECT_GT(after.training.longest_hold_s, 1.9);
@@ -175,8 +185,8 @@ TEST(ExcitationTest, TheProposedDriveBringsThePreisachFamilyToTheFloor) {
   for (const char* name : {"major-2", "ramp", "reversals"}) {
     RecordProperty(std::string(name) + "_major_loop", std::to_string(major.at(name)));
     RecordProperty(std::string(name) + "_proposed", std::to_string(proposed.at(name)));
-    EXPECT_LE(proposed.at(name), 1.25) << name << " trained on the proposed drive; on the major loop "
-                                       << major.at(name);
+    EXPECT_LE(proposed.at(name), 1.25)
+        << name << " trained on the proposed drive; on the major loop " << major.at(name);
   }
   EXPECT_GT(major.at("ramp"), proposed.at("ramp"));
   EXPECT_GT(major.at("reversals"), proposed.at("reversals"));
@@ -200,7 +210,8 @@ TEST(ExcitationTest, TheDiagnosisSentenceTellsAnExcitationGapFromMissingPhysics)
   PZ_EXPECT_HAS(ExcitationGapNote(s.set, r, ratio, 1.25), "physics is missing as well");
   set_ratio("ramp", 1.1);
   set_ratio("reversals", 1.2);
-  EXPECT_EQ(ExcitationGapNote(s.set, r, ratio, 1.25), "");  // the records that need more have no gap
+  EXPECT_EQ(ExcitationGapNote(s.set, r, ratio, 1.25),
+            "");  // the records that need more have no gap
 }
 
 TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
@@ -225,7 +236,8 @@ TEST(ExcitationTest, BadInputIsNamed) {
   RealLikeSet s = GenerateRealLikeSet(Short(1));
   io::Record& t = s.set.records[0];
   std::fill(t.u.begin(), t.u.end(), 12.0);
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { AnalyseExcitation(s.set); }), "the training drive is constant");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { AnalyseExcitation(s.set); }),
+                "the training drive is constant");
   ExcitationOptions o;
   o.bins = 1;
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { AnalyseExcitation(s.set, o); }), "bins");

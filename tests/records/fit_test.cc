@@ -91,7 +91,8 @@ FitOptions QuickOptions(const std::string& family) {
   o.search.pso.iterations = 80;
   o.search.pso.stall_iterations = 25;
   o.lm.max_iterations = 40;
-  if (family == "bimorph-fin" || family == "bw-oscillator") {  // more parameters, resonances: a wider search
+  if (family == "bimorph-fin" ||
+      family == "bw-oscillator") {  // more parameters, resonances: a wider search
     o.search.repetitions = 3;
     o.search.pso.particles = 30;
     o.search.pso.iterations = 150;
@@ -108,7 +109,12 @@ std::vector<Case> Cases() {
       {"duhem", {0.02, 0.1, -2e-6, 0.05, 2.0}},
       {"prandtl-ishlinskii", pi},
       {"bw-oscillator", {0.1, 30, 0.3, 0.4, 0.15, -0.05}},
-      {"bimorph-fin", {95, 0.1, 2.5e-3, 6e-3, 4e-3, 0.1, 0.15, 12, 12, 2.0, 0.07, 0.02}, 375, 0, 0.5, 0.5},
+      {"bimorph-fin",
+       {95, 0.1, 2.5e-3, 6e-3, 4e-3, 0.1, 0.15, 12, 12, 2.0, 0.07, 0.02},
+       375,
+       0,
+       0.5,
+       0.5},
   };
 }
 
@@ -127,10 +133,13 @@ TEST_P(FamilyFit, ExplainsTheWithheldWindowDownToTheNoise) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Families, FamilyFit,
-                         ::testing::Combine(::testing::Range(0, 6), ::testing::Values(Waveform::kSine, Waveform::kMultisine)),
+                         ::testing::Combine(::testing::Range(0, 6),
+                                            ::testing::Values(Waveform::kSine,
+                                                              Waveform::kMultisine)),
                          [](const auto& info) {
-                           std::string n = Cases()[static_cast<size_t>(std::get<0>(info.param))].family + "_" +
-                                           WaveformName(std::get<1>(info.param));
+                           std::string n =
+                               Cases()[static_cast<size_t>(std::get<0>(info.param))].family + "_" +
+                               WaveformName(std::get<1>(info.param));
                            for (char& ch : n)
                              if (ch == '-') ch = '_';
                            return n;
@@ -164,7 +173,8 @@ TEST(RecordFit, TheFinGeometryIsIdentifiedFromASweepThroughItsFirstMode) {
   d.duration_s = 2.1;
   d.fs_hz = 2000;
   d.seed = 5;
-  io::Record r = SynthesizeRecord(truth, c.truth, {}, d, Measurement{-1.7, kNoise, kQuantum, 5}, "sweep", CaseRole::kTrain);
+  io::Record r = SynthesizeRecord(truth, c.truth, {}, d, Measurement{-1.7, kNoise, kQuantum, 5},
+                                  "sweep", CaseRole::kTrain);
   io::RecordSet set;
   set.source = "synthetic";
   set.records = {r};
@@ -197,12 +207,12 @@ TEST(RecordFit, SameResultOnOneAndTwoThreads) {
 }
 
 TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
-  // The bw-oscillator runs up to four parameter sets at once (Family::lanes, model::SimulateBwMany): each
-  // result is Evaluate's, bit for bit, for points in the box, a point outside (m <= 0 after the
-  // scaling: NaN alone) and one that diverges — alone and with effects: drive effects give each
-  // genome its own drive (Family::SimulateMany), output effects act on each lane's output; a family
-  // without lanes and a pair of odd sizes take Evaluate one by one. (The thread pool's groups:
-  // tests/opt/ga_test.cc.)
+  // The bw-oscillator runs up to four parameter sets at once (Family::lanes,
+  // model::SimulateBwMany): each result is Evaluate's, bit for bit, for points in the box, a point
+  // outside (m <= 0 after the scaling: NaN alone) and one that diverges — alone and with effects:
+  // drive effects give each genome its own drive (Family::SimulateMany), output effects act on each
+  // lane's output; a family without lanes and a pair of odd sizes take Evaluate one by one. (The
+  // thread pool's groups: tests/opt/ga_test.cc.)
   const Case c = Cases()[4];
   const io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
   const auto train = set.WithRole(CaseRole::kTrain);
@@ -214,7 +224,8 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
   family[3] = {-0.1, 30, 0.3, 0.4, 0.15, -0.05};  // K < 0: m < 0, invalid
   family[4] = {0.1, 30, 0.3, 0.4, -50, -50};      // β·γ + β·δ ≪ 0: z grows without bound
   family[5] = {0.1, 40, 0.2, 0.3, 0.2, 0.1};
-  for (const char* effects : {"", "delay", "creep", "creep-spectrum,delay", "quadratic-drive,drift"}) {
+  for (const char* effects :
+       {"", "delay", "creep", "creep-spectrum,delay", "quadratic-drive,drift"}) {
     SCOPED_TRACE(effects);
     std::vector<EffectKind> kinds;
     for (std::string_view e = effects; !e.empty();) {
@@ -232,7 +243,8 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
       for (size_t i = model.family_param_count(); i < model.params().size(); ++i) {
         const ParamInfo& q = model.params()[i];
         const double f = 0.15 + 0.13 * static_cast<double>(a);
-        g[a].reals.push_back(q.log_scale ? q.lower * std::pow(q.upper / q.lower, f) : q.lower + f * (q.upper - q.lower));
+        g[a].reals.push_back(q.log_scale ? q.lower * std::pow(q.upper / q.lower, f)
+                                         : q.lower + f * (q.upper - q.lower));
       }
     }
     auto check = [&](std::vector<const opt::Genome*> group) {
@@ -240,7 +252,8 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
       fitness.EvaluateMany(group, out);
       for (size_t l = 0; l < group.size(); ++l) {
         const opt::FitnessResult want = fitness.Evaluate(*group[l]);
-        EXPECT_EQ(out[l].status, want.status) << group.size() << " lanes, genome " << group[l] - g.data();
+        EXPECT_EQ(out[l].status, want.status)
+            << group.size() << " lanes, genome " << group[l] - g.data();
         EXPECT_EQ(std::bit_cast<uint64_t>(out[l].cost), std::bit_cast<uint64_t>(want.cost))
             << group.size() << " lanes, genome " << group[l] - g.data();
       }
@@ -280,13 +293,16 @@ TEST(RecordFit, ALinearFamilysOutputFromItsSolveIsSimulatesBitForBit) {
       model.Simulate(*train[i], p, out.weights, train[i]->end_scored, y);
       const int pol = model.scale().polarity;
       for (size_t k = 0; k < y.size(); ++k)
-        ASSERT_EQ(std::bit_cast<uint64_t>(pol * y[k] + out.offsets[i]), std::bit_cast<uint64_t>(out.yhat[i][k])) << k;
+        ASSERT_EQ(std::bit_cast<uint64_t>(pol * y[k] + out.offsets[i]),
+                  std::bit_cast<uint64_t>(out.yhat[i][k]))
+            << k;
     }
   }
 }
 
 TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
-  const SearchBudget one = SizedSearchBudget(1), five = SizedSearchBudget(5), twelve = SizedSearchBudget(12);
+  const SearchBudget one = SizedSearchBudget(1), five = SizedSearchBudget(5),
+                     twelve = SizedSearchBudget(12);
   EXPECT_EQ(one.particles, 10);
   EXPECT_EQ(one.iterations, 30);
   EXPECT_EQ(one.stall, 10);
@@ -297,7 +313,9 @@ TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
   EXPECT_EQ(five.repetitions, 3);
   EXPECT_EQ(twelve.particles, 30);
   EXPECT_EQ(twelve.converged_spread, 1e-3);
-  PZ_EXPECT_HAS(one.Describe(), "PSO 10 particles × ≤ 30 iterations, stall 10, converged at a spread of 0.001, 2 repetitions");
+  PZ_EXPECT_HAS(one.Describe(),
+                "PSO 10 particles × ≤ 30 iterations, stall 10, converged at a spread of 0.001, 2 "
+                "repetitions");
   // prandtl-ishlinskii + delay searches the delay alone (its weights are solved).
   const Case c = Cases()[3];
   const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
@@ -337,7 +355,8 @@ TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
 
 TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
   // backlash-like on a noisy sine: the one fit of opt/fit.h with the DE search; every parameter is
-  // well constrained and its σ covers the truth (|estimate − truth| < 4 σ), the same on two threads.
+  // well constrained and its σ covers the truth (|estimate − truth| < 4 σ), the same on two
+  // threads.
   const Case c = Cases()[1];
   const io::RecordSet set = MakeSet(c, Waveform::kSine, 7);
   FitOptions o = QuickOptions(c.family);
@@ -468,13 +487,15 @@ TEST(RecordFit, BadRequestsAreNamed) {
   using pz::testing::InputErrorOf;
   io::RecordSet set = MakeSet(Cases()[1], Waveform::kSine, 1);
   FitOptions o = QuickOptions("jiles-atherton");
-  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }), "--family 'jiles-atherton' is unknown (families: stack-bouc-wen");
+  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }),
+                "--family 'jiles-atherton' is unknown (families: stack-bouc-wen");
   PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("hum"); }), "effect 'hum' is unknown");
   // A beam effect of the one library: refused, and the error says where it runs.
   PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("hinge-friction"); }), "acts on the beam");
   PZ_EXPECT_HAS(InputErrorOf([] { ParseEffect("cubic-stiffening"); }), "piezoid diagnose --cases");
   for (auto& r : set.records) r.role = CaseRole::kTest;
-  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, QuickOptions("duhem")); }), "no training records");
+  PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, QuickOptions("duhem")); }),
+                "no training records");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
-// The noise floor of a bench case (records/noise_floor.h): rounding, scatter of the last two cycles,
-// saturation plateaus, on series whose answers are known in closed form. The floor of record sets
-// (EstimateNoiseFloor) is tested on synthetic records in diagnose_test.cc and reallike_test.cc.
+// The noise floor of a bench case (records/noise_floor.h): rounding, scatter of the last two
+// cycles, saturation plateaus, on series whose answers are known in closed form. The floor of
+// record sets (EstimateNoiseFloor) is tested on synthetic records in diagnose_test.cc and
+// reallike_test.cc.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -55,19 +56,23 @@ TEST(NoiseFloorTest, PeriodDifferenceIsTheScatterOfAnyTwoPeriods) {
   // The bench's scatter is the last two cycles of it.
   EXPECT_DOUBLE_EQ(EstimateCaseNoise(std::span<const double>(y).first(200), 4, 0.0).scatter_rms_deg,
                    std::sqrt(PeriodDifferenceSquares(y, 100, 50) / 49 / 4.0));
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 200, 50); }), "the series has 250");
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 0, 1); }), "periods of 1 samples");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 200, 50); }),
+                "the series has 250");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { PeriodDifferenceSquares(y, 0, 1); }),
+                "periods of 1 samples");
 }
 
 TEST(NoiseFloorTest, SaturatedSamplesContributeTheirRoundingOnly) {
   CaseNoise n;
   n.quantum_deg = kQ;
   n.floor_rms_deg = 0.01;
-  const std::vector<double> model = {1.0, 1.0, 1.0, 0.5, 0.2};             // first three clipped at b1 = 1
-  const std::vector<double> meas = {1.0 - kQ, 1.0, 1.0 - 3 * kQ, 0.5, 0.21};  // one level below; three below
+  const std::vector<double> model = {1.0, 1.0, 1.0, 0.5, 0.2};  // first three clipped at b1 = 1
+  const std::vector<double> meas = {1.0 - kQ, 1.0, 1.0 - 3 * kQ, 0.5,
+                                    0.21};  // one level below; three below
   const double f = SaturationAwareFloor(n, meas, model, 1.0, -1.0);
   EXPECT_NEAR(f, std::sqrt((kQ * kQ + 0 + 3 * 0.01 * 0.01) / 5), 1e-12);
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { SaturationAwareFloor(n, meas, std::vector<double>{1.0}, 1.0, -1.0); }),
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf(
+                    [&] { SaturationAwareFloor(n, meas, std::vector<double>{1.0}, 1.0, -1.0); }),
                 "measured has 5");
 }
 

@@ -1,6 +1,6 @@
 // The families with return-point memory on records (records/preisach_family.h, issue 22):
-// generalisation is the score. A known Preisach plant — a fine grid of relays written here, not with
-// the family's code — is identified on a major-loop record and must predict a record whose
+// generalisation is the score. A known Preisach plant — a fine grid of relays written here, not
+// with the family's code — is identified on a major-loop record and must predict a record whose
 // amplitude ramps down to zero and back (nested minor loops) within the noise; the extrapolation
 // guard flags a record beyond the training range and not one inside it; records that cannot
 // support a Preisach grid get an error that says what is missing.
@@ -31,7 +31,8 @@ class RelayPlant {
   explicit RelayPlant(int levels = 400) : L_(levels), h_(100.0 / levels) {
     for (int a = 0; a < L_; ++a) {
       for (int b = 0; b <= a; ++b) {
-        const double al = (a + 0.5) * h_, be = (b + 0.5) * h_, width = al - be, centre = 0.5 * (al + be);
+        const double al = (a + 0.5) * h_, be = (b + 0.5) * h_, width = al - be,
+                     centre = 0.5 * (al + be);
         double rho = std::exp(-width / 25) * (1 + 0.6 * (centre - 50) / 50);
         if (a == b) rho *= 6;
         alpha_.push_back(al);
@@ -46,8 +47,10 @@ class RelayPlant {
     for (size_t k = 0; k < u.size(); ++k) {
       double acc = 0;
       for (size_t q = 0; q < on.size(); ++q) {
-        if (u[k] >= alpha_[q]) on[q] = 1;
-        else if (u[k] <= beta_[q]) on[q] = 0;
+        if (u[k] >= alpha_[q])
+          on[q] = 1;
+        else if (u[k] <= beta_[q])
+          on[q] = 0;
         if (on[q]) acc += weight_[q];
       }
       y[k] = acc;
@@ -62,8 +65,8 @@ class RelayPlant {
 };
 
 /// A record from the drive after `kRest` s at 0 V, noise added, scored after the rest.
-io::Record MakeRecord(const std::string& name, CaseRole role, const std::vector<double>& drive, uint64_t seed,
-                      const RelayPlant& plant) {
+io::Record MakeRecord(const std::string& name, CaseRole role, const std::vector<double>& drive,
+                      uint64_t seed, const RelayPlant& plant) {
   io::Record r;
   r.name = name;
   r.role = role;
@@ -100,10 +103,13 @@ io::RecordSet MakeSet(const RelayPlant& plant) {
   set.format = "synthetic";
   // Training: 4 periods of the major loop 0 … 100 V. Withheld: the amplitude ramps down to zero
   // and back over 10 s (nested minor loops about 50 V); and a larger drive (beyond the range).
-  set.records.push_back(MakeRecord("major", CaseRole::kTrain, Drive(4, 50, 50, [](double) { return 1.0; }), 1, plant));
+  set.records.push_back(MakeRecord("major", CaseRole::kTrain,
+                                   Drive(4, 50, 50, [](double) { return 1.0; }), 1, plant));
   set.records.push_back(MakeRecord("ramp", CaseRole::kValidate,
-                                   Drive(10, 50, 50, [](double x) { return std::abs(1 - 2 * x); }), 2, plant));
-  set.records.push_back(MakeRecord("beyond", CaseRole::kTest, Drive(3, 60, 60, [](double) { return 1.0; }), 3, plant));
+                                   Drive(10, 50, 50, [](double x) { return std::abs(1 - 2 * x); }),
+                                   2, plant));
+  set.records.push_back(MakeRecord("beyond", CaseRole::kTest,
+                                   Drive(3, 60, 60, [](double) { return 1.0; }), 3, plant));
   return set;
 }
 
@@ -126,8 +132,8 @@ TEST(PreisachFamily, IdentifiedOnAMajorLoopPredictsNestedMinorLoopsWithinTheNois
   const io::RecordSet& set = MajorLoopSet();
   const FitResult f = FitRecords(set, Options("preisach"));
   ASSERT_EQ(f.metrics.size(), 3u);
-  std::cout << "preisach: train " << f.metrics[0].rmse << ", minor loops " << f.metrics[1].rmse << ", beyond "
-            << f.metrics[2].rmse << "; " << f.regularisation.Describe() << "\n";
+  std::cout << "preisach: train " << f.metrics[0].rmse << ", minor loops " << f.metrics[1].rmse
+            << ", beyond " << f.metrics[2].rmse << "; " << f.regularisation.Describe() << "\n";
   EXPECT_TRUE(f.regularisation.used);
   EXPECT_EQ(f.regularisation.cv_rmse.size(), f.regularisation.relatives.size());
   // The floor: the noise, and the plant's own 0.25 V staircase (about 0.025 in quadrature).
@@ -145,12 +151,13 @@ TEST(PreisachFamily, IdentifiedOnAMajorLoopPredictsNestedMinorLoopsWithinTheNois
 TEST(PreisachFamily, TheAsymmetricPiBeatsTheSymmetricOne) {
   const io::RecordSet& set = MajorLoopSet();
   const FitResult f = FitRecords(set, Options("asymmetric-pi"));
-  std::cout << "asymmetric-pi: train " << f.metrics[0].rmse << ", minor loops " << f.metrics[1].rmse << "; "
-            << f.regularisation.Describe() << "\n";
+  std::cout << "asymmetric-pi: train " << f.metrics[0].rmse << ", minor loops " << f.metrics[1].rmse
+            << "; " << f.regularisation.Describe() << "\n";
   // The plant's density leans with the relay centre (not a bend of the centre line alone): the
   // asymmetric PI cannot reach the noise, but halves the symmetric PI's error on both records.
   const FitResult pi = FitRecords(set, Options("prandtl-ishlinskii"));
-  std::cout << "prandtl-ishlinskii: train " << pi.metrics[0].rmse << ", minor loops " << pi.metrics[1].rmse << "\n";
+  std::cout << "prandtl-ishlinskii: train " << pi.metrics[0].rmse << ", minor loops "
+            << pi.metrics[1].rmse << "\n";
   EXPECT_LT(f.metrics[0].rmse, 0.6 * pi.metrics[0].rmse);
   EXPECT_LT(f.metrics[1].rmse, 0.6 * pi.metrics[1].rmse);
   for (double w : f.weights) EXPECT_GE(w, 0);
@@ -213,7 +220,8 @@ TEST(PreisachFamily, ErrorAgainstReversalDepthBinsEveryMonotonePiece) {
   EXPECT_EQ(bins[0].samples + bins[1].samples + bins[3].samples, 0u);
   EXPECT_EQ(bins[2].samples + bins[4].samples, r.scored());
   PZ_EXPECT_HAS(DescribeDepthBins(bins), "swing 40–60 %: RMSE 0.1 (2 piece(s)");
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ErrorByReversalDepth(r, yhat, 0); }), "range must be > 0");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ErrorByReversalDepth(r, yhat, 0); }),
+                "range must be > 0");
 }
 
 TEST(PreisachFamily, ResidualTrendAveragesOnePeriodAndLeavesTheDrift) {
@@ -231,7 +239,8 @@ TEST(PreisachFamily, ResidualTrendAveragesOnePeriodAndLeavesTheDrift) {
   const std::vector<double> yhat(r.u.size(), 0.0);
   const std::vector<double> trend = ResidualTrend(r, yhat, 1.0);
   ASSERT_EQ(trend.size(), r.scored());
-  for (size_t i = 50; i + 50 < trend.size(); ++i) {  // full windows: 101 samples, one period and one sample
+  for (size_t i = 50; i + 50 < trend.size();
+       ++i) {  // full windows: 101 samples, one period and one sample
     const double t = (r.first_scored + i) * r.dt;
     ASSERT_NEAR(trend[i], 0.1 * t, 0.006) << "at " << t << " s";
   }
@@ -240,7 +249,8 @@ TEST(PreisachFamily, ResidualTrendAveragesOnePeriodAndLeavesTheDrift) {
   const std::vector<double> raw = ResidualTrend(r, yhat, 0);  // no window: the residual itself
   EXPECT_DOUBLE_EQ(raw[7], r.y[57]);
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, yhat, -1); }), "averaging window");
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, std::vector<double>(10), 1); }), "shorter");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { ResidualTrend(r, std::vector<double>(10), 1); }),
+                "shorter");
   // A window far longer than the record (a drive whose dominant frequency is ~0: `piezoid fit`'s
   // averaging window is one period of it): the whole window's mean everywhere, not a cast of a
   // count beyond size_t (undefined; the sanitizer run stops on it).
@@ -263,7 +273,8 @@ TEST(PreisachFamily, RecordsThatCannotSupportTheGridSayWhatIsMissing) {
   std::vector<double> ramp;
   for (int k = 0; k < 2000; ++k) ramp.push_back(100.0 * k / 1999);
   set.records = {MakeRecord("rise", CaseRole::kTrain, ramp, 4, plant)};
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { FitRecords(set, Options("preisach")); }), "0 reversal(s)");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { FitRecords(set, Options("preisach")); }),
+                "0 reversal(s)");
   // A square wave: up and down, but nothing between its two levels.
   std::vector<double> square;
   for (int k = 0; k < 4000; ++k) square.push_back((k / 500) % 2 ? 100.0 : 0.0);
@@ -272,7 +283,8 @@ TEST(PreisachFamily, RecordsThatCannotSupportTheGridSayWhatIsMissing) {
   PZ_EXPECT_HAS(e, "sample(s) between");
   PZ_EXPECT_HAS(e, "fewer levels");
   // Too many levels for the family.
-  set.records = {MakeRecord("major", CaseRole::kTrain, Drive(2, 50, 50, [](double) { return 1.0; }), 6, plant)};
+  set.records = {MakeRecord("major", CaseRole::kTrain, Drive(2, 50, 50, [](double) { return 1.0; }),
+                            6, plant)};
   FitOptions o = Options("preisach");
   o.family_options.pi_operators = 300;
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { FitRecords(set, o); }), "preisach.levels");

@@ -27,7 +27,8 @@ inline records::FitOptions QuickPreisach(std::vector<records::EffectKind> effect
 }
 
 /// Each record's RMSE / its true noise RMS, by name, for the fit `f` of the set (kept in *out).
-inline std::map<std::string, double> FloorRatios(const records::RealLikeSet& s, const records::FitOptions& f,
+inline std::map<std::string, double> FloorRatios(const records::RealLikeSet& s,
+                                                 const records::FitOptions& f,
                                                  records::FitResult* out = nullptr) {
   records::FitResult r = records::FitRecords(s.set, f);
   std::map<std::string, double> ratios;

@@ -51,13 +51,14 @@ RealLikeSet Generate(const RealLikeOptions& o) {
 
 RealLikeOptions RatePlant(uint64_t seed) {
   RealLikeOptions o = Rates(seed);
-  o.stack.rate_lag_v = 4;      // the bound of the lag [V]
+  o.stack.rate_lag_v = 4;       // the bound of the lag [V]
   o.stack.rate_time_s = 0.005;  // knee at 800 V/s: 0.5 Hz below it, 8 Hz well above
   return o;
 }
 
 /// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
-std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects, FitResult* out = nullptr) {
+std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects,
+                                     FitResult* out = nullptr) {
   return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
@@ -79,8 +80,11 @@ TEST(RateDependenceTest, ThePlantsRecordsCoverRates) {
   EXPECT_EQ(s.set.records[0].name, "train-0.5hz");
   EXPECT_EQ(s.set.records[5].name, "chirp");
   const ExcitationReport rep = AnalyseExcitation(s.set);
-  EXPECT_GT(rep.training.rate_span(), 8) << rep.training.rate_peak_lo << " … " << rep.training.rate_peak_hi;
-  EXPECT_TRUE(RateCoverageError(s.set, std::vector<EffectKind>{EffectKind::Named("rate-dependence")}).empty());
+  EXPECT_GT(rep.training.rate_span(), 8)
+      << rep.training.rate_peak_lo << " … " << rep.training.rate_peak_hi;
+  EXPECT_TRUE(
+      RateCoverageError(s.set, std::vector<EffectKind>{EffectKind::Named("rate-dependence")})
+          .empty());
 }
 
 TEST(RateDependenceTest, BringsRateDependentLoopsToTheFloorWhereTheFamilyAloneDoesNot) {
@@ -134,14 +138,17 @@ TEST(RateDependenceTest, RecordsAtOneRateAreRefusedAndFlagged) {
   const ExcitationReport rep = AnalyseExcitation(s.set);
   EXPECT_LT(rep.training.rate_span(), kMinRateSpan);
   bool said = false;
-  for (const std::string& line : rep.training_lines) said = said || line.find("one rate only") != std::string::npos;
+  for (const std::string& line : rep.training_lines)
+    said = said || line.find("one rate only") != std::string::npos;
   EXPECT_TRUE(said);
   // The 4 Hz record needs rates beyond training.
   bool rate_need = false;
   for (const WithheldExcitation& w : rep.withheld)
-    for (const ExcitationNeed& n : w.needs) rate_need = rate_need || n.kind == ExcitationNeed::Kind::kRate;
+    for (const ExcitationNeed& n : w.needs)
+      rate_need = rate_need || n.kind == ExcitationNeed::Kind::kRate;
   EXPECT_TRUE(rate_need);
-  const std::string e = testing::InputErrorOf([&] { FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")})); });
+  const std::string e = testing::InputErrorOf(
+      [&] { FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")})); });
   PZ_EXPECT_HAS(e, "rate-dependence");
   PZ_EXPECT_HAS(e, "cover rates");
   PZ_EXPECT_HAS(e, "several rates");
@@ -161,7 +168,8 @@ TEST(RateDependenceTest, AWithheldRecordFasterThanTrainingIsFlagged) {
   o.withheld_frequencies_hz = {8};
   o.chirp = false;
   const RealLikeSet s = Generate(o);
-  const FitResult fit = FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")}));
+  const FitResult fit =
+      FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")}));
   const std::vector<ExtrapolationCheck> checks = CheckExtrapolation(s.set, fit);
   ASSERT_EQ(checks.size(), 1u);
   EXPECT_TRUE(checks[0].flagged) << checks[0].Describe("V", "um");

@@ -48,9 +48,10 @@ struct Plant {
   std::shared_ptr<RecordModel> model;
   explicit Plant(const std::string& family) {
     const DataScale scale = MeasureScale(train);
-    model = std::make_shared<RecordModel>(MakeFamily(family, scale, {}),
-                                          std::vector<EffectKind>{EffectKind::Named("creep-spectrum"), EffectKind::Named("delay")},
-                                          scale);
+    model = std::make_shared<RecordModel>(
+        MakeFamily(family, scale, {}),
+        std::vector<EffectKind>{EffectKind::Named("creep-spectrum"), EffectKind::Named("delay")},
+        scale);
   }
 };
 
@@ -86,12 +87,14 @@ TEST(SpectrumSolveTest, ConvergesMonotonicallyToTheJointOptimum) {
     SpectrumSolution& s = both[start];
     s = SolveSpectrum(sp, p);
     EXPECT_EQ(s.start, start);
-    std::cout << "start " << start << ": " << s.iterations << " steps, " << s.grams << " normal equations, objective";
+    std::cout << "start " << start << ": " << s.iterations << " steps, " << s.grams
+              << " normal equations, objective";
     for (double f : s.objectives) std::cout << " " << std::setprecision(15) << f;
     std::cout << "\n";
     ASSERT_TRUE(s.ok);
     ASSERT_GE(s.objectives.size(), 2u);
-    for (size_t i = 1; i < s.objectives.size(); ++i) EXPECT_LT(s.objectives[i], s.objectives[i - 1]) << i;
+    for (size_t i = 1; i < s.objectives.size(); ++i)
+      EXPECT_LT(s.objectives[i], s.objectives[i - 1]) << i;
     EXPECT_EQ(s.objective, s.objectives.back());
     EXPECT_LE(s.iterations, 20);
     for (double w : s.w) {
@@ -99,7 +102,8 @@ TEST(SpectrumSolveTest, ConvergesMonotonicallyToTheJointOptimum) {
       EXPECT_LE(w, su.model->params()[first].upper);
     }
   }
-  // Both starts at the same optimum; the creep found (log creep of 3 % per decade: ~1.5 % per weight).
+  // Both starts at the same optimum; the creep found (log creep of 3 % per decade: ~1.5 % per
+  // weight).
   EXPECT_NEAR(both[0].objective, both[1].objective, 1e-9 * both[0].objective);
   double sum = 0;
   for (size_t i = 0; i < count; ++i) {
@@ -118,7 +122,8 @@ TEST(SpectrumSolveTest, ConvergesMonotonicallyToTheJointOptimum) {
     for (double step : {-1e-3, 1e-3, -1e-5, 1e-5}) {
       std::vector<double> r = q;
       for (size_t j = 0; j < count; ++j)
-        if (j == i || i == count) r[first + j] = std::clamp(q[first + j] + step, 0.0, su.model->params()[first + j].upper);
+        if (j == i || i == count)
+          r[first + j] = std::clamp(q[first + j] + step, 0.0, su.model->params()[first + j].upper);
       if (r == q) continue;
       EXPECT_GE(fitness.Evaluate(Genome(r)).cost, at * (1 - 1e-12)) << i << " " << step;
     }
@@ -145,7 +150,8 @@ TEST(SpectrumSolveTest, AFitSearchesTheDelayOnlyTheSameOnAnyThreadCount) {
   const FitResult two = FitModel(su.s.set, su.model, f);
   EXPECT_EQ(one.searched_parameters, 1u);
   EXPECT_TRUE(one.spectrum_solved);
-  EXPECT_EQ(one.solved_parameters, su.model->EffectParams(EffectKind::Named("creep-spectrum")).second);
+  EXPECT_EQ(one.solved_parameters,
+            su.model->EffectParams(EffectKind::Named("creep-spectrum")).second);
   EXPECT_EQ(one.algorithm, opt::SearchAlgorithm::kLine);  // the delay alone: the line search
   EXPECT_LE(one.evaluations, 300);
   EXPECT_EQ(one.search.evaluations, two.search.evaluations);
@@ -156,7 +162,8 @@ TEST(SpectrumSolveTest, AFitSearchesTheDelayOnlyTheSameOnAnyThreadCount) {
   // The table covers every parameter (the spectrum's weights too) and the penalty's validation ran.
   EXPECT_EQ(one.uncertainty.params.size(), su.model->params().size());
   EXPECT_TRUE(one.spectrum_regularisation.used);
-  EXPECT_EQ(one.spectrum_sigma.size(), su.model->EffectParams(EffectKind::Named("creep-spectrum")).second);
+  EXPECT_EQ(one.spectrum_sigma.size(),
+            su.model->EffectParams(EffectKind::Named("creep-spectrum")).second);
   // At the training floor (the family matches the plant: Preisach + creep + lag).
   const double floor = su.s.truth[0].noise_rms_um;
   EXPECT_LE(one.metrics[0].rmse, 1.15 * floor);

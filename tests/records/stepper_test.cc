@@ -44,7 +44,8 @@ io::Record TestRecord() {
     const double t = static_cast<double>(k) * kDt;
     double u = 50;
     if (k >= 200) {
-      const double tt = static_cast<double>(std::min<size_t>(k, 1500) + (k > 1700 ? k - 1700 : 0) - 200) * kDt;
+      const double tt =
+          static_cast<double>(std::min<size_t>(k, 1500) + (k > 1700 ? k - 1700 : 0) - 200) * kDt;
       u = 50 + 35 * std::sin(2 * std::numbers::pi * tt) * (0.6 + 0.4 * std::sin(1.7 * tt)) +
           6 * std::sin(2 * std::numbers::pi * 7 * tt);
     }
@@ -60,8 +61,8 @@ io::Record TestRecord() {
   return r;
 }
 
-/// Inside every parameter's box: 70 % up a linear range (a symmetric range's middle is 0: no effect), the
-/// geometric middle of a log one; positive weights.
+/// Inside every parameter's box: 70 % up a linear range (a symmetric range's middle is 0: no
+/// effect), the geometric middle of a log one; positive weights.
 ModelSpec Spec(const std::string& family, std::vector<EffectKind> effects, const io::Record& r) {
   ModelSpec s;
   s.family = family;
@@ -75,13 +76,16 @@ ModelSpec Spec(const std::string& family, std::vector<EffectKind> effects, const
   s.drive_max = s.scale.u_max;
   const auto model = s.Model();
   for (const auto& p : model->params())
-    s.params.push_back(p.log_scale ? std::sqrt(p.lower * p.upper) : p.lower + 0.7 * (p.upper - p.lower));
-  if (family == "bimorph-fin") {  // the fin's backlash dead band narrower, so the test drive moves the fin out of it
+    s.params.push_back(p.log_scale ? std::sqrt(p.lower * p.upper)
+                                   : p.lower + 0.7 * (p.upper - p.lower));
+  if (family == "bimorph-fin") {  // the fin's backlash dead band narrower, so the test drive moves
+                                  // the fin out of it
     s.params[5] = 0.02;
     s.params[6] = 0.03;
   }
   if (model->family().linear()) {
-    for (size_t j = 0; j < model->family().regressors(); ++j) s.weights.push_back(0.05 + 0.03 * static_cast<double>(j % 5));
+    for (size_t j = 0; j < model->family().regressors(); ++j)
+      s.weights.push_back(0.05 + 0.03 * static_cast<double>(j % 5));
   }
   return s;
 }
@@ -194,7 +198,9 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
     EXPECT_EQ(EffectKind::Named(name), e) << name;
     const bool beam = def->stage() == model::EffectStage::kBeam;
     const bool on_fin = model::IsFinEffect(e);
-    EXPECT_TRUE(!beam || on_fin) << name << ": a beam effect runs only on the fin bench, which must offer it (EffectDef::Fin)";
+    EXPECT_TRUE(!beam || on_fin)
+        << name
+        << ": a beam effect runs only on the fin bench, which must offer it (EffectDef::Fin)";
     if (!beam) {
       ++records;
       EXPECT_EQ(ParseEffect(name), e) << name;
@@ -202,8 +208,10 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
       const std::vector<ParamInfo> box = def->Params(stack);
       for (int i = 0; i < 20; ++i) {
         const std::vector<double> p = def->DrawRecordsTruth(draw, stack);
-        if (p.size() != box.size()) {  // every missing piece of every effect is listed, not only the first
-          ADD_FAILURE() << name << ": DrawRecordsTruth gives " << p.size() << " parameters, the box has " << box.size();
+        if (p.size() !=
+            box.size()) {  // every missing piece of every effect is listed, not only the first
+          ADD_FAILURE() << name << ": DrawRecordsTruth gives " << p.size()
+                        << " parameters, the box has " << box.size();
           break;
         }
         for (size_t j = 0; j < p.size(); ++j) {
@@ -216,7 +224,8 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
         const ModelSpec s = Spec("backlash-like", {e}, r);
         Stepper st(s);
         const auto ref = Reference(s, r), got = Forward(st, r.u);
-        EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref)) << name << ": the stepper differs from RecordModel::Simulate";
+        EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref))
+            << name << ": the stepper differs from RecordModel::Simulate";
       } catch (const std::exception& x) {
         ADD_FAILURE() << name << ": " << x.what();
       }
@@ -243,9 +252,12 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
         }
       }
     } else {
-      EXPECT_NE(model::FinEffectError(name).find("not an effect of the fin bench"), std::string::npos) << name;
+      EXPECT_NE(model::FinEffectError(name).find("not an effect of the fin bench"),
+                std::string::npos)
+          << name;
       model::TruthDraw half([] { return 0.5; });
-      EXPECT_TRUE(def->DrawFinTruth(half, false).parts.empty()) << name << ": a fin truth without a fin box";
+      EXPECT_TRUE(def->DrawFinTruth(half, false).parts.empty())
+          << name << ": a fin truth without a fin box";
     }
   }
   EXPECT_EQ(records, RecordEffects().size());
@@ -256,19 +268,22 @@ TEST(Stepper, InverseThenForwardReturnsTheReference) {
   const io::Record r = TestRecord();
   for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like"}) {
     ModelSpec s = Spec(family, {}, r);
-    if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};  // alpha >= 0, B1 >= c/2 > 0: monotone on every step
+    if (s.family == "backlash-like")
+      s.params = {0.05, 0.4, 0.25};  // alpha >= 0, B1 >= c/2 > 0: monotone on every step
     const RoundTrip rt = InverseThenForward(s, r.u);
     EXPECT_EQ(rt.saturated, 0) << family;
     EXPECT_LE(MaxDiff(rt.ref, rt.y), 1e-9 * Range(rt.ref)) << family;
   }
 }
 
-/// The initial states (FamilyOptions::initial_state) reach the kernels: forward equals Simulate, the
-/// state is not the centred one, and the inverse started in it undoes the forward model.
+/// The initial states (FamilyOptions::initial_state) reach the kernels: forward equals Simulate,
+/// the state is not the centred one, and the inverse started in it undoes the forward model.
 TEST(Stepper, InitialStatesMatchSimulateAndInvert) {
   const io::Record r = TestRecord();
-  for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
-    for (model::InitialState state : {model::InitialState::kDescended, model::InitialState::kAscended}) {
+  for (const auto& family :
+       {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
+    for (model::InitialState state :
+         {model::InitialState::kDescended, model::InitialState::kAscended}) {
       const std::string what = std::string(family) + " " + model::InitialStateName(state);
       ModelSpec s = Spec(family, {}, r);
       if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};
@@ -284,24 +299,28 @@ TEST(Stepper, InitialStatesMatchSimulateAndInvert) {
       EXPECT_LE(MaxDiff(rt.ref, rt.y), 1e-9 * Range(rt.ref)) << what;
     }
   }
-  // auto: descended for a rest at the bottom of the data's drive range, centred in its middle; always
-  // centred for backlash-like (records/families.cc).
+  // auto: descended for a rest at the bottom of the data's drive range, centred in its middle;
+  // always centred for backlash-like (records/families.cc).
   io::Record bottom = r;
   const double lowest = *std::min_element(r.u.begin(), r.u.end());
   for (size_t k = 0; k < 200; ++k) bottom.u[k] = lowest;
-  for (const auto& family : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
+  for (const auto& family :
+       {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "backlash-like", "stack-bouc-wen"}) {
     for (const io::Record* rec : std::vector<const io::Record*>{&r, &bottom}) {
       ModelSpec s = Spec(family, {}, *rec);
       if (s.family == "backlash-like") s.params = {0.05, 0.4, 0.25};
       if (s.family == "stack-bouc-wen") s.params[0] = 0.3;
       ModelSpec resolved = s;
-      resolved.initial_state = rec == &r || s.family == "backlash-like" ? model::InitialState::kCentred
-                                                                        : model::InitialState::kDescended;
+      resolved.initial_state = rec == &r || s.family == "backlash-like"
+                                   ? model::InitialState::kCentred
+                                   : model::InitialState::kDescended;
       s.initial_state = model::InitialState::kAuto;
       Stepper st(s), want(resolved);
-      const auto ref = Reference(s, *rec), got = Forward(st, rec->u), expected = Forward(want, rec->u);
+      const auto ref = Reference(s, *rec), got = Forward(st, rec->u),
+                 expected = Forward(want, rec->u);
       EXPECT_LE(MaxDiff(ref, got), 1e-12 * Range(ref)) << family << " auto";
-      EXPECT_EQ(MaxDiff(got, expected), 0.0) << family << " auto, rest " << (rec == &r ? "mid-range" : "at the bottom");
+      EXPECT_EQ(MaxDiff(got, expected), 0.0)
+          << family << " auto, rest " << (rec == &r ? "mid-range" : "at the bottom");
     }
   }
   ModelSpec s = Spec("duhem", {}, r);
@@ -343,12 +362,13 @@ TEST(Stepper, RateDependentInverseTracks) {
   }
 }
 
-/// `compensate --replay`'s core (ReplayDrive): every drive effect's inverse, replayed on the model's
-/// own noiseless response to the applied drive, gives that drive back — the delay (a whole number
-/// of samples) read that many samples ahead; the rate-dependence play with its lag τ_r under a
-/// quarter of the sample step —, on a rate-independent and a rate-dependent family. Over a quarter
-/// step the rate-dependence play's one-step inverse is unstable (Stepper::rate_dependence_inverse_gain)
-/// and the inverse plans two samples: within 3 % of the drive's span.
+/// `compensate --replay`'s core (ReplayDrive): every drive effect's inverse, replayed on the
+/// model's own noiseless response to the applied drive, gives that drive back — the delay (a whole
+/// number of samples) read that many samples ahead; the rate-dependence play with its lag τ_r under
+/// a quarter of the sample step —, on a rate-independent and a rate-dependent family. Over a
+/// quarter step the rate-dependence play's one-step inverse is unstable
+/// (Stepper::rate_dependence_inverse_gain) and the inverse plans two samples: within 3 % of the
+/// drive's span.
 TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
   const io::Record r = TestRecord();
   const double span = Range(r.u);
@@ -356,7 +376,8 @@ TEST(Stepper, EveryDriveEffectReplaysItsOwnResponse) {
     for (EffectKind e : kEffects) {
       if (e->stage() != model::EffectStage::kDrive) continue;
       ModelSpec s = Spec(family, {e}, r);
-      if (s.family == "stack-bouc-wen") s.params[0] = 0.3;  // monotone on each step (RateDependentInverseTracks)
+      if (s.family == "stack-bouc-wen")
+        s.params[0] = 0.3;  // monotone on each step (RateDependentInverseTracks)
       const std::string name = family + " + " + std::string(EffectName(e));
       if (std::string_view(EffectName(e)) == "delay") s.params.back() = 3 * kDt;
       if (std::string_view(EffectName(e)) == "rate-dependence") {
@@ -395,11 +416,11 @@ ModelSpec WithDelay(ModelSpec s, double samples) {
 /// A delay of a fractional number of samples n + s (model/kernels/effects.h): for s <= 1/2 the
 /// compensator reads the reference n samples ahead and keeps (1 - s) x + s x_prev in the map it
 /// solves; for s > 1/2 it reads n + L ahead (0.79 samples: L = 23, r^L <= 1e-13 with r = (1 - s)/s)
-/// and undoes the delay backwards over them. The model's own noiseless response replays its drive to
-/// rounding, alone and with drive effects before the delay (driver-lowpass, quadratic-drive, creep),
-/// drive and output effects after it (rate-dependence, creep-spectrum, friction, stiffening), on a
-/// rate-independent and a rate-dependent family. Rounding the delay to whole samples (before) left
-/// up to a few per cent of the span.
+/// and undoes the delay backwards over them. The model's own noiseless response replays its drive
+/// to rounding, alone and with drive effects before the delay (driver-lowpass, quadratic-drive,
+/// creep), drive and output effects after it (rate-dependence, creep-spectrum, friction,
+/// stiffening), on a rate-independent and a rate-dependent family. Rounding the delay to whole
+/// samples (before) left up to a few per cent of the span.
 TEST(Stepper, FractionalDelayReplaysItsOwnResponse) {
   const io::Record r = TestRecord();
   const double span = Range(r.u);
@@ -419,7 +440,8 @@ TEST(Stepper, FractionalDelayReplaysItsOwnResponse) {
       // The stack Bouc-Wen's output through the stiffening folds at these parameters (not monotone:
       // 2.6 % of the span without a delay); the friction's play on the output leaves the drive
       // undetermined within its band (14-16 % with or without a delay): neither is the delay's.
-      const bool has_stiffening = std::find(names.begin(), names.end(), "stiffening") != names.end();
+      const bool has_stiffening =
+          std::find(names.begin(), names.end(), "stiffening") != names.end();
       if (family == "stack-bouc-wen" && has_stiffening) continue;
       ModelSpec base = Spec(family, effects, r);
       if (base.family == "stack-bouc-wen") base.params[0] = 0.3;  // monotone on each step
@@ -429,15 +451,16 @@ TEST(Stepper, FractionalDelayReplaysItsOwnResponse) {
       if (rate) {
         ASSERT_LT(Stepper(base).rate_dependence_inverse_gain(), 1) << name;
       }
-      for (const auto& [delay, preview] : std::vector<std::pair<double, size_t>>{{0.21, 0}, {0.5, 0}, {0.79, 23}, {1.35, 1}, {3.0, 3}}) {
+      for (const auto& [delay, preview] : std::vector<std::pair<double, size_t>>{
+               {0.21, 0}, {0.5, 0}, {0.79, 23}, {1.35, 1}, {3.0, 3}}) {
         const ModelSpec s = WithDelay(base, delay);
         const std::string what = name + " (delay " + std::to_string(delay) + " samples)";
         const Stepper st(s);
         EXPECT_EQ(st.preview_samples(), preview) << what;
         const ReplayError e = ReplayDrive(s, r, SimulateRecord(s, r));
         EXPECT_EQ(e.n, r.size() - 1 - st.preview_samples()) << what;
-        // s = 1/2: an error of the last drive comes back unchanged (alternating): the rounding adds up
-        // to 1e-11 of the span and can pass a limit at the drive's extreme.
+        // s = 1/2: an error of the last drive comes back unchanged (alternating): the rounding adds
+        // up to 1e-11 of the span and can pass a limit at the drive's extreme.
         EXPECT_LE(e.clipped, delay == 0.5 ? 1u : 0u) << what;
         // The rate-dependence play where the drive stops (the hold at 1.5 s): its rate changes sign
         // within a few millivolts of the drive, the one-step map folds there, and behind a fraction
@@ -456,7 +479,8 @@ TEST(Stepper, FractionalDelayReplaysItsOwnResponse) {
 TEST(Stepper, FractionalDelayReplaysFromTheFirstSample) {
   io::Record r = TestRecord();
   const size_t skip = 200;  // the rest
-  for (auto* v : {&r.t, &r.u, &r.y}) v->erase(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(skip));
+  for (auto* v : {&r.t, &r.u, &r.y})
+    v->erase(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(skip));
   for (double& t : r.t) t -= static_cast<double>(skip) * kDt;
   r.end_scored = r.size();
   const double span = Range(r.u);
@@ -468,7 +492,8 @@ TEST(Stepper, FractionalDelayReplaysFromTheFirstSample) {
       if (base.family == "stack-bouc-wen") base.params[0] = 0.3;
       for (const double delay : {0.21, 0.79, 1.93}) {
         const ModelSpec s = WithDelay(base, delay);
-        const std::string what = family + (lowpass ? " + driver-lowpass" : "") + " + delay " + std::to_string(delay);
+        const std::string what =
+            family + (lowpass ? " + driver-lowpass" : "") + " + delay " + std::to_string(delay);
         const ReplayError e = ReplayDrive(s, r, SimulateRecord(s, r));
         EXPECT_EQ(e.clipped, 0u) << what;
         EXPECT_LE(e.rms_u, 1e-9 * span) << what;
@@ -494,16 +519,17 @@ TEST(Stepper, PreviewSamplesOfDelaysAndPlans) {
     double delay;
     size_t preview;
   };
-  for (const auto& [family, delay, preview] : std::vector<Case>{{"prandtl-ishlinskii", 0, 0},
-                                                               {"prandtl-ishlinskii", 0.21, 0},
-                                                               {"prandtl-ishlinskii", 0.5, 0},
-                                                               {"prandtl-ishlinskii", 0.79, 23},
-                                                               {"prandtl-ishlinskii", 1.35, 1},
-                                                               {"prandtl-ishlinskii", 2.49, 2},
-                                                               {"prandtl-ishlinskii", 2.51, 2 + PZK_DELAY_HORIZON_MAX},
-                                                               {"bimorph-fin", 0, 1},
-                                                               {"bimorph-fin", 1.35, 2},
-                                                               {"bimorph-fin", 1.79, 25}}) {
+  for (const auto& [family, delay, preview] :
+       std::vector<Case>{{"prandtl-ishlinskii", 0, 0},
+                         {"prandtl-ishlinskii", 0.21, 0},
+                         {"prandtl-ishlinskii", 0.5, 0},
+                         {"prandtl-ishlinskii", 0.79, 23},
+                         {"prandtl-ishlinskii", 1.35, 1},
+                         {"prandtl-ishlinskii", 2.49, 2},
+                         {"prandtl-ishlinskii", 2.51, 2 + PZK_DELAY_HORIZON_MAX},
+                         {"bimorph-fin", 0, 1},
+                         {"bimorph-fin", 1.35, 2},
+                         {"bimorph-fin", 1.79, 25}}) {
     const ModelSpec s = WithDelay(Spec(family, {EffectKind::Named("delay")}, r), delay);
     EXPECT_EQ(Stepper(s).preview_samples(), preview) << family << " delay " << delay;
   }
@@ -575,15 +601,19 @@ struct HeaderRun {
 HeaderRun CompileAndRun(const Stepper& st, const std::string& name, const std::vector<double>& u,
                         const std::vector<double>& ref) {
   const auto dir = std::filesystem::temp_directory_path() /
-                   ("pz_stepper_" + name + "_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-                    "_" + std::to_string(getpid()));
+                   ("pz_stepper_" + name + "_" +
+                    std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+                    std::to_string(getpid()));
   std::filesystem::create_directories(dir);
   std::ofstream(dir / (name + ".h")) << controller::ExportHeader(st, name, "test model");
-  std::ofstream(dir / "main.c") << "#include <stdio.h>\n#include <stdlib.h>\n#include \"" << name << ".h\"\n"
-                                << "int main(void) {\n  " << name << "_state s, v;\n  double u, y;\n  int first = 1;\n"
+  std::ofstream(dir / "main.c") << "#include <stdio.h>\n#include <stdlib.h>\n#include \"" << name
+                                << ".h\"\n"
+                                << "int main(void) {\n  " << name
+                                << "_state s, v;\n  double u, y;\n  int first = 1;\n"
                                 << "  FILE *in = fopen(\"in.txt\", \"r\");\n  if (!in) return 2;\n"
                                 << "  while (fscanf(in, \"%lf %lf\", &u, &y) == 2) {\n"
-                                << "    if (first) { printf(\"%a %a\\n\", " << name << "_init(&s, u), u); " << name
+                                << "    if (first) { printf(\"%a %a\\n\", " << name
+                                << "_init(&s, u), u); " << name
                                 << "_init(&v, u); first = 0; continue; }\n"
                                 << "    printf(\"%a %a\\n\", " << name << "_step(&s, u), " << name
                                 << "_inverse_step(&v, y));\n  }\n  fclose(in);\n  return 0;\n}\n";
@@ -596,7 +626,8 @@ HeaderRun CompileAndRun(const Stepper& st, const std::string& name, const std::v
     }
   }
   const std::string cmd = "cd '" + dir.string() + "' && '" + PIEZOID_C_COMPILER +
-                          "' -std=c99 -Wall -Wextra -Werror -pedantic -O2 -o run main.c -lm > cc.log 2>&1 && ./run > out.txt";
+                          "' -std=c99 -Wall -Wextra -Werror -pedantic -O2 -o run main.c -lm > "
+                          "cc.log 2>&1 && ./run > out.txt";
   const int rc = std::system(cmd.c_str());
   std::ifstream log(dir / "cc.log");
   std::stringstream cc;
@@ -619,16 +650,23 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     std::string family;
     std::vector<EffectKind> effects;
     model::InitialState state = model::InitialState::kCentred;
-    double delay = -1;  ///< samples (>= 0: set; a fraction up to a half solved exactly, over a half planned ahead)
+    double delay = -1;  ///< samples (>= 0: set; a fraction up to a half solved exactly, over a half
+                        ///< planned ahead)
   };
   std::vector<Case> cases;
   for (const auto& f : kFamilies) cases.push_back({f, {}});
-  cases.push_back({"stack-bouc-wen", {EffectKind::Named("delay"), EffectKind::Named("quadratic-drive")}});
-  cases.push_back({"prandtl-ishlinskii", {EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")},
-                   model::InitialState::kCentred, 0.21});
-  cases.push_back({"stack-bouc-wen", {EffectKind::Named("delay"), EffectKind::Named("friction")},
-                   model::InitialState::kCentred, 1.79});
-  cases.push_back({"bimorph-fin", {EffectKind::Named("delay")}, model::InitialState::kCentred, 1.35});
+  cases.push_back(
+      {"stack-bouc-wen", {EffectKind::Named("delay"), EffectKind::Named("quadratic-drive")}});
+  cases.push_back({"prandtl-ishlinskii",
+                   {EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")},
+                   model::InitialState::kCentred,
+                   0.21});
+  cases.push_back({"stack-bouc-wen",
+                   {EffectKind::Named("delay"), EffectKind::Named("friction")},
+                   model::InitialState::kCentred,
+                   1.79});
+  cases.push_back(
+      {"bimorph-fin", {EffectKind::Named("delay")}, model::InitialState::kCentred, 1.35});
   cases.push_back({"backlash-like", kEffects});
   for (const auto& f : {"prandtl-ishlinskii", "preisach", "asymmetric-pi", "stack-bouc-wen"})
     cases.push_back({f, {}, model::InitialState::kDescended});
@@ -661,7 +699,8 @@ TEST(ExportHeader, CompilesStrictAndMatchesTheStepper) {
     // The inverse: the same kernels, so the same drive (to the last bits on this machine).
     run.inverse.size() == r.size() ? (void)0 : ADD_FAILURE() << name;
     for (size_t k = 1; k < r.size() && k < run.inverse.size(); ++k) {
-      ASSERT_NEAR(run.inverse[k], u_inv[k], 1e-12 * (s.drive_max - s.drive_min)) << name << " sample " << k;
+      ASSERT_NEAR(run.inverse[k], u_inv[k], 1e-12 * (s.drive_max - s.drive_min))
+          << name << " sample " << k;
     }
   }
 }
@@ -760,12 +799,14 @@ TEST(Stepper, FinInverseFollowsWithOneSamplePreview) {
     Stepper inv(s);
     inv.Init(r.u[0]);
     std::vector<double> u(r.size(), r.u[0]);
-    for (size_t k = 1; k < r.size(); ++k) u[k] = inv.InverseStep(ref[std::min(k + 1, r.size() - 1)]);
+    for (size_t k = 1; k < r.size(); ++k)
+      u[k] = inv.InverseStep(ref[std::min(k + 1, r.size() - 1)]);
     Stepper check(s);
     const auto y = Forward(check, u);
     double ss = 0;
     for (size_t k = 0; k < r.size(); ++k) ss += (ref[k] - y[k]) * (ref[k] - y[k]);
-    const double rms = std::sqrt(ss / static_cast<double>(r.size())), dead_band = (s.params[5] + s.params[6]) * s.params[9];
+    const double rms = std::sqrt(ss / static_cast<double>(r.size())),
+                 dead_band = (s.params[5] + s.params[6]) * s.params[9];
     for (double v : u) ASSERT_TRUE(v >= s.drive_min && v <= s.drive_max);
     if (!band) {  // measured: max 4.5e-3, rms 2.5e-4 of a range of 6.4; 23 of 3000 samples clipped
       EXPECT_LE(MaxDiff(ref, y), 2e-3 * Range(ref));

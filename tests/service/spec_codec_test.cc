@@ -15,17 +15,20 @@ namespace {
 
 using testing::Descriptions;
 using testing::HasViolation;
-job::JobSpec NominalSpec(int population, int generations) { return testing::NominalHgannSpec(population, generations); }
-bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field, const std::string& text = "") {
+job::JobSpec NominalSpec(int population, int generations) {
+  return testing::NominalHgannSpec(population, generations);
+}
+bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field,
+              const std::string& text = "") {
   return HasViolation(v, field, text);
 }
 std::string All(const std::vector<job::FieldViolation>& v) { return Descriptions(v); }
 
+using hgann::HgannConfigFromProblem;
+using hgann::HgannFitnessConfig;
 using job::FieldViolation;
 using job::HgannProblem;
 using job::JobSpec;
-using hgann::HgannFitnessConfig;
-using hgann::HgannConfigFromProblem;
 
 TEST(SpecCodec, SpecSurvivesTheWireAndJsonBitForBit) {
   JobSpec s = NominalSpec(10, 1);
@@ -85,7 +88,8 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   s.ga->migration_margin = 0.2;
   s.ga->island_mutation = {0.01, 0.02, 0.03, 0.05};
   JobSpec no_broadcast = s;
-  no_broadcast.ga->broadcast_margin = 0.5;  // not used without an interval: encoded as before broadcasts
+  no_broadcast.ga->broadcast_margin =
+      0.5;  // not used without an interval: encoded as before broadcasts
   s.ga->broadcast_interval = 25;
   s.ga->broadcast_margin = 0.3;
   JobSpec back;
@@ -129,7 +133,8 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   EXPECT_EQ(back.ga->topology, opt::MigrationTopology::kFullyConnected);
   EXPECT_EQ(back.ga->migration_margin, 0.2);
   EXPECT_TRUE(back.ga->island_mutation.empty());
-  EXPECT_EQ(back.ga->output_moves, opt::GaOptions::kAutoOutputMoves) << "unset: 16 % of the offspring with several islands, 0 with one";
+  EXPECT_EQ(back.ga->output_moves, opt::GaOptions::kAutoOutputMoves)
+      << "unset: 16 % of the offspring with several islands, 0 with one";
   EXPECT_EQ(JobSpecToJson(s).find("output"), std::string::npos) << "auto is not written";
   // Output moves, 0 (none) included, are written and come back.
   for (int moves : {0, 16}) {
@@ -148,18 +153,21 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
     mutate(*bad.ga);
     return bad.Validate();
   };
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.islands = 0; }), "ga.islands", "must be in [1, 1024]"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migrants = 10; }), "ga.migrants", "must be in [0, 9]"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.islands = 0; }), "ga.islands",
+                       "must be in [1, 1024]"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migrants = 10; }), "ga.migrants",
+                       "must be in [0, 9]"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migrants = 0; }), "ga.migrants",
                        "must be ≥ 1 when ga.migration_interval > 0"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.topology = static_cast<opt::MigrationTopology>(5); }),
-                       "ga.topology", "MIGRATION_TOPOLOGY_RING"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = 1; }), "ga.migration_margin",
-                       "must be in [0, 1)"));
+  EXPECT_TRUE(HasField(
+      violations([](job::GaSettings& g) { g.topology = static_cast<opt::MigrationTopology>(5); }),
+      "ga.topology", "MIGRATION_TOPOLOGY_RING"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = 1; }),
+                       "ga.migration_margin", "must be in [0, 1)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.migration_margin = std::nan(""); }),
                        "ga.migration_margin", "must be in [0, 1)"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.broadcast_margin = 0; }), "ga.broadcast_margin",
-                       "must be in (0, 1)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.broadcast_margin = 0; }),
+                       "ga.broadcast_margin", "must be in (0, 1)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.broadcast_margin = std::nan(""); }),
                        "ga.broadcast_margin", "must be in (0, 1)"));
   EXPECT_TRUE(HasField(violations([](job::GaSettings& g) {
@@ -167,16 +175,22 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
                          g.migrants = 0;
                        }),
                        "ga.migrants", "must be ≥ 1 when ga.broadcast_interval > 0"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation = {0.01, 0.02}; }),
-                       "ga.island_mutation.size()", "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = 4"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }), "ga.island_mutation[2]",
-                       "must be in [0, 1]"));
+  EXPECT_TRUE(HasField(
+      violations([](job::GaSettings& g) {
+        g.island_mutation = {0.01, 0.02};
+      }),
+      "ga.island_mutation.size()",
+      "must be 0 (the default ladder: ga.mutation_probability × 1, 2, 3, 5) or ga.islands = 4"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.island_mutation[2] = -0.1; }),
+                       "ga.island_mutation[2]", "must be in [0, 1]"));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.island_mutation.clear(); }).empty());
   // population 10, elite 5: 0 … 5 offspring made by moves.
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = 6; }), "ga.output_moves",
-                       "must be in [0, population − round(population · elite_fraction) = 5] (unset: 0 with one "
-                       "island, 16 % of the offspring with several)"));
-  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = -2; }), "ga.output_moves", "must be in [0, "));
+  EXPECT_TRUE(HasField(
+      violations([](job::GaSettings& g) { g.output_moves = 6; }), "ga.output_moves",
+      "must be in [0, population − round(population · elite_fraction) = 5] (unset: 0 with one "
+      "island, 16 % of the offspring with several)"));
+  EXPECT_TRUE(HasField(violations([](job::GaSettings& g) { g.output_moves = -2; }),
+                       "ga.output_moves", "must be in [0, "));
   EXPECT_TRUE(violations([](job::GaSettings& g) { g.output_moves = 5; }).empty());
   // Both population and elite fraction out of range (the fuzzer's input: 1826206566 − −774244904
   // overflowed an int): every field named, the offspring counted in 64 bits.
@@ -187,8 +201,9 @@ TEST(SpecCodec, IslandSettingsRoundTripAndBadOnesAreNamedWithTheirRange) {
   });
   EXPECT_TRUE(HasField(wild, "ga.population", "must be in [2, 1000000]"));
   EXPECT_TRUE(HasField(wild, "ga.elite_fraction", "must be in (0, 1)"));
-  EXPECT_TRUE(violations([](job::GaSettings& g) { g.migration_interval = 0, g.migrants = 0, g.broadcast_interval = 0; })
-                  .empty());
+  EXPECT_TRUE(violations([](job::GaSettings& g) {
+                g.migration_interval = 0, g.migrants = 0, g.broadcast_interval = 0;
+              }).empty());
   // A topology name JSON does not know is refused naming the field and the names allowed.
   const Status st = JobSpecFromJson(R"({"version": 1, "ga": {"topology": "STAR"}})", &back, &v);
   EXPECT_FALSE(st.ok());
@@ -208,7 +223,8 @@ JobSpec FromJson(const std::string& extra, const std::string& ga, std::vector<Fi
   JobSpec s;
   const std::string json = R"({"version": 1, "hgann": {"cases": [{"number": 1, "amplitude_v": 500,
       "frequency_hz": 0.5, "role": "CASE_ROLE_TRAIN", "sample_rate_hz": 100,
-      "angle_deg": [0, 0.1, -0.2]}])" + extra + "}, \"ga\": " + ga + "}";
+      "angle_deg": [0, 0.1, -0.2]}])" +
+                           extra + "}, \"ga\": " + ga + "}";
   EXPECT_TRUE(JobSpecFromJson(json, &s, v).ok()) << json;
   return s;
 }
@@ -255,7 +271,8 @@ TEST(SpecCodec, AnEmptyHgannSpecIsTheRobustPresetAndThePaperPresetIsNamed) {
   EXPECT_EQ(std::get<HgannProblem>(mixed.problem).spread_penalty, 0);
   EXPECT_FALSE(std::get<HgannProblem>(mixed.problem).trend_seeds);
   const JobSpec paper_robust = FromJson(R"(, "preset": "paper", "spread_penalty": 10,
-      "trend_seeds": true)", R"({"islands": 4, "generations": 250})", &v);
+      "trend_seeds": true)",
+                                        R"({"islands": 4, "generations": 250})", &v);
   EXPECT_EQ(paper_robust.ga->islands, 4);
   EXPECT_TRUE(std::get<HgannProblem>(paper_robust.problem).trend_seeds);
   for (const JobSpec* s : {&robust, &paper, &mixed, &paper_robust}) {
@@ -281,7 +298,9 @@ TEST(SpecCodec, AnEmptyHgannSpecIsTheRobustPresetAndThePaperPresetIsNamed) {
 TEST(SpecCodec, BadEnumsInJsonAreNamed) {
   JobSpec s;
   std::vector<FieldViolation> v;
-  ASSERT_TRUE(JobSpecFromJson(R"({"version": 1, "hgann": {"saturation": 7, "cases": [{"role": 9}]}})", &s, &v).ok());
+  ASSERT_TRUE(JobSpecFromJson(
+                  R"({"version": 1, "hgann": {"saturation": 7, "cases": [{"role": 9}]}})", &s, &v)
+                  .ok());
   EXPECT_TRUE(HasField(v, "hgann.saturation")) << All(v);
   EXPECT_TRUE(HasField(v, "hgann.cases[0].role")) << All(v);
 }

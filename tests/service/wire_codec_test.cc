@@ -104,7 +104,8 @@ TEST(WireCodec, GenomesPackBitForBitAtEveryLength) {
       pz::wire::MasterToWorker wire;
       ASSERT_TRUE(wire.ParseFromString(EncodeMasterToWorker(m)));
       ASSERT_EQ(wire.batch().tasks_size(), 1);
-      EXPECT_EQ(wire.batch().tasks(0).genome().bits(), expected) << bits << " bits, trial " << trial;
+      EXPECT_EQ(wire.batch().tasks(0).genome().bits(), expected)
+          << bits << " bits, trial " << trial;
       WorkerMsg back;
       ASSERT_TRUE(DecodeMasterToWorker(EncodeMasterToWorker(m), &back).ok());
       ASSERT_EQ(back.batch.genomes.size(), 1u);
@@ -118,17 +119,19 @@ TEST(WireCodec, GenomesPackBitForBitAtEveryLength) {
 // EncodeMasterToWorker writes for the same tasks, field for field: any subset of positions in
 // any order, genomes of every size (multi-byte lengths), reals, and an empty lease.
 TEST(WireCodec, LeasesFromPackedTasksAreTheEncodedBatch) {
-  std::vector<opt::Genome> genomes = {G(1415, 0xdeadbeef), G(13, 7, {0.5, 1e-300}), G(0, 0), G(64, 99),
-                                      G(1415, 0x12345678)};
-  for (int i = 0; i < 200; ++i) genomes.push_back(G(1415, 0x9e3779b9u * static_cast<uint32_t>(i + 1)));
+  std::vector<opt::Genome> genomes = {G(1415, 0xdeadbeef), G(13, 7, {0.5, 1e-300}), G(0, 0),
+                                      G(64, 99), G(1415, 0x12345678)};
+  for (int i = 0; i < 200; ++i)
+    genomes.push_back(G(1415, 0x9e3779b9u * static_cast<uint32_t>(i + 1)));
   std::vector<int> indices(genomes.size());
-  for (size_t i = 0; i < indices.size(); ++i) indices[i] = static_cast<int>(3 * i + (i % 2 ? 1000000 : 0));
+  for (size_t i = 0; i < indices.size(); ++i)
+    indices[i] = static_cast<int>(3 * i + (i % 2 ? 1000000 : 0));
   const PackedTasks packed(genomes, indices);
   ASSERT_EQ(packed.size(), static_cast<int>(genomes.size()));
   std::vector<int> all(genomes.size());
   for (size_t i = 0; i < all.size(); ++i) all[i] = static_cast<int>(all.size() - 1 - i);
-  for (const std::vector<int>& positions : {std::vector<int>{}, std::vector<int>{0}, std::vector<int>{2},
-                                            std::vector<int>{4, 1, 3}, all}) {
+  for (const std::vector<int>& positions : {std::vector<int>{}, std::vector<int>{0},
+                                            std::vector<int>{2}, std::vector<int>{4, 1, 3}, all}) {
     WorkerMsg m;
     m.type = WorkerMsg::Type::kBatch;
     m.batch.lease_id = 0x123456789abcULL;
@@ -148,7 +151,8 @@ TEST(WireCodec, LeasesFromPackedTasksAreTheEncodedBatch) {
     pz::wire::MasterToWorker from_packed, encoded;
     ASSERT_TRUE(from_packed.ParseFromString(frame)) << positions.size() << " tasks";
     ASSERT_TRUE(encoded.ParseFromString(EncodeMasterToWorker(m)));
-    EXPECT_EQ(from_packed.SerializeAsString(), encoded.SerializeAsString()) << positions.size() << " tasks";
+    EXPECT_EQ(from_packed.SerializeAsString(), encoded.SerializeAsString())
+        << positions.size() << " tasks";
     WorkerMsg back;
     ASSERT_TRUE(DecodeMasterToWorker(frame, &back).ok());
     EXPECT_EQ(back.batch.lease_id, m.batch.lease_id);
@@ -191,8 +195,8 @@ TEST(WireCodec, ClientRequestsRoundTrip) {
   auto e = RoundTrip(eval, EncodeClientRequest, DecodeClientRequest);
   EXPECT_EQ(e.genomes[0].reals, (std::vector<double>{1, 2, 3}));
 
-  for (auto t : {ClientRequestMsg::Type::kStatus, ClientRequestMsg::Type::kWatch, ClientRequestMsg::Type::kCancel,
-                 ClientRequestMsg::Type::kClose}) {
+  for (auto t : {ClientRequestMsg::Type::kStatus, ClientRequestMsg::Type::kWatch,
+                 ClientRequestMsg::Type::kCancel, ClientRequestMsg::Type::kClose}) {
     ClientRequestMsg m;
     m.type = t;
     m.job_id = "jx";
@@ -256,9 +260,11 @@ TEST(WireCodec, ClientRepliesRoundTripWithNetworksAndStatusFields) {
   // The dashboard's workers table and the median of a generation record.
   ClientReplyMsg workers;
   workers.type = ClientReplyMsg::Type::kWorkers;
-  workers.workers_snapshot.workers = {
-      {"00aa", "node-3", "worker-key", "piezoid 0.1.0; x86-64-v3; glibc 2.36", 4242, 8, 1.5e-4, 2, 37, 12345, 1.7e9, true}};
-  workers.workers_snapshot.departed = {{"00bb", "node-4", "lost (missed its heartbeats)", 77, 1.7e9 + 5, 99}};
+  workers.workers_snapshot.workers = {{"00aa", "node-3", "worker-key",
+                                       "piezoid 0.1.0; x86-64-v3; glibc 2.36", 4242, 8, 1.5e-4, 2,
+                                       37, 12345, 1.7e9, true}};
+  workers.workers_snapshot.departed = {
+      {"00bb", "node-4", "lost (missed its heartbeats)", 77, 1.7e9 + 5, 99}};
   workers.workers_snapshot.leases_sent = 10;
   workers.workers_snapshot.tasks_done = 20;
   workers.workers_snapshot.results_ignored = 3;
@@ -273,7 +279,8 @@ TEST(WireCodec, ClientRepliesRoundTripWithNetworksAndStatusFields) {
   median_rec.generation = 7;
   median_rec.median_cost = 0.25;
   with_median.log = {median_rec};
-  EXPECT_EQ(RoundTrip(with_median, EncodeClientReply, DecodeClientReply).log.at(0).median_cost, 0.25);
+  EXPECT_EQ(RoundTrip(with_median, EncodeClientReply, DecodeClientReply).log.at(0).median_cost,
+            0.25);
 }
 
 TEST(WireCodec, LiveViewRequestsRoundTrip) {
@@ -287,7 +294,8 @@ TEST(WireCodec, LiveViewRequestsRoundTrip) {
   EXPECT_EQ(f.log_from, 123u);
   ClientRequestMsg workers;
   workers.type = ClientRequestMsg::Type::kWorkers;
-  EXPECT_EQ(RoundTrip(workers, EncodeClientRequest, DecodeClientRequest).type, ClientRequestMsg::Type::kWorkers);
+  EXPECT_EQ(RoundTrip(workers, EncodeClientRequest, DecodeClientRequest).type,
+            ClientRequestMsg::Type::kWorkers);
 }
 
 TEST(WireCodec, WhatDoesNotDecodeIsNamed) {
@@ -355,7 +363,8 @@ TEST(WireCodec, SpecsEncodeDeterministicallyAndStoredFilesDetectAlteration) {
   flipped[flipped.size() / 2] ^= 0x04;
   const Status s = DecodeStoredFile(flipped, "pz.wire.JobSpec", &out);
   EXPECT_EQ(s.code(), StatusCode::kDataLoss);
-  EXPECT_EQ(DecodeStoredFile(payload, "pz.wire.JobSpec", &out).code(), StatusCode::kNotFound);  // a bare payload
+  EXPECT_EQ(DecodeStoredFile(payload, "pz.wire.JobSpec", &out).code(),
+            StatusCode::kNotFound);  // a bare payload
 }
 
 }  // namespace

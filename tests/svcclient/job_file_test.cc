@@ -16,7 +16,8 @@ namespace {
 using testing::Descriptions;
 using testing::HasViolation;
 const io::CaseSet& Nominal() { return testing::NominalCaseSet(); }
-bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field, const std::string& text = "") {
+bool HasField(const std::vector<job::FieldViolation>& v, const std::string& field,
+              const std::string& text = "") {
   return HasViolation(v, field, text);
 }
 std::string All(const std::vector<job::FieldViolation>& v) { return Descriptions(v); }
@@ -72,7 +73,8 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
 
   // The archipelago: the same job with islands and generations, the migration by its defaults.
   JobSpec islands;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_islands_job.json", &islands, &v).ok()) << All(v);
+  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_islands_job.json", &islands, &v).ok())
+      << All(v);
   EXPECT_EQ(islands.ga->islands, 4);
   EXPECT_EQ(islands.ga->generations, 560);
   EXPECT_EQ(islands.ga->migration_interval, 25);
@@ -87,12 +89,14 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   // Cases and a folder at once, or a folder that is not a case set: named.
   v.clear();
   Status st = client::JobSpecFromJsonFile(
-      R"({"version": 1, "hgann": {"case_set_dir": "x", "cases": [{"number": 1}]}, "ga": {}})", ".", &s, &v);
+      R"({"version": 1, "hgann": {"case_set_dir": "x", "cases": [{"number": 1}]}, "ga": {}})", ".",
+      &s, &v);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "hgann.case_set_dir", "cannot be combined")) << All(v);
   v.clear();
-  st = client::JobSpecFromJsonFile(R"({"version": 1, "hgann": {"case_set_dir": "nowhere"}, "ga": {}})",
-                                   fs::path(PIEZOID_TEST_DATA_DIR), &s, &v);
+  st = client::JobSpecFromJsonFile(
+      R"({"version": 1, "hgann": {"case_set_dir": "nowhere"}, "ga": {}})",
+      fs::path(PIEZOID_TEST_DATA_DIR), &s, &v);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "hgann.case_set_dir", "cannot be read")) << All(v);
   EXPECT_NE(st.message().find("nowhere"), std::string::npos);

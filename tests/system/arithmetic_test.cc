@@ -50,13 +50,16 @@ TEST(Arithmetic, AWorkerOfAnotherProfileIsRefusedWithTheReasonAndDoesNotRetry) {
   const std::string log = Slurp(c.dir() / "workers.log");
   EXPECT_NE(log.find("refused"), std::string::npos) << log;
   EXPECT_NE(log.find(kOther), std::string::npos) << "the worker is told its own profile:\n" << log;
-  EXPECT_NE(log.find("--allow-mixed-arithmetic"), std::string::npos) << "and what would accept it:\n" << log;
+  EXPECT_NE(log.find("--allow-mixed-arithmetic"), std::string::npos)
+      << "and what would accept it:\n"
+      << log;
 
   ASSERT_TRUE(client.Workers(&w).ok());
   ASSERT_EQ(w.workers.size(), 1u) << "the refused worker was never added";
   EXPECT_EQ(w.workers[0].arithmetic, model::ArithmeticProfile());
   ASSERT_FALSE(w.departed.empty());
-  EXPECT_NE(w.departed.back().reason.find("refused: another arithmetic (" + kOther + ")"), std::string::npos)
+  EXPECT_NE(w.departed.back().reason.find("refused: another arithmetic (" + kOther + ")"),
+            std::string::npos)
       << w.departed.back().reason;
 }
 
@@ -68,7 +71,8 @@ TEST(Arithmetic, TheFirstWorkerFixesTheProfileServed) {
   ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return s.workers.size() == 1; }));
   Process& native = c.AddWorker(1);  // this machine's own profile is now the other one
   ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty(); }));
-  EXPECT_NE(w.departed.back().reason.find(model::ArithmeticProfile()), std::string::npos) << w.departed.back().reason;
+  EXPECT_NE(w.departed.back().reason.find(model::ArithmeticProfile()), std::string::npos)
+      << w.departed.back().reason;
   EXPECT_EQ(w.workers.size(), 1u);
   for (int i = 0; i < 200 && native.running(); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_FALSE(native.running());
@@ -91,8 +95,11 @@ TEST(Arithmetic, AJobResumedByARestartedMasterContinuesOnTheProfileItWasComputed
   c.KillMaster(SIGKILL);
   service::JobCheckpoint stored;
   std::string notice;
-  ASSERT_TRUE(master::JobDirectory(c.dir() / "state").LoadCheckpoint(r.job_id, &stored, &notice).ok()) << notice;
-  EXPECT_EQ(stored.arithmetic, kOther) << "the checkpoint records the profile that computed the job";
+  ASSERT_TRUE(
+      master::JobDirectory(c.dir() / "state").LoadCheckpoint(r.job_id, &stored, &notice).ok())
+      << notice;
+  EXPECT_EQ(stored.arithmetic, kOther)
+      << "the checkpoint records the profile that computed the job";
 
   // The restarted master serves the job's profile before any worker arrives: a worker of this
   // machine's profile is refused even if it is the first to reconnect.
@@ -100,13 +107,17 @@ TEST(Arithmetic, AJobResumedByARestartedMasterContinuesOnTheProfileItWasComputed
   Process& native = c.AddWorker(1);
   auto client = c.Client(4000, 5);
   service::WorkersSnapshot w;
-  ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty() && s.workers.size() == 1; }));
-  EXPECT_NE(w.departed.back().reason.find(model::ArithmeticProfile()), std::string::npos) << w.departed.back().reason;
+  ASSERT_TRUE(WaitForWorkers(
+      client, &w, [](const auto& s) { return !s.departed.empty() && s.workers.size() == 1; }));
+  EXPECT_NE(w.departed.back().reason.find(model::ArithmeticProfile()), std::string::npos)
+      << w.departed.back().reason;
   EXPECT_EQ(w.workers[0].arithmetic, kOther);
   for (int i = 0; i < 200 && native.running(); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_FALSE(native.running());
   const std::string log = Slurp(c.dir() / "workers.log");
-  EXPECT_NE(log.find("fixed by job " + r.job_id), std::string::npos) << "the refusal names the job:\n" << log;
+  EXPECT_NE(log.find("fixed by job " + r.job_id), std::string::npos)
+      << "the refusal names the job:\n"
+      << log;
 
   service::JobInfo info;
   ASSERT_TRUE(client.WaitFinal(r.job_id, 60s, &info).ok());

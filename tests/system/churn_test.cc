@@ -44,8 +44,9 @@ struct ChurnResult {
 
 /// Runs `spec` on a master with three 1-thread workers, killing one (at random) every
 /// [min_s, max_s] seconds and starting a replacement, until the job ends.
-ChurnResult RunWithChurn(const job::JobSpec& spec, const std::string& name, double min_s, double max_s,
-                         uint32_t seed, service::JobInfo* info, std::vector<service::ScoredGenome>* best,
+ChurnResult RunWithChurn(const job::JobSpec& spec, const std::string& name, double min_s,
+                         double max_s, uint32_t seed, service::JobInfo* info,
+                         std::vector<service::ScoredGenome>* best,
                          std::vector<service::GenerationRecord>* log) {
   Cluster c(name);
   for (int i = 0; i < 3; ++i) c.AddWorker(1);
@@ -82,7 +83,8 @@ ChurnResult RunWithChurn(const job::JobSpec& spec, const std::string& name, doub
   return out;
 }
 
-void ExpectUnchangedByChurn(job::JobSpec spec, const std::string& name, double min_s, double max_s, int repeat) {
+void ExpectUnchangedByChurn(job::JobSpec spec, const std::string& name, double min_s, double max_s,
+                            int repeat) {
   for (int k = 0; k < repeat; ++k) {
     SCOPED_TRACE("run " + std::to_string(k + 1) + " of " + std::to_string(repeat));
     // A machine (or a build) fast enough to end the job before the second kill gets a longer job:
@@ -94,16 +96,19 @@ void ExpectUnchangedByChurn(job::JobSpec spec, const std::string& name, double m
       service::JobInfo info;
       std::vector<service::ScoredGenome> best;
       std::vector<service::GenerationRecord> log;
-      const ChurnResult churn = RunWithChurn(spec, name, min_s, max_s, 1000 + k, &info, &best, &log);
-      std::printf("%s run %d: %d kills in %.1f s, %zu generations, state %s, %zu quarantined\n", name.c_str(),
-                  k + 1, churn.kills, churn.seconds, log.size(), service::JobStateName(info.state),
-                  info.quarantined.size());
+      const ChurnResult churn =
+          RunWithChurn(spec, name, min_s, max_s, 1000 + k, &info, &best, &log);
+      std::printf("%s run %d: %d kills in %.1f s, %zu generations, state %s, %zu quarantined\n",
+                  name.c_str(), k + 1, churn.kills, churn.seconds, log.size(),
+                  service::JobStateName(info.state), info.quarantined.size());
       ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
-      EXPECT_TRUE(info.quarantined.empty()) << info.quarantined.size() << " individuals quarantined under churn";
+      EXPECT_TRUE(info.quarantined.empty())
+          << info.quarantined.size() << " individuals quarantined under churn";
       ExpectSameRun(ref, best, log);
       if (churn.kills >= 2) break;
-      ASSERT_TRUE(spec.ga.has_value() && attempt < 3) << "the run was too short to churn (" << churn.kills
-                                                      << " kills in " << churn.seconds << " s)";
+      ASSERT_TRUE(spec.ga.has_value() && attempt < 3)
+          << "the run was too short to churn (" << churn.kills << " kills in " << churn.seconds
+          << " s)";
       spec.ga->generations *= 2;
     }
   }
@@ -112,10 +117,13 @@ void ExpectUnchangedByChurn(job::JobSpec spec, const std::string& name, double m
 TEST(Churn, ThePaperJobIsBitIdenticalUnderAKillEvery1To3Seconds) {
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  ASSERT_TRUE(client::LoadJobSpecFile(fs::path(PIEZOID_DATA_DIR) / ".." / "examples" / "hgann_job.json", &spec, &v).ok());
+  ASSERT_TRUE(client::LoadJobSpecFile(
+                  fs::path(PIEZOID_DATA_DIR) / ".." / "examples" / "hgann_job.json", &spec, &v)
+                  .ok());
   const int generations = EnvInt("PIEZOID_CHURN_GENERATIONS", 300);
   if (generations > 0) spec.ga->generations = generations;
-  ExpectUnchangedByChurn(spec, "churn-paper", 1.0, 3.0, std::max(1, EnvInt("PIEZOID_CHURN_REPEAT", 1)));
+  ExpectUnchangedByChurn(spec, "churn-paper", 1.0, 3.0,
+                         std::max(1, EnvInt("PIEZOID_CHURN_REPEAT", 1)));
 }
 
 TEST(Churn, ASyntheticJobIsBitIdenticalUnderAKillEveryThirdOfASecond) {

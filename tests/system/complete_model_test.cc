@@ -1,9 +1,10 @@
 // Complete models on the service (issue 7): the "complete_model" job kind rebuilds, from its spec
 // alone, the fitness the client has (Bouc–Wen oscillator; the records engine's criterion fitness of
-// the committee, both stack families, every criterion: costs bit for bit, through the binary and the JSON encodings); bad specs are refused field by
-// field; and PSO / GA searches whose evaluations run as evaluation sessions on a local master with
-// two workers (one of them killed mid-run) give the local thread-pool run's results bit for bit,
-// for the Bouc–Wen searches and the committee machine, and so do the commands `piezoid boucwen
+// the committee, both stack families, every criterion: costs bit for bit, through the binary and
+// the JSON encodings); bad specs are refused field by field; and PSO / GA searches whose
+// evaluations run as evaluation sessions on a local master with two workers (one of them killed
+// mid-run) give the local thread-pool run's results bit for bit, for the Bouc–Wen searches and the
+// committee machine, and so do the commands `piezoid boucwen
 // --master` and `piezoid committee --master` on the bundled data.
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
@@ -32,15 +33,16 @@ namespace pz::testing {
 namespace {
 
 using complete::BwTraining;
+using job::CompleteModelProblem;
 using records::Criterion;
 using records::CriterionFitness;
-using job::CompleteModelProblem;
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
 // A periodic multisine force of `periods` × period samples at 750 Hz and the true oscillator's
 // response with a little deterministic noise; the first `warmup` samples are not counted.
-io::Record OscillatorRecord(const std::string& name, size_t period, int periods, size_t warmup, unsigned seed) {
+io::Record OscillatorRecord(const std::string& name, size_t period, int periods, size_t warmup,
+                            unsigned seed) {
   model::BwInputOptions input;
   input.sample_rate_hz = 750;
   input.substeps = 4;
@@ -53,7 +55,9 @@ io::Record OscillatorRecord(const std::string& name, size_t period, int periods,
   for (size_t k = 0; k < period * static_cast<size_t>(periods); ++k) {
     double x = 0;
     for (size_t l = 0; l < phase.size(); ++l)
-      x += 15 * std::sin(2 * std::numbers::pi * static_cast<double>((l + 1) * (k % period)) / period + phase[l]);
+      x += 15 *
+           std::sin(2 * std::numbers::pi * static_cast<double>((l + 1) * (k % period)) / period +
+                    phase[l]);
     u.push_back(x);
   }
   y.resize(u.size());
@@ -67,8 +71,9 @@ std::unique_ptr<BwTraining> SmallOscillator() {
   std::vector<io::Record> records;
   records.push_back(OscillatorRecord("A", 256, 2, 0, 1));
   records.push_back(OscillatorRecord("B", 256, 2, 256, 2));
-  return std::make_unique<BwTraining>(std::move(records),
-                                      complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 256), 1.0);
+  return std::make_unique<BwTraining>(
+      std::move(records), complete::BwProtocol(4, model::InputInterpolation::kPeriodicFourier, 256),
+      1.0);
 }
 
 io::Record StackRecord(int number, double f, double amp, model::CaseRole role, unsigned seed) {
@@ -107,15 +112,16 @@ struct StackFitness {
   std::unique_ptr<CriterionFitness> fitness;
   records::FamilyOptions options;
 };
-StackFitness MakeStackFitness(const io::RecordSet& set, const std::string& family, Criterion c, double t0,
-                              double t1, int substeps = 2) {
+StackFitness MakeStackFitness(const io::RecordSet& set, const std::string& family, Criterion c,
+                              double t0, double t1, int substeps = 2) {
   StackFitness f;
   const auto train = set.WithRole(model::CaseRole::kTrain);
   const records::DataScale scale = records::MeasureScale(train);
   f.options.substeps = substeps;
   f.model = std::make_shared<records::RecordModel>(records::MakeFamily(family, scale, f.options),
                                                    std::vector<records::EffectKind>{}, scale);
-  f.fitness = std::make_unique<CriterionFitness>(*f.model, train, records::CriterionOptions{c, t0, t1});
+  f.fitness =
+      std::make_unique<CriterionFitness>(*f.model, train, records::CriterionOptions{c, t0, t1});
   return f;
 }
 
@@ -134,12 +140,13 @@ void ExpectSameFitness(const opt::FitnessFunction& local, const opt::FitnessFunc
 TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
   const auto small = SmallOscillator();
   const BwTraining& local = *small;
-  const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
+  const job::JobSpec spec =
+      complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local), "bw");
   const std::vector<std::vector<double>> points = {
-      model::BwIdentifiable(model::BwParams{}),       // the truth: cost = the noise
-      {2.5, 20, 4e4, 6e4, 700, -900},                  // elsewhere
-      {0.2, -1e4, 5e4, 5e4, 800, -1100},               // negative damping diverges: penalised, cost 1
-      {1, 2, 3}};                                      // wrong size: an error
+      model::BwIdentifiable(model::BwParams{}),  // the truth: cost = the noise
+      {2.5, 20, 4e4, 6e4, 700, -900},            // elsewhere
+      {0.2, -1e4, 5e4, 5e4, 800, -1100},         // negative damping diverges: penalised, cost 1
+      {1, 2, 3}};                                // wrong size: an error
   for (bool json : {false, true}) {
     SCOPED_TRACE(json ? "json" : "binary");
     const auto remote = RemoteCompleteFitness(spec, json);
@@ -155,7 +162,8 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheOscillatorFitnessBitForBit) {
   ASSERT_TRUE(registry.Layout(spec, &layout).ok());
   EXPECT_EQ(layout.reals, 6);
   EXPECT_EQ(layout.bits, 0);
-  EXPECT_EQ(registry.Find("complete_model")->describe(spec, opt::Genome{{}, {2, 10, 5e4, 5e4, 800, -1100}}),
+  EXPECT_EQ(registry.Find("complete_model")
+                ->describe(spec, opt::Genome{{}, {2, 10, 5e4, 5e4, 800, -1100}}),
             "m=2 c=10 k=50000 alpha=50000 beta_gamma=800 beta_delta=-1100");
 }
 
@@ -166,14 +174,19 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheCommitteesFitnessBitForBit) {
       SCOPED_TRACE(family + " " + records::CriterionName(c));
       const StackFitness f = MakeStackFitness(set, family, c, 0.01, 0.5, 3);
       const CriterionFitness& local = *f.fitness;
-      const auto remote = RemoteCompleteFitness(
-          complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, f.options), "stack"), false);
+      const auto remote =
+          RemoteCompleteFitness(complete::CompleteModelJobSpec(
+                                    complete::CompleteModelProblemOf(local, f.options), "stack"),
+                                false);
       ASSERT_TRUE(remote);
       if (family == "stack-bouc-wen")
         ExpectSameFitness(local, *remote,
-                          {{0.3, 0.004, 0.002, 0.05, 400}, {1.5, 0.02, -0.01, 0.03, 5000}, {0.3, -0.05, -0.05, 0.05, 400}});
+                          {{0.3, 0.004, 0.002, 0.05, 400},
+                           {1.5, 0.02, -0.01, 0.03, 5000},
+                           {0.3, -0.05, -0.05, 0.05, 400}});
       else
-        ExpectSameFitness(local, *remote, {{0.012, 0.052, 0.015}, {0.5, 0.03, -0.02}, {-1, 0.05, 0.01}});
+        ExpectSameFitness(local, *remote,
+                          {{0.012, 0.052, 0.015}, {0.5, 0.03, -0.02}, {-1, 0.05, 0.01}});
     }
   }
 }
@@ -181,9 +194,10 @@ TEST(CompleteModelJobKindTest, TheSpecRebuildsTheCommitteesFitnessBitForBit) {
 TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   const io::RecordSet set = StackSet();
   const StackFitness stack = MakeStackFitness(set, "stack-bouc-wen", Criterion::kIae, 0.01, 0.5);
-  const job::JobSpec stack_ok =
-      complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*stack.fitness, stack.options), "ok");
-  const job::JobSpec bw_ok = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*SmallOscillator()), "ok");
+  const job::JobSpec stack_ok = complete::CompleteModelJobSpec(
+      complete::CompleteModelProblemOf(*stack.fitness, stack.options), "ok");
+  const job::JobSpec bw_ok =
+      complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(*SmallOscillator()), "ok");
   job::JobKindRegistry registry;
   registry.Register(complete::CompleteModelJobKind());
   auto violations = [&](job::JobSpec s) {
@@ -216,42 +230,60 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
          "complete_model.records[0].sample_rate_hz = -5: must be finite and > 0");
   expect(edit(stack_ok, [](auto& p) { p.family = CompleteModelProblem::Family::kUnspecified; }),
          "complete_model.family = COMPLETE_MODEL_FAMILY_UNSPECIFIED: must be");
-  expect(edit(stack_ok, [](auto& p) { p.records.clear(); }), "complete_model.records = 0 records: at least one");
-  expect(edit(stack_ok, [](auto& p) { p.t1_s = 0.005; }), "complete_model.t1_s = 0.0050000000000000001: must be finite and > t0_s");
-  expect(edit(stack_ok, [](auto& p) { p.t0_s = 0.2; }), "complete_model.records[0] = ends at 0.1198");
-  expect(edit(stack_ok, [](auto& p) { p.substeps = 2000; }), "complete_model.substeps = 2000: must be in [1, 512]");
-  expect(edit(stack_ok, [](auto& p) { p.criterion = CompleteModelProblem::Criterion::kMax; p.t0_s = p.t1_s = 0; }),
-         "complete_model.criterion = max: without a window (t0_s, t1_s) records are scored by the MSE");
+  expect(edit(stack_ok, [](auto& p) { p.records.clear(); }),
+         "complete_model.records = 0 records: at least one");
+  expect(edit(stack_ok, [](auto& p) { p.t1_s = 0.005; }),
+         "complete_model.t1_s = 0.0050000000000000001: must be finite and > t0_s");
+  expect(edit(stack_ok, [](auto& p) { p.t0_s = 0.2; }),
+         "complete_model.records[0] = ends at 0.1198");
+  expect(edit(stack_ok, [](auto& p) { p.substeps = 2000; }),
+         "complete_model.substeps = 2000: must be in [1, 512]");
+  expect(edit(stack_ok,
+              [](auto& p) {
+                p.criterion = CompleteModelProblem::Criterion::kMax;
+                p.t0_s = p.t1_s = 0;
+              }),
+         "complete_model.criterion = max: without a window (t0_s, t1_s) records are scored by the "
+         "MSE");
   expect(edit(stack_ok, [](auto& p) { p.family = CompleteModelProblem::Family::kStackBoucWen; }),
-         "complete_model.family = STACK_BOUC_WEN: the stack models are records families: family RECORDS");
-  expect(edit(stack_ok, [](auto& p) { p.error_cost = NAN; }), "complete_model.error_cost = nan: must be finite and > 0");
+         "complete_model.family = STACK_BOUC_WEN: the stack models are records families: family "
+         "RECORDS");
+  expect(edit(stack_ok, [](auto& p) { p.error_cost = NAN; }),
+         "complete_model.error_cost = nan: must be finite and > 0");
   expect(edit(stack_ok, [](auto& p) { p.records[0].end_counted = 601; }),
-         "complete_model.records[0].end_counted = 601: must be > first_counted = 0 and <= 600 samples");
+         "complete_model.records[0].end_counted = 601: must be > first_counted = 0 and <= 600 "
+         "samples");
   expect(edit(bw_ok, [](auto& p) { p.records[1].first_counted = 512; }),
          "complete_model.records[1].first_counted = 512: leaves no counted sample of 512");
   expect(edit(bw_ok, [](auto& p) { p.period_samples = 300; }),
-         "complete_model.records[0].input = 512 samples: must be a whole number of periods (period_samples = 300)");
+         "complete_model.records[0].input = 512 samples: must be a whole number of periods "
+         "(period_samples = 300)");
   expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }),
          "complete_model.records[0].input[300] = ");
-  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }),
-         ": differs from input[44] = ");
-  expect(edit(bw_ok, [](auto& p) {
-           p.period_samples = 0;
-           for (auto& r : p.records) {
-             r.input.resize(1009 * 2);
-             r.output.resize(1009 * 2);
-           }
-         }),
-         "complete_model.records[0].input = 2018 samples per period: has the prime factor 1009 > 1000");
-  expect(edit(stack_ok, [](auto& p) { p.interpolation = CompleteModelProblem::Interpolation::kFourier; }),
+  expect(edit(bw_ok, [](auto& p) { p.records[0].input[300] += 1; }), ": differs from input[44] = ");
+  expect(edit(bw_ok,
+              [](auto& p) {
+                p.period_samples = 0;
+                for (auto& r : p.records) {
+                  r.input.resize(1009 * 2);
+                  r.output.resize(1009 * 2);
+                }
+              }),
+         "complete_model.records[0].input = 2018 samples per period: has the prime factor 1009 > "
+         "1000");
+  expect(edit(stack_ok,
+              [](auto& p) { p.interpolation = CompleteModelProblem::Interpolation::kFourier; }),
          "complete_model.interpolation = fourier: only the oscillator's input is interpolated");
   expect(edit(stack_ok, [](auto& p) { p.period_samples = 10; }),
          "complete_model.period_samples = 10: only the oscillator's FOURIER input has periods");
-  expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }), "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
-  expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }), "complete_model.substeps = 1001: must be in [1, 1000]");
+  expect(edit(bw_ok, [](auto& p) { p.t1_s = 2; }),
+         "complete_model.t0_s = 0, t1_s = 2: the oscillator has no window");
+  expect(edit(bw_ok, [](auto& p) { p.substeps = 1001; }),
+         "complete_model.substeps = 1001: must be in [1, 1000]");
   job::JobSpec with_ga = bw_ok;
   with_ga.ga = job::GaSettings{};
-  EXPECT_NE(registry.Validate(with_ga).at(0).description.find("ga: the project GA searches binary genomes"),
+  EXPECT_NE(registry.Validate(with_ga).at(0).description.find(
+                "ga: the project GA searches binary genomes"),
             std::string::npos);
   // An unknown enum value on the wire is named too.
   job::JobSpec decoded;
@@ -262,7 +294,9 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
   json.replace(json.find(family), family.size(), "9");
   EXPECT_TRUE(service::JobSpecFromJson(json, &decoded, &v).ok());
   ASSERT_FALSE(v.empty());
-  EXPECT_EQ(v[0].description, "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE or RECORDS");
+  EXPECT_EQ(v[0].description,
+            "complete_model.family = 9: must be BW_OSCILLATOR, STACK_BOUC_WEN, STACK_BACKLASH_LIKE "
+            "or RECORDS");
 }
 
 client::ServiceEvaluatorOptions Options(const Cluster& c) {
@@ -274,8 +308,8 @@ client::ServiceEvaluatorOptions Options(const Cluster& c) {
   return o;
 }
 
-// Kills `victim` `after_ms` after the `at`-th batch starts, and before the (at + 2)-th batch (a worker
-// lost in the middle of a search, maybe in the middle of a batch).
+// Kills `victim` `after_ms` after the `at`-th batch starts, and before the (at + 2)-th batch (a
+// worker lost in the middle of a search, maybe in the middle of a batch).
 class KillingEvaluator final : public opt::BatchEvaluator {
  public:
   KillingEvaluator(opt::BatchEvaluator& inner, Process* victim, int at, int after_ms)
@@ -304,13 +338,15 @@ class KillingEvaluator final : public opt::BatchEvaluator {
 
 void ExpectSameSearch(const opt::SearchResult& a, const opt::SearchResult& b) {
   ASSERT_EQ(a.best.size(), b.best.size());
-  for (size_t i = 0; i < a.best.size(); ++i) EXPECT_TRUE(SameBits(a.best[i], b.best[i])) << "best[" << i << "]";
+  for (size_t i = 0; i < a.best.size(); ++i)
+    EXPECT_TRUE(SameBits(a.best[i], b.best[i])) << "best[" << i << "]";
   EXPECT_TRUE(SameBits(a.best_cost, b.best_cost)) << a.best_cost << " vs " << b.best_cost;
   EXPECT_EQ(a.evaluations, b.evaluations);
   EXPECT_EQ(a.iterations, b.iterations);
   EXPECT_EQ(a.stop_reason, b.stop_reason);
   ASSERT_EQ(a.trace.best_cost.size(), b.trace.best_cost.size());
-  for (size_t i = 0; i < a.trace.best_cost.size(); ++i) EXPECT_TRUE(SameBits(a.trace.best_cost[i], b.trace.best_cost[i]));
+  for (size_t i = 0; i < a.trace.best_cost.size(); ++i)
+    EXPECT_TRUE(SameBits(a.trace.best_cost[i], b.trace.best_cost[i]));
 }
 
 TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForBit) {
@@ -319,8 +355,10 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
   Process& victim = cluster.AddWorker(1);
   const auto small = SmallOscillator();
   const BwTraining& fitness = *small;
-  const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
-  for (opt::SearchAlgorithm algorithm : {opt::SearchAlgorithm::kPso, opt::SearchAlgorithm::kGaBinary}) {
+  const job::JobSpec spec =
+      complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(fitness), "test");
+  for (opt::SearchAlgorithm algorithm :
+       {opt::SearchAlgorithm::kPso, opt::SearchAlgorithm::kGaBinary}) {
     SCOPED_TRACE(opt::SearchAlgorithmName(algorithm));
     const bool kill = algorithm == opt::SearchAlgorithm::kGaBinary;
     opt::SearchOptions o;
@@ -360,9 +398,11 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
   o.search.pso.iterations = 3;
   o.search.ga_real.population = 6;
   o.search.ga_real.generations = 3;
-  const complete::CommitteeResult local = complete::RunCommittee(set, o, complete::LocalEvaluatorFactory(2));
+  const complete::CommitteeResult local =
+      complete::RunCommittee(set, o, complete::LocalEvaluatorFactory(2));
   int sessions = 0;
-  const complete::EvaluatorFactory service = client::CommitteeServiceFactory(Options(cluster), o.family_options);
+  const complete::EvaluatorFactory service =
+      client::CommitteeServiceFactory(Options(cluster), o.family_options);
   const complete::CommitteeResult remote =
       complete::RunCommittee(set, o, [&](const CriterionFitness& f) {
         ++sessions;
@@ -370,7 +410,8 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
       });
   EXPECT_EQ(sessions, 12);  // (complete + 2 bands) x 2 families x 2 optimisers
   ASSERT_EQ(remote.complete.size(), local.complete.size());
-  for (size_t i = 0; i < local.complete.size(); ++i) ExpectSameSearch(local.complete[i].search, remote.complete[i].search);
+  for (size_t i = 0; i < local.complete.size(); ++i)
+    ExpectSameSearch(local.complete[i].search, remote.complete[i].search);
   ASSERT_EQ(remote.band_models.size(), local.band_models.size());
   for (size_t b = 0; b < local.band_models.size(); ++b)
     for (size_t i = 0; i < local.band_models[b].size(); ++i)
@@ -405,22 +446,38 @@ TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
     args.insert(args.end(), more.begin(), more.end());
     return args;
   };
-  const std::vector<std::string> bw = {"boucwen", "--algorithm", "pso", "--iterations", "3", "--population", "6",
-                                       "--repetitions", "1", "--train-periods", "1", "--no-plots", "--progress", "0"};
+  const std::vector<std::string> bw = {"boucwen",    "--algorithm",
+                                       "pso",        "--iterations",
+                                       "3",          "--population",
+                                       "6",          "--repetitions",
+                                       "1",          "--train-periods",
+                                       "1",          "--no-plots",
+                                       "--progress", "0"};
   std::string out, err;
-  ASSERT_EQ(RunCli(with(bw, {"--threads", "2", "--out", (root / "bw-local").string()}), &out, &err), 0) << err;
-  ASSERT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--out", (root / "bw-service").string()}), &out, &err), 0)
+  ASSERT_EQ(RunCli(with(bw, {"--threads", "2", "--out", (root / "bw-local").string()}), &out, &err),
+            0)
+      << err;
+  ASSERT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--out",
+                             (root / "bw-service").string()}),
+                   &out, &err),
+            0)
       << err;
   EXPECT_NE(out.find("worker thread(s) of " + cluster.client_endpoint()), std::string::npos) << out;
   const auto bw_local = ReadReport(root / "bw-local" / "report.json");
   EXPECT_EQ(bw_local.fields().at("evaluations").number_value(), 24);
   ExpectSameReport(ReadReport(root / "bw-service" / "report.json"), bw_local);
 
-  const std::vector<std::string> cm = {"committee", "--bands", "0,350", "--optimisers", "pso", "--repetitions", "1",
-                                       "--particles", "4", "--iterations", "2", "--stall", "0", "--no-figures",
-                                       "--quiet"};
-  ASSERT_EQ(RunCli(with(cm, {"--threads", "2", "--out", (root / "cm-local").string()}), &out, &err), 0) << err;
-  ASSERT_EQ(RunCli(with(cm, {"--master", cluster.client_endpoint(), "--out", (root / "cm-service").string()}), &out, &err), 0)
+  const std::vector<std::string> cm = {"committee", "--bands",       "0,350",  "--optimisers",
+                                       "pso",       "--repetitions", "1",      "--particles",
+                                       "4",         "--iterations",  "2",      "--stall",
+                                       "0",         "--no-figures",  "--quiet"};
+  ASSERT_EQ(RunCli(with(cm, {"--threads", "2", "--out", (root / "cm-local").string()}), &out, &err),
+            0)
+      << err;
+  ASSERT_EQ(RunCli(with(cm, {"--master", cluster.client_endpoint(), "--out",
+                             (root / "cm-service").string()}),
+                   &out, &err),
+            0)
       << err;
   const auto cm_local = ReadReport(root / "cm-local" / "committee.json");
   EXPECT_EQ(cm_local.fields().at("evaluations").number_value(), 4 * 12);
@@ -432,27 +489,34 @@ TEST(CompleteModelServiceTest, TheCommandsWithMasterGiveTheLocalRunsReports) {
 
   // A master that does not answer: exit code 3 and the command named.
   const std::string nobody = "tcp://127.0.0.1:" + std::to_string(FreePort());
-  EXPECT_EQ(RunCli(with(bw, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out", (root / "x").string()}),
+  EXPECT_EQ(RunCli(with(bw, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out",
+                             (root / "x").string()}),
                    &out, &err),
             3);
   EXPECT_NE(err.find("piezoid boucwen: error: "), std::string::npos) << err;
-  EXPECT_EQ(RunCli(with(cm, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out", (root / "y").string()}),
+  EXPECT_EQ(RunCli(with(cm, {"--master", nobody, "--timeout-ms", "200", "--retries", "1", "--out",
+                             (root / "y").string()}),
                    &out, &err),
             3);
   EXPECT_NE(err.find("piezoid committee: error: "), std::string::npos) << err;
   // CURVE flags as the other service commands take them: half a pair is bad input.
-  EXPECT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--curve-secret", (root / "me.key").string(),
-                             "--out", (root / "z").string()}),
+  EXPECT_EQ(RunCli(with(bw, {"--master", cluster.client_endpoint(), "--curve-secret",
+                             (root / "me.key").string(), "--out", (root / "z").string()}),
                    &out, &err),
             2);
-  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"), std::string::npos) << err;
+  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"),
+            std::string::npos)
+      << err;
   // piezoid diagnose takes the same flags.
-  EXPECT_EQ(RunCli({"diagnose", "--cases", (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "nominal").string(),
-                    "--master", cluster.client_endpoint(), "--curve-secret", (root / "me.key").string(), "--out",
-                    (root / "d").string()},
+  EXPECT_EQ(RunCli({"diagnose", "--cases",
+                    (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "nominal").string(), "--master",
+                    cluster.client_endpoint(), "--curve-secret", (root / "me.key").string(),
+                    "--out", (root / "d").string()},
                    &out, &err),
             2);
-  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"), std::string::npos) << err;
+  EXPECT_NE(err.find("--curve-secret (or PIEZOID_CURVE_SECRET) needs --master-public"),
+            std::string::npos)
+      << err;
   EXPECT_FALSE(fs::exists(root / "d"));
 }
 

@@ -14,7 +14,8 @@
 
 namespace pz::testing {
 
-inline std::unique_ptr<opt::FitnessFunction> RemoteCompleteFitness(const job::JobSpec& spec, bool json) {
+inline std::unique_ptr<opt::FitnessFunction> RemoteCompleteFitness(const job::JobSpec& spec,
+                                                                   bool json) {
   job::JobSpec decoded;
   std::vector<job::FieldViolation> v;
   if (json)

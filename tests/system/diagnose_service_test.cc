@@ -1,7 +1,7 @@
-// The diagnosis on the service: the "diagnose" job kind builds, from its spec alone, the fitness the
-// client has (costs and residual vectors bit for bit; bad specs refused field by field), and a whole
-// diagnosis whose fits run as evaluation sessions on a local master with two workers equals the
-// local run bit for bit.
+// The diagnosis on the service: the "diagnose" job kind builds, from its spec alone, the fitness
+// the client has (costs and residual vectors bit for bit; bad specs refused field by field), and a
+// whole diagnosis whose fits run as evaluation sessions on a local master with two workers equals
+// the local run bit for bit.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -25,7 +25,8 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
   model::BimorphParams p;
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
-    for (double f : {0.25, 0.5, 1.0}) sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
+    for (double f : {0.25, 0.5, 1.0})
+      sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   opt::Rng rng(3);
   std::vector<model::Effect> effects;
   if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
@@ -34,16 +35,20 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-void ExpectSameVector(const std::vector<double>& a, const std::vector<double>& b, const std::string& what) {
+void ExpectSameVector(const std::vector<double>& a, const std::vector<double>& b,
+                      const std::string& what) {
   ASSERT_EQ(a.size(), b.size()) << what;
-  for (size_t i = 0; i < a.size(); ++i) EXPECT_TRUE(SameBits(a[i], b[i])) << what << "[" << i << "]: " << a[i] << " vs " << b[i];
+  for (size_t i = 0; i < a.size(); ++i)
+    EXPECT_TRUE(SameBits(a[i], b[i])) << what << "[" << i << "]: " << a[i] << " vs " << b[i];
 }
 
 TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
   for (const bool residuals : {false, true}) {
-    const DiagnosisFitness local(m, ParameterLayout({EffectKind::Named("delay"), EffectKind::Named("driver-lowpass")}), residuals);
+    const DiagnosisFitness local(
+        m, ParameterLayout({EffectKind::Named("delay"), EffectKind::Named("driver-lowpass")}),
+        residuals);
     const job::JobSpec spec = DiagnoseJobSpec(local, "test");
     // Through the wire encoding, as a worker gets it.
     job::JobSpec decoded;
@@ -89,21 +94,25 @@ TEST(DiagnoseJobKindTest, BadSpecsAreRefusedFieldByField) {
   job::JobSpec s = ok;
   auto& d = std::get<job::DiagnoseProblem>(s.problem);
   d.structure = {"creep", "friction-of-the-gods"};
-  EXPECT_NE(violations(s).find("diagnose.structure[1] = friction-of-the-gods: not an effect"), std::string::npos)
+  EXPECT_NE(violations(s).find("diagnose.structure[1] = friction-of-the-gods: not an effect"),
+            std::string::npos)
       << violations(s);
   s = ok;
   std::get<job::DiagnoseProblem>(s.problem).params[7].upper *= 2;
   EXPECT_NE(violations(s).find("diagnose.params[7] = creep."), std::string::npos) << violations(s);
   s = ok;
   std::get<job::DiagnoseProblem>(s.problem).cycles[2] = 2.5;
-  EXPECT_NE(violations(s).find("diagnose.cycles[2] = 2.5: gives"), std::string::npos) << violations(s);
+  EXPECT_NE(violations(s).find("diagnose.cycles[2] = 2.5: gives"), std::string::npos)
+      << violations(s);
   s = ok;
   std::get<job::DiagnoseProblem>(s.problem).cases[4].angle_deg[3] = NAN;
-  EXPECT_NE(violations(s).find("diagnose.cases[4].angle_deg[3] = nan: must be finite"), std::string::npos)
+  EXPECT_NE(violations(s).find("diagnose.cases[4].angle_deg[3] = nan: must be finite"),
+            std::string::npos)
       << violations(s);
   s = ok;
   for (auto& c : std::get<job::DiagnoseProblem>(s.problem).cases) c.role = job::CaseRole::kTest;
-  EXPECT_NE(violations(s).find("no case with role CASE_ROLE_TRAIN"), std::string::npos) << violations(s);
+  EXPECT_NE(violations(s).find("no case with role CASE_ROLE_TRAIN"), std::string::npos)
+      << violations(s);
   s = ok;
   std::get<job::DiagnoseProblem>(s.problem).rtol = 0.5;
   EXPECT_NE(violations(s).find("rtol"), std::string::npos) << violations(s);
@@ -136,7 +145,8 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   int sessions = 0;
   o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     ++sessions;
-    return std::make_unique<client::ServiceEvaluator>(so, DiagnoseJobSpec(f, "test " + f.layout().Describe()));
+    return std::make_unique<client::ServiceEvaluator>(
+        so, DiagnoseJobSpec(f, "test " + f.layout().Describe()));
   };
   const Diagnosis remote = RunDiagnosis(m, o);
   // base: DE + LM; delay: DE + LM; cubic stiffening (beam): LM only.

@@ -76,8 +76,11 @@ TEST(ServiceFaults, GarbageFramesOnBothEndpointsLeaveTheMasterServing) {
     return r.SerializeAsString();
   }();
   const std::vector<std::string> payloads = {
-      "", "\xff\xff\xff\xff garbage", std::string(100, '\0'),
-      valid_list.substr(0, valid_list.size() / 2), wrong_version.SerializeAsString(),
+      "",
+      "\xff\xff\xff\xff garbage",
+      std::string(100, '\0'),
+      valid_list.substr(0, valid_list.size() / 2),
+      wrong_version.SerializeAsString(),
       std::string(2 << 20, 'x')};  // oversized: above the 1 MiB cap
   for (const std::string& ep : {c.worker_endpoint(), c.client_endpoint()}) {
     for (const auto& p : payloads) {

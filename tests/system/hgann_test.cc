@@ -80,7 +80,8 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
 
   // `piezoid watch` follows it to the end and exits 0.
   std::string out, err;
-  EXPECT_EQ(RunCli({"watch", r.job_id, "--master", c.client_endpoint()}, &out, &err), 0) << out << err;
+  EXPECT_EQ(RunCli({"watch", r.job_id, "--master", c.client_endpoint()}, &out, &err), 0)
+      << out << err;
   EXPECT_NE(out.find("succeeded"), std::string::npos) << out;
 
   service::JobInfo info;
@@ -90,16 +91,19 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   std::vector<service::GenerationRecord> log;
   job::JobSpec stored;
   std::vector<io::SavedNetwork> networks;
-  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored, &networks).ok());
+  ASSERT_TRUE(
+      client.Fetch(r.job_id, master::kBestKept, &best, &log, &info, &stored, &networks).ok());
   ExpectSameRun(ref, best, log);
-  EXPECT_EQ(service::EncodeJobSpec(stored), service::EncodeJobSpec(spec));  // the spec comes back intact
+  EXPECT_EQ(service::EncodeJobSpec(stored),
+            service::EncodeJobSpec(spec));  // the spec comes back intact
 
   // Fetch brings the networks themselves, as a client in any language deploys them: the same,
   // bit for bit, as this client's own decoding of the genomes and as the in-process run's.
   ASSERT_EQ(networks.size(), best.size());
   client::FetchedJob job{info, stored, best, log, {}};
   hgann::HgannFitnessConfig config;
-  ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(stored.problem), &config).ok());
+  ASSERT_TRUE(
+      hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(stored.problem), &config).ok());
   const hgann::HgannFitness fitness(config);
   for (size_t k = 0; k < networks.size(); ++k) {
     io::SavedNetwork mine = client::SavedNetworkOfJob(job, fitness, k);
@@ -133,18 +137,21 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   spec.ga->island_mutation = {0.01, 0.03, 0.01, 0.05};
   spec.ga->broadcast_interval = 3;  // a gated broadcast at 3, 6, 9, 15 between the migrations
   spec.ga->broadcast_margin = 1e-6;
-  std::get<job::HgannProblem>(spec.problem).spread_penalty = 10;  // with it, the islands' output moves
+  std::get<job::HgannProblem>(spec.problem).spread_penalty =
+      10;  // with it, the islands' output moves
   const service::JobCheckpoint ref = Reference(spec);
 
   hgann::IdentifyOptions o;
   o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
   o.threads = 2;
   // The islands' default: each island's last 2 offspring of its 15 (16 %, rounded) are output moves
-  // of its best, made by the master's job runner and by identify alike (a runner without them differs).
+  // of its best, made by the master's job runner and by identify alike (a runner without them
+  // differs).
   ASSERT_EQ(hgann::HgannOutputMoves(o.ga, 10), 2);
   o.spread_penalty = 10;
   hgann::HgannFitnessConfig config;
-  ASSERT_TRUE(hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(spec.problem), &config).ok());
+  ASSERT_TRUE(
+      hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(spec.problem), &config).ok());
   const hgann::HgannFitness fitness(config);
   const io::CaseSet set = hgann::HgannCaseSet(std::get<job::HgannProblem>(spec.problem));
   const hgann::IdentifyResult id = hgann::RunIdentify(o, set, fitness, nullptr);
@@ -160,7 +167,8 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   EXPECT_EQ(log[0].evaluations, 4 * 30);
   EXPECT_EQ(log[1].evaluations, 4 * 15);
   EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
-  EXPECT_EQ(client::GaSummaryOfJob({info, spec, best, log, {}}).best_island, id.summary.best_island);
+  EXPECT_EQ(client::GaSummaryOfJob({info, spec, best, log, {}}).best_island,
+            id.summary.best_island);
 }
 
 TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIdentify) {
@@ -259,7 +267,9 @@ TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
   c.AddWorker(1);
   const std::string ep = c.client_endpoint();
   std::string out, err;
-  ASSERT_EQ(RunCli({"submit", (kExamples / "hgann_quick.json").string(), "--master", ep}, &out, &err), 0) << err;
+  ASSERT_EQ(
+      RunCli({"submit", (kExamples / "hgann_quick.json").string(), "--master", ep}, &out, &err), 0)
+      << err;
   const std::string id = out.substr(0, out.find('\n'));
   ASSERT_EQ(id.size(), 16u) << out;
 
@@ -271,12 +281,15 @@ TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
   EXPECT_NE(out.find("2 workers"), std::string::npos) << out;
 
   const fs::path dir = c.dir() / "result";
-  ASSERT_EQ(RunCli({"fetch", id, "--best", "3", "--out", dir.string(), "--no-plots", "--master", ep}, &out, &err), 0)
+  ASSERT_EQ(
+      RunCli({"fetch", id, "--best", "3", "--out", dir.string(), "--no-plots", "--master", ep},
+             &out, &err),
+      0)
       << out << err;
   EXPECT_NE(out.find("report: " + (dir / "report.md").string()), std::string::npos) << out;
   for (const char* f : {"report.md", "network.pb", "network.json", "progress.csv", "validation.csv",
-                        "parameters.csv", "networks/best-1.pb", "networks/best-1.json", "networks/best-3.pb",
-                        "networks/best-3.json", "traces/case2.csv"})
+                        "parameters.csv", "networks/best-1.pb", "networks/best-1.json",
+                        "networks/best-3.pb", "networks/best-3.json", "traces/case2.csv"})
     EXPECT_TRUE(fs::exists(dir / f)) << f;
   EXPECT_FALSE(fs::exists(dir / "networks/best-4.pb"));
 
@@ -304,8 +317,10 @@ TEST(ServiceHgann, CliSubmitWatchFetchWritesTheNetworksAndTheIdentifyReport) {
 
   // Cancelling a finished job is refused (5); an unknown job is 4.
   EXPECT_EQ(RunCli({"cancel", id, "--master", ep}, &out, &err), 5) << err;
-  EXPECT_EQ(RunCli({"fetch", "j0000000000000000", "--master", ep, "--out", (c.dir() / "x").string()}, &out, &err),
-            4);
+  EXPECT_EQ(
+      RunCli({"fetch", "j0000000000000000", "--master", ep, "--out", (c.dir() / "x").string()},
+             &out, &err),
+      4);
   EXPECT_NE(err.find("no such job"), std::string::npos) << err;
 }
 
@@ -327,11 +342,12 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
   std::vector<job::FieldViolation> v;
   Status st = client.Submit(spec, &r, &v);
   ASSERT_EQ(st.code(), StatusCode::kInvalidArgument) << st.message();
-  for (const char* f : {"hgann.cases[3].angle_deg[17]", "hgann.cases[2].role", "hgann.cases[5].number",
-                        "hgann.ranges_preset", "hgann.spread_penalty", "hgann.geometry.tip_length_m",
-                        "ga.population"})
+  for (const char* f : {"hgann.cases[3].angle_deg[17]", "hgann.cases[2].role",
+                        "hgann.cases[5].number", "hgann.ranges_preset", "hgann.spread_penalty",
+                        "hgann.geometry.tip_length_m", "ga.population"})
     EXPECT_TRUE(HasField(v, f)) << f << " in: " << st.message();
-  EXPECT_NE(st.message().find("hgann.cases[3].angle_deg[17] = nan: must be finite"), std::string::npos)
+  EXPECT_NE(st.message().find("hgann.cases[3].angle_deg[17] = nan: must be finite"),
+            std::string::npos)
       << st.message();
 
   // A spec naming a client folder never reaches a master's disk.
@@ -343,16 +359,23 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
   // The CLI refuses a bad JSON spec itself (exit 2, every violation printed), master or not.
   const fs::path bad = c.dir() / "bad.json";
   std::ofstream(bad) << R"({"version": 1, "seed": "1",
-    "hgann": {"case_set_dir": ")" << (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal").string() << R"(",
-              "ranges": [{"name": "alfa", "min": 0, "max": 1}, {"name": "beta", "min": 1, "max": 0}],
+    "hgann": {"case_set_dir": ")"
+                     << (fs::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal").string() << R"(",
+              "ranges": [{"name": "alfa", "min": 0, "max": 1}, {"name": "beta", "min": 1,
+              "max": 0}],
               "spread_penalty": -2},
     "ga": {"population": 1}})";
   std::string out, err;
-  EXPECT_EQ(RunCli({"submit", bad.string(), "--master", "tcp://127.0.0.1:1", "--timeout-ms", "100"}, &out, &err), 2);
-  EXPECT_NE(err.find("hgann.ranges[0].name = \"alfa\": must be one of mu, delta, alpha, beta, gamma, a1, a2"),
-            std::string::npos)
+  EXPECT_EQ(RunCli({"submit", bad.string(), "--master", "tcp://127.0.0.1:1", "--timeout-ms", "100"},
+                   &out, &err),
+            2);
+  EXPECT_NE(
+      err.find(
+          "hgann.ranges[0].name = \"alfa\": must be one of mu, delta, alpha, beta, gamma, a1, a2"),
+      std::string::npos)
       << err;
-  EXPECT_NE(err.find("hgann.ranges[1].max = 0: must be finite and >= min (1)"), std::string::npos) << err;
+  EXPECT_NE(err.find("hgann.ranges[1].max = 0: must be finite and >= min (1)"), std::string::npos)
+      << err;
   EXPECT_NE(err.find("hgann.spread_penalty = -2"), std::string::npos) << err;
   EXPECT_NE(err.find("ga.population = 1"), std::string::npos) << err;
   EXPECT_TRUE(out.empty()) << out;
@@ -360,7 +383,8 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
   // A folder that is not a case set names the field and the file.
   std::ofstream(bad) << R"({"version": 1, "hgann": {"case_set_dir": "no-such-folder"}, "ga": {}})";
   EXPECT_EQ(RunCli({"submit", bad.string()}, &out, &err), 2);
-  EXPECT_NE(err.find("hgann.case_set_dir = \"no-such-folder\": cannot be read"), std::string::npos) << err;
+  EXPECT_NE(err.find("hgann.case_set_dir = \"no-such-folder\": cannot be read"), std::string::npos)
+      << err;
 
   // The master still serves.
   EXPECT_TRUE(client.Submit(SyntheticSpec(1, 10, 2), &r).ok());
@@ -370,12 +394,17 @@ TEST(ServiceHgann, UnreachableMasterGivesItsMessageAndExitCode3) {
   const std::string ep = "tcp://127.0.0.1:" + std::to_string(FreePort());
   std::string out, err;
   for (const std::vector<std::string>& cmd :
-       {std::vector<std::string>{"status"}, {"list"}, {"watch", "j1"}, {"fetch", "j1"}, {"cancel", "j1"},
+       {std::vector<std::string>{"status"},
+        {"list"},
+        {"watch", "j1"},
+        {"fetch", "j1"},
+        {"cancel", "j1"},
         {"submit", (kExamples / "synthetic_job.json").string()}}) {
     std::vector<std::string> args = cmd;
     args.insert(args.end(), {"--master", ep, "--timeout-ms", "150", "--retries", "2"});
     EXPECT_EQ(RunCli(args, &out, &err), 3) << cmd[0] << ": " << err;
-    EXPECT_NE(err.find("cannot reach the master at " + ep + ": is piezoid-master running?"), std::string::npos)
+    EXPECT_NE(err.find("cannot reach the master at " + ep + ": is piezoid-master running?"),
+              std::string::npos)
         << cmd[0] << ": " << err;
   }
   // A bad command line is bad input (2); --help is 0.

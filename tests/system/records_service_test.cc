@@ -31,8 +31,8 @@ using records::EffectKind;
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 
-/// Two records of backlash-like + delay: a sine after a rest (offset fit), a multisine (offset rest),
-/// plus a withheld one; windows that start after the rest.
+/// Two records of backlash-like + delay: a sine after a rest (offset fit), a multisine (offset
+/// rest), plus a withheld one; windows that start after the rest.
 io::RecordSet MakeSet() {
   const records::DataScale s = records::SyntheticStackScale();
   auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", s));
@@ -51,9 +51,9 @@ io::RecordSet MakeSet() {
     d.duration_s = 3;
     d.fs_hz = 500;
     d.seed = static_cast<uint64_t>(i + 1);
-    io::Record r = records::SynthesizeRecord(truth, p, {}, d, {-0.7, 0.02, 0.005, static_cast<uint64_t>(i + 1)},
-                                             "r" + std::to_string(i), i == 2 ? model::CaseRole::kValidate : model::CaseRole::kTrain,
-                                             0.5, 3.2);
+    io::Record r = records::SynthesizeRecord(
+        truth, p, {}, d, {-0.7, 0.02, 0.005, static_cast<uint64_t>(i + 1)}, "r" + std::to_string(i),
+        i == 2 ? model::CaseRole::kValidate : model::CaseRole::kTrain, 0.5, 3.2);
     if (i == 1) {
       r.offset_mode = io::OffsetMode::kRest;
       double m = 0;
@@ -74,31 +74,35 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
     std::vector<EffectKind> effects;
     int substeps = 2;  // a family made with other sub-steps is made so on the workers too
     int pi_operators = 12;
-    model::InitialState state = model::InitialState::kCentred;  // the family's memory at rest travels too
+    model::InitialState state =
+        model::InitialState::kCentred;  // the family's memory at rest travels too
   };
-  for (const Case& c : {Case{"backlash-like", {EffectKind::Named("delay"), EffectKind::Named("drift")}},
-                        Case{"prandtl-ishlinskii", {EffectKind::Named("driver-lowpass")}},
-                        Case{"prandtl-ishlinskii", {}, 2, 7},
-                        Case{"duhem", {EffectKind::Named("friction"), EffectKind::Named("stiffening")}},
-                        Case{"stack-bouc-wen", {}},
-                        Case{"stack-bouc-wen", {}, 5},
-                        Case{"preisach", {EffectKind::Named("delay")}},
-                        Case{"preisach", {EffectKind::Named("creep")}, 2, 9},
-                        Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}},
-                        Case{"stack-bouc-wen", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kDescended},
-                        Case{"backlash-like", {}, 2, 12, model::InitialState::kAscended},
-                        Case{"asymmetric-pi", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kAuto},
-                        Case{"bw-oscillator", {}},
-                        Case{"bw-oscillator", {EffectKind::Named("delay")}, 3}}) {
-    SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " + std::to_string(c.pi_operators));
+  for (const Case& c :
+       {Case{"backlash-like", {EffectKind::Named("delay"), EffectKind::Named("drift")}},
+        Case{"prandtl-ishlinskii", {EffectKind::Named("driver-lowpass")}},
+        Case{"prandtl-ishlinskii", {}, 2, 7},
+        Case{"duhem", {EffectKind::Named("friction"), EffectKind::Named("stiffening")}},
+        Case{"stack-bouc-wen", {}}, Case{"stack-bouc-wen", {}, 5},
+        Case{"preisach", {EffectKind::Named("delay")}},
+        Case{"preisach", {EffectKind::Named("creep")}, 2, 9},
+        Case{"asymmetric-pi", {EffectKind::Named("quadratic-drive")}},
+        Case{
+            "stack-bouc-wen", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kDescended},
+        Case{"backlash-like", {}, 2, 12, model::InitialState::kAscended},
+        Case{"asymmetric-pi", {EffectKind::Named("delay")}, 2, 12, model::InitialState::kAuto},
+        Case{"bw-oscillator", {}}, Case{"bw-oscillator", {EffectKind::Named("delay")}, 3}}) {
+    SCOPED_TRACE(c.family + " substeps " + std::to_string(c.substeps) + " plays " +
+                 std::to_string(c.pi_operators));
     records::FamilyOptions options;
     options.substeps = c.substeps;
     options.pi_operators = c.pi_operators;
     options.initial_state = c.state;
-    auto fam = std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale, options));
+    auto fam =
+        std::shared_ptr<const records::Family>(records::MakeFamily(c.family, scale, options));
     records::RecordModel model(fam, c.effects, scale);
     records::RecordFitness local(model, train);
-    const job::JobSpec spec = complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, options), "test");
+    const job::JobSpec spec =
+        complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local, options), "test");
     // The rest is cut from the records on the wire.
     const auto& problem = std::get<job::CompleteModelProblem>(spec.problem);
     EXPECT_LT(problem.records[0].input.size(), train[0]->end_scored);
@@ -121,7 +125,8 @@ TEST(RecordsJobKindTest, TheSpecRebuildsTheRecordFitnessBitForBit) {
       remote->EvaluateMany(group, many);
       for (size_t l = 0; l < group.size(); ++l) {
         const opt::FitnessResult a = local.Evaluate(gs[l]);
-        EXPECT_TRUE(SameBits(a.cost, many[l].cost)) << "lane " << l << ": " << a.cost << " vs " << many[l].cost;
+        EXPECT_TRUE(SameBits(a.cost, many[l].cost))
+            << "lane " << l << ": " << a.cost << " vs " << many[l].cost;
         EXPECT_EQ(a.status, many[l].status);
       }
     }
@@ -147,7 +152,9 @@ TEST(RecordsJobKindTest, BadSpecsAreRefusedFieldByField) {
   EXPECT_EQ(first_error(p), "<none>");
   auto q = p;
   q.record_family = "jiles-atherton";
-  PZ_EXPECT_HAS(first_error(q), "complete_model.record_family = 'jiles-atherton': --family 'jiles-atherton' is unknown");
+  PZ_EXPECT_HAS(
+      first_error(q),
+      "complete_model.record_family = 'jiles-atherton': --family 'jiles-atherton' is unknown");
   q = p;
   q.scale.pop_back();
   PZ_EXPECT_HAS(first_error(q), "complete_model.scale = 8 values: must hold 9");
@@ -188,7 +195,8 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
     FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
   }
   ASSERT_EQ(local.params.size(), remote.params.size());
-  for (size_t i = 0; i < local.params.size(); ++i) EXPECT_TRUE(SameBits(local.params[i], remote.params[i])) << i;
+  for (size_t i = 0; i < local.params.size(); ++i)
+    EXPECT_TRUE(SameBits(local.params[i], remote.params[i])) << i;
   EXPECT_TRUE(SameBits(local.train_mse, remote.train_mse));
   EXPECT_EQ(local.search.evaluations, remote.search.evaluations);
   auto client = cluster.Client();
@@ -354,7 +362,8 @@ records::FitOptions BwFitOptions(int iterations) {
   return o;
 }
 
-records::RecordEvaluatorFactory ServiceFactory(const Cluster& cluster, const records::FitOptions& o) {
+records::RecordEvaluatorFactory ServiceFactory(const Cluster& cluster,
+                                               const records::FitOptions& o) {
   client::ServiceEvaluatorOptions so;
   so.client.endpoint = cluster.client_endpoint();
   so.client.timeout_ms = 2000;
@@ -365,7 +374,8 @@ records::RecordEvaluatorFactory ServiceFactory(const Cluster& cluster, const rec
 
 void ExpectSameFit(const records::FitResult& want, const records::FitResult& got) {
   ASSERT_EQ(want.params.size(), got.params.size());
-  for (size_t i = 0; i < want.params.size(); ++i) EXPECT_TRUE(SameBits(want.params[i], got.params[i])) << i;
+  for (size_t i = 0; i < want.params.size(); ++i)
+    EXPECT_TRUE(SameBits(want.params[i], got.params[i])) << i;
   EXPECT_TRUE(SameBits(want.train_mse, got.train_mse)) << want.train_mse << " vs " << got.train_mse;
   EXPECT_EQ(want.search.evaluations, got.search.evaluations);
 }
@@ -382,7 +392,8 @@ TEST(RecordsServiceTest, ABwOscillatorFitOnWorkersTakingFourGenomesAtATimeIsTheL
   records::FitOptions o = BwFitOptions(8);
   const records::FitResult local = records::FitRecords(set, o);
   ASSERT_EQ(local.params.size(), 7u);
-  o.evaluator_factory = [](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+  o.evaluator_factory =
+      [](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     EXPECT_EQ(f.lanes(), 4);
     return std::make_unique<OneAtATimeEvaluator>(f);
   };
@@ -403,7 +414,8 @@ TEST(RecordsServiceTest, ABwOscillatorFitOnWorkersTakingFourGenomesAtATimeIsTheL
 /// every third batch, while its leases are out, and starts a replacement of `threads` threads.
 class ChurningEvaluator final : public opt::BatchEvaluator {
  public:
-  ChurningEvaluator(std::unique_ptr<opt::BatchEvaluator> inner, Cluster& cluster, int threads, int* kills)
+  ChurningEvaluator(std::unique_ptr<opt::BatchEvaluator> inner, Cluster& cluster, int threads,
+                    int* kills)
       : inner_(std::move(inner)), cluster_(cluster), threads_(threads), kills_(kills) {}
   void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
     std::thread killer;
@@ -449,7 +461,8 @@ TEST(RecordsServiceTest, ABwOscillatorFitIsBitIdenticalUnderWorkerChurn) {
   const records::FitResult local = records::FitRecords(set, o);
   int kills = 0;
   const records::RecordEvaluatorFactory service = ServiceFactory(cluster, o);
-  o.evaluator_factory = [&](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+  o.evaluator_factory =
+      [&](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     return std::make_unique<ChurningEvaluator>(service(f), cluster, 2, &kills);
   };
   records::FitResult remote;

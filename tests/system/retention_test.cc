@@ -64,7 +64,10 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
   ASSERT_TRUE(after.Submit(SyntheticSpec(700, 8, 100000, /*sleep_ms=*/5), &running).ok());
   std::vector<std::string> pruned;
   std::vector<job::FieldViolation> refused;
-  ASSERT_TRUE(after.Prune({running.job_id, ids[0], "jnosuchjob000000"}, 0, 0, /*dry_run=*/true, &pruned, &refused).ok());
+  ASSERT_TRUE(after
+                  .Prune({running.job_id, ids[0], "jnosuchjob000000"}, 0, 0, /*dry_run=*/true,
+                         &pruned, &refused)
+                  .ok());
   EXPECT_EQ(pruned, std::vector<std::string>{ids[0]});
   ASSERT_EQ(refused.size(), 2u);
   EXPECT_EQ(refused[0].field, running.job_id);
@@ -73,7 +76,8 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
   EXPECT_TRUE(fs::exists(c.dir() / "state" / "jobs" / ids[0])) << "a dry run deleted";
   // All but the two most recently ended: jobs 0, 1, 2, their folders too.
   ASSERT_TRUE(after.Prune({}, 0, 2, false, &pruned, &refused).ok());
-  EXPECT_EQ(std::set<std::string>(pruned.begin(), pruned.end()), (std::set<std::string>{ids[0], ids[1], ids[2]}));
+  EXPECT_EQ(std::set<std::string>(pruned.begin(), pruned.end()),
+            (std::set<std::string>{ids[0], ids[1], ids[2]}));
   EXPECT_TRUE(refused.empty());
   for (int k = 0; k < 3; ++k) EXPECT_FALSE(fs::exists(c.dir() / "state" / "jobs" / ids[k]));
   auto jobs = ById(after);
@@ -89,7 +93,9 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
   std::string out, err;
   EXPECT_EQ(RunCli({"prune", "--master", c.client_endpoint()}, &out, &err), 2) << err;
   EXPECT_NE(err.find("--older-than"), std::string::npos) << err;
-  EXPECT_EQ(RunCli({"prune", running.job_id, ids[3], "--master", c.client_endpoint()}, &out, &err), 5) << out << err;
+  EXPECT_EQ(RunCli({"prune", running.job_id, ids[3], "--master", c.client_endpoint()}, &out, &err),
+            5)
+      << out << err;
   EXPECT_NE(out.find("pruned " + ids[3]), std::string::npos) << out;
   EXPECT_NE(err.find("running"), std::string::npos) << err;
   ASSERT_TRUE(after.Cancel(running.job_id).ok());

@@ -29,7 +29,9 @@ bool WaitFor(F pred, std::chrono::milliseconds limit = std::chrono::seconds(20))
   return pred();
 }
 
-int PortOf(const std::string& endpoint) { return std::stoi(endpoint.substr(endpoint.rfind(':') + 1)); }
+int PortOf(const std::string& endpoint) {
+  return std::stoi(endpoint.substr(endpoint.rfind(':') + 1));
+}
 
 /// A TCP forwarder on 127.0.0.1 that records every byte it forwards (both directions).
 class RecordingProxy {
@@ -124,7 +126,8 @@ class RecordingProxy {
   std::string bytes_;
 };
 
-/// Key pairs in a temporary folder: keys/NAME.key|pub, allowed public keys in allow/{workers,clients}.
+/// Key pairs in a temporary folder: keys/NAME.key|pub, allowed public keys in
+/// allow/{workers,clients}.
 class Keys {
  public:
   explicit Keys(const fs::path& dir) : dir_(dir) {
@@ -144,9 +147,9 @@ class Keys {
   fs::path key(const std::string& name) const { return dir_ / "keys" / (name + ".key"); }
   fs::path pub(const std::string& name) const { return dir_ / "keys" / (name + ".pub"); }
   std::vector<std::string> MasterArgs() const {
-    return {"--curve-secret", key("master").string(), "--allow-workers",
-            (dir_ / "allow" / "workers").string(), "--allow-clients",
-            (dir_ / "allow" / "clients").string()};
+    return {"--curve-secret",  key("master").string(),
+            "--allow-workers", (dir_ / "allow" / "workers").string(),
+            "--allow-clients", (dir_ / "allow" / "clients").string()};
   }
 
  private:
@@ -154,15 +157,16 @@ class Keys {
 };
 
 fs::path TempDir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() /
-                     ("pz-sec-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(FreePort()));
+  const fs::path d =
+      fs::temp_directory_path() /
+      ("pz-sec-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(FreePort()));
   fs::remove_all(d);
   fs::create_directories(d);
   return d;
 }
 
-std::unique_ptr<Process> CurveWorker(const std::string& endpoint, const Keys& keys, const std::string& name,
-                                     const fs::path& log) {
+std::unique_ptr<Process> CurveWorker(const std::string& endpoint, const Keys& keys,
+                                     const std::string& name, const fs::path& log) {
   return std::make_unique<Process>(
       BuildDir() / "worker" / "piezoid-worker",
       std::vector<std::string>{"--master", endpoint, "--threads", "2", "--heartbeat-ms", "100",
@@ -173,7 +177,8 @@ std::unique_ptr<Process> CurveWorker(const std::string& endpoint, const Keys& ke
 }
 
 client::ServiceClient CurveClient(const std::string& endpoint, const CurveKeyPair& own,
-                                  const CurveKeyPair& master_keys, int timeout_ms = 2000, int retries = 3) {
+                                  const CurveKeyPair& master_keys, int timeout_ms = 2000,
+                                  int retries = 3) {
   client::ServiceClientOptions o = ClientOptions(endpoint, timeout_ms, retries);
   o.curve = own;
   o.master_public = master_keys.public_z85;
@@ -185,8 +190,9 @@ client::ServiceClient CurveClient(const std::string& endpoint, const CurveKeyPai
 TEST(SecurityKeys, KeygenWritesAPrivateSecretAndAReadablePublicKey) {
   const fs::path d = TempDir("keygen");
   std::string out, err;
-  ASSERT_EQ(RunCli({"keygen", "--out", (d / "k").string(), "--name", "alice"}, &out, &err), 0) << err;
-  struct stat st{};
+  ASSERT_EQ(RunCli({"keygen", "--out", (d / "k").string(), "--name", "alice"}, &out, &err), 0)
+      << err;
+  struct stat st {};
   ASSERT_EQ(::stat((d / "k" / "alice.key").c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0600u);
   ASSERT_EQ(::stat((d / "k" / "alice.pub").c_str(), &st), 0);
@@ -236,7 +242,8 @@ TEST(SecurityKeys, SecretKeyReadableByOthersIsRefusedNamingTheMode) {
 
 TEST(SecurityKeys, BadKeyTextNamesTheLine) {
   CurveKeyPair p;
-  Status s = service::ParseCurveKeyFile("metadata\ncurve\n    public-key = \"short\"\n", "x.pub", &p);
+  Status s =
+      service::ParseCurveKeyFile("metadata\ncurve\n    public-key = \"short\"\n", "x.pub", &p);
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("x.pub:3: public-key"), std::string::npos) << s.message();
   s = service::ParseCurveKeyFile("hello\n", "y.pub", &p);
@@ -244,10 +251,12 @@ TEST(SecurityKeys, BadKeyTextNamesTheLine) {
   CurveKeyPair a, b;
   ASSERT_TRUE(service::GenerateCurveKeyPair(&a).ok());
   ASSERT_TRUE(service::GenerateCurveKeyPair(&b).ok());
-  s = service::ParseCurveKeyFile("public-key = \"" + a.public_z85 + "\"\nsecret-key = \"" + b.secret_z85 + "\"\n",
-                                "z.key", &p);
+  s = service::ParseCurveKeyFile(
+      "public-key = \"" + a.public_z85 + "\"\nsecret-key = \"" + b.secret_z85 + "\"\n", "z.key",
+      &p);
   EXPECT_NE(s.message().find("does not belong"), std::string::npos) << s.message();
-  ASSERT_TRUE(service::ParseCurveKeyFile("secret-key = \"" + a.secret_z85 + "\"\n", "s.key", &p).ok());
+  ASSERT_TRUE(
+      service::ParseCurveKeyFile("secret-key = \"" + a.secret_z85 + "\"\n", "s.key", &p).ok());
   EXPECT_EQ(p.public_z85, a.public_z85);  // derived
 }
 
@@ -278,16 +287,18 @@ void RunThroughProxies(bool curve) {
     keys.Make("worker1", "workers");
     client_keys = keys.Make("alice", "clients");
   }
-  Cluster cluster(curve ? "curve" : "plain", curve ? keys.MasterArgs() : std::vector<std::string>{});
-  RecordingProxy to_workers(PortOf(cluster.worker_endpoint())), to_clients(PortOf(cluster.client_endpoint()));
+  Cluster cluster(curve ? "curve" : "plain",
+                  curve ? keys.MasterArgs() : std::vector<std::string>{});
+  RecordingProxy to_workers(PortOf(cluster.worker_endpoint())),
+      to_clients(PortOf(cluster.client_endpoint()));
   std::unique_ptr<Process> worker;
   if (curve) {
     worker = CurveWorker(to_workers.endpoint(), keys, "worker1", d / "worker.log");
   } else {
     worker = std::make_unique<Process>(
         BuildDir() / "worker" / "piezoid-worker",
-        std::vector<std::string>{"--master", to_workers.endpoint(), "--threads", "2", "--heartbeat-ms",
-                                 "100", "--liveness", "5", "--log-level", "warn"},
+        std::vector<std::string>{"--master", to_workers.endpoint(), "--threads", "2",
+                                 "--heartbeat-ms", "100", "--liveness", "5", "--log-level", "warn"},
         d / "worker.log");
   }
   job::JobSpec spec = SyntheticSpec(41, 16, 6);
@@ -304,8 +315,8 @@ void RunThroughProxies(bool curve) {
     std::vector<service::JobInfo> jobs;
     int workers = -1;
     (void)c.List(&jobs, &workers);
-    FAIL() << s.message() << "\nworkers " << workers << ", worker proxy bytes " << to_workers.captured().size()
-           << ", worker running " << worker->running() << "\n"
+    FAIL() << s.message() << "\nworkers " << workers << ", worker proxy bytes "
+           << to_workers.captured().size() << ", worker running " << worker->running() << "\n"
            << Slurp(cluster.dir() / "master.log") << Slurp(d / "worker.log");
   }
   EXPECT_EQ(info.state, service::JobState::kSucceeded) << info.message;
@@ -317,8 +328,10 @@ void RunThroughProxies(bool curve) {
   EXPECT_GT(clients.size(), 200u);
   EXPECT_GT(workers.size(), 200u);
   if (curve) {
-    EXPECT_EQ(clients.find(marker), std::string::npos) << "the spec crossed the client endpoint in clear";
-    EXPECT_EQ(workers.find(marker), std::string::npos) << "the spec crossed the worker endpoint in clear";
+    EXPECT_EQ(clients.find(marker), std::string::npos)
+        << "the spec crossed the client endpoint in clear";
+    EXPECT_EQ(workers.find(marker), std::string::npos)
+        << "the spec crossed the worker endpoint in clear";
     EXPECT_NE(clients.find("CURVE"), std::string::npos);  // the ZMTP greeting names the mechanism
   } else {
     EXPECT_NE(clients.find(marker), std::string::npos) << "the proxy did not see the submission";
@@ -348,7 +361,8 @@ TEST(SecurityCurve, UnknownKeysAreRefusedOnBothEndpoints) {
     const auto t0 = std::chrono::steady_clock::now();
     Status s = c.List(&jobs);
     EXPECT_EQ(s.code(), StatusCode::kUnavailable);
-    EXPECT_NE(s.message().find("refused this client's CURVE key"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("refused this client's CURVE key"), std::string::npos)
+        << s.message();
     EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::milliseconds(2900));
     std::string err;
     EXPECT_EQ(RunCli({"list", "--master", cluster.client_endpoint(), "--curve-secret",
@@ -360,7 +374,8 @@ TEST(SecurityCurve, UnknownKeysAreRefusedOnBothEndpoints) {
   // A client without keys: told that the master may require CURVE keys.
   {
     std::string err;
-    EXPECT_EQ(RunCli({"list", "--master", cluster.client_endpoint(), "--timeout-ms", "500", "--retries", "1"},
+    EXPECT_EQ(RunCli({"list", "--master", cluster.client_endpoint(), "--timeout-ms", "500",
+                      "--retries", "1"},
                      nullptr, &err),
               3);
     EXPECT_NE(err.find("CURVE"), std::string::npos) << err;
@@ -378,12 +393,14 @@ TEST(SecurityCurve, UnknownKeysAreRefusedOnBothEndpoints) {
   // Worker endpoint: unknown keys (and a key allowed only as a client) never join; the worker
   // says why.
   auto stranger = CurveWorker(cluster.worker_endpoint(), keys, "stranger", d / "stranger.log");
-  auto misplaced = CurveWorker(cluster.worker_endpoint(), keys, "w-client-key", d / "misplaced.log");
+  auto misplaced =
+      CurveWorker(cluster.worker_endpoint(), keys, "w-client-key", d / "misplaced.log");
   EXPECT_TRUE(WaitFor([&] {
     const std::string a = Slurp(d / "stranger.log"), b = Slurp(d / "misplaced.log");
     return a.find("refused this worker's CURVE key") != std::string::npos &&
            b.find("refused this worker's CURVE key") != std::string::npos;
-  })) << Slurp(d / "stranger.log") << Slurp(d / "misplaced.log");
+  })) << Slurp(d / "stranger.log")
+      << Slurp(d / "misplaced.log");
   auto c = CurveClient(cluster.client_endpoint(), alice, master_keys);
   std::vector<service::JobInfo> jobs;
   int workers = -1;
@@ -404,8 +421,8 @@ TEST(SecurityCurve, MasterRefusesToStartWithBadKeyOptions) {
   keys.Make("master", "");
   ::chmod(keys.key("master").c_str(), 0604);
   const auto run = [&](std::vector<std::string> args) {
-    args.insert(args.end(), {"--workers", "tcp://127.0.0.1:*", "--clients", "tcp://127.0.0.1:*", "--state-dir",
-                             (d / "state").string()});
+    args.insert(args.end(), {"--workers", "tcp://127.0.0.1:*", "--clients", "tcp://127.0.0.1:*",
+                             "--state-dir", (d / "state").string()});
     std::string cmd = "'" + (BuildDir() / "master" / "piezoid-master").string() + "'";
     for (const auto& a : args) cmd += " '" + a + "'";
     cmd += " >'" + (d / "out.log").string() + "' 2>&1";
@@ -419,8 +436,9 @@ TEST(SecurityCurve, MasterRefusesToStartWithBadKeyOptions) {
   std::tie(code, log) = run({"--curve-secret", keys.key("master").string()});
   EXPECT_EQ(code, 2);
   EXPECT_NE(log.find("--allow-workers"), std::string::npos) << log;
-  std::tie(code, log) = run({"--curve-secret", keys.key("master").string(), "--allow-workers",
-                             (d / "nowhere").string(), "--allow-clients", (d / "allow" / "clients").string()});
+  std::tie(code, log) =
+      run({"--curve-secret", keys.key("master").string(), "--allow-workers",
+           (d / "nowhere").string(), "--allow-clients", (d / "allow" / "clients").string()});
   EXPECT_NE(code, 0);
   EXPECT_NE(log.find("--allow-workers"), std::string::npos) << log;
   EXPECT_NE(log.find("nowhere"), std::string::npos) << log;
@@ -478,7 +496,8 @@ TEST(SecurityLimits, WithCurveTheLimitIsPerClientKey) {
   client::SubmitResult r;
   ASSERT_TRUE(ca.Submit(SyntheticSpec(1, 8, 2), &r).ok());
   Status s = ca.Submit(SyntheticSpec(2, 8, 2), &r);
-  EXPECT_NE(s.message().find("client clients:alice already has 1 running"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("client clients:alice already has 1 running"), std::string::npos)
+      << s.message();
   s = cb.Submit(SyntheticSpec(2, 8, 2), &r);
   EXPECT_TRUE(s.ok()) << s.message();
   fs::remove_all(d);
@@ -486,7 +505,8 @@ TEST(SecurityLimits, WithCurveTheLimitIsPerClientKey) {
 
 TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
   // Above the client's own limit: refused before sending.
-  client::ServiceClientOptions o = ClientOptions("tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1);
+  client::ServiceClientOptions o =
+      ClientOptions("tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1);
   o.max_message_bytes = 2048;
   client::ServiceClient c(o);
   job::JobSpec spec = SyntheticSpec(1, 8, 2);
@@ -525,15 +545,18 @@ TEST(SecurityMaster, SecondMasterOnTheSameStateDirectoryRefusesToStart) {
 
 TEST(SecurityMaster, PlainMasterOnANonLoopbackAddressWarns) {
   const fs::path d = TempDir("warn");
-  Process m(BuildDir() / "master" / "piezoid-master",
-            {"--workers", "tcp://0.0.0.0:" + std::to_string(FreePort()), "--clients",
-             "tcp://127.0.0.1:" + std::to_string(FreePort()), "--state-dir", (d / "state").string()},
-            d / "master.log");
-  EXPECT_TRUE(WaitFor([&] { return Slurp(d / "master.log").find("workers on") != std::string::npos; }));
+  Process m(
+      BuildDir() / "master" / "piezoid-master",
+      {"--workers", "tcp://0.0.0.0:" + std::to_string(FreePort()), "--clients",
+       "tcp://127.0.0.1:" + std::to_string(FreePort()), "--state-dir", (d / "state").string()},
+      d / "master.log");
+  EXPECT_TRUE(
+      WaitFor([&] { return Slurp(d / "master.log").find("workers on") != std::string::npos; }));
   const std::string log = Slurp(d / "master.log");
   EXPECT_NE(log.find("reachable from other hosts and CURVE is off"), std::string::npos) << log;
   const size_t first = log.find("reachable from other hosts");
-  EXPECT_EQ(log.find("reachable from other hosts", first + 1), std::string::npos) << log;  // not the loopback one
+  EXPECT_EQ(log.find("reachable from other hosts", first + 1), std::string::npos)
+      << log;  // not the loopback one
   m.Kill(SIGTERM);
   fs::remove_all(d);
 }
@@ -543,13 +566,22 @@ TEST(SecurityCli, SubmitWithAClientTokenIsIdempotent) {
   const fs::path spec = cluster.dir() / "job.json";
   std::ofstream(spec) << service::JobSpecToJson(SyntheticSpec(5, 8, 2));
   std::string a, b, err;
-  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(), "--client-token", "t1"}, &a, &err), 0)
+  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(),
+                    "--client-token", "t1"},
+                   &a, &err),
+            0)
       << err;
-  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(), "--client-token", "t1"}, &b, &err), 0)
+  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(),
+                    "--client-token", "t1"},
+                   &b, &err),
+            0)
       << err;
   EXPECT_EQ(a, b);
   EXPECT_NE(err.find("already been submitted"), std::string::npos) << err;
-  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(), "--client-token", "t2"}, &b, &err), 0);
+  ASSERT_EQ(RunCli({"submit", spec.string(), "--master", cluster.client_endpoint(),
+                    "--client-token", "t2"},
+                   &b, &err),
+            0);
   EXPECT_NE(a, b);
 }
 

@@ -106,7 +106,8 @@ inline std::string Slurp(const fs::path& p) {
 
 /// Runs `piezoid` (the client CLI of this build) with `args`; stdout and stderr into *out / *err.
 /// Returns its exit code (-1 if it did not exit normally).
-inline int RunCli(const std::vector<std::string>& args, std::string* out = nullptr, std::string* err = nullptr) {
+inline int RunCli(const std::vector<std::string>& args, std::string* out = nullptr,
+                  std::string* err = nullptr) {
   static int counter = 0;
   const fs::path base = fs::temp_directory_path() /
                         ("pz-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
@@ -122,7 +123,8 @@ inline int RunCli(const std::vector<std::string>& args, std::string* out = nullp
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-inline client::ServiceClientOptions ClientOptions(const std::string& endpoint, int timeout_ms, int retries) {
+inline client::ServiceClientOptions ClientOptions(const std::string& endpoint, int timeout_ms,
+                                                  int retries) {
   client::ServiceClientOptions o;
   o.endpoint = endpoint;
   o.timeout_ms = timeout_ms;
@@ -156,12 +158,13 @@ class Cluster {
     const fs::path endpoints = dir_ / "endpoints";
     std::error_code ec;
     fs::remove(endpoints, ec);
-    std::vector<std::string> args = {"--workers", first ? "tcp://127.0.0.1:*" : worker_ep_,
-                                     "--clients", first ? "tcp://127.0.0.1:*" : client_ep_,
+    std::vector<std::string> args = {"--workers",        first ? "tcp://127.0.0.1:*" : worker_ep_,
+                                     "--clients",        first ? "tcp://127.0.0.1:*" : client_ep_,
                                      "--endpoints-file", endpoints.string(),
-                                     "--state-dir", (dir_ / "state").string(),
-                                     "--heartbeat-ms", "100", "--liveness", "5",
-                                     "--log-level", "warn"};
+                                     "--state-dir",      (dir_ / "state").string(),
+                                     "--heartbeat-ms",   "100",
+                                     "--liveness",       "5",
+                                     "--log-level",      "warn"};
     args.insert(args.end(), master_extra_.begin(), master_extra_.end());
     master_ = std::make_unique<Process>(BuildDir() / "master" / "piezoid-master", args,
                                         dir_ / "master.log");
@@ -177,18 +180,20 @@ class Cluster {
       if (!master_->running()) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    ADD_FAILURE() << "the master did not write " << endpoints << " (see " << dir_ / "master.log" << ")";
+    ADD_FAILURE() << "the master did not write " << endpoints << " (see " << dir_ / "master.log"
+                  << ")";
     return false;
   }
   void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
   pid_t master_pid() const { return master_->pid(); }
   Process& AddWorker(int threads, const std::vector<std::string>& extra = {}) {
-    std::vector<std::string> args{"--master", worker_ep_, "--threads", std::to_string(threads),
-                                  "--heartbeat-ms", "100", "--liveness", "5", "--backoff-max-ms",
-                                  "500", "--log-level", "warn"};
+    std::vector<std::string> args{
+        "--master",         worker_ep_, "--threads",   std::to_string(threads),
+        "--heartbeat-ms",   "100",      "--liveness",  "5",
+        "--backoff-max-ms", "500",      "--log-level", "warn"};
     args.insert(args.end(), extra.begin(), extra.end());
-    workers_.push_back(
-        std::make_unique<Process>(BuildDir() / "worker" / "piezoid-worker", args, dir_ / "workers.log"));
+    workers_.push_back(std::make_unique<Process>(BuildDir() / "worker" / "piezoid-worker", args,
+                                                 dir_ / "workers.log"));
     return *workers_.back();
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
@@ -208,7 +213,7 @@ class Cluster {
 };
 
 inline job::JobSpec SyntheticSpec(uint64_t seed, int population, int generations,
-                                     double sleep_ms = 0, int bits = 64) {
+                                  double sleep_ms = 0, int bits = 64) {
   job::JobSpec s;
   s.name = "test";
   s.seed = seed;

@@ -1,8 +1,8 @@
-// Evaluation sessions (JobSpec.external, master/session.h, svcclient/service_evaluator.h): an optimiser
-// in the client process evaluates its batches on the service's workers. The results equal an
-// InlineEvaluator's bit for bit with one or two workers and when a worker is killed mid-batch; the
-// session shows in status (batches, evaluations) and succeeds when closed; bad requests get clear
-// errors; a session whose client falls silent is cancelled.
+// Evaluation sessions (JobSpec.external, master/session.h, svcclient/service_evaluator.h): an
+// optimiser in the client process evaluates its batches on the service's workers. The results equal
+// an InlineEvaluator's bit for bit with one or two workers and when a worker is killed mid-batch;
+// the session shows in status (batches, evaluations) and succeeds when closed; bad requests get
+// clear errors; a session whose client falls silent is cancelled.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -61,7 +61,8 @@ std::vector<FitnessResult> Evaluate(opt::BatchEvaluator& ev, const std::vector<G
 void ExpectSame(const std::vector<FitnessResult>& a, const std::vector<FitnessResult>& b) {
   ASSERT_EQ(a.size(), b.size());
   for (size_t i = 0; i < a.size(); ++i) {
-    EXPECT_EQ(std::memcmp(&a[i].cost, &b[i].cost, sizeof(double)), 0) << i << ": " << a[i].cost << " vs " << b[i].cost;
+    EXPECT_EQ(std::memcmp(&a[i].cost, &b[i].cost, sizeof(double)), 0)
+        << i << ": " << a[i].cost << " vs " << b[i].cost;
     EXPECT_EQ(a[i].status, b[i].status) << i;
     EXPECT_EQ(a[i].reason, b[i].reason) << i;
     EXPECT_EQ(a[i].residuals, b[i].residuals) << i;
@@ -167,7 +168,8 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_EQ(client.Submit(none, &r, &v).code(), StatusCode::kInvalidArgument);
   ASSERT_FALSE(v.empty());
   EXPECT_EQ(v.front().field, "problem");
-  // (On the wire the algorithm is a oneof: both set is a client-side mistake, caught by validation.)
+  // (On the wire the algorithm is a oneof: both set is a client-side mistake, caught by
+  // validation.)
   job::JobSpec both = SessionSpec();
   both.external = job::ExternalSettings{};
   both.ga = job::GaSettings{};

@@ -50,7 +50,8 @@ TEST(SlowClients, WatchersThatNeverReadAndSilentConnectionsDoNotStallTheMaster) 
     watchers.push_back(std::move(s));  // never read
   }
   std::vector<int> raw;
-  const std::string greeting_half("\xff\0\0\0\0\0\0\0\x01\x7f\x03", 11);  // ZMTP 3 signature, cut short
+  const std::string greeting_half("\xff\0\0\0\0\0\0\0\x01\x7f\x03",
+                                  11);  // ZMTP 3 signature, cut short
   for (int i = 0; i < 64; ++i) raw.push_back(RawConnection(c.client_endpoint(), ""));
   for (int i = 0; i < 64; ++i) raw.push_back(RawConnection(c.client_endpoint(), greeting_half));
   for (int fd : raw) ASSERT_GE(fd, 0);
@@ -68,17 +69,24 @@ TEST(SlowClients, WatchersThatNeverReadAndSilentConnectionsDoNotStallTheMaster) 
     rss_max = std::max(rss_max, RssKiB(c.master_pid()));
     ++requests;
     std::this_thread::sleep_for(100ms);
-  } while (info.generation < 2500 && service::JobState::kRunning == info.state && Clock::now() < until);
+  } while (info.generation < 2500 && service::JobState::kRunning == info.state &&
+           Clock::now() < until);
   EXPECT_LT(worst, 1.0) << "slowest Status answer [s]";
   // A 65th watcher (the maximum is 64) takes the oldest one's place and gets events.
   int events = 0;
-  ASSERT_TRUE(client.Watch(r.job_id, [&](const service::JobEvent&) { return ++events < 5; }, 10s).ok());
+  ASSERT_TRUE(client
+                  .Watch(
+                      r.job_id, [&](const service::JobEvent&) { return ++events < 5; }, 10s)
+                  .ok());
   EXPECT_EQ(events, 5);
   EXPECT_GE(info.generation, 2500u) << "the job went on";
-  // 64 stalled watchers of a job publishing hundreds of events a second: bounded by the per-peer queue.
+  // 64 stalled watchers of a job publishing hundreds of events a second: bounded by the per-peer
+  // queue.
   EXPECT_LT(rss_max - rss0, 32 * 1024) << "KiB the master grew by (from " << rss0 << ")";
-  std::printf("slow clients: slowest Status %.3f s over %d requests; master RSS %ld -> max %ld KiB; generation %ld\n",
-              worst, requests, rss0, rss_max, static_cast<long>(info.generation));
+  std::printf(
+      "slow clients: slowest Status %.3f s over %d requests; master RSS %ld -> max %ld KiB; "
+      "generation %ld\n",
+      worst, requests, rss0, rss_max, static_cast<long>(info.generation));
   for (int fd : raw) ::close(fd);
   ASSERT_TRUE(client.Cancel(r.job_id).ok());
 }

@@ -44,22 +44,40 @@ struct Damage {
 
 TEST(State, DamagedCheckpointsFallBackAndEveryJobEndsAsInProcess) {
   const std::vector<Damage> damages = {
-      {"flip-10%", [](const fs::path& d) { WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 0.1, 3)); },
+      {"flip-10%",
+       [](const fs::path& d) {
+         WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 0.1, 3));
+       },
        "checksum mismatch"},
-      {"flip-50%", [](const fs::path& d) { WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 0.5, 0)); },
+      {"flip-50%",
+       [](const fs::path& d) {
+         WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 0.5, 0));
+       },
        "checksum mismatch"},
-      {"flip-last", [](const fs::path& d) { WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 1.0, 7)); },
+      {"flip-last",
+       [](const fs::path& d) {
+         WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 1.0, 7));
+       },
        "checkpoint.pb"},
-      {"truncated", [](const fs::path& d) { const auto s = ReadFile(d / "checkpoint.pb"); WriteFile(d / "checkpoint.pb", s.substr(0, s.size() / 3)); },
+      {"truncated",
+       [](const fs::path& d) {
+         const auto s = ReadFile(d / "checkpoint.pb");
+         WriteFile(d / "checkpoint.pb", s.substr(0, s.size() / 3));
+       },
        "checkpoint.pb"},
-      {"garbage", [](const fs::path& d) { WriteFile(d / "checkpoint.pb", std::string(4096, '\x5a')); }, "checkpoint.pb"},
+      {"garbage",
+       [](const fs::path& d) { WriteFile(d / "checkpoint.pb", std::string(4096, '\x5a')); },
+       "checkpoint.pb"},
       {"deleted", [](const fs::path& d) { fs::remove(d / "checkpoint.pb"); }, "missing"},
-      {"both-bad", [](const fs::path& d) {
+      {"both-bad",
+       [](const fs::path& d) {
          WriteFile(d / "checkpoint.pb", Flip(ReadFile(d / "checkpoint.pb"), 0.3, 1));
          fs::remove(d / "checkpoint.prev.pb");
-       }, "restarted from generation 0"},
+       },
+       "restarted from generation 0"},
       {"intact", [](const fs::path&) {}, ""},
-      {"spec-bad", [](const fs::path& d) { WriteFile(d / "spec.pb", Flip(ReadFile(d / "spec.pb"), 0.5, 2)); },
+      {"spec-bad",
+       [](const fs::path& d) { WriteFile(d / "spec.pb", Flip(ReadFile(d / "spec.pb"), 0.5, 2)); },
        "spec.pb", true},
   };
   Cluster c("state");
@@ -108,7 +126,8 @@ TEST(State, DamagedCheckpointsFallBackAndEveryJobEndsAsInProcess) {
       EXPECT_TRUE(info.notice.empty()) << info.notice;
     } else {
       EXPECT_NE(info.notice.find(damages[i].notice), std::string::npos) << info.notice;
-      EXPECT_NE(info.notice.find((jobs / ids[i]).string()), std::string::npos) << "names the file: " << info.notice;
+      EXPECT_NE(info.notice.find((jobs / ids[i]).string()), std::string::npos)
+          << "names the file: " << info.notice;
     }
     if (damages[i].fails) {
       EXPECT_EQ(info.state, service::JobState::kFailed);
@@ -157,10 +176,15 @@ TEST(State, UnwritableCheckpointsShowInStatusUntilTheyAreWrittenAgain) {
   EXPECT_EQ(info.state, service::JobState::kRunning);
   // Watch events say it too.
   bool in_event = false;
-  ASSERT_TRUE(client.Watch(r.job_id, [&](const service::JobEvent& e) {
-    in_event = in_event || !e.storage_error.empty();
-    return !in_event;
-  }, 20s).ok());
+  ASSERT_TRUE(client
+                  .Watch(
+                      r.job_id,
+                      [&](const service::JobEvent& e) {
+                        in_event = in_event || !e.storage_error.empty();
+                        return !in_event;
+                      },
+                      20s)
+                  .ok());
   EXPECT_TRUE(in_event);
   fs::remove_all(blocker);
   ASSERT_TRUE(client.WaitFinal(r.job_id, 60s, &info).ok());

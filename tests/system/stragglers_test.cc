@@ -21,7 +21,7 @@ struct SlowRun {
 };
 
 SlowRun RunWithASlowWorker(const job::JobSpec& spec, const service::JobCheckpoint& ref,
-                       const std::vector<std::string>& master_flags) {
+                           const std::vector<std::string>& master_flags) {
   Cluster c("straggle", master_flags);
   c.AddWorker(1);
   c.AddWorker(1);
@@ -31,7 +31,8 @@ SlowRun RunWithASlowWorker(const job::JobSpec& spec, const service::JobCheckpoin
   EXPECT_TRUE(client.Submit(spec, &r).ok());
   const auto start = Clock::now();
   service::JobInfo info;
-  while (client.GetStatus(r.job_id, &info).ok() && !service::IsFinal(info.state) && Clock::now() - start < 300s) {
+  while (client.GetStatus(r.job_id, &info).ok() && !service::IsFinal(info.state) &&
+         Clock::now() - start < 300s) {
     ::kill(slow.pid(), SIGSTOP);
     std::this_thread::sleep_for(350ms);
     ::kill(slow.pid(), SIGCONT);
@@ -59,8 +60,8 @@ TEST(Stragglers, CopiesOfASlowWorkersLeasesGiveTheSameResultSooner) {
   EXPECT_LE(with.workers.speculative_wins, with.workers.speculative_leases);
   const SlowRun without = RunWithASlowWorker(spec, ref, {"--speculate-after", "0"});
   EXPECT_EQ(without.workers.speculative_leases, 0u);
-  std::printf("stragglers: %.1f s with copies (%lu sent, %lu answered first), %.1f s without\n", with.seconds,
-              static_cast<unsigned long>(with.workers.speculative_leases),
+  std::printf("stragglers: %.1f s with copies (%lu sent, %lu answered first), %.1f s without\n",
+              with.seconds, static_cast<unsigned long>(with.workers.speculative_leases),
               static_cast<unsigned long>(with.workers.speculative_wins), without.seconds);
 }
 

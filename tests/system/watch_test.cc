@@ -111,7 +111,8 @@ TEST(Watch, CancelPushesTheFinalEventToEveryWatcher) {
   ASSERT_TRUE(first_event(w1));
   ASSERT_TRUE(first_event(w2));
   ASSERT_TRUE(client.Cancel(r.job_id).ok());
-  for (auto [w, id] : {std::pair<RawClient*, uint64_t>{&w1, 71}, std::pair<RawClient*, uint64_t>{&w2, 72}}) {
+  for (auto [w, id] :
+       {std::pair<RawClient*, uint64_t>{&w1, 71}, std::pair<RawClient*, uint64_t>{&w2, 72}}) {
     bool cancelled = false;
     const auto until = std::chrono::steady_clock::now() + 10s;
     while (!cancelled && std::chrono::steady_clock::now() < until) {

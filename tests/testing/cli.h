@@ -13,7 +13,8 @@ namespace pz::testing {
 using RegisterCommand = void (*)(CLI::App& app, int& exit_code);
 
 /// Parses args for a fresh app holding `commands`; returns the exit code the command set.
-inline int RunCommands(std::initializer_list<RegisterCommand> commands, const std::vector<std::string>& args) {
+inline int RunCommands(std::initializer_list<RegisterCommand> commands,
+                       const std::vector<std::string>& args) {
   CLI::App app{"piezoid"};
   app.require_subcommand(1);
   int exit_code = 0;
@@ -25,7 +26,8 @@ inline int RunCommands(std::initializer_list<RegisterCommand> commands, const st
 }
 
 /// RunCommands with stdout captured: what the command printed (a non-zero exit fails the test).
-inline std::string CapturedCommands(std::initializer_list<RegisterCommand> commands, const std::vector<std::string>& args) {
+inline std::string CapturedCommands(std::initializer_list<RegisterCommand> commands,
+                                    const std::vector<std::string>& args) {
   ::testing::internal::CaptureStdout();
   const int code = RunCommands(commands, args);
   const std::string out = ::testing::internal::GetCapturedStdout();

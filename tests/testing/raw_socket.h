@@ -41,7 +41,8 @@ inline int RawConnection(int port, const std::string& bytes, int from = 1) {
 
 /// The resident memory of a process [KiB] (0 = this one), −1 if unknown.
 inline long RssKiB(pid_t pid = 0) {
-  std::ifstream in(pid == 0 ? std::string("/proc/self/status") : "/proc/" + std::to_string(pid) + "/status");
+  std::ifstream in(pid == 0 ? std::string("/proc/self/status")
+                            : "/proc/" + std::to_string(pid) + "/status");
   std::string key;
   long value = 0;
   while (in >> key) {

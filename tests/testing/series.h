@@ -21,7 +21,8 @@ inline std::vector<double> Quantise(const std::vector<double>& y, double q) {
 /// a sin(2π f k / 100 − phase), k = 0 … n−1 (100 Hz sampling).
 inline std::vector<double> Sine(int n, double f, double a, double phase = 0) {
   std::vector<double> y;
-  for (int k = 0; k < n; ++k) y.push_back(a * std::sin(2 * std::numbers::pi * f * k / 100.0 - phase));
+  for (int k = 0; k < n; ++k)
+    y.push_back(a * std::sin(2 * std::numbers::pi * f * k / 100.0 - phase));
   return y;
 }
 

@@ -80,8 +80,8 @@ std::string SleepySpec(double sleep_ms) {
 
 /// Lease `id` of the job of `spec`: n tasks, task i the genome genome(i) at population index
 /// first_index + i.
-WorkerMsg LeaseOf(const std::string& spec, uint64_t id, int n, const std::function<opt::Genome(int)>& genome,
-                  int first_index = 0) {
+WorkerMsg LeaseOf(const std::string& spec, uint64_t id, int n,
+                  const std::function<opt::Genome(int)>& genome, int first_index = 0) {
   WorkerMsg lease;
   lease.type = WorkerMsg::Type::kBatch;
   lease.batch.lease_id = id;
@@ -104,7 +104,8 @@ struct Session {
   WorkerStats stats;
   std::unique_ptr<Worker> worker;
   std::thread thread;
-  explicit Session(int grace_ms, int threads = 1, const job::JobKindRegistry& kinds = kinds::All()) {
+  explicit Session(int grace_ms, int threads = 1,
+                   const job::JobKindRegistry& kinds = kinds::All()) {
     WorkerOptions o;
     o.master = master.endpoint();
     o.threads = threads;
@@ -119,7 +120,8 @@ struct Session {
   }
   /// Ready → lease → context request → context; returns the context requests seen. The lease's
   /// genome i: `genome(i)`, or 16 bits of i's parity.
-  int Lease(const std::string& spec, int tasks, const std::function<opt::Genome(int)>& genome = {}) {
+  int Lease(const std::string& spec, int tasks,
+            const std::function<opt::Genome(int)>& genome = {}) {
     WorkerMsg m;
     EXPECT_TRUE(master.Next(&m));
     EXPECT_EQ(m.type, WorkerMsg::Type::kReady);
@@ -200,7 +202,8 @@ TEST(Worker, ManySmallLeasesOnManyThreadsAreEachAnsweredOnceAndWhole) {
     ASSERT_TRUE(s.master.Next(&m)) << answered.size() << " leases answered";
     if (m.type != WorkerMsg::Type::kResult) continue;
     ASSERT_EQ(m.result.code, service::WireCode::kOk);
-    ASSERT_TRUE(answered.insert(m.result.lease_id).second) << "lease " << m.result.lease_id << " answered twice";
+    ASSERT_TRUE(answered.insert(m.result.lease_id).second)
+        << "lease " << m.result.lease_id << " answered twice";
     if (m.result.lease_id == 7) continue;
     const int k = static_cast<int>(m.result.lease_id - 100);
     ASSERT_EQ(static_cast<int>(m.result.indices.size()), tasks_of.at(m.result.lease_id));
@@ -209,7 +212,8 @@ TEST(Worker, ManySmallLeasesOnManyThreadsAreEachAnsweredOnceAndWhole) {
       opt::Genome g;
       g.bits.assign(16, 0);
       g.bits[static_cast<size_t>((k + static_cast<int>(i)) % 16)] = 1;
-      EXPECT_EQ(m.result.results[i].cost, f->Evaluate(g).cost) << "lease " << m.result.lease_id << " task " << i;
+      EXPECT_EQ(m.result.results[i].cost, f->Evaluate(g).cost)
+          << "lease " << m.result.lease_id << " task " << i;
     }
   }
   s.stop = true;
@@ -249,7 +253,8 @@ class LanesFitness final : public opt::FitnessFunction {
     return Cost(g);
   }
   int lanes() const override { return lanes_; }
-  void EvaluateMany(std::span<const opt::Genome* const> gs, std::span<opt::FitnessResult> out) const override {
+  void EvaluateMany(std::span<const opt::Genome* const> gs,
+                    std::span<opt::FitnessResult> out) const override {
     if (log_) {
       std::lock_guard lock(log_->mu);
       auto& group = log_->groups.emplace_back();
@@ -274,7 +279,8 @@ job::JobKind LanesKind(int lanes, CallLog* log) {
 }
 
 bool SameResult(const opt::FitnessResult& a, const opt::FitnessResult& b) {
-  return std::memcmp(&a.cost, &b.cost, sizeof a.cost) == 0 && a.status == b.status && a.reason == b.reason;
+  return std::memcmp(&a.cost, &b.cost, sizeof a.cost) == 0 && a.status == b.status &&
+         a.reason == b.reason;
 }
 
 // A fitness with lanes: a compute thread takes up to lanes() consecutive tasks of one lease at a
@@ -300,10 +306,11 @@ TEST(Worker, AFitnessWithLanesGetsGroupsOfOneLeaseAndEachGenomeTheSinglePathsRes
         return g;
       };
       s.Lease(spec, 5, [&](int i) { return genome(7, i); });  // lease 7, which fetches the context
-      std::map<int, int> tasks_of = {{7, 5}};  // lease id → tasks
+      std::map<int, int> tasks_of = {{7, 5}};                 // lease id → tasks
       for (int k = 0; k < 60; ++k) {
         const int n = 1 + k % 10;
-        const WorkerMsg lease = LeaseOf(spec, 100 + static_cast<uint64_t>(k), n, [&](int i) { return genome(100 + k, i); });
+        const WorkerMsg lease = LeaseOf(spec, 100 + static_cast<uint64_t>(k), n,
+                                        [&](int i) { return genome(100 + k, i); });
         tasks_of[100 + k] = n;
         s.master.Send(lease);
       }
@@ -323,7 +330,8 @@ TEST(Worker, AFitnessWithLanesGetsGroupsOfOneLeaseAndEachGenomeTheSinglePathsRes
           opt::FitnessResult want{id * 100.0 + i + 0.25, opt::FitnessStatus::kOk, {}};
           if (i == 4) want = {penalty, opt::FitnessStatus::kError, "exception: task 4 fails"};
           if (i == 1) want = {penalty, opt::FitnessStatus::kError, "non-finite cost nan"};
-          EXPECT_TRUE(SameResult(r, want)) << "lease " << id << " task " << i << ": " << r.cost << " " << r.reason;
+          EXPECT_TRUE(SameResult(r, want))
+              << "lease " << id << " task " << i << ": " << r.cost << " " << r.reason;
         }
       }
       s.stop = true;
@@ -333,7 +341,8 @@ TEST(Worker, AFitnessWithLanesGetsGroupsOfOneLeaseAndEachGenomeTheSinglePathsRes
       EXPECT_EQ(s.stats.tasks, static_cast<uint64_t>(total));
       // The groups: of one lease, consecutive, aligned, each once; the singles: the tasks of the
       // groups of one and of the groups that threw (task 4), each once.
-      std::multiset<std::pair<int, int>> want_singles, singles(log.singles.begin(), log.singles.end());
+      std::multiset<std::pair<int, int>> want_singles,
+          singles(log.singles.begin(), log.singles.end());
       std::multiset<std::pair<int, int>> want_groups, groups;
       for (const auto& [id, n] : tasks_of) {
         for (int first = 0; first < n; first += lanes) {
@@ -347,9 +356,11 @@ TEST(Worker, AFitnessWithLanesGetsGroupsOfOneLeaseAndEachGenomeTheSinglePathsRes
         ASSERT_FALSE(g.empty());
         const auto [id, first] = g.front();
         EXPECT_EQ(first % lanes, 0) << "a group of lease " << id << " starts at task " << first;
-        EXPECT_EQ(static_cast<int>(g.size()), std::min(lanes, tasks_of.at(id) - first)) << "lease " << id;
+        EXPECT_EQ(static_cast<int>(g.size()), std::min(lanes, tasks_of.at(id) - first))
+            << "lease " << id;
         for (size_t j = 0; j < g.size(); ++j)
-          EXPECT_EQ(g[j], std::make_pair(id, first + static_cast<int>(j))) << "a group straddles leases or skips";
+          EXPECT_EQ(g[j], std::make_pair(id, first + static_cast<int>(j)))
+              << "a group straddles leases or skips";
         groups.insert({id, first});
       }
       EXPECT_EQ(groups, want_groups);
@@ -373,7 +384,8 @@ int StuckStopScenario() {
   const auto t0 = std::chrono::steady_clock::now();
   s.stop = true;
   s.thread.join();
-  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double waited =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   WorkerMsg m;
   const bool goodbye = s.master.Next(&m, 2000ms) && m.type == WorkerMsg::Type::kDisconnect;
   if (s.stats.stuck_threads != 1) return 1;
@@ -391,8 +403,8 @@ TEST(Worker, AnEvaluationThatOutlastsTheGraceIsReportedNotKilled) {
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status)) << "the scenario died of a signal";
-  EXPECT_EQ(WEXITSTATUS(status), kReturned)
-      << "0: the library ended the process; 1: not reported stuck; 2: waited past the grace; 3: no DISCONNECT";
+  EXPECT_EQ(WEXITSTATUS(status), kReturned) << "0: the library ended the process; 1: not reported "
+                                               "stuck; 2: waited past the grace; 3: no DISCONNECT";
 }
 
 }  // namespace
