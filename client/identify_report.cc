@@ -441,41 +441,11 @@ constexpr const char* kAtBoundMeaning =
     "islands or "
     "seeds are the way out.";
 
-/// report.md.
-std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set,
-                           const hgann::HgannFitness& fitness, const IdentifyResult& result,
-                           const CaseTotals& t, const std::string& mu_regression,
-                           const std::string& at_bound, const std::string& per_case) {
-  const double train_sum = t.train_sum, all_sum = t.all_sum;
-  const int beaten = t.beaten, compared = t.compared;
-  std::ostringstream md;
+/// report.md's GA settings line: population, islands and migration, output moves, seed, ranges,
+/// spread penalty, wall time and preset.
+void WriteGaSettings(std::ostream& md, const IdentifyOptions& options,
+                     const hgann::HgannFitness& fitness, const IdentifyResult& result) {
   const auto& s = result.summary;
-  int64_t penalized = 0, errors = 0;
-  std::map<std::string, int64_t> reasons;
-  for (const auto& g : result.log) {
-    penalized += g.penalized;
-    errors += g.errors;
-    for (const auto& [k, n] : g.failure_reasons) reasons[k] += n;
-  }
-  md << "# HGANN identification of " << set.dir.string() << "\n\n"
-     << "- best network: " << result.best.network.Describe() << "\n"
-     << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6)
-     << " deg² (found in generation " << s.best_generation
-     << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
-     << ")\n"
-     << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
-     << " generations (" << s.message << ")\n"
-     << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors "
-     << errors;
-  if (!reasons.empty()) {
-    md << " (";
-    bool first = true;
-    for (const auto& [k, n] : reasons) {
-      md << (first ? "" : ", ") << k << ": " << n;
-      first = false;
-    }
-    md << ")";
-  }
   md << "\n- GA: population " << options.ga.population_size;
   if (options.ga.islands > 1) {
     md << " × " << options.ga.islands << " islands (";
@@ -512,6 +482,44 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
      << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time "
      << Fmt(s.wall_time_s, 4) << " s"
      << (options.preset.empty() ? std::string() : "; preset '" + options.preset + "'") << "\n";
+}
+
+/// report.md.
+std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& set,
+                           const hgann::HgannFitness& fitness, const IdentifyResult& result,
+                           const CaseTotals& t, const std::string& mu_regression,
+                           const std::string& at_bound, const std::string& per_case) {
+  const double train_sum = t.train_sum, all_sum = t.all_sum;
+  const int beaten = t.beaten, compared = t.compared;
+  std::ostringstream md;
+  const auto& s = result.summary;
+  int64_t penalized = 0, errors = 0;
+  std::map<std::string, int64_t> reasons;
+  for (const auto& g : result.log) {
+    penalized += g.penalized;
+    errors += g.errors;
+    for (const auto& [k, n] : g.failure_reasons) reasons[k] += n;
+  }
+  md << "# HGANN identification of " << set.dir.string() << "\n\n"
+     << "- best network: " << result.best.network.Describe() << "\n"
+     << "- fitness CF = Σ PI over the training cases: " << Fmt(s.best_fitness.cost, 6)
+     << " deg² (found in generation " << s.best_generation
+     << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
+     << ")\n"
+     << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
+     << " generations (" << s.message << ")\n"
+     << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors "
+     << errors;
+  if (!reasons.empty()) {
+    md << " (";
+    bool first = true;
+    for (const auto& [k, n] : reasons) {
+      md << (first ? "" : ", ") << k << ": " << n;
+      first = false;
+    }
+    md << ")";
+  }
+  WriteGaSettings(md, options, fitness, result);
   if (result.seeds) {
     md << "- generation 0 seeded with " << result.seeds->genomes.size()
        << " networks fitted to per-case fits of the training cases (hgann/trend_seeds.h):";
