@@ -285,23 +285,11 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
                                 "t [s]", "mean error [" + yu + "]", false, creep}));
 }
 
-void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r,
-                    const FitArgs& a, const records::ExcitationReport& excitation,
-                    const records::TrainingDriveProposal& proposal,
-                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
+/// report.md's parameter table (value, unit, range, σ, sensitivity, identifiability; the solved
+/// weights), the uncertainty's note and the regularisations chosen.
+void WriteParametersSection(std::ostream& os, const io::RecordSet& set,
+                            const records::FitResult& r) {
   const auto& m = *r.model;
-  os << "# piezoid fit: " << m.Describe() << "\n\n"
-     << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
-     << " records; drive in " << set.drive_unit << ", response in " << set.response_unit << ").\n\n"
-     << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
-  for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
-  os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
-     << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
-     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min)
-     << " … " << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range "
-     << Fmt(m.scale().y_half) << " " << set.response_unit << ", gain " << Fmt(m.scale().gain) << " "
-     << set.response_unit << "/" << set.drive_unit << ", dominant frequency "
-     << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
   const auto& u = r.uncertainty;
   os << "## Parameters\n\n| parameter | value | unit | search range | ± σ | sensitivity ["
      << set.response_unit << "] | identifiability |\n|---|---|---|---|---|---|---|\n";
@@ -342,6 +330,26 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
        << r.spectrum_regularisation.Describe() << ".\n";
   if (const std::string s = r.SpectrumIdentification(); !s.empty()) os << "\nNote: " << s << ".\n";
+}
+
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r,
+                    const FitArgs& a, const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
+  const auto& m = *r.model;
+  os << "# piezoid fit: " << m.Describe() << "\n\n"
+     << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
+     << " records; drive in " << set.drive_unit << ", response in " << set.response_unit << ").\n\n"
+     << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
+  for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
+  os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
+     << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
+     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min)
+     << " … " << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range "
+     << Fmt(m.scale().y_half) << " " << set.response_unit << ", gain " << Fmt(m.scale().gain) << " "
+     << set.response_unit << "/" << set.drive_unit << ", dominant frequency "
+     << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
+  WriteParametersSection(os, set, r);
   os << "\n## Errors\n\n";
   if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
@@ -605,6 +613,33 @@ std::optional<int> PiOperatorsCount(const std::string& text) {
   return n;
 }
 
+/// One searched parameter: the line search's budget (records::FitOptions::Sizing,
+/// opt::LineOptions): --line-grid, --line-brackets, --line-tolerance.
+void AddLineFlags(CLI::App* cmd, opt::LineOptions* out) {
+  const opt::LineOptions line;
+  cmd->add_option("--line-grid", out->grid,
+                  "one searched parameter (the default search then): grid points over its range, "
+                  "ends included")
+      ->check(CLI::Range(3, 100000))
+      ->default_str(std::to_string(line.grid));
+  cmd->add_option(
+         "--line-brackets", out->brackets,
+         "one searched parameter: the grid's lowest local minima refined by Brent's method")
+      ->check(CLI::Range(1, 100000))
+      ->default_str(std::to_string(line.brackets));
+  cmd->add_option("--line-tolerance", out->tolerance,
+                  "one searched parameter: Brent's tolerance, a fraction of the range, in (0, 0.5)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            double x = 0;
+            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5))
+              return "Value " + v + " not in (0, 0.5)";
+            return "";
+          },
+          "in (0, 0.5)"))
+      ->default_str(io::FormatNumber(line.tolerance));
+}
+
 }  // namespace
 
 void RegisterFit(CLI::App& app, int& exit_code) {
@@ -657,30 +692,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "pso, ga-real, ga-binary, de or line (one searched parameter)")
       ->default_str("pso; line for one searched parameter");
   AddSearchFlags(cmd, &a->search, /*sized=*/true);
-  // One searched parameter: the line search's budget (records::FitOptions::Sizing,
-  // opt::LineOptions).
-  const opt::LineOptions line;
-  cmd->add_option("--line-grid", a->line.grid,
-                  "one searched parameter (the default search then): grid points over its range, "
-                  "ends included")
-      ->check(CLI::Range(3, 100000))
-      ->default_str(std::to_string(line.grid));
-  cmd->add_option(
-         "--line-brackets", a->line.brackets,
-         "one searched parameter: the grid's lowest local minima refined by Brent's method")
-      ->check(CLI::Range(1, 100000))
-      ->default_str(std::to_string(line.brackets));
-  cmd->add_option("--line-tolerance", a->line.tolerance,
-                  "one searched parameter: Brent's tolerance, a fraction of the range, in (0, 0.5)")
-      ->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            double x = 0;
-            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5))
-              return "Value " + v + " not in (0, 0.5)";
-            return "";
-          },
-          "in (0, 0.5)"))
-      ->default_str(io::FormatNumber(line.tolerance));
+  AddLineFlags(cmd, &a->line);
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")
       ->default_str("60");
   cmd->add_option(
