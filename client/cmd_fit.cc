@@ -23,7 +23,6 @@
 #include "client/commands.h"
 #include "svcclient/complete_service.h"
 #include "client/excitation_report.h"
-#include "client/json_values.h"
 #include "client/search_flags.h"
 #include "client/select_report.h"
 #include "client/plots.h"
@@ -286,23 +285,11 @@ void WriteTraces(const fs::path& dir, const io::RecordSet& set, const records::F
                                 "t [s]", "mean error [" + yu + "]", false, creep}));
 }
 
-void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r,
-                    const FitArgs& a, const records::ExcitationReport& excitation,
-                    const records::TrainingDriveProposal& proposal,
-                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
+/// report.md's parameter table (value, unit, range, σ, sensitivity, identifiability; the solved
+/// weights), the uncertainty's note and the regularisations chosen.
+void WriteParametersSection(std::ostream& os, const io::RecordSet& set,
+                            const records::FitResult& r) {
   const auto& m = *r.model;
-  os << "# piezoid fit: " << m.Describe() << "\n\n"
-     << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
-     << " records; drive in " << set.drive_unit << ", response in " << set.response_unit << ").\n\n"
-     << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
-  for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
-  os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
-     << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
-     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min)
-     << " … " << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range "
-     << Fmt(m.scale().y_half) << " " << set.response_unit << ", gain " << Fmt(m.scale().gain) << " "
-     << set.response_unit << "/" << set.drive_unit << ", dominant frequency "
-     << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
   const auto& u = r.uncertainty;
   os << "## Parameters\n\n| parameter | value | unit | search range | ± σ | sensitivity ["
      << set.response_unit << "] | identifiability |\n|---|---|---|---|---|---|---|\n";
@@ -343,6 +330,26 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     os << "\nRoughness penalty of the creep spectrum's weights (towards equal weights per decade): "
        << r.spectrum_regularisation.Describe() << ".\n";
   if (const std::string s = r.SpectrumIdentification(); !s.empty()) os << "\nNote: " << s << ".\n";
+}
+
+void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::FitResult& r,
+                    const FitArgs& a, const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation) {
+  const auto& m = *r.model;
+  os << "# piezoid fit: " << m.Describe() << "\n\n"
+     << "Records: `" << set.source.string() << "` (" << set.format << ", " << set.records.size()
+     << " records; drive in " << set.drive_unit << ", response in " << set.response_unit << ").\n\n"
+     << "Model: " << m.family().title() << " — `" << m.family().equation() << "`";
+  for (records::EffectKind e : m.effects()) os << "; + " << records::EffectName(e);
+  os << ".\nOutput polarity " << (m.scale().polarity > 0 ? "+1" : "-1")
+     << " (sign of the drive-to-response slope); offsets per record as stated below.\n"
+     << "Data scale (training records, sets the search ranges): drive " << Fmt(m.scale().u_min)
+     << " … " << Fmt(m.scale().u_max) << " " << set.drive_unit << ", response half range "
+     << Fmt(m.scale().y_half) << " " << set.response_unit << ", gain " << Fmt(m.scale().gain) << " "
+     << set.response_unit << "/" << set.drive_unit << ", dominant frequency "
+     << Fmt(m.scale().f_dom) << " Hz, sampled at " << Fmt(m.scale().fs) << " Hz.\n\n";
+  WriteParametersSection(os, set, r);
   os << "\n## Errors\n\n";
   if (const std::string s = InitialStateSentence(m.family()); !s.empty()) os << s << "\n\n";
   if (a.settle_s > 0) os << SettlingSentence(a.settle_s) << "\n\n";
@@ -406,129 +413,6 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
      << (a.selected ? "auto" : a.family) << "`"
      << (a.selected ? " (this model chosen: the section below)" : "") << ".\n";
   WriteExcitationMarkdown(os, set, excitation, proposal, kProposedDriveFile);
-}
-
-std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
-                    const records::ExcitationReport& excitation,
-                    const records::TrainingDriveProposal& proposal,
-                    const std::vector<records::ExtrapolationCheck>& extrapolation, const FitArgs& a,
-                    const records::SelectionResult* selection = nullptr) {
-  using namespace json;  // NOLINT
-  Struct root;
-  auto& f = *root.mutable_fields();
-  const int levels = r.resolution.used ? r.resolution.value() : a.pi_operators;  // auto: the chosen
-  WriteFitModel(FittedModelSpec(set, r, a.substeps, levels), &root);
-  f["description"] = Text(r.model->Describe());
-  f["response_unit"] = Text(set.response_unit);
-  f["drive_unit"] = Text(set.drive_unit);
-  f["polarity"] = Num(r.model->scale().polarity);
-  f["settle_s"] =
-      Num(a.settle_s);  // each record scored from this long after its rest (0: from the rest's end)
-  Struct params;
-  for (size_t i = 0; i < r.params.size(); ++i)
-    (*params.mutable_fields())[r.model->params()[i].name] = Num(r.params[i]);
-  f["params"] = Obj(params);
-  std::vector<Value> weights, records;
-  for (double w : r.weights) weights.push_back(Num(w));
-  f["weights"] = List(weights);
-  for (const auto& e : r.metrics) {
-    Struct m;
-    auto& g = *m.mutable_fields();
-    g["name"] = Text(e.name);
-    g["role"] = Text(model::CaseRoleName(e.role));
-    g["samples"] = Num(static_cast<double>(e.samples));
-    g["offset"] = Num(e.offset);
-    g["rmse"] = Num(e.rmse);
-    g["max_abs"] = Num(e.max_abs);
-    g["max_at_s"] = Num(e.max_at_s);
-    g["nrmse_pct"] = Num(e.nrmse_pct);  // null: a constant response
-    records.push_back(Obj(m));
-  }
-  f["records"] = List(records);
-  if (r.resolution.used) {
-    Struct g;
-    (*g.mutable_fields())["levels"] = Num(r.resolution.value());
-    (*g.mutable_fields())["description"] = Text(r.resolution.Describe());
-    f["resolution"] = Obj(g);
-  }
-  if (r.regularisation.used) {
-    Struct g;
-    (*g.mutable_fields())["relative"] = Num(r.regularisation.relative);
-    (*g.mutable_fields())["lambda"] = Num(r.regularisation.lambda);
-    if (!r.regularisation.penalty_name.empty())
-      (*g.mutable_fields())["penalty"] = Text(r.regularisation.penalty_name);
-    f["regularisation"] = Obj(g);
-  }
-  if (r.spectrum_regularisation.used) {
-    Struct g;
-    (*g.mutable_fields())["relative"] = Num(r.spectrum_regularisation.relative);
-    (*g.mutable_fields())["lambda"] = Num(r.spectrum_regularisation.lambda);
-    (*g.mutable_fields())["not_identified"] = Text(r.SpectrumIdentification());
-    f["spectrum_regularisation"] = Obj(g);
-  }
-  std::vector<Value> checks;
-  for (const auto& c : extrapolation) {
-    Struct g;
-    auto& x = *g.mutable_fields();
-    x["record"] = Text(c.record);
-    x["flagged"] = Bool(c.flagged);
-    x["drive_beyond"] = Num(c.drive_beyond);
-    x["drive_beyond_share"] = Num(c.drive_beyond_share);
-    x["terms"] = Num(static_cast<double>(c.terms));
-    x["term_max"] = Num(c.term_max);
-    x["term_rms"] = Num(c.term_rms);
-    checks.push_back(Obj(g));
-  }
-  f["extrapolation"] = List(checks);
-  std::vector<Value> table;
-  for (const auto& e : r.uncertainty.params) {
-    Struct p;
-    auto& g = *p.mutable_fields();
-    g["name"] = Text(e.name);
-    g["value"] = Num(e.value);
-    if (std::isfinite(e.std_error)) g["std_error"] = Num(e.std_error);
-    g["sensitivity"] = Num(e.sensitivity);
-    g["identifiability"] = Text(opt::IdentifiabilityName(e.identifiability));
-    if (!e.note.empty()) g["note"] = Text(e.note);
-    table.push_back(Obj(p));
-  }
-  f["uncertainty"] = List(table);
-  std::vector<Value> singular;
-  for (double v : r.uncertainty.singular_values) singular.push_back(Num(v));
-  f["singular_values"] = List(singular);
-  f["train_mse"] = Num(r.train_mse);
-  f["evaluations"] = Num(static_cast<double>(r.evaluations));
-  {
-    Struct g;
-    auto& x = *g.mutable_fields();
-    x["algorithm"] = Text(opt::SearchAlgorithmName(r.algorithm));
-    x["searched_parameters"] = Num(static_cast<double>(r.searched_parameters));
-    x["sized"] = Bool(r.budget_sized);
-    x["repetitions"] = Num(r.budget.repetitions);
-    x["spectrum_solved"] = Bool(r.spectrum_solved);
-    if (r.spectrum_solved) x["solved_parameters"] = Num(static_cast<double>(r.solved_parameters));
-    if (r.algorithm == opt::SearchAlgorithm::kPso) {
-      x["particles"] = Num(r.budget.particles);
-      x["iterations"] = Num(r.budget.iterations);
-      x["stall"] = Num(r.budget.stall);
-      x["converged_spread"] = Num(r.budget.converged_spread);
-    } else if (r.algorithm == opt::SearchAlgorithm::kLine) {
-      x["grid"] = Num(r.line.grid);
-      x["brackets"] = Num(r.line.brackets);
-      x["tolerance"] = Num(r.line.tolerance);
-    }
-    x["search_evaluations"] = Num(static_cast<double>(r.search.evaluations));
-    x["stop_reason"] = Text(r.stop_reason);
-    x["polishes"] = Num(r.polishes);
-    x["best_polish_repetition"] = Num(r.best_polish_repetition + 1);  // 1-based; 0 = none
-    x["search_best_repetition"] = Num(r.search.best_repetition + 1);
-    x["lm_differences"] = Text(r.lm_differences);
-    x["summary"] = Text(SearchSentence(r));
-    f["search"] = Obj(g);
-  }
-  f["excitation"] = ExcitationJson(set, excitation, proposal, kProposedDriveFile);
-  if (selection) f["selection"] = SelectionJson(*selection);
-  return Print(root, "fit.json");
 }
 
 /// The fit's options of the flags (--family auto: the selection's fit options), checked: the
@@ -634,7 +518,12 @@ void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, cons
     if (selection) WriteSelectionMarkdown(os, set, *selection);
   });
   io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) {
-    os << FitJson(set, r, excitation, proposal, extrapolation, a, selection);
+    os << FitJson(set, r, excitation, proposal, extrapolation, selection,
+                  {.settle_s = a.settle_s,
+                   .substeps = a.substeps,
+                   .pi_operators = a.pi_operators,
+                   .search = SearchSentence(r),
+                   .drive_file = kProposedDriveFile});
   });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
@@ -724,6 +613,33 @@ std::optional<int> PiOperatorsCount(const std::string& text) {
   return n;
 }
 
+/// One searched parameter: the line search's budget (records::FitOptions::Sizing,
+/// opt::LineOptions): --line-grid, --line-brackets, --line-tolerance.
+void AddLineFlags(CLI::App* cmd, opt::LineOptions* out) {
+  const opt::LineOptions line;
+  cmd->add_option("--line-grid", out->grid,
+                  "one searched parameter (the default search then): grid points over its range, "
+                  "ends included")
+      ->check(CLI::Range(3, 100000))
+      ->default_str(std::to_string(line.grid));
+  cmd->add_option(
+         "--line-brackets", out->brackets,
+         "one searched parameter: the grid's lowest local minima refined by Brent's method")
+      ->check(CLI::Range(1, 100000))
+      ->default_str(std::to_string(line.brackets));
+  cmd->add_option("--line-tolerance", out->tolerance,
+                  "one searched parameter: Brent's tolerance, a fraction of the range, in (0, 0.5)")
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            double x = 0;
+            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5))
+              return "Value " + v + " not in (0, 0.5)";
+            return "";
+          },
+          "in (0, 0.5)"))
+      ->default_str(io::FormatNumber(line.tolerance));
+}
+
 }  // namespace
 
 void RegisterFit(CLI::App& app, int& exit_code) {
@@ -776,30 +692,7 @@ void RegisterFit(CLI::App& app, int& exit_code) {
                   "pso, ga-real, ga-binary, de or line (one searched parameter)")
       ->default_str("pso; line for one searched parameter");
   AddSearchFlags(cmd, &a->search, /*sized=*/true);
-  // One searched parameter: the line search's budget (records::FitOptions::Sizing,
-  // opt::LineOptions).
-  const opt::LineOptions line;
-  cmd->add_option("--line-grid", a->line.grid,
-                  "one searched parameter (the default search then): grid points over its range, "
-                  "ends included")
-      ->check(CLI::Range(3, 100000))
-      ->default_str(std::to_string(line.grid));
-  cmd->add_option(
-         "--line-brackets", a->line.brackets,
-         "one searched parameter: the grid's lowest local minima refined by Brent's method")
-      ->check(CLI::Range(1, 100000))
-      ->default_str(std::to_string(line.brackets));
-  cmd->add_option("--line-tolerance", a->line.tolerance,
-                  "one searched parameter: Brent's tolerance, a fraction of the range, in (0, 0.5)")
-      ->check(CLI::Validator(
-          [](std::string& v) -> std::string {
-            double x = 0;
-            if (!CLI::detail::lexical_cast(v, x) || !(x > 0 && x < 0.5))
-              return "Value " + v + " not in (0, 0.5)";
-            return "";
-          },
-          "in (0, 0.5)"))
-      ->default_str(io::FormatNumber(line.tolerance));
+  AddLineFlags(cmd, &a->line);
   cmd->add_option("--lm-iterations", a->lm_iterations, "Levenberg-Marquardt polish iterations")
       ->default_str("60");
   cmd->add_option(

@@ -9,8 +9,9 @@
 #include <sstream>
 
 #include "client/commands.h"
-#include "client/json_values.h"
+#include "fit.pb.h"
 #include "io/csv.h"
+#include "io/fit_model.h"
 #include "io/records.h"
 #include "model/status.h"
 #include "diagnose/reallike.h"
@@ -45,79 +46,66 @@ std::vector<double> ReadDrive(const std::string& path, double fs) {
   return u;
 }
 
+/// The set's truth as truth.json (the one conversion of it; io/fit_model.h writes it).
 std::string TruthJson(const records::RealLikeSet& s) {
-  using namespace json;  // NOLINT
   const records::RealLikeStack& st = s.options.stack;
   const records::RealLikeSensor& se = s.options.sensor;
-  Struct root;
-  auto& f = *root.mutable_fields();
-  Struct plant;
-  auto& p = *plant.mutable_fields();
-  p["model"] = Text(
+  proto::SynthTruth t;
+  proto::SynthPlant& p = *t.mutable_plant();
+  p.set_model(
       "Preisach (Everett function of a Gaussian width x Gaussian centre density, skewed) + "
-      "reversible "
-      "linear-quadratic part, then log creep (relaxations 3 per decade), then the sensor's lag");
-  p["u_lo_V"] = Num(st.u_lo);
-  p["u_hi_V"] = Num(st.u_hi);
-  p["stroke_um"] = Num(st.stroke_um);
-  p["hysteresis_share"] = Num(st.hysteresis_share);
-  p["density_width"] = Num(st.density_width);
-  p["density_width_spread"] = Num(st.density_width_spread);
-  p["density_center_spread"] = Num(st.density_center_spread);
-  p["asymmetry"] = Num(st.asymmetry);
-  p["quadratic"] = Num(st.quadratic);
-  p["creep_per_decade"] = Num(st.creep_per_decade);
-  p["creep_tau_min_s"] = Num(st.creep_tau_min_s);
-  p["creep_tau_max_s"] = Num(st.creep_tau_max_s);
-  p["everett_grid"] = Num(st.everett_grid);
-  p["major_loop_width_share"] = Num(s.major_loop_width);
-  if (st.rate_lag_v >
-      0) {  // keys only when present: the default set's truth.json stays the same bytes
-    p["rate_lag_V"] = Num(st.rate_lag_v);
-    p["rate_time_s"] = Num(st.rate_time_s);
-    p["rate_model"] = Text(
+      "reversible linear-quadratic part, then log creep (relaxations 3 per decade), then the "
+      "sensor's lag");
+  p.set_u_lo_v(st.u_lo);
+  p.set_u_hi_v(st.u_hi);
+  p.set_stroke_um(st.stroke_um);
+  p.set_hysteresis_share(st.hysteresis_share);
+  p.set_density_width(st.density_width);
+  p.set_density_width_spread(st.density_width_spread);
+  p.set_density_center_spread(st.density_center_spread);
+  p.set_asymmetry(st.asymmetry);
+  p.set_quadratic(st.quadratic);
+  p.set_creep_per_decade(st.creep_per_decade);
+  p.set_creep_tau_min_s(st.creep_tau_min_s);
+  p.set_creep_tau_max_s(st.creep_tau_max_s);
+  p.set_everett_grid(st.everett_grid);
+  p.set_major_loop_width_share(s.major_loop_width);
+  if (st.rate_lag_v > 0) {  // only when present: the default set's truth.json stays the same bytes
+    p.set_rate_lag_v(st.rate_lag_v);
+    p.set_rate_time_s(st.rate_time_s);
+    p.set_rate_model(
         "effective drive held within +- lambda of the applied u, lambda = rate_lag_V "
-        "tanh(rate_time_s "
-        "|du/dt| / rate_lag_V), into the Preisach and reversible parts (du/dt after the "
-        "amplifier)");
+        "tanh(rate_time_s |du/dt| / rate_lag_V), into the Preisach and reversible parts (du/dt "
+        "after the amplifier)");
   }
-  if (st.driver_tau_s > 0) p["driver_tau_s"] = Num(st.driver_tau_s);
-  f["plant"] = Obj(plant);
-  Struct sensor;
-  auto& q = *sensor.mutable_fields();
-  q["fs_hz"] = Num(se.fs_hz);
-  q["oversample"] = Num(se.oversample);
-  q["lag_samples"] = Num(se.lag_samples);
-  q["noise_white_um"] = Num(se.noise_white_um);
-  q["noise_colored_um"] = Num(se.noise_colored_um);
-  q["colored_time_s"] = Num(se.colored_time_s);
-  q["quantum_um"] = Num(se.quantum_um);
-  q["drive_quantum_V"] = Num(se.drive_quantum_v);
-  q["offset_range_um"] = Num(se.offset_range_um);
-  f["sensor"] = Obj(sensor);
-  Struct floor;
-  auto& n = *floor.mutable_fields();
-  n["nominal_um"] = Num(s.nominal_floor_um);
-  n["realised_um"] = Num(s.realised_floor_um);
-  n["definition"] = Text(
+  if (st.driver_tau_s > 0) p.set_driver_tau_s(st.driver_tau_s);
+  proto::SynthSensor& q = *t.mutable_sensor();
+  q.set_fs_hz(se.fs_hz);
+  q.set_oversample(se.oversample);
+  q.set_lag_samples(se.lag_samples);
+  q.set_noise_white_um(se.noise_white_um);
+  q.set_noise_colored_um(se.noise_colored_um);
+  q.set_colored_time_s(se.colored_time_s);
+  q.set_quantum_um(se.quantum_um);
+  q.set_drive_quantum_v(se.drive_quantum_v);
+  q.set_offset_range_um(se.offset_range_um);
+  proto::SynthNoiseFloor& n = *t.mutable_noise_floor();
+  n.set_nominal_um(s.nominal_floor_um);
+  n.set_realised_um(s.realised_floor_um);
+  n.set_definition(
       "RMS of measured - (noise-free response + offset): what a perfect model leaves; nominal = "
       "sqrt(white^2 + coloured^2 + quantum^2/12), realised = over every scored sample");
-  f["noise_floor"] = Obj(floor);
-  std::vector<Value> recs;
-  for (const records::RealLikeRecordTruth& t : s.truth) {
-    Struct r;
-    auto& g = *r.mutable_fields();
-    g["record"] = Text(t.name);
-    g["role"] = Text(t.role);
-    g["drive"] = Text(t.drive);
-    g["offset_um"] = Num(t.offset_um);
-    g["noise_rms_um"] = Num(t.noise_rms_um);
-    g["scored_samples"] = Num(static_cast<double>(t.scored));
-    recs.push_back(Obj(r));
+  for (const records::RealLikeRecordTruth& r : s.truth) {
+    proto::SynthRecordTruth& g = *t.add_records();
+    g.set_record(r.name);
+    g.set_role(r.role);
+    g.set_drive(r.drive);
+    g.set_offset_um(r.offset_um);
+    g.set_noise_rms_um(r.noise_rms_um);
+    g.set_scored_samples(static_cast<int64_t>(r.scored));
   }
-  f["records"] = List(recs);
-  f["seed"] = Num(static_cast<double>(s.options.seed));
-  return Print(root, "truth.json");
+  t.set_seed(s.options.seed);
+  return io::WriteSynthTruth(t);
 }
 
 int RunSynth(const SynthArgs& a) {

@@ -2,7 +2,9 @@
 
 #include <sstream>
 
+#include "fit.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 #include "model/format.h"
 
 namespace pz::client {
@@ -46,64 +48,52 @@ void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set,
   }
 }
 
+void ExcitationOf(const io::RecordSet& set, const records::ExcitationReport& r,
+                  const records::TrainingDriveProposal& p, const std::string& drive_file,
+                  proto::Excitation* out) {
+  proto::Excitation e;
+  const records::DriveExcitation& t = r.training;
+  proto::ExcitationTraining& g = *e.mutable_training();
+  g.set_drive_min(t.u_min);
+  g.set_drive_max(t.u_max);
+  g.set_duration_s(t.duration_s);
+  g.set_reversals(static_cast<int64_t>(t.turns));
+  g.set_rate_p95(t.rate_p95);
+  g.set_rate_max(t.rate_max);
+  g.set_longest_hold_s(t.longest_hold_s);
+  for (double w : t.depth_weight) g.add_depth_cycles_per_tenth(w);
+  for (double w : t.level_weight) g.add_turns_per_tenth(w);
+  for (const std::string& l : r.training_lines) g.add_summary(l);
+  for (const records::WithheldExcitation& w : r.withheld) {
+    proto::ExcitationWithheld& h = *e.add_withheld();
+    h.set_record(set.records[w.record].name);
+    h.set_drive_min(w.drive.u_min);
+    h.set_drive_max(w.drive.u_max);
+    h.set_reversals(static_cast<int64_t>(w.drive.turns));
+    h.set_rate_p95(w.drive.rate_p95);
+    h.set_longest_hold_s(w.drive.longest_hold_s);
+    h.set_uncovered_share(w.uncovered_share);
+    for (const records::ExcitationNeed& n : w.needs) {
+      proto::ExcitationNeed& k = *h.add_needs();
+      k.set_kind(records::ExcitationNeedName(n.kind));
+      k.set_amount(n.amount);
+      k.set_text(n.text);
+    }
+  }
+  e.set_excitation_gap(r.HasGap());
+  proto::ProposedDrive& q = *e.mutable_proposed_drive();
+  q.set_file(drive_file);
+  q.set_fs_hz(p.fs_hz);
+  q.set_duration_s(static_cast<double>(p.u.size()) / p.fs_hz);
+  for (const std::string& s : p.segments) q.add_segments(s);
+  *out = std::move(e);
+}
+
 json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationReport& r,
                            const records::TrainingDriveProposal& p, const std::string& drive_file) {
-  using namespace json;  // NOLINT
-  Struct root;
-  auto& f = *root.mutable_fields();
-  const records::DriveExcitation& t = r.training;
-  Struct tr;
-  auto& g = *tr.mutable_fields();
-  g["drive_min"] = Num(t.u_min);
-  g["drive_max"] = Num(t.u_max);
-  g["duration_s"] = Num(t.duration_s);
-  g["reversals"] = Num(static_cast<double>(t.turns));
-  g["rate_p95"] = Num(t.rate_p95);
-  g["rate_max"] = Num(t.rate_max);
-  g["longest_hold_s"] = Num(t.longest_hold_s);
-  std::vector<Value> depths, levels, lines;
-  for (double w : t.depth_weight) depths.push_back(Num(w));
-  for (double w : t.level_weight) levels.push_back(Num(w));
-  for (const std::string& l : r.training_lines) lines.push_back(Text(l));
-  g["depth_cycles_per_tenth"] = List(depths);
-  g["turns_per_tenth"] = List(levels);
-  g["summary"] = List(lines);
-  f["training"] = Obj(tr);
-  std::vector<Value> withheld;
-  for (const records::WithheldExcitation& w : r.withheld) {
-    Struct x;
-    auto& h = *x.mutable_fields();
-    h["record"] = Text(set.records[w.record].name);
-    h["drive_min"] = Num(w.drive.u_min);
-    h["drive_max"] = Num(w.drive.u_max);
-    h["reversals"] = Num(static_cast<double>(w.drive.turns));
-    h["rate_p95"] = Num(w.drive.rate_p95);
-    h["longest_hold_s"] = Num(w.drive.longest_hold_s);
-    h["uncovered_share"] = Num(w.uncovered_share);
-    std::vector<Value> needs;
-    for (const records::ExcitationNeed& n : w.needs) {
-      Struct y;
-      auto& k = *y.mutable_fields();
-      k["kind"] = Text(records::ExcitationNeedName(n.kind));
-      k["amount"] = Num(n.amount);
-      k["text"] = Text(n.text);
-      needs.push_back(Obj(y));
-    }
-    h["needs"] = List(needs);
-    withheld.push_back(Obj(x));
-  }
-  f["withheld"] = List(withheld);
-  f["excitation_gap"] = Bool(r.HasGap());
-  Struct prop;
-  auto& q = *prop.mutable_fields();
-  q["file"] = Text(drive_file);
-  q["fs_hz"] = Num(p.fs_hz);
-  q["duration_s"] = Num(static_cast<double>(p.u.size()) / p.fs_hz);
-  std::vector<Value> segments;
-  for (const std::string& s : p.segments) segments.push_back(Text(s));
-  q["segments"] = List(segments);
-  f["proposed_drive"] = Obj(prop);
-  return Obj(root);
+  proto::Excitation e;
+  ExcitationOf(set, r, p, drive_file, &e);
+  return json::Obj(io::MessageToStruct(e));
 }
 
 void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,

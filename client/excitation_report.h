@@ -11,6 +11,10 @@
 #include "io/records.h"
 #include "records/excitation.h"
 
+namespace pz::proto {
+class Excitation;
+}
+
 namespace pz::client {
 
 /// The proposed training drive's file in a report folder.
@@ -21,7 +25,12 @@ void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set,
                              const records::ExcitationReport& report,
                              const records::TrainingDriveProposal& proposal,
                              const std::string& drive_file);
-/// The report and the proposal as a JSON object.
+/// The report and the proposal as their stored message (the one conversion: fit.json's and
+/// diagnosis.json's "excitation"; `out` replaced).
+void ExcitationOf(const io::RecordSet& set, const records::ExcitationReport& report,
+                  const records::TrainingDriveProposal& proposal, const std::string& drive_file,
+                  proto::Excitation* out);
+/// ExcitationOf as a JSON object (io/proto_json.h's rules).
 json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationReport& report,
                            const records::TrainingDriveProposal& proposal,
                            const std::string& drive_file);

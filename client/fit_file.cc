@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "client/excitation_report.h"
+#include "client/select_report.h"
+#include "diagnose/extrapolation.h"
 #include "fit.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 
 namespace pz::client {
 namespace {
@@ -139,8 +143,125 @@ records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitR
   return s;
 }
 
-void WriteFitModel(const records::ModelSpec& m, google::protobuf::Struct* fit_json) {
-  io::WriteFitModel(ToProto(m), fit_json);
+namespace {
+
+void AddErrors(const records::FitResult& r, proto::FitFile* f) {
+  for (const records::RecordMetrics& e : r.metrics) {
+    proto::FitRecordErrors& g = *f->add_records();
+    g.set_name(e.name);
+    g.set_role(model::CaseRoleName(e.role));
+    g.set_samples(static_cast<int64_t>(e.samples));
+    g.set_offset(e.offset);
+    g.set_rmse(e.rmse);
+    g.set_max_abs(e.max_abs);
+    g.set_max_at_s(e.max_at_s);
+    g.set_nrmse_pct(e.nrmse_pct);
+  }
+}
+
+void AddRegularisation(const records::FitResult& r, proto::FitFile* f) {
+  if (r.resolution.used) {
+    f->mutable_resolution()->set_levels(r.resolution.value());
+    f->mutable_resolution()->set_description(r.resolution.Describe());
+  }
+  if (r.regularisation.used) {
+    proto::FitRegularisation& g = *f->mutable_regularisation();
+    g.set_relative(r.regularisation.relative);
+    g.set_lambda(r.regularisation.lambda);
+    if (!r.regularisation.penalty_name.empty()) g.set_penalty(r.regularisation.penalty_name);
+  }
+  if (r.spectrum_regularisation.used) {
+    proto::FitSpectrumRegularisation& g = *f->mutable_spectrum_regularisation();
+    g.set_relative(r.spectrum_regularisation.relative);
+    g.set_lambda(r.spectrum_regularisation.lambda);
+    g.set_not_identified(r.SpectrumIdentification());
+  }
+}
+
+void AddUncertainty(const records::FitResult& r,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation,
+                    proto::FitFile* f) {
+  for (const records::ExtrapolationCheck& c : extrapolation) {
+    proto::FitExtrapolation& x = *f->add_extrapolation();
+    x.set_record(c.record);
+    x.set_flagged(c.flagged);
+    x.set_drive_beyond(c.drive_beyond);
+    x.set_drive_beyond_share(c.drive_beyond_share);
+    x.set_terms(static_cast<int64_t>(c.terms));
+    x.set_term_max(c.term_max);
+    x.set_term_rms(c.term_rms);
+  }
+  for (const auto& e : r.uncertainty.params) {
+    proto::FitUncertainty& g = *f->add_uncertainty();
+    g.set_name(e.name);
+    g.set_value(e.value);
+    if (std::isfinite(e.std_error)) g.set_std_error(e.std_error);
+    g.set_sensitivity(e.sensitivity);
+    g.set_identifiability(opt::IdentifiabilityName(e.identifiability));
+    if (!e.note.empty()) g.set_note(e.note);
+  }
+  for (double v : r.uncertainty.singular_values) f->add_singular_values(v);
+}
+
+void AddSearch(const records::FitResult& r, const std::string& summary, proto::FitSearch* x) {
+  x->set_algorithm(opt::SearchAlgorithmName(r.algorithm));
+  x->set_searched_parameters(static_cast<int64_t>(r.searched_parameters));
+  x->set_sized(r.budget_sized);
+  x->set_repetitions(r.budget.repetitions);
+  x->set_spectrum_solved(r.spectrum_solved);
+  if (r.spectrum_solved) x->set_solved_parameters(static_cast<int64_t>(r.solved_parameters));
+  if (r.algorithm == opt::SearchAlgorithm::kPso) {
+    x->set_particles(r.budget.particles);
+    x->set_iterations(r.budget.iterations);
+    x->set_stall(r.budget.stall);
+    x->set_converged_spread(r.budget.converged_spread);
+  } else if (r.algorithm == opt::SearchAlgorithm::kLine) {
+    x->set_grid(r.line.grid);
+    x->set_brackets(r.line.brackets);
+    x->set_tolerance(r.line.tolerance);
+  }
+  x->set_search_evaluations(r.search.evaluations);
+  x->set_stop_reason(r.stop_reason);
+  x->set_polishes(r.polishes);
+  x->set_best_polish_repetition(r.best_polish_repetition + 1);  // 1-based; 0 = none
+  x->set_search_best_repetition(r.search.best_repetition + 1);
+  x->set_lm_differences(r.lm_differences);
+  x->set_summary(summary);
+}
+
+}  // namespace
+
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
+                    const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation,
+                    const records::SelectionResult* selection, const FitRun& run) {
+  proto::FitFile f;
+  const int levels = r.resolution.used ? r.resolution.value() : run.pi_operators;
+  *f.mutable_model() = ToProto(FittedModelSpec(set, r, run.substeps, levels));
+  f.set_description(r.model->Describe());
+  f.set_response_unit(set.response_unit);
+  f.set_drive_unit(set.drive_unit);
+  f.set_polarity(r.model->scale().polarity);
+  f.set_settle_s(run.settle_s);
+  for (size_t i = 0; i < r.params.size(); ++i)
+    (*f.mutable_params())[r.model->params()[i].name] = r.params[i];
+  for (double w : r.weights) f.add_weights(w);
+  AddErrors(r, &f);
+  AddRegularisation(r, &f);
+  AddUncertainty(r, extrapolation, &f);
+  f.set_train_mse(r.train_mse);
+  f.set_evaluations(r.evaluations);
+  AddSearch(r, run.search, f.mutable_search());
+  ExcitationOf(set, excitation, proposal, run.drive_file, f.mutable_excitation());
+  if (selection) SelectionOf(*selection, f.mutable_selection());
+  return io::WriteFitFile(f);
+}
+
+std::string FitModelJson(const records::ModelSpec& m) {
+  proto::FitModel p = ToProto(m);
+  p.set_format_version(io::kFitFormatVersion);
+  return io::PrintJson(p, "fit.json's model");
 }
 
 bool LooksLikeFitJson(const std::string& path) {

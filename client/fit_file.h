@@ -1,18 +1,23 @@
-// fit.json's model section as a records::ModelSpec: written by `piezoid fit`, read by
-// `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model.load. The JSON is
-// io/fit_model.h's (protobuf JSON of proto/fit.proto); the one conversion between the stored
-// message and the model, both ways, is here. A fit.json of another format_version is refused with
-// the version needed; a bad field is named.
+// fit.json of a fit, and its model section as a records::ModelSpec: written by `piezoid fit`, read
+// by `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model.load. The JSON is
+// io/fit_model.h's (protobuf JSON of proto/fit.proto); the one conversion of a fit's result to the
+// stored message, and between the message's model section and the model both ways, is here. A
+// fit.json of another format_version is refused with the version needed; a bad field is named.
 #pragma once
 
-#include <google/protobuf/struct.pb.h>
-
 #include <string>
+#include <vector>
 
 #include "io/fit_model.h"
 #include "io/records.h"
+#include "records/excitation.h"
 #include "records/fit.h"
+#include "records/select.h"
 #include "records/stepper.h"
+
+namespace pz::records {
+struct ExtrapolationCheck;  // diagnose/extrapolation.h (not on the fuzzer's floor)
+}
 
 namespace pz::client {
 
@@ -23,8 +28,26 @@ using io::kFitFormatVersion;
 records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitResult& r,
                                    int substeps, int pi_operators);
 
-/// Sets fit.json's format_version and model section (`m`) on the document `fit_json`.
-void WriteFitModel(const records::ModelSpec& m, google::protobuf::Struct* fit_json);
+/// What fit.json records of a run beside its result.
+struct FitRun {
+  double settle_s = 0;   ///< --settle-s
+  int substeps = 2;      ///< --substeps
+  int pi_operators = 0;  ///< the plays / levels (the fit's chosen levels replace it when it chose)
+  std::string search;    ///< the search as run, one sentence (report.md's)
+  std::string drive_file;  ///< the proposed training drive's file
+};
+
+/// fit.json's text of a fit (`selection`: --family auto's, or null): the model section (as
+/// FittedModelSpec), the parameters, each record's errors, the uncertainty, the search, the
+/// excitation and the selection.
+std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
+                    const records::ExcitationReport& excitation,
+                    const records::TrainingDriveProposal& proposal,
+                    const std::vector<records::ExtrapolationCheck>& extrapolation,
+                    const records::SelectionResult* selection, const FitRun& run);
+
+/// The model section's JSON (fit.json's "model" object) of `m`.
+std::string FitModelJson(const records::ModelSpec& m);
 
 /// The spec of a fit.json's model section. Throws InputError naming the file and the field, the
 /// version needed, or a family/effect/parameter that does not fit.

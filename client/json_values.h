@@ -18,7 +18,8 @@ Value Bool(bool b);
 Value Null();
 Value Obj(const Struct& s);
 Value List(const std::vector<Value>& items);
-/// The Struct as indented JSON with a final newline; throws std::runtime_error naming `what`.
+/// The Struct as indented JSON with a final newline (io/proto_json.h PrintJson: keys sorted);
+/// throws std::runtime_error naming `what`.
 std::string Print(const Struct& root, const std::string& what);
 
 }  // namespace pz::client::json

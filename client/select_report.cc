@@ -4,7 +4,9 @@
 #include <iomanip>
 #include <sstream>
 
+#include "fit.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 
 namespace pz::client {
 namespace {
@@ -129,68 +131,60 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
   }
 }
 
-json::Value SelectionJson(const records::SelectionResult& s) {
-  using namespace json;  // NOLINT
-  Struct root;
-  auto& f = *root.mutable_fields();
-  f["method"] = Text("blocked cross-validation on the training records; one-standard-error rule");
-  f["folds"] = Num(s.folds);
-  f["fold_fits"] = Num(static_cast<double>(s.fold_fits));
-  f["chosen"] = Text(s.ranking[s.chosen].candidate.Describe());
-  f["best_cv_rmse"] = Num(s.best_cv_rmse);
-  f["noise_floor"] = Num(s.noise.sigma);
-  f["wall_time_s"] = Num(s.wall_time_s);
-  f["detected_initial_state"] = Text(model::InitialStateName(s.detected));
-  std::vector<Value> ranking;
+void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
+  proto::Selection m;
+  m.set_method("blocked cross-validation on the training records; one-standard-error rule");
+  m.set_folds(s.folds);
+  m.set_fold_fits(static_cast<int64_t>(s.fold_fits));
+  m.set_chosen(s.ranking[s.chosen].candidate.Describe());
+  m.set_best_cv_rmse(s.best_cv_rmse);
+  m.set_noise_floor(s.noise.sigma);
+  m.set_wall_time_s(s.wall_time_s);
+  m.set_detected_initial_state(model::InitialStateName(s.detected));
   for (size_t i = 0; i < s.ranking.size(); ++i) {
     const records::ModelScore& c = s.ranking[i];
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["candidate"] = Text(c.candidate.Describe());
-    g["family"] = Text(c.candidate.family);
-    std::vector<Value> effects;
-    for (const auto& e : c.candidate.effects) effects.push_back(Text(records::EffectName(e)));
-    g["effects"] = List(effects);
-    g["levels"] = Num(c.candidate.levels);
-    g["initial_state"] = Text(model::InitialStateName(c.candidate.initial_state));
-    g["parameters"] = Num(static_cast<double>(c.parameters));
-    g["round"] = Num(c.round);
-    g["cv_rmse"] = Num(c.cv_rmse);
-    g["cv_se"] = Num(c.cv_se);
+    proto::SelectionCandidate& g = *m.add_ranking();
+    g.set_candidate(c.candidate.Describe());
+    g.set_family(c.candidate.family);
+    for (const auto& e : c.candidate.effects) g.add_effects(records::EffectName(e));
+    g.set_levels(c.candidate.levels);
+    g.set_initial_state(model::InitialStateName(c.candidate.initial_state));
+    g.set_parameters(static_cast<int64_t>(c.parameters));
+    g.set_round(c.round);
+    g.set_cv_rmse(c.cv_rmse);
+    g.set_cv_se(c.cv_se);
     if (c.round == 2) {
-      g["se_vs_best"] = Num(c.se_vs_best);
-      g["within_one_se"] = Bool(c.within_one_se);
+      g.set_se_vs_best(c.se_vs_best);
+      g.set_within_one_se(c.within_one_se);
     }
-    std::vector<Value> folds;
-    for (double r : c.fold_rmse) folds.push_back(Num(r));
-    g["fold_rmse"] = List(folds);
-    g["withheld_rmse_after_choice"] = Num(c.withheld_rmse);
-    g["train_rmse"] = Num(c.train_rmse);
-    g["chosen"] = Bool(i == s.chosen);
-    if (!c.error.empty()) g["error"] = Text(c.error);
-    ranking.push_back(Obj(x));
+    for (double r : c.fold_rmse) g.add_fold_rmse(r);
+    g.set_withheld_rmse_after_choice(c.withheld_rmse);
+    g.set_train_rmse(c.train_rmse);
+    g.set_chosen(i == s.chosen);
+    if (!c.error.empty()) g.set_error(c.error);
   }
-  f["ranking"] = List(ranking);
-  std::vector<Value> states;
   for (const auto& e : s.initial_states) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["record"] = Text(e.record);
-    g["role"] = Text(model::CaseRoleName(e.role));
+    proto::SelectionInitialState& g = *m.add_initial_states();
+    g.set_record(e.record);
+    g.set_role(model::CaseRoleName(e.role));
     if (!e.note.empty()) {
-      g["note"] = Text(e.note);
+      g.set_note(e.note);
     } else {
-      g["from"] = Num(static_cast<double>(e.from));
-      g["to"] = Num(static_cast<double>(e.to));
-      g["rmse_centred"] = Num(e.rmse[0]);
-      g["rmse_descended"] = Num(e.rmse[1]);
-      g["rmse_ascended"] = Num(e.rmse[2]);
-      g["shows"] = Text(model::InitialStateName(e.state));
+      g.set_from(static_cast<int64_t>(e.from));
+      g.set_to(static_cast<int64_t>(e.to));
+      g.set_rmse_centred(e.rmse[0]);
+      g.set_rmse_descended(e.rmse[1]);
+      g.set_rmse_ascended(e.rmse[2]);
+      g.set_shows(model::InitialStateName(e.state));
     }
-    states.push_back(Obj(x));
   }
-  f["initial_states"] = List(states);
-  return Obj(root);
+  *out = std::move(m);
+}
+
+json::Value SelectionJson(const records::SelectionResult& s) {
+  proto::Selection m;
+  SelectionOf(s, &m);
+  return json::Obj(io::MessageToStruct(m));
 }
 
 }  // namespace pz::client

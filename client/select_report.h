@@ -11,6 +11,10 @@
 #include "io/records.h"
 #include "records/select.h"
 
+namespace pz::proto {
+class Selection;
+}
+
 namespace pz::client {
 
 /// The terminal summary: the ranking (the finalists and the best `screened` of the screening
@@ -20,7 +24,10 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
 /// report.md's section "## Model selection (--family auto)".
 void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
                             const records::SelectionResult& s);
-/// fit.json's / diagnosis.json's "selection" object.
+/// The selection as its stored message (the one conversion: fit.json's and diagnosis.json's
+/// "selection"; `out` replaced).
+void SelectionOf(const records::SelectionResult& s, proto::Selection* out);
+/// SelectionOf as a JSON object (io/proto_json.h's rules).
 json::Value SelectionJson(const records::SelectionResult& s);
 
 }  // namespace pz::client

@@ -1,12 +1,10 @@
 #include "io/fit_model.h"
 
 #include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
-
-#include <stdexcept>
 
 #include "fit.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 #include "model/status.h"
 
 namespace pz::io {
@@ -14,14 +12,6 @@ namespace {
 
 using google::protobuf::Struct;
 using google::protobuf::Value;
-namespace util = google::protobuf::util;
-
-Struct ParseObject(const std::string& path, const std::string& text) {
-  Struct root;
-  const auto st = util::JsonStringToMessage(text, &root);
-  if (!st.ok()) throw InputError(path + ": not a JSON object: " + std::string(st.message()));
-  return root;
-}
 
 std::string Needed() {
   return "this piezoid reads fit.json format_version " + std::to_string(kFitFormatVersion);
@@ -48,50 +38,49 @@ void CheckTopVersion(const std::string& path, const Struct& root) {
 
 bool LooksLikeFitJson(const std::string& text) {
   Struct root;
-  if (!util::JsonStringToMessage(text, &root).ok()) return false;
+  try {
+    root = ParseJsonObject("", text);
+  } catch (const InputError&) {
+    return false;
+  }
   // A fit.json has "model" (an object since format_version 1, a description string before); a
   // network's JSON (io/network_io.h) has a format_version of its own but no "model".
   return root.fields().contains("model");
 }
 
-void ReadFitModel(const std::string& path, const std::string& text, proto::FitModel* out) {
-  const Struct root = ParseObject(path, text);
+void ReadFitFile(const std::string& path, const std::string& text, proto::FitFile* out) {
+  const Struct root = ParseJsonObject(path, text);
   CheckTopVersion(path, root);
-  auto model = root.fields().find("model");
-  if (model == root.fields().end() || model->second.kind_case() != Value::kStructValue) {
+  proto::FitFile f;
+  StructToMessage(path, root, &f);
+  if (f.has_model() && f.model().format_version() != static_cast<unsigned>(kFitFormatVersion)) {
+    throw InputError(path + ": model.format_version " + std::to_string(f.model().format_version()) +
+                     ": " + Needed());
+  }
+  *out = std::move(f);
+}
+
+void ReadFitModel(const std::string& path, const std::string& text, proto::FitModel* out) {
+  proto::FitFile f;
+  ReadFitFile(path, text, &f);
+  if (!f.has_model()) {
     throw InputError(path +
                      ": no \"model\" object (the section piezoid export and compensate read)");
   }
-  std::string json;
-  (void)util::MessageToJsonString(model->second.struct_value(), &json);
-  proto::FitModel m;
-  util::JsonParseOptions o;
-  o.ignore_unknown_fields = false;
-  if (auto st = util::JsonStringToMessage(json, &m, o); !st.ok()) {
-    throw InputError(path + ": model: " + std::string(st.message()));
-  }
-  if (m.format_version() != static_cast<unsigned>(kFitFormatVersion)) {
-    throw InputError(path + ": model.format_version " + std::to_string(m.format_version()) + ": " +
-                     Needed());
-  }
-  *out = std::move(m);
+  *out = std::move(*f.mutable_model());
 }
 
-void WriteFitModel(const proto::FitModel& m, Struct* fit_json) {
-  proto::FitModel versioned = m;
+std::string WriteFitFile(const proto::FitFile& f) {
+  proto::FitFile versioned = f;
   versioned.set_format_version(kFitFormatVersion);
-  util::JsonPrintOptions po;
-  po.always_print_primitive_fields = true;
-  po.preserve_proto_field_names = true;
-  std::string json;
-  Value model;
-  if (!util::MessageToJsonString(versioned, &json, po).ok() ||
-      !util::JsonStringToMessage(json, &model).ok()) {
-    throw std::runtime_error("fit.json: the model section");
-  }
-  auto& f = *fit_json->mutable_fields();
-  f["format_version"].set_number_value(kFitFormatVersion);
-  f["model"] = std::move(model);
+  versioned.mutable_model()->set_format_version(kFitFormatVersion);
+  return PrintJson(versioned, "fit.json");
+}
+
+std::string WriteSynthTruth(const proto::SynthTruth& t) { return PrintJson(t, "truth.json"); }
+
+void ReadSynthTruth(const std::string& path, const std::string& text, proto::SynthTruth* out) {
+  ReadJsonMessage(path, text, out);
 }
 
 }  // namespace pz::io

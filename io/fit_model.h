@@ -1,36 +1,43 @@
-// fit.json's codec (proto/fit.proto, issue 23): the JSON of its model section <-> the stored shape
-// proto::FitModel, through protobuf's JSON util, here only. Written by `piezoid fit`, read by
-// `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model; the one conversion of
-// the message to the model (records::ModelSpec) is client/fit_file.h's.
+// fit.json's codec (proto/fit.proto, issues 23 and 38): the whole file <-> proto::FitFile, and
+// truth.json of `piezoid synth-stack` <-> proto::SynthTruth, through protobuf's JSON util
+// (io/proto_json.h: keys sorted, a non-finite number as null), here only. fit.json is written by
+// `piezoid fit`, read by `piezoid export FIT.json`, `piezoid compensate` and python's
+// piezoid.Model; the one conversion of a fit's result to the message, and of its model section to
+// records::ModelSpec, is client/fit_file.h's.
 //
 // Versioning: fit.json's top-level "format_version" and the model's are kFitFormatVersion; a file
 // of another version (or one of a piezoid before versions, without it) is refused with the version
-// this reader needs; an unknown or mistyped field is named.
+// this reader needs; an unknown or mistyped field, in the model or in the report, is named.
 #pragma once
 
 #include <string>
 
-namespace google::protobuf {
-class Struct;
-}
-
 namespace pz::proto {
+class FitFile;
 class FitModel;
-}
+class SynthTruth;
+}  // namespace pz::proto
 
 namespace pz::io {
 
 inline constexpr int kFitFormatVersion = 1;
 
-/// fit.json text → its model section (`out` replaced). Throws InputError naming `path` and: no or
-/// another format_version (with the one needed), no "model" object, a bad field or value.
+/// fit.json text → the whole file (`out` replaced). Throws InputError naming `path` and: no or
+/// another format_version (with the one needed), a bad field or value (by its path).
+void ReadFitFile(const std::string& path, const std::string& text, proto::FitFile* out);
+
+/// ReadFitFile's model section (`out` replaced); also throws when the file has no "model" object.
 void ReadFitModel(const std::string& path, const std::string& text, proto::FitModel* out);
 
-/// Sets fit.json's "format_version" and its "model" section (`m`, its format_version set here) on
-/// the document `fit_json`; the rest of the document is the writer's report.
-void WriteFitModel(const proto::FitModel& m, google::protobuf::Struct* fit_json);
+/// The file's JSON text (its format_version and its model's set here).
+std::string WriteFitFile(const proto::FitFile& f);
 
 /// True when the text is a JSON object with "model" (a fit.json; a network's JSON has none).
 bool LooksLikeFitJson(const std::string& text);
+
+/// truth.json's text.
+std::string WriteSynthTruth(const proto::SynthTruth& t);
+/// truth.json text → the truth (`out` replaced). Throws InputError naming `path` and the field.
+void ReadSynthTruth(const std::string& path, const std::string& text, proto::SynthTruth* out);
 
 }  // namespace pz::io

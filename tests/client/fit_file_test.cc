@@ -44,12 +44,12 @@ TEST(FitFile, EveryCorpusFileLoadsAndWritesBackTheSameBytes) {
       continue;
     }
     ++loaded;
-    google::protobuf::Struct root, stored;
-    WriteFitModel(m, &root);
+    google::protobuf::Struct stored;
     // The corpus was written with the shortest digits that give each double back: compared as
     // values, printed alike.
     ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(text, &stored).ok()) << f;
-    EXPECT_EQ(json::Print(root, "fit.json"), json::Print(stored, "fit.json")) << f;
+    EXPECT_EQ(FitModelJson(m), json::Print(stored.fields().at("model").struct_value(), "fit.json"))
+        << f;
     EXPECT_TRUE(LooksLikeFitJson(f.string())) << f;
   }
   EXPECT_GE(loaded, 20) << "of " << files.size();
@@ -66,8 +66,9 @@ TEST(FitFile, AFieldOfAnotherTypeIsNamed) {
     (void)LoadFitText("x/fit.json", text);
     FAIL() << "loaded";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("x/fit.json: model: "), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("substeps"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("x/fit.json: model.substeps: invalid value \"two\""),
+              std::string::npos)
+        << e.what();
   }
 }
 
