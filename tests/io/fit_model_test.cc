@@ -107,7 +107,7 @@ TEST(FitModelCodec, ABadFieldIsNamedByItsPath) {
   EXPECT_NE(unknown.find("x/fit.json: records[0].rmsee: Cannot find field"), std::string::npos)
       << unknown;
   const std::string typed =
-      ErrorOf(Replaced(text, "\"search\"", "\"polishes\": ", "\"polishes\": \"two\", \"y\": "));
+      ErrorOf(Replaced(text, "\"search\"", "\"polishes\": 1", "\"polishes\": \"two\""));
   EXPECT_NE(typed.find("x/fit.json: search.polishes: invalid value \"two\""), std::string::npos)
       << typed;
   const std::string model = ErrorOf(Replaced(text, "\"model\"", "\"weights\"", "\"weigths\""));
