@@ -441,47 +441,33 @@ constexpr const char* kAtBoundMeaning =
     "islands or "
     "seeds are the way out.";
 
-/// report.md's GA settings line: population, islands and migration, output moves, seed, ranges,
-/// spread penalty, wall time and preset.
-void WriteGaSettings(std::ostream& md, const IdentifyOptions& options,
-                     const hgann::HgannFitness& fitness, const IdentifyResult& result) {
-  const auto& s = result.summary;
-  md << "\n- GA: population " << options.ga.population_size;
-  if (options.ga.islands > 1) {
-    md << " × " << options.ga.islands << " islands (";
-    if (options.ga.migration_interval > 0) {
-      md << options.ga.migrants << " migrants every " << options.ga.migration_interval
-         << " generations, " << opt::TopologyName(options.ga.topology);
-      if (options.ga.migration_margin > 0)
-        md << ", from sources better by more than " << options.ga.migration_margin * 100 << " %";
-    } else {
-      md << "independent: multi-start";
-    }
-    if (options.ga.broadcast_interval > 0)
-      md << "; a broadcast every " << options.ga.broadcast_interval
-         << " generations from islands better by more than " << options.ga.broadcast_margin * 100
-         << " %";
-    md << "; mutation by island";
-    for (int k = 0; k < options.ga.islands; ++k) md << " " << options.ga.MutationProbability(k);
-    if (options.ga.island_stall_generations > 0)
-      md << "; an island is restarted after " << options.ga.island_stall_generations
-         << " generations of stall";
-    int migrations = 0, restarts = 0;
-    for (const auto& g : result.log) {
-      migrations += g.migrated;
-      for (const auto& i : g.islands) restarts += i.restarted;
-    }
-    md << "; " << migrations << " migrations, " << restarts << " restarts)";
+/// The islands' settings (migration, broadcast, mutation, restarts) and how often they migrated
+/// and restarted, in report.md's GA line.
+void WriteIslands(std::ostream& md, const opt::GaOptions& ga,
+                  const std::vector<opt::GenerationSummary>& log) {
+  md << " × " << ga.islands << " islands (";
+  if (ga.migration_interval > 0) {
+    md << ga.migrants << " migrants every " << ga.migration_interval << " generations, "
+       << opt::TopologyName(ga.topology);
+    if (ga.migration_margin > 0)
+      md << ", from sources better by more than " << ga.migration_margin * 100 << " %";
+  } else {
+    md << "independent: multi-start";
   }
-  if (const int moves = hgann::HgannOutputMoves(options.ga, options.spread_penalty); moves > 0)
-    md << ", " << moves
-       << " offspring per island and generation made by an output move (a step of the best "
-       << "network's outputs in the parameter space)";
-  md << ", seed " << options.ga.seed << ", ranges '" << options.ranges
-     << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
-     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time "
-     << Fmt(s.wall_time_s, 4) << " s"
-     << (options.preset.empty() ? std::string() : "; preset '" + options.preset + "'") << "\n";
+  if (ga.broadcast_interval > 0)
+    md << "; a broadcast every " << ga.broadcast_interval
+       << " generations from islands better by more than " << ga.broadcast_margin * 100 << " %";
+  md << "; mutation by island";
+  for (int k = 0; k < ga.islands; ++k) md << " " << ga.MutationProbability(k);
+  if (ga.island_stall_generations > 0)
+    md << "; an island is restarted after " << ga.island_stall_generations
+       << " generations of stall";
+  int migrations = 0, restarts = 0;
+  for (const auto& g : log) {
+    migrations += g.migrated;
+    for (const auto& i : g.islands) restarts += i.restarted;
+  }
+  md << "; " << migrations << " migrations, " << restarts << " restarts)";
 }
 
 /// report.md.
@@ -519,7 +505,17 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
     }
     md << ")";
   }
-  WriteGaSettings(md, options, fitness, result);
+  md << "\n- GA: population " << options.ga.population_size;
+  if (options.ga.islands > 1) WriteIslands(md, options.ga, result.log);
+  if (const int moves = hgann::HgannOutputMoves(options.ga, options.spread_penalty); moves > 0)
+    md << ", " << moves
+       << " offspring per island and generation made by an output move (a step of the best "
+       << "network's outputs in the parameter space)";
+  md << ", seed " << options.ga.seed << ", ranges '" << options.ranges
+     << "', spread penalty λ = " << options.spread_penalty << " deg² (final spread "
+     << Fmt(fitness.OutputSpread(result.best.network), 3) << "), wall time "
+     << Fmt(s.wall_time_s, 4) << " s"
+     << (options.preset.empty() ? std::string() : "; preset '" + options.preset + "'") << "\n";
   if (result.seeds) {
     md << "- generation 0 seeded with " << result.seeds->genomes.size()
        << " networks fitted to per-case fits of the training cases (hgann/trend_seeds.h):";

@@ -265,21 +265,18 @@ void Score(const io::RecordSet& set, const CommitteeOptions& o, Predict predict,
   if (all_train) *all_train = atr.Done();
 }
 
-}  // namespace
-
-CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOptions& options,
-                             const EvaluatorFactory& factory, const CommitteeLog& log) {
-  ThrowIfError(options.Validate());
-  const double start = Now();
-  const int nb = options.bands.size();
-  CommitteeResult res;
-  res.options = options;
-  res.set = records;
-  const io::RecordSet& set = res.set;
-  std::vector<std::vector<const io::Record*>> band_train(nb);
-  std::vector<int> band_tests(nb, 0);
+/// The records banded by frequency, their windows set, and the training records of each band.
+struct BandedRecords {
+  std::vector<std::vector<const io::Record*>> band_train;
   std::vector<const io::Record*> all_train;
-  for (io::Record& r : res.set.records) {
+};
+
+BandedRecords BandRecords(io::RecordSet& set, const CommitteeOptions& options) {
+  const int nb = options.bands.size();
+  BandedRecords out;
+  out.band_train.resize(nb);
+  std::vector<int> band_tests(nb, 0);
+  for (io::Record& r : set.records) {
     if (!(r.frequency_hz > 0))
       throw InputError(r.Label() +
                        " states no excitation frequency (the committee bands the records by it: a "
@@ -304,22 +301,32 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
     io::SetWindow(r, r.t.front() + options.t0_s, r.t.front() + std::min(options.t1_s, t_end), 1,
                   r.Label() + ": the criterion window");
     if (r.role == model::CaseRole::kTrain) {
-      band_train[b].push_back(&r);
-      all_train.push_back(&r);
+      out.band_train[b].push_back(&r);
+      out.all_train.push_back(&r);
     } else {
       ++band_tests[b];
     }
   }
   for (int b = 0; b < nb; ++b) {
-    if (band_train[b].empty())
+    if (out.band_train[b].empty())
       throw InputError("band " + options.bands.Label(b) + " has no training record");
     if (band_tests[b] == 0)
       throw InputError("band " + options.bands.Label(b) + " has no test record");
   }
+  return out;
+}
 
-  bool first_search = true;
-  auto identify = [&](const std::string& family, opt::SearchAlgorithm algo,
-                      const std::vector<const io::Record*>& train, int band) {
+/// Identifies one family with one algorithm on a band's (or every) training record, scores it on
+/// every record and logs it; the first search states the result's thread count.
+class Identifier {
+ public:
+  Identifier(const CommitteeOptions& options, const EvaluatorFactory& factory,
+             const CommitteeLog& log, CommitteeResult& res)
+      : options_(options), factory_(factory), log_(log), res_(res) {}
+
+  IdentifiedModel operator()(const std::string& family, opt::SearchAlgorithm algo,
+                             const std::vector<const io::Record*>& train, int band) {
+    const CommitteeOptions& options = options_;
     IdentifiedModel m;
     m.family = family;
     m.algorithm = algo;
@@ -338,70 +345,97 @@ CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOption
       throw InputError("box of " + family + ": " + std::to_string(box.names.size()) +
                        " parameters, the family has " + std::to_string(model->params().size()));
     if (!box.names.empty()) {
-      auto evaluator = factory(fitness);
-      if (first_search) res.threads = evaluator->concurrency();  // as the first search runs
-      first_search = false;
+      auto evaluator = factory_(fitness);
+      if (first_search_) res_.threads = evaluator->concurrency();  // as the first search runs
+      first_search_ = false;
       opt::SearchOptions so = options.search;
       so.algorithm = algo;
       ThrowIfError(so.Validate(box));
       m.search = opt::Search(box, so, *evaluator);
       m.params = m.search.best;
-      res.evaluations += m.search.evaluations;
+      res_.evaluations += m.search.evaluations;
     } else {  // a linear family without searched parameters: its weights are solved
       m.search.best_cost = fitness.Cost({});
       m.search.stop_reason = "weights solved by least squares";
     }
     if (model->family().linear()) m.weights = fitness.outputs().Run(m.params).weights;
     Score(
-        set, options, [&](const io::Record& r) { return PredictModel(m, r); }, &m.per_band,
+        res_.set, options, [&](const io::Record& r) { return PredictModel(m, r); }, &m.per_band,
         &m.all_test, nullptr);
-    if (log) {
-      std::ostringstream os;
-      os << (band < 0 ? std::string("complete") : options.bands.Label(band)) << " " << m.Name()
-         << ": " << records::CriterionName(options.criterion) << " "
-         << FormatFigure(m.search.best_cost, 5) << " after " << m.search.evaluations
-         << " evaluations in " << FormatFigure(m.search.wall_time_s) << " s ("
-         << FormatFigure(m.search.evaluations / std::max(m.search.wall_time_s, 1e-9))
-         << " evaluations/s), best of " << m.search.repetition_costs.size() << " repetitions: #"
-         << m.search.best_repetition;
-      log(os.str());
-    }
+    if (log_) Log(m, band);
     return m;
-  };
+  }
+
+ private:
+  void Log(const IdentifiedModel& m, int band) const {
+    std::ostringstream os;
+    os << (band < 0 ? std::string("complete") : options_.bands.Label(band)) << " " << m.Name()
+       << ": " << records::CriterionName(options_.criterion) << " "
+       << FormatFigure(m.search.best_cost, 5) << " after " << m.search.evaluations
+       << " evaluations in " << FormatFigure(m.search.wall_time_s) << " s ("
+       << FormatFigure(m.search.evaluations / std::max(m.search.wall_time_s, 1e-9))
+       << " evaluations/s), best of " << m.search.repetition_costs.size() << " repetitions: #"
+       << m.search.best_repetition;
+    log_(os.str());
+  }
+
+  const CommitteeOptions& options_;
+  const EvaluatorFactory& factory_;
+  const CommitteeLog& log_;
+  CommitteeResult& res_;
+  bool first_search_ = true;
+};
+
+/// Band b's models, the one of lowest aggregate A = (train RMSE + test RMSE) / 2 selected.
+void IdentifyBand(const CommitteeOptions& options, const std::vector<const io::Record*>& train,
+                  int b, Identifier& identify, const CommitteeLog& log, CommitteeResult& res) {
+  const double t = Now();
+  for (const std::string& f : options.families)
+    for (opt::SearchAlgorithm a : options.algorithms)
+      res.band_models[b].push_back(identify(f, a, train, b));
+  res.band_wall_s[b] = Now() - t;
+  double best = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < res.band_models[b].size(); ++i) {
+    const BandMetrics& bm = res.band_models[b][i].per_band[b];
+    const double agg = 0.5 * (bm.train.rmse + bm.test.rmse);
+    if (agg < best) {
+      best = agg;
+      res.selected[b] = static_cast<int>(i);
+    }
+  }
+  res.aggregate[b] = best;
+  if (log)
+    log("band " + options.bands.Label(b) + ": selected " +
+        res.band_models[b][res.selected[b]].Name() + " (A = " + FormatFigure(best, 4) + " µm)");
+}
+
+}  // namespace
+
+CommitteeResult RunCommittee(const io::RecordSet& records, const CommitteeOptions& options,
+                             const EvaluatorFactory& factory, const CommitteeLog& log) {
+  ThrowIfError(options.Validate());
+  const double start = Now();
+  const int nb = options.bands.size();
+  CommitteeResult res;
+  res.options = options;
+  res.set = records;
+  const BandedRecords banded = BandRecords(res.set, options);
+  Identifier identify(options, factory, log, res);
 
   if (options.complete) {
     const double t = Now();
     for (const std::string& f : options.families)
       for (opt::SearchAlgorithm a : options.algorithms)
-        res.complete.push_back(identify(f, a, all_train, -1));
+        res.complete.push_back(identify(f, a, banded.all_train, -1));
     res.complete_wall_s = Now() - t;
   }
   res.band_models.resize(nb);
   res.band_wall_s.assign(nb, 0.0);
   res.selected.assign(nb, 0);
   res.aggregate.assign(nb, 0.0);
-  for (int b = 0; b < nb; ++b) {
-    const double t = Now();
-    for (const std::string& f : options.families)
-      for (opt::SearchAlgorithm a : options.algorithms)
-        res.band_models[b].push_back(identify(f, a, band_train[b], b));
-    res.band_wall_s[b] = Now() - t;
-    double best = std::numeric_limits<double>::infinity();
-    for (size_t i = 0; i < res.band_models[b].size(); ++i) {
-      const BandMetrics& bm = res.band_models[b][i].per_band[b];
-      const double agg = 0.5 * (bm.train.rmse + bm.test.rmse);
-      if (agg < best) {
-        best = agg;
-        res.selected[b] = static_cast<int>(i);
-      }
-    }
-    res.aggregate[b] = best;
-    if (log)
-      log("band " + options.bands.Label(b) + ": selected " +
-          res.band_models[b][res.selected[b]].Name() + " (A = " + FormatFigure(best, 4) + " µm)");
-  }
+  for (int b = 0; b < nb; ++b) IdentifyBand(options, banded.band_train[b], b, identify, log, res);
   Score(
-      set, options, [&](const io::Record& r) { return PredictCommittee(res, r); },
+      res.set, options, [&](const io::Record& r) { return PredictCommittee(res, r); },
       &res.committee_per_band, &res.committee_test, &res.committee_train);
   if (!res.complete.empty()) {
     double best = std::numeric_limits<double>::infinity();

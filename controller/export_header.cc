@@ -22,22 +22,11 @@ void Array(std::ostream& os, const std::string& name, const double* v, int n) {
   os << "};\n";
 }
 
-}  // namespace
-
-std::string ExportHeader(const records::Stepper& st, const std::string& name,
-                         const std::string& comment) {
-  if (!IsCIdentifier(name)) {
-    throw InputError("--name '" + name +
-                     "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
-  }
+/// The header's comment (how to call it, the model) and the kernels' C source.
+void WriteBanner(std::ostream& os, const records::Stepper& st, const std::string& name,
+                 const std::string& safe) {
   const records::ModelSpec& m = st.spec();
   const std::string N = CUpper(name);
-  const auto& blocks = st.blocks();
-  const int nb = static_cast<int>(blocks.size());
-  std::ostringstream os;
-  std::string safe = comment;
-  for (size_t i = 0; i + 1 < safe.size(); ++i)
-    if (safe[i] == '*' && safe[i + 1] == '/') safe[i] = '_';
   os << "/* " << name << ".h: " << safe << "\n"
      << " *\n"
      << " * Written by `piezoid export` (issue 23). Self-contained C99: only <math.h>, no "
@@ -85,18 +74,12 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name,
      << "#ifndef " << N << "_H_\n#define " << N << "_H_\n\n#include <math.h>\n\n"
      << "#ifndef " << pzk::KernelGuard() << "\n#define " << pzk::KernelGuard() << "\n"
      << pzk::KernelSource() << "#endif /* " << pzk::KernelGuard() << " */\n\n";
-  double delay = 0;
-  for (int i = 0; i < nb; ++i)
-    if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];
-  os << "#define " << N << "_U_MIN " << CHexLiteral(m.drive_min) << " /* "
-     << io::FormatNumber(m.drive_min) << " " << m.drive_unit << " */\n"
-     << "#define " << N << "_U_MAX " << CHexLiteral(m.drive_max) << " /* "
-     << io::FormatNumber(m.drive_max) << " " << m.drive_unit << " */\n"
-     << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
-     << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
-     << "#define " << N << "_PREVIEW_SAMPLES " << st.preview_samples() << "\n"
-     << "#define " << N << "_PRIME_SAMPLES " << st.delay_horizon() << "\n"
-     << "#define " << N << "_BLOCKS " << nb << "\n\n";
+}
+
+/// Every block's parameter and weight arrays and the block table.
+void WriteBlocks(std::ostream& os, const records::Stepper& st, const std::string& name) {
+  const auto& blocks = st.blocks();
+  const int nb = static_cast<int>(blocks.size());
   for (int i = 0; i < nb; ++i) {
     const auto& p = st.block_params(static_cast<size_t>(i));
     Array(os, name + "_p" + std::to_string(i) + "_", p.data(), static_cast<int>(p.size()));
@@ -118,6 +101,11 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name,
        << "}" << (i + 1 < nb ? "," : "") << "\n";
   }
   os << "};\n\n";
+}
+
+/// The state type and the init, step, inverse step and inverse prime functions.
+void WriteFunctions(std::ostream& os, const records::Stepper& st, const std::string& name) {
+  const std::string N = CUpper(name);
   const int nc = std::max(st.constants(), 1), nd = std::max(st.dynamic(), 1);
   os << "typedef struct {\n  double c[" << nc << "]; /* constants derived at init */\n  double d["
      << nd << "]; /* dynamic state */\n  double t[" << nd << "]; /* the inverse's trial state */\n"
@@ -144,6 +132,39 @@ std::string ExportHeader(const records::Stepper& st, const std::string& name,
      << "  return pzk_chain_inverse_prime(" << name << "_blocks_, " << N
      << "_BLOCKS, s->c, s->d, s->t, &s->ctl, y_desired);\n}\n\n"
      << "#endif /* " << N << "_H_ */\n";
+}
+
+}  // namespace
+
+std::string ExportHeader(const records::Stepper& st, const std::string& name,
+                         const std::string& comment) {
+  if (!IsCIdentifier(name)) {
+    throw InputError("--name '" + name +
+                     "': must be a C identifier ([A-Za-z_][A-Za-z0-9_]*, at most 63 characters)");
+  }
+  const records::ModelSpec& m = st.spec();
+  const std::string N = CUpper(name);
+  const auto& blocks = st.blocks();
+  const int nb = static_cast<int>(blocks.size());
+  std::ostringstream os;
+  std::string safe = comment;
+  for (size_t i = 0; i + 1 < safe.size(); ++i)
+    if (safe[i] == '*' && safe[i + 1] == '/') safe[i] = '_';
+  WriteBanner(os, st, name, safe);
+  double delay = 0;
+  for (int i = 0; i < nb; ++i)
+    if (blocks[i].kind == pzk::PZK_DELAY) delay = blocks[i].p[0];
+  os << "#define " << N << "_U_MIN " << CHexLiteral(m.drive_min) << " /* "
+     << io::FormatNumber(m.drive_min) << " " << m.drive_unit << " */\n"
+     << "#define " << N << "_U_MAX " << CHexLiteral(m.drive_max) << " /* "
+     << io::FormatNumber(m.drive_max) << " " << m.drive_unit << " */\n"
+     << "#define " << N << "_DT_S " << CHexLiteral(m.dt) << "\n"
+     << "#define " << N << "_DELAY_S " << CHexLiteral(delay) << "\n"
+     << "#define " << N << "_PREVIEW_SAMPLES " << st.preview_samples() << "\n"
+     << "#define " << N << "_PRIME_SAMPLES " << st.delay_horizon() << "\n"
+     << "#define " << N << "_BLOCKS " << nb << "\n\n";
+  WriteBlocks(os, st, name);
+  WriteFunctions(os, st, name);
   return os.str();
 }
 

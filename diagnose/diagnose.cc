@@ -137,122 +137,76 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
   return best;
 }
 
-RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& o) {
-  if (auto st = o.rules.Validate(); !st.ok()) throw InputError("rules." + st.message());
-  RecordDiagnosis d;
-  for (const io::Record& r : set.records)
-    (Withheld(r) ? d.withheld_samples : d.train_samples) += r.scored();
-  if (d.train_samples == 0)
-    throw InputError(set.source.string() + ": no training record (role train)");
-  if (d.withheld_samples == 0) {
-    throw InputError(set.source.string() +
-                     ": no withheld record or window (role validate or test): the diagnosis scores "
-                     "effects on data the fits did not see");
-  }
-  d.excitation = AnalyseExcitation(set);
-  const auto progress = o.fit.progress;
-  FitOptions fo = o.fit;
-  fo.family = o.family;
-  fo.effects.clear();
-  fo.progress = nullptr;
-  if (progress) progress("base fit: " + o.family);
-  d.base = FitRecords(set, fo);
+namespace {
+
+/// The noise floor from the base fit's residuals; refuses a base fit whose prediction is not
+/// finite on a withheld record.
+NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
   std::vector<std::vector<double>> base_res;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
     std::vector<double> e;
-    for (size_t k = r.first_scored; k < r.end_scored; ++k) e.push_back(r.y[k] - d.base.yhat[i][k]);
+    for (size_t k = r.first_scored; k < r.end_scored; ++k) e.push_back(r.y[k] - base.yhat[i][k]);
     base_res.push_back(std::move(e));
   }
-  if (const double s = Sse(set, d.base, true); !std::isfinite(s)) {
+  if (const double s = Sse(set, base, true); !std::isfinite(s)) {
     std::string names;
     for (size_t i = 0; i < set.records.size(); ++i)
-      if (Withheld(set.records[i]) && !std::isfinite(d.base.metrics[i].rmse))
+      if (Withheld(set.records[i]) && !std::isfinite(base.metrics[i].rmse))
         names += (names.empty() ? "" : ", ") + set.records[i].name;
-    throw InputError(d.base.model->Describe() +
-                     ": the fitted model's prediction is not finite on the withheld " +
-                     "record(s) " + names +
-                     " (it diverges there): no gap to diagnose; train on records that " +
-                     "cover their drive, or try more integration sub-steps or another family");
+    throw InputError(
+        base.model->Describe() + ": the fitted model's prediction is not finite on the withheld " +
+        "record(s) " + names + " (it diverges there): no gap to diagnose; train on records that " +
+        "cover their drive, or try more integration sub-steps or another family");
   }
-  d.noise = EstimateNoiseFloor(set, &base_res);
-  const double sigma2 = d.noise.sigma * d.noise.sigma;
-  const double nw = static_cast<double>(d.withheld_samples),
-               nt = static_cast<double>(d.train_samples);
-  const records::Gap gap = MeasureGap(Sse(set, d.base, true), Sse(set, d.base, false), nw * sigma2,
-                                      sigma2, sigma2, nw, nt, o.rules);
-  d.s0 = gap.s0;
-  d.s_floor = gap.s_floor;
-  d.rms_ratio = gap.rms_ratio;
-  d.significant = gap.significant;
+  return EstimateNoiseFloor(set, &base_res);
+}
 
-  // Candidates that apply to the family.
-  const DataScale& scale = d.base.model->scale();
-  const auto lib = EffectLibrary(scale);
+/// The candidates that apply to the family: those asked for, or by default the effects the family
+/// does not hold and the records can support (creep-spectrum needs a window of a decade above its
+/// fastest relaxation); asked for by name, such an effect is an error (its model throws); so does
+/// rate dependence on training records at one rate (records/excitation.h, the rate span).
+std::vector<EffectKind> CandidateEffects(const RecordDiagnosis& d, const RecordDiagnoseOptions& o) {
   std::vector<EffectKind> cands = o.candidates;
-  if (cands.empty()) {
-    // By default, the effects the family does not hold and the records can support (creep-spectrum
-    // needs a window of a decade above its fastest relaxation); asked for by name, such an effect
-    // is an error (its model throws); so does rate dependence on training records at one rate
-    // (records/excitation.h, the rate span).
-    const auto excluded = d.base.model->family().excluded_effects();
-    const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
-    for (const EffectInfo& e : lib)
-      if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() &&
-          e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
-        cands.push_back(e.kind);
+  if (!cands.empty()) return cands;
+  const auto lib = EffectLibrary(d.base.model->scale());
+  const auto excluded = d.base.model->family().excluded_effects();
+  const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
+  for (const EffectInfo& e : lib)
+    if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() &&
+        e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
+      cands.push_back(e.kind);
+  return cands;
+}
+
+/// Extra starts of a candidate's fit: the base fit with the effect at small magnitudes (unit
+/// coordinates).
+void AddExtraStarts(const RecordModel& model, const std::vector<double>& base_params, EffectKind e,
+                    const DataScale& scale, FitOptions& ce) {
+  const auto& params = model.params();
+  opt::ParamBox box;
+  for (const ParamInfo& p : params) {
+    box.names.push_back(p.name);
+    box.lower.push_back(p.lower);
+    box.upper.push_back(p.upper);
+    box.log_scale.push_back(p.log_scale);
   }
-  const auto base_ex = BinExcess(set, d.base, sigma2, scale);
-  const auto base_sq = WithheldSquares(set, d.base);
-  for (EffectKind e : cands) {
-    if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
-    RecordCandidate c;
-    c.kind = e;
-    FitOptions ce = fo;
-    auto model = std::make_shared<RecordModel>(d.base.model->family_ptr(),
-                                               std::vector<EffectKind>{e}, scale);
-    // Extra starts: the base fit with the effect at small magnitudes (unit coordinates).
-    const auto& params = model->params();
-    opt::ParamBox box;
-    for (const ParamInfo& p : params) {
-      box.names.push_back(p.name);
-      box.lower.push_back(p.lower);
-      box.upper.push_back(p.upper);
-      box.log_scale.push_back(p.log_scale);
+  for (double frac : {0.02, 0.1, 0.3}) {
+    std::vector<double> phys = base_params;
+    for (const ParamInfo& p : e->Params(scale)) {
+      const double mid = p.lower <= 0 && p.upper >= 0 ? frac * (p.upper > 0 ? p.upper : p.lower)
+                                                      : p.lower * std::pow(p.upper / p.lower, frac);
+      phys.push_back(mid);
     }
-    for (double frac : {0.02, 0.1, 0.3}) {
-      std::vector<double> phys = d.base.params;
-      for (const ParamInfo& p : e->Params(scale)) {
-        const double mid = p.lower <= 0 && p.upper >= 0
-                               ? frac * (p.upper > 0 ? p.upper : p.lower)
-                               : p.lower * std::pow(p.upper / p.lower, frac);
-        phys.push_back(mid);
-      }
-      std::vector<double> unit(box.size());
-      box.ToUnit(phys.data(), unit.data());
-      ce.extra_starts.push_back(unit);
-    }
-    c.fit = FitModel(set, model, ce);
-    const int k = static_cast<int>(e->Params(scale).size());
-    const double s_withheld = Sse(set, c.fit, true);
-    if (!std::isfinite(s_withheld)) {  // diverges on a withheld record: nothing to score
-      d.diverged.push_back(EffectName(e));
-      continue;
-    }
-    ScoreCandidate(gap, s_withheld, Sse(set, c.fit, false), k,
-                   PatternExplained(base_ex, BinExcess(set, c.fit, sigma2, scale)), o.rules, c);
-    c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.rules.blocks);
-    d.candidates.push_back(std::move(c));
+    std::vector<double> unit(box.size());
+    box.ToUnit(phys.data(), unit.data());
+    ce.extra_starts.push_back(unit);
   }
-  RankByScore(d.candidates);
-  const std::vector<CandidateScore*> ranked = Scores(d.candidates);
-  AssignWeights(gap, ranked);
-  const Naming naming = NameEffect(
-      gap, ranked,
-      [&](int i) {
-        return i < 0 ? base_sq : WithheldSquares(set, d.candidates[static_cast<size_t>(i)].fit);
-      },
-      o.rules);
+}
+
+/// The named effect, the proposed experiment, the excitation note and the verdict's text.
+void ComposeRecordVerdict(const io::RecordSet& set, const RecordDiagnoseOptions& o,
+                          const records::Gap& gap, const Naming& naming, RecordDiagnosis& d) {
   d.named = naming.named;
   d.runner_up = naming.runner_up;
   d.z_runner_up = naming.z_runner_up;
@@ -283,6 +237,76 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
                  " (the fitted model's prediction is not finite on the withheld records: it " +
                  "diverges there).";
   }
+}
+
+}  // namespace
+
+RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& o) {
+  if (auto st = o.rules.Validate(); !st.ok()) throw InputError("rules." + st.message());
+  RecordDiagnosis d;
+  for (const io::Record& r : set.records)
+    (Withheld(r) ? d.withheld_samples : d.train_samples) += r.scored();
+  if (d.train_samples == 0)
+    throw InputError(set.source.string() + ": no training record (role train)");
+  if (d.withheld_samples == 0) {
+    throw InputError(set.source.string() +
+                     ": no withheld record or window (role validate or test): the diagnosis scores "
+                     "effects on data the fits did not see");
+  }
+  d.excitation = AnalyseExcitation(set);
+  const auto progress = o.fit.progress;
+  FitOptions fo = o.fit;
+  fo.family = o.family;
+  fo.effects.clear();
+  fo.progress = nullptr;
+  if (progress) progress("base fit: " + o.family);
+  d.base = FitRecords(set, fo);
+  d.noise = BaseNoiseFloor(set, d.base);
+  const double sigma2 = d.noise.sigma * d.noise.sigma;
+  const double nw = static_cast<double>(d.withheld_samples),
+               nt = static_cast<double>(d.train_samples);
+  const records::Gap gap = MeasureGap(Sse(set, d.base, true), Sse(set, d.base, false), nw * sigma2,
+                                      sigma2, sigma2, nw, nt, o.rules);
+  d.s0 = gap.s0;
+  d.s_floor = gap.s_floor;
+  d.rms_ratio = gap.rms_ratio;
+  d.significant = gap.significant;
+
+  // Candidates that apply to the family.
+  const DataScale& scale = d.base.model->scale();
+  const std::vector<EffectKind> cands = CandidateEffects(d, o);
+  const auto base_ex = BinExcess(set, d.base, sigma2, scale);
+  const auto base_sq = WithheldSquares(set, d.base);
+  for (EffectKind e : cands) {
+    if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
+    RecordCandidate c;
+    c.kind = e;
+    FitOptions ce = fo;
+    auto model = std::make_shared<RecordModel>(d.base.model->family_ptr(),
+                                               std::vector<EffectKind>{e}, scale);
+    AddExtraStarts(*model, d.base.params, e, scale, ce);
+    c.fit = FitModel(set, model, ce);
+    const int k = static_cast<int>(e->Params(scale).size());
+    const double s_withheld = Sse(set, c.fit, true);
+    if (!std::isfinite(s_withheld)) {  // diverges on a withheld record: nothing to score
+      d.diverged.push_back(EffectName(e));
+      continue;
+    }
+    ScoreCandidate(gap, s_withheld, Sse(set, c.fit, false), k,
+                   PatternExplained(base_ex, BinExcess(set, c.fit, sigma2, scale)), o.rules, c);
+    c.z_vs_base = model::PairedBlockZ(base_sq, WithheldSquares(set, c.fit), o.rules.blocks);
+    d.candidates.push_back(std::move(c));
+  }
+  RankByScore(d.candidates);
+  const std::vector<CandidateScore*> ranked = Scores(d.candidates);
+  AssignWeights(gap, ranked);
+  const Naming naming = NameEffect(
+      gap, ranked,
+      [&](int i) {
+        return i < 0 ? base_sq : WithheldSquares(set, d.candidates[static_cast<size_t>(i)].fit);
+      },
+      o.rules);
+  ComposeRecordVerdict(set, o, gap, naming, d);
   return d;
 }
 

@@ -425,6 +425,46 @@ model::ResidualAnalysis AnalyseFit(const DiagnosisModel& m, const FitResult& fit
   return model::AnalyseResiduals(in);
 }
 
+namespace {
+
+/// The floors' RMS over the training and the withheld samples, and the withheld floor's sum of
+/// squares.
+void SetFloorTotals(const DiagnosisModel& m, const std::vector<double>& floors, Diagnosis& d) {
+  double st = 0, sw = 0;
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const double v = floors[c] * floors[c] * m.cases()[c].measured_deg.size();
+    (m.cases()[c].training ? st : sw) += v;
+  }
+  d.floor_train = std::sqrt(st / std::max(1, m.training_samples()));
+  d.floor_withheld = std::sqrt(sw / std::max(1, m.withheld_samples()));
+  d.withheld_floor = sw;
+}
+
+/// How far the final fit closed each case's gap over its floor.
+void MeasureCaseGaps(const DiagnosisModel& m, const std::vector<double>& floors, Diagnosis& d) {
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    CaseGap g;
+    g.number = dc.number;
+    g.training = dc.training;
+    g.amplitude_v = dc.drive.amplitude_v;
+    g.frequency_hz = dc.drive.frequency_hz;
+    g.floor_rms = floors[c];
+    const double n = dc.measured_deg.size();
+    g.pi_before = d.base.case_pi[c];
+    g.pi_after = d.final_fit.case_pi[c];
+    g.rms_before = std::sqrt(g.pi_before / n);
+    g.rms_after = std::sqrt(g.pi_after / n);
+    const double floor_c = n * floors[c] * floors[c];
+    g.closed = g.pi_before > floor_c
+                   ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0)
+                   : 0.0;
+    d.gaps.push_back(g);
+  }
+}
+
+}  // namespace
+
 Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   ThrowIfError(o.Validate());
   const auto start = std::chrono::steady_clock::now();
@@ -451,16 +491,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
     if (c.fit.ok && c.fit.train_pi < floor_model->train_pi) floor_model = &c.fit;
   const std::vector<double> floors = CaseFloors(m, *floor_model);
   d.floor_model = floor_model->description;
-  {
-    double st = 0, sw = 0;
-    for (size_t c = 0; c < m.cases().size(); ++c) {
-      const double v = floors[c] * floors[c] * m.cases()[c].measured_deg.size();
-      (m.cases()[c].training ? st : sw) += v;
-    }
-    d.floor_train = std::sqrt(st / std::max(1, m.training_samples()));
-    d.floor_withheld = std::sqrt(sw / std::max(1, m.withheld_samples()));
-    d.withheld_floor = sw;
-  }
+  SetFloorTotals(m, floors, d);
   d.base_residuals = AnalyseFit(m, d.base, floors);
   Say(o,
       Fmt("base model: train RMS %.4f, withheld RMS %.4f deg; floor %.4f / %.4f deg",
@@ -507,25 +538,7 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   d.withheld_after = d.final_fit.withheld_pi;
   d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
   d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
-  for (size_t c = 0; c < m.cases().size(); ++c) {
-    const DiagCase& dc = m.cases()[c];
-    CaseGap g;
-    g.number = dc.number;
-    g.training = dc.training;
-    g.amplitude_v = dc.drive.amplitude_v;
-    g.frequency_hz = dc.drive.frequency_hz;
-    g.floor_rms = floors[c];
-    const double n = dc.measured_deg.size();
-    g.pi_before = d.base.case_pi[c];
-    g.pi_after = d.final_fit.case_pi[c];
-    g.rms_before = std::sqrt(g.pi_before / n);
-    g.rms_after = std::sqrt(g.pi_after / n);
-    const double floor_c = n * floors[c] * floors[c];
-    g.closed = g.pi_before > floor_c
-                   ? std::clamp(records::ClosedShare(g.pi_before, g.pi_after, floor_c), -9.0, 1.0)
-                   : 0.0;
-    d.gaps.push_back(g);
-  }
+  MeasureCaseGaps(m, floors, d);
   // What the base terms absorb: the best candidate of the first round against the base fit.
   const RoundResult& first = d.rounds.front();
   if (!first.candidates.empty() && first.candidates[0].fit.ok) {

@@ -227,124 +227,160 @@ double Knot(std::vector<double> x) {
   return best;
 }
 
-}  // namespace
-
-TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options) {
-  const auto t0 = std::chrono::steady_clock::now();
+// A parameter that half the training cases or more do not pin down (σ infinite or above a quarter
+// of its range: μ against δ on the fin, whose damping one frequency sees as one number) is held
+// at the median of its per-case values and the cases refitted: their estimates of the other
+// parameters then belong to one value of it, which a network can take. One at a time, the
+// loosest first (ties: the first): μ and δ are loose together, and holding μ pins δ down
+// (holding both left δ constant on trends-dev2, whose δ varies).
+void HoldLooseParameters(const HgannFitness& fitness, const std::vector<int>& training,
+                         const TrendSeedOptions& options, TrendSeeds& out) {
   const HgannFitnessConfig& cfg = fitness.config();
-  TrendSeeds out;
-  std::vector<int> training;
-  for (size_t i = 0; i < cfg.cases.size(); ++i)
-    if (cfg.cases[i].training) training.push_back(static_cast<int>(i));
-  out.cases = FitCases(fitness, training, options, &out.simulations);
-  // A parameter that half the training cases or more do not pin down (σ infinite or above a quarter
-  // of its range: μ against δ on the fin, whose damping one frequency sees as one number) is held
-  // at the median of its per-case values and the cases refitted: their estimates of the other
-  // parameters then belong to one value of it, which a network can take. One at a time, the
-  // loosest first (ties: the first): μ and δ are loose together, and holding μ pins δ down
-  // (holding both left δ constant on trends-dev2, whose δ varies).
-  {
-    Array7 hold;
-    hold.fill(std::nan(""));
-    for (int round = 0; round < kOut; ++round) {
-      int pick = -1, most = 0;
-      for (int k = 0; k < kOut; ++k) {
-        if (!std::isnan(hold[k])) continue;
-        const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
-        int n = 0, loose = 0;
-        for (const CaseEstimate& e : out.cases) {
-          if (!e.ok) continue;
-          ++n;
-          loose += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * width);
-        }
-        if (n > 0 && 2 * loose >= n && loose > most) pick = k, most = loose;
+  Array7 hold;
+  hold.fill(std::nan(""));
+  for (int round = 0; round < kOut; ++round) {
+    int pick = -1, most = 0;
+    for (int k = 0; k < kOut; ++k) {
+      if (!std::isnan(hold[k])) continue;
+      const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
+      int n = 0, loose = 0;
+      for (const CaseEstimate& e : out.cases) {
+        if (!e.ok) continue;
+        ++n;
+        loose += !(std::isfinite(e.sigma[k]) && e.sigma[k] <= 0.25 * width);
       }
-      if (pick < 0) break;
-      std::vector<double> values;
-      for (const CaseEstimate& e : out.cases)
-        if (e.ok) values.push_back(e.s[pick]);
-      std::sort(values.begin(), values.end());
-      const size_t n = values.size();
-      hold[pick] = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-      out.cases = FitCases(fitness, training, options, &out.simulations, &hold);
+      if (n > 0 && 2 * loose >= n && loose > most) pick = k, most = loose;
     }
+    if (pick < 0) break;
+    std::vector<double> values;
+    for (const CaseEstimate& e : out.cases)
+      if (e.ok) values.push_back(e.s[pick]);
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    hold[pick] = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    out.cases = FitCases(fitness, training, options, &out.simulations, &hold);
+  }
+}
+
+constexpr int kGrid = 5;  // the spread penalty's grid (HgannFitness::GridOf)
+
+/// What steps 2 and 3 share: the template network (the hidden layer of every seed, file comment,
+/// step 2, as the chromosome holds it), its hidden outputs at the training cases and over the
+/// spread penalty's grid, and the layout of θ = (c2_k, W2(0, k) … W2(h − 1, k)) for k = 0 … 6:
+/// (h + 1) · 7 coordinates.
+struct TrendBasis {
+  const HgannFitnessConfig& cfg;
+  const std::vector<int>& training;
+  const std::vector<CaseEstimate>& cases;
+  model::Network net0;
+  int h = 0, per = 0, n_theta = 0;
+  std::vector<std::vector<double>> b_train, b_grid;
+  std::vector<int> rows;  ///< the cases whose per-case fit succeeded
+
+  TrendBasis(const HgannFitnessConfig& config, const std::vector<int>& train,
+             const std::vector<CaseEstimate>& estimates)
+      : cfg(config), training(train), cases(estimates) {
+    const auto& norm = cfg.normalization;
+    std::vector<double> xv, xf;
+    for (int i : training) {
+      xv.push_back(norm.NormalizeAmplitude(cfg.cases[i].drive.amplitude_v));
+      xf.push_back(norm.NormalizeFrequency(cfg.cases[i].drive.frequency_hz));
+    }
+    net0 = model::DecodeChromosome(
+        model::EncodeChromosome(TrendNetwork(Knot(xv), Knot(xf), {}, {}, norm, cfg.ranges)), norm,
+        cfg.ranges);
+    h = net0.hidden();
+    for (int i : training)
+      b_train.push_back(Hidden(cfg.cases[i].drive.amplitude_v, cfg.cases[i].drive.frequency_hz));
+    for (int i = 0; i < kGrid; ++i)
+      for (int j = 0; j < kGrid; ++j)
+        b_grid.push_back(Hidden(
+            norm.amplitude_lo_v + (norm.amplitude_hi_v - norm.amplitude_lo_v) * i / (kGrid - 1),
+            norm.frequency_lo_hz +
+                (norm.frequency_hi_hz - norm.frequency_lo_hz) * j / (kGrid - 1)));
+    per = h + 1;
+    n_theta = per * kOut;
+    for (size_t m = 0; m < cases.size(); ++m)
+      if (cases[m].ok) rows.push_back(static_cast<int>(m));
   }
 
-  // The template: the hidden layer of every seed (file comment, step 2), as the chromosome holds
-  // it.
-  const auto& norm = cfg.normalization;
-  std::vector<double> xv, xf;
-  for (int i : training) {
-    xv.push_back(norm.NormalizeAmplitude(cfg.cases[i].drive.amplitude_v));
-    xf.push_back(norm.NormalizeFrequency(cfg.cases[i].drive.frequency_hz));
-  }
-  const model::Network net0 = model::DecodeChromosome(
-      model::EncodeChromosome(TrendNetwork(Knot(xv), Knot(xf), {}, {}, norm, cfg.ranges)), norm,
-      cfg.ranges);
-  const int h = net0.hidden();
-  const auto hidden_of = [&](double v, double f) {
+  std::vector<double> Hidden(double v, double f) const {
     const Eigen::VectorXd b = net0.Forward(v, f).b;
     return std::vector<double>(b.data(), b.data() + b.size());
-  };
-  std::vector<std::vector<double>> b_train, b_grid;
-  for (int i : training)
-    b_train.push_back(hidden_of(cfg.cases[i].drive.amplitude_v, cfg.cases[i].drive.frequency_hz));
-  constexpr int kGrid = 5;  // the spread penalty's grid (HgannFitness::GridOf)
-  for (int i = 0; i < kGrid; ++i)
-    for (int j = 0; j < kGrid; ++j)
-      b_grid.push_back(hidden_of(
-          norm.amplitude_lo_v + (norm.amplitude_hi_v - norm.amplitude_lo_v) * i / (kGrid - 1),
-          norm.frequency_lo_hz + (norm.frequency_hi_hz - norm.frequency_lo_hz) * j / (kGrid - 1)));
-  // θ = (c2_k, W2(0, k) … W2(h − 1, k)) for k = 0 … 6: (h + 1) · 7 coordinates.
-  const int per = h + 1, n_theta = per * kOut;
-  const auto s_of = [&](std::span<const double> th, const std::vector<double>& b, int k) {
+  }
+
+  /// Output k's scaled parameter under θ at hidden outputs b.
+  double S(std::span<const double> th, const std::vector<double>& b, int k) const {
     double n = th[per * k];
     for (int j = 0; j < h; ++j) n += th[per * k + 1 + j] * b[j];
     return Clamp01(n);
-  };
+  }
 
-  // Step 2a: least squares of the per-case s on (1, B) (minimum norm: the training cases are fewer
-  // than the coordinates), and on (1, x_V, x_f) alone (the hinges' weights 0).
-  std::vector<int> rows;
-  for (size_t m = 0; m < out.cases.size(); ++m)
-    if (out.cases[m].ok) rows.push_back(static_cast<int>(m));
-  const auto regress = [&](int columns) {
-    std::vector<double> th(n_theta, 0.0);
-    if (rows.empty()) {
-      const Array7 guess = {0.3, 0.2, 0.5, 0.5, 0.5, 0.05, 0.05};
-      for (int k = 0; k < kOut; ++k) th[per * k] = guess[k];
-      return th;
-    }
-    Eigen::MatrixXd a(static_cast<int>(rows.size()), 1 + columns),
-        y(static_cast<int>(rows.size()), kOut);
-    for (size_t r = 0; r < rows.size(); ++r) {
-      a(r, 0) = 1.0;
-      for (int j = 0; j < columns; ++j) a(r, 1 + j) = b_train[rows[r]][j];
-      for (int k = 0; k < kOut; ++k) y(r, k) = out.cases[rows[r]].s[k];
-    }
-    const Eigen::MatrixXd coef = a.completeOrthogonalDecomposition().solve(y);
-    for (int k = 0; k < kOut; ++k)
-      for (int j = 0; j <= columns; ++j) th[per * k + j] = std::clamp(coef(j, k), -3.0, 3.0);
+  /// Whether the loop's parameters under θ are bounded at every training case and grid point.
+  bool LoopBounded(const std::vector<double>& th) const {
+    for (const auto* points : {&b_train, &b_grid})
+      for (const std::vector<double>& b : *points) {
+        std::array<double, kOut> s{};
+        for (int k = 0; k < kOut; ++k) s[k] = S(th, b, k);
+        const auto p = ToParams(s, cfg.ranges);
+        model::BimorphParams bp;
+        bp.alpha = p.alpha;
+        bp.beta = p.beta;
+        bp.gamma = p.gamma;
+        if (!bp.HysteresisBounded()) return false;
+      }
+    return true;
+  }
+};
+
+// Step 2a: least squares of the per-case s on (1, B) (minimum norm: the training cases are fewer
+// than the coordinates), and on (1, x_V, x_f) alone (the hinges' weights 0).
+std::vector<double> Regress(const TrendBasis& t, int columns) {
+  std::vector<double> th(t.n_theta, 0.0);
+  const int per = t.per;
+  if (t.rows.empty()) {
+    const Array7 guess = {0.3, 0.2, 0.5, 0.5, 0.5, 0.05, 0.05};
+    for (int k = 0; k < kOut; ++k) th[per * k] = guess[k];
     return th;
-  };
-  const std::vector<double> regression = regress(h);
+  }
+  Eigen::MatrixXd a(static_cast<int>(t.rows.size()), 1 + columns),
+      y(static_cast<int>(t.rows.size()), kOut);
+  for (size_t r = 0; r < t.rows.size(); ++r) {
+    a(r, 0) = 1.0;
+    for (int j = 0; j < columns; ++j) a(r, 1 + j) = t.b_train[t.rows[r]][j];
+    for (int k = 0; k < kOut; ++k) y(r, k) = t.cases[t.rows[r]].s[k];
+  }
+  const Eigen::MatrixXd coef = a.completeOrthogonalDecomposition().solve(y);
+  for (int k = 0; k < kOut; ++k)
+    for (int j = 0; j <= columns; ++j) th[per * k + j] = std::clamp(coef(j, k), -3.0, 3.0);
+  return th;
+}
 
-  // Step 2a': per parameter, the structure its per-case estimates support (file comment): the
-  // hidden nodes of each candidate, simplest first; the lowest χ² + 2 p wins (ties: the flatter
-  // over the grid, then the simpler). (A leave-one-case-out choice was measured worse on both
-  // development benches: with four training cases every case left out is an extrapolation, and
-  // it chose constants where the trend is real: docs/performance.md.)
-  const bool hinge_v = h > 2 && net0.w1(0, 2) != 0, hinge_f = h > 2 && net0.w1(1, h - 1) != 0;
+/// The structured start (step 2a') and which of its coordinates are free.
+struct Structured {
+  std::vector<double> theta;
+  std::vector<char> free;
+};
+
+// Step 2a': per parameter, the structure its per-case estimates support (file comment): the
+// hidden nodes of each candidate, simplest first; the lowest χ² + 2 p wins (ties: the flatter
+// over the grid, then the simpler). (A leave-one-case-out choice was measured worse on both
+// development benches: with four training cases every case left out is an extrapolation, and
+// it chose constants where the trend is real: docs/performance.md.)
+Structured ChooseStructures(const TrendBasis& t, const std::vector<double>& regression) {
+  const int h = t.h, per = t.per;
+  const std::vector<int>& rows = t.rows;
+  const bool hinge_v = h > 2 && t.net0.w1(0, 2) != 0, hinge_f = h > 2 && t.net0.w1(1, h - 1) != 0;
   const int iv = 0, jf = 1, hv = hinge_v ? 2 : -1, hf = hinge_f ? h - 1 : -1;
   std::vector<std::vector<int>> structures = {{}, {iv}, {jf}, {iv, jf}};
   if (hv >= 0) structures.push_back({iv, hv});
   if (hf >= 0) structures.push_back({jf, hf});
   if (hv >= 0) structures.push_back({iv, jf, hv});
   if (hf >= 0) structures.push_back({iv, jf, hf});
-  std::vector<double> structured(n_theta, 0.0);
-  std::vector<char> free_theta(n_theta, 0);
+  std::vector<double> structured(t.n_theta, 0.0);
+  std::vector<char> free_theta(t.n_theta, 0);
   for (int k = 0; k < kOut; ++k) {
-    const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
+    const double width = t.cfg.ranges[k].upper - t.cfg.ranges[k].lower;
     double best_score = std::numeric_limits<double>::infinity(), best_var = 0;
     for (const std::vector<int>& cols : structures) {
       const int p = 1 + static_cast<int>(cols.size());
@@ -352,13 +388,13 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       Eigen::MatrixXd a(static_cast<int>(rows.size()), p);
       Eigen::VectorXd y(static_cast<int>(rows.size()));
       for (size_t r = 0; r < rows.size(); ++r) {
-        const CaseEstimate& e = out.cases[rows[r]];
+        const CaseEstimate& e = t.cases[rows[r]];
         const double sd = width > 0 && std::isfinite(e.sigma[k])
                               ? std::max(e.sigma[k] / width, kMinSigmaShare)
                               : 0.25;
         a(r, 0) = 1.0 / sd;
         for (int m = 0; m < static_cast<int>(cols.size()); ++m)
-          a(r, 1 + m) = b_train[rows[r]][cols[m]] / sd;
+          a(r, 1 + m) = t.b_train[rows[r]][cols[m]] / sd;
         y(r) = e.s[k] / sd;
       }
       if (rows.empty()) break;
@@ -369,11 +405,11 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       // what they say between and beyond them, and the flatter one is what λ asks for.
       double mean = 0, var = 0;
       std::vector<double> g;
-      for (const std::vector<double>& b : b_grid) {
+      for (const std::vector<double>& b : t.b_grid) {
         double v = coef(0);
         for (int m = 0; m < static_cast<int>(cols.size()); ++m) v += coef(1 + m) * b[cols[m]];
         g.push_back(Clamp01(v));
-        mean += g.back() / static_cast<double>(b_grid.size());
+        mean += g.back() / static_cast<double>(t.b_grid.size());
       }
       for (double v : g) var += (v - mean) * (v - mean);
       constexpr double kTie = 1e-6;
@@ -392,58 +428,77 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     }
     if (rows.empty()) structured[per * k] = regression[per * k], free_theta[per * k] = 1;
   }
-  std::vector<double> constant(n_theta, 0.0);
+  return {std::move(structured), std::move(free_theta)};
+}
+
+/// The per-case estimates' mean per parameter, as a θ of constants.
+std::vector<double> ConstantTheta(const TrendBasis& t, const std::vector<double>& regression) {
+  std::vector<double> constant(t.n_theta, 0.0);
   for (int k = 0; k < kOut; ++k) {
     double sum = 0;
-    for (int r : rows) sum += out.cases[r].s[k];
-    constant[per * k] = rows.empty() ? regression[per * k] : sum / static_cast<double>(rows.size());
+    for (int r : t.rows) sum += t.cases[r].s[k];
+    constant[t.per * k] =
+        t.rows.empty() ? regression[t.per * k] : sum / static_cast<double>(t.rows.size());
   }
-  // The loop's parameters (α, β, γ: outputs 2–4) held constant, at the per-case estimates' mean,
-  // when their shapes leave the loop unbounded at a training case or a point of the penalty's
-  // grid: the fitness refuses such a network and LM cannot start from it (trends-dev2, where the
-  // estimates' scatter along the α–β–γ valley gave β + γ < 0 at a corner of the box).
-  const auto loop_bounded = [&](const std::vector<double>& th) {
-    for (const auto* points : {&b_train, &b_grid})
-      for (const std::vector<double>& b : *points) {
-        std::array<double, kOut> s{};
-        for (int k = 0; k < kOut; ++k) s[k] = s_of(th, b, k);
-        const auto p = ToParams(s, cfg.ranges);
-        model::BimorphParams bp;
-        bp.alpha = p.alpha;
-        bp.beta = p.beta;
-        bp.gamma = p.gamma;
-        if (!bp.HysteresisBounded()) return false;
-      }
-    return true;
-  };
-  if (!loop_bounded(structured))
-    for (int k = 2; k <= 4; ++k)
-      for (int i = 0; i < per; ++i) {
-        structured[per * k + i] = i == 0 ? constant[per * k] : 0.0;
-        free_theta[per * k + i] = i == 0;
-      }
+  return constant;
+}
 
-  // Step 2b: the joint polish on the fitness's own cost: every training case's residuals and, with
-  // λ > 0, √(λ / 25) (s_k(g) − mean_g s_k) over the grid (Σ of their squares = λ Σ_k Var_grid s_k),
-  // a loop unbounded at a grid point refused as the fitness refuses it.
-  std::atomic<int64_t> sims{0};
-  const double grid_weight = std::sqrt(cfg.spread_penalty / (kGrid * kGrid));
-  const opt::ResidualFunction joint = [&](std::span<const double> th, std::vector<double>& r) {
+/// Step 2b: the joint polish on the fitness's own cost: every training case's residuals and, with
+/// λ > 0, √(λ / 25) (s_k(g) − mean_g s_k) over the grid (Σ of their squares = λ Σ_k Var_grid s_k),
+/// a loop unbounded at a grid point refused as the fitness refuses it. LM over the free
+/// coordinates only (the others stay 0).
+class JointPolish {
+ public:
+  JointPolish(const HgannFitness& fitness, const TrendBasis& t, const TrendSeedOptions& options)
+      : fitness_(fitness), t_(t), lo_(t.n_theta), hi_(t.n_theta) {
+    grid_weight_ = std::sqrt(t.cfg.spread_penalty / (kGrid * kGrid));
+    lm_.max_iterations = options.lm_iterations;
+    lm_.threads = std::max(1, options.threads);
+    for (int i = 0; i < t.n_theta; ++i) {
+      lo_[i] = i % t.per == 0 ? -2.0 : -3.0;
+      hi_[i] = i % t.per == 0 ? 2.0 : 3.0;
+    }
+  }
+
+  std::vector<double> operator()(const std::vector<double>& th0, const std::vector<char>& free) {
+    const int n_theta = t_.n_theta;
+    std::vector<int> index;
+    for (int i = 0; i < n_theta; ++i)
+      if (free[i]) index.push_back(i);
+    std::vector<double> x0, flo, fhi;
+    for (int i : index) x0.push_back(th0[i]), flo.push_back(lo_[i]), fhi.push_back(hi_[i]);
+    const opt::ResidualFunction reduced = [&](std::span<const double> x, std::vector<double>& r) {
+      std::vector<double> th(n_theta, 0.0);
+      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = x[m];
+      return Residuals(th, r);
+    };
+    const opt::LmResult r = opt::LevenbergMarquardt(reduced, x0, flo, fhi, lm_);
+    std::vector<double> th = th0;
+    if (std::isfinite(r.cost))
+      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = r.x[m];
+    return th;
+  }
+
+  int64_t simulations() const { return sims_.load(); }
+
+ private:
+  bool Residuals(std::span<const double> th, std::vector<double>& r) {
+    const HgannFitnessConfig& cfg = t_.cfg;
     r.clear();
     std::vector<double> angle;
-    for (size_t m = 0; m < training.size(); ++m) {
-      const HgannCase& c = cfg.cases[training[m]];
+    for (size_t m = 0; m < t_.training.size(); ++m) {
+      const HgannCase& c = cfg.cases[t_.training[m]];
       std::array<double, kOut> s{};
-      for (int k = 0; k < kOut; ++k) s[k] = s_of(th, b_train[m], k);
+      for (int k = 0; k < kOut; ++k) s[k] = t_.S(th, t_.b_train[m], k);
       angle.resize(c.measured_deg.size());
-      ++sims;
-      if (!fitness.SimulateCase(ToParams(s, cfg.ranges), c, angle)) return false;
+      ++sims_;
+      if (!fitness_.SimulateCase(ToParams(s, cfg.ranges), c, angle)) return false;
       for (size_t k = 0; k < angle.size(); ++k) r.push_back(angle[k] - c.measured_deg[k]);
     }
-    if (grid_weight > 0) {
-      std::vector<std::array<double, kOut>> g(b_grid.size());
-      for (size_t i = 0; i < b_grid.size(); ++i) {
-        for (int k = 0; k < kOut; ++k) g[i][k] = s_of(th, b_grid[i], k);
+    if (grid_weight_ > 0) {
+      std::vector<std::array<double, kOut>> g(t_.b_grid.size());
+      for (size_t i = 0; i < t_.b_grid.size(); ++i) {
+        for (int k = 0; k < kOut; ++k) g[i][k] = t_.S(th, t_.b_grid[i], k);
         model::BimorphParams bp;
         const auto p = ToParams(g[i], cfg.ranges);
         bp.alpha = p.alpha;
@@ -455,53 +510,62 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
         double mean = 0;
         for (const auto& x : g) mean += x[k];
         mean /= static_cast<double>(g.size());
-        for (const auto& x : g) r.push_back(grid_weight * (x[k] - mean));
+        for (const auto& x : g) r.push_back(grid_weight_ * (x[k] - mean));
       }
     }
     return true;
-  };
-  opt::LmOptions lm;
-  lm.max_iterations = options.lm_iterations;
-  lm.threads = std::max(1, options.threads);
-  std::vector<double> lo(n_theta), hi(n_theta);
-  for (int i = 0; i < n_theta; ++i) {
-    lo[i] = i % per == 0 ? -2.0 : -3.0;
-    hi[i] = i % per == 0 ? 2.0 : 3.0;
   }
-  // LM over the free coordinates only (the others stay 0).
-  const auto polish_free = [&](const std::vector<double>& th0, const std::vector<char>& free) {
-    std::vector<int> index;
-    for (int i = 0; i < n_theta; ++i)
-      if (free[i]) index.push_back(i);
-    std::vector<double> x0, flo, fhi;
-    for (int i : index) x0.push_back(th0[i]), flo.push_back(lo[i]), fhi.push_back(hi[i]);
-    const opt::ResidualFunction reduced = [&](std::span<const double> x, std::vector<double>& r) {
-      std::vector<double> th(n_theta, 0.0);
-      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = x[m];
-      return joint(th, r);
-    };
-    const opt::LmResult r = opt::LevenbergMarquardt(reduced, x0, flo, fhi, lm);
-    std::vector<double> th = th0;
-    if (std::isfinite(r.cost))
-      for (size_t m = 0; m < index.size(); ++m) th[index[m]] = r.x[m];
-    return th;
-  };
-  // The structured trend polished within its structure. Not the full one (every weight free): on
-  // trends-dev it reached a training cost 4 % lower and withheld PIs 10–100 times the truth's —
-  // four cases cannot tell a hinge in V from one in f, the per-case estimates' structure can.
-  const std::vector<double> from_structured = polish_free(structured, free_theta);
-  std::vector<char> free_constant(n_theta, 0);
-  for (int k = 0; k < kOut; ++k) free_constant[per * k] = 1;
-  const std::vector<double> from_constant = polish_free(constant, free_constant);
-  // The structure polished again from the polished constant (its slopes from 0): a start the
-  // fitness accepts, where the regression's own start may not be (a loop unbounded somewhere on
-  // the grid, which LM cannot start from).
-  const std::vector<double> from_both = polish_free(from_constant, free_theta);
-  out.simulations += sims.load();
 
-  // Step 3: the networks as chromosomes, their codes polished on the problem's own fitness.
+  const HgannFitness& fitness_;
+  const TrendBasis& t_;
+  std::atomic<int64_t> sims_{0};
+  double grid_weight_ = 0;
+  opt::LmOptions lm_;
+  std::vector<double> lo_, hi_;
+};
+
+struct Candidate {
+  opt::Genome genome;
+  double cost;
+  std::string name;
+};
+
+/// The candidate's weight codes moved by ±1, ±4, ±16 while one lowers the fitness's cost (at most
+/// three passes over the genes).
+void PolishCodes(const HgannFitness& fitness, const std::vector<int>& genes, size_t cases,
+                 Candidate& cand, int64_t& simulations) {
+  static constexpr int kSteps[] = {1, -1, 4, -4, 16, -16};
+  for (int pass = 0; pass < 3; ++pass) {
+    bool improved = false;
+    for (int gene : genes) {
+      for (int step : kSteps) {
+        const int code =
+            static_cast<int>(model::ReadGene(cand.genome.bits, gene, model::kWeightCodeBits));
+        const int next = code + step;
+        if (next < 0 || next > static_cast<int>(model::kMaxWeightCode)) continue;
+        opt::Genome trial = cand.genome;
+        model::WriteGene(trial.bits, gene, model::kWeightCodeBits, static_cast<uint32_t>(next));
+        const double cost = fitness.Evaluate(trial).cost;
+        simulations += static_cast<int64_t>(cases);
+        if (cost < cand.cost) {
+          cand.genome = std::move(trial);
+          cand.cost = cost;
+          improved = true;
+        }
+      }
+    }
+    if (!improved) break;
+  }
+}
+
+/// Step 3: the networks as chromosomes, their codes polished on the problem's own fitness; the
+/// distinct ones into `out`, lowest cost first.
+void AddSeeds(const HgannFitness& fitness, const TrendBasis& t, const TrendSeedOptions& options,
+              const std::pair<const std::vector<double>*, const char*> (&made)[4],
+              TrendSeeds& out) {
+  const int h = t.h, per = t.per;
   const auto encode = [&](const std::vector<double>& th) {
-    model::Network n = net0;
+    model::Network n = t.net0;
     for (int k = 0; k < kOut; ++k) {
       n.c2(k) = std::clamp(th[per * k], model::kWeightMin, model::kWeightMax);
       for (int j = 0; j < h; ++j)
@@ -509,17 +573,7 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     }
     return model::EncodeChromosome(n);
   };
-  struct Candidate {
-    opt::Genome genome;
-    double cost;
-    std::string name;
-  };
   std::vector<Candidate> candidates;
-  const std::pair<const std::vector<double>*, const char*> made[] = {
-      {&from_structured, "structured trend (polished)"},
-      {&from_both, "structured trend (polished from the constant)"},
-      {&structured, "structured trend (regression)"},
-      {&from_constant, "constant (polished)"}};
   std::vector<int> genes;
   for (int k = 0; k < kOut; ++k) {
     genes.push_back(model::C2Bit(k));
@@ -528,31 +582,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
   for (const auto& [theta, name] : made) {
     Candidate cand{opt::Genome{encode(*theta), {}}, 0, name};
     cand.cost = fitness.Evaluate(cand.genome).cost;
-    out.simulations += static_cast<int64_t>(training.size());
-    if (options.code_polish) {
-      static constexpr int kSteps[] = {1, -1, 4, -4, 16, -16};
-      for (int pass = 0; pass < 3; ++pass) {
-        bool improved = false;
-        for (int gene : genes) {
-          for (int step : kSteps) {
-            const int code =
-                static_cast<int>(model::ReadGene(cand.genome.bits, gene, model::kWeightCodeBits));
-            const int next = code + step;
-            if (next < 0 || next > static_cast<int>(model::kMaxWeightCode)) continue;
-            opt::Genome trial = cand.genome;
-            model::WriteGene(trial.bits, gene, model::kWeightCodeBits, static_cast<uint32_t>(next));
-            const double cost = fitness.Evaluate(trial).cost;
-            out.simulations += static_cast<int64_t>(training.size());
-            if (cost < cand.cost) {
-              cand.genome = std::move(trial);
-              cand.cost = cost;
-              improved = true;
-            }
-          }
-        }
-        if (!improved) break;
-      }
-    }
+    out.simulations += static_cast<int64_t>(t.training.size());
+    if (options.code_polish) PolishCodes(fitness, genes, t.training.size(), cand, out.simulations);
     candidates.push_back(std::move(cand));
   }
   std::stable_sort(candidates.begin(), candidates.end(),
@@ -566,6 +597,58 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     out.costs.push_back(c.cost);
     out.names.push_back(c.name);
   }
+}
+
+}  // namespace
+
+TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const HgannFitnessConfig& cfg = fitness.config();
+  TrendSeeds out;
+  std::vector<int> training;
+  for (size_t i = 0; i < cfg.cases.size(); ++i)
+    if (cfg.cases[i].training) training.push_back(static_cast<int>(i));
+  out.cases = FitCases(fitness, training, options, &out.simulations);
+  HoldLooseParameters(fitness, training, options, out);
+
+  const TrendBasis basis(cfg, training, out.cases);
+  const std::vector<double> regression = Regress(basis, basis.h);
+  Structured st = ChooseStructures(basis, regression);
+  std::vector<double>& structured = st.theta;
+  std::vector<char>& free_theta = st.free;
+  const std::vector<double> constant = ConstantTheta(basis, regression);
+  // The loop's parameters (α, β, γ: outputs 2–4) held constant, at the per-case estimates' mean,
+  // when their shapes leave the loop unbounded at a training case or a point of the penalty's
+  // grid: the fitness refuses such a network and LM cannot start from it (trends-dev2, where the
+  // estimates' scatter along the α–β–γ valley gave β + γ < 0 at a corner of the box).
+  const int per = basis.per;
+  if (!basis.LoopBounded(structured))
+    for (int k = 2; k <= 4; ++k)
+      for (int i = 0; i < per; ++i) {
+        structured[per * k + i] = i == 0 ? constant[per * k] : 0.0;
+        free_theta[per * k + i] = i == 0;
+      }
+
+  JointPolish polish_free(fitness, basis, options);
+  // The structured trend polished within its structure. Not the full one (every weight free): on
+  // trends-dev it reached a training cost 4 % lower and withheld PIs 10–100 times the truth's —
+  // four cases cannot tell a hinge in V from one in f, the per-case estimates' structure can.
+  const std::vector<double> from_structured = polish_free(structured, free_theta);
+  std::vector<char> free_constant(basis.n_theta, 0);
+  for (int k = 0; k < kOut; ++k) free_constant[per * k] = 1;
+  const std::vector<double> from_constant = polish_free(constant, free_constant);
+  // The structure polished again from the polished constant (its slopes from 0): a start the
+  // fitness accepts, where the regression's own start may not be (a loop unbounded somewhere on
+  // the grid, which LM cannot start from).
+  const std::vector<double> from_both = polish_free(from_constant, free_theta);
+  out.simulations += polish_free.simulations();
+
+  const std::pair<const std::vector<double>*, const char*> made[] = {
+      {&from_structured, "structured trend (polished)"},
+      {&from_both, "structured trend (polished from the constant)"},
+      {&structured, "structured trend (regression)"},
+      {&from_constant, "constant (polished)"}};
+  AddSeeds(fitness, basis, options, made, out);
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

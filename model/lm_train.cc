@@ -350,6 +350,108 @@ FitSetup SetUpFit(const RegressionData& data, int hidden, const SplitRatios& rat
 
 namespace {
 
+/// The stopping criteria, in trainlm's order (none: another epoch).
+std::optional<TrainTermination> StopReason(const LmOptions& opt, bool finite0, double mse,
+                                           int epoch, double elapsed, double scaled_gradient,
+                                           double mu, bool has_validation, int val_fail) {
+  std::optional<TrainTermination> stop;
+  if (!finite0)
+    stop = TrainTermination::kNonFinite;
+  else if (mse <= opt.goal)
+    stop = TrainTermination::kGoalMet;
+  else if (epoch >= opt.epochs)
+    stop = TrainTermination::kMaxEpochs;
+  else if (elapsed >= opt.time_limit_s)
+    stop = TrainTermination::kTimeLimit;
+  else if (scaled_gradient <= opt.min_grad)
+    stop = TrainTermination::kMinGradient;
+  else if (mu >= opt.mu_max)
+    stop = TrainTermination::kMuMax;
+  else if (opt.max_fail > 0 && has_validation && val_fail >= opt.max_fail)
+    stop = TrainTermination::kValidationStop;
+  return stop;
+}
+
+/// The weights of the lowest validation error so far, and the epochs since it last fell.
+struct BestOnValidation {
+  Eigen::VectorXd w;
+  double vperf;
+  int fails = 0;
+
+  void Update(double v, const Eigen::VectorXd& w_now, int epoch, TrainSummary& sum) {
+    if (v < vperf) {
+      vperf = v;
+      w = w_now;
+      sum.best_epoch = epoch;
+      fails = 0;
+    } else if (v > vperf) {
+      ++fails;
+    }
+  }
+};
+
+/// The solve's work space and the trial network of the damped steps.
+struct DampedStepScratch {
+  Eigen::MatrixXd work;
+  Eigen::VectorXd delta, rhs;
+  FeedForwardNet trial;
+};
+
+/// One epoch: damped Gauss–Newton steps until one lowers the objective (w, its ‖w‖², the
+/// objective and the network then updated, μ decreased) or μ exceeds μ_max.
+void DampedSteps(bool br, double alpha, double beta, const Eigen::MatrixXd& JJ,
+                 const Eigen::VectorXd& JE, const Subset& tr, const LmOptions& opt,
+                 DampedStepScratch& s, FeedForwardNet& net, Eigen::VectorXd& w, double& ssw,
+                 double& perf, double& mu, TrainSummary& sum) {
+  while (mu <= opt.mu_max) {
+    ++sum.solves;
+    bool ok;
+    if (br) {
+      s.rhs = beta * JE + alpha * w;
+      ok = DampedSolve(JJ, beta, mu + alpha, s.rhs, s.work, s.delta);
+    } else {
+      ok = DampedSolve(JJ, 1.0, mu, JE, s.work, s.delta);
+    }
+    if (ok) {
+      Eigen::VectorXd w2 = w + s.delta;
+      if (w2.allFinite()) {
+        s.trial.set_params(w2);
+        const double mse2 = Mse(s.trial, tr);
+        const double ssw2 = w2.squaredNorm();
+        const double perf2 = br ? beta * mse2 + alpha * ssw2 : mse2;
+        if (std::isfinite(perf2) && perf2 < perf) {
+          w = std::move(w2);
+          ssw = ssw2;
+          perf = perf2;
+          net.set_params(w);
+          mu = std::max(mu * opt.mu_dec, 1e-20);
+          break;
+        }
+      }
+    }
+    ++sum.rejected_steps;
+    mu *= opt.mu_inc;
+  }
+}
+
+/// The fits of the trained network on the training, validation and test rows and on every row.
+void SetSplitFits(const FeedForwardNet& net, const Eigen::MatrixXd& xn, const RegressionData& data,
+                  const DataSplit& split, TrainSummary& sum) {
+  const Eigen::VectorXd y_all = net.PredictNormalised(xn);
+  auto fit_rows = [&](const std::vector<int>& rows) {
+    Eigen::VectorXd y(static_cast<Eigen::Index>(rows.size())), t(y.size());
+    for (size_t i = 0; i < rows.size(); ++i) {
+      y(static_cast<Eigen::Index>(i)) = y_all(rows[i]);
+      t(static_cast<Eigen::Index>(i)) = data.t(rows[i]);
+    }
+    return FitOf(y, t);
+  };
+  sum.train = fit_rows(split.train);
+  sum.val = fit_rows(split.val);
+  sum.test = fit_rows(split.test);
+  sum.all = FitOf(y_all, data.t);
+}
+
 TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData& data,
                    const DataSplit& split, const LmOptions& opt, const EpochCallback& on_epoch) {
   const auto t0 = Clock::now();
@@ -378,10 +480,10 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
   TrainSummary sum;
   sum.method = method;
   NormalEquations ne(std::min(opt.block_rows, std::max(N, 1)), P);
-  Eigen::MatrixXd JJ(P, P), work(P, P);
-  Eigen::VectorXd JE(P), delta(P), rhs(P);
+  Eigen::MatrixXd JJ(P, P);
+  Eigen::VectorXd JE(P);
   Eigen::VectorXd w = net.params();
-  FeedForwardNet trial = net;
+  DampedStepScratch scratch{Eigen::MatrixXd(P, P), Eigen::VectorXd(P), Eigen::VectorXd(P), net};
   double mse = 0;
 
   auto form = [&](const FeedForwardNet& at) {
@@ -406,33 +508,18 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
     alpha = ssw == 0 ? 1.0 : gamma / (2.0 * ssw);
     perf = beta * mse + alpha * ssw;
   }
-  Eigen::VectorXd best_w = w;
-  double best_vperf = vperf;
-  int val_fail = 0;
+  BestOnValidation best{w, vperf};
   int epoch = 0;
 
   for (;;) {
     const double elapsed = Since(t0);
-    EpochRecord rec{epoch, elapsed, mse, vperf, tperf, mu, gradient, gamma, ssw, val_fail};
+    EpochRecord rec{epoch, elapsed, mse, vperf, tperf, mu, gradient, gamma, ssw, best.fails};
     if (opt.keep_history) sum.history.push_back(rec);
     if (on_epoch) on_epoch(rec);
 
     // Stopping criteria, in trainlm's order.
-    std::optional<TrainTermination> stop;
-    if (!finite0)
-      stop = TrainTermination::kNonFinite;
-    else if (mse <= opt.goal)
-      stop = TrainTermination::kGoalMet;
-    else if (epoch >= opt.epochs)
-      stop = TrainTermination::kMaxEpochs;
-    else if (elapsed >= opt.time_limit_s)
-      stop = TrainTermination::kTimeLimit;
-    else if (gradient * min_grad_scale <= opt.min_grad)
-      stop = TrainTermination::kMinGradient;
-    else if (mu >= opt.mu_max)
-      stop = TrainTermination::kMuMax;
-    else if (opt.max_fail > 0 && va.n() > 0 && val_fail >= opt.max_fail)
-      stop = TrainTermination::kValidationStop;
+    const std::optional<TrainTermination> stop = StopReason(
+        opt, finite0, mse, epoch, elapsed, gradient * min_grad_scale, mu, va.n() > 0, best.fails);
     if (stop) {
       sum.termination = *stop;
       sum.message = TerminationMessage(*stop);
@@ -440,35 +527,7 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
     }
 
     // One epoch: damped Gauss–Newton steps until one lowers the objective or μ exceeds μ_max.
-    while (mu <= opt.mu_max) {
-      ++sum.solves;
-      bool ok;
-      if (br) {
-        rhs = beta * JE + alpha * w;
-        ok = DampedSolve(JJ, beta, mu + alpha, rhs, work, delta);
-      } else {
-        ok = DampedSolve(JJ, 1.0, mu, JE, work, delta);
-      }
-      if (ok) {
-        Eigen::VectorXd w2 = w + delta;
-        if (w2.allFinite()) {
-          trial.set_params(w2);
-          const double mse2 = Mse(trial, tr);
-          const double ssw2 = w2.squaredNorm();
-          const double perf2 = br ? beta * mse2 + alpha * ssw2 : mse2;
-          if (std::isfinite(perf2) && perf2 < perf) {
-            w = std::move(w2);
-            ssw = ssw2;
-            perf = perf2;
-            net.set_params(w);
-            mu = std::max(mu * opt.mu_dec, 1e-20);
-            break;
-          }
-        }
-      }
-      ++sum.rejected_steps;
-      mu *= opt.mu_inc;
-    }
+    DampedSteps(br, alpha, beta, JJ, JE, tr, opt, scratch, net, w, ssw, perf, mu, sum);
     ++epoch;
     form(net);
     gradient = 2.0 * JE.norm();
@@ -483,20 +542,11 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
     }
     vperf = Mse(net, va);
     if (need_test) tperf = Mse(net, te);
-    if (track_best) {
-      if (vperf < best_vperf) {
-        best_vperf = vperf;
-        best_w = w;
-        sum.best_epoch = epoch;
-        val_fail = 0;
-      } else if (vperf > best_vperf) {
-        ++val_fail;
-      }
-    }
+    if (track_best) best.Update(vperf, w, epoch, sum);
   }
 
   if (track_best) {
-    net.set_params(best_w);
+    net.set_params(best.w);
   } else {
     sum.best_epoch = epoch;
   }
@@ -507,19 +557,7 @@ TrainSummary Train(TrainMethod method, FeedForwardNet& net, const RegressionData
   sum.alpha = alpha;
   sum.beta = beta;
   sum.ssw = net.params().squaredNorm();
-  const Eigen::VectorXd y_all = net.PredictNormalised(xn);
-  auto fit_rows = [&](const std::vector<int>& rows) {
-    Eigen::VectorXd y(static_cast<Eigen::Index>(rows.size())), t(y.size());
-    for (size_t i = 0; i < rows.size(); ++i) {
-      y(static_cast<Eigen::Index>(i)) = y_all(rows[i]);
-      t(static_cast<Eigen::Index>(i)) = data.t(rows[i]);
-    }
-    return FitOf(y, t);
-  };
-  sum.train = fit_rows(split.train);
-  sum.val = fit_rows(split.val);
-  sum.test = fit_rows(split.test);
-  sum.all = FitOf(y_all, data.t);
+  SetSplitFits(net, xn, data, split, sum);
   sum.wall_time_s = Since(t0);
   sum.cpu_time_s = ThreadCpuSeconds() - cpu0;
   return sum;

@@ -878,6 +878,40 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
   summary.steps = steps;
 }
 
+/// Pass 2 of the sampled path: the modes over a chunk's sub-steps in order, runs of sub-steps over
+/// the cached step in one loop (SampledRun), the others by GeneralSubstep; w_tip after each
+/// sample's last sub-step.
+static void SampledModes(const std::vector<modal::SampledSub>& subs, int n, int npad,
+                         const ModePoles* poles, modal::SubStep& sub, const double* wu,
+                         const double* wz, const SampledCoeffs& coeffs, double* x0, double* x1,
+                         double* xs) {
+  for (size_t i = 0; i < subs.size();) {
+    if (subs[i].cached) {
+      size_t j = i + 1;
+      while (j < subs.size() && subs[j].cached) ++j;
+      SampledRun(subs.data() + i, static_cast<long>(j - i), npad, x0, x1, coeffs, xs);
+      i = j;
+    } else {
+      const modal::SampledSub& st = subs[i];
+      GeneralSubstep(n, poles, nullptr, sub, wu, wz, x0, x1, st.tau, st.l, st.r, st.u_a, st.u_dot);
+      if (st.out >= 0) xs[st.out] = SumModes(npad, x0);
+      ++i;
+    }
+  }
+}
+
+/// Pass 3 of the sampled path: θ of the chunk's outputs up to the first non-finite w_tip (their
+/// count returned).
+static long SampledAngles(long len, const double* xs, double inv_len, double* tho) {
+  long n_ok = 0;
+  while (n_ok < len && std::isfinite(xs[n_ok])) ++n_ok;
+  if (!DegreesBatchExact(n_ok, xs, inv_len, tho)) {
+    for (long q = 0; q < n_ok; ++q)
+      if (!(std::abs(xs[q] * inv_len) < 0.125)) tho[q] = Degrees(xs[q], inv_len);
+  }
+  return n_ok;
+}
+
 template <class Sink>
 void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal& drive,
                                 ModalWorkspace& ws, Sink& sink, SimulationSummary& summary) const {
@@ -977,28 +1011,11 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
                                ws.wu_.data(),
                                {ws.d_[0].data(), ws.d_[1].data(), ws.d_[2].data(), ws.d_[3].data(),
                                 ws.d_[4].data(), ws.d_[5].data(), ws.d_[6].data()}};
-    for (size_t i = 0; i < subs.size();) {
-      if (subs[i].cached) {
-        size_t j = i + 1;
-        while (j < subs.size() && subs[j].cached) ++j;
-        SampledRun(subs.data() + i, static_cast<long>(j - i), npad_, x0, x1, coeffs, xs);
-        i = j;
-      } else {
-        const modal::SampledSub& st = subs[i];
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
-                       st.tau, st.l, st.r, st.u_a, st.u_dot);
-        if (st.out >= 0) xs[st.out] = SumModes(npad_, x0);
-        ++i;
-      }
-    }
+    SampledModes(subs, n_, npad_, ws.poles_.data(), ws.sub_, wu_.data(), wz_.data(), coeffs, x0, x1,
+                 xs);
     // Pass 3: the outputs up to the first non-finite w_tip.
     const long len = static_cast<long>(k - k0);
-    long n_ok = 0;
-    while (n_ok < len && std::isfinite(xs[n_ok])) ++n_ok;
-    if (!DegreesBatchExact(n_ok, xs, inv_len, tho)) {
-      for (long q = 0; q < n_ok; ++q)
-        if (!(std::abs(xs[q] * inv_len) < 0.125)) tho[q] = Degrees(xs[q], inv_len);
-    }
+    const long n_ok = SampledAngles(len, xs, inv_len, tho);
     y = BacklashRun(bl, tho, yo, n_ok, y);
     for (long q = 0; q < n_ok; ++q) {
       const size_t j = k0 + 1 + static_cast<size_t>(q);

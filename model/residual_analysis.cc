@@ -103,123 +103,132 @@ LoopFeatures ComputeLoop(std::span<const double> y, double amplitude_v, double f
   return lf;
 }
 
-ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
-  ResidualAnalysis out;
-  double total_pi = 0;
-  for (const ResidualCaseInput& in : inputs) {
-    const std::string where = "case " + std::to_string(in.number) + ": ";
-    const size_t n = in.measured.size();
-    if (n < 4 || in.model.size() != n)
-      throw InputError(where + "measured has " + std::to_string(n) + " samples, model " +
-                       std::to_string(in.model.size()) + " (need equal, >= 4)");
-    if (!(in.frequency_hz > 0) || !(in.sample_rate_hz > 0) || in.cycles < 1)
-      throw InputError(where + "frequency, sample rate and cycles must be > 0");
-    for (size_t k = 0; k < n; ++k)
-      if (!std::isfinite(in.measured[k]) || !std::isfinite(in.model[k]))
-        throw InputError(where + FieldError("sample", k, "non-finite value"));
+namespace {
 
-    CaseResidual c;
-    c.number = in.number;
-    c.training = in.training;
-    c.amplitude_v = in.amplitude_v;
-    c.frequency_hz = in.frequency_hz;
-    c.samples = static_cast<int>(n);
-    c.floor_rms = in.floor_rms_deg;
-    const double fs = in.sample_rate_hz, om = 2 * kPi * in.frequency_hz;
-    const size_t p = PerCycle(n, in.cycles);
-    std::vector<double> e(n);
-    double ymax = -INFINITY, ymin = INFINITY;
-    for (size_t k = 0; k < n; ++k) {
-      e[k] = in.measured[k] - in.model[k];
-      ymax = std::max(ymax, in.measured[k]);
-      ymin = std::min(ymin, in.measured[k]);
-    }
-    const double sat_tol = in.quantum_deg > 0 ? 0.5 * in.quantum_deg : 1e-9;
-    for (size_t k = 0; k < n; ++k) {
-      const double ek = e[k];
-      c.pi += ek * ek;
-      c.max_abs = std::max(c.max_abs, std::abs(ek));
-      const double t = static_cast<double>(k) / fs;
-      double phase = std::fmod(360.0 * in.frequency_hz * t, 360.0);
-      if (phase < 0) phase += 360.0;
-      const bool later = p == 0 || k >= p;
-      (later ? c.later_cycles : c.first_cycle).Add(ek);
-      if (!later) continue;
-      c.phase[std::min(kPhaseBins - 1, static_cast<int>(phase / (360.0 / kPhaseBins)))].Add(ek);
-      (std::cos(om * t) > 0 ? c.rising : c.falling).Add(ek);
-      if (std::abs(phase - 90.0) < kReversalHalfWidthDeg ||
-          std::abs(phase - 270.0) < kReversalHalfWidthDeg)
-        c.near_reversal.Add(ek);
-      if (in.measured[k] >= ymax - sat_tol || in.measured[k] <= ymin + sat_tol)
-        c.in_saturation.Add(ek);
-    }
-    c.rms = std::sqrt(c.pi / n);
-    c.rms_over_floor = c.floor_rms > 0 ? c.rms / c.floor_rms : INFINITY;
-    for (auto& b : c.phase) b.Finish();
-    for (BinStat* b : {&c.rising, &c.falling, &c.near_reversal, &c.in_saturation, &c.first_cycle,
-                       &c.later_cycles})
-      b->Finish();
-    // Time: cycle means, trend over the later cycles.
-    for (int cy = 0; cy < in.cycles && p > 0; ++cy) {
-      double s = 0;
-      for (size_t k = cy * p; k < (cy + 1) * p; ++k) s += e[k];
-      c.cycle_mean.push_back(s / p);
-    }
-    const size_t a = in.cycles >= 2 ? p : 0, b = in.cycles >= 1 && p > 0 ? in.cycles * p : n;
-    {
-      double st = 0, se = 0, stt = 0, ste = 0;
-      const double m = static_cast<double>(b - a);
-      for (size_t k = a; k < b; ++k) {
-        const double t = static_cast<double>(k) / fs;
-        st += t;
-        se += e[k];
-        stt += t * t;
-        ste += t * e[k];
-      }
-      const double sxx = stt - st * st / m;
-      if (sxx > 0) {
-        c.trend_deg_per_s = (ste - st * se / m) / sxx;
-        c.trend_se = c.floor_rms / std::sqrt(sxx);
-      }
-    }
-    // Frequency: harmonics over the later cycles, low-frequency content.
-    if (b > a + 4) {
-      double mean = 0;
-      for (size_t k = a; k < b; ++k) mean += e[k];
-      mean /= static_cast<double>(b - a);
-      c.harmonic[0] = std::abs(mean);
-      double odd = 0, even = 0;
-      for (int k = 1; k <= kHarmonics; ++k) {
-        c.harmonic[k] = std::abs(Coef(e, a, b, om, fs, k));
-        (k % 2 ? odd : even) += 0.5 * c.harmonic[k] * c.harmonic[k];
-      }
-      c.odd_rms = std::sqrt(odd);
-      c.even_rms = std::sqrt(even);
-      c.harmonic_noise = 2.0 * c.floor_rms / std::sqrt(static_cast<double>(b - a));
-    }
-    if (p > 0 && n >= p) {
-      // One-cycle moving average (valid part): removes every harmonic of f, keeps DC and trends.
-      double s = 0, s2 = 0;
-      int cnt = 0;
-      for (size_t k = 0; k < p; ++k) s += e[k];
-      for (size_t k = p;; ++k) {
-        const double avg = s / p;
-        s2 += avg * avg;
-        ++cnt;
-        if (k >= n) break;
-        s += e[k] - e[k - p];
-      }
-      c.low_rms = std::sqrt(s2 / cnt);
-    }
-    c.measured_loop =
-        ComputeLoop(in.measured, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
-    c.model_loop =
-        ComputeLoop(in.model, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
-    total_pi += c.pi;
-    out.cases.push_back(std::move(c));
+/// Time (cycle means, the trend over the later cycles) and frequency (harmonics over the later
+/// cycles, low-frequency content) of a case's residuals e.
+void AddTimeAndFrequency(const ResidualCaseInput& in, const std::vector<double>& e, size_t p,
+                         CaseResidual& c) {
+  const size_t n = e.size();
+  const double fs = in.sample_rate_hz, om = 2 * kPi * in.frequency_hz;
+  for (int cy = 0; cy < in.cycles && p > 0; ++cy) {
+    double s = 0;
+    for (size_t k = cy * p; k < (cy + 1) * p; ++k) s += e[k];
+    c.cycle_mean.push_back(s / p);
   }
+  const size_t a = in.cycles >= 2 ? p : 0, b = in.cycles >= 1 && p > 0 ? in.cycles * p : n;
+  {
+    double st = 0, se = 0, stt = 0, ste = 0;
+    const double m = static_cast<double>(b - a);
+    for (size_t k = a; k < b; ++k) {
+      const double t = static_cast<double>(k) / fs;
+      st += t;
+      se += e[k];
+      stt += t * t;
+      ste += t * e[k];
+    }
+    const double sxx = stt - st * st / m;
+    if (sxx > 0) {
+      c.trend_deg_per_s = (ste - st * se / m) / sxx;
+      c.trend_se = c.floor_rms / std::sqrt(sxx);
+    }
+  }
+  // Frequency: harmonics over the later cycles, low-frequency content.
+  if (b > a + 4) {
+    double mean = 0;
+    for (size_t k = a; k < b; ++k) mean += e[k];
+    mean /= static_cast<double>(b - a);
+    c.harmonic[0] = std::abs(mean);
+    double odd = 0, even = 0;
+    for (int k = 1; k <= kHarmonics; ++k) {
+      c.harmonic[k] = std::abs(Coef(e, a, b, om, fs, k));
+      (k % 2 ? odd : even) += 0.5 * c.harmonic[k] * c.harmonic[k];
+    }
+    c.odd_rms = std::sqrt(odd);
+    c.even_rms = std::sqrt(even);
+    c.harmonic_noise = 2.0 * c.floor_rms / std::sqrt(static_cast<double>(b - a));
+  }
+  if (p > 0 && n >= p) {
+    // One-cycle moving average (valid part): removes every harmonic of f, keeps DC and trends.
+    double s = 0, s2 = 0;
+    int cnt = 0;
+    for (size_t k = 0; k < p; ++k) s += e[k];
+    for (size_t k = p;; ++k) {
+      const double avg = s / p;
+      s2 += avg * avg;
+      ++cnt;
+      if (k >= n) break;
+      s += e[k] - e[k - p];
+    }
+    c.low_rms = std::sqrt(s2 / cnt);
+  }
+}
 
-  // Groups.
+/// One case's residuals: their statistics over the cycle, in time and in frequency, and both
+/// loops.
+CaseResidual AnalyseCase(const ResidualCaseInput& in) {
+  const std::string where = "case " + std::to_string(in.number) + ": ";
+  const size_t n = in.measured.size();
+  if (n < 4 || in.model.size() != n)
+    throw InputError(where + "measured has " + std::to_string(n) + " samples, model " +
+                     std::to_string(in.model.size()) + " (need equal, >= 4)");
+  if (!(in.frequency_hz > 0) || !(in.sample_rate_hz > 0) || in.cycles < 1)
+    throw InputError(where + "frequency, sample rate and cycles must be > 0");
+  for (size_t k = 0; k < n; ++k)
+    if (!std::isfinite(in.measured[k]) || !std::isfinite(in.model[k]))
+      throw InputError(where + FieldError("sample", k, "non-finite value"));
+
+  CaseResidual c;
+  c.number = in.number;
+  c.training = in.training;
+  c.amplitude_v = in.amplitude_v;
+  c.frequency_hz = in.frequency_hz;
+  c.samples = static_cast<int>(n);
+  c.floor_rms = in.floor_rms_deg;
+  const double fs = in.sample_rate_hz, om = 2 * kPi * in.frequency_hz;
+  const size_t p = PerCycle(n, in.cycles);
+  std::vector<double> e(n);
+  double ymax = -INFINITY, ymin = INFINITY;
+  for (size_t k = 0; k < n; ++k) {
+    e[k] = in.measured[k] - in.model[k];
+    ymax = std::max(ymax, in.measured[k]);
+    ymin = std::min(ymin, in.measured[k]);
+  }
+  const double sat_tol = in.quantum_deg > 0 ? 0.5 * in.quantum_deg : 1e-9;
+  for (size_t k = 0; k < n; ++k) {
+    const double ek = e[k];
+    c.pi += ek * ek;
+    c.max_abs = std::max(c.max_abs, std::abs(ek));
+    const double t = static_cast<double>(k) / fs;
+    double phase = std::fmod(360.0 * in.frequency_hz * t, 360.0);
+    if (phase < 0) phase += 360.0;
+    const bool later = p == 0 || k >= p;
+    (later ? c.later_cycles : c.first_cycle).Add(ek);
+    if (!later) continue;
+    c.phase[std::min(kPhaseBins - 1, static_cast<int>(phase / (360.0 / kPhaseBins)))].Add(ek);
+    (std::cos(om * t) > 0 ? c.rising : c.falling).Add(ek);
+    if (std::abs(phase - 90.0) < kReversalHalfWidthDeg ||
+        std::abs(phase - 270.0) < kReversalHalfWidthDeg)
+      c.near_reversal.Add(ek);
+    if (in.measured[k] >= ymax - sat_tol || in.measured[k] <= ymin + sat_tol)
+      c.in_saturation.Add(ek);
+  }
+  c.rms = std::sqrt(c.pi / n);
+  c.rms_over_floor = c.floor_rms > 0 ? c.rms / c.floor_rms : INFINITY;
+  for (auto& b : c.phase) b.Finish();
+  for (BinStat* b :
+       {&c.rising, &c.falling, &c.near_reversal, &c.in_saturation, &c.first_cycle, &c.later_cycles})
+    b->Finish();
+  AddTimeAndFrequency(in, e, p, c);
+  c.measured_loop =
+      ComputeLoop(in.measured, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
+  c.model_loop =
+      ComputeLoop(in.model, in.amplitude_v, in.frequency_hz, fs, in.cycles, in.quantum_deg);
+  return c;
+}
+
+/// The cases' shares and the training and withheld groups.
+void MergeGroups(double total_pi, ResidualAnalysis& out) {
   for (CaseResidual& c : out.cases) {
     c.share = total_pi > 0 ? c.pi / total_pi : 0;
     GroupResidual& g = c.training ? out.training : out.withheld;
@@ -252,8 +261,10 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
     g->low_rms = std::sqrt(g->low_rms / g->cases);
     g->harmonic_noise = std::sqrt(g->harmonic_noise / g->cases);
   }
+}
 
-  // Findings, against the floor (withheld cases first: they carry the verdict).
+/// Findings, against the floor (withheld cases first: they carry the verdict).
+void AddFindings(ResidualAnalysis& out) {
   auto& f = out.findings;
   for (const auto* gp : {&out.withheld, &out.training}) {
     const GroupResidual& g = *gp;
@@ -296,6 +307,20 @@ ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
               "%.4f vs model %.4f deg",
               lag_m / cnt, lag_s / cnt, width_m / cnt, width_s / cnt));
   }
+}
+
+}  // namespace
+
+ResidualAnalysis AnalyseResiduals(std::span<const ResidualCaseInput> inputs) {
+  ResidualAnalysis out;
+  double total_pi = 0;
+  for (const ResidualCaseInput& in : inputs) {
+    CaseResidual c = AnalyseCase(in);
+    total_pi += c.pi;
+    out.cases.push_back(std::move(c));
+  }
+  MergeGroups(total_pi, out);
+  AddFindings(out);
   return out;
 }
 

@@ -192,13 +192,8 @@ BatchResidualFunction UnitResiduals(const ParameterMap& map, BatchEvaluator& eva
   };
 }
 
-}  // namespace
-
-FitResult Fit(const FitProblem& problem, const FitOptions& o) {
-  const auto start = std::chrono::steady_clock::now();
-  if (!problem.map) throw InputError("fit: no parameter map");
-  const ParameterMap& map = *problem.map;
-  const int n = map.size();
+/// The fit's problem and options checked, each bad field named.
+void ValidateFit(const FitProblem& problem, const FitOptions& o, int n) {
   if (n < 1) throw InputError(FieldError("parameters", n, "must be >= 1"));
   if (o.polish) ThrowIfError(o.lm.Validate());
   if (o.threads < 1) throw InputError(FieldError("threads", o.threads, "must be >= 1"));
@@ -224,6 +219,78 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     throw InputError(FieldError("basin_margin", o.basin_margin, "must be finite and >= 0"));
   if (o.uncertainty && !problem.physical_residuals)
     throw InputError("fit: the uncertainty table needs the physical residuals");
+}
+
+/// The other repetitions' bests as starts of the polish, cheapest first (ties: the lower
+/// repetition), distinct points, at most `count`.
+void AddRepetitionStarts(const ParameterMap& map, const SearchResult& sr, int count,
+                         std::vector<std::vector<double>>& starts,
+                         std::vector<int>& start_repetition) {
+  const int n = map.size();
+  const ParamBox box = map.physical_genomes() ? map.SearchBox() : UnitBox(map);
+  std::vector<int> order;
+  for (int r = 0; r < static_cast<int>(sr.repetition_best.size()); ++r)
+    if (r != sr.best_repetition && std::isfinite(sr.repetition_costs[static_cast<size_t>(r)]))
+      order.push_back(r);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+    return sr.repetition_costs[static_cast<size_t>(a)] <
+           sr.repetition_costs[static_cast<size_t>(b)];
+  });
+  int added = 0;
+  for (int r : order) {
+    if (added == count) break;
+    std::vector<double> u(box.size());
+    box.ToUnit(sr.repetition_best[static_cast<size_t>(r)].data(), u.data());
+    const bool seen = std::any_of(starts.begin(), starts.end(), [&](const std::vector<double>& s) {
+      for (int i = 0; i < n; ++i)
+        if (std::abs(s[static_cast<size_t>(i)] - u[static_cast<size_t>(i)]) > 1e-3) return false;
+      return true;
+    });
+    if (seen) continue;
+    starts.push_back(std::move(u));
+    start_repetition.push_back(r);
+    ++added;
+  }
+}
+
+/// LM from every start, in the unit box: concurrently (each polish its own residual evaluator)
+/// when the options allow, else one after another through one evaluator.
+std::vector<LmResult> Polish(const FitProblem& problem, const FitOptions& o,
+                             const std::vector<std::vector<double>>& starts) {
+  const ParameterMap& map = *problem.map;
+  const int n = map.size();
+  const std::vector<double> lo(n, 0.0), hi(n, 1.0);
+  std::vector<LmResult> results(starts.size());
+  if (o.concurrent_polishes && o.threads > 1 && starts.size() > 1) {
+    std::vector<std::exception_ptr> errors(starts.size());
+    ParallelFor(static_cast<int>(starts.size()), o.threads, [&](int s) {
+      try {
+        std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+        results[static_cast<size_t>(s)] = LevenbergMarquardt(
+            UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
+      } catch (...) {
+        errors[static_cast<size_t>(s)] = std::current_exception();
+      }
+    });
+    for (const std::exception_ptr& e : errors)
+      if (e) std::rethrow_exception(e);
+  } else {  // one evaluator for every polish: a service evaluator opens a session per evaluator
+    std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
+    const BatchResidualFunction f = UnitResiduals(map, *rev);
+    for (size_t s = 0; s < starts.size(); ++s)
+      results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
+  }
+  return results;
+}
+
+}  // namespace
+
+FitResult Fit(const FitProblem& problem, const FitOptions& o) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!problem.map) throw InputError("fit: no parameter map");
+  const ParameterMap& map = *problem.map;
+  const int n = map.size();
+  ValidateFit(problem, o, n);
 
   FitResult fit;
   std::vector<double> best_unit;  // where the fit stands, unit coordinates
@@ -253,56 +320,9 @@ FitResult Fit(const FitProblem& problem, const FitOptions& o) {
     start_repetition.resize(starts.size(), -1);
     first_basin = starts.size();
     if (fit.searched && o.polish_repetitions > 0) {
-      // The other repetitions' bests, cheapest first (ties: the lower repetition), distinct points.
-      const ParamBox box = map.physical_genomes() ? map.SearchBox() : UnitBox(map);
-      const SearchResult& sr = fit.search;
-      std::vector<int> order;
-      for (int r = 0; r < static_cast<int>(sr.repetition_best.size()); ++r)
-        if (r != sr.best_repetition && std::isfinite(sr.repetition_costs[static_cast<size_t>(r)]))
-          order.push_back(r);
-      std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
-        return sr.repetition_costs[static_cast<size_t>(a)] <
-               sr.repetition_costs[static_cast<size_t>(b)];
-      });
-      int added = 0;
-      for (int r : order) {
-        if (added == o.polish_repetitions) break;
-        std::vector<double> u(box.size());
-        box.ToUnit(sr.repetition_best[static_cast<size_t>(r)].data(), u.data());
-        const bool seen =
-            std::any_of(starts.begin(), starts.end(), [&](const std::vector<double>& s) {
-              for (int i = 0; i < n; ++i)
-                if (std::abs(s[static_cast<size_t>(i)] - u[static_cast<size_t>(i)]) > 1e-3)
-                  return false;
-              return true;
-            });
-        if (seen) continue;
-        starts.push_back(std::move(u));
-        start_repetition.push_back(r);
-        ++added;
-      }
+      AddRepetitionStarts(map, fit.search, o.polish_repetitions, starts, start_repetition);
     }
-    const std::vector<double> lo(n, 0.0), hi(n, 1.0);
-    std::vector<LmResult> results(starts.size());
-    if (o.concurrent_polishes && o.threads > 1 && starts.size() > 1) {
-      std::vector<std::exception_ptr> errors(starts.size());
-      ParallelFor(static_cast<int>(starts.size()), o.threads, [&](int s) {
-        try {
-          std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
-          results[static_cast<size_t>(s)] = LevenbergMarquardt(
-              UnitResiduals(map, *rev), starts[static_cast<size_t>(s)], lo, hi, o.lm);
-        } catch (...) {
-          errors[static_cast<size_t>(s)] = std::current_exception();
-        }
-      });
-      for (const std::exception_ptr& e : errors)
-        if (e) std::rethrow_exception(e);
-    } else {  // one evaluator for every polish: a service evaluator opens a session per evaluator
-      std::unique_ptr<BatchEvaluator> rev = problem.residual_evaluator();
-      const BatchResidualFunction f = UnitResiduals(map, *rev);
-      for (size_t s = 0; s < starts.size(); ++s)
-        results[s] = LevenbergMarquardt(f, starts[s], lo, hi, o.lm);
-    }
+    std::vector<LmResult> results = Polish(problem, o, starts);
     bool polished = false;
     for (size_t s = 0; s < starts.size(); ++s) {
       LmResult& r = results[s];

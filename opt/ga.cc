@@ -579,6 +579,38 @@ std::vector<int> GeneticAlgorithm::Migrate(const std::vector<std::vector<int>>& 
   return taken;
 }
 
+namespace {
+
+/// A generation's evaluations, failures and their reasons counted into its summary.
+void CountFailures(const std::vector<FitnessResult>& ev, GenerationSummary& s) {
+  s.evaluations += static_cast<int>(ev.size());
+  for (const FitnessResult& f : ev) {
+    if (f.status == FitnessStatus::kOk) continue;
+    ++s.failures;
+    (f.status == FitnessStatus::kPenalized ? s.penalized : s.errors)++;
+    ++s.failure_reasons[f.reason];
+  }
+}
+
+/// Mean, median and worst cost over every island's population.
+void SetCostSpread(const std::vector<IslandState>& islands, int k_islands, GenerationSummary& s) {
+  std::vector<double> costs;
+  for (const IslandState& is : islands)
+    for (const FitnessResult& f : is.fitness) costs.push_back(f.cost);
+  if (k_islands > 1) std::sort(costs.begin(), costs.end());  // one island is ranked already
+  const int n = static_cast<int>(costs.size());
+  s.worst_cost = costs.back();
+  double mean = 0;
+  for (double c : costs) mean += c / n;  // cannot overflow for finite costs
+  s.mean_cost = std::isfinite(mean) ? mean : std::numeric_limits<double>::max();
+  // The costs are sorted: the median is their middle (the mean of the two middle costs).
+  const double lo = costs[(n - 1) / 2], hi = costs[n / 2];
+  const double median = lo + (hi - lo) / 2;
+  s.median_cost = std::isfinite(median) ? median : std::numeric_limits<double>::max();
+}
+
+}  // namespace
+
 const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
                                                   std::vector<std::vector<FitnessResult>> evaluated,
                                                   double start_s) {
@@ -588,13 +620,7 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
   for (int k = 0; k < k_islands; ++k) {
     Draft& d = drafts[k];
     const std::vector<FitnessResult>& ev = evaluated[k];
-    s.evaluations += static_cast<int>(ev.size());
-    for (const FitnessResult& f : ev) {
-      if (f.status == FitnessStatus::kOk) continue;
-      ++s.failures;
-      (f.status == FitnessStatus::kPenalized ? s.penalized : s.errors)++;
-      ++s.failure_reasons[f.reason];
-    }
+    CountFailures(ev, s);
     IslandState& is = state_.islands[k];
     if (d.elite >
         0) {  // the elite, left in the state while the generation was evaluated, goes first
@@ -664,20 +690,7 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
   s.best_cost = top.cost;
   s.best_island = best_island;
   if (describer_) s.best_description = describer_(bi.population.front());
-  // Mean, median and worst over every island's population.
-  std::vector<double> costs;
-  for (const IslandState& is : state_.islands)
-    for (const FitnessResult& f : is.fitness) costs.push_back(f.cost);
-  if (k_islands > 1) std::sort(costs.begin(), costs.end());  // one island is ranked already
-  const int n = static_cast<int>(costs.size());
-  s.worst_cost = costs.back();
-  double mean = 0;
-  for (double c : costs) mean += c / n;  // cannot overflow for finite costs
-  s.mean_cost = std::isfinite(mean) ? mean : std::numeric_limits<double>::max();
-  // The costs are sorted: the median is their middle (the mean of the two middle costs).
-  const double lo = costs[(n - 1) / 2], hi = costs[n / 2];
-  const double median = lo + (hi - lo) / 2;
-  s.median_cost = std::isfinite(median) ? median : std::numeric_limits<double>::max();
+  SetCostSpread(state_.islands, k_islands, s);
 
   std::vector<int> taken(k_islands, 0);
   if (options_.migrates() && s.generation > 0 && s.generation % options_.migration_interval == 0) {

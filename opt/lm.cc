@@ -143,6 +143,43 @@ LmResult LevenbergMarquardt(const ResidualFunction& f, std::vector<double> x,
   return LevenbergMarquardt(ParallelResiduals(f, o.threads), std::move(x), lower, upper, o);
 }
 
+namespace {
+
+/// The free variables: not held at a bound by a gradient pointing out of the box.
+std::vector<int> FreeVariables(const std::vector<double>& x, const Eigen::VectorXd& g,
+                               std::span<const double> lower, std::span<const double> upper) {
+  std::vector<int> free;
+  for (int j = 0; j < static_cast<int>(x.size()); ++j) {
+    const bool at_lo = x[j] <= lower[j] && g[j] > 0;
+    const bool at_hi = x[j] >= upper[j] && g[j] < 0;
+    if (!at_lo && !at_hi) free.push_back(j);
+  }
+  return free;
+}
+
+/// JᵀJ and Jᵀr over the free variables, with the damping's diagonal (JᵀJ's, floored at 1e-12 of
+/// its largest).
+struct FreeSystem {
+  Eigen::MatrixXd a;
+  Eigen::VectorXd g, d;
+
+  FreeSystem(const Eigen::MatrixXd& jtj, const Eigen::VectorXd& jtr, const std::vector<int>& free) {
+    const int nf = static_cast<int>(free.size());
+    a.resize(nf, nf);
+    g.resize(nf);
+    d.resize(nf);
+    double dmax = 0;
+    for (int i = 0; i < nf; ++i) dmax = std::max(dmax, jtj(free[i], free[i]));
+    for (int i = 0; i < nf; ++i) {
+      g[i] = jtr[free[i]];
+      d[i] = std::max(jtj(free[i], free[i]), 1e-12 * dmax + 1e-300);
+      for (int k = 0; k < nf; ++k) a(i, k) = jtj(free[i], free[k]);
+    }
+  }
+};
+
+}  // namespace
+
 LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double> x,
                             std::span<const double> lower, std::span<const double> upper,
                             const LmOptions& o) {
@@ -194,13 +231,7 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
                                                static_cast<Eigen::Index>(res.r.size()));
     const Eigen::MatrixXd a = res.jacobian.transpose() * res.jacobian;
     const Eigen::VectorXd g = res.jacobian.transpose() * rv;
-    // Free variables: not held at a bound by a gradient pointing out of the box.
-    std::vector<int> free;
-    for (int j = 0; j < n; ++j) {
-      const bool at_lo = res.x[j] <= lower[j] && g[j] > 0;
-      const bool at_hi = res.x[j] >= upper[j] && g[j] < 0;
-      if (!at_lo && !at_hi) free.push_back(j);
-    }
+    const std::vector<int> free = FreeVariables(res.x, g, lower, upper);
     if (free.empty()) {
       res.converged = true;
       res.message = "every parameter held at a bound";
@@ -208,15 +239,9 @@ LmResult LevenbergMarquardt(const BatchResidualFunction& fb, std::vector<double>
       break;
     }
     const int nf = static_cast<int>(free.size());
-    Eigen::MatrixXd af(nf, nf);
-    Eigen::VectorXd gf(nf), df(nf);
-    double dmax = 0;
-    for (int i = 0; i < nf; ++i) dmax = std::max(dmax, a(free[i], free[i]));
-    for (int i = 0; i < nf; ++i) {
-      gf[i] = g[free[i]];
-      df[i] = std::max(a(free[i], free[i]), 1e-12 * dmax + 1e-300);
-      for (int k = 0; k < nf; ++k) af(i, k) = a(free[i], free[k]);
-    }
+    const FreeSystem sys(a, g, free);
+    const Eigen::MatrixXd& af = sys.a;
+    const Eigen::VectorXd &gf = sys.g, &df = sys.d;
     bool accepted = false, done = false;
     while (!accepted) {
       Eigen::MatrixXd m = af;

@@ -278,6 +278,67 @@ bool ExcitationReport::HasGap() const {
                      [](const WithheldExcitation& w) { return !w.needs.empty(); });
 }
 
+namespace {
+
+/// The training excitation's summary, one line per aspect: the drive, the reversals, the rates,
+/// the rate span and the duration against the creep times.
+std::vector<std::string> TrainingLines(const DriveExcitation& t, const std::string& unit,
+                                       const ExcitationOptions& o) {
+  std::vector<std::string> lines;
+  {
+    std::ostringstream s;
+    s << "drive " << Num(t.u_min, 4) << " … " << Num(t.u_max, 4) << " " << unit << " over "
+      << Num(t.duration_s) << " s in " << t.records << " training record(s)";
+    lines.push_back(s.str());
+  }
+  {
+    std::ostringstream s;
+    s << t.turns << " reversals, turning at " << BinRanges(Present(t.level_weight))
+      << " of the range; reversal depths (rainflow, share of the range): ";
+    std::string depths;
+    for (int b = o.bins - 1; b >= 0; --b) {
+      const double w = t.depth_weight[static_cast<size_t>(b)];
+      if (w > 0)
+        depths += (depths.empty() ? "" : ", ") + std::to_string(100 * b / o.bins) + "–" +
+                  std::to_string(100 * (b + 1) / o.bins) + " %: " + Num(w) + " cycles";
+    }
+    s << (depths.empty() ? "none" : depths);
+    lines.push_back(s.str());
+  }
+  lines.push_back("rates: |du/dt| up to " + Num(t.rate_max) + " " + unit + "/s (95th percentile " +
+                  (t.records > 1 ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit +
+                                       "/s over the records)"
+                                 : Num(t.rate_p95) + " " + unit + "/s)"));
+  {
+    std::ostringstream s;
+    s << "rate span: " << t.half_cycles << " complete half cycles peaking at "
+      << Num(t.rate_peak_lo) << " … " << Num(t.rate_peak_hi) << " " << unit
+      << "/s (10th–90th percentile over time, " << Num(t.rate_span(), 3) << "×)";
+    if (t.rate_span() < kMinRateSpan)
+      s << ": one rate only — rate dependence cannot be told from the loop's shape; record at "
+           "rates "
+        << Num(kMinRateSpan) << "× apart at least (e.g. sines at 0.5, 2 and 8 Hz)";
+    lines.push_back(s.str());
+  }
+  {
+    std::ostringstream s;
+    const double period =
+        t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;
+    s << "duration against the creep times: " << Num(t.duration_s)
+      << " s of excitation, longest hold " << Num(t.longest_hold_s) << " s";
+    if (t.longest_hold_s < o.min_hold_s) {
+      s << ": relaxations slower than the drive's period (" << Num(period)
+        << " s) show only as a drift over the record";
+    } else {
+      s << ": relaxations up to ≈ " << Num(t.longest_hold_s) << " s show in the holds";
+    }
+    lines.push_back(s.str());
+  }
+  return lines;
+}
+
+}  // namespace
+
 ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOptions& o) {
   if (const std::string e = o.Validate(); !e.empty()) throw InputError("excitation options: " + e);
   std::vector<const io::Record*> train;
@@ -302,56 +363,7 @@ ExcitationReport AnalyseExcitation(const io::RecordSet& set, const ExcitationOpt
   rep.drive_unit = unit;
   rep.training = Describe("training", train, lo, range, o);
   const DriveExcitation& t = rep.training;
-  {
-    std::ostringstream s;
-    s << "drive " << Num(t.u_min, 4) << " … " << Num(t.u_max, 4) << " " << unit << " over "
-      << Num(t.duration_s) << " s in " << t.records << " training record(s)";
-    rep.training_lines.push_back(s.str());
-  }
-  {
-    std::ostringstream s;
-    s << t.turns << " reversals, turning at " << BinRanges(Present(t.level_weight))
-      << " of the range; reversal depths (rainflow, share of the range): ";
-    std::string depths;
-    for (int b = o.bins - 1; b >= 0; --b) {
-      const double w = t.depth_weight[static_cast<size_t>(b)];
-      if (w > 0)
-        depths += (depths.empty() ? "" : ", ") + std::to_string(100 * b / o.bins) + "–" +
-                  std::to_string(100 * (b + 1) / o.bins) + " %: " + Num(w) + " cycles";
-    }
-    s << (depths.empty() ? "none" : depths);
-    rep.training_lines.push_back(s.str());
-  }
-  rep.training_lines.push_back(
-      "rates: |du/dt| up to " + Num(t.rate_max) + " " + unit + "/s (95th percentile " +
-      (t.records > 1
-           ? Num(t.rate_p95_lo) + " … " + Num(t.rate_p95_hi) + " " + unit + "/s over the records)"
-           : Num(t.rate_p95) + " " + unit + "/s)"));
-  {
-    std::ostringstream s;
-    s << "rate span: " << t.half_cycles << " complete half cycles peaking at "
-      << Num(t.rate_peak_lo) << " … " << Num(t.rate_peak_hi) << " " << unit
-      << "/s (10th–90th percentile over time, " << Num(t.rate_span(), 3) << "×)";
-    if (t.rate_span() < kMinRateSpan)
-      s << ": one rate only — rate dependence cannot be told from the loop's shape; record at "
-           "rates "
-        << Num(kMinRateSpan) << "× apart at least (e.g. sines at 0.5, 2 and 8 Hz)";
-    rep.training_lines.push_back(s.str());
-  }
-  {
-    std::ostringstream s;
-    const double period =
-        t.turns >= 2 ? 2 * t.duration_s / static_cast<double>(t.turns) : t.duration_s;
-    s << "duration against the creep times: " << Num(t.duration_s)
-      << " s of excitation, longest hold " << Num(t.longest_hold_s) << " s";
-    if (t.longest_hold_s < o.min_hold_s) {
-      s << ": relaxations slower than the drive's period (" << Num(period)
-        << " s) show only as a drift over the record";
-    } else {
-      s << ": relaxations up to ≈ " << Num(t.longest_hold_s) << " s show in the holds";
-    }
-    rep.training_lines.push_back(s.str());
-  }
+  rep.training_lines = TrainingLines(t, unit, o);
   const std::vector<bool> covered = CoveredCells(t, lo, range, o.bins);
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];

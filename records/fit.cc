@@ -670,6 +670,135 @@ std::string SearchBudget::Describe() const {
          (repetitions == 1 ? " repetition" : " repetitions");
 }
 
+namespace {
+
+/// The box of every parameter (or only the searched ones) and their units.
+opt::ParamBox BoxOf(const std::vector<ParamInfo>& params, const std::vector<size_t>& searched,
+                    bool only_searched, std::vector<std::string>& units) {
+  opt::ParamBox box;
+  units.clear();
+  for (size_t i = 0; i < params.size(); ++i) {
+    if (only_searched && std::find(searched.begin(), searched.end(), i) == searched.end()) continue;
+    const ParamInfo& p = params[i];
+    box.names.push_back(p.name);
+    box.lower.push_back(p.lower);
+    box.upper.push_back(p.upper);
+    box.log_scale.push_back(p.log_scale);
+    units.push_back(p.unit);
+  }
+  return box;
+}
+
+/// The search's budget sized to the number of searched parameters (one: the line search) unless
+/// the user kept it; a line-search budget refused for another search.
+void SizeSearch(const FitOptions::Sizing& k, size_t n_searched, opt::SearchOptions& so,
+                FitResult& res) {
+  if (k.enabled && so.algorithm == opt::SearchAlgorithm::kPso) {
+    if (n_searched == 1 && !k.keep_algorithm && !k.keep_particles && !k.keep_iterations &&
+        !k.keep_stall && !k.keep_repetitions) {
+      so.algorithm = opt::SearchAlgorithm::kLine;  // one bounded scalar: a grid, then Brent
+      so.repetitions = 1;
+    } else {
+      const SearchBudget b = SizedSearchBudget(n_searched);
+      if (!k.keep_particles) so.pso.particles = b.particles;
+      if (!k.keep_iterations) so.pso.iterations = b.iterations;
+      if (!k.keep_stall) so.pso.stall_iterations = b.stall;
+      if (!k.keep_repetitions) so.repetitions = b.repetitions;
+      so.pso.converged_spread = b.converged_spread;
+    }
+    res.budget_sized = true;
+  } else if (so.algorithm == opt::SearchAlgorithm::kLine && !k.keep_repetitions) {
+    so.repetitions = 1;  // asked for by name: its one repetition
+  }
+  if (k.line_given && so.algorithm != opt::SearchAlgorithm::kLine)
+    throw InputError(
+        "--line-grid / --line-brackets / --line-tolerance: the line search's budget, for a "
+        "search of one parameter with the sized budget; this fit searches " +
+        std::to_string(n_searched) + " parameter" + (n_searched == 1 ? "" : "s") + " by " +
+        opt::SearchAlgorithmName(so.algorithm) +
+        (n_searched == 1 ? " (--algorithm or a PSO budget flag was given)" : ""));
+}
+
+/// Progress every 25 iterations of the search (or steps of the line search).
+void SetProgress(const FitOptions& options, opt::SearchOptions& so) {
+  const bool line = so.algorithm == opt::SearchAlgorithm::kLine;
+  const int grid = so.line.grid;
+  so.on_progress = [&options, line, grid](const opt::SearchProgress& p) {
+    if (p.iteration % 25 != 0) return;
+    const std::string where = !line ? "search repetition " + std::to_string(p.repetition) +
+                                          " iteration " + std::to_string(p.iteration)
+                              : p.iteration == 0
+                                  ? "line search, the grid of " + std::to_string(grid)
+                                  : "line search, Brent step " + std::to_string(p.iteration);
+    options.progress(where + ": best MSE " + io::FormatNumber(p.overall_best_cost));
+  };
+}
+
+/// The starts given: a polish from physical values (no search), and extra starts in unit
+/// coordinates of every parameter; both reduced to the searched parameters.
+void AddStarts(const FitOptions& options, size_t n_params, const std::vector<size_t>& searched,
+               const opt::BoxMap* searched_map, opt::FitOptions& fo) {
+  if (!options.polish_from.empty()) {  // no search: the polish from these physical values
+    if (options.polish_from.size() != n_params)
+      throw InputError(FieldError("polish_from", options.polish_from.size(),
+                                  "must have one value per parameter"));
+    std::vector<double> sp;
+    for (size_t i : searched) sp.push_back(options.polish_from[i]);
+    fo.search = false;
+    if (searched_map) fo.starts = {searched_map->ToUnit(sp)};
+  }
+  for (const std::vector<double>& u :
+       options.extra_starts) {  // unit coordinates of every parameter
+    if (u.size() != n_params)
+      throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
+    std::vector<double> su;
+    for (size_t i : searched) su.push_back(u[i]);
+    fo.starts.push_back(std::move(su));
+  }
+}
+
+/// Every vector the search tried diverged (each cost the penalty), so the best is one of them: a
+/// named error, not metrics and a fit.json of NaN.
+[[noreturn]] void ThrowDiverged(const RecordModel& model,
+                                const std::vector<const io::Record*>& train, int64_t evaluations) {
+  std::string names;
+  for (const io::Record* r : train) names += (names.empty() ? "" : ", ") + r->name;
+  throw InputError(
+      model.Describe() + ": the model's output on the training records (" + names +
+      ") is not finite at any of the " + std::to_string(evaluations) +
+      " parameter vectors evaluated in the search box (every simulation diverged): try more "
+      "integration sub-steps (--substeps), a smoother drive, or another family");
+}
+
+/// The polish's options; the LM's differences forward, central to finish after a search, unless
+/// the user chose.
+void SetPolish(const FitOptions& options, opt::FitOptions& fo, FitResult& res) {
+  fo.polish = options.polish;
+  fo.lm = options.lm;
+  if (options.lm_differences_auto) {
+    fo.lm.central = false;
+    fo.lm.central_to_finish = fo.search_options.algorithm != opt::SearchAlgorithm::kLine;
+  }
+  res.lm_differences = fo.lm.central             ? "central"
+                       : fo.lm.central_to_finish ? "forward-central"
+                                                 : "forward";
+}
+
+/// The search and polish's figures into the result; the best searched parameters returned.
+std::vector<double> TakeFit(opt::FitResult fit, FitResult& res) {
+  res.search = std::move(fit.search);
+  res.evaluations = fit.evaluations;
+  res.lm_iterations = fit.lm_iterations;
+  res.stop_reason = res.search.stop_reason;
+  res.polishes = fit.polishes;
+  res.best_polish_repetition = fit.best_polish_repetition;
+  res.polish_message = fit.message;
+  res.uncertainty = std::move(fit.uncertainty);
+  return std::move(fit.x);
+}
+
+}  // namespace
+
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
                    const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -688,24 +817,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   const bool solved = fitness.spectrum_solved();
   std::vector<double> best;  // every parameter
   if (!params.empty()) {
-    auto box_of = [&](bool only_searched, std::vector<std::string>& units) {
-      opt::ParamBox box;
-      units.clear();
-      for (size_t i = 0; i < params.size(); ++i) {
-        if (only_searched && std::find(searched.begin(), searched.end(), i) == searched.end())
-          continue;
-        const ParamInfo& p = params[i];
-        box.names.push_back(p.name);
-        box.lower.push_back(p.lower);
-        box.upper.push_back(p.upper);
-        box.log_scale.push_back(p.log_scale);
-        units.push_back(p.unit);
-      }
-      return box;
-    };
     std::vector<std::string> units;
-    const opt::BoxMap map(box_of(false, units), units);
-    const opt::ParamBox search_box = box_of(true, units);
+    const opt::BoxMap map(BoxOf(params, searched, false, units), units);
+    const opt::ParamBox search_box = BoxOf(params, searched, true, units);
     const std::unique_ptr<opt::BoxMap> searched_map =
         search_box.size() > 0 ? std::make_unique<opt::BoxMap>(search_box, units) : nullptr;
     const RecordResidualFitness residual_fitness(fitness);
@@ -729,31 +843,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     res.solved_parameters = params.size() - searched.size();  // the spectrum's weights where solved
     const FitOptions::Sizing& k = options.sizing;
     opt::SearchOptions& so = fo.search_options;
-    if (k.enabled && so.algorithm == opt::SearchAlgorithm::kPso) {
-      if (searched.size() == 1 && !k.keep_algorithm && !k.keep_particles && !k.keep_iterations &&
-          !k.keep_stall && !k.keep_repetitions) {
-        so.algorithm = opt::SearchAlgorithm::kLine;  // one bounded scalar: a grid, then Brent
-        so.repetitions = 1;
-      } else {
-        const SearchBudget b = SizedSearchBudget(searched.size());
-        if (!k.keep_particles) so.pso.particles = b.particles;
-        if (!k.keep_iterations) so.pso.iterations = b.iterations;
-        if (!k.keep_stall) so.pso.stall_iterations = b.stall;
-        if (!k.keep_repetitions) so.repetitions = b.repetitions;
-        so.pso.converged_spread = b.converged_spread;
-      }
-      res.budget_sized = true;
-    } else if (so.algorithm == opt::SearchAlgorithm::kLine && !k.keep_repetitions) {
-      so.repetitions = 1;  // asked for by name: its one repetition
-    }
-    if (k.line_given && so.algorithm != opt::SearchAlgorithm::kLine)
-      throw InputError(
-          "--line-grid / --line-brackets / --line-tolerance: the line search's budget, for a "
-          "search of one "
-          "parameter with the sized budget; this fit searches " +
-          std::to_string(searched.size()) + " parameter" + (searched.size() == 1 ? "" : "s") +
-          " by " + opt::SearchAlgorithmName(so.algorithm) +
-          (searched.size() == 1 ? " (--algorithm or a PSO budget flag was given)" : ""));
+    SizeSearch(k, searched.size(), so, res);
     res.algorithm = so.algorithm;
     res.line = so.line;
     res.budget = BudgetOf(fo.search_options);
@@ -761,45 +851,9 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
         options.polish_repetitions ? std::max(0, fo.search_options.repetitions - 1) : 0;
     fo.concurrent_polishes =
         true;  // each polish its own ThreadPoolEvaluator over the const fitness
-    if (options.progress) {
-      const bool line = so.algorithm == opt::SearchAlgorithm::kLine;
-      const int grid = so.line.grid;
-      fo.search_options.on_progress = [&options, line, grid](const opt::SearchProgress& p) {
-        if (p.iteration % 25 != 0) return;
-        const std::string where = !line ? "search repetition " + std::to_string(p.repetition) +
-                                              " iteration " + std::to_string(p.iteration)
-                                  : p.iteration == 0
-                                      ? "line search, the grid of " + std::to_string(grid)
-                                      : "line search, Brent step " + std::to_string(p.iteration);
-        options.progress(where + ": best MSE " + io::FormatNumber(p.overall_best_cost));
-      };
-    }
-    fo.polish = options.polish;
-    fo.lm = options.lm;
-    if (options.lm_differences_auto) {
-      fo.lm.central = false;
-      fo.lm.central_to_finish = so.algorithm != opt::SearchAlgorithm::kLine;
-    }
-    res.lm_differences = fo.lm.central             ? "central"
-                         : fo.lm.central_to_finish ? "forward-central"
-                                                   : "forward";
-    if (!options.polish_from.empty()) {  // no search: the polish from these physical values
-      if (options.polish_from.size() != params.size())
-        throw InputError(FieldError("polish_from", options.polish_from.size(),
-                                    "must have one value per parameter"));
-      std::vector<double> sp;
-      for (size_t i : searched) sp.push_back(options.polish_from[i]);
-      fo.search = false;
-      if (searched_map) fo.starts = {searched_map->ToUnit(sp)};
-    }
-    for (const std::vector<double>& u :
-         options.extra_starts) {  // unit coordinates of every parameter
-      if (u.size() != params.size())
-        throw InputError(FieldError("extra_starts", u.size(), "must have one value per parameter"));
-      std::vector<double> su;
-      for (size_t i : searched) su.push_back(u[i]);
-      fo.starts.push_back(std::move(su));
-    }
+    if (options.progress) SetProgress(options, fo.search_options);
+    SetPolish(options, fo, res);
+    AddStarts(options, params.size(), searched, searched_map.get(), fo);
     fo.search_cost_is_sum_of_squares = true;  // the search's cost is the MSE = Σ r²
     // With the spectrum solved, the table covers every parameter (below), not the searched ones.
     fo.uncertainty = options.uncertainty && !solved;
@@ -807,16 +861,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     fo.threads = options.threads;
     std::vector<double> best_searched;
     if (searched_map) {
-      opt::FitResult fit = opt::Fit(problem, fo);
-      res.search = std::move(fit.search);
-      res.evaluations = fit.evaluations;
-      res.lm_iterations = fit.lm_iterations;
-      res.stop_reason = res.search.stop_reason;
-      res.polishes = fit.polishes;
-      res.best_polish_repetition = fit.best_polish_repetition;
-      res.polish_message = fit.message;
-      res.uncertainty = std::move(fit.uncertainty);
-      best_searched = std::move(fit.x);
+      best_searched = TakeFit(opt::Fit(problem, fo), res);
     }
     best = solved ? fitness.Expand(best_searched) : best_searched;
     // A regularised linear family with effects: its strength was chosen with the effects at their
@@ -850,17 +895,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
                                   options.lm.fd_step, problem.residual_weight);
   }
   const RecordFitness::Output out = fitness.Run(best);
-  if (!std::isfinite(out.mse)) {
-    // Every vector the search tried diverged (each cost the penalty), so the best is one of them:
-    // a named error, not metrics and a fit.json of NaN.
-    std::string names;
-    for (const io::Record* r : train) names += (names.empty() ? "" : ", ") + r->name;
-    throw InputError(
-        model->Describe() + ": the model's output on the training records (" + names +
-        ") is not finite at any of the " + std::to_string(res.evaluations) +
-        " parameter vectors evaluated in the search box (every simulation diverged): try more "
-        "integration sub-steps (--substeps), a smoother drive, or another family");
-  }
+  if (!std::isfinite(out.mse)) ThrowDiverged(*model, train, res.evaluations);
   res.params = best;
   res.weights = out.weights;
   res.regularisation = fitness.validation();

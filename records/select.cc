@@ -496,6 +496,48 @@ size_t OneStandardErrorChoice(std::vector<ModelScore>& scores) {
   return pick;
 }
 
+namespace {
+
+/// The initial states worth trying in the second round: the first and, unless the user gave one,
+/// the rest-level rule where it differs for a training record.
+std::vector<model::InitialState> StatesToTry(const io::RecordSet& set, const SelectOptions& options,
+                                             model::InitialState first) {
+  std::vector<model::InitialState> states = {first};
+  if (!options.initial_state_given) {
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
+      if (model::ResolveInitialState(model::InitialState::kAuto, r->u[0], scale.u_min,
+                                     scale.u_max) != first) {
+        states.push_back(model::InitialState::kAuto);
+        break;
+      }
+  }
+  return states;
+}
+
+/// The refitted finalists' training and withheld RMSE.
+void SetRefitErrors(const std::vector<FitResult>& refits, std::vector<ModelScore>& second) {
+  for (size_t i = 0; i < refits.size(); ++i) {
+    if (!refits[i].model) continue;
+    double tr = 0, wh = 0;
+    size_t nt = 0, nw = 0;
+    for (const RecordMetrics& m : refits[i].metrics) {
+      const double sse = m.rmse * m.rmse * static_cast<double>(m.samples);
+      if (m.role == model::CaseRole::kTrain) {
+        tr += sse;
+        nt += m.samples;
+      } else {
+        wh += sse;
+        nw += m.samples;
+      }
+    }
+    second[i].train_rmse = nt ? std::sqrt(tr / static_cast<double>(nt)) : kInf;
+    if (nw) second[i].withheld_rmse = std::sqrt(wh / static_cast<double>(nw));
+  }
+}
+
+}  // namespace
+
 SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   SelectionResult res;
@@ -512,16 +554,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       options.initial_state_given ? options.fit.family_options.initial_state : res.detected;
   // The other state worth trying in the second round: the rest-level rule where it differs for a
   // training record.
-  std::vector<model::InitialState> states = {first};
-  if (!options.initial_state_given) {
-    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
-    for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
-      if (model::ResolveInitialState(model::InitialState::kAuto, r->u[0], scale.u_min,
-                                     scale.u_max) != first) {
-        states.push_back(model::InitialState::kAuto);
-        break;
-      }
-  }
+  const std::vector<model::InitialState> states = StatesToTry(set, options, first);
   // 2. Screening: every candidate, a small search.
   const std::vector<Candidate> grid = CandidateGrid(set, options, first);
   say("screening " + std::to_string(grid.size()) + " candidates by " +
@@ -600,23 +633,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       second[i].error = e.what();
     }
   });
-  for (size_t i = 0; i < finals.size(); ++i) {
-    if (!refits[i].model) continue;
-    double tr = 0, wh = 0;
-    size_t nt = 0, nw = 0;
-    for (const RecordMetrics& m : refits[i].metrics) {
-      const double sse = m.rmse * m.rmse * static_cast<double>(m.samples);
-      if (m.role == model::CaseRole::kTrain) {
-        tr += sse;
-        nt += m.samples;
-      } else {
-        wh += sse;
-        nw += m.samples;
-      }
-    }
-    second[i].train_rmse = nt ? std::sqrt(tr / static_cast<double>(nt)) : kInf;
-    if (nw) second[i].withheld_rmse = std::sqrt(wh / static_cast<double>(nw));
-  }
+  SetRefitErrors(refits, second);
   res.fit = std::move(refits[chosen]);
   res.fit_options = finals[chosen].Options(options.fit);
   // The ranking: the finalists by CV RMSE, then the screened-only ones by theirs.

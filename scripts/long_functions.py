@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Lists the functions longer than a limit (120 lines) in the service's folders (master/, worker/,
-service/, svcclient/, client/) and fails when one is not on the allow-list below.
+"""Lists the functions longer than a limit (120 lines) in every product folder (FOLDERS below:
+model/, io/, opt/, job/, records/, controller/, hgann/, diagnose/, complete/, kinds/, service/,
+master/, worker/, svcclient/, client/) and fails when one is not on the allow-list below.
 
 A function's length is the number of lines from the first line of its signature to its closing
 brace. The scan is a brace matcher over the source with comments, string and character literals
@@ -19,12 +20,25 @@ import re
 import sys
 import tempfile
 
-FOLDERS = ["master", "worker", "service", "svcclient", "client"]
+FOLDERS = ["model", "io", "opt", "job", "records", "controller", "hgann", "diagnose", "complete",
+           "kinds", "service", "master", "worker", "svcclient", "client"]
 LIMIT = 120
 
 # Allowed long functions: (file or file prefix, function name or "*" for every function of the
 # file), each with why. Keep it short: a long function that is not a table is split, not listed.
-ALLOWED = []
+ALLOWED = [
+    ("model/modal_simulator.cc", "ModalSimulator::RunSinusoid",
+     "the modal model's hot loop (three passes per chunk of 256 steps): split only when "
+     "bench_fitness BM_FitnessModal and bench_record_fit show no loss in pair runs; not split "
+     "yet (issue 38)"),
+    ("model/cvode.cc", "IntegrateOnce",
+     "the CVODE integration (setup, stops, restarts, hooks sharing one solver's state): split "
+     "only when bench_fitness and bench_record_fit show no loss in pair runs; not split yet "
+     "(issue 38)"),
+    ("client/cmd_fit.cc", "*",
+     "FitJson, RegisterFit, WriteFitReport (121-132 lines after the 100-column reformat): the file "
+     "is another branch's in issue 38; split there, then drop this entry"),
+]
 
 FUNCTION_QUALIFIERS = {"const", "override", "final", "noexcept", "mutable", "try", "volatile", "&", "&&"}
 CONTAINER = re.compile(r"^(?:template\s*<.*>\s*)?(?:namespace|class|struct|union|enum|extern\s*\"C\")\b", re.S)
