@@ -105,16 +105,18 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
   return Status::Ok();
 }
 
-// Integrate<true>'s loop for 2 NV parameter sets at once, lanes 2v and 2v + 1 in the two halves of
-// SSE2 vectors (GCC vector extensions): every operation of a lane is the scalar loop's, in the same
-// order (packed multiplies, adds and subtractions round each half as the scalar ones do; |x| clears
-// the sign bit as fabs does; no reassociation, no FMA), so each lane's values are its bits. NV = 2
-// runs two independent chains of vector operations, four parameter sets in about the time of one
-// (the loop is bound by the latency of its chain, not by throughput). Returns false, leaving y and
-// the states undefined, as soon as a lane leaves the scalar loop's bounds (the caller then runs
-// each alone, for the scalar loop's exact output and message). Each lane reads its own input (the
-// same table for every lane that shares a drive); the inputs have the same samples, sub-steps and
-// rate (checked by the caller).
+// The kernel's step (pzk_bw_osc_rk4), kept here in vectors: the kernel's step in a loop over
+// four lanes, vectorised by GCC, made the fits' four-lane evaluation 1.06x and pairs 1.2x slower
+// (docs/architecture.md "One home for a step"). Integrate<true>'s loop for 2 NV parameter sets at
+// once, lanes 2v and 2v + 1 in the two halves of SSE2 vectors (GCC vector extensions): every
+// operation of a lane is the scalar loop's, in the same order (packed multiplies, adds and
+// subtractions round each half as the scalar ones do; |x| clears the sign bit as fabs does; no
+// reassociation, no FMA), so each lane's values are its bits. NV = 2 runs two independent chains of
+// vector operations, four parameter sets in about the time of one (the loop is bound by the latency
+// of its chain, not by throughput). Returns false, leaving y and the states undefined, as soon as a
+// lane leaves the scalar loop's bounds (the caller then runs each alone, for the scalar loop's
+// exact output and message). Each lane reads its own input (the same table for every lane that
+// shares a drive); the inputs have the same samples, sub-steps and rate (checked by the caller).
 typedef double V2 __attribute__((vector_size(16)));
 typedef long long V2i __attribute__((vector_size(16)));
 
