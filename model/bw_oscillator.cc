@@ -7,6 +7,8 @@
 #include <sstream>
 #include <unsupported/Eigen/FFT>
 
+#include "model/kernels/pzk.h"
+
 namespace pz::model {
 namespace {
 
@@ -45,43 +47,50 @@ std::vector<double> FourierUpsample(std::span<const double> u, size_t factor) {
   return r;
 }
 
+// One RK4 step for ν ≠ 1 (|z|^(ν−1) in ż), which no kernel has: the exported oscillator is ν = 1,
+// whose step is the kernel's pzk_bw_osc_rk4.
+void Rk4General(const double* c, double nu1, double h, double h2, double h6, const double* u,
+                double* st) {
+  const double inv_m = c[0], cc = c[1], k = c[2], alpha = c[3], bg = c[4], bd = c[5];
+  auto zdot = [&](double v, double z) {
+    const double az = std::abs(z);
+    const double pw = az > 0 ? std::pow(az, nu1) : (nu1 == 0 ? 1.0 : 0.0);
+    return alpha * v - pw * (bg * std::abs(v) * z + bd * v * az);
+  };
+  const double Y = st[0], V = st[1], Z = st[2], u0 = u[0], u1 = u[1], u2 = u[2];
+  const double a1 = (u0 - cc * V - k * Y - Z) * inv_m, z1 = zdot(V, Z);
+  const double y2 = Y + h2 * V, v2 = V + h2 * a1, w2 = Z + h2 * z1;
+  const double a2 = (u1 - cc * v2 - k * y2 - w2) * inv_m, z2 = zdot(v2, w2);
+  const double y3 = Y + h2 * v2, v3 = V + h2 * a2, w3 = Z + h2 * z2;
+  const double a3 = (u1 - cc * v3 - k * y3 - w3) * inv_m, z3 = zdot(v3, w3);
+  const double y4 = Y + h * v3, v4 = V + h * a3, w4 = Z + h * z3;
+  const double a4 = (u2 - cc * v4 - k * y4 - w4) * inv_m, z4 = zdot(v4, w4);
+  st[0] = Y + h6 * (V + 2 * (v2 + v3) + v4);
+  st[1] = V + h6 * (a1 + 2 * (a2 + a3) + a4);
+  st[2] = Z + h6 * (z1 + 2 * (z2 + z3) + z4);
+}
+
 template <bool kNuOne>
 Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwState* state) {
   const size_t n = in.samples();
   const int S = in.substeps();
   const double h = 1.0 / (in.sample_rate_hz() * S), h2 = 0.5 * h, h6 = h / 6.0;
-  const double inv_m = 1.0 / p.m, c = p.c, k = p.k, alpha = p.alpha;
-  const double bg = p.beta * p.gamma, bd = p.beta * p.delta, nu1 = p.nu - 1.0, nu = p.nu;
+  // The kernel's constants (model/kernels/bw_oscillator.h pzk_bw_osc_params).
+  const double c[6] = {1.0 / p.m, p.c, p.k, p.alpha, p.beta * p.gamma, p.beta * p.delta};
+  const double nu1 = p.nu - 1.0;
   const double* u = in.half_steps().data();
-  BwState s0 = state ? *state : BwState{};
-  double Y = s0.y, V = s0.v, Z = s0.z;
-
-  auto zdot = [&](double v, double z) {
-    if constexpr (kNuOne) {
-      return alpha * v - bg * std::abs(v) * z - bd * v * std::abs(z);
-    } else {
-      const double az = std::abs(z);
-      const double pw = az > 0 ? std::pow(az, nu1) : (nu1 == 0 ? 1.0 : 0.0);
-      return alpha * v - pw * (bg * std::abs(v) * z + bd * v * az);
-    }
-  };
-  (void)nu;
-  y[0] = Y;
+  const BwState s0 = state ? *state : BwState{};
+  double st[3] = {s0.y, s0.v, s0.z};
+  y[0] = st[0];
   size_t j = 0;
   for (size_t i = 1; i < n; ++i) {
     for (int s = 0; s < S; ++s, j += 2) {
-      const double u0 = u[j], u1 = u[j + 1], u2 = u[j + 2];
-      const double a1 = (u0 - c * V - k * Y - Z) * inv_m, z1 = zdot(V, Z);
-      const double y2 = Y + h2 * V, v2 = V + h2 * a1, w2 = Z + h2 * z1;
-      const double a2 = (u1 - c * v2 - k * y2 - w2) * inv_m, z2 = zdot(v2, w2);
-      const double y3 = Y + h2 * v2, v3 = V + h2 * a2, w3 = Z + h2 * z2;
-      const double a3 = (u1 - c * v3 - k * y3 - w3) * inv_m, z3 = zdot(v3, w3);
-      const double y4 = Y + h * v3, v4 = V + h * a3, w4 = Z + h * z3;
-      const double a4 = (u2 - c * v4 - k * y4 - w4) * inv_m, z4 = zdot(v4, w4);
-      Y += h6 * (V + 2 * (v2 + v3) + v4);
-      V += h6 * (a1 + 2 * (a2 + a3) + a4);
-      Z += h6 * (z1 + 2 * (z2 + z3) + z4);
+      if constexpr (kNuOne)
+        pzk::pzk_bw_osc_rk4(c, h, h2, h6, u[j], u[j + 1], u[j + 2], st);  // the kernel's step
+      else
+        Rk4General(c, nu1, h, h2, h6, u + j, st);
     }
+    const double Y = st[0], V = st[1], Z = st[2];
     y[i] = Y;
     // |x| ≤ bound is false for NaN too.
     if (!(std::abs(Y) <= 1e3 && std::abs(Z) <= 1e12 && std::abs(V) <= 1e9)) {
@@ -92,20 +101,22 @@ Status Integrate(const BwParams& p, const BwInput& in, std::span<double> y, BwSt
                         " s): y = " + Num(Y) + " m, z = " + Num(Z) + " N");
     }
   }
-  if (state) *state = BwState{Y, V, Z};
+  if (state) *state = BwState{st[0], st[1], st[2]};
   return Status::Ok();
 }
 
-// Integrate<true>'s loop for 2 NV parameter sets at once, lanes 2v and 2v + 1 in the two halves of
-// SSE2 vectors (GCC vector extensions): every operation of a lane is the scalar loop's, in the same
-// order (packed multiplies, adds and subtractions round each half as the scalar ones do; |x| clears
-// the sign bit as fabs does; no reassociation, no FMA), so each lane's values are its bits. NV = 2
-// runs two independent chains of vector operations, four parameter sets in about the time of one
-// (the loop is bound by the latency of its chain, not by throughput). Returns false, leaving y and
-// the states undefined, as soon as a lane leaves the scalar loop's bounds (the caller then runs
-// each alone, for the scalar loop's exact output and message). Each lane reads its own input (the
-// same table for every lane that shares a drive); the inputs have the same samples, sub-steps and
-// rate (checked by the caller).
+// The kernel's step (pzk_bw_osc_rk4), kept here in vectors: the kernel's step in a loop over
+// four lanes, vectorised by GCC, made the fits' four-lane evaluation 1.06x and pairs 1.2x slower
+// (docs/architecture.md "One home for a step"). Integrate<true>'s loop for 2 NV parameter sets at
+// once, lanes 2v and 2v + 1 in the two halves of SSE2 vectors (GCC vector extensions): every
+// operation of a lane is the scalar loop's, in the same order (packed multiplies, adds and
+// subtractions round each half as the scalar ones do; |x| clears the sign bit as fabs does; no
+// reassociation, no FMA), so each lane's values are its bits. NV = 2 runs two independent chains of
+// vector operations, four parameter sets in about the time of one (the loop is bound by the latency
+// of its chain, not by throughput). Returns false, leaving y and the states undefined, as soon as a
+// lane leaves the scalar loop's bounds (the caller then runs each alone, for the scalar loop's
+// exact output and message). Each lane reads its own input (the same table for every lane that
+// shares a drive); the inputs have the same samples, sub-steps and rate (checked by the caller).
 typedef double V2 __attribute__((vector_size(16)));
 typedef long long V2i __attribute__((vector_size(16)));
 

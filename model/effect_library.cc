@@ -17,31 +17,15 @@ namespace {
 // ---- shared arithmetic
 // ----------------------------------------------------------------------------
 
-/// First-order low-pass τ ẋ = s − x over the samples s_k = in(v_k) (linear in between), from rest
-/// at s_0: exact first-order-hold discretisation; each v_k replaced by out(v_k, x_k) in the same
-/// pass (v_k read before it is replaced). τ ≤ 1e-12 dt: x = s.
-template <class In, class Out>
-void LowpassMap(std::span<double> v, double tau, double dt, In in, Out out) {
-  if (v.empty()) return;
-  if (!(tau > 1e-12 * dt)) {
-    for (double& e : v) e = out(e, in(e));
-    return;
-  }
-  const auto [a, c] = LowpassConsts(tau, dt);
-  double prev = in(v[0]), x = prev;
-  v[0] = out(v[0], x);
-  for (size_t k = 1; k < v.size(); ++k) {
-    const double cur = in(v[k]);
-    x = a * x + (1 - a) * prev + (cur - prev) * c;
-    prev = cur;
-    v[k] = out(v[k], x);
-  }
-}
-
-/// The low-pass of v itself, in place.
-void LowpassInPlace(std::span<double> v, double tau, double dt) {
-  LowpassMap(
-      v, tau, dt, [](double e) { return e; }, [](double, double x) { return x; });
+/// The block of an effect's step kernel (model/kernels/effects.h) on the parameters p: the one
+/// home of the effects' per-sample arithmetic, which ApplyDrive / ApplyOutput run over a record.
+pzk::pzk_block EffectBlock(int kind, std::span<const double> p, double dt) {
+  pzk::pzk_block b{};
+  b.kind = kind;
+  b.dt = dt;
+  b.p = p.data();
+  b.np = static_cast<int>(p.size());
+  return b;
 }
 
 // ---- CVODE extensions (the continuous-time forms)
@@ -208,7 +192,11 @@ class DriverLowpass final : public EffectDef {
     return {{"tau_s", "s", dt / 100, tau_hi, true}};
   }
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
-    LowpassInPlace(u, p[0], dt);
+    if (u.empty()) return;
+    const pzk::pzk_block b = EffectBlock(kernel(), p, dt);
+    double c[3] = {}, d[2];
+    pzk::pzk_driver_lowpass_init(&b, c, d, u[0], u[0]);
+    for (size_t k = 1; k < u.size(); ++k) u[k] = pzk::pzk_driver_lowpass_step(c, d, d, u[k]);
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<LowpassExtension>(p[0]);
@@ -238,8 +226,9 @@ class QuadraticDrive final : public EffectDef {
     const double umax = std::max(std::abs(s.u_min), std::abs(s.u_max));
     return {{"c2", "1/V", -0.3 / umax, 0.3 / umax, false}};
   }
-  void ApplyDrive(std::span<const double> p, double, std::span<double> u) const override {
-    for (double& v : u) v += p[0] * v * v;
+  void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
+    const pzk::pzk_block b = EffectBlock(kernel(), p, dt);
+    for (double& v : u) v = pzk::pzk_quadratic_step(&b, v);
   }
   bool memoryless() const override { return true; }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
@@ -272,12 +261,11 @@ class Creep final : public EffectDef {
   }
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
     if (p[0] == 0 || u.empty()) return;
-    // u += the low-pass of k (u − u0), in one pass over u without a buffer (LowpassMap). A search
-    // evaluates this once per genome.
-    const double k = p[0], u0 = u[0];
-    LowpassMap(
-        u, p[1], dt, [k, u0](double e) { return k * (e - u0); },
-        [](double e, double x) { return e + x; });
+    // u += the low-pass of k (u − u0), at rest at u0 = u[0].
+    const pzk::pzk_block b = EffectBlock(kernel(), p, dt);
+    double c[5] = {}, d[2];
+    pzk::pzk_creep_init(&b, c, d, u[0]);
+    for (size_t k = 1; k < u.size(); ++k) u[k] = pzk::pzk_creep_step(&b, c, d, d, u[k]);
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
@@ -315,6 +303,9 @@ class Delay final : public EffectDef {
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
     const double shift = p[0] / dt;
     if (!(shift > 0) || u.empty()) return;
+    // The arithmetic of the kernel's pzk_delay_step (model/kernels/effects.h), on the whole record
+    // rather than its ring of the last inputs: the ring's two divisions a sample made the fits of a
+    // stack with a delay 1.24× slower (bench_record_fit).
     const std::vector<double> src(u.begin(), u.end());
     for (size_t k = 0; k < u.size(); ++k) {
       const double pos = static_cast<double>(k) - shift;
@@ -378,13 +369,11 @@ class RateDependence final : public EffectDef {
   }
   void ApplyDrive(std::span<const double> p, double dt, std::span<double> u) const override {
     if (!(p[0] > 0) || u.empty()) return;
-    double prev1 = u[0], prev2 = u[0], z = u[0], rate = 0;
-    for (double& v : u) {
-      const double raw = v;
-      z = v = Lagged(p[0], p[1], dt, raw, prev1, prev2, z, rate);
-      prev2 = prev1;
-      prev1 = raw;
-    }
+    // At rest at u[0] before it; the first sample is stepped too.
+    const pzk::pzk_block b = EffectBlock(kernel(), p, dt);
+    double d[4];
+    pzk::pzk_rate_dependence_init(d, u[0]);
+    for (double& v : u) v = pzk::pzk_rate_dependence_step(&b, d, d, v);
   }
   /// The bound 4–10 % of the half range, the knee rate r_m/τ_r at ½–2 × the peak rate of the
   /// dominant sine over the range (a lag that saturates within the records' rates).
@@ -392,18 +381,6 @@ class RateDependence final : public EffectDef {
     const double r_m = d.Uniform(0.04, 0.1) * s.u_half;
     const double knee = d.LogUniform(0.5, 2) * 2 * std::numbers::pi * s.f_dom * s.u_half;
     return {r_m, r_m / knee};
-  }
-
- private:
-  // As the kernel's pzk_rate_dependence_step (model/kernels/effects.h), operation for operation.
-  static double Lagged(double r_m, double tau, double dt, double v, double prev1, double prev2,
-                       double z, double& rate_prev) {
-    const double rate = (3 * v - 4 * prev1 + prev2) / (2 * dt);
-    if (rate * rate_prev < 0)
-      z = v - rate * rate * dt / (2 * (rate - rate_prev));  // the vertex between
-    rate_prev = rate;
-    const double lambda = r_m * std::tanh(tau * std::abs(rate) / r_m);
-    return std::max(v - lambda, std::min(v + lambda, z));
   }
 };
 
@@ -498,24 +475,14 @@ class CreepSpectrum final : public EffectDef {
         Times(f.duration);  // p holds these weights first (then later effects')
     const size_t n = taus.size();
     if (p.size() < n) throw std::logic_error("creep-spectrum: fewer weights than relaxations");
-    std::vector<double> a(n), c(n), x(n, 0.0);
-    for (size_t i = 0; i < n; ++i) {
-      const LowpassStep st = LowpassConsts(taus[i], f.dt);  // as the kernel's pzk_lowpass_consts
-      a[i] = st.a;
-      c[i] = st.c;
-    }
-    const double y0 = y[0];
-    double prev = 0;
-    for (size_t k = 1; k < y.size(); ++k) {
-      const double d = y[k] - y0;
-      double corr = 0;
-      for (size_t i = 0; i < n; ++i) {
-        x[i] = a[i] * x[i] + (1 - a[i]) * prev + (d - prev) * c[i];
-        corr += p[i] * (d - x[i]);
-      }
-      prev = d;
-      y[k] -= corr;
-    }
+    pzk::pzk_block b = EffectBlock(kernel(), p.first(n), f.dt);
+    b.n = static_cast<int>(n);
+    b.w = taus.data();
+    b.nw = static_cast<int>(n);
+    std::vector<double> c(1 + 2 * n), d(1 + n);
+    pzk::pzk_creep_spectrum_init(&b, c.data(), d.data(), y[0]);
+    for (size_t k = 1; k < y.size(); ++k)
+      y[k] = pzk::pzk_creep_spectrum_step(&b, c.data(), d.data(), d.data(), y[k]);
   }
   bool linear_output() const override { return true; }
   std::vector<double> KernelData(const DataScale& s) const override { return Times(s.duration); }
@@ -559,15 +526,13 @@ class Friction final : public EffectDef {
   std::vector<ParamInfo> Params(const DataScale& s) const override {
     return {{"r", "y", 0, 0.2 * s.y_half, false}};
   }
-  void ApplyOutput(std::span<const double> p, const OutputFrame&,
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f,
                    std::span<double> y) const override {
-    const double r = std::max(p[0], 0.0);
-    if (r == 0 || y.empty()) return;
-    double z = y[0];
-    for (double& v : y) {
-      z = std::max(v - r, std::min(v + r, z));
-      v = z;
-    }
+    if (y.empty()) return;
+    const pzk::pzk_block b = EffectBlock(kernel(), p, f.dt);
+    double d[1];
+    pzk::pzk_friction_init(d, y[0]);
+    for (double& v : y) v = pzk::pzk_friction_step(&b, d, d, v);
   }
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     return {d.Uniform(0.05, 0.4)};
@@ -587,11 +552,10 @@ class Stiffening final : public EffectDef {
   void ApplyOutput(std::span<const double> p, const OutputFrame& f,
                    std::span<double> y) const override {
     if (y.empty()) return;
-    const double y0 = y[0], Y = f.y_half;
-    for (double& v : y) {
-      const double x = (v - y0) / Y;
-      v -= p[0] * Y * x * x * x;
-    }
+    pzk::pzk_block b = EffectBlock(kernel(), p, f.dt);
+    b.y_half = f.y_half;
+    const double c[1] = {y[0]};  // the output at rest
+    for (double& v : y) v = pzk::pzk_stiffening_step(&b, c, v);
   }
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();
@@ -614,7 +578,10 @@ class Drift final : public EffectDef {
   }
   void ApplyOutput(std::span<const double> p, const OutputFrame& f,
                    std::span<double> y) const override {
-    for (size_t k = 0; k < y.size(); ++k) y[k] += p[0] * (static_cast<double>(k) - f.origin) * f.dt;
+    // The kernel's clock counts the samples from the frame's origin (a whole sample: exact).
+    const pzk::pzk_block b = EffectBlock(kernel(), p, f.dt);
+    double d[1] = {-f.origin - 1};
+    for (double& v : y) v = pzk::pzk_drift_step(&b, d, d, v);
   }
   std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
     const double s = d.Sign();

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "model/format.h"
+#include "model/kernels/pzk.h"
 
 namespace pz::model {
 namespace {
@@ -104,18 +105,20 @@ void ApplyPi(const PiOperator& op, std::span<const double> u, std::span<double> 
   if (y.size() != u.size()) throw InputError("ApplyPi: output size mismatch");
   if (u.empty()) return;
   RequireResolved(op.start, "ApplyPi");
+  // The step is the PI kernel's (model/kernels/play_operators.h pzk_pi_step) on the operator's own
+  // thresholds: y = w0 u + Σ w_i z_i, the plays updated in order.
   const size_t n = op.thresholds.size();
-  std::vector<double> z(n);
+  std::vector<double> w(n + 1), z(n);
+  w[0] = op.w0;
+  std::copy(op.weights.begin(), op.weights.end(), w.begin() + 1);
+  pzk::pzk_block b{};
+  b.kind = pzk::PZK_PRANDTL_ISHLINSKII;
+  b.n = static_cast<int>(n);
+  b.w = w.data();
+  b.nw = static_cast<int>(n + 1);
   for (size_t i = 0; i < n; ++i) z[i] = PlayRest(u[0], op.thresholds[i], op.start);
-  for (size_t k = 0; k < u.size(); ++k) {
-    const double uk = u[k];
-    double acc = op.w0 * uk;
-    for (size_t i = 0; i < n; ++i) {
-      z[i] = std::max(uk - op.thresholds[i], std::min(uk + op.thresholds[i], z[i]));
-      acc += op.weights[i] * z[i];
-    }
-    y[k] = acc;
-  }
+  for (size_t k = 0; k < u.size(); ++k)
+    y[k] = pzk::pzk_pi_step(&b, op.thresholds.data(), z.data(), z.data(), u[k]);
 }
 
 PiOperator InvertPi(const PiOperator& op) {

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "model/format.h"
+#include "model/kernels/pzk.h"
 
 namespace pz::model {
 namespace {
@@ -30,16 +31,68 @@ struct GridTables {
     first.push_back(c.size());
   }
   size_t widths() const { return r.size(); }
-  /// Σ_ij w_ij φ_ij(p_i) for the play values p.
-  double Output(std::span<const double> w, const double* p) const {
-    double acc = 0;
-    for (size_t i = 0; i < r.size(); ++i) {
-      const double pi = p[i];
-      for (size_t q = first[i]; q < first[i + 1]; ++q)
-        acc += w[q] * (std::clamp(pi, c[q], c[q] + delta) - c[q] + k[i]);
-    }
-    return acc;
+};
+
+static_assert(static_cast<int>(InitialState::kDescended) == pzk::PZK_DESCENDED &&
+              static_cast<int>(InitialState::kAscended) == pzk::PZK_ASCENDED &&
+              static_cast<int>(InitialState::kCentred) == pzk::PZK_CENTRED);
+
+/// The Preisach grid as its kernel's block (model/kernels/play_operators.h pzk_preisach_step): the
+/// constants c = {Δ, r_i, k_i, centres}; Step(d, o, x) moves the plays d to x into o and returns
+/// Σ_ij w_ij φ_ij(o_i).
+class PreisachKernel {
+ public:
+  PreisachKernel(const PreisachGrid& g, std::span<const double> w, InitialState start)
+      : n_(static_cast<size_t>(g.levels)), c_(1 + 2 * n_ + g.cells()) {
+    b_.kind = pzk::PZK_PREISACH;
+    b_.n = g.levels;
+    b_.u_min = g.u_min;
+    b_.u_max = g.u_max;
+    b_.w = w.data();
+    b_.nw = static_cast<int>(w.size());
+    b_.init = static_cast<int>(start);
   }
+  PreisachKernel(const PreisachKernel&) = delete;
+  PreisachKernel& operator=(const PreisachKernel&) = delete;
+  size_t widths() const { return n_; }
+  double half_width(size_t i) const { return c_[1 + i]; }
+  /// The plays d at rest at x (the constants made); returns the output there.
+  double Init(double* d, double x) { return pzk::pzk_preisach_init(&b_, c_.data(), d, x); }
+  double Step(const double* d, double* o, double x) const {
+    return pzk::pzk_preisach_step(&b_, c_.data(), d, o, x);
+  }
+
+ private:
+  size_t n_;
+  std::vector<double> c_;
+  pzk::pzk_block b_{};
+};
+
+/// The asymmetric PI as its kernel's block (model/kernels/play_operators.h pzk_asym_pi_step): c =
+/// {thresholds, knots}, w = {w0, weights, up, down}; Step(d, o, x) moves the plays d to x into o
+/// and returns the output.
+class AsymmetricPiKernel {
+ public:
+  explicit AsymmetricPiKernel(const AsymmetricPi& op) {
+    c_ = op.thresholds;
+    c_.insert(c_.end(), op.knots.begin(), op.knots.end());
+    w_.push_back(op.w0);
+    for (const auto* v : {&op.weights, &op.up, &op.down}) w_.insert(w_.end(), v->begin(), v->end());
+    b_.kind = pzk::PZK_ASYMMETRIC_PI;
+    b_.n = static_cast<int>(op.thresholds.size());
+    b_.m = static_cast<int>(op.knots.size());
+    b_.w = w_.data();
+    b_.nw = static_cast<int>(w_.size());
+  }
+  AsymmetricPiKernel(const AsymmetricPiKernel&) = delete;
+  AsymmetricPiKernel& operator=(const AsymmetricPiKernel&) = delete;
+  double Step(const double* d, double* o, double x) const {
+    return pzk::pzk_asym_pi_step(&b_, c_.data(), d, o, x);
+  }
+
+ private:
+  std::vector<double> c_, w_;
+  pzk::pzk_block b_{};
 };
 
 /// Solves f(v) = ref for a non-decreasing f on [lo, hi] with f(lo) ≤ ref ≤ f(hi), by bisection down
@@ -147,7 +200,7 @@ void PreisachRegressors(const PreisachGrid& grid, std::span<const double> u, std
 
 void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::span<const double> u,
                    std::span<double> y, InitialState start) {
-  const GridTables t(grid);
+  ThrowIfError(grid.Validate());
   if (w.size() != grid.cells()) {
     throw InputError("preisach: " + std::to_string(w.size()) + " weights for " +
                      std::to_string(grid.cells()) + " cells");
@@ -155,13 +208,10 @@ void ApplyPreisach(const PreisachGrid& grid, std::span<const double> w, std::spa
   if (y.size() != u.size()) throw InputError("ApplyPreisach: output size mismatch");
   if (u.empty()) return;
   RequireResolved(start, "ApplyPreisach");
-  std::vector<double> p(t.widths());
-  for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], t.r[i], start);
-  for (size_t s = 0; s < u.size(); ++s) {
-    for (size_t i = 0; i < p.size(); ++i)
-      p[i] = std::max(u[s] - t.r[i], std::min(u[s] + t.r[i], p[i]));
-    y[s] = t.Output(w, p.data());
-  }
+  PreisachKernel kernel(grid, w, start);  // the step is the kernel's
+  std::vector<double> p(kernel.widths());
+  y[0] = kernel.Init(p.data(), u[0]);
+  for (size_t s = 1; s < u.size(); ++s) y[s] = kernel.Step(p.data(), p.data(), u[s]);
 }
 
 namespace {
@@ -204,7 +254,7 @@ std::vector<double> PreisachTriangleRoughness(const PreisachGrid& grid) {
 InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w,
                              std::span<const double> y_ref, double u_lo, double u_hi,
                              std::span<double> u, InitialState start) {
-  const GridTables t(grid);
+  ThrowIfError(grid.Validate());
   if (w.size() != grid.cells()) {
     throw InputError("preisach inverse: " + std::to_string(w.size()) + " weights for " +
                      std::to_string(grid.cells()) + " cells");
@@ -223,27 +273,26 @@ InverseReport InvertPreisach(const PreisachGrid& grid, std::span<const double> w
   InverseReport rep;
   if (u.empty()) return rep;
   RequireResolved(start, "InvertPreisach");
-  const size_t n = t.widths();
+  // The forward step is the kernel's (PreisachKernel): a trial moves the plays into `trial`.
+  PreisachKernel kernel(grid, w, start);
+  const size_t n = kernel.widths();
   std::vector<double> p(n), trial(n);
+  kernel.Init(p.data(), u_lo);  // the constants
   // The first sample: a rest state (every play at PlayRest(v)), whose output is non-decreasing in
   // v.
   auto rest = [&](double v) {
-    for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, t.r[i], start);
-    return t.Output(w, trial.data());
+    for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, kernel.half_width(i), start);
+    return kernel.Step(trial.data(), trial.data(), v);
   };
   const double mid = 0.5 * (u_lo + u_hi);
   double v = SolveStep(rest, mid, rest(mid), y_ref[0], u_lo, u_hi, &rep);
-  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(v, t.r[i], start);
-  double y = t.Output(w, p.data());
+  for (size_t i = 0; i < n; ++i) p[i] = PlayRest(v, kernel.half_width(i), start);
+  double y = kernel.Step(p.data(), p.data(), v);
   u[0] = v;
   for (size_t s = 1; s < y_ref.size(); ++s) {
-    auto step = [&](double x) {
-      for (size_t i = 0; i < n; ++i) trial[i] = std::max(x - t.r[i], std::min(x + t.r[i], p[i]));
-      return t.Output(w, trial.data());
-    };
+    auto step = [&](double x) { return kernel.Step(p.data(), trial.data(), x); };
     v = SolveStep(step, v, y, y_ref[s], u_lo, u_hi, &rep);
-    for (size_t i = 0; i < n; ++i) p[i] = std::max(v - t.r[i], std::min(v + t.r[i], p[i]));
-    y = t.Output(w, p.data());
+    y = kernel.Step(p.data(), p.data(), v);
     u[s] = v;
   }
   return rep;
@@ -329,32 +378,15 @@ void AsymmetricPiRegressors(std::span<const double> r, std::span<const double> z
   }
 }
 
-namespace {
-
-/// The asymmetric PI's output for the drive x and the play values p (already updated for x).
-double AsymmetricOutput(const AsymmetricPi& op, double x, const double* p) {
-  double acc = op.w0 * x;
-  for (size_t i = 0; i < op.weights.size(); ++i) acc += op.weights[i] * p[i];
-  for (size_t j = 0; j < op.knots.size(); ++j) {
-    acc += op.up[j] * std::max(x - op.knots[j], 0.0) + op.down[j] * std::min(x - op.knots[j], 0.0);
-  }
-  return acc;
-}
-
-}  // namespace
-
 void ApplyAsymmetricPi(const AsymmetricPi& op, std::span<const double> u, std::span<double> y) {
   ThrowIfError(op.Validate());
   if (y.size() != u.size()) throw InputError("ApplyAsymmetricPi: output size mismatch");
   if (u.empty()) return;
   RequireResolved(op.start, "ApplyAsymmetricPi");
+  const AsymmetricPiKernel kernel(op);  // the step is the kernel's
   std::vector<double> p(op.thresholds.size());
   for (size_t i = 0; i < p.size(); ++i) p[i] = PlayRest(u[0], op.thresholds[i], op.start);
-  for (size_t s = 0; s < u.size(); ++s) {
-    for (size_t i = 0; i < p.size(); ++i)
-      p[i] = std::max(u[s] - op.thresholds[i], std::min(u[s] + op.thresholds[i], p[i]));
-    y[s] = AsymmetricOutput(op, u[s], p.data());
-  }
+  for (size_t s = 0; s < u.size(); ++s) y[s] = kernel.Step(p.data(), p.data(), u[s]);
 }
 
 void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref,
@@ -373,29 +405,24 @@ void InvertAsymmetricPi(const AsymmetricPi& op, std::span<const double> y_ref,
       throw InputError("asymmetric-pi inverse: a reference sample is not finite");
   RequireResolved(op.start, "InvertAsymmetricPi");
   const size_t n = op.thresholds.size();
+  const AsymmetricPiKernel kernel(op);  // the forward step: a trial moves the plays into `trial`
   std::vector<double> p(n), trial(n);
   InverseReport rep;  // never saturates: the operator is unbounded
   auto rest = [&](double v) {
     for (size_t i = 0; i < n; ++i) trial[i] = PlayRest(v, op.thresholds[i], op.start);
-    return AsymmetricOutput(op, v, trial.data());
+    return kernel.Step(trial.data(), trial.data(), v);
   };
   double lo = 0, hi = 0;
   Bracket(rest, 0.0, y_ref[0], &lo, &hi);
   double v = Bisect(rest, lo, hi, rest(lo), rest(hi), y_ref[0]);
   for (size_t i = 0; i < n; ++i) p[i] = PlayRest(v, op.thresholds[i], op.start);
-  double y = AsymmetricOutput(op, v, p.data());
+  double y = kernel.Step(p.data(), p.data(), v);
   u[0] = v;
   for (size_t s = 1; s < y_ref.size(); ++s) {
-    auto step = [&](double x) {
-      for (size_t i = 0; i < n; ++i)
-        trial[i] = std::max(x - op.thresholds[i], std::min(x + op.thresholds[i], p[i]));
-      return AsymmetricOutput(op, x, trial.data());
-    };
+    auto step = [&](double x) { return kernel.Step(p.data(), trial.data(), x); };
     Bracket(step, v, y_ref[s], &lo, &hi);
     v = SolveStep(step, v, y, y_ref[s], lo, hi, &rep);
-    for (size_t i = 0; i < n; ++i)
-      p[i] = std::max(v - op.thresholds[i], std::min(v + op.thresholds[i], p[i]));
-    y = AsymmetricOutput(op, v, p.data());
+    y = kernel.Step(p.data(), p.data(), v);
     u[s] = v;
   }
 }

@@ -1,27 +1,11 @@
 #include "model/stack_models.h"
 
 #include <cmath>
-#include <numbers>
 
 #include "model/kernels/pzk.h"
 
 namespace pz::model {
 namespace {
-
-// φ(z) = (1 − e^{−z}) / z, φ(0) = 1: the exact solution of x' = a − k x over a length v is
-// x(v) = x + (a − k x) v φ(k v).
-inline double Phi(double z) {
-  // Taylor for small |z| (error < z⁴/120 < 1e-14 for |z| < 1e-2.5): the low-frequency records
-  // have tiny steps of u, and this spares them a call of expm1.
-  if (std::abs(z) < 3e-3) return 1.0 + z * (-0.5 + z * (1.0 / 6.0 - z * (1.0 / 24.0)));
-  return -std::expm1(-z) / z;
-}
-
-// L(z) = log1p(z) / z, L(0) = 1.
-inline double LogRatio(double z) {
-  if (std::abs(z) < 1e-8) return 1.0 - 0.5 * z;
-  return std::log1p(z) / z;
-}
 
 bool Finite(double x) { return std::isfinite(x); }
 
@@ -109,22 +93,9 @@ std::vector<double> ToVector(const StackBoucWenParams& p) {
 std::vector<double> ToVector(const BacklashLikeParams& p) { return {p.alpha, p.c, p.b1}; }
 
 double BoucWenStateStep(double h, double du, double alpha, double beta, double gamma) {
-  if (du == 0) return h;
-  const double s = du > 0 ? 1.0 : -1.0;
-  // The sign region of h on this piece: at h = 0 the slope is α, so h leaves 0 towards sgn(α du).
-  const bool positive = h > 0 || (h == 0 && alpha * du >= 0);
-  const double k = beta * s + (positive ? gamma : -gamma);
-  const double h1 = h + (alpha - k * h) * du * Phi(k * du);
-  if (h == 0 || alpha == 0) return h1;  // from 0, or towards the fixed point 0: no crossing
-  if ((h > 0 && h1 >= 0) || (h < 0 && h1 <= 0)) return h1;
-  // h changes sign inside the piece (monotone exponential in u, so once): at
-  // v0 = ln(1 − k h / α) / k = (−h/α) L(−k h/α); the rest from 0 on the other side.
-  const double z = -k * h / alpha;
-  const double v0 = (-h / alpha) * LogRatio(z);
-  const double rest = du - v0;
-  if (!(rest * du > 0)) return 0.0;  // the crossing is at the end of the piece (rounding)
-  const double k2 = beta * s + (positive ? -gamma : gamma);
-  return alpha * rest * Phi(k2 * rest);
+  // The kernel's (model/kernels/stack_models.h pzk_bouc_wen_state_step): exact on the piece, h
+  // split where it changes sign.
+  return pzk::pzk_bouc_wen_state_step(h, du, alpha, beta, gamma);
 }
 
 void SimulateStackBoucWen(const StackBoucWenParams& p, std::span<const double> u, double dt,
@@ -137,57 +108,37 @@ void SimulateStackBoucWen(const StackBoucWenParams& p, std::span<const double> u
   if (!h_out.empty() && h_out.size() != u.size())
     throw InputError("SimulateStackBoucWen: h has " + std::to_string(h_out.size()) +
                      " samples, u has " + std::to_string(u.size()));
-  const int m = options.substeps;
-  // Exact first-order-hold discretisation of dy/dt = ω (x − y) over a sub-step τ:
-  // y1 = a y0 + b0 x0 + b1 x1, a = e^{−ωτ}, b1 = 1 − (1 − a)/(ωτ), b0 = (1 − a)/(ωτ) − a.
-  const double wt = 2 * std::numbers::pi * p.fc_hz * dt / m;
-  const double one_minus_a = -std::expm1(-wt);
-  const double a = 1.0 - one_minus_a;
-  const double q = Phi(wt);  // (1 − a)/(ωτ)
-  const double b1 = 1.0 - q, b0 = q - a;
-  const double inv_m = 1.0 / m;
-  const double alpha = p.alpha, beta = p.beta, gamma = p.gamma;
-  double h = options.rest_state;
-  double x = p.d * (u[0] - h);
-  double y = x;
-  yhat[0] = y;
-  if (!h_out.empty()) h_out[0] = h;
+  // The step is the stack Bouc–Wen kernel's (model/kernels/stack_models.h pzk_stack_bw_step): m
+  // sub-steps of the exact h update on a straight piece of drive, each followed by the driver
+  // filter dy/dt = ω (x − y), x = d (u − h), discretised exactly for x linear over a sub-step.
+  const double params[5] = {p.alpha, p.beta, p.gamma, p.d, p.fc_hz};
+  pzk::pzk_block b{};
+  b.kind = pzk::PZK_STACK_BOUC_WEN;
+  b.n = options.substeps;
+  b.dt = dt;
+  b.p = params;
+  b.np = 5;
+  b.init = pzk::PZK_CENTRED;
+  double c[4], d[4];
+  pzk::pzk_stack_bw_init(&b, c, d, u[0]);  // the constants; the state at rest is the options'
+  d[0] = options.rest_state;
+  d[1] = p.d * (u[0] - d[0]);
+  d[2] = d[1];
+  yhat[0] = d[2];
+  if (!h_out.empty()) h_out[0] = d[0];
   for (size_t k = 1; k < u.size(); ++k) {
-    const double du = (u[k] - u[k - 1]) * inv_m;
-    // The m sub-steps share du, so φ(k du) of each sign region of h is computed once per sample
-    // (lazily); a sub-step where h changes sign takes the general (splitting) update.
-    const double s = du >= 0 ? 1.0 : -1.0;
-    const double kp = beta * s + gamma, kn = beta * s - gamma;
-    double php = 0, phn = 0;
-    bool have_p = false, have_n = false;
-    for (int j = 1; j <= m; ++j) {
-      const double uj = (j == m) ? u[k] : u[k - 1] + j * du;
-      if (du != 0) {
-        const bool positive = h > 0 || (h == 0 && alpha * du >= 0);
-        double h1;
-        if (positive) {
-          if (!have_p) php = Phi(kp * du), have_p = true;
-          h1 = h + (alpha - kp * h) * du * php;
-        } else {
-          if (!have_n) phn = Phi(kn * du), have_n = true;
-          h1 = h + (alpha - kn * h) * du * phn;
-        }
-        if ((h > 0 && h1 < 0) || (h < 0 && h1 > 0))
-          h1 = BoucWenStateStep(h, du, alpha, beta, gamma);  // sign change inside the sub-step
-        h = h1;
-      }
-      const double x1 = p.d * (uj - h);
-      y = a * y + b0 * x + b1 * x1;
-      x = x1;
-    }
-    yhat[k] = y;
-    if (!h_out.empty()) h_out[k] = h;
+    yhat[k] = pzk::pzk_stack_bw_step(&b, c, d, d, u[k]);
+    if (!h_out.empty()) h_out[k] = d[0];
   }
 }
 
 double BacklashLikeStateStep(double w, double du, const BacklashLikeParams& p) {
-  const double as = du >= 0 ? p.alpha : -p.alpha;
-  return w + ((p.c - p.b1) - as * w) * du * Phi(as * du);
+  // The kernel's (model/kernels/stack_models.h pzk_backlash_state_step).
+  const double params[3] = {p.alpha, p.c, p.b1};
+  pzk::pzk_block b{};
+  b.p = params;
+  b.np = 3;
+  return pzk::pzk_backlash_state_step(&b, w, du);
 }
 
 double StackRestState(const StackBoucWenParams& p, double range, InitialState s) {

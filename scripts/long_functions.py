@@ -35,9 +35,6 @@ ALLOWED = [
      "the CVODE integration (setup, stops, restarts, hooks sharing one solver's state): split "
      "only when bench_fitness and bench_record_fit show no loss in pair runs; not split yet "
      "(issue 38)"),
-    ("client/cmd_fit.cc", "*",
-     "FitJson, RegisterFit, WriteFitReport (121-132 lines after the 100-column reformat): the file "
-     "is another branch's in issue 38; split there, then drop this entry"),
 ]
 
 FUNCTION_QUALIFIERS = {"const", "override", "final", "noexcept", "mutable", "try", "volatile", "&", "&&"}

@@ -63,14 +63,14 @@ static inline double pzk_asym_pi_init(const pzk_block *b, double *c, double *d, 
 static inline double pzk_preisach_step(const pzk_block *b, const double *c, const double *d,
                                        double *o, double v) {
   const int n = b->n;
-  const double delta = c[0], *r = c + 1, *k = c + 1 + n, *cen = c + 1 + 2 * n;
+  const double delta = c[0], *r = c + 1, *k = c + 1 + n, *cen = c + 1 + 2 * n, *w = b->w;
   double acc = 0;
   int i, j, q = 0;
+  for (i = 0; i < n; ++i) o[i] = pzk_play(v, r[i], d[i]); /* the plays first: a vector loop */
   for (i = 0; i < n; ++i) {
-    double p = pzk_play(v, r[i], d[i]);
-    o[i] = p;
+    const double p = o[i], ki = k[i];
     for (j = 0; j < n - i; ++j, ++q)
-      acc += (pzk_clamp(p, cen[q], cen[q] + delta) - cen[q] + k[i]) * b->w[q];
+      acc += (pzk_clamp(p, cen[q], cen[q] + delta) - cen[q] + ki) * w[q];
   }
   return acc;
 }

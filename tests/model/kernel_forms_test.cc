@@ -1,0 +1,279 @@
+// The library's C++ forms that run their step kernel (model/kernels/, issue 38 part 3), each
+// against a frozen reference: a digest of the bits of its output on random drives and parameters,
+// recorded from the arithmetic they replaced (the C++ loops of model/ before the move). A change of
+// one bit of one sample changes the digest.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "model/bw_oscillator.h"
+#include "model/effect_library.h"
+#include "model/preisach.h"
+#include "model/prandtl_ishlinskii.h"
+#include "model/stack_models.h"
+
+namespace pz::model {
+namespace {
+
+// FNV-1a over the bits of doubles.
+struct Digest {
+  uint64_t h = 1469598103934665603ULL;
+  void Add(double x) {
+    uint64_t b;
+    std::memcpy(&b, &x, sizeof b);
+    for (int i = 0; i < 8; ++i) {
+      h ^= (b >> (8 * i)) & 0xff;
+      h *= 1099511628211ULL;
+    }
+  }
+  void Add(std::span<const double> v) {
+    for (double x : v) Add(x);
+  }
+};
+
+// Uniform doubles from the raw 64-bit stream (the same on every standard library).
+struct Draw {
+  std::mt19937_64 g;
+  explicit Draw(uint64_t seed) : g(seed) {}
+  double U() { return static_cast<double>(g() >> 11) * 0x1.0p-53; }
+  double U(double lo, double hi) { return lo + (hi - lo) * U(); }
+  int I(int lo, int hi) { return lo + static_cast<int>(g() % static_cast<uint64_t>(hi - lo + 1)); }
+  InitialState State() {
+    const int s = I(0, 2);
+    return s == 0   ? InitialState::kCentred
+           : s == 1 ? InitialState::kDescended
+                    : InitialState::kAscended;
+  }
+  // A drive of n samples in about [-1, 1]: sines, a random walk, holds (du = 0) and jumps.
+  std::vector<double> Drive(size_t n) {
+    std::vector<double> u(n);
+    const double f1 = U(0.002, 0.05), f2 = U(0.01, 0.2), a2 = U(0, 0.4), ph = U(0, 6.28);
+    double walk = 0;
+    for (size_t k = 0; k < n; ++k) {
+      walk += U(-0.02, 0.02);
+      double v = 0.6 * std::sin(f1 * static_cast<double>(k) + ph) +
+                 a2 * std::sin(f2 * static_cast<double>(k)) + walk;
+      if (k > 0 && U() < 0.08) v = u[k - 1];  // a hold
+      if (U() < 0.01) v += U(-0.5, 0.5);      // a jump
+      u[k] = v;
+    }
+    return u;
+  }
+  std::vector<double> Increasing(int n, double lo, double hi) {
+    std::vector<double> r(static_cast<size_t>(n));
+    double x = lo;
+    for (auto& e : r) e = x += U(0.05, 1.0) * (hi - lo) / n;
+    return r;
+  }
+  std::vector<double> Values(int n, double lo, double hi) {
+    std::vector<double> w(static_cast<size_t>(n));
+    for (auto& e : w) e = U(lo, hi);
+    return w;
+  }
+};
+
+constexpr int kDrives = 300;
+constexpr size_t kSamples = 400;
+
+TEST(KernelForms, ApplyPiMatchesFrozenDigest) {
+  Draw d(38001);
+  Digest dig;
+  for (int t = 0; t < kDrives; ++t) {
+    const auto u = d.Drive(kSamples);
+    PiOperator op;
+    const int n = d.I(1, 24);
+    op.w0 = d.U(-0.5, 2);
+    op.thresholds = d.Increasing(n, 0.0, 1.2);
+    op.weights = d.Values(n, -0.3, 1.0);
+    op.start = d.State();
+    std::vector<double> y(u.size());
+    ApplyPi(op, u, y);
+    dig.Add(y);
+  }
+  EXPECT_EQ(dig.h, 15403657618052286110ULL);
+}
+
+TEST(KernelForms, ApplyAsymmetricPiMatchesFrozenDigest) {
+  Draw d(38002);
+  Digest dig;
+  for (int t = 0; t < kDrives; ++t) {
+    const auto u = d.Drive(kSamples);
+    AsymmetricPi op;
+    const int n = d.I(0, 16), K = d.I(0, 8);
+    op.w0 = d.U(-0.5, 2);
+    op.thresholds = d.Increasing(n, 0.0, 1.2);
+    op.weights = d.Values(n, -0.3, 1.0);
+    op.knots = d.Increasing(K, -1.2, 1.2);
+    op.up = d.Values(K, -0.2, 0.8);
+    op.down = d.Values(K, -0.2, 0.8);
+    op.start = d.State();
+    std::vector<double> y(u.size());
+    ApplyAsymmetricPi(op, u, y);
+    dig.Add(y);
+  }
+  EXPECT_EQ(dig.h, 4061216772735131495ULL);
+}
+
+TEST(KernelForms, ApplyPreisachMatchesFrozenDigest) {
+  Draw d(38003);
+  Digest dig;
+  for (int t = 0; t < kDrives; ++t) {
+    const auto u = d.Drive(kSamples);
+    PreisachGrid g;
+    g.u_min = d.U(-1.5, -0.3);
+    g.u_max = d.U(0.3, 1.5);
+    g.levels = d.I(1, 16);
+    const auto w = d.Values(static_cast<int>(g.cells()), -0.2, 1.0);
+    std::vector<double> y(u.size());
+    ApplyPreisach(g, w, u, y, d.State());
+    dig.Add(y);
+  }
+  EXPECT_EQ(dig.h, 14862316398584256949ULL);
+}
+
+// The inverses solve the forward step (the kernel's) by bisection: their drives pin its bits too.
+TEST(KernelForms, InversesMatchFrozenDigest) {
+  Draw d(38007);
+  Digest dig;
+  for (int t = 0; t < 60; ++t) {
+    const auto ref = d.Drive(200);
+    PreisachGrid g;
+    g.u_min = d.U(-1.5, -0.3);
+    g.u_max = d.U(0.3, 1.5);
+    g.levels = d.I(1, 10);
+    const auto w = d.Values(static_cast<int>(g.cells()), 0, 0.3);
+    std::vector<double> u(ref.size());
+    const InverseReport rep = InvertPreisach(g, w, ref, -2, 2, u, d.State());
+    dig.Add(u);
+    dig.Add(static_cast<double>(rep.saturated));
+    dig.Add(rep.max_shortfall);
+    AsymmetricPi op;
+    const int n = d.I(0, 10), K = d.I(0, 5);
+    op.w0 = d.U(0.1, 2);
+    op.thresholds = d.Increasing(n, 0.0, 1.2);
+    op.weights = d.Values(n, 0, 1.0);
+    op.knots = d.Increasing(K, -1.2, 1.2);
+    op.up = d.Values(K, 0, 0.8);
+    op.down = d.Values(K, 0, 0.8);
+    op.start = d.State();
+    InvertAsymmetricPi(op, ref, u);
+    dig.Add(u);
+  }
+  EXPECT_EQ(dig.h, 4286069997716778037ULL);
+}
+
+TEST(KernelForms, StackBoucWenMatchesFrozenDigest) {
+  Draw d(38004);
+  Digest dig;
+  for (int t = 0; t < kDrives; ++t) {
+    const auto u = d.Drive(kSamples);
+    StackBoucWenParams p{d.U(0, 2.5), d.U(-1, 3), d.U(-2, 2), d.U(0.2, 3), d.U(1, 400)};
+    if (t % 17 == 0) p.alpha = 0;
+    StackSimOptions o;
+    o.substeps = d.I(1, 8);
+    o.rest_state = t % 3 == 0 ? 0.0 : d.U(-0.5, 0.5);
+    const double dt = d.U(1e-4, 5e-3);
+    std::vector<double> y(u.size()), h(u.size());
+    SimulateStackBoucWen(p, u, dt, y, o, h);
+    dig.Add(y);
+    dig.Add(h);
+    const InitialState s = d.State();
+    if (s != InitialState::kCentred) dig.Add(StackRestState(p, d.U(0.1, 2), s));
+    BacklashLikeParams q{d.U(0, 3), d.U(-1, 2), d.U(-1, 2)};
+    dig.Add(StackRestState(q, d.U(0.1, 2), d.State()));
+    dig.Add(BoucWenStateStep(d.U(-1, 1), d.U(-1, 1), p.alpha, p.beta, p.gamma));
+  }
+  EXPECT_EQ(dig.h, 3848101983860400004ULL);
+}
+
+TEST(KernelForms, EffectsMatchFrozenDigest) {
+  Draw d(38005);
+  Digest dig;
+  for (int t = 0; t < kDrives; ++t) {
+    const auto u = d.Drive(kSamples);
+    const double dt = d.U(1e-4, 5e-3);
+    for (const EffectDef* e : Effects()) {
+      std::vector<double> p;
+      if (std::string(e->name()) == "creep-spectrum") {
+        p = d.Values(12, 0, 0.05);
+      } else {
+        p = {d.U(0, 0.02), d.U(0.001, 0.5)};
+        if (std::string(e->name()) == "creep") p = {d.U(-0.3, 0.3), d.U(1e-4, 2)};
+        if (std::string(e->name()) == "delay") p = {d.U(0, 60) * dt};
+        if (std::string(e->name()) == "rate-dependence") p = {d.U(0, 0.3), d.U(1e-4, 0.05)};
+        if (std::string(e->name()) == "quadratic-drive") p = {d.U(-0.3, 0.3)};
+        if (std::string(e->name()) == "friction") p = {d.U(-0.05, 0.3)};
+        if (std::string(e->name()) == "stiffening") p = {d.U(-0.3, 0.3)};
+        if (std::string(e->name()) == "drift") p = {d.U(-0.2, 0.2)};
+      }
+      std::vector<double> y = u;
+      if (e->stage() == EffectStage::kDrive) {
+        e->ApplyDrive(p, dt, y);
+      } else if (e->stage() == EffectStage::kOutput) {
+        OutputFrame f;
+        f.dt = dt;
+        f.origin = d.I(0, 50);
+        f.y_half = d.U(0.3, 2);
+        f.duration = 10.0 * d.U(0.5, 3);
+        e->ApplyOutput(p, f, y);
+      }
+      dig.Add(y);
+    }
+  }
+  EXPECT_EQ(dig.h, 7983903807944421268ULL);
+}
+
+TEST(KernelForms, BwOscillatorMatchesFrozenDigest) {
+  Draw d(38006);
+  Digest dig;
+  const InputInterpolation kinds[] = {InputInterpolation::kLinear,
+                                      InputInterpolation::kZeroOrderHold,
+                                      InputInterpolation::kCubicSpline};
+  for (int t = 0; t < 60; ++t) {
+    std::vector<double> u = d.Drive(kSamples);
+    for (double& v : u) v *= 60;  // volts
+    BwInputOptions io;
+    io.sample_rate_hz = d.U(300, 2000);
+    io.substeps = d.I(1, 12);
+    io.interpolation = kinds[t % 3];
+    const BwInput in(u, io);
+    const int lanes = d.I(1, 7);
+    std::vector<BwParams> ps(static_cast<size_t>(lanes));
+    for (auto& p : ps) {
+      p.m = d.U(1, 3);
+      p.c = d.U(5, 40);
+      p.k = d.U(3e4, 8e4);
+      p.alpha = d.U(2e4, 8e4);
+      p.beta = d.U(500, 2000);
+      p.gamma = d.U(-1, 1);
+      p.delta = d.U(-1.5, 0.5);
+      p.nu = t % 10 == 9 ? d.U(1, 1.5) : 1.0;
+    }
+    std::vector<std::vector<double>> ys(ps.size(), std::vector<double>(u.size()));
+    std::vector<std::span<double>> spans(ys.begin(), ys.end());
+    std::vector<const BwInput*> ins(ps.size(), &in);
+    std::vector<BwState> st(ps.size());
+    const std::vector<Status> ok = SimulateBwMany(ps, ins, spans, st);
+    for (size_t l = 0; l < ps.size(); ++l) {
+      dig.Add(ys[l]);
+      dig.Add(st[l].y);
+      dig.Add(st[l].v);
+      dig.Add(st[l].z);
+      dig.Add(ok[l].ok() ? 1.0 : 0.0);
+      std::vector<double> y1(u.size());
+      BwState s1;
+      const Status one = SimulateBw(ps[l], in, y1, &s1);
+      dig.Add(y1);
+      dig.Add(s1.z);
+      dig.Add(one.ok() ? 1.0 : 0.0);
+    }
+  }
+  EXPECT_EQ(dig.h, 12762309032596268373ULL);
+}
+
+}  // namespace
+}  // namespace pz::model
