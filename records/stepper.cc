@@ -1,6 +1,7 @@
 #include "records/stepper.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include "io/csv.h"
 #include "model/bimorph.h"
@@ -88,6 +89,17 @@ void ModelSpec::Validate() const {
   if (!(std::isfinite(drive_min) && std::isfinite(drive_max) && drive_min < drive_max)) {
     throw InputError("model.drive_min / drive_max = [" + io::FormatNumber(drive_min) + ", " +
                      io::FormatNumber(drive_max) + "]: must be finite with min < max");
+  }
+  // A fit writes the training drive's range; an amplifier's range may widen it, but a model is
+  // meaningless 1000 half-ranges beyond its data (and the fin's sub-steps grow with the jump).
+  constexpr double kMaxHalfRanges = 1e3;
+  const double centre = 0.5 * (scale.u_min + scale.u_max);
+  const double reach = kMaxHalfRanges * scale.u_half;
+  if (!(std::abs(drive_min - centre) <= reach && std::abs(drive_max - centre) <= reach)) {
+    throw InputError("model.drive_min / drive_max = [" + io::FormatNumber(drive_min) + ", " +
+                     io::FormatNumber(drive_max) + "]: more than 1000 half-ranges (model.scale." +
+                     "u_half = " + io::FormatNumber(scale.u_half) + ") from the training drive's " +
+                     "centre " + io::FormatNumber(centre));
   }
 }
 

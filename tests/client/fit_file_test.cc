@@ -72,5 +72,35 @@ TEST(FitFile, AFieldOfAnotherTypeIsNamed) {
   }
 }
 
+// A drive range a fit never writes (the fuzzer's: -4.3e17 V on a fin whose data spans 32 V, which
+// took the fin's sub-steps 9 s for 24 samples) is refused by name; an amplifier's wider range
+// loads.
+TEST(FitFile, ADriveRangeFarBeyondTheDataIsRefusedByName) {
+  const fs::path f =
+      fs::path(PIEZOID_DATA_DIR) / ".." / "fuzz" / "corpus-fit-model" / "bimorph-fin.json";
+  const std::string text = io::ReadTextFile(f);
+  const records::ModelSpec m = LoadFitText("x/fit.json", text);
+  const std::string field = "\"drive_min\": ";
+  const size_t at = text.find(field);
+  ASSERT_NE(at, std::string::npos);
+  const size_t end = text.find_first_of(",\n", at + field.size());
+  auto with_min = [&](double v) {
+    std::string t = text;
+    t.replace(at, end - at, field + io::FormatNumber(v));
+    return t;
+  };
+  const double centre = 0.5 * (m.scale.u_min + m.scale.u_max);
+  EXPECT_NO_THROW((void)LoadFitText("x/fit.json", with_min(centre - 3 * m.scale.u_half)));
+  try {
+    (void)LoadFitText("x/fit.json", with_min(-4.3e17));
+    FAIL() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x/fit.json: model.drive_min / drive_max = [-4.3e+17"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("1000 half-ranges"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace pz::client
