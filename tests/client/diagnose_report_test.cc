@@ -1,15 +1,21 @@
-// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h), written through
-// protobuf's Struct: it parses back, a string with quotes and a newline keeps them, a non-finite
-// number is null, and the names the users read are there.
+// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h): diagnosis.json
+// through its message and codec (io/diagnosis_json.h), check.json through protobuf's Struct. Each
+// parses back, a string with quotes and a newline keeps them, a non-finite number is null, the
+// names the users read are there, and diagnosis.json reads back into the message it was written
+// from.
 #include "client/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <sstream>
 #include <string>
+
+#include "diagnosis.pb.h"
+#include "io/diagnosis_json.h"
 
 namespace pz::client {
 namespace {
@@ -71,6 +77,28 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   for (const char* name : {"base", "final", "base_residuals", "final_residuals", "trends",
                            "absorbed", "absorbed_by", "named", "wall_time_s"})
     EXPECT_TRUE(s.fields().contains(name)) << name;
+  for (const char* name : {"candidates", "diverged", "records", "noise_floor", "excitation"})
+    EXPECT_FALSE(s.fields().contains(name)) << name;  // the records diagnosis's
+  // The file reads back into the message it was written from: the same bytes again, and the same
+  // message but for the non-finite numbers (null reads as NaN, which equals nothing).
+  proto::Diagnosis m, back;
+  BenchDiagnosisOf(d, o, &m);
+  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
+  EXPECT_EQ(io::WriteDiagnosisFile(back), out.str());
+  EXPECT_TRUE(std::isnan(back.confidence()));
+  EXPECT_TRUE(std::isnan(back.gap().closed()));
+  m.clear_confidence();
+  back.clear_confidence();
+  m.mutable_gap()->clear_closed();
+  back.mutable_gap()->clear_closed();
+  m.clear_base();  // train_rms_deg, withheld_rms_deg: no samples
+  back.clear_base();
+  m.clear_final();
+  back.clear_final();
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(m, back)) << out.str();
+  EXPECT_EQ(back.bench(), d.bench);
+  EXPECT_EQ(back.rounds(0).named().kind_case(), Value::kNullValue);
+  EXPECT_EQ(back.named().list_value().values_size(), 0);
 }
 
 TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
