@@ -9,13 +9,12 @@
 #include <map>
 #include <numbers>
 #include <set>
-#include <span>
 #include <sstream>
 
-#include "client/json_values.h"
 #include "client/plots.h"
 #include "diagnosis.pb.h"
 #include "io/diagnosis_json.h"
+#include "io/proto_json.h"
 #include "io/csv.h"
 #include "diagnose/verdict.h"
 
@@ -685,24 +684,6 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(
 // ---- check --------------------------------------------------------------------------------------
 
 namespace {
-
-using json::Bool;
-using json::List;
-using json::Num;
-using json::Obj;
-using json::Struct;
-using json::Text;
-using json::Value;
-
-Value Nums(std::span<const double> v) {
-  std::vector<Value> out;
-  out.reserve(v.size());
-  for (double x : v) out.push_back(Num(x));
-  return List(out);
-}
-
-Value Count(int64_t n) { return Num(static_cast<double>(n)); }
-
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
@@ -733,47 +714,37 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
 }
 
 void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s) {
-  Struct root;
-  auto& o = *root.mutable_fields();
-  std::vector<Value> columns;
-  for (int c = 0; c < diagnose::CheckCols(); ++c)
-    columns.push_back(Text(diagnose::CheckColumnName(c)));
-  o["columns"] = List(columns);
-  Struct confusion;
+  proto::DiagnosisCheck m;
+  for (int c = 0; c < diagnose::CheckCols(); ++c) m.add_columns(diagnose::CheckColumnName(c));
   for (int r = 0; r < diagnose::CheckRows(); ++r) {
-    std::vector<Value> row;
-    for (int c = 0; c < diagnose::CheckCols(); ++c) row.push_back(Count(s.confusion[r][c]));
-    (*confusion.mutable_fields())[diagnose::CheckColumnName(r)] = List(row);
+    auto& row = (*m.mutable_confusion())[diagnose::CheckColumnName(r)];
+    for (int c = 0; c < diagnose::CheckCols(); ++c)
+      row.add_values()->set_number_value(s.confusion[r][c]);
   }
-  o["confusion"] = Obj(confusion);
-  o["single_significant"] = Count(s.effect_trials);
-  o["single_significant_right"] = Count(s.effect_right);
-  o["accuracy"] = Num(s.accuracy());
-  o["clean"] = Count(s.clean);
-  o["clean_alarms"] = Count(s.clean_alarms);
-  o["false_alarm_rate"] = Num(s.false_alarm_rate());
-  o["closed"] = Nums(s.closed);
-  std::vector<Value> trials;
+  m.set_single_significant(s.effect_trials);
+  m.set_single_significant_right(s.effect_right);
+  m.set_accuracy(s.accuracy());
+  m.set_clean(s.clean);
+  m.set_clean_alarms(s.clean_alarms);
+  m.set_false_alarm_rate(s.false_alarm_rate());
+  m.mutable_closed()->Assign(s.closed.begin(), s.closed.end());
   for (const auto& t : s.trials) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["seed"] = Num(static_cast<double>(t.seed));  // exact up to 2^53
-    g["truth"] = Text(model::EffectName(t.truth));
-    g["truth_description"] = Text(t.truth_description);
-    g["magnitude"] = Num(t.magnitude);
-    g["verdict_kind"] = Text(t.verdict_kind);
-    g["named"] = Text(model::EffectName(t.named));
-    g["confidence"] = Num(t.confidence);
-    g["significant"] = Bool(t.significant);
-    g["rms_over_floor"] = Num(t.rms_ratio);
-    g["closed"] = Num(t.closed);
-    g["correct"] = Bool(t.correct());
-    g["wall_time_s"] = Num(t.wall_time_s);
-    trials.push_back(Obj(x));
+    proto::DiagnosisCheckTrial& g = *m.add_trials();
+    g.set_seed(t.seed);
+    g.set_truth(model::EffectName(t.truth));
+    g.set_truth_description(t.truth_description);
+    g.set_magnitude(t.magnitude);
+    g.set_verdict_kind(t.verdict_kind);
+    g.set_named(model::EffectName(t.named));
+    g.set_confidence(t.confidence);
+    g.set_significant(t.significant);
+    g.set_rms_over_floor(t.rms_ratio);
+    g.set_closed(t.closed);
+    g.set_correct(t.correct());
+    g.set_wall_time_s(t.wall_time_s);
   }
-  o["trials"] = List(trials);
-  o["wall_time_s"] = Num(s.wall_time_s);
-  out << json::Print(root, "check.json");
+  m.set_wall_time_s(s.wall_time_s);
+  out << io::PrintJson(m, "check.json");
 }
 
 }  // namespace pz::client

@@ -1,8 +1,8 @@
-// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h): diagnosis.json
-// through its message and codec (io/diagnosis_json.h), check.json through protobuf's Struct. Each
-// parses back, a string with quotes and a newline keeps them, a non-finite number is null, the
-// names the users read are there, and diagnosis.json reads back into the message it was written
-// from.
+// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h), each through its
+// message (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h), check.json
+// by io/proto_json.h. Each parses back, a string with quotes and a newline keeps them, a
+// non-finite number is null, the names the users read are there, and each reads back into its
+// message and prints back to the same bytes.
 #include "client/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
@@ -16,6 +16,7 @@
 
 #include "diagnosis.pb.h"
 #include "io/diagnosis_json.h"
+#include "io/proto_json.h"
 
 namespace pz::client {
 namespace {
@@ -124,6 +125,10 @@ TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
   EXPECT_TRUE(Field(trial, "correct").bool_value());
   EXPECT_EQ(Field(trial, "closed").kind_case(), Value::kNullValue);
   EXPECT_EQ(Field(trial, "truth_description").string_value(), "seed 1000: none");
+  proto::DiagnosisCheck back;  // reads into its message and prints back to the same bytes
+  io::ReadJsonMessage("check.json", out.str(), &back);
+  EXPECT_EQ(io::PrintJson(back, "check.json"), out.str());
+  EXPECT_EQ(back.trials(0).seed(), 1000u);
 }
 
 }  // namespace

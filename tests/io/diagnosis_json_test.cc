@@ -2,6 +2,7 @@
 // of tests/data/diagnosis-json (written by `piezoid diagnose` before the codec, when both writers
 // built the file key by key) read and are written back to the same bytes; a message of each kind
 // round-trips; the fields of the other kind are neither written nor read; a bad field is named.
+// And check.json of `diagnose-check` (proto::DiagnosisCheck, through io/proto_json.h).
 #include "io/diagnosis_json.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 
 #include "diagnosis.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 #include "model/status.h"
 
 namespace pz::io {
@@ -236,6 +238,18 @@ TEST(DiagnosisCodec, TheWriterRefusesAMessageOfNoKindOrAFieldOfTheOtherKind) {
   proto::Diagnosis shape = BenchMessage();
   shape.mutable_named()->set_string_value("delay");
   EXPECT_THROW(WriteDiagnosisFile(shape), std::logic_error);
+}
+
+TEST(DiagnosisCheckFile, AnOldCheckJsonReadsAndPrintsBackToTheSameBytes) {
+  const std::string text = ReadTextFile(Data("check.json"));
+  proto::DiagnosisCheck c;
+  ReadJsonMessage("check.json", text, &c);
+  EXPECT_EQ(PrintJson(c, "check.json"), text);
+  ASSERT_EQ(c.trials_size(), 3);
+  EXPECT_EQ(c.trials(0).seed(), 1u);
+  EXPECT_EQ(c.columns_size(), static_cast<int>(c.confusion().size()) + 1);  // + unexplained
+  ASSERT_TRUE(c.confusion().contains("none"));
+  EXPECT_EQ(c.confusion().at("none").values_size(), c.columns_size());
 }
 
 }  // namespace
