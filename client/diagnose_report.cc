@@ -324,6 +324,10 @@ void RoundOf(const RoundResult& r, proto::DiagnosisRound* o) {
     o->mutable_named()->set_string_value(model::EffectName(r.candidates[r.named].kind));
   else
     o->mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
+  if (r.runner_up >= 0) {
+    o->mutable_runner_up()->set_effect(model::EffectName(r.candidates[r.runner_up].kind));
+    o->mutable_runner_up()->set_z(r.z_runner_up);
+  }
   o->set_verdict(r.verdict);
   for (const auto& c : r.candidates) CandidateOf(c, o->add_candidates());
 }

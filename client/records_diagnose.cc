@@ -122,6 +122,11 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
         records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind));
   else
     m.mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
+  if (d.runner_up >= 0) {
+    m.mutable_runner_up()->set_effect(
+        records::EffectName(d.candidates[static_cast<size_t>(d.runner_up)].kind));
+    m.mutable_runner_up()->set_z(d.z_runner_up);
+  }
   m.set_confidence(d.confidence);
   m.set_verdict_kind(d.verdict_kind);
   m.set_verdict(d.verdict);

@@ -102,6 +102,35 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   EXPECT_EQ(back.named().list_value().values_size(), 0);
 }
 
+TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
+  diagnose::Diagnosis d;
+  d.bench = "bench";
+  d.verdict_kind = "inseparable";
+  d.named = {model::EffectKind::Named("delay")};
+  d.confidence = 0.6;
+  diagnose::RoundResult r;
+  r.candidates.resize(2);
+  r.candidates[0].kind = model::EffectKind::Named("delay");
+  r.candidates[1].kind = model::EffectKind::Named("driver-lowpass");
+  r.named = 0;
+  r.runner_up = 1;
+  r.z_runner_up = 0.75;
+  d.rounds.push_back(r);
+  d.rounds.push_back(diagnose::RoundResult{});  // no runner-up: none written
+  std::ostringstream out;
+  WriteDiagnosisJson(out, d, diagnose::DiagnoseOptions{});
+  proto::Diagnosis back;
+  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
+  ASSERT_EQ(back.rounds_size(), 2);
+  EXPECT_EQ(back.rounds(0).named().string_value(), "delay");
+  EXPECT_EQ(back.rounds(0).runner_up().effect(), "driver-lowpass");
+  EXPECT_EQ(back.rounds(0).runner_up().z(), 0.75);
+  EXPECT_FALSE(back.rounds(1).has_runner_up());
+  EXPECT_FALSE(back.has_runner_up());  // the bench's is in its round
+  EXPECT_EQ(back.named().list_value().values(0).string_value(), "delay");
+  EXPECT_EQ(back.confidence(), 0.6);
+}
+
 TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
   diagnose::CheckSummary s;
   diagnose::CheckTrial t;

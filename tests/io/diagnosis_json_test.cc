@@ -109,6 +109,8 @@ proto::Diagnosis RecordsMessage() {
   c.set_z_vs_base(4.5);
   d.add_diverged("creep");
   d.set_withheld_samples(1200);
+  d.mutable_runner_up()->set_effect("driver-lowpass");
+  d.mutable_runner_up()->set_z(0.8);
   d.mutable_next_measurement()->set_waveform("sine");
   d.mutable_next_measurement()->set_frequency_hz(12.5);
   d.mutable_excitation()->set_excitation_gap(true);
@@ -124,7 +126,9 @@ proto::Diagnosis BenchMessage() {
   d.set_confidence(0.97);
   proto::DiagnosisRound& r = *d.add_rounds();
   r.add_from("delay");
-  r.mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
+  r.mutable_named()->set_string_value("creep");
+  r.mutable_runner_up()->set_effect("drift");
+  r.mutable_runner_up()->set_z(1.5);
   proto::DiagnosisCandidate& c = *r.add_candidates();
   c.set_effect("creep");
   c.set_added_parameters(2);
@@ -145,8 +149,8 @@ TEST(DiagnosisCodec, AMessageOfEitherKindRoundTripsWithOnlyItsKindsFields) {
     EXPECT_EQ(WriteDiagnosisFile(back), text);
   }
   const std::string records = WriteDiagnosisFile(RecordsMessage());
-  for (const char* key : {"\"diverged\"", "\"candidates\"", "\"next_measurement\"", "\"z_vs_base\"",
-                          "\"noise_floor\"", "\"excitation_gap_note\""})
+  for (const char* key : {"\"diverged\"", "\"candidates\"", "\"next_measurement\"", "\"runner_up\"",
+                          "\"z_vs_base\"", "\"noise_floor\"", "\"excitation_gap_note\""})
     EXPECT_NE(records.find(key), std::string::npos) << key;
   // the bench's fields, a list or a number at its default, are not written
   for (const char* key :
@@ -158,7 +162,7 @@ TEST(DiagnosisCodec, AMessageOfEitherKindRoundTripsWithOnlyItsKindsFields) {
                           "\"withheld_samples\"", "\"family\"", "\"records\""})
     EXPECT_EQ(bench.find(key), std::string::npos) << key;
   EXPECT_NE(bench.find("\"added_parameters\": 2"), std::string::npos) << bench;
-  EXPECT_NE(bench.find("\"named\": null"), std::string::npos) << bench;
+  EXPECT_NE(bench.find("\"runner_up\": {\n    \"effect\": \"drift\""), std::string::npos) << bench;
   EXPECT_NE(bench.find("\"evaluations\": 1125899906842624"), std::string::npos) << bench;
 }
 
