@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "client/plots.h"
+#include "hgann/extrapolation.h"
 #include "hgann/output_move.h"
 #include "io/trace_io.h"
 #include "model/metrics.h"
@@ -430,6 +431,43 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
   return out;
 }
 
+/// Where the network extrapolates (hgann/extrapolation.h): every withheld case outside the training
+/// cases' hull in (V, f), and its outputs beyond the range the training cases support; markdown and
+/// the terminal's lines.
+std::pair<std::string, std::string> ExtrapolationSection(
+    const hgann::HgannFitness& fitness, const IdentifyResult& result,
+    const std::vector<hgann::CaseEstimate>& estimates) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
+  const auto found = hgann::FindExtrapolations(fitness.config(), result.cases, estimates);
+  std::ostringstream md, term;
+  md << "## Where the network extrapolates\n\n";
+  if (found.empty()) {
+    md << "Every withheld case lies inside the training cases' hull in (V, f).\n\n";
+    return {md.str(), ""};
+  }
+  md << "Withheld cases outside the training cases' hull in (V, f): no training case brackets "
+        "them, and what the network says there is set by its shape. Outputs beyond the range the "
+        "training cases support (the network's values at the training cases and their per-case "
+        "estimates ± 2 σ, widened by 1 % of the parameter's range) are named.\n\n"
+     << "| case | V [V] | f [Hz] | outputs beyond the training cases' range |\n|---|---|---|---|\n";
+  for (const hgann::ExtrapolatedCase& e : found) {
+    std::string beyond;
+    for (int k : e.outputs)
+      beyond += (beyond.empty() ? "" : "; ") + std::string(kSymbols[k]) + " " + Fmt(e.value[k], 3) +
+                " (training " + Fmt(e.lo[k], 3) + " … " + Fmt(e.hi[k], 3) + " " +
+                model::OutputUnit(k) + ")";
+    md << "| " << e.number << " | " << Fmt(e.amplitude_v) << " | " << Fmt(e.frequency_hz) << " | "
+       << (beyond.empty() ? "none: within the training cases' range" : beyond) << " |\n";
+    term << "  case " << e.number << " (" << Fmt(e.amplitude_v) << " V, " << Fmt(e.frequency_hz)
+         << " Hz): " << (beyond.empty() ? "outputs within the training cases' range" : beyond)
+         << "\n";
+  }
+  md << "\n";
+  return {md.str(),
+          "withheld cases outside the training cases' hull in (V, f) (report.md):\n" + term.str()};
+}
+
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. "
     "Widen a "
@@ -631,13 +669,15 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const std::string mu_regression = MuRegression(totals);
   const std::string at_bound = AtBoundList(fitness, result.best.network);
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
+  const auto [extrapolation_md, extrapolation_term] =
+      ExtrapolationSection(fitness, result, per_case.estimates);
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
     f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound,
-                        per_case.markdown);
+                        per_case.markdown + extrapolation_md);
     written.push_back(out / "report.md");
   }
   term << "\n"
@@ -657,7 +697,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   if (!at_bound.empty())
     term << "held at a bound on every training case (set by the range, not the data; report.md): "
          << at_bound << "\n";
-  term << per_case.terminal;
+  term << per_case.terminal << extrapolation_term;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string()
        << " (report.md, network.pb/.json, progress.csv, validation.csv, "
