@@ -123,4 +123,33 @@ std::vector<ExtrapolatedCase> FindExtrapolations(const HgannFitnessConfig& confi
   return out;
 }
 
+std::vector<int> UnsettledOutputs(const HgannFitnessConfig& config, const TrendSeeds& seeds,
+                                  size_t index,
+                                  const std::array<double, model::kNetworkOutputs>& network,
+                                  const CaseEstimate* estimate,
+                                  const std::function<double(int k, double value)>& moved) {
+  std::vector<int> out;
+  if (index >= seeds.supported_lo.size() || index >= seeds.supported_hi.size()) return out;
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    if (k >= 2 && k <= 4) continue;  // α, β, γ: their estimates scatter along a valley
+    const double width = config.ranges[k].upper - config.ranges[k].lower;
+    const double lo = std::min(seeds.supported_lo[index][k], network[k]),
+                 hi = std::max(seeds.supported_hi[index][k], network[k]);
+    double tol = 0.01 * width;
+    if (estimate && estimate->ok) {
+      // A parameter the case's own data do not pin down (μ against δ) is one it does not see.
+      if (!std::isfinite(estimate->sigma[k]) || estimate->sigma[k] > 0.25 * width) continue;
+      tol = std::max(tol, 2 * estimate->sigma[k]);
+    }
+    if (hi - lo <= tol) continue;
+    if (estimate && estimate->ok && moved) {
+      const double far = hi - network[k] > network[k] - lo ? hi : lo;
+      const double d = moved(k, far);
+      if (std::isfinite(d) && d < 2 * estimate->pi) continue;
+    }
+    out.push_back(k);
+  }
+  return out;
+}
+
 }  // namespace pz::hgann

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <utility>
 #include <vector>
 
@@ -34,5 +35,27 @@ struct ExtrapolatedCase {
 std::vector<ExtrapolatedCase> FindExtrapolations(const HgannFitnessConfig& config,
                                                  const std::vector<HgannCaseResult>& cases,
                                                  const std::vector<CaseEstimate>& estimates);
+
+/// The outputs at the configuration's case `index` that the training cases do not settle: the
+/// shapes that fit their per-case estimates alike (TrendSeeds::supported_lo/hi, with the network's
+/// own value `network`, in the parameters' units) part there by more than 1 % of the parameter's
+/// range and, when `estimate` (that case's own fit, may be null) is given:
+///  - by more than 2 of its σ: more than the case's own data would allow, were they measured (a
+///    parameter the case does not pin down, σ infinite or above a quarter of the range, is not
+///    named: the case does not see it);
+///  - and, with `moved` (Σ over the case's samples of the squared change of its predicted angle
+///    when output k alone goes from the network's value to `value`; NaN: could not simulate), when
+///    the end of that range farthest from the network's value moves the prediction by 2 × the
+///    case's own PI or more: were that end the truth, the network's PI would be 3 × the floor.
+/// Inside the training cases' hull or outside it. Empty when the seeds have no such range. α, β
+/// and γ are never named: they trade along a valley, where their per-case estimates scatter beyond
+/// σ even when the truth is constant (the nominal bench: one of them moved alone then "moves" the
+/// prediction by several floors, which the others would take back), so their shapes' spread is not
+/// a trend's.
+std::vector<int> UnsettledOutputs(const HgannFitnessConfig& config, const TrendSeeds& seeds,
+                                  size_t index,
+                                  const std::array<double, model::kNetworkOutputs>& network,
+                                  const CaseEstimate* estimate,
+                                  const std::function<double(int k, double value)>& moved = {});
 
 }  // namespace pz::hgann

@@ -76,6 +76,12 @@ struct TrendSeeds {
   std::vector<std::string> names;    ///< "trend (polished)", …, "constant (polished)"
   int64_t simulations = 0;           ///< case simulations spent
   double wall_time_s = 0;
+  /// Per case of the configuration (every role, in its order): the lowest and highest value of
+  /// each parameter, in its units, over the shapes its per-case estimates support alike (step 2's
+  /// candidates whose χ² + 2 p is within 2 of the chosen one's: Akaike's "substantial support").
+  /// Where they part, the training cases do not settle the parameter there: the network's value
+  /// is one guess of several that fit them alike.
+  std::vector<std::array<double, model::kNetworkOutputs>> supported_lo, supported_hi;
 };
 
 /// Steps 1–3 of the file comment on the fitness's training cases.

@@ -105,5 +105,54 @@ TEST(FindExtrapolations, NamesTheOutputsBeyondTheTrainingRange) {
   EXPECT_TRUE(FindExtrapolations(all, cases, {}).empty());
 }
 
+TEST(UnsettledOutputs, WhereTheShapesThatFitAlikePartByMoreThanTheCaseWouldAllow) {
+  const HgannFitnessConfig cfg = NineCases();
+  TrendSeeds seeds;
+  EXPECT_TRUE(UnsettledOutputs(cfg, seeds, 0, {}, nullptr).empty());  // no trend seeds
+  std::array<double, model::kNetworkOutputs> lo{}, hi{}, net{};
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    lo[k] = hi[k] = net[k] =
+        cfg.ranges[k].lower + 0.5 * (cfg.ranges[k].upper - cfg.ranges[k].lower);
+  }
+  const double w_delta = cfg.ranges[1].upper - cfg.ranges[1].lower;
+  const double w_a2 = cfg.ranges[6].upper - cfg.ranges[6].lower;
+  hi[1] += 0.05 * w_delta;  // δ: the shapes part by 5 % of its range
+  net[6] += 0.03 * w_a2;    // a2: the network's own value 3 % off the shapes' (agreeing) one
+  lo[6] -= 0.005 * w_a2;  // a2's shapes part by 0.5 %, under the 1 %: only the network's 3 % counts
+  lo[2] -= 0.5 * (cfg.ranges[2].upper - cfg.ranges[2].lower);  // α: never named (the valley)
+  seeds.supported_lo.assign(9, lo);
+  seeds.supported_hi.assign(9, hi);
+  EXPECT_EQ(UnsettledOutputs(cfg, seeds, 8, net, nullptr), (std::vector<int>{1, 6}));
+  EXPECT_TRUE(UnsettledOutputs(cfg, seeds, 9, net, nullptr).empty());  // no such case
+
+  // The case's own fit: δ pinned down to ± 4 % (2 σ = 8 % > 5 %): within what the case allows;
+  // a2 not pinned down (σ infinite): the case does not see it.
+  CaseEstimate e;
+  e.ok = true;
+  e.sigma.fill(1e-9);
+  e.sigma[1] = 0.04 * w_delta;
+  e.sigma[6] = std::numeric_limits<double>::infinity();
+  EXPECT_TRUE(UnsettledOutputs(cfg, seeds, 8, net, &e).empty());
+  e.sigma[1] = 0.01 * w_delta;  // 2 σ = 2 % < 5 %
+  EXPECT_EQ(UnsettledOutputs(cfg, seeds, 8, net, &e), (std::vector<int>{1}));
+
+  // With the prediction's move: δ at the far end of the range (hi) moves case 9's prediction by
+  // 1.5 × its own PI (under the 2 × that would make the network's PI 3 × the floor): not named;
+  // by 2.5 ×: named. NaN (no simulation): named.
+  e.pi = 0.2;
+  double asked = 0;
+  const auto move_by = [&](double d) {
+    return [&asked, d](int k, double value) {
+      EXPECT_EQ(k, 1);
+      asked = value;
+      return d;
+    };
+  };
+  EXPECT_TRUE(UnsettledOutputs(cfg, seeds, 8, net, &e, move_by(0.3)).empty());
+  EXPECT_DOUBLE_EQ(asked, hi[1]);
+  EXPECT_EQ(UnsettledOutputs(cfg, seeds, 8, net, &e, move_by(0.5)), (std::vector<int>{1}));
+  EXPECT_EQ(UnsettledOutputs(cfg, seeds, 8, net, &e, move_by(std::nan(""))), (std::vector<int>{1}));
+}
+
 }  // namespace
 }  // namespace pz::hgann
