@@ -12,7 +12,9 @@ nine cases (1 − Σ (net − truth)² / Σ (truth − mean)²).
 
 also prints what a miss is made of: each case's PI with its true parameters but one of them (μ, δ,
 α, β, γ, a1, a2, then b1 and b2 together) swapped to the network's value (× the truth's PI), and
-how sensitive each case's PI is to each parameter: the truth with that one raised by 10 %.
+how sensitive each case's PI is to each parameter: the truth with that one raised by 10 %; and
+what a bound on the extrapolation would give at best: the network's parameters with every withheld
+case's μ … a2 clamped to the range of the network's values at the training cases.
 """
 
 import csv
@@ -74,6 +76,16 @@ def swaps(piezoid, bench, truth, net, floor):
             rows[c][k] = 1.1 * float(rows[c][k])
         pis = pi_with(piezoid, bench, rows)
         print(f"    {k:>7}: " + ratios(pis, floor))
+    rows = {c: {k: float(net[c][k]) for k in PARAMS} for c in net}
+    train = [c for c in net if net[c]["role"] == "train"]
+    for c in rows:
+        if c in train:
+            continue
+        for k in PARAMS[:7]:
+            values = [float(net[t][k]) for t in train]
+            rows[c][k] = min(max(rows[c][k], min(values)), max(values))
+    print("  PI x truth of the network with the withheld cases' outputs clamped to the training "
+          "cases' range:\n    " + ratios(pi_with(piezoid, bench, rows), floor))
 
 
 def main():
