@@ -140,6 +140,10 @@ void ReadDiagnosisFile(const std::string& path, const std::string& text, proto::
                                      : ": neither \"records\" (a records diagnosis) nor \"bench\" "
                                        "(the fin bench's) is given: not a diagnosis.json"));
   const DiagnosisOnly kind = records ? proto::DIAGNOSIS_ONLY_RECORDS : proto::DIAGNOSIS_ONLY_BENCH;
+  const std::string key = records ? "records" : "bench";
+  if (s.fields().at(key).kind_case() != Value::kStringValue)
+    throw InputError(path + ": " + key + ": not a string (the " +
+                     (records ? "record set" : "bench's folder") + ")");
   Filter(*proto::Diagnosis::descriptor(), &s, kind, "", path, Way::kRead);
   StructToMessage(path, s, out);
   if (const auto [at, want] = BadNamed(*out, kind); !at.empty())
