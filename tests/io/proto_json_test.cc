@@ -1,16 +1,33 @@
-// The JSON files the client writes (fit.json, diagnosis.json, committee.json, truth.json) are
-// protobuf Structs, whose fields are a map that protobuf keeps in hash order: json::Print writes
-// them with their keys sorted, so the same document is the same bytes in every run and process.
+// io/proto_json.h prints a protobuf Struct (what MessageToStruct gives for every stored file:
+// fit.json, diagnosis.json, committee.json, report.json, ...), whose fields are a map that protobuf
+// keeps in hash order: PrintJson writes them with their keys sorted at every level, so the same
+// document is the same bytes in every run and process.
+#include "io/proto_json.h"
+
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
-#include "client/json_values.h"
-
-namespace pz::client::json {
+namespace pz::io {
 namespace {
 
-TEST(JsonPrint, KeysAreSortedWhateverTheInsertionOrder) {
+using google::protobuf::Struct;
+using google::protobuf::Value;
+
+Value Num(double x) {
+  Value v;
+  v.set_number_value(x);
+  return v;
+}
+
+Value Text(const std::string& s) {
+  Value v;
+  v.set_string_value(s);
+  return v;
+}
+
+TEST(PrintJson, KeysAreSortedWhateverTheInsertionOrder) {
   const std::vector<std::string> keys = {"zeta",  "alpha", "mid", "beta", "omega",
                                          "gamma", "a1",    "a10", "a2"};
   Struct forward, backward;
@@ -22,9 +39,9 @@ TEST(JsonPrint, KeysAreSortedWhateverTheInsertionOrder) {
   Struct inner;
   (*inner.mutable_fields())["y"] = Text("b");
   (*inner.mutable_fields())["x"] = Text("a");
-  (*forward.mutable_fields())["nested"] = Obj(inner);
-  (*backward.mutable_fields())["nested"] = Obj(inner);
-  const std::string a = Print(forward, "test"), b = Print(backward, "test");
+  *(*forward.mutable_fields())["nested"].mutable_struct_value() = inner;
+  *(*backward.mutable_fields())["nested"].mutable_struct_value() = inner;
+  const std::string a = PrintJson(forward, "test"), b = PrintJson(backward, "test");
   EXPECT_EQ(a, b);
   size_t last = 0;
   for (const char* k : {"\"a1\"", "\"a10\"", "\"a2\"", "\"alpha\"", "\"beta\"", "\"gamma\"",
@@ -39,4 +56,4 @@ TEST(JsonPrint, KeysAreSortedWhateverTheInsertionOrder) {
 }
 
 }  // namespace
-}  // namespace pz::client::json
+}  // namespace pz::io
