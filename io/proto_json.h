@@ -1,6 +1,8 @@
-// Stored JSON through protobuf's JSON util (fit.json, truth.json: io/fit_model.h; the reports'
-// JSON: client/json_values.h): a message <-> an indented JSON object whose bytes do not vary from
-// run to run, and a reader that names the bad field.
+// Stored JSON through protobuf's JSON util: every JSON file the product writes is a message of
+// proto/ printed here (fit.json, truth.json: io/fit_model.h; diagnosis.json, check.json:
+// io/diagnosis_json.h; committee.json; `piezoid boucwen`'s report.json; `piezoid pi --json`): a
+// message <-> an indented JSON object whose bytes do not vary from run to run, and a reader that
+// names the bad field.
 //
 // Written: the message's proto field names; every field without presence (an empty list, a zero),
 // a proto3 optional or message field only when set; keys sorted at every level; a non-finite
