@@ -1,8 +1,10 @@
 #include "complete/job_kind.h"
 
+#include <climits>
 #include <cmath>
 #include <sstream>
 
+#include "model/saturation.h"
 #include "opt/inline_evaluator.h"
 #include "records/criterion.h"
 #include "records/spectrum_solve.h"
@@ -45,6 +47,17 @@ records::DataScale ScaleOf(const CompleteModelProblem& p) {
   return s;
 }
 
+model::EffectSimOptions FinSimOf(const CompleteModelProblem& p) {
+  model::EffectSimOptions o;
+  if (!p.fin_sim) return o;
+  o.oversample = p.fin_sim->oversample;
+  o.rtol = p.fin_sim->rtol;
+  o.atol = p.fin_sim->atol;
+  o.max_steps = static_cast<long>(p.fin_sim->max_steps);
+  o.force_cvode = p.fin_sim->force_cvode;
+  return o;
+}
+
 std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& p) {
   const records::DataScale scale = ScaleOf(p);
   records::FamilyOptions fo;
@@ -52,9 +65,16 @@ std::shared_ptr<records::RecordModel> RecordModelOf(const CompleteModelProblem& 
   fo.pi_operators = p.pi_operators;
   if (!p.initial_state.empty())
     fo.initial_state = model::ParseInitialState(p.initial_state, "complete_model.initial_state");
+  fo.bench_form = p.bench_form;
+  fo.fin_sim = FinSimOf(p);
   std::shared_ptr<const records::Family> fam = records::MakeFamily(p.record_family, scale, fo);
   std::vector<records::EffectKind> effects;
-  for (const std::string& e : p.effects) effects.push_back(records::ParseEffect(e));
+  for (const std::string& e : p.effects) {
+    // The bench form takes the fin's effects, beam ones included, in the order given (its
+    // EffectBox names one it does not take); the records families their drive and output ones.
+    const model::EffectDef* d = p.bench_form ? model::FindEffect(e) : nullptr;
+    effects.push_back(d ? records::EffectKind(*d) : records::ParseEffect(e));
+  }
   return std::make_shared<records::RecordModel>(fam, effects, scale);
 }
 
@@ -123,6 +143,9 @@ class OwningRecordFitness final : public opt::FitnessFunction {
       r.rest_samples = c.rest_samples;
       r.offset_mode = static_cast<io::OffsetMode>(c.offset_mode);
       r.offset = c.offset;
+      if (c.sinusoid)
+        r.sinusoid = {static_cast<int>(c.sinusoid->case_number), c.sinusoid->amplitude_v,
+                      c.sinusoid->frequency_hz, c.sinusoid->cycles, c.sinusoid->sample_rate_hz};
       records_.push_back(std::move(r));
     }
     std::vector<const io::Record*> ptrs;
@@ -218,10 +241,70 @@ uint64_t LargestPrimeFactor(uint64_t n) {
 // large prime factor would keep a worker busy for hours.
 constexpr uint64_t kMaxPeriodPrimeFactor = 1000;
 
+// bimorph-fin's bench form: its family, no window, its simulator's options; its fields nowhere
+// else.
+template <typename Add>
+void CheckBenchForm(const CompleteModelProblem& p, Add&& add) {
+  if (!p.bench_form) {
+    if (p.fin_sim)
+      add("complete_model.fin_sim", "set",
+          "only bimorph-fin's bench form (bench_form) runs the fin's simulator: leave unset");
+    return;
+  }
+  if (p.record_family != "bimorph-fin")
+    add("complete_model.bench_form", "true",
+        "only bimorph-fin has a bench form (record_family = '" + p.record_family + "')");
+  if (Windowed(p))
+    add("complete_model.t0_s", Num(p.t0_s) + ", t1_s = " + Num(p.t1_s),
+        "the bench form's cost is the sum of squared errors over the records: leave both unset");
+  if (const Status s = FinSimOf(p).Validate(); !s.ok())
+    add("complete_model.fin_sim", "{...}", s.message());
+}
+
+// A bench-form record: its stated sinusoid, which has the record's samples, and saturations b1, b2
+// from its measured extremes; no sinusoid elsewhere.
+template <typename Add>
+void CheckSinusoid(const CompleteModelProblem& p, const CompleteModelRecord& r,
+                   const std::string& f, Add&& add) {
+  if (!p.bench_form) {
+    if (r.sinusoid)
+      add(f + ".sinusoid", "set",
+          "only bimorph-fin's bench form (bench_form) simulates a stated sinusoid: leave unset");
+    return;
+  }
+  if (!r.sinusoid) {
+    add(f + ".sinusoid", "unset",
+        "bimorph-fin's bench form simulates each record's stated sinusoid: required");
+    return;
+  }
+  const CompleteModelRecord::Sinusoid& st = *r.sinusoid;
+  const model::Sinusoid d{st.amplitude_v, st.frequency_hz, st.cycles, st.sample_rate_hz};
+  const std::string g = f + ".sinusoid";
+  if (st.case_number < 0 || st.case_number > INT_MAX)
+    add(g + ".case_number", std::to_string(st.case_number), "must be <= 2147483647");
+  else if (const Status s = d.Validate(); !s.ok())
+    add(g, "{V, f, cycles, fs}", s.message());
+  else if (static_cast<size_t>(d.NumSamples()) != r.input.size())
+    add(g,
+        Num(st.cycles) + " cycles at " + Num(st.frequency_hz) + " Hz, fs " +
+            Num(st.sample_rate_hz) + " Hz",
+        "has " + std::to_string(d.NumSamples()) + " samples, the record " +
+            std::to_string(r.input.size()) + " (the bench form's records are sent whole)");
+  try {  // the form's saturations (NaN outputs are named by the record's checks)
+    bool finite = true;
+    for (double y : r.output) finite = finite && std::isfinite(y);
+    if (finite) model::SaturationFromExtremes(r.output);
+  } catch (const InputError& e) {
+    add(f + ".output", std::to_string(r.output.size()) + " samples",
+        std::string("no saturations b1, b2 from its extremes: ") + e.what());
+  }
+}
+
 // The RECORDS family: the family, effects and scale build a model; every record's window, rest and
 // offset are in range.
 template <typename Add>
 void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
+  CheckBenchForm(p, add);
   if (Windowed(p)) {
     if (!(std::isfinite(p.t0_s) && p.t0_s >= 0))
       add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
@@ -290,6 +373,7 @@ void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
     if (r.offset_mode < 0 || r.offset_mode > 2)
       add(f + ".offset_mode", std::to_string(r.offset_mode), "must be 0, 1 or 2");
     if (!std::isfinite(r.offset)) add(f + ".offset", Num(r.offset), "must be finite");
+    CheckSinusoid(p, r, f, add);
     if (Windowed(p) && std::isfinite(p.t0_s) && std::isfinite(p.t1_s) && std::isfinite(r.dt_s) &&
         r.dt_s > 0 && r.end_counted >= 1 && r.end_counted <= n) {
       const double end = static_cast<double>(r.end_counted - 1) * r.dt_s;
@@ -422,16 +506,26 @@ CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int p
   const records::DataScale& s = m.scale();
   p.scale = {s.u_min, s.u_max, s.u_half,  s.y_half, s.gain, static_cast<double>(s.polarity),
              s.f_dom, s.fs,    s.duration};
+  // bimorph-fin's bench form simulates each record's stated sinusoid on all its samples, its
+  // saturations from the whole output: its records are sent whole, with their sinusoid.
+  const bool bench = m.family().simulates_records();
+  p.bench_form = bench;
   for (const io::Record* r : fitness.records()) {
     const size_t from =
-        cut ? std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored) : 0;
+        cut && !bench ? std::min(std::max<size_t>(r->rest_samples, 1) - 1, r->first_scored) : 0;
+    const size_t to = bench ? r->size() : r->end_scored;
     CompleteModelRecord c;
     c.name = r->name.substr(0, 200);
     c.sample_rate_hz = r->sample_rate_hz();
     c.input.assign(r->u.begin() + static_cast<std::ptrdiff_t>(from),
-                   r->u.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+                   r->u.begin() + static_cast<std::ptrdiff_t>(to));
     c.output.assign(r->y.begin() + static_cast<std::ptrdiff_t>(from),
-                    r->y.begin() + static_cast<std::ptrdiff_t>(r->end_scored));
+                    r->y.begin() + static_cast<std::ptrdiff_t>(to));
+    if (bench) {
+      const io::Record::StatedSinusoid& st = r->sinusoid;
+      c.sinusoid = CompleteModelRecord::Sinusoid{st.case_number, st.amplitude_v, st.frequency_hz,
+                                                 st.cycles, st.sample_rate_hz};
+    }
     c.first_counted = r->first_scored - from;
     c.end_counted = r->end_scored - from;
     c.rest_samples = r->rest_samples - from;
@@ -449,6 +543,15 @@ job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& f
                                                  const records::FamilyOptions& options) {
   CompleteModelProblem p = RecordsProblem(fitness, options.pi_operators, true);
   p.substeps = options.substeps;  // the workers' family integrates as the local one
+  if (p.bench_form) {             // and simulates as the local one
+    if (!options.bench_form)
+      throw InputError(fitness.model().Describe() +
+                       ": a bench-form model's evaluation needs the family options it was made "
+                       "with (bench_form and its simulator's options), not another family's");
+    const model::EffectSimOptions& o = options.fin_sim;
+    p.fin_sim = CompleteModelProblem::FinSim{o.oversample, o.rtol, o.atol,
+                                             static_cast<int64_t>(o.max_steps), o.force_cvode};
+  }
   return p;
 }
 

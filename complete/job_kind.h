@@ -27,7 +27,10 @@ job::CompleteModelProblem CompleteModelProblemOf(const BwTraining& training);
 /// `piezoid fit` / `diagnose --records` on the service (family RECORDS): the training records
 /// without the part of their leading rest that is not scored (the model is at rest there: the cut
 /// changes no cost, bit for bit), the family, effects and data scale, and the family's options
-/// (sub-steps, Prandtl–Ishlinskii plays) it was made with.
+/// (sub-steps, Prandtl–Ishlinskii plays) it was made with. bimorph-fin's bench form
+/// (Family::simulates_records): its records whole with their stated sinusoid, the effects in the
+/// model's order, bench_form and `options.fin_sim`; InputError when `options` are not a bench
+/// form's (the options must be those the family was made with).
 job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness,
                                                  const records::FamilyOptions& options);
 /// The committee's fitness (family RECORDS with its criterion and window; the records whole, since

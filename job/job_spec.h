@@ -170,6 +170,12 @@ struct CompleteModelRecord {
   uint64_t rest_samples = 1;  ///< leading samples at the first sample's drive, 1 … samples
   int offset_mode = 0;        ///< io::OffsetMode: 0 fit, 1 rest, 2 fixed
   double offset = 0;          ///< rest: the measured rest level; fixed: the offset
+  /// bench_form: the record's stated sinusoid (io::Record::StatedSinusoid; proto StatedSinusoid).
+  struct Sinusoid {
+    int64_t case_number = 0;
+    double amplitude_v = 0, frequency_hz = 0, cycles = 0, sample_rate_hz = 0;
+  };
+  std::optional<Sinusoid> sinusoid = std::nullopt;  ///< on the wire when set
 };
 
 /// Complete-model identification (job kind "complete_model", complete/job_kind.h): genome.reals =
@@ -203,6 +209,16 @@ struct CompleteModelProblem {
   /// y_half, gain, polarity, f_dom, fs, duration — sent so that the workers' search box and model
   /// are the client's, bit for bit.
   std::vector<double> scale;
+  /// record_family bimorph-fin: its bench form (records/families.h FamilyOptions::bench_form) and
+  /// the simulator's options (model/effects.h EffectSimOptions; unset: its defaults).
+  bool bench_form = false;
+  struct FinSim {
+    int oversample = 4;
+    double rtol = 1e-6, atol = 1e-13;
+    int64_t max_steps = 5000000;
+    bool force_cvode = false;
+  };
+  std::optional<FinSim> fin_sim = std::nullopt;  ///< on the wire when set
 };
 
 /// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends
@@ -237,7 +253,7 @@ struct GaSettings {
       opt::GaOptions::kAutoOutputMoves;  ///< offspring per island made by the kind's move
                                          ///< (opt/ga.h 9.), 0..population − elite; auto (−1): 0
                                          ///< with one island, 16 % of the offspring with several
-  int offspring() const;  ///< evaluated per generation: population − elite count
+  int offspring() const;                 ///< evaluated per generation: population − elite count
 };
 
 /// Service limits of a job.

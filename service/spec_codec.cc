@@ -222,6 +222,15 @@ void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
     pr->set_rest_samples(r.rest_samples);
     pr->set_offset_mode(static_cast<uint32_t>(std::max(0, r.offset_mode)));
     pr->set_offset(r.offset);
+    if (r.sinusoid) {
+      auto* ps = pr->mutable_sinusoid();
+      ps->set_case_number(
+          static_cast<uint32_t>(std::clamp<int64_t>(r.sinusoid->case_number, 0, UINT32_MAX)));
+      ps->set_amplitude_v(r.sinusoid->amplitude_v);
+      ps->set_frequency_hz(r.sinusoid->frequency_hz);
+      ps->set_cycles(r.sinusoid->cycles);
+      ps->set_sample_rate_hz(r.sinusoid->sample_rate_hz);
+    }
   }
   pm->set_criterion(static_cast<pw::CompleteModelCriterion>(m.criterion));
   pm->set_t0_s(m.t0_s);
@@ -236,6 +245,15 @@ void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
   pm->set_pi_operators(static_cast<uint32_t>(std::max(0, m.pi_operators)));
   pm->set_initial_state(m.initial_state);
   pm->mutable_scale()->Assign(m.scale.begin(), m.scale.end());
+  pm->set_bench_form(m.bench_form);
+  if (m.fin_sim) {
+    auto* pf = pm->mutable_fin_sim();
+    pf->set_oversample(static_cast<uint32_t>(std::max(0, m.fin_sim->oversample)));
+    pf->set_rtol(m.fin_sim->rtol);
+    pf->set_atol(m.fin_sim->atol);
+    pf->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, m.fin_sim->max_steps)));
+    pf->set_force_cvode(m.fin_sim->force_cvode);
+  }
 }
 
 CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm,
@@ -263,6 +281,11 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm,
     r.rest_samples = std::max<uint64_t>(1, pr.rest_samples());
     r.offset_mode = static_cast<int>(std::min<uint32_t>(pr.offset_mode(), 1000));
     r.offset = pr.offset();
+    if (pr.has_sinusoid()) {
+      const auto& ps = pr.sinusoid();
+      r.sinusoid = CompleteModelRecord::Sinusoid{
+          ps.case_number(), ps.amplitude_v(), ps.frequency_hz(), ps.cycles(), ps.sample_rate_hz()};
+    }
     m.records.push_back(std::move(r));
   }
   if (pm.criterion() >= 0 && pm.criterion() <= 4)
@@ -287,6 +310,16 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm,
   m.pi_operators = pm.pi_operators() == 0 ? 12 : ClampInt(pm.pi_operators());
   m.initial_state = pm.initial_state();
   m.scale.assign(pm.scale().begin(), pm.scale().end());
+  m.bench_form = pm.bench_form();
+  if (pm.has_fin_sim()) {
+    const auto& pf = pm.fin_sim();
+    m.fin_sim =
+        CompleteModelProblem::FinSim{ClampInt(OrDefault<uint32_t>(pf.oversample(), 4)),
+                                     OrDefault(pf.rtol(), 1e-6), OrDefault(pf.atol(), 1e-13),
+                                     static_cast<int64_t>(std::min<uint64_t>(
+                                         OrDefault<uint64_t>(pf.max_steps(), 5000000), INT64_MAX)),
+                                     pf.force_cvode()};
+  }
   return m;
 }
 

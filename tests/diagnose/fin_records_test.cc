@@ -278,18 +278,6 @@ TEST(FinRecords, TheBenchFormSaysWhatItCannotRun) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("creep-spectrum"), std::string::npos) << e.what();
   }
-  // The service's evaluation does not carry the bench form.
-  o.effects = {};
-  o.evaluator_factory = [](const RecordFitness&) -> std::unique_ptr<opt::BatchEvaluator> {
-    return nullptr;
-  };
-  try {
-    FitRecords(bench, o);
-    ADD_FAILURE() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("bench form"), std::string::npos) << e.what();
-  }
-  o.evaluator_factory = nullptr;
   // A beam effect is refined from a fit: its starts checked.
   o.effects = {EffectKind::Named("hinge-friction")};
   o.polish_from.assign(9, 0.0);
