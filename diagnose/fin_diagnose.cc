@@ -64,21 +64,8 @@ std::vector<double> CaseFloors(const DiagnosisModel& m, const FitResult& fit) {
   return floors;
 }
 
-// Localised excess over the floor of the withheld group: Σ_features n_f · max(0, rms_f² − σ²), over
-// the phase bins, branches, reversals, saturation and first/later cycles, plus the spectral groups
-// (odd, even, low) as N_w/2 · max(0, a² − noise²).
 std::vector<double> FeatureExcess(const model::GroupResidual& g) {
-  const double v = g.floor_rms * g.floor_rms;
-  std::vector<double> ex;
-  auto bin = [&](const model::BinStat& b) { ex.push_back(b.n * std::max(0.0, b.rms * b.rms - v)); };
-  for (const auto& b : g.phase) bin(b);
-  for (const auto* b :
-       {&g.rising, &g.falling, &g.near_reversal, &g.in_saturation, &g.first_cycle, &g.later_cycles})
-    bin(*b);
-  const double hn = g.harmonic_noise * g.harmonic_noise;
-  for (double a : {g.odd_rms, g.even_rms, g.low_rms})
-    ex.push_back(0.5 * g.samples * std::max(0.0, a * a - hn));
-  return ex;
+  return records::ResidualFeatureExcess(g);
 }
 
 // Fits a structure: fast structures get a global search seeded around `from`, beam structures are
@@ -154,21 +141,7 @@ std::vector<double> CaseFloorVariance(const DiagnosisModel& m, std::span<const d
 }
 
 std::vector<Absorption> Compare(const FitResult& without, const FitResult& with) {
-  std::vector<Absorption> r;
-  for (int i = 0; i < ParameterLayout::kBase && i < static_cast<int>(without.params.size()) &&
-                  i < static_cast<int>(with.params.size());
-       ++i) {
-    const ParamEstimate& a = without.params[i];
-    const ParamEstimate& b = with.params[i];
-    const double se = std::sqrt(a.std_error * a.std_error + b.std_error * b.std_error);
-    const double z = se > 0 && std::isfinite(se) ? (a.value - b.value) / se : 0.0;
-    const double rel =
-        std::abs(a.value - b.value) / std::max({std::abs(a.value), std::abs(b.value), 1e-300});
-    if (std::abs(z) > 2.0 && rel > 0.05) r.push_back({a.name, a.unit, a.value, b.value, z});
-  }
-  std::sort(r.begin(), r.end(),
-            [](const Absorption& x, const Absorption& y) { return std::abs(x.z) > std::abs(y.z); });
-  return r;
+  return records::AbsorbedParameters(without.params, with.params, ParameterLayout::kBase);
 }
 
 // Fits every candidate effect on top of `start` (no scoring).
@@ -347,29 +320,10 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
     fr.push_back(c.drive.frequency_hz);
   }
   for (int i = 0; i < n; ++i) {
-    ParamTrend t;
-    t.name = layout.specs()[i].name;
-    t.unit = layout.specs()[i].unit;
-    double lo = INFINITY, hi = -INFINITY, mean = 0;
-    for (size_t c = 0; c < nc; ++c) {
-      t.per_case.push_back(per[c][i]);
-      lo = std::min(lo, per[c][i]);
-      hi = std::max(hi, per[c][i]);
-      mean += per[c][i] / nc;
-    }
-    t.relative_range = std::abs(mean) > 0 ? (hi - lo) / std::abs(mean) : 0;
-    try {
-      const model::PlaneFit pf = model::FitPlane(v, fr, t.per_case);
-      t.slope_v = pf.v.coef;
-      t.slope_f = pf.f.coef;
-      t.p_v = std::isfinite(pf.v.p_value) ? pf.v.p_value : 1;
-      t.p_f = std::isfinite(pf.f.p_value) ? pf.f.p_value : 1;
-      t.r2 = pf.r2;
-    } catch (const InputError&) {
-      // collinear or too few cases: no trend
-    }
-    t.significant = std::min(t.p_v, t.p_f) < 0.01 && t.relative_range > 0.1;
-    trends.push_back(std::move(t));
+    std::vector<double> per_case;
+    for (size_t c = 0; c < nc; ++c) per_case.push_back(per[c][i]);
+    trends.push_back(
+        TrendOver(layout.specs()[i].name, layout.specs()[i].unit, std::move(per_case), v, fr));
   }
   return trends;
 }

@@ -38,6 +38,8 @@
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
 #include "diagnose/decision.h"
+#include "diagnose/diagnose.h"
+#include "diagnose/trends.h"
 
 namespace pz::diagnose {
 
@@ -88,23 +90,8 @@ struct RoundResult {
   std::string verdict;     ///< the round's verdict (diagnose/verdict.h)
 };
 
-/// A parameter trend over the V × f grid from the per-case fits.
-struct ParamTrend {
-  std::string name, unit;
-  std::vector<double> per_case;     ///< value per case (case order)
-  double slope_v = 0, slope_f = 0;  ///< per V, per Hz
-  double p_v = 1, p_f = 1;          ///< two-sided p-values
-  double r2 = 0;
-  double relative_range = 0;  ///< (max − min)/|mean|
-  bool significant = false;   ///< p < 0.01 on V or f and relative range > 10 %
-};
-
-/// A base parameter that moves when an effect is added (what absorbed the effect).
-struct Absorption {
-  std::string name, unit;
-  double without = 0, with = 0;  ///< base model / model with the effect
-  double z = 0;                  ///< shift / combined σ
-};
+using pz::diagnose::ParamTrend;
+using records::Absorption;
 
 /// Per-case before/after of the final model.
 struct CaseGap {
@@ -140,7 +127,7 @@ struct Diagnosis {
   std::string absorbed_by;                         ///< the candidate whose addition shows it
   std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as
                              ///< well), "none" (no significant gap), "unexplained"
-  std::string verdict;  ///< the summary sentence(s)
+  std::string verdict;       ///< the summary sentence(s)
   double wall_time_s = 0;
   int64_t evaluations = 0;
 };
