@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "io/csv.h"
+#include "model/effects.h"
 #include "model/format.h"
 #include "model/model_comparison.h"
 
@@ -599,6 +600,23 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   }
   ComposeRecordVerdict(set, o, gap, naming, d);
   return d;
+}
+
+RecordDiagnoseOptions FinBenchOptions() {
+  RecordDiagnoseOptions o;
+  o.family = "bimorph-fin";
+  const std::vector<EffectKind>& on_records = RecordEffects();
+  for (const model::EffectInfo& e : model::EffectLibrary())
+    if (std::find(on_records.begin(), on_records.end(), e.kind) != on_records.end())
+      o.candidates.push_back(e.kind);
+  o.floor = RecordFloor::kPerRecord;
+  o.pattern = RecordPattern::kResidualAnalysis;
+  o.second_effect = true;
+  o.absorbed_in_verdict = true;
+  o.trends = true;
+  o.model_label = "the base model";
+  o.floor_source = "rounding, scatter and saturation plateaus per case";
+  return o;
 }
 
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& d) {

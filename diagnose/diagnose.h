@@ -197,6 +197,13 @@ std::vector<double> ResidualFeatureExcess(const model::GroupResidual& group);
 /// the base model's prediction is not finite on a withheld record (no gap to measure).
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
+/// The options of the nine-case fin bench's diagnosis on its records: the bimorph-fin family, the
+/// fin library's effects that records models take (RecordEffects) as the candidates, per-record
+/// floors, the residual analysis as the pattern, the greedy second round, the absorbed parameters
+/// in the verdict, the V × f trends, and the verdict's words of the bench ("the base model",
+/// floors "per case").
+RecordDiagnoseOptions FinBenchOptions();
+
 /// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
 

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <iostream>
 
+#include "model/effects.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -355,6 +356,24 @@ TEST(RecordDiagnosis, TheTrendsAddOnFindsAGainThatFollowsTheAmplitude) {
   io::RecordSet bad = Grid({}, {}, 0.001, 41, {1, 4});
   bad.records[0].frequency_hz = 0;
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(bad, o); }), "record 'case1'");
+}
+
+TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
+  const RecordDiagnoseOptions o = FinBenchOptions();
+  EXPECT_EQ(o.family, "bimorph-fin");
+  EXPECT_EQ(o.floor, RecordFloor::kPerRecord);
+  EXPECT_EQ(o.pattern, RecordPattern::kResidualAnalysis);
+  EXPECT_TRUE(o.second_effect && o.absorbed_in_verdict && o.trends);
+  // The fin library's effects that a records model takes, in the library's order.
+  ASSERT_FALSE(o.candidates.empty());
+  size_t at = 0;
+  for (const model::EffectInfo& e : model::EffectLibrary()) {
+    const auto& rec = RecordEffects();
+    if (std::find(rec.begin(), rec.end(), e.kind) == rec.end()) continue;
+    ASSERT_LT(at, o.candidates.size());
+    EXPECT_EQ(o.candidates[at++], e.kind);
+  }
+  EXPECT_EQ(at, o.candidates.size());
 }
 
 }  // namespace
