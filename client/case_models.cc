@@ -1,5 +1,7 @@
 #include "client/case_models.h"
 
+#include "client/data_root.h"
+
 #include <cstdlib>
 #include <functional>
 #include <memory>
@@ -249,12 +251,7 @@ CaseModel ResolveInputCase(const ParamFlags& flags, model::SampledSignal input) 
   return c;
 }
 
-std::filesystem::path DefaultCaseSetDir() {
-  const char* env = std::getenv("PIEZOID_DATA");
-  const std::filesystem::path root =
-      env && *env ? std::filesystem::path(env) : std::filesystem::path(PIEZOID_DATA_DIR);
-  return root / "bimorph-fin" / "nominal";
-}
+std::filesystem::path DefaultCaseSetDir() { return BundledData("bimorph-fin/nominal"); }
 
 Simulator PlantSimulator(model::Solver solver) {
   auto plant = std::make_shared<const model::BimorphPlant>();

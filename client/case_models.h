@@ -74,8 +74,7 @@ std::vector<CaseModel> ResolveSinusoidCases(const ParamFlags& flags,
 /// One CaseModel (number 1) for a sampled input signal. Throws InputError.
 CaseModel ResolveInputCase(const ParamFlags& flags, model::SampledSignal input);
 
-/// The bundled nominal case set: $PIEZOID_DATA/bimorph-fin/nominal if PIEZOID_DATA is set, else
-/// <PIEZOID_DATA_DIR compiled in>/bimorph-fin/nominal.
+/// The bundled nominal case set: DataRoot() / bimorph-fin/nominal (client/data_root.h).
 std::filesystem::path DefaultCaseSetDir();
 
 /// Runs the plant (throws nothing for a physical failure; see model::Simulate).

@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "client/cmd_service.h"
+#include "client/data_root.h"
 #include "client/commands.h"
 #include "svcclient/complete_service.h"
 #include "client/json_values.h"
@@ -33,10 +34,6 @@
 #include "model/bw_oscillator.h"
 #include "model/criteria.h"
 
-#ifndef PIEZOID_DATA_DIR
-#define PIEZOID_DATA_DIR "data"
-#endif
-
 namespace pz::client {
 namespace {
 
@@ -48,7 +45,7 @@ using complete::SimulateBwMultisineTest;
 using complete::SimulateBwSweepTest;
 
 struct BoucwenArgs {
-  std::string data_dir = std::string(PIEZOID_DATA_DIR) + "/boucwen-benchmark";
+  std::string data_dir = BundledData("boucwen-benchmark").string();
   std::string out_dir = "boucwen-out";
   std::string algorithm = "pso";
   int repetitions = 5;
@@ -426,7 +423,8 @@ void RegisterBoucwen(CLI::App& app, int& exit_code) {
                   "use only the first N 8192-sample periods of each training record (0 = all)")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  cmd->add_option("--data-dir", a->data_dir, "folder with the benchmark CSVs")
+  cmd->add_option("--data-dir", a->data_dir,
+                  std::string("folder with the benchmark CSVs; default under ") + kDataRootHelp)
       ->capture_default_str();
   cmd->add_option("--out", a->out_dir, "output folder (report.json, report.md, CSVs, figures)")
       ->capture_default_str();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "client/cmd_service.h"
+#include "client/data_root.h"
 #include "client/commands.h"
 #include "client/committee_report.h"
 #include "complete/committee.h"
@@ -23,7 +24,7 @@ using namespace complete;
 namespace {
 
 struct CommitteeArgs {
-  std::string records = std::string(PIEZOID_DATA_DIR) + "/piezo-stack-bench";
+  std::string records = BundledData("piezo-stack-bench").string();
   std::string out = "committee-out";
   std::string bands = "0,50,150,250,350";
   std::vector<std::string> families{"stack-bouc-wen", "backlash-like"};

@@ -9,20 +9,13 @@
 #include <string>
 
 #include "client/commands.h"
+#include "client/data_root.h"
 #include "client/identify_report.h"
-
-#ifndef PIEZOID_DATA_DIR
-#define PIEZOID_DATA_DIR "data"
-#endif
 
 namespace pz::client {
 namespace {
 
-std::filesystem::path DefaultCasesDir() {
-  if (const char* env = std::getenv("PIEZOID_DATA"))
-    return std::filesystem::path(env) / "bimorph-fin/nominal";
-  return std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin/nominal";
-}
+std::filesystem::path DefaultCasesDir() { return BundledData("bimorph-fin/nominal"); }
 
 struct Progress {
   bool tty = isatty(STDERR_FILENO);
@@ -211,7 +204,9 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   f->opts.out_dir = "piezoid-identify";
   f->cases = f->opts.cases_dir.string();
   f->out = f->opts.out_dir.string();
-  cmd->add_option("--cases", f->cases, "bench case set folder (cases.csv + per-case CSV)")
+  cmd->add_option("--cases", f->cases,
+                  std::string("bench case set folder (cases.csv + per-case CSV); default under ") +
+                      kDataRootHelp)
       ->capture_default_str();
   cmd->add_option("--out", f->out, "result folder (created; files in it are overwritten)")
       ->capture_default_str();

@@ -5,6 +5,7 @@
 #include <memory>
 
 #include "client/case_models.h"
+#include "client/data_root.h"
 #include "client/commands.h"
 #include "client/pi_report.h"
 #include "io/csv.h"
@@ -50,10 +51,10 @@ void RegisterPi(CLI::App& app, int& exit_code) {
       *cmd,
       "auto: --b1/--b2 or the params file's b1,b2 if given, else fitted from each case's "
       "measured extremes.");
-  cmd->add_option(
-         "--cases", args->cases_dir,
-         "bench case set folder (cases.csv + one CSV per case); default: the bundled "
-         "data/bimorph-fin/nominal, or $PIEZOID_DATA/bimorph-fin/nominal if PIEZOID_DATA is set")
+  cmd->add_option("--cases", args->cases_dir,
+                  std::string("bench case set folder (cases.csv + one CSV per case); default: "
+                              "bimorph-fin/nominal under ") +
+                      kDataRootHelp)
       ->type_name("DIR");
   cmd->add_option("--json", args->json_file, "also write the scores as JSON to this file")
       ->type_name("FILE");

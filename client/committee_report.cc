@@ -6,10 +6,11 @@
 #include <limits>
 #include <sstream>
 
-#include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
+#include "committee.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 
 namespace pz::client {
 using namespace complete;  // the committee's types and figures formatting
@@ -280,108 +281,90 @@ void WriteCommitteeReport(std::ostream& o, const CommitteeResult& r) {
 }
 
 // ---- JSON ----------------------------------------------------------------------------------
+// committee.json: the study as its message (proto/committee.proto), printed by io/proto_json.h.
 
 namespace {
 
-using namespace json;  // NOLINT: Num, Text, Obj, List, Struct, Value
-
-Value RoleJson(const RoleMetrics& m) {
-  Struct s;
-  auto& f = *s.mutable_fields();
-  f["records"] = Num(m.records);
-  f["samples"] = Num(static_cast<double>(m.samples));
-  f["iae_um_s"] = Num(m.iae);
-  f["rmse_um"] = Num(m.rmse);
-  f["max_abs_um"] = Num(m.max_abs);
-  return Obj(s);
+void ErrorsOf(const RoleMetrics& m, proto::CommitteeErrors* o) {
+  o->set_records(m.records);
+  o->set_samples(static_cast<int64_t>(m.samples));
+  o->set_iae_um_s(m.iae);
+  o->set_rmse_um(m.rmse);
+  o->set_max_abs_um(m.max_abs);
 }
 
-Value ModelJson(const IdentifiedModel& m, const FrequencyBands& bands) {
-  Struct s;
-  auto& f = *s.mutable_fields();
-  f["family"] = Text(m.family);
+void BandErrorsOf(const std::string& band, const BandMetrics& m, proto::CommitteeBandErrors* o) {
+  o->set_band(band);
+  ErrorsOf(m.train, o->mutable_train());
+  ErrorsOf(m.test, o->mutable_test());
+}
+
+void ModelOf(const IdentifiedModel& m, const FrequencyBands& bands, proto::CommitteeModel* o) {
+  o->set_family(m.family);
   if (records::TakesInitialState(m.family))
-    f["initial_state"] = Text(model::InitialStateName(m.model->family().initial_state()));
-  f["optimiser"] = Text(opt::SearchAlgorithmName(m.algorithm));
-  f["scope"] = Text(m.band < 0 ? "complete" : bands.Label(m.band));
-  Struct p;
+    o->set_initial_state(model::InitialStateName(m.model->family().initial_state()));
+  o->set_optimiser(opt::SearchAlgorithmName(m.algorithm));
+  o->set_scope(m.band < 0 ? "complete" : bands.Label(m.band));
+  auto& p = *o->mutable_parameters();
   const auto& params = m.model->params();
-  for (size_t i = 0; i < params.size(); ++i)
-    (*p.mutable_fields())[params[i].name] = Num(m.params[i]);
+  for (size_t i = 0; i < params.size(); ++i) p[params[i].name] = m.params[i];
   const auto weights = m.model->family().weight_names();
-  for (size_t i = 0; i < weights.size() && i < m.weights.size(); ++i)
-    (*p.mutable_fields())[weights[i]] = Num(m.weights[i]);
-  f["parameters"] = Obj(p);
-  f["best_cost"] = Num(m.search.best_cost);
-  f["evaluations"] = Num(static_cast<double>(m.search.evaluations));
-  f["wall_time_s"] = Num(m.search.wall_time_s);
-  f["stop_reason"] = Text(m.search.stop_reason);
-  f["best_repetition"] = Num(m.search.best_repetition);
-  std::vector<Value> reps;
-  for (double c : m.search.repetition_costs) reps.push_back(Num(c));
-  f["repetition_costs"] = List(reps);
-  std::vector<Value> per;
-  for (int b = 0; b < bands.size(); ++b) {
-    if (m.band >= 0 && m.band != b) continue;
-    Struct x;
-    (*x.mutable_fields())["band"] = Text(bands.Label(b));
-    (*x.mutable_fields())["train"] = RoleJson(m.per_band[b].train);
-    (*x.mutable_fields())["test"] = RoleJson(m.per_band[b].test);
-    per.push_back(Obj(x));
-  }
-  f["per_band"] = List(per);
-  f["all_test"] = RoleJson(m.all_test);
-  return Obj(s);
+  for (size_t i = 0; i < weights.size() && i < m.weights.size(); ++i) p[weights[i]] = m.weights[i];
+  o->set_best_cost(m.search.best_cost);
+  o->set_evaluations(m.search.evaluations);
+  o->set_wall_time_s(m.search.wall_time_s);
+  o->set_stop_reason(m.search.stop_reason);
+  o->set_best_repetition(m.search.best_repetition);
+  o->mutable_repetition_costs()->Assign(m.search.repetition_costs.begin(),
+                                        m.search.repetition_costs.end());
+  for (int b = 0; b < bands.size(); ++b)
+    if (m.band < 0 || m.band == b) BandErrorsOf(bands.Label(b), m.per_band[b], o->add_per_band());
+  ErrorsOf(m.all_test, o->mutable_all_test());
 }
 
 }  // namespace
 
-std::string CommitteeJson(const CommitteeResult& r) {
-  const io::RecordSet& set = r.set;
+void CommitteeOf(const CommitteeResult& r, proto::CommitteeFile* out) {
   const CommitteeOptions& opt = r.options;
-  Struct root;
-  auto& f = *root.mutable_fields();
-  f["records_dir"] = Text(set.source.filename().string());
-  std::vector<Value> edges;
-  for (double e : opt.bands.edges) edges.push_back(Num(e));
-  f["band_edges_hz"] = List(edges);
-  f["criterion"] = Text(records::CriterionName(opt.criterion));
-  f["initial_state"] = Text(model::InitialStateName(opt.family_options.initial_state));
-  f["window_s"] = List({Num(opt.t0_s), Num(opt.t1_s)});
-  f["repetitions"] = Num(opt.search.repetitions);
-  f["committee"] = Text(opt.averaging ? "averaging" : "hard switch");
-  f["selection_aggregate"] = Text("0.5 * (rmse_train + rmse_test)");
-  std::vector<Value> complete;
-  for (const auto& m : r.complete) complete.push_back(ModelJson(m, opt.bands));
-  f["complete_models"] = List(complete);
-  std::vector<Value> bands;
+  proto::CommitteeFile f;
+  f.set_records_dir(r.set.source.filename().string());
+  f.mutable_band_edges_hz()->Assign(opt.bands.edges.begin(), opt.bands.edges.end());
+  f.set_criterion(records::CriterionName(opt.criterion));
+  f.set_initial_state(model::InitialStateName(opt.family_options.initial_state));
+  f.add_window_s(opt.t0_s);
+  f.add_window_s(opt.t1_s);
+  f.set_repetitions(opt.search.repetitions);
+  f.set_committee(opt.averaging ? "averaging" : "hard switch");
+  f.set_selection_aggregate("0.5 * (rmse_train + rmse_test)");
+  for (const auto& m : r.complete) ModelOf(m, opt.bands, f.add_complete_models());
   for (int b = 0; b < opt.bands.size(); ++b) {
-    Struct s;
-    auto& g = *s.mutable_fields();
-    g["band"] = Text(opt.bands.Label(b));
-    std::vector<Value> models;
-    for (const auto& m : r.band_models[b]) models.push_back(ModelJson(m, opt.bands));
-    g["models"] = List(models);
-    g["selected"] = Text(r.band_models[b][r.selected[b]].Name());
-    g["aggregate_um"] = Num(r.aggregate[b]);
-    g["committee_train"] = RoleJson(r.committee_per_band[b].train);
-    g["committee_test"] = RoleJson(r.committee_per_band[b].test);
-    g["wall_time_s"] = Num(r.band_wall_s[b]);
-    bands.push_back(Obj(s));
+    proto::CommitteeBand& g = *f.add_bands();
+    g.set_band(opt.bands.Label(b));
+    for (const auto& m : r.band_models[b]) ModelOf(m, opt.bands, g.add_models());
+    g.set_selected(r.band_models[b][r.selected[b]].Name());
+    g.set_aggregate_um(r.aggregate[b]);
+    ErrorsOf(r.committee_per_band[b].train, g.mutable_committee_train());
+    ErrorsOf(r.committee_per_band[b].test, g.mutable_committee_test());
+    g.set_wall_time_s(r.band_wall_s[b]);
   }
-  f["bands"] = List(bands);
-  f["committee_test"] = RoleJson(r.committee_test);
-  f["committee_train"] = RoleJson(r.committee_train);
+  ErrorsOf(r.committee_test, f.mutable_committee_test());
+  ErrorsOf(r.committee_train, f.mutable_committee_train());
   if (r.best_complete >= 0) {
-    f["best_complete"] = Text(r.complete[r.best_complete].Name());
-    f["best_complete_test"] = RoleJson(r.complete[r.best_complete].all_test);
-    f["rmse_reduction"] = Num(r.rmse_reduction);
-    f["max_error_reduction"] = Num(r.max_reduction);
+    f.set_best_complete(r.complete[r.best_complete].Name());
+    ErrorsOf(r.complete[r.best_complete].all_test, f.mutable_best_complete_test());
+    f.set_rmse_reduction(r.rmse_reduction);
+    f.set_max_error_reduction(r.max_reduction);
   }
-  f["evaluations"] = Num(static_cast<double>(r.evaluations));
-  f["wall_time_s"] = Num(r.wall_s);
-  f["threads"] = Num(r.threads);
-  return Print(root, "committee.json");
+  f.set_evaluations(r.evaluations);
+  f.set_wall_time_s(r.wall_s);
+  f.set_threads(r.threads);
+  *out = std::move(f);
+}
+
+std::string CommitteeJson(const CommitteeResult& r) {
+  proto::CommitteeFile f;
+  CommitteeOf(r, &f);
+  return io::PrintJson(f, "committee.json");
 }
 
 // ---- Figures -------------------------------------------------------------------------------

@@ -9,11 +9,12 @@
 #include <map>
 #include <numbers>
 #include <set>
-#include <span>
 #include <sstream>
 
-#include "client/json_values.h"
 #include "client/plots.h"
+#include "diagnosis.pb.h"
+#include "io/diagnosis_json.h"
+#include "io/proto_json.h"
 #include "io/csv.h"
 #include "diagnose/verdict.h"
 
@@ -181,291 +182,218 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   o << "\n" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations\n";
 }
 
-// ---- JSON
-// ---------------------------------------------------------------------------------------- Through
-// protobuf's Struct and its JSON printer (client/json_values.h), as every report of the client:
-// non-finite numbers are null, the keys sorted.
+// ---- JSON ---------------------------------------------------------------------------------------
+// diagnosis.json: the diagnosis as its stored message (proto/diagnosis.proto), written by
+// io/diagnosis_json.h (keys sorted, a non-finite number as null).
 
 namespace {
 
-using json::Bool;
-using json::List;
-using json::Num;
-using json::Obj;
-using json::Struct;
-using json::Text;
-using json::Value;
-
-Value Nums(std::span<const double> v) {
-  std::vector<Value> out;
-  out.reserve(v.size());
-  for (double x : v) out.push_back(Num(x));
-  return List(out);
-}
-
-Value Count(int64_t n) { return Num(static_cast<double>(n)); }
-
-Value FitJson(const FitResult& f) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["structure"] = Text(f.description);
-  o["ok"] = Bool(f.ok);
-  o["train_pi_deg2"] = Num(f.train_pi);
-  o["withheld_pi_deg2"] = Num(f.withheld_pi);
-  o["train_rms_deg"] = Num(Rms(f.train_pi, f.train_samples));
-  o["withheld_rms_deg"] = Num(Rms(f.withheld_pi, f.withheld_samples));
-  o["residual_sigma_deg"] = Num(f.residual_sigma);
-  o["case_pi_deg2"] = Nums(f.case_pi);
-  std::vector<Value> params;
+void FitOf(const FitResult& f, proto::DiagnosisFit* o) {
+  o->set_structure(f.description);
+  o->set_ok(f.ok);
+  o->set_train_pi_deg2(f.train_pi);
+  o->set_withheld_pi_deg2(f.withheld_pi);
+  o->set_train_rms_deg(Rms(f.train_pi, f.train_samples));
+  o->set_withheld_rms_deg(Rms(f.withheld_pi, f.withheld_samples));
+  o->set_residual_sigma_deg(f.residual_sigma);
+  o->mutable_case_pi_deg2()->Assign(f.case_pi.begin(), f.case_pi.end());
   for (const auto& p : f.params) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["name"] = Text(p.name);
-    g["unit"] = Text(p.unit);
-    g["value"] = Num(p.value);
-    g["std_error"] = Num(p.std_error);
-    g["sensitivity_deg"] = Num(p.sensitivity);
-    g["identifiability"] = Text(diagnose::IdentifiabilityName(p.identifiability));
-    g["note"] = Text(p.note);
-    params.push_back(Obj(x));
+    proto::DiagnosisParameter& g = *o->add_parameters();
+    g.set_name(p.name);
+    g.set_unit(p.unit);
+    g.set_value(p.value);
+    g.set_std_error(p.std_error);
+    g.set_sensitivity_deg(p.sensitivity);
+    g.set_identifiability(diagnose::IdentifiabilityName(p.identifiability));
+    g.set_note(p.note);
   }
-  o["parameters"] = List(params);
-  o["singular_values"] = Nums(f.singular_values);
-  o["weakest_direction"] = Text(f.weakest_direction);
-  o["evaluations"] = Count(f.evaluations);
-  o["wall_time_s"] = Num(f.wall_time_s);
-  o["message"] = Text(f.message);
-  return Obj(s);
+  o->mutable_singular_values()->Assign(f.singular_values.begin(), f.singular_values.end());
+  o->set_weakest_direction(f.weakest_direction);
+  o->set_evaluations(f.evaluations);
+  o->set_wall_time_s(f.wall_time_s);
+  o->set_message(f.message);
 }
 
-Value BinJson(const model::BinStat& b) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["rms_deg"] = Num(b.rms);
-  o["mean_deg"] = Num(b.mean);
-  o["n"] = Count(b.n);
-  return Obj(s);
+void BinOf(const model::BinStat& b, proto::ResidualBin* o) {
+  o->set_rms_deg(b.rms);
+  o->set_mean_deg(b.mean);
+  o->set_n(b.n);
 }
 
-Value LoopJson(const model::LoopFeatures& l) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["width_deg"] = Num(l.width_deg);
-  o["area_deg_V"] = Num(l.area_deg_v);
-  o["offset_deg"] = Num(l.offset_deg);
-  o["peak_to_peak_deg"] = Num(l.peak_to_peak_deg);
-  o["top_phase_deg"] = Num(l.top_phase_deg);
-  o["phase_lag_deg"] = Num(l.phase_lag_deg);
-  o["fundamental_deg"] = Num(l.fundamental_deg);
-  return Obj(s);
+void LoopOf(const model::LoopFeatures& l, proto::LoopFeatures* o) {
+  o->set_width_deg(l.width_deg);
+  o->set_area_deg_v(l.area_deg_v);
+  o->set_offset_deg(l.offset_deg);
+  o->set_peak_to_peak_deg(l.peak_to_peak_deg);
+  o->set_top_phase_deg(l.top_phase_deg);
+  o->set_phase_lag_deg(l.phase_lag_deg);
+  o->set_fundamental_deg(l.fundamental_deg);
 }
 
-Value CaseResidualJson(const model::CaseResidual& c) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["case"] = Count(c.number);
-  o["training"] = Bool(c.training);
-  o["amplitude_V"] = Num(c.amplitude_v);
-  o["frequency_Hz"] = Num(c.frequency_hz);
-  o["pi_deg2"] = Num(c.pi);
-  o["rms_deg"] = Num(c.rms);
-  o["max_abs_deg"] = Num(c.max_abs);
-  o["share"] = Num(c.share);
-  o["floor_rms_deg"] = Num(c.floor_rms);
-  o["rms_over_floor"] = Num(c.rms_over_floor);
-  std::vector<double> rms, mean;
+void CaseResidualOf(const model::CaseResidual& c, proto::CaseResidual* o) {
+  o->set_case_(c.number);
+  o->set_training(c.training);
+  o->set_amplitude_v(c.amplitude_v);
+  o->set_frequency_hz(c.frequency_hz);
+  o->set_pi_deg2(c.pi);
+  o->set_rms_deg(c.rms);
+  o->set_max_abs_deg(c.max_abs);
+  o->set_share(c.share);
+  o->set_floor_rms_deg(c.floor_rms);
+  o->set_rms_over_floor(c.rms_over_floor);
   for (int b = 0; b < model::kPhaseBins; ++b) {
-    rms.push_back(c.phase[b].rms);
-    mean.push_back(c.phase[b].mean);
+    o->add_phase_bins_rms_deg(c.phase[b].rms);
+    o->add_phase_bins_mean_deg(c.phase[b].mean);
   }
-  o["phase_bins_rms_deg"] = Nums(rms);
-  o["phase_bins_mean_deg"] = Nums(mean);
-  o["rising"] = BinJson(c.rising);
-  o["falling"] = BinJson(c.falling);
-  o["near_reversal"] = BinJson(c.near_reversal);
-  o["in_saturation"] = BinJson(c.in_saturation);
-  o["first_cycle"] = BinJson(c.first_cycle);
-  o["later_cycles"] = BinJson(c.later_cycles);
-  o["cycle_mean_deg"] = Nums(c.cycle_mean);
-  o["trend_deg_per_s"] = Num(c.trend_deg_per_s);
-  o["trend_se"] = Num(c.trend_se);
-  o["harmonics_deg"] = Nums(c.harmonic);
-  o["harmonic_noise_deg"] = Num(c.harmonic_noise);
-  o["odd_rms_deg"] = Num(c.odd_rms);
-  o["even_rms_deg"] = Num(c.even_rms);
-  o["low_frequency_rms_deg"] = Num(c.low_rms);
-  o["measured_loop"] = LoopJson(c.measured_loop);
-  o["model_loop"] = LoopJson(c.model_loop);
-  return Obj(s);
+  BinOf(c.rising, o->mutable_rising());
+  BinOf(c.falling, o->mutable_falling());
+  BinOf(c.near_reversal, o->mutable_near_reversal());
+  BinOf(c.in_saturation, o->mutable_in_saturation());
+  BinOf(c.first_cycle, o->mutable_first_cycle());
+  BinOf(c.later_cycles, o->mutable_later_cycles());
+  o->mutable_cycle_mean_deg()->Assign(c.cycle_mean.begin(), c.cycle_mean.end());
+  o->set_trend_deg_per_s(c.trend_deg_per_s);
+  o->set_trend_se(c.trend_se);
+  o->mutable_harmonics_deg()->Assign(c.harmonic.begin(), c.harmonic.end());
+  o->set_harmonic_noise_deg(c.harmonic_noise);
+  o->set_odd_rms_deg(c.odd_rms);
+  o->set_even_rms_deg(c.even_rms);
+  o->set_low_frequency_rms_deg(c.low_rms);
+  LoopOf(c.measured_loop, o->mutable_measured_loop());
+  LoopOf(c.model_loop, o->mutable_model_loop());
 }
 
-Value AnalysisJson(const model::ResidualAnalysis& a) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  std::vector<Value> cases, findings;
-  for (const auto& c : a.cases) cases.push_back(CaseResidualJson(c));
-  for (const auto& f : a.findings) findings.push_back(Text(f));
-  o["cases"] = List(cases);
-  o["findings"] = List(findings);
-  return Obj(s);
+void AnalysisOf(const model::ResidualAnalysis& a, proto::ResidualAnalysis* o) {
+  for (const auto& c : a.cases) CaseResidualOf(c, o->add_cases());
+  for (const auto& f : a.findings) o->add_findings(f);
 }
 
 // The noise floor: the encoder's quantum, the pooled floors and each case's.
-Value NoiseJson(const Diagnosis& d) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["quantum_deg"] = Num(d.quantum_deg);
-  o["floor_train_deg"] = Num(d.floor_train);
-  o["floor_withheld_deg"] = Num(d.floor_withheld);
-  o["floor_model"] = Text(d.floor_model);
-  std::vector<Value> cases;
+void NoiseOf(const Diagnosis& d, proto::BenchNoise* o) {
+  o->set_quantum_deg(d.quantum_deg);
+  o->set_floor_train_deg(d.floor_train);
+  o->set_floor_withheld_deg(d.floor_withheld);
+  o->set_floor_model(d.floor_model);
   for (size_t i = 0; i < d.cases.size(); ++i) {
     const auto& c = d.cases[i];
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["case"] = Count(c.number);
-    g["quantum_deg"] = Num(c.noise.quantum_deg);
-    g["quantisation_rms_deg"] = Num(c.noise.quantisation_rms_deg);
-    g["scatter_rms_deg"] = Num(c.noise.scatter_rms_deg);
-    g["floor_rms_deg"] = Num(c.noise.floor_rms_deg);
-    g["saturation_aware_floor_deg"] = Num(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN);
-    g["b1_deg"] = Num(c.b1);
-    g["b2_deg"] = Num(c.b2);
-    cases.push_back(Obj(x));
+    proto::BenchCaseNoise& g = *o->add_cases();
+    g.set_case_(c.number);
+    g.set_quantum_deg(c.noise.quantum_deg);
+    g.set_quantisation_rms_deg(c.noise.quantisation_rms_deg);
+    g.set_scatter_rms_deg(c.noise.scatter_rms_deg);
+    g.set_floor_rms_deg(c.noise.floor_rms_deg);
+    g.set_saturation_aware_floor_deg(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN);
+    g.set_b1_deg(c.b1);
+    g.set_b2_deg(c.b2);
   }
-  o["cases"] = List(cases);
-  return Obj(s);
 }
 
-Value TrendsJson(const std::vector<diagnose::ParamTrend>& trends) {
-  std::vector<Value> out;
-  for (const auto& t : trends) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["name"] = Text(t.name);
-    g["per_case"] = Nums(t.per_case);
-    g["slope_per_V"] = Num(t.slope_v);
-    g["slope_per_Hz"] = Num(t.slope_f);
-    g["p_V"] = Num(t.p_v);
-    g["p_f"] = Num(t.p_f);
-    g["r2"] = Num(t.r2);
-    g["relative_range"] = Num(t.relative_range);
-    g["significant"] = Bool(t.significant);
-    out.push_back(Obj(x));
+void TrendOf(const diagnose::ParamTrend& t, proto::ParamTrend* o) {
+  o->set_name(t.name);
+  o->mutable_per_case()->Assign(t.per_case.begin(), t.per_case.end());
+  o->set_slope_per_v(t.slope_v);
+  o->set_slope_per_hz(t.slope_f);
+  o->set_p_v(t.p_v);
+  o->set_p_f(t.p_f);
+  o->set_r2(t.r2);
+  o->set_relative_range(t.relative_range);
+  o->set_significant(t.significant);
+}
+
+void CandidateOf(const CandidateResult& c, proto::DiagnosisCandidate* o) {
+  o->set_effect(model::EffectName(c.kind));
+  o->set_added_parameters(c.added_params);
+  o->set_score(c.score);
+  o->set_train_delta_bic(c.train_delta_bic);
+  o->set_closed(c.closed);
+  o->set_raw_reduction(c.raw_reduction);
+  o->set_pattern(c.pattern);
+  o->set_weight(c.weight);
+  o->set_qualifies(c.qualifies);
+  o->set_note(c.note);
+  FitOf(c.fit, o->mutable_fit());
+}
+
+void RoundOf(const RoundResult& r, proto::DiagnosisRound* o) {
+  for (const auto& k : r.base_structure) o->add_from(model::EffectName(k));
+  o->set_withheld_pi_deg2(r.s0);
+  o->set_floor_pi_deg2(r.s_floor);
+  o->set_rms_over_floor(r.rms_ratio);
+  o->set_significant(r.significant);
+  if (r.named >= 0)
+    o->mutable_named()->set_string_value(model::EffectName(r.candidates[r.named].kind));
+  else
+    o->mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
+  if (r.runner_up >= 0) {
+    o->mutable_runner_up()->set_effect(model::EffectName(r.candidates[r.runner_up].kind));
+    o->mutable_runner_up()->set_z(r.z_runner_up);
   }
-  return List(out);
-}
-
-Value CandidateJson(const CandidateResult& c) {
-  Struct x;
-  auto& g = *x.mutable_fields();
-  g["effect"] = Text(model::EffectName(c.kind));
-  g["added_parameters"] = Count(c.added_params);
-  g["score"] = Num(c.score);
-  g["train_delta_bic"] = Num(c.train_delta_bic);
-  g["closed"] = Num(c.closed);
-  g["raw_reduction"] = Num(c.raw_reduction);
-  g["pattern"] = Num(c.pattern);
-  g["weight"] = Num(c.weight);
-  g["qualifies"] = Bool(c.qualifies);
-  g["note"] = Text(c.note);
-  g["fit"] = FitJson(c.fit);
-  return Obj(x);
-}
-
-Value RoundJson(const RoundResult& r) {
-  Struct x;
-  auto& g = *x.mutable_fields();
-  std::vector<Value> from, candidates;
-  for (const auto& k : r.base_structure) from.push_back(Text(model::EffectName(k)));
-  for (const auto& c : r.candidates) candidates.push_back(CandidateJson(c));
-  g["from"] = List(from);
-  g["withheld_pi_deg2"] = Num(r.s0);
-  g["floor_pi_deg2"] = Num(r.s_floor);
-  g["rms_over_floor"] = Num(r.rms_ratio);
-  g["significant"] = Bool(r.significant);
-  g["named"] = r.named >= 0 ? Text(model::EffectName(r.candidates[r.named].kind)) : json::Null();
-  g["verdict"] = Text(r.verdict);
-  g["candidates"] = List(candidates);
-  return Obj(x);
-}
-
-Value AbsorbedJson(const std::vector<diagnose::Absorption>& absorbed) {
-  std::vector<Value> out;
-  for (const auto& a : absorbed) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["name"] = Text(a.name);
-    g["unit"] = Text(a.unit);
-    g["without"] = Num(a.without);
-    g["with"] = Num(a.with);
-    g["z"] = Num(a.z);
-    out.push_back(Obj(x));
-  }
-  return List(out);
+  o->set_verdict(r.verdict);
+  for (const auto& c : r.candidates) CandidateOf(c, o->add_candidates());
 }
 
 // The withheld gap before / after the named effects, in total and per case.
-Value GapJson(const Diagnosis& d) {
-  Struct s;
-  auto& o = *s.mutable_fields();
-  o["withheld_pi_before_deg2"] = Num(d.withheld_before);
-  o["withheld_pi_after_deg2"] = Num(d.withheld_after);
-  o["withheld_floor_pi_deg2"] = Num(d.withheld_floor);
-  o["closed"] = Num(d.closed_total);
-  o["remaining_over_floor"] = Num(d.remaining_ratio);
-  std::vector<Value> cases;
+void GapOf(const Diagnosis& d, proto::DiagnosisGap* o) {
+  o->set_withheld_pi_before_deg2(d.withheld_before);
+  o->set_withheld_pi_after_deg2(d.withheld_after);
+  o->set_withheld_floor_pi_deg2(d.withheld_floor);
+  o->set_closed(d.closed_total);
+  o->set_remaining_over_floor(d.remaining_ratio);
   for (const auto& g : d.gaps) {
-    Struct x;
-    auto& c = *x.mutable_fields();
-    c["case"] = Count(g.number);
-    c["training"] = Bool(g.training);
-    c["floor_rms_deg"] = Num(g.floor_rms);
-    c["rms_before_deg"] = Num(g.rms_before);
-    c["rms_after_deg"] = Num(g.rms_after);
-    c["pi_before_deg2"] = Num(g.pi_before);
-    c["pi_after_deg2"] = Num(g.pi_after);
-    c["closed"] = Num(g.closed);
-    cases.push_back(Obj(x));
+    proto::CaseGap& c = *o->add_cases();
+    c.set_case_(g.number);
+    c.set_training(g.training);
+    c.set_floor_rms_deg(g.floor_rms);
+    c.set_rms_before_deg(g.rms_before);
+    c.set_rms_after_deg(g.rms_after);
+    c.set_pi_before_deg2(g.pi_before);
+    c.set_pi_after_deg2(g.pi_after);
+    c.set_closed(g.closed);
   }
-  o["cases"] = List(cases);
-  return Obj(s);
 }
 
 }  // namespace
 
+void BenchDiagnosisOf(const Diagnosis& d, const diagnose::DiagnoseOptions& opt,
+                      proto::Diagnosis* out) {
+  proto::Diagnosis m;
+  m.set_bench(d.bench);
+  m.set_verdict_kind(d.verdict_kind);
+  m.set_verdict(d.verdict);
+  auto& named = *m.mutable_named()->mutable_list_value();
+  for (const auto& k : d.named) named.add_values()->set_string_value(model::EffectName(k));
+  m.set_confidence(d.named.empty() ? NAN : d.confidence);
+  proto::DiagnosisThresholds& t = *m.mutable_thresholds();
+  t.set_significance_ratio(opt.rules.significance_ratio);
+  t.set_min_closed(opt.rules.min_closed);
+  t.set_min_pattern(opt.rules.min_pattern);
+  NoiseOf(d, m.mutable_noise());
+  FitOf(d.base, m.mutable_base());
+  AnalysisOf(d.base_residuals, m.mutable_base_residuals());
+  for (const auto& x : d.trends) TrendOf(x, m.add_trends());
+  for (const auto& r : d.rounds) RoundOf(r, m.add_rounds());
+  m.set_absorbed_by(d.absorbed_by);
+  for (const auto& a : d.absorbed) {
+    proto::Absorption& g = *m.add_absorbed();
+    g.set_name(a.name);
+    g.set_unit(a.unit);
+    g.set_without(a.without);
+    g.set_with(a.with);
+    g.set_z(a.z);
+  }
+  FitOf(d.final_fit, m.mutable_final());
+  AnalysisOf(d.final_residuals, m.mutable_final_residuals());
+  GapOf(d, m.mutable_gap());
+  m.set_wall_time_s(d.wall_time_s);
+  m.set_evaluations(d.evaluations);
+  *out = std::move(m);
+}
+
 void WriteDiagnosisJson(std::ostream& out, const Diagnosis& d,
                         const diagnose::DiagnoseOptions& opt) {
-  Struct root;
-  auto& o = *root.mutable_fields();
-  o["bench"] = Text(d.bench);
-  o["verdict_kind"] = Text(d.verdict_kind);
-  o["verdict"] = Text(d.verdict);
-  std::vector<Value> named;
-  for (const auto& k : d.named) named.push_back(Text(model::EffectName(k)));
-  o["named"] = List(named);
-  o["confidence"] = Num(d.named.empty() ? NAN : d.confidence);
-  Struct thresholds;
-  auto& t = *thresholds.mutable_fields();
-  t["significance_ratio"] = Num(opt.rules.significance_ratio);
-  t["min_closed"] = Num(opt.rules.min_closed);
-  t["min_pattern"] = Num(opt.rules.min_pattern);
-  o["thresholds"] = Obj(thresholds);
-  o["noise"] = NoiseJson(d);
-  o["base"] = FitJson(d.base);
-  o["base_residuals"] = AnalysisJson(d.base_residuals);
-  o["trends"] = TrendsJson(d.trends);
-  std::vector<Value> rounds;
-  for (const auto& r : d.rounds) rounds.push_back(RoundJson(r));
-  o["rounds"] = List(rounds);
-  o["absorbed_by"] = Text(d.absorbed_by);
-  o["absorbed"] = AbsorbedJson(d.absorbed);
-  o["final"] = FitJson(d.final_fit);
-  o["final_residuals"] = AnalysisJson(d.final_residuals);
-  o["gap"] = GapJson(d);
-  o["wall_time_s"] = Num(d.wall_time_s);
-  o["evaluations"] = Count(d.evaluations);
-  out << json::Print(root, "diagnosis.json");
+  proto::Diagnosis m;
+  BenchDiagnosisOf(d, opt, &m);
+  out << io::WriteDiagnosisFile(m);
 }
 
 // ---- HTML ---------------------------------------------------------------------------------------
@@ -790,47 +718,37 @@ void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
 }
 
 void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s) {
-  Struct root;
-  auto& o = *root.mutable_fields();
-  std::vector<Value> columns;
-  for (int c = 0; c < diagnose::CheckCols(); ++c)
-    columns.push_back(Text(diagnose::CheckColumnName(c)));
-  o["columns"] = List(columns);
-  Struct confusion;
+  proto::DiagnosisCheck m;
+  for (int c = 0; c < diagnose::CheckCols(); ++c) m.add_columns(diagnose::CheckColumnName(c));
   for (int r = 0; r < diagnose::CheckRows(); ++r) {
-    std::vector<Value> row;
-    for (int c = 0; c < diagnose::CheckCols(); ++c) row.push_back(Count(s.confusion[r][c]));
-    (*confusion.mutable_fields())[diagnose::CheckColumnName(r)] = List(row);
+    auto& row = (*m.mutable_confusion())[diagnose::CheckColumnName(r)];
+    for (int c = 0; c < diagnose::CheckCols(); ++c)
+      row.add_values()->set_number_value(s.confusion[r][c]);
   }
-  o["confusion"] = Obj(confusion);
-  o["single_significant"] = Count(s.effect_trials);
-  o["single_significant_right"] = Count(s.effect_right);
-  o["accuracy"] = Num(s.accuracy());
-  o["clean"] = Count(s.clean);
-  o["clean_alarms"] = Count(s.clean_alarms);
-  o["false_alarm_rate"] = Num(s.false_alarm_rate());
-  o["closed"] = Nums(s.closed);
-  std::vector<Value> trials;
+  m.set_single_significant(s.effect_trials);
+  m.set_single_significant_right(s.effect_right);
+  m.set_accuracy(s.accuracy());
+  m.set_clean(s.clean);
+  m.set_clean_alarms(s.clean_alarms);
+  m.set_false_alarm_rate(s.false_alarm_rate());
+  m.mutable_closed()->Assign(s.closed.begin(), s.closed.end());
   for (const auto& t : s.trials) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["seed"] = Num(static_cast<double>(t.seed));  // exact up to 2^53
-    g["truth"] = Text(model::EffectName(t.truth));
-    g["truth_description"] = Text(t.truth_description);
-    g["magnitude"] = Num(t.magnitude);
-    g["verdict_kind"] = Text(t.verdict_kind);
-    g["named"] = Text(model::EffectName(t.named));
-    g["confidence"] = Num(t.confidence);
-    g["significant"] = Bool(t.significant);
-    g["rms_over_floor"] = Num(t.rms_ratio);
-    g["closed"] = Num(t.closed);
-    g["correct"] = Bool(t.correct());
-    g["wall_time_s"] = Num(t.wall_time_s);
-    trials.push_back(Obj(x));
+    proto::DiagnosisCheckTrial& g = *m.add_trials();
+    g.set_seed(t.seed);
+    g.set_truth(model::EffectName(t.truth));
+    g.set_truth_description(t.truth_description);
+    g.set_magnitude(t.magnitude);
+    g.set_verdict_kind(t.verdict_kind);
+    g.set_named(model::EffectName(t.named));
+    g.set_confidence(t.confidence);
+    g.set_significant(t.significant);
+    g.set_rms_over_floor(t.rms_ratio);
+    g.set_closed(t.closed);
+    g.set_correct(t.correct());
+    g.set_wall_time_s(t.wall_time_s);
   }
-  o["trials"] = List(trials);
-  o["wall_time_s"] = Num(s.wall_time_s);
-  out << json::Print(root, "check.json");
+  m.set_wall_time_s(s.wall_time_s);
+  out << io::PrintJson(m, "check.json");
 }
 
 }  // namespace pz::client

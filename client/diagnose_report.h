@@ -11,6 +11,10 @@
 #include "diagnose/fin_check.h"
 #include "diagnose/fin_diagnose.h"
 
+namespace pz::proto {
+class Diagnosis;
+}
+
 namespace pz::client {
 
 /// The terminal summary: noise floor, where the gap lies, the candidates, the verdict, how far
@@ -18,8 +22,11 @@ namespace pz::client {
 void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d,
                     const diagnose::DiagnoseOptions& options);
 
-/// The whole diagnosis as one JSON object, through protobuf's Struct as every report's JSON
-/// (client/json_values.h): keys sorted, non-finite numbers as null.
+/// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; the one
+/// conversion; `out` replaced).
+void BenchDiagnosisOf(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options,
+                      proto::Diagnosis* out);
+/// diagnosis.json (io/diagnosis_json.h: keys sorted, a non-finite number as null).
 void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d,
                         const diagnose::DiagnoseOptions& options);
 

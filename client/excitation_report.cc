@@ -4,7 +4,6 @@
 
 #include "fit.pb.h"
 #include "io/csv.h"
-#include "io/proto_json.h"
 #include "model/format.h"
 
 namespace pz::client {
@@ -87,13 +86,6 @@ void ExcitationOf(const io::RecordSet& set, const records::ExcitationReport& r,
   q.set_duration_s(static_cast<double>(p.u.size()) / p.fs_hz);
   for (const std::string& s : p.segments) q.add_segments(s);
   *out = std::move(e);
-}
-
-json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationReport& r,
-                           const records::TrainingDriveProposal& p, const std::string& drive_file) {
-  proto::Excitation e;
-  ExcitationOf(set, r, p, drive_file, &e);
-  return json::Obj(io::MessageToStruct(e));
 }
 
 void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,

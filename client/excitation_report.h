@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <ostream>
 
-#include "client/json_values.h"
 #include "io/records.h"
 #include "records/excitation.h"
 
@@ -30,10 +29,6 @@ void WriteExcitationMarkdown(std::ostream& os, const io::RecordSet& set,
 void ExcitationOf(const io::RecordSet& set, const records::ExcitationReport& report,
                   const records::TrainingDriveProposal& proposal, const std::string& drive_file,
                   proto::Excitation* out);
-/// ExcitationOf as a JSON object (io/proto_json.h's rules).
-json::Value ExcitationJson(const io::RecordSet& set, const records::ExcitationReport& report,
-                           const records::TrainingDriveProposal& proposal,
-                           const std::string& drive_file);
 /// One line per withheld record with needs (none: one line saying so).
 void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,
                             const records::ExcitationReport& report);

@@ -10,11 +10,12 @@
 #include <sstream>
 
 #include "client/excitation_report.h"
-#include "client/json_values.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "client/search_flags.h"
+#include "diagnosis.pb.h"
 #include "io/csv.h"
+#include "io/diagnosis_json.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -84,76 +85,74 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
   WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
+void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,
+                        const records::TrainingDriveProposal& proposal,
+                        const records::SelectionResult* selection, proto::Diagnosis* out) {
+  proto::Diagnosis m;
+  m.set_records(set.source.string());
+  m.set_family(d.base.model->family().name());
+  m.set_initial_state(model::InitialStateName(d.base.model->family().initial_state()));
+  m.set_response_unit(set.response_unit);
+  proto::NoiseFloor& n = *m.mutable_noise_floor();
+  n.set_sigma(d.noise.sigma);
+  n.set_used(d.noise.used);
+  for (const auto& e : d.noise.estimates) {
+    proto::NoiseEstimate& g = *n.add_estimates();
+    g.set_method(e.method);
+    g.set_sigma(e.sigma);
+    g.set_samples(static_cast<int64_t>(e.samples));
+    g.set_from(e.detail);
+  }
+  m.set_withheld_samples(static_cast<int64_t>(d.withheld_samples));
+  m.set_rms_ratio(d.rms_ratio);
+  m.set_significant(d.significant);
+  for (const auto& c : d.candidates) {
+    proto::DiagnosisCandidate& g = *m.add_candidates();
+    g.set_effect(records::EffectName(c.kind));
+    g.set_score(c.score);
+    g.set_closed(c.closed);
+    g.set_pattern(c.pattern);
+    g.set_z_vs_base(c.z_vs_base);
+    g.set_qualifies(c.qualifies);
+    g.set_note(c.note);
+  }
+  for (const auto& name : d.diverged) m.add_diverged(name);
+  if (d.named >= 0)
+    m.mutable_named()->set_string_value(
+        records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind));
+  else
+    m.mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
+  if (d.runner_up >= 0) {
+    m.mutable_runner_up()->set_effect(
+        records::EffectName(d.candidates[static_cast<size_t>(d.runner_up)].kind));
+    m.mutable_runner_up()->set_z(d.z_runner_up);
+  }
+  m.set_confidence(d.confidence);
+  m.set_verdict_kind(d.verdict_kind);
+  m.set_verdict(d.verdict);
+  ExcitationOf(set, d.excitation, proposal, kProposedDriveFile, m.mutable_excitation());
+  m.set_excitation_gap_note(d.excitation_note);
+  if (d.next) {
+    proto::NextMeasurement& g = *m.mutable_next_measurement();
+    g.set_waveform(records::WaveformName(d.next->shape.waveform));
+    g.set_amplitude(d.next->shape.amplitude);
+    g.set_bias(d.next->shape.bias);
+    g.set_frequency_hz(d.next->shape.frequency_hz);
+    g.set_duration_s(d.next->shape.duration_s);
+    g.set_rms_difference(d.next->rms_difference);
+    g.set_ratio_to_noise(d.next->ratio_to_noise);
+  }
+  if (selection) SelectionOf(*selection, m.mutable_selection());
+  *out = std::move(m);
+}
+
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
                                const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection) {
-  using namespace json;  // NOLINT
-  Struct root;
-  auto& f = *root.mutable_fields();
-  f["records"] = Text(set.source.string());
-  f["family"] = Text(d.base.model->family().name());
-  f["initial_state"] = Text(model::InitialStateName(d.base.model->family().initial_state()));
-  f["response_unit"] = Text(set.response_unit);
-  Struct noise;
-  auto& n = *noise.mutable_fields();
-  n["sigma"] = Num(d.noise.sigma);
-  n["used"] = Text(d.noise.used);
-  std::vector<Value> estimates;
-  for (const auto& e : d.noise.estimates) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["method"] = Text(e.method);
-    g["sigma"] = Num(e.sigma);
-    g["samples"] = Num(static_cast<double>(e.samples));
-    g["from"] = Text(e.detail);
-    estimates.push_back(Obj(x));
-  }
-  n["estimates"] = List(estimates);
-  f["noise_floor"] = Obj(noise);
-  f["withheld_samples"] = Num(static_cast<double>(d.withheld_samples));
-  f["rms_ratio"] = Num(d.rms_ratio);
-  f["significant"] = Bool(d.significant);
-  std::vector<Value> candidates;
-  for (const auto& c : d.candidates) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["effect"] = Text(records::EffectName(c.kind));
-    g["score"] = Num(c.score);
-    g["closed"] = Num(c.closed);
-    g["pattern"] = Num(c.pattern);
-    g["z_vs_base"] = Num(c.z_vs_base);
-    g["qualifies"] = Bool(c.qualifies);
-    g["note"] = Text(c.note);
-    candidates.push_back(Obj(x));
-  }
-  f["candidates"] = List(candidates);
-  std::vector<Value> diverged;
-  for (const auto& n : d.diverged) diverged.push_back(Text(n));
-  f["diverged"] =
-      List(diverged);  // candidates left out: their prediction diverges on withheld records
-  f["named"] = d.named >= 0
-                   ? Text(records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind))
-                   : Null();
-  f["confidence"] = Num(d.confidence);
-  f["verdict_kind"] = Text(d.verdict_kind);
-  f["verdict"] = Text(d.verdict);
-  f["excitation"] = ExcitationJson(set, d.excitation, proposal, kProposedDriveFile);
-  f["excitation_gap_note"] = Text(d.excitation_note);
-  if (d.next) {
-    Struct x;
-    auto& g = *x.mutable_fields();
-    g["waveform"] = Text(records::WaveformName(d.next->shape.waveform));
-    g["amplitude"] = Num(d.next->shape.amplitude);
-    g["bias"] = Num(d.next->shape.bias);
-    g["frequency_hz"] = Num(d.next->shape.frequency_hz);
-    g["duration_s"] = Num(d.next->shape.duration_s);
-    g["rms_difference"] = Num(d.next->rms_difference);
-    g["ratio_to_noise"] = Num(d.next->ratio_to_noise);
-    f["next_measurement"] = Obj(x);
-  }
-  if (selection) f["selection"] = SelectionJson(*selection);
-  os << Print(root, "diagnosis.json");
+  proto::Diagnosis m;
+  RecordsDiagnosisOf(set, d, proposal, selection, &m);
+  os << io::WriteDiagnosisFile(m);
 }
 
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {

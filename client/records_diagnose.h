@@ -12,6 +12,10 @@
 #include "diagnose/diagnose.h"
 #include "records/select.h"
 
+namespace pz::proto {
+class Diagnosis;
+}
+
 namespace pz::client {
 
 struct RecordsDiagnoseRequest {
@@ -42,6 +46,12 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
                                    const records::TrainingDriveProposal& proposal,
                                    double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
+/// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; the one
+/// conversion; `out` replaced). `selection`: --family auto's choice (null: none).
+void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,
+                        const records::TrainingDriveProposal& proposal,
+                        const records::SelectionResult* selection, proto::Diagnosis* out);
+/// diagnosis.json (io/diagnosis_json.h).
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
                                const records::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,

@@ -6,7 +6,6 @@
 
 #include "fit.pb.h"
 #include "io/csv.h"
-#include "io/proto_json.h"
 
 namespace pz::client {
 namespace {
@@ -179,12 +178,6 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
     }
   }
   *out = std::move(m);
-}
-
-json::Value SelectionJson(const records::SelectionResult& s) {
-  proto::Selection m;
-  SelectionOf(s, &m);
-  return json::Obj(io::MessageToStruct(m));
 }
 
 }  // namespace pz::client

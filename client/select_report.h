@@ -7,7 +7,6 @@
 #include <ostream>
 #include <string>
 
-#include "client/json_values.h"
 #include "io/records.h"
 #include "records/select.h"
 
@@ -27,7 +26,5 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
 /// The selection as its stored message (the one conversion: fit.json's and diagnosis.json's
 /// "selection"; `out` replaced).
 void SelectionOf(const records::SelectionResult& s, proto::Selection* out);
-/// SelectionOf as a JSON object (io/proto_json.h's rules).
-json::Value SelectionJson(const records::SelectionResult& s);
 
 }  // namespace pz::client

@@ -75,6 +75,17 @@ struct Record {
   double frequency_hz = 0;  ///< the stated excitation frequency [Hz] (a bench's, or a manifest's
                             ///< frequency_Hz column); 0 = not stated
   int manifest_line = 0;    ///< 0 when not from a manifest
+  /// A bimorph-fin bench case's stated drive u = V sin(2π f t) on k / fs (io/fin_records.h): the
+  /// grid trends and the bench form of the bimorph-fin family read it (the form simulates that
+  /// sinusoid, records/families.h FamilyOptions::bench_form). None stated: stated() false.
+  struct StatedSinusoid {
+    int case_number = 0;        ///< the bench's case number (> 0)
+    double amplitude_v = 0;     ///< V [V]
+    double frequency_hz = 0;    ///< f [Hz]
+    double cycles = 0;          ///< the record's length in drive cycles
+    double sample_rate_hz = 0;  ///< fs [Hz] as stated (dt = 1 / fs)
+    bool stated() const { return frequency_hz > 0 && sample_rate_hz > 0 && cycles > 0; }
+  } sinusoid;
 
   size_t size() const { return t.size(); }
   size_t scored() const { return end_scored - first_scored; }

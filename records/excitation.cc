@@ -466,6 +466,14 @@ std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& 
   return s + ".";
 }
 
+namespace {
+// Bounds of a proposed training drive, whatever the records (an outlier in a slow record sets a
+// range the p95 rate crosses in hours; a fast sample rate multiplies the samples).
+constexpr double kMaxSineS = 600;      // the decaying sine's 12 cycles [s]
+constexpr double kMaxMoveS = 10;       // one half-cosine move [s]
+constexpr double kMaxSamples = 4.0e6;  // 32 MB of drive
+}  // namespace
+
 TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const ExcitationReport& rep,
                                            uint64_t seed) {
   const DriveExcitation& t = rep.training;
@@ -485,9 +493,20 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
   if (!(range > 0) || !(fs > 0))
     throw InputError("proposed drive: the records have no drive range or sample rate");
   if (!(rate > 0)) rate = range;  // one range per second
-  // A sine of amplitude `amp` whose 95th-percentile rate is `rate`: 2π f A ≈ rate.
-  const double f = std::min(fs / 20, rate / (2 * std::numbers::pi * amp));
+  // A sine of amplitude `amp` whose 95th-percentile rate is `rate`: 2π f A ≈ rate, its 12 cycles
+  // within kMaxSineS (a range set by an outlier over a slow record would ask for hours).
+  const int cycles = 12;
+  const double f =
+      std::max(std::min(fs / 20, rate / (2 * std::numbers::pi * amp)), cycles / kMaxSineS);
+  const double hold_s = std::clamp(t.duration_s / 8, 2.0, 10.0);
+  // The longest the plan can take: rest, the first move, the sine, 60 + 9 moves, 9 holds. Over
+  // kMaxSamples at the records' rate, the proposal is sampled more slowly (and says so).
+  const double plan_s = 1 + kMaxMoveS + cycles / f + 69 * kMaxMoveS + 9 * hold_s;
+  const double fs_records = fs;
+  const bool slower = fs * plan_s > kMaxSamples;
+  if (slower) fs = kMaxSamples / plan_s;
   TrainingDriveProposal p;
+  p.records_fs_hz = fs_records;
   p.fs_hz = fs;
   const double dt = 1 / fs;
   auto hold = [&](double level, double seconds) {
@@ -497,7 +516,8 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
   // Half-cosine move to `level` at `rate` (at least 0.05 s).
   auto move = [&](double level) {
     const double from = p.u.empty() ? level : p.u.back();
-    const double seconds = std::max(0.05, std::abs(level - from) / (rate * 2 / std::numbers::pi));
+    const double seconds =
+        std::clamp(std::abs(level - from) / (rate * 2 / std::numbers::pi), 0.05, kMaxMoveS);
     const size_t n = std::max<size_t>(1, static_cast<size_t>(std::llround(seconds * fs)));
     for (size_t k = 1; k <= n; ++k)
       p.u.push_back(from + (level - from) *
@@ -508,7 +528,6 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
   hold(rest_level, p.rest_s);
   move(lo);
   // 1. A decaying-amplitude sine from the lower end: nested minor loops around the middle.
-  const int cycles = 12;
   const size_t nd = static_cast<size_t>(std::llround(cycles / f * fs));
   for (size_t k = 1; k <= nd; ++k) {
     const double tau = static_cast<double>(k) * dt, a = amp * (1 - static_cast<double>(k) / nd);
@@ -530,7 +549,6 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
                        rep.drive_unit + " (seed " + std::to_string(seed) +
                        "): minor loops at every level");
   // 3. A staircase of holds: creep over seconds.
-  const double hold_s = std::clamp(t.duration_s / 8, 2.0, 10.0);
   for (double share : {0.0, 0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25, 0.0}) {
     move(lo + share * range);
     hold(lo + share * range, hold_s);
@@ -542,6 +560,11 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
   d << "a proposed training drive of " << Num(static_cast<double>(p.u.size()) * dt) << " s at "
     << Num(fs, 5) << " Hz (after a " << Num(p.rest_s) << " s rest at " << Num(rest_level, 4) << " "
     << rep.drive_unit << "): ";
+  if (slower) {
+    d << "sampled at " << Num(fs, 5) << " Hz rather than the records' " << Num(p.records_fs_hz, 5)
+      << " Hz, which would take over " << Num(kMaxSamples) << " samples (resample it for the "
+      << "generator); ";
+  }
   for (size_t i = 0; i < p.segments.size(); ++i) d << (i ? "; then " : "") << p.segments[i];
   p.description = d.str();
   return p;

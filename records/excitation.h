@@ -123,9 +123,10 @@ std::string ExcitationGapNote(const io::RecordSet& set, const ExcitationReport& 
 /// Preisach plane), and a staircase of holds (creep over seconds); over the range of every record,
 /// at the faster of the training's and the withheld records' rates, sampled at the training rate.
 struct TrainingDriveProposal {
-  double fs_hz = 0;
-  std::vector<double> u;              ///< from t = 0
-  double rest_s = 0;                  ///< the leading rest
+  double fs_hz = 0;          ///< the records' rate, or lower when that would take over 4e6 samples
+  double records_fs_hz = 0;  ///< the training records' sample rate
+  std::vector<double> u;     ///< from t = 0
+  double rest_s = 0;         ///< the leading rest
   std::vector<std::string> segments;  ///< what each part is for
   std::string description;
 };

@@ -12,6 +12,7 @@
 #include "model/bw_oscillator.h"
 #include "model/duhem.h"
 #include "model/modal_simulator.h"
+#include "model/saturation.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
 #include "records/preisach_family.h"
@@ -374,7 +375,22 @@ class BimorphFinFamily final : public Family {
  public:
   static const FamilyDef kDef;
   BimorphFinFamily(const DataScale& s, const FamilyOptions& o)
-      : geometry_(o.geometry), plant_(o.geometry) {
+      : geometry_(o.geometry),
+        plant_(o.geometry),
+        bench_(o.bench_form),
+        sim_(plant_),
+        sim_options_(o.fin_sim) {
+    if (bench_) {
+      ThrowIfError(o.fin_sim.Validate());
+      // The fin engine's box and typical scales (diagnose/problem.cc BaseSpecs), in volts and
+      // degrees: γ searched as g = γ/β ∈ [−0.98, 1] (β + γ > 0 with margin, β − γ ≥ 0).
+      params_ = {{"mu", "1/s", 0.0, 400.0, false},    {"delta", "s", 0.0, 1.0, false},
+                 {"alpha", "N/V", 0.0, 0.02, false},  {"beta", "1/V", 1e-5, 0.05, true},
+                 {"gamma", "1/V", -0.98, 1.0, false}, {"a1", "deg", 0.0, 1.0, false},
+                 {"a2", "deg", 0.0, 1.0, false}};
+      forms_ = {{-1, 50.0}, {-1, 0.05}, {-1, 1e-3}, {-1, 2e-3}, {3, 2e-3}, {-1, 0.05}, {-1, 0.05}};
+      return;
+    }
     // The spec's ranges (model/network.h) are for drives up to 375 V; α scales with 1/drive.
     const double a = 375.0 / s.u_half, g = s.y_half;  // gain: output units per degree
     const double lp = o.geometry.active_length_m, le = o.geometry.tip_length_m;
@@ -407,6 +423,10 @@ class BimorphFinFamily final : public Family {
   /// in n. The library's FE assembly and eigen-decomposition (model::BimorphPlant,
   /// model::ModalSimulator), as Simulate does; the kernel discretises from these.
   static KernelShape Kernel(const FamilyOptions& o, std::span<const double> p) {
+    if (o.bench_form)
+      throw InputError(
+          "model.family_options: bimorph-fin's bench form (per-record saturations, "
+          "a stated sinusoid) has no step for a controller: fit the family itself");
     model::BeamGeometry geo = o.geometry;
     geo.active_length_m = p[10];
     const bool tip = p.size() > 11;
@@ -434,8 +454,84 @@ class BimorphFinFamily final : public Family {
     return shape;
   }
   const std::vector<ParamInfo>& params() const override { return params_; }
+  std::vector<SearchForm> search_forms() const override { return forms_; }
+  void CheckTraining(const std::vector<const io::Record*>& train) const override {
+    if (!bench_) return;
+    for (const io::Record* r : train) {
+      if (!r->sinusoid.stated())
+        throw InputError(r->Label() +
+                         ": bimorph-fin's bench form needs each record's stated sinusoid (a fin "
+                         "bench read as records by io::RecordsFromCaseSet)");
+      try {
+        model::SaturationFromExtremes(r->y);
+      } catch (const InputError& e) {
+        throw InputError(r->Label() + ": cannot fit the saturations b1, b2: " + e.what());
+      }
+    }
+  }
+  bool simulates_records() const override { return bench_; }
+  bool sums_errors() const override { return bench_; }
+  std::vector<ParamInfo> EffectBox(model::EffectKind e,
+                                   std::vector<SearchForm>* forms) const override {
+    if (!bench_) return Family::EffectBox(e, forms);
+    if (e.none() || !model::IsFinEffect(e))
+      throw InputError("bimorph-fin's bench form: effect '" + std::string(e.name()) +
+                       "': " + model::FinEffectError(e.name()));
+    std::vector<ParamInfo> box;
+    for (const model::EffectParamInfo& q : model::GetEffectInfo(e).params) {
+      box.push_back({q.name, q.unit, q.lower, q.upper, q.log_scale});
+      if (forms) forms->push_back({-1, q.scale});
+    }
+    return box;
+  }
+  void SimulateRecord(const io::Record& r, std::span<const double> p,
+                      std::span<const model::EffectKind> effects, std::span<const double> ep,
+                      size_t end, std::span<double> y) const override {
+    if (!bench_) return Family::SimulateRecord(r, p, effects, ep, end, y);
+    const io::Record::StatedSinusoid& st = r.sinusoid;
+    if (!st.stated())
+      throw InputError(r.Label() +
+                       ": bimorph-fin's bench form simulates a bench case's stated sinusoid; the "
+                       "record states none (a fin bench read as records by io::RecordsFromCaseSet "
+                       "has it)");
+    const model::Sinusoid drive{st.amplitude_v, st.frequency_hz, st.cycles, st.sample_rate_hz};
+    const size_t n = static_cast<size_t>(std::max(0, drive.NumSamples()));
+    if (n != r.size() || end > n || y.size() < end || p.size() != params_.size())
+      throw InputError(r.Label() + ": its stated sinusoid has " + std::to_string(n) +
+                       " samples, the record " + std::to_string(r.size()));
+    model::SaturationPair sat;
+    try {  // the fin's rule: b1, b2 the record's measured extremes
+      sat = model::SaturationFromExtremes(r.y);
+    } catch (const InputError& e) {
+      throw InputError(r.Label() + ": cannot fit the saturations b1, b2: " + e.what());
+    }
+    const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], sat.b1, sat.b2};
+    thread_local std::vector<model::Effect> fx;
+    thread_local std::vector<double> angle;
+    fx.resize(effects.size());
+    size_t at = 0;
+    for (size_t i = 0; i < effects.size(); ++i) {
+      const size_t m = model::GetEffectInfo(effects[i]).params.size();
+      if (at + m > ep.size()) throw InputError(r.Label() + ": too few effect parameters");
+      fx[i].kind = effects[i];
+      fx[i].params.assign(ep.begin() + static_cast<std::ptrdiff_t>(at),
+                          ep.begin() + static_cast<std::ptrdiff_t>(at + m));
+      at += m;
+    }
+    angle.resize(n);
+    if (!sim_.SimulateAngle(b, fx, drive, angle, sim_options_).ok()) {
+      std::fill(y.begin(), y.begin() + static_cast<std::ptrdiff_t>(end),
+                std::numeric_limits<double>::quiet_NaN());
+      return;
+    }
+    std::copy(angle.begin(), angle.begin() + static_cast<std::ptrdiff_t>(end), y.begin());
+  }
   void Simulate(std::span<const double> p, std::span<const double> u, double dt,
                 std::span<double> y) const override {
+    if (bench_)
+      throw InputError(
+          "bimorph-fin's bench form simulates records with a stated sinusoid "
+          "(RecordModel::Simulate), not a bare drive");
     if (p.size() != params_.size())
       throw InputError("bimorph-fin: " + std::to_string(params_.size()) + " parameters expected");
     model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7], -p[8]};
@@ -474,7 +570,11 @@ class BimorphFinFamily final : public Family {
  private:
   model::BeamGeometry geometry_;
   model::BimorphPlant plant_;
+  bool bench_ = false;
+  model::EffectSimulator sim_;  ///< on plant_ (bench form)
+  model::EffectSimOptions sim_options_;
   std::vector<ParamInfo> params_;
+  std::vector<SearchForm> forms_;
 };
 
 // Not in the `--family auto` grid: the fin's bench has its own geometry and protocol.
@@ -483,6 +583,17 @@ const FamilyDef BimorphFinFamily::kDef = {
     BimorphFinFamily::Kernel};
 
 }  // namespace
+
+void Family::SimulateRecord(const io::Record& r, std::span<const double>,
+                            std::span<const model::EffectKind>, std::span<const double>, size_t,
+                            std::span<double>) const {
+  throw InputError(name() + " simulates a drive, not a record (" + r.name + ")");
+}
+
+std::vector<ParamInfo> Family::EffectBox(model::EffectKind e, std::vector<SearchForm>*) const {
+  throw InputError("effect '" + std::string(e.name()) + "' is not an effect " + name() +
+                   " simulates itself");
+}
 
 bool Family::AddNormalEquations(const io::Record&, size_t, std::span<const double>, int,
                                 NormalEquationsBuilder&) const {

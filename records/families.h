@@ -22,7 +22,11 @@
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
 //                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
 //                       and tip length L_e (searched around FamilyOptions::geometry; the
-//                       cross-section and materials stay that geometry's)
+//                       cross-section and materials stay that geometry's); in its bench form
+//                       (FamilyOptions::bench_form) the fin engine's model: μ δ α β γ a1 a2 in
+//                       the fin's box, γ searched as γ/β, the geometry and the gain (1: degrees)
+//                       fixed, b1 b2 per record from its measured extremes, each record's stated
+//                       sinusoid simulated with any fin effect, beam ones included (on CVODE)
 //
 // A family is made for a data scale (drive range, response range, dominant frequency, sample
 // rate) measured on the training records: its search box is scaled to it, so the same family fits
@@ -39,6 +43,7 @@
 #include "model/beam.h"
 #include "model/bw_oscillator.h"
 #include "model/effect_library.h"
+#include "model/effects.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
 
@@ -89,7 +94,16 @@ struct FamilyOptions {
   /// centred). A fit.json written before the field reads as centred (records/stepper.h).
   model::InitialState initial_state = model::InitialState::kAuto;
   model::BeamGeometry geometry;  ///< bimorph fin
-  OscillatorOptions oscillator;  ///< bw-oscillator
+  /// bimorph-fin: the fin bench's form, the model of the fin engine (diagnose/problem.h): μ, δ, α,
+  /// β, γ, a1, a2 searched in the fin's box (γ as the ratio γ/β, Family::SearchForm), the geometry
+  /// fixed at `geometry` and the output the fin angle in degrees (no gain); the saturations b1, b2
+  /// of each record from its measured extremes (model/saturation.h SaturationFromExtremes); each
+  /// record simulated on its stated sinusoid (io::Record::sinusoid, io/fin_records.h) by
+  /// model::EffectSimulator with `fin_sim`, with the fin's effects in the fin's boxes, beam effects
+  /// (hinge-friction, cubic-stiffening) included: those run on CVODE.
+  bool bench_form = false;
+  model::EffectSimOptions fin_sim;  ///< bench form: the simulator's options
+  OscillatorOptions oscillator;     ///< bw-oscillator
 };
 
 class Family {
@@ -140,6 +154,34 @@ class Family {
   /// the builder without forming them. False (the default): the caller forms them.
   virtual bool AddNormalEquations(const io::Record& r, size_t from, std::span<const double> u,
                                   int pol, NormalEquationsBuilder& builder) const;
+  /// How parameter i is searched beyond its box (RecordModel::search_forms): `ratio_of` ≥ 0: as
+  /// the ratio p[i] / p[ratio_of] within [lower, upper] (the fin's γ/β: every point of the box is
+  /// a bounded loop; records/fit.h RecordMap); `scale` > 0: its typical magnitude (the
+  /// uncertainty's steps and sensitivities) in place of the box's.
+  struct SearchForm {
+    int ratio_of = -1;
+    double scale = 0;
+  };
+  /// One per params() entry; empty (the default): each parameter by its box.
+  virtual std::vector<SearchForm> search_forms() const { return {}; }
+  /// A family that simulates whole records, its effects included (bimorph-fin's bench form: each
+  /// record's stated sinusoid and saturations): RecordModel hands it each record with the model's
+  /// parameters (SimulateRecord) and takes the effects' boxes from EffectBox, in the order given.
+  virtual bool simulates_records() const { return false; }
+  /// Its fit's cost is the sum of squared errors over the training records, not their mean (the
+  /// fin engine's CF = Σ PI: bimorph-fin's bench form, so that its fit runs the fin's arithmetic —
+  /// a CVODE model's finite differences turn a rounding of the residuals into a different step).
+  virtual bool sums_errors() const { return false; }
+  /// simulates_records: the output on samples [0, end) of r into y with the family's parameters p
+  /// and `effects` with their parameters `ep` (each one's EffectBox, in that order); NaN for a
+  /// parameter set the model cannot run. Throws InputError for a record it cannot simulate.
+  virtual void SimulateRecord(const io::Record& r, std::span<const double> p,
+                              std::span<const model::EffectKind> effects,
+                              std::span<const double> ep, size_t end, std::span<double> y) const;
+  /// simulates_records: effect e's parameters and their search forms (appended to `forms`); throws
+  /// InputError naming an effect the family does not take.
+  virtual std::vector<ParamInfo> EffectBox(model::EffectKind e,
+                                           std::vector<SearchForm>* forms) const;
   /// Names of the solved weights (linear families).
   virtual std::vector<std::string> weight_names() const { return {}; }
   /// A penalty λ wᵀRw on a linear family's weights: its name (reports) and the Gram matrix R

@@ -426,7 +426,13 @@ double ScoreRecord(const io::Record& r, int polarity, double rest_output, std::s
 
 }  // namespace
 
+double RecordFitness::ResidualWeight() const {
+  return model_.family().sums_errors() ? 1.0 : 1 / std::sqrt(static_cast<double>(samples_));
+}
+
 double RecordFitness::MeanSquare(double sse) const {
+  if (model_.family().sums_errors())
+    return std::isfinite(sse) ? sse : std::numeric_limits<double>::infinity();
   return std::isfinite(sse) ? sse / static_cast<double>(samples_)
                             : std::numeric_limits<double>::infinity();
 }
@@ -563,7 +569,7 @@ bool RecordFitness::ResidualsOf(const Output& o, std::span<const double> params,
   if (!std::isfinite(o.mse)) return false;
   r.clear();
   r.reserve(samples_);
-  const double s = 1 / std::sqrt(static_cast<double>(samples_));
+  const double s = ResidualWeight();
   for (size_t i = 0; i < records_.size(); ++i) {
     const io::Record& rec = *records_[i];
     for (size_t k = rec.first_scored; k < rec.end_scored; ++k)
@@ -604,6 +610,7 @@ RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
     hi = std::max(hi, r.y[k]);
   }
   if (!std::isfinite(sse)) m.max_abs = std::numeric_limits<double>::infinity();
+  m.sse = sse;
   m.rmse = std::sqrt(sse / static_cast<double>(m.samples));
   m.range = hi - lo;
   m.nrmse_pct = m.range > 0 ? 100 * m.rmse / m.range : std::numeric_limits<double>::infinity();
@@ -645,6 +652,85 @@ class RecordResidualFitness final : public opt::FitnessFunction {
 };
 
 }  // namespace
+
+RecordMap::RecordMap(const RecordModel& model)
+    : params_(model.params()), forms_(model.search_forms()) {
+  for (size_t i = 0; i < params_.size(); ++i) {
+    const ParamInfo& p = params_[i];
+    if (!(p.lower < p.upper) || (p.log_scale && !(p.lower > 0)))
+      throw InputError(FieldError(
+          p.name + " box", "[" + io::FormatNumber(p.lower) + ", " + io::FormatNumber(p.upper) + "]",
+          "must be lower < upper (lower > 0 on a log scale)"));
+    const int r = forms_[i].ratio_of;
+    if (r >= 0 && (static_cast<size_t>(r) >= params_.size() || static_cast<size_t>(r) == i ||
+                   forms_[static_cast<size_t>(r)].ratio_of >= 0))
+      throw InputError(p.name + ": searched as a ratio of parameter " + std::to_string(r) +
+                       ", which is not a plain parameter of the model");
+  }
+}
+
+namespace {
+
+// One coordinate of a box, as the fin engine maps it (diagnose/problem.cc ToUnitOne, FromUnitOne).
+double UnitOf(const ParamInfo& s, double x) {
+  double u;
+  if (s.log_scale) {
+    u = std::log(std::max(x, s.lower) / s.lower) / std::log(s.upper / s.lower);
+  } else {
+    u = (x - s.lower) / (s.upper - s.lower);
+  }
+  return std::clamp(u, 0.0, 1.0);
+}
+
+double PhysicalOf(const ParamInfo& s, double u) {
+  u = std::clamp(u, 0.0, 1.0);
+  if (s.log_scale) return s.lower * std::exp(u * std::log(s.upper / s.lower));
+  return s.lower + u * (s.upper - s.lower);
+}
+
+}  // namespace
+
+std::vector<double> RecordMap::ToPhysical(std::span<const double> unit) const {
+  if (unit.size() != params_.size())
+    throw InputError(
+        FieldError("unit point size", unit.size(), "must be " + std::to_string(params_.size())));
+  std::vector<double> x(params_.size());
+  for (size_t i = 0; i < x.size(); ++i) x[i] = PhysicalOf(params_[i], unit[i]);
+  for (size_t i = 0; i < x.size(); ++i)
+    if (forms_[i].ratio_of >= 0) x[i] = x[i] * x[static_cast<size_t>(forms_[i].ratio_of)];
+  return x;
+}
+
+std::vector<double> RecordMap::ToUnit(std::span<const double> physical) const {
+  if (physical.size() != params_.size())
+    throw InputError(FieldError("physical point size", physical.size(),
+                                "must be " + std::to_string(params_.size())));
+  std::vector<double> u(params_.size());
+  for (size_t i = 0; i < u.size(); ++i) {
+    double x = physical[i];
+    if (const int r = forms_[i].ratio_of; r >= 0) {
+      const double d = physical[static_cast<size_t>(r)];
+      x = d > 0 ? physical[i] / d : 0.0;
+    }
+    u[i] = UnitOf(params_[i], x);
+  }
+  return u;
+}
+
+void RecordMap::Bounds(std::span<const double> x, int i, double* lower, double* upper) const {
+  const ParamInfo& p = params_[static_cast<size_t>(i)];
+  const int r = forms_[static_cast<size_t>(i)].ratio_of;
+  *lower = r >= 0 ? p.lower * x[static_cast<size_t>(r)] : p.lower;
+  *upper = r >= 0 ? p.upper * x[static_cast<size_t>(r)] : p.upper;
+}
+
+double RecordMap::Scale(std::span<const double> x, int i) const {
+  const ParamInfo& p = params_[static_cast<size_t>(i)];
+  if (forms_[static_cast<size_t>(i)].scale > 0) return forms_[static_cast<size_t>(i)].scale;
+  if (p.log_scale)
+    return std::max(x[static_cast<size_t>(i)], p.lower) * std::log(p.upper / p.lower);
+  return p.upper - p.lower;
+}
 
 SearchBudget SizedSearchBudget(size_t searched) {
   const int d = static_cast<int>(std::clamp<size_t>(searched, 1, 100));
@@ -734,18 +820,120 @@ void SetProgress(const FitOptions& options, opt::SearchOptions& so) {
   };
 }
 
+bool HasBeamEffect(const RecordModel& model) {
+  for (EffectKind e : model.effects())
+    if (!e.none() && e->stage() == model::EffectStage::kBeam) return true;
+  return false;
+}
+
+/// The fin's starts of a beam model (FitOptions::beam): polish_from with the last effect's
+/// magnitude at each fraction of its range's upper end (either sign: the first fraction on each
+/// side). Empty when that effect has no magnitude.
+std::vector<std::vector<double>> BeamStarts(const FitOptions& o, const RecordModel& model) {
+  if (o.beam.lm_iterations < 1)
+    throw InputError(FieldError("beam.lm_iterations", o.beam.lm_iterations, "must be >= 1"));
+  if (o.beam.start_fractions.empty())
+    throw InputError("beam.start_fractions: needs at least one entry");
+  for (double f : o.beam.start_fractions)
+    if (!(f > 0 && f <= 1))
+      throw InputError(FieldError("beam.start_fractions[]", f, "must be in (0, 1]"));
+  const EffectKind last = model.effects().back();
+  const int mp = model::GetEffectInfo(last).magnitude_param;
+  if (mp < 0) return {};
+  const size_t mag = model.EffectParams(last).first + static_cast<size_t>(mp);
+  const ParamInfo& s = model.params()[mag];
+  const bool both_signs = s.lower < 0 && s.upper > 0;
+  std::vector<std::vector<double>> starts;
+  for (size_t j = 0; j < o.beam.start_fractions.size(); ++j) {
+    const double f = both_signs ? o.beam.start_fractions[0] : o.beam.start_fractions[j];
+    std::vector<double> x = o.polish_from;
+    x[mag] = both_signs && j % 2 == 1 ? f * s.lower : f * s.upper;
+    starts.push_back(std::move(x));
+  }
+  return starts;
+}
+
+/// Hands an evaluator the physical values of the unit genomes of a map whose genomes are unit
+/// coordinates (RecordMap): what the records fitness takes.
+class PhysicalGenomes final : public opt::BatchEvaluator {
+ public:
+  PhysicalGenomes(std::unique_ptr<opt::BatchEvaluator> inner, const opt::ParameterMap& map)
+      : inner_(std::move(inner)), map_(map) {}
+  void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
+    std::vector<opt::Genome> g(batch.genomes.size());
+    for (size_t i = 0; i < g.size(); ++i) g[i].reals = map_.ToPhysical(batch.genomes[i].reals);
+    opt::EvalBatch b = batch;
+    b.genomes = g;
+    inner_->Evaluate(b, out);
+  }
+  int concurrency() const override { return inner_->concurrency(); }
+
+ private:
+  std::unique_ptr<opt::BatchEvaluator> inner_;
+  const opt::ParameterMap& map_;
+};
+
+/// The map of the searched parameters: a model with search forms (a ratio: bimorph-fin's bench
+/// form) the RecordMap, whose genomes are unit coordinates; else their box (null: none).
+std::unique_ptr<opt::ParameterMap> SearchedMap(const RecordModel& model,
+                                               const std::vector<size_t>& searched,
+                                               const opt::ParamBox& search_box,
+                                               const std::vector<std::string>& units) {
+  if (model.has_ratio()) {
+    if (searched.size() != model.params().size())
+      throw InputError(model.Describe() +
+                       ": a parameter searched as a ratio needs every parameter searched (no "
+                       "solved weights)");
+    return std::make_unique<RecordMap>(model);
+  }
+  if (search_box.size() == 0) return nullptr;
+  return std::make_unique<opt::BoxMap>(search_box, units);
+}
+
+/// The evaluator as the map's genomes need it: handed physical values where they are unit
+/// coordinates.
+std::unique_ptr<opt::BatchEvaluator> Physical(std::unique_ptr<opt::BatchEvaluator> e,
+                                              const opt::ParameterMap* map) {
+  if (map == nullptr || map->physical_genomes()) return e;
+  return std::make_unique<PhysicalGenomes>(std::move(e), *map);
+}
+
 /// The starts given: a polish from physical values (no search), and extra starts in unit
 /// coordinates of every parameter; both reduced to the searched parameters.
-void AddStarts(const FitOptions& options, size_t n_params, const std::vector<size_t>& searched,
-               const opt::BoxMap* searched_map, opt::FitOptions& fo) {
+void AddStarts(const FitOptions& options, const RecordModel& model,
+               const std::vector<size_t>& searched, const opt::ParameterMap* searched_map,
+               opt::FitOptions& fo, FitResult& res) {
+  const size_t n_params = model.params().size();
+  // Physical points of every parameter, reduced to the searched ones, in unit coordinates.
+  auto unit = [&](const std::vector<double>& x, const std::string& what) {
+    if (x.size() != n_params)
+      throw InputError(FieldError(what, x.size(), "must have one value per parameter"));
+    std::vector<double> sp;
+    for (size_t i : searched) sp.push_back(x[i]);
+    return searched_map->ToUnit(sp);
+  };
   if (!options.polish_from.empty()) {  // no search: the polish from these physical values
     if (options.polish_from.size() != n_params)
       throw InputError(FieldError("polish_from", options.polish_from.size(),
                                   "must have one value per parameter"));
-    std::vector<double> sp;
-    for (size_t i : searched) sp.push_back(options.polish_from[i]);
     fo.search = false;
-    if (searched_map) fo.starts = {searched_map->ToUnit(sp)};
+    if (searched_map) fo.starts = {unit(options.polish_from, "polish_from")};
+    if (searched_map && HasBeamEffect(model)) {  // the fin's refinement of a CVODE model
+      std::vector<std::vector<double>> starts = BeamStarts(options, model);
+      if (!starts.empty()) fo.starts.clear();
+      for (size_t j = 0; j < starts.size(); ++j)
+        fo.starts.push_back(unit(starts[j], "beam start " + std::to_string(j)));
+      fo.lm.max_iterations = options.beam.lm_iterations;
+      fo.lm.central = false;  // forward differences: half the CVODE runs per Jacobian
+      res.lm_differences = fo.lm.central_to_finish ? "forward-central" : "forward";
+    }
+  }
+  if (searched_map) {
+    for (size_t j = 0; j < options.seed_points.size(); ++j)
+      fo.search_options.seeds.push_back(
+          unit(options.seed_points[j], "seed_points[" + std::to_string(j) + "]"));
+    for (size_t j = 0; j < options.start_points.size(); ++j)
+      fo.starts.push_back(unit(options.start_points[j], "start_points[" + std::to_string(j) + "]"));
   }
   for (const std::vector<double>& u :
        options.extra_starts) {  // unit coordinates of every parameter
@@ -799,6 +987,19 @@ std::vector<double> TakeFit(opt::FitResult fit, FitResult& res) {
 
 }  // namespace
 
+namespace {
+
+/// Every record of the set evaluated with the fit: its metrics and output.
+void EvaluateEvery(const io::RecordSet& set, FitResult& res) {
+  for (const io::Record& r : set.records) {
+    std::vector<double> y;
+    res.metrics.push_back(Evaluate(*res.model, res.params, res.weights, r, &y));
+    res.yhat.push_back(std::move(y));
+  }
+}
+
+}  // namespace
+
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
                    const FitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
@@ -820,22 +1021,24 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     std::vector<std::string> units;
     const opt::BoxMap map(BoxOf(params, searched, false, units), units);
     const opt::ParamBox search_box = BoxOf(params, searched, true, units);
-    const std::unique_ptr<opt::BoxMap> searched_map =
-        search_box.size() > 0 ? std::make_unique<opt::BoxMap>(search_box, units) : nullptr;
+    const std::unique_ptr<opt::ParameterMap> searched_map =
+        SearchedMap(*model, searched, search_box, units);
+    const opt::ParameterMap* m = searched_map.get();
     const RecordResidualFitness residual_fitness(fitness);
     opt::FitProblem problem;
-    problem.map = searched_map.get();
+    problem.map = m;
     problem.cost_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
-      if (options.evaluator_factory) return options.evaluator_factory(fitness);
-      return std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads);
+      if (options.evaluator_factory) return Physical(options.evaluator_factory(fitness), m);
+      return Physical(std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads), m);
     };
     problem.residual_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
-      return std::make_unique<opt::ThreadPoolEvaluator>(residual_fitness, options.threads);
+      return Physical(std::make_unique<opt::ThreadPoolEvaluator>(residual_fitness, options.threads),
+                      m);
     };
     problem.physical_residuals = [&](std::span<const double> x, std::vector<double>& r) {
       return fitness.Residuals(x, r);
     };
-    problem.residual_weight = 1 / std::sqrt(static_cast<double>(fitness.samples()));
+    problem.residual_weight = fitness.ResidualWeight();
     opt::FitOptions fo;
     fo.search_options = options.search;
     res.searched_parameters = searched.size();
@@ -853,7 +1056,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
         true;  // each polish its own ThreadPoolEvaluator over the const fitness
     if (options.progress) SetProgress(options, fo.search_options);
     SetPolish(options, fo, res);
-    AddStarts(options, params.size(), searched, searched_map.get(), fo);
+    AddStarts(options, *model, searched, m, fo, res);
     fo.search_cost_is_sum_of_squares = true;  // the search's cost is the MSE = Σ r²
     // With the spectrum solved, the table covers every parameter (below), not the searched ones.
     fo.uncertainty = options.uncertainty && !solved;
@@ -879,7 +1082,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
       if (searched_map) {
         opt::FitOptions again = fo;
         again.search = false;
-        again.starts = {searched_map->ToUnit(best_searched)};
+        again.starts = {m->ToUnit(best_searched)};
         opt::FitResult second = opt::Fit(problem, again);
         res.evaluations += second.evaluations;
         res.lm_iterations += second.lm_iterations;
@@ -901,13 +1104,10 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   res.regularisation = fitness.validation();
   res.spectrum_regularisation = fitness.spectrum_validation();
   res.spectrum_sigma = fitness.spectrum_sigma();
-  res.train_mse = out.mse;
-  res.train_sse = out.mse * static_cast<double>(fitness.samples());
-  for (const io::Record& r : set.records) {
-    std::vector<double> y;
-    res.metrics.push_back(Evaluate(*model, res.params, res.weights, r, &y));
-    res.yhat.push_back(std::move(y));
-  }
+  const double n = static_cast<double>(fitness.samples());
+  res.train_mse = model->family().sums_errors() ? out.mse / n : out.mse;
+  res.train_sse = model->family().sums_errors() ? out.mse : out.mse * n;
+  EvaluateEvery(set, res);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;
 }

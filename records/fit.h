@@ -44,7 +44,9 @@ double RecordCentre(const io::Record& r, size_t from, std::span<const double> re
 void AddRecordRows(const io::Record& r, size_t from, std::span<const double> reg, size_t m, int pol,
                    NormalEquationsBuilder& builder);
 
-/// The training criterion: mean squared output error over the scored samples of the records.
+/// The training criterion: mean squared output error over the scored samples of the records (the
+/// sum of squared errors for a family whose cost is the sum, Family::sums_errors: the fin bench's
+/// CF = Σ PI, Output::mse then holds that sum).
 class RecordFitness final : public opt::FitnessFunction {
  public:
   /// The records and the model must outlive the fitness; each record's drive is prepared once
@@ -128,6 +130,9 @@ class RecordFitness final : public opt::FitnessFunction {
   std::vector<double> Expand(std::span<const double> searched, double* cost = nullptr) const;
   size_t samples() const { return samples_; }
   double penalty() const { return penalty_; }
+  /// The residuals' factor: 1/√N, so that Σ r² is the MSE; 1 for a family that sums its errors
+  /// (Family::sums_errors).
+  double ResidualWeight() const;
 
  private:
   /// `regs` (optional): each record's regressors, kept for the output when no linear output effect
@@ -187,6 +192,7 @@ struct RecordMetrics {
       0;             ///< RMSE / measured range over the window × 100; infinite when the range is 0
   double range = 0;  ///< measured max − min over the window
   double offset = 0;  ///< the offset used
+  double sse = 0;     ///< Σ error² over the window (a fin bench case's PI [deg²])
 };
 
 /// The default global search of `piezoid fit`, sized by the number of parameters the search
@@ -217,6 +223,34 @@ struct SearchBudget {
 SearchBudget SizedSearchBudget(size_t searched);
 /// The PSO budget of `search` (its repetitions and PSO options).
 SearchBudget BudgetOf(const opt::SearchOptions& search);
+
+/// The parameter map of a record model whose parameters have search forms (RecordModel::
+/// search_forms: bimorph-fin's bench form): each parameter in its box (linear, or log where
+/// marked), mapped to [0, 1]; a ratio parameter (SearchForm::ratio_of = j) searched as the ratio
+/// x_i / x_j in its box, so its bounds at a point are the box's times x_j; the typical scale of
+/// the form where it gives one, else the box's (as opt::BoxMap). The fin engine's arithmetic
+/// (diagnose/problem.cc ParameterLayout, diagnose/fin_fit.h LayoutMap) for the same box, so the
+/// same unit point is the same physical point bit for bit. The genomes are unit coordinates
+/// (physical_genomes() false): FitModel hands its evaluators the physical values. The model must
+/// outlive the map.
+class RecordMap final : public opt::ParameterMap {
+ public:
+  /// Throws InputError on a ratio of a ratio or out of range.
+  explicit RecordMap(const RecordModel& model);
+  int size() const override { return static_cast<int>(params_.size()); }
+  std::string name(int i) const override { return params_[i].name; }
+  std::string unit(int i) const override { return params_[i].unit; }
+  std::vector<double> ToPhysical(std::span<const double> unit) const override;
+  std::vector<double> ToUnit(std::span<const double> physical) const override;
+  void Bounds(std::span<const double> x, int i, double* lower, double* upper) const override;
+  double Scale(std::span<const double> x, int i) const override;
+  bool physical_genomes() const override { return false; }
+  opt::ParamBox SearchBox() const override { return opt::UnitBox(*this); }
+
+ private:
+  const std::vector<ParamInfo>& params_;
+  const std::vector<Family::SearchForm>& forms_;
+};
 
 /// Builds the evaluator of a global search (null = a thread pool of `threads`).
 using RecordEvaluatorFactory =
@@ -265,6 +299,20 @@ struct FitOptions {
   /// Non-empty (physical values of every parameter): no global search; the polish starts here (a
   /// Preisach grid at the levels chosen by validation, from the coarsest grid's fit).
   std::vector<double> polish_from;
+  /// Physical points (every parameter) seeding the global search's first population, after
+  /// search.seeds; and physical starts of the polish besides the search's best, before
+  /// extra_starts (the fin engine's seeds and starts, diagnose/fin_fit.h FitOptions).
+  std::vector<std::vector<double>> seed_points, start_points;
+  /// A model with a beam effect (bimorph-fin's bench form: each run on CVODE) is refined from
+  /// polish_from (needed), not searched: one polish from each start, the last effect's magnitude
+  /// at a fraction of the upper end of its range (a parameter of either sign: the first fraction on
+  /// each side), of lm_iterations Levenberg–Marquardt iterations with forward differences (lm's
+  /// other options as given). The fin engine's DiagnoseOptions::cvode_lm_iterations and
+  /// cvode_start_fractions.
+  struct BeamRefinement {
+    int lm_iterations = 15;                              ///< ≥ 1
+    std::vector<double> start_fractions = {0.03, 0.15};  ///< ≥ 1 entry, each in (0, 1]
+  } beam;
   /// creep-spectrum: its weights' roughness penalty chosen by validation at the solution (false:
   /// the weights unpenalised, as the search has them; for comparisons).
   bool spectrum_roughness = true;

@@ -56,11 +56,28 @@ EffectKind ParseEffect(std::string_view name) {
 RecordModel::RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects,
                          const DataScale& scale)
     : family_(std::move(family)), effects_(std::move(effects)), scale_(scale) {
-  std::sort(effects_.begin(), effects_.end());
-  if (std::adjacent_find(effects_.begin(), effects_.end()) != effects_.end()) {
+  std::vector<EffectKind> sorted = effects_;
+  std::sort(sorted.begin(), sorted.end());
+  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
     throw InputError("an effect is listed twice");
   }
   params_ = family_->params();
+  forms_ = family_->search_forms();
+  if (forms_.size() != params_.size()) forms_.assign(params_.size(), Family::SearchForm{});
+  if (family_->simulates_records()) {  // its own effects in its boxes, in the order given
+    scale_.polarity = 1;               // its output is the response, sign included
+    for (EffectKind e : effects_) {
+      defs_.push_back(e.def());
+      effect_offset_.push_back(params_.size() - family_->params().size());
+      for (ParamInfo q : family_->EffectBox(e, &forms_)) {
+        q.name = std::string(EffectName(e)) + "." + q.name;
+        params_.push_back(q);
+      }
+      forms_.resize(params_.size());
+    }
+    return;
+  }
+  effects_ = std::move(sorted);
   for (EffectKind e : effects_) {
     if (e.none() || e->stage() == model::EffectStage::kBeam)
       throw InputError(std::string("effect '") + e.name() + "' is not a records effect");
@@ -72,6 +89,13 @@ RecordModel::RecordModel(std::shared_ptr<const Family> family, std::vector<Effec
       params_.push_back(q);
     }
   }
+  forms_.resize(params_.size());
+}
+
+bool RecordModel::has_ratio() const {
+  for (const Family::SearchForm& f : forms_)
+    if (f.ratio_of >= 0) return true;
+  return false;
 }
 
 std::string RecordModel::Describe() const {
@@ -154,7 +178,8 @@ size_t SimulatedFrom(const io::Record& r, size_t end) {
 
 std::shared_ptr<const Family::Prepared> RecordModel::Prepare(const io::Record& r,
                                                              size_t end) const {
-  if (family_->linear() || end > r.size() || end == 0) return nullptr;
+  if (family_->linear() || family_->simulates_records() || end > r.size() || end == 0)
+    return nullptr;
   for (const model::EffectDef* e : defs_)
     if (e->stage() == model::EffectStage::kDrive) return nullptr;
   const size_t from = SimulatedFrom(r, end);
@@ -204,6 +229,13 @@ void RecordModel::SimulateMany(const io::Record& r, std::span<const std::span<co
     if (y.size() < end || end > r.size() || end == 0)
       throw InputError("RecordModel::SimulateMany: bad end");
   const size_t nf = family_->params().size();
+  if (family_->simulates_records()) {  // the whole record with its effects, by the family
+    for (size_t l = 0; l < L; ++l) {
+      family_->SimulateRecord(r, ps[l].first(nf), effects_, ps[l].subspan(nf), end, yhats[l]);
+      rest[l] = yhats[l][0];
+    }
+    return;
+  }
   const size_t from = SimulatedFrom(r, end);
   // Per lane: the family's parameters, its segment [from, end), and (drive effects) its own drive.
   thread_local std::vector<std::span<const double>> fp, us;

@@ -29,7 +29,8 @@
 namespace pz::records {
 
 /// A records effect: the library's handle (model/effect_library.h), one of its drive or output
-/// effects (a records family has no beam).
+/// effects (a records family has no beam; bimorph-fin's bench form has one and takes the fin's
+/// effects, RecordModel).
 using model::EffectKind;
 using model::EffectName;
 
@@ -65,7 +66,10 @@ size_t SimulatedFrom(const io::Record& r, size_t end);
 /// rest row 0 for a sample before it.
 inline size_t RegressorRow(size_t k, size_t from) { return k < from ? 0 : k - from; }
 
-/// A family with effects; a parameter vector is the family's params then each effect's.
+/// A family with effects; a parameter vector is the family's params then each effect's. A family
+/// that simulates records itself (Family::simulates_records: bimorph-fin's bench form) takes its
+/// own effects, beam ones included, in their boxes and in the order given; it then runs each
+/// record with every parameter, and the drive and output effects below are not applied around it.
 class RecordModel {
  public:
   RecordModel(std::shared_ptr<const Family> family, std::vector<EffectKind> effects,
@@ -76,6 +80,11 @@ class RecordModel {
   const DataScale& scale() const { return scale_; }
   /// The searched parameters: the family's then the effects'.
   const std::vector<ParamInfo>& params() const { return params_; }
+  /// How each of params() is searched (Family::SearchForm: a ratio, a typical scale); one per
+  /// parameter.
+  const std::vector<Family::SearchForm>& search_forms() const { return forms_; }
+  /// True when a parameter is searched as a ratio of another (records/fit.h RecordMap).
+  bool has_ratio() const;
   /// "backlash-like + delay".
   std::string Describe() const;
 
@@ -130,6 +139,7 @@ class RecordModel {
   std::vector<EffectKind> effects_;
   DataScale scale_;
   std::vector<ParamInfo> params_;
+  std::vector<Family::SearchForm> forms_;
   std::vector<const model::EffectDef*> defs_;  ///< the library's effect of each of effects_
   std::vector<size_t> effect_offset_;          ///< index of each effect's first parameter in p
 };

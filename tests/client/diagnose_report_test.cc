@@ -1,15 +1,22 @@
-// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h), written through
-// protobuf's Struct: it parses back, a string with quotes and a newline keeps them, a non-finite
-// number is null, and the names the users read are there.
+// The JSON of `piezoid diagnose` and `diagnose-check` (client/diagnose_report.h), each through its
+// message (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h), check.json
+// by io/proto_json.h. Each parses back, a string with quotes and a newline keeps them, a
+// non-finite number is null, the names the users read are there, and each reads back into its
+// message and prints back to the same bytes.
 #include "client/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
+#include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <sstream>
 #include <string>
+
+#include "diagnosis.pb.h"
+#include "io/diagnosis_json.h"
+#include "io/proto_json.h"
 
 namespace pz::client {
 namespace {
@@ -71,6 +78,57 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   for (const char* name : {"base", "final", "base_residuals", "final_residuals", "trends",
                            "absorbed", "absorbed_by", "named", "wall_time_s"})
     EXPECT_TRUE(s.fields().contains(name)) << name;
+  for (const char* name : {"candidates", "diverged", "records", "noise_floor", "excitation"})
+    EXPECT_FALSE(s.fields().contains(name)) << name;  // the records diagnosis's
+  // The file reads back into the message it was written from: the same bytes again, and the same
+  // message but for the non-finite numbers (null reads as NaN, which equals nothing).
+  proto::Diagnosis m, back;
+  BenchDiagnosisOf(d, o, &m);
+  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
+  EXPECT_EQ(io::WriteDiagnosisFile(back), out.str());
+  EXPECT_TRUE(std::isnan(back.confidence()));
+  EXPECT_TRUE(std::isnan(back.gap().closed()));
+  m.clear_confidence();
+  back.clear_confidence();
+  m.mutable_gap()->clear_closed();
+  back.mutable_gap()->clear_closed();
+  m.clear_base();  // train_rms_deg, withheld_rms_deg: no samples
+  back.clear_base();
+  m.clear_final();
+  back.clear_final();
+  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(m, back)) << out.str();
+  EXPECT_EQ(back.bench(), d.bench);
+  EXPECT_EQ(back.rounds(0).named().kind_case(), Value::kNullValue);
+  EXPECT_EQ(back.named().list_value().values_size(), 0);
+}
+
+TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
+  diagnose::Diagnosis d;
+  d.bench = "bench";
+  d.verdict_kind = "inseparable";
+  d.named = {model::EffectKind::Named("delay")};
+  d.confidence = 0.6;
+  diagnose::RoundResult r;
+  r.candidates.resize(2);
+  r.candidates[0].kind = model::EffectKind::Named("delay");
+  r.candidates[1].kind = model::EffectKind::Named("driver-lowpass");
+  r.named = 0;
+  r.runner_up = 1;
+  r.z_runner_up = 0.75;
+  d.rounds.push_back(r);
+  d.rounds.push_back(diagnose::RoundResult{});  // no runner-up: none written
+  std::ostringstream out;
+  WriteDiagnosisJson(out, d, diagnose::DiagnoseOptions{});
+  proto::Diagnosis back;
+  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
+  ASSERT_EQ(back.rounds_size(), 2);
+  EXPECT_EQ(back.rounds(0).named().string_value(), "delay");
+  EXPECT_EQ(back.rounds(0).runner_up().effect(), "driver-lowpass");
+  EXPECT_EQ(back.rounds(0).runner_up().z(), 0.75);
+  EXPECT_FALSE(back.rounds(1).has_runner_up());
+  EXPECT_FALSE(back.has_runner_up());  // the bench's is in its round
+  EXPECT_EQ(back.named().list_value().values(0).string_value(), "delay");
+  EXPECT_EQ(back.confidence(), 0.6);
 }
 
 TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
@@ -96,6 +154,10 @@ TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
   EXPECT_TRUE(Field(trial, "correct").bool_value());
   EXPECT_EQ(Field(trial, "closed").kind_case(), Value::kNullValue);
   EXPECT_EQ(Field(trial, "truth_description").string_value(), "seed 1000: none");
+  proto::DiagnosisCheck back;  // reads into its message and prints back to the same bytes
+  io::ReadJsonMessage("check.json", out.str(), &back);
+  EXPECT_EQ(io::PrintJson(back, "check.json"), out.str());
+  EXPECT_EQ(back.trials(0).seed(), 1000u);
 }
 
 }  // namespace

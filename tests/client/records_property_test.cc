@@ -4,9 +4,10 @@
 // the records diagnosis (`diagnose --records --quick` on every fourth set; records::DiagnoseRecords
 // with a tiny search and the report writers of `diagnose --records` on the others), for every
 // family of records::FamilyNames() with random effects of records::EffectNames(). Each command
-// must give a result (no NaN or infinity in what it prints or writes) or a pz::InputError with a
-// message: never a signal, another exception or a hang (a watchdog aborts a set that runs longer
-// than PIEZOID_PROPERTY_CASE_SECONDS, default 120, naming it).
+// must give a result (no NaN or infinity in what it prints or writes; diagnosis.json reads back
+// through its codec) or a pz::InputError with a message: never a signal, another exception or a
+// hang (a watchdog aborts a set that runs longer than PIEZOID_PROPERTY_CASE_SECONDS, default 120,
+// naming it).
 //
 // The sets draw rests before, inside and after the scored windows; windows at the record's edges,
 // one sample long, at the 20-sample minimum (shorter than a delay), past the record's end;
@@ -47,6 +48,8 @@
 #include "client/commands.h"
 #include "client/records_diagnose.h"
 #include "client/record_windows.h"
+#include "diagnosis.pb.h"
+#include "io/diagnosis_json.h"
 #include "io/records.h"
 #include "diagnose/diagnose.h"
 #include "records/excitation.h"
@@ -527,6 +530,10 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     WriteRecordsDiagnosisJson(json, set, dg, proposal);
     EXPECT_FALSE(HasNonFinite(md.str())) << "diagnosis report\n" << what << "\n" << md.str();
     EXPECT_FALSE(HasNonFinite(json.str())) << "diagnosis.json\n" << what << "\n" << json.str();
+    proto::Diagnosis back;  // reads back through its codec, to the same bytes
+    EXPECT_NO_THROW(io::ReadDiagnosisFile("diagnosis.json", json.str(), &back)) << what;
+    EXPECT_EQ(io::WriteDiagnosisFile(back), json.str()) << what;
+    EXPECT_EQ(back.verdict(), dg.verdict) << what;
     ++tally.diagnoses;
   } catch (const InputError& x) {
     EXPECT_STRNE(x.what(), "") << what;

@@ -140,6 +140,34 @@ void TrainOnProposal(RealLikeSet& s, const TrainingDriveProposal& p) {
       SynthesizeRealLikeRecord(plant, s.options.sensor, d, "proposed", CaseRole::kTrain, 9);
 }
 
+// An outlier sample in a withheld record's drive (a fuzzed file's −1.7e6 V in a ±1 V record) sets
+// a range that the training's rate would cross in hours: the proposal asked for 400 MB. It stays
+// bounded (4e6 samples) and finite, sampled more slowly when the records' rate would exceed that.
+TEST(ExcitationTest, TheProposedDriveStaysBoundedWhateverTheRecords) {
+  RealLikeSet s = GenerateRealLikeSet(Short(6));
+  io::Record* withheld = nullptr;
+  for (io::Record& r : s.set.records)
+    if (r.role != CaseRole::kTrain) withheld = &r;
+  ASSERT_NE(withheld, nullptr);
+  withheld->u[withheld->size() / 2] = -1.7e6;
+  const TrainingDriveProposal p = ProposeTrainingDrive(s.set, AnalyseExcitation(s.set), 1);
+  EXPECT_LE(p.u.size(), 4'000'000u);
+  EXPECT_GT(p.u.size(), 1000u);
+  for (double u : p.u) ASSERT_TRUE(std::isfinite(u));
+  EXPECT_EQ(p.fs_hz, p.records_fs_hz);
+  // The same records sampled at 1 MHz: the holds and moves alone would take 2e7 samples.
+  for (io::Record& r : s.set.records) {
+    r.dt /= 5000;
+    for (double& t : r.t) t /= 5000;
+  }
+  const TrainingDriveProposal fast = ProposeTrainingDrive(s.set, AnalyseExcitation(s.set), 1);
+  EXPECT_LE(fast.u.size(), 4'000'000u);
+  EXPECT_DOUBLE_EQ(fast.records_fs_hz, 1e6);
+  EXPECT_LT(fast.fs_hz, fast.records_fs_hz);
+  EXPECT_NE(fast.description.find("rather than the records'"), std::string::npos)
+      << fast.description;
+}
+
 TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
   RealLikeSet s = GenerateRealLikeSet(Short(6));
   const ExcitationReport before = AnalyseExcitation(s.set);
