@@ -23,6 +23,7 @@
 #include "svcclient/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
+#include "io/fin_records.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -146,19 +147,23 @@ void PrintBenchOnRecords(std::ostream& o, const io::RecordSet& set,
 int RunBenchOnRecords(const DiagnoseArgs& a) {
   const auto start = std::chrono::steady_clock::now();
   const std::filesystem::path dir(a.cases_dir);
-  const io::RecordSet set = io::LoadRecordSet(dir);
+  const io::RecordSet set = io::RecordsFromCaseSet(io::LoadCaseSet(dir));
   records::RecordDiagnoseOptions o = records::FinBenchOptions();
   if (!a.candidates.empty()) o.candidates = ParseKinds(a.candidates);
   o.second_effect = !a.no_second;
   o.trends = !a.no_trends;
   o.rules.significance_ratio = a.significance_ratio;
   o.fit.threads = a.threads;
-  o.fit.search.pso.seed = a.seed;
-  if (a.quick) {
-    o.fit.search.repetitions = 1;
-    o.fit.search.pso.particles = 20;
-    o.fit.search.pso.iterations = 60;
-    o.fit.lm.max_iterations = 30;
+  o.fit.lm.threads = a.threads;
+  o.fit.search.de.seed = a.seed;
+  o.bench_fits.seed = a.seed;
+  if (a.quick) {  // the fin engine's --quick
+    o.fit.search.de.population = 24;
+    o.fit.search.de.generations = 40;
+    o.bench_fits.de.population = 24;
+    o.bench_fits.de.generations = 30;
+    o.fit.lm.max_iterations = 20;
+    o.fit.beam.lm_iterations = 8;
   }
   if (a.service.enabled()) {
     o.fit.evaluator_factory =

@@ -85,6 +85,8 @@ double RecordSse(const io::Record& r, const std::vector<double>& yhat) {
 
 /// Whole drive cycles in a record's scored window at its stated frequency (1 without one).
 int ScoredCycles(const io::Record& r) {
+  if (r.sinusoid.stated() && r.first_scored == 0 && r.end_scored == r.size())
+    return std::max(1, static_cast<int>(std::lround(r.sinusoid.cycles)));
   if (!(r.frequency_hz > 0)) return 1;
   return std::max(
       1, static_cast<int>(std::lround(static_cast<double>(r.scored()) * r.dt * r.frequency_hz)));
@@ -316,10 +318,10 @@ model::ResidualAnalysis AnalyseRecordResiduals(const io::RecordSet& set, const F
                        "analysis's phase bins and harmonics need");
     }
     model::ResidualCaseInput c;
-    c.number = static_cast<int>(i) + 1;
+    c.number = r.sinusoid.stated() ? r.sinusoid.case_number : static_cast<int>(i) + 1;
     c.amplitude_v = std::max(pz::diagnose::DriveAmplitude(r), 1e-300);
     c.frequency_hz = r.frequency_hz;
-    c.sample_rate_hz = r.sample_rate_hz();
+    c.sample_rate_hz = r.sinusoid.stated() ? r.sinusoid.sample_rate_hz : r.sample_rate_hz();
     c.cycles = ScoredCycles(r);
     c.training = !Withheld(r);
     c.measured = std::span<const double>(r.y).subspan(r.first_scored, r.scored());
@@ -358,13 +360,87 @@ struct Shape {
   }
 };
 
-/// Fits `start`'s model plus effect e (extra starts: `start` with e at small magnitudes).
+/// The output of `model` at `params` on every record, as a fit (no search, no polish): the nested
+/// model of a bench fit (RecordDiagnoseOptions::BenchFits).
+FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
+                std::vector<double> params, int64_t evaluations) {
+  FitResult f;
+  f.model = std::move(model);
+  f.params = std::move(params);
+  f.evaluations = evaluations;
+  f.polish_message = "the fit ended above the starting model: the effect kept at zero";
+  size_t n = 0;
+  for (const io::Record& r : set.records) {
+    std::vector<double> y;
+    f.metrics.push_back(Evaluate(*f.model, f.params, {}, r, &y));
+    f.yhat.push_back(std::move(y));
+    if (Withheld(r)) continue;
+    f.train_sse += f.metrics.back().sse;
+    n += r.scored();
+  }
+  f.train_mse = f.train_sse / static_cast<double>(std::max<size_t>(n, 1));
+  return f;
+}
+
+/// A candidate fit as the bench's (RecordDiagnoseOptions::BenchFits).
+FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
+                        std::shared_ptr<RecordModel> model, EffectKind e,
+                        const RecordDiagnoseOptions& o, const FitOptions& fo) {
+  std::vector<double> x0 = start.params;
+  const model::Effect zero = model::Effect::Zero(e);
+  for (double v : zero.params) x0.push_back(v);
+  if (x0.size() != model->params().size()) {
+    throw InputError(model->Describe() + ": " + std::to_string(model->params().size()) +
+                     " parameters, the bench's fit extends " + std::to_string(start.params.size()) +
+                     " by " + std::to_string(zero.params.size()));
+  }
+  FitOptions ce = fo;
+  ce.extra_starts.clear();
+  ce.seed_points.clear();
+  ce.start_points.clear();
+  bool beam = false;
+  for (EffectKind k : model->effects())
+    beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
+  if (beam) {
+    ce.polish_from = x0;  // refined at the start fractions (FitOptions::beam)
+  } else {
+    std::vector<std::vector<double>> starts;
+    if (const int mp = model::GetEffectInfo(e).magnitude_param; mp >= 0) {
+      const size_t mag = start.params.size() + static_cast<size_t>(mp);
+      const ParamInfo& s = model->params()[mag];
+      const bool both_signs = s.lower < 0 && s.upper > 0;
+      const std::vector<double>& fr = fo.beam.start_fractions;
+      for (size_t j = 0; j < fr.size(); ++j) {
+        const double f = both_signs ? fr[0] : fr[j];
+        std::vector<double> x = x0;
+        x[mag] = both_signs && j % 2 == 1 ? f * s.lower : f * s.upper;
+        starts.push_back(std::move(x));
+      }
+    }
+    ce.polish_from.clear();
+    ce.search.algorithm = opt::SearchAlgorithm::kDe;
+    ce.search.repetitions = 1;
+    ce.search.de = o.bench_fits.de;
+    ce.search.de.seed = o.bench_fits.seed + 1000 * (static_cast<uint64_t>(model::FinIndex(e)) + 1) +
+                        17 * model->effects().size();
+    ce.seed_points = {x0};
+    ce.seed_points.insert(ce.seed_points.end(), starts.begin(), starts.end());
+    ce.start_points = {x0};
+  }
+  FitResult f = FitModel(set, model, ce);
+  if (f.train_sse > start.train_sse) return FitAt(set, model, x0, f.evaluations);
+  return f;
+}
+
+/// Fits `start`'s model plus effect e (extra starts: `start` with e at small magnitudes; or as the
+/// bench's, RecordDiagnoseOptions::BenchFits).
 FitResult FitOnTop(const io::RecordSet& set, const FitResult& start, EffectKind e,
-                   const DataScale& scale, const FitOptions& fo) {
+                   const DataScale& scale, const RecordDiagnoseOptions& o, const FitOptions& fo) {
   std::vector<EffectKind> effects = start.model->effects();
   effects.push_back(e);
-  FitOptions ce = fo;
   auto model = std::make_shared<RecordModel>(start.model->family_ptr(), effects, scale);
+  if (o.bench_fits.enabled) return BenchFitOnTop(set, start, model, e, o, fo);
+  FitOptions ce = fo;
   AddExtraStarts(*model, start.params, e, scale, ce);
   return FitModel(set, model, ce);
 }
@@ -376,7 +452,7 @@ Naming ScoreAndName(const Shape& shape, const Gap& gap, const FitResult& start,
   const auto start_ex = shape.Excess(start);
   const auto start_sq = WithheldSquares(set, start);
   for (RecordCandidate& c : cands) {
-    const int k = static_cast<int>(c.kind->Params(shape.scale).size());
+    const int k = static_cast<int>(c.fit.model->params().size() - start.model->params().size());
     ScoreCandidate(gap, Sse(set, c.fit, true), Sse(set, c.fit, false), k,
                    PatternExplained(start_ex, shape.Excess(c.fit)), shape.o.rules, c);
     c.z_vs_base = model::PairedBlockZ(start_sq, WithheldSquares(set, c.fit), shape.o.rules.blocks);
@@ -434,7 +510,7 @@ RecordRound SecondRound(const Shape& shape, const std::vector<EffectKind>& cands
         o.fit.progress("second effect: " + first.fit.model->Describe() + " + " + EffectName(e));
       RecordCandidate c;
       c.kind = e;
-      c.fit = FitOnTop(set, first.fit, e, shape.scale, fo);
+      c.fit = FitOnTop(set, first.fit, e, shape.scale, o, fo);
       if (!std::isfinite(Sse(set, c.fit, true))) {
         d.diverged.push_back(first.fit.model->Describe() + " + " + EffectName(e));
         continue;
@@ -528,7 +604,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
     RecordCandidate c;
     c.kind = e;
-    c.fit = FitOnTop(set, d.base, e, scale, fo);
+    c.fit = FitOnTop(set, d.base, e, scale, o, fo);
     if (!std::isfinite(Sse(set, c.fit, true))) {  // diverges on a withheld record: no score
       d.diverged.push_back(EffectName(e));
       continue;
@@ -605,10 +681,13 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
 RecordDiagnoseOptions FinBenchOptions() {
   RecordDiagnoseOptions o;
   o.family = "bimorph-fin";
-  const std::vector<EffectKind>& on_records = RecordEffects();
-  for (const model::EffectInfo& e : model::EffectLibrary())
-    if (std::find(on_records.begin(), on_records.end(), e.kind) != on_records.end())
-      o.candidates.push_back(e.kind);
+  o.fit.family_options.bench_form = true;
+  for (const model::EffectInfo& e : model::EffectLibrary()) o.candidates.push_back(e.kind);
+  o.fit.search.algorithm = opt::SearchAlgorithm::kDe;
+  o.fit.search.repetitions = 1;
+  o.fit.search.de = opt::DeOptions{.population = 40, .generations = 80, .stall_generations = 15};
+  o.fit.lm = opt::LmOptions{.max_iterations = 40};
+  o.bench_fits.enabled = true;
   o.floor = RecordFloor::kPerRecord;
   o.pattern = RecordPattern::kResidualAnalysis;
   o.second_effect = true;

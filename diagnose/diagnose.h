@@ -108,6 +108,20 @@ struct RecordDiagnoseOptions {
   bool trends = false;
   /// The starting model as the verdict names it (empty: the family's name).
   std::string model_label;
+  /// Candidate fits as the nine-case bench's (diagnose/fin_diagnose.cc FitStructure), for a
+  /// family in its bench form (bimorph-fin's FamilyOptions::bench_form): the starting fit extended
+  /// with the new effect at zero (x0); a model with a beam effect refined from x0 with the new
+  /// effect's magnitude at fit.beam's start fractions (no search, records/fit.h FitOptions::beam);
+  /// any other a DE search (`de`, its seed `seed` + 1000 (the effect's place in the fin library
+  /// + 1) + 17 × the model's effects) seeded with x0 and those magnitudes, and polished from x0
+  /// and the search's best; a fit that ends above the starting model on the training records is
+  /// replaced by x0 (the nested model: the effect at zero). Off: the search of `fit` with the
+  /// starting fit and the effect at small magnitudes as extra starts.
+  struct BenchFits {
+    bool enabled = false;
+    opt::DeOptions de{.population = 40, .generations = 60, .stall_generations = 15};
+    uint64_t seed = 1;
+  } bench_fits;
   /// Where the verdict says its floor comes from (empty: the pooled estimate's method, or
   /// "rounding, scatter and saturation plateaus per record" with per-record floors).
   std::string floor_source;
@@ -197,11 +211,12 @@ std::vector<double> ResidualFeatureExcess(const model::GroupResidual& group);
 /// the base model's prediction is not finite on a withheld record (no gap to measure).
 RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOptions& options);
 
-/// The options of the nine-case fin bench's diagnosis on its records: the bimorph-fin family, the
-/// fin library's effects that records models take (RecordEffects) as the candidates, per-record
-/// floors, the residual analysis as the pattern, the greedy second round, the absorbed parameters
-/// in the verdict, the V × f trends, and the verdict's words of the bench ("the base model",
-/// floors "per case").
+/// The options of the nine-case fin bench's diagnosis on its records (io/fin_records.h): the
+/// bimorph-fin family in its bench form, the fin library's effects as the candidates, the fin
+/// engine's searches (DE 40 × 80 for the base, 40 × 60 for a candidate, LM 40; the bench's
+/// candidate fits), per-record floors, the residual analysis as the pattern, the greedy second
+/// round, the absorbed parameters in the verdict, the V × f trends, and the verdict's words of the
+/// bench ("the base model", floors "per case").
 RecordDiagnoseOptions FinBenchOptions();
 
 /// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).

@@ -38,6 +38,7 @@ ParamTrend TrendOver(std::string name, std::string unit, std::vector<double> per
 }
 
 double DriveAmplitude(const io::Record& r) {
+  if (r.sinusoid.stated()) return r.sinusoid.amplitude_v;
   if (r.end_scored <= r.first_scored) return 0;
   const auto [lo, hi] = std::minmax_element(r.u.begin() + static_cast<long>(r.first_scored),
                                             r.u.begin() + static_cast<long>(r.end_scored));

@@ -29,7 +29,8 @@ struct ParamTrend {
 ParamTrend TrendOver(std::string name, std::string unit, std::vector<double> per_case,
                      const std::vector<double>& amplitude, const std::vector<double>& frequency_hz);
 
-/// The amplitude of a record's drive over its scored window: (max u − min u)/2.
+/// The amplitude of a record's drive: its stated sinusoid's (a fin bench case, io/fin_records.h),
+/// else (max u − min u)/2 over its scored window.
 double DriveAmplitude(const io::Record& record);
 
 /// The grid add-on: every record of `set` fitted alone (no global search: a Levenberg–Marquardt

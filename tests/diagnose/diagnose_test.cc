@@ -15,6 +15,9 @@
 #include <cmath>
 #include <iostream>
 
+#include "diagnose/fin_diagnose.h"
+#include "io/bench_data.h"
+#include "io/fin_records.h"
 #include "model/effects.h"
 #include "tests/testing/expect_error.h"
 
@@ -364,16 +367,66 @@ TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
   EXPECT_EQ(o.floor, RecordFloor::kPerRecord);
   EXPECT_EQ(o.pattern, RecordPattern::kResidualAnalysis);
   EXPECT_TRUE(o.second_effect && o.absorbed_in_verdict && o.trends);
-  // The fin library's effects that a records model takes, in the library's order.
-  ASSERT_FALSE(o.candidates.empty());
-  size_t at = 0;
-  for (const model::EffectInfo& e : model::EffectLibrary()) {
-    const auto& rec = RecordEffects();
-    if (std::find(rec.begin(), rec.end(), e.kind) == rec.end()) continue;
-    ASSERT_LT(at, o.candidates.size());
-    EXPECT_EQ(o.candidates[at++], e.kind);
+  EXPECT_TRUE(o.fit.family_options.bench_form);
+  EXPECT_TRUE(o.bench_fits.enabled);
+  EXPECT_EQ(o.fit.search.algorithm, opt::SearchAlgorithm::kDe);
+  // The fin library's effects, in its order.
+  ASSERT_EQ(o.candidates.size(), model::EffectLibrary().size());
+  for (size_t i = 0; i < o.candidates.size(); ++i)
+    EXPECT_EQ(o.candidates[i], model::EffectLibrary()[i].kind);
+}
+
+// The switch's measure: the bench's records (io/fin_records.h) diagnosed by this engine with the
+// bench's options give the fin engine's diagnosis (diagnose/fin_diagnose.h) — small searches, the
+// delay bench, a fast and a beam candidate and the second round.
+TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
+  const io::CaseSet bench = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/delay");
+  const std::vector<EffectKind> cands = {EffectKind::Named("delay"),
+                                         EffectKind::Named("hinge-friction")};
+  const opt::DeOptions base_de{.population = 12, .generations = 6, .stall_generations = 0};
+  const opt::DeOptions cand_de{.population = 12, .generations = 4, .stall_generations = 0};
+  diagnose::DiagnoseOptions fo;
+  fo.candidates = cands;
+  fo.de_base = base_de;
+  fo.de_candidate = cand_de;
+  fo.lm.max_iterations = 8;
+  fo.cvode_lm_iterations = 2;
+  fo.trends = false;
+  const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
+                                   diagnose::CasesFromCaseSet(bench));
+  const diagnose::Diagnosis fin = diagnose::RunDiagnosis(m, fo);
+
+  RecordDiagnoseOptions o = FinBenchOptions();
+  o.candidates = cands;
+  o.fit.search.de = base_de;
+  o.bench_fits.de = cand_de;
+  o.fit.lm.max_iterations = 8;
+  o.fit.lm.threads = 2;
+  o.fit.beam.lm_iterations = 2;
+  o.trends = false;
+  const RecordDiagnosis rec = DiagnoseRecords(io::RecordsFromCaseSet(bench), o);
+  std::cout << "fin:     " << fin.verdict << "\nrecords: " << rec.verdict << "\n";
+  EXPECT_EQ(rec.verdict, fin.verdict);
+  EXPECT_EQ(rec.verdict_kind, fin.verdict_kind);
+  const diagnose::RoundResult& first = fin.rounds.front();
+  EXPECT_NEAR(rec.s0, first.s0, 1e-12 * first.s0);
+  EXPECT_NEAR(rec.s_floor, first.s_floor, 1e-12 * first.s_floor);
+  ASSERT_EQ(rec.candidates.size(), first.candidates.size());
+  for (size_t i = 0; i < rec.candidates.size(); ++i) {
+    const auto& a = rec.candidates[i];
+    const auto& b = first.candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_NEAR(a.s_withheld, b.s_withheld, 1e-12 * b.s_withheld) << EffectName(a.kind);
+    EXPECT_NEAR(a.score, b.score, 1e-9 * std::abs(b.score)) << EffectName(a.kind);
+    EXPECT_NEAR(a.pattern, b.pattern, 1e-9) << EffectName(a.kind);
   }
-  EXPECT_EQ(at, o.candidates.size());
+  ASSERT_EQ(rec.named_effects, fin.named);
+  EXPECT_NEAR(rec.confidence, fin.confidence, 1e-12);
+  ASSERT_EQ(rec.gaps.size(), fin.gaps.size());
+  for (size_t c = 0; c < rec.gaps.size(); ++c) {
+    EXPECT_NEAR(rec.gaps[c].floor_rms, fin.gaps[c].floor_rms, 1e-12) << rec.gaps[c].name;
+    EXPECT_NEAR(rec.gaps[c].pi_after, fin.gaps[c].pi_after, 1e-12 * fin.gaps[c].pi_after);
+  }
 }
 
 }  // namespace
