@@ -43,7 +43,7 @@ struct DiagnoseArgs {
   bool quick = false;
   bool quiet = false;
   double significance_ratio = 1.25;
-  std::string engine = "fin";  ///< --engine: the fin engine, or the records engine on the bench
+  std::string engine = "records";  ///< --engine: the records engine on the bench, or the fin's
   CompleteServiceFlags
       service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
   int concurrent_fits = 0;  ///< 0: 1 locally, 3 with --master
@@ -94,60 +94,9 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
   return o;
 }
 
-/// The terminal summary of the bench diagnosed on its records: the verdict, each round's
-/// candidates, how far the gap shrinks per record, the absorbed parameters and the trends.
-void PrintBenchOnRecords(std::ostream& o, const io::RecordSet& set,
-                         const records::RecordDiagnosis& d, double wall_s) {
-  char line[400];
-  auto rms = [&](double s) { return std::sqrt(s / static_cast<double>(d.withheld_samples)); };
-  auto table = [&](const std::vector<records::RecordCandidate>& cands) {
-    o << "    candidate         withheld RMS  score      closed  pattern  notes\n";
-    for (const records::RecordCandidate& c : cands) {
-      std::snprintf(line, sizeof line, "    %-17s %-13.4f %-10.1f %4.0f %%  %4.0f %%   %s\n",
-                    records::EffectName(c.kind), rms(c.s_withheld), c.score, 100 * c.closed,
-                    100 * c.pattern, c.qualifies ? "qualifies" : c.note.c_str());
-      o << line;
-    }
-  };
-  o << "piezoid diagnose (records engine): " << set.source.string() << " (" << set.records.size()
-    << " records; base " << d.base.model->Describe() << ")\n"
-    << "noise floor per record (saturations of " << d.floor_model << "); withheld RMS " << rms(d.s0)
-    << " " << set.response_unit << " = " << d.rms_ratio << " x the floor\n";
-  o << "  round 1 from the base model\n";
-  table(d.candidates);
-  if (d.second) {
-    o << "  round 2 from " << d.final_fit->model->Describe() << "\n";
-    table(d.second->candidates);
-    o << "    => " << d.second->verdict << "\n";
-  }
-  o << "\nVERDICT: " << d.verdict << "\n";
-  o << "  record  role      floor   RMS before  RMS after  closed\n";
-  for (const records::RecordGap& g : d.gaps) {
-    std::snprintf(line, sizeof line, "  %-7s %-9s %.4f   %.4f     %.4f     %4.0f %%\n",
-                  g.name.c_str(), model::CaseRoleName(g.role), g.floor_rms, g.rms_before,
-                  g.rms_after, 100 * g.closed);
-    o << line;
-  }
-  std::snprintf(line, sizeof line,
-                "  withheld total: %.4f -> %.4f (floor %.4f), share of the gap closed %.0f %%\n",
-                d.s0, d.withheld_after, d.s_floor, 100 * d.closed_total);
-  o << line;
-  for (const pz::diagnose::ParamTrend& t : d.trends) {
-    if (!t.significant) continue;
-    std::snprintf(line, sizeof line, "  trend %-8s slope %.3g /V (p = %.2g), %.3g /Hz (p = %.2g)\n",
-                  t.name.c_str(), t.slope_v, t.p_v, t.slope_f, t.p_f);
-    o << line;
-  }
-  o << "wall " << wall_s << " s\n";
-}
-
-/// `diagnose --cases DIR --engine records`: the bench as a record set, diagnosed by the records
-/// engine with the bench's options (diagnose/diagnose.h FinBenchOptions); report.md and
-/// diagnosis.json are the records diagnosis's.
-int RunBenchOnRecords(const DiagnoseArgs& a) {
-  const auto start = std::chrono::steady_clock::now();
-  const std::filesystem::path dir(a.cases_dir);
-  const io::RecordSet set = io::RecordsFromCaseSet(io::LoadCaseSet(dir));
+/// The bench's diagnosis on its records (diagnose/diagnose.h FinBenchOptions): the fin engine's
+/// flags as its options.
+records::RecordDiagnoseOptions BenchRecordOptions(const DiagnoseArgs& a) {
   records::RecordDiagnoseOptions o = records::FinBenchOptions();
   if (!a.candidates.empty()) o.candidates = ParseKinds(a.candidates);
   o.second_effect = !a.no_second;
@@ -165,27 +114,8 @@ int RunBenchOnRecords(const DiagnoseArgs& a) {
     o.fit.lm.max_iterations = 20;
     o.fit.beam.lm_iterations = 8;
   }
-  if (a.service.enabled()) {
-    o.fit.evaluator_factory =
-        RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
-  }
   if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
-  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
-  PrintBenchOnRecords(
-      std::cout, set, d,
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-  const std::filesystem::path out =
-      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string())
-                        : std::filesystem::path(a.out_dir);
-  std::filesystem::create_directories(out);
-  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
-  io::WriteFileWith(out / "report.md",
-                    [&](std::ostream& s) { WriteRecordsDiagnosisMarkdown(s, set, d, proposal); });
-  io::WriteFileWith(out / "diagnosis.json",
-                    [&](std::ostream& s) { WriteRecordsDiagnosisJson(s, set, d, proposal); });
-  std::cout << "written: " << (out / "report.md").string() << ", "
-            << (out / "diagnosis.json").string() << "\n";
-  return 0;
+  return o;
 }
 
 int RunDiagnose(const DiagnoseArgs& a) {
@@ -221,14 +151,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (a.cases_dir.empty())
     throw InputError(
         "piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
-  if (a.engine == "records") {
-    try {
-      return RunBenchOnRecords(a);
-    } catch (const ServiceError& e) {
-      std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
-      return ExitCodeOf(e.status());
-    }
-  }
   diagnose::EvaluatorFactory service;
   if (a.service.enabled())
     service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
@@ -244,7 +166,18 @@ int RunDiagnose(const DiagnoseArgs& a) {
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
   diagnose::Diagnosis d;
   try {
-    d = diagnose::RunDiagnosis(m, o);
+    // The records engine on the bench's records, unless --engine fin or the service (whose
+    // evaluation sessions take the fin engine's fits).
+    if (a.engine == "records" && !a.service.enabled()) {
+      const auto start = std::chrono::steady_clock::now();
+      const io::RecordSet records = io::RecordsFromCaseSet(set);
+      d = diagnose::DiagnosisOfRecords(m, records,
+                                       records::DiagnoseRecords(records, BenchRecordOptions(a)));
+      d.wall_time_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    } else {
+      d = diagnose::RunDiagnosis(m, o);
+    }
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
@@ -449,12 +382,11 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
                   "withheld RMS / noise floor above which a gap is significant")
       ->check(CLI::Range(1.0001, 100.0));
   cmd->add_option("--engine", a->engine,
-                  "with --cases: fin (the bench's own engine, report.html) or records (the bench "
-                  "as a record set, diagnosed by the records engine with the bench's options: "
-                  "per-case floors, the residual analysis, the second round, the trends; "
-                  "report.md)")
+                  "with --cases: records (the bench's cases as records, diagnosed by the records "
+                  "engine with the bench's options) or fin (the bench's own engine; also what "
+                  "--master runs)")
       ->check(CLI::IsMember({"fin", "records"}))
-      ->default_str("fin");
+      ->default_str("records");
   cmd->add_flag("--no-second", a->no_second, "do not look for a second effect");
   cmd->add_flag("--no-trends", a->no_trends, "skip the per-case fits and their V x f trends");
   cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");

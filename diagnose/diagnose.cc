@@ -18,17 +18,22 @@ bool Withheld(const io::Record& r) { return r.role != CaseRole::kTrain; }
 
 std::string Fmt(double x, int prec = 3) { return FormatG(x, prec); }
 
-/// Σe² over the withheld (or training) scored samples of a fit.
+/// Σe² of record i over its scored window.
+double RecordSse(const io::Record& r, const std::vector<double>& yhat) {
+  double s = 0;
+  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+    const double e = r.y[k] - yhat[k];
+    s += e * e;
+  }
+  return s;
+}
+
+/// Σe² over the withheld (or training) scored samples of a fit: each record's sum, added in set
+/// order (a bench's Σ PI over its cases, as the fin engine adds them).
 double Sse(const io::RecordSet& set, const FitResult& f, bool withheld) {
   double s = 0;
-  for (size_t i = 0; i < set.records.size(); ++i) {
-    const io::Record& r = set.records[i];
-    if (Withheld(r) != withheld) continue;
-    for (size_t k = r.first_scored; k < r.end_scored; ++k) {
-      const double e = r.y[k] - f.yhat[i][k];
-      s += e * e;
-    }
-  }
+  for (size_t i = 0; i < set.records.size(); ++i)
+    if (Withheld(set.records[i]) == withheld) s += RecordSse(set.records[i], f.yhat[i]);
   return s;
 }
 
@@ -71,16 +76,6 @@ std::vector<double> BinExcess(const io::RecordSet& set, const FitResult& f, doub
   for (size_t b = 0; b < sse.size(); ++b)
     ex[b] = std::max(0.0, sse[b] - (floors.empty() ? n[b] * sigma2 : fv[b]));
   return ex;
-}
-
-/// Σe² of record i over its scored window.
-double RecordSse(const io::Record& r, const std::vector<double>& yhat) {
-  double s = 0;
-  for (size_t k = r.first_scored; k < r.end_scored; ++k) {
-    const double e = r.y[k] - yhat[k];
-    s += e * e;
-  }
-  return s;
 }
 
 /// Whole drive cycles in a record's scored window at its stated frequency (1 without one).
@@ -257,15 +252,19 @@ void ComposeRecordVerdict(const io::RecordSet& set, const RecordDiagnoseOptions&
   text.model = o.model_label.empty() ? o.family : o.model_label;
   text.unit = set.response_unit;
   SetFloorText(o, d, text);
-  if (d.runner_up >= 0 && o.propose) {
+  if (d.runner_up >= 0 && o.next_hint) {
+    text.next = o.next_hint(d.candidates[static_cast<size_t>(d.named)].kind,
+                            d.candidates[static_cast<size_t>(d.runner_up)].kind);
+  } else if (d.runner_up >= 0 && o.propose) {
     d.next = ProposeExperiment(set, d.candidates[static_cast<size_t>(d.named)].fit,
                                d.candidates[static_cast<size_t>(d.runner_up)].fit, d.noise.sigma);
     text.next = d.next->description;
   }
+  d.round_verdict = ComposeVerdict(gap, Named(d.candidates), naming, o.rules, text);
   std::vector<double> ratios;
   for (size_t i = 0; i < d.base.metrics.size(); ++i)
     ratios.push_back(d.base.metrics[i].rmse / d.record_floor[i]);
-  if (d.significant && d.noise.sigma > 0)
+  if (d.significant && d.noise.sigma > 0 && o.excitation_note)
     d.excitation_note = ExcitationGapNote(set, d.excitation, ratios, o.rules.significance_ratio);
   text.closing = d.excitation_note;
   if (o.absorbed_in_verdict) {
@@ -507,12 +506,12 @@ RecordRound SecondRound(const Shape& shape, const std::vector<EffectKind>& cands
     for (EffectKind e : cands) {
       if (e == first.kind) continue;
       if (o.fit.progress)
-        o.fit.progress("second effect: " + first.fit.model->Describe() + " + " + EffectName(e));
+        o.fit.progress("second effect: " + ModelLabel(*first.fit.model, o) + " + " + EffectName(e));
       RecordCandidate c;
       c.kind = e;
       c.fit = FitOnTop(set, first.fit, e, shape.scale, o, fo);
       if (!std::isfinite(Sse(set, c.fit, true))) {
-        d.diverged.push_back(first.fit.model->Describe() + " + " + EffectName(e));
+        d.diverged.push_back(ModelLabel(*first.fit.model, o) + " + " + EffectName(e));
         continue;
       }
       round.candidates.push_back(std::move(c));
@@ -524,9 +523,13 @@ RecordRound SecondRound(const Shape& shape, const std::vector<EffectKind>& cands
   round.z_runner_up = naming.z_runner_up;
   round.confidence = naming.confidence;
   VerdictText text;
-  text.model = first.fit.model->Describe();
+  text.model = ModelLabel(*first.fit.model, o);
   text.unit = set.response_unit;
   SetFloorText(o, d, text);
+  if (round.runner_up >= 0 && o.next_hint) {
+    text.next = o.next_hint(round.candidates[static_cast<size_t>(round.named)].kind,
+                            round.candidates[static_cast<size_t>(round.runner_up)].kind);
+  }
   round.verdict = ComposeVerdict(round.gap, Named(round.candidates), naming, o.rules, text);
   return round;
 }
@@ -619,7 +622,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
     const FitResult* floor_model = &d.base;
     for (const RecordCandidate& c : d.candidates)
       if (c.fit.train_sse < floor_model->train_sse) floor_model = &c.fit;
-    d.floor_model = floor_model->model->Describe();
+    d.floor_model = ModelLabel(*floor_model->model, o);
     shape.floors = PerRecordFloors(set, *floor_model);
     double st = 0;
     s_floor = 0;
@@ -678,6 +681,25 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   return d;
 }
 
+std::string FinNextMeasurementHint(EffectKind a, EffectKind b) {
+  auto is = [&](EffectKind x, EffectKind y) { return (a == x && b == y) || (a == y && b == x); };
+  if (is(EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")))
+    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) "
+           "and rounds edges: "
+           "a square-wave (step) drive, or sinusoids at several times the bench's highest "
+           "frequency, would separate them";
+  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) "
+         "would separate them; "
+         "`piezoid diagnose --records` proposes one for record sets";
+}
+
+std::string ModelLabel(const RecordModel& model, const RecordDiagnoseOptions& o) {
+  if (o.base_name.empty()) return model.Describe();
+  std::string s = o.base_name;
+  for (EffectKind e : model.effects()) s += std::string(" + ") + EffectName(e);
+  return s;
+}
+
 RecordDiagnoseOptions FinBenchOptions() {
   RecordDiagnoseOptions o;
   o.family = "bimorph-fin";
@@ -694,6 +716,10 @@ RecordDiagnoseOptions FinBenchOptions() {
   o.absorbed_in_verdict = true;
   o.trends = true;
   o.model_label = "the base model";
+  o.base_name = "base";
+  o.propose = false;
+  o.next_hint = FinNextMeasurementHint;
+  o.excitation_note = false;
   o.floor_source = "rounding, scatter and saturation plateaus per case";
   return o;
 }

@@ -32,6 +32,7 @@
 //     reported whatever the options.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <span>
@@ -108,6 +109,14 @@ struct RecordDiagnoseOptions {
   bool trends = false;
   /// The starting model as the verdict names it (empty: the family's name).
   std::string model_label;
+  /// A model with effects as a round's verdict names it: this + " + " + each effect (empty: the
+  /// family's name, RecordModel::Describe; the bench's: "base").
+  std::string base_name;
+  /// A tie's next measurement as a sentence from the two effects (the bench's physics of their
+  /// difference), in place of the simulated proposal (`propose`); null: none.
+  std::function<std::string(EffectKind, EffectKind)> next_hint;
+  /// The excitation-gap sentence at the end of a significant verdict (records/excitation.h).
+  bool excitation_note = true;
   /// Candidate fits as the nine-case bench's (diagnose/fin_diagnose.cc FitStructure), for a
   /// family in its bench form (bimorph-fin's FamilyOptions::bench_form): the starting fit extended
   /// with the new effect at zero (x0); a model with a beam effect refined from x0 with the new
@@ -169,6 +178,7 @@ struct RecordDiagnosis {
   double confidence = 0;
   std::string verdict_kind;  ///< "effect", "inseparable", "none", "unexplained"
   std::string verdict;
+  std::string round_verdict;  ///< the first round's own verdict (no absorbed, second or closing)
   std::optional<ProposedExperiment> next;
   ExcitationReport excitation;  ///< what training excites, what each withheld record needs
                                 ///< (records/excitation.h)
@@ -218,6 +228,13 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
 /// round, the absorbed parameters in the verdict, the V × f trends, and the verdict's words of the
 /// bench ("the base model", floors "per case").
 RecordDiagnoseOptions FinBenchOptions();
+
+/// What would separate two effects that the nine-case bench cannot: the physics of their difference
+/// (its nine sinusoids; `diagnose --records` simulates candidate drives instead).
+std::string FinNextMeasurementHint(EffectKind a, EffectKind b);
+
+/// A model as the diagnosis names it: RecordModel::Describe, or options.base_name + its effects.
+std::string ModelLabel(const RecordModel& model, const RecordDiagnoseOptions& options);
 
 /// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);

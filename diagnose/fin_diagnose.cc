@@ -21,20 +21,8 @@ using opt::ParallelFor;
 using opt::ResidualFunction;
 namespace {
 
-// What would separate two effects that the bench cannot: the physics of their difference (the fin
-// benches are nine sinusoids; `diagnose --records` simulates candidate drives for record sets).
 std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
-  auto is = [&](model::EffectKind x, model::EffectKind y) {
-    return (a == x && b == y) || (a == y && b == x);
-  };
-  if (is(model::EffectKind::Named("driver-lowpass"), model::EffectKind::Named("delay")))
-    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) "
-           "and rounds edges: "
-           "a square-wave (step) drive, or sinusoids at several times the bench's highest "
-           "frequency, would separate them";
-  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) "
-         "would separate them; "
-         "`piezoid diagnose --records` proposes one for record sets";
+  return records::FinNextMeasurementHint(a, b);
 }
 
 using model::EffectKind;
@@ -520,6 +508,110 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
                                       o.rules, text);
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Say(o, d.verdict);
+  return d;
+}
+
+namespace {
+
+// A records fit as the bench's: "base + effect", per-case PI, the uncertainty table.
+FitResult FinFitOf(const io::RecordSet& set, const records::FitResult& f) {
+  FitResult o;
+  o.structure = f.model->effects();
+  o.description = ParameterLayout(o.structure).Describe();
+  o.x = f.params;
+  o.params = f.uncertainty.params;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const double pi = f.metrics[i].sse;
+    o.case_pi.push_back(pi);
+    const bool training = set.records[i].role == model::CaseRole::kTrain;
+    (training ? o.train_pi : o.withheld_pi) += pi;
+    (training ? o.train_samples : o.withheld_samples) += static_cast<int>(set.records[i].scored());
+  }
+  o.residual_sigma = f.uncertainty.residual_sigma;
+  o.singular_values = f.uncertainty.singular_values;
+  o.weakest_direction = f.uncertainty.weakest_direction;
+  o.evaluations = f.evaluations + f.uncertainty.evaluations;
+  o.wall_time_s = f.wall_time_s;
+  o.message = f.polish_message;
+  o.ok = true;
+  return o;
+}
+
+CandidateResult FinCandidateOf(const io::RecordSet& set, const records::RecordCandidate& c,
+                               const records::FitResult& start) {
+  CandidateResult o;
+  static_cast<records::CandidateScore&>(o) = c;
+  o.kind = c.kind;
+  o.fit = FinFitOf(set, c.fit);
+  o.added_params = static_cast<int>(c.fit.params.size() - start.params.size());
+  return o;
+}
+
+RoundResult FinRoundOf(const io::RecordSet& set, const records::FitResult& start,
+                       const records::Gap& gap, const std::vector<records::RecordCandidate>& cands,
+                       int named, int runner_up, double z_runner_up, const std::string& verdict) {
+  RoundResult r;
+  r.base_structure = start.model->effects();
+  r.s0 = gap.s0;
+  r.s_floor = gap.s_floor;
+  r.rms_ratio = gap.rms_ratio;
+  r.significant = gap.significant;
+  for (const records::RecordCandidate& c : cands)
+    r.candidates.push_back(FinCandidateOf(set, c, start));
+  r.named = named;
+  r.runner_up = runner_up;
+  r.z_runner_up = z_runner_up;
+  r.gap = gap;
+  r.verdict = verdict;
+  return r;
+}
+
+}  // namespace
+
+Diagnosis DiagnosisOfRecords(const DiagnosisModel& m, const io::RecordSet& set,
+                             const records::RecordDiagnosis& rd) {
+  if (set.records.size() != m.cases().size())
+    throw InputError("the bench's records: " + std::to_string(set.records.size()) +
+                     " records for " + std::to_string(m.cases().size()) + " cases");
+  Diagnosis d;
+  d.cases = m.cases();
+  for (const DiagCase& c : m.cases()) d.quantum_deg = std::max(d.quantum_deg, c.noise.quantum_deg);
+  SetFloorTotals(m, rd.record_floor, d);
+  d.floor_model = rd.floor_model;
+  d.base = FinFitOf(set, rd.base);
+  d.base_residuals = rd.base_residuals;
+  d.trends = rd.trends;
+  records::Gap gap;
+  gap.s0 = rd.s0;
+  gap.s_floor = rd.s_floor;
+  gap.rms_ratio = rd.rms_ratio;
+  gap.significant = rd.significant;
+  gap.nw = static_cast<double>(rd.withheld_samples);
+  gap.nt = static_cast<double>(rd.train_samples);
+  d.rounds.push_back(FinRoundOf(set, rd.base, gap, rd.candidates, rd.named, rd.runner_up,
+                                rd.z_runner_up, rd.round_verdict));
+  if (rd.second) {
+    const records::FitResult& start = rd.candidates[static_cast<size_t>(rd.named)].fit;
+    d.rounds.push_back(FinRoundOf(set, start, rd.second->gap, rd.second->candidates,
+                                  rd.second->named, rd.second->runner_up, rd.second->z_runner_up,
+                                  rd.second->verdict));
+  }
+  d.named = rd.named_effects;
+  d.confidence = rd.confidence;
+  d.final_fit = FinFitOf(set, *rd.final_fit);
+  d.final_residuals = rd.final_residuals;
+  d.withheld_before = d.base.withheld_pi;
+  d.withheld_after = d.final_fit.withheld_pi;
+  d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
+  d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
+  MeasureCaseGaps(m, rd.record_floor, d);
+  d.absorbed = rd.absorbed;
+  d.absorbed_by = rd.absorbed_by;
+  d.verdict_kind = rd.verdict_kind;
+  d.verdict = rd.verdict;
+  for (const FitResult* f : {&d.base}) d.evaluations += f->evaluations;
+  for (const RoundResult& r : d.rounds)
+    for (const CandidateResult& c : r.candidates) d.evaluations += c.fit.evaluations;
   return d;
 }
 

@@ -135,6 +135,13 @@ struct Diagnosis {
 /// Runs the whole diagnosis. Throws InputError on invalid options.
 Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
 
+/// The diagnosis of the bench's records (io/fin_records.h; diagnose/diagnose.h DiagnoseRecords
+/// with FinBenchOptions) as the bench's report reads it: `set` the records of `model`'s cases, in
+/// case order. Each fit's figures are its records' (per-case PI, σ and identifiability from the
+/// uncertainty table, evaluations with the table's).
+Diagnosis DiagnosisOfRecords(const DiagnosisModel& model, const io::RecordSet& set,
+                             const records::RecordDiagnosis& diagnosis);
+
 /// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
 model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,
                                    std::span<const double> case_floor);
