@@ -94,30 +94,6 @@ diagnose::DiagnoseOptions Options(const std::string& candidates, int threads, ui
   return o;
 }
 
-/// The bench's diagnosis on its records (diagnose/diagnose.h FinBenchOptions): the fin engine's
-/// flags as its options.
-records::RecordDiagnoseOptions BenchRecordOptions(const DiagnoseArgs& a) {
-  records::RecordDiagnoseOptions o = records::FinBenchOptions();
-  if (!a.candidates.empty()) o.candidates = ParseKinds(a.candidates);
-  o.second_effect = !a.no_second;
-  o.trends = !a.no_trends;
-  o.rules.significance_ratio = a.significance_ratio;
-  o.fit.threads = a.threads;
-  o.fit.lm.threads = a.threads;
-  o.fit.search.de.seed = a.seed;
-  o.bench_fits.seed = a.seed;
-  if (a.quick) {  // the fin engine's --quick
-    o.fit.search.de.population = 24;
-    o.fit.search.de.generations = 40;
-    o.bench_fits.de.population = 24;
-    o.bench_fits.de.generations = 30;
-    o.fit.lm.max_iterations = 20;
-    o.fit.beam.lm_iterations = 8;
-  }
-  if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
-  return o;
-}
-
 int RunDiagnose(const DiagnoseArgs& a) {
   if (!a.records.records.empty()) {
     if (!a.cases_dir.empty())
@@ -166,18 +142,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
   diagnose::Diagnosis d;
   try {
-    // The records engine on the bench's records, unless --engine fin or the service (whose
-    // evaluation sessions take the fin engine's fits).
-    if (a.engine == "records" && !a.service.enabled()) {
-      const auto start = std::chrono::steady_clock::now();
-      const io::RecordSet records = io::RecordsFromCaseSet(set);
-      d = diagnose::DiagnosisOfRecords(m, records,
-                                       records::DiagnoseRecords(records, BenchRecordOptions(a)));
-      d.wall_time_s =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    } else {
-      d = diagnose::RunDiagnosis(m, o);
-    }
+    // The records engine on the bench's records (with --master: the fin engine, whose fitness
+    // the service's sessions take), or --engine fin.
+    d = a.engine == "records" ? diagnose::DiagnoseBench(m, o) : diagnose::RunDiagnosis(m, o);
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());

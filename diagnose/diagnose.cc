@@ -359,25 +359,36 @@ struct Shape {
   }
 };
 
-/// The output of `model` at `params` on every record, as a fit (no search, no polish): the nested
-/// model of a bench fit (RecordDiagnoseOptions::BenchFits).
+/// The output of `model` at `params` on every record, as a fit (no search, no polish), with the
+/// uncertainty table there for a model searched through its RecordMap (the bench form): the nested
+/// model of a bench fit (RecordDiagnoseOptions::BenchFits). `evaluations`: of the fit it replaces.
 FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
-                std::vector<double> params, int64_t evaluations) {
+                std::vector<double> params, int64_t evaluations, const FitOptions& fo) {
   FitResult f;
   f.model = std::move(model);
   f.params = std::move(params);
-  f.evaluations = evaluations;
   f.polish_message = "the fit ended above the starting model: the effect kept at zero";
-  size_t n = 0;
+  std::vector<const io::Record*> train;
   for (const io::Record& r : set.records) {
     std::vector<double> y;
     f.metrics.push_back(Evaluate(*f.model, f.params, {}, r, &y));
     f.yhat.push_back(std::move(y));
     if (Withheld(r)) continue;
     f.train_sse += f.metrics.back().sse;
-    n += r.scored();
+    train.push_back(&r);
   }
+  size_t n = 0;
+  for (const io::Record* r : train) n += r->scored();
   f.train_mse = f.train_sse / static_cast<double>(std::max<size_t>(n, 1));
+  if (fo.uncertainty && f.model->has_ratio()) {
+    const RecordFitness fitness(*f.model, train);
+    const RecordMap map(*f.model);
+    f.uncertainty = opt::ComputeUncertainty(
+        map,
+        [&](std::span<const double> x, std::vector<double>& r) { return fitness.Residuals(x, r); },
+        f.params, fo.threads, fo.lm.fd_step, fitness.ResidualWeight());
+  }
+  f.evaluations = evaluations;
   return f;
 }
 
@@ -427,7 +438,8 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
     ce.start_points = {x0};
   }
   FitResult f = FitModel(set, model, ce);
-  if (f.train_sse > start.train_sse) return FitAt(set, model, x0, f.evaluations);
+  if (f.train_sse > start.train_sse)
+    return FitAt(set, model, x0, f.evaluations + f.uncertainty.evaluations, ce);
   return f;
 }
 
@@ -675,7 +687,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   }
   if (o.trends) {
     if (progress) progress("per-record fits (trends over the V x f grid)");
-    d.trends = pz::diagnose::RecordTrends(set, d.base, fo);
+    d.trends = pz::diagnose::RecordTrends(set, d.base, fo, 25, &d.trend_evaluations);
   }
   ComposeRecordVerdict(set, o, gap, naming, d);
   return d;

@@ -205,6 +205,7 @@ struct RecordDiagnosis {
   std::string absorbed_by;                       ///< that candidate
   std::vector<RecordGap> gaps;                   ///< per record, set order
   std::vector<pz::diagnose::ParamTrend> trends;  ///< RecordDiagnoseOptions::trends
+  int64_t trend_evaluations = 0;                 ///< of the trends' per-record fits
 };
 
 /// The first `count` parameters (a base model's) that move by more than 2 combined σ and 5 % of

@@ -7,6 +7,7 @@
 #include <limits>
 #include <exception>
 
+#include "io/fin_records.h"
 #include "model/model_comparison.h"
 #include "records/noise_floor.h"
 #include "diagnose/verdict.h"
@@ -612,6 +613,58 @@ Diagnosis DiagnosisOfRecords(const DiagnosisModel& m, const io::RecordSet& set,
   for (const FitResult* f : {&d.base}) d.evaluations += f->evaluations;
   for (const RoundResult& r : d.rounds)
     for (const CandidateResult& c : r.candidates) d.evaluations += c.fit.evaluations;
+  return d;
+}
+
+records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
+  records::RecordDiagnoseOptions r = records::FinBenchOptions();
+  if (!o.candidates.empty()) r.candidates = o.candidates;
+  r.fit.threads = o.threads;
+  r.fit.search.de = o.de_base;
+  r.fit.search.de.seed = o.seed;
+  r.bench_fits.de = o.de_candidate;
+  r.bench_fits.seed = o.seed;
+  r.fit.lm = o.lm;
+  r.fit.lm.threads = o.threads;
+  r.fit.beam.lm_iterations = o.cvode_lm_iterations;
+  r.fit.beam.start_fractions = o.cvode_start_fractions;
+  r.fit.family_options.fin_sim = o.sim;
+  r.rules = o.rules;
+  r.second_effect = o.second_effect;
+  r.trends = o.trends;
+  r.fit.progress = o.progress;
+  return r;
+}
+
+io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
+  io::CaseSet set;
+  set.dir = "bench";
+  for (const DiagCase& c : cases) {
+    io::BenchCase b;
+    b.number = c.number;
+    b.amplitude_v = c.drive.amplitude_v;
+    b.frequency_hz = c.drive.frequency_hz;
+    b.role = c.training ? io::CaseRole::kTrain : io::CaseRole::kValidate;
+    b.file = "case" + std::to_string(c.number);
+    b.sample_rate_hz = c.drive.sample_rate_hz;
+    b.cycles = c.drive.cycles;
+    b.angle_deg = c.measured_deg;
+    for (size_t k = 0; k < c.measured_deg.size(); ++k) {
+      b.t.push_back(static_cast<double>(k) / c.drive.sample_rate_hz);
+      b.u.push_back(c.drive.Value(b.t.back()));
+    }
+    set.cases.push_back(std::move(b));
+  }
+  return io::RecordsFromCaseSet(set);
+}
+
+Diagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
+  ThrowIfError(o.Validate());
+  if (o.evaluator_factory) return RunDiagnosis(m, o);
+  const auto start = std::chrono::steady_clock::now();
+  const io::RecordSet set = RecordsOfCases(m.cases());
+  Diagnosis d = DiagnosisOfRecords(m, set, records::DiagnoseRecords(set, RecordOptionsOf(o)));
+  d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }
 

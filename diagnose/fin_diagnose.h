@@ -40,6 +40,7 @@
 #include "diagnose/decision.h"
 #include "diagnose/diagnose.h"
 #include "diagnose/trends.h"
+#include "io/records.h"
 
 namespace pz::diagnose {
 
@@ -141,6 +142,20 @@ Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& optio
 /// uncertainty table, evaluations with the table's).
 Diagnosis DiagnosisOfRecords(const DiagnosisModel& model, const io::RecordSet& set,
                              const records::RecordDiagnosis& diagnosis);
+
+/// The bench's options as the records engine's: FinBenchOptions with these candidates (empty: the
+/// whole library), searches (DE base and candidate, their seed, LM, the beam refinement), simulator
+/// options, rules, rounds, trends, threads and progress.
+records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
+
+/// The bench's cases as records (io/fin_records.h; a withheld case validates).
+io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
+
+/// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
+/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf) and read back as the bench's
+/// Diagnosis (DiagnosisOfRecords). With an evaluator factory (the service's sessions take the fin
+/// engine's fitness) it is RunDiagnosis. Throws InputError on invalid options.
+Diagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
 
 /// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
 model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,

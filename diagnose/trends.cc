@@ -46,7 +46,8 @@ double DriveAmplitude(const io::Record& r) {
 }
 
 std::vector<ParamTrend> RecordTrends(const io::RecordSet& set, const records::FitResult& from,
-                                     const records::FitOptions& options, int iterations) {
+                                     const records::FitOptions& options, int iterations,
+                                     int64_t* evaluations) {
   if (set.records.size() < 4) {
     throw InputError(set.source.string() + ": the V x f trends need at least 4 records (" +
                      std::to_string(set.records.size()) + " given): a plane over amplitude and " +
@@ -79,6 +80,7 @@ std::vector<ParamTrend> RecordTrends(const io::RecordSet& set, const records::Fi
     one.records.push_back(r);
     one.records.back().role = model::CaseRole::kTrain;
     const records::FitResult f = records::FitModel(one, from.model, fo);
+    if (evaluations) *evaluations += f.evaluations;
     for (size_t i = 0; i < np; ++i) per[i].push_back(f.params[i]);
   }
   std::vector<ParamTrend> trends;

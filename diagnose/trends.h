@@ -5,6 +5,7 @@
 // point where the model holds it constant is evidence of an unmodelled effect (docs/diagnosis.md).
 #pragma once
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -38,7 +39,9 @@ double DriveAmplitude(const io::Record& record);
 /// and each of `from`'s parameters regressed over the records' drive amplitude and stated
 /// frequency. Throws InputError naming the record when one states no frequency (a manifest's
 /// frequency_Hz column; a bench's is stated), or when fewer than 4 records are given.
+/// `evaluations` (optional): the per-record fits' model evaluations are added to it.
 std::vector<ParamTrend> RecordTrends(const io::RecordSet& set, const records::FitResult& from,
-                                     const records::FitOptions& options, int iterations = 25);
+                                     const records::FitOptions& options, int iterations = 25,
+                                     int64_t* evaluations = nullptr);
 
 }  // namespace pz::diagnose

@@ -396,15 +396,8 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
                                    diagnose::CasesFromCaseSet(bench));
   const diagnose::Diagnosis fin = diagnose::RunDiagnosis(m, fo);
 
-  RecordDiagnoseOptions o = FinBenchOptions();
-  o.candidates = cands;
-  o.fit.search.de = base_de;
-  o.bench_fits.de = cand_de;
-  o.fit.lm.max_iterations = 8;
-  o.fit.lm.threads = 2;
-  o.fit.beam.lm_iterations = 2;
-  o.trends = false;
-  const RecordDiagnosis rec = DiagnoseRecords(io::RecordsFromCaseSet(bench), o);
+  const RecordDiagnosis rec =
+      DiagnoseRecords(io::RecordsFromCaseSet(bench), diagnose::RecordOptionsOf(fo));
   std::cout << "fin:     " << fin.verdict << "\nrecords: " << rec.verdict << "\n";
   EXPECT_EQ(rec.verdict, fin.verdict);
   EXPECT_EQ(rec.verdict_kind, fin.verdict_kind);
@@ -427,6 +420,22 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
     EXPECT_NEAR(rec.gaps[c].floor_rms, fin.gaps[c].floor_rms, 1e-12) << rec.gaps[c].name;
     EXPECT_NEAR(rec.gaps[c].pi_after, fin.gaps[c].pi_after, 1e-12 * fin.gaps[c].pi_after);
   }
+  // The one driver (the cases as records, read back as the bench's diagnosis): the same fits, the
+  // same rounds, the same evaluations.
+  const diagnose::Diagnosis one = diagnose::DiagnoseBench(m, fo);
+  EXPECT_EQ(one.verdict, fin.verdict);
+  EXPECT_EQ(one.final_fit.x, fin.final_fit.x);
+  EXPECT_EQ(one.final_fit.case_pi, fin.final_fit.case_pi);
+  EXPECT_EQ(one.base.x, fin.base.x);
+  ASSERT_EQ(one.rounds.size(), fin.rounds.size());
+  for (size_t r = 0; r < one.rounds.size(); ++r) {
+    EXPECT_EQ(one.rounds[r].verdict, fin.rounds[r].verdict);
+    EXPECT_EQ(one.rounds[r].candidates.size(), fin.rounds[r].candidates.size());
+  }
+  EXPECT_EQ(one.evaluations, fin.evaluations);
+  EXPECT_EQ(one.floor_model, fin.floor_model);
+  EXPECT_EQ(one.withheld_floor, fin.withheld_floor);
+  EXPECT_EQ(one.closed_total, fin.closed_total);
 }
 
 }  // namespace
