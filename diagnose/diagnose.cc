@@ -367,7 +367,6 @@ FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   FitResult f;
   f.model = std::move(model);
   f.params = std::move(params);
-  f.polish_message = "the fit ended above the starting model: the effect kept at zero";
   std::vector<const io::Record*> train;
   for (const io::Record& r : set.records) {
     std::vector<double> y;
@@ -438,8 +437,12 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
     ce.start_points = {x0};
   }
   FitResult f = FitModel(set, model, ce);
-  if (f.train_sse > start.train_sse)
-    return FitAt(set, model, x0, f.evaluations + f.uncertainty.evaluations, ce);
+  if (f.train_sse > start.train_sse) {
+    FitResult nested = FitAt(set, model, x0, f.evaluations + f.uncertainty.evaluations, ce);
+    nested.polish_message =
+        "refinement ended above the starting model (" + f.polish_message + "): effect kept at zero";
+    return nested;
+  }
   return f;
 }
 
