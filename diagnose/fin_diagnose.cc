@@ -610,7 +610,7 @@ Diagnosis DiagnosisOfRecords(const DiagnosisModel& m, const io::RecordSet& set,
   d.absorbed_by = rd.absorbed_by;
   d.verdict_kind = rd.verdict_kind;
   d.verdict = rd.verdict;
-  for (const FitResult* f : {&d.base}) d.evaluations += f->evaluations;
+  d.evaluations = d.base.evaluations + rd.trend_evaluations;
   for (const RoundResult& r : d.rounds)
     for (const CandidateResult& c : r.candidates) d.evaluations += c.fit.evaluations;
   return d;

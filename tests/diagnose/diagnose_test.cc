@@ -345,6 +345,7 @@ TEST(RecordDiagnosis, TheTrendsAddOnFindsAGainThatFollowsTheAmplitude) {
   // The truth's gain c grows by 0.0005 / V: 0.09 at 60 V, 0.11 at 100 V.
   const RecordDiagnosis r = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}, 0.0005), o);
   ASSERT_EQ(r.trends.size(), 3u);
+  EXPECT_GT(r.trend_evaluations, 6 * 2) << "the per-record fits' evaluations";
   const pz::diagnose::ParamTrend& c = r.trends[1];
   EXPECT_EQ(c.name, "c");
   ASSERT_EQ(c.per_case.size(), 6u);
