@@ -283,6 +283,7 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
   const int n = layout.size();
   const size_t nc = m.cases().size();
   std::vector<std::vector<double>> per(nc);
+  std::vector<int64_t> case_evals(nc, 0);
   ParallelFor(static_cast<int>(nc), o.threads, [&](int c) {
     ResidualFunction f = [&, c](std::span<const double> u, std::vector<double>& r) {
       const std::vector<double> x = layout.FromUnit(u);
@@ -300,8 +301,9 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
     std::vector<double> lb(n, 0.0), ub(n, 1.0);
     const LmResult r = LevenbergMarquardt(f, layout.ToUnit(base.x), lb, ub, lo);
     per[c] = layout.FromUnit(r.x);
+    case_evals[static_cast<size_t>(c)] = r.evaluations;
   });
-  *evals += static_cast<int64_t>(nc) * 25 * (2 * n + 2);
+  for (int64_t e : case_evals) *evals += e;
   std::vector<ParamTrend> trends;
   std::vector<double> v, fr;
   for (const DiagCase& c : m.cases()) {

@@ -392,7 +392,6 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   fo.de_candidate = cand_de;
   fo.lm.max_iterations = 8;
   fo.cvode_lm_iterations = 2;
-  fo.trends = false;
   const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
                                    diagnose::CasesFromCaseSet(bench));
   const diagnose::Diagnosis fin = diagnose::RunDiagnosis(m, fo);
@@ -434,6 +433,11 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
     EXPECT_EQ(one.rounds[r].candidates.size(), fin.rounds[r].candidates.size());
   }
   EXPECT_EQ(one.evaluations, fin.evaluations);
+  ASSERT_EQ(one.trends.size(), fin.trends.size());
+  for (size_t i = 0; i < one.trends.size(); ++i) {
+    EXPECT_EQ(one.trends[i].name, fin.trends[i].name);
+    EXPECT_EQ(one.trends[i].per_case, fin.trends[i].per_case) << one.trends[i].name;
+  }
   EXPECT_EQ(one.floor_model, fin.floor_model);
   EXPECT_EQ(one.withheld_floor, fin.withheld_floor);
   EXPECT_EQ(one.closed_total, fin.closed_total);
