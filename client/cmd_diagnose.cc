@@ -1,9 +1,9 @@
 // `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
-// and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h). Writes a
-// terminal summary, diagnosis.json and report.html with figures.
-// `piezoid diagnose-check`: the same diagnosis on random synthetic benches whose effect is withheld
-// from it; prints the confusion matrix and the distribution of the share of the gap closed.
-#include <chrono>
+// and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h DiagnoseBench:
+// the records engine on the bench's records). Writes a terminal summary, diagnosis.json and
+// report.html with figures. `piezoid diagnose-check`: the same diagnosis on random synthetic
+// benches whose effect is withheld from it; prints the confusion matrix and the distribution of the
+// share of the gap closed.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
