@@ -6,9 +6,8 @@
 // one-period warm-up). The test records are read only afterwards, to report the
 // simulation RMS error of the identified model (and of the true one, the floor) on the official
 // multisine and sine-sweep sets (the protocol: complete/boucwen_benchmark.h). Writes report.json,
-// report.md, CSVs and gnuplot figures.
-#include <google/protobuf/struct.pb.h>
-
+// report.md, CSVs and gnuplot figures; report.json is proto::BoucwenReport (proto/boucwen.proto)
+// printed by io/proto_json.h.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -24,11 +23,12 @@
 #include "client/data_root.h"
 #include "client/commands.h"
 #include "svcclient/complete_service.h"
-#include "client/json_values.h"
 #include "client/plots.h"
+#include "boucwen.pb.h"
 #include "complete/boucwen_benchmark.h"
 #include "complete/job_kind.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 #include "opt/param_search.h"
 #include "opt/thread_pool_evaluator.h"
 #include "model/bw_oscillator.h"
@@ -222,51 +222,42 @@ void PrintSummary(const BwOutcome& o) {
             << Sci(o.rms_sw_true) << " m)\n";
 }
 
-void WriteReportJson(const std::filesystem::path& file, const BoucwenArgs& a, const BwOutcome& o) {
+/// The run as report.json's message (proto/boucwen.proto; the one conversion).
+proto::BoucwenReport ReportOf(const BoucwenArgs& a, const BwOutcome& o) {
   const opt::SearchResult& result = o.result;
-  google::protobuf::Struct report;
-  auto& f = *report.mutable_fields();
-  const auto num = json::Num;
-  const auto str = json::Text;
-  f["algorithm"] = str(opt::SearchAlgorithmName(o.options.algorithm));
-  f["seed"] = num(static_cast<double>(a.seed));
-  f["repetitions"] = num(o.options.repetitions);
-  f["threads"] = num(o.threads);
-  f["evaluated_on"] = str(a.service.enabled() ? "service" : "local");
-  f["substeps"] = num(a.substeps);
-  f["training_samples"] = num(static_cast<double>(o.n_train));
-  f["evaluations"] = num(static_cast<double>(result.evaluations));
-  f["iterations"] = num(result.iterations);
-  f["wall_time_s"] = num(result.wall_time_s);
-  f["evaluations_per_s"] = num(result.evaluations / result.wall_time_s);
-  f["evaluations_to_final"] = num(static_cast<double>(result.trace.evaluations[o.reach]));
-  f["seconds_to_final"] = num(result.trace.wall_time_s[o.reach]);
-  f["stop_reason"] = str(result.stop_reason);
-  f["best_repetition"] = num(result.best_repetition);
-  f["training_rms_m"] = num(o.train_rms);
-  f["test_multisine_rms_m"] = num(o.rms_ms);
-  f["test_sinesweep_rms_m"] = num(o.rms_sw);
-  f["test_multisine_max_abs_m"] = num(o.max_ms);
-  f["test_sinesweep_max_abs_m"] = num(o.max_sw);
-  f["true_model_multisine_rms_m"] = num(o.rms_ms_true);
-  f["true_model_sinesweep_rms_m"] = num(o.rms_sw_true);
-  google::protobuf::Struct params;
+  proto::BoucwenReport r;
+  r.set_algorithm(opt::SearchAlgorithmName(o.options.algorithm));
+  r.set_seed(a.seed);
+  r.set_repetitions(o.options.repetitions);
+  r.set_threads(o.threads);
+  r.set_evaluated_on(a.service.enabled() ? "service" : "local");
+  r.set_substeps(a.substeps);
+  r.set_training_samples(static_cast<int64_t>(o.n_train));
+  r.set_evaluations(result.evaluations);
+  r.set_iterations(result.iterations);
+  r.set_wall_time_s(result.wall_time_s);
+  r.set_evaluations_per_s(static_cast<double>(result.evaluations) / result.wall_time_s);
+  r.set_evaluations_to_final(result.trace.evaluations[o.reach]);
+  r.set_seconds_to_final(result.trace.wall_time_s[o.reach]);
+  r.set_stop_reason(result.stop_reason);
+  r.set_best_repetition(result.best_repetition);
+  r.set_training_rms_m(o.train_rms);
+  r.set_test_multisine_rms_m(o.rms_ms);
+  r.set_test_sinesweep_rms_m(o.rms_sw);
+  r.set_test_multisine_max_abs_m(o.max_ms);
+  r.set_test_sinesweep_max_abs_m(o.max_sw);
+  r.set_true_model_multisine_rms_m(o.rms_ms_true);
+  r.set_true_model_sinesweep_rms_m(o.rms_sw_true);
   for (size_t i = 0; i < o.box.size(); ++i) {
-    google::protobuf::Struct p;
-    (*p.mutable_fields())["identified"] = num(result.best[i]);
-    (*p.mutable_fields())["true"] = num(o.theta_true[i]);
-    (*p.mutable_fields())["relative_error"] = num(result.best[i] / o.theta_true[i] - 1);
-    (*p.mutable_fields())["lower"] = num(o.box.lower[i]);
-    (*p.mutable_fields())["upper"] = num(o.box.upper[i]);
-    *(*params.mutable_fields())[o.box.names[i]].mutable_struct_value() = p;
+    proto::BoucwenParameter& p = (*r.mutable_parameters())[o.box.names[i]];
+    p.set_identified(result.best[i]);
+    p.set_true_(o.theta_true[i]);
+    p.set_relative_error(result.best[i] / o.theta_true[i] - 1);
+    p.set_lower(o.box.lower[i]);
+    p.set_upper(o.box.upper[i]);
   }
-  *f["parameters"].mutable_struct_value() = params;
-  google::protobuf::ListValue reps;
-  for (double c : result.repetition_costs) *reps.add_values() = num(std::sqrt(c));
-  *f["repetition_training_rms_m"].mutable_list_value() = reps;
-  // Printed by json::Print: keys sorted, the same bytes for the same run (a Struct's own printer
-  // follows its map's hash order).
-  io::WriteFileWith(file, [&](std::ostream& os) { os << json::Print(report, "report.json"); });
+  for (double c : result.repetition_costs) r.add_repetition_training_rms_m(std::sqrt(c));
+  return r;
 }
 
 void WriteReportMarkdown(const std::filesystem::path& file, const BoucwenArgs& a,
@@ -378,7 +369,8 @@ int RunBoucwen(const BoucwenArgs& a) {
   ScoreTests(data, &o);
   PrintSummary(o);
   fs::create_directories(out);
-  WriteReportJson(out / "report.json", a, o);
+  io::WriteFileWith(out / "report.json",
+                    [&](std::ostream& os) { os << io::PrintJson(ReportOf(a, o), "report.json"); });
   WriteReportMarkdown(out / "report.md", a, o);
   WriteFigures(out, a, o);
   std::cout << "report: " << (out / "report.md").string() << ", " << (out / "report.json").string()

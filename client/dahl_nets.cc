@@ -8,14 +8,15 @@
 #include <ostream>
 #include <stdexcept>
 
+#include "dahl.pb.h"
 #include "io/csv.h"
+#include "io/proto_json.h"
 #include "model/dense_kernels.h"
 
 namespace pz::client {
 namespace {
 
 std::string Num(double x) { return std::isfinite(x) ? io::FormatNumber(x) : ""; }
-std::string JsonNum(double x) { return std::isfinite(x) ? io::FormatNumber(x) : "null"; }
 
 // The paper's Tables 3 and 4 (seed 001; the spec's comparison table plus the gradient, μ, effective
 // parameters and Σw² columns of the paper).
@@ -180,47 +181,73 @@ void PrintDahlTable(std::ostream& out, const std::vector<DahlNetRun>& runs) {
   }
 }
 
+namespace {
+
+/// The study as its message (proto/dahl.proto; the one conversion).
+proto::DahlSummary SummaryOf(const std::vector<DahlNetRun>& runs, const std::string& backend) {
+  proto::DahlSummary out;
+  out.set_dense_backend(backend);
+  for (const DahlNetRun& r : runs) {
+    const auto& s = r.summary;
+    proto::DahlNetRun& j = *out.add_runs();
+    j.set_case_(r.case_id);
+    j.set_method(model::TrainMethodName(r.method));
+    j.set_seed(r.seed);
+    j.set_hidden(r.hidden);
+    j.set_termination(model::TrainTerminationName(s.termination));
+    j.set_epochs(s.epochs);
+    j.set_best_epoch(s.best_epoch);
+    j.set_mse_train(s.train.mse);
+    j.set_mse_val(s.val.mse);
+    j.set_mse_test(s.test.mse);
+    j.set_r_train(s.train.r);
+    j.set_r_val(s.val.r);
+    j.set_r_test(s.test.r);
+    j.set_r_all(s.all.r);
+    j.set_gradient(s.gradient);
+    j.set_mu(s.mu);
+    j.set_gamma(s.gamma);
+    j.set_ssw(s.ssw);
+    j.set_wall_time_s(s.wall_time_s);
+    j.set_cpu_time_s(s.cpu_time_s);
+    j.set_jtj_time_s(s.jtj_time_s);
+    j.set_ms_per_epoch(r.ms_per_epoch);
+    j.set_restarts(r.restarts);
+    j.set_chosen(r.chosen);
+    j.set_total_wall_s(r.total_wall_s);
+    j.set_total_cpu_s(r.total_cpu_s);
+    for (double m : r.restart_val_mse) j.add_restart_val_mse(m);
+    j.set_solves(s.solves);
+    j.set_rejected_steps(s.rejected_steps);
+    const PaperDahlRow& p = PaperDahlTable(r.case_id);
+    proto::DahlPaperRow& q = *j.mutable_paper();
+    if (r.method == model::TrainMethod::kBayesianRegularization) {
+      q.set_mse_train(p.br_train);
+      q.set_mse_test(p.br_test);
+      q.set_gradient(p.br_gradient);
+      q.set_gamma(p.br_gamma);
+      q.set_ssw(p.br_ssw);
+      q.set_mu(p.br_mu);
+      q.set_epochs(p.br_epochs);
+      q.set_time_s(p.br_time_s);
+    } else {
+      q.set_mse_train(p.lm_train);
+      q.set_mse_val(p.lm_val);
+      q.set_mse_test(p.lm_test);
+      q.set_gradient(p.lm_gradient);
+      q.set_mu(p.lm_mu);
+      q.set_epochs(p.lm_epochs);
+      q.set_time_s(p.lm_time_s);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs,
                    const std::string& backend) {
-  out << "{\n  \"dense_backend\": \"" << backend << "\",\n  \"runs\": [";
-  for (size_t i = 0; i < runs.size(); ++i) {
-    const DahlNetRun& r = runs[i];
-    const auto& s = r.summary;
-    const PaperDahlRow& p = PaperDahlTable(r.case_id);
-    const bool br = r.method == model::TrainMethod::kBayesianRegularization;
-    out << (i ? ",\n" : "\n") << "    {\"case\": " << r.case_id << ", \"method\": \""
-        << model::TrainMethodName(r.method) << "\", \"seed\": " << r.seed
-        << ", \"hidden\": " << r.hidden << ", \"termination\": \""
-        << model::TrainTerminationName(s.termination) << "\""
-        << ", \"epochs\": " << s.epochs << ", \"best_epoch\": " << s.best_epoch
-        << ", \"mse_train\": " << JsonNum(s.train.mse) << ", \"mse_val\": " << JsonNum(s.val.mse)
-        << ", \"mse_test\": " << JsonNum(s.test.mse) << ", \"r_train\": " << JsonNum(s.train.r)
-        << ", \"r_val\": " << JsonNum(s.val.r) << ", \"r_test\": " << JsonNum(s.test.r)
-        << ", \"r_all\": " << JsonNum(s.all.r) << ", \"gradient\": " << JsonNum(s.gradient)
-        << ", \"mu\": " << JsonNum(s.mu) << ", \"gamma\": " << JsonNum(s.gamma)
-        << ", \"ssw\": " << JsonNum(s.ssw) << ", \"wall_time_s\": " << JsonNum(s.wall_time_s)
-        << ", \"cpu_time_s\": " << JsonNum(s.cpu_time_s)
-        << ", \"jtj_time_s\": " << JsonNum(s.jtj_time_s)
-        << ", \"ms_per_epoch\": " << JsonNum(r.ms_per_epoch) << ", \"restarts\": " << r.restarts
-        << ", \"chosen\": " << r.chosen << ", \"total_wall_s\": " << JsonNum(r.total_wall_s)
-        << ", \"total_cpu_s\": " << JsonNum(r.total_cpu_s) << ", \"restart_val_mse\": [";
-    for (size_t k = 0; k < r.restart_val_mse.size(); ++k)
-      out << (k ? ", " : "") << JsonNum(r.restart_val_mse[k]);
-    out << "], \"solves\": " << s.solves << ", \"rejected_steps\": " << s.rejected_steps
-        << ", \"paper\": {";
-    if (br)
-      out << "\"mse_train\": " << JsonNum(p.br_train) << ", \"mse_test\": " << JsonNum(p.br_test)
-          << ", \"gradient\": " << JsonNum(p.br_gradient) << ", \"gamma\": " << JsonNum(p.br_gamma)
-          << ", \"ssw\": " << JsonNum(p.br_ssw) << ", \"mu\": " << JsonNum(p.br_mu)
-          << ", \"epochs\": " << p.br_epochs << ", \"time_s\": " << JsonNum(p.br_time_s);
-    else
-      out << "\"mse_train\": " << JsonNum(p.lm_train) << ", \"mse_val\": " << JsonNum(p.lm_val)
-          << ", \"mse_test\": " << JsonNum(p.lm_test)
-          << ", \"gradient\": " << JsonNum(p.lm_gradient) << ", \"mu\": " << JsonNum(p.lm_mu)
-          << ", \"epochs\": " << p.lm_epochs << ", \"time_s\": " << JsonNum(p.lm_time_s);
-    out << "}}";
-  }
-  out << "\n  ]\n}\n";
+  out << io::PrintJson(SummaryOf(runs, backend), "the Dahl study's JSON");
 }
 
 void WriteDahlCsv(std::ostream& out, const std::vector<DahlNetRun>& runs) {

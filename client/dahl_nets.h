@@ -123,6 +123,8 @@ DahlNetRun TrainDahlNet(const DahlDataset& ds, model::TrainMethod method, const 
 /// The paper-style table: per case and method our MSE train / val / test, R, epochs, time beside
 /// the paper's, and whether ours is at or below the paper's MSE (each subset) and time.
 void PrintDahlTable(std::ostream& out, const std::vector<DahlNetRun>& runs);
+/// The runs with the paper's row beside each: proto::DahlSummary (proto/dahl.proto) printed by
+/// io/proto_json.h (keys sorted, non-finite numbers as null).
 void WriteDahlJson(std::ostream& out, const std::vector<DahlNetRun>& runs,
                    const std::string& backend);
 void WriteDahlCsv(std::ostream& out, const std::vector<DahlNetRun>& runs);

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "client/plots.h"
+#include "hgann/extrapolation.h"
 #include "hgann/output_move.h"
 #include "io/trace_io.h"
 #include "model/metrics.h"
@@ -430,6 +431,108 @@ PerCaseCheck CheckAgainstPerCaseFits(const IdentifyOptions& options, const io::C
   return out;
 }
 
+/// Where the network extrapolates (hgann/extrapolation.h): every withheld case outside the training
+/// cases' hull in (V, f) and its outputs beyond the range the training cases support; with trend
+/// seeds, every withheld case whose outputs the training cases do not settle (the shapes that fit
+/// their per-case estimates alike part there). Markdown and the terminal's lines.
+std::pair<std::string, std::string> ExtrapolationSection(
+    const io::CaseSet& set, const hgann::HgannFitness& fitness, const IdentifyResult& result,
+    const std::vector<hgann::CaseEstimate>& estimates) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
+  const auto found = hgann::FindExtrapolations(fitness.config(), result.cases, estimates);
+  std::ostringstream md, term;
+  md << "## Where the network extrapolates\n\n"
+     << "Withheld cases outside the training cases' hull in (V, f) (no training case brackets "
+        "them: what the network says there is set by its shape), with the outputs beyond the "
+        "range the training cases support (the network's values at the training cases and their "
+        "per-case estimates ± 2 σ, widened by 1 % of the parameter's range)"
+     << (result.seeds ? "; and every withheld case where the shapes that fit the training cases' "
+                        "per-case estimates alike (χ² + 2 p within 2 of the chosen one's; with the "
+                        "network's own value) part by more than 1 % of a parameter's range and "
+                        "2 σ of the case's own fit, and where the end of that range farthest from "
+                        "the network's value moves the case's prediction by twice its own PI or "
+                        "more (were it the truth, the network's PI would be 3 × the floor): there "
+                        "the training cases do not settle the value, and the network's is one "
+                        "guess of several (μ, δ, a1, a2: α, β and γ trade along a valley, where "
+                        "their per-case estimates scatter even when the truth is constant)"
+                      : "")
+     << ".\n\n"
+     << "| case | V [V] | f [Hz] | outside the hull | beyond the training cases' range | not "
+        "settled by the training cases (range of the shapes that fit them alike) |\n"
+     << "|---|---|---|---|---|---|\n";
+  int rows = 0;
+  for (size_t i = 0; i < set.cases.size(); ++i) {
+    const auto& bc = set.cases[i];
+    if (bc.role == io::CaseRole::kTrain) continue;
+    const auto it = std::find_if(found.begin(), found.end(),
+                                 [&](const auto& e) { return e.number == bc.number; });
+    const auto& q = ResultOf(result, bc.number).params;
+    const auto net =
+        model::NetworkParameters{q.mu, q.delta, q.alpha, q.beta, q.gamma, q.a1, q.a2}.ToArray();
+    // How far the case's prediction moves with output k alone at `value` (Σ of squares, deg²).
+    const auto moved = [&](int k, double value) {
+      const hgann::HgannCase& c = fitness.config().cases[i];
+      std::vector<double> a(c.measured_deg.size()), b(c.measured_deg.size());
+      auto p = net;
+      p[k] = value;
+      if (!fitness.SimulateCase(model::NetworkParameters::FromArray(net), c, a) ||
+          !fitness.SimulateCase(model::NetworkParameters::FromArray(p), c, b))
+        return std::nan("");
+      double d = 0;
+      for (size_t m = 0; m < a.size(); ++m) d += (a[m] - b[m]) * (a[m] - b[m]);
+      return d;
+    };
+    const std::vector<int> open =
+        result.seeds
+            ? hgann::UnsettledOutputs(fitness.config(), *result.seeds, i, net,
+                                      i < estimates.size() ? &estimates[i] : nullptr, moved)
+            : std::vector<int>{};
+    if (it == found.end() && open.empty()) continue;
+    ++rows;
+    std::string beyond, unsettled;
+    if (it != found.end())
+      for (int k : it->outputs)
+        beyond += (beyond.empty() ? "" : "; ") + std::string(kSymbols[k]) + " " +
+                  Fmt(it->value[k], 3) + " (training " + Fmt(it->lo[k], 3) + " … " +
+                  Fmt(it->hi[k], 3) + " " + model::OutputUnit(k) + ")";
+    for (int k : open)
+      unsettled += (unsettled.empty() ? "" : "; ") + std::string(kSymbols[k]) + " " +
+                   Fmt(net[k], 3) + " (" +
+                   Fmt(std::min(net[k], result.seeds->supported_lo[i][k]), 3) + " … " +
+                   Fmt(std::max(net[k], result.seeds->supported_hi[i][k]), 3) + " " +
+                   model::OutputUnit(k) + ")";
+    const std::string outside = it != found.end() ? "yes" : "no";
+    md << "| " << bc.number << " | " << Fmt(bc.amplitude_v) << " | " << Fmt(bc.frequency_hz)
+       << " | " << outside << " | "
+       << (it == found.end() ? "—"
+           : beyond.empty()  ? "none"
+                             : beyond)
+       << " | " << (unsettled.empty() ? "—" : unsettled) << " |\n";
+    term << "  case " << bc.number << " (" << Fmt(bc.amplitude_v) << " V, " << Fmt(bc.frequency_hz)
+         << " Hz" << (it != found.end() ? ", outside the hull" : "")
+         << "): " << (beyond.empty() ? "" : "beyond the training range " + beyond + "; ")
+         << (unsettled.empty()
+                 ? (beyond.empty() ? "outputs within the training cases' range and settled by them"
+                                   : "settled")
+                 : "not settled " + unsettled)
+         << "\n";
+  }
+  if (rows == 0) {
+    md.str("");
+    md << "## Where the network extrapolates\n\nEvery withheld case lies inside the training "
+          "cases' hull in (V, f)"
+       << (result.seeds ? ", and the shapes that fit the training cases alike agree at each" : "")
+       << ".\n\n";
+    return {md.str(), ""};
+  }
+  md << "\n";
+  return {md.str(),
+          "where the network extrapolates or the training cases leave an output open "
+          "(report.md):\n" +
+              term.str()};
+}
+
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. "
     "Widen a "
@@ -631,13 +734,15 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const std::string mu_regression = MuRegression(totals);
   const std::string at_bound = AtBoundList(fitness, result.best.network);
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
+  const auto [extrapolation_md, extrapolation_term] =
+      ExtrapolationSection(set, fitness, result, per_case.estimates);
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
     f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound,
-                        per_case.markdown);
+                        per_case.markdown + extrapolation_md);
     written.push_back(out / "report.md");
   }
   term << "\n"
@@ -657,7 +762,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   if (!at_bound.empty())
     term << "held at a bound on every training case (set by the range, not the data; report.md): "
          << at_bound << "\n";
-  term << per_case.terminal;
+  term << per_case.terminal << extrapolation_term;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string()
        << " (report.md, network.pb/.json, progress.csv, validation.csv, "

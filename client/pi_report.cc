@@ -5,6 +5,8 @@
 #include <cstdio>
 
 #include "io/csv.h"
+#include "io/proto_json.h"
+#include "pi.pb.h"
 
 namespace pz::client {
 namespace {
@@ -14,8 +16,6 @@ std::string Fmt(const char* format, double x) {
   std::snprintf(buf, sizeof buf, format, x);
   return buf;
 }
-
-std::string JsonNumber(double x) { return std::isfinite(x) ? io::FormatNumber(x) : "null"; }
 
 std::string StatusText(const CaseScore& c) {
   return c.summary.ok()
@@ -164,63 +164,45 @@ void WritePiCsv(std::ostream& out, const PiReport& r) {
   }
 }
 
-std::string JsonEscape(const std::string& s) {
-  std::string o;
-  for (unsigned char ch : s) {
-    switch (ch) {
-      case '"':
-        o += "\\\"";
-        break;
-      case '\\':
-        o += "\\\\";
-        break;
-      case '\n':
-        o += "\\n";
-        break;
-      case '\r':
-        o += "\\r";
-        break;
-      case '\t':
-        o += "\\t";
-        break;
-      default:
-        if (ch < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", ch);
-          o += buf;
-        } else {
-          o += static_cast<char>(ch);
-        }
-    }
+namespace {
+
+/// The report as its message (proto/pi.proto; the one conversion). A case whose simulation failed
+/// has its metrics as NaN (printed as null).
+proto::PiScores ScoresOf(const PiReport& r) {
+  proto::PiScores out;
+  out.set_case_set(r.case_set);
+  out.set_solver(r.solver);
+  out.set_saturation(r.saturation_mode);
+  const double nan = std::nan("");
+  for (const CaseScore& c : r.cases) {
+    proto::PiCaseScore& s = *out.add_cases();
+    s.set_case_(c.case_number);
+    s.set_amplitude_v(c.amplitude_v);
+    s.set_frequency_hz(c.frequency_hz);
+    s.set_role(io::CaseRoleName(c.role));
+    s.set_b1_deg(c.b1);
+    s.set_b2_deg(c.b2);
+    s.set_saturation(c.saturation_source);
+    s.set_status(model::SimStatusName(c.summary.status));
+    s.set_message(c.summary.message);
+    s.set_pi_deg2(c.scored ? c.metrics.pi : nan);
+    s.set_rmse_deg(c.scored ? c.metrics.rmse : nan);
+    s.set_max_abs_error_deg(c.scored ? c.metrics.max_abs : nan);
+    s.set_r2(c.scored ? c.metrics.r2 : nan);
+    s.set_steps(c.summary.steps);
+    s.set_wall_time_s(c.summary.wall_time_s);
   }
-  return o;
+  out.set_cf_train_deg2(r.cf_train);
+  out.set_sum_validate_deg2(r.sum_validate);
+  out.set_sum_test_deg2(r.sum_test);
+  out.set_failed(r.failed);
+  return out;
 }
 
+}  // namespace
+
 void WritePiJson(std::ostream& out, const PiReport& r) {
-  auto str = [](const std::string& s) { return "\"" + JsonEscape(s) + "\""; };
-  out << "{\n  \"case_set\": " << str(r.case_set) << ",\n  \"solver\": " << str(r.solver)
-      << ",\n  \"saturation\": " << str(r.saturation_mode) << ",\n  \"cases\": [";
-  for (size_t i = 0; i < r.cases.size(); ++i) {
-    const CaseScore& c = r.cases[i];
-    const double nan = std::nan("");
-    out << (i ? "," : "") << "\n    {\"case\": " << c.case_number
-        << ", \"amplitude_V\": " << JsonNumber(c.amplitude_v)
-        << ", \"frequency_Hz\": " << JsonNumber(c.frequency_hz)
-        << ", \"role\": " << str(io::CaseRoleName(c.role)) << ", \"b1_deg\": " << JsonNumber(c.b1)
-        << ", \"b2_deg\": " << JsonNumber(c.b2) << ", \"saturation\": " << str(c.saturation_source)
-        << ", \"status\": " << str(model::SimStatusName(c.summary.status))
-        << ", \"message\": " << str(c.summary.message)
-        << ", \"pi_deg2\": " << JsonNumber(c.scored ? c.metrics.pi : nan)
-        << ", \"rmse_deg\": " << JsonNumber(c.scored ? c.metrics.rmse : nan)
-        << ", \"max_abs_error_deg\": " << JsonNumber(c.scored ? c.metrics.max_abs : nan)
-        << ", \"r2\": " << JsonNumber(c.scored ? c.metrics.r2 : nan)
-        << ", \"steps\": " << c.summary.steps
-        << ", \"wall_time_s\": " << JsonNumber(c.summary.wall_time_s) << "}";
-  }
-  out << "\n  ],\n  \"cf_train_deg2\": " << JsonNumber(r.cf_train)
-      << ",\n  \"sum_validate_deg2\": " << JsonNumber(r.sum_validate)
-      << ",\n  \"sum_test_deg2\": " << JsonNumber(r.sum_test) << ",\n  \"failed\": " << r.failed
-      << "\n}\n";
+  out << io::PrintJson(ScoresOf(r), "the scores' JSON");
 }
 
 }  // namespace pz::client

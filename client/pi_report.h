@@ -47,13 +47,12 @@ PiReport ScoreCaseSet(const io::CaseSet& set, std::span<const CaseModel> models,
 
 /// Per-case table, the amplitude × frequency grid of PI, and the sums.
 void PrintPiReport(std::ostream& out, const PiReport& report);
-/// CSV:
-/// case,amplitude_V,frequency_Hz,role,b1_deg,b2_deg,saturation,status,pi_deg2,rmse_deg,max_abs_error_deg,r2  // NOLINT(length)
+/// CSV, one row per case under the header case, amplitude_V, frequency_Hz, role, b1_deg, b2_deg,
+/// saturation, status, pi_deg2, rmse_deg, max_abs_error_deg, r2 (commas without spaces; the
+/// metrics empty where the simulation failed).
 void WritePiCsv(std::ostream& out, const PiReport& report);
-/// JSON object with the settings, one object per case and the sums (non-finite numbers as null).
+/// JSON object with the settings, one object per case and the sums: proto::PiScores
+/// (proto/pi.proto) printed by io/proto_json.h (keys sorted, non-finite numbers as null).
 void WritePiJson(std::ostream& out, const PiReport& report);
-
-/// Escapes a string for a JSON string literal (without the quotes).
-std::string JsonEscape(const std::string& s);
 
 }  // namespace pz::client

@@ -274,7 +274,7 @@ struct TrendBasis {
   const std::vector<CaseEstimate>& cases;
   model::Network net0;
   int h = 0, per = 0, n_theta = 0;
-  std::vector<std::vector<double>> b_train, b_grid;
+  std::vector<std::vector<double>> b_train, b_grid, b_cases;  ///< b_cases: every case, any role
   std::vector<int> rows;  ///< the cases whose per-case fit succeeded
 
   TrendBasis(const HgannFitnessConfig& config, const std::vector<int>& train,
@@ -292,6 +292,8 @@ struct TrendBasis {
     h = net0.hidden();
     for (int i : training)
       b_train.push_back(Hidden(cfg.cases[i].drive.amplitude_v, cfg.cases[i].drive.frequency_hz));
+    for (const HgannCase& c : cfg.cases)
+      b_cases.push_back(Hidden(c.drive.amplitude_v, c.drive.frequency_hz));
     for (int i = 0; i < kGrid; ++i)
       for (int j = 0; j < kGrid; ++j)
         b_grid.push_back(Hidden(
@@ -356,10 +358,12 @@ std::vector<double> Regress(const TrendBasis& t, int columns) {
   return th;
 }
 
-/// The structured start (step 2a') and which of its coordinates are free.
+/// The structured start (step 2a') and which of its coordinates are free; per case of the
+/// configuration, the scaled range of the shapes the estimates support alike (TrendSeeds).
 struct Structured {
   std::vector<double> theta;
   std::vector<char> free;
+  std::vector<Array7> lo, hi;
 };
 
 // Step 2a': per parameter, the structure its per-case estimates support (file comment): the
@@ -379,9 +383,12 @@ Structured ChooseStructures(const TrendBasis& t, const std::vector<double>& regr
   if (hf >= 0) structures.push_back({iv, jf, hf});
   std::vector<double> structured(t.n_theta, 0.0);
   std::vector<char> free_theta(t.n_theta, 0);
+  std::vector<Array7> lo(t.b_cases.size()), hi(t.b_cases.size());
   for (int k = 0; k < kOut; ++k) {
     const double width = t.cfg.ranges[k].upper - t.cfg.ranges[k].lower;
     double best_score = std::numeric_limits<double>::infinity(), best_var = 0;
+    std::vector<std::pair<double, std::vector<double>>> at_cases;  // (score, value per case)
+    size_t chosen = 0;
     for (const std::vector<int>& cols : structures) {
       const int p = 1 + static_cast<int>(cols.size());
       if (p > static_cast<int>(rows.size()) && !cols.empty()) continue;
@@ -412,12 +419,20 @@ Structured ChooseStructures(const TrendBasis& t, const std::vector<double>& regr
         mean += g.back() / static_cast<double>(t.b_grid.size());
       }
       for (double v : g) var += (v - mean) * (v - mean);
+      std::vector<double> c_values;
+      for (const std::vector<double>& b : t.b_cases) {
+        double v = coef(0);
+        for (int m = 0; m < static_cast<int>(cols.size()); ++m) v += coef(1 + m) * b[cols[m]];
+        c_values.push_back(Clamp01(v));
+      }
+      at_cases.emplace_back(score, std::move(c_values));
       constexpr double kTie = 1e-6;
       const bool lower = score < best_score - kTie,
                  tie = std::abs(score - best_score) <= kTie && var < best_var;
       if (!cols.empty() && !lower && !tie) continue;  // the constant is always a candidate
       best_score = score;
       best_var = var;
+      chosen = at_cases.size() - 1;
       for (int i = 0; i < per; ++i) structured[per * k + i] = 0.0, free_theta[per * k + i] = 0;
       structured[per * k] = std::clamp(coef(0), -2.0, 2.0);
       free_theta[per * k] = 1;
@@ -427,8 +442,17 @@ Structured ChooseStructures(const TrendBasis& t, const std::vector<double>& regr
       }
     }
     if (rows.empty()) structured[per * k] = regression[per * k], free_theta[per * k] = 1;
+    // The shapes within 2 of the chosen one's χ² + 2 p (Akaike's "substantial support"): their
+    // range at each case is what the training cases leave open there.
+    for (size_t i = 0; i < t.b_cases.size(); ++i) {
+      lo[i][k] = hi[i][k] =
+          rows.empty() ? Clamp01(regression[per * k]) : at_cases[chosen].second[i];
+      for (const auto& [score, values] : at_cases)
+        if (score <= best_score + 2 + 1e-6)
+          lo[i][k] = std::min(lo[i][k], values[i]), hi[i][k] = std::max(hi[i][k], values[i]);
+    }
   }
-  return {std::move(structured), std::move(free_theta)};
+  return {std::move(structured), std::move(free_theta), std::move(lo), std::move(hi)};
 }
 
 /// The per-case estimates' mean per parameter, as a θ of constants.
@@ -649,6 +673,16 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       {&structured, "structured trend (regression)"},
       {&from_constant, "constant (polished)"}};
   AddSeeds(fitness, basis, options, made, out);
+  for (size_t i = 0; i < cfg.cases.size(); ++i) {
+    Array7 lo{}, hi{};
+    for (int k = 0; k < kOut; ++k) {
+      const double width = cfg.ranges[k].upper - cfg.ranges[k].lower;
+      lo[k] = cfg.ranges[k].lower + st.lo[i][k] * width;
+      hi[k] = cfg.ranges[k].lower + st.hi[i][k] * width;
+    }
+    out.supported_lo.push_back(lo);
+    out.supported_hi.push_back(hi);
+  }
   out.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

@@ -20,11 +20,14 @@
 //     f piecewise, plane + a hinge, the weighted least squares (weights 1/σ², σ at least 0.5 % of
 //     the range, a quarter of it where the case does not pin it down) with the lowest χ² + 2 p;
 //     of shapes that score alike (a hinge in V or one in f through four cases), the one that
-//     varies least over the spread penalty's 5 × 5 grid. When the loop's shapes (α, β, γ) leave it
-//     unbounded at a training case or a grid point, they are made constant (the estimates' mean).
-//     On the paper's split two training cases share a V (5, 6) and two an f (1, 7), which is what
-//     tells a parameter of f alone (δ on trends-dev) from one of V alone (a1). Then polished by
-//     LM within that structure on all training cases at once, on the fitness's own cost: every
+//     varies least over the spread penalty's 5 × 5 grid (the range of the shapes within 2 of the
+//     chosen one's score, at every case, is kept: TrendSeeds::supported_lo/hi; where they part the
+//     training cases do not settle the parameter: δ is a hinge in f on trends-dev and one in V on
+//     trends-dev3, and their four training cases fit both alike). When the loop's shapes (α, β, γ)
+//     leave it unbounded at a training case or a grid point, they are made constant (the estimates'
+//     mean). On the paper's split two training cases share a V (5, 6) and two an f (1, 7), which is
+//     what tells a parameter of f alone (δ on trends-dev) from one of V alone (a1). Then polished
+//     by LM within that structure on all training cases at once, on the fitness's own cost: every
 //     training case's y_model − y_meas and, with a spread penalty λ, √(λ/25) (s_k(g) − mean s_k)
 //     over the penalty's 5 × 5 grid, an unbounded loop on the grid refused. Seeds: the structured
 //     trend polished, the same unpolished, the constant network polished, and the structure
@@ -76,6 +79,12 @@ struct TrendSeeds {
   std::vector<std::string> names;    ///< "trend (polished)", …, "constant (polished)"
   int64_t simulations = 0;           ///< case simulations spent
   double wall_time_s = 0;
+  /// Per case of the configuration (every role, in its order): the lowest and highest value of
+  /// each parameter, in its units, over the shapes its per-case estimates support alike (step 2's
+  /// candidates whose χ² + 2 p is within 2 of the chosen one's: Akaike's "substantial support").
+  /// Where they part, the training cases do not settle the parameter there: the network's value
+  /// is one guess of several that fit them alike.
+  std::vector<std::array<double, model::kNetworkOutputs>> supported_lo, supported_hi;
 };
 
 /// Steps 1–3 of the file comment on the fitness's training cases.

@@ -13,7 +13,6 @@
 namespace pz::io {
 namespace {
 
-using google::protobuf::Descriptor;
 using google::protobuf::FieldDescriptor;
 using google::protobuf::Struct;
 using google::protobuf::Value;
@@ -41,47 +40,21 @@ bool IsDefault(const Value& v) {
   }
 }
 
-void Filter(const Descriptor& d, Struct* s, DiagnosisOnly kind, const std::string& path,
-            const std::string& where, Way way);
-
-void FilterElement(const FieldDescriptor& f, Value* v, DiagnosisOnly kind, const std::string& path,
-                   const std::string& where, Way way) {
-  if (f.cpp_type() != FieldDescriptor::CPPTYPE_MESSAGE || v->kind_case() != Value::kStructValue)
-    return;
-  const Descriptor& d = *f.message_type();
-  if (d.well_known_type() == Descriptor::WELLKNOWNTYPE_UNSPECIFIED)
-    Filter(d, v->mutable_struct_value(), kind, path, where, way);
-}
-
 /// Written: drops the fields of the other kind (all at their defaults, or a writer's bug); read:
-/// refuses them by their path. Recurses into the message fields.
-void Filter(const Descriptor& d, Struct* s, DiagnosisOnly kind, const std::string& path,
-            const std::string& where, Way way) {
-  std::vector<std::string> other;
-  for (auto& [key, v] : *s->mutable_fields()) {
-    const FieldDescriptor* f = d.FindFieldByName(key);
-    if (f == nullptr) continue;  // the parser names it
-    const std::string at = path.empty() ? key : path + "." + key;
-    const DiagnosisOnly only = f->options().GetExtension(proto::diagnosis_only);
-    if (only != proto::DIAGNOSIS_ONLY_UNSPECIFIED && only != kind) {
-      if (way == Way::kRead)
-        throw InputError(where + ": " + at + ": a field of " + KindName(only) + " in " +
-                         KindName(kind));
-      if (!IsDefault(v))
-        throw std::logic_error("diagnosis.json: " + at + " set in " + KindName(kind));
-      other.push_back(key);
-      continue;
-    }
-    if (f->is_repeated() && !f->is_map()) {
-      if (v.kind_case() != Value::kListValue) continue;
-      auto& items = *v.mutable_list_value()->mutable_values();
-      for (int i = 0; i < items.size(); ++i)
-        FilterElement(*f, &items[i], kind, at + "[" + std::to_string(i) + "]", where, way);
-    } else if (!f->is_map()) {
-      FilterElement(*f, &v, kind, at, where, way);
-    }
-  }
-  for (const auto& key : other) s->mutable_fields()->erase(key);
+/// refuses them by their path (`where`: the file).
+void Filter(Struct* s, DiagnosisOnly kind, const std::string& where, Way way) {
+  JsonFieldWalk walk;
+  walk.keep = [&](const FieldDescriptor& f, const std::string& at, const Value& v) {
+    const DiagnosisOnly only = f.options().GetExtension(proto::diagnosis_only);
+    if (only == proto::DIAGNOSIS_ONLY_UNSPECIFIED || only == kind) return true;
+    if (way == Way::kRead)
+      throw InputError(where + ": " + at + ": a field of " + KindName(only) + " in " +
+                       KindName(kind));
+    if (!IsDefault(v))
+      throw std::logic_error("diagnosis.json: " + at + " set in " + KindName(kind));
+    return false;
+  };
+  WalkJsonObject(*proto::Diagnosis::descriptor(), s, walk);
 }
 
 /// "" when `v` is of the shape "named" takes there (`list`: a list of strings; else a string or
@@ -128,7 +101,7 @@ std::string WriteDiagnosisFile(const proto::Diagnosis& d) {
   if (const auto [at, want] = BadNamed(d, kind); !at.empty())
     throw std::logic_error("diagnosis.json: " + at + " is not " + want);
   Struct s = MessageToStruct(d);
-  Filter(*d.GetDescriptor(), &s, kind, "", "diagnosis.json", Way::kWrite);
+  Filter(&s, kind, "diagnosis.json", Way::kWrite);
   return PrintJson(s, "diagnosis.json");
 }
 
@@ -140,7 +113,11 @@ void ReadDiagnosisFile(const std::string& path, const std::string& text, proto::
                                      : ": neither \"records\" (a records diagnosis) nor \"bench\" "
                                        "(the fin bench's) is given: not a diagnosis.json"));
   const DiagnosisOnly kind = records ? proto::DIAGNOSIS_ONLY_RECORDS : proto::DIAGNOSIS_ONLY_BENCH;
-  Filter(*proto::Diagnosis::descriptor(), &s, kind, "", path, Way::kRead);
+  const std::string key = records ? "records" : "bench";
+  if (s.fields().at(key).kind_case() != Value::kStringValue)
+    throw InputError(path + ": " + key + ": not a string (the " +
+                     (records ? "record set" : "bench's folder") + ")");
+  Filter(&s, kind, path, Way::kRead);
   StructToMessage(path, s, out);
   if (const auto [at, want] = BadNamed(*out, kind); !at.empty())
     throw InputError(path + ": " + at + ": not " + want);

@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 #include "model/status.h"
 
@@ -21,8 +22,6 @@ using google::protobuf::Struct;
 using google::protobuf::Value;
 namespace util = google::protobuf::util;
 
-enum class Way { kWrite, kRead };
-
 bool IsReal(const FieldDescriptor& f) {
   return f.cpp_type() == FieldDescriptor::CPPTYPE_DOUBLE ||
          f.cpp_type() == FieldDescriptor::CPPTYPE_FLOAT;
@@ -33,46 +32,33 @@ bool Is64(const FieldDescriptor& f) {
          f.cpp_type() == FieldDescriptor::CPPTYPE_UINT64;
 }
 
-void FixObject(const Descriptor& d, Struct* s, Way way);
+/// Written, protobuf's "NaN" / "Infinity" of a double becomes null and the string of a 64-bit
+/// integer its number.
+const JsonFieldWalk kWritten{{}, [](const FieldDescriptor& f, Value* v) {
+                               if (v->kind_case() != Value::kStringValue) return;
+                               if (IsReal(f))
+                                 v->set_null_value(google::protobuf::NULL_VALUE);
+                               else if (Is64(f))
+                                 v->set_number_value(std::stod(v->string_value()));
+                             }};
 
-/// One value of field `f` (an element of it when repeated): written, protobuf's "NaN" /
-/// "Infinity" of a double becomes null and the string of a 64-bit integer its number; read, null in
-/// a double field becomes "NaN" (protobuf would take null as 0, or drop it from a list).
-void FixElement(const FieldDescriptor& f, Value* v, Way way) {
-  if (f.cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE) {
-    const Descriptor& d = *f.message_type();
-    if (d.well_known_type() == Descriptor::WELLKNOWNTYPE_UNSPECIFIED &&
-        v->kind_case() == Value::kStructValue)
-      FixObject(d, v->mutable_struct_value(), way);
+/// Read, null in a double field becomes "NaN" (protobuf would take null as 0, or drop it from a
+/// list).
+const JsonFieldWalk kRead{{}, [](const FieldDescriptor& f, Value* v) {
+                            if (IsReal(f) && v->kind_case() == Value::kNullValue)
+                              v->set_string_value("NaN");
+                          }};
+
+void WalkElement(const FieldDescriptor& f, Value* v, const JsonFieldWalk& walk,
+                 const std::string& path) {
+  if (f.cpp_type() != FieldDescriptor::CPPTYPE_MESSAGE) {
+    if (walk.scalar) walk.scalar(f, v);
     return;
   }
-  if (way == Way::kWrite) {
-    if (IsReal(f) && v->kind_case() == Value::kStringValue) {
-      v->set_null_value(google::protobuf::NULL_VALUE);
-    } else if (Is64(f) && v->kind_case() == Value::kStringValue) {
-      v->set_number_value(std::stod(v->string_value()));
-    }
-  } else if (IsReal(f) && v->kind_case() == Value::kNullValue) {
-    v->set_string_value("NaN");
-  }
-}
-
-void FixObject(const Descriptor& d, Struct* s, Way way) {
-  for (auto& [key, v] : *s->mutable_fields()) {
-    const FieldDescriptor* f = d.FindFieldByName(key);
-    if (f == nullptr) f = d.FindFieldByCamelcaseName(key);
-    if (f == nullptr) continue;  // the parser names it
-    if (f->is_map()) {
-      if (v.kind_case() != Value::kStructValue) continue;
-      for (auto& [k, x] : *v.mutable_struct_value()->mutable_fields())
-        FixElement(*f->message_type()->map_value(), &x, way);
-    } else if (f->is_repeated()) {
-      if (v.kind_case() != Value::kListValue) continue;
-      for (Value& x : *v.mutable_list_value()->mutable_values()) FixElement(*f, &x, way);
-    } else {
-      FixElement(*f, &v, way);
-    }
-  }
+  const Descriptor& d = *f.message_type();
+  if (d.well_known_type() == Descriptor::WELLKNOWNTYPE_UNSPECIFIED &&
+      v->kind_case() == Value::kStructValue)
+    WalkJsonObject(d, v->mutable_struct_value(), walk, path);
 }
 
 /// protobuf 3.21's "(records[1].rmse): invalid value …" / "(model) weigths: Cannot find field." as
@@ -89,6 +75,36 @@ std::string FieldError(const std::string& m) {
 
 }  // namespace
 
+void WalkJsonObject(const Descriptor& d, Struct* s, const JsonFieldWalk& walk,
+                    const std::string& path) {
+  std::vector<std::string> erased;
+  for (auto& [key, v] : *s->mutable_fields()) {
+    const FieldDescriptor* f = d.FindFieldByName(key);
+    if (f == nullptr) f = d.FindFieldByCamelcaseName(key);
+    if (f == nullptr) continue;  // the parser names it
+    const std::string at = path.empty() ? key : path + "." + key;
+    if (walk.keep && !walk.keep(*f, at, v)) {
+      erased.push_back(key);
+      continue;
+    }
+    if (f->is_map()) {
+      if (v.kind_case() != Value::kStructValue) continue;
+      const FieldDescriptor& value = *f->message_type()->map_value();
+      for (auto& [k, x] : *v.mutable_struct_value()->mutable_fields())
+        WalkElement(value, &x, walk, at + "." + k);
+    } else if (f->is_repeated()) {
+      if (v.kind_case() != Value::kListValue) continue;
+      auto& items = *v.mutable_list_value()->mutable_values();
+      const bool objects = f->cpp_type() == FieldDescriptor::CPPTYPE_MESSAGE;
+      for (int i = 0; i < items.size(); ++i)  // a path only where it can be used
+        WalkElement(*f, &items[i], walk, objects ? at + "[" + std::to_string(i) + "]" : "");
+    } else {
+      WalkElement(*f, &v, walk, at);
+    }
+  }
+  for (const auto& key : erased) s->mutable_fields()->erase(key);
+}
+
 Struct MessageToStruct(const google::protobuf::Message& m) {
   util::JsonPrintOptions o;
   o.always_print_primitive_fields = true;
@@ -97,7 +113,7 @@ Struct MessageToStruct(const google::protobuf::Message& m) {
   Struct s;
   if (!util::MessageToJsonString(m, &json, o).ok() || !util::JsonStringToMessage(json, &s).ok())
     throw std::runtime_error("cannot write " + m.GetDescriptor()->full_name() + " as JSON");
-  FixObject(*m.GetDescriptor(), &s, Way::kWrite);
+  WalkJsonObject(*m.GetDescriptor(), &s, kWritten);
   return s;
 }
 
@@ -140,7 +156,7 @@ Struct ParseJsonObject(const std::string& where, const std::string& text) {
 
 void StructToMessage(const std::string& where, const Struct& root, google::protobuf::Message* out) {
   Struct fixed = root;
-  FixObject(*out->GetDescriptor(), &fixed, Way::kRead);
+  WalkJsonObject(*out->GetDescriptor(), &fixed, kRead);
   std::string json;
   if (!util::MessageToJsonString(fixed, &json).ok())
     throw InputError(where + ": cannot read the JSON object");

@@ -414,6 +414,9 @@ class BimorphFinFamily final : public Family {
     return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)";
   }
   std::string equation() const override {
+    if (bench_)
+      return "M q'' + C q' + K q = B u - e* z, z' = alpha u' - beta |u'| z - gamma u' |z|, "
+             "y = Backlash_{a1, a2, b1, b2}(atan(w_tip/L)) [deg], b1 b2 per record";
     return "M(L_p, L_e) q'' + C q' + K(L_p, L_e) q = B u - e* z, z' = alpha u' - beta |u'| z - "
            "gamma u' |z|, "
            "y = gain * Backlash(atan(w_tip/L))";

@@ -1008,6 +1008,10 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   if (options.threads < 1) throw InputError(FieldError("threads", options.threads, "must be >= 1"));
   if (const std::string e = RateCoverageError(set, model->effects()); !e.empty())
     throw InputError(e);
+  if (options.evaluator_factory && model->family().simulates_records())
+    throw InputError(model->Describe() +
+                     ": bimorph-fin's bench form is evaluated on this machine (the service's "
+                     "records evaluation does not carry the bench form yet): no --master");
   RecordFitness fitness(*model, train);
   FitResult res;
   res.model = model;

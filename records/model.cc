@@ -46,9 +46,10 @@ EffectKind ParseEffect(std::string_view name) {
   if (e != nullptr) {
     throw InputError("effect '" + std::string(name) + "' acts on the beam (" + e->title() +
                      "): it runs on the bimorph-fin bench's beam (`piezoid diagnose --cases`); "
-                     "records families, "
-                     "bimorph-fin included, take drive and output effects only (effects: " +
-                     known + ")");
+                     "records families take drive and output effects only (effects: " +
+                     known +
+                     "); bimorph-fin's bench form, on a fin bench read as records, takes it "
+                     "(records/families.h FamilyOptions::bench_form)");
   }
   throw InputError("effect '" + std::string(name) + "' is unknown (effects: " + known + ")");
 }

@@ -3,7 +3,7 @@
 
     scripts/make_trend_benches.py build/client/piezoid data/bimorph-fin [NAME ...]
 
-writes data/bimorph-fin/trends-dev and trends-dev2 (for developing) and
+writes data/bimorph-fin/trends-dev, trends-dev2 and trends-dev3 (for developing) and
 data/bimorph-fin/trends-check (only for checking), or only the benches NAME given. Each is
 the paper's nine cases (V in {375, 500, 750} V, f in {0.25, 0.5, 1} Hz, three cycles from rest at
 100 Hz, training cases 1, 5, 6, 7) of a bench whose damping (mu, delta) and
@@ -75,6 +75,23 @@ LAWS = {
         "delta": lambda v, f: 0.10 + 0.60 * (f - 0.25) * (1 - f) + 0.10 * x_of(v) * f,
         "a1": lambda v, f: 0.03 + 0.20 * (1 - math.exp(-3 * x_of(v))),
         "a2": lambda v, f: 0.06 + 0.18 * x_of(v) * f,
+    },
+    # The third development bench (issue 36): a1 falling with V, a2 flat over most of the box and
+    # rising towards the high-frequency corner, delta not monotone in V, mu falling along V * f;
+    # case 9's a2 lies beyond every training case's, as on trends-dev2, but by another form.
+    "trends-dev3": {
+        "seed": 364,
+        "text": {
+            "mu": "mu = 100 - 14 x f   [1/s], x = (V - 375) / 375",
+            "delta": "delta = 0.22 - 0.10 f + 0.06 sin(pi x)   [s]",
+            "a1": "a1 = 0.25 - 0.18 x^0.7   [deg]",
+            "a2": "a2 = 0.08 + 0.16 (max(0, f - 0.4) / 0.6)^2 (0.3 + 0.7 x)   [deg]",
+        },
+        "mu": lambda v, f: 100 - 14 * x_of(v) * f,
+        "delta": lambda v, f: 0.22 - 0.10 * f + 0.06 * math.sin(math.pi * x_of(v)),
+        "a1": lambda v, f: 0.25 - 0.18 * x_of(v) ** 0.7,
+        "a2": lambda v, f: 0.08 + 0.16 * (max(0.0, f - 0.4) / 0.6) ** 2
+        * (0.3 + 0.7 * x_of(v)),
     },
     "trends-check": {
         "seed": 362,

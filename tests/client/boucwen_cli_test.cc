@@ -1,9 +1,9 @@
 // `piezoid boucwen` run in-process on the bundled benchmark data with a tiny search: the true model
 // reproduces the benchmark's floor (the integrator matches the generator), the search improves on
 // its first swarm, the result does not depend on the thread count, and bad input is refused.
+// report.json is proto::BoucwenReport (proto/boucwen.proto): it reads back into its message and
+// prints to the same bytes, as does the file of a piezoid before it (tests/data/boucwen-json).
 #include <gtest/gtest.h>
-#include <google/protobuf/struct.pb.h>
-#include <google/protobuf/util/json_util.h>
 
 #include <CLI/CLI.hpp>
 #include <filesystem>
@@ -12,7 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "boucwen.pb.h"
 #include "client/commands.h"
+#include "io/csv.h"
+#include "io/proto_json.h"
+#include "tests/testing/expect_error.h"
 
 namespace pz::client {
 namespace {
@@ -31,19 +35,14 @@ int RunBoucwen(const std::vector<std::string>& args) {
   return exit_code;
 }
 
-google::protobuf::Struct ReadReport(const fs::path& dir) {
-  std::ifstream in(dir / "report.json");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  google::protobuf::Struct s;
-  EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(ss.str(), &s).ok()) << ss.str();
-  return s;
-}
-
-double Num(const google::protobuf::Struct& s, const std::string& key) {
-  const auto it = s.fields().find(key);
-  EXPECT_NE(it, s.fields().end()) << key;
-  return it == s.fields().end() ? 0.0 : it->second.number_value();
+/// report.json read into its message (an unknown or mistyped field fails), which prints back to the
+/// file's bytes.
+proto::BoucwenReport ReadReport(const fs::path& dir) {
+  const std::string text = io::ReadTextFile(dir / "report.json");
+  proto::BoucwenReport r;
+  io::ReadJsonMessage("report.json", text, &r);
+  EXPECT_EQ(io::PrintJson(r, "report.json"), text);
+  return r;
 }
 
 std::vector<std::string> Tiny(const fs::path& out, int threads) {
@@ -77,18 +76,22 @@ TEST(BoucwenCli, TinyRunWritesAReportAndDoesNotDependOnThreads) {
   const auto b = ReadReport(root / "t2");
   // The true parameters reproduce the benchmark's own floor (README: about 2.3e-7 m on the
   // multisine).
-  EXPECT_LT(Num(a, "true_model_multisine_rms_m"), 3e-7);
-  EXPECT_LT(Num(a, "true_model_sinesweep_rms_m"), 4e-6);
-  EXPECT_EQ(Num(a, "evaluations"), Num(b, "evaluations"));
-  EXPECT_EQ(Num(a, "training_rms_m"), Num(b, "training_rms_m"));  // bit for bit
-  EXPECT_EQ(Num(a, "test_multisine_rms_m"), Num(b, "test_multisine_rms_m"));
-  const auto& pa = a.fields().at("parameters").struct_value().fields();
-  const auto& pb = b.fields().at("parameters").struct_value().fields();
-  ASSERT_EQ(pa.size(), 6u);
-  for (const auto& [name, v] : pa)
-    EXPECT_EQ(v.struct_value().fields().at("identified").number_value(),
-              pb.at(name).struct_value().fields().at("identified").number_value())
-        << name;
+  EXPECT_LT(a.true_model_multisine_rms_m(), 3e-7);
+  EXPECT_LT(a.true_model_sinesweep_rms_m(), 4e-6);
+  EXPECT_EQ(a.evaluations(), b.evaluations());
+  EXPECT_EQ(a.training_rms_m(), b.training_rms_m());  // bit for bit
+  EXPECT_EQ(a.test_multisine_rms_m(), b.test_multisine_rms_m());
+  EXPECT_EQ(a.threads(), 1);
+  EXPECT_EQ(b.threads(), 2);
+  ASSERT_EQ(a.parameters_size(), 6);
+  for (const auto& [name, p] : a.parameters()) {
+    ASSERT_TRUE(b.parameters().contains(name)) << name;
+    EXPECT_EQ(p.identified(), b.parameters().at(name).identified()) << name;
+    EXPECT_EQ(p.relative_error(), p.identified() / p.true_() - 1) << name;
+    EXPECT_TRUE(p.lower() <= p.identified() && p.identified() <= p.upper()) << name;
+  }
+  ASSERT_EQ(a.repetition_training_rms_m_size(), 1);
+  EXPECT_EQ(a.repetition_training_rms_m(0), a.training_rms_m());
   // The search improves on its first swarm (convergence.csv: evaluations, best RMS, time).
   std::ifstream conv(root / "t1" / "convergence.csv");
   std::string line;
@@ -97,7 +100,28 @@ TEST(BoucwenCli, TinyRunWritesAReportAndDoesNotDependOnThreads) {
   while (std::getline(conv, line)) best.push_back(std::stod(line.substr(line.find(',') + 1)));
   ASSERT_GE(best.size(), 2u);
   EXPECT_LT(best.back(), best.front());
-  EXPECT_DOUBLE_EQ(best.back(), Num(a, "training_rms_m"));
+  EXPECT_DOUBLE_EQ(best.back(), a.training_rms_m());
+}
+
+TEST(BoucwenReportJson, TheFileOfAPiezoidBeforeItsMessageReadsAndPrintsBackToTheSameBytes) {
+  const fs::path file = fs::path(PIEZOID_TEST_DATA_DIR) / "boucwen-json" / "report.json";
+  const std::string text = io::ReadTextFile(file);
+  proto::BoucwenReport r;
+  io::ReadJsonMessage(file.string(), text, &r);
+  EXPECT_EQ(io::PrintJson(r, "report.json"), text);
+  EXPECT_EQ(r.algorithm(), "pso");
+  EXPECT_EQ(r.seed(), 1u);
+  EXPECT_EQ(r.evaluations(), 112);
+  EXPECT_EQ(r.repetition_training_rms_m_size(), 2);
+  ASSERT_TRUE(r.parameters().contains("beta_delta"));
+  EXPECT_EQ(r.parameters().at("beta_delta").true_(), -1100);
+  // A key the message does not have is named.
+  std::string bad = text;
+  bad.replace(bad.find("\"stop_reason\""), 13, "\"stop_raeson\"");
+  const std::string e =
+      pz::testing::InputErrorOf([&] { io::ReadJsonMessage("x/report.json", bad, &r); });
+  PZ_EXPECT_HAS(e, "x/report.json");
+  PZ_EXPECT_HAS(e, "stop_raeson");
 }
 
 TEST(BoucwenCli, BadInputIsRefused) {

@@ -1,9 +1,12 @@
 // The library behind `piezoid simulate` and `piezoid pi`: per-case parameter and saturation
 // resolution, scoring with a stand-in simulator (exact PI/CF by construction), the report formats,
 // and the commands run in-process (bad input surfaces as pz::InputError → exit code 2 in main.cc).
+// The scores' JSON is proto::PiScores (proto/pi.proto); the file of a piezoid before it
+// (tests/data/pi-json) reads into it.
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,6 +15,9 @@
 #include "client/case_models.h"
 #include "client/commands.h"
 #include "client/pi_report.h"
+#include "io/csv.h"
+#include "io/proto_json.h"
+#include "pi.pb.h"
 #include "model/saturation.h"
 #include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
@@ -169,13 +175,27 @@ TEST(ScoreCaseSet, FailedCasesAreRowsLeftOutOfTheSums) {
   PrintPiReport(text, r);
   PZ_EXPECT_HAS(text.str(), "(incomplete: 1 case(s) failed)");
   PZ_EXPECT_HAS(text.str(), "solver_failure: stand-in failure");
-  WritePiJson(json, r);
-  PZ_EXPECT_HAS(json.str(),
-                "{\"case\": 5, \"amplitude_V\": 500, \"frequency_Hz\": 0.5, \"role\": \"train\"");
-  PZ_EXPECT_HAS(
-      json.str(),
-      "\"status\": \"solver_failure\", \"message\": \"stand-in failure\", \"pi_deg2\": null");
-  PZ_EXPECT_HAS(json.str(), "\"failed\": 1\n}");
+  PiReport named = r;  // a folder name that JSON must escape
+  named.case_set = "a\"b\\c\nd\x01";
+  WritePiJson(json, named);
+  PZ_EXPECT_HAS(json.str(), "\"case_set\": \"a\\\"b\\\\c\\nd\\u0001\"");
+  PZ_EXPECT_HAS(json.str(), "\"pi_deg2\": null");
+  proto::PiScores back;  // reads into its message and prints back to the same bytes
+  io::ReadJsonMessage("pi.json", json.str(), &back);
+  EXPECT_EQ(io::PrintJson(back, "pi.json"), json.str());
+  EXPECT_EQ(back.case_set(), named.case_set);
+  EXPECT_EQ(back.failed(), 1);
+  ASSERT_EQ(back.cases_size(), 9);
+  const proto::PiCaseScore& c5 = back.cases(4);
+  EXPECT_EQ(c5.case_(), 5);
+  EXPECT_EQ(c5.amplitude_v(), 500);
+  EXPECT_EQ(c5.frequency_hz(), 0.5);
+  EXPECT_EQ(c5.role(), "train");
+  EXPECT_EQ(c5.status(), "solver_failure");
+  EXPECT_EQ(c5.message(), "stand-in failure");
+  EXPECT_TRUE(std::isnan(c5.pi_deg2()) && std::isnan(c5.rmse_deg()) && std::isnan(c5.r2()));
+  EXPECT_EQ(back.cases(3).pi_deg2(), r.cases[3].metrics.pi);
+  EXPECT_EQ(back.cf_train_deg2(), r.cf_train);
   WritePiCsv(csv, r);
   PZ_EXPECT_HAS(csv.str(), "\n5,500,0.5,train,");
   PZ_EXPECT_HAS(csv.str(), ",fitted,solver_failure,,,,\n");
@@ -194,8 +214,22 @@ TEST(ScoreCaseSet, ModelTraceOffTheCaseGridIsNamed) {
       "case1.csv vs model trace: time grids differ first at sample 0");
 }
 
-TEST(JsonEscape, EscapesQuotesBackslashesAndControls) {
-  EXPECT_EQ(JsonEscape("a\"b\\c\nd\x01"), "a\\\"b\\\\c\\nd\\u0001");
+TEST(PiJson, TheFileOfAPiezoidBeforeItsMessageReadsIntoIt) {
+  // Written by string concatenation, in another key order and layout: every key is the message's,
+  // with its value.
+  const fs::path file = fs::path(PIEZOID_TEST_DATA_DIR) / "pi-json" / "pi.json";
+  proto::PiScores s;
+  io::ReadJsonMessage(file.string(), io::ReadTextFile(file), &s);
+  EXPECT_EQ(s.case_set(), "data/bimorph-fin/nominal");
+  EXPECT_EQ(s.solver(), "modal");
+  EXPECT_EQ(s.saturation(), "auto");
+  ASSERT_EQ(s.cases_size(), 9);
+  EXPECT_EQ(s.cases(0).case_(), 1);
+  EXPECT_EQ(s.cases(0).steps(), 1205);
+  EXPECT_EQ(s.cases(0).b1_deg(), 1.3623046875);
+  EXPECT_EQ(s.cases(0).pi_deg2(), 0.11821669260323361);
+  EXPECT_EQ(s.cf_train_deg2(), 0.6377400236487345);
+  EXPECT_EQ(s.failed(), 0);
 }
 
 TEST(DefaultCaseSet, EnvironmentOverridesTheBundledData) {
@@ -244,11 +278,12 @@ TEST(Commands, PiPrintsTheTableAndWritesJson) {
   EXPECT_EQ(code, 0) << out;
   PZ_EXPECT_HAS(out, "(9 cases), solver modal, saturation auto");
   PZ_EXPECT_HAS(out, "CF = sum of PI over the training cases (1, 5, 6, 7)");
-  std::ifstream in(json);
-  std::stringstream text;
-  text << in.rdbuf();
-  PZ_EXPECT_HAS(text.str(), "\"cases\": [");
-  PZ_EXPECT_HAS(text.str(), "\"failed\": ");
+  proto::PiScores s;
+  io::ReadJsonMessage(json.string(), io::ReadTextFile(json), &s);
+  EXPECT_EQ(s.cases_size(), 9);
+  EXPECT_EQ(s.solver(), "modal");
+  EXPECT_EQ(s.failed(), 0);
+  EXPECT_GT(s.cf_train_deg2(), 0);
 }
 
 TEST(Commands, SimulateWritesOneCsvPerCase) {

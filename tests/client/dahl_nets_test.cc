@@ -1,12 +1,17 @@
 // The Dahl-network study plumbing: the paper's cases and data sets, a short deterministic training
-// with restarts chosen by validation MSE, and the table / CSV / JSON writers.
+// with restarts chosen by validation MSE, and the table / CSV / JSON writers (the JSON is
+// proto::DahlSummary, proto/dahl.proto; the file of a piezoid before it reads into it).
 #include "client/dahl_nets.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <sstream>
 
+#include "dahl.pb.h"
+#include "io/csv.h"
+#include "io/proto_json.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -81,7 +86,19 @@ TEST(DahlStudy, RestartsAreDeterministicAndChosenByValidation) {
   WriteDahlHistoryCsv(hist, a);
   PZ_EXPECT_HAS(table.str(), "paper");
   PZ_EXPECT_HAS(csv.str(), "case,method,seed");
-  PZ_EXPECT_HAS(json.str(), "\"restart_val_mse\": [");
+  proto::DahlSummary back;  // reads into its message and prints back to the same bytes
+  io::ReadJsonMessage("dahl.json", json.str(), &back);
+  EXPECT_EQ(io::PrintJson(back, "dahl.json"), json.str());
+  EXPECT_EQ(back.dense_backend(), "test");
+  ASSERT_EQ(back.runs_size(), 1);
+  EXPECT_EQ(back.runs(0).case_(), 1);
+  EXPECT_EQ(back.runs(0).method(), model::TrainMethodName(a.method));
+  ASSERT_EQ(back.runs(0).restart_val_mse_size(), 3);
+  EXPECT_EQ(back.runs(0).restart_val_mse(2), a.restart_val_mse[2]);
+  EXPECT_EQ(back.runs(0).mse_val(), a.summary.val.mse);
+  EXPECT_TRUE(back.runs(0).paper().has_mse_val());  // LM's row: validation MSE, no γ
+  EXPECT_FALSE(back.runs(0).paper().has_gamma());
+  EXPECT_EQ(back.runs(0).paper().mse_train(), PaperDahlTable(1).lm_train);
   const std::string h = hist.str();
   EXPECT_EQ(std::count(h.begin(), h.end(), '\n'), a.summary.epochs + 2);  // header + epochs 0..E
   o.lm_restarts = 0;
@@ -106,6 +123,23 @@ TEST(DahlStudy, AdaptiveInitLmBeatsThePapersRowOnCaseOne) {
   o.lm_init = DahlInit::kNguyenWidrow;
   const DahlNetRun nw = TrainDahlNet(ds, model::TrainMethod::kLevenbergMarquardt, o);
   EXPECT_GT(nw.summary.train.mse, p.lm_train);
+}
+
+// The file of a piezoid before the message (tests/data/dahl-json), written by hand in another key
+// order and layout: every key is the message's, with its value.
+TEST(DahlJson, TheFileOfAPiezoidBeforeItsMessageReadsIntoIt) {
+  const std::string file = std::string(PIEZOID_TEST_DATA_DIR) + "/dahl-json/dahl.json";
+  proto::DahlSummary s;
+  io::ReadJsonMessage(file, io::ReadTextFile(file), &s);
+  ASSERT_EQ(s.runs_size(), 2);
+  EXPECT_EQ(s.runs(0).method(), "LM");
+  EXPECT_EQ(s.runs(0).epochs(), 5);
+  EXPECT_EQ(s.runs(0).mse_train(), 0.00017785532055153335);
+  EXPECT_TRUE(std::isnan(s.runs(0).gamma()));  // null: LM has no γ
+  EXPECT_EQ(s.runs(0).paper().mse_val(), PaperDahlTable(1).lm_val);
+  EXPECT_EQ(s.runs(1).method(), "BR");
+  EXPECT_FALSE(s.runs(1).paper().has_mse_val());
+  EXPECT_EQ(s.runs(1).paper().ssw(), PaperDahlTable(1).br_ssw);
 }
 
 }  // namespace

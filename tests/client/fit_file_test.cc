@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "client/json_values.h"
+#include "io/proto_json.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -48,7 +48,8 @@ TEST(FitFile, EveryCorpusFileLoadsAndWritesBackTheSameBytes) {
     // The corpus was written with the shortest digits that give each double back: compared as
     // values, printed alike.
     ASSERT_TRUE(google::protobuf::util::JsonStringToMessage(text, &stored).ok()) << f;
-    EXPECT_EQ(FitModelJson(m), json::Print(stored.fields().at("model").struct_value(), "fit.json"))
+    EXPECT_EQ(FitModelJson(m),
+              io::PrintJson(stored.fields().at("model").struct_value(), "fit.json"))
         << f;
     EXPECT_TRUE(LooksLikeFitJson(f.string())) << f;
   }

@@ -74,6 +74,14 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
                 std::string::npos)
           << symbols[k];
     }
+    // Where the network extrapolates: the withheld cases outside the training cases' hull (2, 3,
+    // 8, 9 on the paper's split), not case 4 (on its edge), in report.md and on the terminal.
+    EXPECT_NE(md.find("## Where the network extrapolates"), std::string::npos);
+    for (const char* row : {"| 2 | 375 | 0.5 | yes |", "| 3 | 375 | 1 | yes |",
+                            "| 8 | 750 | 0.5 | yes |", "| 9 | 750 | 1 | yes |"})
+      EXPECT_NE(md.find(row), std::string::npos) << row;
+    EXPECT_EQ(md.find("| 4 | 500 | 0.25 |"), std::string::npos);
+    EXPECT_NE(term.str().find("case 9 (750 V, 1 Hz, outside the hull)"), std::string::npos);
   }
   for (const char* f : {"network.pb", "network.json"}) {
     io::SavedNetwork loaded;

@@ -164,16 +164,21 @@ TEST(TrendSeeds, TheSameGenomesWhateverTheThreads) {
   EXPECT_EQ(a.names, b.names);
 }
 
+/// The HGANN configuration of a bundled bench (data/bimorph-fin/NAME), spec ranges, λ = 10 deg².
+HgannFitnessConfig BenchConfig(const char* name) {
+  const io::CaseSet set =
+      io::LoadCaseSet(std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin" / name);
+  HgannFitnessConfig cfg = HgannConfigFromCaseSet(set, model::ParameterRanges{});
+  cfg.spread_penalty = 10;
+  return cfg;
+}
+
 TEST(TrendSeeds, MuIsHeldAndDeltaPinnedDownInsteadOfBothHeld) {
   // On data/bimorph-fin/trends-dev2 μ and δ are both loose in most training cases fitted alone
   // (one frequency sees one damping); holding μ pins δ down, and δ's estimates then follow its
   // law, which is not monotone in f (holding both made δ one constant, every case far off).
-  const io::CaseSet set =
-      io::LoadCaseSet(std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin" / "trends-dev2");
-  HgannFitnessConfig cfg = HgannConfigFromCaseSet(set, model::ParameterRanges{});
-  cfg.spread_penalty = 10;
-  const HgannFitness fitness(cfg);
-  const TrendSeeds seeds = MakeTrendSeeds(fitness);
+  const HgannFitnessConfig cfg = BenchConfig("trends-dev2");
+  const TrendSeeds seeds = MakeTrendSeeds(HgannFitness(cfg));
   ASSERT_EQ(seeds.cases.size(), 4u);  // cases 1, 5, 6, 7
   const double width = cfg.ranges[1].upper - cfg.ranges[1].lower;
   for (const CaseEstimate& e : seeds.cases) {
@@ -189,6 +194,24 @@ TEST(TrendSeeds, MuIsHeldAndDeltaPinnedDownInsteadOfBothHeld) {
   // The seeds reach the training cases' floor (CF of the truth ≈ 0.53 deg²), where the constant
   // network (polished) stays above 8 deg².
   EXPECT_LT(seeds.costs.front(), 1.0);
+}
+
+TEST(TrendSeeds, TheShapesThatFitAlikeSayWhereTheTrainingCasesDoNotSettleAParameter) {
+  // On data/bimorph-fin/trends-dev3 δ = 0.22 − 0.10 f + 0.06 sin(π x): cases 1 and 7 (0.25 Hz)
+  // share δ = 0.195 s, so a shape of f alone through a hinge fits the four training cases as
+  // exactly as the law's own (a hinge in V plus a plane), and the two part at case 4 (on the hull's
+  // edge) and at case 9 (outside it). The range of the shapes that fit alike spans the truth there,
+  // and is narrow at the training cases, which every such shape fits.
+  const TrendSeeds seeds = MakeTrendSeeds(HgannFitness(BenchConfig("trends-dev3")));
+  ASSERT_EQ(seeds.supported_lo.size(), 9u);
+  ASSERT_EQ(seeds.supported_hi.size(), 9u);
+  for (int i : {0, 4, 5, 6})  // cases 1, 5, 6, 7
+    EXPECT_LT(seeds.supported_hi[i][1] - seeds.supported_lo[i][1], 0.01) << "case " << i + 1;
+  for (const auto& [i, truth] : {std::pair{3, 0.247}, std::pair{8, 0.120}}) {
+    EXPECT_GT(seeds.supported_hi[i][1] - seeds.supported_lo[i][1], 0.04) << "case " << i + 1;
+    EXPECT_LE(seeds.supported_lo[i][1], truth + 0.005) << "case " << i + 1;
+    EXPECT_GE(seeds.supported_hi[i][1], truth - 0.005) << "case " << i + 1;
+  }
 }
 
 TEST(SearchPresets, PaperIsTheGaDefaultsAndRobustTheMeasuredSetting) {

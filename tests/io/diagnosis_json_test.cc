@@ -203,6 +203,9 @@ TEST(DiagnosisCodec, AFileOfOneKindWithAFieldOfTheOtherIsRefusedByName) {
   EXPECT_NE(ErrorOf("{\"verdict\": \"x\"}").find("x/diagnosis.json: neither \"records\""),
             std::string::npos);
   EXPECT_NE(ErrorOf("[1]").find("x/diagnosis.json: not a JSON object"), std::string::npos);
+  EXPECT_NE(ErrorOf(ValueReplaced(records, "\"records\": ", "null"))
+                .find("x/diagnosis.json: records: not a string (the record set)"),
+            std::string::npos);
 }
 
 TEST(DiagnosisCodec, ABadFieldOrANamedOfTheWrongShapeIsNamed) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -135,6 +136,63 @@ TEST_P(FinRecordsTest, BaseAndBeamCandidateFitAsTheFinEngine) {
   ExpectSame(fin_beam, rec_beam, diagnose::ParameterLayout({hinge}), set);
 }
 
+// A drive-effect candidate as the fin engine fits it (FitStructure without a beam): a search
+// seeded with the base (its effect at zero) and the start magnitudes, the base polished besides.
+TEST(FinRecords, ADriveEffectCandidateIsSearchedAsTheFinEngineSearchesIt) {
+  const io::CaseSet bench = Bench("nominal");
+  const io::RecordSet set = io::RecordsFromCaseSet(bench);
+  const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
+                                   diagnose::CasesFromCaseSet(bench));
+  const diagnose::FitResult base = FinBase(m);
+  const EffectKind lowpass = EffectKind::Named("driver-lowpass");
+  const diagnose::ParameterLayout layout({lowpass});
+  const std::vector<double> x0 = layout.Extend(base.x, diagnose::ParameterLayout({}));
+  const size_t mag = diagnose::ParameterLayout::kBase;  // tau_s, its only parameter
+  std::vector<std::vector<double>> seeds = {x0};
+  for (double f : kFractions) {
+    seeds.push_back(x0);
+    seeds.back()[mag] = f * layout.specs()[mag].upper;
+  }
+  diagnose::FitOptions fo;
+  fo.threads = 2;
+  fo.de = SmallDe();
+  fo.de.seed = 7 + 1000 * (static_cast<uint64_t>(model::FinIndex(lowpass)) + 1) + 17;
+  fo.lm = SmallLm();
+  fo.uncertainty = false;
+  fo.seeds = seeds;
+  fo.starts = {x0};
+  const diagnose::FitResult fin = diagnose::FitGlobal(m, layout, fo);
+  FitOptions o = RecordsOptions({lowpass});
+  o.search.de.seed = fo.de.seed;
+  o.seed_points = seeds;
+  o.start_points = {x0};
+  ExpectSame(fin, FitRecords(set, o), layout, set);
+}
+
+TEST(FinRecords, TheUncertaintyTableIsTheFinEngines) {
+  const io::CaseSet bench = Bench("nominal");
+  const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
+                                   diagnose::CasesFromCaseSet(bench));
+  diagnose::FitOptions fo;
+  fo.threads = 2;
+  fo.de = SmallDe();
+  fo.lm = SmallLm();
+  const diagnose::FitResult fin = diagnose::FitGlobal(m, diagnose::ParameterLayout({}), fo);
+  FitOptions o = RecordsOptions({});
+  o.uncertainty = true;  // its steps are lm.fd_step, the fin's 1e-3
+  const FitResult rec = FitRecords(io::RecordsFromCaseSet(bench), o);
+  ASSERT_TRUE(fin.ok);
+  ASSERT_EQ(rec.uncertainty.params.size(), fin.params.size());
+  for (size_t i = 0; i < fin.params.size(); ++i) {
+    EXPECT_EQ(rec.uncertainty.params[i].name, fin.params[i].name);
+    EXPECT_EQ(rec.uncertainty.params[i].std_error, fin.params[i].std_error) << i;
+    EXPECT_EQ(rec.uncertainty.params[i].sensitivity, fin.params[i].sensitivity) << i;
+    EXPECT_EQ(rec.uncertainty.params[i].identifiability, fin.params[i].identifiability) << i;
+  }
+  EXPECT_EQ(rec.uncertainty.residual_sigma, fin.residual_sigma);
+  EXPECT_EQ(rec.uncertainty.singular_values, fin.singular_values);
+}
+
 TEST(FinRecords, TheBenchFormFitIsTheSameOnOneThreadAndOnTwo) {
   const io::RecordSet set = io::RecordsFromCaseSet(Bench("nominal"));
   const FitResult one = FitRecords(set, RecordsOptions({}, 1));
@@ -220,6 +278,18 @@ TEST(FinRecords, TheBenchFormSaysWhatItCannotRun) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("creep-spectrum"), std::string::npos) << e.what();
   }
+  // The service's evaluation does not carry the bench form.
+  o.effects = {};
+  o.evaluator_factory = [](const RecordFitness&) -> std::unique_ptr<opt::BatchEvaluator> {
+    return nullptr;
+  };
+  try {
+    FitRecords(bench, o);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("bench form"), std::string::npos) << e.what();
+  }
+  o.evaluator_factory = nullptr;
   // A beam effect is refined from a fit: its starts checked.
   o.effects = {EffectKind::Named("hinge-friction")};
   o.polish_from.assign(9, 0.0);
