@@ -1,8 +1,10 @@
 // `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
-// and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h). Writes a
-// terminal summary, diagnosis.json and report.html with figures.
-// `piezoid diagnose-check`: the same diagnosis on random synthetic benches whose effect is withheld
-// from it; prints the confusion matrix and the distribution of the share of the gap closed.
+// and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h DiagnoseBench:
+// the records engine on the bench's records). Writes a terminal summary, diagnosis.json and
+// report.html with figures. `piezoid diagnose-check`: the same diagnosis on random synthetic
+// benches whose effect is withheld from it; prints the confusion matrix and the distribution of the
+// share of the gap closed.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -21,6 +23,7 @@
 #include "svcclient/service_evaluator.h"
 #include "diagnose/job_kind.h"
 #include "io/bench_data.h"
+#include "io/fin_records.h"
 #include "io/csv.h"
 
 namespace pz::client {
@@ -40,6 +43,7 @@ struct DiagnoseArgs {
   bool quick = false;
   bool quiet = false;
   double significance_ratio = 1.25;
+  std::string engine = "records";  ///< --engine: the records engine on the bench, or the fin's
   CompleteServiceFlags
       service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
   int concurrent_fits = 0;  ///< 0: 1 locally, 3 with --master
@@ -138,7 +142,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
   diagnose::Diagnosis d;
   try {
-    d = diagnose::RunDiagnosis(m, o);
+    // The records engine on the bench's records (with --master: the fin engine, whose fitness
+    // the service's sessions take), or --engine fin.
+    d = a.engine == "records" ? diagnose::DiagnoseBench(m, o) : diagnose::RunDiagnosis(m, o);
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
@@ -342,6 +348,12 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--significance-ratio", a->significance_ratio,
                   "withheld RMS / noise floor above which a gap is significant")
       ->check(CLI::Range(1.0001, 100.0));
+  cmd->add_option("--engine", a->engine,
+                  "with --cases: records (the bench's cases as records, diagnosed by the records "
+                  "engine with the bench's options) or fin (the bench's own engine; also what "
+                  "--master runs)")
+      ->check(CLI::IsMember({"fin", "records"}))
+      ->default_str("records");
   cmd->add_flag("--no-second", a->no_second, "do not look for a second effect");
   cmd->add_flag("--no-trends", a->no_trends, "skip the per-case fits and their V x f trends");
   cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");

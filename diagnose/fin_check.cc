@@ -53,7 +53,7 @@ CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o,
     const DiagnosisModel m(plant, std::move(st.cases), o.sim);
     DiagnoseOptions od = o;
     od.seed = o.seed + static_cast<uint64_t>(i);
-    const Diagnosis d = RunDiagnosis(m, od);
+    const Diagnosis d = DiagnoseBench(m, od);
     t.verdict_kind = d.verdict_kind;
     t.named = d.named.empty() ? model::EffectKind() : d.named.front();
     t.confidence = d.confidence;

@@ -52,7 +52,8 @@ struct CheckSummary : records::CalibrationTally {
 /// Column index of a named result.
 int CheckColumn(const CheckTrial& t);
 
-/// Runs `trials` benches with seeds seed, seed + 1, …; `on_trial` sees each finished trial.
+/// Runs `trials` benches with seeds seed, seed + 1, …, each diagnosed by the one driver
+/// (DiagnoseBench); `on_trial` sees each finished trial.
 CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& diagnose,
                       const SyntheticOptions& synthetic,
                       const std::function<void(const CheckTrial&, int index)>& on_trial = {});

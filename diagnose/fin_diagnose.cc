@@ -7,6 +7,7 @@
 #include <limits>
 #include <exception>
 
+#include "io/fin_records.h"
 #include "model/model_comparison.h"
 #include "records/noise_floor.h"
 #include "diagnose/verdict.h"
@@ -21,20 +22,8 @@ using opt::ParallelFor;
 using opt::ResidualFunction;
 namespace {
 
-// What would separate two effects that the bench cannot: the physics of their difference (the fin
-// benches are nine sinusoids; `diagnose --records` simulates candidate drives for record sets).
 std::string NextMeasurementHint(model::EffectKind a, model::EffectKind b) {
-  auto is = [&](model::EffectKind x, model::EffectKind y) {
-    return (a == x && b == y) || (a == y && b == x);
-  };
-  if (is(model::EffectKind::Named("driver-lowpass"), model::EffectKind::Named("delay")))
-    return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) "
-           "and rounds edges: "
-           "a square-wave (step) drive, or sinusoids at several times the bench's highest "
-           "frequency, would separate them";
-  return "A drive outside the bench's range of amplitudes and frequencies (a square wave, a sweep) "
-         "would separate them; "
-         "`piezoid diagnose --records` proposes one for record sets";
+  return records::FinNextMeasurementHint(a, b);
 }
 
 using model::EffectKind;
@@ -64,21 +53,8 @@ std::vector<double> CaseFloors(const DiagnosisModel& m, const FitResult& fit) {
   return floors;
 }
 
-// Localised excess over the floor of the withheld group: Σ_features n_f · max(0, rms_f² − σ²), over
-// the phase bins, branches, reversals, saturation and first/later cycles, plus the spectral groups
-// (odd, even, low) as N_w/2 · max(0, a² − noise²).
 std::vector<double> FeatureExcess(const model::GroupResidual& g) {
-  const double v = g.floor_rms * g.floor_rms;
-  std::vector<double> ex;
-  auto bin = [&](const model::BinStat& b) { ex.push_back(b.n * std::max(0.0, b.rms * b.rms - v)); };
-  for (const auto& b : g.phase) bin(b);
-  for (const auto* b :
-       {&g.rising, &g.falling, &g.near_reversal, &g.in_saturation, &g.first_cycle, &g.later_cycles})
-    bin(*b);
-  const double hn = g.harmonic_noise * g.harmonic_noise;
-  for (double a : {g.odd_rms, g.even_rms, g.low_rms})
-    ex.push_back(0.5 * g.samples * std::max(0.0, a * a - hn));
-  return ex;
+  return records::ResidualFeatureExcess(g);
 }
 
 // Fits a structure: fast structures get a global search seeded around `from`, beam structures are
@@ -154,21 +130,7 @@ std::vector<double> CaseFloorVariance(const DiagnosisModel& m, std::span<const d
 }
 
 std::vector<Absorption> Compare(const FitResult& without, const FitResult& with) {
-  std::vector<Absorption> r;
-  for (int i = 0; i < ParameterLayout::kBase && i < static_cast<int>(without.params.size()) &&
-                  i < static_cast<int>(with.params.size());
-       ++i) {
-    const ParamEstimate& a = without.params[i];
-    const ParamEstimate& b = with.params[i];
-    const double se = std::sqrt(a.std_error * a.std_error + b.std_error * b.std_error);
-    const double z = se > 0 && std::isfinite(se) ? (a.value - b.value) / se : 0.0;
-    const double rel =
-        std::abs(a.value - b.value) / std::max({std::abs(a.value), std::abs(b.value), 1e-300});
-    if (std::abs(z) > 2.0 && rel > 0.05) r.push_back({a.name, a.unit, a.value, b.value, z});
-  }
-  std::sort(r.begin(), r.end(),
-            [](const Absorption& x, const Absorption& y) { return std::abs(x.z) > std::abs(y.z); });
-  return r;
+  return records::AbsorbedParameters(without.params, with.params, ParameterLayout::kBase);
 }
 
 // Fits every candidate effect on top of `start` (no scoring).
@@ -321,6 +283,7 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
   const int n = layout.size();
   const size_t nc = m.cases().size();
   std::vector<std::vector<double>> per(nc);
+  std::vector<int64_t> case_evals(nc, 0);
   ParallelFor(static_cast<int>(nc), o.threads, [&](int c) {
     ResidualFunction f = [&, c](std::span<const double> u, std::vector<double>& r) {
       const std::vector<double> x = layout.FromUnit(u);
@@ -338,8 +301,9 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
     std::vector<double> lb(n, 0.0), ub(n, 1.0);
     const LmResult r = LevenbergMarquardt(f, layout.ToUnit(base.x), lb, ub, lo);
     per[c] = layout.FromUnit(r.x);
+    case_evals[static_cast<size_t>(c)] = r.evaluations;
   });
-  *evals += static_cast<int64_t>(nc) * 25 * (2 * n + 2);
+  for (int64_t e : case_evals) *evals += e;
   std::vector<ParamTrend> trends;
   std::vector<double> v, fr;
   for (const DiagCase& c : m.cases()) {
@@ -347,29 +311,10 @@ std::vector<ParamTrend> PerCaseTrends(const DiagnosisModel& m, const FitResult& 
     fr.push_back(c.drive.frequency_hz);
   }
   for (int i = 0; i < n; ++i) {
-    ParamTrend t;
-    t.name = layout.specs()[i].name;
-    t.unit = layout.specs()[i].unit;
-    double lo = INFINITY, hi = -INFINITY, mean = 0;
-    for (size_t c = 0; c < nc; ++c) {
-      t.per_case.push_back(per[c][i]);
-      lo = std::min(lo, per[c][i]);
-      hi = std::max(hi, per[c][i]);
-      mean += per[c][i] / nc;
-    }
-    t.relative_range = std::abs(mean) > 0 ? (hi - lo) / std::abs(mean) : 0;
-    try {
-      const model::PlaneFit pf = model::FitPlane(v, fr, t.per_case);
-      t.slope_v = pf.v.coef;
-      t.slope_f = pf.f.coef;
-      t.p_v = std::isfinite(pf.v.p_value) ? pf.v.p_value : 1;
-      t.p_f = std::isfinite(pf.f.p_value) ? pf.f.p_value : 1;
-      t.r2 = pf.r2;
-    } catch (const InputError&) {
-      // collinear or too few cases: no trend
-    }
-    t.significant = std::min(t.p_v, t.p_f) < 0.01 && t.relative_range > 0.1;
-    trends.push_back(std::move(t));
+    std::vector<double> per_case;
+    for (size_t c = 0; c < nc; ++c) per_case.push_back(per[c][i]);
+    trends.push_back(
+        TrendOver(layout.specs()[i].name, layout.specs()[i].unit, std::move(per_case), v, fr));
   }
   return trends;
 }
@@ -566,6 +511,162 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
                                       o.rules, text);
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   Say(o, d.verdict);
+  return d;
+}
+
+namespace {
+
+// A records fit as the bench's: "base + effect", per-case PI, the uncertainty table.
+FitResult FinFitOf(const io::RecordSet& set, const records::FitResult& f) {
+  FitResult o;
+  o.structure = f.model->effects();
+  o.description = ParameterLayout(o.structure).Describe();
+  o.x = f.params;
+  o.params = f.uncertainty.params;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const double pi = f.metrics[i].sse;
+    o.case_pi.push_back(pi);
+    const bool training = set.records[i].role == model::CaseRole::kTrain;
+    (training ? o.train_pi : o.withheld_pi) += pi;
+    (training ? o.train_samples : o.withheld_samples) += static_cast<int>(set.records[i].scored());
+  }
+  o.residual_sigma = f.uncertainty.residual_sigma;
+  o.singular_values = f.uncertainty.singular_values;
+  o.weakest_direction = f.uncertainty.weakest_direction;
+  o.evaluations = f.evaluations + f.uncertainty.evaluations;
+  o.wall_time_s = f.wall_time_s;
+  o.message = f.polish_message;
+  o.ok = true;
+  return o;
+}
+
+CandidateResult FinCandidateOf(const io::RecordSet& set, const records::RecordCandidate& c,
+                               const records::FitResult& start) {
+  CandidateResult o;
+  static_cast<records::CandidateScore&>(o) = c;
+  o.kind = c.kind;
+  o.fit = FinFitOf(set, c.fit);
+  o.added_params = static_cast<int>(c.fit.params.size() - start.params.size());
+  return o;
+}
+
+RoundResult FinRoundOf(const io::RecordSet& set, const records::FitResult& start,
+                       const records::Gap& gap, const std::vector<records::RecordCandidate>& cands,
+                       int named, int runner_up, double z_runner_up, const std::string& verdict) {
+  RoundResult r;
+  r.base_structure = start.model->effects();
+  r.s0 = gap.s0;
+  r.s_floor = gap.s_floor;
+  r.rms_ratio = gap.rms_ratio;
+  r.significant = gap.significant;
+  for (const records::RecordCandidate& c : cands)
+    r.candidates.push_back(FinCandidateOf(set, c, start));
+  r.named = named;
+  r.runner_up = runner_up;
+  r.z_runner_up = z_runner_up;
+  r.gap = gap;
+  r.verdict = verdict;
+  return r;
+}
+
+}  // namespace
+
+Diagnosis DiagnosisOfRecords(const DiagnosisModel& m, const io::RecordSet& set,
+                             const records::RecordDiagnosis& rd) {
+  if (set.records.size() != m.cases().size())
+    throw InputError("the bench's records: " + std::to_string(set.records.size()) +
+                     " records for " + std::to_string(m.cases().size()) + " cases");
+  Diagnosis d;
+  d.cases = m.cases();
+  for (const DiagCase& c : m.cases()) d.quantum_deg = std::max(d.quantum_deg, c.noise.quantum_deg);
+  SetFloorTotals(m, rd.record_floor, d);
+  d.floor_model = rd.floor_model;
+  d.base = FinFitOf(set, rd.base);
+  d.base_residuals = rd.base_residuals;
+  d.trends = rd.trends;
+  records::Gap gap;
+  gap.s0 = rd.s0;
+  gap.s_floor = rd.s_floor;
+  gap.rms_ratio = rd.rms_ratio;
+  gap.significant = rd.significant;
+  gap.nw = static_cast<double>(rd.withheld_samples);
+  gap.nt = static_cast<double>(rd.train_samples);
+  d.rounds.push_back(FinRoundOf(set, rd.base, gap, rd.candidates, rd.named, rd.runner_up,
+                                rd.z_runner_up, rd.round_verdict));
+  if (rd.second) {
+    const records::FitResult& start = rd.candidates[static_cast<size_t>(rd.named)].fit;
+    d.rounds.push_back(FinRoundOf(set, start, rd.second->gap, rd.second->candidates,
+                                  rd.second->named, rd.second->runner_up, rd.second->z_runner_up,
+                                  rd.second->verdict));
+  }
+  d.named = rd.named_effects;
+  d.confidence = rd.confidence;
+  d.final_fit = FinFitOf(set, *rd.final_fit);
+  d.final_residuals = rd.final_residuals;
+  d.withheld_before = d.base.withheld_pi;
+  d.withheld_after = d.final_fit.withheld_pi;
+  d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
+  d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
+  MeasureCaseGaps(m, rd.record_floor, d);
+  d.absorbed = rd.absorbed;
+  d.absorbed_by = rd.absorbed_by;
+  d.verdict_kind = rd.verdict_kind;
+  d.verdict = rd.verdict;
+  d.evaluations = d.base.evaluations + rd.trend_evaluations;
+  for (const RoundResult& r : d.rounds)
+    for (const CandidateResult& c : r.candidates) d.evaluations += c.fit.evaluations;
+  return d;
+}
+
+records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
+  records::RecordDiagnoseOptions r = records::FinBenchOptions();
+  if (!o.candidates.empty()) r.candidates = o.candidates;
+  r.fit.threads = o.threads;
+  r.fit.search.de = o.de_base;
+  r.fit.search.de.seed = o.seed;
+  r.bench_fits.de = o.de_candidate;
+  r.bench_fits.seed = o.seed;
+  r.fit.lm = o.lm;
+  r.fit.lm.threads = o.threads;
+  r.fit.beam.lm_iterations = o.cvode_lm_iterations;
+  r.fit.beam.start_fractions = o.cvode_start_fractions;
+  r.fit.family_options.fin_sim = o.sim;
+  r.rules = o.rules;
+  r.second_effect = o.second_effect;
+  r.trends = o.trends;
+  r.fit.progress = o.progress;
+  return r;
+}
+
+io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
+  io::CaseSet set;
+  set.dir = "bench";
+  for (const DiagCase& c : cases) {
+    io::BenchCase b;
+    b.number = c.number;
+    b.amplitude_v = c.drive.amplitude_v;
+    b.frequency_hz = c.drive.frequency_hz;
+    b.role = c.training ? io::CaseRole::kTrain : io::CaseRole::kValidate;
+    b.file = "case" + std::to_string(c.number);
+    b.sample_rate_hz = c.drive.sample_rate_hz;
+    b.cycles = c.drive.cycles;
+    b.angle_deg = c.measured_deg;
+    for (size_t k = 0; k < c.measured_deg.size(); ++k) {
+      b.t.push_back(static_cast<double>(k) / c.drive.sample_rate_hz);
+      b.u.push_back(c.drive.Value(b.t.back()));
+    }
+    set.cases.push_back(std::move(b));
+  }
+  return io::RecordsFromCaseSet(set);
+}
+
+Diagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
+  ThrowIfError(o.Validate());
+  if (o.evaluator_factory) return RunDiagnosis(m, o);
+  const auto start = std::chrono::steady_clock::now();
+  const io::RecordSet set = RecordsOfCases(m.cases());
+  Diagnosis d = DiagnosisOfRecords(m, set, records::DiagnoseRecords(set, RecordOptionsOf(o)));
+  d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }
 

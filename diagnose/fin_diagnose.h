@@ -38,6 +38,9 @@
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
 #include "diagnose/decision.h"
+#include "diagnose/diagnose.h"
+#include "diagnose/trends.h"
+#include "io/records.h"
 
 namespace pz::diagnose {
 
@@ -88,23 +91,8 @@ struct RoundResult {
   std::string verdict;     ///< the round's verdict (diagnose/verdict.h)
 };
 
-/// A parameter trend over the V × f grid from the per-case fits.
-struct ParamTrend {
-  std::string name, unit;
-  std::vector<double> per_case;     ///< value per case (case order)
-  double slope_v = 0, slope_f = 0;  ///< per V, per Hz
-  double p_v = 1, p_f = 1;          ///< two-sided p-values
-  double r2 = 0;
-  double relative_range = 0;  ///< (max − min)/|mean|
-  bool significant = false;   ///< p < 0.01 on V or f and relative range > 10 %
-};
-
-/// A base parameter that moves when an effect is added (what absorbed the effect).
-struct Absorption {
-  std::string name, unit;
-  double without = 0, with = 0;  ///< base model / model with the effect
-  double z = 0;                  ///< shift / combined σ
-};
+using pz::diagnose::ParamTrend;
+using records::Absorption;
 
 /// Per-case before/after of the final model.
 struct CaseGap {
@@ -140,13 +128,34 @@ struct Diagnosis {
   std::string absorbed_by;                         ///< the candidate whose addition shows it
   std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as
                              ///< well), "none" (no significant gap), "unexplained"
-  std::string verdict;  ///< the summary sentence(s)
+  std::string verdict;       ///< the summary sentence(s)
   double wall_time_s = 0;
   int64_t evaluations = 0;
 };
 
 /// Runs the whole diagnosis. Throws InputError on invalid options.
 Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
+
+/// The diagnosis of the bench's records (io/fin_records.h; diagnose/diagnose.h DiagnoseRecords
+/// with FinBenchOptions) as the bench's report reads it: `set` the records of `model`'s cases, in
+/// case order. Each fit's figures are its records' (per-case PI, σ and identifiability from the
+/// uncertainty table, evaluations with the table's).
+Diagnosis DiagnosisOfRecords(const DiagnosisModel& model, const io::RecordSet& set,
+                             const records::RecordDiagnosis& diagnosis);
+
+/// The bench's options as the records engine's: FinBenchOptions with these candidates (empty: the
+/// whole library), searches (DE base and candidate, their seed, LM, the beam refinement), simulator
+/// options, rules, rounds, trends, threads and progress.
+records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
+
+/// The bench's cases as records (io/fin_records.h; a withheld case validates).
+io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
+
+/// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
+/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf) and read back as the bench's
+/// Diagnosis (DiagnosisOfRecords). With an evaluator factory (the service's sessions take the fin
+/// engine's fitness) it is RunDiagnosis. Throws InputError on invalid options.
+Diagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
 
 /// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
 model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,

@@ -4,14 +4,21 @@
 // explain the single-frequency records equally — the verdict says the data cannot separate them and
 // proposes a measurement, and that measurement, simulated from the truth and added to the records,
 // separates them. The noise floor comes from the rest, the periods, or the residual, and says
-// which.
+// which. The nine-case bench's options on a grid of sinusoidal records (amplitude × frequency):
+// per-record floors, the residual analysis as the pattern, the greedy second round, the absorbed
+// parameters, the per-record gaps and the V × f trends.
 #include "diagnose/diagnose.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 
+#include "diagnose/fin_diagnose.h"
+#include "io/bench_data.h"
+#include "io/fin_records.h"
+#include "model/effects.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -162,6 +169,278 @@ TEST(RecordDiagnosis, NeedsAWithheldRecord) {
   o.fit = Quick();
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }),
                 "no withheld record or window");
+}
+
+// ---- the bench's options on a grid of sinusoidal records ----------------------------------------
+
+/// A grid of whole-cycle sines from phase zero (3 cycles each, a 20 ms rest), amplitudes ×
+/// frequencies, each record its frequency stated; the records of `withheld` (indices) validate.
+/// `gain_slope`: the truth's gain c grows by this per volt above 80 V (a trend over the grid).
+io::RecordSet Grid(const std::vector<EffectKind>& effects, const std::vector<double>& effect_params,
+                   double quantum, uint64_t seed, std::vector<size_t> withheld,
+                   double gain_slope = 0) {
+  const DataScale s = SyntheticStackScale();
+  auto fam = std::shared_ptr<const Family>(MakeFamily("backlash-like", s));
+  RecordModel truth(fam, effects, s);
+  io::RecordSet set;
+  set.source = "synthetic grid";
+  set.response_unit = "um";
+  size_t i = 0;
+  for (double f : {1.0, 2.0, 4.0}) {
+    for (double a : {60.0, 100.0}) {
+      std::vector<double> p = {0.02, 0.1 + gain_slope * (a - 80), 0.05};
+      p.insert(p.end(), effect_params.begin(), effect_params.end());
+      DriveShape d;
+      d.amplitude = a;
+      d.frequency_hz = f;
+      d.phase_rad = 0;
+      d.rest_s = 0.02;
+      d.duration_s = 3 / f;
+      d.fs_hz = 500;
+      const bool w = std::find(withheld.begin(), withheld.end(), i) != withheld.end();
+      io::Record r = SynthesizeRecord(truth, p, {}, d, {0, kNoise, quantum, seed + i},
+                                      "case" + std::to_string(i + 1),
+                                      w ? CaseRole::kValidate : CaseRole::kTrain);
+      r.offset_mode = io::OffsetMode::kFixed;
+      r.offset = 0;
+      r.frequency_hz = f;
+      set.records.push_back(std::move(r));
+      ++i;
+    }
+  }
+  return set;
+}
+
+TEST(RecordDiagnosis, PerRecordFloorsAndTheResidualAnalysisNameALowpass) {
+  // τ = 30 ms: at 1–4 Hz a phase lag of 11–37° and up to 20 % less amplitude.
+  const auto lp = EffectKind::Named("driver-lowpass");
+  const io::RecordSet set = Grid({lp}, {0.03}, 0.01, 11, {1, 3, 5});
+  RecordDiagnoseOptions o;
+  o.family = "backlash-like";
+  o.fit = Quick();
+  o.candidates = {lp, EffectKind::Named("creep")};
+  o.floor = RecordFloor::kPerRecord;
+  o.pattern = RecordPattern::kResidualAnalysis;
+  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  std::cout << r.verdict << "\n";
+  // Each record's floor is its rounding and scatter: √(σ² + q²/12).
+  ASSERT_EQ(r.record_floor.size(), set.records.size());
+  for (double f : r.record_floor) EXPECT_NEAR(f, std::sqrt(kNoise * kNoise + 1e-4 / 12), 0.006);
+  double s_floor = 0;
+  for (size_t i = 0; i < set.records.size(); ++i)
+    if (set.records[i].role != CaseRole::kTrain)
+      s_floor += r.record_floor[i] * r.record_floor[i] * set.records[i].scored();
+  EXPECT_DOUBLE_EQ(r.s_floor, s_floor);
+  EXPECT_FALSE(r.floor_model.empty());
+  PZ_EXPECT_HAS(r.verdict, "per record");
+  // The residual analysis of every record, the withheld group being scored.
+  ASSERT_EQ(r.base_residuals.cases.size(), set.records.size());
+  EXPECT_GT(r.base_residuals.withheld.rms, 3 * r.base_residuals.withheld.floor_rms);
+  ASSERT_TRUE(r.significant) << r.verdict;
+  ASSERT_GE(r.named, 0) << r.verdict;
+  const RecordCandidate& c = r.candidates[static_cast<size_t>(r.named)];
+  EXPECT_EQ(c.kind, lp) << r.verdict;
+  EXPECT_GT(c.pattern, 0.8) << r.verdict;
+  EXPECT_LT(r.final_residuals.withheld.rms, 1.5 * r.final_residuals.withheld.floor_rms);
+  // The per-record gaps: every withheld record closed, the total too.
+  ASSERT_EQ(r.gaps.size(), set.records.size());
+  for (const RecordGap& g : r.gaps) {
+    EXPECT_GT(g.frequency_hz, 0);
+    EXPECT_NEAR(g.amplitude, g.name == "case1" || g.name == "case3" || g.name == "case5" ? 60 : 100,
+                1.0);
+    if (g.role != CaseRole::kTrain) {
+      EXPECT_GT(g.closed, 0.8) << g.name;
+    }
+    EXPECT_LT(g.rms_after, g.rms_before) << g.name;
+  }
+  EXPECT_GT(r.closed_total, 0.9);
+  ASSERT_EQ(r.named_effects.size(), 1u);
+  ASSERT_TRUE(r.final_fit);
+  EXPECT_EQ(r.final_fit->model->Describe(), c.fit.model->Describe());
+}
+
+TEST(RecordDiagnosis, TheResidualAnalysisNeedsEachRecordsFrequency) {
+  io::RecordSet set = Grid({}, {}, 0.01, 12, {1, 3, 5});
+  set.records[2].frequency_hz = 0;
+  RecordDiagnoseOptions o;
+  o.fit = Quick();
+  o.pattern = RecordPattern::kResidualAnalysis;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }), "record 'case3'");
+}
+
+TEST(RecordDiagnosis, TheGreedyRoundNamesASecondEffectOnlyWhileTheGapIsSignificant) {
+  const auto lp = EffectKind::Named("driver-lowpass"), delay = EffectKind::Named("delay"),
+             creep = EffectKind::Named("creep");
+  // A low-pass and a creep: the first named leaves a significant gap, the second closes it.
+  const io::RecordSet set = Grid({lp, creep}, {0.03, 0.15, 0.3}, 0.01, 21, {1, 3, 5});
+  RecordDiagnoseOptions o;
+  o.family = "backlash-like";
+  o.fit = Quick();
+  o.candidates = {lp, creep};
+  o.second_effect = true;
+  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  std::cout << "two effects: " << r.verdict << "\n  second round: " << r.second->verdict << "\n";
+  ASSERT_GE(r.named, 0) << r.verdict;
+  ASSERT_TRUE(r.second.has_value()) << r.verdict;
+  EXPECT_TRUE(r.second->gap.significant) << r.second->verdict;
+  ASSERT_GE(r.second->named, 0) << r.second->verdict;
+  ASSERT_EQ(r.named_effects.size(), 2u);
+  EXPECT_NE(r.named_effects[0], r.named_effects[1]);
+  EXPECT_EQ(r.second->candidates.size(), 1u);
+  PZ_EXPECT_HAS(r.verdict, std::string("with a second effect: ") + EffectName(r.named_effects[1]));
+  EXPECT_EQ(r.final_fit->model->effects().size(), 2u);
+  EXPECT_LT(r.withheld_after, r.candidates[static_cast<size_t>(r.named)].s_withheld);
+  // One effect only: the round runs no fit once its gap is at the floor.
+  const io::RecordSet one = Grid({lp}, {0.03}, 0.01, 22, {1, 3, 5});
+  o.candidates = {lp, delay};
+  const RecordDiagnosis q = DiagnoseRecords(one, o);
+  ASSERT_GE(q.named, 0) << q.verdict;
+  ASSERT_TRUE(q.second.has_value());
+  EXPECT_FALSE(q.second->gap.significant) << q.second->verdict;
+  EXPECT_TRUE(q.second->candidates.empty());
+  EXPECT_EQ(q.named_effects.size(), 1u);
+  EXPECT_EQ(q.verdict.find("second effect"), std::string::npos) << q.verdict;
+}
+
+TEST(RecordDiagnosis, AbsorbedParametersAreNamedWhenAsked) {
+  // No gap beyond the floor, but a creep fitted anyway moves the base parameters it trades with.
+  const auto creep = EffectKind::Named("creep");
+  const io::RecordSet set = Grid({}, {}, 0.01, 31, {1, 3, 5});
+  RecordDiagnoseOptions o;
+  o.family = "backlash-like";
+  o.fit = Quick();
+  o.candidates = {creep};
+  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  EXPECT_FALSE(r.significant) << r.verdict;
+  EXPECT_EQ(r.absorbed_by, "creep");
+  std::cout << r.verdict << "\n";
+  for (const Absorption& a : r.absorbed)
+    std::cout << "  absorbed: " << a.name << " z " << a.z << "\n";
+  for (const Absorption& a : r.absorbed) {
+    EXPECT_GT(std::abs(a.z), 2.0) << a.name;
+    EXPECT_GT(std::abs(a.with - a.without), 0.05 * std::max(std::abs(a.with), std::abs(a.without)));
+  }
+  // The rule itself: a shift of 3 σ by 10 % is absorbed, one of 1 σ is not, nor one of 1 %.
+  std::vector<opt::ParamEstimate> without(3), with(3);
+  const double values[3][3] = {{1.0, 1.1, 0.0333}, {1.0, 1.1, 0.1}, {1.0, 1.01, 0.001}};
+  for (int i = 0; i < 3; ++i) {
+    without[i].name = with[i].name = "p" + std::to_string(i);
+    without[i].value = values[i][0];
+    with[i].value = values[i][1];
+    without[i].std_error = with[i].std_error = values[i][2] / std::sqrt(2.0);
+  }
+  const auto ab = AbsorbedParameters(without, with, 3);
+  ASSERT_EQ(ab.size(), 1u);
+  EXPECT_EQ(ab[0].name, "p0");
+  EXPECT_NEAR(ab[0].z, -0.1 / 0.0333, 1e-9);
+  EXPECT_TRUE(AbsorbedParameters(without, with, 0).empty());
+}
+
+TEST(RecordDiagnosis, TheTrendsAddOnFindsAGainThatFollowsTheAmplitude) {
+  RecordDiagnoseOptions o;
+  o.family = "backlash-like";
+  o.fit = Quick();
+  o.candidates = {EffectKind::Named("delay")};
+  o.trends = true;
+  // The truth's gain c grows by 0.0005 / V: 0.09 at 60 V, 0.11 at 100 V.
+  const RecordDiagnosis r = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}, 0.0005), o);
+  ASSERT_EQ(r.trends.size(), 3u);
+  EXPECT_GT(r.trend_evaluations, 6 * 2) << "the per-record fits' evaluations";
+  const pz::diagnose::ParamTrend& c = r.trends[1];
+  EXPECT_EQ(c.name, "c");
+  ASSERT_EQ(c.per_case.size(), 6u);
+  EXPECT_TRUE(c.significant) << c.p_v;
+  EXPECT_NEAR(c.slope_v, 0.0005, 0.0001);
+  EXPECT_GT(c.r2, 0.9);
+  // The same grid with a constant gain: no trend of c.
+  const RecordDiagnosis flat = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}), o);
+  EXPECT_FALSE(flat.trends[1].significant) << flat.trends[1].p_v;
+  EXPECT_NEAR(flat.trends[1].slope_v, 0, 0.0001);
+  // Without a stated frequency the add-on names the record.
+  io::RecordSet bad = Grid({}, {}, 0.001, 41, {1, 4});
+  bad.records[0].frequency_hz = 0;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(bad, o); }), "record 'case1'");
+}
+
+TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
+  const RecordDiagnoseOptions o = FinBenchOptions();
+  EXPECT_EQ(o.family, "bimorph-fin");
+  EXPECT_EQ(o.floor, RecordFloor::kPerRecord);
+  EXPECT_EQ(o.pattern, RecordPattern::kResidualAnalysis);
+  EXPECT_TRUE(o.second_effect && o.absorbed_in_verdict && o.trends);
+  EXPECT_TRUE(o.fit.family_options.bench_form);
+  EXPECT_TRUE(o.bench_fits.enabled);
+  EXPECT_EQ(o.fit.search.algorithm, opt::SearchAlgorithm::kDe);
+  // The fin library's effects, in its order.
+  ASSERT_EQ(o.candidates.size(), model::EffectLibrary().size());
+  for (size_t i = 0; i < o.candidates.size(); ++i)
+    EXPECT_EQ(o.candidates[i], model::EffectLibrary()[i].kind);
+}
+
+// The switch's measure: the bench's records (io/fin_records.h) diagnosed by this engine with the
+// bench's options give the fin engine's diagnosis (diagnose/fin_diagnose.h) — small searches, the
+// delay bench, a fast and a beam candidate and the second round.
+TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
+  const io::CaseSet bench = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/delay");
+  const std::vector<EffectKind> cands = {EffectKind::Named("delay"),
+                                         EffectKind::Named("hinge-friction")};
+  const opt::DeOptions base_de{.population = 12, .generations = 6, .stall_generations = 0};
+  const opt::DeOptions cand_de{.population = 12, .generations = 4, .stall_generations = 0};
+  diagnose::DiagnoseOptions fo;
+  fo.candidates = cands;
+  fo.de_base = base_de;
+  fo.de_candidate = cand_de;
+  fo.lm.max_iterations = 8;
+  fo.cvode_lm_iterations = 2;
+  const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
+                                   diagnose::CasesFromCaseSet(bench));
+  const diagnose::Diagnosis fin = diagnose::RunDiagnosis(m, fo);
+
+  const RecordDiagnosis rec =
+      DiagnoseRecords(io::RecordsFromCaseSet(bench), diagnose::RecordOptionsOf(fo));
+  std::cout << "fin:     " << fin.verdict << "\nrecords: " << rec.verdict << "\n";
+  EXPECT_EQ(rec.verdict, fin.verdict);
+  EXPECT_EQ(rec.verdict_kind, fin.verdict_kind);
+  const diagnose::RoundResult& first = fin.rounds.front();
+  EXPECT_NEAR(rec.s0, first.s0, 1e-12 * first.s0);
+  EXPECT_NEAR(rec.s_floor, first.s_floor, 1e-12 * first.s_floor);
+  ASSERT_EQ(rec.candidates.size(), first.candidates.size());
+  for (size_t i = 0; i < rec.candidates.size(); ++i) {
+    const auto& a = rec.candidates[i];
+    const auto& b = first.candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    EXPECT_NEAR(a.s_withheld, b.s_withheld, 1e-12 * b.s_withheld) << EffectName(a.kind);
+    EXPECT_NEAR(a.score, b.score, 1e-9 * std::abs(b.score)) << EffectName(a.kind);
+    EXPECT_NEAR(a.pattern, b.pattern, 1e-9) << EffectName(a.kind);
+  }
+  ASSERT_EQ(rec.named_effects, fin.named);
+  EXPECT_NEAR(rec.confidence, fin.confidence, 1e-12);
+  ASSERT_EQ(rec.gaps.size(), fin.gaps.size());
+  for (size_t c = 0; c < rec.gaps.size(); ++c) {
+    EXPECT_NEAR(rec.gaps[c].floor_rms, fin.gaps[c].floor_rms, 1e-12) << rec.gaps[c].name;
+    EXPECT_NEAR(rec.gaps[c].pi_after, fin.gaps[c].pi_after, 1e-12 * fin.gaps[c].pi_after);
+  }
+  // The one driver (the cases as records, read back as the bench's diagnosis): the same fits, the
+  // same rounds, the same evaluations.
+  const diagnose::Diagnosis one = diagnose::DiagnoseBench(m, fo);
+  EXPECT_EQ(one.verdict, fin.verdict);
+  EXPECT_EQ(one.final_fit.x, fin.final_fit.x);
+  EXPECT_EQ(one.final_fit.case_pi, fin.final_fit.case_pi);
+  EXPECT_EQ(one.base.x, fin.base.x);
+  ASSERT_EQ(one.rounds.size(), fin.rounds.size());
+  for (size_t r = 0; r < one.rounds.size(); ++r) {
+    EXPECT_EQ(one.rounds[r].verdict, fin.rounds[r].verdict);
+    EXPECT_EQ(one.rounds[r].candidates.size(), fin.rounds[r].candidates.size());
+  }
+  EXPECT_EQ(one.evaluations, fin.evaluations);
+  ASSERT_EQ(one.trends.size(), fin.trends.size());
+  for (size_t i = 0; i < one.trends.size(); ++i) {
+    EXPECT_EQ(one.trends[i].name, fin.trends[i].name);
+    EXPECT_EQ(one.trends[i].per_case, fin.trends[i].per_case) << one.trends[i].name;
+  }
+  EXPECT_EQ(one.floor_model, fin.floor_model);
+  EXPECT_EQ(one.withheld_floor, fin.withheld_floor);
+  EXPECT_EQ(one.closed_total, fin.closed_total);
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
     std::vector<model::Effect> effects;
     if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
     const DiagnosisModel m(plant, SimulateBench(*plant, p, effects, sat, so, rng));
-    const Diagnosis d = RunDiagnosis(m, o);
+    const Diagnosis d = DiagnoseBench(m, o);
     CheckTrial t;
     t.truth = with_delay ? EffectKind::Named("delay") : EffectKind();
     t.verdict_kind = d.verdict_kind;
@@ -159,8 +159,8 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, CasesFromCaseSet(io::LoadCaseSet(dir)));
   const Diagnosis d =
-      RunDiagnosis(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
-                             EffectKind::Named("creep")}));
+      DiagnoseBench(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
+                              EffectKind::Named("creep")}));
   // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says
   // so.
   ASSERT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
