@@ -136,14 +136,23 @@ int RunDiagnose(const DiagnoseArgs& a) {
       Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
   o.trends = !a.no_trends;
-  if (a.service.enabled()) o.evaluator_factory = std::move(service);
+  if (a.service.enabled() && a.engine == "records") {
+    // The records engine's fits as complete_model sessions (bimorph-fin's bench form on the
+    // workers, bit for bit as locally).
+    const ServiceEvaluatorOptions so = a.service.Options();
+    o.records_service = [so](const records::FamilyOptions& f) {
+      return RecordsServiceFactory(so, f, "piezoid diagnose");
+    };
+  } else if (a.service.enabled()) {
+    o.evaluator_factory = std::move(service);
+  }
   o.concurrent_fits = a.concurrent_fits > 0 ? a.concurrent_fits : a.service.enabled() ? 3 : 1;
   auto plant = std::make_shared<const model::BimorphPlant>();
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
   diagnose::Diagnosis d;
   try {
-    // The records engine on the bench's records (with --master: the fin engine, whose fitness
-    // the service's sessions take), or --engine fin.
+    // The records engine on the bench's records (with --master: on the workers as
+    // complete_model sessions), or --engine fin (with --master: the fin's diagnose sessions).
     d = a.engine == "records" ? diagnose::DiagnoseBench(m, o) : diagnose::RunDiagnosis(m, o);
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
@@ -350,8 +359,9 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(1.0001, 100.0));
   cmd->add_option("--engine", a->engine,
                   "with --cases: records (the bench's cases as records, diagnosed by the records "
-                  "engine with the bench's options) or fin (the bench's own engine; also what "
-                  "--master runs)")
+                  "engine with the bench's options; with --master its fits run as complete_model "
+                  "sessions) or fin (the bench's own engine, kept for comparison; with --master "
+                  "its fits run as diagnose sessions)")
       ->check(CLI::IsMember({"fin", "records"}))
       ->default_str("records");
   cmd->add_flag("--no-second", a->no_second, "do not look for a second effect");

@@ -635,6 +635,7 @@ records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
   r.second_effect = o.second_effect;
   r.trends = o.trends;
   r.fit.progress = o.progress;
+  if (o.records_service) r.fit.evaluator_factory = o.records_service(r.fit.family_options);
   return r;
 }
 
@@ -662,7 +663,7 @@ io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
 
 Diagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
   ThrowIfError(o.Validate());
-  if (o.evaluator_factory) return RunDiagnosis(m, o);
+  if (o.evaluator_factory && !o.records_service) return RunDiagnosis(m, o);
   const auto start = std::chrono::steady_clock::now();
   const io::RecordSet set = RecordsOfCases(m.cases());
   Diagnosis d = DiagnosisOfRecords(m, set, records::DiagnoseRecords(set, RecordOptionsOf(o)));

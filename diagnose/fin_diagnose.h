@@ -50,6 +50,11 @@ struct DiagnoseOptions {
   uint64_t seed = 1;
   /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
   EvaluatorFactory evaluator_factory;
+  /// The records engine's evaluators on the service (DiagnoseBench): given the bench form's family
+  /// options, the factory of every fit's evaluators (svcclient/complete_service.h
+  /// RecordsServiceFactory). With it, DiagnoseBench runs the records engine on the service; with
+  /// only `evaluator_factory`, the fin engine (RunDiagnosis).
+  std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> records_service;
   /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
   /// sessions), ≥ 1; the results do not depend on it.
   int concurrent_fits = 1;

@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "svcclient/complete_service.h"
 #include "svcclient/service_evaluator.h"
 #include "diagnose/fin_diagnose.h"
 #include "diagnose/job_kind.h"
@@ -174,6 +175,67 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   EXPECT_EQ(jobs.size(), 5u);
   for (const auto& j : jobs) {
     EXPECT_EQ(j.kind, "diagnose");
+    EXPECT_GT(j.evaluations, 0u);
+  }
+}
+
+// piezoid diagnose --cases --master: the records engine (DiagnoseBench) with every fit's search as
+// a complete_model session (bimorph-fin's bench form on the workers) gives the local diagnosis
+// bit for bit.
+TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
+  testing::Cluster cluster("diagnose-records-service");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  const DiagnosisModel m(plant, SmallBench(true));
+  DiagnoseOptions o;
+  o.candidates = {EffectKind::Named("delay"), EffectKind::Named("cubic-stiffening")};
+  o.de_base.population = 12;
+  o.de_base.generations = 8;
+  o.de_candidate.population = 12;
+  o.de_candidate.generations = 5;
+  o.lm.max_iterations = 6;
+  o.cvode_lm_iterations = 2;
+  o.cvode_start_fractions = {0.05};
+  o.second_effect = false;
+  o.trends = false;
+  const Diagnosis local = DiagnoseBench(m, o);
+
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 300;
+  int factories = 0;
+  o.records_service = [&](const records::FamilyOptions& f) {
+    ++factories;
+    EXPECT_TRUE(f.bench_form);
+    return client::RecordsServiceFactory(so, f, "test");
+  };
+  const Diagnosis remote = DiagnoseBench(m, o);
+  EXPECT_GE(factories, 1);
+  ExpectSameVector(remote.base.x, local.base.x, "base.x");
+  EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
+  ExpectSameVector(remote.base.case_pi, local.base.case_pi, "base.case_pi");
+  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
+  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
+  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
+    const auto& a = remote.rounds[0].candidates[i];
+    const auto& b = local.rounds[0].candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
+    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
+    EXPECT_TRUE(SameBits(a.score, b.score));
+  }
+  EXPECT_EQ(remote.named, local.named);
+  EXPECT_EQ(remote.verdict, local.verdict);
+  // The searches ran on the workers: complete_model sessions, each with evaluations.
+  auto client = cluster.Client();
+  std::vector<service::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  EXPECT_GE(jobs.size(), 2u);
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.kind, "complete_model");
     EXPECT_GT(j.evaluations, 0u);
   }
 }
