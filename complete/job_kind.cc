@@ -150,26 +150,38 @@ class OwningRecordFitness final : public opt::FitnessFunction {
     }
     std::vector<const io::Record*> ptrs;
     for (const auto& r : records_) ptrs.push_back(&r);
-    if (Windowed(p))
+    if (Windowed(p)) {
       fitness_ = std::make_unique<records::CriterionFitness>(
           *model_, ptrs,
           records::CriterionOptions{CriterionOf(p.criterion), p.t0_s, p.t1_s, p.error_cost});
+    } else {
+      auto f = std::make_unique<records::RecordFitness>(*model_, ptrs);
+      // The polish's residual vectors over the records fitness (kept alive beside them).
+      if (p.residuals) residuals_ = std::make_unique<records::RecordResidualFitness>(*f);
+      fitness_ = std::move(f);
+    }
+    if (residuals_)
+      evaluated_ = residuals_.get();
     else
-      fitness_ = std::make_unique<records::RecordFitness>(*model_, ptrs);
+      evaluated_ = fitness_.get();
   }
-  opt::FitnessResult Evaluate(const opt::Genome& g) const override { return fitness_->Evaluate(g); }
+  opt::FitnessResult Evaluate(const opt::Genome& g) const override {
+    return evaluated_->Evaluate(g);
+  }
   // The records fitness's lanes (a family that runs parameter sets side by side): a worker's
   // compute thread takes that many genomes of a lease at a time.
-  int lanes() const override { return fitness_->lanes(); }
+  int lanes() const override { return evaluated_->lanes(); }
   void EvaluateMany(std::span<const opt::Genome* const> genomes,
                     std::span<opt::FitnessResult> out) const override {
-    fitness_->EvaluateMany(genomes, out);
+    evaluated_->EvaluateMany(genomes, out);
   }
 
  private:
   std::shared_ptr<records::RecordModel> model_;
   std::vector<io::Record> records_;
   std::unique_ptr<opt::FitnessFunction> fitness_;
+  std::unique_ptr<records::RecordResidualFitness> residuals_;  ///< `residuals` only
+  const opt::FitnessFunction* evaluated_ = nullptr;            ///< residuals_ or fitness_
 };
 
 model::InputInterpolation InterpolationOf(SpecInterpolation i) {
@@ -305,6 +317,10 @@ void CheckSinusoid(const CompleteModelProblem& p, const CompleteModelRecord& r,
 template <typename Add>
 void CheckRecordFields(const CompleteModelProblem& p, Add&& add) {
   CheckBenchForm(p, add);
+  if (Windowed(p) && p.residuals)
+    add("complete_model.residuals", "true",
+        "only the MSE over the records' scored samples has residual vectors (no window: leave "
+        "t0_s, t1_s unset, or residuals false)");
   if (Windowed(p)) {
     if (!(std::isfinite(p.t0_s) && p.t0_s >= 0))
       add("complete_model.t0_s", Num(p.t0_s), "must be finite and >= 0");
@@ -405,6 +421,9 @@ std::vector<FieldViolation> CheckFields(const CompleteModelProblem& p) {
     return v;
   }
   // The Bouc–Wen oscillator of the benchmark protocol.
+  if (p.residuals)
+    add("complete_model.residuals", "true",
+        "only the RECORDS family's fitness has residual vectors: leave unset");
   const int sub = Substeps(p);
   if (sub < 1 || sub > 1000)
     add("complete_model.substeps", std::to_string(p.substeps), "must be in [1, 1000] (0 = 4)");
@@ -540,8 +559,10 @@ CompleteModelProblem RecordsProblem(const records::RecordFitness& fitness, int p
 }  // namespace
 
 job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness,
-                                                 const records::FamilyOptions& options) {
+                                                 const records::FamilyOptions& options,
+                                                 bool residuals) {
   CompleteModelProblem p = RecordsProblem(fitness, options.pi_operators, true);
+  p.residuals = residuals;
   p.substeps = options.substeps;  // the workers' family integrates as the local one
   if (p.bench_form) {             // and simulates as the local one
     if (!options.bench_form)

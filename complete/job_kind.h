@@ -30,9 +30,13 @@ job::CompleteModelProblem CompleteModelProblemOf(const BwTraining& training);
 /// (sub-steps, Prandtl–Ishlinskii plays) it was made with. bimorph-fin's bench form
 /// (Family::simulates_records): its records whole with their stated sinusoid, the effects in the
 /// model's order, bench_form and `options.fin_sim`; InputError when `options` are not a bench
-/// form's (the options must be those the family was made with).
+/// form's (the options must be those the family was made with). `residuals`: the polish's spec
+/// (CompleteModelProblem::residuals: each result the residual vector of
+/// records::RecordResidualFitness); false: the search's, whose bytes and job id are those of a
+/// spec made before the field.
 job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& fitness,
-                                                 const records::FamilyOptions& options);
+                                                 const records::FamilyOptions& options,
+                                                 bool residuals = false);
 /// The committee's fitness (family RECORDS with its criterion and window; the records whole, since
 /// the window is in their own time); `options`: the family's (sub-steps, PI plays).
 job::CompleteModelProblem CompleteModelProblemOf(const records::CriterionFitness& fitness,

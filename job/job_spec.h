@@ -219,6 +219,9 @@ struct CompleteModelProblem {
     bool force_cvode = false;
   };
   std::optional<FinSim> fin_sim = std::nullopt;  ///< on the wire when set
+  /// Records without a window: results carry the training residual vector (records/fit.h
+  /// RecordResidualFitness), the polish's Jacobian columns; false: the cost alone.
+  bool residuals = false;
 };
 
 /// An evaluation session (proto ExternalSettings): the client owning the job optimises and sends

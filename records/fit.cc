@@ -620,38 +620,30 @@ RecordMetrics Evaluate(const RecordModel& model, std::span<const double> params,
 
 namespace {
 
-/// The residuals of the training records at physical values (FitnessResult::residuals, cost Σ r² =
-/// the MSE), the polish's fitness.
-class RecordResidualFitness final : public opt::FitnessFunction {
- public:
-  explicit RecordResidualFitness(const RecordFitness& fitness) : fitness_(fitness) {}
-  opt::FitnessResult Evaluate(const opt::Genome& genome) const override {
-    std::vector<double> r;
-    const bool ok = fitness_.Residuals(genome.reals, r);
-    return Result(ok, std::move(r));
-  }
-  // The records fitness's lanes: a Jacobian's columns side by side, each Evaluate's bit for bit.
-  int lanes() const override { return fitness_.lanes(); }
-  void EvaluateMany(std::span<const opt::Genome* const> genomes,
-                    std::span<opt::FitnessResult> out) const override {
-    std::vector<std::vector<double>> rs(genomes.size());
-    const std::unique_ptr<bool[]> ok(new bool[genomes.size()]);
-    fitness_.ResidualsMany(Reals(genomes), rs, std::span<bool>(ok.get(), genomes.size()));
-    for (size_t l = 0; l < genomes.size(); ++l) out[l] = Result(ok[l], std::move(rs[l]));
-  }
-
- private:
-  static opt::FitnessResult Result(bool ok, std::vector<double> residuals) {
-    if (!ok) return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
-    opt::FitnessResult out;
-    out.residuals = std::move(residuals);
-    for (double e : out.residuals) out.cost += e * e;
-    return out;
-  }
-  const RecordFitness& fitness_;
-};
+// A residual vector's result: cost Σ r²; the penalty, "diverged", when the output is not finite.
+opt::FitnessResult ResidualResult(bool ok, std::vector<double> residuals) {
+  if (!ok) return {opt::kDefaultErrorCost, opt::FitnessStatus::kPenalized, "diverged"};
+  opt::FitnessResult out;
+  out.residuals = std::move(residuals);
+  for (double e : out.residuals) out.cost += e * e;
+  return out;
+}
 
 }  // namespace
+
+opt::FitnessResult RecordResidualFitness::Evaluate(const opt::Genome& genome) const {
+  std::vector<double> r;
+  const bool ok = fitness_.Residuals(genome.reals, r);
+  return ResidualResult(ok, std::move(r));
+}
+
+void RecordResidualFitness::EvaluateMany(std::span<const opt::Genome* const> genomes,
+                                         std::span<opt::FitnessResult> out) const {
+  std::vector<std::vector<double>> rs(genomes.size());
+  const std::unique_ptr<bool[]> ok(new bool[genomes.size()]);
+  fitness_.ResidualsMany(Reals(genomes), rs, std::span<bool>(ok.get(), genomes.size()));
+  for (size_t l = 0; l < genomes.size(); ++l) out[l] = ResidualResult(ok[l], std::move(rs[l]));
+}
 
 RecordMap::RecordMap(const RecordModel& model)
     : params_(model.params()), forms_(model.search_forms()) {
@@ -1027,11 +1019,17 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     const RecordResidualFitness residual_fitness(fitness);
     opt::FitProblem problem;
     problem.map = m;
+    // The factory's evaluators (the service's workers) rebuild the fitness as constructed: once a
+    // revalidation below has changed its strengths, the polishes under them run here.
+    bool revalidated = false;
     problem.cost_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
-      if (options.evaluator_factory) return Physical(options.evaluator_factory(fitness), m);
+      if (options.evaluator_factory && !revalidated)
+        return Physical(options.evaluator_factory(fitness, RecordEvaluation::kCost), m);
       return Physical(std::make_unique<opt::ThreadPoolEvaluator>(fitness, options.threads), m);
     };
     problem.residual_evaluator = [&]() -> std::unique_ptr<opt::BatchEvaluator> {
+      if (options.evaluator_factory && !revalidated)
+        return Physical(options.evaluator_factory(fitness, RecordEvaluation::kResiduals), m);
       return Physical(std::make_unique<opt::ThreadPoolEvaluator>(residual_fitness, options.threads),
                       m);
     };
@@ -1079,6 +1077,7 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
         changed = fitness.Revalidate(best);
       if (spectrum) changed = fitness.RevalidateSpectrum(best, map, options.threads) || changed;
       if (!changed) break;
+      revalidated = true;
       if (searched_map) {
         opt::FitOptions again = fo;
         again.search = false;

@@ -3,7 +3,7 @@
 // handled explicitly (io::OffsetMode): the one fit of opt/fit.h over the model's parameter box — a
 // global search (PSO / real GA / binary GA / DE of opt/param_search.h, through the evaluator seam:
 // threads here, the service's workers with --master), a bounded Levenberg–Marquardt polish (its
-// Jacobians one batch of a residual evaluator, threads here) and the uncertainty table (σ,
+// Jacobians one batch of a residual evaluator, through the same seam) and the uncertainty table (σ,
 // sensitivity, identifiability, singular values) at the solution. A linear-in-parameters family
 // (the Prandtl–Ishlinskii operator) has its weights solved exactly by non-negative least squares
 // inside every evaluation (variable projection), so only effect parameters are searched.
@@ -252,9 +252,32 @@ class RecordMap final : public opt::ParameterMap {
   const std::vector<Family::SearchForm>& forms_;
 };
 
-/// Builds the evaluator of a global search (null = a thread pool of `threads`).
+/// The residuals of the training records at physical values (FitnessResult::residuals:
+/// RecordFitness::Residuals; cost Σ r², the MSE; a penalty and "diverged" when an output is not
+/// finite), the polish's fitness: locally, and on a worker for a complete_model spec with
+/// `residuals` (complete/job_kind.h), bit for bit. Runs the fitness's lanes (a Jacobian's columns
+/// side by side, each Evaluate's bit for bit). The fitness must outlive it.
+class RecordResidualFitness final : public opt::FitnessFunction {
+ public:
+  explicit RecordResidualFitness(const RecordFitness& fitness) : fitness_(fitness) {}
+  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
+  int lanes() const override { return fitness_.lanes(); }
+  void EvaluateMany(std::span<const opt::Genome* const> genomes,
+                    std::span<opt::FitnessResult> out) const override;
+
+ private:
+  const RecordFitness& fitness_;
+};
+
+/// What a records fit's evaluator returns: the global search's costs (RecordFitness) or the
+/// Levenberg–Marquardt polish's residual vectors (RecordResidualFitness over the fitness).
+enum class RecordEvaluation { kCost, kResiduals };
+
+/// Builds the evaluator of a global search (kCost) or of one polish (kResiduals: a Jacobian per
+/// batch; called once per polish, concurrently where polishes run side by side) over the fitness
+/// (null factory = a thread pool of `threads`). The genomes are physical values.
 using RecordEvaluatorFactory =
-    std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&)>;
+    std::function<std::unique_ptr<opt::BatchEvaluator>(const RecordFitness&, RecordEvaluation)>;
 
 struct FitOptions {
   std::string family = "backlash-like";

@@ -246,6 +246,7 @@ void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
   pm->set_initial_state(m.initial_state);
   pm->mutable_scale()->Assign(m.scale.begin(), m.scale.end());
   pm->set_bench_form(m.bench_form);
+  pm->set_residuals(m.residuals);
   if (m.fin_sim) {
     auto* pf = pm->mutable_fin_sim();
     pf->set_oversample(static_cast<uint32_t>(std::max(0, m.fin_sim->oversample)));
@@ -311,6 +312,7 @@ CompleteModelProblem CompleteModelFromProto(const pw::CompleteModelProblem& pm,
   m.initial_state = pm.initial_state();
   m.scale.assign(pm.scale().begin(), pm.scale().end());
   m.bench_form = pm.bench_form();
+  m.residuals = pm.residuals();
   if (pm.has_fin_sim()) {
     const auto& pf = pm.fin_sim();
     m.fin_sim =

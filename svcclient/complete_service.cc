@@ -8,12 +8,17 @@ using namespace complete;
 records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
                                                       const records::FamilyOptions& family,
                                                       const std::string& owner) {
-  return [options, family,
-          owner](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+  return [options, family, owner](
+             const records::RecordFitness& f,
+             records::RecordEvaluation e) -> std::unique_ptr<opt::BatchEvaluator> {
+    const bool residuals = e == records::RecordEvaluation::kResiduals;
     const std::string what = owner + ": " + f.model().Describe() + " on " +
-                             std::to_string(f.records().size()) + " record(s)";
+                             std::to_string(f.records().size()) + " record(s)" +
+                             (residuals ? " (polish)" : "");
     return std::make_unique<ServiceEvaluator>(
-        options, complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f, family), what),
+        options,
+        complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(f, family, residuals),
+                                       what),
         owner);
   };
 }

@@ -13,8 +13,10 @@
 
 namespace pz::client {
 
-/// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS), its
-/// family made with `family` as locally (sub-steps, plays), so that the costs are the local ones.
+/// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS) and one
+/// per Levenberg–Marquardt polish (RecordEvaluation::kResiduals: the spec's `residuals`, a Jacobian
+/// per batch), its family made with `family` as locally (sub-steps, plays), so that the costs and
+/// residuals are the local ones.
 records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
                                                       const records::FamilyOptions& family,
                                                       const std::string& owner);

@@ -5,7 +5,10 @@
 // refused field by field; a spec without the bench form encodes as before (no new field on the
 // wire: its bytes, hence its job id, unchanged); and a bench-form fit of the nominal bench whose
 // search runs on a local master with two workers gives the local fit's parameters and per-case sum
-// of squared errors bit for bit, for the base model and for a beam model (hinge-friction on CVODE).
+// of squared errors bit for bit, for the base model and for a beam model (hinge-friction on CVODE),
+// with the Levenberg–Marquardt polish's residual vectors (the spec's `residuals`) on the workers
+// too, as for the fin's refinement of a beam model (no search); `residuals` is refused where
+// there are none (a window, the oscillator).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -119,6 +122,22 @@ TEST(FinRecordsJobKindTest, TheSpecRebuildsTheBenchFormFitnessBitForBit) {
         EXPECT_EQ(a.status, b.status);
       }
     }
+    // The polish's spec: each result the local residual vector, bit for bit.
+    const auto remote = RemoteCompleteFitness(
+        complete::CompleteModelJobSpec(complete::CompleteModelProblemOf(local.fitness, fo, true),
+                                       "polish"),
+        false);
+    ASSERT_TRUE(remote);
+    const records::RecordResidualFitness residuals(local.fitness);
+    const opt::FitnessResult a = residuals.Evaluate(At(local.model, c.at[0])),
+                             b = remote->Evaluate(At(local.model, c.at[0]));
+    ASSERT_EQ(a.status, opt::FitnessStatus::kOk) << a.reason;
+    EXPECT_EQ(a.status, b.status);
+    EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
+    ASSERT_EQ(a.residuals.size(), b.residuals.size());
+    EXPECT_GT(a.residuals.size(), 0u);
+    for (size_t k = 0; k < a.residuals.size(); ++k)
+      ASSERT_TRUE(SameBits(a.residuals[k], b.residuals[k])) << k;
   }
 }
 
@@ -137,6 +156,7 @@ TEST(FinRecordsJobKindTest, ASpecWithoutTheBenchFormPutsNoneOfItsFieldsOnTheWire
   const wire::CompleteModelProblem& m = p.complete_model();
   EXPECT_FALSE(m.bench_form());
   EXPECT_FALSE(m.has_fin_sim());
+  EXPECT_FALSE(m.residuals());
   ASSERT_EQ(m.records_size(), static_cast<int>(train.size()));
   for (const auto& r : m.records()) EXPECT_FALSE(r.has_sinusoid());
   // Cleared, the message is the same bytes: nothing else was added.
@@ -163,6 +183,11 @@ TEST(FinRecordsJobKindTest, BadBenchFormSpecsAreRefusedFieldByField) {
   };
   EXPECT_EQ(errors(p), "<none>");
   auto q = p;
+  q.residuals = true;  // the polish's spec
+  EXPECT_EQ(errors(q), "<none>");
+  q.t1_s = 1;
+  PZ_EXPECT_HAS(errors(q), "complete_model.residuals = true: only the MSE over the records'");
+  q = p;
   q.records[2].sinusoid.reset();
   PZ_EXPECT_HAS(errors(q),
                 "complete_model.records[2].sinusoid = unset: bimorph-fin's bench form "
@@ -242,7 +267,51 @@ void ExpectSameFit(const records::FitResult& want, const records::FitResult& got
   }
   EXPECT_TRUE(SameBits(want.train_sse, got.train_sse)) << want.train_sse << " vs " << got.train_sse;
   EXPECT_EQ(want.search.evaluations, got.search.evaluations);
-  EXPECT_GT(got.search.evaluations, 0);
+  EXPECT_EQ(want.evaluations, got.evaluations);
+  EXPECT_EQ(want.lm_iterations, got.lm_iterations);
+}
+
+client::ServiceEvaluatorOptions ServiceOptions(const Cluster& cluster) {
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 120;
+  return so;
+}
+
+/// The fit with its evaluations (search and polishes) on the cluster's workers.
+records::FitResult FitOnService(const io::RecordSet& set, records::FitOptions o,
+                                const Cluster& cluster) {
+  o.evaluator_factory =
+      client::RecordsServiceFactory(ServiceOptions(cluster), o.family_options, "test");
+  try {
+    return records::FitRecords(set, o);
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
+  }
+  return {};
+}
+
+/// The sessions on the cluster's master: the searches' (cost) and the polishes' (residuals, named
+/// "… (polish)"), each with its evaluations.
+struct Sessions {
+  uint64_t search = 0, polish = 0;  ///< sessions
+  uint64_t search_evals = 0, polish_evals = 0;
+};
+Sessions SessionsOn(Cluster& cluster) {
+  auto client = cluster.Client();
+  std::vector<service::JobInfo> jobs;
+  EXPECT_TRUE(client.List(&jobs).ok());
+  Sessions s;
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.kind, "complete_model");
+    EXPECT_GT(j.evaluations, 0u) << j.name;
+    const bool polish = j.name.ends_with(" (polish)");
+    (polish ? s.polish : s.search) += 1;
+    (polish ? s.polish_evals : s.search_evals) += j.evaluations;
+  }
+  return s;
 }
 
 TEST(FinRecordsServiceTest, ABenchFormFitOnTheServiceIsTheLocalOneBitForBit) {
@@ -250,11 +319,7 @@ TEST(FinRecordsServiceTest, ABenchFormFitOnTheServiceIsTheLocalOneBitForBit) {
   cluster.AddWorker(1);
   cluster.AddWorker(1);
   const io::RecordSet set = Nominal();
-  client::ServiceEvaluatorOptions so;
-  so.client.endpoint = cluster.client_endpoint();
-  so.client.timeout_ms = 2000;
-  so.client.retries = 3;
-  so.batch_timeout_s = 120;
+  int64_t search_evals = 0, polish_evals = 0;
   // The base model (the fast path), then a beam model (hinge-friction: every run on CVODE, about
   // 0.1 s each: a search of two generations of 4 and one polish step).
   const std::vector<records::FitOptions> fits = {
@@ -262,24 +327,51 @@ TEST(FinRecordsServiceTest, ABenchFormFitOnTheServiceIsTheLocalOneBitForBit) {
   for (records::FitOptions o : fits) {
     SCOPED_TRACE(o.effects.empty() ? "base" : "hinge-friction");
     const records::FitResult local = records::FitRecords(set, o);
-    o.evaluator_factory = client::RecordsServiceFactory(so, o.family_options, "test");
-    records::FitResult remote;
-    try {
-      remote = records::FitRecords(set, o);
-    } catch (const std::exception& e) {
-      FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
-    }
+    const records::FitResult remote = FitOnService(set, o, cluster);
     ExpectSameFit(local, remote);
+    search_evals += remote.search.evaluations;
+    polish_evals += remote.evaluations - remote.search.evaluations;
   }
-  // Each search was one session of the complete_model kind, all its evaluations on the workers.
-  auto client = cluster.Client();
-  std::vector<service::JobInfo> jobs;
-  ASSERT_TRUE(client.List(&jobs).ok());
-  ASSERT_EQ(jobs.size(), 2u);
-  for (const auto& j : jobs) {
-    EXPECT_EQ(j.kind, "complete_model");
-    EXPECT_GT(j.evaluations, 0u) << j.name;
-  }
+  // Each search was one session of the complete_model kind, and each polish one (its residual
+  // vectors): every evaluation of both on the workers.
+  const Sessions s = SessionsOn(cluster);
+  EXPECT_EQ(s.search, 2u);
+  EXPECT_EQ(s.polish, 2u);
+  EXPECT_EQ(s.search_evals, static_cast<uint64_t>(search_evals));
+  EXPECT_EQ(s.polish_evals, static_cast<uint64_t>(polish_evals));
+}
+
+// The fin's refinement of a beam model (no search: a Levenberg–Marquardt polish from a base fit
+// with hinge-friction's magnitude at two fractions of its range, every run on CVODE): with the
+// residual vectors on a master with two workers, the local refinement's parameters and per-case
+// sse bit for bit, every evaluation of both polishes on the workers.
+TEST(FinRecordsServiceTest, ABeamRefinementWithItsResidualsOnTheServiceIsTheLocalOneBitForBit) {
+  Cluster cluster("fin-records-refine");
+  cluster.AddWorker(1);
+  cluster.AddWorker(1);
+  const io::RecordSet set = Nominal();
+  records::FitOptions o = BenchFit({EffectKind::Named("hinge-friction")}, 4, 1, 1);
+  // A base point (the bench's own fit is not needed for the check): the box's lower quarter.
+  const records::FitResult probe = [&] {
+    records::FitOptions b = BenchFit({}, 4, 1, 1);
+    b.polish = false;
+    return records::FitRecords(set, b);
+  }();
+  // The hinge's parameters at the middle of their box (its magnitude set by each start).
+  const Local beam(set, o.effects, o.family_options);
+  o.polish_from = probe.params;
+  for (size_t i = probe.params.size(); i < beam.model.params().size(); ++i)
+    o.polish_from.push_back(0.5 * (beam.model.params()[i].lower + beam.model.params()[i].upper));
+  o.beam.lm_iterations = 1;
+  o.beam.start_fractions = {0.03, 0.15};
+  const records::FitResult local = records::FitRecords(set, o);
+  EXPECT_EQ(local.polishes, 2);
+  EXPECT_EQ(local.search.evaluations, 0);
+  ExpectSameFit(local, FitOnService(set, o, cluster));
+  const Sessions s = SessionsOn(cluster);
+  EXPECT_EQ(s.search, 0u);
+  EXPECT_EQ(s.polish, 2u);  // one session per start
+  EXPECT_EQ(s.polish_evals, static_cast<uint64_t>(local.evaluations));
 }
 
 }  // namespace

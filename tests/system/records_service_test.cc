@@ -202,8 +202,15 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   auto client = cluster.Client();
   std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
-  ASSERT_EQ(jobs.size(), 1u);
-  EXPECT_EQ(jobs[0].kind, "complete_model");
+  // The search's session and the polish's (its residual vectors, "… (polish)").
+  ASSERT_EQ(jobs.size(), 2u);
+  int polishes = 0;
+  for (const auto& j : jobs) {
+    EXPECT_EQ(j.kind, "complete_model");
+    EXPECT_GT(j.evaluations, 0u) << j.name;
+    polishes += j.name.ends_with(" (polish)") ? 1 : 0;
+  }
+  EXPECT_EQ(polishes, 1);
   // One searched parameter (prandtl-ishlinskii's weights are solved): the line search, its grid and
   // then one point per bracket and step as the batches of the session, the local fit bit for bit.
   records::FitOptions line = o;
@@ -298,16 +305,24 @@ TEST(RecordsServiceTest, AnAutoFamilyFitWithMasterWritesTheLocalFitJsonBitForBit
   std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
   std::map<std::string, int> per_model;
+  size_t searches = 0, polishes = 0;  // the polishes' sessions: their residual vectors
   for (const auto& j : jobs) {
     EXPECT_EQ(j.kind, "complete_model");
     EXPECT_EQ(j.name.rfind("piezoid fit --family auto: ", 0), 0u) << j.name;
     EXPECT_GT(j.evaluations, 0u) << j.name;
+    if (j.name.ends_with(" (polish)")) {
+      ++polishes;
+      continue;
+    }
+    ++searches;
     ++per_model[j.name.substr(0, j.name.rfind(" on "))];
   }
+  std::printf("%zu search session(s), %zu polish session(s)\n", searches, polishes);
+  EXPECT_GT(polishes, 0u);
   for (const auto& [name, n] : per_model) std::printf("%d session(s): %s\n", n, name.c_str());
   // 7 of the 8 candidates search (prandtl-ishlinskii alone solves its weights): 7 × 3 screening
   // folds, 2 finalists × 3 folds, and the 2 finalists' refits on every training record.
-  EXPECT_EQ(jobs.size(), 7u * 3 + 2 * 3 + 2);
+  EXPECT_EQ(searches, 7u * 3 + 2 * 3 + 2);
   // The chosen model: its 3 screening folds, its 3 final folds and its refit, whose session
   // evaluated the whole global search of fit.json.
   const auto& model = local.fields().at("model").struct_value().fields();
@@ -330,16 +345,22 @@ TEST(RecordsServiceTest, AnAutoFamilyFitWithMasterWritesTheLocalFitJsonBitForBit
 /// lanes hidden (how the workers evaluated before they took lanes() genomes at a time).
 class OneAtATimeEvaluator final : public opt::BatchEvaluator {
  public:
-  explicit OneAtATimeEvaluator(const records::RecordFitness& f) : single_(f), pool_(single_, 2) {}
+  OneAtATimeEvaluator(const records::RecordFitness& f, records::RecordEvaluation e)
+      : residuals_(f),
+        single_(e == records::RecordEvaluation::kResiduals
+                    ? static_cast<const opt::FitnessFunction&>(residuals_)
+                    : f),
+        pool_(single_, 2) {}
   void Evaluate(const opt::EvalBatch& batch, std::span<opt::FitnessResult> out) override {
     pool_.Evaluate(batch, out);
   }
 
  private:
+  records::RecordResidualFitness residuals_;
   struct Single final : opt::FitnessFunction {
-    explicit Single(const records::RecordFitness& f) : f(f) {}
+    explicit Single(const opt::FitnessFunction& f) : f(f) {}
     opt::FitnessResult Evaluate(const opt::Genome& g) const override { return f.Evaluate(g); }
-    const records::RecordFitness& f;
+    const opt::FitnessFunction& f;
   } single_;
   opt::ThreadPoolEvaluator pool_;
 };
@@ -392,10 +413,10 @@ TEST(RecordsServiceTest, ABwOscillatorFitOnWorkersTakingFourGenomesAtATimeIsTheL
   records::FitOptions o = BwFitOptions(8);
   const records::FitResult local = records::FitRecords(set, o);
   ASSERT_EQ(local.params.size(), 7u);
-  o.evaluator_factory =
-      [](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
+  o.evaluator_factory = [](const records::RecordFitness& f,
+                           records::RecordEvaluation e) -> std::unique_ptr<opt::BatchEvaluator> {
     EXPECT_EQ(f.lanes(), 4);
-    return std::make_unique<OneAtATimeEvaluator>(f);
+    return std::make_unique<OneAtATimeEvaluator>(f, e);
   };
   {
     SCOPED_TRACE("one at a time");
@@ -404,10 +425,23 @@ TEST(RecordsServiceTest, ABwOscillatorFitOnWorkersTakingFourGenomesAtATimeIsTheL
   o.evaluator_factory = ServiceFactory(cluster, o);
   try {
     SCOPED_TRACE("on the service");
-    ExpectSameFit(local, records::FitRecords(set, o));
+    const records::FitResult remote = records::FitRecords(set, o);
+    ExpectSameFit(local, remote);
+    EXPECT_EQ(local.evaluations, remote.evaluations);
+    EXPECT_EQ(local.lm_iterations, remote.lm_iterations);
   } catch (const std::exception& e) {
     FAIL() << e.what() << " (see " << cluster.dir() << ")";  // keeps the logs
   }
+  // The search was one session, the polish another (its residual vectors, "… (polish)"): every
+  // evaluation of both on the workers.
+  auto client = cluster.Client();
+  std::vector<service::JobInfo> jobs;
+  ASSERT_TRUE(client.List(&jobs).ok());
+  uint64_t search = 0, polish = 0;
+  for (const auto& j : jobs) (j.name.ends_with(" (polish)") ? polish : search) += j.evaluations;
+  EXPECT_EQ(search, static_cast<uint64_t>(local.search.evaluations));
+  EXPECT_GT(local.lm_iterations, 0);
+  EXPECT_EQ(polish, static_cast<uint64_t>(local.evaluations - local.search.evaluations));
 }
 
 /// A service evaluator that kills one of the cluster's workers (SIGKILL, at random) 1 ms into
@@ -461,9 +495,9 @@ TEST(RecordsServiceTest, ABwOscillatorFitIsBitIdenticalUnderWorkerChurn) {
   const records::FitResult local = records::FitRecords(set, o);
   int kills = 0;
   const records::RecordEvaluatorFactory service = ServiceFactory(cluster, o);
-  o.evaluator_factory =
-      [&](const records::RecordFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
-    return std::make_unique<ChurningEvaluator>(service(f), cluster, 2, &kills);
+  o.evaluator_factory = [&](const records::RecordFitness& f,
+                            records::RecordEvaluation e) -> std::unique_ptr<opt::BatchEvaluator> {
+    return std::make_unique<ChurningEvaluator>(service(f, e), cluster, 2, &kills);
   };
   records::FitResult remote;
   try {
