@@ -26,7 +26,7 @@ start=$(date +%s.%N)
   >"$OUT/service.txt" 2>"$OUT/service.err"
 end=$(date +%s.%N)
 echo "== $SET on the service: wall $(echo "$end - $start" | bc) s (load $(cut -d' ' -f1 /proc/loadavg))"
-grep -E "^  [a-z-]+: training RMS" "$OUT/service.err" | sed 's/^/   /'
+grep -E "^  [a-z-]+: training RMS" "$OUT/service.err" | sed 's/^/   /' || true
 grep -E "^VERDICT|share of the gap closed" "$OUT/service.txt" | sed 's/^/   /'
 "$BIN" list --master "$EP" | tail -n 3 | sed 's/^/   /'
 start=$(date +%s.%N)
