@@ -570,8 +570,9 @@ void PrintFitSummary(const io::RecordSet& set, const records::FitResult& r, cons
                 << "\n";
   std::cout << "  search: " << SearchSentence(r) << "\n";
   std::cout << r.evaluations << " evaluations in " << Fmt(r.wall_time_s, 3) << " s"
-            << (a.service.enabled() ? " (global search on the workers of " + a.service.master + ")"
-                                    : std::string())
+            << (a.service.enabled()
+                    ? " (search and polish on the workers of " + a.service.master + ")"
+                    : std::string())
             << "; report in " << (fs::path(a.out) / "report.md").string() << "\n";
 }
 

@@ -269,7 +269,7 @@ TEST(RecordsServiceTest, AnAutoFamilyFitWithMasterWritesTheLocalFitJsonBitForBit
       "service", {"--master", cluster.client_endpoint(), "--timeout-ms", "2000", "--retries", "3"},
       &service_out);
   EXPECT_EQ(local_out.find("on the workers of"), std::string::npos) << local_out;
-  EXPECT_NE(service_out.find("(global search on the workers of " + cluster.client_endpoint()),
+  EXPECT_NE(service_out.find("(search and polish on the workers of " + cluster.client_endpoint()),
             std::string::npos)
       << service_out;
   // The choice and the CV figures, then the chosen model's parameters and weights, then the rest.
