@@ -5,6 +5,7 @@
 
 #include "io/bench_data.h"
 #include "model/saturation.h"
+#include "records/fit.h"
 
 namespace pz::diagnose {
 namespace {
@@ -25,19 +26,11 @@ std::vector<ParamSpec> BaseSpecs() {
 }
 
 double ToUnitOne(const ParamSpec& s, double x) {
-  double u;
-  if (s.log_scale) {
-    u = std::log(std::max(x, s.lower) / s.lower) / std::log(s.upper / s.lower);
-  } else {
-    u = (x - s.lower) / (s.upper - s.lower);
-  }
-  return std::clamp(u, 0.0, 1.0);
+  return records::UnitCoordinate(s.lower, s.upper, s.log_scale, x);
 }
 
 double FromUnitOne(const ParamSpec& s, double u) {
-  u = std::clamp(u, 0.0, 1.0);
-  if (s.log_scale) return s.lower * std::exp(u * std::log(s.upper / s.lower));
-  return s.lower + u * (s.upper - s.lower);
+  return records::PhysicalCoordinate(s.lower, s.upper, s.log_scale, u);
 }
 
 }  // namespace
@@ -47,10 +40,10 @@ double FromUnitOne(const ParamSpec& s, double u) {
 
 DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured,
                   bool training) {
-  DiagCase c{model::MakeFinCase(number, drive, std::move(measured), training)};
-  c.noise = records::EstimateCaseNoise(c.measured_deg,
-                                       std::max(1, static_cast<int>(std::lround(drive.cycles))));
-  return c;
+  model::FinCase f = model::MakeFinCase(number, drive, std::move(measured), training);
+  records::CaseNoise noise = records::EstimateCaseNoise(
+      f.measured_deg, std::max(1, static_cast<int>(std::lround(drive.cycles))));
+  return DiagCase{std::move(f), std::move(noise)};
 }
 
 std::vector<DiagCase> CasesFromCaseSet(const io::CaseSet& set) {

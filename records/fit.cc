@@ -661,23 +661,30 @@ RecordMap::RecordMap(const RecordModel& model)
   }
 }
 
-namespace {
-
-// One coordinate of a box, as the fin engine maps it (diagnose/problem.cc ToUnitOne, FromUnitOne).
-double UnitOf(const ParamInfo& s, double x) {
+double UnitCoordinate(double lower, double upper, bool log_scale, double x) {
   double u;
-  if (s.log_scale) {
-    u = std::log(std::max(x, s.lower) / s.lower) / std::log(s.upper / s.lower);
+  if (log_scale) {
+    u = std::log(std::max(x, lower) / lower) / std::log(upper / lower);
   } else {
-    u = (x - s.lower) / (s.upper - s.lower);
+    u = (x - lower) / (upper - lower);
   }
   return std::clamp(u, 0.0, 1.0);
 }
 
-double PhysicalOf(const ParamInfo& s, double u) {
+double PhysicalCoordinate(double lower, double upper, bool log_scale, double u) {
   u = std::clamp(u, 0.0, 1.0);
-  if (s.log_scale) return s.lower * std::exp(u * std::log(s.upper / s.lower));
-  return s.lower + u * (s.upper - s.lower);
+  if (log_scale) return lower * std::exp(u * std::log(upper / lower));
+  return lower + u * (upper - lower);
+}
+
+namespace {
+
+double UnitOf(const ParamInfo& s, double x) {
+  return UnitCoordinate(s.lower, s.upper, s.log_scale, x);
+}
+
+double PhysicalOf(const ParamInfo& s, double u) {
+  return PhysicalCoordinate(s.lower, s.upper, s.log_scale, u);
 }
 
 }  // namespace

@@ -224,6 +224,11 @@ SearchBudget SizedSearchBudget(size_t searched);
 /// The PSO budget of `search` (its repetitions and PSO options).
 SearchBudget BudgetOf(const opt::SearchOptions& search);
 
+/// One coordinate of a box ↔ [0, 1] (log scale: lower > 0), clamped: the arithmetic of RecordMap
+/// and of the fin engine's ParameterLayout (diagnose/problem.h), one copy for both.
+double UnitCoordinate(double lower, double upper, bool log_scale, double x);
+double PhysicalCoordinate(double lower, double upper, bool log_scale, double u);
+
 /// The parameter map of a record model whose parameters have search forms (RecordModel::
 /// search_forms: bimorph-fin's bench form): each parameter in its box (linear, or log where
 /// marked), mapped to [0, 1]; a ratio parameter (SearchForm::ratio_of = j) searched as the ratio

@@ -16,11 +16,14 @@
 #include "io/csv.h"
 #include "io/proto_json.h"
 #include "model/status.h"
+#include "tests/testing/text_edit.h"
 
 namespace pz::io {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Replaced;
+using testing::ValueReplaced;
 
 fs::path Data(const std::string& name) {
   return fs::path(PIEZOID_TEST_DATA_DIR) / "diagnosis-json" / name;
@@ -34,24 +37,6 @@ std::string ErrorOf(const std::string& text) {
     return e.what();
   }
   return "(read)";
-}
-
-/// `text` with the value after the first `key` (up to its comma or line end) replaced by `to`.
-std::string ValueReplaced(std::string text, const std::string& key, const std::string& to) {
-  const size_t at = text.find(key);
-  EXPECT_NE(at, std::string::npos) << key;
-  if (at == std::string::npos) return text;
-  const size_t from = at + key.size(), end = text.find_first_of(",\n", from);
-  return text.replace(from, end - from, to);
-}
-
-/// `text` with the first `from` after `after` replaced by `to`.
-std::string Replaced(std::string text, const std::string& after, const std::string& from,
-                     const std::string& to) {
-  const size_t at = text.find(from, text.find(after));
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
 }
 
 TEST(DiagnosisCodec, AnOldDiagnosisJsonOfEitherKindReadsAndIsWrittenBackToTheSameBytes) {

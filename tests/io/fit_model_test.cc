@@ -14,11 +14,13 @@
 #include "fit.pb.h"
 #include "io/csv.h"
 #include "model/status.h"
+#include "tests/testing/text_edit.h"
 
 namespace pz::io {
 namespace {
 
 namespace fs = std::filesystem;
+using testing::Replaced;
 
 fs::path Data(const std::string& name) {
   return fs::path(PIEZOID_TEST_DATA_DIR) / "fit-json" / name;
@@ -32,15 +34,6 @@ std::string ErrorOf(const std::string& text) {
     return e.what();
   }
   return "(read)";
-}
-
-/// `text` with the first `from` after `after` replaced by `to`.
-std::string Replaced(std::string text, const std::string& after, const std::string& from,
-                     const std::string& to) {
-  const size_t at = text.find(from, text.find(after));
-  EXPECT_NE(at, std::string::npos) << from;
-  if (at != std::string::npos) text.replace(at, from.size(), to);
-  return text;
 }
 
 TEST(FitModelCodec, AnOldFitJsonReadsAndIsWrittenBackToTheSameBytes) {

@@ -43,6 +43,47 @@ void ExpectSameVector(const std::vector<double>& a, const std::vector<double>& b
     EXPECT_TRUE(SameBits(a[i], b[i])) << what << "[" << i << "]: " << a[i] << " vs " << b[i];
 }
 
+// A small diagnosis: two candidates (a drive effect, a beam effect on CVODE), small searches.
+DiagnoseOptions SmallOptions() {
+  DiagnoseOptions o;
+  o.candidates = {EffectKind::Named("delay"), EffectKind::Named("cubic-stiffening")};
+  o.de_base.population = 12;
+  o.de_base.generations = 8;
+  o.de_candidate.population = 12;
+  o.de_candidate.generations = 5;
+  o.lm.max_iterations = 6;
+  o.cvode_lm_iterations = 2;
+  o.cvode_start_fractions = {0.05};
+  o.second_effect = false;
+  o.trends = false;
+  return o;
+}
+
+client::ServiceEvaluatorOptions ServiceOptions(testing::Cluster& cluster) {
+  client::ServiceEvaluatorOptions so;
+  so.client.endpoint = cluster.client_endpoint();
+  so.client.timeout_ms = 2000;
+  so.client.retries = 3;
+  so.batch_timeout_s = 300;
+  return so;
+}
+
+// The first round's candidates, the naming and the verdict, bit for bit.
+void ExpectSameRounds(const Diagnosis& remote, const Diagnosis& local) {
+  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
+  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
+  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
+    const auto& a = remote.rounds[0].candidates[i];
+    const auto& b = local.rounds[0].candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
+    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
+    EXPECT_TRUE(SameBits(a.score, b.score));
+  }
+  EXPECT_EQ(remote.named, local.named);
+  EXPECT_EQ(remote.verdict, local.verdict);
+}
+
 TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
@@ -125,24 +166,10 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   cluster.AddWorker(1);
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
-  DiagnoseOptions o;
-  o.candidates = {EffectKind::Named("delay"), EffectKind::Named("cubic-stiffening")};
-  o.de_base.population = 12;
-  o.de_base.generations = 8;
-  o.de_candidate.population = 12;
-  o.de_candidate.generations = 5;
-  o.lm.max_iterations = 6;
-  o.cvode_lm_iterations = 2;
-  o.cvode_start_fractions = {0.05};
-  o.second_effect = false;
-  o.trends = false;
+  DiagnoseOptions o = SmallOptions();
   const Diagnosis local = RunDiagnosis(m, o);
 
-  client::ServiceEvaluatorOptions so;
-  so.client.endpoint = cluster.client_endpoint();
-  so.client.timeout_ms = 2000;
-  so.client.retries = 3;
-  so.batch_timeout_s = 300;
+  const client::ServiceEvaluatorOptions so = ServiceOptions(cluster);
   int sessions = 0;
   o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
     ++sessions;
@@ -155,18 +182,7 @@ TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
   ExpectSameVector(remote.base.x, local.base.x, "base.x");
   EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
   EXPECT_EQ(remote.base.evaluations, local.base.evaluations);
-  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
-  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
-  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
-    const auto& a = remote.rounds[0].candidates[i];
-    const auto& b = local.rounds[0].candidates[i];
-    EXPECT_EQ(a.kind, b.kind);
-    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
-    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
-    EXPECT_TRUE(SameBits(a.score, b.score));
-  }
-  EXPECT_EQ(remote.named, local.named);
-  EXPECT_EQ(remote.verdict, local.verdict);
+  ExpectSameRounds(remote, local);
   EXPECT_EQ(remote.evaluations, local.evaluations);
   // Every session was closed: all succeeded.
   auto client = cluster.Client();
@@ -188,24 +204,10 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   cluster.AddWorker(1);
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
-  DiagnoseOptions o;
-  o.candidates = {EffectKind::Named("delay"), EffectKind::Named("cubic-stiffening")};
-  o.de_base.population = 12;
-  o.de_base.generations = 8;
-  o.de_candidate.population = 12;
-  o.de_candidate.generations = 5;
-  o.lm.max_iterations = 6;
-  o.cvode_lm_iterations = 2;
-  o.cvode_start_fractions = {0.05};
-  o.second_effect = false;
-  o.trends = false;
+  DiagnoseOptions o = SmallOptions();
   const Diagnosis local = DiagnoseBench(m, o);
 
-  client::ServiceEvaluatorOptions so;
-  so.client.endpoint = cluster.client_endpoint();
-  so.client.timeout_ms = 2000;
-  so.client.retries = 3;
-  so.batch_timeout_s = 300;
+  const client::ServiceEvaluatorOptions so = ServiceOptions(cluster);
   int factories = 0;
   o.records_service = [&](const records::FamilyOptions& f) {
     ++factories;
@@ -217,18 +219,7 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   ExpectSameVector(remote.base.x, local.base.x, "base.x");
   EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
   ExpectSameVector(remote.base.case_pi, local.base.case_pi, "base.case_pi");
-  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
-  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
-  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
-    const auto& a = remote.rounds[0].candidates[i];
-    const auto& b = local.rounds[0].candidates[i];
-    EXPECT_EQ(a.kind, b.kind);
-    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
-    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
-    EXPECT_TRUE(SameBits(a.score, b.score));
-  }
-  EXPECT_EQ(remote.named, local.named);
-  EXPECT_EQ(remote.verdict, local.verdict);
+  ExpectSameRounds(remote, local);
   // The searches ran on the workers: complete_model sessions, each with evaluations.
   auto client = cluster.Client();
   std::vector<service::JobInfo> jobs;
