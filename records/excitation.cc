@@ -496,15 +496,17 @@ TrainingDriveProposal ProposeTrainingDrive(const io::RecordSet& set, const Excit
   // A sine of amplitude `amp` whose 95th-percentile rate is `rate`: 2π f A ≈ rate, its 12 cycles
   // within kMaxSineS (a range set by an outlier over a slow record would ask for hours).
   const int cycles = 12;
-  const double f =
-      std::max(std::min(fs / 20, rate / (2 * std::numbers::pi * amp)), cycles / kMaxSineS);
+  double f = std::max(std::min(fs / 20, rate / (2 * std::numbers::pi * amp)), cycles / kMaxSineS);
   const double hold_s = std::clamp(t.duration_s / 8, 2.0, 10.0);
   // The longest the plan can take: rest, the first move, the sine, 60 + 9 moves, 9 holds. Over
   // kMaxSamples at the records' rate, the proposal is sampled more slowly (and says so).
   const double plan_s = 1 + kMaxMoveS + cycles / f + 69 * kMaxMoveS + 9 * hold_s;
   const double fs_records = fs;
   const bool slower = fs * plan_s > kMaxSamples;
-  if (slower) fs = kMaxSamples / plan_s;
+  if (slower) {
+    fs = kMaxSamples / plan_s;
+    f = std::min(f, fs / 20);  // still 20 samples a period (its 240 samples stay within the bound)
+  }
   TrainingDriveProposal p;
   p.records_fs_hz = fs_records;
   p.fs_hz = fs;

@@ -149,13 +149,16 @@ TEST(ExcitationTest, TheProposedDriveStaysBoundedWhateverTheRecords) {
   for (io::Record& r : s.set.records)
     if (r.role != CaseRole::kTrain) withheld = &r;
   ASSERT_NE(withheld, nullptr);
+  const double kept = withheld->u[withheld->size() / 2];
   withheld->u[withheld->size() / 2] = -1.7e6;
   const TrainingDriveProposal p = ProposeTrainingDrive(s.set, AnalyseExcitation(s.set), 1);
   EXPECT_LE(p.u.size(), 4'000'000u);
   EXPECT_GT(p.u.size(), 1000u);
   for (double u : p.u) ASSERT_TRUE(std::isfinite(u));
   EXPECT_EQ(p.fs_hz, p.records_fs_hz);
-  // The same records sampled at 1 MHz: the holds and moves alone would take 2e7 samples.
+  // The same records without the outlier, sampled at 1 MHz: the holds and moves alone would take
+  // 2e7 samples, and the sine's own frequency is above the slower rate's twentieth.
+  withheld->u[withheld->size() / 2] = kept;
   for (io::Record& r : s.set.records) {
     r.dt /= 5000;
     for (double& t : r.t) t /= 5000;
@@ -166,6 +169,11 @@ TEST(ExcitationTest, TheProposedDriveStaysBoundedWhateverTheRecords) {
   EXPECT_LT(fast.fs_hz, fast.records_fs_hz);
   EXPECT_NE(fast.description.find("rather than the records'"), std::string::npos)
       << fast.description;
+  // The sine stays sampled at 20 points a period or more at the slower rate: no aliasing.
+  const size_t at = fast.description.find(" Hz, 12 cycles");
+  ASSERT_NE(at, std::string::npos) << fast.description;
+  const double f = std::stod(fast.description.substr(fast.description.rfind(' ', at - 1) + 1));
+  EXPECT_LE(f, fast.fs_hz / 20 * (1 + 1e-3)) << fast.description;
 }
 
 TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
