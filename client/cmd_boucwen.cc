@@ -362,6 +362,7 @@ void WriteFigures(const std::filesystem::path& out, const BoucwenArgs& a, const 
 int RunBoucwen(const BoucwenArgs& a) {
   namespace fs = std::filesystem;
   const fs::path data(a.data_dir), out(a.out_dir);
+  CheckBundledData(data, "boucwen-benchmark", "--data-dir DIR");
   const complete::BwTraining fitness =
       MakeTraining(a, LoadBwBenchmark(data, model::CaseRole::kTrain));
   BwOutcome o;

@@ -60,6 +60,7 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
 
   io::RecordReadOptions ro;
   ro.check_stated_drive = true;
+  CheckBundledData(a.records, "piezo-stack-bench", "--records PATH");
   const io::RecordSet set = io::LoadRecordSet(a.records, ro);
   std::cout << "piezoid committee: " << set.records.size() << " records from " << a.records << ", "
             << o.bands.size() << " bands, " << o.families.size() << " famil"

@@ -173,6 +173,7 @@ void RunIdentifyCommand(IdentifyFlags& f) {
     const auto it = f.flag_of.find(field);
     return it == f.flag_of.end() ? std::string(field) : it->second;
   }));
+  CheckBundledData(opts.cases_dir, "bimorph-fin/nominal", "--cases DIR");
   const io::CaseSet set = io::LoadCaseSet(opts.cases_dir);
   auto config = hgann::HgannConfigFromCaseSet(set, *ranges);
   config.spread_penalty = opts.spread_penalty;

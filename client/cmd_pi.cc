@@ -23,6 +23,7 @@ struct PiArgs {
 int RunPi(const PiArgs& a) {
   const std::filesystem::path dir =
       a.cases_dir.empty() ? DefaultCaseSetDir() : std::filesystem::path(a.cases_dir);
+  CheckBundledData(dir, "bimorph-fin/nominal", "--cases DIR");
   const io::CaseSet set = io::LoadCaseSet(dir);
   const std::vector<CaseModel> models = ResolveBenchCases(a.flags, set);
   PiReport report = ScoreCaseSet(set, models, PlantSimulator(a.flags.Solver()));

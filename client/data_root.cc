@@ -1,7 +1,10 @@
 #include "client/data_root.h"
 
 #include <cstdlib>
+#include <string>
 #include <system_error>
+
+#include "model/status.h"
 
 namespace pz::client {
 namespace {
@@ -33,5 +36,16 @@ std::filesystem::path DataRoot() {
 }
 
 std::filesystem::path BundledData(std::string_view sub) { return DataRoot() / sub; }
+
+void CheckBundledData(const std::filesystem::path& dir, std::string_view sub,
+                      std::string_view flag) {
+  std::error_code ec;
+  if (dir != BundledData(sub) || std::filesystem::exists(dir, ec)) return;
+  throw InputError("the bundled data (" + dir.string() + ") is not here: give " +
+                   std::string(flag) +
+                   ", or set PIEZOID_DATA to the data/ folder of a piezoid checkout (looked for a "
+                   "data/ folder holding bimorph-fin/ beside the program, up to four folders "
+                   "above it, and in the working folder)");
+}
 
 }  // namespace pz::client

@@ -16,6 +16,11 @@ std::filesystem::path DataRoot();
 /// DataRoot() / sub.
 std::filesystem::path BundledData(std::string_view sub);
 
+/// Throws InputError when `dir` is the bundled `sub` (the flag left at its default) and it does not
+/// exist: the message says where the data were looked for, and which flag or variable to set.
+void CheckBundledData(const std::filesystem::path& dir, std::string_view sub,
+                      std::string_view flag);
+
 /// How a default under the bundled data is found, for --help texts.
 inline constexpr const char* kDataRootHelp =
     "the bundled data: $PIEZOID_DATA, else the data/ folder found beside the program or above it";

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "client/case_models.h"
+#include "client/data_root.h"
 #include "client/commands.h"
 #include "client/pi_report.h"
 #include "io/csv.h"
@@ -239,6 +240,18 @@ TEST(DefaultCaseSet, EnvironmentOverridesTheBundledData) {
   ::setenv("PIEZOID_DATA", "/elsewhere", 1);
   EXPECT_EQ(DefaultCaseSetDir(), fs::path("/elsewhere/bimorph-fin/nominal"));
   ::unsetenv("PIEZOID_DATA");
+}
+
+TEST(DefaultCaseSet, MissingBundledDataSaysWhereItLookedAndWhatToGive) {
+  ::setenv("PIEZOID_DATA", "/nonexistent-piezoid-data", 1);
+  const std::string e = InputErrorOf(
+      [] { CheckBundledData(DefaultCaseSetDir(), "bimorph-fin/nominal", "--cases DIR"); });
+  ::unsetenv("PIEZOID_DATA");
+  PZ_EXPECT_HAS(e, "the bundled data (/nonexistent-piezoid-data/bimorph-fin/nominal) is not here");
+  PZ_EXPECT_HAS(e, "give --cases DIR, or set PIEZOID_DATA");
+  // A folder the user gave is left to the reader's own error.
+  CheckBundledData("/elsewhere/cases", "bimorph-fin/nominal", "--cases DIR");
+  CheckBundledData(DefaultCaseSetDir(), "bimorph-fin/nominal", "--cases DIR");  // it exists
 }
 
 TEST(Commands, BadInputThrowsInputErrorNamingTheFile) {
