@@ -149,11 +149,15 @@ int RunDiagnose(const DiagnoseArgs& a) {
   o.concurrent_fits = a.concurrent_fits > 0 ? a.concurrent_fits : a.service.enabled() ? 3 : 1;
   auto plant = std::make_shared<const model::BimorphPlant>();
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
-  diagnose::Diagnosis d;
+  if (a.engine != "records")  // the reports read the records engine's result
+    throw InputError(
+        "--engine fin: the fin engine is being removed (issue 38) and its result "
+        "has no report any more; use --engine records");
+  diagnose::BenchDiagnosis d;
   try {
     // The records engine on the bench's records (with --master: on the workers as
-    // complete_model sessions), or --engine fin (with --master: the fin's diagnose sessions).
-    d = a.engine == "records" ? diagnose::DiagnoseBench(m, o) : diagnose::RunDiagnosis(m, o);
+    // complete_model sessions).
+    d = diagnose::DiagnoseBench(m, o);
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
@@ -172,7 +176,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     files.push_back(a.json_file);
   }
   std::vector<std::string> warnings;
-  const auto html = WriteDiagnosisHtml(out, d, m, o, !a.no_plots, &warnings);
+  const auto html = WriteDiagnosisHtml(out, d, o, !a.no_plots, &warnings);
   files.push_back(out / "report.html");
   for (const auto& w : warnings) std::cerr << "piezoid diagnose: warning: " << w << "\n";
   std::cout << "written: ";

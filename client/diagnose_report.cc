@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "client/plots.h"
+#include "client/records_diagnose.h"
 #include "diagnosis.pb.h"
 #include "io/diagnosis_json.h"
 #include "io/proto_json.h"
@@ -21,10 +22,9 @@
 namespace pz::client {
 namespace {
 
-using diagnose::CandidateResult;
-using diagnose::Diagnosis;
-using diagnose::FitResult;
-using diagnose::RoundResult;
+using diagnose::BenchDiagnosis;
+using records::RecordCandidate;
+using records::RecordDiagnosis;
 
 std::string F(const char* fmt, double a) {
   if (!std::isfinite(a)) return "n/a";
@@ -58,23 +58,80 @@ std::string Pad(std::string s, size_t w) {
   return s;
 }
 
-void PrintParams(std::ostream& o, const FitResult& f, const std::string& indent) {
-  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12)
-    << Pad("sensitivity", 13) << "identifiability\n";
-  for (const auto& p : f.params) {
-    o << indent << Pad(p.name + " [" + p.unit + "]", 30) << Pad(F("%.5g", p.value), 14)
-      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12)
-      << Pad(F("%.4f deg", p.sensitivity), 13) << diagnose::IdentifiabilityName(p.identifiability)
-      << (p.note.empty() ? "" : "; " + p.note) << "\n";
+// A records fit as the bench reads it: its structure ("base + delay") and its Σe² [deg²] and
+// samples over the training and the withheld cases.
+struct FitView {
+  const records::FitResult* fit = nullptr;
+  std::string description;
+  double train_pi = 0, withheld_pi = 0;
+  int train_samples = 0, withheld_samples = 0;
+  const std::vector<opt::ParamEstimate>& params() const { return fit->uncertainty.params; }
+};
+
+FitView ViewOf(const io::RecordSet& set, const records::FitResult& f) {
+  static const records::RecordDiagnoseOptions kBench = records::FinBenchOptions();
+  FitView v;
+  v.fit = &f;
+  v.description = records::ModelLabel(*f.model, kBench);
+  for (size_t i = 0; i < set.records.size() && i < f.metrics.size(); ++i) {
+    const bool training = set.records[i].role == model::CaseRole::kTrain;
+    (training ? v.train_pi : v.withheld_pi) += f.metrics[i].sse;
+    (training ? v.train_samples : v.withheld_samples) += static_cast<int>(set.records[i].scored());
   }
-  if (!f.weakest_direction.empty())
-    o << indent << "weakest direction: " << f.weakest_direction << "\n";
+  return v;
 }
 
-std::string EffectParams(const FitResult& f) {
+// A greedy round of the records result: the model it starts from, its gap, its ranked candidates
+// and what it named.
+struct RoundView {
+  const records::FitResult* start = nullptr;
+  double s0 = 0, s_floor = 0, rms_ratio = 0;
+  bool significant = false;
+  const std::vector<RecordCandidate>* candidates = nullptr;
+  int named = -1, runner_up = -1;
+  double z_runner_up = 0;
+  const std::string* verdict = nullptr;
+};
+
+std::vector<RoundView> Rounds(const RecordDiagnosis& d) {
+  std::vector<RoundView> r = {{&d.base, d.s0, d.s_floor, d.rms_ratio, d.significant, &d.candidates,
+                               d.named, d.runner_up, d.z_runner_up, &d.round_verdict}};
+  if (d.second) {
+    const records::RecordRound& s = *d.second;
+    r.push_back({&d.candidates[static_cast<size_t>(d.named)].fit, s.gap.s0, s.gap.s_floor,
+                 s.gap.rms_ratio, s.gap.significant, &s.candidates, s.named, s.runner_up,
+                 s.z_runner_up, &s.verdict});
+  }
+  return r;
+}
+
+int AddedParams(const RecordCandidate& c, const RoundView& r) {
+  return static_cast<int>(c.fit.params.size() - r.start->params.size());
+}
+
+int64_t FitEvaluations(const records::FitResult& f) {
+  return f.evaluations + f.uncertainty.evaluations;
+}
+
+void PrintParams(std::ostream& o, const FitView& f, const std::string& indent) {
+  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12)
+    << Pad("sensitivity", 13) << "identifiability\n";
+  for (const auto& p : f.params()) {
+    o << indent << Pad(p.name + " [" + p.unit + "]", 30) << Pad(F("%.5g", p.value), 14)
+      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12)
+      << Pad(F("%.4f deg", p.sensitivity), 13) << opt::IdentifiabilityName(p.identifiability)
+      << (p.note.empty() ? "" : "; " + p.note) << "\n";
+  }
+  if (!f.fit->uncertainty.weakest_direction.empty())
+    o << indent << "weakest direction: " << f.fit->uncertainty.weakest_direction << "\n";
+}
+
+// The effects' parameters (those after the family's own) with σ.
+std::string EffectParams(const records::FitResult& f) {
   std::string s;
-  for (size_t i = diagnose::ParameterLayout::kBase; i < f.params.size(); ++i) {
-    const auto& p = f.params[i];
+  const auto& params = f.uncertainty.params;
+  for (size_t i = f.model->family().params().size(); i < params.size(); ++i) {
+    const auto& p = params[i];
     s += (s.empty() ? "" : ", ") + p.name + " = " + F("%.4g", p.value) +
          (std::isfinite(p.std_error) ? " ± " + F("%.2g", p.std_error) : "") + " " + p.unit;
   }
@@ -83,25 +140,26 @@ std::string EffectParams(const FitResult& f) {
 
 std::vector<double> Sorted(std::set<double> s) { return {s.begin(), s.end()}; }
 
-}  // namespace
-
 // ---- terminal
 // ------------------------------------------------------------------------------------
 
-void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+// The noise floor and the base model's fit.
+void PrintHead(std::ostream& o, const BenchDiagnosis& d, const FitView& b) {
   int nt = 0, nw = 0;
   for (const auto& c : d.cases) (c.training ? nt : nw) += 1;
   o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt
     << " training, " << nw << " withheld)\n";
   o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
     << F("%.4f", d.floor_train) << " (training) / " << F("%.4f", d.floor_withheld)
-    << " (withheld) deg RMS (plateaus of " << d.floor_model << ")\n";
-  const FitResult& b = d.base;
+    << " (withheld) deg RMS (plateaus of " << d.records.floor_model << ")\n";
   o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training "
        "RMS "
     << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS "
     << F("%.4f", Rms(b.withheld_pi, b.withheld_samples)) << " deg\n\n";
+}
 
+// Where the base model's residual lies, and the trends of the per-case fits.
+void PrintWhere(std::ostream& o, const RecordDiagnosis& d) {
   o << "WHERE the gap lies (base model, each against the floor)\n";
   o << "  case   V [V]  f [Hz]  role      floor   RMS      x floor  share of PI\n";
   for (size_t i = 0; i < d.base_residuals.cases.size(); ++i) {
@@ -127,59 +185,80 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
   }
   if (!d.trends.empty() && !any_trend)
     o << "  no significant parameter trend over the V x f grid (per-case fits)\n";
+}
 
+// Each round's candidates, the verdict and what the base parameters absorbed.
+void PrintWhich(std::ostream& o, const BenchDiagnosis& d, const FitView& b,
+                const diagnose::DiagnoseOptions& opt) {
+  const RecordDiagnosis& rd = d.records;
   o << "\nWHICH effect (re-identified on the training cases, scored on the withheld ones)\n";
-  for (size_t r = 0; r < d.rounds.size(); ++r) {
-    const RoundResult& rr = d.rounds[r];
-    std::string start = "base";
-    for (auto k : rr.base_structure) start += std::string(" + ") + model::EffectName(k);
-    o << "  round " << r + 1 << " from " << start << ": withheld RMS "
-      << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples)))
+  const std::vector<RoundView> rounds = Rounds(rd);
+  for (size_t r = 0; r < rounds.size(); ++r) {
+    const RoundView& rr = rounds[r];
+    o << "  round " << r + 1 << " from " << ViewOf(d.set, *rr.start).description
+      << ": withheld RMS " << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples)))
       << " deg = " << F("%.2f", rr.rms_ratio) << " x floor ("
       << (rr.significant ? "significant" : "not significant") << ", threshold "
       << F("%.2f", opt.rules.significance_ratio) << ")\n";
     o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14)
       << Pad("score", 10) << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
-    for (const CandidateResult& c : rr.candidates) {
-      o << "    " << Pad(model::EffectName(c.kind), 18) << Pad(std::to_string(c.added_params), 4)
-        << Pad(F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)), 14)
-        << Pad(F("%.1f", c.score), 10) << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9)
-        << Pad(F("%.3f", c.weight), 8) << (c.qualifies ? "qualifies" : c.note) << "\n";
+    for (const RecordCandidate& c : *rr.candidates) {
+      const FitView f = ViewOf(d.set, c.fit);
+      o << "    " << Pad(model::EffectName(c.kind), 18)
+        << Pad(std::to_string(AddedParams(c, rr)), 4)
+        << Pad(F("%.4f", Rms(f.withheld_pi, f.withheld_samples)), 14) << Pad(F("%.1f", c.score), 10)
+        << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9) << Pad(F("%.3f", c.weight), 8)
+        << (c.qualifies ? "qualifies" : c.note) << "\n";
     }
-    o << "    => " << rr.verdict << "\n";
+    o << "    => " << *rr.verdict << "\n";
   }
-
-  o << "\nVERDICT: " << d.verdict << "\n";
-  if (!d.absorbed.empty()) {
-    o << "  base parameters that move when " << d.absorbed_by << " is added (|shift| > 2 σ):";
-    for (const auto& a : d.absorbed)
+  o << "\nVERDICT: " << rd.verdict << "\n";
+  if (!rd.absorbed.empty()) {
+    o << "  base parameters that move when " << rd.absorbed_by << " is added (|shift| > 2 σ):";
+    for (const auto& a : rd.absorbed)
       o << " " << a.name << " " << F("%.4g", a.without) << " -> " << F("%.4g", a.with) << " "
         << a.unit << " (z " << F("%.1f", a.z) << ");";
     o << "\n";
   }
+}
 
-  o << "\nHOW FAR the gap shrinks (" << d.final_fit.description << ")\n";
+}  // namespace
+
+void PrintDiagnosis(std::ostream& o, const BenchDiagnosis& d,
+                    const diagnose::DiagnoseOptions& opt) {
+  const RecordDiagnosis& rd = d.records;
+  const FitView b = ViewOf(d.set, rd.base), fin = ViewOf(d.set, *rd.final_fit);
+  PrintHead(o, d, b);
+  PrintWhere(o, rd);
+  PrintWhich(o, d, b, opt);
+
+  o << "\nHOW FAR the gap shrinks (" << fin.description << ")\n";
   o << "  case  role      floor   RMS before  RMS after  x floor after  closed\n";
-  for (const auto& g : d.gaps) {
+  for (size_t i = 0; i < rd.gaps.size(); ++i) {
+    const records::RecordGap& g = rd.gaps[i];
     char buf[200];
-    std::snprintf(buf, sizeof buf, "  %-5d %-8s %7.4f  %9.4f  %9.4f  %12.2f  %s\n", g.number,
-                  g.training ? "training" : "withheld", g.floor_rms, g.rms_before, g.rms_after,
-                  g.floor_rms > 0 ? g.rms_after / g.floor_rms : NAN, Pct(g.closed).c_str());
+    std::snprintf(buf, sizeof buf, "  %-5d %-8s %7.4f  %9.4f  %9.4f  %12.2f  %s\n",
+                  d.cases[i].number, d.cases[i].training ? "training" : "withheld", g.floor_rms,
+                  g.rms_before, g.rms_after, g.floor_rms > 0 ? g.rms_after / g.floor_rms : NAN,
+                  Pct(g.closed).c_str());
     o << buf;
   }
-  o << "  withheld total: PI " << F("%.4f", d.withheld_before) << " -> "
-    << F("%.4f", d.withheld_after) << " deg^2 (floor " << F("%.4f", d.withheld_floor)
-    << "), share of the gap closed " << Pct(d.closed_total) << ", remaining "
-    << F("%.2f", d.remaining_ratio) << " x floor\n";
-  if (!d.named.empty()) o << "  effect parameters: " << EffectParams(d.final_fit) << "\n";
+  o << "  withheld total: PI " << F("%.4f", rd.s0) << " -> " << F("%.4f", rd.withheld_after)
+    << " deg^2 (floor " << F("%.4f", rd.s_floor) << "), share of the gap closed "
+    << Pct(rd.closed_total) << ", remaining "
+    << F("%.2f", std::sqrt(rd.withheld_after / rd.s_floor)) << " x floor\n";
+  if (!rd.named_effects.empty())
+    o << "  effect parameters: " << EffectParams(*rd.final_fit) << "\n";
 
-  o << "\nIDENTIFIABILITY (" << d.final_fit.description << ", σ from s² (JᵀJ)⁺ at the solution)\n";
-  PrintParams(o, d.final_fit, "  ");
-  if (d.final_fit.description != d.base.description) {
+  o << "\nIDENTIFIABILITY (" << fin.description << ", σ from s² (JᵀJ)⁺ at the solution)\n";
+  PrintParams(o, fin, "  ");
+  if (fin.description != b.description) {
     o << "  base model:\n";
-    PrintParams(o, d.base, "  ");
+    PrintParams(o, b, "  ");
   }
-  o << "\n" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations << " model evaluations\n";
+  o << "\n"
+    << F("%.1f", d.wall_time_s) << " s, " << diagnose::BenchEvaluations(rd)
+    << " model evaluations\n";
 }
 
 // ---- JSON ---------------------------------------------------------------------------------------
@@ -188,30 +267,32 @@ void PrintDiagnosis(std::ostream& o, const Diagnosis& d, const diagnose::Diagnos
 
 namespace {
 
-void FitOf(const FitResult& f, proto::DiagnosisFit* o) {
-  o->set_structure(f.description);
-  o->set_ok(f.ok);
-  o->set_train_pi_deg2(f.train_pi);
-  o->set_withheld_pi_deg2(f.withheld_pi);
-  o->set_train_rms_deg(Rms(f.train_pi, f.train_samples));
-  o->set_withheld_rms_deg(Rms(f.withheld_pi, f.withheld_samples));
-  o->set_residual_sigma_deg(f.residual_sigma);
-  o->mutable_case_pi_deg2()->Assign(f.case_pi.begin(), f.case_pi.end());
-  for (const auto& p : f.params) {
+void FitOf(const FitView& v, proto::DiagnosisFit* o) {
+  const records::FitResult& f = *v.fit;
+  o->set_structure(v.description);
+  o->set_ok(true);
+  o->set_train_pi_deg2(v.train_pi);
+  o->set_withheld_pi_deg2(v.withheld_pi);
+  o->set_train_rms_deg(Rms(v.train_pi, v.train_samples));
+  o->set_withheld_rms_deg(Rms(v.withheld_pi, v.withheld_samples));
+  o->set_residual_sigma_deg(f.uncertainty.residual_sigma);
+  for (const records::RecordMetrics& m : f.metrics) o->add_case_pi_deg2(m.sse);
+  for (const auto& p : v.params()) {
     proto::DiagnosisParameter& g = *o->add_parameters();
     g.set_name(p.name);
     g.set_unit(p.unit);
     g.set_value(p.value);
     g.set_std_error(p.std_error);
     g.set_sensitivity_deg(p.sensitivity);
-    g.set_identifiability(diagnose::IdentifiabilityName(p.identifiability));
+    g.set_identifiability(opt::IdentifiabilityName(p.identifiability));
     g.set_note(p.note);
   }
-  o->mutable_singular_values()->Assign(f.singular_values.begin(), f.singular_values.end());
-  o->set_weakest_direction(f.weakest_direction);
-  o->set_evaluations(f.evaluations);
+  o->mutable_singular_values()->Assign(f.uncertainty.singular_values.begin(),
+                                       f.uncertainty.singular_values.end());
+  o->set_weakest_direction(f.uncertainty.weakest_direction);
+  o->set_evaluations(FitEvaluations(f));
   o->set_wall_time_s(f.wall_time_s);
-  o->set_message(f.message);
+  o->set_message(f.polish_message);
 }
 
 void BinOf(const model::BinStat& b, proto::ResidualBin* o) {
@@ -269,11 +350,11 @@ void AnalysisOf(const model::ResidualAnalysis& a, proto::ResidualAnalysis* o) {
 }
 
 // The noise floor: the encoder's quantum, the pooled floors and each case's.
-void NoiseOf(const Diagnosis& d, proto::BenchNoise* o) {
+void NoiseOf(const BenchDiagnosis& d, proto::BenchNoise* o) {
   o->set_quantum_deg(d.quantum_deg);
   o->set_floor_train_deg(d.floor_train);
   o->set_floor_withheld_deg(d.floor_withheld);
-  o->set_floor_model(d.floor_model);
+  o->set_floor_model(d.records.floor_model);
   for (size_t i = 0; i < d.cases.size(); ++i) {
     const auto& c = d.cases[i];
     proto::BenchCaseNoise& g = *o->add_cases();
@@ -282,7 +363,7 @@ void NoiseOf(const Diagnosis& d, proto::BenchNoise* o) {
     g.set_quantisation_rms_deg(c.noise.quantisation_rms_deg);
     g.set_scatter_rms_deg(c.noise.scatter_rms_deg);
     g.set_floor_rms_deg(c.noise.floor_rms_deg);
-    g.set_saturation_aware_floor_deg(i < d.gaps.size() ? d.gaps[i].floor_rms : NAN);
+    g.set_saturation_aware_floor_deg(i < d.records.gaps.size() ? d.records.gaps[i].floor_rms : NAN);
     g.set_b1_deg(c.b1);
     g.set_b2_deg(c.b2);
   }
@@ -300,49 +381,42 @@ void TrendOf(const diagnose::ParamTrend& t, proto::ParamTrend* o) {
   o->set_significant(t.significant);
 }
 
-void CandidateOf(const CandidateResult& c, proto::DiagnosisCandidate* o) {
-  o->set_effect(model::EffectName(c.kind));
-  o->set_added_parameters(c.added_params);
-  o->set_score(c.score);
+void CandidateOf(const io::RecordSet& set, const RecordCandidate& c, const RoundView& r,
+                 proto::DiagnosisCandidate* o) {
+  CandidateCommonOf(c, o);
+  o->set_added_parameters(AddedParams(c, r));
   o->set_train_delta_bic(c.train_delta_bic);
-  o->set_closed(c.closed);
   o->set_raw_reduction(c.raw_reduction);
-  o->set_pattern(c.pattern);
   o->set_weight(c.weight);
-  o->set_qualifies(c.qualifies);
-  o->set_note(c.note);
-  FitOf(c.fit, o->mutable_fit());
+  FitOf(ViewOf(set, c.fit), o->mutable_fit());
 }
 
-void RoundOf(const RoundResult& r, proto::DiagnosisRound* o) {
-  for (const auto& k : r.base_structure) o->add_from(model::EffectName(k));
+void RoundOf(const io::RecordSet& set, const RoundView& r, proto::DiagnosisRound* o) {
+  for (const auto& k : r.start->model->effects()) o->add_from(model::EffectName(k));
   o->set_withheld_pi_deg2(r.s0);
   o->set_floor_pi_deg2(r.s_floor);
   o->set_rms_over_floor(r.rms_ratio);
   o->set_significant(r.significant);
-  if (r.named >= 0)
-    o->mutable_named()->set_string_value(model::EffectName(r.candidates[r.named].kind));
-  else
-    o->mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
-  if (r.runner_up >= 0) {
-    o->mutable_runner_up()->set_effect(model::EffectName(r.candidates[r.runner_up].kind));
-    o->mutable_runner_up()->set_z(r.z_runner_up);
-  }
-  o->set_verdict(r.verdict);
-  for (const auto& c : r.candidates) CandidateOf(c, o->add_candidates());
+  NamedOf(*r.candidates, r.named, o->mutable_named());
+  if (r.runner_up >= 0)
+    RunnerUpOf(*r.candidates, r.runner_up, r.z_runner_up, o->mutable_runner_up());
+  o->set_verdict(*r.verdict);
+  for (const auto& c : *r.candidates) CandidateOf(set, c, r, o->add_candidates());
 }
 
 // The withheld gap before / after the named effects, in total and per case.
-void GapOf(const Diagnosis& d, proto::DiagnosisGap* o) {
-  o->set_withheld_pi_before_deg2(d.withheld_before);
-  o->set_withheld_pi_after_deg2(d.withheld_after);
-  o->set_withheld_floor_pi_deg2(d.withheld_floor);
-  o->set_closed(d.closed_total);
-  o->set_remaining_over_floor(d.remaining_ratio);
-  for (const auto& g : d.gaps) {
+void GapOf(const BenchDiagnosis& d, proto::DiagnosisGap* o) {
+  const RecordDiagnosis& rd = d.records;
+  o->set_withheld_pi_before_deg2(rd.s0);
+  o->set_withheld_pi_after_deg2(rd.withheld_after);
+  o->set_withheld_floor_pi_deg2(rd.s_floor);
+  o->set_closed(rd.closed_total);
+  o->set_remaining_over_floor(std::sqrt(rd.withheld_after / rd.s_floor));
+  for (size_t i = 0; i < rd.gaps.size(); ++i) {
+    const records::RecordGap& g = rd.gaps[i];
     proto::CaseGap& c = *o->add_cases();
-    c.set_case_(g.number);
-    c.set_training(g.training);
+    c.set_case_(d.cases[i].number);
+    c.set_training(d.cases[i].training);
     c.set_floor_rms_deg(g.floor_rms);
     c.set_rms_before_deg(g.rms_before);
     c.set_rms_after_deg(g.rms_after);
@@ -354,26 +428,26 @@ void GapOf(const Diagnosis& d, proto::DiagnosisGap* o) {
 
 }  // namespace
 
-void BenchDiagnosisOf(const Diagnosis& d, const diagnose::DiagnoseOptions& opt,
+void BenchDiagnosisOf(const BenchDiagnosis& d, const diagnose::DiagnoseOptions& opt,
                       proto::Diagnosis* out) {
+  const RecordDiagnosis& rd = d.records;
   proto::Diagnosis m;
+  DiagnosisCommonOf(rd, &m);
   m.set_bench(d.bench);
-  m.set_verdict_kind(d.verdict_kind);
-  m.set_verdict(d.verdict);
   auto& named = *m.mutable_named()->mutable_list_value();
-  for (const auto& k : d.named) named.add_values()->set_string_value(model::EffectName(k));
-  m.set_confidence(d.named.empty() ? NAN : d.confidence);
+  for (const auto& k : rd.named_effects) named.add_values()->set_string_value(model::EffectName(k));
+  m.set_confidence(rd.named_effects.empty() ? NAN : rd.confidence);
   proto::DiagnosisThresholds& t = *m.mutable_thresholds();
   t.set_significance_ratio(opt.rules.significance_ratio);
   t.set_min_closed(opt.rules.min_closed);
   t.set_min_pattern(opt.rules.min_pattern);
   NoiseOf(d, m.mutable_noise());
-  FitOf(d.base, m.mutable_base());
-  AnalysisOf(d.base_residuals, m.mutable_base_residuals());
-  for (const auto& x : d.trends) TrendOf(x, m.add_trends());
-  for (const auto& r : d.rounds) RoundOf(r, m.add_rounds());
-  m.set_absorbed_by(d.absorbed_by);
-  for (const auto& a : d.absorbed) {
+  FitOf(ViewOf(d.set, rd.base), m.mutable_base());
+  AnalysisOf(rd.base_residuals, m.mutable_base_residuals());
+  for (const auto& x : rd.trends) TrendOf(x, m.add_trends());
+  for (const RoundView& r : Rounds(rd)) RoundOf(d.set, r, m.add_rounds());
+  m.set_absorbed_by(rd.absorbed_by);
+  for (const auto& a : rd.absorbed) {
     proto::Absorption& g = *m.add_absorbed();
     g.set_name(a.name);
     g.set_unit(a.unit);
@@ -381,15 +455,15 @@ void BenchDiagnosisOf(const Diagnosis& d, const diagnose::DiagnoseOptions& opt,
     g.set_with(a.with);
     g.set_z(a.z);
   }
-  FitOf(d.final_fit, m.mutable_final());
-  AnalysisOf(d.final_residuals, m.mutable_final_residuals());
+  FitOf(ViewOf(d.set, *rd.final_fit), m.mutable_final());
+  AnalysisOf(rd.final_residuals, m.mutable_final_residuals());
   GapOf(d, m.mutable_gap());
   m.set_wall_time_s(d.wall_time_s);
-  m.set_evaluations(d.evaluations);
+  m.set_evaluations(diagnose::BenchEvaluations(rd));
   *out = std::move(m);
 }
 
-void WriteDiagnosisJson(std::ostream& out, const Diagnosis& d,
+void WriteDiagnosisJson(std::ostream& out, const BenchDiagnosis& d,
                         const diagnose::DiagnoseOptions& opt) {
   proto::Diagnosis m;
   BenchDiagnosisOf(d, opt, &m);
@@ -403,33 +477,35 @@ namespace {
 namespace fs = std::filesystem;
 
 // Case c's trace (time, phase, drive, measured, both models, residuals, cycle) and residual spectra
-// as CSV, and the scripts of its three figures (residual vs phase, spectrum, loop).
-void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
-                      const diagnose::DiagnosisModel& model, size_t c,
+// as CSV, and the scripts of its three figures (residual vs phase, spectrum, loop). The models'
+// outputs are the records fits' (base and final) on the case's record.
+void WriteCaseFigures(const fs::path& fig, const BenchDiagnosis& d, size_t c,
                       std::vector<fs::path>& written, std::vector<fs::path>& scripts) {
-  const diagnose::ParameterLayout base_layout(d.base.structure),
-      final_layout(d.final_fit.structure);
-  const bool has_final = d.final_fit.description != d.base.description;
-  const diagnose::DiagCase& dc = model.cases()[c];
-  std::vector<double> yb, yf;
-  model.Simulate(base_layout, d.base.x, c, yb);
-  model.Simulate(final_layout, d.final_fit.x, c, yf);
+  const RecordDiagnosis& rd = d.records;
+  const std::string base_name = ViewOf(d.set, rd.base).description;
+  const std::string final_name = ViewOf(d.set, *rd.final_fit).description;
+  const bool has_final = final_name != base_name;
+  const diagnose::BenchCase& dc = d.cases[c];
+  const io::Record& r = d.set.records[c];
+  const std::vector<double>& yb = rd.base.yhat[c];
+  const std::vector<double>& yf = rd.final_fit->yhat[c];
+  if (yb.size() < r.y.size() || yf.size() < r.y.size())
+    throw InputError(r.Label() + ": the fits' outputs do not cover the record (a bug)");
   const std::string stem = "case" + std::to_string(dc.number);
   const fs::path trace = fig / (stem + "_trace.csv");
   {
     std::ofstream t(trace);
     t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,"
          "cycle\n";
-    const double fs_hz = dc.drive.sample_rate_hz, f = dc.drive.frequency_hz;
-    const size_t p = dc.measured_deg.size() / std::max(1L, std::lround(dc.drive.cycles));
-    for (size_t k = 0; k < dc.measured_deg.size(); ++k) {
+    const double fs_hz = r.sinusoid.sample_rate_hz, f = dc.frequency_hz;
+    const size_t p = r.y.size() / std::max(1L, std::lround(r.sinusoid.cycles));
+    for (size_t k = 0; k < r.y.size(); ++k) {
       const double tk = k / fs_hz;
       const double ph = std::fmod(360.0 * f * tk, 360.0);
-      t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << ","
-        << io::FormatNumber(dc.drive.Value(tk)) << "," << io::FormatNumber(dc.measured_deg[k])
-        << "," << io::FormatNumber(yb[k]) << "," << io::FormatNumber(yf[k]) << ","
-        << io::FormatNumber(dc.measured_deg[k] - yb[k]) << ","
-        << io::FormatNumber(dc.measured_deg[k] - yf[k]) << "," << (p ? k / p + 1 : 1) << "\n";
+      t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << "," << io::FormatNumber(r.u[k])
+        << "," << io::FormatNumber(r.y[k]) << "," << io::FormatNumber(yb[k]) << ","
+        << io::FormatNumber(yf[k]) << "," << io::FormatNumber(r.y[k] - yb[k]) << ","
+        << io::FormatNumber(r.y[k] - yf[k]) << "," << (p ? k / p + 1 : 1) << "\n";
     }
     written.push_back(trace);
   }
@@ -437,16 +513,16 @@ void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
   {
     std::ofstream s(spec);
     s << "harmonic,base_deg,final_deg,noise_deg\n";
-    const auto& rb = d.base_residuals.cases[c];
-    const auto& rf = d.final_residuals.cases[c];
+    const auto& rb = rd.base_residuals.cases[c];
+    const auto& rf = rd.final_residuals.cases[c];
     for (int k = 0; k <= model::kHarmonics; ++k)
       s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k])
         << "," << io::FormatNumber(rb.harmonic_noise) << "\n";
     written.push_back(spec);
   }
-  const std::string label =
-      " (case " + std::to_string(dc.number) + ", " + F("%.0f V", dc.drive.amplitude_v) + ", " +
-      F("%.3g Hz", dc.drive.frequency_hz) + (dc.training ? ", training)" : ", withheld)");
+  const std::string label = " (case " + std::to_string(dc.number) + ", " +
+                            F("%.0f V", dc.amplitude_v) + ", " + F("%.3g Hz", dc.frequency_hz) +
+                            (dc.training ? ", training)" : ", withheld)");
   Plot ph{stem + "_phase",
           "Residual vs drive phase" + label,
           "drive phase [deg]",
@@ -455,8 +531,7 @@ void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
           {}};
   ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
   if (has_final)
-    ph.series.push_back(
-        {trace.filename().string(), 2, 8, d.final_fit.description, "points pt 7 ps 0.4"});
+    ph.series.push_back({trace.filename().string(), 2, 8, final_name, "points pt 7 ps 0.4"});
   Plot sp{stem + "_spectrum",
           "Residual spectrum, later cycles" + label,
           "harmonic of the drive frequency",
@@ -465,19 +540,17 @@ void WriteCaseFigures(const fs::path& fig, const Diagnosis& d,
           {}};
   sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
   if (has_final)
-    sp.series.push_back(
-        {spec.filename().string(), 1, 3, d.final_fit.description, "linespoints pt 7"});
+    sp.series.push_back({spec.filename().string(), 1, 3, final_name, "linespoints pt 7"});
   sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
   Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
   lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
   lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
-  if (has_final)
-    lp.series.push_back({trace.filename().string(), 3, 6, d.final_fit.description, "lines"});
+  if (has_final) lp.series.push_back({trace.filename().string(), 3, 6, final_name, "lines"});
   for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
 }
 
 // The page's head, the verdict and the noise floor.
-void HtmlHead(std::ostream& h, const Diagnosis& d, const diagnose::DiagnoseOptions& opt) {
+void HtmlHead(std::ostream& h, const BenchDiagnosis& d, const diagnose::DiagnoseOptions& opt) {
   h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: "
     << Html(d.bench)
     << "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
@@ -487,46 +560,48 @@ void HtmlHead(std::ostream& h, const Diagnosis& d, const diagnose::DiagnoseOptio
        "8em;border:1px "
        "solid #9bd}img{max-width:100%}</style></head><body>\n";
   h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> "
-    << Html(d.verdict) << "</p>\n";
+    << Html(d.records.verdict) << "</p>\n";
   h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
     << F("%.4f", d.floor_train) << " deg (training), " << F("%.4f", d.floor_withheld)
     << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and "
        "the rounding of the "
        "saturation plateaus of "
-    << Html(d.floor_model) << ". A gap is significant when the withheld RMS exceeds "
+    << Html(d.records.floor_model) << ". A gap is significant when the withheld RMS exceeds "
     << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
 }
 
 // The V × f grid of each case's PI before / after, shaded by its RMS over the floor.
-void HtmlGrid(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
+void HtmlGrid(std::ostream& h, const BenchDiagnosis& d) {
   std::set<double> vs, fs_set;
-  for (const auto& c : model.cases()) {
-    vs.insert(c.drive.amplitude_v);
-    fs_set.insert(c.drive.frequency_hz);
+  for (const auto& c : d.cases) {
+    vs.insert(c.amplitude_v);
+    fs_set.insert(c.frequency_hz);
   }
   const std::vector<double> V = Sorted(vs), Fr = Sorted(fs_set);
   h << "<h2>Where: the grid of PI before / after</h2>\n<p>PI = Σ e² [deg²] per case, base model → "
-    << Html(d.final_fit.description)
+    << Html(ViewOf(d.set, *d.records.final_fit).description)
     << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
   for (double f : Fr) h << "<th>" << F("%.3g Hz", f) << "</th>";
   h << "</tr>\n";
   for (double v : V) {
     h << "<tr><th>" << F("%.0f V", v) << "</th>";
     for (double f : Fr) {
-      const diagnose::CaseGap* g = nullptr;
-      for (const auto& x : d.gaps)
-        if (x.amplitude_v == v && x.frequency_hz == f) g = &x;
-      if (!g) {
+      int at = -1;  // the case at (v, f): the last one there
+      for (size_t i = 0; i < d.cases.size() && i < d.records.gaps.size(); ++i)
+        if (d.cases[i].amplitude_v == v && d.cases[i].frequency_hz == f) at = static_cast<int>(i);
+      if (at < 0) {
         h << "<td></td>";
         continue;
       }
-      const double ratio = g->rms_before / std::max(g->floor_rms, 1e-12);
+      const diagnose::BenchCase& c = d.cases[static_cast<size_t>(at)];
+      const records::RecordGap& g = d.records.gaps[static_cast<size_t>(at)];
+      const double ratio = g.rms_before / std::max(g.floor_rms, 1e-12);
       const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
       h << "<td style=\"background:rgb(255," << red << "," << red << ")\">"
-        << (g->training ? "" : "<i>") << "case " << g->number << ": " << F("%.3g", g->pi_before)
-        << " → " << F("%.3g", g->pi_after) << " (" << F("%.1f", ratio) << " → "
-        << F("%.1f", g->rms_after / std::max(g->floor_rms, 1e-12)) << ")"
-        << (g->training ? "" : "</i>") << "</td>";
+        << (c.training ? "" : "<i>") << "case " << c.number << ": " << F("%.3g", g.pi_before)
+        << " → " << F("%.3g", g.pi_after) << " (" << F("%.1f", ratio) << " → "
+        << F("%.1f", g.rms_after / std::max(g.floor_rms, 1e-12)) << ")"
+        << (c.training ? "" : "</i>") << "</td>";
     }
     h << "</tr>\n";
   }
@@ -535,7 +610,8 @@ void HtmlGrid(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisMode
 
 // Where the base model's residual lies (the findings and the table per case) and the parameter
 // trends of the per-case fits.
-void HtmlLocalisation(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
+void HtmlLocalisation(std::ostream& h, const BenchDiagnosis& bd) {
+  const RecordDiagnosis& d = bd.records;
   h << "<h3>Localisation of the base model's residual</h3>\n<ul>";
   for (const auto& f : d.base_residuals.findings) h << "<li>" << Html(f) << "</li>";
   h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</"
@@ -561,7 +637,7 @@ void HtmlLocalisation(std::ostream& h, const Diagnosis& d, const diagnose::Diagn
   if (d.trends.empty()) return;
   h << "<h3>Parameter trends of per-case fits over the V × f "
        "grid</h3>\n<table><tr><th>parameter</th>";
-  for (const auto& c : model.cases()) h << "<th>case " << c.number << "</th>";
+  for (const auto& c : bd.cases) h << "<th>case " << c.number << "</th>";
   h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
   for (const auto& t : d.trends) {
     h << "<tr><td class=l>" << Html(t.name) << "</td>";
@@ -573,18 +649,21 @@ void HtmlLocalisation(std::ostream& h, const Diagnosis& d, const diagnose::Diagn
 }
 
 // Each round's candidates, and what the base parameters absorbed.
-void HtmlWhich(std::ostream& h, const Diagnosis& d) {
+void HtmlWhich(std::ostream& h, const BenchDiagnosis& bd) {
+  const RecordDiagnosis& d = bd.records;
   h << "<h2>Which effect</h2>\n";
-  for (size_t r = 0; r < d.rounds.size(); ++r) {
-    const auto& rr = d.rounds[r];
-    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(rr.verdict)
+  const std::vector<RoundView> rounds = Rounds(d);
+  for (size_t r = 0; r < rounds.size(); ++r) {
+    const RoundView& rr = rounds[r];
+    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(*rr.verdict)
       << "</p>\n<table><tr><th>candidate</th><th>added "
          "parameters</th><th>withheld RMS "
          "[deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
          "parameters</th><th>notes</th></tr>\n";
-    for (const auto& c : rr.candidates) {
-      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << c.added_params
-        << "</td><td>" << F("%.4f", Rms(c.fit.withheld_pi, c.fit.withheld_samples)) << "</td><td>"
+    for (const auto& c : *rr.candidates) {
+      const FitView f = ViewOf(bd.set, c.fit);
+      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << AddedParams(c, rr)
+        << "</td><td>" << F("%.4f", Rms(f.withheld_pi, f.withheld_samples)) << "</td><td>"
         << F("%.1f", c.score) << "</td><td>" << Pct(c.closed) << "</td><td>" << Pct(c.pattern)
         << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>" << Html(EffectParams(c.fit))
         << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note) << "</td></tr>\n";
@@ -602,68 +681,74 @@ void HtmlWhich(std::ostream& h, const Diagnosis& d) {
 }
 
 // The gap per case before / after and in total.
-void HtmlHowFar(std::ostream& h, const Diagnosis& d) {
+void HtmlHowFar(std::ostream& h, const BenchDiagnosis& bd) {
+  const RecordDiagnosis& d = bd.records;
   h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS "
        "before</th><th>RMS "
        "after</th><th>closed</th></tr>\n";
-  for (const auto& g : d.gaps)
-    h << "<tr><td>" << g.number << "</td><td class=l>" << (g.training ? "training" : "withheld")
-      << "</td><td>" << F("%.4f", g.floor_rms) << "</td><td>" << F("%.4f", g.rms_before)
-      << "</td><td>" << F("%.4f", g.rms_after) << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
-  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.withheld_before) << " → "
-    << F("%.4f", d.withheld_after) << " deg² (floor " << F("%.4f", d.withheld_floor)
-    << "): " << Pct(d.closed_total) << " of the gap closed, " << F("%.2f", d.remaining_ratio)
+  for (size_t i = 0; i < d.gaps.size(); ++i) {
+    const records::RecordGap& g = d.gaps[i];
+    h << "<tr><td>" << bd.cases[i].number << "</td><td class=l>"
+      << (bd.cases[i].training ? "training" : "withheld") << "</td><td>" << F("%.4f", g.floor_rms)
+      << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)
+      << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
+  }
+  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.s0) << " → " << F("%.4f", d.withheld_after)
+    << " deg² (floor " << F("%.4f", d.s_floor) << "): " << Pct(d.closed_total)
+    << " of the gap closed, " << F("%.2f", std::sqrt(d.withheld_after / d.s_floor))
     << " × floor remains.</p>\n";
 }
 
 // A fit's parameters with σ, sensitivity and identifiability, and its weakest direction.
-void HtmlParams(std::ostream& h, const FitResult& f) {
+void HtmlParams(std::ostream& h, const FitView& f) {
   h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity "
        "[deg]</th><th>identifiability</th>"
        "</tr>\n";
-  for (const auto& p : f.params)
+  for (const auto& p : f.params())
     h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>"
       << F("%.5g", p.value) << "</td><td>"
       << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>"
       << F("%.4f", p.sensitivity) << "</td><td class=l>"
-      << diagnose::IdentifiabilityName(p.identifiability)
-      << (p.note.empty() ? "" : "; " + Html(p.note)) << "</td></tr>\n";
-  h << "</table><p>Weakest direction: " << Html(f.weakest_direction) << "</p>\n";
+      << opt::IdentifiabilityName(p.identifiability) << (p.note.empty() ? "" : "; " + Html(p.note))
+      << "</td></tr>\n";
+  h << "</table><p>Weakest direction: " << Html(f.fit->uncertainty.weakest_direction) << "</p>\n";
 }
 
 // The identifiability tables, the figures of every case and the run's cost.
-void HtmlTail(std::ostream& h, const Diagnosis& d, const diagnose::DiagnosisModel& model) {
-  h << "<h2>Identifiability</h2>\n<p>" << Html(d.final_fit.description)
+void HtmlTail(std::ostream& h, const BenchDiagnosis& d) {
+  const FitView fin = ViewOf(d.set, *d.records.final_fit), base = ViewOf(d.set, d.records.base);
+  h << "<h2>Identifiability</h2>\n<p>" << Html(fin.description)
     << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the "
        "parameter.</p>\n";
-  HtmlParams(h, d.final_fit);
-  if (d.final_fit.description != d.base.description) {
+  HtmlParams(h, fin);
+  if (fin.description != base.description) {
     h << "<p>Base model:</p>\n";
-    HtmlParams(h, d.base);
+    HtmlParams(h, base);
   }
   h << "<h2>Figures</h2>\n";
-  for (const auto& c : model.cases()) {
+  for (const auto& c : d.cases) {
     const std::string stem = "figures/case" + std::to_string(c.number);
     h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem
       << "_phase.png\" alt=\"residual vs phase\">\n<img src=\"" << stem
       << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem
       << "_loop.png\" alt=\"loop\">\n";
   }
-  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << d.evaluations
+  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << diagnose::BenchEvaluations(d.records)
     << " model evaluations.</small></p>\n";
   h << "</body></html>\n";
 }
 
 }  // namespace
 
-std::vector<std::filesystem::path> WriteDiagnosisHtml(
-    const std::filesystem::path& dir, const Diagnosis& d, const diagnose::DiagnosisModel& model,
-    const diagnose::DiagnoseOptions& opt, bool plots, std::vector<std::string>* warnings) {
+std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir,
+                                                      const BenchDiagnosis& d,
+                                                      const diagnose::DiagnoseOptions& opt,
+                                                      bool plots,
+                                                      std::vector<std::string>* warnings) {
   fs::create_directories(dir / "figures");
   const fs::path fig = dir / "figures";
   std::vector<fs::path> written, scripts;
-  for (size_t c = 0; c < model.cases().size(); ++c)
-    WriteCaseFigures(fig, d, model, c, written, scripts);
+  for (size_t c = 0; c < d.cases.size(); ++c) WriteCaseFigures(fig, d, c, written, scripts);
   if (plots) {
     if (GnuplotAvailable()) {
       RenderPlots(fig, scripts, warnings);
@@ -676,11 +761,11 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(
   const fs::path html = dir / "report.html";
   std::ofstream h(html);
   HtmlHead(h, d, opt);
-  HtmlGrid(h, d, model);
-  HtmlLocalisation(h, d, model);
+  HtmlGrid(h, d);
+  HtmlLocalisation(h, d);
   HtmlWhich(h, d);
   HtmlHowFar(h, d);
-  HtmlTail(h, d, model);
+  HtmlTail(h, d);
   written.push_back(html);
   return written;
 }

@@ -19,22 +19,23 @@ namespace pz::client {
 
 /// The terminal summary: noise floor, where the gap lies, the candidates, the verdict, how far
 /// the gap shrinks, the identifiability table.
-void PrintDiagnosis(std::ostream& out, const diagnose::Diagnosis& d,
+void PrintDiagnosis(std::ostream& out, const diagnose::BenchDiagnosis& d,
                     const diagnose::DiagnoseOptions& options);
 
-/// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; the one
-/// conversion; `out` replaced).
-void BenchDiagnosisOf(const diagnose::Diagnosis& d, const diagnose::DiagnoseOptions& options,
+/// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; `out` replaced):
+/// the records result's common fields (client/records_diagnose.h DiagnosisCommonOf) and the
+/// bench's own.
+void BenchDiagnosisOf(const diagnose::BenchDiagnosis& d, const diagnose::DiagnoseOptions& options,
                       proto::Diagnosis* out);
 /// diagnosis.json (io/diagnosis_json.h: keys sorted, a non-finite number as null).
-void WriteDiagnosisJson(std::ostream& out, const diagnose::Diagnosis& d,
+void WriteDiagnosisJson(std::ostream& out, const diagnose::BenchDiagnosis& d,
                         const diagnose::DiagnoseOptions& options);
 
-/// Writes dir/report.html with its data (CSV) and figures (gnuplot scripts, PNG if gnuplot runs).
-/// Returns the files written; gnuplot problems are appended to `warnings`.
+/// Writes dir/report.html with its data (CSV) and figures (gnuplot scripts, PNG if gnuplot runs):
+/// the model traces are the records fits' outputs. Returns the files written; gnuplot problems
+/// are appended to `warnings`.
 std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir,
-                                                      const diagnose::Diagnosis& d,
-                                                      const diagnose::DiagnosisModel& model,
+                                                      const diagnose::BenchDiagnosis& d,
                                                       const diagnose::DiagnoseOptions& options,
                                                       bool plots,
                                                       std::vector<std::string>* warnings);

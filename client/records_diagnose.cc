@@ -85,6 +85,34 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
   WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
+void DiagnosisCommonOf(const records::RecordDiagnosis& d, proto::Diagnosis* out) {
+  out->set_verdict_kind(d.verdict_kind);
+  out->set_verdict(d.verdict);
+}
+
+void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandidate* out) {
+  out->set_effect(records::EffectName(c.kind));
+  out->set_score(c.score);
+  out->set_closed(c.closed);
+  out->set_pattern(c.pattern);
+  out->set_qualifies(c.qualifies);
+  out->set_note(c.note);
+}
+
+void NamedOf(const std::vector<records::RecordCandidate>& candidates, int named,
+             google::protobuf::Value* out) {
+  if (named >= 0)
+    out->set_string_value(records::EffectName(candidates[static_cast<size_t>(named)].kind));
+  else
+    out->set_null_value(google::protobuf::NULL_VALUE);
+}
+
+void RunnerUpOf(const std::vector<records::RecordCandidate>& candidates, int runner_up, double z,
+                proto::RunnerUp* out) {
+  out->set_effect(records::EffectName(candidates[static_cast<size_t>(runner_up)].kind));
+  out->set_z(z);
+}
+
 void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,
                         const records::TrainingDriveProposal& proposal,
                         const records::SelectionResult* selection, proto::Diagnosis* out) {
@@ -108,28 +136,14 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
   m.set_significant(d.significant);
   for (const auto& c : d.candidates) {
     proto::DiagnosisCandidate& g = *m.add_candidates();
-    g.set_effect(records::EffectName(c.kind));
-    g.set_score(c.score);
-    g.set_closed(c.closed);
-    g.set_pattern(c.pattern);
+    CandidateCommonOf(c, &g);
     g.set_z_vs_base(c.z_vs_base);
-    g.set_qualifies(c.qualifies);
-    g.set_note(c.note);
   }
   for (const auto& name : d.diverged) m.add_diverged(name);
-  if (d.named >= 0)
-    m.mutable_named()->set_string_value(
-        records::EffectName(d.candidates[static_cast<size_t>(d.named)].kind));
-  else
-    m.mutable_named()->set_null_value(google::protobuf::NULL_VALUE);
-  if (d.runner_up >= 0) {
-    m.mutable_runner_up()->set_effect(
-        records::EffectName(d.candidates[static_cast<size_t>(d.runner_up)].kind));
-    m.mutable_runner_up()->set_z(d.z_runner_up);
-  }
+  NamedOf(d.candidates, d.named, m.mutable_named());
+  if (d.runner_up >= 0) RunnerUpOf(d.candidates, d.runner_up, d.z_runner_up, m.mutable_runner_up());
   m.set_confidence(d.confidence);
-  m.set_verdict_kind(d.verdict_kind);
-  m.set_verdict(d.verdict);
+  DiagnosisCommonOf(d, &m);
   ExcitationOf(set, d.excitation, proposal, kProposedDriveFile, m.mutable_excitation());
   m.set_excitation_gap_note(d.excitation_note);
   if (d.next) {

@@ -12,9 +12,14 @@
 #include "diagnose/diagnose.h"
 #include "records/select.h"
 
+namespace google::protobuf {
+class Value;
+}
 namespace pz::proto {
 class Diagnosis;
-}
+class DiagnosisCandidate;
+class RunnerUp;
+}  // namespace pz::proto
 
 namespace pz::client {
 
@@ -46,6 +51,18 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
                                    const records::TrainingDriveProposal& proposal,
                                    double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
+/// The one fill of diagnosis.json's message from a records result, for both kinds (this file's
+/// `diagnose --records` and the fin bench's, client/diagnose_report.h): the verdict and its kind.
+void DiagnosisCommonOf(const records::RecordDiagnosis& d, proto::Diagnosis* out);
+/// A candidate's fields of both kinds: effect, score, closed, pattern, qualifies, note.
+void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandidate* out);
+/// The effect named among ranked `candidates` (index `named`): its name, or null for −1.
+void NamedOf(const std::vector<records::RecordCandidate>& candidates, int named,
+             google::protobuf::Value* out);
+/// The runner-up `runner_up` (≥ 0) and its paired block z against the named effect.
+void RunnerUpOf(const std::vector<records::RecordCandidate>& candidates, int runner_up, double z,
+                proto::RunnerUp* out);
+
 /// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; the one
 /// conversion; `out` replaced). `selection`: --family auto's choice (null: none).
 void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,

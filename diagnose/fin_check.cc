@@ -53,12 +53,12 @@ CheckSummary RunCheck(int trials, uint64_t seed, const DiagnoseOptions& o,
     const DiagnosisModel m(plant, std::move(st.cases), o.sim);
     DiagnoseOptions od = o;
     od.seed = o.seed + static_cast<uint64_t>(i);
-    const Diagnosis d = DiagnoseBench(m, od);
+    const records::RecordDiagnosis d = DiagnoseBench(m, od).records;
     t.verdict_kind = d.verdict_kind;
-    t.named = d.named.empty() ? model::EffectKind() : d.named.front();
+    t.named = d.named_effects.empty() ? model::EffectKind() : d.named_effects.front();
     t.confidence = d.confidence;
-    t.significant = !d.rounds.empty() && d.rounds.front().significant;
-    t.rms_ratio = d.rounds.empty() ? 0 : d.rounds.front().rms_ratio;
+    t.significant = d.significant;
+    t.rms_ratio = d.rms_ratio;
     t.closed = d.closed_total;
     t.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     Tally(summary, t);

@@ -514,110 +514,6 @@ Diagnosis RunDiagnosis(const DiagnosisModel& m, const DiagnoseOptions& o) {
   return d;
 }
 
-namespace {
-
-// A records fit as the bench's: "base + effect", per-case PI, the uncertainty table.
-FitResult FinFitOf(const io::RecordSet& set, const records::FitResult& f) {
-  FitResult o;
-  o.structure = f.model->effects();
-  o.description = ParameterLayout(o.structure).Describe();
-  o.x = f.params;
-  o.params = f.uncertainty.params;
-  for (size_t i = 0; i < set.records.size(); ++i) {
-    const double pi = f.metrics[i].sse;
-    o.case_pi.push_back(pi);
-    const bool training = set.records[i].role == model::CaseRole::kTrain;
-    (training ? o.train_pi : o.withheld_pi) += pi;
-    (training ? o.train_samples : o.withheld_samples) += static_cast<int>(set.records[i].scored());
-  }
-  o.residual_sigma = f.uncertainty.residual_sigma;
-  o.singular_values = f.uncertainty.singular_values;
-  o.weakest_direction = f.uncertainty.weakest_direction;
-  o.evaluations = f.evaluations + f.uncertainty.evaluations;
-  o.wall_time_s = f.wall_time_s;
-  o.message = f.polish_message;
-  o.ok = true;
-  return o;
-}
-
-CandidateResult FinCandidateOf(const io::RecordSet& set, const records::RecordCandidate& c,
-                               const records::FitResult& start) {
-  CandidateResult o;
-  static_cast<records::CandidateScore&>(o) = c;
-  o.kind = c.kind;
-  o.fit = FinFitOf(set, c.fit);
-  o.added_params = static_cast<int>(c.fit.params.size() - start.params.size());
-  return o;
-}
-
-RoundResult FinRoundOf(const io::RecordSet& set, const records::FitResult& start,
-                       const records::Gap& gap, const std::vector<records::RecordCandidate>& cands,
-                       int named, int runner_up, double z_runner_up, const std::string& verdict) {
-  RoundResult r;
-  r.base_structure = start.model->effects();
-  r.s0 = gap.s0;
-  r.s_floor = gap.s_floor;
-  r.rms_ratio = gap.rms_ratio;
-  r.significant = gap.significant;
-  for (const records::RecordCandidate& c : cands)
-    r.candidates.push_back(FinCandidateOf(set, c, start));
-  r.named = named;
-  r.runner_up = runner_up;
-  r.z_runner_up = z_runner_up;
-  r.gap = gap;
-  r.verdict = verdict;
-  return r;
-}
-
-}  // namespace
-
-Diagnosis DiagnosisOfRecords(const DiagnosisModel& m, const io::RecordSet& set,
-                             const records::RecordDiagnosis& rd) {
-  if (set.records.size() != m.cases().size())
-    throw InputError("the bench's records: " + std::to_string(set.records.size()) +
-                     " records for " + std::to_string(m.cases().size()) + " cases");
-  Diagnosis d;
-  d.cases = m.cases();
-  for (const DiagCase& c : m.cases()) d.quantum_deg = std::max(d.quantum_deg, c.noise.quantum_deg);
-  SetFloorTotals(m, rd.record_floor, d);
-  d.floor_model = rd.floor_model;
-  d.base = FinFitOf(set, rd.base);
-  d.base_residuals = rd.base_residuals;
-  d.trends = rd.trends;
-  records::Gap gap;
-  gap.s0 = rd.s0;
-  gap.s_floor = rd.s_floor;
-  gap.rms_ratio = rd.rms_ratio;
-  gap.significant = rd.significant;
-  gap.nw = static_cast<double>(rd.withheld_samples);
-  gap.nt = static_cast<double>(rd.train_samples);
-  d.rounds.push_back(FinRoundOf(set, rd.base, gap, rd.candidates, rd.named, rd.runner_up,
-                                rd.z_runner_up, rd.round_verdict));
-  if (rd.second) {
-    const records::FitResult& start = rd.candidates[static_cast<size_t>(rd.named)].fit;
-    d.rounds.push_back(FinRoundOf(set, start, rd.second->gap, rd.second->candidates,
-                                  rd.second->named, rd.second->runner_up, rd.second->z_runner_up,
-                                  rd.second->verdict));
-  }
-  d.named = rd.named_effects;
-  d.confidence = rd.confidence;
-  d.final_fit = FinFitOf(set, *rd.final_fit);
-  d.final_residuals = rd.final_residuals;
-  d.withheld_before = d.base.withheld_pi;
-  d.withheld_after = d.final_fit.withheld_pi;
-  d.closed_total = records::ClosedShare(d.withheld_before, d.withheld_after, d.withheld_floor);
-  d.remaining_ratio = std::sqrt(d.withheld_after / d.withheld_floor);
-  MeasureCaseGaps(m, rd.record_floor, d);
-  d.absorbed = rd.absorbed;
-  d.absorbed_by = rd.absorbed_by;
-  d.verdict_kind = rd.verdict_kind;
-  d.verdict = rd.verdict;
-  d.evaluations = d.base.evaluations + rd.trend_evaluations;
-  for (const RoundResult& r : d.rounds)
-    for (const CandidateResult& c : r.candidates) d.evaluations += c.fit.evaluations;
-  return d;
-}
-
 records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
   records::RecordDiagnoseOptions r = records::FinBenchOptions();
   if (!o.candidates.empty()) r.candidates = o.candidates;
@@ -661,12 +557,37 @@ io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
   return io::RecordsFromCaseSet(set);
 }
 
-Diagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
+int64_t BenchEvaluations(const records::RecordDiagnosis& d) {
+  auto fit = [](const records::FitResult& f) { return f.evaluations + f.uncertainty.evaluations; };
+  int64_t n = fit(d.base) + d.trend_evaluations;
+  for (const records::RecordCandidate& c : d.candidates) n += fit(c.fit);
+  if (d.second)
+    for (const records::RecordCandidate& c : d.second->candidates) n += fit(c.fit);
+  return n;
+}
+
+BenchDiagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
   ThrowIfError(o.Validate());
-  if (o.evaluator_factory && !o.records_service) return RunDiagnosis(m, o);
+  if (o.evaluator_factory && !o.records_service)
+    throw InputError(
+        "DiagnoseBench: evaluator_factory is the fin engine's (RunDiagnosis); the "
+        "records engine's fits on the service take records_service");
   const auto start = std::chrono::steady_clock::now();
-  const io::RecordSet set = RecordsOfCases(m.cases());
-  Diagnosis d = DiagnosisOfRecords(m, set, records::DiagnoseRecords(set, RecordOptionsOf(o)));
+  BenchDiagnosis d;
+  d.set = RecordsOfCases(m.cases());
+  d.records = records::DiagnoseRecords(d.set, RecordOptionsOf(o));
+  // The grid's facts: each case's place, noise and saturations, and the floors pooled by role.
+  double st = 0, sw = 0;
+  for (size_t c = 0; c < m.cases().size(); ++c) {
+    const DiagCase& dc = m.cases()[c];
+    d.cases.push_back({dc.number, dc.training, dc.drive.amplitude_v, dc.drive.frequency_hz,
+                       dc.noise, dc.b1, dc.b2});
+    d.quantum_deg = std::max(d.quantum_deg, dc.noise.quantum_deg);
+    const double f = d.records.record_floor[c];
+    (dc.training ? st : sw) += f * f * dc.measured_deg.size();
+  }
+  d.floor_train = std::sqrt(st / std::max(1, m.training_samples()));
+  d.floor_withheld = std::sqrt(sw / std::max(1, m.withheld_samples()));
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }

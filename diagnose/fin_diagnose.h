@@ -141,13 +141,6 @@ struct Diagnosis {
 /// Runs the whole diagnosis. Throws InputError on invalid options.
 Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
 
-/// The diagnosis of the bench's records (io/fin_records.h; diagnose/diagnose.h DiagnoseRecords
-/// with FinBenchOptions) as the bench's report reads it: `set` the records of `model`'s cases, in
-/// case order. Each fit's figures are its records' (per-case PI, σ and identifiability from the
-/// uncertainty table, evaluations with the table's).
-Diagnosis DiagnosisOfRecords(const DiagnosisModel& model, const io::RecordSet& set,
-                             const records::RecordDiagnosis& diagnosis);
-
 /// The bench's options as the records engine's: FinBenchOptions with these candidates (empty: the
 /// whole library), searches (DE base and candidate, their seed, LM, the beam refinement), simulator
 /// options, rules, rounds, trends, threads and progress.
@@ -156,11 +149,39 @@ records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
 /// The bench's cases as records (io/fin_records.h; a withheld case validates).
 io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
 
+/// A bench case as the V × f grid reads it: its place in the grid, its role, its noise (rounding
+/// and scatter, before the saturations) and its saturations from the measured extremes.
+struct BenchCase {
+  int number = 0;
+  bool training = false;
+  double amplitude_v = 0, frequency_hz = 0;
+  records::CaseNoise noise;
+  double b1 = 0, b2 = 0;  ///< [deg]
+};
+
+/// The bench's diagnosis: the records engine's result on the cases as records, and what only the
+/// nine-case grid adds. Each record's gap before / after and its saturation-aware floor are the
+/// records result's (`records.gaps`, `records.record_floor`, set order = case order).
+struct BenchDiagnosis {
+  std::string bench;  ///< the folder or a label
+  io::RecordSet set;  ///< the cases as records, in case order
+  records::RecordDiagnosis records;
+  std::vector<BenchCase> cases;  ///< set order
+  double quantum_deg = 0;        ///< the largest encoder quantum of the cases
+  /// The per-case floors' RMS over the training and the withheld samples [deg].
+  double floor_train = 0, floor_withheld = 0;
+  double wall_time_s = 0;
+};
+
+/// Every model evaluation of a bench diagnosis: its fits' searches, polishes and uncertainty
+/// tables, and the per-case fits of the trends.
+int64_t BenchEvaluations(const records::RecordDiagnosis& d);
+
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
-/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf) and read back as the bench's
-/// Diagnosis (DiagnosisOfRecords). With an evaluator factory (the service's sessions take the fin
-/// engine's fitness) it is RunDiagnosis. Throws InputError on invalid options.
-Diagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
+/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of `model`'s
+/// cases. Throws InputError on invalid options (and on an `evaluator_factory` without
+/// `records_service`: that factory is the fin engine's, RunDiagnosis).
+BenchDiagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
 
 /// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
 model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,

@@ -15,6 +15,9 @@
 #include <string>
 
 #include "diagnosis.pb.h"
+#include "diagnose/diagnose.h"
+#include "records/families.h"
+#include "records/model.h"
 #include "io/diagnosis_json.h"
 #include "io/proto_json.h"
 
@@ -37,22 +40,34 @@ const Value& Field(const Struct& s, const std::string& name) {
   return it == s.fields().end() ? missing : it->second;
 }
 
+// A records fit of bimorph-fin's bench form with `effects`, nothing fitted.
+records::FitResult Fit(std::vector<model::EffectKind> effects, int64_t evaluations = 0) {
+  records::FamilyOptions fo;
+  fo.bench_form = true;
+  const records::DataScale scale;
+  records::FitResult f;
+  f.model = std::make_shared<records::RecordModel>(records::MakeFamily("bimorph-fin", scale, fo),
+                                                   std::move(effects), scale);
+  f.evaluations = evaluations;
+  return f;
+}
+
 TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
-  diagnose::Diagnosis d;
+  diagnose::BenchDiagnosis d;
   d.bench = "bench \"a\"\nline 2";
-  d.verdict_kind = "none";
-  d.verdict = "No significant gap.";
+  records::RecordDiagnosis& r = d.records;
+  r.verdict_kind = "none";
+  r.verdict = "No significant gap.";
   d.quantum_deg = 360.0 / 8192;
-  d.withheld_before = 0.5;
-  d.closed_total = NAN;  // no excess: undefined
-  d.evaluations = 123456789;
-  diagnose::CaseGap g;
-  g.number = 3;
+  r.s0 = 0.5;
+  r.closed_total = NAN;  // no excess: undefined
+  r.base = Fit({}, 123456789);
+  r.final_fit = std::make_shared<records::FitResult>(r.base);
+  records::RecordGap g;
   g.rms_before = 0.0798;
-  d.gaps.push_back(g);
-  diagnose::RoundResult r;
-  r.s0 = 1.5;
-  d.rounds.push_back(r);
+  r.gaps.push_back(g);
+  d.cases.emplace_back();
+  d.cases.back().number = 3;
   diagnose::DiagnoseOptions o;
   std::ostringstream out;
   WriteDiagnosisJson(out, d, o);
@@ -71,10 +86,11 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   const Struct& c = Field(gap, "cases").list_value().values(0).struct_value();
   EXPECT_EQ(Field(c, "case").number_value(), 3);
   EXPECT_EQ(Field(c, "rms_before_deg").number_value(), 0.0798);
-  ASSERT_EQ(Field(s, "rounds").list_value().values_size(), 1);
+  ASSERT_EQ(Field(s, "rounds").list_value().values_size(), 1);  // no second round run
   const Struct& round = Field(s, "rounds").list_value().values(0).struct_value();
-  EXPECT_EQ(Field(round, "withheld_pi_deg2").number_value(), 1.5);
+  EXPECT_EQ(Field(round, "withheld_pi_deg2").number_value(), 0.5);
   EXPECT_EQ(Field(round, "named").kind_case(), Value::kNullValue);
+  EXPECT_EQ(Field(Field(s, "base").struct_value(), "structure").string_value(), "base");
   for (const char* name : {"base", "final", "base_residuals", "final_residuals", "trends",
                            "absorbed", "absorbed_by", "named", "wall_time_s"})
     EXPECT_TRUE(s.fields().contains(name)) << name;
@@ -90,33 +106,39 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   EXPECT_TRUE(std::isnan(back.gap().closed()));
   m.clear_confidence();
   back.clear_confidence();
-  m.mutable_gap()->clear_closed();
-  back.mutable_gap()->clear_closed();
+  m.clear_gap();  // closed; remaining_over_floor: no floor
+  back.clear_gap();
   m.clear_base();  // train_rms_deg, withheld_rms_deg: no samples
   back.clear_base();
   m.clear_final();
   back.clear_final();
+  m.clear_rounds();  // rms_over_floor of no floor
+  back.clear_rounds();
   EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(m, back)) << out.str();
   EXPECT_EQ(back.bench(), d.bench);
-  EXPECT_EQ(back.rounds(0).named().kind_case(), Value::kNullValue);
   EXPECT_EQ(back.named().list_value().values_size(), 0);
 }
 
 TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
-  diagnose::Diagnosis d;
+  const model::EffectKind delay = model::EffectKind::Named("delay"),
+                          lowpass = model::EffectKind::Named("driver-lowpass");
+  diagnose::BenchDiagnosis d;
   d.bench = "bench";
-  d.verdict_kind = "inseparable";
-  d.named = {model::EffectKind::Named("delay")};
-  d.confidence = 0.6;
-  diagnose::RoundResult r;
+  records::RecordDiagnosis& r = d.records;
+  r.verdict_kind = "inseparable";
+  r.named_effects = {delay};
+  r.confidence = 0.6;
+  r.base = Fit({});
   r.candidates.resize(2);
-  r.candidates[0].kind = model::EffectKind::Named("delay");
-  r.candidates[1].kind = model::EffectKind::Named("driver-lowpass");
+  r.candidates[0].kind = delay;
+  r.candidates[0].fit = Fit({delay});
+  r.candidates[1].kind = lowpass;
+  r.candidates[1].fit = Fit({lowpass});
   r.named = 0;
   r.runner_up = 1;
   r.z_runner_up = 0.75;
-  d.rounds.push_back(r);
-  d.rounds.push_back(diagnose::RoundResult{});  // no runner-up: none written
+  r.final_fit = std::make_shared<records::FitResult>(r.candidates[0].fit);
+  r.second = records::RecordRound{};  // no runner-up: none written
   std::ostringstream out;
   WriteDiagnosisJson(out, d, diagnose::DiagnoseOptions{});
   proto::Diagnosis back;
@@ -125,10 +147,15 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
   EXPECT_EQ(back.rounds(0).named().string_value(), "delay");
   EXPECT_EQ(back.rounds(0).runner_up().effect(), "driver-lowpass");
   EXPECT_EQ(back.rounds(0).runner_up().z(), 0.75);
+  ASSERT_EQ(back.rounds(1).from_size(), 1);  // the second round starts from the named model
+  EXPECT_EQ(back.rounds(1).from(0), "delay");
   EXPECT_FALSE(back.rounds(1).has_runner_up());
   EXPECT_FALSE(back.has_runner_up());  // the bench's is in its round
   EXPECT_EQ(back.named().list_value().values(0).string_value(), "delay");
   EXPECT_EQ(back.confidence(), 0.6);
+  EXPECT_EQ(back.final().structure(), "base + delay");
+  ASSERT_EQ(back.rounds(0).candidates_size(), 2);
+  EXPECT_EQ(back.rounds(0).candidates(1).fit().structure(), "base + driver-lowpass");
 }
 
 TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {

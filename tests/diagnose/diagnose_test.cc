@@ -420,27 +420,41 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
     EXPECT_NEAR(rec.gaps[c].floor_rms, fin.gaps[c].floor_rms, 1e-12) << rec.gaps[c].name;
     EXPECT_NEAR(rec.gaps[c].pi_after, fin.gaps[c].pi_after, 1e-12 * fin.gaps[c].pi_after);
   }
-  // The one driver (the cases as records, read back as the bench's diagnosis): the same fits, the
-  // same rounds, the same evaluations.
-  const diagnose::Diagnosis one = diagnose::DiagnoseBench(m, fo);
+  // The one driver (the cases as records, with the grid's facts): the same fits, the same rounds,
+  // the same evaluations.
+  const diagnose::BenchDiagnosis grid = diagnose::DiagnoseBench(m, fo);
+  const RecordDiagnosis& one = grid.records;
   EXPECT_EQ(one.verdict, fin.verdict);
-  EXPECT_EQ(one.final_fit.x, fin.final_fit.x);
-  EXPECT_EQ(one.final_fit.case_pi, fin.final_fit.case_pi);
-  EXPECT_EQ(one.base.x, fin.base.x);
-  ASSERT_EQ(one.rounds.size(), fin.rounds.size());
-  for (size_t r = 0; r < one.rounds.size(); ++r) {
-    EXPECT_EQ(one.rounds[r].verdict, fin.rounds[r].verdict);
-    EXPECT_EQ(one.rounds[r].candidates.size(), fin.rounds[r].candidates.size());
+  EXPECT_EQ(one.final_fit->params, fin.final_fit.x);
+  ASSERT_EQ(one.final_fit->metrics.size(), fin.final_fit.case_pi.size());
+  for (size_t c = 0; c < fin.final_fit.case_pi.size(); ++c)
+    EXPECT_EQ(one.final_fit->metrics[c].sse, fin.final_fit.case_pi[c]) << c;
+  EXPECT_EQ(one.base.params, fin.base.x);
+  EXPECT_EQ(one.round_verdict, fin.rounds[0].verdict);
+  EXPECT_EQ(one.candidates.size(), fin.rounds[0].candidates.size());
+  ASSERT_EQ(one.second.has_value(), fin.rounds.size() > 1);
+  if (one.second) {
+    EXPECT_EQ(one.second->verdict, fin.rounds[1].verdict);
+    EXPECT_EQ(one.second->candidates.size(), fin.rounds[1].candidates.size());
   }
-  EXPECT_EQ(one.evaluations, fin.evaluations);
+  EXPECT_EQ(diagnose::BenchEvaluations(one), fin.evaluations);
   ASSERT_EQ(one.trends.size(), fin.trends.size());
   for (size_t i = 0; i < one.trends.size(); ++i) {
     EXPECT_EQ(one.trends[i].name, fin.trends[i].name);
     EXPECT_EQ(one.trends[i].per_case, fin.trends[i].per_case) << one.trends[i].name;
   }
   EXPECT_EQ(one.floor_model, fin.floor_model);
-  EXPECT_EQ(one.withheld_floor, fin.withheld_floor);
+  EXPECT_EQ(one.s_floor, fin.withheld_floor);
   EXPECT_EQ(one.closed_total, fin.closed_total);
+  EXPECT_EQ(grid.floor_train, fin.floor_train);
+  EXPECT_EQ(grid.floor_withheld, fin.floor_withheld);
+  ASSERT_EQ(one.gaps.size(), fin.gaps.size());
+  for (size_t c = 0; c < fin.gaps.size(); ++c) {
+    EXPECT_EQ(one.gaps[c].pi_before, fin.gaps[c].pi_before) << c;
+    EXPECT_EQ(one.gaps[c].rms_after, fin.gaps[c].rms_after) << c;
+    EXPECT_EQ(one.gaps[c].closed, fin.gaps[c].closed) << c;
+    EXPECT_EQ(grid.cases[c].number, fin.gaps[c].number);
+  }
 }
 
 }  // namespace

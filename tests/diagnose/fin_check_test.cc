@@ -91,12 +91,12 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
     std::vector<model::Effect> effects;
     if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
     const DiagnosisModel m(plant, SimulateBench(*plant, p, effects, sat, so, rng));
-    const Diagnosis d = DiagnoseBench(m, o);
+    const records::RecordDiagnosis d = DiagnoseBench(m, o).records;
     CheckTrial t;
     t.truth = with_delay ? EffectKind::Named("delay") : EffectKind();
     t.verdict_kind = d.verdict_kind;
-    t.named = d.named.empty() ? EffectKind() : d.named.front();
-    t.significant = d.rounds.front().significant;
+    t.named = d.named_effects.empty() ? EffectKind() : d.named_effects.front();
+    t.significant = d.significant;
     t.closed = d.closed_total;
     Tally(summary, t);
     if (with_delay) {
@@ -107,17 +107,18 @@ TEST(CheckTest, WithheldDelayIsNamedAndACleanBenchIsNot) {
         PZ_EXPECT_HAS(d.verdict, "cannot separate");
         EXPECT_LT(d.confidence, 0.9) << d.verdict;
       }
-      ASSERT_FALSE(d.named.empty());
-      EXPECT_EQ(d.named.front(), EffectKind::Named("delay")) << d.verdict;
+      ASSERT_FALSE(d.named_effects.empty());
+      EXPECT_EQ(d.named_effects.front(), EffectKind::Named("delay")) << d.verdict;
       EXPECT_GE(d.closed_total, 0.7) << d.verdict;
       if (d.verdict_kind == "effect") {
         EXPECT_GT(d.confidence, 0.5);  // the named effect carries most of the weight
       }
-      ASSERT_EQ(d.final_fit.params.size(), 8u);
-      EXPECT_NEAR(d.final_fit.params[7].value, 0.02, 3 * d.final_fit.params[7].std_error + 1e-3);
+      const auto& params = d.final_fit->uncertainty.params;
+      ASSERT_EQ(params.size(), 8u);
+      EXPECT_NEAR(params[7].value, 0.02, 3 * params[7].std_error + 1e-3);
     } else {
       EXPECT_EQ(d.verdict_kind, "none") << d.verdict;
-      EXPECT_LT(d.rounds.front().rms_ratio, o.rules.significance_ratio);
+      EXPECT_LT(d.rms_ratio, o.rules.significance_ratio);
     }
   }
   EXPECT_EQ(summary.confusion[model::FinIndex(EffectKind::Named("delay"))]
@@ -158,16 +159,18 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   const std::string dir = std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/driver-lowpass";
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, CasesFromCaseSet(io::LoadCaseSet(dir)));
-  const Diagnosis d =
+  const records::RecordDiagnosis d =
       DiagnoseBench(m, Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
-                              EffectKind::Named("creep")}));
+                              EffectKind::Named("creep")}))
+          .records;
   // The grid's phase-zero sines cannot tell a low-pass from a delay (issue 14): the verdict says
   // so.
   ASSERT_TRUE(d.verdict_kind == "effect" || d.verdict_kind == "inseparable") << d.verdict;
   if (d.verdict_kind == "inseparable") {
     PZ_EXPECT_HAS(d.verdict, "The data cannot separate driver-lowpass from");
   }
-  EXPECT_EQ(d.named.front(), EffectKind::Named("driver-lowpass")) << d.verdict;
+  ASSERT_FALSE(d.named_effects.empty()) << d.verdict;
+  EXPECT_EQ(d.named_effects.front(), EffectKind::Named("driver-lowpass")) << d.verdict;
   EXPECT_GE(d.closed_total, 0.7);
   // Only now, to check the answer: the bench's low-pass corner frequency.
   std::ifstream in(dir + "/truth.json");
@@ -178,7 +181,7 @@ TEST(CheckTest, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   ASSERT_TRUE(std::regex_search(text, mt,
                                 std::regex("\"lpf\"\\s*:\\s*\\{\\s*\"fc\"\\s*:\\s*([0-9.eE+-]+)")));
   const double tau_truth = 1.0 / (2 * std::numbers::pi * std::stod(mt[1]));
-  EXPECT_NEAR(d.final_fit.params[7].value, tau_truth, 0.1 * tau_truth);
+  EXPECT_NEAR(d.final_fit->uncertainty.params[7].value, tau_truth, 0.1 * tau_truth);
 }
 
 }  // namespace

@@ -205,7 +205,7 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   auto plant = std::make_shared<const model::BimorphPlant>();
   const DiagnosisModel m(plant, SmallBench(true));
   DiagnoseOptions o = SmallOptions();
-  const Diagnosis local = DiagnoseBench(m, o);
+  const records::RecordDiagnosis local = DiagnoseBench(m, o).records;
 
   const client::ServiceEvaluatorOptions so = ServiceOptions(cluster);
   int factories = 0;
@@ -214,12 +214,25 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
     EXPECT_TRUE(f.bench_form);
     return client::RecordsServiceFactory(so, f, "test");
   };
-  const Diagnosis remote = DiagnoseBench(m, o);
+  const records::RecordDiagnosis remote = DiagnoseBench(m, o).records;
   EXPECT_GE(factories, 1);
-  ExpectSameVector(remote.base.x, local.base.x, "base.x");
-  EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
-  ExpectSameVector(remote.base.case_pi, local.base.case_pi, "base.case_pi");
-  ExpectSameRounds(remote, local);
+  ExpectSameVector(remote.base.params, local.base.params, "base.params");
+  EXPECT_TRUE(SameBits(remote.base.train_sse, local.base.train_sse));
+  ASSERT_EQ(remote.base.metrics.size(), local.base.metrics.size());
+  for (size_t c = 0; c < local.base.metrics.size(); ++c)
+    EXPECT_TRUE(SameBits(remote.base.metrics[c].sse, local.base.metrics[c].sse)) << c;
+  // The first round's candidates, the naming and the verdict, bit for bit.
+  ASSERT_EQ(remote.candidates.size(), local.candidates.size());
+  for (size_t i = 0; i < local.candidates.size(); ++i) {
+    const auto& a = remote.candidates[i];
+    const auto& b = local.candidates[i];
+    EXPECT_EQ(a.kind, b.kind);
+    ExpectSameVector(a.fit.params, b.fit.params, std::string(model::EffectName(b.kind)) + ".x");
+    EXPECT_TRUE(SameBits(a.s_withheld, b.s_withheld));
+    EXPECT_TRUE(SameBits(a.score, b.score));
+  }
+  EXPECT_EQ(remote.named_effects, local.named_effects);
+  EXPECT_EQ(remote.verdict, local.verdict);
   // The searches ran on the workers: complete_model sessions, each with evaluations.
   auto client = cluster.Client();
   std::vector<service::JobInfo> jobs;
