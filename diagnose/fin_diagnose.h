@@ -52,8 +52,8 @@ struct DiagnoseOptions {
   EvaluatorFactory evaluator_factory;
   /// The records engine's evaluators on the service (DiagnoseBench): given the bench form's family
   /// options, the factory of every fit's evaluators (svcclient/complete_service.h
-  /// RecordsServiceFactory). With it, DiagnoseBench runs the records engine on the service; with
-  /// only `evaluator_factory`, the fin engine (RunDiagnosis).
+  /// RecordsServiceFactory). With it, DiagnoseBench runs the records engine on the service;
+  /// `evaluator_factory` is the fin engine's (RunDiagnosis), which DiagnoseBench refuses.
   std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> records_service;
   /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
   /// sessions), ≥ 1; the results do not depend on it.
