@@ -1,5 +1,7 @@
-// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect
-// causes it, and how far it shrinks once that effect is in the model.
+// The diagnosis of the sim-to-real gap of the nine-case fin bench (issue 6): where the gap lies,
+// which unmodelled effect causes it, and how far it shrinks once that effect is in the model. The
+// bench's cases are records (io/fin_records.h) diagnosed by the records engine (diagnose/diagnose.h
+// DiagnoseRecords with records::FinBenchOptions: bimorph-fin's bench form), in these steps:
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
@@ -34,7 +36,6 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/fin_fit.h"
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
 #include "diagnose/decision.h"
@@ -48,16 +49,10 @@ struct DiagnoseOptions {
   std::vector<model::EffectKind> candidates;  ///< empty = the whole library
   int threads = 2;                            ///< ≥ 1
   uint64_t seed = 1;
-  /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
-  EvaluatorFactory evaluator_factory;
-  /// The records engine's evaluators on the service (DiagnoseBench): given the bench form's family
-  /// options, the factory of every fit's evaluators (svcclient/complete_service.h
-  /// RecordsServiceFactory). With it, DiagnoseBench runs the records engine on the service; with
-  /// only `evaluator_factory`, the fin engine (RunDiagnosis).
+  /// The evaluators on the service: given the bench form's family options, the factory of every
+  /// fit's evaluators (svcclient/complete_service.h RecordsServiceFactory: complete_model
+  /// sessions); null = local threads.
   std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> records_service;
-  /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
-  /// sessions), ≥ 1; the results do not depend on it.
-  int concurrent_fits = 1;
   opt::DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
   opt::DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
   opt::LmOptions lm{.max_iterations = 40};
@@ -138,9 +133,6 @@ struct Diagnosis {
   int64_t evaluations = 0;
 };
 
-/// Runs the whole diagnosis. Throws InputError on invalid options.
-Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
-
 /// The diagnosis of the bench's records (io/fin_records.h; diagnose/diagnose.h DiagnoseRecords
 /// with FinBenchOptions) as the bench's report reads it: `set` the records of `model`'s cases, in
 /// case order. Each fit's figures are its records' (per-case PI, σ and identifiability from the
@@ -158,12 +150,7 @@ io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
 
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
 /// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf) and read back as the bench's
-/// Diagnosis (DiagnosisOfRecords). With an evaluator factory (the service's sessions take the fin
-/// engine's fitness) it is RunDiagnosis. Throws InputError on invalid options.
+/// Diagnosis (DiagnosisOfRecords). Throws InputError on invalid options.
 Diagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
-
-/// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
-model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,
-                                   std::span<const double> case_floor);
 
 }  // namespace pz::diagnose
