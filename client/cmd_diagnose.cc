@@ -21,7 +21,6 @@
 #include "diagnose/reallike_check.h"
 #include "diagnose/verdict.h"
 #include "svcclient/service_evaluator.h"
-#include "diagnose/job_kind.h"
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "io/csv.h"
@@ -43,24 +42,9 @@ struct DiagnoseArgs {
   bool quick = false;
   bool quiet = false;
   double significance_ratio = 1.25;
-  std::string engine = "records";  ///< --engine: the records engine on the bench, or the fin's
   CompleteServiceFlags
       service;  ///< --master etc.: evaluate on a piezoid-master's workers (empty: locally)
-  int concurrent_fits = 0;  ///< 0: 1 locally, 3 with --master
 };
-
-/// Every candidate fit's evaluations as evaluation sessions on the master of `a.service`: one
-/// session per global search (costs) and one per refinement (residuals, a Jacobian per batch).
-diagnose::EvaluatorFactory ServiceFactory(const DiagnoseArgs& a) {
-  const ServiceEvaluatorOptions so =
-      a.service.Options();  // CURVE keys loaded (InputError naming the flag)
-  return [so](const diagnose::DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
-    const std::string what = "diagnose " + f.layout().Describe() +
-                             (f.residuals() ? " (refinement)" : " (global search)");
-    return std::make_unique<ServiceEvaluator>(so, diagnose::DiagnoseJobSpec(f, what),
-                                              "piezoid diagnose");
-  };
-}
 
 std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   std::vector<model::EffectKind> kinds;
@@ -127,32 +111,22 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (a.cases_dir.empty())
     throw InputError(
         "piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
-  diagnose::EvaluatorFactory service;
-  if (a.service.enabled())
-    service = ServiceFactory(a);  // bad --master / CURVE flags fail before any work
   const std::filesystem::path dir(a.cases_dir);
   const io::CaseSet set = io::LoadCaseSet(dir);
   diagnose::DiagnoseOptions o =
       Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
   o.trends = !a.no_trends;
-  if (a.service.enabled() && a.engine == "records") {
-    // The records engine's fits as complete_model sessions (bimorph-fin's bench form on the
-    // workers, bit for bit as locally).
+  if (a.service.enabled()) {
+    // Every fit as complete_model sessions (bimorph-fin's bench form on the workers, bit for bit
+    // as locally); bad --master / CURVE flags fail here, before any work.
     const ServiceEvaluatorOptions so = a.service.Options();
     o.records_service = [so](const records::FamilyOptions& f) {
       return RecordsServiceFactory(so, f, "piezoid diagnose");
     };
-  } else if (a.service.enabled()) {
-    o.evaluator_factory = std::move(service);
   }
-  o.concurrent_fits = a.concurrent_fits > 0 ? a.concurrent_fits : a.service.enabled() ? 3 : 1;
   auto plant = std::make_shared<const model::BimorphPlant>();
   const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
-  if (a.engine != "records")  // the reports read the records engine's result
-    throw InputError(
-        "--engine fin: the fin engine is being removed (issue 38) and its result "
-        "has no report any more; use --engine records");
   diagnose::BenchDiagnosis d;
   try {
     // The records engine on the bench's records (with --master: on the workers as
@@ -361,13 +335,6 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_option("--significance-ratio", a->significance_ratio,
                   "withheld RMS / noise floor above which a gap is significant")
       ->check(CLI::Range(1.0001, 100.0));
-  cmd->add_option("--engine", a->engine,
-                  "with --cases: records (the bench's cases as records, diagnosed by the records "
-                  "engine with the bench's options; with --master its fits run as complete_model "
-                  "sessions) or fin (the bench's own engine, kept for comparison; with --master "
-                  "its fits run as diagnose sessions)")
-      ->check(CLI::IsMember({"fin", "records"}))
-      ->default_str("records");
   cmd->add_flag("--no-second", a->no_second, "do not look for a second effect");
   cmd->add_flag("--no-trends", a->no_trends, "skip the per-case fits and their V x f trends");
   cmd->add_flag("--no-plots", a->no_plots, "write the figure scripts but do not run gnuplot");
@@ -375,11 +342,6 @@ void RegisterDiagnose(CLI::App& app, int& exit_code) {
   cmd->add_flag("--quiet", a->quiet, "no progress lines on stderr");
   AddCompleteServiceFlags(
       cmd, a->service);  // --master, --timeout-ms, --retries, --curve-secret, --master-public
-  cmd->add_option("--concurrent-fits", a->concurrent_fits,
-                  "candidate fits run at the same time (default 1 locally, 3 with --master: "
-                  "sessions in parallel keep "
-                  "the workers busy); the result does not depend on it")
-      ->check(CLI::Range(1, 64));
   cmd->callback([a, &exit_code] { exit_code = RunDiagnose(*a); });
 }
 

@@ -29,7 +29,7 @@ double RecordSse(const io::Record& r, const std::vector<double>& yhat) {
 }
 
 /// Σe² over the withheld (or training) scored samples of a fit: each record's sum, added in set
-/// order (a bench's Σ PI over its cases, as the fin engine adds them).
+/// order (a bench's Σ PI over its cases, added case by case).
 double Sse(const io::RecordSet& set, const FitResult& f, bool withheld) {
   double s = 0;
   for (size_t i = 0; i < set.records.size(); ++i)

@@ -1,5 +1,7 @@
-// The diagnosis of the sim-to-real gap (issue 6): where the gap lies, which unmodelled effect
-// causes it, and how far it shrinks once that effect is in the model.
+// The diagnosis of the sim-to-real gap of the nine-case fin bench (issue 6): where the gap lies,
+// which unmodelled effect causes it, and how far it shrinks once that effect is in the model. The
+// bench's cases are records (io/fin_records.h) diagnosed by the records engine (diagnose/diagnose.h
+// DiagnoseRecords with records::FinBenchOptions: bimorph-fin's bench form), in these steps:
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
@@ -34,7 +36,6 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/fin_fit.h"
 #include "diagnose/problem.h"
 #include "model/residual_analysis.h"
 #include "diagnose/decision.h"
@@ -48,16 +49,10 @@ struct DiagnoseOptions {
   std::vector<model::EffectKind> candidates;  ///< empty = the whole library
   int threads = 2;                            ///< ≥ 1
   uint64_t seed = 1;
-  /// Builds the evaluator of a global search (the service's, say); null = thread pool of `threads`.
-  EvaluatorFactory evaluator_factory;
-  /// The records engine's evaluators on the service (DiagnoseBench): given the bench form's family
-  /// options, the factory of every fit's evaluators (svcclient/complete_service.h
-  /// RecordsServiceFactory). With it, DiagnoseBench runs the records engine on the service;
-  /// `evaluator_factory` is the fin engine's (RunDiagnosis), which DiagnoseBench refuses.
+  /// The evaluators on the service: given the bench form's family options, the factory of every
+  /// fit's evaluators (svcclient/complete_service.h RecordsServiceFactory: complete_model
+  /// sessions); null = local threads.
   std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> records_service;
-  /// Candidate fits run at the same time (each on its own evaluators: with the service, its own
-  /// sessions), ≥ 1; the results do not depend on it.
-  int concurrent_fits = 1;
   opt::DeOptions de_base{.population = 40, .generations = 80, .stall_generations = 15};
   opt::DeOptions de_candidate{.population = 40, .generations = 60, .stall_generations = 15};
   opt::LmOptions lm{.max_iterations = 40};
@@ -73,73 +68,6 @@ struct DiagnoseOptions {
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
   Status Validate() const;
 };
-
-/// One candidate structure, fitted and scored by the rules of diagnose/decision.h.
-struct CandidateResult : records::CandidateScore {
-  model::EffectKind kind;  ///< the effect added in this round (none: the base)
-  FitResult fit;
-  int added_params = 0;
-};
-
-/// One greedy round: the model it starts from, its gap, the candidates on top of it.
-struct RoundResult {
-  std::vector<model::EffectKind> base_structure;
-  double s0 = 0;         ///< withheld Σe² of the starting model [deg²]
-  double s_floor = 0;    ///< withheld floor Σ N σ² [deg²]
-  double rms_ratio = 0;  ///< √(s0 / s_floor)
-  bool significant = false;
-  std::vector<CandidateResult> candidates;  ///< ranked by score, best first
-  int named = -1;                           ///< index into candidates, −1 if none named
-  int runner_up = -1;      ///< a qualifying candidate the data cannot separate from the named one
-  double z_runner_up = 0;  ///< its paired block z against the named one
-  records::Gap gap;        ///< the starting model's gap, as the rules measured it
-  std::string verdict;     ///< the round's verdict (diagnose/verdict.h)
-};
-
-using pz::diagnose::ParamTrend;
-using records::Absorption;
-
-/// Per-case before/after of the final model.
-struct CaseGap {
-  int number = 0;
-  bool training = false;
-  double amplitude_v = 0, frequency_hz = 0;
-  double floor_rms = 0;                  ///< σ_c [deg]
-  double rms_before = 0, rms_after = 0;  ///< [deg]
-  double pi_before = 0, pi_after = 0;    ///< [deg²]
-  double closed = 0;  ///< (PI_b − PI_a)/(PI_b − N σ²), clamped to [−9, 1]
-};
-
-struct Diagnosis {
-  std::string bench;  ///< the folder or a label
-  std::vector<DiagCase> cases;
-  double quantum_deg = 0;
-  double floor_train = 0, floor_withheld = 0;  ///< pooled saturation-aware floor [deg]
-  std::string floor_model;                     ///< the model whose saturations the floor uses
-  FitResult base;
-  model::ResidualAnalysis base_residuals;
-  std::vector<ParamTrend> trends;
-  std::vector<RoundResult> rounds;
-  std::vector<model::EffectKind> named;  ///< effects named, in order
-  double confidence = 0;                 ///< of the first named effect (or of "none")
-  FitResult final_fit;                   ///< the base model plus the named effects
-  model::ResidualAnalysis final_residuals;
-  std::vector<CaseGap> gaps;
-  double withheld_before = 0, withheld_after = 0;  ///< Σe² [deg²]
-  double withheld_floor = 0;                       ///< S_floor [deg²]
-  double closed_total = 0;                         ///< share of the excess closed
-  double remaining_ratio = 0;                      ///< √(after / floor)
-  std::vector<Absorption> absorbed;                ///< when an effect is mimicked by the base terms
-  std::string absorbed_by;                         ///< the candidate whose addition shows it
-  std::string verdict_kind;  ///< "effect", "inseparable" (named, but a runner-up explains it as
-                             ///< well), "none" (no significant gap), "unexplained"
-  std::string verdict;       ///< the summary sentence(s)
-  double wall_time_s = 0;
-  int64_t evaluations = 0;
-};
-
-/// Runs the whole diagnosis. Throws InputError on invalid options.
-Diagnosis RunDiagnosis(const DiagnosisModel& model, const DiagnoseOptions& options);
 
 /// The bench's options as the records engine's: FinBenchOptions with these candidates (empty: the
 /// whole library), searches (DE base and candidate, their seed, LM, the beam refinement), simulator
@@ -179,12 +107,7 @@ int64_t BenchEvaluations(const records::RecordDiagnosis& d);
 
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
 /// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of `model`'s
-/// cases. Throws InputError on invalid options (and on an `evaluator_factory` without
-/// `records_service`: that factory is the fin engine's, RunDiagnosis).
+/// cases. Throws InputError on invalid options.
 BenchDiagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
-
-/// The residual analysis of a fitted model (per-case floors and the saturations of `cases`).
-model::ResidualAnalysis AnalyseFit(const DiagnosisModel& model, const FitResult& fit,
-                                   std::span<const double> case_floor);
 
 }  // namespace pz::diagnose

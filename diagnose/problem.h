@@ -1,13 +1,10 @@
-// The global identification problem of the diagnosis (issue 6): ONE parameter set shared by every
-// case of a bench — μ, δ, α, β, γ, a1, a2 and the parameters of the effects in the model structure
-// — with per-case saturations b1, b2 from each case's measured extremes (model/saturation.h). The
-// cost is the paper's CF = Σ_{training cases} PI_c; the withheld cases score the result.
-//
-// Parameter vector (physical units): [μ, δ, α, β, γ, a1, a2, effect parameters in structure order].
-// Search coordinates: every parameter is mapped to [0, 1] over its range (log scale where marked),
-// except that γ is searched as the ratio g = γ/β ∈ [−0.98, 1], so that every point of the box has a
-// bounded Bouc–Wen loop (β ≥ |γ| with β > 0). The fitness over Genome.reals is a pure function of
-// (genome, problem), so the broker-backed evaluator can run it on workers.
+// The nine-case fin bench as the bench's report reads it (issue 6): ONE parameter set shared by
+// every case — μ, δ, α, β, γ, a1, a2 and the parameters of the effects in the model structure —
+// with per-case saturations b1, b2 from each case's measured extremes (model/saturation.h), the
+// cost the paper's CF = Σ_{training cases} PI_c, the withheld cases scoring the result. The fits
+// are the records engine's (bimorph-fin's bench form, records/families.h; the bench's diagnosis:
+// diagnose/fin_diagnose.h DiagnoseBench); here are the cases with their noise, the parameter
+// vector of a structure, a fit's figures and the simulation of a case (the report's traces).
 #pragma once
 
 #include <memory>
@@ -15,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "opt/evaluator.h"
+#include "opt/fit.h"
 #include "model/bimorph.h"
 #include "model/fin_case.h"
 #include "model/effects.h"
@@ -26,6 +23,10 @@ struct CaseSet;
 }
 
 namespace pz::diagnose {
+
+using opt::Identifiability;
+using opt::IdentifiabilityName;
+using opt::ParamEstimate;
 
 /// One bench case of the problem (saturations from the measured extremes) with its noise floor.
 struct DiagCase : model::FinCase {
@@ -39,52 +40,49 @@ std::vector<DiagCase> CasesFromCaseSet(const io::CaseSet& set);
 DiagCase MakeCase(int number, const model::Sinusoid& drive, std::vector<double> measured,
                   bool training);
 
-/// One parameter of the search.
-struct ParamSpec {
-  std::string name;  ///< "mu", "delta", …, or "<effect>.<param>"
-  std::string unit;
-  double lower = 0, upper = 1;  ///< physical range (γ: ratio range)
-  double scale = 1;             ///< typical magnitude (finite-difference steps, report)
-  bool log_scale = false;
-  bool ratio = false;  ///< true for γ: searched as g = γ/β
-  int effect = -1;     ///< index into the structure, −1 for the base model
-  int effect_param = -1;
-};
-
-/// The parameter layout of a model structure (base model + a list of effect kinds).
+/// The parameter vector of a model structure (base model + a list of effect kinds), in physical
+/// units: [μ, δ, α, β, γ, a1, a2, the effects' parameters in structure order]. Its search box and
+/// unit coordinates are the records engine's (records/families.h, bimorph-fin's bench form).
 class ParameterLayout {
  public:
   explicit ParameterLayout(std::vector<model::EffectKind> structure);
-  int size() const { return static_cast<int>(specs_.size()); }
-  const std::vector<ParamSpec>& specs() const { return specs_; }
+  int size() const { return size_; }
   const std::vector<model::EffectKind>& structure() const { return structure_; }
   static constexpr int kBase = 7;  ///< μ, δ, α, β, γ, a1, a2
 
-  /// Search coordinates in [0, 1] → physical parameter vector (γ = g β).
-  std::vector<double> FromUnit(std::span<const double> unit) const;
-  /// Physical → search coordinates (clamped into [0, 1]).
-  std::vector<double> ToUnit(std::span<const double> physical) const;
   /// Physical vector → plant parameters (b1, b2 left at the given values) and effects.
   void Decode(std::span<const double> physical, model::BimorphParams* params,
               std::vector<model::Effect>* effects) const;
-  /// Plant parameters and effects (matching the structure) → physical vector.
-  std::vector<double> Encode(const model::BimorphParams& params,
-                             std::span<const model::Effect> effects) const;
-  /// Physical vector of the base parameters with every effect at zero magnitude (identity).
-  std::vector<double> Extend(std::span<const double> base_physical,
-                             const ParameterLayout& from) const;
-  /// ∂physical/∂unit at a point (size × size, column j = unit coordinate j): diagonal but for γ,
-  /// which depends on g and β.
-  std::vector<double> UnitJacobian(std::span<const double> unit) const;
   /// "base", "base + creep", …
   std::string Describe() const;
 
  private:
   std::vector<model::EffectKind> structure_;
-  std::vector<ParamSpec> specs_;
+  int size_ = kBase;
 };
 
-/// Evaluates a model structure on the cases: residuals, PIs, traces. Immutable, thread-safe.
+/// One fit of a model structure on the bench's cases, as the bench's report reads it (made from a
+/// records fit by DiagnosisOfRecords, diagnose/fin_diagnose.h).
+struct FitResult {
+  std::vector<model::EffectKind> structure;
+  std::string description;  ///< "base + creep"
+  std::vector<double> x;    ///< physical parameters (layout order)
+  std::vector<ParamEstimate> params;
+  double train_pi = 0;          ///< Σ PI training [deg²]
+  double withheld_pi = 0;       ///< Σ PI withheld [deg²]
+  std::vector<double> case_pi;  ///< every case, in case order [deg²]
+  int train_samples = 0, withheld_samples = 0;
+  double residual_sigma = 0;            ///< s = √(train_pi / (N − p)) [deg]
+  std::vector<double> singular_values;  ///< of J·diag(scale), descending
+  std::string weakest_direction;        ///< the parameters of the smallest singular vector
+  int64_t evaluations = 0;
+  double wall_time_s = 0;
+  std::string message;
+  bool ok = false;
+  int num_params() const { return static_cast<int>(x.size()); }
+};
+
+/// Simulates a model structure on the cases (the report's traces). Immutable, thread-safe.
 class DiagnosisModel {
  public:
   DiagnosisModel(std::shared_ptr<const model::BimorphPlant> plant, std::vector<DiagCase> cases,
@@ -100,12 +98,6 @@ class DiagnosisModel {
   /// Model output of case c [deg]; returns the simulation summary (angle_deg sized by the call).
   model::SimulationSummary Simulate(const ParameterLayout& layout, std::span<const double> physical,
                                     size_t c, std::vector<double>& angle_deg) const;
-  /// Residuals y_meas − y_model of the selected cases (training or withheld, concatenated in case
-  /// order) into r. Returns false if a simulation failed (r then holds a large finite penalty).
-  bool Residuals(const ParameterLayout& layout, std::span<const double> physical, bool training,
-                 std::vector<double>& r) const;
-  /// PI of every case (NaN where the simulation failed).
-  std::vector<double> CasePi(const ParameterLayout& layout, std::span<const double> physical) const;
 
  private:
   std::shared_ptr<const model::BimorphPlant> plant_;
@@ -113,26 +105,6 @@ class DiagnosisModel {
   std::vector<DiagCase> cases_;
   model::EffectSimOptions sim_options_;
   int n_train_ = 0, n_withheld_ = 0;
-};
-
-/// The cost over Genome.reals (search coordinates in [0, 1]): CF = Σ_training PI [deg²]; an invalid
-/// genome or failed simulation gets the finite penalty_cost() with status kPenalized. With
-/// `residuals`, an evaluable genome's result also carries the training residual vector (what
-/// Levenberg–Marquardt needs: DiagnosisModel::Residuals at FromUnit(genome.reals)).
-class DiagnosisFitness final : public opt::FitnessFunction {
- public:
-  DiagnosisFitness(const DiagnosisModel& model, ParameterLayout layout, bool residuals = false);
-  opt::FitnessResult Evaluate(const opt::Genome& genome) const override;
-  const DiagnosisModel& model() const { return model_; }
-  const ParameterLayout& layout() const { return layout_; }
-  bool residuals() const { return residuals_; }
-  double penalty_cost() const { return penalty_; }
-
- private:
-  const DiagnosisModel& model_;
-  ParameterLayout layout_;
-  bool residuals_ = false;
-  double penalty_ = 0;
 };
 
 }  // namespace pz::diagnose

@@ -4,7 +4,7 @@
 //
 //   record     case<N>, the case's role (train / validate / test), its file
 //   drive      the case's stated sinusoid V sin(2π f t_k) sampled on the case's grid t_k = k / fs
-//              (what the fin engine simulates; the recorded drive column is not used)
+//              (what the bench form simulates; the recorded drive column is not used)
 //   response   the measured fin angle [deg]; the whole record scored, offset fixed at 0
 //   metadata   Record::sinusoid: the case number, V, f, the cycles and fs as the case states them
 //              (the V × f grid trends are rebuilt from them), Record::frequency_hz = f

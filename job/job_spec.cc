@@ -71,8 +71,6 @@ std::vector<FieldViolation> JobSpec::Validate() const {
     bool bits01 = s->crash_prefix.find_first_not_of("01") == std::string::npos;
     c.Require(bits01 && static_cast<int>(s->crash_prefix.size()) <= s->genome_bits,
               "synthetic.crash_prefix", s->crash_prefix, "must be a 0/1 string ≤ genome_bits");
-  } else if (std::holds_alternative<DiagnoseProblem>(problem)) {
-    // Checked by the "diagnose" job kind (diagnose/job_kind.h), which knows the effect library.
   } else if (const auto* m = std::get_if<CompleteModelProblem>(&problem)) {
     // The generic ranges; the records and the family's rules are checked by the "complete_model"
     // job kind (complete/job_kind.h), which knows the models.

@@ -132,30 +132,6 @@ struct SyntheticProblem {
   std::string crash_prefix;  ///< test aid: genomes starting with these 0/1 bits kill the evaluator
 };
 
-/// One parameter box of a diagnosis model (proto DiagnoseParam; diagnose/problem.h ParamSpec).
-struct DiagnoseParamBox {
-  std::string name;
-  double lower = 0, upper = 1;
-  bool log_scale = false, ratio = false;
-  bool operator==(const DiagnoseParamBox&) const = default;
-};
-
-/// The global fit of one diagnosis model structure (job kind "diagnose", diagnose/job_kind.h):
-/// genome.reals = search coordinates in [0, 1]; cost = Σ training e² [deg²].
-struct DiagnoseProblem {
-  static constexpr std::string_view kKind = "diagnose";
-  std::vector<HgannCaseSpec> cases;      ///< role kTrain = fitted; b1, b2 unset (from extremes)
-  std::vector<double> cycles;            ///< drive cycles per case (as many as cases), > 0
-  std::vector<std::string> structure;    ///< effect names added to the base model, in order
-  std::vector<DiagnoseParamBox> params;  ///< the search box in layout order
-  bool residuals = false;                ///< results carry the training residual vector
-  int oversample = 4;                    ///< model/effects.h EffectSimOptions
-  double rtol = 1e-6, atol = 1e-13;
-  int64_t max_steps = 5000000;
-  bool force_cvode = false;
-  std::string source;  ///< free text, ≤ 1000 chars
-};
-
 /// One sampled record of a complete-model identification (proto CompleteModelRecord).
 struct CompleteModelRecord {
   std::string name;            ///< label in messages, ≤ 200 chars
@@ -273,16 +249,13 @@ struct JobSpec {
   uint64_t seed = 0;
   JobLimits limits;
   /// The problem; each names its job kind (kKind). A new kind adds its problem struct here.
-  std::variant<std::monostate, HgannProblem, SyntheticProblem, DiagnoseProblem,
-               CompleteModelProblem>
-      problem;
+  std::variant<std::monostate, HgannProblem, SyntheticProblem, CompleteModelProblem> problem;
   /// The algorithm: exactly one of the GA (run by the master) and an external optimiser (an
   /// evaluation session driven by the client).
   std::optional<GaSettings> ga;
   std::optional<ExternalSettings> external;
 
-  /// The problem's kKind ("hgann", "synthetic", "diagnose", "complete_model"), "" when no problem
-  /// is set.
+  /// The problem's kKind ("hgann", "synthetic", "complete_model"), "" when no problem is set.
   std::string kind() const;
   /// "ga", "external" or "".
   std::string algorithm() const { return ga ? "ga" : external ? "external" : ""; }

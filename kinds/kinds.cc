@@ -7,7 +7,6 @@
 #include <thread>
 
 #include "complete/job_kind.h"
-#include "diagnose/job_kind.h"
 #include "hgann/hgann_job.h"
 
 namespace pz::kinds {
@@ -84,7 +83,6 @@ const job::JobKindRegistry& All() {
     auto* r = new job::JobKindRegistry;
     r->Register(SyntheticJobKind());
     r->Register(hgann::HgannJobKind());
-    r->Register(diagnose::DiagnoseJobKind());
     r->Register(complete::CompleteModelJobKind());
     return r;
   }();

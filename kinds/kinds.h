@@ -5,7 +5,6 @@
 //   synthetic       kinds/kinds.cc           tests and benchmarks (null / function cost, sleeps,
 //                                            an optional crash prefix)
 //   hgann           hgann/hgann_job.h        the paper's bimorph-fin identification
-//   diagnose        diagnose/job_kind.h      one model structure of the sim-to-real diagnosis
 //   complete_model  complete/job_kind.h      complete-model fitness (Bouc–Wen oscillator, stack
 //                                            models) of `piezoid boucwen` / `piezoid committee`
 #pragma once

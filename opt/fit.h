@@ -1,8 +1,8 @@
 // The one fit of physical parameters (issue 21): a global search (opt/param_search.h: PSO, real
 // GA, binary GA or differential evolution), then a bounded Levenberg–Marquardt polish from the
 // search's best and the caller's starts (opt/lm.h), then the uncertainty table at the solution.
-// The fin-bench diagnosis (diagnose/fin_fit.h) and the record fits (records/fit.h) are adapters
-// that supply a ParameterMap, their evaluators and their options.
+// The record fits (records/fit.h, the fin bench's among them) are its adapter: they supply a
+// ParameterMap, their evaluators and their options.
 //
 // Coordinates: the search and the polish run in unit coordinates u ∈ [0, 1]^p; the ParameterMap
 // turns them into physical parameters x (a box, linear or log per parameter, or a custom map: the

@@ -382,7 +382,7 @@ class BimorphFinFamily final : public Family {
         sim_options_(o.fin_sim) {
     if (bench_) {
       ThrowIfError(o.fin_sim.Validate());
-      // The fin engine's box and typical scales (diagnose/problem.cc BaseSpecs), in volts and
+      // The fin bench's box and typical scales (the former fin engine's, issue 38), in volts and
       // degrees: γ searched as g = γ/β ∈ [−0.98, 1] (β + γ > 0 with margin, β − γ ≥ 0).
       params_ = {{"mu", "1/s", 0.0, 400.0, false},    {"delta", "s", 0.0, 1.0, false},
                  {"alpha", "N/V", 0.0, 0.02, false},  {"beta", "1/V", 1e-5, 0.05, true},

@@ -23,7 +23,7 @@
 //                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
 //                       and tip length L_e (searched around FamilyOptions::geometry; the
 //                       cross-section and materials stay that geometry's); in its bench form
-//                       (FamilyOptions::bench_form) the fin engine's model: μ δ α β γ a1 a2 in
+//                       (FamilyOptions::bench_form) the fin bench's model: μ δ α β γ a1 a2 in
 //                       the fin's box, γ searched as γ/β, the geometry and the gain (1: degrees)
 //                       fixed, b1 b2 per record from its measured extremes, each record's stated
 //                       sinusoid simulated with any fin effect, beam ones included (on CVODE)
@@ -94,7 +94,7 @@ struct FamilyOptions {
   /// centred). A fit.json written before the field reads as centred (records/stepper.h).
   model::InitialState initial_state = model::InitialState::kAuto;
   model::BeamGeometry geometry;  ///< bimorph fin
-  /// bimorph-fin: the fin bench's form, the model of the fin engine (diagnose/problem.h): μ, δ, α,
+  /// bimorph-fin: the fin bench's form, the model of its diagnosis (diagnose/problem.h): μ, δ, α,
   /// β, γ, a1, a2 searched in the fin's box (γ as the ratio γ/β, Family::SearchForm), the geometry
   /// fixed at `geometry` and the output the fin angle in degrees (no gain); the saturations b1, b2
   /// of each record from its measured extremes (model/saturation.h SaturationFromExtremes); each
@@ -169,7 +169,7 @@ class Family {
   /// parameters (SimulateRecord) and takes the effects' boxes from EffectBox, in the order given.
   virtual bool simulates_records() const { return false; }
   /// Its fit's cost is the sum of squared errors over the training records, not their mean (the
-  /// fin engine's CF = Σ PI: bimorph-fin's bench form, so that its fit runs the fin's arithmetic —
+  /// fin bench's CF = Σ PI: bimorph-fin's bench form, so that its fit runs the fin's arithmetic —
   /// a CVODE model's finite differences turn a rounding of the residuals into a different step).
   virtual bool sums_errors() const { return false; }
   /// simulates_records: the output on samples [0, end) of r into y with the family's parameters p

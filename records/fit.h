@@ -224,8 +224,7 @@ SearchBudget SizedSearchBudget(size_t searched);
 /// The PSO budget of `search` (its repetitions and PSO options).
 SearchBudget BudgetOf(const opt::SearchOptions& search);
 
-/// One coordinate of a box ↔ [0, 1] (log scale: lower > 0), clamped: the arithmetic of RecordMap
-/// and of the fin engine's ParameterLayout (diagnose/problem.h), one copy for both.
+/// One coordinate of a box ↔ [0, 1] (log scale: lower > 0), clamped: the arithmetic of RecordMap.
 double UnitCoordinate(double lower, double upper, bool log_scale, double x);
 double PhysicalCoordinate(double lower, double upper, bool log_scale, double u);
 
@@ -233,9 +232,9 @@ double PhysicalCoordinate(double lower, double upper, bool log_scale, double u);
 /// search_forms: bimorph-fin's bench form): each parameter in its box (linear, or log where
 /// marked), mapped to [0, 1]; a ratio parameter (SearchForm::ratio_of = j) searched as the ratio
 /// x_i / x_j in its box, so its bounds at a point are the box's times x_j; the typical scale of
-/// the form where it gives one, else the box's (as opt::BoxMap). The fin engine's arithmetic
-/// (diagnose/problem.cc ParameterLayout, diagnose/fin_fit.h LayoutMap) for the same box, so the
-/// same unit point is the same physical point bit for bit. The genomes are unit coordinates
+/// the form where it gives one, else the box's (as opt::BoxMap). The former fin engine's
+/// arithmetic for the same box, bit for bit (tests/diagnose/fin_records_test.cc pins it). The
+/// genomes are unit coordinates
 /// (physical_genomes() false): FitModel hands its evaluators the physical values. The model must
 /// outlive the map.
 class RecordMap final : public opt::ParameterMap {
@@ -329,14 +328,14 @@ struct FitOptions {
   std::vector<double> polish_from;
   /// Physical points (every parameter) seeding the global search's first population, after
   /// search.seeds; and physical starts of the polish besides the search's best, before
-  /// extra_starts (the fin engine's seeds and starts, diagnose/fin_fit.h FitOptions).
+  /// extra_starts (the fin bench's seeds and starts of a candidate, records::FinBenchOptions).
   std::vector<std::vector<double>> seed_points, start_points;
   /// A model with a beam effect (bimorph-fin's bench form: each run on CVODE) is refined from
   /// polish_from (needed), not searched: one polish from each start, the last effect's magnitude
   /// at a fraction of the upper end of its range (a parameter of either sign: the first fraction on
   /// each side), of lm_iterations Levenberg–Marquardt iterations with forward differences (lm's
-  /// other options as given). The fin engine's DiagnoseOptions::cvode_lm_iterations and
-  /// cvode_start_fractions.
+  /// other options as given). The fin bench's DiagnoseOptions::cvode_lm_iterations and
+  /// cvode_start_fractions (diagnose/fin_diagnose.h).
   struct BeamRefinement {
     int lm_iterations = 15;                              ///< ≥ 1
     std::vector<double> start_fractions = {0.03, 0.15};  ///< ≥ 1 entry, each in (0, 1]

@@ -16,8 +16,6 @@ namespace pz::service::detail {
 using job::CaseRole;
 using job::CompleteModelProblem;
 using job::CompleteModelRecord;
-using job::DiagnoseParamBox;
-using job::DiagnoseProblem;
 using job::ExternalSettings;
 using job::FieldViolation;
 using job::GaSettings;

@@ -3,6 +3,8 @@
 #include "service/codec_detail.h"
 
 #include <google/protobuf/descriptor.h>
+#include <google/protobuf/struct.pb.h>
+#include <google/protobuf/unknown_field_set.h>
 #include <google/protobuf/util/json_util.h>
 
 #include <cmath>
@@ -166,47 +168,6 @@ SyntheticProblem SyntheticFromProto(const pw::SyntheticProblem& py,
   return y;
 }
 
-void ProblemToProto(const DiagnoseProblem& d, pw::JobSpec* p) {
-  auto* pd = p->mutable_diagnose();
-  for (const HgannCaseSpec& c : d.cases) CaseToProto(c, pd->add_cases());
-  pd->mutable_cycles()->Assign(d.cycles.begin(), d.cycles.end());
-  for (const auto& e : d.structure) pd->add_structure(e);
-  for (const DiagnoseParamBox& b : d.params) {
-    auto* pp = pd->add_params();
-    pp->set_name(b.name);
-    pp->set_lower(b.lower);
-    pp->set_upper(b.upper);
-    pp->set_log_scale(b.log_scale);
-    pp->set_ratio(b.ratio);
-  }
-  pd->set_residuals(d.residuals);
-  pd->set_oversample(static_cast<uint32_t>(std::max(0, d.oversample)));
-  pd->set_rtol(d.rtol);
-  pd->set_atol(d.atol);
-  pd->set_max_steps(static_cast<uint64_t>(std::max<int64_t>(0, d.max_steps)));
-  pd->set_force_cvode(d.force_cvode);
-  pd->set_source(d.source);
-}
-
-DiagnoseProblem DiagnoseFromProto(const pw::DiagnoseProblem& pd, std::vector<FieldViolation>* v) {
-  DiagnoseProblem d;
-  for (int i = 0; i < pd.cases_size(); ++i)
-    d.cases.push_back(CaseFromProto(pd.cases(i), "diagnose.cases[" + std::to_string(i) + "]", v));
-  d.cycles.assign(pd.cycles().begin(), pd.cycles().end());
-  d.structure.assign(pd.structure().begin(), pd.structure().end());
-  for (const auto& pp : pd.params())
-    d.params.push_back({pp.name(), pp.lower(), pp.upper(), pp.log_scale(), pp.ratio()});
-  d.residuals = pd.residuals();
-  d.oversample = ClampInt(OrDefault<uint32_t>(pd.oversample(), 4));
-  d.rtol = OrDefault(pd.rtol(), 1e-6);
-  d.atol = OrDefault(pd.atol(), 1e-13);
-  d.max_steps = static_cast<int64_t>(
-      std::min<uint64_t>(OrDefault<uint64_t>(pd.max_steps(), 5000000), INT64_MAX));
-  d.force_cvode = pd.force_cvode();
-  d.source = pd.source();
-  return d;
-}
-
 void ProblemToProto(const CompleteModelProblem& m, pw::JobSpec* p) {
   auto* pm = p->mutable_complete_model();
   pm->set_family(static_cast<pw::CompleteModelFamily>(m.family));
@@ -332,6 +293,29 @@ int DefaultIslands(const JobSpec& s) {
   return 1;
 }
 
+namespace {
+
+// The tag of the removed "diagnose" problem (proto/job.proto JobSpec: reserved 13, "diagnose").
+constexpr int kRemovedDiagnoseTag = 13;
+
+// An old spec's "diagnose" problem stays in the message's unknown fields.
+bool HoldsRemovedKind(const pw::JobSpec& p) {
+  const google::protobuf::UnknownFieldSet& u = p.GetReflection()->GetUnknownFields(p);
+  for (int i = 0; i < u.field_count(); ++i)
+    if (u.field(i).number() == kRemovedDiagnoseTag) return true;
+  return false;
+}
+
+std::string RemovedKindMessage() {
+  std::string kinds;
+  for (const std::string& k : job::JobKindNames()) kinds += (kinds.empty() ? "" : ", ") + k;
+  return "problem: the job kind \"diagnose\" (the fin engine's fits) was removed; this version "
+         "runs " +
+         kinds + " (piezoid diagnose --cases --master opens complete_model sessions)";
+}
+
+}  // namespace
+
 void ToProto(const JobSpec& s, pw::JobSpec* p) {
   p->set_version(s.version);
   p->set_name(s.name);
@@ -394,13 +378,11 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
     case pw::JobSpec::kSynthetic:
       s->problem = SyntheticFromProto(p.synthetic(), v);
       break;
-    case pw::JobSpec::kDiagnose:
-      s->problem = DiagnoseFromProto(p.diagnose(), v);
-      break;
     case pw::JobSpec::kCompleteModel:
       s->problem = CompleteModelFromProto(p.complete_model(), v);
       break;
     case pw::JobSpec::PROBLEM_NOT_SET:
+      if (v && HoldsRemovedKind(p)) v->push_back({"problem", RemovedKindMessage()});
       break;
   }
   if (p.has_ga()) {
@@ -531,6 +513,10 @@ Status JobSpecFromJson(const std::string& json, JobSpec* spec, std::vector<Field
   opts.ignore_unknown_fields = false;
   auto st = google::protobuf::util::JsonStringToMessage(json, &p, opts);
   if (!st.ok()) {
+    google::protobuf::Struct object;  // any JSON object: does the spec hold the removed kind?
+    if (google::protobuf::util::JsonStringToMessage(json, &object).ok() &&
+        object.fields().contains("diagnose"))
+      return InvalidArgument("job spec JSON: " + RemovedKindMessage());
     const std::string message(st.message());
     return InvalidArgument("job spec JSON: " + message + AllowedEnumNames(message));
   }

@@ -305,5 +305,32 @@ TEST(SpecCodec, BadEnumsInJsonAreNamed) {
   EXPECT_TRUE(HasField(v, "hgann.cases[0].role")) << All(v);
 }
 
+// The removed "diagnose" kind (issue 38): its tag and name are reserved in proto/job.proto, and an
+// old spec holding one is refused naming the kind, from JSON and from the wire (where the problem
+// arrives as an unknown field), instead of being read as a spec without a problem.
+TEST(SpecCodec, ASpecOfTheRemovedDiagnoseKindIsRefusedNamingIt) {
+  JobSpec s;
+  std::vector<FieldViolation> v;
+  const Status json = JobSpecFromJson(
+      R"({"version": 1, "diagnose": {"structure": ["creep"]}, "external": {}})", &s, &v);
+  ASSERT_FALSE(json.ok());
+  EXPECT_NE(json.message().find("the job kind \"diagnose\" (the fin engine's fits) was removed"),
+            std::string::npos)
+      << json.message();
+  JobSpec old;
+  old.external = job::ExternalSettings{};
+  pz::wire::JobSpec p;
+  ASSERT_TRUE(p.ParseFromString(EncodeJobSpec(old)));
+  p.GetReflection()->MutableUnknownFields(&p)->AddLengthDelimited(13,
+                                                                  std::string("\x1a\x05creep", 7));
+  ASSERT_TRUE(DecodeJobSpec(p.SerializeAsString(), &s, &v).ok());
+  EXPECT_TRUE(HasField(v, "problem", "the job kind \"diagnose\"")) << All(v);
+  EXPECT_EQ(s.kind(), "");
+  // Without it, the same spec decodes without a violation (the kinds' check then names the kinds).
+  v.clear();
+  ASSERT_TRUE(DecodeJobSpec(EncodeJobSpec(old), &s, &v).ok());
+  EXPECT_TRUE(v.empty()) << All(v);
+}
+
 }  // namespace
 }  // namespace pz::service

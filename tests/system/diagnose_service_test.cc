@@ -1,19 +1,19 @@
-// The diagnosis on the service: the "diagnose" job kind builds, from its spec alone, the fitness
-// the client has (costs and residual vectors bit for bit; bad specs refused field by field), and a
-// whole diagnosis whose fits run as evaluation sessions on a local master with two workers equals
-// the local run bit for bit.
+// The diagnosis on the service: `piezoid diagnose --cases --master` (the records engine,
+// DiagnoseBench, every fit's evaluations as complete_model sessions) equals the local run bit for
+// bit; a master given a spec of the removed "diagnose" kind (the fin engine's fits, proto tag 13
+// now reserved) refuses it, naming the kind.
 #include <gtest/gtest.h>
 
 #include <cstring>
 
-#include "svcclient/complete_service.h"
-#include "svcclient/service_evaluator.h"
+#include <zmq.hpp>
+
 #include "diagnose/fin_diagnose.h"
-#include "diagnose/job_kind.h"
 #include "diagnose/fin_synthetic.h"
-#include "opt/inline_evaluator.h"
+#include "service/wire_codec.h"
+#include "svcclient/complete_service.h"
 #include "tests/system/service_harness.h"
-#include "kinds/kinds.h"
+#include "wire.pb.h"
 
 namespace pz::diagnose {
 namespace {
@@ -68,133 +68,6 @@ client::ServiceEvaluatorOptions ServiceOptions(testing::Cluster& cluster) {
   return so;
 }
 
-// The first round's candidates, the naming and the verdict, bit for bit.
-void ExpectSameRounds(const Diagnosis& remote, const Diagnosis& local) {
-  ASSERT_EQ(remote.rounds.size(), local.rounds.size());
-  ASSERT_EQ(remote.rounds[0].candidates.size(), local.rounds[0].candidates.size());
-  for (size_t i = 0; i < local.rounds[0].candidates.size(); ++i) {
-    const auto& a = remote.rounds[0].candidates[i];
-    const auto& b = local.rounds[0].candidates[i];
-    EXPECT_EQ(a.kind, b.kind);
-    ExpectSameVector(a.fit.x, b.fit.x, std::string(model::EffectName(b.kind)) + ".x");
-    EXPECT_TRUE(SameBits(a.fit.withheld_pi, b.fit.withheld_pi));
-    EXPECT_TRUE(SameBits(a.score, b.score));
-  }
-  EXPECT_EQ(remote.named, local.named);
-  EXPECT_EQ(remote.verdict, local.verdict);
-}
-
-TEST(DiagnoseJobKindTest, TheSpecRebuildsTheFitnessBitForBit) {
-  auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnosisModel m(plant, SmallBench(true));
-  for (const bool residuals : {false, true}) {
-    const DiagnosisFitness local(
-        m, ParameterLayout({EffectKind::Named("delay"), EffectKind::Named("driver-lowpass")}),
-        residuals);
-    const job::JobSpec spec = DiagnoseJobSpec(local, "test");
-    // Through the wire encoding, as a worker gets it.
-    job::JobSpec decoded;
-    ASSERT_TRUE(service::DecodeJobSpec(service::EncodeJobSpec(spec), &decoded).ok());
-    job::JobKindRegistry registry;
-    registry.Register(DiagnoseJobKind());
-    decoded.external = job::ExternalSettings{};
-    EXPECT_TRUE(registry.Validate(decoded).empty());
-    job::GenomeLayout layout;
-    ASSERT_TRUE(registry.Layout(decoded, &layout).ok());
-    EXPECT_EQ(layout.reals, local.layout().size());
-    EXPECT_EQ(layout.bits, 0);
-    std::unique_ptr<opt::FitnessFunction> remote;
-    ASSERT_TRUE(registry.MakeFitness(decoded, &remote).ok());
-    opt::Rng rng(5);
-    for (int k = 0; k < 3; ++k) {
-      opt::Genome g;
-      for (int i = 0; i < layout.reals; ++i) g.reals.push_back(rng.Uniform01());
-      if (k == 0) g.reals[7] = 0;  // the delay at zero
-      const opt::FitnessResult a = local.Evaluate(g), b = remote->Evaluate(g);
-      EXPECT_TRUE(SameBits(a.cost, b.cost)) << a.cost << " vs " << b.cost;
-      EXPECT_EQ(a.status, b.status);
-      EXPECT_EQ(a.residuals.empty(), !residuals || a.status != opt::FitnessStatus::kOk);
-      ExpectSameVector(a.residuals, b.residuals, "residuals");
-    }
-  }
-}
-
-TEST(DiagnoseJobKindTest, BadSpecsAreRefusedFieldByField) {
-  auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnosisModel m(plant, SmallBench(false));
-  const DiagnosisFitness f(m, ParameterLayout({EffectKind::Named("creep")}));
-  job::JobKindRegistry registry;
-  registry.Register(DiagnoseJobKind());
-  auto violations = [&](const job::JobSpec& s) {
-    std::string all;
-    for (const auto& v : registry.Validate(s)) all += v.description + "\n";
-    return all;
-  };
-  job::JobSpec ok = DiagnoseJobSpec(f, "ok");
-  ok.external = job::ExternalSettings{};
-  EXPECT_EQ(violations(ok), "");
-  job::JobSpec s = ok;
-  auto& d = std::get<job::DiagnoseProblem>(s.problem);
-  d.structure = {"creep", "friction-of-the-gods"};
-  EXPECT_NE(violations(s).find("diagnose.structure[1] = friction-of-the-gods: not an effect"),
-            std::string::npos)
-      << violations(s);
-  s = ok;
-  std::get<job::DiagnoseProblem>(s.problem).params[7].upper *= 2;
-  EXPECT_NE(violations(s).find("diagnose.params[7] = creep."), std::string::npos) << violations(s);
-  s = ok;
-  std::get<job::DiagnoseProblem>(s.problem).cycles[2] = 2.5;
-  EXPECT_NE(violations(s).find("diagnose.cycles[2] = 2.5: gives"), std::string::npos)
-      << violations(s);
-  s = ok;
-  std::get<job::DiagnoseProblem>(s.problem).cases[4].angle_deg[3] = NAN;
-  EXPECT_NE(violations(s).find("diagnose.cases[4].angle_deg[3] = nan: must be finite"),
-            std::string::npos)
-      << violations(s);
-  s = ok;
-  for (auto& c : std::get<job::DiagnoseProblem>(s.problem).cases) c.role = job::CaseRole::kTest;
-  EXPECT_NE(violations(s).find("no case with role CASE_ROLE_TRAIN"), std::string::npos)
-      << violations(s);
-  s = ok;
-  std::get<job::DiagnoseProblem>(s.problem).rtol = 0.5;
-  EXPECT_NE(violations(s).find("rtol"), std::string::npos) << violations(s);
-}
-
-TEST(DiagnoseServiceTest, TheDiagnosisOnTheServiceIsTheLocalOneBitForBit) {
-  testing::Cluster cluster("diagnose-service");
-  cluster.AddWorker(1);
-  cluster.AddWorker(1);
-  auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnosisModel m(plant, SmallBench(true));
-  DiagnoseOptions o = SmallOptions();
-  const Diagnosis local = RunDiagnosis(m, o);
-
-  const client::ServiceEvaluatorOptions so = ServiceOptions(cluster);
-  int sessions = 0;
-  o.evaluator_factory = [&](const DiagnosisFitness& f) -> std::unique_ptr<opt::BatchEvaluator> {
-    ++sessions;
-    return std::make_unique<client::ServiceEvaluator>(
-        so, DiagnoseJobSpec(f, "test " + f.layout().Describe()));
-  };
-  const Diagnosis remote = RunDiagnosis(m, o);
-  // base: DE + LM; delay: DE + LM; cubic stiffening (beam): LM only.
-  EXPECT_EQ(sessions, 5);
-  ExpectSameVector(remote.base.x, local.base.x, "base.x");
-  EXPECT_TRUE(SameBits(remote.base.train_pi, local.base.train_pi));
-  EXPECT_EQ(remote.base.evaluations, local.base.evaluations);
-  ExpectSameRounds(remote, local);
-  EXPECT_EQ(remote.evaluations, local.evaluations);
-  // Every session was closed: all succeeded.
-  auto client = cluster.Client();
-  std::vector<service::JobInfo> jobs;
-  ASSERT_TRUE(client.List(&jobs).ok());
-  EXPECT_EQ(jobs.size(), 5u);
-  for (const auto& j : jobs) {
-    EXPECT_EQ(j.kind, "diagnose");
-    EXPECT_GT(j.evaluations, 0u);
-  }
-}
-
 // piezoid diagnose --cases --master: the records engine (DiagnoseBench) with every fit's search as
 // a complete_model session (bimorph-fin's bench form on the workers) gives the local diagnosis
 // bit for bit.
@@ -242,6 +115,53 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
     EXPECT_EQ(j.kind, "complete_model");
     EXPECT_GT(j.evaluations, 0u);
   }
+}
+
+// A spec of the removed "diagnose" kind, as an old client sends it: the problem's field (tag 13)
+// reaches the master as an unknown field; the submission is refused with the kind named, not run
+// as a spec without a problem.
+TEST(DiagnoseServiceTest, AnOldDiagnoseSpecIsRefusedNamingTheKind) {
+  testing::Cluster cluster("diagnose-removed-kind");
+  job::JobSpec spec;
+  spec.name = "old diagnose session";
+  spec.external = job::ExternalSettings{};
+  service::ClientRequestMsg submit;
+  submit.type = service::ClientRequestMsg::Type::kSubmit;
+  submit.request_id = 7;
+  submit.spec = spec;
+  submit.client_token = "old";
+  wire::ClientRequest request;
+  ASSERT_TRUE(request.ParseFromString(service::EncodeClientRequest(submit)));
+  // DiagnoseProblem{structure: ["creep"], residuals: true} as the old encoder wrote it.
+  wire::JobSpec* old = request.mutable_submit()->mutable_spec();
+  old->GetReflection()->MutableUnknownFields(old)->AddLengthDelimited(
+      13, std::string("\x1a\x05creep\x28\x01", 9));
+  std::string bytes;
+  ASSERT_TRUE(request.SerializeToString(&bytes));
+
+  zmq::context_t ctx;
+  zmq::socket_t s(ctx, zmq::socket_type::dealer);
+  s.set(zmq::sockopt::linger, 0);
+  s.connect(cluster.client_endpoint());
+  s.send(zmq::buffer(bytes));
+  zmq::pollitem_t items[] = {{s.handle(), 0, ZMQ_POLLIN, 0}};
+  zmq::poll(items, 1, std::chrono::milliseconds(10000));
+  ASSERT_TRUE(items[0].revents & ZMQ_POLLIN) << "no reply";
+  zmq::message_t msg;
+  ASSERT_TRUE(s.recv(msg));
+  service::ClientReplyMsg reply;
+  ASSERT_TRUE(service::DecodeClientReply(msg.to_string_view(), &reply).ok());
+  EXPECT_EQ(reply.request_id, 7u);
+  EXPECT_EQ(reply.code, service::WireCode::kInvalidArgument);
+  EXPECT_NE(reply.error.find("the job kind \"diagnose\" (the fin engine's fits) was removed"),
+            std::string::npos)
+      << reply.error;
+  ASSERT_FALSE(reply.violations.empty());
+  EXPECT_EQ(reply.violations[0].field, "problem");
+  // Nothing was started.
+  std::vector<service::JobInfo> jobs;
+  ASSERT_TRUE(cluster.Client().List(&jobs).ok());
+  EXPECT_TRUE(jobs.empty());
 }
 
 }  // namespace
