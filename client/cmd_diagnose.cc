@@ -15,6 +15,7 @@
 #include "client/commands.h"
 #include "svcclient/complete_service.h"
 #include "client/diagnose_report.h"
+#include "client/check_report.h"
 #include "client/records_diagnose.h"
 #include "client/search_flags.h"
 #include "diagnose/check.h"

@@ -4,6 +4,7 @@
 // non-finite number is null, the names the users read are there, and each reads back into its
 // message and prints back to the same bytes.
 #include "client/diagnose_report.h"
+#include "client/check_report.h"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
