@@ -256,6 +256,7 @@ TEST(FinCheck, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   if (d.verdict_kind == "inseparable") {
     PZ_EXPECT_HAS(d.verdict, "The data cannot separate driver-lowpass from");
   }
+  ASSERT_FALSE(d.named_effects.empty()) << d.verdict;
   EXPECT_EQ(d.named_effects.front(), EffectKind::Named("driver-lowpass")) << d.verdict;
   EXPECT_GE(d.closed_total, 0.7);
   // Only now, to check the answer: the bench's low-pass corner frequency.
