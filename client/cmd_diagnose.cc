@@ -15,6 +15,7 @@
 #include "client/commands.h"
 #include "svcclient/complete_service.h"
 #include "client/diagnose_report.h"
+#include "client/check_report.h"
 #include "client/records_diagnose.h"
 #include "client/search_flags.h"
 #include "diagnose/check.h"
@@ -125,13 +126,12 @@ int RunDiagnose(const DiagnoseArgs& a) {
       return RecordsServiceFactory(so, f, "piezoid diagnose");
     };
   }
-  auto plant = std::make_shared<const model::BimorphPlant>();
-  const diagnose::DiagnosisModel m(plant, diagnose::CasesFromCaseSet(set), o.sim);
+  const std::vector<diagnose::DiagCase> cases = diagnose::CasesFromCaseSet(set);
   diagnose::BenchDiagnosis d;
   try {
     // The records engine on the bench's records (with --master: on the workers as
     // complete_model sessions).
-    d = diagnose::DiagnoseBench(m, o);
+    d = diagnose::DiagnoseBench(cases, o);
   } catch (const ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
@@ -226,20 +226,29 @@ int RunRealLikeCheckCommand(const CheckArgs& a) {
   return 0;
 }
 
-int RunRecordsCheckCommand(const CheckArgs& a) {
-  records::RecordsCheckOptions o;
-  o.family = a.records_family;
-  o.trials = a.trials;
-  o.seed = a.seed;
-  o.none_probability = a.none_probability;
-  o.diagnose = CheckDiagnoseOptions(a);
-  const records::RecordsCheckSummary s =
-      records::RunRecordsCheck(o, [](const records::RecordsCheckTrial& t, int i) {
-        std::cout << records::TrialLine(i + 1, t.correct ? "right" : "WRONG", t.description, 42, t)
-                  << std::endl;
-      });
-  std::cout << records::TallyText(s, "records") << static_cast<int>(s.wall_time_s) << " s in all\n";
-  return 0;
+/// The check's form: records of a family (--records-family) or fin benches.
+records::CheckForm CheckFormOf(const CheckArgs& a) {
+  if (!(a.none_probability >= 0 && a.none_probability <= 1))
+    throw InputError(FieldError("--none-probability", a.none_probability, "must be in [0, 1]"));
+  if (!(a.other_form_probability >= 0 && a.other_form_probability <= 1))
+    throw InputError(
+        FieldError("--other-form-probability", a.other_form_probability, "must be in [0, 1]"));
+  if (!a.records_family.empty()) {
+    records::RecordsCheckOptions o;
+    o.trials.family = a.records_family;
+    o.trials.none_probability = a.none_probability;
+    o.diagnose = CheckDiagnoseOptions(a);
+    return records::RecordsCheckForm(o);
+  }
+  diagnose::DiagnoseOptions o =
+      Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
+  o.second_effect = a.second;
+  o.trends = false;
+  records::FinTrialOptions so;
+  so.kinds = ParseKinds(a.kinds);
+  so.none_probability = a.none_probability;
+  so.other_form_probability = a.other_form_probability;
+  return records::FinCheckForm(o, so);
 }
 
 int RunCheckCommand(const CheckArgs& a) {
@@ -247,37 +256,10 @@ int RunCheckCommand(const CheckArgs& a) {
     throw InputError(
         "diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
   if (a.real_like) return RunRealLikeCheckCommand(a);
-  if (!a.records_family.empty()) return RunRecordsCheckCommand(a);
-  diagnose::DiagnoseOptions o =
-      Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
-  o.second_effect = a.second;
-  o.trends = false;
-  diagnose::SyntheticOptions so;
-  so.kinds = ParseKinds(a.kinds);
-  so.none_probability = a.none_probability;
-  so.other_form_probability = a.other_form_probability;
-  if (!(so.none_probability >= 0 && so.none_probability <= 1))
-    throw InputError(FieldError("--none-probability", so.none_probability, "must be in [0, 1]"));
-  if (!(so.other_form_probability >= 0 && so.other_form_probability <= 1))
-    throw InputError(
-        FieldError("--other-form-probability", so.other_form_probability, "must be in [0, 1]"));
-  const diagnose::CheckSummary s =
-      diagnose::RunCheck(a.trials, a.seed, o, so, [&](const diagnose::CheckTrial& t, int i) {
-        char extra[100];
-        std::snprintf(
-            extra, sizeof extra, " closed %6s (%.0f s)",
-            std::isfinite(t.closed)
-                ? (std::to_string(static_cast<int>(std::lround(100 * t.closed))) + "%").c_str()
-                : "n/a",
-            t.wall_time_s);
-        const records::TrialVerdict v{.verdict_kind = t.verdict_kind,
-                                      .named = model::EffectName(t.named),
-                                      .confidence = t.confidence,
-                                      .rms_ratio = t.rms_ratio,
-                                      .significant = t.significant};
-        std::cout << records::TrialLine(i + 1, t.correct() ? "right" : "WRONG", t.truth_description,
-                                        70, v, "", extra)
-                  << std::endl;
+  const records::CheckForm form = CheckFormOf(a);
+  const records::CheckSummary s =
+      records::RunCheck(form, a.trials, a.seed, [&](const records::CheckTrial& t, int i) {
+        std::cout << CheckTrialLine(form.text, t, i) << std::endl;
       });
   PrintCheckSummary(std::cout, s);
   if (!a.json_file.empty())

@@ -8,7 +8,6 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/fin_check.h"
 #include "diagnose/fin_diagnose.h"
 
 namespace pz::proto {
@@ -39,9 +38,5 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
                                                       const diagnose::DiagnoseOptions& options,
                                                       bool plots,
                                                       std::vector<std::string>* warnings);
-
-/// The confusion matrix (true effect × named effect) and the distribution of the share closed.
-void PrintCheckSummary(std::ostream& out, const diagnose::CheckSummary& s);
-void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s);
 
 }  // namespace pz::client

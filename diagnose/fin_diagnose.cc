@@ -84,24 +84,26 @@ int64_t BenchEvaluations(const records::RecordDiagnosis& d) {
   return n;
 }
 
-BenchDiagnosis DiagnoseBench(const DiagnosisModel& m, const DiagnoseOptions& o) {
+BenchDiagnosis DiagnoseBench(const std::vector<DiagCase>& cases, const DiagnoseOptions& o) {
   ThrowIfError(o.Validate());
   const auto start = std::chrono::steady_clock::now();
   BenchDiagnosis d;
-  d.set = RecordsOfCases(m.cases());
+  d.set = RecordsOfCases(cases);
   d.records = records::DiagnoseRecords(d.set, RecordOptionsOf(o));
   // The grid's facts: each case's place, noise and saturations, and the floors pooled by role.
   double st = 0, sw = 0;
-  for (size_t c = 0; c < m.cases().size(); ++c) {
-    const DiagCase& dc = m.cases()[c];
+  int nt = 0, nw = 0;
+  for (size_t c = 0; c < cases.size(); ++c) {
+    const DiagCase& dc = cases[c];
+    (dc.training ? nt : nw) += static_cast<int>(dc.measured_deg.size());
     d.cases.push_back({dc.number, dc.training, dc.drive.amplitude_v, dc.drive.frequency_hz,
                        dc.noise, dc.b1, dc.b2});
     d.quantum_deg = std::max(d.quantum_deg, dc.noise.quantum_deg);
     const double f = d.records.record_floor[c];
     (dc.training ? st : sw) += f * f * dc.measured_deg.size();
   }
-  d.floor_train = std::sqrt(st / std::max(1, m.training_samples()));
-  d.floor_withheld = std::sqrt(sw / std::max(1, m.withheld_samples()));
+  d.floor_train = std::sqrt(st / std::max(1, nt));
+  d.floor_withheld = std::sqrt(sw / std::max(1, nw));
   d.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return d;
 }

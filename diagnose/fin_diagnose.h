@@ -106,8 +106,8 @@ struct BenchDiagnosis {
 int64_t BenchEvaluations(const records::RecordDiagnosis& d);
 
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
-/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of `model`'s
-/// cases. Throws InputError on invalid options.
-BenchDiagnosis DiagnoseBench(const DiagnosisModel& model, const DiagnoseOptions& options);
+/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of
+/// `cases`. Throws InputError on invalid options.
+BenchDiagnosis DiagnoseBench(const std::vector<DiagCase>& cases, const DiagnoseOptions& options);
 
 }  // namespace pz::diagnose

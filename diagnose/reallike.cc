@@ -21,8 +21,6 @@ std::string Num(double x) {
   return s.str();
 }
 
-double Quantise(double x, double q) { return q > 0 ? q * std::round(x / q) : x; }
-
 /// The relaxation times: three per decade from τ_min to τ_max (both included).
 std::vector<double> CreepTimes(const RealLikeStack& s) {
   std::vector<double> taus;

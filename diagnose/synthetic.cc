@@ -1,13 +1,28 @@
 #include "diagnose/synthetic.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
+#include <utility>
+
+#include "io/fin_records.h"
+#include "model/saturation.h"
+#include "records/excitation.h"
 
 namespace pz::records {
 
-double NormalDraw(opt::Rng& rng) {
-  const double a = 1 - rng.Uniform01(), b = rng.Uniform01();
-  return std::sqrt(-2 * std::log(a)) * std::cos(2 * std::numbers::pi * b);
+double NormalDraw(opt::Rng& rng, NormalForm form) {
+  const double u = rng.Uniform01(), v = rng.Uniform01();
+  const double a = form == NormalForm::kComplement ? 1 - u : std::max(u, 1e-300);
+  return std::sqrt(-2 * std::log(a)) * std::cos(2 * std::numbers::pi * v);
+}
+
+void Measure(std::span<double> y, const Measurement& m, opt::Rng& rng) {
+  for (double& v : y) {
+    v += m.offset + (m.noise_std > 0 ? m.noise_std * NormalDraw(rng, m.normal) : 0);
+    v = Quantise(v, m.quantum);
+  }
 }
 
 const char* WaveformName(Waveform w) {
@@ -131,13 +146,253 @@ io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> pa
   r.y.assign(n, 0);
   truth.Simulate(r, params, weights, n, r.y);
   opt::Rng rng(m.seed * 7919 + 17);
-  for (double& v : r.y) {
-    v += m.offset + (m.noise_std > 0 ? m.noise_std * NormalDraw(rng) : 0);
-    if (m.quantum > 0) v = m.quantum * std::round(v / m.quantum);
-  }
+  Measure(r.y, m, rng);
   r.quantum = m.quantum;
   if (t1_s > t0_s) io::SetWindow(r, t0_s, t1_s, 20, "window of " + name);
   return r;
+}
+
+// ---- the trials of a calibration check -------------------------------------------------------
+
+EffectKind DrawEffectKind(opt::Rng& rng, std::span<const EffectKind> kinds) {
+  if (kinds.empty()) throw InputError("synthetic trial: no effect to draw from");
+  return kinds[rng.UniformBelow(kinds.size())];
+}
+
+model::TruthDraw TruthDrawOf(opt::Rng& rng) {
+  return model::TruthDraw([&rng] { return rng.Uniform01(); });
+}
+
+namespace {
+
+// The paper's nine cases (V, f) and split (training 1, 5, 6, 7).
+struct CaseDef {
+  int number;
+  double v, f;
+  bool training;
+};
+constexpr CaseDef kCases[9] = {{1, 375, 0.25, true},  {2, 375, 0.5, false}, {3, 375, 1.0, false},
+                               {4, 500, 0.25, false}, {5, 500, 0.5, true},  {6, 500, 1.0, true},
+                               {7, 750, 0.25, true},  {8, 750, 0.5, false}, {9, 750, 1.0, false}};
+
+std::string NoTruth(const char* check, EffectKind e, const char* draw) {
+  return std::string(check) + ": effect '" + e.name() + "' draws no truth (its " + draw +
+         " in model/effect_library.cc)";
+}
+
+}  // namespace
+
+std::string FinTrialOptions::Validate() const {
+  auto share = [](const char* field, double v) {
+    return v >= 0 && v <= 1 ? std::string() : FieldError(field, v, "must be in [0, 1]");
+  };
+  if (!(quantum_deg >= 0 && std::isfinite(quantum_deg)))
+    return FieldError("quantum_deg", quantum_deg, "must be finite and >= 0");
+  if (!(jitter_rms_deg >= 0 && std::isfinite(jitter_rms_deg)))
+    return FieldError("jitter_rms_deg", jitter_rms_deg, "must be finite and >= 0");
+  if (std::string e = share("none_probability", none_probability); !e.empty()) return e;
+  return share("other_form_probability", other_form_probability);
+}
+
+io::CaseSet SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
+                          const std::vector<model::Effect>& effects,
+                          const std::vector<std::pair<double, double>>& saturations,
+                          const FinTrialOptions& o, opt::Rng& rng) {
+  if (saturations.size() != std::size(kCases))
+    throw InputError("synthetic bench: " + std::to_string(saturations.size()) +
+                     " saturation pairs for the " + std::to_string(std::size(kCases)) + " cases");
+  const model::EffectSimulator sim(plant);
+  const Measurement encoder{
+      .noise_std = o.jitter_rms_deg, .quantum = o.quantum_deg, .normal = NormalForm::kDrawn};
+  io::CaseSet set;
+  set.dir = "bench";
+  for (int c = 0; c < 9; ++c) {
+    const CaseDef& def = kCases[c];
+    const model::Sinusoid d{def.v, def.f};
+    model::BimorphParams p = params;
+    p.b1 = saturations[c].first;
+    p.b2 = saturations[c].second;
+    io::BenchCaseSamples b;
+    b.number = def.number;
+    b.amplitude_v = d.amplitude_v;
+    b.frequency_hz = d.frequency_hz;
+    b.role = def.training ? io::CaseRole::kTrain : io::CaseRole::kValidate;
+    b.sample_rate_hz = d.sample_rate_hz;
+    b.cycles = d.cycles;
+    b.file = "case" + std::to_string(def.number);
+    b.angle_deg.resize(static_cast<size_t>(d.NumSamples()));
+    const model::SimulationSummary s = sim.SimulateAngle(p, effects, d, b.angle_deg);
+    const std::string at = "synthetic bench, case " + std::to_string(def.number);
+    if (!s.ok()) throw InputError(at + ": " + s.message);
+    Measure(b.angle_deg, encoder, rng);
+    set.cases.push_back(io::MakeBenchCase(
+        std::move(b), {},
+        [&](std::string_view field, size_t) { return at + " " + std::string(field); }, ""));
+  }
+  return set;
+}
+
+namespace {
+
+SyntheticTrial DrawFinTrial(const model::BimorphPlant& plant, uint64_t seed,
+                            const FinTrialOptions& o, std::span<const EffectKind> kinds) {
+  opt::Rng rng(seed);
+  SyntheticTrial t;
+  t.seed = seed;
+  // The bench plant, around the physical bench's values.
+  model::BimorphParams p;
+  p.mu = UniformDraw(rng, 60, 130);
+  p.delta = UniformDraw(rng, 0.07, 0.13);
+  p.alpha = UniformDraw(rng, 1.5e-3, 3.5e-3);
+  p.beta = UniformDraw(rng, 4e-3, 8e-3);
+  p.gamma = p.beta * UniformDraw(rng, 0.3, 0.8);
+  p.a1 = UniformDraw(rng, 0.05, 0.15);
+  p.a2 = UniformDraw(rng, 0.1, 0.2);
+  // Saturations: the paper's regression with a ±4 % spread.
+  const model::SaturationRegression reg = model::PaperSaturationRegression();
+  std::vector<std::pair<double, double>> sat;
+  for (const CaseDef& c : kCases) {
+    const model::SaturationPair s = reg.Predict(c.v, c.f);
+    sat.push_back({s.b1 * UniformDraw(rng, 0.96, 1.04), s.b2 * UniformDraw(rng, 0.96, 1.04)});
+  }
+  // The effect.
+  const bool none = rng.Uniform01() < o.none_probability;
+  const bool other_form = rng.Uniform01() < o.other_form_probability;
+  if (!none) {
+    t.truth = DrawEffectKind(rng, kinds);
+    model::TruthDraw draw = TruthDrawOf(rng);
+    model::FinTruth truth = t.truth->DrawFinTruth(draw, other_form);
+    if (truth.parts.empty()) throw InputError(NoTruth("synthetic bench", t.truth, "DrawFinTruth"));
+    t.form = std::move(truth.form);
+    t.magnitude = truth.magnitude;
+    for (std::vector<double>& part : truth.parts) t.effects.push_back({t.truth, std::move(part)});
+  }
+  std::ostringstream os;
+  os << "seed " << seed << ": " << model::EffectName(t.truth);
+  if (!t.form.empty()) os << " (" << t.form << ")";
+  for (const model::Effect& e : t.effects) os << " " << e.Describe();
+  t.description = os.str();
+  try {
+    t.set = io::RecordsFromCaseSet(SimulateBench(plant, p, t.effects, sat, o, rng));
+  } catch (const InputError& e) {
+    throw InputError(t.description + ": " + e.what());
+  }
+  return t;
+}
+
+}  // namespace
+
+TrialDraw FinTrialDraw(const FinTrialOptions& o) {
+  if (const std::string e = o.Validate(); !e.empty()) throw InputError("synthetic bench: " + e);
+  std::vector<EffectKind> kinds = o.kinds;
+  if (kinds.empty())
+    for (const auto& e : model::EffectLibrary()) kinds.push_back(e.kind);
+  auto plant = std::make_shared<const model::BimorphPlant>();
+  return [plant, o, kinds](uint64_t seed) { return DrawFinTrial(*plant, seed, o, kinds); };
+}
+
+std::vector<EffectKind> RecordsTrialEffects(const Family& family) {
+  std::vector<EffectKind> kinds;
+  const auto excluded = family.excluded_effects();
+  for (EffectKind k : RecordEffects())
+    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end() &&
+        !NeedsRateCoverage(k))
+      kinds.push_back(k);
+  return kinds;
+}
+
+namespace {
+
+struct RecordsForm {
+  RecordsTrialOptions options;
+  DataScale scale;
+  std::shared_ptr<const Family> family;
+  std::vector<double> nominal;
+  std::vector<EffectKind> kinds;
+};
+
+/// The truth's parameters (the family's, then the effect's; a linear family's in `weights`) and
+/// the effect, drawn on rng.
+void DrawRecordsTruth(const RecordsForm& f, opt::Rng& rng, SyntheticTrial& t,
+                      std::vector<double>& p, std::vector<double>& weights) {
+  p = f.nominal;
+  for (double& v : p) v *= UniformDraw(rng, 0.8, 1.25);
+  if (f.family->linear()) weights = std::exchange(p, {});  // p: the effect's parameters
+  if (rng.Uniform01() >= f.options.none_probability) {
+    t.truth = DrawEffectKind(rng, f.kinds);
+    model::TruthDraw draw = TruthDrawOf(rng);
+    const std::vector<double> truth = t.truth->DrawRecordsTruth(draw, f.scale);
+    if (truth.empty())
+      throw InputError(NoTruth("diagnose-check --records", t.truth, "DrawRecordsTruth"));
+    p.insert(p.end(), truth.begin(), truth.end());
+    t.magnitude = p.back();
+  }
+}
+
+SyntheticTrial DrawRecordsTrial(const RecordsForm& f, uint64_t seed) {
+  SyntheticTrial t;
+  t.seed = seed;
+  opt::Rng rng(seed * 104729 + 7);
+  std::vector<double> p, weights;
+  DrawRecordsTruth(f, rng, t, p, weights);
+  std::ostringstream desc;
+  if (t.truth.none())
+    desc << "none";
+  else
+    desc << EffectName(t.truth) << " " << p.back();
+  DriveShape d;
+  d.amplitude = 100;
+  d.frequency_hz = 1;
+  d.frequency_end_hz = 6;
+  d.phase_rad = UniformDraw(rng, 0, 2 * std::numbers::pi);
+  d.rest_s = 0.5;
+  d.duration_s = 6;
+  d.fs_hz = 500;
+  d.seed = seed;
+  const double w = rng.Uniform01();
+  d.waveform = w < 0.4 ? Waveform::kSine : w < 0.7 ? Waveform::kMultisine : Waveform::kTriangle;
+  desc << ", " << WaveformName(d.waveform);
+  t.description = desc.str();
+  std::vector<EffectKind> effects;
+  if (!t.truth.none()) effects.push_back(t.truth);
+  const RecordModel truth(f.family, effects, f.scale);
+  io::Record r =
+      SynthesizeRecord(truth, p, weights, d, {UniformDraw(rng, -2, 2), 0.02, 0.005, seed}, "rec",
+                       model::CaseRole::kTrain);
+  const double t0 = r.t[r.rest_samples] + 0.2, t2 = r.t.back(), t1 = t0 + 0.6 * (t2 - t0);
+  t.set.source = "synthetic";
+  io::Record tr = r, wh = r;
+  tr.name = "train";
+  io::SetWindow(tr, t0, t1, 20, "train");
+  wh.name = "withheld";
+  wh.role = model::CaseRole::kValidate;
+  io::SetWindow(wh, t1, t2, 20, "withheld");
+  t.set.records = {std::move(tr), std::move(wh)};
+  return t;
+}
+
+}  // namespace
+
+TrialDraw RecordsTrialDraw(const RecordsTrialOptions& o) {
+  if (!(o.none_probability >= 0 && o.none_probability <= 1))
+    throw InputError(FieldError("none_probability", o.none_probability, "must be in [0, 1]"));
+  auto f = std::make_shared<RecordsForm>();
+  f->options = o;
+  f->scale = SyntheticStackScale();
+  f->family = MakeFamily(o.family, f->scale);
+  f->nominal = f->family->CheckNominal();
+  if (f->nominal.empty()) {
+    std::string with;
+    for (const std::string& name : FamilyNames())
+      if (!MakeFamily(name, f->scale)->CheckNominal().empty())
+        with += (with.empty() ? "" : ", ") + name;
+    throw InputError("diagnose-check --records-family: '" + o.family +
+                     "' has no nominal parameter set for synthetic records (Family::CheckNominal; "
+                     "families with one: " +
+                     with + ")");
+  }
+  f->kinds = RecordsTrialEffects(*f->family);
+  return [f](uint64_t seed) { return DrawRecordsTrial(*f, seed); };
 }
 
 }  // namespace pz::records

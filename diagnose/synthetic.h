@@ -1,16 +1,38 @@
-// Synthetic records from the project's own plants (issue 14), in the shape of real recordings: a
-// rest segment, a drive that starts at an arbitrary phase (a sine, a multisine, a triangle, a
-// square wave with finite slew, a sweep), a response offset, white noise and quantisation. Tests
-// and `piezoid diagnose-check` identify and diagnose these, so every figure can be checked against
-// the truth that made them.
+// The one synthetic truth draw (issues 14, 38): trials whose truth is known, for the calibration
+// checks (`piezoid diagnose-check`, diagnose/check.h) and the tests. A trial draws a plant around
+// its nominal parameters and an effect of the library (kind, form, magnitude) or none, simulates
+// it, reads it through a measurement (offset, noise, quantisation: `Measure`, the one reading of
+// every synthetic record) and hands the diagnosis an io::RecordSet with the truth beside it. Two
+// forms:
+//
+//  - the fin bench (`FinTrialDraw`): the bench plant (spec "bimorph-fin model") with parameters
+//    drawn around the physical bench's, an effect drawn from the fin library — in its library form
+//    or in another functional form the library does not have (a second-order amplifier, creep with
+//    two relaxations: the effect's DrawFinTruth) — the paper's nine cases and split, saturations
+//    from the paper's regression (Appendix B) with a random spread, read through the bench's
+//    encoder (2048-line quadrature, quantum 360/8192 deg) after a vibration jitter (RMS 0.003
+//    deg); its records are the bench's (io/fin_records.h), as `diagnose --cases` reads a folder;
+//  - records of a family (`RecordsTrialDraw`): parameters drawn around the family's nominal set, a
+//    random drive (a sine from an arbitrary phase after a rest, a multisine or a triangle), an
+//    offset, white noise and quantisation, one record cut into a training and a withheld window.
+//
+// The building blocks are those of synthetic records in general, in the shape of real recordings:
+// a rest segment, a drive that starts at an arbitrary phase (a sine, a multisine, a triangle, a
+// square wave with finite slew, a sweep), a response offset, white noise and quantisation.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "io/bench_data.h"
 #include "io/records.h"
+#include "model/bimorph.h"
+#include "model/effects.h"
 #include "opt/random.h"
 #include "records/model.h"
 
@@ -36,30 +58,109 @@ struct DriveShape {
 /// The drive samples (t_k = k / fs from 0, rest then excitation). Throws InputError on bad shapes.
 std::vector<double> MakeDrive(const DriveShape& shape);
 
-struct Measurement {
-  double offset = 0;     ///< added to the response
-  double noise_std = 0;  ///< white Gaussian noise
-  double quantum = 0;    ///< response rounded to multiples of it (0 = none)
-  uint64_t seed = 1;
-};
-
 /// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
 /// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
 DataScale SyntheticStackScale();
 
-/// A standard normal draw (Box–Muller on the generator's uniform grid).
-double NormalDraw(opt::Rng& rng);
+/// Which uniform feeds Box–Muller's logarithm: 1 − u (never 0), or u as drawn (kept above 1e-300).
+/// The same distribution from other draws; the fin bench's trials are pinned on kDrawn.
+enum class NormalForm { kComplement, kDrawn };
+/// A standard normal draw (Box–Muller on two of the generator's uniforms, u then v:
+/// √(−2 ln u') cos(2π v)).
+double NormalDraw(opt::Rng& rng, NormalForm form = NormalForm::kComplement);
 /// A uniform draw in [lo, hi) (one Uniform01): the synthetic draws of every check (records, fin
 /// benches, real-like stacks).
 inline double UniformDraw(opt::Rng& rng, double lo, double hi) {
   return lo + (hi - lo) * rng.Uniform01();
 }
 
-/// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise).
+/// x rounded to a multiple of q (q > 0), or x.
+inline double Quantise(double x, double q) { return q > 0 ? q * std::round(x / q) : x; }
+
+/// How a synthetic response is read.
+struct Measurement {
+  double offset = 0;     ///< added to the response
+  double noise_std = 0;  ///< white Gaussian noise (none drawn when 0)
+  double quantum = 0;    ///< response rounded to multiples of it (0 = none)
+  uint64_t seed = 1;     ///< SynthesizeRecord's generator (Measure takes the caller's)
+  NormalForm normal = NormalForm::kComplement;
+};
+
+/// Reads a response in place: y_k ← Quantise(y_k + (offset + noise_std n_k), quantum), n_k drawn
+/// from rng in sample order (only when noise_std > 0).
+void Measure(std::span<double> y, const Measurement& measurement, opt::Rng& rng);
+
+/// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise), read by
+/// Measure with the generator of measurement.seed.
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
 io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params,
                             std::span<const double> weights, const DriveShape& shape,
                             const Measurement& measurement, const std::string& name,
                             model::CaseRole role, double t0_s = 0, double t1_s = 0);
+
+// ---- the trials of a calibration check -------------------------------------------------------
+
+/// One drawn trial: what it holds (never shown to the diagnosis) and its records.
+struct SyntheticTrial {
+  uint64_t seed = 0;
+  EffectKind truth;                    ///< the effect drawn (none: a clean trial)
+  std::string form;                    ///< its form where it has several ("first-order", …)
+  std::vector<model::Effect> effects;  ///< the fin bench: as simulated (library building blocks)
+  double magnitude = 0;                ///< fin: the drawn magnitude (physical units); records:
+                                       ///< the effect's last drawn parameter
+  std::string description;             ///< the truth in words (effect, form, parameters, drive)
+  io::RecordSet set;                   ///< what the diagnosis sees
+};
+
+/// One form of the draw: a trial for a seed (deterministic in it). Throws InputError if the truth
+/// cannot be simulated (a bug: the drawn ranges are valid).
+using TrialDraw = std::function<SyntheticTrial(uint64_t seed)>;
+
+/// The effect of a trial: one of `kinds`, uniformly (InputError for none to draw from).
+EffectKind DrawEffectKind(opt::Rng& rng, std::span<const EffectKind> kinds);
+/// The library's truth draws (model::TruthDraw) on the trial's generator.
+model::TruthDraw TruthDrawOf(opt::Rng& rng);
+
+// The fin bench.
+
+struct FinTrialOptions {
+  double quantum_deg = 360.0 / 8192;     ///< encoder quantum [deg], ≥ 0 (0: no quantisation)
+  double jitter_rms_deg = 0.003;         ///< vibration jitter before quantisation [deg], ≥ 0
+  double none_probability = 0.2;         ///< share of clean benches, in [0, 1]
+  double other_form_probability = 0.3;   ///< share of effects drawn in a form the library lacks
+  std::vector<model::EffectKind> kinds;  ///< effects to draw from; empty = the whole library
+  /// "" or the field, its value and the rule.
+  std::string Validate() const;
+};
+
+/// Simulates a bench with given plant parameters and effects (the paper's nine cases and split,
+/// saturations per case b1 = sat[c].first, b2 = sat[c].second), read through the encoder with the
+/// jitter drawn from rng: the cases as a bench folder holds them ("case<N>", a withheld case
+/// validates; io::MakeBenchCase). Throws InputError naming the case that cannot be simulated.
+io::CaseSet SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
+                          const std::vector<model::Effect>& effects,
+                          const std::vector<std::pair<double, double>>& saturations,
+                          const FinTrialOptions& options, opt::Rng& rng);
+
+/// The fin bench's trials (one plant, built once): the bench's records (io::RecordsFromCaseSet of
+/// SimulateBench). Throws InputError on bad options.
+TrialDraw FinTrialDraw(const FinTrialOptions& options);
+
+// Records of a family.
+
+struct RecordsTrialOptions {
+  std::string family = "backlash-like";  ///< a family with a CheckNominal set
+  double none_probability = 0.25;        ///< share of clean trials, in [0, 1]
+};
+
+/// The effects a records trial of `family` draws: every records effect the family does not hold,
+/// but those that only records at several rates identify (records/excitation.h NeedsRateCoverage:
+/// the trials' sine and triangle drives run at one rate).
+std::vector<EffectKind> RecordsTrialEffects(const Family& family);
+
+/// The records trials of a family: one record (rest, then a drive of 6 s at 500 Hz), its first 60 %
+/// after 0.2 s of excitation the training window, the rest withheld. Throws InputError on a family
+/// without a nominal parameter set (Family::CheckNominal), naming those with one.
+TrialDraw RecordsTrialDraw(const RecordsTrialOptions& options);
 
 }  // namespace pz::records

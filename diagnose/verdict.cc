@@ -22,6 +22,18 @@ std::string Padded(const std::string& s, size_t width, bool right) {
   if (s.size() >= width) return s;
   return right ? std::string(width - s.size(), ' ') + s : s + std::string(width - s.size(), ' ');
 }
+/// A share as a whole percentage ("n/a" when not finite).
+std::string Pct(double share) {
+  return std::isfinite(share) ? FormatFixed(100 * share, 0) + " %" : std::string("n/a");
+}
+/// The q-quantile of v, linear between order statistics (NaN for none).
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const double r = q * static_cast<double>(v.size() - 1);
+  const size_t i = static_cast<size_t>(r);
+  return i + 1 < v.size() ? v[i] + (r - static_cast<double>(i)) * (v[i + 1] - v[i]) : v[i];
+}
 
 }  // namespace
 
@@ -103,15 +115,12 @@ std::string TrialLine(int index, const std::string& mark, const std::string& des
 }
 
 std::string TallyText(const CalibrationTally& t, const std::string& noun) {
-  auto pct = [](double share) {
-    return std::isfinite(share) ? FormatFixed(100 * share, 0) + " %" : std::string("n/a");
-  };
   std::string s =
       noun + " with an effect and a significant gap: " + std::to_string(t.effect_trials) +
-      ", right effect named in " + std::to_string(t.effect_right) + " (" + pct(t.accuracy()) +
+      ", right effect named in " + std::to_string(t.effect_right) + " (" + Pct(t.accuracy()) +
       "); verdicts 'cannot separate': " + std::to_string(t.inseparable) + "\n";
   s += "clean " + noun + ": " + std::to_string(t.clean) + ", false alarms " +
-       std::to_string(t.clean_alarms) + " (" + pct(t.false_alarm_rate()) + ")\n";
+       std::to_string(t.clean_alarms) + " (" + Pct(t.false_alarm_rate()) + ")\n";
   s += "calibration of the stated confidence (" + std::to_string(t.confidence.size()) + " " + noun +
        " with a named effect):\n";
   for (const model::ReliabilityBin& b : t.Reliability()) {
@@ -124,6 +133,28 @@ std::string TallyText(const CalibrationTally& t, const std::string& noun) {
     s += buf;
   }
   return s;
+}
+
+std::string ConfusionText(std::span<const std::string> columns,
+                          const std::vector<std::vector<int>>& confusion, size_t trials,
+                          const std::string& noun) {
+  std::string s = "confusion matrix (rows: true effect, columns: named; " + std::to_string(trials) +
+                  " " + noun + ")\n  " + Padded("true \\ named", 18, false);
+  for (const std::string& c : columns) s += Padded(c.substr(0, 11), 12, false);
+  s += "\n";
+  for (size_t r = 0; r < confusion.size(); ++r) {
+    s += "  " + Padded(columns[r], 18, false);
+    for (int n : confusion[r]) s += Padded(std::to_string(n), 12, false);
+    s += "\n";
+  }
+  return s;
+}
+
+std::string ClosedText(std::vector<double> closed, const std::string& noun) {
+  return "share of the gap closed (right effect named, " + std::to_string(closed.size()) + " " +
+         noun + "): min " + Pct(Quantile(closed, 0)) + ", 10 % " + Pct(Quantile(closed, 0.1)) +
+         ", median " + Pct(Quantile(closed, 0.5)) + ", 90 % " + Pct(Quantile(closed, 0.9)) +
+         ", max " + Pct(Quantile(closed, 1)) + "\n";
 }
 
 }  // namespace pz::records

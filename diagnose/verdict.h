@@ -85,4 +85,14 @@ std::string TrialLine(int index, const std::string& mark, const std::string& des
 /// ("benches", "records").
 std::string TallyText(const CalibrationTally& tally, const std::string& noun);
 
+/// The confusion matrix of a check, a line a row: its title (`trials` `noun`), the named results
+/// (`columns`, cut to 11 characters), then each truth (`columns` but the last) with its counts.
+std::string ConfusionText(std::span<const std::string> columns,
+                          const std::vector<std::vector<int>>& confusion, size_t trials,
+                          const std::string& noun);
+
+/// The distribution of the share of the gap closed where the right effect was named: min, 10 %,
+/// median, 90 %, max (linear between order statistics; "n/a" without any), one line.
+std::string ClosedText(std::vector<double> closed, const std::string& noun);
+
 }  // namespace pz::records

@@ -122,9 +122,9 @@ class TruthDraw {
   std::function<double()> u01_;
 };
 
-/// A drawn truth of the fin bench's check (diagnose/fin_synthetic.h): one or more copies of the
-/// effect simulated together (a second form the library lacks, e.g. two equal low-pass poles), the
-/// drawn magnitude and the form's name.
+/// A drawn truth of the fin bench's check (diagnose/synthetic.h FinTrialDraw): one or more copies
+/// of the effect simulated together (a second form the library lacks, e.g. two equal low-pass
+/// poles), the drawn magnitude and the form's name.
 struct FinTruth {
   std::string form;                        ///< e.g. "first-order", "two relaxations"
   double magnitude = 0;                    ///< physical units
@@ -184,13 +184,13 @@ class EffectDef {
   virtual int kernel() const { return 0; }
 
   // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
-  /// The parameters of a records check's truth (diagnose/check.cc), on the synthetic stack's scale
-  /// (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect whose
-  /// parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
+  /// The parameters of a records check's truth (diagnose/synthetic.cc), on the synthetic stack's
+  /// scale (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect
+  /// whose parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
   virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const {
     return {};
   }
-  /// A fin-bench check's truth (diagnose/fin_synthetic.cc) in the fin bench's units; `other_form`
+  /// A fin-bench check's truth (diagnose/synthetic.cc) in the fin bench's units; `other_form`
   /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer
   /// it.
   virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }

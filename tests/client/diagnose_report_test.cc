@@ -158,34 +158,5 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
   EXPECT_EQ(back.rounds(0).candidates(1).fit().structure(), "base + driver-lowpass");
 }
 
-TEST(DiagnoseReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
-  diagnose::CheckSummary s;
-  diagnose::CheckTrial t;
-  t.seed = 1000;
-  t.verdict_kind = "none";
-  t.truth_description = "seed 1000: none";
-  t.closed = NAN;
-  diagnose::Tally(s, t);
-  std::ostringstream out;
-  WriteCheckJson(out, s);
-  const Struct j = Parse(out.str());
-  EXPECT_EQ(Field(j, "columns").list_value().values_size(), diagnose::CheckCols());
-  const Struct& confusion = Field(j, "confusion").struct_value();
-  EXPECT_EQ(confusion.fields_size(), diagnose::CheckRows());
-  EXPECT_EQ(Field(confusion, "none").list_value().values(0).number_value(), 1);  // none → none
-  EXPECT_EQ(Field(j, "clean").number_value(), 1);
-  EXPECT_EQ(Field(j, "clean_alarms").number_value(), 0);
-  ASSERT_EQ(Field(j, "trials").list_value().values_size(), 1);
-  const Struct& trial = Field(j, "trials").list_value().values(0).struct_value();
-  EXPECT_EQ(Field(trial, "seed").number_value(), 1000);
-  EXPECT_TRUE(Field(trial, "correct").bool_value());
-  EXPECT_EQ(Field(trial, "closed").kind_case(), Value::kNullValue);
-  EXPECT_EQ(Field(trial, "truth_description").string_value(), "seed 1000: none");
-  proto::DiagnosisCheck back;  // reads into its message and prints back to the same bytes
-  io::ReadJsonMessage("check.json", out.str(), &back);
-  EXPECT_EQ(io::PrintJson(back, "check.json"), out.str());
-  EXPECT_EQ(back.trials(0).seed(), 1000u);
-}
-
 }  // namespace
 }  // namespace pz::client

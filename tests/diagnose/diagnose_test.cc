@@ -479,9 +479,8 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   }
   // The one driver (the cases as records, with the grid's facts): the same fits, the same rounds,
   // the same evaluations, bit for bit.
-  const diagnose::DiagnosisModel m(std::make_shared<const model::BimorphPlant>(),
-                                   diagnose::CasesFromCaseSet(bench));
-  const diagnose::BenchDiagnosis grid = diagnose::DiagnoseBench(m, fo);
+  const diagnose::BenchDiagnosis grid =
+      diagnose::DiagnoseBench(diagnose::CasesFromCaseSet(bench), fo);
   const RecordDiagnosis& one = grid.records;
   EXPECT_EQ(one.verdict, verdict);
   EXPECT_EQ(one.base.params, base_x);

@@ -9,7 +9,7 @@
 #include <zmq.hpp>
 
 #include "diagnose/fin_diagnose.h"
-#include "diagnose/fin_synthetic.h"
+#include "diagnose/synthetic.h"
 #include "service/wire_codec.h"
 #include "svcclient/complete_service.h"
 #include "tests/system/service_harness.h"
@@ -22,7 +22,7 @@ using model::EffectKind;
 
 std::vector<DiagCase> SmallBench(bool with_delay) {
   const model::BimorphPlant plant;
-  SyntheticOptions so;
+  records::FinTrialOptions so;
   model::BimorphParams p;
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
@@ -31,7 +31,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
   opt::Rng rng(3);
   std::vector<model::Effect> effects;
   if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
-  return SimulateBench(plant, p, effects, sat, so, rng);
+  return CasesFromCaseSet(records::SimulateBench(plant, p, effects, sat, so, rng));
 }
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -75,8 +75,7 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   testing::Cluster cluster("diagnose-records-service");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
-  auto plant = std::make_shared<const model::BimorphPlant>();
-  const DiagnosisModel m(plant, SmallBench(true));
+  const std::vector<DiagCase> m = SmallBench(true);
   DiagnoseOptions o = SmallOptions();
   const records::RecordDiagnosis local = DiagnoseBench(m, o).records;
 
