@@ -1,6 +1,7 @@
-// Reports of `piezoid diagnose` and `piezoid diagnose-check`: the terminal summary, the JSON record
-// and the HTML report with its figures (gnuplot, client/plots.h): residual vs drive phase per case,
-// residual spectra, loops before/after, and the amplitude × frequency grid of PI before/after.
+// Reports of `piezoid diagnose --cases` (the fin bench; diagnose-check's: client/check_report.h):
+// the terminal summary, the JSON record and the HTML report with its figures (gnuplot,
+// client/plots.h): residual vs drive phase per case, residual spectra, loops before/after, and the
+// amplitude × frequency grid of PI before/after.
 #pragma once
 
 #include <filesystem>
