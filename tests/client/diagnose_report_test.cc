@@ -1,7 +1,7 @@
 // The JSON of `piezoid diagnose` (client/diagnose_report.h) through its message
-// (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h). Each parses back, a string with quotes and a newline keeps them, a
-// non-finite number is null, the names the users read are there, and each reads back into its
-// message and prints back to the same bytes.
+// (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h). Each parses back, a
+// string with quotes and a newline keeps them, a non-finite number is null, the names the users
+// read are there, and each reads back into its message and prints back to the same bytes.
 #include "client/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
