@@ -357,286 +357,348 @@ OdeSolution IntegrateCvode(const OdeSystem& system, double t0, std::span<const d
 
 namespace {
 
-OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const double> y0,
-                          std::span<const double> t_out, const CvodeOptions& options) {
-  const auto wall_start = std::chrono::steady_clock::now();
-  OdeSolution sol;
-  const int n = system.size();
-  sol.n = n;
-  SimulationSummary& sum = sol.summary;
-  auto finish = [&]() -> OdeSolution {
-    sum.wall_time_s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    return std::move(sol);
-  };
-  auto invalid = [&](std::string msg) {
-    sum.status = SimStatus::kInvalidInput;
-    sum.message = std::move(msg);
-    return finish();
-  };
+// One integration: the output, the SUNDIALS objects (declared in creation order, destroyed in
+// reverse), the counters that survive restarts and the stops. IntegrateOnce() runs it; each step
+// below that returns a bool fills the summary and returns false when the run must end (Run()
+// then returns Finish()).
+class CvodeRun {
+ public:
+  CvodeRun(const OdeSystem& system, double t0, std::span<const double> y0,
+           std::span<const double> t_out, const CvodeOptions& options)
+      : system_(system), t0_(t0), y0_(y0), t_out_(t_out), options_(options), n_(system.size()) {
+    sol_.n = n_;
+  }
 
-  // ---- validation ----
-  if (n < 1) return invalid(FieldError("system.size()", n, "must be >= 1"));
-  if (auto s = options.Validate(n); !s.ok()) return invalid(s.message());
-  if (static_cast<int>(y0.size()) != n)
-    return invalid(
-        FieldError("y0.size()", y0.size(), "must equal the number of states " + std::to_string(n)));
-  if (!std::isfinite(t0)) return invalid(FieldError("t0", t0, "must be finite"));
+  OdeSolution Run();
+
+ private:
+  OdeSolution Finish() {
+    sum_.wall_time_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+    return std::move(sol_);
+  }
+  bool Invalid(std::string msg) {
+    sum_.status = SimStatus::kInvalidInput;
+    sum_.message = std::move(msg);
+    return false;
+  }
+  bool Validate();
+  // Fills the summary with a solver failure.
+  void SetFailure(int flag, const std::string& what) {
+    sum_.status = SimStatus::kSolverFailure;
+    sum_.solver_flag = flag;
+    sum_.message = what;
+    if (!data_.cvode_message.empty()) sum_.message += ": " + data_.cvode_message;
+    if (!data_.callback_note.empty())
+      sum_.message += " (last callback problem: " + data_.callback_note + ")";
+  }
+  bool Fail(int flag, const std::string& what) {
+    SetFailure(flag, what);
+    return false;
+  }
+  bool Check(int flag, const char* call) {
+    if (flag >= 0) return true;
+    SetFailure(flag, std::string(call) + " failed with " + FlagName(flag));
+    return false;
+  }
+  bool CreateSolver();
+  bool ConfigureSolver();
+  Counters Current() const;
+  void Publish() {
+    const Counters c = Current();
+    sum_.steps = done_.steps + c.steps;
+    sum_.rhs_calls = done_.rhs + c.rhs;
+    sum_.jacobian_calls = done_.jac + c.jac;
+  }
+  bool Stopping(const Stop& s) const {
+    return s.breakpoint || (options_.restart_at_outputs && s.first_output >= 0);
+  }
+  bool ArmTstop(double t_now);
+  bool Restart(double t_now);
+  bool Record(const Stop& s);
+  bool CallHook(const StopEvent& ev, bool& restart_needed);
+  bool AdvanceTo(const Stop& s);
+  void Integrate();
+
+  const std::chrono::steady_clock::time_point wall_start_ = std::chrono::steady_clock::now();
+  const OdeSystem& system_;
+  const double t0_;
+  const std::span<const double> y0_, t_out_;
+  const CvodeOptions& options_;
+  const int n_;
+  OdeSolution sol_;
+  SimulationSummary& sum_ = sol_.summary;
+  JacobianStructure js_;
+  bool newton_ = false, banded_ = false, reduced_ = false;
+  int n_roots_ = 0;
+  RunData data_;
+  ContextPtr ctx_;
+  VectorPtr y_;
+  double* yd_ = nullptr;
+  MatrixPtr matrix_;
+  LinearSolverPtr linear_solver_;
+  NonlinearSolverPtr nonlinear_solver_;
+  CvodePtr mem_;
+  void* cv_ = nullptr;
+  Counters done_;  // counters of the runs before the last restart (CVodeReInit zeroes CVODE's)
+  std::vector<Stop> stops_;
+  size_t next_tstop_ = 0;  // index of the next stop where the integrator must halt exactly
+  std::vector<int> root_info_;
+};
+
+OdeSolution CvodeRun::Run() {
+  if (!Validate()) return Finish();
+  sol_.t.reserve(t_out_.size());
+  sol_.y.reserve(t_out_.size() * static_cast<size_t>(n_));
+  if (t_out_.empty()) return Finish();
+  if (!CreateSolver() || !ConfigureSolver()) return Finish();
+  stops_ = MergeStops(t0_, t_out_, options_.breakpoints);
+  root_info_.resize(static_cast<size_t>(n_roots_));
+  Integrate();
+  return Finish();
+}
+
+bool CvodeRun::Validate() {
+  const int n = n_;
+  if (n < 1) return Invalid(FieldError("system.size()", n, "must be >= 1"));
+  if (auto s = options_.Validate(n); !s.ok()) return Invalid(s.message());
+  if (static_cast<int>(y0_.size()) != n)
+    return Invalid(FieldError("y0.size()", y0_.size(),
+                              "must equal the number of states " + std::to_string(n)));
+  if (!std::isfinite(t0_)) return Invalid(FieldError("t0", t0_, "must be finite"));
   for (int i = 0; i < n; ++i)
-    if (!std::isfinite(y0[i]))
-      return invalid(FieldError("y0[" + std::to_string(i) + "]", y0[i], "must be finite"));
-  for (size_t k = 0; k < t_out.size(); ++k) {
-    if (!std::isfinite(t_out[k]))
-      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be finite"));
-    if (t_out[k] < t0)
-      return invalid(
-          FieldError("t_out[" + std::to_string(k) + "]", t_out[k], "must be >= t0 = " + Num(t0)));
-    if (k > 0 && !(t_out[k] > t_out[k - 1]))
-      return invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out[k],
+    if (!std::isfinite(y0_[i]))
+      return Invalid(FieldError("y0[" + std::to_string(i) + "]", y0_[i], "must be finite"));
+  for (size_t k = 0; k < t_out_.size(); ++k) {
+    if (!std::isfinite(t_out_[k]))
+      return Invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out_[k], "must be finite"));
+    if (t_out_[k] < t0_)
+      return Invalid(
+          FieldError("t_out[" + std::to_string(k) + "]", t_out_[k], "must be >= t0 = " + Num(t0_)));
+    if (k > 0 && !(t_out_[k] > t_out_[k - 1]))
+      return Invalid(FieldError("t_out[" + std::to_string(k) + "]", t_out_[k],
                                 "output times must be strictly increasing"));
   }
-  const JacobianStructure js = system.jacobian_structure();
-  const bool newton = options.iteration == NonlinearIteration::kNewton;
-  const bool banded = newton && (options.linear_solver == LinearSolverKind::kBanded ||
-                                 (options.linear_solver == LinearSolverKind::kAuto && js.banded));
-  const bool reduced = newton && !banded &&
-                       (options.linear_solver == LinearSolverKind::kReduced ||
-                        (options.linear_solver == LinearSolverKind::kAuto && js.kinematic > 0));
-  if (reduced && !(js.kinematic > 0 && 2 * js.kinematic <= n))
-    return invalid(FieldError("system kinematic rows", js.kinematic,
+  js_ = system_.jacobian_structure();
+  const JacobianStructure& js = js_;
+  newton_ = options_.iteration == NonlinearIteration::kNewton;
+  banded_ = newton_ && (options_.linear_solver == LinearSolverKind::kBanded ||
+                        (options_.linear_solver == LinearSolverKind::kAuto && js.banded));
+  reduced_ = newton_ && !banded_ &&
+             (options_.linear_solver == LinearSolverKind::kReduced ||
+              (options_.linear_solver == LinearSolverKind::kAuto && js.kinematic > 0));
+  if (reduced_ && !(js.kinematic > 0 && 2 * js.kinematic <= n))
+    return Invalid(FieldError("system kinematic rows", js.kinematic,
                               "must be in [1, n/2] for linear_solver = reduced"));
-  if (banded) {
-    if (!js.banded) return invalid("linear_solver = banded but the system declares no band");
+  if (banded_) {
+    if (!js.banded) return Invalid("linear_solver = banded but the system declares no band");
     if (js.upper < 0 || js.upper >= n || js.lower < 0 || js.lower >= n)
-      return invalid("system bandwidths (upper " + std::to_string(js.upper) + ", lower " +
+      return Invalid("system bandwidths (upper " + std::to_string(js.upper) + ", lower " +
                      std::to_string(js.lower) + ") must be in [0, n-1]");
   }
-  const int n_roots = system.num_roots();
-  if (n_roots < 0) return invalid(FieldError("system.num_roots()", n_roots, "must be >= 0"));
-  sol.t.reserve(t_out.size());
-  sol.y.reserve(t_out.size() * static_cast<size_t>(n));
-  if (t_out.empty()) return finish();
+  n_roots_ = system_.num_roots();
+  if (n_roots_ < 0) return Invalid(FieldError("system.num_roots()", n_roots_, "must be >= 0"));
+  return true;
+}
 
-  // ---- SUNDIALS objects (declared in creation order, destroyed in reverse) ----
-  RunData data;
-  data.system = &system;
-  data.n = n;
-  // Fills the summary with a solver failure; the caller then returns finish().
-  auto set_failure = [&](int flag, const std::string& what) {
-    sum.status = SimStatus::kSolverFailure;
-    sum.solver_flag = flag;
-    sum.message = what;
-    if (!data.cvode_message.empty()) sum.message += ": " + data.cvode_message;
-    if (!data.callback_note.empty())
-      sum.message += " (last callback problem: " + data.callback_note + ")";
-  };
-  auto fail = [&](int flag, const std::string& what) {
-    set_failure(flag, what);
-    return finish();
-  };
-
+// The context, the state vector and the CVODE memory with its right-hand side and tolerances.
+bool CvodeRun::CreateSolver() {
+  data_.system = &system_;
+  data_.n = n_;
   SUNContext raw_ctx = nullptr;
   if (SUNContext_Create(nullptr, &raw_ctx) != 0 || raw_ctx == nullptr)
-    return fail(-1, "SUNContext_Create failed");
-  ContextPtr ctx(raw_ctx);
-  VectorPtr y(N_VNew_Serial(n, ctx.get()));
-  if (!y) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
-  double* yd = N_VGetArrayPointer(y.get());
-  std::copy(y0.begin(), y0.end(), yd);
-  MatrixPtr matrix;
-  LinearSolverPtr linear_solver;
-  NonlinearSolverPtr nonlinear_solver;
-  CvodePtr mem(CVodeCreate(options.method == OdeMethod::kBdf ? CV_BDF : CV_ADAMS, ctx.get()));
-  if (!mem) return fail(CV_MEM_FAIL, "CVodeCreate failed");
-  void* cv = mem.get();
-  CVodeSetErrHandlerFn(cv, ErrorHandler, &data);
+    return Fail(-1, "SUNContext_Create failed");
+  ctx_.reset(raw_ctx);
+  y_.reset(N_VNew_Serial(n_, ctx_.get()));
+  if (!y_) return Fail(CV_MEM_FAIL, "N_VNew_Serial failed");
+  yd_ = N_VGetArrayPointer(y_.get());
+  std::copy(y0_.begin(), y0_.end(), yd_);
+  mem_.reset(CVodeCreate(options_.method == OdeMethod::kBdf ? CV_BDF : CV_ADAMS, ctx_.get()));
+  if (!mem_) return Fail(CV_MEM_FAIL, "CVodeCreate failed");
+  cv_ = mem_.get();
+  CVodeSetErrHandlerFn(cv_, ErrorHandler, &data_);
+  if (!Check(CVodeInit(cv_, RhsCallback, t0_, y_.get()), "CVodeInit")) return false;
+  if (!Check(CVodeSetUserData(cv_, &data_), "CVodeSetUserData")) return false;
+  if (options_.atol_vector.empty())
+    return Check(CVodeSStolerances(cv_, options_.rtol, options_.atol), "CVodeSStolerances");
+  VectorPtr abstol(N_VNew_Serial(n_, ctx_.get()));
+  if (!abstol) return Fail(CV_MEM_FAIL, "N_VNew_Serial failed");
+  std::copy(options_.atol_vector.begin(), options_.atol_vector.end(),
+            N_VGetArrayPointer(abstol.get()));
+  return Check(CVodeSVtolerances(cv_, options_.rtol, abstol.get()), "CVodeSVtolerances");
+}
 
-  auto check = [&](int flag, const char* call) -> bool {
-    if (flag >= 0) return true;
-    set_failure(flag, std::string(call) + " failed with " + FlagName(flag));
+// The (non)linear solvers, the step and order options and the root functions.
+bool CvodeRun::ConfigureSolver() {
+  void* cv = cv_;
+  const CvodeOptions& options = options_;
+  if (newton_) {
+    matrix_.reset(banded_ ? SUNBandMatrix(n_, js_.upper, js_.lower, ctx_.get())
+                          : SUNDenseMatrix(n_, n_, ctx_.get()));
+    if (!matrix_) return Fail(CV_MEM_FAIL, "SUNMatrix creation failed");
+    linear_solver_.reset(banded_    ? SUNLinSol_Band(y_.get(), matrix_.get(), ctx_.get())
+                         : reduced_ ? NewReducedSolver(n_, js_.kinematic, cv, ctx_.get())
+                                    : SUNLinSol_Dense(y_.get(), matrix_.get(), ctx_.get()));
+    if (!linear_solver_) return Fail(CV_MEM_FAIL, "SUNLinearSolver creation failed");
+    if (!Check(CVodeSetLinearSolver(cv, linear_solver_.get(), matrix_.get()),
+               "CVodeSetLinearSolver"))
+      return false;
+    if (js_.analytic && options.use_analytic_jacobian)
+      if (!Check(CVodeSetJacFn(cv, JacobianCallback), "CVodeSetJacFn")) return false;
+  } else {
+    nonlinear_solver_.reset(SUNNonlinSol_FixedPoint(y_.get(), 0, ctx_.get()));
+    if (!nonlinear_solver_) return Fail(CV_MEM_FAIL, "SUNNonlinSol_FixedPoint failed");
+    if (!Check(CVodeSetNonlinearSolver(cv, nonlinear_solver_.get()), "CVodeSetNonlinearSolver"))
+      return false;
+  }
+  if (options.max_step > 0 && !Check(CVodeSetMaxStep(cv, options.max_step), "CVodeSetMaxStep"))
     return false;
-  };
-  if (!check(CVodeInit(cv, RhsCallback, t0, y.get()), "CVodeInit")) return finish();
-  if (!check(CVodeSetUserData(cv, &data), "CVodeSetUserData")) return finish();
-  if (options.atol_vector.empty()) {
-    if (!check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances"))
-      return finish();
-  } else {
-    VectorPtr abstol(N_VNew_Serial(n, ctx.get()));
-    if (!abstol) return fail(CV_MEM_FAIL, "N_VNew_Serial failed");
-    std::copy(options.atol_vector.begin(), options.atol_vector.end(),
-              N_VGetArrayPointer(abstol.get()));
-    if (!check(CVodeSVtolerances(cv, options.rtol, abstol.get()), "CVodeSVtolerances"))
-      return finish();
-  }
-  if (newton) {
-    matrix.reset(banded ? SUNBandMatrix(n, js.upper, js.lower, ctx.get())
-                        : SUNDenseMatrix(n, n, ctx.get()));
-    if (!matrix) return fail(CV_MEM_FAIL, "SUNMatrix creation failed");
-    linear_solver.reset(banded    ? SUNLinSol_Band(y.get(), matrix.get(), ctx.get())
-                        : reduced ? NewReducedSolver(n, js.kinematic, cv, ctx.get())
-                                  : SUNLinSol_Dense(y.get(), matrix.get(), ctx.get()));
-    if (!linear_solver) return fail(CV_MEM_FAIL, "SUNLinearSolver creation failed");
-    if (!check(CVodeSetLinearSolver(cv, linear_solver.get(), matrix.get()), "CVodeSetLinearSolver"))
-      return finish();
-    if (js.analytic && options.use_analytic_jacobian)
-      if (!check(CVodeSetJacFn(cv, JacobianCallback), "CVodeSetJacFn")) return finish();
-  } else {
-    nonlinear_solver.reset(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()));
-    if (!nonlinear_solver) return fail(CV_MEM_FAIL, "SUNNonlinSol_FixedPoint failed");
-    if (!check(CVodeSetNonlinearSolver(cv, nonlinear_solver.get()), "CVodeSetNonlinearSolver"))
-      return finish();
-  }
-  if (options.max_step > 0 && !check(CVodeSetMaxStep(cv, options.max_step), "CVodeSetMaxStep"))
-    return finish();
   if (options.initial_step > 0 &&
-      !check(CVodeSetInitStep(cv, options.initial_step), "CVodeSetInitStep"))
-    return finish();
-  if (options.max_order > 0 && !check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd"))
-    return finish();
+      !Check(CVodeSetInitStep(cv, options.initial_step), "CVodeSetInitStep"))
+    return false;
+  if (options.max_order > 0 && !Check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd"))
+    return false;
   if (options.stability_limit_detection && options.method == OdeMethod::kBdf &&
-      !check(CVodeSetStabLimDet(cv, SUNTRUE), "CVodeSetStabLimDet"))
-    return finish();
-  if (n_roots > 0) {
-    if (!check(CVodeRootInit(cv, n_roots, RootCallback), "CVodeRootInit")) return finish();
+      !Check(CVodeSetStabLimDet(cv, SUNTRUE), "CVodeSetStabLimDet"))
+    return false;
+  if (n_roots_ > 0) {
+    if (!Check(CVodeRootInit(cv, n_roots_, RootCallback), "CVodeRootInit")) return false;
     CVodeSetNoInactiveRootWarn(cv);
   }
+  return true;
+}
 
-  // ---- counters survive restarts (CVodeReInit zeroes CVODE's own) ----
-  Counters done;
-  auto current = [&]() {
-    Counters c;
-    long v = 0;
-    if (CVodeGetNumSteps(cv, &v) == CV_SUCCESS) c.steps = v;
-    if (CVodeGetNumRhsEvals(cv, &v) == CV_SUCCESS) c.rhs = v;
-    if (newton) {
-      if (CVodeGetNumLinRhsEvals(cv, &v) == CV_SUCCESS) c.rhs += v;
-      if (CVodeGetNumJacEvals(cv, &v) == CV_SUCCESS) c.jac = v;
-    }
-    return c;
-  };
-  auto publish = [&]() {
-    const Counters c = current();
-    sum.steps = done.steps + c.steps;
-    sum.rhs_calls = done.rhs + c.rhs;
-    sum.jacobian_calls = done.jac + c.jac;
-  };
+// CVODE's counters since the last (re)start.
+Counters CvodeRun::Current() const {
+  Counters c;
+  long v = 0;
+  if (CVodeGetNumSteps(cv_, &v) == CV_SUCCESS) c.steps = v;
+  if (CVodeGetNumRhsEvals(cv_, &v) == CV_SUCCESS) c.rhs = v;
+  if (newton_) {
+    if (CVodeGetNumLinRhsEvals(cv_, &v) == CV_SUCCESS) c.rhs += v;
+    if (CVodeGetNumJacEvals(cv_, &v) == CV_SUCCESS) c.jac = v;
+  }
+  return c;
+}
 
-  const std::vector<Stop> stops = MergeStops(t0, t_out, options.breakpoints);
-  auto stopping = [&](const Stop& s) {
-    return s.breakpoint || (options.restart_at_outputs && s.first_output >= 0);
-  };
-  size_t next_tstop = 0;  // index of the next stop where the integrator must halt exactly
-  auto arm_tstop = [&](double t_now) -> bool {
-    while (next_tstop < stops.size() &&
-           !(stops[next_tstop].t > t_now && stopping(stops[next_tstop])))
-      ++next_tstop;
-    if (next_tstop < stops.size())
-      return check(CVodeSetStopTime(cv, stops[next_tstop].t), "CVodeSetStopTime");
-    // SUNDIALS 6.4 cannot clear a stop time, and one reached by a CV_SUCCESS return (not
-    // CV_TSTOP_RETURN) stays armed: move it beyond the last output, where it never acts.
-    const double t_end = stops.back().t;
-    return check(CVodeSetStopTime(cv, t_end + std::max(1.0, t_end - t0)), "CVodeSetStopTime");
-  };
-  auto restart = [&](double t_now) -> bool {
-    const Counters c = current();
-    done.steps += c.steps;
-    done.rhs += c.rhs;
-    done.jac += c.jac;
-    if (!check(CVodeReInit(cv, t_now, y.get()), "CVodeReInit")) return false;
-    return arm_tstop(t_now);
-  };
-  auto record = [&](const Stop& s) -> bool {
-    for (int k = s.first_output; k >= 0 && k <= s.last_output; ++k) {
-      sol.t.push_back(t_out[k]);
-      sol.y.insert(sol.y.end(), yd, yd + n);
-    }
-    for (int i = 0; i < n && s.first_output >= 0; ++i) {
-      if (!std::isfinite(yd[i])) {
-        sum.status = SimStatus::kNonFinite;
-        sum.message = "state " + std::to_string(i) + " non-finite at t = " + Num(s.t);
-        return false;
-      }
-    }
-    return true;
-  };
-  std::vector<int> root_info(static_cast<size_t>(n_roots));
-  // Calls the hook; returns false (with the summary filled) if it asks to fail.
-  auto call_hook = [&](StopEvent ev, bool& restart_needed) -> bool {
-    if (!options.on_stop) return true;
-    StopAction a;
-    try {
-      a = options.on_stop(ev, std::span<double>(yd, static_cast<size_t>(n)));
-    } catch (const std::exception& e) {
-      data.Note(std::string("exception in discrete-update hook: ") + e.what());
-      a = StopAction::kFail;
-    }
-    if (a == StopAction::kFail) {
-      set_failure(CV_ILL_INPUT, "discrete-update hook stopped the integration at t = " + Num(ev.t));
+bool CvodeRun::ArmTstop(double t_now) {
+  while (next_tstop_ < stops_.size() &&
+         !(stops_[next_tstop_].t > t_now && Stopping(stops_[next_tstop_])))
+    ++next_tstop_;
+  if (next_tstop_ < stops_.size())
+    return Check(CVodeSetStopTime(cv_, stops_[next_tstop_].t), "CVodeSetStopTime");
+  // SUNDIALS 6.4 cannot clear a stop time, and one reached by a CV_SUCCESS return (not
+  // CV_TSTOP_RETURN) stays armed: move it beyond the last output, where it never acts.
+  const double t_end = stops_.back().t;
+  return Check(CVodeSetStopTime(cv_, t_end + std::max(1.0, t_end - t0_)), "CVodeSetStopTime");
+}
+
+bool CvodeRun::Restart(double t_now) {
+  const Counters c = Current();
+  done_.steps += c.steps;
+  done_.rhs += c.rhs;
+  done_.jac += c.jac;
+  if (!Check(CVodeReInit(cv_, t_now, y_.get()), "CVodeReInit")) return false;
+  return ArmTstop(t_now);
+}
+
+// Appends the outputs of stop s; false (with the summary filled) if the state is non-finite.
+bool CvodeRun::Record(const Stop& s) {
+  for (int k = s.first_output; k >= 0 && k <= s.last_output; ++k) {
+    sol_.t.push_back(t_out_[k]);
+    sol_.y.insert(sol_.y.end(), yd_, yd_ + n_);
+  }
+  for (int i = 0; i < n_ && s.first_output >= 0; ++i) {
+    if (!std::isfinite(yd_[i])) {
+      sum_.status = SimStatus::kNonFinite;
+      sum_.message = "state " + std::to_string(i) + " non-finite at t = " + Num(s.t);
       return false;
     }
-    if (a == StopAction::kRestart) restart_needed = true;
-    return true;
-  };
+  }
+  return true;
+}
 
-  if (!arm_tstop(t0)) return finish();
-  int flag = CV_SUCCESS;
-  for (const Stop& s : stops) {
-    if (s.t > t0) {
-      for (;;) {
-        publish();
-        const long remaining =
-            options.max_steps - sum.steps;  // CVODE's mxstep counts per CVode() call
-        if (remaining <= 0) {
-          flag = CV_TOO_MUCH_WORK;
-          sum.solver_flag = flag;
-          double tc = t0;
-          CVodeGetCurrentTime(cv, &tc);
-          return fail(flag, "CVODE CV_TOO_MUCH_WORK at t = " + Num(tc) +
-                                ": step budget max_steps = " + std::to_string(options.max_steps) +
-                                " used up before t = " + Num(s.t));
-        }
-        CVodeSetMaxNumSteps(cv, remaining);
-        double tret = s.t;
-        flag = CVode(cv, s.t, y.get(), &tret, CV_NORMAL);
-        sum.solver_flag = flag;
-        if (flag < 0) {
-          publish();
-          double tc = tret;
-          CVodeGetCurrentTime(cv, &tc);
-          std::string what = "CVODE " + FlagName(flag) + " at t = " + Num(tc);
-          if (flag == CV_TOO_MUCH_WORK)
-            what += " (step budget max_steps = " + std::to_string(options.max_steps) + ")";
-          return fail(flag, what);
-        }
-        if (flag != CV_ROOT_RETURN) break;
-        // A root function crossed zero at tret < s.t: discrete update, maybe restart, then go on.
-        CVodeGetRootInfo(cv, root_info.data());
-        StopEvent ev;
-        ev.t = tret;
-        ev.roots = root_info;
-        bool need_restart = false;
-        if (!call_hook(ev, need_restart)) return finish();
-        if (need_restart && !restart(tret)) return finish();
-        if (s.t - tret <=
-            64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(s.t)))
-          break;
-      }
+// Calls the hook; returns false (with the summary filled) if it asks to fail.
+bool CvodeRun::CallHook(const StopEvent& ev, bool& restart_needed) {
+  if (!options_.on_stop) return true;
+  StopAction a;
+  try {
+    a = options_.on_stop(ev, std::span<double>(yd_, static_cast<size_t>(n_)));
+  } catch (const std::exception& e) {
+    data_.Note(std::string("exception in discrete-update hook: ") + e.what());
+    a = StopAction::kFail;
+  }
+  if (a == StopAction::kFail) {
+    SetFailure(CV_ILL_INPUT, "discrete-update hook stopped the integration at t = " + Num(ev.t));
+    return false;
+  }
+  if (a == StopAction::kRestart) restart_needed = true;
+  return true;
+}
+
+// Integrates up to stop s (s.t > t0), through the roots met on the way.
+bool CvodeRun::AdvanceTo(const Stop& s) {
+  for (;;) {
+    Publish();
+    const long remaining = options_.max_steps - sum_.steps;  // CVODE's mxstep counts per CVode()
+    if (remaining <= 0) {
+      const int flag = CV_TOO_MUCH_WORK;
+      sum_.solver_flag = flag;
+      double tc = t0_;
+      CVodeGetCurrentTime(cv_, &tc);
+      return Fail(flag, "CVODE CV_TOO_MUCH_WORK at t = " + Num(tc) + ": step budget max_steps = " +
+                            std::to_string(options_.max_steps) + " used up before t = " + Num(s.t));
     }
-    if (!record(s)) {
-      publish();
-      return finish();
+    CVodeSetMaxNumSteps(cv_, remaining);
+    double tret = s.t;
+    const int flag = CVode(cv_, s.t, y_.get(), &tret, CV_NORMAL);
+    sum_.solver_flag = flag;
+    if (flag < 0) {
+      Publish();
+      double tc = tret;
+      CVodeGetCurrentTime(cv_, &tc);
+      std::string what = "CVODE " + FlagName(flag) + " at t = " + Num(tc);
+      if (flag == CV_TOO_MUCH_WORK)
+        what += " (step budget max_steps = " + std::to_string(options_.max_steps) + ")";
+      return Fail(flag, what);
+    }
+    if (flag != CV_ROOT_RETURN) return true;
+    // A root function crossed zero at tret < s.t: discrete update, maybe restart, then go on.
+    CVodeGetRootInfo(cv_, root_info_.data());
+    StopEvent ev;
+    ev.t = tret;
+    ev.roots = root_info_;
+    bool need_restart = false;
+    if (!CallHook(ev, need_restart)) return false;
+    if (need_restart && !Restart(tret)) return false;
+    if (s.t - tret <= 64 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(s.t)))
+      return true;
+  }
+}
+
+// Goes through the stops: integrates to each, records its outputs, calls the hook, restarts.
+void CvodeRun::Integrate() {
+  if (!ArmTstop(t0_)) return;
+  for (const Stop& s : stops_) {
+    if (s.t > t0_ && !AdvanceTo(s)) return;
+    if (!Record(s)) {
+      Publish();
+      return;
     }
     StopEvent ev;
     ev.t = s.t;
     ev.output_index = s.last_output;
     ev.breakpoint = s.breakpoint;
-    bool need_restart = s.t > t0 && stopping(s);
-    if (!call_hook(ev, need_restart)) return finish();
-    if (need_restart && &s != &stops.back() && !restart(s.t)) return finish();
+    bool need_restart = s.t > t0_ && Stopping(s);
+    if (!CallHook(ev, need_restart)) return;
+    if (need_restart && &s != &stops_.back() && !Restart(s.t)) return;
   }
-  publish();
-  return finish();
+  Publish();
+}
+
+OdeSolution IntegrateOnce(const OdeSystem& system, double t0, std::span<const double> y0,
+                          std::span<const double> t_out, const CvodeOptions& options) {
+  return CvodeRun(system, t0, y0, t_out, options).Run();
 }
 
 }  // namespace

@@ -31,10 +31,6 @@ ALLOWED = [
      "the modal model's hot loop (three passes per chunk of 256 steps): split only when "
      "bench_fitness BM_FitnessModal and bench_record_fit show no loss in pair runs; not split "
      "yet (issue 38)"),
-    ("model/cvode.cc", "IntegrateOnce",
-     "the CVODE integration (setup, stops, restarts, hooks sharing one solver's state): split "
-     "only when bench_fitness and bench_record_fit show no loss in pair runs; not split yet "
-     "(issue 38)"),
 ]
 
 FUNCTION_QUALIFIERS = {"const", "override", "final", "noexcept", "mutable", "try", "volatile", "&", "&&"}
