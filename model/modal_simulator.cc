@@ -561,7 +561,7 @@ struct SineBranch {
   double t_start = 0.0, t_end = std::numeric_limits<double>::infinity(), u_cross = 0.0;
   bool end_is_crossing = false;
 
-  void ComputeEnd() {
+  [[gnu::always_inline]] void ComputeEnd() {
     if (!hyst) return;
     const double t_rev = (0.25 + 0.5 * stretch) / f;
     t_end = t_rev;
@@ -578,7 +578,7 @@ struct SineBranch {
       }
     }
   }
-  void Advance() {
+  [[gnu::always_inline]] void Advance() {
     if (end_is_crossing) {
       br = StartBranch(bw, u_cross, 0.0, br.s);
     } else {
@@ -590,7 +590,7 @@ struct SineBranch {
     ComputeEnd();
   }
   // Exact u, u̇, ü at the current branch end.
-  void UAtEnd(double* u, double* ud, double* udd) const {
+  [[gnu::always_inline]] void UAtEnd(double* u, double* ud, double* udd) const {
     if (end_is_crossing) {
       *u = u_cross;
       *ud = V * om * std::cos(om * t_end);
@@ -601,7 +601,7 @@ struct SineBranch {
       *udd = -om * om * br.s * V;
     }
   }
-  ZData Eval(double u, double ud, double udd) const {
+  [[gnu::always_inline]] ZData Eval(double u, double ud, double udd) const {
     return hyst ? EvalZ(br, u, ud, udd) : ZData{};
   }
 };
@@ -643,8 +643,9 @@ struct ModalSimulator::SineChunks {
   double rpow_re[kBlock], rpow_im[kBlock];
   bool jump_at_start = false;  // d⁻ ≠ d⁺ at the chunk's first node
 
-  SineChunks(const ModalSimulator& s, ModalWorkspace& w, int m_, double hs_, double V_, double om_,
-             double htip_re_, double htip_im_, bool hyst_)
+  [[gnu::always_inline]] SineChunks(const ModalSimulator& s, ModalWorkspace& w, int m_, double hs_,
+                                    double V_, double om_, double htip_re_, double htip_im_,
+                                    bool hyst_)
       : sim(s),
         ws(w),
         m(m_),
@@ -687,10 +688,10 @@ struct ModalSimulator::SineChunks {
   }
 
   // The left limit at node j.
-  ZData Left(long j) const { return ZData{zz[j], zzd[j], zzdd[j]}; }
+  [[gnu::always_inline]] ZData Left(long j) const { return ZData{zz[j], zzd[j], zzdd[j]}; }
 
   // Pass 1a: the drive at the nodes 1 … len (global node c0 + j), block by block.
-  void Drive(long c0, long len) {
+  [[gnu::always_inline]] void Drive(long c0, long len) {
     for (long q = 0; q * kBlock <= len; ++q) {
       const long b = c0 + q * kBlock;  // a multiple of 64: e^{iΩ t_b} exactly
       const double tb = static_cast<double>(b) * hs;
@@ -704,7 +705,7 @@ struct ModalSimulator::SineChunks {
   // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
   // make it special (sub-steps, z data now); on a node its data jump there. Between them the
   // nodes' left limits lie on one branch: a segment.
-  void Breakpoints(SineBranch& sb, long c0, long len) {
+  [[gnu::always_inline]] void Breakpoints(SineBranch& sb, long c0, long len) {
     std::vector<Segment>& segments = ws.segments_;
     ws.special_.clear();
     ws.inner_.clear();
@@ -764,7 +765,7 @@ struct ModalSimulator::SineChunks {
 
   // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the
   // node.
-  void NodeZ(long len) {
+  [[gnu::always_inline]] void NodeZ(long len) {
     if (hyst) {
       for (const Segment& sg : ws.segments_) {
         const BoucWenBranch& b = sg.branch;
@@ -789,7 +790,7 @@ struct ModalSimulator::SineChunks {
 
   // Pass 2: the modes over the chunk's steps, sub-steps in the special ones; returns the number
   // of breakpoints inside steps (each one more sub-step).
-  long Modes(long len) {
+  [[gnu::always_inline]] long Modes(long len) {
     const int np = sim.npad_;
     double* x0 = ws.x0_.data();
     double* x1 = ws.x1_.data();
@@ -834,8 +835,9 @@ struct ModalSimulator::SineChunks {
   // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash
   // (BacklashRun) and the sink. False (the summary says why) at a non-finite w_tip.
   template <class Sink>
-  bool Outputs(long c0, long len, double fs, double inv_len, const BacklashParams& bl, double& y,
-               size_t& next_out, Sink& sink, SimulationSummary& summary) {
+  [[gnu::always_inline]] bool Outputs(long c0, long len, double fs, double inv_len,
+                                      const BacklashParams& bl, double& y, size_t& next_out,
+                                      Sink& sink, SimulationSummary& summary) {
     long n_o = 0;
     if (m == 1) {  // every node is an output
       for (long q = 0; q < len; ++q) {
@@ -872,7 +874,7 @@ struct ModalSimulator::SineChunks {
   }
 
   // The chunk's last node is the next chunk's node 0.
-  void Carry(long len) {
+  [[gnu::always_inline]] void Carry(long len) {
     zz[0] = zz[len];
     zzd[0] = zzd[len];
     zzdd[0] = zzdd[len];
