@@ -616,6 +616,8 @@ struct SineBranch {
 //  2. the modal recursion on x̄ = x − P1 d⁻: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺),
 //     with sub-steps on the full state x where a step holds breakpoints (Modes);
 //  3. outputs: w_tip, θ, the backlash (Outputs).
+// Its functions (and SineBranch's) are always inlined: RunSinusoid compiles to the one loop it was
+// before the split (pair runs of bench_fitness BM_FitnessModal: no loss against that one).
 struct ModalSimulator::SineChunks {
   static constexpr long kChunk = 256;
   // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of
