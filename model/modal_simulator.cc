@@ -548,6 +548,342 @@ static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached
   }
 }
 
+namespace {
+
+// The Bouc–Wen branch of a sinusoid run and its end (the next breakpoint): stretch n of the
+// sinusoid runs between the reversals at t = (1/4 + (n−1)/2)/f and (1/4 + n/2)/f, with s = (−1)^n.
+struct SineBranch {
+  BoucWenParams bw;
+  bool hyst;
+  double f, V, om;
+  BoucWenBranch br = StartBranch(bw, 0.0, 0.0, 1.0);
+  int stretch = 0;
+  double t_start = 0.0, t_end = std::numeric_limits<double>::infinity(), u_cross = 0.0;
+  bool end_is_crossing = false;
+
+  [[gnu::always_inline]] void ComputeEnd() {
+    if (!hyst) return;
+    const double t_rev = (0.25 + 0.5 * stretch) / f;
+    t_end = t_rev;
+    end_is_crossing = false;
+    double uc;
+    if (br.ZeroCrossing(&uc) && ((br.s > 0 && uc < V) || (br.s < 0 && uc > -V))) {
+      const double a = std::asin(std::clamp(uc / V, -1.0, 1.0));
+      double tc = (stretch * std::numbers::pi + ((stretch & 1) ? -a : a)) / om;
+      tc = std::clamp(tc, t_start, t_rev);
+      if (tc < t_rev) {
+        t_end = tc;
+        end_is_crossing = true;
+        u_cross = uc;
+      }
+    }
+  }
+  [[gnu::always_inline]] void Advance() {
+    if (end_is_crossing) {
+      br = StartBranch(bw, u_cross, 0.0, br.s);
+    } else {
+      const double u_rev = br.s * V;
+      br = StartBranch(bw, u_rev, br.Z(u_rev), -br.s);
+      ++stretch;
+    }
+    t_start = t_end;
+    ComputeEnd();
+  }
+  // Exact u, u̇, ü at the current branch end.
+  [[gnu::always_inline]] void UAtEnd(double* u, double* ud, double* udd) const {
+    if (end_is_crossing) {
+      *u = u_cross;
+      *ud = V * om * std::cos(om * t_end);
+      *udd = -om * om * u_cross;
+    } else {
+      *u = br.s * V;
+      *ud = 0.0;
+      *udd = -om * om * br.s * V;
+    }
+  }
+  [[gnu::always_inline]] ZData Eval(double u, double ud, double udd) const {
+    return hyst ? EvalZ(br, u, ud, udd) : ZData{};
+  }
+};
+
+}  // namespace
+
+// RunSinusoid's chunk loop (a member type, so that it reads the workspace): the buffers of one
+// chunk of kChunk steps in ws, and the passes over them, each with a short dependency chain:
+//  1. z: the hold data at the nodes (left and right limits) and the breakpoints inside steps,
+//     which depend on u alone, plus the state-free part of w_tip at the output nodes (Drive,
+//     Breakpoints, NodeZ);
+//  2. the modal recursion on x̄ = x − P1 d⁻: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺),
+//     with sub-steps on the full state x where a step holds breakpoints (Modes);
+//  3. outputs: w_tip, θ, the backlash (Outputs).
+// Its functions (and SineBranch's) are always inlined: RunSinusoid compiles to the one loop it was
+// before the split (pair runs of bench_fitness BM_FitnessModal: no loss against that one).
+struct ModalSimulator::SineChunks {
+  static constexpr long kChunk = 256;
+  // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of
+  // the one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that
+  // the nodes of a chunk are independent of each other and their drive is one vectorised loop.
+  static constexpr long kBlock = 64;
+  static_assert(kChunk % kBlock == 0);
+  using Segment = ModalWorkspace::SegmentData;  // nodes [from, to) whose left limits share a branch
+
+  const ModalSimulator& sim;
+  ModalWorkspace& ws;
+  const int m;  // internal steps per sample
+  const double hs, V, om, htip_re, htip_im;
+  const bool hyst;
+  ZData* zr;  // right limits; the left limits at the nodes are (zz, zzd, zzdd) themselves, node 0
+              // of a chunk carries the last one
+  double *xs, *base;
+  double *wo, *tho, *yo;  // pass 3: w, θ, y at the outputs
+  long* io;               //         and their nodes
+  double *nu, *nud, *nudd, *nre, *nim;
+  double *zz, *zzd, *zzdd;
+  const double eps;
+  const StepCoeffs coeffs;
+  const double t1c[3];
+  double rpow_re[kBlock], rpow_im[kBlock];
+  bool jump_at_start = false;  // d⁻ ≠ d⁺ at the chunk's first node
+
+  [[gnu::always_inline]] SineChunks(const ModalSimulator& s, ModalWorkspace& w, int m_, double hs_,
+                                    double V_, double om_, double htip_re_, double htip_im_,
+                                    bool hyst_)
+      : sim(s),
+        ws(w),
+        m(m_),
+        hs(hs_),
+        V(V_),
+        om(om_),
+        htip_re(htip_re_),
+        htip_im(htip_im_),
+        hyst(hyst_),
+        eps(kNodeRelTol * hs_),
+        coeffs{w.e11_.data(),
+               w.e12_.data(),
+               w.e21_.data(),
+               w.e22_.data(),
+               {w.g_[0].data(), w.g_[1].data(), w.g_[2].data(), w.g_[3].data(), w.g_[4].data(),
+                w.g_[5].data()}},
+        t1c{w.t1_[0], hs_ * w.t1_[1], hs_ * hs_ * w.t1_[2]} {
+    ws.zr_.resize(kChunk + 1);
+    ws.xs_.resize(kChunk + 1);
+    ws.base_.resize(kChunk + 1);
+    for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_,
+                    &ws.wo_, &ws.tho_, &ws.yo_})
+      v->resize(kChunk + 1);
+    ws.io_.resize(kChunk + 1);
+    zr = ws.zr_.data();
+    xs = ws.xs_.data();
+    base = ws.base_.data();
+    wo = ws.wo_.data(), tho = ws.tho_.data(), yo = ws.yo_.data();
+    io = ws.io_.data();
+    nu = ws.nu_.data(), nud = ws.nud_.data(), nudd = ws.nudd_.data(), nre = ws.nre_.data(),
+    nim = ws.nim_.data();
+    zz = ws.zz_.data(), zzd = ws.zzd_.data(), zzdd = ws.zzdd_.data();
+    const double rot_re = std::cos(om * hs), rot_im = std::sin(om * hs);
+    rpow_re[0] = 1.0;
+    rpow_im[0] = 0.0;
+    for (long r = 1; r < kBlock; ++r) {
+      rpow_re[r] = rpow_re[r - 1] * rot_re - rpow_im[r - 1] * rot_im;
+      rpow_im[r] = rpow_re[r - 1] * rot_im + rpow_im[r - 1] * rot_re;
+    }
+  }
+
+  // The left limit at node j.
+  [[gnu::always_inline]] ZData Left(long j) const { return ZData{zz[j], zzd[j], zzdd[j]}; }
+
+  // Pass 1a: the drive at the nodes 1 … len (global node c0 + j), block by block.
+  [[gnu::always_inline]] void Drive(long c0, long len) {
+    for (long q = 0; q * kBlock <= len; ++q) {
+      const long b = c0 + q * kBlock;  // a multiple of 64: e^{iΩ t_b} exactly
+      const double tb = static_cast<double>(b) * hs;
+      const double ere = b == 0 ? 1.0 : std::cos(om * tb), eim = b == 0 ? 0.0 : std::sin(om * tb);
+      const long j0 = std::max<long>(1, q * kBlock), j1 = std::min(len, q * kBlock + kBlock - 1);
+      DriveNodes(j0, j1 + 1, q * kBlock, rpow_re, rpow_im, ere, eim, V, om, nre, nim, nu, nud,
+                 nudd);
+    }
+  }
+
+  // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
+  // make it special (sub-steps, z data now); on a node its data jump there. Between them the
+  // nodes' left limits lie on one branch: a segment.
+  [[gnu::always_inline]] void Breakpoints(SineBranch& sb, long c0, long len) {
+    std::vector<Segment>& segments = ws.segments_;
+    ws.special_.clear();
+    ws.inner_.clear();
+    ws.jumps_.clear();
+    segments.clear();
+    BoucWenBranch cur = sb.br;  // the branch of the next node's left limit
+    long seg_from = 1;
+    auto close_segment = [&](long to) {
+      if (to > seg_from) segments.push_back({seg_from, to, cur});
+      seg_from = to;
+    };
+    bool jump_at_node = jump_at_start;
+    for (long i = 0; i < len; ++i) {
+      if (!jump_at_node) {
+        // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then
+        // to the first that the test below passes (it is monotone in i).
+        const double kf = std::floor((sb.t_end - eps) / hs) - 2.0;
+        if (kf > static_cast<double>(c0 + i))
+          i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len
+                                                                       : static_cast<long>(kf) - c0;
+        while (i < len && !(sb.t_end <= static_cast<double>(c0 + i + 1) * hs + eps)) ++i;
+        if (i == len) break;
+      }
+      const long k = c0 + i;
+      const double t1 = static_cast<double>(k + 1) * hs;
+      const int inner_begin = static_cast<int>(ws.inner_.size());
+      while (sb.t_end < t1 - eps) {
+        double ub, udb, uddb;
+        sb.UAtEnd(&ub, &udb, &uddb);
+        const double tb = sb.t_end;
+        const ZData left = sb.Eval(ub, udb, uddb);
+        sb.Advance();
+        ws.inner_.push_back({tb - static_cast<double>(k) * hs, left, sb.Eval(ub, udb, uddb)});
+      }
+      const int inner_end = static_cast<int>(ws.inner_.size());
+      if (jump_at_node || inner_end > inner_begin)
+        ws.special_.push_back({i, inner_begin, inner_end});
+      if (inner_end > inner_begin) {  // node i + 1 is on the new branch
+        close_segment(i + 1);
+        cur = sb.br;
+      }
+      jump_at_node = false;
+      while (sb.t_end <= t1 + eps) {  // breakpoints on the node: the data jump there
+        sb.Advance();
+        jump_at_node = true;
+      }
+      if (jump_at_node) {  // node i + 1's left limit stays on `cur`, its right one and the next on
+                           // br
+        ws.jumps_.emplace_back(i + 1, sb.br);
+        close_segment(i + 2);
+        cur = sb.br;
+      }
+    }
+    close_segment(len + 1);
+    jump_at_start = jump_at_node;
+  }
+
+  // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the
+  // node.
+  [[gnu::always_inline]] void NodeZ(long len) {
+    if (hyst) {
+      for (const Segment& sg : ws.segments_) {
+        const BoucWenBranch& b = sg.branch;
+        if (!ZBatch(sg.from, sg.to, nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd,
+                    zzdd)) {
+          for (long j = sg.from; j < sg.to; ++j) {  // arguments beyond ±700: as EvalZ has it
+            const ZData d = EvalZ(b, nu[j], nud[j], nudd[j]);
+            zz[j] = d.z;
+            zzd[j] = d.zd;
+            zzdd[j] = d.zdd;
+          }
+        }
+      }
+    } else {
+      std::fill(zz + 1, zz + len + 1, 0.0);
+      std::fill(zzd + 1, zzd + len + 1, 0.0);
+      std::fill(zzdd + 1, zzdd + len + 1, 0.0);
+    }
+    NodeData(len, zz, zzd, zzdd, nre, nim, t1c, V, htip_re, htip_im, zr, base);
+    for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
+  }
+
+  // Pass 2: the modes over the chunk's steps, sub-steps in the special ones; returns the number
+  // of breakpoints inside steps (each one more sub-step).
+  [[gnu::always_inline]] long Modes(long len) {
+    const int np = sim.npad_;
+    double* x0 = ws.x0_.data();
+    double* x1 = ws.x1_.data();
+    long extra = 0;
+    long i = 0;
+    for (const ModalWorkspace::Special& sp : ws.special_) {
+      if (i < sp.step) {
+        StepRun(i, sp.step, np, x0, x1, coeffs, zr, hs, xs);
+        i = sp.step;
+      }
+      if (sp.inner_begin == sp.inner_end) {
+        // Data jump at the node, no breakpoint inside: one regular step plus the correction.
+        const ZData a = Left(i);
+        const ZData& b = zr[i];
+        StepRun(i, i + 1, np, x0, x1, coeffs, zr, hs, xs);
+        AddMatVec(np, x0, x1, ws.ep1_, a.z - b.z, hs * (a.zd - b.zd), hs * hs * (a.zdd - b.zdd));
+      } else {
+        // Breakpoints inside: back to the full state, sub-steps between them, then to x̄ again.
+        AddMatVec(np, x0, x1, ws.p1_, Left(i).z, hs * Left(i).zd, hs * hs * Left(i).zdd);
+        double scur = 0.0;
+        ZData dcur = zr[i];
+        for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
+          const ModalWorkspace::Inner& in = ws.inner_[e];
+          GeneralSubstep(sim.n_, ws.poles_.data(), nullptr, ws.sub_, sim.wu_.data(), sim.wz_.data(),
+                         x0, x1, in.offset - scur, dcur, in.left, 0.0, 0.0);
+          dcur = in.right;
+          scur = in.offset;
+        }
+        GeneralSubstep(sim.n_, ws.poles_.data(), nullptr, ws.sub_, sim.wu_.data(), sim.wz_.data(),
+                       x0, x1, hs - scur, dcur, Left(i + 1), 0.0, 0.0);
+        AddMatVec(np, x0, x1, ws.p1_, -Left(i + 1).z, -hs * Left(i + 1).zd,
+                  -hs * hs * Left(i + 1).zdd);
+        extra += sp.inner_end - sp.inner_begin;
+      }
+      xs[i + 1] = SumModes(np, x0);
+      ++i;
+    }
+    if (i < len) StepRun(i, len, np, x0, x1, coeffs, zr, hs, xs);
+    return extra;
+  }
+
+  // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash
+  // (BacklashRun) and the sink. False (the summary says why) at a non-finite w_tip.
+  template <class Sink>
+  [[gnu::always_inline]] bool Outputs(long c0, long len, double fs, double inv_len,
+                                      const BacklashParams& bl, double& y, size_t& next_out,
+                                      Sink& sink, SimulationSummary& summary) {
+    long n_o = 0;
+    if (m == 1) {  // every node is an output
+      for (long q = 0; q < len; ++q) {
+        io[q] = q + 1;
+        wo[q] = xs[q + 1] + base[q + 1];
+      }
+      n_o = len;
+    } else {
+      for (long i3 = 1; i3 <= len; ++i3) {
+        if ((c0 + i3) % m != 0) continue;
+        io[n_o] = i3;
+        wo[n_o++] = xs[i3] + base[i3];
+      }
+    }
+    long n_ok = n_o;  // outputs before the first non-finite w (DegreesBatch's test fails on those)
+    if (!DegreesBatch(n_o, wo, inv_len, tho)) {
+      n_ok = 0;
+      while (n_ok < n_o && std::isfinite(wo[n_ok])) ++n_ok;
+      for (long q = 0; q < n_ok; ++q)
+        if (!(std::abs(wo[q] * inv_len) < 0.125)) tho[q] = Degrees(wo[q], inv_len);
+    }
+    y = BacklashRun(bl, tho, yo, n_ok, y);
+    for (long q = 0; q < n_ok; ++q, ++next_out) {
+      const long i3 = io[q];
+      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], Left(i3).z, wo[q], tho[q],
+                yo[q]);
+    }
+    if (n_ok < n_o) {
+      summary.status = SimStatus::kNonFinite;
+      summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
+      return false;
+    }
+    return true;
+  }
+
+  // The chunk's last node is the next chunk's node 0.
+  [[gnu::always_inline]] void Carry(long len) {
+    zz[0] = zz[len];
+    zzd[0] = zzd[len];
+    zzdd[0] = zzdd[len];
+    zr[0] = zr[len];
+  }
+};
+
 template <class Sink>
 void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& drive,
                                  ModalWorkspace& ws, Sink& sink, SimulationSummary& summary) const {
@@ -584,98 +920,17 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     htip_im += wu_[i] * hi;
   }
 
-  // Bouc–Wen branch and its end (the next breakpoint): stretch n of the sinusoid runs between the
-  // reversals at t = (1/4 + (n−1)/2)/f and (1/4 + n/2)/f, with s = (−1)^n.
-  BoucWenBranch br = StartBranch(bw, 0.0, 0.0, 1.0);
-  int stretch = 0;
-  double t_start = 0.0, t_end = std::numeric_limits<double>::infinity(), u_cross = 0.0;
-  bool end_is_crossing = false;
-  auto compute_end = [&]() {
-    if (!hyst) return;
-    const double t_rev = (0.25 + 0.5 * stretch) / f;
-    t_end = t_rev;
-    end_is_crossing = false;
-    double uc;
-    if (br.ZeroCrossing(&uc) && ((br.s > 0 && uc < V) || (br.s < 0 && uc > -V))) {
-      const double a = std::asin(std::clamp(uc / V, -1.0, 1.0));
-      double tc = (stretch * std::numbers::pi + ((stretch & 1) ? -a : a)) / om;
-      tc = std::clamp(tc, t_start, t_rev);
-      if (tc < t_rev) {
-        t_end = tc;
-        end_is_crossing = true;
-        u_cross = uc;
-      }
-    }
-  };
-  auto advance = [&]() {
-    if (end_is_crossing) {
-      br = StartBranch(bw, u_cross, 0.0, br.s);
-    } else {
-      const double u_rev = br.s * V;
-      br = StartBranch(bw, u_rev, br.Z(u_rev), -br.s);
-      ++stretch;
-    }
-    t_start = t_end;
-    compute_end();
-  };
-  // Exact u, u̇, ü at the current branch end.
-  auto u_at_end = [&](double* u, double* ud, double* udd) {
-    if (end_is_crossing) {
-      *u = u_cross;
-      *ud = V * om * std::cos(om * t_end);
-      *udd = -om * om * u_cross;
-    } else {
-      *u = br.s * V;
-      *ud = 0.0;
-      *udd = -om * om * br.s * V;
-    }
-  };
-  auto eval = [&](double u, double ud, double udd) {
-    return hyst ? EvalZ(br, u, ud, udd) : ZData{};
-  };
-  compute_end();
+  SineBranch sb{bw, hyst, f, V, om};
+  sb.ComputeEnd();
 
-  // The run goes chunk by chunk through three passes that each keep a short dependency chain:
-  //  1. z: the hold data at the nodes (left and right limits) and the breakpoints inside steps,
-  //     which depend on u alone, plus the state-free part of w_tip at the output nodes;
-  //  2. the modal recursion on x̄ = x − P1 d⁻: x̄_{k+1} = E x̄_k + G d_k⁺ + E P1 (d_k⁻ − d_k⁺),
-  //  with
-  //     sub-steps on the full state x where a step holds breakpoints;
-  //  3. outputs: w_tip, θ, the backlash.
-  constexpr long kChunk = 256;
-  ws.zr_.resize(kChunk + 1);
-  ws.xs_.resize(kChunk + 1);
-  ws.base_.resize(kChunk + 1);
-  ZData* zr = ws.zr_.data();  //                                 right limits
-  double* xs = ws.xs_.data();
-  double* base = ws.base_.data();
-  for (auto* v : {&ws.nu_, &ws.nud_, &ws.nudd_, &ws.nre_, &ws.nim_, &ws.zz_, &ws.zzd_, &ws.zzdd_,
-                  &ws.wo_, &ws.tho_, &ws.yo_})
-    v->resize(kChunk + 1);
-  ws.io_.resize(kChunk + 1);
-  double *wo = ws.wo_.data(), *tho = ws.tho_.data(),
-         *yo = ws.yo_.data();  // pass 3: w, θ, y at the outputs
-  long* io = ws.io_.data();    //         and their nodes
-  double *nu = ws.nu_.data(), *nud = ws.nud_.data(), *nudd = ws.nudd_.data(), *nre = ws.nre_.data(),
-         *nim = ws.nim_.data();
-  double *zz = ws.zz_.data(), *zzd = ws.zzd_.data(), *zzdd = ws.zzdd_.data();
-  const double eps = kNodeRelTol * hs;
-  const StepCoeffs coeffs{ws.e11_.data(),
-                          ws.e12_.data(),
-                          ws.e21_.data(),
-                          ws.e22_.data(),
-                          {ws.g_[0].data(), ws.g_[1].data(), ws.g_[2].data(), ws.g_[3].data(),
-                           ws.g_[4].data(), ws.g_[5].data()}};
-  const double t1c[3] = {ws.t1_[0], hs * ws.t1_[1], hs * hs * ws.t1_[2]};
-
-  // Left limits at the nodes are (zz, zzd, zzdd) themselves; node 0 of a chunk carries the last
-  // one.
-  auto zl = [&](long j) { return ZData{zz[j], zzd[j], zzdd[j]}; };
-  zr[0] = eval(0.0, V * om, 0.0);
-  zz[0] = zr[0].z;
-  zzd[0] = zr[0].zd;
-  zzdd[0] = zr[0].zdd;
-  AddMatVec(np, x0, x1, ws.p1_, -zl(0).z, -hs * zl(0).zd, -hs * hs * zl(0).zdd);
+  // The run goes chunk by chunk through the three passes of SineChunks.
+  SineChunks ch(*this, ws, m, hs, V, om, htip_re, htip_im, hyst);
+  ch.zr[0] = sb.Eval(0.0, V * om, 0.0);
+  ch.zz[0] = ch.zr[0].z;
+  ch.zzd[0] = ch.zr[0].zd;
+  ch.zzdd[0] = ch.zr[0].zdd;
+  const ZData l0 = ch.Left(0);
+  AddMatVec(np, x0, x1, ws.p1_, -l0.z, -hs * l0.zd, -hs * hs * l0.zdd);
   double y = 0.0;
   // Output sample j: tip deflection w, its angle θ (NaN-safe: only used once w is checked),
   // backlash.
@@ -690,190 +945,20 @@ void ModalSimulator::RunSinusoid(const BimorphParams& params, const Sinusoid& dr
     sink.Emit(j, t, u, z, w, theta, y);
     return true;
   };
-  const double w0 = SumModes(np, x0) + (Feedthrough(t1c, zl(0)) + V * htip_im);
-  if (!output(0, w0, Degrees(w0, inv_len), 0.0, zl(0).z)) return;
+  const double w0 = SumModes(np, x0) + (Feedthrough(ch.t1c, l0) + V * htip_im);
+  if (!output(0, w0, Degrees(w0, inv_len), 0.0, l0.z)) return;
 
-  // e^{iΩt} at the nodes: e^{iΩ t_b} exactly (sin, cos) every 64 steps, times the powers R^r of the
-  // one-step rotation R = e^{iΩh} (r < 64, formed once by repeated multiplication), so that the
-  // nodes of a chunk are independent of each other and their drive is one vectorised loop.
-  constexpr long kBlock = 64;
-  static_assert(kChunk % kBlock == 0);
-  const double rot_re = std::cos(om * hs), rot_im = std::sin(om * hs);
-  double rpow_re[kBlock], rpow_im[kBlock];
-  rpow_re[0] = 1.0;
-  rpow_im[0] = 0.0;
-  for (long r = 1; r < kBlock; ++r) {
-    rpow_re[r] = rpow_re[r - 1] * rot_re - rpow_im[r - 1] * rot_im;
-    rpow_im[r] = rpow_re[r - 1] * rot_im + rpow_im[r - 1] * rot_re;
-  }
   long steps = 0;
-  bool jump_at_start = false;  // d⁻ ≠ d⁺ at the chunk's first node
   size_t next_out = 1;
-  using Segment = ModalWorkspace::SegmentData;  // nodes [from, to) whose left limits share a branch
-  std::vector<Segment>& segments = ws.segments_;
-  for (long c0 = 0; c0 < n_steps; c0 += kChunk) {
-    const long len = std::min(kChunk, n_steps - c0);
-    // Pass 1a: the drive at the nodes 1 … len (global node c0 + j), block by block.
-    for (long q = 0; q * kBlock <= len; ++q) {
-      const long b = c0 + q * kBlock;  // a multiple of 64: e^{iΩ t_b} exactly
-      const double tb = static_cast<double>(b) * hs;
-      const double ere = b == 0 ? 1.0 : std::cos(om * tb), eim = b == 0 ? 0.0 : std::sin(om * tb);
-      const long j0 = std::max<long>(1, q * kBlock), j1 = std::min(len, q * kBlock + kBlock - 1);
-      DriveNodes(j0, j1 + 1, q * kBlock, rpow_re, rpow_im, ere, eim, V, om, nre, nim, nu, nud,
-                 nudd);
-    }
-    // Pass 1b: the breakpoints (zero crossings of z, reversals of u), in order. Inside a step they
-    // make it special (sub-steps, z data now); on a node its data jump there. Between them the
-    // nodes' left limits lie on one branch: a segment.
-    ws.special_.clear();
-    ws.inner_.clear();
-    ws.jumps_.clear();
-    segments.clear();
-    BoucWenBranch cur = br;  // the branch of the next node's left limit
-    long seg_from = 1;
-    auto close_segment = [&](long to) {
-      if (to > seg_from) segments.push_back({seg_from, to, cur});
-      seg_from = to;
-    };
-    bool jump_at_node = jump_at_start;
-    for (long i = 0; i < len; ++i) {
-      if (!jump_at_node) {
-        // Nothing up to the node the next breakpoint reaches: jump to a node just before it, then
-        // to the first that the test below passes (it is monotone in i).
-        const double kf = std::floor((t_end - eps) / hs) - 2.0;
-        if (kf > static_cast<double>(c0 + i))
-          i = kf - static_cast<double>(c0) >= static_cast<double>(len) ? len
-                                                                       : static_cast<long>(kf) - c0;
-        while (i < len && !(t_end <= static_cast<double>(c0 + i + 1) * hs + eps)) ++i;
-        if (i == len) break;
-      }
-      const long k = c0 + i;
-      const double t1 = static_cast<double>(k + 1) * hs;
-      const int inner_begin = static_cast<int>(ws.inner_.size());
-      while (t_end < t1 - eps) {
-        double ub, udb, uddb;
-        u_at_end(&ub, &udb, &uddb);
-        const double tb = t_end;
-        const ZData left = eval(ub, udb, uddb);
-        advance();
-        ws.inner_.push_back({tb - static_cast<double>(k) * hs, left, eval(ub, udb, uddb)});
-      }
-      const int inner_end = static_cast<int>(ws.inner_.size());
-      if (jump_at_node || inner_end > inner_begin)
-        ws.special_.push_back({i, inner_begin, inner_end});
-      if (inner_end > inner_begin) {  // node i + 1 is on the new branch
-        close_segment(i + 1);
-        cur = br;
-      }
-      jump_at_node = false;
-      while (t_end <= t1 + eps) {  // breakpoints on the node: the data jump there
-        advance();
-        jump_at_node = true;
-      }
-      if (jump_at_node) {  // node i + 1's left limit stays on `cur`, its right one and the next on
-                           // br
-        ws.jumps_.emplace_back(i + 1, br);
-        close_segment(i + 2);
-        cur = br;
-      }
-    }
-    close_segment(len + 1);
-    jump_at_start = jump_at_node;
-    // Pass 1c: z, ż, z̈ at the nodes, segment by segment; right limits where a breakpoint is on the
-    // node.
-    if (hyst) {
-      for (const Segment& sg : segments) {
-        const BoucWenBranch& b = sg.branch;
-        if (!ZBatch(sg.from, sg.to, nu, nud, nudd, b.u0, b.z0, b.gain, b.kappa, b.alpha, zz, zzd,
-                    zzdd)) {
-          for (long j = sg.from; j < sg.to; ++j) {  // arguments beyond ±700: as EvalZ has it
-            const ZData d = EvalZ(b, nu[j], nud[j], nudd[j]);
-            zz[j] = d.z;
-            zzd[j] = d.zd;
-            zzdd[j] = d.zdd;
-          }
-        }
-      }
-    } else {
-      std::fill(zz + 1, zz + len + 1, 0.0);
-      std::fill(zzd + 1, zzd + len + 1, 0.0);
-      std::fill(zzdd + 1, zzdd + len + 1, 0.0);
-    }
-    NodeData(len, zz, zzd, zzdd, nre, nim, t1c, V, htip_re, htip_im, zr, base);
-    for (const auto& [j, b] : ws.jumps_) zr[j] = EvalZ(b, nu[j], nud[j], nudd[j]);
-    // Pass 2.
-    long i = 0;
-    for (const ModalWorkspace::Special& sp : ws.special_) {
-      if (i < sp.step) {
-        StepRun(i, sp.step, np, x0, x1, coeffs, zr, hs, xs);
-        i = sp.step;
-      }
-      if (sp.inner_begin == sp.inner_end) {
-        // Data jump at the node, no breakpoint inside: one regular step plus the correction.
-        const ZData a = zl(i);
-        const ZData& b = zr[i];
-        StepRun(i, i + 1, np, x0, x1, coeffs, zr, hs, xs);
-        AddMatVec(np, x0, x1, ws.ep1_, a.z - b.z, hs * (a.zd - b.zd), hs * hs * (a.zdd - b.zdd));
-      } else {
-        // Breakpoints inside: back to the full state, sub-steps between them, then to x̄ again.
-        AddMatVec(np, x0, x1, ws.p1_, zl(i).z, hs * zl(i).zd, hs * hs * zl(i).zdd);
-        double scur = 0.0;
-        ZData dcur = zr[i];
-        for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
-          const ModalWorkspace::Inner& in = ws.inner_[e];
-          GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
-                         in.offset - scur, dcur, in.left, 0.0, 0.0);
-          dcur = in.right;
-          scur = in.offset;
-        }
-        GeneralSubstep(n_, ws.poles_.data(), nullptr, ws.sub_, wu_.data(), wz_.data(), x0, x1,
-                       hs - scur, dcur, zl(i + 1), 0.0, 0.0);
-        AddMatVec(np, x0, x1, ws.p1_, -zl(i + 1).z, -hs * zl(i + 1).zd, -hs * hs * zl(i + 1).zdd);
-        steps += sp.inner_end - sp.inner_begin;
-      }
-      xs[i + 1] = SumModes(np, x0);
-      ++i;
-    }
-    if (i < len) StepRun(i, len, np, x0, x1, coeffs, zr, hs, xs);
+  for (long c0 = 0; c0 < n_steps; c0 += SineChunks::kChunk) {
+    const long len = std::min(SineChunks::kChunk, n_steps - c0);
+    ch.Drive(c0, len);
+    ch.Breakpoints(sb, c0, len);
+    ch.NodeZ(len);
+    steps += ch.Modes(len);
     steps += len;
-    // Pass 3: θ of every output of the chunk in one vectorised loop, then the backlash
-    // (BacklashRun).
-    long n_o = 0;
-    if (m == 1) {  // every node is an output
-      for (long q = 0; q < len; ++q) {
-        io[q] = q + 1;
-        wo[q] = xs[q + 1] + base[q + 1];
-      }
-      n_o = len;
-    } else {
-      for (long i3 = 1; i3 <= len; ++i3) {
-        if ((c0 + i3) % m != 0) continue;
-        io[n_o] = i3;
-        wo[n_o++] = xs[i3] + base[i3];
-      }
-    }
-    long n_ok = n_o;  // outputs before the first non-finite w (DegreesBatch's test fails on those)
-    if (!DegreesBatch(n_o, wo, inv_len, tho)) {
-      n_ok = 0;
-      while (n_ok < n_o && std::isfinite(wo[n_ok])) ++n_ok;
-      for (long q = 0; q < n_ok; ++q)
-        if (!(std::abs(wo[q] * inv_len) < 0.125)) tho[q] = Degrees(wo[q], inv_len);
-    }
-    y = BacklashRun(bl, tho, yo, n_ok, y);
-    for (long q = 0; q < n_ok; ++q, ++next_out) {
-      const long i3 = io[q];
-      sink.Emit(next_out, static_cast<double>(next_out) / fs, nu[i3], zl(i3).z, wo[q], tho[q],
-                yo[q]);
-    }
-    if (n_ok < n_o) {
-      summary.status = SimStatus::kNonFinite;
-      summary.message = NonFiniteMessage(next_out, static_cast<double>(next_out) / fs);
-      return;
-    }
-    zz[0] = zz[len];
-    zzd[0] = zzd[len];
-    zzdd[0] = zzdd[len];
-    zr[0] = zr[len];
+    if (!ch.Outputs(c0, len, fs, inv_len, bl, y, next_out, sink, summary)) return;
+    ch.Carry(len);
   }
   summary.steps = steps;
 }

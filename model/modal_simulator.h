@@ -144,6 +144,7 @@ class ModalSimulator {
   template <class Sink>
   SimulationSummary Run(const BimorphParams& params, const DriveSignal& drive, ModalWorkspace& ws,
                         Sink& sink) const;
+  struct SineChunks;  // RunSinusoid's chunk loop: its buffers in the workspace and its passes
   template <class Sink>
   void RunSinusoid(const BimorphParams& params, const Sinusoid& drive, ModalWorkspace& ws,
                    Sink& sink, SimulationSummary& summary) const;

@@ -27,10 +27,6 @@ LIMIT = 120
 # Allowed long functions: (file or file prefix, function name or "*" for every function of the
 # file), each with why. Keep it short: a long function that is not a table is split, not listed.
 ALLOWED = [
-    ("model/modal_simulator.cc", "ModalSimulator::RunSinusoid",
-     "the modal model's hot loop (three passes per chunk of 256 steps): split only when "
-     "bench_fitness BM_FitnessModal and bench_record_fit show no loss in pair runs; not split "
-     "yet (issue 38)"),
 ]
 
 FUNCTION_QUALIFIERS = {"const", "override", "final", "noexcept", "mutable", "try", "volatile", "&", "&&"}
