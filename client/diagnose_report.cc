@@ -109,10 +109,6 @@ int AddedParams(const RecordCandidate& c, const RoundView& r) {
   return static_cast<int>(c.fit.params.size() - r.start->params.size());
 }
 
-int64_t FitEvaluations(const records::FitResult& f) {
-  return f.evaluations + f.uncertainty.evaluations;
-}
-
 void PrintParams(std::ostream& o, const FitView& f, const std::string& indent) {
   o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12)
     << Pad("sensitivity", 13) << "identifiability\n";
@@ -290,7 +286,7 @@ void FitOf(const FitView& v, proto::DiagnosisFit* o) {
   o->mutable_singular_values()->Assign(f.uncertainty.singular_values.begin(),
                                        f.uncertainty.singular_values.end());
   o->set_weakest_direction(f.uncertainty.weakest_direction);
-  o->set_evaluations(FitEvaluations(f));
+  o->set_evaluations(diagnose::FitEvaluations(f));
   o->set_wall_time_s(f.wall_time_s);
   o->set_message(f.polish_message);
 }

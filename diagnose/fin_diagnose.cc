@@ -75,12 +75,15 @@ io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
   return io::RecordsFromCaseSet(set);
 }
 
+int64_t FitEvaluations(const records::FitResult& f) {
+  return f.evaluations + f.uncertainty.evaluations;
+}
+
 int64_t BenchEvaluations(const records::RecordDiagnosis& d) {
-  auto fit = [](const records::FitResult& f) { return f.evaluations + f.uncertainty.evaluations; };
-  int64_t n = fit(d.base) + d.trend_evaluations;
-  for (const records::RecordCandidate& c : d.candidates) n += fit(c.fit);
+  int64_t n = FitEvaluations(d.base) + d.trend_evaluations;
+  for (const records::RecordCandidate& c : d.candidates) n += FitEvaluations(c.fit);
   if (d.second)
-    for (const records::RecordCandidate& c : d.second->candidates) n += fit(c.fit);
+    for (const records::RecordCandidate& c : d.second->candidates) n += FitEvaluations(c.fit);
   return n;
 }
 

@@ -101,8 +101,10 @@ struct BenchDiagnosis {
   double wall_time_s = 0;
 };
 
-/// Every model evaluation of a bench diagnosis: its fits' searches, polishes and uncertainty
-/// tables, and the per-case fits of the trends.
+/// The model evaluations of one fit: its search and polish, and its uncertainty table.
+int64_t FitEvaluations(const records::FitResult& f);
+/// Every model evaluation of a bench diagnosis: its fits' (FitEvaluations) and the per-case fits
+/// of the trends.
 int64_t BenchEvaluations(const records::RecordDiagnosis& d);
 
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
