@@ -61,10 +61,8 @@ CheckForm RecordsCheckForm(const RecordsCheckOptions& o) {
   f.text = {.noun = "records", .description_width = 42, .closed_per_trial = false};
   f.draw = RecordsTrialDraw(o.trials);  // first: names a family without a nominal set
   const std::shared_ptr<const Family> family = MakeFamily(o.trials.family, SyntheticStackScale());
-  const auto excluded = family->excluded_effects();
   for (EffectKind k : RecordEffects())
-    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end())
-      f.effects.push_back(k);
+    if (!family->Excludes(k.name())) f.effects.push_back(k);
   RecordDiagnoseOptions d = o.diagnose;
   d.family = o.trials.family;
   d.candidates.clear();

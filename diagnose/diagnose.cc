@@ -190,11 +190,10 @@ std::vector<EffectKind> CandidateEffects(const RecordDiagnosis& d, const RecordD
   std::vector<EffectKind> cands = o.candidates;
   if (!cands.empty()) return cands;
   const auto lib = EffectLibrary(d.base.model->scale());
-  const auto excluded = d.base.model->family().excluded_effects();
+  const Family& family = d.base.model->family();
   const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
   for (const EffectInfo& e : lib)
-    if (std::find(excluded.begin(), excluded.end(), e.name) == excluded.end() &&
-        e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
+    if (!family.Excludes(e.name) && e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
       cands.push_back(e.kind);
   return cands;
 }

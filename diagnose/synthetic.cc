@@ -293,11 +293,8 @@ TrialDraw FinTrialDraw(const FinTrialOptions& o) {
 
 std::vector<EffectKind> RecordsTrialEffects(const Family& family) {
   std::vector<EffectKind> kinds;
-  const auto excluded = family.excluded_effects();
   for (EffectKind k : RecordEffects())
-    if (std::find(excluded.begin(), excluded.end(), k.name()) == excluded.end() &&
-        !NeedsRateCoverage(k))
-      kinds.push_back(k);
+    if (!family.Excludes(k.name()) && !NeedsRateCoverage(k)) kinds.push_back(k);
   return kinds;
 }
 

@@ -33,6 +33,7 @@
 // volts and micrometres, millivolts and nanometres, 1 Hz and 300 Hz.
 #pragma once
 
+#include <algorithm>
 #include <memory>
 #include <span>
 #include <string>
@@ -201,6 +202,11 @@ class Family {
   /// ones it already contains are left out: the stack Bouc–Wen has a driver filter, the Duhem
   /// model a relaxation, the PI model plays).
   virtual std::vector<std::string> excluded_effects() const { return {}; }
+  /// Whether `effect` is one of excluded_effects() (the family already holds it).
+  bool Excludes(std::string_view effect) const {
+    const std::vector<std::string> e = excluded_effects();
+    return std::find(e.begin(), e.end(), effect) != e.end();
+  }
   /// The memory it starts with at rest (FamilyOptions::initial_state for the families that take
   /// it; centred for the others).
   virtual model::InitialState initial_state() const { return model::InitialState::kCentred; }

@@ -434,11 +434,11 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
     if (!e.unsupported.empty()) unsupported.push_back(e.name);
   std::vector<Candidate> out;
   for (const std::string& f : families) {
-    const std::vector<std::string> excluded = MakeFamily(f, scale)->excluded_effects();
+    const auto family = MakeFamily(f, scale);
     for (const auto& effects : sets) {
       bool ok = true;
       for (EffectKind e : effects)
-        ok = ok && !Takes(excluded, EffectName(e)) && !Takes(unsupported, EffectName(e));
+        ok = ok && !family->Excludes(EffectName(e)) && !Takes(unsupported, EffectName(e));
       if (!ok) continue;
       // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
       // only (each evaluation re-makes the regressors): the finalists get the others.
