@@ -127,6 +127,13 @@ int RunDiagnose(const DiagnoseArgs& a) {
     };
   }
   const std::vector<diagnose::DiagCase> cases = diagnose::CasesFromCaseSet(set);
+  // Where the results go, checked before the run (a run is minutes: its work is not lost at the
+  // end).
+  const std::filesystem::path out =
+      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string())
+                        : std::filesystem::path(a.out_dir);
+  io::PrepareOutputFolder(out, "--out");
+  if (!a.json_file.empty()) io::CheckWritableFile(a.json_file, "--json");
   diagnose::BenchDiagnosis d;
   try {
     // The records engine on the bench's records (with --master: on the workers as
@@ -138,10 +145,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
   }
   d.bench = a.cases_dir;
   PrintDiagnosis(std::cout, d, o);
-  const std::filesystem::path out =
-      a.out_dir.empty() ? std::filesystem::path("diagnose_" + dir.filename().string())
-                        : std::filesystem::path(a.out_dir);
-  std::filesystem::create_directories(out);
   std::vector<std::filesystem::path> files;
   io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
   files.push_back(out / "diagnosis.json");
@@ -234,6 +237,7 @@ records::CheckForm CheckFormOf(const CheckArgs& a) {
     throw InputError(
         FieldError("--other-form-probability", a.other_form_probability, "must be in [0, 1]"));
   if (!a.records_family.empty()) {
+    records::FamilyNamed(a.records_family, "--records-family");  // named by its flag
     records::RecordsCheckOptions o;
     o.trials.family = a.records_family;
     o.trials.none_probability = a.none_probability;
@@ -257,6 +261,7 @@ int RunCheckCommand(const CheckArgs& a) {
         "diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
   if (a.real_like) return RunRealLikeCheckCommand(a);
   const records::CheckForm form = CheckFormOf(a);
+  if (!a.json_file.empty()) io::CheckWritableFile(a.json_file, "--json");
   const records::CheckSummary s =
       records::RunCheck(form, a.trials, a.seed, [&](const records::CheckTrial& t, int i) {
         std::cout << CheckTrialLine(form.text, t, i) << std::endl;

@@ -216,10 +216,11 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
     if (a.service) o.fit.evaluator_factory = a.service(o.fit.family_options);
   }
   if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
-  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
-  std::cout << d.verdict << "\n";
   const fs::path out =
       a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
+  io::PrepareOutputFolder(out, "--out");  // before the run: its work is not lost at the end
+  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
+  std::cout << d.verdict << "\n";
   PrintExcitationSummary(std::cout, set, d.excitation);
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);

@@ -5,6 +5,9 @@
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
+
+#include <unistd.h>
 
 #include "model/status.h"
 
@@ -130,6 +133,37 @@ void WriteFileWith(const std::filesystem::path& path,
   write(out);
   out.flush();
   if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+namespace {
+
+void CheckWritableFolder(const std::filesystem::path& dir, std::string_view flag,
+                         const std::filesystem::path& given) {
+  const std::string at = std::string(flag) + " " + given.string();
+  std::error_code ec;
+  if (!std::filesystem::is_directory(dir, ec))
+    throw InputError(at + ": the folder '" + dir.string() + "' does not exist");
+  if (::access(dir.c_str(), W_OK | X_OK) != 0)
+    throw InputError(at + ": the folder '" + dir.string() + "' is not writable");
+}
+
+}  // namespace
+
+void CheckWritableFile(const std::filesystem::path& path, std::string_view flag) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(std::string(flag) + " " + path.string() + ": is a folder, not a file");
+  const std::filesystem::path parent = path.has_parent_path() ? path.parent_path() : ".";
+  CheckWritableFolder(parent, flag, path);
+}
+
+void PrepareOutputFolder(const std::filesystem::path& dir, std::string_view flag) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec)
+    throw InputError(std::string(flag) + " " + dir.string() +
+                     ": cannot create the folder: " + ec.message());
+  CheckWritableFolder(dir, flag, dir);
 }
 
 std::optional<int> CsvTable::FindColumn(std::string_view name) const {

@@ -63,6 +63,14 @@ CsvTable ReadCsvFile(const std::filesystem::path& path);
 void WriteFileWith(const std::filesystem::path& path,
                    const std::function<void(std::ostream&)>& write);
 
+/// Before a long run whose results go to `path`: throws InputError naming `flag` and the path if
+/// the file could not be written then (its folder missing or not writable, or it is a folder), so
+/// the run's work is not lost at the end.
+void CheckWritableFile(const std::filesystem::path& path, std::string_view flag);
+/// The same for an output folder: creates it (and its parents) now, and throws InputError naming
+/// `flag` if it cannot be made or is not writable.
+void PrepareOutputFolder(const std::filesystem::path& dir, std::string_view flag);
+
 /// Parses a whole string as a double ("+1", "1e-3", "-0"); nullopt if it is not exactly one number.
 std::optional<double> ParseDouble(std::string_view s);
 /// Shortest text that reads back to the same double (std::to_chars).

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include "io/csv.h"
@@ -98,6 +100,30 @@ TEST(InputSignalCsv, ErrorsNameFileLineAndColumn) {
                 "params_ok.csv:1: missing columns 't_s', 'voltage_V'");
   PZ_EXPECT_HAS(InputErrorOf([] { (void)ReadInputSignalCsv(kBad / "case_header_only.csv"); }),
                 "0 data rows");
+}
+
+// Output paths are checked before a long run: a missing or read-only folder, or a folder given as
+// the file, is refused naming the flag and the path; a folder to write into is made.
+TEST(OutputPaths, AreCheckedBeforeTheRun) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::path(::testing::TempDir()) / "pz_output_paths";
+  fs::remove_all(root);
+  fs::create_directories(root);
+  EXPECT_NO_THROW(CheckWritableFile(root / "a.json", "--json"));
+  EXPECT_NE(InputErrorOf([&] {
+              CheckWritableFile(root / "missing" / "a.json", "--json");
+            }).find("--json " + (root / "missing" / "a.json").string() + ": the folder '"),
+            std::string::npos);
+  EXPECT_NE(InputErrorOf([&] { CheckWritableFile(root, "--json"); }).find("is a folder"),
+            std::string::npos);
+  EXPECT_NO_THROW(PrepareOutputFolder(root / "out" / "deeper", "--out"));
+  EXPECT_TRUE(fs::is_directory(root / "out" / "deeper"));
+  std::ofstream(root / "plain") << "x";
+  EXPECT_NE(InputErrorOf([&] {
+              PrepareOutputFolder(root / "plain" / "sub", "--out");
+            }).find("--out " + (root / "plain" / "sub").string() + ": cannot create the folder"),
+            std::string::npos);
+  fs::remove_all(root);
 }
 
 }  // namespace
