@@ -722,6 +722,7 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   RegisterExport(app, exit_code);
   RegisterDashboard(app, exit_code);
   RegisterKeygen(app, exit_code);
+  RegisterDoctor(app, exit_code);
 }
 
 // ---- the flags of searches on a master ----

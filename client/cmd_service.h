@@ -60,4 +60,8 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code);
 /// Adds keygen (a CURVE key pair for the service); called by RegisterServiceCommands.
 void RegisterKeygen(CLI::App& app, int& exit_code);
 
+/// Adds doctor (what this machine computes as: client/cmd_doctor.cc); called by
+/// RegisterServiceCommands.
+void RegisterDoctor(CLI::App& app, int& exit_code);
+
 }  // namespace pz::client

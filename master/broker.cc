@@ -14,6 +14,7 @@
 #include <zmq.hpp>
 
 #include "master/log_throttle.h"
+#include "model/arithmetic.h"
 #include "service/liveness.h"
 #include "service/wire_codec.h"
 
@@ -373,10 +374,15 @@ struct Broker::Impl {
   void RefuseWorker(const std::string& id, const WorkerMsg& m) {
     const std::string theirs = m.arithmetic.empty() ? "(not announced)" : m.arithmetic;
     const std::string pinned = options.pinned_by.empty() ? "" : " (" + options.pinned_by + ")";
-    const std::string why = "this master's workers compute as '" + *arithmetic + "'" + pinned +
-                            " and this one as '" + theirs +
-                            "': results would differ in their last bits (start the master with "
-                            "--allow-mixed-arithmetic to accept both)";
+    // Named by what differs (model::ArithmeticDifference: the measured parts, "here" the served
+    // profile's, "there" this worker's), then both profiles whole.
+    const std::string why =
+        "worker on host " + m.host + " pid " + std::to_string(m.pid) +
+        " computes differently from this master's workers in " +
+        model::ArithmeticDifference(*arithmetic, theirs) + "; served '" + *arithmetic + "'" +
+        pinned + ", this one '" + theirs +
+        "': results would differ in their last bits (start the master with "
+        "--allow-mixed-arithmetic to accept both)";
     uint64_t suppressed = 0;
     if (log_throttle.Allow("refused " + m.host, Clock::now(), &suppressed))
       spdlog::warn("worker {} (host {} pid {}) refused: {}{}", Hex(id), m.host, m.pid, why,
@@ -390,7 +396,8 @@ struct Broker::Impl {
     d.id = Hex(id);
     d.host = m.host;
     d.pid = m.pid;
-    d.reason = "refused: another arithmetic (" + theirs + ")";
+    d.reason = "refused: another arithmetic (" + theirs + "): differs in " +
+               model::ArithmeticDifference(*arithmetic, theirs);
     d.at_unix_s = UnixNow();
     Remember(std::move(d));
   }

@@ -41,10 +41,9 @@ int main(int argc, char** argv) {
   pub->needs(secret);
   app.add_option(
       "--arithmetic", o.arithmetic,
-      "announce this arithmetic profile instead of the detected one (" +
-          pz::model::ArithmeticProfile() +
-          " here); only to declare two kinds of machine equivalent after checking that they "
-          "give the same results");
+      "announce this arithmetic profile instead of the measured one (`piezoid doctor`); only "
+      "to declare two kinds of machine equivalent after checking that they give the same "
+      "results");
   app.add_option("--log-level", log_level, "trace, debug, info, warn, error")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
@@ -65,6 +64,10 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   std::signal(SIGPIPE, SIG_IGN);
+  // What this process computes as (model/arithmetic.h): the lines of `piezoid doctor`, and the
+  // profile announced to the master, which admits workers that compute alike.
+  for (const auto& [key, value] : pz::model::ArithmeticReport())
+    spdlog::info("arithmetic {}: {}", key, value);
   pz::worker::Worker w(o, pz::kinds::All());
   spdlog::info("{} threads, master {}{}", o.threads, o.master, o.curve ? " (CURVE)" : "");
   const auto stats = w.Run(g_stop);

@@ -18,6 +18,7 @@
 #include "io/fin_records.h"
 #include "model/effects.h"
 #include "records/fit.h"
+#include "tests/testing/pinned.h"
 
 namespace pz::records {
 namespace {
@@ -111,21 +112,53 @@ const Pinned kNominalLowpass = {
      0x1.d55ef851c4c66p-2},
     0x1.5608b4e9b4c77p+1};
 
-// The records fit is the pinned one bit for bit: the same unit ↔ physical arithmetic, the same
-// simulations and residuals (the bench form's cost is the fin's sum, Family::sums_errors), so the
-// same search and polish. The records engine adds its training sum per sample, the fin per case.
+// The arithmetic these pins were made on (`piezoid doctor`'s digest): AMD EPYC (Zen 4, AVX-512),
+// glibc 2.36 with its FMA maths, GCC 12, Eigen 3.4 without CPUID. There they hold bit for bit;
+// on any other arithmetic to the tolerances below (tests/testing/pinned.h).
+const pz::testing::Pins kPins(pz::testing::kPinnedArithmetic);
+
+// How far another arithmetic moves these fits. They are small searches stopped by their budgets
+// (DE 12 × 5, LM 6 iterations), not converged: a last-bit change in a simulation or in Jᵀ J moves
+// every later LM step along the cost's flat directions (μ's standard error is 35 times its value,
+// the normal matrix's condition number ≈ 1e9). Measured: libm's non-FMA variant moves parameters
+// and PIs by up to 3e-9 relative; 1e-6 relative leaves a factor 300, and a regression of the fit
+// (another step, another start) moves them by 1e-3 or more. A parameter at 0 (a bound) stays there.
+constexpr double kFitRel = 1e-6, kFitAbs = 1e-12;
+
+// The records fit is the pinned one: the same unit ↔ physical arithmetic, the same simulations and
+// residuals (the bench form's cost is the fin's sum, Family::sums_errors), so the same search and
+// polish. The records engine adds its training sum per sample, the fin per case.
 void ExpectPinned(const Pinned& pin, const FitResult& rec, const io::RecordSet& set) {
-  ASSERT_EQ(rec.params.size(), pin.x.size());
-  for (size_t i = 0; i < pin.x.size(); ++i) EXPECT_EQ(rec.params[i], pin.x[i]) << i;
+  EXPECT_TRUE(kPins.Rel(rec.params, pin.x, kFitRel, kFitAbs));
   ASSERT_EQ(rec.metrics.size(), pin.case_pi.size());
   double train = 0;
   for (size_t c = 0; c < pin.case_pi.size(); ++c) {
     EXPECT_EQ(rec.metrics[c].name, set.records[c].name);
-    EXPECT_EQ(rec.metrics[c].sse, pin.case_pi[c]) << rec.metrics[c].name;
+    EXPECT_TRUE(kPins.Rel(rec.metrics[c].sse, pin.case_pi[c], kFitRel)) << rec.metrics[c].name;
     if (set.records[c].role == model::CaseRole::kTrain) train += rec.metrics[c].sse;
   }
-  EXPECT_NEAR(rec.train_sse, pin.train_pi, 1e-12 * pin.train_pi);
-  EXPECT_EQ(train, pin.train_pi);
+  // The per-sample sum against the per-case one: their orders differ (any arithmetic).
+  EXPECT_NEAR(rec.train_sse, train, 1e-12 * train);
+  EXPECT_TRUE(kPins.Rel(train, pin.train_pi, kFitRel));
+}
+
+// A beam candidate's fit on CVODE is pinned bit for bit on the pins' arithmetic only: its two LM
+// iterations take forward differences (step 1e-3) of an adaptive ODE solve, whose step sizes
+// follow the C library's pow and exp, and the best of its start fractions is kept. Measured under
+// libm's other variant, the parameters move by up to 60 % and the training PI by −31 … +12 %: the
+// path is chaotic, the fit's quality is not. Elsewhere the candidate must improve on the base fit
+// it was refined from and land within a factor 2 of the pinned training PI.
+void ExpectPinnedBeam(const Pinned& pin, const FitResult& rec, const io::RecordSet& set,
+                      double base_train) {
+  if (kPins.exact()) return ExpectPinned(pin, rec, set);
+  ASSERT_EQ(rec.params.size(), pin.x.size());
+  ASSERT_EQ(rec.metrics.size(), pin.case_pi.size());
+  double train = 0;
+  for (size_t c = 0; c < pin.case_pi.size(); ++c)
+    if (set.records[c].role == model::CaseRole::kTrain) train += rec.metrics[c].sse;
+  EXPECT_LT(train, base_train);
+  EXPECT_GT(train, 0.5 * pin.train_pi);
+  EXPECT_LT(train, 2.0 * pin.train_pi);
 }
 
 // The base parameters with the effect at zero (its identity): where the fin started a candidate.
@@ -152,7 +185,7 @@ TEST_P(FinRecordsTest, BaseAndBeamCandidateFitAsTheFinEngine) {
   const EffectKind hinge = EffectKind::Named("hinge-friction");
   FitOptions o = RecordsOptions({hinge});
   o.polish_from = WithZeroEffect(rec.params, hinge);
-  ExpectPinned(*GetParam().hinge, FitRecords(set, o), set);
+  ExpectPinnedBeam(*GetParam().hinge, FitRecords(set, o), set, rec.train_sse);
 }
 
 // A drive-effect candidate as the fin engine fitted it: a search seeded with the base (its effect
@@ -199,14 +232,22 @@ TEST(FinRecords, TheUncertaintyTableIsTheFinEngines) {
   const FitResult rec = FitRecords(set, o);
   ExpectPinned(kNominalBase, rec, set);
   ASSERT_EQ(rec.uncertainty.params.size(), rows.size());
+  // The table is an SVD of the Jacobian at the fit (forward differences of step 1e-3): its
+  // smallest singular value is 1e-9 of the largest, so the standard errors of the poorly
+  // identified parameters carry the fit's own spread amplified by that conditioning. Measured
+  // under libm's other variant: 2e-7 relative on the standard errors, 1e-8 on the rest; 1e-4
+  // leaves a factor 500 and still catches another step or another scaling (≥ 1e-2).
+  constexpr double kTableRel = 1e-4;
   for (size_t i = 0; i < rows.size(); ++i) {
     EXPECT_EQ(rec.uncertainty.params[i].name, rows[i].name);
-    EXPECT_EQ(rec.uncertainty.params[i].std_error, rows[i].std_error) << i;
-    EXPECT_EQ(rec.uncertainty.params[i].sensitivity, rows[i].sensitivity) << i;
+    EXPECT_TRUE(kPins.Rel(rec.uncertainty.params[i].std_error, rows[i].std_error, kTableRel))
+        << i;
+    EXPECT_TRUE(kPins.Rel(rec.uncertainty.params[i].sensitivity, rows[i].sensitivity, kTableRel))
+        << i;
     EXPECT_EQ(rec.uncertainty.params[i].identifiability, rows[i].identifiability) << i;
   }
-  EXPECT_EQ(rec.uncertainty.residual_sigma, 0x1.e5358f718061ap-6);
-  EXPECT_EQ(rec.uncertainty.singular_values, singular_values);
+  EXPECT_TRUE(kPins.Rel(rec.uncertainty.residual_sigma, 0x1.e5358f718061ap-6, kTableRel));
+  EXPECT_TRUE(kPins.Rel(rec.uncertainty.singular_values, singular_values, kTableRel));
 }
 
 TEST(FinRecords, TheBenchFormFitIsTheSameOnOneThreadAndOnTwo) {
@@ -318,17 +359,20 @@ TEST(FinRecords, RecordMapIsTheFinLayoutsArithmetic) {
     std::vector<double> u(static_cast<size_t>(map.size()));
     for (size_t i = 0; i < u.size(); ++i)
       u[i] = std::fmod(0.37 * static_cast<double>(p.trial + 1) * static_cast<double>(i + 3), 1.0);
+    // One closed-form map (products, quotients and the log-scaled coordinates' exp / log): a
+    // few ulps of the C library's other variant at most; 1e-14 relative.
+    constexpr double kMapRel = 1e-14;
     const std::vector<double> x = map.ToPhysical(u);
-    EXPECT_EQ(x, p.x) << p.trial;
-    EXPECT_EQ(map.ToUnit(x), p.back) << p.trial;
+    EXPECT_TRUE(kPins.Rel(x, p.x, kMapRel)) << p.trial;
+    EXPECT_TRUE(kPins.Rel(map.ToUnit(x), p.back, kMapRel, 1e-15)) << p.trial;
     for (int i = 0; i < map.size(); ++i) {
       const size_t k = static_cast<size_t>(i);
       EXPECT_EQ(map.name(i), names[k]);
-      EXPECT_EQ(map.Scale(x, i), scales[k]) << i;
+      EXPECT_TRUE(kPins.Rel(map.Scale(x, i), scales[k], kMapRel)) << i;
       double lo = 0, hi = 0;
       map.Bounds(x, i, &lo, &hi);
-      EXPECT_EQ(lo, p.lower[k]) << p.trial << " " << i;
-      EXPECT_EQ(hi, p.upper[k]) << p.trial << " " << i;
+      EXPECT_TRUE(kPins.Rel(lo, p.lower[k], kMapRel)) << p.trial << " " << i;
+      EXPECT_TRUE(kPins.Rel(hi, p.upper[k], kMapRel)) << p.trial << " " << i;
     }
   }
 }

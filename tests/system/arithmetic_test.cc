@@ -1,11 +1,13 @@
-// A master serves one arithmetic profile (model::ArithmeticProfile(): build, instruction-set level,
-// C library): workers of two kinds of machine would give a job results that differ in their last
-// bits depending on which computed what. The first worker fixes the profile; a worker announcing
-// another is refused with the reason, exits instead of retrying, and shows among the departures.
-// --allow-mixed-arithmetic accepts both. A job records the profile that computed it, and a master
-// restarted on its state directory serves that profile while the job runs.
+// A master serves one arithmetic profile (model::ArithmeticProfile(): the build and the measured
+// fingerprint of its kernels): workers of two kinds of machine would give a job results that
+// differ in their last bits depending on which computed what. The first worker fixes the profile;
+// a worker announcing another is refused with the reason (the part that differs), exits instead of
+// retrying, and shows among the departures. --allow-mixed-arithmetic accepts both. A job records
+// the profile that computed it, and a master restarted on its state directory serves that profile
+// while the job runs.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
 #include <functional>
 #include <set>
@@ -141,3 +143,102 @@ TEST(Arithmetic, AllowMixedArithmeticServesBothProfiles) {
 
 }  // namespace
 }  // namespace pz::testing
+
+// Runs `spec` on the cluster's workers and fetches its best and log.
+void RunJob(Cluster& c, const job::JobSpec& spec, std::vector<service::ScoredGenome>* best,
+            std::vector<service::GenerationRecord>* log) {
+  auto client = c.Client(4000, 5);
+  client::SubmitResult r;
+  ASSERT_TRUE(client.Submit(spec, &r).ok());
+  service::JobInfo info;
+  ASSERT_TRUE(client.WaitFinal(r.job_id, 60s, &info).ok());
+  ASSERT_EQ(info.state, service::JobState::kSucceeded) << info.message;
+  ASSERT_TRUE(client.Fetch(r.job_id, 8, best, log).ok());
+}
+
+// The guard measures (issue 44): a worker is admitted when it computes what the served workers
+// compute. PIEZOID_ARITHMETIC_SKEW=fin makes a worker compute as another machine would (the fin
+// part of its measured fingerprint differs, and every cost it returns moves by one ulp): it is
+// refused by the part that differs, naming the worker, and the job's result is the agreeing
+// worker's, bit for bit the in-process reference. Admitted (--allow-mixed-arithmetic), the same
+// worker changes the result: the refusal is what keeps it.
+TEST(Arithmetic, AWorkerThatComputesOtherBitsIsRefusedByWhatItComputes) {
+  const job::JobSpec spec = SyntheticSpec(44, 24, 8);
+  const service::JobCheckpoint ref = Reference(spec);
+  Cluster c("arith-measured");
+  auto client = c.Client(4000, 5);
+  c.AddWorker(1);
+  service::WorkersSnapshot w;
+  ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return s.workers.size() == 1; }));
+  Process& skewed = c.AddWorker(1, {}, {"PIEZOID_ARITHMETIC_SKEW=fin"});
+  ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty(); }))
+      << Slurp(c.dir() / "workers.log");
+  const std::string& why = w.departed.back().reason;
+  EXPECT_NE(why.find("differs in fin ("), std::string::npos) << why;
+  EXPECT_EQ(why.find("libm ("), std::string::npos) << "only the part that differs: " << why;
+  EXPECT_EQ(w.workers.size(), 1u);
+  for (int i = 0; i < 200 && skewed.running(); ++i) std::this_thread::sleep_for(50ms);
+  EXPECT_FALSE(skewed.running()) << "a refused worker stops";
+  const std::string log = Slurp(c.dir() / "workers.log");
+  EXPECT_NE(log.find("pid " + std::to_string(skewed.pid())), std::string::npos)
+      << "the refusal names the worker:\n"
+      << log;
+  EXPECT_NE(log.find("computes differently from this master's workers in fin ("),
+            std::string::npos)
+      << log;
+
+  std::vector<service::ScoredGenome> best;
+  std::vector<service::GenerationRecord> glog;
+  ASSERT_NO_FATAL_FAILURE(RunJob(c, spec, &best, &glog));
+  ExpectSameRun(ref, best, glog);
+
+  Cluster mixed("arith-measured-mixed", {"--allow-mixed-arithmetic"});
+  mixed.AddWorker(1, {}, {"PIEZOID_ARITHMETIC_SKEW=fin"});
+  std::vector<service::ScoredGenome> skewed_best;
+  ASSERT_NO_FATAL_FAILURE(RunJob(mixed, spec, &skewed_best, &glog));
+  ASSERT_FALSE(skewed_best.empty());
+  EXPECT_NE(skewed_best[0].fitness.cost, ref.best[0].fitness.cost)
+      << "the skewed worker's costs are its own";
+}
+
+// The same by a real difference of arithmetic: OpenBLAS's kernels for another CPU core
+// (OPENBLAS_CORETYPE, read when the library loads) change the dense backend's bits where the build
+// uses OpenBLAS. Whatever this machine is, a worker is admitted exactly when its measured profile
+// (`piezoid doctor --profile` under the same environment) equals the served one.
+TEST(Arithmetic, AdmissionFollowsTheMeasuredProfileUnderAnotherBlasCore) {
+  const std::string env = "OPENBLAS_CORETYPE=Prescott";
+  std::string theirs;
+  {
+    const std::string cmd =
+        "env " + env + " '" + (BuildDir() / "client" / "piezoid").string() + "' doctor --profile";
+    FILE* f = ::popen(cmd.c_str(), "r");
+    ASSERT_NE(f, nullptr);
+    char buf[512];
+    while (std::fgets(buf, sizeof buf, f) != nullptr) theirs += buf;
+    ASSERT_EQ(::pclose(f), 0) << theirs;
+  }
+  ASSERT_FALSE(theirs.empty());
+  const std::string measured = theirs.substr(0, theirs.find_last_not_of('\n') + 1);
+  Cluster c("arith-blas");
+  auto client = c.Client(4000, 5);
+  c.AddWorker(1);
+  service::WorkersSnapshot w;
+  ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return s.workers.size() == 1; }));
+  c.AddWorker(1, {}, {env});
+  if (measured == model::ArithmeticProfile()) {
+    ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return s.workers.size() == 2; }))
+        << "the same measured profile is admitted:\n"
+        << Slurp(c.dir() / "workers.log");
+    EXPECT_TRUE(w.departed.empty());
+  } else {
+    ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty(); }))
+        << Slurp(c.dir() / "workers.log");
+    EXPECT_NE(w.departed.back().reason.find(model::ArithmeticDifference(
+                  model::ArithmeticProfile(), measured)),
+              std::string::npos)
+        << w.departed.back().reason;
+    EXPECT_NE(w.departed.back().reason.find("dense ("), std::string::npos)
+        << w.departed.back().reason;
+    EXPECT_EQ(w.workers.size(), 1u);
+  }
+}

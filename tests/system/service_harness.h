@@ -52,7 +52,13 @@ inline int FreePort() {
 
 class Process {
  public:
-  Process(const fs::path& exe, std::vector<std::string> args, const fs::path& log) {
+  /// `env`: "NAME=value" entries added to this process's environment for the child.
+  Process(const fs::path& exe, std::vector<std::string> args, const fs::path& log,
+          std::vector<std::string> env = {}) {
+    std::vector<char*> envp;
+    for (char** e = environ; *e != nullptr; ++e) envp.push_back(*e);
+    for (auto& e : env) envp.push_back(e.data());
+    envp.push_back(nullptr);
     std::vector<char*> argv;
     std::string exe_s = exe.string();
     argv.push_back(exe_s.data());
@@ -62,7 +68,7 @@ class Process {
     posix_spawn_file_actions_init(&fa);
     posix_spawn_file_actions_addopen(&fa, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&fa, 1, 2);
-    if (posix_spawn(&pid_, exe_s.c_str(), &fa, nullptr, argv.data(), environ) != 0) pid_ = -1;
+    if (posix_spawn(&pid_, exe_s.c_str(), &fa, nullptr, argv.data(), envp.data()) != 0) pid_ = -1;
     posix_spawn_file_actions_destroy(&fa);
   }
   ~Process() { Kill(SIGKILL); }
@@ -186,14 +192,15 @@ class Cluster {
   }
   void KillMaster(int sig = SIGKILL) { master_->Kill(sig); }
   pid_t master_pid() const { return master_->pid(); }
-  Process& AddWorker(int threads, const std::vector<std::string>& extra = {}) {
+  Process& AddWorker(int threads, const std::vector<std::string>& extra = {},
+                     const std::vector<std::string>& env = {}) {
     std::vector<std::string> args{
         "--master",         worker_ep_, "--threads",   std::to_string(threads),
         "--heartbeat-ms",   "100",      "--liveness",  "5",
         "--backoff-max-ms", "500",      "--log-level", "warn"};
     args.insert(args.end(), extra.begin(), extra.end());
     workers_.push_back(std::make_unique<Process>(BuildDir() / "worker" / "piezoid-worker", args,
-                                                 dir_ / "workers.log"));
+                                                 dir_ / "workers.log", env));
     return *workers_.back();
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
