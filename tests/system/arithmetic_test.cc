@@ -141,8 +141,6 @@ TEST(Arithmetic, AllowMixedArithmeticServesBothProfiles) {
   EXPECT_TRUE(w.departed.empty());
 }
 
-}  // namespace
-}  // namespace pz::testing
 
 // Runs `spec` on the cluster's workers and fetches its best and log.
 void RunJob(Cluster& c, const job::JobSpec& spec, std::vector<service::ScoredGenome>* best,
@@ -171,6 +169,7 @@ TEST(Arithmetic, AWorkerThatComputesOtherBitsIsRefusedByWhatItComputes) {
   service::WorkersSnapshot w;
   ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return s.workers.size() == 1; }));
   Process& skewed = c.AddWorker(1, {}, {"PIEZOID_ARITHMETIC_SKEW=fin"});
+  const pid_t skewed_pid = skewed.pid();
   ASSERT_TRUE(WaitForWorkers(client, &w, [](const auto& s) { return !s.departed.empty(); }))
       << Slurp(c.dir() / "workers.log");
   const std::string& why = w.departed.back().reason;
@@ -180,7 +179,7 @@ TEST(Arithmetic, AWorkerThatComputesOtherBitsIsRefusedByWhatItComputes) {
   for (int i = 0; i < 200 && skewed.running(); ++i) std::this_thread::sleep_for(50ms);
   EXPECT_FALSE(skewed.running()) << "a refused worker stops";
   const std::string log = Slurp(c.dir() / "workers.log");
-  EXPECT_NE(log.find("pid " + std::to_string(skewed.pid())), std::string::npos)
+  EXPECT_NE(log.find("pid " + std::to_string(skewed_pid)), std::string::npos)
       << "the refusal names the worker:\n"
       << log;
   EXPECT_NE(log.find("computes differently from this master's workers in fin ("),
@@ -242,3 +241,6 @@ TEST(Arithmetic, AdmissionFollowsTheMeasuredProfileUnderAnotherBlasCore) {
     EXPECT_EQ(w.workers.size(), 1u);
   }
 }
+
+}  // namespace
+}  // namespace pz::testing
