@@ -533,6 +533,59 @@ std::pair<std::string, std::string> ExtrapolationSection(
               term.str()};
 }
 
+/// The operating-point law fitted on all training cases at once (hgann/operating_law.h): its
+/// terms, its prior, which parameters the data settle and which the prior, and each withheld
+/// case's parameters' 1-σ under the law's posterior. Markdown and the terminal's lines.
+std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
+                                               const IdentifyResult& result) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
+  if (!result.seeds || !result.seeds->law.ok) return {"", ""};
+  const hgann::OperatingLaw& law = result.seeds->law;
+  const std::string prior = hgann::PriorSettledNames(law);
+  std::string data;
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    if (law.data_settled[k]) data += (data.empty() ? "" : ", ") + std::string(kSymbols[k]);
+  const std::string terms =
+      std::string("each parameter affine in V and ln f") +
+      (law.interaction ? " with a V·f interaction (the training cases determine it)"
+                       : " (no V·f interaction: the training cases cannot show one)");
+  std::ostringstream md, term;
+  md << "## Operating-point law (all training cases at once)\n\n"
+     << "One of generation 0's seeds (hgann/operating_law.h): " << terms
+     << ", fitted on every training case's data together by Levenberg–Marquardt on the fitness's "
+        "own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — the smoothest "
+        "law unless the data pay for a slope — and each level ~ N(middle of the range, (0.5 of "
+        "the range)²), so that a level the data leave open is not put at a bound; the prior "
+        "weighted by the residuals' σ² = "
+     << Fmt(law.sigma2, 3) << " deg² a sample (per-case fits, autocorrelation included). Cost "
+     << Fmt(law.cost, 5) << " deg² (Σ PI over the training cases " << Fmt(law.data_cost, 5)
+     << "), polished from " << law.start << ".\n\n"
+     << "- settled by the data (every coefficient's posterior variance below "
+     << Fmt(hgann::OperatingLaw::kPriorShare * 100, 3) << " % of its prior's): "
+     << (data.empty() ? "none" : data) << "\n"
+     << "- settled by the prior: " << (prior.empty() ? "none" : prior) << "\n\n"
+     << "| case | role | V [V] | f [Hz] |";
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    md << " " << kSymbols[k] << " ± 1σ [" << model::OutputUnit(k) << "] |";
+  md << "\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  const model::Network& net = law.network;
+  for (size_t i = 0; i < set.cases.size() && i < law.sigma_at_case.size(); ++i) {
+    const auto& bc = set.cases[i];
+    const auto p = net.Predict(bc.amplitude_v, bc.frequency_hz).ToArray();
+    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(bc.amplitude_v)
+       << " | " << Fmt(bc.frequency_hz) << " |";
+    for (int k = 0; k < model::kNetworkOutputs; ++k)
+      md << " " << Fmt(p[k], 3) << " ± " << Fmt(law.sigma_at_case[i][k], 2) << " |";
+    md << "\n";
+  }
+  md << "\n";
+  term << "operating-point law: " << terms << "; settled by the data: "
+       << (data.empty() ? "none" : data) << "; by the prior: " << (prior.empty() ? "none" : prior)
+       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n";
+  return {md.str(), term.str()};
+}
+
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. "
     "Widen a "
@@ -736,13 +789,14 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
   const auto [extrapolation_md, extrapolation_term] =
       ExtrapolationSection(set, fitness, result, per_case.estimates);
+  const auto [law_md, law_term] = LawSection(set, result);
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
     f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound,
-                        per_case.markdown + extrapolation_md);
+                        per_case.markdown + law_md + extrapolation_md);
     written.push_back(out / "report.md");
   }
   term << "\n"
@@ -762,7 +816,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   if (!at_bound.empty())
     term << "held at a bound on every training case (set by the range, not the data; report.md): "
          << at_bound << "\n";
-  term << per_case.terminal << extrapolation_term;
+  term << per_case.terminal << law_term << extrapolation_term;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string()
        << " (report.md, network.pb/.json, progress.csv, validation.csv, "

@@ -586,6 +586,7 @@ void PolishCodes(const HgannFitness& fitness, const std::vector<int>& genes, siz
 /// distinct ones into `out`, lowest cost first.
 void AddSeeds(const HgannFitness& fitness, const TrendBasis& t, const TrendSeedOptions& options,
               const std::pair<const std::vector<double>*, const char*> (&made)[4],
+              const std::vector<std::pair<model::Network, std::string>>& networks,
               TrendSeeds& out) {
   const int h = t.h, per = t.per;
   const auto encode = [&](const std::vector<double>& th) {
@@ -603,13 +604,20 @@ void AddSeeds(const HgannFitness& fitness, const TrendBasis& t, const TrendSeedO
     genes.push_back(model::C2Bit(k));
     for (int j = 0; j < h; ++j) genes.push_back(model::W2Bit(j, k));
   }
-  for (const auto& [theta, name] : made) {
-    Candidate cand{opt::Genome{encode(*theta), {}}, 0, name};
+  const auto add = [&](std::vector<uint8_t> bits, const std::vector<int>& gene_list,
+                       const std::string& name) {
+    Candidate cand{opt::Genome{std::move(bits), {}}, 0, name};
     cand.cost = fitness.Evaluate(cand.genome).cost;
     out.simulations += static_cast<int64_t>(t.training.size());
-    if (options.code_polish) PolishCodes(fitness, genes, t.training.size(), cand, out.simulations);
+    if (options.code_polish && !gene_list.empty())
+      PolishCodes(fitness, gene_list, t.training.size(), cand, out.simulations);
     candidates.push_back(std::move(cand));
-  }
+  };
+  for (const auto& [theta, name] : made) add(encode(*theta), genes, name);
+  // A network made elsewhere (the operating-point law) is not code-polished: the polish knows
+  // only the fitness, and would walk a parameter the data do not see (μ, whose level the law's
+  // prior sets) to a bound for a cost lower by 1e-5 deg².
+  for (const auto& [network, name] : networks) add(model::EncodeChromosome(network), {}, name);
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.cost < b.cost; });
   for (Candidate& c : candidates) {
@@ -634,6 +642,8 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
     if (cfg.cases[i].training) training.push_back(static_cast<int>(i));
   out.cases = FitCases(fitness, training, options, &out.simulations);
   HoldLooseParameters(fitness, training, options, out);
+  out.law = FitOperatingLaw(fitness, out.cases, options);
+  out.simulations += out.law.simulations;
 
   const TrendBasis basis(cfg, training, out.cases);
   const std::vector<double> regression = Regress(basis, basis.h);
@@ -672,7 +682,9 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
       {&from_both, "structured trend (polished from the constant)"},
       {&structured, "structured trend (regression)"},
       {&from_constant, "constant (polished)"}};
-  AddSeeds(fitness, basis, options, made, out);
+  std::vector<std::pair<model::Network, std::string>> networks;
+  if (out.law.ok) networks.emplace_back(out.law.network, "operating-point law (joint fit)");
+  AddSeeds(fitness, basis, options, made, networks, out);
   for (size_t i = 0; i < cfg.cases.size(); ++i) {
     Array7 lo{}, hi{};
     for (int k = 0; k < kOut; ++k) {

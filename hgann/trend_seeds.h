@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "hgann/hgann_fitness.h"
+#include "hgann/operating_law.h"
 #include "model/network.h"
 #include "opt/evaluator.h"
 
@@ -85,6 +86,9 @@ struct TrendSeeds {
   /// Where they part, the training cases do not settle the parameter there: the network's value
   /// is one guess of several that fit them alike.
   std::vector<std::array<double, model::kNetworkOutputs>> supported_lo, supported_hi;
+  /// The operating-point law fitted on every training case at once (hgann/operating_law.h): one
+  /// of the seeds ("operating-point law (joint fit)") when it could be fitted.
+  OperatingLaw law;
 };
 
 /// Steps 1–3 of the file comment on the fitness's training cases.
