@@ -533,11 +533,61 @@ std::pair<std::string, std::string> ExtrapolationSection(
               term.str()};
 }
 
+/// The committee of laws that fit the training cases alike (hgann::LawCommittee): which
+/// withheld cases they leave open, with the range of their parameters there, and the next case to
+/// measure. Markdown and the terminal's lines.
+std::pair<std::string, std::string> CommitteeSection(const io::CaseSet& set,
+                                                     const hgann::LawCommittee& c) {
+  std::ostringstream md, term;
+  if (c.floor.size() != set.cases.size()) return {"", ""};
+  md << "### What the training cases leave open, and the next case (query by committee)\n\n"
+     << "A committee of " << c.members
+     << " laws that fit the training cases alike (the law with a V·f term, one posterior σ either "
+        "way along each direction the prior settles: hgann/operating_law.h). A withheld case is "
+        "open where a member moves its predicted angle by 2 floors or more (floor: the residual "
+        "variance a sample × its samples): were that member the truth, the law's PI there would "
+        "be about 3 × the floor.\n\n"
+     << "| case | V [V] | f [Hz] | open | largest member's Σ (Δy)² [floors] | μ [1/s] | δ [s] | "
+        "a1 [deg] | a2 [deg] |\n|---|---|---|---|---|---|---|---|---|\n";
+  std::string open;
+  for (size_t i = 0; i < set.cases.size(); ++i) {
+    const auto& bc = set.cases[i];
+    if (bc.role == io::CaseRole::kTrain) continue;
+    md << "| " << bc.number << " | " << Fmt(bc.amplitude_v) << " | " << Fmt(bc.frequency_hz)
+       << " | " << (c.open[i] ? "**open**" : "settled") << " | "
+       << Fmt(c.disagreement[i] / c.floor[i], 3) << " |";
+    for (int k : {0, 1, 5, 6})
+      md << " " << Fmt(c.lo[i][k], 3) << " … " << Fmt(c.hi[i][k], 3) << " |";
+    md << "\n";
+    if (c.open[i])
+      open += (open.empty() ? "" : ", ") + std::to_string(bc.number) + " (" +
+              Fmt(c.disagreement[i] / c.floor[i], 2) + " floors)";
+  }
+  std::string next;
+  for (size_t r = 0; r < c.next.size() && r < 2; ++r) {
+    const auto& bc = set.cases[c.next[r].first];
+    next += (r ? "; then " : "") + std::string("case ") + std::to_string(bc.number) + " (" +
+            Fmt(bc.amplitude_v) + " V, " + Fmt(bc.frequency_hz) + " Hz: " +
+            Fmt(c.next[r].second, 3) + " floors left open)";
+  }
+  md << "\n- open: " << (open.empty() ? "none" : open) << "\n"
+     << "- next case to measure (query by committee: the candidate whose measurement would rule "
+        "out the members that leave the rest open; what stays open, summed over the other "
+        "withheld cases): "
+     << (next.empty() ? "none" : next) << "\n\n";
+  term << "withheld cases the training cases leave open (committee of laws that fit alike): "
+       << (open.empty() ? "none" : open) << "\n"
+       << "next case to measure (query by committee): " << (next.empty() ? "none" : next)
+       << "\n";
+  return {md.str(), term.str()};
+}
+
 /// The operating-point law fitted on all training cases at once (hgann/operating_law.h): its
 /// terms, its prior, which parameters the data settle and which the prior, and each withheld
 /// case's parameters' 1-σ under the law's posterior. Markdown and the terminal's lines.
 std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
-                                               const IdentifyResult& result) {
+                                               const hgann::HgannFitness& fitness,
+                                               const IdentifyResult& result, int threads) {
   static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
                                                                    "γ", "a1", "a2"};
   if (!result.seeds || !result.seeds->law.ok) return {"", ""};
@@ -580,9 +630,13 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
     md << "\n";
   }
   md << "\n";
+  const auto [committee_md, committee_term] =
+      CommitteeSection(set, hgann::CommitteeOf(fitness, law, threads));
+  md << committee_md;
   term << "operating-point law: " << terms << "; settled by the data: "
        << (data.empty() ? "none" : data) << "; by the prior: " << (prior.empty() ? "none" : prior)
-       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n";
+       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n"
+       << committee_term;
   return {md.str(), term.str()};
 }
 
@@ -789,7 +843,8 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
   const auto [extrapolation_md, extrapolation_term] =
       ExtrapolationSection(set, fitness, result, per_case.estimates);
-  const auto [law_md, law_term] = LawSection(set, result);
+  const auto [law_md, law_term] =
+      LawSection(set, fitness, result, std::max(1, options.threads > 0 ? options.threads : 2));
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);

@@ -40,11 +40,16 @@ struct CaseEstimate;
 struct TrendSeedOptions;
 
 struct OperatingLaw {
-  static constexpr int kMaxTerms = 4;  ///< c, a (x_V), b (ℓ), d (q)
+  static constexpr int kMaxTerms = 6;  ///< c, a (x_V), b (ℓ), d (q), e (h_V), g (h_f)
   bool ok = false;                     ///< the fit ran from an evaluable start
   bool interaction = false;            ///< the q term is in the law
-  int terms = 3;                       ///< 3, or 4 with the interaction
-  /// coef[k][t], t = 0 … terms − 1: c, a, b, d of output k, in scaled units.
+  int terms = 3;                       ///< the most terms of a parameter
+  /// Which terms each parameter's law has: c always; d with the interaction; a, b, e (curvature
+  /// in V: a hinge at the middle training amplitude) and g (curvature in f: the log-f hinge on
+  /// its own) for μ, δ, a1, a2 as their per-case estimates support them (Akaike's χ² + 2 p over
+  /// five sets; the loop's α, β, γ keep a and b).
+  std::array<std::array<bool, kMaxTerms>, model::kNetworkOutputs> active{};
+  /// coef[k][t]: c, a, b, d, e, g of output k, in scaled units (0 for a term not in the law).
   std::array<std::array<double, kMaxTerms>, model::kNetworkOutputs> coef{};
   /// Posterior variance over prior variance of each coefficient (0: the data fix it, 1: only the
   /// prior does).
@@ -61,7 +66,35 @@ struct OperatingLaw {
   std::vector<std::array<double, model::kNetworkOutputs>> sigma_at_case;
   int64_t simulations = 0;
   std::string start;  ///< which start the law was polished from
+  /// θ: kMaxTerms coefficients an output, in output order.
+  std::vector<double> theta;
 };
+
+/// What laws that fit the training cases alike say at every case, and which case to measure next
+/// (query by committee). The committee: the law with the interaction term (whether or not the
+/// training cases determine it), linearised at the fitted law, and the members one posterior σ
+/// either way along each direction of its posterior covariance that the prior settles (posterior
+/// variance above kPriorShare of the prior's along it): laws the training cases cannot tell from
+/// the fitted one. At every case, each member's predicted angle is compared with the fitted law's:
+/// Σ_k (y_member − y_law)², over the case's floor σ² N (the residual variance a sample, as the
+/// law's prior uses it). A withheld case is open when a member moves its prediction by 2 floors or
+/// more (were that member the truth, the law's PI there would be about 3 × the floor).
+/// The next case, by query by committee: each candidate (a withheld case) is scored by what would
+/// remain open were it measured — the members it tells apart from the law (2 floors or more there)
+/// ruled out, the largest remaining disagreement at every other withheld case, in floors, summed —
+/// lowest first; ties by the larger disagreement at the candidate itself.
+struct LawCommittee {
+  int members = 0;
+  std::vector<double> floor;         ///< per case: σ² N [deg²]
+  std::vector<double> disagreement;  ///< per case: the largest member's Σ (Δy)² [deg²]
+  std::vector<bool> open;            ///< per case: withheld and disagreement ≥ 2 floors
+  /// Per case: each parameter's lowest and highest value over the law and the members.
+  std::vector<std::array<double, model::kNetworkOutputs>> lo, hi;
+  /// Candidates (case indices) best first, with what would remain open [floors].
+  std::vector<std::pair<int, double>> next;
+  int64_t simulations = 0;
+};
+LawCommittee CommitteeOf(const HgannFitness& fitness, const OperatingLaw& law, int threads = 1);
 
 /// The law of the file comment on the fitness's training cases; `estimates` (the per-case fits,
 /// TrendSeeds::cases) give the starts and σ.

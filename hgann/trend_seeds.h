@@ -89,7 +89,14 @@ struct TrendSeeds {
   /// The operating-point law fitted on every training case at once (hgann/operating_law.h): one
   /// of the seeds ("operating-point law (joint fit)") when it could be fitted.
   OperatingLaw law;
+  /// The law's seed replaces the structured trends (they are left out of `genomes`) when its cost
+  /// is at most kLawMargin × theirs: a law that fits the training cases nearly as well is
+  /// preferred to shapes chosen case by case, which fit them closer and the withheld cases far
+  /// worse (docs/performance.md, "The operating-point law").
+  bool law_kept = false;
+  double law_cost = 0, structured_cost = 0;  ///< the seeds' costs (+inf: none)
 };
+inline constexpr double kLawMargin = 1.5;
 
 /// Steps 1–3 of the file comment on the fitness's training cases.
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
