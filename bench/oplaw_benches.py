@@ -3,6 +3,7 @@
 
     bench/oplaw_benches.py make  PIEZOID OUT_ROOT FAMILY SEED...
     bench/oplaw_benches.py study PIEZOID OUT_ROOT FAMILY SEED... [-- IDENTIFY_ARGS...]
+    bench/oplaw_benches.py next  PIEZOID OUT_ROOT FAMILY SEED... [-- IDENTIFY_ARGS...]
 
 `make` writes, per seed, OUT_ROOT/FAMILY-SEED-four (the paper's training cases 1, 5, 6, 7) and
 OUT_ROOT/FAMILY-SEED-corner (the same nine cases, case 9 at (750 V, 1 Hz) trained as well): the
@@ -24,6 +25,10 @@ Each law's corner values are drawn uniformly inside the parameter's band (mu 72-
 and prints, per run, the training cost, each case's PI over its truth's PI (the truth's
 parameters, `piezoid pi --saturation given`), the worst withheld ratio, and how many withheld
 cases are within 3 x; then the totals. The runs' folders are kept under OUT_ROOT/runs.
+
+`next` trains, on each bench's paper split, the case identify proposes to measure next (query by
+committee, report.md) as a fifth case, and each other withheld case instead, and prints how many
+of the rest are within 3 x their truth's PI for each choice.
 """
 
 import csv
@@ -153,14 +158,53 @@ def study(piezoid, root, family, seeds, extra):
         print(f"total {split}: {w}/{n} withheld cases within 3x their truth's PI")
 
 
+def next_case(piezoid, root, family, seeds, extra):
+    """Part 3 of issue 47: on each bench's paper split, the case identify proposes (report.md's
+    "next case to measure") trained as a fifth case, against each other withheld case trained
+    instead (every alternative of the same number: no luckier random draw exists); per choice the
+    withheld cases within 3 x their truth's PI."""
+    for seed in seeds:
+        four, _ = make(piezoid, root, family, seed)
+        out = os.path.join(root, "runs", f"{family}-{seed}-four")
+        if not os.path.exists(os.path.join(out, "report.md")):
+            subprocess.run([piezoid, "identify", "--cases", four, "--out", out, "--no-plots"]
+                           + extra, check=True, stdout=subprocess.DEVNULL)
+        with open(os.path.join(out, "report.md")) as fh:
+            line = next(l for l in fh if l.startswith("- next case to measure"))
+        proposed = int(line.split("): ", 1)[1].split("case ", 1)[1].split(" ", 1)[0])
+        with open(os.path.join(four, "cases.csv"), newline="") as fh:
+            rows = list(csv.reader(fh))
+        held = [int(r[0]) for r in rows[1:] if r[4] != "train"]
+        results = []
+        for choice in held:
+            bench = os.path.join(root, f"{family}-{seed}-plus{choice}")
+            if not os.path.exists(bench):
+                shutil.copytree(four, bench)
+                for r in rows[1:]:
+                    r[4] = "train" if int(r[0]) == choice or r[4] == "train" else r[4]
+                with open(os.path.join(bench, "cases.csv"), "w", newline="") as fh:
+                    csv.writer(fh, lineterminator="\n").writerows(rows)
+                with open(os.path.join(four, "cases.csv"), newline="") as fh:
+                    rows = list(csv.reader(fh))
+            run = os.path.join(root, "runs", f"{family}-{seed}-plus{choice}")
+            subprocess.run([piezoid, "identify", "--cases", bench, "--out", run, "--no-plots"]
+                           + extra, check=True, stdout=subprocess.DEVNULL)
+            _, ratio, train, rest = score(piezoid, bench, run)
+            within = sum(ratio[c] <= 3 for c in rest)
+            results.append((choice, within, len(rest), max(ratio[c] for c in rest)))
+        for choice, within, n, worst in results:
+            print(f"{family}-{seed} + case {choice}{' (proposed)' if choice == proposed else ''}: "
+                  f"withheld within 3x {within}/{n}, worst {worst:.1f}x", flush=True)
+
+
 def main():
     args = sys.argv[1:]
     extra = []
     if "--" in args:
         extra = args[args.index("--") + 1:]
         args = args[:args.index("--")]
-    if len(args) < 5 or args[0] not in ("make", "study") or args[3] not in ("dev", "check"):
-        sys.exit("usage: oplaw_benches.py make|study PIEZOID OUT_ROOT dev|check SEED... "
+    if len(args) < 5 or args[0] not in ("make", "study", "next") or args[3] not in ("dev", "check"):
+        sys.exit("usage: oplaw_benches.py make|study|next PIEZOID OUT_ROOT dev|check SEED... "
                  "[-- IDENTIFY_ARGS...]")
     cmd, piezoid, root, family = args[:4]
     seeds = [int(s) for s in args[4:]]
@@ -170,8 +214,10 @@ def main():
     if cmd == "make":
         for seed in seeds:
             make(piezoid, root, family, seed)
-    else:
+    elif cmd == "study":
         study(piezoid, root, family, seeds, extra)
+    else:
+        next_case(piezoid, root, family, seeds, extra)
 
 
 if __name__ == "__main__":

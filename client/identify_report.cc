@@ -596,15 +596,26 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
   std::string data;
   for (int k = 0; k < model::kNetworkOutputs; ++k)
     if (law.data_settled[k]) data += (data.empty() ? "" : ", ") + std::string(kSymbols[k]);
-  const std::string terms =
-      std::string("each parameter affine in V and ln f") +
-      (law.interaction ? " with a V·f interaction (the training cases determine it)"
-                       : " (no V·f interaction: the training cases cannot show one)");
+  // Each parameter's terms beyond its level (OperatingLaw::active).
+  static constexpr const char* kTerms[hgann::OperatingLaw::kMaxTerms] = {
+      "", "V", "ln f", "V·f", "V curvature", "f curvature"};
+  std::string terms;
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    std::string own;
+    for (int t = 1; t < hgann::OperatingLaw::kMaxTerms; ++t)
+      if (law.active[k][t]) own += (own.empty() ? "" : " + ") + std::string(kTerms[t]);
+    terms += (k ? "; " : "") + std::string(kSymbols[k]) + ": ";
+    terms += own.empty() ? "constant" : own;
+  }
+  terms += law.interaction ? " (the training cases determine a V·f interaction)"
+                           : " (no V·f interaction: the training cases cannot show one)";
   std::ostringstream md, term;
   md << "## Operating-point law (all training cases at once)\n\n"
-     << "One of generation 0's seeds (hgann/operating_law.h): " << terms
-     << ", fitted on every training case's data together by Levenberg–Marquardt on the fitness's "
-        "own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — the smoothest "
+     << "One of generation 0's seeds (hgann/operating_law.h), each parameter a law of V and ln f "
+        "with the terms its per-case estimates support (Akaike) — "
+     << terms
+     << " — fitted on every training case's data together by Levenberg–Marquardt on the "
+        "fitness's own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — the smoothest "
         "law unless the data pay for a slope — and each level ~ N(middle of the range, (0.5 of "
         "the range)²), so that a level the data leave open is not put at a bound; the prior "
         "weighted by the residuals' σ² = "
