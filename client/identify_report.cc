@@ -615,8 +615,8 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
         "with the terms its per-case estimates support (Akaike) — "
      << terms
      << " — fitted on every training case's data together by Levenberg–Marquardt on the "
-        "fitness's own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — the smoothest "
-        "law unless the data pay for a slope — and each level ~ N(middle of the range, (0.5 of "
+        "fitness's own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — "
+        "the smoothest law unless the data pay for a slope — and each level ~ N(middle of the range, (0.5 of "
         "the range)²), so that a level the data leave open is not put at a bound; the prior "
         "weighted by the residuals' σ² = "
      << Fmt(law.sigma2, 3) << " deg² a sample (per-case fits, autocorrelation included). Cost "
