@@ -616,15 +616,16 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
      << terms
      << " — fitted on every training case's data together by Levenberg–Marquardt on the "
         "fitness's own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — "
-        "the smoothest law unless the data pay for a slope — and each level ~ N(middle of the range, (0.5 of "
+        "the smoothest law unless the data pay for a slope — and each level ~ N(middle of the "
+        "range, (0.5 of "
         "the range)²), so that a level the data leave open is not put at a bound; the prior "
         "weighted by the residuals' σ² = "
      << Fmt(law.sigma2, 3) << " deg² a sample (per-case fits, autocorrelation included). Cost "
      << Fmt(law.cost, 5) << " deg² (Σ PI over the training cases " << Fmt(law.data_cost, 5)
      << "), polished from " << law.start << ".\n\n"
      << "- settled by the data (every coefficient's posterior variance below "
-     << Fmt(hgann::OperatingLaw::kPriorShare * 100, 3) << " % of its prior's): "
-     << (data.empty() ? "none" : data) << "\n"
+     << Fmt(hgann::OperatingLaw::kPriorShare * 100, 3)
+     << " % of its prior's): " << (data.empty() ? "none" : data) << "\n"
      << "- settled by the prior: " << (prior.empty() ? "none" : prior) << "\n\n"
      << "| case | role | V [V] | f [Hz] |";
   for (int k = 0; k < model::kNetworkOutputs; ++k)
