@@ -41,6 +41,7 @@ import sys
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
 import make_trend_benches as mtb  # noqa: E402  (the simulation, jitter and quantisation)
+import score_trend_bench  # noqa: E402  (the truth's PI)
 
 BANDS = {"mu": (72.0, 108.0), "delta": (0.04, 0.28), "a1": (0.02, 0.28), "a2": (0.02, 0.28)}
 POINTS = [(v, f) for v in (375, 500, 750) for f in (0.25, 0.5, 1.0)]
@@ -116,7 +117,7 @@ def make(piezoid, root, family, seed):
 
 
 def score(piezoid, bench, out):
-    floor = mtb_truth_pi(piezoid, bench)
+    floor = score_trend_bench.truth_pi(piezoid, bench)
     with open(os.path.join(out, "validation.csv")) as fh:
         val = {int(r["case"]): r for r in csv.DictReader(fh)}
     ratio = {c: float(r["pi_deg2"]) / floor[c] for c, r in val.items()}
@@ -124,18 +125,6 @@ def score(piezoid, bench, out):
     held = [c for c in sorted(ratio) if c not in train]
     cf = sum(float(val[c]["pi_deg2"]) for c in train)
     return cf, ratio, train, held
-
-
-def mtb_truth_pi(piezoid, bench):
-    out = subprocess.run([piezoid, "pi", "--cases", bench, "--params",
-                          os.path.join(bench, "truth_params.csv"), "--saturation", "given"],
-                         check=True, capture_output=True, text=True).stdout
-    pis = {}
-    for line in out.splitlines():
-        f = line.split()
-        if len(f) >= 10 and f[0].isdigit() and f[-1] == "ok":
-            pis[int(f[0])] = float(f[-4])
-    return pis
 
 
 def study(piezoid, root, family, seeds, extra):
