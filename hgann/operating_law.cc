@@ -408,9 +408,9 @@ void SelectTerms(const LawBasis& b, const std::vector<CaseEstimate>& est,
                                                                  {true, true, true, true}}};
   // a, b, e, g
   for (int k : {0, 1, 5, 6}) {
-    double best = std::numeric_limits<double>::infinity();
-    std::array<bool, 4> chosen = kSets[0];
-    for (const auto& set : kSets) {
+    std::vector<std::pair<double, int>> scored;  // (χ² + 2 p, set), sets that can be fitted
+    for (int i = 0; i < static_cast<int>(kSets.size()); ++i) {
+      const auto& set = kSets[i];
       if ((set[2] && b.hv < 0) || (set[3] && b.hf < 0)) continue;
       std::vector<int> cols = {0};
       if (set[0]) cols.push_back(1);
@@ -420,8 +420,25 @@ void SelectTerms(const LawBasis& b, const std::vector<CaseEstimate>& est,
       if (set[3]) cols.push_back(5);
       const auto [chi2, n] = EstimatesChi2(b, est, k, cols);
       if (n < static_cast<int>(cols.size())) continue;
-      const double score = chi2 + 2.0 * static_cast<double>(cols.size());
-      if (score < best - 1e-6) best = score, chosen = set;
+      scored.emplace_back(chi2 + 2.0 * static_cast<double>(cols.size()), i);
+    }
+    // The lowest score; when two sets of as many terms tie there (each fits the estimates
+    // exactly: a curvature in V or one in f through four cases), the estimates cannot say which,
+    // and the best of the sets with fewer terms is taken instead.
+    const auto size = [](int i) { return std::count(kSets[i].begin(), kSets[i].end(), true); };
+    std::array<bool, 4> chosen = kSets[0];
+    for (int cap = 4; cap >= 1; --cap) {
+      double best = std::numeric_limits<double>::infinity();
+      int pick = -1, ties = 0;
+      for (const auto& [score, i] : scored) {
+        if (size(i) > cap) continue;
+        if (score < best - 1e-6) best = score, pick = i, ties = 1;
+        else if (score <= best + 1e-6 && size(i) == size(pick)) ++ties;
+      }
+      if (pick < 0) break;
+      chosen = kSets[pick];
+      if (ties == 1) break;
+      cap = static_cast<int>(size(pick));  // the loop's −1 goes below the tied size
     }
     active[k][1] = chosen[0];
     active[k][2] = chosen[1];
