@@ -533,6 +533,125 @@ std::pair<std::string, std::string> ExtrapolationSection(
               term.str()};
 }
 
+/// The committee of laws that fit the training cases alike (hgann::LawCommittee): which
+/// withheld cases they leave open, with the range of their parameters there, and the next case to
+/// measure. Markdown and the terminal's lines.
+std::pair<std::string, std::string> CommitteeSection(const io::CaseSet& set,
+                                                     const hgann::LawCommittee& c) {
+  std::ostringstream md, term;
+  if (c.floor.size() != set.cases.size()) return {"", ""};
+  md << "### What the training cases leave open, and the next case (query by committee)\n\n"
+     << "A committee of " << c.members
+     << " laws that fit the training cases alike (the law with a V·f term, one posterior σ either "
+        "way along each direction the prior settles: hgann/operating_law.h). A withheld case is "
+        "open where a member moves its predicted angle by 2 floors or more (floor: the residual "
+        "variance a sample × its samples): were that member the truth, the law's PI there would "
+        "be about 3 × the floor.\n\n"
+     << "| case | V [V] | f [Hz] | open | largest member's Σ (Δy)² [floors] | μ [1/s] | δ [s] | "
+        "a1 [deg] | a2 [deg] |\n|---|---|---|---|---|---|---|---|---|\n";
+  std::string open;
+  for (size_t i = 0; i < set.cases.size(); ++i) {
+    const auto& bc = set.cases[i];
+    if (bc.role == io::CaseRole::kTrain) continue;
+    md << "| " << bc.number << " | " << Fmt(bc.amplitude_v) << " | " << Fmt(bc.frequency_hz)
+       << " | " << (c.open[i] ? "**open**" : "settled") << " | "
+       << Fmt(c.disagreement[i] / c.floor[i], 3) << " |";
+    for (int k : {0, 1, 5, 6})
+      md << " " << Fmt(c.lo[i][k], 3) << " … " << Fmt(c.hi[i][k], 3) << " |";
+    md << "\n";
+    if (c.open[i])
+      open += (open.empty() ? "" : ", ") + std::to_string(bc.number) + " (" +
+              Fmt(c.disagreement[i] / c.floor[i], 2) + " floors)";
+  }
+  std::string next;
+  for (size_t r = 0; r < c.next.size() && r < 2; ++r) {
+    const auto& bc = set.cases[c.next[r].first];
+    next += (r ? "; then " : "") + std::string("case ") + std::to_string(bc.number) + " (" +
+            Fmt(bc.amplitude_v) + " V, " + Fmt(bc.frequency_hz) + " Hz: " +
+            Fmt(c.next[r].second, 3) + " floors left open)";
+  }
+  md << "\n- open: " << (open.empty() ? "none" : open) << "\n"
+     << "- next case to measure (query by committee: the candidate whose measurement would rule "
+        "out the members that leave the rest open; what stays open, summed over the other "
+        "withheld cases): "
+     << (next.empty() ? "none" : next) << "\n\n";
+  term << "withheld cases the training cases leave open (committee of laws that fit alike): "
+       << (open.empty() ? "none" : open) << "\n"
+       << "next case to measure (query by committee): " << (next.empty() ? "none" : next)
+       << "\n";
+  return {md.str(), term.str()};
+}
+
+/// The operating-point law fitted on all training cases at once (hgann/operating_law.h): its
+/// terms, its prior, which parameters the data settle and which the prior, and each withheld
+/// case's parameters' 1-σ under the law's posterior. Markdown and the terminal's lines.
+std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
+                                               const hgann::HgannFitness& fitness,
+                                               const IdentifyResult& result, int threads) {
+  static constexpr const char* kSymbols[model::kNetworkOutputs] = {"μ", "δ",  "α", "β",
+                                                                   "γ", "a1", "a2"};
+  if (!result.seeds || !result.seeds->law.ok) return {"", ""};
+  const hgann::OperatingLaw& law = result.seeds->law;
+  const std::string prior = hgann::PriorSettledNames(law);
+  std::string data;
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    if (law.data_settled[k]) data += (data.empty() ? "" : ", ") + std::string(kSymbols[k]);
+  // Each parameter's terms beyond its level (OperatingLaw::active).
+  static constexpr const char* kTerms[hgann::OperatingLaw::kMaxTerms] = {
+      "", "V", "ln f", "V·f", "V curvature", "f curvature"};
+  std::string terms;
+  for (int k = 0; k < model::kNetworkOutputs; ++k) {
+    std::string own;
+    for (int t = 1; t < hgann::OperatingLaw::kMaxTerms; ++t)
+      if (law.active[k][t]) own += (own.empty() ? "" : " + ") + std::string(kTerms[t]);
+    terms += (k ? "; " : "") + std::string(kSymbols[k]) + ": ";
+    terms += own.empty() ? "constant" : own;
+  }
+  terms += law.interaction ? " (the training cases determine a V·f interaction)"
+                           : " (no V·f interaction: the training cases cannot show one)";
+  std::ostringstream md, term;
+  md << "## Operating-point law (all training cases at once)\n\n"
+     << "One of generation 0's seeds (hgann/operating_law.h), each parameter a law of V and ln f "
+        "with the terms its per-case estimates support (Akaike) — "
+     << terms
+     << " — fitted on every training case's data together by Levenberg–Marquardt on the "
+        "fitness's own cost, with a Gaussian prior: each slope ~ N(0, (0.5 of the range)²) — "
+        "the smoothest law unless the data pay for a slope — and each level ~ N(middle of the "
+        "range, (0.5 of "
+        "the range)²), so that a level the data leave open is not put at a bound; the prior "
+        "weighted by the residuals' σ² = "
+     << Fmt(law.sigma2, 3) << " deg² a sample (per-case fits, autocorrelation included). Cost "
+     << Fmt(law.cost, 5) << " deg² (Σ PI over the training cases " << Fmt(law.data_cost, 5)
+     << "), polished from " << law.start << ".\n\n"
+     << "- settled by the data (every coefficient's posterior variance below "
+     << Fmt(hgann::OperatingLaw::kPriorShare * 100, 3)
+     << " % of its prior's): " << (data.empty() ? "none" : data) << "\n"
+     << "- settled by the prior: " << (prior.empty() ? "none" : prior) << "\n\n"
+     << "| case | role | V [V] | f [Hz] |";
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    md << " " << kSymbols[k] << " ± 1σ [" << model::OutputUnit(k) << "] |";
+  md << "\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  const model::Network& net = law.network;
+  for (size_t i = 0; i < set.cases.size() && i < law.sigma_at_case.size(); ++i) {
+    const auto& bc = set.cases[i];
+    const auto p = net.Predict(bc.amplitude_v, bc.frequency_hz).ToArray();
+    md << "| " << bc.number << " | " << io::CaseRoleName(bc.role) << " | " << Fmt(bc.amplitude_v)
+       << " | " << Fmt(bc.frequency_hz) << " |";
+    for (int k = 0; k < model::kNetworkOutputs; ++k)
+      md << " " << Fmt(p[k], 3) << " ± " << Fmt(law.sigma_at_case[i][k], 2) << " |";
+    md << "\n";
+  }
+  md << "\n";
+  const auto [committee_md, committee_term] =
+      CommitteeSection(set, hgann::CommitteeOf(fitness, law, threads));
+  md << committee_md;
+  term << "operating-point law: " << terms << "; settled by the data: "
+       << (data.empty() ? "none" : data) << "; by the prior: " << (prior.empty() ? "none" : prior)
+       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n"
+       << committee_term;
+  return {md.str(), term.str()};
+}
+
 constexpr const char* kAtBoundMeaning =
     "on every training case: set by the range, not by the data, which may want it past the bound. "
     "Widen a "
@@ -736,13 +855,15 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
   const auto [extrapolation_md, extrapolation_term] =
       ExtrapolationSection(set, fitness, result, per_case.estimates);
+  const auto [law_md, law_term] =
+      LawSection(set, fitness, result, std::max(1, options.threads > 0 ? options.threads : 2));
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);
   {
     std::ofstream f(out / "report.md");
     f << ReportMarkdown(options, set, fitness, result, totals, mu_regression, at_bound,
-                        per_case.markdown + extrapolation_md);
+                        per_case.markdown + law_md + extrapolation_md);
     written.push_back(out / "report.md");
   }
   term << "\n"
@@ -762,7 +883,7 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   if (!at_bound.empty())
     term << "held at a bound on every training case (set by the range, not the data; report.md): "
          << at_bound << "\n";
-  term << per_case.terminal << extrapolation_term;
+  term << per_case.terminal << law_term << extrapolation_term;
   for (const auto& e : plot_errors) term << "warning: " << e << "\n";
   term << "results in " << out.string()
        << " (report.md, network.pb/.json, progress.csv, validation.csv, "

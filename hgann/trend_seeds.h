@@ -47,6 +47,7 @@
 #include <vector>
 
 #include "hgann/hgann_fitness.h"
+#include "hgann/operating_law.h"
 #include "model/network.h"
 #include "opt/evaluator.h"
 
@@ -85,7 +86,17 @@ struct TrendSeeds {
   /// Where they part, the training cases do not settle the parameter there: the network's value
   /// is one guess of several that fit them alike.
   std::vector<std::array<double, model::kNetworkOutputs>> supported_lo, supported_hi;
+  /// The operating-point law fitted on every training case at once (hgann/operating_law.h): one
+  /// of the seeds ("operating-point law (joint fit)") when it could be fitted.
+  OperatingLaw law;
+  /// The law's seed replaces the structured trends (they are left out of `genomes`) when its cost
+  /// is at most kLawMargin × theirs: a law that fits the training cases nearly as well is
+  /// preferred to shapes chosen case by case, which fit them closer and the withheld cases far
+  /// worse (docs/performance.md, "The operating-point law").
+  bool law_kept = false;
+  double law_cost = 0, structured_cost = 0;  ///< the seeds' costs (+inf: none)
 };
+inline constexpr double kLawMargin = 1.5;
 
 /// Steps 1–3 of the file comment on the fitness's training cases.
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});

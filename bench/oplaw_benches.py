@@ -1,0 +1,213 @@
+#!/usr/bin/env python3
+"""Smooth operating-point law benches for the HGANN (issue 47), and the study that scores them.
+
+    bench/oplaw_benches.py make  PIEZOID OUT_ROOT FAMILY SEED...
+    bench/oplaw_benches.py study PIEZOID OUT_ROOT FAMILY SEED... [-- IDENTIFY_ARGS...]
+    bench/oplaw_benches.py next  PIEZOID OUT_ROOT FAMILY SEED... [-- IDENTIFY_ARGS...]
+
+`make` writes, per seed, OUT_ROOT/FAMILY-SEED-four (the paper's training cases 1, 5, 6, 7) and
+OUT_ROOT/FAMILY-SEED-corner (the same nine cases, case 9 at (750 V, 1 Hz) trained as well): the
+paper's nine operating points of a fin bench whose mu, delta, a1 and a2 follow smooth laws of V and
+f drawn from SEED, with alpha, beta, gamma constant (the nominal bench's loop) and the nominal
+bench's saturations; simulated, jittered and quantised as scripts/make_trend_benches.py does (the
+CVODE path, not the identification's modal path). truth.json and truth_params.csv beside them.
+
+Two families, drawn by different rules, with v = (V - 375) / 375 and l = ln(f / 0.25) / ln 4:
+  - "dev" (the one developed on): each parameter c + a v + b l, plus d v l for an even SEED;
+  - "check" (only checked with, never tuned on): each parameter c + a v^p + b g(f) + d v (f -
+    0.25) / 0.75 with p in [0.6, 1.6], g = sqrt((f - 0.25) / 0.75) or (f - 0.25) / 0.75 (linear
+    in f, not in log f), the V f term for SEED divisible by 3.
+Each law's corner values are drawn uniformly inside the parameter's band (mu 72-108 1/s, delta
+0.04-0.28 s, a1 and a2 0.02-0.28 deg), the interaction moving the (750 V, 1 Hz) corner by up to
+25 % of the band; a draw leaving the band anywhere on the nine points is drawn again.
+
+`study` runs the default `piezoid identify` (or with IDENTIFY_ARGS) on both splits of each bench
+and prints, per run, the training cost, each case's PI over its truth's PI (the truth's
+parameters, `piezoid pi --saturation given`), the worst withheld ratio, and how many withheld
+cases are within 3 x; then the totals. The runs' folders are kept under OUT_ROOT/runs.
+
+`next` trains, on each bench's paper split, the case identify proposes to measure next (query by
+committee, report.md) as a fifth case, and each other withheld case instead, and prints how many
+of the rest are within 3 x their truth's PI for each choice.
+"""
+
+import csv
+import math
+import os
+import random
+import shutil
+import subprocess
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+import make_trend_benches as mtb  # noqa: E402  (the simulation, jitter and quantisation)
+import score_trend_bench  # noqa: E402  (the truth's PI)
+
+BANDS = {"mu": (72.0, 108.0), "delta": (0.04, 0.28), "a1": (0.02, 0.28), "a2": (0.02, 0.28)}
+POINTS = [(v, f) for v in (375, 500, 750) for f in (0.25, 0.5, 1.0)]
+
+
+def v_of(v):
+    return (v - 375.0) / 375.0
+
+
+def l_of(f):
+    return math.log(f / 0.25) / math.log(4.0)
+
+
+def draw_law(rng, family, seed, name):
+    lo, hi = BANDS[name]
+    span = hi - lo
+    while True:
+        p00, p10, p01 = (rng.uniform(lo, hi) for _ in range(3))
+        if family == "dev":
+            inter = seed % 2 == 0
+            d = rng.uniform(-0.25, 0.25) * span if inter else 0.0
+            a, b = p10 - p00, p01 - p00
+            fn = (lambda c, a, b, d: lambda v, f: c + a * v_of(v) + b * l_of(f)
+                  + d * v_of(v) * l_of(f))(p00, a, b, d)
+            text = (f"{name} = {p00:.4g} + {a:.4g} v + {b:.4g} l" + (f" + {d:.4g} v l" if d else "")
+                    + "   v = (V - 375) / 375, l = ln(f / 0.25) / ln 4")
+        else:
+            inter = seed % 3 == 0
+            power = rng.uniform(0.6, 1.6)
+            use_sqrt = rng.random() < 0.5
+            d = rng.uniform(-0.25, 0.25) * span if inter else 0.0
+            a, b = p10 - p00, p01 - p00
+
+            def g(f, use_sqrt=use_sqrt):
+                x = (f - 0.25) / 0.75
+                return math.sqrt(x) if use_sqrt else x
+
+            fn = (lambda c, a, b, d, p, g: lambda v, f: c + a * v_of(v) ** p + b * g(f)
+                  + d * v_of(v) * (f - 0.25) / 0.75)(p00, a, b, d, power, g)
+            text = (f"{name} = {p00:.4g} + {a:.4g} v^{power:.3f} + {b:.4g} "
+                    + ("sqrt((f - 0.25) / 0.75)" if use_sqrt else "(f - 0.25) / 0.75")
+                    + (f" + {d:.4g} v (f - 0.25) / 0.75" if d else "") + "   v = (V - 375) / 375")
+        if all(lo <= fn(v, f) <= hi for v, f in POINTS):
+            return fn, text
+
+
+def laws_of(family, seed):
+    rng = random.Random((1 if family == "dev" else 7919) * 100003 + seed)
+    laws = {"seed": 5000 + seed + (0 if family == "dev" else 500), "text": {}}
+    for name in ("mu", "delta", "a1", "a2"):
+        fn, text = draw_law(rng, family, seed, name)
+        laws[name] = fn
+        laws["text"][name] = text
+    return laws
+
+
+def make(piezoid, root, family, seed):
+    name = f"{family}-{seed}"
+    four, corner = os.path.join(root, name + "-four"), os.path.join(root, name + "-corner")
+    if os.path.exists(os.path.join(four, "truth_params.csv")) and os.path.exists(corner):
+        return four, corner
+    mtb.make(piezoid, root, name + "-four", laws_of(family, seed))
+    shutil.rmtree(corner, ignore_errors=True)
+    shutil.copytree(four, corner)
+    with open(os.path.join(corner, "cases.csv"), newline="") as fh:
+        rows = list(csv.reader(fh))
+    for r in rows[1:]:
+        if r[0] == "9":
+            r[4] = "train"
+    with open(os.path.join(corner, "cases.csv"), "w", newline="") as fh:
+        csv.writer(fh, lineterminator="\n").writerows(rows)
+    return four, corner
+
+
+def score(piezoid, bench, out):
+    floor = score_trend_bench.truth_pi(piezoid, bench)
+    with open(os.path.join(out, "validation.csv")) as fh:
+        val = {int(r["case"]): r for r in csv.DictReader(fh)}
+    ratio = {c: float(r["pi_deg2"]) / floor[c] for c, r in val.items()}
+    train = [c for c, r in val.items() if r["role"] == "train"]
+    held = [c for c in sorted(ratio) if c not in train]
+    cf = sum(float(val[c]["pi_deg2"]) for c in train)
+    return cf, ratio, train, held
+
+
+def study(piezoid, root, family, seeds, extra):
+    totals = {"four": [0, 0], "corner": [0, 0]}
+    for seed in seeds:
+        for split, bench in zip(("four", "corner"), make(piezoid, root, family, seed)):
+            out = os.path.join(root, "runs", f"{family}-{seed}-{split}")
+            subprocess.run([piezoid, "identify", "--cases", bench, "--out", out, "--no-plots"]
+                           + extra, check=True, stdout=subprocess.DEVNULL)
+            cf, ratio, train, held = score(piezoid, bench, out)
+            within = sum(ratio[c] <= 3 for c in held)
+            totals[split][0] += within
+            totals[split][1] += len(held)
+            worst = max(held, key=lambda c: ratio[c])
+            print(f"{family}-{seed} {split:6s} CF {cf:.3f} | withheld within 3x {within}/{len(held)}"
+                  f" | worst case {worst} {ratio[worst]:.1f}x | per case x truth: "
+                  + " ".join(f"{c}{'*' if c in train else ''}:{ratio[c]:.1f}" for c in sorted(ratio)),
+                  flush=True)
+    for split, (w, n) in totals.items():
+        print(f"total {split}: {w}/{n} withheld cases within 3x their truth's PI")
+
+
+def next_case(piezoid, root, family, seeds, extra):
+    """Part 3 of issue 47: on each bench's paper split, the case identify proposes (report.md's
+    "next case to measure") trained as a fifth case, against each other withheld case trained
+    instead (every alternative of the same number: no luckier random draw exists); per choice the
+    withheld cases within 3 x their truth's PI."""
+    for seed in seeds:
+        four, _ = make(piezoid, root, family, seed)
+        out = os.path.join(root, "runs", f"{family}-{seed}-four")
+        if not os.path.exists(os.path.join(out, "report.md")):
+            subprocess.run([piezoid, "identify", "--cases", four, "--out", out, "--no-plots"]
+                           + extra, check=True, stdout=subprocess.DEVNULL)
+        with open(os.path.join(out, "report.md")) as fh:
+            line = next(l for l in fh if l.startswith("- next case to measure"))
+        proposed = int(line.split("): ", 1)[1].split("case ", 1)[1].split(" ", 1)[0])
+        with open(os.path.join(four, "cases.csv"), newline="") as fh:
+            rows = list(csv.reader(fh))
+        held = [int(r[0]) for r in rows[1:] if r[4] != "train"]
+        results = []
+        for choice in held:
+            bench = os.path.join(root, f"{family}-{seed}-plus{choice}")
+            if not os.path.exists(bench):
+                shutil.copytree(four, bench)
+                for r in rows[1:]:
+                    r[4] = "train" if int(r[0]) == choice or r[4] == "train" else r[4]
+                with open(os.path.join(bench, "cases.csv"), "w", newline="") as fh:
+                    csv.writer(fh, lineterminator="\n").writerows(rows)
+                with open(os.path.join(four, "cases.csv"), newline="") as fh:
+                    rows = list(csv.reader(fh))
+            run = os.path.join(root, "runs", f"{family}-{seed}-plus{choice}")
+            subprocess.run([piezoid, "identify", "--cases", bench, "--out", run, "--no-plots"]
+                           + extra, check=True, stdout=subprocess.DEVNULL)
+            _, ratio, train, rest = score(piezoid, bench, run)
+            within = sum(ratio[c] <= 3 for c in rest)
+            results.append((choice, within, len(rest), max(ratio[c] for c in rest)))
+        for choice, within, n, worst in results:
+            print(f"{family}-{seed} + case {choice}{' (proposed)' if choice == proposed else ''}: "
+                  f"withheld within 3x {within}/{n}, worst {worst:.1f}x", flush=True)
+
+
+def main():
+    args = sys.argv[1:]
+    extra = []
+    if "--" in args:
+        extra = args[args.index("--") + 1:]
+        args = args[:args.index("--")]
+    if len(args) < 5 or args[0] not in ("make", "study", "next") or args[3] not in ("dev", "check"):
+        sys.exit("usage: oplaw_benches.py make|study|next PIEZOID OUT_ROOT dev|check SEED... "
+                 "[-- IDENTIFY_ARGS...]")
+    cmd, piezoid, root, family = args[:4]
+    seeds = [int(s) for s in args[4:]]
+    if not os.access(piezoid, os.X_OK):
+        sys.exit(f"{piezoid}: not an executable piezoid binary")
+    os.makedirs(root, exist_ok=True)
+    if cmd == "make":
+        for seed in seeds:
+            make(piezoid, root, family, seed)
+    elif cmd == "study":
+        study(piezoid, root, family, seeds, extra)
+    else:
+        next_case(piezoid, root, family, seeds, extra)
+
+
+if __name__ == "__main__":
+    main()
