@@ -84,6 +84,9 @@ struct ModelScore {
   /// After the choice: the candidate refitted on every training record (finalists only; NaN else).
   double train_rmse = std::numeric_limits<double>::quiet_NaN();
   double withheld_rmse = std::numeric_limits<double>::quiet_NaN();
+  /// Finalists, where the withheld drives need excitation the training lacks: the RMS of this
+  /// finalist's prediction less the finalists' median prediction over those samples (NaN else).
+  double parting = std::numeric_limits<double>::quiet_NaN();
   std::string error;  ///< why it could not be fitted ("" when it was)
 };
 
@@ -149,6 +152,9 @@ struct SelectionResult {
   FitResult fit;           ///< the chosen candidate refitted on all training records
   FitOptions fit_options;  ///< its options
   NoiseFloor noise;        ///< the records' noise floor (EstimateNoiseFloor), beside the errors
+  /// "" or, when the withheld drives need excitation the training lacks, how the finalists'
+  /// predictions part there and how that weighed in the choice.
+  std::string unexcited;
   int folds = 0;
   size_t fold_fits = 0;  ///< fits run for the cross-validation
   double wall_time_s = 0;
