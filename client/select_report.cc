@@ -38,6 +38,7 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
      << "choice, never used for it\n";
   os << "  noise floor " << s.noise.Summary(u) << "\n";
   if (!s.noise.warning.empty()) os << "  warning: " << s.noise.warning << "\n";
+  if (!s.grid_note.empty()) os << "  " << s.grid_note << "\n";
   if (!s.unexcited.empty()) os << "  " << s.unexcited << "\n";
   os << "    " << std::left << std::setw(52) << "candidate" << std::right << std::setw(7)
      << "params" << std::setw(12) << "CV RMSE" << std::setw(10) << "SE*" << std::setw(12)
@@ -63,8 +64,8 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
   os << ")\n";
   os << (s.unexcited.empty() ? "  chosen (the fewest parameters within one SE of the best CV "
                                "RMSE): "
-                             : "  chosen (the least √(CV² + parting²), where the training lacks "
-                               "excitation): ")
+                             : "  chosen (the fewest parameters within one SE of the best CV RMSE "
+                               "among the finalists that do not part on their own): ")
      << s.ranking[s.chosen].candidate.Describe() << "\n";
   for (const auto& e : s.initial_states)
     os << "  initial state, " << model::CaseRoleName(e.role) << " " << e.record << ": "
@@ -96,6 +97,7 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
         "on all the "
      << "training records, shown after the choice. Noise floor " << s.noise.Summary(u) << "."
      << (s.noise.warning.empty() ? "" : " **Warning:** " + s.noise.warning + ".")
+     << (s.grid_note.empty() ? "" : "\n\nThe grid: " + s.grid_note + ".")
      << (s.unexcited.empty() ? "" : "\n\n" + s.unexcited) << "\n\n"
      << "| | candidate | parameters | CV RMSE [" << u
      << "] | ± SE | SE vs best | folds | round | withheld RMSE "
@@ -148,6 +150,7 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
   m.set_noise_floor_summary(s.noise.Summary(""));
   m.set_noise_floor_warning(s.noise.warning);
   m.set_unexcited(s.unexcited);
+  m.set_grid_note(s.grid_note);
   m.set_wall_time_s(s.wall_time_s);
   m.set_detected_initial_state(model::InitialStateName(s.detected));
   for (size_t i = 0; i < s.ranking.size(); ++i) {
