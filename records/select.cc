@@ -722,6 +722,55 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   return pick;
 }
 
+/// The finalists refitted on every training record: the chosen one with `fit`'s own search, the
+/// others with the finalists' (their errors in `second` when they cannot be fitted).
+std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
+                                      const std::vector<Candidate>& finals, size_t chosen,
+                                      const SelectOptions& options,
+                                      std::vector<ModelScore>& second) {
+  const int threads = std::max(1, options.fit.threads);
+  std::vector<FitResult> refits(finals.size());
+  RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    FitOptions f = finals[i].Options(
+        i == chosen
+            ? options.fit
+            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+    if (options.service) f.evaluator_factory = options.service(f.family_options);
+    f.threads = options.service ? threads : 1;
+    f.progress = nullptr;
+    f.uncertainty = i == chosen && options.fit.uncertainty;
+    try {
+      refits[i] = FitRecords(set, f);
+    } catch (const InputError& e) {
+      if (i == chosen) throw;
+      second[i].error = e.what();
+    }
+  });
+  return refits;
+}
+
+/// The ranking: the finalists by CV RMSE, then the screened-only ones by theirs (res.ranking,
+/// res.chosen).
+void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
+                    const std::vector<ModelScore>& screen, const std::vector<size_t>& order,
+                    const std::vector<Candidate>& grid, const std::vector<Candidate>& finals,
+                    SelectionResult& res) {
+  std::vector<size_t> o2(second.size());
+  for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
+  std::stable_sort(o2.begin(), o2.end(),
+                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
+  for (size_t i : o2) {
+    if (i == chosen) res.chosen = res.ranking.size();
+    res.ranking.push_back(second[i]);
+  }
+  for (size_t i : order) {
+    bool final = false;
+    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
+    if (!final) res.ranking.push_back(screen[i]);
+  }
+}
+
 }  // namespace
 
 SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& options) {
@@ -814,24 +863,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
       ")");
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
-  std::vector<FitResult> refits(finals.size());
-  RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
-    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
-    FitOptions f = finals[i].Options(
-        i == chosen
-            ? options.fit
-            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
-    if (options.service) f.evaluator_factory = options.service(f.family_options);
-    f.threads = options.service ? threads : 1;
-    f.progress = nullptr;
-    f.uncertainty = i == chosen && options.fit.uncertainty;
-    try {
-      refits[i] = FitRecords(set, f);
-    } catch (const InputError& e) {
-      if (i == chosen) throw;
-      second[i].error = e.what();
-    }
-  });
+  std::vector<FitResult> refits = RefitFinalists(set, finals, chosen, options, second);
   SetRefitErrors(refits, second);
   // 6. An unexcited region: the finalists' predictions there weighed (their drives only).
   if (const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
@@ -847,20 +879,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   }
   res.fit = std::move(refits[chosen]);
   res.fit_options = finals[chosen].Options(options.fit);
-  // The ranking: the finalists by CV RMSE, then the screened-only ones by theirs.
-  std::vector<size_t> o2(second.size());
-  for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
-  std::stable_sort(o2.begin(), o2.end(),
-                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
-  for (size_t i : o2) {
-    if (i == chosen) res.chosen = res.ranking.size();
-    res.ranking.push_back(second[i]);
-  }
-  for (size_t i : order) {
-    bool final = false;
-    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
-    if (!final) res.ranking.push_back(screen[i]);
-  }
+  RankCandidates(second, chosen, screen, order, grid, finals, res);
   res.noise = EstimateNoiseFloor(set);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;
