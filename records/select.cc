@@ -423,6 +423,8 @@ model::InitialState TrainingInitialState(const std::vector<InitialStateEvidence>
 
 namespace {
 
+std::vector<size_t> UnexcitedRecords(const io::RecordSet& set, std::string* needs);
+
 /// An effect whose magnitude depends on the drive's rate.
 bool RateEffect(EffectKind e) {
   const std::string n = EffectName(e);
@@ -445,12 +447,15 @@ std::string GridNote(const io::RecordSet& set, const SelectOptions& options) {
   if (!options.effect_sets.empty()) return "";
   const double span = TrainingRateSpan(set);
   if (span >= kMinRateSpan) return "";
+  std::string needs;
+  if (UnexcitedRecords(set, &needs).empty()) return "";
   return "delay is left out of the grid: the training drive has one rate (its half cycles' peak "
          "rates span " +
          FormatG(span, 3) + "×, under " + FormatG(kMinRateSpan, 2) +
-         "×), where a delay is a phase that a hysteretic family's loop width gives as well: the "
-         "folds cannot tell them apart, and the delay fitted there shifts every other drive "
-         "(ask for it with --effects)";
+         "×), where a delay is a phase that a hysteretic family's loop width gives as well, and "
+         "the withheld drives have loops the training lacks: the folds cannot tell the two apart, "
+         "and a delay fitted there for loop width mispredicts the other loops (ask for it with "
+         "--effects)";
 }
 
 std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptions& options,

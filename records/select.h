@@ -163,8 +163,9 @@ struct SelectionResult {
 };
 
 /// Why the default grid leaves a rate effect out ("" when it does not): a training drive of one
-/// rate (records/excitation.h rate span under kMinRateSpan) — a delay there is a phase that a
-/// hysteretic family's loop width gives as well, which no fold can tell apart.
+/// rate (records/excitation.h rate span under kMinRateSpan) and withheld drives with reversals or
+/// range the training lacks — a delay there is a phase that a hysteretic family's loop width gives
+/// as well, which no fold can tell apart, and fitted for the width it mispredicts other loops.
 std::string GridNote(const io::RecordSet& set, const SelectOptions& options);
 
 /// The grid of candidates for `set`'s training records (families × effect sets × resolutions,
