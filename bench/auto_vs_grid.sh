@@ -42,7 +42,7 @@ BEST=inf
 while read -r fam lev eff st; do
   flags=(--records "$SET" --family "$fam" --pi-operators "$lev" --out "$OUT/grid" --no-figures --quiet)
   [ "$eff" != none ] && flags+=(--effects "$eff")
-  [ "$st" != auto ] && flags+=(--initial-state "$st")
+  case "$fam" in duhem|bw-oscillator) ;; *) [ "$st" != auto ] && flags+=(--initial-state "$st") ;; esac
   if "$BIN" fit "${flags[@]}" "$@" >/dev/null 2>"$OUT/grid.err"; then
     W=$(withheld "$OUT/grid/fit.json")
   else

@@ -589,6 +589,8 @@ void SetRefitErrors(const std::vector<FitResult>& refits, std::vector<ModelScore
 /// WeighUnexcited: a finalist whose prediction where the training lacks excitation parts from the
 /// families' median by more than this × its CV RMSE extrapolates on its own.
 constexpr double kOwnExtrapolation = 3;
+/// …and only a finalist whose CV RMSE is within this factor of the best can take the choice over.
+constexpr double kPlausible = 3;
 
 /// The withheld records whose drives need what the training lacks in the hysteresis itself
 /// (reversals the training's cells do not hold, or range beyond it: records/excitation.h), and what
@@ -625,10 +627,11 @@ std::vector<size_t> UnexcitedRecords(const io::RecordSet& set, std::string* need
 /// family, three families at least): parting_i, the RMS of finalist i's less the median over those
 /// samples, is how far it extrapolates on its own. A finalist that parts by more than
 /// kOwnExtrapolation × its own CV RMSE — its prediction there is its prior's, not the data's — is
-/// passed over, and the one-standard-error rule is applied to the others: the choice degrades
-/// gracefully (wrong there, it is wrong with the others, not alone). Returns the chosen index
-/// (`chosen` when there is nothing to weigh or no finalist is passed over) and sets each finalist's
-/// parting and the report's sentence.
+/// passed over, and the one-standard-error rule is applied to the others within kPlausible × the
+/// best CV RMSE: the choice degrades gracefully (wrong there, it is wrong with the others, not
+/// alone); when none is left, every plausible finalist extrapolates on its own and the one-SE
+/// choice stands. Returns the chosen index (`chosen` when there is nothing to weigh or no finalist
+/// is passed over) and sets each finalist's parting and the report's sentence.
 size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexcited,
                       const std::string& needs, const std::vector<FitResult>& refits,
                       std::vector<ModelScore>& second, size_t chosen, const std::string& unit,
@@ -683,8 +686,13 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   std::vector<ModelScore> kept;
   std::vector<size_t> index;
   std::string dropped;
+  double best_cv = kInf;
+  for (const ModelScore& m : second) best_cv = std::min(best_cv, m.cv_rmse);
   for (size_t i = 0; i < second.size(); ++i) {
     if (!std::isfinite(second[i].parting) || !std::isfinite(second[i].cv_rmse)) continue;
+    // Only a finalist near the best where the training shows it can take over (when every such
+    // one parts on its own, all extrapolate there alike: the one-SE choice stands).
+    if (second[i].cv_rmse > kPlausible * best_cv) continue;
     if (second[i].parting > kOwnExtrapolation * second[i].cv_rmse) {
       dropped += (dropped.empty() ? "" : ", ") + second[i].candidate.Describe() + " (" +
                  FormatG(second[i].parting, 3) + " against CV " + FormatG(second[i].cv_rmse, 3) +
@@ -706,7 +714,14 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
       "the " +
       std::to_string(reps.size()) + " families' best by up to " + FormatG(widest, 3) + " " + unit +
       " RMS (\"parting\"); ";
-  if (dropped.empty() || kept.empty()) {
+  if (!dropped.empty() && kept.empty()) {
+    *sentence += "every finalist within " + FormatG(kPlausible, 2) +
+                 "× the best CV RMSE parts by more than " + FormatG(kOwnExtrapolation, 2) +
+                 "× its own (" + dropped +
+                 "): they all extrapolate there on their own, and the one-standard-error choice "
+                 "stands: " +
+                 now.candidate.Describe() + ".";
+  } else if (dropped.empty()) {
     *sentence +=
         "none parts by more than " + FormatG(kOwnExtrapolation, 2) +
         "× its own CV RMSE, so the one-standard-error choice stands: " + now.candidate.Describe() +
