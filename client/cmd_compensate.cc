@@ -2,10 +2,13 @@
 // section, client/fit_file.h) as a feed-forward compensator.
 //
 //   compensate --model FIT.json --reference REF.csv --out DRIVE.csv [--check-model OTHER.json]
+//              [--reference-zero absolute|rest|mean|auto]
 //       the drive that makes the model follow the reference (records/stepper.h inverse, the
 //       reference's preview used for a delay), with the predicted tracking error through the
 //       forward model, the clipping events (how much, where) and, with --check-model, the error
-//       another model predicts for that drive (the exposure to model error).
+//       another model predicts for that drive (the exposure to model error). The reference is the
+//       model's absolute output or, the usual form, zero-mean relative to its rest output or to
+//       its major loop's mean (ReferenceZero); the predicted column is in the reference's frame.
 //   compensate --model FIT.json --replay RECORDS
 //       the inverse run on each record's measured response (less the record's own offset, as the
 //       fit takes it: a sensor's zero is not a drive; a delay's response read that many samples
@@ -21,22 +24,24 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <numbers>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "client/commands.h"
 #include "client/fit_file.h"
 #include "client/record_windows.h"
 #include "controller/export_header.h"
+#include "diagnose/diagnose.h"
+#include "diagnose/synthetic.h"
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/format.h"
 #include "opt/random.h"
-#include "diagnose/diagnose.h"
 #include "records/stepper.h"
-#include "diagnose/synthetic.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -200,6 +205,7 @@ struct CompensateArgs {
   std::string model, reference, out, check_model, replay;
   std::vector<std::string> train_windows, validate_windows, test_windows;
   double rest_drive = NAN;
+  std::string reference_zero = "auto";
 };
 
 /// The drive at rest for the reference's first value: the rest state whose output it is
@@ -218,8 +224,66 @@ double RestDrive(const records::ModelSpec& m, double y0) {
   return 0.5 * (lo + hi);
 }
 
+/// The mean of the model's output over its major loop: two periods of a sine through the drive
+/// limits (2000 steps each) from rest at the lower limit, the mean over the second. A training
+/// record's mean response, for a record that spans the range.
+double MajorLoopMean(const records::ModelSpec& m) {
+  records::Stepper st(m);
+  constexpr int kSteps = 2000;
+  const double mid = 0.5 * (m.drive_min + m.drive_max), amp = 0.5 * (m.drive_max - m.drive_min);
+  st.Init(m.drive_min);
+  double sum = 0;
+  for (int k = 1; k <= 2 * kSteps; ++k) {
+    const double y = st.Step(mid - amp * std::cos(2 * std::numbers::pi * k / kSteps));
+    if (k > kSteps) sum += y;
+  }
+  return sum / kSteps;
+}
+
+/// Where the reference's zero lies in the model's absolute output (--reference-zero): `absolute`
+/// (the reference is the model's output itself: zero 0), `rest` (relative to the model's output at
+/// rest under the rest drive, --rest-drive or the lower drive limit), `mean` (relative to its major
+/// loop's mean, MajorLoopMean), `auto` (absolute when the reference's mean lies within the model's
+/// output range over the drive limits, mean otherwise). The zero, and how it was chosen.
+std::pair<double, std::string> ReferenceZero(const CompensateArgs& a, const records::ModelSpec& m,
+                                             const Reference& ref) {
+  std::string mode = a.reference_zero;
+  const std::string unit = " " + m.response_unit;
+  if (mode == "auto") {
+    records::Stepper st(m);
+    const double lo = st.Init(m.drive_min), hi = st.Init(m.drive_max);
+    double mean = 0;
+    for (double y : ref.y) mean += y / static_cast<double>(ref.y.size());
+    const bool inside = mean >= std::min(lo, hi) && mean <= std::max(lo, hi);
+    mode = inside ? "absolute" : "mean";
+    const std::string why = "the reference's mean " + Fmt(mean) + unit +
+                            (inside ? " lies" : " lies not") +
+                            " within the model's output over its drive limits (" + Fmt(lo) + " … " +
+                            Fmt(hi) + unit + "; --reference-zero absolute, rest or mean to choose)";
+    if (inside) return {0.0, "absolute: " + why};
+    const double z = MajorLoopMean(m);
+    return {z, "relative to the mean of the model's major loop, " + Fmt(z) + unit + ": " + why};
+  }
+  if (mode == "absolute") return {0.0, "absolute (--reference-zero absolute)"};
+  if (mode == "rest") {
+    const double u = std::isnan(a.rest_drive) ? m.drive_min : a.rest_drive;
+    records::Stepper st(m);
+    const double z = st.Init(u);
+    return {z, "relative to the model's rest output " + Fmt(z) + unit + " at " + Fmt(u) + " " +
+                   m.drive_unit + " (--reference-zero rest)"};
+  }
+  if (mode == "mean") {
+    const double z = MajorLoopMean(m);
+    return {z, "relative to the mean of the model's major loop, " + Fmt(z) + unit +
+                   " (--reference-zero mean)"};
+  }
+  throw InputError("--reference-zero '" + a.reference_zero + "': absolute, rest, mean or auto");
+}
+
 int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
-  const Reference ref = ReadReference(a.reference, m);
+  Reference ref = ReadReference(a.reference, m);
+  const auto [zero, zero_how] = ReferenceZero(a, m, ref);
+  for (double& y : ref.y) y += zero;  // the model's absolute output from here on
   std::optional<records::ModelSpec> other;
   if (!a.check_model.empty()) {
     other = LoadFit(a.check_model);
@@ -244,12 +308,13 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
     os << "t_s,drive_" << m.drive_unit << ",predicted_" << m.response_unit << "\n";
     for (size_t k = 0; k < u.size(); ++k)
       os << io::FormatNumber(ref.t[k]) << "," << io::FormatNumber(u[k]) << ","
-         << (k < diverged ? io::FormatNumber(y[k]) : std::string()) << "\n";
+         << (k < diverged ? io::FormatNumber(y[k] - zero) : std::string()) << "\n";
   });
   const auto range = std::minmax_element(ref.y.begin(), ref.y.end());
   std::cout << "piezoid compensate: " << m.Model()->Describe() << " from " << a.model
             << ", reference " << a.reference << " (" << ref.y.size() << " samples, range "
             << Fmt(*range.second - *range.first) << " " << m.response_unit << ")\n"
+            << "  reference " << zero_how << "\n"
             << "  drive written to " << a.out << " (rest drive " << Fmt(u0) << " " << m.drive_unit
             << ", limits " << Fmt(inv.ctl().u_lo) << " … " << Fmt(inv.ctl().u_hi) << " "
             << m.drive_unit << ")\n"
@@ -431,6 +496,13 @@ void RegisterCompensate(CLI::App& app, int& exit_code) {
   cmd->add_option("--rest-drive", a->rest_drive,
                   "the drive at rest before the reference (default: the rest drive "
                   "whose output is the reference's first value)");
+  cmd->add_option("--reference-zero", a->reference_zero,
+                  "where the reference's zero lies: absolute (the model's output itself), rest "
+                  "(the model's output at rest under --rest-drive, default the lower drive "
+                  "limit), mean (the mean of the model's major loop: a zero-mean reference about "
+                  "the training record's mean), auto (default: absolute when the reference's mean "
+                  "lies within the model's output range, mean otherwise)")
+      ->type_name("absolute|rest|mean|auto");
   cmd->add_option("--train-window", a->train_windows,
                   "--replay of one CSV: a training window START:END [s]");
   cmd->add_option("--validate-window", a->validate_windows,

@@ -761,7 +761,7 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
   CLI::App* cmd = app.add_subcommand(
       "records",
       "Check a record set and describe it (records, roles, windows, units, rest, sample rate, "
-      "quantum); --convert writes it in the manifest format.");
+      "quantum, repeat groups, the noise floor); --convert writes it in the manifest format.");
   cmd->add_option("path,--records", *path, "record set folder or CSV file")->required();
   cmd->add_option("--convert", *convert, "write the set as a manifest-format folder");
   cmd->callback([path, convert, &exit_code] {
@@ -778,7 +778,19 @@ void RegisterRecords(CLI::App& app, int& exit_code) {
                 << Fmt(r.rest_samples * r.dt) << " s, offset " << io::OffsetModeName(r.offset_mode);
       if (r.offset_mode != io::OffsetMode::kFit) std::cout << " " << Fmt(r.offset);
       if (r.quantum > 0) std::cout << ", quantum " << Fmt(r.quantum);
+      if (!r.repeat.empty()) std::cout << ", repeat group " << r.repeat;
       std::cout << "\n";
+    }
+    // The noise floor from the records alone (records/noise_floor.h): every estimate.
+    try {
+      const records::NoiseFloor nf = records::EstimateNoiseFloor(set);
+      std::cout << "noise floor " << nf.Summary(set.response_unit) << "\n";
+      for (const records::NoiseEstimate& e : nf.estimates)
+        std::cout << "  " << e.method << ": " << Fmt(e.sigma) << " " << set.response_unit << " ("
+                  << e.samples << " samples; " << e.detail << ")\n";
+      if (!nf.warning.empty()) std::cout << "  warning: " << nf.warning << "\n";
+    } catch (const InputError& e) {
+      std::cout << "noise floor: none (" << e.what() << ")\n";
     }
     if (!convert->empty()) {
       io::WriteRecordSet(set, *convert);

@@ -9,12 +9,13 @@
 #include <sstream>
 
 #include "client/commands.h"
+#include "diagnose/reallike.h"
+#include "diagnose/reallike_ring.h"
 #include "fit.pb.h"
 #include "io/csv.h"
 #include "io/fit_model.h"
 #include "io/records.h"
 #include "model/status.h"
-#include "diagnose/reallike.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -24,6 +25,7 @@ struct SynthArgs {
   std::string out;
   records::RealLikeOptions o;
   bool no_creep = false;
+  bool ringing = false;     ///< --ringing: the second generator (diagnose/reallike_ring.h)
   std::string train_drive;  ///< --train-drive: a CSV (time, drive) the training record plays
 };
 
@@ -108,7 +110,37 @@ std::string TruthJson(const records::RealLikeSet& s) {
   return io::WriteSynthTruth(t);
 }
 
+/// --ringing: the second generator's set (its own plant and sensor; --seed and --out only).
+int RunRinging(const SynthArgs& a) {
+  records::RingingOptions o = records::RingingDefaults();
+  o.seed = a.o.seed;
+  const records::RingingSet s = records::GenerateRingingSet(o);
+  const fs::path out(a.out);
+  io::WriteRecordSet(s.set, out);
+  io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
+    os << "# A ringing stage's record set (generated)\n\nMade by `piezoid synth-stack --ringing "
+       << "--out " << a.out << " --seed " << o.seed
+       << "` (diagnose/reallike_ring.h): a Preisach stack (" << o.stack.u_lo << " … "
+       << o.stack.u_hi << " V, " << o.stack.stroke_um << " um) with log creep, in a stage with a "
+       << o.mode_hz << " Hz mode (zeta " << o.mode_zeta << "), recorded at " << o.sensor.fs_hz
+       << " Hz; each record starts right after a step of " << o.step_um
+       << " um to its rest, so the rest rings and settles.\n\n"
+       << "| record | role | drive | offset [um] | noise RMS [um] |\n|---|---|---|---|---|\n";
+    for (const auto& t : s.truth)
+      os << "| " << t.name << " | " << t.role << " | " << t.drive << " | "
+         << io::FormatNumber(t.offset_um) << " | " << io::FormatNumber(t.noise_rms_um) << " |\n";
+    os << "\nThe sensor's white noise: " << io::FormatNumber(s.sensor_floor_um)
+       << " um; with each recording's own wander (what the repeats scatter by): "
+       << io::FormatNumber(s.realised_floor_um) << " um.\n";
+  });
+  std::cout << "written " << s.set.records.size() << " records to " << out.string()
+            << " (sensor noise " << io::FormatNumber(s.sensor_floor_um) << " um, true floor "
+            << io::FormatNumber(s.realised_floor_um) << " um; README.md)\n";
+  return 0;
+}
+
 int RunSynth(const SynthArgs& a) {
+  if (a.ringing) return RunRinging(a);
   records::RealLikeOptions o = a.o;
   if (a.no_creep) o.stack.creep_per_decade = 0;
   if (!a.train_drive.empty()) o.train_drive = ReadDrive(a.train_drive, o.sensor.fs_hz);
@@ -179,6 +211,10 @@ void RegisterSynthStack(CLI::App& app, int& exit_code) {
                   "log creep per decade of time (share)")
       ->check(CLI::Range(0.0, 0.099));
   cmd->add_flag("--no-creep", a->no_creep, "no creep");
+  cmd->add_flag("--ringing", a->ringing,
+                "the second generator instead (diagnose/reallike_ring.h): a 10 kHz stage with a "
+                "mode, rests that ring and settle, loops growing from the bottom, chatter drives "
+                "recorded three times (--seed and --out only)");
   cmd->add_option(
          "--train-drive", a->train_drive,
          "a CSV (time [s] from 0 at --fs, drive [V]) the training record plays instead of the "

@@ -1,8 +1,5 @@
 #include "client/records_diagnose.h"
 
-#include "client/search_flags.h"
-#include "client/select_report.h"
-
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -13,6 +10,7 @@
 #include "client/plots.h"
 #include "client/record_windows.h"
 #include "client/search_flags.h"
+#include "client/select_report.h"
 #include "diagnosis.pb.h"
 #include "io/csv.h"
 #include "io/diagnosis_json.h"
@@ -45,6 +43,7 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
     os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma)
        << " | " << e.samples << " | " << e.detail << " |\n";
   }
+  if (!d.noise.warning.empty()) os << "\n**Warning:** " << d.noise.warning << ".\n";
   os << "\nWithheld: " << d.withheld_samples << " samples; training: " << d.train_samples
      << ". Base model " << d.base.model->Describe() << ": withheld RMS "
      << G(std::sqrt(d.s0 / d.withheld_samples)) << " " << u << " = " << G(d.rms_ratio, 3)
@@ -124,6 +123,7 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
   proto::NoiseFloor& n = *m.mutable_noise_floor();
   n.set_sigma(d.noise.sigma);
   n.set_used(d.noise.used);
+  n.set_warning(d.noise.warning);
   for (const auto& e : d.noise.estimates) {
     proto::NoiseEstimate& g = *n.add_estimates();
     g.set_method(e.method);

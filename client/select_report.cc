@@ -36,7 +36,10 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
      << "-fold blocked cross-validation on the training records (" << s.fold_fits << " fold fits, "
      << G(s.wall_time_s, 3) << " s); the withheld records are scored after the "
      << "choice, never used for it\n";
-  os << "  noise floor " << G(s.noise.sigma) << " " << u << " (" << s.noise.used << ")\n";
+  os << "  noise floor " << s.noise.Summary(u) << "\n";
+  if (!s.noise.warning.empty()) os << "  warning: " << s.noise.warning << "\n";
+  if (!s.grid_note.empty()) os << "  " << s.grid_note << "\n";
+  if (!s.unexcited.empty()) os << "  " << s.unexcited << "\n";
   os << "    " << std::left << std::setw(52) << "candidate" << std::right << std::setw(7)
      << "params" << std::setw(12) << "CV RMSE" << std::setw(10) << "SE*" << std::setw(12)
      << "withheld" << std::setw(8) << "/floor"
@@ -59,7 +62,10 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
         "own";
   if (s.ranking.size() > shown) os << "; " << s.ranking.size() << " candidates in all: report.md";
   os << ")\n";
-  os << "  chosen (the fewest parameters within one SE of the best CV RMSE): "
+  os << (s.unexcited.empty() ? "  chosen (the fewest parameters within one SE of the best CV "
+                               "RMSE): "
+                             : "  chosen (the fewest parameters within one SE of the best CV RMSE "
+                               "among the finalists that do not part on their own): ")
      << s.ranking[s.chosen].candidate.Describe() << "\n";
   for (const auto& e : s.initial_states)
     os << "  initial state, " << model::CaseRoleName(e.role) << " " << e.record << ": "
@@ -89,8 +95,10 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
      << G(s.wall_time_s, 3) << " s). "
      << "**The withheld records never choose**: their errors are those of each finalist refitted "
         "on all the "
-     << "training records, shown after the choice. Noise floor " << G(s.noise.sigma) << " " << u
-     << " (" << s.noise.used << ").\n\n"
+     << "training records, shown after the choice. Noise floor " << s.noise.Summary(u) << "."
+     << (s.noise.warning.empty() ? "" : " **Warning:** " + s.noise.warning + ".")
+     << (s.grid_note.empty() ? "" : "\n\nThe grid: " + s.grid_note + ".")
+     << (s.unexcited.empty() ? "" : "\n\n" + s.unexcited) << "\n\n"
      << "| | candidate | parameters | CV RMSE [" << u
      << "] | ± SE | SE vs best | folds | round | withheld RMSE "
      << "(after, not used) | withheld / floor |\n|---|---|---:|---:|---:|---:|---|---|---:|---:|\n";
@@ -138,6 +146,11 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
   m.set_chosen(s.ranking[s.chosen].candidate.Describe());
   m.set_best_cv_rmse(s.best_cv_rmse);
   m.set_noise_floor(s.noise.sigma);
+  m.set_noise_floor_used(s.noise.used);
+  m.set_noise_floor_summary(s.noise.Summary(""));
+  m.set_noise_floor_warning(s.noise.warning);
+  m.set_unexcited(s.unexcited);
+  m.set_grid_note(s.grid_note);
   m.set_wall_time_s(s.wall_time_s);
   m.set_detected_initial_state(model::InitialStateName(s.detected));
   for (size_t i = 0; i < s.ranking.size(); ++i) {
@@ -161,6 +174,7 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
     g.set_train_rmse(c.train_rmse);
     g.set_chosen(i == s.chosen);
     if (!c.error.empty()) g.set_error(c.error);
+    if (std::isfinite(c.parting)) g.set_parting(c.parting);
   }
   for (const auto& e : s.initial_states) {
     proto::SelectionInitialState& g = *m.add_initial_states();

@@ -308,15 +308,15 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
   csv.RequireColumns({"record", "file", "role"});
   csv.RequireRows();
   static const std::vector<std::string> kKnown = {
-      "record",    "file",         "role",         "t_start_s",    "t_end_s",
-      "offset",    "frequency_Hz", "time_column",  "drive_column", "response_column",
-      "time_unit", "drive_unit",   "response_unit"};
+      "record",          "file",         "role",       "t_start_s",    "t_end_s",
+      "offset",          "frequency_Hz", "repeat",     "time_column",  "drive_column",
+      "response_column", "time_unit",    "drive_unit", "response_unit"};
   for (size_t c = 0; c < csv.header.size(); ++c) {
     if (std::find(kKnown.begin(), kKnown.end(), csv.header[c]) == kKnown.end()) {
       throw InputError(csv.source + ":" + std::to_string(csv.header_line) + ": unknown column '" +
                        csv.header[c] +
                        "' (columns: record, file, role, t_start_s, t_end_s, offset, frequency_Hz, "
-                       "time_column, drive_column, "
+                       "repeat, time_column, drive_column, "
                        "response_column, time_unit, drive_unit, response_unit)");
     }
   }
@@ -379,6 +379,10 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
                          " Hz must be finite and > 0");
       r.frequency_hz = *f;
     }
+    r.repeat = OptionalField(csv, i, "repeat");
+    if (!r.repeat.empty() && !ValidName(r.repeat))
+      throw InputError(csv.Where(i, *csv.FindColumn("repeat")) + ": repeat group '" + r.repeat +
+                       "' must be 1–100 letters, digits, '-', '_' or '.'");
     const std::string off = OptionalField(csv, i, "offset");
     if (off.empty() || off == "fit") {
       r.offset_mode = OffsetMode::kFit;
@@ -403,6 +407,14 @@ RecordSet LoadManifest(const fs::path& dir, const RecordReadOptions& opt) {
     set.records.push_back(std::move(r));
   }
   CheckSameUnits(set, used);
+  for (const Record& r : set.records) {  // a repeat group names two recordings at least
+    if (r.repeat.empty()) continue;
+    if (std::count_if(set.records.begin(), set.records.end(),
+                      [&](const Record& o) { return o.repeat == r.repeat; }) < 2)
+      throw InputError(csv.source + ":" + std::to_string(r.manifest_line) + ": repeat group '" +
+                       r.repeat + "' has one record ('" + r.name +
+                       "'); a repeat group names two or more recordings of the same drive");
+  }
   return set;
 }
 
@@ -663,15 +675,16 @@ RecordSet LoadRecordSet(const fs::path& path, const RecordReadOptions& opt) {
 void WriteRecordSet(const RecordSet& set, const fs::path& dir) {
   fs::create_directories(dir);
   WriteFileWith(dir / "manifest.csv", [&](std::ostream& m) {
-    m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,drive_column,response_column\n";
+    m << "record,file,role,t_start_s,t_end_s,offset,frequency_Hz,repeat,drive_column,"
+         "response_column\n";
     for (const Record& r : set.records) {
       const std::string file = r.name + ".csv";
       m << r.name << "," << file << "," << model::CaseRoleName(r.role) << ","
         << FormatNumber(r.t[r.first_scored]) << "," << FormatNumber(r.t[r.end_scored - 1]) << ","
         << (r.offset_mode == OffsetMode::kFixed ? FormatNumber(r.offset)
                                                 : OffsetModeName(r.offset_mode))
-        << "," << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ",drive_"
-        << set.drive_unit << ",response_" << set.response_unit << "\n";
+        << "," << (r.frequency_hz > 0 ? FormatNumber(r.frequency_hz) : std::string()) << ","
+        << r.repeat << ",drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
       WriteFileWith(dir / file, [&](std::ostream& f) {
         f << "t_s,drive_" << set.drive_unit << ",response_" << set.response_unit << "\n";
         for (size_t i = 0; i < r.size(); ++i)

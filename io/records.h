@@ -3,8 +3,8 @@
 //
 // A record set is a folder with a manifest `manifest.csv`, one row per record:
 //
-//   record,file,role[,t_start_s,t_end_s,offset,frequency_Hz,time_column,drive_column,response_column,  // NOLINT(length)
-//                     time_unit,drive_unit,response_unit]
+//   record,file,role[,t_start_s,t_end_s,offset,frequency_Hz,repeat,time_column,drive_column,  // NOLINT(length)
+//                     response_column,time_unit,drive_unit,response_unit]
 //
 //   record    a unique name (letters, digits, - _ .)
 //   file      the record's CSV, relative to the folder; several rows may use one file (windows)
@@ -17,6 +17,9 @@
 //   *_column  the CSV's column names (defaults t_s, voltage_V, displacement_um)
 //   frequency_Hz  the stated excitation frequency of the record (optional; `piezoid committee`
 //             bands records by it)
+//   repeat    the repeat group of the record (optional: letters, digits, - _ .): records of one
+//             group are recordings of the same drive, and their scatter about each other is the
+//             repeatability floor (records/noise_floor.h)
 //   *_unit    the columns' units; when absent, the unit is the column name's suffix after the last
 //             '_' (t_s → s). A unit stated in both places must agree.
 //
@@ -75,6 +78,9 @@ struct Record {
   double frequency_hz = 0;  ///< the stated excitation frequency [Hz] (a bench's, or a manifest's
                             ///< frequency_Hz column); 0 = not stated
   int manifest_line = 0;    ///< 0 when not from a manifest
+  /// The repeat group (a manifest's repeat column): records of one group were recorded with the
+  /// same drive; "" = none stated.
+  std::string repeat;
   /// A bimorph-fin bench case's stated drive u = V sin(2π f t) on k / fs (io/fin_records.h): the
   /// grid trends and the bench form of the bimorph-fin family read it (the form simulates that
   /// sinusoid, records/families.h FamilyOptions::bench_form). None stated: stated() false.

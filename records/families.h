@@ -105,6 +105,12 @@ struct FamilyOptions {
   bool bench_form = false;
   model::EffectSimOptions fin_sim;  ///< bench form: the simulator's options
   OscillatorOptions oscillator;     ///< bw-oscillator
+  /// A fold of a cross-validation (records/select.h): the family is made for the whole training
+  /// set's scale and a fold's training pieces may not reach every part of it (loops growing from a
+  /// rest reach the top of the range in their last block only). The preisach grid then accepts a
+  /// level without training samples: the roughness prior sets its cells, and the masked block
+  /// scores that extrapolation. A fit on the user's records keeps the check (CheckTraining).
+  bool cross_validation_fold = false;
 };
 
 class Family {

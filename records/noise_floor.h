@@ -22,20 +22,33 @@
 //   floor
 //                  there (SaturationAwareFloor).
 //
-// A record set (issue 14), from what the records allow, in this order of preference (every
+// A record set (issues 14, 45), from what the records allow, in this order of preference (every
 // available estimate is reported, and which one was used):
-//   rest           the response's scatter over a rest segment (≥ 50 samples), linear trend removed;
-//   periods        the drive repeats with a period P: the scatter of the last two periods, as for a
-//                  bench case (PeriodDifferenceSquares);
-//   repeats        two records with the same drive: σ² = var(y₁ − y₂)/2;
+//   repeats        records of the same drive (a manifest's repeat group, io/records.h; else records
+//                  of different files whose drives are equal sample for sample): each aligned on
+//                  the group's first drive (a lag of ≤ 50 samples), its mean removed, σ² the
+//                  scatter about the group's mean, Σ (y_ik − ȳ_k)² / ((m − 1) N). What a
+//                  deterministic model is judged against: the plant repeats itself no closer.
+//   rest           the settled part of every hold of the drive (the leading rest and any hold of
+//                  ≥ 50 samples inside a record): a step to a hold rings (a mechanical mode) and
+//                  settles first, so the hold is cut in blocks, each block's scatter about its own
+//                  line measured, and the settled part is the run of blocks at the end within twice
+//                  the median block of the hold's second half (FindSettledHold); those blocks'
+//                  scatter, pooled, is the estimate (the hold's slow creep, which a model with
+//                  creep follows, stays out; so does noise slower than a block, a twentieth of it);
+//   periods        the drive repeats with a period P: the scatter of every pair of consecutive
+//                  periods after the first (PeriodDifferenceSquares);
 //   residual       the high-frequency part of the base model's residual: mean((e_k − e_{k−1})²)/2
 //                  (an upper bound when the model error is smooth).
 // None goes below the quantisation floor q/√12 (a rest or identical periods cancel the rounding; a
-// continuous model cannot): the estimate says when it was raised to it.
+// continuous model cannot): the estimate says when it was raised to it. Estimates more than
+// kFloorDisagreement apart are reported (NoiseFloor::warning): a sensor's noise at rest far below
+// the records' repeatability, or a hold that never settles.
 //
 // A model whose residual RMS is at σ explains the record down to the noise. Pure: no I/O.
 #pragma once
 
+#include <cstddef>
 #include <span>
 #include <string>
 #include <vector>
@@ -95,8 +108,25 @@ struct NoiseFloor {
   double sigma = 0;
   std::string used;
   std::vector<NoiseEstimate> estimates;
+  /// "" or why the estimates disagree by more than kFloorDisagreement × (largest / smallest).
+  std::string warning;
+  /// "0.021 um (repeats; rest 0.0012, periods 0.004 um)".
+  std::string Summary(const std::string& unit) const;
 };
-/// Rest, periods and repeats from the records; `residuals` (the base model's, per record over its
+/// Estimates further apart than this factor are reported as disagreeing.
+constexpr double kFloorDisagreement = 3;
+/// The settled part of a hold of the drive: samples [from, to) of the hold's response y, and its
+/// scatter (the settled blocks', each about its line, pooled); `trailing_motion`: the drive moves
+/// right after the hold (its last 4 samples are left out: the response lags). sigma 0 when fewer
+/// than 50 samples settle.
+struct SettledHold {
+  size_t from = 0, to = 0;
+  size_t unsettled_samples = 0;  ///< at its start: ringing or settling
+  double sigma = 0;
+};
+SettledHold FindSettledHold(std::span<const double> y, bool trailing_motion);
+
+/// Repeats, rest and periods from the records; `residuals` (the base model's, per record over its
 /// scored window) adds the residual estimate. Throws InputError when no estimate is possible.
 NoiseFloor EstimateNoiseFloor(const io::RecordSet& set,
                               const std::vector<std::vector<double>>* residuals = nullptr);

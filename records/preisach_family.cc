@@ -44,7 +44,9 @@ int Reversals(const io::Record& r, double depth) {
 class PreisachFamily final : public Family {
  public:
   PreisachFamily(const DataScale& s, const FamilyOptions& o)
-      : grid_{s.u_min, s.u_max, o.pi_operators}, start_(o.initial_state) {
+      : grid_{s.u_min, s.u_max, o.pi_operators},
+        start_(o.initial_state),
+        fold_(o.cross_validation_fold) {
     ThrowIfError(grid_.Validate());
   }
   std::string name() const override { return kPreisachFamily.name; }
@@ -117,7 +119,7 @@ class PreisachFamily final : public Family {
           "relays: train on a record that goes up and down, or use fewer levels (--pi-operators)");
     }
     for (size_t j = 0; j < per_level.size(); ++j) {
-      if (per_level[j] < kMinSamplesPerLevel) {
+      if (per_level[j] < kMinSamplesPerLevel && !fold_) {
         throw InputError(
             "preisach: the training drive of " + Names(train) + " has " +
             std::to_string(per_level[j]) + " sample(s) between " +
@@ -138,6 +140,7 @@ class PreisachFamily final : public Family {
   }
   model::PreisachGrid grid_;
   model::InitialState start_;
+  bool fold_ = false;  ///< FamilyOptions::cross_validation_fold: a level may have no sample
   std::vector<ParamInfo> params_;
 };
 

@@ -12,6 +12,7 @@
 #include "io/csv.h"
 #include "model/format.h"
 #include "model/status.h"
+#include "records/excitation.h"
 #include "records/model.h"
 #include "records/spectrum_solve.h"
 
@@ -228,10 +229,13 @@ std::vector<ModelScore> CrossValidateAll(
   for (size_t i = 0; i < cands.size(); ++i) {
     out[i].candidate = cands[i];
     try {
-      made[i] = MakeCandidate(scale, cands[i], FitOptions{}, {});
+      FitOptions fold;  // the family made for the whole training scale, each fold's pieces in it
+      fold.family_options.cross_validation_fold = true;
+      made[i] = MakeCandidate(scale, cands[i], fold, {});
       out[i].parameters = ParameterCount(*made[i].model);
       FitOptions o = options_of(i, made[i].searched);
       made[i].options = cands[i].Options(o);
+      made[i].options.family_options.cross_validation_fold = true;
       if (service) made[i].options.evaluator_factory = service(made[i].options.family_options);
       made[i].options.threads = service ? std::max(1, threads) : 1;
       made[i].options.progress = nullptr;
@@ -417,6 +421,43 @@ model::InitialState TrainingInitialState(const std::vector<InitialStateEvidence>
   return static_cast<model::InitialState>(best);
 }
 
+namespace {
+
+std::vector<size_t> UnexcitedRecords(const io::RecordSet& set, std::string* needs);
+
+/// An effect whose magnitude depends on the drive's rate.
+bool RateEffect(EffectKind e) {
+  const std::string n = EffectName(e);
+  return n == "delay" || n == "driver-lowpass" || n == "rate-dependence";
+}
+
+/// The training records' rate span (records/excitation.h DriveExcitation::rate_span); 0 when the
+/// report cannot be made.
+double TrainingRateSpan(const io::RecordSet& set) {
+  try {
+    return AnalyseExcitation(set).training.rate_span();
+  } catch (const InputError&) {
+    return 0;
+  }
+}
+
+}  // namespace
+
+std::string GridNote(const io::RecordSet& set, const SelectOptions& options) {
+  if (!options.effect_sets.empty()) return "";
+  const double span = TrainingRateSpan(set);
+  if (span >= kMinRateSpan) return "";
+  std::string needs;
+  if (UnexcitedRecords(set, &needs).empty()) return "";
+  return "delay is left out of the grid: the training drive has one rate (its half cycles' peak "
+         "rates span " +
+         FormatG(span, 3) + "×, under " + FormatG(kMinRateSpan, 2) +
+         "×), where a delay is a phase that a hysteretic family's loop width gives as well, and "
+         "the withheld drives have loops the training lacks: the folds cannot tell the two apart, "
+         "and a delay fitted there for loop width mispredicts the other loops (ask for it with "
+         "--effects)";
+}
+
 std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptions& options,
                                      model::InitialState state) {
   std::vector<std::string> families = options.families;
@@ -424,10 +465,13 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
     for (const FamilyDef* f : Families())
       if (f->auto_grid) families.emplace_back(f->name);
   std::vector<std::vector<EffectKind>> sets = options.effect_sets;
-  if (sets.empty()) {
-    const EffectKind delay = ParseEffect("delay"), creep = ParseEffect("creep");
-    sets = {{}, {delay}, {creep}, {creep, delay}};
+  const bool default_sets = sets.empty();
+  if (default_sets) {
+    const EffectKind delay = ParseEffect("delay"), creep = ParseEffect("creep"),
+                     spectrum = ParseEffect("creep-spectrum");
+    sets = {{}, {delay}, {creep}, {creep, delay}, {spectrum}, {spectrum, delay}};
   }
+  const bool one_rate = !GridNote(set, options).empty();
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   std::vector<std::string> unsupported;
   for (const EffectInfo& e : EffectLibrary(scale))
@@ -437,8 +481,14 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
     const auto family = MakeFamily(f, scale);
     for (const auto& effects : sets) {
       bool ok = true;
-      for (EffectKind e : effects)
+      for (EffectKind e : effects) {
         ok = ok && !family->Excludes(EffectName(e)) && !Takes(unsupported, EffectName(e));
+        // By default: no rate effect on a training of one rate (GridNote); the creep spectrum on
+        // the linear families only, whose weights it is solved with (records/spectrum_solve.h):
+        // on the others each of its weights would be searched.
+        ok = ok && !(default_sets && one_rate && RateEffect(e));
+        ok = ok && !(default_sets && EffectName(e) == "creep-spectrum" && !LinearFamily(f));
+      }
       if (!ok) continue;
       // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
       // only (each evaluation re-makes the regressors): the finalists get the others.
@@ -536,6 +586,211 @@ void SetRefitErrors(const std::vector<FitResult>& refits, std::vector<ModelScore
   }
 }
 
+/// WeighUnexcited: a finalist whose prediction where the training lacks excitation parts from the
+/// families' median by more than this × its CV RMSE extrapolates on its own.
+constexpr double kOwnExtrapolation = 3;
+/// …and only a finalist whose CV RMSE is within this factor of the best can take the choice over.
+constexpr double kPlausible = 3;
+
+/// The withheld records whose drives need what the training lacks in the hysteresis itself
+/// (reversals the training's cells do not hold, or range beyond it: records/excitation.h), and what
+/// each needs; none when the report cannot be made.
+std::vector<size_t> UnexcitedRecords(const io::RecordSet& set, std::string* needs) {
+  std::vector<size_t> out;
+  try {
+    const ExcitationReport ex = AnalyseExcitation(set);
+    for (const WithheldExcitation& w : ex.withheld) {
+      std::string what;  // "reversals 70 % uncovered", "range 4 % beyond"
+      for (const ExcitationNeed& n : w.needs) {
+        if (n.kind == ExcitationNeed::Kind::kReversals)
+          what += (what.empty() ? "" : ", ") + FormatG(100 * n.amount, 2) +
+                  " % of its reversals where the training has none";
+        if (n.kind == ExcitationNeed::Kind::kRange)
+          what += (what.empty() ? "" : ", ") + std::string("a drive ") +
+                  FormatG(100 * n.amount, 2) + " % of the range beyond the training's";
+      }
+      if (what.empty()) continue;
+      out.push_back(w.record);
+      *needs += (needs->empty() ? "" : "; ") + set.records[w.record].name + ": " + what;
+    }
+  } catch (const InputError&) {
+    out.clear();
+  }
+  return out;
+}
+
+/// Where the withheld drives need what the training lacks, no fold of the training shows how a
+/// model extrapolates: the CV RMSE says nothing there, and a Preisach grid's interior, a dead
+/// zone's knee, are set there by the prior alone. So the finalists' predictions on those drives
+/// (their responses are not looked at: each prediction's mean over the window removed, the record's
+/// offset being fitted) are compared with the median of the families' (the best finalist of each
+/// family, three families at least): parting_i, the RMS of finalist i's less the median over those
+/// samples, is how far it extrapolates on its own. A finalist that parts by more than
+/// kOwnExtrapolation × its own CV RMSE — its prediction there is its prior's, not the data's — is
+/// passed over, and the one-standard-error rule is applied to the others within kPlausible × the
+/// best CV RMSE: the choice degrades gracefully (wrong there, it is wrong with the others, not
+/// alone); when none is left, every plausible finalist extrapolates on its own and the one-SE
+/// choice stands. Returns the chosen index (`chosen` when there is nothing to weigh or no finalist
+/// is passed over) and sets each finalist's parting and the report's sentence.
+size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexcited,
+                      const std::string& needs, const std::vector<FitResult>& refits,
+                      std::vector<ModelScore>& second, size_t chosen, const std::string& unit,
+                      std::string* sentence) {
+  std::vector<size_t> reps;  // the best finalist of each family, refitted
+  for (size_t i = 0; i < second.size(); ++i) {
+    if (!refits[i].model || !std::isfinite(second[i].cv_rmse)) continue;
+    bool placed = false;
+    for (size_t& r : reps) {
+      if (second[r].candidate.family != second[i].candidate.family) continue;
+      if (second[i].cv_rmse < second[r].cv_rmse) r = i;
+      placed = true;
+    }
+    if (!placed) reps.push_back(i);
+  }
+  if (unexcited.empty() || reps.size() < 3) return chosen;
+  // Each finalist's predictions over the unexcited windows, mean removed per record.
+  auto centred = [&](size_t i) {
+    std::vector<double> v;
+    for (size_t r : unexcited) {
+      const io::Record& rec = set.records[r];
+      const std::vector<double>& y = refits[i].yhat[r];
+      double mean = 0;
+      for (size_t k = rec.first_scored; k < rec.end_scored; ++k)
+        mean += y[k] / static_cast<double>(rec.scored());
+      for (size_t k = rec.first_scored; k < rec.end_scored; ++k) v.push_back(y[k] - mean);
+    }
+    return v;
+  };
+  std::vector<std::vector<double>> rep_pred;
+  for (size_t r : reps) rep_pred.push_back(centred(r));
+  const size_t n = rep_pred.front().size();
+  std::vector<double> median(n), column(reps.size());
+  for (size_t k = 0; k < n; ++k) {
+    for (size_t j = 0; j < reps.size(); ++j) column[j] = rep_pred[j][k];
+    std::sort(column.begin(), column.end());
+    const size_t h = column.size() / 2;
+    median[k] = column.size() % 2 ? column[h] : 0.5 * (column[h - 1] + column[h]);
+  }
+  double widest = 0;
+  for (size_t i = 0; i < second.size(); ++i) {
+    if (!refits[i].model || !std::isfinite(second[i].cv_rmse)) continue;
+    const std::vector<double> v = centred(i);
+    double ss = 0;
+    for (size_t k = 0; k < n; ++k) ss += (v[k] - median[k]) * (v[k] - median[k]);
+    second[i].parting = std::sqrt(ss / static_cast<double>(std::max<size_t>(n, 1)));
+    if (std::isfinite(second[i].parting)) widest = std::max(widest, second[i].parting);
+  }
+  // A finalist whose prediction there departs from the families' median by more than
+  // kOwnExtrapolation × its own CV RMSE extrapolates on its own (its prior's, not the data's):
+  // the one-SE rule is applied to the others (to all when none is left).
+  std::vector<ModelScore> kept;
+  std::vector<size_t> index;
+  std::string dropped;
+  double best_cv = kInf;
+  for (const ModelScore& m : second) best_cv = std::min(best_cv, m.cv_rmse);
+  for (size_t i = 0; i < second.size(); ++i) {
+    if (!std::isfinite(second[i].parting) || !std::isfinite(second[i].cv_rmse)) continue;
+    // Only a finalist near the best where the training shows it can take over (when every such
+    // one parts on its own, all extrapolate there alike: the one-SE choice stands).
+    if (second[i].cv_rmse > kPlausible * best_cv) continue;
+    if (second[i].parting > kOwnExtrapolation * second[i].cv_rmse) {
+      dropped += (dropped.empty() ? "" : ", ") + second[i].candidate.Describe() + " (" +
+                 FormatG(second[i].parting, 3) + " against CV " + FormatG(second[i].cv_rmse, 3) +
+                 ")";
+      continue;
+    }
+    kept.push_back(second[i]);
+    index.push_back(i);
+  }
+  const size_t pick =
+      kept.empty() || dropped.empty() ? chosen : index[OneStandardErrorChoice(kept)];
+  const ModelScore &was = second[chosen], &now = second[pick];
+  *sentence =
+      "**The choice rests on an unexcited region.** The withheld drives need excitation "
+      "the training lacks (" +
+      needs +
+      "): no fold of the training shows how a model extrapolates there. The "
+      "finalists' predictions there (their responses not used) part from the median of "
+      "the " +
+      std::to_string(reps.size()) + " families' best by up to " + FormatG(widest, 3) + " " + unit +
+      " RMS (\"parting\"); ";
+  if (!dropped.empty() && kept.empty()) {
+    *sentence += "every finalist within " + FormatG(kPlausible, 2) +
+                 "× the best CV RMSE parts by more than " + FormatG(kOwnExtrapolation, 2) +
+                 "× its own (" + dropped +
+                 "): they all extrapolate there on their own, and the one-standard-error choice "
+                 "stands: " +
+                 now.candidate.Describe() + ".";
+  } else if (dropped.empty()) {
+    *sentence +=
+        "none parts by more than " + FormatG(kOwnExtrapolation, 2) +
+        "× its own CV RMSE, so the one-standard-error choice stands: " + now.candidate.Describe() +
+        " (parting " + FormatG(now.parting, 3) + " " + unit + ").";
+  } else {
+    *sentence +=
+        "those that part by more than " + FormatG(kOwnExtrapolation, 2) +
+        "× their own CV RMSE extrapolate on their own (the prior's, not the data's) "
+        "and are passed over: " +
+        dropped + "; the one-standard-error rule over the others chooses " +
+        now.candidate.Describe() + " (CV " + FormatG(now.cv_rmse, 3) + ", parting " +
+        FormatG(now.parting, 3) + " " + unit + ")" +
+        (pick != chosen ? ", the one that degrades gracefully, over " + was.candidate.Describe() +
+                              " (CV " + FormatG(was.cv_rmse, 3) + ")"
+                        : std::string()) +
+        ".";
+  }
+  return pick;
+}
+
+/// The finalists refitted on every training record: the chosen one with `fit`'s own search, the
+/// others with the finalists' (their errors in `second` when they cannot be fitted).
+std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
+                                      const std::vector<Candidate>& finals, size_t chosen,
+                                      const SelectOptions& options,
+                                      std::vector<ModelScore>& second) {
+  const int threads = std::max(1, options.fit.threads);
+  std::vector<FitResult> refits(finals.size());
+  RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
+    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    FitOptions f = finals[i].Options(
+        i == chosen
+            ? options.fit
+            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+    if (options.service) f.evaluator_factory = options.service(f.family_options);
+    f.threads = options.service ? threads : 1;
+    f.progress = nullptr;
+    f.uncertainty = i == chosen && options.fit.uncertainty;
+    try {
+      refits[i] = FitRecords(set, f);
+    } catch (const InputError& e) {
+      if (i == chosen) throw;
+      second[i].error = e.what();
+    }
+  });
+  return refits;
+}
+
+/// The ranking: the finalists by CV RMSE, then the screened-only ones by theirs (res.ranking,
+/// res.chosen).
+void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
+                    const std::vector<ModelScore>& screen, const std::vector<size_t>& order,
+                    const std::vector<Candidate>& grid, const std::vector<Candidate>& finals,
+                    SelectionResult& res) {
+  std::vector<size_t> o2(second.size());
+  for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
+  std::stable_sort(o2.begin(), o2.end(),
+                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
+  for (size_t i : o2) {
+    if (i == chosen) res.chosen = res.ranking.size();
+    res.ranking.push_back(second[i]);
+  }
+  for (size_t i : order) {
+    bool final = false;
+    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
+    if (!final) res.ranking.push_back(screen[i]);
+  }
+}
+
 }  // namespace
 
 SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& options) {
@@ -557,6 +812,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   const std::vector<model::InitialState> states = StatesToTry(set, options, first);
   // 2. Screening: every candidate, a small search.
   const std::vector<Candidate> grid = CandidateGrid(set, options, first);
+  res.grid_note = GridNote(set, options);
   say("screening " + std::to_string(grid.size()) + " candidates by " +
       std::to_string(options.folds) + "-fold blocked cross-validation on the training records");
   std::vector<ModelScore> screen = CrossValidateAll(
@@ -590,6 +846,18 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
     }
   };
   for (size_t i : picked) add(grid[i], screen[i].cv_rmse, i == picked.front());
+  // Where the withheld drives need what the training lacks, the best of every family too: their
+  // predictions there are weighed after the choice (WeighUnexcited).
+  std::string needs;
+  const std::vector<size_t> unexcited = UnexcitedRecords(set, &needs);
+  if (!unexcited.empty()) {
+    std::vector<std::string> seen;
+    for (size_t i : order) {
+      if (!std::isfinite(screen[i].cv_rmse) || Takes(seen, grid[i].family)) continue;
+      seen.push_back(grid[i].family);
+      add(grid[i], screen[i].cv_rmse, false);
+    }
+  }
   // The screening's best: with the other initial state (above), and, a linear family with effects
   // screened at its coarsest resolution, at the others.
   const Candidate& top = grid[picked.front()];
@@ -608,48 +876,30 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
     second[i].screen_cv_rmse = final_screen[i];
   }
   // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
-  const size_t chosen = OneStandardErrorChoice(second);
+  size_t chosen = OneStandardErrorChoice(second);
   res.best_cv_rmse = kInf;
   for (const auto& s : second) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
   say("chosen: " + finals[chosen].Describe() + " (CV RMSE " +
       io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
       ")");
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
-  std::vector<FitResult> refits(finals.size());
-  RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
-    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
-    FitOptions f = finals[i].Options(
-        i == chosen
-            ? options.fit
-            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
-    if (options.service) f.evaluator_factory = options.service(f.family_options);
-    f.threads = options.service ? threads : 1;
-    f.progress = nullptr;
-    f.uncertainty = i == chosen && options.fit.uncertainty;
-    try {
-      refits[i] = FitRecords(set, f);
-    } catch (const InputError& e) {
-      if (i == chosen) throw;
-      second[i].error = e.what();
-    }
-  });
+  std::vector<FitResult> refits = RefitFinalists(set, finals, chosen, options, second);
   SetRefitErrors(refits, second);
+  // 6. An unexcited region: the finalists' predictions there weighed (their drives only).
+  if (const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
+                                            set.response_unit, &res.unexcited);
+      weighed != chosen) {
+    chosen = weighed;
+    say("weighed where the training lacks excitation: " + finals[chosen].Describe());
+    FitOptions f = finals[chosen].Options(options.fit);
+    if (options.service) f.evaluator_factory = options.service(f.family_options);
+    f.progress = nullptr;
+    refits[chosen] = FitRecords(set, f);
+    SetRefitErrors(refits, second);
+  }
   res.fit = std::move(refits[chosen]);
   res.fit_options = finals[chosen].Options(options.fit);
-  // The ranking: the finalists by CV RMSE, then the screened-only ones by theirs.
-  std::vector<size_t> o2(second.size());
-  for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
-  std::stable_sort(o2.begin(), o2.end(),
-                   [&](size_t a, size_t b) { return second[a].cv_rmse < second[b].cv_rmse; });
-  for (size_t i : o2) {
-    if (i == chosen) res.chosen = res.ranking.size();
-    res.ranking.push_back(second[i]);
-  }
-  for (size_t i : order) {
-    bool final = false;
-    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
-    if (!final) res.ranking.push_back(screen[i]);
-  }
+  RankCandidates(second, chosen, screen, order, grid, finals, res);
   res.noise = EstimateNoiseFloor(set);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;

@@ -84,6 +84,9 @@ struct ModelScore {
   /// After the choice: the candidate refitted on every training record (finalists only; NaN else).
   double train_rmse = std::numeric_limits<double>::quiet_NaN();
   double withheld_rmse = std::numeric_limits<double>::quiet_NaN();
+  /// Finalists, where the withheld drives need excitation the training lacks: the RMS of this
+  /// finalist's prediction less the finalists' median prediction over those samples (NaN else).
+  double parting = std::numeric_limits<double>::quiet_NaN();
   std::string error;  ///< why it could not be fitted ("" when it was)
 };
 
@@ -113,8 +116,9 @@ struct SelectOptions {
   /// Families tried (default: every family of records/families.h but bimorph-fin, whose
   /// geometry is a fin's).
   std::vector<std::string> families;
-  /// Effect sets tried (default: none, delay, creep, creep + delay); a set a family excludes or the
-  /// data cannot support is left out.
+  /// Effect sets tried (default: none, delay, creep, creep + delay, creep-spectrum, creep-spectrum
+  /// + delay; the spectrum on the linear families only, and no delay on a training drive of one
+  /// rate: GridNote); a set a family excludes or the data cannot support is left out.
   std::vector<std::vector<EffectKind>> effect_sets;
   /// Resolutions of the linear families: alone, each is screened; with effects, the coarsest is,
   /// and a finalist is cross-validated at each.
@@ -149,10 +153,20 @@ struct SelectionResult {
   FitResult fit;           ///< the chosen candidate refitted on all training records
   FitOptions fit_options;  ///< its options
   NoiseFloor noise;        ///< the records' noise floor (EstimateNoiseFloor), beside the errors
+  /// "" or, when the withheld drives need excitation the training lacks, how the finalists'
+  /// predictions part there and how that weighed in the choice.
+  std::string unexcited;
+  std::string grid_note;  ///< GridNote
   int folds = 0;
   size_t fold_fits = 0;  ///< fits run for the cross-validation
   double wall_time_s = 0;
 };
+
+/// Why the default grid leaves a rate effect out ("" when it does not): a training drive of one
+/// rate (records/excitation.h rate span under kMinRateSpan) and withheld drives with reversals or
+/// range the training lacks — a delay there is a phase that a hysteretic family's loop width gives
+/// as well, which no fold can tell apart, and fitted for the width it mispredicts other loops.
+std::string GridNote(const io::RecordSet& set, const SelectOptions& options);
 
 /// The grid of candidates for `set`'s training records (families × effect sets × resolutions,
 /// the initial state `state`), in grid order.

@@ -117,6 +117,70 @@ TEST_F(Compensate, TheDriveMakesTheTruePlantTrackWithinTheNoise) {
   EXPECT_LT(rmse, 2 * kNoise) << out;
 }
 
+/// RMSE of (a − mean a) against (b − mean b) from sample 1 on.
+double CentredRmse(const std::vector<double>& a, const std::vector<double>& b) {
+  double ma = 0, mb = 0;
+  for (size_t k = 1; k < a.size(); ++k) ma += a[k] / static_cast<double>(a.size() - 1);
+  for (size_t k = 1; k < b.size(); ++k) mb += b[k] / static_cast<double>(b.size() - 1);
+  double sse = 0;
+  for (size_t k = 1; k < a.size(); ++k) sse += (a[k] - ma - b[k] + mb) * (a[k] - ma - b[k] + mb);
+  return std::sqrt(sse / static_cast<double>(a.size() - 1));
+}
+
+TEST_F(Compensate, AZeroMeanReferenceIsTakenRelative) {
+  // The usual form of a reference: zero-mean, ±12 um. The model's output spans about 2 … 42 um, so
+  // by default (auto) the reference is taken about the model's major loop's mean; the true plant on
+  // that drive follows it within the noise; the prediction column is in the reference's frame.
+  WriteReference(dir_ / "zero.csv", 12);
+  {
+    std::ifstream in(dir_ / "zero.csv");
+    std::stringstream all;
+    all << in.rdbuf();
+    std::string text = all.str();
+    std::ofstream out(dir_ / "zero.csv");
+    std::istringstream lines(text);
+    std::string line;
+    std::getline(lines, line);
+    out << line << "\n";
+    while (std::getline(lines, line)) {  // less the 25 um of WriteReference
+      const size_t c = line.find(',');
+      out << line.substr(0, c) << "," << io::FormatNumber(std::stod(line.substr(c + 1)) - 25)
+          << "\n";
+    }
+  }
+  const std::string fit = (dir_ / "fit" / "fit.json").string(), ref = (dir_ / "zero.csv").string();
+  const std::string out = Captured({"compensate", "--model", fit, "--reference", ref, "--out",
+                                    (dir_ / "zero_drive.csv").string()});
+  PZ_EXPECT_HAS(out, "reference relative to the mean of the model's major loop");
+  PZ_EXPECT_HAS(out, "clipping: none");
+  const std::vector<double> r = Column(dir_ / "zero.csv", 1);
+  const std::vector<double> u = Column(dir_ / "zero_drive.csv", 1);
+  const std::vector<double> predicted = Column(dir_ / "zero_drive.csv", 2);
+  EXPECT_LT(CentredRmse(Plant(u), r), 2 * kNoise) << out;
+  double mean = 0;  // the prediction about the reference's zero, not the model's absolute output
+  for (double y : predicted) mean += y / static_cast<double>(predicted.size());
+  EXPECT_LT(std::abs(mean), 2.0) << out;
+  // About the rest output at 50 V: the drive starts there and tracks all the same.
+  const std::string rest = Captured({"compensate", "--model", fit, "--reference", ref, "--out",
+                                     (dir_ / "rest_drive.csv").string(), "--reference-zero", "rest",
+                                     "--rest-drive", "50"});
+  PZ_EXPECT_HAS(rest, "reference relative to the model's rest output");
+  PZ_EXPECT_HAS(rest, "clipping: none");
+  const std::vector<double> ur = Column(dir_ / "rest_drive.csv", 1);
+  EXPECT_NEAR(ur[0], 50, 1e-9);
+  EXPECT_LT(CentredRmse(Plant(ur), r), 2 * kNoise) << rest;
+  // Taken as the absolute output (the former behaviour, by choice): clipped, and said so.
+  const std::string absolute =
+      Captured({"compensate", "--model", fit, "--reference", ref, "--out",
+                (dir_ / "abs_drive.csv").string(), "--reference-zero", "absolute"});
+  PZ_EXPECT_HAS(absolute, "where the reference is beyond what the drive limits reach");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] {
+                  RunCli({"compensate", "--model", fit, "--reference", ref, "--out",
+                          (dir_ / "x.csv").string(), "--reference-zero", "middle"});
+                }),
+                "reference-zero");
+}
+
 TEST_F(Compensate, AnUnreachableReferenceIsClippedAndReported) {
   WriteReference(dir_ / "big.csv", 60);
   const std::string out =

@@ -250,6 +250,11 @@ TEST_F(RecordsDir, BadManifestsAreNamed) {
   Write("manifest.csv", "record,file,role,gain\none,a.csv,train,1\n");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "unknown column 'gain'");
   PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_ / "nowhere"); }), "no such file or folder");
+  Write("manifest.csv", "record,file,role,repeat\none,a.csv,train,run\ntwo,a.csv,test,\n");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }),
+                "manifest.csv:2: repeat group 'run' has one record ('one')");
+  Write("manifest.csv", "record,file,role,repeat\none,a.csv,train,a run\n");
+  PZ_EXPECT_HAS(InputErrorOf([&] { LoadRecordSet(dir_); }), "repeat group 'a run' must be");
 }
 
 TEST(RecordSets, OldBenchFormatsAreReadAsRecordSets) {
@@ -267,12 +272,16 @@ TEST(RecordSets, OldBenchFormatsAreReadAsRecordSets) {
 TEST_F(RecordsDir, WrittenSetsReadBackTheSame) {
   Write("a.csv", RecordText());
   Write("manifest.csv",
-        "record,file,role,t_start_s,t_end_s\none,a.csv,train,0.2,0.6\ntwo,a.csv,test,0.6,\n");
+        "record,file,role,t_start_s,t_end_s,repeat\none,a.csv,train,0.2,0.6,\n"
+        "two,a.csv,test,0.6,,sine\nthree,a.csv,test,0.6,,sine\n");
   const RecordSet set = LoadRecordSet(dir_);
+  EXPECT_EQ(set.records[0].repeat, "");
+  EXPECT_EQ(set.records[1].repeat, "sine");
   WriteRecordSet(set, dir_ / "copy");
   const RecordSet back = LoadRecordSet(dir_ / "copy");
-  ASSERT_EQ(back.records.size(), 2u);
-  for (size_t i = 0; i < 2; ++i) {
+  ASSERT_EQ(back.records.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(back.records[i].repeat, set.records[i].repeat);
     EXPECT_EQ(back.records[i].y, set.records[i].y);
     EXPECT_EQ(back.records[i].first_scored, set.records[i].first_scored);
     EXPECT_EQ(back.records[i].end_scored, set.records[i].end_scored);
