@@ -518,7 +518,7 @@ void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, cons
   WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
   io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) {
     WriteFitReport(os, set, r, a, excitation, proposal, extrapolation);
-    WriteFittedModeMarkdown(os, r);
+    WriteFittedModeMarkdown(os, set, r);
     WriteResidualSpectrumMarkdown(os, set, r, nullptr);
     if (selection) WriteSelectionMarkdown(os, set, *selection);
   });

@@ -33,8 +33,7 @@ model::SpectralBand BandOf(const io::RecordSet& set, const records::FitResult& b
                            model::PowerSpectrum* spectrum) {
   const double f_min =
       records::EffectKind::Named("resonance")->Params(base.model->scale())[1].lower;
-  *spectrum = records::ResidualSpectrum(set.records[i], base.yhat[i]);
-  return model::DominantBand(*spectrum, f_min);
+  return records::ResidualBand(set.records[i], base.yhat[i], f_min, spectrum);
 }
 
 std::string FileStem(const std::string& name) {
@@ -86,15 +85,27 @@ void WriteResidualSpectrumMarkdown(std::ostream& os, const io::RecordSet& set,
   }
 }
 
-void WriteFittedModeMarkdown(std::ostream& os, const records::FitResult& fit) {
+void WriteFittedModeMarkdown(std::ostream& os, const io::RecordSet& set,
+                             const records::FitResult& fit) {
   const std::vector<double> mode = FittedMode(&fit);
   if (mode.empty()) return;
+  double floor = 0;
+  for (const io::Record* r : set.WithRole(model::CaseRole::kTrain))
+    floor = std::max(floor, records::ModeBandFloor(*r, 0));
   os << "\n## Resonance\n\nThe fitted mode: f_n " << G(mode[1], 5) << " Hz, ζ " << G(mode[2], 3)
      << ", share " << G(mode[0], 3) << " of the output"
      << (fit.mode_start.empty() ? " (no dominant band in the training residual nor a ringing rest: "
                                   "started by the search alone)"
                                 : " (started at " + fit.mode_start + ")")
      << ".\n";
+  if (mode[1] < floor)
+    os << "\nIts f_n lies among the periodic training drive's first five harmonics (below "
+       << G(floor, 3)
+       << " Hz), where a hysteresis model's own error lies: the fit uses it as a linear dynamics "
+          "of the output (a lag or lead the family lacks), not as a mode of the structure — "
+          "compare it with `delay`, `driver-lowpass` or `rate-dependence`, and identify a mode on "
+          "a "
+          "drive with content near it (band-limited noise, steps).\n";
 }
 
 void WriteResidualSpectrumFigures(const std::filesystem::path& dir, const io::RecordSet& set,

@@ -21,8 +21,10 @@ void WriteResidualSpectrumMarkdown(std::ostream& os, const io::RecordSet& set,
                                    const records::FitResult& base, const records::FitResult* after);
 
 /// A fit holding `resonance`: its fitted mode and where its start came from, as a paragraph
-/// (nothing for a fit without it).
-void WriteFittedModeMarkdown(std::ostream& os, const records::FitResult& fit);
+/// (nothing for a fit without it); a mode among a periodic training drive's first harmonics
+/// (records::ModeBandFloor) is said to act as a linear dynamics of the output, not a structure's.
+void WriteFittedModeMarkdown(std::ostream& os, const io::RecordSet& set,
+                             const records::FitResult& fit);
 
 /// figures/residual_spectrum_<record>.csv (f_hz, base, after) and .gp for each record with a band,
 /// and the mode's marker (residual_mode_<record>.csv); the scripts' paths appended to `scripts`.

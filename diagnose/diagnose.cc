@@ -187,8 +187,7 @@ NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
 /// resonance.h): where a mode shows.
 bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_min) {
   for (size_t i = 0; i < set.records.size() && i < fit.yhat.size(); ++i)
-    if (model::DominantBand(ResidualSpectrum(set.records[i], fit.yhat[i]), f_min).dominant())
-      return true;
+    if (ResidualBand(set.records[i], fit.yhat[i], f_min).dominant()) return true;
   return false;
 }
 

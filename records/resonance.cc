@@ -1,5 +1,7 @@
 #include "records/resonance.h"
 
+#include <algorithm>
+
 namespace pz::records {
 
 model::PowerSpectrum ResidualSpectrum(const io::Record& r, std::span<const double> yhat) {
@@ -8,6 +10,30 @@ model::PowerSpectrum ResidualSpectrum(const io::Record& r, std::span<const doubl
     e.push_back(r.y[k] - yhat[k]);
   const double fs = r.t.size() > 1 ? 1 / (r.t[1] - r.t[0]) : 0;
   return model::WelchSpectrum(e, fs);
+}
+
+double ModeBandFloor(const io::Record& r, double f_min) {
+  if (r.t.size() < 2 || r.end_scored <= r.first_scored) return f_min;
+  const std::span<const double> u(r.u.data() + r.first_scored, r.end_scored - r.first_scored);
+  const model::PowerSpectrum s = model::WelchSpectrum(u, 1 / (r.t[1] - r.t[0]));
+  if (s.p.size() < 4) return f_min;
+  size_t peak = 1;
+  double total = 0;
+  for (size_t k = 1; k < s.p.size(); ++k) {
+    total += s.p[k];
+    if (s.p[k] > s.p[peak]) peak = k;
+  }
+  double line = 0;  // the Hann window's main lobe: two bins each side
+  for (size_t k = peak > 2 ? peak - 2 : 1; k <= peak + 2 && k < s.p.size(); ++k) line += s.p[k];
+  return total > 0 && line >= 0.5 * total ? std::max(f_min, 5.5 * s.f[peak]) : f_min;
+}
+
+model::SpectralBand ResidualBand(const io::Record& r, std::span<const double> yhat, double f_min,
+                                 model::PowerSpectrum* spectrum) {
+  model::PowerSpectrum s = ResidualSpectrum(r, yhat);
+  const model::SpectralBand b = model::DominantBand(s, ModeBandFloor(r, f_min));
+  if (spectrum) *spectrum = std::move(s);
+  return b;
 }
 
 std::optional<ModeStart> FindModeStart(const std::vector<const io::Record*>& records,
@@ -21,8 +47,8 @@ std::optional<ModeStart> FindModeStart(const std::vector<const io::Record*>& rec
     best = ModeStart{b, std::move(source)};
   };
   for (size_t i = 0; i < records.size() && i < yhats.size(); ++i) {
-    const model::PowerSpectrum s = ResidualSpectrum(*records[i], yhats[i]);
-    const model::SpectralBand b = model::DominantBand(s, f_min);
+    model::PowerSpectrum s;
+    const model::SpectralBand b = ResidualBand(*records[i], yhats[i], f_min, &s);
     consider(b, model::BandPower(s, b.f_lo, b.f_hi), "the residual of '" + records[i]->name + "'");
   }
   if (best) return best;

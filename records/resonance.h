@@ -26,14 +26,24 @@ namespace pz::records {
 /// model's output with polarity and offset).
 model::PowerSpectrum ResidualSpectrum(const io::Record& r, std::span<const double> yhat);
 
+/// The lowest frequency where a record's residual band can be a mode's: f_min, and above the first
+/// five harmonics of a periodic drive (5.5 × its fundamental, where one spectral line — its bin and
+/// two each side, the window's main lobe — holds half of the drive's power over the scored window:
+/// a hysteresis model's error on a periodic drive lies at the drive's first harmonics, not in a
+/// mode). A drive without such a line (band-limited noise, chatter) adds nothing.
+double ModeBandFloor(const io::Record& r, double f_min);
+/// The dominant band of record r's residual above ModeBandFloor(r, f_min) (not found: none).
+model::SpectralBand ResidualBand(const io::Record& r, std::span<const double> yhat, double f_min,
+                                 model::PowerSpectrum* spectrum = nullptr);
+
 /// A mode's start: the band and where it was found.
 struct ModeStart {
   model::SpectralBand band;
   std::string source;  ///< "the residual of 'rec'" or "the ringing of the rest of 'rec'"
 };
-/// The strongest dominant band above f_min among the records' residuals (yhats: one per record,
-/// as ResidualSpectrum takes them; empty: none), else among their rests' ringing (a rest of 64
-/// samples at least); nothing when none has one.
+/// The strongest dominant band among the records' residuals (ResidualBand; yhats: one per record,
+/// as ResidualSpectrum takes them; empty: none), else among their rests' ringing above f_min (a
+/// rest of 64 samples at least); nothing when none has one.
 std::optional<ModeStart> FindModeStart(const std::vector<const io::Record*>& records,
                                        const std::vector<std::vector<double>>& yhats, double f_min);
 
