@@ -183,11 +183,11 @@ NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
   return EstimateNoiseFloor(set, &base_res);
 }
 
-/// True when a record's residual under the fit has a dominant band above f_min (records/
-/// resonance.h): where a mode shows.
+/// True when a record's residual under the fit has a mode-like band above f_min (records/
+/// resonance.h: dominant and narrow): where a mode shows.
 bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_min) {
   for (size_t i = 0; i < set.records.size() && i < fit.yhat.size(); ++i)
-    if (ResidualBand(set.records[i], fit.yhat[i], f_min).dominant()) return true;
+    if (ResidualBand(set.records[i], fit.yhat[i], f_min).mode_like()) return true;
   return false;
 }
 
@@ -195,8 +195,9 @@ bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_mi
 /// does not hold and the records can support (creep-spectrum needs a window of a decade above its
 /// fastest relaxation); asked for by name, such an effect is an error (its model throws); so does
 /// rate dependence on training records at one rate (records/excitation.h, the rate span). The
-/// resonance is offered by default where a record's residual under the base model has a dominant
-/// band in its range of f_n (a mode there; elsewhere its fit would only bend the loop).
+/// resonance is offered by default where a record's residual under the base model has a mode-like
+/// band in its range of f_n, above a periodic drive's first harmonics (a mode there; elsewhere its
+/// fit would only bend the loop, as a lag the family lacks).
 std::vector<EffectKind> CandidateEffects(const io::RecordSet& set, const RecordDiagnosis& d,
                                          const RecordDiagnoseOptions& o) {
   std::vector<EffectKind> cands = o.candidates;

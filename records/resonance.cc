@@ -42,7 +42,7 @@ std::optional<ModeStart> FindModeStart(const std::vector<const io::Record*>& rec
   std::optional<ModeStart> best;
   double best_power = 0;
   auto consider = [&](const model::SpectralBand& b, double power, std::string source) {
-    if (!b.dominant() || !(power > best_power)) return;
+    if (!b.mode_like() || !(power > best_power)) return;
     best_power = power;
     best = ModeStart{b, std::move(source)};
   };

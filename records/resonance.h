@@ -41,9 +41,10 @@ struct ModeStart {
   model::SpectralBand band;
   std::string source;  ///< "the residual of 'rec'" or "the ringing of the rest of 'rec'"
 };
-/// The strongest dominant band among the records' residuals (ResidualBand; yhats: one per record,
-/// as ResidualSpectrum takes them; empty: none), else among their rests' ringing above f_min (a
-/// rest of 64 samples at least); nothing when none has one.
+/// The strongest mode-like band (SpectralBand::mode_like: dominant and narrow) among the records'
+/// residuals (ResidualBand; yhats: one per record, as ResidualSpectrum takes them; empty: none),
+/// else among their rests' ringing above f_min (a rest of 64 samples at least); nothing when none
+/// has one.
 std::optional<ModeStart> FindModeStart(const std::vector<const io::Record*>& records,
                                        const std::vector<std::vector<double>>& yhats, double f_min);
 
