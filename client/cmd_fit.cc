@@ -26,6 +26,7 @@
 #include "client/search_flags.h"
 #include "client/select_report.h"
 #include "client/plots.h"
+#include "client/residual_spectrum_report.h"
 #include "client/record_windows.h"
 #include "io/csv.h"
 #include "io/records.h"
@@ -517,6 +518,8 @@ void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, cons
   WriteProposedDrive(fs::path(a.out) / kProposedDriveFile, set, proposal);
   io::WriteFileWith(fs::path(a.out) / "report.md", [&](std::ostream& os) {
     WriteFitReport(os, set, r, a, excitation, proposal, extrapolation);
+    WriteFittedModeMarkdown(os, set, r);
+    WriteResidualSpectrumMarkdown(os, set, r, nullptr);
     if (selection) WriteSelectionMarkdown(os, set, *selection);
   });
   io::WriteFileWith(fs::path(a.out) / "fit.json", [&](std::ostream& os) {
@@ -529,6 +532,8 @@ void WriteFitOutputs(const io::RecordSet& set, const records::FitResult& r, cons
   });
   std::vector<fs::path> scripts;
   WriteTraces(fs::path(a.out) / "figures", set, r, a.no_figures ? nullptr : &scripts);
+  if (!a.no_figures)
+    WriteResidualSpectrumFigures(fs::path(a.out) / "figures", set, r, nullptr, scripts);
   if (!scripts.empty()) {
     std::vector<std::string> errors;
     if (GnuplotAvailable()) {

@@ -9,6 +9,7 @@
 #include "client/excitation_report.h"
 #include "client/plots.h"
 #include "client/record_windows.h"
+#include "client/residual_spectrum_report.h"
 #include "client/search_flags.h"
 #include "client/select_report.h"
 #include "diagnosis.pb.h"
@@ -77,6 +78,8 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
          << " |\n";
     }
   }
+  WriteResidualSpectrumMarkdown(
+      os, set, d.base, d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr);
   if (d.next) {
     os << "\n## Next measurement\n\n" << d.next->description << ".\n";
   }
@@ -253,6 +256,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
     if (best) p.series.push_back({stem + ".csv", 1, 4, best->model->Describe(), "lines"});
     scripts.push_back(WritePlotScript(out / "figures", p));
   }
+  WriteResidualSpectrumFigures(out / "figures", set, d.base, best, scripts);
   std::vector<std::string> errors;
   if (!a.no_plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
   for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";

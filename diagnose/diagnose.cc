@@ -8,6 +8,7 @@
 #include "model/effects.h"
 #include "model/format.h"
 #include "model/model_comparison.h"
+#include "records/resonance.h"
 
 namespace pz::records {
 namespace {
@@ -182,18 +183,33 @@ NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
   return EstimateNoiseFloor(set, &base_res);
 }
 
+/// True when a record's residual under the fit has a mode-like band above f_min (records/
+/// resonance.h: dominant and narrow): where a mode shows.
+bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_min) {
+  for (size_t i = 0; i < set.records.size() && i < fit.yhat.size(); ++i)
+    if (ResidualBand(set.records[i], fit.yhat[i], f_min).mode_like()) return true;
+  return false;
+}
+
 /// The candidates that apply to the family: those asked for, or by default the effects the family
 /// does not hold and the records can support (creep-spectrum needs a window of a decade above its
 /// fastest relaxation); asked for by name, such an effect is an error (its model throws); so does
-/// rate dependence on training records at one rate (records/excitation.h, the rate span).
-std::vector<EffectKind> CandidateEffects(const RecordDiagnosis& d, const RecordDiagnoseOptions& o) {
+/// rate dependence on training records at one rate (records/excitation.h, the rate span). The
+/// resonance is offered by default where a record's residual under the base model has a mode-like
+/// band in its range of f_n, above a periodic drive's first harmonics (a mode there; elsewhere its
+/// fit would only bend the loop, as a lag the family lacks).
+std::vector<EffectKind> CandidateEffects(const io::RecordSet& set, const RecordDiagnosis& d,
+                                         const RecordDiagnoseOptions& o) {
   std::vector<EffectKind> cands = o.candidates;
   if (!cands.empty()) return cands;
   const auto lib = EffectLibrary(d.base.model->scale());
   const Family& family = d.base.model->family();
   const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
+  const EffectKind resonance = EffectKind::Named("resonance");
   for (const EffectInfo& e : lib)
-    if (!family.Excludes(e.name) && e.unsupported.empty() && (rates || !NeedsRateCoverage(e.kind)))
+    if (!family.Excludes(e.name) && e.unsupported.empty() &&
+        (rates || !NeedsRateCoverage(e.kind)) &&
+        (e.kind != resonance || ResidualHasBand(set, d.base, e.params[1].lower)))
       cands.push_back(e.kind);
   return cands;
 }
@@ -616,7 +632,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
 
   // Candidates that apply to the family, each fitted on top of the base model.
   const DataScale& scale = d.base.model->scale();
-  const std::vector<EffectKind> cands = CandidateEffects(d, o);
+  const std::vector<EffectKind> cands = CandidateEffects(set, d, o);
   for (EffectKind e : cands) {
     if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
     RecordCandidate c;

@@ -392,4 +392,102 @@ TrialDraw RecordsTrialDraw(const RecordsTrialOptions& o) {
   return [f](uint64_t seed) { return DrawRecordsTrial(*f, seed); };
 }
 
+namespace {
+
+/// A flat comb of sines over [lo, hi] (spacing ≈ 1/(3 s) to at most 400 lines), random phases, RMS
+/// `rms`, at t.
+struct Comb {
+  std::vector<double> f, phase;
+  double gain = 0;
+  Comb(double lo, double hi, double rms, opt::Rng& rng) {
+    const double step = std::max((hi - lo) / 400, 1.0 / 3);
+    for (double x = lo; x <= hi; x += step) {
+      f.push_back(x);
+      phase.push_back(UniformDraw(rng, 0, 2 * std::numbers::pi));
+    }
+    gain = rms * std::sqrt(2.0 / static_cast<double>(f.size()));
+  }
+  double operator()(double t) const {
+    double v = 0;
+    for (size_t i = 0; i < f.size(); ++i) v += std::sin(2 * std::numbers::pi * f[i] * t + phase[i]);
+    return gain * v;
+  }
+};
+
+/// One record of the mode bench: 50 ms at the range's middle, a step to the rest level at the
+/// bottom, the rest, the drive (simulated from the middle so that the rest rings, then cut after
+/// the step).
+io::Record ModeRecord(const RecordModel& truth, const ModeBench& b, const ModeBenchOptions& o,
+                      bool chatter, double seconds, const std::string& name, uint64_t seed) {
+  opt::Rng rng(seed * 6151 + 29);
+  const Comb comb(o.band_lo_hz, o.band_hi_hz, o.band_rms_v, rng);
+  const double dt = 1 / o.fs_hz, bottom = -o.sine_v;
+  const size_t pre = static_cast<size_t>(std::round(0.05 / dt)),
+               rest = static_cast<size_t>(std::round(o.rest_s / dt)),
+               n = pre + rest + static_cast<size_t>(std::round(seconds / dt));
+  io::Record full;
+  double telegraph = o.chatter_v;
+  for (size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    double u = k < pre ? 0 : bottom;
+    if (k >= pre + rest) {
+      const double te = static_cast<double>(k - pre - rest) * dt, ramp = std::min(1.0, te / 0.02);
+      if (chatter) {
+        const double ph = std::fmod(te * o.sine_hz, 1.0);  // a triangle from the bottom
+        if (rng.Uniform01() < 0.2) telegraph = -telegraph;
+        u = bottom + 2 * o.sine_v * (ph < 0.5 ? 2 * ph : 2 - 2 * ph) + ramp * telegraph;
+      } else {
+        u = -o.sine_v * std::cos(2 * std::numbers::pi * o.sine_hz * te) + ramp * comb(te);
+      }
+    }
+    full.t.push_back(t);
+    full.u.push_back(u);
+  }
+  full.dt = dt;
+  full.rest_samples = pre;
+  full.end_scored = n;
+  full.y.assign(n, 0);
+  truth.Simulate(full, b.params, b.weights, n, full.y);
+  Measure(full.y, {.noise_std = o.noise_std}, rng);
+  io::Record r;
+  r.name = name;
+  r.file = name + ".csv";
+  r.dt = dt;
+  for (size_t k = pre; k < n; ++k) {
+    r.t.push_back(static_cast<double>(k - pre) * dt);
+    r.u.push_back(full.u[k]);
+    r.y.push_back(full.y[k]);
+  }
+  r.rest_samples = rest;
+  r.first_scored = rest;
+  r.end_scored = r.size();
+  return r;
+}
+
+}  // namespace
+
+ModeBench MakeModeBench(const ModeBenchOptions& o) {
+  if (!(o.f_n_hz > 0 && o.f_n_hz < 0.45 * o.fs_hz))
+    throw InputError(FieldError("f_n_hz", o.f_n_hz, "must be in (0, 0.45 fs)"));
+  const DataScale scale = SyntheticStackScale();
+  const std::shared_ptr<const Family> family = MakeFamily(o.family, scale);
+  ModeBench b;
+  b.params = family->CheckNominal();
+  if (b.params.empty())
+    throw InputError("mode bench: family '" + o.family + "' has no nominal parameter set");
+  if (family->linear()) b.weights = std::exchange(b.params, {});
+  b.params.insert(b.params.end(), {o.share, o.f_n_hz, o.zeta});
+  const RecordModel truth(family, {EffectKind::Named("resonance")}, scale);
+  std::ostringstream d;
+  d << o.family << " + resonance (f_n " << o.f_n_hz << " Hz, zeta " << o.zeta << ", share "
+    << o.share << "), " << o.fs_hz << " Hz, withheld " << (o.chatter_v > 0 ? "chatter" : "noise");
+  b.description = d.str();
+  b.set.source = "mode bench";
+  b.set.records.push_back(ModeRecord(truth, b, o, false, o.train_s, "train", o.seed));
+  b.set.records.push_back(
+      ModeRecord(truth, b, o, o.chatter_v > 0, o.withheld_s, "withheld", o.seed + 1));
+  b.set.records.back().role = model::CaseRole::kValidate;
+  return b;
+}
+
 }  // namespace pz::records

@@ -163,4 +163,32 @@ std::vector<EffectKind> RecordsTrialEffects(const Family& family);
 /// without a nominal parameter set (Family::CheckNominal), naming those with one.
 TrialDraw RecordsTrialDraw(const RecordsTrialOptions& options);
 
+// A bench whose truth has a mode (issue 45).
+
+/// Records of a stack whose output rings: the family at its nominal set (Family::CheckNominal) on
+/// the synthetic stack's scale, its output through the library's `resonance` (f_n, ζ, share), read
+/// with white noise. Each record starts with a rest just after a step to the rest level (the rest
+/// rings, as a real stack's first 0.2 s do), then its drive: the training record a slow sine with
+/// band-limited noise riding on it (a flat comb of sines between the band's ends, random phases,
+/// its RMS given), the withheld one the same shape from another seed, or a compensator's chatter
+/// (a triangle with a random telegraph of ±chatter_v switching on one sample in five: broadband).
+struct ModeBenchOptions {
+  std::string family = "backlash-like";
+  double f_n_hz = 740, zeta = 0.03, share = 0.9;
+  double fs_hz = 10000;
+  double sine_hz = 20, sine_v = 70;  ///< the slow drive (amplitude about the range's middle)
+  double band_lo_hz = 50, band_hi_hz = 1500, band_rms_v = 8;  ///< the band-limited noise
+  double chatter_v = 4;  ///< the withheld chatter's half step (0: noise instead)
+  double rest_s = 0.25, train_s = 1.2, withheld_s = 0.8;
+  double noise_std = 0.003;  ///< of the reading
+  uint64_t seed = 1;
+};
+struct ModeBench {
+  io::RecordSet set;
+  std::vector<double> params, weights;  ///< the truth's (RecordModel(family, {resonance}) order)
+  std::string description;
+};
+/// Throws InputError for a family without a nominal set or a mode outside (0, 0.45 fs).
+ModeBench MakeModeBench(const ModeBenchOptions& options);
+
 }  // namespace pz::records

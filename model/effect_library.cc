@@ -516,6 +516,60 @@ class CreepSpectrum final : public EffectDef {
   }
 };
 
+// A mechanical mode after the hysteresis (issue 45): the stack and its flexure ring after a step
+// (≈ 740 Hz on a 35 µm stack at 10 kHz) and on a drive with content there, and no other effect is a
+// mode. Hammerstein, as the creep spectrum: the hysteresis's output v drives a second-order mode
+// of unit gain at DC, of which a share a reaches the output,
+//   y = (1 − a) v + a q,   q̈ + 2ζω q̇ + ω² q = ω² v,   ω = 2π f_n,
+// so the hysteresis keeps its meaning at rest and slowly (a = 1: the whole output through the
+// mode; a < 1: a part of the reading that does not ring, e.g. a sensor on the frame). Discretised
+// exactly for an input linear between samples (the first-order hold of the library's low-passes:
+// the closed form of the free oscillator's exp(A dt) over the deviation from the quasi-static
+// ramp, model/kernels/effects.h pzk_resonance_consts), so that f_n near Nyquist is no
+// approximation; not ZOH, which would hold the hysteresis's output as a staircase the plant never
+// saw, nor Tustin, whose warp is exact at one frequency only. Linear and homogeneous in y, at rest
+// at y[0]: a linear family takes it on each regressor (its weights solved for the output through
+// the mode). Its start values come from the data, not from the box: a fit places f_n and ζ at the
+// dominant band of the residual (records/fit.cc; model/effect_library_resonance.h), or at the
+// ringing of a rest that follows a step.
+class Resonance final : public EffectDef {
+ public:
+  const char* name() const override { return "resonance"; }
+  const char* title() const override {
+    return "a second-order mode after the hysteresis (structure, flexure)";
+  }
+  const char* equation() const override {
+    return "y_e = (1 - a) y + a q, q'' + 2 zeta w q' + w^2 q = w^2 y, w = 2 pi f_n";
+  }
+  EffectStage stage() const override { return EffectStage::kOutput; }
+  int kernel() const override { return pzk::PZK_RESONANCE; }
+  /// f_n from twice the drive's dominant frequency (at most fs/20) to 0.45 fs: a mode the data's
+  /// sampling resolves, above the drive's own band.
+  std::vector<ParamInfo> Params(const DataScale& s) const override {
+    const double f_lo = std::min(2 * s.f_dom, 0.05 * s.fs);
+    return {{"share", "-", 0.0, 1.0, false},
+            {"f_n_hz", "Hz", f_lo, 0.45 * s.fs, true},
+            {"zeta", "-", 0.003, 0.7, true}};
+  }
+  void ApplyOutput(std::span<const double> p, const OutputFrame& f,
+                   std::span<double> y) const override {
+    if (y.empty() || p[0] == 0) return;
+    const pzk::pzk_block b = EffectBlock(kernel(), p.first(3), f.dt);
+    double c[10], d[3];
+    pzk::pzk_resonance_init(&b, c, d, y[0]);
+    for (size_t k = 1; k < y.size(); ++k) y[k] = pzk::pzk_resonance_step(c, d, d, y[k]);
+  }
+  bool linear_output() const override { return true; }
+  /// A mode the check's drives (sines, multisines and triangles of 1–6 Hz at 500 Hz) excite: its
+  /// corners ring, and a chirp to 6 Hz feels the gain rise below it: f_n 8–30 × the dominant drive
+  /// frequency of the scale, ζ 0.02–0.1, most of the output through it.
+  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
+    const double a = d.Uniform(0.6, 1.0);
+    const double f_n = std::min(d.LogUniform(8, 30) * s.f_dom, 0.3 * s.fs);
+    return {a, f_n, d.LogUniform(0.02, 0.1)};
+  }
+};
+
 class Friction final : public EffectDef {
  public:
   const char* name() const override { return "friction"; }
@@ -604,6 +658,7 @@ const RateDependence kRateDependence;
 const HingeFriction kHingeFriction;
 const CubicStiffening kCubicStiffening;
 const CreepSpectrum kCreepSpectrum;
+const Resonance kResonance;
 const Friction kFriction;
 const Stiffening kStiffening;
 const Drift kDrift;
@@ -612,9 +667,9 @@ const Drift kDrift;
 
 const std::vector<const EffectDef*>& Effects() {
   static const std::vector<const EffectDef*> all = {
-      &kDriverLowpass, &kQuadraticDrive,  &kCreep,         &kDelay,    &kRateDependence,
-      &kHingeFriction, &kCubicStiffening, &kCreepSpectrum, &kFriction, &kStiffening,
-      &kDrift};
+      &kDriverLowpass,  &kQuadraticDrive, &kCreep,           &kDelay,
+      &kRateDependence, &kHingeFriction,  &kCubicStiffening, &kCreepSpectrum,
+      &kResonance,      &kFriction,       &kStiffening,      &kDrift};
   return all;
 }
 

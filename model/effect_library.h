@@ -20,9 +20,12 @@
 //   hinge-friction   beam    Ḟ = σ ẇ (1 − F/F_c sgn ẇ), tip force −F    fc_n, sigma_n_per_m
 //   cubic-stiffening beam    tip force −k₃ w_tip³                       k3_n_per_m3
 //   creep-spectrum   output  y_e = y − Σ w_i (y − x_i), τ_i ẋ_i = y − x_i    w_i ≥ 0 at τ_i = 0.05
-//   s … T friction         output  y_e = play_r[y]                            r stiffening output
-//   y_e = y − k₃ Y ((y − y_0)/Y)³              k3 drift            output  y_e = y + ρ (t − t_w)
-//   rate
+//                                                                       s … T
+//   resonance        output  y_e = (1 − a) y + a q,                      share, f_n_hz, zeta
+//                            q̈ + 2ζω q̇ + ω² q = ω² y
+//   friction         output  y_e = play_r[y]                            r
+//   stiffening       output  y_e = y − k₃ Y ((y − y_0)/Y)³              k3
+//   drift            output  y_e = y + ρ (t − t_w)                      rate
 //
 // Drive effects act on u in registry order, output effects on y in registry order; params[0] is the
 // magnitude (zero: identity; the creep spectrum's weights are each their relaxation's magnitude,

@@ -13,6 +13,7 @@
 #include "records/excitation.h"
 #include "records/nnls.h"
 #include "records/preisach_family.h"
+#include "records/resonance.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {
@@ -984,6 +985,53 @@ std::vector<double> TakeFit(opt::FitResult fit, FitResult& res) {
   return std::move(fit.x);
 }
 
+/// A model with `resonance` (records/resonance.h): the mode placed where the training residual of
+/// the fit without it (its share at zero), or a rest's ringing, shows a dominant band, polished
+/// from there at share ½ and 1 besides the fit's best; the better training cost kept.
+void RestartAtMode(const RecordModel& model, const RecordFitness& fitness,
+                   const std::vector<const io::Record*>& train, const opt::ParameterMap& map,
+                   const opt::FitProblem& problem, const opt::FitOptions& fo,
+                   std::vector<double>& best_searched, FitResult& res) {
+  const auto [first, count] = model.EffectParams(EffectKind::Named("resonance"));
+  if (count != 3) return;
+  const bool solved = fitness.spectrum_solved();
+  const std::vector<double> full = solved ? fitness.Expand(best_searched) : best_searched;
+  std::vector<double> without = full;
+  without[first] = 0;
+  const auto& box = model.params();
+  const std::optional<ModeStart> start =
+      FindModeStart(train, fitness.Run(without).yhat, box[first + 1].lower);
+  if (!start) return;
+  const model::SpectralBand& b = start->band;
+  opt::FitOptions again = fo;
+  again.search = false;
+  again.starts = {map.ToUnit(best_searched)};
+  for (double share : {0.5, 1.0}) {
+    std::vector<double> x = full;
+    x[first] = share;
+    x[first + 1] = std::clamp(b.f_peak, box[first + 1].lower, box[first + 1].upper);
+    x[first + 2] = std::clamp(b.zeta, box[first + 2].lower, box[first + 2].upper);
+    std::vector<double> xs;
+    for (size_t i : fitness.searched()) xs.push_back(x[i]);
+    again.starts.push_back(map.ToUnit(xs));
+  }
+  opt::FitResult second = opt::Fit(problem, again);
+  res.evaluations += second.evaluations;
+  res.lm_iterations += second.lm_iterations;
+  res.polishes += second.polishes;
+  auto mse = [&](const std::vector<double>& xs) {
+    return fitness.Run(solved ? fitness.Expand(xs) : xs, false).mse;
+  };
+  const bool kept = mse(second.x) < mse(best_searched);
+  res.mode_start = "f_n " + FormatG(b.f_peak, 4) + " Hz, zeta " + FormatG(b.zeta, 2) + " from " +
+                   start->source + " (band " + FormatG(b.f_lo, 3) + "-" + FormatG(b.f_hi, 3) +
+                   " Hz, " + FormatG(100 * b.share, 3) + " % of its power)" +
+                   (kept ? "" : "; the search's own fit was better");
+  if (!kept) return;
+  best_searched = std::move(second.x);
+  res.uncertainty = std::move(second.uncertainty);
+}
+
 }  // namespace
 
 namespace {
@@ -1070,6 +1118,8 @@ FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
     std::vector<double> best_searched;
     if (searched_map) {
       best_searched = TakeFit(opt::Fit(problem, fo), res);
+      if (options.polish && options.polish_from.empty())
+        RestartAtMode(*model, fitness, train, *m, problem, fo, best_searched, res);
     }
     best = solved ? fitness.Expand(best_searched) : best_searched;
     // A regularised linear family with effects: its strength was chosen with the effects at their

@@ -365,6 +365,9 @@ struct FitResult {
   /// creep-spectrum: "" or which relaxations the training excitation does not identify (σ above
   /// the mean fitted weight: the data cannot tell whether they are there).
   std::string SpectrumIdentification() const;
+  /// resonance: where its start came from and whether the polish from there was kept
+  /// (records/resonance.h; "" without the effect or without a band in the data).
+  std::string mode_start;
   double train_mse = 0;
   double train_sse = 0;
   std::vector<RecordMetrics> metrics;     ///< every record of the set, set order

@@ -69,6 +69,10 @@ static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
       *nc = 1 + 2 * n;
       *nd = 1 + n;
       return 0;
+    case PZK_RESONANCE:
+      *nc = 10;
+      *nd = 3;
+      return 0;
     case PZK_FRICTION:
       *nd = 1;
       return 0;
@@ -131,6 +135,8 @@ static inline double pzk_block_init(const pzk_block *b, double *c, double *d, do
       return pzk_fin_init(b, c, d, v);
     case PZK_CREEP_SPECTRUM:
       return pzk_creep_spectrum_init(b, c, d, v);
+    case PZK_RESONANCE:
+      return pzk_resonance_init(b, c, d, v);
     case PZK_FRICTION:
       return pzk_friction_init(d, v);
     case PZK_STIFFENING:
@@ -178,6 +184,8 @@ static inline double pzk_block_step(const pzk_block *b, const double *c, const d
       return pzk_fin_step(b, c, d, o, v);
     case PZK_CREEP_SPECTRUM:
       return pzk_creep_spectrum_step(b, c, d, o, v);
+    case PZK_RESONANCE:
+      return pzk_resonance_step(c, d, o, v);
     case PZK_FRICTION:
       return pzk_friction_step(b, d, o, v);
     case PZK_STIFFENING:
@@ -209,7 +217,9 @@ static inline double pzk_chain_init(const pzk_block *b, int nb, double *c, doubl
 }
 
 /* How pzk_chain_eval runs the chain: forward; the compensator's one-step map (the delay blocks
- * stepping what remains of their delay once the reference is read ahead: pzk_delay_inverse_step);
+ * stepping what remains of their delay once the reference is read ahead: pzk_delay_inverse_step;
+ * a resonance block in every mode but forward giving its virtual plant,
+ * pzk_resonance_inverse_step);
  * that with the fin's angle pushed up or down through its backlash (pzk_fin_step_through); the
  * delay blocks passing their input on (what a lasting change of the drive meets: a replay's local
  * gain). */
@@ -231,6 +241,8 @@ static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c,
     if (b[i].kind == PZK_DELAY && mode == PZK_EVAL_UNDELAYED) continue;
     if (b[i].kind == PZK_DELAY && mode != PZK_EVAL_FORWARD)
       v = pzk_delay_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+    else if (b[i].kind == PZK_RESONANCE && mode != PZK_EVAL_FORWARD)
+      v = pzk_resonance_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
     else if (b[i].kind == PZK_BIMORPH_FIN &&
              (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
       v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v,

@@ -22,6 +22,7 @@ enum {
   PZK_STIFFENING,
   PZK_DRIFT,          /* output effects */
   PZK_CREEP_SPECTRUM, /* output effect (first of the output stage) */
+  PZK_RESONANCE,      /* output effect (a second-order mode, after the creep spectrum) */
   PZK_AFFINE = 40     /* y = polarity * v + offset */
 };
 

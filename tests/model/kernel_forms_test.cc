@@ -197,6 +197,10 @@ TEST(KernelForms, EffectsMatchFrozenDigest) {
     const auto u = d.Drive(kSamples);
     const double dt = d.U(1e-4, 5e-3);
     for (const EffectDef* e : Effects()) {
+      // The effects the digest was recorded over (their old loops): a later effect (resonance,
+      // issue 45, written as a kernel from the start: tests/records/resonance_test.cc) would
+      // change its draws.
+      if (std::string(e->name()) == "resonance") continue;
       std::vector<double> p;
       if (std::string(e->name()) == "creep-spectrum") {
         p = d.Values(12, 0, 0.05);
