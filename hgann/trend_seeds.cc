@@ -715,15 +715,13 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
   const std::vector<double> from_both = polish_free(from_constant, free_theta);
   out.simulations += polish_free.simulations();
 
-  // With the operating-point law, the structured trends are left out: they fit the training
-  // cases more closely (a hinge per parameter where the per-case estimates ask for it) and the
-  // withheld ones far worse — on the smooth-law benches the GA kept the lowest-cost seed, a
-  // structured trend 5 % below the law on the training cases and 50–80 × the truth on a withheld
-  // case between two training cases (docs/performance.md, "The operating-point law").
-  // Unless the law misses the training cases by more than kLawMargin × the structured trends'
-  // cost: then the law's class (affine in V and ln f) does not hold the truth (a1 ∝ V² on
-  // tests/hgann/trend_seeds_test.cc, δ rising then falling in f on trends-dev2) and the
-  // structured trends stay, the GA keeping the lowest.
+  // The structured trends are left out when the law's seed costs no more than they do
+  // (kLawMargin = 1); otherwise they stay beside it and the GA keeps the lowest. A margin of 1.5
+  // (the law preferred while it costs up to 1.5 × the structured trends) won on the development
+  // family of bench/oplaw_benches.py and lost on its check family (v^p, √f or linear f laws: with
+  // the corner case trained, 1–2 of 8 withheld cases within 3 × against 9 of 12 with the lowest
+  // cost kept): the law's class (ln f, the terms its estimates support) is not yet general enough
+  // to be preferred against the training cost (docs/performance.md, "The operating-point law").
   const std::vector<std::pair<const std::vector<double>*, const char*>> made = {
       {&from_structured, kStructured[0]},
       {&from_both, kStructured[1]},

@@ -90,13 +90,12 @@ struct TrendSeeds {
   /// of the seeds ("operating-point law (joint fit)") when it could be fitted.
   OperatingLaw law;
   /// The law's seed replaces the structured trends (they are left out of `genomes`) when its cost
-  /// is at most kLawMargin × theirs: a law that fits the training cases nearly as well is
-  /// preferred to shapes chosen case by case, which fit them closer and the withheld cases far
-  /// worse (docs/performance.md, "The operating-point law").
+  /// is at most kLawMargin × theirs (1: when it fits the training cases at least as well; a
+  /// larger margin, preferring the law, lost on the check benches: trend_seeds.cc).
   bool law_kept = false;
   double law_cost = 0, structured_cost = 0;  ///< the seeds' costs (+inf: none)
 };
-inline constexpr double kLawMargin = 1.5;
+inline constexpr double kLawMargin = 1.0;
 
 /// Steps 1–3 of the file comment on the fitness's training cases.
 TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& options = {});
