@@ -62,8 +62,10 @@ void WriteResidualSpectrumMarkdown(std::ostream& os, const io::RecordSet& set,
             "model cannot follow. Figures: `figures/residual_spectrum_<record>.png`"
          << (mode.empty() ? "" : ", the fitted mode marked") << ".\n\n"
          << "| record | role | band [Hz] | peak [Hz] | share of the residual's power | "
-            "ζ from its width | after: share of the band closed |\n"
-         << "|---|---|---|---|---|---|---|\n";
+            "ζ from its width | a mode's (ζ < "
+         << G(model::SpectralBand::kModeZeta, 2)
+         << ": the diagnosis tries `resonance`) | after: share of the band closed |\n"
+         << "|---|---|---|---|---|---|---|---|\n";
       header = true;
     }
     std::string closed = "—";
@@ -75,7 +77,9 @@ void WriteResidualSpectrumMarkdown(std::ostream& os, const io::RecordSet& set,
     }
     os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role) << " | "
        << G(b.f_lo, 4) << "–" << G(b.f_hi, 4) << " | " << G(b.f_peak, 4) << " | "
-       << G(100 * b.share, 3) << " % | " << G(b.zeta, 2) << " | " << closed << " |\n";
+       << G(100 * b.share, 3) << " % | " << G(b.zeta, 2) << " | "
+       << (b.mode_like() ? "yes" : "no: wider (harmonics of the drive, or a lag)") << " | "
+       << closed << " |\n";
   }
   if (header && !mode.empty()) {
     os << "\nThe named model's mode: f_n " << G(mode[1], 5) << " Hz, ζ " << G(mode[2], 3)

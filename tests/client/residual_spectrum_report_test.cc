@@ -46,6 +46,7 @@ TEST(ResidualSpectrumReport, AModeBenchShowsItsBandAndTheFittedMode) {
   const std::string md = Report(b.set, d);
   EXPECT_NE(md.find("## Residual spectrum"), std::string::npos) << md;
   EXPECT_NE(md.find("| withheld | validate |"), std::string::npos) << md;
+  EXPECT_NE(md.find(" | yes | "), std::string::npos) << md;  // a mode's band
   EXPECT_NE(md.find("The named model's mode: f_n 7"), std::string::npos) << md;
   const auto dir = std::filesystem::temp_directory_path() /
                    ("pz_residual_spectrum_" + std::to_string(::getpid()));
