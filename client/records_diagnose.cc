@@ -126,7 +126,7 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
   proto::NoiseFloor& n = *m.mutable_noise_floor();
   n.set_sigma(d.noise.sigma);
   n.set_used(d.noise.used);
-  n.set_warning(d.noise.warning);
+  if (!d.noise.warning.empty()) n.set_warning(d.noise.warning);  // optional: older files unchanged
   for (const auto& e : d.noise.estimates) {
     proto::NoiseEstimate& g = *n.add_estimates();
     g.set_method(e.method);

@@ -146,11 +146,12 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
   m.set_chosen(s.ranking[s.chosen].candidate.Describe());
   m.set_best_cv_rmse(s.best_cv_rmse);
   m.set_noise_floor(s.noise.sigma);
-  m.set_noise_floor_used(s.noise.used);
-  m.set_noise_floor_summary(s.noise.Summary(""));
-  m.set_noise_floor_warning(s.noise.warning);
-  m.set_unexcited(s.unexcited);
-  m.set_grid_note(s.grid_note);
+  // Optional: a fit.json written before them reads and writes back the same bytes.
+  if (!s.noise.used.empty()) m.set_noise_floor_used(s.noise.used);
+  if (!s.noise.estimates.empty()) m.set_noise_floor_summary(s.noise.Summary(""));
+  if (!s.noise.warning.empty()) m.set_noise_floor_warning(s.noise.warning);
+  if (!s.unexcited.empty()) m.set_unexcited(s.unexcited);
+  if (!s.grid_note.empty()) m.set_grid_note(s.grid_note);
   m.set_wall_time_s(s.wall_time_s);
   m.set_detected_initial_state(model::InitialStateName(s.detected));
   for (size_t i = 0; i < s.ranking.size(); ++i) {

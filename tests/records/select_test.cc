@@ -21,7 +21,6 @@
 #include "diagnose/reallike.h"
 #include "diagnose/reallike_ring.h"
 #include "diagnose/synthetic.h"
-#include "io/records.h"
 #include "records/families.h"
 #include "records/model.h"
 #include "tests/testing/expect_error.h"
