@@ -20,6 +20,7 @@
 #include <sstream>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -55,8 +56,14 @@ class Process {
   /// `env`: "NAME=value" entries added to this process's environment for the child.
   Process(const fs::path& exe, std::vector<std::string> args, const fs::path& log,
           std::vector<std::string> env = {}) {
-    std::vector<char*> envp;
-    for (char** e = environ; *e != nullptr; ++e) envp.push_back(*e);
+    std::vector<char*> envp;  // environ, less the names `env` sets (getenv takes the first)
+    for (char** e = environ; *e != nullptr; ++e) {
+      const std::string_view entry(*e);
+      bool replaced = false;
+      for (const std::string& x : env)
+        replaced |= entry.substr(0, entry.find('=') + 1) == x.substr(0, x.find('=') + 1);
+      if (!replaced) envp.push_back(*e);
+    }
     for (auto& e : env) envp.push_back(e.data());
     envp.push_back(nullptr);
     std::vector<char*> argv;
