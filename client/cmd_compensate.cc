@@ -282,7 +282,10 @@ std::pair<double, std::string> ReferenceZero(const CompensateArgs& a, const reco
 
 int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
   Reference ref = ReadReference(a.reference, m);
-  const auto [zero, zero_how] = ReferenceZero(a, m, ref);
+  // Not a structured binding: clang 14 (the sanitizer build) cannot capture one in a lambda.
+  const std::pair<double, std::string> zero_pair = ReferenceZero(a, m, ref);
+  const double zero = zero_pair.first;
+  const std::string& zero_how = zero_pair.second;
   for (double& y : ref.y) y += zero;  // the model's absolute output from here on
   std::optional<records::ModelSpec> other;
   if (!a.check_model.empty()) {
