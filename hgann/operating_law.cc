@@ -62,19 +62,11 @@ struct LawBasis {
       if (x > 1e-9 && x < 1 - 1e-9 && (knot_v < 0 || std::abs(x - 0.5) < std::abs(knot_v - 0.5)))
         knot_v = x;
     }
-    using model::TransferFunction;
-    model::Network n;
-    n.input_tf = {TransferFunction::kSatlin, TransferFunction::kSatlin};
     int h = 2;
     if (knot > 0 && f_lo > 0) hf = h++;
     if (with_interaction) ridge0 = h, h += kRidges;
     if (knot_v > 0) hv = h++;
-    n.hidden_tf.assign(h, TransferFunction::kSatlin);
-    n.output_tf.fill(TransferFunction::kSatlin);
-    n.w1 = Eigen::MatrixXd::Zero(2, h);
-    n.c1 = Eigen::VectorXd::Zero(h);
-    n.w1(0, 0) = 1;
-    n.w1(1, 1) = 1;
+    model::Network n = SatlinSkeleton(h);
     if (hf >= 0) {
       n.w1(1, hf) = 1 / (1 - knot);
       n.c1(hf) = -knot / (1 - knot);

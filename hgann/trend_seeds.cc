@@ -87,23 +87,28 @@ double Clamp01(double x) { return std::clamp(x, 0.0, 1.0); }
 
 }  // namespace
 
+model::Network SatlinSkeleton(int hidden) {
+  using model::TransferFunction;
+  model::Network n;
+  n.input_tf = {TransferFunction::kSatlin, TransferFunction::kSatlin};
+  n.hidden_tf.assign(hidden, TransferFunction::kSatlin);
+  n.output_tf.fill(TransferFunction::kSatlin);
+  n.w1 = Eigen::MatrixXd::Zero(2, hidden);
+  n.c1 = Eigen::VectorXd::Zero(hidden);
+  n.w1(0, 0) = 1;
+  n.w1(1, 1) = 1;
+  return n;
+}
+
 model::Network TrendNetwork(double knot_v, double knot_f, const std::vector<double>& c2,
                             const std::vector<std::vector<double>>& w2,
                             const model::InputNormalization& normalization,
                             const model::ParameterRanges& ranges) {
-  using model::TransferFunction;
-  model::Network n;
-  n.input_tf = {TransferFunction::kSatlin, TransferFunction::kSatlin};
   std::vector<std::pair<int, double>> hinges;  // (input, knot)
   if (knot_v > 0 && knot_v < 0.9) hinges.emplace_back(0, knot_v);
   if (knot_f > 0 && knot_f < 0.9) hinges.emplace_back(1, knot_f);
   const int h = 2 + static_cast<int>(hinges.size());
-  n.hidden_tf.assign(h, TransferFunction::kSatlin);
-  n.output_tf.fill(TransferFunction::kSatlin);
-  n.w1 = Eigen::MatrixXd::Zero(2, h);
-  n.c1 = Eigen::VectorXd::Zero(h);
-  n.w1(0, 0) = 1;
-  n.w1(1, 1) = 1;
+  model::Network n = SatlinSkeleton(h);
   for (size_t m = 0; m < hinges.size(); ++m) {
     const auto [input, knot] = hinges[m];
     n.w1(input, 2 + m) = 1 / (1 - knot);

@@ -109,6 +109,10 @@ std::vector<CaseEstimate> FitCases(
     const std::array<double, model::kNetworkOutputs>* hold = nullptr,
     const std::array<double, model::kNetworkOutputs>* start = nullptr);
 
+/// A satlin network of `hidden` (≥ 2) hidden nodes whose nodes 0 and 1 pass x_V and x_f through;
+/// the other nodes' weights, the second layer and the maps are left to the caller (zero).
+model::Network SatlinSkeleton(int hidden);
+
 /// The seeds' network: input and hidden satlin; hidden node 0 = x_V, 1 = x_f, then a hinge
 /// satlin((x − knot)/(1 − knot)) of x_V at knot_v and of x_f at knot_f (each only when in (0,
 /// 0.9)); outputs satlin(Σ_j B_j w2[j][k] + c2[k]) (missing entries 0). H = 2 … 4.
