@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The budget of `piezoid fit --family auto` (issue 45: within 2 minutes on 2 cores for 50 k training
-# samples): a real-like stack (diagnose/reallike.h) recorded at 10 kHz, 5 s of training sine after a
+# samples): a real-like stack (synth/reallike.h) recorded at 10 kHz, 5 s of training sine after a
 # rest at the bottom of the range (50 001 samples), 2 s withheld records; the selection's wall and
 # CPU time (/usr/bin/time). On a loaded machine quote the CPU: the folds run on both threads, so an
 # idle 2-core machine's wall time is about CPU / 2.

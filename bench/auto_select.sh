@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `piezoid fit --family auto` (issue 37) on a real-like stack (diagnose/reallike.h): a 40 s training
+# `piezoid fit --family auto` (issue 37) on a real-like stack (synth/reallike.h): a 40 s training
 # sine at 200 Hz and withheld records (a ramped sine, random reversals, a second sine), made by
 # `piezoid synth-stack`; then the chosen model, its CV RMSE and withheld RMSE, and the run's CPU and
 # wall time (/usr/bin/time; on a loaded machine quote the CPU: the selection runs its fold fits on

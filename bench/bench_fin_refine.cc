@@ -61,10 +61,10 @@ void BM_BeamRefinement(benchmark::State& state, bool service) {
       state.SkipWithError("PIEZOID_BENCH_MASTER (a master's client endpoint) is not set");
       return;
     }
-    client::ServiceEvaluatorOptions so;
+    svcclient::ServiceEvaluatorOptions so;
     so.client.endpoint = ep;
     so.batch_timeout_s = 600;
-    o.evaluator_factory = client::RecordsServiceFactory(so, o.family_options, "bench");
+    o.evaluator_factory = svcclient::RecordsServiceFactory(so, o.family_options, "bench");
   }
   for (auto _ : state) {
     const FitResult r = FitRecords(Records(), o);

@@ -1,5 +1,5 @@
 // The Preisach family at 40+ levels (issue 37) on the independent relay plant
-// (diagnose/relay_preisach_check.h: 100 Hz, 120 s of rich training drive, 12,200 samples):
+// (synth/relay_preisach_check.h: 100 Hz, 120 s of rich training drive, 12,200 samples):
 //   BM_PreisachNormalEquations/dense/levels       the cell rows formed, then their Gram (before)
 //   BM_PreisachNormalEquations/structured/levels  the Gram from the levels' histograms (now)
 //   BM_PreisachFit/levels                          FitRecords at a fixed grid, no effects: the
@@ -17,13 +17,14 @@
 #include "records/fit.h"
 #include "records/model.h"
 #include "records/preisach_normal.h"
-#include "diagnose/relay_preisach_check.h"
+#include "synth/relay_preisach_check.h"
 
 namespace pz::records {
 namespace {
 
-const RelayPreisachCheckSet& Check() {
-  static const RelayPreisachCheckSet s = GenerateRelayPreisachCheck(RelayPreisachCheckOptions{});
+const synth::RelayPreisachCheckSet& Check() {
+  static const synth::RelayPreisachCheckSet s =
+      synth::GenerateRelayPreisachCheck(synth::RelayPreisachCheckOptions{});
   return s;
 }
 

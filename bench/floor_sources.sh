@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The noise floor of issue 45, each source (repeats, the settled rest, periods) and the one used, on
-# the two real-like generators' sets (diagnose/reallike.h; diagnose/reallike_ring.h: a 10 kHz stage
+# the two real-like generators' sets (synth/reallike.h; synth/reallike_ring.h: a 10 kHz stage
 # whose rests ring and settle, chatter drives recorded three times), the bundled P-885.91 stack and
 # any other record set given (a local real recording). `piezoid records` prints them.
 #

@@ -10,7 +10,7 @@
 
 namespace pz::client {
 
-std::string CheckTrialLine(const records::CheckText& text, const records::CheckTrial& t,
+std::string CheckTrialLine(const diagnose::CheckText& text, const diagnose::CheckTrial& t,
                            int index) {
   std::string extra;
   if (text.closed_per_trial) {
@@ -23,21 +23,21 @@ std::string CheckTrialLine(const records::CheckText& text, const records::CheckT
         t.wall_time_s);
     extra = buf;
   }
-  return records::TrialLine(index + 1, t.correct ? "right" : "WRONG", t.description,
-                            text.description_width, t, "", extra);
+  return diagnose::TrialLine(index + 1, t.correct ? "right" : "WRONG", t.description,
+                             text.description_width, t, "", extra);
 }
 
-void PrintCheckSummary(std::ostream& o, const records::CheckSummary& s) {
+void PrintCheckSummary(std::ostream& o, const diagnose::CheckSummary& s) {
   // The matrix, the shares closed, the counts and the calibration (is a stated confidence of 90 %
   // right 90 % of the time?) in the words of every check (diagnose/verdict.h).
   const std::string& noun = s.text.noun;
   char wall[32];
   std::snprintf(wall, sizeof wall, "%.0f s in all\n", s.wall_time_s);
-  o << records::ConfusionText(s.columns, s.confusion, s.trials.size(), noun)
-    << records::ClosedText(s.closed, noun) << records::TallyText(s, noun) << wall;
+  o << diagnose::ConfusionText(s.columns, s.confusion, s.trials.size(), noun)
+    << diagnose::ClosedText(s.closed, noun) << diagnose::TallyText(s, noun) << wall;
 }
 
-void WriteCheckJson(std::ostream& out, const records::CheckSummary& s) {
+void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s) {
   proto::DiagnosisCheck m;
   for (const std::string& c : s.columns) m.add_columns(c);
   for (size_t r = 0; r < s.confusion.size(); ++r) {
@@ -51,7 +51,7 @@ void WriteCheckJson(std::ostream& out, const records::CheckSummary& s) {
   m.set_clean_alarms(s.clean_alarms);
   m.set_false_alarm_rate(s.false_alarm_rate());
   m.mutable_closed()->Assign(s.closed.begin(), s.closed.end());
-  for (const records::CheckTrial& t : s.trials) {
+  for (const diagnose::CheckTrial& t : s.trials) {
     proto::DiagnosisCheckTrial& g = *m.add_trials();
     g.set_seed(t.seed);
     g.set_truth(model::EffectName(t.truth));

@@ -12,11 +12,11 @@ namespace pz::client {
 
 /// "trial   3 right  DESCRIPTION -> effect  delay  ratio …" (diagnose/verdict.h TrialLine), with
 /// the share closed and the wall time where the form's text says so; `index` from 0.
-std::string CheckTrialLine(const records::CheckText& text, const records::CheckTrial& trial,
+std::string CheckTrialLine(const diagnose::CheckText& text, const diagnose::CheckTrial& trial,
                            int index);
 /// The confusion matrix (true effect × named effect), the distribution of the share closed, the
 /// counts and the calibration of the stated confidence.
-void PrintCheckSummary(std::ostream& out, const records::CheckSummary& s);
-void WriteCheckJson(std::ostream& out, const records::CheckSummary& s);
+void PrintCheckSummary(std::ostream& out, const diagnose::CheckSummary& s);
+void WriteCheckJson(std::ostream& out, const diagnose::CheckSummary& s);
 
 }  // namespace pz::client

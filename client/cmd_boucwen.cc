@@ -151,7 +151,7 @@ std::optional<int> Search(const BoucwenArgs& a, const complete::BwTraining& fitn
   try {
     std::unique_ptr<opt::BatchEvaluator> evaluator;
     if (a.service.enabled()) {
-      evaluator = std::make_unique<ServiceEvaluator>(
+      evaluator = std::make_unique<svcclient::ServiceEvaluator>(
           a.service.Options(),
           complete::CompleteModelJobSpec(
               complete::CompleteModelProblemOf(fitness),
@@ -168,7 +168,7 @@ std::optional<int> Search(const BoucwenArgs& a, const complete::BwTraining& fitn
               << a.substeps << " sub-steps per sample, Fourier-interpolated input" << std::endl;
     o->result = opt::Search(o->box, o->options, *evaluator);
     o->threads = evaluator->concurrency();
-  } catch (const ServiceError& e) {  // the evaluator's destructor has closed the session
+  } catch (const svcclient::ServiceError& e) {  // the evaluator's destructor has closed the session
     std::cerr << "piezoid boucwen: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }

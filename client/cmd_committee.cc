@@ -68,13 +68,13 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
             << " optimiser(s), " << o.search.repetitions << " repetitions each" << std::endl;
   CommitteeLog log;
   if (!a.quiet) log = [](const std::string& line) { std::cout << "  " << line << std::endl; };
-  const EvaluatorFactory factory =
-      a.service.enabled() ? CommitteeServiceFactory(a.service.Options(), o.family_options)
-                          : LocalEvaluatorFactory(a.threads);
+  const EvaluatorFactory factory = a.service.enabled() ? svcclient::CommitteeServiceFactory(
+                                                             a.service.Options(), o.family_options)
+                                                       : LocalEvaluatorFactory(a.threads);
   CommitteeResult r;
   try {
     r = RunCommittee(set, o, factory, log);
-  } catch (const ServiceError& e) {
+  } catch (const svcclient::ServiceError& e) {
     std::cerr << "piezoid committee: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }

@@ -36,12 +36,12 @@
 #include "client/record_windows.h"
 #include "controller/export_header.h"
 #include "diagnose/diagnose.h"
-#include "diagnose/synthetic.h"
 #include "io/csv.h"
 #include "io/records.h"
 #include "model/format.h"
 #include "opt/random.h"
 #include "records/stepper.h"
+#include "synth/synthetic.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -436,7 +436,7 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
     if (std::isfinite(noise)) {
       opt::Rng rng(opt::StreamSeed(kReplayNoiseSeed, i));
       std::vector<double> noisy(sim);
-      for (double& v : noisy) v += noise * records::NormalDraw(rng);
+      for (double& v : noisy) v += noise * synth::NormalDraw(rng);
       const records::ReplayError floor = records::ReplayDrive(m, r, noisy);
       std::cout << ", with noise of the floor's σ " << Fmt(floor.rms_u) << " " << du << " ("
                 << Fmt(floor.rms_y) << " " << yu

@@ -11,20 +11,21 @@
 #include <memory>
 #include <sstream>
 
+#include "client/check_report.h"
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "svcclient/complete_service.h"
 #include "client/diagnose_report.h"
-#include "client/check_report.h"
 #include "client/records_diagnose.h"
 #include "client/search_flags.h"
 #include "diagnose/check.h"
 #include "diagnose/reallike_check.h"
 #include "diagnose/verdict.h"
-#include "svcclient/service_evaluator.h"
 #include "io/bench_data.h"
-#include "io/fin_records.h"
 #include "io/csv.h"
+#include "io/fin_records.h"
+#include "svcclient/complete_service.h"
+#include "svcclient/service_evaluator.h"
+#include "synth/synthetic.h"
 
 namespace pz::client {
 namespace {
@@ -85,9 +86,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
       throw InputError("give either --cases (a fin bench) or --records (any record set), not both");
     RecordsDiagnoseRequest r = a.records;
     if (a.service.enabled()) {
-      r.evaluator_factory =
-          RecordsServiceFactory(a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
-      const ServiceEvaluatorOptions service = a.service.Options();
+      r.evaluator_factory = svcclient::RecordsServiceFactory(
+          a.service.Options(), records::FamilyOptions{}, "piezoid diagnose");
+      const svcclient::ServiceEvaluatorOptions service = a.service.Options();
       r.service = [service](const records::FamilyOptions& f) {
         return RecordsServiceFactory(service, f, "piezoid diagnose");
       };
@@ -104,7 +105,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     r.significance_ratio = a.significance_ratio;
     try {
       return RunRecordsDiagnose(r);
-    } catch (const ServiceError& e) {
+    } catch (const svcclient::ServiceError& e) {
       std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
       return ExitCodeOf(e.status());
     }
@@ -121,9 +122,9 @@ int RunDiagnose(const DiagnoseArgs& a) {
   if (a.service.enabled()) {
     // Every fit as complete_model sessions (bimorph-fin's bench form on the workers, bit for bit
     // as locally); bad --master / CURVE flags fail here, before any work.
-    const ServiceEvaluatorOptions so = a.service.Options();
+    const svcclient::ServiceEvaluatorOptions so = a.service.Options();
     o.records_service = [so](const records::FamilyOptions& f) {
-      return RecordsServiceFactory(so, f, "piezoid diagnose");
+      return svcclient::RecordsServiceFactory(so, f, "piezoid diagnose");
     };
   }
   const std::vector<diagnose::DiagCase> cases = diagnose::CasesFromCaseSet(set);
@@ -139,7 +140,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     // The records engine on the bench's records (with --master: on the workers as
     // complete_model sessions).
     d = diagnose::DiagnoseBench(cases, o);
-  } catch (const ServiceError& e) {
+  } catch (const svcclient::ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
   }
@@ -177,14 +178,14 @@ struct CheckArgs {
   bool second = false;
   bool quick = false;
   double significance_ratio = 1.25;
-  bool real_like = false;  ///< --real-like: real-like stack sets (diagnose/reallike.h) instead
+  bool real_like = false;         ///< --real-like: real-like stack sets (synth/reallike.h) instead
   double real_like_train_s = 20;  ///< their training sine's length
   double real_like_withheld_s = 10;
 };
 
 /// The records diagnosis of a check: its rules, threads and (--quick) a smaller search.
-records::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
-  records::RecordDiagnoseOptions d;
+diagnose::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
+  diagnose::RecordDiagnoseOptions d;
   d.rules.significance_ratio = a.significance_ratio;
   d.fit.threads = a.threads;
   if (a.quick) {
@@ -199,24 +200,24 @@ records::RecordDiagnoseOptions CheckDiagnoseOptions(const CheckArgs& a) {
 /// The records diagnosis on real-like stack sets, checked against their truth
 /// (diagnose/reallike_check.h).
 int RunRealLikeCheckCommand(const CheckArgs& a) {
-  records::RealLikeCheckOptions o;
+  diagnose::RealLikeCheckOptions o;
   o.family = a.records_family;
   o.trials = a.trials;
   o.seed = a.seed;
   o.base.train_s = a.real_like_train_s;
   o.base.withheld_s = a.real_like_withheld_s;
   o.diagnose = CheckDiagnoseOptions(a);
-  const records::RealLikeCheckSummary s =
-      records::RunRealLikeCheck(o, [](const records::RealLikeCheckTrial& t, int i) {
+  const diagnose::RealLikeCheckSummary s =
+      diagnose::RunRealLikeCheck(o, [](const diagnose::RealLikeCheckTrial& t, int i) {
         char floor[300];
         std::snprintf(floor, sizeof floor, "%-52s floor %.4f/%.4f (%s) excitation %-5s [%s]",
                       t.description.c_str(), t.floor_estimate, t.floor_truth, t.floor_used.c_str(),
                       t.excitation_right ? "right" : "WRONG", t.excitation.c_str());
-        std::cout << records::TrialLine(i + 1, "", floor, 0, t,
-                                        t.named == "none"
-                                            ? ""
-                                            : (t.named_present ? " (in truth)" : " (not in truth)"),
-                                        t.excitation_note ? "; excitation gap said" : "")
+        std::cout << diagnose::TrialLine(
+                         i + 1, "", floor, 0, t,
+                         t.named == "none" ? ""
+                                           : (t.named_present ? " (in truth)" : " (not in truth)"),
+                         t.excitation_note ? "; excitation gap said" : "")
                   << std::endl;
       });
   const int n = static_cast<int>(s.trials.size());
@@ -230,7 +231,7 @@ int RunRealLikeCheckCommand(const CheckArgs& a) {
 }
 
 /// The check's form: records of a family (--records-family) or fin benches.
-records::CheckForm CheckFormOf(const CheckArgs& a) {
+diagnose::CheckForm CheckFormOf(const CheckArgs& a) {
   if (!(a.none_probability >= 0 && a.none_probability <= 1))
     throw InputError(FieldError("--none-probability", a.none_probability, "must be in [0, 1]"));
   if (!(a.other_form_probability >= 0 && a.other_form_probability <= 1))
@@ -238,21 +239,21 @@ records::CheckForm CheckFormOf(const CheckArgs& a) {
         FieldError("--other-form-probability", a.other_form_probability, "must be in [0, 1]"));
   if (!a.records_family.empty()) {
     records::FamilyNamed(a.records_family, "--records-family");  // named by its flag
-    records::RecordsCheckOptions o;
+    diagnose::RecordsCheckOptions o;
     o.trials.family = a.records_family;
     o.trials.none_probability = a.none_probability;
     o.diagnose = CheckDiagnoseOptions(a);
-    return records::RecordsCheckForm(o);
+    return diagnose::RecordsCheckForm(o);
   }
   diagnose::DiagnoseOptions o =
       Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, true);
   o.second_effect = a.second;
   o.trends = false;
-  records::FinTrialOptions so;
+  synth::FinTrialOptions so;
   so.kinds = ParseKinds(a.kinds);
   so.none_probability = a.none_probability;
   so.other_form_probability = a.other_form_probability;
-  return records::FinCheckForm(o, so);
+  return diagnose::FinCheckForm(o, so);
 }
 
 int RunCheckCommand(const CheckArgs& a) {
@@ -260,10 +261,10 @@ int RunCheckCommand(const CheckArgs& a) {
     throw InputError(
         "diagnose-check --real-like needs --records-family NAME (the family the diagnosis fits)");
   if (a.real_like) return RunRealLikeCheckCommand(a);
-  const records::CheckForm form = CheckFormOf(a);
+  const diagnose::CheckForm form = CheckFormOf(a);
   if (!a.json_file.empty()) io::CheckWritableFile(a.json_file, "--json");
-  const records::CheckSummary s =
-      records::RunCheck(form, a.trials, a.seed, [&](const records::CheckTrial& t, int i) {
+  const diagnose::CheckSummary s =
+      diagnose::RunCheck(form, a.trials, a.seed, [&](const diagnose::CheckTrial& t, int i) {
         std::cout << CheckTrialLine(form.text, t, i) << std::endl;
       });
   PrintCheckSummary(std::cout, s);
@@ -343,10 +344,13 @@ void RegisterDiagnoseCheck(CLI::App& app, int& exit_code) {
                                      "prints the confusion matrix (true x named effect) "
                                      "and the distribution of the share of the gap closed.");
   cmd->add_option("--trials", a->trials, "number of benches")->check(CLI::Range(1, 100000));
+  std::string checkable;
+  for (const std::string& name : synth::RecordsTrialFamilies())
+    checkable += (checkable.empty() ? "" : ", ") + name;
   cmd->add_option("--records-family", a->records_family,
                   "check the records diagnosis instead (diagnose --records) on synthetic records "
-                  "of this family: "
-                  "stack-bouc-wen, backlash-like or duhem");
+                  "of this family: " +
+                      checkable);
   cmd->add_flag("--real-like", a->real_like,
                 "with --records-family: diagnose real-like stack record sets (synth-stack: a "
                 "Preisach plant with log "

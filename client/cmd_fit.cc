@@ -13,29 +13,29 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "client/cmd_service.h"
 #include "client/commands.h"
-#include "svcclient/complete_service.h"
 #include "client/excitation_report.h"
+#include "client/fit_file.h"
+#include "client/plots.h"
+#include "client/record_windows.h"
+#include "client/residual_spectrum_report.h"
 #include "client/search_flags.h"
 #include "client/select_report.h"
-#include "client/plots.h"
-#include "client/residual_spectrum_report.h"
-#include "client/record_windows.h"
 #include "io/csv.h"
 #include "io/records.h"
-#include "client/fit_file.h"
 #include "model/preisach.h"
 #include "records/excitation.h"
-#include "diagnose/extrapolation.h"
+#include "records/extrapolation.h"
 #include "records/fit.h"
 #include "records/select.h"
+#include "svcclient/complete_service.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -374,7 +374,7 @@ void WriteFitReport(std::ostream& os, const io::RecordSet& set, const records::F
     }
   }
   if (!extrapolation.empty()) {
-    os << "\n## Extrapolation (diagnose/extrapolation.h)\n\n";
+    os << "\n## Extrapolation (records/extrapolation.h)\n\n";
     for (const auto& c : extrapolation)
       os << "- " << c.Describe(set.drive_unit, set.response_unit) << "\n";
     os << "\nError against reversal depth (each monotone piece of the drive by its swing, % of the "
@@ -450,7 +450,7 @@ records::FitOptions FitOptionsOf(const FitArgs& a) {
   }
   if (a.service.enabled() && !select)
     o.evaluator_factory =
-        RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
+        svcclient::RecordsServiceFactory(a.service.Options(), o.family_options, "piezoid fit");
   o.search.algorithm = opt::ParseSearchAlgorithm(a.algorithm);
   ApplySearchFlags(a.search, &o.search);
   o.search.line = a.line;
@@ -483,9 +483,9 @@ std::optional<int> FitOrSelect(const io::RecordSet& set, const records::FitOptio
       so.folds = a.folds;
       so.finalists = static_cast<size_t>(a.finalists);
       if (a.service.enabled()) {
-        const ServiceEvaluatorOptions service = a.service.Options();
+        const svcclient::ServiceEvaluatorOptions service = a.service.Options();
         so.service = [service](const records::FamilyOptions& f) {
-          return RecordsServiceFactory(service, f, "piezoid fit --family auto");
+          return svcclient::RecordsServiceFactory(service, f, "piezoid fit --family auto");
         };
       }
       if (!a.quiet) so.progress = [](const std::string& s) { std::cout << "  " << s << std::endl; };
@@ -500,7 +500,7 @@ std::optional<int> FitOrSelect(const io::RecordSet& set, const records::FitOptio
     } else {
       r = records::FitRecords(set, o);
     }
-  } catch (const ServiceError& e) {
+  } catch (const svcclient::ServiceError& e) {
     std::cerr << "piezoid fit: error: " << e.what() << "\n";
     return ExitCodeOf(e.status());
   }

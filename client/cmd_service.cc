@@ -52,10 +52,10 @@ int ExitCodeOf(const Status& s) {
   }
 }
 
-ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
-                                     const std::string& curve_secret,
-                                     const std::string& master_public) {
-  ServiceClientOptions o;
+svcclient::ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms,
+                                                int retries, const std::string& curve_secret,
+                                                const std::string& master_public) {
+  svcclient::ServiceClientOptions o;
   o.endpoint = master;
   o.timeout_ms = timeout_ms;
   o.retries = retries;
@@ -89,8 +89,9 @@ struct Common {
   std::string curve_secret = Env("PIEZOID_CURVE_SECRET"),
               master_public = Env("PIEZOID_MASTER_PUBLIC");
   /// The client of these options; a bad key file throws InputError (exit code 2).
-  ServiceClient Client() const {
-    return ServiceClient(ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public));
+  svcclient::ServiceClient Client() const {
+    return svcclient::ServiceClient(
+        ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public));
   }
 };
 
@@ -267,7 +268,7 @@ struct SubmitOptions : Common {
 int SubmitJob(const SubmitOptions& o) {
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  Status s = LoadJobSpecFile(o.spec, &spec, &v);
+  Status s = svcclient::LoadJobSpecFile(o.spec, &spec, &v);
   if (!s.ok()) return ReportViolations("job spec " + o.spec, v, s);
   // Checked here first (same rules as the master), so a bad spec needs no master to be told.
   v = kinds::All().Validate(spec);
@@ -279,7 +280,7 @@ int SubmitJob(const SubmitOptions& o) {
                  o.embedded_out.c_str());
     return kExitOk;
   }
-  SubmitResult r;
+  svcclient::SubmitResult r;
   s = o.Client().Submit(spec, &r, &v, o.token);
   if (!s.ok())
     return s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + o.spec, v, s)
@@ -412,7 +413,7 @@ void RegisterPrune(CLI::App& app, int& exit_code) {
 // ---------------------------------------------------------------- watch
 
 int WatchJob(const JobOptions& o) {
-  ServiceClient c = o.Client();
+  svcclient::ServiceClient c = o.Client();
   service::JobInfo info;
   Status s = c.GetStatus(o.job_id, &info);
   if (!s.ok()) return Report(s);
@@ -507,7 +508,7 @@ struct ExportOptions {
 int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string* note) {
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  Status s = LoadJobSpecFile(file, &spec, &v);
+  Status s = svcclient::LoadJobSpecFile(file, &spec, &v);
   if (!s.ok()) return ReportViolations("job spec " + file, v, s);
   const auto* h = std::get_if<job::HgannProblem>(&spec.problem);
   if (!h) return Report(InvalidArgument(FieldError("--job", file, "is not an hgann job spec")));
@@ -730,8 +731,8 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
 CompleteServiceFlags::CompleteServiceFlags()
     : curve_secret(Env("PIEZOID_CURVE_SECRET")), master_public(Env("PIEZOID_MASTER_PUBLIC")) {}
 
-ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
-  ServiceEvaluatorOptions o;
+svcclient::ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
+  svcclient::ServiceEvaluatorOptions o;
   o.client = ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public);
   return o;
 }

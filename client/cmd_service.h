@@ -32,9 +32,9 @@ int ExitCodeOf(const Status& s);
 /// both key files are given (this client's NAME.key from `piezoid keygen`, the master's public
 /// key). Throws InputError naming the flag (--curve-secret, --master-public) on a missing partner
 /// or a bad key file. Used by every command that talks to a master.
-ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms, int retries,
-                                     const std::string& curve_secret,
-                                     const std::string& master_public);
+svcclient::ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms,
+                                                int retries, const std::string& curve_secret,
+                                                const std::string& master_public);
 
 /// The flags of a command whose searches run every evaluation as evaluation sessions on a master
 /// (--master, --timeout-ms, --retries, --curve-secret, --master-public).
@@ -47,7 +47,7 @@ struct CompleteServiceFlags {
   CompleteServiceFlags();
   bool enabled() const { return !master.empty(); }
   /// The session options of these flags (CURVE keys loaded); throws InputError naming the flag.
-  ServiceEvaluatorOptions Options() const;
+  svcclient::ServiceEvaluatorOptions Options() const;
 };
 
 /// Adds the flags to `cmd`.

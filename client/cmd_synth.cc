@@ -1,4 +1,4 @@
-// `piezoid synth-stack`: writes a real-like stack record set (diagnose/reallike.h, issue 22 item 5)
+// `piezoid synth-stack`: writes a real-like stack record set (synth/reallike.h, issue 22 item 5)
 // in the manifest format (io/records.h; `piezoid fit`, `diagnose --records` and `records` read it)
 // with its truth: truth.json (the plant, the sensor, each record's drive, offset and realised
 // noise, the true noise floor) and a README.md saying how it was made.
@@ -9,13 +9,13 @@
 #include <sstream>
 
 #include "client/commands.h"
-#include "diagnose/reallike.h"
-#include "diagnose/reallike_ring.h"
 #include "fit.pb.h"
 #include "io/csv.h"
 #include "io/fit_model.h"
 #include "io/records.h"
 #include "model/status.h"
+#include "synth/reallike.h"
+#include "synth/reallike_ring.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -23,9 +23,9 @@ namespace {
 
 struct SynthArgs {
   std::string out;
-  records::RealLikeOptions o;
+  synth::RealLikeOptions o;
   bool no_creep = false;
-  bool ringing = false;     ///< --ringing: the second generator (diagnose/reallike_ring.h)
+  bool ringing = false;     ///< --ringing: the second generator (synth/reallike_ring.h)
   std::string train_drive;  ///< --train-drive: a CSV (time, drive) the training record plays
 };
 
@@ -49,9 +49,9 @@ std::vector<double> ReadDrive(const std::string& path, double fs) {
 }
 
 /// The set's truth as truth.json (the one conversion of it; io/fit_model.h writes it).
-std::string TruthJson(const records::RealLikeSet& s) {
-  const records::RealLikeStack& st = s.options.stack;
-  const records::RealLikeSensor& se = s.options.sensor;
+std::string TruthJson(const synth::RealLikeSet& s) {
+  const synth::RealLikeStack& st = s.options.stack;
+  const synth::RealLikeSensor& se = s.options.sensor;
   proto::SynthTruth t;
   proto::SynthPlant& p = *t.mutable_plant();
   p.set_model(
@@ -97,7 +97,7 @@ std::string TruthJson(const records::RealLikeSet& s) {
   n.set_definition(
       "RMS of measured - (noise-free response + offset): what a perfect model leaves; nominal = "
       "sqrt(white^2 + coloured^2 + quantum^2/12), realised = over every scored sample");
-  for (const records::RealLikeRecordTruth& r : s.truth) {
+  for (const synth::RealLikeRecordTruth& r : s.truth) {
     proto::SynthRecordTruth& g = *t.add_records();
     g.set_record(r.name);
     g.set_role(r.role);
@@ -112,17 +112,17 @@ std::string TruthJson(const records::RealLikeSet& s) {
 
 /// --ringing: the second generator's set (its own plant and sensor; --seed and --out only).
 int RunRinging(const SynthArgs& a) {
-  records::RingingOptions o = records::RingingDefaults();
+  synth::RingingOptions o = synth::RingingDefaults();
   o.seed = a.o.seed;
-  const records::RingingSet s = records::GenerateRingingSet(o);
+  const synth::RingingSet s = synth::GenerateRingingSet(o);
   const fs::path out(a.out);
   io::WriteRecordSet(s.set, out);
   io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
     os << "# A ringing stage's record set (generated)\n\nMade by `piezoid synth-stack --ringing "
        << "--out " << a.out << " --seed " << o.seed
-       << "` (diagnose/reallike_ring.h): a Preisach stack (" << o.stack.u_lo << " … "
-       << o.stack.u_hi << " V, " << o.stack.stroke_um << " um) with log creep, in a stage with a "
-       << o.mode_hz << " Hz mode (zeta " << o.mode_zeta << "), recorded at " << o.sensor.fs_hz
+       << "` (synth/reallike_ring.h): a Preisach stack (" << o.stack.u_lo << " … " << o.stack.u_hi
+       << " V, " << o.stack.stroke_um << " um) with log creep, in a stage with a " << o.mode_hz
+       << " Hz mode (zeta " << o.mode_zeta << "), recorded at " << o.sensor.fs_hz
        << " Hz; each record starts right after a step of " << o.step_um
        << " um to its rest, so the rest rings and settles.\n\n"
        << "| record | role | drive | offset [um] | noise RMS [um] |\n|---|---|---|---|---|\n";
@@ -141,17 +141,17 @@ int RunRinging(const SynthArgs& a) {
 
 int RunSynth(const SynthArgs& a) {
   if (a.ringing) return RunRinging(a);
-  records::RealLikeOptions o = a.o;
+  synth::RealLikeOptions o = a.o;
   if (a.no_creep) o.stack.creep_per_decade = 0;
   if (!a.train_drive.empty()) o.train_drive = ReadDrive(a.train_drive, o.sensor.fs_hz);
-  const records::RealLikeSet s = records::GenerateRealLikeSet(o);
+  const synth::RealLikeSet s = synth::GenerateRealLikeSet(o);
   const fs::path out(a.out);
   io::WriteRecordSet(s.set, out);
   io::WriteFileWith(out / "truth.json", [&](std::ostream& os) { os << TruthJson(s); });
   io::WriteFileWith(out / "README.md", [&](std::ostream& os) {
     os << "# A real-like stack record set (generated)\n\nMade by `piezoid synth-stack --out "
        << a.out << " --seed " << o.seed
-       << "` (diagnose/reallike.h; the other options at their values in truth.json). The plant is "
+       << "` (synth/reallike.h; the other options at their values in truth.json). The plant is "
        << "written independently of the product's families: a Preisach model (return-point memory) "
           "with an "
        << "asymmetric density, a reversible quadratic part, log creep, a sensor lag of "
@@ -176,7 +176,7 @@ int RunSynth(const SynthArgs& a) {
 
 void RegisterSynthStack(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<SynthArgs>();
-  records::RealLikeOptions& o = a->o;
+  synth::RealLikeOptions& o = a->o;
   CLI::App* cmd = app.add_subcommand("synth-stack",
                                      "Write a real-like piezo stack record set with its truth (a "
                                      "Preisach plant with an asymmetric density, log "
@@ -212,7 +212,7 @@ void RegisterSynthStack(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(0.0, 0.099));
   cmd->add_flag("--no-creep", a->no_creep, "no creep");
   cmd->add_flag("--ringing", a->ringing,
-                "the second generator instead (diagnose/reallike_ring.h): a 10 kHz stage with a "
+                "the second generator instead (synth/reallike_ring.h): a 10 kHz stage with a "
                 "mode, rests that ring and settle, loops growing from the bottom, chatter drives "
                 "recorded three times (--seed and --out only)");
   cmd->add_option(

@@ -118,7 +118,7 @@ struct Dashboard::Impl {
 
   // On-demand requests of the HTTP threads (curves of jobs not polled, reports): one client.
   std::mutex request_mu;
-  std::unique_ptr<ServiceClient> request_client;
+  std::unique_ptr<svcclient::ServiceClient> request_client;
   std::mutex report_mu;  // one report built at a time
 
   std::vector<std::string> Reports() const {
@@ -133,7 +133,7 @@ struct Dashboard::Impl {
   }
 
   // ------------------------------------------------------------------ polling
-  void PollOnce(ServiceClient& client, double* polled_at, std::string* error) {
+  void PollOnce(svcclient::ServiceClient& client, double* polled_at, std::string* error) {
     std::vector<service::JobInfo> jobs;
     Status s = client.List(&jobs);
     service::WorkersSnapshot snapshot;
@@ -194,7 +194,7 @@ struct Dashboard::Impl {
   }
 
   void PollLoop() {
-    ServiceClient client(options.client);
+    svcclient::ServiceClient client(options.client);
     double polled_at = 0;
     std::string error;
     while (!stop.load()) {
@@ -414,7 +414,7 @@ Status Dashboard::Start() {
   }
   fs::create_directories(impl_->cache_dir, ec);
   if (ec) return InvalidArgument("--cache " + impl_->cache_dir.string() + ": " + ec.message());
-  impl_->request_client = std::make_unique<ServiceClient>(o.client);
+  impl_->request_client = std::make_unique<svcclient::ServiceClient>(o.client);
   impl_->Routes();
   impl_->port = impl_->server.Bind(o.host, o.port);
   if (impl_->port <= 0)

@@ -34,7 +34,7 @@ struct DashboardOptions {
   std::filesystem::path reports_dir;  ///< optional: folders with a report.md, served read-only
   std::filesystem::path cache_dir;    ///< where job reports are built; empty: a temporary folder
   bool plots = true;                  ///< job reports with figures (gnuplot)
-  ServiceClientOptions client;        ///< the master's client endpoint (and CURVE keys)
+  svcclient::ServiceClientOptions client;  ///< the master's client endpoint (and CURVE keys)
 };
 
 class Dashboard {

@@ -23,8 +23,8 @@ namespace pz::client {
 namespace {
 
 using diagnose::BenchDiagnosis;
-using records::RecordCandidate;
-using records::RecordDiagnosis;
+using diagnose::RecordCandidate;
+using diagnose::RecordDiagnosis;
 
 std::string F(const char* fmt, double a) {
   if (!std::isfinite(a)) return "n/a";
@@ -69,10 +69,10 @@ struct FitView {
 };
 
 FitView ViewOf(const io::RecordSet& set, const records::FitResult& f) {
-  static const records::RecordDiagnoseOptions kBench = records::FinBenchOptions();
+  static const diagnose::RecordDiagnoseOptions kBench = diagnose::FinBenchOptions();
   FitView v;
   v.fit = &f;
-  v.description = records::ModelLabel(*f.model, kBench);
+  v.description = diagnose::ModelLabel(*f.model, kBench);
   for (size_t i = 0; i < set.records.size() && i < f.metrics.size(); ++i) {
     const bool training = set.records[i].role == model::CaseRole::kTrain;
     (training ? v.train_pi : v.withheld_pi) += f.metrics[i].sse;
@@ -97,7 +97,7 @@ std::vector<RoundView> Rounds(const RecordDiagnosis& d) {
   std::vector<RoundView> r = {{&d.base, d.s0, d.s_floor, d.rms_ratio, d.significant, &d.candidates,
                                d.named, d.runner_up, d.z_runner_up, &d.round_verdict}};
   if (d.second) {
-    const records::RecordRound& s = *d.second;
+    const diagnose::RecordRound& s = *d.second;
     r.push_back({&d.candidates[static_cast<size_t>(d.named)].fit, s.gap.s0, s.gap.s_floor,
                  s.gap.rms_ratio, s.gap.significant, &s.candidates, s.named, s.runner_up,
                  s.z_runner_up, &s.verdict});
@@ -231,7 +231,7 @@ void PrintDiagnosis(std::ostream& o, const BenchDiagnosis& d,
   o << "\nHOW FAR the gap shrinks (" << fin.description << ")\n";
   o << "  case  role      floor   RMS before  RMS after  x floor after  closed\n";
   for (size_t i = 0; i < rd.gaps.size(); ++i) {
-    const records::RecordGap& g = rd.gaps[i];
+    const diagnose::RecordGap& g = rd.gaps[i];
     char buf[200];
     std::snprintf(buf, sizeof buf, "  %-5d %-8s %7.4f  %9.4f  %9.4f  %12.2f  %s\n",
                   d.cases[i].number, d.cases[i].training ? "training" : "withheld", g.floor_rms,
@@ -409,7 +409,7 @@ void GapOf(const BenchDiagnosis& d, proto::DiagnosisGap* o) {
   o->set_closed(rd.closed_total);
   o->set_remaining_over_floor(std::sqrt(rd.withheld_after / rd.s_floor));
   for (size_t i = 0; i < rd.gaps.size(); ++i) {
-    const records::RecordGap& g = rd.gaps[i];
+    const diagnose::RecordGap& g = rd.gaps[i];
     proto::CaseGap& c = *o->add_cases();
     c.set_case_(d.cases[i].number);
     c.set_training(d.cases[i].training);
@@ -590,7 +590,7 @@ void HtmlGrid(std::ostream& h, const BenchDiagnosis& d) {
         continue;
       }
       const diagnose::BenchCase& c = d.cases[static_cast<size_t>(at)];
-      const records::RecordGap& g = d.records.gaps[static_cast<size_t>(at)];
+      const diagnose::RecordGap& g = d.records.gaps[static_cast<size_t>(at)];
       const double ratio = g.rms_before / std::max(g.floor_rms, 1e-12);
       const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
       h << "<td style=\"background:rgb(255," << red << "," << red << ")\">"
@@ -683,7 +683,7 @@ void HtmlHowFar(std::ostream& h, const BenchDiagnosis& bd) {
        "before</th><th>RMS "
        "after</th><th>closed</th></tr>\n";
   for (size_t i = 0; i < d.gaps.size(); ++i) {
-    const records::RecordGap& g = d.gaps[i];
+    const diagnose::RecordGap& g = d.gaps[i];
     h << "<tr><td>" << bd.cases[i].number << "</td><td class=l>"
       << (bd.cases[i].training ? "training" : "withheld") << "</td><td>" << F("%.4f", g.floor_rms)
       << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)

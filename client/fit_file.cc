@@ -5,10 +5,10 @@
 
 #include "client/excitation_report.h"
 #include "client/select_report.h"
-#include "diagnose/extrapolation.h"
 #include "fit.pb.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
+#include "records/extrapolation.h"
 
 namespace pz::client {
 namespace {

@@ -16,7 +16,7 @@
 #include "records/stepper.h"
 
 namespace pz::records {
-struct ExtrapolationCheck;  // diagnose/extrapolation.h (not on the fuzzer's floor)
+struct ExtrapolationCheck;  // records/extrapolation.h (not on the fuzzer's floor)
 }
 
 namespace pz::client {

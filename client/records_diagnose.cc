@@ -29,7 +29,7 @@ std::string G(double x, int prec = 4) {
 }  // namespace
 
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
-                                   const records::RecordDiagnosis& d,
+                                   const diagnose::RecordDiagnosis& d,
                                    const records::TrainingDriveProposal& proposal, double settle_s,
                                    const records::SelectionResult* selection) {
   const std::string u = set.response_unit;
@@ -87,12 +87,12 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
   WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
 }
 
-void DiagnosisCommonOf(const records::RecordDiagnosis& d, proto::Diagnosis* out) {
+void DiagnosisCommonOf(const diagnose::RecordDiagnosis& d, proto::Diagnosis* out) {
   out->set_verdict_kind(d.verdict_kind);
   out->set_verdict(d.verdict);
 }
 
-void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandidate* out) {
+void CandidateCommonOf(const diagnose::RecordCandidate& c, proto::DiagnosisCandidate* out) {
   out->set_effect(records::EffectName(c.kind));
   out->set_score(c.score);
   out->set_closed(c.closed);
@@ -101,7 +101,7 @@ void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandid
   out->set_note(c.note);
 }
 
-void NamedOf(const std::vector<records::RecordCandidate>& candidates, int named,
+void NamedOf(const std::vector<diagnose::RecordCandidate>& candidates, int named,
              google::protobuf::Value* out) {
   if (named >= 0)
     out->set_string_value(records::EffectName(candidates[static_cast<size_t>(named)].kind));
@@ -109,13 +109,13 @@ void NamedOf(const std::vector<records::RecordCandidate>& candidates, int named,
     out->set_null_value(google::protobuf::NULL_VALUE);
 }
 
-void RunnerUpOf(const std::vector<records::RecordCandidate>& candidates, int runner_up, double z,
+void RunnerUpOf(const std::vector<diagnose::RecordCandidate>& candidates, int runner_up, double z,
                 proto::RunnerUp* out) {
   out->set_effect(records::EffectName(candidates[static_cast<size_t>(runner_up)].kind));
   out->set_z(z);
 }
 
-void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,
+void RecordsDiagnosisOf(const io::RecordSet& set, const diagnose::RecordDiagnosis& d,
                         const records::TrainingDriveProposal& proposal,
                         const records::SelectionResult* selection, proto::Diagnosis* out) {
   proto::Diagnosis m;
@@ -151,7 +151,7 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
   m.set_excitation_gap_note(d.excitation_note);
   if (d.next) {
     proto::NextMeasurement& g = *m.mutable_next_measurement();
-    g.set_waveform(records::WaveformName(d.next->shape.waveform));
+    g.set_waveform(synth::WaveformName(d.next->shape.waveform));
     g.set_amplitude(d.next->shape.amplitude);
     g.set_bias(d.next->shape.bias);
     g.set_frequency_hz(d.next->shape.frequency_hz);
@@ -164,7 +164,7 @@ void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis
 }
 
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
-                               const records::RecordDiagnosis& d,
+                               const diagnose::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection) {
   proto::Diagnosis m;
@@ -175,7 +175,7 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows,
                                                      a.test_windows, a.settle_s);
-  records::RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = a.family;
   const bool select = a.family == "auto";
   if (select) {
@@ -222,7 +222,7 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const fs::path out =
       a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
   io::PrepareOutputFolder(out, "--out");  // before the run: its work is not lost at the end
-  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis d = diagnose::DiagnoseRecords(set, o);
   std::cout << d.verdict << "\n";
   PrintExcitationSummary(std::cout, set, d.excitation);
   fs::create_directories(out / "figures");

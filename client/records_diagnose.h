@@ -47,30 +47,30 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
 
 /// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
-                                   const records::RecordDiagnosis& d,
+                                   const diagnose::RecordDiagnosis& d,
                                    const records::TrainingDriveProposal& proposal,
                                    double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
 /// The one fill of diagnosis.json's message from a records result, for both kinds (this file's
 /// `diagnose --records` and the fin bench's, client/diagnose_report.h): the verdict and its kind.
-void DiagnosisCommonOf(const records::RecordDiagnosis& d, proto::Diagnosis* out);
+void DiagnosisCommonOf(const diagnose::RecordDiagnosis& d, proto::Diagnosis* out);
 /// A candidate's fields of both kinds: effect, score, closed, pattern, qualifies, note.
-void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandidate* out);
+void CandidateCommonOf(const diagnose::RecordCandidate& c, proto::DiagnosisCandidate* out);
 /// The effect named among ranked `candidates` (index `named`): its name, or null for −1.
-void NamedOf(const std::vector<records::RecordCandidate>& candidates, int named,
+void NamedOf(const std::vector<diagnose::RecordCandidate>& candidates, int named,
              google::protobuf::Value* out);
 /// The runner-up `runner_up` (≥ 0) and its paired block z against the named effect.
-void RunnerUpOf(const std::vector<records::RecordCandidate>& candidates, int runner_up, double z,
+void RunnerUpOf(const std::vector<diagnose::RecordCandidate>& candidates, int runner_up, double z,
                 proto::RunnerUp* out);
 
 /// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; the one
 /// conversion; `out` replaced). `selection`: --family auto's choice (null: none).
-void RecordsDiagnosisOf(const io::RecordSet& set, const records::RecordDiagnosis& d,
+void RecordsDiagnosisOf(const io::RecordSet& set, const diagnose::RecordDiagnosis& d,
                         const records::TrainingDriveProposal& proposal,
                         const records::SelectionResult* selection, proto::Diagnosis* out);
 /// diagnosis.json (io/diagnosis_json.h).
 void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
-                               const records::RecordDiagnosis& d,
+                               const diagnose::RecordDiagnosis& d,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection = nullptr);
 

@@ -8,12 +8,12 @@
 
 #include "diagnose/fin_diagnose.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
-CheckSummary::CheckSummary(CheckText t, const std::vector<EffectKind>& effects)
+CheckSummary::CheckSummary(CheckText t, const std::vector<model::EffectKind>& effects)
     : text(std::move(t)) {
   columns.push_back("none");
-  for (EffectKind e : effects) columns.push_back(EffectName(e));
+  for (model::EffectKind e : effects) columns.push_back(EffectName(e));
   columns.push_back("unexplained");
   confusion.assign(columns.size() - 1, std::vector<int>(columns.size(), 0));
 }
@@ -42,7 +42,7 @@ void CheckSummary::Tally(CheckTrial t) {
   trials.push_back(std::move(t));
 }
 
-CheckForm FinCheckForm(const diagnose::DiagnoseOptions& o, const FinTrialOptions& trials) {
+CheckForm FinCheckForm(const diagnose::DiagnoseOptions& o, const synth::FinTrialOptions& trials) {
   ThrowIfError(o.Validate());
   CheckForm f;
   f.text = {.noun = "benches", .description_width = 70, .closed_per_trial = true};
@@ -60,8 +60,9 @@ CheckForm RecordsCheckForm(const RecordsCheckOptions& o) {
   CheckForm f;
   f.text = {.noun = "records", .description_width = 42, .closed_per_trial = false};
   f.draw = RecordsTrialDraw(o.trials);  // first: names a family without a nominal set
-  const std::shared_ptr<const Family> family = MakeFamily(o.trials.family, SyntheticStackScale());
-  for (EffectKind k : RecordEffects())
+  const std::shared_ptr<const records::Family> family =
+      records::MakeFamily(o.trials.family, synth::SyntheticStackScale());
+  for (model::EffectKind k : records::RecordEffects())
     if (!family->Excludes(k.name())) f.effects.push_back(k);
   RecordDiagnoseOptions d = o.diagnose;
   d.family = o.trials.family;
@@ -78,7 +79,7 @@ CheckSummary RunCheck(const CheckForm& form, int trials, uint64_t seed,
   CheckSummary sum(form.text, form.effects);
   for (int i = 0; i < trials; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
-    const SyntheticTrial st = form.draw(seed + static_cast<uint64_t>(i));
+    const synth::SyntheticTrial st = form.draw(seed + static_cast<uint64_t>(i));
     const RecordDiagnosis dg = DiagnoseRecords(st.set, form.options(i));
     CheckTrial t;
     static_cast<TrialVerdict&>(t) = TrialVerdictOf(dg);
@@ -95,4 +96,4 @@ CheckSummary RunCheck(const CheckForm& form, int trials, uint64_t seed,
   return sum;
 }
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

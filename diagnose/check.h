@@ -1,5 +1,5 @@
 // The calibration check of the diagnosis on data whose effect is withheld from it (issues 14, 38;
-// `piezoid diagnose-check`): for seeds seed, seed + 1, …, a trial is drawn (diagnose/synthetic.h,
+// `piezoid diagnose-check`): for seeds seed, seed + 1, …, a trial is drawn (synth/synthetic.h,
 // one of its forms: the fin bench or records of a family), diagnosed as real data would be
 // (diagnose/diagnose.h DiagnoseRecords, with the options of its form) and tallied against its
 // truth: how often the right effect is named, the false alarms on clean trials, the calibration of
@@ -15,19 +15,19 @@
 
 #include "diagnose/decision.h"
 #include "diagnose/diagnose.h"
-#include "diagnose/synthetic.h"
 #include "diagnose/verdict.h"
+#include "synth/synthetic.h"
 
 namespace pz::diagnose {
 struct DiagnoseOptions;
 }
 
-namespace pz::records {
+namespace pz::diagnose {
 
 /// A trial: its truth and what the diagnosis said of it (diagnose/verdict.h).
 struct CheckTrial : TrialVerdict {
   uint64_t seed = 0;
-  EffectKind truth;         ///< none: a clean trial
+  model::EffectKind truth;  ///< none: a clean trial
   std::string description;  ///< the truth in words (SyntheticTrial::description)
   double magnitude = 0;     ///< SyntheticTrial::magnitude
   double closed = 0;        ///< share of the withheld gap closed by the named effect(s) (NaN:
@@ -57,7 +57,7 @@ struct CheckSummary : CalibrationTally {
 
   CheckSummary() = default;
   /// An empty tally over "none", these effects and "unexplained".
-  CheckSummary(CheckText text, const std::vector<EffectKind>& effects);
+  CheckSummary(CheckText text, const std::vector<model::EffectKind>& effects);
   /// The column (or row) of an effect. Throws std::logic_error for an effect outside the columns
   /// (a form whose effects miss one that its trials draw or its diagnosis names).
   int EffectColumn(const std::string& effect) const;
@@ -70,8 +70,8 @@ struct CheckSummary : CalibrationTally {
 /// One form of the check: how its trials are drawn and diagnosed.
 struct CheckForm {
   CheckText text;
-  std::vector<EffectKind> effects;  ///< the confusion matrix's (CheckSummary's columns)
-  TrialDraw draw;
+  std::vector<model::EffectKind> effects;  ///< the confusion matrix's (CheckSummary's columns)
+  synth::TrialDraw draw;
   /// The options of trial `index`'s diagnosis.
   std::function<RecordDiagnoseOptions(int index)> options;
 };
@@ -79,10 +79,11 @@ struct CheckForm {
 /// The fin bench's check: its trials (FinTrialDraw) diagnosed as `diagnose --cases` diagnoses a
 /// bench (diagnose/fin_diagnose.h RecordOptionsOf), trial i with the search seed
 /// options.seed + i. Throws InputError on bad options.
-CheckForm FinCheckForm(const diagnose::DiagnoseOptions& options, const FinTrialOptions& trials);
+CheckForm FinCheckForm(const diagnose::DiagnoseOptions& options,
+                       const synth::FinTrialOptions& trials);
 
 struct RecordsCheckOptions {
-  RecordsTrialOptions trials;      ///< family and share of clean trials
+  synth::RecordsTrialOptions trials;  ///< family and share of clean trials
   RecordDiagnoseOptions diagnose;  ///< the family set, every effect a candidate, no proposal
 };
 
@@ -94,4 +95,4 @@ CheckForm RecordsCheckForm(const RecordsCheckOptions& options);
 CheckSummary RunCheck(const CheckForm& form, int trials, uint64_t seed,
                       const std::function<void(const CheckTrial&, int index)>& on_trial = {});
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -6,7 +6,7 @@
 
 #include "model/model_comparison.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 namespace {
 
 std::string Fmt(const char* fmt, double a = 0, double b = 0) {
@@ -172,4 +172,4 @@ std::vector<model::ReliabilityBin> CalibrationTally::Reliability() const {
   return model::ReliabilityTable(confidence, right);
 }
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

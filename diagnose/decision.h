@@ -34,7 +34,7 @@
 #include "model/model_comparison.h"
 #include "model/status.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
 /// The thresholds of the rules: the same for every effect.
 struct DecisionRules {
@@ -149,4 +149,4 @@ struct CalibrationTally {
   std::vector<model::ReliabilityBin> Reliability() const;
 };
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -10,7 +10,7 @@
 #include "model/model_comparison.h"
 #include "records/resonance.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 namespace {
 
 using model::CaseRole;
@@ -31,7 +31,7 @@ double RecordSse(const io::Record& r, const std::vector<double>& yhat) {
 
 /// Σe² over the withheld (or training) scored samples of a fit: each record's sum, added in set
 /// order (a bench's Σ PI over its cases, added case by case).
-double Sse(const io::RecordSet& set, const FitResult& f, bool withheld) {
+double Sse(const io::RecordSet& set, const records::FitResult& f, bool withheld) {
   double s = 0;
   for (size_t i = 0; i < set.records.size(); ++i)
     if (Withheld(set.records[i]) == withheld) s += RecordSse(set.records[i], f.yhat[i]);
@@ -39,7 +39,7 @@ double Sse(const io::RecordSet& set, const FitResult& f, bool withheld) {
 }
 
 /// Per-sample squared errors over the withheld samples, in set order.
-std::vector<double> WithheldSquares(const io::RecordSet& set, const FitResult& f) {
+std::vector<double> WithheldSquares(const io::RecordSet& set, const records::FitResult& f) {
   std::vector<double> out;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
@@ -54,8 +54,8 @@ std::vector<double> WithheldSquares(const io::RecordSet& set, const FitResult& f
 
 /// Localised excess over drive-level × direction bins of the withheld samples, against the pooled
 /// σ² (`floors` empty) or each record's σ_c².
-std::vector<double> BinExcess(const io::RecordSet& set, const FitResult& f, double sigma2,
-                              const std::vector<double>& floors, const DataScale& s) {
+std::vector<double> BinExcess(const io::RecordSet& set, const records::FitResult& f, double sigma2,
+                              const std::vector<double>& floors, const records::DataScale& s) {
   constexpr int kLevels = 10;
   std::vector<double> sse(2 * kLevels, 0.0), n(2 * kLevels, 0.0), fv(2 * kLevels, 0.0);
   for (size_t i = 0; i < set.records.size(); ++i) {
@@ -90,7 +90,8 @@ int ScoredCycles(const io::Record& r) {
 
 }  // namespace
 
-std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape, io::Record* out) {
+std::vector<double> PredictOnShape(const records::FitResult& fit, const synth::DriveShape& shape,
+                                   io::Record* out) {
   io::Record r;
   r.u = MakeDrive(shape);
   const size_t n = r.u.size();
@@ -109,18 +110,19 @@ std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape
   return y;
 }
 
-ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a,
-                                     const FitResult& b, double sigma) {
-  const DataScale& s = a.model->scale();
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const records::FitResult& a,
+                                     const records::FitResult& b, double sigma) {
+  const records::DataScale& s = a.model->scale();
   const double fs = s.fs;
   ProposedExperiment best;
   best.ratio_to_noise = -1;
-  for (Waveform w : {Waveform::kSine, Waveform::kTriangle, Waveform::kSquare}) {
+  for (synth::Waveform w :
+       {synth::Waveform::kSine, synth::Waveform::kTriangle, synth::Waveform::kSquare}) {
     for (double fm : {0.25, 0.5, 1.0, 2.0, 4.0, 8.0}) {
       const double f = s.f_dom * fm;
       if (f > fs / 20) continue;
       for (double am : {0.5, 1.0}) {
-        DriveShape d;
+        synth::DriveShape d;
         d.waveform = w;
         d.amplitude = s.u_half * am;
         d.bias = (s.u_min + s.u_max) / 2;
@@ -147,7 +149,7 @@ ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& 
       }
     }
   }
-  const DriveShape& d = best.shape;
+  const synth::DriveShape& d = best.shape;
   best.description = std::string("a ") + WaveformName(d.waveform) + " of ±" + Fmt(d.amplitude, 4) +
                      " " + set.drive_unit + " around " + Fmt(d.bias, 4) + " " + set.drive_unit +
                      " at " + Fmt(d.frequency_hz, 4) + " Hz for " + Fmt(d.duration_s, 3) +
@@ -162,7 +164,7 @@ namespace {
 
 /// The noise floor from the base fit's residuals; refuses a base fit whose prediction is not
 /// finite on a withheld record.
-NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
+records::NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const records::FitResult& base) {
   std::vector<std::vector<double>> base_res;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
@@ -180,14 +182,14 @@ NoiseFloor BaseNoiseFloor(const io::RecordSet& set, const FitResult& base) {
         "record(s) " + names + " (it diverges there): no gap to diagnose; train on records that " +
         "cover their drive, or try more integration sub-steps or another family");
   }
-  return EstimateNoiseFloor(set, &base_res);
+  return records::EstimateNoiseFloor(set, &base_res);
 }
 
 /// True when a record's residual under the fit has a mode-like band above f_min (records/
 /// resonance.h: dominant and narrow): where a mode shows.
-bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_min) {
+bool ResidualHasBand(const io::RecordSet& set, const records::FitResult& fit, double f_min) {
   for (size_t i = 0; i < set.records.size() && i < fit.yhat.size(); ++i)
-    if (ResidualBand(set.records[i], fit.yhat[i], f_min).mode_like()) return true;
+    if (records::ResidualBand(set.records[i], fit.yhat[i], f_min).mode_like()) return true;
   return false;
 }
 
@@ -198,17 +200,17 @@ bool ResidualHasBand(const io::RecordSet& set, const FitResult& fit, double f_mi
 /// resonance is offered by default where a record's residual under the base model has a mode-like
 /// band in its range of f_n, above a periodic drive's first harmonics (a mode there; elsewhere its
 /// fit would only bend the loop, as a lag the family lacks).
-std::vector<EffectKind> CandidateEffects(const io::RecordSet& set, const RecordDiagnosis& d,
-                                         const RecordDiagnoseOptions& o) {
-  std::vector<EffectKind> cands = o.candidates;
+std::vector<model::EffectKind> CandidateEffects(const io::RecordSet& set, const RecordDiagnosis& d,
+                                                const RecordDiagnoseOptions& o) {
+  std::vector<model::EffectKind> cands = o.candidates;
   if (!cands.empty()) return cands;
-  const auto lib = EffectLibrary(d.base.model->scale());
-  const Family& family = d.base.model->family();
-  const bool rates = d.excitation.training.rate_span() >= kMinRateSpan;
-  const EffectKind resonance = EffectKind::Named("resonance");
-  for (const EffectInfo& e : lib)
+  const auto lib = records::EffectLibrary(d.base.model->scale());
+  const records::Family& family = d.base.model->family();
+  const bool rates = d.excitation.training.rate_span() >= records::kMinRateSpan;
+  const model::EffectKind resonance = model::EffectKind::Named("resonance");
+  for (const records::EffectInfo& e : lib)
     if (!family.Excludes(e.name) && e.unsupported.empty() &&
-        (rates || !NeedsRateCoverage(e.kind)) &&
+        (rates || !records::NeedsRateCoverage(e.kind)) &&
         (e.kind != resonance || ResidualHasBand(set, d.base, e.params[1].lower)))
       cands.push_back(e.kind);
   return cands;
@@ -216,11 +218,11 @@ std::vector<EffectKind> CandidateEffects(const io::RecordSet& set, const RecordD
 
 /// Extra starts of a candidate's fit: the base fit with the effect at small magnitudes (unit
 /// coordinates).
-void AddExtraStarts(const RecordModel& model, const std::vector<double>& base_params, EffectKind e,
-                    const DataScale& scale, FitOptions& ce) {
+void AddExtraStarts(const records::RecordModel& model, const std::vector<double>& base_params,
+                    model::EffectKind e, const records::DataScale& scale, records::FitOptions& ce) {
   const auto& params = model.params();
   opt::ParamBox box;
-  for (const ParamInfo& p : params) {
+  for (const records::ParamInfo& p : params) {
     box.names.push_back(p.name);
     box.lower.push_back(p.lower);
     box.upper.push_back(p.upper);
@@ -228,7 +230,7 @@ void AddExtraStarts(const RecordModel& model, const std::vector<double>& base_pa
   }
   for (double frac : {0.02, 0.1, 0.3}) {
     std::vector<double> phys = base_params;
-    for (const ParamInfo& p : e->Params(scale)) {
+    for (const records::ParamInfo& p : e->Params(scale)) {
       const double mid = p.lower <= 0 && p.upper >= 0 ? frac * (p.upper > 0 ? p.upper : p.lower)
                                                       : p.lower * std::pow(p.upper / p.lower, frac);
       phys.push_back(mid);
@@ -256,8 +258,8 @@ void SetFloorText(const RecordDiagnoseOptions& o, const RecordDiagnosis& d, Verd
 }
 
 /// The named effect, the proposed experiment, the excitation note and the verdict's text.
-void ComposeRecordVerdict(const io::RecordSet& set, const RecordDiagnoseOptions& o,
-                          const records::Gap& gap, const Naming& naming, RecordDiagnosis& d) {
+void ComposeRecordVerdict(const io::RecordSet& set, const RecordDiagnoseOptions& o, const Gap& gap,
+                          const Naming& naming, RecordDiagnosis& d) {
   d.named = naming.named;
   d.runner_up = naming.runner_up;
   d.z_runner_up = naming.z_runner_up;
@@ -304,12 +306,12 @@ void ComposeRecordVerdict(const io::RecordSet& set, const RecordDiagnoseOptions&
 
 /// Per-record floors (RecordDiagnoseOptions::floor kPerRecord): each record's rounding and scatter
 /// over its scored window, saturation-aware where `fit` sits on the record's measured extremes.
-std::vector<double> PerRecordFloors(const io::RecordSet& set, const FitResult& fit) {
+std::vector<double> PerRecordFloors(const io::RecordSet& set, const records::FitResult& fit) {
   std::vector<double> floors;
   for (size_t i = 0; i < set.records.size(); ++i) {
     const io::Record& r = set.records[i];
     const auto y = std::span<const double>(r.y).subspan(r.first_scored, r.scored());
-    const CaseNoise noise = EstimateCaseNoise(y, ScoredCycles(r), r.quantum);
+    const records::CaseNoise noise = records::EstimateCaseNoise(y, ScoredCycles(r), r.quantum);
     const auto yh = std::span<const double>(fit.yhat[i]).subspan(r.first_scored, r.scored());
     bool finite = true;
     for (double v : yh) finite = finite && std::isfinite(v);
@@ -321,7 +323,8 @@ std::vector<double> PerRecordFloors(const io::RecordSet& set, const FitResult& f
 
 /// The residual analysis of a fit over every record's scored window (RecordPattern::
 /// kResidualAnalysis); InputError naming a record that states no frequency.
-model::ResidualAnalysis AnalyseRecordResiduals(const io::RecordSet& set, const FitResult& fit,
+model::ResidualAnalysis AnalyseRecordResiduals(const io::RecordSet& set,
+                                               const records::FitResult& fit,
                                                const std::vector<double>& floors) {
   std::vector<model::ResidualCaseInput> in;
   std::vector<std::vector<double>> zeros(set.records.size());
@@ -357,11 +360,12 @@ model::ResidualAnalysis AnalyseRecordResiduals(const io::RecordSet& set, const F
 struct Shape {
   const io::RecordSet& set;
   const RecordDiagnoseOptions& o;
-  const DataScale& scale;
+  const records::DataScale& scale;
   double sigma2 = 0;
   std::vector<double> floors;  ///< empty: the pooled σ
 
-  std::vector<double> Excess(const FitResult& f, model::ResidualAnalysis* keep = nullptr) const {
+  std::vector<double> Excess(const records::FitResult& f,
+                             model::ResidualAnalysis* keep = nullptr) const {
     if (o.pattern == RecordPattern::kDriveBins) return BinExcess(set, f, sigma2, floors, scale);
     model::ResidualAnalysis ra =
         AnalyseRecordResiduals(set, f, floors.empty() ? PooledFloors() : floors);
@@ -377,9 +381,10 @@ struct Shape {
 /// The output of `model` at `params` on every record, as a fit (no search, no polish), with the
 /// uncertainty table there for a model searched through its RecordMap (the bench form): the nested
 /// model of a bench fit (RecordDiagnoseOptions::BenchFits). `evaluations`: of the fit it replaces.
-FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
-                std::vector<double> params, int64_t evaluations, const FitOptions& fo) {
-  FitResult f;
+records::FitResult FitAt(const io::RecordSet& set, std::shared_ptr<records::RecordModel> model,
+                         std::vector<double> params, int64_t evaluations,
+                         const records::FitOptions& fo) {
+  records::FitResult f;
   f.model = std::move(model);
   f.params = std::move(params);
   std::vector<const io::Record*> train;
@@ -395,8 +400,8 @@ FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
   for (const io::Record* r : train) n += r->scored();
   f.train_mse = f.train_sse / static_cast<double>(std::max<size_t>(n, 1));
   if (fo.uncertainty && f.model->has_ratio()) {
-    const RecordFitness fitness(*f.model, train);
-    const RecordMap map(*f.model);
+    const records::RecordFitness fitness(*f.model, train);
+    const records::RecordMap map(*f.model);
     f.uncertainty = opt::ComputeUncertainty(
         map,
         [&](std::span<const double> x, std::vector<double>& r) { return fitness.Residuals(x, r); },
@@ -407,9 +412,9 @@ FitResult FitAt(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
 }
 
 /// A candidate fit as the bench's (RecordDiagnoseOptions::BenchFits).
-FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
-                        std::shared_ptr<RecordModel> model, EffectKind e,
-                        const RecordDiagnoseOptions& o, const FitOptions& fo) {
+records::FitResult BenchFitOnTop(const io::RecordSet& set, const records::FitResult& start,
+                                 std::shared_ptr<records::RecordModel> model, model::EffectKind e,
+                                 const RecordDiagnoseOptions& o, const records::FitOptions& fo) {
   std::vector<double> x0 = start.params;
   const model::Effect zero = model::Effect::Zero(e);
   for (double v : zero.params) x0.push_back(v);
@@ -418,12 +423,12 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
                      " parameters, the bench's fit extends " + std::to_string(start.params.size()) +
                      " by " + std::to_string(zero.params.size()));
   }
-  FitOptions ce = fo;
+  records::FitOptions ce = fo;
   ce.extra_starts.clear();
   ce.seed_points.clear();
   ce.start_points.clear();
   bool beam = false;
-  for (EffectKind k : model->effects())
+  for (model::EffectKind k : model->effects())
     beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
   if (beam) {
     ce.polish_from = x0;  // refined at the start fractions (FitOptions::beam)
@@ -431,7 +436,7 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
     std::vector<std::vector<double>> starts;
     if (const int mp = model::GetEffectInfo(e).magnitude_param; mp >= 0) {
       const size_t mag = start.params.size() + static_cast<size_t>(mp);
-      const ParamInfo& s = model->params()[mag];
+      const records::ParamInfo& s = model->params()[mag];
       const bool both_signs = s.lower < 0 && s.upper > 0;
       const std::vector<double>& fr = fo.beam.start_fractions;
       for (size_t j = 0; j < fr.size(); ++j) {
@@ -451,9 +456,10 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
     ce.seed_points.insert(ce.seed_points.end(), starts.begin(), starts.end());
     ce.start_points = {x0};
   }
-  FitResult f = FitModel(set, model, ce);
+  records::FitResult f = FitModel(set, model, ce);
   if (f.train_sse > start.train_sse) {
-    FitResult nested = FitAt(set, model, x0, f.evaluations + f.uncertainty.evaluations, ce);
+    records::FitResult nested =
+        FitAt(set, model, x0, f.evaluations + f.uncertainty.evaluations, ce);
     nested.polish_message =
         "refinement ended above the starting model (" + f.polish_message + "): effect kept at zero";
     return nested;
@@ -463,19 +469,20 @@ FitResult BenchFitOnTop(const io::RecordSet& set, const FitResult& start,
 
 /// Fits `start`'s model plus effect e (extra starts: `start` with e at small magnitudes; or as the
 /// bench's, RecordDiagnoseOptions::BenchFits).
-FitResult FitOnTop(const io::RecordSet& set, const FitResult& start, EffectKind e,
-                   const DataScale& scale, const RecordDiagnoseOptions& o, const FitOptions& fo) {
-  std::vector<EffectKind> effects = start.model->effects();
+records::FitResult FitOnTop(const io::RecordSet& set, const records::FitResult& start,
+                            model::EffectKind e, const records::DataScale& scale,
+                            const RecordDiagnoseOptions& o, const records::FitOptions& fo) {
+  std::vector<model::EffectKind> effects = start.model->effects();
   effects.push_back(e);
-  auto model = std::make_shared<RecordModel>(start.model->family_ptr(), effects, scale);
+  auto model = std::make_shared<records::RecordModel>(start.model->family_ptr(), effects, scale);
   if (o.bench_fits.enabled) return BenchFitOnTop(set, start, model, e, o, fo);
-  FitOptions ce = fo;
+  records::FitOptions ce = fo;
   AddExtraStarts(*model, start.params, e, scale, ce);
   return FitModel(set, model, ce);
 }
 
 /// Scores the fitted candidates of a round against the gap of `start`, ranks them and names one.
-Naming ScoreAndName(const Shape& shape, const Gap& gap, const FitResult& start,
+Naming ScoreAndName(const Shape& shape, const Gap& gap, const records::FitResult& start,
                     std::vector<RecordCandidate>& cands) {
   const io::RecordSet& set = shape.set;
   const auto start_ex = shape.Excess(start);
@@ -523,9 +530,9 @@ std::vector<RecordGap> RecordGaps(const io::RecordSet& set, const RecordDiagnosi
 }
 
 /// The greedy second round on top of the named candidate (RecordDiagnoseOptions::second_effect).
-RecordRound SecondRound(const Shape& shape, const std::vector<EffectKind>& cands,
-                        const RecordCandidate& first, const Gap& first_gap, const FitOptions& fo,
-                        RecordDiagnosis& d) {
+RecordRound SecondRound(const Shape& shape, const std::vector<model::EffectKind>& cands,
+                        const RecordCandidate& first, const Gap& first_gap,
+                        const records::FitOptions& fo, RecordDiagnosis& d) {
   const io::RecordSet& set = shape.set;
   const RecordDiagnoseOptions& o = shape.o;
   RecordRound round;
@@ -533,7 +540,7 @@ RecordRound SecondRound(const Shape& shape, const std::vector<EffectKind>& cands
   round.gap = MeasureGap(first.s_withheld, first.s_train, first_gap.s_floor, first_gap.var_w,
                          first_gap.var_t, first_gap.nw, first_gap.nt, o.rules);
   if (round.gap.significant) {
-    for (EffectKind e : cands) {
+    for (model::EffectKind e : cands) {
       if (e == first.kind) continue;
       if (o.fit.progress)
         o.fit.progress("second effect: " + ModelLabel(*first.fit.model, o) + " + " + EffectName(e));
@@ -617,9 +624,9 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
       }
     }
   }
-  d.excitation = AnalyseExcitation(set);
+  d.excitation = records::AnalyseExcitation(set);
   const auto progress = o.fit.progress;
-  FitOptions fo = o.fit;
+  records::FitOptions fo = o.fit;
   fo.family = o.family;
   fo.effects.clear();
   fo.progress = nullptr;
@@ -631,9 +638,9 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
                nt = static_cast<double>(d.train_samples);
 
   // Candidates that apply to the family, each fitted on top of the base model.
-  const DataScale& scale = d.base.model->scale();
-  const std::vector<EffectKind> cands = CandidateEffects(set, d, o);
-  for (EffectKind e : cands) {
+  const records::DataScale& scale = d.base.model->scale();
+  const std::vector<model::EffectKind> cands = CandidateEffects(set, d, o);
+  for (model::EffectKind e : cands) {
     if (progress) progress(std::string("candidate: ") + o.family + " + " + EffectName(e));
     RecordCandidate c;
     c.kind = e;
@@ -649,7 +656,7 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   Shape shape{set, o, scale, sigma2, {}};
   double s_floor = nw * sigma2, var_w = sigma2, var_t = sigma2;
   if (o.floor == RecordFloor::kPerRecord) {
-    const FitResult* floor_model = &d.base;
+    const records::FitResult* floor_model = &d.base;
     for (const RecordCandidate& c : d.candidates)
       if (c.fit.train_sse < floor_model->train_sse) floor_model = &c.fit;
     d.floor_model = ModelLabel(*floor_model->model, o);
@@ -676,21 +683,21 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   const Naming naming = ScoreAndName(shape, gap, d.base, d.candidates);
 
   // The greedy second round, the final model and how far it closed the gap.
-  std::shared_ptr<const FitResult> final_fit;
+  std::shared_ptr<const records::FitResult> final_fit;
   if (naming.named >= 0) {
     const RecordCandidate& first = d.candidates[static_cast<size_t>(naming.named)];
     d.named_effects.push_back(first.kind);
-    final_fit = std::make_shared<FitResult>(first.fit);
+    final_fit = std::make_shared<records::FitResult>(first.fit);
     if (o.second_effect) {
       d.second = SecondRound(shape, cands, first, gap, fo, d);
       if (d.second->named >= 0) {
         const RecordCandidate& c = d.second->candidates[static_cast<size_t>(d.second->named)];
         d.named_effects.push_back(c.kind);
-        final_fit = std::make_shared<FitResult>(c.fit);
+        final_fit = std::make_shared<records::FitResult>(c.fit);
       }
     }
   } else {
-    final_fit = std::make_shared<FitResult>(d.base);
+    final_fit = std::make_shared<records::FitResult>(d.base);
   }
   d.final_fit = final_fit;
   d.withheld_after = Sse(set, *final_fit, true);
@@ -711,9 +718,11 @@ RecordDiagnosis DiagnoseRecords(const io::RecordSet& set, const RecordDiagnoseOp
   return d;
 }
 
-std::string FinNextMeasurementHint(EffectKind a, EffectKind b) {
-  auto is = [&](EffectKind x, EffectKind y) { return (a == x && b == y) || (a == y && b == x); };
-  if (is(EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")))
+std::string FinNextMeasurementHint(model::EffectKind a, model::EffectKind b) {
+  auto is = [&](model::EffectKind x, model::EffectKind y) {
+    return (a == x && b == y) || (a == y && b == x);
+  };
+  if (is(model::EffectKind::Named("driver-lowpass"), model::EffectKind::Named("delay")))
     return "A delay shifts every frequency by the same time, a low-pass lags by atan(2 pi f tau) "
            "and rounds edges: "
            "a square-wave (step) drive, or sinusoids at several times the bench's highest "
@@ -723,10 +732,10 @@ std::string FinNextMeasurementHint(EffectKind a, EffectKind b) {
          "`piezoid diagnose --records` proposes one for record sets";
 }
 
-std::string ModelLabel(const RecordModel& model, const RecordDiagnoseOptions& o) {
+std::string ModelLabel(const records::RecordModel& model, const RecordDiagnoseOptions& o) {
   if (o.base_name.empty()) return model.Describe();
   std::string s = o.base_name;
-  for (EffectKind e : model.effects()) s += std::string(" + ") + EffectName(e);
+  for (model::EffectKind e : model.effects()) s += std::string(" + ") + EffectName(e);
   return s;
 }
 
@@ -766,4 +775,4 @@ TrialVerdict TrialVerdictOf(const RecordDiagnosis& d) {
   return v;
 }
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -1,6 +1,6 @@
-// The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14):
-// the rules of diagnose/fin_diagnose.h (docs/diagnosis.md) on records instead of the nine-case
-// grid.
+// The diagnosis of the sim-to-real gap on record sets of any drive, for every family (issue 14;
+// docs/diagnosis.md). It is the one engine: the nine-case fin bench (diagnose/fin_diagnose.h) is
+// diagnosed by it, its cases turned into records and its choices given as options.
 //
 //  1. Noise floor σ from what the records allow (records/noise_floor.h EstimateNoiseFloor: rest,
 //     periods, repeats, the base model's residual; every available estimate is reported, and which
@@ -39,20 +39,20 @@
 #include <string>
 #include <vector>
 
-#include "io/records.h"
 #include "diagnose/decision.h"
+#include "diagnose/trends.h"
+#include "diagnose/verdict.h"
+#include "io/records.h"
+#include "model/residual_analysis.h"
 #include "records/excitation.h"
 #include "records/fit.h"
 #include "records/noise_floor.h"
-#include "diagnose/synthetic.h"
-#include "diagnose/trends.h"
-#include "diagnose/verdict.h"
-#include "model/residual_analysis.h"
+#include "synth/synthetic.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
 struct ProposedExperiment {
-  DriveShape shape;
+  synth::DriveShape shape;
   double rms_difference = 0;  ///< between the two models' predictions [response unit]
   double ratio_to_noise = 0;  ///< rms_difference / σ
   std::string description;
@@ -60,8 +60,8 @@ struct ProposedExperiment {
 
 /// One effect added to the base family, fitted and scored by the rules of diagnose/decision.h.
 struct RecordCandidate : CandidateScore {
-  EffectKind kind;
-  FitResult fit;
+  model::EffectKind kind;
+  records::FitResult fit;
   double z_vs_base = 0;  ///< paired block test against the base model (> 0: better)
 };
 
@@ -79,8 +79,8 @@ enum class RecordPattern {
 
 struct RecordDiagnoseOptions {
   std::string family = "backlash-like";
-  std::vector<EffectKind> candidates;  ///< empty = every effect that applies to the family
-  FitOptions fit;                      ///< family options, search and polish of every fit
+  std::vector<model::EffectKind> candidates;  ///< empty = every effect that applies to the family
+  records::FitOptions fit;                    ///< family options, search and polish of every fit
   DecisionRules rules;                 ///< the decision rules: the same for every effect
   bool propose = true;
   /// kPerRecord (the bench's floor): each record's rounding and scatter over its scored window
@@ -114,7 +114,7 @@ struct RecordDiagnoseOptions {
   std::string base_name;
   /// A tie's next measurement as a sentence from the two effects (the bench's physics of their
   /// difference), in place of the simulated proposal (`propose`); null: none.
-  std::function<std::string(EffectKind, EffectKind)> next_hint;
+  std::function<std::string(model::EffectKind, model::EffectKind)> next_hint;
   /// The excitation-gap sentence at the end of a significant verdict (records/excitation.h).
   bool excitation_note = true;
   /// Candidate fits as the nine-case bench's (diagnose/fin_diagnose.cc FitStructure), for a
@@ -138,7 +138,7 @@ struct RecordDiagnoseOptions {
 
 /// A greedy round on top of the named effect (RecordDiagnoseOptions::second_effect).
 struct RecordRound {
-  std::vector<EffectKind> start;            ///< the effects of the starting model
+  std::vector<model::EffectKind> start;     ///< the effects of the starting model
   Gap gap;                                  ///< the starting model's gap, as the rules measured it
   std::vector<RecordCandidate> candidates;  ///< ranked by score, best first
   int named = -1, runner_up = -1;
@@ -166,8 +166,8 @@ struct RecordGap {
 };
 
 struct RecordDiagnosis {
-  NoiseFloor noise;
-  FitResult base;
+  records::NoiseFloor noise;
+  records::FitResult base;
   size_t withheld_samples = 0, train_samples = 0;
   double s0 = 0, s_floor = 0, rms_ratio = 0;
   bool significant = false;
@@ -180,8 +180,8 @@ struct RecordDiagnosis {
   std::string verdict;
   std::string round_verdict;  ///< the first round's own verdict (no absorbed, second or closing)
   std::optional<ProposedExperiment> next;
-  ExcitationReport excitation;  ///< what training excites, what each withheld record needs
-                                ///< (records/excitation.h)
+  records::ExcitationReport excitation;  ///< what training excites, what each withheld record needs
+                                         ///< (records/excitation.h)
   std::string excitation_note;  ///< the excitation-gap sentence, also at the end of the verdict
                                 ///< (empty: none)
   /// Candidates left out because their fitted model's prediction is not finite on a withheld
@@ -195,10 +195,10 @@ struct RecordDiagnosis {
   /// and of the final one; empty otherwise.
   model::ResidualAnalysis base_residuals, final_residuals;
   std::optional<RecordRound> second;      ///< the greedy round, when one was run
-  std::vector<EffectKind> named_effects;  ///< every effect named, in order
+  std::vector<model::EffectKind> named_effects;  ///< every effect named, in order
   /// The base model plus every named effect (the base fit when nothing is named): a copy of that
   /// fit, or null before the diagnosis ran.
-  std::shared_ptr<const FitResult> final_fit;
+  std::shared_ptr<const records::FitResult> final_fit;
   double withheld_after = 0;  ///< Σe² of the final model over the withheld samples
   double closed_total = 0;    ///< ClosedShare(s0, withheld_after, s_floor) (NaN without excess)
   std::vector<Absorption> absorbed;              ///< against the best first-round candidate
@@ -232,21 +232,21 @@ RecordDiagnoseOptions FinBenchOptions();
 
 /// What would separate two effects that the nine-case bench cannot: the physics of their difference
 /// (its nine sinusoids; `diagnose --records` simulates candidate drives instead).
-std::string FinNextMeasurementHint(EffectKind a, EffectKind b);
+std::string FinNextMeasurementHint(model::EffectKind a, model::EffectKind b);
 
 /// A model as the diagnosis names it: RecordModel::Describe, or options.base_name + its effects.
-std::string ModelLabel(const RecordModel& model, const RecordDiagnoseOptions& options);
+std::string ModelLabel(const records::RecordModel& model, const RecordDiagnoseOptions& options);
 
 /// What a diagnosis said, as a calibration check counts it (diagnose/verdict.h).
 TrialVerdict TrialVerdictOf(const RecordDiagnosis& diagnosis);
 
 /// The drive shape / experiment where two fitted models differ most (used by DiagnoseRecords).
-ProposedExperiment ProposeExperiment(const io::RecordSet& set, const FitResult& a,
-                                     const FitResult& b, double sigma);
+ProposedExperiment ProposeExperiment(const io::RecordSet& set, const records::FitResult& a,
+                                     const records::FitResult& b, double sigma);
 
 /// Simulates a fitted model on a drive shape (the record's rest and excitation, window = the
 /// excitation after its first period), output with polarity; offsets not applied.
-std::vector<double> PredictOnShape(const FitResult& fit, const DriveShape& shape,
+std::vector<double> PredictOnShape(const records::FitResult& fit, const synth::DriveShape& shape,
                                    io::Record* record = nullptr);
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -25,15 +25,15 @@ Status DiagnoseOptions::Validate() const {
       return InvalidArgument(FieldError("cvode_start_fractions[]", f, "must be in (0, 1]"));
   if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
   if (auto s = rules.Validate(); !s.ok()) return InvalidArgument("rules." + s.message());
-  for (EffectKind k : candidates)
+  for (model::EffectKind k : candidates)
     if (!model::IsFinEffect(k))
       return InvalidArgument(
           FieldError("candidates[]", std::string(k.name()), "not an effect of the fin bench"));
   return Status::Ok();
 }
 
-records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
-  records::RecordDiagnoseOptions r = records::FinBenchOptions();
+RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
+  RecordDiagnoseOptions r = FinBenchOptions();
   if (!o.candidates.empty()) r.candidates = o.candidates;
   r.fit.threads = o.threads;
   r.fit.search.de = o.de_base;
@@ -79,11 +79,11 @@ int64_t FitEvaluations(const records::FitResult& f) {
   return f.evaluations + f.uncertainty.evaluations;
 }
 
-int64_t BenchEvaluations(const records::RecordDiagnosis& d) {
+int64_t BenchEvaluations(const RecordDiagnosis& d) {
   int64_t n = FitEvaluations(d.base) + d.trend_evaluations;
-  for (const records::RecordCandidate& c : d.candidates) n += FitEvaluations(c.fit);
+  for (const RecordCandidate& c : d.candidates) n += FitEvaluations(c.fit);
   if (d.second)
-    for (const records::RecordCandidate& c : d.second->candidates) n += FitEvaluations(c.fit);
+    for (const RecordCandidate& c : d.second->candidates) n += FitEvaluations(c.fit);
   return n;
 }
 
@@ -92,7 +92,7 @@ BenchDiagnosis DiagnoseBench(const std::vector<DiagCase>& cases, const DiagnoseO
   const auto start = std::chrono::steady_clock::now();
   BenchDiagnosis d;
   d.set = RecordsOfCases(cases);
-  d.records = records::DiagnoseRecords(d.set, RecordOptionsOf(o));
+  d.records = DiagnoseRecords(d.set, RecordOptionsOf(o));
   // The grid's facts: each case's place, noise and saturations, and the floors pooled by role.
   double st = 0, sw = 0;
   int nt = 0, nw = 0;

@@ -1,7 +1,7 @@
 // The diagnosis of the sim-to-real gap of the nine-case fin bench (issue 6): where the gap lies,
 // which unmodelled effect causes it, and how far it shrinks once that effect is in the model. The
 // bench's cases are records (io/fin_records.h) diagnosed by the records engine (diagnose/diagnose.h
-// DiagnoseRecords with records::FinBenchOptions: bimorph-fin's bench form), in these steps:
+// DiagnoseRecords with FinBenchOptions: bimorph-fin's bench form), in these steps:
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
@@ -61,8 +61,7 @@ struct DiagnoseOptions {
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
   std::vector<double> cvode_start_fractions = {0.03, 0.15};
   model::EffectSimOptions sim;
-  records::DecisionRules
-      rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
+  DecisionRules rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
   bool second_effect = true;                         ///< greedy search for a second effect
   bool trends = true;                                ///< per-case fits and their V × f trends
   std::function<void(const std::string&)> progress;  ///< one line per step (may be null)
@@ -72,7 +71,7 @@ struct DiagnoseOptions {
 /// The bench's options as the records engine's: FinBenchOptions with these candidates (empty: the
 /// whole library), searches (DE base and candidate, their seed, LM, the beam refinement), simulator
 /// options, rules, rounds, trends, threads and progress.
-records::RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
+RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
 
 /// The bench's cases as records (io/fin_records.h; a withheld case validates).
 io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
@@ -93,7 +92,7 @@ struct BenchCase {
 struct BenchDiagnosis {
   std::string bench;  ///< the folder or a label
   io::RecordSet set;  ///< the cases as records, in case order
-  records::RecordDiagnosis records;
+  RecordDiagnosis records;
   std::vector<BenchCase> cases;  ///< set order
   double quantum_deg = 0;        ///< the largest encoder quantum of the cases
   /// The per-case floors' RMS over the training and the withheld samples [deg].
@@ -105,7 +104,7 @@ struct BenchDiagnosis {
 int64_t FitEvaluations(const records::FitResult& f);
 /// Every model evaluation of a bench diagnosis: its fits' (FitEvaluations) and the per-case fits
 /// of the trends.
-int64_t BenchEvaluations(const records::RecordDiagnosis& d);
+int64_t BenchEvaluations(const RecordDiagnosis& d);
 
 /// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
 /// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of

@@ -5,11 +5,11 @@
 #include <cmath>
 #include <sstream>
 
-#include "diagnose/synthetic.h"
 #include "model/status.h"
 #include "opt/random.h"
+#include "synth/synthetic.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
 RealLikeCheckSummary RunRealLikeCheck(
     const RealLikeCheckOptions& o,
@@ -21,16 +21,16 @@ RealLikeCheckSummary RunRealLikeCheck(
     RealLikeCheckTrial t;
     t.seed = o.seed + static_cast<uint64_t>(i);
     opt::Rng rng(t.seed * 104729 + 11);
-    RealLikeOptions g = o.base;
+    synth::RealLikeOptions g = o.base;
     g.seed = t.seed;
     g.ramp = g.reversals = g.second_sine = true;
-    g.stack.creep_per_decade = rng.Uniform01() < 1.0 / 3 ? 0 : UniformDraw(rng, 0.005, 0.03);
-    g.sensor.lag_samples = rng.Uniform01() < 1.0 / 3 ? 0 : UniformDraw(rng, 0.5, 3);
-    g.stack.asymmetry = UniformDraw(rng, -1.5, 1.5);
-    g.stack.hysteresis_share = UniformDraw(rng, 0.1, 0.25);
-    g.stack.quadratic = UniformDraw(rng, -0.2, 0.2);
-    g.amplitude_share = UniformDraw(rng, 0.35, 0.48);
-    g.sensor.noise_white_um = UniformDraw(rng, 0.03, 0.1);
+    g.stack.creep_per_decade = rng.Uniform01() < 1.0 / 3 ? 0 : synth::UniformDraw(rng, 0.005, 0.03);
+    g.sensor.lag_samples = rng.Uniform01() < 1.0 / 3 ? 0 : synth::UniformDraw(rng, 0.5, 3);
+    g.stack.asymmetry = synth::UniformDraw(rng, -1.5, 1.5);
+    g.stack.hysteresis_share = synth::UniformDraw(rng, 0.1, 0.25);
+    g.stack.quadratic = synth::UniformDraw(rng, -0.2, 0.2);
+    g.amplitude_share = synth::UniformDraw(rng, 0.35, 0.48);
+    g.sensor.noise_white_um = synth::UniformDraw(rng, 0.03, 0.1);
     if (g.stack.creep_per_decade > 0) t.truth_effects.push_back("creep");
     if (g.sensor.lag_samples > 0) t.truth_effects.push_back("delay");
     if (std::abs(g.stack.quadratic) >= 0.05) t.truth_effects.push_back("quadratic-drive");
@@ -40,7 +40,7 @@ RealLikeCheckSummary RunRealLikeCheck(
          << ", quad " << g.stack.quadratic << ", asym " << g.stack.asymmetry << ", hyst "
          << g.stack.hysteresis_share;
     t.description = desc.str();
-    const RealLikeSet s = GenerateRealLikeSet(g);
+    const synth::RealLikeSet s = GenerateRealLikeSet(g);
     t.floor_truth = s.realised_floor_um;
     RecordDiagnoseOptions dopt = o.diagnose;
     dopt.family = o.family;
@@ -49,12 +49,12 @@ RealLikeCheckSummary RunRealLikeCheck(
     t.floor_estimate = d.noise.sigma;
     t.floor_used = d.noise.used;
     t.excitation_right = true;
-    for (const WithheldExcitation& w : d.excitation.withheld) {
+    for (const records::WithheldExcitation& w : d.excitation.withheld) {
       const std::string& name = s.set.records[w.record].name;
       bool reversals = false;
-      for (const ExcitationNeed& n : w.needs) {
+      for (const records::ExcitationNeed& n : w.needs) {
         t.excitation += (t.excitation.empty() ? "" : " ") + name + ":" + ExcitationNeedName(n.kind);
-        reversals = reversals || n.kind == ExcitationNeed::Kind::kReversals;
+        reversals = reversals || n.kind == records::ExcitationNeed::Kind::kReversals;
       }
       if (reversals != (name != "major-2")) t.excitation_right = false;
     }
@@ -79,4 +79,4 @@ RealLikeCheckSummary RunRealLikeCheck(
   return sum;
 }
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -1,5 +1,5 @@
 // `piezoid diagnose-check --records-family F --real-like`: the records diagnosis
-// (diagnose/diagnose.h) on real-like stack sets (diagnose/reallike.h) whose plant is not any family
+// (diagnose/diagnose.h) on real-like stack sets (synth/reallike.h) whose plant is not any family
 // of the product: per trial a plant drawn around the defaults (creep on or off, a lag of 0 or 0.5–3
 // samples, the density's asymmetry, the hysteresis share, the reversible curvature, the amplitude,
 // the noise), a major-loop training sine and the withheld records (a second sine, a ramped
@@ -17,15 +17,16 @@
 #include <vector>
 
 #include "diagnose/diagnose.h"
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
 struct RealLikeCheckOptions {
   std::string family = "prandtl-ishlinskii";
   int trials = 10;
   uint64_t seed = 1;
-  RealLikeOptions base;  ///< lengths, rates, sensor; the plant is drawn around base.stack per trial
+  synth::RealLikeOptions
+      base;  ///< lengths, rates, sensor; the plant is drawn around base.stack per trial
   RecordDiagnoseOptions diagnose;  ///< family set per trial; no proposal
 };
 
@@ -55,4 +56,4 @@ RealLikeCheckSummary RunRealLikeCheck(
     const RealLikeCheckOptions& options,
     const std::function<void(const RealLikeCheckTrial&, int)>& on_trial = {});
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -6,7 +6,7 @@
 
 #include "model/format.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 namespace {
 
 std::string G(double x) { return FormatG(x, 3); }
@@ -157,4 +157,4 @@ std::string ClosedText(std::vector<double> closed, const std::string& noun) {
          ", max " + Pct(Quantile(closed, 1)) + "\n";
 }
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

@@ -30,7 +30,7 @@
 
 #include "diagnose/decision.h"
 
-namespace pz::records {
+namespace pz::diagnose {
 
 /// A ranked candidate as the verdict names it.
 struct VerdictCandidate {
@@ -95,4 +95,4 @@ std::string ConfusionText(std::span<const std::string> columns,
 /// median, 90 %, max (linear between order statistics; "n/a" without any), one line.
 std::string ClosedText(std::vector<double> closed, const std::string& noun);
 
-}  // namespace pz::records
+}  // namespace pz::diagnose

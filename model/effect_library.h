@@ -125,7 +125,7 @@ class TruthDraw {
   std::function<double()> u01_;
 };
 
-/// A drawn truth of the fin bench's check (diagnose/synthetic.h FinTrialDraw): one or more copies
+/// A drawn truth of the fin bench's check (synth/synthetic.h FinTrialDraw): one or more copies
 /// of the effect simulated together (a second form the library lacks, e.g. two equal low-pass
 /// poles), the drawn magnitude and the form's name.
 struct FinTruth {
@@ -187,13 +187,13 @@ class EffectDef {
   virtual int kernel() const { return 0; }
 
   // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
-  /// The parameters of a records check's truth (diagnose/synthetic.cc), on the synthetic stack's
+  /// The parameters of a records check's truth (synth/synthetic.cc), on the synthetic stack's
   /// scale (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect
   /// whose parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
   virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const {
     return {};
   }
-  /// A fin-bench check's truth (diagnose/synthetic.cc) in the fin bench's units; `other_form`
+  /// A fin-bench check's truth (synth/synthetic.cc) in the fin bench's units; `other_form`
   /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer
   /// it.
   virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }
@@ -228,7 +228,7 @@ inline const char* EffectName(EffectKind kind) { return kind.name(); }
 
 /// The exact first-order-hold step of a first-order low-pass τ ẋ = v − x over a sample of dt (v
 /// linear in between): x ← a x + (1 − a) v_prev + (v − v_prev) c. One arithmetic for the drive
-/// low-passes, the creep spectrum's relaxations and their joint solve (records/spectrum_solve).
+/// low-passes, the creep spectrum's relaxations and their joint solve (records/spectrum_solve.h).
 struct LowpassStep {
   double a, c;
 };

@@ -216,8 +216,8 @@ class Family {
   /// The memory it starts with at rest (FamilyOptions::initial_state for the families that take
   /// it; centred for the others).
   virtual model::InitialState initial_state() const { return model::InitialState::kCentred; }
-  /// The truth of `diagnose-check --records-family` (diagnose/synthetic.cc): a typical set on the
-  /// synthetic stack's scale (records::SyntheticStackScale), or the weights of a linear family;
+  /// The truth of `diagnose-check --records-family` (synth/synthetic.cc): a typical set on the
+  /// synthetic stack's scale (synth::SyntheticStackScale), or the weights of a linear family;
   /// each value is scaled by a factor drawn in [0.8, 1.25] per trial. Empty: the family has none.
   virtual std::vector<double> CheckNominal() const { return {}; }
 };

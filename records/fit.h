@@ -328,7 +328,7 @@ struct FitOptions {
   std::vector<double> polish_from;
   /// Physical points (every parameter) seeding the global search's first population, after
   /// search.seeds; and physical starts of the polish besides the search's best, before
-  /// extra_starts (the fin bench's seeds and starts of a candidate, records::FinBenchOptions).
+  /// extra_starts (the fin bench's seeds and starts of a candidate, diagnose::FinBenchOptions).
   std::vector<std::vector<double>> seed_points, start_points;
   /// A model with a beam effect (bimorph-fin's bench form: each run on CVODE) is refined from
   /// polish_from (needed), not searched: one polish from each start, the last effect's magnitude

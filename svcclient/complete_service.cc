@@ -2,7 +2,7 @@
 
 #include "complete/job_kind.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 using namespace complete;
 
 records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOptions& options,
@@ -35,4 +35,4 @@ EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options,
   };
 }
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

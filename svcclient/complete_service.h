@@ -11,7 +11,7 @@
 #include "records/fit.h"
 #include "svcclient/service_evaluator.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 
 /// One session per global search of `piezoid fit` / `diagnose --records` (family RECORDS) and one
 /// per Levenberg–Marquardt polish (RecordEvaluation::kResiduals: the spec's `residuals`, a Jacobian
@@ -26,4 +26,4 @@ records::RecordEvaluatorFactory RecordsServiceFactory(const ServiceEvaluatorOpti
 complete::EvaluatorFactory CommitteeServiceFactory(const ServiceEvaluatorOptions& options,
                                                    const records::FamilyOptions& family);
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

@@ -7,7 +7,7 @@
 #include "hgann/hgann_job.h"
 #include "service/wire_codec.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 namespace fs = std::filesystem;
 
 Status ResolveCaseSetDir(job::JobSpec* spec, const fs::path& base_dir,
@@ -65,4 +65,4 @@ Status LoadJobSpecFile(const fs::path& file, job::JobSpec* spec,
   return s;
 }
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

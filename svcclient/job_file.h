@@ -14,7 +14,7 @@
 #include "job/job_spec.h"
 #include "model/status.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 
 /// Parses `json` (a job spec; `base_dir` resolves a relative case_set_dir) and embeds the case set
 /// it names. kInvalidArgument with every field violation in *violations when the spec is bad.
@@ -31,4 +31,4 @@ Status LoadJobSpecFile(const std::filesystem::path& file, job::JobSpec* spec,
 Status ResolveCaseSetDir(job::JobSpec* spec, const std::filesystem::path& base_dir,
                          std::vector<job::FieldViolation>* violations);
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

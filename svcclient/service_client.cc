@@ -7,7 +7,7 @@
 
 #include "service/wire_codec.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 
 using service::ClientReplyMsg;
 using service::ClientRequestMsg;
@@ -359,4 +359,4 @@ Status ServiceClient::WaitFinal(const std::string& job_id, std::chrono::millisec
   return {StatusCode::kUnavailable, "job " + job_id + " not final in time"};
 }
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

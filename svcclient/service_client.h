@@ -2,8 +2,8 @@
 // ZeroMQ (a DEALER to the master's client endpoint), with per-request timeouts and Lazy-Pirate
 // retries (a fresh socket per retry; submissions are idempotent through a client token).
 //
-//   pz::client::ServiceClient c({.endpoint = "tcp://127.0.0.1:5556"});
-//   pz::client::SubmitResult r;
+//   pz::svcclient::ServiceClient c({.endpoint = "tcp://127.0.0.1:5556"});
+//   pz::svcclient::SubmitResult r;
 //   std::vector<pz::job::FieldViolation> bad;
 //   pz::Status s = c.SubmitJson(json_text, &r, &bad);   // bad: field-named errors
 //   c.Watch(r.job_id, [](const pz::service::JobEvent& e) { ...; return true; }, 10min);
@@ -21,7 +21,7 @@
 #include "service/service_types.h"
 #include "model/status.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 
 struct ServiceClientOptions {
   std::string endpoint = "tcp://127.0.0.1:5556";  ///< the master's client endpoint
@@ -112,4 +112,4 @@ class ServiceClient {
 /// pz::Status for a reply's wire code (transient codes → kUnavailable).
 Status StatusFromWire(service::WireCode code, const std::string& error);
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <thread>
 
-namespace pz::client {
+namespace pz::svcclient {
 
 ServiceEvaluator::ServiceEvaluator(ServiceEvaluatorOptions options, job::JobSpec spec,
                                    const std::string& owner)
@@ -80,4 +80,4 @@ void ServiceEvaluator::Evaluate(const opt::EvalBatch& batch, std::span<opt::Fitn
   evaluations_ += static_cast<int64_t>(out.size());
 }
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

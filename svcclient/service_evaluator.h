@@ -2,8 +2,9 @@
 // differential evolution and Levenberg–Marquardt, say) evaluates its batches on the workers of a
 // piezoid-master through an evaluation session (JobSpec.external, master/session.h).
 //
-//   pz::client::ServiceEvaluator ev({.endpoint = "tcp://host:5556"}, spec);  // opens the session
-//   ev.Evaluate({generation, genomes, indices}, results);   // same results as an InlineEvaluator
+//   pz::svcclient::ServiceEvaluator ev({.endpoint = "tcp://host:5556"}, spec);  // opens the
+//   session ev.Evaluate({generation, genomes, indices}, results);   // same results as an
+//   InlineEvaluator
 //   // the destructor closes the session (it succeeds)
 //
 // Results are bit-identical to an InlineEvaluator of the job kind's fitness for the same genomes
@@ -20,7 +21,7 @@
 #include "opt/evaluator.h"
 #include "job/job_spec.h"
 
-namespace pz::client {
+namespace pz::svcclient {
 
 /// A failure of the service during an evaluation (master unreachable for longer than the retries,
 /// session cancelled or failed): the batch has no results.
@@ -76,4 +77,4 @@ class ServiceEvaluator final : public opt::BatchEvaluator {
   bool closed_ = false;
 };
 
-}  // namespace pz::client
+}  // namespace pz::svcclient

@@ -1,4 +1,4 @@
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,9 +7,9 @@
 
 #include "model/status.h"
 #include "opt/random.h"
-#include "diagnose/synthetic.h"
+#include "synth/synthetic.h"
 
-namespace pz::records {
+namespace pz::synth {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -541,4 +541,4 @@ RealLikeSet GenerateRealLikeSet(const RealLikeOptions& o) {
   return out;
 }
 
-}  // namespace pz::records
+}  // namespace pz::synth

@@ -36,7 +36,7 @@
 
 #include "io/records.h"
 
-namespace pz::records {
+namespace pz::synth {
 
 /// The true plant of a real-like stack. Defaults: a 150 V stack with ≈ 45 µm stroke.
 struct RealLikeStack {
@@ -181,4 +181,4 @@ io::Record SynthesizeRealLikeRecord(const RealLikePlant& plant, const RealLikeSe
 /// The drive as a function of time (rest then waveform); throws InputError on a bad drive.
 std::function<double(double)> DriveFunction(const RealLikeDrive& drive);
 
-}  // namespace pz::records
+}  // namespace pz::synth

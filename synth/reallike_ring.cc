@@ -1,14 +1,14 @@
-#include "diagnose/reallike_ring.h"
+#include "synth/reallike_ring.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include "diagnose/synthetic.h"
 #include "model/status.h"
 #include "opt/random.h"
+#include "synth/synthetic.h"
 
-namespace pz::records {
+namespace pz::synth {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -188,4 +188,4 @@ RingingSet GenerateRingingSet(const RingingOptions& o) {
   return out;
 }
 
-}  // namespace pz::records
+}  // namespace pz::synth

@@ -1,5 +1,5 @@
 // A second real-like generator (issue 45): a fast stack in a flexure stage, recorded at 10 kHz the
-// way the issue's records were, with truths the first generator (diagnose/reallike.h) does not
+// way the issue's records were, with truths the first generator (synth/reallike.h) does not
 // have — for checking the noise floor and the model choice only, never for tuning them:
 //
 //  - a mechanical mode after the stack (a second-order low-pass of unit gain, f_n and ζ): every
@@ -23,10 +23,10 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/reallike.h"
 #include "io/records.h"
+#include "synth/reallike.h"
 
-namespace pz::records {
+namespace pz::synth {
 
 struct RingingOptions {
   RealLikeStack stack;    ///< defaults set by RingingDefaults: ±90 V, 35 µm
@@ -62,4 +62,4 @@ struct RingingSet {
 /// Generates the set (deterministic in the seed). Throws InputError on bad options.
 RingingSet GenerateRingingSet(const RingingOptions& options);
 
-}  // namespace pz::records
+}  // namespace pz::synth

@@ -1,4 +1,4 @@
-#include "diagnose/relay_preisach_check.h"
+#include "synth/relay_preisach_check.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "model/status.h"
 
-namespace pz::records {
+namespace pz::synth {
 namespace {
 
 std::string Bad(const std::string& field, double value, const std::string& rule) {
@@ -217,4 +217,4 @@ RelayPreisachCheckSet GenerateRelayPreisachCheck(const RelayPreisachCheckOptions
   return s;
 }
 
-}  // namespace pz::records
+}  // namespace pz::synth

@@ -1,6 +1,6 @@
 // An independent check plant for the `preisach` family (issue 37), never tuned on: a classical
 // Preisach model of discrete relays, written here from its definition and sharing nothing with
-// model/preisach.h (no plays, no cells) or diagnose/reallike.h (no Everett table, no log creep).
+// model/preisach.h (no plays, no cells) or synth/reallike.h (no Everett table, no log creep).
 //
 //  - Drive nonlinearity: the relays and the reversible part see u_q = u + q (u − u_lo)² / (u_hi −
 //  u_lo)
@@ -31,7 +31,7 @@
 
 #include "io/records.h"
 
-namespace pz::records {
+namespace pz::synth {
 
 struct RelayPreisachCheckOptions {
   int relay_levels =
@@ -69,4 +69,4 @@ std::vector<double> RelayPreisachCheckResponse(const RelayPreisachCheckOptions& 
 /// Generates the set (deterministic in the seed). Throws InputError on bad options.
 RelayPreisachCheckSet GenerateRelayPreisachCheck(const RelayPreisachCheckOptions& o);
 
-}  // namespace pz::records
+}  // namespace pz::synth

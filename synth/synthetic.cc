@@ -1,4 +1,4 @@
-#include "diagnose/synthetic.h"
+#include "synth/synthetic.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 #include "model/saturation.h"
 #include "records/excitation.h"
 
-namespace pz::records {
+namespace pz::synth {
 
 double NormalDraw(opt::Rng& rng, NormalForm form) {
   const double u = rng.Uniform01(), v = rng.Uniform01();
@@ -113,8 +113,8 @@ std::vector<double> MakeDrive(const DriveShape& s) {
   return u;
 }
 
-DataScale SyntheticStackScale() {
-  DataScale s;
+records::DataScale SyntheticStackScale() {
+  records::DataScale s;
   s.u_min = -100;
   s.u_max = 100;
   s.u_half = 100;
@@ -126,7 +126,7 @@ DataScale SyntheticStackScale() {
   return s;
 }
 
-io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params,
+io::Record SynthesizeRecord(const records::RecordModel& truth, std::span<const double> params,
                             std::span<const double> weights, const DriveShape& shape,
                             const Measurement& m, const std::string& name, model::CaseRole role,
                             double t0_s, double t1_s) {
@@ -154,7 +154,7 @@ io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> pa
 
 // ---- the trials of a calibration check -------------------------------------------------------
 
-EffectKind DrawEffectKind(opt::Rng& rng, std::span<const EffectKind> kinds) {
+records::EffectKind DrawEffectKind(opt::Rng& rng, std::span<const records::EffectKind> kinds) {
   if (kinds.empty()) throw InputError("synthetic trial: no effect to draw from");
   return kinds[rng.UniformBelow(kinds.size())];
 }
@@ -175,7 +175,7 @@ constexpr CaseDef kCases[9] = {{1, 375, 0.25, true},  {2, 375, 0.5, false}, {3, 
                                {4, 500, 0.25, false}, {5, 500, 0.5, true},  {6, 500, 1.0, true},
                                {7, 750, 0.25, true},  {8, 750, 0.5, false}, {9, 750, 1.0, false}};
 
-std::string NoTruth(const char* check, EffectKind e, const char* draw) {
+std::string NoTruth(const char* check, records::EffectKind e, const char* draw) {
   return std::string(check) + ": effect '" + e.name() + "' draws no truth (its " + draw +
          " in model/effect_library.cc)";
 }
@@ -235,7 +235,7 @@ io::CaseSet SimulateBench(const model::BimorphPlant& plant, const model::Bimorph
 namespace {
 
 SyntheticTrial DrawFinTrial(const model::BimorphPlant& plant, uint64_t seed,
-                            const FinTrialOptions& o, std::span<const EffectKind> kinds) {
+                            const FinTrialOptions& o, std::span<const model::EffectKind> kinds) {
   opt::Rng rng(seed);
   SyntheticTrial t;
   t.seed = seed;
@@ -284,17 +284,17 @@ SyntheticTrial DrawFinTrial(const model::BimorphPlant& plant, uint64_t seed,
 
 TrialDraw FinTrialDraw(const FinTrialOptions& o) {
   if (const std::string e = o.Validate(); !e.empty()) throw InputError("synthetic bench: " + e);
-  std::vector<EffectKind> kinds = o.kinds;
+  std::vector<records::EffectKind> kinds = o.kinds;
   if (kinds.empty())
     for (const auto& e : model::EffectLibrary()) kinds.push_back(e.kind);
   auto plant = std::make_shared<const model::BimorphPlant>();
   return [plant, o, kinds](uint64_t seed) { return DrawFinTrial(*plant, seed, o, kinds); };
 }
 
-std::vector<EffectKind> RecordsTrialEffects(const Family& family) {
-  std::vector<EffectKind> kinds;
-  for (EffectKind k : RecordEffects())
-    if (!family.Excludes(k.name()) && !NeedsRateCoverage(k)) kinds.push_back(k);
+std::vector<records::EffectKind> RecordsTrialEffects(const records::Family& family) {
+  std::vector<records::EffectKind> kinds;
+  for (records::EffectKind k : records::RecordEffects())
+    if (!family.Excludes(k.name()) && !records::NeedsRateCoverage(k)) kinds.push_back(k);
   return kinds;
 }
 
@@ -302,10 +302,10 @@ namespace {
 
 struct RecordsForm {
   RecordsTrialOptions options;
-  DataScale scale;
-  std::shared_ptr<const Family> family;
+  records::DataScale scale;
+  std::shared_ptr<const records::Family> family;
   std::vector<double> nominal;
-  std::vector<EffectKind> kinds;
+  std::vector<records::EffectKind> kinds;
 };
 
 /// The truth's parameters (the family's, then the effect's; a linear family's in `weights`) and
@@ -336,7 +336,7 @@ SyntheticTrial DrawRecordsTrial(const RecordsForm& f, uint64_t seed) {
   if (t.truth.none())
     desc << "none";
   else
-    desc << EffectName(t.truth) << " " << p.back();
+    desc << records::EffectName(t.truth) << " " << p.back();
   DriveShape d;
   d.amplitude = 100;
   d.frequency_hz = 1;
@@ -350,9 +350,9 @@ SyntheticTrial DrawRecordsTrial(const RecordsForm& f, uint64_t seed) {
   d.waveform = w < 0.4 ? Waveform::kSine : w < 0.7 ? Waveform::kMultisine : Waveform::kTriangle;
   desc << ", " << WaveformName(d.waveform);
   t.description = desc.str();
-  std::vector<EffectKind> effects;
+  std::vector<records::EffectKind> effects;
   if (!t.truth.none()) effects.push_back(t.truth);
-  const RecordModel truth(f.family, effects, f.scale);
+  const records::RecordModel truth(f.family, effects, f.scale);
   io::Record r =
       SynthesizeRecord(truth, p, weights, d, {UniformDraw(rng, -2, 2), 0.02, 0.005, seed}, "rec",
                        model::CaseRole::kTrain);
@@ -370,19 +370,26 @@ SyntheticTrial DrawRecordsTrial(const RecordsForm& f, uint64_t seed) {
 
 }  // namespace
 
+std::vector<std::string> RecordsTrialFamilies() {
+  std::vector<std::string> out;
+  for (const std::string& name : records::FamilyNames())
+    if (!records::MakeFamily(name, SyntheticStackScale())->CheckNominal().empty())
+      out.push_back(name);
+  return out;
+}
+
 TrialDraw RecordsTrialDraw(const RecordsTrialOptions& o) {
   if (!(o.none_probability >= 0 && o.none_probability <= 1))
     throw InputError(FieldError("none_probability", o.none_probability, "must be in [0, 1]"));
   auto f = std::make_shared<RecordsForm>();
   f->options = o;
   f->scale = SyntheticStackScale();
-  f->family = MakeFamily(o.family, f->scale);
+  f->family = records::MakeFamily(o.family, f->scale);
   f->nominal = f->family->CheckNominal();
   if (f->nominal.empty()) {
     std::string with;
-    for (const std::string& name : FamilyNames())
-      if (!MakeFamily(name, f->scale)->CheckNominal().empty())
-        with += (with.empty() ? "" : ", ") + name;
+    for (const std::string& name : RecordsTrialFamilies())
+      with += (with.empty() ? "" : ", ") + name;
     throw InputError("diagnose-check --records-family: '" + o.family +
                      "' has no nominal parameter set for synthetic records (Family::CheckNominal; "
                      "families with one: " +
@@ -417,8 +424,9 @@ struct Comb {
 /// One record of the mode bench: 50 ms at the range's middle, a step to the rest level at the
 /// bottom, the rest, the drive (simulated from the middle so that the rest rings, then cut after
 /// the step).
-io::Record ModeRecord(const RecordModel& truth, const ModeBench& b, const ModeBenchOptions& o,
-                      bool chatter, double seconds, const std::string& name, uint64_t seed) {
+io::Record ModeRecord(const records::RecordModel& truth, const ModeBench& b,
+                      const ModeBenchOptions& o, bool chatter, double seconds,
+                      const std::string& name, uint64_t seed) {
   opt::Rng rng(seed * 6151 + 29);
   const Comb comb(o.band_lo_hz, o.band_hi_hz, o.band_rms_v, rng);
   const double dt = 1 / o.fs_hz, bottom = -o.sine_v;
@@ -469,15 +477,15 @@ io::Record ModeRecord(const RecordModel& truth, const ModeBench& b, const ModeBe
 ModeBench MakeModeBench(const ModeBenchOptions& o) {
   if (!(o.f_n_hz > 0 && o.f_n_hz < 0.45 * o.fs_hz))
     throw InputError(FieldError("f_n_hz", o.f_n_hz, "must be in (0, 0.45 fs)"));
-  const DataScale scale = SyntheticStackScale();
-  const std::shared_ptr<const Family> family = MakeFamily(o.family, scale);
+  const records::DataScale scale = SyntheticStackScale();
+  const std::shared_ptr<const records::Family> family = records::MakeFamily(o.family, scale);
   ModeBench b;
   b.params = family->CheckNominal();
   if (b.params.empty())
     throw InputError("mode bench: family '" + o.family + "' has no nominal parameter set");
   if (family->linear()) b.weights = std::exchange(b.params, {});
   b.params.insert(b.params.end(), {o.share, o.f_n_hz, o.zeta});
-  const RecordModel truth(family, {EffectKind::Named("resonance")}, scale);
+  const records::RecordModel truth(family, {records::EffectKind::Named("resonance")}, scale);
   std::ostringstream d;
   d << o.family << " + resonance (f_n " << o.f_n_hz << " Hz, zeta " << o.zeta << ", share "
     << o.share << "), " << o.fs_hz << " Hz, withheld " << (o.chatter_v > 0 ? "chatter" : "noise");
@@ -490,4 +498,4 @@ ModeBench MakeModeBench(const ModeBenchOptions& o) {
   return b;
 }
 
-}  // namespace pz::records
+}  // namespace pz::synth

@@ -36,7 +36,7 @@
 #include "opt/random.h"
 #include "records/model.h"
 
-namespace pz::records {
+namespace pz::synth {
 
 enum class Waveform : int { kSine, kMultisine, kTriangle, kSquare, kSweep };
 const char* WaveformName(Waveform w);
@@ -60,7 +60,7 @@ std::vector<double> MakeDrive(const DriveShape& shape);
 
 /// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
 /// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
-DataScale SyntheticStackScale();
+records::DataScale SyntheticStackScale();
 
 /// Which uniform feeds Box–Muller's logarithm: 1 − u (never 0), or u as drawn (kept above 1e-300).
 /// The same distribution from other draws; the fin bench's trials are pinned on kDrawn.
@@ -93,7 +93,7 @@ void Measure(std::span<double> y, const Measurement& measurement, opt::Rng& rng)
 /// A record of the truth model (polarity +1) on the drive: y = round_q(ŷ + offset + noise), read by
 /// Measure with the generator of measurement.seed.
 /// Window: the whole excitation (or [t0, t1] when t1 > t0); offset mode fit.
-io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> params,
+io::Record SynthesizeRecord(const records::RecordModel& truth, std::span<const double> params,
                             std::span<const double> weights, const DriveShape& shape,
                             const Measurement& measurement, const std::string& name,
                             model::CaseRole role, double t0_s = 0, double t1_s = 0);
@@ -103,7 +103,7 @@ io::Record SynthesizeRecord(const RecordModel& truth, std::span<const double> pa
 /// One drawn trial: what it holds (never shown to the diagnosis) and its records.
 struct SyntheticTrial {
   uint64_t seed = 0;
-  EffectKind truth;                    ///< the effect drawn (none: a clean trial)
+  records::EffectKind truth;           ///< the effect drawn (none: a clean trial)
   std::string form;                    ///< its form where it has several ("first-order", …)
   std::vector<model::Effect> effects;  ///< the fin bench: as simulated (library building blocks)
   double magnitude = 0;                ///< fin: the drawn magnitude (physical units); records:
@@ -117,7 +117,7 @@ struct SyntheticTrial {
 using TrialDraw = std::function<SyntheticTrial(uint64_t seed)>;
 
 /// The effect of a trial: one of `kinds`, uniformly (InputError for none to draw from).
-EffectKind DrawEffectKind(opt::Rng& rng, std::span<const EffectKind> kinds);
+records::EffectKind DrawEffectKind(opt::Rng& rng, std::span<const records::EffectKind> kinds);
 /// The library's truth draws (model::TruthDraw) on the trial's generator.
 model::TruthDraw TruthDrawOf(opt::Rng& rng);
 
@@ -156,7 +156,11 @@ struct RecordsTrialOptions {
 /// The effects a records trial of `family` draws: every records effect the family does not hold,
 /// but those that only records at several rates identify (records/excitation.h NeedsRateCoverage:
 /// the trials' sine and triangle drives run at one rate).
-std::vector<EffectKind> RecordsTrialEffects(const Family& family);
+std::vector<records::EffectKind> RecordsTrialEffects(const records::Family& family);
+
+/// The families a records trial can draw: those with a nominal set (Family::CheckNominal), in the
+/// registry's order.
+std::vector<std::string> RecordsTrialFamilies();
 
 /// The records trials of a family: one record (rest, then a drive of 6 s at 500 Hz), its first 60 %
 /// after 0.2 s of excitation the training window, the rest withheld. Throws InputError on a family
@@ -191,4 +195,4 @@ struct ModeBench {
 /// Throws InputError for a family without a nominal set or a mode outside (0, 0.45 fs).
 ModeBench MakeModeBench(const ModeBenchOptions& options);
 
-}  // namespace pz::records
+}  // namespace pz::synth

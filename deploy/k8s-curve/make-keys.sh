@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Makes the key pairs of deploy/k8s-curve (master, worker, client) in deploy/k8s-curve/keys/ with
+# Makes the key pairs of deploy/k8s-curve (master, worker, client) in a keys folder beside this script with
 # `piezoid keygen` (PIEZOID: the piezoid program, default: from PATH). Existing keys are kept.
 set -euo pipefail
 cd "$(dirname "$0")"

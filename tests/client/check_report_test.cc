@@ -23,15 +23,15 @@ namespace {
 using model::EffectKind;
 
 // The fin bench's form: the fin library's effects.
-records::CheckSummary FinSummary() {
+diagnose::CheckSummary FinSummary() {
   std::vector<EffectKind> effects;
   for (const auto& e : model::EffectLibrary()) effects.push_back(e.kind);
-  return records::CheckSummary({}, effects);
+  return diagnose::CheckSummary({}, effects);
 }
 
 TEST(CheckReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
-  records::CheckSummary s = FinSummary();
-  records::CheckTrial t;
+  diagnose::CheckSummary s = FinSummary();
+  diagnose::CheckTrial t;
   t.seed = 1000;
   t.verdict_kind = "none";
   t.description = "seed 1000: none";
@@ -59,7 +59,7 @@ TEST(CheckReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
 }
 
 TEST(CheckReport, TrialLinesAndTheSummaryReadAsTheFormSays) {
-  records::CheckTrial t;
+  diagnose::CheckTrial t;
   t.truth = EffectKind::Named("delay");
   t.description = "delay 0.01, sine";
   t.verdict_kind = "effect";
@@ -70,14 +70,14 @@ TEST(CheckReport, TrialLinesAndTheSummaryReadAsTheFormSays) {
   t.closed = 0.87;
   t.wall_time_s = 12.4;
   t.correct = true;
-  const records::CheckText bench,
+  const diagnose::CheckText bench,
       rec{.noun = "records", .description_width = 42, .closed_per_trial = false};
   EXPECT_EQ(CheckTrialLine(rec, t, 1),
             "trial   2 right  delay 0.01, sine                           -> effect      delay  "
             "          ratio   4.21 conf 0.99");
   const std::string line = CheckTrialLine(bench, t, 1);
   EXPECT_EQ(line.substr(line.size() - 21), " closed    87% (12 s)");
-  records::CheckSummary s({.noun = "records"}, {EffectKind::Named("delay")});
+  diagnose::CheckSummary s({.noun = "records"}, {EffectKind::Named("delay")});
   s.Tally(t);
   std::ostringstream out;
   PrintCheckSummary(out, s);

@@ -54,7 +54,7 @@ records::FitResult Fit(std::vector<model::EffectKind> effects, int64_t evaluatio
 TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   diagnose::BenchDiagnosis d;
   d.bench = "bench \"a\"\nline 2";
-  records::RecordDiagnosis& r = d.records;
+  diagnose::RecordDiagnosis& r = d.records;
   r.verdict_kind = "none";
   r.verdict = "No significant gap.";
   d.quantum_deg = 360.0 / 8192;
@@ -62,7 +62,7 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   r.closed_total = NAN;  // no excess: undefined
   r.base = Fit({}, 123456789);
   r.final_fit = std::make_shared<records::FitResult>(r.base);
-  records::RecordGap g;
+  diagnose::RecordGap g;
   g.rms_before = 0.0798;
   r.gaps.push_back(g);
   d.cases.emplace_back();
@@ -123,7 +123,7 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
                           lowpass = model::EffectKind::Named("driver-lowpass");
   diagnose::BenchDiagnosis d;
   d.bench = "bench";
-  records::RecordDiagnosis& r = d.records;
+  diagnose::RecordDiagnosis& r = d.records;
   r.verdict_kind = "inseparable";
   r.named_effects = {delay};
   r.confidence = 0.6;
@@ -137,7 +137,7 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
   r.runner_up = 1;
   r.z_runner_up = 0.75;
   r.final_fit = std::make_shared<records::FitResult>(r.candidates[0].fit);
-  r.second = records::RecordRound{};  // no runner-up: none written
+  r.second = diagnose::RecordRound{};  // no runner-up: none written
   std::ostringstream out;
   WriteDiagnosisJson(out, d, diagnose::DiagnoseOptions{});
   proto::Diagnosis back;

@@ -1,13 +1,13 @@
 // Property test of the records commands (issue 37): random record sets that nobody here made, run
 // through `piezoid fit`, `export FIT.json`, `compensate --replay` and `--reference` (in-process,
 // the commands' own code: manifest → reader → fit → checks → fit.json → export / compensate) and
-// the records diagnosis (`diagnose --records --quick` on every fourth set; records::DiagnoseRecords
-// with a tiny search and the report writers of `diagnose --records` on the others), for every
-// family of records::FamilyNames() with random effects of records::EffectNames(). Each command
-// must give a result (no NaN or infinity in what it prints or writes; diagnosis.json reads back
-// through its codec) or a pz::InputError with a message: never a signal, another exception or a
-// hang (a watchdog aborts a set that runs longer than PIEZOID_PROPERTY_CASE_SECONDS, default 120,
-// naming it).
+// the records diagnosis (`diagnose --records --quick` on every fourth set;
+// diagnose::DiagnoseRecords with a tiny search and the report writers of `diagnose --records` on
+// the others), for every family of records::FamilyNames() with random effects of
+// records::EffectNames(). Each command must give a result (no NaN or infinity in what it prints or
+// writes; diagnosis.json reads back through its codec) or a pz::InputError with a message: never a
+// signal, another exception or a hang (a watchdog aborts a set that runs longer than
+// PIEZOID_PROPERTY_CASE_SECONDS, default 120, naming it).
 //
 // The sets draw rests before, inside and after the scored windows; windows at the record's edges,
 // one sample long, at the 20-sample minimum (shorter than a delay), past the record's end;
@@ -512,7 +512,7 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
   }
   try {
     const io::RecordSet set = LoadRecordSetWithWindows(set_dir.string(), {}, {}, {}, s.settle_s);
-    records::RecordDiagnoseOptions o;
+    diagnose::RecordDiagnoseOptions o;
     o.family = s.family;
     o.candidates = {records::ParseEffect(candidate)};
     o.fit.threads = 1;
@@ -522,7 +522,7 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     o.fit.search.pso.iterations = 4;
     o.fit.lm.max_iterations = 4;
     o.fit.family_options.pi_operators = 4;
-    const records::RecordDiagnosis dg = records::DiagnoseRecords(set, o);
+    const diagnose::RecordDiagnosis dg = diagnose::DiagnoseRecords(set, o);
     const records::TrainingDriveProposal proposal =
         records::ProposeTrainingDrive(set, dg.excitation);
     std::ostringstream md, json;

@@ -15,14 +15,14 @@
 
 #include "client/records_diagnose.h"
 #include "diagnose/diagnose.h"
-#include "diagnose/synthetic.h"
 #include "records/excitation.h"
+#include "synth/synthetic.h"
 
 namespace pz::client {
 namespace {
 
-records::RecordDiagnoseOptions Quick() {
-  records::RecordDiagnoseOptions o;
+diagnose::RecordDiagnoseOptions Quick() {
+  diagnose::RecordDiagnoseOptions o;
   o.fit.uncertainty = false;
   o.fit.search.repetitions = 1;
   o.fit.search.pso.particles = 16;
@@ -32,7 +32,7 @@ records::RecordDiagnoseOptions Quick() {
   return o;
 }
 
-std::string Report(const io::RecordSet& set, const records::RecordDiagnosis& d) {
+std::string Report(const io::RecordSet& set, const diagnose::RecordDiagnosis& d) {
   std::ostringstream os;
   WriteRecordsDiagnosisMarkdown(os, set, d, records::ProposeTrainingDrive(set, d.excitation), 0,
                                 nullptr);
@@ -40,8 +40,8 @@ std::string Report(const io::RecordSet& set, const records::RecordDiagnosis& d) 
 }
 
 TEST(ResidualSpectrumReport, AModeBenchShowsItsBandAndTheFittedMode) {
-  const records::ModeBench b = records::MakeModeBench({.train_s = 0.8, .withheld_s = 0.5});
-  const records::RecordDiagnosis d = records::DiagnoseRecords(b.set, Quick());
+  const synth::ModeBench b = synth::MakeModeBench({.train_s = 0.8, .withheld_s = 0.5});
+  const diagnose::RecordDiagnosis d = diagnose::DiagnoseRecords(b.set, Quick());
   ASSERT_GE(d.named, 0) << d.verdict;
   const std::string md = Report(b.set, d);
   EXPECT_NE(md.find("## Residual spectrum"), std::string::npos) << md;
@@ -66,9 +66,8 @@ TEST(ResidualSpectrumReport, AModeBenchShowsItsBandAndTheFittedMode) {
 }
 
 TEST(ResidualSpectrumReport, NoBandNoSection) {
-  const records::ModeBench b =
-      records::MakeModeBench({.share = 0, .train_s = 0.8, .withheld_s = 0.5});
-  const records::RecordDiagnosis d = records::DiagnoseRecords(b.set, Quick());
+  const synth::ModeBench b = synth::MakeModeBench({.share = 0, .train_s = 0.8, .withheld_s = 0.5});
+  const diagnose::RecordDiagnosis d = diagnose::DiagnoseRecords(b.set, Quick());
   for (const auto& c : d.candidates)
     EXPECT_NE(c.kind, records::EffectKind::Named("resonance")) << "tried without a band";
   EXPECT_EQ(Report(b.set, d).find("## Residual spectrum"), std::string::npos);

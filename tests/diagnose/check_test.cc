@@ -1,5 +1,5 @@
 // The calibration check of the diagnosis on data whose effect is withheld from it (issues 14, 38;
-// diagnose/check.h over the one draw of diagnose/synthetic.h), in both forms:
+// diagnose/check.h over the one draw of synth/synthetic.h), in both forms:
 //  - fin benches: deterministic, read like the encoder, the paper's split; a withheld delay is
 //    named and its gap closed, a clean bench gets "no significant gap"; the check tallies its
 //    confusion matrix; on the bundled driver-lowpass bench the right effect is named with a time
@@ -54,7 +54,7 @@ io::RecordSet Bench(const std::vector<model::Effect>& effects, uint64_t seed) {
       sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   opt::Rng rng(seed);
   return io::RecordsFromCaseSet(
-      SimulateBench(plant, model::BimorphParams{}, effects, sat, {}, rng));
+      synth::SimulateBench(plant, model::BimorphParams{}, effects, sat, {}, rng));
 }
 
 void ExpectOnTheEncoderGrid(const io::RecordSet& set, double quantum) {
@@ -66,9 +66,9 @@ void ExpectOnTheEncoderGrid(const io::RecordSet& set, double quantum) {
 }
 
 TEST(SyntheticTrial, BenchesAreDeterministicAndReadThroughTheEncoder) {
-  FinTrialOptions so;
-  const TrialDraw draw = FinTrialDraw(so);
-  const SyntheticTrial a = draw(11), b = FinTrialDraw(so)(11);
+  synth::FinTrialOptions so;
+  const synth::TrialDraw draw = FinTrialDraw(so);
+  const synth::SyntheticTrial a = draw(11), b = FinTrialDraw(so)(11);
   ASSERT_EQ(a.set.records.size(), 9u);
   int training = 0;
   for (size_t c = 0; c < 9; ++c) {
@@ -84,7 +84,7 @@ TEST(SyntheticTrial, BenchesAreDeterministicAndReadThroughTheEncoder) {
   EXPECT_EQ(a.description, b.description);
   PZ_EXPECT_HAS(a.description, "seed 11: ");
   so.none_probability = 1.0;
-  const SyntheticTrial clean = FinTrialDraw(so)(12);
+  const synth::SyntheticTrial clean = FinTrialDraw(so)(12);
   EXPECT_EQ(clean.truth, EffectKind());
   EXPECT_TRUE(clean.effects.empty());
 }
@@ -135,15 +135,15 @@ std::string HexList(const std::vector<double>& v) {
 }
 
 // The fin benches are pinned: bit for bit the samples of the former draw (MakeSyntheticTrial of
-// diagnose/fin_synthetic.cc at 2270e65) for these seeds — a beam effect (CVODE), a clean bench, a
-// drive effect — on the pins' arithmetic (tests/testing/pinned.h). On another, a reading is the
-// simulation (moved by ≈ 1e-13 deg by another libm variant or kernel copy) plus noise, rounded to
-// the encoder's quantum: it changes only where it lay within 1e-13 of a rounding edge, by one
-// quantum (0.0059 deg), so each record's sum is held to 4 quanta.
+// `git show 2270e65:diagnose/fin_synthetic.cc`) for these seeds — a beam effect (CVODE), a clean
+// bench, a drive effect — on the pins' arithmetic (tests/testing/pinned.h). On another, a reading
+// is the simulation (moved by ≈ 1e-13 deg by another libm variant or kernel copy) plus noise,
+// rounded to the encoder's quantum: it changes only where it lay within 1e-13 of a rounding edge,
+// by one quantum (0.0059 deg), so each record's sum is held to 4 quanta.
 TEST(SyntheticTrial, FinBenchesAreThoseOfTheFormerDraw) {
   const pz::testing::Pins pins(pz::testing::kPinnedArithmetic);
-  const TrialDraw draw = FinTrialDraw({});
-  const double quantum = FinTrialOptions{}.quantum_deg;
+  const synth::TrialDraw draw = synth::FinTrialDraw({});
+  const double quantum = synth::FinTrialOptions{}.quantum_deg;
   struct Pinned {
     uint64_t seed, fingerprint;
     std::vector<double> sums;
@@ -152,7 +152,7 @@ TEST(SyntheticTrial, FinBenchesAreThoseOfTheFormerDraw) {
                            {7, 0x86f5e88ca1b398edull, kSums7},
                            {11, 0xc9eebc61c2a16d5full, kSums11}};
   for (const Pinned& p : pinned) {
-    const SyntheticTrial t = draw(p.seed);
+    const synth::SyntheticTrial t = draw(p.seed);
     if (pins.exact()) EXPECT_EQ(Fingerprint(t.set), p.fingerprint) << t.description;
     EXPECT_TRUE(pins.Rel(Sums(t.set), p.sums, 0, 4 * quantum))
         << t.description << ": " << HexList(Sums(t.set));
@@ -165,16 +165,17 @@ TEST(SyntheticTrial, FinBenchesAreThoseOfTheFormerDraw) {
 // IntegrateCvode retries such a run at order ≤ 2 (model/cvode.h); the bench is then simulated, and
 // every reading is finite and on the encoder's grid.
 TEST(SyntheticTrial, AStiffeningTheHighOrderBdfCannotPassIsSimulated) {
-  const FinTrialOptions so;
-  const SyntheticTrial t = FinTrialDraw(so)(14);
+  const synth::FinTrialOptions so;
+  const synth::SyntheticTrial t = FinTrialDraw(so)(14);
   EXPECT_EQ(t.truth.name(), std::string("cubic-stiffening"));
   ASSERT_EQ(t.set.records.size(), 9u);
   ExpectOnTheEncoderGrid(t.set, so.quantum_deg);
 }
 
 TEST(SyntheticTrial, RecordsAreAWindowedRecordOfTheFamily) {
-  const TrialDraw draw = RecordsTrialDraw({.family = "backlash-like", .none_probability = 0});
-  const SyntheticTrial a = draw(3), b = draw(3);
+  const synth::TrialDraw draw =
+      synth::RecordsTrialDraw({.family = "backlash-like", .none_probability = 0});
+  const synth::SyntheticTrial a = draw(3), b = draw(3);
   ASSERT_EQ(a.set.records.size(), 2u);
   EXPECT_EQ(a.set.records[0].role, model::CaseRole::kTrain);
   EXPECT_EQ(a.set.records[1].role, model::CaseRole::kValidate);
@@ -185,25 +186,27 @@ TEST(SyntheticTrial, RecordsAreAWindowedRecordOfTheFamily) {
 }
 
 TEST(SyntheticTrial, BadOptionsAreNamed) {
-  FinTrialOptions so;
+  synth::FinTrialOptions so;
   so.other_form_probability = 1.5;
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { FinTrialDraw(so); }), "other_form_probability");
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { RecordsTrialDraw({.none_probability = -1}); }),
-                "none_probability");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { synth::FinTrialDraw(so); }),
+                "other_form_probability");
+  PZ_EXPECT_HAS(
+      pz::testing::InputErrorOf([&] { synth::RecordsTrialDraw({.none_probability = -1}); }),
+      "none_probability");
 }
 
 TEST(CheckSummary, TalliesTheConfusionMatrixOfEveryForm) {
   const EffectKind delay = EffectKind::Named("delay"), creep = EffectKind::Named("creep");
-  CheckSummary s({.noun = "records"}, {delay, creep});
+  diagnose::CheckSummary s({.noun = "records"}, {delay, creep});
   ASSERT_EQ(s.columns, (std::vector<std::string>{"none", "delay", "creep", "unexplained"}));
-  CheckTrial named;
+  diagnose::CheckTrial named;
   named.truth = delay;
   named.verdict_kind = "effect";
   named.named = "delay";
   named.significant = true;
   named.closed = 0.9;
   s.Tally(named);
-  CheckTrial alarm;
+  diagnose::CheckTrial alarm;
   alarm.verdict_kind = "unexplained";
   alarm.significant = true;
   s.Tally(alarm);
@@ -214,7 +217,7 @@ TEST(CheckSummary, TalliesTheConfusionMatrixOfEveryForm) {
   EXPECT_EQ(s.closed, std::vector<double>{0.9});
   EXPECT_EQ(s.accuracy(), 1.0);
   EXPECT_EQ(s.false_alarm_rate(), 1.0);
-  CheckTrial outside = named;
+  diagnose::CheckTrial outside = named;
   outside.named = "drift";
   EXPECT_THROW(s.Tally(outside), std::logic_error);
 }
@@ -223,15 +226,15 @@ TEST(FinCheck, WithheldDelayIsNamedAndACleanBenchIsNot) {
   const diagnose::DiagnoseOptions o =
       Quick({EffectKind::Named("driver-lowpass"), EffectKind::Named("delay"),
              EffectKind::Named("drift")});
-  const CheckForm form = FinCheckForm(o, {});
-  CheckSummary summary(form.text, form.effects);
+  const diagnose::CheckForm form = FinCheckForm(o, {});
+  diagnose::CheckSummary summary(form.text, form.effects);
   for (const bool with_delay : {true, false}) {
     std::vector<model::Effect> effects;
     if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
-    const RecordDiagnosis d =
+    const diagnose::RecordDiagnosis d =
         DiagnoseRecords(Bench(effects, with_delay ? 1 : 2), diagnose::RecordOptionsOf(o));
-    CheckTrial t;
-    static_cast<TrialVerdict&>(t) = TrialVerdictOf(d);
+    diagnose::CheckTrial t;
+    static_cast<diagnose::TrialVerdict&>(t) = diagnose::TrialVerdictOf(d);
     t.truth = with_delay ? EffectKind::Named("delay") : EffectKind();
     t.closed = d.closed_total;
     summary.Tally(t);
@@ -267,13 +270,13 @@ TEST(FinCheck, WithheldDelayIsNamedAndACleanBenchIsNot) {
 }
 
 TEST(FinCheck, RunCheckTalliesEveryTrial) {
-  FinTrialOptions so;
+  synth::FinTrialOptions so;
   so.kinds = {EffectKind::Named("drift")};
   so.none_probability = 0.0;
   int seen = 0;
-  const CheckForm form =
+  const diagnose::CheckForm form =
       FinCheckForm(Quick({EffectKind::Named("drift"), EffectKind::Named("delay")}), so);
-  const CheckSummary s = RunCheck(form, 1, 3, [&](const CheckTrial& t, int) {
+  const diagnose::CheckSummary s = RunCheck(form, 1, 3, [&](const diagnose::CheckTrial& t, int) {
     ++seen;
     EXPECT_EQ(t.truth, EffectKind::Named("drift"));
   });
@@ -283,7 +286,7 @@ TEST(FinCheck, RunCheckTalliesEveryTrial) {
   for (const auto& row : s.confusion)
     for (int n : row) total += n;
   EXPECT_EQ(total, 1);
-  const CheckTrial& t = s.trials[0];
+  const diagnose::CheckTrial& t = s.trials[0];
   EXPECT_TRUE(t.verdict_kind == "effect" || t.verdict_kind == "inseparable" ||
               t.verdict_kind == "none" || t.verdict_kind == "unexplained");
   if (t.significant) {
@@ -293,7 +296,7 @@ TEST(FinCheck, RunCheckTalliesEveryTrial) {
 
 TEST(FinCheck, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   const std::string dir = std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/driver-lowpass";
-  const RecordDiagnosis d = DiagnoseRecords(
+  const diagnose::RecordDiagnosis d = DiagnoseRecords(
       io::RecordsFromCaseSet(io::LoadCaseSet(dir)),
       diagnose::RecordOptionsOf(Quick({EffectKind::Named("driver-lowpass"),
                                        EffectKind::Named("delay"), EffectKind::Named("creep")})));
@@ -318,8 +321,8 @@ TEST(FinCheck, BundledDriverLowpassBenchIsNamedWithTheTimeConstantOfItsTruth) {
   EXPECT_NEAR(d.final_fit->uncertainty.params[7].value, tau_truth, 0.1 * tau_truth);
 }
 
-RecordsCheckOptions QuickRecords() {
-  RecordsCheckOptions o;
+diagnose::RecordsCheckOptions QuickRecords() {
+  diagnose::RecordsCheckOptions o;
   o.trials.family = "backlash-like";
   o.diagnose.fit.search.repetitions = 1;
   o.diagnose.fit.search.pso.particles = 20;
@@ -329,8 +332,8 @@ RecordsCheckOptions QuickRecords() {
 }
 
 TEST(RecordsCheck, NamesWithheldEffectsWithACalibratedConfidence) {
-  const CheckForm form = RecordsCheckForm(QuickRecords());
-  const CheckSummary s = RunCheck(form, 24, 100);
+  const diagnose::CheckForm form = RecordsCheckForm(QuickRecords());
+  const diagnose::CheckSummary s = RunCheck(form, 24, 100);
   ASSERT_EQ(s.trials.size(), 24u);
   ASSERT_GT(s.effect_trials, 8);
   EXPECT_GE(s.effect_right, 0.8 * s.effect_trials);
@@ -345,7 +348,7 @@ TEST(RecordsCheck, NamesWithheldEffectsWithACalibratedConfidence) {
     for (int n : row) total += n;
   EXPECT_EQ(total, 24);
   // Deterministic for a seed.
-  const CheckSummary a = RunCheck(form, 3, 100), b = RunCheck(form, 3, 100);
+  const diagnose::CheckSummary a = RunCheck(form, 3, 100), b = RunCheck(form, 3, 100);
   for (size_t i = 0; i < 3; ++i) {
     EXPECT_EQ(a.trials[i].named, b.trials[i].named);
     EXPECT_EQ(a.trials[i].confidence, b.trials[i].confidence);
@@ -354,9 +357,9 @@ TEST(RecordsCheck, NamesWithheldEffectsWithACalibratedConfidence) {
 }
 
 TEST(RecordsCheck, FamiliesWithoutANominalSetAreNamed) {
-  RecordsCheckOptions o;
+  diagnose::RecordsCheckOptions o;
   o.trials.family = "bimorph-fin";
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { RecordsCheckForm(o); }),
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { diagnose::RecordsCheckForm(o); }),
                 "'bimorph-fin' has no nominal parameter set");
 }
 

@@ -41,13 +41,13 @@ FitOptions Quick() {
 
 /// A record of truth = family + effects, cut into a training and a withheld window.
 void AddRecord(io::RecordSet& set, const std::string& family, std::vector<EffectKind> effects,
-               std::vector<double> params, const DriveShape& d, uint64_t seed,
+               std::vector<double> params, const synth::DriveShape& d, uint64_t seed,
                const std::string& name, double split_fraction = 0.6) {
-  const DataScale s = SyntheticStackScale();
+  const DataScale s = synth::SyntheticStackScale();
   auto fam = std::shared_ptr<const Family>(MakeFamily(family, s));
   RecordModel truth(fam, std::move(effects), s);
-  io::Record r =
-      SynthesizeRecord(truth, params, {}, d, {-1.2, kNoise, 0.005, seed}, name, CaseRole::kTrain);
+  io::Record r = synth::SynthesizeRecord(truth, params, {}, d, {-1.2, kNoise, 0.005, seed}, name,
+                                         CaseRole::kTrain);
   const double t0 = r.t[r.rest_samples] + 0.2, t2 = r.t.back();
   const double t1 = t0 + split_fraction * (t2 - t0);
   io::Record train = r, withheld = r;
@@ -60,8 +60,8 @@ void AddRecord(io::RecordSet& set, const std::string& family, std::vector<Effect
   set.records.push_back(withheld);
 }
 
-DriveShape Sine(double f = 1, double phase = 2.2) {
-  DriveShape d;
+synth::DriveShape Sine(double f = 1, double phase = 2.2) {
+  synth::DriveShape d;
   d.amplitude = 100;
   d.frequency_hz = f;
   d.phase_rad = phase;
@@ -79,14 +79,14 @@ TEST(RecordDiagnosis, NamesCreepOnAStack) {
   std::vector<double> p = kStack;
   p.push_back(0.12);  // creep k_c
   p.push_back(1.5);   // creep tau_c [s]
-  DriveShape d = Sine();
-  d.waveform = Waveform::kMultisine;
+  synth::DriveShape d = Sine();
+  d.waveform = synth::Waveform::kMultisine;
   d.frequency_end_hz = 6;
   AddRecord(set, "stack-bouc-wen", {EffectKind::Named("creep")}, p, d, 3, "multisine");
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "stack-bouc-wen";
   o.fit = Quick();
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   EXPECT_TRUE(r.significant) << r.verdict;
   EXPECT_EQ(r.noise.used, "rest");
   EXPECT_NEAR(r.noise.sigma, std::sqrt(kNoise * kNoise + 0.005 * 0.005 / 12), 0.004);
@@ -103,11 +103,11 @@ TEST(RecordDiagnosis, NoGapOnACleanStack) {
   io::RecordSet set;
   set.source = "synthetic clean stack";
   AddRecord(set, "stack-bouc-wen", {}, kStack, Sine(), 4, "sine");
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "stack-bouc-wen";
   o.fit = Quick();
   o.candidates = {EffectKind::Named("creep"), EffectKind::Named("delay")};
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   EXPECT_FALSE(r.significant) << r.verdict;
   EXPECT_EQ(r.verdict_kind, "none");
   EXPECT_EQ(r.named, -1);
@@ -120,11 +120,11 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
   set.source = "synthetic low-pass bench";
   AddRecord(set, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, Sine(1, 0), 5,
             "sine");
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
   o.candidates = {EffectKind::Named("driver-lowpass"), EffectKind::Named("delay")};
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   ASSERT_TRUE(r.significant) << r.verdict;
   std::cout << "before: " << r.verdict << "\n";
   ASSERT_EQ(r.verdict_kind, "inseparable") << r.verdict;
@@ -135,12 +135,12 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
 
   // Measure what was proposed (simulated from the truth) and diagnose again.
   io::RecordSet more = set;
-  DriveShape next = r.next->shape;
+  synth::DriveShape next = r.next->shape;
   next.rest_s = 0.5;
   next.duration_s = std::max(next.duration_s, 4.0);
   AddRecord(more, "backlash-like", {EffectKind::Named("driver-lowpass")}, truth, next, 6,
             "proposed", 0.5);
-  const RecordDiagnosis again = DiagnoseRecords(more, o);
+  const diagnose::RecordDiagnosis again = DiagnoseRecords(more, o);
   std::cout << "after: " << again.verdict << "\n";
   ASSERT_GE(again.named, 0) << again.verdict;
   EXPECT_EQ(again.candidates[static_cast<size_t>(again.named)].kind,
@@ -153,7 +153,7 @@ TEST(RecordDiagnosis, LowpassAndDelayCannotBeSeparatedUntilTheProposedMeasuremen
 TEST(RecordDiagnosis, NoiseFloorFromPeriodsWithoutRest) {
   io::RecordSet set;
   set.source = "periodic";
-  DriveShape d = Sine(2, 0);
+  synth::DriveShape d = Sine(2, 0);
   d.rest_s = 0;
   AddRecord(set, "backlash-like", {}, {0.02, 0.1, 0.05}, d, 8, "periodic");
   const NoiseFloor nf = EstimateNoiseFloor(set);
@@ -166,9 +166,9 @@ TEST(RecordDiagnosis, NeedsAWithheldRecord) {
   set.source = "only-train";
   AddRecord(set, "backlash-like", {}, {0.02, 0.1, 0.05}, Sine(), 9, "a");
   set.records.pop_back();
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.fit = Quick();
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }),
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { diagnose::DiagnoseRecords(set, o); }),
                 "no withheld record or window");
 }
 
@@ -180,7 +180,7 @@ TEST(RecordDiagnosis, NeedsAWithheldRecord) {
 io::RecordSet Grid(const std::vector<EffectKind>& effects, const std::vector<double>& effect_params,
                    double quantum, uint64_t seed, std::vector<size_t> withheld,
                    double gain_slope = 0) {
-  const DataScale s = SyntheticStackScale();
+  const DataScale s = synth::SyntheticStackScale();
   auto fam = std::shared_ptr<const Family>(MakeFamily("backlash-like", s));
   RecordModel truth(fam, effects, s);
   io::RecordSet set;
@@ -191,7 +191,7 @@ io::RecordSet Grid(const std::vector<EffectKind>& effects, const std::vector<dou
     for (double a : {60.0, 100.0}) {
       std::vector<double> p = {0.02, 0.1 + gain_slope * (a - 80), 0.05};
       p.insert(p.end(), effect_params.begin(), effect_params.end());
-      DriveShape d;
+      synth::DriveShape d;
       d.amplitude = a;
       d.frequency_hz = f;
       d.phase_rad = 0;
@@ -199,9 +199,9 @@ io::RecordSet Grid(const std::vector<EffectKind>& effects, const std::vector<dou
       d.duration_s = 3 / f;
       d.fs_hz = 500;
       const bool w = std::find(withheld.begin(), withheld.end(), i) != withheld.end();
-      io::Record r = SynthesizeRecord(truth, p, {}, d, {0, kNoise, quantum, seed + i},
-                                      "case" + std::to_string(i + 1),
-                                      w ? CaseRole::kValidate : CaseRole::kTrain);
+      io::Record r = synth::SynthesizeRecord(truth, p, {}, d, {0, kNoise, quantum, seed + i},
+                                             "case" + std::to_string(i + 1),
+                                             w ? CaseRole::kValidate : CaseRole::kTrain);
       r.offset_mode = io::OffsetMode::kFixed;
       r.offset = 0;
       r.frequency_hz = f;
@@ -216,13 +216,13 @@ TEST(RecordDiagnosis, PerRecordFloorsAndTheResidualAnalysisNameALowpass) {
   // τ = 30 ms: at 1–4 Hz a phase lag of 11–37° and up to 20 % less amplitude.
   const auto lp = EffectKind::Named("driver-lowpass");
   const io::RecordSet set = Grid({lp}, {0.03}, 0.01, 11, {1, 3, 5});
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
   o.candidates = {lp, EffectKind::Named("creep")};
-  o.floor = RecordFloor::kPerRecord;
-  o.pattern = RecordPattern::kResidualAnalysis;
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  o.floor = diagnose::RecordFloor::kPerRecord;
+  o.pattern = diagnose::RecordPattern::kResidualAnalysis;
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   std::cout << r.verdict << "\n";
   // Each record's floor is its rounding and scatter: √(σ² + q²/12).
   ASSERT_EQ(r.record_floor.size(), set.records.size());
@@ -239,13 +239,13 @@ TEST(RecordDiagnosis, PerRecordFloorsAndTheResidualAnalysisNameALowpass) {
   EXPECT_GT(r.base_residuals.withheld.rms, 3 * r.base_residuals.withheld.floor_rms);
   ASSERT_TRUE(r.significant) << r.verdict;
   ASSERT_GE(r.named, 0) << r.verdict;
-  const RecordCandidate& c = r.candidates[static_cast<size_t>(r.named)];
+  const diagnose::RecordCandidate& c = r.candidates[static_cast<size_t>(r.named)];
   EXPECT_EQ(c.kind, lp) << r.verdict;
   EXPECT_GT(c.pattern, 0.8) << r.verdict;
   EXPECT_LT(r.final_residuals.withheld.rms, 1.5 * r.final_residuals.withheld.floor_rms);
   // The per-record gaps: every withheld record closed, the total too.
   ASSERT_EQ(r.gaps.size(), set.records.size());
-  for (const RecordGap& g : r.gaps) {
+  for (const diagnose::RecordGap& g : r.gaps) {
     EXPECT_GT(g.frequency_hz, 0);
     EXPECT_NEAR(g.amplitude, g.name == "case1" || g.name == "case3" || g.name == "case5" ? 60 : 100,
                 1.0);
@@ -263,10 +263,11 @@ TEST(RecordDiagnosis, PerRecordFloorsAndTheResidualAnalysisNameALowpass) {
 TEST(RecordDiagnosis, TheResidualAnalysisNeedsEachRecordsFrequency) {
   io::RecordSet set = Grid({}, {}, 0.01, 12, {1, 3, 5});
   set.records[2].frequency_hz = 0;
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.fit = Quick();
-  o.pattern = RecordPattern::kResidualAnalysis;
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(set, o); }), "record 'case3'");
+  o.pattern = diagnose::RecordPattern::kResidualAnalysis;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { diagnose::DiagnoseRecords(set, o); }),
+                "record 'case3'");
 }
 
 TEST(RecordDiagnosis, TheGreedyRoundNamesASecondEffectOnlyWhileTheGapIsSignificant) {
@@ -274,12 +275,12 @@ TEST(RecordDiagnosis, TheGreedyRoundNamesASecondEffectOnlyWhileTheGapIsSignifica
              creep = EffectKind::Named("creep");
   // A low-pass and a creep: the first named leaves a significant gap, the second closes it.
   const io::RecordSet set = Grid({lp, creep}, {0.03, 0.15, 0.3}, 0.01, 21, {1, 3, 5});
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
   o.candidates = {lp, creep};
   o.second_effect = true;
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   std::cout << "two effects: " << r.verdict << "\n  second round: " << r.second->verdict << "\n";
   ASSERT_GE(r.named, 0) << r.verdict;
   ASSERT_TRUE(r.second.has_value()) << r.verdict;
@@ -294,7 +295,7 @@ TEST(RecordDiagnosis, TheGreedyRoundNamesASecondEffectOnlyWhileTheGapIsSignifica
   // One effect only: the round runs no fit once its gap is at the floor.
   const io::RecordSet one = Grid({lp}, {0.03}, 0.01, 22, {1, 3, 5});
   o.candidates = {lp, delay};
-  const RecordDiagnosis q = DiagnoseRecords(one, o);
+  const diagnose::RecordDiagnosis q = DiagnoseRecords(one, o);
   ASSERT_GE(q.named, 0) << q.verdict;
   ASSERT_TRUE(q.second.has_value());
   EXPECT_FALSE(q.second->gap.significant) << q.second->verdict;
@@ -307,17 +308,17 @@ TEST(RecordDiagnosis, AbsorbedParametersAreNamedWhenAsked) {
   // No gap beyond the floor, but a creep fitted anyway moves the base parameters it trades with.
   const auto creep = EffectKind::Named("creep");
   const io::RecordSet set = Grid({}, {}, 0.01, 31, {1, 3, 5});
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
   o.candidates = {creep};
-  const RecordDiagnosis r = DiagnoseRecords(set, o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(set, o);
   EXPECT_FALSE(r.significant) << r.verdict;
   EXPECT_EQ(r.absorbed_by, "creep");
   std::cout << r.verdict << "\n";
-  for (const Absorption& a : r.absorbed)
+  for (const diagnose::Absorption& a : r.absorbed)
     std::cout << "  absorbed: " << a.name << " z " << a.z << "\n";
-  for (const Absorption& a : r.absorbed) {
+  for (const diagnose::Absorption& a : r.absorbed) {
     EXPECT_GT(std::abs(a.z), 2.0) << a.name;
     EXPECT_GT(std::abs(a.with - a.without), 0.05 * std::max(std::abs(a.with), std::abs(a.without)));
   }
@@ -330,21 +331,21 @@ TEST(RecordDiagnosis, AbsorbedParametersAreNamedWhenAsked) {
     with[i].value = values[i][1];
     without[i].std_error = with[i].std_error = values[i][2] / std::sqrt(2.0);
   }
-  const auto ab = AbsorbedParameters(without, with, 3);
+  const auto ab = diagnose::AbsorbedParameters(without, with, 3);
   ASSERT_EQ(ab.size(), 1u);
   EXPECT_EQ(ab[0].name, "p0");
   EXPECT_NEAR(ab[0].z, -0.1 / 0.0333, 1e-9);
-  EXPECT_TRUE(AbsorbedParameters(without, with, 0).empty());
+  EXPECT_TRUE(diagnose::AbsorbedParameters(without, with, 0).empty());
 }
 
 TEST(RecordDiagnosis, TheTrendsAddOnFindsAGainThatFollowsTheAmplitude) {
-  RecordDiagnoseOptions o;
+  diagnose::RecordDiagnoseOptions o;
   o.family = "backlash-like";
   o.fit = Quick();
   o.candidates = {EffectKind::Named("delay")};
   o.trends = true;
   // The truth's gain c grows by 0.0005 / V: 0.09 at 60 V, 0.11 at 100 V.
-  const RecordDiagnosis r = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}, 0.0005), o);
+  const diagnose::RecordDiagnosis r = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}, 0.0005), o);
   ASSERT_EQ(r.trends.size(), 3u);
   EXPECT_GT(r.trend_evaluations, 6 * 2) << "the per-record fits' evaluations";
   const pz::diagnose::ParamTrend& c = r.trends[1];
@@ -354,20 +355,21 @@ TEST(RecordDiagnosis, TheTrendsAddOnFindsAGainThatFollowsTheAmplitude) {
   EXPECT_NEAR(c.slope_v, 0.0005, 0.0001);
   EXPECT_GT(c.r2, 0.9);
   // The same grid with a constant gain: no trend of c.
-  const RecordDiagnosis flat = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}), o);
+  const diagnose::RecordDiagnosis flat = DiagnoseRecords(Grid({}, {}, 0.001, 41, {1, 4}), o);
   EXPECT_FALSE(flat.trends[1].significant) << flat.trends[1].p_v;
   EXPECT_NEAR(flat.trends[1].slope_v, 0, 0.0001);
   // Without a stated frequency the add-on names the record.
   io::RecordSet bad = Grid({}, {}, 0.001, 41, {1, 4});
   bad.records[0].frequency_hz = 0;
-  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { DiagnoseRecords(bad, o); }), "record 'case1'");
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { diagnose::DiagnoseRecords(bad, o); }),
+                "record 'case1'");
 }
 
 TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
-  const RecordDiagnoseOptions o = FinBenchOptions();
+  const diagnose::RecordDiagnoseOptions o = diagnose::FinBenchOptions();
   EXPECT_EQ(o.family, "bimorph-fin");
-  EXPECT_EQ(o.floor, RecordFloor::kPerRecord);
-  EXPECT_EQ(o.pattern, RecordPattern::kResidualAnalysis);
+  EXPECT_EQ(o.floor, diagnose::RecordFloor::kPerRecord);
+  EXPECT_EQ(o.pattern, diagnose::RecordPattern::kResidualAnalysis);
   EXPECT_TRUE(o.second_effect && o.absorbed_in_verdict && o.trends);
   EXPECT_TRUE(o.fit.family_options.bench_form);
   EXPECT_TRUE(o.bench_fits.enabled);
@@ -467,7 +469,7 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   // (another step, start or rule) moves them by 1e-3 or more. The verdict prints three figures,
   // whose distance to a rounding boundary is over 1e-3 relative, so it is compared whole.
   constexpr double kRel = 1e-6, kAbs = 1e-12;
-  const RecordDiagnosis rec =
+  const diagnose::RecordDiagnosis rec =
       DiagnoseRecords(io::RecordsFromCaseSet(bench), diagnose::RecordOptionsOf(fo));
   EXPECT_EQ(rec.verdict, verdict);
   EXPECT_EQ(rec.verdict_kind, "effect");
@@ -494,7 +496,7 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   // same records), and the pinned figures to their tolerance.
   const diagnose::BenchDiagnosis grid =
       diagnose::DiagnoseBench(diagnose::CasesFromCaseSet(bench), fo);
-  const RecordDiagnosis& one = grid.records;
+  const diagnose::RecordDiagnosis& one = grid.records;
   EXPECT_EQ(one.verdict, verdict);
   EXPECT_EQ(one.s0, rec.s0);
   EXPECT_EQ(one.base.params, rec.base.params);

@@ -1,9 +1,9 @@
-// The real-like stack generator (diagnose/reallike.h, issue 22 item 5), checked without the
+// The real-like stack generator (synth/reallike.h, issue 22 item 5), checked without the
 // product's families: its Preisach loops have return-point memory and wipe out minor loops; its
 // creep is logarithmic; its sensor lag is the stated number of samples; the product's noise floor
 // (records/noise_floor.h EstimateNoiseFloor) finds the true floor of its records; the set it writes
 // reads back through io/records.h with its rest and quantum; bad input is named.
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 
 #include <gtest/gtest.h>
 
@@ -23,8 +23,8 @@ void Ramp(std::vector<double>& u, double to, int n = 200) {
   for (int k = 1; k <= n; ++k) u.push_back(from + (to - from) * k / n);
 }
 
-RealLikeOptions Short(uint64_t seed) {
-  RealLikeOptions o;
+synth::RealLikeOptions Short(uint64_t seed) {
+  synth::RealLikeOptions o;
   o.train_s = 12;
   o.withheld_s = 8;
   o.sensor.oversample = 4;
@@ -33,7 +33,7 @@ RealLikeOptions Short(uint64_t seed) {
 }
 
 TEST(RealLikeTest, PreisachLoopsHaveReturnPointMemory) {
-  const RealLikePlant plant(RealLikeStack{});
+  const synth::RealLikePlant plant(synth::RealLikeStack{});
   // 0 → 120 → 30 → 100, a minor loop 100 → 50 → 100, then on to 110.
   std::vector<double> u{0};
   Ramp(u, 120);
@@ -68,31 +68,31 @@ TEST(RealLikeTest, PreisachLoopsHaveReturnPointMemory) {
   Ramp(down, 100);
   EXPECT_GT(plant.Static(down).back() - plant.Static(up).back(), 0.5);
   // The major loop's width is a stack's (10–20 % of the stroke) and the stroke is the stated one.
-  const RealLikeSet s = GenerateRealLikeSet(Short(1));
+  const synth::RealLikeSet s = GenerateRealLikeSet(Short(1));
   EXPECT_GT(s.major_loop_width, 0.08);
   EXPECT_LT(s.major_loop_width, 0.25);
 }
 
 TEST(RealLikeTest, RecordsKeepReturnPointMemoryWithoutCreep) {
-  RealLikeStack st;
+  synth::RealLikeStack st;
   st.creep_per_decade = 0;
-  const RealLikePlant plant(st);
-  RealLikeSensor se;
+  const synth::RealLikePlant plant(st);
+  synth::RealLikeSensor se;
   se.lag_samples = 0;
   se.oversample = 1;
   se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v =
       se.offset_range_um = 0;
   // A played drive: up to 140, down to 20, up to 90, minor loop to 60 and back to 90, on to 140.
-  RealLikeDrive d;
-  d.kind = RealLikeDrive::Kind::kSamples;
+  synth::RealLikeDrive d;
+  d.kind = synth::RealLikeDrive::Kind::kSamples;
   d.samples_fs_hz = se.fs_hz;
   d.rest_s = 0.5;
   d.rest_level = 0;
   for (double to : {140.0, 20.0, 90.0, 60.0, 90.0, 140.0}) Ramp(d.samples, to, 100);
   d.duration_s = static_cast<double>(d.samples.size()) / se.fs_hz;
   std::vector<double> clean;
-  const io::Record r =
-      SynthesizeRealLikeRecord(plant, se, d, "memory", model::CaseRole::kTrain, 1, nullptr, &clean);
+  const io::Record r = synth::SynthesizeRealLikeRecord(plant, se, d, "memory",
+                                                       model::CaseRole::kTrain, 1, nullptr, &clean);
   const size_t start = r.rest_samples;  // record sample start + i is d.samples[i]
   const size_t first_90 = start + 299, second_90 = start + 499;
   ASSERT_NEAR(r.u[first_90], 90, 1e-9);
@@ -102,8 +102,8 @@ TEST(RealLikeTest, RecordsKeepReturnPointMemoryWithoutCreep) {
 }
 
 TEST(RealLikeTest, CreepIsLogarithmicAndTheLagIsTheStatedSamples) {
-  const RealLikePlant plant(RealLikeStack{});
-  RealLikeSensor se;
+  const synth::RealLikePlant plant(synth::RealLikeStack{});
+  synth::RealLikeSensor se;
   se.lag_samples = 0;
   se.noise_white_um = se.noise_colored_um = se.quantum_um = se.drive_quantum_v =
       se.offset_range_um = 0;
@@ -117,7 +117,7 @@ TEST(RealLikeTest, CreepIsLogarithmicAndTheLagIsTheStatedSamples) {
   const double d1 = at(1) - at(0.1), d2 = at(10) - at(1), jump = at(0.01) - y[0];
   EXPECT_GT(d1, 0);
   EXPECT_NEAR(d2 / d1, 1.0, 0.3);
-  EXPECT_NEAR(d2 / jump, RealLikeStack{}.creep_per_decade, 0.005);
+  EXPECT_NEAR(d2 / jump, synth::RealLikeStack{}.creep_per_decade, 0.005);
   // Lag: two whole samples later, exactly; half a sample: between its neighbours (away from the
   // turns).
   const auto sine = [](double t) { return 75 + 60 * std::sin(2 * 3.14159265358979 * t); };
@@ -137,7 +137,7 @@ TEST(RealLikeTest, CreepIsLogarithmicAndTheLagIsTheStatedSamples) {
 
 TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
   for (uint64_t seed : {1u, 2u, 3u}) {
-    const RealLikeSet s = GenerateRealLikeSet(Short(seed));
+    const synth::RealLikeSet s = GenerateRealLikeSet(Short(seed));
     ASSERT_EQ(s.set.records.size(), 4u);
     EXPECT_NEAR(s.realised_floor_um / s.nominal_floor_um, 1, 0.1);
     const NoiseFloor nf = EstimateNoiseFloor(s.set);
@@ -166,17 +166,17 @@ TEST(RealLikeTest, TheProductsNoiseFloorFindsTheTruth) {
 // first 0.5 s).
 /// A plant whose density depends on the width alone (a PI operator), no creep, lag or coloured
 /// noise.
-RealLikeSet WidthOnlySet() {
-  RealLikeOptions o = Short(4);
+synth::RealLikeSet WidthOnlySet() {
+  synth::RealLikeOptions o = Short(4);
   o.stack.density_center_spread = 1e3;
   o.stack.asymmetry = o.stack.quadratic = o.stack.creep_per_decade = 0;
   o.sensor.lag_samples = 0;
   o.sensor.noise_colored_um = 0;
-  return GenerateRealLikeSet(o);
+  return synth::GenerateRealLikeSet(o);
 }
 
 TEST(RealLikeTest, AWidthOnlyDensityIsWhatThePrandtlIshlinskiiFamilyPredicts) {
-  RealLikeSet s = WidthOnlySet();
+  synth::RealLikeSet s = WidthOnlySet();
   for (io::Record& r : s.set.records)
     io::SetWindow(r, r.t[r.rest_samples] + 1.5, r.t.back(), 20, r.name);
   FitOptions f;
@@ -195,7 +195,7 @@ TEST(RealLikeTest, AWidthOnlyDensityIsWhatThePrandtlIshlinskiiFamilyPredicts) {
 /// excitation as well as the rest of it, within 1.25 × the floor; started centred on the rest drive
 /// it does not (its first 0.5 s are several times the floor: the test can fail).
 TEST(RealLikeTest, TheDescendedStateMatchesTheFirstHalfSecondOfAStackRestingAtTheBottom) {
-  RealLikeSet s = WidthOnlySet();
+  synth::RealLikeSet s = WidthOnlySet();
   for (io::Record& r : s.set.records) io::SetWindow(r, r.t[r.rest_samples], r.t.back(), 20, r.name);
   double worst_centred = 0;
   for (model::InitialState state :
@@ -234,8 +234,8 @@ TEST(RealLikeTest, TheDescendedStateMatchesTheFirstHalfSecondOfAStackRestingAtTh
 }
 
 TEST(RealLikeTest, DeterministicAndReadBackInTheRecordFormat) {
-  const RealLikeSet a = GenerateRealLikeSet(Short(7)), b = GenerateRealLikeSet(Short(7)),
-                    c = GenerateRealLikeSet(Short(8));
+  const synth::RealLikeSet a = GenerateRealLikeSet(Short(7)), b = GenerateRealLikeSet(Short(7)),
+                           c = GenerateRealLikeSet(Short(8));
   for (size_t i = 0; i < a.set.records.size(); ++i) {
     EXPECT_EQ(a.set.records[i].y, b.set.records[i].y);
     EXPECT_EQ(a.set.records[i].u, b.set.records[i].u);
@@ -260,18 +260,19 @@ TEST(RealLikeTest, DeterministicAndReadBackInTheRecordFormat) {
 }
 
 TEST(RealLikeTest, BadInputIsNamed) {
-  RealLikeStack st;
+  synth::RealLikeStack st;
   st.u_hi = st.u_lo;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { RealLikePlant p(st); }), "stack.u_hi");
-  RealLikeOptions o = Short(1);
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::RealLikePlant p(st); }), "stack.u_hi");
+  synth::RealLikeOptions o = Short(1);
   o.sensor.lag_samples = -1;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { GenerateRealLikeSet(o); }), "sensor.lag_samples");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::GenerateRealLikeSet(o); }),
+                "sensor.lag_samples");
   o = Short(1);
   o.frequency_hz = 60;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { GenerateRealLikeSet(o); }), "frequency_hz");
-  RealLikeDrive d;
-  d.kind = RealLikeDrive::Kind::kSamples;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { DriveFunction(d); }), "needs samples");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::GenerateRealLikeSet(o); }), "frequency_hz");
+  synth::RealLikeDrive d;
+  d.kind = synth::RealLikeDrive::Kind::kSamples;
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::DriveFunction(d); }), "needs samples");
 }
 
 }  // namespace

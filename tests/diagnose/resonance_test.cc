@@ -1,4 +1,4 @@
-// The diagnosis names a mode (issue 45): on a bench whose truth has one (diagnose/synthetic.h
+// The diagnosis names a mode (issue 45): on a bench whose truth has one (synth/synthetic.h
 // MakeModeBench: a stack whose output rings, band-limited-noise training, chatter withheld), the
 // base model's residual holds a dominant band, `resonance` is tried and named, and it closes most
 // of the withheld gap. The development truth is the bench's default (backlash-like, 740 Hz,
@@ -13,13 +13,13 @@
 #include <cstdio>
 
 #include "diagnose/diagnose.h"
-#include "diagnose/synthetic.h"
+#include "synth/synthetic.h"
 
 namespace pz::records {
 namespace {
 
-RecordDiagnoseOptions Quick(const std::string& family) {
-  RecordDiagnoseOptions o;
+diagnose::RecordDiagnoseOptions Quick(const std::string& family) {
+  diagnose::RecordDiagnoseOptions o;
   o.family = family;
   o.fit.uncertainty = false;
   o.fit.search.repetitions = 1;
@@ -30,8 +30,9 @@ RecordDiagnoseOptions Quick(const std::string& family) {
   return o;
 }
 
-void ExpectNamesTheMode(const ModeBench& b, const std::string& family, double f_n, double zeta) {
-  const RecordDiagnosis d = DiagnoseRecords(b.set, Quick(family));
+void ExpectNamesTheMode(const synth::ModeBench& b, const std::string& family, double f_n,
+                        double zeta) {
+  const diagnose::RecordDiagnosis d = DiagnoseRecords(b.set, Quick(family));
   ASSERT_FALSE(d.named_effects.empty()) << b.description << ": " << d.verdict;
   EXPECT_EQ(d.named_effects.front(), EffectKind::Named("resonance"))
       << b.description << ": " << d.verdict;
@@ -48,13 +49,13 @@ void ExpectNamesTheMode(const ModeBench& b, const std::string& family, double f_
 }
 
 TEST(ModeBench, TheDiagnosisNamesTheResonance) {
-  const ModeBench b = MakeModeBench({});
+  const synth::ModeBench b = synth::MakeModeBench({});
   // The base model's withheld residual holds the mode's band.
   ExpectNamesTheMode(b, "backlash-like", 740, 0.03);
 }
 
 TEST(ModeBench, AnIndependentTruthIsNamedToo) {
-  ModeBenchOptions o;
+  synth::ModeBenchOptions o;
   o.family = "asymmetric-pi";
   o.f_n_hz = 310;
   o.zeta = 0.08;
@@ -64,14 +65,14 @@ TEST(ModeBench, AnIndependentTruthIsNamedToo) {
   o.band_hi_hz = 900;
   o.chatter_v = 0;
   o.seed = 5;
-  ExpectNamesTheMode(MakeModeBench(o), "asymmetric-pi", 310, 0.08);
+  ExpectNamesTheMode(synth::MakeModeBench(o), "asymmetric-pi", 310, 0.08);
 }
 
 TEST(ModeBench, BadModeIsNamed) {
-  ModeBenchOptions o;
+  synth::ModeBenchOptions o;
   o.f_n_hz = 6000;
   try {
-    MakeModeBench(o);
+    synth::MakeModeBench(o);
     ADD_FAILURE() << "no error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("f_n_hz"), std::string::npos) << e.what();

@@ -14,37 +14,39 @@ namespace pz::records {
 namespace {
 
 // s0 = 400, s_floor = 100 over 100 withheld samples: withheld RMS 2, floor 1, ratio 2.
-Gap TestGap(double s0 = 400) { return MeasureGap(s0, 300, 100, 1.0, 1.0, 100, 200, {}); }
+diagnose::Gap TestGap(double s0 = 400) {
+  return diagnose::MeasureGap(s0, 300, 100, 1.0, 1.0, 100, 200, {});
+}
 
-VerdictText Text() {
-  VerdictText t;
+diagnose::VerdictText Text() {
+  diagnose::VerdictText t;
   t.model = "the base model";
   t.unit = "µm";
   t.floor_source = "rest";
   return t;
 }
 
-CandidateScore Scored(const Gap& g, double s_withheld) {
-  CandidateScore c;
-  ScoreCandidate(g, s_withheld, 180, 1, 0.9, {}, c);
+diagnose::CandidateScore Scored(const diagnose::Gap& g, double s_withheld) {
+  diagnose::CandidateScore c;
+  diagnose::ScoreCandidate(g, s_withheld, 180, 1, 0.9, {}, c);
   return c;
 }
 
 TEST(VerdictTest, ANamedEffectClosesItsShareOfTheGap) {
-  const Gap g = TestGap();
-  CandidateScore a = Scored(g, 121), b = Scored(g, 390);
-  const std::vector<VerdictCandidate> ranked = {{"delay", &a}, {"creep", &b}};
-  const Naming n{.named = 0, .runner_up = -1, .z_runner_up = 0, .confidence = 0.987};
-  EXPECT_EQ(ComposeVerdict(g, ranked, n, {}, Text()),
+  const diagnose::Gap g = TestGap();
+  diagnose::CandidateScore a = Scored(g, 121), b = Scored(g, 390);
+  const std::vector<diagnose::VerdictCandidate> ranked = {{"delay", &a}, {"creep", &b}};
+  const diagnose::Naming n{.named = 0, .runner_up = -1, .z_runner_up = 0, .confidence = 0.987};
+  EXPECT_EQ(diagnose::ComposeVerdict(g, ranked, n, {}, Text()),
             "The gap is delay (confidence 98.7 %): adding it closes 93 % of the excess withheld "
             "gap; withheld RMS 2 → "
             "1.1 µm against a noise floor of 1 µm (rest).");
-  VerdictText two = Text();
+  diagnose::VerdictText two = Text();
   two.second = "creep";
   two.second_confidence = 0.9;
   two.s_final = 100;
   two.closing = "Excitation gap: none.";
-  EXPECT_EQ(ComposeVerdict(g, ranked, n, {}, two),
+  EXPECT_EQ(diagnose::ComposeVerdict(g, ranked, n, {}, two),
             "The gap is delay (confidence 98.7 %), with a second effect: creep (confidence 90 %): "
             "adding them closes "
             "100 % of the excess withheld gap; withheld RMS 2 → 1 µm against a noise floor of 1 µm "
@@ -53,12 +55,12 @@ TEST(VerdictTest, ANamedEffectClosesItsShareOfTheGap) {
 }
 
 TEST(VerdictTest, ATieSaysWhatWouldSeparateIt) {
-  const Gap g = TestGap();
-  CandidateScore a = Scored(g, 121), b = Scored(g, 144);
-  const std::vector<VerdictCandidate> ranked = {{"driver-lowpass", &a}, {"delay", &b}};
-  VerdictText t = Text();
+  const diagnose::Gap g = TestGap();
+  diagnose::CandidateScore a = Scored(g, 121), b = Scored(g, 144);
+  const std::vector<diagnose::VerdictCandidate> ranked = {{"driver-lowpass", &a}, {"delay", &b}};
+  diagnose::VerdictText t = Text();
   t.next = "a square wave";
-  const std::string v = ComposeVerdict(
+  const std::string v = diagnose::ComposeVerdict(
       g, ranked, {.named = 0, .runner_up = 1, .z_runner_up = 1.234, .confidence = 0.6}, {}, t);
   EXPECT_EQ(v,
             "The data cannot separate driver-lowpass from delay: both bring the withheld gap to "
@@ -78,13 +80,13 @@ TEST(VerdictTest, ATieSaysWhatWouldSeparateIt) {
 }
 
 TEST(VerdictTest, NoGapNamesTheBestCandidateAndWhatAbsorbsIt) {
-  const Gap g = TestGap(110);
-  CandidateScore a = Scored(g, 90), b = Scored(g, 112);
-  const std::vector<VerdictCandidate> ranked = {{"creep", &a}, {"drift", &b}};
-  VerdictText t = Text();
+  const diagnose::Gap g = TestGap(110);
+  diagnose::CandidateScore a = Scored(g, 90), b = Scored(g, 112);
+  const std::vector<diagnose::VerdictCandidate> ranked = {{"creep", &a}, {"drift", &b}};
+  diagnose::VerdictText t = Text();
   t.floor = 1.0;
   t.absorbed = {"alpha (1 without it, 2 with it)", "beta (3 without it, 4 with it)"};
-  EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, t),
+  EXPECT_EQ(diagnose::ComposeVerdict(g, ranked, {}, {}, t),
             "No significant gap: the withheld RMS error of the base model is 1.05 × the noise "
             "floor (1 µm, from rest), "
             "at most 1.25. The best candidate, creep, would lower it to 0.949 µm, within the floor "
@@ -92,39 +94,39 @@ TEST(VerdictTest, NoGapNamesTheBestCandidateAndWhatAbsorbsIt) {
             "explain is absorbed by the base model's alpha (1 without it, 2 with it), beta (3 "
             "without it, 4 with it).");
   a.score = -1;  // nothing scores above 0: nothing more to say
-  EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, Text()),
+  EXPECT_EQ(diagnose::ComposeVerdict(g, ranked, {}, {}, Text()),
             "No significant gap: the withheld RMS error of the base model is 1.05 × the noise "
             "floor (1 µm, from rest), "
             "at most 1.25.");
 }
 
 TEST(VerdictTest, AnUnexplainedGapSaysWhyTheBestCandidateFails) {
-  const Gap g = TestGap();
-  CandidateScore a = Scored(g, 300);
-  const std::vector<VerdictCandidate> ranked = {{"creep", &a}};
+  const diagnose::Gap g = TestGap();
+  diagnose::CandidateScore a = Scored(g, 300);
+  const std::vector<diagnose::VerdictCandidate> ranked = {{"creep", &a}};
   ASSERT_FALSE(a.qualifies);
-  EXPECT_EQ(ComposeVerdict(g, ranked, {}, {}, Text()),
+  EXPECT_EQ(diagnose::ComposeVerdict(g, ranked, {}, {}, Text()),
             "A significant gap (withheld RMS 2 µm = 2 × the noise floor of 1 µm, from rest) that "
             "no candidate explains "
             "by the rules. Best candidate: creep (closes 33 % of the gap (< 50 %)).");
 }
 
 TEST(VerdictTest, ACheckSpeaksOnceForEveryDataShape) {
-  TrialVerdict v;
+  diagnose::TrialVerdict v;
   v.verdict_kind = "effect";
   v.named = "delay";
   v.confidence = 0.987;
   v.rms_ratio = 2.346;
-  EXPECT_EQ(TrialLine(3, "right", "delay 0.01, sine", 20, v),
+  EXPECT_EQ(diagnose::TrialLine(3, "right", "delay 0.01, sine", 20, v),
             "trial   3 right  delay 0.01, sine     -> effect      delay            ratio   2.35 "
             "conf 0.99");
   EXPECT_EQ(
-      TrialLine(12, "", "plant", 0, v, " (in truth)", "; said"),
+      diagnose::TrialLine(12, "", "plant", 0, v, " (in truth)", "; said"),
       "trial  12 plant -> effect      delay            (in truth) ratio   2.35 conf 0.99; said");
-  CalibrationTally t;
+  diagnose::CalibrationTally t;
   t.Add(false, true, "effect", true, 0.995);
   t.Add(true, false, "none", false, 0);
-  EXPECT_EQ(TallyText(t, "records"),
+  EXPECT_EQ(diagnose::TallyText(t, "records"),
             "records with an effect and a significant gap: 1, right effect named in 1 (100 %); "
             "verdicts 'cannot "
             "separate': 0\nclean records: 1, false alarms 0 (0 %)\ncalibration of the stated "

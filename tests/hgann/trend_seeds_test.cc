@@ -173,7 +173,7 @@ TEST(TrendSeeds, TheSameGenomesWhateverTheThreads) {
   EXPECT_EQ(a.names, b.names);
 }
 
-/// The HGANN configuration of a bundled bench (data/bimorph-fin/NAME), spec ranges, λ = 10 deg².
+/// The HGANN configuration of a bundled bench (data/bimorph-fin/<name>), spec ranges, λ = 10 deg².
 HgannFitnessConfig BenchConfig(const char* name) {
   const io::CaseSet set =
       io::LoadCaseSet(std::filesystem::path(PIEZOID_DATA_DIR) / "bimorph-fin" / name);

@@ -1,4 +1,5 @@
-// Every repository path named in README.md and docs/*.md exists. A path is a token like
+// Every repository path named in README.md, docs/*.md and the sources' comments exists. A path is
+// a token like
 // `opt/param_search.h`, `client/dashboard/`, `tests/deploy/*_test.sh` or `client/plots.{h,cc}`
 // whose first part is an entry of the repository's top folder (or, starting with ../, one that
 // resolves inside the repository from the document's folder); `*` must match at least one entry
@@ -73,8 +74,23 @@ bool Exists(const fs::path& root, const std::string& rel) {
   return true;
 }
 
-// The repository paths named in `doc` that do not exist, as "doc:line: path".
-std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc) {
+// The comment of a source line: after "//" or a block comment's "/*" or leading "*" (C, C++,
+// proto), after "#" (CMake, shell, Python); "" for a line without one.
+std::string CommentOf(const std::string& line, bool hash) {
+  if (hash) {
+    const auto at = line.find('#');
+    return at == std::string::npos || (at > 0 && line[at - 1] != ' ') ? "" : line.substr(at + 1);
+  }
+  if (const auto at = line.find("//"); at != std::string::npos) return line.substr(at + 2);
+  if (const auto at = line.find("/*"); at != std::string::npos) return line.substr(at + 2);
+  const auto first = line.find_first_not_of(' ');
+  return first != std::string::npos && line[first] == '*' ? line.substr(first + 1) : "";
+}
+
+// The repository paths named in `doc` that do not exist, as "doc:line: path". A source file
+// (`comments`) is read for its comments only.
+std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc,
+                                      bool comments = false) {
   std::set<std::string> top;
   for (const auto& e : fs::directory_iterator(root)) {
     const auto name = e.path().filename().string();
@@ -88,7 +104,11 @@ std::vector<std::string> MissingPaths(const fs::path& root, const fs::path& doc)
   std::vector<std::string> out;
   std::ifstream in(doc);
   std::string line;
+  const std::string ext = doc.extension().string();
+  const bool hash = ext == ".txt" || ext == ".sh" || ext == ".py" || ext == ".cmake" ||
+                    doc.filename() == "CMakeLists.txt";
   for (int n = 1; std::getline(in, line); ++n) {
+    if (comments) line = CommentOf(line, hash);
     for (auto it = std::sregex_iterator(line.begin(), line.end(), kToken);
          it != std::sregex_iterator(); ++it) {
       std::string token = (*it)[2];
@@ -120,6 +140,33 @@ std::vector<fs::path> Docs(const fs::path& root) {
   return docs;
 }
 
+// The sources whose comments are read: the C, C++, proto, CMake, shell and Python files git
+// would track (every folder of the top but build trees and dot-folders; tests/data holds data).
+std::vector<fs::path> Sources(const fs::path& root) {
+  std::vector<fs::path> out;
+  static const std::set<std::string> kExt = {".cc",  ".h",     ".c",  ".proto",
+                                             ".txt", ".cmake", ".sh", ".py"};
+  for (const auto& top : fs::directory_iterator(root)) {
+    const auto name = top.path().filename().string();
+    if (!top.is_directory() || name[0] == '.' || fs::exists(top.path() / "CMakeCache.txt") ||
+        name == "out")
+      continue;
+    for (auto it = fs::recursive_directory_iterator(top.path()); it != fs::end(it); ++it) {
+      const auto fname = it->path().filename().string();
+      // tests/layout's fixtures name stale paths on purpose.
+      if (it->is_directory() && (fname == "data" || fname[0] == '.' || fname == "node_modules" ||
+                                 it->path() == root / "tests" / "layout")) {
+        it.disable_recursion_pending();
+      } else if (it->is_regular_file() && kExt.count(it->path().extension().string()) &&
+                 fname.find(".pb.") == std::string::npos) {
+        out.push_back(it->path());
+      }
+    }
+  }
+  out.push_back(root / "CMakeLists.txt");
+  return out;
+}
+
 std::string Join(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
@@ -137,6 +184,18 @@ TEST(DocPaths, EveryRepositoryPathInTheDocsExists) {
     for (auto& m : MissingPaths(root, doc)) missing.push_back(std::move(m));
   }
   EXPECT_GE(docs, 2u);
+  EXPECT_TRUE(missing.empty()) << Join(missing);
+}
+
+TEST(DocPaths, EveryRepositoryPathInTheSourcesCommentsExists) {
+  const fs::path root = PIEZOID_SOURCE_DIR;
+  std::vector<std::string> missing;
+  size_t sources = 0;
+  for (const auto& source : Sources(root)) {
+    ++sources;
+    for (auto& m : MissingPaths(root, source, true)) missing.push_back(std::move(m));
+  }
+  EXPECT_GE(sources, 100u);
   EXPECT_TRUE(missing.empty()) << Join(missing);
 }
 
@@ -163,4 +222,26 @@ TEST(DocPaths, AStalePathIsCaught) {
   EXPECT_EQ(missing[1], "docs/a.md:3: opt/{ga,gone}.h (opt/gone.h)");
   EXPECT_EQ(missing[2], "docs/a.md:3: tests/deploy/*_validate.sh");
   EXPECT_EQ(missing[3], "docs/a.md:3: ../opt/old.h");
+}
+
+// In a source only the comments are read: a path in code (a string, an include of a generated
+// header) is not a claim about the tree.
+TEST(DocPaths, AStalePathInASourceCommentIsCaught) {
+  const fs::path root = fs::temp_directory_path() / ("pz_src_paths_" + std::to_string(::getpid()));
+  fs::remove_all(root);
+  fs::create_directories(root / "opt");
+  std::ofstream(root / "opt" / "ga.h") << "";
+  std::ofstream(root / "opt" / "ga.cc")
+      << "#include \"opt/ga.h\"\n"
+         "const char* kPath = \"opt/not_a_claim.h\";  // the GA of opt/ga.h\n"
+         "/* moved to opt/gone.h\n"
+         " * and opt/ga.h */\n";
+  std::ofstream(root / "opt" / "CMakeLists.txt") << "# opt/ga.cc and opt/old.cc\nSRCS opt/x.cc\n";
+  auto missing = MissingPaths(root, root / "opt" / "ga.cc", true);
+  const auto cmake = MissingPaths(root, root / "opt" / "CMakeLists.txt", true);
+  missing.insert(missing.end(), cmake.begin(), cmake.end());
+  fs::remove_all(root);
+  ASSERT_EQ(missing.size(), 2u) << Join(missing);
+  EXPECT_EQ(missing[0], "opt/ga.cc:3: opt/gone.h");
+  EXPECT_EQ(missing[1], "opt/CMakeLists.txt:1: opt/old.cc");
 }

@@ -257,6 +257,57 @@ std::vector<std::string> UnlistedSources(const fs::path& root) {
   return out;
 }
 
+// Whether the namespace block opened at `open` (the offset of "namespace") only forward-declares
+// (class/struct/enum names, comments): a file may name another folder's types that way.
+bool OnlyForwardDeclares(const std::string& text, size_t open) {
+  const size_t body = text.find('{', open);
+  const size_t end = text.find("\n}", body);
+  std::istringstream lines(text.substr(body + 1, end - body - 1));
+  static const std::regex kForward(
+      R"(^\s*((class|struct|enum class|enum)\s+\w+(\s*:\s*[\w:]+)?;\s*(//.*)?|//.*|)$)");
+  for (std::string line; std::getline(lines, line);)
+    if (!std::regex_match(line, kForward)) return false;
+  return true;
+}
+
+// Namespaces follow folders: a source of the product's folder F opens pz::F (or a namespace
+// inside it, or an anonymous one); another folder's namespace only to forward-declare its types.
+// model/, the floor everything stands on, also holds the project's base vocabulary in pz
+// (model/status.h, model/format.h), and model/kernels/ the C step kernels' C++ names in pz::pzk
+// (their C prefix pzk_). One line a stray block: "file:line: why".
+std::vector<std::string> NamespacesAgainstFolders(const fs::path& root) {
+  std::vector<std::string> out;
+  std::vector<std::string> errors;
+  const Floors f = ParseFloors(root / "cmake" / "floors.txt", errors);
+  static const std::regex kOpen(R"((^|\n)namespace ([A-Za-z_][\w:]*) \{)");
+  for (const auto& folder : f.order) {
+    if (folder.rfind("tests", 0) == 0 || folder == "bench" || folder == "fuzz" ||
+        !fs::is_directory(root / folder))
+      continue;
+    for (const auto& e : fs::recursive_directory_iterator(root / folder)) {
+      if (!IsSource(e.path())) continue;
+      const std::string text = ReadFile(e.path());
+      for (auto it = std::sregex_iterator(text.begin(), text.end(), kOpen);
+           it != std::sregex_iterator(); ++it) {
+        const std::string ns = (*it)[2];
+        const size_t at = it->position(0) + it->length(1);
+        const bool project = ns == "pz" || ns.rfind("pz::", 0) == 0;
+        const bool own =
+            !project || ns == "pz::" + folder || ns.rfind("pz::" + folder + "::", 0) == 0 ||
+            (folder == "model" && ns == "pz") ||
+            (ns == "pz::pzk" &&
+             fs::relative(e.path(), root).generic_string().rfind("model/kernels/", 0) == 0);
+        if (own || OnlyForwardDeclares(text, at)) continue;
+        const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
+        out.push_back(fs::relative(e.path(), root).generic_string() + ":" + std::to_string(line) +
+                      ": namespace " + ns + " in folder " + folder + "/ (pz::" + folder + ")");
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::string Join(const std::vector<std::string>& lines) {
   std::string s;
   for (const auto& l : lines) s += l + "\n";
@@ -293,6 +344,27 @@ class ScratchTree : public ::testing::Test {
 TEST(Floors, TheSourcesKeepToTheFloors) {
   const auto violations = CheckFloors(PIEZOID_SOURCE_DIR);
   EXPECT_TRUE(violations.empty()) << Join(violations);
+}
+
+TEST(Floors, NamespacesFollowFolders) {
+  const auto stray = NamespacesAgainstFolders(PIEZOID_SOURCE_DIR);
+  EXPECT_TRUE(stray.empty()) << Join(stray);
+}
+
+TEST_F(ScratchTree, ANamespaceOfAnotherFolderIsCaught) {
+  Write(root_ / "io" / "a.h",
+        "namespace pz::proto {\nclass Fit;  // forward\n}  // namespace pz::proto\n"
+        "namespace pz::io {\nint A();\n}  // namespace pz::io\n");
+  Write(root_ / "diagnose" / "b.cc",
+        "namespace pz::diagnose::detail {\nint B();\n}\n"
+        "namespace {\nint C();\n}\n"
+        "namespace pz::records {\nint D();\n}  // namespace pz::records\n");
+  Write(root_ / "model" / "s.h", "namespace pz {\nenum class StatusCode : int { kOk };\n}\n");
+  Write(root_ / "opt" / "c.h", "namespace pz {\nint E();\n}\n");
+  const auto v = NamespacesAgainstFolders(root_);
+  ASSERT_EQ(v.size(), 2u) << Join(v);
+  EXPECT_EQ(v[0], "diagnose/b.cc:7: namespace pz::records in folder diagnose/ (pz::diagnose)");
+  EXPECT_EQ(v[1], "opt/c.h:1: namespace pz in folder opt/ (pz::opt)");
 }
 
 TEST(Floors, EverySourceIsListedInItsCMakeLists) {

@@ -1,5 +1,5 @@
 // Creep over decades (model/effect_library.h `creep-spectrum`, issue 22): on a real-like stack
-// (diagnose/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
+// (synth/reallike.h, an independent plant) whose creep is logarithmic from 0.05 s to the
 // training window's length, the preisach family with the creep spectrum predicts the withheld
 // records near their true noise floor, where the single-relaxation `creep` does not; the spectrum's
 // weights stay non-negative; trained on the major loop alone, the varying-amplitude and reversal
@@ -13,16 +13,16 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <memory>
 #include <iostream>
+#include <limits>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <string>
 
 #include "diagnose/diagnose.h"
 #include "records/fit.h"
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 #include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 
@@ -41,8 +41,8 @@ const EffectInfo& Find(const std::vector<EffectInfo>& lib, const std::string& na
 /// 12 s, no sensor lag (the test is about the creep). Trained on a sine whose amplitude swings
 /// between 10 % and 100 % of the major loop's (the minor loops are taught, not extrapolated: the
 /// gap left is the creep's).
-RealLikeOptions Small(uint64_t seed) {
-  RealLikeOptions o;
+synth::RealLikeOptions Small(uint64_t seed) {
+  synth::RealLikeOptions o;
   o.train_s = 12;
   o.withheld_s = 8;
   o.sensor.oversample = 2;
@@ -62,21 +62,21 @@ RealLikeOptions Small(uint64_t seed) {
 }
 
 /// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
-std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects,
+std::map<std::string, double> Ratios(const synth::RealLikeSet& s, std::vector<EffectKind> effects,
                                      FitResult* out = nullptr) {
   return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
 TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
-  const RealLikeSet s = GenerateRealLikeSet(Small(3));
+  const synth::RealLikeSet s = GenerateRealLikeSet(Small(3));
   FitResult spectrum_fit;
   const auto spectrum = Ratios(s, {EffectKind::Named("creep-spectrum")}, &spectrum_fit);
   const auto single = Ratios(s, {EffectKind::Named("creep")});
   // What the family reaches on the same plant without creep (same drives and noise): the reversal
   // record's depths are partly beyond what 12 s of training teach (an excitation gap, not creep).
-  RealLikeOptions o = Small(3);
+  synth::RealLikeOptions o = Small(3);
   o.stack.creep_per_decade = 0;
-  const auto no_creep = Ratios(GenerateRealLikeSet(o), {});
+  const auto no_creep = Ratios(synth::GenerateRealLikeSet(o), {});
   // Relaxations 0.05 s … 12 s, two per decade: 0.05, 0.124, …, 12 s.
   ASSERT_EQ(spectrum_fit.params.size(), 6u);
   for (double w : spectrum_fit.params) EXPECT_GE(w, 0);
@@ -99,9 +99,9 @@ TEST(CreepSpectrumTest, BringsLogCreepToTheFloorWhereOneRelaxationDoesNot) {
 TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget) {
   // Trained on the major loop only (a 40 s constant-amplitude sine: what a user has), with the
   // sensor's lag: the set of `piezoid synth-stack --seed 4` (docs/real-recording.md).
-  RealLikeOptions o;
+  synth::RealLikeOptions o;
   o.seed = 4;
-  RealLikeSet s = GenerateRealLikeSet(o);
+  synth::RealLikeSet s = GenerateRealLikeSet(o);
   io::SkipSettling(s.set, 1.5, 100, "test");
   FitOptions f;
   f.family = "preisach";
@@ -155,7 +155,7 @@ TEST(CreepSpectrumTest, AMajorLoopFitExtrapolatesToTheMinorLoopsWithinTheTarget)
 }
 
 /// Each record's RMSE / its true noise RMS for a model with given parameters and family weights.
-std::map<std::string, double> RatiosOf(const RealLikeSet& s, const RecordModel& model,
+std::map<std::string, double> RatiosOf(const synth::RealLikeSet& s, const RecordModel& model,
                                        const std::vector<double>& p,
                                        const std::vector<double>& weights) {
   std::map<std::string, double> out;
@@ -174,12 +174,12 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePena
   // With those oracle weights fixed, the creep spectrum and the delay fitted on the full plant's
   // major loop bring every withheld record to the floor: the major loop identifies creep and lag;
   // what it does not identify is the interior of the Preisach triangle (the minor loops).
-  RealLikeOptions o;
+  synth::RealLikeOptions o;
   o.seed = 1;
-  RealLikeSet full = GenerateRealLikeSet(o);
+  synth::RealLikeSet full = GenerateRealLikeSet(o);
   o.stack.creep_per_decade = 0;
   o.sensor.lag_samples = 0;
-  RealLikeSet plain = GenerateRealLikeSet(o);
+  synth::RealLikeSet plain = GenerateRealLikeSet(o);
   io::SkipSettling(full.set, 1.5, 100, "test");
   io::SkipSettling(plain.set, 1.5, 100, "test");
   const auto train = full.set.WithRole(model::CaseRole::kTrain);
@@ -259,13 +259,13 @@ TEST(CreepSpectrumTest, AMajorLoopIdentifiesTheCreepTheLagAndWithTheTrianglePena
 }
 
 TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
-  RealLikeOptions o = Small(1);
+  synth::RealLikeOptions o = Small(1);
   o.train_drive.clear();
   o.train_s = 0.4;
   o.withheld_s = 1;
   o.ramp = o.reversals = false;
   o.second_sine = true;  // a withheld record for the diagnosis
-  const RealLikeSet s = GenerateRealLikeSet(o);
+  const synth::RealLikeSet s = GenerateRealLikeSet(o);
   FitOptions f;
   f.family = "prandtl-ishlinskii";
   f.effects = {EffectKind::Named("creep-spectrum")};
@@ -280,7 +280,7 @@ TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
   EXPECT_TRUE(Find(lib, "creep").unsupported.empty());
   // The diagnosis's default candidates leave out what the records cannot support; named, it is
   // the same error.
-  RecordDiagnoseOptions d;
+  diagnose::RecordDiagnoseOptions d;
   d.family = "prandtl-ishlinskii";
   d.propose = false;
   d.fit.uncertainty = false;
@@ -288,11 +288,12 @@ TEST(CreepSpectrumTest, ARecordTooShortForTheSpectrumIsRefused) {
   d.fit.search.pso.particles = 6;
   d.fit.search.pso.iterations = 4;
   d.fit.lm.max_iterations = 5;
-  const RecordDiagnosis dg = DiagnoseRecords(s.set, d);
+  const diagnose::RecordDiagnosis dg = DiagnoseRecords(s.set, d);
   EXPECT_FALSE(dg.candidates.empty());
   for (const auto& c : dg.candidates) EXPECT_NE(c.kind, EffectKind::Named("creep-spectrum"));
   d.candidates = {EffectKind::Named("creep-spectrum")};
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { DiagnoseRecords(s.set, d); }), "at least 0.5 s");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { diagnose::DiagnoseRecords(s.set, d); }),
+                "at least 0.5 s");
 }
 
 }  // namespace

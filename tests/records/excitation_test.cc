@@ -1,5 +1,5 @@
 // The excitation and identifiability report (records/excitation.h, issue 22 item 3) on real-like
-// stack records (diagnose/reallike.h): it catches every withheld record whose reversals the
+// stack records (synth/reallike.h): it catches every withheld record whose reversals the
 // training lacks (the ramped sine, the random reversals, a smaller sine), says nothing for a
 // withheld record within the training excitation, names a drive beyond the range, faster rates
 // and holds; the proposed training drive covers what the withheld records needed; the diagnosis
@@ -14,7 +14,7 @@
 
 #include "diagnose/diagnose.h"
 #include "records/fit.h"
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -22,8 +22,8 @@ namespace {
 
 using model::CaseRole;
 
-RealLikeOptions Short(uint64_t seed) {
-  RealLikeOptions o;
+synth::RealLikeOptions Short(uint64_t seed) {
+  synth::RealLikeOptions o;
   o.train_s = 12;
   o.withheld_s = 10;
   o.sensor.oversample = 2;
@@ -46,15 +46,16 @@ bool Needs(const WithheldExcitation& w, ExcitationNeed::Kind k) {
 }
 
 /// Adds a withheld record of the set's plant on `d` (the training's bias and amplitude by default).
-void AddWithheld(RealLikeSet& s, RealLikeDrive d, const std::string& name, uint64_t seed) {
-  const RealLikePlant plant(s.options.stack);
+void AddWithheld(synth::RealLikeSet& s, synth::RealLikeDrive d, const std::string& name,
+                 uint64_t seed) {
+  const synth::RealLikePlant plant(s.options.stack);
   s.set.records.push_back(
       SynthesizeRealLikeRecord(plant, s.options.sensor, d, name, CaseRole::kValidate, seed));
 }
 
-RealLikeDrive Sine(const RealLikeSet& s, double amplitude_factor, double frequency_factor,
-                   double phase) {
-  RealLikeDrive d;
+synth::RealLikeDrive Sine(const synth::RealLikeSet& s, double amplitude_factor,
+                          double frequency_factor, double phase) {
+  synth::RealLikeDrive d;
   d.rest_level = s.options.stack.u_lo;
   d.bias = (s.options.stack.u_lo + s.options.stack.u_hi) / 2;
   d.amplitude =
@@ -67,7 +68,7 @@ RealLikeDrive Sine(const RealLikeSet& s, double amplitude_factor, double frequen
 
 TEST(ExcitationTest, CatchesEveryWithheldRecordWhoseReversalsTrainingLacks) {
   for (uint64_t seed : {1u, 2u, 3u, 4u}) {
-    RealLikeSet s = GenerateRealLikeSet(Short(seed));
+    synth::RealLikeSet s = GenerateRealLikeSet(Short(seed));
     AddWithheld(s, Sine(s, 0.5, 1, 0.3 * static_cast<double>(seed)), "half-sine", seed);
     const ExcitationReport r = AnalyseExcitation(s.set);
     ASSERT_EQ(r.withheld.size(), 4u);
@@ -92,15 +93,15 @@ TEST(ExcitationTest, CatchesEveryWithheldRecordWhoseReversalsTrainingLacks) {
 }
 
 TEST(ExcitationTest, NamesRangeRatesAndHolds) {
-  RealLikeOptions o = Short(5);
+  synth::RealLikeOptions o = Short(5);
   o.amplitude_share = 0.4;
   o.ramp = o.reversals = o.second_sine = false;
-  RealLikeSet s = GenerateRealLikeSet(o);
+  synth::RealLikeSet s = GenerateRealLikeSet(o);
   AddWithheld(s, Sine(s, 1.12, 1, 1), "wider", 1);
   AddWithheld(s, Sine(s, 1, 4, 2), "faster", 2);
   AddWithheld(s, Sine(s, 1, 1, 3), "same", 3);
-  RealLikeDrive steps = Sine(s, 1, 1, 0);
-  steps.kind = RealLikeDrive::Kind::kSamples;
+  synth::RealLikeDrive steps = Sine(s, 1, 1, 0);
+  steps.kind = synth::RealLikeDrive::Kind::kSamples;
   steps.samples_fs_hz = o.sensor.fs_hz;
   for (double level : {45.0, 75.0, 105.0}) steps.samples.insert(steps.samples.end(), 400, level);
   steps.duration_s = 6;
@@ -126,16 +127,16 @@ TEST(ExcitationTest, NamesRangeRatesAndHolds) {
 }
 
 /// Replaces the set's training record by the proposed drive played on its plant.
-void TrainOnProposal(RealLikeSet& s, const TrainingDriveProposal& p) {
-  RealLikeDrive d;
-  d.kind = RealLikeDrive::Kind::kSamples;
+void TrainOnProposal(synth::RealLikeSet& s, const TrainingDriveProposal& p) {
+  synth::RealLikeDrive d;
+  d.kind = synth::RealLikeDrive::Kind::kSamples;
   d.rest_level = p.u.front();
   d.rest_s = p.rest_s;
   d.samples.assign(p.u.begin() + static_cast<std::ptrdiff_t>(std::llround(p.rest_s * p.fs_hz)),
                    p.u.end());
   d.samples_fs_hz = p.fs_hz;
   d.duration_s = static_cast<double>(d.samples.size()) / p.fs_hz;
-  const RealLikePlant plant(s.options.stack);
+  const synth::RealLikePlant plant(s.options.stack);
   s.set.records[0] =
       SynthesizeRealLikeRecord(plant, s.options.sensor, d, "proposed", CaseRole::kTrain, 9);
 }
@@ -144,7 +145,7 @@ void TrainOnProposal(RealLikeSet& s, const TrainingDriveProposal& p) {
 // a range that the training's rate would cross in hours: the proposal asked for 400 MB. It stays
 // bounded (4e6 samples) and finite, sampled more slowly when the records' rate would exceed that.
 TEST(ExcitationTest, TheProposedDriveStaysBoundedWhateverTheRecords) {
-  RealLikeSet s = GenerateRealLikeSet(Short(6));
+  synth::RealLikeSet s = GenerateRealLikeSet(Short(6));
   io::Record* withheld = nullptr;
   for (io::Record& r : s.set.records)
     if (r.role != CaseRole::kTrain) withheld = &r;
@@ -177,7 +178,7 @@ TEST(ExcitationTest, TheProposedDriveStaysBoundedWhateverTheRecords) {
 }
 
 TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
-  RealLikeSet s = GenerateRealLikeSet(Short(6));
+  synth::RealLikeSet s = GenerateRealLikeSet(Short(6));
   const ExcitationReport before = AnalyseExcitation(s.set);
   ASSERT_TRUE(Needs(Of(before, s.set, "ramp"), ExcitationNeed::Kind::kReversals));
   const TrainingDriveProposal p = ProposeTrainingDrive(s.set, before, 1);
@@ -199,16 +200,16 @@ TEST(ExcitationTest, TheProposedDriveCoversWhatTheWithheldRecordsNeed) {
 // records are an excitation gap; trained on the proposed drive played on the same plant, every
 // withheld record is predicted within the significance threshold (1.25 ×) of the true floor.
 TEST(ExcitationTest, TheProposedDriveBringsThePreisachFamilyToTheFloor) {
-  RealLikeOptions o = Short(5);
+  synth::RealLikeOptions o = Short(5);
   o.stack.creep_per_decade = 0;
   o.sensor.lag_samples = 0;
-  RealLikeSet s = GenerateRealLikeSet(o);
+  synth::RealLikeSet s = GenerateRealLikeSet(o);
   FitOptions f;
   f.family = "preisach";
   f.family_options.pi_operators = 20;
   f.uncertainty = false;
   // Each record's RMSE / its true noise RMS, by name, of a fit on the set's training record.
-  const auto ratios = [&](const RealLikeSet& set) {
+  const auto ratios = [&](const synth::RealLikeSet& set) {
     const FitResult r = FitRecords(set.set, f);
     std::map<std::string, double> out;
     for (size_t i = 0; i < set.set.records.size(); ++i)
@@ -229,7 +230,7 @@ TEST(ExcitationTest, TheProposedDriveBringsThePreisachFamilyToTheFloor) {
 }
 
 TEST(ExcitationTest, TheDiagnosisSentenceTellsAnExcitationGapFromMissingPhysics) {
-  const RealLikeSet s = GenerateRealLikeSet(Short(2));
+  const synth::RealLikeSet s = GenerateRealLikeSet(Short(2));
   const ExcitationReport r = AnalyseExcitation(s.set);
   std::vector<double> ratio(s.set.records.size(), 1.0);
   const auto set_ratio = [&](const std::string& name, double x) {
@@ -251,8 +252,8 @@ TEST(ExcitationTest, TheDiagnosisSentenceTellsAnExcitationGapFromMissingPhysics)
 }
 
 TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
-  const RealLikeSet s = GenerateRealLikeSet(Short(3));
-  RecordDiagnoseOptions o;
+  const synth::RealLikeSet s = GenerateRealLikeSet(Short(3));
+  diagnose::RecordDiagnoseOptions o;
   o.family = "prandtl-ishlinskii";
   o.candidates = {EffectKind::Named("delay")};
   o.propose = false;
@@ -260,7 +261,7 @@ TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
   o.fit.search.pso.particles = 12;
   o.fit.search.pso.iterations = 20;
   o.fit.lm.max_iterations = 10;
-  const RecordDiagnosis d = DiagnoseRecords(s.set, o);
+  const diagnose::RecordDiagnosis d = DiagnoseRecords(s.set, o);
   ASSERT_EQ(d.excitation.withheld.size(), 3u);
   EXPECT_TRUE(Needs(Of(d.excitation, s.set, "ramp"), ExcitationNeed::Kind::kReversals));
   ASSERT_TRUE(d.significant) << d.verdict;  // Prandtl–Ishlinskii is not this plant
@@ -269,7 +270,7 @@ TEST(ExcitationTest, TheRecordsDiagnosisCarriesTheReportAndTheSentence) {
 }
 
 TEST(ExcitationTest, BadInputIsNamed) {
-  RealLikeSet s = GenerateRealLikeSet(Short(1));
+  synth::RealLikeSet s = GenerateRealLikeSet(Short(1));
   io::Record& t = s.set.records[0];
   std::fill(t.u.begin(), t.u.end(), 12.0);
   PZ_EXPECT_HAS(testing::InputErrorOf([&] { AnalyseExcitation(s.set); }),

@@ -1,22 +1,20 @@
 // Identification of every plant family on records shaped like a real recording (records/fit.h,
 // issue 14): a rest segment, a drive that starts at an arbitrary phase, a response offset, noise
 // and quantisation — and on a multisine record. The records are made by the project's own plants
-// (diagnose/synthetic.h) with known parameters; each family must explain the withheld window down
+// (synth/synthetic.h) with known parameters; each family must explain the withheld window down
 // to the noise (RMSE < 1.5 × the noise floor) and the result must not depend on the thread count.
 #include "records/fit.h"
 
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cmath>
 #include <iostream>
 #include <limits>
 #include <numbers>
 
 #include "model/bimorph.h"
-
-#include <cmath>
-
-#include "diagnose/synthetic.h"
+#include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -48,11 +46,11 @@ constexpr double kNoise = 0.02, kQuantum = 0.01;
 const double kFloor = std::sqrt(kNoise * kNoise + kQuantum * kQuantum / 12);
 
 /// One record of the truth cut into a training window and a withheld window.
-io::RecordSet MakeSet(const Case& c, Waveform w, uint64_t seed) {
+io::RecordSet MakeSet(const Case& c, synth::Waveform w, uint64_t seed) {
   const DataScale scale = TruthScale(c);
   auto fam = std::shared_ptr<const Family>(MakeFamily(c.family, scale));
   RecordModel truth(fam, {}, scale);
-  DriveShape d;
+  synth::DriveShape d;
   d.waveform = w;
   d.amplitude = c.amplitude;
   d.bias = c.bias;
@@ -63,14 +61,14 @@ io::RecordSet MakeSet(const Case& c, Waveform w, uint64_t seed) {
   d.duration_s = 5.6;
   d.fs_hz = 1000;
   d.seed = seed;
-  Measurement m{-1.7, kNoise, kQuantum, seed};
+  synth::Measurement m{-1.7, kNoise, kQuantum, seed};
   std::vector<double> weights;
   std::vector<double> params = c.truth;
   if (fam->linear()) {
     weights = c.truth;
     params.clear();
   }
-  io::Record r = SynthesizeRecord(truth, params, weights, d, m, "rec", CaseRole::kTrain);
+  io::Record r = synth::SynthesizeRecord(truth, params, weights, d, m, "rec", CaseRole::kTrain);
   io::RecordSet set;
   set.source = "synthetic";
   set.format = "synthetic";
@@ -118,28 +116,30 @@ std::vector<Case> Cases() {
   };
 }
 
-class FamilyFit : public ::testing::TestWithParam<std::tuple<int, Waveform>> {};
+class FamilyFit : public ::testing::TestWithParam<std::tuple<int, synth::Waveform>> {};
 
 TEST_P(FamilyFit, ExplainsTheWithheldWindowDownToTheNoise) {
   const Case c = Cases()[static_cast<size_t>(std::get<0>(GetParam()))];
-  const Waveform w = std::get<1>(GetParam());
+  const synth::Waveform w = std::get<1>(GetParam());
   const io::RecordSet set = MakeSet(c, w, 11);
   const FitResult r = FitRecords(set, QuickOptions(c.family));
   ASSERT_EQ(r.metrics.size(), 2u);
-  EXPECT_LT(r.metrics[0].rmse, 1.5 * kFloor) << c.family << " " << WaveformName(w) << " train";
-  EXPECT_LT(r.metrics[1].rmse, 1.5 * kFloor) << c.family << " " << WaveformName(w) << " withheld";
+  EXPECT_LT(r.metrics[0].rmse, 1.5 * kFloor)
+      << c.family << " " << synth::WaveformName(w) << " train";
+  EXPECT_LT(r.metrics[1].rmse, 1.5 * kFloor)
+      << c.family << " " << synth::WaveformName(w) << " withheld";
   EXPECT_NEAR(r.metrics[1].offset, -1.7, 0.2);
   EXPECT_LT(r.metrics[1].nrmse_pct, 1.0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Families, FamilyFit,
                          ::testing::Combine(::testing::Range(0, 6),
-                                            ::testing::Values(Waveform::kSine,
-                                                              Waveform::kMultisine)),
+                                            ::testing::Values(synth::Waveform::kSine,
+                                                              synth::Waveform::kMultisine)),
                          [](const auto& info) {
                            std::string n =
                                Cases()[static_cast<size_t>(std::get<0>(info.param))].family + "_" +
-                               WaveformName(std::get<1>(info.param));
+                               synth::WaveformName(std::get<1>(info.param));
                            for (char& ch : n)
                              if (ch == '-') ch = '_';
                            return n;
@@ -162,8 +162,8 @@ TEST(RecordFit, TheFinGeometryIsIdentifiedFromASweepThroughItsFirstMode) {
   EXPECT_EQ(fam->params()[10].name, "active_length");
   EXPECT_EQ(fam->params()[11].name, "tip_length");
   RecordModel truth(fam, {}, scale);
-  DriveShape d;
-  d.waveform = Waveform::kSweep;
+  synth::DriveShape d;
+  d.waveform = synth::Waveform::kSweep;
   d.amplitude = c.amplitude;
   d.bias = c.bias;
   d.frequency_hz = 20;
@@ -173,8 +173,9 @@ TEST(RecordFit, TheFinGeometryIsIdentifiedFromASweepThroughItsFirstMode) {
   d.duration_s = 2.1;
   d.fs_hz = 2000;
   d.seed = 5;
-  io::Record r = SynthesizeRecord(truth, c.truth, {}, d, Measurement{-1.7, kNoise, kQuantum, 5},
-                                  "sweep", CaseRole::kTrain);
+  io::Record r =
+      synth::SynthesizeRecord(truth, c.truth, {}, d, synth::Measurement{-1.7, kNoise, kQuantum, 5},
+                              "sweep", CaseRole::kTrain);
   io::RecordSet set;
   set.source = "synthetic";
   set.records = {r};
@@ -196,7 +197,7 @@ TEST(RecordFit, TheFinGeometryIsIdentifiedFromASweepThroughItsFirstMode) {
 
 TEST(RecordFit, SameResultOnOneAndTwoThreads) {
   const Case c = Cases()[1];
-  const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
+  const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 3);
   FitOptions o = QuickOptions(c.family);
   o.threads = 1;
   const FitResult a = FitRecords(set, o);
@@ -214,7 +215,7 @@ TEST(RecordFit, EvaluationsSideBySideAreTheSameBitForBit) {
   // lane's output; a family without lanes and a pair of odd sizes take Evaluate one by one. (The
   // thread pool's groups: tests/opt/ga_test.cc.)
   const Case c = Cases()[4];
-  const io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
+  const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 5);
   const auto train = set.WithRole(CaseRole::kTrain);
   const DataScale scale = MeasureScale(train);
   std::vector<std::vector<double>> family(6);
@@ -277,7 +278,7 @@ TEST(RecordFit, ALinearFamilysOutputFromItsSolveIsSimulatesBitForBit) {
   // regressor pass); with a delay or a creep of the drive, the output is what RecordModel::Simulate
   // gives for the solved weights, bit for bit.
   const Case c = Cases()[3];
-  const io::RecordSet set = MakeSet(c, Waveform::kSine, 7);
+  const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 7);
   const auto train = set.WithRole(CaseRole::kTrain);
   const DataScale scale = MeasureScale(train);
   for (const char* effects : {"delay", "creep"}) {
@@ -318,7 +319,7 @@ TEST(RecordFit, TheSizedSearchBudgetFollowsTheSearchedParametersAndFlagsWin) {
                 "repetitions");
   // prandtl-ishlinskii + delay searches the delay alone (its weights are solved).
   const Case c = Cases()[3];
-  const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
+  const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 3);
   FitOptions o = QuickOptions("prandtl-ishlinskii");
   o.effects = {ParseEffect("delay")};
   o.uncertainty = false;
@@ -358,7 +359,7 @@ TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
   // well constrained and its σ covers the truth (|estimate − truth| < 4 σ), the same on two
   // threads.
   const Case c = Cases()[1];
-  const io::RecordSet set = MakeSet(c, Waveform::kSine, 7);
+  const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 7);
   FitOptions o = QuickOptions(c.family);
   o.search.algorithm = opt::SearchAlgorithm::kDe;
   o.search.de.population = 20;
@@ -388,7 +389,7 @@ TEST(RecordFit, DifferentialEvolutionFitsAndTheUncertaintyTableCoversTheTruth) {
 
 TEST(RecordFit, NegativeGainIsHandledByPolarity) {
   Case c = Cases()[1];
-  io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
+  io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 5);
   for (auto& r : set.records)
     for (double& v : r.y) v = -v;
   const FitResult r = FitRecords(set, QuickOptions(c.family));
@@ -400,7 +401,7 @@ TEST(RecordFit, TheLargestErrorIsReportedWithItsTime) {
   // A spike planted in the withheld window: the metrics say how large and where, so that a report
   // can tell a one-sample glitch (a jump at the start, a lagging sensor) from a blow-up.
   Case c = Cases()[1];
-  io::RecordSet set = MakeSet(c, Waveform::kSine, 5);
+  io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 5);
   const FitResult r = FitRecords(set, QuickOptions(c.family));
   io::Record spiked = set.records[1];
   const size_t k = spiked.first_scored + (spiked.end_scored - spiked.first_scored) / 3;
@@ -429,7 +430,7 @@ TEST(RecordFit, AWindowThatEndsInsideTheRestGivesEveryFamilyItsRestOutput) {
   // gave NaN (its fits then diverged on every vector, or reported RMSE nan).
   for (const Case& c : Cases()) {
     SCOPED_TRACE(c.family);
-    const io::RecordSet set = MakeSet(c, Waveform::kSine, 3);
+    const io::RecordSet set = MakeSet(c, synth::Waveform::kSine, 3);
     io::Record r = set.records[0];
     ASSERT_GT(r.rest_samples, 100u);
     io::SetWindow(r, r.t[10], r.t[60], 20, "inside the rest");
@@ -468,7 +469,7 @@ class DivergingFamily final : public Family {
 
 TEST(RecordFit, AFitWhoseEverySimulationDivergesIsANamedError) {
   // Issue 37: `piezoid fit` reported RMSE nan on every record and wrote a fit.json of NaN.
-  const io::RecordSet set = MakeSet(Cases()[1], Waveform::kSine, 1);
+  const io::RecordSet set = MakeSet(Cases()[1], synth::Waveform::kSine, 1);
   const DataScale scale = TruthScale(Cases()[1]);
   FitOptions o = QuickOptions("backlash-like");
   o.search.pso.particles = 4;
@@ -485,7 +486,7 @@ TEST(RecordFit, AFitWhoseEverySimulationDivergesIsANamedError) {
 
 TEST(RecordFit, BadRequestsAreNamed) {
   using pz::testing::InputErrorOf;
-  io::RecordSet set = MakeSet(Cases()[1], Waveform::kSine, 1);
+  io::RecordSet set = MakeSet(Cases()[1], synth::Waveform::kSine, 1);
   FitOptions o = QuickOptions("jiles-atherton");
   PZ_EXPECT_HAS(InputErrorOf([&] { FitRecords(set, o); }),
                 "--family 'jiles-atherton' is unknown (families: stack-bouc-wen");

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/reallike_ring.h"
+#include "synth/reallike_ring.h"
 #include "tests/testing/expect_error.h"
 #include "tests/testing/series.h"
 
@@ -192,12 +192,12 @@ TEST(NoiseFloorSetTest, ARepeatGroupIsTheFloorAndTheSensorsNoiseIsWarnedAbout) {
   PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { EstimateNoiseFloor(other); }), "not a repeat");
 }
 
-// The check on the second real-like generator (diagnose/reallike_ring.h; never tuned on): a 10 kHz
+// The check on the second real-like generator (synth/reallike_ring.h; never tuned on): a 10 kHz
 // stage whose rests ring (740 Hz) and settle after the step to them, chatter drives recorded three
 // times. The floor is the repeats' (what the stage repeats to), the rest's settled part reads the
 // sensor's white noise, and the two are said to disagree.
 TEST(NoiseFloorSetTest, TheRingingStagesFloorIsItsRepeatability) {
-  RingingOptions o = RingingDefaults();
+  synth::RingingOptions o = synth::RingingDefaults();
   o.rest_s = 0.4;
   o.loops_s = 0.3;
   o.chatter_s = 0.3;
@@ -205,7 +205,7 @@ TEST(NoiseFloorSetTest, TheRingingStagesFloorIsItsRepeatability) {
   o.withheld_loops_hz = {};
   for (uint64_t seed : {1u, 2u}) {
     o.seed = seed;
-    const RingingSet s = GenerateRingingSet(o);
+    const synth::RingingSet s = GenerateRingingSet(o);
     const NoiseFloor nf = EstimateNoiseFloor(s.set);
     ASSERT_EQ(nf.used, "repeats") << nf.Summary("um");
     // The wander is slow (0.1 s over 0.3 s records): a few independent values per record, so the

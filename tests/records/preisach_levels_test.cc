@@ -1,7 +1,7 @@
 // The Preisach family at 40+ levels (issue 37): the normal equations summed without the rows
 // (records/preisach_normal.h) equal the dense rows' to rounding, the incremental active set
 // (records/nnls.h) gives the Lawson–Hanson optimum, the levels are chosen by cross-validation, and
-// on the independent relay plant (diagnose/relay_preisach_check.h, never tuned on) the family
+// on the independent relay plant (synth/relay_preisach_check.h, never tuned on) the family
 // reaches the noise floor in sample and on withheld records inside the training excitation.
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "records/nnls.h"
 #include "records/preisach_family.h"
 #include "records/preisach_normal.h"
-#include "diagnose/relay_preisach_check.h"
+#include "synth/relay_preisach_check.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -186,13 +186,13 @@ TEST(PreisachLevels, UndoingTheCreepSpectrumInvertsIt) {
 }
 
 /// The check set, short: 50 Hz, 100 s of training (the bench's figure: bench_preisach_check).
-RelayPreisachCheckSet ShortCheck(uint64_t seed) {
-  RelayPreisachCheckOptions o;
+synth::RelayPreisachCheckSet ShortCheck(uint64_t seed) {
+  synth::RelayPreisachCheckOptions o;
   o.fs_hz = 50;
   o.train_s = 100;
   o.withheld_s = 30;
   o.seed = seed;
-  return GenerateRelayPreisachCheck(o);
+  return synth::GenerateRelayPreisachCheck(o);
 }
 
 FitOptions AutoOptions(int threads) {
@@ -211,7 +211,7 @@ FitOptions AutoOptions(int threads) {
 // (delay); the quadratic drive is the grid's to follow (a Preisach grid over a monotone drive
 // transform is a Preisach grid).
 TEST(RelayPreisachCheck, LevelsByValidationReachTheFloorInSampleAndWithheld) {
-  const RelayPreisachCheckSet s = ShortCheck(1);
+  const synth::RelayPreisachCheckSet s = ShortCheck(1);
   const FitResult r = FitRecords(s.set, AutoOptions(2));
   ASSERT_TRUE(r.resolution.used);
   std::cout << r.resolution.Describe() << "\n";
@@ -237,7 +237,7 @@ TEST(RelayPreisachCheck, LevelsByValidationReachTheFloorInSampleAndWithheld) {
 // Without the effects the truth has, the floor is out of reach at any resolution: the levels are
 // not what is missing (the issue's 12 and 24 levels: the creep and the lag were).
 TEST(RelayPreisachCheck, WithoutItsCreepAndLagNoResolutionReachesTheFloor) {
-  const RelayPreisachCheckSet s = ShortCheck(1);
+  const synth::RelayPreisachCheckSet s = ShortCheck(1);
   FitOptions f = AutoOptions(2);
   f.effects.clear();
   const FitResult r = FitRecords(s.set, f);
@@ -247,12 +247,14 @@ TEST(RelayPreisachCheck, WithoutItsCreepAndLagNoResolutionReachesTheFloor) {
 }
 
 TEST(RelayPreisachCheck, BadOptionsNameTheField) {
-  RelayPreisachCheckOptions o;
+  synth::RelayPreisachCheckOptions o;
   o.relay_levels = 20;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { GenerateRelayPreisachCheck(o); }), "relay_levels");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::GenerateRelayPreisachCheck(o); }),
+                "relay_levels");
   o = {};
   o.creep_tau_s[1] = -1;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { GenerateRelayPreisachCheck(o); }), "creep_tau_s[1]");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { synth::GenerateRelayPreisachCheck(o); }),
+                "creep_tau_s[1]");
 }
 
 }  // namespace

@@ -11,7 +11,7 @@
 #include <numbers>
 #include <random>
 
-#include "diagnose/extrapolation.h"
+#include "records/extrapolation.h"
 #include "records/fit.h"
 #include "tests/testing/expect_error.h"
 

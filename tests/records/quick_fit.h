@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "records/fit.h"
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 
 namespace pz::testing {
 
@@ -27,7 +27,7 @@ inline records::FitOptions QuickPreisach(std::vector<records::EffectKind> effect
 }
 
 /// Each record's RMSE / its true noise RMS, by name, for the fit `f` of the set (kept in *out).
-inline std::map<std::string, double> FloorRatios(const records::RealLikeSet& s,
+inline std::map<std::string, double> FloorRatios(const synth::RealLikeSet& s,
                                                  const records::FitOptions& f,
                                                  records::FitResult* out = nullptr) {
   records::FitResult r = records::FitRecords(s.set, f);

@@ -1,5 +1,5 @@
 // Rate dependence (model/effect_library.h `rate-dependence`, issue 22): on a real-like stack
-// (diagnose/reallike.h, an independent plant) whose loops widen with the drive rate up to a bound,
+// (synth/reallike.h, an independent plant) whose loops widen with the drive rate up to a bound,
 // trained on sines at 0.5, 2 and 8 Hz, the preisach family with the effect predicts withheld sines
 // at other frequencies and a chirp within 1.25 × their true noise floor, where the family alone
 // does not, and the records diagnosis names rate dependence; on the same records of a plant with an
@@ -13,9 +13,9 @@
 
 #include "diagnose/diagnose.h"
 #include "records/excitation.h"
-#include "diagnose/extrapolation.h"
+#include "records/extrapolation.h"
 #include "records/fit.h"
-#include "diagnose/reallike.h"
+#include "synth/reallike.h"
 #include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"
 
@@ -24,8 +24,8 @@ namespace {
 
 /// Training sines at 0.5, 2 and 8 Hz (6 s each); withheld sines at 1 and 4 Hz and a chirp over
 /// 0.5–8 Hz; no creep, no sensor lag (the test is about the rate).
-RealLikeOptions Rates(uint64_t seed) {
-  RealLikeOptions o;
+synth::RealLikeOptions Rates(uint64_t seed) {
+  synth::RealLikeOptions o;
   o.train_s = 6;
   o.withheld_s = 6;
   o.sensor.oversample = 2;
@@ -43,39 +43,39 @@ RealLikeOptions Rates(uint64_t seed) {
 /// The set, each record scored from 1.5 s after its rest (`--settle-s 1.5`, io::SkipSettling: the
 /// jump from the rest to the sine's phase is a step the recorder cannot sample, and a step's rate
 /// is no drive rate).
-RealLikeSet Generate(const RealLikeOptions& o) {
-  RealLikeSet s = GenerateRealLikeSet(o);
+synth::RealLikeSet Generate(const synth::RealLikeOptions& o) {
+  synth::RealLikeSet s = GenerateRealLikeSet(o);
   io::SkipSettling(s.set, 1.5, 20, "settle");
   return s;
 }
 
-RealLikeOptions RatePlant(uint64_t seed) {
-  RealLikeOptions o = Rates(seed);
+synth::RealLikeOptions RatePlant(uint64_t seed) {
+  synth::RealLikeOptions o = Rates(seed);
   o.stack.rate_lag_v = 4;       // the bound of the lag [V]
   o.stack.rate_time_s = 0.005;  // knee at 800 V/s: 0.5 Hz below it, 8 Hz well above
   return o;
 }
 
 /// Each withheld record's RMSE / its true noise RMS, by name (the quick Preisach fit).
-std::map<std::string, double> Ratios(const RealLikeSet& s, std::vector<EffectKind> effects,
+std::map<std::string, double> Ratios(const synth::RealLikeSet& s, std::vector<EffectKind> effects,
                                      FitResult* out = nullptr) {
   return testing::FloorRatios(s, testing::QuickPreisach(std::move(effects)), out);
 }
 
-RecordDiagnoseOptions QuickDiagnosis() {
-  RecordDiagnoseOptions d;
+diagnose::RecordDiagnoseOptions QuickDiagnosis() {
+  diagnose::RecordDiagnoseOptions d;
   d.family = "preisach";
   d.propose = false;
   d.fit = testing::QuickPreisach({});
   return d;
 }
 
-std::string Named(const RecordDiagnosis& d) {
+std::string Named(const diagnose::RecordDiagnosis& d) {
   return d.named >= 0 ? EffectName(d.candidates[static_cast<size_t>(d.named)].kind) : "nothing";
 }
 
 TEST(RateDependenceTest, ThePlantsRecordsCoverRates) {
-  const RealLikeSet s = Generate(RatePlant(1));
+  const synth::RealLikeSet s = Generate(RatePlant(1));
   ASSERT_EQ(s.set.records.size(), 6u);
   EXPECT_EQ(s.set.records[0].name, "train-0.5hz");
   EXPECT_EQ(s.set.records[5].name, "chirp");
@@ -88,7 +88,7 @@ TEST(RateDependenceTest, ThePlantsRecordsCoverRates) {
 }
 
 TEST(RateDependenceTest, BringsRateDependentLoopsToTheFloorWhereTheFamilyAloneDoesNot) {
-  const RealLikeSet s = Generate(RatePlant(1));
+  const synth::RealLikeSet s = Generate(RatePlant(1));
   FitResult fit;
   const auto with = Ratios(s, {EffectKind::Named("rate-dependence")}, &fit);
   const auto without = Ratios(s, {});
@@ -112,16 +112,16 @@ TEST(RateDependenceTest, BringsRateDependentLoopsToTheFloorWhereTheFamilyAloneDo
 }
 
 TEST(RateDependenceTest, TheDiagnosisNamesRateDependence) {
-  const RecordDiagnosis d = DiagnoseRecords(Generate(RatePlant(2)).set, QuickDiagnosis());
+  const diagnose::RecordDiagnosis d = DiagnoseRecords(Generate(RatePlant(2)).set, QuickDiagnosis());
   ASSERT_TRUE(d.significant) << d.verdict;
   EXPECT_EQ(d.verdict_kind, "effect") << d.verdict;
   EXPECT_EQ(Named(d), "rate-dependence") << d.verdict;
 }
 
 TEST(RateDependenceTest, OnAnAmplifierLowpassTheDiagnosisNamesTheLowpass) {
-  RealLikeOptions o = Rates(2);
+  synth::RealLikeOptions o = Rates(2);
   o.stack.driver_tau_s = 0.01;
-  const RecordDiagnosis d = DiagnoseRecords(Generate(o).set, QuickDiagnosis());
+  const diagnose::RecordDiagnosis d = DiagnoseRecords(Generate(o).set, QuickDiagnosis());
   ASSERT_TRUE(d.significant) << d.verdict;
   EXPECT_EQ(d.verdict_kind, "effect") << d.verdict;
   EXPECT_EQ(Named(d), "driver-lowpass") << d.verdict;
@@ -129,12 +129,12 @@ TEST(RateDependenceTest, OnAnAmplifierLowpassTheDiagnosisNamesTheLowpass) {
 
 TEST(RateDependenceTest, RecordsAtOneRateAreRefusedAndFlagged) {
   // One sine at one amplitude and frequency for training: its half cycles all peak at one rate.
-  RealLikeOptions o = RatePlant(3);
+  synth::RealLikeOptions o = RatePlant(3);
   o.train_frequencies_hz.clear();
   o.chirp = false;
   o.frequency_hz = 1;
   o.withheld_frequencies_hz = {4};
-  const RealLikeSet s = Generate(o);
+  const synth::RealLikeSet s = Generate(o);
   const ExcitationReport rep = AnalyseExcitation(s.set);
   EXPECT_LT(rep.training.rate_span(), kMinRateSpan);
   bool said = false;
@@ -153,21 +153,21 @@ TEST(RateDependenceTest, RecordsAtOneRateAreRefusedAndFlagged) {
   PZ_EXPECT_HAS(e, "cover rates");
   PZ_EXPECT_HAS(e, "several rates");
   // The diagnosis leaves it out of its default candidates.
-  RecordDiagnoseOptions d = QuickDiagnosis();
+  diagnose::RecordDiagnoseOptions d = QuickDiagnosis();
   d.fit.search.pso.particles = 6;
   d.fit.search.pso.iterations = 4;
   d.fit.lm.max_iterations = 5;
-  const RecordDiagnosis dg = DiagnoseRecords(s.set, d);
+  const diagnose::RecordDiagnosis dg = DiagnoseRecords(s.set, d);
   EXPECT_FALSE(dg.candidates.empty());
   for (const auto& c : dg.candidates) EXPECT_NE(c.kind, EffectKind::Named("rate-dependence"));
 }
 
 TEST(RateDependenceTest, AWithheldRecordFasterThanTrainingIsFlagged) {
-  RealLikeOptions o = RatePlant(4);
+  synth::RealLikeOptions o = RatePlant(4);
   o.train_frequencies_hz = {0.5, 2};
   o.withheld_frequencies_hz = {8};
   o.chirp = false;
-  const RealLikeSet s = Generate(o);
+  const synth::RealLikeSet s = Generate(o);
   const FitResult fit =
       FitRecords(s.set, testing::QuickPreisach({EffectKind::Named("rate-dependence")}));
   const std::vector<ExtrapolationCheck> checks = CheckExtrapolation(s.set, fit);

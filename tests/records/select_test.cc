@@ -18,11 +18,11 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/reallike.h"
-#include "diagnose/reallike_ring.h"
-#include "diagnose/synthetic.h"
 #include "records/families.h"
 #include "records/model.h"
+#include "synth/reallike.h"
+#include "synth/reallike_ring.h"
+#include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -30,8 +30,8 @@ namespace {
 
 /// 10 s of a major-loop sine for training, 6 s withheld records (a ramped sine and reversals);
 /// a coarse plant grid for speed.
-RealLikeSet SmallStack() {
-  RealLikeOptions o;
+synth::RealLikeSet SmallStack() {
+  synth::RealLikeOptions o;
   o.train_s = 10;
   o.withheld_s = 6;
   o.sensor.oversample = 2;
@@ -42,7 +42,7 @@ RealLikeSet SmallStack() {
   o.stack.creep_tau_max_s = 10;
   o.second_sine = false;
   o.seed = 37;
-  return GenerateRealLikeSet(o);
+  return synth::GenerateRealLikeSet(o);
 }
 
 /// A quick search (one repetition of PSO 10 × 15, a short polish), for the selection and the
@@ -80,7 +80,7 @@ double WithheldRmse(const FitResult& r) {
 }
 
 TEST(SelectTest, ChoosesWithinATenthOfTheGridsBestWithheld) {
-  const RealLikeSet s = SmallStack();
+  const synth::RealLikeSet s = SmallStack();
   const SelectOptions o = SmallGrid();
   const SelectionResult sel = SelectModel(s.set, o);
   ASSERT_LT(sel.chosen, sel.ranking.size());
@@ -109,7 +109,7 @@ TEST(SelectTest, ChoosesWithinATenthOfTheGridsBestWithheld) {
 }
 
 TEST(SelectTest, WithheldRecordsNeverChoose) {
-  RealLikeSet s = SmallStack();
+  synth::RealLikeSet s = SmallStack();
   SelectOptions o = SmallGrid();
   o.families = {"prandtl-ishlinskii", "backlash-like"};
   o.levels = {8};
@@ -132,7 +132,7 @@ TEST(SelectTest, WithheldRecordsNeverChoose) {
 }
 
 TEST(SelectTest, OneAndTwoThreadsGiveTheSameChoiceBitForBit) {
-  const RealLikeSet s = SmallStack();
+  const synth::RealLikeSet s = SmallStack();
   SelectOptions o1 = SmallGrid(1), o2 = SmallGrid(2);
   for (SelectOptions* o : {&o1, &o2}) {
     o->families = {"asymmetric-pi", "backlash-like"};
@@ -207,7 +207,7 @@ TEST(SelectTest, TheFirstBranchShowsTheMemoryAtRest) {
   // An asymmetric PI operator (plays and dead zones: not the detector's operator) resting at the
   // bottom of its range, once demagnetised (centred) and once after coming down there
   // (descended): the rest-level rule says descended for both, the first rise tells them apart.
-  const DataScale scale = SyntheticStackScale();
+  const DataScale scale = synth::SyntheticStackScale();
   io::RecordSet set;
   set.source = "synthetic";
   for (model::InitialState st : {model::InitialState::kCentred, model::InitialState::kDescended}) {
@@ -231,7 +231,7 @@ TEST(SelectTest, TheFirstBranchShowsTheMemoryAtRest) {
 }
 
 TEST(SelectTest, RefusesWindowsShorterThanTheFolds) {
-  RealLikeSet s = SmallStack();
+  synth::RealLikeSet s = SmallStack();
   for (io::Record& r : s.set.records)
     if (r.role == model::CaseRole::kTrain) r.end_scored = r.first_scored + 7;
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
@@ -245,13 +245,13 @@ TEST(SelectTest, RefusesWindowsShorterThanTheFolds) {
 // never trains on. Every fold is fitted (the roughness prior sets those cells) and scored: a finite
 // CV RMSE, where each fold used to be refused ("CV RMSE inf"). Checked on the second generator.
 TEST(SelectTest, PreisachFoldsOfLoopsGrowingFromARestAreFitted) {
-  RingingOptions o = RingingDefaults();
+  synth::RingingOptions o = synth::RingingDefaults();
   o.rest_s = 0.05;
   o.loops_s = 0.4;
   o.train_loops_hz = {20};
   o.withheld_loops_hz = {};
   o.repeats = 0;
-  const RingingSet s = GenerateRingingSet(o);
+  const synth::RingingSet s = GenerateRingingSet(o);
   for (const int levels : {8, 12}) {
     const ModelScore m = CrossValidate(s.set, Candidate{"preisach", {}, levels}, Quick(), 5);
     EXPECT_TRUE(std::isfinite(m.cv_rmse)) << levels << ": " << m.error;

@@ -4,6 +4,8 @@
 // checked against the family's own solve at perturbed weights), and a fit searches only the
 // other parameters (a delay), the same bit for bit on one thread or two, its residuals the same
 // from the searched parameters or from all of them.
+#include "records/spectrum_solve.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -13,16 +15,15 @@
 #include <numbers>
 
 #include "records/fit.h"
-#include "diagnose/reallike.h"
-#include "records/spectrum_solve.h"
+#include "synth/reallike.h"
 
 namespace pz::records {
 namespace {
 
 /// 6 s of a stack with log creep of 3 % per decade from 0.05 to 6 s, trained on a sine whose
 /// amplitude swings (minor loops and creep both excited), a one-sample sensor lag.
-RealLikeSet Stack() {
-  RealLikeOptions o;
+synth::RealLikeSet Stack() {
+  synth::RealLikeOptions o;
   o.train_s = 6;
   o.withheld_s = 4;
   o.sensor.oversample = 2;
@@ -39,11 +40,11 @@ RealLikeSet Stack() {
     const double a = 70 * (0.55 + 0.45 * std::cos(2 * std::numbers::pi * t / 3));
     o.train_drive.push_back(t < 0 ? 0.0 : 75 - a * std::cos(2 * std::numbers::pi * 0.8 * t));
   }
-  return GenerateRealLikeSet(o);
+  return synth::GenerateRealLikeSet(o);
 }
 
 struct Plant {
-  RealLikeSet s = Stack();
+  synth::RealLikeSet s = Stack();
   std::vector<const io::Record*> train = s.set.WithRole(model::CaseRole::kTrain);
   std::shared_ptr<RecordModel> model;
   explicit Plant(const std::string& family) {

@@ -22,12 +22,12 @@
 #include <string_view>
 #include <utility>
 
+#include "controller/export_header.h"
 #include "model/effects.h"
 #include "model/kernels/kernel_text.h"
-#include "controller/export_header.h"
 #include "records/fit.h"
 #include "records/stepper.h"
-#include "diagnose/synthetic.h"
+#include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -190,7 +190,7 @@ model::TruthDraw Draws(uint64_t seed) {
 
 TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
   const io::Record r = TestRecord();
-  const DataScale stack = SyntheticStackScale();
+  const DataScale stack = synth::SyntheticStackScale();
   size_t records = 0, fin = 0;
   for (const model::EffectDef* def : model::Effects()) {
     const EffectKind e = *def;

@@ -32,7 +32,7 @@ using job::JobSpec;
 TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   JobSpec s;
   std::vector<FieldViolation> v;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_quick.json", &s, &v).ok()) << All(v);
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "hgann_quick.json", &s, &v).ok()) << All(v);
   const auto& h = std::get<HgannProblem>(s.problem);
   EXPECT_TRUE(h.case_set_dir.empty());
   ASSERT_EQ(h.cases.size(), Nominal().cases.size());
@@ -45,7 +45,7 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(s.ga->generations, 40);
 
   JobSpec paper;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_paper_job.json", &paper, &v).ok())
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "hgann_paper_job.json", &paper, &v).ok())
       << All(v);
   EXPECT_EQ(paper.ga->population, 400);
   EXPECT_EQ(paper.ga->generations, 1000);
@@ -60,7 +60,7 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   // The default job: the robust preset of `piezoid identify` (hgann::SearchPreset("robust")),
   // which the file does not spell out: it is what the spec's unset fields mean.
   JobSpec robust;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_job.json", &robust, &v).ok()) << All(v);
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "hgann_job.json", &robust, &v).ok()) << All(v);
   const auto preset = hgann::SearchPreset("robust");
   ASSERT_TRUE(preset.has_value());
   EXPECT_EQ(robust.ga->population, 400);
@@ -73,7 +73,7 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
 
   // The archipelago: the same job with islands and generations, the migration by its defaults.
   JobSpec islands;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_islands_job.json", &islands, &v).ok())
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "hgann_islands_job.json", &islands, &v).ok())
       << All(v);
   EXPECT_EQ(islands.ga->islands, 4);
   EXPECT_EQ(islands.ga->generations, 560);
@@ -88,13 +88,13 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
 
   // Cases and a folder at once, or a folder that is not a case set: named.
   v.clear();
-  Status st = client::JobSpecFromJsonFile(
+  Status st = svcclient::JobSpecFromJsonFile(
       R"({"version": 1, "hgann": {"case_set_dir": "x", "cases": [{"number": 1}]}, "ga": {}})", ".",
       &s, &v);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);
   EXPECT_TRUE(HasField(v, "hgann.case_set_dir", "cannot be combined")) << All(v);
   v.clear();
-  st = client::JobSpecFromJsonFile(
+  st = svcclient::JobSpecFromJsonFile(
       R"({"version": 1, "hgann": {"case_set_dir": "nowhere"}, "ga": {}})",
       fs::path(PIEZOID_TEST_DATA_DIR), &s, &v);
   EXPECT_EQ(st.code(), StatusCode::kInvalidArgument);

@@ -25,12 +25,12 @@ std::string NobodyThere() {
 }
 
 TEST(ServiceClientLibrary, AnAbsentMasterIsUnavailableNamingTheEndpoint) {
-  ServiceClientOptions o;
+  svcclient::ServiceClientOptions o;
   o.endpoint = NobodyThere();
   o.timeout_ms = 50;
   o.retries = 2;
   o.watch_reconnect_s = 0.1;
-  ServiceClient c(o);
+  svcclient::ServiceClient c(o);
   const auto t0 = std::chrono::steady_clock::now();
   service::JobInfo info;
   const Status status = c.GetStatus("job-1", &info);
@@ -47,12 +47,12 @@ TEST(ServiceClientLibrary, AnAbsentMasterIsUnavailableNamingTheEndpoint) {
 }
 
 TEST(ServiceClientLibrary, AJobSpecThatDoesNotParseIsRefusedBeforeAnythingIsSent) {
-  ServiceClientOptions o;
+  svcclient::ServiceClientOptions o;
   o.endpoint = NobodyThere();
   o.timeout_ms = 50;
   o.retries = 1;
-  ServiceClient c(o);
-  SubmitResult r;
+  svcclient::ServiceClient c(o);
+  svcclient::SubmitResult r;
   std::vector<job::FieldViolation> bad;
   const Status s = c.SubmitJson("{\"seed\": \"not a number\"}", &r, &bad);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.message();

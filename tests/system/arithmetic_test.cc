@@ -23,7 +23,7 @@ namespace {
 using namespace std::chrono_literals;
 
 // Polls the master's worker table until `done` holds (10 s at most).
-bool WaitForWorkers(client::ServiceClient& client, service::WorkersSnapshot* w,
+bool WaitForWorkers(svcclient::ServiceClient& client, service::WorkersSnapshot* w,
                     const std::function<bool(const service::WorkersSnapshot&)>& done) {
   for (int i = 0; i < 200; ++i) {
     if (client.Workers(w).ok() && done(*w)) return true;
@@ -83,7 +83,7 @@ TEST(Arithmetic, TheFirstWorkerFixesTheProfileServed) {
 TEST(Arithmetic, AJobResumedByARestartedMasterContinuesOnTheProfileItWasComputedOn) {
   Cluster c("arith-resume");
   c.AddWorker(1, {"--arithmetic", kOther});
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   {
     auto client = c.Client(4000, 5);
     ASSERT_TRUE(client.Submit(SyntheticSpec(31, 20, 400, 2), &r).ok());
@@ -146,7 +146,7 @@ TEST(Arithmetic, AllowMixedArithmeticServesBothProfiles) {
 void RunJob(Cluster& c, const job::JobSpec& spec, std::vector<service::ScoredGenome>* best,
             std::vector<service::GenerationRecord>* log) {
   auto client = c.Client(4000, 5);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(spec, &r).ok());
   service::JobInfo info;
   ASSERT_TRUE(client.WaitFinal(r.job_id, 60s, &info).ok());

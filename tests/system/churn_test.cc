@@ -51,7 +51,7 @@ ChurnResult RunWithChurn(const job::JobSpec& spec, const std::string& name, doub
   Cluster c(name);
   for (int i = 0; i < 3; ++i) c.AddWorker(1);
   auto client = c.Client(4000, 5);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   EXPECT_TRUE(client.Submit(spec, &r).ok());
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> gap(min_s, max_s);
@@ -117,7 +117,7 @@ void ExpectUnchangedByChurn(job::JobSpec spec, const std::string& name, double m
 TEST(Churn, ThePaperJobIsBitIdenticalUnderAKillEvery1To3Seconds) {
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  ASSERT_TRUE(client::LoadJobSpecFile(
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(
                   fs::path(PIEZOID_DATA_DIR) / ".." / "examples" / "hgann_job.json", &spec, &v)
                   .ok());
   const int generations = EnvInt("PIEZOID_CHURN_GENERATIONS", 300);

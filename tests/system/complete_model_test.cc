@@ -299,8 +299,8 @@ TEST(CompleteModelJobKindTest, BadSpecsAreRefusedFieldByField) {
             "or RECORDS");
 }
 
-client::ServiceEvaluatorOptions Options(const Cluster& c) {
-  client::ServiceEvaluatorOptions o;
+svcclient::ServiceEvaluatorOptions Options(const Cluster& c) {
+  svcclient::ServiceEvaluatorOptions o;
   o.client.endpoint = c.client_endpoint();
   o.client.timeout_ms = 2000;
   o.client.retries = 3;
@@ -370,7 +370,7 @@ TEST(CompleteModelServiceTest, BoucwenSearchesOnTheServiceAreTheLocalOnesBitForB
     o.ga_binary.ga.max_generations = 8;
     opt::ThreadPoolEvaluator pool(fitness, 2);
     const opt::SearchResult local = opt::Search(fitness.Box(), o, pool);
-    client::ServiceEvaluator service(Options(cluster), spec, "test");
+    svcclient::ServiceEvaluator service(Options(cluster), spec, "test");
     // With the binary GA, one of the two workers is killed during the third batch.
     KillingEvaluator ev(service, kill ? &victim : nullptr, 3, 5);
     const opt::SearchResult remote = opt::Search(fitness.Box(), o, ev);
@@ -402,7 +402,7 @@ TEST(CompleteModelServiceTest, TheCommitteeOnTheServiceIsTheLocalOneBitForBit) {
       complete::RunCommittee(set, o, complete::LocalEvaluatorFactory(2));
   int sessions = 0;
   const complete::EvaluatorFactory service =
-      client::CommitteeServiceFactory(Options(cluster), o.family_options);
+      svcclient::CommitteeServiceFactory(Options(cluster), o.family_options);
   const complete::CommitteeResult remote =
       complete::RunCommittee(set, o, [&](const CriterionFitness& f) {
         ++sessions;

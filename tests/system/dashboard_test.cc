@@ -84,7 +84,7 @@ class Dashboard {
   std::unique_ptr<Process> process_;
 };
 
-bool WaitGeneration(client::ServiceClient& c, const std::string& job, uint64_t generation,
+bool WaitGeneration(svcclient::ServiceClient& c, const std::string& job, uint64_t generation,
                     bool final = false) {
   for (int i = 0; i < 1200; ++i) {
     service::JobInfo info;
@@ -102,14 +102,14 @@ TEST(Dashboard, TheCurveAndTheWorkerTableUpdateInARealBrowser) {
   Cluster cluster("dashboard");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
-  client::ServiceClient c = cluster.Client();
+  svcclient::ServiceClient c = cluster.Client();
   // A job that runs for a while: 20 new individuals a generation, 3 ms each, 2 workers.
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "synthetic_job.json", &spec, &v).ok());
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "synthetic_job.json", &spec, &v).ok());
   std::get<job::SyntheticProblem>(spec.problem).sleep_ms = 3;
   spec.ga->generations = 5000;
-  client::SubmitResult job;
+  svcclient::SubmitResult job;
   ASSERT_TRUE(c.Submit(spec, &job).ok());
   ASSERT_TRUE(WaitGeneration(c, job.job_id, 5));
 
@@ -172,8 +172,8 @@ TEST(Dashboard, TheCurveAndTheWorkerTableUpdateInARealBrowser) {
   // folder.
   ASSERT_TRUE(c.Cancel(job.job_id).ok());
   job::JobSpec quick;
-  ASSERT_TRUE(client::LoadJobSpecFile(kExamples / "hgann_quick.json", &quick, &v).ok());
-  client::SubmitResult hg;
+  ASSERT_TRUE(svcclient::LoadJobSpecFile(kExamples / "hgann_quick.json", &quick, &v).ok());
+  svcclient::SubmitResult hg;
   ASSERT_TRUE(c.Submit(quick, &hg).ok());
   ASSERT_TRUE(WaitGeneration(c, hg.job_id, 0, /*final=*/true));
   auto report = http.Get("/jobs/" + hg.job_id + "/report/report.md");

@@ -5,13 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
-
 #include <zmq.hpp>
 
 #include "diagnose/fin_diagnose.h"
-#include "diagnose/synthetic.h"
 #include "service/wire_codec.h"
 #include "svcclient/complete_service.h"
+#include "synth/synthetic.h"
 #include "tests/system/service_harness.h"
 #include "wire.pb.h"
 
@@ -22,7 +21,7 @@ using model::EffectKind;
 
 std::vector<DiagCase> SmallBench(bool with_delay) {
   const model::BimorphPlant plant;
-  records::FinTrialOptions so;
+  synth::FinTrialOptions so;
   model::BimorphParams p;
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
@@ -31,7 +30,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
   opt::Rng rng(3);
   std::vector<model::Effect> effects;
   if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
-  return CasesFromCaseSet(records::SimulateBench(plant, p, effects, sat, so, rng));
+  return CasesFromCaseSet(synth::SimulateBench(plant, p, effects, sat, so, rng));
 }
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -59,8 +58,8 @@ DiagnoseOptions SmallOptions() {
   return o;
 }
 
-client::ServiceEvaluatorOptions ServiceOptions(testing::Cluster& cluster) {
-  client::ServiceEvaluatorOptions so;
+svcclient::ServiceEvaluatorOptions ServiceOptions(testing::Cluster& cluster) {
+  svcclient::ServiceEvaluatorOptions so;
   so.client.endpoint = cluster.client_endpoint();
   so.client.timeout_ms = 2000;
   so.client.retries = 3;
@@ -77,16 +76,16 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   cluster.AddWorker(1);
   const std::vector<DiagCase> m = SmallBench(true);
   DiagnoseOptions o = SmallOptions();
-  const records::RecordDiagnosis local = DiagnoseBench(m, o).records;
+  const diagnose::RecordDiagnosis local = DiagnoseBench(m, o).records;
 
-  const client::ServiceEvaluatorOptions so = ServiceOptions(cluster);
+  const svcclient::ServiceEvaluatorOptions so = ServiceOptions(cluster);
   int factories = 0;
   o.records_service = [&](const records::FamilyOptions& f) {
     ++factories;
     EXPECT_TRUE(f.bench_form);
-    return client::RecordsServiceFactory(so, f, "test");
+    return svcclient::RecordsServiceFactory(so, f, "test");
   };
-  const records::RecordDiagnosis remote = DiagnoseBench(m, o).records;
+  const diagnose::RecordDiagnosis remote = DiagnoseBench(m, o).records;
   EXPECT_GE(factories, 1);
   ExpectSameVector(remote.base.params, local.base.params, "base.params");
   EXPECT_TRUE(SameBits(remote.base.train_sse, local.base.train_sse));

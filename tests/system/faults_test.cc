@@ -22,7 +22,7 @@ bool HasField(const std::vector<job::FieldViolation>& v, const std::string& fiel
 TEST(ServiceFaults, BadJobSpecsAreRejectedWithTheField) {
   Cluster c("badspec");
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   std::vector<job::FieldViolation> v;
 
   job::JobSpec s = SyntheticSpec(1, 10, 5);
@@ -113,7 +113,7 @@ TEST(ServiceFaults, GarbageFramesOnBothEndpointsLeaveTheMasterServing) {
   auto client = c.Client();
   std::vector<service::JobInfo> jobs;
   ASSERT_TRUE(client.List(&jobs).ok());
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(SyntheticSpec(5, 20, 5), &r).ok());
   service::JobInfo info;
   ASSERT_TRUE(client.WaitFinal(r.job_id, 30s, &info).ok());
@@ -129,7 +129,7 @@ TEST(ServiceFaults, IndividualThatKeepsKillingWorkersIsQuarantined) {
   c.AddWorker(1);
   c.AddWorker(1);
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(spec, &r).ok());
   service::JobInfo info;
   const auto deadline = std::chrono::steady_clock::now() + 50s;

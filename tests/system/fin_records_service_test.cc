@@ -271,8 +271,8 @@ void ExpectSameFit(const records::FitResult& want, const records::FitResult& got
   EXPECT_EQ(want.lm_iterations, got.lm_iterations);
 }
 
-client::ServiceEvaluatorOptions ServiceOptions(const Cluster& cluster) {
-  client::ServiceEvaluatorOptions so;
+svcclient::ServiceEvaluatorOptions ServiceOptions(const Cluster& cluster) {
+  svcclient::ServiceEvaluatorOptions so;
   so.client.endpoint = cluster.client_endpoint();
   so.client.timeout_ms = 2000;
   so.client.retries = 3;
@@ -284,7 +284,7 @@ client::ServiceEvaluatorOptions ServiceOptions(const Cluster& cluster) {
 records::FitResult FitOnService(const io::RecordSet& set, records::FitOptions o,
                                 const Cluster& cluster) {
   o.evaluator_factory =
-      client::RecordsServiceFactory(ServiceOptions(cluster), o.family_options, "test");
+      svcclient::RecordsServiceFactory(ServiceOptions(cluster), o.family_options, "test");
   try {
     return records::FitRecords(set, o);
   } catch (const std::exception& e) {

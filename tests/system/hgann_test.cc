@@ -31,7 +31,7 @@ const fs::path kExamples = fs::path(PIEZOID_DATA_DIR) / ".." / "examples";
 job::JobSpec QuickSpec() {
   job::JobSpec spec;
   std::vector<job::FieldViolation> v;
-  const Status s = client::LoadJobSpecFile(kExamples / "hgann_quick.json", &spec, &v);
+  const Status s = svcclient::LoadJobSpecFile(kExamples / "hgann_quick.json", &spec, &v);
   PZ_CHECK_MSG(s.ok(), s.message());
   return spec;
 }
@@ -56,7 +56,7 @@ void RunOnMasterAndTwoWorkers(const std::string& name, const job::JobSpec& spec,
   c.AddWorker(1);
   c.AddWorker(1);
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(spec, &r).ok());
   ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, info).ok());
   ASSERT_EQ(info->state, service::JobState::kSucceeded) << info->message;
@@ -75,7 +75,7 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   c.AddWorker(1);
   c.AddWorker(1);
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   std::vector<job::FieldViolation> v;
   ASSERT_TRUE(client.Submit(spec, &r, &v).ok()) << (v.empty() ? "" : v.front().description);
 
@@ -260,7 +260,7 @@ job::JobSpec SmallJsonSpec(const std::string& extra) {
   const std::string json = R"({"version": 1, "seed": "3", "hgann": {"case_set_dir": "nominal")" +
                            extra + R"(}, "ga": {"population": 20, "generations": 6}})";
   const Status st =
-      client::JobSpecFromJsonFile(json, fs::path(PIEZOID_DATA_DIR) / "bimorph-fin", &s, &v);
+      svcclient::JobSpecFromJsonFile(json, fs::path(PIEZOID_DATA_DIR) / "bimorph-fin", &s, &v);
   PZ_CHECK_MSG(st.ok(), st.message());
   return s;
 }
@@ -387,7 +387,7 @@ TEST(ServiceHgann, BadHgannSpecsAreRejectedWithTheField) {
   // The master answers every violated field.
   Cluster c("hgann-bad");
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   std::vector<job::FieldViolation> v;
   Status st = client.Submit(spec, &r, &v);
   ASSERT_EQ(st.code(), StatusCode::kInvalidArgument) << st.message();

@@ -21,7 +21,7 @@ struct Outcome {
 
 Outcome RunOnCluster(Cluster& c, const job::JobSpec& spec, std::chrono::seconds timeout) {
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   Outcome o;
   Status s = client.Submit(spec, &r);
   EXPECT_TRUE(s.ok()) << s.ToString();
@@ -55,7 +55,7 @@ TEST(Service, WorkersKilledRepeatedlyJobCompletesBitIdentical) {
   Cluster c("killw");
   for (int i = 0; i < 3; ++i) c.AddWorker(2);
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(spec, &r).ok());
   std::mt19937 rng(3);
   service::JobInfo info;
@@ -87,7 +87,7 @@ TEST(Service, MasterKilledAndRestartedResumesBitIdentical) {
   std::string job_id;
   {
     auto client = c.Client();
-    client::SubmitResult r;
+    svcclient::SubmitResult r;
     ASSERT_TRUE(client.Submit(spec, &r).ok());
     job_id = r.job_id;
   }
@@ -122,11 +122,11 @@ TEST(Service, ThreeJobsAtOnceCompleteAndCancelWorks) {
   std::vector<job::JobSpec> specs;
   for (uint64_t seed : {21, 22, 23}) {
     specs.push_back(SyntheticSpec(seed, 30, 10, 1));
-    client::SubmitResult r;
+    svcclient::SubmitResult r;
     ASSERT_TRUE(client.Submit(specs.back(), &r).ok());
     ids.push_back(r.job_id);
   }
-  client::SubmitResult doomed;
+  svcclient::SubmitResult doomed;
   ASSERT_TRUE(client.Submit(SyntheticSpec(99, 30, 100000, 1), &doomed).ok());
   // A watcher sees generation events of the doomed job, then its cancellation.
   std::atomic<int> events{0};

@@ -14,14 +14,14 @@
 #include <sstream>
 #include <thread>
 
-#include "svcclient/complete_service.h"
 #include "complete/job_kind.h"
 #include "complete_remote.h"
 #include "io/records.h"
 #include "json_report.h"
 #include "opt/thread_pool_evaluator.h"
-#include "diagnose/synthetic.h"
 #include "service_harness.h"
+#include "svcclient/complete_service.h"
+#include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::testing {
@@ -34,15 +34,15 @@ bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 /// Two records of backlash-like + delay: a sine after a rest (offset fit), a multisine (offset
 /// rest), plus a withheld one; windows that start after the rest.
 io::RecordSet MakeSet() {
-  const records::DataScale s = records::SyntheticStackScale();
+  const records::DataScale s = synth::SyntheticStackScale();
   auto fam = std::shared_ptr<const records::Family>(records::MakeFamily("backlash-like", s));
   records::RecordModel truth(fam, {EffectKind::Named("delay")}, s);
   const std::vector<double> p = {0.02, 0.1, 0.05, 0.006};
   io::RecordSet set;
   set.source = "synthetic";
   for (int i = 0; i < 3; ++i) {
-    records::DriveShape d;
-    d.waveform = i == 1 ? records::Waveform::kMultisine : records::Waveform::kSine;
+    synth::DriveShape d;
+    d.waveform = i == 1 ? synth::Waveform::kMultisine : synth::Waveform::kSine;
     d.amplitude = 100;
     d.frequency_hz = 1;
     d.frequency_end_hz = 5;
@@ -51,7 +51,7 @@ io::RecordSet MakeSet() {
     d.duration_s = 3;
     d.fs_hz = 500;
     d.seed = static_cast<uint64_t>(i + 1);
-    io::Record r = records::SynthesizeRecord(
+    io::Record r = synth::SynthesizeRecord(
         truth, p, {}, d, {-0.7, 0.02, 0.005, static_cast<uint64_t>(i + 1)}, "r" + std::to_string(i),
         i == 2 ? model::CaseRole::kValidate : model::CaseRole::kTrain, 0.5, 3.2);
     if (i == 1) {
@@ -182,12 +182,12 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   o.search.pso.iterations = 6;
   o.lm.max_iterations = 5;
   const records::FitResult local = records::FitRecords(set, o);
-  client::ServiceEvaluatorOptions so;
+  svcclient::ServiceEvaluatorOptions so;
   so.client.endpoint = cluster.client_endpoint();
   so.client.timeout_ms = 2000;
   so.client.retries = 3;
   so.batch_timeout_s = 120;
-  o.evaluator_factory = client::RecordsServiceFactory(so, o.family_options, "test");
+  o.evaluator_factory = svcclient::RecordsServiceFactory(so, o.family_options, "test");
   records::FitResult remote;
   try {
     remote = records::FitRecords(set, o);
@@ -218,7 +218,7 @@ TEST(RecordsServiceTest, AFitOnTheServiceIsTheLocalOneBitForBit) {
   line.sizing.enabled = true;
   line.evaluator_factory = nullptr;
   const records::FitResult local_line = records::FitRecords(set, line);
-  line.evaluator_factory = client::RecordsServiceFactory(so, line.family_options, "test");
+  line.evaluator_factory = svcclient::RecordsServiceFactory(so, line.family_options, "test");
   records::FitResult remote_line;
   try {
     remote_line = records::FitRecords(set, line);
@@ -386,12 +386,12 @@ records::FitOptions BwFitOptions(int iterations) {
 
 records::RecordEvaluatorFactory ServiceFactory(const Cluster& cluster,
                                                const records::FitOptions& o) {
-  client::ServiceEvaluatorOptions so;
+  svcclient::ServiceEvaluatorOptions so;
   so.client.endpoint = cluster.client_endpoint();
   so.client.timeout_ms = 2000;
   so.client.retries = 3;
   so.batch_timeout_s = 120;
-  return client::RecordsServiceFactory(so, o.family_options, "test");
+  return svcclient::RecordsServiceFactory(so, o.family_options, "test");
 }
 
 void ExpectSameFit(const records::FitResult& want, const records::FitResult& got) {

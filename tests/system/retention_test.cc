@@ -11,7 +11,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-std::map<std::string, service::JobInfo> ById(client::ServiceClient& c) {
+std::map<std::string, service::JobInfo> ById(svcclient::ServiceClient& c) {
   std::vector<service::JobInfo> all;
   EXPECT_TRUE(c.List(&all).ok());
   std::map<std::string, service::JobInfo> m;
@@ -27,7 +27,7 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
   std::vector<job::JobSpec> specs;
   for (int k = 0; k < 5; ++k) {  // one after the other: job 0 ends first
     specs.push_back(SyntheticSpec(600 + k, 12, 8));
-    client::SubmitResult r;
+    svcclient::SubmitResult r;
     ASSERT_TRUE(client.Submit(specs.back(), &r).ok());
     service::JobInfo info;
     ASSERT_TRUE(client.WaitFinal(r.job_id, 30s, &info).ok());
@@ -35,7 +35,7 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
     ids.push_back(r.job_id);
     std::this_thread::sleep_for(20ms);  // distinct end times
   }
-  auto check_archive = [&](client::ServiceClient& client, const char* when) {
+  auto check_archive = [&](svcclient::ServiceClient& client, const char* when) {
     auto jobs = ById(client);
     ASSERT_EQ(jobs.size(), 5u) << when;
     for (int k = 0; k < 5; ++k) {
@@ -60,7 +60,7 @@ TEST(Retention, OldEndedJobsAreArchivedFetchableAndPrunable) {
   check_archive(after, "after a restart");
 
   // A running job is never pruned.
-  client::SubmitResult running;
+  svcclient::SubmitResult running;
   ASSERT_TRUE(after.Submit(SyntheticSpec(700, 8, 100000, /*sleep_ms=*/5), &running).ok());
   std::vector<std::string> pruned;
   std::vector<job::FieldViolation> refused;

@@ -176,13 +176,13 @@ std::unique_ptr<Process> CurveWorker(const std::string& endpoint, const Keys& ke
       log);
 }
 
-client::ServiceClient CurveClient(const std::string& endpoint, const CurveKeyPair& own,
-                                  const CurveKeyPair& master_keys, int timeout_ms = 2000,
-                                  int retries = 3) {
-  client::ServiceClientOptions o = ClientOptions(endpoint, timeout_ms, retries);
+svcclient::ServiceClient CurveClient(const std::string& endpoint, const CurveKeyPair& own,
+                                     const CurveKeyPair& master_keys, int timeout_ms = 2000,
+                                     int retries = 3) {
+  svcclient::ServiceClientOptions o = ClientOptions(endpoint, timeout_ms, retries);
   o.curve = own;
   o.master_public = master_keys.public_z85;
-  return client::ServiceClient(o);
+  return svcclient::ServiceClient(o);
 }
 
 // ------------------------------------------------------------------ key files
@@ -305,8 +305,8 @@ void RunThroughProxies(bool curve) {
   const std::string marker = "PZ-MARKER-plaintext-7f3a9c";
   spec.name = marker;
   auto c = curve ? CurveClient(to_clients.endpoint(), client_keys, master_keys)
-                 : client::ServiceClient(ClientOptions(to_clients.endpoint(), 2000, 3));
-  client::SubmitResult r;
+                 : svcclient::ServiceClient(ClientOptions(to_clients.endpoint(), 2000, 3));
+  svcclient::SubmitResult r;
   Status s = c.Submit(spec, &r);
   ASSERT_TRUE(s.ok()) << s.message();
   service::JobInfo info;
@@ -452,7 +452,7 @@ TEST(SecurityLimits, SpecAboveTheDataSizePerJobIsRefusedNamingTheLimit) {
   auto c = cluster.Client();
   job::JobSpec spec = SyntheticSpec(1, 8, 2);
   spec.name = std::string(5000, 'n');
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   std::vector<job::FieldViolation> v;
   Status s = c.Submit(spec, &r, &v);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << s.message();
@@ -466,14 +466,14 @@ TEST(SecurityLimits, SpecAboveTheDataSizePerJobIsRefusedNamingTheLimit) {
 TEST(SecurityLimits, RunningJobsPerClientAreLimited) {
   Cluster cluster("perclient", {"--max-jobs-per-client", "1"});  // no workers: jobs stay running
   auto c = cluster.Client();
-  client::SubmitResult a, b;
+  svcclient::SubmitResult a, b;
   ASSERT_TRUE(c.Submit(SyntheticSpec(1, 8, 2), &a, nullptr, "tok-a").ok());
   Status s = c.Submit(SyntheticSpec(2, 8, 2), &b);
   EXPECT_EQ(s.code(), StatusCode::kUnavailable) << s.message();
   EXPECT_NE(s.message().find("--max-jobs-per-client"), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("already has 1 running"), std::string::npos) << s.message();
   // A retry of the accepted submission is still answered.
-  client::SubmitResult again;
+  svcclient::SubmitResult again;
   ASSERT_TRUE(c.Submit(SyntheticSpec(1, 8, 2), &again, nullptr, "tok-a").ok());
   EXPECT_EQ(again.job_id, a.job_id);
   EXPECT_TRUE(again.existed);
@@ -493,7 +493,7 @@ TEST(SecurityLimits, WithCurveTheLimitIsPerClientKey) {
   Cluster cluster("perkey", args);
   auto ca = CurveClient(cluster.client_endpoint(), alice, m);
   auto cb = CurveClient(cluster.client_endpoint(), bob, m);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(ca.Submit(SyntheticSpec(1, 8, 2), &r).ok());
   Status s = ca.Submit(SyntheticSpec(2, 8, 2), &r);
   EXPECT_NE(s.message().find("client clients:alice already has 1 running"), std::string::npos)
@@ -505,13 +505,13 @@ TEST(SecurityLimits, WithCurveTheLimitIsPerClientKey) {
 
 TEST(SecurityLimits, MessageSizeIsRefusedNamingTheLimit) {
   // Above the client's own limit: refused before sending.
-  client::ServiceClientOptions o =
+  svcclient::ServiceClientOptions o =
       ClientOptions("tcp://127.0.0.1:" + std::to_string(FreePort()), 200, 1);
   o.max_message_bytes = 2048;
-  client::ServiceClient c(o);
+  svcclient::ServiceClient c(o);
   job::JobSpec spec = SyntheticSpec(1, 8, 2);
   spec.name = std::string(4096, 'n');
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   Status s = c.Submit(spec, &r);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.message().find("max_message_bytes = 2048"), std::string::npos) << s.message();

@@ -136,9 +136,9 @@ inline int RunCli(const std::vector<std::string>& args, std::string* out = nullp
   return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
-inline client::ServiceClientOptions ClientOptions(const std::string& endpoint, int timeout_ms,
-                                                  int retries) {
-  client::ServiceClientOptions o;
+inline svcclient::ServiceClientOptions ClientOptions(const std::string& endpoint, int timeout_ms,
+                                                     int retries) {
+  svcclient::ServiceClientOptions o;
   o.endpoint = endpoint;
   o.timeout_ms = timeout_ms;
   o.retries = retries;
@@ -211,8 +211,8 @@ class Cluster {
     return *workers_.back();
   }
   std::vector<std::unique_ptr<Process>>& workers() { return workers_; }
-  client::ServiceClient Client(int timeout_ms = 2000, int retries = 3) {
-    return client::ServiceClient(ClientOptions(client_ep_, timeout_ms, retries));
+  svcclient::ServiceClient Client(int timeout_ms = 2000, int retries = 3) {
+    return svcclient::ServiceClient(ClientOptions(client_ep_, timeout_ms, retries));
   }
   const std::string& worker_endpoint() const { return worker_ep_; }
   const std::string& client_endpoint() const { return client_ep_; }

@@ -69,8 +69,8 @@ void ExpectSame(const std::vector<FitnessResult>& a, const std::vector<FitnessRe
   }
 }
 
-client::ServiceEvaluatorOptions Options(const Cluster& c) {
-  client::ServiceEvaluatorOptions o;
+svcclient::ServiceEvaluatorOptions Options(const Cluster& c) {
+  svcclient::ServiceEvaluatorOptions o;
   o.client.endpoint = c.client_endpoint();
   o.client.timeout_ms = 2000;
   o.client.retries = 3;
@@ -78,7 +78,8 @@ client::ServiceEvaluatorOptions Options(const Cluster& c) {
   return o;
 }
 
-service::JobInfo WaitFor(client::ServiceClient& c, const std::string& id, service::JobState state) {
+service::JobInfo WaitFor(svcclient::ServiceClient& c, const std::string& id,
+                         service::JobState state) {
   service::JobInfo info;
   for (int i = 0; i < 400; ++i) {
     EXPECT_TRUE(c.GetStatus(id, &info).ok());
@@ -96,7 +97,7 @@ TEST(SessionTest, BitIdenticalToInlineWithOneAndTwoWorkers) {
     const job::JobSpec spec = SessionSpec();
     std::string id;
     {
-      client::ServiceEvaluator ev(Options(cluster), spec, "session test");
+      svcclient::ServiceEvaluator ev(Options(cluster), spec, "session test");
       id = ev.job_id();
       for (uint64_t b = 0; b < 4; ++b) {
         const auto genomes = RandomGenomes(17 + static_cast<int>(b) * 30, 48, 100 + b);
@@ -128,7 +129,7 @@ TEST(SessionTest, AWorkerKilledMidBatchGivesTheSameResults) {
   Process& victim = cluster.AddWorker(1);
   const job::JobSpec spec = SessionSpec(/*sleep_ms=*/30);
   const auto genomes = RandomGenomes(60, 48, 7);
-  client::ServiceEvaluator ev(Options(cluster), spec, "kill test");
+  svcclient::ServiceEvaluator ev(Options(cluster), spec, "kill test");
   std::thread killer([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     victim.Kill(SIGKILL);
@@ -152,7 +153,7 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_EQ(s.code(), StatusCode::kNotFound) << s.message();
   EXPECT_NE(s.message().find("jnosuchjob"), std::string::npos) << s.message();
   // A GA job is not a session.
-  client::SubmitResult ga;
+  svcclient::SubmitResult ga;
   ASSERT_TRUE(client.Submit(SyntheticSpec(1, 8, 1000, 5), &ga).ok());
   s = client.Evaluate(ga.job_id, 1, RandomGenomes(1, 64, 1), &done, &results);
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition) << s.message();
@@ -164,7 +165,7 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   none.problem = std::monostate{};
   none.external = job::ExternalSettings{};
   std::vector<job::FieldViolation> v;
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   EXPECT_EQ(client.Submit(none, &r, &v).code(), StatusCode::kInvalidArgument);
   ASSERT_FALSE(v.empty());
   EXPECT_EQ(v.front().field, "problem");
@@ -179,13 +180,13 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_EQ(v.front().description, "algorithm: only one of ga, external may be set");
   // The same through the evaluator: InputError naming the field.
   try {
-    client::ServiceEvaluator bad(Options(cluster), none);
+    svcclient::ServiceEvaluator bad(Options(cluster), none);
     ADD_FAILURE() << "a session without a problem was opened";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("problem"), std::string::npos) << e.what();
   }
   // Wrong genome length, batch_seq 0, a poll of a batch never sent.
-  client::ServiceEvaluator ev(Options(cluster), SessionSpec());
+  svcclient::ServiceEvaluator ev(Options(cluster), SessionSpec());
   s = client.Evaluate(ev.job_id(), 1, RandomGenomes(2, 47, 1), &done, &results);
   EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
   EXPECT_NE(s.message().find("genomes[0] has 47 bits"), std::string::npos) << s.message();
@@ -203,22 +204,22 @@ TEST(SessionTest, BadRequestsGetClearErrors) {
   EXPECT_EQ(s.code(), StatusCode::kFailedPrecondition);
   EXPECT_NE(s.message().find("succeeded"), std::string::npos) << s.message();
   EXPECT_TRUE(client.Close(ev.job_id()).ok());
-  EXPECT_THROW(Evaluate(ev, RandomGenomes(1, 48, 1)), client::ServiceError);
+  EXPECT_THROW(Evaluate(ev, RandomGenomes(1, 48, 1)), svcclient::ServiceError);
 }
 
 TEST(SessionTest, ASilentClientsSessionIsCancelled) {
   Cluster cluster("session-idle");
   auto o = [&] {
-    client::ServiceEvaluatorOptions x = Options(cluster);
+    svcclient::ServiceEvaluatorOptions x = Options(cluster);
     x.idle_timeout_s = 0.5;
     return x;
   }();
-  client::ServiceEvaluator ev(o, SessionSpec());
+  svcclient::ServiceEvaluator ev(o, SessionSpec());
   auto client = cluster.Client();
   const service::JobInfo info = WaitFor(client, ev.job_id(), service::JobState::kCancelled);
   EXPECT_EQ(info.state, service::JobState::kCancelled);
   EXPECT_NE(info.message.find("idle_timeout_s"), std::string::npos) << info.message;
-  EXPECT_THROW(Evaluate(ev, RandomGenomes(1, 48, 1)), client::ServiceError);
+  EXPECT_THROW(Evaluate(ev, RandomGenomes(1, 48, 1)), svcclient::ServiceError);
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ TEST(SlowClients, WatchersThatNeverReadAndSilentConnectionsDoNotStallTheMaster) 
   Cluster c("slowclients");
   c.AddWorker(1);
   auto client = c.Client(2000, 1);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   // Many short generations: a stream of events for the watchers.
   ASSERT_TRUE(client.Submit(SyntheticSpec(11, 16, 4000), &r).ok());
   const long rss0 = RssKiB(c.master_pid());

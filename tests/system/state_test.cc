@@ -88,7 +88,7 @@ TEST(State, DamagedCheckpointsFallBackAndEveryJobEndsAsInProcess) {
   std::vector<job::JobSpec> refs;
   for (size_t i = 0; i < damages.size(); ++i) {
     job::JobSpec s = SyntheticSpec(300 + i, 16, 60, /*sleep_ms=*/2);
-    client::SubmitResult r;
+    svcclient::SubmitResult r;
     ASSERT_TRUE(client.Submit(s, &r).ok());
     ids.push_back(r.job_id);
     std::get<job::SyntheticProblem>(s.problem).sleep_ms = 0;
@@ -147,7 +147,7 @@ TEST(State, UnwritableCheckpointsShowInStatusUntilTheyAreWrittenAgain) {
   c.AddWorker(2);
   auto client = c.Client();
   job::JobSpec s = SyntheticSpec(41, 16, 150, /*sleep_ms=*/2);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(s, &r).ok());
   service::JobInfo info;
   for (int i = 0; i < 300 && info.generation < 3; ++i) {
@@ -206,7 +206,7 @@ TEST(State, AnUnstorableSubmissionLeavesNoFolderAndEmptyFoldersGoAtStart) {
   const std::string id = service::JobIdOf(service::EncodeJobSpec(s), token);
   const fs::path dir = c.dir() / "state" / "jobs" / id;
   fs::create_directories(dir / "spec.pb.tmp");
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   const Status st = client.Submit(s, &r, nullptr, token);
   EXPECT_FALSE(st.ok());
   EXPECT_NE(st.message().find("cannot store the job"), std::string::npos) << st.message();

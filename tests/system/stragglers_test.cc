@@ -27,7 +27,7 @@ SlowRun RunWithASlowWorker(const job::JobSpec& spec, const service::JobCheckpoin
   c.AddWorker(1);
   Process& slow = c.AddWorker(1);
   auto client = c.Client(4000, 5);
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   EXPECT_TRUE(client.Submit(spec, &r).ok());
   const auto start = Clock::now();
   service::JobInfo info;

@@ -94,7 +94,7 @@ TEST(Watch, CancelPushesTheFinalEventToEveryWatcher) {
   Cluster c("watch-cancel");
   c.AddWorker(1);
   auto client = c.Client();
-  client::SubmitResult r;
+  svcclient::SubmitResult r;
   ASSERT_TRUE(client.Submit(SyntheticSpec(7, 8, 1000, /*sleep_ms=*/5), &r).ok());  // long
   RawClient w1(c.client_endpoint()), w2(c.client_endpoint());
   w1.Send(Request(ClientRequestMsg::Type::kWatch, 71, r.job_id));

@@ -1,4 +1,4 @@
-#include "diagnose/extrapolation.h"
+#include "records/extrapolation.h"
 
 #include <algorithm>
 #include <cmath>
