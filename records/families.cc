@@ -79,8 +79,14 @@ class StackBoucWenFamily final : public Family {
 };
 
 const FamilyDef StackBoucWenFamily::kDef = {
-    "stack-bouc-wen",         true,    false, true, pzk::PZK_STACK_BOUC_WEN,
-    Make<StackBoucWenFamily>, Substeps};
+    .name = "stack-bouc-wen",
+    .takes_initial_state = true,
+    .linear = false,
+    .auto_grid = true,
+    .kernel = pzk::PZK_STACK_BOUC_WEN,
+    .make = Make<StackBoucWenFamily>,
+    .kernel_shape = Substeps,
+};
 
 class BacklashLikeFamily final : public Family {
  public:
@@ -120,7 +126,14 @@ class BacklashLikeFamily final : public Family {
 };
 
 const FamilyDef BacklashLikeFamily::kDef = {
-    "backlash-like", true, false, true, pzk::PZK_BACKLASH_LIKE, Make<BacklashLikeFamily>, NoShape};
+    .name = "backlash-like",
+    .takes_initial_state = true,
+    .linear = false,
+    .auto_grid = true,
+    .kernel = pzk::PZK_BACKLASH_LIKE,
+    .make = Make<BacklashLikeFamily>,
+    .kernel_shape = NoShape,
+};
 
 class DuhemFamily final : public Family {
  public:
@@ -150,8 +163,15 @@ class DuhemFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
-const FamilyDef DuhemFamily::kDef = {"duhem",           false,  false, true, pzk::PZK_DUHEM,
-                                     Make<DuhemFamily>, NoShape};
+const FamilyDef DuhemFamily::kDef = {
+    .name = "duhem",
+    .takes_initial_state = false,
+    .linear = false,
+    .auto_grid = true,
+    .kernel = pzk::PZK_DUHEM,
+    .make = Make<DuhemFamily>,
+    .kernel_shape = NoShape,
+};
 
 class PrandtlIshlinskiiFamily final : public Family {
  public:
@@ -208,8 +228,14 @@ class PrandtlIshlinskiiFamily final : public Family {
 };
 
 const FamilyDef PrandtlIshlinskiiFamily::kDef = {
-    "prandtl-ishlinskii",          true, true, true, pzk::PZK_PRANDTL_ISHLINSKII,
-    Make<PrandtlIshlinskiiFamily>, Plays};
+    .name = "prandtl-ishlinskii",
+    .takes_initial_state = true,
+    .linear = true,
+    .auto_grid = true,
+    .kernel = pzk::PZK_PRANDTL_ISHLINSKII,
+    .make = Make<PrandtlIshlinskiiFamily>,
+    .kernel_shape = Plays,
+};
 
 class BwOscillatorFamily final : public Family {
  public:
@@ -363,13 +389,15 @@ class BwOscillatorFamily final : public Family {
 
 // RK4 steps per sample: OscillatorOptions' default of the fit (2 × substeps).
 const FamilyDef BwOscillatorFamily::kDef = {
-    "bw-oscillator",
-    false,
-    false,
-    true,
-    pzk::PZK_BW_OSCILLATOR,
-    Make<BwOscillatorFamily>,
-    [](const FamilyOptions& o, std::span<const double>) { return KernelSizes(2 * o.substeps); }};
+    .name = "bw-oscillator",
+    .takes_initial_state = false,
+    .linear = false,
+    .auto_grid = true,
+    .kernel = pzk::PZK_BW_OSCILLATOR,
+    .make = Make<BwOscillatorFamily>,
+    .kernel_shape = [](const FamilyOptions& o,
+                       std::span<const double>) { return KernelSizes(2 * o.substeps); },
+};
 
 class BimorphFinFamily final : public Family {
  public:
@@ -582,8 +610,14 @@ class BimorphFinFamily final : public Family {
 
 // Not in the `--family auto` grid: the fin's bench has its own geometry and protocol.
 const FamilyDef BimorphFinFamily::kDef = {
-    "bimorph-fin",           false, false, false, pzk::PZK_BIMORPH_FIN, Make<BimorphFinFamily>,
-    BimorphFinFamily::Kernel};
+    .name = "bimorph-fin",
+    .takes_initial_state = false,
+    .linear = false,
+    .auto_grid = false,
+    .kernel = pzk::PZK_BIMORPH_FIN,
+    .make = Make<BimorphFinFamily>,
+    .kernel_shape = BimorphFinFamily::Kernel,
+};
 
 }  // namespace
 

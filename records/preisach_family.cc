@@ -385,21 +385,26 @@ std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale,
 }
 
 const FamilyDef kPreisachFamily = {
-    "preisach",
-    true,
-    true,
-    true,
-    pzk::PZK_PREISACH,
-    MakePreisachFamily,
-    [](const FamilyOptions& o, std::span<const double>) { return KernelSizes(o.pi_operators); }};
-const FamilyDef kAsymmetricPiFamily = {"asymmetric-pi",
-                                       true,
-                                       true,
-                                       true,
-                                       pzk::PZK_ASYMMETRIC_PI,
-                                       MakeAsymmetricPiFamily,
-                                       [](const FamilyOptions& o, std::span<const double>) {
-                                         return KernelSizes(o.pi_operators, kAsymmetricPiKnots);
-                                       }};
+    .name = "preisach",
+    .takes_initial_state = true,
+    .linear = true,
+    .auto_grid = true,
+    .kernel = pzk::PZK_PREISACH,
+    .make = MakePreisachFamily,
+    .kernel_shape = [](const FamilyOptions& o,
+                       std::span<const double>) { return KernelSizes(o.pi_operators); },
+};
+const FamilyDef kAsymmetricPiFamily = {
+    .name = "asymmetric-pi",
+    .takes_initial_state = true,
+    .linear = true,
+    .auto_grid = true,
+    .kernel = pzk::PZK_ASYMMETRIC_PI,
+    .make = MakeAsymmetricPiFamily,
+    .kernel_shape =
+        [](const FamilyOptions& o, std::span<const double>) {
+          return KernelSizes(o.pi_operators, kAsymmetricPiKnots);
+        },
+};
 
 }  // namespace pz::records
