@@ -4,9 +4,63 @@
 #include <cmath>
 #include <vector>
 
-#include "records/fit.h"
-
 namespace pz::records {
+
+Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::VectorXd& h) {
+  const Eigen::Index n = h.size();
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(n);
+  std::vector<char> passive(static_cast<size_t>(n), 0);
+  const double tol = 1e-12 * std::max(1.0, G.diagonal().cwiseAbs().maxCoeff()) *
+                     std::max(1.0, h.cwiseAbs().maxCoeff());
+  auto solve_passive = [&](Eigen::VectorXd& s) {
+    std::vector<Eigen::Index> idx;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (passive[static_cast<size_t>(i)]) idx.push_back(i);
+    const Eigen::Index m = static_cast<Eigen::Index>(idx.size());
+    Eigen::MatrixXd Gp(m, m);
+    Eigen::VectorXd hp(m);
+    for (Eigen::Index a = 0; a < m; ++a) {
+      hp(a) = h(idx[static_cast<size_t>(a)]);
+      for (Eigen::Index b = 0; b < m; ++b)
+        Gp(a, b) = G(idx[static_cast<size_t>(a)], idx[static_cast<size_t>(b)]);
+    }
+    // A tiny ridge keeps nearly collinear plays solvable.
+    Gp.diagonal().array() += 1e-13 * std::max(1.0, Gp.diagonal().maxCoeff());
+    const Eigen::VectorXd sp = Gp.ldlt().solve(hp);
+    s.setZero(n);
+    for (Eigen::Index a = 0; a < m; ++a) s(idx[static_cast<size_t>(a)]) = sp(a);
+  };
+  for (int outer = 0; outer < 3 * n + 10; ++outer) {
+    const Eigen::Index best = EnteringVariable(h - G * w, passive, tol);
+    if (best < 0) break;
+    passive[static_cast<size_t>(best)] = 1;
+    for (int inner = 0; inner < 3 * n + 10; ++inner) {
+      Eigen::VectorXd s;
+      solve_passive(s);
+      bool feasible = true;
+      for (Eigen::Index i = 0; i < n; ++i)
+        if (passive[static_cast<size_t>(i)] && s(i) <= 0) feasible = false;
+      if (feasible) {
+        w = s;
+        break;
+      }
+      double alpha = 1;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (passive[static_cast<size_t>(i)] && s(i) <= 0)
+          alpha = std::min(alpha, w(i) / (w(i) - s(i)));
+      }
+      w += alpha * (s - w);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        if (passive[static_cast<size_t>(i)] &&
+            w(i) <= 1e-15 * std::max(1.0, w.cwiseAbs().maxCoeff())) {
+          passive[static_cast<size_t>(i)] = 0;
+          w(i) = 0;
+        }
+      }
+    }
+  }
+  return w;
+}
 namespace {
 
 /// The Cholesky factor of G_PP + εI for an ordered passive set P, updated in place.

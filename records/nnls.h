@@ -1,5 +1,5 @@
 // Non-negative least squares for many unknowns (issue 37: the Preisach grid's 820 cells at 40
-// levels): the Lawson–Hanson active set of records/fit.h NonNegativeLeastSquares, from a start and
+// levels): the Lawson–Hanson active set of NonNegativeLeastSquares (below), from a start and
 // with the passive set's Cholesky factor updated as variables enter and leave it.
 //
 // NonNegativeLeastSquares solves every passive set afresh (an LDLᵀ of G_PP: O(p³) per step, and
@@ -18,6 +18,10 @@
 #include <vector>
 
 namespace pz::records {
+
+/// min ‖A w − b‖² subject to w ≥ 0, from the normal equations G = AᵀA, h = Aᵀb (Lawson–Hanson
+/// active set). Returns w.
+Eigen::VectorXd NonNegativeLeastSquares(const Eigen::MatrixXd& G, const Eigen::VectorXd& h);
 
 /// min ‖A w − b‖², w ≥ 0, from G = AᵀA and h = Aᵀb, starting at max(start, 0) (empty: at the
 /// positive part of the unconstrained solution of G + εI).

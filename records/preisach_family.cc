@@ -6,7 +6,7 @@
 #include "io/csv.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/preisach.h"
-#include "records/fit.h"
+#include "records/fitness.h"
 #include "records/preisach_normal.h"
 #include "records/stepper.h"
 

@@ -9,7 +9,6 @@
 
 #include "model/format.h"
 #include "model/status.h"
-#include "records/fit.h"
 #include "records/nnls.h"
 
 namespace pz::records {

@@ -7,7 +7,8 @@
 
 #include "model/effect_library.h"
 #include "model/status.h"
-#include "records/fit.h"
+#include "records/nnls.h"
+#include "records/record_rows.h"
 
 namespace pz::records {
 namespace {

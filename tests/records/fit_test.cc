@@ -14,6 +14,7 @@
 #include <numbers>
 
 #include "model/bimorph.h"
+#include "records/nnls.h"
 #include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
