@@ -14,6 +14,7 @@
 #include "model/status.h"
 #include "records/excitation.h"
 #include "records/model.h"
+#include "records/preisach_family.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {
@@ -221,7 +222,8 @@ std::vector<ModelScore> CrossValidateAll(
     const io::RecordSet& set, const std::vector<Candidate>& cands,
     const std::function<FitOptions(size_t, size_t)>& options_of, int K, int threads,
     const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
-    const std::function<void(const std::string&)>& progress, size_t* fits) {
+    const std::function<void(const std::string&)>& progress, size_t* fits,
+    std::vector<std::vector<double>>* fold_params = nullptr) {
   const std::vector<Fold> folds = MakeFolds(set, K);
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   std::vector<ModelScore> out(cands.size());
@@ -246,6 +248,7 @@ std::vector<ModelScore> CrossValidateAll(
   }
   std::vector<double> rmse(cands.size() * static_cast<size_t>(K), kInf);
   std::vector<std::string> errors(rmse.size());
+  if (fold_params) fold_params->assign(rmse.size(), {});
   std::vector<int> done(cands.size(), 0);
   std::mutex mu;
   RunTasks(rmse.size(), service ? 1 : threads, [&](size_t t) {
@@ -254,6 +257,7 @@ std::vector<ModelScore> CrossValidateAll(
     try {
       const FitResult r = FitModel(folds[k].set, made[i].model, made[i].options);
       rmse[t] = FoldRmse(folds[k], r);
+      if (fold_params) (*fold_params)[t] = r.params;
     } catch (const InputError& e) {
       errors[t] = e.what();
     }
@@ -289,6 +293,140 @@ std::vector<ModelScore> CrossValidateAll(
   return out;
 }
 
+/// The ladder of resolutions (SelectOptions::levels ascending, kAutoLevels alone: the default's).
+std::vector<int> Ladder(const SelectOptions& o) {
+  std::vector<int> l;
+  for (int x : o.levels)
+    if (x != kAutoLevels) l.push_back(x);
+  if (l.empty()) l = SelectOptions{}.levels;
+  std::sort(l.begin(), l.end());
+  l.erase(std::unique(l.begin(), l.end()), l.end());
+  return l;
+}
+
+/// The fold's RMSE of linear candidate c at `levels` with its effects at `params` (the fold's fit
+/// at another resolution): the weights re-solved on the fold's training pieces (the penalty and its
+/// strength validated there at `params`, as a fit's are at its solution; a Preisach grid's creep
+/// spectrum undone on the responses, records/preisach_family.h FitPreisachLevels), each whole
+/// record evaluated. +inf where the pieces cannot support that resolution.
+double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& c, int levels,
+                        const std::vector<double>& params) {
+  FamilyOptions fo = c.Options(FitOptions{}).family_options;
+  fo.pi_operators = levels;
+  fo.cross_validation_fold = true;
+  const std::vector<const io::Record*> train = f.set.WithRole(model::CaseRole::kTrain);
+  FitResult r;
+  try {
+    r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
+    if (c.family == kPreisachFamily.name) {
+      const PreisachLevelFits fits = FitPreisachLevels(train, scale, fo, c.effects, params, {levels});
+      r.weights = fits.fitness.front()->Run(fits.params, false).weights;
+    } else {
+      const RecordFitness fitness(*r.model, train, opt::kDefaultErrorCost, params);
+      r.weights = fitness.Run(params, false).weights;
+    }
+    r.metrics.resize(f.set.records.size());
+    r.yhat.resize(f.set.records.size());
+    for (size_t j : f.whole)
+      r.metrics[j] = Evaluate(*r.model, params, r.weights, f.set.records[j], &r.yhat[j]);
+  } catch (const InputError&) {
+    return kInf;
+  }
+  return FoldRmse(f, r);
+}
+
+/// The resolution of each linear candidate of the screening chosen by its folds
+/// (SelectOptions::levels): fold_params[i K + k] is candidate i's fit in fold k at the ladder's
+/// first rung. Each (candidate, fold, rung) re-solve is one task on `threads`, its result stored
+/// at its index, so that the choice is the same whatever the threads. Sets each candidate's
+/// resolution, its fold RMSEs, CV RMSE, SE and parameters to the chosen rung's, and its table.
+void ChooseLevelsByFolds(const io::RecordSet& set, const SelectOptions& options,
+                         const std::vector<std::vector<double>>& fold_params,
+                         std::vector<ModelScore>& screen, size_t* fits) {
+  const std::vector<int> ladder = Ladder(options);
+  const size_t K = static_cast<size_t>(options.folds), R = ladder.size();
+  if (R < 2) return;
+  const std::vector<Fold> folds = MakeFolds(set, options.folds);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  // rmse[i][rung][k]; a rung not tried is empty.
+  std::vector<std::vector<std::vector<double>>> rmse(screen.size());
+  std::vector<size_t> top(screen.size(), 0);  // per candidate: the finest rung tried
+  std::vector<std::pair<size_t, size_t>> pending;  // (candidate, rung)
+  for (size_t i = 0; i < screen.size(); ++i) {
+    const Candidate& c = screen[i].candidate;
+    if (!LinearFamily(c.family) || c.levels != ladder.front() || !std::isfinite(screen[i].cv_rmse))
+      continue;
+    rmse[i].assign(R, {});
+    rmse[i][0] = screen[i].fold_rmse;
+    const size_t first = std::clamp<size_t>(static_cast<size_t>(options.levels_first), 1, R);
+    for (size_t q = 1; q < first; ++q) pending.emplace_back(i, q);
+    top[i] = first - 1;
+  }
+  auto cv = [&](size_t i, size_t q) {
+    double m = 0;
+    for (double x : rmse[i][q]) m += x / static_cast<double>(K);
+    return std::isfinite(m) ? m : kInf;
+  };
+  while (!pending.empty()) {
+    for (const auto& [i, q] : pending) rmse[i][q].assign(K, kInf);
+    RunTasks(pending.size() * K, options.service ? 1 : std::max(1, options.fit.threads),
+             [&](size_t t) {
+               const auto [i, q] = pending[t / K];
+               const size_t k = t % K;
+               rmse[i][q][k] = ResolvedFoldRmse(folds[k], scale, screen[i].candidate, ladder[q],
+                                                fold_params[i * K + k]);
+             });
+    if (fits) *fits += pending.size() * K;
+    pending.clear();
+    // Climb where the finest rung tried is the lowest.
+    for (size_t i = 0; i < screen.size(); ++i) {
+      if (rmse[i].empty() || top[i] + 1 >= R) continue;
+      size_t best = 0;
+      for (size_t q = 1; q <= top[i]; ++q)
+        if (cv(i, q) < cv(i, best)) best = q;
+      if (best == top[i]) pending.emplace_back(i, ++top[i]);
+    }
+  }
+  for (size_t i = 0; i < screen.size(); ++i) {
+    if (rmse[i].empty()) continue;
+    ModelScore& s = screen[i];
+    auto regressors = [&](int levels) {
+      FamilyOptions fo;
+      fo.pi_operators = levels;
+      fo.cross_validation_fold = true;
+      return MakeFamily(s.candidate.family, scale, fo)->regressors();
+    };
+    const size_t base_regressors = regressors(ladder.front());
+    std::vector<ModelScore> rungs;
+    for (size_t q = 0; q <= top[i]; ++q) {
+      ModelScore m;
+      m.candidate = s.candidate;
+      m.candidate.levels = ladder[q];
+      m.parameters = s.parameters - base_regressors + regressors(ladder[q]);
+      m.fold_rmse = rmse[i][q];
+      m.cv_rmse = cv(i, q);
+      if (std::isfinite(m.cv_rmse)) {
+        double var = 0;
+        for (double x : m.fold_rmse) var += (x - m.cv_rmse) * (x - m.cv_rmse);
+        m.cv_se = std::sqrt(var / static_cast<double>((K - 1) * K));
+      }
+      rungs.push_back(std::move(m));
+      s.level_candidates.push_back(ladder[q]);
+      s.level_cv_rmse.push_back(rungs.back().cv_rmse);
+    }
+    const size_t chosen = OneStandardErrorChoice(rungs);
+    s.level_chosen = chosen;
+    s.level_best = 0;
+    for (size_t q = 1; q < rungs.size(); ++q)
+      if (rungs[q].cv_rmse < rungs[s.level_best].cv_rmse) s.level_best = q;
+    s.candidate.levels = rungs[chosen].candidate.levels;
+    s.parameters = rungs[chosen].parameters;
+    s.fold_rmse = rungs[chosen].fold_rmse;
+    s.cv_rmse = rungs[chosen].cv_rmse;
+    s.cv_se = rungs[chosen].cv_se;
+  }
+}
+
 bool SameModel(const Candidate& a, const Candidate& b) {
   return a.family == b.family && a.effects == b.effects && a.levels == b.levels;
 }
@@ -313,6 +451,21 @@ FitOptions Candidate::Options(const FitOptions& base) const {
   o.family_options.initial_state =
       TakesInitialState(family) ? initial_state : model::InitialState::kAuto;
   return o;
+}
+
+std::string ModelScore::LevelsDescribe() const {
+  if (level_candidates.size() < 2 || level_chosen >= level_candidates.size()) return "";
+  const std::string what = candidate.family == kPreisachFamily.name ? " levels" : " plays";
+  std::string s = std::to_string(level_candidates[level_chosen]) + what + " by the folds (";
+  s += level_chosen == level_best
+           ? std::string("the lowest CV RMSE")
+           : "the fewest within one SE of the lowest, " +
+                 std::to_string(level_candidates[level_best]);
+  s += "): CV RMSE";
+  for (size_t q = 0; q < level_candidates.size(); ++q)
+    s += (q ? ", " : " ") + std::to_string(level_candidates[q]) + " → " +
+         FormatG(level_cv_rmse[q], 3);
+  return s;
 }
 
 std::string InitialStateEvidence::Describe(const std::string& unit) const {
@@ -487,15 +640,11 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
         // the linear families only, whose weights it is solved with (records/spectrum_solve.h):
         // on the others each of its weights would be searched.
         ok = ok && !(default_sets && one_rate && RateEffect(e));
-        ok = ok && !(default_sets && EffectName(e) == "creep-spectrum" && !LinearFamily(f));
+        ok = ok && !(default_sets && std::string(EffectName(e)) == "creep-spectrum" && !LinearFamily(f));
       }
       if (!ok) continue;
-      // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
-      // only (each evaluation re-makes the regressors): the finalists get the others.
-      std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
-      if (LinearFamily(f) && !effects.empty() && !levels.empty())
-        levels = {*std::min_element(levels.begin(), levels.end())};
-      for (int l : levels) out.push_back({f, effects, l, state});
+      // A linear family at the ladder's first rung: its folds choose the others (SelectModel).
+      out.push_back({f, effects, LinearFamily(f) ? Ladder(options).front() : 0, state});
     }
   }
   return out;
@@ -774,7 +923,7 @@ std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
 /// res.chosen).
 void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
                     const std::vector<ModelScore>& screen, const std::vector<size_t>& order,
-                    const std::vector<Candidate>& grid, const std::vector<Candidate>& finals,
+                    const std::vector<Candidate>& finals,
                     SelectionResult& res) {
   std::vector<size_t> o2(second.size());
   for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
@@ -786,7 +935,7 @@ void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
   }
   for (size_t i : order) {
     bool final = false;
-    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
+    for (const Candidate& c : finals) final = final || SameModel(c, screen[i].candidate);
     if (!final) res.ranking.push_back(screen[i]);
   }
 }
@@ -815,10 +964,17 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   res.grid_note = GridNote(set, options);
   say("screening " + std::to_string(grid.size()) + " candidates by " +
       std::to_string(options.folds) + "-fold blocked cross-validation on the training records");
+  std::vector<std::vector<double>> fold_params;
   std::vector<ModelScore> screen = CrossValidateAll(
       set, grid, [&](size_t, size_t searched) { return ScreenOptions(options, searched); },
-      options.folds, threads, options.service, options.progress, &res.fold_fits);
-  for (auto& s : screen) s.screen_cv_rmse = s.cv_rmse;
+      options.folds, threads, options.service, options.progress, &res.fold_fits, &fold_params);
+  // The linear families' resolutions: chosen by the same folds (their weights re-solved).
+  ChooseLevelsByFolds(set, options, fold_params, screen, &res.fold_fits);
+  for (size_t i = 0; i < screen.size(); ++i) {
+    screen[i].screen_cv_rmse = screen[i].cv_rmse;
+    if (!screen[i].level_candidates.empty())
+      say(screen[i].candidate.Describe() + ": " + screen[i].LevelsDescribe());
+  }
   // 3. The finalists: the best of the screening and the simplest within one SE of its best,
   // each with every initial state worth trying, with the full search.
   std::vector<size_t> order(screen.size());
@@ -834,18 +990,19 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   for (auto& s : screen) s.within_one_se = false;  // (the finals' rule is reported)
   if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
   std::vector<Candidate> finals;
-  std::vector<double> final_screen;
-  auto add = [&](Candidate c, double screened, bool every_state) {
+  std::vector<const ModelScore*> final_screen;  // each finalist's screening
+  auto add = [&](const ModelScore& screened, bool every_state) {
+    Candidate c = screened.candidate;
     for (const Candidate& f : finals)
       if (SameModel(f, c)) return;
     for (model::InitialState s : states) {
       if (s != first && (!every_state || !TakesInitialState(c.family))) continue;
       c.initial_state = s;
       finals.push_back(c);
-      final_screen.push_back(screened);
+      final_screen.push_back(&screened);
     }
   };
-  for (size_t i : picked) add(grid[i], screen[i].cv_rmse, i == picked.front());
+  for (size_t i : picked) add(screen[i], i == picked.front());
   // Where the withheld drives need what the training lacks, the best of every family too: their
   // predictions there are weighed after the choice (WeighUnexcited).
   std::string needs;
@@ -855,25 +1012,20 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
     for (size_t i : order) {
       if (!std::isfinite(screen[i].cv_rmse) || Takes(seen, grid[i].family)) continue;
       seen.push_back(grid[i].family);
-      add(grid[i], screen[i].cv_rmse, false);
+      add(screen[i], false);
     }
   }
-  // The screening's best: with the other initial state (above), and, a linear family with effects
-  // screened at its coarsest resolution, at the others.
-  const Candidate& top = grid[picked.front()];
-  if (LinearFamily(top.family) && !top.effects.empty())
-    for (int l : options.levels) {
-      Candidate c = top;
-      c.levels = l;
-      add(c, std::numeric_limits<double>::quiet_NaN(), false);
-    }
   say("cross-validating " + std::to_string(finals.size()) + " finalists with the full search");
   std::vector<ModelScore> second = CrossValidateAll(
       set, finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
       options.folds, threads, options.service, options.progress, &res.fold_fits);
   for (size_t i = 0; i < second.size(); ++i) {
     second[i].round = 2;
-    second[i].screen_cv_rmse = final_screen[i];
+    second[i].screen_cv_rmse = final_screen[i]->cv_rmse;
+    second[i].level_candidates = final_screen[i]->level_candidates;
+    second[i].level_cv_rmse = final_screen[i]->level_cv_rmse;
+    second[i].level_best = final_screen[i]->level_best;
+    second[i].level_chosen = final_screen[i]->level_chosen;
   }
   // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
   size_t chosen = OneStandardErrorChoice(second);
@@ -899,7 +1051,7 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   }
   res.fit = std::move(refits[chosen]);
   res.fit_options = finals[chosen].Options(options.fit);
-  RankCandidates(second, chosen, screen, order, grid, finals, res);
+  RankCandidates(second, chosen, screen, order, finals, res);
   res.noise = EstimateNoiseFloor(set);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;

@@ -87,6 +87,15 @@ struct ModelScore {
   /// Finalists, where the withheld drives need excitation the training lacks: the RMS of this
   /// finalist's prediction less the finalists' median prediction over those samples (NaN else).
   double parting = std::numeric_limits<double>::quiet_NaN();
+  /// A linear family: its resolution chosen by the screening's folds (SelectOptions::levels) —
+  /// the levels tried, each one's CV RMSE (+inf: a fold could not support it), the lowest's index
+  /// and the chosen one's (the fewest within one paired SE of the lowest); empty: one resolution.
+  std::vector<int> level_candidates;
+  std::vector<double> level_cv_rmse;
+  size_t level_best = 0, level_chosen = 0;
+  /// "12 levels by the folds (the fewest within one SE of the best, 20): 8 → 0.31, 12 → 0.2, 20 →
+  /// 0.19" ("" without a choice).
+  std::string LevelsDescribe() const;
   std::string error;  ///< why it could not be fitted ("" when it was)
 };
 
@@ -120,9 +129,15 @@ struct SelectOptions {
   /// + delay; the spectrum on the linear families only, and no delay on a training drive of one
   /// rate: GridNote); a set a family excludes or the data cannot support is left out.
   std::vector<std::vector<EffectKind>> effect_sets;
-  /// Resolutions of the linear families: alone, each is screened; with effects, the coarsest is,
-  /// and a finalist is cross-validated at each.
-  std::vector<int> levels = {8, 12};
+  /// Resolutions of the linear families (plays / Preisach levels), ascending: the ladder the
+  /// screening climbs. Each linear candidate is fitted at the first in every fold; its weights are
+  /// then re-solved in the same fold at the next `levels_first` − 1 with its effects where that fit
+  /// put them (no search), and at the next rung while the finest tried has the lowest CV RMSE. The
+  /// one-SE rule over the rungs (the fewest within one paired SE of the lowest) is the candidate's
+  /// resolution, with which it is ranked and cross-validated again as a finalist. One entry (or
+  /// kAutoLevels alone: the default ladder): that resolution only.
+  std::vector<int> levels = {8, 12, 20, 28, 40};
+  int levels_first = 3;
   int folds = 5;
   size_t finalists = 3;
   /// The screening round's search: PSO particles × iterations × 1 repetition, LM iterations, the
