@@ -319,7 +319,8 @@ double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& 
   try {
     r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
     if (c.family == kPreisachFamily.name) {
-      const PreisachLevelFits fits = FitPreisachLevels(train, scale, fo, c.effects, params, {levels});
+      const PreisachLevelFits fits =
+          FitPreisachLevels(train, scale, fo, c.effects, params, {levels});
       r.weights = fits.fitness.front()->Run(fits.params, false).weights;
     } else {
       const RecordFitness fitness(*r.model, train, opt::kDefaultErrorCost, params);
@@ -640,7 +641,8 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
         // the linear families only, whose weights it is solved with (records/spectrum_solve.h):
         // on the others each of its weights would be searched.
         ok = ok && !(default_sets && one_rate && RateEffect(e));
-        ok = ok && !(default_sets && std::string(EffectName(e)) == "creep-spectrum" && !LinearFamily(f));
+        ok = ok &&
+             !(default_sets && std::string(EffectName(e)) == "creep-spectrum" && !LinearFamily(f));
       }
       if (!ok) continue;
       // A linear family at the ladder's first rung: its folds choose the others (SelectModel).
