@@ -336,6 +336,12 @@ double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& 
   return FoldRmse(f, r);
 }
 
+/// A finer rung of the resolutions' ladder is worth its weights when it lowers the CV RMSE by more
+/// than this share (beside one paired SE): the folds of one periodic record agree on a small,
+/// consistent gain of a finer grid (its SE tiny) that only extrapolation would show to matter (as
+/// the creep spectrum's rule, records/fit.cc kSpectrumRule).
+constexpr double kLevelsTolerance = 0.01;
+
 /// The resolution of each linear candidate of the screening chosen by its folds
 /// (SelectOptions::levels): fold_params[i K + k] is candidate i's fit in fold k at the ladder's
 /// first rung. Each (candidate, fold, rung) re-solve is one task on `threads`, its result stored
@@ -379,13 +385,12 @@ void ChooseLevelsByFolds(const io::RecordSet& set, const SelectOptions& options,
              });
     if (fits) *fits += pending.size() * K;
     pending.clear();
-    // Climb where the finest rung tried is the lowest.
+    // Climb where the finest rung tried is lower than every other by more than kLevelsTolerance.
     for (size_t i = 0; i < screen.size(); ++i) {
       if (rmse[i].empty() || top[i] + 1 >= R) continue;
-      size_t best = 0;
-      for (size_t q = 1; q <= top[i]; ++q)
-        if (cv(i, q) < cv(i, best)) best = q;
-      if (best == top[i]) pending.emplace_back(i, ++top[i]);
+      double below = kInf;
+      for (size_t q = 0; q < top[i]; ++q) below = std::min(below, cv(i, q));
+      if (cv(i, top[i]) < (1 - kLevelsTolerance) * below) pending.emplace_back(i, ++top[i]);
     }
   }
   for (size_t i = 0; i < screen.size(); ++i) {
@@ -415,11 +420,16 @@ void ChooseLevelsByFolds(const io::RecordSet& set, const SelectOptions& options,
       s.level_candidates.push_back(ladder[q]);
       s.level_cv_rmse.push_back(rungs.back().cv_rmse);
     }
-    const size_t chosen = OneStandardErrorChoice(rungs);
-    s.level_chosen = chosen;
+    size_t chosen = OneStandardErrorChoice(rungs);
     s.level_best = 0;
     for (size_t q = 1; q < rungs.size(); ++q)
       if (rungs[q].cv_rmse < rungs[s.level_best].cv_rmse) s.level_best = q;
+    for (size_t q = 0; q < chosen; ++q)  // (the rungs ascend in parameters)
+      if (rungs[q].cv_rmse <= (1 + kLevelsTolerance) * rungs[s.level_best].cv_rmse) {
+        chosen = q;
+        break;
+      }
+    s.level_chosen = chosen;
     s.candidate.levels = rungs[chosen].candidate.levels;
     s.parameters = rungs[chosen].parameters;
     s.fold_rmse = rungs[chosen].fold_rmse;
@@ -460,7 +470,7 @@ std::string ModelScore::LevelsDescribe() const {
   std::string s = std::to_string(level_candidates[level_chosen]) + what + " by the folds (";
   s += level_chosen == level_best
            ? std::string("the lowest CV RMSE")
-           : "the fewest within one SE of the lowest, " +
+           : "the fewest within one SE or 1 % of the lowest, " +
                  std::to_string(level_candidates[level_best]);
   s += "): CV RMSE";
   for (size_t q = 0; q < level_candidates.size(); ++q)
@@ -838,9 +848,11 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   std::vector<size_t> index;
   std::string dropped;
   double best_cv = kInf;
-  for (const ModelScore& m : second) best_cv = std::min(best_cv, m.cv_rmse);
+  for (const ModelScore& m : second)
+    if (m.round == 2) best_cv = std::min(best_cv, m.cv_rmse);
   for (size_t i = 0; i < second.size(); ++i) {
     if (!std::isfinite(second[i].parting) || !std::isfinite(second[i].cv_rmse)) continue;
+    if (second[i].round != 2) continue;  // the median's reference only: not cross-validated again
     // Only a finalist near the best where the training shows it can take over (when every such
     // one parts on its own, all extrapolate there alike: the one-SE choice stands).
     if (second[i].cv_rmse > kPlausible * best_cv) continue;
@@ -993,7 +1005,8 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
   std::vector<Candidate> finals;
   std::vector<const ModelScore*> final_screen;  // each finalist's screening
-  auto add = [&](const ModelScore& screened, bool every_state) {
+  std::vector<bool> reference;                  // only the families' median (below)
+  auto add = [&](const ModelScore& screened, bool every_state, bool only_reference) {
     Candidate c = screened.candidate;
     for (const Candidate& f : finals)
       if (SameModel(f, c)) return;
@@ -1002,9 +1015,10 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       c.initial_state = s;
       finals.push_back(c);
       final_screen.push_back(&screened);
+      reference.push_back(only_reference);
     }
   };
-  for (size_t i : picked) add(screen[i], i == picked.front());
+  for (size_t i : picked) add(screen[i], i == picked.front(), false);
   // Where the withheld drives need what the training lacks, the best of every family too: their
   // predictions there are weighed after the choice (WeighUnexcited).
   std::string needs;
@@ -1014,25 +1028,46 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
     for (size_t i : order) {
       if (!std::isfinite(screen[i].cv_rmse) || Takes(seen, grid[i].family)) continue;
       seen.push_back(grid[i].family);
-      add(screen[i], false);
+      // One screened beyond kPlausible × the best can never take the choice over (WeighUnexcited):
+      // it joins the families' median there, refitted, without its folds again.
+      add(screen[i], false, screen[i].cv_rmse > kPlausible * screen[order.front()].cv_rmse);
     }
   }
-  say("cross-validating " + std::to_string(finals.size()) + " finalists with the full search");
-  std::vector<ModelScore> second = CrossValidateAll(
-      set, finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
+  std::vector<Candidate> cv_finals;
+  for (size_t i = 0; i < finals.size(); ++i)
+    if (!reference[i]) cv_finals.push_back(finals[i]);
+  say("cross-validating " + std::to_string(cv_finals.size()) + " finalists with the full search" +
+      (cv_finals.size() < finals.size()
+           ? " (" + std::to_string(finals.size() - cv_finals.size()) +
+                 " more families' best refitted for the median where the training lacks "
+                 "excitation)"
+           : std::string()));
+  std::vector<ModelScore> cvd = CrossValidateAll(
+      set, cv_finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
       options.folds, threads, options.service, options.progress, &res.fold_fits);
-  for (size_t i = 0; i < second.size(); ++i) {
-    second[i].round = 2;
+  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
+  const size_t chosen_cv = OneStandardErrorChoice(cvd);
+  std::vector<ModelScore> second(finals.size());
+  size_t chosen = 0;
+  for (size_t i = 0, j = 0; i < finals.size(); ++i) {
+    if (reference[i]) {
+      second[i] = *final_screen[i];
+      second[i].candidate = finals[i];
+      second[i].within_one_se = false;
+    } else {
+      if (j == chosen_cv) chosen = i;
+      second[i] = std::move(cvd[j++]);
+      second[i].round = 2;
+    }
     second[i].screen_cv_rmse = final_screen[i]->cv_rmse;
     second[i].level_candidates = final_screen[i]->level_candidates;
     second[i].level_cv_rmse = final_screen[i]->level_cv_rmse;
     second[i].level_best = final_screen[i]->level_best;
     second[i].level_chosen = final_screen[i]->level_chosen;
   }
-  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
-  size_t chosen = OneStandardErrorChoice(second);
-  res.best_cv_rmse = kInf;
-  for (const auto& s : second) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
+  res.best_cv_rmse = second[chosen].cv_rmse;
+  for (const auto& s : second)
+    if (s.round == 2) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
   say("chosen: " + finals[chosen].Describe() + " (CV RMSE " +
       io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
       ")");

@@ -318,8 +318,8 @@ namespace {
 /// part, 20 nearly.
 io::RecordSet FineDensity() {
   RelayPreisachCheckOptions o;
-  o.train_s = 40;
-  o.withheld_s = 15;
+  o.train_s = 25;
+  o.withheld_s = 10;
   o.seed = 3;
   io::RecordSet set = GenerateRelayPreisachCheck(o).set;
   const model::PreisachGrid g{o.u_lo, o.u_hi, 24};
