@@ -905,28 +905,36 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   return pick;
 }
 
-/// The finalists refitted on every training record: the chosen one with `fit`'s own search, the
-/// others with the finalists' (their errors in `second` when they cannot be fitted).
+/// The chosen candidate refitted on every training record with `fit`'s own search (its threads).
+FitResult RefitChosen(const io::RecordSet& set, const Candidate& c, const SelectOptions& options) {
+  FitOptions f = c.Options(options.fit);
+  if (options.service) f.evaluator_factory = options.service(f.family_options);
+  f.progress = nullptr;
+  return FitRecords(set, f);
+}
+
+/// The finalists refitted on every training record: the chosen one (none: finals.size()) by
+/// RefitChosen first, the others side by side with the finalists' search (their errors in `second`
+/// when they cannot be fitted).
 std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
                                       const std::vector<Candidate>& finals, size_t chosen,
                                       const SelectOptions& options,
                                       std::vector<ModelScore>& second) {
   const int threads = std::max(1, options.fit.threads);
   std::vector<FitResult> refits(finals.size());
+  if (chosen < finals.size()) refits[chosen] = RefitChosen(set, finals[chosen], options);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
-    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    if (i == chosen) return;
     FitOptions f = finals[i].Options(
-        i == chosen
-            ? options.fit
-            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+        FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
     if (options.service) f.evaluator_factory = options.service(f.family_options);
     f.threads = options.service ? threads : 1;
     f.progress = nullptr;
-    f.uncertainty = i == chosen && options.fit.uncertainty;
+    f.uncertainty = false;
     try {
       refits[i] = FitRecords(set, f);
     } catch (const InputError& e) {
-      if (i == chosen) throw;
       second[i].error = e.what();
     }
   });
@@ -952,6 +960,52 @@ void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
     for (const Candidate& c : finals) final = final || SameModel(c, screen[i].candidate);
     if (!final) res.ranking.push_back(screen[i]);
   }
+}
+
+/// The finalists' round: each cross-validated again with the finalists' search (but those only
+/// the families' median needs, `reference`, which keep their screening), the one-SE rule's choice
+/// among them in `chosen`; each carries its screening's CV RMSE and resolution table.
+std::vector<ModelScore> CrossValidateFinalists(const io::RecordSet& set,
+                                               const SelectOptions& options,
+                                               const std::vector<Candidate>& finals,
+                                               const std::vector<const ModelScore*>& final_screen,
+                                               const std::vector<bool>& reference, size_t& fits,
+                                               size_t& chosen) {
+  auto say = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
+  std::vector<Candidate> cv_finals;
+  for (size_t i = 0; i < finals.size(); ++i)
+    if (!reference[i]) cv_finals.push_back(finals[i]);
+  say("cross-validating " + std::to_string(cv_finals.size()) + " finalists with the full search" +
+      (cv_finals.size() < finals.size()
+           ? " (" + std::to_string(finals.size() - cv_finals.size()) +
+                 " more families' best refitted for the median where the training lacks "
+                 "excitation)"
+           : std::string()));
+  std::vector<ModelScore> cvd = CrossValidateAll(
+      set, cv_finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
+      options.folds, std::max(1, options.fit.threads), options.service, options.progress, &fits);
+  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
+  const size_t chosen_cv = OneStandardErrorChoice(cvd);
+  std::vector<ModelScore> second(finals.size());
+  for (size_t i = 0, j = 0; i < finals.size(); ++i) {
+    if (reference[i]) {
+      second[i] = *final_screen[i];
+      second[i].candidate = finals[i];
+      second[i].within_one_se = false;
+    } else {
+      if (j == chosen_cv) chosen = i;
+      second[i] = std::move(cvd[j++]);
+      second[i].round = 2;
+    }
+    second[i].screen_cv_rmse = final_screen[i]->cv_rmse;
+    second[i].level_candidates = final_screen[i]->level_candidates;
+    second[i].level_cv_rmse = final_screen[i]->level_cv_rmse;
+    second[i].level_best = final_screen[i]->level_best;
+    second[i].level_chosen = final_screen[i]->level_chosen;
+  }
+  return second;
 }
 
 }  // namespace
@@ -1033,38 +1087,9 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       add(screen[i], false, screen[i].cv_rmse > kPlausible * screen[order.front()].cv_rmse);
     }
   }
-  std::vector<Candidate> cv_finals;
-  for (size_t i = 0; i < finals.size(); ++i)
-    if (!reference[i]) cv_finals.push_back(finals[i]);
-  say("cross-validating " + std::to_string(cv_finals.size()) + " finalists with the full search" +
-      (cv_finals.size() < finals.size()
-           ? " (" + std::to_string(finals.size() - cv_finals.size()) +
-                 " more families' best refitted for the median where the training lacks "
-                 "excitation)"
-           : std::string()));
-  std::vector<ModelScore> cvd = CrossValidateAll(
-      set, cv_finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
-      options.folds, threads, options.service, options.progress, &res.fold_fits);
-  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
-  const size_t chosen_cv = OneStandardErrorChoice(cvd);
-  std::vector<ModelScore> second(finals.size());
   size_t chosen = 0;
-  for (size_t i = 0, j = 0; i < finals.size(); ++i) {
-    if (reference[i]) {
-      second[i] = *final_screen[i];
-      second[i].candidate = finals[i];
-      second[i].within_one_se = false;
-    } else {
-      if (j == chosen_cv) chosen = i;
-      second[i] = std::move(cvd[j++]);
-      second[i].round = 2;
-    }
-    second[i].screen_cv_rmse = final_screen[i]->cv_rmse;
-    second[i].level_candidates = final_screen[i]->level_candidates;
-    second[i].level_cv_rmse = final_screen[i]->level_cv_rmse;
-    second[i].level_best = final_screen[i]->level_best;
-    second[i].level_chosen = final_screen[i]->level_chosen;
-  }
+  std::vector<ModelScore> second = CrossValidateFinalists(set, options, finals, final_screen,
+                                                          reference, res.fold_fits, chosen);
   res.best_cv_rmse = second[chosen].cv_rmse;
   for (const auto& s : second)
     if (s.round == 2) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
@@ -1072,18 +1097,21 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
       io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
       ")");
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
-  std::vector<FitResult> refits = RefitFinalists(set, finals, chosen, options, second);
+  // Where the withheld drives are unexcited the choice may still change (6.): every finalist is
+  // refitted with the finalists' search first (their predictions weighed alike), and the chosen
+  // one with `fit`'s own once it is final.
+  const bool weigh = !unexcited.empty();
+  std::vector<FitResult> refits =
+      RefitFinalists(set, finals, weigh ? finals.size() : chosen, options, second);
   SetRefitErrors(refits, second);
   // 6. An unexcited region: the finalists' predictions there weighed (their drives only).
-  if (const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
-                                            set.response_unit, &res.unexcited);
-      weighed != chosen) {
+  if (weigh) {
+    const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
+                                          set.response_unit, &res.unexcited);
+    if (weighed != chosen) say("weighed where the training lacks excitation: " +
+                               finals[weighed].Describe());
     chosen = weighed;
-    say("weighed where the training lacks excitation: " + finals[chosen].Describe());
-    FitOptions f = finals[chosen].Options(options.fit);
-    if (options.service) f.evaluator_factory = options.service(f.family_options);
-    f.progress = nullptr;
-    refits[chosen] = FitRecords(set, f);
+    refits[chosen] = RefitChosen(set, finals[chosen], options);
     SetRefitErrors(refits, second);
   }
   res.fit = std::move(refits[chosen]);
