@@ -215,15 +215,26 @@ FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
   return f;
 }
 
+double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& c, int levels,
+                        const std::vector<double>& params);
+
+/// A linear family with effects at a resolution finer than `base`: its effects are searched at
+/// `base` and its weights re-solved at its own (as `--pi-operators auto` does, records/fit.cc
+/// FitPreisachAuto: each evaluation at 20 or 40 levels would build the finer grid's equations).
+bool SearchedCoarse(const Candidate& c, int base) {
+  return LinearFamily(c.family) && !c.effects.empty() && c.levels > base;
+}
+
 /// Cross-validates candidates: every (candidate, fold) fit as one task, side by side on
 /// `threads` (each fit on one thread) or one after another with a service. options_of(i): the fit
-/// options of candidate i.
+/// options of candidate i. A candidate SearchedCoarse at `coarse` (> 0) is fitted at `coarse` in
+/// each fold, its weights re-solved at its own resolution there.
 std::vector<ModelScore> CrossValidateAll(
     const io::RecordSet& set, const std::vector<Candidate>& cands,
     const std::function<FitOptions(size_t, size_t)>& options_of, int K, int threads,
     const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
     const std::function<void(const std::string&)>& progress, size_t* fits,
-    std::vector<std::vector<double>>* fold_params = nullptr) {
+    std::vector<std::vector<double>>* fold_params = nullptr, int coarse = 0) {
   const std::vector<Fold> folds = MakeFolds(set, K);
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   std::vector<ModelScore> out(cands.size());
@@ -233,10 +244,12 @@ std::vector<ModelScore> CrossValidateAll(
     try {
       FitOptions fold;  // the family made for the whole training scale, each fold's pieces in it
       fold.family_options.cross_validation_fold = true;
-      made[i] = MakeCandidate(scale, cands[i], fold, {});
-      out[i].parameters = ParameterCount(*made[i].model);
+      out[i].parameters = ParameterCount(*MakeCandidate(scale, cands[i], fold, {}).model);
+      Candidate searched = cands[i];
+      if (coarse > 0 && SearchedCoarse(cands[i], coarse)) searched.levels = coarse;
+      made[i] = MakeCandidate(scale, searched, fold, {});
       FitOptions o = options_of(i, made[i].searched);
-      made[i].options = cands[i].Options(o);
+      made[i].options = searched.Options(o);
       made[i].options.family_options.cross_validation_fold = true;
       if (service) made[i].options.evaluator_factory = service(made[i].options.family_options);
       made[i].options.threads = service ? std::max(1, threads) : 1;
@@ -256,7 +269,9 @@ std::vector<ModelScore> CrossValidateAll(
     if (!made[i].model) return;
     try {
       const FitResult r = FitModel(folds[k].set, made[i].model, made[i].options);
-      rmse[t] = FoldRmse(folds[k], r);
+      rmse[t] = coarse > 0 && SearchedCoarse(cands[i], coarse)
+                    ? ResolvedFoldRmse(folds[k], scale, cands[i], cands[i].levels, r.params)
+                    : FoldRmse(folds[k], r);
       if (fold_params) (*fold_params)[t] = r.params;
     } catch (const InputError& e) {
       errors[t] = e.what();
@@ -905,12 +920,55 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   return pick;
 }
 
+/// FitRecords of candidate c with options f (c's), but a candidate SearchedCoarse at `base`: its
+/// effects searched at `base`, its weights re-solved at its own resolution with the effects there
+/// (the penalty and strength validated there; FitPreisachLevels for a Preisach grid), every record
+/// evaluated with the whole model.
+FitResult FitCandidate(const io::RecordSet& set, const Candidate& c, FitOptions f, int base) {
+  if (!SearchedCoarse(c, base)) return FitRecords(set, f);
+  const int levels = f.family_options.pi_operators;
+  f.family_options.pi_operators = base;
+  FitResult r = FitRecords(set, f);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  const std::vector<const io::Record*> train = set.WithRole(model::CaseRole::kTrain);
+  FamilyOptions fo = f.family_options;
+  fo.pi_operators = levels;
+  r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
+  if (c.family == kPreisachFamily.name) {
+    const PreisachLevelFits fits = FitPreisachLevels(train, scale, fo, c.effects, r.params, {levels});
+    r.weights = fits.fitness.front()->Run(fits.params, false).weights;
+    r.regularisation = fits.fitness.front()->validation();
+  } else {
+    const RecordFitness fitness(*r.model, train, opt::kDefaultErrorCost, r.params);
+    r.weights = fitness.Run(r.params, false).weights;
+    r.regularisation = fitness.validation();
+  }
+  r.metrics.clear();
+  r.yhat.clear();
+  double sse = 0;
+  size_t n = 0;
+  for (const io::Record& rec : set.records) {
+    std::vector<double> y;
+    r.metrics.push_back(Evaluate(*r.model, r.params, r.weights, rec, &y));
+    r.yhat.push_back(std::move(y));
+    if (rec.role == model::CaseRole::kTrain) {
+      sse += r.metrics.back().rmse * r.metrics.back().rmse *
+             static_cast<double>(r.metrics.back().samples);
+      n += r.metrics.back().samples;
+    }
+  }
+  r.train_sse = sse;
+  r.train_mse = n > 0 ? sse / static_cast<double>(n) : 0;
+  r.uncertainty = {};  // the coarse grid's: not this model's
+  return r;
+}
+
 /// The chosen candidate refitted on every training record with `fit`'s own search (its threads).
 FitResult RefitChosen(const io::RecordSet& set, const Candidate& c, const SelectOptions& options) {
   FitOptions f = c.Options(options.fit);
   if (options.service) f.evaluator_factory = options.service(f.family_options);
   f.progress = nullptr;
-  return FitRecords(set, f);
+  return FitCandidate(set, c, f, Ladder(options).front());
 }
 
 /// The finalists refitted on every training record: the chosen one (none: finals.size()) by
@@ -933,7 +991,7 @@ std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
     f.progress = nullptr;
     f.uncertainty = false;
     try {
-      refits[i] = FitRecords(set, f);
+      refits[i] = FitCandidate(set, finals[i], f, Ladder(options).front());
     } catch (const InputError& e) {
       second[i].error = e.what();
     }
@@ -985,7 +1043,8 @@ std::vector<ModelScore> CrossValidateFinalists(const io::RecordSet& set,
            : std::string()));
   std::vector<ModelScore> cvd = CrossValidateAll(
       set, cv_finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
-      options.folds, std::max(1, options.fit.threads), options.service, options.progress, &fits);
+      options.folds, std::max(1, options.fit.threads), options.service, options.progress, &fits,
+      nullptr, Ladder(options).front());
   // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
   const size_t chosen_cv = OneStandardErrorChoice(cvd);
   std::vector<ModelScore> second(finals.size());

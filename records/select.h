@@ -23,7 +23,8 @@
 // `finalists` best of the screening and the simplest candidate within one standard error of its
 // best are cross-validated again with the search of `piezoid fit` (one repetition of its sized
 // budget, its swarm ≤ 15 × 40 iterations, a polish of ≤ 30 iterations) at their chosen
-// resolutions — the best of the screening also with the other initial state worth trying (the
+// resolutions (with effects at a finer one than the first rung: the effects searched at the first,
+// the weights re-solved at theirs, as the refits after the choice) — the best of the screening also with the other initial state worth trying (the
 // records' first branches show one, the rest-level rule another). The one-standard-error rule
 // picks among those: the candidate with
 // the fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
