@@ -935,7 +935,8 @@ FitResult FitCandidate(const io::RecordSet& set, const Candidate& c, FitOptions 
   fo.pi_operators = levels;
   r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
   if (c.family == kPreisachFamily.name) {
-    const PreisachLevelFits fits = FitPreisachLevels(train, scale, fo, c.effects, r.params, {levels});
+    const PreisachLevelFits fits =
+        FitPreisachLevels(train, scale, fo, c.effects, r.params, {levels});
     r.weights = fits.fitness.front()->Run(fits.params, false).weights;
     r.regularisation = fits.fitness.front()->validation();
   } else {

@@ -24,9 +24,9 @@
 // best are cross-validated again with the search of `piezoid fit` (one repetition of its sized
 // budget, its swarm ≤ 15 × 40 iterations, a polish of ≤ 30 iterations) at their chosen
 // resolutions (with effects at a finer one than the first rung: the effects searched at the first,
-// the weights re-solved at theirs, as the refits after the choice) — the best of the screening also with the other initial state worth trying (the
-// records' first branches show one, the rest-level rule another). The one-standard-error rule
-// picks among those: the candidate with
+// the weights re-solved at theirs, as the refits after the choice) — the best of the screening
+// also with the other initial state worth trying (the records' first branches show one, the
+// rest-level rule another). The one-standard-error rule picks among those: the candidate with
 // the fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
 // error of the lowest; ties by CV RMSE, then grid order. The standard error is the paired one (as
 // records/regularisation.h's): of the candidate's fold RMSEs less the best's, over the folds — the
