@@ -118,9 +118,12 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
                : "—")
        << " |\n";
   }
-  os << "\nResolutions chosen by the screening's folds (each fold's weights re-solved at the "
-        "coarsest rung's effects; CV RMSE in "
-     << u << "):\n\n";
+  bool levels = false;
+  for (const records::ModelScore& c : s.ranking) levels = levels || !c.LevelsDescribe().empty();
+  if (levels)
+    os << "\nResolutions chosen by the screening's folds (each fold's weights re-solved at the "
+          "coarsest rung's effects; CV RMSE in "
+       << u << "):\n\n";
   for (const records::ModelScore& c : s.ranking)
     if (const std::string l = c.LevelsDescribe(); !l.empty())
       os << "- " << c.candidate.Describe() << ": " << l << "\n";
