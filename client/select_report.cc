@@ -67,6 +67,8 @@ void PrintSelection(std::ostream& os, const io::RecordSet& set, const records::S
                              : "  chosen (the fewest parameters within one SE of the best CV RMSE "
                                "among the finalists that do not part on their own): ")
      << s.ranking[s.chosen].candidate.Describe() << "\n";
+  if (const std::string l = s.ranking[s.chosen].LevelsDescribe(); !l.empty())
+    os << "  its resolution: " << l << " " << u << "\n";
   for (const auto& e : s.initial_states)
     os << "  initial state, " << model::CaseRoleName(e.role) << " " << e.record << ": "
        << e.Describe(u) << (e.role == model::CaseRole::kTrain ? "" : " (shown, not used)") << "\n";
@@ -116,6 +118,15 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
                : "—")
        << " |\n";
   }
+  bool levels = false;
+  for (const records::ModelScore& c : s.ranking) levels = levels || !c.LevelsDescribe().empty();
+  if (levels)
+    os << "\nResolutions chosen by the screening's folds (each fold's weights re-solved at the "
+          "coarsest rung's effects; CV RMSE in "
+       << u << "):\n\n";
+  for (const records::ModelScore& c : s.ranking)
+    if (const std::string l = c.LevelsDescribe(); !l.empty())
+      os << "- " << c.candidate.Describe() << ": " << l << "\n";
   os << "\n### The memory at rest from each record's first branch\n\n"
      << "A 12-play Prandtl–Ishlinskii operator fitted on the training records; each record's first "
         "branch (from "

@@ -487,23 +487,7 @@ FitResult FitPreisachAuto(const io::RecordSet& set, const DataScale& scale,
     if (r.params.empty()) r.params.assign(r.model->params().size(), 0.0);
     r.weights = fits.fitness[c]->Run(fits.params, false).weights;
     r.regularisation = fits.fitness[c]->validation();
-    r.metrics.clear();
-    r.yhat.clear();
-    double sse = 0;
-    size_t n = 0;
-    for (const io::Record& rec : set.records) {
-      std::vector<double> y;
-      r.metrics.push_back(Evaluate(*r.model, r.params, r.weights, rec, &y));
-      r.yhat.push_back(std::move(y));
-      if (rec.role == model::CaseRole::kTrain) {
-        sse += r.metrics.back().rmse * r.metrics.back().rmse *
-               static_cast<double>(r.metrics.back().samples);
-        n += r.metrics.back().samples;
-      }
-    }
-    r.train_sse = sse;
-    r.train_mse = n > 0 ? sse / static_cast<double>(n) : 0;
-    r.uncertainty = {};  // the coarse grid's: not this model's
+    EvaluateResolved(set, r);
   }
   r.resolution = fits.choice;
   r.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -511,6 +495,26 @@ FitResult FitPreisachAuto(const io::RecordSet& set, const DataScale& scale,
 }
 
 }  // namespace
+
+void EvaluateResolved(const io::RecordSet& set, FitResult& r) {
+  r.metrics.clear();
+  r.yhat.clear();
+  double sse = 0;
+  size_t n = 0;
+  for (const io::Record& rec : set.records) {
+    std::vector<double> y;
+    r.metrics.push_back(Evaluate(*r.model, r.params, r.weights, rec, &y));
+    r.yhat.push_back(std::move(y));
+    if (rec.role == model::CaseRole::kTrain) {
+      sse += r.metrics.back().rmse * r.metrics.back().rmse *
+             static_cast<double>(r.metrics.back().samples);
+      n += r.metrics.back().samples;
+    }
+  }
+  r.train_sse = sse;
+  r.train_mse = n > 0 ? sse / static_cast<double>(n) : 0;
+  r.uncertainty = {};  // the coarse grid's: not this model's
+}
 
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options) {
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));

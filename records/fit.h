@@ -150,6 +150,10 @@ struct FitResult {
 /// searched on the coarsest grid first, the levels chosen at them, and the chosen grid polished
 /// from there).
 FitResult FitRecords(const io::RecordSet& set, const FitOptions& options);
+/// A fit's model re-made at another resolution, its weights re-solved at its effects (`r`'s
+/// model, params and weights those): every record of the set evaluated again (metrics, yhat, the
+/// training MSE and SSE), the uncertainty table dropped (the other resolution's).
+void EvaluateResolved(const io::RecordSet& set, FitResult& r);
 /// The same for a given model (its scale already measured).
 FitResult FitModel(const io::RecordSet& set, std::shared_ptr<RecordModel> model,
                    const FitOptions& options);

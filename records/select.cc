@@ -14,6 +14,7 @@
 #include "model/status.h"
 #include "records/excitation.h"
 #include "records/model.h"
+#include "records/preisach_family.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {
@@ -214,14 +215,26 @@ FitOptions FinalOptions(const SelectOptions& o, size_t searched) {
   return f;
 }
 
+double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& c, int levels,
+                        const std::vector<double>& params);
+
+/// A linear family with effects at a resolution finer than `base`: its effects are searched at
+/// `base` and its weights re-solved at its own (as `--pi-operators auto` does, records/fit.cc
+/// FitPreisachAuto: each evaluation at 20 or 40 levels would build the finer grid's equations).
+bool SearchedCoarse(const Candidate& c, int base) {
+  return LinearFamily(c.family) && !c.effects.empty() && c.levels > base;
+}
+
 /// Cross-validates candidates: every (candidate, fold) fit as one task, side by side on
 /// `threads` (each fit on one thread) or one after another with a service. options_of(i): the fit
-/// options of candidate i.
+/// options of candidate i. A candidate SearchedCoarse at `coarse` (> 0) is fitted at `coarse` in
+/// each fold, its weights re-solved at its own resolution there.
 std::vector<ModelScore> CrossValidateAll(
     const io::RecordSet& set, const std::vector<Candidate>& cands,
     const std::function<FitOptions(size_t, size_t)>& options_of, int K, int threads,
     const std::function<RecordEvaluatorFactory(const FamilyOptions&)>& service,
-    const std::function<void(const std::string&)>& progress, size_t* fits) {
+    const std::function<void(const std::string&)>& progress, size_t* fits,
+    std::vector<std::vector<double>>* fold_params = nullptr, int coarse = 0) {
   const std::vector<Fold> folds = MakeFolds(set, K);
   const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   std::vector<ModelScore> out(cands.size());
@@ -231,10 +244,12 @@ std::vector<ModelScore> CrossValidateAll(
     try {
       FitOptions fold;  // the family made for the whole training scale, each fold's pieces in it
       fold.family_options.cross_validation_fold = true;
-      made[i] = MakeCandidate(scale, cands[i], fold, {});
-      out[i].parameters = ParameterCount(*made[i].model);
+      out[i].parameters = ParameterCount(*MakeCandidate(scale, cands[i], fold, {}).model);
+      Candidate searched = cands[i];
+      if (coarse > 0 && SearchedCoarse(cands[i], coarse)) searched.levels = coarse;
+      made[i] = MakeCandidate(scale, searched, fold, {});
       FitOptions o = options_of(i, made[i].searched);
-      made[i].options = cands[i].Options(o);
+      made[i].options = searched.Options(o);
       made[i].options.family_options.cross_validation_fold = true;
       if (service) made[i].options.evaluator_factory = service(made[i].options.family_options);
       made[i].options.threads = service ? std::max(1, threads) : 1;
@@ -246,6 +261,7 @@ std::vector<ModelScore> CrossValidateAll(
   }
   std::vector<double> rmse(cands.size() * static_cast<size_t>(K), kInf);
   std::vector<std::string> errors(rmse.size());
+  if (fold_params) fold_params->assign(rmse.size(), {});
   std::vector<int> done(cands.size(), 0);
   std::mutex mu;
   RunTasks(rmse.size(), service ? 1 : threads, [&](size_t t) {
@@ -253,7 +269,10 @@ std::vector<ModelScore> CrossValidateAll(
     if (!made[i].model) return;
     try {
       const FitResult r = FitModel(folds[k].set, made[i].model, made[i].options);
-      rmse[t] = FoldRmse(folds[k], r);
+      rmse[t] = coarse > 0 && SearchedCoarse(cands[i], coarse)
+                    ? ResolvedFoldRmse(folds[k], scale, cands[i], cands[i].levels, r.params)
+                    : FoldRmse(folds[k], r);
+      if (fold_params) (*fold_params)[t] = r.params;
     } catch (const InputError& e) {
       errors[t] = e.what();
     }
@@ -289,6 +308,169 @@ std::vector<ModelScore> CrossValidateAll(
   return out;
 }
 
+/// The ladder of resolutions (SelectOptions::levels ascending, kAutoLevels alone: the default's).
+std::vector<int> Ladder(const SelectOptions& o) {
+  std::vector<int> l;
+  for (int x : o.levels)
+    if (x != kAutoLevels) l.push_back(x);
+  if (l.empty()) l = SelectOptions{}.levels;
+  std::sort(l.begin(), l.end());
+  l.erase(std::unique(l.begin(), l.end()), l.end());
+  return l;
+}
+
+/// The fold's RMSE of linear candidate c at `levels` with its effects at `params` (the fold's fit
+/// at another resolution): the weights re-solved on the fold's training pieces (the penalty and its
+/// strength validated there at `params`, as a fit's are at its solution; a Preisach grid's creep
+/// spectrum undone on the responses, records/preisach_family.h FitPreisachLevels), each whole
+/// record evaluated. +inf where the pieces cannot support that resolution.
+double ResolvedFoldRmse(const Fold& f, const DataScale& scale, const Candidate& c, int levels,
+                        const std::vector<double>& params) {
+  FamilyOptions fo = c.Options(FitOptions{}).family_options;
+  fo.pi_operators = levels;
+  fo.cross_validation_fold = true;
+  const std::vector<const io::Record*> train = f.set.WithRole(model::CaseRole::kTrain);
+  FitResult r;
+  try {
+    r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
+    if (c.family == kPreisachFamily.name) {
+      const PreisachLevelFits fits =
+          FitPreisachLevels(train, scale, fo, c.effects, params, {levels});
+      r.weights = fits.fitness.front()->Run(fits.params, false).weights;
+    } else {
+      const RecordFitness fitness(*r.model, train, opt::kDefaultErrorCost, params);
+      r.weights = fitness.Run(params, false).weights;
+    }
+    r.metrics.resize(f.set.records.size());
+    r.yhat.resize(f.set.records.size());
+    for (size_t j : f.whole)
+      r.metrics[j] = Evaluate(*r.model, params, r.weights, f.set.records[j], &r.yhat[j]);
+  } catch (const InputError&) {
+    return kInf;
+  }
+  return FoldRmse(f, r);
+}
+
+std::vector<size_t> UnexcitedRecords(const io::RecordSet& set, std::string* needs);
+
+/// Why the folds do not choose the linear families' resolution ("" when they do): withheld drives
+/// that need reversals or range the training lacks. A training drive of major loops alone gains
+/// at every finer rung (its branches' shape), while the cells the finer grid adds inside are set
+/// by the prior alone, and the folds cannot show how they extrapolate to the minor loops (the
+/// P-885.91 stack's 1 Hz sine: CV RMSE of preisach + creep 0.242 µm at 8 levels, 0.193 at 40,
+/// withheld 0.275 at 40; asymmetric-pi + creep 0.178 µm withheld at 8 plays, 0.200 at 12).
+std::string LevelsNote(const io::RecordSet& set, const SelectOptions& options) {
+  if (Ladder(options).size() < 2) return "";
+  std::string needs;
+  if (UnexcitedRecords(set, &needs).empty()) return "";
+  return "the plays and levels stay at " + std::to_string(Ladder(options).front()) +
+         " (not chosen by the folds): the withheld drives have loops the training lacks, where the "
+         "cells of a finer grid are set by the prior alone and no fold shows how they extrapolate "
+         "(ask for a resolution with --pi-operators)";
+}
+
+/// A finer rung of the resolutions' ladder is worth its weights when it lowers the CV RMSE by more
+/// than this share (beside one paired SE): the folds of one periodic record agree on a small,
+/// consistent gain of a finer grid (its SE tiny) that only extrapolation would show to matter (as
+/// the creep spectrum's rule, records/fit.cc kSpectrumRule).
+constexpr double kLevelsTolerance = 0.01;
+
+/// The resolution of each linear candidate of the screening chosen by its folds
+/// (SelectOptions::levels): fold_params[i K + k] is candidate i's fit in fold k at the ladder's
+/// first rung. Each (candidate, fold, rung) re-solve is one task on `threads`, its result stored
+/// at its index, so that the choice is the same whatever the threads. Sets each candidate's
+/// resolution, its fold RMSEs, CV RMSE, SE and parameters to the chosen rung's, and its table.
+void ChooseLevelsByFolds(const io::RecordSet& set, const SelectOptions& options,
+                         const std::vector<std::vector<double>>& fold_params,
+                         std::vector<ModelScore>& screen, size_t* fits) {
+  const std::vector<int> ladder = Ladder(options);
+  const size_t K = static_cast<size_t>(options.folds), R = ladder.size();
+  if (R < 2 || !LevelsNote(set, options).empty()) return;
+  const std::vector<Fold> folds = MakeFolds(set, options.folds);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  // rmse[i][rung][k]; a rung not tried is empty.
+  std::vector<std::vector<std::vector<double>>> rmse(screen.size());
+  std::vector<size_t> top(screen.size(), 0);  // per candidate: the finest rung tried
+  std::vector<std::pair<size_t, size_t>> pending;  // (candidate, rung)
+  for (size_t i = 0; i < screen.size(); ++i) {
+    const Candidate& c = screen[i].candidate;
+    if (!LinearFamily(c.family) || c.levels != ladder.front() || !std::isfinite(screen[i].cv_rmse))
+      continue;
+    rmse[i].assign(R, {});
+    rmse[i][0] = screen[i].fold_rmse;
+    const size_t first = std::clamp<size_t>(static_cast<size_t>(options.levels_first), 1, R);
+    for (size_t q = 1; q < first; ++q) pending.emplace_back(i, q);
+    top[i] = first - 1;
+  }
+  auto cv = [&](size_t i, size_t q) {
+    double m = 0;
+    for (double x : rmse[i][q]) m += x / static_cast<double>(K);
+    return std::isfinite(m) ? m : kInf;
+  };
+  while (!pending.empty()) {
+    for (const auto& [i, q] : pending) rmse[i][q].assign(K, kInf);
+    RunTasks(pending.size() * K, options.service ? 1 : std::max(1, options.fit.threads),
+             [&](size_t t) {
+               const auto [i, q] = pending[t / K];
+               const size_t k = t % K;
+               rmse[i][q][k] = ResolvedFoldRmse(folds[k], scale, screen[i].candidate, ladder[q],
+                                                fold_params[i * K + k]);
+             });
+    if (fits) *fits += pending.size() * K;
+    pending.clear();
+    // Climb where the finest rung tried is lower than every other by more than kLevelsTolerance.
+    for (size_t i = 0; i < screen.size(); ++i) {
+      if (rmse[i].empty() || top[i] + 1 >= R) continue;
+      double below = kInf;
+      for (size_t q = 0; q < top[i]; ++q) below = std::min(below, cv(i, q));
+      if (cv(i, top[i]) < (1 - kLevelsTolerance) * below) pending.emplace_back(i, ++top[i]);
+    }
+  }
+  for (size_t i = 0; i < screen.size(); ++i) {
+    if (rmse[i].empty()) continue;
+    ModelScore& s = screen[i];
+    auto regressors = [&](int levels) {
+      FamilyOptions fo;
+      fo.pi_operators = levels;
+      fo.cross_validation_fold = true;
+      return MakeFamily(s.candidate.family, scale, fo)->regressors();
+    };
+    const size_t base_regressors = regressors(ladder.front());
+    std::vector<ModelScore> rungs;
+    for (size_t q = 0; q <= top[i]; ++q) {
+      ModelScore m;
+      m.candidate = s.candidate;
+      m.candidate.levels = ladder[q];
+      m.parameters = s.parameters - base_regressors + regressors(ladder[q]);
+      m.fold_rmse = rmse[i][q];
+      m.cv_rmse = cv(i, q);
+      if (std::isfinite(m.cv_rmse)) {
+        double var = 0;
+        for (double x : m.fold_rmse) var += (x - m.cv_rmse) * (x - m.cv_rmse);
+        m.cv_se = std::sqrt(var / static_cast<double>((K - 1) * K));
+      }
+      rungs.push_back(std::move(m));
+      s.level_candidates.push_back(ladder[q]);
+      s.level_cv_rmse.push_back(rungs.back().cv_rmse);
+    }
+    size_t chosen = OneStandardErrorChoice(rungs);
+    s.level_best = 0;
+    for (size_t q = 1; q < rungs.size(); ++q)
+      if (rungs[q].cv_rmse < rungs[s.level_best].cv_rmse) s.level_best = q;
+    for (size_t q = 0; q < chosen; ++q)  // (the rungs ascend in parameters)
+      if (rungs[q].cv_rmse <= (1 + kLevelsTolerance) * rungs[s.level_best].cv_rmse) {
+        chosen = q;
+        break;
+      }
+    s.level_chosen = chosen;
+    s.candidate.levels = rungs[chosen].candidate.levels;
+    s.parameters = rungs[chosen].parameters;
+    s.fold_rmse = rungs[chosen].fold_rmse;
+    s.cv_rmse = rungs[chosen].cv_rmse;
+    s.cv_se = rungs[chosen].cv_se;
+  }
+}
+
 bool SameModel(const Candidate& a, const Candidate& b) {
   return a.family == b.family && a.effects == b.effects && a.levels == b.levels;
 }
@@ -313,6 +495,21 @@ FitOptions Candidate::Options(const FitOptions& base) const {
   o.family_options.initial_state =
       TakesInitialState(family) ? initial_state : model::InitialState::kAuto;
   return o;
+}
+
+std::string ModelScore::LevelsDescribe() const {
+  if (level_candidates.size() < 2 || level_chosen >= level_candidates.size()) return "";
+  const std::string what = candidate.family == kPreisachFamily.name ? " levels" : " plays";
+  std::string s = std::to_string(level_candidates[level_chosen]) + what + " by the folds (";
+  s += level_chosen == level_best
+           ? std::string("the lowest CV RMSE")
+           : "the fewest within one SE or 1 % of the lowest, " +
+                 std::to_string(level_candidates[level_best]);
+  s += "): CV RMSE";
+  for (size_t q = 0; q < level_candidates.size(); ++q)
+    s += (q ? ", " : " ") + std::to_string(level_candidates[q]) + " → " +
+         FormatG(level_cv_rmse[q], 3);
+  return s;
 }
 
 std::string InitialStateEvidence::Describe(const std::string& unit) const {
@@ -487,15 +684,12 @@ std::vector<Candidate> CandidateGrid(const io::RecordSet& set, const SelectOptio
         // the linear families only, whose weights it is solved with (records/spectrum_solve.h):
         // on the others each of its weights would be searched.
         ok = ok && !(default_sets && one_rate && RateEffect(e));
-        ok = ok && !(default_sets && EffectName(e) == "creep-spectrum" && !LinearFamily(f));
+        ok = ok &&
+             !(default_sets && std::string(EffectName(e)) == "creep-spectrum" && !LinearFamily(f));
       }
       if (!ok) continue;
-      // A linear family alone at every resolution (exact, cheap); with effects at the coarsest
-      // only (each evaluation re-makes the regressors): the finalists get the others.
-      std::vector<int> levels = LinearFamily(f) ? options.levels : std::vector<int>{0};
-      if (LinearFamily(f) && !effects.empty() && !levels.empty())
-        levels = {*std::min_element(levels.begin(), levels.end())};
-      for (int l : levels) out.push_back({f, effects, l, state});
+      // A linear family at the ladder's first rung: its folds choose the others (SelectModel).
+      out.push_back({f, effects, LinearFamily(f) ? Ladder(options).front() : 0, state});
     }
   }
   return out;
@@ -687,9 +881,11 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   std::vector<size_t> index;
   std::string dropped;
   double best_cv = kInf;
-  for (const ModelScore& m : second) best_cv = std::min(best_cv, m.cv_rmse);
+  for (const ModelScore& m : second)
+    if (m.round == 2) best_cv = std::min(best_cv, m.cv_rmse);
   for (size_t i = 0; i < second.size(); ++i) {
     if (!std::isfinite(second[i].parting) || !std::isfinite(second[i].cv_rmse)) continue;
+    if (second[i].round != 2) continue;  // the median's reference only: not cross-validated again
     // Only a finalist near the best where the training shows it can take over (when every such
     // one parts on its own, all extrapolate there alike: the one-SE choice stands).
     if (second[i].cv_rmse > kPlausible * best_cv) continue;
@@ -742,28 +938,64 @@ size_t WeighUnexcited(const io::RecordSet& set, const std::vector<size_t>& unexc
   return pick;
 }
 
-/// The finalists refitted on every training record: the chosen one with `fit`'s own search, the
-/// others with the finalists' (their errors in `second` when they cannot be fitted).
+/// FitRecords of candidate c with options f (c's), but a candidate SearchedCoarse at `base`: its
+/// effects searched at `base`, its weights re-solved at its own resolution with the effects there
+/// (the penalty and strength validated there; FitPreisachLevels for a Preisach grid), every record
+/// evaluated with the whole model.
+FitResult FitCandidate(const io::RecordSet& set, const Candidate& c, FitOptions f, int base) {
+  if (!SearchedCoarse(c, base)) return FitRecords(set, f);
+  const int levels = f.family_options.pi_operators;
+  f.family_options.pi_operators = base;
+  FitResult r = FitRecords(set, f);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+  const std::vector<const io::Record*> train = set.WithRole(model::CaseRole::kTrain);
+  FamilyOptions fo = f.family_options;
+  fo.pi_operators = levels;
+  r.model = std::make_shared<RecordModel>(MakeFamily(c.family, scale, fo), c.effects, scale);
+  if (c.family == kPreisachFamily.name) {
+    const PreisachLevelFits fits =
+        FitPreisachLevels(train, scale, fo, c.effects, r.params, {levels});
+    r.weights = fits.fitness.front()->Run(fits.params, false).weights;
+    r.regularisation = fits.fitness.front()->validation();
+  } else {
+    const RecordFitness fitness(*r.model, train, opt::kDefaultErrorCost, r.params);
+    r.weights = fitness.Run(r.params, false).weights;
+    r.regularisation = fitness.validation();
+  }
+  EvaluateResolved(set, r);
+  return r;
+}
+
+/// The chosen candidate refitted on every training record with `fit`'s own search (its threads).
+FitResult RefitChosen(const io::RecordSet& set, const Candidate& c, const SelectOptions& options) {
+  FitOptions f = c.Options(options.fit);
+  if (options.service) f.evaluator_factory = options.service(f.family_options);
+  f.progress = nullptr;
+  return FitCandidate(set, c, f, Ladder(options).front());
+}
+
+/// The finalists refitted on every training record: the chosen one (none: finals.size()) by
+/// RefitChosen first, the others side by side with the finalists' search (their errors in `second`
+/// when they cannot be fitted).
 std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
                                       const std::vector<Candidate>& finals, size_t chosen,
                                       const SelectOptions& options,
                                       std::vector<ModelScore>& second) {
   const int threads = std::max(1, options.fit.threads);
   std::vector<FitResult> refits(finals.size());
+  if (chosen < finals.size()) refits[chosen] = RefitChosen(set, finals[chosen], options);
+  const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
   RunTasks(finals.size(), options.service ? 1 : threads, [&](size_t i) {
-    const DataScale scale = MeasureScale(set.WithRole(model::CaseRole::kTrain));
+    if (i == chosen) return;
     FitOptions f = finals[i].Options(
-        i == chosen
-            ? options.fit
-            : FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
+        FinalOptions(options, MakeCandidate(scale, finals[i], FitOptions{}, {}).searched));
     if (options.service) f.evaluator_factory = options.service(f.family_options);
     f.threads = options.service ? threads : 1;
     f.progress = nullptr;
-    f.uncertainty = i == chosen && options.fit.uncertainty;
+    f.uncertainty = false;
     try {
-      refits[i] = FitRecords(set, f);
+      refits[i] = FitCandidate(set, finals[i], f, Ladder(options).front());
     } catch (const InputError& e) {
-      if (i == chosen) throw;
       second[i].error = e.what();
     }
   });
@@ -774,7 +1006,7 @@ std::vector<FitResult> RefitFinalists(const io::RecordSet& set,
 /// res.chosen).
 void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
                     const std::vector<ModelScore>& screen, const std::vector<size_t>& order,
-                    const std::vector<Candidate>& grid, const std::vector<Candidate>& finals,
+                    const std::vector<Candidate>& finals,
                     SelectionResult& res) {
   std::vector<size_t> o2(second.size());
   for (size_t i = 0; i < o2.size(); ++i) o2[i] = i;
@@ -786,9 +1018,56 @@ void RankCandidates(const std::vector<ModelScore>& second, size_t chosen,
   }
   for (size_t i : order) {
     bool final = false;
-    for (const Candidate& c : finals) final = final || SameModel(c, grid[i]);
+    for (const Candidate& c : finals) final = final || SameModel(c, screen[i].candidate);
     if (!final) res.ranking.push_back(screen[i]);
   }
+}
+
+/// The finalists' round: each cross-validated again with the finalists' search (but those only
+/// the families' median needs, `reference`, which keep their screening), the one-SE rule's choice
+/// among them in `chosen`; each carries its screening's CV RMSE and resolution table.
+std::vector<ModelScore> CrossValidateFinalists(const io::RecordSet& set,
+                                               const SelectOptions& options,
+                                               const std::vector<Candidate>& finals,
+                                               const std::vector<const ModelScore*>& final_screen,
+                                               const std::vector<bool>& reference, size_t& fits,
+                                               size_t& chosen) {
+  auto say = [&](const std::string& s) {
+    if (options.progress) options.progress(s);
+  };
+  std::vector<Candidate> cv_finals;
+  for (size_t i = 0; i < finals.size(); ++i)
+    if (!reference[i]) cv_finals.push_back(finals[i]);
+  say("cross-validating " + std::to_string(cv_finals.size()) + " finalists with the full search" +
+      (cv_finals.size() < finals.size()
+           ? " (" + std::to_string(finals.size() - cv_finals.size()) +
+                 " more families' best refitted for the median where the training lacks "
+                 "excitation)"
+           : std::string()));
+  std::vector<ModelScore> cvd = CrossValidateAll(
+      set, cv_finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
+      options.folds, std::max(1, options.fit.threads), options.service, options.progress, &fits,
+      nullptr, Ladder(options).front());
+  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
+  const size_t chosen_cv = OneStandardErrorChoice(cvd);
+  std::vector<ModelScore> second(finals.size());
+  for (size_t i = 0, j = 0; i < finals.size(); ++i) {
+    if (reference[i]) {
+      second[i] = *final_screen[i];
+      second[i].candidate = finals[i];
+      second[i].within_one_se = false;
+    } else {
+      if (j == chosen_cv) chosen = i;
+      second[i] = std::move(cvd[j++]);
+      second[i].round = 2;
+    }
+    second[i].screen_cv_rmse = final_screen[i]->cv_rmse;
+    second[i].level_candidates = final_screen[i]->level_candidates;
+    second[i].level_cv_rmse = final_screen[i]->level_cv_rmse;
+    second[i].level_best = final_screen[i]->level_best;
+    second[i].level_chosen = final_screen[i]->level_chosen;
+  }
+  return second;
 }
 
 }  // namespace
@@ -813,12 +1092,21 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   // 2. Screening: every candidate, a small search.
   const std::vector<Candidate> grid = CandidateGrid(set, options, first);
   res.grid_note = GridNote(set, options);
+  if (const std::string l = LevelsNote(set, options); !l.empty())
+    res.grid_note += (res.grid_note.empty() ? "" : "; ") + l;
   say("screening " + std::to_string(grid.size()) + " candidates by " +
       std::to_string(options.folds) + "-fold blocked cross-validation on the training records");
+  std::vector<std::vector<double>> fold_params;
   std::vector<ModelScore> screen = CrossValidateAll(
       set, grid, [&](size_t, size_t searched) { return ScreenOptions(options, searched); },
-      options.folds, threads, options.service, options.progress, &res.fold_fits);
-  for (auto& s : screen) s.screen_cv_rmse = s.cv_rmse;
+      options.folds, threads, options.service, options.progress, &res.fold_fits, &fold_params);
+  // The linear families' resolutions: chosen by the same folds (their weights re-solved).
+  ChooseLevelsByFolds(set, options, fold_params, screen, &res.fold_fits);
+  for (size_t i = 0; i < screen.size(); ++i) {
+    screen[i].screen_cv_rmse = screen[i].cv_rmse;
+    if (!screen[i].level_candidates.empty())
+      say(screen[i].candidate.Describe() + ": " + screen[i].LevelsDescribe());
+  }
   // 3. The finalists: the best of the screening and the simplest within one SE of its best,
   // each with every initial state worth trying, with the full search.
   std::vector<size_t> order(screen.size());
@@ -834,18 +1122,21 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
   for (auto& s : screen) s.within_one_se = false;  // (the finals' rule is reported)
   if (std::find(picked.begin(), picked.end(), simplest) == picked.end()) picked.push_back(simplest);
   std::vector<Candidate> finals;
-  std::vector<double> final_screen;
-  auto add = [&](Candidate c, double screened, bool every_state) {
+  std::vector<const ModelScore*> final_screen;  // each finalist's screening
+  std::vector<bool> reference;                  // only the families' median (below)
+  auto add = [&](const ModelScore& screened, bool every_state, bool only_reference) {
+    Candidate c = screened.candidate;
     for (const Candidate& f : finals)
       if (SameModel(f, c)) return;
     for (model::InitialState s : states) {
       if (s != first && (!every_state || !TakesInitialState(c.family))) continue;
       c.initial_state = s;
       finals.push_back(c);
-      final_screen.push_back(screened);
+      final_screen.push_back(&screened);
+      reference.push_back(only_reference);
     }
   };
-  for (size_t i : picked) add(grid[i], screen[i].cv_rmse, i == picked.front());
+  for (size_t i : picked) add(screen[i], i == picked.front(), false);
   // Where the withheld drives need what the training lacks, the best of every family too: their
   // predictions there are weighed after the choice (WeighUnexcited).
   std::string needs;
@@ -855,51 +1146,41 @@ SelectionResult SelectModel(const io::RecordSet& set, const SelectOptions& optio
     for (size_t i : order) {
       if (!std::isfinite(screen[i].cv_rmse) || Takes(seen, grid[i].family)) continue;
       seen.push_back(grid[i].family);
-      add(grid[i], screen[i].cv_rmse, false);
+      // One screened beyond kPlausible × the best can never take the choice over (WeighUnexcited):
+      // it joins the families' median there, refitted, without its folds again.
+      add(screen[i], false, screen[i].cv_rmse > kPlausible * screen[order.front()].cv_rmse);
     }
   }
-  // The screening's best: with the other initial state (above), and, a linear family with effects
-  // screened at its coarsest resolution, at the others.
-  const Candidate& top = grid[picked.front()];
-  if (LinearFamily(top.family) && !top.effects.empty())
-    for (int l : options.levels) {
-      Candidate c = top;
-      c.levels = l;
-      add(c, std::numeric_limits<double>::quiet_NaN(), false);
-    }
-  say("cross-validating " + std::to_string(finals.size()) + " finalists with the full search");
-  std::vector<ModelScore> second = CrossValidateAll(
-      set, finals, [&](size_t, size_t searched) { return FinalOptions(options, searched); },
-      options.folds, threads, options.service, options.progress, &res.fold_fits);
-  for (size_t i = 0; i < second.size(); ++i) {
-    second[i].round = 2;
-    second[i].screen_cv_rmse = final_screen[i];
-  }
-  // 4. The choice: the one-SE rule over the finalists (the withheld records not seen yet).
-  size_t chosen = OneStandardErrorChoice(second);
-  res.best_cv_rmse = kInf;
-  for (const auto& s : second) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
+  size_t chosen = 0;
+  std::vector<ModelScore> second = CrossValidateFinalists(set, options, finals, final_screen,
+                                                          reference, res.fold_fits, chosen);
+  res.best_cv_rmse = second[chosen].cv_rmse;
+  for (const auto& s : second)
+    if (s.round == 2) res.best_cv_rmse = std::min(res.best_cv_rmse, s.cv_rmse);
   say("chosen: " + finals[chosen].Describe() + " (CV RMSE " +
       io::FormatNumber(second[chosen].cv_rmse) + " ± " + io::FormatNumber(second[chosen].cv_se) +
       ")");
   // 5. After the choice: the finalists refitted on every training record; the withheld errors.
-  std::vector<FitResult> refits = RefitFinalists(set, finals, chosen, options, second);
+  // Where the withheld drives are unexcited the choice may still change (6.): every finalist is
+  // refitted with the finalists' search first (their predictions weighed alike), and the chosen
+  // one with `fit`'s own once it is final.
+  const bool weigh = !unexcited.empty();
+  std::vector<FitResult> refits =
+      RefitFinalists(set, finals, weigh ? finals.size() : chosen, options, second);
   SetRefitErrors(refits, second);
   // 6. An unexcited region: the finalists' predictions there weighed (their drives only).
-  if (const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
-                                            set.response_unit, &res.unexcited);
-      weighed != chosen) {
+  if (weigh) {
+    const size_t weighed = WeighUnexcited(set, unexcited, needs, refits, second, chosen,
+                                          set.response_unit, &res.unexcited);
+    if (weighed != chosen) say("weighed where the training lacks excitation: " +
+                               finals[weighed].Describe());
     chosen = weighed;
-    say("weighed where the training lacks excitation: " + finals[chosen].Describe());
-    FitOptions f = finals[chosen].Options(options.fit);
-    if (options.service) f.evaluator_factory = options.service(f.family_options);
-    f.progress = nullptr;
-    refits[chosen] = FitRecords(set, f);
+    refits[chosen] = RefitChosen(set, finals[chosen], options);
     SetRefitErrors(refits, second);
   }
   res.fit = std::move(refits[chosen]);
   res.fit_options = finals[chosen].Options(options.fit);
-  RankCandidates(second, chosen, screen, order, grid, finals, res);
+  RankCandidates(second, chosen, screen, order, finals, res);
   res.noise = EstimateNoiseFloor(set);
   res.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return res;

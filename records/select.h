@@ -13,15 +13,20 @@
 // whole training set (its search box, the Preisach grid, the effects' ranges), so that the folds
 // differ in the scored samples alone.
 //
-// Rounds: a screening round fits every candidate of the grid (families × effect sets ×
-// resolutions; a linear family with effects at its coarsest resolution only, each evaluation
-// re-making its regressors) in every fold with a small search budget (the linear families without
-// effects search nothing and are exact already); the `finalists` best of it and the simplest
-// candidate within one standard error of its best are cross-validated again with the search of
-// `piezoid fit` (one repetition of its sized budget, its swarm ≤ 15 × 40 iterations, a polish of
-// ≤ 30 iterations) — the best of the screening also with the other initial state worth trying
-// (the records' first branches show one, the rest-level rule another) and, a linear family with
-// effects, at every resolution. The one-standard-error rule picks among those: the candidate with
+// Rounds: a screening round fits every candidate of the grid (families × effect sets; a linear
+// family at the first rung of the resolutions' ladder) in every fold with a small search budget
+// (the linear families without effects search nothing and are exact already). A linear family's
+// resolution is then chosen by the same folds: its weights re-solved in each fold at the next
+// rungs with its effects where the fold's fit put them (no search: records/preisach_family.h
+// FitPreisachLevels for a Preisach grid), climbing while the finest rung tried has the lowest CV
+// RMSE, and the fewest within one paired SE of the lowest kept (SelectOptions::levels). The
+// `finalists` best of the screening and the simplest candidate within one standard error of its
+// best are cross-validated again with the search of `piezoid fit` (one repetition of its sized
+// budget, its swarm ≤ 15 × 40 iterations, a polish of ≤ 30 iterations) at their chosen
+// resolutions (with effects at a finer one than the first rung: the effects searched at the first,
+// the weights re-solved at theirs, as the refits after the choice) — the best of the screening
+// also with the other initial state worth trying (the records' first branches show one, the
+// rest-level rule another). The one-standard-error rule picks among those: the candidate with
 // the fewest parameters (searched parameters + solved weights) whose CV RMSE is within one standard
 // error of the lowest; ties by CV RMSE, then grid order. The standard error is the paired one (as
 // records/regularisation.h's): of the candidate's fold RMSEs less the best's, over the folds — the
@@ -87,6 +92,16 @@ struct ModelScore {
   /// Finalists, where the withheld drives need excitation the training lacks: the RMS of this
   /// finalist's prediction less the finalists' median prediction over those samples (NaN else).
   double parting = std::numeric_limits<double>::quiet_NaN();
+  /// A linear family: its resolution chosen by the screening's folds (SelectOptions::levels) —
+  /// the levels tried, each one's CV RMSE (+inf: a fold could not support it), the lowest's index
+  /// and the chosen one's (the fewest within one paired SE or 1 % of the lowest); empty: one
+  /// resolution.
+  std::vector<int> level_candidates;
+  std::vector<double> level_cv_rmse;
+  size_t level_best = 0, level_chosen = 0;
+  /// "12 levels by the folds (the fewest within one SE of the best, 20): 8 → 0.31, 12 → 0.2, 20 →
+  /// 0.19" ("" without a choice).
+  std::string LevelsDescribe() const;
   std::string error;  ///< why it could not be fitted ("" when it was)
 };
 
@@ -120,9 +135,16 @@ struct SelectOptions {
   /// + delay; the spectrum on the linear families only, and no delay on a training drive of one
   /// rate: GridNote); a set a family excludes or the data cannot support is left out.
   std::vector<std::vector<EffectKind>> effect_sets;
-  /// Resolutions of the linear families: alone, each is screened; with effects, the coarsest is,
-  /// and a finalist is cross-validated at each.
-  std::vector<int> levels = {8, 12};
+  /// Resolutions of the linear families (plays / Preisach levels), ascending: the ladder the
+  /// screening climbs. Each linear candidate is fitted at the first in every fold; its weights are
+  /// then re-solved in the same fold at the next `levels_first` − 1 with its effects where that fit
+  /// put them (no search), and at the next rung while the finest tried is lower than the others by
+  /// more than 1 %. The fewest rungs within one paired SE or 1 % of the lowest CV RMSE are the
+  /// candidate's resolution, with which it is ranked and cross-validated again as a finalist. One
+  /// entry (or
+  /// kAutoLevels alone: the default ladder): that resolution only.
+  std::vector<int> levels = {8, 12, 20, 28, 40};
+  int levels_first = 3;
   int folds = 5;
   size_t finalists = 3;
   /// The screening round's search: PSO particles × iterations × 1 repetition, LM iterations, the

@@ -12,16 +12,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <iostream>
 #include <limits>
 #include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "model/preisach.h"
 #include "records/families.h"
 #include "records/model.h"
 #include "synth/reallike.h"
 #include "synth/reallike_ring.h"
+#include "synth/relay_preisach_check.h"
 #include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 
@@ -288,7 +292,7 @@ TEST(SelectTest, TheGridOfAOneRateTrainingHasNoDelay) {
   for (const Candidate& c : CandidateGrid(set, o, model::InitialState::kAscended)) {
     for (const EffectKind& e : c.effects) {
       EXPECT_NE(EffectName(e), "delay") << c.Describe();
-      if (EffectName(e) == "creep-spectrum") {
+      if (std::string(EffectName(e)) == "creep-spectrum") {
         spectrum = true;
         EXPECT_TRUE(c.family == "preisach" || c.family == "asymmetric-pi" ||
                     c.family == "prandtl-ishlinskii")
@@ -299,6 +303,112 @@ TEST(SelectTest, TheGridOfAOneRateTrainingHasNoDelay) {
   EXPECT_TRUE(spectrum);
   o.effect_sets = {{EffectKind::Named("delay")}};  // asked for: kept
   EXPECT_EQ(GridNote(set, o), "");
+}
+
+}  // namespace
+}  // namespace pz::records
+
+namespace pz::records {
+namespace {
+
+/// The relay check plant's drives (synth/relay_preisach_check.h: a decaying, wandering sine,
+/// random reversals, a staircase; nested loops at every level) through a Preisach grid of 24 levels
+/// whose density is modulated along the centre with a period of a quarter of the range, plus a
+/// little noise: a grid of 8 levels (two cells a period) cannot follow the modulation, 12 can in
+/// part, 20 nearly.
+io::RecordSet FineDensity(bool withheld = false) {
+  RelayPreisachCheckOptions o;
+  o.train_s = 25;
+  o.withheld_s = 10;
+  o.seed = 3;
+  io::RecordSet set = GenerateRelayPreisachCheck(o).set;
+  const model::PreisachGrid g{o.u_lo, o.u_hi, 24};
+  std::vector<double> w;
+  for (int i = 0; i < g.levels; ++i)
+    for (int j = 0; j < g.levels - i; ++j)
+      w.push_back(0.3 * std::exp(-i / 4.0) *
+                  (1 + 0.9 * std::sin(2 * std::numbers::pi * (j + 0.5 * i) / 6.0)));
+  uint64_t x = 7;
+  for (io::Record& r : set.records) {
+    model::ApplyPreisach(g, w, r.u, r.y, model::InitialState::kDescended);
+    for (double& y : r.y) {  // uniform noise of RMS 0.01 (a fixed LCG: no library's stream)
+      x = x * 6364136223846793005ULL + 1442695040888963407ULL;
+      y += 0.02 * std::sqrt(3.0) * (static_cast<double>(x >> 11) / 9007199254740992.0 - 0.5);
+    }
+  }
+  // The training record alone: the withheld ones need reversals it lacks (records/excitation.h),
+  // where the folds do not choose the resolution (LevelsAreNotChosenForAnUnexcitedRegion).
+  io::RecordSet train = set;
+  train.records.clear();
+  for (const io::Record& r : set.records)
+    if (r.role == model::CaseRole::kTrain) train.records.push_back(r);
+  return withheld ? set : train;
+}
+
+SelectOptions LevelsGrid(int threads) {
+  SelectOptions o;
+  o.families = {"preisach"};
+  o.effect_sets = {{}};
+  o.levels = {8, 12, 20, 28};
+  o.levels_first = 2;  // 8 and 12 in every case, further while the finest is the best
+  o.finalists = 1;
+  o.fit = Quick(threads);
+  return o;
+}
+
+// The screening's folds choose the grid's levels: more than 8 where the records need them, the
+// chosen resolution the one the finalist is cross-validated and refitted at, the table reported.
+TEST(SelectTest, TheFoldsChooseAFinerPreisachGridWhereTheRecordsNeedIt) {
+  const io::RecordSet set = FineDensity();
+  const SelectionResult sel = SelectModel(set, LevelsGrid(2));
+  const ModelScore& c = sel.ranking[sel.chosen];
+  ASSERT_GE(c.level_candidates.size(), 2u) << c.candidate.Describe();
+  EXPECT_EQ(c.level_candidates[0], 8);
+  EXPECT_EQ(c.level_candidates[1], 12);
+  EXPECT_GE(c.candidate.levels, 12) << c.LevelsDescribe();
+  EXPECT_EQ(c.candidate.levels, c.level_candidates[c.level_chosen]);
+  EXPECT_EQ(sel.fit_options.family_options.pi_operators, c.candidate.levels);
+  EXPECT_EQ(sel.fit.weights.size(),
+            static_cast<size_t>(c.candidate.levels * (c.candidate.levels + 1) / 2));
+  EXPECT_GT(c.level_cv_rmse[0], 1.5 * c.level_cv_rmse[c.level_chosen]) << c.LevelsDescribe();
+  EXPECT_NE(c.LevelsDescribe().find("8 → "), std::string::npos) << c.LevelsDescribe();
+  std::cout << c.LevelsDescribe() << "\n";
+}
+
+// The level re-solves run side by side as the fits do: 1 and 2 threads give the same tables,
+// choice and weights bit for bit (a linear family with an effect: its re-solves at the fold's
+// searched delay).
+TEST(SelectTest, TheLevelsByTheFoldsAreTheSameOnOneAndTwoThreads) {
+  const io::RecordSet set = FineDensity();
+  SelectOptions o1 = LevelsGrid(1), o2 = LevelsGrid(2);
+  for (SelectOptions* o : {&o1, &o2}) {
+    o->families = {"preisach", "asymmetric-pi"};
+    o->effect_sets = {{}, {EffectKind::Named("delay")}};
+    o->levels = {8, 12};
+  }
+  const SelectionResult a = SelectModel(set, o1), b = SelectModel(set, o2);
+  ASSERT_EQ(a.ranking.size(), b.ranking.size());
+  size_t tables = 0;
+  for (size_t i = 0; i < a.ranking.size(); ++i) {
+    EXPECT_EQ(a.ranking[i].candidate.Describe(), b.ranking[i].candidate.Describe());
+    EXPECT_EQ(a.ranking[i].fold_rmse, b.ranking[i].fold_rmse);
+    EXPECT_EQ(a.ranking[i].level_cv_rmse, b.ranking[i].level_cv_rmse);
+    tables += a.ranking[i].level_candidates.size() == 2;
+  }
+  EXPECT_GE(tables, 4u);  // every candidate of the grid had its levels chosen
+  EXPECT_EQ(a.chosen, b.chosen);
+  EXPECT_EQ(a.fit.params, b.fit.params);
+  EXPECT_EQ(a.fit.weights, b.fit.weights);
+}
+
+// Where the withheld drives need reversals the training lacks, the folds cannot show how a finer
+// grid's inner cells extrapolate: the resolution stays at the first rung, and the grid says why.
+TEST(SelectTest, LevelsAreNotChosenForAnUnexcitedRegion) {
+  const SelectionResult sel = SelectModel(FineDensity(true), LevelsGrid(2));
+  const ModelScore& c = sel.ranking[sel.chosen];
+  EXPECT_TRUE(c.level_candidates.empty()) << c.LevelsDescribe();
+  EXPECT_EQ(c.candidate.levels, 8);
+  EXPECT_NE(sel.grid_note.find("not chosen by the folds"), std::string::npos) << sel.grid_note;
 }
 
 }  // namespace
