@@ -651,8 +651,9 @@ TEST(GaTermination, StallStopsAfterStallGenerationsWithoutImprovement) {
 
 TEST(GaTermination, ARelativeStallCountsOnlyStepsLargerThanItsShareOfTheBest) {
   // OneMax from uniform bits: the best falls by a few of its ≈ 700 zeros (of 1415 bits) a
-  // generation, far less than half of it. With stall_relative 0.5 those steps keep the best but do not reset the stall
-  // count: the GA stops after stall_generations although it improved; with 0 it runs on.
+  // generation, far less than half of it. With stall_relative 0.5 those steps keep the best but do
+  // not reset the stall count: the GA stops after stall_generations although it improved; with 0
+  // it runs on.
   const OneMax fitness;
   InlineEvaluator ev(fitness);
   GaOptions o = SmallOptions();
