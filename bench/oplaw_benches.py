@@ -16,7 +16,12 @@ Two families, drawn by different rules, with v = (V - 375) / 375 and l = ln(f / 
   - "dev" (the one developed on): each parameter c + a v + b l, plus d v l for an even SEED;
   - "check" (only checked with, never tuned on): each parameter c + a v^p + b g(f) + d v (f -
     0.25) / 0.75 with p in [0.6, 1.6], g = sqrt((f - 0.25) / 0.75) or (f - 0.25) / 0.75 (linear
-    in f, not in log f), the V f term for SEED divisible by 3.
+    in f, not in log f), the V f term for SEED divisible by 3;
+  - "fresh" (written after the law's shape in f became a choice among ln f, sqrt f and f, which
+    was measured on "check" as well: only checked with, once): each parameter c + a e(v) + b
+    t(l) + d v x, e(v) = (1 - exp(-k v)) / (1 - exp(-k)) with k in [-2.5, 2.5] (concave or convex
+    in V), t(l) = tanh(s l) / tanh(s) with s in [0.3, 2.5] (a sigmoid in log f, no power of f),
+    x = (f - 0.25) / 0.75, the V f term for odd SEED.
 Each law's corner values are drawn uniformly inside the parameter's band (mu 72-108 1/s, delta
 0.04-0.28 s, a1 and a2 0.02-0.28 deg), the interaction moving the (750 V, 1 Hz) corner by up to
 25 % of the band; a draw leaving the band anywhere on the nine points is drawn again.
@@ -68,6 +73,25 @@ def draw_law(rng, family, seed, name):
                   + d * v_of(v) * l_of(f))(p00, a, b, d)
             text = (f"{name} = {p00:.4g} + {a:.4g} v + {b:.4g} l" + (f" + {d:.4g} v l" if d else "")
                     + "   v = (V - 375) / 375, l = ln(f / 0.25) / ln 4")
+        elif family == "fresh":
+            inter = seed % 2 == 1
+            k = rng.uniform(-2.5, 2.5) or 1e-3
+            sl = rng.uniform(0.3, 2.5)
+            d = rng.uniform(-0.25, 0.25) * span if inter else 0.0
+            a, b = p10 - p00, p01 - p00
+
+            def e(v, k=k):
+                return (1 - math.exp(-k * v_of(v))) / (1 - math.exp(-k))
+
+            def t(f, sl=sl):
+                return math.tanh(sl * l_of(f)) / math.tanh(sl)
+
+            fn = (lambda c, a, b, d, e, t: lambda v, f: c + a * e(v) + b * t(f)
+                  + d * v_of(v) * (f - 0.25) / 0.75)(p00, a, b, d, e, t)
+            text = (f"{name} = {p00:.4g} + {a:.4g} (1 - exp({-k:.3f} v)) / (1 - exp({-k:.3f}))"
+                    f" + {b:.4g} tanh({sl:.3f} l) / tanh({sl:.3f})"
+                    + (f" + {d:.4g} v (f - 0.25) / 0.75" if d else "")
+                    + "   v = (V - 375) / 375, l = ln(f / 0.25) / ln 4")
         else:
             inter = seed % 3 == 0
             power = rng.uniform(0.6, 1.6)
@@ -89,8 +113,9 @@ def draw_law(rng, family, seed, name):
 
 
 def laws_of(family, seed):
-    rng = random.Random((1 if family == "dev" else 7919) * 100003 + seed)
-    laws = {"seed": 5000 + seed + (0 if family == "dev" else 500), "text": {}}
+    mult = {"dev": 1, "check": 7919, "fresh": 104729}[family]
+    rng = random.Random(mult * 100003 + seed)
+    laws = {"seed": 5000 + seed + {"dev": 0, "check": 500, "fresh": 900}[family], "text": {}}
     for name in ("mu", "delta", "a1", "a2"):
         fn, text = draw_law(rng, family, seed, name)
         laws[name] = fn
@@ -192,8 +217,9 @@ def main():
     if "--" in args:
         extra = args[args.index("--") + 1:]
         args = args[:args.index("--")]
-    if len(args) < 5 or args[0] not in ("make", "study", "next") or args[3] not in ("dev", "check"):
-        sys.exit("usage: oplaw_benches.py make|study|next PIEZOID OUT_ROOT dev|check SEED... "
+    if (len(args) < 5 or args[0] not in ("make", "study", "next")
+            or args[3] not in ("dev", "check", "fresh")):
+        sys.exit("usage: oplaw_benches.py make|study|next PIEZOID OUT_ROOT dev|check|fresh SEED... "
                  "[-- IDENTIFY_ARGS...]")
     cmd, piezoid, root, family = args[:4]
     seeds = [int(s) for s in args[4:]]

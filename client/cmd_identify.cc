@@ -2,6 +2,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -53,6 +54,7 @@ namespace {
 struct IdentifyFlags {
   IdentifyOptions opts;
   std::string cases, out, preset = std::string(hgann::kDefaultSearchPreset), topology;
+  std::vector<std::string> next_candidates;  ///< --next-candidates, "V:f" each
   bool no_plots = false;
   std::map<std::string, std::string, std::less<>> flag_of;  ///< GaOptions field → its flag
   std::map<std::string, CLI::Option*, std::less<>> given;  ///< field → its option (set by a preset)
@@ -74,7 +76,8 @@ void AddGaOptions(CLI::App* cmd, IdentifyFlags& f) {
             "maximum generations (robust: 250; paper: 1000)");
   ga_option("--stall", "stall_generations", ga.stall_generations,
             "stop after this many generations without improvement of the best over the islands "
-            "(paper: 200; 0 = never)");
+            "(robust: 30 generations in which none lowers the best by more than a relative 1e-6; "
+            "paper: 200, any lower cost; 0 = never)");
   ga_option("--elite", "elite_fraction", ga.elite_fraction,
             "share of the population kept unchanged (paper: 0.5)");
   ga_option("--mutation", "mutation_probability", ga.mutation_probability,
@@ -148,6 +151,37 @@ void AddModelOptions(CLI::App* cmd, IdentifyFlags& f) {
           ->capture_default_str();
 }
 
+/// --next-candidates' points, "V:f" each ("750:1"): V [V] and f [Hz] finite and > 0; an error
+/// names the flag and the bad point.
+std::vector<std::pair<double, double>> ParseNextCandidates(const std::vector<std::string>& points) {
+  static constexpr const char* kRule =
+      "must be V:f, the amplitude [V] and the frequency [Hz] of a feasible operating point, each "
+      "a finite number > 0 (e.g. 750:1)";
+  std::vector<std::pair<double, double>> out;
+  for (const std::string& point : points) {
+    const size_t colon = point.find(':');
+    double v = 0, f = 0;
+    size_t used_v = 0, used_f = 0;
+    bool ok = colon != std::string::npos && colon > 0 && colon + 1 < point.size();
+    if (ok) {
+      try {
+        v = std::stod(point.substr(0, colon), &used_v);
+        f = std::stod(point.substr(colon + 1), &used_f);
+      } catch (const std::exception&) {
+        ok = false;
+      }
+    }
+    ok = ok && used_v == colon && used_f == point.size() - colon - 1 && std::isfinite(v) &&
+         v > 0 && std::isfinite(f) && f > 0;
+    if (!ok) throw InputError(FieldError("--next-candidates", "\"" + point + "\"", kRule));
+    out.emplace_back(v, f);
+  }
+  if (out.size() > job::kMaxNextCandidates)
+    throw InputError(FieldError("--next-candidates", std::to_string(out.size()) + " points",
+                                "must be at most " + std::to_string(job::kMaxNextCandidates)));
+  return out;
+}
+
 /// The command: the preset where no flag says otherwise, the options checked, the run, the report.
 void RunIdentifyCommand(IdentifyFlags& f) {
   IdentifyOptions& opts = f.opts;
@@ -159,9 +193,12 @@ void RunIdentifyCommand(IdentifyFlags& f) {
   const auto unset = [&](const char* field) { return f.given.at(field)->count() == 0; };
   if (unset("islands")) opts.ga.islands = search->islands;
   if (unset("max_generations")) opts.ga.max_generations = search->generations;
+  if (unset("stall_generations")) opts.ga.stall_generations = search->stall_generations;
+  opts.ga.stall_relative = search->stall_relative;
   if (unset("spread_penalty")) opts.spread_penalty = search->spread_penalty;
   if (unset("trend_seeds")) opts.trend_seeds = search->trend_seeds;
   opts.preset = f.preset;
+  opts.next_candidates = ParseNextCandidates(f.next_candidates);
   const auto parsed_topology = opt::ParseTopology(f.topology);
   if (!parsed_topology) {
     throw InputError(FieldError(f.flag_of.at("topology"), f.topology, opt::kTopologyRule));
@@ -214,9 +251,16 @@ void RegisterIdentify(CLI::App& app, int& exit_code) {
   AddModelOptions(cmd, *f);
   AddGaOptions(cmd, *f);
   // What the preset sets shows as its default in --help (the value is the preset's unless given).
-  for (const char* field : {"islands", "max_generations", "spread_penalty", "trend_seeds"})
+  for (const char* field :
+       {"islands", "max_generations", "stall_generations", "spread_penalty", "trend_seeds"})
     f->given.at(field)->default_str("from --preset");
   cmd->add_flag("--no-plots", f->no_plots, "do not render figures (scripts are still written)");
+  cmd->add_option("--next-candidates", f->next_candidates,
+                  "feasible operating points V:f (amplitude [V], frequency [Hz]), "
+                  "comma-separated (e.g. 750:1,600:0.4): the next-case proposal ranks these by "
+                  "how much measuring each would narrow what the training cases leave open "
+                  "(query by committee; default: the case set's withheld cases)")
+      ->delimiter(',');
   cmd->callback([f, &exit_code] {
     RunIdentifyCommand(*f);
     exit_code = 0;

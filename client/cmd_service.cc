@@ -464,7 +464,8 @@ struct FetchOptions : JobOptions {
 int FetchJob(const FetchOptions& o) {
   FetchedJob job;
   Status s =
-      o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
+      o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks,
+                       &job.committee);
   if (!s.ok()) return Report(s);
   if (!service::IsFinal(job.info.state))
     std::fprintf(stderr,

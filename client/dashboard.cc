@@ -262,7 +262,7 @@ struct Dashboard::Impl {
     {
       std::lock_guard rl(request_mu);
       s = request_client->Fetch(job, 5, &fetched.best, &fetched.log, &fetched.info, &fetched.spec,
-                                &fetched.networks);
+                                &fetched.networks, &fetched.committee);
     }
     if (s.code() == StatusCode::kNotFound) {
       Text(res, 404, "job " + job + ": " + s.message());

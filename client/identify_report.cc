@@ -543,19 +543,23 @@ std::pair<std::string, std::string> CommitteeSection(const io::CaseSet& set,
   md << "### What the training cases leave open, and the next case (query by committee)\n\n"
      << "A committee of " << c.members
      << " laws that fit the training cases alike (the law with a V·f term, one posterior σ either "
-        "way along each direction the prior settles: hgann/operating_law.h). A withheld case is "
+        "way along each direction the prior settles; the law moved along each direction of its "
+        "basis that moves no training case; the other shapes in f that fit alike; the network "
+        "kept: hgann/operating_law.h). A withheld case is "
         "open where a member moves its predicted angle by 2 floors or more (floor: the residual "
         "variance a sample × its samples): were that member the truth, the law's PI there would "
         "be about 3 × the floor.\n\n"
-     << "| case | V [V] | f [Hz] | open | largest member's Σ (Δy)² [floors] | μ [1/s] | δ [s] | "
-        "a1 [deg] | a2 [deg] |\n|---|---|---|---|---|---|---|---|---|\n";
+     << "| case | V [V] | f [Hz] | open | largest member's Σ (Δy)² [floors] | the kept network's "
+        "[floors] | μ [1/s] | δ [s] | a1 [deg] | a2 [deg] |\n|---|---|---|---|---|---|---|---|---|"
+        "---|\n";
   std::string open;
   for (size_t i = 0; i < set.cases.size(); ++i) {
     const auto& bc = set.cases[i];
     if (bc.role == io::CaseRole::kTrain) continue;
     md << "| " << bc.number << " | " << Fmt(bc.amplitude_v) << " | " << Fmt(bc.frequency_hz)
        << " | " << (c.open[i] ? "**open**" : "settled") << " | "
-       << Fmt(c.disagreement[i] / c.floor[i], 3) << " |";
+       << Fmt(c.disagreement[i] / c.floor[i], 3) << " | "
+       << Fmt(c.kept_disagreement[i] / c.floor[i], 3) << " |";
     for (int k : {0, 1, 5, 6})
       md << " " << Fmt(c.lo[i][k], 3) << " … " << Fmt(c.hi[i][k], 3) << " |";
     md << "\n";
@@ -565,15 +569,19 @@ std::pair<std::string, std::string> CommitteeSection(const io::CaseSet& set,
   }
   std::string next;
   for (size_t r = 0; r < c.next.size() && r < 2; ++r) {
-    const auto& bc = set.cases[c.next[r].first];
-    next += (r ? "; then " : "") + std::string("case ") + std::to_string(bc.number) + " (" +
-            Fmt(bc.amplitude_v) + " V, " + Fmt(bc.frequency_hz) + " Hz: " +
-            Fmt(c.next[r].second, 3) + " floors left open)";
+    const auto& cand = c.candidates[c.next[r].first];
+    const std::string name =
+        cand.case_index >= 0 ? "case " + std::to_string(set.cases[cand.case_index].number) + " "
+                             : std::string("your point ");
+    next += (r ? "; then " : "") + name + "(" + Fmt(cand.amplitude_v) + " V, " +
+            Fmt(cand.frequency_hz) + " Hz: " + Fmt(c.next[r].second, 3) + " floors left open)";
   }
+  const bool user = !c.candidates.empty() && c.candidates.front().case_index < 0;
   md << "\n- open: " << (open.empty() ? "none" : open) << "\n"
      << "- next case to measure (query by committee: the candidate whose measurement would rule "
         "out the members that leave the rest open; what stays open, summed over the other "
-        "withheld cases): "
+        "withheld cases; candidates: "
+     << (user ? "your list of feasible points" : "the withheld cases") << "): "
      << (next.empty() ? "none" : next) << "\n\n";
   term << "withheld cases the training cases leave open (committee of laws that fit alike): "
        << (open.empty() ? "none" : open) << "\n"
@@ -609,6 +617,15 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
   }
   terms += law.interaction ? " (the training cases determine a V·f interaction)"
                            : " (no V·f interaction: the training cases cannot show one)";
+  // The shapes in f tried (OperatingLaw::kFPowers), the kept one's first.
+  const auto shape_name = [](double power) {
+    return power == 0 ? std::string("ln f") : power == 1 ? std::string("f") : "f^" + Fmt(power, 2);
+  };
+  std::string shapes;
+  for (const auto& s : law.shapes)
+    shapes += (shapes.empty() ? "" : ", ") + shape_name(s.f_power) + " " + Fmt(s.map_cost, 5);
+  terms += "; shape in f: " + shape_name(law.f_power) + ", the one of the lowest MAP cost of " +
+           shapes + " deg² (ln f stands for the shape in the terms)";
   std::ostringstream md, term;
   md << "## Operating-point law (all training cases at once)\n\n"
      << "One of generation 0's seeds (hgann/operating_law.h), each parameter a law of V and ln f "
@@ -642,13 +659,9 @@ std::pair<std::string, std::string> LawSection(const io::CaseSet& set,
     md << "\n";
   }
   md << "\n";
-  const auto [committee_md, committee_term] =
-      CommitteeSection(set, hgann::CommitteeOf(fitness, law, threads));
-  md << committee_md;
   term << "operating-point law: " << terms << "; settled by the data: "
        << (data.empty() ? "none" : data) << "; by the prior: " << (prior.empty() ? "none" : prior)
-       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n"
-       << committee_term;
+       << " (cost " << Fmt(law.cost, 5) << " deg²; report.md)\n";
   return {md.str(), term.str()};
 }
 
@@ -715,7 +728,14 @@ std::string ReportMarkdown(const IdentifyOptions& options, const io::CaseSet& se
      << (options.ga.islands > 1 ? ", island " + std::to_string(s.best_island) : std::string())
      << ")\n"
      << "- stopped: " << opt::GaTerminationName(s.termination) << " after " << s.generations
-     << " generations (" << s.message << ")\n"
+     << " generations (" << s.message
+     << (s.termination == opt::GaTermination::kStall && options.ga.stall_relative > 0
+             ? "; the rule: " + std::to_string(options.ga.stall_generations) +
+                   " generations in which none lowers the best by more than a relative " +
+                   Fmt(options.ga.stall_relative, 2) + " — what the GA added to generation 0's "
+                   "seeds in them, if anything, is below that"
+             : std::string())
+     << ")\n"
      << "- evaluations: " << s.evaluations << ", of which penalised " << penalized << " and errors "
      << errors;
   if (!reasons.empty()) {
@@ -855,8 +875,15 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   const PerCaseCheck per_case = CheckAgainstPerCaseFits(options, set, fitness, result);
   const auto [extrapolation_md, extrapolation_term] =
       ExtrapolationSection(set, fitness, result, per_case.estimates);
-  const auto [law_md, law_term] =
+  auto [law_md, law_term] =
       LawSection(set, fitness, result, std::max(1, options.threads > 0 ? options.threads : 2));
+  // The committee's verdict (identify's, or the master's for a fetched job: the same), after the
+  // law's section when there is one.
+  if (result.committee) {
+    const auto [committee_md, committee_term] = CommitteeSection(set, *result.committee);
+    law_md += committee_md;
+    law_term += committee_term;
+  }
   std::vector<std::string> plot_errors;
   const size_t islands = result.log.empty() ? 0 : result.log.front().islands.size();
   const int rendered = WriteFigures(options, out, set, islands, written, &plot_errors);

@@ -91,6 +91,7 @@ hgann::IdentifyResult IdentifyResultOfJob(const FetchedJob& job,
   r.log = job.log;  // the records are the GA's own summaries
   r.best = SavedNetworkOfJob(job, fitness, 0);
   r.cases = fitness.EvaluateCases(r.best.network);
+  r.committee = job.committee;  // the master's, computed as identify computes it
   return r;
 }
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <ostream>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct FetchedJob {
   std::vector<service::ScoredGenome> best;     ///< best first
   std::vector<service::GenerationRecord> log;  ///< one record per generation
   std::vector<io::SavedNetwork> networks;  ///< best[i] as the master decoded it (hgann), or empty
+  std::optional<job::LawCommittee> committee;  ///< the law's committee on best[0] (hgann), or none
 };
 
 /// The GA's final summary of a job: termination from its state and message, best from best[0],

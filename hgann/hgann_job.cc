@@ -146,6 +146,19 @@ Status HgannRanges(const HgannProblem& h, model::ParameterRanges* ranges) {
   return ranges->Validate();
 }
 
+/// hgann.next_candidates: at most kMaxNextCandidates points, each V and f finite and > 0.
+void RequireNextCandidates(Violations& c, const HgannProblem& h) {
+  c.Require(h.next_candidates.size() <= job::kMaxNextCandidates, "hgann.next_candidates",
+            std::to_string(h.next_candidates.size()) + " points",
+            "must be at most " + std::to_string(job::kMaxNextCandidates));
+  for (size_t i = 0; i < h.next_candidates.size(); ++i) {
+    const auto& [v, f] = h.next_candidates[i];
+    const std::string at = "hgann.next_candidates[" + std::to_string(i) + "]";
+    c.Require(std::isfinite(v) && v > 0, at + ".amplitude_v", v, "must be finite and > 0 [V]");
+    c.Require(std::isfinite(f) && f > 0, at + ".frequency_hz", f, "must be finite and > 0 [Hz]");
+  }
+}
+
 std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
   Violations c;
   c.Require(h.case_set_dir.empty(), "hgann.case_set_dir", "\"" + h.case_set_dir + "\"",
@@ -225,6 +238,7 @@ std::vector<FieldViolation> ValidateHgannProblem(const HgannProblem& h) {
             "\"" + h.ranges_preset + "\"", kRangesPresetRule);
   c.Require(job::HgannSearchPreset(h.preset).has_value(), "hgann.preset", "\"" + h.preset + "\"",
             job::kHgannPresetRule);
+  RequireNextCandidates(c, h);
   std::set<std::string> seen;
   for (size_t i = 0; i < h.ranges.size(); ++i) {
     const ParameterRange& r = h.ranges[i];
@@ -387,6 +401,25 @@ JobKind HgannJobKind() {
       *out = MakeTrendSeeds(fitness, TrendSeedOptions{}).genomes;
     } catch (const std::exception& e) {
       return InvalidArgument(std::string("hgann trend seeds: ") + e.what());
+    }
+    return Status::Ok();
+  };
+  k.committee = [](const JobSpec& s, const Genome& best, job::LawCommittee* out) -> Status {
+    const HgannProblem& problem = std::get<HgannProblem>(s.problem);
+    if (!problem.trend_seeds) return {StatusCode::kNotFound, "no trend seeds, no law"};
+    HgannFitnessConfig config;
+    if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
+    try {
+      const HgannFitness fitness(std::move(config));
+      // As identify (hgann/identify.cc RunIdentify): the seeds' law, the best kept as a member,
+      // the spec's candidates; the same whatever the thread count.
+      const std::optional<TrendSeeds> seeds = MakeTrendSeeds(fitness, TrendSeedOptions{});
+      const std::optional<LawCommittee> c = RunCommittee(
+          fitness, seeds, fitness.Decode(best), problem.next_candidates, /*threads=*/1);
+      if (!c) return {StatusCode::kNotFound, "the law could not be fitted"};
+      *out = *c;
+    } catch (const std::exception& e) {
+      return InvalidArgument(std::string("hgann committee: ") + e.what());
     }
     return Status::Ok();
   };

@@ -33,6 +33,19 @@ double PaperTable8Pi(double v, double f) {
   return it == table.end() ? std::nan("") : it->second;
 }
 
+std::optional<LawCommittee> RunCommittee(const HgannFitness& fitness,
+                                         const std::optional<TrendSeeds>& seeds,
+                                         const model::Network& best,
+                                         const std::vector<std::pair<double, double>>& candidates,
+                                         int threads) {
+  if (!seeds || !seeds->law.ok) return std::nullopt;
+  CommitteeOptions o;
+  o.threads = std::max(1, threads);
+  o.kept = &best;
+  o.candidates = candidates;
+  return CommitteeOf(fitness, seeds->law, o);
+}
+
 IdentifyResult RunIdentify(
     const IdentifyOptions& options, const io::CaseSet& set, const HgannFitness& fitness,
     const std::function<void(const opt::GenerationSummary&)>& on_generation) {
@@ -70,6 +83,9 @@ IdentifyResult RunIdentify(
   for (const auto* c : set.Training())
     p.training_cases.push_back("case" + std::to_string(c->number));
   r.cases = fitness.EvaluateCases(r.best.network);
+  // The same thread count as the seeds' (the committee's Jacobian is the same whatever it is).
+  r.committee = RunCommittee(fitness, r.seeds, r.best.network, options.next_candidates,
+                             std::max(1, options.threads > 0 ? options.threads : 2));
   return r;
 }
 

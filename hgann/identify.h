@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "hgann/hgann_fitness.h"
@@ -30,6 +31,9 @@ struct IdentifyOptions {
   double spread_penalty = 0;  ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
   bool trend_seeds = false;      ///< generation 0 starts with the trend seeds (hgann/trend_seeds.h)
   std::string preset;            ///< the search preset the settings came from (reports; "" = none)
+  /// The user's feasible (V [V], f [Hz]) points for the next-case proposal (CommitteeOptions::
+  /// candidates); empty: the case set's withheld cases are the candidates.
+  std::vector<std::pair<double, double>> next_candidates;
   std::string job_id = "local";  ///< provenance
 };
 
@@ -40,6 +44,9 @@ struct IdentifyResult {
   std::vector<HgannCaseResult> cases;  ///< every case of the set, in manifest order
   std::optional<TrendSeeds>
       seeds;  ///< with IdentifyOptions::trend_seeds: the per-case fits and seeds
+  /// With the seeds' law: the committee of laws that fit alike, the best network kept among them
+  /// (which withheld cases stay open, the next case to measure: hgann/operating_law.h).
+  std::optional<LawCommittee> committee;
 };
 
 /// The parameter ranges of a preset: "" or "default" (spec §3), "paper" (the paper's Table 3);
@@ -57,6 +64,14 @@ using SearchSettings = job::HgannSearchSettings;
 std::optional<SearchSettings> SearchPreset(std::string_view name);
 inline constexpr const char* kDefaultSearchPreset = job::kDefaultHgannPreset;
 inline constexpr const char* kSearchPresetRule = job::kHgannPresetRule;
+
+/// The committee of a run with a law (LawCommittee of the seeds' law, the best network kept as a
+/// member, the options' candidates); nullopt without one. identify and the hgann job kind alike.
+std::optional<LawCommittee> RunCommittee(const HgannFitness& fitness,
+                                         const std::optional<TrendSeeds>& seeds,
+                                         const model::Network& best,
+                                         const std::vector<std::pair<double, double>>& candidates,
+                                         int threads);
 
 /// Runs the GA on the case set's training cases. `on_generation` sees every generation summary.
 IdentifyResult RunIdentify(const IdentifyOptions& options, const io::CaseSet& set,

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <tuple>
 
 #include "hgann/trend_seeds.h"
@@ -20,6 +21,14 @@ constexpr int kGrid = 5;  // the spread penalty's grid (HgannFitness::GridOf)
 constexpr int kRidges = 4;  // the interaction's ridge units
 using Array7 = std::array<double, kOut>;
 using Phi = std::array<double, OperatingLaw::kMaxTerms>;
+using Active = std::array<std::array<bool, OperatingLaw::kMaxTerms>, kOut>;
+
+/// ℓ_λ(f) over [f_lo, f_hi] (the header's Box–Cox shape in f): 0 at f_lo, 1 at f_hi.
+double FShape(double f, double f_lo, double f_hi, double power) {
+  if (power == 0) return std::log(f / f_lo) / std::log(f_hi / f_lo);
+  return (std::pow(f, power) - std::pow(f_lo, power)) /
+         (std::pow(f_hi, power) - std::pow(f_lo, power));
+}
 
 /// The law's hidden layer and its basis φ = (1, x_V, ℓ, q, h_V) at the training cases, every case
 /// of the configuration and the spread penalty's grid (q = 0 without the interaction's nodes, h_V
@@ -42,8 +51,8 @@ struct LawBasis {
   std::array<std::array<bool, OperatingLaw::kMaxTerms>, kOut> active{};
   std::vector<Phi> at_train, at_cases, at_grid;
 
-  LawBasis(const HgannFitnessConfig& config, bool with_interaction,
-           const std::array<std::array<bool, OperatingLaw::kMaxTerms>, kOut>& in_law)
+  LawBasis(const HgannFitnessConfig& config, bool with_interaction, const Active& in_law,
+           double f_power)
       : cfg(config), active(in_law) {
     const auto& norm = cfg.normalization;
     for (size_t i = 0; i < cfg.cases.size(); ++i)
@@ -70,7 +79,7 @@ struct LawBasis {
     if (hf >= 0) {
       n.w1(1, hf) = 1 / (1 - knot);
       n.c1(hf) = -knot / (1 - knot);
-      m1 = std::log(f_knot / f_lo) / std::log(f_hi / f_lo) / knot;
+      m1 = FShape(f_knot, f_lo, f_hi, f_power) / knot;
       m2 = 1 - m1;
     }
     if (with_interaction) {
@@ -362,15 +371,17 @@ void Posterior(const LawBasis& b, const opt::LmResult& r, OperatingLaw& law) {
 }
 
 /// Weighted χ² of the per-case estimates of output k on the basis columns `cols` (σ as the trend
-/// seeds take it, at least 0.5 % of the range), and the number of estimates.
+/// seeds take it, at least 0.5 % of the range), and the number of estimates; `coef` (when given
+/// and the estimates are at least as many as the columns): the least squares' coefficients.
 std::pair<double, int> EstimatesChi2(const LawBasis& b, const std::vector<CaseEstimate>& est,
-                                     int k, const std::vector<int>& cols) {
+                                     int k, const std::vector<int>& cols,
+                                     Eigen::VectorXd* coef = nullptr) {
   const double width = b.cfg.ranges[k].upper - b.cfg.ranges[k].lower;
   std::vector<int> rows;
   for (size_t m = 0; m < est.size() && m < b.at_train.size(); ++m)
     if (est[m].ok) rows.push_back(static_cast<int>(m));
   const int n = static_cast<int>(rows.size()), p = static_cast<int>(cols.size());
-  if (n <= p || width <= 0) return {0.0, n};
+  if (n < p || width <= 0) return {0.0, n};
   Eigen::MatrixXd a(n, p);
   Eigen::VectorXd y(n);
   for (int r = 0; r < n; ++r) {
@@ -380,7 +391,8 @@ std::pair<double, int> EstimatesChi2(const LawBasis& b, const std::vector<CaseEs
     y(r) = e.s[k] / sd;
   }
   const Eigen::VectorXd x = a.completeOrthogonalDecomposition().solve(y);
-  return {(a * x - y).squaredNorm(), n};
+  if (coef) *coef = x;
+  return {n == p ? 0.0 : (a * x - y).squaredNorm(), n};
 }
 
 // The terms of μ, δ, a1 and a2 beyond the level (and the interaction, when in the law): of x_V
@@ -391,35 +403,51 @@ std::pair<double, int> EstimatesChi2(const LawBasis& b, const std::vector<CaseEs
 // f-slope and a V-curvature can fit the same estimates (the 500 V cases are the only ones off
 // 0.25 Hz): a1 ∝ V² is x_V + h_V, not an f-slope through case 5. Not for the loop's α, β, γ,
 // whose per-case estimates scatter along a valley: they keep x_V and ℓ.
-void SelectTerms(const LawBasis& b, const std::vector<CaseEstimate>& est,
-                 std::array<std::array<bool, OperatingLaw::kMaxTerms>, kOut>& active) {
-  static constexpr std::array<std::array<bool, 4>, 5> kSets = {{{true, true, false, false},
-                                                                 {true, false, true, false},
-                                                                 {true, true, true, false},
-                                                                 {true, true, false, true},
-                                                                 {true, true, true, true}}};
-  // a, b, e, g
+// `alternatives`: each other set that fits the estimates alike (χ² + 2 p within kAlike of the
+// lowest), as (output, its estimates' coefficients − the chosen set's): the committee's shapes.
+void SelectTerms(const LawBasis& b, const std::vector<CaseEstimate>& est, Active& active,
+                 std::vector<std::pair<int, Phi>>* alternatives = nullptr) {
+  constexpr double kAlike = 2;  // Akaike: a set within 2 of the best has substantial support
+  // a, b, e, g, d: the interaction d in every set when the training determines it (as in the
+  // law's basis), and then only beside both main effects (the marginality principle: with the
+  // corner trained, a set of V, V·f and a V curvature without ln f fitted a1's estimates of an
+  // additive law, flat in f at 375 V).
+  static constexpr std::array<std::array<bool, 5>, 9> kSets = {{{true, true, false, false, false},
+                                                                 {true, false, true, false, false},
+                                                                 {true, true, true, false, false},
+                                                                 {true, true, false, true, false},
+                                                                 {true, true, true, true, false},
+                                                                 {true, true, false, false, true},
+                                                                 {true, true, true, false, true},
+                                                                 {true, true, false, true, true},
+                                                                 {true, true, true, true, true}}};
+  const bool determined = active[0][3];
   for (int k : {0, 1, 5, 6}) {
     std::vector<std::pair<double, int>> scored;  // (χ² + 2 p, set), sets that can be fitted
+    std::vector<Phi> coefs;                      // their coefficients, in the law's slots
     for (int i = 0; i < static_cast<int>(kSets.size()); ++i) {
       const auto& set = kSets[i];
-      if ((set[2] && b.hv < 0) || (set[3] && b.hf < 0)) continue;
+      if ((set[2] && b.hv < 0) || (set[3] && b.hf < 0) || set[4] != determined) continue;
       std::vector<int> cols = {0};
       if (set[0]) cols.push_back(1);
       if (set[1]) cols.push_back(2);
-      if (active[k][3]) cols.push_back(3);
+      if (set[4]) cols.push_back(3);
       if (set[2]) cols.push_back(4);
       if (set[3]) cols.push_back(5);
-      const auto [chi2, n] = EstimatesChi2(b, est, k, cols);
+      Eigen::VectorXd x;
+      const auto [chi2, n] = EstimatesChi2(b, est, k, cols, &x);
       if (n < static_cast<int>(cols.size())) continue;
       scored.emplace_back(chi2 + 2.0 * static_cast<double>(cols.size()), i);
+      Phi c{};
+      for (size_t j = 0; j < cols.size(); ++j) c[cols[j]] = x(static_cast<int>(j));
+      coefs.push_back(c);
     }
     // The lowest score; when two sets of as many terms tie there (each fits the estimates
     // exactly: a curvature in V or one in f through four cases), the estimates cannot say which,
     // and the best of the sets with fewer terms is taken instead.
     const auto size = [](int i) { return std::count(kSets[i].begin(), kSets[i].end(), true); };
-    std::array<bool, 4> chosen = kSets[0];
-    for (int cap = 4; cap >= 1; --cap) {
+    std::array<bool, 5> chosen = kSets[0];
+    for (int cap = 5; cap >= 1; --cap) {
       double best = std::numeric_limits<double>::infinity();
       int pick = -1, ties = 0;
       for (const auto& [score, i] : scored) {
@@ -436,22 +464,39 @@ void SelectTerms(const LawBasis& b, const std::vector<CaseEstimate>& est,
     active[k][2] = chosen[1];
     active[k][4] = chosen[2];
     active[k][5] = chosen[3];
+    active[k][3] = chosen[4];
+    if (!alternatives || scored.empty()) continue;
+    double lowest = std::numeric_limits<double>::infinity();
+    size_t at = 0;
+    for (size_t j = 0; j < scored.size(); ++j) {
+      lowest = std::min(lowest, scored[j].first);
+      if (kSets[scored[j].second] == chosen) at = j;
+    }
+    for (size_t j = 0; j < scored.size(); ++j) {
+      if (j == at || scored[j].first > lowest + kAlike) continue;
+      Phi d{};
+      for (int t = 0; t < OperatingLaw::kMaxTerms; ++t) d[t] = coefs[j][t] - coefs[at][t];
+      alternatives->emplace_back(k, d);
+    }
   }
 }
 
 }  // namespace
 
-OperatingLaw FitOperatingLaw(const HgannFitness& fitness,
-                             const std::vector<CaseEstimate>& estimates,
-                             const TrendSeedOptions& options) {
+namespace {
+
+/// The law of the header with the shape in f ℓ_λ, λ = f_power.
+OperatingLaw FitShape(const HgannFitness& fitness, const std::vector<CaseEstimate>& estimates,
+                      const TrendSeedOptions& options, double f_power) {
   const HgannFitnessConfig& cfg = fitness.config();
   OperatingLaw law;
-  std::array<std::array<bool, OperatingLaw::kMaxTerms>, kOut> active{};
+  law.f_power = f_power;
+  Active active{};
   for (auto& a : active) a = {true, true, true, false, false, false};
-  const bool interaction = InteractionDetermined(LawBasis(cfg, true, active));
+  const bool interaction = InteractionDetermined(LawBasis(cfg, true, active, f_power));
   for (auto& a : active) a[3] = interaction;
-  SelectTerms(LawBasis(cfg, interaction, active), estimates, active);
-  const LawBasis basis(cfg, interaction, active);
+  SelectTerms(LawBasis(cfg, interaction, active, f_power), estimates, active, &law.alternatives);
+  const LawBasis basis(cfg, interaction, active, f_power);
   law.interaction = interaction;
   law.active = active;
   int terms = 0;
@@ -488,6 +533,7 @@ OperatingLaw FitOperatingLaw(const HgannFitness& fitness,
   law.simulations = residuals.simulations();
   if (!std::isfinite(best.cost)) return law;
   law.ok = true;
+  law.map_cost = best.cost;
   for (int k = 0; k < kOut; ++k)
     for (int t = 0; t < basis.terms; ++t) law.coef[k][t] = best.x[basis.terms * k + t];
   Posterior(basis, best, law);
@@ -500,12 +546,53 @@ OperatingLaw FitOperatingLaw(const HgannFitness& fitness,
   return law;
 }
 
+}  // namespace
+
+OperatingLaw FitOperatingLaw(const HgannFitness& fitness,
+                             const std::vector<CaseEstimate>& estimates,
+                             const TrendSeedOptions& options) {
+  OperatingLaw kept;
+  std::vector<OperatingLaw::Shape> shapes;
+  int64_t simulations = 0;
+  for (const double power : OperatingLaw::kFPowers) {
+    OperatingLaw law = FitShape(fitness, estimates, options, power);
+    simulations += law.simulations;
+    if (!law.ok) continue;
+    shapes.push_back({power, law.map_cost, law.interaction, law.active, law.theta});
+    if (!kept.ok || law.map_cost < kept.map_cost) kept = std::move(law);
+  }
+  kept.shapes = std::move(shapes);
+  kept.simulations = simulations;
+  return kept;
+}
+
 namespace {
 
-/// The committee's members (CommitteeOf): the law moved one posterior σ either way along each
-/// direction the prior settles, and along the training design's null direction of the
-/// interaction; empty when the law's MAP cost cannot be evaluated.
-std::vector<std::vector<double>> CommitteeMembers(const HgannFitness& fitness,
+/// A member of the committee: its parameters at every case of the configuration, then at every
+/// point of the user's list (nullopt where its loop is unbounded).
+using MemberParams = std::vector<std::optional<Array7>>;
+
+bool Bounded(const Array7& p) {
+  model::BimorphParams bp;
+  bp.alpha = p[2];
+  bp.beta = p[3];
+  bp.gamma = p[4];
+  return bp.HysteresisBounded();
+}
+
+/// θ's parameters at `points` under `basis`.
+MemberParams ParamsAt(const LawBasis& basis, const std::vector<double>& th,
+                      const std::vector<Phi>& points) {
+  MemberParams out;
+  for (const Phi& phi : points)
+    out.push_back(basis.LoopBounded(th, phi) ? std::optional<Array7>(basis.Params(th, phi))
+                                             : std::nullopt);
+  return out;
+}
+
+/// The posterior members (CommitteeOf): the law moved one posterior σ either way along each
+/// direction the prior settles; empty when the law's MAP cost cannot be evaluated.
+std::vector<std::vector<double>> PosteriorMembers(const HgannFitness& fitness,
                                                   const OperatingLaw& law, const LawBasis& basis,
                                                   int threads, int64_t* evaluations) {
   constexpr int kT = OperatingLaw::kMaxTerms;
@@ -557,10 +644,24 @@ std::vector<std::vector<double>> CommitteeMembers(const HgannFitness& fitness,
       }
     }
   }
-  // When the law has no interaction because the training cases cannot show one, the design's
-  // null direction in (1, x_V, ℓ, q) moves no training case at all: members along it for μ, δ,
-  // a1 and a2, each with an interaction d as large as the parameter's own largest slope (at least
-  // 1 % of its range) — a V·f term of the size of the trend itself.
+  return members;
+}
+
+/// The committee's shapes (CommitteeOf): for μ, δ, a1 and a2, the law moved by each other term set
+/// that fits the per-case estimates alike (OperatingLaw::alternatives: a curvature in V against
+/// one in f, where the estimates cannot tell them), and, when the law has no V·f term because the
+/// training cases cannot show one, along the training design's null direction in its terms and
+/// the interaction, either way, with an interaction d as large as the parameter's own largest
+/// slope (at least 1 % of its range): a V·f term of the size of the trend itself.
+std::vector<std::vector<double>> ShapeMembers(const OperatingLaw& law, const LawBasis& basis) {
+  constexpr int kT = OperatingLaw::kMaxTerms;
+  const std::vector<double>& x = law.theta;
+  std::vector<std::vector<double>> members;
+  for (const auto& [k, d] : law.alternatives) {
+    std::vector<double> m = x;
+    for (int t = 0; t < kT; ++t) m[kT * k + t] += d[t];
+    members.push_back(std::move(m));
+  }
   for (int k : {0, 1, 5, 6}) {
     if (law.interaction || basis.at_train.empty()) break;
     std::vector<int> cols;  // the parameter's terms and the interaction
@@ -574,8 +675,7 @@ std::vector<std::vector<double>> CommitteeMembers(const HgannFitness& fitness,
     const Eigen::VectorXd null = svd.matrixV().col(p - 1);
     const int id = static_cast<int>(std::find(cols.begin(), cols.end(), 3) - cols.begin());
     if (std::abs(null(id)) < 1e-9) continue;
-    const double size =
-        std::max({std::abs(x[kT * k + 1]), std::abs(x[kT * k + 2]), 0.01});
+    const double size = std::max({std::abs(x[kT * k + 1]), std::abs(x[kT * k + 2]), 0.01});
     for (double sign : {1.0, -1.0}) {
       std::vector<double> m = x;
       for (int c = 0; c < p; ++c) m[kT * k + cols[c]] += sign * size * null(c) / null(id);
@@ -585,69 +685,142 @@ std::vector<std::vector<double>> CommitteeMembers(const HgannFitness& fitness,
   return members;
 }
 
+/// The case a point of the user's list is simulated as: the training case nearest it in
+/// (x_V, x_f), at the point's (V, f) with that case's sample rate, cycles and saturations.
+HgannCase CandidateCase(const HgannFitnessConfig& cfg, double v, double f) {
+  const auto& norm = cfg.normalization;
+  const HgannCase* nearest = nullptr;
+  double best = std::numeric_limits<double>::infinity();
+  for (const HgannCase& c : cfg.cases) {
+    if (!c.training) continue;
+    const double dv = norm.NormalizeAmplitude(c.drive.amplitude_v) - norm.NormalizeAmplitude(v);
+    const double df =
+        norm.NormalizeFrequency(c.drive.frequency_hz) - norm.NormalizeFrequency(f);
+    if (dv * dv + df * df < best) best = dv * dv + df * df, nearest = &c;
+  }
+  HgannCase out = nearest ? *nearest : cfg.cases.front();
+  out.number = 0;
+  out.training = false;
+  out.drive.amplitude_v = v;
+  out.drive.frequency_hz = f;
+  out.measured_deg.assign(static_cast<size_t>(std::max(2, out.drive.NumSamples())), 0.0);
+  return out;
+}
+
+/// Query by committee (CommitteeOf): the candidates ranked by what stays open were each measured.
+void RankCandidates(const HgannFitnessConfig& cfg, const std::vector<std::vector<double>>& dis,
+                    const std::vector<double>& cand_floor, const std::vector<int>& cand_point,
+                    LawCommittee& out) {
+  const size_t n_cases = cfg.cases.size();
+  std::vector<std::tuple<double, double, int>> ranked;  // (remaining, −own disagreement, cand)
+  for (size_t c = 0; c < out.candidates.size(); ++c) {
+    const size_t at = static_cast<size_t>(cand_point[c]);
+    double remaining = 0, own = 0;
+    for (size_t t = 0; t < n_cases; ++t) {
+      if (static_cast<int>(t) == out.candidates[c].case_index || cfg.cases[t].training) continue;
+      double worst = 0;
+      for (size_t m = 0; m < dis.size(); ++m)
+        if (dis[m][at] < 2 * cand_floor[c]) worst = std::max(worst, dis[m][t]);
+      remaining += std::min(worst / out.floor[t], 1e6);
+    }
+    for (size_t m = 0; m < dis.size(); ++m) own = std::max(own, dis[m][at]);
+    ranked.emplace_back(remaining, -std::min(own / cand_floor[c], 1e6), static_cast<int>(c));
+  }
+  std::sort(ranked.begin(), ranked.end());
+  for (const auto& [remaining, own, cand] : ranked) out.next.emplace_back(cand, remaining);
+}
+
 }  // namespace
 
-LawCommittee CommitteeOf(const HgannFitness& fitness, const OperatingLaw& law, int threads) {
+LawCommittee CommitteeOf(const HgannFitness& fitness, const OperatingLaw& law,
+                         const CommitteeOptions& options) {
   const HgannFitnessConfig& cfg = fitness.config();
   LawCommittee out;
   const size_t n_cases = cfg.cases.size();
   out.floor.assign(n_cases, 0.0);
   out.disagreement.assign(n_cases, 0.0);
+  out.kept_disagreement.assign(n_cases, 0.0);
   out.open.assign(n_cases, false);
   constexpr int kT = OperatingLaw::kMaxTerms;
   if (!law.ok || law.theta.size() != static_cast<size_t>(kT * kOut)) return out;
-  const LawBasis basis(cfg, true, law.active);
+  // The points: every case, then the user's list.
+  std::vector<HgannCase> points(cfg.cases.begin(), cfg.cases.end());
+  for (const auto& [v, f] : options.candidates) points.push_back(CandidateCase(cfg, v, f));
+  const LawBasis basis(cfg, true, law.active, law.f_power);
+  std::vector<Phi> at_points = basis.at_cases;
+  for (size_t i = n_cases; i < points.size(); ++i)
+    at_points.push_back(basis.At(points[i].drive.amplitude_v, points[i].drive.frequency_hz));
   int64_t evaluations = 0;
-  const std::vector<std::vector<double>> members =
-      CommitteeMembers(fitness, law, basis, threads, &evaluations);
-  const std::vector<double>& x = law.theta;
+  std::vector<MemberParams> members;
+  const auto posterior = PosteriorMembers(fitness, law, basis, options.threads, &evaluations);
+  const auto shapes = ShapeMembers(law, basis);
+  for (const auto* set : {&posterior, &shapes})
+    for (const std::vector<double>& th : *set) members.push_back(ParamsAt(basis, th, at_points));
+  for (const OperatingLaw::Shape& s : law.shapes) {
+    if (s.f_power == law.f_power ||
+        s.map_cost > law.map_cost + OperatingLaw::kShapeAlike * law.sigma2)
+      continue;
+    const LawBasis other(cfg, true, s.active, s.f_power);
+    std::vector<Phi> at;
+    for (const HgannCase& c : points)
+      at.push_back(other.At(c.drive.amplitude_v, c.drive.frequency_hz));
+    members.push_back(ParamsAt(other, s.theta, at));
+  }
+  int kept = -1;
+  if (options.kept) {
+    MemberParams m;
+    for (const HgannCase& c : points) {
+      const Array7 p = options.kept->Predict(c.drive.amplitude_v, c.drive.frequency_hz).ToArray();
+      m.push_back(Bounded(p) ? std::optional<Array7>(p) : std::nullopt);
+    }
+    kept = static_cast<int>(members.size());
+    members.push_back(std::move(m));
+  }
   out.members = static_cast<int>(members.size());
   out.lo.resize(n_cases);
   out.hi.resize(n_cases);
-  // Each case's prediction under the law and under every member.
-  std::vector<std::vector<double>> dis(members.size(), std::vector<double>(n_cases, 0.0));
-  for (size_t i = 0; i < n_cases; ++i) {
-    const HgannCase& c = cfg.cases[i];
-    out.floor[i] = law.sigma2 * static_cast<double>(c.measured_deg.size());
-    const Array7 p0 = basis.Params(x, basis.at_cases[i]);
-    out.lo[i] = out.hi[i] = p0;
+  // Each point's prediction under the law and under every member.
+  std::vector<std::vector<double>> dis(members.size(), std::vector<double>(points.size(), 0.0));
+  std::vector<double> point_floor(points.size(), 0.0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    const HgannCase& c = points[i];
+    point_floor[i] = law.sigma2 * static_cast<double>(c.measured_deg.size());
+    const Array7 p0 = basis.Params(law.theta, at_points[i]);
+    if (i < n_cases) out.floor[i] = point_floor[i], out.lo[i] = out.hi[i] = p0;
     std::vector<double> y0(c.measured_deg.size()), y(c.measured_deg.size());
     ++out.simulations;
     if (!fitness.SimulateCase(model::NetworkParameters::FromArray(p0), c, y0)) continue;
     for (size_t m = 0; m < members.size(); ++m) {
-      const Array7 p = basis.Params(members[m], basis.at_cases[i]);
-      for (int k = 0; k < kOut; ++k)
-        out.lo[i][k] = std::min(out.lo[i][k], p[k]), out.hi[i][k] = std::max(out.hi[i][k], p[k]);
-      ++out.simulations;
+      const std::optional<Array7>& p = members[m][i];
       double d = 0;
-      if (!basis.LoopBounded(members[m], basis.at_cases[i]) ||
-          !fitness.SimulateCase(model::NetworkParameters::FromArray(p), c, y)) {
+      ++out.simulations;
+      if (!p || !fitness.SimulateCase(model::NetworkParameters::FromArray(*p), c, y)) {
         d = std::numeric_limits<double>::infinity();
       } else {
         for (size_t k = 0; k < y.size(); ++k) d += (y[k] - y0[k]) * (y[k] - y0[k]);
+        if (i < n_cases)
+          for (int k = 0; k < kOut; ++k)
+            out.lo[i][k] = std::min(out.lo[i][k], (*p)[k]),
+            out.hi[i][k] = std::max(out.hi[i][k], (*p)[k]);
       }
       dis[m][i] = d;
-      out.disagreement[i] = std::max(out.disagreement[i], d);
+      if (i < n_cases) out.disagreement[i] = std::max(out.disagreement[i], d);
+      if (i < n_cases && static_cast<int>(m) == kept) out.kept_disagreement[i] = d;
     }
-    out.open[i] = !c.training && out.disagreement[i] >= 2 * out.floor[i];
+    if (i < n_cases) out.open[i] = !c.training && out.disagreement[i] >= 2 * out.floor[i];
   }
-  // Query by committee over the withheld cases.
-  std::vector<std::tuple<double, double, int>> ranked;  // (remaining, −own disagreement, case)
-  for (size_t cand = 0; cand < n_cases; ++cand) {
-    if (cfg.cases[cand].training) continue;
-    double remaining = 0;
-    for (size_t t = 0; t < n_cases; ++t) {
-      if (t == cand || cfg.cases[t].training) continue;
-      double worst = 0;
-      for (size_t m = 0; m < members.size(); ++m)
-        if (dis[m][cand] < 2 * out.floor[cand]) worst = std::max(worst, dis[m][t]);
-      remaining += std::min(worst / out.floor[t], 1e6);
-    }
-    ranked.emplace_back(remaining, -std::min(out.disagreement[cand] / out.floor[cand], 1e6),
-                        static_cast<int>(cand));
+  // The candidates: the user's points, or every withheld case.
+  std::vector<int> cand_point;
+  std::vector<double> cand_floor;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const bool user = i >= n_cases;
+    if (options.candidates.empty() ? (user || cfg.cases[i].training) : !user) continue;
+    out.candidates.push_back({points[i].drive.amplitude_v, points[i].drive.frequency_hz,
+                              user ? -1 : static_cast<int>(i)});
+    cand_point.push_back(static_cast<int>(i));
+    cand_floor.push_back(point_floor[i]);
   }
-  std::sort(ranked.begin(), ranked.end());
-  for (const auto& [remaining, own, cand] : ranked) out.next.emplace_back(cand, remaining);
+  RankCandidates(cfg, dis, cand_floor, cand_point, out);
   out.simulations += evaluations;
   return out;
 }

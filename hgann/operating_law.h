@@ -1,11 +1,16 @@
 // The operating-point law learnt jointly (issue 47): each of the seven parameters a law of the
 // drive's amplitude V and frequency f with the fewest terms the training cases support,
 //
-//   s_k(V, f) = c_k + a_k x_V + b_k ℓ(f) [+ d_k q(x_V, x_f)]        (scaled units, s ∈ [0, 1])
+//   s_k(V, f) = c_k + a_k x_V + b_k ℓ_λ(f) [+ d_k q(x_V, x_f)]      (scaled units, s ∈ [0, 1])
 //
-// x_V, x_f the network's normalised inputs (over the training cases), ℓ the normalised log f
-// (ℓ = ln(f / f_lo) / ln(f_hi / f_lo), as a network: x_f and a hinge at the middle training
-// frequency, exact at the training frequencies and piecewise linear between), q ≈ x_V x_f the
+// x_V, x_f the network's normalised inputs (over the training cases), ℓ_λ the law's shape in f,
+// a Box–Cox power of f normalised over the training frequencies (ℓ_λ = (f^λ − f_lo^λ) / (f_hi^λ −
+// f_lo^λ); λ = 0: ln(f / f_lo) / ln(f_hi / f_lo)), as a network: x_f and a hinge at the middle
+// training frequency, exact at the training frequencies and piecewise linear between. The shape
+// is a choice the data make: the law is fitted with λ = 0 (ln f), ½ (√f) and 1 (f), and the one of
+// the lowest MAP cost is kept (the same number of coefficients each); the others stay beside it
+// (OperatingLaw::shapes), and those that fit alike (MAP cost within kShapeAlike σ²) join the
+// committee, so that where the shapes part the case is named open. q ≈ x_V x_f the
 // interaction (½ (x_V − satlin(x_V − x_f) + satlin(x_V + x_f − 1)): bilinear at the box's
 // corners), included only when the training cases determine it (q not a combination of 1, x_V
 // and ℓ over the training cases: the paper's four cannot show it, a fifth at a corner can).
@@ -29,9 +34,11 @@
 
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hgann/hgann_fitness.h"
+#include "job/law_committee.h"
 #include "model/network.h"
 
 namespace pz::hgann {
@@ -41,7 +48,14 @@ struct TrendSeedOptions;
 
 struct OperatingLaw {
   static constexpr int kMaxTerms = 6;  ///< c, a (x_V), b (ℓ), d (q), e (h_V), g (h_f)
+  /// The shapes in f tried (Box–Cox λ: ln f, √f, f), the first preferred on a tie.
+  static constexpr std::array<double, 3> kFPowers = {0.0, 0.5, 1.0};
+  /// Shapes whose MAP cost is within kShapeAlike σ² of the kept one's fit alike (Δχ² ≤ 4: two σ
+  /// of the one parameter λ).
+  static constexpr double kShapeAlike = 4.0;
   bool ok = false;                     ///< the fit ran from an evaluable start
+  double f_power = 0;                  ///< λ of the kept shape ℓ_λ
+  double map_cost = 0;                 ///< the LM's MAP cost (data + spread grid + prior) [deg²]
   bool interaction = false;            ///< the q term is in the law
   int terms = 3;                       ///< the most terms of a parameter
   /// Which terms each parameter's law has: c always; d with the interaction; a, b, e (curvature
@@ -68,6 +82,17 @@ struct OperatingLaw {
   std::string start;  ///< which start the law was polished from
   /// θ: kMaxTerms coefficients an output, in output order.
   std::vector<double> theta;
+  /// Every shape in f fitted (the kept one included), in kFPowers' order.
+  struct Shape {
+    double f_power = 0, map_cost = 0;
+    bool interaction = false;
+    std::array<std::array<bool, kMaxTerms>, model::kNetworkOutputs> active{};
+    std::vector<double> theta;
+  };
+  std::vector<Shape> shapes;
+  /// The other term sets of μ, δ, a1, a2 that fit the per-case estimates alike (Akaike's χ² + 2 p
+  /// within 2 of the lowest): (output, their regression's coefficients − the chosen set's).
+  std::vector<std::pair<int, std::array<double, kMaxTerms>>> alternatives;
 };
 
 /// What laws that fit the training cases alike say at every case, and which case to measure next
@@ -75,26 +100,33 @@ struct OperatingLaw {
 /// training cases determine it), linearised at the fitted law, and the members one posterior σ
 /// either way along each direction of its posterior covariance that the prior settles (posterior
 /// variance above kPriorShare of the prior's along it): laws the training cases cannot tell from
-/// the fitted one. At every case, each member's predicted angle is compared with the fitted law's:
+/// the fitted one; for μ, δ, a1 and a2, the law moved by each other term set that fits the
+/// per-case estimates alike (OperatingLaw::alternatives: a curvature in V against one in f), and,
+/// without a V·f term, along the training design's null direction of the interaction by the size
+/// of the parameter's own largest slope; the other shapes in f that fit alike (OperatingLaw::
+/// shapes); and
+/// the network kept (CommitteeOptions::kept: it fits the training cases as well, else it would
+/// not be kept), so that a case where the kept network parts from the law is never called
+/// settled. At every case, each member's predicted angle is compared with the fitted law's:
 /// Σ_k (y_member − y_law)², over the case's floor σ² N (the residual variance a sample, as the
 /// law's prior uses it). A withheld case is open when a member moves its prediction by 2 floors or
 /// more (were that member the truth, the law's PI there would be about 3 × the floor).
-/// The next case, by query by committee: each candidate (a withheld case) is scored by what would
-/// remain open were it measured — the members it tells apart from the law (2 floors or more there)
-/// ruled out, the largest remaining disagreement at every other withheld case, in floors, summed —
-/// lowest first; ties by the larger disagreement at the candidate itself.
-struct LawCommittee {
-  int members = 0;
-  std::vector<double> floor;         ///< per case: σ² N [deg²]
-  std::vector<double> disagreement;  ///< per case: the largest member's Σ (Δy)² [deg²]
-  std::vector<bool> open;            ///< per case: withheld and disagreement ≥ 2 floors
-  /// Per case: each parameter's lowest and highest value over the law and the members.
-  std::vector<std::array<double, model::kNetworkOutputs>> lo, hi;
-  /// Candidates (case indices) best first, with what would remain open [floors].
-  std::vector<std::pair<int, double>> next;
-  int64_t simulations = 0;
+/// The next case, by query by committee: each candidate (a withheld case, or a point of the user's
+/// list: CommitteeOptions::candidates) is scored by what would remain open were it measured — the
+/// members it tells apart from the law (2 floors or more there) ruled out, the largest remaining
+/// disagreement at every withheld case other than the candidate, in floors, summed — lowest
+/// first; ties by the larger disagreement at the candidate itself. A user's point is simulated as
+/// the training case nearest it in (x_V, x_f) would be at its (V, f): that case's sample rate,
+/// cycles and saturations.
+struct CommitteeOptions {
+  int threads = 1;
+  const model::Network* kept = nullptr;  ///< the network the run keeps (a member), or none
+  /// The user's feasible (V [V], f [Hz]) points; empty: the withheld cases are the candidates.
+  std::vector<std::pair<double, double>> candidates;
 };
-LawCommittee CommitteeOf(const HgannFitness& fitness, const OperatingLaw& law, int threads = 1);
+using LawCommittee = job::LawCommittee;
+LawCommittee CommitteeOf(const HgannFitness& fitness, const OperatingLaw& law,
+                         const CommitteeOptions& options = {});
 
 /// The law of the file comment on the fitness's training cases; `estimates` (the per-case fits,
 /// TrendSeeds::cases) give the starts and σ.

@@ -15,6 +15,9 @@ opt::GaOptions ToGaOptions(const JobSpec& spec, const GenomeLayout& layout) {
   o.mutation_probability = g.mutation_probability;
   o.max_generations = g.generations;
   o.stall_generations = g.stall_generations;
+  if (const auto* h = std::get_if<HgannProblem>(&spec.problem))  // the preset's relative step
+    o.stall_relative =
+        HgannSearchPreset(h->preset).value_or(*HgannSearchPreset("")).stall_relative;
   o.islands = g.islands;
   o.migration_interval = g.migration_interval;
   o.migrants = g.migrants;
@@ -95,6 +98,13 @@ Status JobKindRegistry::Seeds(const JobSpec& spec, std::vector<opt::Genome>* out
   const JobKind* k = Find(spec.kind());
   if (!k || !k->seeds) return Status::Ok();
   return k->seeds(spec, out);
+}
+
+Status JobKindRegistry::Committee(const JobSpec& spec, const opt::Genome& best,
+                                  LawCommittee* out) const {
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->committee) return {StatusCode::kNotFound, "no committee for this kind"};
+  return k->committee(spec, best, out);
 }
 
 }  // namespace pz::job

@@ -22,6 +22,7 @@
 #include "opt/evaluator.h"
 #include "opt/ga.h"
 #include "job/job_spec.h"
+#include "job/law_committee.h"
 #include "model/network.h"
 #include "model/status.h"
 
@@ -54,6 +55,10 @@ struct JobKind {
   /// (the master's job runner, a local rerun): e.g. the hgann kind's trend seeds. None = uniform
   /// bits.
   std::function<Status(const JobSpec&, std::vector<opt::Genome>*)> seeds;
+  /// Optional: what the kind's operating-point law's committee says of a job's best genome
+  /// (which withheld cases stay open, the next case to measure: the hgann kind with trend seeds),
+  /// computed once by the master's job thread when the job ends. NotFound: none for this spec.
+  std::function<Status(const JobSpec&, const opt::Genome& best, LawCommittee*)> committee;
 };
 
 /// The GA options of a spec's `ga` settings, limits and seed, for genomes of `layout` (what the
@@ -78,6 +83,8 @@ class JobKindRegistry {
   Status Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* out) const;
   /// The kind's seeds of generation 0 (empty when the kind has none).
   Status Seeds(const JobSpec& spec, std::vector<opt::Genome>* out) const;
+  /// The kind's committee on `best` (JobKind::committee); NotFound for a kind or spec without.
+  Status Committee(const JobSpec& spec, const opt::Genome& best, LawCommittee* out) const;
 
  private:
   mutable std::mutex mu_;

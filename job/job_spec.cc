@@ -39,7 +39,12 @@ std::optional<HgannSearchSettings> HgannSearchPreset(std::string_view name) {
   if (name == "paper") return HgannSearchSettings{};
   if (name.empty() || name == kDefaultHgannPreset)
     return HgannSearchSettings{
-        .islands = 4, .generations = 250, .spread_penalty = 10, .trend_seeds = true};
+        .islands = 4,
+        .generations = 250,
+        .spread_penalty = 10,
+        .trend_seeds = true,
+        .stall_generations = 30,
+        .stall_relative = 1e-6};
   return std::nullopt;
 }
 

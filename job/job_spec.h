@@ -91,6 +91,12 @@ struct HgannSearchSettings {
   int generations = 1000;
   double spread_penalty = 0;  ///< λ [deg²]
   bool trend_seeds = false;
+  /// The GA's stop: stall_generations generations in which no generation lowers the best cost by
+  /// more than stall_relative of it (opt::GaOptions). The robust preset's: 30 and 1e-6 (after
+  /// the trend seeds the GA found nothing lower on every bench of docs/performance.md); the
+  /// paper's: 200 and 0 (Table 2).
+  int stall_generations = 200;
+  double stall_relative = 0;
 };
 inline constexpr const char* kDefaultHgannPreset = "robust";
 /// "" (= kDefaultHgannPreset), "robust" or "paper"; nullopt for another name (kHgannPresetRule).
@@ -120,7 +126,12 @@ struct HgannProblem {
   /// "" = the default, robust). The fields here hold the values: a spec encodes only what
   /// differs from its preset.
   std::string preset;
+  /// The user's feasible operating points (V [V], f [Hz]) for the next-case proposal (query by
+  /// committee, hgann/operating_law.h); empty: the case set's withheld cases are the candidates.
+  /// Each finite and > 0 (kNextCandidateRule), at most kMaxNextCandidates.
+  std::vector<std::pair<double, double>> next_candidates;
 };
+inline constexpr size_t kMaxNextCandidates = 1000;
 
 /// A synthetic problem for tests and benchmarks (job kind "synthetic").
 struct SyntheticProblem {

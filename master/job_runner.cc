@@ -12,6 +12,7 @@ using job::GenomeLayout;
 using job::JobKind;
 using job::JobKindRegistry;
 using job::JobSpec;
+using job::LawCommittee;
 using opt::BatchEvaluator;
 using opt::FitnessFunction;
 using opt::GaOptions;
@@ -33,6 +34,7 @@ JobRunner::~JobRunner() = default;
 
 Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume) {
   GenomeLayout layout;
+  kinds_ = &kinds;
   if (Status s = kinds.Layout(spec_, &layout); !s.ok()) return s;
   try {
     ga_ = std::make_unique<GeneticAlgorithm>(ToGaOptions(spec_, layout), &forward_);
@@ -96,6 +98,15 @@ const GenerationRecord& JobRunner::Step(BatchEvaluator& evaluator) {
     checkpoint_.state = JobState::kSucceeded;
     checkpoint_.message = GaTerminationName(*t);
     checkpoint_.termination = *t;
+    // The kind's committee on the best (hgann with trend seeds), before the final state is saved.
+    LawCommittee committee;
+    if (kinds_ && !checkpoint_.best.empty()) {
+      const Status s = kinds_->Committee(spec_, checkpoint_.best.front().genome, &committee);
+      if (s.ok())
+        checkpoint_.committee = std::move(committee);
+      else if (s.code() != StatusCode::kNotFound)
+        checkpoint_.message += " (the law's committee failed: " + s.message() + ")";
+    }
   }
   return checkpoint_.log.back();
 }

@@ -47,6 +47,7 @@ class JobRunner {
   Forward forward_;
   std::unique_ptr<opt::GeneticAlgorithm> ga_;
   std::vector<opt::Genome> seeds_;  ///< the kind's seeds of generation 0 (JobKind::seeds)
+  const job::JobKindRegistry* kinds_ = nullptr;  ///< Init's (the committee at the end)
   service::JobCheckpoint checkpoint_;
 };
 

@@ -643,6 +643,7 @@ ClientReplyMsg JobStore::AnswerFetch(const ClientRequestMsg& req, Job& job) {
   r.best.assign(c.best.begin(), c.best.begin() + std::min<size_t>(c.best.size(), req.count));
   r.log = std::move(c.log);
   r.networks = NetworksOf(job.id, spec, r.best, c.optimizer.best_generation, r.log.size());
+  r.committee = c.committee;
   r.spec = std::move(spec);
   return r;
 }

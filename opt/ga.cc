@@ -84,6 +84,8 @@ Status GaOptions::Validate(const FieldNamer& namer) const {
     return InvalidArgument(
         FieldError(name("stall_generations"), stall_generations, "must be >= 0 (0 = never)"));
   }
+  if (!(stall_relative >= 0 && stall_relative < 1))
+    return InvalidArgument(FieldError(name("stall_relative"), stall_relative, "must be in [0, 1)"));
   if (std::isnan(target_cost))
     return InvalidArgument(FieldError(name("target_cost"), target_cost, "must not be NaN"));
   if (!std::isfinite(error_cost))
@@ -674,12 +676,16 @@ const GenerationSummary& GeneticAlgorithm::Finish(std::vector<Draft> drafts,
   const IslandState& bi = state_.islands[best_island];
   const FitnessResult& top = bi.fitness.front();
   s.improved = !state_.initialized || top.cost < state_.best_fitness.cost;
+  const bool had_best = state_.initialized;
+  const double previous = state_.best_fitness.cost;
   if (s.improved) {
     state_.best = bi.population.front();
     state_.best_fitness = top;
     state_.best_generation = s.generation;
     state_.best_island = best_island;
-    state_.stall = 0;
+    // A step below the relative threshold keeps the best but does not reset the stall count.
+    const bool step = !had_best || top.cost < previous * (1 - options_.stall_relative);
+    state_.stall = step ? 0 : state_.stall + 1;
   } else {
     ++state_.stall;
   }

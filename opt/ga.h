@@ -106,6 +106,9 @@ struct GaOptions {
   int max_generations = 1000;          ///< generations after the initial one, ≥ 0
   int stall_generations = 200;         ///< stop after this many generations without a strictly
                                        ///< lower best cost, ≥ 0 (0 = never stop for stall)
+  /// A generation resets the stall count only when it lowers the best cost by more than this
+  /// share of it, in [0, 1) (0: any lower cost; the best is kept whatever the step).
+  double stall_relative = 0;
   double target_cost =
       -std::numeric_limits<double>::infinity();  ///< stop once best ≤ this; not NaN
   double error_cost = kDefaultErrorCost;         ///< cost given to non-finite results, finite

@@ -76,6 +76,7 @@ std::string EncodeCheckpoint(const JobCheckpoint& c) {
   for (const auto& q : c.quarantined) ToProto(q, p.add_quarantined());
   p.set_elapsed_s(c.elapsed_s);
   p.set_arithmetic(c.arithmetic);
+  if (c.committee) ToProto(*c.committee, p.mutable_committee());
   return Deterministic(p);
 }
 
@@ -127,6 +128,10 @@ Status DecodeCheckpoint(std::string_view bytes, JobCheckpoint* c) {
   for (const auto& q : p.quarantined()) c->quarantined.push_back(FromProto(q));
   c->elapsed_s = p.elapsed_s();
   c->arithmetic = p.arithmetic();
+  if (p.has_committee()) {
+    c->committee.emplace();
+    if (Status s = FromProto(p.committee(), &*c->committee); !s.ok()) return s;
+  }
   return Status::Ok();
 }
 

@@ -367,4 +367,66 @@ WorkersSnapshot FromProto(const pw::WorkersReply& q) {
   return w;
 }
 
+void ToProto(const job::LawCommittee& c, pw::LawCommittee* p) {
+  p->set_members(static_cast<uint32_t>(c.members));
+  for (size_t i = 0; i < c.floor.size(); ++i) {
+    auto* k = p->add_cases();
+    k->set_floor(c.floor[i]);
+    k->set_disagreement(i < c.disagreement.size() ? c.disagreement[i] : 0.0);
+    k->set_kept_disagreement(i < c.kept_disagreement.size() ? c.kept_disagreement[i] : 0.0);
+    k->set_open(i < c.open.size() && c.open[i]);
+    if (i < c.lo.size())
+      for (double v : c.lo[i]) k->add_lo(v);
+    if (i < c.hi.size())
+      for (double v : c.hi[i]) k->add_hi(v);
+  }
+  for (const auto& cand : c.candidates) {
+    auto* k = p->add_candidates();
+    k->set_amplitude_v(cand.amplitude_v);
+    k->set_frequency_hz(cand.frequency_hz);
+    k->set_case_index(cand.case_index);
+  }
+  for (const auto& [index, left_open] : c.next) {
+    auto* r = p->add_next();
+    r->set_candidate(static_cast<uint32_t>(index));
+    r->set_left_open(left_open);
+  }
+  p->set_simulations(c.simulations);
+}
+
+Status FromProto(const pw::LawCommittee& p, job::LawCommittee* c) {
+  *c = job::LawCommittee{};
+  c->members = ClampInt(p.members());
+  for (int i = 0; i < p.cases_size(); ++i) {
+    const auto& k = p.cases(i);
+    const std::string at = "committee.cases[" + std::to_string(i) + "]";
+    if (k.lo_size() != model::kNetworkOutputs || k.hi_size() != model::kNetworkOutputs)
+      return Malformed(at + ": lo and hi must hold the " +
+                       std::to_string(model::kNetworkOutputs) + " parameters");
+    c->floor.push_back(k.floor());
+    c->disagreement.push_back(k.disagreement());
+    c->kept_disagreement.push_back(k.kept_disagreement());
+    c->open.push_back(k.open());
+    std::array<double, model::kNetworkOutputs> lo{}, hi{};
+    for (int j = 0; j < model::kNetworkOutputs; ++j) lo[j] = k.lo(j), hi[j] = k.hi(j);
+    c->lo.push_back(lo);
+    c->hi.push_back(hi);
+  }
+  for (int i = 0; i < p.candidates_size(); ++i) {
+    const auto& k = p.candidates(i);
+    if (k.case_index() < -1 || k.case_index() >= p.cases_size())
+      return Malformed("committee.candidates[" + std::to_string(i) + "].case_index = " +
+                       std::to_string(k.case_index()) + ": must be -1 or a case's index");
+    c->candidates.push_back({k.amplitude_v(), k.frequency_hz(), k.case_index()});
+  }
+  for (int i = 0; i < p.next_size(); ++i) {
+    if (p.next(i).candidate() >= static_cast<uint32_t>(p.candidates_size()))
+      return Malformed("committee.next[" + std::to_string(i) + "].candidate = " +
+                       std::to_string(p.next(i).candidate()) + ": must index candidates");
+    c->next.emplace_back(static_cast<int>(p.next(i).candidate()), p.next(i).left_open());
+  }
+  c->simulations = p.simulations();
+  return Status::Ok();
+}
+
 }  // namespace pz::service::detail

@@ -63,6 +63,10 @@ void InfoToProto(const JobInfo& i, pw::JobInfo* p);
 void ToProto(const WorkersSnapshot& w, pw::WorkersReply* p);
 WorkersSnapshot FromProto(const pw::WorkersReply& p);
 Status InfoFromProto(const pw::JobInfo& p, JobInfo* i);
+void ToProto(const job::LawCommittee& c, pw::LawCommittee* p);
+/// Malformed (naming the field) when a case's lo / hi is not the 7 parameters or a candidate's
+/// index is out of range.
+Status FromProto(const pw::LawCommittee& p, job::LawCommittee* c);
 
 template <typename Domain, typename ProtoList>
 Status IndividualsFromProto(const ProtoList& list, std::vector<Domain>* out) {

@@ -436,6 +436,7 @@ std::string EncodeClientReply(const ClientReplyMsg& m) {
       for (const auto& r : m.log) ToProto(r, f->add_log());
       if (m.spec) ToProto(*m.spec, f->mutable_spec());
       for (const auto& n : m.networks) io::ToProto(n, f->add_networks());
+      if (m.committee) ToProto(*m.committee, f->mutable_committee());
       break;
     }
     case T::kEvent: {
@@ -519,6 +520,11 @@ Status DecodeClientReply(std::string_view bytes, ClientReplyMsg* m) {
         if (Status s = io::FromProto(p.fetch().networks(i), &n); !s.ok())
           return Malformed("fetch.networks[" + std::to_string(i) + "]: " + s.message());
         m->networks.push_back(std::move(n));
+      }
+      if (p.fetch().has_committee()) {
+        m->committee.emplace();
+        if (Status s = FromProto(p.fetch().committee(), &*m->committee); !s.ok())
+          return Malformed("fetch." + s.message());
       }
       return InfoFromProto(p.fetch().info(), &m->info);
     case pw::ClientReply::kEvent:

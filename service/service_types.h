@@ -12,6 +12,7 @@
 #include "opt/ga.h"
 #include "io/network_io.h"
 #include "job/job_spec.h"
+#include "job/law_committee.h"
 
 namespace pz::service {
 
@@ -204,6 +205,7 @@ struct ClientReplyMsg {
   std::vector<GenerationRecord> log;         ///< kFetch
   std::optional<job::JobSpec> spec;          ///< kFetch: the job's spec
   std::vector<io::SavedNetwork> networks;    ///< kFetch: best[i] as networks (hgann), or empty
+  std::optional<job::LawCommittee> committee;  ///< kFetch: JobCheckpoint::committee
   JobEvent event;                            ///< kEvent
   uint64_t batch_seq = 0;                    ///< kEvaluate
   bool done = false;                         ///< kEvaluate: results holds the batch's results
@@ -229,6 +231,9 @@ struct JobCheckpoint {
   std::vector<QuarantineRecord> quarantined;
   double elapsed_s = 0;
   std::string arithmetic;  ///< the profile of the workers that computed it ("" = none recorded)
+  /// An hgann job with trend seeds that ended: the law's committee on its best (job kind's
+  /// `committee`), computed once before the final state is saved.
+  std::optional<job::LawCommittee> committee;
 };
 
 }  // namespace pz::service

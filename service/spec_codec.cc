@@ -76,6 +76,11 @@ void ProblemToProto(const HgannProblem& h, pw::JobSpec* p) {
   if (!preset || h.spread_penalty != preset->spread_penalty)
     ph->set_spread_penalty(h.spread_penalty);
   if (!preset || h.trend_seeds != preset->trend_seeds) ph->set_trend_seeds(h.trend_seeds);
+  for (const auto& [v, f] : h.next_candidates) {
+    auto* point = ph->add_next_candidates();
+    point->set_amplitude_v(v);
+    point->set_frequency_hz(f);
+  }
   ph->set_saturation(h.saturation == HgannProblem::Saturation::kGiven
                          ? pw::SATURATION_GIVEN
                          : pw::SATURATION_FROM_EXTREMES);
@@ -109,6 +114,8 @@ HgannProblem HgannFromProto(const pw::HgannProblem& ph, std::vector<FieldViolati
       job::HgannSearchPreset(h.preset).value_or(*job::HgannSearchPreset(""));
   h.spread_penalty = ph.has_spread_penalty() ? ph.spread_penalty() : preset.spread_penalty;
   h.trend_seeds = ph.has_trend_seeds() ? ph.trend_seeds() : preset.trend_seeds;
+  for (const auto& point : ph.next_candidates())
+    h.next_candidates.emplace_back(point.amplitude_v(), point.frequency_hz());
   switch (ph.saturation()) {
     case pw::SATURATION_UNSPECIFIED:
     case pw::SATURATION_FROM_EXTREMES:
@@ -397,6 +404,7 @@ void FromProto(const pw::JobSpec& p, JobSpec* s, std::vector<FieldViolation>* v)
       const auto preset = job::HgannSearchPreset(h->preset).value_or(*job::HgannSearchPreset(""));
       g.generations = preset.generations;
       g.islands = preset.islands;
+      g.stall_generations = preset.stall_generations;
     }
     if (pg.has_generations()) g.generations = ClampInt(pg.generations());
     if (pg.has_stall_generations()) g.stall_generations = ClampInt(pg.stall_generations());

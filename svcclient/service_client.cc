@@ -251,7 +251,8 @@ Status ServiceClient::Prune(const std::vector<std::string>& job_ids, double olde
 Status ServiceClient::Fetch(const std::string& job_id, int count,
                             std::vector<service::ScoredGenome>* best,
                             std::vector<service::GenerationRecord>* log, service::JobInfo* info,
-                            job::JobSpec* spec, std::vector<io::SavedNetwork>* networks) {
+                            job::JobSpec* spec, std::vector<io::SavedNetwork>* networks,
+                            std::optional<job::LawCommittee>* committee) {
   ClientRequestMsg req;
   req.type = ClientRequestMsg::Type::kFetch;
   req.job_id = job_id;
@@ -263,6 +264,7 @@ Status ServiceClient::Fetch(const std::string& job_id, int count,
   if (log) *log = reply.log;
   if (info) *info = reply.info;
   if (networks) *networks = std::move(reply.networks);
+  if (committee) *committee = std::move(reply.committee);
   if (spec) {
     if (!reply.spec) return {StatusCode::kDataLoss, "the master's fetch reply has no job spec"};
     *spec = *reply.spec;

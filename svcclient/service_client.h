@@ -81,10 +81,13 @@ class ServiceClient {
   /// The best `count` individuals (best first, at most 32), the generation log, the job's state
   /// and its spec (any output may be nullptr).
   /// The job's best `count` (1 … 32) individuals, its log, status and spec, and for kinds whose
-  /// genomes are networks (hgann) those networks as the master decoded them (`networks`).
+  /// genomes are networks (hgann) those networks as the master decoded them (`networks`), and for
+  /// an ended hgann job with trend seeds the law's committee on its best (`committee`; nullopt
+  /// otherwise).
   Status Fetch(const std::string& job_id, int count, std::vector<service::ScoredGenome>* best,
                std::vector<service::GenerationRecord>* log, service::JobInfo* info = nullptr,
-               job::JobSpec* spec = nullptr, std::vector<io::SavedNetwork>* networks = nullptr);
+               job::JobSpec* spec = nullptr, std::vector<io::SavedNetwork>* networks = nullptr,
+               std::optional<job::LawCommittee>* committee = nullptr);
   /// Calls on_event for each pushed event until the job ends (returns Ok), on_event returns
   /// false (Ok) or `timeout` passes (kUnavailable). Survives a master restart (re-watches) that
   /// takes less than options.watch_reconnect_s; a master unreachable for longer is kUnavailable.

@@ -235,6 +235,24 @@ std::string IdentifyRefusal(std::vector<std::string> args) {
   return "";
 }
 
+TEST(IdentifyCli, ABadNextCandidateIsRefusedNamingTheFlagAndThePoint) {
+  const std::string rule =
+      ": must be V:f, the amplitude [V] and the frequency [Hz] of a feasible operating point, each "
+      "a finite number > 0 (e.g. 750:1)";
+  EXPECT_EQ(IdentifyRefusal({"--next-candidates", "750:1,600"}),
+            "--next-candidates = \"600\"" + rule);
+  EXPECT_EQ(IdentifyRefusal({"--next-candidates", "750:0"}),
+            "--next-candidates = \"750:0\"" + rule);
+  EXPECT_EQ(IdentifyRefusal({"--next-candidates", "7x0:1"}),
+            "--next-candidates = \"7x0:1\"" + rule);
+  EXPECT_EQ(IdentifyRefusal({"--next-candidates", "nan:1"}),
+            "--next-candidates = \"nan:1\"" + rule);
+  // Good points pass on to the case set, which does not exist here.
+  EXPECT_EQ(IdentifyRefusal({"--next-candidates", "750:1,600:0.4"})
+                .find("--next-candidates"),
+            std::string::npos);
+}
+
 TEST(IdentifyCli, BadGaSettingsAreRefusedUnderTheirFlagWithTheAllowedRange) {
   EXPECT_EQ(IdentifyRefusal({"--islands", "0"}), "--islands = 0: must be in [1, 1024]");
   EXPECT_EQ(

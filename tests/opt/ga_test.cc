@@ -649,6 +649,29 @@ TEST(GaTermination, StallStopsAfterStallGenerationsWithoutImprovement) {
   EXPECT_NE(s.BriefReport().find("STALL"), std::string::npos);
 }
 
+TEST(GaTermination, ARelativeStallCountsOnlyStepsLargerThanItsShareOfTheBest) {
+  // OneMax from uniform bits: the best falls by a few of its ≈ 700 zeros (of 1415 bits) a
+  // generation, far less than half of it. With stall_relative 0.5 those steps keep the best but do
+  // not reset the stall count: the GA stops after stall_generations although it improved; with 0
+  // it runs on.
+  const OneMax fitness;
+  InlineEvaluator ev(fitness);
+  GaOptions o = SmallOptions();
+  o.max_generations = 40;
+  o.stall_generations = 5;
+  o.stall_relative = 0.5;
+  GeneticAlgorithm ga(o, &ev);
+  const GaSummary s = ga.Run();
+  EXPECT_EQ(s.termination, GaTermination::kStall);
+  EXPECT_EQ(s.generations, 5u);
+  EXPECT_GT(s.best_generation, 0u);  // improved, and kept
+  EXPECT_LT(s.best_fitness.cost, ga.state().log[0].best_cost);
+  o.stall_relative = 0;
+  EXPECT_GT(RunWith(&ev, o).summary.generations, 5u);
+  o.stall_relative = 1;
+  EXPECT_THROW(GeneticAlgorithm(o, &ev), InputError);
+}
+
 TEST(GaTermination, MaxGenerationsTargetAndCancel) {
   const OneMax fitness;
   InlineEvaluator ev(fitness);

@@ -66,6 +66,10 @@ TEST(HgannJobFile, CaseSetDirIsReadRelativeToTheJobFile) {
   EXPECT_EQ(robust.ga->population, 400);
   EXPECT_EQ(robust.ga->islands, preset->islands);
   EXPECT_EQ(robust.ga->generations, preset->generations);
+  EXPECT_EQ(robust.ga->stall_generations, preset->stall_generations);  // 30, not the GA's 200
+  EXPECT_EQ(job::ToGaOptions(robust, job::GenomeLayout{1415, 0}).stall_relative,
+            preset->stall_relative);
+  EXPECT_EQ(job::ToGaOptions(paper, job::GenomeLayout{1415, 0}).stall_relative, 0.0);
   EXPECT_EQ(std::get<job::HgannProblem>(robust.problem).spread_penalty, preset->spread_penalty);
   EXPECT_EQ(std::get<job::HgannProblem>(robust.problem).trend_seeds, preset->trend_seeds);
   EXPECT_EQ(robust.seed, paper.seed);

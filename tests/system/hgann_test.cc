@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "svcclient/job_file.h"
@@ -51,7 +52,8 @@ const service::JobCheckpoint& QuickReference() {
 /// The job on a master with two 1-thread workers, run to its end (succeeded) and fetched.
 void RunOnMasterAndTwoWorkers(const std::string& name, const job::JobSpec& spec,
                               service::JobInfo* info, std::vector<service::ScoredGenome>* best,
-                              std::vector<service::GenerationRecord>* log) {
+                              std::vector<service::GenerationRecord>* log,
+                              std::optional<job::LawCommittee>* committee = nullptr) {
   Cluster c(name);
   c.AddWorker(1);
   c.AddWorker(1);
@@ -60,7 +62,8 @@ void RunOnMasterAndTwoWorkers(const std::string& name, const job::JobSpec& spec,
   ASSERT_TRUE(client.Submit(spec, &r).ok());
   ASSERT_TRUE(client.WaitFinal(r.job_id, 120s, info).ok());
   ASSERT_EQ(info->state, service::JobState::kSucceeded) << info->message;
-  ASSERT_TRUE(client.Fetch(r.job_id, master::kBestKept, best, log, info).ok());
+  ASSERT_TRUE(
+      client.Fetch(r.job_id, master::kBestKept, best, log, info, nullptr, nullptr, committee).ok());
 }
 
 TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
@@ -183,6 +186,9 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   auto& h = std::get<job::HgannProblem>(spec.problem);
   h.spread_penalty = 10;
   h.trend_seeds = true;
+  // The user's feasible points for the next case (hgann.next_candidates, identify's
+  // --next-candidates): the master's committee on the job's best is identify's, bit for bit.
+  h.next_candidates = {{600, 0.4}, {750, 1.0}, {400, 0.8}};
   const service::JobCheckpoint ref = Reference(spec);
 
   hgann::IdentifyOptions o;
@@ -190,6 +196,7 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   o.threads = 2;
   o.spread_penalty = 10;
   o.trend_seeds = true;
+  o.next_candidates = h.next_candidates;
   hgann::HgannFitnessConfig config;
   ASSERT_TRUE(hgann::HgannConfigFromProblem(h, &config).ok());
   const hgann::HgannFitness fitness(config);
@@ -203,8 +210,16 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   service::JobInfo info;
   std::vector<service::ScoredGenome> best;
   std::vector<service::GenerationRecord> log;
-  ASSERT_NO_FATAL_FAILURE(RunOnMasterAndTwoWorkers("hgann-seeds", spec, &info, &best, &log));
+  std::optional<job::LawCommittee> committee;
+  ASSERT_NO_FATAL_FAILURE(
+      RunOnMasterAndTwoWorkers("hgann-seeds", spec, &info, &best, &log, &committee));
   ExpectSameRun(ref, best, log);
+  ASSERT_TRUE(id.committee.has_value());
+  ASSERT_TRUE(committee.has_value());
+  EXPECT_TRUE(*committee == *id.committee);
+  ASSERT_EQ(committee->candidates.size(), 3u);  // the user's points, not the withheld cases
+  EXPECT_EQ(committee->candidates.front().case_index, -1);
+  EXPECT_EQ(committee->next.size(), 3u);
   ASSERT_EQ(log.size(), id.log.size());
   for (size_t g = 0; g < log.size(); ++g) EXPECT_EQ(log[g], id.log[g]) << "generation " << g;
   EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
