@@ -1,6 +1,6 @@
 // The fin modes' exact discretisation (spec "bimorph-fin model" §6) is the step kernel's
 // (model/kernels/fin_modal.h pzk_fin_make_poles, pzk_fin_discretise: its comment has the
-// mathematics). Here: its types for the C++ side, and DiscretiseBatch, the sinusoid path's
+// mathematics). Here: its types for the C++ side, and DiscretiseBatch, both paths'
 // discretisation of every mode over a step cut at a breakpoint (docs/architecture.md "The fin's
 // step": a second path, kept for its figure and for the HGANN digests made with it).
 #pragma once

@@ -497,8 +497,8 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
 // Sub-step of length τ from the current full state (x0, x1): z held by the quintic Hermite of
 // (zl, zr), u (sampled path) linear from u_a with slope u̇, every mode by the kernel's
 // pzk_fin_mode_update over its discretisation for τ, made in sub.steps: by DiscretiseBatch
-// (`batch`: the sinusoid path's, with which the HGANN's digests were made) or by the kernel's
-// pzk_fin_discretise (the sampled path's: the kernel's step, bit for bit).
+// (`batch`: both paths', with which the HGANN's and the fin bench's pins were made; the kernel's
+// per mode differs by ulps and moved the pinned bench diagnosis) or by pzk_fin_discretise.
 static void GeneralSubstep(int n, const ModePoles* poles, modal::SubStep& sub, bool batch,
                            const double* wu, const double* wz, double* x0, double* x1, double tau,
                            const ZData& zl, const ZData& zr, double u_a, double u_dot) {
@@ -945,7 +945,7 @@ static void SampledModes(const std::vector<modal::SampledSub>& subs, int n, int 
       i = j;
     } else {
       const modal::SampledSub& st = subs[i];
-      GeneralSubstep(n, poles, sub, false, wu, wz, x0, x1, st.tau, st.l, st.r, st.u_a, st.u_dot);
+      GeneralSubstep(n, poles, sub, true, wu, wz, x0, x1, st.tau, st.l, st.r, st.u_a, st.u_dot);
       if (st.out >= 0) xs[st.out] = SumModes(npad, x0);
       ++i;
     }

@@ -303,7 +303,7 @@ static inline double pzk_fin_branch_z(const pzk_fin_branch *b, double u) {
  * log1p and three divisions at every sample of a branch heading for zero). The bound: with
  * y = -kappa z0 / alpha, |u_cross - u0| = |z0 / alpha| log1p(y) / y >= |z0| / (|alpha| (1 +
  * max(y, 0))) (log1p(y) >= y / (1 + y)); the reach asked is |ub - u0| with a margin (1e-6 of it and
- * 1e-12 of |u|) far above the roundings of the crossing and of the sub-step's ends. NaN or
+ * 1e-12 of |u|) far above the roundings of the crossing and of the sub-step's ends. Not a number or
  * overflow: 1 (pzk_fin_zero_crossing decides). */
 static inline int pzk_fin_crossing_may_lie(const pzk_fin_branch *b, double ub) {
   const double ay = -b->kappa * b->z0 * (b->alpha > 0 ? 1.0 : -1.0); /* |alpha| y */

@@ -253,11 +253,12 @@ TEST(ModalSampledDrive, InsertingSamplesOnTheSameLinesChangesNothing) {
 }
 
 // The sampled path is the C step kernel's step (model/kernels/fin_modal.h): its walk, the kernel's
-// arithmetic four modes a vector, the kernel's discretisation of every cut piece. On a grid the
-// kernel's fixed step meets exactly (1/128 s) the angles are the records kernel's (pzk_fin_step),
-// bit for bit — the code makes them so, one build, one libm — on a drive with rests, jumps that
-// sub-step (κ u̇ τ > 1/2), reversals and minor loops, for a light and a stiff damping and without
-// hysteresis.
+// arithmetic four modes a vector; a piece cut at a zero crossing is discretised by DiscretiseBatch
+// (a few ulps from the kernel's, which the outputs here do not see). On a grid the kernel's fixed
+// step meets exactly (1/128 s) the angles are the records kernel's (pzk_fin_step), bit for bit —
+// the code makes them so, one build, one libm; a one-rounding change of the mode loop fails it —
+// on a drive with rests, jumps that sub-step (κ u̇ τ > 1/2), reversals and minor loops, for a
+// light and a stiff damping and without hysteresis.
 TEST(ModalSampledDrive, StepsAsTheKernelBitForBit) {
   const ModalSimulator sim(DefaultPlant());
   const int n = sim.num_modes();
