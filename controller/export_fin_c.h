@@ -7,14 +7,14 @@
 //   double NAME_step(&state, u)                             forward: the angle at the next sample
 //   double NAME_inverse_step(&state, angle_desired)         inverse: the drive, and the step taken
 //
-// The recursion is ModalSimulator::RunSampled's for one sample of a uniform grid, operation for
-// operation: the same poles and exact discretisation of each mode (model/modal_discretise.h) at the
-// same sub-steps, the same closed-form Bouc–Wen branches and zero-crossing splits, the same quintic
-// Hermite hold, atan series and backlash step — those helpers are model/kernels/fin_modal.h, the
-// records bimorph-fin kernel's (model/kernels/bimorph_fin.h), copied into the header before the
-// plant. The plant's modal data (ω_i², tip gains, L) and the sample period are computed here by the
-// library and written as exact hex-float literals; μ, δ (hence the discretisation), α, β, γ, a1, a2
-// come from the network at run time (NAME_init).
+// The recursion is ModalSimulator::RunSampled's for one sample of a uniform grid: the C step
+// kernel's (model/kernels/fin_modal.h: the poles and exact discretisation of each mode, the
+// sub-steps, the closed-form Bouc–Wen branches and zero-crossing splits, the quintic Hermite hold,
+// atan series and backlash step — the records bimorph-fin kernel's too), copied into the header
+// before the plant, controller/fin_plant.h (C99, embedded by the build). The plant's modal data
+// (ω_i², tip gains, L) and the sample period are computed here by the library and written as exact
+// hex-float literals; μ, δ (hence the discretisation), α, β, γ, a1, a2 come from the network at
+// run time (NAME_init).
 #pragma once
 
 #include <string>

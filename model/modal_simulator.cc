@@ -57,19 +57,6 @@ inline ZData EvalZ(const BoucWenBranch& b, double u, double ud, double udd) {
   return {z, sl * ud, sl * (udd - b.kappa * ud * ud)};
 }
 
-// False when z provably does not reach 0 on branch b before the input ub: then ZeroCrossing would
-// give a crossing beyond ub (or none), which the sampled path's loop ignores, so it is skipped —
-// its log1p and three divisions at every sample of a branch heading for zero. The bound: with y =
-// −κ z₀/α, |u_cross − u₀| = |z₀/α| log1p(y)/y ≥ |z₀| / (|α| (1 + max(y, 0))) (log1p(y) ≥ y/(1 +
-// y)); the reach asked is |ub − u₀| with a margin (10⁻⁶ of it and 10⁻¹² of |u|) far above the
-// roundings of ZeroCrossing and of the sub-step's ends. NaN or overflow: true (ZeroCrossing
-// decides).
-inline bool CrossingMayLie(const BoucWenBranch& b, double ub) {
-  const double ay = -b.kappa * b.z0 * (b.alpha > 0 ? 1.0 : -1.0);  // |α| y
-  const double reach = std::abs(ub - b.u0) * (1 + 1e-6) + 1e-12 * (std::abs(b.u0) + std::abs(ub));
-  return !(std::abs(b.z0) > (std::abs(b.alpha) + std::max(0.0, ay)) * reach);
-}
-
 // The odd Taylor series of atan, good to ~1 ulp for |x| < 1/8 (x^21/21 < 1e-19), by Estrin's
 // scheme: a short dependency chain, and no branch, so that a loop of it vectorises (DegreesBatch).
 inline double AtanSeries(double x) {
@@ -314,18 +301,8 @@ inline double SumModes(int n, const double* __restrict x0) {
   return (s0 + s1) + (s2 + s3);
 }
 
-// The quintic hold of z over a sub-step τ from its end data: f_j = j! a_j (kHermite), the input's
-// Taylor coefficients in the discretisation's convention.
-[[gnu::always_inline]] inline void HoldCoefficients(double tau, const ZData& zl, const ZData& zr,
-                                                    double* fz) {
-  const double dat[6] = {zl.z, tau * zl.zd, tau * tau * zl.zdd,
-                         zr.z, tau * zr.zd, tau * tau * zr.zdd};
-  for (int j = 0; j < 6; ++j) {
-    double a = 0;
-    for (int c = 0; c < 6; ++c) a += kHermite[j][c] * dat[c];
-    fz[j] = a * kFact[j];
-  }
-}
+// The kernel's hold data of a node.
+inline pzk::pzk_fin_zdata Kz(const ZData& d) { return {d.z, d.zd, d.zdd}; }
 
 // Per-mode data of the cached step, structure of arrays (npad entries each, zero in the padding).
 struct SampledCoeffs {
@@ -345,8 +322,9 @@ inline V4u* At(double* p) { return reinterpret_cast<V4u*>(p); }
 // Sub-steps a piece of a run holds at most (the hold data and partial sums are kept for a piece).
 constexpr long kRunPiece = 128;
 
-// A run of sub-steps over the cached step (the sampled path's regular steps): GeneralSubstep's
-// arithmetic for every mode, operation for operation (so bit for bit, without FMA contraction);
+// A run of sub-steps over the cached step (the sampled path's regular steps): the kernel's
+// arithmetic (pzk_fin_hermite, pzk_fin_mode_update) for every mode, operation for operation (so bit
+// for bit, without FMA contraction);
 // after an output sample's last sub-step, SumModes of x0 (same partial sums) into xs[out]. The run
 // goes piece by piece: first the hold coefficients of every sub-step of the piece, then each block
 // of 4 modes over all of them — its 13 coefficient vectors and its state stay in registers — adding
@@ -364,7 +342,7 @@ constexpr long kRunPiece = 128;
     const long m = std::min(kRunPiece, count - p0);
     const modal::SampledSub* __restrict s = subs + p0;
     long k = 0;
-    for (; k + 4 <= m; k += 4) {  // HoldCoefficients of four sub-steps at a time
+    for (; k + 4 <= m; k += 4) {  // pzk_fin_hermite of four sub-steps at a time
       const modal::SampledSub *s0 = s + k, *s1 = s + k + 1, *s2 = s + k + 2, *s3 = s + k + 3;
       const V4 tau = {s0->tau, s1->tau, s2->tau, s3->tau};
       const V4 tau2 = tau * tau;
@@ -386,7 +364,7 @@ constexpr long kRunPiece = 128;
     }
     for (; k < m; ++k) {
       double h[6];
-      HoldCoefficients(s[k].tau, s[k].l, s[k].r, h);
+      pzk::pzk_fin_hermite(s[k].tau, Kz(s[k].l), Kz(s[k].r), h);
       for (int j = 0; j < 6; ++j) fz[j][k] = h[j];
       taus[k] = s[k].tau;
       fu0[k] = s[k].u_a;
@@ -480,10 +458,11 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
   }
   ws.t1_[0] = ws.t1_[1] = ws.t1_[2] = 0.0;
   for (int i = 0; i < n_; ++i) {
-    const ModePoles poles = modal::MakePoles(omega2_[i], params.mu + params.delta * omega2_[i]);
+    const ModePoles poles =
+        pzk::pzk_fin_make_poles(omega2_[i], params.mu + params.delta * omega2_[i]);
     ws.poles_[i] = poles;
     ModeStep& st = ws.steps_[i];
-    modal::Discretise(poles, step, st);
+    pzk::pzk_fin_discretise(&poles, step, &st);
     // P = −w_z Σ_j j! R_j ⊗ Hermite row j, R_j = [τ D_{j+1}, D_j]: response to the 6 end data.
     double p[2][6] = {};
     for (int j = 0; j < 6; ++j) {
@@ -516,36 +495,24 @@ void ModalSimulator::Prepare(const BimorphParams& params, double step, ModalWork
 }
 
 // Sub-step of length τ from the current full state (x0, x1): z held by the quintic Hermite of
-// (zl, zr), u (sampled path) linear from u_a with slope u̇. `cached` uses ws.steps_ (τ = ws.step_).
-// Without `cached`, the step's discretisation of every mode is made by DiscretiseBatch in the
-// workspace's sub_ (with its scratch).
-static void GeneralSubstep(int n, const ModePoles* poles, const ModeStep* cached,
-                           modal::SubStep& sub, const double* wu, const double* wz, double* x0,
-                           double* x1, double tau, const ZData& zl, const ZData& zr, double u_a,
-                           double u_dot) {
+// (zl, zr), u (sampled path) linear from u_a with slope u̇, every mode by the kernel's
+// pzk_fin_mode_update over its discretisation for τ, made in sub.steps: by DiscretiseBatch
+// (`batch`: both paths', with which the HGANN's and the fin bench's pins were made; the kernel's
+// per mode differs by ulps and moved the pinned bench diagnosis) or by pzk_fin_discretise.
+static void GeneralSubstep(int n, const ModePoles* poles, modal::SubStep& sub, bool batch,
+                           const double* wu, const double* wz, double* x0, double* x1, double tau,
+                           const ZData& zl, const ZData& zr, double u_a, double u_dot) {
   if (!(tau > 0)) return;
-  if (!cached) {
-    modal::DiscretiseBatch(n, poles, tau, sub.steps.data(), sub.scratch.data(), sub.idx.data());
-    cached = sub.steps.data();
+  ModeStep* steps = sub.steps.data();
+  if (batch) {
+    modal::DiscretiseBatch(n, poles, tau, steps, sub.scratch.data(), sub.idx.data());
+  } else {
+    for (int i = 0; i < n; ++i) pzk::pzk_fin_discretise(&poles[i], tau, &steps[i]);
   }
   double fz[6];
-  HoldCoefficients(tau, zl, zr, fz);
-  const double fu0 = u_a, fu1 = u_dot * tau;
-  for (int i = 0; i < n; ++i) {
-    const ModeStep* st = cached + i;
-    double f[6];
-    for (int j = 0; j < 6; ++j) f[j] = -wz[i] * fz[j];
-    f[0] += wu[i] * fu0;
-    f[1] += wu[i] * fu1;
-    double s0 = 0, s1 = 0;
-    for (int j = 0; j < 6; ++j) {
-      s0 += f[j] * st->d[j + 1];
-      s1 += f[j] * st->d[j];
-    }
-    const double a = x0[i], b = x1[i];
-    x0[i] = st->e11 * a + st->e12 * b + tau * s0;
-    x1[i] = st->e21 * a + st->e22 * b + s1;
-  }
+  pzk::pzk_fin_hermite(tau, Kz(zl), Kz(zr), fz);
+  for (int i = 0; i < n; ++i)
+    pzk::pzk_fin_mode_update(&steps[i], wu[i], wz[i], fz, u_a, u_dot, tau, &x0[i], &x1[i]);
 }
 
 namespace {
@@ -816,13 +783,13 @@ struct ModalSimulator::SineChunks {
         ZData dcur = zr[i];
         for (int e = sp.inner_begin; e < sp.inner_end; ++e) {
           const ModalWorkspace::Inner& in = ws.inner_[e];
-          GeneralSubstep(sim.n_, ws.poles_.data(), nullptr, ws.sub_, sim.wu_.data(), sim.wz_.data(),
+          GeneralSubstep(sim.n_, ws.poles_.data(), ws.sub_, true, sim.wu_.data(), sim.wz_.data(),
                          x0, x1, in.offset - scur, dcur, in.left, 0.0, 0.0);
           dcur = in.right;
           scur = in.offset;
         }
-        GeneralSubstep(sim.n_, ws.poles_.data(), nullptr, ws.sub_, sim.wu_.data(), sim.wz_.data(),
-                       x0, x1, hs - scur, dcur, Left(i + 1), 0.0, 0.0);
+        GeneralSubstep(sim.n_, ws.poles_.data(), ws.sub_, true, sim.wu_.data(), sim.wz_.data(), x0,
+                       x1, hs - scur, dcur, Left(i + 1), 0.0, 0.0);
         AddMatVec(np, x0, x1, ws.p1_, -Left(i + 1).z, -hs * Left(i + 1).zd,
                   -hs * hs * Left(i + 1).zdd);
         extra += sp.inner_end - sp.inner_begin;
@@ -978,7 +945,7 @@ static void SampledModes(const std::vector<modal::SampledSub>& subs, int n, int 
       i = j;
     } else {
       const modal::SampledSub& st = subs[i];
-      GeneralSubstep(n, poles, nullptr, sub, wu, wz, x0, x1, st.tau, st.l, st.r, st.u_a, st.u_dot);
+      GeneralSubstep(n, poles, sub, true, wu, wz, x0, x1, st.tau, st.l, st.r, st.u_a, st.u_dot);
       if (st.out >= 0) xs[st.out] = SumModes(npad, x0);
       ++i;
     }
@@ -997,13 +964,21 @@ static long SampledAngles(long len, const double* xs, double inv_len, double* th
   return n_ok;
 }
 
+// Pass 1 of the sampled path: the kernel's walk (pzk_fin_sample) lists each sub-step; a regular one
+// of positive length runs over the cached step (SampledRun), the others by GeneralSubstep.
+static void ListSubstep(void* ctx, double tau, int regular, pzk::pzk_fin_zdata zl,
+                        pzk::pzk_fin_zdata zr, double u_a, double u_dot) {
+  static_cast<std::vector<modal::SampledSub>*>(ctx)->push_back(
+      {tau, u_a, u_dot, ZData{zl.z, zl.zd, zl.zdd}, ZData{zr.z, zr.zd, zr.zdd},
+       regular != 0 && tau > 0, -1});
+}
+
 template <class Sink>
 void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal& drive,
                                 ModalWorkspace& ws, Sink& sink, SimulationSummary& summary) const {
   const std::vector<double>& t = drive.t;
   const std::vector<double>& u = drive.u;
   const size_t n_out = t.size();
-  const BoucWenParams bw{params.alpha, params.beta, params.gamma};
   const bool hyst = params.alpha != 0.0;
   const BacklashParams bl = params.backlash();
   const double inv_len = 1.0 / length_m_;
@@ -1025,7 +1000,8 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
   // The run goes chunk by chunk (at most kChunk output samples, and fewer when the step changes so
   // much that the discretisation is redone) through three passes:
   //  1. z, which depends on u alone: each sample's sub-steps (split where κ|u̇|τ > 1/2 and at the
-  //     zero crossings of z) with the hold data at their ends;
+  //     zero crossings of z) with the hold data at their ends, listed by the kernel's walk
+  //     (pzk_fin_sample);
   //  2. the modes over the sub-steps in order: runs of sub-steps over the cached step in one loop
   //     (SampledRun), the others by GeneralSubstep; w_tip after each sample's last sub-step;
   //  3. outputs: θ in one loop, the backlash (BacklashRun), the sink.
@@ -1044,7 +1020,7 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
     while (k + 1 < n_out && k - k0 < kChunk) {
       const double tau = t[k + 1] - t[k];
       const double r = (u[k + 1] - u[k]) / tau;  // u̇ on the segment
-      const int nsub = hyst ? SubstepsFor(kappa_max * std::abs(r) * tau) : 1;
+      const int nsub = pzk::pzk_fin_substeps(hyst, kappa_max, r, tau);
       const double ts = nsub == 1 ? tau : tau / nsub;  // the same value, without the division
       // Holds(params, ts, ws) — the workspace holds this simulator's (μ, δ) since the Prepare above
       // (finite: Admit validated them), so only the step is compared.
@@ -1053,36 +1029,9 @@ void ModalSimulator::RunSampled(const BimorphParams& params, const SampledSignal
         if (k > k0) break;        // sub-steps have run on this one
         Prepare(params, ts, ws);
       }
-      const double eps = kNodeRelTol * ts;
-      BoucWenBranch br = StartBranch(bw, u[k], z, r);
-      auto eval = [&](double uu) { return hyst ? EvalZ(br, uu, r, 0.0) : ZData{}; };
-      ZData dcur = eval(u[k]);
-      double sa = 0.0;  // time since t_k
-      for (int q = 0; q < nsub; ++q) {
-        const bool last = q + 1 == nsub;
-        const double sb = last ? tau : (q + 1) * ts;
-        const double ub = last ? u[k + 1] : u[k] + r * sb;
-        bool split = false;
-        double uc;
-        if (hyst && CrossingMayLie(br, ub) && br.ZeroCrossing(&uc)) {
-          const double sc = (uc - u[k]) / r;
-          if (sc < sb - eps) {
-            if (sc > sa + eps) {
-              subs.push_back({sc - sa, u[k] + r * sa, r, dcur, eval(uc), false, -1});
-              split = true;
-              sa = sc;
-            }
-            br = StartBranch(bw, uc, 0.0, r);
-            dcur = eval(uc);
-          }
-        }
-        const ZData dr = eval(ub);
-        subs.push_back({sb - sa, u[k] + r * sa, r, dcur, dr, !split && sb - sa > 0, -1});
-        dcur = dr;
-        sa = sb;
-      }
+      z = pzk::pzk_fin_sample(params.alpha, params.beta, params.gamma, u[k], z, u[k + 1], tau, nsub,
+                              ListSubstep, &subs);
       subs.back().out = static_cast<int>(k - k0);
-      z = dcur.z;
       zo[k - k0] = z;
       ++k;
     }

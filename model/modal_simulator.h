@@ -6,11 +6,15 @@
 //   η̈_i + (μ + δ ω_i²) η̇_i + ω_i² η_i = g_u,i u(t) − g_z,i z(t),     w_tip = Σ_i tip_i η_i
 //
 // and z (Bouc–Wen) depends on u alone, in closed form per branch (model/bouc_wen.h). Each mode is
-// advanced by its exact discretisation (model/modal_discretise.h) with a quintic Hermite hold of z
-// built from the analytic z, ż, z̈ at the step ends; steps are split at the zero crossings of z and
-// the reversals of u. For a sinusoid the response to u is the exact particular solution
-// Im(H_i(iΩ) g_u,i V e^{iΩt}), so only z drives the recursion; for a sampled signal u is linear
-// between samples and held exactly.
+// advanced by its exact discretisation (the C step kernel's, model/kernels/fin_modal.h: the one
+// source of the fin's step, which the records family and the exported plant run too) with a
+// quintic Hermite hold of z built from the analytic z, ż, z̈ at the step ends; steps are split at
+// the zero crossings of z and the reversals of u. For a sinusoid the response to u is the exact
+// particular solution Im(H_i(iΩ) g_u,i V e^{iΩt}), so only z drives the recursion (a path of its
+// own: the kernel has none); for a sampled signal u is linear
+// between samples and held exactly: each sample's walk is the kernel's (pzk_fin_sample), its
+// sub-steps run four modes a vector (the kernel's arithmetic, the same bits; docs/architecture.md
+// "The fin's step" has the two paths kept beside the kernel and their figures).
 //
 // Threading: a ModalSimulator is immutable after construction and can be shared by any number of
 // threads; all mutable state lives in a ModalWorkspace, one per thread (the overloads without a

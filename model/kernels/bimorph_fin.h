@@ -1,6 +1,6 @@
 /* bimorph-fin (records/families.h, model/modal_simulator.h): the fin's modal path on the sampled
  * drive (u linear between samples), times the output gain. The same recursion as the --plant header
- * of the HGANN fin (controller/export_fin_c.cc pzf_advance: the one sample loop of fin_modal.h,
+ * of the HGANN fin (controller/fin_plant.h pzf_advance: the one sample loop of fin_modal.h,
  * pzk_fin_sample, over the same helpers), over the block's arrays for any number of modes.
  * p = {mu, delta, alpha, beta, gamma, a1, a2, b1, b2_abs, gain, L_p[, L_e]} (b2 = -b2_abs);
  * n = modes; w = {1/L, omega_i^2 (n), tip_i g_u,i (n), tip_i g_z,i (n)}: the beam's modal data for

@@ -1,8 +1,8 @@
 /* The chain (last part of the kernels): sizes, init, one step forward, one step inverse. A model
  * is an array of blocks in the order drive effects, family, output effects, PZK_AFFINE. Its state
  * is three double arrays: constants c (derived at init), dynamic state d, and scratch t (the same
- * layout as d: the inverse's trial steps write there), plus a pzk_ctl. A new family adds its
- * kernel file and one case in pzk_block_sizes, pzk_block_init and pzk_block_step. */
+ * layout as d: the inverse's trial steps write there), plus a pzk_ctl. A new kind adds its kernel
+ * file, its entry in pzk_kinds (the table of the kinds' operations) and its pzk_kind_slots. */
 
 typedef struct {
   double u_lo, u_hi;     /* drive limits (the training records' range unless changed) */
@@ -12,81 +12,157 @@ typedef struct {
   double max_clip;       /* largest clipping: drive units (forward), response units (inverse) */
 } pzk_ctl;
 
+/* The operations of a block kind, one entry per kind of common.h's enum in the table below:
+ * constants and dynamic doubles (nc, nd; sizes when they depend on the block), the state at rest
+ * under the drive v (init; u_raw: the drive before the drive effects), one step from state d to o
+ * (step; o may be d), and, where the compensator's one-step map differs from the step, that map
+ * (inverse) and the step with the fin's angle pushed through its backlash (through, dir = +-1).
+ * A missing operation: nothing to set (init returns v), the step itself. */
+typedef struct {
+  int kind;         /* PZK_* */
+  const char *name; /* "PZK_*": what an exported header writes for the kind */
+  int nc, nd;
+  void (*sizes)(const pzk_block *b, int *nc, int *nd);
+  double (*init)(const pzk_block *b, double *c, double *d, double v, double u_raw);
+  double (*step)(const pzk_block *b, const double *c, const double *d, double *o, double v);
+  double (*inverse)(const pzk_block *b, const double *c, const double *d, double *o, double v);
+  double (*through)(const pzk_block *b, const double *c, const double *d, double *o, double v,
+                    int dir);
+} pzk_kind_ops;
+
+/* The kernels' functions in the table's signatures: PZK_OP_INIT(X, call) defines pzk_op_X_init,
+ * PZK_OP_STEP(X, call) pzk_op_X (a step or a compensator's map), PZK_OP_SIZES(X, nc, nd)
+ * pzk_op_X_sizes, each returning what `call` (or nc, nd) gives of the table's arguments: the block
+ * b, its constants c, its state d, the next state o, the input v (u_raw: the drive, for init). */
+#define PZK_OP_INIT(x, call)                                                                 \
+  static inline double pzk_op_##x##_init(const pzk_block *b, double *c, double *d, double v, \
+                                         double u_raw) {                                     \
+    (void)b, (void)c, (void)d, (void)u_raw;                                                  \
+    return call;                                                                             \
+  }
+#define PZK_OP_STEP(x, call)                                                                       \
+  static inline double pzk_op_##x(const pzk_block *b, const double *c, const double *d, double *o, \
+                                  double v) {                                                      \
+    (void)b, (void)c, (void)d, (void)o;                                                            \
+    return call;                                                                                   \
+  }
+#define PZK_OP_SIZES(x, n_c, n_d)                                               \
+  static inline void pzk_op_##x##_sizes(const pzk_block *b, int *nc, int *nd) { \
+    *nc = n_c;                                                                  \
+    *nd = n_d;                                                                  \
+  }
+PZK_OP_INIT(quadratic, pzk_quadratic_step(b, v))
+PZK_OP_INIT(creep, pzk_creep_init(b, c, d, v))
+PZK_OP_INIT(delay, pzk_delay_init(b, c, d, v))
+PZK_OP_INIT(rate_dependence, pzk_rate_dependence_init(d, v))
+PZK_OP_INIT(stack_bw, pzk_stack_bw_init(b, c, d, v))
+PZK_OP_INIT(backlash, pzk_backlash_init(b, d, v))
+PZK_OP_INIT(duhem, pzk_duhem_init(b, d, v))
+PZK_OP_INIT(pi, pzk_pi_init(b, c, d, v))
+PZK_OP_INIT(bw_osc, pzk_bw_osc_init(b, c, d, v))
+PZK_OP_INIT(preisach, pzk_preisach_init(b, c, d, v))
+PZK_OP_INIT(asym_pi, pzk_asym_pi_init(b, c, d, v))
+PZK_OP_INIT(fin, pzk_fin_init(b, c, d, v))
+PZK_OP_INIT(friction, pzk_friction_init(d, v))
+PZK_OP_INIT(stiffening, c[0] = v)
+PZK_OP_INIT(drift, (d[0] = 0, v))
+PZK_OP_INIT(creep_spectrum, pzk_creep_spectrum_init(b, c, d, v))
+PZK_OP_INIT(resonance, pzk_resonance_init(b, c, d, v))
+PZK_OP_INIT(affine, b->p[0] * v + b->p[1])
+PZK_OP_STEP(lowpass_step, pzk_driver_lowpass_step(c, d, o, v))
+PZK_OP_STEP(quadratic_step, pzk_quadratic_step(b, v))
+PZK_OP_STEP(delay_step, pzk_delay_step(c, o, v)) /* in place only (o == d) */
+PZK_OP_STEP(delay_inverse, pzk_delay_inverse_step(c, d, o, v))
+PZK_OP_STEP(rate_dependence_step, pzk_rate_dependence_step(b, d, o, v))
+PZK_OP_STEP(backlash_step, pzk_backlash_step(b, d, o, v))
+PZK_OP_STEP(duhem_step, pzk_duhem_step(b, d, o, v))
+PZK_OP_STEP(friction_step, pzk_friction_step(b, d, o, v))
+PZK_OP_STEP(stiffening_step, pzk_stiffening_step(b, c, v))
+PZK_OP_STEP(drift_step, pzk_drift_step(b, d, o, v))
+PZK_OP_STEP(resonance_step, pzk_resonance_step(c, d, o, v))
+PZK_OP_STEP(resonance_inverse, pzk_resonance_inverse_step(c, d, o, v))
+PZK_OP_STEP(affine_step, b->p[0] * v + b->p[1])
+PZK_OP_SIZES(delay, 3, 1 + pzk_delay_capacity(b) + pzk_delay_inverse_size(pzk_delay_horizon(b)))
+PZK_OP_SIZES(pi, b->n, b->n)
+PZK_OP_SIZES(asym_pi, b->n + b->m, b->n)
+PZK_OP_SIZES(preisach, 1 + 2 * b->n + b->n * (b->n + 1) / 2, b->n)
+PZK_OP_SIZES(fin, PZK_FIN_C * b->n, 2 * b->n + 4)
+PZK_OP_SIZES(creep_spectrum, 1 + 2 * b->n, 1 + b->n)
+#undef PZK_OP_INIT
+#undef PZK_OP_STEP
+#undef PZK_OP_SIZES
+
+/* One entry per kind, in increasing kind order (tests/model/kernel_forms_test.cc checks the order
+ * and that every kind of the enum has its entry). */
+#define PZK_KIND(k) .kind = k, .name = #k
+static const pzk_kind_ops pzk_kinds[] = {
+    {PZK_KIND(PZK_LOWPASS), .nc = 3, .nd = 2, .init = pzk_driver_lowpass_init,
+     .step = pzk_op_lowpass_step},
+    {PZK_KIND(PZK_QUADRATIC), .init = pzk_op_quadratic_init, .step = pzk_op_quadratic_step},
+    {PZK_KIND(PZK_CREEP), .nc = 5, .nd = 2, .init = pzk_op_creep_init, .step = pzk_creep_step},
+    {PZK_KIND(PZK_DELAY), .sizes = pzk_op_delay_sizes, .init = pzk_op_delay_init,
+     .step = pzk_op_delay_step, .inverse = pzk_op_delay_inverse},
+    {PZK_KIND(PZK_RATE_DEPENDENCE), .nd = 4, .init = pzk_op_rate_dependence_init,
+     .step = pzk_op_rate_dependence_step},
+    {PZK_KIND(PZK_STACK_BOUC_WEN), .nc = 4, .nd = 4, .init = pzk_op_stack_bw_init,
+     .step = pzk_stack_bw_step},
+    {PZK_KIND(PZK_BACKLASH_LIKE), .nd = 2, .init = pzk_op_backlash_init,
+     .step = pzk_op_backlash_step},
+    {PZK_KIND(PZK_DUHEM), .nd = 2, .init = pzk_op_duhem_init, .step = pzk_op_duhem_step},
+    {PZK_KIND(PZK_PRANDTL_ISHLINSKII), .sizes = pzk_op_pi_sizes, .init = pzk_op_pi_init,
+     .step = pzk_pi_step},
+    {PZK_KIND(PZK_BW_OSCILLATOR), .nc = 6, .nd = 4, .init = pzk_op_bw_osc_init,
+     .step = pzk_bw_osc_step},
+    {PZK_KIND(PZK_PREISACH), .sizes = pzk_op_preisach_sizes, .init = pzk_op_preisach_init,
+     .step = pzk_preisach_step},
+    {PZK_KIND(PZK_ASYMMETRIC_PI), .sizes = pzk_op_asym_pi_sizes, .init = pzk_op_asym_pi_init,
+     .step = pzk_asym_pi_step},
+    {PZK_KIND(PZK_BIMORPH_FIN), .sizes = pzk_op_fin_sizes, .init = pzk_op_fin_init,
+     .step = pzk_fin_step, .through = pzk_fin_step_through},
+    {PZK_KIND(PZK_FRICTION), .nd = 1, .init = pzk_op_friction_init, .step = pzk_op_friction_step},
+    {PZK_KIND(PZK_STIFFENING), .nc = 1, .init = pzk_op_stiffening_init,
+     .step = pzk_op_stiffening_step},
+    {PZK_KIND(PZK_DRIFT), .nd = 1, .init = pzk_op_drift_init, .step = pzk_op_drift_step},
+    {PZK_KIND(PZK_CREEP_SPECTRUM), .sizes = pzk_op_creep_spectrum_sizes,
+     .init = pzk_op_creep_spectrum_init, .step = pzk_creep_spectrum_step},
+    {PZK_KIND(PZK_RESONANCE), .nc = 10, .nd = 3, .init = pzk_op_resonance_init,
+     .step = pzk_op_resonance_step, .inverse = pzk_op_resonance_inverse},
+    {PZK_KIND(PZK_AFFINE), .init = pzk_op_affine_init, .step = pzk_op_affine_step},
+};
+#undef PZK_KIND
+static inline int pzk_num_kinds(void) { return (int)(sizeof pzk_kinds / sizeof pzk_kinds[0]); }
+
+/* Each id's entry in pzk_kinds (-1: none), so that a block's operations are one load away (a
+ * search of the table made a chain of light blocks 1.5 times slower than a switch; this, 0.9
+ * times); tests/model/kernel_forms_test.cc checks it against the table and the enum. */
+static const signed char pzk_kind_slots[PZK_AFFINE + 1] = {
+    -1, 0,  1,  2,  3,  4,  -1, -1, -1, -1, /* 0 - 9: drive effects 1 - 5 */
+    5,  6,  7,  8,  9,  10, 11, 12, -1, -1, /* 10 - 19: families 10 - 17 */
+    -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, /* 20 - 29 */
+    13, 14, 15, 16, 17, -1, -1, -1, -1, -1, /* 30 - 39: output effects 30 - 34 */
+    18                                      /* 40: PZK_AFFINE */
+};
+
+/* The table's entry of a kind; 0 for an unknown one. */
+static inline const pzk_kind_ops *pzk_kind_of(int kind) {
+  return kind >= 0 && kind <= PZK_AFFINE && pzk_kind_slots[kind] >= 0
+             ? &pzk_kinds[pzk_kind_slots[kind]]
+             : 0;
+}
+
 /* Constants and dynamic doubles a block needs; -1 for an unknown kind. */
 static inline int pzk_block_sizes(const pzk_block *b, int *nc, int *nd) {
-  int n = b->n;
+  const pzk_kind_ops *k = pzk_kind_of(b->kind);
   *nc = 0;
   *nd = 0;
-  switch (b->kind) {
-    case PZK_LOWPASS:
-      *nc = 3;
-      *nd = 2;
-      return 0;
-    case PZK_QUADRATIC:
-      return 0;
-    case PZK_CREEP:
-      *nc = 5;
-      *nd = 2;
-      return 0;
-    case PZK_DELAY:
-      *nc = 3;
-      *nd = 1 + pzk_delay_capacity(b) + pzk_delay_inverse_size(pzk_delay_horizon(b));
-      return 0;
-    case PZK_RATE_DEPENDENCE:
-      *nd = 4;
-      return 0;
-    case PZK_STACK_BOUC_WEN:
-      *nc = 4;
-      *nd = 4;
-      return 0;
-    case PZK_BACKLASH_LIKE:
-      *nd = 2;
-      return 0;
-    case PZK_DUHEM:
-      *nd = 2;
-      return 0;
-    case PZK_PRANDTL_ISHLINSKII:
-      *nc = n;
-      *nd = n;
-      return 0;
-    case PZK_ASYMMETRIC_PI:
-      *nc = n + b->m;
-      *nd = n;
-      return 0;
-    case PZK_PREISACH:
-      *nc = 1 + 2 * n + n * (n + 1) / 2;
-      *nd = n;
-      return 0;
-    case PZK_BW_OSCILLATOR:
-      *nc = 6;
-      *nd = 4;
-      return 0;
-    case PZK_BIMORPH_FIN:
-      *nc = PZK_FIN_C * n;
-      *nd = 2 * n + 4;
-      return 0;
-    case PZK_CREEP_SPECTRUM:
-      *nc = 1 + 2 * n;
-      *nd = 1 + n;
-      return 0;
-    case PZK_RESONANCE:
-      *nc = 10;
-      *nd = 3;
-      return 0;
-    case PZK_FRICTION:
-      *nd = 1;
-      return 0;
-    case PZK_STIFFENING:
-      *nc = 1;
-      return 0;
-    case PZK_DRIFT:
-      *nd = 1;
-      return 0;
-    case PZK_AFFINE:
-      return 0;
-    default:
-      return -1;
+  if (!k) return -1;
+  if (k->sizes) {
+    k->sizes(b, nc, nd);
+  } else {
+    *nc = k->nc;
+    *nd = k->nd;
   }
+  return 0;
 }
 
 /* Sets c_off / d_off of every block; returns 0, or -1 - i for an unknown kind at block i. */
@@ -106,97 +182,15 @@ static inline int pzk_layout(pzk_block *b, int nb, int *nc_total, int *nd_total)
 
 static inline double pzk_block_init(const pzk_block *b, double *c, double *d, double v,
                                     double u_raw) {
-  switch (b->kind) {
-    case PZK_LOWPASS:
-      return pzk_driver_lowpass_init(b, c, d, v, u_raw);
-    case PZK_QUADRATIC:
-      return pzk_quadratic_step(b, v);
-    case PZK_CREEP:
-      return pzk_creep_init(b, c, d, v);
-    case PZK_DELAY:
-      return pzk_delay_init(b, c, d, v);
-    case PZK_RATE_DEPENDENCE:
-      return pzk_rate_dependence_init(d, v);
-    case PZK_STACK_BOUC_WEN:
-      return pzk_stack_bw_init(b, c, d, v);
-    case PZK_BACKLASH_LIKE:
-      return pzk_backlash_init(b, d, v);
-    case PZK_DUHEM:
-      return pzk_duhem_init(b, d, v);
-    case PZK_PRANDTL_ISHLINSKII:
-      return pzk_pi_init(b, c, d, v);
-    case PZK_ASYMMETRIC_PI:
-      return pzk_asym_pi_init(b, c, d, v);
-    case PZK_PREISACH:
-      return pzk_preisach_init(b, c, d, v);
-    case PZK_BW_OSCILLATOR:
-      return pzk_bw_osc_init(b, c, d, v);
-    case PZK_BIMORPH_FIN:
-      return pzk_fin_init(b, c, d, v);
-    case PZK_CREEP_SPECTRUM:
-      return pzk_creep_spectrum_init(b, c, d, v);
-    case PZK_RESONANCE:
-      return pzk_resonance_init(b, c, d, v);
-    case PZK_FRICTION:
-      return pzk_friction_init(d, v);
-    case PZK_STIFFENING:
-      c[0] = v;
-      return v;
-    case PZK_DRIFT:
-      d[0] = 0;
-      return v;
-    case PZK_AFFINE:
-      return b->p[0] * v + b->p[1];
-    default:
-      return v;
-  }
+  const pzk_kind_ops *k = pzk_kind_of(b->kind);
+  return k && k->init ? k->init(b, c, d, v, u_raw) : v;
 }
 
 /* One block's step: reads its state in d, writes the next one to o (o may be d). */
 static inline double pzk_block_step(const pzk_block *b, const double *c, const double *d, double *o,
                                     double v) {
-  switch (b->kind) {
-    case PZK_LOWPASS:
-      return pzk_driver_lowpass_step(c, d, o, v);
-    case PZK_QUADRATIC:
-      return pzk_quadratic_step(b, v);
-    case PZK_CREEP:
-      return pzk_creep_step(b, c, d, o, v);
-    case PZK_DELAY:
-      return pzk_delay_step(c, o, v); /* in place only (o == d) */
-    case PZK_RATE_DEPENDENCE:
-      return pzk_rate_dependence_step(b, d, o, v);
-    case PZK_STACK_BOUC_WEN:
-      return pzk_stack_bw_step(b, c, d, o, v);
-    case PZK_BACKLASH_LIKE:
-      return pzk_backlash_step(b, d, o, v);
-    case PZK_DUHEM:
-      return pzk_duhem_step(b, d, o, v);
-    case PZK_PRANDTL_ISHLINSKII:
-      return pzk_pi_step(b, c, d, o, v);
-    case PZK_ASYMMETRIC_PI:
-      return pzk_asym_pi_step(b, c, d, o, v);
-    case PZK_PREISACH:
-      return pzk_preisach_step(b, c, d, o, v);
-    case PZK_BW_OSCILLATOR:
-      return pzk_bw_osc_step(b, c, d, o, v);
-    case PZK_BIMORPH_FIN:
-      return pzk_fin_step(b, c, d, o, v);
-    case PZK_CREEP_SPECTRUM:
-      return pzk_creep_spectrum_step(b, c, d, o, v);
-    case PZK_RESONANCE:
-      return pzk_resonance_step(c, d, o, v);
-    case PZK_FRICTION:
-      return pzk_friction_step(b, d, o, v);
-    case PZK_STIFFENING:
-      return pzk_stiffening_step(b, c, v);
-    case PZK_DRIFT:
-      return pzk_drift_step(b, d, o, v);
-    case PZK_AFFINE:
-      return b->p[0] * v + b->p[1];
-    default:
-      return v;
-  }
+  const pzk_kind_ops *k = pzk_kind_of(b->kind);
+  return k ? k->step(b, c, d, o, v) : v;
 }
 
 /* At rest under the drive u0 (every block at equilibrium); returns the output there. */
@@ -238,17 +232,16 @@ static inline double pzk_chain_eval(const pzk_block *b, int nb, const double *c,
   double v = u;
   int i;
   for (i = 0; i < nb; ++i) {
-    if (b[i].kind == PZK_DELAY && mode == PZK_EVAL_UNDELAYED) continue;
-    if (b[i].kind == PZK_DELAY && mode != PZK_EVAL_FORWARD)
-      v = pzk_delay_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
-    else if (b[i].kind == PZK_RESONANCE && mode != PZK_EVAL_FORWARD)
-      v = pzk_resonance_inverse_step(c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
-    else if (b[i].kind == PZK_BIMORPH_FIN &&
-             (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
-      v = pzk_fin_step_through(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v,
-                               mode == PZK_EVAL_PUSH_UP ? 1 : -1);
+    const pzk_kind_ops *k = pzk_kind_of(b[i].kind);
+    const double *ci = c + b[i].c_off, *di = d + b[i].d_off;
+    double *oi = o + b[i].d_off;
+    if (!k || (b[i].kind == PZK_DELAY && mode == PZK_EVAL_UNDELAYED)) continue;
+    if (k->through && (mode == PZK_EVAL_PUSH_UP || mode == PZK_EVAL_PUSH_DOWN))
+      v = k->through(&b[i], ci, di, oi, v, mode == PZK_EVAL_PUSH_UP ? 1 : -1);
+    else if (k->inverse && mode != PZK_EVAL_FORWARD)
+      v = k->inverse(&b[i], ci, di, oi, v);
     else
-      v = pzk_block_step(&b[i], c + b[i].c_off, d + b[i].d_off, o + b[i].d_off, v);
+      v = k->step(&b[i], ci, di, oi, v);
   }
   return v;
 }

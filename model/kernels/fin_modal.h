@@ -1,10 +1,22 @@
-/* The bimorph fin's modal recursion, the helpers (model/modal_simulator.h, modal_discretise.h,
- * bouc_wen.h, backlash.h): each mode's exact discretisation, the closed-form Bouc-Wen branches and
- * their zero crossings, the quintic Hermite hold of z, one mode's update, the atan series and the
- * backlash step, operation for operation as the library. One source for the records family's
- * kernel (bimorph_fin.h) and the HGANN fin plant of `piezoid export --plant`
- * (controller/export_fin_c.cc), which copies this file into its header. Guarded, so that both kinds
- * of header can be included in one translation unit. */
+/* The bimorph fin's modal recursion (spec "bimorph-fin model" section 6): each mode's exact
+ * discretisation, the closed-form Bouc-Wen branches and their zero crossings, the quintic Hermite
+ * hold of z, one mode's update, the walk of one sample, the atan series and the backlash step. The
+ * one source of the fin's step: model/modal_simulator.cc runs it (its sampled path's walk and
+ * sub-steps, both paths' discretisation), as do the records family's kernel (bimorph_fin.h) and the
+ * HGANN fin plant of `piezoid export --plant` (controller/fin_plant.h, after this file in its
+ * header). Guarded, so that both kinds of header can be included in one translation unit.
+ *
+ * The discretisation. Mode i is  eta'' + c eta' + omega^2 eta = f(t),  x = [eta, eta']^T,
+ * x' = A x + b f,  A = [[0, 1], [-omega^2, -c]],  b = [0, 1]^T. Over a step tau with a polynomial
+ * input f(t0 + s) = sum_j f_j s^j / j!,
+ *   x(tau) = E x(0) + sum_j f_j tau^{j+1} phi_{j+1}(tau A) b,   E = e^{tau A},
+ *   tau^{j+1} phi_{j+1}(tau A) b = [tau^{j+1} D_{j+1}, tau^j D_j]^T,
+ * D_j = phi_j(tau .)[l1, l2] (the divided difference), phi_0(z) = e^z, phi_j(z) = sum_m z^m /
+ * (m + j)!, l1, l2 the roots of l^2 + c l + omega^2 = 0. The D_j and E are computed without
+ * cancellation in every regime the plant reaches: underdamped (delta = 0, nearly undamped upper
+ * modes), overdamped with a huge root ratio (delta > 0: l1 ~ -delta omega^2 down to -1e10 1/s,
+ * l2 ~ -1/delta), near-critical (l1 ~ l2) and tiny steps (|tau l| << 1): a few ulps of the
+ * entries' scale (tests/model/golden_test.cc holds them to the spec's golden vectors). */
 #ifndef PZK_FIN_MODAL_H_
 #define PZK_FIN_MODAL_H_
 typedef struct {
@@ -29,7 +41,7 @@ static inline int pzk_fin_sign(double x) { return (x > 0) - (x < 0); }
 static inline double pzk_fin_min(double a, double b) { return (b < a) ? b : a; }
 static inline double pzk_fin_max(double a, double b) { return (a < b) ? b : a; }
 
-/* 1/n!, n = 0 ... 24 (modal_discretise.cc kInvFact). */
+/* 1/n!, n = 0 ... 24. */
 static inline const double *pzk_fin_inv_fact(void) {
   static const double f[25] = {1.0,
                                1.0,
@@ -66,7 +78,9 @@ static inline pzk_fin_cx pzk_fin_cmul(pzk_fin_cx a, pzk_fin_cx b) {
   return r;
 }
 
-/* phi_0 ... phi_6 at a real x (modal::PhiReal). */
+/* phi_0 ... phi_6 at a real x. |x| < 1: the Taylor terms of phi_6 up to x^N with |x|^{N+1} 6! /
+ * (N+7)! < 2^-53 (N = 7, 9, 14 for |x| <= 1/16, 1/4, 1), then the stable downward recurrence
+ * phi_{j-1} = x phi_j + 1/(j-1)!; otherwise upward from e^x (0 below -745, where it underflows). */
 static inline void pzk_fin_phi_real(double x, double *phi) {
   const double *f = pzk_fin_inv_fact();
   const double ax = fabs(x);
@@ -86,7 +100,8 @@ static inline void pzk_fin_phi_real(double x, double *phi) {
   }
 }
 
-/* phi_0 ... phi_6 at a complex x (modal_discretise.cc PhiComplex). */
+/* phi_0 ... phi_6 at a complex x: |x| < 1 the series of phi_6 and the downward recurrence,
+ * otherwise upward from e^x (error factor 1/|x| <= 1 per step). */
 static inline void pzk_fin_phi_complex(pzk_fin_cx x, pzk_fin_cx *phi) {
   const double *f = pzk_fin_inv_fact();
   const double r2 = x.re * x.re + x.im * x.im;
@@ -128,7 +143,9 @@ static inline void pzk_fin_phi_complex(pzk_fin_cx x, pzk_fin_cx *phi) {
   }
 }
 
-/* Roots of l^2 + c l + omega2 = 0 (modal::MakePoles). */
+/* Roots of l^2 + c l + omega2 = 0 for c >= 0, omega2 >= 0, without cancellation for c >> omega or
+ * c ~ 2 omega: a complex pair re +- i im (im > 0), or real l1 <= l2 <= 0 (l1 the larger in
+ * magnitude, l2 = omega2 / l1). */
 static inline pzk_fin_poles pzk_fin_make_poles(double omega2, double c) {
   pzk_fin_poles p;
   const double w = sqrt(omega2);
@@ -147,7 +164,9 @@ static inline pzk_fin_poles pzk_fin_make_poles(double omega2, double c) {
   return p;
 }
 
-/* Small |tau lambda| (modal_discretise.cc SeriesRegime). */
+/* Small |tau lambda| (rho <= 1): D_j = tau sum_m k_m / (m + 1 + j)!, k_m = tau^m h_m with the
+ * complete homogeneous polynomials h_m(l1, l2) = s h_{m-1} - p h_{m-2} (s = -c, p = omega2), all
+ * real; D_6, D_5 from the series, the rest by the stable downward recurrence. */
 static inline void pzk_fin_series(const pzk_fin_poles *p, double tau, pzk_fin_step_t *out) {
   const double *f = pzk_fin_inv_fact();
   const double ts = -p->c * tau, tp = p->omega2 * tau * tau;
@@ -172,8 +191,12 @@ static inline void pzk_fin_series(const pzk_fin_poles *p, double tau, pzk_fin_st
   out->e22 = out->e11 - p->c * d[0];
 }
 
-/* One mode over a step tau: E = e^{tau A} and the divided differences D_0 ... D_6
- * (modal::Discretise). */
+/* One mode over a step tau >= 0: E = e^{tau A} and the divided differences D_0 ... D_6. Well
+ * separated roots (tau |l1 - l2| >= 0.5): D_j = (phi_j(tau l1) - phi_j(tau l2)) / (l1 - l2), the
+ * cancellation bounded by the gap. Close roots away from the origin (near-critical damping,
+ * m = -c/2): e^{tau A} = e^{tau m} (C I + S tau (A - m I)), C = cosh(tau g/2), S = sinh(tau g/2) /
+ * (tau g/2) (cos / sinc when complex), and the upward recurrence D_j = (D_{j-1}/tau - avg_j)/m,
+ * avg_j = (phi_j(tau l1) + phi_j(tau l2))/2; its error factor 1/|tau m| is < 4/3. */
 static inline void pzk_fin_discretise(const pzk_fin_poles *p, double tau, pzk_fin_step_t *out) {
   double *d = out->d;
   double rho, gap, m, y, em, C, S, inv_m, inv_tau;
@@ -275,6 +298,19 @@ static inline double pzk_fin_branch_z(const pzk_fin_branch *b, double u) {
   return b->kappa == 0.0 ? b->z0 + b->alpha * du : b->z0 + b->gain * pzk_fin_expm1(-b->kappa * du);
 }
 
+/* 0 when z provably does not reach 0 on branch b before the input ub: then pzk_fin_zero_crossing
+ * would give a crossing beyond ub (or none), which pzk_fin_sample ignores, so it is skipped (its
+ * log1p and three divisions at every sample of a branch heading for zero). The bound: with
+ * y = -kappa z0 / alpha, |u_cross - u0| = |z0 / alpha| log1p(y) / y >= |z0| / (|alpha| (1 +
+ * max(y, 0))) (log1p(y) >= y / (1 + y)); the reach asked is |ub - u0| with a margin (1e-6 of it and
+ * 1e-12 of |u|) far above the roundings of the crossing and of the sub-step's ends. Not a number or
+ * overflow: 1 (pzk_fin_zero_crossing decides). */
+static inline int pzk_fin_crossing_may_lie(const pzk_fin_branch *b, double ub) {
+  const double ay = -b->kappa * b->z0 * (b->alpha > 0 ? 1.0 : -1.0); /* |alpha| y */
+  const double reach = fabs(ub - b->u0) * (1 + 1e-6) + 1e-12 * (fabs(b->u0) + fabs(ub));
+  return !(fabs(b->z0) > (fabs(b->alpha) + pzk_fin_max(0.0, ay)) * reach);
+}
+
 static inline int pzk_fin_zero_crossing(const pzk_fin_branch *b, double *u_cross) {
   double y, ratio, du;
   if (b->z0 == 0.0 || b->alpha == 0.0 || b->s == 0 || b->alpha * b->s * b->sigma >= 0) return 0;
@@ -287,8 +323,8 @@ static inline int pzk_fin_zero_crossing(const pzk_fin_branch *b, double *u_cross
   return 1;
 }
 
-/* z, dz/dt, d2z/dt2 on a branch at input u moving at ud (modal_simulator.cc EvalZ; ramp: u'' = 0).
- */
+/* z, dz/dt, d2z/dt2 on a branch at input u moving at ud (ramp: u'' = 0; modal_simulator.cc EvalZ
+ * with a u''). */
 static inline pzk_fin_zdata pzk_fin_eval_z(double alpha, const pzk_fin_branch *b, double u,
                                            double ud) {
   pzk_fin_zdata r;
@@ -318,7 +354,8 @@ static inline int pzk_fin_substeps(int hysteresis, double kappa_max, double r, d
 }
 
 /* The force's Taylor coefficients over a sub-step tau: z held by the quintic Hermite of (zl, zr)
- * (modal_simulator.cc GeneralSubstep). */
+ * (a_j of p(s) = sum a_j s^j on [0, 1] from [z0, tau z0', tau^2 z0'', z1, tau z1', tau^2 z1''],
+ * times j!: the discretisation's convention). */
 static inline void pzk_fin_hermite(double tau, pzk_fin_zdata zl, pzk_fin_zdata zr, double *fz) {
   static const double hermite[6][6] = {{1, 0, 0, 0, 0, 0},       {0, 1, 0, 0, 0, 0},
                                        {0, 0, 0.5, 0, 0, 0},     {-10, -6, -1.5, 10, -4, 0.5},
@@ -340,7 +377,8 @@ static inline void pzk_fin_hermite(double tau, pzk_fin_zdata zl, pzk_fin_zdata z
 }
 
 /* One mode's state (x0, x1) over a sub-step tau with step sp, tip gains wu, wz, the force's
- * coefficients fz and the drive u_a + u_dot s (GeneralSubstep's per-mode update). */
+ * coefficients fz and the drive u_a + u_dot s. modal_simulator.cc SampledRun does it four modes a
+ * vector, operation for operation (the same bits). */
 static inline void pzk_fin_mode_update(const pzk_fin_step_t *sp, double wu, double wz,
                                        const double *fz, double u_a, double u_dot, double tau,
                                        double *x0, double *x1) {
@@ -367,10 +405,10 @@ typedef void (*pzk_fin_substep_fn)(void *ctx, double tau, int regular, pzk_fin_z
                                    pzk_fin_zdata zr, double u_a, double u_dot);
 
 /* One sample of the fin's drive from u0 (Bouc-Wen force z0) to v over tau, u linear between them,
- * in nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero (ModalSimulator::RunSampled's
- * loop body): the modes advance through `substep` (ctx its data); returns z at the sample's end.
- * The one loop of the records kernel (bimorph_fin.h pzk_fin_step) and the HGANN fin header
- * (controller/export_fin_c.cc pzf_advance). */
+ * in nsub sub-steps (pzk_fin_substeps), each cut where z crosses zero: the modes advance through
+ * `substep` (ctx its data); returns z at the sample's end. The one walk of ModalSimulator's sampled
+ * path (its pass 1 lists the sub-steps), the records kernel (bimorph_fin.h pzk_fin_step) and the
+ * HGANN fin header (controller/fin_plant.h pzf_advance). */
 static inline double pzk_fin_sample(double alpha, double beta, double gamma, double u0, double z0,
                                     double v, double tau, int nsub, pzk_fin_substep_fn substep,
                                     void *ctx) {
@@ -387,7 +425,7 @@ static inline double pzk_fin_sample(double alpha, double beta, double gamma, dou
     int split = 0;
     double uc;
     pzk_fin_zdata dr;
-    if (hyst && pzk_fin_zero_crossing(&br, &uc)) {
+    if (hyst && pzk_fin_crossing_may_lie(&br, ub) && pzk_fin_zero_crossing(&br, &uc)) {
       const double sc = (uc - u0) / r;
       if (sc < sb - eps) {
         if (sc > sa + eps) {

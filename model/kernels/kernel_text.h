@@ -15,8 +15,8 @@ std::string KernelGuard();
 /// The bimorph fin's modal helpers (model/kernels/fin_modal.h): also the base of the HGANN fin
 /// plant's header (controller/export_fin_c.h).
 std::string FinModalSource();
-/// The PZK_* name of a block kind, read from the kernels' own enum (model/kernels/common.h: the one
-/// list of the ids the families' and effects' registrations give); "0" for none.
+/// The PZK_* name of a block kind, from the kernels' table of kinds (model/kernels/chain.h
+/// pzk_kinds, one entry per id of common.h's enum); "0" for none.
 std::string KindName(int kind);
 
 }  // namespace pz::pzk

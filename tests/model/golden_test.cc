@@ -252,6 +252,107 @@ TEST(ModalSampledDrive, InsertingSamplesOnTheSameLinesChangesNothing) {
   }
 }
 
+// The sampled path is the C step kernel's step (model/kernels/fin_modal.h): its walk, the kernel's
+// arithmetic four modes a vector; a piece cut at a zero crossing is discretised by DiscretiseBatch
+// (a few ulps from the kernel's, which the outputs here do not see). On a grid the kernel's fixed
+// step meets exactly (1/128 s) the angles are the records kernel's (pzk_fin_step), bit for bit —
+// the code makes them so, one build, one libm; a one-rounding change of the mode loop fails it —
+// on a drive with rests, jumps that sub-step (κ u̇ τ > 1/2), reversals and minor loops, for a
+// light and a stiff damping and without hysteresis.
+TEST(ModalSampledDrive, StepsAsTheKernelBitForBit) {
+  const ModalSimulator sim(DefaultPlant());
+  const int n = sim.num_modes();
+  std::vector<double> w{1.0 / sim.length_m()};
+  for (auto v : {sim.omega2(), sim.tip_gain_u(), sim.tip_gain_z()})
+    w.insert(w.end(), v.begin(), v.end());
+  SampledSignal drive;
+  for (int k = 0; k < 640; ++k) {
+    const double t = k / 128.0;
+    double u = 500 * std::sin(2 * 3.141592653589793 * 0.7 * t) + 150 * std::sin(11.0 * t);
+    if (k % 97 > 85) u = 120;                      // a rest
+    if (k % 61 == 30) u = k % 2 ? 700.0 : -650.0;  // a jump
+    drive.t.push_back(t);
+    drive.u.push_back(u);
+  }
+  for (int c = 0; c < 3; ++c) {
+    BimorphParams p;
+    p.mu = 95;
+    p.delta = c == 1 ? 0.3 : 0.0;
+    p.alpha = c == 2 ? 0.0 : 2.5e-3;
+    p.beta = 0.02;
+    p.gamma = 0.01;
+    p.a1 = 0.1;
+    p.a2 = 0.15;
+    p.b1 = 3.0;
+    p.b2 = -2.5;
+    std::vector<double> y(drive.t.size());
+    ModalWorkspace ws;
+    const SimulationSummary sum = sim.SimulateAngle(p, DriveSignal{drive}, y, ws);
+    ASSERT_TRUE(sum.ok()) << sum.BriefReport();
+    const double pk[11] = {p.mu, p.delta, p.alpha, p.beta, p.gamma, p.a1, p.a2, p.b1, -p.b2, 1, 0};
+    pzk::pzk_block b{};
+    b.kind = pzk::PZK_BIMORPH_FIN;
+    b.n = n;
+    b.dt = 1.0 / 128;
+    b.p = pk;
+    b.np = 11;
+    b.w = w.data();
+    b.nw = static_cast<int>(w.size());
+    std::vector<double> cs(static_cast<size_t>(PZK_FIN_C * n)), ds(static_cast<size_t>(2 * n + 4));
+    EXPECT_EQ(pzk::pzk_fin_init(&b, cs.data(), ds.data(), drive.u[0]), y[0]) << "case " << c;
+    long substepped = 0, cut = 0;  // samples sub-stepped, pieces cut at a zero crossing of z
+    for (size_t k = 1; k < drive.u.size(); ++k) {
+      const double u0 = ds[2 * n], tau = b.dt;
+      const int nsub = pzk::pzk_fin_substeps(1, p.beta + p.gamma, (drive.u[k] - u0) / tau, tau);
+      substepped += nsub > 1;
+      pzk::pzk_fin_sample(
+          p.alpha, p.beta, p.gamma, u0, ds[2 * n + 1], drive.u[k], tau, nsub,
+          [](void* ctx, double, int regular, pzk::pzk_fin_zdata, pzk::pzk_fin_zdata, double,
+             double) { *static_cast<long*>(ctx) += regular == 0; },
+          &cut);
+      ASSERT_EQ(pzk::pzk_fin_step(&b, cs.data(), ds.data(), ds.data(), drive.u[k]), y[k])
+          << "case " << c << ", sample " << k;
+    }
+    EXPECT_GT(substepped, 10) << "the drive must sub-step";
+    if (p.alpha != 0) {
+      EXPECT_GT(cut, 10) << "z must cross zero inside samples";
+    }
+  }
+}
+
+// DiscretiseBatch (the sinusoid path's cut steps) gives the kernel's discretisation to a few ulps
+// of each entry's scale (its e^x is ExpReduced, within 2 ulps of std::exp).
+TEST(ModalDiscretisation, BatchAgreesWithTheKernel) {
+  const ModalBasis& mb = DefaultPlant().modal();
+  const int n = static_cast<int>(mb.omega.size());
+  std::vector<modal::ModePoles> poles(static_cast<size_t>(n));
+  std::vector<modal::ModeStep> batch(static_cast<size_t>(n));
+  std::vector<double> scratch(16 * static_cast<size_t>(n));
+  std::vector<int> idx(static_cast<size_t>(n));
+  for (double delta : {0.0, 1e-4, 0.3})
+    for (double tau : {1e-6, 1e-3, 0.01}) {
+      for (int i = 0; i < n; ++i) {
+        const double w2 = mb.omega(i) * mb.omega(i);
+        poles[static_cast<size_t>(i)] = pzk::pzk_fin_make_poles(w2, 95.0 + delta * w2);
+      }
+      modal::DiscretiseBatch(n, poles.data(), tau, batch.data(), scratch.data(), idx.data());
+      for (int i = 0; i < n; ++i) {
+        modal::ModeStep k;
+        pzk::pzk_fin_discretise(&poles[static_cast<size_t>(i)], tau, &k);
+        const modal::ModeStep& b = batch[static_cast<size_t>(i)];
+        const std::string where = "mode " + std::to_string(i) + " delta " + std::to_string(delta) +
+                                  " tau " + std::to_string(tau);
+        const double e = std::max({std::abs(k.e11), std::abs(k.e22), 1e-300});
+        EXPECT_NEAR(b.e11, k.e11, 1e-14 * e) << where;
+        EXPECT_NEAR(b.e22, k.e22, 1e-14 * e) << where;
+        EXPECT_NEAR(b.e12, k.e12, 1e-14 * std::abs(k.e12) + 1e-300) << where;
+        EXPECT_NEAR(b.e21, k.e21, 1e-14 * std::abs(k.e21) + 1e-300) << where;
+        for (int j = 0; j <= modal::kMaxPhi; ++j)
+          EXPECT_NEAR(b.d[j], k.d[j], 1e-14 * std::abs(k.d[j]) + 1e-300) << where << " D_" << j;
+      }
+    }
+}
+
 TEST(ModalSimulator, AngleOnlyRunEqualsFullTraceAndSurvivesWorkspaceReuse) {
   const ModalSimulator sim(DefaultPlant());
   const GoldenCase a = LoadGolden("case7"), b = LoadGolden("random3");
@@ -371,7 +472,8 @@ TEST(ModalDiscretisation, MatchesAugmentedMatrixExponentialInEveryRegime) {
     for (int j = 2; j < 7; ++j) m(j, j + 1) = 1;
     const Eigen::Matrix<double, 8, 8> ex = m.exp();
     modal::ModeStep st;
-    modal::Discretise(modal::MakePoles(cs.omega * cs.omega, cs.c), cs.tau, st);
+    const modal::ModePoles poles = pzk::pzk_fin_make_poles(cs.omega * cs.omega, cs.c);
+    pzk::pzk_fin_discretise(&poles, cs.tau, &st);
     const std::string where = "omega " + std::to_string(cs.omega) + ", c " + std::to_string(cs.c) +
                               ", tau " + std::to_string(cs.tau);
     const double tol = 1e-12 * (1 + wt + ct) * (1 + wt + ct);
@@ -397,7 +499,8 @@ TEST(ModalDiscretisation, StiffModesStayFiniteAndConsistent) {
       for (double tau : {1e-9, 1e-5, 0.01}) {
         const double w2 = mb.omega(i) * mb.omega(i), c = 95.0 + delta * w2;
         modal::ModeStep st;
-        modal::Discretise(modal::MakePoles(w2, c), tau, st);
+        const modal::ModePoles poles = pzk::pzk_fin_make_poles(w2, c);
+        pzk::pzk_fin_discretise(&poles, tau, &st);
         for (double v : {st.e11, st.e12, st.e21, st.e22}) ASSERT_TRUE(std::isfinite(v));
         for (int j = 1; j < 6; ++j) {
           ASSERT_TRUE(std::isfinite(st.d[j]));

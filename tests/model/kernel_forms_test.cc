@@ -7,11 +7,16 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <map>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "model/bw_oscillator.h"
 #include "model/effect_library.h"
+#include "model/kernels/kernel_text.h"
+#include "model/kernels/pzk.h"
 #include "model/preisach.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/stack_models.h"
@@ -306,6 +311,63 @@ TEST(KernelForms, BwOscillatorMatchesFrozenDigest) {
     }
   }
   ExpectFrozen(dig, 12762309032596268373ULL, kSum7, kAbs7);
+}
+
+// The kinds of model/kernels/common.h's enum, read from its text: `NAME` or `NAME = N`, in order.
+std::map<int, std::string> EnumKinds() {
+  const std::string common = pzk::KernelSource();
+  const size_t at = common.find("enum {") + 6;
+  std::string body = common.substr(at, common.find("};", at) - at);
+  for (size_t c = body.find("/*"); c != std::string::npos; c = body.find("/*"))
+    body.erase(c, body.find("*/", c) + 2 - c);
+  std::map<int, std::string> kinds;
+  std::istringstream items(body);
+  int next = 0;
+  for (std::string item; std::getline(items, item, ',');) {
+    std::istringstream is(item);
+    std::string name, eq;
+    if (!(is >> name)) continue;
+    if (is >> eq && eq == "=") is >> next;
+    kinds[next++] = name;
+  }
+  return kinds;
+}
+
+// The table of kind operations (model/kernels/chain.h pzk_kinds): one entry per kind of the enum,
+// in increasing order (pzk_kind_of searches it by halves), named as the enum names it, each with a
+// step; an unknown kind has none.
+TEST(KernelForms, KindTableNamesEveryKindInOrder) {
+  const std::map<int, std::string> kinds = EnumKinds();
+  ASSERT_GE(kinds.size(), 19u);
+  ASSERT_EQ(static_cast<size_t>(pzk::pzk_num_kinds()), kinds.size());
+  auto it = kinds.begin();
+  for (int i = 0; i < pzk::pzk_num_kinds(); ++i, ++it) {
+    const pzk::pzk_kind_ops& k = pzk::pzk_kinds[i];
+    EXPECT_EQ(k.kind, it->first) << it->second;
+    EXPECT_EQ(std::string(k.name), it->second);
+    EXPECT_NE(k.step, nullptr) << k.name;
+    if (i > 0) {
+      EXPECT_LT(pzk::pzk_kinds[i - 1].kind, k.kind);
+    }
+    EXPECT_EQ(pzk::pzk_kind_of(k.kind), &k);
+    EXPECT_EQ(pzk::KindName(k.kind), it->second);
+  }
+  // Every id up to the last: its entry through pzk_kind_slots exactly when the enum has it.
+  for (int id = -1; id <= kinds.rbegin()->first + 1; ++id) {
+    const pzk::pzk_kind_ops* k = pzk::pzk_kind_of(id);
+    EXPECT_EQ(k != nullptr, kinds.count(id) == 1) << id;
+    if (k) {
+      EXPECT_EQ(k->kind, id);
+    }
+  }
+  for (int kind : {0, 6, 9, 18, 29, 35, 39, 41, -1}) {
+    EXPECT_EQ(pzk::pzk_kind_of(kind), nullptr) << kind;
+    EXPECT_EQ(pzk::KindName(kind), "0");
+    pzk::pzk_block b{};
+    b.kind = kind;
+    int nc = 0, nd = 0;
+    EXPECT_EQ(pzk::pzk_block_sizes(&b, &nc, &nd), -1);
+  }
 }
 
 }  // namespace
