@@ -19,20 +19,20 @@
 #include <string>
 #include <vector>
 
-#include "client/cmd_service.h"
-#include "client/data_root.h"
-#include "client/commands.h"
-#include "svcclient/complete_service.h"
-#include "client/plots.h"
 #include "boucwen.pb.h"
+#include "client/commands.h"
+#include "client/data_root.h"
+#include "client/service_flags.h"
 #include "complete/boucwen_benchmark.h"
 #include "complete/job_kind.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
-#include "opt/param_search.h"
-#include "opt/thread_pool_evaluator.h"
 #include "model/bw_oscillator.h"
 #include "model/criteria.h"
+#include "opt/param_search.h"
+#include "opt/thread_pool_evaluator.h"
+#include "reports/plots.h"
+#include "svcclient/complete_service.h"
 
 namespace pz::client {
 namespace {
@@ -324,34 +324,34 @@ void WriteFigures(const std::filesystem::path& out, const BoucwenArgs& a, const 
   });
   if (a.no_plots) return;
   std::vector<fs::path> scripts;
-  scripts.push_back(
-      WritePlotScript(out, Plot{"convergence",
-                                "Best training RMS error vs evaluations",
-                                "evaluations",
-                                "RMS error [m]",
-                                true,
-                                {PlotSeries{"convergence.csv", 1, 2, "best so far", "lines"}}}));
-  scripts.push_back(
-      WritePlotScript(out, Plot{"test_multisine",
-                                "Multisine test set: simulation of the identified model",
-                                "t [s]",
-                                "y [m]",
-                                false,
-                                {PlotSeries{"test_multisine.csv", 1, 2, "y test", "lines"},
-                                 PlotSeries{"test_multisine.csv", 1, 3, "y model", "lines"},
-                                 PlotSeries{"test_multisine.csv", 1, 4, "error", "lines"}}}));
-  scripts.push_back(WritePlotScript(
-      out,
-      Plot{"test_sinesweep_error",
-           "Sine-sweep test set: simulation error",
-           "t [s]",
-           "error [m]",
-           false,
-           {PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"},
-            PlotSeries{"test_sinesweep.csv", 1, 4, "identified model (drawn on top)", "lines"}}}));
-  if (GnuplotAvailable()) {
+  scripts.push_back(reports::WritePlotScript(
+      out, reports::Plot{"convergence",
+                         "Best training RMS error vs evaluations",
+                         "evaluations",
+                         "RMS error [m]",
+                         true,
+                         {reports::PlotSeries{"convergence.csv", 1, 2, "best so far", "lines"}}}));
+  scripts.push_back(reports::WritePlotScript(
+      out, reports::Plot{"test_multisine",
+                         "Multisine test set: simulation of the identified model",
+                         "t [s]",
+                         "y [m]",
+                         false,
+                         {reports::PlotSeries{"test_multisine.csv", 1, 2, "y test", "lines"},
+                          reports::PlotSeries{"test_multisine.csv", 1, 3, "y model", "lines"},
+                          reports::PlotSeries{"test_multisine.csv", 1, 4, "error", "lines"}}}));
+  scripts.push_back(reports::WritePlotScript(
+      out, reports::Plot{"test_sinesweep_error",
+                         "Sine-sweep test set: simulation error",
+                         "t [s]",
+                         "error [m]",
+                         false,
+                         {reports::PlotSeries{"test_sinesweep.csv", 1, 5, "true model", "lines"},
+                          reports::PlotSeries{"test_sinesweep.csv", 1, 4,
+                                              "identified model (drawn on top)", "lines"}}}));
+  if (reports::GnuplotAvailable()) {
     std::vector<std::string> errors;
-    RenderPlots(out, scripts, &errors);
+    reports::RenderPlots(out, scripts, &errors);
     for (const auto& e : errors) std::cerr << "piezoid boucwen: warning: " << e << "\n";
   } else {
     std::cerr << "piezoid boucwen: warning: gnuplot not found; render with: cd " << out.string()

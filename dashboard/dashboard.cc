@@ -1,4 +1,4 @@
-#include "client/dashboard.h"
+#include "dashboard/dashboard.h"
 
 #include <spdlog/spdlog.h>
 
@@ -12,15 +12,15 @@
 #include <sstream>
 #include <thread>
 
-#include "client/dashboard_assets.h"
-#include "client/job_report.h"
+#include "dashboard/dashboard_assets.h"
+#include "reports/job_report.h"
 #include "service/wire_codec.h"
 
 // Last: <resolv.h>, which httplib.h includes, defines a macro `_res` that Eigen's headers use as a
 // name.
-#include "client/http_guard.h"
+#include "dashboard/http_guard.h"
 
-namespace pz::client {
+namespace pz::dashboard {
 namespace fs = std::filesystem;
 
 namespace {
@@ -118,7 +118,7 @@ struct Dashboard::Impl {
 
   // On-demand requests of the HTTP threads (curves of jobs not polled, reports): one client.
   std::mutex request_mu;
-  std::unique_ptr<ServiceClient> request_client;
+  std::unique_ptr<client::ServiceClient> request_client;
   std::mutex report_mu;  // one report built at a time
 
   std::vector<std::string> Reports() const {
@@ -133,7 +133,7 @@ struct Dashboard::Impl {
   }
 
   // ------------------------------------------------------------------ polling
-  void PollOnce(ServiceClient& client, double* polled_at, std::string* error) {
+  void PollOnce(client::ServiceClient& client, double* polled_at, std::string* error) {
     std::vector<service::JobInfo> jobs;
     Status s = client.List(&jobs);
     service::WorkersSnapshot snapshot;
@@ -194,7 +194,7 @@ struct Dashboard::Impl {
   }
 
   void PollLoop() {
-    ServiceClient client(options.client);
+    client::ServiceClient client(options.client);
     double polled_at = 0;
     std::string error;
     while (!stop.load()) {
@@ -257,7 +257,7 @@ struct Dashboard::Impl {
     const fs::path dir = cache_dir / job;
     std::lock_guard lock(report_mu);
     if (fs::exists(dir / ".complete")) return dir;
-    FetchedJob fetched;
+    reports::FetchedJob fetched;
     Status s;
     {
       std::lock_guard rl(request_mu);
@@ -284,8 +284,8 @@ struct Dashboard::Impl {
     fs::remove_all(dir, ec);
     fs::create_directories(dir, ec);
     std::ostringstream terminal;
-    FetchOutput out;
-    s = WriteFetchedJob(fetched, dir, options.plots, terminal, &out);
+    reports::FetchOutput out;
+    s = reports::WriteFetchedJob(fetched, dir, options.plots, terminal, &out);
     if (!s.ok()) {
       Text(res, 500, "the report of job " + job + " could not be written: " + s.message());
       return std::nullopt;
@@ -414,7 +414,7 @@ Status Dashboard::Start() {
   }
   fs::create_directories(impl_->cache_dir, ec);
   if (ec) return InvalidArgument("--cache " + impl_->cache_dir.string() + ": " + ec.message());
-  impl_->request_client = std::make_unique<ServiceClient>(o.client);
+  impl_->request_client = std::make_unique<client::ServiceClient>(o.client);
   impl_->Routes();
   impl_->port = impl_->server.Bind(o.host, o.port);
   if (impl_->port <= 0)
@@ -448,4 +448,4 @@ void Dashboard::Stop() {
   if (impl_->poll_thread.joinable()) impl_->poll_thread.join();
 }
 
-}  // namespace pz::client
+}  // namespace pz::dashboard

@@ -24,7 +24,7 @@
 #include "svcclient/service_client.h"
 #include "model/status.h"
 
-namespace pz::client {
+namespace pz::dashboard {
 
 struct DashboardOptions {
   std::string host = "127.0.0.1";     ///< address to listen on
@@ -34,7 +34,7 @@ struct DashboardOptions {
   std::filesystem::path reports_dir;  ///< optional: folders with a report.md, served read-only
   std::filesystem::path cache_dir;    ///< where job reports are built; empty: a temporary folder
   bool plots = true;                  ///< job reports with figures (gnuplot)
-  ServiceClientOptions client;        ///< the master's client endpoint (and CURVE keys)
+  client::ServiceClientOptions client;  ///< the master's client endpoint (and CURVE keys)
 };
 
 class Dashboard {
@@ -57,4 +57,4 @@ class Dashboard {
   std::unique_ptr<Impl> impl_;
 };
 
-}  // namespace pz::client
+}  // namespace pz::dashboard

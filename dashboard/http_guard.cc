@@ -11,9 +11,9 @@
 #include <cerrno>
 #include <cstring>
 
-#include "client/http_guard.h"  // last: httplib.h
+#include "dashboard/http_guard.h"  // last: httplib.h
 
-namespace pz::client {
+namespace pz::dashboard {
 
 namespace {
 
@@ -368,4 +368,4 @@ void GuardedServer::Serve(Ready r) {
   CloseSocket(r.fd);
 }
 
-}  // namespace pz::client
+}  // namespace pz::dashboard

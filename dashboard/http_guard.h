@@ -32,7 +32,7 @@
 // Last in every includer: <resolv.h>, which httplib.h includes, defines a macro `_res`.
 #include <httplib.h>
 
-namespace pz::client {
+namespace pz::dashboard {
 
 struct HttpGuardOptions {
   std::chrono::milliseconds head_timeout{2000};  ///< the whole request head must arrive within this
@@ -114,4 +114,4 @@ class GuardedServer : public httplib::Server {
   uint64_t next_seq_ = 0;
 };
 
-}  // namespace pz::client
+}  // namespace pz::dashboard

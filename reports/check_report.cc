@@ -1,14 +1,14 @@
-#include "client/check_report.h"
+#include "reports/check_report.h"
 
 #include <cmath>
 #include <cstdio>
 #include <string>
 
-#include "diagnosis.pb.h"
 #include "diagnose/verdict.h"
+#include "diagnosis.pb.h"
 #include "io/proto_json.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 std::string CheckTrialLine(const records::CheckText& text, const records::CheckTrial& t,
                            int index) {
@@ -70,4 +70,4 @@ void WriteCheckJson(std::ostream& out, const records::CheckSummary& s) {
   out << io::PrintJson(m, "check.json");
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

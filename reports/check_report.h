@@ -8,7 +8,7 @@
 
 #include "diagnose/check.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 /// "trial   3 right  DESCRIPTION -> effect  delay  ratio …" (diagnose/verdict.h TrialLine), with
 /// the share closed and the wall time where the form's text says so; `index` from 0.
@@ -19,4 +19,4 @@ std::string CheckTrialLine(const records::CheckText& text, const records::CheckT
 void PrintCheckSummary(std::ostream& out, const records::CheckSummary& s);
 void WriteCheckJson(std::ostream& out, const records::CheckSummary& s);
 
-}  // namespace pz::client
+}  // namespace pz::reports

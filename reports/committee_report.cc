@@ -1,4 +1,4 @@
-#include "client/committee_report.h"
+#include "reports/committee_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,13 +6,13 @@
 #include <limits>
 #include <sstream>
 
-#include "client/plots.h"
-#include "client/record_windows.h"
 #include "committee.pb.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
+#include "reports/plots.h"
+#include "reports/record_windows.h"
 
-namespace pz::client {
+namespace pz::reports {
 using namespace complete;  // the committee's types and figures formatting
 
 // ---- Report --------------------------------------------------------------------------------
@@ -420,4 +420,4 @@ std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const Com
   return out;
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

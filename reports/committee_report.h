@@ -12,7 +12,7 @@ namespace pz::proto {
 class CommitteeFile;
 }
 
-namespace pz::client {
+namespace pz::reports {
 
 using complete::CommitteeResult;
 
@@ -28,4 +28,4 @@ std::string CommitteeJson(const CommitteeResult& r);
 std::vector<std::string> WriteCommitteeFigures(const std::string& dir, const CommitteeResult& r,
                                                std::vector<std::string>* warnings);
 
-}  // namespace pz::client
+}  // namespace pz::reports

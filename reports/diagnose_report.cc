@@ -1,6 +1,4 @@
-#include "client/diagnose_report.h"
-
-#include "model/model_comparison.h"
+#include "reports/diagnose_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,15 +9,16 @@
 #include <set>
 #include <sstream>
 
-#include "client/plots.h"
-#include "client/records_diagnose.h"
+#include "diagnose/verdict.h"
 #include "diagnosis.pb.h"
+#include "io/csv.h"
 #include "io/diagnosis_json.h"
 #include "io/proto_json.h"
-#include "io/csv.h"
-#include "diagnose/verdict.h"
+#include "model/model_comparison.h"
+#include "reports/plots.h"
+#include "reports/records_diagnose.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 using diagnose::BenchDiagnosis;
@@ -766,4 +765,4 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
   return written;
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -1,6 +1,6 @@
-// Reports of `piezoid diagnose --cases` (the fin bench; diagnose-check's: client/check_report.h):
+// Reports of `piezoid diagnose --cases` (the fin bench; diagnose-check's: reports/check_report.h):
 // the terminal summary, the JSON record and the HTML report with its figures (gnuplot,
-// client/plots.h): residual vs drive phase per case, residual spectra, loops before/after, and the
+// reports/plots.h): residual vs drive phase per case, residual spectra, loops before/after, and the
 // amplitude × frequency grid of PI before/after.
 #pragma once
 
@@ -15,7 +15,7 @@ namespace pz::proto {
 class Diagnosis;
 }
 
-namespace pz::client {
+namespace pz::reports {
 
 /// The terminal summary: noise floor, where the gap lies, the candidates, the verdict, how far
 /// the gap shrinks, the identifiability table.
@@ -23,7 +23,7 @@ void PrintDiagnosis(std::ostream& out, const diagnose::BenchDiagnosis& d,
                     const diagnose::DiagnoseOptions& options);
 
 /// The diagnosis as its stored message (diagnosis.json, proto/diagnosis.proto; `out` replaced):
-/// the records result's common fields (client/records_diagnose.h DiagnosisCommonOf) and the
+/// the records result's common fields (reports/records_diagnose.h DiagnosisCommonOf) and the
 /// bench's own.
 void BenchDiagnosisOf(const diagnose::BenchDiagnosis& d, const diagnose::DiagnoseOptions& options,
                       proto::Diagnosis* out);
@@ -40,4 +40,4 @@ std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::pat
                                                       bool plots,
                                                       std::vector<std::string>* warnings);
 
-}  // namespace pz::client
+}  // namespace pz::reports

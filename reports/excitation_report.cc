@@ -1,4 +1,4 @@
-#include "client/excitation_report.h"
+#include "reports/excitation_report.h"
 
 #include <sstream>
 
@@ -6,7 +6,7 @@
 #include "io/csv.h"
 #include "model/format.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 std::string G(double x) { return FormatG(x, 4); }
@@ -114,4 +114,4 @@ void WriteProposedDrive(const std::filesystem::path& path, const io::RecordSet& 
   });
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

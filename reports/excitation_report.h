@@ -14,7 +14,7 @@ namespace pz::proto {
 class Excitation;
 }
 
-namespace pz::client {
+namespace pz::reports {
 
 /// The proposed training drive's file in a report folder.
 inline constexpr const char* kProposedDriveFile = "excitation_drive.csv";
@@ -36,4 +36,4 @@ void PrintExcitationSummary(std::ostream& os, const io::RecordSet& set,
 void WriteProposedDrive(const std::filesystem::path& path, const io::RecordSet& set,
                         const records::TrainingDriveProposal& proposal);
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -1,16 +1,16 @@
-#include "client/fit_file.h"
+#include "reports/fit_file.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "client/excitation_report.h"
-#include "client/select_report.h"
 #include "diagnose/extrapolation.h"
 #include "fit.pb.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
+#include "reports/excitation_report.h"
+#include "reports/select_report.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 /// The model → its stored message (the one conversion this way).
@@ -143,6 +143,17 @@ records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitR
   return s;
 }
 
+double TrainMeanOutput(const io::RecordSet& set) {
+  double sum = 0;
+  size_t n = 0;
+  for (const io::Record& r : set.records) {
+    if (r.role != model::CaseRole::kTrain) continue;
+    for (size_t k = r.first_scored; k < r.end_scored; ++k) sum += r.y[k];
+    n += r.end_scored - r.first_scored;
+  }
+  return n > 0 ? sum / static_cast<double>(n) : NAN;
+}
+
 namespace {
 
 void AddErrors(const records::FitResult& r, proto::FitFile* f) {
@@ -239,14 +250,10 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
   proto::FitFile f;
   const int levels = r.resolution.used ? r.resolution.value() : run.pi_operators;
   *f.mutable_model() = ToProto(FittedModelSpec(set, r, run.substeps, levels));
+  if (const double mean = TrainMeanOutput(set); std::isfinite(mean))
+    f.mutable_model()->set_train_mean_output(mean);
   f.set_description(r.model->Describe());
-  f.set_response_unit(set.response_unit);
-  f.set_drive_unit(set.drive_unit);
-  f.set_polarity(r.model->scale().polarity);
   f.set_settle_s(run.settle_s);
-  for (size_t i = 0; i < r.params.size(); ++i)
-    (*f.mutable_params())[r.model->params()[i].name] = r.params[i];
-  for (double w : r.weights) f.add_weights(w);
   AddErrors(r, &f);
   AddRegularisation(r, &f);
   AddUncertainty(r, extrapolation, &f);
@@ -272,13 +279,18 @@ bool LooksLikeFitJson(const std::string& path) {
   }
 }
 
-records::ModelSpec LoadFit(const std::string& path) {
-  return LoadFitText(path, io::ReadTextFile(path));
+records::ModelSpec LoadFit(const std::string& path, std::optional<double>* train_mean_output) {
+  return LoadFitText(path, io::ReadTextFile(path), train_mean_output);
 }
 
-records::ModelSpec LoadFitText(const std::string& path, const std::string& text) {
+records::ModelSpec LoadFitText(const std::string& path, const std::string& text,
+                               std::optional<double>* train_mean_output) {
   proto::FitModel m;
   io::ReadFitModel(path, text, &m);
+  if (train_mean_output) {
+    train_mean_output->reset();
+    if (m.has_train_mean_output()) *train_mean_output = m.train_mean_output();
+  }
   try {
     return FromProto(m);
   } catch (const InputError& e) {
@@ -286,4 +298,4 @@ records::ModelSpec LoadFitText(const std::string& path, const std::string& text)
   }
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -2,9 +2,11 @@
 // by `piezoid export FIT.json`, `piezoid compensate` and python's piezoid.Model.load. The JSON is
 // io/fit_model.h's (protobuf JSON of proto/fit.proto); the one conversion of a fit's result to the
 // stored message, and between the message's model section and the model both ways, is here. A
-// fit.json of another format_version is refused with the version needed; a bad field is named.
+// fit.json of a format_version it does not read is refused with the ones it reads; a bad field is
+// named.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,7 +21,7 @@ namespace pz::records {
 struct ExtrapolationCheck;  // diagnose/extrapolation.h (not on the fuzzer's floor)
 }
 
-namespace pz::client {
+namespace pz::reports {
 
 using io::kFitFormatVersion;
 
@@ -27,6 +29,11 @@ using io::kFitFormatVersion;
 /// the training records' drive range; the sample step: the first training record's).
 records::ModelSpec FittedModelSpec(const io::RecordSet& set, const records::FitResult& r,
                                    int substeps, int pi_operators);
+
+/// The mean of the measured response over the training records' scored samples (fit.json's
+/// model.train_mean_output: `compensate --reference-zero mean`'s zero). NaN without training
+/// samples.
+double TrainMeanOutput(const io::RecordSet& set);
 
 /// What fit.json records of a run beside its result.
 struct FitRun {
@@ -38,7 +45,7 @@ struct FitRun {
 };
 
 /// fit.json's text of a fit (`selection`: --family auto's, or null): the model section (as
-/// FittedModelSpec), the parameters, each record's errors, the uncertainty, the search, the
+/// FittedModelSpec, with TrainMeanOutput), each record's errors, the uncertainty, the search, the
 /// excitation and the selection.
 std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
                     const records::ExcitationReport& excitation,
@@ -49,13 +56,17 @@ std::string FitJson(const io::RecordSet& set, const records::FitResult& r,
 /// The model section's JSON (fit.json's "model" object) of `m`.
 std::string FitModelJson(const records::ModelSpec& m);
 
-/// The spec of a fit.json's model section. Throws InputError naming the file and the field, the
-/// version needed, or a family/effect/parameter that does not fit.
-records::ModelSpec LoadFit(const std::string& path);
+/// The spec of a fit.json's model section; `train_mean_output` (when given): its
+/// train_mean_output, empty for a file without it (version 1, a model-only file). Throws
+/// InputError naming the file and the field, the versions read, or a family/effect/parameter that
+/// does not fit.
+records::ModelSpec LoadFit(const std::string& path,
+                           std::optional<double>* train_mean_output = nullptr);
 /// LoadFit of a fit.json's text (`path` names it in the errors): the fuzzer's entry point.
-records::ModelSpec LoadFitText(const std::string& path, const std::string& text);
+records::ModelSpec LoadFitText(const std::string& path, const std::string& text,
+                               std::optional<double>* train_mean_output = nullptr);
 
 /// True when the file is a fit.json (a JSON object with "model"), not a network file.
 bool LooksLikeFitJson(const std::string& path);
 
-}  // namespace pz::client
+}  // namespace pz::reports

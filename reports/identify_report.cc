@@ -1,4 +1,4 @@
-#include "client/identify_report.h"
+#include "reports/identify_report.h"
 
 #include <algorithm>
 #include <chrono>
@@ -10,15 +10,15 @@
 #include <set>
 #include <sstream>
 
-#include "client/plots.h"
 #include "hgann/extrapolation.h"
 #include "hgann/output_move.h"
 #include "io/trace_io.h"
-#include "model/metrics.h"
 #include "model/chromosome.h"
+#include "model/metrics.h"
 #include "model/saturation.h"
+#include "reports/plots.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace fs = std::filesystem;
 using hgann::IdentifyResult;
 using hgann::PaperTable8Pi;
@@ -891,4 +891,4 @@ std::vector<fs::path> WriteIdentifyReport(const IdentifyOptions& options, const 
   return written;
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -12,7 +12,7 @@
 #include "hgann/identify.h"
 #include "io/bench_data.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 /// The run's options (hgann::IdentifyOptions) and where / how to write its report.
 struct IdentifyOptions : hgann::IdentifyOptions {
@@ -36,4 +36,4 @@ std::vector<std::filesystem::path> WriteIdentifyReport(const IdentifyOptions& op
                                                        const hgann::IdentifyResult& result,
                                                        std::ostream& terminal);
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -1,4 +1,4 @@
-#include "client/job_report.h"
+#include "reports/job_report.h"
 
 #include <chrono>
 #include <fstream>
@@ -11,7 +11,7 @@
 #include "model/chromosome.h"
 #include "service/wire_codec.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace fs = std::filesystem;
 
 opt::GaSummary GaSummaryOfJob(const FetchedJob& job) {
@@ -198,4 +198,4 @@ Status WriteFetchedJob(const FetchedJob& job, const fs::path& out, bool plots, s
   return Status::Ok();
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

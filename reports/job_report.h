@@ -1,5 +1,5 @@
 // What `piezoid fetch` writes for a job fetched from the master: the best networks and, for an
-// hgann job, the same validation report as `piezoid identify` (client/identify_report.h
+// hgann job, the same validation report as `piezoid identify` (reports/identify_report.h
 // WriteIdentifyReport), rebuilt from the job's spec (spec → HgannFitnessConfig → HgannFitness), its
 // generation log and its best genomes.
 #pragma once
@@ -8,10 +8,10 @@
 #include <ostream>
 #include <vector>
 
-#include "client/identify_report.h"
+#include "reports/identify_report.h"
 #include "service/service_types.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 /// A job as the master answers a fetch.
 struct FetchedJob {
@@ -51,4 +51,4 @@ struct FetchOutput {
 Status WriteFetchedJob(const FetchedJob& job, const std::filesystem::path& out_dir, bool plots,
                        std::ostream& terminal, FetchOutput* out);
 
-}  // namespace pz::client
+}  // namespace pz::reports

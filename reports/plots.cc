@@ -1,10 +1,10 @@
-#include "client/plots.h"
+#include "reports/plots.h"
 
 #include <cstdlib>
 #include <fstream>
 #include <stdexcept>
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 std::string Quote(const std::string& s) {
@@ -68,4 +68,4 @@ int RenderPlots(const std::filesystem::path& dir, const std::vector<std::filesys
   return ok;
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-namespace pz::client {
+namespace pz::reports {
 
 struct PlotSeries {
   std::string data_file;  ///< CSV with a header row, relative to the script's folder
@@ -39,4 +39,4 @@ bool GnuplotAvailable();
 int RenderPlots(const std::filesystem::path& dir, const std::vector<std::filesystem::path>& scripts,
                 std::vector<std::string>* errors);
 
-}  // namespace pz::client
+}  // namespace pz::reports

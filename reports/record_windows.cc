@@ -1,8 +1,11 @@
-#include "client/record_windows.h"
+#include "reports/record_windows.h"
+
+#include <algorithm>
+#include <string_view>
 
 #include "io/csv.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 io::RecordSet LoadRecordSetWithWindows(const std::string& path, const std::vector<std::string>& tr,
                                        const std::vector<std::string>& va,
@@ -44,4 +47,17 @@ std::string InitialStateSentence(model::InitialState s, const std::string& subje
          " (--initial-state; docs/records.md).";
 }
 
-}  // namespace pz::client
+int NameColumnWidth(const io::RecordSet& set) {
+  size_t w = 14;
+  for (const io::Record& r : set.records) w = std::max(w, r.name.size());
+  return static_cast<int>(w + 2);
+}
+
+int RoleColumnWidth(const io::RecordSet& set) {
+  size_t w = 5;
+  for (const io::Record& r : set.records)
+    w = std::max(w, std::string_view(model::CaseRoleName(r.role)).size());
+  return static_cast<int>(w + 2);
+}
+
+}  // namespace pz::reports

@@ -9,7 +9,7 @@
 #include "io/records.h"
 #include "records/families.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 io::RecordSet LoadRecordSetWithWindows(const std::string& path,
                                        const std::vector<std::string>& train,
@@ -27,4 +27,10 @@ std::string InitialStateSentence(const records::Family& family);
 /// starts").
 std::string InitialStateSentence(model::InitialState s, const std::string& subject);
 
-}  // namespace pz::client
+/// The width of a terminal column of record names: the longest name and two spaces, at least 16.
+int NameColumnWidth(const io::RecordSet& set);
+
+/// The width of a terminal column of roles: the longest role name of the set and two spaces.
+int RoleColumnWidth(const io::RecordSet& set);
+
+}  // namespace pz::reports

@@ -1,4 +1,4 @@
-#include "client/records_diagnose.h"
+#include "reports/records_diagnose.h"
 
 #include <cmath>
 #include <filesystem>
@@ -6,17 +6,16 @@
 #include <iostream>
 #include <sstream>
 
-#include "client/excitation_report.h"
-#include "client/plots.h"
-#include "client/record_windows.h"
-#include "client/residual_spectrum_report.h"
-#include "client/search_flags.h"
-#include "client/select_report.h"
 #include "diagnosis.pb.h"
 #include "io/csv.h"
 #include "io/diagnosis_json.h"
+#include "reports/excitation_report.h"
+#include "reports/plots.h"
+#include "reports/record_windows.h"
+#include "reports/residual_spectrum_report.h"
+#include "reports/select_report.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace fs = std::filesystem;
 namespace {
 
@@ -172,67 +171,17 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
   os << io::WriteDiagnosisFile(m);
 }
 
-int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
-  const io::RecordSet set = LoadRecordSetWithWindows(a.records, a.train_windows, a.validate_windows,
-                                                     a.test_windows, a.settle_s);
-  records::RecordDiagnoseOptions o;
-  o.family = a.family;
-  const bool select = a.family == "auto";
-  if (select) {
-    if (!a.initial_state.empty())
-      o.fit.family_options.initial_state =
-          model::ParseInitialState(a.initial_state, "--initial-state");
-  } else {
-    o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
-  }
-  o.rules.significance_ratio = a.significance_ratio;
-  std::stringstream ss(a.candidates);
-  std::string name;
-  while (std::getline(ss, name, ','))
-    if (!name.empty()) o.candidates.push_back(records::ParseEffect(name));
-  o.fit.threads = a.threads;
-  o.fit.evaluator_factory = a.evaluator_factory;
-  o.fit.search.pso.seed = a.seed;
-  if (a.quick) {
-    o.fit.search.repetitions = 1;
-    o.fit.search.pso.particles = 20;
-    o.fit.search.pso.iterations = 60;
-    o.fit.lm.max_iterations = 30;
-  }
-  // No --family: the family, its resolution and initial state chosen by cross-validation on the
-  // training records first (records/select.h), the diagnosis then run on it.
-  records::SelectionResult selection;
-  if (select) {
-    records::SelectOptions so;
-    so.fit = o.fit;
-    so.fit.evaluator_factory = nullptr;
-    so.fit.sizing.enabled = !a.quick;  // `piezoid fit`'s search (sized), or the quick one
-    so.fit.polish_repetitions = true;
-    so.fit.lm_differences_auto = true;
-    so.initial_state_given = !a.initial_state.empty();
-    so.service = a.service;
-    if (!a.quiet) so.progress = [](const std::string& s) { std::cerr << s << std::endl; };
-    selection = records::SelectModel(set, so);
-    PrintSelection(std::cout, set, selection);
-    o.family = selection.fit_options.family;
-    o.fit.family_options = selection.fit_options.family_options;
-    if (a.service) o.fit.evaluator_factory = a.service(o.fit.family_options);
-  }
-  if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
-  const fs::path out =
-      a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
-  io::PrepareOutputFolder(out, "--out");  // before the run: its work is not lost at the end
-  const records::RecordDiagnosis d = records::DiagnoseRecords(set, o);
-  std::cout << d.verdict << "\n";
-  PrintExcitationSummary(std::cout, set, d.excitation);
+std::vector<std::string> WriteRecordsDiagnosisFolder(
+    const std::filesystem::path& out, const io::RecordSet& set, const records::RecordDiagnosis& d,
+    double settle_s, const records::SelectionResult* selection, bool plots) {
   fs::create_directories(out / "figures");
   const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
   WriteProposedDrive(out / kProposedDriveFile, set, proposal);
   io::WriteFileWith(out / "report.md", [&](std::ostream& os) {
-    WriteRecordsDiagnosisMarkdown(os, set, d, proposal, a.settle_s, select ? &selection : nullptr);
+    WriteRecordsDiagnosisMarkdown(os, set, d, proposal, settle_s, selection);
   });
   io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& os) {
-    WriteRecordsDiagnosisJson(os, set, d, proposal, select ? &selection : nullptr);
+    WriteRecordsDiagnosisJson(os, set, d, proposal, selection);
   });
   // Withheld traces: measured, base, named model.
   std::vector<fs::path> scripts;
@@ -258,11 +207,8 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   }
   WriteResidualSpectrumFigures(out / "figures", set, d.base, best, scripts);
   std::vector<std::string> errors;
-  if (!a.no_plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
-  for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";
-  std::cout << "written: " << (out / "report.md").string() << ", "
-            << (out / "diagnosis.json").string() << "\n";
-  return 0;
+  if (plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
+  return errors;
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

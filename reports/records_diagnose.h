@@ -1,15 +1,16 @@
-// `piezoid diagnose --records PATH --family NAME`: the diagnosis of diagnose/diagnose.h on a record
-// set of any drive, with its report (report.md, diagnosis.json, withheld traces and figures, the
-// excitation report and its proposed training drive excitation_drive.csv).
+// The report of `piezoid diagnose --records PATH --family NAME` (the diagnosis of
+// diagnose/diagnose.h on a record set of any drive; the command: client/cmd_diagnose.cc):
+// report.md, diagnosis.json, withheld traces and figures, the excitation report and its proposed
+// training drive excitation_drive.csv.
 #pragma once
 
-#include <functional>
+#include <filesystem>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include "io/records.h"
 #include "diagnose/diagnose.h"
+#include "io/records.h"
 #include "records/select.h"
 
 namespace google::protobuf {
@@ -21,29 +22,15 @@ class DiagnosisCandidate;
 class RunnerUp;
 }  // namespace pz::proto
 
-namespace pz::client {
+namespace pz::reports {
 
-struct RecordsDiagnoseRequest {
-  std::string records;
-  std::string family = "auto";  ///< "auto": chosen by records/select.h first (--family not given)
-  std::vector<std::string> train_windows, validate_windows, test_windows;
-  double settle_s =
-      0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
-  std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default)
-  std::string out;
-  std::string candidates;  ///< comma-separated, empty = every applicable effect
-  int threads = 2;
-  uint64_t seed = 1;
-  bool quick = false;
-  bool no_plots = false;
-  bool quiet = false;
-  double significance_ratio = 1.25;
-  records::RecordEvaluatorFactory evaluator_factory;  ///< --master (null: local threads)
-  /// --master with --family auto: the factory for a family's options (the chosen resolution's).
-  std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> service;
-};
-
-int RunRecordsDiagnose(const RecordsDiagnoseRequest& request);
+/// The report folder of a records diagnosis `d` of `set` (`piezoid diagnose --records`): report.md,
+/// diagnosis.json, the proposed training drive (kProposedDriveFile), the withheld traces and the
+/// residual spectra in figures/, rendered when `plots` and gnuplot is installed. `selection`:
+/// --family auto's choice (null: none). Returns the figures' rendering errors (warnings).
+std::vector<std::string> WriteRecordsDiagnosisFolder(
+    const std::filesystem::path& out, const io::RecordSet& set, const records::RecordDiagnosis& d,
+    double settle_s, const records::SelectionResult* selection, bool plots);
 
 /// `proposal`: the training drive proposed from d.excitation (written as excitation_drive.csv).
 void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
@@ -52,7 +39,7 @@ void WriteRecordsDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
                                    double settle_s = 0,
                                    const records::SelectionResult* selection = nullptr);
 /// The one fill of diagnosis.json's message from a records result, for both kinds (this file's
-/// `diagnose --records` and the fin bench's, client/diagnose_report.h): the verdict and its kind.
+/// `diagnose --records` and the fin bench's, reports/diagnose_report.h): the verdict and its kind.
 void DiagnosisCommonOf(const records::RecordDiagnosis& d, proto::Diagnosis* out);
 /// A candidate's fields of both kinds: effect, score, closed, pattern, qualifies, note.
 void CandidateCommonOf(const records::RecordCandidate& c, proto::DiagnosisCandidate* out);
@@ -74,4 +61,4 @@ void WriteRecordsDiagnosisJson(std::ostream& os, const io::RecordSet& set,
                                const records::TrainingDriveProposal& proposal,
                                const records::SelectionResult* selection = nullptr);
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -1,4 +1,4 @@
-#include "client/residual_spectrum_report.h"
+#include "reports/residual_spectrum_report.h"
 
 #include <algorithm>
 #include <cctype>
@@ -7,11 +7,11 @@
 #include <ostream>
 #include <sstream>
 
-#include "client/plots.h"
 #include "io/csv.h"
 #include "records/resonance.h"
+#include "reports/plots.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 std::string G(double x, int prec = 4) {
@@ -148,4 +148,4 @@ void WriteResidualSpectrumFigures(const std::filesystem::path& dir, const io::Re
   }
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -13,7 +13,7 @@
 #include "io/records.h"
 #include "records/fit.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 /// The "## Residual spectrum" section (nothing without a dominant band). `after`: the named model's
 /// fit, or null.
@@ -32,4 +32,4 @@ void WriteResidualSpectrumFigures(const std::filesystem::path& dir, const io::Re
                                   const records::FitResult& base, const records::FitResult* after,
                                   std::vector<std::filesystem::path>& scripts);
 
-}  // namespace pz::client
+}  // namespace pz::reports

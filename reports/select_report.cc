@@ -1,4 +1,4 @@
-#include "client/select_report.h"
+#include "reports/select_report.h"
 
 #include <cmath>
 #include <iomanip>
@@ -7,7 +7,7 @@
 #include "fit.pb.h"
 #include "io/csv.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 std::string G(double x, int prec = 4) {
@@ -195,4 +195,4 @@ void SelectionOf(const records::SelectionResult& s, proto::Selection* out) {
   *out = std::move(m);
 }
 
-}  // namespace pz::client
+}  // namespace pz::reports

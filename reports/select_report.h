@@ -14,7 +14,7 @@ namespace pz::proto {
 class Selection;
 }
 
-namespace pz::client {
+namespace pz::reports {
 
 /// The terminal summary: the ranking (the finalists and the best `screened` of the screening
 /// round), the choice, the initial state per record.
@@ -27,4 +27,4 @@ void WriteSelectionMarkdown(std::ostream& os, const io::RecordSet& set,
 /// "selection"; `out` replaced).
 void SelectionOf(const records::SelectionResult& s, proto::Selection* out);
 
-}  // namespace pz::client
+}  // namespace pz::reports

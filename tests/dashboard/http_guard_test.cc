@@ -11,11 +11,11 @@
 
 #include <gtest/gtest.h>
 
-#include "client/dashboard.h"
+#include "dashboard/dashboard.h"
 #include "tests/testing/raw_socket.h"
-#include "client/http_guard.h"  // last: httplib.h
+#include "dashboard/http_guard.h"  // last: httplib.h
 
-namespace pz::client {
+namespace pz::dashboard {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -201,4 +201,4 @@ TEST(DashboardGuard, HalfOpenConnectionsDoNotStallThePage) {
 }
 
 }  // namespace
-}  // namespace pz::client
+}  // namespace pz::dashboard

@@ -1,12 +1,14 @@
-// The service subcommands of `piezoid`: submit, status, list, watch, cancel, fetch (client of a
-// piezoid-master), export (a network file as a standalone C header) and keygen (CURVE keys); the
-// flags that run another command's searches on a master (CompleteServiceFlags: `piezoid fit`,
-// `boucwen`, `committee`, `diagnose`) over the service-client library (svcclient/).
+// What the commands that talk to a piezoid-master share: the exit codes and how a failure is told,
+// the options of a client of the master, and the flags that run another command's searches on a
+// master (CompleteServiceFlags: `piezoid fit`, `boucwen`, `committee`, `diagnose`) over the
+// service-client library (svcclient/). The commands themselves: client/commands.h.
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
+#include "job/job_spec.h"
 #include "model/status.h"
 #include "svcclient/complete_service.h"
 #include "svcclient/service_client.h"
@@ -27,6 +29,20 @@ enum ExitCode : int {
 /// The exit code of a status (kOk → 0, kInvalidArgument → 2, kUnavailable → 3, kNotFound → 4,
 /// kFailedPrecondition → 5, anything else → 1).
 int ExitCodeOf(const Status& s);
+
+/// Says `s` on stderr ("piezoid: error: …") unless it is ok; returns ExitCodeOf(s).
+int ReportStatus(const Status& s);
+
+/// Prints every violation of the job spec `what` (else `s`); returns the exit code for an invalid
+/// spec.
+int ReportViolations(const std::string& what, const std::vector<job::FieldViolation>& v,
+                     const Status& s);
+
+/// Writes `text` to `path`: kExitOk, or the exit code after saying that it cannot.
+int WriteTextFile(const std::string& path, const std::string& text);
+
+/// The environment variable `name`, or `fallback` when it is unset or empty.
+std::string EnvOr(const char* name, const char* fallback = "");
 
 /// The options of a client of the master at `master` (timeout per attempt, attempts); CURVE when
 /// both key files are given (this client's NAME.key from `piezoid keygen`, the master's public
@@ -52,16 +68,5 @@ struct CompleteServiceFlags {
 
 /// Adds the flags to `cmd`.
 void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& flags);
-
-/// Adds submit, status, list (alias jobs), watch, cancel, fetch and export; their callbacks set
-/// exit_code.
-void RegisterServiceCommands(CLI::App& app, int& exit_code);
-
-/// Adds keygen (a CURVE key pair for the service); called by RegisterServiceCommands.
-void RegisterKeygen(CLI::App& app, int& exit_code);
-
-/// Adds doctor (what this machine computes as: client/cmd_doctor.cc); called by
-/// RegisterServiceCommands.
-void RegisterDoctor(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -1,10 +1,10 @@
-// The report of `piezoid diagnose-check` (client/check_report.h), one writer for both forms of the
+// The report of `piezoid diagnose-check` (reports/check_report.h), one writer for both forms of the
 // check: check.json through its message (proto/diagnosis.proto DiagnosisCheck, io/proto_json.h)
 // parses back with the confusion matrix, the trials and a non-finite share closed as null, and
 // reads back into its message and prints back to the same bytes; a trial's line and the summary
 // read as the form's text says (the share closed and wall time on a bench's line, not a record's;
 // the trials' noun).
-#include "client/check_report.h"
+#include "reports/check_report.h"
 
 #include <gtest/gtest.h>
 
@@ -17,7 +17,7 @@
 #include "model/effects.h"
 #include "tests/testing/expect_error.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 using model::EffectKind;
@@ -87,4 +87,4 @@ TEST(CheckReport, TrialLinesAndTheSummaryReadAsTheFormSays) {
 }
 
 }  // namespace
-}  // namespace pz::client
+}  // namespace pz::reports

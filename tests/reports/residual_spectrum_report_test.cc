@@ -1,9 +1,9 @@
-// The residual spectrum in a records report (issue 45, client/residual_spectrum_report.h): on a
+// The residual spectrum in a records report (issue 45, reports/residual_spectrum_report.h): on a
 // bench whose truth has a mode, report.md of `diagnose --records` has the section — the band, its
 // share, the named resonance's f_n and what it closed — and the figures draw the spectra with the
 // mode marked; on the same bench without the mode (share 0) the residual holds no band and the
 // report says nothing of it.
-#include "client/residual_spectrum_report.h"
+#include "reports/residual_spectrum_report.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,12 +13,12 @@
 #include <sstream>
 #include <string>
 
-#include "client/records_diagnose.h"
 #include "diagnose/diagnose.h"
 #include "diagnose/synthetic.h"
 #include "records/excitation.h"
+#include "reports/records_diagnose.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 records::RecordDiagnoseOptions Quick() {
@@ -75,4 +75,4 @@ TEST(ResidualSpectrumReport, NoBandNoSection) {
 }
 
 }  // namespace
-}  // namespace pz::client
+}  // namespace pz::reports

@@ -1,8 +1,8 @@
-// The JSON of `piezoid diagnose` (client/diagnose_report.h) through its message
+// The JSON of `piezoid diagnose` (reports/diagnose_report.h) through its message
 // (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h). Each parses back, a
 // string with quotes and a newline keeps them, a non-finite number is null, the names the users
 // read are there, and each reads back into its message and prints back to the same bytes.
-#include "client/diagnose_report.h"
+#include "reports/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
@@ -13,14 +13,14 @@
 #include <sstream>
 #include <string>
 
-#include "diagnosis.pb.h"
 #include "diagnose/diagnose.h"
-#include "records/families.h"
-#include "records/model.h"
+#include "diagnosis.pb.h"
 #include "io/diagnosis_json.h"
 #include "io/proto_json.h"
+#include "records/families.h"
+#include "records/model.h"
 
-namespace pz::client {
+namespace pz::reports {
 namespace {
 
 using google::protobuf::Struct;
@@ -158,4 +158,4 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
 }
 
 }  // namespace
-}  // namespace pz::client
+}  // namespace pz::reports
