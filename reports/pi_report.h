@@ -1,20 +1,18 @@
-// Scoring a model against a bench case set (`piezoid pi`): simulate each case, compare the model's
-// fin angle with the measured one on the same grid, and report the paper's PI per case, the cost CF
-// (Σ PI over the training cases, paper eq. 6), RMSE and max |e|, as a text table, in the paper's
-// amplitude × frequency grid, as CSV and as JSON.
+// The scores of a model against a bench case set (`piezoid pi`; the scoring: client/case_models.h
+// ScoreCaseSet): the model's fin angle against the measured one on the same grid, reported as the
+// paper's PI per case, the cost CF (Σ PI over the training cases, paper eq. 6), RMSE and max |e|,
+// as a text table, in the paper's amplitude × frequency grid, as CSV and as JSON.
 #pragma once
 
 #include <ostream>
-#include <span>
 #include <string>
 #include <vector>
 
-#include "client/case_models.h"
 #include "io/bench_data.h"
 #include "model/metrics.h"
 #include "model/simulation.h"
 
-namespace pz::client {
+namespace pz::reports {
 
 struct CaseScore {
   int case_number = 0;
@@ -39,12 +37,6 @@ struct PiReport {
   int failed = 0;           ///< cases whose simulation failed (they are not in the sums)
 };
 
-/// Simulates every case with models[i] (same order as set.cases) and scores it. A failed simulation
-/// is a row with scored = false. Throws InputError if models and cases disagree or a model trace is
-/// not on the case's time grid (tolerance 1e-6 / fs).
-PiReport ScoreCaseSet(const io::CaseSet& set, std::span<const CaseModel> models,
-                      const Simulator& simulate);
-
 /// Per-case table, the amplitude × frequency grid of PI, and the sums.
 void PrintPiReport(std::ostream& out, const PiReport& report);
 /// CSV, one row per case under the header case, amplitude_V, frequency_Hz, role, b1_deg, b2_deg,
@@ -55,4 +47,4 @@ void WritePiCsv(std::ostream& out, const PiReport& report);
 /// (proto/pi.proto) printed by io/proto_json.h (keys sorted, non-finite numbers as null).
 void WritePiJson(std::ostream& out, const PiReport& report);
 
-}  // namespace pz::client
+}  // namespace pz::reports
