@@ -41,10 +41,11 @@ for f in $FAMILIES; do
 import json, sys
 d = json.load(open(sys.argv[1]))
 user, system, wall = map(float, open(sys.argv[4]).read().split())
-u = d.get("response_unit", "")
+m = d["model"]  # fit.json version 2: the model written once
+u = m.get("response_unit", "")
 rec = {r["role"]: r for r in d["records"]}
 t, v = rec["train"], rec["validate"]
-n = len(d.get("params", {})) + len(d.get("weights", []) or [])
+n = len(m.get("params", [])) + len(m.get("weights", []) or [])
 s = d.get("search", {})
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {n} | {t['rmse']:.4f} {u} | {v['rmse']:.4f} {u} | {v['max_abs']:.3f} {u} | "
       f"{v['nrmse_pct']:.3f} % | {int(d['evaluations'])} | {user + system:.1f} | {wall:.1f} | {s.get('summary', '')} |")

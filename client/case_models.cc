@@ -262,4 +262,48 @@ Simulator PlantSimulator(model::Solver solver) {
   };
 }
 
+reports::PiReport ScoreCaseSet(const io::CaseSet& set, std::span<const CaseModel> models,
+                               const Simulator& simulate) {
+  if (models.size() != set.cases.size())
+    throw InputError("scoring: " + std::to_string(models.size()) + " models for " +
+                     std::to_string(set.cases.size()) + " cases");
+  reports::PiReport report;
+  report.case_set = set.dir.string();
+  for (size_t i = 0; i < set.cases.size(); ++i) {
+    const io::BenchCase& bc = set.cases[i];
+    const CaseModel& m = models[i];
+    if (m.case_number != bc.number)
+      throw InputError("scoring: model " + std::to_string(i) + " is for case " +
+                       std::to_string(m.case_number) + " but the case set's entry is case " +
+                       std::to_string(bc.number));
+    reports::CaseScore s;
+    s.case_number = bc.number;
+    s.amplitude_v = bc.amplitude_v;
+    s.frequency_hz = bc.frequency_hz;
+    s.role = bc.role;
+    s.b1 = m.params.b1;
+    s.b2 = m.params.b2;
+    s.saturation_source = m.saturation_source;
+    const model::BimorphTrace trace = simulate(m.params, m.drive);
+    s.summary = trace.summary;
+    if (trace.summary.ok()) {
+      try {
+        s.metrics = model::CompareTraces(bc.t, bc.angle_deg, trace.t, trace.angle_deg,
+                                         1e-6 / bc.sample_rate_hz);
+      } catch (const InputError& e) {
+        throw InputError(bc.file.string() + " vs model trace: " + e.what());
+      }
+      s.scored = true;
+      double* sum = bc.role == io::CaseRole::kTrain      ? &report.cf_train
+                    : bc.role == io::CaseRole::kValidate ? &report.sum_validate
+                                                         : &report.sum_test;
+      *sum += s.metrics.pi;
+    } else {
+      ++report.failed;
+    }
+    report.cases.push_back(std::move(s));
+  }
+  return report;
+}
+
 }  // namespace pz::client

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "io/params_io.h"
 #include "model/bimorph.h"
 #include "model/saturation.h"
+#include "reports/pi_report.h"
 
 namespace pz::client {
 
@@ -82,5 +84,11 @@ using Simulator =
     std::function<model::BimorphTrace(const model::BimorphParams&, const model::DriveSignal&)>;
 /// The real plant with the given solver (one BimorphPlant shared by all calls).
 Simulator PlantSimulator(model::Solver solver);
+
+/// Simulates every case with models[i] (same order as set.cases) and scores it. A failed simulation
+/// is a row with scored = false. Throws InputError if models and cases disagree or a model trace is
+/// not on the case's time grid (tolerance 1e-6 / fs).
+reports::PiReport ScoreCaseSet(const io::CaseSet& set, std::span<const CaseModel> models,
+                               const Simulator& simulate);
 
 }  // namespace pz::client

@@ -2,7 +2,7 @@
 // excitation frequency (default: the bundled stack bench data/piezo-stack-bench; any records/
 // families.h family): complete models and per-band sub-models of each family by each
 // optimiser, selection per band, the committee against the best complete model; writes report.md,
-// committee.json and loop figures (complete/committee.h, client/committee_report.h).
+// committee.json and loop figures (complete/committee.h, reports/committee_report.h).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -10,14 +10,14 @@
 #include <string>
 #include <vector>
 
-#include "client/cmd_service.h"
-#include "client/data_root.h"
 #include "client/commands.h"
-#include "client/committee_report.h"
-#include "complete/committee.h"
-#include "svcclient/complete_service.h"
+#include "client/data_root.h"
 #include "client/search_flags.h"
+#include "client/service_flags.h"
+#include "complete/committee.h"
 #include "io/csv.h"
+#include "reports/committee_report.h"
+#include "svcclient/complete_service.h"
 
 namespace pz::client {
 using namespace complete;
@@ -82,11 +82,12 @@ int RunCommitteeCommand(const CommitteeArgs& a) {
   namespace fs = std::filesystem;
   fs::create_directories(a.out);
   io::WriteFileWith(fs::path(a.out) / "report.md",
-                    [&](std::ostream& os) { WriteCommitteeReport(os, r); });
+                    [&](std::ostream& os) { reports::WriteCommitteeReport(os, r); });
   io::WriteFileWith(fs::path(a.out) / "committee.json",
-                    [&](std::ostream& os) { os << CommitteeJson(r); });
+                    [&](std::ostream& os) { os << reports::CommitteeJson(r); });
   std::vector<std::string> warnings;
-  if (!a.no_figures) WriteCommitteeFigures((fs::path(a.out) / "figures").string(), r, &warnings);
+  if (!a.no_figures)
+    reports::WriteCommitteeFigures((fs::path(a.out) / "figures").string(), r, &warnings);
   for (const auto& w : warnings) std::cerr << "piezoid committee: warning: " << w << "\n";
 
   std::cout << "committee test RMSE " << r.committee_test.rmse << " um, max error "

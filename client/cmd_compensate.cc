@@ -1,5 +1,5 @@
-// `piezoid compensate` and `piezoid export FIT.json` (issue 23): a fitted model (fit.json's model
-// section, client/fit_file.h) as a feed-forward compensator.
+// `piezoid compensate` (issue 23): a fitted model (fit.json's model section, reports/fit_file.h) as
+// a feed-forward compensator. (`piezoid export FIT.json`: client/cmd_export.cc.)
 //
 //   compensate --model FIT.json --reference REF.csv --out DRIVE.csv [--check-model OTHER.json]
 //              [--reference-zero absolute|rest|mean|auto]
@@ -8,7 +8,8 @@
 //       forward model, the clipping events (how much, where) and, with --check-model, the error
 //       another model predicts for that drive (the exposure to model error). The reference is the
 //       model's absolute output or, the usual form, zero-mean relative to its rest output or to
-//       its major loop's mean (ReferenceZero); the predicted column is in the reference's frame.
+//       the training records' mean response (ReferenceZero); the predicted column is in the
+//       reference's frame.
 //   compensate --model FIT.json --replay RECORDS
 //       the inverse run on each record's measured response (less the record's own offset, as the
 //       fit takes it: a sensor's zero is not a drive; a delay's response read that many samples
@@ -32,8 +33,6 @@
 #include <vector>
 
 #include "client/commands.h"
-#include "client/fit_file.h"
-#include "client/record_windows.h"
 #include "controller/export_header.h"
 #include "diagnose/diagnose.h"
 #include "io/csv.h"
@@ -41,7 +40,8 @@
 #include "model/format.h"
 #include "opt/random.h"
 #include "records/stepper.h"
-#include "synth/synthetic.h"
+#include "reports/fit_file.h"
+#include "reports/record_windows.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
@@ -240,12 +240,27 @@ double MajorLoopMean(const records::ModelSpec& m) {
   return sum / kSteps;
 }
 
+/// The zero of `mean`: the training records' mean response (fit.json's model.train_mean_output,
+/// `train_mean`), else (a fit.json of version 1, a model-only file) the mean of the model's major
+/// loop. The zero and what it is.
+std::pair<double, std::string> MeanZero(const records::ModelSpec& m,
+                                        const std::optional<double>& train_mean) {
+  const std::string unit = " " + m.response_unit;
+  if (train_mean)
+    return {*train_mean, "the training records' mean response, " + Fmt(*train_mean) + unit};
+  const double z = MajorLoopMean(m);
+  return {z, "the mean of the model's major loop, " + Fmt(z) + unit +
+                 " (the fit.json does not carry the training records' mean)"};
+}
+
 /// Where the reference's zero lies in the model's absolute output (--reference-zero): `absolute`
 /// (the reference is the model's output itself: zero 0), `rest` (relative to the model's output at
-/// rest under the rest drive, --rest-drive or the lower drive limit), `mean` (relative to its major
-/// loop's mean, MajorLoopMean), `auto` (absolute when the reference's mean lies within the model's
-/// output range over the drive limits, mean otherwise). The zero, and how it was chosen.
+/// rest under the rest drive, --rest-drive or the lower drive limit), `mean` (relative to the
+/// training records' mean response, MeanZero), `auto` (absolute when the reference's mean lies
+/// within the model's output range over the drive limits, mean otherwise). The zero, and how it
+/// was chosen.
 std::pair<double, std::string> ReferenceZero(const CompensateArgs& a, const records::ModelSpec& m,
+                                             const std::optional<double>& train_mean,
                                              const Reference& ref) {
   std::string mode = a.reference_zero;
   const std::string unit = " " + m.response_unit;
@@ -261,8 +276,8 @@ std::pair<double, std::string> ReferenceZero(const CompensateArgs& a, const reco
                             " within the model's output over its drive limits (" + Fmt(lo) + " … " +
                             Fmt(hi) + unit + "; --reference-zero absolute, rest or mean to choose)";
     if (inside) return {0.0, "absolute: " + why};
-    const double z = MajorLoopMean(m);
-    return {z, "relative to the mean of the model's major loop, " + Fmt(z) + unit + ": " + why};
+    const auto [z, what] = MeanZero(m, train_mean);
+    return {z, "relative to " + what + ": " + why};
   }
   if (mode == "absolute") return {0.0, "absolute (--reference-zero absolute)"};
   if (mode == "rest") {
@@ -273,23 +288,23 @@ std::pair<double, std::string> ReferenceZero(const CompensateArgs& a, const reco
                    m.drive_unit + " (--reference-zero rest)"};
   }
   if (mode == "mean") {
-    const double z = MajorLoopMean(m);
-    return {z, "relative to the mean of the model's major loop, " + Fmt(z) + unit +
-                   " (--reference-zero mean)"};
+    const auto [z, what] = MeanZero(m, train_mean);
+    return {z, "relative to " + what + " (--reference-zero mean)"};
   }
   throw InputError("--reference-zero '" + a.reference_zero + "': absolute, rest, mean or auto");
 }
 
-int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
+int RunReference(const CompensateArgs& a, const records::ModelSpec& m,
+                 const std::optional<double>& train_mean) {
   Reference ref = ReadReference(a.reference, m);
   // Not a structured binding: clang 14 (the sanitizer build) cannot capture one in a lambda.
-  const std::pair<double, std::string> zero_pair = ReferenceZero(a, m, ref);
+  const std::pair<double, std::string> zero_pair = ReferenceZero(a, m, train_mean, ref);
   const double zero = zero_pair.first;
   const std::string& zero_how = zero_pair.second;
   for (double& y : ref.y) y += zero;  // the model's absolute output from here on
   std::optional<records::ModelSpec> other;
   if (!a.check_model.empty()) {
-    other = LoadFit(a.check_model);
+    other = reports::LoadFit(a.check_model);
     if (other->response_unit != m.response_unit || other->drive_unit != m.drive_unit) {
       throw InputError("--check-model " + a.check_model + ": drive in " + other->drive_unit +
                        ", response in " + other->response_unit + "; the model's are " +
@@ -368,8 +383,8 @@ int RunReference(const CompensateArgs& a, const records::ModelSpec& m) {
 }
 
 int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
-  const io::RecordSet set =
-      LoadRecordSetWithWindows(a.replay, a.train_windows, a.validate_windows, a.test_windows);
+  const io::RecordSet set = reports::LoadRecordSetWithWindows(a.replay, a.train_windows,
+                                                              a.validate_windows, a.test_windows);
   if (set.response_unit != m.response_unit || set.drive_unit != m.drive_unit) {
     throw InputError("--replay " + a.replay + ": drive in " + set.drive_unit + ", response in " +
                      set.response_unit + "; the model's are " + m.drive_unit + ", " +
@@ -456,28 +471,6 @@ int RunReplay(const CompensateArgs& a, const records::ModelSpec& m) {
 
 }  // namespace
 
-int ExportFit(const std::string& fit_json, const std::string& out, const std::string& name_flag) {
-  const records::ModelSpec m = LoadFit(fit_json);
-  records::Stepper st(m);
-  std::string name = name_flag;
-  if (name.empty()) {
-    name = out.empty() ? "piezoid_model" : fs::path(out).stem().string();
-    for (char& c : name)
-      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-    if (name.empty() || std::isdigit(static_cast<unsigned char>(name[0]))) name = "pz_" + name;
-  }
-  const std::string header =
-      controller::ExportHeader(st, name, m.Model()->Describe() + " from " + fit_json);
-  if (out.empty()) {
-    std::cout << header;
-    return 0;
-  }
-  io::WriteFileWith(out, [&](std::ostream& os) { os << header; });
-  std::cerr << "piezoid: wrote " << out << ": " << name << "_init, " << name << "_step, " << name
-            << "_inverse_step (" << m.Model()->Describe() << ")\n";
-  return 0;
-}
-
 void RegisterCompensate(CLI::App& app, int& exit_code) {
   auto a = std::make_shared<CompensateArgs>();
   CLI::App* cmd =
@@ -502,8 +495,9 @@ void RegisterCompensate(CLI::App& app, int& exit_code) {
   cmd->add_option("--reference-zero", a->reference_zero,
                   "where the reference's zero lies: absolute (the model's output itself), rest "
                   "(the model's output at rest under --rest-drive, default the lower drive "
-                  "limit), mean (the mean of the model's major loop: a zero-mean reference about "
-                  "the training record's mean), auto (default: absolute when the reference's mean "
+                  "limit), mean (a zero-mean reference about the training records' mean response, "
+                  "or the mean of the model's major loop for a fit.json without it), auto "
+                  "(default: absolute when the reference's mean "
                   "lies within the model's output range, mean otherwise)")
       ->type_name("absolute|rest|mean|auto");
   cmd->add_option("--train-window", a->train_windows,
@@ -513,7 +507,8 @@ void RegisterCompensate(CLI::App& app, int& exit_code) {
   cmd->add_option("--test-window", a->test_windows,
                   "--replay of one CSV: a test window START:END [s]");
   cmd->callback([a, &exit_code] {
-    const records::ModelSpec m = LoadFit(a->model);
+    std::optional<double> train_mean;
+    const records::ModelSpec m = reports::LoadFit(a->model, &train_mean);
     if (!a->replay.empty()) {
       exit_code = RunReplay(*a, m);
       return;
@@ -521,7 +516,7 @@ void RegisterCompensate(CLI::App& app, int& exit_code) {
     if (a->reference.empty())
       throw InputError("compensate: give --reference REF.csv (with --out) or --replay RECORDS");
     if (a->out.empty()) throw InputError("compensate --reference: give --out DRIVE.csv");
-    exit_code = RunReference(*a, m);
+    exit_code = RunReference(*a, m, train_mean);
   });
 }
 

@@ -11,24 +11,111 @@
 #include <memory>
 #include <sstream>
 
-#include "client/check_report.h"
-#include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/diagnose_report.h"
-#include "client/records_diagnose.h"
 #include "client/search_flags.h"
+#include "client/service_flags.h"
 #include "diagnose/check.h"
 #include "diagnose/reallike_check.h"
 #include "diagnose/verdict.h"
 #include "io/bench_data.h"
 #include "io/csv.h"
 #include "io/fin_records.h"
+#include "reports/check_report.h"
+#include "reports/diagnose_report.h"
+#include "reports/excitation_report.h"
+#include "reports/record_windows.h"
+#include "reports/records_diagnose.h"
+#include "reports/select_report.h"
 #include "svcclient/complete_service.h"
 #include "svcclient/service_evaluator.h"
-#include "synth/synthetic.h"
 
 namespace pz::client {
+namespace fs = std::filesystem;
 namespace {
+
+/// `piezoid diagnose --records`: its flags.
+struct RecordsDiagnoseRequest {
+  std::string records;
+  std::string family = "auto";  ///< "auto": chosen by records/select.h first (--family not given)
+  std::vector<std::string> train_windows, validate_windows, test_windows;
+  double settle_s =
+      0;  ///< --settle-s: scored from this long after each record's rest (io::SkipSettling)
+  std::string initial_state;  ///< --initial-state (empty: FamilyOptions' default)
+  std::string out;
+  std::string candidates;  ///< comma-separated, empty = every applicable effect
+  int threads = 2;
+  uint64_t seed = 1;
+  bool quick = false;
+  bool no_plots = false;
+  bool quiet = false;
+  double significance_ratio = 1.25;
+  records::RecordEvaluatorFactory evaluator_factory;  ///< --master (null: local threads)
+  /// --master with --family auto: the factory for a family's options (the chosen resolution's).
+  std::function<records::RecordEvaluatorFactory(const records::FamilyOptions&)> service;
+};
+
+/// `piezoid diagnose --records`: the diagnosis of diagnose/diagnose.h on a record set of any drive,
+/// its report folder by reports/records_diagnose.h.
+int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
+  const io::RecordSet set = reports::LoadRecordSetWithWindows(
+      a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
+  diagnose::RecordDiagnoseOptions o;
+  o.family = a.family;
+  const bool select = a.family == "auto";
+  if (select) {
+    if (!a.initial_state.empty())
+      o.fit.family_options.initial_state =
+          model::ParseInitialState(a.initial_state, "--initial-state");
+  } else {
+    o.fit.family_options.initial_state = InitialStateOfFlag(a.initial_state, a.family);
+  }
+  o.rules.significance_ratio = a.significance_ratio;
+  std::stringstream ss(a.candidates);
+  std::string name;
+  while (std::getline(ss, name, ','))
+    if (!name.empty()) o.candidates.push_back(records::ParseEffect(name));
+  o.fit.threads = a.threads;
+  o.fit.evaluator_factory = a.evaluator_factory;
+  o.fit.search.pso.seed = a.seed;
+  if (a.quick) {
+    o.fit.search.repetitions = 1;
+    o.fit.search.pso.particles = 20;
+    o.fit.search.pso.iterations = 60;
+    o.fit.lm.max_iterations = 30;
+  }
+  // No --family: the family, its resolution and initial state chosen by cross-validation on the
+  // training records first (records/select.h), the diagnosis then run on it.
+  records::SelectionResult selection;
+  if (select) {
+    records::SelectOptions so;
+    so.fit = o.fit;
+    so.fit.evaluator_factory = nullptr;
+    so.fit.sizing.enabled = !a.quick;  // `piezoid fit`'s search (sized), or the quick one
+    so.fit.polish_repetitions = true;
+    so.fit.lm_differences_auto = true;
+    so.initial_state_given = !a.initial_state.empty();
+    so.service = a.service;
+    if (!a.quiet) so.progress = [](const std::string& s) { std::cerr << s << std::endl; };
+    selection = records::SelectModel(set, so);
+    reports::PrintSelection(std::cout, set, selection);
+    o.family = selection.fit_options.family;
+    o.fit.family_options = selection.fit_options.family_options;
+    if (a.service) o.fit.evaluator_factory = a.service(o.fit.family_options);
+  }
+  if (!a.quiet) o.fit.progress = [](const std::string& s) { std::cerr << s << std::endl; };
+  const fs::path out =
+      a.out.empty() ? fs::path("diagnose_" + fs::path(a.records).stem().string()) : fs::path(a.out);
+  io::PrepareOutputFolder(out, "--out");  // before the run: its work is not lost at the end
+  const diagnose::RecordDiagnosis d = diagnose::DiagnoseRecords(set, o);
+  std::cout << d.verdict << "\n";
+  reports::PrintExcitationSummary(std::cout, set, d.excitation);
+  const std::vector<std::string> errors = reports::WriteRecordsDiagnosisFolder(
+      out, set, d, a.settle_s, select ? &selection : nullptr, !a.no_plots);
+  for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";
+  std::cout << "written: " << (out / "report.md").string() << ", "
+            << (out / "diagnosis.json").string() << "\n";
+  return 0;
+}
 
 struct DiagnoseArgs {
   std::string cases_dir;
@@ -145,16 +232,17 @@ int RunDiagnose(const DiagnoseArgs& a) {
     return ExitCodeOf(e.status());
   }
   d.bench = a.cases_dir;
-  PrintDiagnosis(std::cout, d, o);
+  reports::PrintDiagnosis(std::cout, d, o);
   std::vector<std::filesystem::path> files;
-  io::WriteFileWith(out / "diagnosis.json", [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
+  io::WriteFileWith(out / "diagnosis.json",
+                    [&](std::ostream& s) { reports::WriteDiagnosisJson(s, d, o); });
   files.push_back(out / "diagnosis.json");
   if (!a.json_file.empty()) {
-    io::WriteFileWith(a.json_file, [&](std::ostream& s) { WriteDiagnosisJson(s, d, o); });
+    io::WriteFileWith(a.json_file, [&](std::ostream& s) { reports::WriteDiagnosisJson(s, d, o); });
     files.push_back(a.json_file);
   }
   std::vector<std::string> warnings;
-  const auto html = WriteDiagnosisHtml(out, d, o, !a.no_plots, &warnings);
+  const auto html = reports::WriteDiagnosisHtml(out, d, o, !a.no_plots, &warnings);
   files.push_back(out / "report.html");
   for (const auto& w : warnings) std::cerr << "piezoid diagnose: warning: " << w << "\n";
   std::cout << "written: ";
@@ -265,11 +353,11 @@ int RunCheckCommand(const CheckArgs& a) {
   if (!a.json_file.empty()) io::CheckWritableFile(a.json_file, "--json");
   const diagnose::CheckSummary s =
       diagnose::RunCheck(form, a.trials, a.seed, [&](const diagnose::CheckTrial& t, int i) {
-        std::cout << CheckTrialLine(form.text, t, i) << std::endl;
+        std::cout << reports::CheckTrialLine(form.text, t, i) << std::endl;
       });
-  PrintCheckSummary(std::cout, s);
+  reports::PrintCheckSummary(std::cout, s);
   if (!a.json_file.empty())
-    io::WriteFileWith(a.json_file, [&](std::ostream& out) { WriteCheckJson(out, s); });
+    io::WriteFileWith(a.json_file, [&](std::ostream& out) { reports::WriteCheckJson(out, s); });
   return 0;
 }
 

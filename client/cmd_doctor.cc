@@ -8,7 +8,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "client/cmd_service.h"
+#include "client/commands.h"
+#include "client/service_flags.h"
 #include "model/arithmetic.h"
 
 namespace pz::client {

@@ -11,7 +11,7 @@
 
 #include "client/commands.h"
 #include "client/data_root.h"
-#include "client/identify_report.h"
+#include "reports/identify_report.h"
 
 namespace pz::client {
 namespace {
@@ -36,7 +36,7 @@ struct Progress {
         max_generations > 0 ? static_cast<int>(width * g.generation / max_generations) : width;
     std::string bar(filled, '#');
     bar.resize(width, '.');
-    const std::string islands = IslandsBrief(g);
+    const std::string islands = reports::IslandsBrief(g);
     std::fprintf(
         stderr, "%s[%s] gen %llu/%d  best %.5g  mean %.4g  stall %d  %.0f eval/s  %s%s  %.0f s%s",
         tty ? "\r" : "", bar.c_str(), static_cast<unsigned long long>(g.generation),
@@ -52,7 +52,7 @@ namespace {
 
 /// The command's flags as the callback reads them.
 struct IdentifyFlags {
-  IdentifyOptions opts;
+  reports::IdentifyOptions opts;
   std::string cases, out, preset = std::string(hgann::kDefaultSearchPreset), topology;
   std::vector<std::string> next_candidates;  ///< --next-candidates, "V:f" each
   bool no_plots = false;
@@ -184,7 +184,7 @@ std::vector<std::pair<double, double>> ParseNextCandidates(const std::vector<std
 
 /// The command: the preset where no flag says otherwise, the options checked, the run, the report.
 void RunIdentifyCommand(IdentifyFlags& f) {
-  IdentifyOptions& opts = f.opts;
+  reports::IdentifyOptions& opts = f.opts;
   opts.cases_dir = f.cases;
   opts.out_dir = f.out;
   opts.plots = !f.no_plots;
@@ -228,7 +228,7 @@ void RunIdentifyCommand(IdentifyFlags& f) {
   const auto result =
       hgann::RunIdentify(opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
   if (progress.tty) std::fprintf(stderr, "\n");
-  WriteIdentifyReport(opts, set, fitness, result, std::cout);
+  reports::WriteIdentifyReport(opts, set, fitness, result, std::cout);
 }
 
 }  // namespace

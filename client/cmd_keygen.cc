@@ -5,7 +5,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "client/cmd_service.h"
+#include "client/commands.h"
+#include "client/service_flags.h"
 #include "service/security.h"
 
 namespace pz::client {

@@ -5,10 +5,10 @@
 #include <memory>
 
 #include "client/case_models.h"
-#include "client/data_root.h"
 #include "client/commands.h"
-#include "client/pi_report.h"
+#include "client/data_root.h"
 #include "io/csv.h"
+#include "reports/pi_report.h"
 
 namespace pz::client {
 namespace {
@@ -26,15 +26,15 @@ int RunPi(const PiArgs& a) {
   CheckBundledData(dir, "bimorph-fin/nominal", "--cases DIR");
   const io::CaseSet set = io::LoadCaseSet(dir);
   const std::vector<CaseModel> models = ResolveBenchCases(a.flags, set);
-  PiReport report = ScoreCaseSet(set, models, PlantSimulator(a.flags.Solver()));
+  reports::PiReport report = ScoreCaseSet(set, models, PlantSimulator(a.flags.Solver()));
   report.solver = a.flags.solver;
   report.saturation_mode = a.flags.saturation;
-  PrintPiReport(std::cout, report);
+  reports::PrintPiReport(std::cout, report);
   std::cout.flush();
   if (!a.json_file.empty())
-    io::WriteFileWith(a.json_file, [&](std::ostream& o) { WritePiJson(o, report); });
+    io::WriteFileWith(a.json_file, [&](std::ostream& o) { reports::WritePiJson(o, report); });
   if (!a.csv_file.empty())
-    io::WriteFileWith(a.csv_file, [&](std::ostream& o) { WritePiCsv(o, report); });
+    io::WriteFileWith(a.csv_file, [&](std::ostream& o) { reports::WritePiCsv(o, report); });
   return report.failed ? 1 : 0;
 }
 

@@ -1,8 +1,6 @@
-// `piezoid submit | status | list | watch | cancel | fetch | export`: the service commands, thin
-// wrappers of svcclient/service_client.h, svcclient/job_file.h, client/job_report.h and
-// controller/export_c.h. Register with RegisterServiceCommands(app, exit_code).
-#include "client/cmd_service.h"
-
+// `piezoid submit | status | list | watch | cancel | prune | fetch | dashboard`: the service
+// commands, thin wrappers of svcclient/service_client.h, svcclient/job_file.h, reports/job_report.h
+// and dashboard/dashboard.h. Register with RegisterServiceCommands(app, exit_code).
 #include <pthread.h>
 #include <signal.h>
 #include <unistd.h>
@@ -20,74 +18,27 @@
 #include <sstream>
 
 #include "client/commands.h"
-#include "client/dashboard.h"
-#include "client/fit_file.h"
-#include "svcclient/job_file.h"
-#include "client/job_report.h"
-#include "svcclient/service_client.h"
-#include "controller/export_c.h"
+#include "client/service_flags.h"
+#include "dashboard/dashboard.h"
 #include "hgann/hgann_job.h"
 #include "job/job_kind.h"
 #include "kinds/kinds.h"
-#include "model/modal_simulator.h"
+#include "reports/job_report.h"
 #include "service/wire_codec.h"
+#include "svcclient/job_file.h"
+#include "svcclient/service_client.h"
 
 namespace pz::client {
 namespace fs = std::filesystem;
 
-int ExitCodeOf(const Status& s) {
-  switch (s.code()) {
-    case StatusCode::kOk:
-      return kExitOk;
-    case StatusCode::kInvalidArgument:
-      return kExitBadInput;
-    case StatusCode::kUnavailable:
-      return kExitUnreachable;
-    case StatusCode::kNotFound:
-      return kExitUnknownJob;
-    case StatusCode::kFailedPrecondition:
-      return kExitJobNotOk;
-    default:
-      return kExitFailure;
-  }
-}
-
-svcclient::ServiceClientOptions ClientOptionsOf(const std::string& master, int timeout_ms,
-                                                int retries, const std::string& curve_secret,
-                                                const std::string& master_public) {
-  svcclient::ServiceClientOptions o;
-  o.endpoint = master;
-  o.timeout_ms = timeout_ms;
-  o.retries = retries;
-  if (curve_secret.empty() != master_public.empty())
-    throw InputError(curve_secret.empty() ? "--master-public (or PIEZOID_MASTER_PUBLIC) needs "
-                                            "--curve-secret (or PIEZOID_CURVE_SECRET)"
-                                          : "--curve-secret (or PIEZOID_CURVE_SECRET) needs "
-                                            "--master-public (or PIEZOID_MASTER_PUBLIC)");
-  if (!curve_secret.empty()) {
-    service::CurveKeyPair keys;
-    if (Status s = service::LoadCurveSecretFile(curve_secret, &keys); !s.ok())
-      throw InputError("--curve-secret: " + s.message());
-    if (Status s = service::LoadCurvePublicFile(master_public, &o.master_public); !s.ok())
-      throw InputError("--master-public: " + s.message());
-    o.curve = keys;
-  }
-  return o;
-}
-
 namespace {
-
-std::string Env(const char* name, const char* fallback = "") {
-  const char* env = std::getenv(name);
-  return env && *env ? env : fallback;
-}
 
 struct Common {
   std::string master;
   int timeout_ms = 4000;
   int retries = 2;
-  std::string curve_secret = Env("PIEZOID_CURVE_SECRET"),
-              master_public = Env("PIEZOID_MASTER_PUBLIC");
+  std::string curve_secret = EnvOr("PIEZOID_CURVE_SECRET"),
+              master_public = EnvOr("PIEZOID_MASTER_PUBLIC");
   /// The client of these options; a bad key file throws InputError (exit code 2).
   svcclient::ServiceClient Client() const {
     return svcclient::ServiceClient(
@@ -95,7 +46,7 @@ struct Common {
   }
 };
 
-std::string DefaultMaster() { return Env("PIEZOID_MASTER", "tcp://127.0.0.1:5556"); }
+std::string DefaultMaster() { return EnvOr("PIEZOID_MASTER", "tcp://127.0.0.1:5556"); }
 
 void AddCommon(CLI::App* c, Common& o) {
   c->add_option("--master", o.master,
@@ -112,22 +63,6 @@ void AddCommon(CLI::App* c, Common& o) {
                 "$PIEZOID_CURVE_SECRET)");
   c->add_option("--master-public", o.master_public,
                 "CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
-}
-
-int Report(const Status& s) {
-  if (s.ok()) return kExitOk;
-  std::fprintf(stderr, "piezoid: error: %s\n", s.message().c_str());
-  return ExitCodeOf(s);
-}
-
-/// Prints every violation; returns the exit code for an invalid spec.
-int ReportViolations(const std::string& what, const std::vector<job::FieldViolation>& v,
-                     const Status& s) {
-  if (v.empty()) return Report(s);
-  std::fprintf(stderr, "piezoid: error: %s is invalid (%zu violation%s):\n", what.c_str(), v.size(),
-               v.size() == 1 ? "" : "s");
-  for (const auto& x : v) std::fprintf(stderr, "  %s\n", x.description.c_str());
-  return kExitBadInput;
 }
 
 std::string Num(double x, int prec = 6) {
@@ -214,7 +149,7 @@ class Progress {
                   static_cast<unsigned long long>(r.generation),
                   static_cast<unsigned long long>(max_), bar.c_str(), hgann_ ? 17 : 14,
                   best.c_str(), rate, e.workers, e.workers == 1 ? "" : "s", e.worker_threads);
-    const std::string islands = IslandsBrief(r);
+    const std::string islands = reports::IslandsBrief(r);
     std::strncat(line, islands.c_str(), sizeof line - std::strlen(line) - 1);
     if (tty_) {
       std::printf("\r%s\033[K", line);
@@ -251,14 +186,6 @@ void OnRun(CLI::App* c, const std::shared_ptr<Options>& o, int& exit_code, Run r
   c->callback([o, &exit_code, run] { exit_code = run(*o); });
 }
 
-/// Writes text to path: kExitOk, or the exit code after saying that it cannot.
-int WriteFile(const std::string& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary);
-  f << text;
-  f.close();
-  return f ? kExitOk : Report({StatusCode::kInternal, path + ": cannot write"});
-}
-
 // ---------------------------------------------------------------- submit
 
 struct SubmitOptions : Common {
@@ -274,7 +201,8 @@ int SubmitJob(const SubmitOptions& o) {
   v = kinds::All().Validate(spec);
   if (!v.empty()) return ReportViolations("job spec " + o.spec, v, InvalidArgument("invalid"));
   if (!o.embedded_out.empty()) {
-    if (int code = WriteFile(o.embedded_out, service::JobSpecToJson(spec) + "\n"); code != kExitOk)
+    if (int code = WriteTextFile(o.embedded_out, service::JobSpecToJson(spec) + "\n");
+        code != kExitOk)
       return code;
     std::fprintf(stderr, "piezoid: wrote %s (the spec with its data embedded; not submitted)\n",
                  o.embedded_out.c_str());
@@ -284,7 +212,7 @@ int SubmitJob(const SubmitOptions& o) {
   s = o.Client().Submit(spec, &r, &v, o.token);
   if (!s.ok())
     return s.code() == StatusCode::kInvalidArgument ? ReportViolations("job spec " + o.spec, v, s)
-                                                    : Report(s);
+                                                    : ReportStatus(s);
   std::printf("%s\n", r.job_id.c_str());
   if (r.existed)
     std::fprintf(stderr, "piezoid: job %s had already been submitted\n", r.job_id.c_str());
@@ -321,7 +249,7 @@ int ListJobs(const Common& o) {
   int workers = 0, threads = 0;
   Status s = o.Client().List(&all, &workers, &threads);
   if (s.ok()) PrintList(all, workers, threads);
-  return Report(s);
+  return ReportStatus(s);
 }
 
 int ShowStatus(const StatusOptions& o) {
@@ -329,7 +257,7 @@ int ShowStatus(const StatusOptions& o) {
   service::JobInfo i;
   Status s = o.Client().GetStatus(o.job_id, &i);
   if (s.ok()) PrintInfo(i);
-  return Report(s);
+  return ReportStatus(s);
 }
 
 void RegisterStatus(CLI::App& app, int& exit_code) {
@@ -356,7 +284,7 @@ struct JobOptions : Common {
 int CancelJob(const JobOptions& o) {
   Status s = o.Client().Cancel(o.job_id);
   if (s.ok()) std::printf("%s cancelled\n", o.job_id.c_str());
-  return Report(s);
+  return ReportStatus(s);
 }
 
 void RegisterCancel(CLI::App& app, int& exit_code) {
@@ -385,7 +313,7 @@ int PruneJobs(const PruneOptions& o) {
   std::vector<job::FieldViolation> refused;
   Status s =
       o.Client().Prune(o.job_ids, o.older_days * 86400.0, o.keep, o.dry_run, &pruned, &refused);
-  if (!s.ok()) return Report(s);
+  if (!s.ok()) return ReportStatus(s);
   for (const auto& id : pruned)
     std::printf("%s %s\n", o.dry_run ? "would prune" : "pruned", id.c_str());
   for (const auto& v : refused)
@@ -416,7 +344,7 @@ int WatchJob(const JobOptions& o) {
   svcclient::ServiceClient c = o.Client();
   service::JobInfo info;
   Status s = c.GetStatus(o.job_id, &info);
-  if (!s.ok()) return Report(s);
+  if (!s.ok()) return ReportStatus(s);
   std::printf("job %s (%s%s%s), %llu generations at most\n", o.job_id.c_str(), info.kind.c_str(),
               info.name.empty() ? "" : ": ", info.name.c_str(),
               static_cast<unsigned long long>(info.max_generations));
@@ -430,9 +358,9 @@ int WatchJob(const JobOptions& o) {
       },
       std::chrono::hours(24 * 365));
   progress.End();
-  if (!s.ok()) return Report(s);
+  if (!s.ok()) return ReportStatus(s);
   s = c.GetStatus(o.job_id, &info);
-  if (!s.ok()) return Report(s);
+  if (!s.ok()) return ReportStatus(s);
   std::printf("job %s %s (%s) after %llu generations: best cost %s%s, %llu evaluations in %.1f s\n",
               o.job_id.c_str(), service::JobStateName(info.state), info.message.c_str(),
               static_cast<unsigned long long>(info.generation > 0 ? info.generation - 1 : 0),
@@ -462,22 +390,21 @@ struct FetchOptions : JobOptions {
 };
 
 int FetchJob(const FetchOptions& o) {
-  FetchedJob job;
+  reports::FetchedJob job;
   Status s =
-      o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks,
-                       &job.committee);
-  if (!s.ok()) return Report(s);
+      o.Client().Fetch(o.job_id, o.count, &job.best, &job.log, &job.info, &job.spec, &job.networks);
+  if (!s.ok()) return ReportStatus(s);
   if (!service::IsFinal(job.info.state))
     std::fprintf(stderr,
                  "piezoid: note: job %s is still %s (generation %llu): this is the best so far\n",
                  o.job_id.c_str(), service::JobStateName(job.info.state),
                  static_cast<unsigned long long>(job.info.generation));
   const fs::path dir = o.out.empty() ? fs::path(o.job_id) : fs::path(o.out);
-  FetchOutput out;
-  s = WriteFetchedJob(job, dir, !o.no_plots, std::cout, &out);
+  reports::FetchOutput out;
+  s = reports::WriteFetchedJob(job, dir, !o.no_plots, std::cout, &out);
   std::cout.flush();
   if (s.ok() && !out.report.empty()) std::printf("report: %s\n", out.report.string().c_str());
-  return Report(s);
+  return ReportStatus(s);
 }
 
 void RegisterFetch(CLI::App& app, int& exit_code) {
@@ -496,131 +423,6 @@ void RegisterFetch(CLI::App& app, int& exit_code) {
   OnRun(c, o, exit_code, FetchJob);
 }
 
-// ---------------------------------------------------------------- export
-
-struct ExportOptions {
-  std::string network, out, name = "piezoid_predict", job;
-  bool plant = false;
-  controller::FinPlantExport fin;
-};
-
-/// The beam of the job spec `file` (its hgann.geometry overrides), and its cases' saturations as a
-/// note for the header.
-int JobBeam(const std::string& file, model::BeamGeometry* geometry, std::string* note) {
-  job::JobSpec spec;
-  std::vector<job::FieldViolation> v;
-  Status s = svcclient::LoadJobSpecFile(file, &spec, &v);
-  if (!s.ok()) return ReportViolations("job spec " + file, v, s);
-  const auto* h = std::get_if<job::HgannProblem>(&spec.problem);
-  if (!h) return Report(InvalidArgument(FieldError("--job", file, "is not an hgann job spec")));
-  hgann::HgannFitnessConfig config;
-  if (s = hgann::HgannConfigFromProblem(*h, &config); !s.ok()) return Report(s);
-  *geometry = config.geometry;
-  std::ostringstream n;
-  n << "The beam of job spec " << fs::path(file).filename().string()
-    << "; its cases' saturations [deg]";
-  for (const auto& c : config.cases)
-    n << (&c == &config.cases.front() ? ": " : ", ") << "case " << c.number << " ("
-      << c.drive.amplitude_v << " V, " << c.drive.frequency_hz << " Hz) b1 " << CDecimal(c.b1)
-      << " b2 " << CDecimal(c.b2);
-  *note = n.str() + ".";
-  return kExitOk;
-}
-
-/// The file `piezoid export` reads for PATH: PATH itself, or for a folder the first of fit.json
-/// (piezoid fit), network.pb (identify; fetch of an hgann job) and networks/best-1.pb (fetch).
-std::string ExportSource(const std::string& path) {
-  std::error_code ec;
-  if (!fs::is_directory(path, ec)) return path;
-  for (const char* name : {"fit.json", "network.pb", "networks/best-1.pb"}) {
-    const fs::path p = fs::path(path) / name;
-    if (fs::is_regular_file(p, ec)) return p.string();
-  }
-  throw InputError(
-      path +
-      ": a folder without fit.json, network.pb or networks/best-1.pb (what piezoid fit, identify "
-      "and fetch write)");
-}
-
-int ExportNetwork(const ExportOptions& o) {
-  const std::string source = ExportSource(o.network);
-  // A fit.json (piezoid fit): the record model's header (client/cmd_compensate.cc).
-  if (LooksLikeFitJson(source))
-    return ExportFit(source, o.out, o.name == "piezoid_predict" ? "" : o.name);
-  io::SavedNetwork net;
-  Status s = io::LoadNetwork(source, &net);
-  if (!s.ok()) return Report(InvalidArgument(s.message()));
-  std::string header;
-  if (o.plant) {
-    model::BeamGeometry geometry;  // the spec's beam, as the HGANN fitness's default …
-    controller::FinPlantExport fin = o.fin;
-    if (!o.job.empty()) {  // … or the job's
-      if (int code = JobBeam(o.job, &geometry, &fin.note); code != kExitOk) return code;
-    }
-    const model::BimorphPlant plant(geometry);
-    const model::ModalSimulator sim(plant);
-    s = controller::NetworkAndFinToCHeader(net, sim, fin, o.name, &header);
-  } else {
-    s = controller::NetworkToCHeader(net, o.name, &header);
-  }
-  if (!s.ok()) return Report(s);
-  if (o.out.empty()) {
-    std::fwrite(header.data(), 1, header.size(), stdout);
-    return kExitOk;
-  }
-  if (int code = WriteFile(o.out, header); code != kExitOk) return code;
-  if (o.plant)
-    std::fprintf(stderr,
-                 "piezoid: wrote %s: %s_params, %s_init, %s_step, %s_inverse_step at %g Hz\n",
-                 o.out.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(), o.name.c_str(),
-                 o.fin.sample_rate_hz);
-  else
-    std::fprintf(stderr, "piezoid: wrote %s: %s(amplitude_v, frequency_hz, p[7])\n", o.out.c_str(),
-                 o.name.c_str());
-  return kExitOk;
-}
-
-void RegisterExport(CLI::App& app, int& exit_code) {
-  auto o = std::make_shared<ExportOptions>();
-  auto* c = app.add_subcommand("export",
-                               "write a network file (.pb or .json) or a fit.json (piezoid fit) as "
-                               "a standalone C header for a controller");
-  c->add_option("network", o->network,
-                "network file (from fetch or identify), fit.json of piezoid fit, or their folder "
-                "(fit.json, network.pb or "
-                "networks/best-1.pb in it)")
-      ->required();
-  c->add_option("--out,-o", o->out, "header file to write (default: stdout)");
-  c->add_option("--name", o->name,
-                "name of the C function (a C identifier; for a fit.json the prefix of its "
-                "functions, default the header's file stem)")
-      ->capture_default_str();
-  auto* plant = c->add_flag("--plant", o->plant,
-                            "add the bimorph-fin plant (spec beam) as a per-sample recursion: "
-                            "NAME_init, NAME_step (drive -> angle), "
-                            "NAME_inverse_step (angle -> drive)");
-  c->add_option("--sample-rate", o->fin.sample_rate_hz,
-                "the controller's sample rate [Hz] (with --plant)")
-      ->needs(plant)
-      ->capture_default_str();
-  c->add_option("--drive-limit", o->fin.drive_limit_v,
-                "|drive| limit [V] (with --plant; 0 = the largest training amplitude)")
-      ->needs(plant)
-      ->capture_default_str();
-  c->add_option("--job", o->job,
-                "the HGANN job spec (.json) the network was identified with: its beam "
-                "(hgann.geometry) and, in a "
-                "comment, its cases' saturations (with --plant; default: the spec's beam)")
-      ->needs(plant);
-  c->add_option("--inverse-horizon", o->fin.inverse_horizon,
-                "samples over which NAME_inverse_step reaches the desired angle (with --plant; 1 = "
-                "exact one-step "
-                "inversion, unstable on this plant)")
-      ->needs(plant)
-      ->capture_default_str();
-  OnRun(c, o, exit_code, ExportNetwork);
-}
-
 // ---------------------------------------------------------------- dashboard
 
 struct DashboardFlags : Common {
@@ -630,7 +432,7 @@ struct DashboardFlags : Common {
 };
 
 /// The dashboard's options of its flags: InvalidArgument naming --listen or --token-file.
-Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
+Status DashboardOptionsOf(const DashboardFlags& f, dashboard::DashboardOptions* o) {
   o->client = ClientOptionsOf(f.master, f.timeout_ms, f.retries, f.curve_secret, f.master_public);
   const size_t colon = f.listen.rfind(':');
   if (colon == std::string::npos || colon + 1 == f.listen.size())
@@ -660,8 +462,8 @@ Status DashboardOptionsOf(const DashboardFlags& f, DashboardOptions* o) {
 }
 
 int ServeDashboard(const DashboardFlags& f) {
-  DashboardOptions o;
-  if (Status s = DashboardOptionsOf(f, &o); !s.ok()) return Report(s);
+  dashboard::DashboardOptions o;
+  if (Status s = DashboardOptionsOf(f, &o); !s.ok()) return ReportStatus(s);
   // SIGINT / SIGTERM end the dashboard: blocked here (every thread inherits the mask), awaited
   // below.
   sigset_t signals;
@@ -669,8 +471,8 @@ int ServeDashboard(const DashboardFlags& f) {
   sigaddset(&signals, SIGINT);
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
-  Dashboard d(o);
-  if (Status s = d.Start(); !s.ok()) return Report(s);
+  dashboard::Dashboard d(o);
+  if (Status s = d.Start(); !s.ok()) return ReportStatus(s);
   if (!f.url_file.empty()) {
     const std::string tmp = f.url_file + ".tmp";
     std::ofstream(tmp) << d.url() << "\n";
@@ -721,44 +523,9 @@ void RegisterServiceCommands(CLI::App& app, int& exit_code) {
   RegisterPrune(app, exit_code);
   RegisterWatch(app, exit_code);
   RegisterFetch(app, exit_code);
-  RegisterExport(app, exit_code);
   RegisterDashboard(app, exit_code);
   RegisterKeygen(app, exit_code);
   RegisterDoctor(app, exit_code);
-}
-
-// ---- the flags of searches on a master ----
-
-CompleteServiceFlags::CompleteServiceFlags()
-    : curve_secret(Env("PIEZOID_CURVE_SECRET")), master_public(Env("PIEZOID_MASTER_PUBLIC")) {}
-
-svcclient::ServiceEvaluatorOptions CompleteServiceFlags::Options() const {
-  svcclient::ServiceEvaluatorOptions o;
-  o.client = ClientOptionsOf(master, timeout_ms, retries, curve_secret, master_public);
-  return o;
-}
-
-void AddCompleteServiceFlags(CLI::App* cmd, CompleteServiceFlags& f) {
-  cmd->add_option("--master", f.master,
-                  "run every evaluation of the searches on the workers of this piezoid-master (its "
-                  "client endpoint, "
-                  "e.g. tcp://127.0.0.1:5556), one evaluation session per search or fit: the same "
-                  "result, bit for "
-                  "bit, as the local run")
-      ->type_name("ENDPOINT");
-  cmd->add_option("--timeout-ms", f.timeout_ms, "with --master: per-request timeout [ms]")
-      ->check(CLI::Range(10, 3600000))
-      ->capture_default_str();
-  cmd->add_option("--retries", f.retries, "with --master: attempts per request")
-      ->check(CLI::Range(1, 100))
-      ->capture_default_str();
-  cmd->add_option(
-      "--curve-secret", f.curve_secret,
-      "with --master, CURVE: this client's key pair, NAME.key from `piezoid keygen` (default: "
-      "$PIEZOID_CURVE_SECRET)");
-  cmd->add_option(
-      "--master-public", f.master_public,
-      "with --master, CURVE: the master's public key file (default: $PIEZOID_MASTER_PUBLIC)");
 }
 
 }  // namespace pz::client

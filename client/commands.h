@@ -3,8 +3,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <string>
-
 namespace pz::client {
 
 // Each Register* adds one subcommand to app; its callback sets the process exit code through
@@ -21,10 +19,14 @@ void RegisterFit(CLI::App& app, int& exit_code);
 void RegisterRecords(CLI::App& app, int& exit_code);
 void RegisterSynthStack(CLI::App& app, int& exit_code);
 void RegisterCompensate(CLI::App& app, int& exit_code);
+/// `piezoid export` (client/cmd_export.cc): a fit.json or a network file as a C99 header.
+void RegisterExport(CLI::App& app, int& exit_code);
 
-/// `piezoid export FIT.json`: the fitted model as a self-contained C99 header
-/// (controller/export_header.h) written to `out` (stdout when empty), its functions named `name`
-/// (default: out's stem). Throws InputError on a bad fit.json. Returns the exit code.
-int ExportFit(const std::string& fit_json, const std::string& out, const std::string& name);
+/// The service commands (client/cmd_service.cc): submit, status, list (alias jobs), cancel, prune,
+/// watch, fetch and dashboard, with keygen (CURVE keys: client/cmd_keygen.cc) and doctor (what
+/// this machine computes as: client/cmd_doctor.cc).
+void RegisterServiceCommands(CLI::App& app, int& exit_code);
+void RegisterKeygen(CLI::App& app, int& exit_code);
+void RegisterDoctor(CLI::App& app, int& exit_code);
 
 }  // namespace pz::client

@@ -2,8 +2,8 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "client/cmd_service.h"
 #include "client/commands.h"
+#include "client/service_flags.h"
 #include "model/status.h"
 
 int main(int argc, char** argv) {
@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   pz::client::RegisterRecords(app, exit_code);
   pz::client::RegisterSynthStack(app, exit_code);
   pz::client::RegisterCompensate(app, exit_code);
+  pz::client::RegisterExport(app, exit_code);
   pz::client::RegisterServiceCommands(app, exit_code);
   app.footer(
       "Exit codes: 0 ok; 1 runtime failure; 2 bad input (command line, job spec with every "

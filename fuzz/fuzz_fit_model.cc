@@ -1,4 +1,4 @@
-// libFuzzer target: the fit.json loader (client/fit_file.h LoadFitText over io/fit_model.h) and
+// libFuzzer target: the fit.json loader (reports/fit_file.h LoadFitText over io/fit_model.h) and
 // what `piezoid export FIT.json` and `piezoid compensate` do with a model it accepts: the step
 // kernels built (records::Stepper), the C header written (controller/export_header.h), the model
 // run forward and inverse over a short drive sweep between its drive limits. The whole input is the
@@ -14,10 +14,10 @@
 #include <string>
 #include <string_view>
 
-#include "client/fit_file.h"
 #include "controller/export_header.h"
 #include "model/status.h"
 #include "records/stepper.h"
+#include "reports/fit_file.h"
 
 namespace {
 
@@ -54,7 +54,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const pz::records::ModelSpec m = pz::client::LoadFitText("fit.json", text);
+    const pz::records::ModelSpec m = pz::reports::LoadFitText("fit.json", text);
     Run(m);
   } catch (const pz::InputError& e) {
     if (std::string_view(e.what()).empty()) Fail("an InputError without a message");

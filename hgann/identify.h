@@ -1,6 +1,6 @@
 // `piezoid identify` on one machine: the HGANN identification of a bench case set by the GA
 // (opt/ga.h) over a thread pool, with the HGANN fitness (hgann/hgann_fitness.h). The report of the
-// run is client/identify_report.h; the same run on the service is the "hgann" job kind
+// run is reports/identify_report.h; the same run on the service is the "hgann" job kind
 // (hgann/hgann_job.h), bit for bit.
 #pragma once
 

@@ -2,7 +2,7 @@
 // both diagnoses (the records diagnosis of `piezoid diagnose --records` and the fin bench's of
 // `piezoid diagnose --cases`), through io/proto_json.h (keys sorted, a non-finite number as null, a
 // bad field named by its path), here only. The one conversion of each diagnosis to the message is
-// its report writer's (client/records_diagnose.cc, client/diagnose_report.cc).
+// its report writer's (reports/records_diagnose.cc, reports/diagnose_report.cc).
 //
 // A file is of one kind: "records" given (a records diagnosis) or "bench" (the fin bench's). The
 // fields of the other kind (the option diagnosis_only) are not written — a list as [] neither —

@@ -14,10 +14,12 @@ using google::protobuf::Struct;
 using google::protobuf::Value;
 
 std::string Needed() {
-  return "this piezoid reads fit.json format_version " + std::to_string(kFitFormatVersion);
+  return "this piezoid reads fit.json format_version " + std::to_string(kFitFormatVersionOldest) +
+         " or " + std::to_string(kFitFormatVersion);
 }
 
-void CheckTopVersion(const std::string& path, const Struct& root) {
+/// The file's format_version (kFitFormatVersionOldest … kFitFormatVersion).
+int CheckTopVersion(const std::string& path, const Struct& root) {
   const auto& f = root.fields();
   auto version = f.find("format_version");
   if (version == f.end()) {
@@ -27,12 +29,16 @@ void CheckTopVersion(const std::string& path, const Struct& root) {
                      Needed() + "; run piezoid fit again");
   }
   const Value& v = version->second;
-  if (v.kind_case() != Value::kNumberValue || v.number_value() != kFitFormatVersion) {
-    const std::string got =
-        v.kind_case() == Value::kNumberValue ? FormatNumber(v.number_value()) : "(not a number)";
-    throw InputError(path + ": format_version " + got + ": " + Needed());
-  }
+  const bool number = v.kind_case() == Value::kNumberValue;
+  for (int read = kFitFormatVersionOldest; number && read <= kFitFormatVersion; ++read)
+    if (v.number_value() == read) return read;
+  const std::string got = number ? FormatNumber(v.number_value()) : "(not a number)";
+  throw InputError(path + ": format_version " + got + ": " + Needed());
 }
+
+/// Version 1's top-level copies of the model's fields (the model section is the one read).
+constexpr const char* kVersion1Copies[] = {"response_unit", "drive_unit", "polarity", "params",
+                                           "weights"};
 
 }  // namespace
 
@@ -49,13 +55,15 @@ bool LooksLikeFitJson(const std::string& text) {
 }
 
 void ReadFitFile(const std::string& path, const std::string& text, proto::FitFile* out) {
-  const Struct root = ParseJsonObject(path, text);
-  CheckTopVersion(path, root);
+  Struct root = ParseJsonObject(path, text);
+  const int version = CheckTopVersion(path, root);
+  if (version == 1)
+    for (const char* key : kVersion1Copies) root.mutable_fields()->erase(key);
   proto::FitFile f;
   StructToMessage(path, root, &f);
-  if (f.has_model() && f.model().format_version() != static_cast<unsigned>(kFitFormatVersion)) {
+  if (f.has_model() && f.model().format_version() != static_cast<unsigned>(version)) {
     throw InputError(path + ": model.format_version " + std::to_string(f.model().format_version()) +
-                     ": " + Needed());
+                     ": not the file's format_version " + std::to_string(version));
   }
   *out = std::move(f);
 }

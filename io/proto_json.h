@@ -3,7 +3,7 @@
 // check.json: io/diagnosis_json.h; committee.json; `piezoid boucwen`'s report.json; `piezoid pi
 // --json`; `piezoid dahl --json`), none by hand. (A network's .json is protobuf's own printing,
 // io/network_io.h; the dashboard's documents are served, not stored: service/wire_codec.h, and a
-// report folder's file list in client/dashboard.cc.) Here: a message <-> an indented JSON object
+// report folder's file list in dashboard/dashboard.cc.) Here: a message <-> an indented JSON object
 // whose bytes do not vary from run to run, and a reader that names the bad field. One walker
 // (WalkJsonObject) goes over a message's JSON object by its fields, for the rules below and for a
 // codec's own (io/diagnosis_json.cc).

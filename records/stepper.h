@@ -27,7 +27,7 @@
 namespace pz::records {
 namespace pzk = ::pz::pzk;  // the step kernels (model/kernels/pzk.h)
 
-/// Everything that rebuilds a fitted model (fit.json's "model" section, client/fit_file.h).
+/// Everything that rebuilds a fitted model (fit.json's "model" section, reports/fit_file.h).
 struct ModelSpec {
   std::string family;
   int substeps = 2;       ///< FamilyOptions::substeps

@@ -21,7 +21,7 @@ import sys
 import tempfile
 
 FOLDERS = ["model", "io", "opt", "job", "records", "controller", "hgann", "diagnose", "complete",
-           "kinds", "service", "master", "worker", "svcclient", "client"]
+           "kinds", "service", "master", "worker", "svcclient", "reports", "dashboard", "client"]
 LIMIT = 120
 
 # Allowed long functions: (file or file prefix, function name or "*" for every function of the

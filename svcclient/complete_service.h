@@ -1,6 +1,6 @@
 // Complete-model searches on the workers of a piezoid-master (issue 7): the evaluator factories
 // of `piezoid fit`, `diagnose --records` and the committee over the service (their flags, --master
-// and the rest, are the CLI's: client/cmd_service.h CompleteServiceFlags). Each search is one
+// and the rest, are the CLI's: client/service_flags.h CompleteServiceFlags). Each search is one
 // session whose spec (the "complete_model" job kind, complete/job_kind.h) carries the fitness's
 // records, so the results equal the local run's bit for bit.
 #pragma once

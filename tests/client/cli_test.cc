@@ -3,6 +3,8 @@
 // and the commands run in-process (bad input surfaces as pz::InputError → exit code 2 in main.cc).
 // The scores' JSON is proto::PiScores (proto/pi.proto); the file of a piezoid before it
 // (tests/data/pi-json) reads into it.
+#include "tests/testing/cli.h"
+
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
@@ -13,14 +15,13 @@
 #include <sstream>
 
 #include "client/case_models.h"
-#include "client/data_root.h"
 #include "client/commands.h"
-#include "client/pi_report.h"
+#include "client/data_root.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
-#include "pi.pb.h"
 #include "model/saturation.h"
-#include "tests/testing/cli.h"
+#include "pi.pb.h"
+#include "reports/pi_report.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::client {
@@ -146,7 +147,7 @@ TEST(ScoreCaseSet, ExactPiAndCfWithAStandInSimulator) {
   const io::CaseSet set = io::LoadCaseSet(kNominal);
   ParsedFlags f({});
   const auto models = ResolveBenchCases(f.flags, set);
-  const PiReport r = ScoreCaseSet(set, models, OffsetSimulator(set, 0.1));
+  const reports::PiReport r = ScoreCaseSet(set, models, OffsetSimulator(set, 0.1));
   ASSERT_EQ(r.cases.size(), 9u);
   for (const auto& c : r.cases) {
     ASSERT_TRUE(c.scored);
@@ -159,7 +160,7 @@ TEST(ScoreCaseSet, ExactPiAndCfWithAStandInSimulator) {
   EXPECT_EQ(r.failed, 0);
 
   std::ostringstream text;
-  PrintPiReport(text, r);
+  reports::PrintPiReport(text, r);
   PZ_EXPECT_HAS(text.str(), "CF = sum of PI over the training cases (1, 5, 6, 7): 33 deg^2");
   PZ_EXPECT_HAS(text.str(), "     500 V      12.0000      6.0000*      3.0000*");
 }
@@ -167,18 +168,18 @@ TEST(ScoreCaseSet, ExactPiAndCfWithAStandInSimulator) {
 TEST(ScoreCaseSet, FailedCasesAreRowsLeftOutOfTheSums) {
   const io::CaseSet set = io::LoadCaseSet(kNominal);
   ParsedFlags f({});
-  const PiReport r =
+  const reports::PiReport r =
       ScoreCaseSet(set, ResolveBenchCases(f.flags, set), OffsetSimulator(set, 0.1, 5));
   EXPECT_EQ(r.failed, 1);
   EXPECT_FALSE(r.cases[4].scored);
   EXPECT_NEAR(r.cf_train, 0.01 * (1200 + 300 + 1200), 1e-9);
   std::ostringstream text, json, csv;
-  PrintPiReport(text, r);
+  reports::PrintPiReport(text, r);
   PZ_EXPECT_HAS(text.str(), "(incomplete: 1 case(s) failed)");
   PZ_EXPECT_HAS(text.str(), "solver_failure: stand-in failure");
-  PiReport named = r;  // a folder name that JSON must escape
+  reports::PiReport named = r;  // a folder name that JSON must escape
   named.case_set = "a\"b\\c\nd\x01";
-  WritePiJson(json, named);
+  reports::WritePiJson(json, named);
   PZ_EXPECT_HAS(json.str(), "\"case_set\": \"a\\\"b\\\\c\\nd\\u0001\"");
   PZ_EXPECT_HAS(json.str(), "\"pi_deg2\": null");
   proto::PiScores back;  // reads into its message and prints back to the same bytes
@@ -197,7 +198,7 @@ TEST(ScoreCaseSet, FailedCasesAreRowsLeftOutOfTheSums) {
   EXPECT_TRUE(std::isnan(c5.pi_deg2()) && std::isnan(c5.rmse_deg()) && std::isnan(c5.r2()));
   EXPECT_EQ(back.cases(3).pi_deg2(), r.cases[3].metrics.pi);
   EXPECT_EQ(back.cf_train_deg2(), r.cf_train);
-  WritePiCsv(csv, r);
+  reports::WritePiCsv(csv, r);
   PZ_EXPECT_HAS(csv.str(), "\n5,500,0.5,train,");
   PZ_EXPECT_HAS(csv.str(), ",fitted,solver_failure,,,,\n");
 }
@@ -324,7 +325,7 @@ TEST(Commands, SimulateWritesOneCsvPerCase) {
 TEST(ScoreCaseSet, NominalParametersMatchTheNominalBenchToQuantisationLevel) {
   const io::CaseSet set = io::LoadCaseSet(kNominal);
   ParsedFlags f({});
-  const PiReport r =
+  const reports::PiReport r =
       ScoreCaseSet(set, ResolveBenchCases(f.flags, set), PlantSimulator(model::Solver::kModal));
   ASSERT_EQ(r.failed, 0);
   const double q = 360.0 / 8192;

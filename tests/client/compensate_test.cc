@@ -14,13 +14,15 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <regex>
 #include <sstream>
 
 #include "client/commands.h"
-#include "client/fit_file.h"
 #include "io/csv.h"
+#include "model/format.h"
+#include "reports/fit_file.h"
 #include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
@@ -129,8 +131,9 @@ double CentredRmse(const std::vector<double>& a, const std::vector<double>& b) {
 
 TEST_F(Compensate, AZeroMeanReferenceIsTakenRelative) {
   // The usual form of a reference: zero-mean, ±12 um. The model's output spans about 2 … 42 um, so
-  // by default (auto) the reference is taken about the model's major loop's mean; the true plant on
-  // that drive follows it within the noise; the prediction column is in the reference's frame.
+  // by default (auto) the reference is taken about the training records' mean response (fit.json's
+  // model.train_mean_output); the true plant on that drive follows it within the noise; the
+  // prediction column is in the reference's frame.
   WriteReference(dir_ / "zero.csv", 12);
   {
     std::ifstream in(dir_ / "zero.csv");
@@ -151,7 +154,11 @@ TEST_F(Compensate, AZeroMeanReferenceIsTakenRelative) {
   const std::string fit = (dir_ / "fit" / "fit.json").string(), ref = (dir_ / "zero.csv").string();
   const std::string out = Captured({"compensate", "--model", fit, "--reference", ref, "--out",
                                     (dir_ / "zero_drive.csv").string()});
-  PZ_EXPECT_HAS(out, "reference relative to the mean of the model's major loop");
+  std::optional<double> train_mean;
+  reports::LoadFit(fit, &train_mean);
+  ASSERT_TRUE(train_mean.has_value());
+  PZ_EXPECT_HAS(out, "reference relative to the training records' mean response, " +
+                         FormatG(*train_mean, 4) + " um");
   PZ_EXPECT_HAS(out, "clipping: none");
   const std::vector<double> r = Column(dir_ / "zero.csv", 1);
   const std::vector<double> u = Column(dir_ / "zero_drive.csv", 1);
@@ -160,6 +167,18 @@ TEST_F(Compensate, AZeroMeanReferenceIsTakenRelative) {
   double mean = 0;  // the prediction about the reference's zero, not the model's absolute output
   for (double y : predicted) mean += y / static_cast<double>(predicted.size());
   EXPECT_LT(std::abs(mean), 2.0) << out;
+  // A fit.json without the training mean (version 1, a model-only file): the model's major loop's
+  // mean instead, and said so.
+  std::string json = io::ReadTextFile(fit);
+  const size_t at = json.find("  \"train_mean_output\": ");
+  ASSERT_NE(at, std::string::npos);
+  json.erase(at, json.find('\n', at) + 1 - at);
+  std::ofstream(dir_ / "no_mean.json") << json;
+  const std::string loop =
+      Captured({"compensate", "--model", (dir_ / "no_mean.json").string(), "--reference", ref,
+                "--out", (dir_ / "loop_drive.csv").string(), "--reference-zero", "mean"});
+  PZ_EXPECT_HAS(loop, "reference relative to the mean of the model's major loop");
+  PZ_EXPECT_HAS(loop, "(the fit.json does not carry the training records' mean)");
   // About the rest output at 50 V: the drive starts there and tracks all the same.
   const std::string rest = Captured({"compensate", "--model", fit, "--reference", ref, "--out",
                                      (dir_ / "rest_drive.csv").string(), "--reference-zero", "rest",
@@ -191,7 +210,7 @@ TEST_F(Compensate, AnUnreachableReferenceIsClippedAndReported) {
   PZ_EXPECT_HAS(out, " s: ");  // where
   const std::vector<double> u = Column(dir_ / "big_drive.csv", 1);
   const auto [lo, hi] = std::minmax_element(u.begin(), u.end());
-  const records::ModelSpec m = LoadFit((dir_ / "fit" / "fit.json").string());
+  const records::ModelSpec m = reports::LoadFit((dir_ / "fit" / "fit.json").string());
   EXPECT_EQ(*hi, m.drive_max);
   EXPECT_EQ(*lo, m.drive_min);
 }
@@ -205,28 +224,29 @@ TEST_F(Compensate, BadInputIsNamed) {
       }),
       "is in 'deg', the model's response is in 'um'");
   std::string json = io::ReadTextFile(dir_ / "fit" / "fit.json");
-  const size_t at = json.find("\"format_version\": 1");
+  const size_t at = json.find("\"format_version\": 2");
   ASSERT_NE(at, std::string::npos);
-  std::string v2 = json;
-  v2.replace(at, 19, "\"format_version\": 2");
-  std::ofstream(dir_ / "v2.json") << v2;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "v2.json").string()); }),
-                "format_version 2: this piezoid reads fit.json format_version 1");
+  std::string v3 = json;
+  v3.replace(at, 19, "\"format_version\": 3");
+  std::ofstream(dir_ / "v3.json") << v3;
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { reports::LoadFit((dir_ / "v3.json").string()); }),
+                "format_version 3: this piezoid reads fit.json format_version 1 or 2");
   std::string renamed = json;
   const size_t w = renamed.find("\"weights\"", renamed.find("\"model\""));  // the model section's
   ASSERT_NE(w, std::string::npos);
   renamed.replace(w, 9, "\"weigths\"");
   std::ofstream(dir_ / "bad.json") << renamed;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "bad.json").string()); }), "weigths");
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { reports::LoadFit((dir_ / "bad.json").string()); }),
+                "weigths");
   std::string family = json;
   const size_t fam = family.find("\"family\": \"");
   ASSERT_NE(fam, std::string::npos);
   family.insert(fam + 11, "no-such-");
   std::ofstream(dir_ / "family.json") << family;
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "family.json").string()); }),
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { reports::LoadFit((dir_ / "family.json").string()); }),
                 "model.family 'no-such-");
   std::ofstream(dir_ / "old.json") << "{\"model\": \"prandtl-ishlinskii\", \"params\": {}}\n";
-  PZ_EXPECT_HAS(testing::InputErrorOf([&] { LoadFit((dir_ / "old.json").string()); }),
+  PZ_EXPECT_HAS(testing::InputErrorOf([&] { reports::LoadFit((dir_ / "old.json").string()); }),
                 "no format_version");
 }
 
@@ -234,19 +254,19 @@ TEST_F(Compensate, BadInputIsNamed) {
 /// is auto (the default); a fit.json without the field (proto3: empty; fitted before it, centred)
 /// reads as centred; bad values name the flag / field.
 TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
-  EXPECT_EQ(LoadFit((dir_ / "fit" / "fit.json").string()).initial_state,
+  EXPECT_EQ(reports::LoadFit((dir_ / "fit" / "fit.json").string()).initial_state,
             model::InitialState::kAuto);
   PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "fit" / "fit.json"), "\"initial_state\": \"auto\"");
   PZ_EXPECT_HAS(io::ReadTextFile(dir_ / "fit" / "report.md"),
                 "in the **auto** state (descended at a rest at the bottom");
   // backlash-like's auto is centred (records/families.cc; measured: docs/records.md).
-  EXPECT_EQ(LoadFit((dir_ / "other" / "fit.json").string()).initial_state,
+  EXPECT_EQ(reports::LoadFit((dir_ / "other" / "fit.json").string()).initial_state,
             model::InitialState::kCentred);
   Captured({"fit", "--records", (dir_ / "rec.csv").string(), "--family", "prandtl-ishlinskii",
             "--pi-operators", "6", "--initial-state", "ascended", "--out", (dir_ / "asc").string(),
             "--no-figures", "--quiet"});
   const fs::path fit = dir_ / "asc" / "fit.json";
-  EXPECT_EQ(LoadFit(fit.string()).initial_state, model::InitialState::kAscended);
+  EXPECT_EQ(reports::LoadFit(fit.string()).initial_state, model::InitialState::kAscended);
   const std::string report = io::ReadTextFile(dir_ / "asc" / "report.md");
   EXPECT_NE(report.find("in the **ascended** state"), std::string::npos) << report;
   std::string json = io::ReadTextFile(fit);
@@ -256,13 +276,13 @@ TEST_F(Compensate, TheInitialStateIsSavedAndLoaded) {
   std::string old = json;
   old.replace(at, field.size(), "\"initial_state\": \"\"");
   std::ofstream(dir_ / "no_state.json") << old;
-  EXPECT_EQ(LoadFit((dir_ / "no_state.json").string()).initial_state,
+  EXPECT_EQ(reports::LoadFit((dir_ / "no_state.json").string()).initial_state,
             model::InitialState::kCentred);
   std::string bad = json;
   bad.replace(at, field.size(), "\"initial_state\": \"upward\"");
   std::ofstream(dir_ / "bad_state.json") << bad;
   PZ_EXPECT_HAS(
-      testing::InputErrorOf([&] { LoadFit((dir_ / "bad_state.json").string()); }),
+      testing::InputErrorOf([&] { reports::LoadFit((dir_ / "bad_state.json").string()); }),
       "model.initial_state 'upward' is unknown (allowed: centred, descended, ascended, auto)");
   PZ_EXPECT_HAS(testing::InputErrorOf([&] {
                   RunCli({"fit", "--records", (dir_ / "rec.csv").string(), "--family",

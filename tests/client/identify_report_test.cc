@@ -1,7 +1,8 @@
-// piezoid identify's result folder (client/identify_report.h): every file written, the network
+// piezoid identify's result folder (reports/identify_report.h): every file written, the network
 // reloads exactly and predicts as the fitness's decoding does.
-#include <gtest/gtest.h>
+#include "reports/identify_report.h"
 
+#include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
@@ -12,12 +13,11 @@
 #include <sstream>
 
 #include "client/commands.h"
-#include "client/identify_report.h"
 #include "hgann/hgann_fitness.h"
 #include "hgann/trend_seeds.h"
-#include "model/chromosome.h"
 #include "io/bench_data.h"
 #include "io/network_io.h"
+#include "model/chromosome.h"
 
 namespace pz::client {
 namespace {
@@ -29,8 +29,8 @@ const io::CaseSet& Nominal() {
 }
 
 /// A small run of the nominal set into a temporary folder named after `name`.
-IdentifyOptions SmallRun(const std::string& name, int population, int generations) {
-  IdentifyOptions o;
+reports::IdentifyOptions SmallRun(const std::string& name, int population, int generations) {
+  reports::IdentifyOptions o;
   o.cases_dir = Nominal().dir;
   o.out_dir = std::filesystem::temp_directory_path() /
               ("piezoid-" + name + "-" + std::to_string(::getpid()));
@@ -45,13 +45,13 @@ IdentifyOptions SmallRun(const std::string& name, int population, int generation
 TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
   const io::CaseSet& set = Nominal();
   const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
-  IdentifyOptions o = SmallRun("identify-test", 20, 3);
+  reports::IdentifyOptions o = SmallRun("identify-test", 20, 3);
   int generations = 0;
   const auto result =
       hgann::RunIdentify(o, set, fitness, [&](const opt::GenerationSummary&) { ++generations; });
   EXPECT_EQ(generations, 4);
   std::ostringstream term;
-  const auto files = WriteIdentifyReport(o, set, fitness, result, term);
+  const auto files = reports::WriteIdentifyReport(o, set, fitness, result, term);
   for (const char* f :
        {"network.pb", "network.json", "progress.csv", "validation.csv", "parameters.csv",
         "report.md", "fitness.gp", "case9_loop.gp", "traces/case9.csv"})
@@ -98,13 +98,13 @@ TEST(IdentifyReport, WritesResultFolderWhoseNetworkReloadsExactly) {
 /// report.md of a result whose network is `net` (a small run's result with its network replaced).
 std::string ReportOf(const std::string& name, const hgann::HgannFitness& fitness,
                      const model::Network& net, std::string* terminal) {
-  IdentifyOptions o = SmallRun(name, 10, 0);
+  reports::IdentifyOptions o = SmallRun(name, 10, 0);
   auto result = hgann::RunIdentify(o, Nominal(), fitness, nullptr);
   result.best.chromosome = model::EncodeChromosome(net);
   result.best.network = fitness.Decode(opt::Genome{result.best.chromosome, {}});
   result.cases = fitness.EvaluateCases(result.best.network);
   std::ostringstream term;
-  WriteIdentifyReport(o, Nominal(), fitness, result, term);
+  reports::WriteIdentifyReport(o, Nominal(), fitness, result, term);
   std::ifstream in(o.out_dir / "report.md");
   const std::string md((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   std::filesystem::remove_all(o.out_dir);
@@ -141,7 +141,7 @@ TEST(IdentifyReport, ThePerCaseCheckFlagsAPlantedMissAndNotTheTruth) {
 TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   const io::CaseSet& set = Nominal();
   const hgann::HgannFitness fitness(hgann::HgannConfigFromCaseSet(set, {}));
-  IdentifyOptions o = SmallRun("identify-islands", 12, 4);
+  reports::IdentifyOptions o = SmallRun("identify-islands", 12, 4);
   o.ga.islands = 3;
   o.ga.migration_interval = 2;
   o.ga.migrants = 1;
@@ -149,7 +149,7 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   o.ga.migration_margin = 0;
   const auto result = hgann::RunIdentify(o, set, fitness, nullptr);
   std::ostringstream term;
-  WriteIdentifyReport(o, set, fitness, result, term);
+  reports::WriteIdentifyReport(o, set, fitness, result, term);
   std::ifstream csv(o.out_dir / "progress.csv");
   std::string header, row;
   std::getline(csv, header);
@@ -169,9 +169,9 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
         << row;
   }
   EXPECT_EQ(rows, 5);
-  EXPECT_EQ(IslandCsvCells(result.log[2]).substr(0, 3),
+  EXPECT_EQ(reports::IslandCsvCells(result.log[2]).substr(0, 3),
             "," + std::to_string(result.log[2].best_island) + ",");
-  EXPECT_NE(IslandsBrief(result.log.back()).find("/3 (islands "), std::string::npos);
+  EXPECT_NE(reports::IslandsBrief(result.log.back()).find("/3 (islands "), std::string::npos);
   std::ifstream gp(o.out_dir / "fitness.gp");
   const std::string plot((std::istreambuf_iterator<char>(gp)), {});
   EXPECT_NE(plot.find("island 2"), std::string::npos) << plot;
@@ -184,7 +184,8 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
   // The margin's gate and the islands' rates (the default ladder above, or given) are named in the
   // report's line.
   const auto report_line = [&] {
-    WriteIdentifyReport(o, set, fitness, hgann::RunIdentify(o, set, fitness, nullptr), term);
+    reports::WriteIdentifyReport(o, set, fitness, hgann::RunIdentify(o, set, fitness, nullptr),
+                                 term);
     std::ifstream in(o.out_dir / "report.md");
     return std::string((std::istreambuf_iterator<char>(in)), {});
   };
@@ -213,8 +214,8 @@ TEST(IdentifyReport, IslandsGetTheirColumnsTheirLinesAndTheirReportLine) {
       std::string::npos)
       << broadcast;
   // One island: the file is as before islands.
-  EXPECT_EQ(IslandCsvHeader({opt::GenerationSummary{}}), "");
-  EXPECT_EQ(IslandsBrief(opt::GenerationSummary{}), "");
+  EXPECT_EQ(reports::IslandCsvHeader({opt::GenerationSummary{}}), "");
+  EXPECT_EQ(reports::IslandsBrief(opt::GenerationSummary{}), "");
   std::filesystem::remove_all(o.out_dir);
 }
 

@@ -1,6 +1,6 @@
 // The effect `rate-dependence` through the command line (issue 22): `piezoid synth-stack` writes a
 // rate-dependent plant's records at several rates with its truth; `piezoid fit --effects
-// rate-dependence` writes fit.json, which reads back (client/fit_file.h LoadFit) with the effect
+// rate-dependence` writes fit.json, which reads back (reports/fit_file.h LoadFit) with the effect
 // and its fitted parameters, and `piezoid compensate --replay` runs the model's inverse with it; on
 // a set trained at one rate the fit is refused.
 #include <gtest/gtest.h>
@@ -10,8 +10,8 @@
 #include <filesystem>
 
 #include "client/commands.h"
-#include "client/fit_file.h"
 #include "io/csv.h"
+#include "reports/fit_file.h"
 #include "tests/testing/cli.h"
 #include "tests/testing/expect_error.h"
 
@@ -54,7 +54,7 @@ TEST(RateDependenceCli, FitJsonRoundTripsAndCompensates) {
   EXPECT_TRUE(fs::exists(dir / "set" / "chirp.csv"));
   Captured(Join({"fit", "--records", (dir / "set").string(), "--out", (dir / "fit").string()},
                 kQuickFit));
-  const records::ModelSpec m = LoadFit((dir / "fit" / "fit.json").string());
+  const records::ModelSpec m = reports::LoadFit((dir / "fit" / "fit.json").string());
   ASSERT_EQ(m.effects.size(), 1u);
   EXPECT_EQ(m.effects[0], model::EffectKind::Named("rate-dependence"));
   ASSERT_GE(m.params.size(), 2u);

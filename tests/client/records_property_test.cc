@@ -44,17 +44,16 @@
 #include <thread>
 #include <vector>
 
-#include "client/cmd_service.h"
 #include "client/commands.h"
-#include "client/records_diagnose.h"
-#include "client/record_windows.h"
+#include "diagnose/diagnose.h"
 #include "diagnosis.pb.h"
 #include "io/diagnosis_json.h"
 #include "io/records.h"
-#include "diagnose/diagnose.h"
 #include "records/excitation.h"
 #include "records/families.h"
 #include "records/model.h"
+#include "reports/record_windows.h"
+#include "reports/records_diagnose.h"
 #include "tests/testing/cli.h"
 
 namespace pz::client {
@@ -385,7 +384,7 @@ Outcome Run(const std::vector<std::string>& args) {
   ::testing::internal::CaptureStdout();
   try {
     const int code = testing::RunCommands(
-        {RegisterFit, RegisterCompensate, RegisterServiceCommands, RegisterDiagnose}, args);
+        {RegisterFit, RegisterCompensate, RegisterExport, RegisterDiagnose}, args);
     o.ok = code == 0;
     if (!o.ok) o.failure = "exit code " + std::to_string(code) + " without an InputError";
   } catch (const InputError& e) {
@@ -511,7 +510,8 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     return;
   }
   try {
-    const io::RecordSet set = LoadRecordSetWithWindows(set_dir.string(), {}, {}, {}, s.settle_s);
+    const io::RecordSet set =
+        reports::LoadRecordSetWithWindows(set_dir.string(), {}, {}, {}, s.settle_s);
     diagnose::RecordDiagnoseOptions o;
     o.family = s.family;
     o.candidates = {records::ParseEffect(candidate)};
@@ -526,8 +526,8 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     const records::TrainingDriveProposal proposal =
         records::ProposeTrainingDrive(set, dg.excitation);
     std::ostringstream md, json;
-    WriteRecordsDiagnosisMarkdown(md, set, dg, proposal, s.settle_s);
-    WriteRecordsDiagnosisJson(json, set, dg, proposal);
+    reports::WriteRecordsDiagnosisMarkdown(md, set, dg, proposal, s.settle_s);
+    reports::WriteRecordsDiagnosisJson(json, set, dg, proposal);
     EXPECT_FALSE(HasNonFinite(md.str())) << "diagnosis report\n" << what << "\n" << md.str();
     EXPECT_FALSE(HasNonFinite(json.str())) << "diagnosis.json\n" << what << "\n" << json.str();
     proto::Diagnosis back;  // reads back through its codec, to the same bytes

@@ -1,6 +1,6 @@
 // Every repository path named in README.md, docs/*.md and the sources' comments exists. A path is
 // a token like
-// `opt/param_search.h`, `client/dashboard/`, `tests/deploy/*_test.sh` or `client/plots.{h,cc}`
+// `opt/param_search.h`, `dashboard/page/`, `tests/deploy/*_test.sh` or `reports/plots.{h,cc}`
 // whose first part is an entry of the repository's top folder (or, starting with ../, one that
 // resolves inside the repository from the document's folder); `*` must match at least one entry
 // and `{a,b}` names each alternative.

@@ -317,11 +317,11 @@ namespace {
 /// little noise: a grid of 8 levels (two cells a period) cannot follow the modulation, 12 can in
 /// part, 20 nearly.
 io::RecordSet FineDensity(bool withheld = false) {
-  RelayPreisachCheckOptions o;
+  synth::RelayPreisachCheckOptions o;
   o.train_s = 25;
   o.withheld_s = 10;
   o.seed = 3;
-  io::RecordSet set = GenerateRelayPreisachCheck(o).set;
+  io::RecordSet set = synth::GenerateRelayPreisachCheck(o).set;
   const model::PreisachGrid g{o.u_lo, o.u_hi, 24};
   std::vector<double> w;
   for (int i = 0; i < g.levels; ++i)

@@ -756,7 +756,7 @@ TEST(FamilyRegistry, EveryFamilyFitsExportsAndStepsAsTheCxxModel) {
     const double y_half = fit.model->scale().y_half;
     // rms within 1 % of the half range (a linear family's weights are regularised).
     EXPECT_LE(fit.train_mse, 1e-4 * y_half * y_half) << "its own response, fitted from its truth";
-    // The model section of its fit.json (client/fit_file.cc FitModelJson), as a ModelSpec.
+    // The model section of its fit.json (reports/fit_file.cc FitModelJson), as a ModelSpec.
     ModelSpec s;
     s.family = fit.model->family().name();
     s.pi_operators = truth.pi_operators;

@@ -11,14 +11,14 @@
 #include <optional>
 #include <sstream>
 
-#include "svcclient/job_file.h"
-#include "client/job_report.h"
-#include "io/network_io.h"
 #include "hgann/hgann_job.h"
 #include "hgann/identify.h"
 #include "hgann/output_move.h"
+#include "io/network_io.h"
 #include "job/job_kind.h"
 #include "model/chromosome.h"
+#include "reports/job_report.h"
+#include "svcclient/job_file.h"
 #include "tests/system/service_harness.h"
 #include "tests/testing/pinned.h"
 
@@ -104,13 +104,13 @@ TEST(ServiceHgann, QuickJobOverMasterAndTwoWorkersIsBitIdenticalToInProcess) {
   // Fetch brings the networks themselves, as a client in any language deploys them: the same,
   // bit for bit, as this client's own decoding of the genomes and as the in-process run's.
   ASSERT_EQ(networks.size(), best.size());
-  client::FetchedJob job{info, stored, best, log, {}};
+  reports::FetchedJob job{info, stored, best, log, {}};
   hgann::HgannFitnessConfig config;
   ASSERT_TRUE(
       hgann::HgannConfigFromProblem(std::get<job::HgannProblem>(stored.problem), &config).ok());
   const hgann::HgannFitness fitness(config);
   for (size_t k = 0; k < networks.size(); ++k) {
-    io::SavedNetwork mine = client::SavedNetworkOfJob(job, fitness, k);
+    io::SavedNetwork mine = reports::SavedNetworkOfJob(job, fitness, k);
     mine.provenance.created_unix_ms = networks[k].provenance.created_unix_ms;
     EXPECT_EQ(networks[k], mine) << "network " << k;
     EXPECT_EQ(networks[k].network, fitness.Decode(ref.best[k].genome)) << "network " << k;
@@ -171,7 +171,7 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   EXPECT_EQ(log[0].evaluations, 4 * 30);
   EXPECT_EQ(log[1].evaluations, 4 * 15);
   EXPECT_EQ(best.front().genome.bits, id.best.chromosome);
-  EXPECT_EQ(client::GaSummaryOfJob({info, spec, best, log, {}}).best_island,
+  EXPECT_EQ(reports::GaSummaryOfJob({info, spec, best, log, {}}).best_island,
             id.summary.best_island);
 }
 
