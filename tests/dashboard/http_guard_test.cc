@@ -1,8 +1,5 @@
 // The dashboard's HTTP server against clients that open connections and never finish a request
 // (issue 24): raw sockets hold half-open connections while a normal client is answered.
-#include "dashboard/http_guard.h"  // last: httplib.h
-
-#include <gtest/gtest.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
@@ -12,8 +9,13 @@
 #include <thread>
 #include <vector>
 
+#include <gtest/gtest.h>
+
 #include "dashboard/dashboard.h"
 #include "tests/testing/raw_socket.h"
+// clang-format off
+#include "dashboard/http_guard.h"  // last: httplib.h (its macros break Eigen's headers)
+// clang-format on
 
 namespace pz::dashboard {
 namespace {
