@@ -125,3 +125,22 @@ function(pz_cc_test)
   endif()
   set_tests_properties(${_t} PROPERTIES TIMEOUT ${PZ_TIMEOUT} LABELS "${PZ_LABELS}")
 endfunction()
+
+# pz_embed_assets(OUT file.cc NAMESPACE ns COMMENT text ASSETS kName=path ...): generates OUT at
+# build time with cmake/embed_assets.cmake, one std::string_view a name holding its file's bytes,
+# again whenever a file changes (the step kernels' text, the fin plant, the dashboard's page).
+function(pz_embed_assets)
+  cmake_parse_arguments(E "" "OUT;NAMESPACE;COMMENT" "ASSETS" ${ARGN})
+  set(paths)
+  foreach(asset ${E_ASSETS})
+    string(REGEX REPLACE "^[^=]*=" "" path "${asset}")
+    list(APPEND paths "${path}")
+  endforeach()
+  add_custom_command(
+    OUTPUT ${E_OUT}
+    COMMAND ${CMAKE_COMMAND} -DOUT=${E_OUT} -DNAMESPACE=${E_NAMESPACE} "-DASSETS=${E_ASSETS}"
+            -P ${PROJECT_SOURCE_DIR}/cmake/embed_assets.cmake
+    DEPENDS ${paths} ${PROJECT_SOURCE_DIR}/cmake/embed_assets.cmake
+    COMMENT "${E_COMMENT}"
+    VERBATIM)
+endfunction()
