@@ -12,7 +12,7 @@
 //
 // Flop counts: SYRK n p (p + 1) (= 636 Mflop for 7,001 × 301), GEMM 2 n p². GFLOP/s counters are on
 // the benchmark's CPU time (single thread), so they hold when other processes share the cores.
-// Figures: docs/performance.md, "Dahl networks (LM / BR)".
+// Figures: docs/performance.md, "Studies against published figures".
 #include <benchmark/benchmark.h>
 
 #include <Eigen/Dense>

@@ -9,7 +9,7 @@
 //   response; counter
 //                                trials = steps of the forward recursion per inverse step
 // The network: tests/data/networks/fin_nominal.json, identified on the nominal bench. Figures and
-// the operation count: docs/performance.md, "Fin header".
+// the operation count: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 #include <dlfcn.h>
 #include <sys/wait.h>

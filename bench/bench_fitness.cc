@@ -4,7 +4,7 @@
 // the CVODE path; and the same drives sampled (u linear between the samples) on the sampled path
 // and on the C step kernel alone (model/kernels/bimorph_fin.h: the sinusoid path's and the
 // vectorised mode loop's yardstick, docs/architecture.md "The fin's step"). Figures and the command
-// line: docs/performance.md, "Plant simulation".
+// line: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <array>

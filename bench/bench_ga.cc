@@ -1,7 +1,7 @@
 // Speed of the GA's operators alone (selection, two-point crossover, mutation by geometric gaps,
 // ranking, bookkeeping) at the paper's size, population 400 × 1415 bits, with a null or a cheap
 // fitness; and of the chromosome decode + forward pass that every HGANN fitness evaluation starts
-// with. Figures: docs/performance.md, "Genetic algorithm operators".
+// with. Figures: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

@@ -7,7 +7,8 @@
 //                            fitness (complete/boucwen_benchmark.h, the records engine's):
 //                            evaluations/s
 //   BM_Search_Sphere/alg     the same search on a 6-D sphere: the optimisers' own overhead
-// Figures and the command: docs/performance.md, "Complete models: PSO and GA".
+// Figures and the command: docs/performance.md, "Benchmarks of the parts" and "Studies against
+// published figures".
 #include <benchmark/benchmark.h>
 
 #include <string>

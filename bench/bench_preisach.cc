@@ -5,7 +5,7 @@
 //   BM_PreisachRegressors/levels   the cell regressors (what every least-squares evaluation
 //   computes) BM_PreisachInverse/levels      the exact inverse (one-step bisection): samples/s
 //   BM_AsymmetricPiApply / BM_AsymmetricPiInverse   the same for asymmetric-pi (12 plays, 6 knots)
-// Figures and the command: docs/performance.md, "Fits on records".
+// Figures and the command: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <cmath>

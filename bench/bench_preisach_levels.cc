@@ -8,7 +8,7 @@
 //   BM_PreisachAutoFit                             --pi-operators auto with creep-spectrum + delay:
 //                                                  the effects' search on 12 levels, the levels'
 //                                                  validation over 12 / 20 / 28 / 40, the weights
-// Figures and the command: docs/performance.md, "Preisach at 40 levels".
+// Figures and the command: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <vector>

@@ -24,7 +24,7 @@
 //       given (the spectrum's weights too: one build of the normal equations of the filtered
 //       regressors, the path of a searched spectrum)
 //
-// Figures and the command: docs/performance.md, "Fits on records".
+// Figures and the command: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <cmath>

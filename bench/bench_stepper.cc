@@ -6,7 +6,7 @@
 //   map)
 // cases: 0 prandtl-ishlinskii (30 plays), 1 backlash-like, 2 stack-bouc-wen + driver-lowpass,
 // 3 duhem, 4 preisach (12 levels), 5 asymmetric-pi (12 plays), 6 bw-oscillator (4 RK4 steps).
-// Figures and the command: docs/performance.md, "A model in a controller".
+// Figures and the command: docs/performance.md, "Benchmarks of the parts".
 #include <benchmark/benchmark.h>
 
 #include <cmath>

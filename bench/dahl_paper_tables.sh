@@ -3,7 +3,7 @@
 # tansig neurons, 70/15/15 split, then our MSE per subset and time beside the paper's Tables 3 and 4.
 # Usage: bench/dahl_paper_tables.sh [build dir] [seed] [extra `piezoid dahl` flags…]
 # min_grad is tested in normalised target units unless `--min-grad-units target` is passed (MATLAB's
-# literal test; see docs/performance.md, "Dahl networks").
+# literal test; see docs/performance.md, "Studies against published figures").
 # Writes the JSON / CSV summaries and per-run epoch histories to $OUT (default: a temporary folder,
 # kept and printed at the end).
 set -euo pipefail

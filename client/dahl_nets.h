@@ -103,7 +103,7 @@ struct DahlStudyOptions {
   /// MATLAB's trainlm / trainbr defaults, except that min_grad is tested in normalised target units
   /// (LmOptions::min_grad_normalised): case 2's displacement spans 0.31 where the others span 3.08,
   /// so its gradients in target units are 100 × smaller, and BR stopped on min_grad at the plateau
-  /// every case crosses (see docs/performance.md, "Dahl networks").
+  /// every case crosses (see docs/performance.md, "Studies against published figures").
   model::LmOptions lm_options = [] {
     model::LmOptions lo;
     lo.min_grad_normalised = true;

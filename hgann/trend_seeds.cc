@@ -375,7 +375,7 @@ struct Structured {
 // hidden nodes of each candidate, simplest first; the lowest χ² + 2 p wins (ties: the flatter
 // over the grid, then the simpler). (A leave-one-case-out choice was measured worse on both
 // development benches: with four training cases every case left out is an extrapolation, and
-// it chose constants where the trend is real: docs/performance.md.)
+// it chose constants where the trend is real: the history of docs/performance.md.)
 Structured ChooseStructures(const TrendBasis& t, const std::vector<double>& regression) {
   const int h = t.h, per = t.per;
   const std::vector<int>& rows = t.rows;
@@ -726,7 +726,7 @@ TrendSeeds MakeTrendSeeds(const HgannFitness& fitness, const TrendSeedOptions& o
   // family of bench/oplaw_benches.py and lost on its check family (v^p, √f or linear f laws: with
   // the corner case trained, 1–2 of 8 withheld cases within 3 × against 9 of 12 with the lowest
   // cost kept): the law's class (ln f, the terms its estimates support) is not yet general enough
-  // to be preferred against the training cost (docs/performance.md, "The operating-point law").
+  // to be preferred against the training cost (docs/performance.md, "Trend seeds").
   const std::vector<std::pair<const std::vector<double>*, const char*>> made = {
       {&from_structured, kStructured[0]},
       {&from_both, kStructured[1]},

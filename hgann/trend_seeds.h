@@ -33,7 +33,7 @@
 //     trend polished, the same unpolished, the constant network polished, and the structure
 //     polished again from that constant (slopes from 0: a start the fitness accepts). (Every
 //     weight free fits the training cases better and the withheld ones far worse:
-//     docs/performance.md.)
+//     the history of docs/performance.md, "Trend seeds".)
 //  3. At the chromosome's resolution: each seed's output codes (c2 and W2 of the used hidden nodes)
 //     are polished by a coordinate search over the codes (steps ±1, ±4, ±16, three passes, only
 //     strictly lower costs of the problem's own fitness kept): the Lamarckian write-back of the

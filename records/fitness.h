@@ -193,7 +193,7 @@ struct RecordMetrics {
 /// kLine: a grid of 17 points over its range, one batch, then the grid's lowest two local minima
 /// refined by Brent's method side by side to 1e-4 of the range; no random choice): the cost of one
 /// bounded scalar (a delay) is cheap to bracket, and ≈ 40 evaluations find what a swarm of 10 × ≤
-/// 30 × 2 finds in ≈ 460 (docs/performance.md, "One searched parameter: a line search").
+/// 30 × 2 finds in ≈ 460 (docs/performance.md, "The 10 s target on the 150 V recording").
 ///
 /// docs/performance.md, "The 10 s target on the 150 V recording".
 struct SearchBudget {
