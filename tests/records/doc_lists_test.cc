@@ -77,8 +77,8 @@ TEST(DocLists, RecordsMdNamesEveryEffectARecordsFamilyTakes) {
   for (const model::EffectDef* e : model::Effects())
     if (e->kernel() != 0) expected.push_back(e->name());
   const std::string text = Slurp("docs/records.md");
-  static const std::regex list(
-      R"(`--effects a,b` adds unmodelled effects of the diagnosis library to any family \(([^;]*);)");
+  static const std::regex list(R"(`--effects a,b` adds unmodelled effects of the diagnosis )"
+                               R"(library to any family \(([^;]*);)");
   std::smatch m;
   ASSERT_TRUE(std::regex_search(text, m, list)) << "docs/records.md: the `--effects a,b` sentence";
   std::vector<std::string> listed = Split(m[1], ",");
