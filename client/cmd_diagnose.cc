@@ -141,8 +141,8 @@ std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   std::string name;
   while (std::getline(ss, name, ',')) {
     if (name.empty()) continue;
-    const auto k = model::ParseEffectKind(name);
-    if (!k || k->none()) throw InputError(model::FinEffectError(name));
+    const auto k = records::ParseEffectKind(name);
+    if (!k || k->none()) throw InputError(records::FinEffectError(name));
     kinds.push_back(*k);
   }
   return kinds;

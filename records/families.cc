@@ -505,11 +505,11 @@ class BimorphFinFamily final : public Family {
   std::vector<ParamInfo> EffectBox(model::EffectKind e,
                                    std::vector<SearchForm>* forms) const override {
     if (!bench_) return Family::EffectBox(e, forms);
-    if (e.none() || !model::IsFinEffect(e))
+    if (e.none() || !IsFinEffect(e))
       throw InputError("bimorph-fin's bench form: effect '" + std::string(e.name()) +
-                       "': " + model::FinEffectError(e.name()));
+                       "': " + FinEffectError(e.name()));
     std::vector<ParamInfo> box;
-    for (const model::EffectParamInfo& q : model::GetEffectInfo(e).params) {
+    for (const EffectParamInfo& q : GetFinEffectInfo(e).params) {
       box.push_back({q.name, q.unit, q.lower, q.upper, q.log_scale});
       if (forms) forms->push_back({-1, q.scale});
     }
@@ -537,12 +537,12 @@ class BimorphFinFamily final : public Family {
       throw InputError(r.Label() + ": cannot fit the saturations b1, b2: " + e.what());
     }
     const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], sat.b1, sat.b2};
-    thread_local std::vector<model::Effect> fx;
+    thread_local std::vector<Effect> fx;
     thread_local std::vector<double> angle;
     fx.resize(effects.size());
     size_t at = 0;
     for (size_t i = 0; i < effects.size(); ++i) {
-      const size_t m = model::GetEffectInfo(effects[i]).params.size();
+      const size_t m = GetFinEffectInfo(effects[i]).params.size();
       if (at + m > ep.size()) throw InputError(r.Label() + ": too few effect parameters");
       fx[i].kind = effects[i];
       fx[i].params.assign(ep.begin() + static_cast<std::ptrdiff_t>(at),
@@ -602,8 +602,8 @@ class BimorphFinFamily final : public Family {
   model::BeamGeometry geometry_;
   model::BimorphPlant plant_;
   bool bench_ = false;
-  model::EffectSimulator sim_;  ///< on plant_ (bench form)
-  model::EffectSimOptions sim_options_;
+  EffectSimulator sim_;  ///< on plant_ (bench form)
+  EffectSimOptions sim_options_;
   std::vector<ParamInfo> params_;
   std::vector<SearchForm> forms_;
 };

@@ -44,9 +44,9 @@
 #include "model/beam.h"
 #include "model/bw_oscillator.h"
 #include "model/effect_library.h"
-#include "model/effects.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
+#include "records/fin_effects.h"
 
 namespace pz::records {
 
@@ -100,10 +100,10 @@ struct FamilyOptions {
   /// fixed at `geometry` and the output the fin angle in degrees (no gain); the saturations b1, b2
   /// of each record from its measured extremes (model/saturation.h SaturationFromExtremes); each
   /// record simulated on its stated sinusoid (io::Record::sinusoid, io/fin_records.h) by
-  /// model::EffectSimulator with `fin_sim`, with the fin's effects in the fin's boxes, beam effects
-  /// (hinge-friction, cubic-stiffening) included: those run on CVODE.
+  /// EffectSimulator (records/fin_effects.h) with `fin_sim`, the fin's effects in their boxes, beam
+  /// effects (hinge-friction, cubic-stiffening) included: those run on CVODE.
   bool bench_form = false;
-  model::EffectSimOptions fin_sim;  ///< bench form: the simulator's options
+  EffectSimOptions fin_sim;         ///< bench form: the simulator's options
   OscillatorOptions oscillator;     ///< bw-oscillator
   /// A fold of a cross-validation (records/select.h): the family is made for the whole training
   /// set's scale and a fold's training pieces may not reach every part of it (loops growing from a

@@ -100,7 +100,7 @@ std::vector<std::vector<double>> BeamStarts(const FitOptions& o, const RecordMod
     if (!(f > 0 && f <= 1))
       throw InputError(FieldError("beam.start_fractions[]", f, "must be in (0, 1]"));
   const EffectKind last = model.effects().back();
-  const int mp = model::GetEffectInfo(last).magnitude_param;
+  const int mp = GetFinEffectInfo(last).magnitude_param;
   if (mp < 0) return {};
   const size_t mag = model.EffectParams(last).first + static_cast<size_t>(mp);
   const ParamInfo& s = model.params()[mag];
