@@ -20,6 +20,7 @@
 #include "io/bench_data.h"
 #include "io/csv.h"
 #include "io/fin_records.h"
+#include "records/registry.h"
 #include "reports/check_report.h"
 #include "reports/diagnose_report.h"
 #include "reports/excitation_report.h"

@@ -7,6 +7,7 @@
 #include "model/saturation.h"
 #include "opt/inline_evaluator.h"
 #include "records/criterion.h"
+#include "records/registry.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::complete {

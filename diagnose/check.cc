@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "diagnose/fin_diagnose.h"
+#include "records/registry.h"
 
 namespace pz::diagnose {
 

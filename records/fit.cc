@@ -13,6 +13,7 @@
 #include "records/excitation.h"
 #include "records/nnls.h"
 #include "records/preisach_family.h"
+#include "records/registry.h"
 #include "records/resonance.h"
 #include "records/spectrum_solve.h"
 

@@ -9,6 +9,7 @@
 #include "io/fin_records.h"
 #include "model/saturation.h"
 #include "records/excitation.h"
+#include "records/registry.h"
 
 namespace pz::synth {
 

@@ -19,6 +19,7 @@
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "records/fin_effects.h"
+#include "records/registry.h"
 #include "tests/testing/expect_error.h"
 #include "tests/testing/pinned.h"
 

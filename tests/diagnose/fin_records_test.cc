@@ -18,6 +18,7 @@
 #include "io/fin_records.h"
 #include "records/fin_effects.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "tests/testing/pinned.h"
 
 namespace pz::records {

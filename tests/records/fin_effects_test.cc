@@ -17,7 +17,10 @@ namespace {
 
 using model::BimorphParams;
 using model::BimorphPlant;
+using model::ComputeLoop;
 using model::EffectKind;
+using model::FindEffect;
+using model::LoopFeatures;
 using model::SimStatus;
 using model::SimulationSummary;
 using model::Sinusoid;
@@ -58,7 +61,8 @@ class EffectsTest : public ::testing::Test {
 };
 
 TEST_F(EffectsTest, LibraryNamesRoundTripAndEveryEffectHasUnitsAndRanges) {
-  // The fin's order (EffectDef::Fin's order): its check draws truths and lists rows in it.
+  // The fin's order (the order of its boxes, records/fin_effects.cc kFinBoxes): its check draws
+  // truths and lists rows in it.
   std::vector<std::string> names;
   for (const FinEffectInfo& e : FinEffects()) names.push_back(e.name);
   EXPECT_EQ(names, (std::vector<std::string>{"driver-lowpass", "creep", "hinge-friction", "delay",

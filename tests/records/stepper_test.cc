@@ -26,6 +26,7 @@
 #include "model/kernels/kernel_text.h"
 #include "records/fin_effects.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "records/stepper.h"
 #include "synth/synthetic.h"
 #include "synth/truth_draw.h"

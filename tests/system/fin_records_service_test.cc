@@ -21,6 +21,7 @@
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "job.pb.h"
+#include "records/registry.h"
 #include "service_harness.h"
 #include "svcclient/complete_service.h"
 #include "tests/testing/expect_error.h"
