@@ -22,6 +22,7 @@
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "records/fit.h"
+#include "records/registry.h"
 
 namespace pz::records {
 namespace {

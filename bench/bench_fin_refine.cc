@@ -20,6 +20,7 @@
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "svcclient/complete_service.h"
 
 namespace pz::records {

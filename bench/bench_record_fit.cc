@@ -39,6 +39,7 @@
 #include "records/families.h"
 #include "records/fit.h"
 #include "records/model.h"
+#include "records/registry.h"
 
 namespace pz::records {
 namespace {

@@ -16,6 +16,7 @@
 #include "client/service_flags.h"
 #include "complete/committee.h"
 #include "io/csv.h"
+#include "records/registry.h"
 #include "reports/committee_report.h"
 #include "svcclient/complete_service.h"
 

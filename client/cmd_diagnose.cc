@@ -20,6 +20,7 @@
 #include "io/bench_data.h"
 #include "io/csv.h"
 #include "io/fin_records.h"
+#include "records/registry.h"
 #include "reports/check_report.h"
 #include "reports/diagnose_report.h"
 #include "reports/excitation_report.h"
@@ -141,8 +142,8 @@ std::vector<model::EffectKind> ParseKinds(const std::string& list) {
   std::string name;
   while (std::getline(ss, name, ',')) {
     if (name.empty()) continue;
-    const auto k = model::ParseEffectKind(name);
-    if (!k || k->none()) throw InputError(model::FinEffectError(name));
+    const auto k = records::ParseEffectKind(name);
+    if (!k || k->none()) throw InputError(records::FinEffectError(name));
     kinds.push_back(*k);
   }
   return kinds;

@@ -25,6 +25,7 @@
 #include "records/excitation.h"
 #include "records/extrapolation.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "records/select.h"
 #include "reports/excitation_report.h"
 #include "reports/fit_report.h"

@@ -1,6 +1,7 @@
 #include "client/search_flags.h"
 
 #include "records/families.h"
+#include "records/registry.h"
 
 namespace pz::client {
 

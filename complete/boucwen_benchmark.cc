@@ -5,6 +5,7 @@
 
 #include "io/csv.h"
 #include "records/criterion.h"
+#include "records/registry.h"
 
 namespace pz::complete {
 namespace {

@@ -12,6 +12,7 @@
 #include "opt/inline_evaluator.h"
 #include "opt/thread_pool_evaluator.h"
 #include "records/fit.h"
+#include "records/registry.h"
 
 namespace pz::complete {
 namespace {

@@ -7,6 +7,7 @@
 #include "model/saturation.h"
 #include "opt/inline_evaluator.h"
 #include "records/criterion.h"
+#include "records/registry.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::complete {
@@ -47,8 +48,8 @@ records::DataScale ScaleOf(const CompleteModelProblem& p) {
   return s;
 }
 
-model::EffectSimOptions FinSimOf(const CompleteModelProblem& p) {
-  model::EffectSimOptions o;
+records::EffectSimOptions FinSimOf(const CompleteModelProblem& p) {
+  records::EffectSimOptions o;
   if (!p.fin_sim) return o;
   o.oversample = p.fin_sim->oversample;
   o.rtol = p.fin_sim->rtol;
@@ -569,7 +570,7 @@ job::CompleteModelProblem CompleteModelProblemOf(const records::RecordFitness& f
       throw InputError(fitness.model().Describe() +
                        ": a bench-form model's evaluation needs the family options it was made "
                        "with (bench_form and its simulator's options), not another family's");
-    const model::EffectSimOptions& o = options.fin_sim;
+    const records::EffectSimOptions& o = options.fin_sim;
     p.fin_sim = CompleteModelProblem::FinSim{o.oversample, o.rtol, o.atol,
                                              static_cast<int64_t>(o.max_steps), o.force_cvode};
   }

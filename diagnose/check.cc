@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "diagnose/fin_diagnose.h"
+#include "records/registry.h"
 
 namespace pz::diagnose {
 
@@ -46,7 +47,7 @@ CheckForm FinCheckForm(const diagnose::DiagnoseOptions& o, const synth::FinTrial
   ThrowIfError(o.Validate());
   CheckForm f;
   f.text = {.noun = "benches", .description_width = 70, .closed_per_trial = true};
-  for (const auto& e : model::EffectLibrary()) f.effects.push_back(e.kind);
+  for (const auto& e : records::FinEffects()) f.effects.push_back(e.kind);
   f.draw = FinTrialDraw(trials);
   f.options = [o](int index) {
     diagnose::DiagnoseOptions od = o;

@@ -5,9 +5,9 @@
 #include <numeric>
 
 #include "io/csv.h"
-#include "model/effects.h"
 #include "model/format.h"
 #include "model/model_comparison.h"
+#include "records/fin_effects.h"
 #include "records/resonance.h"
 
 namespace pz::diagnose {
@@ -416,7 +416,7 @@ records::FitResult BenchFitOnTop(const io::RecordSet& set, const records::FitRes
                                  std::shared_ptr<records::RecordModel> model, model::EffectKind e,
                                  const RecordDiagnoseOptions& o, const records::FitOptions& fo) {
   std::vector<double> x0 = start.params;
-  const model::Effect zero = model::Effect::Zero(e);
+  const records::Effect zero = records::Effect::Zero(e);
   for (double v : zero.params) x0.push_back(v);
   if (x0.size() != model->params().size()) {
     throw InputError(model->Describe() + ": " + std::to_string(model->params().size()) +
@@ -429,12 +429,12 @@ records::FitResult BenchFitOnTop(const io::RecordSet& set, const records::FitRes
   ce.start_points.clear();
   bool beam = false;
   for (model::EffectKind k : model->effects())
-    beam = beam || model::GetEffectInfo(k).stage == model::EffectStage::kBeam;
+    beam = beam || records::GetFinEffectInfo(k).stage == model::EffectStage::kBeam;
   if (beam) {
     ce.polish_from = x0;  // refined at the start fractions (FitOptions::beam)
   } else {
     std::vector<std::vector<double>> starts;
-    if (const int mp = model::GetEffectInfo(e).magnitude_param; mp >= 0) {
+    if (const int mp = records::GetFinEffectInfo(e).magnitude_param; mp >= 0) {
       const size_t mag = start.params.size() + static_cast<size_t>(mp);
       const records::ParamInfo& s = model->params()[mag];
       const bool both_signs = s.lower < 0 && s.upper > 0;
@@ -450,7 +450,8 @@ records::FitResult BenchFitOnTop(const io::RecordSet& set, const records::FitRes
     ce.search.algorithm = opt::SearchAlgorithm::kDe;
     ce.search.repetitions = 1;
     ce.search.de = o.bench_fits.de;
-    ce.search.de.seed = o.bench_fits.seed + 1000 * (static_cast<uint64_t>(model::FinIndex(e)) + 1) +
+    ce.search.de.seed = o.bench_fits.seed +
+                        1000 * (static_cast<uint64_t>(records::FinIndex(e)) + 1) +
                         17 * model->effects().size();
     ce.seed_points = {x0};
     ce.seed_points.insert(ce.seed_points.end(), starts.begin(), starts.end());
@@ -743,7 +744,7 @@ RecordDiagnoseOptions FinBenchOptions() {
   RecordDiagnoseOptions o;
   o.family = "bimorph-fin";
   o.fit.family_options.bench_form = true;
-  for (const model::EffectInfo& e : model::EffectLibrary()) o.candidates.push_back(e.kind);
+  for (const records::FinEffectInfo& e : records::FinEffects()) o.candidates.push_back(e.kind);
   o.fit.search.algorithm = opt::SearchAlgorithm::kDe;
   o.fit.search.repetitions = 1;
   o.fit.search.de = opt::DeOptions{.population = 40, .generations = 80, .stall_generations = 15};

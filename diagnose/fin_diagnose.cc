@@ -26,7 +26,7 @@ Status DiagnoseOptions::Validate() const {
   if (auto s = sim.Validate(); !s.ok()) return InvalidArgument("sim." + s.message());
   if (auto s = rules.Validate(); !s.ok()) return InvalidArgument("rules." + s.message());
   for (model::EffectKind k : candidates)
-    if (!model::IsFinEffect(k))
+    if (!records::IsFinEffect(k))
       return InvalidArgument(
           FieldError("candidates[]", std::string(k.name()), "not an effect of the fin bench"));
   return Status::Ok();

@@ -60,7 +60,7 @@ struct DiagnoseOptions {
   /// Starting magnitudes of a beam candidate, as fractions of the upper end of its magnitude range
   /// (a parameter of either sign: the first fraction on each side), ≥ 1 entry, in (0, 1].
   std::vector<double> cvode_start_fractions = {0.03, 0.15};
-  model::EffectSimOptions sim;
+  records::EffectSimOptions sim;
   DecisionRules rules;  ///< the decision rules: the same for every effect (diagnose/decision.h)
   bool second_effect = true;                         ///< greedy search for a second effect
   bool trends = true;                                ///< per-case fits and their V × f trends

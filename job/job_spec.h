@@ -197,7 +197,7 @@ struct CompleteModelProblem {
   /// are the client's, bit for bit.
   std::vector<double> scale;
   /// record_family bimorph-fin: its bench form (records/families.h FamilyOptions::bench_form) and
-  /// the simulator's options (model/effects.h EffectSimOptions; unset: its defaults).
+  /// the simulator's options (records/fin_effects.h EffectSimOptions; unset: its defaults).
   bool bench_form = false;
   struct FinSim {
     int oversample = 4;

@@ -201,18 +201,6 @@ class DriverLowpass final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<LowpassExtension>(p[0]);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    return {d.Uniform(0.004, 0.03)};
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
-    const double tau = d.LogUniform(0.005, 0.08);
-    if (other_form)
-      return {"second-order (two poles)", tau, {{tau / 2}, {tau / 2}}};  // same total lag
-    return {"first-order", tau, {{tau}}};
-  }
-  FinBox Fin() const override {
-    return {1, {{0.0, 0.2, 0.01, false, "time constant of the amplifier"}}};
-  }
 };
 
 class QuadraticDrive final : public EffectDef {
@@ -233,18 +221,6 @@ class QuadraticDrive final : public EffectDef {
   bool memoryless() const override { return true; }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<QuadraticExtension>(p[0]);
-  }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    const double s = d.Sign();
-    return {s * d.Uniform(0.0005, 0.002)};
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
-    const double s = d.Sign();
-    const double c2 = s * d.LogUniform(1e-5, 2e-4);
-    return {"quadratic", c2, {{c2}}};
-  }
-  FinBox Fin() const override {
-    return {6, {{-5e-4, 5e-4, 2e-5, false, "quadratic drive coefficient"}}};
   }
 };
 
@@ -269,23 +245,6 @@ class Creep final : public EffectDef {
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CreepExtension>(p[0], p[1]);
-  }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    const double s = d.Sign();
-    const double k = s * d.Uniform(0.03, 0.15);
-    return {k, d.Uniform(0.5, 2)};
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool other_form) const override {
-    const double k = d.LogUniform(0.02, 0.3), tau = d.LogUniform(0.5, 10);
-    if (other_form)
-      return {
-          "two relaxations", k, {{k / 2, tau / 3}, {k / 2, tau * 3}}};  // a decade apart, one gain
-    return {"one relaxation", k, {{k, tau}}};
-  }
-  FinBox Fin() const override {
-    return {2,
-            {{0.0, 1.0, 0.05, false, "creep gain: long-run extra share of the drive"},
-             {0.05, 50.0, 2.0, true, "creep relaxation time"}}};
   }
 };
 
@@ -319,14 +278,6 @@ class Delay final : public EffectDef {
     }
   }
   double TimeShift(std::span<const double> p) const override { return p[0]; }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    return {d.Uniform(0.003, 0.02)};
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
-    const double tau = d.LogUniform(0.003, 0.05);
-    return {"pure delay", tau, {{tau}}};
-  }
-  FinBox Fin() const override { return {4, {{0.0, 0.1, 0.005, false, "delay"}}}; }
 };
 
 // Rate dependence (issue 22): the loop widens with the drive rate, and the widening saturates. In
@@ -375,13 +326,6 @@ class RateDependence final : public EffectDef {
     pzk::pzk_rate_dependence_init(d, u[0]);
     for (double& v : u) v = pzk::pzk_rate_dependence_step(&b, d, d, v);
   }
-  /// The bound 4–10 % of the half range, the knee rate r_m/τ_r at ½–2 × the peak rate of the
-  /// dominant sine over the range (a lag that saturates within the records' rates).
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
-    const double r_m = d.Uniform(0.04, 0.1) * s.u_half;
-    const double knee = d.LogUniform(0.5, 2) * 2 * std::numbers::pi * s.f_dom * s.u_half;
-    return {r_m, r_m / knee};
-  }
 };
 
 class HingeFriction final : public EffectDef {
@@ -398,15 +342,6 @@ class HingeFriction final : public EffectDef {
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<DahlHingeExtension>(p[0], p[1]);
   }
-  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
-    const double fc = d.LogUniform(0.02, 0.3), sigma = d.LogUniform(500, 1e4);
-    return {"Dahl", fc, {{fc, sigma}}};
-  }
-  FinBox Fin() const override {
-    return {3,
-            {{0.0, 1.0, 0.05, false, "Coulomb level F_c of the friction force"},
-             {20.0, 2e5, 2000.0, true, "pre-sliding stiffness sigma"}}};
-  }
 };
 
 class CubicStiffening final : public EffectDef {
@@ -420,15 +355,6 @@ class CubicStiffening final : public EffectDef {
   }
   std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const override {
     return std::make_unique<CubicExtension>(p[0]);
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
-    const double k3 = d.LogUniform(3e5, 1e7);
-    return {"cubic", k3, {{k3}}};
-  }
-  FinBox Fin() const override {
-    return {
-        5,
-        {{-5e6, 2e7, 1e6, false, "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}};
   }
 };
 
@@ -487,10 +413,6 @@ class CreepSpectrum final : public EffectDef {
   bool linear_output() const override { return true; }
   std::vector<double> KernelData(const DataScale& s) const override { return Times(s.duration); }
   int kernel() const override { return pzk::PZK_CREEP_SPECTRUM; }
-  /// Log creep: equal weights, 1–4 % of the output per relaxation.
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
-    return std::vector<double>(Times(s.duration).size(), d.Uniform(0.01, 0.04));
-  }
 
  private:
   /// The relaxation times for a window of T seconds; throws InputError when T is under a decade.
@@ -560,14 +482,6 @@ class Resonance final : public EffectDef {
     for (size_t k = 1; k < y.size(); ++k) y[k] = pzk::pzk_resonance_step(c, d, d, y[k]);
   }
   bool linear_output() const override { return true; }
-  /// A mode the check's drives (sines, multisines and triangles of 1–6 Hz at 500 Hz) excite: its
-  /// corners ring, and a chirp to 6 Hz feels the gain rise below it: f_n 8–30 × the dominant drive
-  /// frequency of the scale, ζ 0.02–0.1, most of the output through it.
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale& s) const override {
-    const double a = d.Uniform(0.6, 1.0);
-    const double f_n = std::min(d.LogUniform(8, 30) * s.f_dom, 0.3 * s.fs);
-    return {a, f_n, d.LogUniform(0.02, 0.1)};
-  }
 };
 
 class Friction final : public EffectDef {
@@ -588,9 +502,6 @@ class Friction final : public EffectDef {
     pzk::pzk_friction_init(d, y[0]);
     for (double& v : y) v = pzk::pzk_friction_step(&b, d, d, v);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    return {d.Uniform(0.05, 0.4)};
-  }
 };
 
 class Stiffening final : public EffectDef {
@@ -610,10 +521,6 @@ class Stiffening final : public EffectDef {
     b.y_half = f.y_half;
     const double c[1] = {y[0]};  // the output at rest
     for (double& v : y) v = pzk::pzk_stiffening_step(&b, c, v);
-  }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    const double s = d.Sign();
-    return {s * d.Uniform(0.02, 0.12)};
   }
 };
 
@@ -637,16 +544,6 @@ class Drift final : public EffectDef {
     double d[1] = {-f.origin - 1};
     for (double& v : y) v = pzk::pzk_drift_step(&b, d, d, v);
   }
-  std::vector<double> DrawRecordsTruth(TruthDraw& d, const DataScale&) const override {
-    const double s = d.Sign();
-    return {s * d.Uniform(0.03, 0.15)};
-  }
-  FinTruth DrawFinTruth(TruthDraw& d, bool) const override {
-    const double s = d.Sign();
-    const double r = s * d.LogUniform(0.002, 0.05);
-    return {"linear", r, {{r}}};
-  }
-  FinBox Fin() const override { return {7, {{-0.2, 0.2, 0.005, false, "drift rate", "deg/s"}}}; }
 };
 
 // The registry: one line per effect, in chain order.
@@ -716,12 +613,6 @@ const char* StageName(EffectStage stage) {
   }
   return "?";
 }
-
-double TruthDraw::Uniform(double lo, double hi) { return lo + (hi - lo) * u01_(); }
-double TruthDraw::LogUniform(double lo, double hi) {
-  return lo * std::exp(std::log(hi / lo) * u01_());
-}
-double TruthDraw::Sign() { return u01_() < 0.5 ? -1.0 : 1.0; }
 
 void EffectDef::ApplyDrive(std::span<const double>, double, std::span<double>) const {}
 void EffectDef::ApplyOutput(std::span<const double>, const OutputFrame&, std::span<double>) const {}

@@ -1,15 +1,16 @@
 // The one library of candidate unmodelled effects (issue 21): every effect is written once, as one
 // small class in model/effect_library.cc, with its name, title, equation, stage, parameters (ranges
-// scaled to the data), its arithmetic, and what each protocol needs of it — the fin bench's box
-// (Fin), the truths of the synthetic checks (DrawRecordsTruth, DrawFinTruth) and the id of its C
-// step (kernel); the registry (Effects()) lists them in stage order, and one handle (EffectKind)
-// names an effect for every user. Both users run the same code:
+// scaled to the data), its arithmetic and the id of its C step (kernel); the registry (Effects())
+// lists them in stage order, and one handle (EffectKind) names an effect for every user. What a
+// protocol adds to an effect lives with the protocol, keyed by the effect: the fin bench's box in
+// records/fin_effects.cc, the truths of the synthetic checks in synth/truth_draw.cc. Both users
+// run the same code:
 //   * records/ (records::RecordModel, every plant family on measured records) applies the drive
 //     stage to the record's sampled drive and the output stage to the family's output;
-//   * the bimorph-fin bench (model/effects.h, EffectSimulator) applies the same drive stage to its
-//     sinusoid sampled on a fine grid (or, for memoryless effects, pointwise with the delay as an
-//     exact time shift), the same output stage to the fin angle, and runs beam effects — and, on
-//     its CVODE path, the drive effects too — as BimorphExtensions (model/bimorph_ode.h).
+//   * the bimorph-fin bench (records/fin_effects.h, EffectSimulator) applies the same drive stage
+//     to its sinusoid sampled on a fine grid (or, for memoryless effects, pointwise with the delay
+//     as an exact time shift), the same output stage to the fin angle, and runs beam effects —
+//     and, on its CVODE path, the drive effects too — as BimorphExtensions (model/bimorph_ode.h).
 //
 //   name             stage   equation                                   parameters
 //   driver-lowpass   drive   τ u̇_e = u − u_e                           tau_s
@@ -44,7 +45,6 @@
 #include <cmath>
 #include <compare>
 #include <cstddef>
-#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -93,47 +93,6 @@ struct OutputFrame {
   double duration = 1;  ///< the data's longest scored window [s] (DataScale::duration)
 };
 
-/// One parameter of the bimorph-fin bench's search box (model/effects.h), in the library's order:
-/// the physical range, a typical magnitude (search scaling, finite-difference steps, > 0), a doc
-/// line and, where the fin's output differs from the library's scale, the unit (null: the
-/// library's).
-struct FinParam {
-  double lower = 0, upper = 0, scale = 1;
-  bool log_scale = false;
-  const char* doc = "";
-  const char* unit = nullptr;
-};
-/// The fin bench's box of an effect it offers (no parameters: the fin does not offer it), and the
-/// effect's place in the fin's order — the order the fin's diagnosis tries candidates, its check
-/// draws truths and its confusion matrix lists rows (the order of the fin's former enum, kept so
-/// seeded checks stay the same; a new effect takes the next number).
-struct FinBox {
-  int order = 0;
-  std::vector<FinParam> params;
-};
-
-/// Random draws of a synthetic check's truth on the caller's seeded generator (a source of uniform
-/// numbers in [0, 1)); each draw takes one number, in the order written.
-class TruthDraw {
- public:
-  explicit TruthDraw(std::function<double()> uniform01) : u01_(std::move(uniform01)) {}
-  double Uniform(double lo, double hi);     ///< lo + (hi − lo) u
-  double LogUniform(double lo, double hi);  ///< lo (hi/lo)^u
-  double Sign();                            ///< −1 if u < 0.5, else 1
-
- private:
-  std::function<double()> u01_;
-};
-
-/// A drawn truth of the fin bench's check (synth/synthetic.h FinTrialDraw): one or more copies
-/// of the effect simulated together (a second form the library lacks, e.g. two equal low-pass
-/// poles), the drawn magnitude and the form's name.
-struct FinTruth {
-  std::string form;                        ///< e.g. "first-order", "two relaxations"
-  double magnitude = 0;                    ///< physical units
-  std::vector<std::vector<double>> parts;  ///< the parameters of each copy (fin-bench units)
-};
-
 /// One effect. Subclasses override the methods of their stage; the defaults are the identity.
 class EffectDef {
  public:
@@ -175,28 +134,12 @@ class EffectDef {
   /// (output effects; the delay, which the CVODE path takes as a shift of the output times).
   virtual std::unique_ptr<BimorphExtension> MakeExtension(std::span<const double> p) const;
 
-  // ---- the bimorph-fin bench (model/effects.h) ----
-  /// Its box on the fin bench (physical ranges: the fin's scale is fixed); default: not offered.
-  virtual FinBox Fin() const { return {}; }
-
   // ---- per-sample step (controller export) ----
   /// The id of the effect's step in the C kernels (model/kernels/common.h PZK_*, run by
   /// model/kernels/chain.h for records/stepper.h and copied into `piezoid export` headers); 0:
   /// none (beam effects, which only the fin bench's CVODE path runs). Drive effects take ids below
   /// PZK_STACK_BOUC_WEN (10), output effects from PZK_FRICTION (30).
   virtual int kernel() const { return 0; }
-
-  // ---- truths of the synthetic checks (`piezoid diagnose-check`) ----
-  /// The parameters of a records check's truth (synth/synthetic.cc), on the synthetic stack's
-  /// scale (records::SyntheticStackScale: 200 V peak to peak, about 0.1 y/V; `scale` for an effect
-  /// whose parameter count depends on the data, as creep-spectrum's); empty: none (beam effects).
-  virtual std::vector<double> DrawRecordsTruth(TruthDraw&, const DataScale& /*scale*/) const {
-    return {};
-  }
-  /// A fin-bench check's truth (synth/synthetic.cc) in the fin bench's units; `other_form`
-  /// asks for a form the library lacks where the effect has one. No parts: the fin does not offer
-  /// it.
-  virtual FinTruth DrawFinTruth(TruthDraw&, bool /*other_form*/) const { return {}; }
 };
 
 /// The handle of an effect: the library's effect, or none (default). Compared in chain order

@@ -11,12 +11,11 @@
 #include "model/bimorph.h"
 #include "model/bw_oscillator.h"
 #include "model/duhem.h"
+#include "model/kernels/pzk.h"
 #include "model/modal_simulator.h"
-#include "model/saturation.h"
 #include "model/prandtl_ishlinskii.h"
+#include "model/saturation.h"
 #include "model/stack_models.h"
-#include "records/preisach_family.h"
-#include "records/stepper.h"
 
 namespace pz::records {
 namespace {
@@ -37,7 +36,6 @@ KernelShape NoShape(const FamilyOptions&, std::span<const double>) { return {}; 
 
 class StackBoucWenFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   StackBoucWenFamily(const DataScale& s, const FamilyOptions& o)
       : sim_{.substeps = o.substeps},
         start_(o.initial_state),
@@ -52,7 +50,7 @@ class StackBoucWenFamily final : public Family {
                {"d", "y/V", 0.3 * g, 10 * g, true},
                {"fc_Hz", "Hz", std::min(2 * s.f_dom, 0.04 * s.fs), 0.45 * s.fs, true}};
   }
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kStackBoucWenFamily.name; }
   std::string title() const override { return "Bouc–Wen stack with driver filter"; }
   std::string equation() const override {
     return "y = LPF_fc[d (u - h)], dh/dt = alpha du/dt - beta |du/dt| h - gamma du/dt |h|";
@@ -78,7 +76,9 @@ class StackBoucWenFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
-const FamilyDef StackBoucWenFamily::kDef = {
+}  // namespace
+
+const FamilyDef kStackBoucWenFamily = {
     .name = "stack-bouc-wen",
     .takes_initial_state = true,
     .linear = false,
@@ -88,9 +88,10 @@ const FamilyDef StackBoucWenFamily::kDef = {
     .kernel_shape = Substeps,
 };
 
+namespace {
+
 class BacklashLikeFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   // kAuto is centred for this family (docs/records.md "The initial state at rest": started
   // descended at a rest at the bottom of the range, its fits on real-like stacks predict the minor
   // loops worse, the reversal records by up to 1.8 ×); descended and ascended are taken as given.
@@ -105,7 +106,7 @@ class BacklashLikeFamily final : public Family {
                {"c", "y/V", 0.3 * g, 3 * g, true},
                {"B1", "y/V", -3 * g, 5 * g, false}};
   }
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kBacklashLikeFamily.name; }
   std::string title() const override { return "backlash-like (Coleman–Hodgdon)"; }
   std::string equation() const override { return "dy/dt = alpha |du/dt| (c u - y) + B1 du/dt"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
@@ -125,7 +126,9 @@ class BacklashLikeFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
-const FamilyDef BacklashLikeFamily::kDef = {
+}  // namespace
+
+const FamilyDef kBacklashLikeFamily = {
     .name = "backlash-like",
     .takes_initial_state = true,
     .linear = false,
@@ -135,9 +138,10 @@ const FamilyDef BacklashLikeFamily::kDef = {
     .kernel_shape = NoShape,
 };
 
+namespace {
+
 class DuhemFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   DuhemFamily(const DataScale& s, const FamilyOptions&) {
     const double a = s.u_half, g = s.gain;
     params_ = {{"alpha", "1/V", 0.01 / a, 100 / a, true},
@@ -146,7 +150,7 @@ class DuhemFamily final : public Family {
                {"b", "y/V", -3 * g, 5 * g, false},
                {"lambda", "1/s", 0, 10 * kTwoPi * s.f_dom, false}};
   }
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kDuhemFamily.name; }
   std::string title() const override { return "Duhem-type (cubic curve, relaxation)"; }
   std::string equation() const override {
     return "dy/dt = alpha |du/dt| (f(u) - y) + b du/dt + lambda (f(u) - y), f(u) = c u + c3 u^3";
@@ -163,7 +167,9 @@ class DuhemFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
-const FamilyDef DuhemFamily::kDef = {
+}  // namespace
+
+const FamilyDef kDuhemFamily = {
     .name = "duhem",
     .takes_initial_state = false,
     .linear = false,
@@ -173,15 +179,16 @@ const FamilyDef DuhemFamily::kDef = {
     .kernel_shape = NoShape,
 };
 
+namespace {
+
 class PrandtlIshlinskiiFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   PrandtlIshlinskiiFamily(const DataScale& s, const FamilyOptions& o)
       : thresholds_(model::PiThresholds(o.pi_operators, s.u_half)),
         start_(o.initial_state),
         u_min_(s.u_min),
         u_max_(s.u_max) {}
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kPrandtlIshlinskiiFamily.name; }
   std::string title() const override { return "Prandtl–Ishlinskii operator"; }
   std::string equation() const override { return "y = w0 u + sum_i w_i play_{r_i}[u], w >= 0"; }
   const std::vector<ParamInfo>& params() const override { return params_; }
@@ -227,7 +234,9 @@ class PrandtlIshlinskiiFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
-const FamilyDef PrandtlIshlinskiiFamily::kDef = {
+}  // namespace
+
+const FamilyDef kPrandtlIshlinskiiFamily = {
     .name = "prandtl-ishlinskii",
     .takes_initial_state = true,
     .linear = true,
@@ -237,9 +246,10 @@ const FamilyDef PrandtlIshlinskiiFamily::kDef = {
     .kernel_shape = Plays,
 };
 
+namespace {
+
 class BwOscillatorFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   BwOscillatorFamily(const DataScale& s, const FamilyOptions& o)
       : osc_(o.oscillator),
         substeps_(o.oscillator.rk4_steps > 0 ? o.oscillator.rk4_steps : 2 * o.substeps) {
@@ -262,7 +272,7 @@ class BwOscillatorFamily final : public Family {
                {"beta_gamma", "1/y", 0.01 / y, 100 / y, true},
                {"beta_delta", "1/y", -100 / y, 100 / y, false}};
   }
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kBwOscillatorFamily.name; }
   std::string title() const override { return "Bouc–Wen hysteretic oscillator"; }
   std::string equation() const override {
     if (osc_.physical)
@@ -387,8 +397,10 @@ class BwOscillatorFamily final : public Family {
   std::vector<ParamInfo> params_;
 };
 
+}  // namespace
+
 // RK4 steps per sample: OscillatorOptions' default of the fit (2 × substeps).
-const FamilyDef BwOscillatorFamily::kDef = {
+const FamilyDef kBwOscillatorFamily = {
     .name = "bw-oscillator",
     .takes_initial_state = false,
     .linear = false,
@@ -399,9 +411,10 @@ const FamilyDef BwOscillatorFamily::kDef = {
                        std::span<const double>) { return KernelSizes(2 * o.substeps); },
 };
 
+namespace {
+
 class BimorphFinFamily final : public Family {
  public:
-  static const FamilyDef kDef;
   BimorphFinFamily(const DataScale& s, const FamilyOptions& o)
       : geometry_(o.geometry),
         plant_(o.geometry),
@@ -437,7 +450,7 @@ class BimorphFinFamily final : public Family {
     if (le > 0 && o.geometry.n_tip > 0)
       params_.push_back({"tip_length", "m", 0.25 * le, 3 * le, true});
   }
-  std::string name() const override { return kDef.name; }
+  std::string name() const override { return kBimorphFinFamily.name; }
   std::string title() const override {
     return "bimorph fin (FE beam, Rayleigh damping, Bouc–Wen, backlash)";
   }
@@ -505,11 +518,11 @@ class BimorphFinFamily final : public Family {
   std::vector<ParamInfo> EffectBox(model::EffectKind e,
                                    std::vector<SearchForm>* forms) const override {
     if (!bench_) return Family::EffectBox(e, forms);
-    if (e.none() || !model::IsFinEffect(e))
+    if (e.none() || !IsFinEffect(e))
       throw InputError("bimorph-fin's bench form: effect '" + std::string(e.name()) +
-                       "': " + model::FinEffectError(e.name()));
+                       "': " + FinEffectError(e.name()));
     std::vector<ParamInfo> box;
-    for (const model::EffectParamInfo& q : model::GetEffectInfo(e).params) {
+    for (const EffectParamInfo& q : GetFinEffectInfo(e).params) {
       box.push_back({q.name, q.unit, q.lower, q.upper, q.log_scale});
       if (forms) forms->push_back({-1, q.scale});
     }
@@ -537,12 +550,12 @@ class BimorphFinFamily final : public Family {
       throw InputError(r.Label() + ": cannot fit the saturations b1, b2: " + e.what());
     }
     const model::BimorphParams b{p[0], p[1], p[2], p[3], p[4], p[5], p[6], sat.b1, sat.b2};
-    thread_local std::vector<model::Effect> fx;
+    thread_local std::vector<Effect> fx;
     thread_local std::vector<double> angle;
     fx.resize(effects.size());
     size_t at = 0;
     for (size_t i = 0; i < effects.size(); ++i) {
-      const size_t m = model::GetEffectInfo(effects[i]).params.size();
+      const size_t m = GetFinEffectInfo(effects[i]).params.size();
       if (at + m > ep.size()) throw InputError(r.Label() + ": too few effect parameters");
       fx[i].kind = effects[i];
       fx[i].params.assign(ep.begin() + static_cast<std::ptrdiff_t>(at),
@@ -602,14 +615,16 @@ class BimorphFinFamily final : public Family {
   model::BeamGeometry geometry_;
   model::BimorphPlant plant_;
   bool bench_ = false;
-  model::EffectSimulator sim_;  ///< on plant_ (bench form)
-  model::EffectSimOptions sim_options_;
+  EffectSimulator sim_;  ///< on plant_ (bench form)
+  EffectSimOptions sim_options_;
   std::vector<ParamInfo> params_;
   std::vector<SearchForm> forms_;
 };
 
+}  // namespace
+
 // Not in the `--family auto` grid: the fin's bench has its own geometry and protocol.
-const FamilyDef BimorphFinFamily::kDef = {
+const FamilyDef kBimorphFinFamily = {
     .name = "bimorph-fin",
     .takes_initial_state = false,
     .linear = false,
@@ -618,8 +633,6 @@ const FamilyDef BimorphFinFamily::kDef = {
     .make = Make<BimorphFinFamily>,
     .kernel_shape = BimorphFinFamily::Kernel,
 };
-
-}  // namespace
 
 void Family::SimulateRecord(const io::Record& r, std::span<const double>,
                             std::span<const model::EffectKind>, std::span<const double>, size_t,
@@ -723,56 +736,6 @@ DataScale MeasureScale(const std::vector<const io::Record*>& records) {
   }
   s.f_dom = reversals > 0 ? reversals / (2 * excited) : 1.0 / std::max(excited, 1e-9);
   return s;
-}
-
-const std::vector<const FamilyDef*>& Families() {
-  static const std::vector<const FamilyDef*> all = {
-      &StackBoucWenFamily::kDef, &BacklashLikeFamily::kDef,
-      &DuhemFamily::kDef,        &PrandtlIshlinskiiFamily::kDef,
-      &BwOscillatorFamily::kDef, &BimorphFinFamily::kDef,
-      &kPreisachFamily,          &kAsymmetricPiFamily};
-  return all;
-}
-
-const FamilyDef* FindFamily(std::string_view name) {
-  for (const FamilyDef* f : Families())
-    if (name == f->name) return f;
-  return nullptr;
-}
-
-std::string FamilyList(bool initial_state_only) {
-  std::string s;
-  for (const FamilyDef* f : Families())
-    if (!initial_state_only || f->takes_initial_state)
-      s += (s.empty() ? "" : ", ") + std::string(f->name);
-  return s;
-}
-
-const FamilyDef& FamilyNamed(std::string_view name, std::string_view field) {
-  if (const FamilyDef* f = FindFamily(name)) return *f;
-  throw InputError(std::string(field) + " '" + std::string(name) +
-                   "' is unknown (families: " + FamilyList() + ")");
-}
-
-const std::vector<std::string>& FamilyNames() {
-  static const std::vector<std::string> names = [] {
-    std::vector<std::string> v;
-    for (const FamilyDef* f : Families()) v.emplace_back(f->name);
-    return v;
-  }();
-  return names;
-}
-
-bool TakesInitialState(std::string_view family) {
-  const FamilyDef* f = FindFamily(family);
-  return f != nullptr && f->takes_initial_state;
-}
-
-std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale,
-                                   const FamilyOptions& o) {
-  if (o.substeps < 1 || o.substeps > 512)
-    throw InputError(FieldError("substeps", o.substeps, "must be 1 … 512"));
-  return FamilyNamed(name, "--family").make(scale, o);
 }
 
 }  // namespace pz::records

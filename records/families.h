@@ -44,9 +44,9 @@
 #include "model/beam.h"
 #include "model/bw_oscillator.h"
 #include "model/effect_library.h"
-#include "model/effects.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/status.h"
+#include "records/fin_effects.h"
 
 namespace pz::records {
 
@@ -100,10 +100,10 @@ struct FamilyOptions {
   /// fixed at `geometry` and the output the fin angle in degrees (no gain); the saturations b1, b2
   /// of each record from its measured extremes (model/saturation.h SaturationFromExtremes); each
   /// record simulated on its stated sinusoid (io::Record::sinusoid, io/fin_records.h) by
-  /// model::EffectSimulator with `fin_sim`, with the fin's effects in the fin's boxes, beam effects
-  /// (hinge-friction, cubic-stiffening) included: those run on CVODE.
+  /// EffectSimulator (records/fin_effects.h) with `fin_sim`, the fin's effects in their boxes, beam
+  /// effects (hinge-friction, cubic-stiffening) included: those run on CVODE.
   bool bench_form = false;
-  model::EffectSimOptions fin_sim;  ///< bench form: the simulator's options
+  EffectSimOptions fin_sim;         ///< bench form: the simulator's options
   OscillatorOptions oscillator;     ///< bw-oscillator
   /// A fold of a cross-validation (records/select.h): the family is made for the whole training
   /// set's scale and a fold's training pieces may not reach every part of it (loops growing from a
@@ -236,10 +236,11 @@ inline KernelShape KernelSizes(int n, int m = 0) {
   return s;
 }
 
-/// A plant family as registered (Families()): what is known of it before any data. Each family's
-/// class holds its own as `static const FamilyDef kDef` beside it, and one line of Families()
-/// registers it; the CLI's family list and the `--family auto` grid, the initial-state support, the
-/// stepper's and the export's kernel id and a fit.json's family name are read from here.
+/// A plant family as registered (records/registry.h Families()): what is known of it before any
+/// data. Each family's source defines its own (`const FamilyDef kXFamily`, C++20 designated
+/// initialisers) beside its class and declares it in its header, and one line of Families()
+/// registers it; the CLI's family list and the `--family auto` grid, the initial-state support,
+/// the stepper's and the export's kernel id and a fit.json's family name are read from there.
 struct FamilyDef {
   const char* name;
   bool takes_initial_state;  ///< FamilyOptions::initial_state sets its memory at rest
@@ -252,27 +253,9 @@ struct FamilyDef {
   KernelShape (*kernel_shape)(const FamilyOptions&, std::span<const double> params);
 };
 
-/// Every family, in registration order (the order of the header comment, of `--family auto`'s grid
-/// and of every list shown to a user).
-const std::vector<const FamilyDef*>& Families();
-/// The registered family of that name; null for none.
-const FamilyDef* FindFamily(std::string_view name);
-/// FindFamily, or throws InputError "FIELD 'NAME' is unknown (families: …)".
-const FamilyDef& FamilyNamed(std::string_view name, std::string_view field);
-/// The registered families' names joined by ", " (help texts, errors); `initial_state_only`: those
-/// that take an initial state.
-std::string FamilyList(bool initial_state_only = false);
-
-/// True for the families whose memory at rest FamilyOptions::initial_state sets
-/// (FamilyDef::takes_initial_state). (duhem relaxes to its curve at rest, the oscillator and the
-/// fin start from their own equilibrium.)
-bool TakesInitialState(std::string_view family);
-
-/// Every family name, in registration order.
-const std::vector<std::string>& FamilyNames();
-/// Makes a family for the scale. Throws InputError naming an unknown family (and the known ones)
-/// or bad options.
-std::unique_ptr<Family> MakeFamily(std::string_view name, const DataScale& scale,
-                                   const FamilyOptions& options = {});
+/// The registrations of the families defined in records/families.cc (records/registry.h lists
+/// them with the others).
+extern const FamilyDef kStackBoucWenFamily, kBacklashLikeFamily, kDuhemFamily,
+    kPrandtlIshlinskiiFamily, kBwOscillatorFamily, kBimorphFinFamily;
 
 }  // namespace pz::records

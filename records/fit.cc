@@ -13,6 +13,7 @@
 #include "records/excitation.h"
 #include "records/nnls.h"
 #include "records/preisach_family.h"
+#include "records/registry.h"
 #include "records/resonance.h"
 #include "records/spectrum_solve.h"
 
@@ -100,7 +101,7 @@ std::vector<std::vector<double>> BeamStarts(const FitOptions& o, const RecordMod
     if (!(f > 0 && f <= 1))
       throw InputError(FieldError("beam.start_fractions[]", f, "must be in (0, 1]"));
   const EffectKind last = model.effects().back();
-  const int mp = model::GetEffectInfo(last).magnitude_param;
+  const int mp = GetFinEffectInfo(last).magnitude_param;
   if (mp < 0) return {};
   const size_t mag = model.EffectParams(last).first + static_cast<size_t>(mp);
   const ParamInfo& s = model.params()[mag];

@@ -8,7 +8,6 @@
 #include "io/csv.h"
 #include "model/format.h"
 #include "records/nnls.h"
-#include "records/preisach_family.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {

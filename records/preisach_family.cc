@@ -4,11 +4,11 @@
 #include <cmath>
 
 #include "io/csv.h"
+#include "model/kernels/pzk.h"
 #include "model/prandtl_ishlinskii.h"
 #include "model/preisach.h"
 #include "records/fitness.h"
 #include "records/preisach_normal.h"
-#include "records/stepper.h"
 
 namespace pz::records {
 namespace {

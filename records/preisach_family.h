@@ -20,7 +20,7 @@ std::unique_ptr<Family> MakePreisachFamily(const DataScale& scale, const FamilyO
 std::unique_ptr<Family> MakeAsymmetricPiFamily(const DataScale& scale,
                                                const FamilyOptions& options);
 
-/// Their registrations (records/families.cc Families()).
+/// Their registrations (listed by records/registry.cc Families()).
 extern const FamilyDef kPreisachFamily, kAsymmetricPiFamily;
 
 /// One-sided dead zones per side of the asymmetric PI (evenly inside the training drive range).

@@ -15,6 +15,7 @@
 #include "records/excitation.h"
 #include "records/model.h"
 #include "records/preisach_family.h"
+#include "records/registry.h"
 #include "records/spectrum_solve.h"
 
 namespace pz::records {

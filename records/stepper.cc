@@ -6,7 +6,7 @@
 #include "io/csv.h"
 #include "model/bimorph.h"
 #include "model/modal_simulator.h"
-#include "records/preisach_family.h"
+#include "records/registry.h"
 
 namespace pz::records {
 namespace {

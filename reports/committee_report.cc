@@ -9,6 +9,7 @@
 #include "committee.pb.h"
 #include "io/csv.h"
 #include "io/proto_json.h"
+#include "records/registry.h"
 #include "reports/plots.h"
 #include "reports/record_windows.h"
 

@@ -7,6 +7,7 @@
 #include "io/csv.h"
 #include "io/proto_json.h"
 #include "records/extrapolation.h"
+#include "records/registry.h"
 #include "reports/excitation_report.h"
 #include "reports/select_report.h"
 

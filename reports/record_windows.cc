@@ -4,6 +4,7 @@
 #include <string_view>
 
 #include "io/csv.h"
+#include "records/registry.h"
 
 namespace pz::reports {
 

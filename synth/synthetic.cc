@@ -9,6 +9,7 @@
 #include "io/fin_records.h"
 #include "model/saturation.h"
 #include "records/excitation.h"
+#include "records/registry.h"
 
 namespace pz::synth {
 
@@ -159,8 +160,8 @@ records::EffectKind DrawEffectKind(opt::Rng& rng, std::span<const records::Effec
   return kinds[rng.UniformBelow(kinds.size())];
 }
 
-model::TruthDraw TruthDrawOf(opt::Rng& rng) {
-  return model::TruthDraw([&rng] { return rng.Uniform01(); });
+TruthDraw TruthDrawOf(opt::Rng& rng) {
+  return TruthDraw([&rng] { return rng.Uniform01(); });
 }
 
 namespace {
@@ -177,7 +178,7 @@ constexpr CaseDef kCases[9] = {{1, 375, 0.25, true},  {2, 375, 0.5, false}, {3, 
 
 std::string NoTruth(const char* check, records::EffectKind e, const char* draw) {
   return std::string(check) + ": effect '" + e.name() + "' draws no truth (its " + draw +
-         " in model/effect_library.cc)";
+         " in synth/truth_draw.cc)";
 }
 
 }  // namespace
@@ -195,13 +196,13 @@ std::string FinTrialOptions::Validate() const {
 }
 
 io::CaseSet SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
-                          const std::vector<model::Effect>& effects,
+                          const std::vector<records::Effect>& effects,
                           const std::vector<std::pair<double, double>>& saturations,
                           const FinTrialOptions& o, opt::Rng& rng) {
   if (saturations.size() != std::size(kCases))
     throw InputError("synthetic bench: " + std::to_string(saturations.size()) +
                      " saturation pairs for the " + std::to_string(std::size(kCases)) + " cases");
-  const model::EffectSimulator sim(plant);
+  const records::EffectSimulator sim(plant);
   const Measurement encoder{
       .noise_std = o.jitter_rms_deg, .quantum = o.quantum_deg, .normal = NormalForm::kDrawn};
   io::CaseSet set;
@@ -260,8 +261,8 @@ SyntheticTrial DrawFinTrial(const model::BimorphPlant& plant, uint64_t seed,
   const bool other_form = rng.Uniform01() < o.other_form_probability;
   if (!none) {
     t.truth = DrawEffectKind(rng, kinds);
-    model::TruthDraw draw = TruthDrawOf(rng);
-    model::FinTruth truth = t.truth->DrawFinTruth(draw, other_form);
+    TruthDraw draw = TruthDrawOf(rng);
+    FinTruth truth = DrawFinTruth(t.truth, draw, other_form);
     if (truth.parts.empty()) throw InputError(NoTruth("synthetic bench", t.truth, "DrawFinTruth"));
     t.form = std::move(truth.form);
     t.magnitude = truth.magnitude;
@@ -270,7 +271,7 @@ SyntheticTrial DrawFinTrial(const model::BimorphPlant& plant, uint64_t seed,
   std::ostringstream os;
   os << "seed " << seed << ": " << model::EffectName(t.truth);
   if (!t.form.empty()) os << " (" << t.form << ")";
-  for (const model::Effect& e : t.effects) os << " " << e.Describe();
+  for (const records::Effect& e : t.effects) os << " " << e.Describe();
   t.description = os.str();
   try {
     t.set = io::RecordsFromCaseSet(SimulateBench(plant, p, t.effects, sat, o, rng));
@@ -286,7 +287,7 @@ TrialDraw FinTrialDraw(const FinTrialOptions& o) {
   if (const std::string e = o.Validate(); !e.empty()) throw InputError("synthetic bench: " + e);
   std::vector<records::EffectKind> kinds = o.kinds;
   if (kinds.empty())
-    for (const auto& e : model::EffectLibrary()) kinds.push_back(e.kind);
+    for (const auto& e : records::FinEffects()) kinds.push_back(e.kind);
   auto plant = std::make_shared<const model::BimorphPlant>();
   return [plant, o, kinds](uint64_t seed) { return DrawFinTrial(*plant, seed, o, kinds); };
 }
@@ -310,15 +311,15 @@ struct RecordsForm {
 
 /// The truth's parameters (the family's, then the effect's; a linear family's in `weights`) and
 /// the effect, drawn on rng.
-void DrawRecordsTruth(const RecordsForm& f, opt::Rng& rng, SyntheticTrial& t,
-                      std::vector<double>& p, std::vector<double>& weights) {
+void DrawTrialTruth(const RecordsForm& f, opt::Rng& rng, SyntheticTrial& t, std::vector<double>& p,
+                    std::vector<double>& weights) {
   p = f.nominal;
   for (double& v : p) v *= UniformDraw(rng, 0.8, 1.25);
   if (f.family->linear()) weights = std::exchange(p, {});  // p: the effect's parameters
   if (rng.Uniform01() >= f.options.none_probability) {
     t.truth = DrawEffectKind(rng, f.kinds);
-    model::TruthDraw draw = TruthDrawOf(rng);
-    const std::vector<double> truth = t.truth->DrawRecordsTruth(draw, f.scale);
+    TruthDraw draw = TruthDrawOf(rng);
+    const std::vector<double> truth = DrawRecordsTruth(t.truth, draw, f.scale);
     if (truth.empty())
       throw InputError(NoTruth("diagnose-check --records", t.truth, "DrawRecordsTruth"));
     p.insert(p.end(), truth.begin(), truth.end());
@@ -331,7 +332,7 @@ SyntheticTrial DrawRecordsTrial(const RecordsForm& f, uint64_t seed) {
   t.seed = seed;
   opt::Rng rng(seed * 104729 + 7);
   std::vector<double> p, weights;
-  DrawRecordsTruth(f, rng, t, p, weights);
+  DrawTrialTruth(f, rng, t, p, weights);
   std::ostringstream desc;
   if (t.truth.none())
     desc << "none";

@@ -8,10 +8,11 @@
 //  - the fin bench (`FinTrialDraw`): the bench plant (spec "bimorph-fin model") with parameters
 //    drawn around the physical bench's, an effect drawn from the fin library — in its library form
 //    or in another functional form the library does not have (a second-order amplifier, creep with
-//    two relaxations: the effect's DrawFinTruth) — the paper's nine cases and split, saturations
-//    from the paper's regression (Appendix B) with a random spread, read through the bench's
-//    encoder (2048-line quadrature, quantum 360/8192 deg) after a vibration jitter (RMS 0.003
-//    deg); its records are the bench's (io/fin_records.h), as `diagnose --cases` reads a folder;
+//    two relaxations: the effect's fin truth, synth/truth_draw.h) — the paper's nine cases and
+//    split, saturations from the paper's regression (Appendix B) with a random spread, read through
+//    the bench's encoder (2048-line quadrature, quantum 360/8192 deg) after a vibration jitter (RMS
+//    0.003 deg); its records are the bench's (io/fin_records.h), as `diagnose --cases` reads a
+//    folder;
 //  - records of a family (`RecordsTrialDraw`): parameters drawn around the family's nominal set, a
 //    random drive (a sine from an arbitrary phase after a rest, a multisine or a triangle), an
 //    offset, white noise and quantisation, one record cut into a training and a withheld window.
@@ -32,9 +33,10 @@
 #include "io/bench_data.h"
 #include "io/records.h"
 #include "model/bimorph.h"
-#include "model/effects.h"
 #include "opt/random.h"
+#include "records/fin_effects.h"
 #include "records/model.h"
+#include "synth/truth_draw.h"
 
 namespace pz::synth {
 
@@ -105,7 +107,7 @@ struct SyntheticTrial {
   uint64_t seed = 0;
   records::EffectKind truth;           ///< the effect drawn (none: a clean trial)
   std::string form;                    ///< its form where it has several ("first-order", …)
-  std::vector<model::Effect> effects;  ///< the fin bench: as simulated (library building blocks)
+  std::vector<records::Effect> effects;  ///< the fin bench: as simulated (library building blocks)
   double magnitude = 0;                ///< fin: the drawn magnitude (physical units); records:
                                        ///< the effect's last drawn parameter
   std::string description;             ///< the truth in words (effect, form, parameters, drive)
@@ -118,8 +120,8 @@ using TrialDraw = std::function<SyntheticTrial(uint64_t seed)>;
 
 /// The effect of a trial: one of `kinds`, uniformly (InputError for none to draw from).
 records::EffectKind DrawEffectKind(opt::Rng& rng, std::span<const records::EffectKind> kinds);
-/// The library's truth draws (model::TruthDraw) on the trial's generator.
-model::TruthDraw TruthDrawOf(opt::Rng& rng);
+/// The effects' truth draws (synth/truth_draw.h) on the trial's generator.
+TruthDraw TruthDrawOf(opt::Rng& rng);
 
 // The fin bench.
 
@@ -138,7 +140,7 @@ struct FinTrialOptions {
 /// jitter drawn from rng: the cases as a bench folder holds them ("case<N>", a withheld case
 /// validates; io::MakeBenchCase). Throws InputError naming the case that cannot be simulated.
 io::CaseSet SimulateBench(const model::BimorphPlant& plant, const model::BimorphParams& params,
-                          const std::vector<model::Effect>& effects,
+                          const std::vector<records::Effect>& effects,
                           const std::vector<std::pair<double, double>>& saturations,
                           const FinTrialOptions& options, opt::Rng& rng);
 

@@ -52,6 +52,7 @@
 #include "records/excitation.h"
 #include "records/families.h"
 #include "records/model.h"
+#include "records/registry.h"
 #include "reports/record_windows.h"
 #include "reports/records_diagnose.h"
 #include "tests/testing/cli.h"

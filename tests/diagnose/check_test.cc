@@ -46,7 +46,7 @@ diagnose::DiagnoseOptions Quick(std::vector<EffectKind> candidates) {
 }
 
 // The physical bench's plant with the saturations of the paper's grid, read through the encoder.
-io::RecordSet Bench(const std::vector<model::Effect>& effects, uint64_t seed) {
+io::RecordSet Bench(const std::vector<records::Effect>& effects, uint64_t seed) {
   const model::BimorphPlant plant;
   std::vector<std::pair<double, double>> sat;
   for (double v : {375.0, 500.0, 750.0})
@@ -229,7 +229,7 @@ TEST(FinCheck, WithheldDelayIsNamedAndACleanBenchIsNot) {
   const diagnose::CheckForm form = FinCheckForm(o, {});
   diagnose::CheckSummary summary(form.text, form.effects);
   for (const bool with_delay : {true, false}) {
-    std::vector<model::Effect> effects;
+    std::vector<records::Effect> effects;
     if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
     const diagnose::RecordDiagnosis d =
         DiagnoseRecords(Bench(effects, with_delay ? 1 : 2), diagnose::RecordOptionsOf(o));
@@ -260,7 +260,7 @@ TEST(FinCheck, WithheldDelayIsNamedAndACleanBenchIsNot) {
       EXPECT_LT(d.rms_ratio, o.rules.significance_ratio);
     }
   }
-  const int delay = model::FinIndex(EffectKind::Named("delay"));
+  const int delay = records::FinIndex(EffectKind::Named("delay"));
   EXPECT_EQ(summary.columns[static_cast<size_t>(delay)], "delay");
   EXPECT_EQ(summary.confusion[delay][delay], 1);
   EXPECT_EQ(summary.confusion[0][0], 1);

@@ -18,7 +18,8 @@
 #include "diagnose/fin_diagnose.h"
 #include "io/bench_data.h"
 #include "io/fin_records.h"
-#include "model/effects.h"
+#include "records/fin_effects.h"
+#include "records/registry.h"
 #include "tests/testing/expect_error.h"
 #include "tests/testing/pinned.h"
 
@@ -375,9 +376,9 @@ TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
   EXPECT_TRUE(o.bench_fits.enabled);
   EXPECT_EQ(o.fit.search.algorithm, opt::SearchAlgorithm::kDe);
   // The fin library's effects, in its order.
-  ASSERT_EQ(o.candidates.size(), model::EffectLibrary().size());
+  ASSERT_EQ(o.candidates.size(), records::FinEffects().size());
   for (size_t i = 0; i < o.candidates.size(); ++i)
-    EXPECT_EQ(o.candidates[i], model::EffectLibrary()[i].kind);
+    EXPECT_EQ(o.candidates[i], records::FinEffects()[i].kind);
 }
 
 // The fin bench diagnosed on its records: the bench's records (io/fin_records.h) diagnosed by this

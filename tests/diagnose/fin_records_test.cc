@@ -16,8 +16,9 @@
 
 #include "io/bench_data.h"
 #include "io/fin_records.h"
-#include "model/effects.h"
+#include "records/fin_effects.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "tests/testing/pinned.h"
 
 namespace pz::records {
@@ -163,7 +164,7 @@ void ExpectPinnedBeam(const Pinned& pin, const FitResult& rec, const io::RecordS
 
 // The base parameters with the effect at zero (its identity): where the fin started a candidate.
 std::vector<double> WithZeroEffect(std::vector<double> base, EffectKind effect) {
-  for (double v : model::Effect::Zero(effect).params) base.push_back(v);
+  for (double v : records::Effect::Zero(effect).params) base.push_back(v);
   return base;
 }
 
@@ -198,10 +199,10 @@ TEST(FinRecords, ADriveEffectCandidateIsSearchedAsTheFinEngineSearchedIt) {
   std::vector<std::vector<double>> seeds = {x0};
   for (double f : kFractions) {
     seeds.push_back(x0);
-    seeds.back()[mag] = f * model::GetEffectInfo(lowpass).params[0].upper;
+    seeds.back()[mag] = f * records::GetFinEffectInfo(lowpass).params[0].upper;
   }
   FitOptions o = RecordsOptions({lowpass});
-  o.search.de.seed = 7 + 1000 * (static_cast<uint64_t>(model::FinIndex(lowpass)) + 1) + 17;
+  o.search.de.seed = 7 + 1000 * (static_cast<uint64_t>(records::FinIndex(lowpass)) + 1) + 17;
   o.seed_points = seeds;
   o.start_points = {x0};
   ExpectPinned(kNominalLowpass, FitRecords(set, o), set);

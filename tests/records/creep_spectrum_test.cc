@@ -23,6 +23,7 @@
 #include "diagnose/diagnose.h"
 #include "records/fit.h"
 #include "records/nnls.h"
+#include "records/registry.h"
 #include "synth/reallike.h"
 #include "tests/records/quick_fit.h"
 #include "tests/testing/expect_error.h"

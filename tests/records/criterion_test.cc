@@ -14,6 +14,7 @@
 
 #include "model/criteria.h"
 #include "model/stack_models.h"
+#include "records/registry.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {

@@ -12,8 +12,8 @@
 #include <vector>
 
 #include "model/effect_library.h"
-#include "model/effects.h"
-#include "records/families.h"
+#include "records/fin_effects.h"
+#include "records/registry.h"
 
 namespace pz {
 namespace {
@@ -89,7 +89,7 @@ TEST(DocLists, RecordsMdNamesEveryEffectARecordsFamilyTakes) {
 
 TEST(DocLists, DiagnosisMdHasARowForEveryFinEffect) {
   std::vector<std::string> expected;
-  for (const model::EffectInfo& e : model::EffectLibrary())
+  for (const records::FinEffectInfo& e : records::FinEffects())
     if (!e.kind.none()) expected.push_back(e.name);
   // The table is in stage order, the library in chain order: the same names are what counts.
   std::vector<std::string> rows =

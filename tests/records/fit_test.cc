@@ -15,6 +15,7 @@
 
 #include "model/bimorph.h"
 #include "records/nnls.h"
+#include "records/registry.h"
 #include "synth/synthetic.h"
 #include "tests/testing/expect_error.h"
 

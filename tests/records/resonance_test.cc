@@ -17,6 +17,7 @@
 #include "model/effect_library_resonance.h"
 #include "records/fit.h"
 #include "records/model.h"
+#include "records/registry.h"
 #include "records/stepper.h"
 
 namespace pz::records {

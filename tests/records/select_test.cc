@@ -23,6 +23,7 @@
 #include "model/preisach.h"
 #include "records/families.h"
 #include "records/model.h"
+#include "records/registry.h"
 #include "synth/reallike.h"
 #include "synth/reallike_ring.h"
 #include "synth/relay_preisach_check.h"

@@ -15,6 +15,7 @@
 #include <numbers>
 
 #include "records/fit.h"
+#include "records/registry.h"
 #include "synth/reallike.h"
 
 namespace pz::records {

@@ -23,11 +23,13 @@
 #include <utility>
 
 #include "controller/export_header.h"
-#include "model/effects.h"
 #include "model/kernels/kernel_text.h"
+#include "records/fin_effects.h"
 #include "records/fit.h"
+#include "records/registry.h"
 #include "records/stepper.h"
 #include "synth/synthetic.h"
+#include "synth/truth_draw.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::records {
@@ -174,15 +176,18 @@ TEST(Stepper, EveryEffectMatchesSimulate) {
 }
 
 // The design test of issue 21 for an effect: written once (its class in model/effect_library.cc),
-// it is reachable by name from every user, each piece it needs is there, and a forgotten piece
-// fails here — a records effect (drive or output stage) parses for fit / diagnose --records / the
-// service, draws a records truth inside its box, and has a step kernel of its stage that matches
-// RecordModel::Simulate; a fin effect (a beam effect must be one) parses for the fin diagnosis
-// and the job kind, has a fin box and draws fin truths inside it (both forms).
-/// Truth draws on a seeded generator (a linear congruential one: tests/records/ keeps to the floors
-/// of records/, which draw through model::TruthDraw without opt/).
-model::TruthDraw Draws(uint64_t seed) {
-  return model::TruthDraw([state = seed]() mutable {
+// with what each protocol adds kept with the protocol and keyed by the effect (the fin bench's box
+// in records/fin_effects.cc, the checks' truths in synth/truth_draw.cc), it is reachable by name
+// from every user, each piece it needs is there, and a forgotten piece fails here — a records
+// effect (drive or output stage) parses for fit / diagnose --records / the service, draws a records
+// truth inside its box, and has a step kernel of its stage that matches RecordModel::Simulate; a
+// fin effect (one with a fin box; a beam effect must be one) parses for the fin diagnosis and the
+// job kind, draws fin truths inside its box (both forms) and, a drive effect, has the
+// continuous-time form or the pure time shift of the fin's CVODE path; an effect without a box
+// draws no fin truth.
+/// Truth draws on a seeded generator (a linear congruential one, independent of opt/).
+synth::TruthDraw Draws(uint64_t seed) {
+  return synth::TruthDraw([state = seed]() mutable {
     state = state * 6364136223846793005ULL + 1442695040888963407ULL;
     return static_cast<double>(state >> 11) * 0x1.0p-53;
   });
@@ -197,17 +202,18 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
     const std::string name = def->name();
     EXPECT_EQ(EffectKind::Named(name), e) << name;
     const bool beam = def->stage() == model::EffectStage::kBeam;
-    const bool on_fin = model::IsFinEffect(e);
+    const bool on_fin = records::IsFinEffect(e);
     EXPECT_TRUE(!beam || on_fin)
         << name
-        << ": a beam effect runs only on the fin bench, which must offer it (EffectDef::Fin)";
+        << ": a beam effect runs only on the fin bench, which must offer it (a box in "
+           "records/fin_effects.cc)";
     if (!beam) {
       ++records;
       EXPECT_EQ(ParseEffect(name), e) << name;
-      model::TruthDraw draw = Draws(12345);
+      synth::TruthDraw draw = Draws(12345);
       const std::vector<ParamInfo> box = def->Params(stack);
       for (int i = 0; i < 20; ++i) {
-        const std::vector<double> p = def->DrawRecordsTruth(draw, stack);
+        const std::vector<double> p = synth::DrawRecordsTruth(e, draw, stack);
         if (p.size() !=
             box.size()) {  // every missing piece of every effect is listed, not only the first
           ADD_FAILURE() << name << ": DrawRecordsTruth gives " << p.size()
@@ -234,34 +240,38 @@ TEST(EveryEffect, IsReachableFromEveryUserWithEveryPiece) {
     }
     if (on_fin) {
       ++fin;
-      EXPECT_EQ(model::ParseEffectKind(name), std::optional<EffectKind>(e)) << name;
+      EXPECT_EQ(records::ParseEffectKind(name), std::optional<EffectKind>(e)) << name;
       for (bool other_form : {false, true}) {
-        model::TruthDraw draw = Draws(777);
+        synth::TruthDraw draw = Draws(777);
         for (int i = 0; i < 20; ++i) {
-          const model::FinTruth t = def->DrawFinTruth(draw, other_form);
+          const synth::FinTruth t = synth::DrawFinTruth(e, draw, other_form);
           if (t.parts.empty()) {
-            ADD_FAILURE() << name << ": no DrawFinTruth";
+            ADD_FAILURE() << name << ": no fin truth (synth/truth_draw.cc)";
             break;
           }
           EXPECT_FALSE(t.form.empty()) << name;
           for (const auto& part : t.parts) {
-            const model::Effect fe{e, part};
+            const records::Effect fe{e, part};
             EXPECT_TRUE(fe.Validate().ok()) << fe.Validate().message();
             EXPECT_FALSE(fe.IsIdentity()) << fe.Describe();
           }
         }
       }
+      if (def->stage() == model::EffectStage::kDrive)  // the fin's CVODE path runs it
+        EXPECT_TRUE(def->MakeExtension(records::Effect::Zero(e).params) != nullptr ||
+                    def->TimeShift(std::vector<double>{0.01}) == 0.01)
+            << name << ": a fin drive effect needs a continuous-time form or a pure time shift";
     } else {
-      EXPECT_NE(model::FinEffectError(name).find("not an effect of the fin bench"),
+      EXPECT_NE(records::FinEffectError(name).find("not an effect of the fin bench"),
                 std::string::npos)
           << name;
-      model::TruthDraw half([] { return 0.5; });
-      EXPECT_TRUE(def->DrawFinTruth(half, false).parts.empty())
+      synth::TruthDraw half([] { return 0.5; });
+      EXPECT_TRUE(synth::DrawFinTruth(e, half, false).parts.empty())
           << name << ": a fin truth without a fin box";
     }
   }
   EXPECT_EQ(records, RecordEffects().size());
-  EXPECT_EQ(fin, model::EffectLibrary().size());
+  EXPECT_EQ(fin, records::FinEffects().size());
 }
 
 TEST(Stepper, InverseThenForwardReturnsTheReference) {

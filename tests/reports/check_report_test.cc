@@ -14,7 +14,7 @@
 
 #include "diagnosis.pb.h"
 #include "io/proto_json.h"
-#include "model/effects.h"
+#include "records/fin_effects.h"
 #include "tests/testing/expect_error.h"
 
 namespace pz::reports {
@@ -25,7 +25,7 @@ using model::EffectKind;
 // The fin bench's form: the fin library's effects.
 diagnose::CheckSummary FinSummary() {
   std::vector<EffectKind> effects;
-  for (const auto& e : model::EffectLibrary()) effects.push_back(e.kind);
+  for (const auto& e : records::FinEffects()) effects.push_back(e.kind);
   return diagnose::CheckSummary({}, effects);
 }
 
@@ -44,7 +44,7 @@ TEST(CheckReport, CheckJsonHasTheConfusionMatrixAndTheTrials) {
   proto::DiagnosisCheck back;  // reads into its message and prints back to the same bytes
   io::ReadJsonMessage("check.json", out.str(), &back);
   EXPECT_EQ(io::PrintJson(back, "check.json"), out.str());
-  const int effects = static_cast<int>(model::EffectLibrary().size());
+  const int effects = static_cast<int>(records::FinEffects().size());
   ASSERT_EQ(back.columns_size(), effects + 2);
   EXPECT_EQ(back.columns(0), "none");
   EXPECT_EQ(back.columns(effects + 1), "unexplained");

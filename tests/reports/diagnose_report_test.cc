@@ -19,6 +19,7 @@
 #include "io/proto_json.h"
 #include "records/families.h"
 #include "records/model.h"
+#include "records/registry.h"
 
 namespace pz::reports {
 namespace {

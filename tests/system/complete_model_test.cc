@@ -24,6 +24,7 @@
 #include "model/stack_models.h"
 #include "opt/random.h"
 #include "opt/thread_pool_evaluator.h"
+#include "records/registry.h"
 #include "complete_remote.h"
 #include "json_report.h"
 #include "service_harness.h"

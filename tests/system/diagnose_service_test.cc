@@ -28,7 +28,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
     for (double f : {0.25, 0.5, 1.0})
       sat.push_back({0.0065 * v - 0.85 * f - 0.63, -0.0062 * v + 0.68 * f + 0.71});
   opt::Rng rng(3);
-  std::vector<model::Effect> effects;
+  std::vector<records::Effect> effects;
   if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
   return CasesFromCaseSet(synth::SimulateBench(plant, p, effects, sat, so, rng));
 }

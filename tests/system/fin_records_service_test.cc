@@ -21,6 +21,7 @@
 #include "io/bench_data.h"
 #include "io/fin_records.h"
 #include "job.pb.h"
+#include "records/registry.h"
 #include "service_harness.h"
 #include "svcclient/complete_service.h"
 #include "tests/testing/expect_error.h"
@@ -69,14 +70,14 @@ TEST(FinRecordsJobKindTest, TheSpecRebuildsTheBenchFormFitnessBitForBit) {
   struct Case {
     std::vector<EffectKind> effects;
     std::vector<double> at;
-    model::EffectSimOptions sim;
+    records::EffectSimOptions sim;
   };
   // Two drive effects out of the library's order (the parameters in the order given), the fast
   // path on another fine grid, the base on CVODE, and a beam effect (CVODE): the simulator's
   // options travel.
   const EffectKind creep = EffectKind::Named("creep"),
                    lowpass = EffectKind::Named("driver-lowpass");
-  model::EffectSimOptions coarse, cvode;
+  records::EffectSimOptions coarse, cvode;
   coarse.oversample = 2;
   cvode.force_cvode = true;
   cvode.rtol = 1e-5;

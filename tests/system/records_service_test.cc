@@ -19,6 +19,7 @@
 #include "io/records.h"
 #include "json_report.h"
 #include "opt/thread_pool_evaluator.h"
+#include "records/registry.h"
 #include "service_harness.h"
 #include "svcclient/complete_service.h"
 #include "synth/synthetic.h"

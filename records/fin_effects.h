@@ -1,8 +1,10 @@
-// The bimorph-fin bench's use of the one effect library (model/effect_library.h, issue 21): the
-// effects the fin diagnosis (issue 6) offers — every library effect whose class gives a fin box
-// (EffectDef::Fin: physical ranges, a typical scale, a doc line, its place in the fin's order) — by
-// the library's handle EffectKind, and EffectSimulator, which runs the bimorph plant with any list
-// of them. Zero magnitude is the identity. Today, in the fin's order:
+// The bimorph-fin bench's effects (the bench form of records/families.h's bimorph-fin family,
+// FamilyOptions::bench_form; issues 6, 21, 46): which effects of the one library
+// (model/effect_library.h) the bench offers, each with its search box — physical ranges, a typical
+// scale, a doc line and its place in the fin's order, in one table (kFinBoxes in
+// records/fin_effects.cc) keyed by the library's effect —, and EffectSimulator, which runs the
+// bimorph plant with any list of them. The library itself knows nothing of the bench. Zero
+// magnitude is the identity. Today, in the fin's order:
 //
 //   library effect     stage    fin-bench range
 //   driver-lowpass     drive    tau_s ∈ [0, 0.2] s
@@ -40,8 +42,10 @@
 #include "model/effect_library.h"
 #include "model/modal_simulator.h"
 #include "model/signal.h"
+#include "model/simulation.h"
+#include "model/status.h"
 
-namespace pz::model {
+namespace pz::records {
 
 /// One physical parameter of an effect.
 struct EffectParamInfo {
@@ -54,37 +58,38 @@ struct EffectParamInfo {
   std::string doc;
 };
 
-struct EffectInfo {
-  EffectKind kind;                 ///< the library's effect (none: the entry "none")
-  const EffectDef* def = nullptr;  ///< kind.def()
-  std::string name;                ///< selectable name, e.g. "driver-lowpass"
-  std::string title;               ///< e.g. "driver (amplifier) low-pass"
-  EffectStage stage = EffectStage::kDrive;
+/// An effect as the fin bench offers it: the library's names, the bench box's parameters.
+struct FinEffectInfo {
+  model::EffectKind kind;                 ///< the library's effect (none: the entry "none")
+  const model::EffectDef* def = nullptr;  ///< kind.def()
+  std::string name;                       ///< selectable name, e.g. "driver-lowpass"
+  std::string title;                      ///< e.g. "driver (amplifier) low-pass"
+  model::EffectStage stage = model::EffectStage::kDrive;
   std::string equation;  ///< one line
   /// Index of the parameter whose zero makes the effect the identity (the magnitude), or -1.
   int magnitude_param = 0;
   std::vector<EffectParamInfo> params;
 };
 
-/// Every effect the fin bench offers, in the fin's order (FinBox::order).
-const std::vector<EffectInfo>& EffectLibrary();
+/// Every effect the fin bench offers (one with a box in kFinBoxes), in the fin's order.
+const std::vector<FinEffectInfo>& FinEffects();
 /// The entry of one kind (none, or an effect the fin does not offer: name "none", no parameters).
-const EffectInfo& GetEffectInfo(EffectKind kind);
+const FinEffectInfo& GetFinEffectInfo(model::EffectKind kind);
 /// True when the fin bench offers the effect.
-bool IsFinEffect(EffectKind kind);
-/// Position of a fin effect in EffectLibrary() plus one; 0 for none (the rows of the fin check's
+bool IsFinEffect(model::EffectKind kind);
+/// Position of a fin effect in FinEffects() plus one; 0 for none (the rows of the fin check's
 /// confusion matrix). Throws std::logic_error for an effect the fin does not offer.
-int FinIndex(EffectKind kind);
-/// Parses a name of EffectLibrary(), "none" or a former name ("output-drift"); nullopt if unknown
+int FinIndex(model::EffectKind kind);
+/// Parses a name of FinEffects(), "none" or a former name ("output-drift"); nullopt if unknown
 /// or not a fin effect (FinEffectError says which).
-std::optional<EffectKind> ParseEffectKind(std::string_view name);
+std::optional<model::EffectKind> ParseEffectKind(std::string_view name);
 /// Why `name` is not a fin effect ("not an effect of the fin bench: …" for a library effect the fin
 /// does not offer, "not an effect of the library: …" else); lists the fin's effects.
 std::string FinEffectError(std::string_view name);
 
-/// One effect with its parameter values (in GetEffectInfo(kind).params order, physical units).
+/// One effect with its parameter values (in GetFinEffectInfo(kind).params order, physical units).
 struct Effect {
-  EffectKind kind;
+  model::EffectKind kind;
   std::vector<double> params;
 
   /// Count, finiteness and ranges; the error names the effect, the parameter, the value and the
@@ -95,7 +100,7 @@ struct Effect {
   /// e.g. "driver-lowpass(tau_s = 0.02 s)".
   std::string Describe() const;
   /// The effect with every parameter at zero magnitude (identity) and others mid-range.
-  static Effect Zero(EffectKind kind);
+  static Effect Zero(model::EffectKind kind);
 };
 
 /// True if any (non-identity) effect of the list needs the CVODE path.
@@ -114,34 +119,36 @@ struct EffectSimOptions {
 /// The drive u_e(t_j) [V] after the drive-stage effects (low-pass, quadratic, creep, delay) at the
 /// given times (≥ 0, increasing), for the sinusoid u from rest. Exact to first-order-hold
 /// discretisation error on a grid 4 × finer than the spacing of `t` (≈ 1e-7 of V at 400 Hz).
-std::vector<double> ShapedDrive(std::span<const Effect> effects, const Sinusoid& drive,
+std::vector<double> ShapedDrive(std::span<const Effect> effects, const model::Sinusoid& drive,
                                 std::span<const double> t);
 
 /// CVODE extensions of the drive and beam stages, in stage order (delay and drift are not
 /// extensions: they act on the output times and values). Identity effects are left out.
-std::vector<std::unique_ptr<BimorphExtension>> MakeExtensions(std::span<const Effect> effects);
+std::vector<std::unique_ptr<model::BimorphExtension>> MakeExtensions(
+    std::span<const Effect> effects);
 
 /// Runs the bimorph plant with effects. Immutable after construction; thread-safe.
 class EffectSimulator {
  public:
   /// The plant must outlive the simulator.
-  explicit EffectSimulator(const BimorphPlant& plant);
-  const BimorphPlant& plant() const { return *plant_; }
-  const ModalSimulator& modal() const { return modal_; }
+  explicit EffectSimulator(const model::BimorphPlant& plant);
+  const model::BimorphPlant& plant() const { return *plant_; }
+  const model::ModalSimulator& modal() const { return modal_; }
 
   /// Fin angle y_k [deg] on the drive's sample grid into angle_deg (drive.NumSamples() entries);
   /// optionally the linear fin angle θ_k [deg] into theta_deg (same size, or empty). Never throws:
   /// invalid parameters / effects / options come back as kInvalidInput, physical failures as in
   /// model::Simulate(). A CVODE run that stalls is tried once more at BDF order ≤ 2
   /// (model/cvode.h).
-  SimulationSummary SimulateAngle(const BimorphParams& params, std::span<const Effect> effects,
-                                  const Sinusoid& drive, std::span<double> angle_deg,
-                                  const EffectSimOptions& options = {},
-                                  std::span<double> theta_deg = {}) const;
+  model::SimulationSummary SimulateAngle(const model::BimorphParams& params,
+                                         std::span<const Effect> effects,
+                                         const model::Sinusoid& drive, std::span<double> angle_deg,
+                                         const EffectSimOptions& options = {},
+                                         std::span<double> theta_deg = {}) const;
 
  private:
-  const BimorphPlant* plant_;
-  ModalSimulator modal_;
+  const model::BimorphPlant* plant_;
+  model::ModalSimulator modal_;
 };
 
-}  // namespace pz::model
+}  // namespace pz::records

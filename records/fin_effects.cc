@@ -1,4 +1,4 @@
-#include "model/effects.h"
+#include "records/fin_effects.h"
 
 #include <algorithm>
 #include <chrono>
@@ -11,39 +11,130 @@
 #include "model/backlash.h"
 #include "model/cvode.h"
 
-namespace pz::model {
+namespace pz::records {
+
+using model::ApplyBacklash;
+using model::BimorphExtension;
+using model::BimorphOde;
+using model::BimorphParams;
+using model::BimorphPlant;
+using model::CvodeOptions;
+using model::DataScale;
+using model::DriveSignal;
+using model::EffectDef;
+using model::EffectIndex;
+using model::EffectKind;
+using model::EffectStage;
+using model::FindEffect;
+using model::IntegrateCvode;
+using model::LinearSolverKind;
+using model::ModalWorkspace;
+using model::NonlinearIteration;
+using model::OdeMethod;
+using model::OdeSolution;
+using model::OutputFrame;
+using model::ParamInfo;
+using model::SampledSignal;
+using model::SimStatus;
+using model::SimulationSummary;
+using model::Sinusoid;
+using model::StageName;
+
 namespace {
 
+// One parameter of the fin bench's box of an effect, in the library's order (EffectDef::Params):
+// the physical range, a typical magnitude (search scaling, finite-difference steps, > 0), a doc
+// line and, where the fin's output differs from the library's scale, the unit (null: the
+// library's).
+struct FinParam {
+  double lower = 0, upper = 0, scale = 1;
+  bool log_scale = false;
+  const char* doc = "";
+  const char* unit = nullptr;
+};
+// The fin bench's box of an effect it offers, keyed by the library's name, and the effect's place
+// in the fin's order — the order the fin's diagnosis tries candidates, its check draws truths and
+// its confusion matrix lists rows (the order of the fin's former enum, kept so seeded checks stay
+// the same; a new effect takes the next number). At most 2 parameters today.
+struct FinBox {
+  const char* effect = "";
+  int order = 0;
+  FinParam params[2] = {};
+  int count = 1;
+};
+
+// The boxes: an effect the fin bench offers has one line here; the library (model/) knows nothing
+// of the bench.
+const FinBox kFinBoxes[] = {
+    {.effect = "driver-lowpass",
+     .order = 1,
+     .params = {{.upper = 0.2, .scale = 0.01, .doc = "time constant of the amplifier"}}},
+    {.effect = "creep",
+     .order = 2,
+     .params = {{.upper = 1.0,
+                 .scale = 0.05,
+                 .doc = "creep gain: long-run extra share of the drive"},
+                {.lower = 0.05,
+                 .upper = 50.0,
+                 .scale = 2.0,
+                 .log_scale = true,
+                 .doc = "creep relaxation time"}},
+     .count = 2},
+    {.effect = "hinge-friction",
+     .order = 3,
+     .params = {{.upper = 1.0, .scale = 0.05, .doc = "Coulomb level F_c of the friction force"},
+                {.lower = 20.0,
+                 .upper = 2e5,
+                 .scale = 2000.0,
+                 .log_scale = true,
+                 .doc = "pre-sliding stiffness sigma"}},
+     .count = 2},
+    {.effect = "delay", .order = 4, .params = {{.upper = 0.1, .scale = 0.005, .doc = "delay"}}},
+    {.effect = "cubic-stiffening",
+     .order = 5,
+     .params = {{.lower = -5e6,
+                 .upper = 2e7,
+                 .scale = 1e6,
+                 .doc = "cubic tip stiffness (linear tip stiffness is about 500 N/m)"}}},
+    {.effect = "quadratic-drive",
+     .order = 6,
+     .params =
+         {{.lower = -5e-4, .upper = 5e-4, .scale = 2e-5, .doc = "quadratic drive coefficient"}}},
+    {.effect = "drift",
+     .order = 7,
+     .params =
+         {{.lower = -0.2, .upper = 0.2, .scale = 0.005, .doc = "drift rate", .unit = "deg/s"}}},
+};
+
 // The fin's effects: every library effect with a fin box, in the fin's order.
-std::vector<EffectInfo> BuildLibrary() {
-  std::vector<std::pair<int, EffectInfo>> lib;
-  for (const EffectDef* def : Effects()) {
-    const FinBox box = def->Fin();
-    if (box.params.empty()) continue;
+std::vector<FinEffectInfo> BuildLibrary() {
+  std::vector<std::pair<int, FinEffectInfo>> lib;
+  for (const FinBox& box : kFinBoxes) {
+    const EffectDef* def = EffectKind::Named(box.effect).def();  // throws for a stale name
     const std::vector<ParamInfo> names = def->Params(DataScale{});
-    if (names.size() != box.params.size())
+    if (names.size() != static_cast<size_t>(box.count))
       throw std::logic_error(std::string("fin box of '") + def->name() + "': parameter count");
-    EffectInfo info{*def, def, def->name(), def->title(), def->stage(), def->equation(), 0, {}};
+    FinEffectInfo info{*def, def, def->name(), def->title(), def->stage(), def->equation(), 0, {}};
     for (size_t i = 0; i < names.size(); ++i) {
       const FinParam& p = box.params[i];
       info.params.push_back({names[i].name, p.unit ? p.unit : names[i].unit, p.lower, p.upper,
                              p.scale, p.log_scale, p.doc});
     }
     for (const auto& [order, other] : lib)
-      if (order == box.order)
+      if (order == box.order || other.def == def)
         throw std::logic_error(std::string("fin boxes of '") + other.name + "' and '" +
-                               def->name() + "': same order");
+                               def->name() + "': same order or same effect");
     lib.push_back({box.order, std::move(info)});
   }
   std::sort(lib.begin(), lib.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<EffectInfo> out;
+  std::vector<FinEffectInfo> out;
   for (auto& [order, info] : lib) out.push_back(std::move(info));
   return out;
 }
 
-const EffectInfo& NoneInfo() {
-  static const EffectInfo none{EffectKind(),         nullptr, "none", "no unmodelled effect",
-                               EffectStage::kOutput, "",      -1,     {}};
+const FinEffectInfo& NoneInfo() {
+  static const FinEffectInfo none{EffectKind(),         nullptr, "none", "no unmodelled effect",
+                                  EffectStage::kOutput, "",      -1,     {}};
   return none;
 }
 
@@ -59,7 +150,7 @@ std::vector<Link> Chain(std::span<const Effect> effects, const EffectStage* stag
   std::vector<std::pair<size_t, Link>> r;
   for (const Effect& e : effects) {
     if (e.IsIdentity()) continue;
-    const EffectInfo& info = GetEffectInfo(e.kind);
+    const FinEffectInfo& info = GetFinEffectInfo(e.kind);
     const EffectDef* def = info.def;
     if (def == nullptr ||
         e.params.size() != info.params.size())  // callers validate first; never read past
@@ -89,22 +180,22 @@ SampledScratch& Scratch() {
 
 }  // namespace
 
-const std::vector<EffectInfo>& EffectLibrary() {
-  static const std::vector<EffectInfo> lib = BuildLibrary();
+const std::vector<FinEffectInfo>& FinEffects() {
+  static const std::vector<FinEffectInfo> lib = BuildLibrary();
   return lib;
 }
 
-const EffectInfo& GetEffectInfo(EffectKind kind) {
-  for (const EffectInfo& e : EffectLibrary())
+const FinEffectInfo& GetFinEffectInfo(EffectKind kind) {
+  for (const FinEffectInfo& e : FinEffects())
     if (e.kind == kind) return e;
   return NoneInfo();
 }
 
-bool IsFinEffect(EffectKind kind) { return !kind.none() && GetEffectInfo(kind).kind == kind; }
+bool IsFinEffect(EffectKind kind) { return !kind.none() && GetFinEffectInfo(kind).kind == kind; }
 
 int FinIndex(EffectKind kind) {
   if (kind.none()) return 0;
-  const auto& lib = EffectLibrary();
+  const auto& lib = FinEffects();
   for (size_t i = 0; i < lib.size(); ++i)
     if (lib[i].kind == kind) return static_cast<int>(i) + 1;
   throw std::logic_error(std::string("effect '") + kind.name() +
@@ -120,7 +211,7 @@ std::optional<EffectKind> ParseEffectKind(std::string_view name) {
 
 std::string FinEffectError(std::string_view name) {
   std::string known;
-  for (const EffectInfo& e : EffectLibrary()) known += (known.empty() ? "" : ", ") + e.name;
+  for (const FinEffectInfo& e : FinEffects()) known += (known.empty() ? "" : ", ") + e.name;
   const EffectDef* def = FindEffect(name);
   if (def != nullptr)
     return "not an effect of the fin bench: '" + std::string(name) + "' is the library's " +
@@ -131,7 +222,7 @@ std::string FinEffectError(std::string_view name) {
 }
 
 Status Effect::Validate() const {
-  const EffectInfo& info = GetEffectInfo(kind);
+  const FinEffectInfo& info = GetFinEffectInfo(kind);
   if (!kind.none() && info.kind != kind)
     return InvalidArgument(
         FieldError("effect.kind", std::string(kind.name()), "not an effect of the fin bench"));
@@ -154,13 +245,13 @@ Status Effect::Validate() const {
 
 bool Effect::IsIdentity() const {
   if (kind.none()) return true;
-  const EffectInfo& info = GetEffectInfo(kind);
+  const FinEffectInfo& info = GetFinEffectInfo(kind);
   return info.magnitude_param >= 0 && static_cast<size_t>(info.magnitude_param) < params.size() &&
          params[info.magnitude_param] == 0.0;
 }
 
 std::string Effect::Describe() const {
-  const EffectInfo& info = GetEffectInfo(kind);
+  const FinEffectInfo& info = GetFinEffectInfo(kind);
   std::ostringstream os;
   os.precision(4);
   os << info.name;
@@ -179,7 +270,7 @@ std::string Effect::Describe() const {
 }
 
 Effect Effect::Zero(EffectKind kind) {
-  const EffectInfo& info = GetEffectInfo(kind);
+  const FinEffectInfo& info = GetFinEffectInfo(kind);
   Effect e{kind, {}};
   for (size_t i = 0; i < info.params.size(); ++i) {
     const EffectParamInfo& p = info.params[i];
@@ -192,7 +283,7 @@ Effect Effect::Zero(EffectKind kind) {
 
 bool NeedsCvode(std::span<const Effect> effects) {
   for (const Effect& e : effects)
-    if (!e.IsIdentity() && GetEffectInfo(e.kind).stage == EffectStage::kBeam) return true;
+    if (!e.IsIdentity() && GetFinEffectInfo(e.kind).stage == EffectStage::kBeam) return true;
   return false;
 }
 
@@ -370,4 +461,4 @@ SimulationSummary EffectSimulator::SimulateAngle(const BimorphParams& params,
   return summary;
 }
 
-}  // namespace pz::model
+}  // namespace pz::records

@@ -1,6 +1,8 @@
-// The effect library (model/effects.h): every effect at zero magnitude is the identity, each
-// changes the output the way its physics says, and the fast path (shaped drive as a sampled signal)
-// agrees with the CVODE path (effects as BimorphExtensions) where both apply.
+// The fin bench's effects (records/fin_effects.h): every effect at zero magnitude is the identity,
+// each changes the output the way its physics says, and the fast path (shaped drive as a sampled
+// signal) agrees with the CVODE path (effects as BimorphExtensions) where both apply.
+#include "records/fin_effects.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,11 +10,20 @@
 #include <thread>
 #include <vector>
 
-#include "model/effects.h"
 #include "model/residual_analysis.h"
 
-namespace pz::model {
+namespace pz::records {
 namespace {
+
+using model::BimorphParams;
+using model::BimorphPlant;
+using model::ComputeLoop;
+using model::EffectKind;
+using model::FindEffect;
+using model::LoopFeatures;
+using model::SimStatus;
+using model::SimulationSummary;
+using model::Sinusoid;
 
 // Sampled fast path vs the exact sinusoid path: the drive is linear between samples of a 400 Hz
 // grid, error ≈ h²ü/8 of the drive; measured ≤ 1e-4 deg.
@@ -50,12 +61,13 @@ class EffectsTest : public ::testing::Test {
 };
 
 TEST_F(EffectsTest, LibraryNamesRoundTripAndEveryEffectHasUnitsAndRanges) {
-  // The fin's order (EffectDef::Fin's order): its check draws truths and lists rows in it.
+  // The fin's order (the order of its boxes, records/fin_effects.cc kFinBoxes): its check draws
+  // truths and lists rows in it.
   std::vector<std::string> names;
-  for (const EffectInfo& e : EffectLibrary()) names.push_back(e.name);
+  for (const FinEffectInfo& e : FinEffects()) names.push_back(e.name);
   EXPECT_EQ(names, (std::vector<std::string>{"driver-lowpass", "creep", "hinge-friction", "delay",
                                              "cubic-stiffening", "quadratic-drive", "drift"}));
-  for (const EffectInfo& e : EffectLibrary()) {
+  for (const FinEffectInfo& e : FinEffects()) {
     ASSERT_TRUE(ParseEffectKind(e.name).has_value()) << e.name;
     EXPECT_EQ(*ParseEffectKind(e.name), e.kind);
     EXPECT_FALSE(e.params.empty());
@@ -75,7 +87,7 @@ TEST_F(EffectsTest, LibraryNamesRoundTripAndEveryEffectHasUnitsAndRanges) {
 }
 
 TEST_F(EffectsTest, FinOffersItsEffectsOfTheOneLibraryAndSaysWhyNotTheOthers) {
-  for (const EffectInfo& e : EffectLibrary()) {
+  for (const FinEffectInfo& e : FinEffects()) {
     ASSERT_NE(e.def, nullptr) << e.name;
     EXPECT_EQ(FindEffect(e.name), e.def);
     EXPECT_EQ(e.stage, e.def->stage());
@@ -125,7 +137,7 @@ TEST_F(EffectsTest, ValidateNamesTheParameterAndTheRange) {
 TEST_F(EffectsTest, ZeroMagnitudeIsTheIdentityForEveryEffect) {
   const Sinusoid d{500, 0.5};
   const std::vector<double> base = Run(Params(), {}, d);
-  for (const EffectInfo& e : EffectLibrary()) {
+  for (const FinEffectInfo& e : FinEffects()) {
     const std::vector<double> y = Run(Params(), {Effect::Zero(e.kind)}, d);
     EXPECT_EQ(MaxDiff(base, y), 0.0) << e.name;
   }
@@ -273,4 +285,4 @@ TEST_F(EffectsTest, ShapedDriveOfALowpassIsTheAnalyticResponse) {
 }
 
 }  // namespace
-}  // namespace pz::model
+}  // namespace pz::records
