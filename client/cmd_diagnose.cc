@@ -1,6 +1,6 @@
 // `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
 // and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h DiagnoseBench:
-// the records engine on the bench's records). Writes a terminal summary, diagnosis.json and
+// the records engine on the bench's record set). Writes a terminal summary, diagnosis.json and
 // report.html with figures. `piezoid diagnose-check`: the same diagnosis on random synthetic
 // benches whose effect is withheld from it; prints the confusion matrix and the distribution of the
 // share of the gap closed.
@@ -201,7 +201,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     throw InputError(
         "piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
   const std::filesystem::path dir(a.cases_dir);
-  const io::CaseSet set = io::LoadCaseSet(dir);
+  const io::RecordSet set = io::RecordsFromCaseSet(io::LoadCaseSet(dir));
   diagnose::DiagnoseOptions o =
       Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
@@ -214,7 +214,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
       return svcclient::RecordsServiceFactory(so, f, "piezoid diagnose");
     };
   }
-  const std::vector<diagnose::DiagCase> cases = diagnose::CasesFromCaseSet(set);
   // Where the results go, checked before the run (a run is minutes: its work is not lost at the
   // end).
   const std::filesystem::path out =
@@ -226,12 +225,11 @@ int RunDiagnose(const DiagnoseArgs& a) {
   try {
     // The records engine on the bench's records (with --master: on the workers as
     // complete_model sessions).
-    d = diagnose::DiagnoseBench(cases, o);
+    d = diagnose::DiagnoseBench(set, o);
   } catch (const svcclient::ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
   }
-  d.bench = a.cases_dir;
   reports::PrintDiagnosis(std::cout, d, o);
   std::vector<std::filesystem::path> files;
   io::WriteFileWith(out / "diagnosis.json",
