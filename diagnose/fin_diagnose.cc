@@ -92,6 +92,7 @@ BenchDiagnosis DiagnoseBench(const io::RecordSet& set, const DiagnoseOptions& o)
   BenchDiagnosis d;
   d.bench = set.source.string();
   d.set = set;
+  d.rules = o.rules;
   for (const io::Record& r : set.records) d.cases.push_back(GridCaseOf(r));
   d.records = DiagnoseRecords(d.set, RecordOptionsOf(o));
   // The floors pooled by role, and the largest encoder quantum of the cases.

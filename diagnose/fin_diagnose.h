@@ -37,11 +37,11 @@
 #include <string>
 #include <vector>
 
-#include "model/residual_analysis.h"
 #include "diagnose/decision.h"
 #include "diagnose/diagnose.h"
 #include "diagnose/trends.h"
 #include "io/records.h"
+#include "model/residual_analysis.h"
 #include "records/noise_floor.h"
 
 namespace pz::diagnose {
@@ -103,6 +103,7 @@ struct BenchDiagnosis {
   double quantum_deg = 0;        ///< the largest encoder quantum of the cases
   /// The per-case floors' RMS over the training and the withheld samples [deg].
   double floor_train = 0, floor_withheld = 0;
+  DecisionRules rules;  ///< the options' decision rules (the report's thresholds)
   double wall_time_s = 0;
 };
 
