@@ -1,9 +1,9 @@
 // `piezoid diagnose`: where the sim-to-real gap of a bench lies, which unmodelled effect causes it,
 // and how far it shrinks once the effect is in the model (diagnose/fin_diagnose.h DiagnoseBench:
-// the records engine on the bench's records). Writes a terminal summary, diagnosis.json and
-// report.html with figures. `piezoid diagnose-check`: the same diagnosis on random synthetic
-// benches whose effect is withheld from it; prints the confusion matrix and the distribution of the
-// share of the gap closed.
+// the records engine on the bench's record set). Writes a terminal summary and the report folder
+// (reports/diagnose_report.h, with the bench's grid section). `piezoid diagnose-check`: the same
+// diagnosis on random synthetic benches whose effect is withheld from it; prints the confusion
+// matrix and the distribution of the share of the gap closed.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -21,11 +21,11 @@
 #include "io/csv.h"
 #include "io/fin_records.h"
 #include "records/registry.h"
+#include "reports/bench_grid.h"
 #include "reports/check_report.h"
 #include "reports/diagnose_report.h"
 #include "reports/excitation_report.h"
 #include "reports/record_windows.h"
-#include "reports/records_diagnose.h"
 #include "reports/select_report.h"
 #include "svcclient/complete_service.h"
 #include "svcclient/service_evaluator.h"
@@ -56,7 +56,7 @@ struct RecordsDiagnoseRequest {
 };
 
 /// `piezoid diagnose --records`: the diagnosis of diagnose/diagnose.h on a record set of any drive,
-/// its report folder by reports/records_diagnose.h.
+/// its report folder by reports/diagnose_report.h.
 int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const io::RecordSet set = reports::LoadRecordSetWithWindows(
       a.records, a.train_windows, a.validate_windows, a.test_windows, a.settle_s);
@@ -110,8 +110,9 @@ int RunRecordsDiagnose(const RecordsDiagnoseRequest& a) {
   const diagnose::RecordDiagnosis d = diagnose::DiagnoseRecords(set, o);
   std::cout << d.verdict << "\n";
   reports::PrintExcitationSummary(std::cout, set, d.excitation);
-  const std::vector<std::string> errors = reports::WriteRecordsDiagnosisFolder(
-      out, set, d, a.settle_s, select ? &selection : nullptr, !a.no_plots);
+  const std::vector<std::string> errors = reports::WriteDiagnosisFolder(
+      out, set, d, {.settle_s = a.settle_s, .selection = select ? &selection : nullptr},
+      !a.no_plots);
   for (const auto& e : errors) std::cerr << "piezoid diagnose: warning: " << e << "\n";
   std::cout << "written: " << (out / "report.md").string() << ", "
             << (out / "diagnosis.json").string() << "\n";
@@ -202,7 +203,7 @@ int RunDiagnose(const DiagnoseArgs& a) {
     throw InputError(
         "piezoid diagnose needs --cases DIR (a fin bench) or --records PATH --family NAME");
   const std::filesystem::path dir(a.cases_dir);
-  const io::CaseSet set = io::LoadCaseSet(dir);
+  const io::RecordSet set = io::RecordsFromCaseSet(io::LoadCaseSet(dir));
   diagnose::DiagnoseOptions o =
       Options(a.candidates, a.threads, a.seed, a.quick, a.significance_ratio, a.quiet);
   o.second_effect = !a.no_second;
@@ -215,7 +216,6 @@ int RunDiagnose(const DiagnoseArgs& a) {
       return svcclient::RecordsServiceFactory(so, f, "piezoid diagnose");
     };
   }
-  const std::vector<diagnose::DiagCase> cases = diagnose::CasesFromCaseSet(set);
   // Where the results go, checked before the run (a run is minutes: its work is not lost at the
   // end).
   const std::filesystem::path out =
@@ -227,29 +227,24 @@ int RunDiagnose(const DiagnoseArgs& a) {
   try {
     // The records engine on the bench's records (with --master: on the workers as
     // complete_model sessions).
-    d = diagnose::DiagnoseBench(cases, o);
+    d = diagnose::DiagnoseBench(set, o);
   } catch (const svcclient::ServiceError& e) {
     std::fprintf(stderr, "piezoid diagnose: error: %s\n", e.what());
     return ExitCodeOf(e.status());
   }
-  d.bench = a.cases_dir;
-  reports::PrintDiagnosis(std::cout, d, o);
-  std::vector<std::filesystem::path> files;
-  io::WriteFileWith(out / "diagnosis.json",
-                    [&](std::ostream& s) { reports::WriteDiagnosisJson(s, d, o); });
-  files.push_back(out / "diagnosis.json");
+  reports::PrintBenchSummary(std::cout, d);
+  const reports::DiagnosisReport report{.grid = &d};
+  const std::vector<std::string> warnings =
+      reports::WriteDiagnosisFolder(out, d.set, d.records, report, !a.no_plots);
   if (!a.json_file.empty()) {
-    io::WriteFileWith(a.json_file, [&](std::ostream& s) { reports::WriteDiagnosisJson(s, d, o); });
-    files.push_back(a.json_file);
+    std::error_code ec;
+    fs::copy_file(out / "diagnosis.json", a.json_file, fs::copy_options::overwrite_existing, ec);
+    if (ec) throw InputError("--json " + a.json_file + ": cannot write (" + ec.message() + ")");
   }
-  std::vector<std::string> warnings;
-  const auto html = reports::WriteDiagnosisHtml(out, d, o, !a.no_plots, &warnings);
-  files.push_back(out / "report.html");
   for (const auto& w : warnings) std::cerr << "piezoid diagnose: warning: " << w << "\n";
-  std::cout << "written: ";
-  for (size_t i = 0; i < files.size(); ++i) std::cout << (i ? ", " : "") << files[i].string();
-  std::cout << " (+ " << html.size() - 1 << " figure files in " << (out / "figures").string()
-            << ")\n";
+  std::cout << "written: " << (out / "report.md").string() << ", "
+            << (out / "diagnosis.json").string() << (a.json_file.empty() ? "" : ", " + a.json_file)
+            << " (figures in " << (out / "figures").string() << ")\n";
   return 0;
 }
 

@@ -4,7 +4,7 @@
 #include <chrono>
 #include <cmath>
 
-#include "io/fin_records.h"
+#include "model/saturation.h"
 
 namespace pz::diagnose {
 
@@ -53,26 +53,25 @@ RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& o) {
   return r;
 }
 
-io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases) {
-  io::CaseSet set;
-  set.dir = "bench";
-  for (const DiagCase& c : cases) {
-    io::BenchCase b;
-    b.number = c.number;
-    b.amplitude_v = c.drive.amplitude_v;
-    b.frequency_hz = c.drive.frequency_hz;
-    b.role = c.training ? io::CaseRole::kTrain : io::CaseRole::kValidate;
-    b.file = "case" + std::to_string(c.number);
-    b.sample_rate_hz = c.drive.sample_rate_hz;
-    b.cycles = c.drive.cycles;
-    b.angle_deg = c.measured_deg;
-    for (size_t k = 0; k < c.measured_deg.size(); ++k) {
-      b.t.push_back(static_cast<double>(k) / c.drive.sample_rate_hz);
-      b.u.push_back(c.drive.Value(b.t.back()));
+BenchCase GridCaseOf(const io::Record& r) {
+  const io::Record::StatedSinusoid& s = r.sinusoid;
+  if (!s.stated())
+    throw InputError(r.Label() + ": states no sinusoid (a fin bench's case number, V, f, cycles " +
+                     "and fs: io/fin_records.h), which the bench's V × f grid needs");
+  const model::SaturationPair sat = [&] {
+    try {
+      return model::SaturationFromExtremes(r.y);
+    } catch (const InputError& e) {
+      throw InputError(r.Label() + ": " + e.what());
     }
-    set.cases.push_back(std::move(b));
-  }
-  return io::RecordsFromCaseSet(set);
+  }();
+  return {s.case_number,
+          r.role == model::CaseRole::kTrain,
+          s.amplitude_v,
+          s.frequency_hz,
+          records::EstimateCaseNoise(r.y, std::max(1, static_cast<int>(std::lround(s.cycles)))),
+          sat.b1,
+          sat.b2};
 }
 
 int64_t FitEvaluations(const records::FitResult& f) {
@@ -87,23 +86,25 @@ int64_t BenchEvaluations(const RecordDiagnosis& d) {
   return n;
 }
 
-BenchDiagnosis DiagnoseBench(const std::vector<DiagCase>& cases, const DiagnoseOptions& o) {
+BenchDiagnosis DiagnoseBench(const io::RecordSet& set, const DiagnoseOptions& o) {
   ThrowIfError(o.Validate());
   const auto start = std::chrono::steady_clock::now();
   BenchDiagnosis d;
-  d.set = RecordsOfCases(cases);
+  d.bench = set.source.string();
+  d.set = set;
+  d.rules = o.rules;
+  for (const io::Record& r : set.records) d.cases.push_back(GridCaseOf(r));
   d.records = DiagnoseRecords(d.set, RecordOptionsOf(o));
-  // The grid's facts: each case's place, noise and saturations, and the floors pooled by role.
+  // The floors pooled by role, and the largest encoder quantum of the cases.
   double st = 0, sw = 0;
   int nt = 0, nw = 0;
-  for (size_t c = 0; c < cases.size(); ++c) {
-    const DiagCase& dc = cases[c];
-    (dc.training ? nt : nw) += static_cast<int>(dc.measured_deg.size());
-    d.cases.push_back({dc.number, dc.training, dc.drive.amplitude_v, dc.drive.frequency_hz,
-                       dc.noise, dc.b1, dc.b2});
-    d.quantum_deg = std::max(d.quantum_deg, dc.noise.quantum_deg);
+  for (size_t c = 0; c < d.cases.size(); ++c) {
+    const BenchCase& bc = d.cases[c];
+    const int n = static_cast<int>(set.records[c].y.size());
+    (bc.training ? nt : nw) += n;
+    d.quantum_deg = std::max(d.quantum_deg, bc.noise.quantum_deg);
     const double f = d.records.record_floor[c];
-    (dc.training ? st : sw) += f * f * dc.measured_deg.size();
+    (bc.training ? st : sw) += f * f * n;
   }
   d.floor_train = std::sqrt(st / std::max(1, nt));
   d.floor_withheld = std::sqrt(sw / std::max(1, nw));

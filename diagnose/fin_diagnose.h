@@ -1,7 +1,8 @@
 // The diagnosis of the sim-to-real gap of the nine-case fin bench (issue 6): where the gap lies,
 // which unmodelled effect causes it, and how far it shrinks once that effect is in the model. The
-// bench's cases are records (io/fin_records.h) diagnosed by the records engine (diagnose/diagnose.h
-// DiagnoseRecords with FinBenchOptions: bimorph-fin's bench form), in these steps:
+// bench is a record set (a bench folder read by io::LoadRecordSet, or io/fin_records.h) diagnosed
+// by the records engine (diagnose/diagnose.h DiagnoseRecords with FinBenchOptions: bimorph-fin's
+// bench form), with the facts of its V × f grid computed from its records, in these steps:
 //
 //  1. Base fit: ONE parameter set (μ, δ, α, β, γ, a1, a2) for every case, b1/b2 per case from the
 //     measured extremes, fitted on the training cases (global search + Levenberg–Marquardt).
@@ -36,12 +37,12 @@
 #include <string>
 #include <vector>
 
-#include "diagnose/problem.h"
-#include "model/residual_analysis.h"
 #include "diagnose/decision.h"
 #include "diagnose/diagnose.h"
 #include "diagnose/trends.h"
 #include "io/records.h"
+#include "model/residual_analysis.h"
+#include "records/noise_floor.h"
 
 namespace pz::diagnose {
 
@@ -73,11 +74,9 @@ struct DiagnoseOptions {
 /// options, rules, rounds, trends, threads and progress.
 RecordDiagnoseOptions RecordOptionsOf(const DiagnoseOptions& options);
 
-/// The bench's cases as records (io/fin_records.h; a withheld case validates).
-io::RecordSet RecordsOfCases(const std::vector<DiagCase>& cases);
-
-/// A bench case as the V × f grid reads it: its place in the grid, its role, its noise (rounding
-/// and scatter, before the saturations) and its saturations from the measured extremes.
+/// A bench case as the V × f grid reads it, from its record (GridCaseOf): its place in the grid,
+/// its role, its noise (rounding and scatter, before the saturations) and its saturations from
+/// the measured extremes.
 struct BenchCase {
   int number = 0;
   bool training = false;
@@ -86,17 +85,25 @@ struct BenchCase {
   double b1 = 0, b2 = 0;  ///< [deg]
 };
 
-/// The bench's diagnosis: the records engine's result on the cases as records, and what only the
+/// The grid's facts of a fin bench's record (its stated sinusoid, io::Record::sinusoid): the case
+/// number, V, f and the role; the noise of its whole record over its stated cycles
+/// (records::EstimateCaseNoise); b1, b2 from its measured extremes (model::SaturationFromExtremes).
+/// Throws InputError naming the record when it states no sinusoid or its extremes give no
+/// saturation.
+BenchCase GridCaseOf(const io::Record& record);
+
+/// The bench's diagnosis: the records engine's result on the bench's records, and what only the
 /// nine-case grid adds. Each record's gap before / after and its saturation-aware floor are the
 /// records result's (`records.gaps`, `records.record_floor`, set order = case order).
 struct BenchDiagnosis {
-  std::string bench;  ///< the folder or a label
-  io::RecordSet set;  ///< the cases as records, in case order
+  std::string bench;  ///< the folder or a label (the set's source)
+  io::RecordSet set;  ///< the bench's records, in case order
   RecordDiagnosis records;
   std::vector<BenchCase> cases;  ///< set order
   double quantum_deg = 0;        ///< the largest encoder quantum of the cases
   /// The per-case floors' RMS over the training and the withheld samples [deg].
   double floor_train = 0, floor_withheld = 0;
+  DecisionRules rules;  ///< the options' decision rules (the report's thresholds)
   double wall_time_s = 0;
 };
 
@@ -106,9 +113,10 @@ int64_t FitEvaluations(const records::FitResult& f);
 /// of the trends.
 int64_t BenchEvaluations(const RecordDiagnosis& d);
 
-/// The one driver of the bench's diagnosis: its cases as records, diagnosed by the records engine
-/// (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf), with the grid's facts of
-/// `cases`. Throws InputError on invalid options.
-BenchDiagnosis DiagnoseBench(const std::vector<DiagCase>& cases, const DiagnoseOptions& options);
+/// The one driver of the bench's diagnosis: its records (a fin bench's: each states its sinusoid)
+/// diagnosed by the records engine (diagnose/diagnose.h DiagnoseRecords with RecordOptionsOf),
+/// with the grid's facts computed from them (GridCaseOf). Throws InputError on invalid options,
+/// a record that states no sinusoid, or a set without training or withheld records.
+BenchDiagnosis DiagnoseBench(const io::RecordSet& set, const DiagnoseOptions& options);
 
 }  // namespace pz::diagnose

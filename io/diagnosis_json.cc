@@ -1,126 +1,122 @@
 #include "io/diagnosis_json.h"
 
-#include <google/protobuf/descriptor.h>
 #include <google/protobuf/struct.pb.h>
 
 #include <stdexcept>
-#include <vector>
 
 #include "diagnosis.pb.h"
+#include "io/csv.h"
 #include "io/proto_json.h"
 #include "model/status.h"
 
 namespace pz::io {
 namespace {
 
-using google::protobuf::FieldDescriptor;
 using google::protobuf::Struct;
 using google::protobuf::Value;
-using proto::DiagnosisOnly;
 
-enum class Way { kWrite, kRead };
+/// The bench's top-level parts of a version-1 file: version 2's BenchGrid.
+constexpr const char* kGridKeys[] = {
+    "thresholds", "noise",       "base",       "base_residuals", "trends",
+    "rounds",     "absorbed_by", "absorbed",   "final",          "final_residuals",
+    "gap",        "wall_time_s", "evaluations"};
 
-const char* KindName(DiagnosisOnly k) {
-  return k == proto::DIAGNOSIS_ONLY_RECORDS ? "a records diagnosis" : "the fin bench's diagnosis";
-}
-
-/// A value the message's default prints as (a field of the other kind left unset).
-bool IsDefault(const Value& v) {
-  switch (v.kind_case()) {
-    case Value::kNumberValue:
-      return v.number_value() == 0;
-    case Value::kStringValue:
-      return v.string_value().empty();
-    case Value::kBoolValue:
-      return !v.bool_value();
-    case Value::kListValue:
-      return v.list_value().values().empty();
-    default:
-      return false;
-  }
-}
-
-/// Written: drops the fields of the other kind (all at their defaults, or a writer's bug); read:
-/// refuses them by their path (`where`: the file).
-void Filter(Struct* s, DiagnosisOnly kind, const std::string& where, Way way) {
-  JsonFieldWalk walk;
-  walk.keep = [&](const FieldDescriptor& f, const std::string& at, const Value& v) {
-    const DiagnosisOnly only = f.options().GetExtension(proto::diagnosis_only);
-    if (only == proto::DIAGNOSIS_ONLY_UNSPECIFIED || only == kind) return true;
-    if (way == Way::kRead)
-      throw InputError(where + ": " + at + ": a field of " + KindName(only) + " in " +
-                       KindName(kind));
-    if (!IsDefault(v))
-      throw std::logic_error("diagnosis.json: " + at + " set in " + KindName(kind));
-    return false;
-  };
-  WalkJsonObject(*proto::Diagnosis::descriptor(), s, walk);
-}
-
-/// "" when `v` is of the shape "named" takes there (`list`: a list of strings; else a string or
-/// null); else what is wrong.
-std::string NamedShape(const Value& v, bool list) {
-  if (list) {
-    if (v.kind_case() != Value::kListValue) return "a list of the effects named";
+/// Version 1's "named" at `at` as version 2's: a list of strings stays, a string is a list of
+/// one, null an empty list (`list` false: a round's, a string or null, null removed).
+void ConvertNamed(const std::string& path, const std::string& at, Struct* s, bool list) {
+  auto it = s->mutable_fields()->find("named");
+  if (it == s->mutable_fields()->end()) return;
+  Value& v = it->second;
+  const bool is_list = v.kind_case() == Value::kListValue;
+  if (list && is_list) {
     for (const Value& x : v.list_value().values())
-      if (x.kind_case() != Value::kStringValue) return "a list of the effects named (strings)";
-    return "";
+      if (x.kind_case() != Value::kStringValue)
+        throw InputError(path + ": " + at + ": not a list of the effects named (strings)");
+    return;
   }
-  if (v.kind_case() == Value::kStringValue || v.kind_case() == Value::kNullValue) return "";
-  return "the effect named (a string) or null";
+  if (list) throw InputError(path + ": " + at + ": not a list of the effects named");
+  if (v.kind_case() == Value::kNullValue) {
+    s->mutable_fields()->erase(it);
+  } else if (v.kind_case() != Value::kStringValue) {
+    throw InputError(path + ": " + at + ": not the effect named (a string) or null");
+  }
 }
 
-/// The first "named" of a wrong shape: its path and the shape it takes ("" when none).
-std::pair<std::string, std::string> BadNamed(const proto::Diagnosis& d, DiagnosisOnly kind) {
-  if (d.has_named()) {
-    const std::string want = NamedShape(d.named(), kind == proto::DIAGNOSIS_ONLY_BENCH);
-    if (!want.empty()) return {"named", want};
+/// A version-1 file (its kind "records" or "bench") in version 2's shape.
+void ConvertVersion1(const std::string& path, Struct* s) {
+  auto& f = *s->mutable_fields();
+  const bool records = f.contains("records"), bench = f.contains("bench");
+  if (records == bench)
+    throw InputError(path + (records ? ": both \"records\" and \"bench\" are given"
+                                     : ": no format_version, and neither \"records\" (a records "
+                                       "diagnosis) nor \"bench\" (the fin bench's) is given: not "
+                                       "a diagnosis.json"));
+  const std::string key = records ? "records" : "bench";
+  if (f.at(key).kind_case() != Value::kStringValue)
+    throw InputError(path + ": " + key + ": not a string (the " +
+                     (records ? "record set" : "bench's folder") + ")");
+  if (auto named = f.find("named"); named != f.end()) {
+    Value& v = named->second;
+    if (records && v.kind_case() == Value::kNullValue) {
+      v.mutable_list_value();
+    } else if (records && v.kind_case() == Value::kStringValue) {
+      const std::string one = v.string_value();
+      v.mutable_list_value()->add_values()->set_string_value(one);
+    } else if (records) {
+      throw InputError(path + ": named: not the effect named (a string) or null");
+    }
+    ConvertNamed(path, "named", s, true);
   }
-  for (int i = 0; i < d.rounds_size(); ++i) {
-    if (!d.rounds(i).has_named()) continue;
-    const std::string want = NamedShape(d.rounds(i).named(), false);
-    if (!want.empty()) return {"rounds[" + std::to_string(i) + "].named", want};
+  if (bench) {
+    Struct& grid = *f["grid"].mutable_struct_value();
+    for (const char* k : kGridKeys) {
+      if (auto it = f.find(k); it != f.end()) {
+        (*grid.mutable_fields())[k] = it->second;
+        f.erase(it);
+      }
+    }
+    f["records"] = f.at("bench");
+    f.erase("bench");
+    if (auto it = grid.mutable_fields()->find("rounds");
+        it != grid.mutable_fields()->end() && it->second.has_list_value()) {
+      auto& rounds = *it->second.mutable_list_value()->mutable_values();
+      for (int i = 0; i < rounds.size(); ++i)
+        if (rounds[i].has_struct_value())
+          ConvertNamed(path, "rounds[" + std::to_string(i) + "].named",
+                       rounds[i].mutable_struct_value(), false);
+    }
   }
-  return {};
-}
-
-DiagnosisOnly KindOfMessage(const proto::Diagnosis& d) {
-  if (d.has_records() == d.has_bench())
-    throw std::logic_error(d.has_records()
-                               ? "diagnosis.json: both \"records\" and \"bench\" are set"
-                               : "diagnosis.json: neither \"records\" nor \"bench\" is set");
-  return d.has_records() ? proto::DIAGNOSIS_ONLY_RECORDS : proto::DIAGNOSIS_ONLY_BENCH;
+  f["format_version"].set_number_value(kDiagnosisFormatVersion);
 }
 
 }  // namespace
 
-bool IsRecordsDiagnosis(const proto::Diagnosis& d) { return d.has_records(); }
+bool IsBenchDiagnosis(const proto::Diagnosis& d) { return d.has_grid(); }
 
 std::string WriteDiagnosisFile(const proto::Diagnosis& d) {
-  const DiagnosisOnly kind = KindOfMessage(d);
-  if (const auto [at, want] = BadNamed(d, kind); !at.empty())
-    throw std::logic_error("diagnosis.json: " + at + " is not " + want);
-  Struct s = MessageToStruct(d);
-  Filter(&s, kind, "diagnosis.json", Way::kWrite);
-  return PrintJson(s, "diagnosis.json");
+  if (d.records().empty()) throw std::logic_error("diagnosis.json: \"records\" is not set");
+  proto::Diagnosis m = d;
+  m.set_format_version(kDiagnosisFormatVersion);
+  return PrintJson(MessageToStruct(m), "diagnosis.json");
 }
 
 void ReadDiagnosisFile(const std::string& path, const std::string& text, proto::Diagnosis* out) {
   Struct s = ParseJsonObject(path, text);
-  const bool records = s.fields().contains("records"), bench = s.fields().contains("bench");
-  if (records == bench)
-    throw InputError(path + (records ? ": both \"records\" and \"bench\" are given"
-                                     : ": neither \"records\" (a records diagnosis) nor \"bench\" "
-                                       "(the fin bench's) is given: not a diagnosis.json"));
-  const DiagnosisOnly kind = records ? proto::DIAGNOSIS_ONLY_RECORDS : proto::DIAGNOSIS_ONLY_BENCH;
-  const std::string key = records ? "records" : "bench";
-  if (s.fields().at(key).kind_case() != Value::kStringValue)
-    throw InputError(path + ": " + key + ": not a string (the " +
-                     (records ? "record set" : "bench's folder") + ")");
-  Filter(&s, kind, path, Way::kRead);
+  const auto version = s.fields().find("format_version");
+  if (version == s.fields().end()) {
+    ConvertVersion1(path, &s);
+  } else if (version->second.kind_case() != Value::kNumberValue ||
+             version->second.number_value() != kDiagnosisFormatVersion) {
+    throw InputError(path + ": format_version " +
+                     (version->second.kind_case() == Value::kNumberValue
+                          ? FormatNumber(version->second.number_value())
+                          : std::string("(not a number)")) +
+                     ": this piezoid reads diagnosis.json format_version " +
+                     std::to_string(kDiagnosisFormatVersion) + " and " +
+                     std::to_string(kDiagnosisFormatVersionOldest) +
+                     " (a file without format_version)");
+  }
   StructToMessage(path, s, out);
-  if (const auto [at, want] = BadNamed(*out, kind); !at.empty())
-    throw InputError(path + ": " + at + ": not " + want);
 }
 
 }  // namespace pz::io

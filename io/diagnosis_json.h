@@ -1,13 +1,13 @@
-// diagnosis.json's codec (proto/diagnosis.proto, issue 38): the file <-> proto::Diagnosis, for
-// both diagnoses (the records diagnosis of `piezoid diagnose --records` and the fin bench's of
-// `piezoid diagnose --cases`), through io/proto_json.h (keys sorted, a non-finite number as null, a
-// bad field named by its path), here only. The one conversion of each diagnosis to the message is
-// its report writer's (reports/records_diagnose.cc, reports/diagnose_report.cc).
+// diagnosis.json's codec (proto/diagnosis.proto, issues 38, 46): the file <-> proto::Diagnosis,
+// through io/proto_json.h (keys sorted, a non-finite number as null, a bad field named by its
+// path), here only. The one conversion of a diagnosis to the message is the report writer's
+// (reports/diagnose_report.h DiagnosisOf).
 //
-// A file is of one kind: "records" given (a records diagnosis) or "bench" (the fin bench's). The
-// fields of the other kind (the option diagnosis_only) are not written — a list as [] neither —
-// and a file that holds one is refused, naming it; "named" is a string or null in a records
-// diagnosis and in every round, a list of strings in the bench's.
+// One shape (format_version 2): a record set's diagnosis, the fin bench's with its optional
+// "grid". Version 1 (no "format_version": a file of one of two kinds, "records" or "bench", the
+// bench's parts at the top level, "named" a string or null, or the bench's list) is converted on
+// read: "bench" becomes "records", the bench's parts move into "grid", "named" becomes the list of
+// the effects named (a round's: absent for null).
 #pragma once
 
 #include <string>
@@ -18,15 +18,20 @@ class Diagnosis;
 
 namespace pz::io {
 
-/// diagnosis.json's text. Throws std::logic_error when the message is of no kind or of both, or
-/// holds a field of the other kind or a "named" of the wrong shape (a writer's bug).
+/// The version written; version 1 (kDiagnosisFormatVersionOldest) is read and converted.
+inline constexpr int kDiagnosisFormatVersion = 2;
+inline constexpr int kDiagnosisFormatVersionOldest = 1;
+
+/// diagnosis.json's text, its format_version set to kDiagnosisFormatVersion. Throws
+/// std::logic_error when "records" is empty (a writer's bug).
 std::string WriteDiagnosisFile(const proto::Diagnosis& d);
 
-/// diagnosis.json text → the message (`out` replaced). Throws InputError naming `path` and: the
-/// kind missing or both given, a field of the other kind, a bad field or value (by its path).
+/// diagnosis.json text of any version read → the message in version 2 (`out` replaced). Throws
+/// InputError naming `path` and: an unknown format_version, a version-1 file of no kind or of
+/// both, a "named" of the wrong shape, a bad field or value (by its path).
 void ReadDiagnosisFile(const std::string& path, const std::string& text, proto::Diagnosis* out);
 
-/// True when the message is a records diagnosis ("records" given), false for the fin bench's.
-bool IsRecordsDiagnosis(const proto::Diagnosis& d);
+/// True when the message holds the fin bench's grid (`diagnose --cases`).
+bool IsBenchDiagnosis(const proto::Diagnosis& d);
 
 }  // namespace pz::io

@@ -10,6 +10,7 @@
 
 #include "io/bench_data.h"
 #include "io/csv.h"
+#include "io/fin_records.h"
 #include "io/quantum.h"
 #include "model/status.h"
 
@@ -506,30 +507,12 @@ RecordSet FromStackBench(const fs::path& dir, const RecordReadOptions& opt) {
   return set;
 }
 
+// The one reader of a fin bench folder: its cases (io/bench_data.h) as records (io/fin_records.h).
 RecordSet FromFinBench(const fs::path& dir, const RecordReadOptions& opt) {
   BenchReadOptions bo;
-  bo.check_voltage = false;
-  bo.cycles = 0;
-  const CaseSet cs = LoadCaseSet(dir, bo);
-  RecordSet set;
-  set.source = dir;
-  set.format = "bimorph-fin-bench";
-  set.response_unit = "deg";
-  for (const BenchCase& c : cs.cases) {
-    FileData d;
-    d.t = c.t;
-    d.u = c.u;
-    d.y = c.angle_deg;
-    d.dt = 1.0 / c.sample_rate_hz;
-    d.rest = 1;
-    d.quantum = EstimateQuantum(d.y);
-    Record r = MakeRecord(d, "case" + std::to_string(c.number), c.role, c.file);
-    r.offset_mode = OffsetMode::kFixed;
-    r.offset = 0;
-    r.frequency_hz = c.frequency_hz;
-    FinishRecord(r, opt);
-    set.records.push_back(std::move(r));
-  }
+  bo.cycles = 0;  // any length; the voltage column is checked against the stated sinusoid
+  RecordSet set = RecordsFromCaseSet(LoadCaseSet(dir, bo));
+  for (Record& r : set.records) FinishRecord(r, opt);
   return set;
 }
 

@@ -38,8 +38,9 @@
 // `piezoid committee` (records.csv: record, frequency_Hz, offset_V, amplitude_V, file, role; roles
 // train/test, records named record<N>, offset 0, the stated frequency kept; the drive checked
 // against offset + A sin(2π f t) on request), the bimorph-fin bench folder (cases.csv,
-// io/bench_data.h; offset 0), and a single CSV file (one record, role train; windows are given by
-// the command line, see SplitIntoWindows).
+// io/bench_data.h, its voltage column checked against the stated sinusoid; the records of
+// io/fin_records.h: the stated sinusoid is the drive, offset 0), and a single CSV file (one
+// record, role train; windows are given by the command line, see SplitIntoWindows).
 //
 // Every error is a pz::InputError that names the file, the line and the column, or the record.
 #pragma once

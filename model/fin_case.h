@@ -1,6 +1,6 @@
 // One case of a bimorph-fin bench, ready to simulate and score: what the HGANN fitness
-// (hgann/hgann_fitness.h) and the diagnosis (diagnose/problem.h) both work on. The same case exists
-// as a file record (io/bench_data.h BenchCase: t, u, angle as read) and in a job spec
+// (hgann/hgann_fitness.h) works on (the diagnosis reads records: io/fin_records.h). The same
+// case exists as a file record (io/bench_data.h BenchCase: t, u, angle as read) and in a job spec
 // (job/job_spec.h HgannCaseSpec: what travels on the wire); both become this form through
 // MakeFinCase (a BenchCase through io::MakeFinCase), the one builder.
 #pragma once

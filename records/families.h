@@ -95,7 +95,7 @@ struct FamilyOptions {
   /// centred). A fit.json written before the field reads as centred (records/stepper.h).
   model::InitialState initial_state = model::InitialState::kAuto;
   model::BeamGeometry geometry;  ///< bimorph fin
-  /// bimorph-fin: the fin bench's form, the model of its diagnosis (diagnose/problem.h): μ, δ, α,
+  /// bimorph-fin: the fin bench's form, its diagnosis's model (diagnose/fin_diagnose.h): μ, δ, α,
   /// β, γ, a1, a2 searched in the fin's box (γ as the ratio γ/β, Family::SearchForm), the geometry
   /// fixed at `geometry` and the output the fin angle in degrees (no gain); the saturations b1, b2
   /// of each record from its measured extremes (model/saturation.h SaturationFromExtremes); each

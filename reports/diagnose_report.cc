@@ -1,768 +1,209 @@
 #include "reports/diagnose_report.h"
 
-#include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <fstream>
-#include <map>
-#include <numbers>
-#include <set>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
 #include <sstream>
 
-#include "diagnose/verdict.h"
 #include "diagnosis.pb.h"
 #include "io/csv.h"
 #include "io/diagnosis_json.h"
-#include "io/proto_json.h"
-#include "model/model_comparison.h"
+#include "reports/bench_grid.h"
+#include "reports/excitation_report.h"
 #include "reports/plots.h"
-#include "reports/records_diagnose.h"
+#include "reports/record_windows.h"
+#include "reports/residual_spectrum_report.h"
+#include "reports/select_report.h"
 
 namespace pz::reports {
+namespace fs = std::filesystem;
 namespace {
 
-using diagnose::BenchDiagnosis;
-using diagnose::RecordCandidate;
-using diagnose::RecordDiagnosis;
-
-std::string F(const char* fmt, double a) {
-  if (!std::isfinite(a)) return "n/a";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, fmt, a);
-  return buf;
+std::string G(double x, int prec = 4) {
+  std::ostringstream s;
+  s << std::setprecision(prec) << x;
+  return s.str();
 }
-std::string Pct(double share) { return std::isfinite(share) ? F("%.0f %%", 100 * share) : "n/a"; }
-std::string Html(const std::string& s) {
-  std::string r;
-  for (char c : s) {
-    if (c == '<')
-      r += "&lt;";
-    else if (c == '>')
-      r += "&gt;";
-    else if (c == '&')
-      r += "&amp;";
-    else
-      r += c;
+
+}  // namespace
+
+void WriteDiagnosisMarkdown(std::ostream& os, const io::RecordSet& set,
+                            const diagnose::RecordDiagnosis& d,
+                            const records::TrainingDriveProposal& proposal,
+                            const DiagnosisReport& report) {
+  const double settle_s = report.settle_s;
+  const records::SelectionResult* selection = report.selection;
+  const std::string u = set.response_unit;
+  os << "# piezoid diagnose: " << d.base.model->family().name() << " on `" << set.source.string()
+     << "`\n\n"
+     << "**Verdict (" << d.verdict_kind << "):** " << d.verdict << "\n\n";
+  if (settle_s > 0) os << SettlingSentence(settle_s) << "\n\n";
+  if (const std::string s = InitialStateSentence(d.base.model->family()); !s.empty())
+    os << s << "\n\n";
+  os << "## Noise floor\n\n| estimate | σ [" << u << "] | samples | from |\n|---|---|---|---|\n";
+  for (const auto& e : d.noise.estimates) {
+    os << "| " << e.method << (e.method == d.noise.used ? " (used)" : "") << " | " << G(e.sigma)
+       << " | " << e.samples << " | " << e.detail << " |\n";
   }
-  return r;
-}
-
-double Rms(double pi, int n) { return n > 0 ? std::sqrt(pi / n) : NAN; }
-
-std::string Pad(std::string s, size_t w) {
-  // Pads by code points (the names hold UTF-8 Greek letters in some places).
-  size_t len = 0;
-  for (unsigned char c : s) len += (c & 0xC0) != 0x80;
-  while (len++ < w) s += ' ';
-  return s;
-}
-
-// A records fit as the bench reads it: its structure ("base + delay") and its Σe² [deg²] and
-// samples over the training and the withheld cases.
-struct FitView {
-  const records::FitResult* fit = nullptr;
-  std::string description;
-  double train_pi = 0, withheld_pi = 0;
-  int train_samples = 0, withheld_samples = 0;
-  const std::vector<opt::ParamEstimate>& params() const { return fit->uncertainty.params; }
-};
-
-FitView ViewOf(const io::RecordSet& set, const records::FitResult& f) {
-  static const diagnose::RecordDiagnoseOptions kBench = diagnose::FinBenchOptions();
-  FitView v;
-  v.fit = &f;
-  v.description = diagnose::ModelLabel(*f.model, kBench);
-  for (size_t i = 0; i < set.records.size() && i < f.metrics.size(); ++i) {
-    const bool training = set.records[i].role == model::CaseRole::kTrain;
-    (training ? v.train_pi : v.withheld_pi) += f.metrics[i].sse;
-    (training ? v.train_samples : v.withheld_samples) += static_cast<int>(set.records[i].scored());
+  if (!d.noise.warning.empty()) os << "\n**Warning:** " << d.noise.warning << ".\n";
+  os << "\nWithheld: " << d.withheld_samples << " samples; training: " << d.train_samples
+     << ". Base model " << d.base.model->Describe() << ": withheld RMS "
+     << G(std::sqrt(d.s0 / d.withheld_samples)) << " " << u << " = " << G(d.rms_ratio, 3)
+     << " × the floor (significant above 1.25: " << (d.significant ? "yes" : "no") << ").\n\n"
+     << "## Candidates (ranked by score)\n\n"
+     << "| effect | withheld RMS [" << u
+     << "] | score | train ΔBIC | closed | pattern | z vs base | qualifies |\n"
+     << "|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : d.candidates) {
+    os << "| " << records::EffectName(c.kind) << " | "
+       << G(std::sqrt(c.s_withheld / d.withheld_samples)) << " | " << G(c.score, 5) << " | "
+       << G(c.train_delta_bic, 5) << " | "
+       << (std::isfinite(c.closed) ? G(100 * c.closed, 3) + " %" : "—") << " | "
+       << G(100 * c.pattern, 3) << " % | " << G(c.z_vs_base, 3) << " | "
+       << (c.qualifies ? "yes" : c.note) << " |\n";
   }
-  return v;
-}
-
-// A greedy round of the records result: the model it starts from, its gap, its ranked candidates
-// and what it named.
-struct RoundView {
-  const records::FitResult* start = nullptr;
-  double s0 = 0, s_floor = 0, rms_ratio = 0;
-  bool significant = false;
-  const std::vector<RecordCandidate>* candidates = nullptr;
-  int named = -1, runner_up = -1;
-  double z_runner_up = 0;
-  const std::string* verdict = nullptr;
-};
-
-std::vector<RoundView> Rounds(const RecordDiagnosis& d) {
-  std::vector<RoundView> r = {{&d.base, d.s0, d.s_floor, d.rms_ratio, d.significant, &d.candidates,
-                               d.named, d.runner_up, d.z_runner_up, &d.round_verdict}};
-  if (d.second) {
-    const diagnose::RecordRound& s = *d.second;
-    r.push_back({&d.candidates[static_cast<size_t>(d.named)].fit, s.gap.s0, s.gap.s_floor,
-                 s.gap.rms_ratio, s.gap.significant, &s.candidates, s.named, s.runner_up,
-                 s.z_runner_up, &s.verdict});
-  }
-  return r;
-}
-
-int AddedParams(const RecordCandidate& c, const RoundView& r) {
-  return static_cast<int>(c.fit.params.size() - r.start->params.size());
-}
-
-void PrintParams(std::ostream& o, const FitView& f, const std::string& indent) {
-  o << indent << Pad("parameter", 30) << Pad("value", 14) << Pad("± σ", 12)
-    << Pad("sensitivity", 13) << "identifiability\n";
-  for (const auto& p : f.params()) {
-    o << indent << Pad(p.name + " [" + p.unit + "]", 30) << Pad(F("%.5g", p.value), 14)
-      << Pad(std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—", 12)
-      << Pad(F("%.4f deg", p.sensitivity), 13) << opt::IdentifiabilityName(p.identifiability)
-      << (p.note.empty() ? "" : "; " + p.note) << "\n";
-  }
-  if (!f.fit->uncertainty.weakest_direction.empty())
-    o << indent << "weakest direction: " << f.fit->uncertainty.weakest_direction << "\n";
-}
-
-// The effects' parameters (those after the family's own) with σ.
-std::string EffectParams(const records::FitResult& f) {
-  std::string s;
-  const auto& params = f.uncertainty.params;
-  for (size_t i = f.model->family().params().size(); i < params.size(); ++i) {
-    const auto& p = params[i];
-    s += (s.empty() ? "" : ", ") + p.name + " = " + F("%.4g", p.value) +
-         (std::isfinite(p.std_error) ? " ± " + F("%.2g", p.std_error) : "") + " " + p.unit;
-  }
-  return s;
-}
-
-std::vector<double> Sorted(std::set<double> s) { return {s.begin(), s.end()}; }
-
-// ---- terminal
-// ------------------------------------------------------------------------------------
-
-// The noise floor and the base model's fit.
-void PrintHead(std::ostream& o, const BenchDiagnosis& d, const FitView& b) {
-  int nt = 0, nw = 0;
-  for (const auto& c : d.cases) (c.training ? nt : nw) += 1;
-  o << "piezoid diagnose: " << d.bench << " (" << d.cases.size() << " cases: " << nt
-    << " training, " << nw << " withheld)\n";
-  o << "noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
-    << F("%.4f", d.floor_train) << " (training) / " << F("%.4f", d.floor_withheld)
-    << " (withheld) deg RMS (plateaus of " << d.records.floor_model << ")\n";
-  o << "base model (one parameter set for every case, b1/b2 from the measured extremes): training "
-       "RMS "
-    << F("%.4f", Rms(b.train_pi, b.train_samples)) << ", withheld RMS "
-    << F("%.4f", Rms(b.withheld_pi, b.withheld_samples)) << " deg\n\n";
-}
-
-// Where the base model's residual lies, and the trends of the per-case fits.
-void PrintWhere(std::ostream& o, const RecordDiagnosis& d) {
-  o << "WHERE the gap lies (base model, each against the floor)\n";
-  o << "  case   V [V]  f [Hz]  role      floor   RMS      x floor  share of PI\n";
-  for (size_t i = 0; i < d.base_residuals.cases.size(); ++i) {
-    const auto& c = d.base_residuals.cases[i];
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "  %-5d %6.0f %7.3g  %-8s %7.4f  %7.4f  %6.2f   %5.1f %%\n",
-                  c.number, c.amplitude_v, c.frequency_hz, c.training ? "training" : "withheld",
-                  c.floor_rms, c.rms, c.rms_over_floor, 100 * c.share);
-    o << buf;
-  }
-  for (const auto& f : d.base_residuals.findings) o << "  - " << f << "\n";
-  bool any_trend = false;
-  for (const auto& t : d.trends) {
-    if (!t.significant) continue;
-    if (!any_trend)
-      o << "  parameter trends over the V x f grid (per-case fits; a global model cannot follow "
-           "them):\n";
-    any_trend = true;
-    o << "    " << Pad(t.name, 7) << " slope " << F("%.3g", t.slope_v)
-      << " /V (p = " << F("%.2g", t.p_v) << "), " << F("%.3g", t.slope_f)
-      << " /Hz (p = " << F("%.2g", t.p_f) << "), range " << Pct(t.relative_range)
-      << " of its mean\n";
-  }
-  if (!d.trends.empty() && !any_trend)
-    o << "  no significant parameter trend over the V x f grid (per-case fits)\n";
-}
-
-// Each round's candidates, the verdict and what the base parameters absorbed.
-void PrintWhich(std::ostream& o, const BenchDiagnosis& d, const FitView& b,
-                const diagnose::DiagnoseOptions& opt) {
-  const RecordDiagnosis& rd = d.records;
-  o << "\nWHICH effect (re-identified on the training cases, scored on the withheld ones)\n";
-  const std::vector<RoundView> rounds = Rounds(rd);
-  for (size_t r = 0; r < rounds.size(); ++r) {
-    const RoundView& rr = rounds[r];
-    o << "  round " << r + 1 << " from " << ViewOf(d.set, *rr.start).description
-      << ": withheld RMS " << F("%.4f", std::sqrt(rr.s0 / std::max(1, b.withheld_samples)))
-      << " deg = " << F("%.2f", rr.rms_ratio) << " x floor ("
-      << (rr.significant ? "significant" : "not significant") << ", threshold "
-      << F("%.2f", opt.rules.significance_ratio) << ")\n";
-    o << "    " << Pad("candidate", 18) << Pad("+k", 4) << Pad("withheld RMS", 14)
-      << Pad("score", 10) << Pad("closed", 8) << Pad("pattern", 9) << Pad("weight", 8) << "notes\n";
-    for (const RecordCandidate& c : *rr.candidates) {
-      const FitView f = ViewOf(d.set, c.fit);
-      o << "    " << Pad(model::EffectName(c.kind), 18)
-        << Pad(std::to_string(AddedParams(c, rr)), 4)
-        << Pad(F("%.4f", Rms(f.withheld_pi, f.withheld_samples)), 14) << Pad(F("%.1f", c.score), 10)
-        << Pad(Pct(c.closed), 8) << Pad(Pct(c.pattern), 9) << Pad(F("%.3f", c.weight), 8)
-        << (c.qualifies ? "qualifies" : c.note) << "\n";
+  if (d.named >= 0) {
+    const auto& c = d.candidates[static_cast<size_t>(d.named)];
+    os << "\n## The named model: " << c.fit.model->Describe()
+       << "\n\n| parameter | value | unit |\n|---|---|---|\n";
+    for (size_t i = 0; i < c.fit.params.size(); ++i) {
+      os << "| " << c.fit.model->params()[i].name << " | " << G(c.fit.params[i], 6) << " | "
+         << c.fit.model->params()[i].unit << " |\n";
     }
-    o << "    => " << *rr.verdict << "\n";
+    os << "\n| record | role | RMSE before | RMSE after | NRMSE after |\n|---|---|---|---|---|\n";
+    for (size_t i = 0; i < set.records.size(); ++i) {
+      os << "| " << set.records[i].name << " | " << model::CaseRoleName(set.records[i].role)
+         << " | " << G(d.base.metrics[i].rmse) << " | " << G(c.fit.metrics[i].rmse) << " | "
+         << (std::isfinite(c.fit.metrics[i].nrmse_pct) ? G(c.fit.metrics[i].nrmse_pct, 3) + " %"
+                                                       : "— (constant response)")
+         << " |\n";
+    }
   }
-  o << "\nVERDICT: " << rd.verdict << "\n";
-  if (!rd.absorbed.empty()) {
-    o << "  base parameters that move when " << rd.absorbed_by << " is added (|shift| > 2 σ):";
-    for (const auto& a : rd.absorbed)
-      o << " " << a.name << " " << F("%.4g", a.without) << " -> " << F("%.4g", a.with) << " "
-        << a.unit << " (z " << F("%.1f", a.z) << ");";
-    o << "\n";
+  WriteResidualSpectrumMarkdown(
+      os, set, d.base, d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr);
+  if (d.next) {
+    os << "\n## Next measurement\n\n" << d.next->description << ".\n";
   }
+  if (selection) WriteSelectionMarkdown(os, set, *selection);
+  WriteExcitationMarkdown(os, set, d.excitation, proposal, kProposedDriveFile);
+  if (report.grid) WriteBenchGridMarkdown(os, *report.grid);
 }
 
-}  // namespace
-
-void PrintDiagnosis(std::ostream& o, const BenchDiagnosis& d,
-                    const diagnose::DiagnoseOptions& opt) {
-  const RecordDiagnosis& rd = d.records;
-  const FitView b = ViewOf(d.set, rd.base), fin = ViewOf(d.set, *rd.final_fit);
-  PrintHead(o, d, b);
-  PrintWhere(o, rd);
-  PrintWhich(o, d, b, opt);
-
-  o << "\nHOW FAR the gap shrinks (" << fin.description << ")\n";
-  o << "  case  role      floor   RMS before  RMS after  x floor after  closed\n";
-  for (size_t i = 0; i < rd.gaps.size(); ++i) {
-    const diagnose::RecordGap& g = rd.gaps[i];
-    char buf[200];
-    std::snprintf(buf, sizeof buf, "  %-5d %-8s %7.4f  %9.4f  %9.4f  %12.2f  %s\n",
-                  d.cases[i].number, d.cases[i].training ? "training" : "withheld", g.floor_rms,
-                  g.rms_before, g.rms_after, g.floor_rms > 0 ? g.rms_after / g.floor_rms : NAN,
-                  Pct(g.closed).c_str());
-    o << buf;
-  }
-  o << "  withheld total: PI " << F("%.4f", rd.s0) << " -> " << F("%.4f", rd.withheld_after)
-    << " deg^2 (floor " << F("%.4f", rd.s_floor) << "), share of the gap closed "
-    << Pct(rd.closed_total) << ", remaining "
-    << F("%.2f", std::sqrt(rd.withheld_after / rd.s_floor)) << " x floor\n";
-  if (!rd.named_effects.empty())
-    o << "  effect parameters: " << EffectParams(*rd.final_fit) << "\n";
-
-  o << "\nIDENTIFIABILITY (" << fin.description << ", σ from s² (JᵀJ)⁺ at the solution)\n";
-  PrintParams(o, fin, "  ");
-  if (fin.description != b.description) {
-    o << "  base model:\n";
-    PrintParams(o, b, "  ");
-  }
-  o << "\n"
-    << F("%.1f", d.wall_time_s) << " s, " << diagnose::BenchEvaluations(rd)
-    << " model evaluations\n";
+void CandidateOf(const diagnose::RecordCandidate& c, const records::FitResult& start,
+                 proto::DiagnosisCandidate* out) {
+  out->set_effect(records::EffectName(c.kind));
+  out->set_score(c.score);
+  out->set_closed(c.closed);
+  out->set_pattern(c.pattern);
+  out->set_qualifies(c.qualifies);
+  out->set_note(c.note);
+  out->set_z_vs_base(c.z_vs_base);
+  out->set_added_parameters(static_cast<int64_t>(c.fit.params.size()) -
+                            static_cast<int64_t>(start.params.size()));
+  out->set_train_delta_bic(c.train_delta_bic);
+  out->set_raw_reduction(c.raw_reduction);
+  out->set_weight(c.weight);
 }
 
-// ---- JSON ---------------------------------------------------------------------------------------
-// diagnosis.json: the diagnosis as its stored message (proto/diagnosis.proto), written by
-// io/diagnosis_json.h (keys sorted, a non-finite number as null).
-
-namespace {
-
-void FitOf(const FitView& v, proto::DiagnosisFit* o) {
-  const records::FitResult& f = *v.fit;
-  o->set_structure(v.description);
-  o->set_ok(true);
-  o->set_train_pi_deg2(v.train_pi);
-  o->set_withheld_pi_deg2(v.withheld_pi);
-  o->set_train_rms_deg(Rms(v.train_pi, v.train_samples));
-  o->set_withheld_rms_deg(Rms(v.withheld_pi, v.withheld_samples));
-  o->set_residual_sigma_deg(f.uncertainty.residual_sigma);
-  for (const records::RecordMetrics& m : f.metrics) o->add_case_pi_deg2(m.sse);
-  for (const auto& p : v.params()) {
-    proto::DiagnosisParameter& g = *o->add_parameters();
-    g.set_name(p.name);
-    g.set_unit(p.unit);
-    g.set_value(p.value);
-    g.set_std_error(p.std_error);
-    g.set_sensitivity_deg(p.sensitivity);
-    g.set_identifiability(opt::IdentifiabilityName(p.identifiability));
-    g.set_note(p.note);
-  }
-  o->mutable_singular_values()->Assign(f.uncertainty.singular_values.begin(),
-                                       f.uncertainty.singular_values.end());
-  o->set_weakest_direction(f.uncertainty.weakest_direction);
-  o->set_evaluations(diagnose::FitEvaluations(f));
-  o->set_wall_time_s(f.wall_time_s);
-  o->set_message(f.polish_message);
-}
-
-void BinOf(const model::BinStat& b, proto::ResidualBin* o) {
-  o->set_rms_deg(b.rms);
-  o->set_mean_deg(b.mean);
-  o->set_n(b.n);
-}
-
-void LoopOf(const model::LoopFeatures& l, proto::LoopFeatures* o) {
-  o->set_width_deg(l.width_deg);
-  o->set_area_deg_v(l.area_deg_v);
-  o->set_offset_deg(l.offset_deg);
-  o->set_peak_to_peak_deg(l.peak_to_peak_deg);
-  o->set_top_phase_deg(l.top_phase_deg);
-  o->set_phase_lag_deg(l.phase_lag_deg);
-  o->set_fundamental_deg(l.fundamental_deg);
-}
-
-void CaseResidualOf(const model::CaseResidual& c, proto::CaseResidual* o) {
-  o->set_case_(c.number);
-  o->set_training(c.training);
-  o->set_amplitude_v(c.amplitude_v);
-  o->set_frequency_hz(c.frequency_hz);
-  o->set_pi_deg2(c.pi);
-  o->set_rms_deg(c.rms);
-  o->set_max_abs_deg(c.max_abs);
-  o->set_share(c.share);
-  o->set_floor_rms_deg(c.floor_rms);
-  o->set_rms_over_floor(c.rms_over_floor);
-  for (int b = 0; b < model::kPhaseBins; ++b) {
-    o->add_phase_bins_rms_deg(c.phase[b].rms);
-    o->add_phase_bins_mean_deg(c.phase[b].mean);
-  }
-  BinOf(c.rising, o->mutable_rising());
-  BinOf(c.falling, o->mutable_falling());
-  BinOf(c.near_reversal, o->mutable_near_reversal());
-  BinOf(c.in_saturation, o->mutable_in_saturation());
-  BinOf(c.first_cycle, o->mutable_first_cycle());
-  BinOf(c.later_cycles, o->mutable_later_cycles());
-  o->mutable_cycle_mean_deg()->Assign(c.cycle_mean.begin(), c.cycle_mean.end());
-  o->set_trend_deg_per_s(c.trend_deg_per_s);
-  o->set_trend_se(c.trend_se);
-  o->mutable_harmonics_deg()->Assign(c.harmonic.begin(), c.harmonic.end());
-  o->set_harmonic_noise_deg(c.harmonic_noise);
-  o->set_odd_rms_deg(c.odd_rms);
-  o->set_even_rms_deg(c.even_rms);
-  o->set_low_frequency_rms_deg(c.low_rms);
-  LoopOf(c.measured_loop, o->mutable_measured_loop());
-  LoopOf(c.model_loop, o->mutable_model_loop());
-}
-
-void AnalysisOf(const model::ResidualAnalysis& a, proto::ResidualAnalysis* o) {
-  for (const auto& c : a.cases) CaseResidualOf(c, o->add_cases());
-  for (const auto& f : a.findings) o->add_findings(f);
-}
-
-// The noise floor: the encoder's quantum, the pooled floors and each case's.
-void NoiseOf(const BenchDiagnosis& d, proto::BenchNoise* o) {
-  o->set_quantum_deg(d.quantum_deg);
-  o->set_floor_train_deg(d.floor_train);
-  o->set_floor_withheld_deg(d.floor_withheld);
-  o->set_floor_model(d.records.floor_model);
-  for (size_t i = 0; i < d.cases.size(); ++i) {
-    const auto& c = d.cases[i];
-    proto::BenchCaseNoise& g = *o->add_cases();
-    g.set_case_(c.number);
-    g.set_quantum_deg(c.noise.quantum_deg);
-    g.set_quantisation_rms_deg(c.noise.quantisation_rms_deg);
-    g.set_scatter_rms_deg(c.noise.scatter_rms_deg);
-    g.set_floor_rms_deg(c.noise.floor_rms_deg);
-    g.set_saturation_aware_floor_deg(i < d.records.gaps.size() ? d.records.gaps[i].floor_rms : NAN);
-    g.set_b1_deg(c.b1);
-    g.set_b2_deg(c.b2);
-  }
-}
-
-void TrendOf(const diagnose::ParamTrend& t, proto::ParamTrend* o) {
-  o->set_name(t.name);
-  o->mutable_per_case()->Assign(t.per_case.begin(), t.per_case.end());
-  o->set_slope_per_v(t.slope_v);
-  o->set_slope_per_hz(t.slope_f);
-  o->set_p_v(t.p_v);
-  o->set_p_f(t.p_f);
-  o->set_r2(t.r2);
-  o->set_relative_range(t.relative_range);
-  o->set_significant(t.significant);
-}
-
-void CandidateOf(const io::RecordSet& set, const RecordCandidate& c, const RoundView& r,
-                 proto::DiagnosisCandidate* o) {
-  CandidateCommonOf(c, o);
-  o->set_added_parameters(AddedParams(c, r));
-  o->set_train_delta_bic(c.train_delta_bic);
-  o->set_raw_reduction(c.raw_reduction);
-  o->set_weight(c.weight);
-  FitOf(ViewOf(set, c.fit), o->mutable_fit());
-}
-
-void RoundOf(const io::RecordSet& set, const RoundView& r, proto::DiagnosisRound* o) {
-  for (const auto& k : r.start->model->effects()) o->add_from(model::EffectName(k));
-  o->set_withheld_pi_deg2(r.s0);
-  o->set_floor_pi_deg2(r.s_floor);
-  o->set_rms_over_floor(r.rms_ratio);
-  o->set_significant(r.significant);
-  NamedOf(*r.candidates, r.named, o->mutable_named());
-  if (r.runner_up >= 0)
-    RunnerUpOf(*r.candidates, r.runner_up, r.z_runner_up, o->mutable_runner_up());
-  o->set_verdict(*r.verdict);
-  for (const auto& c : *r.candidates) CandidateOf(set, c, r, o->add_candidates());
-}
-
-// The withheld gap before / after the named effects, in total and per case.
-void GapOf(const BenchDiagnosis& d, proto::DiagnosisGap* o) {
-  const RecordDiagnosis& rd = d.records;
-  o->set_withheld_pi_before_deg2(rd.s0);
-  o->set_withheld_pi_after_deg2(rd.withheld_after);
-  o->set_withheld_floor_pi_deg2(rd.s_floor);
-  o->set_closed(rd.closed_total);
-  o->set_remaining_over_floor(std::sqrt(rd.withheld_after / rd.s_floor));
-  for (size_t i = 0; i < rd.gaps.size(); ++i) {
-    const diagnose::RecordGap& g = rd.gaps[i];
-    proto::CaseGap& c = *o->add_cases();
-    c.set_case_(d.cases[i].number);
-    c.set_training(d.cases[i].training);
-    c.set_floor_rms_deg(g.floor_rms);
-    c.set_rms_before_deg(g.rms_before);
-    c.set_rms_after_deg(g.rms_after);
-    c.set_pi_before_deg2(g.pi_before);
-    c.set_pi_after_deg2(g.pi_after);
-    c.set_closed(g.closed);
-  }
-}
-
-}  // namespace
-
-void BenchDiagnosisOf(const BenchDiagnosis& d, const diagnose::DiagnoseOptions& opt,
-                      proto::Diagnosis* out) {
-  const RecordDiagnosis& rd = d.records;
+void DiagnosisOf(const io::RecordSet& set, const diagnose::RecordDiagnosis& d,
+                 const records::TrainingDriveProposal& proposal, const DiagnosisReport& report,
+                 proto::Diagnosis* out) {
   proto::Diagnosis m;
-  DiagnosisCommonOf(rd, &m);
-  m.set_bench(d.bench);
-  auto& named = *m.mutable_named()->mutable_list_value();
-  for (const auto& k : rd.named_effects) named.add_values()->set_string_value(model::EffectName(k));
-  m.set_confidence(rd.named_effects.empty() ? NAN : rd.confidence);
-  proto::DiagnosisThresholds& t = *m.mutable_thresholds();
-  t.set_significance_ratio(opt.rules.significance_ratio);
-  t.set_min_closed(opt.rules.min_closed);
-  t.set_min_pattern(opt.rules.min_pattern);
-  NoiseOf(d, m.mutable_noise());
-  FitOf(ViewOf(d.set, rd.base), m.mutable_base());
-  AnalysisOf(rd.base_residuals, m.mutable_base_residuals());
-  for (const auto& x : rd.trends) TrendOf(x, m.add_trends());
-  for (const RoundView& r : Rounds(rd)) RoundOf(d.set, r, m.add_rounds());
-  m.set_absorbed_by(rd.absorbed_by);
-  for (const auto& a : rd.absorbed) {
-    proto::Absorption& g = *m.add_absorbed();
-    g.set_name(a.name);
-    g.set_unit(a.unit);
-    g.set_without(a.without);
-    g.set_with(a.with);
-    g.set_z(a.z);
+  m.set_verdict_kind(d.verdict_kind);
+  m.set_verdict(d.verdict);
+  for (const auto& k : d.named_effects) m.add_named(records::EffectName(k));
+  m.set_confidence(d.named_effects.empty() ? NAN : d.confidence);
+  m.set_records(set.source.string());
+  m.set_family(d.base.model->family().name());
+  m.set_initial_state(model::InitialStateName(d.base.model->family().initial_state()));
+  m.set_response_unit(set.response_unit);
+  proto::NoiseFloor& n = *m.mutable_noise_floor();
+  n.set_sigma(d.noise.sigma);
+  n.set_used(d.noise.used);
+  if (!d.noise.warning.empty()) n.set_warning(d.noise.warning);  // optional: older files unchanged
+  for (const auto& e : d.noise.estimates) {
+    proto::NoiseEstimate& g = *n.add_estimates();
+    g.set_method(e.method);
+    g.set_sigma(e.sigma);
+    g.set_samples(static_cast<int64_t>(e.samples));
+    g.set_from(e.detail);
   }
-  FitOf(ViewOf(d.set, *rd.final_fit), m.mutable_final());
-  AnalysisOf(rd.final_residuals, m.mutable_final_residuals());
-  GapOf(d, m.mutable_gap());
-  m.set_wall_time_s(d.wall_time_s);
-  m.set_evaluations(diagnose::BenchEvaluations(rd));
+  m.set_withheld_samples(static_cast<int64_t>(d.withheld_samples));
+  m.set_rms_ratio(d.rms_ratio);
+  m.set_significant(d.significant);
+  for (const auto& c : d.candidates) CandidateOf(c, d.base, m.add_candidates());
+  for (const auto& name : d.diverged) m.add_diverged(name);
+  if (d.runner_up >= 0) {
+    m.mutable_runner_up()->set_effect(
+        records::EffectName(d.candidates[static_cast<size_t>(d.runner_up)].kind));
+    m.mutable_runner_up()->set_z(d.z_runner_up);
+  }
+  ExcitationOf(set, d.excitation, proposal, kProposedDriveFile, m.mutable_excitation());
+  m.set_excitation_gap_note(d.excitation_note);
+  if (d.next) {
+    proto::NextMeasurement& g = *m.mutable_next_measurement();
+    g.set_waveform(synth::WaveformName(d.next->shape.waveform));
+    g.set_amplitude(d.next->shape.amplitude);
+    g.set_bias(d.next->shape.bias);
+    g.set_frequency_hz(d.next->shape.frequency_hz);
+    g.set_duration_s(d.next->shape.duration_s);
+    g.set_rms_difference(d.next->rms_difference);
+    g.set_ratio_to_noise(d.next->ratio_to_noise);
+  }
+  if (report.selection) SelectionOf(*report.selection, m.mutable_selection());
+  if (report.grid) BenchGridOf(*report.grid, m.mutable_grid());
   *out = std::move(m);
 }
 
-void WriteDiagnosisJson(std::ostream& out, const BenchDiagnosis& d,
-                        const diagnose::DiagnoseOptions& opt) {
+void WriteDiagnosisJson(std::ostream& os, const io::RecordSet& set,
+                        const diagnose::RecordDiagnosis& d,
+                        const records::TrainingDriveProposal& proposal,
+                        const DiagnosisReport& report) {
   proto::Diagnosis m;
-  BenchDiagnosisOf(d, opt, &m);
-  out << io::WriteDiagnosisFile(m);
+  DiagnosisOf(set, d, proposal, report, &m);
+  os << io::WriteDiagnosisFile(m);
 }
 
-// ---- HTML ---------------------------------------------------------------------------------------
-
-namespace {
-
-namespace fs = std::filesystem;
-
-// Case c's trace (time, phase, drive, measured, both models, residuals, cycle) and residual spectra
-// as CSV, and the scripts of its three figures (residual vs phase, spectrum, loop). The models'
-// outputs are the records fits' (base and final) on the case's record.
-void WriteCaseFigures(const fs::path& fig, const BenchDiagnosis& d, size_t c,
-                      std::vector<fs::path>& written, std::vector<fs::path>& scripts) {
-  const RecordDiagnosis& rd = d.records;
-  const std::string base_name = ViewOf(d.set, rd.base).description;
-  const std::string final_name = ViewOf(d.set, *rd.final_fit).description;
-  const bool has_final = final_name != base_name;
-  const diagnose::BenchCase& dc = d.cases[c];
-  const io::Record& r = d.set.records[c];
-  const std::vector<double>& yb = rd.base.yhat[c];
-  const std::vector<double>& yf = rd.final_fit->yhat[c];
-  if (yb.size() < r.y.size() || yf.size() < r.y.size())
-    throw InputError(r.Label() + ": the fits' outputs do not cover the record (a bug)");
-  const std::string stem = "case" + std::to_string(dc.number);
-  const fs::path trace = fig / (stem + "_trace.csv");
-  {
-    std::ofstream t(trace);
-    t << "t_s,phase_deg,u_V,measured_deg,base_deg,final_deg,residual_base_deg,residual_final_deg,"
-         "cycle\n";
-    const double fs_hz = r.sinusoid.sample_rate_hz, f = dc.frequency_hz;
-    const size_t p = r.y.size() / std::max(1L, std::lround(r.sinusoid.cycles));
-    for (size_t k = 0; k < r.y.size(); ++k) {
-      const double tk = k / fs_hz;
-      const double ph = std::fmod(360.0 * f * tk, 360.0);
-      t << io::FormatNumber(tk) << "," << io::FormatNumber(ph) << "," << io::FormatNumber(r.u[k])
-        << "," << io::FormatNumber(r.y[k]) << "," << io::FormatNumber(yb[k]) << ","
-        << io::FormatNumber(yf[k]) << "," << io::FormatNumber(r.y[k] - yb[k]) << ","
-        << io::FormatNumber(r.y[k] - yf[k]) << "," << (p ? k / p + 1 : 1) << "\n";
-    }
-    written.push_back(trace);
-  }
-  const fs::path spec = fig / (stem + "_spectrum.csv");
-  {
-    std::ofstream s(spec);
-    s << "harmonic,base_deg,final_deg,noise_deg\n";
-    const auto& rb = rd.base_residuals.cases[c];
-    const auto& rf = rd.final_residuals.cases[c];
-    for (int k = 0; k <= model::kHarmonics; ++k)
-      s << k << "," << io::FormatNumber(rb.harmonic[k]) << "," << io::FormatNumber(rf.harmonic[k])
-        << "," << io::FormatNumber(rb.harmonic_noise) << "\n";
-    written.push_back(spec);
-  }
-  const std::string label = " (case " + std::to_string(dc.number) + ", " +
-                            F("%.0f V", dc.amplitude_v) + ", " + F("%.3g Hz", dc.frequency_hz) +
-                            (dc.training ? ", training)" : ", withheld)");
-  Plot ph{stem + "_phase",
-          "Residual vs drive phase" + label,
-          "drive phase [deg]",
-          "measured - model [deg]",
-          false,
-          {}};
-  ph.series.push_back({trace.filename().string(), 2, 7, "base model", "points pt 7 ps 0.4"});
-  if (has_final)
-    ph.series.push_back({trace.filename().string(), 2, 8, final_name, "points pt 7 ps 0.4"});
-  Plot sp{stem + "_spectrum",
-          "Residual spectrum, later cycles" + label,
-          "harmonic of the drive frequency",
-          "amplitude [deg]",
-          false,
-          {}};
-  sp.series.push_back({spec.filename().string(), 1, 2, "base model", "linespoints pt 7"});
-  if (has_final)
-    sp.series.push_back({spec.filename().string(), 1, 3, final_name, "linespoints pt 7"});
-  sp.series.push_back({spec.filename().string(), 1, 4, "noise level (one bin)", "lines dt 2"});
-  Plot lp{stem + "_loop", "Loop" + label, "drive u [V]", "fin angle [deg]", false, {}};
-  lp.series.push_back({trace.filename().string(), 3, 4, "measured", "points pt 7 ps 0.3"});
-  lp.series.push_back({trace.filename().string(), 3, 5, "base model", "lines"});
-  if (has_final) lp.series.push_back({trace.filename().string(), 3, 6, final_name, "lines"});
-  for (const Plot& pl : {ph, sp, lp}) scripts.push_back(WritePlotScript(fig, pl));
-}
-
-// The page's head, the verdict and the noise floor.
-void HtmlHead(std::ostream& h, const BenchDiagnosis& d, const diagnose::DiagnoseOptions& opt) {
-  h << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>piezoid diagnose: "
-    << Html(d.bench)
-    << "</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:auto;padding:1em}"
-       "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #bbb;padding:3px "
-       "8px;text-align:right}"
-       "th{background:#eee}td.l{text-align:left}.v{font-size:1.15em;background:#f4f8ff;padding:0."
-       "8em;border:1px "
-       "solid #9bd}img{max-width:100%}</style></head><body>\n";
-  h << "<h1>Sim-to-real gap: " << Html(d.bench) << "</h1>\n<p class=\"v\"><b>Verdict.</b> "
-    << Html(d.records.verdict) << "</p>\n";
-  h << "<p>Noise floor: encoder quantum " << F("%.5g", d.quantum_deg) << " deg; floor "
-    << F("%.4f", d.floor_train) << " deg (training), " << F("%.4f", d.floor_withheld)
-    << " deg (withheld) RMS, from the quantisation, the scatter between the last two cycles and "
-       "the rounding of the "
-       "saturation plateaus of "
-    << Html(d.records.floor_model) << ". A gap is significant when the withheld RMS exceeds "
-    << F("%.2f", opt.rules.significance_ratio) << " x the floor.</p>\n";
-}
-
-// The V × f grid of each case's PI before / after, shaded by its RMS over the floor.
-void HtmlGrid(std::ostream& h, const BenchDiagnosis& d) {
-  std::set<double> vs, fs_set;
-  for (const auto& c : d.cases) {
-    vs.insert(c.amplitude_v);
-    fs_set.insert(c.frequency_hz);
-  }
-  const std::vector<double> V = Sorted(vs), Fr = Sorted(fs_set);
-  h << "<h2>Where: the grid of PI before / after</h2>\n<p>PI = Σ e² [deg²] per case, base model → "
-    << Html(ViewOf(d.set, *d.records.final_fit).description)
-    << "; RMS / floor in brackets; withheld cases in italics.</p>\n<table><tr><th>V \\ f</th>";
-  for (double f : Fr) h << "<th>" << F("%.3g Hz", f) << "</th>";
-  h << "</tr>\n";
-  for (double v : V) {
-    h << "<tr><th>" << F("%.0f V", v) << "</th>";
-    for (double f : Fr) {
-      int at = -1;  // the case at (v, f): the last one there
-      for (size_t i = 0; i < d.cases.size() && i < d.records.gaps.size(); ++i)
-        if (d.cases[i].amplitude_v == v && d.cases[i].frequency_hz == f) at = static_cast<int>(i);
-      if (at < 0) {
-        h << "<td></td>";
-        continue;
+std::vector<std::string> WriteDiagnosisFolder(const std::filesystem::path& out,
+                                              const io::RecordSet& set,
+                                              const diagnose::RecordDiagnosis& d,
+                                              const DiagnosisReport& report, bool plots) {
+  fs::create_directories(out / "figures");
+  const records::TrainingDriveProposal proposal = records::ProposeTrainingDrive(set, d.excitation);
+  WriteProposedDrive(out / kProposedDriveFile, set, proposal);
+  io::WriteFileWith(out / "report.md", [&](std::ostream& os) {
+    WriteDiagnosisMarkdown(os, set, d, proposal, report);
+  });
+  io::WriteFileWith(out / "diagnosis.json",
+                    [&](std::ostream& os) { WriteDiagnosisJson(os, set, d, proposal, report); });
+  // Withheld traces: measured, base, named model.
+  std::vector<fs::path> scripts;
+  const records::FitResult* best =
+      d.named >= 0 ? &d.candidates[static_cast<size_t>(d.named)].fit : nullptr;
+  for (size_t i = 0; i < set.records.size(); ++i) {
+    const io::Record& r = set.records[i];
+    const std::string stem = "withheld_" + r.name;
+    if (r.role == model::CaseRole::kTrain) continue;
+    io::WriteFileWith(out / "figures" / (stem + ".csv"), [&](std::ostream& os) {
+      os << "t_s,measured,base_error,named_error\n";
+      for (size_t k = r.first_scored; k < r.end_scored; ++k) {
+        os << io::FormatNumber(r.t[k]) << "," << io::FormatNumber(r.y[k]) << ","
+           << io::FormatNumber(r.y[k] - d.base.yhat[i][k]) << ","
+           << io::FormatNumber(best ? r.y[k] - best->yhat[i][k] : 0.0) << "\n";
       }
-      const diagnose::BenchCase& c = d.cases[static_cast<size_t>(at)];
-      const diagnose::RecordGap& g = d.records.gaps[static_cast<size_t>(at)];
-      const double ratio = g.rms_before / std::max(g.floor_rms, 1e-12);
-      const int red = std::clamp(static_cast<int>(255 - 40 * (ratio - 1)), 120, 255);
-      h << "<td style=\"background:rgb(255," << red << "," << red << ")\">"
-        << (c.training ? "" : "<i>") << "case " << c.number << ": " << F("%.3g", g.pi_before)
-        << " → " << F("%.3g", g.pi_after) << " (" << F("%.1f", ratio) << " → "
-        << F("%.1f", g.rms_after / std::max(g.floor_rms, 1e-12)) << ")"
-        << (c.training ? "" : "</i>") << "</td>";
-    }
-    h << "</tr>\n";
+    });
+    Plot p{stem,    r.name + ": error of the base and the named model",
+           "t [s]", "error [" + set.response_unit + "]",
+           false,   {{stem + ".csv", 1, 3, d.base.model->Describe(), "lines"}}};
+    if (best) p.series.push_back({stem + ".csv", 1, 4, best->model->Describe(), "lines"});
+    scripts.push_back(WritePlotScript(out / "figures", p));
   }
-  h << "</table>\n";
-}
-
-// Where the base model's residual lies (the findings and the table per case) and the parameter
-// trends of the per-case fits.
-void HtmlLocalisation(std::ostream& h, const BenchDiagnosis& bd) {
-  const RecordDiagnosis& d = bd.records;
-  h << "<h3>Localisation of the base model's residual</h3>\n<ul>";
-  for (const auto& f : d.base_residuals.findings) h << "<li>" << Html(f) << "</li>";
-  h << "</ul>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS</th><th>rising</"
-       "th><th>falling</th><th>near "
-       "reversals</th><th>in saturation</th><th>first cycle</th><th>later cycles</th><th>trend "
-       "[deg/s]</th><th>odd "
-       "harm.</th><th>even harm.</th><th>low freq.</th><th>lag meas./model [deg]</th><th>width "
-       "meas./model "
-       "[deg]</th></tr>\n";
-  for (const auto& c : d.base_residuals.cases) {
-    h << "<tr><td>" << c.number << "</td><td class=l>" << (c.training ? "training" : "withheld")
-      << "</td><td>" << F("%.4f", c.floor_rms) << "</td><td>" << F("%.4f", c.rms) << "</td><td>"
-      << F("%.4f", c.rising.rms) << "</td><td>" << F("%.4f", c.falling.rms) << "</td><td>"
-      << F("%.4f", c.near_reversal.rms) << "</td><td>" << F("%.4f", c.in_saturation.rms)
-      << "</td><td>" << F("%.4f", c.first_cycle.rms) << "</td><td>" << F("%.4f", c.later_cycles.rms)
-      << "</td><td>" << F("%.2g", c.trend_deg_per_s) << "</td><td>" << F("%.4f", c.odd_rms)
-      << "</td><td>" << F("%.4f", c.even_rms) << "</td><td>" << F("%.4f", c.low_rms) << "</td><td>"
-      << F("%.2f", c.measured_loop.phase_lag_deg) << " / " << F("%.2f", c.model_loop.phase_lag_deg)
-      << "</td><td>" << F("%.3f", c.measured_loop.width_deg) << " / "
-      << F("%.3f", c.model_loop.width_deg) << "</td></tr>\n";
-  }
-  h << "</table>\n";
-  if (d.trends.empty()) return;
-  h << "<h3>Parameter trends of per-case fits over the V × f "
-       "grid</h3>\n<table><tr><th>parameter</th>";
-  for (const auto& c : bd.cases) h << "<th>case " << c.number << "</th>";
-  h << "<th>p (V)</th><th>p (f)</th><th>trend</th></tr>\n";
-  for (const auto& t : d.trends) {
-    h << "<tr><td class=l>" << Html(t.name) << "</td>";
-    for (double v : t.per_case) h << "<td>" << F("%.4g", v) << "</td>";
-    h << "<td>" << F("%.2g", t.p_v) << "</td><td>" << F("%.2g", t.p_f) << "</td><td>"
-      << (t.significant ? "<b>significant</b>" : "") << "</td></tr>\n";
-  }
-  h << "</table>\n";
-}
-
-// Each round's candidates, and what the base parameters absorbed.
-void HtmlWhich(std::ostream& h, const BenchDiagnosis& bd) {
-  const RecordDiagnosis& d = bd.records;
-  h << "<h2>Which effect</h2>\n";
-  const std::vector<RoundView> rounds = Rounds(d);
-  for (size_t r = 0; r < rounds.size(); ++r) {
-    const RoundView& rr = rounds[r];
-    h << "<h3>Round " << r + 1 << "</h3><p>" << Html(*rr.verdict)
-      << "</p>\n<table><tr><th>candidate</th><th>added "
-         "parameters</th><th>withheld RMS "
-         "[deg]</th><th>score</th><th>closed</th><th>pattern</th><th>weight</th><th>"
-         "parameters</th><th>notes</th></tr>\n";
-    for (const auto& c : *rr.candidates) {
-      const FitView f = ViewOf(bd.set, c.fit);
-      h << "<tr><td class=l>" << model::EffectName(c.kind) << "</td><td>" << AddedParams(c, rr)
-        << "</td><td>" << F("%.4f", Rms(f.withheld_pi, f.withheld_samples)) << "</td><td>"
-        << F("%.1f", c.score) << "</td><td>" << Pct(c.closed) << "</td><td>" << Pct(c.pattern)
-        << "</td><td>" << F("%.3f", c.weight) << "</td><td class=l>" << Html(EffectParams(c.fit))
-        << "</td><td class=l>" << Html(c.qualifies ? "qualifies" : c.note) << "</td></tr>\n";
-    }
-    h << "</table>\n";
-  }
-  if (!d.absorbed.empty()) {
-    h << "<p>Base parameters that move when <b>" << Html(d.absorbed_by)
-      << "</b> is added (|shift| &gt; 2 σ): ";
-    for (const auto& a : d.absorbed)
-      h << Html(a.name) << " " << F("%.4g", a.without) << " → " << F("%.4g", a.with) << " "
-        << Html(a.unit) << "; ";
-    h << "</p>\n";
-  }
-}
-
-// The gap per case before / after and in total.
-void HtmlHowFar(std::ostream& h, const BenchDiagnosis& bd) {
-  const RecordDiagnosis& d = bd.records;
-  h << "<h2>How far</h2>\n<table><tr><th>case</th><th>role</th><th>floor</th><th>RMS "
-       "before</th><th>RMS "
-       "after</th><th>closed</th></tr>\n";
-  for (size_t i = 0; i < d.gaps.size(); ++i) {
-    const diagnose::RecordGap& g = d.gaps[i];
-    h << "<tr><td>" << bd.cases[i].number << "</td><td class=l>"
-      << (bd.cases[i].training ? "training" : "withheld") << "</td><td>" << F("%.4f", g.floor_rms)
-      << "</td><td>" << F("%.4f", g.rms_before) << "</td><td>" << F("%.4f", g.rms_after)
-      << "</td><td>" << Pct(g.closed) << "</td></tr>\n";
-  }
-  h << "</table>\n<p>Withheld total PI " << F("%.4f", d.s0) << " → " << F("%.4f", d.withheld_after)
-    << " deg² (floor " << F("%.4f", d.s_floor) << "): " << Pct(d.closed_total)
-    << " of the gap closed, " << F("%.2f", std::sqrt(d.withheld_after / d.s_floor))
-    << " × floor remains.</p>\n";
-}
-
-// A fit's parameters with σ, sensitivity and identifiability, and its weakest direction.
-void HtmlParams(std::ostream& h, const FitView& f) {
-  h << "<table><tr><th>parameter</th><th>value</th><th>± σ</th><th>sensitivity "
-       "[deg]</th><th>identifiability</th>"
-       "</tr>\n";
-  for (const auto& p : f.params())
-    h << "<tr><td class=l>" << Html(p.name) << " [" << Html(p.unit) << "]</td><td>"
-      << F("%.5g", p.value) << "</td><td>"
-      << (std::isfinite(p.std_error) ? F("%.3g", p.std_error) : "—") << "</td><td>"
-      << F("%.4f", p.sensitivity) << "</td><td class=l>"
-      << opt::IdentifiabilityName(p.identifiability) << (p.note.empty() ? "" : "; " + Html(p.note))
-      << "</td></tr>\n";
-  h << "</table><p>Weakest direction: " << Html(f.fit->uncertainty.weakest_direction) << "</p>\n";
-}
-
-// The identifiability tables, the figures of every case and the run's cost.
-void HtmlTail(std::ostream& h, const BenchDiagnosis& d) {
-  const FitView fin = ViewOf(d.set, *d.records.final_fit), base = ViewOf(d.set, d.records.base);
-  h << "<h2>Identifiability</h2>\n<p>" << Html(fin.description)
-    << ": σ from s²(JᵀJ)⁺ at the solution; sensitivity = RMS output change per typical step of the "
-       "parameter.</p>\n";
-  HtmlParams(h, fin);
-  if (fin.description != base.description) {
-    h << "<p>Base model:</p>\n";
-    HtmlParams(h, base);
-  }
-  h << "<h2>Figures</h2>\n";
-  for (const auto& c : d.cases) {
-    const std::string stem = "figures/case" + std::to_string(c.number);
-    h << "<h3>Case " << c.number << "</h3>\n<img src=\"" << stem
-      << "_phase.png\" alt=\"residual vs phase\">\n<img src=\"" << stem
-      << "_spectrum.png\" alt=\"residual spectrum\">\n<img src=\"" << stem
-      << "_loop.png\" alt=\"loop\">\n";
-  }
-  h << "<p><small>" << F("%.1f", d.wall_time_s) << " s, " << diagnose::BenchEvaluations(d.records)
-    << " model evaluations.</small></p>\n";
-  h << "</body></html>\n";
-}
-
-}  // namespace
-
-std::vector<std::filesystem::path> WriteDiagnosisHtml(const std::filesystem::path& dir,
-                                                      const BenchDiagnosis& d,
-                                                      const diagnose::DiagnoseOptions& opt,
-                                                      bool plots,
-                                                      std::vector<std::string>* warnings) {
-  fs::create_directories(dir / "figures");
-  const fs::path fig = dir / "figures";
-  std::vector<fs::path> written, scripts;
-  for (size_t c = 0; c < d.cases.size(); ++c) WriteCaseFigures(fig, d, c, written, scripts);
-  if (plots) {
-    if (GnuplotAvailable()) {
-      RenderPlots(fig, scripts, warnings);
-    } else if (warnings) {
-      warnings->push_back("gnuplot not found: figures left as scripts in " + fig.string() +
-                          " (run gnuplot *.gp there)");
-    }
-  }
-  for (const auto& s : scripts) written.push_back(s);
-  const fs::path html = dir / "report.html";
-  std::ofstream h(html);
-  HtmlHead(h, d, opt);
-  HtmlGrid(h, d);
-  HtmlLocalisation(h, d);
-  HtmlWhich(h, d);
-  HtmlHowFar(h, d);
-  HtmlTail(h, d);
-  written.push_back(html);
-  return written;
+  WriteResidualSpectrumFigures(out / "figures", set, d.base, best, scripts);
+  if (report.grid) WriteBenchGridFigures(out / "figures", *report.grid, scripts);
+  std::vector<std::string> errors;
+  if (plots && GnuplotAvailable()) RenderPlots(out / "figures", scripts, &errors);
+  return errors;
 }
 
 }  // namespace pz::reports

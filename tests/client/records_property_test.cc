@@ -54,7 +54,7 @@
 #include "records/model.h"
 #include "records/registry.h"
 #include "reports/record_windows.h"
-#include "reports/records_diagnose.h"
+#include "reports/diagnose_report.h"
 #include "tests/testing/cli.h"
 
 namespace pz::client {
@@ -527,8 +527,8 @@ void Check(const DrawnSet& s, const fs::path& dir, bool cli_diagnose, Tally& tal
     const records::TrainingDriveProposal proposal =
         records::ProposeTrainingDrive(set, dg.excitation);
     std::ostringstream md, json;
-    reports::WriteRecordsDiagnosisMarkdown(md, set, dg, proposal, s.settle_s);
-    reports::WriteRecordsDiagnosisJson(json, set, dg, proposal);
+    reports::WriteDiagnosisMarkdown(md, set, dg, proposal, {.settle_s = s.settle_s});
+    reports::WriteDiagnosisJson(json, set, dg, proposal);
     EXPECT_FALSE(HasNonFinite(md.str())) << "diagnosis report\n" << what << "\n" << md.str();
     EXPECT_FALSE(HasNonFinite(json.str())) << "diagnosis.json\n" << what << "\n" << json.str();
     proto::Diagnosis back;  // reads back through its codec, to the same bytes

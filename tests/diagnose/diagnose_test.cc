@@ -382,8 +382,8 @@ TEST(RecordDiagnosis, TheFinBenchOptionsAreTheBenchsChoices) {
 }
 
 // The fin bench diagnosed on its records: the bench's records (io/fin_records.h) diagnosed by this
-// engine with the bench's options, and the bench's one driver (diagnose::DiagnoseBench: the cases
-// as records, read back as the bench's diagnosis), give the fin engine's diagnosis — pinned from
+// engine with the bench's options, and the bench's one driver (diagnose::DiagnoseBench: the same
+// records, with the grid's facts computed from them), give the fin engine's diagnosis — pinned from
 // diagnose::RunDiagnosis at main 2270e65, which both equalled when it was in the tree — on small
 // searches of the delay bench: a fast and a beam candidate and the second round.
 const pz::testing::Pins kPins(pz::testing::kPinnedArithmetic);
@@ -495,8 +495,7 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   // The one driver (the cases as records, with the grid's facts): the same fits, the same rounds,
   // the same evaluations as DiagnoseRecords, bit for bit on any arithmetic (the same code on the
   // same records), and the pinned figures to their tolerance.
-  const diagnose::BenchDiagnosis grid =
-      diagnose::DiagnoseBench(diagnose::CasesFromCaseSet(bench), fo);
+  const diagnose::BenchDiagnosis grid = diagnose::DiagnoseBench(io::RecordsFromCaseSet(bench), fo);
   const diagnose::RecordDiagnosis& one = grid.records;
   EXPECT_EQ(one.verdict, verdict);
   EXPECT_EQ(one.s0, rec.s0);
@@ -525,6 +524,36 @@ TEST(RecordDiagnosis, TheFinBenchOnItsRecordsIsDiagnosedAsByTheFinEngine) {
   EXPECT_TRUE(kPins.Rel(one.closed_total, 0x1.f70ea93aa8d5fp-1, kRel));
   ASSERT_EQ(one.gaps.size(), grid.cases.size());
   for (size_t c = 0; c < one.gaps.size(); ++c) EXPECT_EQ(grid.cases[c].number, int(c) + 1);
+}
+
+// The grid's facts come from the records: each case's place and role from its stated sinusoid,
+// its saturations from the extremes of its measured angle, its noise from its whole record; a
+// record that states no sinusoid (a manifest's) is refused by name.
+TEST(RecordDiagnosis, TheBenchGridsFactsAreComputedFromItsRecords) {
+  const io::CaseSet bench = io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/delay");
+  const io::RecordSet set = io::RecordsFromCaseSet(bench);
+  for (size_t c = 0; c < set.records.size(); ++c) {
+    const io::BenchCase& bc = bench.cases[c];
+    const diagnose::BenchCase g = diagnose::GridCaseOf(set.records[c]);
+    EXPECT_EQ(g.number, bc.number);
+    EXPECT_EQ(g.training, bc.role == model::CaseRole::kTrain);
+    EXPECT_EQ(g.amplitude_v, bc.amplitude_v);
+    EXPECT_EQ(g.frequency_hz, bc.frequency_hz);
+    const auto [lo, hi] = std::minmax_element(bc.angle_deg.begin(), bc.angle_deg.end());
+    EXPECT_EQ(g.b1, *hi);
+    EXPECT_EQ(g.b2, *lo);
+    // The encoder's quantum of the bench (data/bimorph-fin/README.md): 360 / 8192 deg.
+    EXPECT_NEAR(g.noise.quantum_deg, 360.0 / 8192, 1e-9) << bc.number;
+    EXPECT_GT(g.noise.floor_rms_deg, 0.0);
+  }
+  io::Record plain = set.records[0];
+  plain.sinusoid = {};
+  const std::string none = pz::testing::InputErrorOf([&] { diagnose::GridCaseOf(plain); });
+  PZ_EXPECT_HAS(none, "record 'case1'");
+  PZ_EXPECT_HAS(none, "states no sinusoid");
+  io::Record flat = set.records[0];
+  for (double& y : flat.y) y = -1;
+  PZ_EXPECT_HAS(pz::testing::InputErrorOf([&] { diagnose::GridCaseOf(flat); }), "b1");
 }
 
 }  // namespace

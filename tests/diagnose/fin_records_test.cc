@@ -283,6 +283,16 @@ TEST(FinRecords, TheRecordsOfABenchKeepItsCasesAndTheirStatedSinusoid) {
     for (size_t k = 0; k < r.u.size(); ++k) EXPECT_EQ(r.u[k], bc.Drive().Value(bc.t[k])) << k;
     EXPECT_EQ(r.end_scored, r.size());
   }
+  // The one reader of a bench folder: io::LoadRecordSet reads the same records (the stated
+  // sinusoid as the drive, its voltage column checked against it).
+  const io::RecordSet read = io::LoadRecordSet(bench.dir);
+  ASSERT_EQ(read.records.size(), set.records.size());
+  for (size_t c = 0; c < set.records.size(); ++c) {
+    EXPECT_EQ(read.records[c].u, set.records[c].u) << c;
+    EXPECT_EQ(read.records[c].y, set.records[c].y) << c;
+    EXPECT_EQ(read.records[c].sinusoid.case_number, set.records[c].sinusoid.case_number) << c;
+    EXPECT_EQ(read.records[c].quantum, set.records[c].quantum) << c;
+  }
 }
 
 // The fin layout's arithmetic (diagnose::LayoutMap at main 2270e65, which RecordMap equalled bit

@@ -1,7 +1,8 @@
-// diagnosis.json's codec (io/diagnosis_json.h over io/proto_json.h), for both diagnoses: the files
-// of tests/data/diagnosis-json (written by `piezoid diagnose` before the codec, when both writers
-// built the file key by key) read and are written back to the same bytes; a message of each kind
-// round-trips; the fields of the other kind are neither written nor read; a bad field is named.
+// diagnosis.json's codec (io/diagnosis_json.h over io/proto_json.h): the version-1 files of
+// tests/data/diagnosis-json (two kinds, written by `piezoid diagnose` before issue 46) read,
+// converted to version 2's one shape (the bench's parts in "grid", "named" a list), and written
+// back in version 2, which reads back to the same bytes; a record set's and a bench's message
+// round-trip; an unknown version, a "named" of the wrong shape and a bad field are named.
 // And check.json of `diagnose-check` (proto::DiagnosisCheck, through io/proto_json.h).
 #include "io/diagnosis_json.h"
 
@@ -39,44 +40,57 @@ std::string ErrorOf(const std::string& text) {
   return "(read)";
 }
 
-TEST(DiagnosisCodec, AnOldDiagnosisJsonOfEitherKindReadsAndIsWrittenBackToTheSameBytes) {
+TEST(DiagnosisCodec, AVersionOneFileOfEitherKindReadsConvertedToVersionTwo) {
   for (const char* name :
        {"records-none.json", "records-effect.json", "records-auto.json", "bench.json"}) {
     const std::string text = ReadTextFile(Data(name));
     proto::Diagnosis d;
     ReadDiagnosisFile(name, text, &d);
     EXPECT_FALSE(d.verdict().empty()) << name;
-    EXPECT_EQ(WriteDiagnosisFile(d), text) << name;
+    EXPECT_EQ(d.format_version(), static_cast<uint32_t>(kDiagnosisFormatVersion)) << name;
+    const std::string two = WriteDiagnosisFile(d);
+    EXPECT_NE(two.find("\"format_version\": 2"), std::string::npos) << name;
+    EXPECT_EQ(two.find("\"bench\""), std::string::npos) << name;
+    proto::Diagnosis back;  // version 2 reads back to the same bytes
+    ReadDiagnosisFile(name, two, &back);
+    EXPECT_EQ(WriteDiagnosisFile(back), two) << name;
   }
   proto::Diagnosis d;
   ReadDiagnosisFile("records-none.json", ReadTextFile(Data("records-none.json")), &d);
-  EXPECT_TRUE(IsRecordsDiagnosis(d));
-  EXPECT_EQ(d.named().kind_case(), google::protobuf::Value::kNullValue);
+  EXPECT_FALSE(IsBenchDiagnosis(d));
+  EXPECT_TRUE(d.named().empty());  // null: nothing named
   EXPECT_EQ(d.candidates_size(), 2);
   EXPECT_TRUE(d.has_excitation());
   EXPECT_FALSE(d.has_selection());
-  EXPECT_TRUE(d.rounds().empty());
+  EXPECT_FALSE(d.has_grid());
   ReadDiagnosisFile("records-effect.json", ReadTextFile(Data("records-effect.json")), &d);
-  EXPECT_EQ(d.named().string_value(), "delay");
+  ASSERT_EQ(d.named_size(), 1);
+  EXPECT_EQ(d.named(0), "delay");
   EXPECT_EQ(d.verdict_kind(), "effect");
   ReadDiagnosisFile("records-auto.json", ReadTextFile(Data("records-auto.json")), &d);
   EXPECT_TRUE(d.has_selection());
   EXPECT_FALSE(d.selection().ranking().empty());
   ReadDiagnosisFile("bench.json", ReadTextFile(Data("bench.json")), &d);
-  EXPECT_FALSE(IsRecordsDiagnosis(d));
-  EXPECT_EQ(d.bench(), "data/bimorph-fin/delay");
-  ASSERT_EQ(d.named().list_value().values_size(), 1);
-  EXPECT_EQ(d.named().list_value().values(0).string_value(), "delay");
-  ASSERT_EQ(d.rounds_size(), 2);
-  EXPECT_EQ(d.rounds(0).named().string_value(), "delay");
-  EXPECT_EQ(d.rounds(1).named().kind_case(), google::protobuf::Value::kNullValue);
-  EXPECT_TRUE(d.rounds(0).candidates(0).has_fit());
-  EXPECT_EQ(d.base_residuals().cases_size(), 9);
+  EXPECT_TRUE(IsBenchDiagnosis(d));
+  EXPECT_EQ(d.records(), "data/bimorph-fin/delay");
+  ASSERT_EQ(d.named_size(), 1);
+  EXPECT_EQ(d.named(0), "delay");
+  EXPECT_NEAR(d.confidence(), 0.967, 1e-3);
+  const proto::BenchGrid& g = d.grid();
+  ASSERT_EQ(g.rounds_size(), 2);
+  EXPECT_EQ(g.rounds(0).named(), "delay");
+  EXPECT_FALSE(g.rounds(1).has_named());  // null: nothing named
+  EXPECT_TRUE(g.rounds(0).candidates(0).has_fit());
+  EXPECT_EQ(g.base_residuals().cases_size(), 9);
+  EXPECT_EQ(g.noise().cases_size(), 9);
+  EXPECT_EQ(g.gap().cases_size(), 9);
+  EXPECT_FALSE(g.trends().empty());
+  EXPECT_GT(g.evaluations(), 0);
   EXPECT_TRUE(d.candidates().empty());
   EXPECT_FALSE(d.has_noise_floor());
 }
 
-/// A records diagnosis with every optional part but the selection (a next measurement, a
+/// A record set's diagnosis with every optional part but the selection (a next measurement, a
 /// diverged candidate, a non-finite number).
 proto::Diagnosis RecordsMessage() {
   proto::Diagnosis d;
@@ -84,7 +98,7 @@ proto::Diagnosis RecordsMessage() {
   d.set_family("prandtl-ishlinskii");
   d.set_verdict_kind("inseparable");
   d.set_verdict("delay or driver-lowpass\nline 2");
-  d.mutable_named()->set_string_value("delay");
+  d.add_named("delay");
   d.set_confidence(0.62);
   d.mutable_noise_floor()->set_sigma(0.05);
   d.mutable_noise_floor()->add_estimates()->set_samples(int64_t{1} << 40);
@@ -102,16 +116,20 @@ proto::Diagnosis RecordsMessage() {
   return d;
 }
 
+/// The fin bench's: the records diagnosis's fields and its grid.
 proto::Diagnosis BenchMessage() {
   proto::Diagnosis d;
-  d.set_bench("data/bimorph-fin/delay");
+  d.set_records("data/bimorph-fin/delay");
+  d.set_family("bimorph-fin");
   d.set_verdict_kind("effect");
   d.set_verdict("The gap is delay.");
-  d.mutable_named()->mutable_list_value()->add_values()->set_string_value("delay");
+  d.add_named("delay");
+  d.add_named("creep");
   d.set_confidence(0.97);
-  proto::DiagnosisRound& r = *d.add_rounds();
+  proto::BenchGrid& g = *d.mutable_grid();
+  proto::DiagnosisRound& r = *g.add_rounds();
   r.add_from("delay");
-  r.mutable_named()->set_string_value("creep");
+  r.set_named("creep");
   r.mutable_runner_up()->set_effect("drift");
   r.mutable_runner_up()->set_z(1.5);
   proto::DiagnosisCandidate& c = *r.add_candidates();
@@ -119,78 +137,63 @@ proto::Diagnosis BenchMessage() {
   c.set_added_parameters(2);
   c.set_weight(0.25);
   c.mutable_fit()->add_case_pi_deg2(0.5);
-  d.add_trends()->set_slope_per_v(1e-3);
-  d.mutable_gap()->add_cases()->set_case_(3);
-  d.set_evaluations(int64_t{1} << 50);
+  g.add_trends()->set_slope_per_v(1e-3);
+  g.mutable_gap()->add_cases()->set_case_(3);
+  g.set_evaluations(int64_t{1} << 50);
   return d;
 }
 
-TEST(DiagnosisCodec, AMessageOfEitherKindRoundTripsWithOnlyItsKindsFields) {
-  for (const proto::Diagnosis& d : {RecordsMessage(), BenchMessage()}) {
+TEST(DiagnosisCodec, AMessageOfEitherDiagnosisRoundTrips) {
+  for (proto::Diagnosis d : {RecordsMessage(), BenchMessage()}) {
     const std::string text = WriteDiagnosisFile(d);
     proto::Diagnosis back;
     ReadDiagnosisFile("x", text, &back);
+    d.set_format_version(kDiagnosisFormatVersion);
     EXPECT_EQ(back.DebugString(), d.DebugString()) << text;
     EXPECT_EQ(WriteDiagnosisFile(back), text);
   }
   const std::string records = WriteDiagnosisFile(RecordsMessage());
   for (const char* key : {"\"diverged\"", "\"candidates\"", "\"next_measurement\"", "\"runner_up\"",
-                          "\"z_vs_base\"", "\"noise_floor\"", "\"excitation_gap_note\""})
+                          "\"z_vs_base\"", "\"noise_floor\"", "\"named\": [\n  \"delay\"\n ]"})
     EXPECT_NE(records.find(key), std::string::npos) << key;
-  // the bench's fields, a list or a number at its default, are not written
-  for (const char* key :
-       {"\"rounds\"", "\"trends\"", "\"absorbed\"", "\"absorbed_by\"", "\"wall_time_s\"",
-        "\"evaluations\"", "\"added_parameters\"", "\"weight\"", "\"bench\""})
-    EXPECT_EQ(records.find(key), std::string::npos) << key;
+  EXPECT_EQ(records.find("\"grid\""), std::string::npos);  // a record set's: no grid
   const std::string bench = WriteDiagnosisFile(BenchMessage());
-  for (const char* key : {"\"diverged\"", "\n \"candidates\"", "\"z_vs_base\"",
-                          "\"withheld_samples\"", "\"family\"", "\"records\""})
-    EXPECT_EQ(bench.find(key), std::string::npos) << key;
   EXPECT_NE(bench.find("\"added_parameters\": 2"), std::string::npos) << bench;
-  EXPECT_NE(bench.find("\"runner_up\": {\n    \"effect\": \"drift\""), std::string::npos) << bench;
+  EXPECT_NE(bench.find("\"named\": \"creep\""), std::string::npos) << bench;
   EXPECT_NE(bench.find("\"evaluations\": 1125899906842624"), std::string::npos) << bench;
 }
 
 TEST(DiagnosisCodec, ANonFiniteNumberIsNullAndReadsBackAsNaN) {
   proto::Diagnosis d = BenchMessage();
   d.set_confidence(NAN);  // nothing named
-  d.mutable_rounds(0)->mutable_candidates(0)->set_closed(INFINITY);
+  d.mutable_grid()->mutable_rounds(0)->mutable_candidates(0)->set_closed(INFINITY);
   const std::string text = WriteDiagnosisFile(d);
   EXPECT_NE(text.find("\"confidence\": null"), std::string::npos) << text;
   EXPECT_NE(text.find("\"closed\": null"), std::string::npos) << text;
   proto::Diagnosis back;
   ReadDiagnosisFile("x", text, &back);
   EXPECT_TRUE(std::isnan(back.confidence()));
-  EXPECT_TRUE(std::isnan(back.rounds(0).candidates(0).closed()));
+  EXPECT_TRUE(std::isnan(back.grid().rounds(0).candidates(0).closed()));
 }
 
-TEST(DiagnosisCodec, AFileOfOneKindWithAFieldOfTheOtherIsRefusedByName) {
+TEST(DiagnosisCodec, AVersionOneFileOfNoKindOrBothIsRefused) {
   const std::string records = ReadTextFile(Data("records-none.json"));
-  const std::string trends = ErrorOf(Replaced(records, "{", "{", "{\n \"trends\": [],"));
-  EXPECT_NE(trends.find("x/diagnosis.json: trends: a field of the fin bench's diagnosis in a "
-                        "records diagnosis"),
-            std::string::npos)
-      << trends;
-  const std::string weight =
-      ErrorOf(Replaced(records, "\"candidates\"", "\"effect\"", "\"weight\": 1, \"effect\""));
-  EXPECT_NE(weight.find("x/diagnosis.json: candidates[0].weight: a field of the fin bench's"),
-            std::string::npos)
-      << weight;
   const std::string bench = ReadTextFile(Data("bench.json"));
-  const std::string z =
-      ErrorOf(Replaced(bench, "\"rounds\"", "\"effect\"", "\"z_vs_base\": 1, \"effect\""));
-  EXPECT_NE(z.find("x/diagnosis.json: rounds[0].candidates[0].z_vs_base: a field of a records "
-                   "diagnosis in the fin bench's diagnosis"),
-            std::string::npos)
-      << z;
   EXPECT_NE(ErrorOf(Replaced(bench, "{", "{", "{\n \"records\": \"set\",")).find("both"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("{\"verdict\": \"x\"}").find("x/diagnosis.json: neither \"records\""),
+  EXPECT_NE(ErrorOf("{\"verdict\": \"x\"}").find("x/diagnosis.json: no format_version"),
             std::string::npos);
   EXPECT_NE(ErrorOf("[1]").find("x/diagnosis.json: not a JSON object"), std::string::npos);
   EXPECT_NE(ErrorOf(ValueReplaced(records, "\"records\": ", "null"))
                 .find("x/diagnosis.json: records: not a string (the record set)"),
             std::string::npos);
+  // version 2's file of another version
+  const std::string two = WriteDiagnosisFile(RecordsMessage());
+  const std::string three = ErrorOf(ValueReplaced(two, "\"format_version\": ", "3"));
+  EXPECT_NE(three.find("x/diagnosis.json: format_version 3: this piezoid reads diagnosis.json "
+                       "format_version 2 and 1"),
+            std::string::npos)
+      << three;
 }
 
 TEST(DiagnosisCodec, ABadFieldOrANamedOfTheWrongShapeIsNamed) {
@@ -202,7 +205,7 @@ TEST(DiagnosisCodec, ABadFieldOrANamedOfTheWrongShapeIsNamed) {
   const std::string typed = ErrorOf(ValueReplaced(records, "\"withheld_samples\": ", "\"many\""));
   EXPECT_NE(typed.find("x/diagnosis.json: withheld_samples"), std::string::npos) << typed;
   const std::string list =
-      ErrorOf(Replaced(records, "\"named\"", "\"named\": null", "\"named\": [\"delay\"]"));
+      ErrorOf(Replaced(records, "\"named\"", "\"named\": null", "\"named\": 2"));
   EXPECT_NE(list.find("x/diagnosis.json: named: not the effect named (a string) or null"),
             std::string::npos)
       << list;
@@ -216,20 +219,16 @@ TEST(DiagnosisCodec, ABadFieldOrANamedOfTheWrongShapeIsNamed) {
   EXPECT_NE(round.find("x/diagnosis.json: rounds[0].named: not the effect named"),
             std::string::npos)
       << round;
+  // version 2: "named" a list of strings, the round's a string
+  const std::string two = WriteDiagnosisFile(BenchMessage());
+  const std::string v2 =
+      ErrorOf(Replaced(two, "\"grid\"", "\"named\": \"creep\"", "\"named\": [\"creep\"]"));
+  EXPECT_NE(v2.find("x/diagnosis.json: grid.rounds[0].named"), std::string::npos) << v2;
 }
 
-TEST(DiagnosisCodec, TheWriterRefusesAMessageOfNoKindOrAFieldOfTheOtherKind) {
+TEST(DiagnosisCodec, TheWriterRefusesAMessageWithoutItsRecordSet) {
   proto::Diagnosis none;
   EXPECT_THROW(WriteDiagnosisFile(none), std::logic_error);
-  proto::Diagnosis both = RecordsMessage();
-  both.set_bench("b");
-  EXPECT_THROW(WriteDiagnosisFile(both), std::logic_error);
-  proto::Diagnosis mixed = RecordsMessage();
-  mixed.set_absorbed_by("creep");
-  EXPECT_THROW(WriteDiagnosisFile(mixed), std::logic_error);
-  proto::Diagnosis shape = BenchMessage();
-  shape.mutable_named()->set_string_value("delay");
-  EXPECT_THROW(WriteDiagnosisFile(shape), std::logic_error);
 }
 
 TEST(DiagnosisCheckFile, AnOldCheckJsonReadsAndPrintsBackToTheSameBytes) {

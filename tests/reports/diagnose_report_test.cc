@@ -1,25 +1,29 @@
-// The JSON of `piezoid diagnose` (reports/diagnose_report.h) through its message
-// (proto/diagnosis.proto): diagnosis.json by its codec (io/diagnosis_json.h). Each parses back, a
-// string with quotes and a newline keeps them, a non-finite number is null, the names the users
-// read are there, and each reads back into its message and prints back to the same bytes.
+// The one report of `piezoid diagnose` (reports/diagnose_report.h) with the fin bench's grid
+// section (reports/bench_grid.h): the grid's part of diagnosis.json (proto::BenchGrid) with its
+// names, nulls and rounds, and the whole report folder of a small diagnosis of a bundled bench —
+// the records report plus its grid section, diagnosis.json in one shape that reads back.
 #include "reports/diagnose_report.h"
 
 #include <google/protobuf/struct.pb.h>
 #include <google/protobuf/util/json_util.h>
-#include <google/protobuf/util/message_differencer.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
-#include <sstream>
+#include <filesystem>
 #include <string>
 
 #include "diagnose/diagnose.h"
 #include "diagnosis.pb.h"
+#include "io/bench_data.h"
+#include "io/csv.h"
 #include "io/diagnosis_json.h"
+#include "io/fin_records.h"
 #include "io/proto_json.h"
 #include "records/families.h"
 #include "records/model.h"
 #include "records/registry.h"
+#include "reports/bench_grid.h"
 
 namespace pz::reports {
 namespace {
@@ -52,9 +56,9 @@ records::FitResult Fit(std::vector<model::EffectKind> effects, int64_t evaluatio
   return f;
 }
 
-TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
+TEST(DiagnoseReport, TheGridsMessageHasItsNamesAndNulls) {
   diagnose::BenchDiagnosis d;
-  d.bench = "bench \"a\"\nline 2";
+  d.bench = "bench";
   diagnose::RecordDiagnosis& r = d.records;
   r.verdict_kind = "none";
   r.verdict = "No significant gap.";
@@ -68,17 +72,13 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   r.gaps.push_back(g);
   d.cases.emplace_back();
   d.cases.back().number = 3;
-  diagnose::DiagnoseOptions o;
-  std::ostringstream out;
-  WriteDiagnosisJson(out, d, o);
-  const Struct s = Parse(out.str());
-  EXPECT_EQ(Field(s, "bench").string_value(), d.bench);
-  EXPECT_EQ(Field(s, "verdict_kind").string_value(), "none");
-  EXPECT_EQ(Field(s, "confidence").kind_case(), Value::kNullValue);  // nothing named
+  proto::BenchGrid m;
+  BenchGridOf(d, &m);
+  const Struct s = Parse(io::PrintJson(m, "grid"));
   EXPECT_EQ(Field(s, "evaluations").number_value(), 123456789);
   EXPECT_EQ(Field(Field(s, "noise").struct_value(), "quantum_deg").number_value(), d.quantum_deg);
   EXPECT_EQ(Field(Field(s, "thresholds").struct_value(), "significance_ratio").number_value(),
-            o.rules.significance_ratio);
+            d.rules.significance_ratio);
   const Struct& gap = Field(s, "gap").struct_value();
   EXPECT_EQ(Field(gap, "closed").kind_case(), Value::kNullValue);
   EXPECT_EQ(Field(gap, "withheld_pi_before_deg2").number_value(), 0.5);
@@ -89,45 +89,19 @@ TEST(DiagnoseReport, DiagnosisJsonParsesBackWithItsNamesNullsAndEscapes) {
   ASSERT_EQ(Field(s, "rounds").list_value().values_size(), 1);  // no second round run
   const Struct& round = Field(s, "rounds").list_value().values(0).struct_value();
   EXPECT_EQ(Field(round, "withheld_pi_deg2").number_value(), 0.5);
-  EXPECT_EQ(Field(round, "named").kind_case(), Value::kNullValue);
+  EXPECT_FALSE(round.fields().contains("named"));  // nothing named
   EXPECT_EQ(Field(Field(s, "base").struct_value(), "structure").string_value(), "base");
-  for (const char* name : {"base", "final", "base_residuals", "final_residuals", "trends",
-                           "absorbed", "absorbed_by", "named", "wall_time_s"})
+  for (const char* name :
+       {"base", "final", "base_residuals", "final_residuals", "trends", "absorbed", "wall_time_s"})
     EXPECT_TRUE(s.fields().contains(name)) << name;
-  for (const char* name : {"candidates", "diverged", "records", "noise_floor", "excitation"})
-    EXPECT_FALSE(s.fields().contains(name)) << name;  // the records diagnosis's
-  // The file reads back into the message it was written from: the same bytes again, and the same
-  // message but for the non-finite numbers (null reads as NaN, which equals nothing).
-  proto::Diagnosis m, back;
-  BenchDiagnosisOf(d, o, &m);
-  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
-  EXPECT_EQ(io::WriteDiagnosisFile(back), out.str());
-  EXPECT_TRUE(std::isnan(back.confidence()));
-  EXPECT_TRUE(std::isnan(back.gap().closed()));
-  m.clear_confidence();
-  back.clear_confidence();
-  m.clear_gap();  // closed; remaining_over_floor: no floor
-  back.clear_gap();
-  m.clear_base();  // train_rms_deg, withheld_rms_deg: no samples
-  back.clear_base();
-  m.clear_final();
-  back.clear_final();
-  m.clear_rounds();  // rms_over_floor of no floor
-  back.clear_rounds();
-  EXPECT_TRUE(google::protobuf::util::MessageDifferencer::Equals(m, back)) << out.str();
-  EXPECT_EQ(back.bench(), d.bench);
-  EXPECT_EQ(back.named().list_value().values_size(), 0);
 }
 
 TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
   const model::EffectKind delay = model::EffectKind::Named("delay"),
                           lowpass = model::EffectKind::Named("driver-lowpass");
   diagnose::BenchDiagnosis d;
-  d.bench = "bench";
   diagnose::RecordDiagnosis& r = d.records;
-  r.verdict_kind = "inseparable";
   r.named_effects = {delay};
-  r.confidence = 0.6;
   r.base = Fit({});
   r.candidates.resize(2);
   r.candidates[0].kind = delay;
@@ -139,23 +113,62 @@ TEST(DiagnoseReport, ARoundWithARunnerUpNamesItAndItsZ) {
   r.z_runner_up = 0.75;
   r.final_fit = std::make_shared<records::FitResult>(r.candidates[0].fit);
   r.second = diagnose::RecordRound{};  // no runner-up: none written
-  std::ostringstream out;
-  WriteDiagnosisJson(out, d, diagnose::DiagnoseOptions{});
-  proto::Diagnosis back;
-  io::ReadDiagnosisFile("diagnosis.json", out.str(), &back);
+  proto::BenchGrid back;
+  BenchGridOf(d, &back);
   ASSERT_EQ(back.rounds_size(), 2);
-  EXPECT_EQ(back.rounds(0).named().string_value(), "delay");
+  EXPECT_EQ(back.rounds(0).named(), "delay");
   EXPECT_EQ(back.rounds(0).runner_up().effect(), "driver-lowpass");
   EXPECT_EQ(back.rounds(0).runner_up().z(), 0.75);
   ASSERT_EQ(back.rounds(1).from_size(), 1);  // the second round starts from the named model
   EXPECT_EQ(back.rounds(1).from(0), "delay");
   EXPECT_FALSE(back.rounds(1).has_runner_up());
-  EXPECT_FALSE(back.has_runner_up());  // the bench's is in its round
-  EXPECT_EQ(back.named().list_value().values(0).string_value(), "delay");
-  EXPECT_EQ(back.confidence(), 0.6);
+  EXPECT_FALSE(back.rounds(1).has_named());
   EXPECT_EQ(back.final().structure(), "base + delay");
   ASSERT_EQ(back.rounds(0).candidates_size(), 2);
   EXPECT_EQ(back.rounds(0).candidates(1).fit().structure(), "base + driver-lowpass");
+  EXPECT_EQ(back.rounds(0).candidates(1).added_parameters(), 0);  // no parameter in Fit()
+}
+
+// The bench's report is the records report plus its grid section: a small diagnosis of the
+// bundled delay bench (one candidate, small searches, no trends, no second round) written whole.
+TEST(DiagnoseReport, TheBenchsReportIsTheRecordsReportWithItsGridSection) {
+  const io::RecordSet set =
+      io::RecordsFromCaseSet(io::LoadCaseSet(std::string(PIEZOID_DATA_DIR) + "/bimorph-fin/delay"));
+  diagnose::DiagnoseOptions o;
+  o.candidates = {model::EffectKind::Named("delay")};
+  o.de_base = {.population = 10, .generations = 4, .stall_generations = 0};
+  o.de_candidate = {.population = 10, .generations = 3, .stall_generations = 0};
+  o.lm.max_iterations = 4;
+  o.second_effect = false;
+  o.trends = false;
+  const diagnose::BenchDiagnosis d = diagnose::DiagnoseBench(set, o);
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("pz_bench_report_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  const std::vector<std::string> warnings =
+      WriteDiagnosisFolder(dir, d.set, d.records, {.grid = &d}, false);
+  EXPECT_TRUE(warnings.empty());
+  const std::string md = io::ReadTextFile(dir / "report.md");
+  for (const char* part : {"**Verdict (", "## Noise floor", "## Candidates (ranked by score)",
+                           "## The V × f grid", "| 375 V |", "### Round 1", "### How far",
+                           "### Identifiability", "figures/case9_loop.png", "## Excitation"})
+    EXPECT_NE(md.find(part), std::string::npos) << part;
+  EXPECT_TRUE(std::filesystem::exists(dir / "figures" / "case1_trace.csv"));
+  EXPECT_TRUE(std::filesystem::exists(dir / "figures" / "withheld_case2.csv"));
+  proto::Diagnosis back;
+  io::ReadDiagnosisFile("diagnosis.json", io::ReadTextFile(dir / "diagnosis.json"), &back);
+  EXPECT_EQ(back.records(), set.source.string());
+  EXPECT_EQ(back.family(), "bimorph-fin");
+  EXPECT_EQ(back.response_unit(), "deg");
+  EXPECT_EQ(back.verdict(), d.records.verdict);
+  ASSERT_TRUE(back.has_grid());
+  EXPECT_EQ(back.grid().noise().cases_size(), 9);
+  EXPECT_EQ(back.grid().gap().cases_size(), 9);
+  ASSERT_EQ(back.grid().rounds_size(), 1);
+  ASSERT_EQ(back.candidates_size(), back.grid().rounds(0).candidates_size());
+  EXPECT_EQ(back.candidates(0).score(), back.grid().rounds(0).candidates(0).score());
+  EXPECT_EQ(back.named_size(), static_cast<int>(d.records.named_effects.size()));
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

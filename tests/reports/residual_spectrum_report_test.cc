@@ -15,7 +15,7 @@
 
 #include "diagnose/diagnose.h"
 #include "records/excitation.h"
-#include "reports/records_diagnose.h"
+#include "reports/diagnose_report.h"
 #include "synth/synthetic.h"
 
 namespace pz::reports {
@@ -34,8 +34,7 @@ diagnose::RecordDiagnoseOptions Quick() {
 
 std::string Report(const io::RecordSet& set, const diagnose::RecordDiagnosis& d) {
   std::ostringstream os;
-  WriteRecordsDiagnosisMarkdown(os, set, d, records::ProposeTrainingDrive(set, d.excitation), 0,
-                                nullptr);
+  WriteDiagnosisMarkdown(os, set, d, records::ProposeTrainingDrive(set, d.excitation));
   return os.str();
 }
 

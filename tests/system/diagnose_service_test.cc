@@ -8,6 +8,7 @@
 #include <zmq.hpp>
 
 #include "diagnose/fin_diagnose.h"
+#include "io/fin_records.h"
 #include "service/wire_codec.h"
 #include "svcclient/complete_service.h"
 #include "synth/synthetic.h"
@@ -19,7 +20,7 @@ namespace {
 
 using model::EffectKind;
 
-std::vector<DiagCase> SmallBench(bool with_delay) {
+io::RecordSet SmallBench(bool with_delay) {
   const model::BimorphPlant plant;
   synth::FinTrialOptions so;
   model::BimorphParams p;
@@ -30,7 +31,7 @@ std::vector<DiagCase> SmallBench(bool with_delay) {
   opt::Rng rng(3);
   std::vector<records::Effect> effects;
   if (with_delay) effects = {{EffectKind::Named("delay"), {0.02}}};
-  return CasesFromCaseSet(synth::SimulateBench(plant, p, effects, sat, so, rng));
+  return io::RecordsFromCaseSet(synth::SimulateBench(plant, p, effects, sat, so, rng));
 }
 
 bool SameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
@@ -74,7 +75,7 @@ TEST(DiagnoseServiceTest, TheRecordsEngineOnTheServiceIsTheLocalOneBitForBit) {
   testing::Cluster cluster("diagnose-records-service");
   cluster.AddWorker(1);
   cluster.AddWorker(1);
-  const std::vector<DiagCase> m = SmallBench(true);
+  const io::RecordSet m = SmallBench(true);
   DiagnoseOptions o = SmallOptions();
   const diagnose::RecordDiagnosis local = DiagnoseBench(m, o).records;
 
