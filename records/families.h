@@ -16,9 +16,8 @@
 //                       by blocked cross-validation (records/regularisation.h ChoosePenalty); exact
 //                       inverse by one-step bisection
 //   asymmetric-pi       PI operator plus a monotone memoryless bend from one-sided dead zones of
-//   the
-//                       drive (model/preisach.h): asymmetric loops, weights ≥ 0 (monotone, exact
-//                       inverse), a ridge on the dead zones chosen by the same validation
+//                       the drive (model/preisach.h): asymmetric loops, weights ≥ 0 (monotone,
+//                       exact inverse), a ridge on the dead zones chosen by the same validation
 //   bimorph-fin         the bimorph fin (model/bimorph.h, modal path) with an output gain:
 //                       μ δ α β γ a1 a2 b1 b2 gain, and the beam's geometry: active length L_p
 //                       and tip length L_e (searched around FamilyOptions::geometry; the

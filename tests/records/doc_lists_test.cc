@@ -1,6 +1,8 @@
 // The lists the documents and scripts keep by hand, checked against the registries they copy
 // (issue 46 part 5): the family table of docs/records.md, its `--effects` list, the effect table
-// of docs/diagnosis.md (the fin bench's effects) and bench/real_recording.sh's default families.
+// of docs/diagnosis.md (the fin bench's effects), bench/real_recording.sh's default families, the
+// README's families, proto/job.proto's comments on record_family and effects, and the header
+// table of records/families.h.
 // A family or effect added to a registry fails here until every list names it.
 #include <gtest/gtest.h>
 
@@ -109,6 +111,63 @@ TEST(DocLists, RealRecordingScriptRunsEveryFamily) {
   std::sort(listed.begin(), listed.end());
   std::sort(expected.begin(), expected.end());
   EXPECT_EQ(listed, expected);
+}
+
+std::vector<std::string> Sorted(std::vector<std::string> v) {
+  std::sort(v.begin(), v.end());
+  return v;
+}
+
+std::vector<std::string> RecordsEffectNames() {
+  std::vector<std::string> names;
+  for (const model::EffectDef* e : model::Effects())
+    if (e->kernel() != 0) names.push_back(e->name());
+  return names;
+}
+
+// The names matching `name` (its first group) in `text` between the first `to` and the last
+// `from` before it.
+std::vector<std::string> NamesBetween(const std::string& text, const std::string& from,
+                                      const std::string& to, const std::regex& name) {
+  const size_t b = text.find(to);
+  EXPECT_NE(b, std::string::npos) << to;
+  const size_t a = b == std::string::npos ? b : text.rfind(from, b);
+  EXPECT_NE(a, std::string::npos) << from;
+  if (a == std::string::npos || b == std::string::npos) return {};
+  // `to`'s first character kept: it ends the last name.
+  const std::string part = text.substr(a + from.size(), b + 1 - a - from.size());
+  std::vector<std::string> out;
+  for (std::sregex_iterator it(part.begin(), part.end(), name), end; it != end; ++it)
+    out.push_back((*it)[1]);
+  return out;
+}
+
+TEST(DocLists, ReadmeNamesEveryFamily) {
+  EXPECT_EQ(Sorted(NamesBetween(Slurp("README.md"), "Families: ", "Every fit flags",
+                                std::regex("`([a-z-]+)`"))),
+            Sorted(FamilyNames()));
+}
+
+TEST(DocLists, JobProtoCommentsNameEveryFamilyAndEffect) {
+  const std::string proto = Slurp("proto/job.proto");
+  const std::regex word(R"(([a-z]+(?:-[a-z]+)*)(?:,| \())");
+  std::vector<std::string> families =
+      NamesBetween(proto, "// RECORDS family only: ", "(records/registry.h)", word);
+  EXPECT_EQ(Sorted(families), Sorted(FamilyNames()));
+  std::vector<std::string> effects =
+      NamesBetween(proto, "string record_family = 11;", "(model/effect_library.h)", word);
+  EXPECT_EQ(Sorted(effects), Sorted(RecordsEffectNames()));
+}
+
+TEST(DocLists, FamiliesHeaderTableHasARowForEveryFamily) {
+  // The header comment's rows: "//   name   text", the name two spaces or more from its text.
+  const std::string header = Slurp("records/families.h");
+  const std::string table = header.substr(0, header.find("#pragma once"));
+  std::vector<std::string> rows;
+  static const std::regex row(R"(//   ([a-z-]+) {2,}\S)");
+  for (std::sregex_iterator it(table.begin(), table.end(), row), end; it != end; ++it)
+    rows.push_back((*it)[1]);
+  EXPECT_EQ(Sorted(rows), Sorted(FamilyNames()));
 }
 
 }  // namespace
