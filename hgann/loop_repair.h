@@ -19,8 +19,8 @@
 // of its range (a loop-free model is bounded). The input, hidden and other output genes are kept,
 // so the child still breeds with the population; a loop constant over the envelope is the
 // bench's own (the nominal loop does not vary with V or f), and the trend seeds make the same
-// choice (operating_law.cc FlattenLoopIfUnbounded). A genome still unbounded after the rewrite (none
-// on the benches of docs/performance.md) is left as it is and refused by the fitness.
+// choice (operating_law.cc FlattenLoopIfUnbounded). A genome still unbounded after the rewrite
+// (none on the benches of docs/operating-law.md) is left as it is and refused by the fitness.
 #pragma once
 
 #include <array>

@@ -69,7 +69,8 @@ TEST(LoopRepair, UnboundedChildrenBecomeBoundedInTheirLoopOutputsAlone) {
     repaired += changed;
     EXPECT_TRUE(repair.Bounded(fitness.Decode(g))) << "genome " << i;
     for (int b = 0; b < model::kChromosomeBits; ++b)
-      if (g.bits[b] != before.bits[b]) ASSERT_TRUE(InLoopOutputs(b)) << "genome " << i << " bit " << b;
+      if (g.bits[b] != before.bits[b])
+        ASSERT_TRUE(InLoopOutputs(b)) << "genome " << i << " bit " << b;
     const opt::FitnessResult r = fitness.Evaluate(g);
     EXPECT_EQ(r.reason.find("unbounded"), std::string::npos) << "genome " << i << ": " << r.reason;
     Genome again = g;
