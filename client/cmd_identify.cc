@@ -195,6 +195,7 @@ void RunIdentifyCommand(IdentifyFlags& f) {
   if (unset("max_generations")) opts.ga.max_generations = search->generations;
   if (unset("stall_generations")) opts.ga.stall_generations = search->stall_generations;
   opts.ga.stall_relative = search->stall_relative;
+  opts.repair_loops = search->repair_loops;
   if (unset("spread_penalty")) opts.spread_penalty = search->spread_penalty;
   if (unset("trend_seeds")) opts.trend_seeds = search->trend_seeds;
   opts.preset = f.preset;
@@ -228,6 +229,12 @@ void RunIdentifyCommand(IdentifyFlags& f) {
   const auto result =
       hgann::RunIdentify(opts, set, fitness, [&](const opt::GenerationSummary& g) { progress(g); });
   if (progress.tty) std::fprintf(stderr, "\n");
+  if (opts.repair_loops)
+    std::fprintf(stderr,
+                 "loop repair (robust preset): %lld of %lld fresh genomes had an unbounded "
+                 "Bouc-Wen loop and were rewritten into the bounded region before evaluation\n",
+                 static_cast<long long>(result.repaired),
+                 static_cast<long long>(result.summary.evaluations));
   reports::WriteIdentifyReport(opts, set, fitness, result, std::cout);
 }
 

@@ -152,34 +152,36 @@ bool HgannFitness::BoundedOnEnvelope(const model::Network& network) const {
   return GridOf(network).bounded;
 }
 
-HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const {
+std::vector<std::pair<double, double>> HgannFitness::EnvelopeGrid(
+    const model::InputNormalization& n) {
   constexpr int kGrid = 5;
-  const auto& n = config_.normalization;
+  std::vector<std::pair<double, double>> grid;
+  for (int i = 0; i < kGrid; ++i)
+    for (int j = 0; j < kGrid; ++j)
+      grid.emplace_back(
+          n.amplitude_lo_v + (n.amplitude_hi_v - n.amplitude_lo_v) * i / (kGrid - 1),
+          n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1));
+  return grid;
+}
+
+HgannFitness::Envelope HgannFitness::GridOf(const model::Network& network) const {
   Envelope e;
   double sum[model::kNetworkOutputs] = {}, sum2[model::kNetworkOutputs] = {};
-  for (int i = 0; i < kGrid; ++i) {
-    for (int j = 0; j < kGrid; ++j) {
-      const double v = n.amplitude_lo_v + (n.amplitude_hi_v - n.amplitude_lo_v) * i / (kGrid - 1);
-      const double f =
-          n.frequency_lo_hz + (n.frequency_hi_hz - n.frequency_lo_hz) * j / (kGrid - 1);
-      const model::NetworkParameters q = network.Predict(v, f);
-      model::BimorphParams bp;
-      bp.alpha = q.alpha;
-      bp.beta = q.beta;
-      bp.gamma = q.gamma;
-      if (!bp.HysteresisBounded()) e.bounded = false;
-      const auto p = q.ToArray();
-      for (int k = 0; k < model::kNetworkOutputs; ++k) {
-        const auto& r = config_.ranges[k];
-        const double s = r.upper > r.lower ? (p[k] - r.lower) / (r.upper - r.lower) : 0.0;
-        sum[k] += s;
-        sum2[k] += s * s;
-      }
+  const std::vector<std::pair<double, double>> grid = EnvelopeGrid(config_.normalization);
+  for (const auto& [v, f] : grid) {
+    const model::NetworkParameters q = network.Predict(v, f);
+    if (!LoopBounded(q)) e.bounded = false;
+    const auto p = q.ToArray();
+    for (int k = 0; k < model::kNetworkOutputs; ++k) {
+      const auto& r = config_.ranges[k];
+      const double s = r.upper > r.lower ? (p[k] - r.lower) / (r.upper - r.lower) : 0.0;
+      sum[k] += s;
+      sum2[k] += s * s;
     }
   }
-  constexpr double kN = kGrid * kGrid;
+  const double count = static_cast<double>(grid.size());
   for (int k = 0; k < model::kNetworkOutputs; ++k)
-    e.spread += std::max(0.0, sum2[k] / kN - (sum[k] / kN) * (sum[k] / kN));
+    e.spread += std::max(0.0, sum2[k] / count - (sum[k] / count) * (sum[k] / count));
   return e;
 }
 

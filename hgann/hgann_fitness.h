@@ -12,6 +12,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "model/bimorph.h"
@@ -21,6 +22,16 @@
 #include "opt/evaluator.h"
 
 namespace pz::hgann {
+
+/// The Bouc–Wen loop of a network's parameters is bounded (model::BimorphParams::
+/// HysteresisBounded on their α, β, γ): what the fitness checks before simulating.
+inline bool LoopBounded(const model::NetworkParameters& p) {
+  model::BimorphParams bp;
+  bp.alpha = p.alpha;
+  bp.beta = p.beta;
+  bp.gamma = p.gamma;
+  return bp.HysteresisBounded();
+}
 
 /// One case of an HGANN problem: its drive, its measured fin angle and its saturations.
 using HgannCase = model::FinCase;
@@ -90,6 +101,8 @@ class HgannFitness final : public opt::FitnessFunction {
   /// "unbounded_hysteresis_in_envelope"), as on a training case: its model breaks at untrained
   /// operating points inside the training box.
   bool BoundedOnEnvelope(const model::Network& network) const;
+  /// The spread penalty's grid: 5 × 5 (V, f) points evenly over the normalisation's box, V outer.
+  static std::vector<std::pair<double, double>> EnvelopeGrid(const model::InputNormalization& n);
 
   /// Which of the seven parameters the network holds at a bound of its range on every training
   /// case: −1 at the lower bound, +1 at the upper, 0 otherwise (inside on some case, or a

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "hgann/identify.h"
+#include "hgann/loop_repair.h"
 #include "hgann/output_move.h"
 #include "hgann/trend_seeds.h"
 #include "model/chromosome.h"
@@ -387,6 +388,15 @@ JobKind HgannJobKind() {
     HgannFitnessConfig config;  // the normalisation and training drives the fitness uses
     if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
     *out = OutputMove(config);
+    return Status::Ok();
+  };
+  k.repair = [](const JobSpec& s, opt::GeneticAlgorithm::Repair* out) -> Status {
+    *out = nullptr;
+    const HgannProblem& problem = std::get<HgannProblem>(s.problem);
+    if (!HgannRepairsLoops(problem.preset)) return Status::Ok();
+    HgannFitnessConfig config;  // the normalisation, ranges and points the fitness checks
+    if (Status st = HgannConfigFromProblem(problem, &config); !st.ok()) return st;
+    *out = LoopRepair(config);
     return Status::Ok();
   };
   k.seeds = [](const JobSpec& s, std::vector<Genome>* out) -> Status {

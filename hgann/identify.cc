@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 
+#include "hgann/loop_repair.h"
 #include "hgann/output_move.h"
 #include "model/chromosome.h"
 #include "opt/thread_pool_evaluator.h"
@@ -57,6 +58,7 @@ IdentifyResult RunIdentify(
   algorithm.SetDescriber([](const opt::Genome& g) { return model::DescribeChromosome(g.bits); });
   if (HgannOutputMoves(ga, fitness.config().spread_penalty) > 0)
     algorithm.SetMove(OutputMove(fitness.config()));  // the hgann job kind's move (hgann_job.cc)
+  if (options.repair_loops) algorithm.SetRepair(LoopRepair(fitness.config()));
   if (on_generation) algorithm.AddGenerationCallback(on_generation);
 
   IdentifyResult r;
@@ -68,6 +70,7 @@ IdentifyResult RunIdentify(
     algorithm.Initialize(r.seeds->genomes);
   }
   r.summary = algorithm.Run();
+  r.repaired = algorithm.repaired();
   r.log = algorithm.state().log;
   r.best.network = fitness.Decode(r.summary.best);
   r.best.chromosome = r.summary.best.bits;

@@ -30,6 +30,9 @@ struct IdentifyOptions {
       "default";  ///< parameter ranges preset: "default" (spec §3) or "paper" (Table 3)
   double spread_penalty = 0;  ///< λ [deg²] of HgannFitnessConfig::spread_penalty (0 = paper's cost)
   bool trend_seeds = false;      ///< generation 0 starts with the trend seeds (hgann/trend_seeds.h)
+  /// Children with an unbounded loop repaired before evaluation (hgann/loop_repair.h): the
+  /// default preset's, as a spec's without a preset (HgannRepairsLoops); false: the paper's GA.
+  bool repair_loops = true;
   std::string preset;            ///< the search preset the settings came from (reports; "" = none)
   /// The user's feasible (V [V], f [Hz]) points for the next-case proposal (CommitteeOptions::
   /// candidates); empty: the case set's withheld cases are the candidates.
@@ -39,6 +42,7 @@ struct IdentifyOptions {
 
 struct IdentifyResult {
   opt::GaSummary summary;
+  int64_t repaired = 0;  ///< fresh genomes the loop repair rewrote (IdentifyOptions::repair_loops)
   std::vector<opt::GenerationSummary> log;
   io::SavedNetwork best;
   std::vector<HgannCaseResult> cases;  ///< every case of the set, in manifest order

@@ -33,16 +33,18 @@ std::array<double, model::kNetworkOutputs> OutputMove::MeanOutputs(
 
 void OutputMove::WriteConstantOutputs(std::vector<uint8_t>* bits,
                                       const std::array<double, model::kNetworkOutputs>& t) {
+  for (int k = 0; k < model::kNetworkOutputs; ++k)
+    WriteConstantOutput(bits, k, std::clamp(t[k], 0.0, 1.0));
+}
+
+void OutputMove::WriteConstantOutput(std::vector<uint8_t>* bits, int k, double t) {
   std::span<uint8_t> b(*bits);
   const uint32_t zero = model::EncodeWeight(0.0);
-  for (int k = 0; k < model::kNetworkOutputs; ++k) {
-    model::WriteGene(b, model::OutputTfBit(k), model::kTransferCodeBits,
-                     static_cast<uint32_t>(model::TransferFunction::kSatlin));
-    for (int j = 0; j < model::kMaxHidden; ++j)
-      model::WriteGene(b, model::W2Bit(j, k), model::kWeightCodeBits, zero);
-    model::WriteGene(b, model::C2Bit(k), model::kWeightCodeBits,
-                     model::EncodeWeight(std::clamp(t[k], 0.0, 1.0)));
-  }
+  model::WriteGene(b, model::OutputTfBit(k), model::kTransferCodeBits,
+                   static_cast<uint32_t>(model::TransferFunction::kSatlin));
+  for (int j = 0; j < model::kMaxHidden; ++j)
+    model::WriteGene(b, model::W2Bit(j, k), model::kWeightCodeBits, zero);
+  model::WriteGene(b, model::C2Bit(k), model::kWeightCodeBits, model::EncodeWeight(t));
 }
 
 void OutputMove::operator()(const opt::Genome& parent, opt::Rng& rng,

@@ -56,6 +56,9 @@ class OutputMove {
   /// comment).
   static void WriteConstantOutputs(std::vector<uint8_t>* bits,
                                    const std::array<double, model::kNetworkOutputs>& t);
+  /// Output k alone: satlin, every hidden-to-output weight the code nearest 0, the bias the code
+  /// nearest `t` (unclamped: t < 0 or t > 1 pins the output at a bound of its range exactly).
+  static void WriteConstantOutput(std::vector<uint8_t>* bits, int k, double t);
 
  private:
   model::InputNormalization normalization_;

@@ -329,12 +329,7 @@ struct TrendBasis {
       for (const std::vector<double>& b : *points) {
         std::array<double, kOut> s{};
         for (int k = 0; k < kOut; ++k) s[k] = S(th, b, k);
-        const auto p = ToParams(s, cfg.ranges);
-        model::BimorphParams bp;
-        bp.alpha = p.alpha;
-        bp.beta = p.beta;
-        bp.gamma = p.gamma;
-        if (!bp.HysteresisBounded()) return false;
+        if (!hgann::LoopBounded(ToParams(s, cfg.ranges))) return false;
       }
     return true;
   }

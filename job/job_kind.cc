@@ -93,6 +93,13 @@ Status JobKindRegistry::Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* o
   return k->move(spec, out);
 }
 
+Status JobKindRegistry::Repair(const JobSpec& spec, opt::GeneticAlgorithm::Repair* out) const {
+  *out = nullptr;
+  const JobKind* k = Find(spec.kind());
+  if (!k || !k->repair) return Status::Ok();
+  return k->repair(spec, out);
+}
+
 Status JobKindRegistry::Seeds(const JobSpec& spec, std::vector<opt::Genome>* out) const {
   out->clear();
   const JobKind* k = Find(spec.kind());

@@ -50,6 +50,9 @@ struct JobKind {
   /// Optional: the kind's move for the GA's output moves (opt/ga.h, file comment 9.). A kind
   /// without one refuses a spec that asks for output moves.
   std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Move*)> move;
+  /// Optional: the kind's repair of fresh genomes (opt/ga.h, file comment 10.), a function of the
+  /// spec (null: genomes are evaluated as made).
+  std::function<Status(const JobSpec&, opt::GeneticAlgorithm::Repair*)> repair;
   /// Optional: the genomes that fill the first slots of generation 0
   /// (GeneticAlgorithm::Initialize), a function of the spec alone, computed once when a job starts
   /// (the master's job runner, a local rerun): e.g. the hgann kind's trend seeds. None = uniform
@@ -81,6 +84,8 @@ class JobKindRegistry {
                   std::vector<model::Network>* out) const;
   /// The kind's move for the GA (null when the kind has none: its genomes are only bred).
   Status Move(const JobSpec& spec, opt::GeneticAlgorithm::Move* out) const;
+  /// The kind's repair for the GA (null when the kind has none, or the spec asks for none).
+  Status Repair(const JobSpec& spec, opt::GeneticAlgorithm::Repair* out) const;
   /// The kind's seeds of generation 0 (empty when the kind has none).
   Status Seeds(const JobSpec& spec, std::vector<opt::Genome>* out) const;
   /// The kind's committee on `best` (JobKind::committee); NotFound for a kind or spec without.

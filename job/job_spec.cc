@@ -44,7 +44,8 @@ std::optional<HgannSearchSettings> HgannSearchPreset(std::string_view name) {
         .spread_penalty = 10,
         .trend_seeds = true,
         .stall_generations = 30,
-        .stall_relative = 1e-6};
+        .stall_relative = 1e-6,
+        .repair_loops = true};
   return std::nullopt;
 }
 

@@ -97,6 +97,10 @@ struct HgannSearchSettings {
   /// paper's: 200 and 0 (Table 2).
   int stall_generations = 200;
   double stall_relative = 0;
+  /// A child whose Bouc–Wen loop is unbounded is repaired into the bounded region before it is
+  /// evaluated (hgann/loop_repair.h): the robust preset's (a third of its evaluations were such
+  /// refusals); the paper's GA evaluates genomes as made.
+  bool repair_loops = false;
 };
 inline constexpr const char* kDefaultHgannPreset = "robust";
 /// "" (= kDefaultHgannPreset), "robust" or "paper"; nullopt for another name (kHgannPresetRule).

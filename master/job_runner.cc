@@ -44,6 +44,9 @@ Status JobRunner::Init(const JobKindRegistry& kinds, const JobCheckpoint* resume
     opt::GeneticAlgorithm::Move move;
     if (Status s = kinds.Move(spec_, &move); !s.ok()) return s;
     if (move) ga_->SetMove(std::move(move));
+    opt::GeneticAlgorithm::Repair repair;
+    if (Status s = kinds.Repair(spec_, &repair); !s.ok()) return s;
+    if (repair) ga_->SetRepair(std::move(repair));
     if (!resume || !resume->optimizer.initialized) {
       if (Status s = kinds.Seeds(spec_, &seeds_); !s.ok()) return s;
     }

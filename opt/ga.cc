@@ -351,6 +351,8 @@ void GeneticAlgorithm::AddGenerationCallback(GenerationCallback callback) {
 void GeneticAlgorithm::SetDescriber(Describer describer) { describer_ = std::move(describer); }
 void GeneticAlgorithm::SetMove(Move move) { move_ = std::move(move); }
 
+void GeneticAlgorithm::SetRepair(Repair repair) { repair_ = std::move(repair); }
+
 void GeneticAlgorithm::RestoreState(GaState state) {
   ThrowIfError(state.Validate(options_));
   if (!state.initialized)
@@ -393,6 +395,9 @@ std::vector<std::vector<FitnessResult>> GeneticAlgorithm::Evaluate(std::vector<D
   // i · population_size + (kept count + j). One island's fresh genomes are the batch as they are;
   // several islands' are moved into one batch and back (no copy either way).
   const int n = options_.population_size;
+  if (repair_)
+    for (Draft& d : drafts)
+      for (Genome& g : d.fresh) repaired_ += repair_(g) ? 1 : 0;
   std::vector<Genome> joined;
   std::vector<int> indices;
   for (size_t i = 0; i < drafts.size(); ++i) {

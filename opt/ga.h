@@ -64,6 +64,9 @@
 //      beside the GA's search in the network's bits, which leaves a plateau that bit flips cannot
 //      (the default with several islands, by measurement: docs/performance.md, "Islands"). Without
 //      a move (or with 0 moves) every offspring is bred.
+//   10. repair: with a repair set (SetRepair; a problem hook) every fresh genome passes through it
+//      before the batch is evaluated; HGANN's robust preset rewrites a child whose Bouc–Wen loop
+//      is unbounded into the bounded region (hgann/loop_repair.h) instead of spending a slot on it.
 // The job's best, stall and termination are over all islands (the best of the best); the
 // generation's summary carries each island's best, stall, immigrants and restart (IslandSummary).
 #pragma once
@@ -296,6 +299,14 @@ class GeneticAlgorithm {
   /// stays a function of (options, seed, fitness, move). Without one, every offspring is bred.
   using Move = std::function<void(const Genome& parent, Rng& rng, std::span<Genome> children)>;
   void SetMove(Move move);
+  /// A problem's repair (e.g. hgann/loop_repair.h): applied to every fresh genome of a generation
+  /// (seeded, drawn, bred or moved) before the batch is evaluated; true when it rewrote the genome.
+  /// Must be a function of the genome alone (no draws), so the run stays a function of (options,
+  /// seed, fitness, move, repair). Without one (the paper's GA) genomes are evaluated as made.
+  using Repair = std::function<bool(Genome&)>;
+  void SetRepair(Repair repair);
+  /// Fresh genomes the repair rewrote in this object's generations (not part of the state).
+  int64_t repaired() const { return repaired_; }
 
   /// Creates generation 0: `seeds` (≤ population_size genomes of genome_bits 0/1 bits) fill the
   /// first slots of island 0, the rest are drawn uniformly (each island from its own generator);
@@ -366,6 +377,8 @@ class GeneticAlgorithm {
   std::vector<GenerationCallback> callbacks_;
   Describer describer_;
   Move move_;
+  Repair repair_;
+  int64_t repaired_ = 0;
   std::atomic<bool> cancel_{false};
   std::vector<Rng> rngs_;                  ///< one per island
   std::vector<std::vector<int>> sources_;  ///< MigrationSources(i), computed once

@@ -237,12 +237,14 @@ TEST(SearchPresets, PaperIsTheGaDefaultsAndRobustTheMeasuredSetting) {
   EXPECT_EQ(paper->generations, defaults.max_generations);
   EXPECT_EQ(paper->spread_penalty, 0);
   EXPECT_FALSE(paper->trend_seeds);
+  EXPECT_FALSE(paper->repair_loops) << "the paper's GA evaluates genomes as made";
   const auto robust = SearchPreset(kDefaultSearchPreset);
   ASSERT_TRUE(robust.has_value());
   EXPECT_EQ(robust->islands, 4);
   EXPECT_EQ(robust->generations, 250);
   EXPECT_EQ(robust->spread_penalty, 10);
   EXPECT_TRUE(robust->trend_seeds);
+  EXPECT_TRUE(robust->repair_loops);
   EXPECT_FALSE(SearchPreset("fast").has_value());
 }
 

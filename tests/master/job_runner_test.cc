@@ -42,6 +42,25 @@ TEST(JobRunner, InProcessJobRunsExactlyAsPiezoidIdentify) {
   EXPECT_EQ(job.best.front().fitness.cost, id.summary.best_fitness.cost);
 }
 
+// The job kind's repair (hgann/loop_repair.h) follows the spec's preset: the default repairs every
+// child whose loop is unbounded, so none is refused for it; the paper's GA refuses them.
+TEST(JobRunner, TheDefaultPresetRepairsUnboundedLoopsThePaperPresetRefusesThem) {
+  const auto unbounded = [](const service::JobCheckpoint& job) {
+    int n = 0;
+    for (const auto& g : job.log)
+      for (const auto& [reason, count] : g.failure_reasons)
+        if (reason.find("unbounded") != std::string::npos) n += count;
+    return n;
+  };
+  job::JobSpec spec = NominalSpec(16, 4);
+  service::JobCheckpoint repaired, paper;
+  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &repaired).ok());
+  std::get<job::HgannProblem>(spec.problem).preset = "paper";
+  ASSERT_TRUE(RunJobInProcess("t", spec, kinds::All(), &paper).ok());
+  EXPECT_EQ(unbounded(repaired), 0);
+  EXPECT_GT(unbounded(paper), 0) << "a uniform genome's loop is unbounded about half the time";
+}
+
 /// Four islands of the nominal hgann problem: migration every 3 generations, fully connected, an
 /// island restarted after 4 generations of its own stall, each island at its own mutation rate.
 job::JobSpec IslandSpec() {

@@ -1435,6 +1435,44 @@ TEST(GaOutputMoves, SameRunWhateverTheEvaluatorAndResumesFromACheckpoint) {
   ExpectSameRun(whole, resumed);
 }
 
+// The repair (file comment 10.): every fresh genome of every generation, seeds and drawn ones
+// included, passes through it before the batch is evaluated; the run stays a function of the
+// options and seed (a repair is a function of the genome alone).
+TEST(GaRepair, EveryEvaluatedGenomeIsRepairedFirst) {
+  const HashFitness fitness;
+  InlineEvaluator inner(fitness);
+  const auto repair = [](Genome& g) {  // HashFitness penalises b0 b1 b2 all set: clear b2 there
+    if (!(g.bits[0] && g.bits[1] && g.bits[2])) return false;
+    g.bits[2] = 0;
+    return true;
+  };
+  const auto run = [&](BatchEvaluator* ev, int64_t* repaired) {
+    GeneticAlgorithm ga(IslandOptions(3), ev);
+    ga.SetRepair(repair);
+    RunRecord r;
+    r.summary = ga.Run();
+    r.state = ga.state();
+    *repaired = ga.repaired();
+    return r;
+  };
+  RecordingEvaluator recording(&inner);
+  int64_t repaired = 0;
+  const RunRecord with = run(&recording, &repaired);
+  int64_t evaluated = 0;
+  for (const auto& batch : recording.genomes)
+    for (const Genome& g : batch) {
+      EXPECT_FALSE(g.bits[0] && g.bits[1] && g.bits[2]);
+      ++evaluated;
+    }
+  EXPECT_EQ(evaluated, with.summary.evaluations);
+  EXPECT_GT(repaired, 0) << "an eighth of uniform genomes have b0 b1 b2 set";
+  for (const GenerationSummary& g : with.state.log)
+    EXPECT_EQ(g.failure_reasons.count("unbounded hysteresis"), 0u) << "generation " << g.generation;
+  int64_t again = 0;
+  ExpectSameRun(with, run(&inner, &again));
+  EXPECT_EQ(again, repaired);
+}
+
 }  // namespace islands
 
 }  // namespace

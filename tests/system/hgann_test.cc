@@ -13,6 +13,7 @@
 
 #include "hgann/hgann_job.h"
 #include "hgann/identify.h"
+#include "hgann/loop_repair.h"
 #include "hgann/output_move.h"
 #include "io/network_io.h"
 #include "job/job_kind.h"
@@ -148,6 +149,7 @@ TEST(ServiceHgann, FourIslandsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIde
   hgann::IdentifyOptions o;
   o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
   o.threads = 2;
+  o.repair_loops = hgann::HgannRepairsLoops(std::get<job::HgannProblem>(spec.problem).preset);
   // The islands' default: each island's last 2 offspring of its 15 (16 %, rounded) are output moves
   // of its best, made by the master's job runner and by identify alike (a runner without them
   // differs).
@@ -194,6 +196,7 @@ TEST(ServiceHgann, TrendSeedsOverMasterAndTwoWorkersAreBitIdenticalToPiezoidIden
   hgann::IdentifyOptions o;
   o.ga = job::ToGaOptions(spec, job::GenomeLayout{model::kChromosomeBits, 0});
   o.threads = 2;
+  o.repair_loops = hgann::HgannRepairsLoops(h.preset);
   o.spread_penalty = 10;
   o.trend_seeds = true;
   o.next_candidates = h.next_candidates;
