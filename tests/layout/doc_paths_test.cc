@@ -245,3 +245,21 @@ TEST(DocPaths, AStalePathInASourceCommentIsCaught) {
   EXPECT_EQ(missing[0], "opt/ga.cc:3: opt/gone.h");
   EXPECT_EQ(missing[1], "opt/CMakeLists.txt:1: opt/old.cc");
 }
+
+// A merge's conflict markers left in a committed file (a doc merges without a build error).
+TEST(DocPaths, NoMergeConflictMarkers) {
+  const fs::path root = PIEZOID_SOURCE_DIR;
+  std::vector<fs::path> files = Docs(root);
+  for (auto& s : Sources(root)) files.push_back(std::move(s));
+  const std::string ours = std::string(7, '<') + " ", theirs = std::string(7, '>') + " ";
+  std::vector<std::string> found;
+  for (const auto& file : files) {
+    std::ifstream in(file);
+    std::string line;
+    for (int n = 1; std::getline(in, line); ++n) {
+      if (line.rfind(ours, 0) == 0 || line.rfind(theirs, 0) == 0)
+        found.push_back(fs::relative(file, root).generic_string() + ":" + std::to_string(n));
+    }
+  }
+  EXPECT_TRUE(found.empty()) << Join(found);
+}
