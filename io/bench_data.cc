@@ -4,6 +4,7 @@
 #include <numbers>
 
 #include "io/csv.h"
+#include "model/format.h"
 
 namespace pz::io {
 namespace fs = std::filesystem;
@@ -116,7 +117,7 @@ BenchCase MakeBenchCase(BenchCaseSamples s, const BenchReadOptions& options,
              FormatNumber(c.u[k]) + " V is not V sin(2 pi f t) = " + FormatNumber(want) +
                  " V (V = " + FormatNumber(c.amplitude_v) +
                  " V, f = " + FormatNumber(c.frequency_hz) + " Hz, t = " + FormatNumber(c.t[k]) +
-                 " s; tolerance " + FormatNumber(vtol) + " V)");
+                 " s; tolerance " + FormatG(vtol, 3) + " V)");
     }
   }
   c.angle_deg = std::move(s.angle_deg);

@@ -12,6 +12,7 @@
 #include "io/csv.h"
 #include "io/fin_records.h"
 #include "io/quantum.h"
+#include "model/format.h"
 #include "model/status.h"
 
 namespace pz::io {
@@ -432,7 +433,7 @@ void CheckStatedDrive(const CsvTable& csv, int cu, const Record& r, double offse
           csv.Where(k, cu) + ": " + FormatNumber(r.u[k]) + " V is not offset + A sin(2 pi f t) = " +
           FormatNumber(want) + " V (offset = " + FormatNumber(offset) +
           " V, A = " + FormatNumber(amplitude) + " V, f = " + FormatNumber(r.frequency_hz) +
-          " Hz, t = " + FormatNumber(r.t[k]) + " s; tolerance " + FormatNumber(vtol) + " V)" + ctx);
+          " Hz, t = " + FormatNumber(r.t[k]) + " s; tolerance " + FormatG(vtol, 3) + " V)" + ctx);
   }
 }
 
