@@ -92,14 +92,8 @@ int ScoredCycles(const io::Record& r) {
 
 std::vector<double> PredictOnShape(const records::FitResult& fit, const synth::DriveShape& shape,
                                    io::Record* out) {
-  io::Record r;
-  r.u = MakeDrive(shape);
+  io::Record r = synth::RecordOfDrive(shape);
   const size_t n = r.u.size();
-  r.dt = 1 / shape.fs_hz;
-  r.t.resize(n);
-  for (size_t k = 0; k < n; ++k) r.t[k] = static_cast<double>(k) * r.dt;
-  r.rest_samples = 1;
-  while (r.rest_samples < n && r.u[r.rest_samples] == r.u[0]) ++r.rest_samples;
   r.first_scored =
       std::min(n - 1, r.rest_samples + static_cast<size_t>(shape.fs_hz / shape.frequency_hz));
   r.end_scored = n;

@@ -127,14 +127,8 @@ records::DataScale SyntheticStackScale() {
   return s;
 }
 
-io::Record SynthesizeRecord(const records::RecordModel& truth, std::span<const double> params,
-                            std::span<const double> weights, const DriveShape& shape,
-                            const Measurement& m, const std::string& name, model::CaseRole role,
-                            double t0_s, double t1_s) {
+io::Record RecordOfDrive(const DriveShape& shape) {
   io::Record r;
-  r.name = name;
-  r.role = role;
-  r.file = name + ".csv";
   r.u = MakeDrive(shape);
   const size_t n = r.u.size();
   r.dt = 1 / shape.fs_hz;
@@ -142,6 +136,18 @@ io::Record SynthesizeRecord(const records::RecordModel& truth, std::span<const d
   for (size_t k = 0; k < n; ++k) r.t[k] = static_cast<double>(k) * r.dt;
   r.rest_samples = 1;
   while (r.rest_samples < n && r.u[r.rest_samples] == r.u[0]) ++r.rest_samples;
+  return r;
+}
+
+io::Record SynthesizeRecord(const records::RecordModel& truth, std::span<const double> params,
+                            std::span<const double> weights, const DriveShape& shape,
+                            const Measurement& m, const std::string& name, model::CaseRole role,
+                            double t0_s, double t1_s) {
+  io::Record r = RecordOfDrive(shape);
+  r.name = name;
+  r.role = role;
+  r.file = name + ".csv";
+  const size_t n = r.u.size();
   r.first_scored = std::min(n - 1, r.rest_samples);
   r.end_scored = n;
   r.y.assign(n, 0);

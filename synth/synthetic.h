@@ -59,6 +59,9 @@ struct DriveShape {
 };
 /// The drive samples (t_k = k / fs from 0, rest then excitation). Throws InputError on bad shapes.
 std::vector<double> MakeDrive(const DriveShape& shape);
+/// A record of that drive: u = MakeDrive(shape), t_k = k / fs, the leading rest (the samples at
+/// u[0]) counted; nothing scored, no response yet.
+io::Record RecordOfDrive(const DriveShape& shape);
 
 /// The data scale of the project's synthetic stack records (±100 V drive, ±10 µm response, gain
 /// 0.1 µm/V, 1 Hz, 500 Hz sampling, 4 s): the truth models of tests and diagnose-check use it.
