@@ -37,7 +37,9 @@ double BimorphPlant::TipToDegrees(double w_tip) const {
 
 const char* SolverName(Solver s) { return s == Solver::kModal ? "modal" : "cvode"; }
 
-Status SimulateOptions::Validate() const {
+Status SimulateOptions::Validate() const { return ValidateCvodeSettings(rtol, atol, max_steps); }
+
+Status ValidateCvodeSettings(double rtol, double atol, long max_steps) {
   if (!(rtol > 0 && rtol <= 1e-2))
     return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
   if (!(atol > 0 && std::isfinite(atol)))

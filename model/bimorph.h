@@ -80,6 +80,9 @@ struct SimulateOptions {
   long max_steps = 10000000;  ///< CVODE step budget for the whole run, > 0
   Status Validate() const;
 };
+/// The checks of a CVODE run's rtol, atol and max_steps (SimulateOptions's, and every caller that
+/// carries the three), naming the failing field.
+Status ValidateCvodeSettings(double rtol, double atol, long max_steps);
 
 /// Simulates the plant. Never throws for a parameter set that is merely bad physics: an unbounded
 /// hysteresis loop, a failed solve or a non-finite state come back in trace.summary.

@@ -290,12 +290,7 @@ bool NeedsCvode(std::span<const Effect> effects) {
 Status EffectSimOptions::Validate() const {
   if (oversample < 1 || oversample > 64)
     return InvalidArgument(FieldError("oversample", oversample, "must be in [1, 64]"));
-  if (!(rtol > 0 && rtol <= 1e-2))
-    return InvalidArgument(FieldError("rtol", rtol, "must be in (0, 1e-2]"));
-  if (!(atol > 0 && std::isfinite(atol)))
-    return InvalidArgument(FieldError("atol", atol, "must be finite and > 0"));
-  if (max_steps <= 0) return InvalidArgument(FieldError("max_steps", max_steps, "must be > 0"));
-  return Status::Ok();
+  return model::ValidateCvodeSettings(rtol, atol, max_steps);
 }
 
 std::vector<double> ShapedDrive(std::span<const Effect> effects, const Sinusoid& drive,
